@@ -1,0 +1,306 @@
+#include <prt/envmap.h>
+
+#include <prt/error.h>
+#include <prt/io.h>
+
+#include "image_io.h"
+
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+namespace prt {
+
+// ---- lat-long -----------------------------------------------------------
+
+glm::dvec3 latlong_direction(double px, double py, int width, int height) {
+  const double theta = M_PI * py / height, phi = 2.0 * M_PI * px / width;
+  const double st = std::sin(theta);
+  return {-st * std::sin(phi), std::cos(theta), st * std::cos(phi)};
+}
+
+void latlong_pixel(const glm::dvec3& d, int width, int height, double& px, double& py) {
+  const double r = glm::length(d);
+  const double theta = std::acos(std::clamp(d.y / r, -1.0, 1.0));
+  double phi = std::atan2(-d.x, d.z);  // sin(phi) ~ -x, cos(phi) ~ z
+  if (phi < 0) phi += 2.0 * M_PI;
+  px = phi / (2.0 * M_PI) * width;
+  if (px >= width) px -= width;
+  py = theta / M_PI * height;
+}
+
+double latlong_pixel_solid_angle(int y, int width, int height) {
+  const double t0 = M_PI * y / height, t1 = M_PI * (y + 1) / height;
+  // cos t0 - cos t1 = 2 sin((t0+t1)/2) sin((t1-t0)/2): no cancellation near the poles.
+  return 2.0 * std::sin(0.5 * (t0 + t1)) * std::sin(0.5 * (t1 - t0)) * 2.0 * M_PI / width;
+}
+
+// ---- cube maps ----------------------------------------------------------
+
+std::string_view cube_face_name(int face) {
+  static constexpr std::string_view names[6] = {"+X", "-X", "+Y", "-Y", "+Z", "-Z"};
+  PRT_CHECK(face >= 0 && face < 6);
+  return names[face];
+}
+
+glm::dvec3 cube_direction(int face, double s, double t) {
+  switch (face) {
+    case kPosX: return {1.0, -t, -s};
+    case kNegX: return {-1.0, -t, s};
+    case kPosY: return {s, 1.0, t};
+    case kNegY: return {s, -1.0, -t};
+    case kPosZ: return {s, -t, 1.0};
+    case kNegZ: return {-s, -t, -1.0};
+  }
+  PRT_CHECK(face >= 0 && face < 6);
+  return {};
+}
+
+glm::dvec3 cube_texel_direction(int face, int u, int v, int N) {
+  return glm::normalize(cube_direction(face, 2.0 * (u + 0.5) / N - 1.0, 2.0 * (v + 0.5) / N - 1.0));
+}
+
+int cube_face_coords(const glm::dvec3& d, double& s, double& t) {
+  const double ax = std::abs(d.x), ay = std::abs(d.y), az = std::abs(d.z);
+  // Inverse of cube_direction: (sc, tc, major axis) per face, as in the GL spec.
+  if (ax >= ay && ax >= az) {
+    if (d.x > 0) { s = -d.z / ax; t = -d.y / ax; return kPosX; }
+    s = d.z / ax; t = -d.y / ax; return kNegX;
+  }
+  if (ay >= az) {
+    if (d.y > 0) { s = d.x / ay; t = d.z / ay; return kPosY; }
+    s = d.x / ay; t = -d.z / ay; return kNegY;
+  }
+  if (d.z > 0) { s = d.x / az; t = -d.y / az; return kPosZ; }
+  s = -d.x / az; t = -d.y / az; return kNegZ;
+}
+
+double cube_texel_solid_angle(int u, int v, int N) {
+  auto area = [](double x, double y) { return std::atan2(x * y, std::sqrt(x * x + y * y + 1.0)); };
+  const double x0 = 2.0 * u / N - 1.0, x1 = 2.0 * (u + 1) / N - 1.0;
+  const double y0 = 2.0 * v / N - 1.0, y1 = 2.0 * (v + 1) / N - 1.0;
+  return area(x0, y0) - area(x0, y1) - area(x1, y0) + area(x1, y1);
+}
+
+// ---- mappings -------------------------------------------------------------
+
+Mapping parse_mapping(std::string_view name) {
+  if (name == "auto") return Mapping::Auto;
+  if (name == "latlong") return Mapping::LatLong;
+  if (name == "hcross") return Mapping::HCross;
+  if (name == "vcross") return Mapping::VCross;
+  if (name == "faces") return Mapping::Faces;
+  throw Error("unknown mapping '" + std::string(name) + "' (expected auto, latlong, hcross, vcross or faces)");
+}
+
+std::string_view mapping_name(Mapping m) {
+  switch (m) {
+    case Mapping::Auto: return "auto";
+    case Mapping::LatLong: return "lat-long";
+    case Mapping::HCross: return "horizontal cross";
+    case Mapping::VCross: return "vertical cross";
+    case Mapping::Faces: return "cube faces";
+  }
+  return "?";
+}
+
+MapStats compute_stats(const float* rgb, std::size_t pixels) {
+  MapStats s;
+  s.pixels = pixels;
+  double sum = 0.0;
+  std::size_t finite_values = 0;
+  double mn = std::numeric_limits<double>::infinity(), mx = -mn;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    bool neg = false, bad = false;
+    for (int c = 0; c < 3; ++c) {
+      const float v = rgb[3 * i + c];
+      if (!std::isfinite(v)) {
+        bad = true;
+        continue;
+      }
+      neg |= v < 0.0f;
+      mn = std::min(mn, double(v));
+      mx = std::max(mx, double(v));
+      sum += v;
+      ++finite_values;
+    }
+    s.negative += neg;
+    if (bad) {
+      if (s.nonfinite == 0) s.first_nonfinite = static_cast<long>(i);
+      ++s.nonfinite;
+    }
+  }
+  if (finite_values > 0) {
+    s.min = mn;
+    s.max = mx;
+    s.mean = sum / finite_values;
+  }
+  return s;
+}
+
+namespace {
+
+namespace fs = std::filesystem;
+
+using detail::RawImage;
+
+RawImage read_image_rgb(const std::string& path) { return detail::read_image_file(path); }
+
+void copy_face(const RawImage& img, int x0, int y0, int N, bool rotate180, float* dst) {
+  for (int v = 0; v < N; ++v)
+    for (int u = 0; u < N; ++u) {
+      const int su = rotate180 ? N - 1 - u : u, sv = rotate180 ? N - 1 - v : v;
+      const float* s = &img.rgb[(std::size_t(y0 + sv) * img.width + (x0 + su)) * 3];
+      std::copy(s, s + 3, dst + (std::size_t(v) * N + u) * 3);
+    }
+}
+
+std::string shape_string(const RawImage& img) {
+  return std::to_string(img.width) + "x" + std::to_string(img.height);
+}
+
+}  // namespace
+
+EnvMap make_latlong(int width, int height, std::vector<float> rgb, std::string source) {
+  if (width <= 0 || height <= 0 || rgb.size() != std::size_t(width) * height * 3)
+    throw Error(source + ": lat-long map needs width*height*3 values");
+  EnvMap m;
+  m.layout = Mapping::LatLong;
+  m.width = width;
+  m.height = height;
+  m.rgb = std::move(rgb);
+  m.source = std::move(source);
+  m.source_layout = "lat-long";
+  m.stats = compute_stats(m.rgb.data(), m.pixel_count());
+  return m;
+}
+
+EnvMap make_cube(int size, std::vector<float> rgb, std::string source) {
+  if (size <= 0 || rgb.size() != std::size_t(6) * size * size * 3)
+    throw Error(source + ": cube map needs 6*size*size*3 values");
+  EnvMap m;
+  m.layout = Mapping::Faces;
+  m.width = m.height = size;
+  m.rgb = std::move(rgb);
+  m.source = std::move(source);
+  m.source_layout = "cube faces";
+  m.stats = compute_stats(m.rgb.data(), m.pixel_count());
+  return m;
+}
+
+EnvMap load_envmap(const std::string& path, Mapping mapping) {
+  RawImage img = read_image_rgb(path);
+  const int W = img.width, H = img.height;
+  if (mapping == Mapping::Auto) {
+    if (W == 2 * H)
+      mapping = Mapping::LatLong;
+    else if (3 * W == 4 * H && W % 4 == 0)
+      mapping = Mapping::HCross;
+    else if (4 * W == 3 * H && W % 3 == 0)
+      mapping = Mapping::VCross;
+    else
+      throw Error(path + ": cannot tell the mapping from a " + shape_string(img) +
+                  " image (expected 2:1 lat-long, 4:3 horizontal cross or 3:4 vertical cross; "
+                  "use --mapping)");
+  }
+  EnvMap m;
+  switch (mapping) {
+    case Mapping::LatLong:
+      if (W != 2 * H)
+        throw Error(path + ": a lat-long map must be twice as wide as high, this one is " + shape_string(img));
+      m = make_latlong(W, H, std::move(img.rgb), path);
+      break;
+    case Mapping::HCross:
+    case Mapping::VCross: {
+      const bool h = mapping == Mapping::HCross;
+      const int N = h ? W / 4 : W / 3;
+      if (N == 0 || (h ? (W != 4 * N || H != 3 * N) : (W != 3 * N || H != 4 * N)))
+        throw Error(path + ": a " + std::string(mapping_name(mapping)) + " must be " + (h ? "4N x 3N" : "3N x 4N") +
+                    " pixels, this one is " + shape_string(img));
+      // Face positions in the cross, in units of N: {column, row}.
+      static constexpr int hpos[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
+      static constexpr int vpos[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3}};
+      std::vector<float> faces(std::size_t(6) * N * N * 3);
+      for (int f = 0; f < 6; ++f) {
+        const int* p = h ? hpos[f] : vpos[f];
+        copy_face(img, p[0] * N, p[1] * N, N, !h && f == kNegZ, faces.data() + std::size_t(f) * N * N * 3);
+      }
+      m = make_cube(N, std::move(faces), path);
+      break;
+    }
+    case Mapping::Faces:
+      throw Error(path + ": --mapping faces needs six face files (+X,-X,+Y,-Y,+Z,-Z)");
+    case Mapping::Auto:
+      break;
+  }
+  m.source_layout = std::string(mapping_name(mapping));
+  m.source_channels = img.channels;
+  return m;
+}
+
+EnvMap load_cube_faces(const std::array<std::string, 6>& paths) {
+  int N = 0;
+  std::vector<float> faces;
+  int channels = 3;
+  for (int f = 0; f < 6; ++f) {
+    RawImage img = read_image_rgb(paths[f]);
+    if (img.width != img.height)
+      throw Error(paths[f] + ": cube face " + std::string(cube_face_name(f)) + " must be square, this one is " +
+                  shape_string(img));
+    if (f == 0) {
+      N = img.width;
+      faces.resize(std::size_t(6) * N * N * 3);
+      channels = img.channels;
+    } else if (img.width != N) {
+      throw Error(paths[f] + ": cube face " + std::string(cube_face_name(f)) + " is " + shape_string(img) +
+                  " but " + paths[0] + " is " + std::to_string(N) + "x" + std::to_string(N));
+    }
+    std::copy(img.rgb.begin(), img.rgb.end(), faces.begin() + std::size_t(f) * N * N * 3);
+  }
+  EnvMap m = make_cube(N, std::move(faces), paths[0] + " (+5 faces)");
+  m.source_channels = channels;
+  return m;
+}
+
+void require_finite(const EnvMap& map) {
+  if (map.stats.nonfinite == 0) return;
+  std::ostringstream os;
+  os << map.source << ": " << map.stats.nonfinite << " pixel(s) are NaN or infinite";
+  const long i = map.stats.first_nonfinite;
+  if (map.is_cube()) {
+    const long n = long(map.width) * map.width;
+    os << " (first: face " << cube_face_name(int(i / n)) << ", x " << (i % n) % map.width << ", y "
+       << (i % n) / map.width << ")";
+  } else {
+    os << " (first at x " << i % map.width << ", y " << i / map.width << ")";
+  }
+  os << "; fix the map (e.g. oiiotool --fixnan black) before projecting";
+  throw Error(os.str());
+}
+
+std::string describe(const EnvMap& m) {
+  std::ostringstream os;
+  os.precision(6);
+  os << m.source << ": ";
+  if (m.is_cube())
+    os << "cube map, faces " << m.width << "x" << m.width << " (from " << m.source_layout << ")";
+  else
+    os << m.width << "x" << m.height << " lat-long";
+  os << ", " << m.source_channels << " channel" << (m.source_channels == 1 ? "" : "s") << ", min " << m.stats.min
+     << ", max " << m.stats.max << ", mean " << m.stats.mean << ", " << m.stats.negative << " negative, "
+     << m.stats.nonfinite << " non-finite pixels";
+  return os.str();
+}
+
+void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+  PRT_CHECK_OP(rgb.size(), ==, std::size_t(width) * height * 3);
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const bool floating = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff" || ext == ".pfm";
+  write_atomically(path, [&](const std::string& tmp) { detail::write_image_file(tmp, path, width, height, rgb, floating); });
+}
+
+}  // namespace prt

@@ -1,0 +1,53 @@
+#include <prt/io.h>
+
+#include <prt/error.h>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace prt {
+
+void write_atomically(const std::string& path, const std::function<void(const std::string& tmp)>& write) {
+  namespace fs = std::filesystem;
+  static std::atomic<unsigned> counter{0};
+  const fs::path p(path);
+  if (p.filename().empty()) throw Error(path + ": not a file name");
+  // Hidden, unique, and with the same extension (image writers choose the
+  // format by extension).
+  std::string name = ".";
+  name += p.stem().string();
+  name += ".tmp" + std::to_string(getpid()) + "-" + std::to_string(counter++);
+  name += p.extension().string();
+  const fs::path tmp = p.parent_path() / name;
+  try {
+    write(tmp.string());
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
+  std::error_code ec;
+  fs::rename(tmp, p, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw Error(path + ": cannot write: " + ec.message());
+  }
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) throw Error(path + ": cannot open for writing: " + std::strerror(errno));
+    f << text;
+    f.close();
+    if (!f) throw Error(path + ": write failed: " + std::strerror(errno));
+  });
+}
+
+}  // namespace prt

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Installs prt's build and runtime dependencies from Debian packages.
+# Idempotent: when every package is already installed it prints nothing and
+# touches nothing (no apt-get update). Needs root or sudo for the install step.
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git
+  # numerics, threading, ray tracing
+  libtbb-dev libembree-dev libglm-dev
+  # images and meshes
+  libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
+  # command line, JSON, logging
+  libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  # GL: headless EGL on Mesa (llvmpipe), GLFW window, Xvfb for window tests
+  libegl-dev libgl-dev libopengl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # plots for reports
+  python3 python3-matplotlib python3-numpy
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "install-deps: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
+  SUDO="sudo"
+fi
+echo "install-deps: installing ${#missing[@]} Debian package(s): ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done" >&2

@@ -1,0 +1,213 @@
+// prt project: environment map -> SH coefficients.
+#include "commands.h"
+
+#include <prt/envmap.h>
+#include <prt/error.h>
+#include <prt/filter.h>
+#include <prt/io.h>
+#include <prt/projection.h>
+#include <prt/rotation.h>
+#include <prt/sh.h>
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <sstream>
+
+namespace prt::cli {
+
+namespace {
+
+constexpr const char* kConvention =
+    "real orthonormal SH, Condon-Shortley phase, polar axis z, index k = l(l+1)+m; world right-handed, +Y up; "
+    "radiance in the map's units (docs/CONVENTIONS.md)";
+
+struct ProjectArgs {
+  std::string env, output, format = "json", window = "none", rotate, reconstruct, reconstruct_size;
+  std::string mapping = "auto", quadrature = "box";
+  int bands = 3;
+  double window_width = 0;
+  bool irradiance = false, quiet = false;
+};
+
+EnvMap load(const ProjectArgs& a) {
+  const Mapping m = parse_mapping(a.mapping);
+  if (m != Mapping::Faces) return load_envmap(a.env, m);
+  // Six faces: a pattern with {face} (px nx py ny pz nz), or six comma-separated files.
+  std::array<std::string, 6> paths;
+  static constexpr const char* tags[6] = {"px", "nx", "py", "ny", "pz", "nz"};
+  const auto brace = a.env.find("{face}");
+  if (brace != std::string::npos) {
+    for (int f = 0; f < 6; ++f) paths[f] = std::string(a.env).replace(brace, 6, tags[f]);
+  } else {
+    std::stringstream ss(a.env);
+    int f = 0;
+    for (std::string part; std::getline(ss, part, ',');) {
+      if (f == 6) throw Error("--mapping faces: more than six files in '" + a.env + "'");
+      paths[f++] = part;
+    }
+    if (f != 6)
+      throw Error("--mapping faces: expected six files +X,-X,+Y,-Y,+Z,-Z or a pattern with {face}, got '" + a.env +
+                  "'");
+  }
+  return load_cube_faces(paths);
+}
+
+// JSON with one coefficient triple per line (nlohmann serialises every value:
+// escaping, and doubles in shortest round-trip form, i.e. full precision).
+std::string format_json(const std::vector<glm::dvec3>& c, int bands, const nlohmann::ordered_json& extra) {
+  std::string s = "{\n  \"bands\": " + std::to_string(bands) + ",\n  \"convention\": " +
+                  nlohmann::json(kConvention).dump() + ",\n  \"coefficients\": [\n";
+  for (std::size_t k = 0; k < c.size(); ++k)
+    s += "    " + nlohmann::json({c[k].x, c[k].y, c[k].z}).dump() + (k + 1 < c.size() ? ",\n" : "\n");
+  s += "  ]";
+  for (auto it = extra.begin(); it != extra.end(); ++it) s += ",\n  " + nlohmann::json(it.key()).dump() + ": " + it.value().dump();
+  return s + "\n}\n";
+}
+
+std::string format_text(const std::vector<glm::dvec3>& c, int bands, const std::string& header) {
+  std::string s = "# " + header + "\n# " + kConvention + "\n";
+  s += fmt::format("# {:>4} {:>3} {:>4} {:>25} {:>25} {:>25}\n", "k", "l", "m", "r", "g", "b");
+  for (int l = 0; l < bands; ++l)
+    for (int m = -l; m <= l; ++m) {
+      const auto& v = c[sh::index(l, m)];
+      s += fmt::format("  {:>4} {:>3} {:>4} {:>25.17g} {:>25.17g} {:>25.17g}\n", sh::index(l, m), l, m, v.x, v.y, v.z);
+    }
+  return s;
+}
+
+std::string format_code(const std::vector<glm::dvec3>& c, int bands, const std::string& header, bool glsl) {
+  const int n = sh::num_coeffs(bands);
+  std::string s = "// " + header + "\n// " + kConvention + "\n";
+  if (glsl) {
+    s += fmt::format("const int PRT_SH_BANDS = {};\nconst vec3 PRT_SH_COEFFS[{}] = vec3[{}](\n", bands, n, n);
+    for (int k = 0; k < n; ++k)
+      s += fmt::format("    vec3({:.9g}, {:.9g}, {:.9g}){}\n", c[k].x, c[k].y, c[k].z, k + 1 < n ? "," : "");
+    s += ");\n";
+  } else {
+    s += fmt::format("constexpr int kPrtShBands = {};\nconstexpr float kPrtShCoeffs[{}][3] = {{\n", bands, n);
+    for (int k = 0; k < n; ++k) s += fmt::format("    {{{:.9g}f, {:.9g}f, {:.9g}f}},\n", c[k].x, c[k].y, c[k].z);
+    s += "};\n";
+  }
+  return s;
+}
+
+int run_project(const ProjectArgs& a) {
+  // Validate every option before reading the map.
+  const Quadrature quad = parse_quadrature(a.quadrature);
+  const sh::Window window = sh::parse_window(a.window);
+  if (a.format != "json" && a.format != "text" && a.format != "glsl" && a.format != "cpp")
+    throw Error("--format: expected json, text, glsl or cpp, got '" + a.format + "'");
+  double euler[3] = {0, 0, 0};
+  if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
+  int rw = 0, rh = 0;
+  if (!a.reconstruct_size.empty()) {
+    char x = 0, extra = 0;
+    if (std::sscanf(a.reconstruct_size.c_str(), "%d%c%d%c", &rw, &x, &rh, &extra) != 3 || x != 'x' || rw < 1 ||
+        rh < 1 || rw > 65536 || rh > 65536)
+      throw Error("--reconstruct-size: expected WxH with 1 <= W, H <= 65536, got '" + a.reconstruct_size + "'");
+  }
+
+  const EnvMap map = load(a);
+  if (!a.quiet) fmt::print(stderr, "{}\n", describe(map));
+  std::vector<glm::dvec3> c = project(map, a.bands, quad);
+
+  nlohmann::ordered_json extra;
+  extra["source"] = map.source;
+  extra["mapping"] = map.source_layout;
+  extra["quantity"] = a.irradiance ? "irradiance (clamped-cosine convolution, no 1/pi)" : "radiance";
+  extra["quadrature"] = std::string(quadrature_name(quad));
+
+  if (a.irradiance) sh::scale_bands(std::span<glm::dvec3>(c), sh::clamped_cosine_factors(a.bands));
+  const double width = a.window_width > 0 ? a.window_width : a.bands;
+  const sh::AutoWindow w = sh::apply_window(std::span<glm::dvec3>(c), window, width);
+  nlohmann::ordered_json wj;
+  wj["kind"] = std::string(sh::window_name(window));
+  if (window == sh::Window::Auto) {
+    wj["hanning_width"] = w.width;
+    wj["min_before"] = w.min_before;
+    wj["min_after"] = w.min_after;
+    if (!a.quiet) {
+      if (!w.windowed)
+        fmt::print(stderr, "window auto: reconstruction already non-negative (min {:.6g}); no window applied\n",
+                   w.min_before);
+      else
+        fmt::print(stderr, "window auto: Hanning width {:.6g} lifts the minimum from {:.6g} to {:.6g}\n", w.width,
+                   w.min_before, w.min_after);
+    }
+    if (!w.achieved)
+      fmt::print(stderr, "warning: the map's mean is negative in some channel; no window makes it non-negative\n");
+  } else if (window != sh::Window::None) {
+    wj["width"] = width;
+  }
+  extra["window"] = wj;
+
+  if (!a.rotate.empty()) {
+    const sh::Rotation rot(a.bands, sh::rotation_from_euler(euler[0], euler[1], euler[2]));
+    std::vector<glm::dvec3> r(c.size());
+    rot.apply(c, r);
+    c.swap(r);
+    extra["rotate_yaw_pitch_roll_deg"] = {euler[0], euler[1], euler[2]};
+  }
+
+  const std::string header = fmt::format("prt project {} --bands {}: {}{}", map.source, a.bands,
+                                         a.irradiance ? "irradiance" : "radiance",
+                                         a.rotate.empty() ? "" : ", rotated " + a.rotate);
+  std::string text;
+  if (a.format == "json")
+    text = format_json(c, a.bands, extra);
+  else if (a.format == "text")
+    text = format_text(c, a.bands, header);
+  else
+    text = format_code(c, a.bands, header, a.format == "glsl");
+
+  if (!a.reconstruct.empty()) {
+    if (rw == 0) {
+      rw = map.is_cube() ? 4 * map.width : map.width;
+      rh = rw / 2;
+    }
+    write_image(a.reconstruct, rw, rh, reconstruct_latlong(c, rw, rh));
+    if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{} lat-long, {} bands)\n", a.reconstruct, rw, rh, a.bands);
+  }
+  if (a.output.empty() || a.output == "-")
+    fmt::print("{}", text);
+  else
+    write_text_file(a.output, text);
+  return 0;
+}
+
+}  // namespace
+
+Run add_project(CLI::App& app) {
+  auto a = std::make_shared<ProjectArgs>();
+  CLI::App* s = app.add_subcommand("project", "Project an environment map onto spherical harmonics");
+  s->footer(
+      "Maps: any format OpenImageIO reads (EXR, HDR, PNG, ...). Lat-long (2:1), horizontal (4:3) or vertical (3:4)\n"
+      "cross, or six faces (--mapping faces, ENV = 'sky_{face}.exr' with px nx py ny pz nz, or six comma-separated\n"
+      "files +X,-X,+Y,-Y,+Z,-Z). A one-line summary of the map goes to stderr.\n"
+      "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
+  s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
+  s->add_option("-b,--bands", a->bands, "Number of bands n: degrees 0..n-1, n*n coefficients")
+      ->check(CLI::Range(1, sh::kMaxBands))
+      ->capture_default_str();
+  s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");
+  s->add_option("-f,--format", a->format, "Output format: json, text (table), glsl or cpp (paste-ready snippet)")
+      ->capture_default_str();
+  s->add_option("-w,--window", a->window, "Windowing against ringing: none, hanning, lanczos, auto")
+      ->capture_default_str();
+  s->add_option("--window-width", a->window_width, "Window width w in bands (band l is scaled by f(l/w); default n)")
+      ->check(CLI::PositiveNumber);
+  s->add_flag("--irradiance", a->irradiance, "Convolve with the clamped cosine: irradiance E_lm = A_l L_lm (no 1/pi)");
+  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)");
+  s->add_option("-m,--mapping", a->mapping, "Map layout: auto, latlong, hcross, vcross, faces")->capture_default_str();
+  s->add_option("--quadrature", a->quadrature,
+                "box: texels are area averages, integrated exactly; point: texels are point samples (lat-long only)")
+      ->capture_default_str();
+  s->add_option("--reconstruct", a->reconstruct, "Also write the n-band reconstruction as a lat-long image");
+  s->add_option("--reconstruct-size", a->reconstruct_size, "WxH of the reconstruction (default: the map's size)");
+  s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
+  return [a] { return run_project(*a); };
+}
+
+}  // namespace prt::cli
