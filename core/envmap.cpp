@@ -295,10 +295,25 @@ std::string describe(const EnvMap& m) {
   return os.str();
 }
 
-void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {
-  PRT_CHECK_OP(rgb.size(), ==, std::size_t(width) * height * 3);
+namespace {
+std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+}  // namespace
+
+void check_image_output(const std::string& path) {
+  static const char* known[] = {".exr", ".hdr", ".pfm", ".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp", ".tga"};
+  const std::string ext = lower_extension(path);
+  if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return ext == k; }) == std::end(known))
+    throw Error(path + ": unknown image type '" + ext + "' (use .exr for linear HDR, or .hdr, .pfm, .tif, .png, .jpg)");
+  check_writable(path);
+}
+
+void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+  PRT_CHECK_OP(rgb.size(), ==, std::size_t(width) * height * 3);
+  const std::string ext = lower_extension(path);
   const bool floating = ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff" || ext == ".pfm";
   write_atomically(path, [&](const std::string& tmp) { detail::write_image_file(tmp, path, width, height, rgb, floating); });
 }

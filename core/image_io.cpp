@@ -77,7 +77,7 @@ RawImage read_exr(const std::string& path) {
   }
 }
 
-void write_exr(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+void write_exr(const std::string& path, const std::string& shown, int width, int height, const std::vector<float>& rgb) {
   try {
     Imf::Header header(width, height);
     for (const char* c : {"R", "G", "B"}) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
@@ -90,7 +90,7 @@ void write_exr(const std::string& path, int width, int height, const std::vector
     file.setFrameBuffer(fb);
     file.writePixels(height);
   } catch (const std::exception& e) {
-    throw Error(path + ": cannot write EXR: " + e.what());
+    throw Error(shown + ": cannot write EXR: " + e.what());
   }
 }
 
@@ -159,6 +159,7 @@ RawImage read_image_file(const std::string& path) {
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
   if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
   if (access(path.c_str(), R_OK) != 0) throw Error(path + ": permission denied");
+  if (fs::file_size(path, ec) == 0 && !ec) throw Error(path + ": file is empty");
   if (Imf::isOpenExrFile(path.c_str())) return read_exr(path);
 
   const Plugin& p = plugin();
@@ -186,7 +187,7 @@ void write_image_file(const std::string& path, const std::string& format_from, i
                       const std::vector<float>& rgb, bool floating) {
   std::string ext = fs::path(format_from).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  if (ext == ".exr") return write_exr(path, width, height, rgb);
+  if (ext == ".exr") return write_exr(path, format_from, width, height, rgb);
   const Plugin& p = plugin();
   if (!p.write) throw Error(format_from + ": " + p.error);
   std::vector<unsigned char> bytes;
@@ -199,7 +200,7 @@ void write_image_file(const std::string& path, const std::string& format_from, i
     }
   }
   char err[1024] = {0};
-  if (p.write(path.c_str(), path.c_str(), width, height, rgb.data(), bytes.data(), floating ? 1 : 0, err,
+  if (p.write(path.c_str(), format_from.c_str(), width, height, rgb.data(), bytes.data(), floating ? 1 : 0, err,
               sizeof(err)) != 0)
     throw Error(format_from + ": " + err);
 }

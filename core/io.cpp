@@ -40,6 +40,17 @@ void write_atomically(const std::string& path, const std::function<void(const st
   }
 }
 
+void check_writable(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path p(path);
+  if (path.empty() || p.filename().empty()) throw Error("'" + path + "': not a file name");
+  const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(path + ": directory " + dir.string() + " does not exist");
+  if (access(dir.c_str(), W_OK) != 0) throw Error(path + ": directory " + dir.string() + " is not writable");
+  if (fs::is_directory(p, ec)) throw Error(path + ": is a directory");
+}
+
 void write_text_file(const std::string& path, const std::string& text) {
   write_atomically(path, [&](const std::string& tmp) {
     std::ofstream f(tmp, std::ios::binary);

@@ -18,7 +18,11 @@ void set_error(char* err, size_t len, const std::string& msg) {
 extern "C" __attribute__((visibility("default"))) int prt_oiio_read(const char* path, float** data, int* width,
                                                                     int* height, int* channels, int* srgb, char* err,
                                                                     size_t err_len) {
-  auto in = OIIO::ImageInput::open(path);
+  // Keep colour and alpha apart: prt ignores alpha, so colours must not come
+  // back premultiplied (OpenImageIO's default for PNG).
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) {
     std::string why = OIIO::geterror();
     set_error(err, err_len, why.empty() ? "not an image file OpenImageIO can read" : why);
@@ -63,7 +67,8 @@ extern "C" __attribute__((visibility("default"))) int prt_oiio_write(const char*
                                                                      char* err, size_t err_len) {
   auto out = OIIO::ImageOutput::create(format_from);
   if (!out) {
-    set_error(err, err_len, "cannot write an image of this type: " + OIIO::geterror());
+    OIIO::geterror();  // clear; its text names the temporary file
+    set_error(err, err_len, "cannot write images of this type (use .exr, .hdr, .png, .jpg, .tif, ...)");
     return 1;
   }
   const OIIO::TypeDesc type = floating ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8;

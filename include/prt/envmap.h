@@ -116,4 +116,9 @@ std::string describe(const EnvMap& map);
 // failure never leaves a half-written file. Throws prt::Error.
 void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
 
+// Throws prt::Error naming `path` unless write_image can write it: a known
+// image extension (.exr, .hdr, .pfm, .tif, .tiff, .png, .jpg, .jpeg, .bmp,
+// .tga) in a writable directory.
+void check_image_output(const std::string& path);
+
 }  // namespace prt

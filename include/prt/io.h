@@ -11,6 +11,11 @@ namespace prt {
 // rename fails, the temporary file is removed and `path` is untouched.
 void write_atomically(const std::string& path, const std::function<void(const std::string& tmp)>& write);
 
+// Throws prt::Error naming `path` unless its directory exists and is
+// writable and `path` is not a directory. Lets a command refuse bad output
+// paths before doing any work.
+void check_writable(const std::string& path);
+
 // Writes `text` to `path` through write_atomically. Throws prt::Error.
 void write_text_file(const std::string& path, const std::string& text);
 

@@ -21,7 +21,7 @@ namespace {
 
 constexpr const char* kConvention =
     "real orthonormal SH, Condon-Shortley phase, polar axis z, index k = l(l+1)+m; world right-handed, +Y up; "
-    "radiance in the map's units (docs/CONVENTIONS.md)";
+    "in the map's units, no 1/pi (docs/CONVENTIONS.md)";
 
 struct ProjectArgs {
   std::string env, output, format = "json", window = "none", rotate, reconstruct, reconstruct_size;
@@ -87,16 +87,20 @@ std::string format_code(const std::vector<glm::dvec3>& c, int bands, const std::
     s += ");\n";
   } else {
     s += fmt::format("constexpr int kPrtShBands = {};\nconstexpr float kPrtShCoeffs[{}][3] = {{\n", bands, n);
-    for (int k = 0; k < n; ++k) s += fmt::format("    {{{:.9g}f, {:.9g}f, {:.9g}f}},\n", c[k].x, c[k].y, c[k].z);
+    // '#' keeps the decimal point (2 -> 2.00000000f): always a valid float literal.
+    for (int k = 0; k < n; ++k) s += fmt::format("    {{{:#.9g}f, {:#.9g}f, {:#.9g}f}},\n", c[k].x, c[k].y, c[k].z);
     s += "};\n";
   }
   return s;
 }
 
 int run_project(const ProjectArgs& a) {
-  // Validate every option before reading the map.
-  const Quadrature quad = parse_quadrature(a.quadrature);
-  const sh::Window window = sh::parse_window(a.window);
+  // Validate every option and output path before reading the map.
+  const Quadrature quad = for_option("--quadrature", [&] { return parse_quadrature(a.quadrature); });
+  const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  for_option("--mapping", [&] { return parse_mapping(a.mapping); });
+  if (!a.output.empty() && a.output != "-") for_option("--output", [&] { check_writable(a.output); });
+  if (!a.reconstruct.empty()) for_option("--reconstruct", [&] { check_image_output(a.reconstruct); });
   if (a.format != "json" && a.format != "text" && a.format != "glsl" && a.format != "cpp")
     throw Error("--format: expected json, text, glsl or cpp, got '" + a.format + "'");
   double euler[3] = {0, 0, 0};
@@ -168,12 +172,20 @@ int run_project(const ProjectArgs& a) {
       rh = rw / 2;
     }
     write_image(a.reconstruct, rw, rh, reconstruct_latlong(c, rw, rh));
-    if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{} lat-long, {} bands)\n", a.reconstruct, rw, rh, a.bands);
   }
-  if (a.output.empty() || a.output == "-")
+  if (a.output.empty() || a.output == "-") {
     fmt::print("{}", text);
-  else
-    write_text_file(a.output, text);
+  } else {
+    try {
+      write_text_file(a.output, text);
+    } catch (const Error&) {
+      // All or nothing: do not leave the reconstruction of a failed run.
+      if (!a.reconstruct.empty()) std::remove(a.reconstruct.c_str());
+      throw;
+    }
+  }
+  if (!a.reconstruct.empty() && !a.quiet)
+    fmt::print(stderr, "wrote {} ({}x{} lat-long, {} bands)\n", a.reconstruct, rw, rh, a.bands);
   return 0;
 }
 
@@ -189,7 +201,7 @@ Run add_project(CLI::App& app) {
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
   s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
   s->add_option("-b,--bands", a->bands, "Number of bands n: degrees 0..n-1, n*n coefficients")
-      ->check(CLI::Range(1, sh::kMaxBands))
+      ->check(int_range(1, sh::kMaxBands))
       ->capture_default_str();
   s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");
   s->add_option("-f,--format", a->format, "Output format: json, text (table), glsl or cpp (paste-ready snippet)")
@@ -197,7 +209,7 @@ Run add_project(CLI::App& app) {
   s->add_option("-w,--window", a->window, "Windowing against ringing: none, hanning, lanczos, auto")
       ->capture_default_str();
   s->add_option("--window-width", a->window_width, "Window width w in bands (band l is scaled by f(l/w); default n)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   s->add_flag("--irradiance", a->irradiance, "Convolve with the clamped cosine: irradiance E_lm = A_l L_lm (no 1/pi)");
   s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)");
   s->add_option("-m,--mapping", a->mapping, "Map layout: auto, latlong, hcross, vcross, faces")->capture_default_str();

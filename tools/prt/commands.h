@@ -2,6 +2,8 @@
 // returns the function that runs it once the command line is parsed.
 #pragma once
 
+#include <prt/error.h>
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
@@ -15,5 +17,19 @@ Run add_verify(CLI::App& app);
 
 // "a,b,c" -> three doubles; throws prt::Error naming `option` otherwise.
 void parse_triple(const std::string& text, const char* option, double out[3]);
+
+// Validators whose messages say what is expected and what was given.
+CLI::Validator int_range(int lo, int hi);
+CLI::Validator positive_number();
+
+// Calls f(); a prt::Error it throws is re-thrown with "option: " in front.
+template <typename F>
+auto for_option(const char* option, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    throw Error(std::string(option) + ": " + e.what());
+  }
+}
 
 }  // namespace prt::cli

@@ -6,6 +6,7 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -29,6 +30,43 @@ void parse_triple(const std::string& text, const char* option, double out[3]) {
     }
   }
   if (pos != text.size()) throw Error(std::string(option) + ": expected three numbers a,b,c, got '" + text + "'");
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(out[i])) throw Error(std::string(option) + ": numbers must be finite, got '" + text + "'");
+}
+
+CLI::Validator int_range(int lo, int hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        std::size_t used = 0;
+        long v = 0;
+        try {
+          v = std::stol(s, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != s.size() || v < lo || v > hi)
+          return "must be a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got '" + s +
+                 "'";
+        return {};
+      },
+      "INT in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        std::size_t used = 0;
+        double v = 0;
+        try {
+          v = std::stod(s, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != s.size() || !(v > 0) || !std::isfinite(v))
+          return "must be a positive number, got '" + s + "'";
+        return {};
+      },
+      "POSITIVE");
 }
 
 }  // namespace prt::cli
@@ -48,6 +86,19 @@ int main(int argc, char** argv) {
   add(prt::cli::add_project);
   add(prt::cli::add_verify);
 
+  // CLI11 reports an unknown command as "a subcommand is required"; name it.
+  if (argc > 1 && argv[1][0] != '-') {
+    bool known = false;
+    std::string names;
+    for (const auto& [sub, run] : commands) {
+      known |= sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      fmt::print(stderr, "prt: unknown command '{}' (commands: {}; see prt --help)\n", argv[1], names);
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Configures and builds prt (Release by default) into build/.
+# Usage: scripts/build.sh [BUILD_DIR] [extra cmake arguments...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+dir=${1:-build}
+shift || true
+jobs=$(nproc 2>/dev/null || echo 2)
+generator=()
+command -v ninja >/dev/null && generator=(-G Ninja)
+if [ ! -f "$dir/CMakeCache.txt" ]; then
+  cmake -S . -B "$dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+elif [ $# -gt 0 ]; then
+  cmake -S . -B "$dir" "$@" >/dev/null
+fi
+cmake --build "$dir" --parallel "$jobs"

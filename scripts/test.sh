@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs dependencies, builds prt with its tests, and runs the whole suite:
+# first the Release build, then the unit tests again under AddressSanitizer
+# and UndefinedBehaviorSanitizer. Exit status non-zero on any failure.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+jobs=$(nproc 2>/dev/null || echo 2)
+
+echo "== Release build and tests"
+scripts/build.sh build
+ctest --test-dir build --output-on-failure --parallel "$jobs"
+
+echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
+scripts/build.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPRT_SANITIZE=ON -DPRT_BUILD_BENCH=OFF
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-asan --output-on-failure --parallel "$jobs" -L unit

@@ -1,0 +1,115 @@
+// Clamped-cosine convolution and windowing.
+#include "test_util.h"
+
+#include <prt/error.h>
+#include <prt/filter.h>
+#include <prt/quadrature.h>
+
+#include <gtest/gtest.h>
+
+namespace prt {
+namespace {
+
+TEST(ClampedCosine, MatchesExactQuadratureForEveryBand) {
+  // A_l = sqrt(4pi/(2l+1)) * integral of max(z,0) Y_l0; Gauss-Legendre in z on
+  // [0,1] with 40 nodes is exact for the degree <= 64 integrand.
+  const Rule1D gl = gauss_legendre(40, 0.0, 1.0);
+  const int n = 64;
+  std::vector<double> Y(sh::num_coeffs(n)), c(n, 0.0);
+  for (std::size_t i = 0; i < gl.x.size(); ++i) {
+    const double z = gl.x[i];
+    sh::eval<double>(n, std::sqrt(1 - z * z), 0, z, Y.data());
+    for (int l = 0; l < n; ++l) c[l] += 2 * M_PI * gl.w[i] * z * Y[sh::index(l, 0)];
+  }
+  for (int l = 0; l < n; ++l)
+    EXPECT_NEAR(std::sqrt(4 * M_PI / (2 * l + 1)) * c[l], sh::clamped_cosine_factor(l), 1e-13) << l;
+}
+
+TEST(ClampedCosine, DirectionalLightTruncationFigures) {
+  // 3-band irradiance of a unit directional light (radiance = delta at +z,
+  // exact irradiance max(cos, 0)): the truncation users should know about:
+  // E(0) = 17/16, E(90) = 3/32, E(180) = 1/16 instead of 1, 0, 0.
+  std::vector<glm::dvec3> c(9);
+  double Y[9];
+  sh::eval<double>(3, 0, 0, 1, Y);
+  for (int k = 0; k < 9; ++k) c[k] = glm::dvec3(Y[k]);  // projection of a delta at +z
+  sh::scale_bands(std::span<glm::dvec3>(c), sh::clamped_cosine_factors(3));
+  EXPECT_NEAR(evaluate(c, {0, 0, 1}).x, 17.0 / 16.0, 1e-14);
+  EXPECT_NEAR(evaluate(c, {1, 0, 0}).x, 3.0 / 32.0, 1e-14);
+  EXPECT_NEAR(evaluate(c, {0, 0, -1}).x, 1.0 / 16.0, 1e-14);
+}
+
+TEST(Window, Factors) {
+  const auto none = sh::window_factors(sh::Window::None, 5, 3);
+  for (double f : none) EXPECT_EQ(f, 1.0);
+  const auto h = sh::window_factors(sh::Window::Hanning, 5, 4);
+  EXPECT_DOUBLE_EQ(h[0], 1.0);
+  EXPECT_DOUBLE_EQ(h[2], 0.5);  // (1 + cos(pi/2)) / 2
+  EXPECT_EQ(h[4], 0.0);         // l >= w
+  const auto s = sh::window_factors(sh::Window::Lanczos, 5, 4);
+  EXPECT_DOUBLE_EQ(s[0], 1.0);
+  EXPECT_NEAR(s[2], std::sin(M_PI / 2) / (M_PI / 2), 1e-15);
+  EXPECT_EQ(s[4], 0.0);
+  EXPECT_THROW(sh::window_factors(sh::Window::Hanning, 5, 0), Error);
+  EXPECT_THROW(sh::parse_window("gauss"), Error);
+  EXPECT_EQ(sh::parse_window("lanczos"), sh::Window::Lanczos);
+}
+
+// min over many random directions of the reconstruction.
+double dense_min(const std::vector<glm::dvec3>& c) {
+  double mn = 1e300;
+  for (const auto& d : test::random_directions(20000, 99)) {
+    const auto v = evaluate(c, d);
+    mn = std::min({mn, v.x, v.y, v.z});
+  }
+  return mn;
+}
+
+TEST(Window, AutoMakesASunInADimSkyNonNegative) {
+  // 9 bands of a 1e5 one-pixel sun in a sky of 0.05: rings to large negatives.
+  const int W = 256, H = 128, n = 9;
+  std::vector<float> rgb(std::size_t(W) * H * 3, 0.05f);
+  for (int ch = 0; ch < 3; ++ch) rgb[(std::size_t(30) * W + 77) * 3 + ch] = 1e5f;
+  auto c = project(make_latlong(W, H, std::move(rgb)), n);
+  ASSERT_LT(dense_min(c), -1.0);
+  const auto r = sh::apply_window(std::span<glm::dvec3>(c), sh::Window::Auto, 0);
+  EXPECT_TRUE(r.windowed);
+  EXPECT_TRUE(r.achieved);
+  EXPECT_GE(r.min_after, 0.0);  // the guarantee: non-negative at every check-grid node
+  EXPECT_GT(r.width, 1.0);
+  // Between grid nodes a dip is possible but small next to the mean
+  // (c_00 Y_00); allow 1% of it.
+  EXPECT_GT(dense_min(c), -0.01 * c[0].x * 0.5 / std::sqrt(M_PI));
+}
+
+TEST(Window, AutoPicksTheWeakestSufficientWindow) {
+  const int W = 128, H = 64, n = 7;
+  std::vector<float> rgb(std::size_t(W) * H * 3, 0.1f);
+  for (int ch = 0; ch < 3; ++ch) rgb[(std::size_t(10) * W + 5) * 3 + ch] = 5e3f;
+  const auto c = project(make_latlong(W, H, std::move(rgb)), n);
+  const auto r = sh::choose_window(c);
+  ASSERT_TRUE(r.windowed);
+  // A window 1% wider (weaker) must fail on the same check grid.
+  auto wider = c;
+  sh::scale_bands(std::span<glm::dvec3>(wider), sh::window_factors(sh::Window::Hanning, n, r.width * 1.01));
+  EXPECT_LT(sh::choose_window(wider).min_before, 0.0);
+}
+
+TEST(Window, AutoLeavesNonNegativeFunctionsAlone) {
+  auto c = project(make_latlong(64, 32, std::vector<float>(64 * 32 * 3, 2.0f)), 5);
+  const auto before = c;
+  const auto r = sh::apply_window(std::span<glm::dvec3>(c), sh::Window::Auto, 0);
+  EXPECT_FALSE(r.windowed);
+  EXPECT_EQ(test::distance(c, before), 0.0);
+}
+
+TEST(Window, AutoReportsWhenImpossible) {
+  // Mean negative in one channel: no window can make it non-negative.
+  auto c = project(make_latlong(64, 32, std::vector<float>(64 * 32 * 3, -1.0f)), 3);
+  c[1] = glm::dvec3(3.0);
+  const auto r = sh::apply_window(std::span<glm::dvec3>(c), sh::Window::Auto, 0);
+  EXPECT_FALSE(r.achieved);
+}
+
+}  // namespace
+}  // namespace prt
