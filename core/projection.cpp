@@ -38,6 +38,21 @@ glm::dmat3 world_to_local() {
   return P;
 }
 
+// Dot product with four partial sums in a fixed order: vectorises without
+// -ffast-math and gives the same bits on every run.
+inline double dot(const double* a, const double* b, int n) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    s0 += a[i] * b[i];
+    s1 += a[i + 1] * b[i + 1];
+    s2 += a[i + 2] * b[i + 2];
+    s3 += a[i + 3] * b[i + 3];
+  }
+  for (; i < n; ++i) s0 += a[i] * b[i];
+  return (s0 + s1) + (s2 + s3);
+}
+
 // Rows are summed in fixed chunks whose partial sums are added in order, so
 // the result does not depend on how TBB schedules them.
 constexpr int kRowsPerChunk = 8;
@@ -126,13 +141,8 @@ std::vector<glm::dvec3> project_latlong(const EnvMap& map, int bands, Quadrature
         const double* sm = F.s.data() + std::size_t(m) * W;
         for (int ch = 0; ch < 3; ++ch) {
           const double* L = planar.data() + std::size_t(ch) * W;
-          double a = 0.0, b = 0.0;
-          for (int x = 0; x < W; ++x) {
-            a += L[x] * cm[x];
-            b += L[x] * sm[x];
-          }
-          A[m * 3 + ch] = a;
-          B[m * 3 + ch] = b;
+          A[m * 3 + ch] = dot(L, cm, W);
+          B[m * 3 + ch] = dot(L, sm, W);
         }
       }
       const double* polar = row_polar.data() + std::size_t(y) * nt;
@@ -157,32 +167,119 @@ std::vector<glm::dvec3> project_latlong(const EnvMap& map, int bands, Quadrature
   return world;
 }
 
+// Rotates coefficients about the z axis by alpha in place (O(bands^2)): for
+// g(d) = f(Rz(alpha)^T d), c'_m = c_m cos(m a) - c_-m sin(m a) and
+// c'_-m = c_m sin(m a) + c_-m cos(m a).
+void rotate_about_z(std::vector<glm::dvec3>& c, int n, double alpha) {
+  for (int m = 1; m < n; ++m) {
+    const double cm = std::cos(m * alpha), sm = std::sin(m * alpha);
+    for (int l = m; l < n; ++l) {
+      glm::dvec3& p = c[sh::index(l, m)];
+      glm::dvec3& q = c[sh::index(l, -m)];
+      const glm::dvec3 pm = p;
+      p = pm * cm - q * sm;
+      q = pm * sm + q * cm;
+    }
+  }
+}
+
+// Cube maps in O(6 N^2 bands + 6 N bands^3), with the same quadrature as a
+// texel-by-texel sum (basis at the texel centre times the exact solid angle).
+//
+// Every face is the template face p(s, t) = (s, -t, 1) / rho turned by a
+// fixed rotation R_f (read off cube_direction). On the template, the texels
+// of row t lie on the great circle through e1 = (1,0,0) and (0,-t,1): in the
+// row frame F_t = [x' y' z'] with x' = (0,-t,1)/r, y' = e1, z' = (0,1,t)/r,
+// r = sqrt(1+t^2), texel s sits on the equator at phi = atan2(s, r), where
+// Y_lm = P_lm(0) (cos m phi, sin m phi): the row needs only the Fourier sums
+// A_m, B_m of its texels (N * bands). The row frames differ by a turn about
+// e1: F_t = F_0 Ry(atan t), and Ry(a) = K Rz(a) K^T with K = Rx(-90 deg), so
+//   c_face = Rot(R_f F_0 K) sum_rows Rz(atan t) Rot(K^T) c_row,
+// one fixed rotation per row (bands^3), a z-turn per row (bands^2) and one
+// rotation per face.
 std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
   const int N = map.width, n = bands, nc = sh::num_coeffs(n);
-  std::vector<double> omega(std::size_t(N) * N);
+  glm::dmat3 F0(0.0);  // columns x'_0 = (0,0,1), y'_0 = (1,0,0), z'_0 = (0,1,0)
+  F0[0] = {0, 0, 1};
+  F0[1] = {1, 0, 0};
+  F0[2] = {0, 1, 0};
+  const glm::dmat3 K = sh::rotation_axis_angle({1, 0, 0}, -M_PI / 2);
+  const sh::Rotation to_z(n, glm::transpose(K));
+  std::vector<double> equator(sh::num_tri(n));
+  sh::eval_polar<double>(n, 0.0, 1.0, equator.data());
+
+  // Exact texel solid angles (the same on every face), from the (N+1)^2
+  // corners: omega = A(s0,t0) - A(s0,t1) - A(s1,t0) + A(s1,t1).
+  std::vector<double> corner(std::size_t(N + 1) * (N + 1)), omega(std::size_t(N) * N);
+  for (int j = 0; j <= N; ++j)
+    for (int i = 0; i <= N; ++i) {
+      const double x = 2.0 * i / N - 1.0, y = 2.0 * j / N - 1.0;
+      corner[std::size_t(j) * (N + 1) + i] = std::atan2(x * y, std::sqrt(x * x + y * y + 1.0));
+    }
   for (int v = 0; v < N; ++v)
-    for (int u = 0; u < N; ++u) omega[std::size_t(v) * N + u] = cube_texel_solid_angle(u, v, N);
-  const int rows = 6 * N;  // (face, v) pairs
-  const int chunks = (rows + kRowsPerChunk - 1) / kRowsPerChunk;
+    for (int u = 0; u < N; ++u) {
+      const double* c0 = corner.data() + std::size_t(v) * (N + 1) + u;
+      const double* c1 = c0 + (N + 1);
+      omega[std::size_t(v) * N + u] = c0[0] - c1[0] - c0[1] + c1[1];
+    }
+  const int chunks_per_face = (N + kRowsPerChunk - 1) / kRowsPerChunk;
+  const int chunks = 6 * chunks_per_face;
   std::vector<glm::dvec3> partial(std::size_t(chunks) * nc, glm::dvec3(0.0));
   tbb::parallel_for(0, chunks, [&](int chunk) {
-    std::vector<double> Y(nc);
+    const int face = chunk / chunks_per_face, v0 = (chunk % chunks_per_face) * kRowsPerChunk;
+    const int v1 = std::min(N, v0 + kRowsPerChunk);
+    std::vector<double> wl(std::size_t(3) * N), cs(N), sn(N), cm(N), sm(N);
+    std::vector<glm::dvec3> row(nc), turned(nc);
     glm::dvec3* acc = partial.data() + std::size_t(chunk) * nc;
-    const int r1 = std::min(rows, (chunk + 1) * kRowsPerChunk);
-    for (int r = chunk * kRowsPerChunk; r < r1; ++r) {
-      const int face = r / N, v = r % N;
-      const float* row = map.rgb.data() + (std::size_t(face) * N + v) * N * 3;
+    for (int v = v0; v < v1; ++v) {
+      const double t = 2.0 * (v + 0.5) / N - 1.0, r = std::sqrt(1.0 + t * t);
+      const float* L = map.rgb.data() + (std::size_t(face) * N + v) * N * 3;
       for (int u = 0; u < N; ++u) {
-        const glm::dvec3 d = cube_texel_direction(face, u, v, N);
-        sh::eval<double>(n, d.x, d.y, d.z, Y.data());
-        const glm::dvec3 L = omega[std::size_t(v) * N + u] * glm::dvec3(row[3 * u], row[3 * u + 1], row[3 * u + 2]);
-        for (int k = 0; k < nc; ++k) acc[k] += Y[k] * L;
+        const double s = 2.0 * (u + 0.5) / N - 1.0, rho = std::sqrt(s * s + r * r);
+        const double w = omega[std::size_t(v) * N + u];
+        for (int ch = 0; ch < 3; ++ch) wl[std::size_t(ch) * N + u] = w * L[3 * u + ch];
+        cs[u] = r / rho;
+        sn[u] = s / rho;
+        cm[u] = 1.0;
+        sm[u] = 0.0;
       }
+      // Fourier sums along the row, then the equator's polar factors.
+      std::fill(row.begin(), row.end(), glm::dvec3(0.0));
+      for (int m = 0; m < n; ++m) {
+        glm::dvec3 A(0.0), B(0.0);
+        for (int ch = 0; ch < 3; ++ch) {
+          const double* x = wl.data() + std::size_t(ch) * N;
+          A[ch] = dot(x, cm.data(), N);
+          B[ch] = dot(x, sm.data(), N);
+        }
+        for (int l = m; l < n; ++l) {
+          const double p = equator[sh::tri_index(l, m)];
+          row[sh::index(l, m)] = p * A;
+          if (m > 0) row[sh::index(l, -m)] = p * B;
+        }
+        for (int u = 0; u < N; ++u) {  // (cos, sin)(m+1) phi by one complex product
+          const double c1 = cm[u] * cs[u] - sm[u] * sn[u];
+          sm[u] = sm[u] * cs[u] + cm[u] * sn[u];
+          cm[u] = c1;
+        }
+      }
+      to_z.apply(row, turned);
+      rotate_about_z(turned, n, std::atan(t));
+      for (int k = 0; k < nc; ++k) acc[k] += turned[k];
     }
   });
-  std::vector<glm::dvec3> c(nc, glm::dvec3(0.0));
-  for (int chunk = 0; chunk < chunks; ++chunk)
-    for (int k = 0; k < nc; ++k) c[k] += partial[std::size_t(chunk) * nc + k];
+
+  std::vector<glm::dvec3> c(nc, glm::dvec3(0.0)), face_sum(nc), face_world(nc);
+  for (int face = 0; face < 6; ++face) {
+    std::fill(face_sum.begin(), face_sum.end(), glm::dvec3(0.0));
+    for (int i = 0; i < chunks_per_face; ++i)
+      for (int k = 0; k < nc; ++k) face_sum[k] += partial[std::size_t(face * chunks_per_face + i) * nc + k];
+    // R_f maps the template (s, -t, 1) to cube_direction(face, s, t).
+    const glm::dvec3 o = cube_direction(face, 0, 0);
+    const glm::dmat3 Rf(cube_direction(face, 1, 0) - o, o - cube_direction(face, 0, 1), o);
+    sh::Rotation(n, Rf * F0 * K).apply(face_sum, face_world);
+    for (int k = 0; k < nc; ++k) c[k] += face_world[k];
+  }
   return c;
 }
 

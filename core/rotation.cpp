@@ -19,6 +19,22 @@ constexpr std::size_t band_offset(int l) {
 Rotation::Rotation(int bands, const glm::dmat3& R) : bands_(bands) {
   check_bands(bands);
   d_.resize(band_offset(bands));
+  // The recurrence's weights u, v, w depend on (l, m, n) only: tabulate them
+  // once so that set(), called every frame, does no sqrt or division.
+  uvw_.resize(3 * band_offset(bands));
+  for (int l = 2; l < bands; ++l) {
+    double* t = uvw_.data() + 3 * band_offset(l);
+    for (int m = -l; m <= l; ++m) {
+      const int am = std::abs(m);
+      const double d = m == 0 ? 1.0 : 0.0;
+      for (int n = -l; n <= l; ++n, t += 3) {
+        const double denom = std::abs(n) < l ? double(l + n) * (l - n) : double(2 * l) * (2 * l - 1);
+        t[0] = std::sqrt(double(l + m) * (l - m) / denom);
+        t[1] = 0.5 * std::sqrt((1.0 + d) * (l + am - 1) * (l + am) / denom) * (1.0 - 2.0 * d);
+        t[2] = -0.5 * std::sqrt(double(l - am - 1) * (l - am) / denom) * (1.0 - d);
+      }
+    }
+  }
   set(R);
 }
 
@@ -58,14 +74,10 @@ void Rotation::set(const glm::dmat3& R) {
       if (b == -l) return r1(i, 1) * prev(a, -l + 1) + r1(i, -1) * prev(a, l - 1);
       return r1(i, 0) * prev(a, b);
     };
+    const double* t = uvw_.data() + 3 * band_offset(l);
     for (int m = -l; m <= l; ++m) {
-      const int am = std::abs(m);
-      const double d = m == 0 ? 1.0 : 0.0;
-      for (int n = -l; n <= l; ++n) {
-        const double denom = std::abs(n) < l ? double(l + n) * (l - n) : double(2 * l) * (2 * l - 1);
-        const double u = std::sqrt(double(l + m) * (l - m) / denom);
-        const double v = 0.5 * std::sqrt((1.0 + d) * (l + am - 1) * (l + am) / denom) * (1.0 - 2.0 * d);
-        const double wc = -0.5 * std::sqrt(double(l - am - 1) * (l - am) / denom) * (1.0 - d);
+      for (int n = -l; n <= l; ++n, t += 3) {
+        const double u = t[0], v = t[1], wc = t[2];
         double value = 0.0;
         if (u != 0.0) value += u * P(0, m, n);
         if (v != 0.0) {
@@ -73,9 +85,9 @@ void Rotation::set(const glm::dmat3& R) {
           if (m == 0)
             V = P(1, 1, n) + P(-1, -1, n);
           else if (m > 0)
-            V = P(1, m - 1, n) * std::sqrt(1.0 + (m == 1)) - P(-1, -m + 1, n) * (1.0 - (m == 1));
+            V = m == 1 ? P(1, 0, n) * M_SQRT2 : P(1, m - 1, n) - P(-1, -m + 1, n);
           else
-            V = P(1, m + 1, n) * (1.0 - (m == -1)) + P(-1, -m - 1, n) * std::sqrt(1.0 + (m == -1));
+            V = m == -1 ? P(-1, 0, n) * M_SQRT2 : P(1, m + 1, n) + P(-1, -m - 1, n);
           value += v * V;
         }
         if (wc != 0.0) {

@@ -42,7 +42,9 @@ std::string_view quadrature_name(Quadrature q);
 // the row integral of every (l, m) polar factor (q nodes per row, q <= 8 for
 // usual maps); the map's frame (polar axis +Y) is turned into the SH frame
 // (polar axis +Z) by one exact SH rotation at the end.
-// Cube cost: O(6 N^2 bands^2): the basis is evaluated at every texel.
+// Cube cost: O(6 N^2 bands + 6 N bands^3): each face row lies on a great
+// circle, so in the row's own frame it needs only Fourier sums, and one fixed
+// rotation plus a turn about z brings it to the face (see projection.cpp).
 std::vector<glm::dvec3> project(const EnvMap& map, int bands, Quadrature q = Quadrature::Box);
 
 // Reconstruction: sum_k c_k Y_k(d) for a unit direction d.

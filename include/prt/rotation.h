@@ -51,7 +51,8 @@ class Rotation {
 
   int bands_ = 0;
   glm::dmat3 R_{1.0};
-  std::vector<double> d_;  // all bands, band l at offset l(2l-1)(2l+1)/3
+  std::vector<double> d_;    // all bands, band l at offset l(2l-1)(2l+1)/3
+  std::vector<double> uvw_;  // recurrence weights u, v, w per entry of d_ (bands >= 2)
 };
 
 // The rotation prt's --rotate yaw,pitch,roll means, angles in degrees:

@@ -1,0 +1,103 @@
+// bench/bench_main.cpp - runs the benchmarks, then prints speed as ratios
+// against the baselines measured in the same process (never as absolute
+// pass/fail assertions), plus the per-frame rotation budgets for reference.
+#include <benchmark/benchmark.h>
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+// The console reporter, also recording the wall time per iteration (s) of
+// every successful benchmark, keyed "BM_Name" or "BM_Name/args": the median
+// over repetitions when --benchmark_repetitions gives one, else the mean of
+// the runs.
+class RecordingReporter : public benchmark::ConsoleReporter {
+ public:
+  using ConsoleReporter::ConsoleReporter;
+
+  void ReportRuns(const std::vector<Run>& reports) override {
+    ConsoleReporter::ReportRuns(reports);
+    for (const Run& r : reports) {
+      if (r.error_occurred || r.iterations == 0) continue;
+      std::string key = r.run_name.function_name;
+      if (!r.run_name.args.empty()) key += "/" + r.run_name.args;
+      const double s = r.GetAdjustedRealTime() / benchmark::GetTimeUnitMultiplier(r.time_unit);
+      if (r.run_type == Run::RT_Iteration) {
+        runs_[key].first += s;
+        runs_[key].second += 1;
+      } else if (r.aggregate_name == "median") {
+        median_[key] = s;
+      }
+    }
+  }
+
+  // Seconds per iteration, or < 0 when the benchmark did not run.
+  double seconds(const std::string& key) const {
+    if (const auto m = median_.find(key); m != median_.end()) return m->second;
+    const auto it = runs_.find(key);
+    return it == runs_.end() ? -1.0 : it->second.first / it->second.second;
+  }
+
+ private:
+  std::map<std::string, std::pair<double, int>> runs_;  // sum of seconds, count
+  std::map<std::string, double> median_;
+};
+
+void ratio(const RecordingReporter& rep, const char* what, const std::string& slow, const std::string& fast) {
+  const double s = rep.seconds(slow), f = rep.seconds(fast);
+  if (s > 0 && f > 0) std::printf("speedup %s: %.1f x  (%s / %s)\n", what, s / f, slow.c_str(), fast.c_str());
+}
+
+void budget(const RecordingReporter& rep, const char* what, const std::string& key, double target_us) {
+  const double s = rep.seconds(key);
+  if (s > 0)
+    std::printf("%s: %.2f us  (target < %g us: %s)\n", what, s * 1e6, target_us,
+                s * 1e6 < target_us ? "met" : "NOT met");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  RecordingReporter rep(isatty(STDOUT_FILENO) ? benchmark::ConsoleReporter::OO_ColorTabular
+                                              : benchmark::ConsoleReporter::OO_Tabular);
+  benchmark::RunSpecifiedBenchmarks(&rep);
+  benchmark::Shutdown();
+
+  std::printf("\n---- ratios (baselines measured in this process; the baselines are deliberately naive) ----\n");
+  ratio(rep, "whole-process prt project vs naive std::sph_legendre baseline", "BM_NaiveBaseline", "BM_ProjectWhole");
+  ratio(rep, "whole-process prt project on 1 thread (TBB + OpenEXR) vs naive std::sph_legendre baseline", "BM_NaiveBaseline",
+        "BM_ProjectWhole1T");
+  ratio(rep, "prt::project 9 bands, all threads vs 1 thread", "BM_ProjectOnly1T/9", "BM_ProjectOnly/9");
+  ratio(rep, "load_envmap(forest.exr), all threads vs 1 thread", "BM_LoadOnly1T", "BM_LoadOnly");
+  ratio(rep, "cube 6x256^2, 9 bands, great-circle rows vs texel-by-texel sum (both 1 thread)", "BM_CubeTexelSum/9",
+        "BM_ProjectCube1T/9");
+  ratio(rep, "cube 6x256^2, 16 bands, great-circle rows vs texel-by-texel sum (both 1 thread)", "BM_CubeTexelSum/16",
+        "BM_ProjectCube1T/16");
+  ratio(rep, "prt::sh::eval double vs naive std::sph_legendre at 9 bands", "BM_EvalNaive/9", "BM_EvalDouble/9");
+  ratio(rep, "prt::sh::eval float vs naive std::sph_legendre at 9 bands", "BM_EvalNaive/9", "BM_EvalFloat/9");
+  ratio(rep, "rotation per frame (set + apply RGB) vs re-projection, 9 bands", "BM_RotateByReprojectRGB/9",
+        "BM_RotationFrameRGB/9");
+  ratio(rep, "rotation per frame (set + apply RGB) vs re-projection, 16 bands", "BM_RotateByReprojectRGB/16",
+        "BM_RotationFrameRGB/16");
+
+  std::printf("\n---- breakdown and budgets (for reference, not assertions) ----\n");
+  for (const char* key : {"BM_ProjectWhole", "BM_LoadOnly", "BM_ProjectOnly/9", "BM_FormatOnly", "BM_ProjectWhole1T",
+                          "BM_LoadOnly1T", "BM_ProjectOnly1T/9", "BM_NaiveBaseline", "BM_ProjectCube/3",
+                          "BM_ProjectCube/9", "BM_ProjectCube/16"}) {
+    const double s = rep.seconds(key);
+    if (s > 0) std::printf("%-20s %10.3f ms\n", key, s * 1e3);
+  }
+  budget(rep, "rotation build, 9 bands", "BM_RotationBuild/9", 10);
+  budget(rep, "rotation build, 32 bands", "BM_RotationBuild/32", 1000);
+  budget(rep, "per-frame build + apply RGB, 9 bands", "BM_RotationFrameRGB/9", 100);
+  budget(rep, "per-frame build + apply RGB, 16 bands", "BM_RotationFrameRGB/16", 1000);
+  return 0;
+}
