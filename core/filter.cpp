@@ -29,11 +29,6 @@ std::vector<double> clamped_cosine_factors(int bands) {
 }
 
 namespace {
-int bands_of(std::size_t n) {
-  const int b = static_cast<int>(std::lround(std::sqrt(double(n))));
-  PRT_CHECK_OP(static_cast<std::size_t>(b) * b, ==, n);
-  return b;
-}
 
 template <typename V>
 void scale_bands_impl(std::span<V> c, std::span<const double> f) {

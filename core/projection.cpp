@@ -19,12 +19,6 @@ Quadrature parse_quadrature(std::string_view name) {
 
 std::string_view quadrature_name(Quadrature q) { return q == Quadrature::Box ? "box" : "point"; }
 
-int bands_of(std::size_t n) {
-  const int b = static_cast<int>(std::lround(std::sqrt(double(n))));
-  PRT_CHECK_OP(static_cast<std::size_t>(b) * b, ==, n);
-  return b;
-}
-
 namespace {
 
 // The lat-long map's own frame: polar axis +Y (theta of the map is the polar
@@ -297,7 +291,7 @@ std::vector<glm::dvec3> project(const EnvMap& map, int bands, Quadrature q) {
 }
 
 glm::dvec3 evaluate(std::span<const glm::dvec3> coeffs, const glm::dvec3& d) {
-  const int n = bands_of(coeffs.size());
+  const int n = sh::bands_of(coeffs.size());
   double Y[sh::kMaxBands * sh::kMaxBands];
   sh::eval<double>(n, d.x, d.y, d.z, Y);
   glm::dvec3 v(0.0);
@@ -307,7 +301,7 @@ glm::dvec3 evaluate(std::span<const glm::dvec3> coeffs, const glm::dvec3& d) {
 
 std::vector<float> reconstruct_latlong(std::span<const glm::dvec3> coeffs, int W, int H) {
   PRT_CHECK(W > 0 && H > 0);
-  const int n = bands_of(coeffs.size());
+  const int n = sh::bands_of(coeffs.size());
   std::vector<glm::dvec3> local(coeffs.size());
   sh::Rotation(n, world_to_local()).apply(coeffs, local);
   const FourierTable F(W, n);

@@ -117,8 +117,7 @@ template <typename V>
 void Rotation::apply_impl(std::span<const V> in, std::span<V> out) const {
   const std::size_t n = in.size();
   PRT_CHECK_OP(out.size(), ==, n);
-  const int b = static_cast<int>(std::lround(std::sqrt(double(n))));
-  PRT_CHECK_OP(static_cast<std::size_t>(b) * b, ==, n);
+  const int b = bands_of(n);
   PRT_CHECK_OP(b, <=, bands_);
   for (int l = 0; l < b; ++l) {
     const double* D = d_.data() + band_offset(l);

@@ -65,6 +65,12 @@ inline void legendre_columns(int bands, T z, T s, Emit&& emit) {
 
 }  // namespace
 
+int bands_of(std::size_t n) {
+  const int b = static_cast<int>(std::lround(std::sqrt(double(n))));
+  PRT_CHECK_OP(static_cast<std::size_t>(b) * b, ==, n);
+  return b;
+}
+
 void check_bands(int bands, const char* what) {
   if (bands < 1 || bands > kMaxBands)
     throw Error(std::string(what) + " must be between 1 and " + std::to_string(kMaxBands) + ", got " +

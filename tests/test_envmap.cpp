@@ -6,6 +6,7 @@
 // Grey and odd-channel images are written by the small EXR and PNG encoders
 // below (independent of prt's own writer, which always writes RGB).
 #include <prt/envmap.h>
+#include <prt/quadrature.h>
 #include <prt/error.h>
 
 #include <gtest/gtest.h>
@@ -234,30 +235,6 @@ double srgb_decode(double e) { return e <= 0.04045 ? e / 12.92 : std::pow((e + 0
 
 double angle_between(const glm::dvec3& a, const glm::dvec3& b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
-}
-
-// Gauss-Legendre rule on [a, b], computed here (independently of prt's own
-// quadrature) by Newton iteration on P_n.
-void gauss_legendre(int n, double a, double b, std::vector<double>& x, std::vector<double>& w) {
-  x.assign(n, 0.0);
-  w.assign(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 0.0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = z;
-      for (int k = 2; k <= n; ++k) {
-        const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = n * (z * p1 - p0) / (z * z - 1.0);
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-16) break;
-    }
-    x[i] = 0.5 * (a + b) + 0.5 * (b - a) * z;
-    w[i] = (b - a) / ((1.0 - z * z) * dp * dp);
-  }
 }
 
 void expect_dir_near(const glm::dvec3& got, const glm::dvec3& want, double tol, const std::string& what) {
@@ -581,8 +558,12 @@ TEST(Cube, TexelSolidAngleMatchesNumericalIntegration) {
                                 std::array{7, 9, 16}, std::array{31, 32, 64}, std::array{0, 63, 64}, std::array{2, 0, 3}}) {
     const double s0 = 2.0 * u / N - 1.0, s1 = 2.0 * (u + 1) / N - 1.0;
     const double t0 = 2.0 * v / N - 1.0, t1 = 2.0 * (v + 1) / N - 1.0;
-    gauss_legendre(40, s0, s1, xs, ws);
-    gauss_legendre(40, t0, t1, ys, wys);
+    // prt's Gauss-Legendre rule is itself pinned by test_sh (Quadrature.*).
+    const prt::Rule1D rs = prt::gauss_legendre(40, s0, s1), rt = prt::gauss_legendre(40, t0, t1);
+    xs = rs.x;
+    ws = rs.w;
+    ys = rt.x;
+    wys = rt.w;
     double integral = 0.0;
     for (std::size_t i = 0; i < xs.size(); ++i)
       for (std::size_t j = 0; j < ys.size(); ++j)

@@ -54,7 +54,4 @@ glm::dvec3 evaluate(std::span<const glm::dvec3> coeffs, const glm::dvec3& d);
 // each pixel the value at its centre direction; O(W H bands + H bands^2).
 std::vector<float> reconstruct_latlong(std::span<const glm::dvec3> coeffs, int width, int height);
 
-// Number of bands of a coefficient vector (size must be a square).
-int bands_of(std::size_t num_coeffs);
-
 }  // namespace prt

@@ -26,6 +26,10 @@ constexpr int num_coeffs(int bands) { return bands * bands; }
 constexpr int tri_index(int l, int m) { return l * (l + 1) / 2 + m; }
 constexpr int num_tri(int bands) { return bands * (bands + 1) / 2; }
 
+// Band count of a coefficient vector of n entries; n must be a square
+// (checked: a non-square size is a bug in the caller).
+int bands_of(std::size_t num_coeffs);
+
 // Throws prt::Error unless 1 <= bands <= kMaxBands; `what` names the caller's
 // option in the message (e.g. "--bands").
 void check_bands(int bands, const char* what = "bands");
