@@ -16,8 +16,23 @@ namespace prt {
 void write_atomically(const std::string& path, const std::function<void(const std::string& tmp)>& write) {
   namespace fs = std::filesystem;
   static std::atomic<unsigned> counter{0};
-  const fs::path p(path);
+  fs::path p(path);
   if (p.filename().empty()) throw Error(path + ": not a file name");
+  std::error_code ec;
+  // A symbolic link is written through: the file it names is replaced, the
+  // link stays.
+  if (fs::is_symlink(p, ec)) {
+    const fs::path target = fs::weakly_canonical(p, ec);
+    if (!ec) p = target;
+  }
+  const fs::file_status st = fs::status(p, ec);
+  if (fs::is_directory(st)) throw Error(path + ": is a directory");
+  if (fs::exists(st) && !fs::is_regular_file(st)) {
+    // A device, FIFO or socket (e.g. /dev/stdout): nothing to replace
+    // atomically; renaming over it would destroy it. Write in place.
+    write(p.string());
+    return;
+  }
   // Hidden, unique, and with the same extension (image writers choose the
   // format by extension).
   std::string name = ".";
@@ -28,11 +43,10 @@ void write_atomically(const std::string& path, const std::function<void(const st
   try {
     write(tmp.string());
   } catch (...) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
     throw;
   }
-  std::error_code ec;
   fs::rename(tmp, p, ec);
   if (ec) {
     fs::remove(tmp, ec);

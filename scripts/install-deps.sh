@@ -8,7 +8,7 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git
   # numerics, threading, ray tracing
-  libtbb-dev libembree-dev libglm-dev
+  libtbb-dev libembree-dev libglm-dev libxxhash-dev
   # images and meshes
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
   # command line, JSON, logging

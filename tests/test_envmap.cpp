@@ -8,8 +8,10 @@
 #include <prt/envmap.h>
 #include <prt/quadrature.h>
 #include <prt/error.h>
+#include <prt/io.h>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +27,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -1233,3 +1236,42 @@ TEST(AtomicWrite, FailedRenameLeavesTheOldFileAndNoTemporary) {
 }
 
 }  // namespace
+
+// ---- special destinations -------------------------------------------------
+// Regression: renaming the temporary over a non-regular file destroyed it
+// (`-o /dev/null` turned /dev/null into a regular file when run as root).
+
+TEST(AtomicWrite, WritesThroughASymlink) {
+  const fs::path dir = fs::temp_directory_path() / ("prt_symlink_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path target = dir / "target.txt", link = dir / "link.txt";
+  prt::write_text_file(target.string(), "old");
+  fs::create_symlink(target, link);
+  prt::write_text_file(link.string(), "new");
+  EXPECT_TRUE(fs::is_symlink(link));
+  std::ifstream f(target);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "new");
+  fs::remove_all(dir);
+}
+
+TEST(AtomicWrite, AFifoIsWrittenInPlaceNotReplaced) {
+  const fs::path dir = fs::temp_directory_path() / ("prt_fifo_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path fifo = dir / "pipe";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] {
+    std::ifstream in(fifo);
+    received.assign((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  });
+  prt::write_text_file(fifo.string(), "through the pipe");
+  reader.join();
+  EXPECT_EQ(received, "through the pipe");
+  EXPECT_EQ(fs::status(fifo).type(), fs::file_type::fifo);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicWrite, ADirectoryIsRefused) {
+  EXPECT_THROW(prt::write_text_file(fs::temp_directory_path().string(), "x"), prt::Error);
+}
