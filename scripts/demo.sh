@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The main job on the bundled scene: installs dependencies, builds prt, checks
-# its numerics, and projects every bundled environment map onto SH, writing
-# the coefficients and pictures of what the bands keep into out/.
+# its numerics, projects every bundled environment map onto SH (coefficients
+# and pictures of what the bands keep), precomputes shadowed and
+# interreflected transfer for the bundled model, and relights it under every
+# map, writing everything into out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -23,5 +25,19 @@ for env in envmaps/*.exr; do
     --reconstruct "$out/$name.irradiance.png" --reconstruct-size 512x256
 done
 echo
+echo "== prt precompute: models/scene.obj, shadowed and interreflected transfer (5 bands, 1024 rays/vertex)"
+"$prt" precompute models/scene.obj -o "$out/scene.shadowed.prt"
+"$prt" precompute models/scene.obj -o "$out/scene.interreflected.prt" --mode interreflected --bounces 2
+"$prt" info "$out/scene.interreflected.prt"
+
+echo
+echo "== prt relight: the model under every bundled map"
+for env in envmaps/*.exr; do
+  name=$(basename "$env" .exr)
+  "$prt" relight models/scene.obj "$out/scene.interreflected.prt" "$env" -q -o "$out/scene.$name.ply"
+done
+
+echo
 echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands keep),"
-echo "<map>.irradiance.glsl (paste-ready 3-band irradiance), <map>.irradiance.png (irradiance map)."
+echo "<map>.irradiance.glsl (paste-ready 3-band irradiance), <map>.irradiance.png (irradiance map),"
+echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance)."

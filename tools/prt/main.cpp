@@ -84,6 +84,11 @@ int main(int argc, char** argv) {
     commands[app.get_subcommands({})[before]] = std::move(run);
   };
   add(prt::cli::add_project);
+  add(prt::cli::add_precompute);
+  add(prt::cli::add_relight);
+  add(prt::cli::add_reference);
+  add(prt::cli::add_compare);
+  add(prt::cli::add_info);
   add(prt::cli::add_verify);
 
   // CLI11 reports an unknown command as "a subcommand is required"; name it.

@@ -1,0 +1,73 @@
+// prt/mesh.h - triangle meshes for precomputation: loading, validation, normals.
+//
+// Positions are in the file's units, world frame (docs/CONVENTIONS.md). The
+// vertex order of the file is kept (so transfer files line up with a user's
+// own copy of the mesh), except for formats that store vertices per corner
+// (OBJ, STL), whose identical corners are joined on load; --weld further
+// merges vertices that share a position.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+enum class NormalWeighting { Area, Angle };
+
+struct MeshOptions {
+  bool weld = false;               // merge vertices with bit-identical positions
+  bool file_normals = true;        // use the file's normals when it has them
+  NormalWeighting weighting = NormalWeighting::Area;  // for computed normals
+};
+
+// What loading found and did; printed by the command line.
+struct MeshReport {
+  std::size_t degenerate_triangles = 0;   // zero area: kept (indices stay), ignored by normals and rays
+  std::size_t unreferenced_vertices = 0;  // no triangle uses them: normal 0, transfer 0
+  std::size_t normals_computed = 0;       // vertices whose normal was computed (file had none or a bad one)
+  std::size_t zero_normals = 0;           // vertices left without a normal (only degenerate triangles): transfer 0
+  std::size_t welded = 0;                 // vertices removed by --weld
+  bool file_had_normals = false;
+  bool file_had_colors = false;
+};
+
+struct Mesh {
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;        // unit length, or zero (see MeshReport)
+  std::vector<glm::uvec3> triangles;     // counter-clockwise seen from the front
+  std::vector<glm::vec3> colors;         // per-vertex linear RGB from the file, or empty
+  std::string source;
+  MeshReport report;
+
+  std::size_t vertex_count() const { return positions.size(); }
+  // XXH3-64 of the positions and triangle indices (bytes as stored); what a
+  // transfer file records to refuse being used with another mesh.
+  std::uint64_t hash() const;
+  // Axis-aligned bounds and their diagonal length.
+  glm::vec3 bounds_min() const;
+  glm::vec3 bounds_max() const;
+  double diagonal() const;
+};
+
+// Loads OBJ, PLY, OFF, STL, glTF/GLB (anything Assimp reads), all meshes of
+// the file flattened into one with node transforms applied. Throws
+// prt::Error naming the file for: missing/unreadable file, parse errors, no
+// vertices, no triangles, NaN or infinite coordinates (with the vertex index),
+// out-of-range indices.
+Mesh load_mesh(const std::string& path, const MeshOptions& options = {});
+
+// Builds a mesh from arrays (tests, generated geometry), with the same
+// validation and normal computation as load_mesh. `normals` and `colors`
+// may be empty.
+Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangles,
+               std::vector<glm::vec3> normals = {}, std::vector<glm::vec3> colors = {},
+               const MeshOptions& options = {}, std::string source = "<memory>");
+
+// One line: "bunny.off: 37706 vertices, 75408 triangles, normals computed (area), 0 degenerate, ...".
+std::string describe(const Mesh& mesh);
+
+}  // namespace prt

@@ -1,0 +1,172 @@
+// Vertex CSV files and error measures: see prt/compare.h.
+#include <prt/compare.h>
+
+#include <prt/error.h>
+#include <prt/io.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <string_view>
+
+namespace prt {
+
+namespace {
+
+constexpr std::string_view kHeader = "vertex,r,g,b";
+constexpr std::string_view kHeaderSe = "vertex,r,g,b,se_r,se_g,se_b";
+
+void append_value(std::string& s, float v) {
+  char buf[32];
+  const int len = std::snprintf(buf, sizeof buf, "%.9g", double(v));
+  s.append(buf, std::size_t(len));
+}
+
+[[noreturn]] void fail(const std::string& path, std::size_t line, const std::string& what) {
+  throw Error(path + ":" + std::to_string(line) + ": " + what);
+}
+
+}  // namespace
+
+void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb,
+                      const std::vector<glm::vec3>* std_error) {
+  if (std_error) PRT_CHECK_OP(std_error->size(), ==, rgb.size());
+  std::string text;
+  text.reserve(rgb.size() * (std_error ? 80 : 40) + 32);
+  text.append(std_error ? kHeaderSe : kHeader).push_back('\n');
+  for (std::size_t v = 0; v < rgb.size(); ++v) {
+    text.append(std::to_string(v));
+    for (int c = 0; c < 3; ++c) {
+      if (!std::isfinite(rgb[v][c]) || (std_error && !std::isfinite((*std_error)[v][c])))
+        throw Error(path + ": refusing to write a non-finite value at vertex " + std::to_string(v));
+      text.push_back(',');
+      append_value(text, rgb[v][c]);
+    }
+    if (std_error)
+      for (int c = 0; c < 3; ++c) {
+        text.push_back(',');
+        append_value(text, (*std_error)[v][c]);
+      }
+    text.push_back('\n');
+  }
+  write_text_file(path, text);
+}
+
+std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm::vec3>* std_error) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path + ": cannot open for reading");
+  const std::string text{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+  if (f.bad()) throw Error(path + ": read error");
+
+  std::vector<glm::vec3> rgb;
+  if (std_error) std_error->clear();
+  std::size_t pos = 0, line_no = 0;
+  bool with_se = false;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line_no == 1) {
+      if (line == kHeaderSe)
+        with_se = true;
+      else if (line != kHeader)
+        fail(path, 1,
+             "expected the header '" + std::string(kHeader) + "' or '" + std::string(kHeaderSe) + "', got '" +
+                 std::string(line.substr(0, 80)) + "'");
+      continue;
+    }
+    if (line.empty()) {
+      // Only trailing blank lines are allowed.
+      if (text.find_first_not_of("\r\n", pos) == std::string::npos) break;
+      fail(path, line_no, "blank line");
+    }
+    const int columns = with_se ? 7 : 4;
+    double values[7];
+    std::size_t field = 0, start = 0;
+    for (int col = 0; col < columns; ++col) {
+      const std::size_t comma = line.find(',', start);
+      const bool last = col + 1 == columns;
+      if (!last && comma == std::string_view::npos)
+        fail(path, line_no, "expected " + std::to_string(columns) + " comma-separated fields, got " +
+                                std::to_string(col + 1));
+      if (last && comma != std::string_view::npos)
+        fail(path, line_no, "expected " + std::to_string(columns) + " comma-separated fields, got more");
+      const std::string_view tok = line.substr(start, last ? std::string_view::npos : comma - start);
+      start = comma + 1;
+      field = std::size_t(col);
+      if (col == 0) {
+        std::size_t index = 0;
+        const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), index);
+        if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty())
+          fail(path, line_no, "vertex index '" + std::string(tok.substr(0, 40)) + "' is not a whole number");
+        if (index != rgb.size())
+          fail(path, line_no, "expected vertex " + std::to_string(rgb.size()) + ", got " + std::to_string(index));
+        continue;
+      }
+      double x = 0;
+      const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), x);
+      if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty())
+        fail(path, line_no, "field " + std::to_string(field + 1) + " '" + std::string(tok.substr(0, 40)) +
+                                "' is not a number");
+      if (!std::isfinite(x) || !std::isfinite(float(x)))
+        fail(path, line_no, "field " + std::to_string(field + 1) + " '" + std::string(tok.substr(0, 40)) +
+                                "' is not finite (in float)");
+      values[col] = x;
+    }
+    rgb.emplace_back(float(values[1]), float(values[2]), float(values[3]));
+    if (with_se && std_error) std_error->emplace_back(float(values[4]), float(values[5]), float(values[6]));
+  }
+  if (line_no == 0) throw Error(path + ": empty file (expected the header '" + std::string(kHeader) + "')");
+  if (rgb.empty()) throw Error(path + ": no vertex lines after the header");
+  return rgb;
+}
+
+CompareResult compare_vertices(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
+  if (a.size() != b.size())
+    throw Error("vertex counts differ: " + std::to_string(a.size()) + " vs " + std::to_string(b.size()) +
+                " (reference)");
+  CompareResult r;
+  r.vertices = a.size();
+  if (a.empty()) return r;
+  const std::size_t n = a.size();
+  std::vector<double> diff(n);
+  double sum_d2 = 0, sum_b2 = 0, sum_b = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    const glm::dvec3 av(a[v]), bv(b[v]);
+    const double d2 = glm::dot(av - bv, av - bv), b2 = glm::dot(bv, bv);
+    diff[v] = std::sqrt(d2);
+    sum_d2 += d2;
+    sum_b2 += b2;
+    sum_b += std::sqrt(b2);
+    r.max_abs = std::max(r.max_abs, diff[v]);
+  }
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  r.mean_ref = sum_b / double(n);
+  r.eps = kCompareEpsFraction * r.mean_ref;
+  r.rms_abs = std::sqrt(sum_d2 / double(n));
+  r.rel_rms = sum_b2 > 0 ? std::sqrt(sum_d2 / sum_b2) : (sum_d2 > 0 ? inf : 0.0);
+  std::vector<double> rel(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const double denom = std::max(double(glm::length(glm::dvec3(b[v]))), r.eps);
+    rel[v] = diff[v] == 0 ? 0.0 : (denom > 0 ? diff[v] / denom : inf);
+    if (rel[v] > r.max_rel || v == 0) {
+      r.max_rel = rel[v];
+      r.max_vertex = v;
+    }
+  }
+  const std::size_t rank = (99 * n + 99) / 100;  // ceil(0.99 n), 1-based nearest rank, in integers
+  std::nth_element(rel.begin(), rel.begin() + (rank - 1), rel.end());
+  r.p99_rel = rel[rank - 1];
+  return r;
+}
+
+}  // namespace prt

@@ -1,0 +1,388 @@
+// Triangle meshes: loading through Assimp, validation, welding, vertex normals.
+// The contract is include/prt/mesh.h.
+
+#include <prt/error.h>
+#include <prt/mesh.h>
+
+#include <assimp/Importer.hpp>
+#include <assimp/config.h>
+#include <assimp/mesh.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+#include <xxhash.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <unordered_map>
+
+namespace prt {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A computed normal sum counts as cancelled (zero) when its length is at most
+// this fraction of the sum of its contributions' lengths: opposite faces that
+// cancel leave only double rounding (~1e-16 relative) behind, while any real
+// surface leaves far more.
+constexpr double kCancelledFraction = 1e-12;
+
+bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+glm::dvec3 to_double(const glm::vec3& v) { return glm::dvec3(v); }
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext;
+}
+
+std::string format_vec(const glm::vec3& v) {
+  std::ostringstream os;
+  os.precision(9);
+  os << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+  return os.str();
+}
+
+// Bit pattern of a position, so that welding merges exactly the positions that
+// are bit-identical (0.0 and -0.0 stay apart; NaN cannot occur here).
+struct PositionKey {
+  std::array<std::uint32_t, 3> bits;
+  bool operator==(const PositionKey&) const = default;
+};
+
+struct PositionKeyHash {
+  std::size_t operator()(const PositionKey& k) const noexcept {
+    return std::size_t(XXH3_64bits(k.bits.data(), sizeof(k.bits)));
+  }
+};
+
+PositionKey key_of(const glm::vec3& p) {
+  PositionKey k;
+  std::memcpy(k.bits.data(), &p, sizeof(k.bits));
+  return k;
+}
+
+// Merges vertices with bit-identical positions, keeping the first occurrence
+// (and its colour) and the relative order of the survivors. Returns, per new
+// vertex, whether it absorbed another vertex (its file normal is then dropped).
+std::vector<bool> weld(Mesh& mesh, std::vector<glm::vec3>& file_normals) {
+  const std::size_t n = mesh.positions.size();
+  std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> first;
+  first.reserve(n);
+  std::vector<std::uint32_t> remap(n);
+  std::vector<glm::vec3> positions, normals, colors;
+  std::vector<bool> merged;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto [it, inserted] = first.emplace(key_of(mesh.positions[i]), std::uint32_t(positions.size()));
+    remap[i] = it->second;
+    if (!inserted) {
+      merged[it->second] = true;
+      continue;
+    }
+    positions.push_back(mesh.positions[i]);
+    if (!file_normals.empty()) normals.push_back(file_normals[i]);
+    if (!mesh.colors.empty()) colors.push_back(mesh.colors[i]);
+    merged.push_back(false);
+  }
+  mesh.report.welded = n - positions.size();
+  for (auto& t : mesh.triangles) t = glm::uvec3(remap[t.x], remap[t.y], remap[t.z]);
+  mesh.positions = std::move(positions);
+  mesh.colors = std::move(colors);
+  file_normals = std::move(normals);
+  return merged;
+}
+
+// Fills mesh.normals and the normal counts of mesh.report from the topology
+// and, where usable, the file's normals.
+void compute_normals(Mesh& mesh, const std::vector<glm::vec3>& file_normals, const std::vector<bool>& ignore_file,
+                     const MeshOptions& options) {
+  const std::size_t n = mesh.positions.size();
+  std::vector<glm::dvec3> sum(n, glm::dvec3(0.0));
+  std::vector<double> magnitude(n, 0.0);  // sum of the contributions' lengths
+  std::vector<bool> referenced(n, false);
+
+  for (const glm::uvec3& tri : mesh.triangles) {
+    referenced[tri.x] = referenced[tri.y] = referenced[tri.z] = true;
+    // Start the triangle at its smallest index (a rotation keeps the winding),
+    // so two coincident triangles of opposite winding give exactly opposite
+    // cross products and cancel exactly.
+    glm::uvec3 t = tri;
+    while (t.x > t.y || t.x > t.z) t = glm::uvec3(t.y, t.z, t.x);
+    const glm::dvec3 p[3] = {to_double(mesh.positions[t.x]), to_double(mesh.positions[t.y]),
+                             to_double(mesh.positions[t.z])};
+    const glm::dvec3 c = glm::cross(p[1] - p[0], p[2] - p[0]);  // twice the area, along the face normal
+    const double len = glm::length(c);
+    // Degenerate: zero area in double (also repeated indices and collinear
+    // corners), or an overflow. Kept in the mesh, ignored here.
+    if (!(len > 0.0) || !std::isfinite(len)) {
+      ++mesh.report.degenerate_triangles;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) {
+      glm::dvec3 w;
+      if (options.weighting == NormalWeighting::Area) {
+        w = c;  // area weighting: the un-normalised face normal
+      } else {
+        // Angle weighting: the unit face normal times the corner angle, taken
+        // with atan2 (accurate for needle-thin corners, unlike acos).
+        const glm::dvec3 a = p[(k + 1) % 3] - p[k];
+        const glm::dvec3 b = p[(k + 2) % 3] - p[k];
+        const double angle = std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
+        w = c * (angle / len);
+      }
+      sum[t[k]] += w;
+      magnitude[t[k]] += glm::length(w);
+    }
+  }
+
+  mesh.normals.assign(n, glm::vec3(0.0f));
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!referenced[i]) {  // normal 0: no transfer is computed for it
+      ++mesh.report.unreferenced_vertices;
+      continue;
+    }
+    if (options.file_normals && !file_normals.empty() && !ignore_file[i]) {
+      const glm::dvec3 f = to_double(file_normals[i]);
+      const double len = glm::length(f);
+      if (std::isfinite(len) && len > 0.0) {
+        mesh.normals[i] = glm::vec3(f / len);
+        continue;
+      }
+    }
+    const double len = glm::length(sum[i]);
+    if (!(len > kCancelledFraction * magnitude[i]) || !std::isfinite(len)) {
+      ++mesh.report.zero_normals;  // only degenerate triangles, or cancelling faces
+      continue;
+    }
+    mesh.normals[i] = glm::vec3(sum[i] / len);
+    ++mesh.report.normals_computed;
+  }
+}
+
+// Assimp's OFF reader replaces an out-of-range vertex index by the last
+// vertex (it only logs an error), so OFF files are checked here first. Only a
+// definite bad index throws; anything this simple scan does not understand is
+// left to Assimp.
+void check_off_indices(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  // The tokens of the next non-empty line, '#' comments removed; false at the end.
+  auto next_tokens = [&](std::vector<std::string>& tokens) {
+    while (std::getline(in, line)) {
+      std::istringstream ls(line.substr(0, line.find('#')));
+      tokens.clear();
+      for (std::string tok; ls >> tok;) tokens.push_back(tok);
+      if (!tokens.empty()) return true;
+    }
+    return false;
+  };
+  auto number = [](const std::string& tok, long long& value) {
+    const char* end = tok.data() + tok.size();
+    return std::from_chars(tok.data(), end, value).ptr == end;
+  };
+  std::vector<std::string> tokens;
+  if (!next_tokens(tokens)) return;
+  const std::string magic = tokens[0];  // OFF, COFF, NOFF, CNOFF, STOFF, ...
+  if (magic.size() < 3 || magic.compare(magic.size() - 3, 3, "OFF") != 0) return;
+  tokens.erase(tokens.begin());  // the counts may follow on the same line
+  if (tokens.empty() && !next_tokens(tokens)) return;
+  long long nv = 0, nf = 0;
+  if (tokens.size() < 2 || !number(tokens[0], nv) || !number(tokens[1], nf) || nv < 0 || nf < 0) return;
+  for (long long v = 0; v < nv; ++v)
+    if (!next_tokens(tokens)) return;
+  for (long long f = 0; f < nf && next_tokens(tokens); ++f) {
+    long long k = 0;
+    if (!number(tokens[0], k)) return;
+    for (long long j = 1; j <= k && j < static_cast<long long>(tokens.size()); ++j) {
+      long long index = 0;
+      if (!number(tokens[j], index)) return;
+      if (index < 0 || index >= nv)
+        throw Error(path + ": face " + std::to_string(f) + " uses vertex " + tokens[j] +
+                    ", out of range (the file has " + std::to_string(nv) + " vertices)");
+    }
+  }
+}
+
+}  // namespace
+
+std::uint64_t Mesh::hash() const {
+  std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(), &XXH3_freeState);
+  PRT_CHECK(state != nullptr);
+  PRT_CHECK(XXH3_64bits_reset(state.get()) == XXH_OK);
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float) && sizeof(glm::uvec3) == 3 * sizeof(std::uint32_t));
+  PRT_CHECK(XXH3_64bits_update(state.get(), positions.data(), positions.size() * sizeof(glm::vec3)) == XXH_OK);
+  PRT_CHECK(XXH3_64bits_update(state.get(), triangles.data(), triangles.size() * sizeof(glm::uvec3)) == XXH_OK);
+  return XXH3_64bits_digest(state.get());
+}
+
+glm::vec3 Mesh::bounds_min() const {
+  if (positions.empty()) return glm::vec3(0.0f);
+  glm::vec3 m = positions.front();
+  for (const auto& p : positions) m = glm::min(m, p);
+  return m;
+}
+
+glm::vec3 Mesh::bounds_max() const {
+  if (positions.empty()) return glm::vec3(0.0f);
+  glm::vec3 m = positions.front();
+  for (const auto& p : positions) m = glm::max(m, p);
+  return m;
+}
+
+double Mesh::diagonal() const { return glm::length(to_double(bounds_max()) - to_double(bounds_min())); }
+
+Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangles, std::vector<glm::vec3> normals,
+               std::vector<glm::vec3> colors, const MeshOptions& options, std::string source) {
+  PRT_CHECK(normals.empty() || normals.size() == positions.size());
+  PRT_CHECK(colors.empty() || colors.size() == positions.size());
+
+  Mesh mesh;
+  mesh.source = std::move(source);
+  const std::string& src = mesh.source;
+  if (positions.empty()) throw Error(src + ": no vertices");
+  if (triangles.empty()) throw Error(src + ": no triangles");
+  if (positions.size() > std::numeric_limits<std::uint32_t>::max())
+    throw Error(src + ": too many vertices (" + std::to_string(positions.size()) + ")");
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (!finite(positions[i]))
+      throw Error(src + ": vertex " + std::to_string(i) + " has a non-finite coordinate " + format_vec(positions[i]));
+  for (std::size_t i = 0; i < colors.size(); ++i)
+    if (!finite(colors[i]))
+      throw Error(src + ": vertex " + std::to_string(i) + " has a non-finite colour " + format_vec(colors[i]));
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      if (triangles[t][k] >= positions.size())
+        throw Error(src + ": triangle " + std::to_string(t) + " uses vertex " + std::to_string(triangles[t][k]) +
+                    ", out of range (the mesh has " + std::to_string(positions.size()) + " vertices)");
+
+  mesh.report.file_had_normals = !normals.empty();
+  mesh.report.file_had_colors = !colors.empty();
+  mesh.positions = std::move(positions);
+  mesh.triangles = std::move(triangles);
+  mesh.colors = std::move(colors);
+
+  // --weld: vertices that absorbed others get computed normals (their file
+  // normals disagree across the seam that welding closes); the rest keep theirs.
+  std::vector<bool> ignore_file(mesh.positions.size(), false);
+  if (options.weld) ignore_file = weld(mesh, normals);
+  compute_normals(mesh, normals, ignore_file, options);
+  return mesh;
+}
+
+Mesh load_mesh(const std::string& path, const MeshOptions& options) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (status.type() == fs::file_type::not_found) throw Error(path + ": no such file");
+  if (ec) throw Error(path + ": cannot be read (" + ec.message() + ")");
+  if (status.type() == fs::file_type::directory) throw Error(path + ": is a directory, not a mesh file");
+  if (!std::ifstream(path, std::ios::binary)) throw Error(path + ": cannot be read (permission denied?)");
+  if (status.type() == fs::file_type::regular && fs::file_size(path, ec) == 0 && !ec)
+    throw Error(path + ": empty file");
+
+  // OBJ and STL store vertices per face corner: join identical corners into
+  // shared vertices. Other formats (OFF, PLY, glTF) index shared vertices and
+  // keep the file's order and count exactly. UVs and tangents are dropped
+  // first so they do not split vertices we would join; STL's per-facet normals
+  // are not vertex normals, so they are dropped too (otherwise no two facets
+  // of a curved surface would share a vertex).
+  const std::string ext = lower_extension(path);
+  const bool per_corner = ext == ".obj" || ext == ".stl";
+  unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices;
+  Assimp::Importer importer;
+  if (per_corner) {
+    int removed = aiComponent_TEXCOORDS | aiComponent_TANGENTS_AND_BITANGENTS;
+    if (ext == ".stl") removed |= aiComponent_NORMALS;
+    importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, removed);
+    flags |= aiProcess_RemoveComponent | aiProcess_JoinIdenticalVertices;
+  }
+  if (ext == ".off") check_off_indices(path);
+  const aiScene* scene = importer.ReadFile(path, flags);
+  if (scene == nullptr) throw Error(path + ": cannot be parsed: " + importer.GetErrorString());
+
+  // Flatten every mesh (node transforms are already applied) into one.
+  std::vector<glm::vec3> positions, normals, colors;
+  std::vector<glm::uvec3> triangles;
+  bool any_normals = false, any_colors = false;
+  std::size_t skipped = 0;  // point and line primitives
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    any_normals |= scene->mMeshes[m]->HasNormals();
+    any_colors |= scene->mMeshes[m]->HasVertexColors(0);
+  }
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* am = scene->mMeshes[m];
+    const std::size_t offset = positions.size();
+    if (offset + am->mNumVertices > std::numeric_limits<std::uint32_t>::max())
+      throw Error(path + ": too many vertices");
+    for (unsigned i = 0; i < am->mNumVertices; ++i) {
+      const aiVector3D& p = am->mVertices[i];
+      positions.emplace_back(p.x, p.y, p.z);
+      if (any_normals) {
+        // A zero normal means "none": such vertices get computed normals.
+        const aiVector3D nrm = am->HasNormals() ? am->mNormals[i] : aiVector3D(0, 0, 0);
+        normals.emplace_back(nrm.x, nrm.y, nrm.z);
+      }
+      if (any_colors) {
+        // Assimp gives colours as floats, 8-bit channels already divided by
+        // 255; taken as linear RGB as they are. Meshes without colours get white.
+        const aiColor4D c = am->HasVertexColors(0) ? am->mColors[0][i] : aiColor4D(1, 1, 1, 1);
+        colors.emplace_back(c.r, c.g, c.b);
+      }
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) {
+        ++skipped;
+        continue;
+      }
+      glm::uvec3 t;
+      for (int k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= am->mNumVertices)
+          throw Error(path + ": a face uses vertex " + std::to_string(face.mIndices[k]) + ", out of range (" +
+                      std::to_string(am->mNumVertices) + " vertices)");
+        t[k] = std::uint32_t(offset + face.mIndices[k]);
+      }
+      triangles.push_back(t);
+    }
+  }
+  if (positions.empty()) throw Error(path + ": no vertices");
+  if (triangles.empty())
+    throw Error(path + ": no triangles" +
+                (skipped ? " (only " + std::to_string(skipped) + " points or lines)" : std::string()));
+  return make_mesh(std::move(positions), std::move(triangles), std::move(normals), std::move(colors), options, path);
+}
+
+std::string describe(const Mesh& mesh) {
+  const MeshReport& r = mesh.report;
+  std::ostringstream os;
+  os << fs::path(mesh.source).filename().string() << ": " << mesh.vertex_count() << " vertices, "
+     << mesh.triangles.size() << " triangles, ";
+  // (MeshReport does not record the weighting, so it is not named here.)
+  const std::size_t from_file = mesh.vertex_count() - r.unreferenced_vertices - r.zero_normals - r.normals_computed;
+  if (from_file == 0)
+    os << "normals computed";
+  else if (r.normals_computed == 0)
+    os << "normals from the file";
+  else
+    os << "normals: " << from_file << " from the file, " << r.normals_computed << " computed";
+  os << ", " << r.degenerate_triangles << " degenerate triangles, " << r.unreferenced_vertices
+     << " unreferenced vertices";
+  if (r.zero_normals) os << ", " << r.zero_normals << " without a normal";
+  if (r.welded) os << ", " << r.welded << " welded";
+  if (!mesh.colors.empty()) os << ", vertex colours";
+  return os.str();
+}
+
+}  // namespace prt

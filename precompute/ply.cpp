@@ -1,0 +1,41 @@
+#include <prt/ply.h>
+
+#include <prt/error.h>
+#include <prt/io.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+namespace prt {
+
+void write_ply(const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& colors) {
+  PRT_CHECK_OP(colors.size(), ==, mesh.vertex_count());
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) throw Error(path + ": cannot open for writing");
+    f << "ply\nformat binary_little_endian 1.0\ncomment prt relight: linear radiance per vertex\n"
+      << "element vertex " << mesh.vertex_count() << "\n"
+      << "property float x\nproperty float y\nproperty float z\n"
+      << "property float nx\nproperty float ny\nproperty float nz\n"
+      << "property float red\nproperty float green\nproperty float blue\n"
+      << "element face " << mesh.triangles.size() << "\n"
+      << "property list uchar int vertex_indices\nend_header\n";
+    std::vector<float> v(9);
+    for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+      const glm::vec3 p = mesh.positions[i], nrm = mesh.normals[i], c = colors[i];
+      const float rec[9] = {p.x, p.y, p.z, nrm.x, nrm.y, nrm.z, c.x, c.y, c.z};
+      f.write(reinterpret_cast<const char*>(rec), sizeof rec);
+    }
+    for (const glm::uvec3& t : mesh.triangles) {
+      const unsigned char three = 3;
+      const std::int32_t idx[3] = {std::int32_t(t.x), std::int32_t(t.y), std::int32_t(t.z)};
+      f.write(reinterpret_cast<const char*>(&three), 1);
+      f.write(reinterpret_cast<const char*>(idx), sizeof idx);
+    }
+    f.close();
+    if (!f) throw Error(path + ": write failed");
+  });
+}
+
+}  // namespace prt

@@ -1,0 +1,219 @@
+#include "ray_scene.h"
+
+#include <prt/error.h>
+
+#include <embree3/rtcore.h>
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace prt::detail {
+
+namespace {
+
+thread_local std::string embree_error;
+
+void on_embree_error(void*, RTCError code, const char* str) {
+  embree_error = "Embree error " + std::to_string(int(code)) + (str ? std::string(": ") + str : std::string());
+}
+
+RTCScene scene_of(void* s) { return static_cast<RTCScene>(s); }
+
+}  // namespace
+
+void enable_ftz_daz() {
+  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+}
+
+double default_ray_offset(const Mesh& mesh) {
+  // Relative to the model's size, and never below the float spacing of its
+  // coordinates (a small model far from the origin).
+  const glm::vec3 lo = mesh.bounds_min(), hi = mesh.bounds_max();
+  const double magnitude = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x),
+                                     std::abs(hi.y), std::abs(hi.z)});
+  return std::max({1e-4 * mesh.diagonal(), 64.0 * FLT_EPSILON * magnitude, 1e-30});
+}
+
+RayScene::RayScene(const Mesh& mesh) : mesh_(mesh) {
+  RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) throw Error("Embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+  device_ = device;
+  rtcSetDeviceErrorFunction(device, on_embree_error, nullptr);
+  embree_error.clear();
+  RTCScene scene = rtcNewScene(device);
+  scene_ = scene;
+  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  // Embree's own buffers (rtcSetNewGeometryBuffer) are padded as it needs.
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                        3 * sizeof(float), mesh.positions.size()));
+  auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                           3 * sizeof(unsigned), mesh.triangles.size()));
+  if (!v || !t) {
+    rtcReleaseGeometry(geom);
+    release();
+    throw Error("Embree: cannot allocate geometry buffers: " + embree_error);
+  }
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    v[3 * i] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+    t[3 * i] = mesh.triangles[i].x;
+    t[3 * i + 1] = mesh.triangles[i].y;
+    t[3 * i + 2] = mesh.triangles[i].z;
+  }
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene);
+  if (!embree_error.empty()) {
+    const std::string why = embree_error;
+    release();
+    throw Error("Embree: cannot build the scene: " + why);
+  }
+}
+
+RayScene::~RayScene() { release(); }
+
+void RayScene::release() {
+  if (scene_) rtcReleaseScene(scene_of(scene_));
+  if (device_) rtcReleaseDevice(static_cast<RTCDevice>(device_));
+  scene_ = device_ = nullptr;
+}
+
+std::uint32_t RayScene::occluded8(const glm::vec3& o, const glm::vec3* dirs, int count, float tnear) const {
+  PRT_CHECK(count >= 0 && count <= 8);
+  alignas(32) int valid[8];
+  alignas(32) RTCRay8 ray;
+  for (int i = 0; i < 8; ++i) {
+    valid[i] = i < count ? -1 : 0;
+    const glm::vec3 d = i < count ? dirs[i] : glm::vec3(0, 0, 1);
+    ray.org_x[i] = o.x;
+    ray.org_y[i] = o.y;
+    ray.org_z[i] = o.z;
+    ray.dir_x[i] = d.x;
+    ray.dir_y[i] = d.y;
+    ray.dir_z[i] = d.z;
+    ray.tnear[i] = tnear;
+    ray.tfar[i] = std::numeric_limits<float>::infinity();
+    ray.time[i] = 0.0f;
+    ray.mask[i] = ~0u;
+    ray.id[i] = unsigned(i);
+    ray.flags[i] = 0;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcOccluded8(valid, scene_of(scene_), &ctx, &ray);
+  std::uint32_t bits = 0;
+  for (int i = 0; i < count; ++i)
+    if (ray.tfar[i] < 0.0f) bits |= 1u << i;  // Embree sets tfar = -inf on occlusion
+  return bits;
+}
+
+namespace {
+bool is_front(const Mesh& m, unsigned tri, const glm::vec3& dir) {
+  const glm::uvec3 t = m.triangles[tri];
+  const glm::vec3 n = glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]);
+  return glm::dot(n, dir) < 0.0f;
+}
+}  // namespace
+
+void RayScene::intersect8(const glm::vec3& o, const glm::vec3* dirs, int count, float tnear, Hit* hits) const {
+  PRT_CHECK(count >= 0 && count <= 8);
+  alignas(32) int valid[8];
+  alignas(32) RTCRayHit8 rh;
+  for (int i = 0; i < 8; ++i) {
+    valid[i] = i < count ? -1 : 0;
+    const glm::vec3 d = i < count ? dirs[i] : glm::vec3(0, 0, 1);
+    rh.ray.org_x[i] = o.x;
+    rh.ray.org_y[i] = o.y;
+    rh.ray.org_z[i] = o.z;
+    rh.ray.dir_x[i] = d.x;
+    rh.ray.dir_y[i] = d.y;
+    rh.ray.dir_z[i] = d.z;
+    rh.ray.tnear[i] = tnear;
+    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+    rh.ray.time[i] = 0.0f;
+    rh.ray.mask[i] = ~0u;
+    rh.ray.id[i] = unsigned(i);
+    rh.ray.flags[i] = 0;
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect8(valid, scene_of(scene_), &ctx, &rh);
+  for (int i = 0; i < count; ++i) {
+    Hit& h = hits[i];
+    if (rh.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) {
+      h = Hit{};
+      continue;
+    }
+    h.triangle = rh.hit.primID[i];
+    h.u = rh.hit.u[i];
+    h.v = rh.hit.v[i];
+    h.t = rh.ray.tfar[i];
+    h.front = is_front(mesh_, h.triangle, dirs[i]);
+  }
+}
+
+Hit RayScene::intersect1(const glm::vec3& o, const glm::vec3& d, float tnear) const {
+  RTCRayHit rh;
+  rh.ray.org_x = o.x;
+  rh.ray.org_y = o.y;
+  rh.ray.org_z = o.z;
+  rh.ray.dir_x = d.x;
+  rh.ray.dir_y = d.y;
+  rh.ray.dir_z = d.z;
+  rh.ray.tnear = tnear;
+  rh.ray.tfar = std::numeric_limits<float>::infinity();
+  rh.ray.time = 0.0f;
+  rh.ray.mask = ~0u;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect1(scene_of(scene_), &ctx, &rh);
+  Hit h;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
+  h.triangle = rh.hit.primID;
+  h.u = rh.hit.u;
+  h.v = rh.hit.v;
+  h.t = rh.ray.tfar;
+  h.front = is_front(mesh_, h.triangle, d);
+  return h;
+}
+
+bool RayScene::occluded1(const glm::vec3& o, const glm::vec3& d, float tnear) const {
+  RTCRay ray;
+  ray.org_x = o.x;
+  ray.org_y = o.y;
+  ray.org_z = o.z;
+  ray.dir_x = d.x;
+  ray.dir_y = d.y;
+  ray.dir_z = d.z;
+  ray.tnear = tnear;
+  ray.tfar = std::numeric_limits<float>::infinity();
+  ray.time = 0.0f;
+  ray.mask = ~0u;
+  ray.id = 0;
+  ray.flags = 0;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcOccluded1(scene_of(scene_), &ctx, &ray);
+  return ray.tfar < 0.0f;
+}
+
+}  // namespace prt::detail

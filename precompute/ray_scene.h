@@ -1,0 +1,62 @@
+// Private to prt::precompute: an Embree 3 scene of one mesh, and the ray
+// queries the precomputation and the reference renderer need.
+//
+// Rays start at p + offset * n (n: the vertex normal; see docs/PRECOMPUTE.md)
+// with tnear = offset, so a surface never shadows itself at any model scale.
+// Back faces occlude (the Debian Embree has no back-face culling) and hits
+// report which side was struck.
+#pragma once
+
+#include <prt/mesh.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+
+namespace prt::detail {
+
+struct Hit {
+  std::uint32_t triangle = ~0u;  // ~0u: no hit
+  float u = 0, v = 0;            // barycentrics of vertices 1 and 2 of the triangle
+  float t = 0;
+  bool front = true;             // struck the side its normal faces
+  bool hit() const { return triangle != ~0u; }
+};
+
+class RayScene {
+ public:
+  // Builds the BVH over the mesh's triangles (degenerate ones are harmless).
+  // Throws prt::Error if Embree fails.
+  explicit RayScene(const Mesh& mesh);
+  ~RayScene();
+  RayScene(const RayScene&) = delete;
+  RayScene& operator=(const RayScene&) = delete;
+
+  // Occlusion of up to 8 rays from one origin: bit i of the result is set when
+  // ray i (direction dirs[i], unit length) hits something in [tnear, inf).
+  std::uint32_t occluded8(const glm::vec3& origin, const glm::vec3* dirs, int count, float tnear) const;
+  // Closest hits of up to 8 rays from one origin.
+  void intersect8(const glm::vec3& origin, const glm::vec3* dirs, int count, float tnear, Hit* hits) const;
+  // One ray.
+  Hit intersect1(const glm::vec3& origin, const glm::vec3& dir, float tnear) const;
+  bool occluded1(const glm::vec3& origin, const glm::vec3& dir, float tnear) const;
+
+  const Mesh& mesh() const { return mesh_; }
+
+ private:
+  void release();
+
+  const Mesh& mesh_;
+  void* device_ = nullptr;  // RTCDevice
+  void* scene_ = nullptr;   // RTCScene
+};
+
+// Sets flush-to-zero and denormals-are-zero on the calling thread (Embree's
+// advice; call on every worker thread before tracing).
+void enable_ftz_daz();
+
+// The default ray offset for a mesh: 1e-4 x its bounding-box diagonal (and a
+// floor of 1e-30 for a mesh of one point).
+double default_ray_offset(const Mesh& mesh);
+
+}  // namespace prt::detail

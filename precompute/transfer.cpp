@@ -1,0 +1,387 @@
+// Per-vertex SH transfer with Embree (docs/PRECOMPUTE.md).
+//
+// Shadowed transfer is computed as the analytic unshadowed transfer minus the
+// occluded part: T = (rho/pi) [A_l Y_lm(n) - sum_{occluded j} w cos_j Y(w_j)].
+// An unoccluded vertex is therefore exact, and the sampling error lives only
+// in the occluded directions (a control variate that also spares the SH work
+// of every unoccluded ray). Interreflection reuses the first pass's hits as a
+// sparse gather matrix G (receiver vertex x emitting vertex), one gather per
+// bounce.
+#include <prt/transfer.h>
+
+#include <prt/error.h>
+#include <prt/filter.h>
+#include <prt/sh.h>
+
+#include "ray_scene.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <mutex>
+
+namespace prt {
+
+TransferMode parse_transfer_mode(std::string_view name) {
+  if (name == "unshadowed") return TransferMode::Unshadowed;
+  if (name == "shadowed") return TransferMode::Shadowed;
+  if (name == "interreflected") return TransferMode::Interreflected;
+  throw Error("unknown mode '" + std::string(name) + "' (expected unshadowed, shadowed or interreflected)");
+}
+
+std::string_view transfer_mode_name(TransferMode m) {
+  switch (m) {
+    case TransferMode::Unshadowed: return "unshadowed";
+    case TransferMode::Shadowed: return "shadowed";
+    case TransferMode::Interreflected: return "interreflected";
+  }
+  return "?";
+}
+
+namespace {
+
+// ---- a portable, seeded direction set ---------------------------------------
+
+// splitmix64: the standard's distributions are implementation-defined, so
+// prt draws its own bits to stay bit-reproducible across standard libraries.
+struct SplitMix64 {
+  std::uint64_t s;
+  std::uint64_t next() {
+    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return double(next() >> 11) * 0x1.0p-53; }
+};
+
+// Uniform random rotation from three uniforms (Shoemake, Graphics Gems III).
+glm::dmat3 random_rotation(SplitMix64& rng) {
+  const double u1 = rng.uniform(), u2 = 2 * M_PI * rng.uniform(), u3 = 2 * M_PI * rng.uniform();
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  const double x = a * std::sin(u2), y = a * std::cos(u2), z = b * std::sin(u3), w = b * std::cos(u3);
+  glm::dmat3 R;  // from the unit quaternion (x, y, z, w); glm: R[col][row]
+  R[0] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)};
+  R[1] = {2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)};
+  R[2] = {2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)};
+  return R;
+}
+
+// M directions of a spherical Fibonacci set (equal area), turned by a
+// seeded random rotation; each stands for 4 pi / M steradians.
+std::vector<glm::vec3> direction_set(int M, std::uint64_t seed) {
+  SplitMix64 rng{seed};
+  const glm::dmat3 R = random_rotation(rng);
+  const double golden = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<glm::vec3> d(M);
+  for (int i = 0; i < M; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / M, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = 2.0 * M_PI * std::fmod(i / golden, 1.0);
+    d[i] = glm::vec3(R * glm::dvec3(r * std::cos(phi), r * std::sin(phi), z));
+  }
+  return d;
+}
+
+void check_options(const TransferOptions& o, const Mesh& mesh) {
+  sh::check_bands(o.bands, "--bands");
+  if (o.samples < 1 || o.samples > (1 << 24))
+    throw Error("--samples must be between 1 and 16777216, got " + std::to_string(o.samples));
+  if (o.bounces < 0 || o.bounces > 64) throw Error("--bounces must be between 0 and 64, got " + std::to_string(o.bounces));
+  for (int c = 0; c < 3; ++c)
+    if (!(o.albedo[c] >= 0.0f && o.albedo[c] <= 1.0f))
+      throw Error("--albedo must be in [0, 1] per channel (energy conservation), got " + std::to_string(o.albedo[c]));
+  if (o.vertex_colors && mesh.colors.empty()) throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
+  if (o.threads < 0) throw Error("--threads must be >= 0");
+  if (!(o.offset >= 0.0) || !std::isfinite(o.offset)) throw Error("--offset must be a finite number >= 0");
+}
+
+// Albedo of vertex v, channel c.
+struct Albedo {
+  const TransferOptions& o;
+  const Mesh& m;
+  float operator()(std::size_t v, int c) const {
+    return o.vertex_colors ? std::clamp(m.colors[v][c], 0.0f, 1.0f) : o.albedo[c];
+  }
+};
+
+// Sparse gather matrix in CSR form: row v lists (emitting vertex, weight)
+// with weight = sum over rays of v that hit the front of a triangle touching
+// that vertex of w cos barycentric.
+struct Gather {
+  std::vector<std::size_t> row;  // V + 1
+  std::vector<std::uint32_t> col;
+  std::vector<float> val;
+};
+
+class Canceller {
+ public:
+  Canceller(const Progress& p, std::size_t total, const char* phase) : p_(p), total_(total), phase_(phase) {}
+  // Returns false once the callback asked to stop.
+  bool tick(std::size_t n) {
+    if (!p_) return true;
+    const std::size_t d = done_ += n;
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (lock.owns_lock() && !cancelled_ && !p_(d, total_, phase_)) cancelled_ = true;
+    return !cancelled_;
+  }
+  void finish() {
+    if (cancelled_) throw Error("cancelled");
+    if (p_ && !p_(total_, total_, phase_)) throw Error("cancelled");
+  }
+  bool cancelled() const { return cancelled_; }
+
+ private:
+  const Progress& p_;
+  std::size_t total_;
+  const char* phase_;
+  std::atomic<std::size_t> done_{0};
+  std::mutex mutex_;
+  std::atomic<bool> cancelled_{false};
+};
+
+}  // namespace
+
+Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Progress& progress) {
+  check_options(o, mesh);
+  std::unique_ptr<tbb::global_control> limit;
+  if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+
+  const int n = o.bands, nc = sh::num_coeffs(n);
+  const std::size_t V = mesh.vertex_count();
+  const bool grey = !o.vertex_colors && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z;
+  Transfer t;
+  t.bands = n;
+  t.channels = grey ? 1 : 3;
+  t.mode = o.mode;
+  t.bounces = o.mode == TransferMode::Interreflected ? o.bounces : 0;
+  t.samples = o.mode == TransferMode::Unshadowed ? 0 : o.samples;
+  t.albedo = o.albedo;
+  t.vertex_colors = o.vertex_colors;
+  t.seed = o.seed;
+  t.vertices = V;
+  t.mesh_hash = mesh.hash();
+  const std::size_t stride = t.stride();
+  const Albedo albedo{o, mesh};
+
+  // Geometry-only transfer S (no albedo), one channel: S_k = (1/pi) integral V cos+ Y_k.
+  std::vector<double> A = sh::clamped_cosine_factors(n);
+  std::vector<float> S(V * nc, 0.0f);
+  t.ao.assign(V, 1.0f);
+  t.bent_normals.assign(mesh.normals.begin(), mesh.normals.end());
+  Gather G;
+  const bool trace = o.mode != TransferMode::Unshadowed;
+  const bool gather = o.mode == TransferMode::Interreflected && o.bounces > 0;
+
+  const int M = 2 * o.samples;
+  const std::vector<glm::vec3> dirs = trace ? direction_set(M, o.seed) : std::vector<glm::vec3>{};
+  std::vector<float> Ytab(trace ? std::size_t(M) * nc : 0);
+  for (int j = 0; j < (trace ? M : 0); ++j) sh::eval<float>(n, dirs[j].x, dirs[j].y, dirs[j].z, Ytab.data() + std::size_t(j) * nc);
+  const double w = 4.0 * M_PI / M;
+  const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
+
+  std::unique_ptr<detail::RayScene> scene;
+  if (trace) scene = std::make_unique<detail::RayScene>(mesh);
+  std::vector<std::vector<std::pair<std::uint32_t, float>>> rows(gather ? V : 0);
+
+  Canceller first(progress, V, trace ? "rays" : "transfer");
+  constexpr std::size_t kGrain = 64;
+  tbb::parallel_for(std::size_t(0), (V + kGrain - 1) / kGrain, [&](std::size_t block) {
+    detail::enable_ftz_daz();
+    if (first.cancelled()) return;
+    std::vector<double> Yn(nc), occ(nc);
+    std::vector<float> Yf(nc);
+    glm::vec3 batch[8];
+    int batch_j[8];
+    detail::Hit hits[8];
+    const std::size_t v0 = block * kGrain, v1 = std::min(V, v0 + kGrain);
+    for (std::size_t v = v0; v < v1; ++v) {
+      const glm::vec3 nrm = mesh.normals[v];
+      if (glm::dot(nrm, nrm) == 0.0f) {  // unreferenced or no normal: no transfer
+        t.ao[v] = 0.0f;
+        continue;
+      }
+      sh::eval<double>(n, nrm.x, nrm.y, nrm.z, Yn.data());
+      float* s = S.data() + v * nc;
+      if (!trace) {
+        for (int l = 0; l < n; ++l)
+          for (int m = -l; m <= l; ++m) s[sh::index(l, m)] = float(A[l] * Yn[sh::index(l, m)] / M_PI);
+        continue;
+      }
+      std::fill(occ.begin(), occ.end(), 0.0);
+      double occ_cos = 0.0;
+      glm::dvec3 occ_dir(0.0);
+      const glm::vec3 origin = mesh.positions[v] + offset * nrm;
+      auto row_of = [&](int count) {
+        // Occluded directions of this batch: subtract their cosine-weighted
+        // basis; record front hits for the bounce gather.
+        std::uint32_t occluded = 0;
+        if (gather) {
+          scene->intersect8(origin, batch, count, offset, hits);
+          for (int i = 0; i < count; ++i) occluded |= hits[i].hit() ? 1u << i : 0u;
+        } else {
+          occluded = scene->occluded8(origin, batch, count, offset);
+        }
+        for (int i = 0; i < count; ++i) {
+          if (!(occluded & (1u << i))) continue;
+          const int j = batch_j[i];
+          const double wc = w * glm::dot(nrm, dirs[j]);
+          const float* y = Ytab.data() + std::size_t(j) * nc;
+          for (int k = 0; k < nc; ++k) occ[k] += wc * y[k];
+          occ_cos += wc;
+          occ_dir += wc * glm::dvec3(dirs[j]);
+          if (gather && hits[i].front) {
+            const glm::uvec3 tri = mesh.triangles[hits[i].triangle];
+            const float b[3] = {1.0f - hits[i].u - hits[i].v, hits[i].u, hits[i].v};
+            for (int c = 0; c < 3; ++c) rows[v].emplace_back(tri[c], float(wc) * b[c]);
+          }
+        }
+      };
+      int count = 0;
+      double all_cos = 0.0;  // the direction set's own integral of cos+ (pi up to its quadrature error)
+      for (int j = 0; j < M; ++j) {
+        const float c = glm::dot(nrm, dirs[j]);
+        if (c <= 0.0f) continue;  // below the horizon: no ray
+        all_cos += w * c;
+        batch[count] = dirs[j];
+        batch_j[count++] = j;
+        if (count == 8) {
+          row_of(count);
+          count = 0;
+        }
+      }
+      if (count) row_of(count);
+      // Scale the occluded sums so the set integrates cos+ to exactly pi: a
+      // fully occluded vertex then gets AO 0 and T_00 0 exactly.
+      const double scale = all_cos > 0.0 ? M_PI / all_cos : 1.0;
+      for (int l = 0; l < n; ++l)
+        for (int m = -l; m <= l; ++m) {
+          const int k = sh::index(l, m);
+          s[k] = float((A[l] * Yn[k] - scale * occ[k]) / M_PI);
+        }
+      t.ao[v] = float(std::clamp(1.0 - scale * occ_cos / M_PI, 0.0, 1.0));
+      const glm::dvec3 bent = (2.0 * M_PI / 3.0) * glm::dvec3(nrm) - scale * occ_dir;
+      const double len = glm::length(bent);
+      t.bent_normals[v] = len > 0 ? glm::vec3(bent / len) : nrm;
+      if (gather) {  // merge duplicate emitters, in a fixed order; same scale as above
+        auto& r = rows[v];
+        for (auto& e : r) e.second = float(scale * e.second);
+        std::sort(r.begin(), r.end(), [](auto& a, auto& b) { return a.first < b.first; });
+        std::size_t out = 0;
+        for (std::size_t i = 0; i < r.size(); ++i) {
+          if (out > 0 && r[out - 1].first == r[i].first)
+            r[out - 1].second += r[i].second;
+          else
+            r[out++] = r[i];
+        }
+        r.resize(out);
+        r.shrink_to_fit();
+      }
+    }
+    first.tick(v1 - v0);
+  });
+  first.finish();
+  scene.reset();
+
+  // Direct transfer: albedo times S.
+  t.coeffs.assign(V * stride, 0.0f);
+  tbb::parallel_for(std::size_t(0), V, [&](std::size_t v) {
+    for (int c = 0; c < t.channels; ++c) {
+      const float a = albedo(v, c);
+      for (int k = 0; k < nc; ++k) t.coeffs[v * stride + std::size_t(c) * nc + k] = a * S[v * nc + k];
+    }
+  });
+  S.clear();
+  S.shrink_to_fit();
+  if (!gather) {
+    if (o.mode == TransferMode::Interreflected) t.direct = t.coeffs;
+    return t;
+  }
+
+  // CSR gather matrix from the per-vertex rows.
+  G.row.assign(V + 1, 0);
+  for (std::size_t v = 0; v < V; ++v) G.row[v + 1] = G.row[v] + rows[v].size();
+  G.col.resize(G.row[V]);
+  G.val.resize(G.row[V]);
+  for (std::size_t v = 0; v < V; ++v) {
+    for (std::size_t i = 0; i < rows[v].size(); ++i) {
+      G.col[G.row[v] + i] = rows[v][i].first;
+      G.val[G.row[v] + i] = rows[v][i].second;
+    }
+    std::vector<std::pair<std::uint32_t, float>>().swap(rows[v]);
+  }
+
+  // Bounces: T_{b+1}(v) = (rho_v / pi) sum_u G_vu T_b(u), each from the
+  // previous bounce alone; the total is summed separately.
+  t.direct = t.coeffs;
+  std::vector<float> prev = t.coeffs, next(V * stride);
+  for (int b = 1; b <= o.bounces; ++b) {
+    Canceller bounce(progress, V, "bounces");
+    tbb::parallel_for(std::size_t(0), (V + kGrain - 1) / kGrain, [&](std::size_t block) {
+      std::vector<double> acc(stride);
+      const std::size_t v0 = block * kGrain, v1 = std::min(V, v0 + kGrain);
+      for (std::size_t v = v0; v < v1; ++v) {
+        std::fill(acc.begin(), acc.end(), 0.0);
+        for (std::size_t e = G.row[v]; e < G.row[v + 1]; ++e) {
+          const float* src = prev.data() + std::size_t(G.col[e]) * stride;
+          const double g = G.val[e];
+          for (std::size_t k = 0; k < stride; ++k) acc[k] += g * src[k];
+        }
+        for (int c = 0; c < t.channels; ++c) {
+          const double a = albedo(v, c) / M_PI;
+          for (int k = 0; k < nc; ++k) next[v * stride + std::size_t(c) * nc + k] = float(a * acc[std::size_t(c) * nc + k]);
+        }
+      }
+      bounce.tick(v1 - v0);
+    });
+    bounce.finish();
+    double energy = 0.0;
+    for (std::size_t i = 0; i < next.size(); ++i) {
+      t.coeffs[i] += next[i];
+      energy += std::abs(next[i]);
+    }
+    t.bounce_energy.push_back(energy / double(std::max<std::size_t>(V, 1)));
+    prev.swap(next);
+  }
+  return t;
+}
+
+namespace {
+std::vector<glm::vec3> relight_array(const Transfer& t, const std::vector<float>& T, const std::vector<glm::dvec3>& light) {
+  const int nc = t.bands * t.bands;
+  if (light.size() < std::size_t(nc))
+    throw Error("lighting has " + std::to_string(sh::bands_of(light.size())) + " bands, the transfer needs " +
+                std::to_string(t.bands));
+  PRT_CHECK_OP(T.size(), ==, t.vertices * t.stride());
+  std::vector<glm::vec3> out(t.vertices);
+  tbb::parallel_for(std::size_t(0), t.vertices, [&](std::size_t v) {
+    const float* tv = T.data() + v * t.stride();
+    glm::dvec3 r(0.0);
+    for (int c = 0; c < 3; ++c) {
+      const float* tc = tv + (t.channels == 1 ? 0 : std::size_t(c) * nc);
+      double s = 0.0;
+      for (int k = 0; k < nc; ++k) s += double(tc[k]) * light[k][c];
+      r[c] = s;
+    }
+    out[v] = glm::vec3(r);
+  });
+  return out;
+}
+}  // namespace
+
+std::vector<glm::vec3> relight(const Transfer& t, const std::vector<glm::dvec3>& light) {
+  return relight_array(t, t.coeffs, light);
+}
+
+std::vector<glm::vec3> relight_direct(const Transfer& t, const std::vector<glm::dvec3>& light) {
+  if (t.direct.empty()) return relight(t, light);
+  return relight_array(t, t.direct, light);
+}
+
+}  // namespace prt

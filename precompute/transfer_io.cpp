@@ -1,0 +1,637 @@
+// Transfer files. docs/FORMAT.md is the specification; the constants and
+// checks below follow it field by field.
+#include <prt/transfer_io.h>
+
+#include <prt/error.h>
+#include <prt/io.h>
+
+#include <xxhash.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+
+namespace prt {
+
+namespace {
+
+// The format is little-endian IEEE 754; on such a machine its arrays are the
+// in-memory arrays, written and read without conversion.
+static_assert(std::endian::native == std::endian::little,
+              "transfer files are little-endian: add byte swapping before porting to a big-endian machine");
+static_assert(std::numeric_limits<float>::is_iec559 && std::numeric_limits<double>::is_iec559);
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "bent normals are stored as packed float triples");
+
+// ---- layout (docs/FORMAT.md) ---------------------------------------------------
+
+// "PRTT" then CR LF SUB LF, as PNG: a text-mode transfer that rewrites line
+// endings, or a 7-bit one, changes these bytes.
+constexpr std::array<char, 8> kMagic = {'P', 'R', 'T', 'T', '\r', '\n', '\x1a', '\n'};
+constexpr std::array<char, 4> kEndMagic = {'P', 'R', 'T', 'E'};
+constexpr std::uint64_t kHeaderSize = 128;
+constexpr std::uint64_t kSectionHeaderSize = 24;  // u32 kind, u32 type, u64 count, u64 bytes
+constexpr std::uint64_t kTrailerSize = 12;        // u64 XXH3-64 of all bytes before it, "PRTE"
+constexpr std::uint64_t kMinFileSize = kHeaderSize + kTrailerSize;
+constexpr std::uint64_t kAlign = 8;               // section data is zero-padded to a multiple of 8
+
+// Byte offsets of the header fields. Every field is naturally aligned.
+constexpr std::size_t kOffVersion = 8;        // u32
+constexpr std::size_t kOffHeaderSize = 12;    // u32
+constexpr std::size_t kOffBasis = 16;         // u32
+constexpr std::size_t kOffBands = 20;         // u32
+constexpr std::size_t kOffChannels = 24;      // u32
+constexpr std::size_t kOffMode = 28;          // u32
+constexpr std::size_t kOffBounces = 32;       // u32
+constexpr std::size_t kOffSamples = 36;       // u32
+constexpr std::size_t kOffAlbedo = 40;        // f32[3]
+constexpr std::size_t kOffFlags = 52;         // u32
+constexpr std::size_t kOffSeed = 56;          // u64
+constexpr std::size_t kOffVertices = 64;      // u64
+constexpr std::size_t kOffMeshHash = 72;      // u64
+constexpr std::size_t kOffSectionCount = 80;  // u32
+constexpr std::size_t kOffReserved = 84;      // zero up to kHeaderSize
+
+constexpr std::uint32_t kBasisSH = 0;
+constexpr std::uint32_t kBasisWavelet = 1;  // reserved
+constexpr std::uint32_t kFlagVertexColors = 1u << 0;
+constexpr std::uint32_t kKnownFlags = kFlagVertexColors;
+
+constexpr std::uint32_t kTypeF32 = 1;
+constexpr std::uint32_t kTypeF64 = 2;
+
+enum Kind : std::uint32_t { kCoeffs = 1, kDirect = 2, kAO = 3, kBentNormals = 4, kBounceEnergy = 5 };
+
+struct KindInfo {
+  std::uint32_t kind;
+  const char* name;
+  std::uint32_t type;
+  bool per_vertex;
+};
+// In file order: sections are stored by increasing kind.
+constexpr std::array<KindInfo, 5> kKinds = {{
+    {kCoeffs, "coefficients", kTypeF32, true},
+    {kDirect, "direct", kTypeF32, true},
+    {kAO, "ambient occlusion", kTypeF32, true},
+    {kBentNormals, "bent normals", kTypeF32, true},
+    {kBounceEnergy, "bounce energy", kTypeF64, false},
+}};
+
+const KindInfo* kind_info(std::uint32_t kind) {
+  for (const auto& k : kKinds)
+    if (k.kind == kind) return &k;
+  return nullptr;
+}
+
+std::uint32_t type_bytes(std::uint32_t type) { return type == kTypeF64 ? 8 : 4; }
+const char* type_name(std::uint32_t type) { return type == kTypeF64 ? "f64" : "f32"; }
+
+// ---- small helpers ----------------------------------------------------------------
+
+[[gnu::format(printf, 1, 2)]] std::string sformat(const char* fmt, ...) {
+  va_list args;
+  va_start(args, fmt);
+  char buf[512];
+  const int n = std::vsnprintf(buf, sizeof buf, fmt, args);
+  va_end(args);
+  return std::string(buf, n < 0 ? 0 : std::min<std::size_t>(std::size_t(n), sizeof buf - 1));
+}
+
+std::string hex64(std::uint64_t v) { return sformat("0x%016llx", static_cast<unsigned long long>(v)); }
+std::string u64s(std::uint64_t v) { return std::to_string(v); }
+
+std::string errno_text() { return errno != 0 ? std::strerror(errno) : "I/O error"; }
+
+template <typename T>
+T load(const unsigned char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+template <typename T>
+void store(unsigned char* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+constexpr std::uint64_t padding(std::uint64_t bytes) { return (kAlign - bytes % kAlign) % kAlign; }
+
+// a + b, or the largest u64 if that overflows (sizes read from a damaged file).
+std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
+  return a > std::numeric_limits<std::uint64_t>::max() - b ? std::numeric_limits<std::uint64_t>::max() : a + b;
+}
+
+// ---- validation shared by the writer and the reader -----------------------------
+
+// The header values of a transfer, wide enough for anything a file holds.
+struct Values {
+  std::int64_t bands, channels, mode, bounces, samples;
+  glm::vec3 albedo;
+  std::uint64_t vertices;
+};
+
+// What is wrong with the values, or "".
+std::string values_problem(const Values& v) {
+  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+  if (v.bands < 1 || v.bands > 64) return sformat("bands is %lld; must be 1 to 64", static_cast<long long>(v.bands));
+  if (v.channels != 1 && v.channels != 3)
+    return sformat("channels is %lld; must be 1 or 3", static_cast<long long>(v.channels));
+  if (v.mode < 0 || v.mode > 2)
+    return sformat("unknown transfer mode %lld (0 unshadowed, 1 shadowed, 2 interreflected)",
+                   static_cast<long long>(v.mode));
+  if (v.bounces < 0 || v.bounces > kIntMax)
+    return sformat("bounces is %lld; must be 0 to %lld", static_cast<long long>(v.bounces),
+                   static_cast<long long>(kIntMax));
+  if (v.samples < 0 || v.samples > kIntMax)
+    return sformat("samples is %lld; must be 0 to %lld", static_cast<long long>(v.samples),
+                   static_cast<long long>(kIntMax));
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(v.albedo[c])) return "albedo is not finite";
+  if (v.vertices == 0) return "no vertices";
+  return {};
+}
+
+// The element count section `kind` must have, given valid header values
+// (bounce energy: at most this many).
+std::uint64_t expected_count(std::uint32_t kind, const Values& v) {
+  const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands) * std::uint64_t(v.bands);
+  switch (kind) {
+    case kCoeffs:
+    case kDirect: return v.vertices * stride;
+    case kAO: return v.vertices;
+    case kBentNormals: return 3 * v.vertices;
+    case kBounceEnergy: return std::uint64_t(v.bounces);
+  }
+  return 0;
+}
+
+// What is wrong with a section of `kind` holding `count` elements in a
+// transfer of `v`, or "".
+std::string section_problem(std::uint32_t kind, std::uint64_t count, const Values& v) {
+  const KindInfo& k = *kind_info(kind);
+  const std::uint64_t want = expected_count(kind, v);
+  if (kind == kDirect && v.mode != 2)
+    return sformat("has a '%s' section, which only an interreflected transfer has (this one is %s)", k.name,
+                   std::string(transfer_mode_name(TransferMode(v.mode))).c_str());
+  if (kind == kBounceEnergy) {
+    if (count == 0 || count > want)
+      return sformat("section '%s' has %llu values; expected 1 to bounces = %llu", k.name,
+                     static_cast<unsigned long long>(count), static_cast<unsigned long long>(want));
+    return {};
+  }
+  if (count != want) {
+    if (kind == kCoeffs || kind == kDirect)
+      return sformat("section '%s' has %llu values; expected vertices x channels x bands^2 = %llu x %lld x %lld = %llu",
+                     k.name, static_cast<unsigned long long>(count), static_cast<unsigned long long>(v.vertices),
+                     static_cast<long long>(v.channels), static_cast<long long>(v.bands * v.bands),
+                     static_cast<unsigned long long>(want));
+    return sformat("section '%s' has %llu values; expected %llu for %llu vertices", k.name,
+                   static_cast<unsigned long long>(count), static_cast<unsigned long long>(want),
+                   static_cast<unsigned long long>(v.vertices));
+  }
+  return {};
+}
+
+// The first non-finite value, or "". Reported by vertex: that is what a user
+// can look up.
+std::string finite_problem(const Transfer& t) {
+  const std::size_t stride = t.stride();
+  const std::size_t n = std::size_t(t.bands) * t.bands;
+  const auto coeff = [&](const std::vector<float>& a, const char* what) -> std::string {
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!std::isfinite(a[i]))
+        return sformat("vertex %zu has a non-finite %s (%g at channel %zu, k = %zu)", i / stride, what, double(a[i]),
+                       (i % stride) / n, i % n);
+    return {};
+  };
+  if (auto p = coeff(t.coeffs, "coefficient"); !p.empty()) return p;
+  if (auto p = coeff(t.direct, "direct coefficient"); !p.empty()) return p;
+  for (std::size_t v = 0; v < t.ao.size(); ++v)
+    if (!std::isfinite(t.ao[v]))
+      return sformat("vertex %zu has a non-finite ambient occlusion (%g)", v, double(t.ao[v]));
+  for (std::size_t v = 0; v < t.bent_normals.size(); ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(t.bent_normals[v][c])) return sformat("vertex %zu has a non-finite bent normal", v);
+  for (std::size_t b = 0; b < t.bounce_energy.size(); ++b)
+    if (!std::isfinite(t.bounce_energy[b])) return sformat("bounce %zu has a non-finite energy", b + 1);
+  return {};
+}
+
+Values values_of(const Transfer& t) {
+  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices};
+}
+
+// Pointer to the array of section `kind` and its element count.
+std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind) {
+  switch (kind) {
+    case kCoeffs: return {t.coeffs.data(), t.coeffs.size()};
+    case kDirect: return {t.direct.data(), t.direct.size()};
+    case kAO: return {t.ao.data(), t.ao.size()};
+    case kBentNormals: return {t.bent_normals.data(), 3 * std::uint64_t(t.bent_normals.size())};
+    case kBounceEnergy: return {t.bounce_energy.data(), t.bounce_energy.size()};
+  }
+  return {nullptr, 0};
+}
+
+// Whether `t` stores section `kind`: the coefficients always, the others when non-empty.
+bool has_section(const Transfer& t, std::uint32_t kind) { return kind == kCoeffs || section_array(t, kind).second > 0; }
+
+// Everything the reader would refuse in `t`, or "".
+std::string transfer_problem(const Transfer& t) {
+  const Values v = values_of(t);
+  if (auto p = values_problem(v); !p.empty()) return p;
+  for (const auto& k : kKinds)
+    if (has_section(t, k.kind))
+      if (auto p = section_problem(k.kind, section_array(t, k.kind).second, v); !p.empty()) return p;
+  return finite_problem(t);
+}
+
+// ---- writing ------------------------------------------------------------------------
+
+// An output stream that hashes what it writes.
+class HashedWriter {
+ public:
+  explicit HashedWriter(std::ofstream& out) : out_(out), state_(XXH3_createState(), &XXH3_freeState) {
+    if (!state_ || XXH3_64bits_reset(state_.get()) != XXH_OK) throw std::bad_alloc();
+  }
+  void write(const void* data, std::uint64_t bytes) {
+    if (bytes == 0) return;
+    XXH3_64bits_update(state_.get(), data, bytes);
+    raw(data, bytes);
+  }
+  void raw(const void* data, std::uint64_t bytes) {
+    out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+  }
+  std::uint64_t digest() const { return XXH3_64bits_digest(state_.get()); }
+
+ private:
+  std::ofstream& out_;
+  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state_;
+};
+
+}  // namespace
+
+std::vector<TransferSection> transfer_sections(const Transfer& t) {
+  std::vector<TransferSection> s;
+  for (const auto& k : kKinds) {
+    if (!has_section(t, k.kind)) continue;
+    const std::uint64_t count = section_array(t, k.kind).second;
+    s.push_back({k.kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex});
+  }
+  return s;
+}
+
+std::uint64_t transfer_bytes_per_vertex(const Transfer& t) {
+  std::uint64_t b = 0;
+  for (const auto& s : transfer_sections(t))
+    if (s.per_vertex && t.vertices > 0) b += s.bytes / t.vertices;
+  return b;
+}
+
+std::uint64_t transfer_file_size(const Transfer& t) {
+  std::uint64_t size = kHeaderSize + kTrailerSize;
+  for (const auto& s : transfer_sections(t)) size += kSectionHeaderSize + s.bytes + padding(s.bytes);
+  return size;
+}
+
+void write_transfer(const std::string& path, const Transfer& t) {
+  if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
+  const std::vector<TransferSection> sections = transfer_sections(t);
+
+  unsigned char header[kHeaderSize] = {};  // reserved bytes stay zero
+  std::memcpy(header, kMagic.data(), kMagic.size());
+  store<std::uint32_t>(header + kOffVersion, kTransferFormatVersion);
+  store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
+  store<std::uint32_t>(header + kOffBasis, kBasisSH);
+  store<std::uint32_t>(header + kOffBands, std::uint32_t(t.bands));
+  store<std::uint32_t>(header + kOffChannels, std::uint32_t(t.channels));
+  store<std::uint32_t>(header + kOffMode, std::uint32_t(t.mode));
+  store<std::uint32_t>(header + kOffBounces, std::uint32_t(t.bounces));
+  store<std::uint32_t>(header + kOffSamples, std::uint32_t(t.samples));
+  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
+  store<std::uint32_t>(header + kOffFlags, t.vertex_colors ? kFlagVertexColors : 0u);
+  store<std::uint64_t>(header + kOffSeed, t.seed);
+  store<std::uint64_t>(header + kOffVertices, t.vertices);
+  store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
+  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
+
+  write_atomically(path, [&](const std::string& tmp) {
+    errno = 0;  // so that a failure reports its own cause
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw Error(path + ": cannot open for writing: " + errno_text());
+    HashedWriter out(f);
+    out.write(header, kHeaderSize);
+    static constexpr unsigned char zeros[kAlign] = {};
+    for (const auto& s : sections) {
+      unsigned char sh[kSectionHeaderSize];
+      store<std::uint32_t>(sh + 0, s.kind);
+      store<std::uint32_t>(sh + 4, kind_info(s.kind)->type);
+      store<std::uint64_t>(sh + 8, s.count);
+      store<std::uint64_t>(sh + 16, s.bytes);
+      out.write(sh, sizeof sh);
+      out.write(section_array(t, s.kind).first, s.bytes);
+      out.write(zeros, padding(s.bytes));
+    }
+    unsigned char trailer[kTrailerSize];
+    store<std::uint64_t>(trailer, out.digest());
+    std::memcpy(trailer + 8, kEndMagic.data(), kEndMagic.size());
+    out.raw(trailer, sizeof trailer);
+    f.close();
+    if (!f) throw Error(path + ": write failed: " + errno_text());
+  });
+}
+
+// ---- reading ------------------------------------------------------------------------
+
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {}
+
+  Error fail(const std::string& what) const { return Error(path_ + ": " + what); }
+
+  Transfer read();
+
+ private:
+  void read_at(std::uint64_t offset, void* dst, std::uint64_t bytes) {
+    f_.clear();
+    f_.seekg(static_cast<std::streamoff>(offset));
+    f_.read(static_cast<char*>(dst), static_cast<std::streamsize>(bytes));
+    if (!f_ || std::uint64_t(f_.gcount()) != bytes)
+      throw fail("read error at byte " + u64s(offset) + ": " + errno_text());
+  }
+  void check_signature(const unsigned char* head, std::uint64_t have);
+  void explain_bad_size(std::uint32_t section_count);
+  std::uint64_t checksum(std::uint64_t bytes);
+  template <typename T>
+  void read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count);
+
+  std::string path_;
+  std::ifstream f_;
+  std::uint64_t size_ = 0;
+};
+
+std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size) {
+  return "truncated: expected " + std::string(exact ? "" : "at least ") + u64s(expected) + " bytes, file has " +
+         u64s(size);
+}
+
+void Reader::check_signature(const unsigned char* head, std::uint64_t have) {
+  const std::uint64_t n = std::min<std::uint64_t>(have, kMagic.size());
+  if (std::memcmp(head, kMagic.data(), std::min<std::uint64_t>(n, 4)) != 0) throw fail("not a prt transfer file");
+  if (n > 4 && std::memcmp(head + 4, kMagic.data() + 4, n - 4) != 0)
+    throw fail("not a valid prt transfer file: its signature is damaged (\"PRTT\" is not followed by CR LF 0x1A LF), "
+               "as by a transfer in text mode that converted line endings");
+}
+
+// The file does not end with the trailer. Walks the section table as far as
+// the file goes to say how long it should be.
+void Reader::explain_bad_size(std::uint32_t section_count) {
+  std::uint64_t end = kHeaderSize;  // end of what is known so far
+  for (std::uint32_t i = 0; i < section_count; ++i) {
+    const bool last = i + 1 == section_count;
+    if (end + kSectionHeaderSize > size_) throw fail(truncated(end + kSectionHeaderSize + kTrailerSize, false, size_));
+    unsigned char sh[kSectionHeaderSize];
+    read_at(end, sh, sizeof sh);
+    const std::uint64_t bytes = load<std::uint64_t>(sh + 16);
+    end = sat_add(sat_add(end + kSectionHeaderSize, bytes), padding(bytes));
+    if (sat_add(end, kTrailerSize) > size_) throw fail(truncated(sat_add(end, kTrailerSize), last, size_));
+  }
+  const std::uint64_t want = end + kTrailerSize;
+  if (want > size_) throw fail(truncated(want, true, size_));
+  if (want < size_)
+    throw fail("corrupt: expected " + u64s(want) + " bytes, file has " + u64s(size_) + " (data after the end?)");
+  throw fail("corrupt: the end marker \"PRTE\" is missing");
+}
+
+std::uint64_t Reader::checksum(std::uint64_t bytes) {
+  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(), &XXH3_freeState);
+  if (!state || XXH3_64bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
+  std::vector<char> buf(std::size_t(1) << 20);
+  f_.clear();
+  f_.seekg(0);
+  for (std::uint64_t done = 0; done < bytes;) {
+    const std::uint64_t n = std::min<std::uint64_t>(buf.size(), bytes - done);
+    f_.read(buf.data(), static_cast<std::streamsize>(n));
+    if (!f_) throw fail("read error at byte " + u64s(done) + ": " + errno_text());
+    XXH3_64bits_update(state.get(), buf.data(), n);
+    done += n;
+  }
+  return XXH3_64bits_digest(state.get());
+}
+
+template <typename T>
+void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count) {
+  dst.resize(count);
+  read_at(offset, dst.data(), count * sizeof(T));
+}
+
+Transfer Reader::read() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path_, ec);
+  if (st.type() == fs::file_type::not_found) throw fail("no such file");
+  if (ec) throw fail("cannot access: " + ec.message());
+  if (fs::is_directory(st)) throw fail("is a directory, not a transfer file");
+  if (!fs::is_regular_file(st)) throw fail("not a regular file");
+  if (access(path_.c_str(), R_OK) != 0) throw fail("permission denied");
+  size_ = fs::file_size(path_, ec);
+  if (ec) throw fail("cannot read: " + ec.message());
+  if (size_ == 0) throw fail("file is empty (not a prt transfer file)");
+  f_.open(path_, std::ios::binary);
+  if (!f_) throw fail("cannot open: " + errno_text());
+
+  // 1. Signature and version, from whatever part of the header is there: a
+  // newer version may lay out everything after them differently.
+  unsigned char h[kHeaderSize] = {};
+  const std::uint64_t head = std::min(size_, kHeaderSize);
+  read_at(0, h, head);
+  check_signature(h, head);
+  if (head < kOffVersion + 4) throw fail(truncated(kMinFileSize, false, size_));
+  const std::uint32_t version = load<std::uint32_t>(h + kOffVersion);
+  if (version > kTransferFormatVersion)
+    throw fail("written by a newer prt (version " + std::to_string(version) + "); this prt reads version " +
+               std::to_string(kTransferFormatVersion));
+  if (version != kTransferFormatVersion) throw fail("unknown format version " + std::to_string(version));
+  if (size_ < kMinFileSize) throw fail(truncated(kMinFileSize, false, size_));
+  const std::uint32_t header_size = load<std::uint32_t>(h + kOffHeaderSize);
+  if (header_size != kHeaderSize)
+    throw fail("corrupt: header size " + std::to_string(header_size) + "; version 1 has " + u64s(kHeaderSize));
+  const std::uint32_t section_count = load<std::uint32_t>(h + kOffSectionCount);
+
+  // 2. Complete (ends with the trailer) and intact (checksum), before any
+  // value is trusted.
+  unsigned char trailer[kTrailerSize];
+  read_at(size_ - kTrailerSize, trailer, kTrailerSize);
+  if (std::memcmp(trailer + 8, kEndMagic.data(), kEndMagic.size()) != 0) explain_bad_size(section_count);
+  const std::uint64_t stored = load<std::uint64_t>(trailer);
+  const std::uint64_t computed = checksum(size_ - kTrailerSize);
+  if (stored != computed)
+    throw fail("corrupt: checksum mismatch (stored " + hex64(stored) + ", computed " + hex64(computed) + ")");
+
+  // 3. Header values.
+  const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
+  if (basis == kBasisWavelet) throw fail("holds a wavelet transfer, which this prt cannot read (it reads SH)");
+  if (basis != kBasisSH) throw fail("unknown basis " + std::to_string(basis) + " (0 is spherical harmonics)");
+  const Values v{load<std::uint32_t>(h + kOffBands),
+                 load<std::uint32_t>(h + kOffChannels),
+                 load<std::uint32_t>(h + kOffMode),
+                 load<std::uint32_t>(h + kOffBounces),
+                 load<std::uint32_t>(h + kOffSamples),
+                 {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
+                 load<std::uint64_t>(h + kOffVertices)};
+  if (auto p = values_problem(v); !p.empty()) throw fail("bad header: " + p);
+  const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
+  if (flags & ~kKnownFlags) throw fail("bad header: unknown flags " + sformat("0x%x", flags & ~kKnownFlags));
+  for (std::uint64_t i = kOffReserved; i < kHeaderSize; ++i)
+    if (h[i] != 0) throw fail("bad header: reserved byte " + u64s(i) + " is not zero");
+  // The coefficients alone take 4 x channels x bands^2 bytes per vertex.
+  const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands * v.bands);
+  if (v.vertices > size_ / (4 * stride))
+    throw fail("bad header: " + u64s(v.vertices) + " vertices cannot fit in a file of " + u64s(size_) +
+               " bytes (at " + u64s(4 * stride) + " bytes per vertex)");
+  if (section_count == 0) throw fail("bad section table: no sections (the coefficients are required)");
+  if (section_count > kKinds.size())
+    throw fail("bad section table: " + std::to_string(section_count) + " sections; at most " +
+               std::to_string(kKinds.size()) + " kinds exist");
+
+  Transfer t;
+  t.bands = int(v.bands);
+  t.channels = int(v.channels);
+  t.mode = TransferMode(v.mode);
+  t.bounces = int(v.bounces);
+  t.samples = int(v.samples);
+  t.albedo = v.albedo;
+  t.vertex_colors = (flags & kFlagVertexColors) != 0;
+  t.seed = load<std::uint64_t>(h + kOffSeed);
+  t.vertices = std::size_t(v.vertices);
+  t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
+
+  // 4. Sections: known kinds in increasing order, each of the type and size
+  // the header implies, data padded with zeros.
+  const std::uint64_t data_end = size_ - kTrailerSize;
+  std::uint64_t offset = kHeaderSize;
+  std::uint32_t previous = 0;
+  for (std::uint32_t i = 0; i < section_count; ++i) {
+    const std::string where = "section " + std::to_string(i + 1) + " of " + std::to_string(section_count);
+    if (offset + kSectionHeaderSize > data_end) throw fail("bad section table: " + where + " is missing");
+    unsigned char sh[kSectionHeaderSize];
+    read_at(offset, sh, sizeof sh);
+    const std::uint32_t kind = load<std::uint32_t>(sh + 0);
+    const std::uint32_t type = load<std::uint32_t>(sh + 4);
+    const std::uint64_t count = load<std::uint64_t>(sh + 8);
+    const std::uint64_t bytes = load<std::uint64_t>(sh + 16);
+    const KindInfo* k = kind_info(kind);
+    if (!k) throw fail("bad section table: " + where + " has unknown kind " + std::to_string(kind));
+    if (kind <= previous)
+      throw fail("bad section table: " + where + " ('" + k->name + "') is out of order or repeated");
+    if (i == 0 && kind != kCoeffs) throw fail("bad section table: no 'coefficients' section");
+    previous = kind;
+    if (type != k->type)
+      throw fail("bad section table: section '" + std::string(k->name) + "' has element type " +
+                 std::to_string(type) + "; expected " + std::to_string(k->type) + " (" + type_name(k->type) + ")");
+    if (auto p = section_problem(kind, count, v); !p.empty()) throw fail("bad section table: " + p);
+    // count is now at most bands^2 x channels x vertices: no overflow below.
+    if (bytes != count * type_bytes(type))
+      throw fail("bad section table: section '" + std::string(k->name) + "' has " + u64s(count) + " " +
+                 type_name(type) + " values but " + u64s(bytes) + " bytes");
+    const std::uint64_t data = offset + kSectionHeaderSize;
+    const std::uint64_t pad = padding(bytes);
+    if (bytes + pad > data_end - data)
+      throw fail("bad section table: section '" + std::string(k->name) + "' runs past the end of the file");
+    switch (kind) {
+      case kCoeffs: read_section(data, t.coeffs, count); break;
+      case kDirect: read_section(data, t.direct, count); break;
+      case kAO: read_section(data, t.ao, count); break;
+      case kBentNormals: read_section(data, t.bent_normals, count / 3); break;
+      case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
+    }
+    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
+    read_at(data + bytes, got, pad);
+    if (std::memcmp(got, zeros, pad) != 0)
+      throw fail("bad section table: the padding after section '" + std::string(k->name) + "' is not zero");
+    offset = data + bytes + pad;
+  }
+  if (offset != data_end)
+    throw fail("bad section table: " + u64s(data_end - offset) + " bytes between the last section and the trailer");
+
+  // 5. Values.
+  if (auto p = finite_problem(t); !p.empty()) throw fail(p);
+  return t;
+}
+
+}  // namespace
+
+Transfer read_transfer(const std::string& path) { return Reader(path).read(); }
+
+// ---- checking and describing ----------------------------------------------------------
+
+void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
+  const std::uint64_t hash = mesh.hash();
+  if (t.vertices == mesh.vertex_count() && t.mesh_hash == hash) return;
+  throw Error(transfer_path + " was computed for a different mesh (" + u64s(t.vertices) + " vertices, hash " +
+              hex64(t.mesh_hash) + ") than " + mesh.source + " (" + u64s(mesh.vertex_count()) + " vertices, hash " +
+              hex64(hash) + "); run prt precompute again");
+}
+
+std::string describe_transfer(const Transfer& t) {
+  const auto line = [](const char* label, const std::string& value) {
+    return sformat("  %-17s %s\n", label, value.c_str());
+  };
+  std::string s = "prt transfer (format version " + std::to_string(kTransferFormatVersion) + ")\n";
+  s += line("basis", "spherical harmonics");
+  s += line("bands", sformat("%d (%d coefficients per channel)", t.bands, t.bands * t.bands));
+  s += line("channels",
+            sformat("%d%s", t.channels, t.channels == 1 ? " (grey: one channel serves R, G and B)" : " (RGB)"));
+  s += line("mode", std::string(transfer_mode_name(t.mode)));
+  s += line("bounces", std::to_string(t.bounces));
+  s += line("samples", std::to_string(t.samples));
+  s += line("albedo", sformat("%.7g %.7g %.7g%s", double(t.albedo.x), double(t.albedo.y), double(t.albedo.z),
+                              t.vertex_colors ? " (vertex colours used as albedo)" : ""));
+  s += line("seed", u64s(t.seed));
+  s += line("vertices", u64s(t.vertices));
+  s += line("mesh hash", hex64(t.mesh_hash));
+  bool first = true;
+  for (const auto& sec : transfer_sections(t)) {
+    std::string v = sformat("%-18s %12llu bytes", sec.name, static_cast<unsigned long long>(sec.bytes));
+    if (sec.per_vertex && t.vertices > 0)
+      v += sformat(" (%llu per vertex)", static_cast<unsigned long long>(sec.bytes / t.vertices));
+    else
+      v += sformat(" (%llu values)", static_cast<unsigned long long>(sec.count));
+    s += line(first ? "sections" : "", v);
+    first = false;
+  }
+  s += line("bytes per vertex", u64s(transfer_bytes_per_vertex(t)));
+  s += line("file size", u64s(transfer_file_size(t)) + " bytes");
+  if (!t.ao.empty()) {
+    double lo = t.ao[0], hi = t.ao[0], sum = 0;
+    for (float a : t.ao) {
+      lo = std::min(lo, double(a));
+      hi = std::max(hi, double(a));
+      sum += a;
+    }
+    s += line("ambient occlusion", sformat("min %.6g, mean %.6g, max %.6g", lo, sum / double(t.ao.size()), hi));
+  }
+  if (!t.bounce_energy.empty()) {
+    std::string e;
+    for (double b : t.bounce_energy) {
+      if (!e.empty()) e += ' ';
+      e += sformat("%.6g", b);
+    }
+    s += line("bounce energy", e);
+  }
+  return s;
+}
+
+}  // namespace prt

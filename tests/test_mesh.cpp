@@ -1,0 +1,652 @@
+// Tests of prt/mesh.h: loading each format through Assimp, validation errors,
+// vertex normals (area and angle weighting, degenerate cases), welding, the
+// mesh hash, and the shared research meshes when ../shared is present.
+
+#include <prt/error.h>
+#include <prt/mesh.h>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using glm::uvec3;
+using glm::vec3;
+
+namespace {
+
+// Unit normals come from a double sum rounded to float: within a few float ulps.
+constexpr float kUnitTol = 1e-6f;
+// Normals of a scaled copy differ only by float rounding of the scaled positions.
+constexpr float kScaleTol = 1e-6f;
+
+// A fresh directory per test, removed afterwards.
+class MeshFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("prt_test_mesh_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p.string();
+  }
+
+  fs::path dir_;
+};
+
+// Expects `f` to throw prt::Error whose message starts with `prefix` and contains `part`.
+template <typename F>
+void expect_error(F f, const std::string& prefix, const std::string& part) {
+  try {
+    f();
+    ADD_FAILURE() << "no prt::Error thrown; expected one containing '" << part << "'";
+  } catch (const prt::Error& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.rfind(prefix, 0), 0u) << msg;
+    EXPECT_NE(msg.find(part), std::string::npos) << msg;
+  }
+}
+
+void expect_near(const vec3& a, const vec3& b, float tol) {
+  EXPECT_NEAR(a.x, b.x, tol) << "(" << a.x << "," << a.y << "," << a.z << ")";
+  EXPECT_NEAR(a.y, b.y, tol) << "(" << a.x << "," << a.y << "," << a.z << ")";
+  EXPECT_NEAR(a.z, b.z, tol) << "(" << a.x << "," << a.y << "," << a.z << ")";
+}
+
+bool is_unit_or_zero(const vec3& n) {
+  if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z)) return false;
+  const float l = glm::length(n);
+  return l == 0.0f || std::abs(l - 1.0f) < kUnitTol;
+}
+
+// file + computed + zero + unreferenced partition the vertices.
+void expect_consistent_report(const prt::Mesh& m) {
+  const auto& r = m.report;
+  EXPECT_LE(r.normals_computed + r.zero_normals + r.unreferenced_vertices, m.vertex_count());
+  EXPECT_EQ(m.normals.size(), m.vertex_count());
+  for (const auto& n : m.normals) EXPECT_TRUE(is_unit_or_zero(n));
+}
+
+// An n x n grid of quads in the plane y = 0, normals +Y (counter-clockwise seen from +Y).
+prt::Mesh grid(int n, float scale = 1.0f, const prt::MeshOptions& options = {}) {
+  std::vector<vec3> p;
+  std::vector<uvec3> t;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) p.emplace_back(scale * float(i) / n, 0.0f, scale * float(j) / n);
+  auto at = [n](int i, int j) { return unsigned(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      t.emplace_back(at(i, j), at(i, j + 1), at(i + 1, j + 1));
+      t.emplace_back(at(i, j), at(i + 1, j + 1), at(i + 1, j));
+    }
+  return prt::make_mesh(std::move(p), std::move(t), {}, {}, options);
+}
+
+// A cube split per face: 6 faces x 4 vertices = 24, outward, counter-clockwise.
+void split_cube(std::vector<vec3>& p, std::vector<uvec3>& t, float s = 1.0f) {
+  const vec3 c[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  const unsigned faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {3, 7, 6, 2}, {0, 4, 7, 3}, {1, 2, 6, 5}};
+  for (const auto& f : faces) {
+    const unsigned b = unsigned(p.size());
+    for (unsigned k : f) p.push_back(c[k] * s);
+    t.emplace_back(b, b + 1, b + 2);
+    t.emplace_back(b, b + 2, b + 3);
+  }
+}
+
+std::string base64(const std::vector<std::uint8_t>& d) {
+  static const char* tab = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < d.size(); i += 3) {
+    const std::uint32_t v = (std::uint32_t(d[i]) << 16) | (i + 1 < d.size() ? std::uint32_t(d[i + 1]) << 8 : 0) |
+                            (i + 2 < d.size() ? std::uint32_t(d[i + 2]) : 0);
+    out += tab[(v >> 18) & 63];
+    out += tab[(v >> 12) & 63];
+    out += i + 1 < d.size() ? tab[(v >> 6) & 63] : '=';
+    out += i + 2 < d.size() ? tab[v & 63] : '=';
+  }
+  return out;
+}
+
+// ---- loading each format ---------------------------------------------------
+
+TEST_F(MeshFiles, OffKeepsVertexOrderAndCount) {
+  // Vertex 4 is unreferenced; the quad is triangulated; order is not sorted.
+  const std::string path = write("quad.off",
+                                 "OFF\n6 2 0\n"
+                                 "1 0 0\n0 0 0\n0 0 1\n1 0 1\n5 5 5\n0.5 0 2\n"
+                                 "4 1 2 3 0\n3 2 5 3\n");
+  const prt::Mesh m = prt::load_mesh(path);
+  ASSERT_EQ(m.vertex_count(), 6u);
+  EXPECT_EQ(m.triangles.size(), 3u);
+  const vec3 expected[6] = {{1, 0, 0}, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {5, 5, 5}, {0.5f, 0, 2}};
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(m.positions[i], expected[i]) << i;
+  EXPECT_EQ(m.report.unreferenced_vertices, 1u);
+  EXPECT_EQ(m.normals[4], vec3(0.0f));
+  // Winding 1,2,3 (0,0,0)->(0,0,1)->(1,0,1) is counter-clockwise seen from +Y.
+  for (int i : {0, 1, 2, 3, 5}) expect_near(m.normals[i], vec3(0, 1, 0), kUnitTol);
+  EXPECT_FALSE(m.report.file_had_normals);
+  EXPECT_FALSE(m.report.file_had_colors);
+  EXPECT_EQ(m.report.normals_computed, 5u);
+  EXPECT_EQ(m.source, path);
+}
+
+TEST_F(MeshFiles, ObjCornersAreJoinedAndFileNormalsUsed) {
+  // A 2x2 grid of quads, each corner with its own (shared) smooth normal: 9 vertices.
+  std::string obj = "# grid\n";
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) obj += "v " + std::to_string(i) + " 0 " + std::to_string(j) + "\n";
+  obj += "vn 0 2 0\nvn 0.6 0.8 0\n";  // not unit: must be normalised
+  auto idx = [](int i, int j) { return std::to_string(j * 3 + i + 1); };
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      obj += "f";
+      for (const auto& c : {idx(i, j), idx(i, j + 1), idx(i + 1, j + 1), idx(i + 1, j)})
+        obj += " " + c + "//" + (c == "5" ? "2" : "1");
+      obj += "\n";
+    }
+  const std::string path = write("grid.obj", obj);
+  const prt::Mesh m = prt::load_mesh(path);
+  EXPECT_EQ(m.vertex_count(), 9u);
+  EXPECT_EQ(m.triangles.size(), 8u);
+  EXPECT_TRUE(m.report.file_had_normals);
+  EXPECT_EQ(m.report.normals_computed, 0u);
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+    const vec3 want = m.positions[i] == vec3(1, 0, 1) ? vec3(0.6f, 0.8f, 0) : vec3(0, 1, 0);
+    expect_near(m.normals[i], want, kUnitTol);
+  }
+  // Ignoring the file's normals computes the flat grid's +Y everywhere.
+  prt::MeshOptions computed;
+  computed.file_normals = false;
+  const prt::Mesh c = prt::load_mesh(path, computed);
+  EXPECT_EQ(c.vertex_count(), 9u);
+  EXPECT_EQ(c.report.normals_computed, 9u);
+  for (const auto& n : c.normals) EXPECT_EQ(n, vec3(0, 1, 0));
+}
+
+TEST_F(MeshFiles, ObjCubeWithoutNormalsJoinsToEightVertices) {
+  const std::string path = write("cube.obj",
+                                 "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                 "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                 "f 1/1 4/2 3/3 2/4\nf 5/1 6/2 7/3 8/4\nf 1/1 2/2 6/3 5/4\n"
+                                 "f 4/1 8/2 7/3 3/4\nf 1/1 5/2 8/3 4/4\nf 2/1 3/2 7/3 6/4\n");
+  const prt::Mesh m = prt::load_mesh(path);
+  // Texture coordinates differ per corner but are dropped before joining.
+  EXPECT_EQ(m.vertex_count(), 8u);
+  EXPECT_EQ(m.triangles.size(), 12u);
+  EXPECT_EQ(m.report.normals_computed, 8u);
+  for (std::size_t i = 0; i < 8; ++i) {
+    // Corner normals of a closed cube point outward along the diagonal.
+    const vec3 out = glm::normalize(m.positions[i] - vec3(0.5f));
+    EXPECT_GT(glm::dot(m.normals[i], out), 0.9f) << i;
+  }
+}
+
+TEST_F(MeshFiles, ObjWithFaceNormalsStaysSplit) {
+  // Per-face normals make the corners differ: 24 vertices, then --weld gives 8.
+  const std::string path = write("cube_n.obj",
+                                 "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                 "vn 0 0 -1\nvn 0 0 1\nvn 0 -1 0\nvn 0 1 0\nvn -1 0 0\nvn 1 0 0\n"
+                                 "f 1//1 4//1 3//1 2//1\nf 5//2 6//2 7//2 8//2\nf 1//3 2//3 6//3 5//3\n"
+                                 "f 4//4 8//4 7//4 3//4\nf 1//5 5//5 8//5 4//5\nf 2//6 3//6 7//6 6//6\n");
+  const prt::Mesh m = prt::load_mesh(path);
+  EXPECT_EQ(m.vertex_count(), 24u);
+  for (std::size_t i = 0; i < 24; ++i) {
+    const float l1 = std::abs(m.normals[i].x) + std::abs(m.normals[i].y) + std::abs(m.normals[i].z);
+    EXPECT_NEAR(l1, 1.0f, kUnitTol) << "axis-aligned face normal expected";
+  }
+  prt::MeshOptions weld;
+  weld.weld = true;
+  const prt::Mesh w = prt::load_mesh(path, weld);
+  EXPECT_EQ(w.vertex_count(), 8u);
+  EXPECT_EQ(w.report.welded, 16u);
+  EXPECT_EQ(w.report.normals_computed, 8u);  // merged vertices drop the disagreeing file normals
+}
+
+TEST_F(MeshFiles, PlyColoursAndOrder) {
+  const std::string path = write("tri.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 4\n"
+                                 "property float x\nproperty float y\nproperty float z\n"
+                                 "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                                 "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                                 "0 0 1 255 0 0\n1 0 1 0 255 0\n1 0 0 0 0 255\n0 0 0 51 102 255\n"
+                                 "3 0 1 2\n3 0 2 3\n");
+  const prt::Mesh m = prt::load_mesh(path);
+  ASSERT_EQ(m.vertex_count(), 4u);
+  EXPECT_EQ(m.triangles.size(), 2u);
+  EXPECT_EQ(m.positions[0], vec3(0, 0, 1));
+  EXPECT_EQ(m.positions[3], vec3(0, 0, 0));
+  EXPECT_EQ(m.triangles[0], uvec3(0, 1, 2));
+  ASSERT_TRUE(m.report.file_had_colors);
+  ASSERT_EQ(m.colors.size(), 4u);
+  // Assimp hands 8-bit channels over divided by 255 (no sRGB decoding).
+  constexpr float kByte = 1e-6f;
+  expect_near(m.colors[0], vec3(1, 0, 0), kByte);
+  expect_near(m.colors[1], vec3(0, 1, 0), kByte);
+  expect_near(m.colors[2], vec3(0, 0, 1), kByte);
+  expect_near(m.colors[3], vec3(0.2f, 0.4f, 1.0f), kByte);
+  // (0,0,1)->(1,0,1)->(1,0,0) is counter-clockwise seen from +Y.
+  for (const auto& n : m.normals) EXPECT_EQ(n, vec3(0, 1, 0));
+}
+
+TEST_F(MeshFiles, StlFacetsAreJoinedIntoSharedVertices) {
+  // A tetrahedron: 4 facets x 3 corners = 12 corners, 4 distinct positions.
+  // Facet normals differ per facet; they are not vertex normals and must not
+  // keep the corners apart.
+  const vec3 v[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const uvec3 f[4] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::string stl = "solid tet\n";
+  for (const auto& t : f) {
+    const vec3 n = glm::normalize(glm::cross(v[t.y] - v[t.x], v[t.z] - v[t.x]));
+    stl += "facet normal " + std::to_string(n.x) + " " + std::to_string(n.y) + " " + std::to_string(n.z) +
+           "\nouter loop\n";
+    for (int k = 0; k < 3; ++k)
+      stl += "vertex " + std::to_string(v[t[k]].x) + " " + std::to_string(v[t[k]].y) + " " +
+             std::to_string(v[t[k]].z) + "\n";
+    stl += "endloop\nendfacet\n";
+  }
+  stl += "endsolid tet\n";
+  const prt::Mesh m = prt::load_mesh(write("tet.STL", stl));  // extension case does not matter
+  EXPECT_EQ(m.vertex_count(), 4u);
+  EXPECT_EQ(m.triangles.size(), 4u);
+  EXPECT_FALSE(m.report.file_had_normals);
+  EXPECT_EQ(m.report.normals_computed, 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const vec3 out = m.positions[i] - vec3(0.25f);
+    EXPECT_GT(glm::dot(m.normals[i], out), 0.0f) << i;
+  }
+}
+
+TEST_F(MeshFiles, GltfWithEmbeddedBuffer) {
+  // One indexed triangle pair (a unit square in z = 0, facing +Z) with a node
+  // translation that must be applied.
+  const float pos[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const std::uint16_t idx[6] = {0, 1, 2, 0, 2, 3};
+  std::vector<std::uint8_t> buf(sizeof(pos) + sizeof(idx));
+  std::memcpy(buf.data(), pos, sizeof(pos));
+  std::memcpy(buf.data() + sizeof(pos), idx, sizeof(idx));
+  const std::string json = R"({
+  "asset": {"version": "2.0"},
+  "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0, "translation": [10, 0, 0]}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"byteLength": 60, "uri": "data:application/octet-stream;base64,)" +
+                           base64(buf) + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                  {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})";
+  const prt::Mesh m = prt::load_mesh(write("square.gltf", json));
+  ASSERT_EQ(m.vertex_count(), 4u);
+  EXPECT_EQ(m.triangles.size(), 2u);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(m.positions[i], vec3(pos[i][0] + 10, pos[i][1], pos[i][2])) << i;
+  for (const auto& n : m.normals) EXPECT_EQ(n, vec3(0, 0, 1));
+}
+
+// ---- load errors -------------------------------------------------------------
+
+TEST_F(MeshFiles, MissingDirectoryEmptyAndGarbage) {
+  const std::string missing = (dir_ / "nope.obj").string();
+  expect_error([&] { prt::load_mesh(missing); }, missing, "no such file");
+  expect_error([&] { prt::load_mesh(dir_.string()); }, dir_.string(), "directory");
+  const std::string empty = write("empty.off", "");
+  expect_error([&] { prt::load_mesh(empty); }, empty, "empty file");
+  const std::string garbage = write("garbage.ply", "ply\nthis is not a ply file\n");
+  expect_error([&] { prt::load_mesh(garbage); }, garbage, "cannot be parsed");
+}
+
+TEST_F(MeshFiles, OnlyPointsAndLinesHaveNoTriangles) {
+  const std::string path = write("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\np 1\n");
+  expect_error([&] { prt::load_mesh(path); }, path, "no triangles");
+  // Assimp itself refuses an OFF file without faces.
+  const std::string none = write("nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n");
+  expect_error([&] { prt::load_mesh(none); }, none, "no valid faces");
+}
+
+TEST_F(MeshFiles, OutOfRangeIndexInFile) {
+  // Assimp's OFF reader would silently clamp these to the last vertex.
+  const std::string off = write("bad.off", "OFF\n# comment\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 3\n");
+  expect_error([&] { prt::load_mesh(off); }, off, "face 1 uses vertex 3, out of range");
+  const std::string neg = write("neg.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n");
+  expect_error([&] { prt::load_mesh(neg); }, neg, "out of range");
+  const std::string ply = write("bad.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                "property float x\nproperty float y\nproperty float z\n"
+                                "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                "0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n");
+  expect_error([&] { prt::load_mesh(ply); }, ply, "out of range");
+  const std::string obj = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+  expect_error([&] { prt::load_mesh(obj); }, obj, "out of range");
+}
+
+TEST_F(MeshFiles, NonFiniteCoordinateInFile) {
+  const std::string path = write("nan.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\nnan 0 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(path); }, path, "vertex 3 has a non-finite coordinate");
+}
+
+TEST_F(MeshFiles, SameFileLoadedTwiceHashesTheSame) {
+  const std::string text = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+  const std::string a = write("a.off", text), b = write("b.off", text);
+  EXPECT_EQ(prt::load_mesh(a).hash(), prt::load_mesh(b).hash());
+  EXPECT_EQ(prt::load_mesh(a).hash(), prt::load_mesh(a).hash());
+}
+
+// ---- make_mesh validation ------------------------------------------------------
+
+TEST(MakeMesh, ValidationErrors) {
+  const std::vector<vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  expect_error([&] { prt::make_mesh({}, {{0, 1, 2}}, {}, {}, {}, "src"); }, "src", "no vertices");
+  expect_error([&] { prt::make_mesh(p, {}, {}, {}, {}, "src"); }, "src", "no triangles");
+  expect_error([&] { prt::make_mesh(p, {{0, 1, 3}}, {}, {}, {}, "src"); }, "src", "out of range");
+  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                    -std::numeric_limits<float>::infinity()}) {
+    std::vector<vec3> q = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}};
+    q[3].y = bad;
+    expect_error([&] { prt::make_mesh(q, {{0, 1, 2}}, {}, {}, {}, "src"); }, "src",
+                 "vertex 3 has a non-finite coordinate");
+  }
+  // Mismatched array sizes are a caller's bug, not a user error.
+  EXPECT_THROW(prt::make_mesh(p, {{0, 1, 2}}, {{0, 0, 1}}), prt::InternalError);
+}
+
+// ---- normals ----------------------------------------------------------------
+
+TEST(Normals, FlatGridIsExactlyTheFaceNormal) {
+  for (auto w : {prt::NormalWeighting::Area, prt::NormalWeighting::Angle}) {
+    prt::MeshOptions o;
+    o.weighting = w;
+    const prt::Mesh m = grid(7, 3.0f, o);
+    EXPECT_EQ(m.report.normals_computed, m.vertex_count());
+    for (const auto& n : m.normals) EXPECT_EQ(n, vec3(0, 1, 0));
+  }
+}
+
+// Vertex 0 is shared by a big face (normal +Z, area 50) and a small face
+// (normal +X, area 0.005) with a right angle at vertex 0 in both.
+prt::Mesh big_and_small(prt::NormalWeighting w) {
+  std::vector<vec3> p = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {0, 0.1f, 0}, {0, 0, -0.1f}};
+  std::vector<uvec3> t = {{0, 1, 2}, {0, 4, 3}};
+  prt::MeshOptions o;
+  o.weighting = w;
+  return prt::make_mesh(p, t, {}, {}, o);
+}
+
+TEST(Normals, AreaWeightingLeansTowardTheBigFace) {
+  const prt::Mesh m = big_and_small(prt::NormalWeighting::Area);
+  // Sum (0,0,100) + (0.01,0,0): tan of the lean from +Z is 1e-4.
+  const vec3 n = m.normals[0];
+  expect_near(n, glm::normalize(vec3(0.01f, 0, 100)), kUnitTol);
+  EXPECT_GT(n.z, 0.9999f);
+}
+
+TEST(Normals, AngleWeightingIgnoresArea) {
+  const prt::Mesh m = big_and_small(prt::NormalWeighting::Angle);
+  // Both corners are right angles: the normal bisects +Z and +X.
+  expect_near(m.normals[0], glm::normalize(vec3(1, 0, 1)), kUnitTol);
+  // At the other corners only one face contributes.
+  expect_near(m.normals[1], vec3(0, 0, 1), kUnitTol);
+  expect_near(m.normals[3], vec3(1, 0, 0), kUnitTol);
+}
+
+TEST(Normals, AngleWeightingOfATentCorner) {
+  // Vertex 0 has corner angles 90 degrees in face A (normal +Z) and 45 in
+  // face B (normal +X): the angle-weighted normal is (0.5, 0, 1) normalised,
+  // area weighting (areas 0.5 and 0.5) gives (1, 0, 1).
+  std::vector<vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 1, -1}};
+  std::vector<uvec3> t = {{0, 1, 2}, {0, 3, 2}};
+  prt::MeshOptions angle;
+  angle.weighting = prt::NormalWeighting::Angle;
+  expect_near(prt::make_mesh(p, t, {}, {}, angle).normals[0], glm::normalize(vec3(0.5f, 0, 1)), kUnitTol);
+  expect_near(prt::make_mesh(p, t).normals[0], glm::normalize(vec3(1, 0, 1)), kUnitTol);
+}
+
+TEST(Normals, DegenerateTrianglesAreKeptAndIgnored) {
+  // 0-1-2 a good triangle; 3 used only by degenerate ones: repeated index,
+  // collinear corners, all corners at one point.
+  std::vector<vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 0, 0}, {3, 0, 0}, {5, 5, 5}, {5, 5, 5}};
+  std::vector<uvec3> t = {{0, 1, 2}, {3, 3, 4}, {0, 1, 3}, {5, 6, 5}, {5, 5, 6}};
+  const prt::Mesh m = prt::make_mesh(p, t);
+  EXPECT_EQ(m.triangles.size(), 5u);
+  EXPECT_EQ(m.triangles[1], uvec3(3, 3, 4));
+  EXPECT_EQ(m.report.degenerate_triangles, 4u);
+  EXPECT_EQ(m.report.zero_normals, 4u);  // vertices 3, 4, 5, 6
+  EXPECT_EQ(m.report.unreferenced_vertices, 0u);
+  EXPECT_EQ(m.report.normals_computed, 3u);
+  for (int i : {3, 4, 5, 6}) EXPECT_EQ(m.normals[i], vec3(0.0f)) << i;
+  // Degenerate triangles with good vertices do not disturb their normals.
+  for (int i : {0, 1, 2}) EXPECT_EQ(m.normals[i], vec3(0, 0, 1)) << i;
+  expect_consistent_report(m);
+}
+
+TEST(Normals, NeedleTriangleIsNotDegenerate) {
+  // Height 1e-30 over a base of 1: area 5e-31, far below float's smallest
+  // normal number squared, but non-zero in double.
+  for (auto w : {prt::NormalWeighting::Area, prt::NormalWeighting::Angle}) {
+    prt::MeshOptions o;
+    o.weighting = w;
+    const prt::Mesh m = prt::make_mesh({{0, 0, 0}, {1, 0, 0}, {0.5f, 1e-30f, 0}}, {{0, 1, 2}}, {}, {}, o);
+    EXPECT_EQ(m.report.degenerate_triangles, 0u);
+    EXPECT_EQ(m.report.normals_computed, 3u);
+    for (const auto& n : m.normals) EXPECT_EQ(n, vec3(0, 0, 1));
+  }
+}
+
+TEST(Normals, OppositeCoincidentTrianglesCancel) {
+  // Same three vertices, both windings, in several rotations of the indices.
+  const std::vector<vec3> p = {{0, 0, 0}, {1, 0.3f, 0.1f}, {0.2f, 1, 0.7f}};
+  for (const uvec3 back : {uvec3(0, 2, 1), uvec3(2, 1, 0), uvec3(1, 0, 2)})
+    for (auto w : {prt::NormalWeighting::Area, prt::NormalWeighting::Angle}) {
+      prt::MeshOptions o;
+      o.weighting = w;
+      const prt::Mesh m = prt::make_mesh(p, {{1, 2, 0}, back}, {}, {}, o);
+      EXPECT_EQ(m.report.zero_normals, 3u);
+      EXPECT_EQ(m.report.normals_computed, 0u);
+      for (const auto& n : m.normals) EXPECT_EQ(n, vec3(0.0f));
+    }
+}
+
+TEST(Normals, FanOfAThousandTriangles) {
+  // A cone: apex at (0, 1, 0) over a circle of 1000 rim points in y = 0,
+  // plus a flat fan of 1000 triangles around a centre. Apex and centre
+  // normals must be +Y and -Y by symmetry.
+  const int n = 1000;
+  std::vector<vec3> p = {{0, 1, 0}, {0, 0, 0}};
+  std::vector<uvec3> t;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    p.emplace_back(float(std::cos(a)), 0.0f, float(-std::sin(a)));
+  }
+  for (int i = 0; i < n; ++i) {
+    const unsigned a = 2 + i, b = 2 + (i + 1) % n;
+    t.emplace_back(0, a, b);  // counter-clockwise from above: outward
+    t.emplace_back(1, b, a);  // bottom, facing -Y
+  }
+  for (auto w : {prt::NormalWeighting::Area, prt::NormalWeighting::Angle}) {
+    prt::MeshOptions o;
+    o.weighting = w;
+    const prt::Mesh m = prt::make_mesh(p, t, {}, {}, o);
+    // The rim is symmetric only up to float rounding of cos/sin (1e-7 each).
+    constexpr float kSymmetry = 1e-5f;
+    expect_near(m.normals[0], vec3(0, 1, 0), kSymmetry);
+    EXPECT_EQ(m.normals[1], vec3(0, -1, 0));  // flat: exact
+    EXPECT_EQ(m.report.normals_computed, m.vertex_count());
+    expect_consistent_report(m);
+  }
+}
+
+TEST(Normals, UnreferencedVerticesGetZero) {
+  const prt::Mesh m =
+      prt::make_mesh({{0, 0, 0}, {9, 9, 9}, {1, 0, 0}, {0, 1, 0}, {7, 7, 7}}, {{0, 2, 3}}, {{0, 0, 1}, {0, 0, 1}, {}, {}, {1, 0, 0}});
+  EXPECT_EQ(m.report.unreferenced_vertices, 2u);
+  EXPECT_EQ(m.normals[1], vec3(0.0f));  // even with a file normal
+  EXPECT_EQ(m.normals[4], vec3(0.0f));
+  EXPECT_EQ(m.normals[0], vec3(0, 0, 1));  // from the file
+  EXPECT_EQ(m.report.normals_computed, 2u);  // zero file normals: computed
+  EXPECT_EQ(m.normals[2], vec3(0, 0, 1));
+}
+
+TEST(Normals, BadFileNormalsAreReplaced) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const prt::Mesh m = prt::make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}},
+                                     {{nan, 0, 0}, {0, 0, 0}, {3, 0, 4}});
+  EXPECT_TRUE(m.report.file_had_normals);
+  EXPECT_EQ(m.report.normals_computed, 2u);
+  EXPECT_EQ(m.normals[0], vec3(0, 0, 1));
+  EXPECT_EQ(m.normals[1], vec3(0, 0, 1));
+  expect_near(m.normals[2], vec3(0.6f, 0, 0.8f), kUnitTol);
+}
+
+TEST(Normals, ScaleInvariant) {
+  // A bumpy surface: a grid with heights, at scales 1e-6, 1 and 1e6.
+  auto bumpy = [](float s) {
+    std::vector<vec3> p;
+    std::vector<uvec3> t;
+    const int n = 8;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        p.push_back(s * vec3(float(i), float(std::sin(i * 0.7) * std::cos(j * 1.3)), float(j)));
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const unsigned a = j * (n + 1) + i;
+        t.emplace_back(a, a + n + 1, a + n + 2);
+        t.emplace_back(a, a + n + 2, a + 1);
+      }
+    return prt::make_mesh(p, t);
+  };
+  const prt::Mesh ref = bumpy(1.0f);
+  for (float s : {1e-6f, 1e6f}) {
+    const prt::Mesh m = bumpy(s);
+    EXPECT_EQ(m.report.degenerate_triangles, 0u);
+    for (std::size_t i = 0; i < m.vertex_count(); ++i) expect_near(m.normals[i], ref.normals[i], kScaleTol);
+  }
+}
+
+// ---- welding, hash, bounds, describe -------------------------------------------
+
+TEST(Weld, SplitCubeWeldsToEight) {
+  std::vector<vec3> p;
+  std::vector<uvec3> t;
+  split_cube(p, t);
+  ASSERT_EQ(p.size(), 24u);
+  const prt::Mesh split = prt::make_mesh(p, t);
+  EXPECT_EQ(split.vertex_count(), 24u);
+  EXPECT_EQ(split.report.welded, 0u);
+  prt::MeshOptions o;
+  o.weld = true;
+  const prt::Mesh m = prt::make_mesh(p, t, {}, std::vector<vec3>(24, vec3(0.5f)), o);
+  EXPECT_EQ(m.vertex_count(), 8u);
+  EXPECT_EQ(m.report.welded, 16u);
+  EXPECT_EQ(m.colors.size(), 8u);
+  EXPECT_EQ(m.triangles.size(), 12u);
+  EXPECT_EQ(m.positions[0], p[0]);  // first occurrences, in order
+  for (const auto& tri : m.triangles)
+    for (int k = 0; k < 3; ++k) EXPECT_LT(tri[k], 8u);
+  for (std::size_t i = 0; i < 8; ++i)
+    EXPECT_GT(glm::dot(m.normals[i], glm::normalize(m.positions[i] - vec3(0.5f))), 0.9f);
+  EXPECT_NE(describe(m).find("16 welded"), std::string::npos) << describe(m);
+}
+
+TEST(Hash, StableAndSensitive) {
+  std::vector<vec3> p;
+  std::vector<uvec3> t;
+  split_cube(p, t);
+  const std::uint64_t h = prt::make_mesh(p, t).hash();
+  EXPECT_EQ(prt::make_mesh(p, t).hash(), h);
+  // Normals, colours and options do not enter the hash.
+  prt::MeshOptions angle;
+  angle.weighting = prt::NormalWeighting::Angle;
+  EXPECT_EQ(prt::make_mesh(p, t, {}, std::vector<vec3>(24, vec3(1)), angle).hash(), h);
+  auto p2 = p;
+  p2[5].x = std::nextafter(p2[5].x, 2.0f);
+  EXPECT_NE(prt::make_mesh(p2, t).hash(), h);
+  auto t2 = t;
+  t2[3] = uvec3(t2[3].y, t2[3].z, t2[3].x);  // same triangle, rotated indices
+  EXPECT_NE(prt::make_mesh(p, t2).hash(), h);
+}
+
+TEST(Bounds, BoxAndDiagonal) {
+  const prt::Mesh m = prt::make_mesh({{-1, 2, 3}, {4, -5, 6}, {0, 0, -6}}, {{0, 1, 2}});
+  EXPECT_EQ(m.bounds_min(), vec3(-1, -5, -6));
+  EXPECT_EQ(m.bounds_max(), vec3(4, 2, 6));
+  EXPECT_DOUBLE_EQ(m.diagonal(), std::sqrt(25.0 + 49.0 + 144.0));
+  const prt::Mesh point = prt::make_mesh({{1, 2, 3}}, {{0, 0, 0}});
+  EXPECT_EQ(point.diagonal(), 0.0);
+  EXPECT_EQ(point.report.degenerate_triangles, 1u);
+  EXPECT_EQ(prt::Mesh{}.diagonal(), 0.0);
+}
+
+TEST(Describe, OneLine) {
+  const prt::Mesh m = grid(2);
+  const std::string d = describe(m);
+  EXPECT_EQ(d, "<memory>: 9 vertices, 8 triangles, normals computed, 0 degenerate triangles, 0 unreferenced vertices");
+}
+
+// ---- the project's meshes ---------------------------------------------------------
+
+TEST(SharedMeshes, LoadAll) {
+  const fs::path dir = fs::path(PRT_SHARED_DIR) / "meshes";
+  if (!fs::is_directory(dir)) GTEST_SKIP() << dir << " not present";
+  // From ../shared/meshes/LICENSE.txt.
+  const std::map<std::string, std::size_t> counts = {
+      {"bunny00.off", 37706}, {"cow.off", 2904},   {"knot1.off", 3200}, {"holes.off", 4291},
+      {"fandisk.off", 6475},  {"homer.off", 4930}, {"lion.off", 7529},  {"mannequin-devil.off", 12977}};
+  int loaded = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".off") continue;
+    SCOPED_TRACE(entry.path().string());
+    prt::Mesh m;
+    ASSERT_NO_THROW(m = prt::load_mesh(entry.path().string()));
+    const auto it = counts.find(entry.path().filename().string());
+    if (it != counts.end()) {
+      EXPECT_EQ(m.vertex_count(), it->second);
+    }
+    expect_consistent_report(m);
+    EXPECT_GT(m.diagonal(), 0.0);
+    std::printf("  %s\n", describe(m).c_str());
+    ++loaded;
+  }
+  EXPECT_GE(loaded, 8);
+}
+
+TEST(DefaultModel, Loads) {
+  const fs::path path = fs::path(PRT_SOURCE_DIR) / "models" / "scene.obj";
+  if (!fs::exists(path)) GTEST_SKIP() << path << " not present";
+  const prt::Mesh m = prt::load_mesh(path.string());
+  EXPECT_GT(m.vertex_count(), 1000u);
+  EXPECT_EQ(m.report.degenerate_triangles, 0u);
+  EXPECT_EQ(m.report.unreferenced_vertices, 0u);
+  EXPECT_EQ(m.report.zero_normals, 0u);
+  EXPECT_EQ(m.report.normals_computed, 0u);  // every vertex has a file normal
+  expect_consistent_report(m);
+  std::printf("  %s\n", describe(m).c_str());
+  // The winding agrees with the file's normals: computed normals point the same way.
+  prt::MeshOptions computed;
+  computed.file_normals = false;
+  const prt::Mesh c = prt::load_mesh(path.string(), computed);
+  ASSERT_EQ(c.vertex_count(), m.vertex_count());
+  std::size_t disagree = 0;
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) disagree += glm::dot(m.normals[i], c.normals[i]) < 0.9f;
+  EXPECT_EQ(disagree, 0u);
+}
+
+}  // namespace

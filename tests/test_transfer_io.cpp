@@ -1,0 +1,790 @@
+// Tests of transfer files (docs/FORMAT.md): bit-identical round trips, the
+// byte layout the document specifies, every way a file can be bad, atomic
+// writing, the mesh check and `prt info`.
+#include <prt/error.h>
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <xxhash.h>
+
+#include <algorithm>
+#include <cctype>
+#include <csignal>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using prt::Transfer;
+using prt::TransferMode;
+
+// ---- helpers --------------------------------------------------------------------
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string("prt_test_transfer_io_") + info->test_suite_name() + "_" + info->name();
+    for (char& c : name)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
+    path_ = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+    fs::remove_all(path_);
+    fs::create_directories(path_ / "work");
+    fs::create_directories(path_ / "io");
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  // Inputs and outputs; captured streams of prt go to io() instead, so a
+  // listing of work() shows exactly what was written.
+  std::string file(const std::string& name) const { return (path_ / "work" / name).string(); }
+  fs::path io() const { return path_ / "io"; }
+  std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(path_ / "work")) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+ private:
+  fs::path path_;
+};
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::string& path, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+bool contains(const std::string& haystack, const std::string& needle) {
+  return haystack.find(needle) != std::string::npos;
+}
+
+// Sections to fill in a test transfer.
+struct Sections {
+  bool direct = false, ao = false, bent = false, energy = false;
+};
+
+// A transfer with random values in every array, consistent with its header.
+Transfer make_transfer(TransferMode mode, int channels, int bands, std::size_t vertices, Sections s,
+                       unsigned seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> g;
+  Transfer t;
+  t.bands = bands;
+  t.channels = channels;
+  t.mode = mode;
+  t.bounces = mode == TransferMode::Interreflected ? 3 : 0;
+  t.samples = 1024;
+  t.albedo = {0.8f, 0.5f, 0.25f};
+  t.vertex_colors = channels == 3;
+  t.seed = 0x0123456789abcdefull + seed;
+  t.vertices = vertices;
+  t.mesh_hash = 0xfedcba9876543210ull ^ seed;
+  t.coeffs.resize(vertices * t.stride());
+  for (float& c : t.coeffs) c = g(rng);
+  if (s.direct) {
+    t.direct.resize(t.coeffs.size());
+    for (float& c : t.direct) c = g(rng);
+  }
+  if (s.ao) {
+    t.ao.resize(vertices);
+    for (float& a : t.ao) a = std::abs(g(rng)) / 4;
+  }
+  if (s.bent) {
+    t.bent_normals.resize(vertices);
+    for (auto& n : t.bent_normals) n = {g(rng), g(rng), g(rng)};
+  }
+  if (s.energy)
+    for (int b = 0; b < t.bounces; ++b) t.bounce_energy.push_back(1.0 / (b + 3));
+  return t;
+}
+
+Transfer full_transfer(std::size_t vertices = 40) {
+  return make_transfer(TransferMode::Interreflected, 3, 4, vertices, {true, true, true, true});
+}
+
+template <typename T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+void expect_identical(const Transfer& a, const Transfer& b) {
+  EXPECT_EQ(a.bands, b.bands);
+  EXPECT_EQ(a.channels, b.channels);
+  EXPECT_EQ(a.mode, b.mode);
+  EXPECT_EQ(a.bounces, b.bounces);
+  EXPECT_EQ(a.samples, b.samples);
+  EXPECT_EQ(std::memcmp(&a.albedo, &b.albedo, sizeof a.albedo), 0);
+  EXPECT_EQ(a.vertex_colors, b.vertex_colors);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.mesh_hash, b.mesh_hash);
+  EXPECT_TRUE(same_bits(a.coeffs, b.coeffs));
+  EXPECT_TRUE(same_bits(a.direct, b.direct));
+  EXPECT_TRUE(same_bits(a.ao, b.ao));
+  EXPECT_TRUE(same_bits(a.bent_normals, b.bent_normals));
+  EXPECT_TRUE(same_bits(a.bounce_energy, b.bounce_energy));
+}
+
+// Field offsets of docs/FORMAT.md, restated here on purpose: the test pins
+// the document, not the implementation's constants.
+constexpr std::size_t kHeader = 128, kSectionHeader = 24, kTrailer = 12;
+constexpr std::size_t kVersionAt = 8, kHeaderSizeAt = 12, kBasisAt = 16, kBandsAt = 20, kChannelsAt = 24,
+                      kModeAt = 28, kBouncesAt = 32, kSamplesAt = 36, kAlbedoAt = 40, kFlagsAt = 52, kSeedAt = 56,
+                      kVerticesAt = 64, kMeshHashAt = 72, kSectionCountAt = 80;
+
+template <typename T>
+T get(const std::string& bytes, std::size_t at) {
+  T v;
+  std::memcpy(&v, bytes.data() + at, sizeof v);
+  return v;
+}
+
+template <typename T>
+void put(std::string& bytes, std::size_t at, T v) {
+  std::memcpy(bytes.data() + at, &v, sizeof v);
+}
+
+// Recomputes the trailer's checksum after an edit, as a buggy or foreign
+// writer would produce: the reader must then catch the edit itself.
+void reseal(std::string& bytes) {
+  put<std::uint64_t>(bytes, bytes.size() - kTrailer, XXH3_64bits(bytes.data(), bytes.size() - kTrailer));
+}
+
+// Expects read_transfer(path) to throw prt::Error whose message names the
+// file and contains every one of `words`.
+void expect_read_error(const std::string& path, const std::vector<std::string>& words, const std::string& what) {
+  try {
+    prt::read_transfer(path);
+    ADD_FAILURE() << what << ": read_transfer accepted the file";
+  } catch (const prt::Error& e) {
+    const std::string msg = e.what();
+    EXPECT_TRUE(contains(msg, path)) << what << ": message does not name the file: " << msg;
+    for (const auto& w : words) EXPECT_TRUE(contains(msg, w)) << what << ": expected '" << w << "' in: " << msg;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << what << ": threw something other than prt::Error: " << e.what();
+  }
+}
+
+// Writes `bytes` to a file and expects reading it to fail with `words`.
+void expect_bytes_error(const TempDir& dir, const std::string& bytes, const std::vector<std::string>& words,
+                        const std::string& what) {
+  const std::string path = dir.file("bad.prtt");
+  write_bytes(path, bytes);
+  expect_read_error(path, words, what);
+}
+
+// A valid file's bytes, with the offsets of its sections' headers.
+struct Sample {
+  std::string bytes;
+  std::vector<std::size_t> section_at;
+};
+
+Sample sample_file(const TempDir& dir, const Transfer& t) {
+  const std::string path = dir.file("sample.prtt");
+  prt::write_transfer(path, t);
+  Sample s{read_bytes(path), {}};
+  std::size_t at = kHeader;
+  for (std::uint32_t i = 0; i < get<std::uint32_t>(s.bytes, kSectionCountAt); ++i) {
+    s.section_at.push_back(at);
+    const auto bytes = get<std::uint64_t>(s.bytes, at + 16);
+    at += kSectionHeader + bytes + (8 - bytes % 8) % 8;
+  }
+  return s;
+}
+
+// ---- running prt --------------------------------------------------------------------
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct Result {
+  int code = -1;
+  std::string out, err;
+};
+
+Result run_prt(const TempDir& dir, const std::vector<std::string>& args) {
+  static int counter = 0;
+  const fs::path out = dir.io() / ("out" + std::to_string(counter) + ".txt");
+  const fs::path err = dir.io() / ("err" + std::to_string(counter) + ".txt");
+  ++counter;
+  std::string cmd = shell_quote(PRT_EXE);
+  for (const auto& a : args) cmd.append(" ").append(shell_quote(a));
+  cmd.append(" </dev/null >").append(shell_quote(out.string()));
+  cmd.append(" 2>").append(shell_quote(err.string()));
+  const int status = std::system(cmd.c_str());
+  Result r;
+  if (status != -1 && WIFEXITED(status))
+    r.code = WEXITSTATUS(status);
+  else if (status != -1 && WIFSIGNALED(status))
+    r.code = 128 + WTERMSIG(status);
+  r.out = read_bytes(out.string());
+  r.err = read_bytes(err.string());
+  return r;
+}
+
+std::string describe_run(const Result& r) {
+  return "exit " + std::to_string(r.code) + "\n--- stdout ---\n" + r.out.substr(0, 2000) + "\n--- stderr ---\n" +
+         r.err.substr(0, 2000);
+}
+
+// ---- round trips -------------------------------------------------------------------
+
+TEST(TransferFile, RoundTripIsBitIdenticalForEveryModeChannelAndSection) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  unsigned seed = 0;
+  for (TransferMode mode : {TransferMode::Unshadowed, TransferMode::Shadowed, TransferMode::Interreflected})
+    for (int channels : {1, 3})
+      for (int bands : {1, 2, 5})
+        for (int mask = 0; mask < 16; ++mask) {
+          const Sections s{(mask & 1) != 0 && mode == TransferMode::Interreflected, (mask & 2) != 0,
+                           (mask & 4) != 0, (mask & 8) != 0 && mode == TransferMode::Interreflected};
+          // 7 vertices: odd sizes, so sections need padding to 8 bytes.
+          const Transfer t = make_transfer(mode, channels, bands, 7, s, ++seed);
+          SCOPED_TRACE(std::string(prt::transfer_mode_name(mode)) + " channels " + std::to_string(channels) +
+                       " bands " + std::to_string(bands) + " sections " + std::to_string(mask));
+          prt::write_transfer(path, t);
+          EXPECT_EQ(fs::file_size(path), prt::transfer_file_size(t));
+          EXPECT_EQ(fs::file_size(path) % 4, 0u);
+          const Transfer back = prt::read_transfer(path);
+          expect_identical(t, back);
+          // Writing what was read gives the same bytes.
+          const std::string first = read_bytes(path);
+          prt::write_transfer(path, back);
+          EXPECT_EQ(read_bytes(path), first);
+        }
+}
+
+TEST(TransferFile, RoundTripKeepsSpecialFloatsBitForBit) {
+  TempDir dir;
+  Transfer t = make_transfer(TransferMode::Shadowed, 1, 2, 3, {false, true, true, false});
+  t.coeffs[0] = -0.0f;
+  t.coeffs[1] = std::numeric_limits<float>::denorm_min();
+  t.coeffs[2] = -std::numeric_limits<float>::max();
+  t.coeffs[3] = std::numeric_limits<float>::min();
+  t.ao[0] = 0.0f;
+  t.bent_normals[1] = {0.0f, -0.0f, 1.0f};
+  t.albedo = {0.1f, 1e-30f, 3.4e38f};
+  t.seed = ~0ull;
+  t.mesh_hash = 0;
+  t.samples = std::numeric_limits<int>::max();
+  const std::string path = dir.file("t.prtt");
+  prt::write_transfer(path, t);
+  expect_identical(t, prt::read_transfer(path));
+}
+
+TEST(TransferFile, LargerTransferRoundTrips) {
+  TempDir dir;
+  const Transfer t = make_transfer(TransferMode::Interreflected, 3, 8, 5000, {true, true, true, true});
+  const std::string path = dir.file("big.prtt");
+  prt::write_transfer(path, t);
+  expect_identical(t, prt::read_transfer(path));
+}
+
+// ---- the layout docs/FORMAT.md specifies ----------------------------------------------
+
+TEST(TransferFormat, BytesAreWhereTheDocumentSays) {
+  TempDir dir;
+  const Transfer t = full_transfer(5);
+  const Sample s = sample_file(dir, t);
+  const std::string& b = s.bytes;
+  EXPECT_EQ(b.substr(0, 8), std::string("PRTT\r\n\x1a\n", 8));
+  EXPECT_EQ(get<std::uint32_t>(b, kVersionAt), 1u);
+  EXPECT_EQ(get<std::uint32_t>(b, kHeaderSizeAt), 128u);
+  EXPECT_EQ(get<std::uint32_t>(b, kBasisAt), 0u);
+  EXPECT_EQ(get<std::uint32_t>(b, kBandsAt), 4u);
+  EXPECT_EQ(get<std::uint32_t>(b, kChannelsAt), 3u);
+  EXPECT_EQ(get<std::uint32_t>(b, kModeAt), 2u);
+  EXPECT_EQ(get<std::uint32_t>(b, kBouncesAt), 3u);
+  EXPECT_EQ(get<std::uint32_t>(b, kSamplesAt), 1024u);
+  EXPECT_EQ(get<float>(b, kAlbedoAt + 0), 0.8f);
+  EXPECT_EQ(get<float>(b, kAlbedoAt + 4), 0.5f);
+  EXPECT_EQ(get<float>(b, kAlbedoAt + 8), 0.25f);
+  EXPECT_EQ(get<std::uint32_t>(b, kFlagsAt), 1u);  // vertex colours
+  EXPECT_EQ(get<std::uint64_t>(b, kSeedAt), t.seed);
+  EXPECT_EQ(get<std::uint64_t>(b, kVerticesAt), 5u);
+  EXPECT_EQ(get<std::uint64_t>(b, kMeshHashAt), t.mesh_hash);
+  EXPECT_EQ(get<std::uint32_t>(b, kSectionCountAt), 5u);
+  for (std::size_t i = 84; i < kHeader; ++i) EXPECT_EQ(b[i], 0) << "reserved byte " << i;
+
+  // Sections in kind order: kind, element type, count, bytes, data.
+  const std::uint32_t kinds[5] = {1, 2, 3, 4, 5}, types[5] = {1, 1, 1, 1, 2};
+  const std::uint64_t counts[5] = {5 * 3 * 16, 5 * 3 * 16, 5, 15, 3};
+  ASSERT_EQ(s.section_at.size(), 5u);
+  EXPECT_EQ(s.section_at[0], kHeader);
+  for (int i = 0; i < 5; ++i) {
+    const std::size_t at = s.section_at[i];
+    EXPECT_EQ(at % 8, 0u);
+    EXPECT_EQ(get<std::uint32_t>(b, at), kinds[i]);
+    EXPECT_EQ(get<std::uint32_t>(b, at + 4), types[i]);
+    EXPECT_EQ(get<std::uint64_t>(b, at + 8), counts[i]);
+    EXPECT_EQ(get<std::uint64_t>(b, at + 16), counts[i] * (types[i] == 2 ? 8 : 4));
+  }
+  // Vertex-major [vertex][channel][k]: vertex 2, channel 1, k = 7.
+  EXPECT_EQ(get<float>(b, kHeader + kSectionHeader + 4 * ((2 * 3 + 1) * 16 + 7)), t.coeffs[(2 * 3 + 1) * 16 + 7]);
+  // AO: 5 floats = 20 bytes, padded to 24 with zeros.
+  EXPECT_EQ(s.section_at[3] - s.section_at[2], kSectionHeader + 24);
+  EXPECT_EQ(get<std::uint32_t>(b, s.section_at[2] + kSectionHeader + 20), 0u);
+  EXPECT_EQ(get<double>(b, s.section_at[4] + kSectionHeader + 8), t.bounce_energy[1]);
+
+  // Trailer: XXH3-64 of everything before it, then "PRTE".
+  EXPECT_EQ(b.substr(b.size() - 4), "PRTE");
+  EXPECT_EQ(get<std::uint64_t>(b, b.size() - kTrailer), XXH3_64bits(b.data(), b.size() - kTrailer));
+}
+
+TEST(TransferFormat, WorkedExampleOfTheDocument) {
+  // docs/FORMAT.md: bunny00 (37706 vertices), 5 bands, 1 channel, shadowed,
+  // with ambient occlusion and bent normals.
+  Transfer t = make_transfer(TransferMode::Shadowed, 1, 5, 37706, {false, true, true, false});
+  EXPECT_EQ(prt::transfer_bytes_per_vertex(t), 116u);
+  EXPECT_EQ(prt::transfer_file_size(t), 4374108u);
+  const auto sections = prt::transfer_sections(t);
+  ASSERT_EQ(sections.size(), 3u);
+  EXPECT_EQ(sections[0].bytes, 3770600u);
+  EXPECT_EQ(sections[1].bytes, 150824u);
+  EXPECT_EQ(sections[2].bytes, 452472u);
+  // Interreflected, 3 channels, everything: 300 + 300 + 4 + 12 per vertex.
+  t = make_transfer(TransferMode::Interreflected, 3, 5, 37706, {true, true, true, true});
+  EXPECT_EQ(prt::transfer_bytes_per_vertex(t), 616u);
+}
+
+// ---- bad files -------------------------------------------------------------------------
+
+TEST(TransferRead, MissingEmptyAndDirectory) {
+  TempDir dir;
+  expect_read_error(dir.file("nope.prtt"), {"no such file"}, "missing");
+  write_bytes(dir.file("empty.prtt"), "");
+  expect_read_error(dir.file("empty.prtt"), {"empty"}, "empty");
+  fs::create_directories(dir.file("d.prtt"));
+  expect_read_error(dir.file("d.prtt"), {"directory"}, "directory");
+}
+
+TEST(TransferRead, NotATransferFile) {
+  TempDir dir;
+  expect_bytes_error(dir, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", {"not a prt transfer file"}, "text file");
+  expect_bytes_error(dir, "hi", {"not a prt transfer file"}, "short text");
+  expect_bytes_error(dir, std::string(4096, '\0'), {"not a prt transfer file"}, "zeros");
+  Sample s = sample_file(dir, full_transfer());
+  s.bytes[0] = 'Q';
+  expect_bytes_error(dir, s.bytes, {"not a prt transfer file"}, "wrong magic");
+}
+
+TEST(TransferRead, TextModeMangledSignatureIsNamed) {
+  TempDir dir;
+  const Sample s = sample_file(dir, full_transfer());
+  std::string mangled = s.bytes;
+  mangled.erase(4, 1);  // CR LF -> LF, as a text-mode copy does
+  expect_bytes_error(dir, mangled, {"signature", "text mode"}, "CRLF -> LF");
+}
+
+TEST(TransferRead, NewerAndUnknownVersions) {
+  TempDir dir;
+  Sample s = sample_file(dir, full_transfer());
+  put<std::uint32_t>(s.bytes, kVersionAt, 99);
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads version 1"}, "version 99");
+  // A newer version may change everything after the version: it is named
+  // even when the rest is short or different.
+  expect_bytes_error(dir, s.bytes.substr(0, 16), {"newer prt (version 99)"}, "version 99, short");
+  put<std::uint32_t>(s.bytes, kVersionAt, 0);
+  expect_bytes_error(dir, s.bytes, {"unknown format version 0"}, "version 0");
+}
+
+TEST(TransferRead, TruncatedAnywhere) {
+  TempDir dir;
+  const Transfer t = full_transfer();
+  const Sample s = sample_file(dir, t);
+  const std::size_t size = s.bytes.size();
+  const std::vector<std::size_t> cuts = {3,
+                                         8,
+                                         12,
+                                         20,
+                                         100,
+                                         127,
+                                         128,
+                                         139,
+                                         140,
+                                         150,                          // inside the first section header
+                                         s.section_at[0] + 1000,       // inside the coefficients
+                                         s.section_at[1] + 30,         // inside the direct part
+                                         s.section_at[4] + 4,          // inside the last section header
+                                         s.section_at[4] + 30,         // inside the last section's data
+                                         size - kTrailer,              // no trailer
+                                         size - 4,                     // no end marker
+                                         size - 1};
+  for (std::size_t cut : cuts) {
+    SCOPED_TRACE("cut at " + std::to_string(cut) + " of " + std::to_string(size));
+    expect_bytes_error(dir, s.bytes.substr(0, cut), {"truncated: expected ", "bytes, file has " + std::to_string(cut)},
+                       "cut");
+  }
+  // Where the size is known exactly, it is stated exactly.
+  for (std::size_t cut : {s.section_at[4] + 30, size - kTrailer, size - 4, size - 1})
+    expect_bytes_error(dir, s.bytes.substr(0, cut),
+                       {"truncated: expected " + std::to_string(size) + " bytes, file has " + std::to_string(cut)},
+                       "exact");
+  expect_bytes_error(dir, s.bytes.substr(0, 100), {"truncated: expected at least 140 bytes, file has 100"},
+                     "inside the header");
+}
+
+TEST(TransferRead, FlippedBytesFailTheChecksum) {
+  TempDir dir;
+  const Sample s = sample_file(dir, full_transfer());
+  const std::size_t size = s.bytes.size();
+  for (std::size_t at : {std::size_t(kBandsAt), std::size_t(kVerticesAt), std::size_t(100), s.section_at[0] + 16,
+                         s.section_at[0] + kSectionHeader + 17, size / 2, s.section_at[4] + kSectionHeader + 3,
+                         size - kTrailer, size - 5}) {
+    std::string b = s.bytes;
+    b[at] = static_cast<char>(b[at] ^ 0x10);
+    expect_bytes_error(dir, b, {"corrupt: checksum mismatch"}, "flip at " + std::to_string(at));
+  }
+  std::string b = s.bytes;
+  b[size - 1] = 'X';
+  expect_bytes_error(dir, b, {"corrupt", "end marker"}, "end marker");
+  b = s.bytes + "extra";
+  expect_bytes_error(dir, b, {"corrupt: expected " + std::to_string(size) + " bytes"}, "appended bytes");
+}
+
+TEST(TransferRead, BadHeaderValues) {
+  TempDir dir;
+  const Sample s = sample_file(dir, full_transfer());
+  struct Case {
+    std::size_t at;
+    std::uint64_t value;
+    int bytes;
+    std::vector<std::string> words;
+  };
+  const std::vector<Case> cases = {
+      {kBandsAt, 0, 4, {"bad header", "bands is 0", "1 to 64"}},
+      {kBandsAt, 65, 4, {"bands is 65"}},
+      {kChannelsAt, 2, 4, {"channels is 2", "1 or 3"}},
+      {kChannelsAt, 0, 4, {"channels is 0"}},
+      {kModeAt, 3, 4, {"unknown transfer mode 3"}},
+      {kBasisAt, 1, 4, {"wavelet"}},
+      {kBasisAt, 7, 4, {"unknown basis 7"}},
+      {kBouncesAt, 0x80000000u, 4, {"bounces is 2147483648"}},
+      {kSamplesAt, 0xffffffffu, 4, {"samples is 4294967295"}},
+      {kAlbedoAt + 4, 0x7fc00000u, 4, {"albedo is not finite"}},
+      {kFlagsAt, 0x81, 4, {"unknown flags 0x80"}},
+      {100, 1, 1, {"reserved byte 100"}},
+      {kHeaderSizeAt, 64, 4, {"header size 64"}},
+      {kVerticesAt, 0, 8, {"no vertices"}},
+      {kVerticesAt, 1ull << 40, 8, {"1099511627776 vertices cannot fit"}},
+      {kVerticesAt, ~0ull, 8, {"vertices cannot fit"}},
+      {kVerticesAt, 41, 8, {"section 'coefficients' has 1920 values", "41 x 3 x 16 = 1968"}},
+      {kSectionCountAt, 0, 4, {"no sections"}},
+      {kSectionCountAt, 6, 4, {"6 sections"}},
+  };
+  for (const auto& c : cases) {
+    std::string b = s.bytes;
+    if (c.bytes == 1)
+      b[c.at] = static_cast<char>(c.value);
+    else if (c.bytes == 4)
+      put<std::uint32_t>(b, c.at, std::uint32_t(c.value));
+    else
+      put<std::uint64_t>(b, c.at, c.value);
+    reseal(b);
+    expect_bytes_error(dir, b, c.words, "header byte " + std::to_string(c.at) + " = " + std::to_string(c.value));
+  }
+}
+
+TEST(TransferRead, SectionsInconsistentWithTheHeader) {
+  TempDir dir;
+  const Sample s = sample_file(dir, full_transfer());
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& words, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, words, what);
+  };
+  const std::size_t c = s.section_at[0], ao = s.section_at[2];
+  edit(c, std::uint32_t(9), {"unknown kind 9"}, "kind 9");
+  edit(c, std::uint32_t(3), {"no 'coefficients' section"}, "coefficients missing");
+  edit(ao, std::uint32_t(2), {"out of order or repeated"}, "repeated kind");
+  edit(c + 4, std::uint32_t(2), {"element type 2", "expected 1 (f32)"}, "f64 coefficients");
+  edit(c + 8, std::uint64_t(1919), {"1919 values", "expected vertices x channels x bands^2"}, "count");
+  edit(c + 16, std::uint64_t(7676), {"1920 f32 values but 7676 bytes"}, "bytes");
+  edit(ao + 8, std::uint64_t(39), {"'ambient occlusion' has 39 values; expected 40"}, "AO count");
+  edit(s.section_at[4] + 8, std::uint64_t(4), {"'bounce energy' has 4 values; expected 1 to bounces = 3"},
+       "bounce energy count");
+  edit(kModeAt, std::uint32_t(1), {"'direct' section", "only an interreflected transfer"}, "direct when shadowed");
+  edit(kSectionCountAt, std::uint32_t(4), {"between the last section and the trailer"}, "section count too small");
+
+  // Non-zero padding: the AO section (40 floats) needs none; make one that does.
+  Transfer odd = full_transfer(5);
+  const Sample o = sample_file(dir, odd);
+  std::string b = o.bytes;
+  b[o.section_at[2] + kSectionHeader + 20] = 1;
+  reseal(b);
+  expect_bytes_error(dir, b, {"padding after section 'ambient occlusion'"}, "padding");
+}
+
+TEST(TransferRead, NonFiniteValuesNameTheVertex) {
+  TempDir dir;
+  const Transfer t = full_transfer();
+  const Sample s = sample_file(dir, t);
+  const std::size_t stride = t.stride();  // 3 x 16
+  const auto edit = [&](std::size_t at, float value, const std::vector<std::string>& words, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, words, what);
+  };
+  const std::size_t data = kHeader + kSectionHeader;
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  edit(data + 4 * (12 * stride + 16 + 5), nan, {"vertex 12 has a non-finite coefficient", "channel 1, k = 5"}, "NaN");
+  edit(data + 4 * (39 * stride), -inf, {"vertex 39 has a non-finite coefficient"}, "-Inf");
+  edit(s.section_at[1] + kSectionHeader + 4 * (3 * stride), inf, {"vertex 3 has a non-finite direct coefficient"},
+       "direct");
+  edit(s.section_at[2] + kSectionHeader + 4 * 7, nan, {"vertex 7 has a non-finite ambient occlusion"}, "AO");
+  edit(s.section_at[3] + kSectionHeader + 4 * (3 * 8 + 2), inf, {"vertex 8 has a non-finite bent normal"}, "bent");
+  std::string b = s.bytes;
+  put(b, s.section_at[4] + kSectionHeader + 8, std::numeric_limits<double>::quiet_NaN());
+  reseal(b);
+  expect_bytes_error(dir, b, {"bounce 2 has a non-finite energy"}, "bounce energy");
+}
+
+// ---- writing -----------------------------------------------------------------------------
+
+TEST(TransferWrite, RefusesWhatCouldNotBeReadBack) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  const auto expect_refused = [&](const Transfer& t, const std::string& words) {
+    try {
+      prt::write_transfer(path, t);
+      ADD_FAILURE() << "wrote a bad transfer (" << words << ")";
+    } catch (const prt::Error& e) {
+      EXPECT_TRUE(contains(e.what(), path)) << e.what();
+      EXPECT_TRUE(contains(e.what(), words)) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(path));
+  };
+  Transfer t = full_transfer();
+  t.coeffs.pop_back();
+  expect_refused(t, "section 'coefficients' has 1919 values");
+  t = full_transfer();
+  t.coeffs[100] = std::numeric_limits<float>::quiet_NaN();
+  expect_refused(t, "vertex 2 has a non-finite coefficient");
+  t = full_transfer();
+  t.bands = 0;
+  expect_refused(t, "bands is 0");
+  t = full_transfer();
+  t.ao.resize(3);
+  expect_refused(t, "'ambient occlusion' has 3 values");
+  t = full_transfer();
+  t.mode = TransferMode::Shadowed;
+  expect_refused(t, "only an interreflected transfer");
+  t = full_transfer();
+  t.vertices = 0;
+  t.coeffs.clear();
+  t.direct.clear();
+  t.ao.clear();
+  t.bent_normals.clear();
+  expect_refused(t, "no vertices");
+  EXPECT_TRUE(dir.listing().empty());
+}
+
+// Runs write_transfer(path, t) in a child process whose file-size limit
+// (RLIMIT_FSIZE) makes the write fail part-way with EFBIG, as a full disk
+// would; the limit never touches this process or its output. Returns the
+// child's exit code: 0 when it threw prt::Error naming the file and the
+// failure, 1 when it wrote, 2 for a wrong message, 3 for another exception.
+int write_with_size_limit(const std::string& path, const Transfer& t, rlim_t limit) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::signal(SIGXFSZ, SIG_IGN);
+    rlimit lim{};
+    getrlimit(RLIMIT_FSIZE, &lim);
+    lim.rlim_cur = limit;
+    setrlimit(RLIMIT_FSIZE, &lim);
+    int code = 1;
+    try {
+      prt::write_transfer(path, t);
+    } catch (const prt::Error& e) {
+      code = contains(e.what(), path + ": write failed") ? 0 : 2;
+    } catch (...) {
+      code = 3;
+    }
+    _exit(code);
+  }
+  int status = 0;
+  if (pid < 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status)) return -1;
+  return WEXITSTATUS(status);
+}
+
+TEST(TransferWrite, FailedWriteLeavesTheOldFileAndNoTemporary) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  const Transfer small = make_transfer(TransferMode::Shadowed, 1, 2, 10, {});
+  prt::write_transfer(path, small);
+  const std::string before = read_bytes(path);
+  ASSERT_LT(before.size(), 4096u);
+
+  const Transfer big = make_transfer(TransferMode::Shadowed, 3, 8, 1000, {false, true, true, false});
+  ASSERT_GT(prt::transfer_file_size(big), 65536u);
+  EXPECT_EQ(write_with_size_limit(path, big, 65536), 0) << "0: prt::Error naming the failure; 1: no error";
+  EXPECT_EQ(read_bytes(path), before);
+  EXPECT_EQ(dir.listing(), std::vector<std::string>{"t.prtt"});
+  expect_identical(prt::read_transfer(path), small);
+
+  // Without the limit the same write succeeds.
+  prt::write_transfer(path, big);
+  expect_identical(prt::read_transfer(path), big);
+
+  // A directory that does not exist: an error, and nothing written.
+  EXPECT_THROW(prt::write_transfer(dir.file("no/such/dir.prtt"), small), prt::Error);
+  EXPECT_EQ(dir.listing(), std::vector<std::string>{"t.prtt"});
+}
+
+// ---- the mesh check ---------------------------------------------------------------------
+
+prt::Mesh grid(int k, float lift = 0.0f) {
+  std::vector<glm::vec3> p;
+  std::vector<glm::uvec3> tri;
+  for (int j = 0; j <= k; ++j)
+    for (int i = 0; i <= k; ++i) p.emplace_back(float(i) / k, (i == 1 && j == 1) ? lift : 0.0f, float(j) / k);
+  for (int j = 0; j < k; ++j)
+    for (int i = 0; i < k; ++i) {
+      const unsigned a = j * (k + 1) + i, b = a + 1, c = a + k + 1, d = c + 1;
+      tri.emplace_back(a, c, b);
+      tri.emplace_back(b, c, d);
+    }
+  return prt::make_mesh(std::move(p), std::move(tri), {}, {}, {}, "grid" + std::to_string(k) + ".off");
+}
+
+TEST(TransferMesh, CheckMatchesAcceptsTheMeshAndRefusesAnother) {
+  const prt::Mesh mesh = grid(4);
+  Transfer t = make_transfer(TransferMode::Shadowed, 1, 3, mesh.vertex_count(), {});
+  t.mesh_hash = mesh.hash();
+  EXPECT_NO_THROW(prt::check_matches(t, mesh, "grid.prtt"));
+  EXPECT_NO_THROW(prt::check_matches(t, grid(4), "grid.prtt"));  // same data, built again
+
+  const auto expect_refused = [&](const prt::Mesh& other, const std::string& what) {
+    try {
+      prt::check_matches(t, other, "grid.prtt");
+      ADD_FAILURE() << what << ": accepted";
+    } catch (const prt::Error& e) {
+      const std::string msg = e.what();
+      for (const std::string& w :
+           std::vector<std::string>{"grid.prtt was computed for a different mesh (25 vertices, hash ", other.source,
+                                    std::to_string(other.vertex_count()) + " vertices", "run prt precompute again"})
+        EXPECT_TRUE(contains(msg, w)) << what << ": expected '" << w << "' in: " << msg;
+    }
+  };
+  expect_refused(grid(5), "more vertices");
+  expect_refused(grid(4, 0.25f), "a moved vertex");
+  // Same positions, triangles listed in another order.
+  prt::Mesh swapped = grid(4);
+  std::swap(swapped.triangles[0], swapped.triangles[1]);
+  expect_refused(swapped, "reordered triangles");
+}
+
+TEST(TransferMesh, HashSurvivesTheFile) {
+  TempDir dir;
+  const prt::Mesh mesh = grid(3);
+  Transfer t = make_transfer(TransferMode::Unshadowed, 1, 2, mesh.vertex_count(), {});
+  t.mesh_hash = mesh.hash();
+  prt::write_transfer(dir.file("g.prtt"), t);
+  EXPECT_NO_THROW(prt::check_matches(prt::read_transfer(dir.file("g.prtt")), mesh, dir.file("g.prtt")));
+}
+
+// ---- describe_transfer and prt info -------------------------------------------------------
+
+TEST(TransferDescribe, NamesEveryField) {
+  Transfer t = make_transfer(TransferMode::Shadowed, 1, 5, 37706, {false, true, true, false});
+  t.mesh_hash = 0x00ab00cd00ef0012ull;
+  std::fill(t.ao.begin(), t.ao.end(), 0.5f);
+  t.ao[3] = 0.25f;
+  t.ao[9] = 1.0f;
+  const std::string d = prt::describe_transfer(t);
+  for (const char* w : {"bands", "5 (25 coefficients", "channels", "mode", "shadowed", "bounces", "samples", "1024",
+                        "albedo", "0.8 0.5 0.25", "37706", "0x00ab00cd00ef0012", "coefficients", "3770600 bytes",
+                        "(100 per vertex)", "ambient occlusion", "bent normals", "bytes per vertex", "116",
+                        "4374108 bytes", "min 0.25", "max 1"})
+    EXPECT_TRUE(contains(d, w)) << "expected '" << w << "' in:\n" << d;
+  EXPECT_EQ(d.back(), '\n');
+}
+
+TEST(PrtInfo, PrintsTheHeader) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  const Transfer t = make_transfer(TransferMode::Interreflected, 3, 5, 321, {true, true, false, true});
+  prt::write_transfer(path, t);
+  Result r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, path)) << r.out;
+  EXPECT_TRUE(contains(r.out, "5 (25 coefficients")) << r.out;
+  EXPECT_TRUE(contains(r.out, "321")) << r.out;
+  EXPECT_TRUE(contains(r.out, "interreflected")) << r.out;
+
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 1);
+  EXPECT_EQ(j.at("bands"), 5);
+  EXPECT_EQ(j.at("channels"), 3);
+  EXPECT_EQ(j.at("mode"), "interreflected");
+  EXPECT_EQ(j.at("bounces"), 3);
+  EXPECT_EQ(j.at("vertices"), 321);
+  EXPECT_EQ(j.at("seed").get<std::uint64_t>(), t.seed);
+  EXPECT_EQ(j.at("mesh_hash"), "0xfedcba9876543211");
+  EXPECT_EQ(j.at("sections").size(), 4u);
+  EXPECT_EQ(j.at("sections").at(0).at("bytes"), 321 * 300);
+  EXPECT_EQ(j.at("bytes_per_vertex"), 604);
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
+  EXPECT_TRUE(j.contains("ambient_occlusion"));
+  EXPECT_EQ(dir.listing(), std::vector<std::string>{"t.prtt"});
+}
+
+TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  prt::write_transfer(path, full_transfer());
+  std::string b = read_bytes(path);
+  b[b.size() / 2] = static_cast<char>(b[b.size() / 2] ^ 1);
+  write_bytes(path, b);
+  Result r = run_prt(dir, {"info", path});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_TRUE(contains(r.err, path + ": corrupt: checksum mismatch")) << describe_run(r);
+  EXPECT_TRUE(r.out.empty()) << r.out;
+
+  write_bytes(path, b.substr(0, 1000));
+  r = run_prt(dir, {"info", path, "--json"});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_TRUE(contains(r.err, path + ": truncated")) << describe_run(r);
+
+  r = run_prt(dir, {"info", dir.file("missing.prtt")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_TRUE(contains(r.err, dir.file("missing.prtt") + ": no such file")) << describe_run(r);
+
+  r = run_prt(dir, {"info"});
+  EXPECT_NE(r.code, 0) << describe_run(r);
+}
+
+}  // namespace

@@ -1,0 +1,92 @@
+// prt compare: error of one vertex CSV against a reference one.
+#include "commands.h"
+
+#include <prt/compare.h>
+
+#include <glm/geometric.hpp>
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <memory>
+
+namespace prt::cli {
+
+namespace {
+
+struct CompareArgs {
+  std::string a, b;
+  bool json = false;
+};
+
+// JSON has no infinity: a black reference's infinite relative errors become null.
+nlohmann::json number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+int run_compare(const CompareArgs& args) {
+  std::vector<glm::vec3> se;
+  const std::vector<glm::vec3> a = read_vertex_csv(args.a);
+  const std::vector<glm::vec3> b = read_vertex_csv(args.b, &se);
+  if (a.size() != b.size())
+    throw Error(fmt::format("{} has {} vertices but {} has {}: not results for the same mesh", args.a, a.size(),
+                            args.b, b.size()));
+  const CompareResult r = compare_vertices(a, b);
+
+  // The reference's own noise, when it carries standard errors: differences
+  // of this size are not resolved by it.
+  double noise = -1;
+  if (!se.empty()) {
+    double se2 = 0, b2 = 0;
+    for (std::size_t v = 0; v < b.size(); ++v) {
+      se2 += double(glm::dot(se[v], se[v]));
+      b2 += double(glm::dot(b[v], b[v]));
+    }
+    noise = b2 > 0 ? std::sqrt(se2 / b2) : 0.0;
+  }
+
+  if (args.json) {
+    nlohmann::ordered_json j;
+    j["a"] = args.a;
+    j["b"] = args.b;
+    j["vertices"] = r.vertices;
+    j["rel_rms"] = number(r.rel_rms);
+    j["p99_rel"] = number(r.p99_rel);
+    j["max_rel"] = number(r.max_rel);
+    j["max_rel_vertex"] = r.max_vertex;
+    j["eps"] = r.eps;
+    j["mean_ref"] = r.mean_ref;
+    j["rms_abs"] = r.rms_abs;
+    j["max_abs"] = r.max_abs;
+    j["ref_noise_rel_rms"] = noise >= 0 ? nlohmann::json(noise) : nlohmann::json(nullptr);
+    j["definitions"] =
+        "norms are Euclidean over RGB; rel_rms = sqrt(sum |a-b|^2 / sum |b|^2); per-vertex e = |a-b| / max(|b|, eps), "
+        "eps = 1e-3 x mean |b|; p99 by nearest rank; b is the reference";
+    fmt::print("{}\n", j.dump(2));
+    return 0;
+  }
+  fmt::print("{} vs {} (reference): {} vertices\n", args.a, args.b, r.vertices);
+  fmt::print("  relative RMS error       {:.6g}   sqrt(sum |a-b|^2 / sum |b|^2)\n", r.rel_rms);
+  fmt::print("  99th percentile rel.     {:.6g}   per vertex |a-b| / max(|b|, eps)\n", r.p99_rel);
+  fmt::print("  max relative error       {:.6g}   at vertex {}\n", r.max_rel, r.max_vertex);
+  fmt::print("  eps                      {:.6g}   = 1e-3 x mean |b| ({:.6g})\n", r.eps, r.mean_ref);
+  fmt::print("  RMS / max absolute       {:.6g} / {:.6g}\n", r.rms_abs, r.max_abs);
+  if (noise >= 0) fmt::print("  reference noise          {:.6g}   relative RMS of its standard errors\n", noise);
+  return 0;
+}
+
+}  // namespace
+
+Run add_compare(CLI::App& app) {
+  auto a = std::make_shared<CompareArgs>();
+  CLI::App* s = app.add_subcommand("compare", "Error of per-vertex radiance A.csv against a reference B.csv");
+  s->footer(
+      "Files: vertex,r,g,b[,se_r,se_g,se_b] as written by prt relight and prt reference.\n"
+      "Norms are Euclidean over RGB. eps keeps near-black vertices from dominating the relative errors.\n"
+      "Example: prt compare cow_prt.csv cow_ref.csv --json");
+  s->add_option("A", a->a, "CSV to judge")->required();
+  s->add_option("B", a->b, "Reference CSV")->required();
+  s->add_flag("--json", a->json, "Print the numbers as JSON");
+  return [a] { return run_compare(*a); };
+}
+
+}  // namespace prt::cli
