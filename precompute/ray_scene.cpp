@@ -91,10 +91,9 @@ void RayScene::release() {
   scene_ = device_ = nullptr;
 }
 
-std::uint32_t RayScene::occluded8(const glm::vec3& o, const glm::vec3* dirs, int count, float tnear) const {
-  PRT_CHECK(count >= 0 && count <= 8);
-  alignas(32) int valid[8];
-  alignas(32) RTCRay8 ray;
+namespace {
+// An 8-wide packet from one origin: lanes >= count are invalid.
+void fill_packet(const glm::vec3& o, const glm::vec3* dirs, int count, float tnear, int* valid, RTCRay8& ray) {
   for (int i = 0; i < 8; ++i) {
     valid[i] = i < count ? -1 : 0;
     const glm::vec3 d = i < count ? dirs[i] : glm::vec3(0, 0, 1);
@@ -111,6 +110,32 @@ std::uint32_t RayScene::occluded8(const glm::vec3& o, const glm::vec3* dirs, int
     ray.id[i] = unsigned(i);
     ray.flags[i] = 0;
   }
+}
+
+// One ray.
+RTCRay single_ray(const glm::vec3& o, const glm::vec3& d, float tnear) {
+  RTCRay ray;
+  ray.org_x = o.x;
+  ray.org_y = o.y;
+  ray.org_z = o.z;
+  ray.dir_x = d.x;
+  ray.dir_y = d.y;
+  ray.dir_z = d.z;
+  ray.tnear = tnear;
+  ray.tfar = std::numeric_limits<float>::infinity();
+  ray.time = 0.0f;
+  ray.mask = ~0u;
+  ray.id = 0;
+  ray.flags = 0;
+  return ray;
+}
+}  // namespace
+
+std::uint32_t RayScene::occluded8(const glm::vec3& o, const glm::vec3* dirs, int count, float tnear) const {
+  PRT_CHECK(count >= 0 && count <= 8);
+  alignas(32) int valid[8];
+  alignas(32) RTCRay8 ray;
+  fill_packet(o, dirs, count, tnear, valid, ray);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   rtcOccluded8(valid, scene_of(scene_), &ctx, &ray);
@@ -132,21 +157,8 @@ void RayScene::intersect8(const glm::vec3& o, const glm::vec3* dirs, int count, 
   PRT_CHECK(count >= 0 && count <= 8);
   alignas(32) int valid[8];
   alignas(32) RTCRayHit8 rh;
+  fill_packet(o, dirs, count, tnear, valid, rh.ray);
   for (int i = 0; i < 8; ++i) {
-    valid[i] = i < count ? -1 : 0;
-    const glm::vec3 d = i < count ? dirs[i] : glm::vec3(0, 0, 1);
-    rh.ray.org_x[i] = o.x;
-    rh.ray.org_y[i] = o.y;
-    rh.ray.org_z[i] = o.z;
-    rh.ray.dir_x[i] = d.x;
-    rh.ray.dir_y[i] = d.y;
-    rh.ray.dir_z[i] = d.z;
-    rh.ray.tnear[i] = tnear;
-    rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-    rh.ray.time[i] = 0.0f;
-    rh.ray.mask[i] = ~0u;
-    rh.ray.id[i] = unsigned(i);
-    rh.ray.flags[i] = 0;
     rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
@@ -169,18 +181,7 @@ void RayScene::intersect8(const glm::vec3& o, const glm::vec3* dirs, int count, 
 
 Hit RayScene::intersect1(const glm::vec3& o, const glm::vec3& d, float tnear) const {
   RTCRayHit rh;
-  rh.ray.org_x = o.x;
-  rh.ray.org_y = o.y;
-  rh.ray.org_z = o.z;
-  rh.ray.dir_x = d.x;
-  rh.ray.dir_y = d.y;
-  rh.ray.dir_z = d.z;
-  rh.ray.tnear = tnear;
-  rh.ray.tfar = std::numeric_limits<float>::infinity();
-  rh.ray.time = 0.0f;
-  rh.ray.mask = ~0u;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
+  rh.ray = single_ray(o, d, tnear);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   RTCIntersectContext ctx;
@@ -197,19 +198,7 @@ Hit RayScene::intersect1(const glm::vec3& o, const glm::vec3& d, float tnear) co
 }
 
 bool RayScene::occluded1(const glm::vec3& o, const glm::vec3& d, float tnear) const {
-  RTCRay ray;
-  ray.org_x = o.x;
-  ray.org_y = o.y;
-  ray.org_z = o.z;
-  ray.dir_x = d.x;
-  ray.dir_y = d.y;
-  ray.dir_z = d.z;
-  ray.tnear = tnear;
-  ray.tfar = std::numeric_limits<float>::infinity();
-  ray.time = 0.0f;
-  ray.mask = ~0u;
-  ray.id = 0;
-  ray.flags = 0;
+  RTCRay ray = single_ray(o, d, tnear);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   rtcOccluded1(scene_of(scene_), &ctx, &ray);
