@@ -2,6 +2,8 @@
 // stdout and stderr captured to files, and compares its output with the
 // library computed in-process. Inputs other than the shipped envmaps are
 // generated at run time in a per-test temporary directory.
+#include "test_files.h"
+
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/filter.h>
@@ -11,7 +13,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -57,88 +58,7 @@ constexpr double kIrradianceTol = 1e-12;
 
 // ---- helpers --------------------------------------------------------------------
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("prt_test_cli_") + info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
-    path_ = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_ / "work");
-    fs::create_directories(path_ / "io");
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  // Where tests put their inputs and outputs (captured streams go elsewhere,
-  // so a listing of this directory shows exactly what prt wrote).
-  std::string file(const std::string& name) const { return (path_ / "work" / name).string(); }
-  fs::path work() const { return path_ / "work"; }
-  fs::path io() const { return path_ / "io"; }
-
-  std::vector<std::string> listing() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(work())) names.push_back(e.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
-
-std::string read_file(const fs::path& path) {
-  std::ifstream f(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
-
-void write_file(const std::string& path, const std::string& bytes) {
-  std::ofstream f(path, std::ios::binary);
-  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Result {
-  int code = -1;  // exit status; 128 + signal when killed
-  std::string out, err;
-};
-
-// Runs prt with `args`, stdin from /dev/null, capturing both streams.
-Result run_prt(const TempDir& dir, const std::vector<std::string>& args) {
-  static int counter = 0;
-  const fs::path out = dir.io() / ("out" + std::to_string(counter) + ".txt");
-  const fs::path err = dir.io() / ("err" + std::to_string(counter) + ".txt");
-  ++counter;
-  std::string cmd = shell_quote(PRT_EXE);
-  for (const auto& a : args) cmd.append(" ").append(shell_quote(a));
-  cmd.append(" </dev/null >").append(shell_quote(out.string()));
-  cmd.append(" 2>").append(shell_quote(err.string()));
-  const int status = std::system(cmd.c_str());
-  Result r;
-  if (status != -1 && WIFEXITED(status))
-    r.code = WEXITSTATUS(status);
-  else if (status != -1 && WIFSIGNALED(status))
-    r.code = 128 + WTERMSIG(status);
-  r.out = read_file(out);
-  r.err = read_file(err);
-  return r;
-}
-
-std::string describe_run(const Result& r) {
-  return "exit " + std::to_string(r.code) + "\n--- stdout ---\n" + r.out.substr(0, 2000) + "\n--- stderr ---\n" +
-         r.err.substr(0, 2000);
-}
+using namespace prt::test;
 
 std::string repo_envmap(const std::string& name) { return std::string(PRT_SOURCE_DIR) + "/envmaps/" + name; }
 

@@ -5,6 +5,8 @@
 // Test images are generated at run time in a per-test temporary directory.
 // Grey and odd-channel images are written by the small EXR and PNG encoders
 // below (independent of prt's own writer, which always writes RGB).
+#include "test_files.h"
+
 #include <prt/envmap.h>
 #include <prt/quadrature.h>
 #include <prt/error.h>
@@ -68,51 +70,9 @@ constexpr double kSrgbDecodeTol = 1e-6;
 
 // ---- helpers ----------------------------------------------------------------
 
-// A fresh directory per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("prt_test_envmap_") + info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
-    path_ = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  const fs::path& path() const { return path_; }
-
-  // Names of the files in the directory (to catch leftover temporaries).
-  std::vector<std::string> listing() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path_)) names.push_back(e.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
+using namespace prt::test;
 
 std::string repo_envmap(const std::string& name) { return std::string(PRT_SOURCE_DIR) + "/envmaps/" + name; }
-
-std::string read_bytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
-
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream f(path, std::ios::binary);
-  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
 
 static_assert(std::endian::native == std::endian::little, "the EXR encoder below writes native little-endian");
 
@@ -173,7 +133,7 @@ void write_raw_exr(const std::string& path, int w, int h, std::vector<std::pair<
     for (const auto& ch : channels)
       for (int x = 0; x < w; ++x) put<float>(out, ch.second[std::size_t(y) * w + x]);
   }
-  write_bytes(path, out);
+  write_file(path, out);
 }
 
 // Minimal PNG writer: 8-bit grey (channels 1) or grey + alpha (channels 2),
@@ -230,7 +190,7 @@ void write_raw_png(const std::string& path, int w, int h, int channels, const st
   chunk(out, "IHDR", ihdr);
   chunk(out, "IDAT", z);
   chunk(out, "IEND", "");
-  write_bytes(path, out);
+  write_file(path, out);
 }
 
 double srgb_encode(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055; }
@@ -1165,14 +1125,14 @@ void expect_load_error(const std::string& path, const std::vector<std::string>& 
 TEST(BadFiles, LoadErrorsNameTheFile) {
   TempDir dir;
   expect_load_error(dir.file("missing.exr"), {"no such file"});
-  expect_load_error(dir.path().string(), {"directory"});
-  write_bytes(dir.file("text.exr"), "this is not an image\n");
+  expect_load_error(dir.work().string(), {"directory"});
+  write_file(dir.file("text.exr"), "this is not an image\n");
   expect_load_error(dir.file("text.exr"), {});
-  write_bytes(dir.file("empty.exr"), "");
+  write_file(dir.file("empty.exr"), "");
   expect_load_error(dir.file("empty.exr"), {});
-  const std::string studio = read_bytes(repo_envmap("studio.exr"));
+  const std::string studio = read_file(repo_envmap("studio.exr"));
   ASSERT_GT(studio.size(), 1000u);
-  write_bytes(dir.file("truncated.exr"), studio.substr(0, studio.size() * 6 / 10));
+  write_file(dir.file("truncated.exr"), studio.substr(0, studio.size() * 6 / 10));
   expect_load_error(dir.file("truncated.exr"), {"truncated"});
   prt::write_image(dir.file("odd.exr"), 100, 37, std::vector<float>(100 * 37 * 3, 1.0f));
   expect_load_error(dir.file("odd.exr"), {"100x37"});
@@ -1182,7 +1142,7 @@ TEST(BadFiles, LoadErrorsNameTheFile) {
 
 TEST(AtomicWrite, MissingDirectoryThrowsAndCreatesNothing) {
   TempDir dir;
-  const std::string path = (dir.path() / "no" / "such" / "dir" / "out.exr").string();
+  const std::string path = (dir.work() / "no" / "such" / "dir" / "out.exr").string();
   try {
     prt::write_image(path, 4, 2, std::vector<float>(24, 1.0f));
     ADD_FAILURE() << "expected prt::Error";
@@ -1191,7 +1151,7 @@ TEST(AtomicWrite, MissingDirectoryThrowsAndCreatesNothing) {
     // The message names the requested path, not write_atomically's temporary.
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
-  EXPECT_FALSE(fs::exists(dir.path() / "no"));
+  EXPECT_FALSE(fs::exists(dir.work() / "no"));
   EXPECT_TRUE(dir.listing().empty());
 }
 
@@ -1199,14 +1159,14 @@ TEST(AtomicWrite, UnsupportedFormatLeavesTheOldFileAndNoTemporary) {
   // The writer fails before anything is renamed.
   TempDir dir;
   const std::string xyz = dir.file("image.xyz");
-  write_bytes(xyz, "old contents");
+  write_file(xyz, "old contents");
   try {
     prt::write_image(xyz, 4, 2, std::vector<float>(24, 1.0f));
     ADD_FAILURE() << "expected prt::Error";
   } catch (const prt::Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind(xyz, 0), 0u) << "message should start with the file name: " << e.what();
   }
-  EXPECT_EQ(read_bytes(xyz), "old contents");
+  EXPECT_EQ(read_file(xyz), "old contents");
   EXPECT_EQ(dir.listing(), std::vector<std::string>{"image.xyz"});
 }
 
@@ -1217,10 +1177,10 @@ TEST(AtomicWrite, FailedRenameLeavesTheOldFileAndNoTemporary) {
   const std::string good = dir.file("good.exr");
   const std::vector<float> pixels = test_pattern(8, 4, 0.0f, 1.0f, 9);
   prt::write_image(good, 8, 4, pixels);
-  const std::string good_bytes = read_bytes(good);
-  fs::create_directories(dir.path() / "busy.exr" / "inside");
+  const std::string good_bytes = read_file(good);
+  fs::create_directories(dir.work() / "busy.exr" / "inside");
   EXPECT_THROW(prt::write_image(dir.file("busy.exr"), 8, 4, pixels), prt::Error);
-  EXPECT_TRUE(fs::is_directory(dir.path() / "busy.exr" / "inside"));
+  EXPECT_TRUE(fs::is_directory(dir.work() / "busy.exr" / "inside"));
 
   // 2. Overwriting an existing file replaces it completely.
   const std::vector<float> other = test_pattern(4, 2, 0.0f, 1.0f, 10);
@@ -1228,7 +1188,7 @@ TEST(AtomicWrite, FailedRenameLeavesTheOldFileAndNoTemporary) {
   const prt::EnvMap m = prt::load_envmap(good);
   EXPECT_EQ(m.width, 4);
   EXPECT_EQ(m.rgb, other);
-  EXPECT_NE(read_bytes(good), good_bytes);
+  EXPECT_NE(read_file(good), good_bytes);
 
   // No ".name.tmp*" left behind by any of this.
   EXPECT_EQ(dir.listing(), (std::vector<std::string>{"busy.exr", "good.exr"}));

@@ -2,6 +2,8 @@
 // vertex normals (area and angle weighting, degenerate cases), welding, the
 // mesh hash, and the shared research meshes when ../shared is present.
 
+#include "test_files.h"
+
 #include <prt/error.h>
 #include <prt/mesh.h>
 
@@ -34,22 +36,14 @@ constexpr float kScaleTol = 1e-6f;
 // A fresh directory per test, removed afterwards.
 class MeshFiles : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("prt_test_mesh_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   std::string write(const std::string& name, const std::string& text) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p.string();
+    const std::string p = tmp_.file(name);
+    prt::test::write_file(p, text);
+    return p;
   }
 
-  fs::path dir_;
+  prt::test::TempDir tmp_;
+  const fs::path dir_ = tmp_.work();
 };
 
 // Expects `f` to throw prt::Error whose message starts with `prefix` and contains `part`.

@@ -6,6 +6,8 @@
 // kAbsFloor. With a few hundred such checks, 5 sigma keeps the chance of a
 // false failure of an unbiased estimator below ~1e-4 in all (the seeds are fixed,
 // so a run that passes always passes); a biased one fails once sigma is small.
+#include "test_files.h"
+
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
@@ -17,7 +19,6 @@
 #include <glm/matrix.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -37,6 +38,7 @@ namespace fs = std::filesystem;
 using prt::ReferenceOptions;
 using prt::ReferenceResult;
 using prt::TransferMode;
+using namespace prt::test;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kSigmas = 5.0;
@@ -450,37 +452,6 @@ TEST(Reference, ZeroNormalVertexIsBlack) {
 
 // ---- CSV and compare ----------------------------------------------------------------
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("prt_test_reference_") + info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
-    path_ = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
-
-std::string read_file(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
-
-void write_file(const std::string& path, const std::string& bytes) {
-  std::ofstream f(path, std::ios::binary);
-  f << bytes;
-}
-
 TEST(VertexCsv, RoundTripIsExact) {
   TempDir dir;
   const std::vector<glm::vec3> rgb = {{0.1f, 1e-30f, -2.5f}, {3.4028235e38f, 0, 1.0f / 3.0f}, {7, 8, 9}};
@@ -580,34 +551,7 @@ TEST(Compare, HandComputedNumbers) {
 
 // ---- the command line ---------------------------------------------------------------
 
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct CliRun {
-  int code = -1;
-  std::string out, err;
-};
-
-CliRun run_prt(const TempDir& dir, const std::vector<std::string>& args) {
-  static int counter = 0;
-  const std::string out = dir.file("stdout" + std::to_string(counter)), err = dir.file("stderr" + std::to_string(counter));
-  ++counter;
-  std::string cmd = shell_quote(PRT_EXE);
-  for (const auto& a : args) cmd.append(" ").append(shell_quote(a));
-  cmd.append(" </dev/null >").append(shell_quote(out));
-  cmd.append(" 2>").append(shell_quote(err));
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  if (status != -1 && WIFEXITED(status)) r.code = WEXITSTATUS(status);
-  r.out = read_file(out);
-  r.err = read_file(err);
-  return r;
-}
-
-std::string describe(const CliRun& r) { return "exit " + std::to_string(r.code) + "\nstdout: " + r.out + "\nstderr: " + r.err; }
+std::string describe(const Result& r) { return "exit " + std::to_string(r.code) + "\nstdout: " + r.out + "\nstderr: " + r.err; }
 
 // A quad facing +Y as an OFF file (normals computed on load: +Y).
 void write_quad_off(const std::string& path) {
@@ -618,7 +562,7 @@ TEST(CliReference, WritesCsvWithStandardErrors) {
   TempDir dir;
   write_quad_off(dir.file("quad.off"));
   prt::write_image(dir.file("sky.exr"), 32, 16, std::vector<float>(32 * 16 * 3, 2.0f));
-  const CliRun r = run_prt(dir, {"reference", dir.file("quad.off"), dir.file("sky.exr"), "--samples", "512", "--albedo",
+  const Result r = run_prt(dir, {"reference", dir.file("quad.off"), dir.file("sky.exr"), "--samples", "512", "--albedo",
                               "1,0.5,0.25", "--rotate", "10,20,30", "--threads", "1", "-o", dir.file("out.csv")});
   ASSERT_EQ(r.code, 0) << describe(r);
   EXPECT_NE(r.err.find("4 vertices"), std::string::npos) << r.err;  // mesh summary
@@ -665,7 +609,7 @@ TEST(CliReference, BadInputsFailClearly) {
       {{"reference", mesh, env}, "--output"},
   };
   for (const Bad& b : cases) {
-    const CliRun r = run_prt(dir, b.args);
+    const Result r = run_prt(dir, b.args);
     EXPECT_NE(r.code, 0) << describe(r);
     EXPECT_NE(r.err.find(b.says), std::string::npos) << "wanted '" << b.says << "' in:\n" << describe(r);
     EXPECT_FALSE(fs::exists(out)) << b.says;
@@ -680,7 +624,7 @@ TEST(CliCompare, PrintsTheNumbers) {
   prt::write_vertex_csv(dir.file("a.csv"), a);
   prt::write_vertex_csv(dir.file("b.csv"), b, &se);
 
-  CliRun r = run_prt(dir, {"compare", dir.file("a.csv"), dir.file("b.csv"), "--json"});
+  Result r = run_prt(dir, {"compare", dir.file("a.csv"), dir.file("b.csv"), "--json"});
   ASSERT_EQ(r.code, 0) << describe(r);
   const nlohmann::json j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j.at("vertices").get<int>(), 4);

@@ -1,6 +1,8 @@
 // Tests of transfer files (docs/FORMAT.md): bit-identical round trips, the
 // byte layout the document specifies, every way a file can be bad, atomic
 // writing, the mesh check and `prt info`.
+#include "test_files.h"
+
 #include <prt/error.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
@@ -35,49 +37,7 @@ using prt::TransferMode;
 
 // ---- helpers --------------------------------------------------------------------
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("prt_test_transfer_io_") + info->test_suite_name() + "_" + info->name();
-    for (char& c : name)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
-    path_ = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_ / "work");
-    fs::create_directories(path_ / "io");
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  // Inputs and outputs; captured streams of prt go to io() instead, so a
-  // listing of work() shows exactly what was written.
-  std::string file(const std::string& name) const { return (path_ / "work" / name).string(); }
-  fs::path io() const { return path_ / "io"; }
-  std::vector<std::string> listing() const {
-    std::vector<std::string> names;
-    for (const auto& e : fs::directory_iterator(path_ / "work")) names.push_back(e.path().filename().string());
-    std::sort(names.begin(), names.end());
-    return names;
-  }
-
- private:
-  fs::path path_;
-};
-
-std::string read_bytes(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
-
-void write_bytes(const std::string& path, const std::string& bytes) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+using namespace prt::test;
 
 bool contains(const std::string& haystack, const std::string& needle) {
   return haystack.find(needle) != std::string::npos;
@@ -194,7 +154,7 @@ void expect_read_error(const std::string& path, const std::vector<std::string>& 
 void expect_bytes_error(const TempDir& dir, const std::string& bytes, const std::vector<std::string>& words,
                         const std::string& what) {
   const std::string path = dir.file("bad.prtt");
-  write_bytes(path, bytes);
+  write_file(path, bytes);
   expect_read_error(path, words, what);
 }
 
@@ -207,7 +167,7 @@ struct Sample {
 Sample sample_file(const TempDir& dir, const Transfer& t) {
   const std::string path = dir.file("sample.prtt");
   prt::write_transfer(path, t);
-  Sample s{read_bytes(path), {}};
+  Sample s{read_file(path), {}};
   std::size_t at = kHeader;
   for (std::uint32_t i = 0; i < get<std::uint32_t>(s.bytes, kSectionCountAt); ++i) {
     s.section_at.push_back(at);
@@ -215,44 +175,6 @@ Sample sample_file(const TempDir& dir, const Transfer& t) {
     at += kSectionHeader + bytes + (8 - bytes % 8) % 8;
   }
   return s;
-}
-
-// ---- running prt --------------------------------------------------------------------
-
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-Result run_prt(const TempDir& dir, const std::vector<std::string>& args) {
-  static int counter = 0;
-  const fs::path out = dir.io() / ("out" + std::to_string(counter) + ".txt");
-  const fs::path err = dir.io() / ("err" + std::to_string(counter) + ".txt");
-  ++counter;
-  std::string cmd = shell_quote(PRT_EXE);
-  for (const auto& a : args) cmd.append(" ").append(shell_quote(a));
-  cmd.append(" </dev/null >").append(shell_quote(out.string()));
-  cmd.append(" 2>").append(shell_quote(err.string()));
-  const int status = std::system(cmd.c_str());
-  Result r;
-  if (status != -1 && WIFEXITED(status))
-    r.code = WEXITSTATUS(status);
-  else if (status != -1 && WIFSIGNALED(status))
-    r.code = 128 + WTERMSIG(status);
-  r.out = read_bytes(out.string());
-  r.err = read_bytes(err.string());
-  return r;
-}
-
-std::string describe_run(const Result& r) {
-  return "exit " + std::to_string(r.code) + "\n--- stdout ---\n" + r.out.substr(0, 2000) + "\n--- stderr ---\n" +
-         r.err.substr(0, 2000);
 }
 
 // ---- round trips -------------------------------------------------------------------
@@ -277,9 +199,9 @@ TEST(TransferFile, RoundTripIsBitIdenticalForEveryModeChannelAndSection) {
           const Transfer back = prt::read_transfer(path);
           expect_identical(t, back);
           // Writing what was read gives the same bytes.
-          const std::string first = read_bytes(path);
+          const std::string first = read_file(path);
           prt::write_transfer(path, back);
-          EXPECT_EQ(read_bytes(path), first);
+          EXPECT_EQ(read_file(path), first);
         }
 }
 
@@ -381,7 +303,7 @@ TEST(TransferFormat, WorkedExampleOfTheDocument) {
 TEST(TransferRead, MissingEmptyAndDirectory) {
   TempDir dir;
   expect_read_error(dir.file("nope.prtt"), {"no such file"}, "missing");
-  write_bytes(dir.file("empty.prtt"), "");
+  write_file(dir.file("empty.prtt"), "");
   expect_read_error(dir.file("empty.prtt"), {"empty"}, "empty");
   fs::create_directories(dir.file("d.prtt"));
   expect_read_error(dir.file("d.prtt"), {"directory"}, "directory");
@@ -643,13 +565,13 @@ TEST(TransferWrite, FailedWriteLeavesTheOldFileAndNoTemporary) {
   const std::string path = dir.file("t.prtt");
   const Transfer small = make_transfer(TransferMode::Shadowed, 1, 2, 10, {});
   prt::write_transfer(path, small);
-  const std::string before = read_bytes(path);
+  const std::string before = read_file(path);
   ASSERT_LT(before.size(), 4096u);
 
   const Transfer big = make_transfer(TransferMode::Shadowed, 3, 8, 1000, {false, true, true, false});
   ASSERT_GT(prt::transfer_file_size(big), 65536u);
   EXPECT_EQ(write_with_size_limit(path, big, 65536), 0) << "0: prt::Error naming the failure; 1: no error";
-  EXPECT_EQ(read_bytes(path), before);
+  EXPECT_EQ(read_file(path), before);
   EXPECT_EQ(dir.listing(), std::vector<std::string>{"t.prtt"});
   expect_identical(prt::read_transfer(path), small);
 
@@ -766,15 +688,15 @@ TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {
   TempDir dir;
   const std::string path = dir.file("t.prtt");
   prt::write_transfer(path, full_transfer());
-  std::string b = read_bytes(path);
+  std::string b = read_file(path);
   b[b.size() / 2] = static_cast<char>(b[b.size() / 2] ^ 1);
-  write_bytes(path, b);
+  write_file(path, b);
   Result r = run_prt(dir, {"info", path});
   EXPECT_EQ(r.code, 1) << describe_run(r);
   EXPECT_TRUE(contains(r.err, path + ": corrupt: checksum mismatch")) << describe_run(r);
   EXPECT_TRUE(r.out.empty()) << r.out;
 
-  write_bytes(path, b.substr(0, 1000));
+  write_file(path, b.substr(0, 1000));
   r = run_prt(dir, {"info", path, "--json"});
   EXPECT_EQ(r.code, 1) << describe_run(r);
   EXPECT_TRUE(contains(r.err, path + ": truncated")) << describe_run(r);

@@ -1,0 +1,109 @@
+// Helpers shared by prt's tests that touch the file system: a per-test
+// temporary directory, whole-file reads and writes, and running the built
+// `prt` executable (PRT_EXE) with its output captured.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <ios>
+#include <iterator>
+#include <string>
+#include <system_error>
+#include <vector>
+
+namespace prt::test {
+
+// A fresh directory per test, removed afterwards. Tests put their inputs and
+// outputs in work(); captured streams of prt go to io() instead, so a listing
+// of work() shows exactly what was written.
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string("prt_test_") + info->test_suite_name() + "_" + info->name();
+    for (char& c : name)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') c = '_';
+    path_ = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(work());
+    std::filesystem::create_directories(io());
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  std::string file(const std::string& name) const { return (work() / name).string(); }
+  std::filesystem::path work() const { return path_ / "work"; }
+  std::filesystem::path io() const { return path_ / "io"; }
+
+  // Sorted names of the entries of work() (to catch leftover temporaries).
+  std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(work())) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline std::string read_file(const std::filesystem::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+inline void write_file(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+inline std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct Result {
+  int code = -1;  // exit status; 128 + signal when killed
+  std::string out, err;
+};
+
+// Runs prt with `args`, stdin from /dev/null, capturing both streams in dir.io().
+inline Result run_prt(const TempDir& dir, const std::vector<std::string>& args) {
+  static int counter = 0;
+  const std::filesystem::path out = dir.io() / ("out" + std::to_string(counter) + ".txt");
+  const std::filesystem::path err = dir.io() / ("err" + std::to_string(counter) + ".txt");
+  ++counter;
+  std::string cmd = shell_quote(PRT_EXE);
+  for (const auto& a : args) cmd.append(" ").append(shell_quote(a));
+  cmd.append(" </dev/null >").append(shell_quote(out.string()));
+  cmd.append(" 2>").append(shell_quote(err.string()));
+  const int status = std::system(cmd.c_str());
+  Result r;
+  if (status != -1 && WIFEXITED(status))
+    r.code = WEXITSTATUS(status);
+  else if (status != -1 && WIFSIGNALED(status))
+    r.code = 128 + WTERMSIG(status);
+  r.out = read_file(out);
+  r.err = read_file(err);
+  return r;
+}
+
+// A run's exit status and the start of both streams, for failure messages.
+inline std::string describe_run(const Result& r) {
+  return "exit " + std::to_string(r.code) + "\n--- stdout ---\n" + r.out.substr(0, 2000) + "\n--- stderr ---\n" +
+         r.err.substr(0, 2000);
+}
+
+}  // namespace prt::test
