@@ -71,6 +71,8 @@ CLI::Validator positive_number() {
 
 }  // namespace prt::cli
 
+// Exit status: 0 success, 1 a user error (bad file, bad data), 2 a usage
+// error (bad option), 3 an internal error (a bug), 130 interrupted (Ctrl-C).
 int main(int argc, char** argv) {
   CLI::App app{"prt: Precomputed Radiance Transfer toolkit (spherical harmonics and wavelets).\n"
                "Conventions: docs/CONVENTIONS.md. Each subcommand has --help.",
@@ -107,7 +109,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 prints the message (or the help); its own codes (105, ...) become
+    // the conventional usage-error status 2.
+    return app.exit(e) == 0 ? 0 : 2;
   }
   for (auto& [sub, run] : commands) {
     if (!sub->parsed()) continue;
