@@ -16,6 +16,7 @@ Run add_project(CLI::App& app);    // cmd_project.cpp
 Run add_verify(CLI::App& app);     // cmd_verify.cpp
 Run add_precompute(CLI::App& app); // cmd_precompute.cpp
 Run add_relight(CLI::App& app);    // cmd_relight.cpp
+Run add_render(CLI::App& app);     // cmd_render.cpp
 Run add_reference(CLI::App& app);  // cmd_reference.cpp
 Run add_compare(CLI::App& app);    // cmd_compare.cpp
 Run add_info(CLI::App& app);       // cmd_info.cpp

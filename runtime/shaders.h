@@ -1,0 +1,9 @@
+// The GLSL sources of shaders/, embedded at build time (runtime/embed_shaders.cmake).
+#pragma once
+
+namespace prt::shaders {
+extern const char* const mesh_vert_glsl;
+extern const char* const mesh_frag_glsl;
+extern const char* const background_vert_glsl;
+extern const char* const background_frag_glsl;
+}  // namespace prt::shaders

@@ -1,0 +1,357 @@
+// Headless GL renderer (prt/render.h): frames agree with the CPU reference
+// prt::relight, rotating the renderer's lighting equals projecting a rotated
+// map, the background shows L(R^T d), and the `prt render` command.
+// Runs on Mesa llvmpipe; skips (with the reason) where no EGL/GL 4.5 context
+// can be made at all.
+#include <prt/envmap.h>
+#include <prt/error.h>
+#include <prt/mesh.h>
+#include <prt/projection.h>
+#include <prt/render.h>
+#include <prt/rotation.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <random>
+
+#include "test_files.h"
+#include "test_meshes.h"
+
+namespace prt {
+namespace {
+
+// Tolerances, relative to the largest value compared.
+constexpr double kVertexTolerance = 1e-3;    // pixel at a vertex vs relight() (float GPU vs double CPU sum)
+constexpr double kRotationTolerance = 2e-3;  // rotated SH vs projection of a resampled map, and bilinear backgrounds
+constexpr double kBackgroundTolerance = 1e-3;  // background texel lookup vs CPU bilinear lookup
+
+// A renderer, or the reason none can be made here.
+std::unique_ptr<Renderer> try_renderer(std::string& why) {
+  try {
+    return std::make_unique<Renderer>();
+  } catch (const Error& e) {
+    why = e.what();
+    return nullptr;
+  }
+}
+
+#define REQUIRE_RENDERER(r)                                                     \
+  std::string why_##r;                                                          \
+  std::unique_ptr<Renderer> r = try_renderer(why_##r);                          \
+  if (!r) GTEST_SKIP() << "headless rendering unavailable: " << why_##r;
+
+using Fn = std::function<glm::dvec3(const glm::dvec3&)>;
+
+// A smooth, positive, coloured environment.
+glm::dvec3 smooth_env(const glm::dvec3& d) {
+  return {1.0 + 0.8 * d.x + 0.3 * d.y * d.z, 0.9 + 0.6 * d.y - 0.2 * d.x * d.x, 0.7 + 0.5 * d.z + 0.3 * d.x * d.y};
+}
+
+EnvMap latlong_of(const Fn& f, int w, int h) {
+  std::vector<float> rgb(std::size_t(w) * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const glm::dvec3 v = f(latlong_direction(x + 0.5, y + 0.5, w, h));
+      for (int c = 0; c < 3; ++c) rgb[(std::size_t(y) * w + x) * 3 + c] = float(v[c]);
+    }
+  return make_latlong(w, h, std::move(rgb));
+}
+
+// What GL_LINEAR with REPEAT in s, CLAMP_TO_EDGE in t reads at direction d.
+glm::dvec3 bilinear(const EnvMap& m, const glm::dvec3& d) {
+  double px = 0, py = 0;
+  latlong_pixel(d, m.width, m.height, px, py);
+  const double fx = px - 0.5, fy = std::clamp(py - 0.5, 0.0, m.height - 1.0);
+  const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+  const double ax = fx - x0, ay = fy - y0;
+  auto texel = [&](int x, int y) {
+    x = ((x % m.width) + m.width) % m.width;
+    y = std::clamp(y, 0, m.height - 1);
+    const float* p = m.rgb.data() + (std::size_t(y) * m.width + x) * 3;
+    return glm::dvec3(p[0], p[1], p[2]);
+  };
+  return (1 - ay) * ((1 - ax) * texel(x0, y0) + ax * texel(x0 + 1, y0)) +
+         ay * ((1 - ax) * texel(x0, y0 + 1) + ax * texel(x0 + 1, y0 + 1));
+}
+
+// A bumpy height field facing the camera at (0, 0, D) (fov 90, square
+// image), built so that every vertex projects exactly onto a pixel centre;
+// pixel_of[v] is that pixel, or (-1, -1) on the border (a pixel centre on the
+// mesh's outline is covered or not by the rasteriser's tie rule).
+struct CameraGrid {
+  Mesh mesh;
+  std::vector<std::pair<int, int>> pixel_of;
+  Camera camera;
+  int size = 64;
+};
+
+CameraGrid camera_grid(bool colored) {
+  CameraGrid g;
+  const double D = 3.0;
+  g.camera.eye = {0, 0, D};
+  g.camera.target = {0, 0, 0};
+  g.camera.up = {0, 1, 0};
+  g.camera.fov_deg = 90;
+  const int n = 7, step = 8;  // vertices at pixels 8, 16, ..., 56
+  std::vector<glm::vec3> p, colors;
+  std::vector<glm::uvec3> t;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.2f, 1.0f);
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a) {
+      const int px = step * (a + 1), py = step * (b + 1);
+      const double xn = 2.0 * (px + 0.5) / g.size - 1.0, yn = 1.0 - 2.0 * (py + 0.5) / g.size;
+      const double z = 0.6 * std::exp(-3.0 * (xn * xn + yn * yn)) + 0.15 * std::sin(4 * xn) * yn;
+      p.emplace_back(float(xn * (D - z)), float(yn * (D - z)), float(z));
+      const bool border = a == 0 || b == 0 || a == n - 1 || b == n - 1;
+      g.pixel_of.emplace_back(border ? -1 : px, border ? -1 : py);
+      colors.emplace_back(u(rng), u(rng), u(rng));
+    }
+  for (int b = 0; b + 1 < n; ++b)
+    for (int a = 0; a + 1 < n; ++a) {
+      const unsigned v = unsigned(b * n + a);
+      t.emplace_back(v, v + n, v + 1);  // counter-clockwise seen from +Z
+      t.emplace_back(v + 1, v + n, v + n + 1);
+    }
+  g.mesh = make_mesh(std::move(p), std::move(t), {}, colored ? colors : std::vector<glm::vec3>{}, {}, "grid");
+  return g;
+}
+
+void check_vertices_match_relight(TransferMode mode, bool colored, int bands) {
+  REQUIRE_RENDERER(r);
+  const CameraGrid g = camera_grid(colored);
+  TransferOptions o;
+  o.mode = mode;
+  o.bands = bands;
+  o.samples = 128;
+  o.vertex_colors = colored;
+  o.albedo = glm::vec3(0.8f);
+  const Transfer t = compute_transfer(g.mesh, o);
+  ASSERT_EQ(t.channels, colored ? 3 : 1);
+  const std::vector<glm::dvec3> light = project(latlong_of(smooth_env, 128, 64), bands);
+  const std::vector<glm::vec3> expected = relight(t, light);
+
+  r->set_mesh(g.mesh, t);
+  r->set_lighting(light);
+  const Image img = r->render(g.camera, g.size, g.size);
+  ASSERT_EQ(img.width, g.size);
+  ASSERT_EQ(img.rgb.size(), std::size_t(g.size) * g.size * 3);
+  double scale = 0;
+  for (const auto& e : expected) scale = std::max({scale, double(e.x), double(e.y), double(e.z)});
+  ASSERT_GT(scale, 0.1);
+  double worst = 0;
+  int checked = 0;
+  for (std::size_t v = 0; v < expected.size(); ++v) {
+    if (g.pixel_of[v].first < 0) continue;
+    ++checked;
+    const glm::vec3 got = img.at(g.pixel_of[v].first, g.pixel_of[v].second);
+    for (int c = 0; c < 3; ++c) {
+      const double err = std::abs(double(got[c]) - expected[v][c]) / std::max(double(expected[v][c]), 0.1 * scale);
+      worst = std::max(worst, err);
+      EXPECT_LE(err, kVertexTolerance) << "vertex " << v << " channel " << c << ": GPU " << got[c] << ", relight "
+                                       << expected[v][c];
+    }
+  }
+  EXPECT_EQ(checked, 25);
+  ::testing::Test::RecordProperty("worst_relative_error", std::to_string(worst));
+}
+
+TEST(Render, PixelsAtVerticesEqualRelightRgbUnshadowed) {
+  check_vertices_match_relight(TransferMode::Unshadowed, true, 4);
+}
+
+TEST(Render, PixelsAtVerticesEqualRelightGreyShadowed) {
+  check_vertices_match_relight(TransferMode::Shadowed, false, 6);
+}
+
+TEST(Render, SixteenBandsRgb) { check_vertices_match_relight(TransferMode::Unshadowed, true, 16); }
+
+TEST(Render, RotatedLightingEqualsProjectedRotatedMap) {
+  REQUIRE_RENDERER(r);
+  const Mesh mesh = test::sphere(16, 32);
+  TransferOptions o;
+  o.mode = TransferMode::Unshadowed;
+  o.bands = 5;
+  const Transfer t = compute_transfer(mesh, o);
+  const glm::dmat3 R = sh::rotation_from_euler(30, 20, 10);
+  const EnvMap f = latlong_of(smooth_env, 256, 128);
+  const EnvMap g = latlong_of([&](const glm::dvec3& d) { return smooth_env(glm::transpose(R) * d); }, 256, 128);
+  const Camera cam = default_camera(mesh, 40);
+
+  r->set_mesh(mesh, t);
+  std::vector<glm::dvec3> light = project(f, t.bands), rotated(light.size());
+  sh::Rotation(t.bands, R).apply(light, rotated);
+  r->set_lighting(rotated);
+  r->set_environment(f);
+  r->set_environment_rotation(R);
+  const Image a = r->render(cam, 96, 80);
+
+  r->set_lighting(project(g, t.bands));
+  r->set_environment(g);
+  r->set_environment_rotation(glm::dmat3(1.0));
+  const Image b = r->render(cam, 96, 80);
+
+  double scale = 0, worst = 0;
+  for (float v : a.rgb) scale = std::max(scale, double(std::abs(v)));
+  ASSERT_GT(scale, 0.1);
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) worst = std::max(worst, double(std::abs(a.rgb[i] - b.rgb[i])));
+  EXPECT_LE(worst / scale, kRotationTolerance);
+  ::testing::Test::RecordProperty("relative_difference", std::to_string(worst / scale));
+  // The rotation matters: unrotated lighting gives a visibly different frame.
+  r->set_lighting(light);
+  const Image c = r->render(cam, 96, 80);
+  double diff = 0;
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) diff = std::max(diff, double(std::abs(a.rgb[i] - c.rgb[i])));
+  EXPECT_GT(diff / scale, 20 * kRotationTolerance);
+}
+
+TEST(Render, BackgroundShowsRotatedMapAlongViewDirection) {
+  REQUIRE_RENDERER(r);
+  const EnvMap map = latlong_of(smooth_env, 64, 32);
+  const glm::dmat3 R = sh::rotation_from_euler(40, -25, 15);
+  r->set_environment(map);
+  r->set_environment_rotation(R);
+  const glm::dvec3 forwards[] = {{0, 0, -1}, {1, 0.2, 0.3}, {-0.3, -0.5, 0.8}, {0.1, 0.9, 0.2}};
+  for (const glm::dvec3& fwd : forwards) {
+    Camera cam;
+    cam.eye = {0.5, -0.25, 2.0};  // the background depends on the direction only
+    cam.target = cam.eye + fwd;
+    cam.up = {0, 1, 0};
+    const Image img = r->render(cam, 65, 33);  // odd sizes: a pixel centre on the axis
+    const glm::vec3 got = img.at(32, 16);
+    const glm::dvec3 expected = bilinear(map, glm::transpose(R) * glm::normalize(fwd));
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(got[c], expected[c], kBackgroundTolerance * std::abs(expected[c]))
+          << "channel " << c << " looking along " << fwd.x << "," << fwd.y << "," << fwd.z;
+  }
+}
+
+TEST(Render, DefaultCameraFramesTheBoundingSphere) {
+  const Mesh mesh = test::sphere(8, 16, 2.0f);
+  const Camera cam = default_camera(mesh, 60);
+  EXPECT_NEAR(cam.target.x, 0, 1e-6);
+  EXPECT_NEAR(cam.eye.z, 1.05 * 2.0 / std::sin(M_PI / 6), 1e-5);
+  EXPECT_EQ(cam.up, glm::dvec3(0, 1, 0));
+}
+
+TEST(Render, ClearErrors) {
+  REQUIRE_RENDERER(r);
+  const Mesh a = test::quad(3), b = test::quad(4);
+  TransferOptions o;
+  o.mode = TransferMode::Unshadowed;
+  o.bands = 3;
+  const Transfer ta = compute_transfer(a, o);
+  EXPECT_THROW(r->set_mesh(b, ta), Error);  // another mesh
+  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>(9)), Error);  // no mesh yet
+  r->set_mesh(a, ta);
+  const Camera cam = default_camera(a);
+  EXPECT_THROW(r->render(cam, 16, 16), Error);                  // no lighting yet
+  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>(4)), Error);  // 2 bands for a 3-band transfer
+  r->set_lighting(std::vector<glm::dvec3>(9, glm::dvec3(1.0)));
+  EXPECT_THROW(r->render(cam, 0, 16), Error);
+  EXPECT_THROW(r->render(cam, 16, -1), Error);
+  Camera bad = cam;
+  bad.target = bad.eye;
+  EXPECT_THROW(r->render(bad, 16, 16), Error);
+  try {
+    r->render(cam, 0, 4);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("0x4"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(r->render(cam, 16, 16));
+}
+
+// ---- prt render ------------------------------------------------------------
+
+void write_off(const std::string& path, const Mesh& m) {
+  std::ofstream f(path);
+  f << "OFF\n" << m.positions.size() << " " << m.triangles.size() << " 0\n";
+  char buf[128];
+  for (const auto& p : m.positions) {
+    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+    f << buf;
+  }
+  for (const auto& t : m.triangles) f << "3 " << t.x << " " << t.y << " " << t.z << "\n";
+}
+
+class RenderCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string why;
+    if (!try_renderer(why)) GTEST_SKIP() << "headless rendering unavailable: " << why;
+    write_off(dir.file("ball.off"), test::sphere(10, 20));
+    write_off(dir.file("plane.off"), test::quad(4));
+    const EnvMap env = latlong_of(smooth_env, 64, 32);
+    write_image(dir.file("env.exr"), env.width, env.height, env.rgb);
+    for (const char* m : {"ball", "plane"}) {
+      const auto res = test::run_prt(dir, {"precompute", dir.file(std::string(m) + ".off"), "-o",
+                                           dir.file(std::string(m) + ".prt"), "-m", "unshadowed", "-b", "3", "-q"});
+      ASSERT_EQ(res.code, 0) << test::describe_run(res);
+    }
+  }
+  test::TempDir dir;
+};
+
+TEST_F(RenderCli, WritesLinearExr) {
+  const auto res = test::run_prt(dir, {"render", dir.file("ball.off"), dir.file("ball.prt"), dir.file("env.exr"), "-o",
+                                       dir.file("out.exr"), "--width", "64", "--height", "32", "--rotate", "10,0,0"});
+  ASSERT_EQ(res.code, 0) << test::describe_run(res);
+  EXPECT_NE(res.err.find("OpenGL"), std::string::npos) << res.err;
+  const EnvMap img = load_envmap(dir.file("out.exr"), Mapping::LatLong);
+  ASSERT_EQ(img.width, 64);
+  ASSERT_EQ(img.height, 32);
+  // The ball covers the centre; its radiance is that of an unshadowed white-ish sphere under the map.
+  const float* c = img.rgb.data() + (16 * 64 + 32) * 3;
+  EXPECT_GT(c[0], 0.1f);
+  EXPECT_LT(c[0], 3.0f);
+}
+
+TEST_F(RenderCli, FramesGetNumberedNames) {
+  const auto res = test::run_prt(dir, {"render", dir.file("ball.off"), dir.file("ball.prt"), dir.file("env.exr"), "-o",
+                                       dir.file("spin.png"), "--width", "24", "--height", "16", "--frames", "3",
+                                       "--spin", "30", "--camera", "0,0,4,0,0,0,0,1,0", "--fov", "50", "-q"});
+  ASSERT_EQ(res.code, 0) << test::describe_run(res);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("spin_0000.png")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("spin_0002.png")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("spin_0003.png")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("spin.png")));
+}
+
+TEST_F(RenderCli, BadInputs) {
+  auto render = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {"render"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return test::run_prt(dir, args);
+  };
+  const std::string mesh = dir.file("ball.off"), prt = dir.file("ball.prt"), env = dir.file("env.exr");
+  auto r1 = render({mesh, dir.file("plane.prt"), env, "-o", dir.file("a.exr")});
+  EXPECT_NE(r1.code, 0);
+  EXPECT_NE(r1.err.find("plane.prt"), std::string::npos) << r1.err;
+  test::write_file(dir.file("junk.exr"), "not an image");
+  auto r2 = render({mesh, prt, dir.file("junk.exr"), "-o", dir.file("b.exr")});
+  EXPECT_NE(r2.code, 0);
+  EXPECT_NE(r2.err.find("junk.exr"), std::string::npos) << r2.err;
+  auto r3 = render({mesh, prt, env, "-o", dir.file("c.exr"), "--width", "0"});
+  EXPECT_NE(r3.code, 0);
+  EXPECT_NE(r3.err.find("width"), std::string::npos) << r3.err;
+  auto r4 = render({mesh, prt, env, "-o", dir.file("d.exr"), "--camera", "1,2,3"});
+  EXPECT_NE(r4.code, 0);
+  EXPECT_NE(r4.err.find("--camera"), std::string::npos) << r4.err;
+  auto r5 = render({mesh, prt, env, "-o", dir.file("e.txt")});
+  EXPECT_NE(r5.code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("a.exr")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("c.exr")));
+}
+
+}  // namespace
+}  // namespace prt
