@@ -115,6 +115,7 @@ Camera default_camera(const Mesh& mesh, double fov_deg) {
 struct Renderer::Impl {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
+  bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
   GLuint mesh_program = 0, background_program = 0;
   GLuint vao = 0, empty_vao = 0;
@@ -131,12 +132,15 @@ struct Renderer::Impl {
   std::string device;
 
   void make_current() const {
+    if (external) return;
     if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))
       throw Error("cannot make the OpenGL context current (EGL error " + hex(unsigned(eglGetError())) + ")");
   }
 
   void create_context();
+  void check_version(const char* how);
   void create_objects();
+  void draw(const Camera& cam, int width, int height);
   void destroy();
   void resize(int w, int h);
 };
@@ -192,15 +196,21 @@ void Renderer::Impl::create_context() {
   context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attribs);
   if (context == EGL_NO_CONTEXT) egl_fail("eglCreateContext(4.5 core)");
   if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) egl_fail("eglMakeCurrent(no surface)");
+  check_version("EGL");
+}
 
+void Renderer::Impl::check_version(const char* how) {
   GLint major = 0, minor = 0;
   glGetIntegerv(GL_MAJOR_VERSION, &major);
   glGetIntegerv(GL_MINOR_VERSION, &minor);
   const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
   device = std::string(renderer ? renderer : "?") + ", " + (version ? version : "?");
-  if (major * 10 + minor < 45)
-    throw Error("no OpenGL 4.5 context: got " + device + " (EGL error " + hex(unsigned(eglGetError())) + ")");
+  if (major * 10 + minor < 45) {
+    if (external) throw Error("no OpenGL 4.5 context: the current context is " + device);
+    throw Error(std::string("no OpenGL 4.5 context: got ") + device + " (" + how + " error " +
+                hex(unsigned(eglGetError())) + ")");
+  }
 }
 
 void Renderer::Impl::create_objects() {
@@ -234,8 +244,8 @@ void Renderer::Impl::resize(int w, int h) {
 }
 
 void Renderer::Impl::destroy() {
-  if (display == EGL_NO_DISPLAY) return;
-  if (context != EGL_NO_CONTEXT && eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
+  if (display == EGL_NO_DISPLAY && !external) return;
+  if (external || (context != EGL_NO_CONTEXT && eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))) {
     const GLuint buffers[] = {position_buffer, index_buffer, transfer_buffer, light_buffer};
     glDeleteBuffers(4, buffers);
     const GLuint textures[] = {latlong_texture, cube_texture};
@@ -247,6 +257,10 @@ void Renderer::Impl::destroy() {
     glDeleteVertexArrays(2, vaos);
     glDeleteProgram(mesh_program);
     glDeleteProgram(background_program);
+    if (external) {
+      external = false;  // destroyed once
+      return;
+    }
     eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   }
   if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
@@ -258,6 +272,18 @@ void Renderer::Impl::destroy() {
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
   try {
     impl_->create_context();
+    impl_->create_objects();
+  } catch (...) {
+    impl_->destroy();
+    throw;
+  }
+}
+
+Renderer::Renderer(UseCurrentContext) : impl_(std::make_unique<Impl>()) {
+  impl_->external = true;
+  try {
+    if (!glGetString(GL_VERSION)) throw Error("no OpenGL 4.5 context: no OpenGL context is current");
+    impl_->check_version("GL");
     impl_->create_objects();
   } catch (...) {
     impl_->destroy();
@@ -387,8 +413,8 @@ void Renderer::clear_environment() {
 
 void Renderer::set_environment_rotation(const glm::dmat3& R) { impl_->env_rotation = R; }
 
-Image Renderer::render(const Camera& cam, int width, int height) {
-  Impl& m = *impl_;
+void Renderer::Impl::draw(const Camera& cam, int width, int height) {
+  Impl& m = *this;
   if (width <= 0 || height <= 0)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is empty");
   GLint max_rb = 0;
@@ -456,7 +482,11 @@ Image Renderer::render(const Camera& cam, int width, int height) {
   }
   glBindVertexArray(0);
   check_gl("rendering");
+}
 
+Image Renderer::render(const Camera& cam, int width, int height) {
+  Impl& m = *impl_;
+  m.draw(cam, width, height);
   std::vector<float> rgba(std::size_t(width) * height * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadnPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
@@ -474,6 +504,22 @@ Image Renderer::render(const Camera& cam, int width, int height) {
       for (int c = 0; c < 3; ++c) dst[x * 3 + c] = src[x * 4 + c];
   }
   return img;
+}
+
+bool Renderer::present(const Camera& cam, int width, int height, int window_width, int window_height) {
+  Impl& m = *impl_;
+  m.draw(cam, width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  GLint encoding = GL_LINEAR;
+  glGetNamedFramebufferAttachmentParameteriv(0, GL_BACK_LEFT, GL_FRAMEBUFFER_ATTACHMENT_COLOR_ENCODING, &encoding);
+  const bool srgb = encoding == GL_SRGB;
+  if (srgb) glEnable(GL_FRAMEBUFFER_SRGB);
+  glViewport(0, 0, window_width, window_height);
+  glBlitNamedFramebuffer(m.fbo, 0, 0, 0, width, height, 0, 0, window_width, window_height, GL_COLOR_BUFFER_BIT,
+                         (width == window_width && height == window_height) ? GL_NEAREST : GL_LINEAR);
+  if (srgb) glDisable(GL_FRAMEBUFFER_SRGB);
+  check_gl("presenting the frame");
+  return srgb;
 }
 
 }  // namespace prt

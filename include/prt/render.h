@@ -18,6 +18,13 @@
 // device (NVIDIA), then the default display; desktop OpenGL 4.5 core, no
 // surface (EGL_KHR_surfaceless_context), rendering into an RGBA32F + depth
 // framebuffer object. No GL types appear here.
+//
+// Interactive use (prt view): Renderer(Renderer::use_current_context) takes
+// the caller's current OpenGL 4.5 core context (a GLFW window's) instead of
+// creating one; the caller keeps it current while calling the renderer.
+// present() draws the same frame as render() into the same framebuffer
+// object and blits it to the context's default framebuffer (sRGB-encoded
+// when that framebuffer is sRGB-capable) instead of reading it back.
 #pragma once
 
 #include <prt/envmap.h>
@@ -67,6 +74,11 @@ class Renderer {
   // Creates the headless context. Throws prt::Error("no OpenGL 4.5 context:
   // ... (EGL error 0x...)") when EGL or OpenGL 4.5 core is not available.
   Renderer();
+  // Uses the OpenGL context current on the calling thread (it must be 4.5
+  // core; throws prt::Error otherwise). It is not destroyed with the Renderer.
+  struct UseCurrentContext {};
+  static constexpr UseCurrentContext use_current_context{};
+  explicit Renderer(UseCurrentContext);
   ~Renderer();
   Renderer(Renderer&&) noexcept;
   Renderer& operator=(Renderer&&) noexcept;
@@ -98,6 +110,13 @@ class Renderer {
   // Renders a frame; throws prt::Error for a zero or too large size, a
   // degenerate camera, or a mesh without lighting.
   Image render(const Camera& camera, int width, int height);
+
+  // Draws the frame render() would draw (width x height) and blits it to the
+  // current context's default framebuffer, scaled to window_width x
+  // window_height. The caller swaps buffers. Returns true when the blit
+  // encodes sRGB (the default framebuffer is sRGB-capable), false when the
+  // window receives linear values.
+  bool present(const Camera& camera, int width, int height, int window_width, int window_height);
 
  private:
   struct Impl;

@@ -20,6 +20,7 @@ Run add_render(CLI::App& app);     // cmd_render.cpp
 Run add_reference(CLI::App& app);  // cmd_reference.cpp
 Run add_compare(CLI::App& app);    // cmd_compare.cpp
 Run add_info(CLI::App& app);       // cmd_info.cpp
+Run add_view(CLI::App& app);       // cmd_view.cpp
 
 // "a,b,c" -> three doubles; throws prt::Error naming `option` otherwise.
 void parse_triple(const std::string& text, const char* option, double out[3]);

@@ -1,0 +1,182 @@
+// prt view (interactive GLFW window): under Xvfb, its scripted screenshot
+// (--frames N --screenshot FILE) equals prt render's image of the same camera
+// and size, and without a display it exits 1 pointing to prt render.
+// Skips (with the reason) where xvfb-run is missing, or where Xvfb's GLX
+// (Mesa llvmpipe) gives no OpenGL 4.5 core context.
+#include <prt/envmap.h>
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "test_files.h"
+#include "test_meshes.h"
+
+namespace prt {
+namespace {
+
+// Screenshot vs prt render, in 8-bit sRGB codes. Both draw with the same
+// shaders on the same rasteriser (llvmpipe), so the frames should agree
+// exactly; 2 codes allow for rounding differences between the GLX and EGL
+// contexts' float paths (one code is ~0.4%, below visible). Pixels on the
+// silhouette (3x3 neighbourhood spread over kEdgeSpread codes) may differ by
+// a rasterisation tie-break and are only counted (at most kEdgeFraction of
+// all pixels off by more than kMaxCodeDiff).
+constexpr int kMaxCodeDiff = 2;
+constexpr int kEdgeSpread = 16;
+constexpr double kEdgeFraction = 0.01;
+
+bool on_path(const char* exe) {
+  const char* path = std::getenv("PATH");
+  if (!path) return false;
+  std::string p = path;
+  std::size_t start = 0;
+  while (start <= p.size()) {
+    const std::size_t end = std::min(p.find(':', start), p.size());
+    const std::filesystem::path f = std::filesystem::path(p.substr(start, end - start)) / exe;
+    if (::access(f.c_str(), X_OK) == 0) return true;
+    start = end + 1;
+  }
+  return false;
+}
+
+void write_off(const std::string& path, const Mesh& m) {
+  std::ofstream f(path);
+  f << "OFF\n" << m.positions.size() << " " << m.triangles.size() << " 0\n";
+  char buf[128];
+  for (const auto& p : m.positions) {
+    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+    f << buf;
+  }
+  for (const auto& t : m.triangles) f << "3 " << t.x << " " << t.y << " " << t.z << "\n";
+}
+
+int srgb_code(float linear) {
+  const double v = std::clamp(double(linear), 0.0, 1.0);
+  const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+  return int(std::lround(s * 255));
+}
+
+class ViewCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    mesh = dir.file("ball.off");
+    prt = dir.file("ball.prt");
+    env = dir.file("env.exr");
+    write_off(mesh, test::sphere(12, 24));
+    const Mesh m = load_mesh(mesh);
+    TransferOptions o;
+    o.mode = TransferMode::Unshadowed;
+    o.bands = 3;
+    o.samples = 64;
+    write_transfer(prt, compute_transfer(m, o));
+    const int w = 64, h = 32;
+    std::vector<float> rgb(std::size_t(w) * h * 3);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const glm::dvec3 d = latlong_direction(x + 0.5, y + 0.5, w, h);
+        const double v[3] = {0.6 + 0.4 * d.x, 0.5 + 0.3 * d.y, 0.4 + 0.3 * d.z};
+        for (int c = 0; c < 3; ++c) rgb[(std::size_t(y) * w + x) * 3 + c] = float(v[c]);
+      }
+    write_image(env, w, h, rgb);
+  }
+  test::TempDir dir;
+  std::string mesh, prt, env;
+};
+
+// 256x128: the images are read back with load_envmap, which takes 2:1 lat-long shapes only.
+constexpr int kW = 256, kH = 128;
+
+TEST_F(ViewCli, ScreenshotMatchesRender) {
+  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  const std::string shot = dir.file("view.png"), ref = dir.file("render.png");
+  const std::string err = (dir.io() / "view_err.txt").string();
+  // Under the sanitizer build, Mesa's GLX driver (dlclosed at exit) shows its
+  // allocations as leaks from an unknown module; leak checking stays on for
+  // every other test, the EGL renderer's included.
+  const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
+                          "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
+                          test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
+                          " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --screenshot " + test::shell_quote(shot) +
+                          " </dev/null >/dev/null 2>" + test::shell_quote(err);
+  const int status = std::system(cmd.c_str());
+  const std::string view_err = test::read_file(err);
+  const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  if (code != 0 && view_err.find("OpenGL 4.5 core") != std::string::npos)
+    GTEST_SKIP() << "Xvfb's GLX gives no OpenGL 4.5 core context: " << view_err;
+  ASSERT_EQ(code, 0) << view_err;
+  EXPECT_NE(view_err.find("Controls:"), std::string::npos) << view_err;
+
+  const auto res = test::run_prt(dir, {"render", mesh, prt, env, "-o", ref, "--width", std::to_string(kW), "--height",
+                                       std::to_string(kH), "-q"});
+  if (res.code != 0 && res.err.find("no OpenGL 4.5 context") != std::string::npos)
+    GTEST_SKIP() << "headless rendering unavailable: " << res.err;
+  ASSERT_EQ(res.code, 0) << test::describe_run(res);
+
+  const EnvMap a = load_envmap(shot, Mapping::LatLong), b = load_envmap(ref, Mapping::LatLong);
+  ASSERT_EQ(a.width, kW);
+  ASSERT_EQ(a.height, kH);
+  ASSERT_EQ(b.width, kW);
+  ASSERT_EQ(b.height, kH);
+  auto code_at = [](const EnvMap& m, int x, int y, int c) {
+    return srgb_code(m.rgb[(std::size_t(y) * m.width + x) * 3 + std::size_t(c)]);
+  };
+  int interior_max = 0, off = 0, mesh_pixels = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      int spread = 0, diff = 0;
+      for (int c = 0; c < 3; ++c) {
+        int lo = 255, hi = 0;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int v = code_at(b, std::clamp(x + dx, 0, kW - 1), std::clamp(y + dy, 0, kH - 1), c);
+            lo = std::min(lo, v);
+            hi = std::max(hi, v);
+          }
+        spread = std::max(spread, hi - lo);
+        diff = std::max(diff, std::abs(code_at(a, x, y, c) - code_at(b, x, y, c)));
+      }
+      if (spread <= kEdgeSpread) interior_max = std::max(interior_max, diff);
+      off += diff > kMaxCodeDiff;
+    }
+  // The ball covers the centre and differs from the background there.
+  mesh_pixels = code_at(b, kW / 2, kH / 2, 0) != code_at(b, 2, 2, 0);
+  EXPECT_TRUE(mesh_pixels);
+  EXPECT_LE(interior_max, kMaxCodeDiff);
+  std::printf("screenshot vs prt render: max %d codes away from edges, %d pixels over %d\n", interior_max, off,
+              kMaxCodeDiff);
+  EXPECT_LE(off, int(kEdgeFraction * kW * kH));
+}
+
+TEST_F(ViewCli, NoDisplayPointsToRender) {
+  const std::string err = (dir.io() / "nodisplay_err.txt").string();
+  const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY " + test::shell_quote(PRT_EXE) + " view " +
+                          test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
+                          " --frames 1 --screenshot " + test::shell_quote(dir.file("x.png")) +
+                          " </dev/null >/dev/null 2>" + test::shell_quote(err);
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(status != -1 && WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const std::string text = test::read_file(err);
+  EXPECT_NE(text.find("prt render"), std::string::npos) << text;
+  EXPECT_NE(text.find("display"), std::string::npos) << text;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+}
+
+TEST_F(ViewCli, HelpListsControls) {
+  const auto res = test::run_prt(dir, {"view", "--help"});
+  ASSERT_EQ(res.code, 0) << test::describe_run(res);
+  EXPECT_NE(res.out.find("right-drag"), std::string::npos) << res.out;
+  EXPECT_NE(res.out.find("--screenshot"), std::string::npos) << res.out;
+}
+
+}  // namespace
+}  // namespace prt
