@@ -2,8 +2,9 @@
 # The main job on the bundled scene: installs dependencies, builds prt, checks
 # its numerics, projects every bundled environment map onto SH (coefficients
 # and pictures of what the bands keep), precomputes shadowed and
-# interreflected transfer for the bundled model, and relights it under every
-# map, writing everything into out/.
+# interreflected transfer for the bundled model, relights it under every map,
+# renders pictures of it headless, writing everything into out/, and opens the
+# viewer when a display is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -38,6 +39,23 @@ for env in envmaps/*.exr; do
 done
 
 echo
+echo "== prt render: pictures of the relit model (headless OpenGL through EGL; no display needed)"
+for env in envmaps/*.exr; do
+  name=$(basename "$env" .exr)
+  "$prt" render models/scene.obj "$out/scene.interreflected.prt" "$env" -q -o "$out/scene.$name.png" \
+    --width 640 --height 400 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0
+done
+"$prt" render models/scene.obj "$out/scene.interreflected.prt" envmaps/sunset.exr -q -o "$out/turn.png" \
+  --width 320 --height 200 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --frames 12 --spin 30
+
+echo
 echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands keep),"
 echo "<map>.irradiance.glsl (paste-ready 3-band irradiance), <map>.irradiance.png (irradiance map),"
-echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance)."
+echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance),"
+echo "scene.<map>.png (rendered), turn_0000..0011.png (the sunset turning around the model)."
+
+if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${CI:-}" ] && [ -t 1 ]; then
+  echo
+  echo "== prt view: close the window (Esc) to finish"
+  "$prt" view models/scene.obj "$out/scene.interreflected.prt" envmaps/sunset.exr || true
+fi
