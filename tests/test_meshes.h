@@ -4,6 +4,9 @@
 #include <prt/mesh.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
 #include <vector>
 
 namespace prt::test {
@@ -73,6 +76,19 @@ inline Mesh open_box(float h) {
   wall(3, 4);
   wall(4, 1);
   return make_mesh(std::move(p), std::move(t), {}, {}, {}, "open box");
+}
+
+// Writes a mesh as OFF (positions and triangles; %.9g round-trips floats),
+// which prt loads keeping the vertex order.
+inline void write_off(const std::string& path, const Mesh& m) {
+  std::ofstream f(path);
+  f << "OFF\n" << m.positions.size() << " " << m.triangles.size() << " 0\n";
+  char buf[128];
+  for (const auto& p : m.positions) {
+    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+    f << buf;
+  }
+  for (const auto& t : m.triangles) f << "3 " << t.x << " " << t.y << " " << t.z << "\n";
 }
 
 }  // namespace prt::test

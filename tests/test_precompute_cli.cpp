@@ -17,15 +17,10 @@ namespace {
 
 using namespace prt::test;
 
-// A 4x4-cell quad facing +Y as an OBJ file (vertices shared, no normals).
-std::string write_quad_obj(const TempDir& dir) {
-  const Mesh q = test::quad(4);
-  std::string s;
-  for (const auto& p : q.positions) s += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
-  for (const auto& t : q.triangles)
-    s += "f " + std::to_string(t.x + 1) + " " + std::to_string(t.y + 1) + " " + std::to_string(t.z + 1) + "\n";
-  const std::string path = dir.file("quad.obj");
-  write_file(path, s);
+// A 4x4-cell quad facing +Y as an OFF file.
+std::string write_quad(const TempDir& dir) {
+  const std::string path = dir.file("quad.off");
+  test::write_off(path, test::quad(4));
   return path;
 }
 
@@ -39,7 +34,7 @@ TEST(PrecomputeCli, WhiteFurnaceThroughTheCommandLine) {
   // Albedo 1, unshadowed, constant map of 1: every vertex's radiance is 1
   // (float storage of the transfer: 1e-6).
   TempDir dir;
-  const std::string mesh = write_quad_obj(dir), env = write_constant_map(dir, 1.0f);
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
   for (const char* mode : {"unshadowed", "shadowed"}) {
     const Result p = run_prt(dir, {"precompute", mesh, "-o", dir.file("q.prt"), "--mode", mode, "--albedo", "1,1,1",
                                    "--samples", "64", "-q"});
@@ -62,15 +57,10 @@ TEST(PrecomputeCli, WhiteFurnaceThroughTheCommandLine) {
 
 TEST(PrecomputeCli, TransferForAnotherMeshIsRefused) {
   TempDir dir;
-  const std::string mesh = write_quad_obj(dir), env = write_constant_map(dir, 1.0f);
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
   ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("q.prt"), "-q", "--mode", "unshadowed"}).code, 0);
-  const Mesh other = test::quad(3);
-  std::string s;
-  for (const auto& p : other.positions) s += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
-  for (const auto& t : other.triangles)
-    s += "f " + std::to_string(t.x + 1) + " " + std::to_string(t.y + 1) + " " + std::to_string(t.z + 1) + "\n";
-  write_file(dir.file("other.obj"), s);
-  const Result r = run_prt(dir, {"relight", dir.file("other.obj"), dir.file("q.prt"), env, "-o", dir.file("o.csv")});
+  test::write_off(dir.file("other.off"), test::quad(3));
+  const Result r = run_prt(dir, {"relight", dir.file("other.off"), dir.file("q.prt"), env, "-o", dir.file("o.csv")});
   EXPECT_EQ(r.code, 1) << describe_run(r);
   EXPECT_NE(r.err.find("different mesh"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir.file("o.csv")));
@@ -78,7 +68,7 @@ TEST(PrecomputeCli, TransferForAnotherMeshIsRefused) {
 
 TEST(PrecomputeCli, BadOptionsFailBeforeAnyWork) {
   TempDir dir;
-  const std::string mesh = write_quad_obj(dir);
+  const std::string mesh = write_quad(dir);
   const std::vector<std::vector<std::string>> cases = {
       {"precompute", mesh, "-o", dir.file("x.prt"), "--bands", "0"},
       {"precompute", mesh, "-o", dir.file("x.prt"), "--bands", "17"},

@@ -273,24 +273,14 @@ TEST(Render, ClearErrors) {
 
 // ---- prt render ------------------------------------------------------------
 
-void write_off(const std::string& path, const Mesh& m) {
-  std::ofstream f(path);
-  f << "OFF\n" << m.positions.size() << " " << m.triangles.size() << " 0\n";
-  char buf[128];
-  for (const auto& p : m.positions) {
-    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
-    f << buf;
-  }
-  for (const auto& t : m.triangles) f << "3 " << t.x << " " << t.y << " " << t.z << "\n";
-}
 
 class RenderCli : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
     if (!try_renderer(why)) GTEST_SKIP() << "headless rendering unavailable: " << why;
-    write_off(dir.file("ball.off"), test::sphere(10, 20));
-    write_off(dir.file("plane.off"), test::quad(4));
+    test::write_off(dir.file("ball.off"), test::sphere(10, 20));
+    test::write_off(dir.file("plane.off"), test::quad(4));
     const EnvMap env = latlong_of(smooth_env, 64, 32);
     write_image(dir.file("env.exr"), env.width, env.height, env.rgb);
     for (const char* m : {"ball", "plane"}) {

@@ -48,16 +48,6 @@ bool on_path(const char* exe) {
   return false;
 }
 
-void write_off(const std::string& path, const Mesh& m) {
-  std::ofstream f(path);
-  f << "OFF\n" << m.positions.size() << " " << m.triangles.size() << " 0\n";
-  char buf[128];
-  for (const auto& p : m.positions) {
-    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
-    f << buf;
-  }
-  for (const auto& t : m.triangles) f << "3 " << t.x << " " << t.y << " " << t.z << "\n";
-}
 
 int srgb_code(float linear) {
   const double v = std::clamp(double(linear), 0.0, 1.0);
@@ -71,7 +61,7 @@ class ViewCli : public ::testing::Test {
     mesh = dir.file("ball.off");
     prt = dir.file("ball.prt");
     env = dir.file("env.exr");
-    write_off(mesh, test::sphere(12, 24));
+    test::write_off(mesh, test::sphere(12, 24));
     const Mesh m = load_mesh(mesh);
     TransferOptions o;
     o.mode = TransferMode::Unshadowed;

@@ -1,5 +1,6 @@
 // prt relight: CPU relighting of a precomputed mesh under an environment map.
 #include "commands.h"
+#include "scene.h"
 
 #include <prt/compare.h>
 #include <prt/envmap.h>
@@ -35,10 +36,10 @@ int run_relight(const RelightArgs& a) {
   if (ext != ".ply" && ext != ".csv") throw Error("--output: " + a.output + ": expected a .ply or .csv file");
   for_option("--output", [&] { check_writable(a.output); });
 
-  const Mesh mesh = load_mesh(a.mesh);
-  const Transfer t = read_transfer(a.transfer);
-  check_matches(t, mesh, a.transfer);
-  const EnvMap env = load_envmap(a.env);
+  const Scene scene = load_scene(a.mesh, a.transfer, a.env);
+  const Mesh& mesh = scene.mesh;
+  const Transfer& t = scene.transfer;
+  const EnvMap& env = scene.env;
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(env));
 
   std::vector<glm::dvec3> light = project(env, t.bands);

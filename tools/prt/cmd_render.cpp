@@ -1,6 +1,7 @@
 // prt render: headless OpenGL rendering of a precomputed mesh under an
 // environment map (prt::Renderer, EGL, no display needed).
 #include "commands.h"
+#include "scene.h"
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
@@ -63,14 +64,10 @@ int run_render(const RenderArgs& a) {
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
   for_option("--output", [&] { check_image_output(a.output); });
 
-  const Mesh mesh = load_mesh(a.mesh);
-  const Transfer t = read_transfer(a.transfer);
-  check_matches(t, mesh, a.transfer);
-  if (t.bands > kMaxRenderBands)
-    throw Error(a.transfer + ": " + std::to_string(t.bands) + " bands; prt render takes at most " +
-                std::to_string(kMaxRenderBands));
-  const EnvMap env = load_envmap(a.env);
-  require_finite(env);
+  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render");
+  const Mesh& mesh = scene.mesh;
+  const Transfer& t = scene.transfer;
+  const EnvMap& env = scene.env;
 
   Camera cam = default_camera(mesh, a.fov);
   if (!a.camera.empty()) parse_camera(a.camera, cam);

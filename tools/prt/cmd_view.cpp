@@ -4,6 +4,7 @@
 // and blitted to the window; screenshots are the renderer's float frame read
 // back and written with write_image (sRGB-encoded PNG), like prt render.
 #include "commands.h"
+#include "scene.h"
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
@@ -91,14 +92,10 @@ int run_view(const ViewArgs& a) {
   if (!std::filesystem::is_directory(a.screenshot_dir))
     throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
 
-  const Mesh mesh = load_mesh(a.mesh);
-  const Transfer t = read_transfer(a.transfer);
-  check_matches(t, mesh, a.transfer);
-  if (t.bands > kMaxRenderBands)
-    throw Error(a.transfer + ": " + std::to_string(t.bands) + " bands; prt view takes at most " +
-                std::to_string(kMaxRenderBands));
-  const EnvMap env = load_envmap(a.env);
-  require_finite(env);
+  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view");
+  const Mesh& mesh = scene.mesh;
+  const Transfer& t = scene.transfer;
+  const EnvMap& env = scene.env;
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
