@@ -1,7 +1,9 @@
 // Headless OpenGL 4.5 PRT renderer: EGL context, buffers, shaders, frames.
 // See prt/render.h.
 #include <prt/error.h>
+#include <prt/filter.h>
 #include <prt/render.h>
+#include <prt/sh.h>
 #include <prt/transfer_io.h>
 
 #include "shaders.h"
@@ -18,6 +20,7 @@
 #include <glm/mat4x4.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -65,8 +68,12 @@ GLuint compile(GLenum type, const char* source, const char* name) {
   return s;
 }
 
-GLuint link(const char* vs_src, const char* fs_src, const char* name) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, vs_src, name);
+// Links a program; `defines` (e.g. "#define MODE 1\n") goes right after the
+// vertex shader's #version line.
+GLuint link(const char* vs_src, const char* fs_src, const char* name, const std::string& defines = {}) {
+  std::string vs_text = vs_src;
+  if (!defines.empty()) vs_text.insert(vs_text.find('\n') + 1, defines);
+  const GLuint vs = compile(GL_VERTEX_SHADER, vs_text.c_str(), name);
   GLuint fs = 0;
   try {
     fs = compile(GL_FRAGMENT_SHADER, fs_src, name);
@@ -95,7 +102,97 @@ GLuint link(const char* vs_src, const char* fs_src, const char* name) {
 
 constexpr int kMaxCoeffs = kMaxRenderBands * kMaxRenderBands;  // LightBlock in shaders/mesh.vert.glsl
 
+// The attribute shader's modes (shaders/attribute.vert.glsl's MODE).
+int attribute_mode(Shading s) {
+  switch (s) {
+    case Shading::Lambert: return 1;
+    case Shading::AmbientOcclusion: return 2;
+    case Shading::BentNormal: return 3;
+    case Shading::VertexColors: return 4;
+    default: return 0;
+  }
+}
+
+// Irradiance / pi of the lighting's first 9 coefficients as quadratic forms
+// n4^T M n4, n4 = (x, y, z, 1), one per channel: the table of
+// docs/CONVENTIONS.md with E_k = A_l L_k.
+std::array<glm::mat4, 3> irradiance_matrices(std::span<const glm::dvec3> L) {
+  const double pi = 3.14159265358979323846;
+  const double c0 = 0.5 / std::sqrt(pi), c1 = std::sqrt(3 / (4 * pi)), c2 = std::sqrt(15 / (4 * pi)),
+               c3 = std::sqrt(5 / (16 * pi)), c4 = std::sqrt(15 / (16 * pi));
+  std::array<glm::mat4, 3> M{};
+  for (int c = 0; c < 3; ++c) {
+    double e[9] = {};
+    for (int k = 0; k < 9 && std::size_t(k) < L.size(); ++k)
+      e[k] = sh::clamped_cosine_factor(k == 0 ? 0 : k < 4 ? 1 : 2) * L[std::size_t(k)][c] / pi;
+    glm::dmat4 m(0.0);  // m[col][row], symmetric
+    auto set = [&](int i, int j, double v) { m[i][j] = m[j][i] = v; };
+    set(0, 0, c4 * e[8]);
+    set(1, 1, -c4 * e[8]);
+    set(2, 2, 3 * c3 * e[6]);
+    set(0, 1, c2 * e[4] / 2);
+    set(1, 2, -c2 * e[5] / 2);
+    set(0, 2, -c2 * e[7] / 2);
+    set(0, 3, -c1 * e[3] / 2);
+    set(1, 3, -c1 * e[1] / 2);
+    set(2, 3, c1 * e[2] / 2);
+    set(3, 3, c0 * e[0] - c3 * e[6]);
+    M[std::size_t(c)] = glm::mat4(m);
+  }
+  return M;
+}
+
 }  // namespace
+
+std::string_view shading_name(Shading s) {
+  switch (s) {
+    case Shading::Transfer: return "transfer";
+    case Shading::Direct: return "direct";
+    case Shading::Unshadowed: return "unshadowed";
+    case Shading::Lambert: return "lambert";
+    case Shading::AmbientOcclusion: return "ao";
+    case Shading::BentNormal: return "bent";
+    case Shading::VertexColors: return "colors";
+  }
+  return "?";
+}
+
+Shading parse_shading(std::string_view name) {
+  for (Shading s : {Shading::Transfer, Shading::Direct, Shading::Unshadowed, Shading::Lambert,
+                    Shading::AmbientOcclusion, Shading::BentNormal, Shading::VertexColors})
+    if (name == shading_name(s)) return s;
+  throw Error("unknown shading '" + std::string(name) +
+              "' (expected transfer, direct, unshadowed, lambert, ao, bent or colors)");
+}
+
+std::string_view tone_map_name(ToneMap t) {
+  switch (t) {
+    case ToneMap::Clamp: return "clamp";
+    case ToneMap::Reinhard: return "reinhard";
+    case ToneMap::Aces: return "aces";
+  }
+  return "?";
+}
+
+ToneMap parse_tone_map(std::string_view name) {
+  for (ToneMap t : {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces})
+    if (name == tone_map_name(t)) return t;
+  throw Error("unknown tone map '" + std::string(name) + "' (expected clamp, reinhard or aces)");
+}
+
+float tone_map(float linear, const Display& d) {
+  const float v = std::max(linear * float(std::exp2(d.exposure)), 0.0f);
+  switch (d.tone_map) {
+    case ToneMap::Reinhard: return v / (1.0f + v);
+    case ToneMap::Aces: return std::clamp(v * (2.51f * v + 0.03f) / (v * (2.43f * v + 0.59f) + 0.14f), 0.0f, 1.0f);
+    case ToneMap::Clamp: break;
+  }
+  return std::min(v, 1.0f);
+}
+
+void tone_map(std::vector<float>& rgb, const Display& d) {
+  for (float& v : rgb) v = tone_map(v, d);
+}
 
 Camera default_camera(const Mesh& mesh, double fov_deg) {
   if (mesh.positions.empty()) throw Error("default camera: the mesh has no vertices");
@@ -117,16 +214,30 @@ struct Renderer::Impl {
   EGLContext context = EGL_NO_CONTEXT;
   bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
-  GLuint mesh_program = 0, background_program = 0;
-  GLuint vao = 0, empty_vao = 0;
-  GLuint position_buffer = 0, index_buffer = 0, transfer_buffer = 0, light_buffer = 0;
+  GLuint mesh_program = 0, background_program = 0, display_program = 0;
+  std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
+  GLuint vao = 0, attribute_vao = 0, empty_vao = 0;
+  GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
+  // Transfer arrays by Shading: the file's, its direct part, the analytic unshadowed one (made when first used).
+  GLuint transfer_buffer = 0, direct_buffer = 0, unshadowed_buffer = 0;
+  int unshadowed_channels = 0;
+  // Per-vertex attributes: normals, per-vertex albedo (vertex-coloured transfers), AO, bent normals, colours.
+  GLuint normal_buffer = 0, albedo_buffer = 0, ao_buffer = 0, bent_buffer = 0, color_buffer = 0;
   GLuint latlong_texture = 0, cube_texture = 0;
-  GLuint fbo = 0, color_rb = 0, depth_rb = 0;
+  GLuint fbo = 0, color_texture = 0, depth_rb = 0;
   int fbo_width = 0, fbo_height = 0;
+  GLuint display_fbo = 0, display_rb = 0;
+  int display_width = 0, display_height = 0;
 
   GLsizei index_count = 0;
-  int bands = 0, channels = 0;
-  bool have_lighting = false;
+  std::size_t vertex_count = 0;
+  int bands = 0, channels = 0, band_limit = 0;
+  Shading shading = Shading::Transfer;
+  bool have_lighting = false, have_colors = false;
+  glm::vec3 albedo{1.0f};               // constant albedo (transfers without vertex colours)
+  std::vector<glm::vec3> cpu_normals;   // for the unshadowed transfer, made on demand
+  std::vector<glm::vec3> cpu_albedo;    // per-vertex albedo, vertex-coloured transfers only
+  std::array<glm::mat4, 3> irradiance{};  // Lambert
   int environment = 0;  // 0 none, 1 lat-long, 2 cube
   glm::dmat3 env_rotation{1.0};
   std::string device;
@@ -141,7 +252,12 @@ struct Renderer::Impl {
   void check_version(const char* how);
   void create_objects();
   void draw(const Camera& cam, int width, int height);
+  void draw_mesh(const glm::mat4& view_proj);
+  void display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb);
+  GLuint attribute_program(int mode);
+  void make_unshadowed();
   void destroy();
+  void delete_mesh_objects();
   void resize(int w, int h);
 };
 
@@ -216,23 +332,38 @@ void Renderer::Impl::check_version(const char* how) {
 void Renderer::Impl::create_objects() {
   mesh_program = link(shaders::mesh_vert_glsl, shaders::mesh_frag_glsl, "mesh");
   background_program = link(shaders::background_vert_glsl, shaders::background_frag_glsl, "background");
+  display_program = link(shaders::background_vert_glsl, shaders::display_frag_glsl, "display");
   glCreateVertexArrays(1, &vao);
+  glCreateVertexArrays(1, &attribute_vao);
   glCreateVertexArrays(1, &empty_vao);
   glCreateBuffers(1, &light_buffer);
   glNamedBufferStorage(light_buffer, GLsizeiptr(kMaxCoeffs * 4 * sizeof(float)), nullptr, GL_DYNAMIC_STORAGE_BIT);
   glCreateFramebuffers(1, &fbo);
+  glCreateFramebuffers(1, &display_fbo);
   check_gl("creating the renderer's objects");
+}
+
+GLuint Renderer::Impl::attribute_program(int mode) {
+  GLuint& p = attribute_programs[std::size_t(mode)];
+  if (!p)
+    p = link(shaders::attribute_vert_glsl, shaders::mesh_frag_glsl, "attribute",
+             "#define MODE " + std::to_string(mode) + "\n");
+  return p;
 }
 
 void Renderer::Impl::resize(int w, int h) {
   if (w == fbo_width && h == fbo_height) return;
-  if (color_rb) glDeleteRenderbuffers(1, &color_rb);
+  if (color_texture) glDeleteTextures(1, &color_texture);
   if (depth_rb) glDeleteRenderbuffers(1, &depth_rb);
-  glCreateRenderbuffers(1, &color_rb);
+  glCreateTextures(GL_TEXTURE_2D, 1, &color_texture);  // a texture: the display pass samples it
+  glTextureStorage2D(color_texture, 1, GL_RGBA32F, w, h);
+  glTextureParameteri(color_texture, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(color_texture, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(color_texture, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTextureParameteri(color_texture, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glCreateRenderbuffers(1, &depth_rb);
-  glNamedRenderbufferStorage(color_rb, GL_RGBA32F, w, h);
   glNamedRenderbufferStorage(depth_rb, GL_DEPTH_COMPONENT32F, w, h);
-  glNamedFramebufferRenderbuffer(fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_rb);
+  glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, color_texture, 0);
   glNamedFramebufferRenderbuffer(fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb);
   const GLenum status = glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER);
   check_gl("allocating the framebuffer");
@@ -243,20 +374,31 @@ void Renderer::Impl::resize(int w, int h) {
   fbo_height = h;
 }
 
+void Renderer::Impl::delete_mesh_objects() {
+  const GLuint buffers[] = {position_buffer, index_buffer, transfer_buffer, direct_buffer, unshadowed_buffer,
+                            normal_buffer,   albedo_buffer, ao_buffer,      bent_buffer,   color_buffer};
+  glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
+  position_buffer = index_buffer = transfer_buffer = direct_buffer = unshadowed_buffer = 0;
+  normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = 0;
+}
+
 void Renderer::Impl::destroy() {
   if (display == EGL_NO_DISPLAY && !external) return;
   if (external || (context != EGL_NO_CONTEXT && eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))) {
-    const GLuint buffers[] = {position_buffer, index_buffer, transfer_buffer, light_buffer};
-    glDeleteBuffers(4, buffers);
-    const GLuint textures[] = {latlong_texture, cube_texture};
-    glDeleteTextures(2, textures);
-    const GLuint rbs[] = {color_rb, depth_rb};
+    delete_mesh_objects();
+    glDeleteBuffers(1, &light_buffer);
+    const GLuint textures[] = {latlong_texture, cube_texture, color_texture};
+    glDeleteTextures(3, textures);
+    const GLuint rbs[] = {depth_rb, display_rb};
     glDeleteRenderbuffers(2, rbs);
-    glDeleteFramebuffers(1, &fbo);
-    const GLuint vaos[] = {vao, empty_vao};
-    glDeleteVertexArrays(2, vaos);
+    const GLuint fbos[] = {fbo, display_fbo};
+    glDeleteFramebuffers(2, fbos);
+    const GLuint vaos[] = {vao, attribute_vao, empty_vao};
+    glDeleteVertexArrays(3, vaos);
     glDeleteProgram(mesh_program);
     glDeleteProgram(background_program);
+    glDeleteProgram(display_program);
+    for (GLuint p : attribute_programs) glDeleteProgram(p);
     if (external) {
       external = false;  // destroyed once
       return;
@@ -306,6 +448,17 @@ Renderer& Renderer::operator=(Renderer&& other) noexcept {
 std::string Renderer::device() const { return impl_->device; }
 int Renderer::bands() const { return impl_->bands; }
 
+namespace {
+
+GLuint make_buffer(const void* data, std::size_t bytes, GLbitfield flags = 0) {
+  GLuint b = 0;
+  glCreateBuffers(1, &b);
+  glNamedBufferStorage(b, GLsizeiptr(std::max<std::size_t>(bytes, 4)), bytes ? data : nullptr, flags);
+  return b;
+}
+
+}  // namespace
+
 void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   if (t.vertices != mesh.vertex_count())
     throw Error("transfer has " + std::to_string(t.vertices) + " vertices, the mesh " +
@@ -319,39 +472,59 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   if (t.coeffs.size() != t.vertices * t.stride())
     throw Error("transfer has " + std::to_string(t.coeffs.size()) + " coefficients, expected " +
                 std::to_string(t.vertices * t.stride()));
+  if (!t.direct.empty() && t.direct.size() != t.coeffs.size())
+    throw Error("transfer's direct part has " + std::to_string(t.direct.size()) + " coefficients, expected " +
+                std::to_string(t.coeffs.size()));
+  if (!t.ao.empty() && t.ao.size() != t.vertices) throw Error("transfer's ambient occlusion has the wrong length");
+  if (!t.bent_normals.empty() && t.bent_normals.size() != t.vertices)
+    throw Error("transfer's bent normals have the wrong length");
+  if (t.vertex_colors && mesh.colors.size() != mesh.vertex_count())
+    throw Error("the transfer was computed with vertex colours, but the mesh has none");
   if (mesh.triangles.empty()) throw Error("the mesh has no triangles");
   Impl& m = *impl_;
   m.make_current();
   clear_mesh();
-  glCreateBuffers(1, &m.position_buffer);
-  glNamedBufferStorage(m.position_buffer, GLsizeiptr(mesh.positions.size() * sizeof(glm::vec3)),
-                       mesh.positions.data(), 0);
-  glCreateBuffers(1, &m.index_buffer);
-  glNamedBufferStorage(m.index_buffer, GLsizeiptr(mesh.triangles.size() * sizeof(glm::uvec3)),
-                       mesh.triangles.data(), 0);
-  glCreateBuffers(1, &m.transfer_buffer);
-  glNamedBufferStorage(m.transfer_buffer, GLsizeiptr(t.coeffs.size() * sizeof(float)), t.coeffs.data(), 0);
-  glVertexArrayVertexBuffer(m.vao, 0, m.position_buffer, 0, sizeof(glm::vec3));
-  glVertexArrayAttribFormat(m.vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
-  glVertexArrayAttribBinding(m.vao, 0, 0);
-  glEnableVertexArrayAttrib(m.vao, 0);
-  glVertexArrayElementBuffer(m.vao, m.index_buffer);
+  m.position_buffer = make_buffer(mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
+  m.index_buffer = make_buffer(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+  m.transfer_buffer = make_buffer(t.coeffs.data(), t.coeffs.size() * sizeof(float));
+  if (!t.direct.empty()) m.direct_buffer = make_buffer(t.direct.data(), t.direct.size() * sizeof(float));
+  m.normal_buffer = make_buffer(mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
+  if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
+  if (!t.bent_normals.empty())
+    m.bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
+  m.albedo = t.albedo;
+  m.cpu_normals = mesh.normals;
+  if (t.vertex_colors) {
+    m.cpu_albedo = mesh.colors;
+    m.albedo_buffer = make_buffer(mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
+  }
+  for (GLuint vao : {m.vao, m.attribute_vao}) {
+    glVertexArrayVertexBuffer(vao, 0, m.position_buffer, 0, sizeof(glm::vec3));
+    glVertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(vao, 0, 0);
+    glEnableVertexArrayAttrib(vao, 0);
+    glVertexArrayElementBuffer(vao, m.index_buffer);
+  }
   check_gl("uploading the mesh and transfer");
   m.index_count = GLsizei(mesh.triangles.size() * 3);
-  m.bands = t.bands;
+  m.vertex_count = mesh.vertex_count();
+  m.bands = m.band_limit = t.bands;
   m.channels = t.channels;
+  m.shading = Shading::Transfer;
   m.have_lighting = false;
 }
 
 void Renderer::clear_mesh() {
   Impl& m = *impl_;
   m.make_current();
-  const GLuint buffers[] = {m.position_buffer, m.index_buffer, m.transfer_buffer};
-  glDeleteBuffers(3, buffers);
-  m.position_buffer = m.index_buffer = m.transfer_buffer = 0;
+  m.delete_mesh_objects();
   m.index_count = 0;
-  m.bands = m.channels = 0;
-  m.have_lighting = false;
+  m.vertex_count = 0;
+  m.bands = m.channels = m.band_limit = m.unshadowed_channels = 0;
+  m.shading = Shading::Transfer;
+  m.have_lighting = m.have_colors = false;
+  m.cpu_normals.clear();
+  m.cpu_albedo.clear();
 }
 
 void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
@@ -367,7 +540,83 @@ void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
   m.make_current();
   glNamedBufferSubData(m.light_buffer, 0, GLsizeiptr(v.size() * sizeof(float)), v.data());
   check_gl("uploading the lighting");
+  m.irradiance = irradiance_matrices(coeffs);
   m.have_lighting = true;
+}
+
+void Renderer::set_band_limit(int b) {
+  Impl& m = *impl_;
+  if (m.bands == 0) throw Error("set_band_limit: no mesh uploaded");
+  if (b < 1 || b > m.bands)
+    throw Error("band limit " + std::to_string(b) + " outside 1.." + std::to_string(m.bands) + " (the transfer's bands)");
+  m.band_limit = b;
+}
+
+int Renderer::band_limit() const { return impl_->band_limit; }
+
+bool Renderer::has_shading(Shading s) const {
+  const Impl& m = *impl_;
+  if (m.bands == 0) return false;
+  switch (s) {
+    case Shading::Direct: return m.direct_buffer != 0;
+    case Shading::AmbientOcclusion: return m.ao_buffer != 0;
+    case Shading::BentNormal: return m.bent_buffer != 0;
+    case Shading::VertexColors: return m.have_colors;
+    default: return true;
+  }
+}
+
+void Renderer::set_shading(Shading s) {
+  if (!has_shading(s)) {
+    const char* why = impl_->bands == 0                ? "no mesh is uploaded"
+                      : s == Shading::Direct           ? "the transfer is not interreflected"
+                      : s == Shading::VertexColors     ? "no vertex colours were set"
+                                                       : "the transfer file has no such data";
+    throw Error("shading '" + std::string(shading_name(s)) + "' is unavailable: " + why);
+  }
+  impl_->shading = s;
+}
+
+Shading Renderer::shading() const { return impl_->shading; }
+
+void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
+  Impl& m = *impl_;
+  if (m.bands == 0) throw Error("set_vertex_colors: no mesh uploaded");
+  if (colors.size() != m.vertex_count)
+    throw Error("set_vertex_colors: " + std::to_string(colors.size()) + " colours for " +
+                std::to_string(m.vertex_count) + " vertices");
+  m.make_current();
+  if (!m.color_buffer)
+    m.color_buffer = make_buffer(nullptr, m.vertex_count * sizeof(glm::vec3), GL_DYNAMIC_STORAGE_BIT);
+  glNamedBufferSubData(m.color_buffer, 0, GLsizeiptr(colors.size_bytes()), colors.data());
+  check_gl("uploading vertex colours");
+  m.have_colors = true;
+}
+
+// The analytic unshadowed transfer (albedo/pi) A_l Y_k(n), as compute_transfer
+// makes it, in the file's layout and band count.
+void Renderer::Impl::make_unshadowed() {
+  const int nc = bands * bands;
+  const bool rgb = !cpu_albedo.empty() || !(albedo[0] == albedo[1] && albedo[1] == albedo[2]);
+  const int ch = rgb ? 3 : 1;
+  const std::vector<double> A = sh::clamped_cosine_factors(bands);
+  const double inv_pi = 1.0 / 3.14159265358979323846;
+  std::vector<float> T(vertex_count * std::size_t(ch) * std::size_t(nc), 0.0f);
+  std::vector<double> y(static_cast<std::size_t>(nc));
+  for (std::size_t v = 0; v < vertex_count; ++v) {
+    const glm::dvec3 n(cpu_normals[v]);
+    if (n == glm::dvec3(0.0)) continue;  // no normal: transfer 0
+    sh::eval(bands, n.x, n.y, n.z, y.data());
+    const glm::vec3 a = cpu_albedo.empty() ? albedo : cpu_albedo[v];
+    for (int c = 0; c < ch; ++c)
+      for (int l = 0, k = 0; l < bands; ++l)
+        for (int mm = -l; mm <= l; ++mm, ++k)
+          T[(v * std::size_t(ch) + std::size_t(c)) * std::size_t(nc) + std::size_t(k)] =
+              float(a[c] * inv_pi * A[std::size_t(l)] * y[std::size_t(k)]);
+  }
+  unshadowed_buffer = make_buffer(T.data(), T.size() * sizeof(float));
+  unshadowed_channels = ch;
+  check_gl("uploading the unshadowed transfer");
 }
 
 void Renderer::set_environment(const EnvMap& map) {
@@ -423,7 +672,9 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
   if (width > max_rb || height > max_rb)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " exceeds the limit " +
                 std::to_string(max_rb));
-  if (m.bands > 0 && !m.have_lighting) throw Error("render: no lighting set for the mesh");
+  const bool lit = m.shading == Shading::Transfer || m.shading == Shading::Direct ||
+                   m.shading == Shading::Unshadowed || m.shading == Shading::Lambert;
+  if (m.bands > 0 && lit && !m.have_lighting) throw Error("render: no lighting set for the mesh");
   if (!(cam.fov_deg > 0 && cam.fov_deg < 180)) throw Error("camera: field of view must be in (0, 180) degrees");
   const glm::dvec3 fwd = cam.target - cam.eye;
   if (!(glm::length(fwd) > 0) || !(glm::length(glm::cross(fwd, cam.up)) > 1e-12 * glm::length(fwd)))
@@ -467,32 +718,82 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const double dist = glm::length(fwd);
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
-    const glm::mat4 view_proj(proj * view);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glDisable(GL_CULL_FACE);  // open meshes show their back faces
-    glUseProgram(m.mesh_program);
-    glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
-    glUniform1i(1, m.bands * m.bands);
-    glUniform1i(2, m.channels);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, m.transfer_buffer);
-    glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.light_buffer);
-    glBindVertexArray(m.vao);
-    glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+    m.draw_mesh(glm::mat4(proj * view));
   }
   glBindVertexArray(0);
   check_gl("rendering");
 }
 
-Image Renderer::render(const Camera& cam, int width, int height) {
-  Impl& m = *impl_;
-  m.draw(cam, width, height);
+void Renderer::Impl::draw_mesh(const glm::mat4& view_proj) {
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);  // open meshes show their back faces
+  const int mode = attribute_mode(shading);
+  if (mode == 0) {  // a transfer array dotted with the lighting
+    GLuint buffer = transfer_buffer;
+    int ch = channels;
+    if (shading == Shading::Direct) buffer = direct_buffer;
+    if (shading == Shading::Unshadowed) {
+      if (!unshadowed_buffer) make_unshadowed();
+      buffer = unshadowed_buffer;
+      ch = unshadowed_channels;
+    }
+    glUseProgram(mesh_program);
+    glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
+    glUniform1i(1, band_limit * band_limit);
+    glUniform1i(2, ch);
+    glUniform1i(3, bands * bands);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffer);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
+    glBindVertexArray(vao);
+  } else {
+    const GLuint data = mode == 1 ? normal_buffer : mode == 2 ? ao_buffer : mode == 3 ? bent_buffer : color_buffer;
+    glVertexArrayVertexBuffer(attribute_vao, 1, data, 0, mode == 2 ? sizeof(float) : sizeof(glm::vec3));
+    glVertexArrayAttribFormat(attribute_vao, 1, mode == 2 ? 1 : 3, GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(attribute_vao, 1, 1);
+    glEnableVertexArrayAttrib(attribute_vao, 1);
+    if (albedo_buffer) {
+      glVertexArrayVertexBuffer(attribute_vao, 2, albedo_buffer, 0, sizeof(glm::vec3));
+      glVertexArrayAttribFormat(attribute_vao, 2, 3, GL_FLOAT, GL_FALSE, 0);
+      glVertexArrayAttribBinding(attribute_vao, 2, 2);
+      glEnableVertexArrayAttrib(attribute_vao, 2);
+    } else {
+      glDisableVertexArrayAttrib(attribute_vao, 2);
+      glVertexAttrib3f(2, albedo[0], albedo[1], albedo[2]);  // a constant attribute
+    }
+    glUseProgram(attribute_program(mode));
+    glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
+    glUniformMatrix4fv(4, 3, GL_FALSE, &irradiance[0][0][0]);
+    glBindVertexArray(attribute_vao);
+  }
+  glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+}
+
+// Samples the frame (color_texture), applies exposure and the tone map, and
+// writes [0, 1] values into `target` (0: the default framebuffer).
+void Renderer::Impl::display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb) {
+  glBindFramebuffer(GL_FRAMEBUFFER, target);
+  glViewport(0, 0, width, height);
+  glDisable(GL_DEPTH_TEST);
+  glUseProgram(display_program);
+  glUniform1f(0, float(std::exp2(d.exposure)));
+  glUniform1i(1, d.tone_map == ToneMap::Reinhard ? 1 : d.tone_map == ToneMap::Aces ? 2 : 0);
+  glUniform1i(2, encode_srgb ? 1 : 0);
+  glBindTextureUnit(2, color_texture);
+  glBindVertexArray(empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindVertexArray(0);
+  check_gl("the display pass");
+}
+
+namespace {
+
+// Reads the bound read framebuffer's colour attachment 0 as a top-down RGB image.
+Image read_back(int width, int height) {
   std::vector<float> rgba(std::size_t(width) * height * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadnPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());
   check_gl("reading the frame back");
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-
   Image img;
   img.width = width;
   img.height = height;
@@ -506,20 +807,60 @@ Image Renderer::render(const Camera& cam, int width, int height) {
   return img;
 }
 
-bool Renderer::present(const Camera& cam, int width, int height, int window_width, int window_height) {
+}  // namespace
+
+Image Renderer::render(const Camera& cam, int width, int height, const Display* display) {
   Impl& m = *impl_;
   m.draw(cam, width, height);
+  if (display) {
+    if (width != m.display_width || height != m.display_height) {
+      if (m.display_rb) glDeleteRenderbuffers(1, &m.display_rb);
+      glCreateRenderbuffers(1, &m.display_rb);
+      glNamedRenderbufferStorage(m.display_rb, GL_RGBA32F, width, height);
+      glNamedFramebufferRenderbuffer(m.display_fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, m.display_rb);
+      check_gl("allocating the display framebuffer");
+      m.display_width = width;
+      m.display_height = height;
+    }
+    m.display_pass(*display, m.display_fbo, width, height, false);
+  }
+  Image img = read_back(width, height);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  return img;
+}
+
+void Renderer::draw_only(const Camera& cam, int width, int height) {
+  impl_->draw(cam, width, height);
+  glFinish();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+bool Renderer::present(const Camera& cam, int width, int height, int window_width, int window_height,
+                       const Display& display) {
+  Impl& m = *impl_;
+  m.draw(cam, width, height);
   GLint encoding = GL_LINEAR;
   glGetNamedFramebufferAttachmentParameteriv(0, GL_BACK_LEFT, GL_FRAMEBUFFER_ATTACHMENT_COLOR_ENCODING, &encoding);
   const bool srgb = encoding == GL_SRGB;
   if (srgb) glEnable(GL_FRAMEBUFFER_SRGB);
-  glViewport(0, 0, window_width, window_height);
-  glBlitNamedFramebuffer(m.fbo, 0, 0, 0, width, height, 0, 0, window_width, window_height, GL_COLOR_BUFFER_BIT,
-                         (width == window_width && height == window_height) ? GL_NEAREST : GL_LINEAR);
+  m.display_pass(display, 0, window_width, window_height, !srgb);  // encoded either way
   if (srgb) glDisable(GL_FRAMEBUFFER_SRGB);
   check_gl("presenting the frame");
   return srgb;
+}
+
+std::vector<unsigned char> Renderer::read_presented(int width, int height) {
+  impl_->make_current();
+  std::vector<unsigned char> rgb(std::size_t(width) * height * 3);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadnPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, GLsizei(rgb.size()), rgb.data());
+  check_gl("reading the window back");
+  for (int y = 0; y < height / 2; ++y)  // GL row 0 is the bottom
+    std::swap_ranges(rgb.begin() + std::ptrdiff_t(y) * width * 3, rgb.begin() + std::ptrdiff_t(y + 1) * width * 3,
+                     rgb.begin() + std::ptrdiff_t(height - 1 - y) * width * 3);
+  return rgb;
 }
 
 }  // namespace prt

@@ -6,4 +6,6 @@ extern const char* const mesh_vert_glsl;
 extern const char* const mesh_frag_glsl;
 extern const char* const background_vert_glsl;
 extern const char* const background_frag_glsl;
+extern const char* const attribute_vert_glsl;
+extern const char* const display_frag_glsl;
 }  // namespace prt::shaders

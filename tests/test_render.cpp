@@ -126,6 +126,33 @@ CameraGrid camera_grid(bool colored) {
   return g;
 }
 
+// Every interior vertex's pixel equals expected[v] within kVertexTolerance,
+// relative to max(expected, 10% of the largest expected value).
+void expect_pixels_at_vertices(const Image& img, const CameraGrid& g, const std::vector<glm::vec3>& expected,
+                               const std::string& what) {
+  ASSERT_EQ(img.width, g.size);
+  ASSERT_EQ(img.rgb.size(), std::size_t(g.size) * g.size * 3);
+  ASSERT_EQ(expected.size(), g.pixel_of.size());
+  double scale = 0;
+  for (const auto& e : expected) scale = std::max({scale, double(e.x), double(e.y), double(e.z)});
+  ASSERT_GT(scale, 0.1) << what;
+  double worst = 0;
+  int checked = 0;
+  for (std::size_t v = 0; v < expected.size(); ++v) {
+    if (g.pixel_of[v].first < 0) continue;
+    ++checked;
+    const glm::vec3 got = img.at(g.pixel_of[v].first, g.pixel_of[v].second);
+    for (int c = 0; c < 3; ++c) {
+      const double err = std::abs(double(got[c]) - expected[v][c]) / std::max(double(expected[v][c]), 0.1 * scale);
+      worst = std::max(worst, err);
+      EXPECT_LE(err, kVertexTolerance) << what << ": vertex " << v << " channel " << c << ": GPU " << got[c]
+                                       << ", CPU " << expected[v][c];
+    }
+  }
+  EXPECT_EQ(checked, 25) << what;
+  ::testing::Test::RecordProperty("worst_relative_error_" + what, std::to_string(worst));
+}
+
 void check_vertices_match_relight(TransferMode mode, bool colored, int bands) {
   REQUIRE_RENDERER(r);
   const CameraGrid g = camera_grid(colored);
@@ -138,31 +165,9 @@ void check_vertices_match_relight(TransferMode mode, bool colored, int bands) {
   const Transfer t = compute_transfer(g.mesh, o);
   ASSERT_EQ(t.channels, colored ? 3 : 1);
   const std::vector<glm::dvec3> light = project(latlong_of(smooth_env, 128, 64), bands);
-  const std::vector<glm::vec3> expected = relight(t, light);
-
   r->set_mesh(g.mesh, t);
   r->set_lighting(light);
-  const Image img = r->render(g.camera, g.size, g.size);
-  ASSERT_EQ(img.width, g.size);
-  ASSERT_EQ(img.rgb.size(), std::size_t(g.size) * g.size * 3);
-  double scale = 0;
-  for (const auto& e : expected) scale = std::max({scale, double(e.x), double(e.y), double(e.z)});
-  ASSERT_GT(scale, 0.1);
-  double worst = 0;
-  int checked = 0;
-  for (std::size_t v = 0; v < expected.size(); ++v) {
-    if (g.pixel_of[v].first < 0) continue;
-    ++checked;
-    const glm::vec3 got = img.at(g.pixel_of[v].first, g.pixel_of[v].second);
-    for (int c = 0; c < 3; ++c) {
-      const double err = std::abs(double(got[c]) - expected[v][c]) / std::max(double(expected[v][c]), 0.1 * scale);
-      worst = std::max(worst, err);
-      EXPECT_LE(err, kVertexTolerance) << "vertex " << v << " channel " << c << ": GPU " << got[c] << ", relight "
-                                       << expected[v][c];
-    }
-  }
-  EXPECT_EQ(checked, 25);
-  ::testing::Test::RecordProperty("worst_relative_error", std::to_string(worst));
+  expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, light), "relight");
 }
 
 TEST(Render, PixelsAtVerticesEqualRelightRgbUnshadowed) {
@@ -271,6 +276,121 @@ TEST(Render, ClearErrors) {
   EXPECT_NO_THROW(r->render(cam, 16, 16));
 }
 
+// Every shading mode, at the vertices, against its CPU definition: the
+// file's transfer and its direct part (relight, relight_direct), the analytic
+// unshadowed transfer (compute_transfer's), plain Lambert (= unshadowed at 3
+// bands), band truncation (= lighting with the higher bands zeroed), AO, bent
+// normals and uploaded vertex colours.
+void check_shading_modes(bool colored) {
+  REQUIRE_RENDERER(r);
+  const CameraGrid g = camera_grid(colored);
+  TransferOptions o;
+  o.mode = TransferMode::Interreflected;
+  o.bounces = 1;
+  o.bands = 4;
+  o.samples = 128;
+  o.vertex_colors = colored;
+  o.albedo = glm::vec3(0.8f);
+  const Transfer t = compute_transfer(g.mesh, o);
+  ASSERT_FALSE(t.direct.empty());
+  const std::vector<glm::dvec3> light = project(latlong_of(smooth_env, 128, 64), o.bands);
+  r->set_mesh(g.mesh, t);
+  r->set_lighting(light);
+  auto shade = [&](Shading s) {
+    r->set_shading(s);
+    EXPECT_EQ(r->shading(), s);
+    return r->render(g.camera, g.size, g.size);
+  };
+  expect_pixels_at_vertices(shade(Shading::Transfer), g, relight(t, light), "transfer");
+  expect_pixels_at_vertices(shade(Shading::Direct), g, relight_direct(t, light), "direct");
+
+  TransferOptions u = o;
+  u.mode = TransferMode::Unshadowed;
+  expect_pixels_at_vertices(shade(Shading::Unshadowed), g, relight(compute_transfer(g.mesh, u), light), "unshadowed");
+  u.bands = 3;
+  expect_pixels_at_vertices(shade(Shading::Lambert), g, relight(compute_transfer(g.mesh, u), light), "lambert");
+
+  r->set_shading(Shading::Transfer);
+  r->set_band_limit(2);
+  EXPECT_EQ(r->band_limit(), 2);
+  std::vector<glm::dvec3> truncated = light;
+  std::fill(truncated.begin() + 4, truncated.end(), glm::dvec3(0.0));
+  expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, truncated), "band_limit_2");
+  r->set_band_limit(4);
+
+  std::vector<glm::vec3> ao(t.vertices), bent(t.vertices), colors(t.vertices);
+  for (std::size_t v = 0; v < t.vertices; ++v) {
+    ao[v] = glm::vec3(t.ao[v]);
+    bent[v] = 0.5f + 0.5f * t.bent_normals[v];
+    colors[v] = glm::vec3(0.1f + 0.01f * float(v), 2.0f, 0.5f);
+  }
+  expect_pixels_at_vertices(shade(Shading::AmbientOcclusion), g, ao, "ao");
+  expect_pixels_at_vertices(shade(Shading::BentNormal), g, bent, "bent");
+  r->set_vertex_colors(colors);
+  expect_pixels_at_vertices(shade(Shading::VertexColors), g, colors, "colors");
+}
+
+TEST(Render, ShadingModesGrey) { check_shading_modes(false); }
+TEST(Render, ShadingModesVertexColoured) { check_shading_modes(true); }
+
+TEST(Render, UnavailableModesAreRefused) {
+  REQUIRE_RENDERER(r);
+  EXPECT_FALSE(r->has_shading(Shading::Transfer));  // no mesh
+  const Mesh a = test::quad(3);
+  TransferOptions o;
+  o.mode = TransferMode::Unshadowed;
+  o.bands = 3;
+  r->set_mesh(a, compute_transfer(a, o));
+  EXPECT_TRUE(r->has_shading(Shading::Lambert));
+  EXPECT_FALSE(r->has_shading(Shading::Direct));  // not interreflected
+  EXPECT_THROW(r->set_shading(Shading::Direct), Error);
+  EXPECT_THROW(r->set_shading(Shading::VertexColors), Error);  // none set yet
+  EXPECT_THROW(r->set_band_limit(0), Error);
+  EXPECT_THROW(r->set_band_limit(4), Error);
+  EXPECT_THROW(r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count() + 1)), Error);
+  r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count(), glm::vec3(1.0f)));
+  EXPECT_NO_THROW(r->set_shading(Shading::VertexColors));
+  EXPECT_NO_THROW(r->render(default_camera(a), 8, 8));  // vertex colours need no lighting
+  EXPECT_EQ(parse_shading("lambert"), Shading::Lambert);
+  EXPECT_THROW(parse_shading("phong"), Error);
+  EXPECT_EQ(parse_tone_map("aces"), ToneMap::Aces);
+  EXPECT_THROW(parse_tone_map("filmic"), Error);
+}
+
+// The GPU display pass (exposure, tone map) equals the CPU tone_map of the
+// linear frame, pixel by pixel, for every operator; the frame holds values
+// from 0 to well above 1 (a bright background). 2e-6: float rounding of the
+// same formula on both sides (values are in [0, 1]).
+TEST(Render, DisplayPassEqualsCpuToneMap) {
+  REQUIRE_RENDERER(r);
+  constexpr double kToneTolerance = 2e-6;
+  const Mesh mesh = test::sphere(8, 16);
+  TransferOptions o;
+  o.mode = TransferMode::Unshadowed;
+  o.bands = 3;
+  r->set_mesh(mesh, compute_transfer(mesh, o));
+  const EnvMap env = latlong_of([](const glm::dvec3& d) { return 3.0 * smooth_env(d); }, 64, 32);
+  r->set_environment(env);
+  r->set_lighting(project(env, 3));
+  const Camera cam = default_camera(mesh, 70);
+  const Image linear = r->render(cam, 40, 30);
+  float top = 0;
+  for (float v : linear.rgb) top = std::max(top, v);
+  EXPECT_GT(top, 2.0f);
+  for (ToneMap op : {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces}) {
+    const Display d{0.7, op};
+    const Image shown = r->render(cam, 40, 30, &d);
+    std::vector<float> expected = linear.rgb;
+    tone_map(expected, d);
+    double worst = 0;
+    for (std::size_t i = 0; i < expected.size(); ++i) worst = std::max(worst, double(std::abs(shown.rgb[i] - expected[i])));
+    EXPECT_LE(worst, kToneTolerance) << tone_map_name(op);
+  }
+  EXPECT_FLOAT_EQ(tone_map(1.0f, {1.0, ToneMap::Reinhard}), 2.0f / 3.0f);
+  EXPECT_FLOAT_EQ(tone_map(-1.0f, {0.0, ToneMap::Aces}), 0.0f);
+  EXPECT_FLOAT_EQ(tone_map(5.0f, {0.0, ToneMap::Clamp}), 1.0f);
+}
+
 // ---- prt render ------------------------------------------------------------
 
 
@@ -281,8 +401,8 @@ class RenderCli : public ::testing::Test {
     if (!try_renderer(why)) GTEST_SKIP() << "headless rendering unavailable: " << why;
     test::write_off(dir.file("ball.off"), test::sphere(10, 20));
     test::write_off(dir.file("plane.off"), test::quad(4));
-    const EnvMap env = latlong_of(smooth_env, 64, 32);
-    write_image(dir.file("env.exr"), env.width, env.height, env.rgb);
+    const EnvMap map = latlong_of(smooth_env, 64, 32);
+    write_image(env, map.width, map.height, map.rgb);
     for (const char* m : {"ball", "plane"}) {
       const auto res = test::run_prt(dir, {"precompute", dir.file(std::string(m) + ".off"), "-o",
                                            dir.file(std::string(m) + ".prt"), "-m", "unshadowed", "-b", "3", "-q"});
@@ -290,6 +410,12 @@ class RenderCli : public ::testing::Test {
     }
   }
   test::TempDir dir;
+  const std::string mesh = dir.file("ball.off"), prt = dir.file("ball.prt"), env = dir.file("env.exr");
+  test::Result render(const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"render"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return test::run_prt(dir, args);
+  }
 };
 
 TEST_F(RenderCli, WritesLinearExr) {
@@ -318,12 +444,6 @@ TEST_F(RenderCli, FramesGetNumberedNames) {
 }
 
 TEST_F(RenderCli, BadInputs) {
-  auto render = [&](std::vector<std::string> extra) {
-    std::vector<std::string> args = {"render"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    return test::run_prt(dir, args);
-  };
-  const std::string mesh = dir.file("ball.off"), prt = dir.file("ball.prt"), env = dir.file("env.exr");
   auto r1 = render({mesh, dir.file("plane.prt"), env, "-o", dir.file("a.exr")});
   EXPECT_NE(r1.code, 0);
   EXPECT_NE(r1.err.find("plane.prt"), std::string::npos) << r1.err;
@@ -341,6 +461,29 @@ TEST_F(RenderCli, BadInputs) {
   EXPECT_NE(r5.code, 0);
   EXPECT_FALSE(std::filesystem::exists(dir.file("a.exr")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.exr")));
+  // Look options: a mode the file cannot show, too many bands, unknown names.
+  auto r6 = render({mesh, prt, env, "-o", dir.file("f.exr"), "--shading", "direct"});
+  EXPECT_EQ(r6.code, 1);
+  EXPECT_NE(r6.err.find("not interreflected"), std::string::npos) << r6.err;
+  auto r7 = render({mesh, prt, env, "-o", dir.file("g.exr"), "--bands", "9"});
+  EXPECT_NE(r7.code, 0);
+  EXPECT_NE(r7.err.find("--bands"), std::string::npos) << r7.err;
+  auto r8 = render({mesh, prt, env, "-o", dir.file("h.png"), "--tonemap", "filmic"});
+  EXPECT_EQ(r8.code, 1);
+  EXPECT_NE(r8.err.find("--tonemap"), std::string::npos) << r8.err;
+  for (const char* f : {"f.exr", "g.exr", "h.png"}) EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
+}
+
+// --exposure scales EXR output linearly (no tone map on float output).
+TEST_F(RenderCli, LookOptionsOnExr) {
+  // 2:1 images: read back with load_envmap, which takes lat-long shapes only.
+  auto base = render({mesh, prt, env, "-o", dir.file("a.exr"), "--width", "32", "--height", "16"});
+  ASSERT_EQ(base.code, 0) << test::describe_run(base);
+  auto bright = render({mesh, prt, env, "-o", dir.file("b.exr"), "--width", "32", "--height", "16", "--exposure", "1"});
+  ASSERT_EQ(bright.code, 0) << test::describe_run(bright);
+  const EnvMap a = load_envmap(dir.file("a.exr"), Mapping::LatLong), b = load_envmap(dir.file("b.exr"), Mapping::LatLong);
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) EXPECT_FLOAT_EQ(b.rgb[i], 2 * a.rgb[i]) << i;
 }
 
 }  // namespace

@@ -80,13 +80,17 @@ class ViewCli : public ::testing::Test {
   }
   test::TempDir dir;
   std::string mesh, prt, env;
+  void check_screenshot_matches_render(const std::vector<std::string>& look);
 };
 
 // 256x128: the images are read back with load_envmap, which takes 2:1 lat-long shapes only.
 constexpr int kW = 256, kH = 128;
 
-TEST_F(ViewCli, ScreenshotMatchesRender) {
-  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+// The window's screenshot after a few frames equals prt render's PNG, both
+// with the options `look` (shading, exposure, tone map, ...).
+void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& look) {
+  std::string look_args;
+  for (const auto& s : look) look_args.append(1, ' ').append(test::shell_quote(s));
   const std::string shot = dir.file("view.png"), ref = dir.file("render.png");
   const std::string err = (dir.io() / "view_err.txt").string();
   // Under the sanitizer build, Mesa's GLX driver (dlclosed at exit) shows its
@@ -95,7 +99,7 @@ TEST_F(ViewCli, ScreenshotMatchesRender) {
   const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
                           "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
                           test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
-                          " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --screenshot " + test::shell_quote(shot) +
+                          " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --screenshot " + test::shell_quote(shot) + look_args +
                           " </dev/null >/dev/null 2>" + test::shell_quote(err);
   const int status = std::system(cmd.c_str());
   const std::string view_err = test::read_file(err);
@@ -105,8 +109,10 @@ TEST_F(ViewCli, ScreenshotMatchesRender) {
   ASSERT_EQ(code, 0) << view_err;
   EXPECT_NE(view_err.find("Controls:"), std::string::npos) << view_err;
 
-  const auto res = test::run_prt(dir, {"render", mesh, prt, env, "-o", ref, "--width", std::to_string(kW), "--height",
-                                       std::to_string(kH), "-q"});
+  std::vector<std::string> render_args = {"render", mesh, prt, env, "-o", ref, "--width", std::to_string(kW),
+                                          "--height", std::to_string(kH), "-q"};
+  render_args.insert(render_args.end(), look.begin(), look.end());
+  const auto res = test::run_prt(dir, render_args);
   if (res.code != 0 && res.err.find("no OpenGL 4.5 context") != std::string::npos)
     GTEST_SKIP() << "headless rendering unavailable: " << res.err;
   ASSERT_EQ(res.code, 0) << test::describe_run(res);
@@ -144,6 +150,17 @@ TEST_F(ViewCli, ScreenshotMatchesRender) {
   std::printf("screenshot vs prt render: max %d codes away from edges, %d pixels over %d\n", interior_max, off,
               kMaxCodeDiff);
   EXPECT_LE(off, int(kEdgeFraction * kW * kH));
+}
+
+TEST_F(ViewCli, ScreenshotMatchesRender) {
+  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  check_screenshot_matches_render({});
+}
+
+// The window's display pass (exposure, tone map, sRGB) and a non-PRT mode.
+TEST_F(ViewCli, ScreenshotMatchesRenderWithLookOptions) {
+  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  check_screenshot_matches_render({"--shading", "lambert", "--exposure", "1.5", "--tonemap", "reinhard", "--window", "hanning"});
 }
 
 TEST_F(ViewCli, NoDisplayPointsToRender) {

@@ -37,12 +37,46 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace prt {
 
 // The most bands the renderer's lighting block holds (16^2 = 256 vec4s).
 inline constexpr int kMaxRenderBands = 16;
+
+// What the mesh shows (prt view's M key, prt render --shading).
+enum class Shading {
+  Transfer,          // the file's transfer: shadowed, or interreflected (direct + bounces)
+  Direct,            // interreflected files only: their shadowed (0-bounce) part
+  Unshadowed,        // the analytic clamped-cosine transfer of each vertex normal, (albedo/pi) A_l Y_k(n),
+                     // at the file's band count (computed on the CPU when first selected)
+  Lambert,           // no PRT: plain diffuse, albedo/pi x the irradiance of the lighting's first 9
+                     // coefficients at the normal (Ramamoorthi & Hanrahan's quadratic form n^T M n)
+  AmbientOcclusion,  // grey: the file's per-vertex ambient occlusion (files that have it)
+  BentNormal,        // 0.5 + 0.5 x the file's bent normal as RGB (files that have it)
+  VertexColors,      // linear RGB per vertex from set_vertex_colors (CPU relighting, e.g. wavelets)
+};
+std::string_view shading_name(Shading s);  // "transfer", "direct", "unshadowed", "lambert", "ao", "bent", "colors"
+Shading parse_shading(std::string_view name);  // throws prt::Error listing the names
+
+// From linear HDR to display values in [0, 1] (then sRGB-encoded by the
+// window or by write_image): v = tone(2^exposure x linear), per channel.
+//   clamp:    min(v, 1)
+//   reinhard: v / (1 + v)
+//   aces:     Narkowicz's fit of the ACES filmic curve,
+//             v (2.51 v + 0.03) / (v (2.43 v + 0.59) + 0.14), clamped to [0, 1]
+// Negative values become 0 in every operator.
+enum class ToneMap { Clamp, Reinhard, Aces };
+std::string_view tone_map_name(ToneMap t);     // "clamp", "reinhard", "aces"
+ToneMap parse_tone_map(std::string_view name);  // throws prt::Error listing the names
+struct Display {
+  double exposure = 0;  // stops
+  ToneMap tone_map = ToneMap::Clamp;
+};
+// The CPU version of the display pass (the same formula as shaders/display.frag.glsl).
+float tone_map(float linear, const Display& display);
+void tone_map(std::vector<float>& rgb, const Display& display);
 
 // A perspective camera; the image's vertical field of view is fov_deg, the
 // horizontal one follows from the image's aspect ratio.
@@ -97,8 +131,27 @@ class Renderer {
   int bands() const;  // of the uploaded transfer; 0 without a mesh
 
   // The lighting of the next frames: RGB coefficients, at least bands()^2
-  // (extra ones are ignored). Only these bands()^2 vec4s go to the GPU.
+  // (extra ones are ignored). Only these bands()^2 vec4s go to the GPU (and
+  // for Lambert, three 4x4 matrices).
   void set_lighting(std::span<const glm::dvec3> coeffs);
+
+  // Shades with the first bands^2 coefficients only (1 <= bands <= bands();
+  // truncation, live: no re-upload). Reset to bands() by set_mesh.
+  void set_band_limit(int bands);
+  int band_limit() const;
+
+  // What the mesh shows (default Transfer; set_mesh resets it). has_shading
+  // says whether the uploaded mesh and transfer support a mode: Direct needs
+  // an interreflected transfer, AmbientOcclusion and BentNormal a file that
+  // has them, VertexColors a set_vertex_colors call. set_shading throws
+  // prt::Error for a mode the mesh does not support.
+  bool has_shading(Shading s) const;
+  void set_shading(Shading s);
+  Shading shading() const;
+  // Per-vertex linear RGB for Shading::VertexColors (one per mesh vertex);
+  // uploaded at once (the whole array crosses the bus: meant for per-frame
+  // CPU relighting).
+  void set_vertex_colors(std::span<const glm::vec3> colors);
 
   // Background: a lat-long or cube map (uploaded once as a float texture),
   // drawn behind the mesh with the rotation of set_environment_rotation.
@@ -108,15 +161,25 @@ class Renderer {
   void set_environment_rotation(const glm::dmat3& R);
 
   // Renders a frame; throws prt::Error for a zero or too large size, a
-  // degenerate camera, or a mesh without lighting.
-  Image render(const Camera& camera, int width, int height);
+  // degenerate camera, or a mesh without lighting. Linear HDR values, or with
+  // `display` the display values of the same frame (exposure and tone map
+  // applied on the GPU, in [0, 1], before sRGB encoding).
+  Image render(const Camera& camera, int width, int height, const Display* display = nullptr);
+  // Draws the frame and waits for the GPU, without reading it back (timing).
+  void draw_only(const Camera& camera, int width, int height);
 
-  // Draws the frame render() would draw (width x height) and blits it to the
-  // current context's default framebuffer, scaled to window_width x
-  // window_height. The caller swaps buffers. Returns true when the blit
-  // encodes sRGB (the default framebuffer is sRGB-capable), false when the
-  // window receives linear values.
-  bool present(const Camera& camera, int width, int height, int window_width, int window_height);
+  // Draws the frame render() would draw (width x height) and runs the
+  // display pass (exposure, tone map) into the current context's default
+  // framebuffer, scaled to window_width x window_height. The caller swaps
+  // buffers. The window receives sRGB-encoded values either way: by the
+  // framebuffer when it is sRGB-capable (returns true), else by the display
+  // shader (returns false).
+  bool present(const Camera& camera, int width, int height, int window_width, int window_height,
+               const Display& display = {});
+  // What present() left in the default framebuffer's back buffer (before the
+  // swap): width x height 8-bit sRGB codes, row 0 at the top, as the window
+  // shows them.
+  std::vector<unsigned char> read_presented(int width, int height);
 
  private:
   struct Impl;

@@ -1,6 +1,7 @@
 // prt render: headless OpenGL rendering of a precomputed mesh under an
 // environment map (prt::Renderer, EGL, no display needed).
 #include "commands.h"
+#include "look.h"
 #include "scene.h"
 
 #include <prt/envmap.h>
@@ -26,8 +27,9 @@ namespace {
 struct RenderArgs {
   std::string mesh, transfer, env, output, camera, rotate;
   int width = 512, height = 512, frames = 1;
-  double fov = 40, spin = 0, exposure = 0;
+  double fov = 40, spin = 0;
   bool frames_given = false, spin_given = false, quiet = false;
+  LookArgs look;
 };
 
 // "ex,ey,ez,tx,ty,tz,ux,uy,uz" -> nine doubles.
@@ -68,6 +70,7 @@ int run_render(const RenderArgs& a) {
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
+  const Look look = parse_look(a.look, t);
 
   Camera cam = default_camera(mesh, a.fov);
   if (!a.camera.empty()) parse_camera(a.camera, cam);
@@ -77,14 +80,15 @@ int run_render(const RenderArgs& a) {
   if (!a.quiet) fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(env), renderer.device());
   renderer.set_mesh(mesh, t);
   renderer.set_environment(env);
+  renderer.set_band_limit(look.bands);
+  renderer.set_shading(look.shading);
 
   // Project once; each frame only rotates the coefficients (no re-projection).
-  const std::vector<glm::dvec3> light = project(env, t.bands);
+  const std::vector<glm::dvec3> light = windowed_lighting(project(env, t.bands), look.bands, look.window);
   std::vector<glm::dvec3> rotated(light.size());
   const glm::dmat3 base = sh::rotation_from_euler(euler[0], euler[1], euler[2]);
   sh::Rotation rotation(t.bands, base);
   const double spin = a.spin_given ? a.spin : (a.frames > 1 ? 360.0 / a.frames : 0.0);
-  const double gain = std::exp2(a.exposure);
 
   double render_seconds = 0;
   for (int f = 0; f < a.frames; ++f) {
@@ -96,10 +100,8 @@ int run_render(const RenderArgs& a) {
     renderer.set_environment_rotation(R);
     Image img = renderer.render(cam, a.width, a.height);
     render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (gain != 1.0)
-      for (float& v : img.rgb) v = float(v * gain);
     const std::string path = a.frames_given ? frame_path(a.output, f) : a.output;
-    write_image(path, img.width, img.height, img.rgb);
+    write_frame(path, std::move(img), look.display);
     if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{})\n", path, img.width, img.height);
   }
   if (!a.quiet)
@@ -117,7 +119,8 @@ Run add_render(CLI::App& app) {
       "Per-vertex PRT shading on the GPU (OpenGL 4.5 through EGL, no display needed; Mesa llvmpipe works).\n"
       "The default camera looks from +Z at the centre of the mesh's bounding box and frames its bounding sphere.\n"
       "The environment is drawn as background; lighting and background turn together with --rotate/--spin.\n"
-      "EXR output keeps linear floats; PNG and other 8-bit formats get sRGB encoding.\n"
+      "EXR output keeps linear floats (times 2^exposure); PNG and other 8-bit formats get the tone map\n"
+      "(--tonemap, default clamp) and sRGB encoding.\n"
       "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
@@ -135,7 +138,7 @@ Run add_render(CLI::App& app) {
       ->each([a](const std::string&) { a->frames_given = true; });
   s->add_option("--spin", a->spin, "Degrees about +Y per frame (default 360 / frames)")
       ->each([a](const std::string&) { a->spin_given = true; });
-  s->add_option("--exposure", a->exposure, "Scale the image by 2^EXPOSURE before writing")->capture_default_str();
+  add_look_options(s, a->look);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_render(*a); };
 }

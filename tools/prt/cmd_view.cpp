@@ -1,9 +1,10 @@
 // prt view: an interactive GLFW window showing a precomputed mesh relit under
 // an environment map. The drawing is prt::Renderer's (the same shaders and
-// framebuffer as prt render), run in the window's OpenGL 4.5 core context
-// and blitted to the window; screenshots are the renderer's float frame read
-// back and written with write_image (sRGB-encoded PNG), like prt render.
+// framebuffer as prt render), run in the window's OpenGL 4.5 core context;
+// the display pass (exposure, tone map, sRGB) draws it into the window.
+// Screenshots are the window's own pixels, as shown.
 #include "commands.h"
+#include "look.h"
 #include "scene.h"
 
 #include <prt/envmap.h>
@@ -24,13 +25,16 @@
 #endif
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
+#include <vector>
 
 namespace prt::cli {
 
@@ -39,15 +43,51 @@ namespace {
 constexpr const char* kControls =
     "Controls: left-drag orbit the camera | scroll zoom | right-drag or shift+left-drag rotate the environment\n"
     "          (lighting and background together) | space toggle auto-rotate of the environment\n"
-    "          1/2/3 all bands / 3 bands (9 coefficients) / 2 bands (4 coefficients) | S screenshot\n"
-    "          R reset view | Esc or Q quit";
+    "          M / shift+M next / previous shading: transfer, direct (interreflected files), unshadowed,\n"
+    "            lambert (no PRT), ambient occlusion, bent normals (files that have them)\n"
+    "          0 all bands, 1-9 shade with that many bands (16 -> 9 -> 4 coefficients: 4, 3, 2)\n"
+    "          W cycle SH windowing: none, hanning, lanczos, auto\n"
+    "          E / shift+E exposure up / down half a stop | T cycle tone map: clamp, reinhard, aces\n"
+    "          N / P next / previous environment map (bundled maps and those beside ENV); drop a map file on\n"
+    "            the window to load it | S screenshot | H print these controls | R reset view | Esc or Q quit\n"
+    "          The title bar shows the frame time and the current settings.";
 
 struct ViewArgs {
   std::string mesh, transfer, env, screenshot, screenshot_dir = ".";
   int width = 800, height = 600, frames = 0;
   double fov = 40;
   bool quiet = false;
+  LookArgs look;
 };
+
+bool is_map_file(const std::filesystem::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+}
+
+// The maps N and P cycle through: the HDR maps beside ENV and the bundled
+// ones (the source tree's envmaps/, or $PRT_ENVMAPS), sorted, ENV included.
+std::vector<std::string> map_playlist(const std::string& env) {
+  std::set<std::filesystem::path> found;
+  auto add_dir = [&](const std::filesystem::path& dir) {
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+      if (e.is_regular_file(ec) && is_map_file(e.path()))
+        found.insert(std::filesystem::weakly_canonical(e.path(), ec));
+  };
+  const std::filesystem::path env_path = std::filesystem::absolute(env);
+  add_dir(env_path.parent_path());
+  if (const char* dir = std::getenv("PRT_ENVMAPS"); dir && *dir) add_dir(dir);
+#ifdef PRT_BUNDLED_ENVMAPS
+  add_dir(PRT_BUNDLED_ENVMAPS);
+#endif
+  std::error_code ec;
+  found.insert(std::filesystem::weakly_canonical(env_path, ec));
+  std::vector<std::string> list;
+  for (const auto& p : found) list.push_back(p.string());
+  return list;
+}
 
 #ifdef PRT_HAVE_GLFW
 
@@ -71,11 +111,35 @@ struct ViewState {
   // Environment: yaw about +Y, pitch about +X, plus the auto-rotate angle.
   double env_yaw = 0, env_pitch = 0, env_auto = 0;
   bool auto_rotate = false;
-  int band_key = 1;  // 1 all, 2 three bands, 3 two bands
+  int bands = 0;        // band limit; 0: all
+  int shading_step = 0;  // M presses (+1) and shift+M presses (-1)
+  int window = 0;        // index into kWindows
+  int map_step = 0;      // N (+1) and P (-1) presses not yet handled
+  std::string dropped;   // a map file dropped on the window, not yet loaded
+  double exposure = 0;
+  int tone = 0;          // index into kToneMaps
   bool dragging = false, env_dragging = false;
   double last_x = 0, last_y = 0;
   bool screenshot_requested = false;
 };
+
+constexpr sh::Window kWindows[] = {sh::Window::None, sh::Window::Hanning, sh::Window::Lanczos, sh::Window::Auto};
+constexpr ToneMap kToneMaps[] = {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces};
+constexpr Shading kShadings[] = {Shading::Transfer, Shading::Direct,           Shading::Unshadowed,
+                                 Shading::Lambert,  Shading::AmbientOcclusion, Shading::BentNormal};
+
+std::string shading_label(Shading s, const Transfer& t) {
+  switch (s) {
+    case Shading::Transfer: return std::string(transfer_mode_name(t.mode));
+    case Shading::Direct: return "shadowed (direct part)";
+    case Shading::Unshadowed: return "unshadowed";
+    case Shading::Lambert: return "plain Lambert (no PRT)";
+    case Shading::AmbientOcclusion: return "ambient occlusion";
+    case Shading::BentNormal: return "bent normals";
+    case Shading::VertexColors: return "vertex colours";
+  }
+  return "?";
+}
 
 std::string next_screenshot(const std::string& dir) {
   for (int i = 0; i < 10000; ++i) {
@@ -83,6 +147,18 @@ std::string next_screenshot(const std::string& dir) {
     if (!std::filesystem::exists(p)) return p.string();
   }
   throw Error("--screenshot-dir " + dir + ": prt_view_0000.png to prt_view_9999.png all exist");
+}
+
+// Saves the window's pixels (8-bit sRGB codes) so that an 8-bit file gets
+// the same codes back: the codes are decoded to the linear values write_image
+// encodes again.
+void save_window(const std::string& path, const std::vector<unsigned char>& codes, int w, int h) {
+  std::vector<float> rgb(codes.size());
+  for (std::size_t i = 0; i < codes.size(); ++i) {
+    const double v = codes[i] / 255.0;
+    rgb[i] = float(v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4));
+  }
+  write_image(path, w, h, rgb);
 }
 
 int run_view(const ViewArgs& a) {
@@ -95,7 +171,7 @@ int run_view(const ViewArgs& a) {
   const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view");
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
-  const EnvMap& env = scene.env;
+  const Look look = parse_look(a.look, t);
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -120,6 +196,10 @@ int run_view(const ViewArgs& a) {
   glfwSwapInterval(a.frames > 0 ? 0 : 1);
 
   ViewState st;
+  st.bands = look.bands;
+  st.exposure = look.display.exposure;
+  st.tone = int(std::find(std::begin(kToneMaps), std::end(kToneMaps), look.display.tone_map) - std::begin(kToneMaps));
+  st.window = int(std::find(std::begin(kWindows), std::end(kWindows), look.window) - std::begin(kWindows));
   // The renderer must go before the window (its objects live in the window's context).
   std::optional<Renderer> renderer_slot;
   renderer_slot.emplace(Renderer::use_current_context);
@@ -130,14 +210,37 @@ int run_view(const ViewArgs& a) {
   } release_first{renderer_slot};
 
   if (!a.quiet) {
-    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(env), renderer.device());
+    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(scene.env), renderer.device());
     fmt::print(stderr, "{}\n", kControls);
   }
   renderer.set_mesh(mesh, t);
-  renderer.set_environment(env);
+  renderer.set_environment(scene.env);
+  renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
+  int shading_index = int(std::find(std::begin(kShadings), std::end(kShadings), look.shading) - std::begin(kShadings));
 
-  const std::vector<glm::dvec3> light = project(env, t.bands);
-  std::vector<glm::dvec3> rotated(light.size());
+  // The environment: projected once per map; windowed once per band/window setting.
+  const std::vector<std::string> playlist = map_playlist(a.env);
+  std::size_t map_index = std::size_t(
+      std::find(playlist.begin(), playlist.end(),
+                std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
+      playlist.begin());
+  std::string map_name = std::filesystem::path(a.env).filename().string();
+  std::vector<glm::dvec3> projected = project(scene.env, t.bands), light;
+  int light_bands = -1, light_window = -1;
+  auto load_map = [&](const std::string& path) {
+    try {
+      EnvMap m = load_envmap(path);
+      require_finite(m);
+      projected = project(m, t.bands);
+      renderer.set_environment(m);
+      map_name = std::filesystem::path(path).filename().string();
+      light_bands = -1;  // re-window
+      if (!a.quiet) fmt::print(stderr, "{}\n", describe(m));
+    } catch (const Error& e) {
+      fmt::print(stderr, "prt view: cannot use {}: {} (keeping {})\n", path, e.what(), map_name);
+    }
+  };
+  std::vector<glm::dvec3> rotated(projected.size());
   sh::Rotation rotation(t.bands, glm::dmat3(1.0));
   const Camera base = default_camera(mesh, a.fov);
   const glm::dvec3 offset0 = base.eye - base.target;
@@ -172,32 +275,42 @@ int run_view(const ViewArgs& a) {
     auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
     s.zoom = std::clamp(s.zoom * std::pow(0.9, dy), 0.05, 20.0);
   });
-  glfwSetKeyCallback(window.get(), [](GLFWwindow* w, int key, int, int action, int) {
-    if (action != GLFW_PRESS) return;
+  glfwSetKeyCallback(window.get(), [](GLFWwindow* w, int key, int, int action, int mods) {
+    if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
     auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+    const bool shift = (mods & GLFW_MOD_SHIFT) != 0;
+    if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) {
+      s.bands = key - GLFW_KEY_0;  // 0: all; clamped to the file's bands by the frame loop
+      return;
+    }
     switch (key) {
       case GLFW_KEY_ESCAPE:
       case GLFW_KEY_Q: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
       case GLFW_KEY_SPACE: s.auto_rotate = !s.auto_rotate; break;
       case GLFW_KEY_S: s.screenshot_requested = true; break;
-      case GLFW_KEY_1: s.band_key = 1; break;
-      case GLFW_KEY_2: s.band_key = 2; break;
-      case GLFW_KEY_3: s.band_key = 3; break;
-      case GLFW_KEY_R: {
-        const bool ar = s.auto_rotate;
-        s = ViewState{};
-        s.auto_rotate = ar;
+      case GLFW_KEY_M: s.shading_step += shift ? -1 : 1; break;
+      case GLFW_KEY_W: s.window = (s.window + 1) % int(std::size(kWindows)); break;
+      case GLFW_KEY_T: s.tone = (s.tone + 1) % int(std::size(kToneMaps)); break;
+      case GLFW_KEY_E: s.exposure = std::clamp(s.exposure + (shift ? -0.5 : 0.5), -20.0, 20.0); break;
+      case GLFW_KEY_N: ++s.map_step; break;
+      case GLFW_KEY_P: --s.map_step; break;
+      case GLFW_KEY_H: fmt::print(stderr, "{}\n", kControls); break;
+      case GLFW_KEY_R:  // the view; the look (bands, shading, exposure, ...) stays
+        s.yaw = s.pitch = s.env_yaw = s.env_pitch = s.env_auto = 0;
+        s.zoom = 1;
         break;
-      }
       default: break;
     }
+  });
+  glfwSetDropCallback(window.get(), [](GLFWwindow* w, int count, const char** paths) {
+    auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+    if (count > 0) s.dropped = paths[0];
   });
 
   using Clock = std::chrono::steady_clock;
   auto last = Clock::now(), title_time = last;
   double frame_ms = 0;
   int frame = 0, title_frames = 0;
-  bool reported_encoding = false;
   while (!glfwWindowShouldClose(window.get())) {
     const auto now = Clock::now();
     const double dt = std::chrono::duration<double>(now - last).count();
@@ -210,30 +323,49 @@ int run_view(const ViewArgs& a) {
     cam.eye = base.target + orbit * offset0 * st.zoom;
     cam.up = orbit * base.up;
 
+    // Settings changed by keys since the last frame.
+    if (!st.dropped.empty()) {
+      load_map(st.dropped);
+      st.dropped.clear();
+    }
+    if (st.map_step != 0 && !playlist.empty()) {
+      const auto n = std::ptrdiff_t(playlist.size());
+      map_index = std::size_t(((std::ptrdiff_t(map_index) + st.map_step) % n + n) % n);
+      st.map_step = 0;
+      load_map(playlist[map_index]);
+    }
+    for (; st.shading_step != 0; st.shading_step += st.shading_step > 0 ? -1 : 1) {
+      const int n = int(std::size(kShadings)), dir = st.shading_step > 0 ? 1 : -1;
+      do shading_index = ((shading_index + dir) % n + n) % n;
+      while (!renderer.has_shading(kShadings[shading_index]));
+      renderer.set_shading(kShadings[shading_index]);
+    }
+    const int keep_bands = st.bands == 0 ? t.bands : std::min(t.bands, st.bands);
+    if (keep_bands != light_bands || st.window != light_window) {
+      light = windowed_lighting(projected, keep_bands, kWindows[st.window]);
+      renderer.set_band_limit(keep_bands);
+      light_bands = keep_bands;
+      light_window = st.window;
+    }
+    const Display shown{st.exposure, kToneMaps[st.tone]};
+
     const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, glm::radians(st.env_yaw + st.env_auto)) *
                          sh::rotation_axis_angle({1, 0, 0}, glm::radians(st.env_pitch));
     rotation.set(R);
     rotation.apply(light, rotated);
-    const int keep_bands = st.band_key == 1 ? t.bands : std::min(t.bands, st.band_key == 2 ? 3 : 2);
-    std::fill(rotated.begin() + std::ptrdiff_t(keep_bands) * keep_bands, rotated.end(), glm::dvec3(0.0));
     renderer.set_lighting(rotated);
     renderer.set_environment_rotation(R);
 
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window.get(), &fw, &fh);
     if (fw > 0 && fh > 0) {
-      const bool srgb = renderer.present(cam, fw, fh, fw, fh);
-      if (!reported_encoding && !a.quiet) {
-        if (!srgb) fmt::print(stderr, "note: the window is not sRGB-capable; it shows linear values (screenshots are sRGB)\n");
-        reported_encoding = true;
-      }
+      renderer.present(cam, fw, fh, fw, fh, shown);
       ++frame;
       const bool last_scripted = a.frames > 0 && frame >= a.frames;
       if (st.screenshot_requested || last_scripted) {
-        const Image img = renderer.render(cam, fw, fh);
         const std::string path = last_scripted ? a.screenshot : next_screenshot(a.screenshot_dir);
-        write_image(path, img.width, img.height, img.rgb);
-        if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{})\n", path, img.width, img.height);
+        save_window(path, renderer.read_presented(fw, fh), fw, fh);
+        if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{})\n", path, fw, fh);
         st.screenshot_requested = false;
       }
       glfwSwapBuffers(window.get());
@@ -245,9 +377,14 @@ int run_view(const ViewArgs& a) {
       const double fps = title_frames / std::chrono::duration<double>(Clock::now() - title_time).count();
       title_time = Clock::now();
       title_frames = 0;
-      glfwSetWindowTitle(window.get(), fmt::format("prt view - {:.2f} ms/frame ({:.0f} fps) - {} bands{}",
-                                                   frame_ms, fps, keep_bands, st.auto_rotate ? " - auto-rotate" : "")
-                                           .c_str());
+      const sh::Window wk = kWindows[st.window];
+      glfwSetWindowTitle(
+          window.get(),
+          fmt::format("prt view - {:.2f} ms/frame ({:.0f} fps) - {} - {} bands{} - {} - exposure {:+.1f}, {}{}",
+                      frame_ms, fps, shading_label(kShadings[shading_index], t), keep_bands,
+                      wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)), map_name,
+                      st.exposure, tone_map_name(kToneMaps[st.tone]), st.auto_rotate ? " - auto-rotate" : "")
+              .c_str());
     }
     glfwPollEvents();
   }
@@ -270,7 +407,8 @@ Run add_view(CLI::App& app) {
   s->footer(std::string("Same renderer as prt render, in a GLFW window (OpenGL 4.5 core; needs a display;\n"
                         "without one it exits 1: use prt render, or xvfb-run).\n") +
             kControls +
-            "\nScreenshots (S) are prt_view_NNNN.png in --screenshot-dir, sRGB-encoded like prt render's PNGs.\n"
+            "\nScreenshots (S) are the window's pixels as shown (8-bit sRGB, the same codes as prt render's PNG with\n"
+            "the same options), saved as prt_view_NNNN.png in --screenshot-dir.\n"
             "Scripted: --frames N --screenshot FILE renders N frames, saves FILE and exits 0.\n"
             "Example: prt view bunny.off bunny.prt envmaps/forest.exr");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
@@ -284,6 +422,7 @@ Run add_view(CLI::App& app) {
       ->check(int_range(1, 1000000));
   s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)");
   s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")->capture_default_str();
+  add_look_options(s, a->look);
   s->add_flag("-q,--quiet", a->quiet, "No summary and controls on stderr");
   return [a] { return run_view(*a); };
 }

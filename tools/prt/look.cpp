@@ -1,0 +1,66 @@
+#include "look.h"
+
+#include "commands.h"
+
+#include <prt/envmap.h>
+#include <prt/error.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+
+namespace prt::cli {
+
+void add_look_options(CLI::App* s, LookArgs& a) {
+  s->add_option("--shading", a.shading,
+                "transfer (the file's), direct (shadowed part of an interreflected file), unshadowed, lambert "
+                "(no PRT), ao, bent")
+      ->capture_default_str();
+  s->add_option("--bands", a.bands, "Shade with the first N bands only (0: all of the file's)")
+      ->check(int_range(0, kMaxRenderBands));
+  s->add_option("--window", a.window, "SH window against ringing: none, hanning, lanczos, auto")
+      ->capture_default_str();
+  s->add_option("--exposure", a.exposure, "Scale radiance by 2^EXPOSURE for display")->capture_default_str();
+  s->add_option("--tonemap", a.tone_map, "8-bit output and the window: clamp, reinhard, aces")
+      ->capture_default_str();
+}
+
+Look parse_look(const LookArgs& a, const Transfer& t) {
+  Look look;
+  look.shading = for_option("--shading", [&] { return parse_shading(a.shading); });
+  if (look.shading == Shading::VertexColors)
+    throw Error("--shading: colors is for callers that upload their own vertex colours");
+  if (a.bands > t.bands)
+    throw Error("--bands " + std::to_string(a.bands) + ": the transfer has " + std::to_string(t.bands) + " bands");
+  look.bands = a.bands == 0 ? t.bands : a.bands;
+  look.window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  if (!std::isfinite(a.exposure) || std::abs(a.exposure) > 64)
+    throw Error("--exposure: expected stops in [-64, 64], got " + std::to_string(a.exposure));
+  look.display.exposure = a.exposure;
+  look.display.tone_map = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
+  return look;
+}
+
+std::vector<glm::dvec3> windowed_lighting(std::vector<glm::dvec3> light, int bands, sh::Window window) {
+  const std::size_t n = std::min(light.size(), std::size_t(bands) * bands);
+  std::fill(light.begin() + std::ptrdiff_t(n), light.end(), glm::dvec3(0.0));
+  if (window != sh::Window::None) sh::apply_window(std::span(light.data(), n), window, bands + 1.0);
+  return light;
+}
+
+void write_frame(const std::string& path, Image img, const Display& d) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  const bool linear = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff";
+  if (linear) {
+    const float gain = float(std::exp2(d.exposure));
+    if (gain != 1.0f)
+      for (float& v : img.rgb) v *= gain;
+  } else {
+    tone_map(img.rgb, d);
+  }
+  write_image(path, img.width, img.height, img.rgb);
+}
+
+}  // namespace prt::cli
