@@ -113,6 +113,18 @@ int main(int argc, char** argv) {
                   (b1 - bounce) / prt);
     }
   }
+  for (const char* size : {"512", "64"})
+    for (const char* coeffs : {"3", "4", "5"}) {
+      const std::string prt_key = std::string("BM_Frame/") + coeffs + "/" + size,
+                        lambert = std::string("BM_Frame/0/") + size;
+      const double p = rep.seconds(prt_key), l = rep.seconds(lambert);
+      if (p > 0 && l > 0)
+        std::printf("frame %sx%s, PRT %d coefficients RGB: %.3f ms vs plain Lambert %.3f ms: %.2f x (target <= 1.5: %s)\n",
+                    size, size, std::stoi(coeffs) * std::stoi(coeffs), p * 1e3, l * 1e3, p / l,
+                    p / l <= 1.5 ? "met" : "NOT met");
+    }
+  budget(rep, "CPU work per frame (rotate + apply + upload), 9 bands", "BM_CpuFrameWork/9", 100);
+  budget(rep, "CPU work per frame (rotate + apply + upload), 16 bands", "BM_CpuFrameWork/16", 1000);
   budget(rep, "rotation build, 9 bands", "BM_RotationBuild/9", 10);
   budget(rep, "rotation build, 32 bands", "BM_RotationBuild/32", 1000);
   budget(rep, "per-frame build + apply RGB, 9 bands", "BM_RotationFrameRGB/9", 100);

@@ -23,6 +23,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <string>
 #include <utility>
 
@@ -209,18 +210,32 @@ Camera default_camera(const Mesh& mesh, double fov_deg) {
   return cam;
 }
 
+namespace {
+
+// A transfer array on the GPU: a buffer and its RGBA32F buffer texture
+// (shaders/mesh.vert.glsl).
+struct TransferArray {
+  GLuint buffer = 0, texture = 0;
+  int channels = 0;
+  explicit operator bool() const { return buffer != 0; }
+};
+
+}  // namespace
+
 struct Renderer::Impl {
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
   bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
-  GLuint mesh_program = 0, background_program = 0, display_program = 0;
+  GLuint background_program = 0, display_program = 0;
+  std::map<std::array<int, 3>, GLuint> mesh_programs;  // by (coeffs, vec4s, channels); compiled when first used
   std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
   GLuint vao = 0, attribute_vao = 0, empty_vao = 0;
   GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
-  // Transfer arrays by Shading: the file's, its direct part, the analytic unshadowed one (made when first used).
-  GLuint transfer_buffer = 0, direct_buffer = 0, unshadowed_buffer = 0;
-  int unshadowed_channels = 0;
+  // Transfer arrays by Shading: the file's, its direct part, the analytic
+  // unshadowed one (made when first used).
+  TransferArray transfer, direct, unshadowed;
+  std::vector<float> light;  // bands^2 vec4s as uploaded before truncation
   // Per-vertex attributes: normals, per-vertex albedo (vertex-coloured transfers), AO, bent normals, colours.
   GLuint normal_buffer = 0, albedo_buffer = 0, ao_buffer = 0, bent_buffer = 0, color_buffer = 0;
   GLuint latlong_texture = 0, cube_texture = 0;
@@ -255,6 +270,8 @@ struct Renderer::Impl {
   void draw_mesh(const glm::mat4& view_proj);
   void display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb);
   GLuint attribute_program(int mode);
+  GLuint mesh_program(int coeffs, int vec4s, int channels);
+  void upload_lighting();
   void make_unshadowed();
   void destroy();
   void delete_mesh_objects();
@@ -330,7 +347,6 @@ void Renderer::Impl::check_version(const char* how) {
 }
 
 void Renderer::Impl::create_objects() {
-  mesh_program = link(shaders::mesh_vert_glsl, shaders::mesh_frag_glsl, "mesh");
   background_program = link(shaders::background_vert_glsl, shaders::background_frag_glsl, "background");
   display_program = link(shaders::background_vert_glsl, shaders::display_frag_glsl, "display");
   glCreateVertexArrays(1, &vao);
@@ -341,6 +357,15 @@ void Renderer::Impl::create_objects() {
   glCreateFramebuffers(1, &fbo);
   glCreateFramebuffers(1, &display_fbo);
   check_gl("creating the renderer's objects");
+}
+
+GLuint Renderer::Impl::mesh_program(int coeffs, int vec4s, int ch) {
+  GLuint& p = mesh_programs[{coeffs, vec4s, ch}];
+  if (!p)
+    p = link(shaders::mesh_vert_glsl, shaders::mesh_frag_glsl, "mesh",
+             "#define COEFFS " + std::to_string(coeffs) + "\n#define VEC4S " + std::to_string(vec4s) +
+                 "\n#define CHANNELS " + std::to_string(ch) + "\n");
+  return p;
 }
 
 GLuint Renderer::Impl::attribute_program(int mode) {
@@ -375,10 +400,13 @@ void Renderer::Impl::resize(int w, int h) {
 }
 
 void Renderer::Impl::delete_mesh_objects() {
-  const GLuint buffers[] = {position_buffer, index_buffer, transfer_buffer, direct_buffer, unshadowed_buffer,
-                            normal_buffer,   albedo_buffer, ao_buffer,      bent_buffer,   color_buffer};
+  const GLuint buffers[] = {position_buffer,    index_buffer,  transfer.buffer, direct.buffer, unshadowed.buffer,
+                            normal_buffer,      albedo_buffer, ao_buffer,       bent_buffer,   color_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
-  position_buffer = index_buffer = transfer_buffer = direct_buffer = unshadowed_buffer = 0;
+  const GLuint textures[] = {transfer.texture, direct.texture, unshadowed.texture};
+  glDeleteTextures(GLsizei(std::size(textures)), textures);
+  transfer = direct = unshadowed = TransferArray{};
+  position_buffer = index_buffer = 0;
   normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = 0;
 }
 
@@ -395,7 +423,7 @@ void Renderer::Impl::destroy() {
     glDeleteFramebuffers(2, fbos);
     const GLuint vaos[] = {vao, attribute_vao, empty_vao};
     glDeleteVertexArrays(3, vaos);
-    glDeleteProgram(mesh_program);
+    for (const auto& [key, p] : mesh_programs) glDeleteProgram(p);
     glDeleteProgram(background_program);
     glDeleteProgram(display_program);
     for (GLuint p : attribute_programs) glDeleteProgram(p);
@@ -450,11 +478,40 @@ int Renderer::bands() const { return impl_->bands; }
 
 namespace {
 
+// A transfer array as the shader's buffer texture wants it: each vertex's
+// channels padded with zeros to a multiple of 4 coefficients.
+std::vector<float> padded_transfer(const float* t, std::size_t vertices, int channels, int stride) {
+  const int padded = (stride + 3) / 4 * 4;
+  std::vector<float> out(vertices * std::size_t(channels) * std::size_t(padded), 0.0f);
+  for (std::size_t run = 0; run < vertices * std::size_t(channels); ++run)
+    std::copy_n(t + run * std::size_t(stride), stride, out.begin() + std::ptrdiff_t(run * std::size_t(padded)));
+  return out;
+}
+
 GLuint make_buffer(const void* data, std::size_t bytes, GLbitfield flags = 0) {
   GLuint b = 0;
   glCreateBuffers(1, &b);
   glNamedBufferStorage(b, GLsizeiptr(std::max<std::size_t>(bytes, 4)), bytes ? data : nullptr, flags);
   return b;
+}
+
+// Uploads a transfer array ([vertex][channel][k], k < stride) padded for the
+// shader, with its buffer texture. Throws when it exceeds the buffer texture
+// limit of the implementation.
+TransferArray make_transfer_array(const float* t, std::size_t vertices, int channels, int stride) {
+  const std::vector<float> padded = padded_transfer(t, vertices, channels, stride);
+  GLint max_texels = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  if (padded.size() / 4 > std::size_t(max_texels))
+    throw Error("transfer of " + std::to_string(vertices) + " vertices x " + std::to_string(channels) +
+                " channels x " + std::to_string(stride) + " coefficients exceeds this OpenGL's buffer texture limit (" +
+                std::to_string(max_texels) + " texels of 4 floats)");
+  TransferArray a;
+  a.buffer = make_buffer(padded.data(), padded.size() * sizeof(float));
+  glCreateTextures(GL_TEXTURE_BUFFER, 1, &a.texture);
+  glTextureBuffer(a.texture, GL_RGBA32F, a.buffer);
+  a.channels = channels;
+  return a;
 }
 
 }  // namespace
@@ -486,8 +543,9 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   clear_mesh();
   m.position_buffer = make_buffer(mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
   m.index_buffer = make_buffer(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
-  m.transfer_buffer = make_buffer(t.coeffs.data(), t.coeffs.size() * sizeof(float));
-  if (!t.direct.empty()) m.direct_buffer = make_buffer(t.direct.data(), t.direct.size() * sizeof(float));
+  const int stride = t.bands * t.bands;
+  m.transfer = make_transfer_array(t.coeffs.data(), t.vertices, t.channels, stride);
+  if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), t.vertices, t.channels, stride);
   m.normal_buffer = make_buffer(mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
   if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
   if (!t.bent_normals.empty())
@@ -520,7 +578,8 @@ void Renderer::clear_mesh() {
   m.delete_mesh_objects();
   m.index_count = 0;
   m.vertex_count = 0;
-  m.bands = m.channels = m.band_limit = m.unshadowed_channels = 0;
+  m.bands = m.channels = m.band_limit = 0;
+  m.light.clear();
   m.shading = Shading::Transfer;
   m.have_lighting = m.have_colors = false;
   m.cpu_normals.clear();
@@ -534,14 +593,24 @@ void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
   if (coeffs.size() < n)
     throw Error("lighting has " + std::to_string(coeffs.size()) + " coefficients, the transfer needs " +
                 std::to_string(n) + " (" + std::to_string(m.bands) + " bands)");
-  std::vector<float> v(n * 4, 0.0f);
+  m.light.assign(n * 4, 0.0f);
   for (std::size_t k = 0; k < n; ++k)
-    for (int c = 0; c < 3; ++c) v[k * 4 + std::size_t(c)] = float(coeffs[k][c]);
-  m.make_current();
-  glNamedBufferSubData(m.light_buffer, 0, GLsizeiptr(v.size() * sizeof(float)), v.data());
-  check_gl("uploading the lighting");
+    for (int c = 0; c < 3; ++c) m.light[k * 4 + std::size_t(c)] = float(coeffs[k][c]);
+  m.upload_lighting();
   m.irradiance = irradiance_matrices(coeffs);
   m.have_lighting = true;
+}
+
+// The first band_limit^2 lighting coefficients, zeros up to the next
+// multiple of 4 (the shader reads whole vec4s of transfer).
+void Renderer::Impl::upload_lighting() {
+  if (light.empty()) return;
+  const std::size_t keep = std::size_t(band_limit) * band_limit, padded = (keep + 3) / 4 * 4;
+  std::vector<float> v(padded * 4, 0.0f);
+  std::copy_n(light.begin(), std::ptrdiff_t(keep * 4), v.begin());
+  make_current();
+  glNamedBufferSubData(light_buffer, 0, GLsizeiptr(v.size() * sizeof(float)), v.data());
+  check_gl("uploading the lighting");
 }
 
 void Renderer::set_band_limit(int b) {
@@ -550,6 +619,7 @@ void Renderer::set_band_limit(int b) {
   if (b < 1 || b > m.bands)
     throw Error("band limit " + std::to_string(b) + " outside 1.." + std::to_string(m.bands) + " (the transfer's bands)");
   m.band_limit = b;
+  m.upload_lighting();
 }
 
 int Renderer::band_limit() const { return impl_->band_limit; }
@@ -558,7 +628,7 @@ bool Renderer::has_shading(Shading s) const {
   const Impl& m = *impl_;
   if (m.bands == 0) return false;
   switch (s) {
-    case Shading::Direct: return m.direct_buffer != 0;
+    case Shading::Direct: return bool(m.direct);
     case Shading::AmbientOcclusion: return m.ao_buffer != 0;
     case Shading::BentNormal: return m.bent_buffer != 0;
     case Shading::VertexColors: return m.have_colors;
@@ -614,8 +684,7 @@ void Renderer::Impl::make_unshadowed() {
           T[(v * std::size_t(ch) + std::size_t(c)) * std::size_t(nc) + std::size_t(k)] =
               float(a[c] * inv_pi * A[std::size_t(l)] * y[std::size_t(k)]);
   }
-  unshadowed_buffer = make_buffer(T.data(), T.size() * sizeof(float));
-  unshadowed_channels = ch;
+  unshadowed = make_transfer_array(T.data(), vertex_count, ch, nc);
   check_gl("uploading the unshadowed transfer");
 }
 
@@ -730,20 +799,11 @@ void Renderer::Impl::draw_mesh(const glm::mat4& view_proj) {
   glDisable(GL_CULL_FACE);  // open meshes show their back faces
   const int mode = attribute_mode(shading);
   if (mode == 0) {  // a transfer array dotted with the lighting
-    GLuint buffer = transfer_buffer;
-    int ch = channels;
-    if (shading == Shading::Direct) buffer = direct_buffer;
-    if (shading == Shading::Unshadowed) {
-      if (!unshadowed_buffer) make_unshadowed();
-      buffer = unshadowed_buffer;
-      ch = unshadowed_channels;
-    }
-    glUseProgram(mesh_program);
+    if (shading == Shading::Unshadowed && !unshadowed) make_unshadowed();
+    const TransferArray& a = shading == Shading::Direct ? direct : shading == Shading::Unshadowed ? unshadowed : transfer;
+    glUseProgram(mesh_program(band_limit * band_limit, (bands * bands + 3) / 4, a.channels));
     glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
-    glUniform1i(1, band_limit * band_limit);
-    glUniform1i(2, ch);
-    glUniform1i(3, bands * bands);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffer);
+    glBindTextureUnit(3, a.texture);
     glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
     glBindVertexArray(vao);
   } else {

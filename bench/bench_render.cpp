@@ -1,0 +1,116 @@
+// bench/bench_render.cpp - the GL runtime on whatever OpenGL 4.5 the machine
+// gives (Mesa llvmpipe on CI machines, a GPU through EGL where there is one):
+// frame time of PRT shading at 9, 16 and 25 coefficients RGB against plain
+// Lambert shading (no transfer: irradiance from the normal) of the same mesh
+// in the same process, and the CPU work per frame (rotation build, apply,
+// upload of the lighting).
+//
+// Mesh: ../shared/meshes/bunny00.off (37.7k vertices), else the bundled
+// models/scene.obj. Transfers are synthetic (random, RGB, the mesh's hash):
+// shading cost does not depend on the values.
+#include <prt/mesh.h>
+#include <prt/projection.h>
+#include <prt/render.h>
+#include <prt/rotation.h>
+#include <prt/transfer.h>
+#include <prt/envmap.h>
+#include <prt/error.h>
+
+#include <benchmark/benchmark.h>
+
+#include <glm/trigonometric.hpp>
+
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <string>
+
+namespace {
+
+const prt::Mesh& mesh() {
+  static const prt::Mesh m = [] {
+    const std::string shared = PRT_SHARED_DIR "/meshes/bunny00.off";
+    return prt::load_mesh(std::filesystem::exists(shared) ? shared : PRT_SOURCE_DIR "/models/scene.obj");
+  }();
+  return m;
+}
+
+prt::Transfer synthetic_transfer(const prt::Mesh& m, int bands, int channels) {
+  prt::Transfer t;
+  t.bands = bands;
+  t.channels = channels;
+  t.mode = prt::TransferMode::Shadowed;
+  t.vertices = m.vertex_count();
+  t.mesh_hash = m.hash();
+  t.coeffs.resize(t.vertices * t.stride());
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-0.1f, 0.3f);
+  for (float& c : t.coeffs) c = u(rng);
+  return t;
+}
+
+// One renderer for the process (a context per benchmark would dominate), or
+// the reason there is none.
+prt::Renderer* renderer(std::string& why) {
+  static std::string reason;
+  static std::unique_ptr<prt::Renderer> r = [] () -> std::unique_ptr<prt::Renderer> {
+    try {
+      return std::make_unique<prt::Renderer>();
+    } catch (const prt::Error& e) {
+      reason = e.what();
+      return nullptr;
+    }
+  }();
+  why = reason;
+  return r.get();
+}
+
+const prt::EnvMap& environment() {
+  static const prt::EnvMap env = prt::load_envmap(PRT_SOURCE_DIR "/envmaps/forest.exr");
+  return env;
+}
+
+// Frame: draw (background + mesh) at 512 x 512 and wait for it (glFinish), no
+// read-back. state.range(0): bands of an RGB transfer; 0: plain Lambert.
+// state.range(1): image side in pixels.
+void BM_Frame(benchmark::State& state) {
+  std::string why;
+  prt::Renderer* r = renderer(why);
+  if (!r) return state.SkipWithError(why.c_str());
+  const int bands = int(state.range(0)), size = int(state.range(1));
+  const prt::Mesh& m = mesh();
+  r->set_mesh(m, synthetic_transfer(m, bands == 0 ? 3 : bands, 3));
+  r->set_environment(environment());
+  r->set_lighting(prt::project(environment(), bands == 0 ? 3 : bands));
+  r->set_shading(bands == 0 ? prt::Shading::Lambert : prt::Shading::Transfer);
+  const prt::Camera cam = prt::default_camera(m);
+  r->draw_only(cam, size, size);  // warm: compile, allocate
+  for (auto _ : state) r->draw_only(cam, size, size);
+  state.counters["vertices"] = double(m.vertex_count());
+  state.SetLabel(r->device());
+}
+BENCHMARK(BM_Frame)->ArgsProduct({{0, 3, 4, 5}, {512, 64}})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// CPU work per frame: rotation build and apply (RGB) and the lighting upload
+// (glNamedBufferSubData of bands^2 vec4s; the driver copies it, no wait).
+void BM_CpuFrameWork(benchmark::State& state) {
+  std::string why;
+  prt::Renderer* r = renderer(why);
+  if (!r) return state.SkipWithError(why.c_str());
+  const int bands = int(state.range(0));
+  const prt::Mesh& m = mesh();
+  r->set_mesh(m, synthetic_transfer(m, bands, 1));
+  const std::vector<glm::dvec3> light = prt::project(environment(), bands);
+  std::vector<glm::dvec3> rotated(light.size());
+  prt::sh::Rotation rot(bands, glm::dmat3(1.0));
+  double angle = 0;
+  for (auto _ : state) {
+    angle += 0.01;
+    rot.set(prt::sh::rotation_axis_angle({0, 1, 0}, angle));
+    rot.apply(light, rotated);
+    r->set_lighting(rotated);
+  }
+}
+BENCHMARK(BM_CpuFrameWork)->Arg(3)->Arg(5)->Arg(9)->Arg(16)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
