@@ -1,0 +1,106 @@
+// prt/wavelet_transfer.h - all-frequency shadowed transfer in a Haar wavelet
+// basis on a cube map (Ng, Ramamoorthi & Hanrahan 2003; layout in
+// prt/wavelet.h).
+//
+// Per vertex, over the 6 r^2 texels i of the cube (texel-centre direction
+// w_i, exact solid angle omega_i; docs/CONVENTIONS.md, "Cube maps"):
+//   t_i = (1/pi) V(w_i) max(n.w_i, 0) omega_i     (one channel, no albedo)
+// and the outgoing radiance under texel-average lighting l_i is
+//   B = rho sum_i t_i l_i = rho sum_j (W t)_j (W l)_j   (W orthonormal: Parseval)
+// so a white unoccluded vertex under constant radiance 1 gets B ~= 1, up to
+// the cube's midpoint quadrature of the cosine. The albedo rho is applied at
+// relighting time (grey/RGB constant or the mesh's vertex colours).
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/transfer.h>  // Progress
+#include <prt/wavelet.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace prt {
+
+struct WaveletOptions {
+  int cube_res = 32;          // face size r: power of two in [2, 256]
+  double threshold = 1e-3;    // relative L2 truncation error per vertex, in [0, 1) (see WaveletTransfer)
+  glm::vec3 albedo{1.0f};     // used unless vertex_colors; [0, 1] per channel
+  bool vertex_colors = false; // use the mesh's per-vertex colours as albedo (clamped to [0, 1])
+  int threads = 0;            // 0: all cores
+  double offset = 0;          // ray origin offset; 0: detail default (1e-4 x bounding-box diagonal)
+};
+
+// Sparse, quantised wavelet transfer of every vertex, stored transposed for
+// relighting (Ng et al.): column j (a wavelet index < 6 r^2) lists the
+// vertices with a kept coefficient there.
+//
+// Threshold: per vertex, with c = W t (the Haar transform of its 6 r^2 t_i)
+// and E = sum c_j^2, the coefficients are visited by |c_j| ascending (ties:
+// lower index first) and dropped while the dropped energy stays
+// <= threshold^2 E. The kept transfer therefore has relative L2 error
+// <= threshold, in the wavelet and (Parseval) in the texel domain.
+// threshold = 0 keeps every non-zero coefficient.
+//
+// Quantisation: kept c_j of vertex v is stored as an int16 q with
+// c_j ~= q * vertex_scale[v], vertex_scale[v] = max_j |c_j| / 32767 (rounded
+// to float), q = round(c_j / vertex_scale[v]). The error of every kept
+// coefficient is <= max_j |c_j| / 65534 (times 1 + 2^-24 for the float scale).
+// Kept coefficients that round to q = 0 are dropped (within the same bound).
+struct WaveletTransfer {
+  int cube_res = 0;
+  std::size_t vertices = 0;
+  std::uint64_t mesh_hash = 0;  // Mesh::hash() of the mesh it was computed for
+  double threshold = 0;
+  glm::vec3 albedo{1.0f};
+  bool vertex_colors = false;
+  std::vector<glm::vec3> vertex_albedo;  // per vertex, only when vertex_colors
+
+  std::vector<std::uint64_t> col_offsets;   // 6 r^2 + 1: column j is [col_offsets[j], col_offsets[j+1])
+  std::vector<std::uint32_t> col_vertices;  // vertex of each entry, ascending within a column
+  std::vector<std::int16_t> col_values;     // quantised coefficient q of each entry
+  std::vector<float> vertex_scale;          // dequantisation scale per vertex
+  std::vector<std::uint32_t> vertex_kept;   // statistics: kept coefficients per vertex
+
+  std::size_t coeff_count() const { return wavelet::cube_size(cube_res); }
+  std::size_t kept() const { return col_vertices.size(); }
+  // Fraction of the vertices x 6 r^2 coefficients kept.
+  double kept_fraction() const;
+  // Storage of the relighting data: offsets, entries (6 bytes each), scales
+  // and per-vertex albedo (vertex_kept, a statistic, is not counted).
+  std::size_t bytes() const;
+};
+
+// Traces one occlusion ray per texel above the horizon of every vertex (from
+// p + offset n, tnear = offset), builds t, transforms, thresholds, quantises
+// and transposes. Vertices with a zero normal get no coefficients. TBB over
+// blocks of vertices; deterministic (same bits for any thread count).
+// Progress: phase "rays", cancellable (throws prt::Error("cancelled")).
+// Throws prt::Error on bad options (cube_res, threshold, albedo, offset,
+// threads, vertex_colors without colours, more than 2^32 - 1 vertices).
+WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& options,
+                                         const Progress& progress = {});
+
+// Outgoing radiance of every vertex: out[v] = rho_v sum_{j in terms}
+// c_vj (W l)_j, RGB. `light` is planar [3][6 r^2], already Haar-transformed
+// (wavelet::forward_cube); `terms` are indices < 6 r^2 (wavelet::select_terms).
+// Vertices with no coefficient in the selected columns get 0. Parallel over
+// fixed vertex ranges; each vertex sums its terms in the given order, so the
+// result does not depend on the thread count.
+void wavelet_relight(const WaveletTransfer& t, const float* light, std::span<const std::uint32_t> terms,
+                     std::vector<glm::vec3>& out);
+
+// Dequantised wavelet coefficients of one vertex (6 r^2 values, zeros where
+// dropped). For tests and diagnostics: O(6 r^2 log V).
+std::vector<float> wavelet_vertex_coefficients(const WaveletTransfer& t, std::size_t v);
+
+// Reference: the dense texel-domain transfer t_i (no albedo, double) of the
+// listed vertices, [k][6 r^2], traced exactly as compute_wavelet_transfer
+// does. B_v = rho_v sum_i t_i l_i is the direct per-texel relighting.
+std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOptions& options,
+                                           std::span<const std::uint32_t> vertices);
+
+}  // namespace prt

@@ -1,0 +1,293 @@
+// All-frequency wavelet transfer (Ng, Ramamoorthi & Hanrahan 2003): per-vertex
+// visibility x cosine on a cube map, Haar-transformed, thresholded, quantised
+// to int16 and stored by wavelet index (see prt/wavelet_transfer.h).
+#include <prt/wavelet_transfer.h>
+
+#include <prt/error.h>
+
+#include "ray_scene.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace prt {
+
+double WaveletTransfer::kept_fraction() const {
+  const double total = double(vertices) * double(coeff_count());
+  return total > 0 ? double(kept()) / total : 0.0;
+}
+
+std::size_t WaveletTransfer::bytes() const {
+  return col_offsets.size() * sizeof(std::uint64_t) + col_vertices.size() * sizeof(std::uint32_t) +
+         col_values.size() * sizeof(std::int16_t) + vertex_scale.size() * sizeof(float) +
+         vertex_albedo.size() * sizeof(glm::vec3);
+}
+
+namespace {
+
+void check_options(const WaveletOptions& o, const Mesh& mesh) {
+  wavelet::check_resolution(o.cube_res, "--cube-res");
+  if (!(o.threshold >= 0.0 && o.threshold < 1.0))
+    throw Error("--threshold must be in [0, 1), got " + std::to_string(o.threshold));
+  for (int c = 0; c < 3; ++c)
+    if (!(o.albedo[c] >= 0.0f && o.albedo[c] <= 1.0f))
+      throw Error("--albedo must be in [0, 1] per channel (energy conservation), got " + std::to_string(o.albedo[c]));
+  if (o.vertex_colors && mesh.colors.empty()) throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
+  if (o.threads < 0) throw Error("--threads must be >= 0");
+  if (!(o.offset >= 0.0) || !std::isfinite(o.offset)) throw Error("--offset must be a finite number >= 0");
+  if (mesh.vertex_count() >= std::numeric_limits<std::uint32_t>::max())
+    throw Error(mesh.source + ": too many vertices for a wavelet transfer (at most 2^32 - 2)");
+}
+
+// Progress reporting from worker threads; the callback runs on one thread at a time.
+class Ticker {
+ public:
+  Ticker(const Progress& p, std::size_t total) : p_(p), total_(total) {}
+  void tick(std::size_t n) {
+    if (!p_) return;
+    const std::size_t d = done_ += n;
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (lock.owns_lock() && !cancelled_ && !p_(d, total_, "rays")) cancelled_ = true;
+  }
+  bool cancelled() const { return cancelled_; }
+  void finish() {
+    if (cancelled_ || (p_ && !p_(total_, total_, "rays"))) throw Error("cancelled");
+  }
+
+ private:
+  const Progress& p_;
+  std::size_t total_;
+  std::atomic<std::size_t> done_{0};
+  std::mutex mutex_;
+  std::atomic<bool> cancelled_{false};
+};
+
+// Texel-centre directions and solid angles of the cube, shared by all vertices.
+struct CubeTable {
+  int r;
+  std::vector<glm::vec3> dir;  // 6 r^2, unit
+  std::vector<double> omega;   // 6 r^2
+  explicit CubeTable(int res) : r(res), dir(wavelet::cube_size(res)), omega(wavelet::cube_size(res)) {
+    for (int f = 0; f < 6; ++f)
+      for (int v = 0; v < r; ++v)
+        for (int u = 0; u < r; ++u) {
+          const std::size_t j = (std::size_t(f) * r + v) * r + u;
+          dir[j] = glm::vec3(cube_texel_direction(f, u, v, r));
+          omega[j] = cube_texel_solid_angle(u, v, r);
+        }
+  }
+};
+
+// Dense t_i of vertex v into t (6 r^2 doubles). Returns false (t all zero)
+// for a vertex without a normal.
+bool trace_vertex(const detail::RayScene& scene, const Mesh& mesh, std::size_t v, const CubeTable& cube, float offset,
+                  double* t) {
+  const std::size_t n = cube.dir.size();
+  std::fill(t, t + n, 0.0);
+  const glm::vec3 nrm = mesh.normals[v];
+  if (glm::dot(nrm, nrm) == 0.0f) return false;
+  const glm::vec3 origin = mesh.positions[v] + offset * nrm;
+  glm::vec3 batch[8];
+  std::uint32_t index[8];
+  double weight[8];
+  int count = 0;
+  auto flush = [&] {
+    const std::uint32_t occluded = scene.occluded8(origin, batch, count, offset);
+    for (int i = 0; i < count; ++i)
+      if (!(occluded & (1u << i))) t[index[i]] = weight[i];
+    count = 0;
+  };
+  for (std::size_t j = 0; j < n; ++j) {
+    const float c = glm::dot(nrm, cube.dir[j]);
+    if (c <= 0.0f) continue;  // below the horizon: no ray, t = 0
+    batch[count] = cube.dir[j];
+    index[count] = std::uint32_t(j);
+    weight[count++] = double(c) * cube.omega[j] / M_PI;
+    if (count == 8) flush();
+  }
+  if (count) flush();
+  return true;
+}
+
+struct Entry {
+  std::uint32_t j;
+  std::int16_t q;
+};
+
+// Haar transform, threshold and quantisation of one vertex's dense t (in
+// place). Appends kept entries (ascending j) to `out`; returns the scale.
+float compress_vertex(double* t, int r, double threshold, std::vector<std::pair<double, std::uint32_t>>& order,
+                      std::vector<Entry>& out) {
+  const std::size_t rr = std::size_t(r) * r, n = 6 * rr;
+  for (int f = 0; f < 6; ++f) wavelet::haar_forward(t + f * rr, r);
+  order.clear();
+  double energy = 0.0, maxabs = 0.0;
+  for (std::size_t j = 0; j < n; ++j)
+    if (t[j] != 0.0) {
+      order.emplace_back(std::abs(t[j]), std::uint32_t(j));
+      energy += t[j] * t[j];
+      maxabs = std::max(maxabs, std::abs(t[j]));
+    }
+  if (order.empty()) return 0.0f;
+  std::sort(order.begin(), order.end());  // |c| ascending, then index: a fixed order
+  const double budget = threshold * threshold * energy;
+  double dropped = 0.0;
+  std::size_t first_kept = 0;
+  for (; first_kept < order.size(); ++first_kept) {
+    const double e = order[first_kept].first * order[first_kept].first;
+    if (dropped + e > budget) break;
+    dropped += e;
+  }
+  for (std::size_t i = 0; i < first_kept; ++i) t[order[i].second] = 0.0;
+  const float scale = float(maxabs / 32767.0);
+  const double inv = 1.0 / double(scale);
+  for (std::size_t j = 0; j < n; ++j) {
+    if (t[j] == 0.0) continue;
+    const double q = std::clamp(std::round(t[j] * inv), -32767.0, 32767.0);
+    if (q != 0.0) out.push_back({std::uint32_t(j), std::int16_t(q)});
+  }
+  return scale;
+}
+
+float offset_of(const WaveletOptions& o, const Mesh& mesh) {
+  return float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
+}
+
+}  // namespace
+
+WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& o, const Progress& progress) {
+  check_options(o, mesh);
+  std::unique_ptr<tbb::global_control> limit;
+  if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+
+  const int r = o.cube_res;
+  const std::size_t V = mesh.vertex_count(), n = wavelet::cube_size(r);
+  WaveletTransfer wt;
+  wt.cube_res = r;
+  wt.vertices = V;
+  wt.mesh_hash = mesh.hash();
+  wt.threshold = o.threshold;
+  wt.albedo = o.albedo;
+  wt.vertex_colors = o.vertex_colors;
+  if (o.vertex_colors) {
+    wt.vertex_albedo.resize(V);
+    for (std::size_t v = 0; v < V; ++v) wt.vertex_albedo[v] = glm::clamp(mesh.colors[v], 0.0f, 1.0f);
+  }
+  wt.vertex_scale.assign(V, 0.0f);
+  wt.vertex_kept.assign(V, 0);
+
+  const CubeTable cube(r);
+  const float offset = offset_of(o, mesh);
+  const detail::RayScene scene(mesh);
+
+  // Pass 1: per block of vertices, the kept entries in vertex order.
+  constexpr std::size_t kGrain = 32;
+  const std::size_t blocks = (V + kGrain - 1) / kGrain;
+  std::vector<std::vector<Entry>> block_entries(blocks);
+  Ticker ticker(progress, V);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    detail::enable_ftz_daz();
+    if (ticker.cancelled()) return;
+    std::vector<double> t(n);
+    std::vector<std::pair<double, std::uint32_t>> order;
+    order.reserve(n);
+    std::vector<Entry>& entries = block_entries[b];
+    const std::size_t v0 = b * kGrain, v1 = std::min(V, v0 + kGrain);
+    for (std::size_t v = v0; v < v1; ++v) {
+      if (!trace_vertex(scene, mesh, v, cube, offset, t.data())) continue;
+      const std::size_t before = entries.size();
+      wt.vertex_scale[v] = compress_vertex(t.data(), r, o.threshold, order, entries);
+      wt.vertex_kept[v] = std::uint32_t(entries.size() - before);
+    }
+    entries.shrink_to_fit();
+    ticker.tick(v1 - v0);
+  });
+  ticker.finish();
+
+  // Pass 2: transpose into columns. Walking vertices in order keeps every
+  // column sorted by vertex.
+  wt.col_offsets.assign(n + 1, 0);
+  for (const auto& entries : block_entries)
+    for (const Entry& e : entries) ++wt.col_offsets[e.j + 1];
+  for (std::size_t j = 0; j < n; ++j) wt.col_offsets[j + 1] += wt.col_offsets[j];
+  const std::size_t total = wt.col_offsets[n];
+  wt.col_vertices.resize(total);
+  wt.col_values.resize(total);
+  std::vector<std::uint64_t> cursor(wt.col_offsets.begin(), wt.col_offsets.end() - 1);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::vector<Entry>& entries = block_entries[b];
+    std::size_t k = 0;
+    for (std::size_t v = b * kGrain; v < std::min(V, (b + 1) * kGrain); ++v)
+      for (std::uint32_t i = 0; i < wt.vertex_kept[v]; ++i, ++k) {
+        const std::uint64_t pos = cursor[entries[k].j]++;
+        wt.col_vertices[pos] = std::uint32_t(v);
+        wt.col_values[pos] = entries[k].q;
+      }
+    std::vector<Entry>().swap(block_entries[b]);
+  }
+  return wt;
+}
+
+void wavelet_relight(const WaveletTransfer& t, const float* light, std::span<const std::uint32_t> terms,
+                     std::vector<glm::vec3>& out) {
+  const std::size_t n = t.coeff_count(), V = t.vertices;
+  PRT_CHECK_OP(t.col_offsets.size(), ==, n + 1);
+  for (std::uint32_t j : terms) PRT_CHECK_OP(std::size_t(j), <, n);
+  out.assign(V, glm::vec3(0.0f));
+  // Fixed ranges small enough for their accumulators to stay in L1.
+  constexpr std::size_t kRange = 2048;
+  tbb::parallel_for(std::size_t(0), (V + kRange - 1) / kRange, [&](std::size_t range) {
+    const std::uint32_t v0 = std::uint32_t(range * kRange), v1 = std::uint32_t(std::min(V, (range + 1) * kRange));
+    glm::vec3* acc = out.data() + v0;  // sum_j q_vj l_j, scaled below
+    for (std::uint32_t j : terms) {
+      const glm::vec3 l(light[j], light[n + j], light[2 * n + j]);
+      const std::uint32_t* first = t.col_vertices.data() + t.col_offsets[j];
+      const std::uint32_t* last = t.col_vertices.data() + t.col_offsets[j + 1];
+      const std::uint32_t* it = std::lower_bound(first, last, v0);
+      const std::int16_t* q = t.col_values.data() + (it - t.col_vertices.data());
+      for (; it != last && *it < v1; ++it, ++q) acc[*it - v0] += float(*q) * l;
+    }
+    for (std::uint32_t v = v0; v < v1; ++v)
+      out[v] *= t.vertex_scale[v] * (t.vertex_colors ? t.vertex_albedo[v] : t.albedo);
+  });
+}
+
+std::vector<float> wavelet_vertex_coefficients(const WaveletTransfer& t, std::size_t v) {
+  const std::size_t n = t.coeff_count();
+  PRT_CHECK_OP(v, <, t.vertices);
+  std::vector<float> c(n, 0.0f);
+  for (std::size_t j = 0; j < n; ++j) {
+    const auto first = t.col_vertices.begin() + std::ptrdiff_t(t.col_offsets[j]);
+    const auto last = t.col_vertices.begin() + std::ptrdiff_t(t.col_offsets[j + 1]);
+    const auto it = std::lower_bound(first, last, std::uint32_t(v));
+    if (it != last && *it == v) c[j] = float(t.col_values[std::size_t(it - t.col_vertices.begin())]) * t.vertex_scale[v];
+  }
+  return c;
+}
+
+std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOptions& o,
+                                           std::span<const std::uint32_t> vertices) {
+  check_options(o, mesh);
+  const CubeTable cube(o.cube_res);
+  const detail::RayScene scene(mesh);
+  const std::size_t n = cube.dir.size();
+  detail::enable_ftz_daz();
+  std::vector<double> t(vertices.size() * n);
+  for (std::size_t k = 0; k < vertices.size(); ++k) {
+    if (vertices[k] >= mesh.vertex_count()) throw Error("vertex " + std::to_string(vertices[k]) + " out of range");
+    trace_vertex(scene, mesh, vertices[k], cube, offset_of(o, mesh), t.data() + k * n);
+  }
+  return t;
+}
+
+}  // namespace prt
