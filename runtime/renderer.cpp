@@ -69,12 +69,40 @@ GLuint compile(GLenum type, const char* source, const char* name) {
   return s;
 }
 
-// Links a program; `defines` (e.g. "#define MODE 1\n") goes right after the
-// vertex shader's #version line.
+// Inserts `defines` (e.g. "#define MODE 1\n") right after a shader's #version line.
+std::string with_defines(const char* src, const std::string& defines) {
+  std::string text = src;
+  if (!defines.empty()) text.insert(text.find('\n') + 1, defines);
+  return text;
+}
+
+GLuint check_link(GLuint p, const char* name) {
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(p, GL_INFO_LOG_LENGTH, &len);
+    std::string log(std::size_t(std::max(len, 1)), '\0');
+    glGetProgramInfoLog(p, len, nullptr, log.data());
+    glDeleteProgram(p);
+    throw Error(std::string("shader program ") + name + " does not link: " + log.c_str());
+  }
+  return p;
+}
+
+// A compute program with `defines`.
+GLuint link_compute(const char* src, const char* name, const std::string& defines) {
+  const GLuint cs = compile(GL_COMPUTE_SHADER, with_defines(src, defines).c_str(), name);
+  const GLuint p = glCreateProgram();
+  glAttachShader(p, cs);
+  glLinkProgram(p);
+  glDeleteShader(cs);
+  return check_link(p, name);
+}
+
+// A vertex + fragment program; `defines` go into the vertex shader.
 GLuint link(const char* vs_src, const char* fs_src, const char* name, const std::string& defines = {}) {
-  std::string vs_text = vs_src;
-  if (!defines.empty()) vs_text.insert(vs_text.find('\n') + 1, defines);
-  const GLuint vs = compile(GL_VERTEX_SHADER, vs_text.c_str(), name);
+  const GLuint vs = compile(GL_VERTEX_SHADER, with_defines(vs_src, defines).c_str(), name);
   GLuint fs = 0;
   try {
     fs = compile(GL_FRAGMENT_SHADER, fs_src, name);
@@ -88,17 +116,7 @@ GLuint link(const char* vs_src, const char* fs_src, const char* name, const std:
   glLinkProgram(p);
   glDeleteShader(vs);
   glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(p, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::size_t(std::max(len, 1)), '\0');
-    glGetProgramInfoLog(p, len, nullptr, log.data());
-    glDeleteProgram(p);
-    throw Error(std::string("shader program ") + name + " does not link: " + log.c_str());
-  }
-  return p;
+  return check_link(p, name);
 }
 
 constexpr int kMaxCoeffs = kMaxRenderBands * kMaxRenderBands;  // LightBlock in shaders/mesh.vert.glsl
@@ -228,9 +246,10 @@ struct Renderer::Impl {
   bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
   GLuint background_program = 0, display_program = 0;
-  std::map<std::array<int, 3>, GLuint> mesh_programs;  // by (coeffs, vec4s, channels); compiled when first used
+  std::map<std::array<int, 3>, GLuint> relight_programs;  // by (coeffs, vec4s, channels); compiled when first used
+  GLuint radiance_buffer = 0;  // vec4 per vertex, written by the relighting pass
   std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
-  GLuint vao = 0, attribute_vao = 0, empty_vao = 0;
+  GLuint vao = 0, empty_vao = 0;
   GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
   // Transfer arrays by Shading: the file's, its direct part, the analytic
   // unshadowed one (made when first used).
@@ -270,7 +289,8 @@ struct Renderer::Impl {
   void draw_mesh(const glm::mat4& view_proj);
   void display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb);
   GLuint attribute_program(int mode);
-  GLuint mesh_program(int coeffs, int vec4s, int channels);
+  GLuint relight_program(int coeffs, int vec4s, int channels);
+  GLuint relight();
   void upload_lighting();
   void make_unshadowed();
   void destroy();
@@ -350,7 +370,6 @@ void Renderer::Impl::create_objects() {
   background_program = link(shaders::background_vert_glsl, shaders::background_frag_glsl, "background");
   display_program = link(shaders::background_vert_glsl, shaders::display_frag_glsl, "display");
   glCreateVertexArrays(1, &vao);
-  glCreateVertexArrays(1, &attribute_vao);
   glCreateVertexArrays(1, &empty_vao);
   glCreateBuffers(1, &light_buffer);
   glNamedBufferStorage(light_buffer, GLsizeiptr(kMaxCoeffs * 4 * sizeof(float)), nullptr, GL_DYNAMIC_STORAGE_BIT);
@@ -359,12 +378,12 @@ void Renderer::Impl::create_objects() {
   check_gl("creating the renderer's objects");
 }
 
-GLuint Renderer::Impl::mesh_program(int coeffs, int vec4s, int ch) {
-  GLuint& p = mesh_programs[{coeffs, vec4s, ch}];
+GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch) {
+  GLuint& p = relight_programs[{coeffs, vec4s, ch}];
   if (!p)
-    p = link(shaders::mesh_vert_glsl, shaders::mesh_frag_glsl, "mesh",
-             "#define COEFFS " + std::to_string(coeffs) + "\n#define VEC4S " + std::to_string(vec4s) +
-                 "\n#define CHANNELS " + std::to_string(ch) + "\n");
+    p = link_compute(shaders::relight_comp_glsl, "relight",
+                     "#define COEFFS " + std::to_string(coeffs) + "\n#define VEC4S " + std::to_string(vec4s) +
+                         "\n#define CHANNELS " + std::to_string(ch) + "\n");
   return p;
 }
 
@@ -401,13 +420,14 @@ void Renderer::Impl::resize(int w, int h) {
 
 void Renderer::Impl::delete_mesh_objects() {
   const GLuint buffers[] = {position_buffer,    index_buffer,  transfer.buffer, direct.buffer, unshadowed.buffer,
-                            normal_buffer,      albedo_buffer, ao_buffer,       bent_buffer,   color_buffer};
+                            normal_buffer,      albedo_buffer, ao_buffer,       bent_buffer,   color_buffer,
+                            radiance_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   const GLuint textures[] = {transfer.texture, direct.texture, unshadowed.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
   transfer = direct = unshadowed = TransferArray{};
   position_buffer = index_buffer = 0;
-  normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = 0;
+  normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = radiance_buffer = 0;
 }
 
 void Renderer::Impl::destroy() {
@@ -421,9 +441,9 @@ void Renderer::Impl::destroy() {
     glDeleteRenderbuffers(2, rbs);
     const GLuint fbos[] = {fbo, display_fbo};
     glDeleteFramebuffers(2, fbos);
-    const GLuint vaos[] = {vao, attribute_vao, empty_vao};
-    glDeleteVertexArrays(3, vaos);
-    for (const auto& [key, p] : mesh_programs) glDeleteProgram(p);
+    const GLuint vaos[] = {vao, empty_vao};
+    glDeleteVertexArrays(2, vaos);
+    for (const auto& [key, p] : relight_programs) glDeleteProgram(p);
     glDeleteProgram(background_program);
     glDeleteProgram(display_program);
     for (GLuint p : attribute_programs) glDeleteProgram(p);
@@ -556,13 +576,12 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
     m.cpu_albedo = mesh.colors;
     m.albedo_buffer = make_buffer(mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
   }
-  for (GLuint vao : {m.vao, m.attribute_vao}) {
-    glVertexArrayVertexBuffer(vao, 0, m.position_buffer, 0, sizeof(glm::vec3));
-    glVertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
-    glVertexArrayAttribBinding(vao, 0, 0);
-    glEnableVertexArrayAttrib(vao, 0);
-    glVertexArrayElementBuffer(vao, m.index_buffer);
-  }
+  m.radiance_buffer = make_buffer(nullptr, mesh.vertex_count() * 4 * sizeof(float));
+  glVertexArrayVertexBuffer(m.vao, 0, m.position_buffer, 0, sizeof(glm::vec3));
+  glVertexArrayAttribFormat(m.vao, 0, 3, GL_FLOAT, GL_FALSE, 0);
+  glVertexArrayAttribBinding(m.vao, 0, 0);
+  glEnableVertexArrayAttrib(m.vao, 0);
+  glVertexArrayElementBuffer(m.vao, m.index_buffer);
   check_gl("uploading the mesh and transfer");
   m.index_count = GLsizei(mesh.triangles.size() * 3);
   m.vertex_count = mesh.vertex_count();
@@ -793,39 +812,53 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
   check_gl("rendering");
 }
 
+// The relighting pass of the current transfer shading (Transfer, Direct,
+// Unshadowed) into radiance_buffer; returns that buffer.
+GLuint Renderer::Impl::relight() {
+  if (shading == Shading::Unshadowed && !unshadowed) make_unshadowed();
+  const TransferArray& a = shading == Shading::Direct ? direct : shading == Shading::Unshadowed ? unshadowed : transfer;
+  glUseProgram(relight_program(band_limit * band_limit, (bands * bands + 3) / 4, a.channels));
+  glUniform1ui(0, GLuint(vertex_count));
+  glBindTextureUnit(3, a.texture);
+  glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);
+  glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
+  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);
+  return radiance_buffer;
+}
+
 void Renderer::Impl::draw_mesh(const glm::mat4& view_proj) {
+  int mode = attribute_mode(shading);
+  GLuint data = 0;
+  GLsizei stride = sizeof(glm::vec3);
+  if (mode == 0) {  // a transfer array dotted with the lighting, then drawn as vertex colours
+    data = relight();
+    stride = 4 * sizeof(float);
+    mode = attribute_mode(Shading::VertexColors);
+  } else {
+    data = mode == 1 ? normal_buffer : mode == 2 ? ao_buffer : mode == 3 ? bent_buffer : color_buffer;
+    if (mode == 2) stride = sizeof(float);
+  }
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);  // open meshes show their back faces
-  const int mode = attribute_mode(shading);
-  if (mode == 0) {  // a transfer array dotted with the lighting
-    if (shading == Shading::Unshadowed && !unshadowed) make_unshadowed();
-    const TransferArray& a = shading == Shading::Direct ? direct : shading == Shading::Unshadowed ? unshadowed : transfer;
-    glUseProgram(mesh_program(band_limit * band_limit, (bands * bands + 3) / 4, a.channels));
-    glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
-    glBindTextureUnit(3, a.texture);
-    glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
-    glBindVertexArray(vao);
+  glVertexArrayVertexBuffer(vao, 1, data, 0, stride);
+  glVertexArrayAttribFormat(vao, 1, mode == 2 ? 1 : 3, GL_FLOAT, GL_FALSE, 0);
+  glVertexArrayAttribBinding(vao, 1, 1);
+  glEnableVertexArrayAttrib(vao, 1);
+  if (albedo_buffer) {
+    glVertexArrayVertexBuffer(vao, 2, albedo_buffer, 0, sizeof(glm::vec3));
+    glVertexArrayAttribFormat(vao, 2, 3, GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(vao, 2, 2);
+    glEnableVertexArrayAttrib(vao, 2);
   } else {
-    const GLuint data = mode == 1 ? normal_buffer : mode == 2 ? ao_buffer : mode == 3 ? bent_buffer : color_buffer;
-    glVertexArrayVertexBuffer(attribute_vao, 1, data, 0, mode == 2 ? sizeof(float) : sizeof(glm::vec3));
-    glVertexArrayAttribFormat(attribute_vao, 1, mode == 2 ? 1 : 3, GL_FLOAT, GL_FALSE, 0);
-    glVertexArrayAttribBinding(attribute_vao, 1, 1);
-    glEnableVertexArrayAttrib(attribute_vao, 1);
-    if (albedo_buffer) {
-      glVertexArrayVertexBuffer(attribute_vao, 2, albedo_buffer, 0, sizeof(glm::vec3));
-      glVertexArrayAttribFormat(attribute_vao, 2, 3, GL_FLOAT, GL_FALSE, 0);
-      glVertexArrayAttribBinding(attribute_vao, 2, 2);
-      glEnableVertexArrayAttrib(attribute_vao, 2);
-    } else {
-      glDisableVertexArrayAttrib(attribute_vao, 2);
-      glVertexAttrib3f(2, albedo[0], albedo[1], albedo[2]);  // a constant attribute
-    }
-    glUseProgram(attribute_program(mode));
-    glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
-    glUniformMatrix4fv(4, 3, GL_FALSE, &irradiance[0][0][0]);
-    glBindVertexArray(attribute_vao);
+    glDisableVertexArrayAttrib(vao, 2);
+    glVertexAttrib3f(2, albedo[0], albedo[1], albedo[2]);  // a constant attribute
   }
+  glUseProgram(attribute_program(mode));
+  glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
+  glUniformMatrix4fv(4, 3, GL_FALSE, &irradiance[0][0][0]);
+  glBindVertexArray(vao);
   glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
 }
 

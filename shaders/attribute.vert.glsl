@@ -6,7 +6,8 @@
 //     first 9 SH coefficients (Ramamoorthi & Hanrahan 2001), n4 = (n, 1)
 //   2 ambient occlusion: a_data.x, shown grey
 //   3 bent normal: a_data, shown as 0.5 + 0.5 n
-//   4 vertex colours: a_data is linear RGB
+//   4 vertex colours: a_data is linear RGB (uploaded colours, or the radiance
+//     written by the relighting pass, relight.comp.glsl)
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_data;
 layout(location = 2) in vec3 a_albedo;  // Lambert: per-vertex, or one constant value
