@@ -377,4 +377,24 @@ void CubeSplatter::resample(const glm::dmat3& R, std::vector<float>& planar_out)
   });
 }
 
+// ---- FrameLighting -------------------------------------------------------------
+
+FrameLighting::FrameLighting(const EnvMap& map, int cube_res) : splatter_(map, cube_res) {}
+
+void FrameLighting::update(const glm::dmat3& R, int K, Selection selection) {
+  if (K < 0) throw Error("the number of wavelet terms must be >= 0, got " + std::to_string(K));
+  const int r = splatter_.resolution();
+  splatter_.resample(R, coeffs_);
+  forward_cube(coeffs_.data(), r, 3);
+  select_terms(coeffs_, 3, r, K, selection, terms_);
+}
+
+Selection parse_selection(std::string_view name) {
+  if (name == "area") return Selection::AreaWeighted;
+  if (name == "magnitude") return Selection::Magnitude;
+  throw Error("unknown wavelet term selection '" + std::string(name) + "' (expected area or magnitude)");
+}
+
+std::string_view selection_name(Selection s) { return s == Selection::AreaWeighted ? "area" : "magnitude"; }
+
 }  // namespace prt::wavelet

@@ -4,6 +4,7 @@
 
 #include <prt/error.h>
 #include <prt/io.h>
+#include <prt/wavelet.h>
 
 #include <xxhash.h>
 
@@ -63,12 +64,15 @@ constexpr std::size_t kOffSectionCount = 80;  // u32
 constexpr std::size_t kOffReserved = 84;      // zero up to kHeaderSize
 
 constexpr std::uint32_t kBasisSH = 0;
-constexpr std::uint32_t kBasisWavelet = 1;  // reserved
+constexpr std::uint32_t kBasisWavelet = 1;
 constexpr std::uint32_t kFlagVertexColors = 1u << 0;
 constexpr std::uint32_t kKnownFlags = kFlagVertexColors;
 
 constexpr std::uint32_t kTypeF32 = 1;
 constexpr std::uint32_t kTypeF64 = 2;
+constexpr std::uint32_t kTypeU64 = 3;  // wavelet files only
+constexpr std::uint32_t kTypeU32 = 4;
+constexpr std::uint32_t kTypeI16 = 5;
 
 enum Kind : std::uint32_t { kCoeffs = 1, kDirect = 2, kAO = 3, kBentNormals = 4, kBounceEnergy = 5 };
 
@@ -93,8 +97,23 @@ const KindInfo* kind_info(std::uint32_t kind) {
   return nullptr;
 }
 
-std::uint32_t type_bytes(std::uint32_t type) { return type == kTypeF64 ? 8 : 4; }
-const char* type_name(std::uint32_t type) { return type == kTypeF64 ? "f64" : "f32"; }
+std::uint32_t type_bytes(std::uint32_t type) {
+  switch (type) {
+    case kTypeF64:
+    case kTypeU64: return 8;
+    case kTypeI16: return 2;
+    default: return 4;
+  }
+}
+const char* type_name(std::uint32_t type) {
+  switch (type) {
+    case kTypeF64: return "f64";
+    case kTypeU64: return "u64";
+    case kTypeU32: return "u32";
+    case kTypeI16: return "i16";
+    default: return "f32";
+  }
+}
 
 // ---- small helpers ----------------------------------------------------------------
 
@@ -286,7 +305,7 @@ std::vector<TransferSection> transfer_sections(const Transfer& t) {
   for (const auto& k : kKinds) {
     if (!has_section(t, k.kind)) continue;
     const std::uint64_t count = section_array(t, k.kind).second;
-    s.push_back({k.kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex});
+    s.push_back({k.kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex, type_name(k.type)});
   }
   return s;
 }
@@ -362,8 +381,13 @@ class Reader {
   Error fail(const std::string& what) const { return Error(path_ + ": " + what); }
 
   Transfer read();
+  WaveletTransfer read_wavelet();
+  std::uint32_t read_basis();
 
  private:
+  void open_file();
+  void read_head();  // signature, version, header size: into h_, section_count_
+  void verify();     // trailer and checksum
   void read_at(std::uint64_t offset, void* dst, std::uint64_t bytes) {
     f_.clear();
     f_.seekg(static_cast<std::streamoff>(offset));
@@ -380,6 +404,8 @@ class Reader {
   std::string path_;
   std::ifstream f_;
   std::uint64_t size_ = 0;
+  unsigned char h_[kHeaderSize] = {};
+  std::uint32_t section_count_ = 0;
 };
 
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size) {
@@ -437,7 +463,7 @@ void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64
   read_at(offset, dst.data(), count * sizeof(T));
 }
 
-Transfer Reader::read() {
+void Reader::open_file() {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status st = fs::status(path_, ec);
@@ -451,10 +477,12 @@ Transfer Reader::read() {
   if (size_ == 0) throw fail("file is empty (not a prt transfer file)");
   f_.open(path_, std::ios::binary);
   if (!f_) throw fail("cannot open: " + errno_text());
+}
 
+void Reader::read_head() {
   // 1. Signature and version, from whatever part of the header is there: a
   // newer version may lay out everything after them differently.
-  unsigned char h[kHeaderSize] = {};
+  unsigned char* h = h_;
   const std::uint64_t head = std::min(size_, kHeaderSize);
   read_at(0, h, head);
   check_signature(h, head);
@@ -468,22 +496,48 @@ Transfer Reader::read() {
   const std::uint32_t header_size = load<std::uint32_t>(h + kOffHeaderSize);
   if (header_size != kHeaderSize)
     throw fail("corrupt: header size " + std::to_string(header_size) + "; version 1 has " + u64s(kHeaderSize));
-  const std::uint32_t section_count = load<std::uint32_t>(h + kOffSectionCount);
+  section_count_ = load<std::uint32_t>(h + kOffSectionCount);
+}
 
+void Reader::verify() {
   // 2. Complete (ends with the trailer) and intact (checksum), before any
   // value is trusted.
   unsigned char trailer[kTrailerSize];
   read_at(size_ - kTrailerSize, trailer, kTrailerSize);
-  if (std::memcmp(trailer + 8, kEndMagic.data(), kEndMagic.size()) != 0) explain_bad_size(section_count);
+  if (std::memcmp(trailer + 8, kEndMagic.data(), kEndMagic.size()) != 0) explain_bad_size(section_count_);
   const std::uint64_t stored = load<std::uint64_t>(trailer);
   const std::uint64_t computed = checksum(size_ - kTrailerSize);
   if (stored != computed)
     throw fail("corrupt: checksum mismatch (stored " + hex64(stored) + ", computed " + hex64(computed) + ")");
+}
+
+std::string unknown_basis(std::uint32_t basis) {
+  return "unknown basis " + std::to_string(basis) + " (0 is spherical harmonics, 1 wavelet)";
+}
+
+std::uint32_t Reader::read_basis() {
+  open_file();
+  read_head();
+  const std::uint32_t basis = load<std::uint32_t>(h_ + kOffBasis);
+  if (basis != kBasisSH && basis != kBasisWavelet) throw fail(unknown_basis(basis));
+  return basis;
+}
+
+Transfer Reader::read() {
+  open_file();
+  read_head();
+  verify();
+  const unsigned char* h = h_;
+  const std::uint32_t section_count = section_count_;
 
   // 3. Header values.
   const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
-  if (basis == kBasisWavelet) throw fail("holds a wavelet transfer, which this prt cannot read (it reads SH)");
-  if (basis != kBasisSH) throw fail("unknown basis " + std::to_string(basis) + " (0 is spherical harmonics)");
+  if (basis == kBasisWavelet)
+    throw fail("holds a wavelet transfer (basis 'wavelet', cube resolution " +
+               std::to_string(load<std::uint32_t>(h + kOffBands)) +
+               "), not spherical harmonics: relight it with prt relight (prt::read_wavelet_transfer), or run "
+               "prt precompute --basis sh for an SH transfer");
+  if (basis != kBasisSH) throw fail(unknown_basis(basis));
   const Values v{load<std::uint32_t>(h + kOffBands),
                  load<std::uint32_t>(h + kOffChannels),
                  load<std::uint32_t>(h + kOffMode),
@@ -632,6 +686,314 @@ std::string describe_transfer(const Transfer& t) {
     s += line("bounce energy", e);
   }
   return s;
+}
+
+// ---- wavelet transfers (docs/FORMAT.md, "Wavelet transfer") ----------------------
+
+namespace {
+
+// Header fields that only a wavelet file uses (in the SH header's reserved bytes).
+constexpr std::size_t kOffCubeRes = kOffBands;  // u32: the face size r
+constexpr std::size_t kOffQuantisation = 84;    // u32
+constexpr std::size_t kOffThreshold = 88;       // f64
+constexpr std::size_t kOffWaveletReserved = 96; // zero up to kHeaderSize
+constexpr std::uint32_t kQuantInt16 = 1;        // int16 values, one f32 scale per vertex
+
+enum WaveletKind : std::uint32_t {
+  kColOffsets = 16,
+  kColVertices = 17,
+  kColValues = 18,
+  kVertexScale = 19,
+  kVertexAlbedo = 20,
+};
+
+struct WaveletSection {
+  std::uint32_t kind;
+  const char* name;
+  std::uint32_t type;
+  const void* data;
+  std::uint64_t count;
+  bool per_vertex;
+};
+
+std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t) {
+  std::vector<WaveletSection> s = {
+      {kColOffsets, "column offsets", kTypeU64, t.col_offsets.data(), t.col_offsets.size(), false},
+      {kColVertices, "column vertices", kTypeU32, t.col_vertices.data(), t.col_vertices.size(), false},
+      {kColValues, "column values", kTypeI16, t.col_values.data(), t.col_values.size(), false},
+      {kVertexScale, "vertex scales", kTypeF32, t.vertex_scale.data(), t.vertex_scale.size(), true},
+  };
+  if (t.vertex_colors)
+    s.push_back({kVertexAlbedo, "vertex albedo", kTypeF32, t.vertex_albedo.data(), 3 * std::uint64_t(t.vertex_albedo.size()),
+                 true});
+  return s;
+}
+
+const char* wavelet_kind_name(std::uint32_t kind) {
+  switch (kind) {
+    case kColOffsets: return "column offsets";
+    case kColVertices: return "column vertices";
+    case kColValues: return "column values";
+    case kVertexScale: return "vertex scales";
+    case kVertexAlbedo: return "vertex albedo";
+  }
+  return "?";
+}
+
+// Header values of a wavelet transfer: what is wrong with them, or "".
+std::string wavelet_header_problem(std::int64_t r, double threshold, const glm::vec3& albedo, std::uint64_t vertices) {
+  if (!wavelet::valid_resolution(int(std::clamp<std::int64_t>(r, 0, 1 << 20))))
+    return sformat("cube resolution is %lld; must be a power of two from 2 to 256", static_cast<long long>(r));
+  if (!(threshold >= 0.0 && threshold < 1.0)) return sformat("threshold is %g; must be in [0, 1)", threshold);
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(albedo[c])) return "albedo is not finite";
+  if (vertices == 0) return "no vertices";
+  if (vertices >= std::numeric_limits<std::uint32_t>::max())
+    return sformat("%llu vertices; a wavelet transfer holds at most 2^32 - 2", static_cast<unsigned long long>(vertices));
+  return {};
+}
+
+// The arrays of a wavelet transfer: what is wrong with them, or "".
+std::string wavelet_arrays_problem(const WaveletTransfer& t) {
+  const std::size_t n = wavelet::cube_size(t.cube_res), V = t.vertices;
+  if (t.col_offsets.size() != n + 1)
+    return sformat("section 'column offsets' has %zu values; expected 6 r^2 + 1 = %zu", t.col_offsets.size(), n + 1);
+  if (t.col_values.size() != t.col_vertices.size())
+    return sformat("section 'column values' has %zu values but 'column vertices' has %zu", t.col_values.size(),
+                   t.col_vertices.size());
+  if (t.col_offsets[0] != 0)
+    return sformat("column offsets start at %llu, not 0", static_cast<unsigned long long>(t.col_offsets[0]));
+  for (std::size_t j = 0; j < n; ++j)
+    if (t.col_offsets[j + 1] < t.col_offsets[j])
+      return sformat("column offsets decrease at column %zu (%llu after %llu)", j,
+                     static_cast<unsigned long long>(t.col_offsets[j + 1]),
+                     static_cast<unsigned long long>(t.col_offsets[j]));
+  if (t.col_offsets[n] != t.col_vertices.size())
+    return sformat("column offsets end at %llu; the columns hold %zu entries",
+                   static_cast<unsigned long long>(t.col_offsets[n]), t.col_vertices.size());
+  for (std::size_t j = 0; j < n; ++j)
+    for (std::uint64_t e = t.col_offsets[j]; e < t.col_offsets[j + 1]; ++e) {
+      const std::uint32_t v = t.col_vertices[e];
+      if (v >= V) return sformat("column %zu lists vertex %u; the transfer has %zu vertices", j, v, V);
+      if (e > t.col_offsets[j] && v <= t.col_vertices[e - 1])
+        return sformat("column %zu is not sorted by vertex (vertex %u after %u)", j, v, t.col_vertices[e - 1]);
+    }
+  if (t.vertex_scale.size() != V)
+    return sformat("section 'vertex scales' has %zu values; expected one per vertex (%zu)", t.vertex_scale.size(), V);
+  for (std::size_t v = 0; v < V; ++v)
+    if (!std::isfinite(t.vertex_scale[v]) || t.vertex_scale[v] < 0.0f)
+      return sformat("vertex %zu has a bad scale (%g; must be finite and >= 0)", v, double(t.vertex_scale[v]));
+  if (t.vertex_colors != !t.vertex_albedo.empty() || (t.vertex_colors && t.vertex_albedo.size() != V))
+    return sformat("%zu per-vertex albedos for %zu vertices with vertex colours %s", t.vertex_albedo.size(), V,
+                   t.vertex_colors ? "on" : "off");
+  for (std::size_t v = 0; v < t.vertex_albedo.size(); ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(t.vertex_albedo[v][c])) return sformat("vertex %zu has a non-finite albedo", v);
+  return {};
+}
+
+std::string wavelet_problem(const WaveletTransfer& t) {
+  if (auto p = wavelet_header_problem(t.cube_res, t.threshold, t.albedo, t.vertices); !p.empty()) return p;
+  return wavelet_arrays_problem(t);
+}
+
+}  // namespace
+
+std::string_view basis_name(TransferBasis b) { return b == TransferBasis::Wavelet ? "wavelet" : "sh"; }
+
+TransferBasis read_transfer_basis(const std::string& path) {
+  return Reader(path).read_basis() == kBasisWavelet ? TransferBasis::Wavelet : TransferBasis::SH;
+}
+
+std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
+  std::vector<TransferSection> out;
+  for (const auto& s : wavelet_sections(t))
+    out.push_back({s.kind, s.name, type_bytes(s.type), s.count, s.count * type_bytes(s.type), s.per_vertex,
+                   type_name(s.type)});
+  return out;
+}
+
+std::uint64_t transfer_file_size(const WaveletTransfer& t) {
+  std::uint64_t size = kHeaderSize + kTrailerSize;
+  for (const auto& s : transfer_sections(t)) size += kSectionHeaderSize + s.bytes + padding(s.bytes);
+  return size;
+}
+
+void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
+  if (auto p = wavelet_problem(t); !p.empty()) throw Error(path + ": cannot write this wavelet transfer: " + p);
+  const std::vector<WaveletSection> sections = wavelet_sections(t);
+
+  unsigned char header[kHeaderSize] = {};
+  std::memcpy(header, kMagic.data(), kMagic.size());
+  store<std::uint32_t>(header + kOffVersion, kTransferFormatVersion);
+  store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
+  store<std::uint32_t>(header + kOffBasis, kBasisWavelet);
+  store<std::uint32_t>(header + kOffCubeRes, std::uint32_t(t.cube_res));
+  store<std::uint32_t>(header + kOffChannels, 1);
+  store<std::uint32_t>(header + kOffMode, std::uint32_t(TransferMode::Shadowed));
+  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
+  store<std::uint32_t>(header + kOffFlags, t.vertex_colors ? kFlagVertexColors : 0u);
+  store<std::uint64_t>(header + kOffVertices, t.vertices);
+  store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
+  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
+  store<std::uint32_t>(header + kOffQuantisation, kQuantInt16);
+  store<double>(header + kOffThreshold, t.threshold);
+
+  write_atomically(path, [&](const std::string& tmp) {
+    errno = 0;
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw Error(path + ": cannot open for writing: " + errno_text());
+    HashedWriter out(f);
+    out.write(header, kHeaderSize);
+    static constexpr unsigned char zeros[kAlign] = {};
+    for (const auto& s : sections) {
+      const std::uint64_t bytes = s.count * type_bytes(s.type);
+      unsigned char sh[kSectionHeaderSize];
+      store<std::uint32_t>(sh + 0, s.kind);
+      store<std::uint32_t>(sh + 4, s.type);
+      store<std::uint64_t>(sh + 8, s.count);
+      store<std::uint64_t>(sh + 16, bytes);
+      out.write(sh, sizeof sh);
+      out.write(s.data, bytes);
+      out.write(zeros, padding(bytes));
+    }
+    unsigned char trailer[kTrailerSize];
+    store<std::uint64_t>(trailer, out.digest());
+    std::memcpy(trailer + 8, kEndMagic.data(), kEndMagic.size());
+    out.raw(trailer, sizeof trailer);
+    f.close();
+    if (!f) throw Error(path + ": write failed: " + errno_text());
+  });
+}
+
+namespace {
+
+WaveletTransfer Reader::read_wavelet() {
+  open_file();
+  read_head();
+  verify();
+  const unsigned char* h = h_;
+  const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
+  if (basis == kBasisSH)
+    throw fail("holds a spherical-harmonics transfer (basis 'sh', " + std::to_string(load<std::uint32_t>(h + kOffBands)) +
+               " bands), not a wavelet one: run prt precompute --basis wavelet for a wavelet transfer, or read it "
+               "with prt::read_transfer");
+  if (basis != kBasisWavelet) throw fail(unknown_basis(basis));
+
+  WaveletTransfer t;
+  const std::uint32_t r = load<std::uint32_t>(h + kOffCubeRes);
+  const std::uint32_t channels = load<std::uint32_t>(h + kOffChannels), mode = load<std::uint32_t>(h + kOffMode);
+  t.threshold = load<double>(h + kOffThreshold);
+  t.albedo = {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)};
+  t.vertices = std::size_t(load<std::uint64_t>(h + kOffVertices));
+  t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
+  if (auto p = wavelet_header_problem(r, t.threshold, t.albedo, t.vertices); !p.empty()) throw fail("bad header: " + p);
+  t.cube_res = int(r);
+  if (channels != 1) throw fail("bad header: channels is " + std::to_string(channels) + "; a wavelet transfer has 1");
+  if (mode != std::uint32_t(TransferMode::Shadowed))
+    throw fail("bad header: mode is " + std::to_string(mode) + "; a wavelet transfer is shadowed (1)");
+  if (load<std::uint32_t>(h + kOffBounces) != 0 || load<std::uint32_t>(h + kOffSamples) != 0 ||
+      load<std::uint64_t>(h + kOffSeed) != 0)
+    throw fail("bad header: bounces, samples and seed must be 0 in a wavelet transfer");
+  const std::uint32_t quant = load<std::uint32_t>(h + kOffQuantisation);
+  if (quant != kQuantInt16)
+    throw fail("bad header: unknown quantisation " + std::to_string(quant) + " (1 is int16 with a scale per vertex)");
+  const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
+  if (flags & ~kKnownFlags) throw fail("bad header: unknown flags " + sformat("0x%x", flags & ~kKnownFlags));
+  t.vertex_colors = (flags & kFlagVertexColors) != 0;
+  for (std::uint64_t i = kOffWaveletReserved; i < kHeaderSize; ++i)
+    if (h[i] != 0) throw fail("bad header: reserved byte " + u64s(i) + " is not zero");
+  if (t.vertices > size_ / 4)  // the scales alone take 4 bytes per vertex
+    throw fail("bad header: " + u64s(t.vertices) + " vertices cannot fit in a file of " + u64s(size_) + " bytes");
+
+  std::vector<std::uint32_t> kinds = {kColOffsets, kColVertices, kColValues, kVertexScale};
+  if (t.vertex_colors) kinds.push_back(kVertexAlbedo);
+  if (section_count_ != kinds.size())
+    throw fail("bad section table: " + std::to_string(section_count_) + " sections; a wavelet transfer " +
+               (t.vertex_colors ? "with" : "without") + " vertex colours has " + std::to_string(kinds.size()));
+
+  const std::uint64_t n = wavelet::cube_size(t.cube_res), data_end = size_ - kTrailerSize;
+  std::uint64_t offset = kHeaderSize;
+  for (std::uint32_t i = 0; i < section_count_; ++i) {
+    const char* name = wavelet_kind_name(kinds[i]);
+    if (offset + kSectionHeaderSize > data_end)
+      throw fail("bad section table: section " + std::to_string(i + 1) + " ('" + name + "') is missing");
+    unsigned char sh[kSectionHeaderSize];
+    read_at(offset, sh, sizeof sh);
+    const std::uint32_t kind = load<std::uint32_t>(sh + 0), type = load<std::uint32_t>(sh + 4);
+    const std::uint64_t count = load<std::uint64_t>(sh + 8), bytes = load<std::uint64_t>(sh + 16);
+    if (kind != kinds[i])
+      throw fail("bad section table: section " + std::to_string(i + 1) + " has kind " + std::to_string(kind) +
+                 "; expected " + std::to_string(kinds[i]) + " ('" + name + "')");
+    const std::uint32_t want_type = kind == kColOffsets ? kTypeU64 : kind == kColVertices ? kTypeU32
+                                  : kind == kColValues  ? kTypeI16 : kTypeF32;
+    if (type != want_type)
+      throw fail("bad section table: section '" + std::string(name) + "' has element type " + std::to_string(type) +
+                 "; expected " + std::to_string(want_type) + " (" + type_name(want_type) + ")");
+    std::uint64_t want = 0;
+    switch (kind) {
+      case kColOffsets: want = n + 1; break;
+      case kColVertices: want = count; break;  // checked against the offsets below
+      case kColValues: want = t.col_vertices.size(); break;
+      case kVertexScale: want = t.vertices; break;
+      case kVertexAlbedo: want = 3 * std::uint64_t(t.vertices); break;
+    }
+    if (count != want)
+      throw fail("bad section table: section '" + std::string(name) + "' has " + u64s(count) + " values; expected " +
+                 u64s(want));
+    const std::uint64_t data = offset + kSectionHeaderSize, eb = type_bytes(type);
+    if (count > (data_end - data) / eb)
+      throw fail("bad section table: section '" + std::string(name) + "' runs past the end of the file");
+    if (bytes != count * eb)
+      throw fail("bad section table: section '" + std::string(name) + "' has " + u64s(count) + " " + type_name(type) +
+                 " values but " + u64s(bytes) + " bytes");
+    const std::uint64_t pad = padding(bytes);
+    if (bytes + pad > data_end - data)
+      throw fail("bad section table: section '" + std::string(name) + "' runs past the end of the file");
+    switch (kind) {
+      case kColOffsets: read_section(data, t.col_offsets, count); break;
+      case kColVertices: read_section(data, t.col_vertices, count); break;
+      case kColValues: read_section(data, t.col_values, count); break;
+      case kVertexScale: read_section(data, t.vertex_scale, count); break;
+      case kVertexAlbedo: read_section(data, t.vertex_albedo, count / 3); break;
+    }
+    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
+    read_at(data + bytes, got, pad);
+    if (std::memcmp(got, zeros, pad) != 0)
+      throw fail("bad section table: the padding after section '" + std::string(name) + "' is not zero");
+    offset = data + bytes + pad;
+  }
+  if (offset != data_end)
+    throw fail("bad section table: " + u64s(data_end - offset) + " bytes between the last section and the trailer");
+  if (auto p = wavelet_arrays_problem(t); !p.empty()) throw fail(p);
+  t.vertex_kept.assign(t.vertices, 0);
+  for (std::uint32_t v : t.col_vertices) ++t.vertex_kept[v];
+  return t;
+}
+
+}  // namespace
+
+WaveletTransfer read_wavelet_transfer(const std::string& path) { return Reader(path).read_wavelet(); }
+
+void check_matches(const WaveletTransfer& t, const Mesh& mesh, const std::string& what) {
+  const std::uint64_t hash = mesh.hash();
+  if (t.vertices == mesh.vertex_count() && t.mesh_hash == hash) return;
+  throw Error(what + " was computed for a different mesh (" + u64s(t.vertices) + " vertices, hash " +
+              hex64(t.mesh_hash) + ") than " + mesh.source + " (" + u64s(mesh.vertex_count()) + " vertices, hash " +
+              hex64(hash) + "); run prt precompute --basis wavelet again");
+}
+
+std::string describe_transfer(const WaveletTransfer& t) {
+  const double bpv = t.vertices > 0 ? double(t.bytes()) / double(t.vertices) : 0.0;
+  return sformat("prt wavelet transfer (format version %u): cube %d (%zu coefficients), threshold %g, int16 + f32 "
+                 "scale per vertex, ",
+                 kTransferFormatVersion, t.cube_res, t.coeff_count(), t.threshold) +
+         sformat("%zu vertices, kept %.4g%% (%zu coefficients), %.1f bytes/vertex, ", t.vertices,
+                 100.0 * t.kept_fraction(), t.kept(), bpv) +
+         (t.vertex_colors ? std::string("albedo: vertex colours, ")
+                          : sformat("albedo %.7g %.7g %.7g, ", double(t.albedo.x), double(t.albedo.y),
+                                    double(t.albedo.z))) +
+         "mesh hash " + hex64(t.mesh_hash) + ", file " + u64s(transfer_file_size(t)) + " bytes\n";
 }
 
 }  // namespace prt

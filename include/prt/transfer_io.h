@@ -3,14 +3,19 @@
 //
 // The file format (little-endian header, typed sections, XXH3-64 checksum)
 // is specified in docs/FORMAT.md; the in-memory layout it stores is that of
-// prt::Transfer (prt/transfer.h).
+// prt::Transfer (prt/transfer.h) for the SH basis and prt::WaveletTransfer
+// (prt/wavelet_transfer.h) for the wavelet basis. Both bases share the
+// header, the section framing, the checksum and the atomic write; the header's
+// basis field says which one a file holds.
 #pragma once
 
 #include <prt/mesh.h>
 #include <prt/transfer.h>
+#include <prt/wavelet_transfer.h>
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace prt {
@@ -47,6 +52,7 @@ struct TransferSection {
   std::uint64_t count = 0;          // elements (scalars)
   std::uint64_t bytes = 0;          // count * element_bytes, without padding
   bool per_vertex = false;          // true: bytes / vertices bytes per vertex
+  const char* type = "f32";         // element type: "f32", "f64", "u64", "u32" or "i16"
 };
 
 // The sections write_transfer stores for `t`, in file order (empty arrays
@@ -56,5 +62,44 @@ std::vector<TransferSection> transfer_sections(const Transfer& t);
 std::uint64_t transfer_bytes_per_vertex(const Transfer& t);
 // Exact size in bytes of the file write_transfer writes for `t`.
 std::uint64_t transfer_file_size(const Transfer& t);
+
+// ---- the basis a file holds ---------------------------------------------------
+enum class TransferBasis { SH, Wavelet };
+std::string_view basis_name(TransferBasis b);  // "sh", "wavelet"
+
+// Reads just the header: the file's existence, signature, version, header
+// size and basis field, with read_transfer's messages for each. Does not
+// verify the checksum or the sections (read_transfer / read_wavelet_transfer
+// do). Throws prt::Error "PATH: problem".
+TransferBasis read_transfer_basis(const std::string& path);
+
+// ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
+// Writes `t` through write_atomically. Throws prt::Error naming the file,
+// before writing anything, if `t` would fail read_wavelet_transfer's checks
+// (column offsets not monotone or not ending at the entry count, vertex
+// indices out of range or unsorted within a column, array sizes, non-finite
+// scales or albedo, bad cube resolution or threshold).
+void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t);
+
+// Reads a wavelet transfer file, validating signature, version, size,
+// checksum, header, section table and every value as above;
+// WaveletTransfer::vertex_kept is recomputed from the columns. Throws
+// prt::Error "PATH: problem"; on an SH file the message says so and points to
+// read_transfer / prt precompute --basis wavelet. read_transfer likewise
+// refuses a wavelet file, naming the basis.
+WaveletTransfer read_wavelet_transfer(const std::string& path);
+
+// Throws prt::Error unless `t` was computed for `mesh` (same vertex count and
+// Mesh::hash()); `what` (the transfer's path) names it in the message.
+void check_matches(const WaveletTransfer& t, const Mesh& mesh, const std::string& what);
+
+// One line (ending in a newline): cube resolution, threshold, quantisation,
+// vertices, kept fraction, bytes per vertex, albedo, mesh hash, file size.
+std::string describe_transfer(const WaveletTransfer& t);
+
+// The sections write_wavelet_transfer stores for `t`, in file order, and the
+// exact size of the file. Bytes per vertex: WaveletTransfer::bytes() / vertices.
+std::vector<TransferSection> transfer_sections(const WaveletTransfer& t);
+std::uint64_t transfer_file_size(const WaveletTransfer& t);
 
 }  // namespace prt

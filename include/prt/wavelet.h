@@ -38,6 +38,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace prt::wavelet {
@@ -140,5 +141,39 @@ class CubeSplatter {
   std::vector<double> scratch_;  // per-chunk accumulators
   glm::dvec3 energy_{0.0};
 };
+
+// ---- per-frame lighting ----------------------------------------------------------
+// The lighting side of a frame (Ng et al. 2003, section 4): resample the
+// rotated environment into the cube (CubeSplatter), Haar-transform it
+// (forward_cube) and keep the K largest terms (select_terms). Built once per
+// map and resolution; update() runs every frame. Owns its buffers; not
+// thread-safe (one object per rendering thread).
+class FrameLighting {
+ public:
+  // Throws prt::Error for an invalid cube_res or an empty map (CubeSplatter).
+  FrameLighting(const EnvMap& map, int cube_res);
+
+  // Resamples with rotation R (light from d arrives from R d; docs/CONVENTIONS.md,
+  // "Rotations"), transforms, and selects K terms (K >= 6 r^2: all of them, in
+  // index order). Throws prt::Error for K < 0. Deterministic.
+  void update(const glm::dmat3& R, int K, Selection selection);
+
+  // After update(): planar [3][6 r^2] Haar coefficients of the texel-average
+  // radiance (all of them; terms() says which to use).
+  const std::vector<float>& coefficients() const { return coeffs_; }
+  // After update(): the min(K, 6 r^2) selected indices, ascending.
+  const std::vector<std::uint32_t>& terms() const { return terms_; }
+  int resolution() const { return splatter_.resolution(); }
+  const CubeSplatter& splatter() const { return splatter_; }
+
+ private:
+  CubeSplatter splatter_;
+  std::vector<float> coeffs_;
+  std::vector<std::uint32_t> terms_;
+};
+
+// "area" or "magnitude" (the command line's --selection); throws prt::Error otherwise.
+Selection parse_selection(std::string_view name);
+std::string_view selection_name(Selection s);
 
 }  // namespace prt::wavelet

@@ -42,7 +42,7 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
   for (const auto& s : transfer_sections(t))
     sections.push_back({{"kind", s.kind},
                         {"name", s.name},
-                        {"type", s.element_bytes == 8 ? "f64" : "f32"},
+                        {"type", s.type},
                         {"count", s.count},
                         {"bytes", s.bytes}});
   j["sections"] = sections;
@@ -58,7 +58,40 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
   return j;
 }
 
+nlohmann::ordered_json to_json(const std::string& path, const WaveletTransfer& t) {
+  nlohmann::ordered_json j;
+  j["file"] = path;
+  j["format_version"] = kTransferFormatVersion;
+  j["basis"] = "wavelet";
+  j["cube_res"] = t.cube_res;
+  j["coefficients"] = t.coeff_count();
+  j["threshold"] = t.threshold;
+  j["quantisation"] = "int16, f32 scale per vertex";
+  j["mode"] = "shadowed";
+  j["albedo"] = {t.albedo.x, t.albedo.y, t.albedo.z};
+  j["vertex_colors"] = t.vertex_colors;
+  j["vertices"] = t.vertices;
+  j["mesh_hash"] = fmt::format("{:#018x}", t.mesh_hash);
+  j["kept"] = t.kept();
+  j["kept_fraction"] = t.kept_fraction();
+  nlohmann::ordered_json sections = nlohmann::ordered_json::array();
+  for (const auto& s : transfer_sections(t))
+    sections.push_back({{"kind", s.kind}, {"name", s.name}, {"type", s.type}, {"count", s.count}, {"bytes", s.bytes}});
+  j["sections"] = sections;
+  j["bytes_per_vertex"] = t.vertices ? double(t.bytes()) / double(t.vertices) : 0.0;
+  j["file_bytes"] = transfer_file_size(t);
+  return j;
+}
+
 int run_info(const InfoArgs& a) {
+  if (read_transfer_basis(a.file) == TransferBasis::Wavelet) {
+    const WaveletTransfer w = read_wavelet_transfer(a.file);  // validates everything
+    if (a.json)
+      fmt::print("{}\n", to_json(a.file, w).dump(2));
+    else
+      fmt::print("{}: {}", a.file, describe_transfer(w));
+    return 0;
+  }
   const Transfer t = read_transfer(a.file);  // validates everything; throws naming the file
   if (a.json)
     fmt::print("{}\n", to_json(a.file, t).dump(2));
@@ -74,7 +107,8 @@ Run add_info(CLI::App& app) {
   CLI::App* s = app.add_subcommand("info", "Describe a transfer file (checks it completely)");
   s->footer(
       "Reads and validates the whole file (signature, version, size, checksum, every value) and prints its\n"
-      "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes.\n"
+      "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes;\n"
+      "for a wavelet transfer: cube resolution, threshold, kept fraction and bytes per vertex.\n"
       "The format is specified in docs/FORMAT.md. Exits non-zero, naming the problem, on a bad file.\n"
       "Example: prt info bunny.prtt --json");
   s->add_option("FILE", a->file, "Transfer file written by prt precompute")->required();

@@ -1,4 +1,4 @@
-// prt precompute: mesh -> per-vertex SH transfer file.
+// prt precompute: mesh -> per-vertex SH or wavelet transfer file.
 #include "commands.h"
 #include "progress.h"
 
@@ -6,23 +6,81 @@
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/wavelet_transfer.h>
 
 #include <fmt/core.h>
 
 #include <chrono>
+#include <vector>
 
 namespace prt::cli {
 
 namespace {
 
 struct PrecomputeArgs {
-  std::string mesh, output, mode = "shadowed", albedo = "0.8,0.8,0.8";
+  std::string mesh, output, mode = "shadowed", albedo = "0.8,0.8,0.8", basis = "sh";
   TransferOptions opt;
+  WaveletOptions wopt;
   MeshOptions mesh_opt;
   bool quiet = false;
+  // Options given on the command line (to refuse those the basis does not take).
+  std::vector<const CLI::Option*> sh_only, wavelet_only;
 };
 
+// --basis wavelet: the all-frequency shadowed transfer (prt/wavelet_transfer.h).
+int run_wavelet(PrecomputeArgs& a) {
+  if (a.mode != "shadowed")
+    throw Error("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed only "
+                "(use --basis sh for unshadowed or interreflected transfers)");
+  for (const CLI::Option* o : a.sh_only)
+    if (o->count() > 0)
+      throw Error(o->get_name() + " does not apply to --basis wavelet (a wavelet transfer is shadowed, one ray per " +
+                  "cube texel above the horizon; its size is set by --cube-res and --threshold)");
+  double rgb[3];
+  parse_triple(a.albedo, "--albedo", rgb);
+  a.wopt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  a.wopt.vertex_colors = a.opt.vertex_colors;
+  a.wopt.threads = a.opt.threads;
+  a.wopt.offset = a.opt.offset;
+  wavelet::check_resolution(a.wopt.cube_res, "--cube-res");
+  if (!(a.wopt.threshold >= 0.0 && a.wopt.threshold < 1.0))
+    throw Error("--threshold must be in [0, 1), got " + fmt::format("{}", a.wopt.threshold));
+  for_option("--output", [&] { check_writable(a.output); });
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  WaveletTransfer t;
+  bool interrupted = false;
+  {
+    ProgressBar bar(a.quiet);
+    try {
+      t = compute_wavelet_transfer(mesh, a.wopt, bar.callback());
+    } catch (const Error&) {
+      if (!ProgressBar::interrupted()) throw;
+      interrupted = true;
+    }
+  }
+  if (interrupted) {
+    fmt::print(stderr, "prt precompute: interrupted; nothing written\n");
+    return 130;
+  }
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  write_wavelet_transfer(a.output, t);
+  if (!a.quiet)
+    fmt::print(stderr,
+               "wrote {}: wavelet, cube {} ({} coefficients), threshold {}, {} vertices, kept {:.3f}% of the "
+               "coefficients ({:.1f} per vertex), {:.1f} bytes/vertex, {} bytes, precompute {:.2f} s\n",
+               a.output, t.cube_res, t.coeff_count(), t.threshold, t.vertices, 100.0 * t.kept_fraction(),
+               t.vertices ? double(t.kept()) / double(t.vertices) : 0.0,
+               t.vertices ? double(t.bytes()) / double(t.vertices) : 0.0, transfer_file_size(t), secs);
+  return 0;
+}
+
 int run_precompute(PrecomputeArgs& a) {
+  if (a.basis == "wavelet") return run_wavelet(a);
+  for (const CLI::Option* o : a.wavelet_only)
+    if (o->count() > 0) throw Error(o->get_name() + " applies to --basis wavelet only");
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);
@@ -72,23 +130,40 @@ Run add_precompute(CLI::App& app) {
       "1024 rays per vertex (the hemisphere half of a 2048-direction spherical Fibonacci set; D3DX's default ray\n"
       "count), 1 bounce (most of the interreflected light at albedo 0.8), albedo 0.8 (light grey paint; 1 would\n"
       "reflect all light). A grey albedo stores one channel. Ctrl-C stops without writing anything.\n"
-      "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2");
+      "--basis wavelet (shadowed only; --cube-res, default 32, and --threshold, default 1e-3) stores sparse int16\n"
+      "Haar coefficients per vertex for all-frequency shadows; relight it with prt relight --terms K.\n"
+      "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
+      "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
+  s->add_option("--basis", a->basis,
+                "sh (spherical harmonics, all modes) or wavelet (all-frequency shadows: Haar on a cube map, "
+                "Ng et al. 2003)")
+      ->check(CLI::IsMember({"sh", "wavelet"}))
+      ->capture_default_str();
   s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")->capture_default_str();
-  s->add_option("-b,--bands", a->opt.bands, "SH bands n (n*n coefficients)")
-      ->check(int_range(1, 16))
-      ->capture_default_str();
-  s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
-      ->check(int_range(1, 1 << 24))
-      ->capture_default_str();
-  s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode)")
-      ->check(int_range(0, 64))
-      ->capture_default_str();
+  a->sh_only.push_back(s->add_option("-b,--bands", a->opt.bands, "SH bands n (n*n coefficients)")
+                           ->check(int_range(1, 16))
+                           ->capture_default_str());
+  a->sh_only.push_back(s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
+                           ->check(int_range(1, 1 << 24))
+                           ->capture_default_str());
+  a->sh_only.push_back(s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode)")
+                           ->check(int_range(0, 64))
+                           ->capture_default_str());
+  a->wavelet_only.push_back(
+      s->add_option("--cube-res", a->wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
+          ->check(int_range(2, 256))
+          ->capture_default_str());
+  a->wavelet_only.push_back(
+      s->add_option("--threshold", a->wopt.threshold,
+                    "Wavelet basis: relative L2 truncation error per vertex, in [0, 1) (0 keeps every non-zero term)")
+          ->capture_default_str());
   s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")->capture_default_str();
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-t,--threads", a->opt.threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
-  s->add_option("--seed", a->opt.seed, "Seed of the direction set (same seed, same bits)")->capture_default_str();
+  a->sh_only.push_back(
+      s->add_option("--seed", a->opt.seed, "Seed of the direction set (same seed, same bits)")->capture_default_str());
   s->add_option("--offset", a->opt.offset,
                 "Ray origin offset along the normal, in mesh units (default 1e-4 x bounding-box diagonal)");
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");

@@ -12,9 +12,12 @@
 #include <prt/rotation.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/wavelet.h>
+#include <prt/wavelet_transfer.h>
 
 #include <fmt/core.h>
 
+#include <chrono>
 #include <filesystem>
 
 namespace prt::cli {
@@ -22,13 +25,55 @@ namespace prt::cli {
 namespace {
 
 struct RelightArgs {
-  std::string mesh, transfer, env, output, rotate, window = "none";
+  std::string mesh, transfer, env, output, rotate, window = "none", selection = "area";
   double window_width = 0;
+  int terms = 100;
   bool direct = false, quiet = false;
+  std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
 };
 
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void write_output(const std::string& ext, const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& rgb) {
+  if (ext == ".ply")
+    write_ply(path, mesh, rgb);
+  else
+    write_vertex_csv(path, rgb, nullptr);
+}
+
+// A wavelet transfer: per-frame lighting (resample, Haar, K terms) and the sparse sum.
+int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler[3]) {
+  const wavelet::Selection selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
+  const Mesh mesh = load_mesh(a.mesh);
+  const WaveletTransfer t = read_wavelet_transfer(a.transfer);
+  check_matches(t, mesh, a.transfer);
+  EnvMap env = load_envmap(a.env);
+  require_finite(env);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(mesh), describe(env), describe_transfer(t));
+
+  auto t0 = std::chrono::steady_clock::now();
+  wavelet::FrameLighting lighting(env, t.cube_res);
+  const double setup_ms = ms_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  lighting.update(sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.terms, selection);
+  const double light_ms = ms_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  std::vector<glm::vec3> rgb;
+  wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
+  const double relight_ms = ms_since(t0);
+  write_output(ext, a.output, mesh, rgb);
+  if (!a.quiet)
+    fmt::print(stderr,
+               "relight: {:.3f} ms per frame (lighting {:.3f} ms: resample, Haar, {} of {} terms by {}; transfer "
+               "{:.3f} ms); map setup {:.1f} ms\nwrote {} ({} vertices)\n",
+               light_ms + relight_ms, light_ms, lighting.terms().size(), t.coeff_count(),
+               wavelet::selection_name(selection), relight_ms, setup_ms, a.output, rgb.size());
+  return 0;
+}
+
 int run_relight(const RelightArgs& a) {
-  const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
   double euler[3] = {0, 0, 0};
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
   std::string ext = std::filesystem::path(a.output).extension().string();
@@ -36,13 +81,32 @@ int run_relight(const RelightArgs& a) {
   if (ext != ".ply" && ext != ".csv") throw Error("--output: " + a.output + ": expected a .ply or .csv file");
   for_option("--output", [&] { check_writable(a.output); });
 
+  // The basis comes from the file; options of the other basis are refused.
+  const TransferBasis basis = read_transfer_basis(a.transfer);
+  if (basis == TransferBasis::Wavelet) {
+    for (const CLI::Option* o : a.sh_only)
+      if (o->count() > 0)
+        throw Error(o->get_name() + " applies to SH transfers; " + a.transfer +
+                    " holds a wavelet transfer (use --terms and --selection to control its lighting approximation)");
+    return run_wavelet(a, ext, euler);
+  }
+  for (const CLI::Option* o : a.wavelet_only)
+    if (o->count() > 0)
+      throw Error(o->get_name() + " applies to wavelet transfers; " + a.transfer +
+                  " holds an SH transfer, whose band count is fixed when it is computed (prt precompute --bands), "
+                  "or run prt precompute --basis wavelet");
+  const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
+
   const Scene scene = load_scene(a.mesh, a.transfer, a.env);
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(env));
 
+  const auto t0 = std::chrono::steady_clock::now();
   std::vector<glm::dvec3> light = project(env, t.bands);
+  const double project_ms = ms_since(t0);
+  const auto t1 = std::chrono::steady_clock::now();
   sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : t.bands);
   if (!a.rotate.empty()) {
     std::vector<glm::dvec3> r(light.size());
@@ -50,11 +114,12 @@ int run_relight(const RelightArgs& a) {
     light.swap(r);
   }
   const std::vector<glm::vec3> rgb = a.direct ? relight_direct(t, light) : relight(t, light);
-  if (ext == ".ply")
-    write_ply(a.output, mesh, rgb);
-  else
-    write_vertex_csv(a.output, rgb, nullptr);
-  if (!a.quiet) fmt::print(stderr, "wrote {} ({} vertices)\n", a.output, rgb.size());
+  const double frame_ms = ms_since(t1);
+  write_output(ext, a.output, mesh, rgb);
+  if (!a.quiet)
+    fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
+                       "wrote {} ({} vertices)\n",
+               frame_ms, project_ms, a.output, rgb.size());
   return 0;
 }
 
@@ -65,17 +130,29 @@ Run add_relight(CLI::App& app) {
   CLI::App* s = app.add_subcommand("relight", "Outgoing radiance of every vertex under an environment map (CPU)");
   s->footer(
       "Radiance is in the map's units: albedo 1, unshadowed, under a constant map of 1 gives exactly 1.\n"
-      "Example: prt relight bunny.off bunny.prt envmaps/forest.exr --rotate 90,0,0 -o bunny.ply");
+      "The basis comes from the transfer file: SH files take --window/--window-width/--direct, wavelet files\n"
+      "(prt precompute --basis wavelet) take --terms/--selection.\n"
+      "Example: prt relight bunny.off bunny.prt envmaps/forest.exr --rotate 90,0,0 -o bunny.ply\n"
+      "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map")->required();
   s->add_option("-o,--output", a->output, "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b)")
       ->required();
   s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees");
-  s->add_option("-w,--window", a->window, "Windowing: none, hanning, lanczos, auto")->capture_default_str();
-  s->add_option("--window-width", a->window_width, "Window width in bands (default: the band count)")
-      ->check(positive_number());
-  s->add_flag("--direct", a->direct, "Interreflected files: use the direct (shadowed) part only");
+  a->sh_only.push_back(
+      s->add_option("-w,--window", a->window, "SH: windowing: none, hanning, lanczos, auto")->capture_default_str());
+  a->sh_only.push_back(s->add_option("--window-width", a->window_width, "SH: window width in bands (default: the band count)")
+                           ->check(positive_number()));
+  a->sh_only.push_back(s->add_flag("--direct", a->direct, "SH, interreflected files: use the direct (shadowed) part only"));
+  a->wavelet_only.push_back(s->add_option("-k,--terms", a->terms,
+                                          "Wavelet: lighting terms K kept per frame (K >= 6 r^2 keeps all)")
+                                ->check(int_range(0, 1 << 30))
+                                ->capture_default_str());
+  a->wavelet_only.push_back(
+      s->add_option("--selection", a->selection,
+                    "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
+          ->capture_default_str());
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }
