@@ -555,7 +555,22 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   if (!t.ao.empty() && t.ao.size() != t.vertices) throw Error("transfer's ambient occlusion has the wrong length");
   if (!t.bent_normals.empty() && t.bent_normals.size() != t.vertices)
     throw Error("transfer's bent normals have the wrong length");
-  if (t.vertex_colors && mesh.colors.size() != mesh.vertex_count())
+  set_mesh(mesh, t.albedo, t.vertex_colors);
+  Impl& m = *impl_;
+  const int stride = t.bands * t.bands;
+  m.transfer = make_transfer_array(t.coeffs.data(), t.vertices, t.channels, stride);
+  if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), t.vertices, t.channels, stride);
+  if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
+  if (!t.bent_normals.empty())
+    m.bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
+  check_gl("uploading the transfer");
+  m.bands = m.band_limit = t.bands;
+  m.channels = t.channels;
+  m.shading = Shading::Transfer;
+}
+
+void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors) {
+  if (vertex_colors && mesh.colors.size() != mesh.vertex_count())
     throw Error("the transfer was computed with vertex colours, but the mesh has none");
   if (mesh.triangles.empty()) throw Error("the mesh has no triangles");
   Impl& m = *impl_;
@@ -563,16 +578,10 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   clear_mesh();
   m.position_buffer = make_buffer(mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
   m.index_buffer = make_buffer(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
-  const int stride = t.bands * t.bands;
-  m.transfer = make_transfer_array(t.coeffs.data(), t.vertices, t.channels, stride);
-  if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), t.vertices, t.channels, stride);
   m.normal_buffer = make_buffer(mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
-  if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
-  if (!t.bent_normals.empty())
-    m.bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
-  m.albedo = t.albedo;
+  m.albedo = albedo;
   m.cpu_normals = mesh.normals;
-  if (t.vertex_colors) {
+  if (vertex_colors) {
     m.cpu_albedo = mesh.colors;
     m.albedo_buffer = make_buffer(mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
   }
@@ -582,12 +591,10 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   glVertexArrayAttribBinding(m.vao, 0, 0);
   glEnableVertexArrayAttrib(m.vao, 0);
   glVertexArrayElementBuffer(m.vao, m.index_buffer);
-  check_gl("uploading the mesh and transfer");
+  check_gl("uploading the mesh");
   m.index_count = GLsizei(mesh.triangles.size() * 3);
   m.vertex_count = mesh.vertex_count();
-  m.bands = m.band_limit = t.bands;
-  m.channels = t.channels;
-  m.shading = Shading::Transfer;
+  m.shading = Shading::VertexColors;  // until set_vertex_colors, or a transfer (the overload above)
   m.have_lighting = false;
 }
 
@@ -607,8 +614,9 @@ void Renderer::clear_mesh() {
 
 void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
   Impl& m = *impl_;
-  if (m.bands == 0) throw Error("set_lighting: no mesh uploaded");
+  if (m.index_count == 0) throw Error("set_lighting: no mesh uploaded");
   const std::size_t n = std::size_t(m.bands) * m.bands;
+  if (coeffs.empty()) throw Error("lighting has no coefficients");
   if (coeffs.size() < n)
     throw Error("lighting has " + std::to_string(coeffs.size()) + " coefficients, the transfer needs " +
                 std::to_string(n) + " (" + std::to_string(m.bands) + " bands)");
@@ -634,7 +642,7 @@ void Renderer::Impl::upload_lighting() {
 
 void Renderer::set_band_limit(int b) {
   Impl& m = *impl_;
-  if (m.bands == 0) throw Error("set_band_limit: no mesh uploaded");
+  if (m.bands == 0) throw Error("set_band_limit: no SH transfer uploaded");
   if (b < 1 || b > m.bands)
     throw Error("band limit " + std::to_string(b) + " outside 1.." + std::to_string(m.bands) + " (the transfer's bands)");
   m.band_limit = b;
@@ -645,19 +653,24 @@ int Renderer::band_limit() const { return impl_->band_limit; }
 
 bool Renderer::has_shading(Shading s) const {
   const Impl& m = *impl_;
-  if (m.bands == 0) return false;
+  if (m.index_count == 0) return false;
   switch (s) {
+    case Shading::Transfer:
+    case Shading::Unshadowed: return m.bands > 0;
     case Shading::Direct: return bool(m.direct);
     case Shading::AmbientOcclusion: return m.ao_buffer != 0;
     case Shading::BentNormal: return m.bent_buffer != 0;
     case Shading::VertexColors: return m.have_colors;
-    default: return true;
+    case Shading::Lambert: return true;
   }
+  return false;
 }
 
 void Renderer::set_shading(Shading s) {
   if (!has_shading(s)) {
-    const char* why = impl_->bands == 0                ? "no mesh is uploaded"
+    const char* why = impl_->index_count == 0          ? "no mesh is uploaded"
+                      : impl_->bands == 0 && (s == Shading::Transfer || s == Shading::Unshadowed)
+                          ? "no SH transfer is uploaded"
                       : s == Shading::Direct           ? "the transfer is not interreflected"
                       : s == Shading::VertexColors     ? "no vertex colours were set"
                                                        : "the transfer file has no such data";
@@ -670,7 +683,7 @@ Shading Renderer::shading() const { return impl_->shading; }
 
 void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
   Impl& m = *impl_;
-  if (m.bands == 0) throw Error("set_vertex_colors: no mesh uploaded");
+  if (m.index_count == 0) throw Error("set_vertex_colors: no mesh uploaded");
   if (colors.size() != m.vertex_count)
     throw Error("set_vertex_colors: " + std::to_string(colors.size()) + " colours for " +
                 std::to_string(m.vertex_count) + " vertices");
@@ -762,7 +775,9 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
                 std::to_string(max_rb));
   const bool lit = m.shading == Shading::Transfer || m.shading == Shading::Direct ||
                    m.shading == Shading::Unshadowed || m.shading == Shading::Lambert;
-  if (m.bands > 0 && lit && !m.have_lighting) throw Error("render: no lighting set for the mesh");
+  if (m.index_count > 0 && lit && !m.have_lighting) throw Error("render: no lighting set for the mesh");
+  if (m.index_count > 0 && m.shading == Shading::VertexColors && !m.have_colors)
+    throw Error("render: no vertex colours set for the mesh");
   if (!(cam.fov_deg > 0 && cam.fov_deg < 180)) throw Error("camera: field of view must be in (0, 180) degrees");
   const glm::dvec3 fwd = cam.target - cam.eye;
   if (!(glm::length(fwd) > 0) || !(glm::length(glm::cross(fwd, cam.up)) > 1e-12 * glm::length(fwd)))

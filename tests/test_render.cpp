@@ -474,6 +474,48 @@ TEST_F(RenderCli, BadInputs) {
   for (const char* f : {"f.exr", "g.exr", "h.png"}) EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
 }
 
+// A wavelet transfer renders (relit on the CPU, drawn as vertex colours); the
+// options of the other basis are refused on each.
+TEST_F(RenderCli, WaveletTransfer) {
+  const std::string wprt = dir.file("ball_w.prt");
+  const auto pre = test::run_prt(dir, {"precompute", mesh, "-o", wprt, "--basis", "wavelet", "--cube-res", "8", "-q"});
+  ASSERT_EQ(pre.code, 0) << test::describe_run(pre);
+  auto ok = render({mesh, wprt, env, "-o", dir.file("w.exr"), "--width", "32", "--height", "16", "--terms", "50"});
+  ASSERT_EQ(ok.code, 0) << test::describe_run(ok);
+  EXPECT_NE(ok.err.find("wavelet relighting on the CPU"), std::string::npos) << ok.err;
+  const EnvMap img = load_envmap(dir.file("w.exr"), Mapping::LatLong);
+  EXPECT_GT(img.rgb[(8 * 32 + 16) * 3], 0.05f);  // the ball, lit, at the centre
+  auto bands = render({mesh, wprt, env, "-o", dir.file("x.exr"), "--bands", "2"});
+  EXPECT_EQ(bands.code, 1);
+  EXPECT_NE(bands.err.find("--bands applies to SH"), std::string::npos) << bands.err;
+  auto terms = render({mesh, prt, env, "-o", dir.file("y.exr"), "--terms", "20"});
+  EXPECT_EQ(terms.code, 1);
+  EXPECT_NE(terms.err.find("--terms applies to wavelet"), std::string::npos) << terms.err;
+  auto ao = render({mesh, wprt, env, "-o", dir.file("z.exr"), "--shading", "ao"});
+  EXPECT_EQ(ao.code, 1);
+  for (const char* f : {"x.exr", "y.exr", "z.exr"}) EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
+}
+
+// The renderer without an SH transfer: vertex colours and Lambert only.
+TEST(Render, MeshWithoutTransfer) {
+  REQUIRE_RENDERER(r);
+  const Mesh a = test::sphere(8, 16);
+  r->set_mesh(a, glm::vec3(0.5f));
+  EXPECT_EQ(r->bands(), 0);
+  EXPECT_FALSE(r->has_shading(Shading::Transfer));
+  EXPECT_FALSE(r->has_shading(Shading::Unshadowed));
+  EXPECT_TRUE(r->has_shading(Shading::Lambert));
+  EXPECT_THROW(r->set_band_limit(1), Error);
+  const Camera cam = default_camera(a);
+  EXPECT_THROW(r->render(cam, 8, 8), Error);  // no colours yet
+  r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count(), glm::vec3(0.25f)));
+  const Image img = r->render(cam, 8, 8);
+  EXPECT_FLOAT_EQ(img.at(4, 4).y, 0.25f);
+  r->set_lighting(std::vector<glm::dvec3>(1, glm::dvec3(2 * std::sqrt(M_PI))));  // constant radiance 1
+  r->set_shading(Shading::Lambert);
+  EXPECT_NEAR(r->render(cam, 8, 8).at(4, 4).y, 0.5, 1e-5);  // albedo x 1
+}
+
 // --exposure scales EXR output linearly (no tone map on float output).
 TEST_F(RenderCli, LookOptionsOnExr) {
   // 2:1 images: read back with load_envmap, which takes lat-long shapes only.

@@ -7,6 +7,7 @@
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/wavelet_transfer.h>
 
 #include <gtest/gtest.h>
 
@@ -68,6 +69,10 @@ class ViewCli : public ::testing::Test {
     o.bands = 3;
     o.samples = 64;
     write_transfer(prt, compute_transfer(m, o));
+    WaveletOptions wo;
+    wo.cube_res = 8;
+    wavelet = dir.file("ball_w.prt");
+    write_wavelet_transfer(wavelet, compute_wavelet_transfer(m, wo));
     const int w = 64, h = 32;
     std::vector<float> rgb(std::size_t(w) * h * 3);
     for (int y = 0; y < h; ++y)
@@ -79,8 +84,8 @@ class ViewCli : public ::testing::Test {
     write_image(env, w, h, rgb);
   }
   test::TempDir dir;
-  std::string mesh, prt, env;
-  void check_screenshot_matches_render(const std::vector<std::string>& look);
+  std::string mesh, prt, env, wavelet;
+  void check_screenshot_matches_render(const std::vector<std::string>& look, bool wavelet_first = false);
 };
 
 // 256x128: the images are read back with load_envmap, which takes 2:1 lat-long shapes only.
@@ -88,7 +93,10 @@ constexpr int kW = 256, kH = 128;
 
 // The window's screenshot after a few frames equals prt render's PNG, both
 // with the options `look` (shading, exposure, tone map, ...).
-void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& look) {
+// With wavelet_first, the view shows the wavelet transfer (SH as --second)
+// and prt render renders the wavelet transfer.
+void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& look, bool wavelet_first) {
+  const std::string first = wavelet_first ? wavelet : prt;
   std::string look_args;
   for (const auto& s : look) look_args.append(1, ' ').append(test::shell_quote(s));
   const std::string shot = dir.file("view.png"), ref = dir.file("render.png");
@@ -98,7 +106,8 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
   // every other test, the EGL renderer's included.
   const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
                           "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
-                          test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
+                          test::shell_quote(mesh) + " " + test::shell_quote(first) + " " + test::shell_quote(env) +
+                          (wavelet_first ? " --second " + test::shell_quote(prt) : std::string()) +
                           " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --screenshot " + test::shell_quote(shot) + look_args +
                           " </dev/null >/dev/null 2>" + test::shell_quote(err);
   const int status = std::system(cmd.c_str());
@@ -109,7 +118,7 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
   ASSERT_EQ(code, 0) << view_err;
   EXPECT_NE(view_err.find("Controls:"), std::string::npos) << view_err;
 
-  std::vector<std::string> render_args = {"render", mesh, prt, env, "-o", ref, "--width", std::to_string(kW),
+  std::vector<std::string> render_args = {"render", mesh, first, env, "-o", ref, "--width", std::to_string(kW),
                                           "--height", std::to_string(kH), "-q"};
   render_args.insert(render_args.end(), look.begin(), look.end());
   const auto res = test::run_prt(dir, render_args);
@@ -161,6 +170,12 @@ TEST_F(ViewCli, ScreenshotMatchesRender) {
 TEST_F(ViewCli, ScreenshotMatchesRenderWithLookOptions) {
   if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
   check_screenshot_matches_render({"--shading", "lambert", "--exposure", "1.5", "--tonemap", "reinhard", "--window", "hanning"});
+}
+
+// Wavelet relighting in the window (with an SH transfer as --second).
+TEST_F(ViewCli, WaveletScreenshotMatchesRender) {
+  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  check_screenshot_matches_render({"--terms", "40"}, true);
 }
 
 TEST_F(ViewCli, NoDisplayPointsToRender) {

@@ -127,12 +127,17 @@ class Renderer {
   // Throws prt::Error when the transfer was not computed for this mesh
   // (vertex count, mesh hash) or its arrays are inconsistent.
   void set_mesh(const Mesh& mesh, const Transfer& transfer);
+  // Uploads the mesh alone, with no SH transfer (e.g. for wavelet relighting
+  // on the CPU): Shading::VertexColors (after set_vertex_colors) and Lambert
+  // (albedo: `albedo`, or the mesh's colours when vertex_colors) are available.
+  void set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors = false);
   void clear_mesh();
-  int bands() const;  // of the uploaded transfer; 0 without a mesh
+  int bands() const;  // of the uploaded SH transfer; 0 without one
 
   // The lighting of the next frames: RGB coefficients, at least bands()^2
-  // (extra ones are ignored). Only these bands()^2 vec4s go to the GPU (and
-  // for Lambert, three 4x4 matrices).
+  // (at least 1 without an SH transfer; extra ones are ignored). Only these
+  // bands()^2 vec4s go to the GPU (and for Lambert, three 4x4 matrices from
+  // the first 9).
   void set_lighting(std::span<const glm::dvec3> coeffs);
 
   // Shades with the first bands^2 coefficients only (1 <= bands <= bands();

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <sstream>
 
 namespace prt::cli {
@@ -66,11 +67,12 @@ int run_render(const RenderArgs& a) {
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
   for_option("--output", [&] { check_image_output(a.output); });
 
-  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render");
+  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true);
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
-  const Look look = parse_look(a.look, t);
+  const bool wavelet = scene.basis == TransferBasis::Wavelet;
+  const Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet);
 
   Camera cam = default_camera(mesh, a.fov);
   if (!a.camera.empty()) parse_camera(a.camera, cam);
@@ -78,19 +80,32 @@ int run_render(const RenderArgs& a) {
 
   Renderer renderer;
   if (!a.quiet) fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(env), renderer.device());
-  renderer.set_mesh(mesh, t);
   renderer.set_environment(env);
-  renderer.set_band_limit(look.bands);
-  renderer.set_shading(look.shading);
+  std::optional<WaveletFrames> wavelet_frames;
+  if (wavelet) {
+    renderer.set_mesh(mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
+    wavelet_frames.emplace(scene.wavelet, env);
+    if (look.shading != Shading::Transfer && look.shading != Shading::Lambert)
+      throw Error("--shading " + std::string(shading_name(look.shading)) +
+                  ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
+  } else {
+    renderer.set_mesh(mesh, t);
+    renderer.set_band_limit(look.bands);
+    renderer.set_shading(look.shading);
+  }
 
-  // Project once; each frame only rotates the coefficients (no re-projection).
-  const std::vector<glm::dvec3> light = windowed_lighting(project(env, t.bands), look.bands, look.window);
+  // SH: project once; each frame only rotates the coefficients. Wavelet: each
+  // frame resamples the rotated map (no cheap rotation in that basis). Lambert
+  // needs 3 bands of SH lighting in both.
+  const int sh_bands = wavelet ? 3 : t.bands;
+  const std::vector<glm::dvec3> light =
+      windowed_lighting(project(env, sh_bands), wavelet ? sh_bands : look.bands, look.window);
   std::vector<glm::dvec3> rotated(light.size());
   const glm::dmat3 base = sh::rotation_from_euler(euler[0], euler[1], euler[2]);
-  sh::Rotation rotation(t.bands, base);
+  sh::Rotation rotation(sh_bands, base);
   const double spin = a.spin_given ? a.spin : (a.frames > 1 ? 360.0 / a.frames : 0.0);
 
-  double render_seconds = 0;
+  double render_seconds = 0, cpu_ms = 0;
   for (int f = 0; f < a.frames; ++f) {
     const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, glm::radians(spin * f)) * base;
     const auto t0 = std::chrono::steady_clock::now();
@@ -98,15 +113,25 @@ int run_render(const RenderArgs& a) {
     rotation.apply(light, rotated);
     renderer.set_lighting(rotated);
     renderer.set_environment_rotation(R);
+    if (wavelet && look.shading == Shading::Transfer) {
+      cpu_ms += wavelet_frames->frame(renderer, R, look.terms, look.selection);
+      renderer.set_shading(Shading::VertexColors);
+    } else if (wavelet) {
+      renderer.set_shading(Shading::Lambert);
+    }
     Image img = renderer.render(cam, a.width, a.height);
     render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::string path = a.frames_given ? frame_path(a.output, f) : a.output;
-    write_frame(path, std::move(img), look.display);
     if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{})\n", path, img.width, img.height);
+    write_frame(path, std::move(img), look.display);
   }
-  if (!a.quiet)
+  if (!a.quiet) {
     fmt::print(stderr, "{} frame(s), {:.2f} ms per frame (rotate, upload, draw, read back)\n", a.frames,
                1e3 * render_seconds / a.frames);
+    if (wavelet && look.shading == Shading::Transfer)
+      fmt::print(stderr, "wavelet relighting on the CPU: {:.2f} ms per frame (K = {}, {} selection, cube {}^2 x 6)\n",
+                 cpu_ms / a.frames, look.terms, wavelet::selection_name(look.selection), scene.wavelet.cube_res);
+  }
   return 0;
 }
 
@@ -119,6 +144,8 @@ Run add_render(CLI::App& app) {
       "Per-vertex PRT shading on the GPU (OpenGL 4.5 through EGL, no display needed; Mesa llvmpipe works).\n"
       "The default camera looks from +Z at the centre of the mesh's bounding box and frames its bounding sphere.\n"
       "The environment is drawn as background; lighting and background turn together with --rotate/--spin.\n"
+      "SH transfers are relit on the GPU; wavelet transfers (prt precompute --basis wavelet) on the CPU each\n"
+      "frame (rotated map resampled into the cube, K Haar terms, --terms/--selection), then drawn.\n"
       "EXR output keeps linear floats (times 2^exposure); PNG and other 8-bit formats get the tone map\n"
       "(--tonemap, default clamp) and sRGB encoding.\n"
       "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10");

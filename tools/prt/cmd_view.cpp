@@ -48,12 +48,14 @@ constexpr const char* kControls =
     "          0 all bands, 1-9 shade with that many bands (16 -> 9 -> 4 coefficients: 4, 3, 2)\n"
     "          W cycle SH windowing: none, hanning, lanczos, auto\n"
     "          E / shift+E exposure up / down half a stop | T cycle tone map: clamp, reinhard, aces\n"
+    "          B switch SH / wavelet (with --second) | [ / ] halve / double the wavelet terms K | G wavelet\n"
+    "            selection: area-weighted / magnitude; in wavelet mode M toggles plain Lambert\n"
     "          N / P next / previous environment map (bundled maps and those beside ENV); drop a map file on\n"
     "            the window to load it | S screenshot | H print these controls | R reset view | Esc or Q quit\n"
     "          The title bar shows the frame time and the current settings.";
 
 struct ViewArgs {
-  std::string mesh, transfer, env, screenshot, screenshot_dir = ".";
+  std::string mesh, transfer, env, second, screenshot, screenshot_dir = ".";
   int width = 800, height = 600, frames = 0;
   double fov = 40;
   bool quiet = false;
@@ -118,6 +120,11 @@ struct ViewState {
   std::string dropped;   // a map file dropped on the window, not yet loaded
   double exposure = 0;
   int tone = 0;          // index into kToneMaps
+  bool wavelet = false;  // showing the wavelet transfer (B toggles when both bases are loaded)
+  bool toggle_basis = false;
+  bool wavelet_lambert = false;  // in wavelet mode, M toggles to plain Lambert
+  int terms = 100;       // wavelet K
+  int selection = 0;     // 0 area, 1 magnitude
   bool dragging = false, env_dragging = false;
   double last_x = 0, last_y = 0;
   bool screenshot_requested = false;
@@ -168,10 +175,25 @@ int run_view(const ViewArgs& a) {
   if (!std::filesystem::is_directory(a.screenshot_dir))
     throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
 
-  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view");
+  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true);
+  bool have_sh = scene.basis == TransferBasis::SH, have_wavelet = !have_sh;
+  if (!a.second.empty()) {  // the other basis, for the same mesh
+    Scene other;
+    other.mesh = std::move(scene.mesh);
+    load_transfer(other, a.second, kMaxRenderBands, "view", true);
+    scene.mesh = std::move(other.mesh);
+    if (other.basis == scene.basis)
+      throw Error("--second " + a.second + ": also a " + std::string(basis_name(other.basis)) + " transfer; give " +
+                  "one SH and one wavelet transfer of the mesh");
+    if (other.basis == TransferBasis::Wavelet) scene.wavelet = std::move(other.wavelet);
+    else scene.transfer = std::move(other.transfer);
+    have_sh = have_wavelet = true;
+  }
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
-  const Look look = parse_look(a.look, t);
+  const Look look = parse_look(a.look, have_sh ? t.bands : 0, have_wavelet);
+  const int sh_bands = have_sh ? t.bands : 3;  // Lambert needs 3 bands of lighting
+  const int wavelet_coeffs = have_wavelet ? int(wavelet::cube_size(scene.wavelet.cube_res)) : 0;
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -213,10 +235,24 @@ int run_view(const ViewArgs& a) {
     fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(scene.env), renderer.device());
     fmt::print(stderr, "{}\n", kControls);
   }
-  renderer.set_mesh(mesh, t);
+  if (have_sh) renderer.set_mesh(mesh, t);
+  else renderer.set_mesh(mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
   renderer.set_environment(scene.env);
-  renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
+  std::optional<WaveletFrames> wavelet_frames;
+  if (have_wavelet) wavelet_frames.emplace(scene.wavelet, scene.env);
+  st.wavelet = scene.basis == TransferBasis::Wavelet;
+  st.terms = look.terms;
+  st.selection = look.selection == wavelet::Selection::AreaWeighted ? 0 : 1;
   int shading_index = int(std::find(std::begin(kShadings), std::end(kShadings), look.shading) - std::begin(kShadings));
+  if (st.wavelet) {
+    if (look.shading != Shading::Transfer && look.shading != Shading::Lambert)
+      throw Error("--shading " + std::string(shading_name(look.shading)) +
+                  ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
+    st.wavelet_lambert = look.shading == Shading::Lambert;
+    shading_index = 0;
+  } else {
+    renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
+  }
 
   // The environment: projected once per map; windowed once per band/window setting.
   const std::vector<std::string> playlist = map_playlist(a.env);
@@ -225,14 +261,15 @@ int run_view(const ViewArgs& a) {
                 std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
       playlist.begin());
   std::string map_name = std::filesystem::path(a.env).filename().string();
-  std::vector<glm::dvec3> projected = project(scene.env, t.bands), light;
+  std::vector<glm::dvec3> projected = project(scene.env, sh_bands), light;
   int light_bands = -1, light_window = -1;
   auto load_map = [&](const std::string& path) {
     try {
       EnvMap m = load_envmap(path);
       require_finite(m);
-      projected = project(m, t.bands);
+      projected = project(m, sh_bands);
       renderer.set_environment(m);
+      if (wavelet_frames) wavelet_frames->set_environment(m);
       map_name = std::filesystem::path(path).filename().string();
       light_bands = -1;  // re-window
       if (!a.quiet) fmt::print(stderr, "{}\n", describe(m));
@@ -241,7 +278,7 @@ int run_view(const ViewArgs& a) {
     }
   };
   std::vector<glm::dvec3> rotated(projected.size());
-  sh::Rotation rotation(t.bands, glm::dmat3(1.0));
+  sh::Rotation rotation(sh_bands, glm::dmat3(1.0));
   const Camera base = default_camera(mesh, a.fov);
   const glm::dvec3 offset0 = base.eye - base.target;
 
@@ -295,6 +332,10 @@ int run_view(const ViewArgs& a) {
       case GLFW_KEY_N: ++s.map_step; break;
       case GLFW_KEY_P: --s.map_step; break;
       case GLFW_KEY_H: fmt::print(stderr, "{}\n", kControls); break;
+      case GLFW_KEY_B: s.toggle_basis = true; break;
+      case GLFW_KEY_LEFT_BRACKET: s.terms = std::max(1, s.terms / 2); break;
+      case GLFW_KEY_RIGHT_BRACKET: s.terms = std::min(1 << 20, s.terms * 2); break;
+      case GLFW_KEY_G: s.selection = 1 - s.selection; break;
       case GLFW_KEY_R:  // the view; the look (bands, shading, exposure, ...) stays
         s.yaw = s.pitch = s.env_yaw = s.env_pitch = s.env_auto = 0;
         s.zoom = 1;
@@ -309,7 +350,7 @@ int run_view(const ViewArgs& a) {
 
   using Clock = std::chrono::steady_clock;
   auto last = Clock::now(), title_time = last;
-  double frame_ms = 0;
+  double frame_ms = 0, wavelet_ms = 0;
   int frame = 0, title_frames = 0;
   while (!glfwWindowShouldClose(window.get())) {
     const auto now = Clock::now();
@@ -334,19 +375,31 @@ int run_view(const ViewArgs& a) {
       st.map_step = 0;
       load_map(playlist[map_index]);
     }
+    if (st.toggle_basis) {
+      st.toggle_basis = false;
+      if (have_sh && have_wavelet) st.wavelet = !st.wavelet;
+      if (!st.wavelet) renderer.set_shading(kShadings[shading_index]);
+    }
     for (; st.shading_step != 0; st.shading_step += st.shading_step > 0 ? -1 : 1) {
+      if (st.wavelet) {
+        st.wavelet_lambert = !st.wavelet_lambert;
+        continue;
+      }
       const int n = int(std::size(kShadings)), dir = st.shading_step > 0 ? 1 : -1;
       do shading_index = ((shading_index + dir) % n + n) % n;
       while (!renderer.has_shading(kShadings[shading_index]));
       renderer.set_shading(kShadings[shading_index]);
     }
-    const int keep_bands = st.bands == 0 ? t.bands : std::min(t.bands, st.bands);
+    const int keep_bands = !have_sh ? sh_bands : st.bands == 0 ? t.bands : std::min(t.bands, st.bands);
     if (keep_bands != light_bands || st.window != light_window) {
       light = windowed_lighting(projected, keep_bands, kWindows[st.window]);
-      renderer.set_band_limit(keep_bands);
+      if (have_sh) renderer.set_band_limit(keep_bands);
       light_bands = keep_bands;
       light_window = st.window;
     }
+    st.terms = std::min(st.terms, wavelet_coeffs > 0 ? wavelet_coeffs : st.terms);
+    const wavelet::Selection selection =
+        st.selection == 0 ? wavelet::Selection::AreaWeighted : wavelet::Selection::Magnitude;
     const Display shown{st.exposure, kToneMaps[st.tone]};
 
     const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, glm::radians(st.env_yaw + st.env_auto)) *
@@ -355,6 +408,12 @@ int run_view(const ViewArgs& a) {
     rotation.apply(light, rotated);
     renderer.set_lighting(rotated);
     renderer.set_environment_rotation(R);
+    if (st.wavelet && !st.wavelet_lambert) {
+      wavelet_ms = 0.1 * wavelet_frames->frame(renderer, R, st.terms, selection) + 0.9 * wavelet_ms;
+      renderer.set_shading(Shading::VertexColors);
+    } else if (st.wavelet) {
+      renderer.set_shading(Shading::Lambert);
+    }
 
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window.get(), &fw, &fh);
@@ -378,13 +437,18 @@ int run_view(const ViewArgs& a) {
       title_time = Clock::now();
       title_frames = 0;
       const sh::Window wk = kWindows[st.window];
-      glfwSetWindowTitle(
-          window.get(),
-          fmt::format("prt view - {:.2f} ms/frame ({:.0f} fps) - {} - {} bands{} - {} - exposure {:+.1f}, {}{}",
-                      frame_ms, fps, shading_label(kShadings[shading_index], t), keep_bands,
-                      wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)), map_name,
-                      st.exposure, tone_map_name(kToneMaps[st.tone]), st.auto_rotate ? " - auto-rotate" : "")
-              .c_str());
+      const std::string basis =
+          !st.wavelet ? fmt::format("{} - {} bands{}", shading_label(kShadings[shading_index], t), keep_bands,
+                                    wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)))
+          : st.wavelet_lambert ? std::string("plain Lambert (no PRT)")
+                               : fmt::format("wavelet {}^2 x 6, K = {} ({}), CPU {:.1f} ms", scene.wavelet.cube_res,
+                                             st.terms, wavelet::selection_name(selection), wavelet_ms);
+      glfwSetWindowTitle(window.get(), fmt::format("prt view - {:.2f} ms/frame ({:.0f} fps) - {} - {} - exposure "
+                                                   "{:+.1f}, {}{}",
+                                                   frame_ms, fps, basis, map_name, st.exposure,
+                                                   tone_map_name(kToneMaps[st.tone]),
+                                                   st.auto_rotate ? " - auto-rotate" : "")
+                                           .c_str());
     }
     glfwPollEvents();
   }
@@ -422,6 +486,8 @@ Run add_view(CLI::App& app) {
       ->check(int_range(1, 1000000));
   s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)");
   s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")->capture_default_str();
+  s->add_option("--second", a->second,
+                "A transfer of the other basis (SH or wavelet) for the same mesh: B switches between the two");
   add_look_options(s, a->look);
   s->add_flag("-q,--quiet", a->quiet, "No summary and controls on stderr");
   return [a] { return run_view(*a); };

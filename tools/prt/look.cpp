@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 
@@ -17,24 +18,40 @@ void add_look_options(CLI::App* s, LookArgs& a) {
                 "transfer (the file's), direct (shadowed part of an interreflected file), unshadowed, lambert "
                 "(no PRT), ao, bent")
       ->capture_default_str();
-  s->add_option("--bands", a.bands, "Shade with the first N bands only (0: all of the file's)")
-      ->check(int_range(0, kMaxRenderBands));
-  s->add_option("--window", a.window, "SH window against ringing: none, hanning, lanczos, auto")
-      ->capture_default_str();
+  a.bands_option = s->add_option("--bands", a.bands, "SH: shade with the first N bands only (0: all of the file's)")
+                       ->check(int_range(0, kMaxRenderBands));
+  a.window_option = s->add_option("--window", a.window, "SH: window against ringing: none, hanning, lanczos, auto")
+                        ->capture_default_str();
+  a.terms_option = s->add_option("-k,--terms", a.terms, "Wavelet: lighting terms K kept per frame (K >= 6 r^2: all)")
+                       ->check(int_range(1, 1 << 30))
+                       ->capture_default_str();
+  a.selection_option =
+      s->add_option("--selection", a.selection,
+                    "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
+          ->capture_default_str();
   s->add_option("--exposure", a.exposure, "Scale radiance by 2^EXPOSURE for display")->capture_default_str();
   s->add_option("--tonemap", a.tone_map, "8-bit output and the window: clamp, reinhard, aces")
       ->capture_default_str();
 }
 
-Look parse_look(const LookArgs& a, const Transfer& t) {
+Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {
   Look look;
+  if (sh_bands == 0)
+    for (const CLI::Option* o : {a.bands_option, a.window_option})
+      if (o && o->count() > 0) throw Error(o->get_name() + " applies to SH transfers; this one is a wavelet transfer");
+  if (!wavelet)
+    for (const CLI::Option* o : {a.terms_option, a.selection_option})
+      if (o && o->count() > 0)
+        throw Error(o->get_name() + " applies to wavelet transfers (prt precompute --basis wavelet); this one is SH");
   look.shading = for_option("--shading", [&] { return parse_shading(a.shading); });
   if (look.shading == Shading::VertexColors)
     throw Error("--shading: colors is for callers that upload their own vertex colours");
-  if (a.bands > t.bands)
-    throw Error("--bands " + std::to_string(a.bands) + ": the transfer has " + std::to_string(t.bands) + " bands");
-  look.bands = a.bands == 0 ? t.bands : a.bands;
+  if (a.bands > sh_bands && sh_bands > 0)
+    throw Error("--bands " + std::to_string(a.bands) + ": the transfer has " + std::to_string(sh_bands) + " bands");
+  look.bands = a.bands == 0 ? sh_bands : a.bands;
   look.window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  look.terms = a.terms;
+  look.selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
   if (!std::isfinite(a.exposure) || std::abs(a.exposure) > 64)
     throw Error("--exposure: expected stops in [-64, 64], got " + std::to_string(a.exposure));
   look.display.exposure = a.exposure;
@@ -61,6 +78,24 @@ void write_frame(const std::string& path, Image img, const Display& d) {
     tone_map(img.rgb, d);
   }
   write_image(path, img.width, img.height, img.rgb);
+}
+
+}  // namespace prt::cli
+
+namespace prt::cli {
+
+WaveletFrames::WaveletFrames(const WaveletTransfer& t, const EnvMap& env)
+    : transfer_(t), lighting_(env, t.cube_res), colors_(t.vertices) {}
+
+void WaveletFrames::set_environment(const EnvMap& env) { lighting_ = wavelet::FrameLighting(env, transfer_.cube_res); }
+
+double WaveletFrames::frame(Renderer& r, const glm::dmat3& R, int K, wavelet::Selection selection) {
+  const auto t0 = std::chrono::steady_clock::now();
+  lighting_.update(R, K, selection);
+  wavelet_relight(transfer_, lighting_.coefficients().data(), lighting_.terms(), colors_);
+  const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.set_vertex_colors(colors_);
+  return ms;
 }
 
 }  // namespace prt::cli

@@ -2,9 +2,12 @@
 // windowing, exposure and tone map. The same options on both commands.
 #pragma once
 
+#include <prt/envmap.h>
 #include <prt/filter.h>
 #include <prt/render.h>
 #include <prt/transfer.h>
+#include <prt/wavelet.h>
+#include <prt/wavelet_transfer.h>
 
 #include <CLI/CLI.hpp>
 
@@ -14,24 +17,51 @@
 namespace prt::cli {
 
 struct LookArgs {
-  std::string shading = "transfer", tone_map = "clamp", window = "none";
+  std::string shading = "transfer", tone_map = "clamp", window = "none", selection = "area";
   double exposure = 0;
-  int bands = 0;  // 0: all of the file's
+  int bands = 0;    // 0: all of the file's
+  int terms = 100;  // wavelet lighting terms K
+  CLI::Option *bands_option = nullptr, *window_option = nullptr, *terms_option = nullptr,
+              *selection_option = nullptr;
 };
 
-// --shading, --bands, --window, --exposure, --tonemap.
+// --shading, --bands, --window (SH), --terms, --selection (wavelet),
+// --exposure, --tonemap.
 void add_look_options(CLI::App* command, LookArgs& args);
 
 struct Look {
   Shading shading = Shading::Transfer;
   int bands = 0;  // band limit, 1 .. transfer bands
   sh::Window window = sh::Window::None;
+  int terms = 100;
+  wavelet::Selection selection = wavelet::Selection::AreaWeighted;
   Display display;
 };
 
-// Checks the options against the transfer (band count); throws prt::Error
-// naming the option.
-Look parse_look(const LookArgs& args, const Transfer& transfer);
+// Checks the options against what was loaded: an SH transfer of `sh_bands`
+// bands (0: none) and/or a wavelet transfer (`wavelet`); SH-only options
+// given without an SH transfer, and wavelet-only ones without a wavelet
+// transfer, are refused. Throws prt::Error naming the option.
+Look parse_look(const LookArgs& args, int sh_bands, bool wavelet);
+
+// Wavelet relighting for render and view: each frame resamples the rotated
+// environment into the transfer's cube, keeps K Haar terms, relights every
+// vertex on the CPU (multi-threaded) and uploads the colours to the renderer
+// (Shading::VertexColors).
+class WaveletFrames {
+ public:
+  WaveletFrames(const WaveletTransfer& transfer, const EnvMap& env);
+  void set_environment(const EnvMap& env);
+  // Relights for rotation R with K terms and uploads; returns the CPU
+  // milliseconds spent (lighting + sparse sum).
+  double frame(Renderer& renderer, const glm::dmat3& R, int K, wavelet::Selection selection);
+  int cube_res() const { return transfer_.cube_res; }
+
+ private:
+  const WaveletTransfer& transfer_;
+  wavelet::FrameLighting lighting_;
+  std::vector<glm::vec3> colors_;
+};
 
 // The lighting to upload: the first `bands` bands of `light` windowed (the
 // window's width is bands + 1 for Hanning and Lanczos, so band bands-1 keeps

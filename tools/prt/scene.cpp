@@ -1,17 +1,29 @@
 #include "scene.h"
 
 #include <prt/error.h>
-#include <prt/transfer_io.h>
 
 namespace prt::cli {
 
-Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
-                 const char* command) {
-  Scene s{load_mesh(mesh), read_transfer(transfer), {}};
+void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet) {
+  // Without allow_wavelet, read_transfer itself refuses a wavelet file, naming its basis.
+  s.basis = allow_wavelet ? read_transfer_basis(transfer) : TransferBasis::SH;
+  if (s.basis == TransferBasis::Wavelet) {
+    s.wavelet = read_wavelet_transfer(transfer);
+    check_matches(s.wavelet, s.mesh, transfer);
+    return;
+  }
+  s.transfer = read_transfer(transfer);
   check_matches(s.transfer, s.mesh, transfer);
   if (max_bands > 0 && s.transfer.bands > max_bands)
     throw Error(transfer + ": " + std::to_string(s.transfer.bands) + " bands; prt " + command + " takes at most " +
                 std::to_string(max_bands));
+}
+
+Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
+                 const char* command, bool allow_wavelet) {
+  Scene s;
+  s.mesh = load_mesh(mesh);
+  load_transfer(s, transfer, max_bands, command, allow_wavelet);
   s.env = load_envmap(env);
   require_finite(s.env);
   return s;

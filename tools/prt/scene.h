@@ -5,6 +5,8 @@
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
+#include <prt/transfer_io.h>
+#include <prt/wavelet_transfer.h>
 
 #include <string>
 
@@ -12,13 +14,21 @@ namespace prt::cli {
 
 struct Scene {
   Mesh mesh;
-  Transfer transfer;
+  TransferBasis basis = TransferBasis::SH;
+  Transfer transfer;        // basis SH
+  WaveletTransfer wavelet;  // basis Wavelet
   EnvMap env;
 };
 
-// Throws prt::Error naming the file at fault; max_bands > 0 also refuses a
-// transfer with more bands, naming `command` in the message.
+// Throws prt::Error naming the file at fault; max_bands > 0 also refuses an
+// SH transfer with more bands, naming `command` in the message. Wavelet
+// files are refused unless allow_wavelet.
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands = 0,
-                 const char* command = "");
+                 const char* command = "", bool allow_wavelet = false);
+
+// Loads a transfer file into `scene` (the mesh must be loaded) and checks it
+// against the mesh; the rules of load_scene.
+void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
+                   bool allow_wavelet);
 
 }  // namespace prt::cli
