@@ -55,7 +55,7 @@ constexpr const char* kControls =
     "          The title bar shows the frame time and the current settings.";
 
 struct ViewArgs {
-  std::string mesh, transfer, env, second, screenshot, screenshot_dir = ".";
+  std::string mesh, transfer, env, second, camera, screenshot, screenshot_dir = ".";
   int width = 800, height = 600, frames = 0;
   double fov = 40;
   bool quiet = false;
@@ -279,7 +279,8 @@ int run_view(const ViewArgs& a) {
   };
   std::vector<glm::dvec3> rotated(projected.size());
   sh::Rotation rotation(sh_bands, glm::dmat3(1.0));
-  const Camera base = default_camera(mesh, a.fov);
+  Camera base = default_camera(mesh, a.fov);
+  if (!a.camera.empty()) parse_camera(a.camera, base);
   const glm::dvec3 offset0 = base.eye - base.target;
 
   glfwSetWindowUserPointer(window.get(), &st);
@@ -480,6 +481,7 @@ Run add_view(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
   s->add_option("--width", a->width, "Window width in pixels")->check(int_range(1, 16384))->capture_default_str();
   s->add_option("--height", a->height, "Window height in pixels")->check(int_range(1, 16384))->capture_default_str();
+  s->add_option("--camera", a->camera, "Starting camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (orbit is about the target)");
   s->add_option("--fov", a->fov, "Vertical field of view in degrees")->check(CLI::Range(1.0, 179.0))
       ->capture_default_str();
   s->add_option("--frames", a->frames, "Render N frames, save --screenshot FILE and exit")

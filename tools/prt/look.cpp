@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 
 namespace prt::cli {
 
@@ -32,6 +33,29 @@ void add_look_options(CLI::App* s, LookArgs& a) {
   s->add_option("--exposure", a.exposure, "Scale radiance by 2^EXPOSURE for display")->capture_default_str();
   s->add_option("--tonemap", a.tone_map, "8-bit output and the window: clamp, reinhard, aces")
       ->capture_default_str();
+}
+
+// "ex,ey,ez,tx,ty,tz,ux,uy,uz" -> nine doubles.
+void parse_camera(const std::string& text, Camera& cam) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw Error("--camera: \"" + item + "\" is not a number (expected ex,ey,ez,tx,ty,tz,ux,uy,uz)");
+    }
+  }
+  if (v.size() != 9 || text.empty() || text.back() == ',')
+    throw Error("--camera: expected 9 numbers ex,ey,ez,tx,ty,tz,ux,uy,uz, got \"" + text + "\"");
+  for (double x : v)
+    if (!std::isfinite(x)) throw Error("--camera: non-finite value in \"" + text + "\"");
+  cam.eye = {v[0], v[1], v[2]};
+  cam.target = {v[3], v[4], v[5]};
+  cam.up = {v[6], v[7], v[8]};
 }
 
 Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {

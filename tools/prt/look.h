@@ -70,6 +70,10 @@ class WaveletFrames {
 // per map or setting, not per frame.
 std::vector<glm::dvec3> windowed_lighting(std::vector<glm::dvec3> light, int bands, sh::Window window);
 
+// --camera "ex,ey,ez,tx,ty,tz,ux,uy,uz": sets eye, target and up; throws
+// prt::Error naming --camera.
+void parse_camera(const std::string& text, Camera& camera);
+
 // Writes a frame: EXR (and other float formats) keep linear values scaled by
 // 2^exposure; 8-bit formats get the tone map, then sRGB encoding.
 void write_frame(const std::string& path, Image image, const Display& display);
