@@ -3,8 +3,8 @@
 # its numerics, projects every bundled environment map onto SH (coefficients
 # and pictures of what the bands keep), precomputes shadowed and
 # interreflected transfer for the bundled model, relights it under every map,
-# renders pictures of it headless, writing everything into out/, and opens the
-# viewer when a display is present.
+# renders pictures of it headless, does the same through the wavelet basis,
+# writing everything into out/, and opens the viewer when a display is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
@@ -49,13 +49,24 @@ done
   --width 320 --height 200 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --frames 12 --spin 30
 
 echo
+echo "== the all-frequency wavelet basis: shadowed transfer on a 6x32x32 cube map, relit with 100 Haar terms"
+"$prt" precompute models/scene.obj -o "$out/scene.wavelet.prt" --basis wavelet --cube-res 32
+for env in envmaps/*.exr; do
+  name=$(basename "$env" .exr)
+  "$prt" render models/scene.obj "$out/scene.wavelet.prt" "$env" -q -o "$out/scene.$name.wavelet.png" \
+    --width 640 --height 400 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --terms 100
+done
+
+echo
 echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands keep),"
 echo "<map>.irradiance.glsl (paste-ready 3-band irradiance), <map>.irradiance.png (irradiance map),"
 echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance),"
-echo "scene.<map>.png (rendered), turn_0000..0011.png (the sunset turning around the model)."
+echo "scene.<map>.png (rendered), turn_0000..0011.png (the sunset turning around the model),"
+echo "scene.<map>.wavelet.png (the same lit through the wavelet basis: compare the shadows under studio.exr)."
 
 if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${CI:-}" ] && [ -t 1 ]; then
   echo
   echo "== prt view: close the window (Esc) to finish"
-  "$prt" view models/scene.obj "$out/scene.interreflected.prt" envmaps/sunset.exr || true
+  "$prt" view models/scene.obj "$out/scene.interreflected.prt" envmaps/sunset.exr \
+    --second "$out/scene.wavelet.prt" --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --exposure -1 || true
 fi
