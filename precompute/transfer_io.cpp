@@ -631,12 +631,22 @@ Transfer read_transfer(const std::string& path) { return Reader(path).read(); }
 
 // ---- checking and describing ----------------------------------------------------------
 
-void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
+namespace {
+
+// Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
+void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,
+                const char* rerun) {
   const std::uint64_t hash = mesh.hash();
-  if (t.vertices == mesh.vertex_count() && t.mesh_hash == hash) return;
-  throw Error(transfer_path + " was computed for a different mesh (" + u64s(t.vertices) + " vertices, hash " +
-              hex64(t.mesh_hash) + ") than " + mesh.source + " (" + u64s(mesh.vertex_count()) + " vertices, hash " +
-              hex64(hash) + "); run prt precompute again");
+  if (vertices == mesh.vertex_count() && mesh_hash == hash) return;
+  throw Error(what + " was computed for a different mesh (" + u64s(vertices) + " vertices, hash " + hex64(mesh_hash) +
+              ") than " + mesh.source + " (" + u64s(mesh.vertex_count()) + " vertices, hash " + hex64(hash) +
+              "); run " + rerun + " again");
+}
+
+}  // namespace
+
+void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
+  check_mesh(t.vertices, t.mesh_hash, mesh, transfer_path, "prt precompute");
 }
 
 std::string describe_transfer(const Transfer& t) {
@@ -976,11 +986,7 @@ WaveletTransfer Reader::read_wavelet() {
 WaveletTransfer read_wavelet_transfer(const std::string& path) { return Reader(path).read_wavelet(); }
 
 void check_matches(const WaveletTransfer& t, const Mesh& mesh, const std::string& what) {
-  const std::uint64_t hash = mesh.hash();
-  if (t.vertices == mesh.vertex_count() && t.mesh_hash == hash) return;
-  throw Error(what + " was computed for a different mesh (" + u64s(t.vertices) + " vertices, hash " +
-              hex64(t.mesh_hash) + ") than " + mesh.source + " (" + u64s(mesh.vertex_count()) + " vertices, hash " +
-              hex64(hash) + "); run prt precompute --basis wavelet again");
+  check_mesh(t.vertices, t.mesh_hash, mesh, what, "prt precompute --basis wavelet");
 }
 
 std::string describe_transfer(const WaveletTransfer& t) {

@@ -50,21 +50,10 @@ int run_wavelet(PrecomputeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
-  WaveletTransfer t;
-  bool interrupted = false;
-  {
-    ProgressBar bar(a.quiet);
-    try {
-      t = compute_wavelet_transfer(mesh, a.wopt, bar.callback());
-    } catch (const Error&) {
-      if (!ProgressBar::interrupted()) throw;
-      interrupted = true;
-    }
-  }
-  if (interrupted) {
-    fmt::print(stderr, "prt precompute: interrupted; nothing written\n");
-    return 130;
-  }
+  const std::optional<WaveletTransfer> computed = run_with_progress(
+      a.quiet, "precompute", [&](const Progress& progress) { return compute_wavelet_transfer(mesh, a.wopt, progress); });
+  if (!computed) return 130;
+  const WaveletTransfer& t = *computed;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_wavelet_transfer(a.output, t);
   if (!a.quiet)
@@ -90,21 +79,10 @@ int run_precompute(PrecomputeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
-  Transfer t;
-  bool interrupted = false;
-  {
-    ProgressBar bar(a.quiet);
-    try {
-      t = compute_transfer(mesh, a.opt, bar.callback());
-    } catch (const Error&) {
-      if (!ProgressBar::interrupted()) throw;
-      interrupted = true;
-    }
-  }
-  if (interrupted) {
-    fmt::print(stderr, "prt precompute: interrupted; nothing written\n");
-    return 130;
-  }
+  const std::optional<Transfer> computed = run_with_progress(
+      a.quiet, "precompute", [&](const Progress& progress) { return compute_transfer(mesh, a.opt, progress); });
+  if (!computed) return 130;
+  const Transfer& t = *computed;
   write_transfer(a.output, t);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet) {

@@ -64,21 +64,10 @@ int run_reference(ReferenceArgs& a) {
   if (a.opt.vertex_colors && mesh.colors.empty())
     fmt::print(stderr, "warning: {} has no vertex colours; using --albedo {}\n", a.mesh, a.albedo);
 
-  ReferenceResult r;
-  bool interrupted = false;
-  {
-    ProgressBar bar(a.quiet);
-    try {
-      r = render_reference(mesh, map, a.opt, bar.callback());
-    } catch (const Error&) {
-      if (!ProgressBar::interrupted()) throw;
-      interrupted = true;
-    }
-  }
-  if (interrupted) {
-    fmt::print(stderr, "prt reference: interrupted; nothing written\n");
-    return 130;
-  }
+  const std::optional<ReferenceResult> computed = run_with_progress(
+      a.quiet, "reference", [&](const Progress& progress) { return render_reference(mesh, map, a.opt, progress); });
+  if (!computed) return 130;
+  const ReferenceResult& r = *computed;
   write_vertex_csv(a.output, r.radiance, &r.std_error);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet) {

@@ -6,10 +6,14 @@
 // output (outputs are written only after the work is done, atomically).
 #pragma once
 
+#include <prt/error.h>
 #include <prt/transfer.h>
 
 #include <chrono>
+#include <cstdio>
+#include <optional>
 #include <string>
+#include <type_traits>
 
 namespace prt::cli {
 
@@ -31,5 +35,23 @@ class ProgressBar {
   int last_percent_ = -1;
   std::chrono::steady_clock::time_point phase_start_, last_draw_;
 };
+
+// Runs compute(progress callback) under a ProgressBar. Returns its result, or
+// std::nullopt after printing "prt COMMAND: interrupted; nothing written"
+// when Ctrl-C cancelled it (the caller then exits 130).
+template <typename F>
+auto run_with_progress(bool quiet, const char* command, F&& compute)
+    -> std::optional<std::invoke_result_t<F, Progress>> {
+  {
+    ProgressBar bar(quiet);
+    try {
+      return compute(bar.callback());
+    } catch (const Error&) {
+      if (!ProgressBar::interrupted()) throw;
+    }
+  }
+  std::fprintf(stderr, "prt %s: interrupted; nothing written\n", command);
+  return std::nullopt;
+}
 
 }  // namespace prt::cli
