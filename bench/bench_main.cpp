@@ -129,5 +129,21 @@ int main(int argc, char** argv) {
   budget(rep, "rotation build, 32 bands", "BM_RotationBuild/32", 1000);
   budget(rep, "per-frame build + apply RGB, 9 bands", "BM_RotationFrameRGB/9", 100);
   budget(rep, "per-frame build + apply RGB, 16 bands", "BM_RotationFrameRGB/16", 1000);
+
+  // Wavelet lighting (Ng et al. 2003), bunny00, cube 32, forest.exr turning:
+  // a frame is the rotated resample + Haar + select K (RGB) + the sparse sum.
+  for (const char* k : {"10", "100", "300", "1000"}) {
+    const double s = rep.seconds(std::string("BM_WaveletFrame/") + k);
+    if (s > 0) std::printf("wavelet frame, bunny00, r=32, K=%-4s %8.3f ms\n", k, s * 1e3);
+  }
+  {
+    const double frame = rep.seconds("BM_WaveletFrame/100"), light = rep.seconds("BM_WaveletLightingOnly");
+    if (frame > 0 && light > 0)
+      std::printf("wavelet frame K=100 split: lighting (resample + Haar + select) %.3f ms, transfer sum %.3f ms\n",
+                  light * 1e3, (frame - light) * 1e3);
+  }
+  budget(rep, "wavelet frame, bunny00, r=32, K=100 (rotated re-projection + Haar + select + relight)",
+         "BM_WaveletFrame/100", 10000);
+  budget(rep, "wavelet lighting only (rotated resample + Haar + select K=100), r=32", "BM_WaveletLightingOnly", 10000);
   return 0;
 }

@@ -108,7 +108,7 @@ Run add_precompute(CLI::App& app) {
       "1024 rays per vertex (the hemisphere half of a 2048-direction spherical Fibonacci set; D3DX's default ray\n"
       "count), 1 bounce (most of the interreflected light at albedo 0.8), albedo 0.8 (light grey paint; 1 would\n"
       "reflect all light). A grey albedo stores one channel. Ctrl-C stops without writing anything.\n"
-      "--basis wavelet (shadowed only; --cube-res, default 32, and --threshold, default 1e-3) stores sparse int16\n"
+      "--basis wavelet (shadowed only; --cube-res, default 32, and --threshold, default 1e-2) stores sparse int16\n"
       "Haar coefficients per vertex for all-frequency shadows; relight it with prt relight --terms K.\n"
       "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32");
