@@ -1,6 +1,8 @@
 #include <prt/quadrature.h>
 
+#include <prt/envmap.h>
 #include <prt/error.h>
+#include <prt/sh.h>
 
 #include <cmath>
 
@@ -72,6 +74,22 @@ std::vector<double> fejer_weights(int H) {
     w[i] = 2.0 / H * (1.0 - 2.0 * s);
   }
   return w;
+}
+
+std::vector<double> latlong_box_integrals(int bands, double t0, double t1, double p0, double p1, int nodes) {
+  sh::check_bands(bands);
+  const Rule1D rt = gauss_legendre(nodes, t0, t1), rp = gauss_legendre(nodes, p0, p1);
+  std::vector<double> sum(std::size_t(bands) * bands, 0.0), y(sum.size());
+  for (std::size_t i = 0; i < rt.x.size(); ++i)
+    for (std::size_t j = 0; j < rp.x.size(); ++j) {
+      const double th = rt.x[i], ph = rp.x[j];
+      // The lat-long direction of (theta, phi) (a 1x1 map's pixel coordinates); Y at that world direction.
+      const glm::dvec3 d = latlong_direction(ph / (2.0 * M_PI), th / M_PI, 1, 1);
+      sh::eval(bands, d.x, d.y, d.z, y.data());
+      const double w = rt.w[i] * rp.w[j] * std::sin(th);
+      for (std::size_t k = 0; k < y.size(); ++k) sum[k] += w * y[k];
+    }
+  return sum;
 }
 
 }  // namespace prt

@@ -484,6 +484,50 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
                       ", after (>= 0)",
         std::max(0.0, -r.min_after), 0.0, "the window's guarantee on its check grid");
   }
+  // Hard cases (docs/HARD_CASES.md; tests/hard_cases has the rest).
+  {
+    double e = 0.0;  // the poles: Y_l0 = (+-1)^l sqrt((2l+1)/4pi), all m != 0 exactly 0
+    std::vector<double> y(std::size_t(N) * N);
+    for (double z : {1.0, -1.0}) {
+      sh::eval(N, 0.0, 0.0, z, y.data());
+      for (int l = 0; l < N; ++l)
+        for (int m = -l; m <= l; ++m)
+          e = std::max(e, std::abs(y[std::size_t(sh::index(l, m))] - (m == 0 ? std::pow(z, l) * band_norm(l) : 0.0)) /
+                              band_norm(l));
+    }
+    add("hard cases", "the poles +-Z, " + nb + ": max |Y - exact| / band norm", e, kExact, kExactWhy);
+  }
+  {
+    const auto zero = project(make_latlong(16, 8, std::vector<float>(16 * 8 * 3, 0.0f), "zeros"), N);
+    add("hard cases", "all-zero map, " + nb + ": max |c|", max_abs_diff(zero, std::vector<dvec3>(zero.size(), dvec3(0.0))),
+        0.0, "zero in, zero out: no term may be rounded away from 0");
+    auto one = project(make_latlong(1, 1, {2.5f, 2.5f, 2.5f}, "1x1"), N);
+    one[0] -= dvec3(2.5 * std::sqrt(4.0 * M_PI));
+    add("hard cases", "1x1 map (one pixel, the whole sphere), " + nb + ": max |c - 2.5 sqrt(4pi) e_0|",
+        max_abs_diff(one, std::vector<dvec3>(one.size(), dvec3(0.0))), kExact, kExactWhy);
+    // 2x1: two hemispheres; each coefficient is L0 int_0 Y + L1 int_1 Y.
+    const auto two = project(make_latlong(2, 1, {1.0f, 1.0f, 1.0f, 3.0f, 3.0f, 3.0f}, "2x1"), N);
+    const auto a = latlong_box_integrals(N, 0, M_PI, 0, M_PI, N + 64),
+               b = latlong_box_integrals(N, 0, M_PI, M_PI, 2 * M_PI, N + 64);
+    double e = 0.0;
+    for (std::size_t k = 0; k < two.size(); ++k) e = std::max(e, std::abs(two[k].x - (a[k] + 3.0 * b[k])));
+    add("hard cases", "2x1 map (two hemispheres), " + nb + ": max |c - exact box integrals|", e, kExact, kExactWhy);
+  }
+  {
+    // A sun of 1e6 in one pixel of a 1e-2 sky: its energy and shape are kept.
+    const int W = 512, H = 256, sx = 300, sy = 70;
+    std::vector<float> rgb(std::size_t(W) * H * 3, 1e-2f);
+    for (int ch = 0; ch < 3; ++ch) rgb[(std::size_t(sy) * W + sx) * 3 + ch] = 1e6f;
+    const auto c = project(make_latlong(W, H, std::move(rgb), "sun"), N);
+    const auto pix = latlong_box_integrals(N, M_PI * sy / H, M_PI * (sy + 1) / H, 2 * M_PI * sx / W,
+                                           2 * M_PI * (sx + 1) / W, N + 64);
+    const double sky = double(1e-2f), sun = double(1e6f), energy = sun * latlong_pixel_solid_angle(sy, W, H);
+    double e = 0.0;
+    for (std::size_t k = 0; k < c.size(); ++k)
+      e = std::max(e, std::abs(c[k].x - ((k == 0 ? sky * std::sqrt(4.0 * M_PI) : 0.0) + (sun - sky) * pix[k])));
+    add("hard cases", "one-pixel sun of 1e6 in a 1e-2 sky, " + nb + ": max |c - exact| / sun energy", e / energy,
+        kExact, kExactWhy);
+  }
   return out;
 }
 

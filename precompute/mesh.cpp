@@ -107,6 +107,28 @@ std::vector<bool> weld(Mesh& mesh, std::vector<glm::vec3>& file_normals) {
 
 // Fills mesh.normals and the normal counts of mesh.report from the topology
 // and, where usable, the file's normals.
+// Fills report.nonmanifold_edges and report.inconsistent_edges (see MeshReport).
+void count_edges(Mesh& mesh) {
+  struct Use {
+    std::uint32_t count = 0, forward = 0;  // triangles on the edge; those traversing it low -> high index
+  };
+  std::unordered_map<std::uint64_t, Use> edges;
+  edges.reserve(mesh.triangles.size() * 2);
+  for (const glm::uvec3& t : mesh.triangles) {
+    if (t.x == t.y || t.y == t.z || t.z == t.x) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+      Use& u = edges[(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b)];
+      ++u.count;
+      u.forward += a < b;
+    }
+  }
+  for (const auto& [key, u] : edges) {
+    if (u.count > 2) ++mesh.report.nonmanifold_edges;
+    else if (u.count == 2 && u.forward != 1) ++mesh.report.inconsistent_edges;
+  }
+}
+
 void compute_normals(Mesh& mesh, const std::vector<glm::vec3>& file_normals, const std::vector<bool>& ignore_file,
                      const MeshOptions& options) {
   const std::size_t n = mesh.positions.size();
@@ -148,6 +170,7 @@ void compute_normals(Mesh& mesh, const std::vector<glm::vec3>& file_normals, con
     }
   }
 
+  count_edges(mesh);
   mesh.normals.assign(n, glm::vec3(0.0f));
   for (std::size_t i = 0; i < n; ++i) {
     if (!referenced[i]) {  // normal 0: no transfer is computed for it
@@ -380,6 +403,8 @@ std::string describe(const Mesh& mesh) {
   os << ", " << r.degenerate_triangles << " degenerate triangles, " << r.unreferenced_vertices
      << " unreferenced vertices";
   if (r.zero_normals) os << ", " << r.zero_normals << " without a normal";
+  if (r.nonmanifold_edges) os << ", " << r.nonmanifold_edges << " non-manifold edges";
+  if (r.inconsistent_edges) os << ", " << r.inconsistent_edges << " edges between inconsistently wound triangles";
   if (r.welded) os << ", " << r.welded << " welded";
   if (!mesh.colors.empty()) os << ", vertex colours";
   return os.str();

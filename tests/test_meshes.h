@@ -78,6 +78,15 @@ inline Mesh open_box(float h) {
   return make_mesh(std::move(p), std::move(t), {}, {}, {}, "open box");
 }
 
+// Cosine-weighted visible fraction of a square opening of half-width 1 at
+// height h seen from the centre of the floor: 4 x the point-to-rectangle form
+// factor with the rectangle's corner above the point (Howell's catalogue, C-11):
+// F = (1/2pi) [x/sqrt(1+x^2) atan(y/sqrt(1+x^2)) + y/sqrt(1+y^2) atan(x/sqrt(1+y^2))], x = y = 1/h.
+inline double open_box_ao(double h) {
+  const double x = 1.0 / h, q = std::sqrt(1 + x * x);
+  return 4.0 * (1.0 / (2 * M_PI)) * (2.0 * x / q * std::atan(x / q));
+}
+
 // Writes a mesh as OFF (positions and triangles; %.9g round-trips floats),
 // which prt loads keeping the vertex order.
 inline void write_off(const std::string& path, const Mesh& m) {

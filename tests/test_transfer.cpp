@@ -73,23 +73,14 @@ TEST(Transfer, ConvexSphereShadowedEqualsUnshadowed) {
   for (std::size_t i = 0; i < u.coeffs.size(); ++i) ASSERT_NEAR(s.coeffs[i], u.coeffs[i], kFloatStore);
 }
 
-// Cosine-weighted visible fraction of a square opening of half-width 1 at
-// height h seen from the centre of the floor: 4 x the point-to-rectangle form
-// factor with the rectangle's corner above the point (Howell's catalogue, C-11):
-// F = (1/2pi) [x/sqrt(1+x^2) atan(y/sqrt(1+x^2)) + y/sqrt(1+y^2) atan(x/sqrt(1+y^2))], x = y = 1/h.
-double open_box_ao(double h) {
-  const double x = 1.0 / h, q = std::sqrt(1 + x * x);
-  return 4.0 * (1.0 / (2 * M_PI)) * (2.0 * x / q * std::atan(x / q));
-}
-
 TEST(Transfer, OpenBoxFloorCentreAmbientOcclusion) {
   for (float h : {0.5f, 1.0f, 3.0f}) {
     const Mesh m = test::open_box(h);
     const Transfer s = compute_transfer(m, opts(TransferMode::Shadowed, 3, 1 << 15));
     // 32768 rays over a visibility edge: error ~N^-0.75 (docs/NOTES) ~ 4e-4; allow 2e-3.
-    EXPECT_NEAR(s.ao[0], open_box_ao(h), 2e-3) << "h = " << h;
+    EXPECT_NEAR(s.ao[0], test::open_box_ao(h), 2e-3) << "h = " << h;
     // Relighting the white floor under a constant sky of 1 gives the same number.
-    EXPECT_NEAR(relight(s, constant_light(3))[0].x, open_box_ao(h), 2e-3);
+    EXPECT_NEAR(relight(s, constant_light(3))[0].x, test::open_box_ao(h), 2e-3);
     // The bent normal of the floor centre points straight up by symmetry.
     EXPECT_NEAR(s.bent_normals[0].y, 1.0f, 1e-3f);
   }

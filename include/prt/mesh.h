@@ -31,6 +31,14 @@ struct MeshReport {
   std::size_t normals_computed = 0;       // vertices whose normal was computed (file had none or a bad one)
   std::size_t zero_normals = 0;           // vertices left without a normal (only degenerate triangles): transfer 0
   std::size_t welded = 0;                 // vertices removed by --weld
+  // Topology, counted over the edges of non-degenerate triangles (by vertex
+  // index): an edge used by more than two triangles is non-manifold; an edge
+  // two triangles traverse in the same direction joins inconsistently wound
+  // faces, whose normals (computed ones) partly cancel and whose front and
+  // back are swapped for rays. prt keeps such meshes (the winding is the
+  // file's word on which side is the front) and reports them.
+  std::size_t nonmanifold_edges = 0;
+  std::size_t inconsistent_edges = 0;
   bool file_had_normals = false;
   bool file_had_colors = false;
 };

@@ -24,6 +24,14 @@ struct SphereRule {
 };
 SphereRule gauss_legendre_sphere(int n_theta, int n_phi);
 
+// The integrals of every Y_k (k < bands^2) over the lat-long box theta in
+// [t0, t1] (measured from +Y), phi in [p0, p1] (docs/CONVENTIONS.md), by
+// Gauss-Legendre in theta and in phi with `nodes` points each: the
+// integrand is a trigonometric polynomial of degree < bands + 1 in each, so
+// nodes >= bands + 2 converge to double rounding over the whole sphere.
+// What a projected box pixel must equal.
+std::vector<double> latlong_box_integrals(int bands, double t0, double t1, double p0, double p1, int nodes);
+
 // Fejer's first rule on the H midpoints theta_i = pi (i + 0.5) / H: weights
 // w_i with sum_i w_i g(cos theta_i) = integral_{-1}^{1} g(z) dz exactly for
 // polynomials g of degree <= H-1. Weights are positive and sum to 2.
