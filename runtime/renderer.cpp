@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -119,7 +120,28 @@ GLuint link(const char* vs_src, const char* fs_src, const char* name, const std:
   return check_link(p, name);
 }
 
-constexpr int kMaxCoeffs = kMaxRenderBands * kMaxRenderBands;  // LightBlock in shaders/mesh.vert.glsl
+constexpr int kMaxCoeffs = kMaxRenderBands * kMaxRenderBands;  // LightBlock in the shaders
+
+// Renderers share an EGL display (EGL has one per platform and device, and
+// eglInitialize does not count). The last renderer of a display terminates
+// it, so the driver's threads are joined and its memory freed before the
+// process exits (llvmpipe keeps a rasteriser and a compute thread pool).
+std::mutex g_display_mutex;
+std::map<EGLDisplay, int> g_display_users;
+
+void acquire_display(EGLDisplay d) {
+  const std::lock_guard<std::mutex> lock(g_display_mutex);
+  ++g_display_users[d];
+}
+
+void release_display(EGLDisplay d) {
+  const std::lock_guard<std::mutex> lock(g_display_mutex);
+  const auto it = g_display_users.find(d);
+  if (it == g_display_users.end() || --it->second > 0) return;
+  g_display_users.erase(it);
+  eglReleaseThread();
+  eglTerminate(d);
+}
 
 // The attribute shader's modes (shaders/attribute.vert.glsl's MODE).
 int attribute_mode(Shading s) {
@@ -314,6 +336,7 @@ void Renderer::Impl::create_context() {
       return false;
     }
     display = d;
+    acquire_display(d);
     return true;
   };
   // 1. Mesa's surfaceless platform: no X, no Wayland, no DRM device needed.
@@ -454,7 +477,7 @@ void Renderer::Impl::destroy() {
     eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   }
   if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
-  // No eglTerminate: the display is shared by every Renderer of the process.
+  if (display != EGL_NO_DISPLAY) release_display(display);
   context = EGL_NO_CONTEXT;
   display = EGL_NO_DISPLAY;
 }

@@ -126,10 +126,12 @@ void expect_identical(const WaveletTransfer& a, const WaveletTransfer& b) {
   EXPECT_EQ(a.col_offsets, b.col_offsets);
   EXPECT_EQ(a.col_vertices, b.col_vertices);
   EXPECT_EQ(a.col_values, b.col_values);
-  ASSERT_EQ(a.vertex_scale.size(), b.vertex_scale.size());
-  EXPECT_EQ(std::memcmp(a.vertex_scale.data(), b.vertex_scale.data(), a.vertex_scale.size() * sizeof(float)), 0);
-  ASSERT_EQ(a.vertex_albedo.size(), b.vertex_albedo.size());
-  EXPECT_EQ(std::memcmp(a.vertex_albedo.data(), b.vertex_albedo.data(), a.vertex_albedo.size() * sizeof(glm::vec3)), 0);
+  // Bit-exact (memcmp, not ==, so -0/+0 and NaN payloads count); empty arrays may have null data().
+  auto same_bytes = [](const auto& x, const auto& y) {
+    return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof x[0]) == 0);
+  };
+  EXPECT_TRUE(same_bytes(a.vertex_scale, b.vertex_scale));
+  EXPECT_TRUE(same_bytes(a.vertex_albedo, b.vertex_albedo));
   EXPECT_EQ(a.vertex_kept, b.vertex_kept);
 }
 
