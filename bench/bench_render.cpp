@@ -18,6 +18,8 @@
 
 #include <benchmark/benchmark.h>
 
+#include "synthetic_transfer.h"
+
 #include <glm/trigonometric.hpp>
 
 #include <filesystem>
@@ -33,20 +35,6 @@ const prt::Mesh& mesh() {
     return prt::load_mesh(std::filesystem::exists(shared) ? shared : PRT_SOURCE_DIR "/models/scene.obj");
   }();
   return m;
-}
-
-prt::Transfer synthetic_transfer(const prt::Mesh& m, int bands, int channels) {
-  prt::Transfer t;
-  t.bands = bands;
-  t.channels = channels;
-  t.mode = prt::TransferMode::Shadowed;
-  t.vertices = m.vertex_count();
-  t.mesh_hash = m.hash();
-  t.coeffs.resize(t.vertices * t.stride());
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<float> u(-0.1f, 0.3f);
-  for (float& c : t.coeffs) c = u(rng);
-  return t;
 }
 
 // One renderer for the process (a context per benchmark would dominate), or
@@ -79,7 +67,7 @@ void BM_Frame(benchmark::State& state) {
   if (!r) return state.SkipWithError(why.c_str());
   const int bands = int(state.range(0)), size = int(state.range(1));
   const prt::Mesh& m = mesh();
-  r->set_mesh(m, synthetic_transfer(m, bands == 0 ? 3 : bands, 3));
+  r->set_mesh(m, prt::bench::synthetic_transfer(m, bands == 0 ? 3 : bands, 3));
   r->set_environment(environment());
   r->set_lighting(prt::project(environment(), bands == 0 ? 3 : bands));
   r->set_shading(bands == 0 ? prt::Shading::Lambert : prt::Shading::Transfer);
@@ -99,7 +87,7 @@ void BM_CpuFrameWork(benchmark::State& state) {
   if (!r) return state.SkipWithError(why.c_str());
   const int bands = int(state.range(0));
   const prt::Mesh& m = mesh();
-  r->set_mesh(m, synthetic_transfer(m, bands, 1));
+  r->set_mesh(m, prt::bench::synthetic_transfer(m, bands, 1));
   const std::vector<glm::dvec3> light = prt::project(environment(), bands);
   std::vector<glm::dvec3> rotated(light.size());
   prt::sh::Rotation rot(bands, glm::dmat3(1.0));

@@ -21,6 +21,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "synthetic_transfer.h"
+
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/gl.h>
 #include <GL/glext.h>
@@ -62,19 +64,6 @@ prt::Mesh subdivide(const prt::Mesh& in) {
     t.emplace_back(ab, bc, ca);
   }
   return prt::make_mesh(std::move(p), std::move(t), std::move(n), {}, {}, in.source + " (subdivided)");
-}
-
-prt::Transfer synthetic(const prt::Mesh& m, int bands, int channels) {
-  prt::Transfer t;
-  t.bands = bands;
-  t.channels = channels;
-  t.vertices = m.vertex_count();
-  t.mesh_hash = m.hash();
-  t.coeffs.resize(t.vertices * t.stride());
-  std::mt19937 rng(1);
-  std::uniform_real_distribution<float> u(-0.1f, 0.3f);
-  for (float& c : t.coeffs) c = u(rng);
-  return t;
 }
 
 // The same dot products as a compute shader (one invocation per vertex,
@@ -168,7 +157,7 @@ int main(int argc, char** argv) {
     std::printf("device: %s\nmesh: %zu vertices, %zu triangles; image %dx%d; %d frames each\n", r.device().c_str(),
                 mesh.vertex_count(), mesh.triangles.size(), w, h, frames);
     const prt::Camera cam = prt::default_camera(mesh);
-    r.set_mesh(mesh, synthetic(mesh, 3, channels));
+    r.set_mesh(mesh, prt::bench::synthetic_transfer(mesh, 3, channels));
     r.set_lighting(prt::project(env, 3));
     r.set_shading(prt::Shading::Lambert);
     const double lambert = frame_ms(r, cam, w, h, frames);
@@ -177,7 +166,7 @@ int main(int argc, char** argv) {
     std::string item;
     while (std::getline(ss, item, ',')) {
       const int b = std::atoi(item.c_str());
-      r.set_mesh(mesh, synthetic(mesh, b, channels));
+      r.set_mesh(mesh, prt::bench::synthetic_transfer(mesh, b, channels));
       r.set_lighting(prt::project(env, b));
       const double ms = frame_ms(r, cam, w, h, frames);
       const double bytes = double(mesh.vertex_count()) * channels * ((b * b + 3) / 4 * 4) * 4.0;

@@ -33,6 +33,16 @@ void enable_ftz_daz() {
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
 }
 
+void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threads, double offset, const Mesh& mesh) {
+  for (int c = 0; c < 3; ++c)
+    if (!(albedo[c] >= 0.0f && albedo[c] <= 1.0f))
+      throw Error("--albedo must be in [0, 1] per channel (energy conservation), got " + std::to_string(albedo[c]));
+  if (vertex_colors && mesh.colors.empty())
+    throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
+  if (threads < 0) throw Error("--threads must be >= 0");
+  if (!(offset >= 0.0) || !std::isfinite(offset)) throw Error("--offset must be a finite number >= 0");
+}
+
 double default_ray_offset(const Mesh& mesh) {
   // Relative to the model's size, and never below the float spacing of its
   // coordinates (a small model far from the origin).

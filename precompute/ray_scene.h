@@ -55,6 +55,9 @@ class RayScene {
 // advice; call on every worker thread before tracing).
 void enable_ftz_daz();
 
+// The options both precomputations share; throws prt::Error naming the option.
+void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threads, double offset, const Mesh& mesh);
+
 // The default ray offset for a mesh: 1e-4 x its bounding-box diagonal (and a
 // floor of 1e-30 for a mesh of one point).
 double default_ray_offset(const Mesh& mesh);

@@ -94,12 +94,7 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.samples < 1 || o.samples > (1 << 24))
     throw Error("--samples must be between 1 and 16777216, got " + std::to_string(o.samples));
   if (o.bounces < 0 || o.bounces > 64) throw Error("--bounces must be between 0 and 64, got " + std::to_string(o.bounces));
-  for (int c = 0; c < 3; ++c)
-    if (!(o.albedo[c] >= 0.0f && o.albedo[c] <= 1.0f))
-      throw Error("--albedo must be in [0, 1] per channel (energy conservation), got " + std::to_string(o.albedo[c]));
-  if (o.vertex_colors && mesh.colors.empty()) throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
-  if (o.threads < 0) throw Error("--threads must be >= 0");
-  if (!(o.offset >= 0.0) || !std::isfinite(o.offset)) throw Error("--offset must be a finite number >= 0");
+  detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 
 // Albedo of vertex v, channel c.

@@ -317,11 +317,17 @@ std::uint64_t transfer_bytes_per_vertex(const Transfer& t) {
   return b;
 }
 
-std::uint64_t transfer_file_size(const Transfer& t) {
+namespace {
+
+std::uint64_t file_size_of(const std::vector<TransferSection>& sections) {
   std::uint64_t size = kHeaderSize + kTrailerSize;
-  for (const auto& s : transfer_sections(t)) size += kSectionHeaderSize + s.bytes + padding(s.bytes);
+  for (const auto& s : sections) size += kSectionHeaderSize + s.bytes + padding(s.bytes);
   return size;
 }
+
+}  // namespace
+
+std::uint64_t transfer_file_size(const Transfer& t) { return file_size_of(transfer_sections(t)); }
 
 void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
@@ -823,11 +829,7 @@ std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
   return out;
 }
 
-std::uint64_t transfer_file_size(const WaveletTransfer& t) {
-  std::uint64_t size = kHeaderSize + kTrailerSize;
-  for (const auto& s : transfer_sections(t)) size += kSectionHeaderSize + s.bytes + padding(s.bytes);
-  return size;
-}
+std::uint64_t transfer_file_size(const WaveletTransfer& t) { return file_size_of(transfer_sections(t)); }
 
 void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
   if (auto p = wavelet_problem(t); !p.empty()) throw Error(path + ": cannot write this wavelet transfer: " + p);

@@ -39,12 +39,7 @@ void check_options(const WaveletOptions& o, const Mesh& mesh) {
   wavelet::check_resolution(o.cube_res, "--cube-res");
   if (!(o.threshold >= 0.0 && o.threshold < 1.0))
     throw Error("--threshold must be in [0, 1), got " + std::to_string(o.threshold));
-  for (int c = 0; c < 3; ++c)
-    if (!(o.albedo[c] >= 0.0f && o.albedo[c] <= 1.0f))
-      throw Error("--albedo must be in [0, 1] per channel (energy conservation), got " + std::to_string(o.albedo[c]));
-  if (o.vertex_colors && mesh.colors.empty()) throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
-  if (o.threads < 0) throw Error("--threads must be >= 0");
-  if (!(o.offset >= 0.0) || !std::isfinite(o.offset)) throw Error("--offset must be a finite number >= 0");
+  detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
   if (mesh.vertex_count() >= std::numeric_limits<std::uint32_t>::max())
     throw Error(mesh.source + ": too many vertices for a wavelet transfer (at most 2^32 - 2)");
 }
