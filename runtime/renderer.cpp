@@ -24,7 +24,6 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <mutex>
 #include <string>
 #include <utility>
 
@@ -121,27 +120,6 @@ GLuint link(const char* vs_src, const char* fs_src, const char* name, const std:
 }
 
 constexpr int kMaxCoeffs = kMaxRenderBands * kMaxRenderBands;  // LightBlock in the shaders
-
-// Renderers share an EGL display (EGL has one per platform and device, and
-// eglInitialize does not count). The last renderer of a display terminates
-// it, so the driver's threads are joined and its memory freed before the
-// process exits (llvmpipe keeps a rasteriser and a compute thread pool).
-std::mutex g_display_mutex;
-std::map<EGLDisplay, int> g_display_users;
-
-void acquire_display(EGLDisplay d) {
-  const std::lock_guard<std::mutex> lock(g_display_mutex);
-  ++g_display_users[d];
-}
-
-void release_display(EGLDisplay d) {
-  const std::lock_guard<std::mutex> lock(g_display_mutex);
-  const auto it = g_display_users.find(d);
-  if (it == g_display_users.end() || --it->second > 0) return;
-  g_display_users.erase(it);
-  eglReleaseThread();
-  eglTerminate(d);
-}
 
 // The attribute shader's modes (shaders/attribute.vert.glsl's MODE).
 int attribute_mode(Shading s) {
@@ -336,7 +314,6 @@ void Renderer::Impl::create_context() {
       return false;
     }
     display = d;
-    acquire_display(d);
     return true;
   };
   // 1. Mesa's surfaceless platform: no X, no Wayland, no DRM device needed.
@@ -477,7 +454,9 @@ void Renderer::Impl::destroy() {
     eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   }
   if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
-  if (display != EGL_NO_DISPLAY) release_display(display);
+  // No eglTerminate: the display is shared by every Renderer of the process,
+  // and terminating it unloads Mesa's driver, whose remaining allocations
+  // LeakSanitizer then reports from an unknown module.
   context = EGL_NO_CONTEXT;
   display = EGL_NO_DISPLAY;
 }
