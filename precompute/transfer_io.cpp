@@ -327,6 +327,47 @@ std::uint64_t file_size_of(const std::vector<TransferSection>& sections) {
 
 }  // namespace
 
+namespace {
+
+// One section as written: kind, element type, element count, bytes, data.
+struct RawSection {
+  std::uint32_t kind, type;
+  std::uint64_t count, bytes;
+  const void* data;
+};
+
+// Writes header, sections (each padded to kAlign) and the checksummed
+// trailer to a temporary file renamed over `path` (nothing half-written).
+void write_file(const std::string& path, const unsigned char (&header)[kHeaderSize],
+                const std::vector<RawSection>& sections) {
+  write_atomically(path, [&](const std::string& tmp) {
+    errno = 0;  // so that a failure reports its own cause
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw Error(path + ": cannot open for writing: " + errno_text());
+    HashedWriter out(f);
+    out.write(header, kHeaderSize);
+    static constexpr unsigned char zeros[kAlign] = {};
+    for (const auto& s : sections) {
+      unsigned char sh[kSectionHeaderSize];
+      store<std::uint32_t>(sh + 0, s.kind);
+      store<std::uint32_t>(sh + 4, s.type);
+      store<std::uint64_t>(sh + 8, s.count);
+      store<std::uint64_t>(sh + 16, s.bytes);
+      out.write(sh, sizeof sh);
+      out.write(s.data, s.bytes);
+      out.write(zeros, padding(s.bytes));
+    }
+    unsigned char trailer[kTrailerSize];
+    store<std::uint64_t>(trailer, out.digest());
+    std::memcpy(trailer + 8, kEndMagic.data(), kEndMagic.size());
+    out.raw(trailer, sizeof trailer);
+    f.close();
+    if (!f) throw Error(path + ": write failed: " + errno_text());
+  });
+}
+
+}  // namespace
+
 std::uint64_t transfer_file_size(const Transfer& t) { return file_size_of(transfer_sections(t)); }
 
 void write_transfer(const std::string& path, const Transfer& t) {
@@ -350,30 +391,10 @@ void write_transfer(const std::string& path, const Transfer& t) {
   store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
   store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
 
-  write_atomically(path, [&](const std::string& tmp) {
-    errno = 0;  // so that a failure reports its own cause
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw Error(path + ": cannot open for writing: " + errno_text());
-    HashedWriter out(f);
-    out.write(header, kHeaderSize);
-    static constexpr unsigned char zeros[kAlign] = {};
-    for (const auto& s : sections) {
-      unsigned char sh[kSectionHeaderSize];
-      store<std::uint32_t>(sh + 0, s.kind);
-      store<std::uint32_t>(sh + 4, kind_info(s.kind)->type);
-      store<std::uint64_t>(sh + 8, s.count);
-      store<std::uint64_t>(sh + 16, s.bytes);
-      out.write(sh, sizeof sh);
-      out.write(section_array(t, s.kind).first, s.bytes);
-      out.write(zeros, padding(s.bytes));
-    }
-    unsigned char trailer[kTrailerSize];
-    store<std::uint64_t>(trailer, out.digest());
-    std::memcpy(trailer + 8, kEndMagic.data(), kEndMagic.size());
-    out.raw(trailer, sizeof trailer);
-    f.close();
-    if (!f) throw Error(path + ": write failed: " + errno_text());
-  });
+  std::vector<RawSection> raw;
+  for (const auto& s : sections)
+    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, section_array(t, s.kind).first});
+  write_file(path, header, raw);
 }
 
 // ---- reading ------------------------------------------------------------------------
@@ -851,31 +872,9 @@ void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
   store<std::uint32_t>(header + kOffQuantisation, kQuantInt16);
   store<double>(header + kOffThreshold, t.threshold);
 
-  write_atomically(path, [&](const std::string& tmp) {
-    errno = 0;
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw Error(path + ": cannot open for writing: " + errno_text());
-    HashedWriter out(f);
-    out.write(header, kHeaderSize);
-    static constexpr unsigned char zeros[kAlign] = {};
-    for (const auto& s : sections) {
-      const std::uint64_t bytes = s.count * type_bytes(s.type);
-      unsigned char sh[kSectionHeaderSize];
-      store<std::uint32_t>(sh + 0, s.kind);
-      store<std::uint32_t>(sh + 4, s.type);
-      store<std::uint64_t>(sh + 8, s.count);
-      store<std::uint64_t>(sh + 16, bytes);
-      out.write(sh, sizeof sh);
-      out.write(s.data, bytes);
-      out.write(zeros, padding(bytes));
-    }
-    unsigned char trailer[kTrailerSize];
-    store<std::uint64_t>(trailer, out.digest());
-    std::memcpy(trailer + 8, kEndMagic.data(), kEndMagic.size());
-    out.raw(trailer, sizeof trailer);
-    f.close();
-    if (!f) throw Error(path + ": write failed: " + errno_text());
-  });
+  std::vector<RawSection> raw;
+  for (const auto& s : sections) raw.push_back({s.kind, s.type, s.count, s.count * type_bytes(s.type), s.data});
+  write_file(path, header, raw);
 }
 
 namespace {
