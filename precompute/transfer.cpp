@@ -94,6 +94,8 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.samples < 1 || o.samples > (1 << 24))
     throw Error("--samples must be between 1 and 16777216, got " + std::to_string(o.samples));
   if (o.bounces < 0 || o.bounces > 64) throw Error("--bounces must be between 0 and 64, got " + std::to_string(o.bounces));
+  if (!(o.bounce_tolerance >= 0.0 && o.bounce_tolerance < 1.0))
+    throw Error("--bounce-tolerance must be in [0, 1), got " + std::to_string(o.bounce_tolerance));
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 
@@ -315,6 +317,10 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   // Bounces: T_{b+1}(v) = (rho_v / pi) sum_u G_vu T_b(u), each from the
   // previous bounce alone; the total is summed separately.
   t.direct = t.coeffs;
+  double direct_energy = 0.0;
+  for (float x : t.direct) direct_energy += std::abs(x);
+  t.direct_energy = direct_energy / double(std::max<std::size_t>(V, 1));
+  t.bounces = 0;
   std::vector<float> prev = t.coeffs, next(V * stride);
   for (int b = 1; b <= o.bounces; ++b) {
     Canceller bounce(progress, V, "bounces");
@@ -342,6 +348,8 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
       energy += std::abs(next[i]);
     }
     t.bounce_energy.push_back(energy / double(std::max<std::size_t>(V, 1)));
+    t.bounces = b;
+    if (o.bounce_tolerance > 0 && t.bounce_energy.back() < o.bounce_tolerance * t.direct_energy) break;
     prev.swap(next);
   }
   return t;

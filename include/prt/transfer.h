@@ -28,7 +28,12 @@ struct TransferOptions {
   TransferMode mode = TransferMode::Shadowed;
   int bands = 5;                 // 1..16 (any up to sh::kMaxBands works)
   int samples = 1024;            // ~rays per vertex: 2*samples directions over the sphere
-  int bounces = 1;               // interreflected only; 0 = shadowed
+  int bounces = 1;               // interreflected only; 0 = shadowed; at most this many
+  // Interreflected: stop adding bounces once one adds less than this fraction
+  // of the direct transfer's energy (mean |T| over all coefficients; see
+  // Transfer::bounce_energy); Transfer::bounces says how many were computed.
+  // 0: always `bounces`.
+  double bounce_tolerance = 0;
   glm::vec3 albedo{1.0f};        // used when the mesh has no colours or vertex_colors is false
   bool vertex_colors = false;    // use the mesh's per-vertex colours as albedo
   int threads = 0;               // 0: all cores
@@ -43,7 +48,7 @@ struct Transfer {
   int bands = 0;
   int channels = 1;
   TransferMode mode = TransferMode::Shadowed;
-  int bounces = 0;
+  int bounces = 0;               // computed (at most TransferOptions::bounces)
   int samples = 0;
   glm::vec3 albedo{1.0f};
   bool vertex_colors = false;
@@ -56,6 +61,7 @@ struct Transfer {
   std::vector<float> ao;             // kappa_A = (1/pi) integral V max(n.w,0) dw, per vertex (1 if unshadowed)
   std::vector<glm::vec3> bent_normals;  // normalised cosine-weighted mean unoccluded direction
   std::vector<double> bounce_energy;    // mean |T| added by each bounce (diagnostics)
+  double direct_energy = 0;             // interreflected: mean |T| of the direct part (not stored in files)
 
   std::size_t stride() const { return std::size_t(channels) * bands * bands; }
   const float* vertex(std::size_t v) const { return coeffs.data() + v * stride(); }

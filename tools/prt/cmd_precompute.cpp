@@ -89,6 +89,13 @@ int run_precompute(PrecomputeArgs& a) {
     fmt::print(stderr, "wrote {}: {} {} bands, {} channel{}, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
                a.output, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s", t.vertices,
                4 * t.stride(), secs);
+    if (t.mode == TransferMode::Interreflected && a.opt.bounces > 0) {
+      std::string energies;
+      for (double e : t.bounce_energy) energies += fmt::format(" {:.3g}", t.direct_energy > 0 ? e / t.direct_energy : 0.0);
+      fmt::print(stderr, "bounces: {} of at most {}{}; energy of each relative to the direct part:{}\n", t.bounces,
+                 a.opt.bounces, t.bounces < a.opt.bounces ? " (the last fell below --bounce-tolerance)" : "",
+                 energies);
+    }
     if (!t.ao.empty() && t.mode != TransferMode::Unshadowed) {
       double mean = 0;
       for (float v : t.ao) mean += v;
@@ -126,9 +133,14 @@ Run add_precompute(CLI::App& app) {
   a->sh_only.push_back(s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
                            ->check(int_range(1, 1 << 24))
                            ->capture_default_str());
-  a->sh_only.push_back(s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode)")
+  a->sh_only.push_back(s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode), at most")
                            ->check(int_range(0, 64))
                            ->capture_default_str());
+  a->sh_only.push_back(
+      s->add_option("--bounce-tolerance", a->opt.bounce_tolerance,
+                    "Stop adding bounces once one adds less than this fraction of the direct part's energy (0: never)")
+          ->check(CLI::Range(0.0, 0.999999))
+          ->capture_default_str());
   a->wavelet_only.push_back(
       s->add_option("--cube-res", a->wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
           ->check(int_range(2, 256))
