@@ -20,6 +20,13 @@ struct InfoArgs {
   bool json = false;
 };
 
+nlohmann::ordered_json sections_json(const std::vector<TransferSection>& sections) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const auto& s : sections)
+    out.push_back({{"kind", s.kind}, {"name", s.name}, {"type", s.type}, {"count", s.count}, {"bytes", s.bytes}});
+  return out;
+}
+
 // The header fields and section sizes. The mesh hash is a hex string: a
 // 64-bit integer does not survive JSON readers that use doubles.
 nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
@@ -38,14 +45,7 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
   j["seed"] = t.seed;
   j["vertices"] = t.vertices;
   j["mesh_hash"] = fmt::format("{:#018x}", t.mesh_hash);
-  nlohmann::ordered_json sections = nlohmann::ordered_json::array();
-  for (const auto& s : transfer_sections(t))
-    sections.push_back({{"kind", s.kind},
-                        {"name", s.name},
-                        {"type", s.type},
-                        {"count", s.count},
-                        {"bytes", s.bytes}});
-  j["sections"] = sections;
+  j["sections"] = sections_json(transfer_sections(t));
   j["bytes_per_vertex"] = transfer_bytes_per_vertex(t);
   j["file_bytes"] = transfer_file_size(t);
   if (!t.ao.empty()) {
@@ -74,10 +74,7 @@ nlohmann::ordered_json to_json(const std::string& path, const WaveletTransfer& t
   j["mesh_hash"] = fmt::format("{:#018x}", t.mesh_hash);
   j["kept"] = t.kept();
   j["kept_fraction"] = t.kept_fraction();
-  nlohmann::ordered_json sections = nlohmann::ordered_json::array();
-  for (const auto& s : transfer_sections(t))
-    sections.push_back({{"kind", s.kind}, {"name", s.name}, {"type", s.type}, {"count", s.count}, {"bytes", s.bytes}});
-  j["sections"] = sections;
+  j["sections"] = sections_json(transfer_sections(t));
   j["bytes_per_vertex"] = t.vertices ? double(t.bytes()) / double(t.vertices) : 0.0;
   j["file_bytes"] = transfer_file_size(t);
   return j;
