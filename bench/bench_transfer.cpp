@@ -37,9 +37,21 @@ prt::TransferOptions options(prt::TransferMode mode, int bounces = 0) {
   return o;
 }
 
+// Counters: the fraction of vertices that are analytic (no ray occluded:
+// no stored transfer, prt/transfer.h) and the stored bytes per vertex.
+void count_analytic(benchmark::State& state, const prt::Transfer& t) {
+  state.counters["analytic"] = double(t.analytic_vertices()) / double(t.vertices);
+  state.counters["stored_bytes_per_vertex"] = double(4 * (t.coeffs.size() + t.direct.size())) / double(t.vertices);
+}
+
 void BM_TransferShadowed(benchmark::State& state) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
-  for (auto _ : state) benchmark::DoNotOptimize(prt::compute_transfer(*bunny(), options(prt::TransferMode::Shadowed)).coeffs.data());
+  prt::Transfer t;
+  for (auto _ : state) {
+    t = prt::compute_transfer(*bunny(), options(prt::TransferMode::Shadowed));
+    benchmark::DoNotOptimize(t.coeffs.data());
+  }
+  count_analytic(state, t);
 }
 BENCHMARK(BM_TransferShadowed)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
 
@@ -88,8 +100,12 @@ BENCHMARK(BM_BareEmbree)->Unit(benchmark::kMillisecond)->UseRealTime()->Iteratio
 void BM_TransferInterreflected(benchmark::State& state) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
   const int bounces = int(state.range(0));
-  for (auto _ : state)
-    benchmark::DoNotOptimize(prt::compute_transfer(*bunny(), options(prt::TransferMode::Interreflected, bounces)).coeffs.data());
+  prt::Transfer t;
+  for (auto _ : state) {
+    t = prt::compute_transfer(*bunny(), options(prt::TransferMode::Interreflected, bounces));
+    benchmark::DoNotOptimize(t.coeffs.data());
+  }
+  count_analytic(state, t);
 }
 BENCHMARK(BM_TransferInterreflected)->Arg(1)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
 

@@ -61,7 +61,13 @@ constexpr std::size_t kOffSeed = 56;          // u64
 constexpr std::size_t kOffVertices = 64;      // u64
 constexpr std::size_t kOffMeshHash = 72;      // u64
 constexpr std::size_t kOffSectionCount = 80;  // u32
-constexpr std::size_t kOffReserved = 84;      // zero up to kHeaderSize
+constexpr std::size_t kOffReserved = 84;      // version 1: zero up to kHeaderSize
+// Version 2 (analytic vertices): a u32 of zeros at 84, then
+constexpr std::size_t kOffStored = 88;        // u64: vertices with stored transfer
+constexpr std::size_t kOffShadingHash = 96;   // u64: shading_hash() of the mesh
+constexpr std::size_t kOffReservedV2 = 104;   // zero up to kHeaderSize
+// The wavelet basis did not change with version 2: its files stay version 1.
+constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
 
 constexpr std::uint32_t kBasisSH = 0;
 constexpr std::uint32_t kBasisWavelet = 1;
@@ -74,7 +80,14 @@ constexpr std::uint32_t kTypeU64 = 3;  // wavelet files only
 constexpr std::uint32_t kTypeU32 = 4;
 constexpr std::uint32_t kTypeI16 = 5;
 
-enum Kind : std::uint32_t { kCoeffs = 1, kDirect = 2, kAO = 3, kBentNormals = 4, kBounceEnergy = 5 };
+enum Kind : std::uint32_t {
+  kCoeffs = 1,
+  kDirect = 2,
+  kAO = 3,
+  kBentNormals = 4,
+  kBounceEnergy = 5,
+  kAnalyticMask = 6,  // version 2
+};
 
 struct KindInfo {
   std::uint32_t kind;
@@ -83,13 +96,20 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 5> kKinds = {{
+constexpr std::array<KindInfo, 6> kKinds = {{
     {kCoeffs, "coefficients", kTypeF32, true},
     {kDirect, "direct", kTypeF32, true},
     {kAO, "ambient occlusion", kTypeF32, true},
     {kBentNormals, "bent normals", kTypeF32, true},
     {kBounceEnergy, "bounce energy", kTypeF64, false},
+    {kAnalyticMask, "analytic vertices", kTypeU32, false},
 }};
+// Section kinds a file of each version may hold (kinds 1..N).
+constexpr std::size_t kKindsV1 = 5;
+constexpr std::size_t kKindsV2 = 6;
+
+// Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
+constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
 
 const KindInfo* kind_info(std::uint32_t kind) {
   for (const auto& k : kKinds)
@@ -157,6 +177,7 @@ struct Values {
   std::int64_t bands, channels, mode, bounces, samples;
   glm::vec3 albedo;
   std::uint64_t vertices;
+  std::uint64_t stored;  // vertices with a row in the coefficients; the rest are analytic
 };
 
 // What is wrong with the values, or "".
@@ -177,6 +198,12 @@ std::string values_problem(const Values& v) {
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(v.albedo[c])) return "albedo is not finite";
   if (v.vertices == 0) return "no vertices";
+  if (v.stored > v.vertices)
+    return sformat("%llu stored vertices, more than its %llu vertices", static_cast<unsigned long long>(v.stored),
+                   static_cast<unsigned long long>(v.vertices));
+  if (v.stored < v.vertices && v.stored >= Transfer::kAnalytic)
+    return sformat("%llu stored vertices; with analytic vertices at most %llu", static_cast<unsigned long long>(v.stored),
+                   static_cast<unsigned long long>(Transfer::kAnalytic - 1));
   return {};
 }
 
@@ -186,10 +213,11 @@ std::uint64_t expected_count(std::uint32_t kind, const Values& v) {
   const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands) * std::uint64_t(v.bands);
   switch (kind) {
     case kCoeffs:
-    case kDirect: return v.vertices * stride;
+    case kDirect: return v.stored * stride;
     case kAO: return v.vertices;
     case kBentNormals: return 3 * v.vertices;
     case kBounceEnergy: return std::uint64_t(v.bounces);
+    case kAnalyticMask: return mask_words(v.vertices);
   }
   return 0;
 }
@@ -202,6 +230,8 @@ std::string section_problem(std::uint32_t kind, std::uint64_t count, const Value
   if (kind == kDirect && v.mode != 2)
     return sformat("has a '%s' section, which only an interreflected transfer has (this one is %s)", k.name,
                    std::string(transfer_mode_name(TransferMode(v.mode))).c_str());
+  if (kind == kAnalyticMask && v.stored == v.vertices)
+    return sformat("has an '%s' section, but the header says every vertex is stored", k.name);
   if (kind == kBounceEnergy) {
     if (count == 0 || count > want)
       return sformat("section '%s' has %llu values; expected 1 to bounces = %llu", k.name,
@@ -210,10 +240,14 @@ std::string section_problem(std::uint32_t kind, std::uint64_t count, const Value
   }
   if (count != want) {
     if (kind == kCoeffs || kind == kDirect)
-      return sformat("section '%s' has %llu values; expected vertices x channels x bands^2 = %llu x %lld x %lld = %llu",
-                     k.name, static_cast<unsigned long long>(count), static_cast<unsigned long long>(v.vertices),
+      return sformat("section '%s' has %llu values; expected stored vertices x channels x bands^2 = %llu x %lld x %lld "
+                     "= %llu",
+                     k.name, static_cast<unsigned long long>(count), static_cast<unsigned long long>(v.stored),
                      static_cast<long long>(v.channels), static_cast<long long>(v.bands * v.bands),
                      static_cast<unsigned long long>(want));
+    if (kind == kAnalyticMask)
+      return sformat("section '%s' has %llu words; expected (vertices + 31) / 32 = %llu", k.name,
+                     static_cast<unsigned long long>(count), static_cast<unsigned long long>(want));
     return sformat("section '%s' has %llu values; expected %llu for %llu vertices", k.name,
                    static_cast<unsigned long long>(count), static_cast<unsigned long long>(want),
                    static_cast<unsigned long long>(v.vertices));
@@ -226,11 +260,15 @@ std::string section_problem(std::uint32_t kind, std::uint64_t count, const Value
 std::string finite_problem(const Transfer& t) {
   const std::size_t stride = t.stride();
   const std::size_t n = std::size_t(t.bands) * t.bands;
+  const auto vertex_of_row = [&](std::size_t row) {
+    if (t.slots.empty()) return row;
+    return std::size_t(std::find(t.slots.begin(), t.slots.end(), std::uint32_t(row)) - t.slots.begin());
+  };
   const auto coeff = [&](const std::vector<float>& a, const char* what) -> std::string {
     for (std::size_t i = 0; i < a.size(); ++i)
       if (!std::isfinite(a[i]))
-        return sformat("vertex %zu has a non-finite %s (%g at channel %zu, k = %zu)", i / stride, what, double(a[i]),
-                       (i % stride) / n, i % n);
+        return sformat("vertex %zu has a non-finite %s (%g at channel %zu, k = %zu)", vertex_of_row(i / stride), what,
+                       double(a[i]), (i % stride) / n, i % n);
     return {};
   };
   if (auto p = coeff(t.coeffs, "coefficient"); !p.empty()) return p;
@@ -246,8 +284,40 @@ std::string finite_problem(const Transfer& t) {
   return {};
 }
 
+// The stored vertices of a transfer whose slots may be inconsistent (the
+// writer checks them): the vertices that are not analytic.
+std::uint64_t stored_of(const Transfer& t) {
+  return t.slots.size() == t.vertices ? t.stored_vertices() : t.vertices;
+}
+
 Values values_of(const Transfer& t) {
-  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices};
+  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored_of(t)};
+}
+
+// The slots must number the stored vertices 0, 1, 2, ... in vertex order
+// (the file keeps only which vertices are analytic): what is wrong, or "".
+std::string slots_problem(const Transfer& t) {
+  if (t.slots.empty()) return {};
+  if (t.slots.size() != t.vertices)
+    return sformat("%zu slots for %zu vertices (one per vertex, or none)", t.slots.size(), t.vertices);
+  std::uint32_t row = 0;
+  for (std::size_t v = 0; v < t.vertices; ++v) {
+    if (t.slots[v] == Transfer::kAnalytic) continue;
+    if (t.slots[v] != row)
+      return sformat("vertex %zu is in row %u; stored vertices must take rows 0, 1, 2, ... in vertex order (row %u)",
+                     v, t.slots[v], row);
+    ++row;
+  }
+  return {};
+}
+
+// The analytic-vertex bit mask of `t` (empty when no vertex is analytic).
+std::vector<std::uint32_t> analytic_mask(const Transfer& t) {
+  if (t.analytic_vertices() == 0) return {};
+  std::vector<std::uint32_t> mask(mask_words(t.vertices), 0u);
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    if (t.slots[v] == Transfer::kAnalytic) mask[v / 32] |= 1u << (v % 32);
+  return mask;
 }
 
 // Pointer to the array of section `kind` and its element count.
@@ -258,6 +328,8 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
     case kAO: return {t.ao.data(), t.ao.size()};
     case kBentNormals: return {t.bent_normals.data(), 3 * std::uint64_t(t.bent_normals.size())};
     case kBounceEnergy: return {t.bounce_energy.data(), t.bounce_energy.size()};
+    // Built by the writer from the slots (analytic_mask).
+    case kAnalyticMask: return {nullptr, stored_of(t) < t.vertices ? mask_words(t.vertices) : 0};
   }
   return {nullptr, 0};
 }
@@ -267,6 +339,7 @@ bool has_section(const Transfer& t, std::uint32_t kind) { return kind == kCoeffs
 
 // Everything the reader would refuse in `t`, or "".
 std::string transfer_problem(const Transfer& t) {
+  if (auto p = slots_problem(t); !p.empty()) return p;
   const Values v = values_of(t);
   if (auto p = values_problem(v); !p.empty()) return p;
   for (const auto& k : kKinds)
@@ -308,6 +381,19 @@ std::vector<TransferSection> transfer_sections(const Transfer& t) {
     s.push_back({k.kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex, type_name(k.type)});
   }
   return s;
+}
+
+std::uint64_t analytic_bytes_saved(const Transfer& t) {
+  const std::uint64_t analytic = t.analytic_vertices(), row = 4 * std::uint64_t(t.stride());
+  if (analytic == 0) return 0;
+  std::uint64_t dense = 0, compact = 0;  // the sections as written, and with every vertex stored
+  for (const auto& sec : transfer_sections(t)) {
+    compact += kSectionHeaderSize + sec.bytes + padding(sec.bytes);
+    if (sec.kind == kAnalyticMask) continue;
+    const std::uint64_t bytes = sec.kind == kCoeffs || sec.kind == kDirect ? sec.bytes + analytic * row : sec.bytes;
+    dense += kSectionHeaderSize + bytes + padding(bytes);
+  }
+  return dense > compact ? dense - compact : 0;
 }
 
 std::uint64_t transfer_bytes_per_vertex(const Transfer& t) {
@@ -390,10 +476,14 @@ void write_transfer(const std::string& path, const Transfer& t) {
   store<std::uint64_t>(header + kOffVertices, t.vertices);
   store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
   store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
+  store<std::uint64_t>(header + kOffStored, stored_of(t));
+  store<std::uint64_t>(header + kOffShadingHash, t.shading_hash);
 
+  const std::vector<std::uint32_t> mask = analytic_mask(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
-    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, section_array(t, s.kind).first});
+    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
+                   s.kind == kAnalyticMask ? mask.data() : section_array(t, s.kind).first});
   write_file(path, header, raw);
 }
 
@@ -410,6 +500,7 @@ class Reader {
   Transfer read();
   WaveletTransfer read_wavelet();
   std::uint32_t read_basis();
+  std::uint32_t version() const { return version_; }
 
  private:
   void open_file();
@@ -433,6 +524,7 @@ class Reader {
   std::uint64_t size_ = 0;
   unsigned char h_[kHeaderSize] = {};
   std::uint32_t section_count_ = 0;
+  std::uint32_t version_ = 0;
 };
 
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size) {
@@ -516,13 +608,15 @@ void Reader::read_head() {
   if (head < kOffVersion + 4) throw fail(truncated(kMinFileSize, false, size_));
   const std::uint32_t version = load<std::uint32_t>(h + kOffVersion);
   if (version > kTransferFormatVersion)
-    throw fail("written by a newer prt (version " + std::to_string(version) + "); this prt reads version " +
+    throw fail("written by a newer prt (version " + std::to_string(version) + "); this prt reads versions 1 to " +
                std::to_string(kTransferFormatVersion));
-  if (version != kTransferFormatVersion) throw fail("unknown format version " + std::to_string(version));
+  if (version == 0) throw fail("unknown format version " + std::to_string(version));
+  version_ = version;
   if (size_ < kMinFileSize) throw fail(truncated(kMinFileSize, false, size_));
   const std::uint32_t header_size = load<std::uint32_t>(h + kOffHeaderSize);
   if (header_size != kHeaderSize)
-    throw fail("corrupt: header size " + std::to_string(header_size) + "; version 1 has " + u64s(kHeaderSize));
+    throw fail("corrupt: header size " + std::to_string(header_size) + "; version " + std::to_string(version) +
+               " has " + u64s(kHeaderSize));
   section_count_ = load<std::uint32_t>(h + kOffSectionCount);
 }
 
@@ -571,21 +665,30 @@ Transfer Reader::read() {
                  load<std::uint32_t>(h + kOffBounces),
                  load<std::uint32_t>(h + kOffSamples),
                  {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
-                 load<std::uint64_t>(h + kOffVertices)};
+                 load<std::uint64_t>(h + kOffVertices),
+                 // Version 1 stores every vertex.
+                 version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
+  const bool v1 = version_ == 1;
+  const std::size_t known_kinds = v1 ? kKindsV1 : kKindsV2;
   if (auto p = values_problem(v); !p.empty()) throw fail("bad header: " + p);
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   if (flags & ~kKnownFlags) throw fail("bad header: unknown flags " + sformat("0x%x", flags & ~kKnownFlags));
   for (std::uint64_t i = kOffReserved; i < kHeaderSize; ++i)
-    if (h[i] != 0) throw fail("bad header: reserved byte " + u64s(i) + " is not zero");
-  // The coefficients alone take 4 x channels x bands^2 bytes per vertex.
+    if (h[i] != 0 && (v1 || i < kOffStored || i >= kOffReservedV2))
+      throw fail("bad header: reserved byte " + u64s(i) + " is not zero");
+  // The coefficients alone take 4 x channels x bands^2 bytes per stored
+  // vertex, the analytic-vertex mask 1 bit per vertex.
   const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands * v.bands);
-  if (v.vertices > size_ / (4 * stride))
+  if (v.stored > size_ / (4 * stride))
+    throw fail("bad header: " + u64s(v.stored) + (v1 ? "" : " stored") + " vertices cannot fit in a file of " +
+               u64s(size_) + " bytes (at " + u64s(4 * stride) + " bytes per vertex)");
+  if (v.stored < v.vertices && mask_words(v.vertices) > size_ / 4)
     throw fail("bad header: " + u64s(v.vertices) + " vertices cannot fit in a file of " + u64s(size_) +
-               " bytes (at " + u64s(4 * stride) + " bytes per vertex)");
+               " bytes (their analytic-vertex mask alone takes " + u64s(4 * mask_words(v.vertices)) + ")");
   if (section_count == 0) throw fail("bad section table: no sections (the coefficients are required)");
-  if (section_count > kKinds.size())
+  if (section_count > known_kinds)
     throw fail("bad section table: " + std::to_string(section_count) + " sections; at most " +
-               std::to_string(kKinds.size()) + " kinds exist");
+               std::to_string(known_kinds) + " kinds exist in version " + std::to_string(version_));
 
   Transfer t;
   t.bands = int(v.bands);
@@ -598,6 +701,8 @@ Transfer Reader::read() {
   t.seed = load<std::uint64_t>(h + kOffSeed);
   t.vertices = std::size_t(v.vertices);
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
+  if (!v1) t.shading_hash = load<std::uint64_t>(h + kOffShadingHash);
+  std::vector<std::uint32_t> mask;
 
   // 4. Sections: known kinds in increasing order, each of the type and size
   // the header implies, data padded with zeros.
@@ -614,7 +719,9 @@ Transfer Reader::read() {
     const std::uint64_t count = load<std::uint64_t>(sh + 8);
     const std::uint64_t bytes = load<std::uint64_t>(sh + 16);
     const KindInfo* k = kind_info(kind);
-    if (!k) throw fail("bad section table: " + where + " has unknown kind " + std::to_string(kind));
+    if (!k || kind > known_kinds)
+      throw fail("bad section table: " + where + " has unknown kind " + std::to_string(kind) +
+                 (k ? " in a version " + std::to_string(version_) + " file" : std::string()));
     if (kind <= previous)
       throw fail("bad section table: " + where + " ('" + k->name + "') is out of order or repeated");
     if (i == 0 && kind != kCoeffs) throw fail("bad section table: no 'coefficients' section");
@@ -637,6 +744,7 @@ Transfer Reader::read() {
       case kAO: read_section(data, t.ao, count); break;
       case kBentNormals: read_section(data, t.bent_normals, count / 3); break;
       case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
+      case kAnalyticMask: read_section(data, mask, count); break;
     }
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
@@ -646,8 +754,26 @@ Transfer Reader::read() {
   }
   if (offset != data_end)
     throw fail("bad section table: " + u64s(data_end - offset) + " bytes between the last section and the trailer");
+  if (v.stored < v.vertices && mask.empty())
+    throw fail("bad section table: no 'analytic vertices' section, but the header says " +
+               u64s(v.vertices - v.stored) + " of " + u64s(v.vertices) + " vertices are analytic");
 
-  // 5. Values.
+  // 5. Values: the mask marks exactly the vertices the header says are
+  // analytic, and nothing past the last vertex; every value is finite.
+  if (!mask.empty()) {
+    std::uint64_t marked = 0;
+    for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
+    const std::uint64_t tail = v.vertices % 32;
+    if (tail != 0 && (mask.back() >> tail) != 0)
+      throw fail("bad analytic-vertex mask: bits set past the last vertex (" + u64s(v.vertices) + ")");
+    if (marked != v.vertices - v.stored)
+      throw fail("bad analytic-vertex mask: " + u64s(marked) + " vertices marked analytic; the header says " +
+                 u64s(v.vertices - v.stored) + " (" + u64s(v.vertices) + " vertices, " + u64s(v.stored) + " stored)");
+    t.slots.assign(t.vertices, Transfer::kAnalytic);
+    std::uint32_t row = 0;
+    for (std::size_t vtx = 0; vtx < t.vertices; ++vtx)
+      if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) t.slots[vtx] = row++;
+  }
   if (auto p = finite_problem(t); !p.empty()) throw fail(p);
   return t;
 }
@@ -672,8 +798,27 @@ void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mes
 
 }  // namespace
 
+std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors) {
+  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(), &XXH3_freeState);
+  if (!state || XXH3_64bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
+  static_assert(sizeof(glm::vec3) == 12);
+  XXH3_64bits_update(state.get(), mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
+  if (vertex_colors) XXH3_64bits_update(state.get(), mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
+  return XXH3_64bits_digest(state.get());
+}
+
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
   check_mesh(t.vertices, t.mesh_hash, mesh, transfer_path, "prt precompute");
+  // Analytic vertices take their normal and albedo from the mesh, which the
+  // mesh hash (positions, triangles) does not cover.
+  if (t.slots.empty()) return;
+  const std::size_t analytic = t.analytic_vertices();
+  if (analytic == 0) return;
+  const std::uint64_t hash = shading_hash(mesh, t.vertex_colors);
+  if (hash == t.shading_hash) return;
+  throw Error(transfer_path + " was computed with other normals" + (t.vertex_colors ? " or vertex colours" : "") +
+              " than " + mesh.source + " (shading hash " + hex64(t.shading_hash) + ", the mesh's " + hex64(hash) +
+              "), and its " + u64s(analytic) + " analytic vertices are shaded from the mesh's; run prt precompute again");
 }
 
 std::string describe_transfer(const Transfer& t) {
@@ -703,7 +848,12 @@ std::string describe_transfer(const Transfer& t) {
     s += line(first ? "sections" : "", v);
     first = false;
   }
-  s += line("bytes per vertex", u64s(transfer_bytes_per_vertex(t)));
+  const std::size_t analytic = t.analytic_vertices();
+  s += line("analytic", sformat("%zu of %zu vertices (%.1f%%; unoccluded: clamped cosine evaluated at run time), "
+                                "%llu bytes saved",
+                                analytic, t.vertices, t.vertices ? 100.0 * double(analytic) / double(t.vertices) : 0.0,
+                                static_cast<unsigned long long>(analytic_bytes_saved(t))));
+  s += line("bytes per vertex", u64s(transfer_bytes_per_vertex(t)) + (analytic ? " (mean over all vertices)" : ""));
   s += line("file size", u64s(transfer_file_size(t)) + " bytes");
   if (!t.ao.empty()) {
     double lo = t.ao[0], hi = t.ao[0], sum = 0;
@@ -842,6 +992,12 @@ TransferBasis read_transfer_basis(const std::string& path) {
   return Reader(path).read_basis() == kBasisWavelet ? TransferBasis::Wavelet : TransferBasis::SH;
 }
 
+std::uint32_t read_transfer_version(const std::string& path) {
+  Reader r(path);
+  r.read_basis();
+  return r.version();
+}
+
 std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
   std::vector<TransferSection> out;
   for (const auto& s : wavelet_sections(t))
@@ -858,7 +1014,7 @@ void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
 
   unsigned char header[kHeaderSize] = {};
   std::memcpy(header, kMagic.data(), kMagic.size());
-  store<std::uint32_t>(header + kOffVersion, kTransferFormatVersion);
+  store<std::uint32_t>(header + kOffVersion, kWaveletVersion);
   store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
   store<std::uint32_t>(header + kOffBasis, kBasisWavelet);
   store<std::uint32_t>(header + kOffCubeRes, std::uint32_t(t.cube_res));
@@ -890,6 +1046,9 @@ WaveletTransfer Reader::read_wavelet() {
                " bands), not a wavelet one: run prt precompute --basis wavelet for a wavelet transfer, or read it "
                "with prt::read_transfer");
   if (basis != kBasisWavelet) throw fail(unknown_basis(basis));
+  if (version_ != kWaveletVersion)
+    throw fail("bad header: format version " + std::to_string(version_) + " for a wavelet transfer (wavelet files are "
+               "version " + std::to_string(kWaveletVersion) + ")");
 
   WaveletTransfer t;
   const std::uint32_t r = load<std::uint32_t>(h + kOffCubeRes);
@@ -994,7 +1153,7 @@ std::string describe_transfer(const WaveletTransfer& t) {
   const double bpv = t.vertices > 0 ? double(t.bytes()) / double(t.vertices) : 0.0;
   return sformat("prt wavelet transfer (format version %u): cube %d (%zu coefficients), threshold %g, int16 + f32 "
                  "scale per vertex, ",
-                 kTransferFormatVersion, t.cube_res, t.coeff_count(), t.threshold) +
+                 kWaveletVersion, t.cube_res, t.coeff_count(), t.threshold) +
          sformat("%zu vertices, kept %.4g%% (%zu coefficients), %.1f bytes/vertex, ", t.vertices,
                  100.0 * t.kept_fraction(), t.kept(), bpv) +
          (t.vertex_colors ? std::string("albedo: vertex colours, ")

@@ -231,12 +231,16 @@ Camera default_camera(const Mesh& mesh, double fov_deg) {
 namespace {
 
 // A transfer array on the GPU: a buffer and its RGBA32F buffer texture
-// (shaders/mesh.vert.glsl).
+// (shaders/relight.comp.glsl), one row per stored vertex.
 struct TransferArray {
   GLuint buffer = 0, texture = 0;
   int channels = 0;
+  std::size_t bytes = 0;
   explicit operator bool() const { return buffer != 0; }
 };
+
+// relight.comp.glsl's SOURCE: where each vertex's transfer comes from.
+enum class Source { Stored = 0, Mixed = 1, Analytic = 2 };
 
 }  // namespace
 
@@ -246,14 +250,19 @@ struct Renderer::Impl {
   bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
   GLuint background_program = 0, display_program = 0;
-  std::map<std::array<int, 3>, GLuint> relight_programs;  // by (coeffs, vec4s, channels); compiled when first used
+  // By (coeffs, vec4s, channels, source, vertex albedo); compiled when first used.
+  std::map<std::array<int, 5>, GLuint> relight_programs;
   GLuint radiance_buffer = 0;  // vec4 per vertex, written by the relighting pass
   std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
   GLuint vao = 0, empty_vao = 0;
   GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
-  // Transfer arrays by Shading: the file's, its direct part, the analytic
-  // unshadowed one (made when first used).
-  TransferArray transfer, direct, unshadowed;
+  // Transfer arrays by Shading: the file's and its direct part, rows of the
+  // stored vertices only. Analytic vertices (and every vertex in
+  // Shading::Unshadowed) are shaded from the normal and albedo buffers.
+  TransferArray transfer, direct;
+  bool has_direct = false;        // an interreflected transfer's direct part (maybe all analytic)
+  Source source = Source::Stored;  // of transfer and direct
+  GLuint slot_buffer = 0;          // Source::Mixed: per vertex its row, or Transfer::kAnalytic
   std::vector<float> light;  // bands^2 vec4s as uploaded before truncation
   // Per-vertex attributes: normals, per-vertex albedo (vertex-coloured transfers), AO, bent normals, colours.
   GLuint normal_buffer = 0, albedo_buffer = 0, ao_buffer = 0, bent_buffer = 0, color_buffer = 0;
@@ -269,8 +278,6 @@ struct Renderer::Impl {
   Shading shading = Shading::Transfer;
   bool have_lighting = false, have_colors = false;
   glm::vec3 albedo{1.0f};               // constant albedo (transfers without vertex colours)
-  std::vector<glm::vec3> cpu_normals;   // for the unshadowed transfer, made on demand
-  std::vector<glm::vec3> cpu_albedo;    // per-vertex albedo, vertex-coloured transfers only
   std::array<glm::mat4, 3> irradiance{};  // Lambert
   int environment = 0;  // 0 none, 1 lat-long, 2 cube
   glm::dmat3 env_rotation{1.0};
@@ -289,10 +296,9 @@ struct Renderer::Impl {
   void draw_mesh(const glm::mat4& view_proj);
   void display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb);
   GLuint attribute_program(int mode);
-  GLuint relight_program(int coeffs, int vec4s, int channels);
+  GLuint relight_program(int coeffs, int vec4s, int channels, Source source, bool vertex_albedo);
   GLuint relight();
   void upload_lighting();
-  void make_unshadowed();
   void destroy();
   void delete_mesh_objects();
   void resize(int w, int h);
@@ -378,12 +384,16 @@ void Renderer::Impl::create_objects() {
   check_gl("creating the renderer's objects");
 }
 
-GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch) {
-  GLuint& p = relight_programs[{coeffs, vec4s, ch}];
-  if (!p)
+GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source from, bool vertex_albedo) {
+  GLuint& p = relight_programs[{coeffs, vec4s, ch, int(from), vertex_albedo ? 1 : 0}];
+  if (!p) {
+    const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
     p = link_compute(shaders::relight_comp_glsl, "relight",
-                     "#define COEFFS " + std::to_string(coeffs) + "\n#define VEC4S " + std::to_string(vec4s) +
-                         "\n#define CHANNELS " + std::to_string(ch) + "\n");
+                     "#define COEFFS " + std::to_string(coeffs) + "\n#define BANDS " + std::to_string(shader_bands) +
+                         "\n#define VEC4S " + std::to_string(vec4s) + "\n#define CHANNELS " + std::to_string(ch) +
+                         "\n#define SOURCE " + std::to_string(int(from)) + "\n#define VERTEX_ALBEDO " +
+                         std::to_string(vertex_albedo ? 1 : 0) + "\n");
+  }
   return p;
 }
 
@@ -419,13 +429,15 @@ void Renderer::Impl::resize(int w, int h) {
 }
 
 void Renderer::Impl::delete_mesh_objects() {
-  const GLuint buffers[] = {position_buffer,    index_buffer,  transfer.buffer, direct.buffer, unshadowed.buffer,
-                            normal_buffer,      albedo_buffer, ao_buffer,       bent_buffer,   color_buffer,
-                            radiance_buffer};
+  const GLuint buffers[] = {position_buffer, index_buffer,  transfer.buffer, direct.buffer, slot_buffer, normal_buffer,
+                            albedo_buffer,   ao_buffer,     bent_buffer,     color_buffer,  radiance_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
-  const GLuint textures[] = {transfer.texture, direct.texture, unshadowed.texture};
+  const GLuint textures[] = {transfer.texture, direct.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
-  transfer = direct = unshadowed = TransferArray{};
+  transfer = direct = TransferArray{};
+  has_direct = false;
+  source = Source::Stored;
+  slot_buffer = 0;
   position_buffer = index_buffer = 0;
   normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = radiance_buffer = 0;
 }
@@ -529,6 +541,7 @@ TransferArray make_transfer_array(const float* t, std::size_t vertices, int chan
                 " channels x " + std::to_string(stride) + " coefficients exceeds this OpenGL's buffer texture limit (" +
                 std::to_string(max_texels) + " texels of 4 floats)");
   TransferArray a;
+  a.bytes = padded.size() * sizeof(float);
   a.buffer = make_buffer(padded.data(), padded.size() * sizeof(float));
   glCreateTextures(GL_TEXTURE_BUFFER, 1, &a.texture);
   glTextureBuffer(a.texture, GL_RGBA32F, a.buffer);
@@ -548,9 +561,13 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
                 std::to_string(kMaxRenderBands));
   if (t.channels != 1 && t.channels != 3)
     throw Error("transfer has " + std::to_string(t.channels) + " channels (expected 1 or 3)");
-  if (t.coeffs.size() != t.vertices * t.stride())
+  if (!t.slots.empty() && t.slots.size() != t.vertices)
+    throw Error("transfer has " + std::to_string(t.slots.size()) + " vertex slots for " + std::to_string(t.vertices) +
+                " vertices");
+  const std::size_t rows = t.stored_vertices();
+  if (t.coeffs.size() != rows * t.stride())
     throw Error("transfer has " + std::to_string(t.coeffs.size()) + " coefficients, expected " +
-                std::to_string(t.vertices * t.stride()));
+                std::to_string(rows * t.stride()) + " (" + std::to_string(rows) + " stored vertices)");
   if (!t.direct.empty() && t.direct.size() != t.coeffs.size())
     throw Error("transfer's direct part has " + std::to_string(t.direct.size()) + " coefficients, expected " +
                 std::to_string(t.coeffs.size()));
@@ -560,8 +577,30 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   set_mesh(mesh, t.albedo, t.vertex_colors);
   Impl& m = *impl_;
   const int stride = t.bands * t.bands;
-  m.transfer = make_transfer_array(t.coeffs.data(), t.vertices, t.channels, stride);
-  if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), t.vertices, t.channels, stride);
+  // With no stored vertex, an interreflected transfer's direct part is its
+  // transfer: both are the clamped cosine everywhere.
+  m.has_direct = !t.direct.empty() || (t.mode == TransferMode::Interreflected && rows == 0);
+  // Analytic vertices spare their rows on the GPU but cost every vertex a
+  // 4-byte slot. Where that costs more than it spares (few analytic
+  // vertices), their rows are evaluated here and uploaded as stored ones.
+  const std::size_t analytic = t.vertices - rows;
+  const std::size_t row_bytes =
+      std::size_t(t.channels) * std::size_t((stride + 3) / 4 * 4) * sizeof(float) * (t.direct.empty() ? 1 : 2);
+  m.source = rows == 0                                                              ? Source::Analytic
+             : analytic > 0 && analytic * row_bytes > t.vertices * sizeof(std::uint32_t) ? Source::Mixed
+                                                                                    : Source::Stored;
+  if (m.source == Source::Stored && analytic > 0) {
+    const std::vector<float> all = dense_transfer(t, mesh);
+    m.transfer = make_transfer_array(all.data(), t.vertices, t.channels, stride);
+    if (!t.direct.empty()) {
+      const std::vector<float> all_direct = dense_transfer(t, mesh, true);
+      m.direct = make_transfer_array(all_direct.data(), t.vertices, t.channels, stride);
+    }
+  } else {
+    m.transfer = make_transfer_array(t.coeffs.data(), rows, t.channels, stride);
+    if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), rows, t.channels, stride);
+  }
+  if (m.source == Source::Mixed) m.slot_buffer = make_buffer(t.slots.data(), t.slots.size() * sizeof(std::uint32_t));
   if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
   if (!t.bent_normals.empty())
     m.bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
@@ -582,9 +621,7 @@ void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_c
   m.index_buffer = make_buffer(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
   m.normal_buffer = make_buffer(mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
   m.albedo = albedo;
-  m.cpu_normals = mesh.normals;
   if (vertex_colors) {
-    m.cpu_albedo = mesh.colors;
     m.albedo_buffer = make_buffer(mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
   }
   m.radiance_buffer = make_buffer(nullptr, mesh.vertex_count() * 4 * sizeof(float));
@@ -610,8 +647,6 @@ void Renderer::clear_mesh() {
   m.light.clear();
   m.shading = Shading::Transfer;
   m.have_lighting = m.have_colors = false;
-  m.cpu_normals.clear();
-  m.cpu_albedo.clear();
 }
 
 void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
@@ -659,7 +694,7 @@ bool Renderer::has_shading(Shading s) const {
   switch (s) {
     case Shading::Transfer:
     case Shading::Unshadowed: return m.bands > 0;
-    case Shading::Direct: return bool(m.direct);
+    case Shading::Direct: return m.has_direct;
     case Shading::AmbientOcclusion: return m.ao_buffer != 0;
     case Shading::BentNormal: return m.bent_buffer != 0;
     case Shading::VertexColors: return m.have_colors;
@@ -697,29 +732,10 @@ void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
   m.have_colors = true;
 }
 
-// The analytic unshadowed transfer (albedo/pi) A_l Y_k(n), as compute_transfer
-// makes it, in the file's layout and band count.
-void Renderer::Impl::make_unshadowed() {
-  const int nc = bands * bands;
-  const bool rgb = !cpu_albedo.empty() || !(albedo[0] == albedo[1] && albedo[1] == albedo[2]);
-  const int ch = rgb ? 3 : 1;
-  const std::vector<double> A = sh::clamped_cosine_factors(bands);
-  const double inv_pi = 1.0 / 3.14159265358979323846;
-  std::vector<float> T(vertex_count * std::size_t(ch) * std::size_t(nc), 0.0f);
-  std::vector<double> y(static_cast<std::size_t>(nc));
-  for (std::size_t v = 0; v < vertex_count; ++v) {
-    const glm::dvec3 n(cpu_normals[v]);
-    if (n == glm::dvec3(0.0)) continue;  // no normal: transfer 0
-    sh::eval(bands, n.x, n.y, n.z, y.data());
-    const glm::vec3 a = cpu_albedo.empty() ? albedo : cpu_albedo[v];
-    for (int c = 0; c < ch; ++c)
-      for (int l = 0, k = 0; l < bands; ++l)
-        for (int mm = -l; mm <= l; ++mm, ++k)
-          T[(v * std::size_t(ch) + std::size_t(c)) * std::size_t(nc) + std::size_t(k)] =
-              float(a[c] * inv_pi * A[std::size_t(l)] * y[std::size_t(k)]);
-  }
-  unshadowed = make_transfer_array(T.data(), vertex_count, ch, nc);
-  check_gl("uploading the unshadowed transfer");
+std::size_t Renderer::transfer_bytes() const {
+  const Impl& m = *impl_;
+  const std::size_t slots = m.source == Source::Mixed ? m.vertex_count * sizeof(std::uint32_t) : 0;
+  return m.transfer.bytes + m.direct.bytes + slots;
 }
 
 void Renderer::set_environment(const EnvMap& map) {
@@ -832,10 +848,20 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
 // The relighting pass of the current transfer shading (Transfer, Direct,
 // Unshadowed) into radiance_buffer; returns that buffer.
 GLuint Renderer::Impl::relight() {
-  if (shading == Shading::Unshadowed && !unshadowed) make_unshadowed();
-  const TransferArray& a = shading == Shading::Direct ? direct : shading == Shading::Unshadowed ? unshadowed : transfer;
-  glUseProgram(relight_program(band_limit * band_limit, (bands * bands + 3) / 4, a.channels));
+  const TransferArray& a = shading == Shading::Direct && direct ? direct : transfer;
+  const Source s = shading == Shading::Unshadowed ? Source::Analytic : source;
+  const bool vertex_albedo = albedo_buffer != 0;
+  glUseProgram(relight_program(band_limit * band_limit, (bands * bands + 3) / 4, channels, s, vertex_albedo));
   glUniform1ui(0, GLuint(vertex_count));
+  if (s != Source::Stored) {  // the clamped cosine of analytic vertices (relight.comp.glsl)
+    float cosine[kMaxRenderBands] = {};
+    for (int l = 0; l < bands; ++l) cosine[l] = float(sh::clamped_cosine_factor(l) / 3.14159265358979323846);
+    glUniform1fv(2, kMaxRenderBands, cosine);
+    if (!vertex_albedo) glUniform3f(1, albedo[0], albedo[1], albedo[2]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
+    if (vertex_albedo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, albedo_buffer);
+    if (s == Source::Mixed) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, slot_buffer);
+  }
   glBindTextureUnit(3, a.texture);
   glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);

@@ -8,14 +8,22 @@
 // (compute GPUs rasterise on a few), and each vertex is relit once however
 // many triangles share it. Measured in docs/PERFORMANCE.md.
 //
-// The transfer is a buffer texture of RGBA32F texels: per vertex, CHANNELS
-// runs of VEC4S texels, run c holding channel c's coefficients k = 0 ..
-// bands^2 - 1 padded with zeros to 4 VEC4S (prt::Transfer's
-// [vertex][channel][k] layout, each channel padded to a multiple of 4). The
-// renderer compiles one program per (COEFFS, VEC4S, CHANNELS), inserting the
-// #defines after the version line, so the loops have constant bounds. Only
-// the first COEFFS coefficients are used (live band truncation); the lighting
-// block holds zeros from COEFFS up to the next multiple of 4.
+// The transfer is a buffer texture of RGBA32F texels: per stored vertex (a
+// row), CHANNELS runs of VEC4S texels, run c holding channel c's
+// coefficients k = 0 .. bands^2 - 1 padded with zeros to 4 VEC4S
+// (prt::Transfer's [row][channel][k] layout, each channel padded to a
+// multiple of 4). The renderer compiles one program per (COEFFS, VEC4S,
+// CHANNELS, SOURCE, VERTEX_ALBEDO), inserting the #defines after the version
+// line, so the loops have constant bounds. Only the first COEFFS = BANDS^2
+// coefficients are used (live band truncation); the lighting block holds
+// zeros from COEFFS up to the next multiple of 4.
+//
+// SOURCE says where a vertex's transfer comes from (prt/transfer.h,
+// "analytic vertices"):
+//   0 stored: every vertex has a row, row v;
+//   1 mixed: slots[v] is the row of vertex v, or 0xffffffff for an analytic
+//     vertex, whose transfer is the clamped cosine about its normal;
+//   2 analytic: every vertex (Shading::Unshadowed; no transfer at all).
 layout(local_size_x = 64) in;
 
 layout(binding = 3) uniform samplerBuffer u_transfer;
@@ -26,11 +34,75 @@ layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; }
 layout(location = 0) uniform uint u_vertices;
 
 const int FETCHES = (COEFFS + 3) / 4;
+const uint ANALYTIC = 0xffffffffu;
 
-void main() {
-  const uint v = gl_GlobalInvocationID.x;
-  if (v >= u_vertices) return;
-  const int base = int(v) * (CHANNELS * VEC4S);
+#if SOURCE == 1
+layout(std430, binding = 4) readonly buffer SlotBuffer { uint slots[]; };
+#endif
+
+#if SOURCE != 0
+// The mesh's normals and (VERTEX_ALBEDO) colours, packed float triples.
+layout(std430, binding = 5) readonly buffer NormalBuffer { float normals[]; };
+#if VERTEX_ALBEDO
+layout(std430, binding = 6) readonly buffer AlbedoBuffer { float colors[]; };
+#else
+layout(location = 1) uniform vec3 u_albedo;
+#endif
+// A_l / pi, the clamped-cosine factors (prt::sh::clamped_cosine_factor), per band.
+layout(location = 2) uniform float u_cosine[16];
+
+// Radiance of a vertex with normal n and albedo rho under the lighting's
+// first BANDS bands: rho sum_l (A_l / pi) sum_m Y_lm(n) L_lm, the SH basis
+// by the fully normalised recurrence of core/sh.cpp (Sloan, JCGT 2013), with
+// (c, s) = sqrt(2) (Re, Im) (x + i y)^m. A zero normal gives 0, as its
+// stored transfer would.
+vec3 clamped_cosine(vec3 n, vec3 rho) {
+  if (dot(n, n) == 0.0) return vec3(0.0);
+  vec3 r = vec3(0.0);
+  float pmm = 0.28209479177387814;  // Y_00 = 1 / (2 sqrt(pi))
+  float c = 1.4142135623730951, s = 0.0;
+  for (int m = 0; m < BANDS; ++m) {
+    if (m > 0) {
+      pmm *= -sqrt((2.0 * float(m) + 1.0) / (2.0 * float(m)));  // s^m is folded into (c, s)
+      const float c1 = c * n.x - s * n.y;
+      s = c * n.y + s * n.x;
+      c = c1;
+    }
+    float p2 = 0.0, p1 = pmm;
+    for (int l = m; l < BANDS; ++l) {
+      float p = pmm;
+      if (l == m + 1) {
+        p = sqrt(2.0 * float(m) + 3.0) * n.z * pmm;
+      } else if (l > m + 1) {
+        const float l2 = float(l * l), m2 = float(m * m), lm1 = float((l - 1) * (l - 1));
+        p = sqrt((4.0 * l2 - 1.0) / (l2 - m2)) * (n.z * p1 - sqrt((lm1 - m2) / (4.0 * lm1 - 1.0)) * p2);
+      }
+      if (l > m) {
+        p2 = p1;
+        p1 = p;
+      }
+      const int k = l * (l + 1);
+      const vec3 y = m == 0 ? p * L[k].rgb : p * (c * L[k + m].rgb + s * L[k - m].rgb);
+      r += u_cosine[l] * y;
+    }
+  }
+  return rho * r;
+}
+
+vec3 analytic_radiance(uint v) {
+  const vec3 n = vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+#if VERTEX_ALBEDO
+  // compute_transfer clamps vertex colours to [0, 1] as albedo.
+  const vec3 rho = clamp(vec3(colors[3 * v], colors[3 * v + 1], colors[3 * v + 2]), 0.0, 1.0);
+#else
+  const vec3 rho = u_albedo;
+#endif
+  return clamped_cosine(n, rho);
+}
+#endif
+
+vec3 stored_radiance(uint row) {
+  const int base = int(row) * (CHANNELS * VEC4S);
   vec3 r = vec3(0.0);
   for (int i = 0; i < FETCHES; ++i) {
     const vec3 l0 = L[4 * i].rgb, l1 = L[4 * i + 1].rgb, l2 = L[4 * i + 2].rgb, l3 = L[4 * i + 3].rgb;
@@ -45,5 +117,19 @@ void main() {
               dot(tb, vec4(l0.b, l1.b, l2.b, l3.b)));
 #endif
   }
+  return r;
+}
+
+void main() {
+  const uint v = gl_GlobalInvocationID.x;
+  if (v >= u_vertices) return;
+#if SOURCE == 0
+  const vec3 r = stored_radiance(v);
+#elif SOURCE == 1
+  const uint row = slots[v];
+  const vec3 r = row == ANALYTIC ? analytic_radiance(v) : stored_radiance(row);
+#else
+  const vec3 r = analytic_radiance(v);
+#endif
   radiance[v] = vec4(r, 1.0);
 }

@@ -43,7 +43,7 @@ TEST(Accuracy, ShadowedErrorFallsWithBandsOnCowUnderForest) {
     o.samples = 1024;
     o.albedo = glm::vec3(0.8f);
     const Transfer t = compute_transfer(mesh, o);
-    return compare_vertices(relight(t, project(env, bands)), ref.radiance).rel_rms;
+    return compare_vertices(relight(t, mesh, project(env, bands)), ref.radiance).rel_rms;
   };
   const double e3 = error_at(3), e8 = error_at(8);
   // Measured: e3 0.061, e8 0.033, noise 0.027 (1024 reference samples).

@@ -153,6 +153,15 @@ void expect_pixels_at_vertices(const Image& img, const CameraGrid& g, const std:
   ::testing::Test::RecordProperty("worst_relative_error_" + what, std::to_string(worst));
 }
 
+// Interior vertices (those the pixel checks see) of each kind: analytic
+// (unoccluded, shaded from the normal in the shader) and stored.
+std::pair<int, int> analytic_and_stored(const Transfer& t, const CameraGrid& g) {
+  int analytic = 0, stored = 0;
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    if (g.pixel_of[v].first >= 0) ++(t.is_analytic(v) ? analytic : stored);
+  return {analytic, stored};
+}
+
 void check_vertices_match_relight(TransferMode mode, bool colored, int bands) {
   REQUIRE_RENDERER(r);
   const CameraGrid g = camera_grid(colored);
@@ -164,10 +173,13 @@ void check_vertices_match_relight(TransferMode mode, bool colored, int bands) {
   o.albedo = glm::vec3(0.8f);
   const Transfer t = compute_transfer(g.mesh, o);
   ASSERT_EQ(t.channels, colored ? 3 : 1);
+  if (mode == TransferMode::Unshadowed) {
+    EXPECT_EQ(t.stored_vertices(), 0u);  // every vertex analytic
+  }
   const std::vector<glm::dvec3> light = project(latlong_of(smooth_env, 128, 64), bands);
   r->set_mesh(g.mesh, t);
   r->set_lighting(light);
-  expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, light), "relight");
+  expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, g.mesh, light), "relight");
 }
 
 TEST(Render, PixelsAtVerticesEqualRelightRgbUnshadowed) {
@@ -179,6 +191,63 @@ TEST(Render, PixelsAtVerticesEqualRelightGreyShadowed) {
 }
 
 TEST(Render, SixteenBandsRgb) { check_vertices_match_relight(TransferMode::Unshadowed, true, 16); }
+
+// The bump of the camera grid shadows its slopes (stored vertices) but not
+// its top and the far side of the ridge (analytic vertices): both paths of
+// the relighting pass at once, against relight(), for grey and coloured
+// albedo, with band truncation, and with only the stored rows on the GPU.
+TEST(Render, AnalyticAndStoredVerticesBothMatchRelight) {
+  REQUIRE_RENDERER(r);
+  for (bool colored : {false, true}) {
+    SCOPED_TRACE(colored ? "vertex colours" : "grey");
+    const CameraGrid g = camera_grid(colored);
+    TransferOptions o;
+    o.mode = TransferMode::Shadowed;
+    o.bands = 5;
+    o.samples = 128;
+    o.vertex_colors = colored;
+    o.albedo = glm::vec3(0.8f);
+    const Transfer t = compute_transfer(g.mesh, o);
+    const auto [analytic, stored] = analytic_and_stored(t, g);
+    ASSERT_GT(analytic, 0);
+    ASSERT_GT(stored, 0);
+    const std::vector<glm::dvec3> light = project(latlong_of(smooth_env, 128, 64), o.bands);
+    r->set_mesh(g.mesh, t);
+    r->set_lighting(light);
+    expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, g.mesh, light), "mixed");
+    // Only stored rows cross the bus: each channel padded to 28 floats, plus a 4-byte slot per vertex.
+    EXPECT_EQ(r->transfer_bytes(), t.stored_vertices() * std::size_t(t.channels) * 28 * 4 + 4 * t.vertices);
+    for (int limit : {1, 3}) {
+      r->set_band_limit(limit);
+      std::vector<glm::dvec3> truncated = light;
+      std::fill(truncated.begin() + limit * limit, truncated.end(), glm::dvec3(0.0));
+      expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, g.mesh, truncated),
+                                "band_limit_" + std::to_string(limit));
+    }
+
+    // One analytic vertex: in grey it spares less (one row, 112 bytes) than
+    // the slots would cost (4 bytes x 49 vertices), so the renderer uploads
+    // every row, the analytic one evaluated on the CPU, and no slots; in RGB
+    // its row (336 bytes) outweighs them and only stored rows go up.
+    Transfer one = t;
+    one.coeffs = dense_transfer(t, g.mesh);
+    one.slots.clear();
+    std::vector<std::uint8_t> mask(t.vertices, 0);
+    for (std::size_t v = 0; v < t.vertices; ++v)
+      if (t.is_analytic(v) && g.pixel_of[v].first >= 0) {
+        mask[v] = 1;
+        break;
+      }
+    compact_transfer(one, mask);
+    ASSERT_EQ(one.analytic_vertices(), 1u);
+    r->set_mesh(g.mesh, one);
+    r->set_lighting(light);
+    const std::size_t row = std::size_t(t.channels) * 28 * 4, slots = 4 * one.vertices;
+    ASSERT_EQ(row < slots, !colored);
+    EXPECT_EQ(r->transfer_bytes(), colored ? (one.vertices - 1) * row + slots : one.vertices * row);
+    expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(one, g.mesh, light), "one_analytic");
+  }
+}
 
 TEST(Render, RotatedLightingEqualsProjectedRotatedMap) {
   REQUIRE_RENDERER(r);
@@ -301,21 +370,23 @@ void check_shading_modes(bool colored) {
     EXPECT_EQ(r->shading(), s);
     return r->render(g.camera, g.size, g.size);
   };
-  expect_pixels_at_vertices(shade(Shading::Transfer), g, relight(t, light), "transfer");
-  expect_pixels_at_vertices(shade(Shading::Direct), g, relight_direct(t, light), "direct");
+  expect_pixels_at_vertices(shade(Shading::Transfer), g, relight(t, g.mesh, light), "transfer");
+  expect_pixels_at_vertices(shade(Shading::Direct), g, relight_direct(t, g.mesh, light), "direct");
 
   TransferOptions u = o;
   u.mode = TransferMode::Unshadowed;
-  expect_pixels_at_vertices(shade(Shading::Unshadowed), g, relight(compute_transfer(g.mesh, u), light), "unshadowed");
+  expect_pixels_at_vertices(shade(Shading::Unshadowed), g, relight(compute_transfer(g.mesh, u), g.mesh, light),
+                            "unshadowed");
   u.bands = 3;
-  expect_pixels_at_vertices(shade(Shading::Lambert), g, relight(compute_transfer(g.mesh, u), light), "lambert");
+  expect_pixels_at_vertices(shade(Shading::Lambert), g, relight(compute_transfer(g.mesh, u), g.mesh, light),
+                            "lambert");
 
   r->set_shading(Shading::Transfer);
   r->set_band_limit(2);
   EXPECT_EQ(r->band_limit(), 2);
   std::vector<glm::dvec3> truncated = light;
   std::fill(truncated.begin() + 4, truncated.end(), glm::dvec3(0.0));
-  expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, truncated), "band_limit_2");
+  expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, relight(t, g.mesh, truncated), "band_limit_2");
   r->set_band_limit(4);
 
   std::vector<glm::vec3> ao(t.vertices), bent(t.vertices), colors(t.vertices);

@@ -44,7 +44,9 @@ TEST(Transfer, WhiteUnshadowedUnderConstantLightIsExactlyOne) {
   const Mesh m = test::sphere(12, 24);
   const Transfer t = compute_transfer(m, opts(TransferMode::Unshadowed, 3));
   EXPECT_EQ(t.channels, 1);  // grey albedo: one channel
-  for (const glm::vec3& b : relight(t, constant_light(3))) {
+  EXPECT_EQ(t.stored_vertices(), 0u);  // every vertex is analytic: nothing stored
+  EXPECT_TRUE(t.coeffs.empty());
+  for (const glm::vec3& b : relight(t, m, constant_light(3))) {
     EXPECT_NEAR(b.x, 1.0, kFloatStore);
     EXPECT_NEAR(b.z, 1.0, kFloatStore);
   }
@@ -55,13 +57,18 @@ TEST(Transfer, FlatQuadShadowedEqualsUnshadowedEqualsClampedCosine) {
   const Transfer u = compute_transfer(m, opts(TransferMode::Unshadowed, 6));
   const Transfer s = compute_transfer(m, opts(TransferMode::Shadowed, 6, 512));
   const auto exact = clamped_cosine_transfer({0, 1, 0}, 6);
-  for (std::size_t v = 0; v < m.vertex_count(); ++v)
+  // Nothing above the quad occludes: every vertex is analytic, the shadowed
+  // transfer is the exact analytic one, no sampling error at all.
+  EXPECT_EQ(s.analytic_vertices(), m.vertex_count());
+  EXPECT_TRUE(s.coeffs.empty());
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    EXPECT_EQ(s.stored(v), nullptr);
+    const std::vector<double> tu = vertex_transfer(u, m, v), ts = vertex_transfer(s, m, v);
     for (int k = 0; k < 36; ++k) {
-      EXPECT_NEAR(u.vertex(v)[k], exact[k], kFloatStore);
-      // Nothing above the quad occludes: the shadowed transfer is the exact
-      // analytic one, no sampling error at all.
-      EXPECT_NEAR(s.vertex(v)[k], exact[k], kFloatStore) << "vertex " << v << " k " << k;
+      EXPECT_NEAR(tu[k], exact[k], kFloatStore);
+      EXPECT_NEAR(ts[k], exact[k], kFloatStore) << "vertex " << v << " k " << k;
     }
+  }
   for (float ao : s.ao) EXPECT_FLOAT_EQ(ao, 1.0f);
 }
 
@@ -70,7 +77,13 @@ TEST(Transfer, ConvexSphereShadowedEqualsUnshadowed) {
   for (std::size_t v = 0; v < m.vertex_count(); ++v) ASSERT_GT(glm::dot(m.normals[v], m.positions[v]), 0.0f);
   const Transfer u = compute_transfer(m, opts(TransferMode::Unshadowed, 5));
   const Transfer s = compute_transfer(m, opts(TransferMode::Shadowed, 5, 512));
-  for (std::size_t i = 0; i < u.coeffs.size(); ++i) ASSERT_NEAR(s.coeffs[i], u.coeffs[i], kFloatStore);
+  // Convex: no ray hits anything, so nothing is stored in either.
+  EXPECT_EQ(s.analytic_vertices(), m.vertex_count());
+  EXPECT_EQ(u.analytic_vertices(), m.vertex_count());
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    const std::vector<double> tu = vertex_transfer(u, m, v), ts = vertex_transfer(s, m, v);
+    for (std::size_t k = 0; k < tu.size(); ++k) ASSERT_NEAR(ts[k], tu[k], kFloatStore);
+  }
 }
 
 TEST(Transfer, OpenBoxFloorCentreAmbientOcclusion) {
@@ -80,7 +93,7 @@ TEST(Transfer, OpenBoxFloorCentreAmbientOcclusion) {
     // 32768 rays over a visibility edge: error ~N^-0.75 (docs/NOTES) ~ 4e-4; allow 2e-3.
     EXPECT_NEAR(s.ao[0], test::open_box_ao(h), 2e-3) << "h = " << h;
     // Relighting the white floor under a constant sky of 1 gives the same number.
-    EXPECT_NEAR(relight(s, constant_light(3))[0].x, test::open_box_ao(h), 2e-3);
+    EXPECT_NEAR(relight(s, m, constant_light(3))[0].x, test::open_box_ao(h), 2e-3);
     // The bent normal of the floor centre points straight up by symmetry.
     EXPECT_NEAR(s.bent_normals[0].y, 1.0f, 1e-3f);
   }
@@ -97,8 +110,8 @@ TEST(Transfer, IntegratingSphereBouncesFormAGeometricSeries) {
   o.albedo = glm::vec3(float(a));
   o.bounces = 6;
   const Transfer t = compute_transfer(m, o);
-  const auto B = relight(t, constant_light(3));
-  const auto B0 = relight_direct(t, constant_light(3));
+  const auto B = relight(t, m, constant_light(3));
+  const auto B0 = relight_direct(t, m, constant_light(3));
   double mean = 0, mean0 = 0;
   std::size_t count = 0;
   for (std::size_t v = 0; v < m.vertex_count(); ++v) {
@@ -172,7 +185,7 @@ TEST(Transfer, RgbAlbedoStoresThreeChannelsGreyStoresOne) {
   o.albedo = glm::vec3(0.9f, 0.5f, 0.1f);
   const Transfer t = compute_transfer(m, o);
   EXPECT_EQ(t.channels, 3);
-  const auto b = relight(t, constant_light(3));
+  const auto b = relight(t, m, constant_light(3));
   EXPECT_NEAR(b[4].x, 0.9, kFloatStore);
   EXPECT_NEAR(b[4].y, 0.5, kFloatStore);
   EXPECT_NEAR(b[4].z, 0.1, kFloatStore);
@@ -190,6 +203,7 @@ TEST(Transfer, DeterministicAcrossThreadCounts) {
   const Transfer two = compute_transfer(m, o);
   EXPECT_EQ(one.coeffs, two.coeffs);
   EXPECT_EQ(one.direct, two.direct);
+  EXPECT_EQ(one.slots, two.slots);
   o.seed = 2;
   EXPECT_NE(compute_transfer(m, o).coeffs, two.coeffs);  // the seed does change the direction set
 }
@@ -218,6 +232,148 @@ TEST(Transfer, ProgressAndCancellation) {
   EXPECT_EQ(last, m.vertex_count());
   EXPECT_THROW(compute_transfer(m, opts(TransferMode::Shadowed, 3, 32), [](std::size_t, std::size_t, const char*) { return false; }),
                Error);
+}
+
+// ---- analytic vertices (prt/transfer.h) ----------------------------------------
+
+// A ball resting above a floor: the ball's upper cap sees only sky (analytic
+// vertices), the floor sees the ball and the ball's lower half the floor
+// (stored vertices).
+Mesh ball_over_floor() {
+  const Mesh floor = test::quad(8);
+  const Mesh ball = test::sphere(8, 16, 0.4f);
+  std::vector<glm::vec3> p = floor.positions;
+  std::vector<glm::uvec3> t = floor.triangles;
+  const unsigned base = unsigned(p.size());
+  for (const glm::vec3& q : ball.positions) p.push_back(q + glm::vec3(0.0f, 0.5f, 0.0f));
+  for (const glm::uvec3& tri : ball.triangles) t.push_back(tri + glm::uvec3(base));
+  return make_mesh(std::move(p), std::move(t), {}, {}, {}, "ball over floor");
+}
+
+// Outgoing radiance of one vertex from a transfer row of doubles.
+glm::dvec3 dot_row(const std::vector<double>& row, int channels, const std::vector<glm::dvec3>& light) {
+  const std::size_t nc = row.size() / std::size_t(channels);
+  glm::dvec3 r(0.0);
+  for (int c = 0; c < 3; ++c)
+    for (std::size_t k = 0; k < nc; ++k) r[c] += row[(channels == 1 ? 0 : std::size_t(c)) * nc + k] * light[k][c];
+  return r;
+}
+
+// A lighting with every coefficient non-zero, so every basis function counts.
+std::vector<glm::dvec3> busy_light(int bands) {
+  std::vector<glm::dvec3> L(sh::num_coeffs(bands));
+  for (std::size_t k = 0; k < L.size(); ++k)
+    L[k] = glm::dvec3(1.0 / (1.0 + double(k)), 0.5 * std::cos(double(k)), 0.3 + 0.1 * std::sin(3.0 * double(k)));
+  return L;
+}
+
+TEST(TransferAnalytic, UnoccludedVerticesStoreNothingAndRelightExactly) {
+  const Mesh m = ball_over_floor();
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    SCOPED_TRACE(std::string(transfer_mode_name(mode)));
+    TransferOptions o = opts(mode, 4, 256);
+    o.albedo = glm::vec3(0.9f, 0.6f, 0.3f);  // three channels
+    const Transfer t = compute_transfer(m, o);
+    ASSERT_EQ(t.channels, 3);
+    const std::size_t analytic = t.analytic_vertices();
+    ASSERT_GT(analytic, 0u);
+    ASSERT_LT(analytic, m.vertex_count());
+    EXPECT_EQ(t.coeffs.size(), t.stored_vertices() * t.stride());
+    if (mode == TransferMode::Interreflected) {
+      EXPECT_EQ(t.direct.size(), t.coeffs.size());
+    }
+    const std::vector<glm::dvec3> L = busy_light(4);
+    const std::vector<glm::vec3> B = relight(t, m, L), B0 = relight_direct(t, m, L);
+    std::uint32_t row = 0;
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+      // No ray of an analytic vertex hit anything: its AO is exactly 1 (a
+      // stored vertex's AO can round to 1 too, when only grazing rays hit).
+      if (t.is_analytic(v)) {
+        EXPECT_EQ(t.ao[v], 1.0f) << "vertex " << v;
+      }
+      glm::dvec3 expected;
+      if (t.is_analytic(v)) {
+        EXPECT_EQ(t.stored(v), nullptr);
+        std::vector<double> row3;  // the test's own clamped cosine, times the albedo per channel
+        for (int c = 0; c < 3; ++c)
+          for (double y : clamped_cosine_transfer(m.normals[v], 4)) row3.push_back(o.albedo[c] * y);
+        expected = dot_row(row3, 3, L);
+        // No bounce reaches a vertex that sees no surface.
+        EXPECT_EQ(B[v], B0[v]) << "vertex " << v;
+      } else {
+        ASSERT_NE(t.stored(v), nullptr);
+        EXPECT_EQ(t.slots[v], row++);  // stored rows in vertex order
+        expected = dot_row(std::vector<double>(t.stored(v), t.stored(v) + t.stride()), 3, L);
+      }
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(B[v][c], expected[c], kFloatStore) << "vertex " << v << " channel " << c;
+    }
+  }
+}
+
+// The classification does not depend on the mode: a shadowed and an
+// interreflected transfer of the same rays mark the same vertices, and the
+// interreflected direct part of a stored vertex is the shadowed transfer.
+TEST(TransferAnalytic, SameVerticesInEveryTracedMode) {
+  const Mesh m = ball_over_floor();
+  const Transfer s = compute_transfer(m, opts(TransferMode::Shadowed, 3, 128));
+  TransferOptions o = opts(TransferMode::Interreflected, 3, 128);
+  o.bounces = 2;
+  const Transfer i = compute_transfer(m, o);
+  EXPECT_EQ(s.slots, i.slots);
+  EXPECT_EQ(s.coeffs, i.direct);
+  EXPECT_NE(s.coeffs, i.coeffs);  // the bounces did add light to stored vertices
+}
+
+TEST(TransferAnalytic, VertexColoursAreTheAnalyticAlbedo) {
+  Mesh m = ball_over_floor();
+  std::vector<glm::vec3> colors(m.vertex_count());
+  for (std::size_t v = 0; v < colors.size(); ++v) colors[v] = glm::vec3(0.1f + 0.001f * float(v), 1.5f, 0.4f);
+  m = make_mesh(m.positions, m.triangles, {}, colors, {}, "coloured");
+  TransferOptions o = opts(TransferMode::Shadowed, 3, 128);
+  o.vertex_colors = true;
+  const Transfer t = compute_transfer(m, o);
+  ASSERT_GT(t.analytic_vertices(), 0u);
+  const std::vector<glm::dvec3> L = busy_light(3);
+  const std::vector<glm::vec3> B = relight(t, m, L);
+  // dense_transfer: every vertex's row, stored or evaluated, in vertex order.
+  const std::vector<float> dense = dense_transfer(t, m);
+  ASSERT_EQ(dense.size(), m.vertex_count() * t.stride());
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    const std::vector<double> row = vertex_transfer(t, m, v);
+    for (std::size_t i = 0; i < row.size(); ++i) ASSERT_EQ(dense[v * t.stride() + i], float(row[i]));
+  }
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+    if (!t.is_analytic(v)) continue;
+    // Colours are clamped to [0, 1] as albedo, as for stored vertices.
+    EXPECT_EQ(vertex_albedo(t, m, v), glm::clamp(colors[v], 0.0f, 1.0f));
+    const glm::dvec3 e = dot_row(vertex_transfer(t, m, v), 3, L);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(B[v][c], e[c], kFloatStore);
+  }
+}
+
+TEST(TransferAnalytic, CompactKeepsStoredRowsInVertexOrder) {
+  Transfer t;
+  t.bands = 1;
+  t.channels = 1;
+  t.vertices = 5;
+  t.coeffs = {10, 11, 12, 13, 14};
+  t.direct = {20, 21, 22, 23, 24};
+  t.mode = TransferMode::Interreflected;
+  compact_transfer(t, {1, 0, 1, 0, 0});
+  EXPECT_EQ(t.slots, (std::vector<std::uint32_t>{Transfer::kAnalytic, 0, Transfer::kAnalytic, 1, 2}));
+  EXPECT_EQ(t.coeffs, (std::vector<float>{11, 13, 14}));
+  EXPECT_EQ(t.direct, (std::vector<float>{21, 23, 24}));
+  EXPECT_EQ(t.analytic_vertices(), 2u);
+  EXPECT_EQ(*t.stored(4), 14.0f);
+  EXPECT_EQ(*t.stored_direct(3), 23.0f);
+  Transfer none = t;
+  none.slots.clear();
+  none.coeffs = {1, 2};
+  none.direct.clear();
+  none.vertices = 2;
+  compact_transfer(none, {0, 0});  // nothing analytic: nothing changes
+  EXPECT_TRUE(none.slots.empty());
+  EXPECT_EQ(none.coeffs, (std::vector<float>{1, 2}));
 }
 
 TEST(Transfer, RejectsBadOptions) {

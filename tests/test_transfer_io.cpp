@@ -87,6 +87,21 @@ Transfer full_transfer(std::size_t vertices = 40) {
   return make_transfer(TransferMode::Interreflected, 3, 4, vertices, {true, true, true, true});
 }
 
+// `t` with the vertices `analytic(v)` selects marked analytic (their rows dropped).
+template <typename Pick>
+Transfer with_analytic(Transfer t, Pick analytic) {
+  std::vector<std::uint8_t> mask(t.vertices);
+  for (std::size_t v = 0; v < t.vertices; ++v) mask[v] = analytic(v) ? 1 : 0;
+  prt::compact_transfer(t, mask);
+  t.shading_hash = 0x5eed5eed5eed5eedull;
+  return t;
+}
+
+// full_transfer(40) with every third vertex analytic (0, 3, ..., 39): 14 analytic, 26 stored.
+Transfer mixed_transfer() {
+  return with_analytic(full_transfer(40), [](std::size_t v) { return v % 3 == 0; });
+}
+
 template <typename T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
@@ -103,6 +118,8 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_EQ(a.seed, b.seed);
   EXPECT_EQ(a.vertices, b.vertices);
   EXPECT_EQ(a.mesh_hash, b.mesh_hash);
+  EXPECT_EQ(a.shading_hash, b.shading_hash);
+  EXPECT_EQ(a.slots, b.slots);
   EXPECT_TRUE(same_bits(a.coeffs, b.coeffs));
   EXPECT_TRUE(same_bits(a.direct, b.direct));
   EXPECT_TRUE(same_bits(a.ao, b.ao));
@@ -115,7 +132,7 @@ void expect_identical(const Transfer& a, const Transfer& b) {
 constexpr std::size_t kHeader = 128, kSectionHeader = 24, kTrailer = 12;
 constexpr std::size_t kVersionAt = 8, kHeaderSizeAt = 12, kBasisAt = 16, kBandsAt = 20, kChannelsAt = 24,
                       kModeAt = 28, kBouncesAt = 32, kSamplesAt = 36, kAlbedoAt = 40, kFlagsAt = 52, kSeedAt = 56,
-                      kVerticesAt = 64, kMeshHashAt = 72, kSectionCountAt = 80;
+                      kVerticesAt = 64, kMeshHashAt = 72, kSectionCountAt = 80, kStoredAt = 88, kShadingHashAt = 96;
 
 template <typename T>
 T get(const std::string& bytes, std::size_t at) {
@@ -205,6 +222,65 @@ TEST(TransferFile, RoundTripIsBitIdenticalForEveryModeChannelAndSection) {
         }
 }
 
+TEST(TransferFile, RoundTripKeepsAnalyticVertices) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  // Vertex counts around the mask's 32-bit words; none, some, all analytic.
+  for (std::size_t vertices : {1u, 7u, 31u, 32u, 33u, 100u})
+    for (int pattern = 0; pattern < 4; ++pattern) {
+      const auto pick = [&](std::size_t v) {
+        return pattern == 0 ? false : pattern == 1 ? v % 3 == 1 : pattern == 2 ? v + 1 == vertices : true;
+      };
+      for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+        const bool ir = mode == TransferMode::Interreflected;
+        const Transfer t = with_analytic(make_transfer(mode, ir ? 3 : 1, 3, vertices, {ir, true, true, ir}), pick);
+        SCOPED_TRACE(std::to_string(vertices) + " vertices, pattern " + std::to_string(pattern) + ", " +
+                     std::string(prt::transfer_mode_name(mode)));
+        prt::write_transfer(path, t);
+        EXPECT_EQ(fs::file_size(path), prt::transfer_file_size(t));
+        const Transfer back = prt::read_transfer(path);
+        expect_identical(t, back);
+        EXPECT_EQ(back.analytic_vertices(), t.analytic_vertices());
+        for (std::size_t v = 0; v < vertices; ++v) EXPECT_EQ(back.is_analytic(v), pick(v)) << "vertex " << v;
+      }
+    }
+}
+
+// Version 1 files (every vertex stored; bytes 84-127 zero) are still read.
+TEST(TransferFile, ReadsVersionOneFiles) {
+  TempDir dir;
+  const Transfer t = full_transfer();
+  Sample s = sample_file(dir, t);
+  ASSERT_EQ(get<std::uint64_t>(s.bytes, kStoredAt), 40u);
+  put<std::uint32_t>(s.bytes, kVersionAt, 1);
+  put<std::uint64_t>(s.bytes, kStoredAt, 0);  // reserved in version 1
+  put<std::uint64_t>(s.bytes, kShadingHashAt, 0);
+  reseal(s.bytes);
+  const std::string path = dir.file("v1.prtt");
+  write_file(path, s.bytes);
+  expect_identical(prt::read_transfer(path), t);
+  EXPECT_EQ(prt::read_transfer_version(path), 1u);
+  const Result r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_EQ(nlohmann::json::parse(r.out).at("format_version"), 1);
+  // Version 1 has no stored count, shading hash or analytic-vertex mask.
+  std::string b = s.bytes;
+  put<std::uint64_t>(b, kStoredAt, 40);
+  reseal(b);
+  expect_bytes_error(dir, b, {"reserved byte 88 is not zero"}, "stored count in version 1");
+  const Sample m = sample_file(dir, mixed_transfer());
+  b = m.bytes;
+  put<std::uint32_t>(b, kVersionAt, 1);
+  put<std::uint64_t>(b, kStoredAt, 0);
+  put<std::uint64_t>(b, kShadingHashAt, 0);
+  reseal(b);
+  expect_bytes_error(dir, b, {"6 sections; at most 5 kinds exist in version 1"}, "mask in version 1");
+  b = s.bytes;  // the version 1 file of every vertex
+  put<std::uint32_t>(b, s.section_at[4], 6);  // its bounce energy section relabelled as a mask
+  reseal(b);
+  expect_bytes_error(dir, b, {"unknown kind 6 in a version 1 file"}, "kind 6 in version 1");
+}
+
 TEST(TransferFile, RoundTripKeepsSpecialFloatsBitForBit) {
   TempDir dir;
   Transfer t = make_transfer(TransferMode::Shadowed, 1, 2, 3, {false, true, true, false});
@@ -239,7 +315,7 @@ TEST(TransferFormat, BytesAreWhereTheDocumentSays) {
   const Sample s = sample_file(dir, t);
   const std::string& b = s.bytes;
   EXPECT_EQ(b.substr(0, 8), std::string("PRTT\r\n\x1a\n", 8));
-  EXPECT_EQ(get<std::uint32_t>(b, kVersionAt), 1u);
+  EXPECT_EQ(get<std::uint32_t>(b, kVersionAt), 2u);
   EXPECT_EQ(get<std::uint32_t>(b, kHeaderSizeAt), 128u);
   EXPECT_EQ(get<std::uint32_t>(b, kBasisAt), 0u);
   EXPECT_EQ(get<std::uint32_t>(b, kBandsAt), 4u);
@@ -255,7 +331,10 @@ TEST(TransferFormat, BytesAreWhereTheDocumentSays) {
   EXPECT_EQ(get<std::uint64_t>(b, kVerticesAt), 5u);
   EXPECT_EQ(get<std::uint64_t>(b, kMeshHashAt), t.mesh_hash);
   EXPECT_EQ(get<std::uint32_t>(b, kSectionCountAt), 5u);
-  for (std::size_t i = 84; i < kHeader; ++i) EXPECT_EQ(b[i], 0) << "reserved byte " << i;
+  EXPECT_EQ(get<std::uint64_t>(b, kStoredAt), 5u);  // every vertex stored
+  EXPECT_EQ(get<std::uint64_t>(b, kShadingHashAt), t.shading_hash);
+  for (std::size_t i = 84; i < kStoredAt; ++i) EXPECT_EQ(b[i], 0) << "reserved byte " << i;
+  for (std::size_t i = 104; i < kHeader; ++i) EXPECT_EQ(b[i], 0) << "reserved byte " << i;
 
   // Sections in kind order: kind, element type, count, bytes, data.
   const std::uint32_t kinds[5] = {1, 2, 3, 4, 5}, types[5] = {1, 1, 1, 1, 2};
@@ -282,6 +361,37 @@ TEST(TransferFormat, BytesAreWhereTheDocumentSays) {
   EXPECT_EQ(get<std::uint64_t>(b, b.size() - kTrailer), XXH3_64bits(b.data(), b.size() - kTrailer));
 }
 
+TEST(TransferFormat, AnalyticVertexMaskIsWhereTheDocumentSays) {
+  TempDir dir;
+  const Transfer t = mixed_transfer();
+  const Sample s = sample_file(dir, t);
+  const std::string& b = s.bytes;
+  EXPECT_EQ(get<std::uint64_t>(b, kVerticesAt), 40u);
+  EXPECT_EQ(get<std::uint64_t>(b, kStoredAt), 26u);
+  EXPECT_EQ(get<std::uint64_t>(b, kShadingHashAt), 0x5eed5eed5eed5eedull);
+  ASSERT_EQ(get<std::uint32_t>(b, kSectionCountAt), 6u);
+  // Coefficients and direct: the 26 stored vertices' rows, in vertex order.
+  EXPECT_EQ(get<std::uint64_t>(b, s.section_at[0] + 8), 26u * 3 * 16);
+  EXPECT_EQ(get<std::uint64_t>(b, s.section_at[1] + 8), 26u * 3 * 16);
+  EXPECT_EQ(get<float>(b, kHeader + kSectionHeader), t.coeffs[0]);  // row 0 is vertex 1
+  // AO and bent normals stay per vertex.
+  EXPECT_EQ(get<std::uint64_t>(b, s.section_at[2] + 8), 40u);
+  // Kind 6, u32, (40 + 31) / 32 = 2 words, 8 bytes: bit v % 32 of word v / 32.
+  const std::size_t at = s.section_at[5];
+  EXPECT_EQ(get<std::uint32_t>(b, at), 6u);
+  EXPECT_EQ(get<std::uint32_t>(b, at + 4), 4u);
+  EXPECT_EQ(get<std::uint64_t>(b, at + 8), 2u);
+  EXPECT_EQ(get<std::uint64_t>(b, at + 16), 8u);
+  std::uint32_t w0 = 0, w1 = 0;
+  for (std::size_t v = 0; v < 40; v += 3) (v < 32 ? w0 : w1) |= 1u << (v % 32);
+  EXPECT_EQ(get<std::uint32_t>(b, at + kSectionHeader), w0);
+  EXPECT_EQ(get<std::uint32_t>(b, at + kSectionHeader + 4), w1);
+  EXPECT_EQ(b.size(), at + kSectionHeader + 8 + kTrailer);
+  EXPECT_EQ(prt::transfer_file_size(t), b.size());
+  // Saved: 14 rows of coefficients and of direct (14 x 192 bytes each), less the mask section.
+  EXPECT_EQ(prt::analytic_bytes_saved(t), 2u * 14 * 192 - (kSectionHeader + 8));
+}
+
 TEST(TransferFormat, WorkedExampleOfTheDocument) {
   // docs/FORMAT.md: bunny00 (37706 vertices), 5 bands, 1 channel, shadowed,
   // with ambient occlusion and bent normals.
@@ -293,6 +403,11 @@ TEST(TransferFormat, WorkedExampleOfTheDocument) {
   EXPECT_EQ(sections[0].bytes, 3770600u);
   EXPECT_EQ(sections[1].bytes, 150824u);
   EXPECT_EQ(sections[2].bytes, 452472u);
+  // With 1000 analytic vertices: 100 bytes less each, plus a mask of 1179
+  // words (4716 bytes, padded to 4720) behind a section header.
+  const Transfer a = with_analytic(t, [](std::size_t v) { return v < 1000; });
+  EXPECT_EQ(prt::transfer_file_size(a), 4278852u);
+  EXPECT_EQ(prt::analytic_bytes_saved(a), 4374108u - 4278852u);
   // Interreflected, 3 channels, everything: 300 + 300 + 4 + 12 per vertex.
   t = make_transfer(TransferMode::Interreflected, 3, 5, 37706, {true, true, true, true});
   EXPECT_EQ(prt::transfer_bytes_per_vertex(t), 616u);
@@ -331,7 +446,8 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads version 1"}, "version 99");
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 2"},
+                     "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
   expect_bytes_error(dir, s.bytes.substr(0, 16), {"newer prt (version 99)"}, "version 99, short");
@@ -414,14 +530,18 @@ TEST(TransferRead, BadHeaderValues) {
       {kSamplesAt, 0xffffffffu, 4, {"samples is 4294967295"}},
       {kAlbedoAt + 4, 0x7fc00000u, 4, {"albedo is not finite"}},
       {kFlagsAt, 0x81, 4, {"unknown flags 0x80"}},
-      {100, 1, 1, {"reserved byte 100"}},
+      {84, 1, 1, {"reserved byte 84"}},
+      {110, 1, 1, {"reserved byte 110"}},
       {kHeaderSizeAt, 64, 4, {"header size 64"}},
       {kVerticesAt, 0, 8, {"no vertices"}},
       {kVerticesAt, 1ull << 40, 8, {"1099511627776 vertices cannot fit"}},
       {kVerticesAt, ~0ull, 8, {"vertices cannot fit"}},
-      {kVerticesAt, 41, 8, {"section 'coefficients' has 1920 values", "41 x 3 x 16 = 1968"}},
+      {kVerticesAt, 41, 8, {"section 'ambient occlusion' has 40 values; expected 41"}},
+      {kStoredAt, 41, 8, {"41 stored vertices, more than its 40 vertices"}},
+      {kStoredAt, 39, 8, {"section 'coefficients' has 1920 values", "39 x 3 x 16 = 1872"}},
+      {kStoredAt, 1ull << 40, 8, {"stored vertices, more than"}},
       {kSectionCountAt, 0, 4, {"no sections"}},
-      {kSectionCountAt, 6, 4, {"6 sections"}},
+      {kSectionCountAt, 7, 4, {"7 sections; at most 6 kinds exist in version 2"}},
   };
   for (const auto& c : cases) {
     std::string b = s.bytes;
@@ -450,13 +570,14 @@ TEST(TransferRead, SectionsInconsistentWithTheHeader) {
   edit(c, std::uint32_t(3), {"no 'coefficients' section"}, "coefficients missing");
   edit(ao, std::uint32_t(2), {"out of order or repeated"}, "repeated kind");
   edit(c + 4, std::uint32_t(2), {"element type 2", "expected 1 (f32)"}, "f64 coefficients");
-  edit(c + 8, std::uint64_t(1919), {"1919 values", "expected vertices x channels x bands^2"}, "count");
+  edit(c + 8, std::uint64_t(1919), {"1919 values", "expected stored vertices x channels x bands^2"}, "count");
   edit(c + 16, std::uint64_t(7676), {"1920 f32 values but 7676 bytes"}, "bytes");
   edit(ao + 8, std::uint64_t(39), {"'ambient occlusion' has 39 values; expected 40"}, "AO count");
   edit(s.section_at[4] + 8, std::uint64_t(4), {"'bounce energy' has 4 values; expected 1 to bounces = 3"},
        "bounce energy count");
   edit(kModeAt, std::uint32_t(1), {"'direct' section", "only an interreflected transfer"}, "direct when shadowed");
   edit(kSectionCountAt, std::uint32_t(4), {"between the last section and the trailer"}, "section count too small");
+  edit(kSectionCountAt, std::uint32_t(6), {"section 6 of 6 is missing"}, "section count too large");
 
   // Non-zero padding: the AO section (40 floats) needs none; make one that does.
   Transfer odd = full_transfer(5);
@@ -465,6 +586,53 @@ TEST(TransferRead, SectionsInconsistentWithTheHeader) {
   b[o.section_at[2] + kSectionHeader + 20] = 1;
   reseal(b);
   expect_bytes_error(dir, b, {"padding after section 'ambient occlusion'"}, "padding");
+}
+
+TEST(TransferRead, BadAnalyticVertexMask) {
+  TempDir dir;
+  const Sample s = sample_file(dir, mixed_transfer());
+  const std::size_t mask = s.section_at[5], words = mask + kSectionHeader;
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& words_expected,
+                        const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, words_expected, what);
+  };
+  // Bit 1 (vertex 1) set as well: 15 marked, the header says 14.
+  edit(words, get<std::uint32_t>(s.bytes, words) | 2u,
+       {"bad analytic-vertex mask: 15 vertices marked analytic; the header says 14 (40 vertices, 26 stored)"},
+       "one bit too many");
+  // Bits past vertex 39 (bit 8 of word 1) are not vertices.
+  edit(words + 4, (get<std::uint32_t>(s.bytes, words + 4) & ~1u) | (1u << 8),
+       {"bits set past the last vertex (40)"}, "tail bit");
+  edit(mask + 4, std::uint32_t(1), {"'analytic vertices' has element type 1; expected 4 (u32)"}, "f32 mask");
+  edit(mask + 8, std::uint64_t(3), {"'analytic vertices' has 3 words; expected (vertices + 31) / 32 = 2"},
+       "word count");
+  edit(mask + 16, std::uint64_t(12), {"2 u32 values but 12 bytes"}, "byte size");
+  edit(kStoredAt, std::uint64_t(40), {"section 'coefficients' has 1248 values", "40 x 3 x 16 = 1920"},
+       "stored count says all");
+
+  // The mask section left out (the file shortened by it): the header's
+  // stored count still says 14 vertices are analytic.
+  std::string b = s.bytes.substr(0, mask) + s.bytes.substr(s.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kSectionCountAt, 5);
+  reseal(b);
+  expect_bytes_error(dir, b, {"no 'analytic vertices' section", "14 of 40 vertices are analytic"}, "no mask");
+
+  // A mask in a file that stores every vertex.
+  const Sample d = sample_file(dir, full_transfer());
+  b = d.bytes.substr(0, d.bytes.size() - kTrailer);
+  const std::string extra = s.bytes.substr(mask, kSectionHeader + 8);
+  b += extra + d.bytes.substr(d.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kSectionCountAt, 6);
+  reseal(b);
+  expect_bytes_error(dir, b, {"has an 'analytic vertices' section, but the header says every vertex is stored"},
+                     "mask when all stored");
+
+  // Too many vertices for the mask to fit in the file.
+  edit(kVerticesAt, std::uint64_t(1) << 40, {"1099511627776 vertices cannot fit", "analytic-vertex mask"},
+       "huge vertex count");
 }
 
 TEST(TransferRead, NonFiniteValuesNameTheVertex) {
@@ -490,6 +658,18 @@ TEST(TransferRead, NonFiniteValuesNameTheVertex) {
   put(b, s.section_at[4] + kSectionHeader + 8, std::numeric_limits<double>::quiet_NaN());
   reseal(b);
   expect_bytes_error(dir, b, {"bounce 2 has a non-finite energy"}, "bounce energy");
+
+  // With analytic vertices (every third), rows are named by their vertex:
+  // row 1 is vertex 2, row 25 vertex 38.
+  const Sample m = sample_file(dir, mixed_transfer());
+  b = m.bytes;
+  put(b, data + 4 * (1 * stride + 3), nan);
+  reseal(b);
+  expect_bytes_error(dir, b, {"vertex 2 has a non-finite coefficient"}, "NaN in row 1");
+  b = m.bytes;
+  put(b, m.section_at[1] + kSectionHeader + 4 * (25 * stride), inf);
+  reseal(b);
+  expect_bytes_error(dir, b, {"vertex 38 has a non-finite direct coefficient"}, "Inf in direct row 25");
 }
 
 // ---- writing -----------------------------------------------------------------------------
@@ -529,6 +709,15 @@ TEST(TransferWrite, RefusesWhatCouldNotBeReadBack) {
   t.ao.clear();
   t.bent_normals.clear();
   expect_refused(t, "no vertices");
+  t = mixed_transfer();
+  std::swap(t.slots[1], t.slots[2]);  // rows out of vertex order (the file cannot say so)
+  expect_refused(t, "vertex 1 is in row 1; stored vertices must take rows 0, 1, 2, ... in vertex order (row 0)");
+  t = mixed_transfer();
+  t.slots.pop_back();
+  expect_refused(t, "39 slots for 40 vertices");
+  t = mixed_transfer();
+  t.coeffs.resize(t.coeffs.size() + t.stride());  // a row for an analytic vertex
+  expect_refused(t, "section 'coefficients' has 1296 values; expected stored vertices");
   EXPECT_TRUE(dir.listing().empty());
 }
 
@@ -627,6 +816,38 @@ TEST(TransferMesh, CheckMatchesAcceptsTheMeshAndRefusesAnother) {
   expect_refused(swapped, "reordered triangles");
 }
 
+// Analytic vertices are shaded from the mesh's normals (and colours), which
+// the mesh hash does not cover: the shading hash does.
+TEST(TransferMesh, AnalyticVerticesNeedTheSameNormals) {
+  TempDir dir;
+  const prt::Mesh mesh = grid(4);
+  prt::TransferOptions o;
+  o.bands = 2;
+  o.samples = 16;
+  const Transfer t = prt::compute_transfer(mesh, o);  // flat: every vertex analytic
+  ASSERT_EQ(t.analytic_vertices(), mesh.vertex_count());
+  EXPECT_EQ(t.shading_hash, prt::shading_hash(mesh, false));
+  prt::write_transfer(dir.file("g.prtt"), t);
+  const Transfer back = prt::read_transfer(dir.file("g.prtt"));
+  EXPECT_NO_THROW(prt::check_matches(back, mesh, "g.prtt"));
+  // The same positions and triangles with other normals: same mesh hash.
+  std::vector<glm::vec3> normals(mesh.vertex_count(), glm::normalize(glm::vec3(0.1f, 1.0f, 0.0f)));
+  const prt::Mesh tilted = prt::make_mesh(mesh.positions, mesh.triangles, normals, {}, {}, "tilted.off");
+  ASSERT_EQ(tilted.hash(), mesh.hash());
+  try {
+    prt::check_matches(back, tilted, "g.prtt");
+    ADD_FAILURE() << "accepted other normals";
+  } catch (const prt::Error& e) {
+    for (const char* w : {"g.prtt was computed with other normals than tilted.off", "25 analytic vertices",
+                          "run prt precompute again"})
+      EXPECT_TRUE(contains(e.what(), w)) << e.what();
+  }
+  // A transfer without analytic vertices does not depend on the normals.
+  Transfer dense = make_transfer(TransferMode::Shadowed, 1, 2, mesh.vertex_count(), {});
+  dense.mesh_hash = mesh.hash();
+  EXPECT_NO_THROW(prt::check_matches(dense, tilted, "dense.prtt"));
+}
+
 TEST(TransferMesh, HashSurvivesTheFile) {
   TempDir dir;
   const prt::Mesh mesh = grid(3);
@@ -668,7 +889,10 @@ TEST(PrtInfo, PrintsTheHeader) {
   r = run_prt(dir, {"info", path, "--json"});
   ASSERT_EQ(r.code, 0) << describe_run(r);
   const nlohmann::json j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j.at("format_version"), 1);
+  EXPECT_EQ(j.at("format_version"), 2);
+  EXPECT_EQ(j.at("analytic_vertices"), 0);
+  EXPECT_EQ(j.at("stored_vertices"), 321);
+  EXPECT_EQ(j.at("analytic_bytes_saved"), 0);
   EXPECT_EQ(j.at("bands"), 5);
   EXPECT_EQ(j.at("channels"), 3);
   EXPECT_EQ(j.at("mode"), "interreflected");
@@ -682,6 +906,25 @@ TEST(PrtInfo, PrintsTheHeader) {
   EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
   EXPECT_TRUE(j.contains("ambient_occlusion"));
   EXPECT_EQ(dir.listing(), std::vector<std::string>{"t.prtt"});
+}
+
+TEST(PrtInfo, CountsAnalyticVertices) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  const Transfer t = mixed_transfer();
+  prt::write_transfer(path, t);
+  Result r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::string saved = std::to_string(prt::analytic_bytes_saved(t));
+  EXPECT_TRUE(contains(r.out, "14 of 40 vertices (35.0%")) << r.out;
+  EXPECT_TRUE(contains(r.out, saved + " bytes saved")) << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("analytic_vertices"), 14);
+  EXPECT_EQ(j.at("stored_vertices"), 26);
+  EXPECT_EQ(j.at("analytic_bytes_saved"), prt::analytic_bytes_saved(t));
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
 }
 
 TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {

@@ -577,7 +577,7 @@ TEST(WaveletAccuracy, SharpShadowIsFarBetterThan16BandSH) {
   so.samples = 4096;
   so.albedo = glm::vec3(1.0f);
   const Transfer st = compute_transfer(m, so);
-  const std::vector<glm::vec3> bs = relight(st, project(map, 16));
+  const std::vector<glm::vec3> bs = relight(st, m, project(map, 16));
 
   double lit = 0;
   for (double b : truth) lit = std::max(lit, b);

@@ -1,11 +1,13 @@
 // prt/render.h - headless OpenGL 4.5 PRT renderer (EGL, no window, no display).
 //
-// The classic PRT runtime: every vertex's transfer vector lives on the GPU
-// (a std430 float array, the layout of prt::Transfer: [vertex][channel][k]),
-// and per frame only the (rotated) lighting coefficients are uploaded. The
-// vertex shader takes the dot product of the two, the fragment shader outputs
-// the interpolated colour (Gouraud), so pixels at vertices equal
-// prt::relight() of those vertices. The environment is drawn as background,
+// The classic PRT runtime: every stored vertex's transfer vector lives on the
+// GPU (a buffer texture, the layout of prt::Transfer: [row][channel][k]),
+// and per frame only the (rotated) lighting coefficients are uploaded. A
+// compute pass takes the dot product of the two per vertex, or for analytic
+// (unoccluded) vertices evaluates the clamped cosine about the vertex normal
+// from the lighting (prt/transfer.h); the mesh is drawn with the result
+// interpolated (Gouraud), so pixels at vertices equal prt::relight() of
+// those vertices. The environment is drawn as background,
 // looked up per pixel by the view direction.
 //
 // Conventions (docs/CONVENTIONS.md): rotating the lighting by R moves light
@@ -50,7 +52,7 @@ enum class Shading {
   Transfer,          // the file's transfer: shadowed, or interreflected (direct + bounces)
   Direct,            // interreflected files only: their shadowed (0-bounce) part
   Unshadowed,        // the analytic clamped-cosine transfer of each vertex normal, (albedo/pi) A_l Y_k(n),
-                     // at the file's band count (computed on the CPU when first selected)
+                     // at the file's band count (evaluated in the relighting pass, as analytic vertices are)
   Lambert,           // no PRT: plain diffuse, albedo/pi x the irradiance of the lighting's first 9
                      // coefficients at the normal (Ramamoorthi & Hanrahan's quadratic form n^T M n)
   AmbientOcclusion,  // grey: the file's per-vertex ambient occlusion (files that have it)
@@ -122,8 +124,9 @@ class Renderer {
   // GL_RENDERER and GL_VERSION, e.g. "llvmpipe (LLVM 15.0.6, 256 bits), 4.5 (Core Profile) Mesa 22.3.6".
   std::string device() const;
 
-  // Uploads positions, triangle indices and the transfer coefficients (the
-  // whole transfer; any band count up to kMaxRenderBands, 1 or 3 channels).
+  // Uploads positions, normals, triangle indices and the transfer: the rows of
+  // its stored vertices, and for a transfer with analytic vertices their
+  // slots (any band count up to kMaxRenderBands, 1 or 3 channels).
   // Throws prt::Error when the transfer was not computed for this mesh
   // (vertex count, mesh hash) or its arrays are inconsistent.
   void set_mesh(const Mesh& mesh, const Transfer& transfer);
@@ -133,6 +136,14 @@ class Renderer {
   void set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors = false);
   void clear_mesh();
   int bands() const;  // of the uploaded SH transfer; 0 without one
+  // Bytes of transfer data on the GPU: the stored rows of the transfer and
+  // its direct part (each channel padded to a multiple of 4 coefficients),
+  // and 4 bytes of slot per vertex when some vertices are analytic. When
+  // those slots would cost more than the analytic rows they spare, set_mesh
+  // evaluates the analytic rows on the CPU and uploads every vertex's row,
+  // without slots. Normals and colours are not counted (every shading mode
+  // has them).
+  std::size_t transfer_bytes() const;
 
   // The lighting of the next frames: RGB coefficients, at least bands()^2
   // (at least 1 without an SH transfer; extra ones are ignored). Only these

@@ -41,9 +41,18 @@ struct TransferOptions {
   double offset = 0;             // ray origin offset; 0: 1e-4 x the mesh's bounding-box diagonal
 };
 
-// Per-vertex results. Layout of a transfer array: vertex-major,
-// [vertex][channel][k] with k < bands^2, channels 1 (grey albedo: one
-// channel serves R, G and B) or 3.
+// Per-vertex results. Layout of a transfer array: [row][channel][k] with
+// k < bands^2, channels 1 (grey albedo: one channel serves R, G and B) or 3,
+// one row per *stored* vertex, in vertex order.
+//
+// Analytic vertices (docs/PRECOMPUTE.md, "Analytic vertices"): a vertex with
+// a normal none of whose rays hit anything has exactly the unshadowed
+// transfer (rho/pi) A_l Y_lm(n): the shadowed form's occluded sum is empty,
+// and interreflection gathers nothing into it (it sees no surface). Such a
+// vertex stores no coefficients; relight() and the renderer evaluate the
+// clamped cosine about the mesh's normal, with the albedo compute_transfer
+// used (vertex_albedo). In an unshadowed transfer every vertex with a normal
+// is analytic, so nothing is stored but for vertices without one (transfer 0).
 struct Transfer {
   int bands = 0;
   int channels = 1;
@@ -55,17 +64,66 @@ struct Transfer {
   std::uint64_t seed = 0;
   std::size_t vertices = 0;
   std::uint64_t mesh_hash = 0;
+  // shading_hash(mesh, vertex_colors) of the mesh the transfer was computed
+  // for: analytic vertices take their normal and albedo from the mesh, which
+  // mesh_hash (positions, triangles) does not cover. 0: not recorded (files
+  // of format version 1, which have no analytic vertices).
+  std::uint64_t shading_hash = 0;
 
-  std::vector<float> coeffs;         // the transfer of `mode` (interreflected: direct + all bounces)
-  std::vector<float> direct;         // interreflected only: the shadowed (0-bounce) part, same layout
+  // slots[v]: the row of vertex v in coeffs (and direct), or kAnalytic.
+  // Empty: every vertex is stored, vertex v in row v (no analytic vertex).
+  static constexpr std::uint32_t kAnalytic = 0xffffffffu;
+  std::vector<std::uint32_t> slots;
+  std::vector<float> coeffs;         // stored rows: the transfer of `mode` (interreflected: direct + all bounces)
+  std::vector<float> direct;         // interreflected only: the shadowed (0-bounce) part, same rows
   std::vector<float> ao;             // kappa_A = (1/pi) integral V max(n.w,0) dw, per vertex (1 if unshadowed)
-  std::vector<glm::vec3> bent_normals;  // normalised cosine-weighted mean unoccluded direction
+  std::vector<glm::vec3> bent_normals;  // normalised cosine-weighted mean unoccluded direction, per vertex
   std::vector<double> bounce_energy;    // mean |T| added by each bounce (diagnostics)
   double direct_energy = 0;             // interreflected: mean |T| of the direct part (not stored in files)
 
   std::size_t stride() const { return std::size_t(channels) * bands * bands; }
-  const float* vertex(std::size_t v) const { return coeffs.data() + v * stride(); }
+  bool is_analytic(std::size_t v) const { return !slots.empty() && slots[v] == kAnalytic; }
+  std::size_t analytic_vertices() const;  // counted over slots
+  std::size_t stored_vertices() const { return vertices - analytic_vertices(); }
+  // The accessor every consumer uses: the stored transfer of vertex v
+  // (stride() floats, [channel][k]), or nullptr when v is analytic (then it
+  // is analytic_transfer() of the mesh's normal and vertex_albedo()).
+  const float* stored(std::size_t v) const { return row(coeffs, v); }
+  // The same for the direct part (interreflected transfers that keep it).
+  const float* stored_direct(std::size_t v) const { return row(direct, v); }
+
+ private:
+  const float* row(const std::vector<float>& a, std::size_t v) const {
+    const std::size_t r = slots.empty() ? v : slots[v];
+    return r == kAnalytic ? nullptr : a.data() + r * stride();
+  }
 };
+
+// The unshadowed (clamped-cosine) transfer of a vertex with normal n and
+// albedo rho: out[c bands^2 + k] = (rho_c / pi) A_l Y_lm(n) for c < channels
+// (rho.x alone when channels is 1); 0 for a zero normal. In double: what
+// relight() uses for analytic vertices.
+void analytic_transfer(int bands, int channels, const glm::vec3& normal, const glm::vec3& albedo, double* out);
+
+// The albedo compute_transfer used at vertex v of `mesh`: its colour clamped
+// to [0, 1] when t.vertex_colors, t.albedo otherwise.
+glm::vec3 vertex_albedo(const Transfer& t, const Mesh& mesh, std::size_t v);
+
+// The transfer of vertex v whatever its kind (stride() values): the stored
+// row, or the analytic one from `mesh`. `direct`: the direct part (the same
+// for analytic vertices). For tests and tools; relight() does not copy.
+std::vector<double> vertex_transfer(const Transfer& t, const Mesh& mesh, std::size_t v, bool direct = false);
+
+// The whole array with one row per vertex (row v = vertex v), analytic rows
+// evaluated from `mesh` and rounded to float: the layout of a transfer with no
+// analytic vertex. `direct`: of the direct part (the transfer itself when it
+// keeps none).
+std::vector<float> dense_transfer(const Transfer& t, const Mesh& mesh, bool direct = false);
+
+// Marks vertices analytic (slots; see Transfer) and drops their rows from
+// coeffs and direct. `analytic` has one entry per vertex (non-zero:
+// analytic). compute_transfer does this itself; for tests and tools.
+void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic);
 
 // Progress callback: (work done, work total, phase name). Called from one
 // thread at a time; return false to cancel (compute_transfer then throws
@@ -77,9 +135,12 @@ using Progress = std::function<bool(std::size_t done, std::size_t total, const c
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
 
 // Outgoing radiance of every vertex under lighting coefficients `light`
-// (RGB, bands^2 or more; extra bands are ignored): RGB per vertex.
-std::vector<glm::vec3> relight(const Transfer& t, const std::vector<glm::dvec3>& light);
-// The same from the `direct` (shadowed) part of an interreflected transfer.
-std::vector<glm::vec3> relight_direct(const Transfer& t, const std::vector<glm::dvec3>& light);
+// (RGB, bands^2 or more; extra bands are ignored): RGB per vertex. `mesh` is
+// the mesh t was computed for (check_matches): analytic vertices take their
+// normal and albedo from it, evaluated exactly in double.
+std::vector<glm::vec3> relight(const Transfer& t, const Mesh& mesh, const std::vector<glm::dvec3>& light);
+// The same from the `direct` (shadowed) part of an interreflected transfer
+// (the transfer itself when it keeps no direct part).
+std::vector<glm::vec3> relight_direct(const Transfer& t, const Mesh& mesh, const std::vector<glm::dvec3>& light);
 
 }  // namespace prt

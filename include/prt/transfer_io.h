@@ -20,8 +20,11 @@
 
 namespace prt {
 
-// The one version this prt writes and reads (docs/FORMAT.md).
-inline constexpr std::uint32_t kTransferFormatVersion = 1;
+// The version this prt writes for SH transfers (docs/FORMAT.md); it reads
+// this one and every earlier one (version 1: every vertex stored). Wavelet
+// transfers are written as version kWaveletFormatVersion.
+inline constexpr std::uint32_t kTransferFormatVersion = 2;
+inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 
 // Writes `t` to `path` through write_atomically: a failure (or the process
 // being killed) leaves any existing file untouched and no temporary behind.
@@ -36,8 +39,15 @@ void write_transfer(const std::string& path, const Transfer& t);
 Transfer read_transfer(const std::string& path);
 
 // Throws prt::Error unless `t` was computed for `mesh` (same vertex count and
-// Mesh::hash()); `transfer_path` names the transfer in the message.
+// Mesh::hash(); and when t has analytic vertices, the same shading_hash:
+// those are shaded from the mesh's normals and colours); `transfer_path`
+// names the transfer in the message.
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path);
+
+// XXH3-64 (seed 0) of the mesh's normals (V x f32 x, y, z) followed, when
+// vertex_colors, by its colours (V x f32 r, g, b): what analytic vertices
+// are shaded from (Transfer::shading_hash).
+std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors);
 
 // A multi-line human-readable summary (bands, channels, mode, bounces,
 // samples, albedo, vertices, mesh hash, sections and sizes, bytes per vertex,
@@ -46,7 +56,7 @@ std::string describe_transfer(const Transfer& t);
 
 // ---- what a file holds (prt info, tests) ------------------------------------
 struct TransferSection {
-  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 5 bounce energy
+  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 5 bounce energy, 6 analytic vertices
   const char* name = "";            // "coefficients", "direct", "ambient occlusion", ...
   std::uint32_t element_bytes = 0;  // 4 (f32) or 8 (f64)
   std::uint64_t count = 0;          // elements (scalars)
@@ -58,8 +68,12 @@ struct TransferSection {
 // The sections write_transfer stores for `t`, in file order (empty arrays
 // other than the coefficients are left out).
 std::vector<TransferSection> transfer_sections(const Transfer& t);
-// Bytes per vertex over all per-vertex sections.
+// Bytes per vertex over all per-vertex sections (the coefficients averaged
+// over all vertices, analytic ones included).
 std::uint64_t transfer_bytes_per_vertex(const Transfer& t);
+// How many bytes smaller the file is than the same transfer with every
+// vertex stored (the analytic vertices' rows, less the mask section).
+std::uint64_t analytic_bytes_saved(const Transfer& t);
 // Exact size in bytes of the file write_transfer writes for `t`.
 std::uint64_t transfer_file_size(const Transfer& t);
 
@@ -72,6 +86,8 @@ std::string_view basis_name(TransferBasis b);  // "sh", "wavelet"
 // verify the checksum or the sections (read_transfer / read_wavelet_transfer
 // do). Throws prt::Error "PATH: problem".
 TransferBasis read_transfer_basis(const std::string& path);
+// The same header checks; returns the file's format version (1 or 2 for SH).
+std::uint32_t read_transfer_version(const std::string& path);
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
 // Writes `t` through write_atomically. Throws prt::Error naming the file,

@@ -29,10 +29,10 @@ nlohmann::ordered_json sections_json(const std::vector<TransferSection>& section
 
 // The header fields and section sizes. The mesh hash is a hex string: a
 // 64-bit integer does not survive JSON readers that use doubles.
-nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
+nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::uint32_t version) {
   nlohmann::ordered_json j;
   j["file"] = path;
-  j["format_version"] = kTransferFormatVersion;
+  j["format_version"] = version;
   j["basis"] = "sh";
   j["bands"] = t.bands;
   j["coefficients_per_channel"] = t.bands * t.bands;
@@ -46,6 +46,10 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
   j["vertices"] = t.vertices;
   j["mesh_hash"] = fmt::format("{:#018x}", t.mesh_hash);
   j["sections"] = sections_json(transfer_sections(t));
+  // Analytic (unoccluded) vertices store no transfer (docs/PRECOMPUTE.md).
+  j["analytic_vertices"] = t.analytic_vertices();
+  j["stored_vertices"] = t.stored_vertices();
+  j["analytic_bytes_saved"] = analytic_bytes_saved(t);
   j["bytes_per_vertex"] = transfer_bytes_per_vertex(t);
   j["file_bytes"] = transfer_file_size(t);
   if (!t.ao.empty()) {
@@ -61,7 +65,7 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t) {
 nlohmann::ordered_json to_json(const std::string& path, const WaveletTransfer& t) {
   nlohmann::ordered_json j;
   j["file"] = path;
-  j["format_version"] = kTransferFormatVersion;
+  j["format_version"] = kWaveletFormatVersion;
   j["basis"] = "wavelet";
   j["cube_res"] = t.cube_res;
   j["coefficients"] = t.coeff_count();
@@ -90,10 +94,15 @@ int run_info(const InfoArgs& a) {
     return 0;
   }
   const Transfer t = read_transfer(a.file);  // validates everything; throws naming the file
-  if (a.json)
-    fmt::print("{}\n", to_json(a.file, t).dump(2));
-  else
+  const std::uint32_t version = read_transfer_version(a.file);
+  if (a.json) {
+    fmt::print("{}\n", to_json(a.file, t, version).dump(2));
+  } else {
     fmt::print("{}: {}", a.file, describe_transfer(t));
+    if (version != kTransferFormatVersion)
+      fmt::print("  (the file is format version {}; prt now writes version {}: sizes above are as it would write it)\n",
+                 version, kTransferFormatVersion);
+  }
   return 0;
 }
 
@@ -104,7 +113,8 @@ Run add_info(CLI::App& app) {
   CLI::App* s = app.add_subcommand("info", "Describe a transfer file (checks it completely)");
   s->footer(
       "Reads and validates the whole file (signature, version, size, checksum, every value) and prints its\n"
-      "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes;\n"
+      "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes, and how\n"
+      "many vertices are analytic (unoccluded: no stored transfer) with the bytes that saves;\n"
       "for a wavelet transfer: cube resolution, threshold, kept fraction and bytes per vertex.\n"
       "The format is specified in docs/FORMAT.md. Exits non-zero, naming the problem, on a bad file.\n"
       "Example: prt info bunny.prtt --json");

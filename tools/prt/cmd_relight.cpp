@@ -113,7 +113,7 @@ int run_relight(const RelightArgs& a) {
     sh::Rotation(t.bands, sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, r);
     light.swap(r);
   }
-  const std::vector<glm::vec3> rgb = a.direct ? relight_direct(t, light) : relight(t, light);
+  const std::vector<glm::vec3> rgb = a.direct ? relight_direct(t, mesh, light) : relight(t, mesh, light);
   const double frame_ms = ms_since(t1);
   write_output(ext, a.output, mesh, rgb);
   if (!a.quiet)
