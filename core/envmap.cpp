@@ -5,6 +5,8 @@
 
 #include "image_io.h"
 
+#include <tbb/parallel_for.h>
+
 
 #include <algorithm>
 #include <cmath>
@@ -107,13 +109,8 @@ std::string_view mapping_name(Mapping m) {
   return "?";
 }
 
-MapStats compute_stats(const float* rgb, std::size_t pixels) {
-  MapStats s;
-  s.pixels = pixels;
-  double sum = 0.0;
-  std::size_t finite_values = 0;
-  double mn = std::numeric_limits<double>::infinity(), mx = -mn;
-  for (std::size_t i = 0; i < pixels; ++i) {
+void StatsAccumulator::Run::add(const float* rgb, std::size_t first, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
     bool neg = false, bad = false;
     for (int c = 0; c < 3; ++c) {
       const float v = rgb[3 * i + c];
@@ -122,23 +119,70 @@ MapStats compute_stats(const float* rgb, std::size_t pixels) {
         continue;
       }
       neg |= v < 0.0f;
-      mn = std::min(mn, double(v));
-      mx = std::max(mx, double(v));
+      min = std::min(min, double(v));
+      max = std::max(max, double(v));
       sum += v;
-      ++finite_values;
+      ++finite;
     }
-    s.negative += neg;
+    negative += neg;
     if (bad) {
-      if (s.nonfinite == 0) s.first_nonfinite = static_cast<long>(i);
-      ++s.nonfinite;
+      if (nonfinite == 0) first_nonfinite = static_cast<long>(first + i);
+      ++nonfinite;
     }
   }
-  if (finite_values > 0) {
-    s.min = mn;
-    s.max = mx;
-    s.mean = sum / finite_values;
+}
+
+void StatsAccumulator::Run::merge(const Run& later) {
+  sum += later.sum;
+  min = std::min(min, later.min);
+  max = std::max(max, later.max);
+  finite += later.finite;
+  negative += later.negative;
+  if (first_nonfinite < 0) first_nonfinite = later.first_nonfinite;
+  nonfinite += later.nonfinite;
+}
+
+void StatsAccumulator::add(const float* rgb, std::size_t pixels) {
+  constexpr std::size_t kRun = 65536;
+  if (pixels == 0) return;
+  const std::size_t begin = pixels_, end = pixels_ + pixels;
+  const std::size_t r0 = begin / kRun, r1 = (end + kRun - 1) / kRun;
+  std::vector<Run> runs(r1 - r0);
+  runs[0] = open_;  // empty when the last piece ended a run
+  tbb::parallel_for(r0, r1, [&](std::size_t r) {
+    const std::size_t a = std::max(begin, r * kRun), b = std::min(end, (r + 1) * kRun);
+    runs[r - r0].add(rgb + 3 * (a - begin), a, b - a);
+  });
+  open_ = Run{};
+  for (std::size_t r = r0; r < r1; ++r) {
+    if ((r + 1) * kRun <= end)
+      done_.merge(runs[r - r0]);
+    else
+      open_ = runs[r - r0];
+  }
+  pixels_ = end;
+}
+
+MapStats StatsAccumulator::result() const {
+  Run all = done_;
+  all.merge(open_);
+  MapStats s;
+  s.pixels = pixels_;
+  s.negative = all.negative;
+  s.nonfinite = all.nonfinite;
+  s.first_nonfinite = all.first_nonfinite;
+  if (all.finite > 0) {
+    s.min = all.min;
+    s.max = all.max;
+    s.mean = all.sum / double(all.finite);
   }
   return s;
+}
+
+MapStats compute_stats(const float* rgb, std::size_t pixels) {
+  StatsAccumulator acc;
+  acc.add(rgb, pixels);
+  return acc.result();
 }
 
 namespace {
@@ -191,50 +235,52 @@ EnvMap make_cube(int size, std::vector<float> rgb, std::string source) {
   return m;
 }
 
-EnvMap load_envmap(const std::string& path, Mapping mapping) {
-  RawImage img = read_image_rgb(path);
-  const int W = img.width, H = img.height;
-  if (mapping == Mapping::Auto) {
-    if (W == 2 * H)
-      mapping = Mapping::LatLong;
-    else if (3 * W == 4 * H && W % 4 == 0)
-      mapping = Mapping::HCross;
-    else if (4 * W == 3 * H && W % 3 == 0)
-      mapping = Mapping::VCross;
-    else
-      throw Error(path + ": cannot tell the mapping from a " + shape_string(img) +
-                  " image (expected 2:1 lat-long, 4:3 horizontal cross or 3:4 vertical cross; "
-                  "use --mapping)");
-  }
-  EnvMap m;
+Mapping mapping_of_shape(const std::string& path, int W, int H, Mapping mapping) {
+  const std::string shape = std::to_string(W) + "x" + std::to_string(H);
   switch (mapping) {
+    case Mapping::Auto:
+      if (W == 2 * H) return Mapping::LatLong;
+      if (3 * W == 4 * H && W % 4 == 0) return Mapping::HCross;
+      if (4 * W == 3 * H && W % 3 == 0) return Mapping::VCross;
+      throw Error(path + ": cannot tell the mapping from a " + shape +
+                  " image (expected 2:1 lat-long, 4:3 horizontal cross or 3:4 vertical cross; use --mapping)");
     case Mapping::LatLong:
-      if (W != 2 * H)
-        throw Error(path + ": a lat-long map must be twice as wide as high, this one is " + shape_string(img));
-      m = make_latlong(W, H, std::move(img.rgb), path);
-      break;
+      if (W != 2 * H) throw Error(path + ": a lat-long map must be twice as wide as high, this one is " + shape);
+      return mapping;
     case Mapping::HCross:
     case Mapping::VCross: {
       const bool h = mapping == Mapping::HCross;
       const int N = h ? W / 4 : W / 3;
       if (N == 0 || (h ? (W != 4 * N || H != 3 * N) : (W != 3 * N || H != 4 * N)))
         throw Error(path + ": a " + std::string(mapping_name(mapping)) + " must be " + (h ? "4N x 3N" : "3N x 4N") +
-                    " pixels, this one is " + shape_string(img));
-      // Face positions in the cross, in units of N: {column, row}.
-      static constexpr int hpos[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
-      static constexpr int vpos[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3}};
-      std::vector<float> faces(std::size_t(6) * N * N * 3);
-      for (int f = 0; f < 6; ++f) {
-        const int* p = h ? hpos[f] : vpos[f];
-        copy_face(img, p[0] * N, p[1] * N, N, !h && f == kNegZ, faces.data() + std::size_t(f) * N * N * 3);
-      }
-      m = make_cube(N, std::move(faces), path);
-      break;
+                    " pixels, this one is " + shape);
+      return mapping;
     }
     case Mapping::Faces:
-      throw Error(path + ": --mapping faces needs six face files (+X,-X,+Y,-Y,+Z,-Z)");
-    case Mapping::Auto:
       break;
+  }
+  throw Error(path + ": --mapping faces needs six face files (+X,-X,+Y,-Y,+Z,-Z)");
+}
+
+EnvMap load_envmap(const std::string& path, Mapping mapping) {
+  RawImage img = read_image_rgb(path);
+  const int W = img.width, H = img.height;
+  mapping = mapping_of_shape(path, W, H, mapping);
+  EnvMap m;
+  if (mapping == Mapping::LatLong) {
+    m = make_latlong(W, H, std::move(img.rgb), path);
+  } else {
+    const bool h = mapping == Mapping::HCross;
+    const int N = h ? W / 4 : W / 3;
+    // Face positions in the cross, in units of N: {column, row}.
+    static constexpr int hpos[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {3, 1}};
+    static constexpr int vpos[6][2] = {{2, 1}, {0, 1}, {1, 0}, {1, 2}, {1, 1}, {1, 3}};
+    std::vector<float> faces(std::size_t(6) * N * N * 3);
+    for (int f = 0; f < 6; ++f) {
+      const int* p = h ? hpos[f] : vpos[f];
+      copy_face(img, p[0] * N, p[1] * N, N, !h && f == kNegZ, faces.data() + std::size_t(f) * N * N * 3);
+    }
+    m = make_cube(N, std::move(faces), path);
   }
   m.source_layout = std::string(mapping_name(mapping));
   m.source_channels = img.channels;

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -33,49 +34,65 @@ inline float srgb_to_linear(float v) { return v <= 0.04045f ? v / 12.92f : std::
 
 // ---- OpenEXR --------------------------------------------------------------
 
-RawImage read_exr(const std::string& path) {
-  static std::once_flag threads;
-  std::call_once(threads, [] { Imf::setGlobalThreadCount(std::max(1u, std::thread::hardware_concurrency())); });
+// Wraps OpenEXR's exceptions (truncated or corrupt files) into prt::Error.
+template <typename F>
+auto exr_call(const std::string& path, F f) {
   try {
-    Imf::InputFile file(path.c_str());
-    const Imath::Box2i dw = file.header().dataWindow();
-    RawImage img;
-    img.width = dw.max.x - dw.min.x + 1;
-    img.height = dw.max.y - dw.min.y + 1;
-    const Imf::ChannelList& cl = file.header().channels();
-    std::vector<std::string> names;
-    for (auto it = cl.begin(); it != cl.end(); ++it) names.emplace_back(it.name());
-    img.channels = static_cast<int>(names.size());
-    auto has = [&](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
-    std::vector<std::string> use;  // channels to read into R, G, B (one: grey)
-    if (has("R") && has("G") && has("B"))
-      use = {"R", "G", "B"};
-    else if (has("Y"))
-      use = {"Y"};
-    else if (names.size() == 1)
-      use = {names[0]};
-    else {
-      std::string list;
-      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      throw Error(path + ": EXR has no R, G, B or Y channels (it has: " + list + ")");
-    }
-    if (img.width <= 0 || img.height <= 0) throw Error(path + ": image has no pixels");
-    img.rgb.assign(std::size_t(img.width) * img.height * 3, 0.0f);
-    Imf::FrameBuffer fb;
-    for (std::size_t c = 0; c < use.size(); ++c)
-      fb.insert(use[c], Imf::Slice::Make(Imf::FLOAT, img.rgb.data() + c, dw, 3 * sizeof(float),
-                                         3 * sizeof(float) * std::size_t(img.width)));
-    file.setFrameBuffer(fb);
-    file.readPixels(dw.min.y, dw.max.y);
-    if (use.size() == 1)
-      for (std::size_t i = 0; i < img.rgb.size(); i += 3) img.rgb[i + 1] = img.rgb[i + 2] = img.rgb[i];
-    return img;
+    return f();
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {
     throw Error(path + ": cannot read EXR (truncated or corrupt?): " + e.what());
   }
 }
+
+struct ExrRows {
+  std::unique_ptr<Imf::InputFile> file;
+  Imath::Box2i dw;
+  std::vector<std::string> use;  // channels to read into R, G, B (one: grey)
+  int channels = 0;
+
+  explicit ExrRows(const std::string& path) {
+    static std::once_flag threads;
+    std::call_once(threads, [] { Imf::setGlobalThreadCount(std::max(1u, std::thread::hardware_concurrency())); });
+    exr_call(path, [&] {
+      file = std::make_unique<Imf::InputFile>(path.c_str());
+      dw = file->header().dataWindow();
+      const Imf::ChannelList& cl = file->header().channels();
+      std::vector<std::string> names;
+      for (auto it = cl.begin(); it != cl.end(); ++it) names.emplace_back(it.name());
+      channels = static_cast<int>(names.size());
+      auto has = [&](const char* n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+      if (has("R") && has("G") && has("B"))
+        use = {"R", "G", "B"};
+      else if (has("Y"))
+        use = {"Y"};
+      else if (names.size() == 1)
+        use = {names[0]};
+      else {
+        std::string list;
+        for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+        throw Error(path + ": EXR has no R, G, B or Y channels (it has: " + list + ")");
+      }
+      if (dw.max.x < dw.min.x || dw.max.y < dw.min.y) throw Error(path + ": image has no pixels");
+    });
+  }
+
+  void read(const std::string& path, int y0, int rows, float* rgb) {
+    const int W = dw.max.x - dw.min.x + 1;
+    exr_call(path, [&] {
+      Imf::FrameBuffer fb;
+      // Slice::Make places `rgb + c` at pixel (min.x, min.y + y0) of the file.
+      for (std::size_t c = 0; c < use.size(); ++c)
+        fb.insert(use[c], Imf::Slice::Make(Imf::FLOAT, rgb + c, Imath::V2i(dw.min.x, dw.min.y + y0), W, rows,
+                                           3 * sizeof(float), 3 * sizeof(float) * std::size_t(W)));
+      file->setFrameBuffer(fb);
+      file->readPixels(dw.min.y + y0, dw.min.y + y0 + rows - 1);
+    });
+    if (use.size() == 1)
+      for (std::size_t i = 0; i < std::size_t(rows) * W * 3; i += 3) rgb[i + 1] = rgb[i + 2] = rgb[i];
+  }
+};
 
 void write_exr(const std::string& path, const std::string& shown, int width, int height, const std::vector<float>& rgb) {
   try {
@@ -97,8 +114,9 @@ void write_exr(const std::string& path, const std::string& shown, int width, int
 // ---- the OpenImageIO plugin ---------------------------------------------------
 
 struct Plugin {
-  prt_oiio_read_fn read = nullptr;
-  prt_oiio_free_fn free = nullptr;
+  prt_oiio_open_fn open = nullptr;
+  prt_oiio_read_rows_fn read_rows = nullptr;
+  prt_oiio_close_fn close = nullptr;
   prt_oiio_write_fn write = nullptr;
   std::string error;
 };
@@ -140,10 +158,15 @@ const Plugin& plugin() {
         p.error = std::string("cannot load ") + file + ": " + dlerror();
         return;
       }
-      p.read = reinterpret_cast<prt_oiio_read_fn>(dlsym(h, "prt_oiio_read"));
-      p.free = reinterpret_cast<prt_oiio_free_fn>(dlsym(h, "prt_oiio_free"));
+      p.open = reinterpret_cast<prt_oiio_open_fn>(dlsym(h, "prt_oiio_open"));
+      p.read_rows = reinterpret_cast<prt_oiio_read_rows_fn>(dlsym(h, "prt_oiio_read_rows"));
+      p.close = reinterpret_cast<prt_oiio_close_fn>(dlsym(h, "prt_oiio_close"));
       p.write = reinterpret_cast<prt_oiio_write_fn>(dlsym(h, "prt_oiio_write"));
-      if (!p.read || !p.free || !p.write) p.error = file + " is not prt's OpenImageIO plugin";
+      if (!p.open || !p.read_rows || !p.close || !p.write) {
+        p.open = nullptr;
+        p.write = nullptr;
+        p.error = file + " is not prt's OpenImageIO plugin (or one from another prt version)";
+      }
       return;
     }
     p.error = "prt's OpenImageIO plugin (libprt_oiio.so) was not found; tried:" + tried +
@@ -154,32 +177,84 @@ const Plugin& plugin() {
 
 }  // namespace
 
-RawImage read_image_file(const std::string& path) {
+struct RowReader::Impl {
+  std::string path;
+  int width = 0, height = 0, channels = 0, next = 0;
+  bool streams = true;
+  std::string note;
+  std::unique_ptr<ExrRows> exr;
+  // Through the plugin:
+  const Plugin* plugin = nullptr;
+  prt_oiio_reader* oiio = nullptr;
+  int srgb = 0;
+  std::vector<float> file_rows;  // the rows as the file has them (all channels)
+};
+
+RowReader::RowReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  Impl& r = *impl_;
+  r.path = path;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
   if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
   if (access(path.c_str(), R_OK) != 0) throw Error(path + ": permission denied");
   if (fs::file_size(path, ec) == 0 && !ec) throw Error(path + ": file is empty");
-  if (Imf::isOpenExrFile(path.c_str())) return read_exr(path);
-
+  if (Imf::isOpenExrFile(path.c_str())) {
+    r.exr = std::make_unique<ExrRows>(path);
+    r.width = r.exr->dw.max.x - r.exr->dw.min.x + 1;
+    r.height = r.exr->dw.max.y - r.exr->dw.min.y + 1;
+    r.channels = r.exr->channels;
+    return;
+  }
   const Plugin& p = plugin();
-  if (!p.read) throw Error(path + ": not an EXR file, and " + p.error);
-  float* data = nullptr;
-  int srgb = 0;
-  RawImage img;
+  if (!p.open) throw Error(path + ": not an EXR file, and " + p.error);
   char err[1024] = {0};
-  if (p.read(path.c_str(), &data, &img.width, &img.height, &img.channels, &srgb, err, sizeof(err)) != 0)
-    throw Error(path + ": cannot read image: " + err);
-  const std::size_t pixels = std::size_t(img.width) * img.height;
-  const int C = img.channels;
-  img.rgb.resize(pixels * 3);
+  int streams = 0;
+  r.oiio = p.open(path.c_str(), &r.width, &r.height, &r.channels, &r.srgb, &streams, err, sizeof(err));
+  if (!r.oiio) throw Error(path + ": cannot read image: " + err);
+  r.plugin = &p;
+  r.streams = streams != 0;
+  if (!r.streams) r.note = "a tiled file: read whole, not by rows";
+}
+
+RowReader::~RowReader() {
+  if (impl_->oiio) impl_->plugin->close(impl_->oiio);
+}
+
+int RowReader::width() const { return impl_->width; }
+int RowReader::height() const { return impl_->height; }
+int RowReader::channels() const { return impl_->channels; }
+bool RowReader::streams() const { return impl_->streams; }
+const std::string& RowReader::note() const { return impl_->note; }
+
+void RowReader::read(int y0, int rows, float* rgb) {
+  Impl& r = *impl_;
+  PRT_CHECK_OP(y0, ==, r.next);
+  PRT_CHECK(rows >= 0 && y0 + rows <= r.height);
+  if (rows == 0) return;
+  r.next = y0 + rows;
+  if (r.exr) return r.exr->read(r.path, y0, rows, rgb);
+  const std::size_t pixels = std::size_t(rows) * r.width;
+  const int C = r.channels;
+  r.file_rows.resize(pixels * C);
+  char err[1024] = {0};
+  if (r.plugin->read_rows(r.oiio, y0, y0 + rows, r.file_rows.data(), err, sizeof(err)) != 0)
+    throw Error(r.path + ": cannot read image: " + err);
   for (std::size_t i = 0; i < pixels; ++i)
     for (int c = 0; c < 3; ++c) {
       // 1 channel: grey; 2: grey + alpha; 3 or more: RGB(A...).
-      const float v = data[i * C + (C >= 3 ? c : 0)];
-      img.rgb[i * 3 + c] = srgb ? srgb_to_linear(v) : v;
+      const float v = r.file_rows[i * C + (C >= 3 ? c : 0)];
+      rgb[i * 3 + c] = r.srgb ? srgb_to_linear(v) : v;
     }
-  p.free(data);
+}
+
+RawImage read_image_file(const std::string& path) {
+  RowReader reader(path);
+  RawImage img;
+  img.width = reader.width();
+  img.height = reader.height();
+  img.channels = reader.channels();
+  img.rgb.resize(std::size_t(img.width) * img.height * 3);
+  reader.read(0, img.height, img.rgb.data());
   return img;
 }
 

@@ -3,9 +3,18 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include <cstdlib>
+#include <algorithm>
 #include <cstring>
+#include <memory>
+#include <new>
 #include <string>
+#include <vector>
+
+struct prt_oiio_reader {
+  std::unique_ptr<OIIO::ImageInput> in;
+  int width = 0, height = 0, channels = 0;
+  std::vector<float> whole;  // a tiled file, read whole at open
+};
 
 namespace {
 void set_error(char* err, size_t len, const std::string& msg) {
@@ -15,9 +24,10 @@ void set_error(char* err, size_t len, const std::string& msg) {
 }
 }  // namespace
 
-extern "C" __attribute__((visibility("default"))) int prt_oiio_read(const char* path, float** data, int* width,
-                                                                    int* height, int* channels, int* srgb, char* err,
-                                                                    size_t err_len) {
+extern "C" __attribute__((visibility("default"))) prt_oiio_reader* prt_oiio_open(const char* path, int* width,
+                                                                                 int* height, int* channels,
+                                                                                 int* srgb, int* streams, char* err,
+                                                                                 size_t err_len) {
   // Keep colour and alpha apart: prt ignores alpha, so colours must not come
   // back premultiplied (OpenImageIO's default for PNG).
   OIIO::ImageSpec config;
@@ -26,40 +36,66 @@ extern "C" __attribute__((visibility("default"))) int prt_oiio_read(const char* 
   if (!in) {
     std::string why = OIIO::geterror();
     set_error(err, err_len, why.empty() ? "not an image file OpenImageIO can read" : why);
-    return 1;
+    return nullptr;
   }
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
     set_error(err, err_len, "image has no pixels");
-    return 1;
+    return nullptr;
   }
-  const size_t n = size_t(spec.width) * spec.height * spec.nchannels;
-  constexpr size_t kMaxValues = size_t(6) << 30;  // refuse absurd headers before allocating
-  if (n > kMaxValues) {
-    set_error(err, err_len, "image too large");
-    return 1;
-  }
-  float* px = static_cast<float*>(std::malloc(n * sizeof(float)));
-  if (!px) {
-    set_error(err, err_len, "out of memory");
-    return 1;
-  }
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px)) {
-    set_error(err, err_len, "cannot read pixels (truncated or corrupt file?): " + in->geterror());
-    std::free(px);
-    return 1;
+  auto r = std::make_unique<prt_oiio_reader>();
+  r->width = spec.width;
+  r->height = spec.height;
+  r->channels = spec.nchannels;
+  if (spec.tile_width > 0) {  // no scanline access: read it whole now
+    const size_t n = size_t(spec.width) * spec.height * spec.nchannels;
+    constexpr size_t kMaxValues = size_t(6) << 30;  // refuse absurd headers before allocating
+    if (n > kMaxValues) {
+      set_error(err, err_len, "image too large");
+      return nullptr;
+    }
+    try {
+      r->whole.resize(n);
+    } catch (const std::bad_alloc&) {
+      set_error(err, err_len, "out of memory");
+      return nullptr;
+    }
+    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, r->whole.data())) {
+      set_error(err, err_len, "cannot read pixels (truncated or corrupt file?): " + in->geterror());
+      return nullptr;
+    }
   }
   const std::string cs = spec.get_string_attribute("oiio:ColorSpace");
   const bool integer = spec.format.basetype == OIIO::TypeDesc::UINT8 || spec.format.basetype == OIIO::TypeDesc::UINT16;
   *srgb = integer && (cs.empty() || cs == "sRGB" || cs == "srgb_rec709_scene");
-  *data = px;
   *width = spec.width;
   *height = spec.height;
   *channels = spec.nchannels;
+  *streams = r->whole.empty() ? 1 : 0;
+  r->in = std::move(in);
+  return r.release();
+}
+
+extern "C" __attribute__((visibility("default"))) int prt_oiio_read_rows(prt_oiio_reader* r, int y0, int y1,
+                                                                         float* data, char* err, size_t err_len) {
+  if (y0 < 0 || y1 > r->height || y0 > y1) {
+    set_error(err, err_len, "rows out of range");
+    return 1;
+  }
+  const size_t row = size_t(r->width) * r->channels;
+  if (!r->whole.empty()) {
+    std::copy(r->whole.begin() + std::ptrdiff_t(y0 * row), r->whole.begin() + std::ptrdiff_t(y1 * row), data);
+    return 0;
+  }
+  const OIIO::ImageSpec& spec = r->in->spec();
+  if (!r->in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, 0, 0, r->channels, OIIO::TypeDesc::FLOAT, data)) {
+    set_error(err, err_len, "cannot read pixels (truncated or corrupt file?): " + r->in->geterror());
+    return 1;
+  }
   return 0;
 }
 
-extern "C" __attribute__((visibility("default"))) void prt_oiio_free(float* data) { std::free(data); }
+extern "C" __attribute__((visibility("default"))) void prt_oiio_close(prt_oiio_reader* r) { delete r; }
 
 extern "C" __attribute__((visibility("default"))) int prt_oiio_write(const char* path, const char* format_from,
                                                                      int width, int height, const float* rgb,

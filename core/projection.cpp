@@ -5,8 +5,11 @@
 #include <prt/rotation.h>
 #include <prt/sh.h>
 
+#include "image_io.h"
+
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace prt {
@@ -81,85 +84,6 @@ struct FourierTable {
       }
   }
 };
-
-std::vector<glm::dvec3> project_latlong(const EnvMap& map, int bands, Quadrature q) {
-  const int W = map.width, H = map.height, n = bands;
-  const FourierTable F(W, n);
-  const int nt = sh::num_tri(n);
-  // Per row, the integral over theta of every polar factor times sin(theta)
-  // (box), or the point rule's weight times the polar factor (point); then
-  // the phi measure of one pixel: 2pi/W, times sinc(m pi / W) for box (the
-  // exact integral of cos(m phi) over a pixel is 2pi/W sinc(m pi/W) cos(m phi_c)).
-  std::vector<double> row_polar(std::size_t(H) * nt, 0.0);
-  std::vector<double> phi_factor(n, 2.0 * M_PI / W);
-  if (q == Quadrature::Box) {
-    for (int m = 1; m < n; ++m) {
-      const double a = M_PI * m / W;
-      phi_factor[m] *= std::sin(a) / a;
-    }
-    const int nodes = gauss_nodes_for_row(n, M_PI / H);
-    tbb::parallel_for(0, H, [&](int y) {
-      const Rule1D gl = gauss_legendre(nodes, M_PI * y / H, M_PI * (y + 1) / H);
-      std::vector<double> polar(nt);
-      double* out = row_polar.data() + std::size_t(y) * nt;
-      for (int j = 0; j < nodes; ++j) {
-        const double st = std::sin(gl.x[j]);
-        sh::eval_polar<double>(n, std::cos(gl.x[j]), st, polar.data());
-        for (int k = 0; k < nt; ++k) out[k] += gl.w[j] * st * polar[k];
-      }
-    });
-  } else {
-    const std::vector<double> fw = fejer_weights(H);
-    for (int y = 0; y < H; ++y) {
-      const double theta = M_PI * (y + 0.5) / H;
-      double* out = row_polar.data() + std::size_t(y) * nt;
-      sh::eval_polar<double>(n, std::cos(theta), std::sin(theta), out);
-      for (int k = 0; k < nt; ++k) out[k] *= fw[y];
-    }
-  }
-
-  const int chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
-  const int nc = sh::num_coeffs(n);
-  std::vector<glm::dvec3> partial(std::size_t(chunks) * nc, glm::dvec3(0.0));
-  tbb::parallel_for(0, chunks, [&](int chunk) {
-    std::vector<double> planar(std::size_t(W) * 3), A(std::size_t(n) * 3), B(std::size_t(n) * 3);
-    glm::dvec3* acc = partial.data() + std::size_t(chunk) * nc;
-    const int y1 = std::min(H, (chunk + 1) * kRowsPerChunk);
-    for (int y = chunk * kRowsPerChunk; y < y1; ++y) {
-      const float* row = map.rgb.data() + std::size_t(y) * W * 3;
-      for (int x = 0; x < W; ++x)
-        for (int ch = 0; ch < 3; ++ch) planar[std::size_t(ch) * W + x] = row[3 * x + ch];
-      // Fourier sums along the row: A_m = sum L cos(m phi), B_m = sum L sin(m phi).
-      for (int m = 0; m < n; ++m) {
-        const double* cm = F.c.data() + std::size_t(m) * W;
-        const double* sm = F.s.data() + std::size_t(m) * W;
-        for (int ch = 0; ch < 3; ++ch) {
-          const double* L = planar.data() + std::size_t(ch) * W;
-          A[m * 3 + ch] = dot(L, cm, W);
-          B[m * 3 + ch] = dot(L, sm, W);
-        }
-      }
-      const double* polar = row_polar.data() + std::size_t(y) * nt;
-      for (int l = 0; l < n; ++l) {
-        const int k0 = sh::index(l, 0);
-        for (int m = 0; m <= l; ++m) {
-          const double p = phi_factor[m] * polar[sh::tri_index(l, m)];
-          const glm::dvec3 a(A[m * 3], A[m * 3 + 1], A[m * 3 + 2]);
-          acc[k0 + m] += p * a;
-          if (m > 0) acc[k0 - m] += p * glm::dvec3(B[m * 3], B[m * 3 + 1], B[m * 3 + 2]);
-        }
-      }
-    }
-  });
-  std::vector<glm::dvec3> local(nc, glm::dvec3(0.0));
-  for (int chunk = 0; chunk < chunks; ++chunk)
-    for (int k = 0; k < nc; ++k) local[k] += partial[std::size_t(chunk) * nc + k];
-
-  // local coefficients describe g(u) = L(P^T u); L = g rotated by P^T.
-  std::vector<glm::dvec3> world(nc);
-  sh::Rotation(n, glm::transpose(world_to_local())).apply(local, world);
-  return world;
-}
 
 // Rotates coefficients about the z axis by alpha in place (O(bands^2)): for
 // g(d) = f(Rz(alpha)^T d), c'_m = c_m cos(m a) - c_-m sin(m a) and
@@ -279,6 +203,138 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
 
 }  // namespace
 
+// ---- lat-long: the row kernel ---------------------------------------------------
+
+struct LatLongProjector::Impl {
+  int W, H, n, nt, nc;
+  Quadrature q;
+  FourierTable F;
+  // The phi measure of one pixel: 2pi/W, times sinc(m pi / W) for box (the
+  // exact integral of cos(m phi) over a pixel is 2pi/W sinc(m pi/W) cos(m phi_c)).
+  std::vector<double> phi_factor;
+  int gauss_nodes = 0;        // box: Gauss-Legendre nodes per row
+  std::vector<double> fejer;  // point: Fejer weights of the H rows
+  // Sums in the map's frame: of the completed chunks, in chunk order, and of
+  // the chunk the last block ended in (when it ended inside one).
+  std::vector<glm::dvec3> total, open;
+  int next = 0;
+
+  Impl(int width, int height, int bands, Quadrature quad)
+      : W(width), H(height), n(bands), nt(sh::num_tri(bands)), nc(sh::num_coeffs(bands)), q(quad), F(width, bands),
+        phi_factor(bands, 2.0 * M_PI / width), total(nc, glm::dvec3(0.0)), open(nc, glm::dvec3(0.0)) {
+    if (q == Quadrature::Box) {
+      for (int m = 1; m < n; ++m) {
+        const double a = M_PI * m / W;
+        phi_factor[m] *= std::sin(a) / a;
+      }
+      gauss_nodes = gauss_nodes_for_row(n, M_PI / H);
+    } else {
+      fejer = fejer_weights(H);
+    }
+  }
+
+  // Row y's polar weights: the integral over the row's theta range of every
+  // polar factor times sin(theta) (box), or the point rule's weight times
+  // the polar factor at the row's centre (point).
+  void row_polar(int y, double* out, double* scratch) const {
+    if (q == Quadrature::Box) {
+      const Rule1D gl = gauss_legendre(gauss_nodes, M_PI * y / H, M_PI * (y + 1) / H);
+      std::fill(out, out + nt, 0.0);
+      for (int j = 0; j < gauss_nodes; ++j) {
+        const double st = std::sin(gl.x[j]);
+        sh::eval_polar<double>(n, std::cos(gl.x[j]), st, scratch);
+        for (int k = 0; k < nt; ++k) out[k] += gl.w[j] * st * scratch[k];
+      }
+    } else {
+      const double theta = M_PI * (y + 0.5) / H;
+      sh::eval_polar<double>(n, std::cos(theta), std::sin(theta), out);
+      for (int k = 0; k < nt; ++k) out[k] *= fejer[y];
+    }
+  }
+
+  // Per-task buffers of add_row.
+  struct Scratch {
+    std::vector<double> planar, A, B, polar, polar_scratch;
+    explicit Scratch(const Impl& p)
+        : planar(std::size_t(p.W) * 3), A(std::size_t(p.n) * 3), B(std::size_t(p.n) * 3), polar(p.nt),
+          polar_scratch(p.nt) {}
+  };
+  // Adds row y (W RGB pixels) to acc: Fourier sums along the row, times the
+  // row's polar weights.
+  void add_row(int y, const float* row, glm::dvec3* acc, Scratch& s) const {
+    for (int x = 0; x < W; ++x)
+      for (int ch = 0; ch < 3; ++ch) s.planar[std::size_t(ch) * W + x] = row[3 * x + ch];
+    // A_m = sum L cos(m phi), B_m = sum L sin(m phi).
+    for (int m = 0; m < n; ++m) {
+      const double* cm = F.c.data() + std::size_t(m) * W;
+      const double* sm = F.s.data() + std::size_t(m) * W;
+      for (int ch = 0; ch < 3; ++ch) {
+        const double* L = s.planar.data() + std::size_t(ch) * W;
+        s.A[m * 3 + ch] = dot(L, cm, W);
+        s.B[m * 3 + ch] = dot(L, sm, W);
+      }
+    }
+    row_polar(y, s.polar.data(), s.polar_scratch.data());
+    for (int l = 0; l < n; ++l) {
+      const int k0 = sh::index(l, 0);
+      for (int m = 0; m <= l; ++m) {
+        const double p = phi_factor[m] * s.polar[sh::tri_index(l, m)];
+        const glm::dvec3 a(s.A[m * 3], s.A[m * 3 + 1], s.A[m * 3 + 2]);
+        acc[k0 + m] += p * a;
+        if (m > 0) acc[k0 - m] += p * glm::dvec3(s.B[m * 3], s.B[m * 3 + 1], s.B[m * 3 + 2]);
+      }
+    }
+  }
+};
+
+LatLongProjector::LatLongProjector(int width, int height, int bands, Quadrature q) {
+  sh::check_bands(bands, "--bands");
+  PRT_CHECK(width > 0 && height > 0);
+  impl_ = std::make_unique<Impl>(width, height, bands, q);
+}
+
+LatLongProjector::~LatLongProjector() = default;
+
+int LatLongProjector::rows_done() const { return impl_->next; }
+
+void LatLongProjector::add_rows(int y0, int rows, const float* rgb) {
+  Impl& p = *impl_;
+  PRT_CHECK_OP(y0, ==, p.next);
+  PRT_CHECK(rows >= 0 && rows <= p.H - y0);
+  if (rows == 0) return;
+  const int y1 = y0 + rows, nc = p.nc;
+  // One partial sum per 8-row chunk the block touches, summed in parallel;
+  // the first continues the open chunk's sum (row by row, as if unbroken).
+  const int c0 = y0 / kRowsPerChunk, c1 = (y1 + kRowsPerChunk - 1) / kRowsPerChunk;
+  std::vector<glm::dvec3> partial(std::size_t(c1 - c0) * nc, glm::dvec3(0.0));
+  if (y0 % kRowsPerChunk != 0) std::copy(p.open.begin(), p.open.end(), partial.begin());
+  tbb::parallel_for(c0, c1, [&](int chunk) {
+    Impl::Scratch s(p);
+    glm::dvec3* acc = partial.data() + std::size_t(chunk - c0) * nc;
+    const int r1 = std::min(y1, (chunk + 1) * kRowsPerChunk);
+    for (int y = std::max(y0, chunk * kRowsPerChunk); y < r1; ++y)
+      p.add_row(y, rgb + std::size_t(y - y0) * p.W * 3, acc, s);
+  });
+  // Completed chunks join the total in order; an unfinished last one stays open.
+  for (int chunk = c0; chunk < c1; ++chunk) {
+    const glm::dvec3* acc = partial.data() + std::size_t(chunk - c0) * nc;
+    if (std::min(p.H, (chunk + 1) * kRowsPerChunk) <= y1)
+      for (int k = 0; k < nc; ++k) p.total[k] += acc[k];
+    else
+      std::copy(acc, acc + nc, p.open.begin());
+  }
+  p.next = y1;
+}
+
+std::vector<glm::dvec3> LatLongProjector::finish() const {
+  const Impl& p = *impl_;
+  PRT_CHECK_OP(p.next, ==, p.H);
+  // The sums describe g(u) = L(P^T u) in the map's frame; L = g rotated by P^T.
+  std::vector<glm::dvec3> world(p.nc);
+  sh::Rotation(p.n, glm::transpose(world_to_local())).apply(p.total, world);
+  return world;
+}
+
 std::vector<glm::dvec3> project(const EnvMap& map, int bands, Quadrature q) {
   sh::check_bands(bands, "--bands");
   require_finite(map);
@@ -287,7 +343,59 @@ std::vector<glm::dvec3> project(const EnvMap& map, int bands, Quadrature q) {
       throw Error(map.source + ": the point quadrature is for lat-long maps; cube maps use box");
     return project_cube(map, bands);
   }
-  return project_latlong(map, bands, q);
+  LatLongProjector p(map.width, map.height, bands, q);
+  p.add_rows(0, map.height, map.rgb.data());
+  return p.finish();
+}
+
+namespace {
+// Pixels per block when a lat-long file is streamed: 32 MiB of RGB float
+// rows, in whole multiples of 32 rows (the largest scanline block of EXR's
+// compressors, so blocks split none), at least 32.
+constexpr std::size_t kStreamBlockBytes = std::size_t(32) << 20;
+constexpr int kStreamRowMultiple = 32;
+}  // namespace
+
+FileProjection project_file(const std::string& path, int bands, Quadrature q, Mapping mapping, int block_rows) {
+  sh::check_bands(bands, "--bands");
+  PRT_CHECK(block_rows >= 0);
+  FileProjection out;
+  {
+    detail::RowReader reader(path);
+    const int W = reader.width(), H = reader.height();
+    if (mapping_of_shape(path, W, H, mapping) == Mapping::LatLong) {
+      if (!reader.streams()) out.note = reader.note();
+      const std::size_t row_bytes = std::size_t(W) * 3 * sizeof(float);
+      const std::size_t automatic = std::max<std::size_t>(
+          kStreamRowMultiple, kStreamBlockBytes / row_bytes / kStreamRowMultiple * kStreamRowMultiple);
+      const int rows = int(std::min<std::size_t>(H, block_rows > 0 ? std::size_t(block_rows) : automatic));
+      std::vector<float> block(std::size_t(rows) * W * 3);
+      LatLongProjector projector(W, H, bands, q);
+      StatsAccumulator stats;
+      for (int y0 = 0; y0 < H; y0 += rows) {
+        const int n = std::min(rows, H - y0);
+        reader.read(y0, n, block.data());
+        stats.add(block.data(), std::size_t(n) * W);
+        projector.add_rows(y0, n, block.data());
+      }
+      EnvMap& m = out.map;
+      m.layout = Mapping::LatLong;
+      m.width = W;
+      m.height = H;
+      m.source = path;
+      m.source_layout = std::string(mapping_name(Mapping::LatLong));
+      m.source_channels = reader.channels();
+      m.stats = stats.result();
+      require_finite(m);
+      out.coeffs = projector.finish();
+      out.streamed = out.note.empty();
+      out.block_rows = rows;
+      return out;
+    }
+  }  // a cross: closes the reader before reading the file whole
+  out.map = load_envmap(path, mapping);
+  out.coeffs = project(out.map, bands, q);
+  return out;
 }
 
 glm::dvec3 evaluate(std::span<const glm::dvec3> coeffs, const glm::dvec3& d) {

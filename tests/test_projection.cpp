@@ -1,4 +1,5 @@
 // Projection of lat-long and cube maps, reconstruction, determinism.
+#include "test_files.h"
 #include "test_util.h"
 
 #include <prt/error.h>
@@ -6,6 +7,9 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+
+#include <limits>
+#include <string>
 
 namespace prt {
 namespace {
@@ -150,6 +154,106 @@ TEST(Projection, BitIdenticalForAnyThreadCount) {
   cube_two = project(cube, 9);
   EXPECT_EQ(one, two);
   EXPECT_EQ(cube_one, cube_two);
+}
+
+// ---- streamed projection (LatLongProjector, project_file) ----------------------
+
+// Rows fed in blocks of any size, with any thread count, give project()'s
+// coefficients bit for bit: the 8-row chunks and their order are fixed.
+TEST(StreamedProjection, AnyBlockingIsBitIdentical) {
+  const int W = 300, H = 150;  // H not a multiple of the 8-row chunk
+  const EnvMap m = test::latlong_of(W, H, band_limited(test::random_coefficients(5, 21)));
+  for (Quadrature q : {Quadrature::Box, Quadrature::Point}) {
+    const std::vector<glm::dvec3> whole = project(m, 7, q);
+    for (int block : {1, 3, 8, 13, 64, H}) {
+      for (int threads : {1, 0}) {
+        std::unique_ptr<tbb::global_control> limit;
+        if (threads)
+          limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+        LatLongProjector p(W, H, 7, q);
+        for (int y0 = 0; y0 < H; y0 += block) {
+          EXPECT_EQ(p.rows_done(), y0);
+          p.add_rows(y0, std::min(block, H - y0), m.rgb.data() + std::size_t(y0) * W * 3);
+        }
+        EXPECT_EQ(p.finish(), whole) << quadrature_name(q) << ", blocks of " << block << ", threads " << threads;
+      }
+    }
+  }
+}
+
+TEST(StreamedProjection, RowsOutOfOrderAreABug) {
+  LatLongProjector p(16, 8, 3);
+  const std::vector<float> rows(16 * 4 * 3, 1.0f);
+  EXPECT_THROW(p.add_rows(4, 4, rows.data()), InternalError);
+  p.add_rows(0, 4, rows.data());
+  EXPECT_THROW(p.add_rows(4, 5, rows.data()), InternalError);  // past the last row
+  EXPECT_THROW(p.finish(), InternalError);                     // rows 4..7 missing
+  EXPECT_THROW(LatLongProjector(16, 8, 0), Error);
+}
+
+// A file streamed in blocks (through OpenEXR, and through the OpenImageIO
+// plugin for HDR and 8-bit sRGB PNG) gives load_envmap + project()'s
+// coefficients, stats and description, bit for bit.
+TEST(StreamedProjection, FilesGiveTheInMemoryAnswer) {
+  test::TempDir dir;
+  const int W = 96, H = 48;
+  EnvMap m = test::latlong_of(W, H, band_limited(test::random_coefficients(4, 22)));
+  for (float& v : m.rgb) v = 0.5f + 0.25f * v;  // within [0, 1] for the PNG
+  for (const char* name : {"map.exr", "map.hdr", "map.png"}) {
+    const std::string path = dir.file(name);
+    write_image(path, W, H, m.rgb);
+    const EnvMap loaded = load_envmap(path);
+    for (int block : {0, 5, 8}) {  // 0: automatic (the whole of this small map)
+      const FileProjection f = project_file(path, 6, Quadrature::Box, Mapping::Auto, block);
+      EXPECT_TRUE(f.streamed) << name << " " << f.note;
+      EXPECT_EQ(f.block_rows, block ? block : H);
+      EXPECT_TRUE(f.map.rgb.empty());
+      EXPECT_EQ(f.coeffs, project(loaded, 6)) << name << ", blocks of " << block;
+      EXPECT_EQ(describe(f.map), describe(loaded)) << name;
+      EXPECT_EQ(f.map.stats.mean, loaded.stats.mean) << name;
+      EXPECT_EQ(f.map.stats.negative, loaded.stats.negative) << name;
+    }
+  }
+}
+
+// Errors are the in-memory path's, word for word: a non-finite pixel (found
+// in the block that holds it, reported once the file is read), a shape that
+// fits no mapping, a missing file, bad bands. Cross layouts are read whole.
+TEST(StreamedProjection, FileErrorsMatchTheInMemoryPath) {
+  test::TempDir dir;
+  auto message = [](auto f) {
+    try {
+      f();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::vector<float> rgb(std::size_t(64) * 32 * 3, 1.0f);
+  rgb[(std::size_t(29) * 64 + 12) * 3 + 1] = std::numeric_limits<float>::quiet_NaN();  // x 12, y 29: the 4th block of 8
+  const std::string nan = dir.file("nan.exr");
+  write_image(nan, 64, 32, rgb);
+  const std::string want = message([&] { require_finite(load_envmap(nan)); });
+  EXPECT_NE(want.find("x 12, y 29"), std::string::npos) << want;
+  EXPECT_EQ(message([&] { project_file(nan, 3, Quadrature::Box, Mapping::Auto, 8); }), want);
+
+  const std::string odd = dir.file("odd.exr");
+  write_image(odd, 100, 37, std::vector<float>(std::size_t(100) * 37 * 3, 1.0f));
+  for (Mapping mapping : {Mapping::Auto, Mapping::LatLong, Mapping::HCross, Mapping::Faces})
+    EXPECT_EQ(message([&] { project_file(odd, 3, Quadrature::Box, mapping); }),
+              message([&] { load_envmap(odd, mapping); }));
+  const std::string missing = dir.file("missing.exr");
+  EXPECT_EQ(message([&] { project_file(missing, 3); }), missing + ": no such file");
+  EXPECT_NE(message([&] { project_file(nan, 0); }).find("--bands"), std::string::npos);
+
+  const std::string cross = dir.file("cross.exr");  // 4:3: read whole, cut into faces
+  std::vector<float> hc(std::size_t(16) * 12 * 3);
+  for (std::size_t i = 0; i < hc.size(); ++i) hc[i] = float(i % 7);
+  write_image(cross, 16, 12, hc);
+  const FileProjection f = project_file(cross, 3);
+  EXPECT_FALSE(f.streamed);
+  EXPECT_TRUE(f.map.is_cube());
+  EXPECT_EQ(f.coeffs, project(load_envmap(cross), 3));
 }
 
 TEST(Projection, RejectsBadInput) {

@@ -27,6 +27,7 @@
 
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -103,6 +104,37 @@ EnvMap make_latlong(int width, int height, std::vector<float> rgb, std::string s
 EnvMap make_cube(int size, std::vector<float> rgb, std::string source = "<memory>");
 
 MapStats compute_stats(const float* rgb, std::size_t pixels);
+
+// compute_stats over pixels fed in order in pieces of any size (a map read in
+// blocks of rows): result() is bit-identical to compute_stats of the whole.
+// The sum behind the mean runs in double over fixed runs of 65536 pixels
+// (counted from the first pixel, whatever the pieces), in parallel, and the
+// runs are added in order.
+class StatsAccumulator {
+ public:
+  void add(const float* rgb, std::size_t pixels);
+  MapStats result() const;
+
+ private:
+  struct Run {
+    double sum = 0.0;
+    double min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
+    std::size_t finite = 0, negative = 0, nonfinite = 0;
+    long first_nonfinite = -1;
+    void add(const float* rgb, std::size_t first, std::size_t count);  // pixels first .. first + count - 1
+    void merge(const Run& later);
+  };
+  Run done_;  // the completed runs, in order
+  Run open_;  // the run the last piece ended in
+  std::size_t pixels_ = 0;
+};
+
+// The mapping of a width x height image file: `requested`, or for Auto the
+// one its shape says (2:1 lat-long, 4:3 horizontal cross, 3:4 vertical
+// cross). Throws prt::Error naming `path` and its size when the shape fits
+// none of them or not the requested one, and for Faces (six files, not one).
+// The check load_envmap makes before it keeps any pixel.
+Mapping mapping_of_shape(const std::string& path, int width, int height, Mapping requested);
 
 // Throws prt::Error naming the map when it has NaN or Inf pixels.
 void require_finite(const EnvMap& map);

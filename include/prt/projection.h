@@ -9,7 +9,9 @@
 
 #include <glm/vec3.hpp>
 
+#include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -46,6 +48,56 @@ std::string_view quadrature_name(Quadrature q);
 // circle, so in the row's own frame it needs only Fourier sums, and one fixed
 // rotation plus a turn about z brings it to the face (see projection.cpp).
 std::vector<glm::dvec3> project(const EnvMap& map, int bands, Quadrature q = Quadrature::Box);
+
+// The lat-long projection of project(), fed rows top to bottom in blocks of
+// any size, so the map need not be in memory: project() itself feeds the
+// whole map as one block. Rows are summed in fixed 8-row chunks whose partial
+// sums are added in order whatever the blocks, so the coefficients are
+// bit-identical to project()'s for any blocking and thread count.
+// Memory: O(W bands) for the phi tables, plus O(bands^2) per 8-row chunk of
+// the block being added. Pixels are not checked here: feed finite ones
+// (require_finite, StatsAccumulator).
+class LatLongProjector {
+ public:
+  // Throws prt::Error for bands outside [1, sh::kMaxBands]; width and height
+  // must be positive.
+  LatLongProjector(int width, int height, int bands, Quadrature q = Quadrature::Box);
+  ~LatLongProjector();
+  LatLongProjector(const LatLongProjector&) = delete;
+  LatLongProjector& operator=(const LatLongProjector&) = delete;
+
+  // Adds rows [y0, y0 + rows): rows * width RGB float pixels, row-major,
+  // row 0 at the top. y0 must be rows_done() (rows come in order).
+  void add_rows(int y0, int rows, const float* rgb);
+  int rows_done() const;
+  // The coefficients, once all rows are in.
+  std::vector<glm::dvec3> finish() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// A map file projected by project_file.
+struct FileProjection {
+  std::vector<glm::dvec3> coeffs;
+  EnvMap map;  // what load_envmap gives, but with rgb empty when streamed
+  bool streamed = false;
+  int block_rows = 0;  // rows per block read, when streamed
+  std::string note;    // why a lat-long map was not streamed ("" otherwise)
+};
+
+// load_envmap(path, mapping) then project(map, bands, q), with the same
+// coefficients, stats and errors, but a lat-long map is read and projected
+// block by block, `block_rows` rows at a time (0: about 32 MiB of pixels, in
+// multiples of 32 rows), so peak memory is O(W block_rows + W bands +
+// bands^2), not O(W H). Non-finite
+// pixels are counted as the blocks go by, and refused (require_finite) once
+// the file is read. Cross layouts are read whole (the faces are cut from
+// the image); so are tiled non-EXR files (OpenImageIO reads them whole; note
+// says so). Throws prt::Error naming the file.
+FileProjection project_file(const std::string& path, int bands, Quadrature q = Quadrature::Box,
+                            Mapping mapping = Mapping::Auto, int block_rows = 0);
 
 // Reconstruction: sum_k c_k Y_k(d) for a unit direction d.
 glm::dvec3 evaluate(std::span<const glm::dvec3> coeffs, const glm::dvec3& d);

@@ -12,6 +12,9 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include <sys/resource.h>
+
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -28,8 +31,15 @@ struct ProjectArgs {
   std::string mapping = "auto", quadrature = "box";
   int bands = 3;
   double window_width = 0;
-  bool irradiance = false, quiet = false;
+  bool irradiance = false, quiet = false, no_stream = false, peak_memory = false;
 };
+
+// Peak resident memory of this process so far, in MiB (Linux: ru_maxrss is in KiB).
+double peak_rss_mib() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return double(ru.ru_maxrss) / 1024.0;
+}
 
 EnvMap load(const ProjectArgs& a) {
   const Mapping m = parse_mapping(a.mapping);
@@ -113,15 +123,34 @@ int run_project(const ProjectArgs& a) {
       throw Error("--reconstruct-size: expected WxH with 1 <= W, H <= 65536, got '" + a.reconstruct_size + "'");
   }
 
-  const EnvMap map = load(a);
+  // A single file is streamed (project_file): a lat-long map is read and
+  // projected a block of rows at a time, with the same coefficients as the
+  // whole map in memory, so it is the default at every size.
+  FileProjection fp;
+  if (a.no_stream || parse_mapping(a.mapping) == Mapping::Faces) {
+    fp.map = load(a);
+    fp.coeffs = project(fp.map, a.bands, quad);
+  } else {
+    fp = project_file(a.env, a.bands, quad, parse_mapping(a.mapping));
+  }
+  const EnvMap& map = fp.map;
+  std::vector<glm::dvec3>& c = fp.coeffs;
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(map));
-  std::vector<glm::dvec3> c = project(map, a.bands, quad);
+  const std::string reading = fp.streamed ? fmt::format("streamed in {}-row blocks", fp.block_rows)
+                                          : "read whole" + (fp.note.empty() ? std::string() : " (" + fp.note + ")");
 
   nlohmann::ordered_json extra;
   extra["source"] = map.source;
   extra["mapping"] = map.source_layout;
   extra["quantity"] = a.irradiance ? "irradiance (clamped-cosine convolution, no 1/pi)" : "radiance";
   extra["quadrature"] = std::string(quadrature_name(quad));
+  // Last in the JSON, measured once everything else is done.
+  const auto report_memory = [&](nlohmann::ordered_json& j) {
+    if (!a.peak_memory) return;
+    const double mib = peak_rss_mib();
+    j["memory"] = {{"peak_rss_mib", std::round(mib * 10) / 10}, {"read", reading}};
+    fmt::print(stderr, "peak memory {:.1f} MiB (getrusage ru_maxrss); map {}\n", mib, reading);
+  };
 
   if (a.irradiance) sh::scale_bands(std::span<glm::dvec3>(c), sh::clamped_cosine_factors(a.bands));
   const double width = a.window_width > 0 ? a.window_width : a.bands;
@@ -158,14 +187,6 @@ int run_project(const ProjectArgs& a) {
   const std::string header = fmt::format("prt project {} --bands {}: {}{}", map.source, a.bands,
                                          a.irradiance ? "irradiance" : "radiance",
                                          a.rotate.empty() ? "" : ", rotated " + a.rotate);
-  std::string text;
-  if (a.format == "json")
-    text = format_json(c, a.bands, extra);
-  else if (a.format == "text")
-    text = format_text(c, a.bands, header);
-  else
-    text = format_code(c, a.bands, header, a.format == "glsl");
-
   if (!a.reconstruct.empty()) {
     if (rw == 0) {
       rw = map.is_cube() ? 4 * map.width : map.width;
@@ -173,6 +194,14 @@ int run_project(const ProjectArgs& a) {
     }
     write_image(a.reconstruct, rw, rh, reconstruct_latlong(c, rw, rh));
   }
+  report_memory(extra);
+  std::string text;
+  if (a.format == "json")
+    text = format_json(c, a.bands, extra);
+  else if (a.format == "text")
+    text = format_text(c, a.bands, header);
+  else
+    text = format_code(c, a.bands, header, a.format == "glsl");
   if (a.output.empty() || a.output == "-") {
     fmt::print("{}", text);
   } else {
@@ -197,7 +226,8 @@ Run add_project(CLI::App& app) {
   s->footer(
       "Maps: any format OpenImageIO reads (EXR, HDR, PNG, ...). Lat-long (2:1), horizontal (4:3) or vertical (3:4)\n"
       "cross, or six faces (--mapping faces, ENV = 'sky_{face}.exr' with px nx py ny pz nz, or six comma-separated\n"
-      "files +X,-X,+Y,-Y,+Z,-Z). A one-line summary of the map goes to stderr.\n"
+      "files +X,-X,+Y,-Y,+Z,-Z). A one-line summary of the map goes to stderr. A lat-long file is read and\n"
+      "projected ~32 MiB of rows at a time, so a 16384x8192 map needs ~0.1 GiB, not 1.5 (docs/HARD_CASES.md).\n"
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
   s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
   s->add_option("-b,--bands", a->bands, "Number of bands n: degrees 0..n-1, n*n coefficients")
@@ -219,6 +249,10 @@ Run add_project(CLI::App& app) {
   s->add_option("--reconstruct", a->reconstruct, "Also write the n-band reconstruction as a lat-long image");
   s->add_option("--reconstruct-size", a->reconstruct_size, "WxH of the reconstruction (default: the map's size)");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
+  s->add_flag("--no-stream", a->no_stream,
+              "Read the whole map before projecting (same coefficients; lat-long maps are otherwise streamed)");
+  s->add_flag("--peak-memory", a->peak_memory,
+              "Report the peak resident memory on stderr and as \"memory\" in the JSON");
   return [a] { return run_project(*a); };
 }
 
