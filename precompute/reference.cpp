@@ -290,10 +290,19 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o) {
 
 }  // namespace
 
-ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
-                                 const Progress& progress) {
+namespace {
+
+// The reference at vertices[i] (every vertex when `vertices` is null) into
+// entry i of the result.
+ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
+                                      const std::vector<std::uint32_t>* vertices, const Progress& progress) {
   validate(mesh, map, options);
-  const std::size_t n = mesh.vertex_count();
+  if (vertices)
+    for (std::uint32_t v : *vertices)
+      if (v >= mesh.vertex_count())
+        throw Error("reference: vertex " + std::to_string(v) + " is out of range (the mesh has " +
+                    std::to_string(mesh.vertex_count()) + ")");
+  const std::size_t n = vertices ? vertices->size() : mesh.vertex_count();
   ReferenceResult result;
   result.radiance.assign(n, glm::vec3(0.0f));
   result.std_error.assign(n, glm::vec3(0.0f));
@@ -324,8 +333,9 @@ ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const Refe
   const int N = options.samples;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4), [&](const tbb::blocked_range<std::size_t>& r) {
     detail::enable_ftz_daz();
-    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) {
       if (cancelled.load(std::memory_order_relaxed)) return;
+      const std::size_t v = vertices ? (*vertices)[i] : i;
       glm::dvec3 nv(mesh.normals[v]);
       if (!(glm::dot(nv, nv) > 0)) continue;  // no normal: radiance 0
       nv = glm::normalize(nv);
@@ -334,14 +344,14 @@ ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const Refe
       Rng rng(options.seed, v);
       // Welford's running mean and sum of squared deviations, per channel.
       glm::dvec3 mean(0.0), m2(0.0);
-      for (int i = 0; i < N; ++i) {
+      for (int s = 0; s < N; ++s) {
         const glm::dvec3 x = rho_pi * integ.irradiance(rng, p, nv, 0);
         const glm::dvec3 d = x - mean;
-        mean += d / double(i + 1);
+        mean += d / double(s + 1);
         m2 += d * (x - mean);
       }
-      result.radiance[v] = glm::vec3(mean);
-      result.std_error[v] = glm::vec3(glm::sqrt(glm::max(m2, 0.0) / (double(N - 1) * N)));
+      result.radiance[i] = glm::vec3(mean);
+      result.std_error[i] = glm::vec3(glm::sqrt(glm::max(m2, 0.0) / (double(N - 1) * N)));
     }
     const std::size_t now = done.fetch_add(r.size()) + r.size();
     if (progress && report.try_lock()) {
@@ -352,6 +362,18 @@ ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const Refe
   if (cancelled) throw Error("cancelled");
   if (progress && !progress(n, n, "reference")) throw Error("cancelled");
   return result;
+}
+
+}  // namespace
+
+ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
+                                 const Progress& progress) {
+  return render_reference_impl(mesh, map, options, nullptr, progress);
+}
+
+ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
+                                 const std::vector<std::uint32_t>& vertices, const Progress& progress) {
+  return render_reference_impl(mesh, map, options, &vertices, progress);
 }
 
 }  // namespace prt

@@ -85,4 +85,11 @@ struct ReferenceResult {
 ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
                                  const Progress& progress = {});
 
+// The same at the listed vertices only: entry i of the result is vertex
+// vertices[i], bit-identical to that vertex's entry in the full reference
+// (each vertex has its own generator). Throws prt::Error for an index out of
+// range.
+ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
+                                 const std::vector<std::uint32_t>& vertices, const Progress& progress = {});
+
 }  // namespace prt

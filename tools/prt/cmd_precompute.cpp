@@ -6,11 +6,15 @@
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/tuning.h>
 #include <prt/wavelet_transfer.h>
 
 #include <fmt/core.h>
 
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <unistd.h>
 #include <vector>
 
 namespace prt::cli {
@@ -25,7 +29,71 @@ struct PrecomputeArgs {
   bool quiet = false;
   // Options given on the command line (to refuse those the basis does not take).
   std::vector<const CLI::Option*> sh_only, wavelet_only;
+  // --target-error: the error target, its map and reference cache; bands,
+  // samples and bounces given on the command line are the most it may choose.
+  double target_error = 0;
+  std::string env, cache;
+  const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr;
 };
+
+// The reference cache of --target-error: --cache, else $XDG_CACHE_HOME/prt,
+// else ~/.cache/prt, else none.
+std::string target_cache(const std::string& given) {
+  if (!given.empty()) return given;
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return (std::filesystem::path(x) / "prt").string();
+  if (const char* h = std::getenv("HOME"); h && *h) return (std::filesystem::path(h) / ".cache" / "prt").string();
+  return {};
+}
+
+// The map --target-error is measured under.
+EnvMap target_map(const PrecomputeArgs& a) {
+  if (a.env.empty()) throw Error("--target-error needs --env MAP: the error depends on the lighting");
+  EnvMap map = load_envmap(a.env);
+  require_finite(map);
+  if (map.is_cube()) throw Error(a.env + ": --target-error needs a lat-long (2:1) map, not " + map.source_layout);
+  return map;
+}
+
+TargetLog target_log(const PrecomputeArgs& a) {
+  return [quiet = a.quiet](const std::string& line) {
+    if (!quiet) fmt::print(stderr, "{}{}\n", isatty(2) ? "\r\033[K" : "", line);
+  };
+}
+
+// --basis wavelet --target-error: the fewest terms K meeting the target.
+std::optional<WaveletTransfer> run_wavelet_target(PrecomputeArgs& a, const Mesh& mesh) {
+  const EnvMap map = target_map(a);
+  TargetOptions t;
+  t.target = a.target_error;
+  t.transfer.albedo = a.wopt.albedo;
+  t.transfer.vertex_colors = a.wopt.vertex_colors;
+  t.transfer.offset = a.wopt.offset;
+  const std::optional<WaveletTargetResult> r = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+    return choose_wavelet_terms(mesh, map, t, a.wopt, target_cache(a.cache), progress, target_log(a));
+  });
+  if (!r) return std::nullopt;
+  if (!a.quiet) fmt::print(stderr, "target error {}: {}\n", a.target_error, r->explanation);
+  return std::move(r->transfer);
+}
+
+// --target-error: the cheapest settings meeting the target (prt/tuning.h).
+std::optional<Transfer> run_target(PrecomputeArgs& a, const Mesh& mesh) {
+  if (a.opt.bounce_tolerance > 0) throw Error("--bounce-tolerance and --target-error both choose the bounces; give one");
+  const EnvMap map = target_map(a);
+  TargetOptions t;
+  t.target = a.target_error;
+  t.transfer = a.opt;
+  // Unless given: the largest the search may choose.
+  if (a.bands_opt->count() == 0) t.transfer.bands = 16;
+  if (a.samples_opt->count() == 0) t.transfer.samples = 4096;
+  if (a.bounces_opt->count() == 0) t.transfer.bounces = 3;
+  const std::optional<TargetResult> r = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+    return choose_transfer(mesh, map, t, target_cache(a.cache), progress, target_log(a));
+  });
+  if (!r) return std::nullopt;
+  if (!a.quiet) fmt::print(stderr, "target error {}: {}\n", a.target_error, r->explanation);
+  return std::move(r->transfer);
+}
 
 // --basis wavelet: the all-frequency shadowed transfer (prt/wavelet_transfer.h).
 int run_wavelet(PrecomputeArgs& a) {
@@ -50,8 +118,11 @@ int run_wavelet(PrecomputeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
-  const std::optional<WaveletTransfer> computed = run_with_progress(
-      a.quiet, "precompute", [&](const Progress& progress) { return compute_wavelet_transfer(mesh, a.wopt, progress); });
+  const std::optional<WaveletTransfer> computed =
+      a.target_error > 0 ? run_wavelet_target(a, mesh)
+                         : run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+                             return compute_wavelet_transfer(mesh, a.wopt, progress);
+                           });
   if (!computed) return 130;
   const WaveletTransfer& t = *computed;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -79,8 +150,11 @@ int run_precompute(PrecomputeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
-  const std::optional<Transfer> computed = run_with_progress(
-      a.quiet, "precompute", [&](const Progress& progress) { return compute_transfer(mesh, a.opt, progress); });
+  const std::optional<Transfer> computed =
+      a.target_error > 0 ? run_target(a, mesh)
+                         : run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+                             return compute_transfer(mesh, a.opt, progress);
+                           });
   if (!computed) return 130;
   const Transfer& t = *computed;
   write_transfer(a.output, t);
@@ -89,6 +163,9 @@ int run_precompute(PrecomputeArgs& a) {
     fmt::print(stderr, "wrote {}: {} {} bands, {} channel{}, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
                a.output, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s", t.vertices,
                4 * t.stride(), secs);
+    fmt::print(stderr, "analytic (unoccluded, no stored transfer): {} of {} vertices ({:.1f}%), {} bytes saved\n",
+               t.analytic_vertices(), t.vertices,
+               t.vertices ? 100.0 * double(t.analytic_vertices()) / double(t.vertices) : 0.0, analytic_bytes_saved(t));
     if (t.mode == TransferMode::Interreflected && a.opt.bounces > 0) {
       std::string energies;
       for (double e : t.bounce_energy) energies += fmt::format(" {:.3g}", t.direct_energy > 0 ? e / t.direct_energy : 0.0);
@@ -117,7 +194,10 @@ Run add_precompute(CLI::App& app) {
       "reflect all light). A grey albedo stores one channel. Ctrl-C stops without writing anything.\n"
       "--basis wavelet (shadowed only; --cube-res, default 32, and --threshold, default 1e-2) stores sparse int16\n"
       "Haar coefficients per vertex for all-frequency shadows; relight it with prt relight --terms K.\n"
+      "--target-error e --env MAP chooses bands, bounces and samples: the cheapest that reach relative RMS e\n"
+      "against a Monte Carlo reference under MAP (docs/REPORT.md).\n"
       "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
+      "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
@@ -127,15 +207,22 @@ Run add_precompute(CLI::App& app) {
       ->check(CLI::IsMember({"sh", "wavelet"}))
       ->capture_default_str();
   s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")->capture_default_str();
-  a->sh_only.push_back(s->add_option("-b,--bands", a->opt.bands, "SH bands n (n*n coefficients)")
-                           ->check(int_range(1, 16))
-                           ->capture_default_str());
-  a->sh_only.push_back(s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
-                           ->check(int_range(1, 1 << 24))
-                           ->capture_default_str());
-  a->sh_only.push_back(s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode), at most")
-                           ->check(int_range(0, 64))
-                           ->capture_default_str());
+  a->bands_opt = s->add_option("-b,--bands", a->opt.bands, "SH bands n (n*n coefficients)")
+                     ->check(int_range(1, 16))
+                     ->capture_default_str();
+  a->samples_opt = s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
+                       ->check(int_range(1, 1 << 24))
+                       ->capture_default_str();
+  a->bounces_opt = s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode), at most")
+                       ->check(int_range(0, 64))
+                       ->capture_default_str();
+  a->sh_only.insert(a->sh_only.end(), {a->bands_opt, a->samples_opt, a->bounces_opt});
+  s->add_option("--target-error", a->target_error,
+                "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
+                "against the reference under --env is at most this (--bands/--samples/--bounces: the most to try)")
+      ->check(CLI::Range(0.0, 1.0));
+  s->add_option("--env", a->env, "Lat-long map the --target-error is measured under");
+  s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)");
   a->sh_only.push_back(
       s->add_option("--bounce-tolerance", a->opt.bounce_tolerance,
                     "Stop adding bounces once one adds less than this fraction of the direct part's energy (0: never)")

@@ -21,6 +21,7 @@ Run add_reference(CLI::App& app);  // cmd_reference.cpp
 Run add_compare(CLI::App& app);    // cmd_compare.cpp
 Run add_info(CLI::App& app);       // cmd_info.cpp
 Run add_view(CLI::App& app);       // cmd_view.cpp
+Run add_report(CLI::App& app);     // cmd_report.cpp
 
 // "a,b,c" -> three doubles; throws prt::Error naming `option` otherwise.
 void parse_triple(const std::string& text, const char* option, double out[3]);

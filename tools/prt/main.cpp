@@ -94,6 +94,7 @@ int main(int argc, char** argv) {
   add(prt::cli::add_info);
   add(prt::cli::add_verify);
   add(prt::cli::add_view);
+  add(prt::cli::add_report);
 
   // CLI11 reports an unknown command as "a subcommand is required"; name it.
   if (argc > 1 && argv[1][0] != '-') {

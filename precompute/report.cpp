@@ -1,0 +1,298 @@
+// The settings grid of `prt report` (prt/report.h).
+#include <prt/report.h>
+
+#include <prt/error.h>
+#include <prt/projection.h>
+#include <prt/rotation.h>
+#include <prt/transfer_io.h>
+#include <prt/wavelet.h>
+#include <prt/wavelet_transfer.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+namespace prt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// A rotation with no special axis, for timing (a rotation about an axis or
+// by 180 degrees has structured zeros the timing should not depend on).
+glm::dmat3 timing_rotation() { return sh::rotation_from_euler(37.0, 23.0, 11.0); }
+
+// Median frame time in ms of `frame`, run for about `seconds` (at least 3 frames).
+template <class F>
+double median_ms(double seconds, F&& frame) {
+  std::vector<double> ms;
+  const auto start = Clock::now();
+  while (ms.size() < 3 || (seconds_since(start) < seconds && ms.size() < 1000)) {
+    const auto t0 = Clock::now();
+    frame();
+    ms.push_back(seconds_since(t0) * 1e3);
+  }
+  std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+  return ms[ms.size() / 2];
+}
+
+std::string fmt_g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
+void validate(const ReportOptions& o) {
+  const auto in = [](const std::vector<int>& v, int lo, int hi, const char* what) {
+    for (int x : v)
+      if (x < lo || x > hi)
+        throw Error(std::string("report: ") + what + " " + std::to_string(x) + " is outside [" + std::to_string(lo) +
+                    ", " + std::to_string(hi) + "]");
+  };
+  in(o.bands, 1, 16, "bands");
+  in({o.samples_bands, o.bounce_bands}, 1, 16, "bands");
+  in(o.samples, 1, 1 << 24, "samples");
+  in({o.bands_samples, o.bounce_samples}, 1, 1 << 24, "samples");
+  in(o.bounces, 0, 64, "bounces");
+  in(o.terms, 1, std::numeric_limits<int>::max(), "wavelet terms");
+  if (o.bands.empty() && o.samples.empty() && o.bounces.empty() && o.terms.empty())
+    throw Error("report: every sweep is empty");
+  if (o.truth_vertices == 0 || o.truth_samples < 2 || o.truth_bounce_samples < 2)
+    throw Error("report: the reference needs at least one vertex and two samples");
+}
+
+struct Runner {
+  const Mesh& mesh;
+  const EnvMap& map;
+  const ReportOptions& o;
+  const std::string& cache_dir;
+  const Progress& progress;
+  const ReportLog& log;
+  Report& report;
+  std::vector<glm::dvec3> light;  // the map's SH projection, 16 bands (all sweeps use a prefix)
+
+  void say(const std::string& line) const {
+    if (log) log(line);
+  }
+
+  ErrorSet truth(TransferMode mode, int samples, int bounces, std::size_t vertices, const char* what) {
+    ErrorSetOptions e;
+    e.reference.mode = mode;
+    e.reference.bounces = bounces;
+    e.reference.albedo = o.albedo;
+    e.reference.samples = samples;
+    e.vertices = vertices;
+    std::string note;
+    ErrorSet set = cached_error_set(mesh, map, e, cache_dir, progress, &note);
+    if (!note.empty()) report.notes.push_back(std::string(what) + ": " + note);
+    say(std::string(what) + ": " + std::to_string(set.vertices.size()) + " vertices x " + std::to_string(samples) +
+        " samples, noise floor " + fmt_g(set.noise_floor()) +
+        (set.seconds > 0 ? ", " + fmt_g(set.seconds) + " s" : std::string(", from the cache")));
+    return set;
+  }
+
+  Transfer precompute(TransferMode mode, int bands, int samples, int bounces, double& seconds) const {
+    TransferOptions t;
+    t.mode = mode;
+    t.bands = bands;
+    t.samples = samples;
+    t.bounces = bounces;
+    t.albedo = o.albedo;
+    t.threads = o.threads;
+    const auto t0 = Clock::now();
+    Transfer transfer = compute_transfer(mesh, t, progress);
+    seconds = seconds_since(t0);
+    return transfer;
+  }
+
+  ReportRow sh_row(const char* sweep, const Transfer& t, double seconds, const ErrorSet& truth,
+                   std::vector<glm::vec3>* radiance_out = nullptr) const {
+    ReportRow row;
+    row.sweep = sweep;
+    row.basis = "sh";
+    row.bands = t.bands;
+    row.samples = t.samples;
+    row.bounces = t.mode == TransferMode::Interreflected ? t.bounces : 0;
+    row.precompute_s = seconds;
+    row.bytes = transfer_file_size(t);
+    const std::vector<glm::dvec3> l(light.begin(), light.begin() + std::size_t(t.bands) * t.bands);
+    row.relight_ms = time_sh_relight(t, mesh, l, o.relight_seconds);
+    std::vector<glm::vec3> rgb = relight(t, mesh, l);
+    row.error = measure_accuracy(truth, rgb);
+    say(std::string(sweep) + ": " + std::to_string(t.bands) + " bands, " + std::to_string(t.samples) + " samples, " +
+        std::to_string(row.bounces) + " bounces: precompute " + fmt_g(seconds) + " s, relight " +
+        fmt_g(row.relight_ms) + " ms, error " + fmt_g(row.error.rel_rms));
+    if (radiance_out) *radiance_out = std::move(rgb);
+    return row;
+  }
+
+  void picture(const std::string& label, std::vector<glm::vec3> rgb) {
+    if (o.image_samples > 0) report.pictures.push_back({label, std::move(rgb)});
+  }
+
+  void bands_sweep() {
+    for (std::size_t i = 0; i < o.bands.size(); ++i) {
+      double s = 0;
+      const Transfer t = precompute(TransferMode::Shadowed, o.bands[i], o.bands_samples, 0, s);
+      std::vector<glm::vec3> rgb;
+      report.rows.push_back(sh_row("bands", t, s, report.shadowed_truth, &rgb));
+      if (i == 0 || i + 1 == o.bands.size()) picture("SH " + std::to_string(t.bands) + " bands", std::move(rgb));
+    }
+  }
+
+  void samples_sweep() {
+    std::vector<std::vector<glm::vec3>> at_truth;  // each row's result at the error vertices
+    const std::size_t first = report.rows.size();
+    for (int samples : o.samples) {
+      double s = 0;
+      const Transfer t = precompute(TransferMode::Shadowed, o.samples_bands, samples, 0, s);
+      std::vector<glm::vec3> rgb;
+      report.rows.push_back(sh_row("samples", t, s, report.shadowed_truth, &rgb));
+      std::vector<glm::vec3> sub;
+      for (std::uint32_t v : report.shadowed_truth.vertices) sub.push_back(rgb[v]);
+      at_truth.push_back(std::move(sub));
+    }
+    // The sampling error alone: against the largest sample count.
+    const auto best = std::max_element(o.samples.begin(), o.samples.end()) - o.samples.begin();
+    const std::vector<glm::vec3>& b = at_truth[std::size_t(best)];
+    double ref = 0;
+    for (const glm::vec3& x : b) ref += glm::dot(glm::dvec3(x), glm::dvec3(x));
+    for (std::size_t i = 0; i < at_truth.size(); ++i) {
+      if (std::ptrdiff_t(i) == best || ref == 0) continue;
+      double err = 0;
+      for (std::size_t k = 0; k < b.size(); ++k) {
+        const glm::dvec3 d = glm::dvec3(at_truth[i][k]) - glm::dvec3(b[k]);
+        err += glm::dot(d, d);
+      }
+      report.rows[first + i].self_rms = std::sqrt(err / ref);
+    }
+  }
+
+  void bounces_sweep() {
+    for (int k : o.bounces) {
+      double s = 0;
+      const Transfer t = k == 0 ? precompute(TransferMode::Shadowed, o.bounce_bands, o.bounce_samples, 0, s)
+                                : precompute(TransferMode::Interreflected, o.bounce_bands, o.bounce_samples, k, s);
+      report.rows.push_back(sh_row("bounces", t, s, report.interreflected_truth));
+    }
+  }
+
+  void terms_sweep() {
+    WaveletOptions w;
+    w.cube_res = o.cube_res;
+    w.threshold = o.threshold;
+    w.albedo = o.albedo;
+    w.threads = o.threads;
+    const auto t0 = Clock::now();
+    const WaveletTransfer t = compute_wavelet_transfer(mesh, w, progress);
+    const double seconds = seconds_since(t0);
+    wavelet::FrameLighting lighting(map, o.cube_res);
+    const int mid = o.terms[o.terms.size() / 2];
+    for (int K : o.terms) {
+      ReportRow row;
+      row.sweep = "terms";
+      row.basis = "wavelet";
+      row.terms = K;
+      row.cube_res = o.cube_res;
+      row.precompute_s = seconds;
+      row.bytes = t.bytes();
+      std::vector<glm::vec3> rgb;
+      const glm::dmat3 R = timing_rotation();
+      row.relight_ms = median_ms(o.relight_seconds, [&] {
+        lighting.update(R, K, wavelet::Selection::AreaWeighted);
+        wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
+      });
+      lighting.update(glm::dmat3(1.0), K, wavelet::Selection::AreaWeighted);
+      wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
+      row.error = measure_accuracy(report.shadowed_truth, rgb);
+      say("terms: wavelet K=" + std::to_string(K) + ": precompute " + fmt_g(seconds) + " s, relight " +
+          fmt_g(row.relight_ms) + " ms, error " + fmt_g(row.error.rel_rms));
+      report.rows.push_back(row);
+      if (K == mid) picture("wavelet K=" + std::to_string(K), std::move(rgb));
+    }
+  }
+};
+
+}  // namespace
+
+ReportOptions report_options(bool quick) {
+  ReportOptions o;
+  if (!quick) {
+    o.bands = {3, 4, 5, 6, 8, 10, 12, 14, 16};
+    o.samples = {64, 128, 256, 512, 1024, 2048, 4096};
+    o.bounces = {0, 1, 2, 3};
+    o.terms = {10, 30, 100, 300, 1000};
+    return o;
+  }
+  o.bands = {3, 5, 8, 12, 16};
+  o.bands_samples = 256;
+  o.samples = {64, 256, 1024};
+  o.samples_bands = 8;
+  o.bounces = {0, 1, 2};
+  o.bounce_bands = 4;
+  o.bounce_samples = 256;
+  o.terms = {10, 100, 1000};
+  o.cube_res = 16;
+  o.truth_vertices = 512;
+  o.truth_samples = 16384;
+  o.truth_bounce_samples = 8192;
+  o.truth_bounces = 4;
+  o.image_samples = 128;
+  o.relight_seconds = 0.05;
+  return o;
+}
+
+double time_sh_relight(const Transfer& t, const Mesh& mesh, const std::vector<glm::dvec3>& light, double seconds) {
+  sh::Rotation rot(t.bands, glm::dmat3(1.0));
+  std::vector<glm::dvec3> rotated(light.size());
+  const glm::dmat3 R = timing_rotation();
+  std::vector<glm::vec3> rgb;
+  return median_ms(seconds, [&] {
+    rot.set(R);
+    rot.apply(light, rotated);
+    rgb = relight(t, mesh, rotated);
+  });
+}
+
+Report run_report(const Mesh& mesh, const EnvMap& map, const ReportOptions& options, const std::string& cache_dir,
+                  const Progress& progress, const ReportLog& log) {
+  validate(options);
+  if (map.is_cube()) throw Error("report: the reference needs a lat-long map (" + map.source + " is a cube map)");
+  Report report;
+  Runner run{mesh, map, options, cache_dir, progress, log, report, project(map, 16)};
+  const bool shadowed = !options.bands.empty() || !options.samples.empty() || !options.terms.empty();
+  if (shadowed)
+    report.shadowed_truth = run.truth(TransferMode::Shadowed, options.truth_samples, 0, options.truth_vertices,
+                                      "shadowed reference");
+  if (!options.bounces.empty())
+    report.interreflected_truth = run.truth(TransferMode::Interreflected, options.truth_bounce_samples,
+                                            options.truth_bounces, options.truth_vertices, "interreflected reference");
+  if (options.image_samples > 0 && shadowed) {
+    // At least image_samples; more when the error set's budget of vertex
+    // samples covers them (a small mesh gets the error set's precision).
+    const double budget = double(options.truth_vertices) * options.truth_samples / double(mesh.vertex_count());
+    report.image_samples = int(std::max<double>(options.image_samples, std::min<double>(options.truth_samples, budget)));
+    const ErrorSet all = run.truth(TransferMode::Shadowed, report.image_samples, 0, mesh.vertex_count(),
+                                   "reference for pictures");
+    report.image_reference.assign(mesh.vertex_count(), glm::vec3(0.0f));
+    report.image_std_error.assign(mesh.vertex_count(), glm::vec3(0.0f));
+    for (std::size_t i = 0; i < all.vertices.size(); ++i) {
+      report.image_reference[all.vertices[i]] = all.radiance[i];
+      report.image_std_error[all.vertices[i]] = all.std_error[i];
+    }
+    report.image_reference_noise = all.noise_floor();
+  }
+  if (!options.bands.empty()) run.bands_sweep();
+  if (!options.samples.empty()) run.samples_sweep();
+  if (!options.bounces.empty()) run.bounces_sweep();
+  if (!options.terms.empty()) run.terms_sweep();
+  return report;
+}
+
+}  // namespace prt

@@ -1,0 +1,353 @@
+// Error sets (prt/accuracy.h), the report grid (prt/report.h) and the
+// error-target search (prt/tuning.h); `prt report` and
+// `prt precompute --target-error` on the command line.
+#include <prt/accuracy.h>
+#include <prt/error.h>
+#include <prt/projection.h>
+#include <prt/report.h>
+#include <prt/transfer.h>
+#include <prt/tuning.h>
+
+#include "test_files.h"
+#include "test_meshes.h"
+#include "test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+
+#include <cstring>
+#include <random>
+
+namespace prt {
+namespace {
+
+using test::TempDir;
+
+// A dim sky with a small bright sun: the case where errors are large.
+EnvMap sky_with_sun() {
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(0.4, 0.8, 0.3));
+  return test::latlong_of(64, 32, [&](const glm::dvec3& d) {
+    const double s = glm::dot(d, sun) > 0.97 ? 20.0 : 0.0;
+    return glm::dvec3(0.3 + s, 0.35 + s, 0.45 + 0.8 * s) * (d.y > 0 ? 1.0 : 0.3);
+  });
+}
+
+// A ball over a floor (~430 vertices): contact shadows and interreflection,
+// small enough for the searches to run in a few seconds.
+Mesh small_scene() {
+  const Mesh floor = test::quad(16), ball = test::sphere(8, 16, 0.35f);
+  std::vector<glm::vec3> p = floor.positions;
+  std::vector<glm::uvec3> t = floor.triangles;
+  const unsigned base = unsigned(p.size());
+  for (const glm::vec3& x : ball.positions) p.push_back(x + glm::vec3(0.1f, 0.45f, 0.0f));
+  for (const glm::uvec3& x : ball.triangles) t.push_back(x + glm::uvec3(base));
+  return make_mesh(std::move(p), std::move(t), {}, {}, {}, "ball over floor");
+}
+
+TEST(ErrorSet, ChoosesDistinctUsableVerticesDeterministically) {
+  Mesh m = test::sphere(8, 16);
+  m.normals[3] = glm::vec3(0.0f);  // unusable: no normal
+  const auto a = choose_error_vertices(m, 20, 7), b = choose_error_vertices(m, 20, 7);
+  EXPECT_EQ(a, b);
+  ASSERT_EQ(a.size(), 20u);
+  EXPECT_TRUE(std::is_sorted(a.begin(), a.end()));
+  EXPECT_EQ(std::adjacent_find(a.begin(), a.end()), a.end());
+  EXPECT_EQ(std::find(a.begin(), a.end(), 3u), a.end());
+  EXPECT_NE(a, choose_error_vertices(m, 20, 8));
+  // More than there are: every usable vertex.
+  EXPECT_EQ(choose_error_vertices(m, 1u << 20, 7).size(), m.vertex_count() - 1);
+}
+
+TEST(ErrorSet, SubsetReferenceIsTheFullReferenceAtThoseVertices) {
+  const Mesh m = test::open_box(0.7f);
+  const EnvMap map = sky_with_sun();
+  ErrorSetOptions o;
+  o.reference.samples = 64;
+  o.vertices = 4;
+  const ErrorSet set = make_error_set(m, map, o);
+  const ReferenceResult full = render_reference(m, map, o.reference);
+  ASSERT_EQ(set.vertices.size(), 4u);
+  for (std::size_t i = 0; i < set.vertices.size(); ++i) {
+    EXPECT_EQ(set.radiance[i], full.radiance[set.vertices[i]]) << i;  // bit-identical: per-vertex generators
+    EXPECT_EQ(set.std_error[i], full.std_error[set.vertices[i]]) << i;
+  }
+}
+
+// The noise correction: a reference with known Gaussian noise, a result with
+// a known 5% error. The raw error mixes both; the corrected one finds 5%.
+TEST(Accuracy, SubtractsTheReferenceNoise) {
+  const std::size_t n = 20000;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> gauss;
+  ErrorSet set;
+  set.mesh_vertices = n;
+  std::vector<glm::vec3> truth(n), result(n);
+  const double se = 0.05;  // per channel, on values ~1: noise floor ~0.05
+  for (std::size_t v = 0; v < n; ++v) {
+    truth[v] = glm::vec3(float(1 + 0.5 * std::sin(0.01 * double(v))));
+    result[v] = truth[v] * 1.05f;
+    set.vertices.push_back(std::uint32_t(v));
+    set.radiance.push_back(truth[v] + glm::vec3(float(se * gauss(rng)), float(se * gauss(rng)), float(se * gauss(rng))));
+    set.std_error.push_back(glm::vec3(float(se)));
+  }
+  const Accuracy a = measure_accuracy(set, result);
+  // Tolerance: the corrected estimate's own spread over 20000 vertices x 3
+  // channels is about 0.05 x sqrt(2 / 60000) / 0.05 relative ~ 1e-3 absolute; 3e-3 is 3 sigma.
+  EXPECT_NEAR(a.rel_rms, 0.05, 3e-3);
+  EXPECT_GT(a.rel_rms_raw, 0.065);  // sqrt(0.05^2 + 0.05^2 x ~0.93) ~ 0.07
+  EXPECT_NEAR(a.noise_floor, set.noise_floor(), 1e-12);
+  EXPECT_THROW(measure_accuracy(set, std::vector<glm::vec3>(n - 1)), Error);
+}
+
+TEST(ErrorSetCache, RoundTripsAndRefusesDamage) {
+  TempDir dir;
+  const Mesh m = test::open_box(0.7f);
+  const EnvMap map = sky_with_sun();
+  ErrorSetOptions o;
+  o.reference.samples = 32;
+  std::string note;
+  const ErrorSet a = cached_error_set(m, map, o, dir.file("cache"), {}, &note);
+  EXPECT_NE(note.find("cached in"), std::string::npos) << note;
+  note.clear();
+  const ErrorSet b = cached_error_set(m, map, o, dir.file("cache"), {}, &note);
+  EXPECT_NE(note.find("read from"), std::string::npos) << note;
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.radiance, b.radiance);
+  EXPECT_EQ(a.std_error, b.std_error);
+
+  // Other inputs, other key.
+  ErrorSetOptions o2 = o;
+  o2.reference.samples = 33;
+  const std::string key = error_set_key(m, map, o), key2 = error_set_key(m, map, o2);
+  EXPECT_NE(key, key2);
+  const std::string path = dir.file("cache") + "/" + key + ".prte";
+  EXPECT_THROW(read_error_set(path, key2), Error);
+  EXPECT_FALSE(read_error_set(dir.file("missing.prte"), key).has_value());
+  // Truncated, and a bad value: refused with the file named; the cache re-renders.
+  const std::string bytes = test::read_file(path);
+  test::write_file(path, bytes.substr(0, bytes.size() - 5));
+  try {
+    read_error_set(path, key);
+    ADD_FAILURE() << "truncated cache accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  note.clear();
+  const ErrorSet c = cached_error_set(m, map, o, dir.file("cache"), {}, &note);
+  EXPECT_NE(note.find("rendering it again"), std::string::npos) << note;
+  EXPECT_EQ(c.radiance, a.radiance);
+  std::string nan_bytes = test::read_file(path);
+  const float nan = NAN;
+  std::memcpy(nan_bytes.data() + 40 + a.vertices.size() * 4, &nan, 4);
+  test::write_file(path, nan_bytes);
+  EXPECT_THROW(read_error_set(path, key), Error);
+}
+
+// A small grid: every sweep's rows, errors that fall with bands on a smooth
+// map, the sampling-alone error where it belongs, pictures.
+TEST(Report, SmallGrid) {
+  const Mesh m = small_scene();
+  const EnvMap map = sky_with_sun();
+  ReportOptions o;
+  o.bands = {2, 6};
+  o.bands_samples = 128;
+  o.samples = {32, 128};
+  o.samples_bands = 4;
+  o.bounces = {0, 1};
+  o.bounce_bands = 3;
+  o.bounce_samples = 64;
+  o.terms = {10, 200};
+  o.cube_res = 8;
+  o.truth_vertices = 200;
+  o.truth_samples = 1024;
+  o.truth_bounce_samples = 256;
+  o.truth_bounces = 2;
+  o.image_samples = 4;
+  o.relight_seconds = 0;
+  std::vector<std::string> lines;
+  const Report r = run_report(m, map, o, "", {}, [&](const std::string& l) { lines.push_back(l); });
+  ASSERT_EQ(r.rows.size(), 8u);
+  EXPECT_GE(lines.size(), r.rows.size());
+  const auto row = [&](const char* sweep, int i) {
+    std::vector<const ReportRow*> v;
+    for (const ReportRow& x : r.rows)
+      if (x.sweep == sweep) v.push_back(&x);
+    return *v.at(std::size_t(i));
+  };
+  EXPECT_LT(row("bands", 1).error.rel_rms, 0.7 * row("bands", 0).error.rel_rms);
+  EXPECT_LT(row("bounces", 1).error.rel_rms, row("bounces", 0).error.rel_rms);  // bounces add missing light
+  EXPECT_LT(row("terms", 1).error.rel_rms, row("terms", 0).error.rel_rms);
+  EXPECT_GT(row("samples", 0).self_rms, 0);
+  EXPECT_TRUE(std::isnan(row("samples", 1).self_rms));  // the comparison itself
+  EXPECT_TRUE(std::isnan(row("bands", 0).self_rms));
+  for (const ReportRow& x : r.rows) {
+    EXPECT_GT(x.precompute_s, 0) << x.sweep;
+    EXPECT_GT(x.relight_ms, 0) << x.sweep;
+    EXPECT_GT(x.bytes, 0u) << x.sweep;
+    EXPECT_GE(x.error.rel_rms_raw, x.error.rel_rms) << x.sweep;
+  }
+  EXPECT_EQ(r.interreflected_truth.vertices.size(), 200u);
+  ASSERT_EQ(r.pictures.size(), 3u);  // fewest bands, most bands, the middle K
+  EXPECT_EQ(r.image_reference.size(), m.vertex_count());
+  EXPECT_EQ(r.image_samples, int(200.0 * 1024 / double(m.vertex_count())));  // more than the 4 asked for
+  EXPECT_THROW(run_report(m, map, ReportOptions{}, ""), Error);  // every sweep empty
+}
+
+// --target-error meets its target against a reference it never saw (another
+// seed, four times the samples, every vertex).
+TEST(Tuning, MeetsTheTargetOnAnIndependentReference) {
+  const Mesh m = small_scene();
+  const EnvMap map = sky_with_sun();
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    TargetOptions o;
+    o.target = 0.06;
+    o.transfer.mode = mode;
+    o.transfer.albedo = glm::vec3(0.8f);
+    o.transfer.bands = 10;
+    o.transfer.samples = 2048;
+    o.transfer.bounces = 2;
+    o.truth_bounces = 4;
+    o.truth_vertices = 256;
+    const TargetResult r = choose_transfer(m, map, o, "");
+    SCOPED_TRACE(r.explanation);
+    EXPECT_LE(r.error.rel_rms, kTargetMargin * o.target);
+    EXPECT_EQ(r.transfer.bands, r.bands);
+    EXPECT_EQ(r.transfer.samples, r.samples);
+    // Cheapest along each axis: one band fewer misses the target at the probe.
+    if (r.bands > 1) {
+      bool found = false;
+      for (const TargetTrial& t : r.trials)
+        if (t.step == "bands" && t.bands == r.bands - 1) {
+          found = true;
+          EXPECT_FALSE(t.meets);
+        }
+      EXPECT_TRUE(found);
+    }
+    ErrorSetOptions check;
+    check.reference.mode = mode;
+    check.reference.bounces = o.truth_bounces;
+    check.reference.albedo = glm::vec3(0.8f);
+    check.reference.samples = 4 * r.truth_samples;
+    check.reference.seed = 99;
+    check.vertices = m.vertex_count();
+    check.seed = 99;
+    const ErrorSet independent = make_error_set(m, map, check);
+    const Accuracy a = measure_accuracy(independent, relight(r.transfer, m, project(map, r.bands)));
+    EXPECT_LE(a.rel_rms, o.target) << transfer_mode_name(mode) << " noise " << a.noise_floor;
+  }
+}
+
+// The wavelet basis: the fewest terms K that meet the target; K / 2 or the
+// previous rung of the ladder does not.
+TEST(Tuning, WaveletTermsMeetTheTarget) {
+  const Mesh m = small_scene();
+  const EnvMap map = sky_with_sun();
+  TargetOptions o;
+  o.target = 0.03;
+  o.transfer.albedo = glm::vec3(0.8f);
+  o.truth_vertices = 256;
+  WaveletOptions w;
+  w.cube_res = 16;
+  w.albedo = glm::vec3(0.8f);
+  const WaveletTargetResult r = choose_wavelet_terms(m, map, o, w, "");
+  SCOPED_TRACE(r.explanation);
+  ASSERT_GE(r.trials.size(), 2u);  // the sun needs more than 10 terms
+  EXPECT_TRUE(r.trials.back().meets);
+  EXPECT_EQ(r.trials.back().terms, r.terms);
+  EXPECT_FALSE(r.trials[r.trials.size() - 2].meets);
+  EXPECT_LE(r.error.rel_rms, kTargetMargin * o.target);
+  w.cube_res = 2;  // 24 texels cannot hold the sun: refused, even with every term
+  try {
+    choose_wavelet_terms(m, map, o, w, "");
+    ADD_FAILURE() << "an unreachable target was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not reached"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Tuning, RefusesWhatItCannotMeet) {
+  const Mesh m = test::open_box(0.7f);
+  const EnvMap map = sky_with_sun();
+  TargetOptions o;
+  o.transfer.bands = 2;
+  o.transfer.samples = 64;
+  o.target = 0.01;
+  o.truth_vertices = 9;
+  o.max_truth_samples = 1 << 20;
+  try {
+    choose_transfer(m, map, o, "");
+    ADD_FAILURE() << "an unreachable target was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("not reached"), std::string::npos) << e.what();
+  }
+  o.max_truth_samples = 2048;  // too few for a 1% reference under a sun
+  EXPECT_THROW(choose_transfer(m, map, o, ""), Error);
+  o.target = 0;
+  EXPECT_THROW(choose_transfer(m, map, o, ""), Error);
+  o.target = 0.5;
+  o.transfer.mode = TransferMode::Unshadowed;
+  EXPECT_THROW(choose_transfer(m, map, o, ""), Error);
+}
+
+// ---- command line -----------------------------------------------------------
+
+TEST(ReportCli, WritesTablesCsvAndPlots) {
+  TempDir dir;
+  const std::string out = dir.file("rep"), mesh = dir.file("scene.off");
+  test::write_off(mesh, small_scene());
+  const auto r = test::run_prt(dir, {"report", mesh,
+                                     std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--quick", "-o", out, "-q"});
+  ASSERT_EQ(r.code, 0) << test::describe_run(r);
+  const std::string md = test::read_file(out + "/report.md"), csv = test::read_file(out + "/report.csv");
+  for (const char* s : {"## SH bands", "## Samples per vertex", "## Interreflection bounces", "## Wavelet terms K",
+                        "Fitted slope"})
+    EXPECT_NE(md.find(s), std::string::npos) << s;
+  // Header plus the quick grid's rows: 5 bands, 3 samples, 3 bounces, 3 K.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 5 + 3 + 3 + 3) << csv;
+  EXPECT_NE(csv.find("pareto"), std::string::npos);
+  if (md.find("plots.py failed") == std::string::npos && md.find("plots skipped") == std::string::npos) {
+    for (const char* png : {"error_vs_time.png", "error_vs_settings.png", "error_vs_samples.png"})
+      EXPECT_GT(std::filesystem::file_size(out + "/" + png), 10000u) << png;
+  } else {
+    GTEST_SKIP() << "matplotlib unavailable; tables checked, plots not";
+  }
+  // A second run reads the cached references.
+  const auto again = test::run_prt(dir, {"report", mesh,
+                                         std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--quick", "-o", out,
+                                         "-q", "--no-plots"});
+  ASSERT_EQ(again.code, 0) << test::describe_run(again);
+  EXPECT_NE(test::read_file(out + "/report.md").find("reference read from"), std::string::npos);
+}
+
+TEST(ReportCli, BadInputIsRefusedByName) {
+  TempDir dir;
+  const std::string mesh = std::string(PRT_SOURCE_DIR) + "/models/scene.obj";
+  auto r = test::run_prt(dir, {"report", mesh, dir.file("nope.exr"), "-o", dir.file("rep")});
+  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_NE(r.err.find("nope.exr"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("rep") + "/report.md"));
+  r = test::run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--target-error", "0.05"});
+  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_NE(r.err.find("--env"), std::string::npos) << r.err;
+  r = test::run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--target-error", "0.05", "--env",
+                          std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--bounce-tolerance", "0.1"});
+  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("t.prt")));
+}
+
+TEST(PrecomputeCli, TargetErrorWritesTheChosenTransfer) {
+  TempDir dir;
+  test::write_off(dir.file("scene.off"), small_scene());
+  const auto r = test::run_prt(dir, {"precompute", dir.file("scene.off"), "-o",
+                                     dir.file("t.prt"), "--target-error", "0.08", "--env",
+                                     std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--cache",
+                                     dir.file("cache")});
+  ASSERT_EQ(r.code, 0) << test::describe_run(r);
+  EXPECT_NE(r.err.find("chose "), std::string::npos) << r.err;
+  const auto info = test::run_prt(dir, {"info", dir.file("t.prt")});
+  EXPECT_EQ(info.code, 0) << test::describe_run(info);
+}
+
+}  // namespace
+}  // namespace prt

@@ -1,0 +1,404 @@
+// prt report: speed against error on the user's model and map. The grid is
+// prt::run_report (prt/report.h); this command writes its tables (report.md,
+// report.csv, report.json), renders pictures through prt::Renderer and runs
+// the embedded plotting script (scripts/report_plots.py) for the PNG plots.
+#include "commands.h"
+#include "look.h"
+#include "progress.h"
+
+#include <prt/envmap.h>
+#include <prt/io.h>
+#include <prt/mesh.h>
+#include <prt/render.h>
+#include <prt/report.h>
+
+#include <fmt/core.h>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <numeric>
+#include <unistd.h>
+
+namespace prt::cli {
+
+extern const char* const report_plots_py;  // generated from scripts/report_plots.py
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ReportArgs {
+  std::string mesh, env, out = "prt-report", albedo = "0.8,0.8,0.8", cache;
+  MeshOptions mesh_opt;
+  int threads = 0, image_size = 360;
+  bool quick = false, no_cache = false, no_plots = false, quiet = false;
+};
+
+// Which reference a row is measured against.
+const char* reference_of(const ReportRow& r) { return r.sweep == "bounces" ? "interreflected" : "shadowed"; }
+
+// Rows on the Pareto front of (precompute time, error), per reference: no
+// other row of the same reference is at least as fast and as accurate and
+// strictly better in one.
+std::vector<bool> pareto_front(const std::vector<ReportRow>& rows) {
+  std::vector<bool> front(rows.size(), true);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = 0; j < rows.size() && front[i]; ++j) {
+      if (i == j || std::string_view(reference_of(rows[i])) != reference_of(rows[j])) continue;
+      const ReportRow &a = rows[i], &b = rows[j];
+      const bool no_worse = b.precompute_s <= a.precompute_s && b.error.rel_rms <= a.error.rel_rms;
+      const bool better = b.precompute_s < a.precompute_s || b.error.rel_rms < a.error.rel_rms;
+      if (no_worse && better) front[i] = false;
+    }
+  return front;
+}
+
+// Least-squares line through (log x, log y): y ~ e^intercept x^slope.
+struct Fit {
+  double slope = NAN, intercept = NAN, x0 = 0, x1 = 0;
+  int points = 0;
+};
+Fit fit_loglog(const std::vector<std::pair<double, double>>& pts) {
+  Fit f;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (auto [x, y] : pts) {
+    if (!(x > 0 && y > 0)) continue;
+    const double lx = std::log(x), ly = std::log(y);
+    sx += lx, sy += ly, sxx += lx * lx, sxy += lx * ly;
+    f.x0 = f.points ? std::min(f.x0, x) : x;
+    f.x1 = std::max(f.x1, x);
+    ++f.points;
+  }
+  const double d = f.points * sxx - sx * sx;
+  if (f.points >= 2 && d > 0) {
+    f.slope = (f.points * sxy - sx * sy) / d;
+    f.intercept = (sy - f.slope * sx) / f.points;
+  }
+  return f;
+}
+
+std::string bytes_text(double b) {
+  if (b >= 1 << 20) return fmt::format("{:.1f} MB", b / (1 << 20));
+  if (b >= 1 << 10) return fmt::format("{:.1f} kB", b / (1 << 10));
+  return fmt::format("{:.0f} B", b);
+}
+
+std::string csv_text(const std::vector<ReportRow>& rows, const std::vector<bool>& front, std::size_t vertices) {
+  std::string s =
+      "sweep,basis,reference,bands,samples,bounces,terms,cube_res,precompute_s,relight_ms,bytes,bytes_per_vertex,"
+      "rel_rms,rel_rms_raw,noise_floor,p99_rel,self_rms,pareto\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ReportRow& r = rows[i];
+    s += fmt::format("{},{},{},{},{},{},{},{},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}\n", r.sweep,
+                     r.basis, reference_of(r), r.bands, r.samples, r.bounces, r.terms, r.cube_res, r.precompute_s,
+                     r.relight_ms, r.bytes, double(r.bytes) / double(vertices), r.error.rel_rms,
+                     r.error.rel_rms_raw, r.error.noise_floor, r.error.p99_rel,
+                     std::isnan(r.self_rms) ? std::string("nan") : fmt::format("{:.6g}", r.self_rms),
+                     front[i] ? 1 : 0);
+  }
+  return s;
+}
+
+// The error as the tables show it: flagged when the reference's own noise
+// is comparable (the corrected value is then only an estimate).
+std::string error_text(const Accuracy& e) {
+  const bool unresolved = e.rel_rms < 2 * e.noise_floor;
+  return fmt::format("{:.3g}{}", e.rel_rms, unresolved ? " *" : "");
+}
+
+std::string table(const std::vector<ReportRow>& rows, const std::vector<bool>& front, const std::string& sweep,
+                  std::size_t vertices) {
+  const bool wavelet = sweep == "terms";
+  std::string s = fmt::format("| {} | precompute (s) | relight (ms/frame) | storage | per vertex | rel. RMS | p99 |{}"
+                              " Pareto |\n|---|---:|---:|---:|---:|---:|---:|{}---|\n",
+                              wavelet ? "K" : sweep, sweep == "samples" ? " sampling alone |" : "",
+                              sweep == "samples" ? "---:|" : "");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ReportRow& r = rows[i];
+    if (r.sweep != sweep) continue;
+    const int key = sweep == "bands" ? r.bands : sweep == "samples" ? r.samples : sweep == "bounces" ? r.bounces : r.terms;
+    s += fmt::format("| {} | {:.2f} | {:.2f} | {} | {} | {} | {:.3g} |{} {} |\n", key, r.precompute_s, r.relight_ms,
+                     bytes_text(double(r.bytes)), bytes_text(double(r.bytes) / double(vertices)),
+                     error_text(r.error), r.error.p99_rel,
+                     sweep == "samples" ? (std::isnan(r.self_rms) ? " - |" : fmt::format(" {:.3g} |", r.self_rms))
+                                        : "",
+                     front[i] ? "yes" : "");
+  }
+  return s;
+}
+
+// Per-vertex error |a - ref| / mean |ref| as an image: R = error, G = 1 on
+// the mesh (0 on the background), written as PFM for the plotting script.
+void write_error_pfm(const std::string& path, const Image& img) {
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    f << "PF\n" << img.width << " " << img.height << "\n-1.0\n";
+    for (int y = img.height - 1; y >= 0; --y)  // PFM rows run bottom to top
+      f.write(reinterpret_cast<const char*>(img.rgb.data() + std::size_t(y) * img.width * 3),
+              std::streamsize(sizeof(float) * 3 * img.width));
+    if (!f.flush()) throw Error("cannot write " + tmp);
+  });
+}
+
+// Renders the reference and each picture, and the error heat maps. Returns
+// the JSON entries; throws prt::Error when there is no GL 4.5 context.
+nlohmann::json render_pictures(const Mesh& mesh, const Report& report, const glm::vec3& albedo,
+                               const std::string& out, int size) {
+  fs::create_directories(fs::path(out) / "images");
+  Renderer renderer;
+  renderer.set_mesh(mesh, albedo, false);
+  const Camera camera = default_camera(mesh);
+  // Exposure: the reference's 95th-percentile vertex luminance maps to 0.8 before the tone map.
+  std::vector<float> lum;
+  for (const glm::vec3& c : report.image_reference) lum.push_back(glm::dot(c, glm::vec3(0.2126f, 0.7152f, 0.0722f)));
+  std::nth_element(lum.begin(), lum.begin() + lum.size() * 95 / 100, lum.end());
+  const double p95 = lum.empty() ? 1.0 : std::max(1e-12, double(lum[lum.size() * 95 / 100]));
+  const Display display{std::log2(0.8 / p95), ToneMap::Reinhard};
+  const auto draw = [&](const std::vector<glm::vec3>& colors, const std::string& file, const Display& d) {
+    renderer.set_vertex_colors(colors);
+    renderer.set_shading(Shading::VertexColors);
+    write_frame((fs::path(out) / file).string(), renderer.render(camera, size, size), d);
+  };
+  draw(report.image_reference, "images/reference.png", display);
+  double mean_ref = 0;
+  for (const glm::vec3& c : report.image_reference) mean_ref += glm::length(glm::dvec3(c));
+  mean_ref /= double(std::max<std::size_t>(1, report.image_reference.size()));
+  nlohmann::json pics = nlohmann::json::array();
+  for (std::size_t i = 0; i < report.pictures.size(); ++i) {
+    const ReportPicture& p = report.pictures[i];
+    const std::string stem = fmt::format("images/setting{}", i);
+    draw(p.radiance, stem + ".png", display);
+    std::vector<glm::vec3> err(p.radiance.size());
+    for (std::size_t v = 0; v < err.size(); ++v) {
+      const glm::dvec3 d = glm::dvec3(p.radiance[v]) - glm::dvec3(report.image_reference[v]);
+      err[v] = glm::vec3(float(glm::length(d) / std::max(mean_ref, 1e-30)), 1.0f, 0.0f);
+    }
+    renderer.set_vertex_colors(err);
+    write_error_pfm((fs::path(out) / (stem + "_error.pfm")).string(), renderer.render(camera, size, size));
+    // The picture's error over every vertex, noise-corrected as the tables are.
+    ErrorSet all;
+    all.mesh_vertices = mesh.vertex_count();
+    all.vertices.resize(all.mesh_vertices);
+    std::iota(all.vertices.begin(), all.vertices.end(), 0u);
+    all.radiance = report.image_reference;
+    all.std_error = report.image_std_error;
+    pics.push_back({{"label", p.label},
+                    {"image", stem + ".png"},
+                    {"error", stem + "_error.pfm"},
+                    {"rel_rms", measure_accuracy(all, p.radiance).rel_rms}});
+  }
+  return pics;
+}
+
+// The interpreter for the plotting script: $PRT_PYTHON, else Debian's
+// /usr/bin/python3 (where python3-matplotlib installs), else python3 on PATH.
+std::string python() {
+  if (const char* p = std::getenv("PRT_PYTHON"); p && *p) return p;
+  if (access("/usr/bin/python3", X_OK) == 0) return "/usr/bin/python3";
+  return "python3";
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// Writes plots.py into `out` and runs it; returns an empty string or why it failed.
+std::string run_plots(const std::string& out) {
+  const std::string script = (fs::path(out) / "plots.py").string();
+  write_text_file(script, report_plots_py);
+  const std::string log = (fs::path(out) / "plots.log").string();
+  const std::string cmd = shell_quote(python()) + " " + shell_quote(script) + " " + shell_quote(out) + " > " +
+                          shell_quote(log) + " 2>&1";
+  const int rc = std::system(cmd.c_str());
+  if (rc == 0) {
+    fs::remove(log);
+    return {};
+  }
+  std::ifstream f(log);
+  std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const auto last = text.find_last_of('\n', text.size() > 1 ? text.size() - 2 : 0);
+  return fmt::format("{} failed (see {}): {}", cmd.substr(0, cmd.find(" > ")), log,
+                     last == std::string::npos ? text : text.substr(last + 1));
+}
+
+int run_report_command(ReportArgs& a) {
+  double rgb[3];
+  parse_triple(a.albedo, "--albedo", rgb);
+  for (double c : rgb)
+    if (!(c >= 0 && c <= 1)) throw Error("--albedo: values must be in [0, 1], got '" + a.albedo + "'");
+  ReportOptions opt = report_options(a.quick);
+  opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  opt.threads = a.threads;
+  std::error_code ec;
+  fs::create_directories(a.out, ec);
+  if (ec || !fs::is_directory(a.out)) throw Error("--out: cannot create the directory " + a.out);
+  for_option("--out", [&] { check_writable((fs::path(a.out) / "report.md").string()); });
+  const std::string cache = a.no_cache ? std::string() : a.cache.empty() ? (fs::path(a.out) / "cache").string() : a.cache;
+  std::unique_ptr<tbb::global_control> limit;
+  if (a.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  const EnvMap map = load_envmap(a.env);
+  require_finite(map);
+  if (map.is_cube()) throw Error(a.env + ": prt report needs a lat-long (2:1) map, not " + map.source_layout);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(map));
+  const bool tty = isatty(2);
+  const ReportLog log = [&](const std::string& line) {
+    if (!a.quiet) fmt::print(stderr, "{}{}\n", tty ? "\r\033[K" : "", line);
+  };
+  const std::optional<Report> computed = run_with_progress(
+      a.quiet, "report", [&](const Progress& progress) { return run_report(mesh, map, opt, cache, progress, log); });
+  if (!computed) return 130;
+  const Report& rep = *computed;
+  const std::vector<bool> front = pareto_front(rep.rows);
+  const std::size_t V = mesh.vertex_count();
+
+  // Fits of error against samples: all points against the reference; the
+  // sampling error alone on points with at most 1/4 of the largest count
+  // (where the comparison's own sampling error is at most about half).
+  std::vector<std::pair<double, double>> total, alone;
+  int max_samples = 0;
+  for (const ReportRow& r : rep.rows)
+    if (r.sweep == "samples") max_samples = std::max(max_samples, r.samples);
+  for (const ReportRow& r : rep.rows)
+    if (r.sweep == "samples") {
+      total.emplace_back(r.samples, r.error.rel_rms);
+      if (!std::isnan(r.self_rms) && 4 * r.samples <= max_samples) alone.emplace_back(r.samples, r.self_rms);
+    }
+  const Fit fit = fit_loglog(total), fit_alone = fit_loglog(alone);
+
+  nlohmann::json meta;
+  meta["mesh"] = a.mesh;
+  meta["map"] = a.env;
+  meta["mesh_name"] = fs::path(a.mesh).filename().string();
+  meta["map_name"] = fs::path(a.env).filename().string();
+  meta["vertices"] = V;
+  meta["quick"] = a.quick;
+  meta["shadowed_noise_floor"] = rep.shadowed_truth.vertices.empty() ? 0.0 : rep.shadowed_truth.noise_floor();
+  meta["interreflected_noise_floor"] =
+      rep.interreflected_truth.vertices.empty() ? 0.0 : rep.interreflected_truth.noise_floor();
+  nlohmann::json fits = nlohmann::json::object();
+  if (!std::isnan(fit.slope))
+    fits.update({{"slope", fit.slope}, {"intercept", fit.intercept}, {"slope_range", {fit.x0, fit.x1}}});
+  if (!std::isnan(fit_alone.slope))
+    fits.update({{"self_slope", fit_alone.slope},
+                 {"self_intercept", fit_alone.intercept},
+                 {"self_slope_range", {fit_alone.x0, fit_alone.x1}}});
+  meta["samples_fit"] = fits;
+
+  std::string pictures_note;
+  if (!rep.image_reference.empty()) {
+    try {
+      meta["pictures"] = render_pictures(mesh, rep, opt.albedo, a.out, a.image_size);
+      meta["reference_image"] = "images/reference.png";
+      meta["image_samples"] = rep.image_samples;
+      meta["image_noise"] = rep.image_reference_noise;
+    } catch (const Error& e) {
+      pictures_note = fmt::format("no pictures: {}", e.what());
+    }
+  }
+  write_text_file((fs::path(a.out) / "report.csv").string(), csv_text(rep.rows, front, V));
+  write_text_file((fs::path(a.out) / "report.json").string(), meta.dump(2) + "\n");
+  std::string plots_note = a.no_plots ? "plots skipped (--no-plots)" : run_plots(a.out);
+
+  // report.md
+  std::string md = fmt::format("# prt report: {} under {}\n\n", meta["mesh_name"].get<std::string>(),
+                               meta["map_name"].get<std::string>());
+  md += fmt::format(
+      "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
+      "Monte Carlo reference (`prt reference`: shadowed {} samples per vertex, noise floor {:.3g}",
+      V, a.albedo, a.quick ? "quick" : "full", rep.shadowed_truth.vertices.size(), opt.truth_samples,
+      meta["shadowed_noise_floor"].get<double>());
+  if (!rep.interreflected_truth.vertices.empty())
+    md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
+                      opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
+  md +=
+      "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below twice "
+      "the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex relative "
+      "error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time per frame "
+      "(lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), median. "
+      "Storage: the transfer file.\n\n";
+  md += "![error against precompute time](error_vs_time.png)\n\n";
+  const auto section = [&](const char* sweep, const std::string& title, const std::string& text) {
+    if (std::none_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; })) return;
+    md += "## " + title + "\n\n" + text + "\n\n" + table(rep.rows, front, sweep, V) + "\n";
+  };
+  section("bands", "SH bands", fmt::format("Shadowed, {} samples per vertex.", opt.bands_samples));
+  md += "![error against bands and K](error_vs_settings.png)\n\n";
+  std::string fit_text = fmt::format("Shadowed, {} bands.", opt.samples_bands);
+  if (!std::isnan(fit.slope))
+    fit_text += fmt::format(" Fitted slope of error against samples (log-log): **{:.2f}** against the reference", fit.slope);
+  if (!std::isnan(fit_alone.slope))
+    fit_text += fmt::format(", **{:.2f}** for the sampling error alone (against {} samples, points up to {})",
+                            fit_alone.slope, max_samples, max_samples / 4);
+  fit_text += "; Monte Carlo converges with slope -0.5. \"Sampling alone\" is the error against the sweep's "
+              "largest sample count at the same bands, which the band truncation does not hide.";
+  section("samples", "Samples per vertex", fit_text);
+  md += "![error against samples](error_vs_samples.png)\n\n";
+  section("bounces", "Interreflection bounces",
+          fmt::format("{} bands, {} samples; 0 is the shadowed transfer. Against the interreflected reference.",
+                      opt.bounce_bands, opt.bounce_samples));
+  section("terms", "Wavelet terms K",
+          fmt::format("Haar on a {}x{}x6 cube, threshold {}, area-weighted selection; one precompute.", opt.cube_res,
+                      opt.cube_res, opt.threshold));
+  if (meta.contains("pictures"))
+    md += fmt::format("## Pictures\n\n![reference, settings and error heat maps](images.png)\n\nThe reference here "
+                      "has {} samples at every vertex (noise floor {:.3g}); heat maps show |result - reference| / "
+                      "mean |reference| per vertex.\n\n",
+                      rep.image_samples, rep.image_reference_noise);
+  md += "## Notes\n\n";
+  for (const std::string& n : rep.notes) md += "- " + n + "\n";
+  if (!pictures_note.empty()) md += "- " + pictures_note + "\n";
+  if (!plots_note.empty()) md += "- " + plots_note + "\n";
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  md += fmt::format("- Report made in {:.1f} s by `prt report{} {} {}`.\n", secs, a.quick ? " --quick" : "", a.mesh,
+                    a.env);
+  write_text_file((fs::path(a.out) / "report.md").string(), md);
+  if (!pictures_note.empty()) fmt::print(stderr, "warning: {}\n", pictures_note);
+  if (!plots_note.empty()) fmt::print(stderr, "warning: {}\n", plots_note);
+  if (!a.quiet) fmt::print(stderr, "wrote {}/report.md, report.csv, plots ({:.1f} s)\n", a.out, secs);
+  return 0;
+}
+
+}  // namespace
+
+Run add_report(CLI::App& app) {
+  auto a = std::make_shared<ReportArgs>();
+  CLI::App* s = app.add_subcommand(
+      "report", "Speed against error on a model and map: tables, CSV and plots over bands, samples, bounces and K");
+  s->footer(
+      "Runs the ground truth once (cached in DIR/cache), then precomputes and relights every setting of the grid\n"
+      "(full: bands 3..16, samples 64..4096, bounces 0..3, wavelet K 10..1000; --quick: a smaller grid and\n"
+      "reference) and writes DIR/report.md, report.csv, report.json and PNG plots (python3-matplotlib).\n"
+      "See docs/REPORT.md. Ctrl-C stops without writing.\n"
+      "Example: prt report bunny.off forest.exr --out bunny-report --quick");
+  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
+  s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
+  s->add_option("-o,--out", a->out, "Output directory")->capture_default_str();
+  s->add_flag("--quick", a->quick, "Small grid and reference (under a minute for ~40k vertices on 2 cores)");
+  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")->capture_default_str();
+  s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)");
+  s->add_flag("--no-cache", a->no_cache, "Always recompute the references");
+  s->add_flag("--no-plots", a->no_plots, "Tables only (no Python)");
+  s->add_option("--image-size", a->image_size, "Picture size in pixels")->check(int_range(16, 4096))->capture_default_str();
+  s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
+  s->add_option("-t,--threads", a->threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
+  s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
+  return [a] { return run_report_command(*a); };
+}
+
+}  // namespace prt::cli
