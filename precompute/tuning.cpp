@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <tuple>
 
 namespace prt {
 
@@ -154,32 +155,36 @@ TargetResult choose_transfer(const Mesh& mesh, const EnvMap& map, const TargetOp
                 ": the best error is " + g3(best) +
                 " (more bands, or the wavelet basis for sharp lighting; `prt report` shows the trade-off)");
 
-  // 2. Bounces.
-  int bounces = max_bounces;
-  std::optional<Transfer> kept;  // the last run that met the target, reused when it has the final settings
+  // The last run that met the target, reused when it has the final settings.
+  std::optional<Transfer> kept;
   double kept_seconds = 0;
   Accuracy kept_error;
-  for (int k = 0; k < max_bounces; ++k) {
-    double seconds = 0;
-    Transfer t = s.run(bands, probe, k, seconds);
-    if (const TargetTrial tr = s.trial("bounces", t, bands, seconds); tr.meets) {
-      bounces = k;
-      kept = std::move(t), kept_seconds = seconds, kept_error = tr.error;
-      break;
+  // Runs settings(x) for each rung x of a ladder until one meets the target;
+  // returns that rung, or `otherwise` when none does.
+  const auto climb = [&](const char* step, const std::vector<int>& ladder, int otherwise, auto settings) {
+    for (int x : ladder) {
+      const auto [b, n, k] = settings(x);
+      double seconds = 0;
+      Transfer t = s.run(b, n, k, seconds);
+      if (const TargetTrial tr = s.trial(step, t, bands, seconds); tr.meets) {
+        kept = std::move(t), kept_seconds = seconds, kept_error = tr.error;
+        return x;
+      }
     }
-  }
+    return otherwise;
+  };
 
-  // 3. Samples.
-  int chosen_samples = probe;
-  for (int n = kFewestSamples; n < probe; n *= 2) {
-    double seconds = 0;
-    Transfer t = s.run(bands, n, bounces, seconds);
-    if (const TargetTrial tr = s.trial("samples", t, bands, seconds); tr.meets) {
-      chosen_samples = n;
-      kept = std::move(t), kept_seconds = seconds, kept_error = tr.error;
-      break;
-    }
-  }
+  // 2. Bounces: 0, 1, ... below the most (known to meet).
+  std::vector<int> bounce_ladder;
+  for (int k = 0; k < max_bounces; ++k) bounce_ladder.push_back(k);
+  const int bounces = climb("bounces", bounce_ladder, max_bounces,
+                            [&](int k) { return std::tuple{bands, probe, k}; });
+
+  // 3. Samples: 64, 128, ... below the probe count (known to meet).
+  std::vector<int> samples_ladder;
+  for (int n = kFewestSamples; n < probe; n *= 2) samples_ladder.push_back(n);
+  const int chosen_samples = climb("samples", samples_ladder, probe,
+                                   [&](int n) { return std::tuple{bands, n, bounces}; });
   if (!kept || kept->samples != chosen_samples || kept->bands != bands) {
     kept = s.run(bands, chosen_samples, bounces, kept_seconds);
     kept_error = s.trial("final", *kept, bands, kept_seconds).error;
