@@ -80,6 +80,19 @@ std::vector<std::uint32_t> choose_error_vertices(const Mesh& mesh, std::size_t c
   return usable;
 }
 
+ErrorSet whole_error_set(std::vector<glm::vec3> radiance, std::vector<glm::vec3> std_error) {
+  if (radiance.size() != std_error.size())
+    throw Error("error set: " + std::to_string(radiance.size()) + " values but " + std::to_string(std_error.size()) +
+                " standard errors");
+  ErrorSet set;
+  set.mesh_vertices = radiance.size();
+  set.vertices.resize(radiance.size());
+  std::iota(set.vertices.begin(), set.vertices.end(), 0u);
+  set.radiance = std::move(radiance);
+  set.std_error = std::move(std_error);
+  return set;
+}
+
 ErrorSet make_error_set(const Mesh& mesh, const EnvMap& map, const ErrorSetOptions& options,
                         const Progress& progress) {
   if (options.vertices == 0) throw Error("error set: at least one vertex is needed");

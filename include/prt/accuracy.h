@@ -52,6 +52,11 @@ struct ErrorSet {
 // a non-zero normal, ascending; deterministic in (mesh, count, seed).
 std::vector<std::uint32_t> choose_error_vertices(const Mesh& mesh, std::size_t count, std::uint64_t seed);
 
+// A set over every vertex from a reference already computed for all of them
+// (a vertex CSV with standard errors, a full render_reference). Throws
+// prt::Error when the sizes differ.
+ErrorSet whole_error_set(std::vector<glm::vec3> radiance, std::vector<glm::vec3> std_error);
+
 // Renders the reference at the chosen vertices. Throws prt::Error as
 // render_reference does.
 ErrorSet make_error_set(const Mesh& mesh, const EnvMap& map, const ErrorSetOptions& options,

@@ -11,7 +11,6 @@
 
 #include <cmath>
 #include <memory>
-#include <numeric>
 #include <optional>
 
 namespace prt::cli {
@@ -39,15 +38,7 @@ int run_compare(const CompareArgs& args) {
   // of this size are not resolved by it, and subtracting it in quadrature
   // estimates the error against the exact answer (prt/accuracy.h).
   std::optional<Accuracy> acc;
-  if (!se.empty()) {
-    ErrorSet set;
-    set.mesh_vertices = b.size();
-    set.vertices.resize(b.size());
-    std::iota(set.vertices.begin(), set.vertices.end(), 0u);
-    set.radiance = b;
-    set.std_error = se;
-    acc = measure_accuracy(set, a);
-  }
+  if (!se.empty()) acc = measure_accuracy(whole_error_set(b, se), a);
   if (args.json) {
     nlohmann::ordered_json j;
     j["a"] = args.a;

@@ -26,7 +26,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <numeric>
 #include <unistd.h>
 
 namespace prt::cli {
@@ -173,6 +172,8 @@ nlohmann::json render_pictures(const Mesh& mesh, const Report& report, const glm
   double mean_ref = 0;
   for (const glm::vec3& c : report.image_reference) mean_ref += glm::length(glm::dvec3(c));
   mean_ref /= double(std::max<std::size_t>(1, report.image_reference.size()));
+  // Each picture's error over every vertex, noise-corrected as the tables are.
+  const ErrorSet all = whole_error_set(report.image_reference, report.image_std_error);
   nlohmann::json pics = nlohmann::json::array();
   for (std::size_t i = 0; i < report.pictures.size(); ++i) {
     const ReportPicture& p = report.pictures[i];
@@ -185,13 +186,6 @@ nlohmann::json render_pictures(const Mesh& mesh, const Report& report, const glm
     }
     renderer.set_vertex_colors(err);
     write_error_pfm((fs::path(out) / (stem + "_error.pfm")).string(), renderer.render(camera, size, size));
-    // The picture's error over every vertex, noise-corrected as the tables are.
-    ErrorSet all;
-    all.mesh_vertices = mesh.vertex_count();
-    all.vertices.resize(all.mesh_vertices);
-    std::iota(all.vertices.begin(), all.vertices.end(), 0u);
-    all.radiance = report.image_reference;
-    all.std_error = report.image_std_error;
     pics.push_back({{"label", p.label},
                     {"image", stem + ".png"},
                     {"error", stem + "_error.pfm"},
