@@ -1,6 +1,7 @@
 // bench/bench_transfer.cpp - shadowed transfer on bunny00 (37.7k vertices,
 // 5 bands, 1024 rays per vertex) against the same rays traced by bare Embree
 // with no SH work, and the cost of an interreflection bounce.
+#include <prt/precompute.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 

@@ -5,6 +5,7 @@
 // cube, Haar transform, select K terms by area, RGB) + wavelet_relight over
 // every vertex. The transfer is computed once per process (tens of seconds on
 // 2 cores) and kept in a static.
+#include <prt/precompute.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/rotation.h>

@@ -1,9 +1,10 @@
 # Embeds shaders/*.glsl into a generated C++ source, so prt_runtime does not
-# read the source tree at run time. Each file shaders/NAME.glsl becomes
+# read the source tree at run time. Each listed file shaders/NAME.glsl becomes
 # `const char* const prt::shaders::NAME_glsl` (non-alphanumerics -> '_'),
 # declared in runtime/shaders.h. Editing a shader re-runs CMake.
-# Sets PRT_SHADER_SOURCE to the generated file.
-file(GLOB _prt_shaders CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/shaders/*.glsl")
+# Takes PRT_SHADERS (the files, listed by the includer); sets
+# PRT_SHADER_SOURCE to the generated file.
+set(_prt_shaders ${PRT_SHADERS})
 set(_prt_shader_defs "")
 foreach(_shader IN LISTS _prt_shaders)
   set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS "${_shader}")

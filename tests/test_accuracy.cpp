@@ -1,5 +1,6 @@
 // PRT against the Monte Carlo reference on a real mesh and map (skipped when
 // ../shared is absent): the error falls as bands grow, toward the noise floor.
+#include <prt/precompute.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>

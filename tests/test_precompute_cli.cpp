@@ -2,6 +2,7 @@
 #include "test_files.h"
 #include "test_meshes.h"
 
+#include <prt/vertex_csv.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
 

@@ -8,6 +8,7 @@
 // so a run that passes always passes); a biased one fails once sigma is small.
 #include "test_files.h"
 
+#include <prt/vertex_csv.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/error.h>

@@ -3,6 +3,7 @@
 // map, the background shows L(R^T d), and the `prt render` command.
 // Runs on Mesa llvmpipe; skips (with the reason) where no EGL/GL 4.5 context
 // can be made at all.
+#include <prt/precompute.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/mesh.h>

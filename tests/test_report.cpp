@@ -1,6 +1,7 @@
 // Error sets (prt/accuracy.h), the report grid (prt/report.h) and the
 // error-target search (prt/tuning.h); `prt report` and
 // `prt precompute --target-error` on the command line.
+#include <prt/precompute.h>
 #include <prt/accuracy.h>
 #include <prt/error.h>
 #include <prt/projection.h>

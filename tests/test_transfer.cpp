@@ -2,6 +2,7 @@
 #include "test_meshes.h"
 #include "test_util.h"
 
+#include <prt/precompute.h>
 #include <prt/error.h>
 #include <prt/filter.h>
 #include <prt/transfer.h>

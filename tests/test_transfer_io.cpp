@@ -3,6 +3,7 @@
 // writing, the mesh check and `prt info`.
 #include "test_files.h"
 
+#include <prt/precompute.h>
 #include <prt/error.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>

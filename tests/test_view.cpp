@@ -3,6 +3,7 @@
 // and size, and without a display it exits 1 pointing to prt render.
 // Skips (with the reason) where xvfb-run is missing, or where Xvfb's GLX
 // (Mesa llvmpipe) gives no OpenGL 4.5 core context.
+#include <prt/precompute.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>

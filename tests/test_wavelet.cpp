@@ -3,6 +3,7 @@
 #include "test_meshes.h"
 #include "test_util.h"
 
+#include <prt/precompute.h>
 #include <prt/error.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>

@@ -6,6 +6,8 @@
 #include "test_files.h"
 #include "test_meshes.h"
 
+#include <prt/vertex_csv.h>
+#include <prt/precompute.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/error.h>

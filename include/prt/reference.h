@@ -48,6 +48,7 @@
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/progress.h>
 #include <prt/transfer.h>
 
 #include <glm/mat3x3.hpp>

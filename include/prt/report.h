@@ -19,6 +19,7 @@
 #include <prt/accuracy.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/precompute.h>
 #include <prt/transfer.h>
 
 #include <glm/vec3.hpp>

@@ -24,23 +24,6 @@ enum class TransferMode : std::uint32_t { Unshadowed = 0, Shadowed = 1, Interref
 TransferMode parse_transfer_mode(std::string_view name);  // "unshadowed", "shadowed", "interreflected"
 std::string_view transfer_mode_name(TransferMode m);
 
-struct TransferOptions {
-  TransferMode mode = TransferMode::Shadowed;
-  int bands = 5;                 // 1..16 (any up to sh::kMaxBands works)
-  int samples = 1024;            // ~rays per vertex: 2*samples directions over the sphere
-  int bounces = 1;               // interreflected only; 0 = shadowed; at most this many
-  // Interreflected: stop adding bounces once one adds less than this fraction
-  // of the direct transfer's energy (mean |T| over all coefficients; see
-  // Transfer::bounce_energy); Transfer::bounces says how many were computed.
-  // 0: always `bounces`.
-  double bounce_tolerance = 0;
-  glm::vec3 albedo{1.0f};        // used when the mesh has no colours or vertex_colors is false
-  bool vertex_colors = false;    // use the mesh's per-vertex colours as albedo
-  int threads = 0;               // 0: all cores
-  std::uint64_t seed = 1;        // rotates the direction set; same seed, same inputs -> same bits
-  double offset = 0;             // ray origin offset; 0: 1e-4 x the mesh's bounding-box diagonal
-};
-
 // Per-vertex results. Layout of a transfer array: [row][channel][k] with
 // k < bands^2, channels 1 (grey albedo: one channel serves R, G and B) or 3,
 // one row per *stored* vertex, in vertex order.
@@ -114,6 +97,11 @@ glm::vec3 vertex_albedo(const Transfer& t, const Mesh& mesh, std::size_t v);
 // for analytic vertices). For tests and tools; relight() does not copy.
 std::vector<double> vertex_transfer(const Transfer& t, const Mesh& mesh, std::size_t v, bool direct = false);
 
+// XXH3-64 (seed 0) of the mesh's normals (V x f32 x, y, z) followed, when
+// vertex_colors, by its colours (V x f32 r, g, b): what analytic vertices
+// are shaded from (Transfer::shading_hash).
+std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors);
+
 // The whole array with one row per vertex (row v = vertex v), analytic rows
 // evaluated from `mesh` and rounded to float: the layout of a transfer with no
 // analytic vertex. `direct`: of the direct part (the transfer itself when it
@@ -124,15 +112,6 @@ std::vector<float> dense_transfer(const Transfer& t, const Mesh& mesh, bool dire
 // coeffs and direct. `analytic` has one entry per vertex (non-zero:
 // analytic). compute_transfer does this itself; for tests and tools.
 void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic);
-
-// Progress callback: (work done, work total, phase name). Called from one
-// thread at a time; return false to cancel (compute_transfer then throws
-// prt::Error("cancelled")).
-using Progress = std::function<bool(std::size_t done, std::size_t total, const char* phase)>;
-
-// Computes the transfer. Throws prt::Error on bad options. Deterministic:
-// the same mesh, options and thread count give the same bits.
-Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
 
 // Outgoing radiance of every vertex under lighting coefficients `light`
 // (RGB, bands^2 or more; extra bands are ignored): RGB per vertex. `mesh` is

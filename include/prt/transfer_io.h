@@ -44,11 +44,6 @@ Transfer read_transfer(const std::string& path);
 // names the transfer in the message.
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path);
 
-// XXH3-64 (seed 0) of the mesh's normals (V x f32 x, y, z) followed, when
-// vertex_colors, by its colours (V x f32 r, g, b): what analytic vertices
-// are shaded from (Transfer::shading_hash).
-std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors);
-
 // A multi-line human-readable summary (bands, channels, mode, bounces,
 // samples, albedo, vertices, mesh hash, sections and sizes, bytes per vertex,
 // ambient-occlusion range). Ends with a newline.

@@ -27,6 +27,7 @@
 #include <prt/accuracy.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/precompute.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
 

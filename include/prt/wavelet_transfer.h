@@ -13,7 +13,6 @@
 #pragma once
 
 #include <prt/mesh.h>
-#include <prt/transfer.h>  // Progress
 #include <prt/wavelet.h>
 
 #include <glm/vec3.hpp>
@@ -24,16 +23,6 @@
 #include <vector>
 
 namespace prt {
-
-struct WaveletOptions {
-  int cube_res = 32;          // face size r: power of two in [2, 256]
-  double threshold = 1e-2;    // relative L2 truncation error per vertex, in [0, 1) (see WaveletTransfer;
-                               // docs/WAVELETS.md: 1e-2 moves no measured error by more than 4e-4, stores 34% less than 1e-3)
-  glm::vec3 albedo{1.0f};     // used unless vertex_colors; [0, 1] per channel
-  bool vertex_colors = false; // use the mesh's per-vertex colours as albedo (clamped to [0, 1])
-  int threads = 0;            // 0: all cores
-  double offset = 0;          // ray origin offset; 0: detail default (1e-4 x bounding-box diagonal)
-};
 
 // Sparse, quantised wavelet transfer of every vertex, stored transposed for
 // relighting (Ng et al.): column j (a wavelet index < 6 r^2) lists the
@@ -75,16 +64,6 @@ struct WaveletTransfer {
   std::size_t bytes() const;
 };
 
-// Traces one occlusion ray per texel above the horizon of every vertex (from
-// p + offset n, tnear = offset), builds t, transforms, thresholds, quantises
-// and transposes. Vertices with a zero normal get no coefficients. TBB over
-// blocks of vertices; deterministic (same bits for any thread count).
-// Progress: phase "rays", cancellable (throws prt::Error("cancelled")).
-// Throws prt::Error on bad options (cube_res, threshold, albedo, offset,
-// threads, vertex_colors without colours, more than 2^32 - 1 vertices).
-WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& options,
-                                         const Progress& progress = {});
-
 // Outgoing radiance of every vertex: out[v] = rho_v sum_{j in terms}
 // c_vj (W l)_j, RGB. `light` is planar [3][6 r^2], already Haar-transformed
 // (wavelet::forward_cube); `terms` are indices < 6 r^2 (wavelet::select_terms).
@@ -97,11 +76,5 @@ void wavelet_relight(const WaveletTransfer& t, const float* light, std::span<con
 // Dequantised wavelet coefficients of one vertex (6 r^2 values, zeros where
 // dropped). For tests and diagnostics: O(6 r^2 log V).
 std::vector<float> wavelet_vertex_coefficients(const WaveletTransfer& t, std::size_t v);
-
-// Reference: the dense texel-domain transfer t_i (no albedo, double) of the
-// listed vertices, [k][6 r^2], traced exactly as compute_wavelet_transfer
-// does. B_v = rho_v sum_i t_i l_i is the direct per-texel relighting.
-std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOptions& options,
-                                           std::span<const std::uint32_t> vertices);
 
 }  // namespace prt

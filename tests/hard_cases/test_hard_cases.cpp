@@ -3,6 +3,7 @@
 // refusal. Cases already pinned elsewhere (1000 small rotations, 1 vs 2
 // threads, scale 1e-6 / 1e6, ...) are listed in docs/HARD_CASES.md with the
 // test that pins them, not repeated here.
+#include <prt/precompute.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/mesh.h>

@@ -1,6 +1,7 @@
 // prt compare: error of one vertex CSV against a reference one.
 #include "commands.h"
 
+#include <prt/vertex_csv.h>
 #include <prt/accuracy.h>
 #include <prt/compare.h>
 

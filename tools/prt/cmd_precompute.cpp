@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "progress.h"
 
+#include <prt/precompute.h>
 #include <prt/io.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>

@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "progress.h"
 
+#include <prt/vertex_csv.h>
 #include <prt/compare.h>
 
 #include <glm/geometric.hpp>

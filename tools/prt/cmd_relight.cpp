@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "scene.h"
 
+#include <prt/vertex_csv.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/filter.h>

@@ -7,7 +7,7 @@
 #pragma once
 
 #include <prt/error.h>
-#include <prt/transfer.h>
+#include <prt/progress.h>
 
 #include <chrono>
 #include <cstdio>

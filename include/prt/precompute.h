@@ -1,0 +1,70 @@
+// prt/precompute.h - computing transfer with Embree (prt::precompute): SH
+// transfer vectors (Sloan, Kautz & Snyder 2002) and all-frequency wavelet
+// transfer (Ng, Ramamoorthi & Hanrahan 2003). The results are prt::scene's
+// data types (prt/transfer.h, prt/wavelet_transfer.h), written and read by
+// prt/transfer_io.h and relit on the CPU or the GPU without Embree.
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/progress.h>
+#include <prt/transfer.h>
+#include <prt/wavelet_transfer.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace prt {
+
+// ---- SH transfer (docs/PRECOMPUTE.md) -----------------------------------------
+struct TransferOptions {
+  TransferMode mode = TransferMode::Shadowed;
+  int bands = 5;                 // 1..16 (any up to sh::kMaxBands works)
+  int samples = 1024;            // ~rays per vertex: 2*samples directions over the sphere
+  int bounces = 1;               // interreflected only; 0 = shadowed; at most this many
+  // Interreflected: stop adding bounces once one adds less than this fraction
+  // of the direct transfer's energy (mean |T| over all coefficients; see
+  // Transfer::bounce_energy); Transfer::bounces says how many were computed.
+  // 0: always `bounces`.
+  double bounce_tolerance = 0;
+  glm::vec3 albedo{1.0f};        // used when the mesh has no colours or vertex_colors is false
+  bool vertex_colors = false;    // use the mesh's per-vertex colours as albedo
+  int threads = 0;               // 0: all cores
+  std::uint64_t seed = 1;        // rotates the direction set; same seed, same inputs -> same bits
+  double offset = 0;             // ray origin offset; 0: 1e-4 x the mesh's bounding-box diagonal
+};
+
+// Computes the transfer. Throws prt::Error on bad options. Deterministic:
+// the same mesh, options and thread count give the same bits.
+Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
+
+// ---- wavelet transfer (docs/WAVELETS.md) -------------------------------------------
+struct WaveletOptions {
+  int cube_res = 32;          // face size r: power of two in [2, 256]
+  double threshold = 1e-2;    // relative L2 truncation error per vertex, in [0, 1) (see WaveletTransfer;
+                               // docs/WAVELETS.md: 1e-2 moves no measured error by more than 4e-4, stores 34% less than 1e-3)
+  glm::vec3 albedo{1.0f};     // used unless vertex_colors; [0, 1] per channel
+  bool vertex_colors = false; // use the mesh's per-vertex colours as albedo (clamped to [0, 1])
+  int threads = 0;            // 0: all cores
+  double offset = 0;          // ray origin offset; 0: detail default (1e-4 x bounding-box diagonal)
+};
+
+// Traces one occlusion ray per texel above the horizon of every vertex (from
+// p + offset n, tnear = offset), builds t, transforms, thresholds, quantises
+// and transposes. Vertices with a zero normal get no coefficients. TBB over
+// blocks of vertices; deterministic (same bits for any thread count).
+// Progress: phase "rays", cancellable (throws prt::Error("cancelled")).
+// Throws prt::Error on bad options (cube_res, threshold, albedo, offset,
+// threads, vertex_colors without colours, more than 2^32 - 1 vertices).
+WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& options,
+                                         const Progress& progress = {});
+
+// Reference: the dense texel-domain transfer t_i (no albedo, double) of the
+// listed vertices, [k][6 r^2], traced exactly as compute_wavelet_transfer
+// does. B_v = rho_v sum_i t_i l_i is the direct per-texel relighting.
+std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOptions& options,
+                                           std::span<const std::uint32_t> vertices);
+
+}  // namespace prt
