@@ -1,19 +1,16 @@
-// Headless OpenGL 4.5 PRT renderer: EGL context, buffers, shaders, frames.
-// See prt/render.h.
+// The OpenGL 4.5 PRT renderer: buffers, programs, the relighting, mesh,
+// background and display passes, read-back. See prt/render.h. The EGL
+// context is egl_context.cpp's, the GL helpers gl_util.cpp's, tone_map()
+// display.cpp's and default_camera() camera.cpp's.
 #include <prt/error.h>
 #include <prt/filter.h>
 #include <prt/render.h>
 #include <prt/sh.h>
 #include <prt/transfer_io.h>
 
+#include "egl_context.h"
+#include "gl_util.h"
 #include "shaders.h"
-
-#define EGL_EGLEXT_PROTOTYPES 0
-#include <EGL/egl.h>
-#include <EGL/eglext.h>
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GL/glext.h>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -29,95 +26,11 @@
 
 namespace prt {
 
+using gl::check_gl;
+using gl::hex;
+using gl::make_buffer;
+
 namespace {
-
-std::string hex(unsigned v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%04X", v);
-  return buf;
-}
-
-[[noreturn]] void egl_fail(const std::string& what) {
-  throw Error("no OpenGL 4.5 context: " + what + " (EGL error " + hex(unsigned(eglGetError())) + ")");
-}
-
-bool has_extension(const char* list, const char* name) {
-  if (!list) return false;
-  const std::string s = std::string(" ") + list + " ";
-  return s.find(std::string(" ") + name + " ") != std::string::npos;
-}
-
-void check_gl(const char* what) {
-  const GLenum e = glGetError();
-  if (e != GL_NO_ERROR) throw Error(std::string("OpenGL error ") + hex(e) + " in " + what);
-}
-
-GLuint compile(GLenum type, const char* source, const char* name) {
-  const GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::size_t(std::max(len, 1)), '\0');
-    glGetShaderInfoLog(s, len, nullptr, log.data());
-    glDeleteShader(s);
-    throw Error(std::string("shader ") + name + " does not compile: " + log.c_str());
-  }
-  return s;
-}
-
-// Inserts `defines` (e.g. "#define MODE 1\n") right after a shader's #version line.
-std::string with_defines(const char* src, const std::string& defines) {
-  std::string text = src;
-  if (!defines.empty()) text.insert(text.find('\n') + 1, defines);
-  return text;
-}
-
-GLuint check_link(GLuint p, const char* name) {
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(p, GL_INFO_LOG_LENGTH, &len);
-    std::string log(std::size_t(std::max(len, 1)), '\0');
-    glGetProgramInfoLog(p, len, nullptr, log.data());
-    glDeleteProgram(p);
-    throw Error(std::string("shader program ") + name + " does not link: " + log.c_str());
-  }
-  return p;
-}
-
-// A compute program with `defines`.
-GLuint link_compute(const char* src, const char* name, const std::string& defines) {
-  const GLuint cs = compile(GL_COMPUTE_SHADER, with_defines(src, defines).c_str(), name);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, cs);
-  glLinkProgram(p);
-  glDeleteShader(cs);
-  return check_link(p, name);
-}
-
-// A vertex + fragment program; `defines` go into the vertex shader.
-GLuint link(const char* vs_src, const char* fs_src, const char* name, const std::string& defines = {}) {
-  const GLuint vs = compile(GL_VERTEX_SHADER, with_defines(vs_src, defines).c_str(), name);
-  GLuint fs = 0;
-  try {
-    fs = compile(GL_FRAGMENT_SHADER, fs_src, name);
-  } catch (...) {
-    glDeleteShader(vs);
-    throw;
-  }
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  return check_link(p, name);
-}
 
 constexpr int kMaxCoeffs = kMaxRenderBands * kMaxRenderBands;  // LightBlock in the shaders
 
@@ -199,35 +112,6 @@ ToneMap parse_tone_map(std::string_view name) {
   throw Error("unknown tone map '" + std::string(name) + "' (expected clamp, reinhard or aces)");
 }
 
-float tone_map(float linear, const Display& d) {
-  const float v = std::max(linear * float(std::exp2(d.exposure)), 0.0f);
-  switch (d.tone_map) {
-    case ToneMap::Reinhard: return v / (1.0f + v);
-    case ToneMap::Aces: return std::clamp(v * (2.51f * v + 0.03f) / (v * (2.43f * v + 0.59f) + 0.14f), 0.0f, 1.0f);
-    case ToneMap::Clamp: break;
-  }
-  return std::min(v, 1.0f);
-}
-
-void tone_map(std::vector<float>& rgb, const Display& d) {
-  for (float& v : rgb) v = tone_map(v, d);
-}
-
-Camera default_camera(const Mesh& mesh, double fov_deg) {
-  if (mesh.positions.empty()) throw Error("default camera: the mesh has no vertices");
-  if (!(fov_deg > 0 && fov_deg < 180)) throw Error("default camera: field of view must be in (0, 180) degrees");
-  const glm::dvec3 c = (glm::dvec3(mesh.bounds_min()) + glm::dvec3(mesh.bounds_max())) * 0.5;
-  double r = 0;
-  for (const auto& p : mesh.positions) r = std::max(r, glm::length(glm::dvec3(p) - c));
-  if (r <= 0) r = 1;
-  Camera cam;
-  cam.target = c;
-  cam.eye = c + glm::dvec3(0, 0, 1.05 * r / std::sin(glm::radians(fov_deg) / 2));
-  cam.up = {0, 1, 0};
-  cam.fov_deg = fov_deg;
-  return cam;
-}
-
 namespace {
 
 // A transfer array on the GPU: a buffer and its RGBA32F buffer texture
@@ -245,8 +129,7 @@ enum class Source { Stored = 0, Mixed = 1, Analytic = 2 };
 }  // namespace
 
 struct Renderer::Impl {
-  EGLDisplay display = EGL_NO_DISPLAY;
-  EGLContext context = EGL_NO_CONTEXT;
+  gl::EglContext egl;     // the headless context (Renderer())
   bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
   GLuint background_program = 0, display_program = 0;
@@ -284,13 +167,13 @@ struct Renderer::Impl {
   std::string device;
 
   void make_current() const {
-    if (external) return;
-    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))
-      throw Error("cannot make the OpenGL context current (EGL error " + hex(unsigned(eglGetError())) + ")");
+    if (!external) egl.make_current();
   }
+  // For the contract checks (PRT_CHECK): what the caller has uploaded.
+  bool has_mesh() const { return index_count > 0; }
+  bool has_sh_transfer() const { return bands > 0; }
 
-  void create_context();
-  void check_version(const char* how);
+  void check_current_version();
   void create_objects();
   void draw(const Camera& cam, int width, int height);
   void draw_mesh(const glm::mat4& view_proj);
@@ -304,77 +187,15 @@ struct Renderer::Impl {
   void resize(int w, int h);
 };
 
-void Renderer::Impl::create_context() {
-  const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-  auto get_platform_display =
-      reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
-  std::string tried;
-  auto try_init = [&](EGLDisplay d, const char* name) {
-    if (d == EGL_NO_DISPLAY) {
-      tried += std::string(tried.empty() ? "" : ", ") + name + ": no display (EGL error " + hex(unsigned(eglGetError())) + ")";
-      return false;
-    }
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(d, &major, &minor)) {
-      tried += std::string(tried.empty() ? "" : ", ") + name + ": eglInitialize failed (EGL error " + hex(unsigned(eglGetError())) + ")";
-      return false;
-    }
-    display = d;
-    return true;
-  };
-  // 1. Mesa's surfaceless platform: no X, no Wayland, no DRM device needed.
-  if (get_platform_display && has_extension(client_ext, "EGL_MESA_platform_surfaceless"))
-    try_init(get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr), "surfaceless");
-  // 2. The first EGL device (NVIDIA's headless path).
-  if (display == EGL_NO_DISPLAY && get_platform_display && has_extension(client_ext, "EGL_EXT_platform_device")) {
-    auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    EGLDeviceEXT devices[8];
-    EGLint n = 0;
-    if (query_devices && query_devices(8, devices, &n) && n > 0)
-      try_init(get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[0], nullptr), "device");
-  }
-  // 3. Whatever the default display is.
-  if (display == EGL_NO_DISPLAY) try_init(eglGetDisplay(EGL_DEFAULT_DISPLAY), "default display");
-  if (display == EGL_NO_DISPLAY) throw Error("no OpenGL 4.5 context: no usable EGL display; tried " + tried);
-
-  const char* ext = eglQueryString(display, EGL_EXTENSIONS);
-  if (!has_extension(ext, "EGL_KHR_surfaceless_context"))
-    throw Error("no OpenGL 4.5 context: the EGL display lacks EGL_KHR_surfaceless_context");
-  if (!eglBindAPI(EGL_OPENGL_API)) egl_fail("eglBindAPI(EGL_OPENGL_API)");
-
-  const EGLint config_attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_SURFACE_TYPE, EGL_PBUFFER_BIT,
-                                   EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8, EGL_NONE};
-  EGLConfig config = nullptr;
-  EGLint configs = 0;
-  if (!eglChooseConfig(display, config_attribs, &config, 1, &configs) || configs < 1) {
-    if (!has_extension(ext, "EGL_KHR_no_config_context")) egl_fail("no EGL config renders desktop OpenGL");
-    config = EGL_NO_CONFIG_KHR;
-  }
-  const EGLint context_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                    EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
-  context = eglCreateContext(display, config, EGL_NO_CONTEXT, context_attribs);
-  if (context == EGL_NO_CONTEXT) egl_fail("eglCreateContext(4.5 core)");
-  if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) egl_fail("eglMakeCurrent(no surface)");
-  check_version("EGL");
-}
-
-void Renderer::Impl::check_version(const char* how) {
-  GLint major = 0, minor = 0;
-  glGetIntegerv(GL_MAJOR_VERSION, &major);
-  glGetIntegerv(GL_MINOR_VERSION, &minor);
-  const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
-  device = std::string(renderer ? renderer : "?") + ", " + (version ? version : "?");
-  if (major * 10 + minor < 45) {
-    if (external) throw Error("no OpenGL 4.5 context: the current context is " + device);
-    throw Error(std::string("no OpenGL 4.5 context: got ") + device + " (" + how + " error " +
-                hex(unsigned(eglGetError())) + ")");
-  }
+// The caller's context (Renderer(use_current_context)) must be 4.5 core.
+void Renderer::Impl::check_current_version() {
+  device = gl::device_string();
+  if (gl::version() < 45) throw Error("no OpenGL 4.5 context: the current context is " + device);
 }
 
 void Renderer::Impl::create_objects() {
-  background_program = link(shaders::background_vert_glsl, shaders::background_frag_glsl, "background");
-  display_program = link(shaders::background_vert_glsl, shaders::display_frag_glsl, "display");
+  background_program = gl::link_program(shaders::background_vert_glsl, shaders::background_frag_glsl, "background");
+  display_program = gl::link_program(shaders::background_vert_glsl, shaders::display_frag_glsl, "display");
   glCreateVertexArrays(1, &vao);
   glCreateVertexArrays(1, &empty_vao);
   glCreateBuffers(1, &light_buffer);
@@ -388,11 +209,12 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
   GLuint& p = relight_programs[{coeffs, vec4s, ch, int(from), vertex_albedo ? 1 : 0}];
   if (!p) {
     const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
-    p = link_compute(shaders::relight_comp_glsl, "relight",
-                     "#define COEFFS " + std::to_string(coeffs) + "\n#define BANDS " + std::to_string(shader_bands) +
-                         "\n#define VEC4S " + std::to_string(vec4s) + "\n#define CHANNELS " + std::to_string(ch) +
-                         "\n#define SOURCE " + std::to_string(int(from)) + "\n#define VERTEX_ALBEDO " +
-                         std::to_string(vertex_albedo ? 1 : 0) + "\n");
+    p = gl::link_compute(shaders::relight_comp_glsl, "relight",
+                         "#define COEFFS " + std::to_string(coeffs) + "\n#define BANDS " +
+                             std::to_string(shader_bands) + "\n#define VEC4S " + std::to_string(vec4s) +
+                             "\n#define CHANNELS " + std::to_string(ch) + "\n#define SOURCE " +
+                             std::to_string(int(from)) + "\n#define VERTEX_ALBEDO " +
+                             std::to_string(vertex_albedo ? 1 : 0) + "\n");
   }
   return p;
 }
@@ -400,8 +222,8 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
 GLuint Renderer::Impl::attribute_program(int mode) {
   GLuint& p = attribute_programs[std::size_t(mode)];
   if (!p)
-    p = link(shaders::attribute_vert_glsl, shaders::mesh_frag_glsl, "attribute",
-             "#define MODE " + std::to_string(mode) + "\n");
+    p = gl::link_program(shaders::attribute_vert_glsl, shaders::mesh_frag_glsl, "attribute",
+                         "#define MODE " + std::to_string(mode) + "\n");
   return p;
 }
 
@@ -443,8 +265,8 @@ void Renderer::Impl::delete_mesh_objects() {
 }
 
 void Renderer::Impl::destroy() {
-  if (display == EGL_NO_DISPLAY && !external) return;
-  if (external || (context != EGL_NO_CONTEXT && eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context))) {
+  if (!egl.has_display() && !external) return;
+  if (external || egl.try_make_current()) {
     delete_mesh_objects();
     glDeleteBuffers(1, &light_buffer);
     const GLuint textures[] = {latlong_texture, cube_texture, color_texture};
@@ -463,19 +285,15 @@ void Renderer::Impl::destroy() {
       external = false;  // destroyed once
       return;
     }
-    eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    egl.release_current();
   }
-  if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
-  // No eglTerminate: the display is shared by every Renderer of the process,
-  // and terminating it unloads Mesa's driver, whose remaining allocations
-  // LeakSanitizer then reports from an unknown module.
-  context = EGL_NO_CONTEXT;
-  display = EGL_NO_DISPLAY;
+  egl.destroy();  // never the display: egl_context.h
 }
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
   try {
-    impl_->create_context();
+    impl_->egl.create();
+    impl_->device = gl::device_string();
     impl_->create_objects();
   } catch (...) {
     impl_->destroy();
@@ -487,7 +305,7 @@ Renderer::Renderer(UseCurrentContext) : impl_(std::make_unique<Impl>()) {
   impl_->external = true;
   try {
     if (!glGetString(GL_VERSION)) throw Error("no OpenGL 4.5 context: no OpenGL context is current");
-    impl_->check_version("GL");
+    impl_->check_current_version();
     impl_->create_objects();
   } catch (...) {
     impl_->destroy();
@@ -520,13 +338,6 @@ std::vector<float> padded_transfer(const float* t, std::size_t vertices, int cha
   for (std::size_t run = 0; run < vertices * std::size_t(channels); ++run)
     std::copy_n(t + run * std::size_t(stride), stride, out.begin() + std::ptrdiff_t(run * std::size_t(padded)));
   return out;
-}
-
-GLuint make_buffer(const void* data, std::size_t bytes, GLbitfield flags = 0) {
-  GLuint b = 0;
-  glCreateBuffers(1, &b);
-  glNamedBufferStorage(b, GLsizeiptr(std::max<std::size_t>(bytes, 4)), bytes ? data : nullptr, flags);
-  return b;
 }
 
 // Uploads a transfer array ([vertex][channel][k], k < stride) padded for the
@@ -651,12 +462,9 @@ void Renderer::clear_mesh() {
 
 void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
   Impl& m = *impl_;
-  if (m.index_count == 0) throw Error("set_lighting: no mesh uploaded");
-  const std::size_t n = std::size_t(m.bands) * m.bands;
-  if (coeffs.empty()) throw Error("lighting has no coefficients");
-  if (coeffs.size() < n)
-    throw Error("lighting has " + std::to_string(coeffs.size()) + " coefficients, the transfer needs " +
-                std::to_string(n) + " (" + std::to_string(m.bands) + " bands)");
+  PRT_CHECK(m.has_mesh());
+  const std::size_t n = std::size_t(m.bands) * m.bands, needed = std::max<std::size_t>(n, 1);
+  PRT_CHECK_OP(coeffs.size(), >=, needed);
   m.light.assign(n * 4, 0.0f);
   for (std::size_t k = 0; k < n; ++k)
     for (int c = 0; c < 3; ++c) m.light[k * 4 + std::size_t(c)] = float(coeffs[k][c]);
@@ -679,9 +487,9 @@ void Renderer::Impl::upload_lighting() {
 
 void Renderer::set_band_limit(int b) {
   Impl& m = *impl_;
-  if (m.bands == 0) throw Error("set_band_limit: no SH transfer uploaded");
-  if (b < 1 || b > m.bands)
-    throw Error("band limit " + std::to_string(b) + " outside 1.." + std::to_string(m.bands) + " (the transfer's bands)");
+  PRT_CHECK(m.has_sh_transfer());
+  PRT_CHECK_OP(b, >=, 1);
+  PRT_CHECK_OP(b, <=, m.bands);
   m.band_limit = b;
   m.upload_lighting();
 }
@@ -704,13 +512,15 @@ bool Renderer::has_shading(Shading s) const {
 }
 
 void Renderer::set_shading(Shading s) {
+  const Impl& m = *impl_;
+  // What the caller has (not) uploaded is a contract: a mesh; an SH transfer
+  // for every mode but Lambert and VertexColors; colours for VertexColors.
+  PRT_CHECK(m.has_mesh());
+  if (s != Shading::Lambert && s != Shading::VertexColors) PRT_CHECK(m.has_sh_transfer());
+  if (s == Shading::VertexColors) PRT_CHECK(m.have_colors);
+  // What the transfer file holds is data: an error to report.
   if (!has_shading(s)) {
-    const char* why = impl_->index_count == 0          ? "no mesh is uploaded"
-                      : impl_->bands == 0 && (s == Shading::Transfer || s == Shading::Unshadowed)
-                          ? "no SH transfer is uploaded"
-                      : s == Shading::Direct           ? "the transfer is not interreflected"
-                      : s == Shading::VertexColors     ? "no vertex colours were set"
-                                                       : "the transfer file has no such data";
+    const char* why = s == Shading::Direct ? "the transfer is not interreflected" : "the transfer file has no such data";
     throw Error("shading '" + std::string(shading_name(s)) + "' is unavailable: " + why);
   }
   impl_->shading = s;
@@ -720,10 +530,8 @@ Shading Renderer::shading() const { return impl_->shading; }
 
 void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
   Impl& m = *impl_;
-  if (m.index_count == 0) throw Error("set_vertex_colors: no mesh uploaded");
-  if (colors.size() != m.vertex_count)
-    throw Error("set_vertex_colors: " + std::to_string(colors.size()) + " colours for " +
-                std::to_string(m.vertex_count) + " vertices");
+  PRT_CHECK(m.has_mesh());
+  PRT_CHECK_OP(colors.size(), ==, m.vertex_count);
   m.make_current();
   if (!m.color_buffer)
     m.color_buffer = make_buffer(nullptr, m.vertex_count * sizeof(glm::vec3), GL_DYNAMIC_STORAGE_BIT);
@@ -739,9 +547,9 @@ std::size_t Renderer::transfer_bytes() const {
 }
 
 void Renderer::set_environment(const EnvMap& map) {
-  const std::size_t expected = std::size_t(map.width) * map.height * 3 * (map.is_cube() ? 6 : 1);
-  if (map.width <= 0 || map.height <= 0 || map.rgb.size() != expected)
-    throw Error("environment " + map.source + ": inconsistent size");
+  // An EnvMap from load_envmap or make_latlong/make_cube is consistent.
+  PRT_CHECK(map.width > 0 && map.height > 0);
+  PRT_CHECK_OP(map.rgb.size(), ==, std::size_t(map.width) * map.height * 3 * (map.is_cube() ? 6 : 1));
   Impl& m = *impl_;
   m.make_current();
   clear_environment();
@@ -783,19 +591,21 @@ void Renderer::set_environment_rotation(const glm::dmat3& R) { impl_->env_rotati
 
 void Renderer::Impl::draw(const Camera& cam, int width, int height) {
   Impl& m = *this;
-  if (width <= 0 || height <= 0)
-    throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is empty");
+  // Contracts: a positive size (the callers' own: --width, a window's
+  // framebuffer), the lighting or colours of the mesh's shading uploaded.
+  PRT_CHECK_OP(width, >, 0);
+  PRT_CHECK_OP(height, >, 0);
+  const bool lit = m.shading == Shading::Transfer || m.shading == Shading::Direct ||
+                   m.shading == Shading::Unshadowed || m.shading == Shading::Lambert;
+  if (m.has_mesh() && lit) PRT_CHECK(m.have_lighting);
+  if (m.has_mesh() && m.shading == Shading::VertexColors) PRT_CHECK(m.have_colors);
+  // Errors: what this OpenGL can draw, and the camera (the user's --camera).
   GLint max_rb = 0;
   m.make_current();
   glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_rb);
   if (width > max_rb || height > max_rb)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " exceeds the limit " +
                 std::to_string(max_rb));
-  const bool lit = m.shading == Shading::Transfer || m.shading == Shading::Direct ||
-                   m.shading == Shading::Unshadowed || m.shading == Shading::Lambert;
-  if (m.index_count > 0 && lit && !m.have_lighting) throw Error("render: no lighting set for the mesh");
-  if (m.index_count > 0 && m.shading == Shading::VertexColors && !m.have_colors)
-    throw Error("render: no vertex colours set for the mesh");
   if (!(cam.fov_deg > 0 && cam.fov_deg < 180)) throw Error("camera: field of view must be in (0, 180) degrees");
   const glm::dvec3 fwd = cam.target - cam.eye;
   if (!(glm::length(fwd) > 0) || !(glm::length(glm::cross(fwd, cam.up)) > 1e-12 * glm::length(fwd)))

@@ -318,6 +318,9 @@ TEST(Render, DefaultCameraFramesTheBoundingSphere) {
   EXPECT_EQ(cam.up, glm::dvec3(0, 1, 0));
 }
 
+// Bad data and values from a user are prt::Error with a clear message;
+// calls that break the renderer's contract (out of order, out of range) are
+// a caller's bug: prt::InternalError, naming the check.
 TEST(Render, ClearErrors) {
   REQUIRE_RENDERER(r);
   const Mesh a = test::quad(3), b = test::quad(4);
@@ -326,22 +329,36 @@ TEST(Render, ClearErrors) {
   o.bands = 3;
   const Transfer ta = compute_transfer(a, o);
   EXPECT_THROW(r->set_mesh(b, ta), Error);  // another mesh
-  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>(9)), Error);  // no mesh yet
+  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>(9)), InternalError);  // no mesh yet
   r->set_mesh(a, ta);
   const Camera cam = default_camera(a);
-  EXPECT_THROW(r->render(cam, 16, 16), Error);                  // no lighting yet
-  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>(4)), Error);  // 2 bands for a 3-band transfer
+  EXPECT_THROW(r->render(cam, 16, 16), InternalError);                  // no lighting yet
+  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>(4)), InternalError);  // 2 bands for a 3-band transfer
+  EXPECT_THROW(r->set_lighting(std::vector<glm::dvec3>()), InternalError);
   r->set_lighting(std::vector<glm::dvec3>(9, glm::dvec3(1.0)));
-  EXPECT_THROW(r->render(cam, 0, 16), Error);
-  EXPECT_THROW(r->render(cam, 16, -1), Error);
-  Camera bad = cam;
-  bad.target = bad.eye;
-  EXPECT_THROW(r->render(bad, 16, 16), Error);
+  EXPECT_THROW(r->render(cam, 0, 16), InternalError);
+  EXPECT_THROW(r->render(cam, 16, -1), InternalError);
   try {
     r->render(cam, 0, 4);
     FAIL();
+  } catch (const InternalError& e) {
+    EXPECT_NE(std::string(e.what()).find("width > 0"), std::string::npos) << e.what();
+  }
+  // The user's camera and a size beyond what this OpenGL draws are errors.
+  Camera bad = cam;
+  bad.target = bad.eye;
+  EXPECT_THROW(r->render(bad, 16, 16), Error);
+  bad = cam;
+  bad.up = bad.target - bad.eye;
+  EXPECT_THROW(r->render(bad, 16, 16), Error);
+  bad = cam;
+  bad.fov_deg = 180;
+  EXPECT_THROW(r->render(bad, 16, 16), Error);
+  try {
+    r->render(cam, 1 << 20, 4);
+    FAIL();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("0x4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("1048576x4"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(r->render(cam, 16, 16));
 }
@@ -405,21 +422,36 @@ void check_shading_modes(bool colored) {
 TEST(Render, ShadingModesGrey) { check_shading_modes(false); }
 TEST(Render, ShadingModesVertexColoured) { check_shading_modes(true); }
 
+// Modes the transfer file has no data for are errors (prt render --shading
+// and prt view show them, exit 1); modes and band limits that break the
+// contract (nothing uploaded for them, out of range) are internal errors.
 TEST(Render, UnavailableModesAreRefused) {
   REQUIRE_RENDERER(r);
   EXPECT_FALSE(r->has_shading(Shading::Transfer));  // no mesh
+  EXPECT_THROW(r->set_shading(Shading::Lambert), InternalError);
   const Mesh a = test::quad(3);
   TransferOptions o;
   o.mode = TransferMode::Unshadowed;
   o.bands = 3;
-  r->set_mesh(a, compute_transfer(a, o));
+  Transfer t = compute_transfer(a, o);
+  t.ao.clear();  // a file without ambient occlusion and bent normals
+  t.bent_normals.clear();
+  r->set_mesh(a, t);
   EXPECT_TRUE(r->has_shading(Shading::Lambert));
   EXPECT_FALSE(r->has_shading(Shading::Direct));  // not interreflected
+  EXPECT_FALSE(r->has_shading(Shading::AmbientOcclusion));
   EXPECT_THROW(r->set_shading(Shading::Direct), Error);
-  EXPECT_THROW(r->set_shading(Shading::VertexColors), Error);  // none set yet
-  EXPECT_THROW(r->set_band_limit(0), Error);
-  EXPECT_THROW(r->set_band_limit(4), Error);
-  EXPECT_THROW(r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count() + 1)), Error);
+  EXPECT_THROW(r->set_shading(Shading::BentNormal), Error);
+  try {
+    r->set_shading(Shading::AmbientOcclusion);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("shading 'ao' is unavailable"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(r->set_shading(Shading::VertexColors), InternalError);  // none set yet
+  EXPECT_THROW(r->set_band_limit(0), InternalError);
+  EXPECT_THROW(r->set_band_limit(4), InternalError);
+  EXPECT_THROW(r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count() + 1)), InternalError);
   r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count(), glm::vec3(1.0f)));
   EXPECT_NO_THROW(r->set_shading(Shading::VertexColors));
   EXPECT_NO_THROW(r->render(default_camera(a), 8, 8));  // vertex colours need no lighting
@@ -538,12 +570,20 @@ TEST_F(RenderCli, BadInputs) {
   EXPECT_EQ(r6.code, 1);
   EXPECT_NE(r6.err.find("not interreflected"), std::string::npos) << r6.err;
   auto r7 = render({mesh, prt, env, "-o", dir.file("g.exr"), "--bands", "9"});
-  EXPECT_NE(r7.code, 0);
+  EXPECT_EQ(r7.code, 1);
   EXPECT_NE(r7.err.find("--bands"), std::string::npos) << r7.err;
   auto r8 = render({mesh, prt, env, "-o", dir.file("h.png"), "--tonemap", "filmic"});
   EXPECT_EQ(r8.code, 1);
   EXPECT_NE(r8.err.find("--tonemap"), std::string::npos) << r8.err;
-  for (const char* f : {"f.exr", "g.exr", "h.png"}) EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
+  // A degenerate camera is the user's error (exit 1), not an internal one (3).
+  auto r9 = render({mesh, prt, env, "-o", dir.file("i.exr"), "--camera", "0,0,2,0,0,2,0,1,0"});
+  EXPECT_EQ(r9.code, 1);
+  EXPECT_NE(r9.err.find("camera: eye equals target"), std::string::npos) << r9.err;
+  auto r10 = render({mesh, prt, env, "-o", dir.file("j.exr"), "--camera", "0,0,3,0,0,0,0,0,1"});
+  EXPECT_EQ(r10.code, 1);
+  EXPECT_NE(r10.err.find("up is parallel"), std::string::npos) << r10.err;
+  for (const char* f : {"f.exr", "g.exr", "h.png", "i.exr", "j.exr"})
+    EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
 }
 
 // A wavelet transfer renders (relit on the CPU, drawn as vertex colours); the
@@ -577,9 +617,11 @@ TEST(Render, MeshWithoutTransfer) {
   EXPECT_FALSE(r->has_shading(Shading::Transfer));
   EXPECT_FALSE(r->has_shading(Shading::Unshadowed));
   EXPECT_TRUE(r->has_shading(Shading::Lambert));
-  EXPECT_THROW(r->set_band_limit(1), Error);
+  EXPECT_THROW(r->set_band_limit(1), InternalError);                // no SH transfer
+  EXPECT_THROW(r->set_shading(Shading::Transfer), InternalError);   // the same
+  EXPECT_THROW(r->set_shading(Shading::AmbientOcclusion), InternalError);
   const Camera cam = default_camera(a);
-  EXPECT_THROW(r->render(cam, 8, 8), Error);  // no colours yet
+  EXPECT_THROW(r->render(cam, 8, 8), InternalError);  // no colours yet
   r->set_vertex_colors(std::vector<glm::vec3>(a.vertex_count(), glm::vec3(0.25f)));
   const Image img = r->render(cam, 8, 8);
   EXPECT_FLOAT_EQ(img.at(4, 4).y, 0.25f);

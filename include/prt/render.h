@@ -27,6 +27,14 @@
 // present() draws the same frame as render() into the same framebuffer
 // object and blits it to the context's default framebuffer (sRGB-encoded
 // when that framebuffer is sRGB-capable) instead of reading it back.
+//
+// Errors (prt/error.h). prt::Error is for what the data, the user's values
+// and the OpenGL implementation decide: no context, a transfer that does not
+// belong to the mesh, a mode the transfer file has no data for, a degenerate
+// camera, an image larger than the implementation's limit, an OpenGL error.
+// Breaking a method's contract (calling it before what it needs was
+// uploaded, or with a value outside its stated range) is a bug of the
+// caller: PRT_CHECK throws prt::InternalError. Each method says which.
 #pragma once
 
 #include <prt/envmap.h>
@@ -148,11 +156,14 @@ class Renderer {
   // The lighting of the next frames: RGB coefficients, at least bands()^2
   // (at least 1 without an SH transfer; extra ones are ignored). Only these
   // bands()^2 vec4s go to the GPU (and for Lambert, three 4x4 matrices from
-  // the first 9).
+  // the first 9). Contract (prt::InternalError): a mesh is uploaded and
+  // enough coefficients are given (project() the map at bands() bands).
   void set_lighting(std::span<const glm::dvec3> coeffs);
 
   // Shades with the first bands^2 coefficients only (1 <= bands <= bands();
   // truncation, live: no re-upload). Reset to bands() by set_mesh.
+  // Contract (prt::InternalError): an SH transfer is uploaded and bands is in
+  // that range; check a user's band count against bands() first.
   void set_band_limit(int bands);
   int band_limit() const;
 
@@ -160,28 +171,40 @@ class Renderer {
   // says whether the uploaded mesh and transfer support a mode: Direct needs
   // an interreflected transfer, AmbientOcclusion and BentNormal a file that
   // has them, VertexColors a set_vertex_colors call. set_shading throws
-  // prt::Error for a mode the mesh does not support.
+  // prt::Error for a mode the transfer file has no data for (Direct of a
+  // transfer that is not interreflected, AmbientOcclusion or BentNormal of a
+  // file without them: "shading 'ao' is unavailable: ..."). Contract
+  // (prt::InternalError): a mesh is uploaded; an SH transfer for every mode
+  // but Lambert and VertexColors; colours for VertexColors.
   bool has_shading(Shading s) const;
   void set_shading(Shading s);
   Shading shading() const;
   // Per-vertex linear RGB for Shading::VertexColors (one per mesh vertex);
   // uploaded at once (the whole array crosses the bus: meant for per-frame
-  // CPU relighting).
+  // CPU relighting). Contract (prt::InternalError): a mesh is uploaded and
+  // colors has one entry per vertex.
   void set_vertex_colors(std::span<const glm::vec3> colors);
 
   // Background: a lat-long or cube map (uploaded once as a float texture),
   // drawn behind the mesh with the rotation of set_environment_rotation.
-  // Without one the background is black.
+  // Without one the background is black. Contract (prt::InternalError): the
+  // map is consistent (its size matches its pixels, as load_envmap's are).
   void set_environment(const EnvMap& map);
   void clear_environment();
   void set_environment_rotation(const glm::dmat3& R);
 
-  // Renders a frame; throws prt::Error for a zero or too large size, a
-  // degenerate camera, or a mesh without lighting. Linear HDR values, or with
-  // `display` the display values of the same frame (exposure and tone map
-  // applied on the GPU, in [0, 1], before sRGB encoding).
+  // Renders a frame. Throws prt::Error for a size larger than the OpenGL
+  // implementation's renderbuffer limit, and for a degenerate camera (field
+  // of view outside (0, 180), eye equal to target, up parallel to the view
+  // direction, non-finite values). Contract (prt::InternalError): width and
+  // height are positive, and the mesh's shading has what it needs (lighting
+  // for Transfer, Direct, Unshadowed and Lambert, colours for VertexColors).
+  // Linear HDR values, or with `display` the display values of the same
+  // frame (exposure and tone map applied on the GPU, in [0, 1], before sRGB
+  // encoding).
   Image render(const Camera& camera, int width, int height, const Display* display = nullptr);
   // Draws the frame and waits for the GPU, without reading it back (timing).
+  // The errors and contract of render().
   void draw_only(const Camera& camera, int width, int height);
 
   // Draws the frame render() would draw (width x height) and runs the
@@ -189,7 +212,7 @@ class Renderer {
   // framebuffer, scaled to window_width x window_height. The caller swaps
   // buffers. The window receives sRGB-encoded values either way: by the
   // framebuffer when it is sRGB-capable (returns true), else by the display
-  // shader (returns false).
+  // shader (returns false). The errors and contract of render().
   bool present(const Camera& camera, int width, int height, int window_width, int window_height,
                const Display& display = {});
   // What present() left in the default framebuffer's back buffer (before the
