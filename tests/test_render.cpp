@@ -12,6 +12,9 @@
 #include <prt/rotation.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/wavelet.h>
+#include <prt/wavelet_playback.h>
+#include <prt/wavelet_transfer.h>
 
 #include <gtest/gtest.h>
 
@@ -628,6 +631,70 @@ TEST(Render, MeshWithoutTransfer) {
   r->set_lighting(std::vector<glm::dvec3>(1, glm::dvec3(2 * std::sqrt(M_PI))));  // constant radiance 1
   r->set_shading(Shading::Lambert);
   EXPECT_NEAR(r->render(cam, 8, 8).at(4, 4).y, 0.5, 1e-5);  // albedo x 1
+}
+
+// A wavelet transfer drawn through the library's WaveletPlayback. The
+// expected colours are built without it: the lighting of the rotated map
+// (FrameLighting, K terms) relit by wavelet_relight, and independently of
+// wavelet_relight a dense sum over the same terms of each vertex's
+// dequantised coefficients times its albedo. The pixels at the vertices are
+// those colours, for grey and per-vertex albedo.
+TEST(Render, WaveletPlaybackPixelsEqualWaveletRelight) {
+  REQUIRE_RENDERER(r);
+  constexpr double kDenseTolerance = 1e-5;  // float sums in another order, relative to the largest colour
+  for (bool colored : {false, true}) {
+    SCOPED_TRACE(colored ? "vertex colours" : "grey");
+    const CameraGrid g = camera_grid(colored);
+    WaveletOptions wo;
+    wo.cube_res = 8;
+    wo.vertex_colors = colored;
+    wo.albedo = glm::vec3(0.8f, 0.7f, 0.6f);
+    const WaveletTransfer wt = compute_wavelet_transfer(g.mesh, wo);
+    const EnvMap env = latlong_of(smooth_env, 128, 64);
+    const glm::dmat3 R = sh::rotation_from_euler(30, 20, 10);
+    const int K = 40;
+    const auto selection = wavelet::Selection::AreaWeighted;
+
+    r->set_mesh(g.mesh, wt.albedo, wt.vertex_colors);
+    WaveletPlayback playback(wt, env);
+    EXPECT_EQ(&playback.transfer(), &wt);  // held by reference
+    EXPECT_GE(playback.frame(*r, R, K, selection), 0.0);
+    EXPECT_EQ(r->shading(), Shading::VertexColors);
+    const Image img = r->render(g.camera, g.size, g.size);
+
+    wavelet::FrameLighting lighting(env, wt.cube_res);
+    lighting.update(R, K, selection);
+    ASSERT_EQ(lighting.terms().size(), std::size_t(K));
+    std::vector<glm::vec3> expected;
+    wavelet_relight(wt, lighting.coefficients().data(), lighting.terms(), expected);
+    ASSERT_EQ(expected.size(), g.mesh.vertex_count());
+    EXPECT_TRUE(playback.colors() == expected);  // deterministic: the same bits
+
+    const std::size_t n = wt.coeff_count();
+    const std::vector<float>& L = lighting.coefficients();
+    double scale = 0;
+    for (const glm::vec3& e : expected) scale = std::max({scale, double(e.x), double(e.y), double(e.z)});
+    for (std::size_t v = 0; v < wt.vertices; ++v) {
+      const std::vector<float> c = wavelet_vertex_coefficients(wt, v);
+      const glm::vec3 rho = wt.vertex_colors ? wt.vertex_albedo[v] : wt.albedo;
+      for (int ch = 0; ch < 3; ++ch) {
+        double sum = 0;
+        for (std::uint32_t j : lighting.terms()) sum += double(c[j]) * L[std::size_t(ch) * n + j];
+        EXPECT_NEAR(expected[v][ch], rho[ch] * sum, kDenseTolerance * scale) << "vertex " << v << " channel " << ch;
+      }
+    }
+    expect_pixels_at_vertices(img, g, expected, colored ? "wavelet_rgb" : "wavelet_grey");
+
+    // Another map: the next frame follows it.
+    const EnvMap dim = latlong_of([](const glm::dvec3& d) { return 0.5 * smooth_env(d); }, 128, 64);
+    playback.set_environment(dim);
+    playback.frame(*r, R, K, selection);
+    wavelet::FrameLighting dim_lighting(dim, wt.cube_res);
+    dim_lighting.update(R, K, selection);
+    wavelet_relight(wt, dim_lighting.coefficients().data(), dim_lighting.terms(), expected);
+    expect_pixels_at_vertices(r->render(g.camera, g.size, g.size), g, expected,
+                              colored ? "wavelet_rgb_dim" : "wavelet_grey_dim");
+  }
 }
 
 // --exposure scales EXR output linearly (no tone map on float output).

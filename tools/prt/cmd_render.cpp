@@ -11,6 +11,7 @@
 #include <prt/rotation.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/wavelet_playback.h>
 
 #include <fmt/core.h>
 #include <glm/trigonometric.hpp>
@@ -58,10 +59,10 @@ int run_render(const RenderArgs& a) {
   Renderer renderer;
   if (!a.quiet) fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(env), renderer.device());
   renderer.set_environment(env);
-  std::optional<WaveletFrames> wavelet_frames;
+  std::optional<WaveletPlayback> playback;
   if (wavelet) {
     renderer.set_mesh(mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
-    wavelet_frames.emplace(scene.wavelet, env);
+    playback.emplace(scene.wavelet, env);
     if (look.shading != Shading::Transfer && look.shading != Shading::Lambert)
       throw Error("--shading " + std::string(shading_name(look.shading)) +
                   ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
@@ -91,8 +92,7 @@ int run_render(const RenderArgs& a) {
     renderer.set_lighting(rotated);
     renderer.set_environment_rotation(R);
     if (wavelet && look.shading == Shading::Transfer) {
-      cpu_ms += wavelet_frames->frame(renderer, R, look.terms, look.selection);
-      renderer.set_shading(Shading::VertexColors);
+      cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
     } else if (wavelet) {
       renderer.set_shading(Shading::Lambert);
     }

@@ -14,6 +14,7 @@
 #include <prt/rotation.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/wavelet_playback.h>
 
 #include <fmt/core.h>
 #include <glm/geometric.hpp>
@@ -238,7 +239,7 @@ int run_view(const ViewArgs& a) {
   if (have_sh) renderer.set_mesh(mesh, t);
   else renderer.set_mesh(mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
   renderer.set_environment(scene.env);
-  std::optional<WaveletFrames> wavelet_frames;
+  std::optional<WaveletPlayback> wavelet_frames;
   if (have_wavelet) wavelet_frames.emplace(scene.wavelet, scene.env);
   st.wavelet = scene.basis == TransferBasis::Wavelet;
   st.terms = look.terms;
@@ -410,8 +411,7 @@ int run_view(const ViewArgs& a) {
     renderer.set_lighting(rotated);
     renderer.set_environment_rotation(R);
     if (st.wavelet && !st.wavelet_lambert) {
-      wavelet_ms = 0.1 * wavelet_frames->frame(renderer, R, st.terms, selection) + 0.9 * wavelet_ms;
-      renderer.set_shading(Shading::VertexColors);
+      wavelet_ms = 0.1 * wavelet_frames->frame(renderer, R, st.terms, selection) + 0.9 * wavelet_ms;  // vertex colours
     } else if (st.wavelet) {
       renderer.set_shading(Shading::Lambert);
     }

@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -102,24 +101,6 @@ void write_frame(const std::string& path, Image img, const Display& d) {
     tone_map(img.rgb, d);
   }
   write_image(path, img.width, img.height, img.rgb);
-}
-
-}  // namespace prt::cli
-
-namespace prt::cli {
-
-WaveletFrames::WaveletFrames(const WaveletTransfer& t, const EnvMap& env)
-    : transfer_(t), lighting_(env, t.cube_res), colors_(t.vertices) {}
-
-void WaveletFrames::set_environment(const EnvMap& env) { lighting_ = wavelet::FrameLighting(env, transfer_.cube_res); }
-
-double WaveletFrames::frame(Renderer& r, const glm::dmat3& R, int K, wavelet::Selection selection) {
-  const auto t0 = std::chrono::steady_clock::now();
-  lighting_.update(R, K, selection);
-  wavelet_relight(transfer_, lighting_.coefficients().data(), lighting_.terms(), colors_);
-  const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.set_vertex_colors(colors_);
-  return ms;
 }
 
 }  // namespace prt::cli

@@ -7,7 +7,6 @@
 #include <prt/render.h>
 #include <prt/transfer.h>
 #include <prt/wavelet.h>
-#include <prt/wavelet_transfer.h>
 
 #include <CLI/CLI.hpp>
 
@@ -43,25 +42,6 @@ struct Look {
 // given without an SH transfer, and wavelet-only ones without a wavelet
 // transfer, are refused. Throws prt::Error naming the option.
 Look parse_look(const LookArgs& args, int sh_bands, bool wavelet);
-
-// Wavelet relighting for render and view: each frame resamples the rotated
-// environment into the transfer's cube, keeps K Haar terms, relights every
-// vertex on the CPU (multi-threaded) and uploads the colours to the renderer
-// (Shading::VertexColors).
-class WaveletFrames {
- public:
-  WaveletFrames(const WaveletTransfer& transfer, const EnvMap& env);
-  void set_environment(const EnvMap& env);
-  // Relights for rotation R with K terms and uploads; returns the CPU
-  // milliseconds spent (lighting + sparse sum).
-  double frame(Renderer& renderer, const glm::dmat3& R, int K, wavelet::Selection selection);
-  int cube_res() const { return transfer_.cube_res; }
-
- private:
-  const WaveletTransfer& transfer_;
-  wavelet::FrameLighting lighting_;
-  std::vector<glm::vec3> colors_;
-};
 
 // The lighting to upload: the first `bands` bands of `light` windowed (the
 // window's width is bands + 1 for Hanning and Lanczos, so band bands-1 keeps
