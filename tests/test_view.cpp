@@ -2,14 +2,18 @@
 // (--frames N --screenshot FILE) equals prt render's image of the same camera
 // and size, and without a display it exits 1 pointing to prt render.
 // Skips (with the reason) where xvfb-run is missing, or where Xvfb's GLX
-// (Mesa llvmpipe) gives no OpenGL 4.5 core context.
+// (Mesa llvmpipe) gives no OpenGL 4.5 core context. Its input (keys, mouse,
+// scroll, drops -> ViewState, tools/prt/view_input.h) is tested without a
+// window.
 #include <prt/precompute.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/rotation.h>
 #include <prt/wavelet_transfer.h>
 
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,6 +25,7 @@
 
 #include "test_files.h"
 #include "test_meshes.h"
+#include "view_input.h"
 
 namespace prt {
 namespace {
@@ -192,6 +197,158 @@ TEST_F(ViewCli, NoDisplayPointsToRender) {
   EXPECT_NE(text.find("prt render"), std::string::npos) << text;
   EXPECT_NE(text.find("display"), std::string::npos) << text;
   EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+}
+
+// ---- input -> ViewState (no window) -----------------------------------------
+
+using namespace cli;
+
+TEST(ViewInput, KeysChangeTheLook) {
+  ViewState s;
+  for (int k = input::kKey0; k <= input::kKey9; ++k) {
+    EXPECT_EQ(on_key(s, k, input::kPress, 0), KeyAction::None);
+    EXPECT_EQ(s.bands, k - input::kKey0);
+  }
+  on_key(s, input::kKey0 + 4, input::kRelease, 0);  // releases do nothing
+  EXPECT_EQ(s.bands, 9);
+  on_key(s, input::kKey0 + 4, input::kRepeat, 0);  // repeats do what presses do
+  EXPECT_EQ(s.bands, 4);
+
+  on_key(s, input::kKeyM, input::kPress, 0);
+  on_key(s, input::kKeyM, input::kPress, 0);
+  on_key(s, input::kKeyM, input::kPress, input::kModShift);
+  EXPECT_EQ(s.shading_step, 1);  // applied (and reset) by the frame loop
+  const sh::Window windows[] = {sh::Window::None, sh::Window::Hanning, sh::Window::Lanczos, sh::Window::Auto};
+  for (int i = 1; i <= 5; ++i) {
+    on_key(s, input::kKeyW, input::kPress, 0);
+    EXPECT_EQ(kWindows[s.window], windows[i % 4]);
+    on_key(s, input::kKeyT, input::kPress, 0);
+    EXPECT_EQ(s.tone, i % 3);
+  }
+  on_key(s, input::kKeyE, input::kPress, 0);
+  on_key(s, input::kKeyE, input::kPress, 0);
+  on_key(s, input::kKeyE, input::kPress, input::kModShift);
+  EXPECT_DOUBLE_EQ(s.exposure, 0.5);
+  for (int i = 0; i < 100; ++i) on_key(s, input::kKeyE, input::kRepeat, 0);
+  EXPECT_DOUBLE_EQ(s.exposure, 20.0);  // clamped
+
+  on_key(s, input::kKeyN, input::kPress, 0);
+  on_key(s, input::kKeyN, input::kPress, 0);
+  on_key(s, input::kKeyP, input::kPress, 0);
+  EXPECT_EQ(s.map_step, 1);
+  on_key(s, input::kKeySpace, input::kPress, 0);
+  EXPECT_TRUE(s.auto_rotate);
+  on_key(s, input::kKeyS, input::kPress, 0);
+  EXPECT_TRUE(s.screenshot_requested);
+  EXPECT_EQ(on_key(s, input::kKeyH, input::kPress, 0), KeyAction::PrintControls);
+  EXPECT_EQ(on_key(s, input::kKeyQ, input::kPress, 0), KeyAction::Quit);
+  EXPECT_EQ(on_key(s, input::kKeyEscape, input::kPress, 0), KeyAction::Quit);
+  EXPECT_EQ(on_key(s, input::kKeyEscape, input::kRelease, 0), KeyAction::None);
+}
+
+TEST(ViewInput, WaveletKeys) {
+  ViewState s;
+  s.terms = 100;
+  on_key(s, input::kKeyB, input::kPress, 0);
+  EXPECT_TRUE(s.toggle_basis);
+  EXPECT_FALSE(s.wavelet);  // the frame loop switches, when both bases are loaded
+  on_key(s, input::kKeyLeftBracket, input::kPress, 0);
+  EXPECT_EQ(s.terms, 50);
+  on_key(s, input::kKeyRightBracket, input::kPress, 0);
+  on_key(s, input::kKeyRightBracket, input::kPress, 0);
+  EXPECT_EQ(s.terms, 200);
+  for (int i = 0; i < 20; ++i) on_key(s, input::kKeyLeftBracket, input::kPress, 0);
+  EXPECT_EQ(s.terms, 1);
+  for (int i = 0; i < 30; ++i) on_key(s, input::kKeyRightBracket, input::kPress, 0);
+  EXPECT_EQ(s.terms, 1 << 20);
+  on_key(s, input::kKeyG, input::kPress, 0);
+  EXPECT_EQ(s.selection, 1);
+  on_key(s, input::kKeyG, input::kPress, 0);
+  EXPECT_EQ(s.selection, 0);
+}
+
+TEST(ViewInput, MouseOrbitsZoomsAndTurnsTheEnvironment) {
+  ViewState s;
+  on_cursor(s, 10, 10);  // no button: nothing turns
+  EXPECT_EQ(s.yaw, 0);
+  on_mouse_button(s, input::kMouseLeft, input::kPress, 0, 100, 100);
+  EXPECT_TRUE(s.dragging);
+  on_cursor(s, 110, 95);
+  EXPECT_DOUBLE_EQ(s.yaw, -4.0);
+  EXPECT_DOUBLE_EQ(s.pitch, -2.0);
+  on_cursor(s, 110, 1000);
+  EXPECT_DOUBLE_EQ(s.pitch, 89.0);  // clamped short of the pole
+  on_mouse_button(s, input::kMouseLeft, input::kRelease, 0, 110, 1000);
+  EXPECT_FALSE(s.dragging);
+
+  on_mouse_button(s, input::kMouseRight, input::kPress, 0, 0, 0);
+  EXPECT_TRUE(s.env_dragging);
+  on_cursor(s, 25, -10);
+  EXPECT_DOUBLE_EQ(s.env_yaw, 10.0);
+  EXPECT_DOUBLE_EQ(s.env_pitch, -4.0);
+  EXPECT_DOUBLE_EQ(s.yaw, -4.0);  // the camera stays
+  on_mouse_button(s, input::kMouseRight, input::kRelease, 0, 25, -10);
+  EXPECT_FALSE(s.env_dragging);
+  on_mouse_button(s, input::kMouseLeft, input::kPress, input::kModShift, 0, 0);  // shift+left: the environment too
+  EXPECT_TRUE(s.env_dragging);
+  EXPECT_FALSE(s.dragging);
+  on_mouse_button(s, input::kMouseLeft, input::kRelease, input::kModShift, 0, 0);
+
+  on_scroll(s, 1);
+  EXPECT_DOUBLE_EQ(s.zoom, 0.9);
+  on_scroll(s, -100);
+  EXPECT_DOUBLE_EQ(s.zoom, 20.0);
+  on_scroll(s, 1000);
+  EXPECT_DOUBLE_EQ(s.zoom, 0.05);
+
+  s.auto_rotate = true;
+  advance(s, 0.5);
+  EXPECT_DOUBLE_EQ(s.env_auto, 15.0);
+  s.exposure = 1.5;
+  on_key(s, input::kKeyR, input::kPress, 0);  // the view resets, the look stays
+  EXPECT_EQ(s.exposure, 1.5);
+  EXPECT_EQ(s.yaw, 0);
+  EXPECT_EQ(s.pitch, 0);
+  EXPECT_EQ(s.env_yaw, 0);
+  EXPECT_EQ(s.env_auto, 0);
+  EXPECT_EQ(s.zoom, 1);
+  EXPECT_TRUE(s.auto_rotate);
+
+  const char* files[] = {"a.exr", "b.exr"};
+  on_drop(s, 2, files);
+  EXPECT_EQ(s.dropped, "a.exr");
+}
+
+TEST(ViewInput, CameraAndEnvironmentFollowTheState) {
+  Camera base;
+  base.eye = {1, 2, 5};
+  base.target = {1, 2, 0};
+  ViewState s;
+  Camera c = orbit_camera(base, s);
+  EXPECT_EQ(c.eye, base.eye);
+  EXPECT_EQ(c.up, base.up);
+  s.yaw = 90;  // a quarter turn about +Y: from +Z to +X of the target
+  s.zoom = 2;
+  c = orbit_camera(base, s);
+  EXPECT_NEAR(c.eye.x, 11, 1e-12);
+  EXPECT_NEAR(c.eye.y, 2, 1e-12);
+  EXPECT_NEAR(c.eye.z, 0, 1e-12);
+  EXPECT_EQ(c.target, base.target);
+  s = ViewState{};
+  s.pitch = 30;  // looking down from above
+  c = orbit_camera(base, s);
+  EXPECT_NEAR(c.eye.y, 2 + 5 * std::sin(M_PI / 6), 1e-12);
+  EXPECT_NEAR(glm::dot(c.up, c.eye - c.target), 0, 1e-12);
+
+  s = ViewState{};
+  s.env_yaw = 20;
+  s.env_auto = 10;
+  s.env_pitch = -15;
+  const glm::dmat3 expected =
+      sh::rotation_axis_angle({0, 1, 0}, M_PI / 6) * sh::rotation_axis_angle({1, 0, 0}, -M_PI / 12);
+  const glm::dmat3 R = environment_rotation(s);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(R[i][j], expected[i][j], 1e-12);
 }
 
 TEST_F(ViewCli, HelpListsControls) {

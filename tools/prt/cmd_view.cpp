@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "look.h"
 #include "scene.h"
+#include "view_input.h"
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
@@ -17,8 +18,6 @@
 #include <prt/wavelet_playback.h>
 
 #include <fmt/core.h>
-#include <glm/geometric.hpp>
-#include <glm/trigonometric.hpp>
 
 #ifdef PRT_HAVE_GLFW
 #define GLFW_INCLUDE_NONE
@@ -94,6 +93,18 @@ std::vector<std::string> map_playlist(const std::string& env) {
 
 #ifdef PRT_HAVE_GLFW
 
+// view_input.h's codes are GLFW's.
+static_assert(input::kRelease == GLFW_RELEASE && input::kPress == GLFW_PRESS && input::kRepeat == GLFW_REPEAT);
+static_assert(input::kModShift == GLFW_MOD_SHIFT);
+static_assert(input::kMouseLeft == GLFW_MOUSE_BUTTON_LEFT && input::kMouseRight == GLFW_MOUSE_BUTTON_RIGHT);
+static_assert(input::kKeySpace == GLFW_KEY_SPACE && input::kKey0 == GLFW_KEY_0 && input::kKey9 == GLFW_KEY_9);
+static_assert(input::kKeyB == GLFW_KEY_B && input::kKeyE == GLFW_KEY_E && input::kKeyG == GLFW_KEY_G &&
+              input::kKeyH == GLFW_KEY_H && input::kKeyM == GLFW_KEY_M && input::kKeyN == GLFW_KEY_N &&
+              input::kKeyP == GLFW_KEY_P && input::kKeyQ == GLFW_KEY_Q && input::kKeyR == GLFW_KEY_R &&
+              input::kKeyS == GLFW_KEY_S && input::kKeyT == GLFW_KEY_T && input::kKeyW == GLFW_KEY_W);
+static_assert(input::kKeyLeftBracket == GLFW_KEY_LEFT_BRACKET && input::kKeyRightBracket == GLFW_KEY_RIGHT_BRACKET &&
+              input::kKeyEscape == GLFW_KEY_ESCAPE);
+
 std::string g_glfw_error;  // the last GLFW error message
 
 struct Glfw {
@@ -107,34 +118,6 @@ struct Glfw {
   Glfw(const Glfw&) = delete;
   Glfw& operator=(const Glfw&) = delete;
 };
-
-struct ViewState {
-  // Camera orbit about the default camera's target: yaw about +Y, pitch up.
-  double yaw = 0, pitch = 0, zoom = 1;
-  // Environment: yaw about +Y, pitch about +X, plus the auto-rotate angle.
-  double env_yaw = 0, env_pitch = 0, env_auto = 0;
-  bool auto_rotate = false;
-  int bands = 0;        // band limit; 0: all
-  int shading_step = 0;  // M presses (+1) and shift+M presses (-1)
-  int window = 0;        // index into kWindows
-  int map_step = 0;      // N (+1) and P (-1) presses not yet handled
-  std::string dropped;   // a map file dropped on the window, not yet loaded
-  double exposure = 0;
-  int tone = 0;          // index into kToneMaps
-  bool wavelet = false;  // showing the wavelet transfer (B toggles when both bases are loaded)
-  bool toggle_basis = false;
-  bool wavelet_lambert = false;  // in wavelet mode, M toggles to plain Lambert
-  int terms = 100;       // wavelet K
-  int selection = 0;     // 0 area, 1 magnitude
-  bool dragging = false, env_dragging = false;
-  double last_x = 0, last_y = 0;
-  bool screenshot_requested = false;
-};
-
-constexpr sh::Window kWindows[] = {sh::Window::None, sh::Window::Hanning, sh::Window::Lanczos, sh::Window::Auto};
-constexpr ToneMap kToneMaps[] = {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces};
-constexpr Shading kShadings[] = {Shading::Transfer, Shading::Direct,           Shading::Unshadowed,
-                                 Shading::Lambert,  Shading::AmbientOcclusion, Shading::BentNormal};
 
 std::string shading_label(Shading s, const Transfer& t) {
   switch (s) {
@@ -169,15 +152,11 @@ void save_window(const std::string& path, const std::vector<unsigned char>& code
   write_image(path, w, h, rgb);
 }
 
-int run_view(const ViewArgs& a) {
-  if (!a.screenshot.empty()) for_option("--screenshot", [&] { check_image_output(a.screenshot); });
-  if (a.screenshot.empty() && a.frames > 0) throw Error("--frames needs --screenshot FILE");
-  if (!a.screenshot.empty() && a.frames == 0) throw Error("--screenshot needs --frames N");
-  if (!std::filesystem::is_directory(a.screenshot_dir))
-    throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
-
+// MESH, TRANSFER and ENV, and with --second the transfer of the other basis.
+Scene load_view_scene(const ViewArgs& a, bool& have_sh, bool& have_wavelet) {
   Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true);
-  bool have_sh = scene.basis == TransferBasis::SH, have_wavelet = !have_sh;
+  have_sh = scene.basis == TransferBasis::SH;
+  have_wavelet = !have_sh;
   if (!a.second.empty()) {  // the other basis, for the same mesh
     Scene other;
     other.mesh = std::move(scene.mesh);
@@ -190,11 +169,210 @@ int run_view(const ViewArgs& a) {
     else scene.transfer = std::move(other.transfer);
     have_sh = have_wavelet = true;
   }
-  const Mesh& mesh = scene.mesh;
-  const Transfer& t = scene.transfer;
-  const Look look = parse_look(a.look, have_sh ? t.bands : 0, have_wavelet);
-  const int sh_bands = have_sh ? t.bands : 3;  // Lambert needs 3 bands of lighting
-  const int wavelet_coeffs = have_wavelet ? int(wavelet::cube_size(scene.wavelet.cube_res)) : 0;
+  return scene;
+}
+
+using WindowPtr = std::unique_ptr<GLFWwindow, void (*)(GLFWwindow*)>;
+
+// A double-buffered, sRGB-capable window with an OpenGL 4.5 core context,
+// made current (no vsync for scripted frames).
+WindowPtr open_window(const ViewArgs& a) {
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  glfwWindowHint(GLFW_SRGB_CAPABLE, GLFW_TRUE);
+  glfwWindowHint(GLFW_DOUBLEBUFFER, GLFW_TRUE);
+  WindowPtr window(glfwCreateWindow(a.width, a.height, "prt view", nullptr, nullptr), glfwDestroyWindow);
+  if (!window)
+    throw Error("cannot open a window with an OpenGL 4.5 core context (" + g_glfw_error +
+                "). For images without a window use `prt render` (headless EGL)");
+  glfwMakeContextCurrent(window.get());
+  glfwSwapInterval(a.frames > 0 ? 0 : 1);
+  return window;
+}
+
+// The window's events into the ViewState behind its user pointer (view_input.h).
+void connect_input(GLFWwindow* window, ViewState& st) {
+  glfwSetWindowUserPointer(window, &st);
+  static const auto state = [](GLFWwindow* w) -> ViewState& {
+    return *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
+  };
+  glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int mods) {
+    double x = 0, y = 0;
+    glfwGetCursorPos(w, &x, &y);
+    on_mouse_button(state(w), button, action, mods, x, y);
+  });
+  glfwSetCursorPosCallback(window, [](GLFWwindow* w, double x, double y) { on_cursor(state(w), x, y); });
+  glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) { on_scroll(state(w), dy); });
+  glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
+    switch (on_key(state(w), key, action, mods)) {
+      case KeyAction::Quit: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
+      case KeyAction::PrintControls: fmt::print(stderr, "{}\n", kControls); break;
+      case KeyAction::None: break;
+    }
+  });
+  glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) { on_drop(state(w), count, paths); });
+}
+
+// What the window shows, and how the settings of a ViewState reach the
+// renderer: the loaded transfers (SH and/or wavelet), the map and its SH
+// projection (once per map, windowed once per band/window setting), the
+// wavelet playback.
+class Viewer {
+ public:
+  // Uploads the mesh and map, sets the starting look; throws prt::Error for
+  // a shading the transfer cannot show.
+  Viewer(const ViewArgs& a, const Scene& scene, bool have_sh, bool have_wavelet, const Look& look, Renderer& renderer,
+         ViewState& st)
+      : a_(a),
+        scene_(scene),
+        t_(scene.transfer),
+        have_sh_(have_sh),
+        have_wavelet_(have_wavelet),
+        sh_bands_(have_sh ? scene.transfer.bands : 3),  // Lambert needs 3 bands of lighting
+        wavelet_coeffs_(have_wavelet ? int(wavelet::cube_size(scene.wavelet.cube_res)) : 0),
+        renderer_(renderer),
+        rotation_(sh_bands_, glm::dmat3(1.0)) {
+    if (have_sh) renderer.set_mesh(scene.mesh, t_);
+    else renderer.set_mesh(scene.mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
+    renderer.set_environment(scene.env);
+    if (have_wavelet) playback_.emplace(scene.wavelet, scene.env);
+    st.wavelet = scene.basis == TransferBasis::Wavelet;
+    st.terms = look.terms;
+    st.selection = look.selection == wavelet::Selection::AreaWeighted ? 0 : 1;
+    shading_index_ = int(std::find(std::begin(kShadings), std::end(kShadings), look.shading) - std::begin(kShadings));
+    if (st.wavelet) {
+      if (look.shading != Shading::Transfer && look.shading != Shading::Lambert)
+        throw Error("--shading " + std::string(shading_name(look.shading)) +
+                    ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
+      st.wavelet_lambert = look.shading == Shading::Lambert;
+      shading_index_ = 0;
+    } else {
+      renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
+    }
+    playlist_ = map_playlist(a.env);
+    map_index_ = std::size_t(std::find(playlist_.begin(), playlist_.end(),
+                                       std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
+                             playlist_.begin());
+    map_name_ = std::filesystem::path(a.env).filename().string();
+    projected_ = project(scene.env, sh_bands_);
+    rotated_.resize(projected_.size());
+  }
+
+  // Settings changed by keys since the last frame: a dropped or the
+  // next/previous map, the basis, the shading, bands and window, K.
+  void apply(ViewState& st) {
+    if (!st.dropped.empty()) {
+      load_map(st.dropped);
+      st.dropped.clear();
+    }
+    if (st.map_step != 0 && !playlist_.empty()) {
+      const auto n = std::ptrdiff_t(playlist_.size());
+      map_index_ = std::size_t(((std::ptrdiff_t(map_index_) + st.map_step) % n + n) % n);
+      st.map_step = 0;
+      load_map(playlist_[map_index_]);
+    }
+    if (st.toggle_basis) {
+      st.toggle_basis = false;
+      if (have_sh_ && have_wavelet_) st.wavelet = !st.wavelet;
+      if (!st.wavelet) renderer_.set_shading(kShadings[shading_index_]);
+    }
+    for (; st.shading_step != 0; st.shading_step += st.shading_step > 0 ? -1 : 1) {
+      if (st.wavelet) {
+        st.wavelet_lambert = !st.wavelet_lambert;
+        continue;
+      }
+      const int n = int(std::size(kShadings)), dir = st.shading_step > 0 ? 1 : -1;
+      do shading_index_ = ((shading_index_ + dir) % n + n) % n;
+      while (!renderer_.has_shading(kShadings[shading_index_]));
+      renderer_.set_shading(kShadings[shading_index_]);
+    }
+    keep_bands_ = !have_sh_ ? sh_bands_ : st.bands == 0 ? t_.bands : std::min(t_.bands, st.bands);
+    if (keep_bands_ != light_bands_ || st.window != light_window_) {
+      light_ = windowed_lighting(projected_, keep_bands_, kWindows[st.window]);
+      if (have_sh_) renderer_.set_band_limit(keep_bands_);
+      light_bands_ = keep_bands_;
+      light_window_ = st.window;
+    }
+    st.terms = std::min(st.terms, wavelet_coeffs_ > 0 ? wavelet_coeffs_ : st.terms);
+  }
+
+  // The lighting of environment rotation R: the rotated SH coefficients and
+  // background, and in wavelet mode the CPU relighting (or plain Lambert).
+  void light(const ViewState& st, const glm::dmat3& R) {
+    rotation_.set(R);
+    rotation_.apply(light_, rotated_);
+    renderer_.set_lighting(rotated_);
+    renderer_.set_environment_rotation(R);
+    if (st.wavelet && !st.wavelet_lambert) {
+      wavelet_ms_ = 0.1 * playback_->frame(renderer_, R, st.terms, selection(st)) + 0.9 * wavelet_ms_;
+    } else if (st.wavelet) {
+      renderer_.set_shading(Shading::Lambert);
+    }
+  }
+
+  // The title's part after the frame time: what is shown, the map, the display.
+  std::string title(const ViewState& st) const {
+    const sh::Window wk = kWindows[st.window];
+    const std::string basis =
+        !st.wavelet ? fmt::format("{} - {} bands{}", shading_label(kShadings[shading_index_], t_), keep_bands_,
+                                  wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)))
+        : st.wavelet_lambert ? std::string("plain Lambert (no PRT)")
+                             : fmt::format("wavelet {}^2 x 6, K = {} ({}), CPU {:.1f} ms", scene_.wavelet.cube_res,
+                                           st.terms, wavelet::selection_name(selection(st)), wavelet_ms_);
+    return fmt::format("{} - {} - exposure {:+.1f}, {}{}", basis, map_name_, st.exposure,
+                       tone_map_name(kToneMaps[st.tone]), st.auto_rotate ? " - auto-rotate" : "");
+  }
+
+ private:
+  static wavelet::Selection selection(const ViewState& st) {
+    return st.selection == 0 ? wavelet::Selection::AreaWeighted : wavelet::Selection::Magnitude;
+  }
+
+  void load_map(const std::string& path) {
+    try {
+      EnvMap m = load_envmap(path);
+      require_finite(m);
+      projected_ = project(m, sh_bands_);
+      renderer_.set_environment(m);
+      if (playback_) playback_->set_environment(m);
+      map_name_ = std::filesystem::path(path).filename().string();
+      light_bands_ = -1;  // re-window
+      if (!a_.quiet) fmt::print(stderr, "{}\n", describe(m));
+    } catch (const Error& e) {
+      fmt::print(stderr, "prt view: cannot use {}: {} (keeping {})\n", path, e.what(), map_name_);
+    }
+  }
+
+  const ViewArgs& a_;
+  const Scene& scene_;
+  const Transfer& t_;
+  const bool have_sh_, have_wavelet_;
+  const int sh_bands_, wavelet_coeffs_;
+  Renderer& renderer_;
+  std::optional<WaveletPlayback> playback_;
+  int shading_index_ = 0;
+  std::vector<std::string> playlist_;
+  std::size_t map_index_ = 0;
+  std::string map_name_;
+  std::vector<glm::dvec3> projected_, light_, rotated_;
+  int light_bands_ = -1, light_window_ = -1, keep_bands_ = 0;
+  sh::Rotation rotation_;
+  double wavelet_ms_ = 0;
+};
+
+int run_view(const ViewArgs& a) {
+  if (!a.screenshot.empty()) for_option("--screenshot", [&] { check_image_output(a.screenshot); });
+  if (a.screenshot.empty() && a.frames > 0) throw Error("--frames needs --screenshot FILE");
+  if (!a.screenshot.empty() && a.frames == 0) throw Error("--screenshot needs --frames N");
+  if (!std::filesystem::is_directory(a.screenshot_dir))
+    throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
+
+  bool have_sh = false, have_wavelet = false;
+  const Scene scene = load_view_scene(a, have_sh, have_wavelet);
+  const Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet);
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -203,20 +381,7 @@ int run_view(const ViewArgs& a) {
                 "For images without a display use `prt render` (headless EGL), or run under xvfb-run");
 
   Glfw glfw;
-  glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_SRGB_CAPABLE, GLFW_TRUE);
-  glfwWindowHint(GLFW_DOUBLEBUFFER, GLFW_TRUE);
-  std::unique_ptr<GLFWwindow, void (*)(GLFWwindow*)> window(
-      glfwCreateWindow(a.width, a.height, "prt view", nullptr, nullptr), glfwDestroyWindow);
-  if (!window)
-    throw Error("cannot open a window with an OpenGL 4.5 core context (" + g_glfw_error +
-                "). For images without a window use `prt render` (headless EGL)");
-  glfwMakeContextCurrent(window.get());
-  glfwSwapInterval(a.frames > 0 ? 0 : 1);
+  const WindowPtr window = open_window(a);
 
   ViewState st;
   st.bands = look.bands;
@@ -233,193 +398,30 @@ int run_view(const ViewArgs& a) {
   } release_first{renderer_slot};
 
   if (!a.quiet) {
-    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(scene.env), renderer.device());
+    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(scene.mesh), describe(scene.env), renderer.device());
     fmt::print(stderr, "{}\n", kControls);
   }
-  if (have_sh) renderer.set_mesh(mesh, t);
-  else renderer.set_mesh(mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
-  renderer.set_environment(scene.env);
-  std::optional<WaveletPlayback> wavelet_frames;
-  if (have_wavelet) wavelet_frames.emplace(scene.wavelet, scene.env);
-  st.wavelet = scene.basis == TransferBasis::Wavelet;
-  st.terms = look.terms;
-  st.selection = look.selection == wavelet::Selection::AreaWeighted ? 0 : 1;
-  int shading_index = int(std::find(std::begin(kShadings), std::end(kShadings), look.shading) - std::begin(kShadings));
-  if (st.wavelet) {
-    if (look.shading != Shading::Transfer && look.shading != Shading::Lambert)
-      throw Error("--shading " + std::string(shading_name(look.shading)) +
-                  ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
-    st.wavelet_lambert = look.shading == Shading::Lambert;
-    shading_index = 0;
-  } else {
-    renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
-  }
-
-  // The environment: projected once per map; windowed once per band/window setting.
-  const std::vector<std::string> playlist = map_playlist(a.env);
-  std::size_t map_index = std::size_t(
-      std::find(playlist.begin(), playlist.end(),
-                std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
-      playlist.begin());
-  std::string map_name = std::filesystem::path(a.env).filename().string();
-  std::vector<glm::dvec3> projected = project(scene.env, sh_bands), light;
-  int light_bands = -1, light_window = -1;
-  auto load_map = [&](const std::string& path) {
-    try {
-      EnvMap m = load_envmap(path);
-      require_finite(m);
-      projected = project(m, sh_bands);
-      renderer.set_environment(m);
-      if (wavelet_frames) wavelet_frames->set_environment(m);
-      map_name = std::filesystem::path(path).filename().string();
-      light_bands = -1;  // re-window
-      if (!a.quiet) fmt::print(stderr, "{}\n", describe(m));
-    } catch (const Error& e) {
-      fmt::print(stderr, "prt view: cannot use {}: {} (keeping {})\n", path, e.what(), map_name);
-    }
-  };
-  std::vector<glm::dvec3> rotated(projected.size());
-  sh::Rotation rotation(sh_bands, glm::dmat3(1.0));
-  Camera base = default_camera(mesh, a.fov);
+  Viewer viewer(a, scene, have_sh, have_wavelet, look, renderer, st);
+  Camera base = default_camera(scene.mesh, a.fov);
   if (!a.camera.empty()) parse_camera(a.camera, base);
-  const glm::dvec3 offset0 = base.eye - base.target;
-
-  glfwSetWindowUserPointer(window.get(), &st);
-  glfwSetMouseButtonCallback(window.get(), [](GLFWwindow* w, int button, int action, int mods) {
-    auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
-    glfwGetCursorPos(w, &s.last_x, &s.last_y);
-    const bool press = action == GLFW_PRESS;
-    if (button == GLFW_MOUSE_BUTTON_RIGHT || (button == GLFW_MOUSE_BUTTON_LEFT && (mods & GLFW_MOD_SHIFT))) {
-      s.env_dragging = press;
-      if (!press) s.dragging = false;
-    } else if (button == GLFW_MOUSE_BUTTON_LEFT) {
-      s.dragging = press;
-      if (!press) s.env_dragging = false;
-    }
-  });
-  glfwSetCursorPosCallback(window.get(), [](GLFWwindow* w, double x, double y) {
-    auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
-    const double dx = x - s.last_x, dy = y - s.last_y;
-    s.last_x = x;
-    s.last_y = y;
-    if (s.env_dragging) {
-      s.env_yaw += 0.4 * dx;
-      s.env_pitch = std::clamp(s.env_pitch + 0.4 * dy, -90.0, 90.0);
-    } else if (s.dragging) {
-      s.yaw -= 0.4 * dx;
-      s.pitch = std::clamp(s.pitch + 0.4 * dy, -89.0, 89.0);
-    }
-  });
-  glfwSetScrollCallback(window.get(), [](GLFWwindow* w, double, double dy) {
-    auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
-    s.zoom = std::clamp(s.zoom * std::pow(0.9, dy), 0.05, 20.0);
-  });
-  glfwSetKeyCallback(window.get(), [](GLFWwindow* w, int key, int, int action, int mods) {
-    if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
-    auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
-    const bool shift = (mods & GLFW_MOD_SHIFT) != 0;
-    if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) {
-      s.bands = key - GLFW_KEY_0;  // 0: all; clamped to the file's bands by the frame loop
-      return;
-    }
-    switch (key) {
-      case GLFW_KEY_ESCAPE:
-      case GLFW_KEY_Q: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
-      case GLFW_KEY_SPACE: s.auto_rotate = !s.auto_rotate; break;
-      case GLFW_KEY_S: s.screenshot_requested = true; break;
-      case GLFW_KEY_M: s.shading_step += shift ? -1 : 1; break;
-      case GLFW_KEY_W: s.window = (s.window + 1) % int(std::size(kWindows)); break;
-      case GLFW_KEY_T: s.tone = (s.tone + 1) % int(std::size(kToneMaps)); break;
-      case GLFW_KEY_E: s.exposure = std::clamp(s.exposure + (shift ? -0.5 : 0.5), -20.0, 20.0); break;
-      case GLFW_KEY_N: ++s.map_step; break;
-      case GLFW_KEY_P: --s.map_step; break;
-      case GLFW_KEY_H: fmt::print(stderr, "{}\n", kControls); break;
-      case GLFW_KEY_B: s.toggle_basis = true; break;
-      case GLFW_KEY_LEFT_BRACKET: s.terms = std::max(1, s.terms / 2); break;
-      case GLFW_KEY_RIGHT_BRACKET: s.terms = std::min(1 << 20, s.terms * 2); break;
-      case GLFW_KEY_G: s.selection = 1 - s.selection; break;
-      case GLFW_KEY_R:  // the view; the look (bands, shading, exposure, ...) stays
-        s.yaw = s.pitch = s.env_yaw = s.env_pitch = s.env_auto = 0;
-        s.zoom = 1;
-        break;
-      default: break;
-    }
-  });
-  glfwSetDropCallback(window.get(), [](GLFWwindow* w, int count, const char** paths) {
-    auto& s = *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
-    if (count > 0) s.dropped = paths[0];
-  });
+  connect_input(window.get(), st);
 
   using Clock = std::chrono::steady_clock;
   auto last = Clock::now(), title_time = last;
-  double frame_ms = 0, wavelet_ms = 0;
+  double frame_ms = 0;
   int frame = 0, title_frames = 0;
   while (!glfwWindowShouldClose(window.get())) {
     const auto now = Clock::now();
-    const double dt = std::chrono::duration<double>(now - last).count();
+    advance(st, std::chrono::duration<double>(now - last).count());
     last = now;
-    if (st.auto_rotate) st.env_auto = std::fmod(st.env_auto + 30.0 * dt, 360.0);
-
-    Camera cam = base;
-    const double yaw = glm::radians(st.yaw), pitch = glm::radians(st.pitch);
-    const glm::dmat3 orbit = sh::rotation_axis_angle({0, 1, 0}, yaw) * sh::rotation_axis_angle({1, 0, 0}, -pitch);
-    cam.eye = base.target + orbit * offset0 * st.zoom;
-    cam.up = orbit * base.up;
-
-    // Settings changed by keys since the last frame.
-    if (!st.dropped.empty()) {
-      load_map(st.dropped);
-      st.dropped.clear();
-    }
-    if (st.map_step != 0 && !playlist.empty()) {
-      const auto n = std::ptrdiff_t(playlist.size());
-      map_index = std::size_t(((std::ptrdiff_t(map_index) + st.map_step) % n + n) % n);
-      st.map_step = 0;
-      load_map(playlist[map_index]);
-    }
-    if (st.toggle_basis) {
-      st.toggle_basis = false;
-      if (have_sh && have_wavelet) st.wavelet = !st.wavelet;
-      if (!st.wavelet) renderer.set_shading(kShadings[shading_index]);
-    }
-    for (; st.shading_step != 0; st.shading_step += st.shading_step > 0 ? -1 : 1) {
-      if (st.wavelet) {
-        st.wavelet_lambert = !st.wavelet_lambert;
-        continue;
-      }
-      const int n = int(std::size(kShadings)), dir = st.shading_step > 0 ? 1 : -1;
-      do shading_index = ((shading_index + dir) % n + n) % n;
-      while (!renderer.has_shading(kShadings[shading_index]));
-      renderer.set_shading(kShadings[shading_index]);
-    }
-    const int keep_bands = !have_sh ? sh_bands : st.bands == 0 ? t.bands : std::min(t.bands, st.bands);
-    if (keep_bands != light_bands || st.window != light_window) {
-      light = windowed_lighting(projected, keep_bands, kWindows[st.window]);
-      if (have_sh) renderer.set_band_limit(keep_bands);
-      light_bands = keep_bands;
-      light_window = st.window;
-    }
-    st.terms = std::min(st.terms, wavelet_coeffs > 0 ? wavelet_coeffs : st.terms);
-    const wavelet::Selection selection =
-        st.selection == 0 ? wavelet::Selection::AreaWeighted : wavelet::Selection::Magnitude;
-    const Display shown{st.exposure, kToneMaps[st.tone]};
-
-    const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, glm::radians(st.env_yaw + st.env_auto)) *
-                         sh::rotation_axis_angle({1, 0, 0}, glm::radians(st.env_pitch));
-    rotation.set(R);
-    rotation.apply(light, rotated);
-    renderer.set_lighting(rotated);
-    renderer.set_environment_rotation(R);
-    if (st.wavelet && !st.wavelet_lambert) {
-      wavelet_ms = 0.1 * wavelet_frames->frame(renderer, R, st.terms, selection) + 0.9 * wavelet_ms;  // vertex colours
-    } else if (st.wavelet) {
-      renderer.set_shading(Shading::Lambert);
-    }
+    const Camera cam = orbit_camera(base, st);
+    viewer.apply(st);
+    viewer.light(st, environment_rotation(st));
 
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window.get(), &fw, &fh);
     if (fw > 0 && fh > 0) {
-      renderer.present(cam, fw, fh, fw, fh, shown);
+      renderer.present(cam, fw, fh, fw, fh, Display{st.exposure, kToneMaps[st.tone]});
       ++frame;
       const bool last_scripted = a.frames > 0 && frame >= a.frames;
       if (st.screenshot_requested || last_scripted) {
@@ -437,19 +439,9 @@ int run_view(const ViewArgs& a) {
       const double fps = title_frames / std::chrono::duration<double>(Clock::now() - title_time).count();
       title_time = Clock::now();
       title_frames = 0;
-      const sh::Window wk = kWindows[st.window];
-      const std::string basis =
-          !st.wavelet ? fmt::format("{} - {} bands{}", shading_label(kShadings[shading_index], t), keep_bands,
-                                    wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)))
-          : st.wavelet_lambert ? std::string("plain Lambert (no PRT)")
-                               : fmt::format("wavelet {}^2 x 6, K = {} ({}), CPU {:.1f} ms", scene.wavelet.cube_res,
-                                             st.terms, wavelet::selection_name(selection), wavelet_ms);
-      glfwSetWindowTitle(window.get(), fmt::format("prt view - {:.2f} ms/frame ({:.0f} fps) - {} - {} - exposure "
-                                                   "{:+.1f}, {}{}",
-                                                   frame_ms, fps, basis, map_name, st.exposure,
-                                                   tone_map_name(kToneMaps[st.tone]),
-                                                   st.auto_rotate ? " - auto-rotate" : "")
-                                           .c_str());
+      glfwSetWindowTitle(window.get(),
+                         fmt::format("prt view - {:.2f} ms/frame ({:.0f} fps) - {}", frame_ms, fps, viewer.title(st))
+                             .c_str());
     }
     glfwPollEvents();
   }

@@ -1,0 +1,96 @@
+// prt view's input: events to ViewState. See view_input.h.
+#include "view_input.h"
+
+#include <prt/rotation.h>
+
+#include <glm/trigonometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+
+namespace prt::cli {
+
+void on_mouse_button(ViewState& s, int button, int action, int mods, double x, double y) {
+  s.last_x = x;
+  s.last_y = y;
+  const bool press = action == input::kPress;
+  if (button == input::kMouseRight || (button == input::kMouseLeft && (mods & input::kModShift))) {
+    s.env_dragging = press;
+    if (!press) s.dragging = false;
+  } else if (button == input::kMouseLeft) {
+    s.dragging = press;
+    if (!press) s.env_dragging = false;
+  }
+}
+
+void on_cursor(ViewState& s, double x, double y) {
+  const double dx = x - s.last_x, dy = y - s.last_y;
+  s.last_x = x;
+  s.last_y = y;
+  if (s.env_dragging) {
+    s.env_yaw += 0.4 * dx;
+    s.env_pitch = std::clamp(s.env_pitch + 0.4 * dy, -90.0, 90.0);
+  } else if (s.dragging) {
+    s.yaw -= 0.4 * dx;
+    s.pitch = std::clamp(s.pitch + 0.4 * dy, -89.0, 89.0);
+  }
+}
+
+void on_scroll(ViewState& s, double dy) { s.zoom = std::clamp(s.zoom * std::pow(0.9, dy), 0.05, 20.0); }
+
+KeyAction on_key(ViewState& s, int key, int action, int mods) {
+  if (action != input::kPress && action != input::kRepeat) return KeyAction::None;
+  const bool shift = (mods & input::kModShift) != 0;
+  if (key >= input::kKey0 && key <= input::kKey9) {
+    s.bands = key - input::kKey0;  // 0: all; clamped to the file's bands by the frame loop
+    return KeyAction::None;
+  }
+  switch (key) {
+    case input::kKeyEscape:
+    case input::kKeyQ: return KeyAction::Quit;
+    case input::kKeyH: return KeyAction::PrintControls;
+    case input::kKeySpace: s.auto_rotate = !s.auto_rotate; break;
+    case input::kKeyS: s.screenshot_requested = true; break;
+    case input::kKeyM: s.shading_step += shift ? -1 : 1; break;
+    case input::kKeyW: s.window = (s.window + 1) % int(std::size(kWindows)); break;
+    case input::kKeyT: s.tone = (s.tone + 1) % int(std::size(kToneMaps)); break;
+    case input::kKeyE: s.exposure = std::clamp(s.exposure + (shift ? -0.5 : 0.5), -20.0, 20.0); break;
+    case input::kKeyN: ++s.map_step; break;
+    case input::kKeyP: --s.map_step; break;
+    case input::kKeyB: s.toggle_basis = true; break;
+    case input::kKeyLeftBracket: s.terms = std::max(1, s.terms / 2); break;
+    case input::kKeyRightBracket: s.terms = std::min(1 << 20, s.terms * 2); break;
+    case input::kKeyG: s.selection = 1 - s.selection; break;
+    case input::kKeyR:  // the view; the look (bands, shading, exposure, ...) stays
+      s.yaw = s.pitch = s.env_yaw = s.env_pitch = s.env_auto = 0;
+      s.zoom = 1;
+      break;
+    default: break;
+  }
+  return KeyAction::None;
+}
+
+void on_drop(ViewState& s, int count, const char** paths) {
+  if (count > 0) s.dropped = paths[0];
+}
+
+void advance(ViewState& s, double dt) {
+  if (s.auto_rotate) s.env_auto = std::fmod(s.env_auto + 30.0 * dt, 360.0);
+}
+
+Camera orbit_camera(const Camera& base, const ViewState& s) {
+  Camera cam = base;
+  const double yaw = glm::radians(s.yaw), pitch = glm::radians(s.pitch);
+  const glm::dmat3 orbit = sh::rotation_axis_angle({0, 1, 0}, yaw) * sh::rotation_axis_angle({1, 0, 0}, -pitch);
+  cam.eye = base.target + orbit * (base.eye - base.target) * s.zoom;
+  cam.up = orbit * base.up;
+  return cam;
+}
+
+glm::dmat3 environment_rotation(const ViewState& s) {
+  return sh::rotation_axis_angle({0, 1, 0}, glm::radians(s.env_yaw + s.env_auto)) *
+         sh::rotation_axis_angle({1, 0, 0}, glm::radians(s.env_pitch));
+}
+
+}  // namespace prt::cli

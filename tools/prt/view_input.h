@@ -1,0 +1,88 @@
+// prt view's input: what the keys, the mouse, the scroll wheel and dropped
+// files change (ViewState), apart from the window that delivers them and the
+// frame loop that applies the state to the renderer (cmd_view.cpp).
+//
+// Events come with GLFW's codes (keys, mouse buttons, actions, modifiers).
+// The constants in `input` are those codes, checked against GLFW/glfw3.h in
+// cmd_view.cpp, so that this file needs no GLFW and the mapping is tested
+// without a window (tests/test_view.cpp).
+#pragma once
+
+#include <prt/filter.h>
+#include <prt/render.h>
+
+#include <glm/mat3x3.hpp>
+
+#include <string>
+
+namespace prt::cli {
+
+namespace input {  // GLFW's codes (GLFW/glfw3.h)
+inline constexpr int kRelease = 0, kPress = 1, kRepeat = 2;
+inline constexpr int kModShift = 0x0001;
+inline constexpr int kMouseLeft = 0, kMouseRight = 1;
+inline constexpr int kKeySpace = 32, kKey0 = 48, kKey9 = 57;
+inline constexpr int kKeyB = 66, kKeyE = 69, kKeyG = 71, kKeyH = 72, kKeyM = 77, kKeyN = 78, kKeyP = 80,
+                     kKeyQ = 81, kKeyR = 82, kKeyS = 83, kKeyT = 84, kKeyW = 87;
+inline constexpr int kKeyLeftBracket = 91, kKeyRightBracket = 93, kKeyEscape = 256;
+}  // namespace input
+
+// What W, T and M cycle through (ViewState holds indices into these).
+inline constexpr sh::Window kWindows[] = {sh::Window::None, sh::Window::Hanning, sh::Window::Lanczos,
+                                          sh::Window::Auto};
+inline constexpr ToneMap kToneMaps[] = {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces};
+inline constexpr Shading kShadings[] = {Shading::Transfer, Shading::Direct,           Shading::Unshadowed,
+                                        Shading::Lambert,  Shading::AmbientOcclusion, Shading::BentNormal};
+
+struct ViewState {
+  // Camera orbit about the base camera's target: yaw about +Y, pitch up (degrees).
+  double yaw = 0, pitch = 0, zoom = 1;
+  // Environment: yaw about +Y, pitch about +X, plus the auto-rotate angle (degrees).
+  double env_yaw = 0, env_pitch = 0, env_auto = 0;
+  bool auto_rotate = false;
+  int bands = 0;         // band limit; 0: all (the frame loop clamps it to the file's)
+  int shading_step = 0;  // M presses (+1) and shift+M presses (-1) not yet applied
+  int window = 0;        // index into kWindows
+  int map_step = 0;      // N (+1) and P (-1) presses not yet applied
+  std::string dropped;   // a map file dropped on the window, not yet loaded
+  double exposure = 0;   // stops, in [-20, 20]
+  int tone = 0;          // index into kToneMaps
+  bool wavelet = false;  // showing the wavelet transfer (B toggles when both bases are loaded)
+  bool toggle_basis = false;     // B pressed, not yet applied
+  bool wavelet_lambert = false;  // in wavelet mode, M toggles to plain Lambert
+  int terms = 100;               // wavelet K, in [1, 2^20] (the frame loop clamps it to 6 r^2)
+  int selection = 0;             // 0 area, 1 magnitude
+  bool dragging = false, env_dragging = false;
+  double last_x = 0, last_y = 0;  // the cursor at the last event
+  bool screenshot_requested = false;
+};
+
+// What a key asks of the window beyond the state.
+enum class KeyAction { None, Quit, PrintControls };
+
+// A mouse button pressed or released with the cursor at (x, y): left-drag
+// orbits the camera, right-drag or shift+left-drag turns the environment.
+void on_mouse_button(ViewState& s, int button, int action, int mods, double x, double y);
+// The cursor moved to (x, y): 0.4 degrees per pixel of the drag under way
+// (camera pitch clamped to +-89, environment pitch to +-90).
+void on_cursor(ViewState& s, double x, double y);
+// Scrolled dy steps: zoom x 0.9^dy, clamped to [0.05, 20].
+void on_scroll(ViewState& s, double dy);
+// A key pressed or repeated (releases do nothing): 0-9 bands, space
+// auto-rotate, S screenshot, M / shift+M shading, W window, T tone map,
+// E / shift+E exposure +- half a stop, N / P maps, B basis, [ ] K / 2 and
+// x 2, G selection, R reset the view (not the look), H and Esc / Q (returned).
+KeyAction on_key(ViewState& s, int key, int action, int mods);
+// Files dropped on the window: the first is loaded by the next frame.
+void on_drop(ViewState& s, int count, const char** paths);
+
+// dt seconds passed: auto-rotation turns the environment 30 degrees a second.
+void advance(ViewState& s, double dt);
+// `base` orbited about its target by the state's yaw and pitch, its distance
+// to the target times the zoom.
+Camera orbit_camera(const Camera& base, const ViewState& s);
+// The environment's rotation: about +Y by env_yaw + env_auto, after a turn
+// about +X by env_pitch.
+glm::dmat3 environment_rotation(const ViewState& s);
+
+}  // namespace prt::cli
