@@ -2,8 +2,11 @@
 
 #include <prt/error.h>
 #include <prt/io.h>
+#include <prt/names.h>
 
 #include "image_io.h"
+
+#include <fmt/format.h>
 
 #include <tbb/parallel_for.h>
 
@@ -12,7 +15,6 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <sstream>
 
 namespace prt {
 
@@ -89,25 +91,24 @@ double cube_texel_solid_angle(int u, int v, int N) {
 
 // ---- mappings -------------------------------------------------------------
 
-Mapping parse_mapping(std::string_view name) {
-  if (name == "auto") return Mapping::Auto;
-  if (name == "latlong") return Mapping::LatLong;
-  if (name == "hcross") return Mapping::HCross;
-  if (name == "vcross") return Mapping::VCross;
-  if (name == "faces") return Mapping::Faces;
-  throw Error("unknown mapping '" + std::string(name) + "' (expected auto, latlong, hcross, vcross or faces)");
-}
+namespace {
+// The option names parse_mapping takes, and the words mapping_name describes a layout with.
+constexpr EnumName<Mapping> kMappingOptions[] = {
+    {Mapping::Auto, "auto"},     {Mapping::LatLong, "latlong"}, {Mapping::HCross, "hcross"},
+    {Mapping::VCross, "vcross"}, {Mapping::Faces, "faces"},
+};
+constexpr EnumName<Mapping> kMappingNames[] = {
+    {Mapping::Auto, "auto"},
+    {Mapping::LatLong, "lat-long"},
+    {Mapping::HCross, "horizontal cross"},
+    {Mapping::VCross, "vertical cross"},
+    {Mapping::Faces, "cube faces"},
+};
+}  // namespace
 
-std::string_view mapping_name(Mapping m) {
-  switch (m) {
-    case Mapping::Auto: return "auto";
-    case Mapping::LatLong: return "lat-long";
-    case Mapping::HCross: return "horizontal cross";
-    case Mapping::VCross: return "vertical cross";
-    case Mapping::Faces: return "cube faces";
-  }
-  return "?";
-}
+Mapping parse_mapping(std::string_view name) { return parse_enum(kMappingOptions, name, "mapping"); }
+
+std::string_view mapping_name(Mapping m) { return enum_name(kMappingNames, m); }
 
 void StatsAccumulator::Run::add(const float* rgb, std::size_t first, std::size_t count) {
   for (std::size_t i = 0; i < count; ++i) {
@@ -203,7 +204,7 @@ void copy_face(const RawImage& img, int x0, int y0, int N, bool rotate180, float
 }
 
 std::string shape_string(const RawImage& img) {
-  return std::to_string(img.width) + "x" + std::to_string(img.height);
+  return fmt::format("{}x{}", img.width, img.height);
 }
 
 }  // namespace
@@ -236,7 +237,7 @@ EnvMap make_cube(int size, std::vector<float> rgb, std::string source) {
 }
 
 Mapping mapping_of_shape(const std::string& path, int W, int H, Mapping mapping) {
-  const std::string shape = std::to_string(W) + "x" + std::to_string(H);
+  const std::string shape = fmt::format("{}x{}", W, H);
   switch (mapping) {
     case Mapping::Auto:
       if (W == 2 * H) return Mapping::LatLong;
@@ -302,7 +303,7 @@ EnvMap load_cube_faces(const std::array<std::string, 6>& paths) {
       channels = img.channels;
     } else if (img.width != N) {
       throw Error(paths[f] + ": cube face " + std::string(cube_face_name(f)) + " is " + shape_string(img) +
-                  " but " + paths[0] + " is " + std::to_string(N) + "x" + std::to_string(N));
+                  " but " + paths[0] + " is " + fmt::format("{}x{}", N, N));
     }
     std::copy(img.rgb.begin(), img.rgb.end(), faces.begin() + std::size_t(f) * N * N * 3);
   }
@@ -313,32 +314,29 @@ EnvMap load_cube_faces(const std::array<std::string, 6>& paths) {
 
 void require_finite(const EnvMap& map) {
   if (map.stats.nonfinite == 0) return;
-  std::ostringstream os;
-  os << map.source << ": " << map.stats.nonfinite << " pixel(s) are NaN or infinite";
+  std::string s = fmt::format("{}: {} pixel(s) are NaN or infinite", map.source, map.stats.nonfinite);
   const long i = map.stats.first_nonfinite;
   if (map.is_cube()) {
     const long n = long(map.width) * map.width;
-    os << " (first: face " << cube_face_name(int(i / n)) << ", x " << (i % n) % map.width << ", y "
-       << (i % n) / map.width << ")";
+    s += fmt::format(" (first: face {}, x {}, y {})", cube_face_name(int(i / n)), (i % n) % map.width,
+                     (i % n) / map.width);
   } else {
-    os << " (first at x " << i % map.width << ", y " << i / map.width << ")";
+    s += fmt::format(" (first at x {}, y {})", i % map.width, i / map.width);
   }
-  os << "; fix the map (e.g. oiiotool --fixnan black) before projecting";
-  throw Error(os.str());
+  s += "; fix the map (e.g. oiiotool --fixnan black) before projecting";
+  throw Error(s);
 }
 
 std::string describe(const EnvMap& m) {
-  std::ostringstream os;
-  os.precision(6);
-  os << m.source << ": ";
+  std::string s = m.source + ": ";
   if (m.is_cube())
-    os << "cube map, faces " << m.width << "x" << m.width << " (from " << m.source_layout << ")";
+    s += fmt::format("cube map, faces {}x{} (from {})", m.width, m.width, m.source_layout);
   else
-    os << m.width << "x" << m.height << " lat-long";
-  os << ", " << m.source_channels << " channel" << (m.source_channels == 1 ? "" : "s") << ", min " << m.stats.min
-     << ", max " << m.stats.max << ", mean " << m.stats.mean << ", " << m.stats.negative << " negative, "
-     << m.stats.nonfinite << " non-finite pixels";
-  return os.str();
+    s += fmt::format("{}x{} lat-long", m.width, m.height);
+  s += fmt::format(", {} channel{}, min {:g}, max {:g}, mean {:g}, {} negative, {} non-finite pixels", m.source_channels,
+                   m.source_channels == 1 ? "" : "s", m.stats.min, m.stats.max, m.stats.mean, m.stats.negative,
+                   m.stats.nonfinite);
+  return s;
 }
 
 namespace {

@@ -1,11 +1,11 @@
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 namespace prt::detail {
 
 void check_failed(const char* expr, const char* file, int line, const std::string& values) {
-  std::ostringstream os;
-  os << "internal error: check failed: " << expr << values << " at " << file << ":" << line;
-  throw InternalError(os.str());
+  throw InternalError(fmt::format("internal error: check failed: {}{} at {}:{}", expr, values, file, line));
 }
 
 }  // namespace prt::detail

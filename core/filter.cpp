@@ -1,8 +1,11 @@
 #include <prt/filter.h>
 
 #include <prt/error.h>
+#include <prt/names.h>
 #include <prt/quadrature.h>
 #include <prt/sh.h>
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -42,28 +45,21 @@ void scale_bands_impl(std::span<V> c, std::span<const double> f) {
 void scale_bands(std::span<glm::dvec3> c, std::span<const double> f) { scale_bands_impl(c, f); }
 void scale_bands(std::span<double> c, std::span<const double> f) { scale_bands_impl(c, f); }
 
-Window parse_window(std::string_view name) {
-  if (name == "none") return Window::None;
-  if (name == "hanning" || name == "hann") return Window::Hanning;
-  if (name == "lanczos") return Window::Lanczos;
-  if (name == "auto") return Window::Auto;
-  throw Error("unknown window '" + std::string(name) + "' (expected none, hanning, lanczos or auto)");
-}
+namespace {
+constexpr EnumName<Window> kWindowNames[] = {
+    {Window::None, "none"},       {Window::Hanning, "hanning"}, {Window::Hanning, "hann", true},
+    {Window::Lanczos, "lanczos"}, {Window::Auto, "auto"},
+};
+}  // namespace
 
-std::string_view window_name(Window w) {
-  switch (w) {
-    case Window::None: return "none";
-    case Window::Hanning: return "hanning";
-    case Window::Lanczos: return "lanczos";
-    case Window::Auto: return "auto";
-  }
-  return "?";
-}
+Window parse_window(std::string_view name) { return parse_enum(kWindowNames, name, "window"); }
+
+std::string_view window_name(Window w) { return enum_name(kWindowNames, w); }
 
 std::vector<double> window_factors(Window kind, int bands, double width) {
   PRT_CHECK(kind != Window::Auto);
   if (kind != Window::None && !(width > 0))
-    throw Error("window width must be positive, got " + std::to_string(width));
+    throw Error(fmt::format("window width must be positive, got {:f}", width));
   std::vector<double> f(bands, 1.0);
   for (int l = 1; l < bands; ++l) {
     const double t = l / width;

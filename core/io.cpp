@@ -2,6 +2,8 @@
 
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 #include <unistd.h>
 
 #include <atomic>
@@ -37,7 +39,7 @@ void write_atomically(const std::string& path, const std::function<void(const st
   // format by extension).
   std::string name = ".";
   name += p.stem().string();
-  name += ".tmp" + std::to_string(getpid()) + "-" + std::to_string(counter++);
+  name += fmt::format(".tmp{}-{}", getpid(), counter++);
   name += p.extension().string();
   const fs::path tmp = p.parent_path() / name;
   try {

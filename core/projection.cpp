@@ -1,6 +1,7 @@
 #include <prt/projection.h>
 
 #include <prt/error.h>
+#include <prt/names.h>
 #include <prt/quadrature.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
@@ -14,13 +15,13 @@
 
 namespace prt {
 
-Quadrature parse_quadrature(std::string_view name) {
-  if (name == "box") return Quadrature::Box;
-  if (name == "point") return Quadrature::Point;
-  throw Error("unknown quadrature '" + std::string(name) + "' (expected box or point)");
-}
+namespace {
+constexpr EnumName<Quadrature> kQuadratureNames[] = {{Quadrature::Box, "box"}, {Quadrature::Point, "point"}};
+}  // namespace
 
-std::string_view quadrature_name(Quadrature q) { return q == Quadrature::Box ? "box" : "point"; }
+Quadrature parse_quadrature(std::string_view name) { return parse_enum(kQuadratureNames, name, "quadrature"); }
+
+std::string_view quadrature_name(Quadrature q) { return enum_name(kQuadratureNames, q); }
 
 namespace {
 

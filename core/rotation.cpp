@@ -3,6 +3,8 @@
 #include <prt/error.h>
 #include <prt/sh.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <string>
 
@@ -48,7 +50,7 @@ void Rotation::set(const glm::dmat3& R) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) err = std::max(err, std::abs(I[i][j] - (i == j ? 1.0 : 0.0)));
   if (!(err <= kRotationTolerance))
-    throw Error("not a rotation matrix (|R^T R - I| or |det R - 1| = " + std::to_string(err) + ")");
+    throw Error(fmt::format("not a rotation matrix (|R^T R - I| or |det R - 1| = {:f})", err));
   R_ = R;
 
   d_[0] = 1.0;

@@ -2,6 +2,8 @@
 
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -73,8 +75,7 @@ int bands_of(std::size_t n) {
 
 void check_bands(int bands, const char* what) {
   if (bands < 1 || bands > kMaxBands)
-    throw Error(std::string(what) + " must be between 1 and " + std::to_string(kMaxBands) + ", got " +
-                std::to_string(bands));
+    throw Error(fmt::format("{} must be between 1 and {}, got {}", what, kMaxBands, bands));
 }
 
 template <typename T>

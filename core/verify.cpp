@@ -7,6 +7,8 @@
 #include <prt/rotation.h>
 #include <prt/sh.h>
 
+#include <fmt/format.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -300,20 +302,20 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     if (on_check) on_check(out.back());
   };
   const int N = opt.bands_max, NF = std::min(opt.float_bands, N);
-  const std::string nb = std::to_string(N) + " bands";
+  const std::string nb = fmt::format("{} bands", N);
   const std::vector<dvec3> dirs = test_directions(500, 7);
 
   // basis
   add("basis", "orthonormality, Gauss-Legendre product rule, " + nb + ": max |G - I|", orthonormality_error<double>(N),
       kExact, kExactWhy);
-  add("basis", "orthonormality, float evaluation, " + std::to_string(NF) + " bands: max |G - I|",
+  add("basis", fmt::format("orthonormality, float evaluation, {} bands: max |G - I|", NF),
       orthonormality_error<float>(NF), kFloat, kFloatWhy);
   add("basis", "closed forms of bands 0-2 (incl. Condon-Shortley signs): max |Y - formula|", closed_form_error(dirs),
       kExact, kExactWhy);
   add("basis", "std::sph_legendre oracle, " + nb + ", poles included: max |Y - ref| / band norm",
       sph_legendre_error(N, dirs), kExact, "independent implementation in double; both accurate to ~1e-14");
   add("basis", "polar factor form agrees with direction form, " + nb, polar_vs_eval_error(N, dirs), kExact, kExactWhy);
-  add("basis", "float vs double evaluation, " + std::to_string(NF) + " bands: max |Yf - Yd| / band norm",
+  add("basis", fmt::format("float vs double evaluation, {} bands: max |Yf - Yd| / band norm", NF),
       float_eval_error(NF, dirs), kFloat, kFloatWhy);
 
   // closed-form projections
@@ -385,14 +387,14 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     const auto c = random_coefficients(n, 17);
     const double cn = norm(c);
     const EnvMap ll = make_latlong(256, 128, sample_latlong(c, 256, 128), "band-limited");
-    add("projection", "band-limited " + std::to_string(n) + "-band function, 256x128 lat-long, point rule: |dc|/|c|",
+    add("projection", fmt::format("band-limited {}-band function, 256x128 lat-long, point rule: |dc|/|c|", n),
         norm([&] {
           auto p = project(ll, n, Quadrature::Point);
           for (std::size_t k = 0; k < p.size(); ++k) p[k] -= c[k];
           return p;
         }()) / cn,
         kPixelFloat, std::string(kPixelFloatWhy) + "(Fejer rule, H >= 2n-1)");
-    add("projection", "band-limited " + std::to_string(n) + "-band function, 256x128 lat-long, box rule: |dc|/|c|",
+    add("projection", fmt::format("band-limited {}-band function, 256x128 lat-long, box rule: |dc|/|c|", n),
         norm([&] {
           auto p = project(ll, n, Quadrature::Box);
           for (std::size_t k = 0; k < p.size(); ++k) p[k] -= c[k];
@@ -400,7 +402,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
         }()) / cn,
         1e-3, "second order, O(h^2): point samples read as texel averages");
     const EnvMap cube = make_cube(64, sample_cube(c, 64), "band-limited cube");
-    add("projection", "band-limited " + std::to_string(n) + "-band function, 6x64x64 cube map: |dc|/|c|",
+    add("projection", fmt::format("band-limited {}-band function, 6x64x64 cube map: |dc|/|c|", n),
         norm([&] {
           auto p = project(cube, n);
           for (std::size_t k = 0; k < p.size(); ++k) p[k] -= c[k];
@@ -430,8 +432,8 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
         }
     auto got = project(cube, n);
     for (std::size_t k = 0; k < got.size(); ++k) got[k] -= direct[k];
-    add("projection", "cube great-circle row algorithm vs texel-by-texel sum, random 6x9x9, " + std::to_string(n) +
-                          " bands: |dc|/|c|",
+    add("projection",
+        fmt::format("cube great-circle row algorithm vs texel-by-texel sum, random 6x9x9, {} bands: |dc|/|c|", n),
         norm(got) / norm(direct), kExact, kExactWhy);
   }
   {
@@ -442,7 +444,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     auto c = project(ll, n);
     std::vector<dvec3> ref(c.size(), dvec3(0.0));
     ref[0] = dvec3(std::sqrt(4.0 * M_PI));
-    add("projection", "constant map, 64x32 lat-long: max |c - sqrt(4pi) e_0|, " + std::to_string(n) + " bands",
+    add("projection", fmt::format("constant map, 64x32 lat-long: max |c - sqrt(4pi) e_0|, {} bands", n),
         max_abs_diff(c, ref), kExact, kExactWhy);
     sh::scale_bands(std::span<dvec3>(c), sh::clamped_cosine_factors(n));
     double e = 0.0;
@@ -480,8 +482,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     for (int ch = 0; ch < 3; ++ch) rgb[(std::size_t(20) * W + 37) * 3 + ch] = 1e5f;
     auto c = project(make_latlong(W, H, std::move(rgb), "sun"), n);
     const sh::AutoWindow r = sh::apply_window(std::span<dvec3>(c), sh::Window::Auto, 0);
-    add("filter", "auto window on a 1e5 sun: min of reconstruction before " + std::to_string(r.min_before) +
-                      ", after (>= 0)",
+    add("filter", fmt::format("auto window on a 1e5 sun: min of reconstruction before {:f}, after (>= 0)", r.min_before),
         std::max(0.0, -r.min_after), 0.0, "the window's guarantee on its check grid");
   }
   // Hard cases (docs/HARD_CASES.md; tests/hard_cases has the rest).

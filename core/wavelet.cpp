@@ -3,6 +3,9 @@
 #include <prt/wavelet.h>
 
 #include <prt/error.h>
+#include <prt/names.h>
+
+#include <fmt/format.h>
 
 #include <tbb/parallel_for.h>
 
@@ -18,7 +21,7 @@ bool valid_resolution(int r) { return r >= 2 && r <= 256 && (r & (r - 1)) == 0; 
 
 void check_resolution(int r, const char* what) {
   if (!valid_resolution(r))
-    throw Error(std::string(what) + " must be a power of two between 2 and 256, got " + std::to_string(r));
+    throw Error(fmt::format("{} must be a power of two between 2 and 256, got {}", what, r));
 }
 
 // ---- transforms -------------------------------------------------------------
@@ -123,7 +126,7 @@ int support_size(int index_in_face, int r) {
 void select_terms(std::span<const float> coeffs, int channels, int r, int K, Selection selection,
                   std::vector<std::uint32_t>& out) {
   check_resolution(r);
-  if (K < 0) throw Error("the number of wavelet terms must be >= 0, got " + std::to_string(K));
+  if (K < 0) throw Error(fmt::format("the number of wavelet terms must be >= 0, got {}", K));
   PRT_CHECK(channels >= 1);
   const std::size_t n = cube_size(r), rr = std::size_t(r) * r;
   PRT_CHECK_OP(coeffs.size(), >=, n * channels);
@@ -382,19 +385,20 @@ void CubeSplatter::resample(const glm::dmat3& R, std::vector<float>& planar_out)
 FrameLighting::FrameLighting(const EnvMap& map, int cube_res) : splatter_(map, cube_res) {}
 
 void FrameLighting::update(const glm::dmat3& R, int K, Selection selection) {
-  if (K < 0) throw Error("the number of wavelet terms must be >= 0, got " + std::to_string(K));
+  if (K < 0) throw Error(fmt::format("the number of wavelet terms must be >= 0, got {}", K));
   const int r = splatter_.resolution();
   splatter_.resample(R, coeffs_);
   forward_cube(coeffs_.data(), r, 3);
   select_terms(coeffs_, 3, r, K, selection, terms_);
 }
 
-Selection parse_selection(std::string_view name) {
-  if (name == "area") return Selection::AreaWeighted;
-  if (name == "magnitude") return Selection::Magnitude;
-  throw Error("unknown wavelet term selection '" + std::string(name) + "' (expected area or magnitude)");
-}
+namespace {
+constexpr EnumName<Selection> kSelectionNames[] = {{Selection::AreaWeighted, "area"},
+                                                   {Selection::Magnitude, "magnitude"}};
+}  // namespace
 
-std::string_view selection_name(Selection s) { return s == Selection::AreaWeighted ? "area" : "magnitude"; }
+Selection parse_selection(std::string_view name) { return parse_enum(kSelectionNames, name, "wavelet term selection"); }
+
+std::string_view selection_name(Selection s) { return enum_name(kSelectionNames, s); }
 
 }  // namespace prt::wavelet

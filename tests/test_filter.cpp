@@ -3,6 +3,7 @@
 
 #include <prt/error.h>
 #include <prt/filter.h>
+#include <prt/names.h>
 #include <prt/quadrature.h>
 
 #include <gtest/gtest.h>
@@ -53,6 +54,38 @@ TEST(Window, Factors) {
   EXPECT_THROW(sh::window_factors(sh::Window::Hanning, 5, 0), Error);
   EXPECT_THROW(sh::parse_window("gauss"), Error);
   EXPECT_EQ(sh::parse_window("lanczos"), sh::Window::Lanczos);
+}
+
+// prt/names.h: one table per enum, one message for an unknown name.
+TEST(Names, ParseAndNameThroughOneTable) {
+  for (sh::Window w : {sh::Window::None, sh::Window::Hanning, sh::Window::Lanczos, sh::Window::Auto})
+    EXPECT_EQ(sh::parse_window(sh::window_name(w)), w);
+  EXPECT_EQ(sh::parse_window("hann"), sh::Window::Hanning);  // an alias: parsed, not listed
+  EXPECT_EQ(sh::window_name(sh::Window::Hanning), "hanning");
+  try {
+    sh::parse_window("gauss");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "unknown window 'gauss' (expected none, hanning, lanczos or auto)");
+  }
+  enum class Two { A, B };
+  constexpr EnumName<Two> one[] = {{Two::A, "a"}};
+  constexpr EnumName<Two> two[] = {{Two::A, "a"}, {Two::B, "b"}};
+  static_assert(enum_name(two, Two::B) == "b");
+  EXPECT_EQ(enum_name(one, Two::B), "?");
+  EXPECT_EQ(parse_enum(two, "b", "letter"), Two::B);
+  try {
+    parse_enum(one, "", "letter");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "unknown letter '' (expected a)");
+  }
+  try {
+    parse_enum(two, "c", "letter");
+    ADD_FAILURE();
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "unknown letter 'c' (expected a or b)");
+  }
 }
 
 // min over many random directions of the reconstruction.
