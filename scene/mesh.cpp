@@ -2,7 +2,10 @@
 // The contract is include/prt/mesh.h.
 
 #include <prt/error.h>
+#include <prt/hash.h>
 #include <prt/mesh.h>
+
+#include <fmt/format.h>
 
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
@@ -12,7 +15,6 @@
 
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
-#include <xxhash.h>
 
 #include <algorithm>
 #include <array>
@@ -24,6 +26,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <span>
 #include <sstream>
 #include <unordered_map>
 
@@ -50,10 +53,7 @@ std::string lower_extension(const std::string& path) {
 }
 
 std::string format_vec(const glm::vec3& v) {
-  std::ostringstream os;
-  os.precision(9);
-  os << "(" << v.x << ", " << v.y << ", " << v.z << ")";
-  return os.str();
+  return fmt::format("({:.9g}, {:.9g}, {:.9g})", double(v.x), double(v.y), double(v.z));
 }
 
 // Bit pattern of a position, so that welding merges exactly the positions that
@@ -65,7 +65,7 @@ struct PositionKey {
 
 struct PositionKeyHash {
   std::size_t operator()(const PositionKey& k) const noexcept {
-    return std::size_t(XXH3_64bits(k.bits.data(), sizeof(k.bits)));
+    return std::size_t(hash64(k.bits.data(), sizeof(k.bits)));
   }
 };
 
@@ -233,8 +233,8 @@ void check_off_indices(const std::string& path) {
       long long index = 0;
       if (!number(tokens[j], index)) return;
       if (index < 0 || index >= nv)
-        throw Error(path + ": face " + std::to_string(f) + " uses vertex " + tokens[j] +
-                    ", out of range (the file has " + std::to_string(nv) + " vertices)");
+        throw Error(fmt::format("{}: face {} uses vertex {}, out of range (the file has {} vertices)", path, f, tokens[j],
+                                nv));
     }
   }
 }
@@ -242,13 +242,11 @@ void check_off_indices(const std::string& path) {
 }  // namespace
 
 std::uint64_t Mesh::hash() const {
-  std::unique_ptr<XXH3_state_t, decltype(&XXH3_freeState)> state(XXH3_createState(), &XXH3_freeState);
-  PRT_CHECK(state != nullptr);
-  PRT_CHECK(XXH3_64bits_reset(state.get()) == XXH_OK);
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float) && sizeof(glm::uvec3) == 3 * sizeof(std::uint32_t));
-  PRT_CHECK(XXH3_64bits_update(state.get(), positions.data(), positions.size() * sizeof(glm::vec3)) == XXH_OK);
-  PRT_CHECK(XXH3_64bits_update(state.get(), triangles.data(), triangles.size() * sizeof(glm::uvec3)) == XXH_OK);
-  return XXH3_64bits_digest(state.get());
+  return Hasher()
+      .add_span(std::span<const glm::vec3>(positions))
+      .add_span(std::span<const glm::uvec3>(triangles))
+      .digest();
 }
 
 glm::vec3 Mesh::bounds_min() const {
@@ -278,18 +276,18 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangl
   if (positions.empty()) throw Error(src + ": no vertices");
   if (triangles.empty()) throw Error(src + ": no triangles");
   if (positions.size() > std::numeric_limits<std::uint32_t>::max())
-    throw Error(src + ": too many vertices (" + std::to_string(positions.size()) + ")");
+    throw Error(fmt::format("{}: too many vertices ({})", src, positions.size()));
   for (std::size_t i = 0; i < positions.size(); ++i)
     if (!finite(positions[i]))
-      throw Error(src + ": vertex " + std::to_string(i) + " has a non-finite coordinate " + format_vec(positions[i]));
+      throw Error(fmt::format("{}: vertex {} has a non-finite coordinate {}", src, i, format_vec(positions[i])));
   for (std::size_t i = 0; i < colors.size(); ++i)
     if (!finite(colors[i]))
-      throw Error(src + ": vertex " + std::to_string(i) + " has a non-finite colour " + format_vec(colors[i]));
+      throw Error(fmt::format("{}: vertex {} has a non-finite colour {}", src, i, format_vec(colors[i])));
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (int k = 0; k < 3; ++k)
       if (triangles[t][k] >= positions.size())
-        throw Error(src + ": triangle " + std::to_string(t) + " uses vertex " + std::to_string(triangles[t][k]) +
-                    ", out of range (the mesh has " + std::to_string(positions.size()) + " vertices)");
+        throw Error(fmt::format("{}: triangle {} uses vertex {}, out of range (the mesh has {} vertices)", src, t,
+                                triangles[t][k], positions.size()));
 
   mesh.report.file_had_normals = !normals.empty();
   mesh.report.file_had_colors = !colors.empty();
@@ -373,8 +371,8 @@ Mesh load_mesh(const std::string& path, const MeshOptions& options) {
       glm::uvec3 t;
       for (int k = 0; k < 3; ++k) {
         if (face.mIndices[k] >= am->mNumVertices)
-          throw Error(path + ": a face uses vertex " + std::to_string(face.mIndices[k]) + ", out of range (" +
-                      std::to_string(am->mNumVertices) + " vertices)");
+          throw Error(fmt::format("{}: a face uses vertex {}, out of range ({} vertices)", path, face.mIndices[k],
+                                  am->mNumVertices));
         t[k] = std::uint32_t(offset + face.mIndices[k]);
       }
       triangles.push_back(t);
@@ -383,31 +381,30 @@ Mesh load_mesh(const std::string& path, const MeshOptions& options) {
   if (positions.empty()) throw Error(path + ": no vertices");
   if (triangles.empty())
     throw Error(path + ": no triangles" +
-                (skipped ? " (only " + std::to_string(skipped) + " points or lines)" : std::string()));
+                (skipped ? fmt::format(" (only {} points or lines)", skipped) : std::string()));
   return make_mesh(std::move(positions), std::move(triangles), std::move(normals), std::move(colors), options, path);
 }
 
 std::string describe(const Mesh& mesh) {
   const MeshReport& r = mesh.report;
-  std::ostringstream os;
-  os << fs::path(mesh.source).filename().string() << ": " << mesh.vertex_count() << " vertices, "
-     << mesh.triangles.size() << " triangles, ";
+  std::string s = fmt::format("{}: {} vertices, {} triangles, ", fs::path(mesh.source).filename().string(),
+                              mesh.vertex_count(), mesh.triangles.size());
   // (MeshReport does not record the weighting, so it is not named here.)
   const std::size_t from_file = mesh.vertex_count() - r.unreferenced_vertices - r.zero_normals - r.normals_computed;
   if (from_file == 0)
-    os << "normals computed";
+    s += "normals computed";
   else if (r.normals_computed == 0)
-    os << "normals from the file";
+    s += "normals from the file";
   else
-    os << "normals: " << from_file << " from the file, " << r.normals_computed << " computed";
-  os << ", " << r.degenerate_triangles << " degenerate triangles, " << r.unreferenced_vertices
-     << " unreferenced vertices";
-  if (r.zero_normals) os << ", " << r.zero_normals << " without a normal";
-  if (r.nonmanifold_edges) os << ", " << r.nonmanifold_edges << " non-manifold edges";
-  if (r.inconsistent_edges) os << ", " << r.inconsistent_edges << " edges between inconsistently wound triangles";
-  if (r.welded) os << ", " << r.welded << " welded";
-  if (!mesh.colors.empty()) os << ", vertex colours";
-  return os.str();
+    s += fmt::format("normals: {} from the file, {} computed", from_file, r.normals_computed);
+  s += fmt::format(", {} degenerate triangles, {} unreferenced vertices", r.degenerate_triangles,
+                   r.unreferenced_vertices);
+  if (r.zero_normals) s += fmt::format(", {} without a normal", r.zero_normals);
+  if (r.nonmanifold_edges) s += fmt::format(", {} non-manifold edges", r.nonmanifold_edges);
+  if (r.inconsistent_edges) s += fmt::format(", {} edges between inconsistently wound triangles", r.inconsistent_edges);
+  if (r.welded) s += fmt::format(", {} welded", r.welded);
+  if (!mesh.colors.empty()) s += ", vertex colours";
+  return s;
 }
 
 }  // namespace prt

@@ -1,11 +1,17 @@
-// Transfer data: mode names, analytic (unoccluded) vertices, dense rows and
-// CPU relighting (prt/transfer.h). Computing a transfer is prt::precompute's
-// (precompute/transfer.cpp).
+// Transfer data: mode names, the validator, analytic (unoccluded) vertices,
+// the shading hash, dense rows and CPU relighting (prt/transfer.h). Computing
+// a transfer is prt::precompute's (precompute/transfer.cpp).
 #include <prt/transfer.h>
 
 #include <prt/error.h>
 #include <prt/filter.h>
+#include <prt/hash.h>
+#include <prt/names.h>
 #include <prt/sh.h>
+
+#include "transfer_rules.h"
+
+#include <fmt/format.h>
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -15,28 +21,165 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <span>
 #include <string>
 
 namespace prt {
 
-TransferMode parse_transfer_mode(std::string_view name) {
-  if (name == "unshadowed") return TransferMode::Unshadowed;
-  if (name == "shadowed") return TransferMode::Shadowed;
-  if (name == "interreflected") return TransferMode::Interreflected;
-  throw Error("unknown mode '" + std::string(name) + "' (expected unshadowed, shadowed or interreflected)");
-}
+namespace {
+constexpr EnumName<TransferMode> kTransferModeNames[] = {
+    {TransferMode::Unshadowed, "unshadowed"},
+    {TransferMode::Shadowed, "shadowed"},
+    {TransferMode::Interreflected, "interreflected"},
+};
+}  // namespace
 
-std::string_view transfer_mode_name(TransferMode m) {
-  switch (m) {
-    case TransferMode::Unshadowed: return "unshadowed";
-    case TransferMode::Shadowed: return "shadowed";
-    case TransferMode::Interreflected: return "interreflected";
-  }
-  return "?";
-}
+TransferMode parse_transfer_mode(std::string_view name) { return parse_enum(kTransferModeNames, name, "mode"); }
+
+std::string_view transfer_mode_name(TransferMode m) { return enum_name(kTransferModeNames, m); }
 
 std::size_t Transfer::analytic_vertices() const {
   return std::size_t(std::count(slots.begin(), slots.end(), kAnalytic));
+}
+
+// ---- the validator ------------------------------------------------------------------
+
+namespace detail {
+
+TransferHeader header_of(const Transfer& t) {
+  const std::uint64_t stored = t.slots.size() == t.vertices ? t.stored_vertices() : t.vertices;
+  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored};
+}
+
+std::string header_problem(const TransferHeader& h) {
+  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
+  if (h.bands < 1 || h.bands > sh::kMaxBands) return fmt::format("bands is {}; must be 1 to {}", h.bands, sh::kMaxBands);
+  if (h.channels != 1 && h.channels != 3) return fmt::format("channels is {}; must be 1 or 3", h.channels);
+  if (h.mode < 0 || h.mode > 2)
+    return fmt::format("unknown transfer mode {} (0 unshadowed, 1 shadowed, 2 interreflected)", h.mode);
+  if (h.bounces < 0 || h.bounces > kIntMax) return fmt::format("bounces is {}; must be 0 to {}", h.bounces, kIntMax);
+  if (h.samples < 0 || h.samples > kIntMax) return fmt::format("samples is {}; must be 0 to {}", h.samples, kIntMax);
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(h.albedo[c])) return "albedo is not finite";
+  if (!albedo_in_range(h.albedo))
+    return fmt::format("albedo is {:.7g} {:.7g} {:.7g}; must be in [{}, {}] per channel (energy conservation)",
+                       double(h.albedo.x), double(h.albedo.y), double(h.albedo.z), kMinAlbedo, kMaxAlbedo);
+  if (h.vertices == 0) return "no vertices";
+  if (h.stored > h.vertices) return fmt::format("{} stored vertices, more than its {} vertices", h.stored, h.vertices);
+  if (h.stored < h.vertices && h.stored >= Transfer::kAnalytic)
+    return fmt::format("{} stored vertices; with analytic vertices at most {}", h.stored, Transfer::kAnalytic - 1);
+  return {};
+}
+
+std::string array_problem(TransferArray a, std::uint64_t count, const TransferHeader& h) {
+  const char* name = array_name(a);
+  const std::uint64_t stride = std::uint64_t(h.channels) * std::uint64_t(h.bands) * std::uint64_t(h.bands);
+  switch (a) {
+    case TransferArray::Direct:
+      if (h.mode != std::int64_t(TransferMode::Interreflected))
+        return fmt::format("has a '{}' section, which only an interreflected transfer has (this one is {})", name,
+                           transfer_mode_name(TransferMode(h.mode)));
+      [[fallthrough]];
+    case TransferArray::Coeffs:
+      if (count != h.stored * stride)
+        return fmt::format("section '{}' has {} values; expected stored vertices x channels x bands^2 = {} x {} x {} "
+                           "= {}",
+                           name, count, h.stored, h.channels, h.bands * h.bands, h.stored * stride);
+      return {};
+    case TransferArray::BounceEnergy:
+      if (count == 0 || count > std::uint64_t(h.bounces))
+        return fmt::format("section '{}' has {} values; expected 1 to bounces = {}", name, count, h.bounces);
+      return {};
+    case TransferArray::AO:
+    case TransferArray::BentNormals: {
+      const std::uint64_t want = a == TransferArray::AO ? h.vertices : 3 * h.vertices;
+      if (count != want) return fmt::format("section '{}' has {} values; expected {} for {} vertices", name, count, want,
+                                            h.vertices);
+      return {};
+    }
+  }
+  return {};
+}
+
+}  // namespace detail
+
+namespace {
+
+// The slots must number the stored vertices 0, 1, 2, ... in vertex order
+// (the file keeps only which vertices are analytic): what is wrong, or "".
+std::string slots_problem(const Transfer& t) {
+  if (t.slots.empty()) return {};
+  if (t.slots.size() != t.vertices)
+    return fmt::format("{} slots for {} vertices (one per vertex, or none)", t.slots.size(), t.vertices);
+  std::uint32_t row = 0;
+  for (std::size_t v = 0; v < t.vertices; ++v) {
+    if (t.slots[v] == Transfer::kAnalytic) continue;
+    if (t.slots[v] != row)
+      return fmt::format("vertex {} is in row {}; stored vertices must take rows 0, 1, 2, ... in vertex order (row {})",
+                         v, t.slots[v], row);
+    ++row;
+  }
+  return {};
+}
+
+// The first non-finite value, or "". Reported by vertex: that is what a user
+// can look up.
+std::string finite_problem(const Transfer& t) {
+  const std::size_t stride = t.stride();
+  const std::size_t n = std::size_t(t.bands) * t.bands;
+  const auto vertex_of_row = [&](std::size_t row) {
+    if (t.slots.empty()) return row;
+    return std::size_t(std::find(t.slots.begin(), t.slots.end(), std::uint32_t(row)) - t.slots.begin());
+  };
+  const auto coeff = [&](const std::vector<float>& a, const char* what) -> std::string {
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!std::isfinite(a[i]))
+        return fmt::format("vertex {} has a non-finite {} ({:g} at channel {}, k = {})", vertex_of_row(i / stride), what,
+                           double(a[i]), (i % stride) / n, i % n);
+    return {};
+  };
+  if (auto p = coeff(t.coeffs, "coefficient"); !p.empty()) return p;
+  if (auto p = coeff(t.direct, "direct coefficient"); !p.empty()) return p;
+  for (std::size_t v = 0; v < t.ao.size(); ++v)
+    if (!std::isfinite(t.ao[v]))
+      return fmt::format("vertex {} has a non-finite ambient occlusion ({:g})", v, double(t.ao[v]));
+  for (std::size_t v = 0; v < t.bent_normals.size(); ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(t.bent_normals[v][c])) return fmt::format("vertex {} has a non-finite bent normal", v);
+  for (std::size_t b = 0; b < t.bounce_energy.size(); ++b)
+    if (!std::isfinite(t.bounce_energy[b])) return fmt::format("bounce {} has a non-finite energy", b + 1);
+  return {};
+}
+
+}  // namespace
+
+std::string transfer_problem(const Transfer& t) {
+  using detail::TransferArray;
+  if (auto p = slots_problem(t); !p.empty()) return p;
+  const detail::TransferHeader h = detail::header_of(t);
+  if (auto p = detail::header_problem(h); !p.empty()) return p;
+  // The coefficients are always there (with no stored vertex, empty); the
+  // other arrays may be absent.
+  const std::pair<TransferArray, std::size_t> arrays[] = {
+      {TransferArray::Coeffs, t.coeffs.size()},
+      {TransferArray::Direct, t.direct.size()},
+      {TransferArray::AO, t.ao.size()},
+      {TransferArray::BentNormals, 3 * t.bent_normals.size()},
+      {TransferArray::BounceEnergy, t.bounce_energy.size()},
+  };
+  for (const auto& [a, count] : arrays)
+    if (a == TransferArray::Coeffs || count > 0)
+      if (auto p = detail::array_problem(a, count, h); !p.empty()) return p;
+  return finite_problem(t);
+}
+
+std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors) {
+  static_assert(sizeof(glm::vec3) == 12);
+  Hasher h;
+  h.add_span(std::span<const glm::vec3>(mesh.normals));
+  if (vertex_colors) h.add_span(std::span<const glm::vec3>(mesh.colors));
+  return h.digest();
 }
 
 void analytic_transfer(int bands, int channels, const glm::vec3& normal, const glm::vec3& albedo, double* out) {
@@ -119,8 +262,7 @@ std::vector<glm::vec3> relight_array(const Transfer& t, const Mesh& mesh, const 
                                      const std::vector<glm::dvec3>& light) {
   const int nc = t.bands * t.bands;
   if (light.size() < std::size_t(nc))
-    throw Error("lighting has " + std::to_string(sh::bands_of(light.size())) + " bands, the transfer needs " +
-                std::to_string(t.bands));
+    throw Error(fmt::format("lighting has {} bands, the transfer needs {}", sh::bands_of(light.size()), t.bands));
   PRT_CHECK_OP(mesh.vertex_count(), ==, t.vertices);
   PRT_CHECK(t.slots.empty() || t.slots.size() == t.vertices);
   PRT_CHECK_OP(T.size(), ==, t.stored_vertices() * t.stride());

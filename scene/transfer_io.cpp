@@ -3,10 +3,14 @@
 #include <prt/transfer_io.h>
 
 #include <prt/error.h>
+#include <prt/hash.h>
 #include <prt/io.h>
+#include <prt/names.h>
 #include <prt/wavelet.h>
 
-#include <xxhash.h>
+#include "transfer_rules.h"
+
+#include <fmt/format.h>
 
 #include <unistd.h>
 
@@ -14,14 +18,11 @@
 #include <array>
 #include <bit>
 #include <cerrno>
-#include <cmath>
-#include <cstdarg>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
-#include <memory>
 
 namespace prt {
 
@@ -80,12 +81,15 @@ constexpr std::uint32_t kTypeU64 = 3;  // wavelet files only
 constexpr std::uint32_t kTypeU32 = 4;
 constexpr std::uint32_t kTypeI16 = 5;
 
+// Kinds 1 to 5 are the arrays of a Transfer (detail::TransferArray), 6 the
+// file's form of its slots.
+using detail::TransferArray;
 enum Kind : std::uint32_t {
-  kCoeffs = 1,
-  kDirect = 2,
-  kAO = 3,
-  kBentNormals = 4,
-  kBounceEnergy = 5,
+  kCoeffs = std::uint32_t(TransferArray::Coeffs),
+  kDirect = std::uint32_t(TransferArray::Direct),
+  kAO = std::uint32_t(TransferArray::AO),
+  kBentNormals = std::uint32_t(TransferArray::BentNormals),
+  kBounceEnergy = std::uint32_t(TransferArray::BounceEnergy),
   kAnalyticMask = 6,  // version 2
 };
 
@@ -97,11 +101,11 @@ struct KindInfo {
 };
 // In file order: sections are stored by increasing kind.
 constexpr std::array<KindInfo, 6> kKinds = {{
-    {kCoeffs, "coefficients", kTypeF32, true},
-    {kDirect, "direct", kTypeF32, true},
-    {kAO, "ambient occlusion", kTypeF32, true},
-    {kBentNormals, "bent normals", kTypeF32, true},
-    {kBounceEnergy, "bounce energy", kTypeF64, false},
+    {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
+    {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
+    {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
+    {kBentNormals, detail::array_name(TransferArray::BentNormals), kTypeF32, true},
+    {kBounceEnergy, detail::array_name(TransferArray::BounceEnergy), kTypeF64, false},
     {kAnalyticMask, "analytic vertices", kTypeU32, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
@@ -125,29 +129,13 @@ std::uint32_t type_bytes(std::uint32_t type) {
     default: return 4;
   }
 }
-const char* type_name(std::uint32_t type) {
-  switch (type) {
-    case kTypeF64: return "f64";
-    case kTypeU64: return "u64";
-    case kTypeU32: return "u32";
-    case kTypeI16: return "i16";
-    default: return "f32";
-  }
-}
+constexpr EnumName<std::uint32_t> kTypeNames[] = {
+    {kTypeF32, "f32"}, {kTypeF64, "f64"}, {kTypeU64, "u64"}, {kTypeU32, "u32"}, {kTypeI16, "i16"},
+};
+// TransferSection::type is a C string: the names are literals.
+const char* type_name(std::uint32_t type) { return enum_name(kTypeNames, type).data(); }
 
 // ---- small helpers ----------------------------------------------------------------
-
-[[gnu::format(printf, 1, 2)]] std::string sformat(const char* fmt, ...) {
-  va_list args;
-  va_start(args, fmt);
-  char buf[512];
-  const int n = std::vsnprintf(buf, sizeof buf, fmt, args);
-  va_end(args);
-  return std::string(buf, n < 0 ? 0 : std::min<std::size_t>(std::size_t(n), sizeof buf - 1));
-}
-
-std::string hex64(std::uint64_t v) { return sformat("0x%016llx", static_cast<unsigned long long>(v)); }
-std::string u64s(std::uint64_t v) { return std::to_string(v); }
 
 std::string errno_text() { return errno != 0 ? std::strerror(errno) : "I/O error"; }
 
@@ -170,146 +158,27 @@ std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
   return a > std::numeric_limits<std::uint64_t>::max() - b ? std::numeric_limits<std::uint64_t>::max() : a + b;
 }
 
-// ---- validation shared by the writer and the reader -----------------------------
+// ---- the data rules (transfer_rules.h) and the file's own ------------------------
 
-// The header values of a transfer, wide enough for anything a file holds.
-struct Values {
-  std::int64_t bands, channels, mode, bounces, samples;
-  glm::vec3 albedo;
-  std::uint64_t vertices;
-  std::uint64_t stored;  // vertices with a row in the coefficients; the rest are analytic
-};
-
-// What is wrong with the values, or "".
-std::string values_problem(const Values& v) {
-  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
-  if (v.bands < 1 || v.bands > 64) return sformat("bands is %lld; must be 1 to 64", static_cast<long long>(v.bands));
-  if (v.channels != 1 && v.channels != 3)
-    return sformat("channels is %lld; must be 1 or 3", static_cast<long long>(v.channels));
-  if (v.mode < 0 || v.mode > 2)
-    return sformat("unknown transfer mode %lld (0 unshadowed, 1 shadowed, 2 interreflected)",
-                   static_cast<long long>(v.mode));
-  if (v.bounces < 0 || v.bounces > kIntMax)
-    return sformat("bounces is %lld; must be 0 to %lld", static_cast<long long>(v.bounces),
-                   static_cast<long long>(kIntMax));
-  if (v.samples < 0 || v.samples > kIntMax)
-    return sformat("samples is %lld; must be 0 to %lld", static_cast<long long>(v.samples),
-                   static_cast<long long>(kIntMax));
-  for (int c = 0; c < 3; ++c)
-    if (!std::isfinite(v.albedo[c])) return "albedo is not finite";
-  if (v.vertices == 0) return "no vertices";
-  if (v.stored > v.vertices)
-    return sformat("%llu stored vertices, more than its %llu vertices", static_cast<unsigned long long>(v.stored),
-                   static_cast<unsigned long long>(v.vertices));
-  if (v.stored < v.vertices && v.stored >= Transfer::kAnalytic)
-    return sformat("%llu stored vertices; with analytic vertices at most %llu", static_cast<unsigned long long>(v.stored),
-                   static_cast<unsigned long long>(Transfer::kAnalytic - 1));
-  return {};
-}
-
-// The element count section `kind` must have, given valid header values
-// (bounce energy: at most this many).
-std::uint64_t expected_count(std::uint32_t kind, const Values& v) {
-  const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands) * std::uint64_t(v.bands);
-  switch (kind) {
-    case kCoeffs:
-    case kDirect: return v.stored * stride;
-    case kAO: return v.vertices;
-    case kBentNormals: return 3 * v.vertices;
-    case kBounceEnergy: return std::uint64_t(v.bounces);
-    case kAnalyticMask: return mask_words(v.vertices);
-  }
-  return 0;
-}
+using detail::TransferHeader;
 
 // What is wrong with a section of `kind` holding `count` elements in a
-// transfer of `v`, or "".
-std::string section_problem(std::uint32_t kind, std::uint64_t count, const Values& v) {
-  const KindInfo& k = *kind_info(kind);
-  const std::uint64_t want = expected_count(kind, v);
-  if (kind == kDirect && v.mode != 2)
-    return sformat("has a '%s' section, which only an interreflected transfer has (this one is %s)", k.name,
-                   std::string(transfer_mode_name(TransferMode(v.mode))).c_str());
-  if (kind == kAnalyticMask && v.stored == v.vertices)
-    return sformat("has an '%s' section, but the header says every vertex is stored", k.name);
-  if (kind == kBounceEnergy) {
-    if (count == 0 || count > want)
-      return sformat("section '%s' has %llu values; expected 1 to bounces = %llu", k.name,
-                     static_cast<unsigned long long>(count), static_cast<unsigned long long>(want));
-    return {};
-  }
-  if (count != want) {
-    if (kind == kCoeffs || kind == kDirect)
-      return sformat("section '%s' has %llu values; expected stored vertices x channels x bands^2 = %llu x %lld x %lld "
-                     "= %llu",
-                     k.name, static_cast<unsigned long long>(count), static_cast<unsigned long long>(v.stored),
-                     static_cast<long long>(v.channels), static_cast<long long>(v.bands * v.bands),
-                     static_cast<unsigned long long>(want));
-    if (kind == kAnalyticMask)
-      return sformat("section '%s' has %llu words; expected (vertices + 31) / 32 = %llu", k.name,
-                     static_cast<unsigned long long>(count), static_cast<unsigned long long>(want));
-    return sformat("section '%s' has %llu values; expected %llu for %llu vertices", k.name,
-                   static_cast<unsigned long long>(count), static_cast<unsigned long long>(want),
-                   static_cast<unsigned long long>(v.vertices));
-  }
-  return {};
-}
-
-// The first non-finite value, or "". Reported by vertex: that is what a user
-// can look up.
-std::string finite_problem(const Transfer& t) {
-  const std::size_t stride = t.stride();
-  const std::size_t n = std::size_t(t.bands) * t.bands;
-  const auto vertex_of_row = [&](std::size_t row) {
-    if (t.slots.empty()) return row;
-    return std::size_t(std::find(t.slots.begin(), t.slots.end(), std::uint32_t(row)) - t.slots.begin());
-  };
-  const auto coeff = [&](const std::vector<float>& a, const char* what) -> std::string {
-    for (std::size_t i = 0; i < a.size(); ++i)
-      if (!std::isfinite(a[i]))
-        return sformat("vertex %zu has a non-finite %s (%g at channel %zu, k = %zu)", vertex_of_row(i / stride), what,
-                       double(a[i]), (i % stride) / n, i % n);
-    return {};
-  };
-  if (auto p = coeff(t.coeffs, "coefficient"); !p.empty()) return p;
-  if (auto p = coeff(t.direct, "direct coefficient"); !p.empty()) return p;
-  for (std::size_t v = 0; v < t.ao.size(); ++v)
-    if (!std::isfinite(t.ao[v]))
-      return sformat("vertex %zu has a non-finite ambient occlusion (%g)", v, double(t.ao[v]));
-  for (std::size_t v = 0; v < t.bent_normals.size(); ++v)
-    for (int c = 0; c < 3; ++c)
-      if (!std::isfinite(t.bent_normals[v][c])) return sformat("vertex %zu has a non-finite bent normal", v);
-  for (std::size_t b = 0; b < t.bounce_energy.size(); ++b)
-    if (!std::isfinite(t.bounce_energy[b])) return sformat("bounce %zu has a non-finite energy", b + 1);
+// transfer of valid header values `v`, or "": the array rules for kinds 1 to
+// 5, the analytic-vertex mask's for 6.
+std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v) {
+  if (kind != kAnalyticMask) return detail::array_problem(TransferArray(kind), count, v);
+  const char* name = kind_info(kind)->name;
+  if (v.stored == v.vertices)
+    return fmt::format("has an '{}' section, but the header says every vertex is stored", name);
+  if (count != mask_words(v.vertices))
+    return fmt::format("section '{}' has {} words; expected (vertices + 31) / 32 = {}", name, count,
+                       mask_words(v.vertices));
   return {};
 }
 
 // The stored vertices of a transfer whose slots may be inconsistent (the
 // writer checks them): the vertices that are not analytic.
-std::uint64_t stored_of(const Transfer& t) {
-  return t.slots.size() == t.vertices ? t.stored_vertices() : t.vertices;
-}
-
-Values values_of(const Transfer& t) {
-  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored_of(t)};
-}
-
-// The slots must number the stored vertices 0, 1, 2, ... in vertex order
-// (the file keeps only which vertices are analytic): what is wrong, or "".
-std::string slots_problem(const Transfer& t) {
-  if (t.slots.empty()) return {};
-  if (t.slots.size() != t.vertices)
-    return sformat("%zu slots for %zu vertices (one per vertex, or none)", t.slots.size(), t.vertices);
-  std::uint32_t row = 0;
-  for (std::size_t v = 0; v < t.vertices; ++v) {
-    if (t.slots[v] == Transfer::kAnalytic) continue;
-    if (t.slots[v] != row)
-      return sformat("vertex %zu is in row %u; stored vertices must take rows 0, 1, 2, ... in vertex order (row %u)",
-                     v, t.slots[v], row);
-    ++row;
-  }
-  return {};
-}
+std::uint64_t stored_of(const Transfer& t) { return detail::header_of(t).stored; }
 
 // The analytic-vertex bit mask of `t` (empty when no vertex is analytic).
 std::vector<std::uint32_t> analytic_mask(const Transfer& t) {
@@ -337,38 +206,25 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
 // Whether `t` stores section `kind`: the coefficients always, the others when non-empty.
 bool has_section(const Transfer& t, std::uint32_t kind) { return kind == kCoeffs || section_array(t, kind).second > 0; }
 
-// Everything the reader would refuse in `t`, or "".
-std::string transfer_problem(const Transfer& t) {
-  if (auto p = slots_problem(t); !p.empty()) return p;
-  const Values v = values_of(t);
-  if (auto p = values_problem(v); !p.empty()) return p;
-  for (const auto& k : kKinds)
-    if (has_section(t, k.kind))
-      if (auto p = section_problem(k.kind, section_array(t, k.kind).second, v); !p.empty()) return p;
-  return finite_problem(t);
-}
-
 // ---- writing ------------------------------------------------------------------------
 
 // An output stream that hashes what it writes.
 class HashedWriter {
  public:
-  explicit HashedWriter(std::ofstream& out) : out_(out), state_(XXH3_createState(), &XXH3_freeState) {
-    if (!state_ || XXH3_64bits_reset(state_.get()) != XXH_OK) throw std::bad_alloc();
-  }
+  explicit HashedWriter(std::ofstream& out) : out_(out) {}
   void write(const void* data, std::uint64_t bytes) {
     if (bytes == 0) return;
-    XXH3_64bits_update(state_.get(), data, bytes);
+    hash_.add(data, bytes);
     raw(data, bytes);
   }
   void raw(const void* data, std::uint64_t bytes) {
     out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
   }
-  std::uint64_t digest() const { return XXH3_64bits_digest(state_.get()); }
+  std::uint64_t digest() const { return hash_.digest(); }
 
  private:
   std::ofstream& out_;
-  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state_;
+  Hasher hash_;
 };
 
 }  // namespace
@@ -511,7 +367,7 @@ class Reader {
     f_.seekg(static_cast<std::streamoff>(offset));
     f_.read(static_cast<char*>(dst), static_cast<std::streamsize>(bytes));
     if (!f_ || std::uint64_t(f_.gcount()) != bytes)
-      throw fail("read error at byte " + u64s(offset) + ": " + errno_text());
+      throw fail(fmt::format("read error at byte {}: {}", offset, errno_text()));
   }
   void check_signature(const unsigned char* head, std::uint64_t have);
   void explain_bad_size(std::uint32_t section_count);
@@ -528,8 +384,7 @@ class Reader {
 };
 
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size) {
-  return "truncated: expected " + std::string(exact ? "" : "at least ") + u64s(expected) + " bytes, file has " +
-         u64s(size);
+  return fmt::format("truncated: expected {}{} bytes, file has {}", exact ? "" : "at least ", expected, size);
 }
 
 void Reader::check_signature(const unsigned char* head, std::uint64_t have) {
@@ -556,24 +411,23 @@ void Reader::explain_bad_size(std::uint32_t section_count) {
   const std::uint64_t want = end + kTrailerSize;
   if (want > size_) throw fail(truncated(want, true, size_));
   if (want < size_)
-    throw fail("corrupt: expected " + u64s(want) + " bytes, file has " + u64s(size_) + " (data after the end?)");
+    throw fail(fmt::format("corrupt: expected {} bytes, file has {} (data after the end?)", want, size_));
   throw fail("corrupt: the end marker \"PRTE\" is missing");
 }
 
 std::uint64_t Reader::checksum(std::uint64_t bytes) {
-  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(), &XXH3_freeState);
-  if (!state || XXH3_64bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
+  Hasher hash;
   std::vector<char> buf(std::size_t(1) << 20);
   f_.clear();
   f_.seekg(0);
   for (std::uint64_t done = 0; done < bytes;) {
     const std::uint64_t n = std::min<std::uint64_t>(buf.size(), bytes - done);
     f_.read(buf.data(), static_cast<std::streamsize>(n));
-    if (!f_) throw fail("read error at byte " + u64s(done) + ": " + errno_text());
-    XXH3_64bits_update(state.get(), buf.data(), n);
+    if (!f_) throw fail(fmt::format("read error at byte {}: {}", done, errno_text()));
+    hash.add(buf.data(), n);
     done += n;
   }
-  return XXH3_64bits_digest(state.get());
+  return hash.digest();
 }
 
 template <typename T>
@@ -608,15 +462,14 @@ void Reader::read_head() {
   if (head < kOffVersion + 4) throw fail(truncated(kMinFileSize, false, size_));
   const std::uint32_t version = load<std::uint32_t>(h + kOffVersion);
   if (version > kTransferFormatVersion)
-    throw fail("written by a newer prt (version " + std::to_string(version) + "); this prt reads versions 1 to " +
-               std::to_string(kTransferFormatVersion));
-  if (version == 0) throw fail("unknown format version " + std::to_string(version));
+    throw fail(fmt::format("written by a newer prt (version {}); this prt reads versions 1 to {}", version,
+                           kTransferFormatVersion));
+  if (version == 0) throw fail(fmt::format("unknown format version {}", version));
   version_ = version;
   if (size_ < kMinFileSize) throw fail(truncated(kMinFileSize, false, size_));
   const std::uint32_t header_size = load<std::uint32_t>(h + kOffHeaderSize);
   if (header_size != kHeaderSize)
-    throw fail("corrupt: header size " + std::to_string(header_size) + "; version " + std::to_string(version) +
-               " has " + u64s(kHeaderSize));
+    throw fail(fmt::format("corrupt: header size {}; version {} has {}", header_size, version, kHeaderSize));
   section_count_ = load<std::uint32_t>(h + kOffSectionCount);
 }
 
@@ -629,11 +482,11 @@ void Reader::verify() {
   const std::uint64_t stored = load<std::uint64_t>(trailer);
   const std::uint64_t computed = checksum(size_ - kTrailerSize);
   if (stored != computed)
-    throw fail("corrupt: checksum mismatch (stored " + hex64(stored) + ", computed " + hex64(computed) + ")");
+    throw fail(fmt::format("corrupt: checksum mismatch (stored 0x{:016x}, computed 0x{:016x})", stored, computed));
 }
 
 std::string unknown_basis(std::uint32_t basis) {
-  return "unknown basis " + std::to_string(basis) + " (0 is spherical harmonics, 1 wavelet)";
+  return fmt::format("unknown basis {} (0 is spherical harmonics, 1 wavelet)", basis);
 }
 
 std::uint32_t Reader::read_basis() {
@@ -654,41 +507,42 @@ Transfer Reader::read() {
   // 3. Header values.
   const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
   if (basis == kBasisWavelet)
-    throw fail("holds a wavelet transfer (basis 'wavelet', cube resolution " +
-               std::to_string(load<std::uint32_t>(h + kOffBands)) +
-               "), not spherical harmonics: relight it with prt relight (prt::read_wavelet_transfer), or run "
-               "prt precompute --basis sh for an SH transfer");
+    throw fail(fmt::format("holds a wavelet transfer (basis 'wavelet', cube resolution {}), not spherical harmonics: "
+                           "relight it with prt relight (prt::read_wavelet_transfer), or run prt precompute --basis "
+                           "sh for an SH transfer",
+                           load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisSH) throw fail(unknown_basis(basis));
-  const Values v{load<std::uint32_t>(h + kOffBands),
-                 load<std::uint32_t>(h + kOffChannels),
-                 load<std::uint32_t>(h + kOffMode),
-                 load<std::uint32_t>(h + kOffBounces),
-                 load<std::uint32_t>(h + kOffSamples),
-                 {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
-                 load<std::uint64_t>(h + kOffVertices),
-                 // Version 1 stores every vertex.
-                 version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
+  const TransferHeader v{load<std::uint32_t>(h + kOffBands),
+                         load<std::uint32_t>(h + kOffChannels),
+                         load<std::uint32_t>(h + kOffMode),
+                         load<std::uint32_t>(h + kOffBounces),
+                         load<std::uint32_t>(h + kOffSamples),
+                         {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
+                         load<std::uint64_t>(h + kOffVertices),
+                         // Version 1 stores every vertex.
+                         version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
   const bool v1 = version_ == 1;
   const std::size_t known_kinds = v1 ? kKindsV1 : kKindsV2;
-  if (auto p = values_problem(v); !p.empty()) throw fail("bad header: " + p);
+  if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
-  if (flags & ~kKnownFlags) throw fail("bad header: unknown flags " + sformat("0x%x", flags & ~kKnownFlags));
+  if (flags & ~kKnownFlags) throw fail(fmt::format("bad header: unknown flags 0x{:x}", flags & ~kKnownFlags));
   for (std::uint64_t i = kOffReserved; i < kHeaderSize; ++i)
     if (h[i] != 0 && (v1 || i < kOffStored || i >= kOffReservedV2))
-      throw fail("bad header: reserved byte " + u64s(i) + " is not zero");
+      throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
   // The coefficients alone take 4 x channels x bands^2 bytes per stored
   // vertex, the analytic-vertex mask 1 bit per vertex.
   const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands * v.bands);
   if (v.stored > size_ / (4 * stride))
-    throw fail("bad header: " + u64s(v.stored) + (v1 ? "" : " stored") + " vertices cannot fit in a file of " +
-               u64s(size_) + " bytes (at " + u64s(4 * stride) + " bytes per vertex)");
+    throw fail(fmt::format("bad header: {}{} vertices cannot fit in a file of {} bytes (at {} bytes per vertex)", v.stored,
+                           v1 ? "" : " stored", size_, 4 * stride));
   if (v.stored < v.vertices && mask_words(v.vertices) > size_ / 4)
-    throw fail("bad header: " + u64s(v.vertices) + " vertices cannot fit in a file of " + u64s(size_) +
-               " bytes (their analytic-vertex mask alone takes " + u64s(4 * mask_words(v.vertices)) + ")");
+    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their analytic-vertex mask alone "
+                           "takes {})",
+                           v.vertices, size_, 4 * mask_words(v.vertices)));
   if (section_count == 0) throw fail("bad section table: no sections (the coefficients are required)");
   if (section_count > known_kinds)
-    throw fail("bad section table: " + std::to_string(section_count) + " sections; at most " +
-               std::to_string(known_kinds) + " kinds exist in version " + std::to_string(version_));
+    throw fail(fmt::format("bad section table: {} sections; at most {} kinds exist in version {}", section_count,
+                           known_kinds, version_));
 
   Transfer t;
   t.bands = int(v.bands);
@@ -710,7 +564,7 @@ Transfer Reader::read() {
   std::uint64_t offset = kHeaderSize;
   std::uint32_t previous = 0;
   for (std::uint32_t i = 0; i < section_count; ++i) {
-    const std::string where = "section " + std::to_string(i + 1) + " of " + std::to_string(section_count);
+    const std::string where = fmt::format("section {} of {}", i + 1, section_count);
     if (offset + kSectionHeaderSize > data_end) throw fail("bad section table: " + where + " is missing");
     unsigned char sh[kSectionHeaderSize];
     read_at(offset, sh, sizeof sh);
@@ -720,24 +574,24 @@ Transfer Reader::read() {
     const std::uint64_t bytes = load<std::uint64_t>(sh + 16);
     const KindInfo* k = kind_info(kind);
     if (!k || kind > known_kinds)
-      throw fail("bad section table: " + where + " has unknown kind " + std::to_string(kind) +
-                 (k ? " in a version " + std::to_string(version_) + " file" : std::string()));
+      throw fail(fmt::format("bad section table: {} has unknown kind {}{}", where, kind,
+                             k ? fmt::format(" in a version {} file", version_) : std::string()));
     if (kind <= previous)
       throw fail("bad section table: " + where + " ('" + k->name + "') is out of order or repeated");
     if (i == 0 && kind != kCoeffs) throw fail("bad section table: no 'coefficients' section");
     previous = kind;
     if (type != k->type)
-      throw fail("bad section table: section '" + std::string(k->name) + "' has element type " +
-                 std::to_string(type) + "; expected " + std::to_string(k->type) + " (" + type_name(k->type) + ")");
+      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", k->name, type,
+                             k->type, type_name(k->type)));
     if (auto p = section_problem(kind, count, v); !p.empty()) throw fail("bad section table: " + p);
     // count is now at most bands^2 x channels x vertices: no overflow below.
     if (bytes != count * type_bytes(type))
-      throw fail("bad section table: section '" + std::string(k->name) + "' has " + u64s(count) + " " +
-                 type_name(type) + " values but " + u64s(bytes) + " bytes");
+      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", k->name, count,
+                             type_name(type), bytes));
     const std::uint64_t data = offset + kSectionHeaderSize;
     const std::uint64_t pad = padding(bytes);
     if (bytes + pad > data_end - data)
-      throw fail("bad section table: section '" + std::string(k->name) + "' runs past the end of the file");
+      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", k->name));
     switch (kind) {
       case kCoeffs: read_section(data, t.coeffs, count); break;
       case kDirect: read_section(data, t.direct, count); break;
@@ -749,32 +603,35 @@ Transfer Reader::read() {
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
     if (std::memcmp(got, zeros, pad) != 0)
-      throw fail("bad section table: the padding after section '" + std::string(k->name) + "' is not zero");
+      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", k->name));
     offset = data + bytes + pad;
   }
   if (offset != data_end)
-    throw fail("bad section table: " + u64s(data_end - offset) + " bytes between the last section and the trailer");
+    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
   if (v.stored < v.vertices && mask.empty())
-    throw fail("bad section table: no 'analytic vertices' section, but the header says " +
-               u64s(v.vertices - v.stored) + " of " + u64s(v.vertices) + " vertices are analytic");
+    throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
+                           "are analytic",
+                           v.vertices - v.stored, v.vertices));
 
   // 5. Values: the mask marks exactly the vertices the header says are
-  // analytic, and nothing past the last vertex; every value is finite.
+  // analytic, and nothing past the last vertex; then the validator (every
+  // value finite).
   if (!mask.empty()) {
     std::uint64_t marked = 0;
     for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
     const std::uint64_t tail = v.vertices % 32;
     if (tail != 0 && (mask.back() >> tail) != 0)
-      throw fail("bad analytic-vertex mask: bits set past the last vertex (" + u64s(v.vertices) + ")");
+      throw fail(fmt::format("bad analytic-vertex mask: bits set past the last vertex ({})", v.vertices));
     if (marked != v.vertices - v.stored)
-      throw fail("bad analytic-vertex mask: " + u64s(marked) + " vertices marked analytic; the header says " +
-                 u64s(v.vertices - v.stored) + " (" + u64s(v.vertices) + " vertices, " + u64s(v.stored) + " stored)");
+      throw fail(fmt::format("bad analytic-vertex mask: {} vertices marked analytic; the header says {} ({} vertices, "
+                             "{} stored)",
+                             marked, v.vertices - v.stored, v.vertices, v.stored));
     t.slots.assign(t.vertices, Transfer::kAnalytic);
     std::uint32_t row = 0;
     for (std::size_t vtx = 0; vtx < t.vertices; ++vtx)
       if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) t.slots[vtx] = row++;
   }
-  if (auto p = finite_problem(t); !p.empty()) throw fail(p);
+  if (auto p = transfer_problem(t); !p.empty()) throw fail(p);
   return t;
 }
 
@@ -791,21 +648,12 @@ void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mes
                 const char* rerun) {
   const std::uint64_t hash = mesh.hash();
   if (vertices == mesh.vertex_count() && mesh_hash == hash) return;
-  throw Error(what + " was computed for a different mesh (" + u64s(vertices) + " vertices, hash " + hex64(mesh_hash) +
-              ") than " + mesh.source + " (" + u64s(mesh.vertex_count()) + " vertices, hash " + hex64(hash) +
-              "); run " + rerun + " again");
+  throw Error(fmt::format("{} was computed for a different mesh ({} vertices, hash 0x{:016x}) than {} ({} vertices, "
+                          "hash 0x{:016x}); run {} again",
+                          what, vertices, mesh_hash, mesh.source, mesh.vertex_count(), hash, rerun));
 }
 
 }  // namespace
-
-std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors) {
-  std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(), &XXH3_freeState);
-  if (!state || XXH3_64bits_reset(state.get()) != XXH_OK) throw std::bad_alloc();
-  static_assert(sizeof(glm::vec3) == 12);
-  XXH3_64bits_update(state.get(), mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
-  if (vertex_colors) XXH3_64bits_update(state.get(), mesh.colors.data(), mesh.colors.size() * sizeof(glm::vec3));
-  return XXH3_64bits_digest(state.get());
-}
 
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
   check_mesh(t.vertices, t.mesh_hash, mesh, transfer_path, "prt precompute");
@@ -816,45 +664,48 @@ void check_matches(const Transfer& t, const Mesh& mesh, const std::string& trans
   if (analytic == 0) return;
   const std::uint64_t hash = shading_hash(mesh, t.vertex_colors);
   if (hash == t.shading_hash) return;
-  throw Error(transfer_path + " was computed with other normals" + (t.vertex_colors ? " or vertex colours" : "") +
-              " than " + mesh.source + " (shading hash " + hex64(t.shading_hash) + ", the mesh's " + hex64(hash) +
-              "), and its " + u64s(analytic) + " analytic vertices are shaded from the mesh's; run prt precompute again");
+  throw Error(fmt::format("{} was computed with other normals{} than {} (shading hash 0x{:016x}, the mesh's 0x{:016x}), "
+                          "and its {} analytic vertices are shaded from the mesh's; run prt precompute again",
+                          transfer_path, t.vertex_colors ? " or vertex colours" : "", mesh.source, t.shading_hash, hash,
+                          analytic));
 }
 
 std::string describe_transfer(const Transfer& t) {
   const auto line = [](const char* label, const std::string& value) {
-    return sformat("  %-17s %s\n", label, value.c_str());
+    return fmt::format("  {:<17} {}\n", label, value);
   };
-  std::string s = "prt transfer (format version " + std::to_string(kTransferFormatVersion) + ")\n";
+  std::string s = fmt::format("prt transfer (format version {})\n", kTransferFormatVersion);
   s += line("basis", "spherical harmonics");
-  s += line("bands", sformat("%d (%d coefficients per channel)", t.bands, t.bands * t.bands));
+  s += line("bands", fmt::format("{} ({} coefficients per channel)", t.bands, t.bands * t.bands));
   s += line("channels",
-            sformat("%d%s", t.channels, t.channels == 1 ? " (grey: one channel serves R, G and B)" : " (RGB)"));
+            fmt::format("{}{}", t.channels, t.channels == 1 ? " (grey: one channel serves R, G and B)" : " (RGB)"));
   s += line("mode", std::string(transfer_mode_name(t.mode)));
-  s += line("bounces", std::to_string(t.bounces));
-  s += line("samples", std::to_string(t.samples));
-  s += line("albedo", sformat("%.7g %.7g %.7g%s", double(t.albedo.x), double(t.albedo.y), double(t.albedo.z),
-                              t.vertex_colors ? " (vertex colours used as albedo)" : ""));
-  s += line("seed", u64s(t.seed));
-  s += line("vertices", u64s(t.vertices));
-  s += line("mesh hash", hex64(t.mesh_hash));
+  s += line("bounces", fmt::format("{}", t.bounces));
+  s += line("samples", fmt::format("{}", t.samples));
+  s += line("albedo", fmt::format("{:.7g} {:.7g} {:.7g}{}", double(t.albedo.x), double(t.albedo.y), double(t.albedo.z),
+                                  t.vertex_colors ? " (vertex colours used as albedo)" : ""));
+  s += line("seed", fmt::format("{}", t.seed));
+  s += line("vertices", fmt::format("{}", t.vertices));
+  s += line("mesh hash", fmt::format("0x{:016x}", t.mesh_hash));
   bool first = true;
   for (const auto& sec : transfer_sections(t)) {
-    std::string v = sformat("%-18s %12llu bytes", sec.name, static_cast<unsigned long long>(sec.bytes));
+    std::string v = fmt::format("{:<18} {:>12} bytes", sec.name, sec.bytes);
     if (sec.per_vertex && t.vertices > 0)
-      v += sformat(" (%llu per vertex)", static_cast<unsigned long long>(sec.bytes / t.vertices));
+      v += fmt::format(" ({} per vertex)", sec.bytes / t.vertices);
     else
-      v += sformat(" (%llu values)", static_cast<unsigned long long>(sec.count));
+      v += fmt::format(" ({} values)", sec.count);
     s += line(first ? "sections" : "", v);
     first = false;
   }
   const std::size_t analytic = t.analytic_vertices();
-  s += line("analytic", sformat("%zu of %zu vertices (%.1f%%; unoccluded: clamped cosine evaluated at run time), "
-                                "%llu bytes saved",
-                                analytic, t.vertices, t.vertices ? 100.0 * double(analytic) / double(t.vertices) : 0.0,
-                                static_cast<unsigned long long>(analytic_bytes_saved(t))));
-  s += line("bytes per vertex", u64s(transfer_bytes_per_vertex(t)) + (analytic ? " (mean over all vertices)" : ""));
-  s += line("file size", u64s(transfer_file_size(t)) + " bytes");
+  s += line("analytic", fmt::format("{} of {} vertices ({:.1f}%; unoccluded: clamped cosine evaluated at run time), "
+                                    "{} bytes saved",
+                                    analytic, t.vertices,
+                                    t.vertices ? 100.0 * double(analytic) / double(t.vertices) : 0.0,
+                                    analytic_bytes_saved(t)));
+  s += line("bytes per vertex",
+            fmt::format("{}{}", transfer_bytes_per_vertex(t), analytic ? " (mean over all vertices)" : ""));
+  s += line("file size", fmt::format("{} bytes", transfer_file_size(t)));
   if (!t.ao.empty()) {
     double lo = t.ao[0], hi = t.ao[0], sum = 0;
     for (float a : t.ao) {
@@ -862,13 +713,13 @@ std::string describe_transfer(const Transfer& t) {
       hi = std::max(hi, double(a));
       sum += a;
     }
-    s += line("ambient occlusion", sformat("min %.6g, mean %.6g, max %.6g", lo, sum / double(t.ao.size()), hi));
+    s += line("ambient occlusion", fmt::format("min {:.6g}, mean {:.6g}, max {:.6g}", lo, sum / double(t.ao.size()), hi));
   }
   if (!t.bounce_energy.empty()) {
     std::string e;
     for (double b : t.bounce_energy) {
       if (!e.empty()) e += ' ';
-      e += sformat("%.6g", b);
+      fmt::format_to(std::back_inserter(e), "{:.6g}", b);
     }
     s += line("bounce energy", e);
   }
@@ -903,90 +754,33 @@ struct WaveletSection {
   bool per_vertex;
 };
 
+constexpr EnumName<std::uint32_t> kWaveletKindNames[] = {
+    {kColOffsets, "column offsets"}, {kColVertices, "column vertices"}, {kColValues, "column values"},
+    {kVertexScale, "vertex scales"}, {kVertexAlbedo, "vertex albedo"},
+};
+const char* wavelet_kind_name(std::uint32_t kind) { return enum_name(kWaveletKindNames, kind).data(); }
+
 std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t) {
+  const auto n = wavelet_kind_name;
   std::vector<WaveletSection> s = {
-      {kColOffsets, "column offsets", kTypeU64, t.col_offsets.data(), t.col_offsets.size(), false},
-      {kColVertices, "column vertices", kTypeU32, t.col_vertices.data(), t.col_vertices.size(), false},
-      {kColValues, "column values", kTypeI16, t.col_values.data(), t.col_values.size(), false},
-      {kVertexScale, "vertex scales", kTypeF32, t.vertex_scale.data(), t.vertex_scale.size(), true},
+      {kColOffsets, n(kColOffsets), kTypeU64, t.col_offsets.data(), t.col_offsets.size(), false},
+      {kColVertices, n(kColVertices), kTypeU32, t.col_vertices.data(), t.col_vertices.size(), false},
+      {kColValues, n(kColValues), kTypeI16, t.col_values.data(), t.col_values.size(), false},
+      {kVertexScale, n(kVertexScale), kTypeF32, t.vertex_scale.data(), t.vertex_scale.size(), true},
   };
   if (t.vertex_colors)
-    s.push_back({kVertexAlbedo, "vertex albedo", kTypeF32, t.vertex_albedo.data(), 3 * std::uint64_t(t.vertex_albedo.size()),
-                 true});
+    s.push_back({kVertexAlbedo, n(kVertexAlbedo), kTypeF32, t.vertex_albedo.data(),
+                 3 * std::uint64_t(t.vertex_albedo.size()), true});
   return s;
-}
-
-const char* wavelet_kind_name(std::uint32_t kind) {
-  switch (kind) {
-    case kColOffsets: return "column offsets";
-    case kColVertices: return "column vertices";
-    case kColValues: return "column values";
-    case kVertexScale: return "vertex scales";
-    case kVertexAlbedo: return "vertex albedo";
-  }
-  return "?";
-}
-
-// Header values of a wavelet transfer: what is wrong with them, or "".
-std::string wavelet_header_problem(std::int64_t r, double threshold, const glm::vec3& albedo, std::uint64_t vertices) {
-  if (!wavelet::valid_resolution(int(std::clamp<std::int64_t>(r, 0, 1 << 20))))
-    return sformat("cube resolution is %lld; must be a power of two from 2 to 256", static_cast<long long>(r));
-  if (!(threshold >= 0.0 && threshold < 1.0)) return sformat("threshold is %g; must be in [0, 1)", threshold);
-  for (int c = 0; c < 3; ++c)
-    if (!std::isfinite(albedo[c])) return "albedo is not finite";
-  if (vertices == 0) return "no vertices";
-  if (vertices >= std::numeric_limits<std::uint32_t>::max())
-    return sformat("%llu vertices; a wavelet transfer holds at most 2^32 - 2", static_cast<unsigned long long>(vertices));
-  return {};
-}
-
-// The arrays of a wavelet transfer: what is wrong with them, or "".
-std::string wavelet_arrays_problem(const WaveletTransfer& t) {
-  const std::size_t n = wavelet::cube_size(t.cube_res), V = t.vertices;
-  if (t.col_offsets.size() != n + 1)
-    return sformat("section 'column offsets' has %zu values; expected 6 r^2 + 1 = %zu", t.col_offsets.size(), n + 1);
-  if (t.col_values.size() != t.col_vertices.size())
-    return sformat("section 'column values' has %zu values but 'column vertices' has %zu", t.col_values.size(),
-                   t.col_vertices.size());
-  if (t.col_offsets[0] != 0)
-    return sformat("column offsets start at %llu, not 0", static_cast<unsigned long long>(t.col_offsets[0]));
-  for (std::size_t j = 0; j < n; ++j)
-    if (t.col_offsets[j + 1] < t.col_offsets[j])
-      return sformat("column offsets decrease at column %zu (%llu after %llu)", j,
-                     static_cast<unsigned long long>(t.col_offsets[j + 1]),
-                     static_cast<unsigned long long>(t.col_offsets[j]));
-  if (t.col_offsets[n] != t.col_vertices.size())
-    return sformat("column offsets end at %llu; the columns hold %zu entries",
-                   static_cast<unsigned long long>(t.col_offsets[n]), t.col_vertices.size());
-  for (std::size_t j = 0; j < n; ++j)
-    for (std::uint64_t e = t.col_offsets[j]; e < t.col_offsets[j + 1]; ++e) {
-      const std::uint32_t v = t.col_vertices[e];
-      if (v >= V) return sformat("column %zu lists vertex %u; the transfer has %zu vertices", j, v, V);
-      if (e > t.col_offsets[j] && v <= t.col_vertices[e - 1])
-        return sformat("column %zu is not sorted by vertex (vertex %u after %u)", j, v, t.col_vertices[e - 1]);
-    }
-  if (t.vertex_scale.size() != V)
-    return sformat("section 'vertex scales' has %zu values; expected one per vertex (%zu)", t.vertex_scale.size(), V);
-  for (std::size_t v = 0; v < V; ++v)
-    if (!std::isfinite(t.vertex_scale[v]) || t.vertex_scale[v] < 0.0f)
-      return sformat("vertex %zu has a bad scale (%g; must be finite and >= 0)", v, double(t.vertex_scale[v]));
-  if (t.vertex_colors != !t.vertex_albedo.empty() || (t.vertex_colors && t.vertex_albedo.size() != V))
-    return sformat("%zu per-vertex albedos for %zu vertices with vertex colours %s", t.vertex_albedo.size(), V,
-                   t.vertex_colors ? "on" : "off");
-  for (std::size_t v = 0; v < t.vertex_albedo.size(); ++v)
-    for (int c = 0; c < 3; ++c)
-      if (!std::isfinite(t.vertex_albedo[v][c])) return sformat("vertex %zu has a non-finite albedo", v);
-  return {};
-}
-
-std::string wavelet_problem(const WaveletTransfer& t) {
-  if (auto p = wavelet_header_problem(t.cube_res, t.threshold, t.albedo, t.vertices); !p.empty()) return p;
-  return wavelet_arrays_problem(t);
 }
 
 }  // namespace
 
-std::string_view basis_name(TransferBasis b) { return b == TransferBasis::Wavelet ? "wavelet" : "sh"; }
+namespace {
+constexpr EnumName<TransferBasis> kBasisNames[] = {{TransferBasis::SH, "sh"}, {TransferBasis::Wavelet, "wavelet"}};
+}  // namespace
+
+std::string_view basis_name(TransferBasis b) { return enum_name(kBasisNames, b); }
 
 TransferBasis read_transfer_basis(const std::string& path) {
   return Reader(path).read_basis() == kBasisWavelet ? TransferBasis::Wavelet : TransferBasis::SH;
@@ -1009,7 +803,7 @@ std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
 std::uint64_t transfer_file_size(const WaveletTransfer& t) { return file_size_of(transfer_sections(t)); }
 
 void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
-  if (auto p = wavelet_problem(t); !p.empty()) throw Error(path + ": cannot write this wavelet transfer: " + p);
+  if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this wavelet transfer: " + p);
   const std::vector<WaveletSection> sections = wavelet_sections(t);
 
   unsigned char header[kHeaderSize] = {};
@@ -1042,13 +836,13 @@ WaveletTransfer Reader::read_wavelet() {
   const unsigned char* h = h_;
   const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
   if (basis == kBasisSH)
-    throw fail("holds a spherical-harmonics transfer (basis 'sh', " + std::to_string(load<std::uint32_t>(h + kOffBands)) +
-               " bands), not a wavelet one: run prt precompute --basis wavelet for a wavelet transfer, or read it "
-               "with prt::read_transfer");
+    throw fail(fmt::format("holds a spherical-harmonics transfer (basis 'sh', {} bands), not a wavelet one: run prt "
+                           "precompute --basis wavelet for a wavelet transfer, or read it with prt::read_transfer",
+                           load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisWavelet) throw fail(unknown_basis(basis));
   if (version_ != kWaveletVersion)
-    throw fail("bad header: format version " + std::to_string(version_) + " for a wavelet transfer (wavelet files are "
-               "version " + std::to_string(kWaveletVersion) + ")");
+    throw fail(fmt::format("bad header: format version {} for a wavelet transfer (wavelet files are version {})",
+                           version_, kWaveletVersion));
 
   WaveletTransfer t;
   const std::uint32_t r = load<std::uint32_t>(h + kOffCubeRes);
@@ -1057,49 +851,50 @@ WaveletTransfer Reader::read_wavelet() {
   t.albedo = {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)};
   t.vertices = std::size_t(load<std::uint64_t>(h + kOffVertices));
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
-  if (auto p = wavelet_header_problem(r, t.threshold, t.albedo, t.vertices); !p.empty()) throw fail("bad header: " + p);
+  if (auto p = detail::wavelet_header_problem(r, t.threshold, t.albedo, t.vertices); !p.empty())
+    throw fail("bad header: " + p);
   t.cube_res = int(r);
-  if (channels != 1) throw fail("bad header: channels is " + std::to_string(channels) + "; a wavelet transfer has 1");
+  if (channels != 1) throw fail(fmt::format("bad header: channels is {}; a wavelet transfer has 1", channels));
   if (mode != std::uint32_t(TransferMode::Shadowed))
-    throw fail("bad header: mode is " + std::to_string(mode) + "; a wavelet transfer is shadowed (1)");
+    throw fail(fmt::format("bad header: mode is {}; a wavelet transfer is shadowed (1)", mode));
   if (load<std::uint32_t>(h + kOffBounces) != 0 || load<std::uint32_t>(h + kOffSamples) != 0 ||
       load<std::uint64_t>(h + kOffSeed) != 0)
     throw fail("bad header: bounces, samples and seed must be 0 in a wavelet transfer");
   const std::uint32_t quant = load<std::uint32_t>(h + kOffQuantisation);
   if (quant != kQuantInt16)
-    throw fail("bad header: unknown quantisation " + std::to_string(quant) + " (1 is int16 with a scale per vertex)");
+    throw fail(fmt::format("bad header: unknown quantisation {} (1 is int16 with a scale per vertex)", quant));
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
-  if (flags & ~kKnownFlags) throw fail("bad header: unknown flags " + sformat("0x%x", flags & ~kKnownFlags));
+  if (flags & ~kKnownFlags) throw fail(fmt::format("bad header: unknown flags 0x{:x}", flags & ~kKnownFlags));
   t.vertex_colors = (flags & kFlagVertexColors) != 0;
   for (std::uint64_t i = kOffWaveletReserved; i < kHeaderSize; ++i)
-    if (h[i] != 0) throw fail("bad header: reserved byte " + u64s(i) + " is not zero");
+    if (h[i] != 0) throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
   if (t.vertices > size_ / 4)  // the scales alone take 4 bytes per vertex
-    throw fail("bad header: " + u64s(t.vertices) + " vertices cannot fit in a file of " + u64s(size_) + " bytes");
+    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes", t.vertices, size_));
 
   std::vector<std::uint32_t> kinds = {kColOffsets, kColVertices, kColValues, kVertexScale};
   if (t.vertex_colors) kinds.push_back(kVertexAlbedo);
   if (section_count_ != kinds.size())
-    throw fail("bad section table: " + std::to_string(section_count_) + " sections; a wavelet transfer " +
-               (t.vertex_colors ? "with" : "without") + " vertex colours has " + std::to_string(kinds.size()));
+    throw fail(fmt::format("bad section table: {} sections; a wavelet transfer {} vertex colours has {}", section_count_,
+                           t.vertex_colors ? "with" : "without", kinds.size()));
 
   const std::uint64_t n = wavelet::cube_size(t.cube_res), data_end = size_ - kTrailerSize;
   std::uint64_t offset = kHeaderSize;
   for (std::uint32_t i = 0; i < section_count_; ++i) {
     const char* name = wavelet_kind_name(kinds[i]);
     if (offset + kSectionHeaderSize > data_end)
-      throw fail("bad section table: section " + std::to_string(i + 1) + " ('" + name + "') is missing");
+      throw fail(fmt::format("bad section table: section {} ('{}') is missing", i + 1, name));
     unsigned char sh[kSectionHeaderSize];
     read_at(offset, sh, sizeof sh);
     const std::uint32_t kind = load<std::uint32_t>(sh + 0), type = load<std::uint32_t>(sh + 4);
     const std::uint64_t count = load<std::uint64_t>(sh + 8), bytes = load<std::uint64_t>(sh + 16);
     if (kind != kinds[i])
-      throw fail("bad section table: section " + std::to_string(i + 1) + " has kind " + std::to_string(kind) +
-                 "; expected " + std::to_string(kinds[i]) + " ('" + name + "')");
+      throw fail(
+          fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
     const std::uint32_t want_type = kind == kColOffsets ? kTypeU64 : kind == kColVertices ? kTypeU32
                                   : kind == kColValues  ? kTypeI16 : kTypeF32;
     if (type != want_type)
-      throw fail("bad section table: section '" + std::string(name) + "' has element type " + std::to_string(type) +
-                 "; expected " + std::to_string(want_type) + " (" + type_name(want_type) + ")");
+      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
+                             want_type, type_name(want_type)));
     std::uint64_t want = 0;
     switch (kind) {
       case kColOffsets: want = n + 1; break;
@@ -1109,17 +904,16 @@ WaveletTransfer Reader::read_wavelet() {
       case kVertexAlbedo: want = 3 * std::uint64_t(t.vertices); break;
     }
     if (count != want)
-      throw fail("bad section table: section '" + std::string(name) + "' has " + u64s(count) + " values; expected " +
-                 u64s(want));
+      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count, want));
     const std::uint64_t data = offset + kSectionHeaderSize, eb = type_bytes(type);
     if (count > (data_end - data) / eb)
-      throw fail("bad section table: section '" + std::string(name) + "' runs past the end of the file");
+      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
     if (bytes != count * eb)
-      throw fail("bad section table: section '" + std::string(name) + "' has " + u64s(count) + " " + type_name(type) +
-                 " values but " + u64s(bytes) + " bytes");
+      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", name, count,
+                             type_name(type), bytes));
     const std::uint64_t pad = padding(bytes);
     if (bytes + pad > data_end - data)
-      throw fail("bad section table: section '" + std::string(name) + "' runs past the end of the file");
+      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
     switch (kind) {
       case kColOffsets: read_section(data, t.col_offsets, count); break;
       case kColVertices: read_section(data, t.col_vertices, count); break;
@@ -1130,12 +924,12 @@ WaveletTransfer Reader::read_wavelet() {
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
     if (std::memcmp(got, zeros, pad) != 0)
-      throw fail("bad section table: the padding after section '" + std::string(name) + "' is not zero");
+      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", name));
     offset = data + bytes + pad;
   }
   if (offset != data_end)
-    throw fail("bad section table: " + u64s(data_end - offset) + " bytes between the last section and the trailer");
-  if (auto p = wavelet_arrays_problem(t); !p.empty()) throw fail(p);
+    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
+  if (auto p = transfer_problem(t); !p.empty()) throw fail(p);
   t.vertex_kept.assign(t.vertices, 0);
   for (std::uint32_t v : t.col_vertices) ++t.vertex_kept[v];
   return t;
@@ -1151,15 +945,14 @@ void check_matches(const WaveletTransfer& t, const Mesh& mesh, const std::string
 
 std::string describe_transfer(const WaveletTransfer& t) {
   const double bpv = t.vertices > 0 ? double(t.bytes()) / double(t.vertices) : 0.0;
-  return sformat("prt wavelet transfer (format version %u): cube %d (%zu coefficients), threshold %g, int16 + f32 "
-                 "scale per vertex, ",
-                 kWaveletVersion, t.cube_res, t.coeff_count(), t.threshold) +
-         sformat("%zu vertices, kept %.4g%% (%zu coefficients), %.1f bytes/vertex, ", t.vertices,
-                 100.0 * t.kept_fraction(), t.kept(), bpv) +
-         (t.vertex_colors ? std::string("albedo: vertex colours, ")
-                          : sformat("albedo %.7g %.7g %.7g, ", double(t.albedo.x), double(t.albedo.y),
-                                    double(t.albedo.z))) +
-         "mesh hash " + hex64(t.mesh_hash) + ", file " + u64s(transfer_file_size(t)) + " bytes\n";
+  const std::string albedo = t.vertex_colors ? std::string("albedo: vertex colours")
+                                             : fmt::format("albedo {:.7g} {:.7g} {:.7g}", double(t.albedo.x),
+                                                           double(t.albedo.y), double(t.albedo.z));
+  return fmt::format("prt wavelet transfer (format version {}): cube {} ({} coefficients), threshold {:g}, int16 + f32 "
+                     "scale per vertex, {} vertices, kept {:.4g}% ({} coefficients), {:.1f} bytes/vertex, {}, mesh hash "
+                     "0x{:016x}, file {} bytes\n",
+                     kWaveletVersion, t.cube_res, t.coeff_count(), t.threshold, t.vertices, 100.0 * t.kept_fraction(),
+                     t.kept(), bpv, albedo, t.mesh_hash, transfer_file_size(t));
 }
 
 }  // namespace prt

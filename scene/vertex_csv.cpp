@@ -4,12 +4,13 @@
 #include <prt/error.h>
 #include <prt/io.h>
 
+#include <fmt/format.h>
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -22,14 +23,11 @@ namespace {
 constexpr std::string_view kHeader = "vertex,r,g,b";
 constexpr std::string_view kHeaderSe = "vertex,r,g,b,se_r,se_g,se_b";
 
-void append_value(std::string& s, float v) {
-  char buf[32];
-  const int len = std::snprintf(buf, sizeof buf, "%.9g", double(v));
-  s.append(buf, std::size_t(len));
-}
+// %.9g: nine significant digits, so every float reads back exactly.
+void append_value(std::string& s, float v) { fmt::format_to(std::back_inserter(s), "{:.9g}", double(v)); }
 
 [[noreturn]] void fail(const std::string& path, std::size_t line, const std::string& what) {
-  throw Error(path + ":" + std::to_string(line) + ": " + what);
+  throw Error(fmt::format("{}:{}: {}", path, line, what));
 }
 
 }  // namespace
@@ -41,10 +39,10 @@ void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb
   text.reserve(rgb.size() * (std_error ? 80 : 40) + 32);
   text.append(std_error ? kHeaderSe : kHeader).push_back('\n');
   for (std::size_t v = 0; v < rgb.size(); ++v) {
-    text.append(std::to_string(v));
+    fmt::format_to(std::back_inserter(text), "{}", v);
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(rgb[v][c]) || (std_error && !std::isfinite((*std_error)[v][c])))
-        throw Error(path + ": refusing to write a non-finite value at vertex " + std::to_string(v));
+        throw Error(fmt::format("{}: refusing to write a non-finite value at vertex {}", path, v));
       text.push_back(',');
       append_value(text, rgb[v][c]);
     }
@@ -96,10 +94,9 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
       const std::size_t comma = line.find(',', start);
       const bool last = col + 1 == columns;
       if (!last && comma == std::string_view::npos)
-        fail(path, line_no, "expected " + std::to_string(columns) + " comma-separated fields, got " +
-                                std::to_string(col + 1));
+        fail(path, line_no, fmt::format("expected {} comma-separated fields, got {}", columns, col + 1));
       if (last && comma != std::string_view::npos)
-        fail(path, line_no, "expected " + std::to_string(columns) + " comma-separated fields, got more");
+        fail(path, line_no, fmt::format("expected {} comma-separated fields, got more", columns));
       const std::string_view tok = line.substr(start, last ? std::string_view::npos : comma - start);
       start = comma + 1;
       field = std::size_t(col);
@@ -109,17 +106,15 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
         if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty())
           fail(path, line_no, "vertex index '" + std::string(tok.substr(0, 40)) + "' is not a whole number");
         if (index != rgb.size())
-          fail(path, line_no, "expected vertex " + std::to_string(rgb.size()) + ", got " + std::to_string(index));
+          fail(path, line_no, fmt::format("expected vertex {}, got {}", rgb.size(), index));
         continue;
       }
       double x = 0;
       const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), x);
       if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty())
-        fail(path, line_no, "field " + std::to_string(field + 1) + " '" + std::string(tok.substr(0, 40)) +
-                                "' is not a number");
+        fail(path, line_no, fmt::format("field {} '{}' is not a number", field + 1, tok.substr(0, 40)));
       if (!std::isfinite(x) || !std::isfinite(float(x)))
-        fail(path, line_no, "field " + std::to_string(field + 1) + " '" + std::string(tok.substr(0, 40)) +
-                                "' is not finite (in float)");
+        fail(path, line_no, fmt::format("field {} '{}' is not finite (in float)", field + 1, tok.substr(0, 40)));
       values[col] = x;
     }
     rgb.emplace_back(float(values[1]), float(values[2]), float(values[3]));

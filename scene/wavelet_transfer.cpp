@@ -1,14 +1,22 @@
-// Wavelet transfer data: sizes and the sparse CPU relighting
+// Wavelet transfer data: sizes, the validator and the sparse CPU relighting
 // (prt/wavelet_transfer.h). Computing one is prt::precompute's
 // (precompute/wavelet_transfer.cpp).
 #include <prt/wavelet_transfer.h>
 
 #include <prt/error.h>
+#include <prt/transfer.h>
+#include <prt/wavelet.h>
+
+#include "transfer_rules.h"
+
+#include <fmt/format.h>
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <limits>
 
 namespace prt {
 
@@ -21,6 +29,67 @@ std::size_t WaveletTransfer::bytes() const {
   return col_offsets.size() * sizeof(std::uint64_t) + col_vertices.size() * sizeof(std::uint32_t) +
          col_values.size() * sizeof(std::int16_t) + vertex_scale.size() * sizeof(float) +
          vertex_albedo.size() * sizeof(glm::vec3);
+}
+
+// ---- the validator ------------------------------------------------------------------
+
+namespace detail {
+
+std::string wavelet_header_problem(std::int64_t r, double threshold, const glm::vec3& albedo, std::uint64_t vertices) {
+  if (!wavelet::valid_resolution(int(std::clamp<std::int64_t>(r, 0, 1 << 20))))
+    return fmt::format("cube resolution is {}; must be a power of two from 2 to 256", r);
+  if (!(threshold >= 0.0 && threshold < 1.0)) return fmt::format("threshold is {:g}; must be in [0, 1)", threshold);
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(albedo[c])) return "albedo is not finite";
+  if (!albedo_in_range(albedo))
+    return fmt::format("albedo is {:.7g} {:.7g} {:.7g}; must be in [{}, {}] per channel (energy conservation)",
+                       double(albedo.x), double(albedo.y), double(albedo.z), kMinAlbedo, kMaxAlbedo);
+  if (vertices == 0) return "no vertices";
+  if (vertices >= std::numeric_limits<std::uint32_t>::max())
+    return fmt::format("{} vertices; a wavelet transfer holds at most 2^32 - 2", vertices);
+  return {};
+}
+
+}  // namespace detail
+
+std::string transfer_problem(const WaveletTransfer& t) {
+  if (auto p = detail::wavelet_header_problem(t.cube_res, t.threshold, t.albedo, t.vertices); !p.empty()) return p;
+  const std::size_t n = wavelet::cube_size(t.cube_res), V = t.vertices;
+  if (t.col_offsets.size() != n + 1)
+    return fmt::format("section 'column offsets' has {} values; expected 6 r^2 + 1 = {}", t.col_offsets.size(), n + 1);
+  if (t.col_values.size() != t.col_vertices.size())
+    return fmt::format("section 'column values' has {} values but 'column vertices' has {}", t.col_values.size(),
+                       t.col_vertices.size());
+  if (t.col_offsets[0] != 0) return fmt::format("column offsets start at {}, not 0", t.col_offsets[0]);
+  for (std::size_t j = 0; j < n; ++j)
+    if (t.col_offsets[j + 1] < t.col_offsets[j])
+      return fmt::format("column offsets decrease at column {} ({} after {})", j, t.col_offsets[j + 1], t.col_offsets[j]);
+  if (t.col_offsets[n] != t.col_vertices.size())
+    return fmt::format("column offsets end at {}; the columns hold {} entries", t.col_offsets[n], t.col_vertices.size());
+  for (std::size_t j = 0; j < n; ++j)
+    for (std::uint64_t e = t.col_offsets[j]; e < t.col_offsets[j + 1]; ++e) {
+      const std::uint32_t v = t.col_vertices[e];
+      if (v >= V) return fmt::format("column {} lists vertex {}; the transfer has {} vertices", j, v, V);
+      if (e > t.col_offsets[j] && v <= t.col_vertices[e - 1])
+        return fmt::format("column {} is not sorted by vertex (vertex {} after {})", j, v, t.col_vertices[e - 1]);
+    }
+  if (t.vertex_scale.size() != V)
+    return fmt::format("section 'vertex scales' has {} values; expected one per vertex ({})", t.vertex_scale.size(), V);
+  for (std::size_t v = 0; v < V; ++v)
+    if (!std::isfinite(t.vertex_scale[v]) || t.vertex_scale[v] < 0.0f)
+      return fmt::format("vertex {} has a bad scale ({:g}; must be finite and >= 0)", v, double(t.vertex_scale[v]));
+  if (t.vertex_colors != !t.vertex_albedo.empty() || (t.vertex_colors && t.vertex_albedo.size() != V))
+    return fmt::format("{} per-vertex albedos for {} vertices with vertex colours {}", t.vertex_albedo.size(), V,
+                       t.vertex_colors ? "on" : "off");
+  for (std::size_t v = 0; v < t.vertex_albedo.size(); ++v) {
+    const glm::vec3& a = t.vertex_albedo[v];
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(a[c])) return fmt::format("vertex {} has a non-finite albedo", v);
+    if (!albedo_in_range(a))
+      return fmt::format("vertex {} has an albedo of {:.7g} {:.7g} {:.7g}; must be in [{}, {}] per channel", v,
+                         double(a.x), double(a.y), double(a.z), kMinAlbedo, kMaxAlbedo);
+  }
+  return {};
 }
 
 void wavelet_relight(const WaveletTransfer& t, const float* light, std::span<const std::uint32_t> terms,

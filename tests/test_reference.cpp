@@ -16,6 +16,7 @@
 #include <prt/reference.h>
 #include <prt/rotation.h>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 #include <gtest/gtest.h>
@@ -26,10 +27,14 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -472,6 +477,40 @@ TEST(VertexCsv, RoundTripIsExact) {
   // Non-finite values are refused rather than written.
   EXPECT_THROW(prt::write_vertex_csv(dir.file("d.csv"), {{std::nanf(""), 0, 0}}), prt::Error);
   EXPECT_FALSE(fs::exists(dir.file("d.csv")));
+}
+
+// The bytes are printf's %.9g of every value (files written before prt
+// formatted with fmt read and compare the same).
+TEST(VertexCsv, ValuesArePrintfNineDigits) {
+  TempDir dir;
+  std::mt19937 rng(3);
+  std::vector<glm::vec3> rgb, se;
+  const float special[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.1f, 1e-30f, 1e30f, 3.4028235e38f, 1.17549435e-38f,
+                           1.4e-45f, 123456789.0f, 0.000123456789f, 1.0f / 3.0f};
+  for (float f : special) rgb.push_back({f, -f, f * 0.5f});
+  for (int i = 0; i < 3000; ++i) {
+    glm::vec3 v;
+    for (int c = 0; c < 3; ++c) {
+      std::uint32_t bits = rng();
+      std::memcpy(&v[c], &bits, 4);
+      if (!std::isfinite(v[c])) v[c] = float(bits % 1000) / 7.0f;
+    }
+    rgb.push_back(v);
+  }
+  for (const glm::vec3& v : rgb) se.push_back(glm::abs(v) * 0.25f);
+  std::string want = "vertex,r,g,b,se_r,se_g,se_b\n";
+  char buf[64];
+  for (std::size_t v = 0; v < rgb.size(); ++v) {
+    want += std::to_string(v);
+    for (const glm::vec3* a : {&rgb[v], &se[v]})
+      for (int c = 0; c < 3; ++c) {
+        std::snprintf(buf, sizeof buf, ",%.9g", double((*a)[c]));
+        want += buf;
+      }
+    want += '\n';
+  }
+  prt::write_vertex_csv(dir.file("a.csv"), rgb, &se);
+  EXPECT_EQ(read_file(dir.file("a.csv")), want);
 }
 
 TEST(VertexCsv, ReaderNamesFileAndLine) {

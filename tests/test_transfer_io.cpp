@@ -5,6 +5,7 @@
 
 #include <prt/precompute.h>
 #include <prt/error.h>
+#include <prt/hash.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
@@ -14,6 +15,9 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+// xxHash itself, compiled in (nothing links libxxhash): the checksum is checked
+// against it, not against prt::Hasher.
+#define XXH_INLINE_ALL
 #include <xxhash.h>
 
 #include <algorithm>
@@ -291,7 +295,7 @@ TEST(TransferFile, RoundTripKeepsSpecialFloatsBitForBit) {
   t.coeffs[3] = std::numeric_limits<float>::min();
   t.ao[0] = 0.0f;
   t.bent_normals[1] = {0.0f, -0.0f, 1.0f};
-  t.albedo = {0.1f, 1e-30f, 3.4e38f};
+  t.albedo = {0.1f, 1e-30f, 1.0f};  // albedo is limited to [0, 1]
   t.seed = ~0ull;
   t.mesh_hash = 0;
   t.samples = std::numeric_limits<int>::max();
@@ -530,6 +534,10 @@ TEST(TransferRead, BadHeaderValues) {
       {kBouncesAt, 0x80000000u, 4, {"bounces is 2147483648"}},
       {kSamplesAt, 0xffffffffu, 4, {"samples is 4294967295"}},
       {kAlbedoAt + 4, 0x7fc00000u, 4, {"albedo is not finite"}},
+      // What compute_transfer refuses (--albedo outside [0, 1]): 2, -1, 1e30.
+      {kAlbedoAt, 0x40000000u, 4, {"bad header: albedo is 2 0.5 0.25; must be in [0, 1] per channel"}},
+      {kAlbedoAt + 4, 0xbf800000u, 4, {"albedo is 0.8 -1 0.25; must be in [0, 1]"}},
+      {kAlbedoAt + 8, 0x7149f2cau, 4, {"albedo is 0.8 0.5 1e+30; must be in [0, 1]"}},
       {kFlagsAt, 0x81, 4, {"unknown flags 0x80"}},
       {84, 1, 1, {"reserved byte 84"}},
       {110, 1, 1, {"reserved byte 110"}},
@@ -719,7 +727,79 @@ TEST(TransferWrite, RefusesWhatCouldNotBeReadBack) {
   t = mixed_transfer();
   t.coeffs.resize(t.coeffs.size() + t.stride());  // a row for an analytic vertex
   expect_refused(t, "section 'coefficients' has 1296 values; expected stored vertices");
+  for (float a : {2.0f, -1.0f, 1e30f}) {  // what compute_transfer refuses
+    t = full_transfer();
+    t.albedo.y = a;
+    expect_refused(t, "must be in [0, 1] per channel (energy conservation)");
+  }
   EXPECT_TRUE(dir.listing().empty());
+}
+
+// The one validator: what write_transfer refuses is what transfer_problem
+// reports, word for word.
+TEST(TransferValidator, IsWhatTheWriterRefuses) {
+  EXPECT_EQ(prt::transfer_problem(full_transfer()), "");
+  EXPECT_EQ(prt::transfer_problem(mixed_transfer()), "");
+  EXPECT_EQ(prt::transfer_problem(make_transfer(TransferMode::Unshadowed, 1, 1, 1, {})), "");
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  std::vector<Transfer> bad(6, full_transfer());
+  bad[0].bands = 65;
+  bad[1].direct.pop_back();
+  bad[2].mode = TransferMode(7);
+  bad[3].albedo.x = 1.5f;
+  bad[4].bent_normals[3].y = std::numeric_limits<float>::infinity();
+  bad[5].bounce_energy.push_back(0.1);  // 4 values for 3 bounces
+  for (const Transfer& t : bad) {
+    const std::string problem = prt::transfer_problem(t);
+    ASSERT_FALSE(problem.empty());
+    try {
+      prt::write_transfer(path, t);
+      ADD_FAILURE() << "wrote a transfer with: " << problem;
+    } catch (const prt::Error& e) {
+      EXPECT_EQ(std::string(e.what()), path + ": cannot write this transfer: " + problem);
+    }
+  }
+  EXPECT_EQ(prt::transfer_problem(bad[3]),
+            "albedo is 1.5 0.5 0.25; must be in [0, 1] per channel (energy conservation)");
+}
+
+// ---- the hash (prt/hash.h) ----------------------------------------------------------------
+
+TEST(Hash, IsXxh3WithSeedZeroInOneCallOrInPieces) {
+  // Pinned: XXH3-64 of nothing, and of "abc" (xxHash 0.8's test vectors).
+  EXPECT_EQ(prt::hash64(nullptr, 0), 0x2d06800538d394c2ull);
+  EXPECT_EQ(prt::Hasher().digest(), 0x2d06800538d394c2ull);
+  EXPECT_EQ(prt::hash64("abc", 3), XXH3_64bits("abc", 3));
+  std::mt19937_64 rng(7);
+  std::string bytes(100000, '\0');
+  for (char& c : bytes) c = char(rng());
+  for (std::size_t n : {0, 1, 3, 16, 17, 128, 129, 240, 241, 1024, 100000}) {
+    EXPECT_EQ(prt::hash64(bytes.data(), n), XXH3_64bits(bytes.data(), n)) << n;
+    prt::Hasher h;
+    for (std::size_t done = 0; done < n;) {  // random pieces, some empty
+      const std::size_t k = std::min<std::size_t>(n - done, rng() % 300);
+      h.add(bytes.data() + done, k);
+      done += k;
+    }
+    EXPECT_EQ(h.digest(), XXH3_64bits(bytes.data(), n)) << n;
+  }
+  const std::uint32_t x = 0xdeadbeef;
+  EXPECT_EQ(prt::Hasher().add_value(x).digest(), XXH3_64bits(&x, 4));
+}
+
+TEST(Hash, MeshAndShadingHashesAreXxh3OfTheirBytes) {
+  std::vector<glm::vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {1, 0.5f, 1}};
+  std::vector<glm::vec3> colors = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.5f, 0.5f, 0.5f}};
+  const prt::Mesh m = prt::make_mesh(p, {{0, 2, 1}, {1, 2, 3}}, {}, colors, {}, "m.off");
+  std::string pos(reinterpret_cast<const char*>(m.positions.data()), m.positions.size() * 12);
+  pos.append(reinterpret_cast<const char*>(m.triangles.data()), m.triangles.size() * 12);
+  EXPECT_EQ(m.hash(), XXH3_64bits(pos.data(), pos.size()));
+  const std::string n(reinterpret_cast<const char*>(m.normals.data()), m.normals.size() * 12);
+  EXPECT_EQ(prt::shading_hash(m, false), XXH3_64bits(n.data(), n.size()));
+  std::string nc = n;
+  nc.append(reinterpret_cast<const char*>(m.colors.data()), m.colors.size() * 12);
+  EXPECT_EQ(prt::shading_hash(m, true), XXH3_64bits(nc.data(), nc.size()));
 }
 
 // Runs write_transfer(path, t) in a child process whose file-size limit

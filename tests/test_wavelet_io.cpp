@@ -19,6 +19,9 @@
 #include <prt/wavelet_transfer.h>
 
 #include <gtest/gtest.h>
+// xxHash itself, compiled in (nothing links libxxhash): the checksum is checked
+// against it, not against prt::Hasher.
+#define XXH_INLINE_ALL
 #include <xxhash.h>
 
 #include <cmath>

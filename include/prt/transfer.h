@@ -82,6 +82,28 @@ struct Transfer {
   }
 };
 
+// The albedo of every transfer, per channel: [kMinAlbedo, kMaxAlbedo] = [0, 1]
+// (energy conservation). compute_transfer and compute_wavelet_transfer
+// refuse others, and transfer_problem finds them.
+inline constexpr float kMinAlbedo = 0.0f, kMaxAlbedo = 1.0f;
+inline bool albedo_in_range(const glm::vec3& a) {
+  for (int c = 0; c < 3; ++c)
+    if (!(a[c] >= kMinAlbedo && a[c] <= kMaxAlbedo)) return false;  // NaN too
+  return true;
+}
+
+// The one consistency check of a transfer's data, used by write_transfer,
+// read_transfer and the renderer: what is wrong with `t`, or "" when nothing
+// is. bands 1 to 64, channels 1 or 3, a known mode, bounces and samples >= 0,
+// albedo in range, at least one vertex; slots empty or one per vertex,
+// numbering the stored vertices' rows 0, 1, 2, ... in vertex order;
+// coefficients one row (stride() floats) per stored vertex; direct absent or
+// the same size, and only in an interreflected transfer; ambient occlusion
+// and bent normals absent or one per vertex; bounce energy absent or 1 to
+// bounces values; every value finite. Whether `t` fits a mesh is
+// check_matches' (prt/transfer_io.h).
+std::string transfer_problem(const Transfer& t);
+
 // The unshadowed (clamped-cosine) transfer of a vertex with normal n and
 // albedo rho: out[c bands^2 + k] = (rho_c / pi) A_l Y_lm(n) for c < channels
 // (rho.x alone when channels is 1); 0 for a zero normal. In double: what

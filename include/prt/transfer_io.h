@@ -28,14 +28,14 @@ inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 
 // Writes `t` to `path` through write_atomically: a failure (or the process
 // being killed) leaves any existing file untouched and no temporary behind.
-// Throws prt::Error naming the file if `t` is inconsistent (array sizes that
-// do not match bands/channels/vertices, NaN or infinite values: such a file
-// could not be read back) or the write fails.
+// Throws prt::Error "PATH: cannot write this transfer: PROBLEM" before writing
+// anything if `t` is inconsistent (transfer_problem, prt/transfer.h: such a
+// file could not be read back), and naming the file if the write fails.
 void write_transfer(const std::string& path, const Transfer& t);
 
 // Reads a transfer file. Validates everything before returning: signature,
 // version, size (truncation), checksum, header values, section table, and
-// that every value is finite. Throws prt::Error "PATH: problem" otherwise.
+// the data (transfer_problem). Throws prt::Error "PATH: problem" otherwise.
 Transfer read_transfer(const std::string& path);
 
 // Throws prt::Error unless `t` was computed for `mesh` (same vertex count and
@@ -86,10 +86,11 @@ std::uint32_t read_transfer_version(const std::string& path);
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
 // Writes `t` through write_atomically. Throws prt::Error naming the file,
-// before writing anything, if `t` would fail read_wavelet_transfer's checks
-// (column offsets not monotone or not ending at the entry count, vertex
-// indices out of range or unsorted within a column, array sizes, non-finite
-// scales or albedo, bad cube resolution or threshold).
+// before writing anything, if transfer_problem(t) (prt/wavelet_transfer.h)
+// finds it inconsistent: column offsets not monotone or not ending at the
+// entry count, vertex indices out of range or unsorted within a column, array
+// sizes, non-finite scales, albedo outside [0, 1], bad cube resolution or
+// threshold.
 void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t);
 
 // Reads a wavelet transfer file, validating signature, version, size,

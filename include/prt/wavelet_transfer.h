@@ -20,6 +20,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace prt {
@@ -63,6 +64,17 @@ struct WaveletTransfer {
   // and per-vertex albedo (vertex_kept, a statistic, is not counted).
   std::size_t bytes() const;
 };
+
+// The one consistency check of a wavelet transfer, used by
+// write_wavelet_transfer and read_wavelet_transfer: what is wrong with `t`,
+// or "" when nothing is. Cube resolution a power of two from 2 to 256,
+// threshold in [0, 1), albedo in [kMinAlbedo, kMaxAlbedo] (prt/transfer.h),
+// 1 to 2^32 - 2 vertices; 6 r^2 + 1 column offsets from 0, never decreasing,
+// ending at the entry count; as many values as entries; vertex indices below
+// `vertices` and ascending within each column; one finite scale >= 0 per
+// vertex; per-vertex albedo (in range) exactly when vertex_colors.
+// vertex_kept (a statistic) is not checked.
+std::string transfer_problem(const WaveletTransfer& t);
 
 // Outgoing radiance of every vertex: out[v] = rho_v sum_{j in terms}
 // c_vj (W l)_j, RGB. `light` is planar [3][6 r^2], already Haar-transformed
