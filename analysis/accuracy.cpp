@@ -4,21 +4,22 @@
 
 #include <prt/compare.h>
 #include <prt/error.h>
+#include <prt/hash.h>
 #include <prt/io.h>
 
-#include <xxhash.h>
+#include <fmt/format.h>
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <random>
+#include <span>
 
 namespace prt {
 
@@ -33,27 +34,12 @@ double sum_sq(std::span<const glm::vec3> v) {
   return s;
 }
 
-class Hasher {
- public:
-  Hasher() : state_(XXH3_createState()) {
-    if (!state_ || XXH3_64bits_reset(state_) != XXH_OK) throw Error("error set key: xxHash failed");
-  }
-  ~Hasher() { XXH3_freeState(state_); }
-  Hasher(const Hasher&) = delete;
-  Hasher& operator=(const Hasher&) = delete;
-  void add(const void* p, std::size_t n) { XXH3_64bits_update(state_, p, n); }
-  template <class T>
-  void add(const T& x) { add(&x, sizeof x); }
-  template <class T>
-  void add_vector(const std::vector<T>& v) {
-    add(v.size());
-    add(v.data(), v.size() * sizeof(T));
-  }
-  std::uint64_t digest() const { return XXH3_64bits_digest(state_); }
-
- private:
-  XXH3_state_t* state_;
-};
+// A vector's length, then its elements.
+template <class T>
+void add_vector(Hasher& h, const std::vector<T>& v) {
+  h.add_value(v.size());
+  h.add_span(std::span<const T>(v));
+}
 
 }  // namespace
 
@@ -82,8 +68,7 @@ std::vector<std::uint32_t> choose_error_vertices(const Mesh& mesh, std::size_t c
 
 ErrorSet whole_error_set(std::vector<glm::vec3> radiance, std::vector<glm::vec3> std_error) {
   if (radiance.size() != std_error.size())
-    throw Error("error set: " + std::to_string(radiance.size()) + " values but " + std::to_string(std_error.size()) +
-                " standard errors");
+    throw Error(fmt::format("error set: {} values but {} standard errors", radiance.size(), std_error.size()));
   ErrorSet set;
   set.mesh_vertices = radiance.size();
   set.vertices.resize(radiance.size());
@@ -110,8 +95,8 @@ ErrorSet make_error_set(const Mesh& mesh, const EnvMap& map, const ErrorSetOptio
 
 Accuracy measure_accuracy(const ErrorSet& set, std::span<const glm::vec3> radiance) {
   if (radiance.size() != set.mesh_vertices)
-    throw Error("accuracy: the result has " + std::to_string(radiance.size()) + " vertices, the reference's mesh " +
-                std::to_string(set.mesh_vertices));
+    throw Error(fmt::format("accuracy: the result has {} vertices, the reference's mesh {}", radiance.size(),
+                            set.mesh_vertices));
   std::vector<glm::vec3> a(set.vertices.size());
   for (std::size_t i = 0; i < a.size(); ++i) a[i] = radiance[set.vertices[i]];
   const CompareResult c = compare_vertices(a, set.radiance);
@@ -136,29 +121,27 @@ Accuracy measure_accuracy(const ErrorSet& set, std::span<const glm::vec3> radian
 
 std::string error_set_key(const Mesh& mesh, const EnvMap& map, const ErrorSetOptions& options) {
   Hasher h;
-  h.add(kVersion);
-  h.add_vector(mesh.positions);
-  h.add_vector(mesh.triangles);
-  h.add_vector(mesh.normals);
-  h.add_vector(mesh.colors);
-  h.add(map.layout);
-  h.add(map.width);
-  h.add(map.height);
-  h.add_vector(map.rgb);
+  h.add_value(kVersion);
+  add_vector(h, mesh.positions);
+  add_vector(h, mesh.triangles);
+  add_vector(h, mesh.normals);
+  add_vector(h, mesh.colors);
+  h.add_value(map.layout);
+  h.add_value(map.width);
+  h.add_value(map.height);
+  add_vector(h, map.rgb);
   const ReferenceOptions& r = options.reference;
-  h.add(r.mode);
-  h.add(r.bounces);
-  h.add(r.albedo);
-  h.add(r.vertex_colors);
-  h.add(r.samples);
-  h.add(r.seed);
-  h.add(r.offset);
-  h.add(r.rotation);
-  h.add(options.vertices);
-  h.add(options.seed);
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h.digest()));
-  return hex;
+  h.add_value(r.mode);
+  h.add_value(r.bounces);
+  h.add_value(r.albedo);
+  h.add_value(r.vertex_colors);
+  h.add_value(r.samples);
+  h.add_value(r.seed);
+  h.add_value(r.offset);
+  h.add_value(r.rotation);
+  h.add_value(options.vertices);
+  h.add_value(options.seed);
+  return fmt::format("{:016x}", h.digest());
 }
 
 void write_error_set(const std::string& path, const std::string& key, const ErrorSet& set) {
@@ -196,7 +179,7 @@ std::optional<ErrorSet> read_error_set(const std::string& path, const std::strin
   in.read(reinterpret_cast<char*>(&n), 8);
   if (!in) throw fail("is truncated (header)");
   if (std::memcmp(magic, kMagic, 4) != 0) throw fail("is not a prt error-set file");
-  if (version != kVersion) throw fail("has version " + std::to_string(version));
+  if (version != kVersion) throw fail(fmt::format("has version {}", version));
   if (std::string(file_key, 16) != key) throw fail("was made for other inputs (key mismatch)");
   const auto size = std::filesystem::file_size(path, ec);
   if (ec || n == 0 || n > mesh_vertices || size != 40 + n * 28) throw fail("has a bad size or count");

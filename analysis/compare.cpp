@@ -3,6 +3,8 @@
 
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -13,8 +15,7 @@ namespace prt {
 
 CompareResult compare_vertices(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
   if (a.size() != b.size())
-    throw Error("vertex counts differ: " + std::to_string(a.size()) + " vs " + std::to_string(b.size()) +
-                " (reference)");
+    throw Error(fmt::format("vertex counts differ: {} vs {} (reference)", a.size(), b.size()));
   CompareResult r;
   r.vertices = a.size();
   if (a.empty()) return r;

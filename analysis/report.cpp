@@ -8,11 +8,12 @@
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>
 
+#include <fmt/format.h>
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -42,18 +43,11 @@ double median_ms(double seconds, F&& frame) {
   return ms[ms.size() / 2];
 }
 
-std::string fmt_g(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
-
 void validate(const ReportOptions& o) {
   const auto in = [](const std::vector<int>& v, int lo, int hi, const char* what) {
     for (int x : v)
       if (x < lo || x > hi)
-        throw Error(std::string("report: ") + what + " " + std::to_string(x) + " is outside [" + std::to_string(lo) +
-                    ", " + std::to_string(hi) + "]");
+        throw Error(fmt::format("report: {} {} is outside [{}, {}]", what, x, lo, hi));
   };
   in(o.bands, 1, 16, "bands");
   in({o.samples_bands, o.bounce_bands}, 1, 16, "bands");
@@ -91,9 +85,8 @@ struct Runner {
     std::string note;
     ErrorSet set = cached_error_set(mesh, map, e, cache_dir, progress, &note);
     if (!note.empty()) report.notes.push_back(std::string(what) + ": " + note);
-    say(std::string(what) + ": " + std::to_string(set.vertices.size()) + " vertices x " + std::to_string(samples) +
-        " samples, noise floor " + fmt_g(set.noise_floor()) +
-        (set.seconds > 0 ? ", " + fmt_g(set.seconds) + " s" : std::string(", from the cache")));
+    say(fmt::format("{}: {} vertices x {} samples, noise floor {:.3g}{}", what, set.vertices.size(), samples,
+                    set.noise_floor(), set.seconds > 0 ? fmt::format(", {:.3g} s", set.seconds) : ", from the cache"));
     return set;
   }
 
@@ -125,9 +118,8 @@ struct Runner {
     row.relight_ms = time_sh_relight(t, mesh, l, o.relight_seconds);
     std::vector<glm::vec3> rgb = relight(t, mesh, l);
     row.error = measure_accuracy(truth, rgb);
-    say(std::string(sweep) + ": " + std::to_string(t.bands) + " bands, " + std::to_string(t.samples) + " samples, " +
-        std::to_string(row.bounces) + " bounces: precompute " + fmt_g(seconds) + " s, relight " +
-        fmt_g(row.relight_ms) + " ms, error " + fmt_g(row.error.rel_rms));
+    say(fmt::format("{}: {} bands, {} samples, {} bounces: precompute {:.3g} s, relight {:.3g} ms, error {:.3g}", sweep,
+                    t.bands, t.samples, row.bounces, seconds, row.relight_ms, row.error.rel_rms));
     if (radiance_out) *radiance_out = std::move(rgb);
     return row;
   }
@@ -142,7 +134,7 @@ struct Runner {
       const Transfer t = precompute(TransferMode::Shadowed, o.bands[i], o.bands_samples, 0, s);
       std::vector<glm::vec3> rgb;
       report.rows.push_back(sh_row("bands", t, s, report.shadowed_truth, &rgb));
-      if (i == 0 || i + 1 == o.bands.size()) picture("SH " + std::to_string(t.bands) + " bands", std::move(rgb));
+      if (i == 0 || i + 1 == o.bands.size()) picture(fmt::format("SH {} bands", t.bands), std::move(rgb));
     }
   }
 
@@ -211,10 +203,10 @@ struct Runner {
       lighting.update(glm::dmat3(1.0), K, wavelet::Selection::AreaWeighted);
       wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
       row.error = measure_accuracy(report.shadowed_truth, rgb);
-      say("terms: wavelet K=" + std::to_string(K) + ": precompute " + fmt_g(seconds) + " s, relight " +
-          fmt_g(row.relight_ms) + " ms, error " + fmt_g(row.error.rel_rms));
+      say(fmt::format("terms: wavelet K={}: precompute {:.3g} s, relight {:.3g} ms, error {:.3g}", K, seconds,
+                      row.relight_ms, row.error.rel_rms));
       report.rows.push_back(row);
-      if (K == mid) picture("wavelet K=" + std::to_string(K), std::move(rgb));
+      if (K == mid) picture(fmt::format("wavelet K={}", K), std::move(rgb));
     }
   }
 };

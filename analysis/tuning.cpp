@@ -5,10 +5,11 @@
 #include <prt/projection.h>
 #include <prt/wavelet.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <optional>
 #include <tuple>
 
@@ -22,11 +23,6 @@ constexpr int kPilotSamples = 1024;  // reference samples of the noise pilot
 constexpr int kFirstProbe = 1024;    // samples of the first bands probe
 constexpr int kFewestSamples = 64;   // the samples ladder starts here
 
-std::string g3(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", x);
-  return buf;
-}
 
 struct Search {
   const Mesh& mesh;
@@ -70,8 +66,8 @@ struct Search {
     tr.meets = meets(tr.error);
     result.trials.push_back(tr);
     if (log)
-      log(std::string(step) + ": " + std::to_string(bands) + " bands, " + std::to_string(tr.samples) + " samples, " +
-          std::to_string(tr.bounces) + " bounces: error " + g3(tr.error.rel_rms) + (tr.meets ? " (meets)" : ""));
+      log(fmt::format("{}: {} bands, {} samples, {} bounces: error {:.3g}{}", step, bands, tr.samples, tr.bounces,
+                      tr.error.rel_rms, tr.meets ? " (meets)" : ""));
     return tr;
   }
 };
@@ -99,22 +95,22 @@ ErrorSet target_reference(const Mesh& mesh, const EnvMap& map, const TargetOptio
   if (pilot_noise > want) {
     const double needed = kPilotSamples * (pilot_noise / want) * (pilot_noise / want);
     if (needed > o.max_truth_samples)
-      throw Error("--target-error " + g3(o.target) + " would need a reference of " + g3(needed) +
-                  " samples per vertex (its noise at " + std::to_string(kPilotSamples) + " is " + g3(pilot_noise) +
-                  "); the most allowed is " + std::to_string(o.max_truth_samples) + ": ask for a larger target");
+      throw Error(fmt::format("--target-error {:.3g} would need a reference of {:.3g} samples per vertex (its noise at "
+                              "{} is {:.3g}); the most allowed is {}: ask for a larger target",
+                              o.target, needed, kPilotSamples, pilot_noise, o.max_truth_samples));
     samples = int(std::ceil(needed / 256.0)) * 256;
   }
   ErrorSet truth = samples == kPilotSamples
                        ? pilot
                        : cached_error_set(mesh, map, truth_options(o, samples), cache_dir, progress);
   if (log)
-    log("reference: " + std::to_string(truth.vertices.size()) + " vertices x " + std::to_string(samples) +
-        " samples, noise floor " + g3(truth.noise_floor()));
+    log(fmt::format("reference: {} vertices x {} samples, noise floor {:.3g}", truth.vertices.size(), samples,
+                    truth.noise_floor()));
   return truth;
 }
 
 void check_target(double target) {
-  if (!(target > 0 && target < 1)) throw Error("--target-error must be in (0, 1), got " + g3(target));
+  if (!(target > 0 && target < 1)) throw Error(fmt::format("--target-error must be in (0, 1), got {:.3g}", target));
 }
 
 }  // namespace
@@ -149,11 +145,11 @@ TargetResult choose_transfer(const Mesh& mesh, const EnvMap& map, const TargetOp
     if (bands) break;
   }
   if (!bands)
-    throw Error("--target-error " + g3(o.target) + " is not reached within " + std::to_string(max_bands) +
-                " bands, " + std::to_string(max_samples) + " samples" +
-                (max_bounces ? ", " + std::to_string(max_bounces) + " bounces" : std::string()) +
-                ": the best error is " + g3(best) +
-                " (more bands, or the wavelet basis for sharp lighting; `prt report` shows the trade-off)");
+    throw Error(fmt::format("--target-error {:.3g} is not reached within {} bands, {} samples{}: the best error is "
+                            "{:.3g} (more bands, or the wavelet basis for sharp lighting; `prt report` shows the "
+                            "trade-off)",
+                            o.target, max_bands, max_samples,
+                            max_bounces ? fmt::format(", {} bounces", max_bounces) : std::string(), best));
 
   // The last run that met the target, reused when it has the final settings.
   std::optional<Transfer> kept;
@@ -200,24 +196,24 @@ TargetResult choose_transfer(const Mesh& mesh, const EnvMap& map, const TargetOp
   const auto error_of = [&](const char* step, int b, int n, int k) -> std::string {
     for (const TargetTrial& t : r.trials)
       if (t.step == step && t.bands == b && (n == 0 || t.samples == n) && t.bounces == k)
-        return g3(t.error.rel_rms);
+        return fmt::format("{:.3g}", t.error.rel_rms);
     return "";
   };
-  std::string why = "chose " + std::to_string(bands) + " bands, " + std::to_string(chosen_samples) + " samples" +
-                    (max_bounces ? ", " + std::to_string(bounces) + " bounces" : std::string()) + ": error " +
-                    g3(r.error.rel_rms) + " <= " + g3(kTargetMargin) + " x target " + g3(o.target) + " (reference " +
-                    std::to_string(r.truth_samples) + " samples, noise " + g3(r.truth_noise) + ")";
+  std::string why = fmt::format("chose {} bands, {} samples{}: error {:.3g} <= {:.3g} x target {:.3g} (reference {} "
+                                "samples, noise {:.3g})",
+                                bands, chosen_samples, max_bounces ? fmt::format(", {} bounces", bounces) : std::string(),
+                                r.error.rel_rms, kTargetMargin, o.target, r.truth_samples, r.truth_noise);
   if (bands > 1) {
     const std::string e = error_of("bands", bands - 1, probe, max_bounces);
-    if (!e.empty()) why += "; " + std::to_string(bands - 1) + " bands reach only " + e;
+    if (!e.empty()) why += fmt::format("; {} bands reach only {}", bands - 1, e);
   }
   if (bounces > 0) {
     const std::string e = error_of("bounces", bands, probe, bounces - 1);
-    if (!e.empty()) why += "; " + std::to_string(bounces - 1) + " bounces only " + e;
+    if (!e.empty()) why += fmt::format("; {} bounces only {}", bounces - 1, e);
   }
   if (chosen_samples > kFewestSamples) {
     const std::string e = error_of("samples", bands, chosen_samples / 2, bounces);
-    if (!e.empty()) why += "; " + std::to_string(chosen_samples / 2) + " samples only " + e;
+    if (!e.empty()) why += fmt::format("; {} samples only {}", chosen_samples / 2, e);
   }
   r.explanation = why;
   return r;
@@ -248,7 +244,7 @@ WaveletTargetResult choose_wavelet_terms(const Mesh& mesh, const EnvMap& map, co
     best = std::min(best, e.rel_rms);
     const bool ok = e.rel_rms <= kTargetMargin * o.target;
     r.trials.push_back({K, e, ok});
-    if (log) log("terms: K=" + std::to_string(K) + ": error " + g3(e.rel_rms) + (ok ? " (meets)" : ""));
+    if (log) log(fmt::format("terms: K={}: error {:.3g}{}", K, e.rel_rms, ok ? " (meets)" : ""));
     if (ok) {
       r.terms = K;
       r.error = e;
@@ -256,16 +252,16 @@ WaveletTargetResult choose_wavelet_terms(const Mesh& mesh, const EnvMap& map, co
     }
   }
   if (!r.terms)
-    throw Error("--target-error " + g3(o.target) + " is not reached by the wavelet transfer at --cube-res " +
-                std::to_string(wavelet_options.cube_res) + ", --threshold " + g3(wavelet_options.threshold) +
-                " even with all " + std::to_string(all) + " terms: the best error is " + g3(best) +
-                " (a larger --cube-res or a smaller --threshold)");
-  r.explanation = "relight with --terms " + std::to_string(r.terms) + ": error " + g3(r.error.rel_rms) + " <= " +
-                  g3(kTargetMargin) + " x target " + g3(o.target) + " (reference " + std::to_string(r.truth_samples) +
-                  " samples, noise " + g3(r.truth_noise) + ")";
+    throw Error(fmt::format("--target-error {:.3g} is not reached by the wavelet transfer at --cube-res {}, "
+                            "--threshold {:.3g} even with all {} terms: the best error is {:.3g} (a larger --cube-res "
+                            "or a smaller --threshold)",
+                            o.target, wavelet_options.cube_res, wavelet_options.threshold, all, best));
+  r.explanation = fmt::format("relight with --terms {}: error {:.3g} <= {:.3g} x target {:.3g} (reference {} samples, "
+                              "noise {:.3g})",
+                              r.terms, r.error.rel_rms, kTargetMargin, o.target, r.truth_samples, r.truth_noise);
   if (r.trials.size() > 1)
-    r.explanation += "; K=" + std::to_string(r.trials[r.trials.size() - 2].terms) + " reaches only " +
-                     g3(r.trials[r.trials.size() - 2].error.rel_rms);
+    r.explanation += fmt::format("; K={} reaches only {:.3g}", r.trials[r.trials.size() - 2].terms,
+                                 r.trials[r.trials.size() - 2].error.rel_rms);
   return r;
 }
 

@@ -1,6 +1,9 @@
 #include "ray_scene.h"
 
 #include <prt/error.h>
+#include <prt/transfer.h>
+
+#include <fmt/format.h>
 
 #include <embree3/rtcore.h>
 #include <pmmintrin.h>
@@ -21,7 +24,7 @@ namespace {
 thread_local std::string embree_error;
 
 void on_embree_error(void*, RTCError code, const char* str) {
-  embree_error = "Embree error " + std::to_string(int(code)) + (str ? std::string(": ") + str : std::string());
+  embree_error = fmt::format("Embree error {}{}{}", int(code), str ? ": " : "", str ? str : "");
 }
 
 RTCScene scene_of(void* s) { return static_cast<RTCScene>(s); }
@@ -34,9 +37,11 @@ void enable_ftz_daz() {
 }
 
 void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threads, double offset, const Mesh& mesh) {
+  // The limits every transfer's albedo keeps (transfer_problem checks them too).
   for (int c = 0; c < 3; ++c)
-    if (!(albedo[c] >= 0.0f && albedo[c] <= 1.0f))
-      throw Error("--albedo must be in [0, 1] per channel (energy conservation), got " + std::to_string(albedo[c]));
+    if (!albedo_in_range(glm::vec3(albedo[c])))
+      throw Error(fmt::format("--albedo must be in [{}, {}] per channel (energy conservation), got {:f}", kMinAlbedo,
+                              kMaxAlbedo, double(albedo[c])));
   if (vertex_colors && mesh.colors.empty())
     throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
   if (threads < 0) throw Error("--threads must be >= 0");
@@ -54,7 +59,7 @@ double default_ray_offset(const Mesh& mesh) {
 
 RayScene::RayScene(const Mesh& mesh) : mesh_(mesh) {
   RTCDevice device = rtcNewDevice(nullptr);
-  if (!device) throw Error("Embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+  if (!device) throw Error(fmt::format("Embree: cannot create a device (error {})", int(rtcGetDeviceError(nullptr))));
   device_ = device;
   rtcSetDeviceErrorFunction(device, on_embree_error, nullptr);
   embree_error.clear();

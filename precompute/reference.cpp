@@ -8,6 +8,8 @@
 
 #include "ray_scene.h"
 
+#include <fmt/format.h>
+
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
@@ -266,19 +268,17 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o) {
     throw Error("reference: " + map.source + ": empty or malformed lat-long map");
   require_finite(map);
   if (o.samples < 2)
-    throw Error("reference: samples must be at least 2 (the standard error needs two), got " +
-                std::to_string(o.samples));
+    throw Error(fmt::format("reference: samples must be at least 2 (the standard error needs two), got {}", o.samples));
   if (o.mode != TransferMode::Unshadowed && o.mode != TransferMode::Shadowed &&
       o.mode != TransferMode::Interreflected)
-    throw Error("reference: unknown transfer mode " + std::to_string(std::uint32_t(o.mode)));
+    throw Error(fmt::format("reference: unknown transfer mode {}", std::uint32_t(o.mode)));
   if (o.bounces < 0 || o.bounces > kMaxReferenceBounces)
-    throw Error("reference: bounces must be from 0 to " + std::to_string(kMaxReferenceBounces) + ", got " +
-                std::to_string(o.bounces));
+    throw Error(fmt::format("reference: bounces must be from 0 to {}, got {}", kMaxReferenceBounces, o.bounces));
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(o.albedo[c]) || o.albedo[c] < 0)
       throw Error("reference: albedo must be finite and >= 0 in every channel");
   if (!std::isfinite(o.offset) || o.offset < 0)
-    throw Error("reference: ray offset must be finite and >= 0, got " + std::to_string(o.offset));
+    throw Error(fmt::format("reference: ray offset must be finite and >= 0, got {:f}", o.offset));
   const glm::dmat3 I = glm::transpose(o.rotation) * o.rotation;
   double err = std::abs(glm::determinant(o.rotation) - 1.0);
   for (int i = 0; i < 3; ++i)
@@ -300,8 +300,7 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
   if (vertices)
     for (std::uint32_t v : *vertices)
       if (v >= mesh.vertex_count())
-        throw Error("reference: vertex " + std::to_string(v) + " is out of range (the mesh has " +
-                    std::to_string(mesh.vertex_count()) + ")");
+        throw Error(fmt::format("reference: vertex {} is out of range (the mesh has {})", v, mesh.vertex_count()));
   const std::size_t n = vertices ? vertices->size() : mesh.vertex_count();
   ReferenceResult result;
   result.radiance.assign(n, glm::vec3(0.0f));

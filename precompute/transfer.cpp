@@ -17,6 +17,8 @@
 
 #include "ray_scene.h"
 
+#include <fmt/format.h>
+
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -80,10 +82,11 @@ std::vector<glm::vec3> direction_set(int M, std::uint64_t seed) {
 void check_options(const TransferOptions& o, const Mesh& mesh) {
   sh::check_bands(o.bands, "--bands");
   if (o.samples < 1 || o.samples > (1 << 24))
-    throw Error("--samples must be between 1 and 16777216, got " + std::to_string(o.samples));
-  if (o.bounces < 0 || o.bounces > 64) throw Error("--bounces must be between 0 and 64, got " + std::to_string(o.bounces));
+    throw Error(fmt::format("--samples must be between 1 and 16777216, got {}", o.samples));
+  if (o.bounces < 0 || o.bounces > 64)
+    throw Error(fmt::format("--bounces must be between 0 and 64, got {}", o.bounces));
   if (!(o.bounce_tolerance >= 0.0 && o.bounce_tolerance < 1.0))
-    throw Error("--bounce-tolerance must be in [0, 1), got " + std::to_string(o.bounce_tolerance));
+    throw Error(fmt::format("--bounce-tolerance must be in [0, 1), got {:f}", o.bounce_tolerance));
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 

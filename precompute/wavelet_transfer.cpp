@@ -7,6 +7,8 @@
 
 #include "ray_scene.h"
 
+#include <fmt/format.h>
+
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -27,7 +29,7 @@ namespace {
 void check_options(const WaveletOptions& o, const Mesh& mesh) {
   wavelet::check_resolution(o.cube_res, "--cube-res");
   if (!(o.threshold >= 0.0 && o.threshold < 1.0))
-    throw Error("--threshold must be in [0, 1), got " + std::to_string(o.threshold));
+    throw Error(fmt::format("--threshold must be in [0, 1), got {:f}", o.threshold));
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
   if (mesh.vertex_count() >= std::numeric_limits<std::uint32_t>::max())
     throw Error(mesh.source + ": too many vertices for a wavelet transfer (at most 2^32 - 2)");
@@ -231,7 +233,7 @@ std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOption
   detail::enable_ftz_daz();
   std::vector<double> t(vertices.size() * n);
   for (std::size_t k = 0; k < vertices.size(); ++k) {
-    if (vertices[k] >= mesh.vertex_count()) throw Error("vertex " + std::to_string(vertices[k]) + " out of range");
+    if (vertices[k] >= mesh.vertex_count()) throw Error(fmt::format("vertex {} out of range", vertices[k]));
     trace_vertex(scene, mesh, vertices[k], cube, offset_of(o, mesh), t.data() + k * n);
   }
   return t;

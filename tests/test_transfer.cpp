@@ -388,10 +388,42 @@ TEST(Transfer, RejectsBadOptions) {
   o = opts(TransferMode::Shadowed);
   o.albedo = glm::vec3(1.5f);
   EXPECT_THROW(compute_transfer(m, o), Error);
+  // The albedo limits are those of every transfer (transfer_problem).
+  for (float a : {-1.0f, 2.0f, 1e30f, kMinAlbedo, kMaxAlbedo}) {
+    o = opts(TransferMode::Unshadowed);
+    o.albedo = glm::vec3(0.5f, a, 0.5f);
+    Transfer t;
+    t.bands = 2;
+    t.mode = TransferMode::Unshadowed;
+    t.albedo = o.albedo;
+    t.vertices = 1;
+    t.coeffs.assign(4, 0.0f);
+    if (albedo_in_range(o.albedo)) {
+      EXPECT_NO_THROW(compute_transfer(m, o)) << a;
+      EXPECT_EQ(transfer_problem(t), "") << a;
+      continue;
+    }
+    try {
+      compute_transfer(m, o);
+      ADD_FAILURE() << "accepted albedo " << a;
+    } catch (const Error& e) {
+      const std::string want = "--albedo must be in [0, 1] per channel (energy conservation), got ";
+      EXPECT_EQ(std::string(e.what()).substr(0, want.size()), want);
+    }
+    EXPECT_NE(transfer_problem(t).find("must be in [0, 1] per channel"), std::string::npos) << transfer_problem(t);
+  }
   o = opts(TransferMode::Shadowed);
   o.vertex_colors = true;  // the quad has none
   EXPECT_THROW(compute_transfer(m, o), Error);
   EXPECT_THROW(parse_transfer_mode("ambient"), Error);
+  try {
+    parse_transfer_mode("ambient");
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "unknown mode 'ambient' (expected unshadowed, shadowed or interreflected)");
+  }
+  for (TransferMode mode : {TransferMode::Unshadowed, TransferMode::Shadowed, TransferMode::Interreflected})
+    EXPECT_EQ(parse_transfer_mode(transfer_mode_name(mode)), mode);
+  EXPECT_EQ(transfer_mode_name(TransferMode(9)), "?");
 }
 
 }  // namespace
