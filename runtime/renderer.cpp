@@ -4,6 +4,7 @@
 // display.cpp's and default_camera() camera.cpp's.
 #include <prt/error.h>
 #include <prt/filter.h>
+#include <prt/names.h>
 #include <prt/render.h>
 #include <prt/sh.h>
 #include <prt/transfer_io.h>
@@ -76,41 +77,23 @@ std::array<glm::mat4, 3> irradiance_matrices(std::span<const glm::dvec3> L) {
 
 }  // namespace
 
-std::string_view shading_name(Shading s) {
-  switch (s) {
-    case Shading::Transfer: return "transfer";
-    case Shading::Direct: return "direct";
-    case Shading::Unshadowed: return "unshadowed";
-    case Shading::Lambert: return "lambert";
-    case Shading::AmbientOcclusion: return "ao";
-    case Shading::BentNormal: return "bent";
-    case Shading::VertexColors: return "colors";
-  }
-  return "?";
-}
+namespace {
+constexpr EnumName<Shading> kShadingNames[] = {
+    {Shading::Transfer, "transfer"},     {Shading::Direct, "direct"},    {Shading::Unshadowed, "unshadowed"},
+    {Shading::Lambert, "lambert"},       {Shading::AmbientOcclusion, "ao"}, {Shading::BentNormal, "bent"},
+    {Shading::VertexColors, "colors"},
+};
+constexpr EnumName<ToneMap> kToneMapNames[] = {
+    {ToneMap::Clamp, "clamp"}, {ToneMap::Reinhard, "reinhard"}, {ToneMap::Aces, "aces"}};
+}  // namespace
 
-Shading parse_shading(std::string_view name) {
-  for (Shading s : {Shading::Transfer, Shading::Direct, Shading::Unshadowed, Shading::Lambert,
-                    Shading::AmbientOcclusion, Shading::BentNormal, Shading::VertexColors})
-    if (name == shading_name(s)) return s;
-  throw Error("unknown shading '" + std::string(name) +
-              "' (expected transfer, direct, unshadowed, lambert, ao, bent or colors)");
-}
+std::string_view shading_name(Shading s) { return enum_name(kShadingNames, s); }
 
-std::string_view tone_map_name(ToneMap t) {
-  switch (t) {
-    case ToneMap::Clamp: return "clamp";
-    case ToneMap::Reinhard: return "reinhard";
-    case ToneMap::Aces: return "aces";
-  }
-  return "?";
-}
+Shading parse_shading(std::string_view name) { return parse_enum(kShadingNames, name, "shading"); }
 
-ToneMap parse_tone_map(std::string_view name) {
-  for (ToneMap t : {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces})
-    if (name == tone_map_name(t)) return t;
-  throw Error("unknown tone map '" + std::string(name) + "' (expected clamp, reinhard or aces)");
-}
+std::string_view tone_map_name(ToneMap t) { return enum_name(kToneMapNames, t); }
+
+ToneMap parse_tone_map(std::string_view name) { return parse_enum(kToneMapNames, name, "tone map"); }
 
 namespace {
 
@@ -363,28 +346,12 @@ TransferArray make_transfer_array(const float* t, std::size_t vertices, int chan
 }  // namespace
 
 void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
-  if (t.vertices != mesh.vertex_count())
-    throw Error("transfer has " + std::to_string(t.vertices) + " vertices, the mesh " +
-                std::to_string(mesh.vertex_count()));
+  if (const std::string p = transfer_problem(t); !p.empty()) throw Error("inconsistent transfer: " + p);
   check_matches(t, mesh, "transfer");
-  if (t.bands < 1 || t.bands > kMaxRenderBands)
+  if (t.bands > kMaxRenderBands)
     throw Error("transfer has " + std::to_string(t.bands) + " bands; the renderer takes 1 to " +
                 std::to_string(kMaxRenderBands));
-  if (t.channels != 1 && t.channels != 3)
-    throw Error("transfer has " + std::to_string(t.channels) + " channels (expected 1 or 3)");
-  if (!t.slots.empty() && t.slots.size() != t.vertices)
-    throw Error("transfer has " + std::to_string(t.slots.size()) + " vertex slots for " + std::to_string(t.vertices) +
-                " vertices");
   const std::size_t rows = t.stored_vertices();
-  if (t.coeffs.size() != rows * t.stride())
-    throw Error("transfer has " + std::to_string(t.coeffs.size()) + " coefficients, expected " +
-                std::to_string(rows * t.stride()) + " (" + std::to_string(rows) + " stored vertices)");
-  if (!t.direct.empty() && t.direct.size() != t.coeffs.size())
-    throw Error("transfer's direct part has " + std::to_string(t.direct.size()) + " coefficients, expected " +
-                std::to_string(t.coeffs.size()));
-  if (!t.ao.empty() && t.ao.size() != t.vertices) throw Error("transfer's ambient occlusion has the wrong length");
-  if (!t.bent_normals.empty() && t.bent_normals.size() != t.vertices)
-    throw Error("transfer's bent normals have the wrong length");
   set_mesh(mesh, t.albedo, t.vertex_colors);
   Impl& m = *impl_;
   const int stride = t.bands * t.bands;
