@@ -3,6 +3,7 @@
 #include "oiio_plugin.h"
 
 #include <prt/error.h>
+#include <prt/paths.h>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -121,56 +122,36 @@ struct Plugin {
   std::string error;
 };
 
-std::string exe_dir() {
-  char buf[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", buf, sizeof(buf) - 1);
-  if (n <= 0) return {};
-  buf[n] = 0;
-  return fs::path(buf).parent_path().string();
-}
-
 const Plugin& plugin() {
   static Plugin p;
   static std::once_flag once;
   std::call_once(once, [] {
-    std::vector<std::string> dirs;
-    if (const char* env = std::getenv("PRT_PLUGIN_DIR")) dirs.emplace_back(env);
-    const std::string exe = exe_dir();
-    if (!exe.empty()) {
-      dirs.push_back(exe);
-      dirs.push_back(exe + "/../lib/prt");
-    }
-#ifdef PRT_PLUGIN_BUILD_DIR
-    dirs.emplace_back(PRT_PLUGIN_BUILD_DIR);
-#endif
-#ifdef PRT_PLUGIN_INSTALL_DIR
-    dirs.emplace_back(PRT_PLUGIN_INSTALL_DIR);
-#endif
-    std::string tried;
-    for (const auto& d : dirs) {
-      const std::string file = d + "/libprt_oiio.so";
-      if (!fs::exists(file)) {
-        tried += " " + file;
-        continue;
-      }
-      void* h = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
-      if (!h) {
-        p.error = std::string("cannot load ") + file + ": " + dlerror();
-        return;
-      }
-      p.open = reinterpret_cast<prt_oiio_open_fn>(dlsym(h, "prt_oiio_open"));
-      p.read_rows = reinterpret_cast<prt_oiio_read_rows_fn>(dlsym(h, "prt_oiio_read_rows"));
-      p.close = reinterpret_cast<prt_oiio_close_fn>(dlsym(h, "prt_oiio_close"));
-      p.write = reinterpret_cast<prt_oiio_write_fn>(dlsym(h, "prt_oiio_write"));
-      if (!p.open || !p.read_rows || !p.close || !p.write) {
-        p.open = nullptr;
-        p.write = nullptr;
-        p.error = file + " is not prt's OpenImageIO plugin (or one from another prt version)";
-      }
+    // Where prt/paths.h says: $PRT_PLUGIN_DIR, else <libdir>/prt beside libprt_core.
+    const std::string file = (plugin_dir() / "libprt_oiio.so").string();
+    if (!fs::exists(file)) {
+      std::string tried;
+      if (const char* env = std::getenv("PRT_PLUGIN_DIR"); env && *env)
+        tried = " " + file + " ($PRT_PLUGIN_DIR)";
+      else
+        for (const fs::path& d : library_dirs()) tried.append(" ").append((d / "prt" / "libprt_oiio.so").string());
+      p.error = "prt's OpenImageIO plugin (libprt_oiio.so) was not found; tried:" + tried +
+                " (set PRT_PLUGIN_DIR to the directory that holds it, or use EXR files)";
       return;
     }
-    p.error = "prt's OpenImageIO plugin (libprt_oiio.so) was not found; tried:" + tried +
-              " (set PRT_PLUGIN_DIR, or use EXR files)";
+    void* h = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!h) {
+      p.error = std::string("cannot load ") + file + ": " + dlerror();
+      return;
+    }
+    p.open = reinterpret_cast<prt_oiio_open_fn>(dlsym(h, "prt_oiio_open"));
+    p.read_rows = reinterpret_cast<prt_oiio_read_rows_fn>(dlsym(h, "prt_oiio_read_rows"));
+    p.close = reinterpret_cast<prt_oiio_close_fn>(dlsym(h, "prt_oiio_close"));
+    p.write = reinterpret_cast<prt_oiio_write_fn>(dlsym(h, "prt_oiio_write"));
+    if (!p.open || !p.read_rows || !p.close || !p.write) {
+      p.open = nullptr;
+      p.write = nullptr;
+      p.error = file + " is not prt's OpenImageIO plugin (or one from another prt version)";
+    }
   });
   return p;
 }

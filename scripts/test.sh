@@ -9,6 +9,8 @@ jobs=$(nproc 2>/dev/null || echo 2)
 
 echo "== Release build and tests"
 scripts/build.sh build
+# Every label: unit, report, hard_cases and package (install the build, move
+# the prefix, build and run consumers against it; tests/package).
 ctest --test-dir build --output-on-failure --parallel "$jobs"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"

@@ -10,6 +10,7 @@
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/paths.h>
 #include <prt/projection.h>
 #include <prt/render.h>
 #include <prt/rotation.h>
@@ -69,7 +70,7 @@ bool is_map_file(const std::filesystem::path& p) {
 }
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
-// ones (the source tree's envmaps/, or $PRT_ENVMAPS), sorted, ENV included.
+// ones (prt::data_dir()/envmaps, and $PRT_ENVMAPS), sorted, ENV included.
 std::vector<std::string> map_playlist(const std::string& env) {
   std::set<std::filesystem::path> found;
   auto add_dir = [&](const std::filesystem::path& dir) {
@@ -81,9 +82,7 @@ std::vector<std::string> map_playlist(const std::string& env) {
   const std::filesystem::path env_path = std::filesystem::absolute(env);
   add_dir(env_path.parent_path());
   if (const char* dir = std::getenv("PRT_ENVMAPS"); dir && *dir) add_dir(dir);
-#ifdef PRT_BUNDLED_ENVMAPS
-  add_dir(PRT_BUNDLED_ENVMAPS);
-#endif
+  add_dir(prt::data_dir() / "envmaps");
   std::error_code ec;
   found.insert(std::filesystem::weakly_canonical(env_path, ec));
   std::vector<std::string> list;
