@@ -3,16 +3,13 @@
 
 #include <prt/error.h>
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cstdio>
 
 namespace prt::gl {
 
-std::string hex(unsigned v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%04X", v);
-  return buf;
-}
+std::string hex(unsigned v) { return fmt::format("0x{:04X}", v); }
 
 bool has_extension(const char* list, const char* name) {
   if (!list) return false;

@@ -13,6 +13,7 @@
 #include "gl_util.h"
 #include "shaders.h"
 
+#include <fmt/format.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/mat4x4.hpp>
@@ -193,11 +194,9 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
   if (!p) {
     const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
     p = gl::link_compute(shaders::relight_comp_glsl, "relight",
-                         "#define COEFFS " + std::to_string(coeffs) + "\n#define BANDS " +
-                             std::to_string(shader_bands) + "\n#define VEC4S " + std::to_string(vec4s) +
-                             "\n#define CHANNELS " + std::to_string(ch) + "\n#define SOURCE " +
-                             std::to_string(int(from)) + "\n#define VERTEX_ALBEDO " +
-                             std::to_string(vertex_albedo ? 1 : 0) + "\n");
+                         fmt::format("#define COEFFS {}\n#define BANDS {}\n#define VEC4S {}\n#define CHANNELS {}\n"
+                                     "#define SOURCE {}\n#define VERTEX_ALBEDO {}\n",
+                                     coeffs, shader_bands, vec4s, ch, int(from), vertex_albedo ? 1 : 0));
   }
   return p;
 }
@@ -206,7 +205,7 @@ GLuint Renderer::Impl::attribute_program(int mode) {
   GLuint& p = attribute_programs[std::size_t(mode)];
   if (!p)
     p = gl::link_program(shaders::attribute_vert_glsl, shaders::mesh_frag_glsl, "attribute",
-                         "#define MODE " + std::to_string(mode) + "\n");
+                         fmt::format("#define MODE {}\n", mode));
   return p;
 }
 
@@ -227,8 +226,7 @@ void Renderer::Impl::resize(int w, int h) {
   const GLenum status = glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER);
   check_gl("allocating the framebuffer");
   if (status != GL_FRAMEBUFFER_COMPLETE)
-    throw Error("RGBA32F framebuffer of " + std::to_string(w) + "x" + std::to_string(h) + " is incomplete (" +
-                hex(status) + ")");
+    throw Error(fmt::format("RGBA32F framebuffer of {}x{} is incomplete ({})", w, h, hex(status)));
   fbo_width = w;
   fbo_height = h;
 }
@@ -331,9 +329,9 @@ TransferArray make_transfer_array(const float* t, std::size_t vertices, int chan
   GLint max_texels = 0;
   glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
   if (padded.size() / 4 > std::size_t(max_texels))
-    throw Error("transfer of " + std::to_string(vertices) + " vertices x " + std::to_string(channels) +
-                " channels x " + std::to_string(stride) + " coefficients exceeds this OpenGL's buffer texture limit (" +
-                std::to_string(max_texels) + " texels of 4 floats)");
+    throw Error(fmt::format("transfer of {} vertices x {} channels x {} coefficients exceeds this OpenGL's "
+                            "buffer texture limit ({} texels of 4 floats)",
+                            vertices, channels, stride, max_texels));
   TransferArray a;
   a.bytes = padded.size() * sizeof(float);
   a.buffer = make_buffer(padded.data(), padded.size() * sizeof(float));
@@ -349,8 +347,7 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   if (const std::string p = transfer_problem(t); !p.empty()) throw Error("inconsistent transfer: " + p);
   check_matches(t, mesh, "transfer");
   if (t.bands > kMaxRenderBands)
-    throw Error("transfer has " + std::to_string(t.bands) + " bands; the renderer takes 1 to " +
-                std::to_string(kMaxRenderBands));
+    throw Error(fmt::format("transfer has {} bands; the renderer takes 1 to {}", t.bands, kMaxRenderBands));
   const std::size_t rows = t.stored_vertices();
   set_mesh(mesh, t.albedo, t.vertex_colors);
   Impl& m = *impl_;
@@ -571,8 +568,7 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
   m.make_current();
   glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &max_rb);
   if (width > max_rb || height > max_rb)
-    throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " exceeds the limit " +
-                std::to_string(max_rb));
+    throw Error(fmt::format("image size {}x{} exceeds the limit {}", width, height, max_rb));
   if (!(cam.fov_deg > 0 && cam.fov_deg < 180)) throw Error("camera: field of view must be in (0, 180) degrees");
   const glm::dvec3 fwd = cam.target - cam.eye;
   if (!(glm::length(fwd) > 0) || !(glm::length(glm::cross(fwd, cam.up)) > 1e-12 * glm::length(fwd)))

@@ -67,8 +67,8 @@ EnvMap load(const ProjectArgs& a) {
 // JSON with one coefficient triple per line (nlohmann serialises every value:
 // escaping, and doubles in shortest round-trip form, i.e. full precision).
 std::string format_json(const std::vector<glm::dvec3>& c, int bands, const nlohmann::ordered_json& extra) {
-  std::string s = "{\n  \"bands\": " + std::to_string(bands) + ",\n  \"convention\": " +
-                  nlohmann::json(kConvention).dump() + ",\n  \"coefficients\": [\n";
+  std::string s = fmt::format("{{\n  \"bands\": {},\n  \"convention\": {},\n  \"coefficients\": [\n", bands,
+                              nlohmann::json(kConvention).dump());
   for (std::size_t k = 0; k < c.size(); ++k)
     s += "    " + nlohmann::json({c[k].x, c[k].y, c[k].z}).dump() + (k + 1 < c.size() ? ",\n" : "\n");
   s += "  ]";

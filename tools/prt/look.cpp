@@ -5,6 +5,8 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -70,13 +72,13 @@ Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {
   if (look.shading == Shading::VertexColors)
     throw Error("--shading: colors is for callers that upload their own vertex colours");
   if (a.bands > sh_bands && sh_bands > 0)
-    throw Error("--bands " + std::to_string(a.bands) + ": the transfer has " + std::to_string(sh_bands) + " bands");
+    throw Error(fmt::format("--bands {}: the transfer has {} bands", a.bands, sh_bands));
   look.bands = a.bands == 0 ? sh_bands : a.bands;
   look.window = for_option("--window", [&] { return sh::parse_window(a.window); });
   look.terms = a.terms;
   look.selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
   if (!std::isfinite(a.exposure) || std::abs(a.exposure) > 64)
-    throw Error("--exposure: expected stops in [-64, 64], got " + std::to_string(a.exposure));
+    throw Error(fmt::format("--exposure: expected stops in [-64, 64], got {:f}", a.exposure));
   look.display.exposure = a.exposure;
   look.display.tone_map = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
   return look;

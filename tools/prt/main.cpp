@@ -45,11 +45,10 @@ CLI::Validator int_range(int lo, int hi) {
           used = 0;
         }
         if (used == 0 || used != s.size() || v < lo || v > hi)
-          return "must be a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got '" + s +
-                 "'";
+          return fmt::format("must be a whole number from {} to {}, got '{}'", lo, hi, s);
         return {};
       },
-      "INT in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      fmt::format("INT in [{}, {}]", lo, hi));
 }
 
 CLI::Validator positive_number() {

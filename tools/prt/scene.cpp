@@ -2,6 +2,8 @@
 
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 namespace prt::cli {
 
 void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet) {
@@ -15,8 +17,7 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
   s.transfer = read_transfer(transfer);
   check_matches(s.transfer, s.mesh, transfer);
   if (max_bands > 0 && s.transfer.bands > max_bands)
-    throw Error(transfer + ": " + std::to_string(s.transfer.bands) + " bands; prt " + command + " takes at most " +
-                std::to_string(max_bands));
+    throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, s.transfer.bands, command, max_bands));
 }
 
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
