@@ -55,17 +55,21 @@ inline double dot(const double* a, const double* b, int n) {
 constexpr int kRowsPerChunk = 8;
 
 // Gauss-Legendre nodes per row so that the theta integral of a polar factor
-// of degree < bands (a trigonometric polynomial of degree <= bands in theta)
-// over a row of height h is exact to double precision: the smallest q whose
-// error bound h^(2q+1) (q!)^4 / ((2q+1) ((2q)!)^3) * bands^(2q) is below
-// 1e-17 (relative to the factor's size, which is <= 1).
+// of degree < bands times sin(theta) (a trigonometric polynomial of degree
+// <= bands in theta, for odd m as for even: the rule is in theta, not in
+// cos(theta), so the sin(theta) factor of odd m is no branch point) over a
+// row of height h is exact to double precision: the smallest q whose error
+// bound h^(2q+1) (q!)^4 / ((2q+1) ((2q)!)^3) * bands^(2q) is below 1e-17
+// (relative to the factor's size, which is <= 1). 1024x512 at 9 bands: 4;
+// one row over the whole sphere (a 1x1 or 2x1 map) at 64 bands: 86. The
+// count is not capped: a cap of 64 once left that row at 4e-8.
 int gauss_nodes_for_row(int bands, double h) {
-  for (int q = 1; q < 64; ++q) {
+  for (int q = 1;; ++q) {
     const double log_bound = (2 * q + 1) * std::log(h) + 4 * std::lgamma(q + 1.0) - std::log(2.0 * q + 1) -
                              3 * std::lgamma(2 * q + 1.0) + 2 * q * std::log(double(bands));
     if (log_bound < std::log(1e-17)) return q;
+    PRT_CHECK_OP(q, <, 1000);  // rows are at most pi high: q <= 86 for 64 bands
   }
-  return 64;
 }
 
 // cos(m phi_x), sin(m phi_local_x) for every column x and m < bands, where
@@ -212,7 +216,7 @@ struct LatLongProjector::Impl {
   // The phi measure of one pixel: 2pi/W, times sinc(m pi / W) for box (the
   // exact integral of cos(m phi) over a pixel is 2pi/W sinc(m pi/W) cos(m phi_c)).
   std::vector<double> phi_factor;
-  int gauss_nodes = 0;        // box: Gauss-Legendre nodes per row
+  Rule1D gauss;               // box: the Gauss-Legendre rule of every row, on [-1, 1]
   std::vector<double> fejer;  // point: Fejer weights of the H rows
   // Sums in the map's frame: of the completed chunks, in chunk order, and of
   // the chunk the last block ended in (when it ended inside one).
@@ -227,7 +231,7 @@ struct LatLongProjector::Impl {
         const double a = M_PI * m / W;
         phi_factor[m] *= std::sin(a) / a;
       }
-      gauss_nodes = gauss_nodes_for_row(n, M_PI / H);
+      gauss = gauss_legendre(gauss_nodes_for_row(n, M_PI / H));
     } else {
       fejer = fejer_weights(H);
     }
@@ -238,12 +242,14 @@ struct LatLongProjector::Impl {
   // the polar factor at the row's centre (point).
   void row_polar(int y, double* out, double* scratch) const {
     if (q == Quadrature::Box) {
-      const Rule1D gl = gauss_legendre(gauss_nodes, M_PI * y / H, M_PI * (y + 1) / H);
+      // The rule mapped to the row's [theta_0, theta_1] (the same bits as
+      // gauss_legendre(nodes, theta_0, theta_1)).
+      const double t0 = M_PI * y / H, t1 = M_PI * (y + 1) / H, h = 0.5 * (t1 - t0), c = 0.5 * (t1 + t0);
       std::fill(out, out + nt, 0.0);
-      for (int j = 0; j < gauss_nodes; ++j) {
-        const double st = std::sin(gl.x[j]);
-        sh::eval_polar<double>(n, std::cos(gl.x[j]), st, scratch);
-        for (int k = 0; k < nt; ++k) out[k] += gl.w[j] * st * scratch[k];
+      for (std::size_t j = 0; j < gauss.x.size(); ++j) {
+        const double theta = c + h * gauss.x[j], st = std::sin(theta), w = h * gauss.w[j];
+        sh::eval_polar<double>(n, std::cos(theta), st, scratch);
+        for (int k = 0; k < nt; ++k) out[k] += w * st * scratch[k];
       }
     } else {
       const double theta = M_PI * (y + 0.5) / H;
