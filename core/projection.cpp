@@ -11,6 +11,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 
 namespace prt {
 
@@ -33,6 +35,26 @@ glm::dmat3 world_to_local() {
   P[0][1] = 1.0;      // local.y = world.x
   P[1][2] = 1.0;      // local.z = world.y
   return P;
+}
+
+// A rotation the projections apply to every map (P^T, the cube's frames).
+// Up to sh::kDoubleRecurrenceBands it is built on the spot (microseconds).
+// Above, Rotation runs in extended precision (about 15 ms at 64 bands), so
+// each matrix is built once per process and kept at the largest band count
+// asked for: band l of a Rotation does not depend on how many bands it has,
+// so applying a larger one to n bands is the n-band rotation, bit for bit.
+std::shared_ptr<const sh::Rotation> fixed_rotation(int bands, const glm::dmat3& R) {
+  if (bands <= sh::kDoubleRecurrenceBands) return std::make_shared<const sh::Rotation>(bands, R);
+  static std::mutex mutex;
+  static std::vector<std::shared_ptr<const sh::Rotation>> cache;  // a handful of matrices
+  const std::lock_guard<std::mutex> lock(mutex);
+  for (auto& r : cache)
+    if (r->matrix() == R) {
+      if (r->bands() < bands) r = std::make_shared<const sh::Rotation>(bands, R);
+      return r;
+    }
+  cache.push_back(std::make_shared<const sh::Rotation>(bands, R));
+  return cache.back();
 }
 
 // Dot product with four partial sums in a fixed order: vectorises without
@@ -126,7 +148,7 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
   F0[1] = {1, 0, 0};
   F0[2] = {0, 1, 0};
   const glm::dmat3 K = sh::rotation_axis_angle({1, 0, 0}, -M_PI / 2);
-  const sh::Rotation to_z(n, glm::transpose(K));
+  const auto to_z = fixed_rotation(n, glm::transpose(K));
   std::vector<double> equator(sh::num_tri(n));
   sh::eval_polar<double>(n, 0.0, 1.0, equator.data());
 
@@ -185,7 +207,7 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
           cm[u] = c1;
         }
       }
-      to_z.apply(row, turned);
+      to_z->apply(row, turned);
       rotate_about_z(turned, n, std::atan(t));
       for (int k = 0; k < nc; ++k) acc[k] += turned[k];
     }
@@ -199,7 +221,7 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
     // R_f maps the template (s, -t, 1) to cube_direction(face, s, t).
     const glm::dvec3 o = cube_direction(face, 0, 0);
     const glm::dmat3 Rf(cube_direction(face, 1, 0) - o, o - cube_direction(face, 0, 1), o);
-    sh::Rotation(n, Rf * F0 * K).apply(face_sum, face_world);
+    fixed_rotation(n, Rf * F0 * K)->apply(face_sum, face_world);
     for (int k = 0; k < nc; ++k) c[k] += face_world[k];
   }
   return c;
@@ -337,7 +359,7 @@ std::vector<glm::dvec3> LatLongProjector::finish() const {
   PRT_CHECK_OP(p.next, ==, p.H);
   // The sums describe g(u) = L(P^T u) in the map's frame; L = g rotated by P^T.
   std::vector<glm::dvec3> world(p.nc);
-  sh::Rotation(p.n, glm::transpose(world_to_local())).apply(p.total, world);
+  fixed_rotation(p.n, glm::transpose(world_to_local()))->apply(p.total, world);
   return world;
 }
 
@@ -417,7 +439,7 @@ std::vector<float> reconstruct_latlong(std::span<const glm::dvec3> coeffs, int W
   PRT_CHECK(W > 0 && H > 0);
   const int n = sh::bands_of(coeffs.size());
   std::vector<glm::dvec3> local(coeffs.size());
-  sh::Rotation(n, world_to_local()).apply(coeffs, local);
+  fixed_rotation(n, world_to_local())->apply(coeffs, local);
   const FourierTable F(W, n);
   std::vector<float> out(std::size_t(W) * H * 3);
   tbb::parallel_for(0, H, [&](int y) {
