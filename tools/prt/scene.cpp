@@ -16,7 +16,7 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
   check_matches(s.transfer, s.mesh, transfer);
   if (max_bands > 0 && s.transfer.bands > max_bands)
     throw Error(transfer + ": " + std::to_string(s.transfer.bands) + " bands; prt " + command + " takes at most " +
-                std::to_string(max_bands));
+                std::to_string(max_bands) + " (what the renderer's lighting block holds; prt relight takes any)");
 }
 
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
