@@ -39,7 +39,7 @@ glm::dmat3 world_to_local() {
 
 // A rotation the projections apply to every map (P^T, the cube's frames).
 // Up to sh::kDoubleRecurrenceBands it is built on the spot (microseconds).
-// Above, Rotation runs in extended precision (about 15 ms at 64 bands), so
+// Above, Rotation runs in extended precision (about 10 ms at 64 bands), so
 // each matrix is built once per process and kept at the largest band count
 // asked for: band l of a Rotation does not depend on how many bands it has,
 // so applying a larger one to n bands is the n-band rotation, bit for bit.
