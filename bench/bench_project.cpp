@@ -117,7 +117,7 @@ void BM_ProjectOnly(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(map.pixel_count()));
 }
-BENCHMARK(BM_ProjectOnly)->Arg(3)->Arg(5)->Arg(9)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ProjectOnly)->Arg(3)->Arg(5)->Arg(9)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Single-threaded prt::project at 9 bands (parallel speed-up = this / ProjectOnly/9).
 void BM_ProjectOnly1T(benchmark::State& state) {
@@ -224,7 +224,7 @@ void BM_ProjectCube(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(cube.pixel_count()));
 }
-BENCHMARK(BM_ProjectCube)->Arg(3)->Arg(9)->Arg(16)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ProjectCube)->Arg(3)->Arg(9)->Arg(16)->Arg(64)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ProjectCube1T(benchmark::State& state) {
   const SingleThreaded one;

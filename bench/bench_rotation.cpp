@@ -48,7 +48,7 @@ void BM_RotationBuild(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
 }
-BENCHMARK(BM_RotationBuild)->Arg(9)->Arg(16)->Arg(32)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RotationBuild)->Arg(9)->Arg(16)->Arg(32)->Arg(48)->Arg(64)->Unit(benchmark::kMicrosecond);
 
 // Constructing a fresh Rotation each time (allocation included).
 void BM_RotationConstruct(benchmark::State& state) {
@@ -60,7 +60,7 @@ void BM_RotationConstruct(benchmark::State& state) {
     benchmark::DoNotOptimize(rot.band(n - 1).data());
   }
 }
-BENCHMARK(BM_RotationConstruct)->Arg(9)->Arg(16)->Arg(32)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RotationConstruct)->Arg(9)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 
 // Applying a built rotation to n*n RGB coefficients.
 void BM_RotationApplyRGB(benchmark::State& state) {

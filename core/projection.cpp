@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <mutex>
 
 namespace prt {
 
@@ -36,6 +38,26 @@ glm::dmat3 world_to_local() {
   return P;
 }
 
+// A rotation the projections apply to every map (P^T, the cube's frames).
+// Up to sh::kDoubleRecurrenceBands it is built on the spot (microseconds).
+// Above, Rotation runs in extended precision (about 10 ms at 64 bands), so
+// each matrix is built once per process and kept at the largest band count
+// asked for: band l of a Rotation does not depend on how many bands it has,
+// so applying a larger one to n bands is the n-band rotation, bit for bit.
+std::shared_ptr<const sh::Rotation> fixed_rotation(int bands, const glm::dmat3& R) {
+  if (bands <= sh::kDoubleRecurrenceBands) return std::make_shared<const sh::Rotation>(bands, R);
+  static std::mutex mutex;
+  static std::vector<std::shared_ptr<const sh::Rotation>> cache;  // a handful of matrices
+  const std::lock_guard<std::mutex> lock(mutex);
+  for (auto& r : cache)
+    if (r->matrix() == R) {
+      if (r->bands() < bands) r = std::make_shared<const sh::Rotation>(bands, R);
+      return r;
+    }
+  cache.push_back(std::make_shared<const sh::Rotation>(bands, R));
+  return cache.back();
+}
+
 // Dot product with four partial sums in a fixed order: vectorises without
 // -ffast-math and gives the same bits on every run.
 inline double dot(const double* a, const double* b, int n) {
@@ -56,17 +78,21 @@ inline double dot(const double* a, const double* b, int n) {
 constexpr int kRowsPerChunk = 8;
 
 // Gauss-Legendre nodes per row so that the theta integral of a polar factor
-// of degree < bands (a trigonometric polynomial of degree <= bands in theta)
-// over a row of height h is exact to double precision: the smallest q whose
-// error bound h^(2q+1) (q!)^4 / ((2q+1) ((2q)!)^3) * bands^(2q) is below
-// 1e-17 (relative to the factor's size, which is <= 1).
+// of degree < bands times sin(theta) (a trigonometric polynomial of degree
+// <= bands in theta, for odd m as for even: the rule is in theta, not in
+// cos(theta), so the sin(theta) factor of odd m is no branch point) over a
+// row of height h is exact to double precision: the smallest q whose error
+// bound h^(2q+1) (q!)^4 / ((2q+1) ((2q)!)^3) * bands^(2q) is below 1e-17
+// (relative to the factor's size, which is <= 1). 1024x512 at 9 bands: 4;
+// one row over the whole sphere (a 1x1 or 2x1 map) at 64 bands: 86. The
+// count is not capped: a cap of 64 once left that row at 4e-8.
 int gauss_nodes_for_row(int bands, double h) {
-  for (int q = 1; q < 64; ++q) {
+  for (int q = 1;; ++q) {
     const double log_bound = (2 * q + 1) * std::log(h) + 4 * std::lgamma(q + 1.0) - std::log(2.0 * q + 1) -
                              3 * std::lgamma(2 * q + 1.0) + 2 * q * std::log(double(bands));
     if (log_bound < std::log(1e-17)) return q;
+    PRT_CHECK_OP(q, <, 1000);  // rows are at most pi high: q <= 86 for 64 bands
   }
-  return 64;
 }
 
 // cos(m phi_x), sin(m phi_local_x) for every column x and m < bands, where
@@ -123,7 +149,7 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
   F0[1] = {1, 0, 0};
   F0[2] = {0, 1, 0};
   const glm::dmat3 K = sh::rotation_axis_angle({1, 0, 0}, -M_PI / 2);
-  const sh::Rotation to_z(n, glm::transpose(K));
+  const auto to_z = fixed_rotation(n, glm::transpose(K));
   std::vector<double> equator(sh::num_tri(n));
   sh::eval_polar<double>(n, 0.0, 1.0, equator.data());
 
@@ -182,7 +208,7 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
           cm[u] = c1;
         }
       }
-      to_z.apply(row, turned);
+      to_z->apply(row, turned);
       rotate_about_z(turned, n, std::atan(t));
       for (int k = 0; k < nc; ++k) acc[k] += turned[k];
     }
@@ -196,7 +222,7 @@ std::vector<glm::dvec3> project_cube(const EnvMap& map, int bands) {
     // R_f maps the template (s, -t, 1) to cube_direction(face, s, t).
     const glm::dvec3 o = cube_direction(face, 0, 0);
     const glm::dmat3 Rf(cube_direction(face, 1, 0) - o, o - cube_direction(face, 0, 1), o);
-    sh::Rotation(n, Rf * F0 * K).apply(face_sum, face_world);
+    fixed_rotation(n, Rf * F0 * K)->apply(face_sum, face_world);
     for (int k = 0; k < nc; ++k) c[k] += face_world[k];
   }
   return c;
@@ -213,7 +239,7 @@ struct LatLongProjector::Impl {
   // The phi measure of one pixel: 2pi/W, times sinc(m pi / W) for box (the
   // exact integral of cos(m phi) over a pixel is 2pi/W sinc(m pi/W) cos(m phi_c)).
   std::vector<double> phi_factor;
-  int gauss_nodes = 0;        // box: Gauss-Legendre nodes per row
+  Rule1D gauss;               // box: the Gauss-Legendre rule of every row, on [-1, 1]
   std::vector<double> fejer;  // point: Fejer weights of the H rows
   // Sums in the map's frame: of the completed chunks, in chunk order, and of
   // the chunk the last block ended in (when it ended inside one).
@@ -228,7 +254,7 @@ struct LatLongProjector::Impl {
         const double a = M_PI * m / W;
         phi_factor[m] *= std::sin(a) / a;
       }
-      gauss_nodes = gauss_nodes_for_row(n, M_PI / H);
+      gauss = gauss_legendre(gauss_nodes_for_row(n, M_PI / H));
     } else {
       fejer = fejer_weights(H);
     }
@@ -239,12 +265,14 @@ struct LatLongProjector::Impl {
   // the polar factor at the row's centre (point).
   void row_polar(int y, double* out, double* scratch) const {
     if (q == Quadrature::Box) {
-      const Rule1D gl = gauss_legendre(gauss_nodes, M_PI * y / H, M_PI * (y + 1) / H);
+      // The rule mapped to the row's [theta_0, theta_1] (the same bits as
+      // gauss_legendre(nodes, theta_0, theta_1)).
+      const double t0 = M_PI * y / H, t1 = M_PI * (y + 1) / H, h = 0.5 * (t1 - t0), c = 0.5 * (t1 + t0);
       std::fill(out, out + nt, 0.0);
-      for (int j = 0; j < gauss_nodes; ++j) {
-        const double st = std::sin(gl.x[j]);
-        sh::eval_polar<double>(n, std::cos(gl.x[j]), st, scratch);
-        for (int k = 0; k < nt; ++k) out[k] += gl.w[j] * st * scratch[k];
+      for (std::size_t j = 0; j < gauss.x.size(); ++j) {
+        const double theta = c + h * gauss.x[j], st = std::sin(theta), w = h * gauss.w[j];
+        sh::eval_polar<double>(n, std::cos(theta), st, scratch);
+        for (int k = 0; k < nt; ++k) out[k] += w * st * scratch[k];
       }
     } else {
       const double theta = M_PI * (y + 0.5) / H;
@@ -332,7 +360,7 @@ std::vector<glm::dvec3> LatLongProjector::finish() const {
   PRT_CHECK_OP(p.next, ==, p.H);
   // The sums describe g(u) = L(P^T u) in the map's frame; L = g rotated by P^T.
   std::vector<glm::dvec3> world(p.nc);
-  sh::Rotation(p.n, glm::transpose(world_to_local())).apply(p.total, world);
+  fixed_rotation(p.n, glm::transpose(world_to_local()))->apply(p.total, world);
   return world;
 }
 
@@ -412,7 +440,7 @@ std::vector<float> reconstruct_latlong(std::span<const glm::dvec3> coeffs, int W
   PRT_CHECK(W > 0 && H > 0);
   const int n = sh::bands_of(coeffs.size());
   std::vector<glm::dvec3> local(coeffs.size());
-  sh::Rotation(n, world_to_local()).apply(coeffs, local);
+  fixed_rotation(n, world_to_local())->apply(coeffs, local);
   const FourierTable F(W, n);
   std::vector<float> out(std::size_t(W) * H * 3);
   tbb::parallel_for(0, H, [&](int y) {

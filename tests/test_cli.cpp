@@ -385,6 +385,25 @@ TEST(CliProject, IrradianceOfAConstantMap) {
     for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[k][ch], 0.0, kIrradianceTol) << k << " " << ch;
 }
 
+// Issue #13: 64 bands on a map one pixel high (its row spans the sphere's
+// whole polar range) through the command: the JSON carries the library's
+// coefficients at full precision (their exactness against box integrals is
+// Projection.BoxRuleIsExactOnCoarseMapsAtEveryBandCount), and two
+// hemispheres of 1 and 3 give c_00 = 2 sqrt(4pi).
+TEST(CliProject, SixtyFourBandsOfAOnePixelHighMap) {
+  TempDir dir;
+  const std::string env = dir.file("halves.exr");
+  prt::write_image(env, 2, 1, {1.0f, 1.0f, 1.0f, 3.0f, 3.0f, 3.0f});
+  const Result r = run_prt(dir, {"project", env, "--bands", "64", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::vector<glm::dvec3> c = coeffs_from_json(nlohmann::json::parse(r.out));
+  ASSERT_EQ(c.size(), 64u * 64u);
+  const std::vector<glm::dvec3> want = reference(env, 64);
+  for (std::size_t k = 0; k < c.size(); ++k)
+    for (int ch = 0; ch < 3; ++ch) ASSERT_NEAR(c[k][ch], want[k][ch], 1e-15 + 1e-15 * std::abs(want[k][ch])) << k;
+  for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(c[0][ch], 2.0 * std::sqrt(4.0 * kPi), 1e-12) << ch;
+}
+
 TEST(CliProject, CrossAndFaceFilesMatchTheLibrary) {
   TempDir dir;
   constexpr int N = 8;
@@ -501,6 +520,7 @@ const BadCase kBadCases[] = {
     {"BandsZero", {"{forest}", "--bands", "0"}, {"--bands"}, ""},
     {"BandsNegative", {"{forest}", "--bands", "-3"}, {"--bands"}, ""},
     {"BandsHuge", {"{forest}", "--bands", "100000"}, {"--bands"}, ""},
+    {"BandsOverTheMost", {"{forest}", "--bands", "65"}, {"--bands", "1 to 64"}, ""},
     {"BandsNotANumber", {"{forest}", "--bands", "abc"}, {"--bands", "abc"}, ""},
     {"WindowBogus", {"{forest}", "--window", "bogus"}, {"window", "bogus"}, ""},
     {"WindowWidthNegative", {"{forest}", "--window-width", "-1"}, {"--window-width"}, ""},

@@ -92,6 +92,16 @@ TEST(PrecomputeCli, BadOptionsFailBeforeAnyWork) {
   }
 }
 
+// The band limit says why it is 16 (docs/CONVENTIONS.md, "Band counts"),
+// not just that it is.
+TEST(PrecomputeCli, BandLimitSaysWhy) {
+  TempDir dir;
+  const Result r = run_prt(dir, {"precompute", write_quad(dir), "-o", dir.file("x.prt"), "--bands", "20"});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("from 1 to 16"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("prt render and prt view draw at most 16 bands"), std::string::npos) << r.err;
+}
+
 TEST(PrecomputeCli, CtrlCLeavesNothingBehind) {
   // A job long enough to interrupt: the bundled model at many rays per vertex.
   TempDir dir;

@@ -21,7 +21,7 @@ namespace prt {
 // ---- SH transfer (docs/PRECOMPUTE.md) -----------------------------------------
 struct TransferOptions {
   TransferMode mode = TransferMode::Shadowed;
-  int bands = 5;                 // 1..16 (any up to sh::kMaxBands works)
+  int bands = 5;                 // prt precompute takes 1..16 (docs/CONVENTIONS.md, "Band counts"); any up to sh::kMaxBands works here
   int samples = 1024;            // ~rays per vertex: 2*samples directions over the sphere
   int bounces = 1;               // interreflected only; 0 = shadowed; at most this many
   // Interreflected: stop adding bounces once one adds less than this fraction

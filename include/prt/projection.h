@@ -21,8 +21,11 @@ namespace prt {
 // * Box (default): a texel holds the average radiance over its area.
 //   Lat-long: the basis is integrated over each pixel exactly (analytically
 //   in phi, by a Gauss-Legendre rule in theta with enough nodes for the band
-//   count to reach double precision), so a constant map projects to exactly
-//   c_00 = sqrt(4pi) L and every pixel's energy is exact.
+//   count and the row's height to reach double precision: from 4 for a
+//   1024x512 map to 86 for a 1x1 map at 64 bands), so a constant map
+//   projects to exactly c_00 = sqrt(4pi) L and every pixel's energy is
+//   exact; within 1e-12 (of the band norm, or of a pixel's energy) at every
+//   band count 1..64 and map size (docs/CONVENTIONS.md).
 //   Cube: the basis at the texel centre times the texel's exact solid
 //   angle; energy is exact, higher coefficients carry an O(h^2) error.
 //   For a smooth function sampled at texel centres both are second order,

@@ -208,8 +208,11 @@ Run add_precompute(CLI::App& app) {
       ->check(CLI::IsMember({"sh", "wavelet"}))
       ->capture_default_str();
   s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")->capture_default_str();
-  a->bands_opt = s->add_option("-b,--bands", a->opt.bands, "SH bands n (n*n coefficients)")
-                     ->check(int_range(1, 16))
+  a->bands_opt = s->add_option("-b,--bands", a->opt.bands,
+                               "SH bands n (n*n coefficients), 1 to 16: prt render and prt view draw at most 16, and "
+                               "transfer accuracy is measured up to 16 (docs/CONVENTIONS.md, \"Band counts\")")
+                     ->check(int_range(1, 16, "prt render and prt view draw at most 16 bands; transfer accuracy is "
+                                              "measured up to 16"))
                      ->capture_default_str();
   a->samples_opt = s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
                        ->check(int_range(1, 1 << 24))

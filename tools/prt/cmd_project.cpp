@@ -230,7 +230,9 @@ Run add_project(CLI::App& app) {
       "projected ~32 MiB of rows at a time, so a 16384x8192 map needs ~0.1 GiB, not 1.5 (docs/HARD_CASES.md).\n"
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
   s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
-  s->add_option("-b,--bands", a->bands, "Number of bands n: degrees 0..n-1, n*n coefficients")
+  s->add_option("-b,--bands", a->bands,
+                "Number of bands n: degrees 0..n-1, n*n coefficients; every n from 1 to 64 computed to 1e-12 in "
+                "double (the box rule's pixel integrals, the cube's texel sum, --rotate; prt verify --bands-max 64)")
       ->check(int_range(1, sh::kMaxBands))
       ->capture_default_str();
   s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");

@@ -132,7 +132,9 @@ Run add_relight(CLI::App& app) {
   s->footer(
       "Radiance is in the map's units: albedo 1, unshadowed, under a constant map of 1 gives exactly 1.\n"
       "The basis comes from the transfer file: SH files take --window/--window-width/--direct, wavelet files\n"
-      "(prt precompute --basis wavelet) take --terms/--selection.\n"
+      "(prt precompute --basis wavelet) take --terms/--selection. For an SH file of any band count (1 to 64)\n"
+      "the lighting is projected and rotated (--rotate) to 1e-12 in double (prt verify --bands-max 64); the\n"
+      "transfer itself is stored in float.\n"
       "Example: prt relight bunny.off bunny.prt envmaps/forest.exr --rotate 90,0,0 -o bunny.ply\n"
       "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();

@@ -14,7 +14,8 @@ Run add_verify(CLI::App& app) {
   auto opt = std::make_shared<VerifyOptions>();
   auto verbose = std::make_shared<bool>(false);
   CLI::App* s = app.add_subcommand("verify", "Check prt's SH numerics against exact answers; exit 1 on any failure");
-  s->add_option("--bands-max", opt->bands_max, "Run the double-precision checks up to this many bands")
+  s->add_option("--bands-max", opt->bands_max,
+                "Run the double-precision checks up to this many bands (64: the most prt takes; ~1 min on 2 cores)")
       ->check(int_range(3, sh::kMaxBands))
       ->capture_default_str();
   s->add_flag("-v,--verbose", *verbose, "Also print why each tolerance is what it is");

@@ -26,8 +26,9 @@ Run add_report(CLI::App& app);     // cmd_report.cpp
 // "a,b,c" -> three doubles; throws prt::Error naming `option` otherwise.
 void parse_triple(const std::string& text, const char* option, double out[3]);
 
-// Validators whose messages say what is expected and what was given.
-CLI::Validator int_range(int lo, int hi);
+// Validators whose messages say what is expected and what was given; `why`
+// (optional) says why the range is what it is, in the message.
+CLI::Validator int_range(int lo, int hi, std::string why = {});
 CLI::Validator positive_number();
 
 // Calls f(); a prt::Error it throws is re-thrown with "option: " in front.

@@ -20,8 +20,10 @@ void add_look_options(CLI::App* s, LookArgs& a) {
                 "transfer (the file's), direct (shadowed part of an interreflected file), unshadowed, lambert "
                 "(no PRT), ao, bent")
       ->capture_default_str();
-  a.bands_option = s->add_option("--bands", a.bands, "SH: shade with the first N bands only (0: all of the file's)")
-                       ->check(int_range(0, kMaxRenderBands));
+  a.bands_option = s->add_option("--bands", a.bands,
+                                 "SH: shade with the first N bands only (0: all of the file's; at most 16, what the "
+                                 "renderer's lighting block holds)")
+                       ->check(int_range(0, kMaxRenderBands, "the renderer's lighting block holds 16 bands"));
   a.window_option = s->add_option("--window", a.window, "SH: window against ringing: none, hanning, lanczos, auto")
                         ->capture_default_str();
   a.terms_option = s->add_option("-k,--terms", a.terms, "Wavelet: lighting terms K kept per frame (K >= 6 r^2: all)")

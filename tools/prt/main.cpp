@@ -34,9 +34,9 @@ void parse_triple(const std::string& text, const char* option, double out[3]) {
     if (!std::isfinite(out[i])) throw Error(std::string(option) + ": numbers must be finite, got '" + text + "'");
 }
 
-CLI::Validator int_range(int lo, int hi) {
+CLI::Validator int_range(int lo, int hi, std::string why) {
   return CLI::Validator(
-      [lo, hi](std::string& s) -> std::string {
+      [lo, hi, why](std::string& s) -> std::string {
         std::size_t used = 0;
         long v = 0;
         try {
@@ -45,7 +45,8 @@ CLI::Validator int_range(int lo, int hi) {
           used = 0;
         }
         if (used == 0 || used != s.size() || v < lo || v > hi)
-          return fmt::format("must be a whole number from {} to {}, got '{}'", lo, hi, s);
+          return fmt::format("must be a whole number from {} to {}{}, got '{}'", lo, hi,
+                             why.empty() ? "" : " (" + why + ")", s);
         return {};
       },
       fmt::format("INT in [{}, {}]", lo, hi));

@@ -17,7 +17,9 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
   s.transfer = read_transfer(transfer);
   check_matches(s.transfer, s.mesh, transfer);
   if (max_bands > 0 && s.transfer.bands > max_bands)
-    throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, s.transfer.bands, command, max_bands));
+    throw Error(fmt::format("{}: {} bands; prt {} takes at most {} (what the renderer's lighting block holds; "
+                            "prt relight takes any)",
+                            transfer, s.transfer.bands, command, max_bands));
 }
 
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
