@@ -417,7 +417,8 @@ void Reader::explain_bad_size(std::uint32_t section_count) {
 
 std::uint64_t Reader::checksum(std::uint64_t bytes) {
   Hasher hash;
-  std::vector<char> buf(std::size_t(1) << 20);
+  // 1 MiB at a time; no more than the file (a small file allocates little).
+  std::vector<char> buf(std::size_t(std::min<std::uint64_t>(std::uint64_t(1) << 20, bytes)));
   f_.clear();
   f_.seekg(0);
   for (std::uint64_t done = 0; done < bytes;) {
