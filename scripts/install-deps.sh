@@ -2,6 +2,7 @@
 # Installs prt's build and runtime dependencies from Debian packages.
 # Idempotent: when every package is already installed it prints nothing and
 # touches nothing (no apt-get update). Needs root or sudo for the install step.
+# Usage: scripts/install-deps.sh [--fuzz]   (--fuzz: also clang and libFuzzer, for scripts/fuzz.sh)
 set -euo pipefail
 
 PACKAGES=(
@@ -20,6 +21,15 @@ PACKAGES=(
   # plots for reports
   python3 python3-matplotlib python3-numpy
 )
+# scripts/fuzz.sh only (the test build and CI do not need them): clang, and
+# libclang-rt-14-dev for libFuzzer's runtime (libclang_rt.fuzzer, beside the
+# sanitizers'); Debian 12's clang is clang 14.
+FUZZ_PACKAGES=(clang libclang-rt-14-dev)
+case "${1:-}" in
+  "") ;;
+  --fuzz) PACKAGES+=("${FUZZ_PACKAGES[@]}") ;;
+  *) echo "usage: $0 [--fuzz]" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${PACKAGES[@]}"; do

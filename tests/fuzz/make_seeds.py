@@ -1,0 +1,234 @@
+#!/usr/bin/env python3
+"""Writes the fuzz targets' seed inputs (tests/fuzz/README.md, "Seeds").
+
+Usage: make_seeds.py OUT_DIR PRT_EXE
+
+Makes OUT_DIR/<target>/seed-* for every target: small meshes in each format
+(written here), maps (with oiiotool), transfer files of both bases (with
+`PRT_EXE precompute` on a tiny mesh) and vertex CSVs (`PRT_EXE relight` and
+`PRT_EXE reference`). scripts/fuzz.sh --seeds merges them into corpus/;
+they are kept there only if they add coverage.
+"""
+import base64
+import json
+import pathlib
+import struct
+import subprocess
+import sys
+import tempfile
+
+# A tetrahedron on a ground quad: shared vertices, one quad to triangulate,
+# some vertices seen by the whole sky (analytic in a transfer file), some not.
+POS = [(-2, 0, -2), (2, 0, -2), (2, 0, 2), (-2, 0, 2),  # ground quad
+       (0, 0.05, 0), (0.5, 0.05, 0), (0.25, 0.05, 0.5), (0.25, 0.6, 0.2)]  # tetrahedron
+TRIS = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 7, 5), (5, 7, 6), (6, 7, 4)]
+QUAD_FACES = [(0, 3, 2, 1), (4, 5, 6), (4, 7, 5), (5, 7, 6), (6, 7, 4)]
+NORM = [(0, 1, 0)] * 4 + [(0, -1, 0), (1, 0, 0), (0, 0, 1), (0, 1, 0)]
+COL = [(0.8, 0.2, 0.2), (0.2, 0.8, 0.2), (0.2, 0.2, 0.8), (0.9, 0.9, 0.9),
+       (1, 1, 0), (0, 1, 1), (1, 0, 1), (0.5, 0.5, 0.5)]
+
+
+def write(out, target, name, data):
+    d = out / target
+    d.mkdir(parents=True, exist_ok=True)
+    (d / f"seed-{name}").write_bytes(data.encode() if isinstance(data, str) else data)
+
+
+def off_seeds(out):
+    s = "OFF\n%d %d 0\n" % (len(POS), len(QUAD_FACES))
+    s += "".join("%g %g %g\n" % p for p in POS)
+    s += "".join("%d %s\n" % (len(f), " ".join(map(str, f))) for f in QUAD_FACES)
+    write(out, "off", "quad.off", s)
+    s = "COFF\n# colours per vertex\n%d %d 0\n" % (len(POS), len(TRIS))
+    s += "".join("%g %g %g %d %d %d 255\n" % (p + tuple(int(c * 255) for c in col)) for p, col in zip(POS, COL))
+    s += "".join("3 %d %d %d\n" % t for t in TRIS)
+    write(out, "off", "coff.off", s)
+    s = "NOFF %d %d 0\n" % (len(POS), len(TRIS))
+    s += "".join("%g %g %g %g %g %g\n" % (p + n) for p, n in zip(POS, NORM))
+    s += "".join("3 %d %d %d\n" % t for t in TRIS)
+    write(out, "off", "noff.off", s)
+    write(out, "off", "bad-index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")
+
+
+def ply_header(fmt, normals, colors, quad):
+    h = "ply\nformat %s 1.0\ncomment prt fuzz seed\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n" % (
+        fmt, len(POS))
+    if normals:
+        h += "property float nx\nproperty float ny\nproperty float nz\n"
+    if colors:
+        h += "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+    h += "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % len(QUAD_FACES if quad else TRIS)
+    return h
+
+
+def ply_seeds(out):
+    s = ply_header("ascii", True, True, True)
+    for p, n, c in zip(POS, NORM, COL):
+        s += "%g %g %g %g %g %g %d %d %d\n" % (p + n + tuple(int(x * 255) for x in c))
+    s += "".join("%d %s\n" % (len(f), " ".join(map(str, f))) for f in QUAD_FACES)
+    write(out, "ply", "ascii.ply", s)
+    for fmt, e in (("binary_little_endian", "<"), ("binary_big_endian", ">")):
+        b = ply_header(fmt, fmt.endswith("little_endian"), True, False).encode()
+        for p, n, c in zip(POS, NORM, COL):
+            b += struct.pack(e + "3f", *p)
+            if fmt.endswith("little_endian"):
+                b += struct.pack(e + "3f", *n)
+            b += struct.pack(e + "3B", *(int(x * 255) for x in c))
+        for t in TRIS:
+            b += struct.pack(e + "B3i", 3, *t)
+        write(out, "ply", fmt + ".ply", b)
+
+
+def obj_seeds(out):
+    s = "# prt fuzz seed\no ground\n" + "".join("v %g %g %g\n" % p for p in POS)
+    s += "".join("vn %g %g %g\n" % n for n in NORM) + "vt 0 0\nvt 1 0\nvt 1 1\n"
+    s += "g quad\nf 1/1/1 4/2/4 3/3/3 2/1/2\ng tet\n"
+    s += "".join("f %d//%d %d//%d %d//%d\n" % (a + 1, a + 1, b + 1, b + 1, c + 1, c + 1) for a, b, c in TRIS[2:])
+    write(out, "obj", "normals.obj", s)
+    s = "".join("v %g %g %g %g %g %g\n" % (p + c) for p, c in zip(POS, COL))
+    s += "".join("f %d %d %d\n" % (a - 8, b - 8, c - 8) for a, b, c in TRIS)  # negative (relative) indices
+    write(out, "obj", "colours-negative.obj", s)
+
+
+def stl_seeds(out):
+    def normal(t):
+        a, b, c = (POS[i] for i in t)
+        u = [b[k] - a[k] for k in range(3)]
+        v = [c[k] - a[k] for k in range(3)]
+        return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+    s = "solid seed\n"
+    for t in TRIS:
+        s += " facet normal %g %g %g\n  outer loop\n" % normal(t)
+        s += "".join("   vertex %g %g %g\n" % POS[i] for i in t)
+        s += "  endloop\n endfacet\n"
+    write(out, "stl", "ascii.stl", s + "endsolid seed\n")
+    b = b"prt fuzz seed".ljust(80, b" ") + struct.pack("<I", len(TRIS))
+    for t in TRIS:
+        b += struct.pack("<3f", *normal(t)) + b"".join(struct.pack("<3f", *POS[i]) for i in t) + b"\0\0"
+    write(out, "stl", "binary.stl", b)
+
+
+def gltf_parts(with_colors):
+    """(json dict, binary buffer) of a two-mesh glTF; the second mesh under a transformed node."""
+    buf = b"".join(struct.pack("<3f", *p) for p in POS)
+    npos = len(buf)
+    buf += b"".join(struct.pack("<3f", *n) for n in NORM)
+    ncol = len(buf)
+    buf += b"".join(struct.pack("<4f", *(c + (1.0,))) for c in COL)
+    nidx = len(buf)
+    buf += b"".join(struct.pack("<3H", *t) for t in TRIS)
+    buf += b"\0" * (-len(buf) % 4)
+    mn = [min(p[k] for p in POS) for k in range(3)]
+    mx = [max(p[k] for p in POS) for k in range(3)]
+    attrs = {"POSITION": 0, "NORMAL": 1}
+    if with_colors:
+        attrs["COLOR_0"] = 2
+    j = {
+        "asset": {"version": "2.0", "generator": "prt fuzz seed"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"mesh": 1, "translation": [0, 1, 0], "rotation": [0, 0.7071068, 0, 0.7071068],
+                                 "scale": [0.5, 0.5, 0.5]}],
+        "meshes": [{"primitives": [{"attributes": attrs, "indices": 3, "mode": 4}]},
+                   {"primitives": [{"attributes": {"POSITION": 0}, "indices": 4}]}],
+        "buffers": [{"byteLength": len(buf)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": npos, "target": 34962},
+            {"buffer": 0, "byteOffset": npos, "byteLength": ncol - npos, "target": 34962},
+            {"buffer": 0, "byteOffset": ncol, "byteLength": nidx - ncol, "target": 34962},
+            {"buffer": 0, "byteOffset": nidx, "byteLength": 6 * len(TRIS), "target": 34963},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": len(POS), "type": "VEC3", "min": mn, "max": mx},
+            {"bufferView": 1, "componentType": 5126, "count": len(POS), "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": len(POS), "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5123, "count": 3 * len(TRIS), "type": "SCALAR"},
+            {"bufferView": 3, "byteOffset": 12, "componentType": 5123, "count": 3 * (len(TRIS) - 2), "type": "SCALAR"},
+        ],
+    }
+    return j, buf
+
+
+def gltf_seeds(out):
+    for colors in (False, True):
+        j, buf = gltf_parts(colors)
+        j["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+        write(out, "gltf", "colours.gltf" if colors else "plain.gltf", json.dumps(j, indent=1))
+        j, buf = gltf_parts(colors)
+        js = json.dumps(j, separators=(",", ":")).encode()
+        js += b" " * (-len(js) % 4)
+        body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(buf), 0x004E4942) + buf
+        write(out, "glb", "colours.glb" if colors else "plain.glb", struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+
+
+def image_seeds(out, tmp):
+    def oiio(name, target, *args):
+        f = tmp / name
+        subprocess.run(["oiiotool", *args, "-o", str(f)], check=True)
+        write(out, target, name, f.read_bytes())
+    grad = ["--pattern", "fill:topleft=0.1,0.2,4:topright=2,0.5,0.1:bottomleft=0,0,0:bottomright=8,8,8"]
+    oiio("latlong-float.exr", "exr", *grad, "16x8", "3", "-d", "float", "--compression", "none")
+    oiio("latlong-half-zip.exr", "exr", *grad, "16x8", "3", "-d", "half", "--compression", "zip")
+    oiio("latlong-piz.exr", "exr", *grad, "32x16", "3", "-d", "half", "--compression", "piz")
+    oiio("hcross-rle.exr", "exr", *grad, "16x12", "3", "-d", "half", "--compression", "rle")
+    oiio("vcross-b44.exr", "exr", *grad, "12x16", "3", "-d", "half", "--compression", "b44")
+    oiio("grey-y.exr", "exr", *grad, "8x4", "3", "--chnames", "Y,A,Z", "-d", "float", "--ch", "Y")
+    oiio("rgba-tiled.exr", "exr", *grad, "16x8", "4", "-d", "half", "--tile", "8", "8", "--compression", "zips")
+    oiio("latlong-rle.hdr", "hdr", *grad, "32x16", "3")
+    oiio("latlong-small.hdr", "hdr", *grad, "4x2", "3")  # below 8 wide: flat, not run-length encoded
+
+
+def transfer_seeds(out, tmp, prt):
+    mesh = tmp / "tiny.ply"
+    s = ply_header("ascii", False, True, False)
+    s += "".join("%g %g %g %d %d %d\n" % (p + tuple(int(x * 255) for x in c)) for p, c in zip(POS, COL))
+    s += "".join("3 %d %d %d\n" % t for t in TRIS)
+    mesh.write_text(s)
+    runs = {
+        "unshadowed-b2": ["--mode", "unshadowed", "--bands", "2"],
+        "shadowed-b3": ["--mode", "shadowed", "--bands", "3", "--samples", "64"],
+        "interreflected-colour": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
+                                  "--vertex-colors"],
+        "wavelet-r2": ["--basis", "wavelet", "--cube-res", "2"],
+        "wavelet-r4-colour": ["--basis", "wavelet", "--cube-res", "4", "--threshold", "0",
+                              "--vertex-colors"],
+    }
+    for name, args in runs.items():
+        f = tmp / (name + ".prt")
+        subprocess.run([prt, "precompute", str(mesh), "-o", str(f), "--threads", "1", "-q", *args], check=True)
+        write(out, "transfer", name + ".prt", f.read_bytes())
+    return mesh, tmp / "shadowed-b3.prt"
+
+
+def csv_seeds(out, tmp, prt, mesh, transfer):
+    env = tmp / "env.exr"
+    subprocess.run(["oiiotool", "--pattern", "constant:color=1,0.5,0.25", "16x8", "3", "-d", "float", "-o", str(env)],
+                   check=True)
+    f = tmp / "relit.csv"
+    subprocess.run([prt, "relight", str(mesh), str(transfer), str(env), "-o", str(f)], check=True,
+                   stderr=subprocess.DEVNULL)
+    write(out, "csv", "relight.csv", f.read_bytes())
+    f = tmp / "reference.csv"
+    subprocess.run([prt, "reference", str(mesh), str(env), "-o", str(f), "--samples", "16"], check=True,
+                   stderr=subprocess.DEVNULL)
+    write(out, "csv", "reference-se.csv", f.read_bytes())
+    write(out, "csv", "crlf.csv", "vertex,r,g,b\r\n0,1e-3,-0,3.40282347e+38\r\n1,0x1p-3,inf,nan\r\n\r\n")
+
+
+def main():
+    out = pathlib.Path(sys.argv[1])
+    prt = sys.argv[2]
+    with tempfile.TemporaryDirectory() as t:
+        tmp = pathlib.Path(t)
+        off_seeds(out)
+        ply_seeds(out)
+        obj_seeds(out)
+        stl_seeds(out)
+        gltf_seeds(out)
+        image_seeds(out, tmp)
+        mesh, transfer = transfer_seeds(out, tmp, prt)
+        csv_seeds(out, tmp, prt, mesh, transfer)
+
+
+if __name__ == "__main__":
+    main()
