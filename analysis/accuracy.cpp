@@ -165,6 +165,7 @@ void write_error_set(const std::string& path, const std::string& key, const Erro
 std::optional<ErrorSet> read_error_set(const std::string& path, const std::string& key) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) return std::nullopt;
+  check_input_file(path, "a cached reference");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open the cached reference");
   const auto fail = [&](const std::string& what) { return Error(path + ": cached reference " + what); };

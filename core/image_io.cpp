@@ -3,6 +3,7 @@
 #include "oiio_plugin.h"
 
 #include <prt/error.h>
+#include <prt/io.h>
 #include <prt/paths.h>
 
 #include <ImfChannelList.h>
@@ -174,11 +175,9 @@ struct RowReader::Impl {
 RowReader::RowReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
   Impl& r = *impl_;
   r.path = path;
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(path + ": no such file");
-  if (fs::is_directory(path, ec)) throw Error(path + ": is a directory, not an image");
-  if (access(path.c_str(), R_OK) != 0) throw Error(path + ": permission denied");
-  if (fs::file_size(path, ec) == 0 && !ec) throw Error(path + ": file is empty");
+  // EXR and the plugin's formats alike: a FIFO or a device is refused before
+  // either library opens it.
+  if (check_input_file(path, "an image") == 0) throw Error(path + ": file is empty");
   if (Imf::isOpenExrFile(path.c_str())) {
     r.exr = std::make_unique<ExrRows>(path);
     r.width = r.exr->dw.max.x - r.exr->dw.min.x + 1;

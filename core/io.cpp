@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -14,6 +15,36 @@
 #include <fstream>
 
 namespace prt {
+
+std::uint64_t check_input_file(const std::string& path, std::string_view kind) {
+  if (path.empty()) throw Error("'': not a file name");
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int err = errno;
+    struct stat link {};
+    switch (err) {
+      case ENOENT:
+        if (::lstat(path.c_str(), &link) == 0 && S_ISLNK(link.st_mode))
+          throw Error(path + ": no such file (a symbolic link to a file that does not exist)");
+        throw Error(path + ": no such file");
+      case ENOTDIR: throw Error(path + ": no such file (a part of the path is not a directory)");
+      case ELOOP: throw Error(path + ": too many levels of symbolic links");
+      case EACCES: throw Error(path + ": permission denied");
+      default: throw Error(path + ": cannot access: " + std::strerror(err));
+    }
+  }
+  if (S_ISDIR(st.st_mode)) throw Error(fmt::format("{}: is a directory, not {}", path, kind));
+  if (!S_ISREG(st.st_mode)) {
+    const char* what = S_ISFIFO(st.st_mode)   ? "a FIFO (named pipe)"
+                       : S_ISCHR(st.st_mode)  ? "a character device"
+                       : S_ISBLK(st.st_mode)  ? "a block device"
+                       : S_ISSOCK(st.st_mode) ? "a socket"
+                                              : "a special file";
+    throw Error(fmt::format("{}: is {}, not a regular file", path, what));
+  }
+  if (::access(path.c_str(), R_OK) != 0) throw Error(path + ": permission denied");
+  return static_cast<std::uint64_t>(st.st_size);
+}
 
 void write_atomically(const std::string& path, const std::function<void(const std::string& tmp)>& write) {
   namespace fs = std::filesystem;

@@ -438,16 +438,7 @@ void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64
 }
 
 void Reader::open_file() {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::file_status st = fs::status(path_, ec);
-  if (st.type() == fs::file_type::not_found) throw fail("no such file");
-  if (ec) throw fail("cannot access: " + ec.message());
-  if (fs::is_directory(st)) throw fail("is a directory, not a transfer file");
-  if (!fs::is_regular_file(st)) throw fail("not a regular file");
-  if (access(path_.c_str(), R_OK) != 0) throw fail("permission denied");
-  size_ = fs::file_size(path_, ec);
-  if (ec) throw fail("cannot read: " + ec.message());
+  size_ = check_input_file(path_, "a transfer file");
   if (size_ == 0) throw fail("file is empty (not a prt transfer file)");
   f_.open(path_, std::ios::binary);
   if (!f_) throw fail("cannot open: " + errno_text());

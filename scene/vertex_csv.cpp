@@ -57,6 +57,7 @@ void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb
 }
 
 std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm::vec3>* std_error) {
+  check_input_file(path, "a vertex CSV file");  // not a FIFO or /dev/zero: read whole below
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path + ": cannot open for reading");
   const std::string text{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};

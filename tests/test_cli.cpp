@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -550,6 +551,45 @@ INSTANTIATE_TEST_SUITE_P(Cases, CliBadInput, ::testing::ValuesIn(kBadCases),
                          [](const ::testing::TestParamInfo<BadCase>& p) { return std::string(p.param.name); });
 
 // ---- verify -----------------------------------------------------------------------
+
+// ---- inputs that are not regular files (docs/HARD_CASES.md, "Malformed input") ----
+
+TEST(CliInputFiles, MapsAndVertexCsvMustBeRegularFiles) {
+  // A FIFO blocked prt until a writer came; /dev/zero grew without end
+  // (`prt compare a.csv /dev/zero` until killed). Refused from stat(), before
+  // OpenEXR, the OpenImageIO plugin or the CSV reader opens anything.
+  TempDir dir;
+  for (const char* name : {"fifo.exr", "fifo.png", "fifo.csv"})
+    ASSERT_EQ(::mkfifo(dir.file(name).c_str(), 0600), 0) << name;
+  write_file(dir.file("a.csv"), "vertex,r,g,b\n0,1,1,1\n");
+  std::filesystem::create_symlink("loop2.exr", dir.work() / "loop1.exr");
+  std::filesystem::create_symlink("loop1.exr", dir.work() / "loop2.exr");
+  const std::vector<std::string> listing = dir.listing();
+  const std::string fifo = "is a FIFO (named pipe), not a regular file";
+  struct Case {
+    std::vector<std::string> args;
+    std::string file, message;
+  };
+  const std::vector<Case> cases = {
+      {{"project", dir.file("fifo.exr")}, dir.file("fifo.exr"), fifo},                 // OpenEXR
+      {{"project", dir.file("fifo.png")}, dir.file("fifo.png"), fifo},                 // the OpenImageIO plugin
+      {{"project", dir.file("fifo.exr"), "--no-stream"}, dir.file("fifo.exr"), fifo},  // the whole-image path
+      {{"project", "/dev/zero"}, "/dev/zero", "is a character device, not a regular file"},
+      {{"project", dir.file("loop1.exr")}, dir.file("loop1.exr"), "too many levels of symbolic links"},
+      {{"compare", dir.file("a.csv"), "/dev/zero"}, "/dev/zero", "is a character device, not a regular file"},
+      {{"compare", dir.file("a.csv"), dir.file("fifo.csv")}, dir.file("fifo.csv"), fifo},
+      {{"info", dir.file("fifo.exr")}, dir.file("fifo.exr"), fifo},
+  };
+  for (const Case& c : cases) {
+    const BoundedResult r = run_prt_bounded(dir, c.args, 20);
+    const std::string what = c.args[0] + " " + c.file;
+    EXPECT_FALSE(r.timed_out) << what << ": blocked";
+    EXPECT_EQ(r.code, 1) << what << "\n" << describe_run(r);
+    EXPECT_NE(r.err.find(c.file + ": " + c.message), std::string::npos) << what << "\n" << r.err;
+    EXPECT_LT(r.max_rss_kb, kRefusalRssKb) << what;
+    EXPECT_EQ(dir.listing(), listing) << what << ": something was written";
+  }
+}
 
 TEST(CliVerify, PassesAndSummarises) {
   TempDir dir;

@@ -3,12 +3,16 @@
 // `prt` executable (PRT_EXE) with its output captured.
 #pragma once
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +20,7 @@
 #include <iterator>
 #include <string>
 #include <system_error>
+#include <thread>
 #include <vector>
 
 namespace prt::test {
@@ -99,6 +104,82 @@ inline Result run_prt(const TempDir& dir, const std::vector<std::string>& args) 
   r.err = read_file(err);
   return r;
 }
+
+// A run of prt bounded in time, with its peak memory: what run_prt gives,
+// plus the child's own peak resident set (wait4's rusage) and wall time.
+struct BoundedResult : Result {
+  long max_rss_kb = 0;
+  double seconds = 0;
+  bool timed_out = false;  // killed after the timeout (code is then 124)
+};
+
+// Runs prt with `args` (no shell: fork and exec, stdin from /dev/null, both
+// streams captured in dir.io()), killing it after `timeout_s` seconds. For
+// inputs that must be refused fast and without allocating (memory bombs) or
+// without blocking (FIFOs).
+inline BoundedResult run_prt_bounded(const TempDir& dir, const std::vector<std::string>& args,
+                                     double timeout_s = 30.0) {
+  static int counter = 0;
+  const std::filesystem::path out = dir.io() / ("bout" + std::to_string(counter) + ".txt");
+  const std::filesystem::path err = dir.io() / ("berr" + std::to_string(counter) + ".txt");
+  ++counter;
+  std::vector<std::string> argv_s = {PRT_EXE};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const auto start = std::chrono::steady_clock::now();
+  BoundedResult r;
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int in = ::open("/dev/null", O_RDONLY);
+    const int o = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (in < 0 || o < 0 || e < 0 || ::dup2(in, 0) < 0 || ::dup2(o, 1) < 0 || ::dup2(e, 2) < 0) ::_exit(126);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  if (pid < 0) return r;
+  int status = 0;
+  struct rusage ru {};
+  for (;;) {
+    const pid_t done = ::wait4(pid, &status, WNOHANG, &ru);
+    if (done == pid) break;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() > timeout_s) {
+      ::kill(pid, SIGKILL);
+      ::wait4(pid, &status, 0, &ru);
+      r.timed_out = true;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.max_rss_kb = ru.ru_maxrss;
+  if (r.timed_out)
+    r.code = 124;
+  else if (WIFEXITED(status))
+    r.code = WEXITSTATUS(status);
+  else if (WIFSIGNALED(status))
+    r.code = 128 + WTERMSIG(status);
+  r.out = read_file(out);
+  r.err = read_file(err);
+  return r;
+}
+
+// The most memory a refused input may take: prt's own start-up (~20 MB;
+// several times that under AddressSanitizer's shadow memory), far below the
+// gigabytes a trusted header would have allocated.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr long kRefusalRssKb = 400 * 1024;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr long kRefusalRssKb = 400 * 1024;
+#else
+constexpr long kRefusalRssKb = 100 * 1024;
+#endif
+#else
+constexpr long kRefusalRssKb = 100 * 1024;
+#endif
 
 // A run's exit status and the start of both streams, for failure messages.
 inline std::string describe_run(const Result& r) {
