@@ -1,9 +1,14 @@
-// Triangle meshes: loading through Assimp, validation, welding, vertex normals.
+// Triangle meshes: loading through Assimp (after the structure checks of
+// mesh_check.h), validation, welding, vertex normals.
 // The contract is include/prt/mesh.h.
+
+#include <prt/mesh.h>
+
+#include "mesh_check.h"
 
 #include <prt/error.h>
 #include <prt/hash.h>
-#include <prt/mesh.h>
+#include <prt/io.h>
 
 #include <fmt/format.h>
 
@@ -19,15 +24,12 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <span>
-#include <sstream>
 #include <unordered_map>
 
 namespace prt {
@@ -45,12 +47,6 @@ constexpr double kCancelledFraction = 1e-12;
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 glm::dvec3 to_double(const glm::vec3& v) { return glm::dvec3(v); }
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext;
-}
 
 std::string format_vec(const glm::vec3& v) {
   return fmt::format("({:.9g}, {:.9g}, {:.9g})", double(v.x), double(v.y), double(v.z));
@@ -195,50 +191,6 @@ void compute_normals(Mesh& mesh, const std::vector<glm::vec3>& file_normals, con
   }
 }
 
-// Assimp's OFF reader replaces an out-of-range vertex index by the last
-// vertex (it only logs an error), so OFF files are checked here first. Only a
-// definite bad index throws; anything this simple scan does not understand is
-// left to Assimp.
-void check_off_indices(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  // The tokens of the next non-empty line, '#' comments removed; false at the end.
-  auto next_tokens = [&](std::vector<std::string>& tokens) {
-    while (std::getline(in, line)) {
-      std::istringstream ls(line.substr(0, line.find('#')));
-      tokens.clear();
-      for (std::string tok; ls >> tok;) tokens.push_back(tok);
-      if (!tokens.empty()) return true;
-    }
-    return false;
-  };
-  auto number = [](const std::string& tok, long long& value) {
-    const char* end = tok.data() + tok.size();
-    return std::from_chars(tok.data(), end, value).ptr == end;
-  };
-  std::vector<std::string> tokens;
-  if (!next_tokens(tokens)) return;
-  const std::string magic = tokens[0];  // OFF, COFF, NOFF, CNOFF, STOFF, ...
-  if (magic.size() < 3 || magic.compare(magic.size() - 3, 3, "OFF") != 0) return;
-  tokens.erase(tokens.begin());  // the counts may follow on the same line
-  if (tokens.empty() && !next_tokens(tokens)) return;
-  long long nv = 0, nf = 0;
-  if (tokens.size() < 2 || !number(tokens[0], nv) || !number(tokens[1], nf) || nv < 0 || nf < 0) return;
-  for (long long v = 0; v < nv; ++v)
-    if (!next_tokens(tokens)) return;
-  for (long long f = 0; f < nf && next_tokens(tokens); ++f) {
-    long long k = 0;
-    if (!number(tokens[0], k)) return;
-    for (long long j = 1; j <= k && j < static_cast<long long>(tokens.size()); ++j) {
-      long long index = 0;
-      if (!number(tokens[j], index)) return;
-      if (index < 0 || index >= nv)
-        throw Error(fmt::format("{}: face {} uses vertex {}, out of range (the file has {} vertices)", path, f, tokens[j],
-                                nv));
-    }
-  }
-}
-
 }  // namespace
 
 std::uint64_t Mesh::hash() const {
@@ -277,9 +229,15 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangl
   if (triangles.empty()) throw Error(src + ": no triangles");
   if (positions.size() > std::numeric_limits<std::uint32_t>::max())
     throw Error(fmt::format("{}: too many vertices ({})", src, positions.size()));
-  for (std::size_t i = 0; i < positions.size(); ++i)
+  for (std::size_t i = 0; i < positions.size(); ++i) {
     if (!finite(positions[i]))
       throw Error(fmt::format("{}: vertex {} has a non-finite coordinate {}", src, i, format_vec(positions[i])));
+    const glm::vec3 a = glm::abs(positions[i]);
+    if (double(std::max({a.x, a.y, a.z})) > kMaxCoordinate)
+      throw Error(fmt::format("{}: vertex {} has a coordinate beyond prt's limit of {:g} {} (|x|, |y|, |z| <= {:g} in "
+                              "mesh units: float ray tracing breaks down on larger models; scale the mesh down)",
+                              src, i, kMaxCoordinate, format_vec(positions[i]), kMaxCoordinate));
+  }
   for (std::size_t i = 0; i < colors.size(); ++i)
     if (!finite(colors[i]))
       throw Error(fmt::format("{}: vertex {} has a non-finite colour {}", src, i, format_vec(colors[i])));
@@ -304,14 +262,13 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangl
 }
 
 Mesh load_mesh(const std::string& path, const MeshOptions& options) {
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  if (status.type() == fs::file_type::not_found) throw Error(path + ": no such file");
-  if (ec) throw Error(path + ": cannot be read (" + ec.message() + ")");
-  if (status.type() == fs::file_type::directory) throw Error(path + ": is a directory, not a mesh file");
-  if (!std::ifstream(path, std::ios::binary)) throw Error(path + ": cannot be read (permission denied?)");
-  if (status.type() == fs::file_type::regular && fs::file_size(path, ec) == 0 && !ec)
-    throw Error(path + ": empty file");
+  // A regular file (not a FIFO or a device), of a format prt reads, whose
+  // structure holds what it declares (scene/mesh_check.h): only then does
+  // Assimp see it.
+  const std::uint64_t size = check_input_file(path, "a mesh file");
+  if (size == 0) throw Error(path + ": empty file");
+  const detail::MeshFormat format = detail::mesh_format(path);
+  detail::check_mesh_file(path, format, size);
 
   // OBJ and STL store vertices per face corner: join identical corners into
   // shared vertices. Other formats (OFF, PLY, glTF) index shared vertices and
@@ -319,17 +276,15 @@ Mesh load_mesh(const std::string& path, const MeshOptions& options) {
   // first so they do not split vertices we would join; STL's per-facet normals
   // are not vertex normals, so they are dropped too (otherwise no two facets
   // of a curved surface would share a vertex).
-  const std::string ext = lower_extension(path);
-  const bool per_corner = ext == ".obj" || ext == ".stl";
+  const bool per_corner = format == detail::MeshFormat::Obj || format == detail::MeshFormat::Stl;
   unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices;
   Assimp::Importer importer;
   if (per_corner) {
     int removed = aiComponent_TEXCOORDS | aiComponent_TANGENTS_AND_BITANGENTS;
-    if (ext == ".stl") removed |= aiComponent_NORMALS;
+    if (format == detail::MeshFormat::Stl) removed |= aiComponent_NORMALS;
     importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, removed);
     flags |= aiProcess_RemoveComponent | aiProcess_JoinIdenticalVertices;
   }
-  if (ext == ".off") check_off_indices(path);
   const aiScene* scene = importer.ReadFile(path, flags);
   if (scene == nullptr) throw Error(path + ": cannot be parsed: " + importer.GetErrorString());
 

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -305,8 +306,9 @@ TEST_F(MeshFiles, MissingDirectoryEmptyAndGarbage) {
   expect_error([&] { prt::load_mesh(dir_.string()); }, dir_.string(), "directory");
   const std::string empty = write("empty.off", "");
   expect_error([&] { prt::load_mesh(empty); }, empty, "empty file");
+  // Refused by the structure check before Assimp sees it, with the line.
   const std::string garbage = write("garbage.ply", "ply\nthis is not a ply file\n");
-  expect_error([&] { prt::load_mesh(garbage); }, garbage, "cannot be parsed");
+  expect_error([&] { prt::load_mesh(garbage); }, garbage, "line 2: expected 'format ascii 1.0'");
 }
 
 TEST_F(MeshFiles, OnlyPointsAndLinesHaveNoTriangles) {
@@ -343,6 +345,260 @@ TEST_F(MeshFiles, SameFileLoadedTwiceHashesTheSame) {
   const std::string a = write("a.off", text), b = write("b.off", text);
   EXPECT_EQ(prt::load_mesh(a).hash(), prt::load_mesh(b).hash());
   EXPECT_EQ(prt::load_mesh(a).hash(), prt::load_mesh(a).hash());
+}
+
+// ---- malformed files: refused by the structure checks (docs/HARD_CASES.md) -----------
+
+// Little-endian bytes of a value.
+template <typename T>
+std::string bytes_of(T v) {
+  std::string b(sizeof v, '\0');
+  std::memcpy(b.data(), &v, sizeof v);
+  return b;
+}
+
+// A binary PLY header for `vertices` float xyz vertices and `faces` faces
+// (a uchar count and int indices).
+std::string ply_header(std::uint64_t vertices, std::uint64_t faces, bool ascii = false) {
+  return std::string("ply\nformat ") + (ascii ? "ascii" : "binary_little_endian") + " 1.0\nelement vertex " +
+         std::to_string(vertices) + "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+         std::to_string(faces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+std::string ply_vertices() {
+  std::string b;
+  for (float f : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) b += bytes_of(f);
+  return b;
+}
+
+std::string ply_face(unsigned char count, std::vector<std::int32_t> indices) {
+  std::string b(1, char(count));
+  for (std::int32_t i : indices) b += bytes_of(i);
+  return b;
+}
+
+TEST_F(MeshFiles, TruncatedBinaryPlyIsRefused) {
+  // Each of these read past the end of the data in Assimp (SIGSEGV, or a
+  // "face uses vertex 168430090" from the bytes beyond).
+  const std::string none = write("none.ply", ply_header(3, 1));
+  expect_error([&] { prt::load_mesh(none); }, none,
+               "the header declares 3 vertex and 1 face entries, which take at least 37 bytes, but only 0 bytes follow");
+  const std::string count255 = write("count255.ply", ply_header(3, 1) + ply_vertices() + ply_face(255, {0, 1, 2}));
+  expect_error([&] { prt::load_mesh(count255); }, count255, "truncated: the data ends in face 0 of the 1");
+  const std::string short_vertices = write("short.ply", ply_header(3, 1) + ply_vertices().substr(0, 20));
+  expect_error([&] { prt::load_mesh(short_vertices); }, short_vertices, "but only 20 bytes follow");
+  const std::string bad_index = write("index.ply", ply_header(3, 1) + ply_vertices() + ply_face(3, {0, 1, 7}));
+  expect_error([&] { prt::load_mesh(bad_index); }, bad_index, "face 0 uses vertex 7, out of range (the file has 3");
+  const std::string negative = write("negative.ply", ply_header(3, 1) + ply_vertices() + ply_face(3, {0, -1, 2}));
+  expect_error([&] { prt::load_mesh(negative); }, negative, "face 0 uses vertex -1, out of range");
+  // The complete file loads, with its data as written.
+  const prt::Mesh m = prt::load_mesh(write("whole.ply", ply_header(3, 1) + ply_vertices() + ply_face(3, {0, 1, 2})));
+  EXPECT_EQ(m.vertex_count(), 3u);
+  EXPECT_EQ(m.positions[1], vec3(1, 0, 0));
+  EXPECT_EQ(m.triangles[0], uvec3(0, 1, 2));
+}
+
+TEST_F(MeshFiles, PlyCountsBeyondTheFileSizeAreRefusedBeforeReading) {
+  // 1e8 declared vertices in a file of a few hundred bytes: refused from the
+  // header (Assimp allocated 1.2 GB first); the memory is checked end to end
+  // in test_precompute_cli.
+  const std::string binary = write("big.ply", ply_header(100000000, 1) + ply_vertices());
+  expect_error([&] { prt::load_mesh(binary); }, binary,
+               "100000000 vertex and 1 face entries, which take at least 1200000001 bytes, but only 36 bytes follow");
+  const std::string ascii = write("big_ascii.ply", ply_header(100000000, 1, true) + "0 0 0\n");
+  expect_error([&] { prt::load_mesh(ascii); }, ascii, "which take at least");
+  // An element with entries but no properties takes no bytes: refused.
+  const std::string empty = write("noprops.ply",
+                                  "ply\nformat binary_little_endian 1.0\nelement junk 4000000000\n" +
+                                      ply_header(3, 1).substr(std::string("ply\nformat binary_little_endian 1.0\n").size()) +
+                                      ply_vertices() + ply_face(3, {0, 1, 2}));
+  expect_error([&] { prt::load_mesh(empty); }, empty, "element junk (line 3) declares 4000000000 entries but no properties");
+}
+
+TEST_F(MeshFiles, AsciiPlyWithoutEndHeaderIsRefused) {
+  // Assimp spun at 100% CPU on this, forever.
+  const std::string path = write("noend.ply", "ply\nformat ascii 1.0\n");
+  expect_error([&] { prt::load_mesh(path); }, path, "has no end_header");
+  std::string header = ply_header(3, 1, true);
+  header.resize(header.find("end_header"));
+  const std::string longer = write("noend2.ply", header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(longer); }, longer, "line 9: unknown header line '0 0 0'");
+}
+
+TEST_F(MeshFiles, AsciiPlyHoldingFewerVerticesThanDeclaredIsRefused) {
+  // 5 declared, 3 held: Assimp read the face lines as vertices.
+  const std::string path = write("five.ply", ply_header(5, 2, true) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
+  expect_error([&] { prt::load_mesh(path); }, path,
+               "line 13: vertex 3 has 4 values, more than its properties take (3) (does the header declare more "
+               "vertices than the file has?)");
+  const std::string faces = write("faces.ply", ply_header(3, 3, true) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
+  expect_error([&] { prt::load_mesh(faces); }, faces, "the file ends after 2 of the 3 face entries its header declares");
+  const std::string word = write("word.ply", ply_header(3, 1, true) + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(word); }, word, "line 11: vertex 1: y 'zero' is not a float");
+  const std::string fraction = write("fraction.ply", ply_header(3, 1, true) + "0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n");
+  expect_error([&] { prt::load_mesh(fraction); }, fraction, "line 13: face 0: vertex_indices entry 1 '1.5' is not a int");
+}
+
+TEST_F(MeshFiles, OffDeclaringMoreThanItHoldsIsRefused) {
+  // The brief's case: Assimp asserted (SIGABRT) on the missing face.
+  const std::string faces = write("faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(faces); }, faces, "the file ends after 1 of the 2 faces its header declares");
+  const std::string vertices = write("vertices.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
+  expect_error([&] { prt::load_mesh(vertices); }, vertices,
+               "line 6: vertex 3 has 4 values, expected 3 (does the header declare more vertices than the file has?)");
+  // A 50-byte header claiming 1e8 or 5e8 vertices (Assimp took 2.4 and 11.7 GB).
+  for (const char* count : {"100000000", "500000000"}) {
+    const std::string big = write(std::string("big") + count + ".off", std::string("OFF\n") + count + " 1 0\n0 0 0\n");
+    expect_error([&] { prt::load_mesh(big); }, big,
+                 std::string("declares ") + count + " vertices and 1 faces, which take at least");
+  }
+  // The counts line must hold all three counts.
+  const std::string two = write("two.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(two); }, two, "line 3: the counts (vertices, faces, edges) must end their line");
+}
+
+TEST_F(MeshFiles, OffIndicesMustBeWholeNumbers) {
+  // Assimp read 'q' and '1.5' as 0 and 1: a degenerate triangle, silently.
+  for (const char* index : {"q", "1.5"}) {
+    const std::string path =
+        write(std::string("index_") + (index[0] == 'q' ? "q" : "frac") + ".off",
+              std::string("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 ") + index + " 2\n");
+    expect_error([&] { prt::load_mesh(path); }, path,
+                 std::string("line 6: face 0 uses vertex '") + index + "', which is not a vertex index");
+  }
+  const std::string ten = write("ten.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n10 0 1 2 0 1 2 0 1 2 0\n");
+  expect_error([&] { prt::load_mesh(ten); }, ten, "face 0 has 10 vertices; the OFF reader takes faces of up to 9");
+  const std::string comment = write("comment.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n# c\n3 0 2 1\n");
+  expect_error([&] { prt::load_mesh(comment); }, comment, "line 7: a blank or comment line where face 1 should be");
+  const std::string word = write("word.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(word); }, word, "line 4: vertex 1: 'x' is not a number");
+  const std::string binary = write("binary.off", std::string("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1\0 0\n3 0 1 2\n", 34));
+  expect_error([&] { prt::load_mesh(binary); }, binary, "line 5: holds the control character 0x00");
+  // Comments and blank lines where OFF allows them, CRLF, COFF's RGBA and a
+  // last line without its end still load.
+  const prt::Mesh m = prt::load_mesh(write("fine.off", "COFF # colours\r\n\r\n# c\r\n3 1 0\r\n0 0 0 1 0 0 1\r\n\r\n"
+                                                        "1 0 0 0 1 0 1 # x\r\n0 1 0 0 0 1 1\r\n3 0 1 2 9 9 9"));
+  EXPECT_EQ(m.vertex_count(), 3u);
+  ASSERT_EQ(m.colors.size(), 3u);
+  EXPECT_EQ(m.colors[1], vec3(0, 1, 0));
+  const std::string rgb = write("rgb.off", "COFF\n3 1 0\n0 0 0 1 0 0\n1 0 0 0 1 0\n0 1 0 0 0 1\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(rgb); }, rgb, "vertex 0 has 6 values, expected 7 (a COFF colour is four values");
+}
+
+// A glTF of two quads (4 triangles over 6 vertices); indices[11] as given.
+std::string gltf_two_quads(std::uint16_t last_index, const std::string& uri, std::size_t* bytes = nullptr,
+                           std::string* buffer = nullptr) {
+  const float pos[6][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}};
+  const std::uint16_t idx[12] = {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, last_index};
+  std::vector<std::uint8_t> buf(sizeof(pos) + sizeof(idx));
+  std::memcpy(buf.data(), pos, sizeof(pos));
+  std::memcpy(buf.data() + sizeof(pos), idx, sizeof(idx));
+  if (bytes) *bytes = buf.size();
+  if (buffer) buffer->assign(buf.begin(), buf.end());
+  const std::string u = uri.empty() ? "data:application/octet-stream;base64," + base64(buf) : uri;
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"byteLength": 96, "uri": ")" + u + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 72}, {"buffer": 0, "byteOffset": 72, "byteLength": 24}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3", "min": [0, 0, 0], "max": [2, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}]})";
+}
+
+TEST_F(MeshFiles, GltfOutOfRangeIndexIsRefusedNotDropped) {
+  // Assimp dropped the bad face (4 triangles became 3), as OFF, PLY and OBJ refuse.
+  EXPECT_EQ(prt::load_mesh(write("good.gltf", gltf_two_quads(3, ""))).triangles.size(), 4u);
+  const std::string bad = write("bad.gltf", gltf_two_quads(9, ""));
+  expect_error([&] { prt::load_mesh(bad); }, bad,
+               "mesh 0 primitive 0 uses vertex 9 (index 11 of accessor 1), out of range (its POSITION has 6 vertices)");
+}
+
+TEST_F(MeshFiles, GltfBuffersAndChunksAreCheckedAgainstTheFiles) {
+  // An external buffer shorter than its byteLength.
+  std::string data;
+  gltf_two_quads(3, "", nullptr, &data);
+  write("quads.bin", data.substr(0, 50));
+  const std::string external = write("external.gltf", gltf_two_quads(3, "quads.bin"));
+  expect_error([&] { prt::load_mesh(external); }, external, "buffer 0 declares 96 bytes, but " + tmp_.file("quads.bin") + " has 50");
+  // The whole buffer loads.
+  write("whole.bin", data);
+  EXPECT_EQ(prt::load_mesh(write("whole.gltf", gltf_two_quads(3, "whole.bin"))).vertex_count(), 6u);
+  // An 86-byte GLB whose JSON chunk claims 4 GB (Assimp allocated 4.2 GB).
+  std::string glb = "glTF" + bytes_of<std::uint32_t>(2) + bytes_of<std::uint32_t>(86) + bytes_of<std::uint32_t>(0xFFFFFFF0u) +
+                    "JSON" + R"({"asset":{"version":"2.0"}})";
+  glb.resize(86, ' ');
+  const std::string bomb = write("bomb.glb", glb);
+  expect_error([&] { prt::load_mesh(bomb); }, bomb,
+               "GLB chunk 0 (JSON) declares 4294967280 bytes, but only 66 follow its header in the file");
+  std::string longer = glb;
+  std::memcpy(longer.data() + 8, bytes_of<std::uint32_t>(0xFFFFFFF0u).data(), 4);
+  const std::string truncated = write("truncated.glb", longer);
+  expect_error([&] { prt::load_mesh(truncated); }, truncated, "truncated: its header declares 4294967280 bytes, the file has 86");
+  // Assimp recurses through nodes and JSON: a cycle and deep nesting are refused.
+  std::string cycle = gltf_two_quads(3, "");
+  cycle.replace(cycle.find(R"("nodes": [{"mesh": 0}])"), 22, R"("nodes": [{"mesh": 0, "children": [1]}, {"children": [0]}])");
+  const std::string cyclic = write("cycle.gltf", cycle);
+  expect_error([&] { prt::load_mesh(cyclic); }, cyclic, "node 0 is its own ancestor (a cycle in the node hierarchy)");
+  std::string deep = gltf_two_quads(3, "");
+  deep.insert(deep.size() - 1, R"(, "extras": )" + std::string(100000, '[') + std::string(100000, ']'));
+  const std::string nested = write("deep.gltf", deep);
+  expect_error([&] { prt::load_mesh(nested); }, nested, "its JSON nests deeper than 64 levels");
+  const std::string v1 = write("v1.gltf", R"({"asset": {"version": "1.0"}})");
+  expect_error([&] { prt::load_mesh(v1); }, v1, "glTF 1.0; prt reads glTF 2.0");
+}
+
+TEST_F(MeshFiles, ObjAndStlStructureIsChecked) {
+  const std::string two = write("two.obj", "v 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n");
+  expect_error([&] { prt::load_mesh(two); }, two, "line 1: vertex 1 has 2 numbers, expected 3");
+  const std::string word = write("word.obj", "v 0 0 0\nv q 0 0\nv 0 1 0\nf 1 2 3\n");
+  expect_error([&] { prt::load_mesh(word); }, word, "line 2: vertex: 'q' is not a number");
+  const std::string fraction = write("fraction.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2.5 3\n");
+  expect_error([&] { prt::load_mesh(fraction); }, fraction, "line 4: face uses vertex '2.5', which is not a vertex reference");
+  const std::string normal = write("normal.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//7 3//1\n");
+  expect_error([&] { prt::load_mesh(normal); }, normal, "line 5: uses normal 7, out of range (the file has 1 normals)");
+  const std::string back = write("back.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9\n");
+  expect_error([&] { prt::load_mesh(back); }, back, "line 4: face uses vertex -9, out of range (3 vertices defined so far)");
+  // Continued lines are joined, as Assimp joins them.
+  EXPECT_EQ(prt::load_mesh(write("joined.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n3\n")).triangles.size(), 1u);
+  std::string stl(84, '\0');
+  stl[80] = 2;  // two triangles declared, none held
+  const std::string binary = write("short.stl", stl + std::string(50, '\0'));
+  expect_error([&] { prt::load_mesh(binary); }, binary,
+               "neither a binary STL (84 + 50 bytes x the 2 triangles its header declares = 184 bytes; the file has 134)");
+  const std::string ascii = write("two.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                             "endloop\nendfacet\nendsolid t\n");
+  expect_error([&] { prt::load_mesh(ascii); }, ascii, "line 6: facet 0 has 2 vertices, not 3");
+}
+
+TEST_F(MeshFiles, OnlyTheReadFormatsAreTried) {
+  // Assimp would try its ~40 other readers on an unknown extension.
+  const std::string other = write("mesh.xyz", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  expect_error([&] { prt::load_mesh(other); }, other,
+               "unknown mesh format '.xyz' (prt reads .obj, .ply, .off, .stl, .gltf and .glb)");
+}
+
+TEST_F(MeshFiles, InputMustBeARegularFile) {
+  // Refused from stat() alone: a FIFO is never opened (through the command,
+  // with a timeout, in test_precompute_cli).
+  const std::string fifo = tmp_.file("fifo.off");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error([&] { prt::load_mesh(fifo); }, fifo, "is a FIFO (named pipe), not a regular file");
+  expect_error([&] { prt::load_mesh("/dev/zero"); }, "/dev/zero", "is a character device, not a regular file");
+  fs::create_symlink("loop2.off", dir_ / "loop1.off");
+  fs::create_symlink("loop1.off", dir_ / "loop2.off");
+  expect_error([&] { prt::load_mesh(tmp_.file("loop1.off")); }, tmp_.file("loop1.off"),
+               "too many levels of symbolic links");
+  fs::create_symlink("missing.off", dir_ / "dangling.off");
+  expect_error([&] { prt::load_mesh(tmp_.file("dangling.off")); }, tmp_.file("dangling.off"),
+               "no such file (a symbolic link to a file that does not exist)");
+}
+
+TEST_F(MeshFiles, CoordinatesBeyondTheLimitAreRefused) {
+  // Embree asserted (SIGABRT) on a mesh scaled by 1e19; prt::kMaxCoordinate is 1e12.
+  const std::string far = write("far.off", "OFF\n3 1 0\n0 0 0\n1e19 0 0\n0 1e19 0\n3 0 1 2\n");
+  expect_error([&] { prt::load_mesh(far); }, far, "vertex 1 has a coordinate beyond prt's limit of 1e+12");
+  EXPECT_NO_THROW(prt::make_mesh({{0, 0, 0}, {1e12f, 0, 0}, {0, -1e12f, 0}}, {{0, 1, 2}}));
+  expect_error([&] { prt::make_mesh({{0, 0, 0}, {0, 0, 2e12f}, {0, 1, 0}}, {{0, 1, 2}}, {}, {}, {}, "src"); }, "src",
+               "vertex 1 has a coordinate beyond prt's limit of 1e+12");
 }
 
 // ---- make_mesh validation ------------------------------------------------------

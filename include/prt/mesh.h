@@ -18,6 +18,18 @@ namespace prt {
 
 enum class NormalWeighting { Area, Angle };
 
+// The largest |coordinate| a mesh may have, in mesh units (so its
+// bounding-box diagonal is at most 2 sqrt(3) x 1e12 = 3.5e12); make_mesh
+// and load_mesh refuse larger ones, naming the vertex. Embree traces in
+// float: its ray-triangle test multiplies lengths, which overflow float on
+// models that large, and it rejects ray origins beyond 1.8e18 outright (an
+// assertion that aborts, not an error). Measured: the AO of an open box
+// (edges as long as the model) and of models/scene.obj matches the unit
+// model at every scale up to 1e13, and from 1e14 rays hit nothing (AO 1).
+// The precomputation also needs a diagonal of at least 1e-10 (its rays lose
+// every hit from 1e-13; precompute/ray_scene.h). docs/PRECOMPUTE.md.
+inline constexpr double kMaxCoordinate = 1e12;
+
 struct MeshOptions {
   bool weld = false;               // merge vertices with bit-identical positions
   bool file_normals = true;        // use the file's normals when it has them
@@ -61,15 +73,24 @@ struct Mesh {
   double diagonal() const;
 };
 
-// Loads OBJ, PLY, OFF, STL, glTF/GLB (anything Assimp reads), all meshes of
-// the file flattened into one with node transforms applied. Throws
-// prt::Error naming the file for: missing/unreadable file, parse errors, no
-// vertices, no triangles, NaN or infinite coordinates (with the vertex index),
-// out-of-range indices.
+// Loads OBJ, PLY, OFF, STL and glTF 2.0 / GLB (told by the extension, any
+// case), all meshes of the file flattened into one with node transforms
+// applied. The file must be a regular file (prt::check_input_file: not a
+// FIFO or a device). Before Assimp parses it, its structure is checked in
+// bounded memory (every count and length the file declares against the
+// bytes it holds, every number and index parsed, line numbers in messages;
+// docs/HARD_CASES.md, "Malformed input"), so a malformed file is refused
+// rather than crashing, hanging, allocating what its header claims or being
+// read as something else. Throws prt::Error naming the file for: a missing,
+// unreadable or non-regular file, another extension, a malformed or
+// truncated file, no vertices, no triangles, NaN or infinite coordinates or
+// coordinates beyond kMaxCoordinate (with the vertex index), out-of-range
+// indices.
 Mesh load_mesh(const std::string& path, const MeshOptions& options = {});
 
 // Builds a mesh from arrays (tests, generated geometry), with the same
-// validation and normal computation as load_mesh. `normals` and `colors`
+// validation (finite coordinates within kMaxCoordinate, indices in range)
+// and normal computation as load_mesh. `normals` and `colors`
 // may be empty.
 Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangles,
                std::vector<glm::vec3> normals = {}, std::vector<glm::vec3> colors = {},
