@@ -45,7 +45,18 @@ void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threa
   if (vertex_colors && mesh.colors.empty())
     throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
   if (threads < 0) throw Error("--threads must be >= 0");
-  if (!(offset >= 0.0) || !std::isfinite(offset)) throw Error("--offset must be a finite number >= 0");
+  check_ray_offset(offset, mesh, "--offset");
+}
+
+double max_ray_offset(const Mesh& mesh) { return std::max(0.1 * mesh.diagonal(), default_ray_offset(mesh)); }
+
+void check_ray_offset(double offset, const Mesh& mesh, const char* option) {
+  if (!(offset >= 0.0) || !std::isfinite(offset))
+    throw Error(fmt::format("{} must be a finite number > 0 (0: the default), got {}", option, offset));
+  if (offset > max_ray_offset(mesh))
+    throw Error(fmt::format("{} {:g} is too large for {}: at most a tenth of its bounding-box diagonal ({:g}) (the "
+                            "default is 1e-4 x the diagonal, {:g})",
+                            option, offset, mesh.source, max_ray_offset(mesh), default_ray_offset(mesh)));
 }
 
 double default_ray_offset(const Mesh& mesh) {
@@ -58,6 +69,19 @@ double default_ray_offset(const Mesh& mesh) {
 }
 
 RayScene::RayScene(const Mesh& mesh) : mesh_(mesh) {
+  // make_mesh refuses larger coordinates; a Mesh built by hand is checked here.
+  const glm::vec3 lo = mesh.bounds_min(), hi = mesh.bounds_max();
+  const double extent = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y),
+                                  std::abs(hi.z)});
+  if (!(extent <= kMaxCoordinate))
+    throw Error(fmt::format("{}: a coordinate of {:g} is beyond prt's limit of {:g}, where float ray tracing breaks "
+                            "down; scale the mesh down",
+                            mesh.source, extent, kMaxCoordinate));
+  const double diagonal = mesh.diagonal();
+  if (diagonal > 0 && diagonal < kMinRayDiagonal)
+    throw Error(fmt::format("{}: its bounding-box diagonal {:g} is below {:g}, where float ray tracing loses every hit; "
+                            "scale the mesh up",
+                            mesh.source, diagonal, kMinRayDiagonal));
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device) throw Error(fmt::format("Embree: cannot create a device (error {})", int(rtcGetDeviceError(nullptr))));
   device_ = device;

@@ -23,10 +23,19 @@ struct Hit {
   bool hit() const { return triangle != ~0u; }
 };
 
+// The smallest bounding-box diagonal rays are traced on (a mesh of one
+// point, diagonal 0, has nothing to hit and is let through). Embree's float
+// ray-triangle test multiplies lengths, and with flush-to-zero products
+// below 1.2e-38 vanish: an open box loses every hit from a size of 1e-13
+// (AO 1, silently); 1e-10 keeps a margin.
+inline constexpr double kMinRayDiagonal = 1e-10;
+
 class RayScene {
  public:
   // Builds the BVH over the mesh's triangles (degenerate ones are harmless).
-  // Throws prt::Error if Embree fails.
+  // Throws prt::Error naming the mesh if its coordinates are beyond
+  // kMaxCoordinate (prt/mesh.h) or its diagonal is below kMinRayDiagonal,
+  // before Embree sees it, or if Embree fails.
   explicit RayScene(const Mesh& mesh);
   ~RayScene();
   RayScene(const RayScene&) = delete;
@@ -61,5 +70,17 @@ void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threa
 // The default ray offset for a mesh: 1e-4 x its bounding-box diagonal (and a
 // floor of 1e-30 for a mesh of one point).
 double default_ray_offset(const Mesh& mesh);
+
+// The largest ray offset a mesh takes: a tenth of its bounding-box diagonal
+// (never below the default). Rays starting farther from the surface than
+// that miss most of what they should hit, and an offset without a bound puts
+// ray origins where float tracing fails (Embree refuses |origin| > 1.8e18
+// with an assertion); with the mesh's coordinates within kMaxCoordinate
+// (prt/mesh.h) every origin stays within 1.4e12.
+double max_ray_offset(const Mesh& mesh);
+
+// Throws prt::Error naming `option` and the mesh unless offset is 0 (the
+// default) or finite, > 0 and at most max_ray_offset(mesh).
+void check_ray_offset(double offset, const Mesh& mesh, const char* option);
 
 }  // namespace prt::detail

@@ -277,8 +277,7 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o) {
   for (int c = 0; c < 3; ++c)
     if (!std::isfinite(o.albedo[c]) || o.albedo[c] < 0)
       throw Error("reference: albedo must be finite and >= 0 in every channel");
-  if (!std::isfinite(o.offset) || o.offset < 0)
-    throw Error(fmt::format("reference: ray offset must be finite and >= 0, got {:f}", o.offset));
+  detail::check_ray_offset(o.offset, mesh, "reference: ray offset (--offset)");
   const glm::dmat3 I = glm::transpose(o.rotation) * o.rotation;
   double err = std::abs(glm::determinant(o.rotation) - 1.0);
   for (int i = 0; i < 3; ++i)

@@ -210,8 +210,10 @@ TEST(Transfer, DeterministicAcrossThreadCounts) {
 }
 
 TEST(Transfer, ScaleInvariance) {
-  // Offsets scale with the model: a box at 1e-6 and 1e6 gives the same AO.
-  for (double scale : {1e-6, 1e6}) {
+  // Offsets scale with the model: a box at 1e-6 and 1e6 gives the same AO,
+  // and so does one at prt::kMaxCoordinate (1e12, its corners on the limit):
+  // float rays still work there (the limit's reason, prt/mesh.h).
+  for (double scale : {1e-6, 1e6, kMaxCoordinate}) {
     Mesh base = test::open_box(1.0f);
     std::vector<glm::vec3> p = base.positions;
     for (auto& q : p) q *= float(scale);
@@ -220,6 +222,24 @@ TEST(Transfer, ScaleInvariance) {
     const Transfer ref = compute_transfer(base, opts(TransferMode::Shadowed, 3, 4096));
     EXPECT_NEAR(s.ao[0], ref.ao[0], 1e-5) << scale;
   }
+}
+
+TEST(Transfer, ModelsTooSmallForFloatRaysAreRefused) {
+  // At 1e-13 an open box's rays lose every hit (AO 1, silently): a model
+  // whose diagonal is below kMinRayDiagonal (1e-10) is refused before Embree.
+  Mesh base = test::open_box(1.0f);
+  std::vector<glm::vec3> p = base.positions;
+  for (auto& q : p) q *= 1e-13f;
+  const Mesh tiny = make_mesh(p, base.triangles, {}, {}, {}, "tiny.off");
+  try {
+    compute_transfer(tiny, opts(TransferMode::Shadowed, 3, 64));
+    ADD_FAILURE() << "traced rays on a model of diagonal " << tiny.diagonal();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("tiny.off: its bounding-box diagonal 3e-13 is below 1e-10"),
+              std::string::npos) << e.what();
+  }
+  // Unshadowed transfer traces no rays: computed.
+  EXPECT_NO_THROW(compute_transfer(tiny, opts(TransferMode::Unshadowed, 3, 64)));
 }
 
 TEST(Transfer, ProgressAndCancellation) {

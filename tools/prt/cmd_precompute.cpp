@@ -246,7 +246,9 @@ Run add_precompute(CLI::App& app) {
   a->sh_only.push_back(
       s->add_option("--seed", a->opt.seed, "Seed of the direction set (same seed, same bits)")->capture_default_str());
   s->add_option("--offset", a->opt.offset,
-                "Ray origin offset along the normal, in mesh units (default 1e-4 x bounding-box diagonal)");
+                "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
+                "diagonal (default 1e-4 x the diagonal)")
+      ->check(positive_number());
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_precompute(*a); };

@@ -119,7 +119,9 @@ Run add_reference(CLI::App& app) {
   s->add_option("--seed", a->opt.seed, "Random seed (same seed, same bits, any thread count)")->capture_default_str();
   s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)");
   s->add_option("--offset", a->opt.offset,
-                "Ray origin offset along the normal, in mesh units (default 1e-4 x bounding-box diagonal)");
+                "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
+                "diagonal (default 1e-4 x the diagonal)")
+      ->check(positive_number());
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position (as prt precompute --weld)");
   s->add_option("-t,--threads", a->threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
