@@ -649,6 +649,12 @@ void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mes
 
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
   check_mesh(t.vertices, t.mesh_hash, mesh, transfer_path, "prt precompute");
+  // Its albedo is the mesh's colours (analytic vertices are shaded with them):
+  // a mesh without colours is not the mesh it was computed for.
+  if (t.vertex_colors && mesh.colors.size() != mesh.vertex_count())
+    throw Error(fmt::format("{} uses vertex colours as albedo (computed with --vertex-colors), but {} has no vertex "
+                            "colours; give the coloured mesh, or run prt precompute again without --vertex-colors",
+                            transfer_path, mesh.source));
   // Analytic vertices take their normal and albedo from the mesh, which the
   // mesh hash (positions, triangles) does not cover.
   if (t.slots.empty()) return;

@@ -4,6 +4,7 @@
 #include "test_files.h"
 
 #include <prt/precompute.h>
+#include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/hash.h>
 #include <prt/mesh.h>
@@ -927,6 +928,61 @@ TEST(TransferMesh, AnalyticVerticesNeedTheSameNormals) {
   Transfer dense = make_transfer(TransferMode::Shadowed, 1, 2, mesh.vertex_count(), {});
   dense.mesh_hash = mesh.hash();
   EXPECT_NO_THROW(prt::check_matches(dense, tilted, "dense.prtt"));
+}
+
+// A transfer whose albedo is the mesh's colours needs a mesh with colours:
+// check_matches says so for every command. A file with the flag set (and its
+// checksum recomputed) passed prt info, then prt relight stopped on an
+// internal check (exit 3) and prt render refused it without naming the file.
+TEST(TransferMesh, VertexColourTransferNeedsAColouredMesh) {
+  TempDir dir;
+  const prt::Mesh mesh = grid(4);
+  std::string off = "OFF\n" + std::to_string(mesh.vertex_count()) + " " + std::to_string(mesh.triangles.size()) + " 0\n";
+  for (const glm::vec3& p : mesh.positions)
+    off += std::to_string(p.x) + " " + std::to_string(p.y) + " " + std::to_string(p.z) + "\n";
+  for (const glm::uvec3& t : mesh.triangles)
+    off += "3 " + std::to_string(t.x) + " " + std::to_string(t.y) + " " + std::to_string(t.z) + "\n";
+  const std::string mesh_path = dir.file("grid.off");
+  write_file(mesh_path, off);
+  const prt::Mesh loaded = prt::load_mesh(mesh_path);
+  ASSERT_TRUE(loaded.colors.empty());
+  prt::TransferOptions o;
+  o.bands = 2;
+  o.samples = 16;
+  Transfer t = prt::compute_transfer(loaded, o);  // flat: every vertex analytic, albedo from the transfer
+  const std::string plain = dir.file("plain.prtt");
+  prt::write_transfer(plain, t);
+  std::string bytes = read_file(plain);
+  ASSERT_EQ(get<std::uint32_t>(bytes, kFlagsAt), 0u);
+  put<std::uint32_t>(bytes, kFlagsAt, 1u);  // vertex colours as albedo
+  reseal(bytes);
+  const std::string flagged = dir.file("flagged.prtt");
+  write_file(flagged, bytes);
+  std::filesystem::remove(plain);
+  // The reader accepts it (a legal header) ...
+  const Transfer back = prt::read_transfer(flagged);
+  EXPECT_TRUE(back.vertex_colors);
+  EXPECT_EQ(run_prt(dir, {"info", flagged}).code, 0);
+  // ... and check_matches refuses it for this mesh, naming both files.
+  const std::string want = flagged + " uses vertex colours as albedo (computed with --vertex-colors), but " +
+                           mesh_path + " has no vertex colours";
+  try {
+    prt::check_matches(back, loaded, flagged);
+    ADD_FAILURE() << "accepted a vertex-colour transfer for a mesh without colours";
+  } catch (const prt::Error& e) {
+    EXPECT_TRUE(contains(e.what(), want)) << e.what();
+  }
+  prt::write_image(dir.file("sky.exr"), 8, 4, std::vector<float>(8 * 4 * 3, 1.0f));
+  const std::vector<std::string> inputs = dir.listing();
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"relight", mesh_path, flagged, dir.file("sky.exr"), "-o", dir.file("out.csv")},
+           {"render", mesh_path, flagged, dir.file("sky.exr"), "-o", dir.file("out.png"), "--width", "16", "--height",
+            "16"}}) {
+    const Result r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 1) << args[0] << "\n" << describe_run(r);
+    EXPECT_TRUE(contains(r.err, want)) << args[0] << "\n" << r.err;
+    EXPECT_EQ(dir.listing(), inputs) << args[0] << ": something was written";
+  }
 }
 
 TEST(TransferMesh, HashSurvivesTheFile) {

@@ -39,9 +39,11 @@ void write_transfer(const std::string& path, const Transfer& t);
 Transfer read_transfer(const std::string& path);
 
 // Throws prt::Error unless `t` was computed for `mesh` (same vertex count and
-// Mesh::hash(); and when t has analytic vertices, the same shading_hash:
-// those are shaded from the mesh's normals and colours); `transfer_path`
-// names the transfer in the message.
+// Mesh::hash(); the mesh has vertex colours when t's albedo is them; and when
+// t has analytic vertices, the same shading_hash: those are shaded from the
+// mesh's normals and colours); `transfer_path` names the transfer in the
+// message. Every command that pairs a transfer with a mesh (relight, render,
+// view) and the renderer call it, so they refuse alike.
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path);
 
 // A multi-line human-readable summary (bands, channels, mode, bounces,
