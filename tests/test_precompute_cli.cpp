@@ -9,8 +9,12 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstring>
 #include <thread>
 
 namespace prt {
@@ -121,6 +125,217 @@ TEST(PrecomputeCli, CtrlCLeavesNothingBehind) {
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_TRUE(dir.listing().empty()) << "left: " << dir.listing().front();
 }
+
+// ---- malformed input (docs/HARD_CASES.md, "Malformed input") ----------------------
+
+template <typename T>
+std::string le_bytes(T v) {
+  std::string b(sizeof v, '\0');
+  std::memcpy(b.data(), &v, sizeof v);
+  return b;
+}
+
+struct Hostile {
+  std::string name, bytes, message;  // the file, its contents, what the refusal says
+};
+
+// The bad-input campaign's meshes: each crashed, hung, allocated gigabytes
+// or was read as something else before the structure checks.
+std::vector<Hostile> hostile_meshes() {
+  const std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                          "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  std::string vertices;
+  for (float f : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) vertices += le_bytes(f);
+  std::string face255(1, char(255));
+  for (std::int32_t i : {0, 1, 2}) face255 += le_bytes(i);
+  std::string big_ply = ply;
+  big_ply.replace(big_ply.find("vertex 3"), 8, "vertex 100000000");
+  std::string ascii = ply;
+  ascii.replace(ascii.find("binary_little_endian"), 20, "ascii");
+  ascii.replace(ascii.find("vertex 3"), 8, "vertex 5");
+  ascii.replace(ascii.find("face 1"), 6, "face 2");
+  std::string glb = "glTF" + le_bytes<std::uint32_t>(2) + le_bytes<std::uint32_t>(86) +
+                    le_bytes<std::uint32_t>(0xFFFFFFF0u) + "JSON" + R"({"asset":{"version":"2.0"}})";
+  glb.resize(86, ' ');
+  // Two quads; one index (9) beyond the 6 vertices: Assimp dropped that
+  // triangle. The buffer, base64: six float positions, twelve u16 indices.
+  std::string buffer;
+  for (float f : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 1.f, 1.f, 0.f, 0.f, 1.f, 0.f, 2.f, 0.f, 0.f, 2.f, 1.f, 0.f})
+    buffer += le_bytes(f);
+  for (std::uint16_t i : {0, 1, 2, 0, 2, 3, 1, 4, 5, 1, 5, 9}) buffer += le_bytes(i);
+  static const char* tab = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string b64;
+  for (std::size_t i = 0; i < buffer.size(); i += 3) {  // 96 bytes: no padding
+    const std::uint32_t v = std::uint32_t(std::uint8_t(buffer[i])) << 16 | std::uint32_t(std::uint8_t(buffer[i + 1])) << 8 |
+                            std::uint8_t(buffer[i + 2]);
+    for (int k = 18; k >= 0; k -= 6) b64 += tab[(v >> k) & 63];
+  }
+  const std::string gltf =
+      R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+      "buffers": [{"byteLength": 96, "uri": "data:application/octet-stream;base64,)" + b64 + R"("}],
+      "bufferViews": [{"buffer": 0, "byteLength": 72}, {"buffer": 0, "byteOffset": 72, "byteLength": 24}],
+      "accessors": [{"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3"},
+                    {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}]})";
+  return {
+      {"nodata.ply", ply, "the header declares 3 vertex and 1 face entries, which take at least 37 bytes, but only 0"},
+      {"count255.ply", ply + vertices + face255, "truncated: the data ends in face 0 of the 1 its header declares"},
+      {"short.ply", ply + vertices.substr(0, 20), "which take at least 37 bytes, but only 20 bytes follow it"},
+      {"big.ply", big_ply + vertices, "100000000 vertex and 1 face entries, which take at least 1200000001 bytes"},
+      {"noend.ply", "ply\nformat ascii 1.0\n", "has no end_header"},
+      {"five.ply", ascii + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n", "line 13: vertex 3 has 4 values"},
+      {"faces.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "the file ends after 1 of the 2 faces"},
+      {"big.off", "OFF\n100000000 1 0\n0 0 0\n", "declares 100000000 vertices and 1 faces, which take at least"},
+      {"q.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 q 2\n", "line 6: face 0 uses vertex 'q', which is not a"},
+      {"half.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n", "line 6: face 0 uses vertex '1.5', which is not"},
+      {"bomb.glb", glb, "GLB chunk 0 (JSON) declares 4294967280 bytes, but only 66 follow its header"},
+      {"dropped.gltf", gltf, "mesh 0 primitive 0 uses vertex 9 (index 11 of accessor 1), out of range"},
+  };
+}
+
+// Expects `r` to have exited with `code`, naming `file` with `message`, and
+// the test's directory to hold only `inputs` (nothing written, no temporary).
+void expect_refused(const TempDir& dir, const Result& r, int code, const std::string& file, const std::string& message,
+                    std::vector<std::string> inputs, const std::string& what) {
+  EXPECT_EQ(r.code, code) << what << "\n" << describe_run(r);
+  EXPECT_NE(r.err.find(file + ": "), std::string::npos) << what << ": does not name " << file << "\n" << r.err;
+  EXPECT_NE(r.err.find(message), std::string::npos) << what << ": expected '" << message << "'\n" << r.err;
+  std::sort(inputs.begin(), inputs.end());
+  EXPECT_EQ(dir.listing(), inputs) << what << ": something was written";
+}
+
+TEST(MalformedInput, MeshesAreRefusedByPrecomputeAndReference) {
+  TempDir dir;
+  const std::string env = write_constant_map(dir, 1.0f);
+  for (const Hostile& h : hostile_meshes()) {
+    const std::string mesh = dir.file(h.name);
+    write_file(mesh, h.bytes);
+    const std::vector<std::string> inputs = {"constant.exr", h.name};
+    // Bounded: the ASCII PLY without end_header spun forever.
+    const BoundedResult p = run_prt_bounded(dir, {"precompute", mesh, "-o", dir.file("out.prt"), "-q"}, 60);
+    EXPECT_FALSE(p.timed_out) << h.name;
+    expect_refused(dir, p, 1, mesh, h.message, inputs, "precompute " + h.name);
+    const BoundedResult r =
+        run_prt_bounded(dir, {"reference", mesh, env, "-o", dir.file("out.csv"), "--samples", "4", "-q"}, 60);
+    EXPECT_FALSE(r.timed_out) << h.name;
+    expect_refused(dir, r, 1, mesh, h.message, inputs, "reference " + h.name);
+    std::filesystem::remove(mesh);
+  }
+}
+
+TEST(MalformedInput, DeclaredSizesAreCheckedBeforeAnythingIsAllocated) {
+  // What the headers claimed took 4.2 GB (GLB), 1.2 GB (PLY), 2.4 and 11.7 GB
+  // (OFF) before an error or a crash; now refused in prt's start-up memory.
+  TempDir dir;
+  std::vector<Hostile> bombs;
+  for (const Hostile& h : hostile_meshes())
+    if (h.name == "bomb.glb" || h.name == "big.ply" || h.name == "big.off") bombs.push_back(h);
+  bombs.push_back({"bigger.off", "OFF\n500000000 1 0\n0 0 0\n", "declares 500000000 vertices"});
+  ASSERT_EQ(bombs.size(), 4u);
+  for (const Hostile& h : bombs) {
+    write_file(dir.file(h.name), h.bytes);
+    const BoundedResult r = run_prt_bounded(dir, {"precompute", dir.file(h.name), "-o", dir.file("out.prt"), "-q"}, 60);
+    expect_refused(dir, r, 1, dir.file(h.name), h.message, {h.name}, h.name);
+    EXPECT_LT(r.max_rss_kb, kRefusalRssKb) << h.name << ": peak RSS " << r.max_rss_kb << " KiB";
+    EXPECT_LT(r.seconds, 10.0) << h.name;
+    std::filesystem::remove(dir.file(h.name));
+  }
+}
+
+TEST(MalformedInput, FifosAndDevicesAreRefusedWithoutBlocking) {
+  // Refused from stat() before anything opens them: a reader of a FIFO
+  // blocks until a writer comes, /dev/zero never ends.
+  TempDir dir;
+  const std::string env = write_constant_map(dir, 1.0f), quad = write_quad(dir);
+  for (const char* name : {"fifo.off", "fifo.exr", "fifo.bin", "fifo.mtl"})
+    ASSERT_EQ(::mkfifo(dir.file(name).c_str(), 0600), 0) << name;
+  write_file(dir.file("external.gltf"),
+             R"({"asset": {"version": "2.0"}, "buffers": [{"byteLength": 96, "uri": "fifo.bin"}]})");
+  write_file(dir.file("material.obj"), "mtllib fifo.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::vector<std::string> inputs = {"constant.exr", "external.gltf", "fifo.bin", "fifo.exr",
+                                           "fifo.mtl",     "fifo.off",      "material.obj", "quad.off"};
+  const std::string fifo = "is a FIFO (named pipe), not a regular file";
+  struct Case {
+    std::vector<std::string> args;
+    std::string file, message;
+  };
+  const std::vector<Case> cases = {
+      {{"precompute", dir.file("fifo.off"), "-o", dir.file("o.prt")}, dir.file("fifo.off"), fifo},
+      {{"reference", dir.file("fifo.off"), env, "-o", dir.file("o.csv")}, dir.file("fifo.off"), fifo},
+      {{"reference", quad, dir.file("fifo.exr"), "-o", dir.file("o.csv")}, dir.file("fifo.exr"), fifo},
+      {{"precompute", dir.file("external.gltf"), "-o", dir.file("o.prt")}, dir.file("external.gltf"),
+       "buffer 0: " + dir.file("fifo.bin") + ": " + fifo},
+      {{"precompute", dir.file("material.obj"), "-o", dir.file("o.prt")}, dir.file("material.obj"),
+       "line 1: its material library " + dir.file("fifo.mtl") + ": " + fifo},
+      {{"precompute", "/dev/zero", "-o", dir.file("o.prt")}, "/dev/zero", "is a character device, not a regular file"},
+  };
+  for (const Case& c : cases) {
+    const BoundedResult r = run_prt_bounded(dir, c.args, 20);
+    EXPECT_FALSE(r.timed_out) << c.args[0] << " " << c.file << ": blocked";
+    expect_refused(dir, r, 1, c.file, c.message, inputs, c.args[0] + " " + c.file);
+  }
+}
+
+TEST(MalformedInput, RayOffsetIsRangeChecked) {
+  // --offset 1e30 put ray origins where Embree asserts (SIGABRT) in every mode.
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
+  const std::vector<std::string> inputs = {"constant.exr", "quad.off"};
+  const std::vector<std::vector<std::string>> runs = {
+      {"precompute", mesh, "-o", dir.file("o.prt"), "--samples", "16"},
+      {"precompute", mesh, "-o", dir.file("o.prt"), "--samples", "16", "--mode", "interreflected"},
+      {"precompute", mesh, "-o", dir.file("o.prt"), "--basis", "wavelet", "--cube-res", "8"},
+      {"reference", mesh, env, "-o", dir.file("o.csv"), "--samples", "4"},
+  };
+  for (std::vector<std::string> args : runs) {
+    args.insert(args.end(), {"--offset", "1e30"});
+    const Result r = run_prt(dir, args);
+    // The quad's diagonal is 2 sqrt(2): at most 0.283.
+    expect_refused(dir, r, 1, mesh, "1e+30 is too large for " + mesh + ": at most a tenth of its bounding-box "
+                                    "diagonal (0.282843)",
+                   inputs, args[0] + " " + args[args.size() - 3]);
+    EXPECT_NE(r.err.find("--offset"), std::string::npos) << r.err;
+  }
+  for (const char* bad : {"0", "-1", "nan", "inf"}) {
+    const Result r = run_prt(dir, {"precompute", mesh, "-o", dir.file("o.prt"), "--offset", bad});
+    EXPECT_EQ(r.code, 2) << bad << "\n" << describe_run(r);
+    EXPECT_NE(r.err.find("--offset: must be a positive number"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << r.err;
+    const Result q = run_prt(dir, {"reference", mesh, env, "-o", dir.file("o.csv"), "--offset", bad});
+    EXPECT_EQ(q.code, 2) << bad << "\n" << describe_run(q);
+  }
+  EXPECT_EQ(dir.listing(), inputs);
+  // Within the bound: computed.
+  EXPECT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("o.prt"), "--samples", "16", "--offset", "0.28", "-q"}).code,
+            0);
+}
+
+TEST(MalformedInput, CoordinatesBeyondTheLimitAreRefused) {
+  // The quad scaled by 1e19: Embree asserted (SIGABRT) in every mode.
+  TempDir dir;
+  const Mesh quad = test::quad(4);
+  const std::string mesh = dir.file("huge.off");
+  std::string off = "OFF\n" + std::to_string(quad.vertex_count()) + " " + std::to_string(quad.triangles.size()) + " 0\n";
+  char line[128];
+  for (const glm::vec3& q : quad.positions) {
+    std::snprintf(line, sizeof line, "%.9g %.9g %.9g\n", q.x * 1e19, q.y * 1e19, q.z * 1e19);
+    off += line;
+  }
+  for (const glm::uvec3& t : quad.triangles)
+    off += "3 " + std::to_string(t.x) + " " + std::to_string(t.y) + " " + std::to_string(t.z) + "\n";
+  write_file(mesh, off);
+  const std::string env = write_constant_map(dir, 1.0f);
+  const std::vector<std::vector<std::string>> runs = {
+      {"precompute", mesh, "-o", dir.file("o.prt")},
+      {"precompute", mesh, "-o", dir.file("o.prt"), "--mode", "interreflected"},
+      {"precompute", mesh, "-o", dir.file("o.prt"), "--basis", "wavelet", "--cube-res", "8"},
+      {"reference", mesh, env, "-o", dir.file("o.csv")},
+  };
+  for (const auto& args : runs)
+    expect_refused(dir, run_prt(dir, args), 1, mesh, "vertex 0 has a coordinate beyond prt's limit of 1e+12",
+                   {"constant.exr", "huge.off"}, args[0]);
+}
+
 
 }  // namespace
 }  // namespace prt
