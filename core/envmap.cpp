@@ -347,11 +347,18 @@ std::string lower_extension(const std::string& path) {
 }
 }  // namespace
 
-void check_image_output(const std::string& path) {
-  static const char* known[] = {".exr", ".hdr", ".pfm", ".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp", ".tga"};
+std::string image_output_type_problem(const std::string& path) {
+  // What write_image writes: EXR itself, the rest through OpenImageIO's
+  // writers (which have none for PFM, only a reader).
+  static const char* known[] = {".exr", ".hdr", ".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp", ".tga"};
   const std::string ext = lower_extension(path);
   if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return ext == k; }) == std::end(known))
-    throw Error(path + ": unknown image type '" + ext + "' (use .exr for linear HDR, or .hdr, .pfm, .tif, .png, .jpg)");
+    return path + ": unknown image type '" + ext + "' (use .exr for linear HDR, or .hdr, .tif, .png, .jpg, .bmp, .tga)";
+  return {};
+}
+
+void check_image_output(const std::string& path) {
+  if (const std::string problem = image_output_type_problem(path); !problem.empty()) throw Error(problem);
   check_writable(path);
 }
 

@@ -1,9 +1,13 @@
 // libprt_oiio: OpenImageIO behind a C interface (see oiio_plugin.h).
 #include "oiio_plugin.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <memory>
 #include <new>
@@ -21,6 +25,35 @@ void set_error(char* err, size_t len, const std::string& msg) {
   if (len == 0) return;
   std::strncpy(err, msg.c_str(), len - 1);
   err[len - 1] = 0;
+}
+
+// Writes `bytes` to `path` (created or truncated), checking every write(),
+// the fsync() and the close(): "" or why it failed. OpenImageIO's own file
+// writing ignores a short write (its PNG writer reports success on a full
+// disk, leaving a truncated file), so images are encoded into memory and
+// written here.
+std::string write_bytes(const char* path, const std::vector<unsigned char>& bytes) {
+  const int fd = ::open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) return std::string("cannot open for writing: ") + std::strerror(errno);
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int e = n < 0 ? errno : EIO;
+      ::close(fd);
+      return std::string("write failed: ") + std::strerror(e);
+    }
+    done += std::size_t(n);
+  }
+  // A device or pipe written in place (write_atomically) cannot be synced.
+  if (::fsync(fd) != 0 && errno != EINVAL && errno != ENOTSUP) {
+    const int e = errno;
+    ::close(fd);
+    return std::string("write failed: ") + std::strerror(e);
+  }
+  if (::close(fd) != 0) return std::string("write failed: ") + std::strerror(errno);
+  return {};
 }
 }  // namespace
 
@@ -110,8 +143,25 @@ extern "C" __attribute__((visibility("default"))) int prt_oiio_write(const char*
   const OIIO::TypeDesc type = floating ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8;
   OIIO::ImageSpec spec(width, height, 3, type);
   const void* px = floating ? static_cast<const void*>(rgb) : static_cast<const void*>(bytes);
+  // Encoded into memory (every writer prt uses takes an IOProxy), then
+  // written with every system call checked: open, write_image and close
+  // report encoding errors, write_bytes the file system's.
+  std::vector<unsigned char> encoded;
+  OIIO::Filesystem::IOVecOutput memory(encoded);
+  if (!out->supports("ioproxy") || !out->set_ioproxy(&memory)) {
+    set_error(err, err_len, std::string("OpenImageIO's ") + out->format_name() + " writer cannot write to memory");
+    return 1;
+  }
   if (!out->open(path, spec) || !out->write_image(type, px) || !out->close()) {
-    set_error(err, err_len, "write failed: " + out->geterror());
+    set_error(err, err_len, "cannot encode the image: " + out->geterror());
+    return 1;
+  }
+  if (encoded.empty()) {
+    set_error(err, err_len, std::string("OpenImageIO's ") + out->format_name() + " writer produced no bytes");
+    return 1;
+  }
+  if (const std::string why = write_bytes(path, encoded); !why.empty()) {
+    set_error(err, err_len, why);
     return 1;
   }
   return 0;

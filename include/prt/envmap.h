@@ -144,13 +144,19 @@ void require_finite(const EnvMap& map);
 std::string describe(const EnvMap& map);
 
 // Writes an RGB float image (EXR keeps floats; 8-bit formats get sRGB
-// encoding). Written to a temporary file beside `path` and renamed, so a
-// failure never leaves a half-written file. Throws prt::Error.
+// encoding). Written to a temporary file beside `path` and renamed
+// (write_atomically), so a failure never leaves a half-written file: EXR
+// through OpenEXR, the rest encoded by the OpenImageIO plugin into memory and
+// written with every write, fsync and close checked (a full disk is
+// "PATH: write failed: No space left on device"). Throws prt::Error.
 void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
 
 // Throws prt::Error naming `path` unless write_image can write it: a known
-// image extension (.exr, .hdr, .pfm, .tif, .tiff, .png, .jpg, .jpeg, .bmp,
-// .tga) in a writable directory.
+// image extension (.exr, .hdr, .tif, .tiff, .png, .jpg, .jpeg, .bmp, .tga)
+// in a writable directory.
 void check_image_output(const std::string& path);
+// The first half of check_image_output: "" when the extension is one
+// write_image writes, else the message ("PATH: unknown image type '.xyz' ...").
+std::string image_output_type_problem(const std::string& path);
 
 }  // namespace prt
