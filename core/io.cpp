@@ -46,6 +46,13 @@ std::uint64_t check_input_file(const std::string& path, std::string_view kind) {
   return static_cast<std::uint64_t>(st.st_size);
 }
 
+namespace {
+
+// The StagedWrites this thread's write_atomically calls go to (StagedWrites::Scope).
+thread_local StagedWrites* t_staging = nullptr;
+
+}  // namespace
+
 void write_atomically(const std::string& path, const std::function<void(const std::string& tmp)>& write) {
   namespace fs = std::filesystem;
   static std::atomic<unsigned> counter{0};
@@ -80,11 +87,53 @@ void write_atomically(const std::string& path, const std::function<void(const st
     fs::remove(tmp, ignored);
     throw;
   }
+  if (t_staging) {
+    t_staging->stage(tmp.string(), p.string(), path);
+    return;
+  }
   fs::rename(tmp, p, ec);
   if (ec) {
     fs::remove(tmp, ec);
     throw Error(path + ": cannot write: " + ec.message());
   }
+}
+
+StagedWrites::~StagedWrites() { discard(); }
+
+StagedWrites::Scope::Scope(StagedWrites& staged) : previous_(t_staging) { t_staging = &staged; }
+StagedWrites::Scope::~Scope() { t_staging = previous_; }
+
+void StagedWrites::stage(const std::string& tmp, const std::string& path, const std::string& shown) {
+  std::error_code ec;
+  for (auto it = staged_.begin(); it != staged_.end(); ++it)
+    if (it->path == path) {  // written again: the new version replaces the staged one
+      std::filesystem::remove(it->tmp, ec);
+      staged_.erase(it);
+      break;
+    }
+  staged_.push_back({tmp, path, shown, std::filesystem::exists(path, ec)});
+}
+
+void StagedWrites::commit() {
+  namespace fs = std::filesystem;
+  for (std::size_t i = 0; i < staged_.size(); ++i) {
+    std::error_code ec;
+    fs::rename(staged_[i].tmp, staged_[i].path, ec);
+    if (!ec) continue;
+    const std::string message = staged_[i].shown + ": cannot write: " + ec.message();
+    for (std::size_t j = 0; j < i; ++j)
+      if (!staged_[j].existed) fs::remove(staged_[j].path, ec);
+    for (std::size_t j = i; j < staged_.size(); ++j) fs::remove(staged_[j].tmp, ec);
+    staged_.clear();
+    throw Error(message);
+  }
+  staged_.clear();
+}
+
+void StagedWrites::discard() {
+  std::error_code ec;
+  for (const Entry& e : staged_) std::filesystem::remove(e.tmp, ec);
+  staged_.clear();
 }
 
 void check_writable(const std::string& path) {

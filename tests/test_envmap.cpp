@@ -1268,3 +1268,85 @@ TEST(AtomicWrite, AFifoIsWrittenInPlaceNotReplaced) {
 TEST(AtomicWrite, ADirectoryIsRefused) {
   EXPECT_THROW(prt::write_text_file(fs::temp_directory_path().string(), "x"), prt::Error);
 }
+
+// ---- staged writes (prt/io.h) --------------------------------------------------
+
+namespace {
+
+std::vector<std::string> names_in(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(StagedWrites, CommitRenamesEverythingDiscardLeavesNothing) {
+  prt::test::TempDir dir;
+  prt::write_text_file(dir.file("a.txt"), "old a");
+  {
+    prt::StagedWrites staged;
+    {
+      prt::StagedWrites::Scope scope(staged);
+      prt::write_text_file(dir.file("a.txt"), "new a");
+      prt::write_image(dir.file("b.exr"), 4, 2, std::vector<float>(24, 0.5f));
+      prt::write_text_file(dir.file("c.txt"), "first c");
+      prt::write_text_file(dir.file("c.txt"), "second c");  // the second version is kept
+    }
+    prt::write_text_file(dir.file("d.txt"), "not staged");  // outside the scope: renamed at once
+    EXPECT_EQ(staged.size(), 3u);
+    EXPECT_EQ(read_file(dir.file("a.txt")), "old a");
+    EXPECT_FALSE(fs::exists(dir.file("b.exr")));
+    EXPECT_EQ(read_file(dir.file("d.txt")), "not staged");
+    EXPECT_EQ(names_in(dir.work()).size(), 5u);  // a, d and three temporaries
+    staged.commit();
+    EXPECT_EQ(staged.size(), 0u);
+  }
+  EXPECT_EQ(read_file(dir.file("a.txt")), "new a");
+  EXPECT_EQ(read_file(dir.file("c.txt")), "second c");
+  EXPECT_EQ(prt::load_envmap(dir.file("b.exr")).width, 4);
+  EXPECT_EQ(names_in(dir.work()), (std::vector<std::string>{"a.txt", "b.exr", "c.txt", "d.txt"}));
+
+  // Not committed (an exception, Ctrl-C): the destructor removes the temporaries.
+  {
+    prt::StagedWrites staged;
+    prt::StagedWrites::Scope scope(staged);
+    prt::write_text_file(dir.file("a.txt"), "newer a");
+    prt::write_text_file(dir.file("e.txt"), "e");
+  }
+  EXPECT_EQ(read_file(dir.file("a.txt")), "new a");
+  EXPECT_EQ(names_in(dir.work()), (std::vector<std::string>{"a.txt", "b.exr", "c.txt", "d.txt"}));
+}
+
+TEST(StagedWrites, ScopesArePerThread) {
+  prt::test::TempDir dir;
+  prt::StagedWrites staged;
+  prt::StagedWrites::Scope scope(staged);
+  std::thread other([&] { prt::write_text_file(dir.file("other.txt"), "at once"); });
+  other.join();
+  EXPECT_EQ(read_file(dir.file("other.txt")), "at once");
+  EXPECT_EQ(staged.size(), 0u);
+}
+
+TEST(StagedWrites, AFailedRenameRemovesWhatTheCommitCreated) {
+  // The third of three cannot be renamed (its path became a non-empty
+  // directory after it was staged): the first, new, is removed again; the
+  // second replaced a file, whose old contents are gone; no temporary stays.
+  prt::test::TempDir dir;
+  prt::write_text_file(dir.file("2.txt"), "old 2");
+  prt::StagedWrites staged;
+  {
+    prt::StagedWrites::Scope scope(staged);
+    for (const char* n : {"1.txt", "2.txt", "3.txt"}) prt::write_text_file(dir.file(n), n);
+  }
+  fs::create_directories(dir.work() / "3.txt" / "inside");
+  try {
+    staged.commit();
+    ADD_FAILURE() << "expected prt::Error";
+  } catch (const prt::Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(dir.file("3.txt") + ": cannot write: ", 0), 0u) << e.what();
+  }
+  EXPECT_EQ(names_in(dir.work()), (std::vector<std::string>{"2.txt", "3.txt"}));
+  EXPECT_EQ(read_file(dir.file("2.txt")), "2.txt");
+}
+
+}  // namespace
