@@ -34,8 +34,39 @@ struct PrecomputeArgs {
   // samples and bounces given on the command line are the most it may choose.
   double target_error = 0;
   std::string env, cache;
-  const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr;
+  const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr, *mode_opt = nullptr,
+                    *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr;
 };
+
+// The rules across options (each value alone is checked while parsing):
+// UsageError, before anything is read.
+void check_usage(const PrecomputeArgs& a) {
+  const bool target = a.target_opt->count() > 0;
+  for (const CLI::Option* o : {a.env_opt, a.cache_opt})
+    if (o->count() > 0 && !target)
+      throw UsageError(o->get_name() + " is for --target-error (the map and reference cache it measures the error "
+                       "with); give --target-error too, or leave " + o->get_name() + " out");
+  if (target && a.env.empty())
+    throw UsageError("--target-error needs --env MAP: the error depends on the lighting");
+  if (a.basis == "wavelet") {
+    if (a.mode != "shadowed")
+      throw UsageError("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed "
+                       "only (use --basis sh for unshadowed or interreflected transfers)");
+    for (const CLI::Option* o : a.sh_only)
+      if (o->count() > 0)
+        throw UsageError(o->get_name() + " does not apply to --basis wavelet (a wavelet transfer is shadowed, one "
+                         "ray per cube texel above the horizon; its size is set by --cube-res and --threshold)");
+  } else {
+    for (const CLI::Option* o : a.wavelet_only)
+      if (o->count() > 0) throw UsageError(o->get_name() + " applies to --basis wavelet only");
+    if (target && a.tolerance_opt->count() > 0)
+      throw UsageError("--bounce-tolerance and --target-error both choose the bounces; give one");
+    if (target && a.mode == "unshadowed")
+      throw UsageError("--target-error: the unshadowed transfer has no sampling to choose (use --mode shadowed or "
+                       "interreflected)");
+  }
+  check_not_input("--output", a.output, {{"MESH", a.mesh}, {"--env", a.env}});
+}
 
 // The reference cache of --target-error: --cache, else $XDG_CACHE_HOME/prt,
 // else ~/.cache/prt, else none.
@@ -48,7 +79,6 @@ std::string target_cache(const std::string& given) {
 
 // The map --target-error is measured under.
 EnvMap target_map(const PrecomputeArgs& a) {
-  if (a.env.empty()) throw Error("--target-error needs --env MAP: the error depends on the lighting");
   EnvMap map = load_envmap(a.env);
   require_finite(map);
   if (map.is_cube()) throw Error(a.env + ": --target-error needs a lat-long (2:1) map, not " + map.source_layout);
@@ -79,7 +109,6 @@ std::optional<WaveletTransfer> run_wavelet_target(PrecomputeArgs& a, const Mesh&
 
 // --target-error: the cheapest settings meeting the target (prt/tuning.h).
 std::optional<Transfer> run_target(PrecomputeArgs& a, const Mesh& mesh) {
-  if (a.opt.bounce_tolerance > 0) throw Error("--bounce-tolerance and --target-error both choose the bounces; give one");
   const EnvMap map = target_map(a);
   TargetOptions t;
   t.target = a.target_error;
@@ -98,36 +127,28 @@ std::optional<Transfer> run_target(PrecomputeArgs& a, const Mesh& mesh) {
 
 // --basis wavelet: the all-frequency shadowed transfer (prt/wavelet_transfer.h).
 int run_wavelet(PrecomputeArgs& a) {
-  if (a.mode != "shadowed")
-    throw Error("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed only "
-                "(use --basis sh for unshadowed or interreflected transfers)");
-  for (const CLI::Option* o : a.sh_only)
-    if (o->count() > 0)
-      throw Error(o->get_name() + " does not apply to --basis wavelet (a wavelet transfer is shadowed, one ray per " +
-                  "cube texel above the horizon; its size is set by --cube-res and --threshold)");
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);
   a.wopt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   a.wopt.vertex_colors = a.opt.vertex_colors;
   a.wopt.threads = a.opt.threads;
   a.wopt.offset = a.opt.offset;
-  wavelet::check_resolution(a.wopt.cube_res, "--cube-res");
-  if (!(a.wopt.threshold >= 0.0 && a.wopt.threshold < 1.0))
-    throw Error("--threshold must be in [0, 1), got " + fmt::format("{}", a.wopt.threshold));
-  for_option("--output", [&] { check_writable(a.output); });
+  for_path("--output", [&] { check_writable(a.output); });
 
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   const std::optional<WaveletTransfer> computed =
-      a.target_error > 0 ? run_wavelet_target(a, mesh)
+      a.target_opt->count() > 0 ? run_wavelet_target(a, mesh)
                          : run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
                              return compute_wavelet_transfer(mesh, a.wopt, progress);
                            });
   if (!computed) return 130;
   const WaveletTransfer& t = *computed;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  write_wavelet_transfer(a.output, t);
+  out.write([&] { write_wavelet_transfer(a.output, t); });
+  if (const int rc = out.commit(); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr,
                "wrote {}: wavelet, cube {} ({} coefficients), threshold {}, {} vertices, kept {:.3f}% of the "
@@ -139,26 +160,27 @@ int run_wavelet(PrecomputeArgs& a) {
 }
 
 int run_precompute(PrecomputeArgs& a) {
+  check_usage(a);
   if (a.basis == "wavelet") return run_wavelet(a);
-  for (const CLI::Option* o : a.wavelet_only)
-    if (o->count() > 0) throw Error(o->get_name() + " applies to --basis wavelet only");
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);
   a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
-  for_option("--output", [&] { check_writable(a.output); });
+  for_path("--output", [&] { check_writable(a.output); });
 
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   const std::optional<Transfer> computed =
-      a.target_error > 0 ? run_target(a, mesh)
+      a.target_opt->count() > 0 ? run_target(a, mesh)
                          : run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
                              return compute_transfer(mesh, a.opt, progress);
                            });
   if (!computed) return 130;
   const Transfer& t = *computed;
-  write_transfer(a.output, t);
+  out.write([&] { write_transfer(a.output, t); });
+  if (const int rc = out.commit(); rc != 0) return rc;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet) {
     fmt::print(stderr, "wrote {}: {} {} bands, {} channel{}, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
@@ -207,7 +229,9 @@ Run add_precompute(CLI::App& app) {
                 "Ng et al. 2003)")
       ->check(CLI::IsMember({"sh", "wavelet"}))
       ->capture_default_str();
-  s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")->capture_default_str();
+  a->mode_opt = s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")
+                    ->check(parsed_by(parse_transfer_mode))
+                    ->capture_default_str();
   a->bands_opt = s->add_option("-b,--bands", a->opt.bands,
                                "SH bands n (n*n coefficients), 1 to 16: prt render and prt view draw at most 16, and "
                                "transfer accuracy is measured up to 16 (docs/CONVENTIONS.md, \"Band counts\")")
@@ -221,30 +245,39 @@ Run add_precompute(CLI::App& app) {
                        ->check(int_range(0, 64))
                        ->capture_default_str();
   a->sh_only.insert(a->sh_only.end(), {a->bands_opt, a->samples_opt, a->bounces_opt});
-  s->add_option("--target-error", a->target_error,
-                "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
-                "against the reference under --env is at most this (--bands/--samples/--bounces: the most to try)")
-      ->check(CLI::Range(0.0, 1.0));
-  s->add_option("--env", a->env, "Lat-long map the --target-error is measured under");
-  s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)");
-  a->sh_only.push_back(
+  a->target_opt =
+      s->add_option("--target-error", a->target_error,
+                    "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
+                    "against the reference under --env is at most this, in (0, 1) (--bands/--samples/--bounces: "
+                    "the most to try)")
+          ->check(number_range(0.0, 1.0, true, true, "a relative RMS error"));
+  a->env_opt = s->add_option("--env", a->env, "Lat-long map the --target-error is measured under");
+  a->cache_opt = s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)");
+  a->tolerance_opt =
       s->add_option("--bounce-tolerance", a->opt.bounce_tolerance,
-                    "Stop adding bounces once one adds less than this fraction of the direct part's energy (0: never)")
-          ->check(CLI::Range(0.0, 0.999999))
-          ->capture_default_str());
+                    "Stop adding bounces once one adds less than this fraction of the direct part's energy, in "
+                    "[0, 1) (0: never)")
+          ->check(number_range(0.0, 1.0, false, true))
+          ->capture_default_str();
+  a->sh_only.push_back(a->tolerance_opt);
   a->wavelet_only.push_back(
       s->add_option("--cube-res", a->wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
-          ->check(int_range(2, 256))
+          ->check(cube_resolution())
           ->capture_default_str());
   a->wavelet_only.push_back(
       s->add_option("--threshold", a->wopt.threshold,
                     "Wavelet basis: relative L2 truncation error per vertex, in [0, 1) (0 keeps every non-zero term)")
+          ->check(number_range(0.0, 1.0, false, true))
           ->capture_default_str());
-  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")->capture_default_str();
+  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")
+      ->check(triple_value("r,g,b", kMinAlbedo, kMaxAlbedo, "energy conservation"))
+      ->capture_default_str();
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-t,--threads", a->opt.threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
   a->sh_only.push_back(
-      s->add_option("--seed", a->opt.seed, "Seed of the direction set (same seed, same bits)")->capture_default_str());
+      s->add_option("--seed", a->opt.seed, "Seed of the direction set, 0 to 2^64-1 (same seed, same bits)")
+          ->check(seed_value())
+          ->capture_default_str());
   s->add_option("--offset", a->opt.offset,
                 "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
                 "diagonal (default 1e-4 x the diagonal)")

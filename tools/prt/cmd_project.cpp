@@ -1,5 +1,6 @@
 // prt project: environment map -> SH coefficients.
 #include "commands.h"
+#include "progress.h"
 
 #include <prt/envmap.h>
 #include <prt/error.h>
@@ -41,10 +42,9 @@ double peak_rss_mib() {
   return double(ru.ru_maxrss) / 1024.0;
 }
 
-EnvMap load(const ProjectArgs& a) {
-  const Mapping m = parse_mapping(a.mapping);
-  if (m != Mapping::Faces) return load_envmap(a.env, m);
-  // Six faces: a pattern with {face} (px nx py ny pz nz), or six comma-separated files.
+// --mapping faces: the six files ENV names, a pattern with {face} (px nx py
+// ny pz nz) or six comma-separated files; UsageError otherwise.
+std::array<std::string, 6> face_paths(const ProjectArgs& a) {
   std::array<std::string, 6> paths;
   static constexpr const char* tags[6] = {"px", "nx", "py", "ny", "pz", "nz"};
   const auto brace = a.env.find("{face}");
@@ -54,14 +54,42 @@ EnvMap load(const ProjectArgs& a) {
     std::stringstream ss(a.env);
     int f = 0;
     for (std::string part; std::getline(ss, part, ',');) {
-      if (f == 6) throw Error("--mapping faces: more than six files in '" + a.env + "'");
+      if (f == 6) throw UsageError("--mapping faces: more than six files in " + show_text(a.env));
       paths[f++] = part;
     }
     if (f != 6)
-      throw Error("--mapping faces: expected six files +X,-X,+Y,-Y,+Z,-Z or a pattern with {face}, got '" + a.env +
-                  "'");
+      throw UsageError("--mapping faces: expected six files +X,-X,+Y,-Y,+Z,-Z or a pattern with {face}, got " +
+                       show_text(a.env));
   }
-  return load_cube_faces(paths);
+  return paths;
+}
+
+EnvMap load(const ProjectArgs& a) {
+  const Mapping m = parse_mapping(a.mapping);
+  if (m != Mapping::Faces) return load_envmap(a.env, m);
+  return load_cube_faces(face_paths(a));
+}
+
+// The outputs are none of the inputs, nor each other.
+void check_outputs(const ProjectArgs& a) {
+  const bool faces = parse_mapping(a.mapping) == Mapping::Faces;
+  const std::array<std::string, 6> f = faces ? face_paths(a) : std::array<std::string, 6>{a.env};
+  const bool to_file = !a.output.empty() && a.output != "-";
+  for (const auto& [option, path] : {std::pair<const char*, std::string>{"--output", to_file ? a.output : ""},
+                                     std::pair<const char*, std::string>{"--reconstruct", a.reconstruct}})
+    if (!path.empty())
+      check_not_input(option, path,
+                      {{"ENV", f[0]}, {"ENV", f[1]}, {"ENV", f[2]}, {"ENV", f[3]}, {"ENV", f[4]}, {"ENV", f[5]}});
+  if (to_file && !a.reconstruct.empty() && same_file(a.output, a.reconstruct))
+    throw UsageError("--reconstruct " + a.reconstruct + ": is also the --output file; give the coefficients and the "
+                     "reconstruction two names");
+}
+
+// --reconstruct-size WxH (size_value() has checked it while parsing).
+void parse_size(const std::string& text, int& w, int& h) {
+  const auto x = text.find('x');
+  w = std::stoi(text.substr(0, x));
+  h = std::stoi(text.substr(x + 1));
 }
 
 // JSON with one coefficient triple per line (nlohmann serialises every value:
@@ -105,23 +133,20 @@ std::string format_code(const std::vector<glm::dvec3>& c, int bands, const std::
 }
 
 int run_project(const ProjectArgs& a) {
-  // Validate every option and output path before reading the map.
+  // Validate every option and output path before reading the map (names,
+  // numbers and sizes were checked while parsing).
   const Quadrature quad = for_option("--quadrature", [&] { return parse_quadrature(a.quadrature); });
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
-  for_option("--mapping", [&] { return parse_mapping(a.mapping); });
-  if (!a.output.empty() && a.output != "-") for_option("--output", [&] { check_writable(a.output); });
-  if (!a.reconstruct.empty()) for_option("--reconstruct", [&] { check_image_output(a.reconstruct); });
-  if (a.format != "json" && a.format != "text" && a.format != "glsl" && a.format != "cpp")
-    throw Error("--format: expected json, text, glsl or cpp, got '" + a.format + "'");
+  if (!a.reconstruct.empty())
+    if (const std::string problem = image_output_type_problem(a.reconstruct); !problem.empty())
+      throw UsageError("--reconstruct: " + problem);
+  check_outputs(a);
+  if (!a.output.empty() && a.output != "-") for_path("--output", [&] { check_writable(a.output); });
+  if (!a.reconstruct.empty()) for_path("--reconstruct", [&] { check_image_output(a.reconstruct); });
   double euler[3] = {0, 0, 0};
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
   int rw = 0, rh = 0;
-  if (!a.reconstruct_size.empty()) {
-    char x = 0, extra = 0;
-    if (std::sscanf(a.reconstruct_size.c_str(), "%d%c%d%c", &rw, &x, &rh, &extra) != 3 || x != 'x' || rw < 1 ||
-        rh < 1 || rw > 65536 || rh > 65536)
-      throw Error("--reconstruct-size: expected WxH with 1 <= W, H <= 65536, got '" + a.reconstruct_size + "'");
-  }
+  if (!a.reconstruct_size.empty()) parse_size(a.reconstruct_size, rw, rh);
 
   // A single file is streamed (project_file): a lat-long map is read and
   // projected a block of rows at a time, with the same coefficients as the
@@ -187,12 +212,15 @@ int run_project(const ProjectArgs& a) {
   const std::string header = fmt::format("prt project {} --bands {}: {}{}", map.source, a.bands,
                                          a.irradiance ? "irradiance" : "radiance",
                                          a.rotate.empty() ? "" : ", rotated " + a.rotate);
+  // Both files or neither (Outputs): a failure or Ctrl-C while writing one
+  // leaves the old ones.
+  Outputs out("project");
   if (!a.reconstruct.empty()) {
     if (rw == 0) {
       rw = map.is_cube() ? 4 * map.width : map.width;
       rh = rw / 2;
     }
-    write_image(a.reconstruct, rw, rh, reconstruct_latlong(c, rw, rh));
+    out.write([&] { write_image(a.reconstruct, rw, rh, reconstruct_latlong(c, rw, rh)); });
   }
   report_memory(extra);
   std::string text;
@@ -202,17 +230,9 @@ int run_project(const ProjectArgs& a) {
     text = format_text(c, a.bands, header);
   else
     text = format_code(c, a.bands, header, a.format == "glsl");
-  if (a.output.empty() || a.output == "-") {
-    fmt::print("{}", text);
-  } else {
-    try {
-      write_text_file(a.output, text);
-    } catch (const Error&) {
-      // All or nothing: do not leave the reconstruction of a failed run.
-      if (!a.reconstruct.empty()) std::remove(a.reconstruct.c_str());
-      throw;
-    }
-  }
+  if (!a.output.empty() && a.output != "-") out.write([&] { write_text_file(a.output, text); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (a.output.empty() || a.output == "-") fmt::print("{}", text);
   if (!a.reconstruct.empty() && !a.quiet)
     fmt::print(stderr, "wrote {} ({}x{} lat-long, {} bands)\n", a.reconstruct, rw, rh, a.bands);
   return 0;
@@ -237,19 +257,27 @@ Run add_project(CLI::App& app) {
       ->capture_default_str();
   s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");
   s->add_option("-f,--format", a->format, "Output format: json, text (table), glsl or cpp (paste-ready snippet)")
+      ->check(one_of({"json", "text", "glsl", "cpp"}))
       ->capture_default_str();
   s->add_option("-w,--window", a->window, "Windowing against ringing: none, hanning, lanczos, auto")
+      ->check(parsed_by(sh::parse_window))
       ->capture_default_str();
   s->add_option("--window-width", a->window_width, "Window width w in bands (band l is scaled by f(l/w); default n)")
       ->check(positive_number());
   s->add_flag("--irradiance", a->irradiance, "Convolve with the clamped cosine: irradiance E_lm = A_l L_lm (no 1/pi)");
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)");
-  s->add_option("-m,--mapping", a->mapping, "Map layout: auto, latlong, hcross, vcross, faces")->capture_default_str();
+  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)")
+      ->check(triple_value("yaw,pitch,roll"));
+  s->add_option("-m,--mapping", a->mapping, "Map layout: auto, latlong, hcross, vcross, faces")
+      ->check(parsed_by(parse_mapping))
+      ->capture_default_str();
   s->add_option("--quadrature", a->quadrature,
                 "box: texels are area averages, integrated exactly; point: texels are point samples (lat-long only)")
+      ->check(parsed_by(parse_quadrature))
       ->capture_default_str();
   s->add_option("--reconstruct", a->reconstruct, "Also write the n-band reconstruction as a lat-long image");
-  s->add_option("--reconstruct-size", a->reconstruct_size, "WxH of the reconstruction (default: the map's size)");
+  s->add_option("--reconstruct-size", a->reconstruct_size,
+                "WxH of the reconstruction, each from 1 to 65536 (default: the map's size)")
+      ->check(size_value(65536));
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   s->add_flag("--no-stream", a->no_stream,
               "Read the whole map before projecting (same coefficients; lat-long maps are otherwise streamed)");

@@ -34,12 +34,12 @@ struct ReferenceArgs {
 };
 
 int run_reference(ReferenceArgs& a) {
-  // Every option and the output path before any loading.
+  // Every option and the output path before any loading (each value alone
+  // was checked while parsing).
+  check_not_input("--output", a.output, {{"MESH", a.mesh}, {"ENV", a.env}});
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);
-  for (double c : rgb)
-    if (c < 0) throw Error("--albedo: values must be >= 0, got '" + a.albedo + "'");
   a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   if (!a.rotate.empty()) {
     double e[3];
@@ -47,8 +47,8 @@ int run_reference(ReferenceArgs& a) {
     a.opt.rotation = sh::rotation_from_euler(e[0], e[1], e[2]);
   }
   if (a.opt.offset < 0 || !std::isfinite(a.opt.offset))
-    throw Error("--offset: must be a finite number >= 0 (0: 1e-4 x the bounding-box diagonal)");
-  for_option("--output", [&] { check_writable(a.output); });
+    throw UsageError("--offset: must be a finite number >= 0 (0: 1e-4 x the bounding-box diagonal)");
+  for_path("--output", [&] { check_writable(a.output); });
 
   std::unique_ptr<tbb::global_control> limit;
   if (a.threads > 0)
@@ -65,11 +65,13 @@ int run_reference(ReferenceArgs& a) {
   if (a.opt.vertex_colors && mesh.colors.empty())
     fmt::print(stderr, "warning: {} has no vertex colours; using --albedo {}\n", a.mesh, a.albedo);
 
+  Outputs out("reference");  // from here Ctrl-C stops cleanly, the write step included
   const std::optional<ReferenceResult> computed = run_with_progress(
       a.quiet, "reference", [&](const Progress& progress) { return render_reference(mesh, map, a.opt, progress); });
   if (!computed) return 130;
   const ReferenceResult& r = *computed;
-  write_vertex_csv(a.output, r.radiance, &r.std_error);
+  out.write([&] { write_vertex_csv(a.output, r.radiance, &r.std_error); });
+  if (const int rc = out.commit(); rc != 0) return rc;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet) {
     // Noise summary: relative RMS of the standard errors (what `prt compare`
@@ -106,18 +108,25 @@ Run add_reference(CLI::App& app) {
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
   s->add_option("-o,--output", a->output, "CSV file to write")->required();
-  s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")->capture_default_str();
+  s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")
+      ->check(parsed_by(parse_transfer_mode))
+      ->capture_default_str();
   s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode)")
       ->check(int_range(0, kMaxReferenceBounces))
       ->capture_default_str();
-  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b (>= 0)")->capture_default_str();
+  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b (>= 0)")
+      ->check(triple_value("r,g,b", 0.0))
+      ->capture_default_str();
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-s,--samples", a->opt.samples,
                 "Iterations per vertex, each one map-sampled and one cosine-sampled direction")
       ->check(int_range(2, 1 << 24))
       ->capture_default_str();
-  s->add_option("--seed", a->opt.seed, "Random seed (same seed, same bits, any thread count)")->capture_default_str();
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)");
+  s->add_option("--seed", a->opt.seed, "Random seed, 0 to 2^64-1 (same seed, same bits, any thread count)")
+      ->check(seed_value())
+      ->capture_default_str();
+  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)")
+      ->check(triple_value("yaw,pitch,roll"));
   s->add_option("--offset", a->opt.offset,
                 "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
                 "diagonal (default 1e-4 x the diagonal)")

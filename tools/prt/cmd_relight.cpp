@@ -1,5 +1,6 @@
 // prt relight: CPU relighting of a precomputed mesh under an environment map.
 #include "commands.h"
+#include "progress.h"
 #include "scene.h"
 
 #include <prt/vertex_csv.h>
@@ -18,8 +19,11 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <limits>
 
 namespace prt::cli {
 
@@ -37,11 +41,31 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void write_output(const std::string& ext, const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& rgb) {
-  if (ext == ".ply")
-    write_ply(path, mesh, rgb);
-  else
-    write_vertex_csv(path, rgb, nullptr);
+// Writes the result through Outputs: all of it, or (failure, Ctrl-C)
+// nothing. Returns the exit status.
+int write_output(const std::string& ext, const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& rgb) {
+  Outputs out("relight");
+  out.write([&] {
+    if (ext == ".ply")
+      write_ply(path, mesh, rgb);
+    else
+      write_vertex_csv(path, rgb, nullptr);
+  });
+  return out.commit();
+}
+
+// Float overflow of map x transfer: the inputs are named (the output is not
+// at fault). `largest(v)` is the largest |coefficient| of vertex v's transfer.
+template <typename Largest>
+void check_relit(const std::vector<glm::vec3>& rgb, const RelightArgs& a, const EnvMap& env, Largest largest) {
+  for (std::size_t v = 0; v < rgb.size(); ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(rgb[v][c]))
+        throw Error(fmt::format("relit radiance of vertex {} is {} ({} channel): the values of {} (max {}) times the "
+                                "transfer of {} (largest coefficient of that vertex {}) overflow float (largest {}); "
+                                "scale the map down",
+                                v, show_number(rgb[v][c]), "rgb"[c], a.env, show_number(env.stats.max), a.transfer,
+                                show_number(largest(v)), show_number(std::numeric_limits<float>::max())));
 }
 
 // A wavelet transfer: per-frame lighting (resample, Haar, K terms) and the sparse sum.
@@ -64,7 +88,8 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   std::vector<glm::vec3> rgb;
   wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
   const double relight_ms = ms_since(t0);
-  write_output(ext, a.output, mesh, rgb);
+  check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
+  if (const int rc = write_output(ext, a.output, mesh, rgb); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr,
                "relight: {:.3f} ms per frame (lighting {:.3f} ms: resample, Haar, {} of {} terms by {}; transfer "
@@ -79,8 +104,9 @@ int run_relight(const RelightArgs& a) {
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-  if (ext != ".ply" && ext != ".csv") throw Error("--output: " + a.output + ": expected a .ply or .csv file");
-  for_option("--output", [&] { check_writable(a.output); });
+  if (ext != ".ply" && ext != ".csv") throw UsageError("--output: " + a.output + ": expected a .ply or .csv file");
+  check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+  for_path("--output", [&] { check_writable(a.output); });
 
   // The basis comes from the file; options of the other basis are refused.
   const TransferBasis basis = read_transfer_basis(a.transfer);
@@ -102,6 +128,7 @@ int run_relight(const RelightArgs& a) {
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
+  if (a.direct) check_direct(t, a.transfer, "--direct");
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(env));
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -116,7 +143,12 @@ int run_relight(const RelightArgs& a) {
   }
   const std::vector<glm::vec3> rgb = a.direct ? relight_direct(t, mesh, light) : relight(t, mesh, light);
   const double frame_ms = ms_since(t1);
-  write_output(ext, a.output, mesh, rgb);
+  check_relit(rgb, a, env, [&](std::size_t v) {
+    double m = 0;
+    for (double x : vertex_transfer(t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
+    return m;
+  });
+  if (const int rc = write_output(ext, a.output, mesh, rgb); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
                        "wrote {} ({} vertices)\n",
@@ -142,12 +174,17 @@ Run add_relight(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map")->required();
   s->add_option("-o,--output", a->output, "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b)")
       ->required();
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees");
+  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees")
+      ->check(triple_value("yaw,pitch,roll"));
   a->sh_only.push_back(
-      s->add_option("-w,--window", a->window, "SH: windowing: none, hanning, lanczos, auto")->capture_default_str());
+      s->add_option("-w,--window", a->window, "SH: windowing: none, hanning, lanczos, auto")
+          ->check(parsed_by(sh::parse_window))
+          ->capture_default_str());
   a->sh_only.push_back(s->add_option("--window-width", a->window_width, "SH: window width in bands (default: the band count)")
                            ->check(positive_number()));
-  a->sh_only.push_back(s->add_flag("--direct", a->direct, "SH, interreflected files: use the direct (shadowed) part only"));
+  a->sh_only.push_back(s->add_flag("--direct", a->direct,
+                                   "SH, interreflected files: use the direct (shadowed) part only (refused for other "
+                                   "files)"));
   a->wavelet_only.push_back(s->add_option("-k,--terms", a->terms,
                                           "Wavelet: lighting terms K kept per frame (K >= 6 r^2 keeps all)")
                                 ->check(int_range(0, 1 << 30))
@@ -155,6 +192,7 @@ Run add_relight(CLI::App& app) {
   a->wavelet_only.push_back(
       s->add_option("--selection", a->selection,
                     "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
+          ->check(parsed_by(wavelet::parse_selection))
           ->capture_default_str());
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };

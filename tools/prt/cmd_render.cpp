@@ -2,6 +2,7 @@
 // environment map (prt::Renderer, EGL, no display needed).
 #include "commands.h"
 #include "look.h"
+#include "progress.h"
 #include "scene.h"
 
 #include <prt/envmap.h>
@@ -43,7 +44,12 @@ std::string frame_path(const std::string& out, int frame) {
 int run_render(const RenderArgs& a) {
   double euler[3] = {0, 0, 0};
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
-  for_option("--output", [&] { check_image_output(a.output); });
+  if (const std::string problem = image_output_type_problem(a.output); !problem.empty())
+    throw UsageError("--output: " + problem);
+  for (int f = 0; f < (a.frames_given ? a.frames : 1); ++f)
+    check_not_input("--output", a.frames_given ? frame_path(a.output, f) : a.output,
+                    {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+  for_path("--output", [&] { check_image_output(a.output); });
 
   const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true);
   const Mesh& mesh = scene.mesh;
@@ -67,6 +73,7 @@ int run_render(const RenderArgs& a) {
       throw Error("--shading " + std::string(shading_name(look.shading)) +
                   ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
   } else {
+    if (look.shading == Shading::Direct) check_direct(t, a.transfer, "--shading direct");
     renderer.set_mesh(mesh, t);
     renderer.set_band_limit(look.bands);
     renderer.set_shading(look.shading);
@@ -83,26 +90,42 @@ int run_render(const RenderArgs& a) {
   sh::Rotation rotation(sh_bands, base);
   const double spin = a.spin_given ? a.spin : (a.frames > 1 ? 360.0 / a.frames : 0.0);
 
+  // The frames are staged (Outputs): a failed write or Ctrl-C between frames
+  // leaves none of them, and the old files.
+  Outputs out("render");
   double render_seconds = 0, cpu_ms = 0;
-  for (int f = 0; f < a.frames; ++f) {
-    const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, glm::radians(spin * f)) * base;
-    const auto t0 = std::chrono::steady_clock::now();
-    rotation.set(R);
-    rotation.apply(light, rotated);
-    renderer.set_lighting(rotated);
-    renderer.set_environment_rotation(R);
-    if (wavelet && look.shading == Shading::Transfer) {
-      cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
-    } else if (wavelet) {
-      renderer.set_shading(Shading::Lambert);
+  int width = 0, height = 0;
+  {
+    ProgressBar bar(a.quiet || a.frames == 1);
+    const Progress progress = bar.callback();
+    for (int f = 0; f < a.frames; ++f) {
+      if (!progress(std::size_t(f), std::size_t(a.frames), "frames")) break;  // Ctrl-C: commit() says so
+      const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, glm::radians(spin * f)) * base;
+      const auto t0 = std::chrono::steady_clock::now();
+      rotation.set(R);
+      rotation.apply(light, rotated);
+      renderer.set_lighting(rotated);
+      renderer.set_environment_rotation(R);
+      if (wavelet && look.shading == Shading::Transfer) {
+        cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
+      } else if (wavelet) {
+        renderer.set_shading(Shading::Lambert);
+      }
+      Image img = renderer.render(cam, a.width, a.height);
+      render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      width = img.width;
+      height = img.height;
+      out.write([&] { write_frame(a.frames_given ? frame_path(a.output, f) : a.output, std::move(img), look.display); });
     }
-    Image img = renderer.render(cam, a.width, a.height);
-    render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const std::string path = a.frames_given ? frame_path(a.output, f) : a.output;
-    if (!a.quiet) fmt::print(stderr, "wrote {} ({}x{})\n", path, img.width, img.height);
-    write_frame(path, std::move(img), look.display);
+    if (!Outputs::interrupted()) progress(std::size_t(a.frames), std::size_t(a.frames), "frames");
   }
+  if (const int rc = out.commit(); rc != 0) return rc;
   if (!a.quiet) {
+    if (a.frames_given)
+      fmt::print(stderr, "wrote {} frames {} to {} ({}x{})\n", a.frames, frame_path(a.output, 0),
+                 frame_path(a.output, a.frames - 1), width, height);
+    else
+      fmt::print(stderr, "wrote {} ({}x{})\n", a.output, width, height);
     fmt::print(stderr, "{} frame(s), {:.2f} ms per frame (rotate, upload, draw, read back)\n", a.frames,
                1e3 * render_seconds / a.frames);
     if (wavelet && look.shading == Shading::Transfer)
@@ -133,14 +156,18 @@ Run add_render(CLI::App& app) {
       ->required();
   s->add_option("--width", a->width, "Image width in pixels")->check(int_range(1, 16384))->capture_default_str();
   s->add_option("--height", a->height, "Image height in pixels")->check(int_range(1, 16384))->capture_default_str();
-  s->add_option("--camera", a->camera, "Camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (eye, target, up)");
-  s->add_option("--fov", a->fov, "Vertical field of view in degrees")->check(CLI::Range(1.0, 179.0))
+  s->add_option("--camera", a->camera, "Camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (eye, target, up)")
+      ->check(camera_value());
+  s->add_option("--fov", a->fov, "Vertical field of view in degrees, 1 to 179")
+      ->check(number_range(1.0, 179.0))
       ->capture_default_str();
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees");
+  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees")
+      ->check(triple_value("yaw,pitch,roll"));
   s->add_option("--frames", a->frames, "Render K frames, spinning the environment about +Y")
       ->check(int_range(1, 100000))
       ->each([a](const std::string&) { a->frames_given = true; });
   s->add_option("--spin", a->spin, "Degrees about +Y per frame (default 360 / frames)")
+      ->check(finite_number())
       ->each([a](const std::string&) { a->spin_given = true; });
   add_look_options(s, a->look);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");

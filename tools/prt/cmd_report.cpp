@@ -21,8 +21,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -145,7 +147,8 @@ void write_error_pfm(const std::string& path, const Image& img) {
     for (int y = img.height - 1; y >= 0; --y)  // PFM rows run bottom to top
       f.write(reinterpret_cast<const char*>(img.rgb.data() + std::size_t(y) * img.width * 3),
               std::streamsize(sizeof(float) * 3 * img.width));
-    if (!f.flush()) throw Error("cannot write " + tmp);
+    f.close();  // close() too: a full disk may show only there
+    if (!f) throw Error(path + ": write failed: " + std::strerror(errno));
   });
 }
 
@@ -229,16 +232,16 @@ std::string run_plots(const std::string& out) {
 
 int run_report_command(ReportArgs& a) {
   double rgb[3];
-  parse_triple(a.albedo, "--albedo", rgb);
-  for (double c : rgb)
-    if (!(c >= 0 && c <= 1)) throw Error("--albedo: values must be in [0, 1], got '" + a.albedo + "'");
+  parse_triple(a.albedo, "--albedo", rgb);  // in [0, 1]: checked while parsing
+  for (const char* name : {"report.md", "report.csv", "report.json", "plots.py", "plots.log"})
+    check_not_input("--out", (fs::path(a.out) / name).string(), {{"MESH", a.mesh}, {"ENV", a.env}});
   ReportOptions opt = report_options(a.quick);
   opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   opt.threads = a.threads;
   std::error_code ec;
   fs::create_directories(a.out, ec);
   if (ec || !fs::is_directory(a.out)) throw Error("--out: cannot create the directory " + a.out);
-  for_option("--out", [&] { check_writable((fs::path(a.out) / "report.md").string()); });
+  for_path("--out", [&] { check_writable((fs::path(a.out) / "report.md").string()); });
   const std::string cache = a.no_cache ? std::string() : a.cache.empty() ? (fs::path(a.out) / "cache").string() : a.cache;
   std::unique_ptr<tbb::global_control> limit;
   if (a.threads > 0)
@@ -384,7 +387,9 @@ Run add_report(CLI::App& app) {
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
   s->add_option("-o,--out", a->out, "Output directory")->capture_default_str();
   s->add_flag("--quick", a->quick, "Small grid and reference (under a minute for ~40k vertices on 2 cores)");
-  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")->capture_default_str();
+  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")
+      ->check(triple_value("r,g,b", 0.0, 1.0))
+      ->capture_default_str();
   s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)");
   s->add_flag("--no-cache", a->no_cache, "Always recompute the references");
   s->add_flag("--no-plots", a->no_plots, "Tables only (no Python)");

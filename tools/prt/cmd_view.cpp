@@ -363,9 +363,15 @@ class Viewer {
 };
 
 int run_view(const ViewArgs& a) {
-  if (!a.screenshot.empty()) for_option("--screenshot", [&] { check_image_output(a.screenshot); });
-  if (a.screenshot.empty() && a.frames > 0) throw Error("--frames needs --screenshot FILE");
-  if (!a.screenshot.empty() && a.frames == 0) throw Error("--screenshot needs --frames N");
+  if (a.screenshot.empty() && a.frames > 0) throw UsageError("--frames needs --screenshot FILE");
+  if (!a.screenshot.empty() && a.frames == 0) throw UsageError("--screenshot needs --frames N");
+  if (!a.screenshot.empty()) {
+    if (const std::string problem = image_output_type_problem(a.screenshot); !problem.empty())
+      throw UsageError("--screenshot: " + problem);
+    check_not_input("--screenshot", a.screenshot,
+                    {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}, {"--second", a.second}});
+    for_path("--screenshot", [&] { check_image_output(a.screenshot); });
+  }
   if (!std::filesystem::is_directory(a.screenshot_dir))
     throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
 
@@ -472,8 +478,10 @@ Run add_view(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
   s->add_option("--width", a->width, "Window width in pixels")->check(int_range(1, 16384))->capture_default_str();
   s->add_option("--height", a->height, "Window height in pixels")->check(int_range(1, 16384))->capture_default_str();
-  s->add_option("--camera", a->camera, "Starting camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (orbit is about the target)");
-  s->add_option("--fov", a->fov, "Vertical field of view in degrees")->check(CLI::Range(1.0, 179.0))
+  s->add_option("--camera", a->camera, "Starting camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (orbit is about the target)")
+      ->check(camera_value());
+  s->add_option("--fov", a->fov, "Vertical field of view in degrees, 1 to 179")
+      ->check(number_range(1.0, 179.0))
       ->capture_default_str();
   s->add_option("--frames", a->frames, "Render N frames, save --screenshot FILE and exit")
       ->check(int_range(1, 1000000));

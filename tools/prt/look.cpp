@@ -6,25 +6,90 @@
 #include <prt/error.h>
 
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <sstream>
 
 namespace prt::cli {
 
+namespace {
+
+// --shading: a name of parse_shading's but colors (the renderer's mode for
+// callers that upload their own vertex colours).
+CLI::Validator shading_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        try {
+          if (parse_shading(s) == Shading::VertexColors)
+            return "colors is for callers that upload their own vertex colours";
+        } catch (const Error& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "");
+}
+
+// "" or why `text` is not a camera; sets `cam` when it is.
+std::string camera_problem(const std::string& text, Camera& cam) {
+  constexpr const char* kForm = "ex,ey,ez,tx,ty,tz,ux,uy,uz";
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);  // out of range: +-inf, refused below
+    if (end == item.c_str() || item.find_first_not_of(" \t", std::size_t(end - item.c_str())) != std::string::npos)
+      return fmt::format("{} is not a number (expected {})", show_text(item), kForm);
+    v.push_back(x);
+  }
+  if (v.size() != 9 || text.empty() || text.back() == ',')
+    return fmt::format("expected 9 numbers {}, got {}", kForm, show_text(text));
+  for (double x : v)
+    if (!std::isfinite(x)) return fmt::format("non-finite value {} in {}", show_number(x), show_text(text));
+  const glm::dvec3 eye{v[0], v[1], v[2]}, target{v[3], v[4], v[5]}, up{v[6], v[7], v[8]};
+  const auto shown = [](const glm::dvec3& p) {
+    return fmt::format("({}, {}, {})", show_number(p.x), show_number(p.y), show_number(p.z));
+  };
+  // The renderer's own test (Renderer::render), so what passes here draws.
+  const glm::dvec3 fwd = target - eye;
+  if (!(glm::length(fwd) > 0)) return "eye equals target " + shown(eye);
+  if (!(glm::length(glm::cross(fwd, up)) > 1e-12 * glm::length(fwd)))
+    return "up " + shown(up) + " is parallel to the view direction " + shown(fwd) + " (or zero)";
+  cam.eye = eye;
+  cam.target = target;
+  cam.up = up;
+  return {};
+}
+
+}  // namespace
+
+CLI::Validator camera_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        Camera cam;
+        return camera_problem(s, cam);
+      },
+      "ex,ey,ez,tx,ty,tz,ux,uy,uz");
+}
+
 void add_look_options(CLI::App* s, LookArgs& a) {
   s->add_option("--shading", a.shading,
                 "transfer (the file's), direct (shadowed part of an interreflected file), unshadowed, lambert "
                 "(no PRT), ao, bent")
+      ->check(shading_value())
       ->capture_default_str();
   a.bands_option = s->add_option("--bands", a.bands,
                                  "SH: shade with the first N bands only (0: all of the file's; at most 16, what the "
                                  "renderer's lighting block holds)")
                        ->check(int_range(0, kMaxRenderBands, "the renderer's lighting block holds 16 bands"));
   a.window_option = s->add_option("--window", a.window, "SH: window against ringing: none, hanning, lanczos, auto")
+                        ->check(parsed_by(sh::parse_window))
                         ->capture_default_str();
   a.terms_option = s->add_option("-k,--terms", a.terms, "Wavelet: lighting terms K kept per frame (K >= 6 r^2: all)")
                        ->check(int_range(1, 1 << 30))
@@ -32,33 +97,20 @@ void add_look_options(CLI::App* s, LookArgs& a) {
   a.selection_option =
       s->add_option("--selection", a.selection,
                     "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
+          ->check(parsed_by(wavelet::parse_selection))
           ->capture_default_str();
-  s->add_option("--exposure", a.exposure, "Scale radiance by 2^EXPOSURE for display")->capture_default_str();
+  s->add_option("--exposure", a.exposure, "Scale radiance by 2^EXPOSURE for display, -64 to 64 stops")
+      ->check(number_range(-64, 64, false, false, "stops"))
+      ->capture_default_str();
   s->add_option("--tonemap", a.tone_map, "8-bit output and the window: clamp, reinhard, aces")
+      ->check(parsed_by(parse_tone_map))
       ->capture_default_str();
 }
 
 // "ex,ey,ez,tx,ty,tz,ux,uy,uz" -> nine doubles.
 void parse_camera(const std::string& text, Camera& cam) {
-  std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw Error("--camera: \"" + item + "\" is not a number (expected ex,ey,ez,tx,ty,tz,ux,uy,uz)");
-    }
-  }
-  if (v.size() != 9 || text.empty() || text.back() == ',')
-    throw Error("--camera: expected 9 numbers ex,ey,ez,tx,ty,tz,ux,uy,uz, got \"" + text + "\"");
-  for (double x : v)
-    if (!std::isfinite(x)) throw Error("--camera: non-finite value in \"" + text + "\"");
-  cam.eye = {v[0], v[1], v[2]};
-  cam.target = {v[3], v[4], v[5]};
-  cam.up = {v[6], v[7], v[8]};
+  if (const std::string problem = camera_problem(text, cam); !problem.empty())
+    throw UsageError("--camera: " + problem);
 }
 
 Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {
@@ -70,17 +122,14 @@ Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {
     for (const CLI::Option* o : {a.terms_option, a.selection_option})
       if (o && o->count() > 0)
         throw Error(o->get_name() + " applies to wavelet transfers (prt precompute --basis wavelet); this one is SH");
+  // Each name and number was checked while parsing (add_look_options).
   look.shading = for_option("--shading", [&] { return parse_shading(a.shading); });
-  if (look.shading == Shading::VertexColors)
-    throw Error("--shading: colors is for callers that upload their own vertex colours");
   if (a.bands > sh_bands && sh_bands > 0)
     throw Error(fmt::format("--bands {}: the transfer has {} bands", a.bands, sh_bands));
   look.bands = a.bands == 0 ? sh_bands : a.bands;
   look.window = for_option("--window", [&] { return sh::parse_window(a.window); });
   look.terms = a.terms;
   look.selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
-  if (!std::isfinite(a.exposure) || std::abs(a.exposure) > 64)
-    throw Error(fmt::format("--exposure: expected stops in [-64, 64], got {:f}", a.exposure));
   look.display.exposure = a.exposure;
   look.display.tone_map = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
   return look;

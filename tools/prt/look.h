@@ -50,8 +50,11 @@ Look parse_look(const LookArgs& args, int sh_bands, bool wavelet);
 // per map or setting, not per frame.
 std::vector<glm::dvec3> windowed_lighting(std::vector<glm::dvec3> light, int bands, sh::Window window);
 
-// --camera "ex,ey,ez,tx,ty,tz,ux,uy,uz": sets eye, target and up; throws
-// prt::Error naming --camera.
+// --camera "ex,ey,ez,tx,ty,tz,ux,uy,uz": nine finite numbers, the eye not at
+// the target, up not parallel to the view direction (the renderer's rule).
+CLI::Validator camera_value();
+// Sets eye, target and up from a --camera value; throws UsageError naming
+// --camera (camera_value() has checked it while parsing).
 void parse_camera(const std::string& text, Camera& camera);
 
 // Writes a frame: EXR (and other float formats) keep linear values scaled by

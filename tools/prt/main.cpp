@@ -11,68 +11,10 @@
 #include <map>
 #include <string>
 
-namespace prt::cli {
-
-void parse_triple(const std::string& text, const char* option, double out[3]) {
-  std::size_t pos = 0;
-  for (int i = 0; i < 3; ++i) {
-    std::size_t used = 0;
-    try {
-      out[i] = std::stod(text.substr(pos), &used);
-    } catch (const std::exception&) {
-      throw Error(std::string(option) + ": expected three numbers a,b,c, got '" + text + "'");
-    }
-    pos += used;
-    if (i < 2) {
-      if (pos >= text.size() || text[pos] != ',')
-        throw Error(std::string(option) + ": expected three numbers a,b,c, got '" + text + "'");
-      ++pos;
-    }
-  }
-  if (pos != text.size()) throw Error(std::string(option) + ": expected three numbers a,b,c, got '" + text + "'");
-  for (int i = 0; i < 3; ++i)
-    if (!std::isfinite(out[i])) throw Error(std::string(option) + ": numbers must be finite, got '" + text + "'");
-}
-
-CLI::Validator int_range(int lo, int hi, std::string why) {
-  return CLI::Validator(
-      [lo, hi, why](std::string& s) -> std::string {
-        std::size_t used = 0;
-        long v = 0;
-        try {
-          v = std::stol(s, &used);
-        } catch (const std::exception&) {
-          used = 0;
-        }
-        if (used == 0 || used != s.size() || v < lo || v > hi)
-          return fmt::format("must be a whole number from {} to {}{}, got '{}'", lo, hi,
-                             why.empty() ? "" : " (" + why + ")", s);
-        return {};
-      },
-      fmt::format("INT in [{}, {}]", lo, hi));
-}
-
-CLI::Validator positive_number() {
-  return CLI::Validator(
-      [](std::string& s) -> std::string {
-        std::size_t used = 0;
-        double v = 0;
-        try {
-          v = std::stod(s, &used);
-        } catch (const std::exception&) {
-          used = 0;
-        }
-        if (used == 0 || used != s.size() || !(v > 0) || !std::isfinite(v))
-          return "must be a positive number, got '" + s + "'";
-        return {};
-      },
-      "POSITIVE");
-}
-
-}  // namespace prt::cli
-
 // Exit status: 0 success, 1 a user error (bad file, bad data), 2 a usage
-// error (bad option), 3 an internal error (a bug), 130 interrupted (Ctrl-C).
+// error (bad option: every bad option value, whether CLI11's validators or a
+// command's UsageError find it), 3 an internal error (a bug), 130
+// interrupted (Ctrl-C; nothing written).
 int main(int argc, char** argv) {
   CLI::App app{"prt: Precomputed Radiance Transfer toolkit (spherical harmonics and wavelets).\n"
                "Conventions: docs/CONVENTIONS.md. Each subcommand has --help.",
@@ -109,6 +51,16 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  // Usage errors look alike, from CLI11 or from a command (UsageError):
+  // "prt CMD: error: --option: what is wrong", and where the options are.
+  const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
+  const std::string who = command.empty() ? "prt" : "prt " + command;
+  const auto usage_message = [who](const std::string& what) {
+    return fmt::format("{0}: error: {1}\nRun '{0} --help' for the options.\n", who, what);
+  };
+  app.failure_message([usage_message](const CLI::App*, const CLI::Error& e) -> std::string {
+    return usage_message(e.what());
+  });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -120,6 +72,9 @@ int main(int argc, char** argv) {
     if (!sub->parsed()) continue;
     try {
       return run();
+    } catch (const prt::cli::UsageError& e) {
+      fmt::print(stderr, "{}", usage_message(e.what()));
+      return 2;
     } catch (const prt::Error& e) {
       fmt::print(stderr, "prt {}: error: {}\n", sub->get_name(), e.what());
       return 1;

@@ -1,32 +1,79 @@
 #include "progress.h"
 
 #include <fmt/core.h>
+#include <pthread.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <thread>
 
 namespace prt::cli {
 
 namespace {
 std::atomic<bool> g_interrupted{false};
 void on_sigint(int) { g_interrupted = true; }
-using Handler = void (*)(int);
-Handler g_previous = SIG_DFL;
+int g_depth = 0;  // InterruptScopes alive (the main thread creates them)
+struct sigaction g_previous {};
 }  // namespace
 
-ProgressBar::ProgressBar(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {
+InterruptScope::InterruptScope() {
+  if (g_depth++ > 0) return;
   g_interrupted = false;
-  g_previous = std::signal(SIGINT, on_sigint);
+  struct sigaction sa {};
+  sa.sa_handler = on_sigint;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &sa, &g_previous);
 }
 
+InterruptScope::~InterruptScope() {
+  if (--g_depth == 0) sigaction(SIGINT, &g_previous, nullptr);
+}
+
+bool InterruptScope::interrupted() { return g_interrupted; }
+
+ProgressBar::ProgressBar(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {}
+
 ProgressBar::~ProgressBar() {
-  std::signal(SIGINT, g_previous);
   if (tty_ && !quiet_ && last_percent_ >= 0) fmt::print(stderr, "\n");
 }
 
-bool ProgressBar::interrupted() { return g_interrupted; }
+void Outputs::test_pause() const {
+  static const long ms = [] {
+    const char* env = std::getenv("PRT_TEST_PAUSE_BEFORE_RENAME");
+    return env && *env ? std::strtol(env, nullptr, 10) : 0L;
+  }();
+  if (ms <= 0 || interrupted()) return;
+  fmt::print(stderr, "PRT_TEST_PAUSE_BEFORE_RENAME: {} file(s) written to temporary names, not renamed\n",
+             staged_.size());
+  std::fflush(stderr);
+  // The flag, not EINTR: the handler may run on another thread.
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+  while (!interrupted() && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+}
+
+int Outputs::commit() {
+  sigset_t block, old;
+  sigemptyset(&block);
+  for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, s);
+  pthread_sigmask(SIG_BLOCK, &block, &old);
+  struct Restore {
+    sigset_t& mask;
+    ~Restore() { pthread_sigmask(SIG_SETMASK, &mask, nullptr); }
+  } restore{old};
+  if (interrupted()) {
+    staged_.discard();
+    fmt::print(stderr, "prt {}: interrupted; nothing written\n", command_);
+    return 130;
+  }
+  staged_.commit();
+  return 0;
+}
 
 Progress ProgressBar::callback() {
   return [this](std::size_t done, std::size_t total, const char* phase) { return update(done, total, phase); };
@@ -54,7 +101,7 @@ bool ProgressBar::update(std::size_t done, std::size_t total, const char* phase)
     fmt::print(stderr, "\r{:<8} [{}{}] {:3d}% {}/{}  {:.1f}s, ETA {:.1f}s  ", phase, std::string(filled, '#'),
                std::string(kWidth - filled, ' '), percent, done, total, elapsed, eta);
     last_percent_ = percent;
-  } else if (percent / 25 != last_percent_ / 25 || (done == total && last_percent_ != 100)) {
+  } else if (last_percent_ < 0 || percent / 25 != last_percent_ / 25 || (done == total && last_percent_ != 100)) {
     // Not a terminal (a log): a line at 0, 25, 50, 75 and 100%.
     fmt::print(stderr, "{}: {}% ({}/{}), {:.1f}s elapsed\n", phase, percent, done, total, elapsed);
     last_percent_ = percent;

@@ -22,6 +22,13 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
                             transfer, s.transfer.bands, command, max_bands));
 }
 
+void check_direct(const Transfer& t, const std::string& path, const std::string& option) {
+  if (t.mode != TransferMode::Interreflected)
+    throw Error(fmt::format("{}: {} needs an interreflected transfer (its direct part is the shadowed, 0-bounce "
+                            "light); this one is {}, not interreflected",
+                            path, option, transfer_mode_name(t.mode)));
+}
+
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
                  const char* command, bool allow_wavelet) {
   Scene s;

@@ -26,6 +26,11 @@ struct Scene {
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands = 0,
                  const char* command = "", bool allow_wavelet = false);
 
+// Throws prt::Error naming `path` unless `t` keeps a direct part (an
+// interreflected transfer): what `option` ("--direct", "--shading direct")
+// shows.
+void check_direct(const Transfer& t, const std::string& path, const std::string& option);
+
 // Loads a transfer file into `scene` (the mesh must be loaded) and checks it
 // against the mesh; the rules of load_scene.
 void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
