@@ -2,6 +2,7 @@
 // stdout and stderr captured to files, and compares its output with the
 // library computed in-process. Inputs other than the shipped envmaps are
 // generated at run time in a per-test temporary directory.
+#include "test_child.h"
 #include "test_files.h"
 
 #include <prt/envmap.h>
@@ -449,6 +450,7 @@ struct BadCase {
   std::vector<std::string> args;
   std::vector<std::string> words;
   std::string input;  // must appear in stderr; "" when there is no file to name
+  int code;           // 1: a bad file or data; 2: a bad option value (README, "Exit status")
 };
 
 std::string expand(std::string s, const TempDir& dir) {
@@ -473,6 +475,7 @@ void make_bad_inputs(const TempDir& dir) {
   rgb[(std::size_t(20) * 64 + 63) * 3 + 2] = std::numeric_limits<float>::infinity();  // x 63, y 20
   prt::write_image(dir.file("inf.exr"), 64, 32, rgb);
   fs::create_directories(dir.work() / "subdir.exr");
+  write_constant_map(dir.file("env.exr"), 8, 4, 1.0f);  // an input an output must not overwrite
 }
 
 // Test names and failure messages show the case's name, not its bytes.
@@ -494,57 +497,90 @@ TEST_P(CliBadInput, FailsWithAMessageAndNoOutput) {
     args.push_back(out);
   }
   const Result r = run_prt(dir, args);
-  EXPECT_NE(r.code, 0) << describe_run(r);
-  EXPECT_LT(r.code, 128) << "crashed: " << describe_run(r);
-  EXPECT_NE(r.code, 3) << "internal error instead of a user error: " << describe_run(r);
+  EXPECT_EQ(r.code, c.code) << describe_run(r);
   EXPECT_TRUE(r.out.empty()) << describe_run(r);
   const std::string err = lower(r.err);
   if (!c.input.empty()) {
     EXPECT_TRUE(contains(r.err, expand(c.input, dir))) << "input not named: " << r.err;
   }
   for (const auto& w : c.words) EXPECT_TRUE(contains(err, lower(expand(w, dir)))) << "'" << w << "' missing: " << r.err;
+  // Numbers in messages are short ({:.6g}), whatever was given.
+  EXPECT_FALSE(std::regex_search(r.err, std::regex("[0-9]{25}"))) << "a number printed whole: " << r.err;
+  if (c.code == 2) {
+    EXPECT_TRUE(contains(r.err, "prt project: error: ")) << r.err;
+  }
   // Nothing written: the directory holds exactly the inputs it held before.
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(dir.listing(), before);
 }
 
 const BadCase kBadCases[] = {
-    {"MissingFile", {"{dir}/missing.exr"}, {"no such file"}, "{dir}/missing.exr"},
-    {"Directory", {"{dir}/subdir.exr"}, {"directory"}, "{dir}/subdir.exr"},
-    {"TextFileNamedExr", {"{dir}/text.exr"}, {"not an openexr file"}, "{dir}/text.exr"},
-    {"TruncatedExr", {"{dir}/truncated.exr"}, {"truncated"}, "{dir}/truncated.exr"},
-    {"EmptyFile", {"{dir}/empty.exr"}, {"empty"}, "{dir}/empty.exr"},
-    {"WrongShapeAuto", {"{dir}/odd.exr"}, {"100x37", "mapping"}, "{dir}/odd.exr"},
-    {"WrongShapeLatLong", {"{dir}/odd.exr", "--mapping", "latlong"}, {"100x37", "twice as wide"}, "{dir}/odd.exr"},
-    {"NaNPixel", {"{dir}/nan.exr"}, {"nan", "x 12, y 7"}, "{dir}/nan.exr"},
-    {"InfPixel", {"{dir}/inf.exr"}, {"infinite", "x 63, y 20"}, "{dir}/inf.exr"},
-    {"BandsZero", {"{forest}", "--bands", "0"}, {"--bands"}, ""},
-    {"BandsNegative", {"{forest}", "--bands", "-3"}, {"--bands"}, ""},
-    {"BandsHuge", {"{forest}", "--bands", "100000"}, {"--bands"}, ""},
-    {"BandsOverTheMost", {"{forest}", "--bands", "65"}, {"--bands", "1 to 64"}, ""},
-    {"BandsNotANumber", {"{forest}", "--bands", "abc"}, {"--bands", "abc"}, ""},
-    {"WindowBogus", {"{forest}", "--window", "bogus"}, {"window", "bogus"}, ""},
-    {"WindowWidthNegative", {"{forest}", "--window-width", "-1"}, {"--window-width"}, ""},
-    {"RotateTwoNumbers", {"{forest}", "--rotate", "1,2"}, {"--rotate", "three numbers"}, ""},
-    {"RotateNotNumbers", {"{forest}", "--rotate", "a,b,c"}, {"--rotate", "three numbers"}, ""},
-    {"RotateFourNumbers", {"{forest}", "--rotate", "1,2,3,4"}, {"--rotate"}, ""},
+    {"MissingFile", {"{dir}/missing.exr"}, {"no such file"}, "{dir}/missing.exr", 1},
+    {"Directory", {"{dir}/subdir.exr"}, {"directory"}, "{dir}/subdir.exr", 1},
+    {"TextFileNamedExr", {"{dir}/text.exr"}, {"not an openexr file"}, "{dir}/text.exr", 1},
+    {"TruncatedExr", {"{dir}/truncated.exr"}, {"truncated"}, "{dir}/truncated.exr", 1},
+    {"EmptyFile", {"{dir}/empty.exr"}, {"empty"}, "{dir}/empty.exr", 1},
+    {"WrongShapeAuto", {"{dir}/odd.exr"}, {"100x37", "mapping"}, "{dir}/odd.exr", 1},
+    {"WrongShapeLatLong", {"{dir}/odd.exr", "--mapping", "latlong"}, {"100x37", "twice as wide"}, "{dir}/odd.exr", 1},
+    {"NaNPixel", {"{dir}/nan.exr"}, {"nan", "x 12, y 7"}, "{dir}/nan.exr", 1},
+    {"InfPixel", {"{dir}/inf.exr"}, {"infinite", "x 63, y 20"}, "{dir}/inf.exr", 1},
+    {"BandsZero", {"{forest}", "--bands", "0"}, {"--bands"}, "", 2},
+    {"BandsNegative", {"{forest}", "--bands", "-3"}, {"--bands"}, "", 2},
+    {"BandsHuge", {"{forest}", "--bands", "100000"}, {"--bands"}, "", 2},
+    {"BandsOverTheMost", {"{forest}", "--bands", "65"}, {"--bands", "1 to 64"}, "", 2},
+    {"BandsNotANumber", {"{forest}", "--bands", "abc"}, {"--bands", "abc"}, "", 2},
+    {"WindowBogus", {"{forest}", "--window", "bogus"}, {"window", "bogus"}, "", 2},
+    {"WindowWidthNegative", {"{forest}", "--window-width", "-1"}, {"--window-width"}, "", 2},
+    {"RotateTwoNumbers", {"{forest}", "--rotate", "1,2"}, {"--rotate", "three numbers"}, "", 2},
+    {"RotateNotNumbers", {"{forest}", "--rotate", "a,b,c"}, {"--rotate", "three numbers"}, "", 2},
+    {"RotateFourNumbers", {"{forest}", "--rotate", "1,2,3,4"}, {"--rotate"}, "", 2},
     // Regression: std::stod accepts "nan"; the error must name --rotate.
-    {"RotateNaN", {"{forest}", "--rotate", "nan,0,0"}, {"--rotate"}, ""},
-    {"FormatXml", {"{forest}", "--format", "xml"}, {"--format", "xml"}, ""},
-    {"MappingBogus", {"{forest}", "--mapping", "bogus"}, {"mapping", "bogus"}, ""},
-    {"QuadratureBogus", {"{forest}", "--quadrature", "bogus"}, {"quadrature", "bogus"}, ""},
-    {"FacesWithTwoFiles", {"{forest},{forest}", "--mapping", "faces"}, {"six files"}, ""},
-    {"FacesPatternMissing", {"{dir}/sky_{face}.exr", "--mapping", "faces"}, {"no such file"}, "{dir}/sky_px.exr"},
-    {"ReconstructSizeZero", {"{forest}", "--reconstruct-size", "0x0"}, {"--reconstruct-size", "0x0"}, ""},
-    {"ReconstructSizeBogus", {"{forest}", "--reconstruct-size", "64by32"}, {"--reconstruct-size"}, ""},
-    {"NoInput", {"--bands", "3"}, {"env"}, ""},
-    {"OutputInMissingDirectory", {"{forest}", "-o", "{dir}/nodir/out.json"}, {"{dir}/nodir/out.json"}, ""},
+    {"RotateNaN", {"{forest}", "--rotate", "nan,0,0"}, {"--rotate"}, "", 2},
+    {"FormatXml", {"{forest}", "--format", "xml"}, {"--format", "xml"}, "", 2},
+    {"MappingBogus", {"{forest}", "--mapping", "bogus"}, {"mapping", "bogus"}, "", 2},
+    {"QuadratureBogus", {"{forest}", "--quadrature", "bogus"}, {"quadrature", "bogus"}, "", 2},
+    {"FacesWithTwoFiles", {"{forest},{forest}", "--mapping", "faces"}, {"six files"}, "", 2},
+    {"FacesPatternMissing", {"{dir}/sky_{face}.exr", "--mapping", "faces"}, {"no such file"}, "{dir}/sky_px.exr", 1},
+    {"ReconstructSizeZero", {"{forest}", "--reconstruct-size", "0x0"}, {"--reconstruct-size", "0x0"}, "", 2},
+    {"ReconstructSizeBogus", {"{forest}", "--reconstruct-size", "64by32"}, {"--reconstruct-size"}, "", 2},
+    {"NoInput", {"--bands", "3"}, {"env"}, "", 2},
+    {"OutputInMissingDirectory", {"{forest}", "-o", "{dir}/nodir/out.json"}, {"{dir}/nodir/out.json"}, "", 1},
     // The message names the requested file, not write_atomically's temporary.
     {"ReconstructInMissingDirectory",
      {"{forest}", "--reconstruct", "{dir}/nodir/rec.exr"},
      {"{dir}/nodir/rec.exr"},
-     ""},
-    {"ReconstructUnknownFormat", {"{forest}", "--reconstruct", "{dir}/rec.xyz"}, {"{dir}/rec.xyz"}, ""},
+     "", 1},
+    {"ReconstructUnknownFormat", {"{forest}", "--reconstruct", "{dir}/rec.xyz"}, {"{dir}/rec.xyz"}, "", 2},
+    // Bad options and outputs (docs/HARD_CASES.md): every bad value exits 2.
+    {"FormatYaml", {"{forest}", "--format", "yaml"}, {"--format: expected json, text, glsl or cpp, got 'yaml'"}, "", 2},
+    // sscanf's %d wrapped 4294967297 to 1: a 1x2 image was written.
+    {"ReconstructSizeOverflow",
+     {"{forest}", "--reconstruct", "{dir}/rec.exr", "--reconstruct-size", "4294967297x2"},
+     {"--reconstruct-size: expected wxh with w and h whole numbers from 1 to 65536, got '4294967297x2'"},
+     "",
+     2},
+    {"ReconstructSizeTooWide", {"{forest}", "--reconstruct-size", "65537x2"}, {"--reconstruct-size", "65537x2"}, "", 2},
+    {"ReconstructSizeNegative", {"{forest}", "--reconstruct-size", "-64x32"}, {"--reconstruct-size", "-64x32"}, "", 2},
+    {"ReconstructSizeSigned", {"{forest}", "--reconstruct-size", "+64x32"}, {"--reconstruct-size", "+64x32"}, "", 2},
+    // OpenImageIO has no PFM writer: refused before the work, not after it.
+    {"ReconstructPfm", {"{forest}", "--reconstruct", "{dir}/rec.pfm"}, {"{dir}/rec.pfm", "unknown image type"}, "", 2},
+    {"WindowWidthHuge", {"{forest}", "--window-width", "-1e308"}, {"--window-width", "got -1e+308"}, "", 2},
+    {"RotateHuge", {"{forest}", "--rotate", "1e999,0,0"}, {"--rotate", "must be finite"}, "", 2},
+    {"OutputIsTheInput",
+     {"{dir}/env.exr", "-o", "{dir}/env.exr"},
+     {"--output {dir}/env.exr: is the input env", "does not write over its inputs"},
+     "",
+     2},
+    {"ReconstructIsTheInput",
+     {"{dir}/env.exr", "--reconstruct", "{dir}/env.exr"},
+     {"--reconstruct {dir}/env.exr: is the input env"},
+     "",
+     2},
+    {"ReconstructIsTheOutput",
+     {"{dir}/env.exr", "-o", "{dir}/same.exr", "--reconstruct", "{dir}/same.exr"},
+     {"--reconstruct {dir}/same.exr: is also the --output file"},
+     "",
+     2},
 };
 
 INSTANTIATE_TEST_SUITE_P(Cases, CliBadInput, ::testing::ValuesIn(kBadCases),
@@ -606,6 +642,105 @@ TEST(CliVerify, PassesAndSummarises) {
   int pass_rows = 0;
   for (const auto& l : lines) pass_rows += std::regex_search(l, std::regex(R"(\bPASS$)")) ? 1 : 0;
   EXPECT_EQ(pass_rows, passed);
+}
+
+// ---- bad options and outputs (docs/HARD_CASES.md, "Bad options and outputs") ----
+
+// A PNG that cannot be written whole (a full disk; here RLIMIT_FSIZE, which
+// fails the write with EFBIG as a full disk fails it with ENOSPC): exit 1
+// naming the file, the old file untouched, no temporary. OpenImageIO's PNG
+// writer ignored the short write: exit 0, a truncated PNG under the real name.
+// Every format through the plugin is now encoded in memory and written with
+// each call checked; EXR (OpenEXR's own writer) reported it already.
+TEST(CliOutputs, ImageOnAFullDiskFailsAndKeepsTheOldFile) {
+  TempDir dir;
+  const std::string studio = repo_envmap("studio.exr");
+  for (const char* name : {"rec.png", "rec.jpg", "rec.tif", "rec.exr"}) {  // .hdr, .bmp, .tga: as .png
+    SCOPED_TRACE(name);
+    const std::string rec = dir.file(name), json = dir.file("c.json");
+    write_file(rec, "old image");
+    write_file(json, "old coefficients");
+    const auto before = dir.listing();
+    // 512x256: every format takes more than 16 KiB (JPEG 22 KB, PNG 53 KB).
+    const Result r = run_prt_file_limit(dir, {"project", studio, "--bands", "4", "--reconstruct", rec,
+                                              "--reconstruct-size", "512x256", "-o", json, "-q"},
+                                        16 * 1024);
+    EXPECT_EQ(r.code, 1) << describe_run(r);
+    EXPECT_TRUE(contains(r.err, "prt project: error: " + rec + ": ")) << r.err;
+    EXPECT_TRUE(contains(lower(r.err), "file too large")) << r.err;
+    EXPECT_EQ(read_file(rec), "old image");
+    EXPECT_EQ(read_file(json), "old coefficients");  // both or neither
+    EXPECT_EQ(dir.listing(), before);
+    EXPECT_TRUE(temporaries(dir).empty());
+    fs::remove(rec);
+    fs::remove(json);
+  }
+  // Without the limit the same PNG is written, and is an image.
+  const Result ok = run_prt(dir, {"project", studio, "--bands", "4", "--reconstruct", dir.file("rec.png"),
+                                  "--reconstruct-size", "512x256", "-q"});
+  ASSERT_EQ(ok.code, 0) << describe_run(ok);
+  EXPECT_EQ(prt::load_envmap(dir.file("rec.png")).width, 512);
+}
+
+// An output that is an input: refused (exit 2) naming which input, the input
+// untouched; also when the output is a link to it.
+TEST(CliOutputs, AnOutputThatIsAnInputIsRefused) {
+  TempDir dir;
+  const std::string env = dir.file("env.exr");
+  write_constant_map(env, 16, 8, 0.5f);
+  const std::string bytes = read_file(env);
+  fs::create_symlink(env, dir.work() / "link.json");
+  fs::create_hard_link(env, dir.work() / "hard.exr");
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{"project", env, "-o", env}, "--output " + env + ": is the input ENV"},
+      {{"project", env, "-o", dir.file("link.json")}, "--output " + dir.file("link.json") + ": is the input ENV (" + env + ")"},
+      {{"project", env, "--reconstruct", dir.file("hard.exr")}, "--reconstruct " + dir.file("hard.exr") + ": is the input ENV"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run_prt(dir, c.args);
+    EXPECT_EQ(r.code, 2) << describe_run(r);
+    EXPECT_TRUE(contains(r.err, c.message)) << r.err;
+    EXPECT_EQ(read_file(env), bytes);
+  }
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"env.exr", "hard.exr", "link.json"}));
+}
+
+// Ctrl-C while the outputs are written: exit 130, "interrupted; nothing
+// written", neither output changed, no temporary. PRT_TEST_PAUSE_BEFORE_RENAME
+// (prt/io.h) holds the write step open until the signal comes.
+TEST(CliOutputs, CtrlCWhileWritingLeavesTheOldFiles) {
+  TempDir dir;
+  const std::string rec = dir.file("rec.exr"), json = dir.file("c.json");
+  write_file(rec, "old image");
+  write_file(json, "old coefficients");
+  const auto r = run_prt_interrupted(
+      dir, {"project", repo_envmap("studio.exr"), "--bands", "3", "--reconstruct", rec, "-o", json, "-q"},
+      "PRT_TEST_PAUSE_BEFORE_RENAME", {"PRT_TEST_PAUSE_BEFORE_RENAME=30000"});
+  EXPECT_TRUE(r.marker_seen) << describe_run(r);
+  EXPECT_EQ(r.code, 130) << describe_run(r);
+  EXPECT_TRUE(contains(r.err, "prt project: interrupted; nothing written")) << r.err;
+  EXPECT_EQ(read_file(rec), "old image");
+  EXPECT_EQ(read_file(json), "old coefficients");
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"c.json", "rec.exr"}));
+}
+
+// Usage errors look alike, whether CLI11's validators or a command's rule
+// finds them: "prt CMD: error: --option: ...", where the options are, exit 2.
+TEST(CliOutputs, UsageErrorsLookAlike) {
+  TempDir dir;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"project", repo_envmap("forest.exr"), "--bands", "100"},
+        std::vector<std::string>{"project", repo_envmap("forest.exr"), "--mapping", "faces"},
+        std::vector<std::string>{"project", repo_envmap("forest.exr"), "--frobnicate"}}) {
+    const Result r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 2) << describe_run(r);
+    EXPECT_EQ(r.err.rfind("prt project: error: ", 0), 0u) << r.err;
+    EXPECT_TRUE(contains(r.err, "Run 'prt project --help' for the options.")) << r.err;
+  }
 }
 
 }  // namespace

@@ -1,10 +1,14 @@
 // prt precompute / relight / info end to end through the real executable.
+#include "test_child.h"
 #include "test_files.h"
 #include "test_meshes.h"
 
 #include <prt/vertex_csv.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -74,22 +78,22 @@ TEST(PrecomputeCli, TransferForAnotherMeshIsRefused) {
 TEST(PrecomputeCli, BadOptionsFailBeforeAnyWork) {
   TempDir dir;
   const std::string mesh = write_quad(dir);
-  const std::vector<std::vector<std::string>> cases = {
-      {"precompute", mesh, "-o", dir.file("x.prt"), "--bands", "0"},
-      {"precompute", mesh, "-o", dir.file("x.prt"), "--bands", "17"},
-      {"precompute", mesh, "-o", dir.file("x.prt"), "--samples", "0"},
-      {"precompute", mesh, "-o", dir.file("x.prt"), "--albedo", "2,0,0"},
-      {"precompute", mesh, "-o", dir.file("x.prt"), "--mode", "ambient"},
-      {"precompute", mesh, "-o", dir.file("x.prt"), "--vertex-colors"},
-      {"precompute", dir.file("missing.obj"), "-o", dir.file("x.prt")},
-      {"precompute", mesh, "-o", dir.file("nodir/x.prt")},
-      {"relight", mesh, dir.file("missing.prt"), dir.file("constant.exr"), "-o", dir.file("x.csv")},
-      {"relight", mesh, mesh, mesh, "-o", dir.file("x.txt")},
+  // 2: a bad option value; 1: a bad file (or one an option does not fit).
+  const std::vector<std::pair<std::vector<std::string>, int>> cases = {
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--bands", "0"}, 2},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--bands", "17"}, 2},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--samples", "0"}, 2},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--albedo", "2,0,0"}, 2},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--mode", "ambient"}, 2},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--vertex-colors"}, 1},  // the mesh has none
+      {{"precompute", dir.file("missing.obj"), "-o", dir.file("x.prt")}, 1},
+      {{"precompute", mesh, "-o", dir.file("nodir/x.prt")}, 1},
+      {{"relight", mesh, dir.file("missing.prt"), dir.file("constant.exr"), "-o", dir.file("x.csv")}, 1},
+      {{"relight", mesh, mesh, mesh, "-o", dir.file("x.txt")}, 2},
   };
-  for (const auto& args : cases) {
+  for (const auto& [args, code] : cases) {
     const Result r = run_prt(dir, args);
-    EXPECT_NE(r.code, 0) << describe_run(r);
-    EXPECT_LT(r.code, 3) << "not a clean user error: " << describe_run(r);
+    EXPECT_EQ(r.code, code) << describe_run(r);
     EXPECT_FALSE(r.err.empty());
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.prt")));
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.csv")));
@@ -107,22 +111,15 @@ TEST(PrecomputeCli, BandLimitSaysWhy) {
 }
 
 TEST(PrecomputeCli, CtrlCLeavesNothingBehind) {
-  // A job long enough to interrupt: the bundled model at many rays per vertex.
+  // A job long enough to interrupt: the bundled model at many rays per
+  // vertex, interrupted at its first progress line ("rays: 0% ...").
   TempDir dir;
   const std::string out = dir.file("big.prt");
   const std::string model = std::string(PRT_SOURCE_DIR) + "/models/scene.obj";
-  std::vector<std::string> args = {PRT_EXE, "precompute", model, "-o", out, "--samples", "65536", "-q"};
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, PRT_EXE, nullptr, nullptr, argv.data(), environ), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  kill(pid, SIGINT);
-  int status = 0;
-  ASSERT_EQ(waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal instead of stopping cleanly";
-  EXPECT_EQ(WEXITSTATUS(status), 130);
+  const auto r = run_prt_interrupted(dir, {"precompute", model, "-o", out, "--samples", "65536"}, "rays: 0%");
+  EXPECT_TRUE(r.marker_seen) << describe_run(r);
+  EXPECT_EQ(r.code, 130) << "killed by a signal instead of stopping cleanly? " << describe_run(r);
+  EXPECT_NE(r.err.find("prt precompute: interrupted; nothing written"), std::string::npos) << r.err;
   EXPECT_TRUE(dir.listing().empty()) << "left: " << dir.listing().front();
 }
 
@@ -336,6 +333,194 @@ TEST(MalformedInput, CoordinatesBeyondTheLimitAreRefused) {
                    {"constant.exr", "huge.off"}, args[0]);
 }
 
+
+// ---- bad options and outputs (docs/HARD_CASES.md, "Bad options and outputs") ----
+
+// Runs each of `runs`, expecting exit `code`, stderr containing each of its
+// words, and the directory as it was (nothing written, no temporary).
+struct Refusal {
+  std::vector<std::string> args, words;
+};
+void expect_refusals(const TempDir& dir, const std::vector<Refusal>& runs, int code) {
+  const auto before = dir.listing();
+  for (const Refusal& c : runs) {
+    std::string line;
+    for (const auto& a : c.args) line += a + " ";
+    const Result r = run_prt(dir, c.args);
+    EXPECT_EQ(r.code, code) << line << "\n" << describe_run(r);
+    for (const auto& w : c.words) EXPECT_NE(r.err.find(w), std::string::npos) << line << ": no '" << w << "'\n" << r.err;
+    EXPECT_EQ(dir.listing(), before) << line;
+  }
+}
+
+TEST(BadOptions, SeedsAreWholeNumbersFrom0To2To64Minus1) {
+  // --seed -1 and --seed 18446744073709551616 both became 2^64 - 1.
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
+  const std::string expected = "--seed: must be a whole number from 0 to 18446744073709551615 (digits only), got ";
+  std::vector<Refusal> runs;
+  for (const char* bad : {"-1", "18446744073709551616", "99999999999999999999999", "1e3", "0x10", "+1", " 1", "1.5", ""})
+    runs.push_back({{"precompute", mesh, "-o", dir.file("x.prt"), "--seed", bad}, {expected + "'" + bad + "'"}});
+  runs.push_back({{"reference", mesh, env, "-o", dir.file("x.csv"), "--seed", "-1"}, {expected + "'-1'"}});
+  expect_refusals(dir, runs, 2);
+  // The largest is taken as it is.
+  const Result ok = run_prt(dir, {"precompute", mesh, "-o", dir.file("x.prt"), "--seed", "18446744073709551615",
+                                  "--samples", "16", "-q"});
+  ASSERT_EQ(ok.code, 0) << describe_run(ok);
+  EXPECT_EQ(read_transfer(dir.file("x.prt")).seed, 18446744073709551615ull);
+}
+
+TEST(BadOptions, TargetErrorAndItsOptionsAreChecked) {
+  // --target-error 0 and nan, and --env without --target-error, were ignored.
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f), out = dir.file("x.prt");
+  std::vector<Refusal> runs;
+  for (const char* bad : {"0", "nan", "1", "-0.5", "inf"})
+    runs.push_back({{"precompute", mesh, "-o", out, "--target-error", bad, "--env", env},
+                    {"--target-error: must be a number in (0, 1) (a relative RMS error), got "}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--env", env},
+                  {"--env is for --target-error", "give --target-error too"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--cache", dir.work().string()}, {"--cache is for --target-error"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--target-error", "0.1"}, {"--target-error needs --env MAP"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--target-error", "0.1", "--env", env, "--bounce-tolerance", "0.1"},
+                  {"--bounce-tolerance and --target-error both choose the bounces"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--target-error", "0.1", "--env", env, "--mode", "unshadowed"},
+                  {"--target-error: the unshadowed transfer has no sampling to choose"}});
+  expect_refusals(dir, runs, 2);
+}
+
+TEST(BadOptions, BadOptionValuesExitTwo) {
+  // These exited 1, as if a file were bad; --bands 100 already exited 2.
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("s.prt"), "--samples", "16", "-q"}).code, 0);
+  const std::string out = dir.file("x.prt"), csv = dir.file("x.csv"), prt = dir.file("s.prt");
+  expect_refusals(
+      dir,
+      {
+          {{"precompute", mesh, "-o", out, "--mode", "foo"},
+           {"prt precompute: error: --mode: unknown mode 'foo' (expected unshadowed, shadowed or interreflected)"}},
+          {{"precompute", mesh, "-o", out, "--albedo", "-1"}, {"--albedo: expected three numbers r,g,b, got '-1'"}},
+          {{"precompute", mesh, "-o", out, "--albedo", "-1,0,0"},
+           {"--albedo: each of r,g,b must be from 0 to 1 (energy conservation), got -1"}},
+          {{"precompute", mesh, "-o", out, "--albedo", "0.5,nan,0.5"}, {"--albedo: numbers must be finite"}},
+          {{"precompute", mesh, "-o", out, "--basis", "wavelet", "--cube-res", "3"},
+           {"--cube-res: must be a power of two from 2 to 256"}},
+          {{"precompute", mesh, "-o", out, "--basis", "wavelet", "--samples", "64"},
+           {"--samples does not apply to --basis wavelet"}},
+          {{"precompute", mesh, "-o", out, "--basis", "wavelet", "--threshold", "1"},
+           {"--threshold: must be a number in [0, 1), got 1"}},
+          {{"precompute", mesh, "-o", out, "--bounce-tolerance", "1"}, {"--bounce-tolerance: must be a number in [0, 1)"}},
+          {{"precompute", mesh, "-o", out, "--cube-res", "16"}, {"--cube-res applies to --basis wavelet only"}},
+          {{"reference", mesh, env, "-o", csv, "--mode", "foo"}, {"--mode: unknown mode 'foo'"}},
+          {{"reference", mesh, env, "-o", csv, "--albedo", "-1,0,0"}, {"--albedo: each of r,g,b must be at least 0"}},
+          {{"relight", mesh, prt, env, "-o", csv, "--window", "bogus"}, {"--window: unknown window 'bogus'"}},
+          {{"relight", mesh, prt, env, "-o", csv, "--rotate", "1e999,0,0"}, {"--rotate: numbers must be finite"}},
+          {{"relight", mesh, prt, env, "-o", dir.file("x.txt")}, {"expected a .ply or .csv file"}},
+      },
+      2);
+}
+
+TEST(BadOptions, AnOutputThatIsAnInputIsRefused) {
+  // `prt precompute cow.off -o cow.off` overwrote its own input.
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("s.prt"), "--samples", "16", "-q"}).code, 0);
+  const std::string prt = dir.file("s.prt");
+  std::filesystem::create_symlink(prt, dir.work() / "to_prt.csv");
+  std::filesystem::create_symlink(mesh, dir.work() / "to_mesh.csv");
+  std::filesystem::create_symlink(env, dir.work() / "to_env.ply");
+  const std::string mesh_bytes = read_file(mesh), prt_bytes = read_file(prt), env_bytes = read_file(env);
+  expect_refusals(
+      dir,
+      {
+          {{"precompute", mesh, "-o", mesh}, {"--output " + mesh + ": is the input MESH; prt does not write over"}},
+          {{"precompute", mesh, "-o", env, "--target-error", "0.1", "--env", env}, {"--output " + env + ": is the input --env"}},
+          {{"relight", mesh, prt, env, "-o", dir.file("to_prt.csv")},
+           {"--output " + dir.file("to_prt.csv") + ": is the input TRANSFER (" + prt + ")"}},
+          {{"relight", mesh, prt, env, "-o", dir.file("to_env.ply")}, {"is the input ENV (" + env + ")"}},
+          {{"reference", mesh, env, "-o", dir.file("to_mesh.csv")}, {"is the input MESH (" + mesh + ")"}},
+      },
+      2);
+  EXPECT_EQ(read_file(mesh), mesh_bytes);
+  EXPECT_EQ(read_file(prt), prt_bytes);
+  EXPECT_EQ(read_file(env), env_bytes);
+}
+
+TEST(BadOptions, RelightDirectNeedsAnInterreflectedTransfer) {
+  // --direct on a shadowed file was ignored (render refused --shading direct).
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("s.prt"), "--samples", "16", "-q"}).code, 0);
+  expect_refusals(dir,
+                  {{{"relight", mesh, dir.file("s.prt"), env, "-o", dir.file("x.csv"), "--direct"},
+                    {"prt relight: error: " + dir.file("s.prt") + ": --direct needs an interreflected transfer",
+                     "this one is shadowed, not interreflected"}}},
+                  1);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("i.prt"), "--samples", "16", "-m", "interreflected",
+                          "-q"}).code,
+            0);
+  const Result ok = run_prt(dir, {"relight", mesh, dir.file("i.prt"), env, "-o", dir.file("x.csv"), "--direct", "-q"});
+  EXPECT_EQ(ok.code, 0) << describe_run(ok);
+}
+
+TEST(BadOptions, NonFiniteRelitRadianceNamesTheInputs) {
+  // A map of 1e10 times transfer coefficients of 1e30 overflows float: the
+  // message blamed the output file ("refusing to write a non-finite value").
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1e10f), prt = dir.file("big.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", prt, "--samples", "16", "-q"}).code, 0);
+  const Mesh m = load_mesh(mesh);
+  Transfer t = read_transfer(prt);
+  t.coeffs = dense_transfer(t, m);  // every vertex stored, 1e30 times
+  for (float& c : t.coeffs) c *= 1e30f;
+  t.slots.clear();
+  write_transfer(prt, t);
+  for (const char* out : {"o.csv", "o.ply"}) {
+    const Result r = run_prt(dir, {"relight", mesh, prt, env, "-o", dir.file(out)});
+    EXPECT_EQ(r.code, 1) << describe_run(r);
+    EXPECT_NE(r.err.find("relit radiance of vertex 0 is inf (r channel): the values of " + env +
+                         " (max 1e+10) times the transfer of " + prt),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("overflow float"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find(out), std::string::npos) << "blames the output: " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file(out)));
+  }
+}
+
+// Ctrl-C in the write step: the temporary was left (.NAME.tmpPID-N.ext) and
+// the process died of SIGINT. Now exit 130, "interrupted; nothing written",
+// the old file as it was. PRT_TEST_PAUSE_BEFORE_RENAME (prt/io.h) holds the
+// write step open; the signal goes when the child says it is there.
+TEST(CtrlC, DuringTheWriteStepLeavesTheOldFile) {
+  TempDir dir;
+  const std::string mesh = write_quad(dir), env = write_constant_map(dir, 1.0f);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("s.prt"), "--samples", "16", "-q"}).code, 0);
+  struct Case {
+    std::vector<std::string> args;
+    std::string command, output;
+  };
+  const std::vector<Case> cases = {
+      {{"precompute", mesh, "-o", dir.file("p.prt"), "--samples", "16"}, "precompute", "p.prt"},
+      {{"precompute", mesh, "-o", dir.file("w.prt"), "--basis", "wavelet", "--cube-res", "4"}, "precompute", "w.prt"},
+      {{"relight", mesh, dir.file("s.prt"), env, "-o", dir.file("r.ply")}, "relight", "r.ply"},
+      {{"relight", mesh, dir.file("s.prt"), env, "-o", dir.file("r.csv")}, "relight", "r.csv"},
+      {{"reference", mesh, env, "-o", dir.file("f.csv"), "--samples", "4"}, "reference", "f.csv"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.output);
+    write_file(dir.file(c.output), "old");
+    const auto before = dir.listing();
+    const auto r = run_prt_interrupted(dir, c.args, "PRT_TEST_PAUSE_BEFORE_RENAME", {"PRT_TEST_PAUSE_BEFORE_RENAME=30000"});
+    EXPECT_TRUE(r.marker_seen) << describe_run(r);
+    EXPECT_EQ(r.code, 130) << describe_run(r);
+    EXPECT_NE(r.err.find("prt " + c.command + ": interrupted; nothing written"), std::string::npos) << r.err;
+    EXPECT_EQ(read_file(dir.file(c.output)), "old");
+    EXPECT_EQ(dir.listing(), before);
+    EXPECT_TRUE(temporaries(dir).empty());
+  }
+}
 
 }  // namespace
 }  // namespace prt

@@ -27,6 +27,7 @@
 #include <optional>
 #include <random>
 
+#include "test_child.h"
 #include "test_files.h"
 #include "test_meshes.h"
 
@@ -565,26 +566,28 @@ TEST_F(RenderCli, BadInputs) {
   EXPECT_NE(r4.code, 0);
   EXPECT_NE(r4.err.find("--camera"), std::string::npos) << r4.err;
   auto r5 = render({mesh, prt, env, "-o", dir.file("e.txt")});
-  EXPECT_NE(r5.code, 0);
+  EXPECT_EQ(r5.code, 2) << r5.err;  // a bad option value
+  EXPECT_NE(r5.err.find("--output: " + dir.file("e.txt") + ": unknown image type '.txt'"), std::string::npos) << r5.err;
   EXPECT_FALSE(std::filesystem::exists(dir.file("a.exr")));
   EXPECT_FALSE(std::filesystem::exists(dir.file("c.exr")));
   // Look options: a mode the file cannot show, too many bands, unknown names.
   auto r6 = render({mesh, prt, env, "-o", dir.file("f.exr"), "--shading", "direct"});
-  EXPECT_EQ(r6.code, 1);
+  EXPECT_EQ(r6.code, 1);  // the option does not fit the file: the file is named
+  EXPECT_NE(r6.err.find(prt + ": --shading direct needs an interreflected transfer"), std::string::npos) << r6.err;
   EXPECT_NE(r6.err.find("not interreflected"), std::string::npos) << r6.err;
   auto r7 = render({mesh, prt, env, "-o", dir.file("g.exr"), "--bands", "9"});
   EXPECT_EQ(r7.code, 1);
   EXPECT_NE(r7.err.find("--bands"), std::string::npos) << r7.err;
   auto r8 = render({mesh, prt, env, "-o", dir.file("h.png"), "--tonemap", "filmic"});
-  EXPECT_EQ(r8.code, 1);
+  EXPECT_EQ(r8.code, 2);
   EXPECT_NE(r8.err.find("--tonemap"), std::string::npos) << r8.err;
-  // A degenerate camera is the user's error (exit 1), not an internal one (3).
+  // A degenerate camera is a bad --camera (exit 2), not an internal error (3).
   auto r9 = render({mesh, prt, env, "-o", dir.file("i.exr"), "--camera", "0,0,2,0,0,2,0,1,0"});
-  EXPECT_EQ(r9.code, 1);
-  EXPECT_NE(r9.err.find("camera: eye equals target"), std::string::npos) << r9.err;
+  EXPECT_EQ(r9.code, 2);
+  EXPECT_NE(r9.err.find("--camera: eye equals target (0, 0, 2)"), std::string::npos) << r9.err;
   auto r10 = render({mesh, prt, env, "-o", dir.file("j.exr"), "--camera", "0,0,3,0,0,0,0,0,1"});
-  EXPECT_EQ(r10.code, 1);
-  EXPECT_NE(r10.err.find("up is parallel"), std::string::npos) << r10.err;
+  EXPECT_EQ(r10.code, 2);
+  EXPECT_NE(r10.err.find("--camera: up (0, 0, 1) is parallel"), std::string::npos) << r10.err;
   for (const char* f : {"f.exr", "g.exr", "h.png", "i.exr", "j.exr"})
     EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
 }
@@ -601,7 +604,7 @@ TEST_F(RenderCli, WaveletTransfer) {
   const EnvMap img = load_envmap(dir.file("w.exr"), Mapping::LatLong);
   EXPECT_GT(img.rgb[(8 * 32 + 16) * 3], 0.05f);  // the ball, lit, at the centre
   auto bands = render({mesh, wprt, env, "-o", dir.file("x.exr"), "--bands", "2"});
-  EXPECT_EQ(bands.code, 1);
+  EXPECT_EQ(bands.code, 1);  // options of the other basis: the file does not take them
   EXPECT_NE(bands.err.find("--bands applies to SH"), std::string::npos) << bands.err;
   auto terms = render({mesh, prt, env, "-o", dir.file("y.exr"), "--terms", "20"});
   EXPECT_EQ(terms.code, 1);
@@ -707,6 +710,107 @@ TEST_F(RenderCli, LookOptionsOnExr) {
   const EnvMap a = load_envmap(dir.file("a.exr"), Mapping::LatLong), b = load_envmap(dir.file("b.exr"), Mapping::LatLong);
   ASSERT_EQ(a.rgb.size(), b.rgb.size());
   for (std::size_t i = 0; i < a.rgb.size(); ++i) EXPECT_FLOAT_EQ(b.rgb[i], 2 * a.rgb[i]) << i;
+}
+
+
+// ---- bad options and outputs (docs/HARD_CASES.md, "Bad options and outputs") ----
+
+// Bad values of the look and camera options exit 2 and show numbers short
+// (--exposure 1e308 printed 309 digits); nothing is written.
+TEST_F(RenderCli, BadOptionValuesExitTwo) {
+  struct Case {
+    std::vector<std::string> extra;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{"--exposure", "inf"}, "--exposure: must be a number in [-64, 64] (stops), got inf"},
+      {{"--exposure", "1e308"}, "--exposure: must be a number in [-64, 64] (stops), got 1e+308"},
+      {{"--exposure", "nan"}, "--exposure: must be a number in [-64, 64] (stops), got nan"},
+      {{"--fov", "nan"}, "--fov: must be a number in [1, 179], got nan"},
+      {{"--spin", "inf"}, "--spin: must be a finite number, got inf"},
+      {{"--shading", "colors"}, "--shading: colors is for callers that upload their own vertex colours"},
+      {{"--shading", "shiny"}, "--shading: unknown shading 'shiny'"},
+      {{"--window", "kaiser"}, "--window: unknown window 'kaiser'"},
+      {{"--camera", "1,2,3"}, "--camera: expected 9 numbers ex,ey,ez,tx,ty,tz,ux,uy,uz, got '1,2,3'"},
+      {{"--camera", "0,0,1e999,0,0,0,0,1,0"}, "--camera: non-finite value inf"},
+      {{"--rotate", "nan,0,0"}, "--rotate: numbers must be finite"},
+      {{"--width", "64"}, "--output: " + dir.file("x.pfm") + ": unknown image type '.pfm'"},
+  };
+  const auto before = dir.listing();
+  for (const Case& c : cases) {
+    const bool pfm = c.message.find(".pfm") != std::string::npos;
+    std::vector<std::string> args = {mesh, prt, env, "-o", dir.file(pfm ? "x.pfm" : "x.png")};
+    args.insert(args.end(), c.extra.begin(), c.extra.end());
+    const auto r = render(args);
+    EXPECT_EQ(r.code, 2) << c.extra[0] << "\n" << test::describe_run(r);
+    EXPECT_NE(r.err.find("prt render: error: " + c.message), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("0000000000"), std::string::npos) << "a number printed whole: " << r.err;
+  }
+  EXPECT_EQ(dir.listing(), before);
+}
+
+TEST_F(RenderCli, AnOutputThatIsAnInputIsRefused) {
+  const std::string bytes = test::read_file(env);
+  auto r = render({mesh, prt, env, "-o", env});
+  EXPECT_EQ(r.code, 2) << test::describe_run(r);
+  EXPECT_NE(r.err.find("--output " + env + ": is the input ENV"), std::string::npos) << r.err;
+  // A frame of a sequence that would land on an input (env_0001.exr).
+  const std::string frame = dir.file("env_0001.exr");
+  std::filesystem::copy_file(env, frame);
+  r = render({mesh, prt, frame, "-o", env, "--frames", "3"});
+  EXPECT_EQ(r.code, 2) << test::describe_run(r);
+  EXPECT_NE(r.err.find("--output " + frame + ": is the input ENV"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_file(env), bytes);
+  EXPECT_EQ(test::read_file(frame), bytes);
+  EXPECT_TRUE(test::temporaries(dir).empty());
+}
+
+// PNG frames on a full disk (RLIMIT_FSIZE in the child: writes fail with
+// EFBIG as on a full disk with ENOSPC): exit 1 naming the frame, none of the
+// sequence left, the old file of that name untouched. Each PNG was written
+// truncated, and the run exited 0.
+TEST_F(RenderCli, FramesOnAFullDiskLeaveNothing) {
+  test::write_file(dir.file("spin_0000.png"), "old frame");
+  const auto before = dir.listing();
+  const auto r = test::run_prt_file_limit(
+      dir, {"render", mesh, prt, env, "-o", dir.file("spin.png"), "--frames", "4", "--width", "256", "--height", "256",
+            "-q"},
+      4096);
+  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_NE(r.err.find("prt render: error: " + dir.file("spin_0000.png") + ": write failed: File too large"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(test::read_file(dir.file("spin_0000.png")), "old frame");
+  EXPECT_EQ(dir.listing(), before);
+  EXPECT_TRUE(test::temporaries(dir).empty());
+}
+
+// A failure part-way through a sequence leaves none of it: frame 2's name is
+// taken by a directory, so its write fails after frames 0 and 1 are staged.
+TEST_F(RenderCli, AFailedSequenceLeavesNoFrame) {
+  std::filesystem::create_directories(std::filesystem::path(dir.file("seq_0002.exr")) / "inside");
+  const auto before = dir.listing();
+  const auto r = render({mesh, prt, env, "-o", dir.file("seq.exr"), "--frames", "4", "--width", "16", "--height", "8",
+                         "-q"});
+  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_NE(r.err.find(dir.file("seq_0002.exr")), std::string::npos) << r.err;
+  EXPECT_EQ(dir.listing(), before);
+  EXPECT_TRUE(test::temporaries(dir).empty());
+}
+
+// Ctrl-C in the frame loop (there was no SIGINT handling: `--frames 5000`
+// left 223 frames): exit 130, no frame, no temporary. Signalled at the first
+// progress line.
+TEST_F(RenderCli, CtrlCDuringASequenceLeavesNoFrame) {
+  const auto before = dir.listing();
+  const auto r = test::run_prt_interrupted(
+      dir, {"render", mesh, prt, env, "-o", dir.file("many.png"), "--frames", "5000", "--width", "16", "--height", "16"},
+      "frames: 0%");
+  EXPECT_TRUE(r.marker_seen) << test::describe_run(r);
+  EXPECT_EQ(r.code, 130) << test::describe_run(r);
+  EXPECT_NE(r.err.find("prt render: interrupted; nothing written"), std::string::npos) << r.err;
+  EXPECT_EQ(dir.listing(), before);
+  EXPECT_TRUE(test::temporaries(dir).empty());
 }
 
 }  // namespace

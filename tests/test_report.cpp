@@ -328,12 +328,13 @@ TEST(ReportCli, BadInputIsRefusedByName) {
   EXPECT_EQ(r.code, 1) << test::describe_run(r);
   EXPECT_NE(r.err.find("nope.exr"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir.file("rep") + "/report.md"));
+  // Rules across options are usage errors (exit 2), found before any work.
   r = test::run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--target-error", "0.05"});
-  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_EQ(r.code, 2) << test::describe_run(r);
   EXPECT_NE(r.err.find("--env"), std::string::npos) << r.err;
   r = test::run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--target-error", "0.05", "--env",
                           std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--bounce-tolerance", "0.1"});
-  EXPECT_EQ(r.code, 1) << test::describe_run(r);
+  EXPECT_EQ(r.code, 2) << test::describe_run(r);
   EXPECT_FALSE(std::filesystem::exists(dir.file("t.prt")));
 }
 
