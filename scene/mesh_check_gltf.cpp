@@ -336,11 +336,11 @@ class GltfCheck {
                   std::uint64_t stride, const std::string& what) const {
     const View& v = views_[view];
     const std::uint64_t step = stride ? stride : elem;
-    // The last element ends at offset + (count - 1) * step + elem.
-    const std::uint64_t max = std::numeric_limits<std::uint64_t>::max();
-    const bool overflow = count > 1 && step > (max - offset - elem) / (count - 1);
-    const std::uint64_t end = count == 0 ? offset : offset + (count - 1) * step + elem;
-    if (overflow || end > v.length)
+    // The last element ends at offset + (count - 1) * step + elem (in 128
+    // bits: every term comes from the file).
+    __extension__ typedef unsigned __int128 u128;
+    const u128 end = count == 0 ? u128(offset) : u128(offset) + u128(count - 1) * step + elem;
+    if (end > v.length)
       fail(fmt::format("{} ({} elements of {} bytes from byte {}) does not fit in bufferView {} ({} bytes)", what, count,
                        elem, offset, view, v.length));
   }
