@@ -603,6 +603,7 @@ void check_ply(const std::string& path, std::uint64_t size) {
             s.fail_line(fmt::format("{} {}: the count of {} {} is not a {} >= 0", e.name, i, p.name, quote_token(tokens[pos]),
                                     ply_name(p.count_type)));
           ++pos;
+          if (n == 0 && is_index_list(e, p)) s.fail_line(fmt::format("{} {} has no vertices", e.name, i));
           if (tokens.size() - pos < std::uint64_t(n))
             s.fail_line(fmt::format("{} {}: {} has {} entries but lists {}", e.name, i, p.name, n, tokens.size() - pos));
           const bool indices = is_index_list(e, p);
@@ -646,6 +647,8 @@ void check_ply(const std::string& path, std::uint64_t size) {
         if (!c) truncated(e, i);
         const std::int64_t n = ply_binary_int(c, p.count_type, big_endian);
         if (n < 0) s.fail(fmt::format("{} {}: {} has a count of {} (byte {})", e.name, i, p.name, n, s.offset()));
+        // Assimp's triangulation asserts on a face without indices (it takes the process down).
+        if (n == 0 && is_index_list(e, p)) s.fail(fmt::format("{} {} has no vertices (byte {})", e.name, i, s.offset()));
         const std::size_t item = ply_size(p.type);
         if (std::uint64_t(n) * item > s.remaining()) truncated(e, i);
         if (!is_index_list(e, p)) {

@@ -391,6 +391,16 @@ TEST_F(MeshFiles, TruncatedBinaryPlyIsRefused) {
   expect_error([&] { prt::load_mesh(bad_index); }, bad_index, "face 0 uses vertex 7, out of range (the file has 3");
   const std::string negative = write("negative.ply", ply_header(3, 1) + ply_vertices() + ply_face(3, {0, -1, 2}));
   expect_error([&] { prt::load_mesh(negative); }, negative, "face 0 uses vertex -1, out of range");
+  // A face without indices (found by fuzzing): Assimp's triangulation asserts
+  // on it, aborting the process.
+  const std::string empty_face =
+      write("empty_face.ply", ply_header(3, 2) + ply_vertices() + ply_face(3, {0, 1, 2}) + ply_face(0, {}));
+  // The byte after face 1's count: the header, 3 vertices, face 0 and that count.
+  const std::size_t after_count = ply_header(3, 2).size() + 3 * 12 + (1 + 3 * 4) + 1;
+  expect_error([&] { prt::load_mesh(empty_face); }, empty_face,
+               "face 1 has no vertices (byte " + std::to_string(after_count) + ")");
+  const std::string empty_ascii = write("empty_ascii.ply", ply_header(3, 2, true) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0\n");
+  expect_error([&] { prt::load_mesh(empty_ascii); }, empty_ascii, "line 14: face 1 has no vertices");
   // The complete file loads, with its data as written.
   const prt::Mesh m = prt::load_mesh(write("whole.ply", ply_header(3, 1) + ply_vertices() + ply_face(3, {0, 1, 2})));
   EXPECT_EQ(m.vertex_count(), 3u);
