@@ -23,8 +23,11 @@ cd "$(dirname "$0")/.."
 ALL_TARGETS=(off ply obj stl gltf glb exr hdr transfer csv)
 # Longest input per target, bytes: a few times the largest seed, and small
 # enough that each run stays fast. The committed corpus keeps to these.
-declare -A MAX_LEN=([off]=8192 [ply]=8192 [obj]=8192 [stl]=8192 [gltf]=16384 [glb]=16384
+declare -A MAX_LEN=([off]=8192 [ply]=8192 [obj]=8192 [stl]=8192 [gltf]=4096 [glb]=4096
                     [exr]=16384 [hdr]=8192 [transfer]=16384 [csv]=4096)
+# Every run: 10 s per input, 2 GiB of memory, 512 MiB in one allocation (a
+# header that makes a library allocate what it declares is found at once).
+LIMITS=(-timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=512)
 
 seeds=0
 if [ "${1:-}" = "--seeds" ]; then
@@ -91,22 +94,24 @@ for t in "${targets[@]}"; do
   # Fork mode: one worker process, restarted after a crash, timeout or OOM.
   # New inputs go to $work/corpus (the first directory), findings to artifacts/.
   nice -n "$nice_level" "$exe" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \
-    -max_total_time="$seconds" -max_len="${MAX_LEN[$t]}" -timeout=10 -rss_limit_mb=2048 \
+    -max_total_time="$seconds" -max_len="${MAX_LEN[$t]}" "${LIMITS[@]}" \
     -artifact_prefix="$work/artifacts/" "${dict[@]}" "$work/corpus" "${inputs[@]}" >"$work/fuzz.log" 2>&1 || true
 
   # The last status line: "#RUNS: cov: .. ft: .. corp: .. exec/s N oom/timeout/crash: a/b/c time: Ns ...".
   status=$(grep -E '^#[0-9]+: cov:' "$work/fuzz.log" | tail -1 || true)
   runs=$(sed -nE 's/^#([0-9]+):.*/\1/p' <<<"$status")
-  rate=$(sed -nE 's/.*exec\/s ([0-9]+).*/\1/p' <<<"$status")
+  runs=${runs:-0}
+  rate=$((runs / (seconds > 0 ? seconds : 1)))  # over the whole run (the status line's is the last job's)
 
   # The committed corpus becomes the smallest set of inputs, old and new,
-  # that keeps every feature (-merge=1 into an empty directory); the seed-*
-  # files (tests/fuzz/make_seeds.py) stay whatever they add. libFuzzer names
-  # the others by the SHA-1 of their content.
+  # that keeps every edge covered (-merge=1 into an empty directory, counting
+  # edges, not hit counts: -use_counters=0 keeps it small); the seed-* files
+  # (tests/fuzz/make_seeds.py) stay whatever they add. libFuzzer names the
+  # others by the SHA-1 of their content.
   fresh="$work/fresh"
   mkdir -p "$fresh"
   cp "$corpus"/seed-* "$fresh"/ 2>/dev/null || true
-  if nice -n "$nice_level" "$exe" -merge=1 -max_len="${MAX_LEN[$t]}" -timeout=10 -rss_limit_mb=2048 \
+  if nice -n "$nice_level" "$exe" -merge=1 -use_counters=0 -max_len="${MAX_LEN[$t]}" "${LIMITS[@]}" \
        "$fresh" "$corpus" "$work/corpus" >"$work/merge.log" 2>&1 && [ -n "$(ls -A "$fresh")" ]; then
     added=$(comm -13 <(ls "$corpus" | sort) <(ls "$fresh" | sort) | wc -l)
     find "$corpus" -type f -delete
@@ -118,20 +123,31 @@ for t in "${targets[@]}"; do
   after=$(find "$corpus" -type f | wc -l)
 
   # Findings: the first $PRT_FUZZ_KEEP (default 3) of each kind, smallest
-  # first, are minimised (crashes and leaks: the smallest input that still
-  # fails, up to 30 s each) and copied to crashes/<target>/ (often one bug
-  # many times: the rest stay in $work/artifacts/).
-  declare -A kinds=([crash]=0 [leak]=0 [timeout]=0 [oom]=0)
+  # first, that fail again when run alone are minimised (crashes and leaks:
+  # the smallest input that still fails, up to 30 s each) and copied to
+  # crashes/<target>/ (often one bug many times: the rest stay in
+  # $work/artifacts/). One that does not fail again (fork mode sometimes
+  # blames an empty input) is counted as "flaky" and left there.
+  declare -A kinds=([crash]=0 [leak]=0 [timeout]=0 [oom]=0 [flaky]=0)
+  declare -A kept=([crash]=0 [leak]=0 [timeout]=0 [oom]=0)
   while IFS= read -r a; do
     name=$(basename "$a")
     kind=${name%%-*}
-    [ -n "${kinds[$kind]:-}" ] || continue
+    [ -n "${kept[$kind]:-}" ] || continue
+    if [ "${kept[$kind]}" -ge "${PRT_FUZZ_KEEP:-3}" ]; then
+      kinds[$kind]=$((kinds[$kind] + 1))
+      continue
+    fi
+    if nice -n "$nice_level" "$exe" "${LIMITS[@]}" "$a" >"$work/again-$name.log" 2>&1; then
+      kinds[flaky]=$((kinds[flaky] + 1))
+      continue
+    fi
     kinds[$kind]=$((kinds[$kind] + 1))
-    [ "${kinds[$kind]}" -le "${PRT_FUZZ_KEEP:-3}" ] || continue
+    kept[$kind]=$((kept[$kind] + 1))
     keep="$a"
     if [ "$kind" = crash ] || [ "$kind" = leak ]; then
       min="$work/min-$name"
-      nice -n "$nice_level" "$exe" -minimize_crash=1 -max_total_time=30 -timeout=10 -rss_limit_mb=2048 \
+      nice -n "$nice_level" "$exe" -minimize_crash=1 -max_total_time=30 "${LIMITS[@]}" \
         -exact_artifact_path="$min" "$a" >"$work/min-$name.log" 2>&1 || true
       [ -s "$min" ] && keep="$min"
     fi
@@ -141,12 +157,13 @@ for t in "${targets[@]}"; do
   n_found=$((kinds[crash] + kinds[leak] + kinds[timeout] + kinds[oom]))
   [ $n_found -gt 0 ] && found=1
   size=$(($(cat "$corpus"/* | wc -c) / 1024))
-  printf 'fuzz.sh: %-8s %5s s %10s runs %7s exec/s  corpus +%d (%d files, %d KB)  crashes %d leaks %d timeouts %d ooms %d\n' \
-    "$t" "$seconds" "${runs:-?}" "${rate:-?}" "$added" "$after" "$size" \
-    "${kinds[crash]}" "${kinds[leak]}" "${kinds[timeout]}" "${kinds[oom]}"
-  printf '%s\t%s\t%s\t%s\t%s\t%d\t%d\t%d\t%d\t%d\n' "$(date -u +%FT%TZ)" "$t" "$seconds" "${runs:-0}" "${rate:-0}" \
+  printf 'fuzz.sh: %-8s %5s s %10s runs %6s exec/s  corpus +%d (%d files, %d KB)  crashes %d leaks %d timeouts %d ooms %d%s\n' \
+    "$t" "$seconds" "$runs" "$rate" "$added" "$after" "$size" \
+    "${kinds[crash]}" "${kinds[leak]}" "${kinds[timeout]}" "${kinds[oom]}" \
+    "$([ "${kinds[flaky]}" -gt 0 ] && echo " (${kinds[flaky]} did not fail again)")"
+  printf '%s\t%s\t%s\t%s\t%s\t%d\t%d\t%d\t%d\t%d\n' "$(date -u +%FT%TZ)" "$t" "$seconds" "$runs" "$rate" \
     "$added" "${kinds[crash]}" "${kinds[leak]}" "${kinds[timeout]}" "${kinds[oom]}" >>"$log"
-  unset kinds
+  unset kinds kept
 done
 if [ $found -eq 1 ]; then
   echo "fuzz.sh: findings are in tests/fuzz/crashes/<target>/ (ctest -R fuzz_replay fails until they are fixed;" \

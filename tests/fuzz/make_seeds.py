@@ -149,16 +149,27 @@ def gltf_parts(with_colors):
     return j, buf
 
 
+def gltf_triangle():
+    """(json dict, binary buffer) of the smallest glTF: one triangle, no indices."""
+    buf = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+    j = {"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+         "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "buffers": [{"byteLength": len(buf)}],
+         "bufferViews": [{"buffer": 0, "byteLength": len(buf)}],
+         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]}]}
+    return j, buf
+
+
 def gltf_seeds(out):
-    for colors in (False, True):
-        j, buf = gltf_parts(colors)
+    # Compact JSON: the fuzzer's inputs stay about the size of the seeds.
+    for name, (j, buf) in (("triangle", gltf_triangle()), ("colours", gltf_parts(True))):
         j["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
-        write(out, "gltf", "colours.gltf" if colors else "plain.gltf", json.dumps(j, indent=1))
-        j, buf = gltf_parts(colors)
+        write(out, "gltf", name + ".gltf", json.dumps(j, separators=(",", ":")))
+    for name, (j, buf) in (("triangle", gltf_triangle()), ("colours", gltf_parts(True))):
         js = json.dumps(j, separators=(",", ":")).encode()
         js += b" " * (-len(js) % 4)
         body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(buf), 0x004E4942) + buf
-        write(out, "glb", "colours.glb" if colors else "plain.glb", struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+        write(out, "glb", name + ".glb", struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
 
 
 def image_seeds(out, tmp):
