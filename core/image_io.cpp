@@ -6,6 +6,8 @@
 #include <prt/io.h>
 #include <prt/paths.h>
 
+#include <fmt/format.h>
+
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -22,6 +24,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -45,6 +48,60 @@ auto exr_call(const std::string& path, F f) {
     throw;
   } catch (const std::exception& e) {
     throw Error(path + ": cannot read EXR (truncated or corrupt?): " + e.what());
+  }
+}
+
+// Walks the EXR header(s) before OpenEXR sees them: OpenEXR allocates each
+// attribute at the size it declares before reading it, so an 858-byte file
+// declaring a 1.8 GB string attribute took 1.8 GB (found by fuzzing). Every
+// attribute must fit in what follows it in the file. Bounded: names and type
+// names are at most 255 bytes (OpenEXR's long-name limit), and the walk reads
+// a few bytes per attribute, seeking over the values.
+void check_exr_headers(const std::string& path, std::uint64_t size) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open");
+  std::uint64_t pos = 0;
+  const auto fail = [&](const std::string& what) {
+    throw Error(fmt::format("{}: not a readable EXR: {} (at byte {} of {})", path, what, pos, size));
+  };
+  const auto get = [&](char* out, std::size_t n) {
+    if (!in.read(out, std::streamsize(n))) fail("the file ends inside its header");
+    pos += n;
+  };
+  char magic_version[8];
+  get(magic_version, 8);
+  const std::uint32_t flags = std::uint32_t(std::uint8_t(magic_version[5])) << 8 |
+                              std::uint32_t(std::uint8_t(magic_version[6])) << 16;
+  const bool multipart = (flags & 0x1000u) != 0;
+  // A null-terminated string of at most 255 bytes; empty at the end of a header.
+  const auto name = [&](const char* what) {
+    std::string n;
+    for (char c;;) {
+      get(&c, 1);
+      if (c == '\0') return n;
+      if (n.size() == 255) fail(fmt::format("an attribute's {} is longer than 255 bytes", what));
+      n += c;
+    }
+  };
+  for (int header = 0;; ++header) {
+    std::string attribute = name("name");
+    if (attribute.empty()) {
+      // An empty header ends a multi-part file's list (or is the first part's end).
+      if (!multipart || header > 0) break;
+      fail("a multi-part file's first header is empty");
+    }
+    for (; !attribute.empty(); attribute = name("name")) {
+      const std::string type = name("type name");
+      unsigned char b[4];
+      get(reinterpret_cast<char*>(b), 4);
+      const std::int32_t bytes = std::int32_t(std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 |
+                                              std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24);
+      if (bytes < 0 || std::uint64_t(bytes) > size - pos)
+        fail(fmt::format("attribute '{}' ({}) declares {} bytes, but {} follow it", attribute, type, bytes, size - pos));
+      in.seekg(std::streamoff(bytes), std::ios::cur);
+      pos += std::uint64_t(bytes);
+    }
+    if (!multipart) break;
   }
 }
 
@@ -177,8 +234,10 @@ RowReader::RowReader(const std::string& path) : impl_(std::make_unique<Impl>()) 
   r.path = path;
   // EXR and the plugin's formats alike: a FIFO or a device is refused before
   // either library opens it.
-  if (check_input_file(path, "an image") == 0) throw Error(path + ": file is empty");
+  const std::uint64_t size = check_input_file(path, "an image");
+  if (size == 0) throw Error(path + ": file is empty");
   if (Imf::isOpenExrFile(path.c_str())) {
+    check_exr_headers(path, size);
     r.exr = std::make_unique<ExrRows>(path);
     r.width = r.exr->dw.max.x - r.exr->dw.min.x + 1;
     r.height = r.exr->dw.max.y - r.exr->dw.min.y + 1;

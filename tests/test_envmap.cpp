@@ -1171,6 +1171,28 @@ TEST(BadFiles, LoadErrorsNameTheFile) {
   expect_load_error(dir.file("odd.exr"), {"100x37"});
 }
 
+TEST(BadFiles, ExrAttributeLargerThanTheFileIsRefusedBeforeOpenExr) {
+  // Found by fuzzing: OpenEXR allocates an attribute at its declared size
+  // before reading it (an 858-byte file declaring a 1.8 GB string took 1.8 GB).
+  TempDir dir;
+  prt::write_image(dir.file("ok.exr"), 8, 4, std::vector<float>(8 * 4 * 3, 0.5f));
+  std::string exr = read_file(dir.file("ok.exr"));
+  const std::string key = std::string("dataWindow\0box2i\0", 17);
+  const std::size_t at = exr.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t size_at = at + key.size();
+  const std::uint32_t huge = 1800000000u;
+  for (int k = 0; k < 4; ++k) exr[size_at + k] = char((huge >> (8 * k)) & 0xffu);
+  write_file(dir.file("huge_attribute.exr"), exr);
+  expect_load_error(dir.file("huge_attribute.exr"),
+                    {"attribute 'dataWindow' (box2i) declares 1800000000 bytes, but " +
+                         std::to_string(exr.size() - size_at - 4) + " follow it (at byte " +
+                         std::to_string(size_at + 4) + " of " + std::to_string(exr.size()) + ")"});
+  // The header cut inside an attribute's name.
+  write_file(dir.file("cut_header.exr"), exr.substr(0, at + 4));
+  expect_load_error(dir.file("cut_header.exr"), {"the file ends inside its header"});
+}
+
 // ---- atomic writing -------------------------------------------------------------------
 
 TEST(AtomicWrite, MissingDirectoryThrowsAndCreatesNothing) {
