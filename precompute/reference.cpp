@@ -6,6 +6,7 @@
 
 #include <prt/error.h>
 
+#include "progress_ticker.h"
 #include "ray_scene.h"
 
 #include <fmt/format.h>
@@ -18,9 +19,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <mutex>
 #include <optional>
 #include <string>
 
@@ -323,16 +322,14 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
                          colors,
                          options.offset > 0 ? options.offset : detail::default_ray_offset(mesh)};
 
-  std::atomic<bool> cancelled{false};
-  std::atomic<std::size_t> done{0};
-  std::mutex report;
-  if (progress && !progress(0, n, "reference")) throw Error("cancelled");
+  detail::ProgressTicker ticker(progress, n, "reference");
+  ticker.start();
 
   const int N = options.samples;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4), [&](const tbb::blocked_range<std::size_t>& r) {
     detail::enable_ftz_daz();
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      if (cancelled.load(std::memory_order_relaxed)) return;
+      if (ticker.cancelled()) return;
       const std::size_t v = vertices ? (*vertices)[i] : i;
       glm::dvec3 nv(mesh.normals[v]);
       if (!(glm::dot(nv, nv) > 0)) continue;  // no normal: radiance 0
@@ -351,14 +348,9 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
       result.radiance[i] = glm::vec3(mean);
       result.std_error[i] = glm::vec3(glm::sqrt(glm::max(m2, 0.0) / (double(N - 1) * N)));
     }
-    const std::size_t now = done.fetch_add(r.size()) + r.size();
-    if (progress && report.try_lock()) {
-      std::lock_guard<std::mutex> lock(report, std::adopt_lock);
-      if (!cancelled && !progress(now, n, "reference")) cancelled = true;
-    }
+    ticker.tick(r.size());
   });
-  if (cancelled) throw Error("cancelled");
-  if (progress && !progress(n, n, "reference")) throw Error("cancelled");
+  ticker.finish();
   return result;
 }
 

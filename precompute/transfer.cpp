@@ -15,6 +15,7 @@
 #include <prt/filter.h>
 #include <prt/sh.h>
 
+#include "progress_ticker.h"
 #include "ray_scene.h"
 
 #include <fmt/format.h>
@@ -28,10 +29,8 @@
 #include <glm/mat3x3.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <memory>
-#include <mutex>
 
 namespace prt {
 
@@ -108,32 +107,6 @@ struct Gather {
   std::vector<float> val;
 };
 
-class Canceller {
- public:
-  Canceller(const Progress& p, std::size_t total, const char* phase) : p_(p), total_(total), phase_(phase) {}
-  // Returns false once the callback asked to stop.
-  bool tick(std::size_t n) {
-    if (!p_) return true;
-    const std::size_t d = done_ += n;
-    std::unique_lock lock(mutex_, std::try_to_lock);
-    if (lock.owns_lock() && !cancelled_ && !p_(d, total_, phase_)) cancelled_ = true;
-    return !cancelled_;
-  }
-  void finish() {
-    if (cancelled_) throw Error("cancelled");
-    if (p_ && !p_(total_, total_, phase_)) throw Error("cancelled");
-  }
-  bool cancelled() const { return cancelled_; }
-
- private:
-  const Progress& p_;
-  std::size_t total_;
-  const char* phase_;
-  std::atomic<std::size_t> done_{0};
-  std::mutex mutex_;
-  std::atomic<bool> cancelled_{false};
-};
-
 }  // namespace
 
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Progress& progress) {
@@ -181,7 +154,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   // analytic clamped cosine, stored by no one (compact_transfer below).
   std::vector<std::uint8_t> analytic(V, 0);
 
-  Canceller first(progress, V, trace ? "rays" : "transfer");
+  detail::ProgressTicker first(progress, V, trace ? "rays" : "transfer");
   constexpr std::size_t kGrain = 64;
   tbb::parallel_for(std::size_t(0), (V + kGrain - 1) / kGrain, [&](std::size_t block) {
     detail::enable_ftz_daz();
@@ -323,7 +296,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   t.bounces = 0;
   std::vector<float> prev = t.coeffs, next(V * stride);
   for (int b = 1; b <= o.bounces; ++b) {
-    Canceller bounce(progress, V, "bounces");
+    detail::ProgressTicker bounce(progress, V, "bounces");
     tbb::parallel_for(std::size_t(0), (V + kGrain - 1) / kGrain, [&](std::size_t block) {
       std::vector<double> acc(stride);
       const std::size_t v0 = block * kGrain, v1 = std::min(V, v0 + kGrain);

@@ -5,6 +5,7 @@
 
 #include <prt/error.h>
 
+#include "progress_ticker.h"
 #include "ray_scene.h"
 
 #include <fmt/format.h>
@@ -15,11 +16,9 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <string>
 
 namespace prt {
@@ -34,29 +33,6 @@ void check_options(const WaveletOptions& o, const Mesh& mesh) {
   if (mesh.vertex_count() >= std::numeric_limits<std::uint32_t>::max())
     throw Error(mesh.source + ": too many vertices for a wavelet transfer (at most 2^32 - 2)");
 }
-
-// Progress reporting from worker threads; the callback runs on one thread at a time.
-class Ticker {
- public:
-  Ticker(const Progress& p, std::size_t total) : p_(p), total_(total) {}
-  void tick(std::size_t n) {
-    if (!p_) return;
-    const std::size_t d = done_ += n;
-    std::unique_lock lock(mutex_, std::try_to_lock);
-    if (lock.owns_lock() && !cancelled_ && !p_(d, total_, "rays")) cancelled_ = true;
-  }
-  bool cancelled() const { return cancelled_; }
-  void finish() {
-    if (cancelled_ || (p_ && !p_(total_, total_, "rays"))) throw Error("cancelled");
-  }
-
- private:
-  const Progress& p_;
-  std::size_t total_;
-  std::atomic<std::size_t> done_{0};
-  std::mutex mutex_;
-  std::atomic<bool> cancelled_{false};
-};
 
 // Texel-centre directions and solid angles of the cube, shared by all vertices.
 struct CubeTable {
@@ -180,7 +156,7 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
   constexpr std::size_t kGrain = 32;
   const std::size_t blocks = (V + kGrain - 1) / kGrain;
   std::vector<std::vector<Entry>> block_entries(blocks);
-  Ticker ticker(progress, V);
+  detail::ProgressTicker ticker(progress, V, "rays");
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
     detail::enable_ftz_daz();
     if (ticker.cancelled()) return;
