@@ -4,6 +4,7 @@
 #include "gl_util.h"
 
 #include <prt/error.h>
+#include <prt/render.h>
 
 #define EGL_EGLEXT_PROTOTYPES 0
 #include <EGL/egl.h>
@@ -18,7 +19,7 @@ namespace {
 std::string egl_error() { return hex(unsigned(eglGetError())); }
 
 [[noreturn]] void egl_fail(const std::string& what) {
-  throw Error("no OpenGL 4.5 context: " + what + " (EGL error " + egl_error() + ")");
+  throw NoGlContext("no OpenGL 4.5 context: " + what + " (EGL error " + egl_error() + ")");
 }
 
 }  // namespace
@@ -56,11 +57,11 @@ void EglContext::create() {
   }
   // 3. Whatever the default display is.
   if (display == EGL_NO_DISPLAY) try_init(eglGetDisplay(EGL_DEFAULT_DISPLAY), "default display");
-  if (display == EGL_NO_DISPLAY) throw Error("no OpenGL 4.5 context: no usable EGL display; tried " + tried);
+  if (display == EGL_NO_DISPLAY) throw NoGlContext("no OpenGL 4.5 context: no usable EGL display; tried " + tried);
 
   const char* ext = eglQueryString(display, EGL_EXTENSIONS);
   if (!has_extension(ext, "EGL_KHR_surfaceless_context"))
-    throw Error("no OpenGL 4.5 context: the EGL display lacks EGL_KHR_surfaceless_context");
+    throw NoGlContext("no OpenGL 4.5 context: the EGL display lacks EGL_KHR_surfaceless_context");
   if (!eglBindAPI(EGL_OPENGL_API)) egl_fail("eglBindAPI(EGL_OPENGL_API)");
 
   const EGLint config_attribs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_SURFACE_TYPE, EGL_PBUFFER_BIT,
@@ -79,7 +80,7 @@ void EglContext::create() {
   if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) egl_fail("eglMakeCurrent(no surface)");
   if (version() < 45) {
     const std::string device = device_string();
-    throw Error("no OpenGL 4.5 context: got " + device + " (EGL error " + egl_error() + ")");
+    throw NoGlContext("no OpenGL 4.5 context: got " + device + " (EGL error " + egl_error() + ")");
   }
 }
 

@@ -26,7 +26,7 @@ class EglContext {
   EglContext& operator=(const EglContext&) = delete;
 
   // Initialises a display, creates the context and makes it current; checks
-  // it is OpenGL 4.5 or later. Throws prt::Error("no OpenGL 4.5 context: ...
+  // it is OpenGL 4.5 or later. Throws prt::NoGlContext("no OpenGL 4.5 context: ...
   // (EGL error 0x...)") naming the displays tried or the step that failed.
   // On failure the display (and context) made so far stay for destroy().
   void create();

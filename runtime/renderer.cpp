@@ -174,7 +174,7 @@ struct Renderer::Impl {
 // The caller's context (Renderer(use_current_context)) must be 4.5 core.
 void Renderer::Impl::check_current_version() {
   device = gl::device_string();
-  if (gl::version() < 45) throw Error("no OpenGL 4.5 context: the current context is " + device);
+  if (gl::version() < 45) throw NoGlContext("no OpenGL 4.5 context: the current context is " + device);
 }
 
 void Renderer::Impl::create_objects() {
@@ -285,7 +285,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 Renderer::Renderer(UseCurrentContext) : impl_(std::make_unique<Impl>()) {
   impl_->external = true;
   try {
-    if (!glGetString(GL_VERSION)) throw Error("no OpenGL 4.5 context: no OpenGL context is current");
+    if (!glGetString(GL_VERSION)) throw NoGlContext("no OpenGL 4.5 context: no OpenGL context is current");
     impl_->check_current_version();
     impl_->create_objects();
   } catch (...) {

@@ -24,6 +24,7 @@
 #include <fstream>
 
 #include "test_files.h"
+#include "test_gl.h"
 #include "test_meshes.h"
 #include "view_input.h"
 
@@ -120,7 +121,7 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
   const std::string view_err = test::read_file(err);
   const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
   if (code != 0 && view_err.find("OpenGL 4.5 core") != std::string::npos)
-    GTEST_SKIP() << "Xvfb's GLX gives no OpenGL 4.5 core context: " << view_err;
+    PRT_SKIP_WITHOUT_GL("Xvfb's GLX gives no OpenGL 4.5 core context: " + view_err);
   ASSERT_EQ(code, 0) << view_err;
   EXPECT_NE(view_err.find("Controls:"), std::string::npos) << view_err;
 
@@ -128,8 +129,7 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
                                           "--height", std::to_string(kH), "-q"};
   render_args.insert(render_args.end(), look.begin(), look.end());
   const auto res = test::run_prt(dir, render_args);
-  if (res.code != 0 && res.err.find("no OpenGL 4.5 context") != std::string::npos)
-    GTEST_SKIP() << "headless rendering unavailable: " << res.err;
+  if (res.code != 0 && res.err.find("no OpenGL 4.5 context") != std::string::npos) PRT_SKIP_WITHOUT_GL(res.err);
   ASSERT_EQ(res.code, 0) << test::describe_run(res);
 
   const EnvMap a = load_envmap(shot, Mapping::LatLong), b = load_envmap(ref, Mapping::LatLong);
@@ -168,19 +168,19 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
 }
 
 TEST_F(ViewCli, ScreenshotMatchesRender) {
-  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
   check_screenshot_matches_render({});
 }
 
 // The window's display pass (exposure, tone map, sRGB) and a non-PRT mode.
 TEST_F(ViewCli, ScreenshotMatchesRenderWithLookOptions) {
-  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
   check_screenshot_matches_render({"--shading", "lambert", "--exposure", "1.5", "--tonemap", "reinhard", "--window", "hanning"});
 }
 
 // Wavelet relighting in the window (with an SH transfer as --second).
 TEST_F(ViewCli, WaveletScreenshotMatchesRender) {
-  if (!on_path("xvfb-run")) GTEST_SKIP() << "xvfb-run is not on PATH";
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
   check_screenshot_matches_render({"--terms", "40"}, true);
 }
 

@@ -38,6 +38,7 @@
 #pragma once
 
 #include <prt/envmap.h>
+#include <prt/error.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 
@@ -113,13 +114,24 @@ struct Image {
   }
 };
 
+// Thrown when no OpenGL 4.5 core context can be had: EGL missing or refusing,
+// or only an older context. Every other failure of the runtime (a shader that
+// does not compile or link, a bad input) is a plain prt::Error, so a caller
+// (or a test) can tell "no GL here" from "GL here, and something is broken".
+class NoGlContext : public Error {
+ public:
+  using Error::Error;
+};
+
 class Renderer {
  public:
-  // Creates the headless context. Throws prt::Error("no OpenGL 4.5 context:
-  // ... (EGL error 0x...)") when EGL or OpenGL 4.5 core is not available.
+  // Creates the headless context. Throws prt::NoGlContext("no OpenGL 4.5
+  // context: ... (EGL error 0x...)") when EGL or OpenGL 4.5 core is not
+  // available; prt::Error when the context works but its programs do not
+  // build.
   Renderer();
   // Uses the OpenGL context current on the calling thread (it must be 4.5
-  // core; throws prt::Error otherwise). It is not destroyed with the Renderer.
+  // core; throws prt::NoGlContext otherwise). It is not destroyed with the Renderer.
   struct UseCurrentContext {};
   static constexpr UseCurrentContext use_current_context{};
   explicit Renderer(UseCurrentContext);
