@@ -149,11 +149,10 @@ TEST(CliHelp, NoSubcommandIsAnError) {
 TEST(CliHelp, UnknownSubcommandIsAnError) {
   TempDir dir;
   const Result r = run_prt(dir, {"frobnicate"});
-  EXPECT_NE(r.code, 0) << describe_run(r);
-  EXPECT_LT(r.code, 128) << "crashed: " << describe_run(r);
-  EXPECT_FALSE(r.err.empty());
-  // Unclear message (reported to the lead): CLI11 answers "A subcommand is
-  // required" instead of naming the unknown subcommand 'frobnicate'.
+  EXPECT_EQ(r.code, 2) << describe_run(r);  // a usage error
+  EXPECT_TRUE(contains(r.err, "unknown command 'frobnicate'")) << r.err;
+  EXPECT_TRUE(contains(r.err, "verify")) << "lists the commands: " << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
 }
 
 TEST(CliHelp, VersionPrintsAVersion) {
@@ -586,8 +585,6 @@ const BadCase kBadCases[] = {
 INSTANTIATE_TEST_SUITE_P(Cases, CliBadInput, ::testing::ValuesIn(kBadCases),
                          [](const ::testing::TestParamInfo<BadCase>& p) { return std::string(p.param.name); });
 
-// ---- verify -----------------------------------------------------------------------
-
 // ---- inputs that are not regular files (docs/HARD_CASES.md, "Malformed input") ----
 
 TEST(CliInputFiles, MapsAndVertexCsvMustBeRegularFiles) {
@@ -642,6 +639,47 @@ TEST(CliVerify, PassesAndSummarises) {
   int pass_rows = 0;
   for (const auto& l : lines) pass_rows += std::regex_search(l, std::regex(R"(\bPASS$)")) ? 1 : 0;
   EXPECT_EQ(pass_rows, passed);
+}
+
+// A failing check makes prt verify fail: every tolerance scaled down to
+// 1e-300 leaves only checks whose error is exactly 0 passing.
+TEST(CliVerify, AFailedCheckExitsOne) {
+  TempDir dir;
+  const Result r = run_prt(dir, {"verify", "--bands-max", "3", "--tolerance-scale", "1e-300"});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(\nverify: (\d+) passed, (\d+) failed\b)"))) << r.out;
+  const int failed = std::stoi(m[2]);
+  EXPECT_GT(failed, 0);
+  int fail_rows = 0;
+  for (const auto& l : lines_of(r.out)) fail_rows += std::regex_search(l, std::regex(R"(\bFAIL$)")) ? 1 : 0;
+  EXPECT_EQ(fail_rows, failed);
+  // The same checks at their own tolerances pass (exit 0), and a scale that is not positive is a usage error.
+  EXPECT_EQ(run_prt(dir, {"verify", "--bands-max", "3"}).code, 0);
+  const Result bad = run_prt(dir, {"verify", "--tolerance-scale", "0"});
+  EXPECT_EQ(bad.code, 2) << describe_run(bad);
+  EXPECT_TRUE(contains(bad.err, "--tolerance-scale")) << bad.err;
+}
+
+// The four exit statuses (README, "Exit status"): 0 done, 1 bad data, 2 bad
+// option, 3 a bug in prt (PRT_TEST_INTERNAL_ERROR makes the command fail as
+// one would).
+TEST(CliExitStatus, OneForBadDataTwoForBadOptionsThreeForABug) {
+  TempDir dir;
+  const std::string map = repo_envmap("studio.exr");
+  EXPECT_EQ(run_prt(dir, {"project", map, "--bands", "2"}).code, 0);
+  write_file(dir.file("bad.exr"), "not an image");
+  const Result data = run_prt(dir, {"project", dir.file("bad.exr")});
+  EXPECT_EQ(data.code, 1) << describe_run(data);
+  EXPECT_TRUE(contains(data.err, "prt project: error: " + dir.file("bad.exr"))) << data.err;
+  const Result option = run_prt(dir, {"project", map, "--bands", "0"});
+  EXPECT_EQ(option.code, 2) << describe_run(option);
+  EXPECT_TRUE(contains(option.err, "--bands")) << option.err;
+  EXPECT_TRUE(contains(option.err, "Run 'prt project --help' for the options.")) << option.err;
+  const Result bug = run_prt(dir, {"project", map}, {{"PRT_TEST_INTERNAL_ERROR", "1"}});
+  EXPECT_EQ(bug.code, 3) << describe_run(bug);
+  EXPECT_TRUE(contains(bug.err, "This is a bug in prt; please report it.")) << bug.err;
+  EXPECT_TRUE(contains(bug.err, "check failed")) << bug.err;
 }
 
 // ---- bad options and outputs (docs/HARD_CASES.md, "Bad options and outputs") ----

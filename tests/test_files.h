@@ -21,6 +21,7 @@
 #include <string>
 #include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace prt::test {
@@ -85,12 +86,16 @@ struct Result {
 };
 
 // Runs prt with `args`, stdin from /dev/null, capturing both streams in dir.io().
-inline Result run_prt(const TempDir& dir, const std::vector<std::string>& args) {
+// env: NAME=VALUE pairs added to prt's environment.
+inline Result run_prt(const TempDir& dir, const std::vector<std::string>& args,
+                      const std::vector<std::pair<std::string, std::string>>& env = {}) {
   static int counter = 0;
   const std::filesystem::path out = dir.io() / ("out" + std::to_string(counter) + ".txt");
   const std::filesystem::path err = dir.io() / ("err" + std::to_string(counter) + ".txt");
   ++counter;
-  std::string cmd = shell_quote(PRT_EXE);
+  std::string cmd = env.empty() ? std::string() : std::string("env");
+  for (const auto& [name, value] : env) cmd.append(" ").append(shell_quote(name + "=" + value));
+  cmd.append(env.empty() ? "" : " ").append(shell_quote(PRT_EXE));
   for (const auto& a : args) cmd.append(" ").append(shell_quote(a));
   cmd.append(" </dev/null >").append(shell_quote(out.string()));
   cmd.append(" 2>").append(shell_quote(err.string()));

@@ -19,11 +19,17 @@ Run add_verify(CLI::App& app) {
       ->check(int_range(3, sh::kMaxBands))
       ->capture_default_str();
   s->add_flag("-v,--verbose", *verbose, "Also print why each tolerance is what it is");
-  return [opt, verbose] {
+  auto scale = std::make_shared<double>(1.0);
+  s->add_option("--tolerance-scale", *scale,
+                "Multiply every tolerance by this before judging (below 1: how much margin each check has)")
+      ->check(positive_number())
+      ->capture_default_str();
+  return [opt, verbose, scale] {
     const auto t0 = std::chrono::steady_clock::now();
     int passed = 0, failed = 0;
     fmt::print("{:<14} {:<88} {:>10} {:>10}  {}\n", "group", "check", "error", "tolerance", "result");
-    run_verify(*opt, [&](const CheckResult& r) {
+    run_verify(*opt, [&](CheckResult r) {
+      r.tolerance *= *scale;
       fmt::print("{:<14} {:<88} {:>10.3g} {:>10.3g}  {}\n", r.group, r.name, r.error, r.tolerance,
                  r.pass() ? "PASS" : "FAIL");
       if (*verbose) fmt::print("{:<14} {}\n", "", "tolerance: " + r.why);

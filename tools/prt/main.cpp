@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <string>
 
@@ -71,6 +72,9 @@ int main(int argc, char** argv) {
   for (auto& [sub, run] : commands) {
     if (!sub->parsed()) continue;
     try {
+      // Test hook (tests/test_cli.cpp, CliExitStatus): the command fails as
+      // a bug in prt would, to pin exit status 3 and its message.
+      if (std::getenv("PRT_TEST_INTERNAL_ERROR")) PRT_CHECK(!"PRT_TEST_INTERNAL_ERROR is set");
       return run();
     } catch (const prt::cli::UsageError& e) {
       fmt::print(stderr, "{}", usage_message(e.what()));
