@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <regex>
 #include <thread>
 
 namespace prt {
@@ -61,7 +62,9 @@ TEST(PrecomputeCli, WhiteFurnaceThroughTheCommandLine) {
   EXPECT_NE(read_file(dir.file("q.ply")).find("property float red"), std::string::npos);
   const Result info = run_prt(dir, {"info", dir.file("q.prt")});
   EXPECT_EQ(info.code, 0);
-  EXPECT_NE(info.out.find("25"), std::string::npos) << info.out;  // 25 vertices
+  // quad(4) has 5 x 5 = 25 vertices; the last precompute was shadowed, 64 rays, albedo 1.
+  for (const char* line : {R"(^  vertices +25$)", R"(^  mode +shadowed$)", R"(^  samples +64$)", R"(^  albedo +1 1 1$)"})
+    EXPECT_TRUE(std::regex_search(info.out, std::regex(line, std::regex::multiline))) << line << "\n" << info.out;
 }
 
 TEST(PrecomputeCli, TransferForAnotherMeshIsRefused) {
