@@ -7,6 +7,7 @@
 #include <prt/projection.h>
 #include <prt/report.h>
 #include <prt/transfer.h>
+#include <prt/transfer_io.h>
 #include <prt/tuning.h>
 
 #include "test_files.h"
@@ -193,6 +194,57 @@ TEST(Report, SmallGrid) {
   EXPECT_EQ(r.image_reference.size(), m.vertex_count());
   EXPECT_EQ(r.image_samples, int(200.0 * 1024 / double(m.vertex_count())));  // more than the 4 asked for
   EXPECT_THROW(run_report(m, map, ReportOptions{}, ""), Error);  // every sweep empty
+
+  // Independent of run_report's pipeline: the rows' errors, self RMS and
+  // sizes recomputed here from the transfers themselves and the formulas of
+  // prt/accuracy.h and prt/report.h, against the truth the report used.
+  const ErrorSet& truth = r.shadowed_truth;
+  ASSERT_FALSE(truth.vertices.empty());
+  TempDir dir;
+  const auto transfer = [&](int bands, int samples) {
+    TransferOptions t;
+    t.mode = TransferMode::Shadowed;
+    t.bands = bands;
+    t.samples = samples;
+    t.albedo = o.albedo;
+    return compute_transfer(m, t);
+  };
+  const auto at_truth = [&](const Transfer& t) {
+    const std::vector<glm::vec3> all = relight(t, m, project(map, t.bands));
+    std::vector<glm::dvec3> sub;
+    for (std::uint32_t v : truth.vertices) sub.emplace_back(all[v]);
+    return sub;
+  };
+  // rel_rms_raw = sqrt(sum |a - ref|^2 / sum |ref|^2); rel_rms subtracts sum |se|^2 first.
+  const auto check_row = [&](const ReportRow& row, const std::vector<glm::dvec3>& a) {
+    double err = 0, ref = 0, se = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const glm::dvec3 b(truth.radiance[i]), e(truth.std_error[i]), d = a[i] - b;
+      err += glm::dot(d, d);
+      ref += glm::dot(b, b);
+      se += glm::dot(e, e);
+    }
+    // Tolerance: the same float results summed in double in another order.
+    EXPECT_NEAR(row.error.rel_rms_raw, std::sqrt(err / ref), 1e-9) << row.sweep << " " << row.bands;
+    EXPECT_NEAR(row.error.rel_rms, std::sqrt(std::max(0.0, err - se) / ref), 1e-9) << row.sweep << " " << row.bands;
+  };
+  for (int i : {0, 1}) {
+    const ReportRow& b = row("bands", i);
+    const Transfer t = transfer(b.bands, o.bands_samples);
+    check_row(b, at_truth(t));
+    write_transfer(dir.file("bands.prt"), t);
+    EXPECT_EQ(b.bytes, std::filesystem::file_size(dir.file("bands.prt"))) << "the transfer file's size";
+  }
+  const std::vector<glm::dvec3> few = at_truth(transfer(o.samples_bands, 32)),
+                                many = at_truth(transfer(o.samples_bands, 128));
+  check_row(row("samples", 0), few);
+  check_row(row("samples", 1), many);
+  double self = 0, norm = 0;  // self_rms: against the largest sample count
+  for (std::size_t i = 0; i < few.size(); ++i) {
+    self += glm::dot(few[i] - many[i], few[i] - many[i]);
+    norm += glm::dot(many[i], many[i]);
+  }
+  EXPECT_NEAR(row("samples", 0).self_rms, std::sqrt(self / norm), 1e-9);
 }
 
 // --target-error meets its target against a reference it never saw (another
