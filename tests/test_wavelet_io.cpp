@@ -372,6 +372,52 @@ EnvMap random_map(int W, int H, unsigned seed) {
   return make_latlong(W, H, std::move(rgb), "random");
 }
 
+// prt/wavelet.h's transform as its comment defines it, written out here in
+// double: per face, for s = r, r/2, ..., 2, a 1-D orthonormal Haar step on
+// every row of the top-left s x s square, then on every column of it.
+std::vector<double> textbook_haar(const std::vector<float>& planar, int r, int channels) {
+  std::vector<double> out(planar.begin(), planar.end());
+  const double h = 1.0 / std::sqrt(2.0);
+  std::vector<double> tmp(std::size_t(r), 0.0);
+  for (std::size_t f = 0; f < std::size_t(channels) * 6; ++f) {
+    double* face = out.data() + f * std::size_t(r) * r;
+    for (int s = r; s >= 2; s /= 2) {
+      for (int pass = 0; pass < 2; ++pass)  // rows, then columns
+        for (int line = 0; line < s; ++line) {
+          const auto at = [&](int i) -> double& { return pass == 0 ? face[line * r + i] : face[i * r + line]; };
+          for (int i = 0; i < s / 2; ++i) {
+            tmp[i] = (at(2 * i) + at(2 * i + 1)) * h;
+            tmp[s / 2 + i] = (at(2 * i) - at(2 * i + 1)) * h;
+          }
+          for (int i = 0; i < s; ++i) at(i) = tmp[i];
+        }
+    }
+  }
+  return out;
+}
+
+// The K largest weights (ties: the smaller index), ascending, by a full sort;
+// weights from prt/wavelet.h's definitions (|c_j| over the channels; area
+// weighting by the support side 2r/s of a level-s wavelet, r for (0, 0)).
+std::vector<std::uint32_t> textbook_select(const std::vector<float>& planar, int r, int K, bool area) {
+  const std::size_t n = cube_size(r);
+  std::vector<std::pair<double, std::uint32_t>> w(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    double sq = 0;
+    for (int c = 0; c < 3; ++c) sq += double(planar[c * n + j]) * planar[c * n + j];
+    const int x = int(j % std::size_t(r * r)) % r, y = int(j % std::size_t(r * r)) / r, m = std::max(x, y);
+    int level = 1;
+    while (level <= m) level *= 2;  // m in [level/2, level)
+    const double side = m == 0 ? r : 2.0 * r / level;
+    w[j] = {std::sqrt(sq) * (area ? side * side / (double(r) * r) : 1.0), std::uint32_t(j)};
+  }
+  std::sort(w.begin(), w.end(), [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::vector<std::uint32_t> keep;
+  for (int k = 0; k < K && k < int(n); ++k) keep.push_back(w[k].second);
+  std::sort(keep.begin(), keep.end());
+  return keep;
+}
+
 TEST(FrameLighting, IsResampleThenHaarThenSelect) {
   const EnvMap map = random_map(64, 32, 4);
   const int r = 8;
@@ -387,6 +433,22 @@ TEST(FrameLighting, IsResampleThenHaarThenSelect) {
   wavelet::select_terms(expect, 3, r, 50, wavelet::Selection::AreaWeighted, terms);
   EXPECT_EQ(fl.coefficients(), expect);
   EXPECT_EQ(fl.terms(), terms);
+  // Independently of prt's transform and selection: the textbook Haar of the
+  // resampled cube (float rounding of a few steps: 1e-5 of the largest), and
+  // the selection by a full sort of the same coefficients.
+  std::vector<float> texels;
+  sp.resample(R, texels);
+  const std::vector<double> haar = textbook_haar(texels, r, 3);
+  double largest = 0, worst = 0;
+  for (std::size_t j = 0; j < haar.size(); ++j) {
+    largest = std::max(largest, std::abs(haar[j]));
+    worst = std::max(worst, std::abs(haar[j] - fl.coefficients()[j]));
+  }
+  EXPECT_LT(worst, 1e-5 * largest);
+  EXPECT_EQ(fl.terms(), textbook_select(fl.coefficients(), r, 50, true));
+  fl.update(R, 50, wavelet::Selection::Magnitude);
+  EXPECT_EQ(fl.terms(), textbook_select(fl.coefficients(), r, 50, false));
+  EXPECT_NE(fl.terms(), terms);  // the two weightings choose differently here, so each choice is tested
   // K >= 6 r^2: every index, in order.
   fl.update(R, 1 << 20, wavelet::Selection::Magnitude);
   ASSERT_EQ(fl.terms().size(), cube_size(r));
