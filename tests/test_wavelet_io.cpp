@@ -600,8 +600,8 @@ TEST(WaveletCli, BadOptionsFailWithNoOutput) {
 TEST(WaveletAccuracy, SharpShadowIsFarBetterThan16BandSH) {
   // A sun of 1e4 (2x2 pixels of a 128x64 lat-long map, about 31 degrees from
   // the zenith, 5e-3 sr) in a sky of 0.05, over a plane with a box floating
-  // above it. Truth: the dense per-texel sum at r = 128 (texels 4x finer than
-  // the wavelet cube). Compared on the plane vertices near the shadow edge
+  // above it. Truth: computed below from the map and the box alone. Compared
+  // on the plane vertices near the shadow edge
   // (a 5x5 grid neighbourhood holds both lit and shadowed truth values).
   const int k = 32;
   const Mesh m = plane_and_box(k);
@@ -614,19 +614,57 @@ TEST(WaveletAccuracy, SharpShadowIsFarBetterThan16BandSH) {
   const EnvMap map = make_latlong(W, H, std::move(rgb), "sun");
   const glm::dmat3 I(1.0);
 
-  // Truth.
-  const int rt = 128;
-  const std::size_t nt = cube_size(rt);
-  std::vector<float> texels;
-  wavelet::CubeSplatter(map, rt).resample(I, texels);
-  std::vector<std::uint32_t> vs(plane);
-  std::iota(vs.begin(), vs.end(), 0u);
-  WaveletOptions to = wopts(rt, 0.0);
-  to.albedo = glm::vec3(1.0f);
-  const std::vector<double> dense = wavelet_texel_transfer(m, to, vs);
+  // Truth, from the map itself and the box's geometry, with none of prt's
+  // transfer code: B(p) = (1/pi) sum over the map's pixels of
+  // L V(p, w) max(w.y, 0) dw (albedo 1, normal +Y), V by a ray-box slab test
+  // (the plane cannot shadow itself). Sky pixels at their centres; each sun
+  // pixel split 16 x 16, with each part's exact solid angle, so the shadow's
+  // edge is placed to 1/256 of the sun.
+  const glm::dvec3 box_lo(-0.25, 0.3, -0.25), box_hi(0.25, 0.6, 0.25);
+  const auto blocked = [&](const glm::dvec3& o, const glm::dvec3& d) {
+    double t0 = 0, t1 = 1e30;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] == 0) {
+        if (o[a] < box_lo[a] || o[a] > box_hi[a]) return false;
+        continue;
+      }
+      double ta = (box_lo[a] - o[a]) / d[a], tb = (box_hi[a] - o[a]) / d[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = std::max(t0, ta);
+      t1 = std::min(t1, tb);
+    }
+    return t0 <= t1;
+  };
+  struct Sample {
+    glm::dvec3 w;
+    double weight;  // L max(w.y, 0) dw / pi
+  };
+  std::vector<Sample> samples;
+  const int split = 16;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const double L = map.rgb[(std::size_t(y) * W + x) * 3];
+      const bool sun = L > 1.0f;
+      const int n = sun ? split : 1;
+      double pixel_omega = 0;
+      for (int b = 0; b < n; ++b) {
+        // Row y spans polar angles [y, y + 1] pi / H from +Y; a part spans 1/n of it and 1/n of the pixel's width.
+        const double th0 = (y + double(b) / n) * M_PI / H, th1 = (y + double(b + 1) / n) * M_PI / H;
+        const double omega = (2 * M_PI / W / n) * (std::cos(th0) - std::cos(th1));
+        for (int a = 0; a < n; ++a) {
+          const glm::dvec3 w = latlong_direction(x + (a + 0.5) / n, y + (b + 0.5) / n, W, H);
+          pixel_omega += omega;
+          if (w.y > 0) samples.push_back({w, L * w.y * omega / M_PI});
+        }
+      }
+      ASSERT_NEAR(pixel_omega, latlong_pixel_solid_angle(y, W, H), 1e-12);
+    }
   std::vector<double> truth(plane, 0.0);
-  for (std::size_t v = 0; v < plane; ++v)
-    for (std::size_t i = 0; i < nt; ++i) truth[v] += dense[v * nt + i] * texels[i];  // grey map: channel 0
+  for (std::size_t v = 0; v < plane; ++v) {
+    const glm::dvec3 p(m.positions[v]);
+    for (const Sample& q : samples)
+      if (!blocked(p, q.w)) truth[v] += q.weight;
+  }
 
   // Wavelets, r = 32, K = 300.
   WaveletOptions wo = wopts(32, 1e-3);
@@ -676,10 +714,12 @@ TEST(WaveletAccuracy, SharpShadowIsFarBetterThan16BandSH) {
   std::printf("sharp shadow: lit %.3f, %d edge vertices: RMS error wavelet %.4f, SH16 %.4f (ratio %.2f); "
               "all plane vertices: wavelet %.4f, SH16 %.4f (ratio %.2f)\n",
               lit, edge, rms_w, rms_s, rms_s / rms_w, all_w, all_s, all_s / all_w);
-  // Measured (Release, this mesh and map): lit 13.56; 160 edge vertices, RMS
-  // error wavelet 0.565 (4.2% of lit), SH16 1.98: ratio 3.50; over all 1089
-  // plane vertices wavelet 0.217, SH16 0.800: ratio 3.68. The wavelet error
-  // left is the r = 32 cube's placement of a ~2-texel sun. Bounds with room:
+  // Measured (Release, this mesh and map, against the truth above): lit
+  // 13.56; 160 edge vertices, RMS error wavelet 0.571 (4.2% of lit), SH16
+  // 1.98: ratio 3.47; over all 1089 plane vertices wavelet 0.219, SH16 0.800:
+  // ratio 3.65 (against the former truth, prt's own dense r = 128 texel sum:
+  // 0.565, 3.50, 0.217, 3.68). The wavelet error left is the r = 32 cube's
+  // placement of a ~2-texel sun. Bounds with room:
   EXPECT_LT(rms_w, 0.08 * lit);
   EXPECT_GT(rms_s / rms_w, 2.0);
   EXPECT_GT(all_s / all_w, 2.0);
