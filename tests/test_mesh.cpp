@@ -5,7 +5,9 @@
 #include "test_files.h"
 
 #include <prt/error.h>
+#include <prt/hash.h>
 #include <prt/mesh.h>
+#include <prt/transfer.h>
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -842,6 +844,28 @@ TEST(Hash, StableAndSensitive) {
   auto t2 = t;
   t2[3] = uvec3(t2[3].y, t2[3].z, t2[3].x);  // same triangle, rotated indices
   EXPECT_NE(prt::make_mesh(p, t2).hash(), h);
+}
+
+// The hashes against values computed outside prt: `xxhsum -H3` (xxHash
+// 0.8.1, Debian's xxhash package) of files holding the bytes docs/FORMAT.md
+// describes, written by Python's struct.pack('<...f') and ('<...I'):
+//   empty input                                  2d06800538d394c2 (xxHash's own test vector)
+//   positions (0,0,0) (1,0,0) (0,1,0), triangle (0,1,2)          a28a642a01fc25be
+//   normals (0,0,1) x 3 (the shading hash, no colours)           e4e8cbac9e65f7b1
+//   200 positions p[k] = (k % 97) / 8 - 6 (k < 600, exact in float),
+//   100 triangles t[k] = 7 k % 200 (k < 300): 3600 bytes,
+//   past XXH3's 240-byte short-input path                        c0d16cafca24fb51
+TEST(Hash, MatchesXxhsumOnTheDocumentedBytes) {
+  EXPECT_EQ(prt::hash64(nullptr, 0), 0x2d06800538d394c2ull);
+  const prt::Mesh tri = prt::make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}});
+  EXPECT_EQ(tri.hash(), 0xa28a642a01fc25beull);
+  ASSERT_EQ(tri.normals[0], vec3(0, 0, 1));
+  EXPECT_EQ(prt::shading_hash(tri, false), 0xe4e8cbac9e65f7b1ull);
+  std::vector<vec3> p(200);
+  for (int k = 0; k < 600; ++k) p[k / 3][k % 3] = float(k % 97) / 8.0f - 6.0f;
+  std::vector<uvec3> t(100);
+  for (int k = 0; k < 300; ++k) t[k / 3][k % 3] = unsigned(7 * k % 200);
+  EXPECT_EQ(prt::make_mesh(p, t).hash(), 0xc0d16cafca24fb51ull);
 }
 
 TEST(Bounds, BoxAndDiagonal) {
