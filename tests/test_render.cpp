@@ -588,17 +588,17 @@ TEST_F(RenderCli, FramesGetNumberedNames) {
 
 TEST_F(RenderCli, BadInputs) {
   auto r1 = render({mesh, dir.file("plane.prt"), env, "-o", dir.file("a.exr")});
-  EXPECT_NE(r1.code, 0);
+  EXPECT_EQ(r1.code, 1) << r1.err;
   EXPECT_NE(r1.err.find("plane.prt"), std::string::npos) << r1.err;
   test::write_file(dir.file("junk.exr"), "not an image");
   auto r2 = render({mesh, prt, dir.file("junk.exr"), "-o", dir.file("b.exr")});
-  EXPECT_NE(r2.code, 0);
+  EXPECT_EQ(r2.code, 1) << r2.err;
   EXPECT_NE(r2.err.find("junk.exr"), std::string::npos) << r2.err;
   auto r3 = render({mesh, prt, env, "-o", dir.file("c.exr"), "--width", "0"});
-  EXPECT_NE(r3.code, 0);
+  EXPECT_EQ(r3.code, 2) << r3.err;
   EXPECT_NE(r3.err.find("width"), std::string::npos) << r3.err;
   auto r4 = render({mesh, prt, env, "-o", dir.file("d.exr"), "--camera", "1,2,3"});
-  EXPECT_NE(r4.code, 0);
+  EXPECT_EQ(r4.code, 2) << r4.err;
   EXPECT_NE(r4.err.find("--camera"), std::string::npos) << r4.err;
   auto r5 = render({mesh, prt, env, "-o", dir.file("e.txt")});
   EXPECT_EQ(r5.code, 2) << r5.err;  // a bad option value
