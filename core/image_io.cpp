@@ -51,12 +51,28 @@ auto exr_call(const std::string& path, F f) {
   }
 }
 
-// Walks the EXR header(s) before OpenEXR sees them: OpenEXR allocates each
-// attribute at the size it declares before reading it, so an 858-byte file
-// declaring a 1.8 GB string attribute took 1.8 GB (found by fuzzing). Every
-// attribute must fit in what follows it in the file. Bounded: names and type
-// names are at most 255 bytes (OpenEXR's long-name limit), and the walk reads
-// a few bytes per attribute, seeking over the values.
+// Walks the EXR header(s) before OpenEXR sees them, reading them as OpenEXR
+// does (Imf::Header::readFrom), so that nothing OpenEXR then allocates is out
+// of proportion to the file (found by fuzzing: an 858-byte file declaring a
+// 1.8 GB string attribute took 1.8 GB; a 463-byte one declaring a data window
+// 6.5 million pixels wide, 1.3 GB of decompression buffer):
+// - attributes OpenEXR reads by their declared size (strings, string and
+//   float vectors, unknown types) must fit in what follows them;
+// - those it reads by their content do so here too: fixed-size types take
+//   their size whatever the size field says, a channel list runs to its
+//   empty name, a preview image's pixels must fit in the file;
+// - the data window is at most kMaxExrSide pixels each way, and a scan-line
+//   file's offset table (a u64 per block of rows) fits in the file.
+// Bounded: names are at most 255 bytes, and values are skipped, not read.
+constexpr std::int64_t kMaxExrSide = 65536;
+
+// A name from the file as printed in messages: other bytes than printable ASCII as '?'.
+std::string printable(std::string s) {
+  for (char& c : s)
+    if (c < 0x20 || c > 0x7e) c = '?';
+  return s;
+}
+
 void check_exr_headers(const std::string& path, std::uint64_t size) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open");
@@ -64,44 +80,101 @@ void check_exr_headers(const std::string& path, std::uint64_t size) {
   const auto fail = [&](const std::string& what) {
     throw Error(fmt::format("{}: not a readable EXR: {} (at byte {} of {})", path, what, pos, size));
   };
-  const auto get = [&](char* out, std::size_t n) {
-    if (!in.read(out, std::streamsize(n))) fail("the file ends inside its header");
+  const auto get = [&](void* out, std::size_t n) {
+    if (n > size - pos || !in.read(static_cast<char*>(out), std::streamsize(n))) fail("the file ends inside its header");
     pos += n;
   };
-  char magic_version[8];
-  get(magic_version, 8);
-  const std::uint32_t flags = std::uint32_t(std::uint8_t(magic_version[5])) << 8 |
-                              std::uint32_t(std::uint8_t(magic_version[6])) << 16;
-  const bool multipart = (flags & 0x1000u) != 0;
-  // A null-terminated string of at most 255 bytes; empty at the end of a header.
+  const auto skip = [&](std::uint64_t n) {
+    if (n > size - pos) fail("the file ends inside its header");
+    in.seekg(std::streamoff(n), std::ios::cur);
+    pos += n;
+  };
+  const auto i32 = [&] {
+    unsigned char b[4];
+    get(b, 4);
+    return std::int32_t(std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 | std::uint32_t(b[2]) << 16 |
+                        std::uint32_t(b[3]) << 24);
+  };
+  // A null-terminated string of at most 255 bytes (OpenEXR's Name::MAX_LENGTH).
   const auto name = [&](const char* what) {
     std::string n;
     for (char c;;) {
       get(&c, 1);
       if (c == '\0') return n;
-      if (n.size() == 255) fail(fmt::format("an attribute's {} is longer than 255 bytes", what));
+      if (n.size() == 255) fail(fmt::format("{} longer than 255 bytes", what));
       n += c;
     }
   };
+  std::int32_t magic_version[2];
+  magic_version[0] = i32();
+  magic_version[1] = i32();
+  const std::uint32_t flags = std::uint32_t(magic_version[1]);
+  const bool multipart = (flags & 0x1000u) != 0, tiled = (flags & 0x200u) != 0, deep = (flags & 0x800u) != 0;
+  // The value sizes of the types OpenEXR reads as fixed-size values.
+  static const std::pair<const char*, int> kFixed[] = {
+      {"box2i", 16}, {"box2f", 16}, {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
+      {"float", 4}, {"int", 4}, {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64},
+      {"m44d", 128}, {"rational", 8}, {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16},
+      {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"deepImageState", 1}};
+  std::int64_t rows = 0;
+  int compression = -1;
   for (int header = 0;; ++header) {
-    std::string attribute = name("name");
+    std::string attribute = name("an attribute name");
     if (attribute.empty()) {
       // An empty header ends a multi-part file's list (or is the first part's end).
       if (!multipart || header > 0) break;
       fail("a multi-part file's first header is empty");
     }
-    for (; !attribute.empty(); attribute = name("name")) {
-      const std::string type = name("type name");
-      unsigned char b[4];
-      get(reinterpret_cast<char*>(b), 4);
-      const std::int32_t bytes = std::int32_t(std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 |
-                                              std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24);
-      if (bytes < 0 || std::uint64_t(bytes) > size - pos)
-        fail(fmt::format("attribute '{}' ({}) declares {} bytes, but {} follow it", attribute, type, bytes, size - pos));
-      in.seekg(std::streamoff(bytes), std::ios::cur);
-      pos += std::uint64_t(bytes);
+    for (; !attribute.empty(); attribute = name("an attribute name")) {
+      const std::string type = name("an attribute type name");
+      const std::int32_t bytes = i32();
+      if (bytes < 0)
+        fail(fmt::format("attribute '{}' ({}) declares {} bytes", printable(attribute), printable(type), bytes));
+      const auto* fixed = std::find_if(std::begin(kFixed), std::end(kFixed),
+                                       [&](const auto& f) { return type == f.first; });
+      if (fixed != std::end(kFixed)) {
+        if (attribute == "dataWindow" && type == "box2i") {
+          std::int32_t box[4];
+          for (std::int32_t& v : box) v = i32();
+          const std::int64_t w = std::int64_t(box[2]) - box[0] + 1, h = std::int64_t(box[3]) - box[1] + 1;
+          if (w > kMaxExrSide || h > kMaxExrSide)
+            fail(fmt::format("its data window is {} x {} pixels; prt reads images of at most {} pixels each way", w, h,
+                             kMaxExrSide));
+          rows = std::max(rows, h);
+        } else if (attribute == "compression" && type == "compression") {
+          unsigned char c;
+          get(&c, 1);
+          compression = c;
+        } else {
+          skip(std::uint64_t(fixed->second));
+        }
+      } else if (type == "chlist") {
+        // Channels until an empty name: name, then 16 bytes (type, linear, reserved, x and y sampling).
+        while (!name("a channel name").empty()) skip(16);
+      } else if (type == "preview") {
+        const std::int32_t w = i32(), h = i32();
+        const std::uint64_t pixels = std::uint64_t(std::uint32_t(w)) * std::uint32_t(h);
+        if (pixels > (size - pos) / 4)
+          fail(fmt::format("its preview image of {} x {} pixels is larger than the file", std::uint32_t(w),
+                           std::uint32_t(h)));
+        skip(pixels * 4);
+      } else {
+        if (std::uint64_t(bytes) > size - pos)
+          fail(fmt::format("attribute '{}' ({}) declares {} bytes, but {} follow it", printable(attribute),
+                           printable(type), bytes, size - pos));
+        skip(std::uint64_t(bytes));
+      }
     }
     if (!multipart) break;
+  }
+  // A single-part scan-line file: one u64 offset per block of rows follows the header.
+  if (!multipart && !tiled && !deep && rows > 0) {
+    static const int kRowsPerBlock[] = {1, 1, 1, 16, 32, 16, 32, 32, 32, 256};  // by compression, 0..9
+    const int per = compression >= 0 && compression < 10 ? kRowsPerBlock[compression] : 1;
+    const std::uint64_t table = std::uint64_t((rows + per - 1) / per) * 8;
+    if (table > size - pos)
+      fail(fmt::format("its {} rows take an offset table of {} bytes, but {} follow the header", rows, table,
+                       size - pos));
   }
 }
 

@@ -1171,25 +1171,44 @@ TEST(BadFiles, LoadErrorsNameTheFile) {
   expect_load_error(dir.file("odd.exr"), {"100x37"});
 }
 
-TEST(BadFiles, ExrAttributeLargerThanTheFileIsRefusedBeforeOpenExr) {
-  // Found by fuzzing: OpenEXR allocates an attribute at its declared size
-  // before reading it (an 858-byte file declaring a 1.8 GB string took 1.8 GB).
+// Found by fuzzing: OpenEXR allocates what a header declares before reading
+// it (an 858-byte file declaring a 1.8 GB string took 1.8 GB; a data window
+// 6.5 million pixels wide, 1.3 GB of decompression buffer). The header walk
+// refuses each before OpenEXR opens the file.
+TEST(BadFiles, ExrHeadersDeclaringMoreThanTheFileHasAreRefusedBeforeOpenExr) {
   TempDir dir;
   prt::write_image(dir.file("ok.exr"), 8, 4, std::vector<float>(8 * 4 * 3, 0.5f));
-  std::string exr = read_file(dir.file("ok.exr"));
-  const std::string key = std::string("dataWindow\0box2i\0", 17);
-  const std::size_t at = exr.find(key);
-  ASSERT_NE(at, std::string::npos);
-  const std::size_t size_at = at + key.size();
-  const std::uint32_t huge = 1800000000u;
-  for (int k = 0; k < 4; ++k) exr[size_at + k] = char((huge >> (8 * k)) & 0xffu);
-  write_file(dir.file("huge_attribute.exr"), exr);
+  const std::string exr = read_file(dir.file("ok.exr"));
+  const auto le32 = [](std::uint32_t v) {
+    std::string b(4, '\0');
+    for (int k = 0; k < 4; ++k) b[k] = char((v >> (8 * k)) & 0xffu);
+    return b;
+  };
+  // A string attribute inserted first, declaring 1.8 GB.
+  const std::string attr = std::string("comment\0string\0", 15);
+  std::string big = exr.substr(0, 8) + attr + le32(1800000000u) + "hello" + exr.substr(8);
+  write_file(dir.file("huge_attribute.exr"), big);
+  const std::size_t after_size = 8 + attr.size() + 4;
   expect_load_error(dir.file("huge_attribute.exr"),
-                    {"attribute 'dataWindow' (box2i) declares 1800000000 bytes, but " +
-                         std::to_string(exr.size() - size_at - 4) + " follow it (at byte " +
-                         std::to_string(size_at + 4) + " of " + std::to_string(exr.size()) + ")"});
+                    {"attribute 'comment' (string) declares 1800000000 bytes, but " +
+                     std::to_string(big.size() - after_size) + " follow it (at byte " + std::to_string(after_size) +
+                     " of " + std::to_string(big.size()) + ")"});
+  // A data window 6.5 million pixels wide.
+  const std::string key = std::string("dataWindow\0box2i\0", 17);
+  const std::size_t box = exr.find(key) + key.size() + 4;
+  ASSERT_NE(exr.find(key), std::string::npos);
+  std::string wide = exr;
+  wide.replace(box + 8, 4, le32(6553610u));
+  write_file(dir.file("wide.exr"), wide);
+  expect_load_error(dir.file("wide.exr"), {"its data window is 6553611 x 4 pixels; prt reads images of at most 65536"});
+  // 60000 rows in a file of a few hundred bytes: the offset table alone does not fit.
+  std::string tall = exr;
+  tall.replace(box + 12, 4, le32(59999u));
+  write_file(dir.file("tall.exr"), tall);
+  // prt writes ZIP (16 rows per block): 3750 offsets of 8 bytes.
+  expect_load_error(dir.file("tall.exr"), {"its 60000 rows take an offset table of 30000 bytes"});
   // The header cut inside an attribute's name.
-  write_file(dir.file("cut_header.exr"), exr.substr(0, at + 4));
+  write_file(dir.file("cut_header.exr"), exr.substr(0, exr.find(key) + 4));
   expect_load_error(dir.file("cut_header.exr"), {"the file ends inside its header"});
 }
 
