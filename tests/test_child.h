@@ -57,10 +57,7 @@ inline Result run_prt_file_limit(const TempDir& dir, const std::vector<std::stri
   ChildArgs c(args, {});
   const pid_t pid = ::fork();
   if (pid == 0) {
-    const int in = ::open("/dev/null", O_RDONLY);
-    const int o = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (in < 0 || o < 0 || e < 0 || ::dup2(in, 0) < 0 || ::dup2(o, 1) < 0 || ::dup2(e, 2) < 0) ::_exit(126);
+    redirect_child_stdio(out, err);
     ::signal(SIGXFSZ, SIG_IGN);  // ignored stays ignored across execve
     rlimit lim{};
     ::getrlimit(RLIMIT_FSIZE, &lim);

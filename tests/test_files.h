@@ -118,6 +118,15 @@ struct BoundedResult : Result {
   bool timed_out = false;  // killed after the timeout (code is then 124)
 };
 
+// In a forked child: stdin from /dev/null, stdout and stderr to the files
+// (created or truncated); exits 126 if any of it fails.
+inline void redirect_child_stdio(const std::string& out, const std::string& err) {
+  const int in = ::open("/dev/null", O_RDONLY);
+  const int o = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (in < 0 || o < 0 || e < 0 || ::dup2(in, 0) < 0 || ::dup2(o, 1) < 0 || ::dup2(e, 2) < 0) ::_exit(126);
+}
+
 // Runs prt with `args` (no shell: fork and exec, stdin from /dev/null, both
 // streams captured in dir.io()), killing it after `timeout_s` seconds. For
 // inputs that must be refused fast and without allocating (memory bombs) or
@@ -137,10 +146,7 @@ inline BoundedResult run_prt_bounded(const TempDir& dir, const std::vector<std::
   BoundedResult r;
   const pid_t pid = ::fork();
   if (pid == 0) {
-    const int in = ::open("/dev/null", O_RDONLY);
-    const int o = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int e = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (in < 0 || o < 0 || e < 0 || ::dup2(in, 0) < 0 || ::dup2(o, 1) < 0 || ::dup2(e, 2) < 0) ::_exit(126);
+    redirect_child_stdio(out.string(), err.string());
     ::execv(argv[0], argv.data());
     ::_exit(127);
   }

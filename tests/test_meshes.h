@@ -78,19 +78,22 @@ inline Mesh open_box(float h) {
   return make_mesh(std::move(p), std::move(t), {}, {}, {}, "open box");
 }
 
-// A (k+1)^2-vertex floor (quad(k)) with a ball of radius 0.4 floating 0.5
-// above its centre: most floor vertices are shadowed by the ball, and the
-// ball's underside sees the floor (interreflection). Large enough that
-// transfer's blocks of vertices spread over threads.
-inline Mesh floor_and_ball(int k) {
-  const Mesh floor = quad(k), ball = sphere(12, 24, 0.4f);
+// quad(k) with sphere(rings, segments, radius) centred at `centre` over it.
+inline Mesh ball_over_floor(int k, int rings, int segments, float radius, const glm::vec3& centre) {
+  const Mesh floor = quad(k), ball = sphere(rings, segments, radius);
   std::vector<glm::vec3> p = floor.positions;
   std::vector<glm::uvec3> t = floor.triangles;
   const unsigned base = unsigned(p.size());
-  for (const glm::vec3& q : ball.positions) p.push_back(q + glm::vec3(0.0f, 0.9f, 0.0f));
+  for (const glm::vec3& q : ball.positions) p.push_back(q + centre);
   for (const glm::uvec3& tri : ball.triangles) t.push_back(tri + glm::uvec3(base));
-  return make_mesh(std::move(p), std::move(t), {}, {}, {}, "floor and ball");
+  return make_mesh(std::move(p), std::move(t), {}, {}, {}, "ball over floor");
 }
+
+// A (k+1)^2-vertex floor with a ball of radius 0.4 floating 0.5 above its
+// centre: most floor vertices are shadowed by the ball, and the ball's
+// underside sees the floor (interreflection). Large enough that transfer's
+// blocks of vertices spread over threads.
+inline Mesh floor_and_ball(int k) { return ball_over_floor(k, 12, 24, 0.4f, {0.0f, 0.9f, 0.0f}); }
 
 // Cosine-weighted visible fraction of a square opening of half-width 1 at
 // height h seen from the centre of the floor: 4 x the point-to-rectangle form

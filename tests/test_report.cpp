@@ -37,15 +37,7 @@ EnvMap sky_with_sun() {
 
 // A ball over a floor (~430 vertices): contact shadows and interreflection,
 // small enough for the searches to run in a few seconds.
-Mesh small_scene() {
-  const Mesh floor = test::quad(16), ball = test::sphere(8, 16, 0.35f);
-  std::vector<glm::vec3> p = floor.positions;
-  std::vector<glm::uvec3> t = floor.triangles;
-  const unsigned base = unsigned(p.size());
-  for (const glm::vec3& x : ball.positions) p.push_back(x + glm::vec3(0.1f, 0.45f, 0.0f));
-  for (const glm::uvec3& x : ball.triangles) t.push_back(x + glm::uvec3(base));
-  return make_mesh(std::move(p), std::move(t), {}, {}, {}, "ball over floor");
-}
+Mesh small_scene() { return test::ball_over_floor(16, 8, 16, 0.35f, {0.1f, 0.45f, 0.0f}); }
 
 TEST(ErrorSet, ChoosesDistinctUsableVerticesDeterministically) {
   Mesh m = test::sphere(8, 16);
@@ -216,7 +208,7 @@ TEST(Report, SmallGrid) {
     return sub;
   };
   // rel_rms_raw = sqrt(sum |a - ref|^2 / sum |ref|^2); rel_rms subtracts sum |se|^2 first.
-  const auto check_row = [&](const ReportRow& row, const std::vector<glm::dvec3>& a) {
+  const auto check_row = [&](const ReportRow& got, const std::vector<glm::dvec3>& a) {
     double err = 0, ref = 0, se = 0;
     for (std::size_t i = 0; i < a.size(); ++i) {
       const glm::dvec3 b(truth.radiance[i]), e(truth.std_error[i]), d = a[i] - b;
@@ -225,8 +217,8 @@ TEST(Report, SmallGrid) {
       se += glm::dot(e, e);
     }
     // Tolerance: the same float results summed in double in another order.
-    EXPECT_NEAR(row.error.rel_rms_raw, std::sqrt(err / ref), 1e-9) << row.sweep << " " << row.bands;
-    EXPECT_NEAR(row.error.rel_rms, std::sqrt(std::max(0.0, err - se) / ref), 1e-9) << row.sweep << " " << row.bands;
+    EXPECT_NEAR(got.error.rel_rms_raw, std::sqrt(err / ref), 1e-9) << got.sweep << " " << got.bands;
+    EXPECT_NEAR(got.error.rel_rms, std::sqrt(std::max(0.0, err - se) / ref), 1e-9) << got.sweep << " " << got.bands;
   };
   for (int i : {0, 1}) {
     const ReportRow& b = row("bands", i);

@@ -280,16 +280,7 @@ TEST(Transfer, ProgressAndCancellation) {
 // A ball resting above a floor: the ball's upper cap sees only sky (analytic
 // vertices), the floor sees the ball and the ball's lower half the floor
 // (stored vertices).
-Mesh ball_over_floor() {
-  const Mesh floor = test::quad(8);
-  const Mesh ball = test::sphere(8, 16, 0.4f);
-  std::vector<glm::vec3> p = floor.positions;
-  std::vector<glm::uvec3> t = floor.triangles;
-  const unsigned base = unsigned(p.size());
-  for (const glm::vec3& q : ball.positions) p.push_back(q + glm::vec3(0.0f, 0.5f, 0.0f));
-  for (const glm::uvec3& tri : ball.triangles) t.push_back(tri + glm::uvec3(base));
-  return make_mesh(std::move(p), std::move(t), {}, {}, {}, "ball over floor");
-}
+Mesh ball_over_floor() { return test::ball_over_floor(8, 8, 16, 0.4f, {0.0f, 0.5f, 0.0f}); }
 
 // Outgoing radiance of one vertex from a transfer row of doubles.
 glm::dvec3 dot_row(const std::vector<double>& row, int channels, const std::vector<glm::dvec3>& light) {
