@@ -13,9 +13,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <mutex>
-#include <thread>
 
 namespace prt {
 
@@ -51,29 +48,8 @@ std::uint64_t check_input_file(const std::string& path, std::string_view kind) {
 
 namespace {
 
-// The StagedWrites each thread's write_atomically calls go to
-// (StagedWrites::Scope), by thread. Not a thread_local: with one in
-// libprt_core, GCC 12's LeakSanitizer crashed at exit scanning the library's
-// dynamic TLS ("Tracer caught signal 11"), in every test that wrote a file.
-std::mutex g_staging_mutex;
-std::map<std::thread::id, StagedWrites*>& staging_by_thread() {
-  static auto* m = new std::map<std::thread::id, StagedWrites*>;  // never destroyed: used until exit
-  return *m;
-}
-StagedWrites* current_staging() {
-  std::lock_guard<std::mutex> lock(g_staging_mutex);
-  const auto& m = staging_by_thread();
-  const auto it = m.find(std::this_thread::get_id());
-  return it == m.end() ? nullptr : it->second;
-}
-void set_current_staging(StagedWrites* s) {
-  std::lock_guard<std::mutex> lock(g_staging_mutex);
-  auto& m = staging_by_thread();
-  if (s)
-    m[std::this_thread::get_id()] = s;
-  else
-    m.erase(std::this_thread::get_id());
-}
+// The StagedWrites this thread's write_atomically calls go to (StagedWrites::Scope).
+thread_local StagedWrites* t_staging = nullptr;
 
 }  // namespace
 
@@ -111,8 +87,8 @@ void write_atomically(const std::string& path, const std::function<void(const st
     fs::remove(tmp, ignored);
     throw;
   }
-  if (StagedWrites* staged = current_staging()) {
-    staged->stage(tmp.string(), p.string(), path);
+  if (t_staging) {
+    t_staging->stage(tmp.string(), p.string(), path);
     return;
   }
   fs::rename(tmp, p, ec);
@@ -124,8 +100,8 @@ void write_atomically(const std::string& path, const std::function<void(const st
 
 StagedWrites::~StagedWrites() { discard(); }
 
-StagedWrites::Scope::Scope(StagedWrites& staged) : previous_(current_staging()) { set_current_staging(&staged); }
-StagedWrites::Scope::~Scope() { set_current_staging(previous_); }
+StagedWrites::Scope::Scope(StagedWrites& staged) : previous_(t_staging) { t_staging = &staged; }
+StagedWrites::Scope::~Scope() { t_staging = previous_; }
 
 void StagedWrites::stage(const std::string& tmp, const std::string& path, const std::string& shown) {
   std::error_code ec;
