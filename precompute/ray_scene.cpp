@@ -10,6 +10,7 @@
 #include <xmmintrin.h>
 
 #include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
 
 #include <algorithm>
 #include <cfloat>
@@ -243,5 +244,52 @@ bool RayScene::occluded1(const glm::vec3& o, const glm::vec3& d, float tnear) co
   rtcOccluded1(scene_of(scene_), &ctx, &ray);
   return ray.tfar < 0.0f;
 }
+
+namespace {
+
+// ---- a portable, seeded direction set ---------------------------------------
+
+// splitmix64: the standard's distributions are implementation-defined, so
+// prt draws its own bits to stay bit-reproducible across standard libraries.
+struct SplitMix64 {
+  std::uint64_t s;
+  std::uint64_t next() {
+    std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return double(next() >> 11) * 0x1.0p-53; }
+};
+
+// Uniform random rotation from three uniforms (Shoemake, Graphics Gems III).
+glm::dmat3 random_rotation(SplitMix64& rng) {
+  const double u1 = rng.uniform(), u2 = 2 * M_PI * rng.uniform(), u3 = 2 * M_PI * rng.uniform();
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  const double x = a * std::sin(u2), y = a * std::cos(u2), z = b * std::sin(u3), w = b * std::cos(u3);
+  glm::dmat3 R;  // from the unit quaternion (x, y, z, w); glm: R[col][row]
+  R[0] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)};
+  R[1] = {2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)};
+  R[2] = {2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)};
+  return R;
+}
+
+}  // namespace
+
+// M directions of a spherical Fibonacci set (equal area), turned by a
+// seeded random rotation; each stands for 4 pi / M steradians.
+std::vector<glm::vec3> direction_set(int M, std::uint64_t seed) {
+  SplitMix64 rng{seed};
+  const glm::dmat3 R = random_rotation(rng);
+  const double golden = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<glm::vec3> d(M);
+  for (int i = 0; i < M; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / M, r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = 2.0 * M_PI * std::fmod(i / golden, 1.0);
+    d[i] = glm::vec3(R * glm::dvec3(r * std::cos(phi), r * std::sin(phi), z));
+  }
+  return d;
+}
+
 
 }  // namespace prt::detail

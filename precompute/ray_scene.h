@@ -12,6 +12,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <vector>
 
 namespace prt::detail {
 
@@ -66,6 +67,11 @@ void enable_ftz_daz();
 
 // The options both precomputations share; throws prt::Error naming the option.
 void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threads, double offset, const Mesh& mesh);
+
+// M directions of a spherical Fibonacci set (equal area), turned by a
+// random rotation drawn from `seed` (splitmix64: the same bits with any
+// standard library); each stands for 4 pi / M steradians.
+std::vector<glm::vec3> direction_set(int M, std::uint64_t seed);
 
 // The default ray offset for a mesh: 1e-4 x its bounding-box diagonal (and a
 // floor of 1e-30 for a mesh of one point).
