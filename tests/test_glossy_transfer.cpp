@@ -24,8 +24,8 @@
 namespace prt {
 namespace {
 
-// 32768 Fibonacci directions against a visibility edge (the opening's rim):
-// the estimate's error falls like M^-3/4; measured below, bound with margin.
+// 32768 Fibonacci directions against a visibility edge (the opening's rim),
+// relative to the largest entry: measured 1.5e-3 (6.5e-4 of 0.446).
 constexpr double kOpeningTolerance = 1e-2;
 
 TEST(GlossyMatrices, UnoccludedVerticesAreTheHemisphereMatrixAndStoreNothing) {
@@ -93,13 +93,9 @@ TEST(GlossyMatrices, DeterministicAcrossThreadCounts) {
   const GlossyMatrices one = compute_glossy_matrices(m, o);
   ASSERT_GT(one.packed.size(), 1000u * one.packed_size());  // many stored vertices
   o.threads = 4;
-  GlossyMatrices many;
   std::size_t threads = 0;
-  for (int attempt = 0; attempt < 5 && threads < 2; ++attempt) {
-    test::ThreadWitness witness;
-    many = compute_glossy_matrices(m, o, witness.progress());
-    threads = witness.fewest({"rays"});
-  }
+  const GlossyMatrices many =
+      test::until_shared([&](const Progress& p) { return compute_glossy_matrices(m, o, p); }, {"rays"}, threads);
   ASSERT_GE(threads, 2u) << "no run shared its work between threads";
   EXPECT_EQ(one.slots, many.slots);
   EXPECT_EQ(one.packed, many.packed);

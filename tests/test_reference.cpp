@@ -396,18 +396,18 @@ TEST(Reference, SameBitsForAnyThreadCount) {
   const prt::EnvMap map = sun_map(32, 16, 9, 4, glm::vec3(500, 400, 300), 0.3f);
   ReferenceOptions o = options(TransferMode::Interreflected, 64, 42);
   o.bounces = 2;
-  ReferenceResult one, two;
+  ReferenceResult one;
   {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
     one = prt::render_reference(m, map, o);
   }
   std::size_t threads = 0;
-  for (int attempt = 0; attempt < 5 && threads < 2; ++attempt) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
-    prt::test::ThreadWitness witness;
-    two = prt::render_reference(m, map, o, witness.progress());
-    threads = witness.fewest({"reference"});
-  }
+  const ReferenceResult two = prt::test::until_shared(
+      [&](const prt::Progress& p) {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
+        return prt::render_reference(m, map, o, p);
+      },
+      {"reference"}, threads);
   ASSERT_GE(threads, 2u) << "no run shared its work between threads; the comparison would prove nothing";
   EXPECT_TRUE(same_bits(one, two));
   o.seed = 43;

@@ -15,6 +15,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace prt::test {
 
@@ -35,7 +36,7 @@ class ThreadWitness {
     };
   }
   // The fewest threads seen in any of `phases` (0 if one was never reported).
-  std::size_t fewest(std::initializer_list<const char*> phases) const {
+  std::size_t fewest(const std::vector<const char*>& phases) const {
     std::lock_guard<std::mutex> lock(mutex_);
     std::size_t least = ~std::size_t(0);
     for (const char* p : phases) {
@@ -49,6 +50,21 @@ class ThreadWitness {
   mutable std::mutex mutex_;
   std::map<std::string, std::set<std::thread::id>> seen_;
 };
+
+// Calls run(progress) until the progress reports of each of `phases` came
+// from two or more threads (at most 5 calls: a run may happen not to share
+// on a loaded machine) and returns the last result; `threads` receives the
+// fewest threads seen in a phase on that call (the test asserts >= 2).
+template <typename Run>
+auto until_shared(const Run& run, const std::vector<const char*>& phases, std::size_t& threads) {
+  threads = 0;
+  for (int attempt = 0;; ++attempt) {
+    ThreadWitness witness;
+    auto result = run(witness.progress());
+    threads = witness.fewest(phases);
+    if (threads >= 2 || attempt == 4) return result;
+  }
+}
 
 // Counts the TBB worker threads that joined `arena` while it observes (for
 // work with no progress callback, e.g. relighting): a worker joins an arena

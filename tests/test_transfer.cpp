@@ -209,13 +209,11 @@ TEST(Transfer, DeterministicAcrossThreadCounts) {
     o.threads = 1;
     const Transfer one = compute_transfer(m, o);
     o.threads = 4;
-    Transfer many;
     std::size_t threads = 0;
-    for (int attempt = 0; attempt < 5 && threads < 2; ++attempt) {
-      test::ThreadWitness witness;
-      many = compute_transfer(m, o, witness.progress());
-      threads = bounces ? witness.fewest({"rays", "bounces"}) : witness.fewest({"rays"});
-    }
+    const Transfer many = test::until_shared([&](const Progress& p) { return compute_transfer(m, o, p); },
+                                             bounces ? std::vector<const char*>{"rays", "bounces"}
+                                                     : std::vector<const char*>{"rays"},
+                                             threads);
     ASSERT_GE(threads, 2u) << "no run shared its work between threads; the comparison would prove nothing";
     EXPECT_EQ(one.coeffs, many.coeffs);
     EXPECT_EQ(one.direct, many.direct);

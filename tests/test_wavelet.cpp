@@ -553,13 +553,9 @@ TEST(WaveletTransfer, DeterministicAcrossRunsAndThreadCounts) {
   ASSERT_GT(a.col_values.size(), 100000u);  // many kept terms, not a trivial transfer
   o.threads = 4;
   for (int run = 0; run < 2; ++run) {  // twice: runs on several threads agree with each other too
-    WaveletTransfer x;
     std::size_t threads = 0;
-    for (int attempt = 0; attempt < 5 && threads < 2; ++attempt) {
-      test::ThreadWitness witness;
-      x = compute_wavelet_transfer(m, o, witness.progress());
-      threads = witness.fewest({"rays"});
-    }
+    const WaveletTransfer x =
+        test::until_shared([&](const Progress& p) { return compute_wavelet_transfer(m, o, p); }, {"rays"}, threads);
     ASSERT_GE(threads, 2u) << "no run shared its work between threads; the comparison would prove nothing";
     EXPECT_EQ(x.col_offsets, a.col_offsets);
     EXPECT_EQ(x.col_vertices, a.col_vertices);
