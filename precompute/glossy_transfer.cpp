@@ -46,10 +46,15 @@ GlossyMatrices compute_glossy_matrices(const Mesh& mesh, const GlossyOptions& o,
   const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
   const detail::RayScene scene(mesh);
 
-  // Per block: the packed occluded sums of its vertices that have any, in vertex order.
+  // Per block: its stored vertices (those with an occluded ray) in vertex
+  // order, and their packed M_p = H(n) - the occluded sum, in float.
   constexpr std::size_t kGrain = 32;
   const std::size_t blocks = (V + kGrain - 1) / kGrain;
-  std::vector<std::vector<std::pair<std::uint32_t, std::vector<double>>>> found(blocks);
+  struct Found {
+    std::vector<std::uint32_t> vertices;
+    std::vector<float> packed;
+  };
+  std::vector<Found> found(blocks);
   detail::ProgressTicker ticker(progress, V, "rays");
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
     detail::enable_ftz_daz();
@@ -86,26 +91,24 @@ GlossyMatrices compute_glossy_matrices(const Mesh& mesh, const GlossyOptions& o,
         if (++count == 8) flush();
       }
       if (count > 0) flush();
-      if (occluded_rays > 0) found[b].emplace_back(std::uint32_t(v), acc);
+      if (occluded_rays == 0) continue;
+      const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm)), n);
+      Found& f = found[b];
+      f.vertices.push_back(std::uint32_t(v));
+      std::size_t k = 0;
+      for (int p = 0; p < nc; ++p)
+        for (int q = p; q < nc; ++q, ++k) f.packed.push_back(float(H[std::size_t(p) * nc + q] - acc[k]));
     }
     ticker.tick(v1 - v0);
   });
   ticker.finish();
 
-  // Stored rows in vertex order: M_p = H(n) - the occluded sum, upper triangle.
-  std::size_t rows = 0;
-  for (const auto& f : found) rows += f.size();
-  g.packed.resize(rows * P);
-  std::size_t row = 0;
-  for (const auto& f : found)
-    for (const auto& [v, occ] : f) {
-      const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(mesh.normals[v])), n);
-      float* out = g.packed.data() + row * P;
-      std::size_t k = 0;
-      for (int p = 0; p < nc; ++p)
-        for (int q = p; q < nc; ++q, ++k) out[k] = float(H[std::size_t(p) * nc + q] - occ[k]);
-      g.slots[v] = std::uint32_t(row++);
-    }
+  // Stored rows in vertex order (blocks are in vertex order).
+  for (const Found& f : found) {
+    const std::size_t first = g.packed.size() / P;
+    for (std::size_t i = 0; i < f.vertices.size(); ++i) g.slots[f.vertices[i]] = std::uint32_t(first + i);
+    g.packed.insert(g.packed.end(), f.packed.begin(), f.packed.end());
+  }
   return g;
 }
 
