@@ -112,8 +112,10 @@ BENCHMARK(BM_TransferInterreflected)->Arg(1)->Arg(3)->Unit(benchmark::kMilliseco
 
 // Glossy transfer matrices (issue 15's target: 6 bands at 1024 rays in at
 // most 3x the diffuse shadowed pass at the same settings, run beside it).
-// BM_ShadowedSixBands is that baseline; BM_GlossySixBands builds M_p with a
-// scalar double rank-1 update per occluded ray (no BLAS yet).
+// BM_ShadowedSixBands is that baseline; BM_GlossySixBands is the same pass
+// with TransferOptions::glossy (the same rays; M_p by one OpenBLAS dsyrk per
+// vertex), and BM_GlossyInterreflectedFiveBands the interreflected glossy
+// pass (one bounce; the walls' light by one dgemm per vertex).
 void BM_ShadowedSixBands(benchmark::State& state) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
   prt::TransferOptions o = options(prt::TransferMode::Shadowed);
@@ -129,18 +131,34 @@ BENCHMARK(BM_ShadowedSixBands)->Unit(benchmark::kMillisecond)->UseRealTime()->It
 
 void BM_GlossySixBands(benchmark::State& state) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
-  prt::GlossyOptions o;
-  o.bands = 6;
+  prt::TransferOptions o;
+  o.mode = prt::TransferMode::Shadowed;
   o.samples = kSamples;
-  prt::GlossyMatrices g;
+  o.bands = 6;
+  o.glossy = true;
+  prt::Transfer t;
   for (auto _ : state) {
-    g = prt::compute_glossy_matrices(*bunny(), o);
-    benchmark::DoNotOptimize(g.packed.data());
+    t = prt::compute_transfer(*bunny(), o);
+    benchmark::DoNotOptimize(t.glossy_matrices.data());
   }
-  const double stored = g.packed_size() ? double(g.packed.size() / g.packed_size()) : 0.0;
-  state.counters["analytic"] = 1.0 - stored / double(g.vertices);
-  state.counters["stored_bytes_per_vertex"] = 4.0 * double(g.packed.size()) / double(g.vertices);
+  count_analytic(state, t);
+  state.counters["glossy_bytes_per_vertex"] = 4.0 * double(t.glossy_matrices.size()) / double(t.vertices);
 }
 BENCHMARK(BM_GlossySixBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+void BM_GlossyInterreflectedFiveBands(benchmark::State& state) {
+  if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
+  prt::TransferOptions o = options(prt::TransferMode::Interreflected, 1);
+  o.bands = 5;
+  o.glossy = true;
+  prt::Transfer t;
+  for (auto _ : state) {
+    t = prt::compute_transfer(*bunny(), o);
+    benchmark::DoNotOptimize(t.glossy_matrices.data());
+  }
+  count_analytic(state, t);
+  state.counters["glossy_bytes_per_vertex"] = 4.0 * double(t.glossy_matrices.size()) / double(t.vertices);
+}
+BENCHMARK(BM_GlossyInterreflectedFiveBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 }  // namespace

@@ -100,6 +100,7 @@ set(_prt_dep_table
   "OpenGL::OpenGL|OpenGL COMPONENTS OpenGL EGL|opengl"
   "OpenGL::EGL|OpenGL COMPONENTS OpenGL EGL|egl"
   "PkgConfig::XXHASH|PKG:XXHASH:libxxhash|libxxhash"
+  "PkgConfig::OPENBLAS|PKG:OPENBLAS:openblas|openblas"
   "fmt::fmt|fmt|fmt"
   "fmt::fmt-header-only|fmt|fmt"
   "spdlog::spdlog|spdlog|spdlog"

@@ -8,17 +8,26 @@
 // sparse gather matrix G (receiver vertex x emitting vertex), one gather per
 // bounce. Vertices none of whose rays is occluded keep no stored transfer
 // (prt/transfer.h, "analytic vertices").
+//
+// Glossy matrices (TransferOptions::glossy) come from the same rays: the
+// hemisphere product matrix of the normal minus w Y Y^T of every occluded ray
+// (one BLAS rank-k update per vertex); interreflected adds, for every ray
+// that hits a front face, w Y(s) T_q^T with T_q the hit point's final
+// diffuse transfer (one BLAS product per vertex after the bounces).
 // Computing SH transfer: see prt/precompute.h.
 #include <prt/precompute.h>
 
 #include <prt/error.h>
 #include <prt/filter.h>
+#include <prt/glossy.h>
 #include <prt/sh.h>
 
 #include "progress_ticker.h"
 #include "ray_scene.h"
 
 #include <fmt/format.h>
+
+#include <cblas.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
@@ -44,6 +53,12 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
     throw Error(fmt::format("--bounces must be between 0 and 64, got {}", o.bounces));
   if (!(o.bounce_tolerance >= 0.0 && o.bounce_tolerance < 1.0))
     throw Error(fmt::format("--bounce-tolerance must be in [0, 1), got {:f}", o.bounce_tolerance));
+  if (o.glossy && o.mode == TransferMode::Unshadowed)
+    throw Error("--material glossy needs --mode shadowed or interreflected (an unshadowed vertex's glossy matrix is the "
+                "hemisphere's, computed at run time)");
+  if (o.glossy && o.bands > kMaxGlossyBands)
+    throw Error(fmt::format("--bands must be at most {} for glossy transfer (each matrix has bands^4 entries), got {}",
+                            kMaxGlossyBands, o.bands));
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 
@@ -64,6 +79,68 @@ struct Gather {
   std::vector<std::uint32_t> col;
   std::vector<float> val;
 };
+
+// A ray of a vertex that hit the front of a triangle, for interreflected
+// glossy: its direction's index and where it hit.
+struct FrontHit {
+  std::uint32_t dir, triangle;
+  float u, v;
+};
+
+// out (n x n, row-major, upper triangle) = alpha a^T a + beta out for the k x n
+// row-major a: the BLAS rank-k update.
+void rank_k_update(int n, int k, double alpha, const double* a, double beta, double* out) {
+  cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, n, k, alpha, a, n, beta, out, n);
+}
+
+}  // namespace
+
+namespace {
+
+// Interreflected glossy: M_p[c] += w sum_front hits Y(s) T_q[c]^T, T_q the
+// final diffuse transfer (t.coeffs, one row per vertex) at the hit point by
+// its barycentric coordinates; per vertex one BLAS product
+// (nc x H) (H x channels nc).
+void add_glossy_bounce_light(Transfer& t, const Mesh& mesh, std::vector<std::vector<FrontHit>>& front_hits,
+                             const std::vector<double>& Y, double w, const Progress& progress) {
+  const std::size_t V = t.vertices, nc = std::size_t(t.bands) * t.bands, stride = t.stride();
+  const std::size_t gstride = t.glossy_stride();
+  detail::ProgressTicker ticker(progress, V, "glossy bounce light");
+  constexpr std::size_t kGrain = 64;
+  tbb::parallel_for(std::size_t(0), (V + kGrain - 1) / kGrain, [&](std::size_t block) {
+    if (ticker.cancelled()) return;
+    std::vector<double> Yh, Th, B(nc * stride);
+    const std::size_t v0 = block * kGrain, v1 = std::min(V, v0 + kGrain);
+    for (std::size_t v = v0; v < v1; ++v) {
+      std::vector<FrontHit>& hits = front_hits[v];
+      if (hits.empty()) continue;
+      const std::size_t H = hits.size();
+      Yh.resize(H * nc);
+      Th.assign(H * stride, 0.0);
+      for (std::size_t h = 0; h < H; ++h) {
+        std::copy_n(Y.begin() + std::ptrdiff_t(hits[h].dir * nc), nc, Yh.begin() + std::ptrdiff_t(h * nc));
+        const glm::uvec3 tri = mesh.triangles[hits[h].triangle];
+        const double b[3] = {1.0 - hits[h].u - hits[h].v, hits[h].u, hits[h].v};
+        double* th = Th.data() + h * stride;
+        for (int c = 0; c < 3; ++c) {
+          const float* src = t.coeffs.data() + std::size_t(tri[c]) * stride;
+          for (std::size_t k = 0; k < stride; ++k) th[k] += b[c] * src[k];
+        }
+      }
+      cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, int(nc), int(stride), int(H), w, Yh.data(), int(nc),
+                  Th.data(), int(stride), 0.0, B.data(), int(stride));
+      float* g = t.glossy_matrices.data() + v * gstride;
+      for (int c = 0; c < t.channels; ++c)
+        for (std::size_t i = 0; i < nc; ++i)
+          for (std::size_t j = 0; j < nc; ++j)
+            g[std::size_t(c) * nc * nc + i * nc + j] =
+                float(double(g[std::size_t(c) * nc * nc + i * nc + j]) + B[i * stride + std::size_t(c) * nc + j]);
+      std::vector<FrontHit>().swap(hits);
+    }
+    ticker.tick(v1 - v0);
+  });
+  ticker.finish();
+}
 
 }  // namespace
 
@@ -98,10 +175,21 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   const bool trace = o.mode != TransferMode::Unshadowed;
   const bool gather = o.mode == TransferMode::Interreflected && o.bounces > 0;
 
+  const bool glossy = o.glossy;
+  const bool glossy_ir = glossy && o.mode == TransferMode::Interreflected;
+  const bool want_hits = gather || glossy_ir;
+  t.glossy = glossy;
+  const std::size_t gstride = glossy ? t.glossy_stride() : 0;
+  if (glossy) t.glossy_matrices.assign(V * gstride, 0.0f);
+  std::vector<std::vector<FrontHit>> front_hits(glossy_ir ? V : 0);
+
   const int M = 2 * o.samples;
   const std::vector<glm::vec3> dirs = trace ? detail::direction_set(M, o.seed) : std::vector<glm::vec3>{};
   std::vector<float> Ytab(trace ? std::size_t(M) * nc : 0);
   for (int j = 0; j < (trace ? M : 0); ++j) sh::eval<float>(n, dirs[j].x, dirs[j].y, dirs[j].z, Ytab.data() + std::size_t(j) * nc);
+  // Glossy: the basis in double (the products of the matrices sum many rays).
+  std::vector<double> Ydbl(glossy ? std::size_t(M) * nc : 0);
+  for (int j = 0; j < (glossy ? M : 0); ++j) sh::eval<double>(n, dirs[j].x, dirs[j].y, dirs[j].z, Ydbl.data() + std::size_t(j) * nc);
   const double w = 4.0 * M_PI / M;
   const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
 
@@ -118,7 +206,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
     detail::enable_ftz_daz();
     if (first.cancelled()) return;
     std::vector<double> Yn(nc), occ(nc);
-    std::vector<float> Yf(nc);
+    std::vector<double> Yocc, C(glossy ? std::size_t(nc) * nc : 0);  // glossy: the occluded rays' Y, and w Yocc^T Yocc
     glm::vec3 batch[8];
     int batch_j[8];
     detail::Hit hits[8];
@@ -138,6 +226,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
         continue;
       }
       std::fill(occ.begin(), occ.end(), 0.0);
+      Yocc.clear();
       std::size_t occluded_rays = 0;
       double occ_cos = 0.0;
       glm::dvec3 occ_dir(0.0);
@@ -146,7 +235,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
         // Occluded directions of this batch: subtract their cosine-weighted
         // basis; record front hits for the bounce gather.
         std::uint32_t occluded = 0;
-        if (gather) {
+        if (want_hits) {
           scene->intersect8(origin, batch, count, offset, hits);
           for (int i = 0; i < count; ++i) occluded |= hits[i].hit() ? 1u << i : 0u;
         } else {
@@ -161,6 +250,9 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
           for (int k = 0; k < nc; ++k) occ[k] += wc * y[k];
           occ_cos += wc;
           occ_dir += wc * glm::dvec3(dirs[j]);
+          if (glossy) Yocc.insert(Yocc.end(), Ydbl.begin() + std::ptrdiff_t(j) * nc, Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
+          if (glossy_ir && hits[i].front)
+            front_hits[v].push_back({std::uint32_t(j), hits[i].triangle, hits[i].u, hits[i].v});
           if (gather && hits[i].front) {
             const glm::uvec3 tri = mesh.triangles[hits[i].triangle];
             const float b[3] = {1.0f - hits[i].u - hits[i].v, hits[i].u, hits[i].v};
@@ -183,6 +275,22 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
       }
       if (count) row_of(count);
       analytic[v] = occluded_rays == 0;
+      if (glossy && occluded_rays > 0) {
+        // M_p = H(n) - w sum_occluded Y Y^T (upper triangle from the BLAS).
+        rank_k_update(nc, int(occluded_rays), w, Yocc.data(), 0.0, C.data());
+        const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm)), n);
+        float* g = t.glossy_matrices.data() + v * gstride;
+        std::size_t k = 0;
+        for (int p = 0; p < nc; ++p)
+          for (int q = glossy_ir ? 0 : p; q < nc; ++q) {
+            const int a = std::min(p, q), b = std::max(p, q);
+            const double value = H[std::size_t(p) * nc + q] - C[std::size_t(a) * nc + b];
+            if (glossy_ir)  // full, per channel; the bounce light is added below
+              for (int c = 0; c < t.channels; ++c) g[std::size_t(c) * nc * nc + std::size_t(p) * nc + q] = float(value);
+            else
+              g[k++] = float(value);
+          }
+      }
       // Scale the occluded sums so the set integrates cos+ to exactly pi: a
       // fully occluded vertex then gets AO 0 and T_00 0 exactly.
       const double scale = all_cos > 0.0 ? M_PI / all_cos : 1.0;
@@ -228,6 +336,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   t.shading_hash = shading_hash(mesh, o.vertex_colors);
   if (!gather) {
     if (o.mode == TransferMode::Interreflected) t.direct = t.coeffs;
+    if (glossy_ir) add_glossy_bounce_light(t, mesh, front_hits, Ydbl, w, progress);
     compact_transfer(t, analytic);
     return t;
   }
@@ -285,6 +394,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   }
   // An analytic vertex has no gather row (no occluded ray), so no bounce
   // added anything to it: its total is its direct part, the clamped cosine.
+  if (glossy_ir) add_glossy_bounce_light(t, mesh, front_hits, Ydbl, w, progress);
   compact_transfer(t, analytic);
   return t;
 }

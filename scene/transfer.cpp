@@ -49,7 +49,7 @@ namespace detail {
 
 TransferHeader header_of(const Transfer& t) {
   const std::uint64_t stored = t.slots.size() == t.vertices ? t.stored_vertices() : t.vertices;
-  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored};
+  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored, t.glossy};
 }
 
 std::string header_problem(const TransferHeader& h) {
@@ -87,6 +87,20 @@ std::string array_problem(TransferArray a, std::uint64_t count, const TransferHe
                            "= {}",
                            name, count, h.stored, h.channels, h.bands * h.bands, h.stored * stride);
       return {};
+    case TransferArray::Glossy: {
+      if (h.mode == std::int64_t(TransferMode::Unshadowed))
+        return fmt::format("has a '{}' section, which an unshadowed transfer does not have (every vertex's matrix is "
+                           "the hemisphere's)", name);
+      const bool ir = h.mode == std::int64_t(TransferMode::Interreflected);
+      const std::uint64_t nc = std::uint64_t(h.bands) * std::uint64_t(h.bands);
+      const std::uint64_t per = ir ? std::uint64_t(h.channels) * nc * nc : nc * (nc + 1) / 2;
+      if (count != h.stored * per)
+        return ir ? fmt::format("section '{}' has {} values; expected stored vertices x channels x (bands^2)^2 = {} x "
+                                "{} x {} = {}", name, count, h.stored, h.channels, nc * nc, h.stored * per)
+                  : fmt::format("section '{}' has {} values; expected stored vertices x bands^2 (bands^2 + 1) / 2 = "
+                                "{} x {} = {}", name, count, h.stored, per, h.stored * per);
+      return {};
+    }
     case TransferArray::BounceEnergy:
       if (count == 0 || count > std::uint64_t(h.bounces))
         return fmt::format("section '{}' has {} values; expected 1 to bounces = {}", name, count, h.bounces);
@@ -141,6 +155,10 @@ std::string finite_problem(const Transfer& t) {
   };
   if (auto p = coeff(t.coeffs, "coefficient"); !p.empty()) return p;
   if (auto p = coeff(t.direct, "direct coefficient"); !p.empty()) return p;
+  for (std::size_t i = 0; i < t.glossy_matrices.size(); ++i)
+    if (!std::isfinite(t.glossy_matrices[i]))
+      return fmt::format("vertex {} has a non-finite glossy matrix entry ({:g})",
+                         vertex_of_row(i / t.glossy_stride()), double(t.glossy_matrices[i]));
   for (std::size_t v = 0; v < t.ao.size(); ++v)
     if (!std::isfinite(t.ao[v]))
       return fmt::format("vertex {} has a non-finite ambient occlusion ({:g})", v, double(t.ao[v]));
@@ -171,6 +189,11 @@ std::string transfer_problem(const Transfer& t) {
   for (const auto& [a, count] : arrays)
     if (a == TransferArray::Coeffs || count > 0)
       if (auto p = detail::array_problem(a, count, h); !p.empty()) return p;
+  if (t.glossy) {
+    if (auto p = detail::array_problem(TransferArray::Glossy, t.glossy_matrices.size(), h); !p.empty()) return p;
+  } else if (!t.glossy_matrices.empty()) {
+    return "glossy matrices without the glossy flag";
+  }
   return finite_problem(t);
 }
 
@@ -236,6 +259,8 @@ void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic) {
   const std::size_t stride = t.stride();
   PRT_CHECK_OP(t.coeffs.size(), ==, t.vertices * stride);
   PRT_CHECK(t.direct.empty() || t.direct.size() == t.coeffs.size());
+  const std::size_t gstride = t.glossy ? t.glossy_stride() : 0;
+  PRT_CHECK_OP(t.glossy_matrices.size(), ==, t.vertices * gstride);
   if (std::none_of(analytic.begin(), analytic.end(), [](std::uint8_t a) { return a != 0; })) return;
   t.slots.assign(t.vertices, Transfer::kAnalytic);
   std::size_t rows = 0;
@@ -246,6 +271,9 @@ void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic) {
       std::copy_n(t.coeffs.begin() + std::ptrdiff_t(v * stride), stride, t.coeffs.begin() + std::ptrdiff_t(rows * stride));
       if (!t.direct.empty())
         std::copy_n(t.direct.begin() + std::ptrdiff_t(v * stride), stride, t.direct.begin() + std::ptrdiff_t(rows * stride));
+      if (gstride)
+        std::copy_n(t.glossy_matrices.begin() + std::ptrdiff_t(v * gstride), gstride,
+                    t.glossy_matrices.begin() + std::ptrdiff_t(rows * gstride));
     }
     t.slots[v] = std::uint32_t(rows++);
   }
@@ -255,6 +283,8 @@ void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic) {
     t.direct.resize(rows * stride);
     t.direct.shrink_to_fit();
   }
+  t.glossy_matrices.resize(rows * gstride);
+  t.glossy_matrices.shrink_to_fit();
 }
 
 namespace {

@@ -73,7 +73,9 @@ constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
 constexpr std::uint32_t kBasisSH = 0;
 constexpr std::uint32_t kBasisWavelet = 1;
 constexpr std::uint32_t kFlagVertexColors = 1u << 0;
-constexpr std::uint32_t kKnownFlags = kFlagVertexColors;
+constexpr std::uint32_t kFlagGlossy = 1u << 1;  // version 3: glossy transfer matrices (section 7)
+constexpr std::uint32_t kKnownFlagsV2 = kFlagVertexColors;
+constexpr std::uint32_t kKnownFlags = kFlagVertexColors | kFlagGlossy;
 
 constexpr std::uint32_t kTypeF32 = 1;
 constexpr std::uint32_t kTypeF64 = 2;
@@ -91,6 +93,7 @@ enum Kind : std::uint32_t {
   kBentNormals = std::uint32_t(TransferArray::BentNormals),
   kBounceEnergy = std::uint32_t(TransferArray::BounceEnergy),
   kAnalyticMask = 6,  // version 2
+  kGlossy = std::uint32_t(TransferArray::Glossy),  // version 3
 };
 
 struct KindInfo {
@@ -100,17 +103,19 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 6> kKinds = {{
+constexpr std::array<KindInfo, 7> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
     {kBentNormals, detail::array_name(TransferArray::BentNormals), kTypeF32, true},
     {kBounceEnergy, detail::array_name(TransferArray::BounceEnergy), kTypeF64, false},
     {kAnalyticMask, "analytic vertices", kTypeU32, false},
+    {kGlossy, detail::array_name(TransferArray::Glossy), kTypeF32, true},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
 constexpr std::size_t kKindsV2 = 6;
+constexpr std::size_t kKindsV3 = 7;
 
 // Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
 constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
@@ -166,6 +171,8 @@ using detail::TransferHeader;
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6.
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v) {
+  if (kind == kGlossy && !v.glossy)
+    return fmt::format("has a '{}' section, but the header's flags say it has none", kind_info(kind)->name);
   if (kind != kAnalyticMask) return detail::array_problem(TransferArray(kind), count, v);
   const char* name = kind_info(kind)->name;
   if (v.stored == v.vertices)
@@ -199,12 +206,15 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
     case kBounceEnergy: return {t.bounce_energy.data(), t.bounce_energy.size()};
     // Built by the writer from the slots (analytic_mask).
     case kAnalyticMask: return {nullptr, stored_of(t) < t.vertices ? mask_words(t.vertices) : 0};
+    case kGlossy: return {t.glossy_matrices.data(), t.glossy_matrices.size()};
   }
   return {nullptr, 0};
 }
 
 // Whether `t` stores section `kind`: the coefficients always, the others when non-empty.
-bool has_section(const Transfer& t, std::uint32_t kind) { return kind == kCoeffs || section_array(t, kind).second > 0; }
+bool has_section(const Transfer& t, std::uint32_t kind) {
+  return kind == kCoeffs || (kind == kGlossy && t.glossy) || section_array(t, kind).second > 0;
+}
 
 // ---- writing ------------------------------------------------------------------------
 
@@ -246,7 +256,9 @@ std::uint64_t analytic_bytes_saved(const Transfer& t) {
   for (const auto& sec : transfer_sections(t)) {
     compact += kSectionHeaderSize + sec.bytes + padding(sec.bytes);
     if (sec.kind == kAnalyticMask) continue;
-    const std::uint64_t bytes = sec.kind == kCoeffs || sec.kind == kDirect ? sec.bytes + analytic * row : sec.bytes;
+    const std::uint64_t bytes = sec.kind == kCoeffs || sec.kind == kDirect ? sec.bytes + analytic * row
+                                : sec.kind == kGlossy                  ? sec.bytes + analytic * 4 * t.glossy_stride()
+                                                                       : sec.bytes;
     dense += kSectionHeaderSize + bytes + padding(bytes);
   }
   return dense > compact ? dense - compact : 0;
@@ -318,7 +330,9 @@ void write_transfer(const std::string& path, const Transfer& t) {
 
   unsigned char header[kHeaderSize] = {};  // reserved bytes stay zero
   std::memcpy(header, kMagic.data(), kMagic.size());
-  store<std::uint32_t>(header + kOffVersion, kTransferFormatVersion);
+  // Version 3 only where it is needed: transfers without glossy matrices stay
+  // readable by a prt that reads version 2.
+  store<std::uint32_t>(header + kOffVersion, transfer_format_version(t.glossy));
   store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
   store<std::uint32_t>(header + kOffBasis, kBasisSH);
   store<std::uint32_t>(header + kOffBands, std::uint32_t(t.bands));
@@ -327,7 +341,7 @@ void write_transfer(const std::string& path, const Transfer& t) {
   store<std::uint32_t>(header + kOffBounces, std::uint32_t(t.bounces));
   store<std::uint32_t>(header + kOffSamples, std::uint32_t(t.samples));
   for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
-  store<std::uint32_t>(header + kOffFlags, t.vertex_colors ? kFlagVertexColors : 0u);
+  store<std::uint32_t>(header + kOffFlags, (t.vertex_colors ? kFlagVertexColors : 0u) | (t.glossy ? kFlagGlossy : 0u));
   store<std::uint64_t>(header + kOffSeed, t.seed);
   store<std::uint64_t>(header + kOffVertices, t.vertices);
   store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
@@ -504,7 +518,7 @@ Transfer Reader::read() {
                            "sh for an SH transfer",
                            load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisSH) throw fail(unknown_basis(basis));
-  const TransferHeader v{load<std::uint32_t>(h + kOffBands),
+  TransferHeader v{load<std::uint32_t>(h + kOffBands),
                          load<std::uint32_t>(h + kOffChannels),
                          load<std::uint32_t>(h + kOffMode),
                          load<std::uint32_t>(h + kOffBounces),
@@ -514,10 +528,13 @@ Transfer Reader::read() {
                          // Version 1 stores every vertex.
                          version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
   const bool v1 = version_ == 1;
-  const std::size_t known_kinds = v1 ? kKindsV1 : kKindsV2;
-  if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
+  const std::size_t known_kinds = v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : kKindsV3;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
-  if (flags & ~kKnownFlags) throw fail(fmt::format("bad header: unknown flags 0x{:x}", flags & ~kKnownFlags));
+  const std::uint32_t known_flags = version_ >= 3 ? kKnownFlags : kKnownFlagsV2;
+  if (flags & ~known_flags)
+    throw fail(fmt::format("bad header: unknown flags 0x{:x} in a version {} file", flags & ~known_flags, version_));
+  v.glossy = (flags & kFlagGlossy) != 0;
+  if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
   for (std::uint64_t i = kOffReserved; i < kHeaderSize; ++i)
     if (h[i] != 0 && (v1 || i < kOffStored || i >= kOffReservedV2))
       throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
@@ -544,6 +561,7 @@ Transfer Reader::read() {
   t.samples = int(v.samples);
   t.albedo = v.albedo;
   t.vertex_colors = (flags & kFlagVertexColors) != 0;
+  t.glossy = v.glossy;
   t.seed = load<std::uint64_t>(h + kOffSeed);
   t.vertices = std::size_t(v.vertices);
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
@@ -591,6 +609,7 @@ Transfer Reader::read() {
       case kBentNormals: read_section(data, t.bent_normals, count / 3); break;
       case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
       case kAnalyticMask: read_section(data, mask, count); break;
+      case kGlossy: read_section(data, t.glossy_matrices, count); break;
     }
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
@@ -604,6 +623,8 @@ Transfer Reader::read() {
     throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
                            "are analytic",
                            v.vertices - v.stored, v.vertices));
+  if (v.glossy && previous < kGlossy)
+    throw fail("bad section table: no 'glossy matrices' section, but the header's flags say the file has one");
 
   // 5. Values: the mask marks exactly the vertices the header says are
   // analytic, and nothing past the last vertex; then the validator (every
@@ -672,12 +693,19 @@ std::string describe_transfer(const Transfer& t) {
   const auto line = [](const char* label, const std::string& value) {
     return fmt::format("  {:<17} {}\n", label, value);
   };
-  std::string s = fmt::format("prt transfer (format version {})\n", kTransferFormatVersion);
+  std::string s = fmt::format("prt transfer (format version {})\n", transfer_format_version(t.glossy));
   s += line("basis", "spherical harmonics");
   s += line("bands", fmt::format("{} ({} coefficients per channel)", t.bands, t.bands * t.bands));
   s += line("channels",
             fmt::format("{}{}", t.channels, t.channels == 1 ? " (grey: one channel serves R, G and B)" : " (RGB)"));
   s += line("mode", std::string(transfer_mode_name(t.mode)));
+  if (t.glossy)
+    s += line("material", fmt::format("glossy: transfer matrices of {}x{}{} per stored vertex", t.bands * t.bands,
+                                      t.bands * t.bands,
+                                      t.glossy_symmetric() ? " (symmetric: upper triangle stored)"
+                                                           : fmt::format(", {} channel{} (interreflected)",
+                                                                         t.glossy_channels(),
+                                                                         t.glossy_channels() == 1 ? "" : "s")));
   s += line("bounces", fmt::format("{}", t.bounces));
   s += line("samples", fmt::format("{}", t.samples));
   s += line("albedo", fmt::format("{:.7g} {:.7g} {:.7g}{}", double(t.albedo.x), double(t.albedo.y), double(t.albedo.z),

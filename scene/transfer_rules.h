@@ -22,6 +22,7 @@ struct TransferHeader {
   glm::vec3 albedo;
   std::uint64_t vertices;
   std::uint64_t stored;  // vertices with a row in the coefficients; the rest are analytic
+  bool glossy = false;   // holds glossy transfer matrices
 };
 // Those of `t`; its stored vertices are counted over its slots when they are
 // one per vertex, and are all of its vertices otherwise.
@@ -30,16 +31,19 @@ TransferHeader header_of(const Transfer& t);
 std::string header_problem(const TransferHeader& h);
 
 // The arrays of a Transfer, numbered as their file sections (docs/FORMAT.md).
-enum class TransferArray : std::uint32_t { Coeffs = 1, Direct = 2, AO = 3, BentNormals = 4, BounceEnergy = 5 };
+enum class TransferArray : std::uint32_t {
+  Coeffs = 1, Direct = 2, AO = 3, BentNormals = 4, BounceEnergy = 5, Glossy = 7
+};
 inline constexpr EnumName<TransferArray> kTransferArrayNames[] = {
     {TransferArray::Coeffs, "coefficients"},   {TransferArray::Direct, "direct"},
     {TransferArray::AO, "ambient occlusion"},  {TransferArray::BentNormals, "bent normals"},
-    {TransferArray::BounceEnergy, "bounce energy"},
+    {TransferArray::BounceEnergy, "bounce energy"},  {TransferArray::Glossy, "glossy matrices"},
 };
 constexpr const char* array_name(TransferArray a) { return enum_name(kTransferArrayNames, a).data(); }
 // What is wrong with array `a` holding `count` scalars (bent normals: 3 per
 // vertex) in a transfer of valid values `h`, or "". Every array but the
-// coefficients may also be absent (not checked here).
+// coefficients may also be absent (not checked here); the glossy matrices
+// are there exactly when h.glossy.
 std::string array_problem(TransferArray a, std::uint64_t count, const TransferHeader& h);
 
 // What is wrong with the scalar values of a wavelet transfer, or "".

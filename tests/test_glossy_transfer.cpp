@@ -1,9 +1,12 @@
-// Glossy transfer matrices (prt/precompute.h: compute_glossy_matrices)
+// Glossy transfer matrices (prt/precompute.h: TransferOptions::glossy)
 // against exact answers: an unoccluded vertex gets the hemisphere product
-// matrix exactly; the centre of an open box's floor gets the product
-// integral over the box's opening, integrated in the test over the opening's
-// square (a smooth integrand, Gauss-Legendre); the same bits on any number of
-// threads, with the work shown to be shared.
+// matrix exactly and stores nothing; the centre of an open box's floor gets
+// the product integral over the box's opening, integrated in the test over
+// the opening's square (a smooth integrand, Gauss-Legendre); interreflected,
+// the light of the walls is the walls' own diffuse transfer integrated over
+// their area (not over rays); the diffuse part is the same bits as without
+// glossy (the same rays); the same bits on any number of threads, with the
+// work shown to be shared.
 #include <prt/error.h>
 #include <prt/glossy.h>
 #include <prt/precompute.h>
@@ -28,17 +31,24 @@ namespace {
 // relative to the largest entry: measured 1.5e-3 (6.5e-4 of 0.446).
 constexpr double kOpeningTolerance = 1e-2;
 
-TEST(GlossyMatrices, UnoccludedVerticesAreTheHemisphereMatrixAndStoreNothing) {
+TransferOptions glossy_options(TransferMode mode, int bands, int samples) {
+  TransferOptions o;
+  o.mode = mode;
+  o.bands = bands;
+  o.samples = samples;
+  o.glossy = true;
+  return o;
+}
+
+TEST(GlossyTransfer, UnoccludedVerticesAreTheHemisphereMatrixAndStoreNothing) {
   const Mesh m = test::quad(4);
-  GlossyOptions o;
-  o.bands = 4;
-  o.samples = 256;
-  const GlossyMatrices g = compute_glossy_matrices(m, o);
-  EXPECT_TRUE(g.packed.empty());
+  const Transfer t = compute_transfer(m, glossy_options(TransferMode::Shadowed, 4, 256));
+  EXPECT_TRUE(t.glossy);
+  EXPECT_TRUE(t.glossy_matrices.empty());
   const std::vector<double> H = glossy::hemisphere_product_matrix(glm::dvec3(0, 1, 0), 4);
   for (std::size_t v = 0; v < m.vertex_count(); ++v) {
-    ASSERT_EQ(g.slots[v], GlossyMatrices::kAnalytic) << v;
-    const std::vector<double> mv = glossy_matrix(g, m, v);
+    ASSERT_TRUE(t.is_analytic(v)) << v;
+    const std::vector<double> mv = vertex_glossy_matrix(t, m, v);
     for (std::size_t k = 0; k < H.size(); ++k) ASSERT_NEAR(mv[k], H[k], 1e-12) << v << " " << k;
   }
 }
@@ -63,52 +73,138 @@ std::vector<double> opening_matrix(double h, int bands) {
   return m;
 }
 
-TEST(GlossyMatrices, OpenBoxFloorCentreSeesTheOpening) {
+double max_abs(const std::vector<double>& a) {
+  double x = 0;
+  for (double v : a) x = std::max(x, std::abs(v));
+  return x;
+}
+
+double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double x = 0;
+  for (std::size_t k = 0; k < a.size(); ++k) x = std::max(x, std::abs(a[k] - b[k]));
+  return x;
+}
+
+TEST(GlossyTransfer, OpenBoxFloorCentreSeesTheOpening) {
   const double h = 0.6;
   const Mesh m = test::open_box(float(h));
-  GlossyOptions o;
-  o.bands = 5;
-  o.samples = 16384;
-  const GlossyMatrices g = compute_glossy_matrices(m, o);
-  ASSERT_NE(g.slots[0], GlossyMatrices::kAnalytic);
-  const std::vector<double> got = glossy_matrix(g, m, 0), want = opening_matrix(h, 5);
+  const Transfer t = compute_transfer(m, glossy_options(TransferMode::Shadowed, 5, 16384));
+  ASSERT_FALSE(t.is_analytic(0));
+  const std::vector<double> got = vertex_glossy_matrix(t, m, 0), want = opening_matrix(h, 5);
+  // Symmetric by construction (one triangle stored).
+  const int nc = 25;
+  for (int i = 0; i < nc; ++i)
+    for (int j = 0; j < nc; ++j) ASSERT_EQ(got[std::size_t(i) * nc + j], got[std::size_t(j) * nc + i]);
   // The exact matrix: its (0, 0) entry is the opening's solid angle / (4 pi).
-  double largest = 0, worst = 0;
-  for (std::size_t k = 0; k < want.size(); ++k) {
-    largest = std::max(largest, std::abs(want[k]));
-    worst = std::max(worst, std::abs(got[k] - want[k]));
-  }
+  const double worst = max_diff(got, want), largest = max_abs(want);
   std::printf("open box floor centre: max |M - exact| %.3g (largest entry %.3g)\n", worst, largest);
   EXPECT_LT(worst, kOpeningTolerance * largest);
 }
 
-// The same bits on one thread and on several (4,000 vertices, 125 blocks of
-// 32), with two threads shown to have computed blocks before comparing.
-TEST(GlossyMatrices, DeterministicAcrossThreadCounts) {
-  const Mesh m = test::floor_and_ball(60);
-  GlossyOptions o;
-  o.bands = 3;
-  o.samples = 64;
-  o.threads = 1;
-  const GlossyMatrices one = compute_glossy_matrices(m, o);
-  ASSERT_GT(one.packed.size(), 1000u * one.packed_size());  // many stored vertices
-  o.threads = 4;
-  std::size_t threads = 0;
-  const GlossyMatrices many =
-      test::until_shared([&](const Progress& p) { return compute_glossy_matrices(m, o, p); }, {"rays"}, threads);
-  ASSERT_GE(threads, 2u) << "no run shared its work between threads";
-  EXPECT_EQ(one.slots, many.slots);
-  EXPECT_EQ(one.packed, many.packed);
+// Interreflected: M_ir - M_shadowed = Int over the walls' directions of
+// Y_i(s) T_q(s)[j] ds, T_q the walls' diffuse transfer interpolated at the
+// point q seen in direction s. Here integrated over each wall triangle's
+// area instead (ds = cos_q / r^2 dA, Gauss-Legendre on the square mapped
+// onto the triangle), from the transfer's own per-vertex rows.
+std::vector<double> wall_light_matrix(const Mesh& m, const Transfer& t, int bands) {
+  const int nc = bands * bands;
+  const std::vector<float> T = dense_transfer(t, m);
+  const Rule1D rule = gauss_legendre(48, 0.0, 1.0);
+  std::vector<double> out(std::size_t(nc) * nc, 0.0), y(std::size_t(nc), 0.0);
+  const glm::dvec3 p(m.positions[0]);
+  for (std::size_t f = 4; f < m.triangles.size(); ++f) {  // the walls (after the floor's four)
+    const glm::uvec3 tri = m.triangles[f];
+    const glm::dvec3 a(m.positions[tri.x]), b(m.positions[tri.y]), c(m.positions[tri.z]);
+    const glm::dvec3 cr = glm::cross(b - a, c - a);
+    const double area2 = glm::length(cr);
+    const glm::dvec3 fn = cr / area2;
+    for (std::size_t i = 0; i < rule.x.size(); ++i)
+      for (std::size_t k = 0; k < rule.x.size(); ++k) {
+        // Duffy: (u, v) = (s, s t) on the square, barycentrics (1 - u, u - v, v).
+        const double s = rule.x[i], tt = rule.x[k];
+        const double b1 = s * (1.0 - tt), b2 = s * tt, b0 = 1.0 - s;
+        const glm::dvec3 q = b0 * a + b1 * b + b2 * c;
+        const glm::dvec3 d = q - p;
+        const double r = glm::length(d);
+        const glm::dvec3 w = d / r;
+        const double cos_q = -glm::dot(fn, w);
+        if (cos_q <= 0.0) continue;  // the back of a wall: no light
+        const double weight = rule.w[i] * rule.w[k] * s * area2 * cos_q / (r * r);
+        sh::eval(bands, w.x, w.y, w.z, y.data());
+        for (int col = 0; col < nc; ++col) {
+          const double tq = b0 * T[tri.x * std::size_t(nc) + col] + b1 * T[tri.y * std::size_t(nc) + col] +
+                            b2 * T[tri.z * std::size_t(nc) + col];
+          for (int row = 0; row < nc; ++row) out[std::size_t(row) * nc + col] += weight * y[row] * tq;
+        }
+      }
+  }
+  return out;
 }
 
-TEST(GlossyMatrices, RefusesBadOptions) {
+TEST(GlossyTransfer, InterreflectedAddsTheWallsDiffuseLight) {
+  const double h = 0.6;
+  const Mesh m = test::open_box(float(h));
+  TransferOptions o = glossy_options(TransferMode::Interreflected, 4, 16384);
+  o.albedo = glm::vec3(0.8f);
+  o.bounces = 2;
+  const Transfer ir = compute_transfer(m, o);
+  o.mode = TransferMode::Shadowed;
+  const Transfer sh = compute_transfer(m, o);
+  ASSERT_EQ(ir.glossy_channels(), 1);
+  ASSERT_FALSE(ir.glossy_symmetric());
+  const std::vector<double> got_ir = vertex_glossy_matrix(ir, m, 0), got_sh = vertex_glossy_matrix(sh, m, 0);
+  std::vector<double> got(got_ir.size());
+  for (std::size_t k = 0; k < got.size(); ++k) got[k] = got_ir[k] - got_sh[k];
+  const std::vector<double> want = wall_light_matrix(m, ir, 4);
+  const double worst = max_diff(got, want), largest = max_abs(want);
+  std::printf("open box walls' light: max |M_ir - M_sh - exact| %.3g (largest entry %.3g)\n", worst, largest);
+  ASSERT_GT(largest, 1e-3);  // the walls do send light
+  EXPECT_LT(worst, kOpeningTolerance * largest);
+}
+
+// Glossy traces no other rays: the diffuse part is the transfer without it,
+// bit for bit, in both modes.
+TEST(GlossyTransfer, DiffusePartIsUnchanged) {
+  const Mesh m = test::floor_and_ball(12);
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    TransferOptions o = glossy_options(mode, 3, 128);
+    o.albedo = glm::vec3(0.9f, 0.6f, 0.3f);
+    const Transfer g = compute_transfer(m, o);
+    o.glossy = false;
+    const Transfer d = compute_transfer(m, o);
+    EXPECT_EQ(g.coeffs, d.coeffs);
+    EXPECT_EQ(g.slots, d.slots);
+    EXPECT_EQ(g.ao, d.ao);
+    EXPECT_EQ(g.glossy_channels(), mode == TransferMode::Interreflected ? 3 : 1);
+    EXPECT_EQ(g.glossy_matrices.size(), g.stored_vertices() * g.glossy_stride());
+    EXPECT_FALSE(d.glossy);
+  }
+}
+
+// The same bits on one thread and on several (4,000 vertices, 63 blocks of
+// 64), with two threads shown to have computed blocks before comparing.
+TEST(GlossyTransfer, DeterministicAcrossThreadCounts) {
+  const Mesh m = test::floor_and_ball(60);
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    TransferOptions o = glossy_options(mode, 3, 64);
+    o.threads = 1;
+    const Transfer one = compute_transfer(m, o);
+    ASSERT_GT(one.stored_vertices(), 1000u);
+    o.threads = 4;
+    std::size_t threads = 0;
+    const Transfer many = test::until_shared([&](const Progress& p) { return compute_transfer(m, o, p); }, {"rays"}, threads);
+    ASSERT_GE(threads, 2u) << "no run shared its work between threads";
+    EXPECT_EQ(one.slots, many.slots);
+    EXPECT_EQ(one.glossy_matrices, many.glossy_matrices);
+  }
+}
+
+TEST(GlossyTransfer, RefusesBadOptions) {
   const Mesh m = test::quad(2);
-  GlossyOptions o;
-  o.bands = 17;
-  EXPECT_THROW(compute_glossy_matrices(m, o), Error);
-  o = {};
-  o.samples = 0;
-  EXPECT_THROW(compute_glossy_matrices(m, o), Error);
+  TransferOptions o = glossy_options(TransferMode::Shadowed, kMaxGlossyBands + 1, 64);
+  EXPECT_THROW(compute_transfer(m, o), Error);
+  o = glossy_options(TransferMode::Unshadowed, 3, 64);
+  EXPECT_THROW(compute_transfer(m, o), Error);
 }
 
 }  // namespace

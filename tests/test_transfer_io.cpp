@@ -132,6 +132,18 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_TRUE(same_bits(a.ao, b.ao));
   EXPECT_TRUE(same_bits(a.bent_normals, b.bent_normals));
   EXPECT_TRUE(same_bits(a.bounce_energy, b.bounce_energy));
+  EXPECT_EQ(a.glossy, b.glossy);
+  EXPECT_TRUE(same_bits(a.glossy_matrices, b.glossy_matrices));
+}
+
+// `t` with random glossy matrices for its stored rows (the layout of its mode).
+Transfer with_glossy(Transfer t, unsigned seed = 7) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<float> g;
+  t.glossy = true;
+  t.glossy_matrices.resize(t.stored_vertices() * t.glossy_stride());
+  for (float& x : t.glossy_matrices) x = g(rng);
+  return t;
 }
 
 // Field offsets of docs/FORMAT.md, restated here on purpose: the test pins
@@ -453,7 +465,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 2"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 3"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -681,6 +693,65 @@ TEST(TransferRead, NonFiniteValuesNameTheVertex) {
   put(b, m.section_at[1] + kSectionHeader + 4 * (25 * stride), inf);
   reseal(b);
   expect_bytes_error(dir, b, {"vertex 38 has a non-finite direct coefficient"}, "Inf in direct row 25");
+}
+
+// ---- glossy matrices (version 3) -----------------------------------------------------
+
+TEST(TransferFile, GlossyMatricesRoundTripAsVersionThree) {
+  TempDir dir;
+  const std::size_t nc = 16;  // 4 bands
+  struct Case {
+    Transfer t;
+    std::size_t per_row;  // floats per stored row, as docs/FORMAT.md says
+  };
+  const std::vector<Case> cases = {
+      {with_glossy(make_transfer(TransferMode::Shadowed, 1, 4, 40, {false, true, true, false})), nc * (nc + 1) / 2},
+      {with_glossy(mixed_transfer()), 3 * nc * nc},  // interreflected RGB, 26 of 40 stored
+  };
+  for (const Case& c : cases) {
+    const Sample s = sample_file(dir, c.t);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 3u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 2u, 2u);
+    // The last section is kind 7, f32, stored vertices x the row above.
+    const std::size_t last = s.section_at.back();
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, last), 7u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, last + 4), 1u);
+    EXPECT_EQ(get<std::uint64_t>(s.bytes, last + 8), c.t.stored_vertices() * c.per_row);
+    float first;
+    std::memcpy(&first, s.bytes.data() + last + kSectionHeader, 4);
+    EXPECT_EQ(first, c.t.glossy_matrices[0]);
+    expect_identical(prt::read_transfer(dir.file("sample.prtt")), c.t);
+  }
+  // Without glossy matrices prt still writes version 2.
+  const Sample plain = sample_file(dir, full_transfer());
+  EXPECT_EQ(get<std::uint32_t>(plain.bytes, kVersionAt), 2u);
+}
+
+TEST(TransferRead, GlossyMatricesInconsistentWithTheHeader) {
+  TempDir dir;
+  const Transfer t = with_glossy(make_transfer(TransferMode::Shadowed, 1, 4, 40, {false, true, false, false}));
+  const Sample s = sample_file(dir, t);
+  const std::size_t g = s.section_at.back();
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& words, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, words, what);
+  };
+  edit(kFlagsAt, std::uint32_t(0), {"'glossy matrices' section", "flags say it has none"}, "section without flag");
+  edit(kVersionAt, std::uint32_t(2), {"unknown flags 0x2 in a version 2 file"}, "glossy in version 2");
+  edit(g + 8, std::uint64_t(40 * 136 - 1), {"'glossy matrices' has 5439 values", "bands^2 (bands^2 + 1) / 2"},
+       "count");
+  edit(kModeAt, std::uint32_t(0), {"unshadowed transfer does not have"}, "unshadowed with glossy");
+  edit(g + kSectionHeader + 4 * (136 * 17 + 3), std::numeric_limits<float>::quiet_NaN(),
+       {"vertex 17 has a non-finite glossy matrix entry"}, "NaN");
+  // The flag without the section.
+  const Sample plain = sample_file(dir, make_transfer(TransferMode::Shadowed, 1, 4, 40, {false, true, false, false}));
+  std::string b = plain.bytes;
+  put(b, kVersionAt, std::uint32_t(3));
+  put(b, kFlagsAt, std::uint32_t(2));
+  reseal(b);
+  expect_bytes_error(dir, b, {"no 'glossy matrices' section", "flags say the file has one"}, "flag without section");
 }
 
 // ---- writing -----------------------------------------------------------------------------

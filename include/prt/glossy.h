@@ -21,6 +21,11 @@
 
 namespace prt::glossy {
 
+// The largest Phong exponent the tools take: far past what SH of any stored
+// band count can represent (docs/GLOSSY.md), and where the integer rule's
+// node count stays small.
+inline constexpr double kMaxGloss = 4096.0;
+
 // Lambda_l(e) for l < bands by Gauss-Legendre on [0, 1] in double: exact for
 // integer e (t^e P_l(t) is then a polynomial of degree e + l); for other e
 // after the substitution t = u^8 that smooths t^e at 0 (`nodes` 0: enough

@@ -34,45 +34,18 @@ struct TransferOptions {
   int threads = 0;               // 0: all cores
   std::uint64_t seed = 1;        // rotates the direction set; same seed, same inputs -> same bits
   double offset = 0;             // ray origin offset; 0: 1e-4 x the mesh's bounding-box diagonal
+  // Also the glossy transfer matrices (prt/transfer.h, Transfer::glossy), from
+  // the same rays; shadowed or interreflected, bands at most kMaxGlossyBands.
+  bool glossy = false;
 };
+
+// Glossy matrices have bands^4 entries: 12 bands are 83 KB per vertex (mono,
+// shadowed), far past any GPU's per-frame budget (docs/GLOSSY.md).
+inline constexpr int kMaxGlossyBands = 12;
 
 // Computes the transfer. Throws prt::Error on bad options. Deterministic:
 // the same mesh, options and thread count give the same bits.
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
-
-// ---- glossy transfer matrices (docs/CONVENTIONS.md, "Glossy transfer"; issue 15, in progress) ----
-struct GlossyOptions {
-  int bands = 5;              // 1..16
-  int samples = 1024;         // ~rays per vertex, as TransferOptions::samples (2 samples directions over the sphere)
-  int threads = 0;            // 0: all cores
-  std::uint64_t seed = 1;     // the direction set's rotation, as TransferOptions::seed
-  double offset = 0;          // ray origin offset; 0: 1e-4 x the bounding-box diagonal
-};
-
-// The shadowed transfer matrices M_p[i][j] = Int Y_i V_p Y_j ds of every
-// vertex (V_p zero below the horizon). M_p is the hemisphere product matrix
-// of the normal (prt/glossy.h, exact) minus the occluded rays' w Y Y^T, so a
-// vertex no ray of which is occluded needs nothing stored (slots: kAnalytic),
-// and the others store the upper triangle of M_p (symmetric).
-struct GlossyMatrices {
-  static constexpr std::uint32_t kAnalytic = 0xffffffffu;
-  int bands = 0;
-  std::size_t vertices = 0;
-  std::vector<std::uint32_t> slots;  // per vertex: its row in `packed`, or kAnalytic
-  std::vector<float> packed;         // per stored vertex: rows i = 0..nc-1 of M_p from column i on
-  std::size_t packed_size() const {
-    const std::size_t nc = std::size_t(bands) * bands;
-    return nc * (nc + 1) / 2;
-  }
-};
-
-// Throws prt::Error on bad options; deterministic for any thread count.
-// Progress: phase "rays", cancellable.
-GlossyMatrices compute_glossy_matrices(const Mesh& mesh, const GlossyOptions& options, const Progress& progress = {});
-
-// Vertex v's M_p, nc x nc row-major (analytic vertices from the mesh's normal;
-// zero for a vertex without a normal).
-std::vector<double> glossy_matrix(const GlossyMatrices& g, const Mesh& mesh, std::size_t v);
 
 // ---- wavelet transfer (docs/WAVELETS.md) -------------------------------------------
 struct WaveletOptions {

@@ -62,6 +62,26 @@ struct Transfer {
   std::vector<float> ao;             // kappa_A = (1/pi) integral V max(n.w,0) dw, per vertex (1 if unshadowed)
   std::vector<glm::vec3> bent_normals;  // normalised cosine-weighted mean unoccluded direction, per vertex
   std::vector<double> bounce_energy;    // mean |T| added by each bounce (diagnostics)
+
+  // Glossy transfer matrices (docs/CONVENTIONS.md, "Glossy transfer"), when
+  // `glossy`: M_p maps the lighting L (bands^2 per colour) to the transferred
+  // incident radiance L'_p = M_p L. One row per stored vertex, the rows of
+  // coeffs (an analytic vertex sees no surface, so its M_p is the hemisphere
+  // product matrix of its normal, prt/glossy.h, and is not stored).
+  //  - shadowed: M_p[i][j] = Int Y_i V_p Y_j ds, symmetric and colourless:
+  //    one channel, rows i = 0..nc-1 from column i on (nc (nc + 1) / 2 floats);
+  //  - interreflected: plus the light the hit points' diffuse transfer sends
+  //    (albedo: one matrix per channel), not symmetric: nc x nc row-major per
+  //    channel.
+  // Unshadowed transfers have none (every M_p is the hemisphere's).
+  bool glossy = false;
+  std::vector<float> glossy_matrices;
+  int glossy_channels() const { return mode == TransferMode::Interreflected ? channels : 1; }
+  bool glossy_symmetric() const { return mode != TransferMode::Interreflected; }
+  std::size_t glossy_stride() const {
+    const std::size_t nc = std::size_t(bands) * bands;
+    return std::size_t(glossy_channels()) * (glossy_symmetric() ? nc * (nc + 1) / 2 : nc * nc);
+  }
   double direct_energy = 0;             // interreflected: mean |T| of the direct part (not stored in files)
 
   std::size_t stride() const { return std::size_t(channels) * bands * bands; }
@@ -74,6 +94,12 @@ struct Transfer {
   const float* stored(std::size_t v) const { return row(coeffs, v); }
   // The same for the direct part (interreflected transfers that keep it).
   const float* stored_direct(std::size_t v) const { return row(direct, v); }
+  // Vertex v's stored glossy matrices (glossy_stride() floats), or nullptr
+  // when v is analytic or the transfer has none.
+  const float* stored_glossy(std::size_t v) const {
+    const std::size_t r = slots.empty() ? v : slots[v];
+    return !glossy || r == kAnalytic ? nullptr : glossy_matrices.data() + r * glossy_stride();
+  }
 
  private:
   const float* row(const std::vector<float>& a, std::size_t v) const {
@@ -143,5 +169,37 @@ std::vector<glm::vec3> relight(const Transfer& t, const Mesh& mesh, const std::v
 // The same from the `direct` (shadowed) part of an interreflected transfer
 // (the transfer itself when it keeps no direct part).
 std::vector<glm::vec3> relight_direct(const Transfer& t, const Mesh& mesh, const std::vector<glm::dvec3>& light);
+
+// ---- glossy shading (docs/CONVENTIONS.md, "Glossy transfer") ----
+
+// Vertex v's glossy transfer matrix of channel c (< glossy_channels()), nc x
+// nc row-major in double: its stored one unpacked, or for an analytic vertex
+// the hemisphere product matrix of the mesh's normal (zero without a normal).
+// Throws prt::Error when t has no glossy matrices.
+std::vector<double> vertex_glossy_matrix(const Transfer& t, const Mesh& mesh, std::size_t v, int c = 0);
+
+// What a glossy shading needs beyond the lighting: the eye point, the Phong
+// exponent e >= 0, the specular strength rho_s >= 0, and the diffuse
+// albedo rho_d (per channel; negative: the transfer's own albedo). A
+// different rho_d scales the diffuse transfer by rho_d / albedo, which is
+// exact for unshadowed and shadowed transfers; an interreflected transfer's
+// bounces were computed with its albedo, so it takes only that, or 0.
+struct GlossyShading {
+  glm::dvec3 eye{0.0, 0.0, 3.0};
+  double gloss = 16.0;
+  double specular = 0.5;
+  glm::dvec3 diffuse{-1.0};
+};
+// The problem with `s` for `t` (or ""): finite eye, e and rho_s in range,
+// rho_d in [0, 1] or the transfer's own, and glossy matrices present.
+std::string glossy_shading_problem(const Transfer& t, const GlossyShading& s);
+
+// L_o of every vertex toward the eye (RGB): diffuse rho_d/pi Int L V cos+ (the
+// transfer's coefficients, scaled as above) plus rho_s sum_lm Lambda_l(e)
+// (M_p L)_lm Y_lm(r), r the eye's mirror direction about the vertex normal
+// (docs/CONVENTIONS.md). A vertex the eye sees from below its horizon
+// (n.v <= 0) gets its diffuse part only. Throws prt::Error on a bad shading.
+std::vector<glm::vec3> relight_glossy(const Transfer& t, const Mesh& mesh, const std::vector<glm::dvec3>& light,
+                                      const GlossyShading& shading);
 
 }  // namespace prt

@@ -23,8 +23,11 @@ namespace prt {
 // The version this prt writes for SH transfers (docs/FORMAT.md); it reads
 // this one and every earlier one (version 1: every vertex stored). Wavelet
 // transfers are written as version kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 2;
+inline constexpr std::uint32_t kTransferFormatVersion = 3;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
+// The version write_transfer writes for `t`: 3 with glossy matrices, 2
+// otherwise (so that a prt reading version 2 reads every file it could).
+inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? kTransferFormatVersion : 2u; }
 
 // Writes `t` to `path` through write_atomically: a failure (or the process
 // being killed) leaves any existing file untouched and no temporary behind.

@@ -99,9 +99,9 @@ int run_info(const InfoArgs& a) {
     fmt::print("{}\n", to_json(a.file, t, version).dump(2));
   } else {
     fmt::print("{}: {}", a.file, describe_transfer(t));
-    if (version != kTransferFormatVersion)
+    if (version != transfer_format_version(t.glossy))
       fmt::print("  (the file is format version {}; prt now writes version {}: sizes above are as it would write it)\n",
-                 version, kTransferFormatVersion);
+                 version, transfer_format_version(t.glossy));
   }
   return 0;
 }

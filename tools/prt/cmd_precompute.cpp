@@ -23,7 +23,7 @@ namespace prt::cli {
 namespace {
 
 struct PrecomputeArgs {
-  std::string mesh, output, mode = "shadowed", albedo = "0.8,0.8,0.8", basis = "sh";
+  std::string mesh, output, mode = "shadowed", albedo = "0.8,0.8,0.8", basis = "sh", material = "diffuse";
   TransferOptions opt;
   WaveletOptions wopt;
   MeshOptions mesh_opt;
@@ -35,7 +35,8 @@ struct PrecomputeArgs {
   double target_error = 0;
   std::string env, cache;
   const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr, *mode_opt = nullptr,
-                    *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr;
+                    *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr,
+                    *material_opt = nullptr;
 };
 
 // The rules across options (each value alone is checked while parsing):
@@ -61,6 +62,17 @@ void check_usage(const PrecomputeArgs& a) {
       if (o->count() > 0) throw UsageError(o->get_name() + " applies to --basis wavelet only");
     if (target && a.tolerance_opt->count() > 0)
       throw UsageError("--bounce-tolerance and --target-error both choose the bounces; give one");
+    if (a.material == "glossy" && a.mode == "unshadowed")
+      throw UsageError("--material glossy needs --mode shadowed or interreflected (an unshadowed vertex's glossy "
+                       "matrix is the hemisphere's, which prt computes at run time)");
+    if (a.material == "glossy" && a.opt.bands > kMaxGlossyBands)
+      throw UsageError(fmt::format("--material glossy takes --bands at most {} (each matrix has bands^4 entries: {} "
+                                   "bands would be {} KB per vertex)",
+                                   kMaxGlossyBands, a.opt.bands,
+                                   a.opt.bands * a.opt.bands * (a.opt.bands * a.opt.bands + 1) * 2 / 1000));
+    if (a.material == "glossy" && target)
+      throw UsageError("--target-error chooses diffuse transfer settings only; give --bands and --samples for "
+                       "--material glossy");
     if (target && a.mode == "unshadowed")
       throw UsageError("--target-error: the unshadowed transfer has no sampling to choose (use --mode shadowed or "
                        "interreflected)");
@@ -163,6 +175,7 @@ int run_precompute(PrecomputeArgs& a) {
   check_usage(a);
   if (a.basis == "wavelet") return run_wavelet(a);
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
+  a.opt.glossy = a.material == "glossy";
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);
   a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
@@ -186,6 +199,13 @@ int run_precompute(PrecomputeArgs& a) {
     fmt::print(stderr, "wrote {}: {} {} bands, {} channel{}, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
                a.output, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s", t.vertices,
                4 * t.stride(), secs);
+    if (t.glossy)
+      fmt::print(stderr, "glossy matrices: {}x{}{}, {} bytes per stored vertex, {} per vertex on average\n",
+                 t.bands * t.bands, t.bands * t.bands,
+                 t.glossy_symmetric() ? " symmetric (upper triangle stored)"
+                                      : fmt::format(" x {} channel{}", t.glossy_channels(),
+                                                    t.glossy_channels() == 1 ? "" : "s"),
+                 4 * t.glossy_stride(), 4 * t.glossy_matrices.size() / std::max<std::size_t>(t.vertices, 1));
     fmt::print(stderr, "analytic (unoccluded, no stored transfer): {} of {} vertices ({:.1f}%), {} bytes saved\n",
                t.analytic_vertices(), t.vertices,
                t.vertices ? 100.0 * double(t.analytic_vertices()) / double(t.vertices) : 0.0, analytic_bytes_saved(t));
@@ -219,7 +239,10 @@ Run add_precompute(CLI::App& app) {
       "Haar coefficients per vertex for all-frequency shadows; relight it with prt relight --terms K.\n"
       "--target-error e --env MAP chooses bands, bounces and samples: the cheapest that reach relative RMS e\n"
       "against a Monte Carlo reference under MAP (docs/REPORT.md).\n"
+      "--material glossy also stores per-vertex transfer matrices (Sloan, Kautz & Snyder 2002) for a Phong lobe whose\n"
+      "exponent and strength are chosen at run time (prt relight --eye --gloss --specular, prt render, prt view).\n"
       "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
+      "         prt precompute bunny.off -o bunny-glossy.prt --material glossy --bands 5\n"
       "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
@@ -229,6 +252,12 @@ Run add_precompute(CLI::App& app) {
                 "Ng et al. 2003)")
       ->check(CLI::IsMember({"sh", "wavelet"}))
       ->capture_default_str();
+  a->material_opt =
+      s->add_option("--material", a->material,
+                    "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
+                    "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12)")
+          ->check(CLI::IsMember({"diffuse", "glossy"}))
+          ->capture_default_str();
   a->mode_opt = s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")
                     ->check(parsed_by(parse_transfer_mode))
                     ->capture_default_str();
@@ -244,7 +273,7 @@ Run add_precompute(CLI::App& app) {
   a->bounces_opt = s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode), at most")
                        ->check(int_range(0, 64))
                        ->capture_default_str();
-  a->sh_only.insert(a->sh_only.end(), {a->bands_opt, a->samples_opt, a->bounces_opt});
+  a->sh_only.insert(a->sh_only.end(), {a->bands_opt, a->samples_opt, a->bounces_opt, a->material_opt});
   a->target_opt =
       s->add_option("--target-error", a->target_error,
                     "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "

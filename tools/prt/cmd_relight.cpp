@@ -31,6 +31,10 @@ namespace {
 
 struct RelightArgs {
   std::string mesh, transfer, env, output, rotate, window = "none", selection = "area";
+  // Glossy: the eye point, and the lobe's exponent and strength (docs/GLOSSY.md).
+  std::string eye, diffuse;
+  double gloss = 16, specular = 0.5;
+  std::vector<const CLI::Option*> glossy_opts;  // need --eye
   double window_width = 0;
   int terms = 100;
   bool direct = false, quiet = false;
@@ -124,11 +128,40 @@ int run_relight(const RelightArgs& a) {
                   "or run prt precompute --basis wavelet");
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
 
+  const bool glossy = !a.eye.empty();
+  for (const CLI::Option* o : a.glossy_opts)
+    if (o->count() > 0 && !glossy)
+      throw UsageError(o->get_name() + " shapes the glossy part, which needs --eye x,y,z (the point the vertices are "
+                       "seen from)");
+  if (glossy && a.direct) throw UsageError("--direct and --eye: the glossy part has no direct-only form");
+  GlossyShading shading;
+  if (glossy) {
+    double e[3];
+    parse_triple(a.eye, "--eye", e);
+    shading.eye = {e[0], e[1], e[2]};
+    shading.gloss = a.gloss;
+    shading.specular = a.specular;
+    if (!a.diffuse.empty()) {
+      double d[3];
+      const bool one = a.diffuse.find(',') == std::string::npos;
+      parse_triple(one ? a.diffuse + "," + a.diffuse + "," + a.diffuse : a.diffuse, "--diffuse", d);
+      for (double x : d)
+        if (!(x >= 0.0 && x <= 1.0))
+          throw UsageError(fmt::format("--diffuse: {} is outside [0, 1] (an albedo)", a.diffuse));
+      shading.diffuse = {d[0], d[1], d[2]};
+    }
+  }
+
   const Scene scene = load_scene(a.mesh, a.transfer, a.env);
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
   if (a.direct) check_direct(t, a.transfer, "--direct");
+  if (glossy)
+    if (auto p = glossy_shading_problem(t, shading); !p.empty()) throw Error(a.transfer + ": " + p);
+  if (!glossy && t.glossy && !a.quiet)
+    fmt::print(stderr, "{} holds glossy matrices: give --eye x,y,z (and --gloss, --specular) for the view-dependent "
+                       "part; writing the diffuse part only\n", a.transfer);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(env));
 
   const auto t0 = std::chrono::steady_clock::now();
@@ -141,7 +174,9 @@ int run_relight(const RelightArgs& a) {
     sh::Rotation(t.bands, sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, r);
     light.swap(r);
   }
-  const std::vector<glm::vec3> rgb = a.direct ? relight_direct(t, mesh, light) : relight(t, mesh, light);
+  const std::vector<glm::vec3> rgb = glossy     ? relight_glossy(t, mesh, light, shading)
+                                     : a.direct ? relight_direct(t, mesh, light)
+                                                : relight(t, mesh, light);
   const double frame_ms = ms_since(t1);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
@@ -167,7 +202,10 @@ Run add_relight(CLI::App& app) {
       "(prt precompute --basis wavelet) take --terms/--selection. For an SH file of any band count (1 to 64)\n"
       "the lighting is projected and rotated (--rotate) to 1e-12 in double (prt verify --bands-max 64); the\n"
       "transfer itself is stored in float.\n"
+      "A glossy file (prt precompute --material glossy) takes --eye x,y,z: each vertex's radiance toward that point,\n"
+      "diffuse plus a Phong lobe of exponent --gloss and strength --specular (docs/GLOSSY.md).\n"
       "Example: prt relight bunny.off bunny.prt envmaps/forest.exr --rotate 90,0,0 -o bunny.ply\n"
+      "         prt relight bunny.off glossy.prt envmaps/forest.exr --eye 0,0.1,0.4 --gloss 16 -o g.csv\n"
       "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
@@ -194,6 +232,20 @@ Run add_relight(CLI::App& app) {
                     "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
           ->check(parsed_by(wavelet::parse_selection))
           ->capture_default_str());
+  s->add_option("--eye", a->eye, "Glossy files: the eye point x,y,z the radiance is seen from")
+      ->check(triple_value("x,y,z"));
+  a->glossy_opts.push_back(
+      s->add_option("--gloss", a->gloss, "Glossy: Phong exponent e of the lobe (e + 1)/(2 pi) cos^e, 0 to 4096")
+          ->check(number_range(0, 4096))
+          ->capture_default_str());
+  a->glossy_opts.push_back(s->add_option("--specular", a->specular, "Glossy: the lobe's strength rho_s, 0 to 1")
+                               ->check(number_range(0, 1))
+                               ->capture_default_str());
+  a->glossy_opts.push_back(s->add_option("--diffuse", a->diffuse,
+                                         "Glossy: diffuse albedo rho_d (one value or r,g,b in [0, 1]; default: the "
+                                         "transfer's own; 0: the glossy part alone)"));
+  for (const CLI::Option* o : a->glossy_opts) a->sh_only.push_back(o);
+  a->sh_only.push_back(a->glossy_opts.empty() ? nullptr : s->get_option("--eye"));
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }
