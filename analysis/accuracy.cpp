@@ -139,6 +139,12 @@ std::string error_set_key(const Mesh& mesh, const EnvMap& map, const ErrorSetOpt
   h.add_value(r.seed);
   h.add_value(r.offset);
   h.add_value(r.rotation);
+  if (r.glossy) {  // (absent for diffuse sets, whose keys stay those of earlier prts)
+    h.add_value(r.glossy);
+    h.add_value(r.eye);
+    h.add_value(r.gloss);
+    h.add_value(r.specular);
+  }
   h.add_value(options.vertices);
   h.add_value(options.seed);
   return fmt::format("{:016x}", h.digest());

@@ -2,6 +2,7 @@
 #include <prt/report.h>
 
 #include <prt/error.h>
+#include <prt/glossy.h>
 #include <prt/projection.h>
 #include <prt/rotation.h>
 #include <prt/transfer_io.h>
@@ -55,7 +56,13 @@ void validate(const ReportOptions& o) {
   in({o.bands_samples, o.bounce_samples}, 1, 1 << 24, "samples");
   in(o.bounces, 0, 64, "bounces");
   in(o.terms, 1, std::numeric_limits<int>::max(), "wavelet terms");
-  if (o.bands.empty() && o.samples.empty() && o.bounces.empty() && o.terms.empty())
+  in(o.glossy_bands, 1, kMaxGlossyBands, "glossy bands");
+  in({o.glossy_samples, o.glossy_exact_samples}, 1, 1 << 24, "glossy samples");
+  for (double e : o.glossy_gloss)
+    if (!(e >= 0 && e <= glossy::kMaxGloss)) throw Error(fmt::format("report: gloss {:g} is outside [0, {:g}]", e, glossy::kMaxGloss));
+  if (!o.glossy_bands.empty() && o.glossy_gloss.empty()) throw Error("report: the glossy sweep needs exponents");
+  if (o.truth_glossy_samples < 2) throw Error("report: the glossy reference needs two samples");
+  if (o.bands.empty() && o.samples.empty() && o.bounces.empty() && o.terms.empty() && o.glossy_bands.empty())
     throw Error("report: every sweep is empty");
   if (o.truth_vertices == 0 || o.truth_samples < 2 || o.truth_bounce_samples < 2)
     throw Error("report: the reference needs at least one vertex and two samples");
@@ -75,16 +82,18 @@ struct Runner {
     if (log) log(line);
   }
 
-  ErrorSet truth(TransferMode mode, int samples, int bounces, std::size_t vertices, const char* what) {
+  ErrorSet truth(TransferMode mode, int samples, int bounces, std::size_t vertices, const std::string& what,
+                 const ReferenceOptions* glossy = nullptr) {
     ErrorSetOptions e;
+    if (glossy) e.reference = *glossy;
     e.reference.mode = mode;
     e.reference.bounces = bounces;
-    e.reference.albedo = o.albedo;
+    if (!glossy) e.reference.albedo = o.albedo;
     e.reference.samples = samples;
     e.vertices = vertices;
     std::string note;
     ErrorSet set = cached_error_set(mesh, map, e, cache_dir, progress, &note);
-    if (!note.empty()) report.notes.push_back(std::string(what) + ": " + note);
+    if (!note.empty()) report.notes.push_back(what + ": " + note);
     say(fmt::format("{}: {} vertices x {} samples, noise floor {:.3g}{}", what, set.vertices.size(), samples,
                     set.noise_floor(), set.seconds > 0 ? fmt::format(", {:.3g} s", set.seconds) : ", from the cache"));
     return set;
@@ -122,6 +131,78 @@ struct Runner {
                     t.bands, t.samples, row.bounces, seconds, row.relight_ms, row.error.rel_rms));
     if (radiance_out) *radiance_out = std::move(rgb);
     return row;
+  }
+
+  // The glossy sweep: per band count one precompute (timed), per exponent
+  // its relighting (the glossy part alone, timed) against that exponent's
+  // reference, and the intrinsic error with near-exact matrices at the error
+  // vertices.
+  void glossy_sweep() {
+    const std::vector<std::uint32_t>& at = report.glossy_truth.front().vertices;
+    for (int bands : o.glossy_bands) {
+      TransferOptions t;
+      t.mode = TransferMode::Shadowed;
+      t.bands = bands;
+      t.samples = o.glossy_samples;
+      t.albedo = o.albedo;
+      t.threads = o.threads;
+      t.glossy = true;
+      auto t0 = Clock::now();
+      const Transfer transfer = compute_transfer(mesh, t, progress);
+      const double seconds = seconds_since(t0);
+      t.samples = o.glossy_exact_samples;
+      const std::vector<double> exact = glossy_vertex_matrices(mesh, t, at);
+      const std::size_t nc = std::size_t(bands) * bands;
+      const std::vector<glm::dvec3> l(light.begin(), light.begin() + std::ptrdiff_t(nc));
+      for (std::size_t g = 0; g < o.glossy_gloss.size(); ++g) {
+        GlossyShading shading;
+        shading.eye = report.glossy_eye;
+        shading.gloss = o.glossy_gloss[g];
+        shading.specular = 1.0;
+        shading.diffuse = glm::dvec3(0.0);
+        ReportRow row;
+        row.sweep = "glossy";
+        row.basis = "sh";
+        row.bands = bands;
+        row.samples = o.glossy_samples;
+        row.gloss = shading.gloss;
+        row.precompute_s = seconds;
+        row.bytes = transfer_file_size(transfer);
+        std::vector<glm::vec3> rgb;
+        row.relight_ms = median_ms(o.relight_seconds, [&] { rgb = relight_glossy(transfer, mesh, l, shading); });
+        const ErrorSet& truth = report.glossy_truth[g];
+        row.error = measure_accuracy(truth, rgb);
+        // The same formula with the near-exact matrices at the error vertices.
+        const std::vector<double> lambda = glossy::phong_lobe_factors(shading.gloss, bands);
+        std::vector<double> transferred(nc);
+        for (std::size_t i = 0; i < at.size(); ++i) {
+          const std::uint32_t v = at[i];
+          const glm::dvec3 n = glm::normalize(glm::dvec3(mesh.normals[v]));
+          const glm::dvec3 to_eye = shading.eye - glm::dvec3(mesh.positions[v]);
+          const glm::dvec3 view = glm::normalize(to_eye);
+          const double ndv = glm::dot(n, view);
+          glm::dvec3 value(0.0);
+          if (ndv > 0) {
+            const glm::dvec3 r = 2.0 * ndv * n - view;
+            const double* M = exact.data() + i * nc * nc;
+            for (int c = 0; c < 3; ++c) {
+              for (std::size_t p = 0; p < nc; ++p) {
+                double a = 0;
+                for (std::size_t q = 0; q < nc; ++q) a += M[p * nc + q] * l[q][c];
+                transferred[p] = a;
+              }
+              value[c] = glossy::glossy_radiance(transferred, lambda, bands, r, 1.0);
+            }
+          }
+          rgb[v] = glm::vec3(value);
+        }
+        row.intrinsic = measure_accuracy(truth, rgb);
+        say(fmt::format("glossy: {} bands, e {:g}: precompute {:.3g} s, relight {:.3g} ms, error {:.3g} (intrinsic "
+                        "{:.3g})",
+                        bands, shading.gloss, seconds, row.relight_ms, row.error.rel_rms, row.intrinsic.rel_rms));
+        report.rows.push_back(row);
+      }
+    }
   }
 
   void picture(const std::string& label, std::vector<glm::vec3> rgb) {
@@ -220,6 +301,8 @@ ReportOptions report_options(bool quick) {
     o.samples = {64, 128, 256, 512, 1024, 2048, 4096};
     o.bounces = {0, 1, 2, 3};
     o.terms = {10, 30, 100, 300, 1000};
+    o.glossy_bands = {4, 6, 8, 10};
+    o.glossy_gloss = {4, 16, 64};
     return o;
   }
   o.bands = {3, 5, 8, 12, 16};
@@ -230,6 +313,11 @@ ReportOptions report_options(bool quick) {
   o.bounce_bands = 4;
   o.bounce_samples = 256;
   o.terms = {10, 100, 1000};
+  o.glossy_bands = {4, 6};
+  o.glossy_gloss = {16};
+  o.glossy_samples = 256;
+  o.glossy_exact_samples = 4096;
+  o.truth_glossy_samples = 8192;
   o.cube_res = 16;
   o.truth_vertices = 512;
   o.truth_samples = 16384;
@@ -284,6 +372,32 @@ Report run_report(const Mesh& mesh, const EnvMap& map, const ReportOptions& opti
   if (!options.samples.empty()) run.samples_sweep();
   if (!options.bounces.empty()) run.bounces_sweep();
   if (!options.terms.empty()) run.terms_sweep();
+  if (!options.glossy_bands.empty()) {
+    report.glossy_eye = options.glossy_eye;
+    if (std::isnan(report.glossy_eye.x)) {
+      // prt render's default camera (prt/render.h: default_camera, 40 degrees).
+      glm::dvec3 lo(mesh.positions[0]), hi = lo;
+      for (const glm::vec3& p : mesh.positions) {
+        lo = glm::min(lo, glm::dvec3(p));
+        hi = glm::max(hi, glm::dvec3(p));
+      }
+      const glm::dvec3 c = 0.5 * (lo + hi);
+      double radius = 0;
+      for (const glm::vec3& p : mesh.positions) radius = std::max(radius, glm::length(glm::dvec3(p) - c));
+      report.glossy_eye = c + glm::dvec3(0, 0, 1.05 * radius / std::sin(20.0 * M_PI / 180.0));
+    }
+    for (double e : options.glossy_gloss) {
+      ReferenceOptions r;
+      r.glossy = true;
+      r.eye = report.glossy_eye;
+      r.gloss = e;
+      r.specular = 1.0;
+      r.albedo = glm::vec3(0.0f);  // the glossy part alone
+      report.glossy_truth.push_back(run.truth(TransferMode::Shadowed, options.truth_glossy_samples, 0,
+                                              options.truth_vertices, fmt::format("glossy reference e={:g}", e), &r));
+    }
+    run.glossy_sweep();
+  }
   return report;
 }
 

@@ -61,27 +61,37 @@ std::vector<double> phong_lobe_factors_recurrence(double e, int bands) {
   return lambda;
 }
 
-std::vector<double> hemisphere_product_matrix(const glm::dvec3& n, int bands) {
+HemisphereRule hemisphere_rule(const glm::dvec3& n, int bands) {
   sh::check_bands(bands);
   if (!(std::abs(glm::length(n) - 1.0) <= 1e-6))
-    throw Error(fmt::format("hemisphere_product_matrix: the normal ({}, {}, {}) is not unit length", n.x, n.y, n.z));
+    throw Error(fmt::format("hemisphere rule: the normal ({}, {}, {}) is not unit length", n.x, n.y, n.z));
   // A right-handed frame (t, b, n).
   const glm::dvec3 a = std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
   const glm::dvec3 t = glm::normalize(glm::cross(a, n)), b = glm::cross(n, t);
-  const int K = bands * bands, nphi = 2 * bands;
+  const int nphi = 2 * bands;
   const Rule1D rule = gauss_legendre(bands, 0.0, 1.0);
-  std::vector<double> m(std::size_t(K) * K, 0.0), y(std::size_t(K), 0.0);
+  HemisphereRule h;
   for (std::size_t i = 0; i < rule.x.size(); ++i) {
     const double ct = rule.x[i], st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
     for (int j = 0; j < nphi; ++j) {
       const double phi = 2.0 * M_PI * (j + 0.5) / nphi;
-      const glm::dvec3 s = st * std::cos(phi) * t + st * std::sin(phi) * b + ct * n;
-      sh::eval(bands, s.x, s.y, s.z, y.data());
-      const double w = rule.w[i] * 2.0 * M_PI / nphi;
-      for (int p = 0; p < K; ++p) {
-        const double wp = w * y[std::size_t(p)];
-        for (int q = p; q < K; ++q) m[std::size_t(p) * K + q] += wp * y[std::size_t(q)];
-      }
+      h.directions.push_back(st * std::cos(phi) * t + st * std::sin(phi) * b + ct * n);
+      h.weights.push_back(rule.w[i] * 2.0 * M_PI / nphi);
+    }
+  }
+  return h;
+}
+
+std::vector<double> hemisphere_product_matrix(const glm::dvec3& n, int bands) {
+  const HemisphereRule h = hemisphere_rule(n, bands);
+  const int K = bands * bands;
+  std::vector<double> m(std::size_t(K) * K, 0.0), y(std::size_t(K), 0.0);
+  for (std::size_t i = 0; i < h.directions.size(); ++i) {
+    const glm::dvec3& s = h.directions[i];
+    sh::eval(bands, s.x, s.y, s.z, y.data());
+    for (int p = 0; p < K; ++p) {
+      const double wp = h.weights[i] * y[std::size_t(p)];
+      for (int q = p; q < K; ++q) m[std::size_t(p) * K + q] += wp * y[std::size_t(q)];
     }
   }
   for (int p = 0; p < K; ++p)

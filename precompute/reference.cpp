@@ -5,6 +5,7 @@
 #include <prt/reference.h>
 
 #include <prt/error.h>
+#include <prt/glossy.h>
 
 #include "progress_ticker.h"
 #include "ray_scene.h"
@@ -181,6 +182,26 @@ glm::dvec3 sample_cosine(Rng& rng, const glm::dvec3& n) {
 // a one-pixel sun, 2-3% more on cow.off under forest, studio and sunset.exr.
 double mis_over_pdf(double pa, double pb) { return pa / (pa * pa + pb * pb); }
 
+// The normalised Phong lobe about unit r: density phi_e(r.w) =
+// (e + 1)/(2 pi) max(r.w, 0)^e per unit solid angle, and a direction drawn
+// from it (cos = u^(1/(e+1)), uniform azimuth).
+struct PhongLobe {
+  glm::dvec3 r;
+  double e;
+  double pdf(const glm::dvec3& w) const {
+    const double c = glm::dot(r, w);
+    return c > 0 ? (e + 1.0) / (2.0 * kPi) * std::pow(c, e) : 0.0;
+  }
+  glm::dvec3 sample(Rng& rng) const {
+    const double u0 = rng.uniform(), u1 = rng.uniform();
+    const double ct = std::pow(1.0 - u0, 1.0 / (e + 1.0)), st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
+    const double phi = 2.0 * kPi * u1;
+    glm::dvec3 t, b;
+    basis(r, t, b);
+    return glm::normalize(st * std::cos(phi) * t + st * std::sin(phi) * b + ct * r);
+  }
+};
+
 // ---- the integrator ------------------------------------------------------------
 
 struct Integrator {
@@ -235,6 +256,42 @@ struct Integrator {
     return E;
   }
 
+  // One iteration's estimate of the integral over n.w > 0 of Li(w) phi_e(r.w)
+  // dw at p: the map's light by MIS of the map's and the lobe's densities;
+  // a front face hit by the lobe direction sends (interreflected) its diffuse
+  // exit radiance rho/pi E(q), E(q) with all `bounces` bounces.
+  glm::dvec3 glossy(Rng& rng, const glm::dvec3& p, const glm::dvec3& n, const PhongLobe& lobe) const {
+    glm::dvec3 G(0.0);
+    const glm::vec3 o = origin(p, n);
+    const float tnear = float(offset);
+    if (env.can_sample()) {
+      std::size_t pixel = 0;
+      const glm::dvec3 w = env.sample(rng, pixel);
+      const double f = lobe.pdf(w);
+      if (f > 0 && glm::dot(n, w) > 0 && !scene->occluded1(o, glm::vec3(w), tnear))
+        G += env.radiance(pixel) * (f * mis_over_pdf(env.pdf(pixel), f));
+    }
+    const glm::dvec3 w = lobe.sample(rng);
+    const double f = lobe.pdf(w);
+    if (!(f > 0) || glm::dot(n, w) <= 0) return G;  // below the horizon: V = 0
+    std::optional<detail::Hit> hit;
+    bool escapes;
+    if (mode == TransferMode::Interreflected) {
+      hit = scene->intersect1(o, glm::vec3(w), tnear);
+      escapes = !hit->hit();
+    } else {
+      escapes = !scene->occluded1(o, glm::vec3(w), tnear);
+    }
+    if (escapes) {
+      const std::size_t pixel = env.pixel_of(w);
+      G += env.radiance(pixel) * (f * mis_over_pdf(f, env.pdf(pixel)));
+    } else if (hit && hit->front) {
+      glm::dvec3 q, ns, rho;
+      if (surface(*hit, q, ns, rho)) G += rho / kPi * irradiance(rng, q, ns, 0);  // f / p_lobe = 1
+    }
+    return G;
+  }
+
   // Point, shading normal and albedo at a hit; false if the triangle has no
   // usable normal (degenerate), which then reflects nothing.
   bool surface(const detail::Hit& h, glm::dvec3& q, glm::dvec3& ns, glm::dvec3& rho) const {
@@ -282,6 +339,16 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) err = std::max(err, std::abs(I[i][j] - (i == j ? 1.0 : 0.0)));
   if (!(err <= 1e-6)) throw Error("reference: the lighting rotation is not a proper rotation matrix");
+  if (o.glossy) {
+    if (o.mode == TransferMode::Unshadowed)
+      throw Error("reference: glossy needs a shadowed or interreflected mode (visibility is part of the model)");
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(o.eye[c])) throw Error("reference: the eye point is not finite");
+    if (!(o.gloss >= 0 && o.gloss <= glossy::kMaxGloss))
+      throw Error(fmt::format("reference: the gloss exponent must be 0 to {:g}, got {:g}", glossy::kMaxGloss, o.gloss));
+    if (!(o.specular >= 0 && o.specular <= 1))
+      throw Error(fmt::format("reference: the specular strength must be 0 to 1, got {:g}", o.specular));
+  }
   if (o.vertex_colors && !mesh.colors.empty() && mesh.colors.size() != mesh.vertex_count())
     throw Error("reference: " + mesh.source + " has colours for some vertices only");
 }
@@ -306,8 +373,9 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
 
   // Interreflection with no bounce is exactly the shadowed estimator (same
   // rays, same random numbers, same bits).
+  // (Glossy keeps the mode: its hits see the surfaces' direct light even then.)
   TransferMode mode = options.mode;
-  if (mode == TransferMode::Interreflected && options.bounces == 0) mode = TransferMode::Shadowed;
+  if (mode == TransferMode::Interreflected && options.bounces == 0 && !options.glossy) mode = TransferMode::Shadowed;
 
   const EnvLight env(map, options.rotation);
   std::optional<detail::RayScene> scene;
@@ -337,10 +405,21 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
       const glm::dvec3 p(mesh.positions[v]);
       const glm::dvec3 rho_pi = (colors ? glm::dvec3(mesh.colors[v]) : glm::dvec3(options.albedo)) / kPi;
       Rng rng(options.seed, v);
+      // Glossy: the lobe about the eye's mirror direction, when the eye is
+      // above the horizon.
+      std::optional<PhongLobe> lobe;
+      if (options.glossy && options.specular > 0) {
+        const glm::dvec3 to_eye = options.eye - p;
+        const double d = glm::length(to_eye);
+        const glm::dvec3 view = d > 0 ? to_eye / d : nv;
+        const double ndv = glm::dot(nv, view);
+        if (ndv > 0) lobe = PhongLobe{glm::normalize(2.0 * ndv * nv - view), options.gloss};
+      }
       // Welford's running mean and sum of squared deviations, per channel.
       glm::dvec3 mean(0.0), m2(0.0);
       for (int s = 0; s < N; ++s) {
-        const glm::dvec3 x = rho_pi * integ.irradiance(rng, p, nv, 0);
+        glm::dvec3 x = rho_pi * integ.irradiance(rng, p, nv, 0);
+        if (lobe) x += options.specular * integ.glossy(rng, p, nv, *lobe);
         const glm::dvec3 d = x - mean;
         mean += d / double(s + 1);
         m2 += d * (x - mean);

@@ -399,4 +399,58 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   return t;
 }
 
+std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptions& options,
+                                           std::span<const std::uint32_t> vertices) {
+  TransferOptions o = options;
+  o.glossy = true;
+  o.mode = TransferMode::Shadowed;
+  check_options(o, mesh);
+  for (std::uint32_t v : vertices)
+    if (v >= mesh.vertex_count())
+      throw Error(fmt::format("glossy matrices: vertex {} is out of range (the mesh has {})", v, mesh.vertex_count()));
+  std::unique_ptr<tbb::global_control> limit;
+  if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+  const int n = o.bands, nc = n * n;
+  const int M = 2 * o.samples;
+  const std::vector<glm::vec3> dirs = detail::direction_set(M, o.seed);
+  const double w = 4.0 * M_PI / M;
+  const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
+  const detail::RayScene scene(mesh);
+  std::vector<double> out(vertices.size() * std::size_t(nc) * nc, 0.0);
+  tbb::parallel_for(std::size_t(0), vertices.size(), [&](std::size_t i) {
+    detail::enable_ftz_daz();
+    const std::uint32_t v = vertices[i];
+    const glm::vec3 nrm = mesh.normals[v];
+    if (glm::dot(nrm, nrm) == 0.0f) return;
+    const glm::vec3 origin = mesh.positions[v] + offset * nrm;
+    std::vector<double> Yocc, y(static_cast<std::size_t>(nc)), C(std::size_t(nc) * nc, 0.0);
+    glm::vec3 batch[8];
+    int count = 0;
+    std::size_t occluded = 0;
+    const auto flush = [&] {
+      const std::uint32_t hit = scene.occluded8(origin, batch, count, offset);
+      for (int k = 0; k < count; ++k)
+        if (hit & (1u << k)) {
+          sh::eval<double>(n, batch[k].x, batch[k].y, batch[k].z, y.data());
+          Yocc.insert(Yocc.end(), y.begin(), y.end());
+          ++occluded;
+        }
+      count = 0;
+    };
+    for (int j = 0; j < M; ++j) {
+      if (glm::dot(dirs[j], nrm) <= 0.0f) continue;
+      batch[count++] = dirs[j];
+      if (count == 8) flush();
+    }
+    if (count) flush();
+    if (occluded) rank_k_update(nc, int(occluded), w, Yocc.data(), 0.0, C.data());
+    const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm)), n);
+    double* m = out.data() + i * std::size_t(nc) * nc;
+    for (int p = 0; p < nc; ++p)
+      for (int q = 0; q < nc; ++q)
+        m[std::size_t(p) * nc + q] = H[std::size_t(p) * nc + q] - C[std::size_t(std::min(p, q)) * nc + std::max(p, q)];
+  });
+  return out;
+}
+
 }  // namespace prt

@@ -88,7 +88,7 @@ std::vector<glm::vec3> relight_glossy(const Transfer& t, const Mesh& mesh, const
   const std::vector<double> lambda = glossy::phong_lobe_factors(s.gloss, n);
   const int gch = t.glossy_channels();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.vertices), [&](const tbb::blocked_range<std::size_t>& range) {
-    std::vector<double> y(nc), u(nc);
+    std::vector<double> y(nc), u(nc), ys(nc);
     for (std::size_t v = range.begin(); v != range.end(); ++v) {
       glm::dvec3 r = glm::dvec3(out[v]) * scale;
       const glm::vec3 nf = mesh.normals[v];
@@ -99,23 +99,52 @@ std::vector<glm::vec3> relight_glossy(const Transfer& t, const Mesh& mesh, const
         const glm::dvec3 view = d > 0.0 ? to_eye / d : nrm;
         const double ndv = glm::dot(nrm, view);
         if (ndv > 0.0) {
+          // y = Lambda Y(r): the glossy part is y . (M L) = (M^T y) . L.
           const glm::dvec3 mirror = 2.0 * ndv * nrm - view;
           sh::eval<double>(n, mirror.x, mirror.y, mirror.z, y.data());
           for (int l = 0; l < n; ++l)
             for (int m = -l; m <= l; ++m) y[std::size_t(sh::index(l, m))] *= lambda[std::size_t(l)];
-          for (int c = 0; c < 3; ++c) {
-            if (c == 0 || gch == 3) {  // u = M^T (Lambda Y(r)): the same for every colour of a mono matrix
-              const std::vector<double> M = vertex_glossy_matrix(t, mesh, v, gch == 3 ? c : 0);
-              for (std::size_t j = 0; j < nc; ++j) {
-                double a = 0.0;
-                for (std::size_t i = 0; i < nc; ++i) a += y[i] * M[i * nc + j];
-                u[j] = a;
+          glm::dvec3 g(0.0);
+          const float* row = t.stored_glossy(v);
+          if (!row) {
+            // Unoccluded: M = the hemisphere product matrix, so y . (M L) is
+            // the hemisphere rule's sum of (y . Y(s)) (L . Y(s)), exact.
+            const glossy::HemisphereRule h = glossy::hemisphere_rule(nrm, n);
+            for (std::size_t k = 0; k < h.directions.size(); ++k) {
+              const glm::dvec3& dir = h.directions[k];
+              sh::eval<double>(n, dir.x, dir.y, dir.z, ys.data());
+              double lobe = 0.0;
+              glm::dvec3 light_s(0.0);
+              for (std::size_t i = 0; i < nc; ++i) {
+                lobe += y[i] * ys[i];
+                light_s += ys[i] * light[i];
+              }
+              g += h.weights[k] * lobe * light_s;
+            }
+          } else if (t.glossy_symmetric()) {
+            // The upper triangle, row p from column p: u_q = sum_p y_p M_pq.
+            std::fill(u.begin(), u.end(), 0.0);
+            std::size_t k = 0;
+            for (std::size_t p = 0; p < nc; ++p) {
+              u[p] += y[p] * row[k++];
+              for (std::size_t q = p + 1; q < nc; ++q, ++k) {
+                u[q] += y[p] * row[k];
+                u[p] += y[q] * row[k];
               }
             }
-            double g = 0.0;
-            for (std::size_t j = 0; j < nc; ++j) g += u[j] * light[j][c];
-            r[c] += s.specular * g;
+            for (std::size_t j = 0; j < nc; ++j) g += u[j] * light[j];
+          } else {
+            for (int c = 0; c < 3; ++c) {
+              const float* M = row + std::size_t(gch == 3 ? c : 0) * nc * nc;
+              if (c == 0 || gch == 3) {
+                std::fill(u.begin(), u.end(), 0.0);
+                for (std::size_t i = 0; i < nc; ++i)
+                  for (std::size_t j = 0; j < nc; ++j) u[j] += y[i] * M[i * nc + j];
+              }
+              for (std::size_t j = 0; j < nc; ++j) g[c] += u[j] * light[j][c];
+            }
           }
+          r += s.specular * g;
         }
       }
       out[v] = glm::vec3(r);

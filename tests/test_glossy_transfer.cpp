@@ -199,6 +199,22 @@ TEST(GlossyTransfer, DeterministicAcrossThreadCounts) {
   }
 }
 
+// The reference matrices at chosen vertices are the stored ones (same rays),
+// up to the float they are stored in.
+TEST(GlossyTransfer, VertexMatricesAreTheStoredOnes) {
+  const Mesh m = test::floor_and_ball(10);
+  const TransferOptions o = glossy_options(TransferMode::Shadowed, 4, 128);
+  const Transfer t = compute_transfer(m, o);
+  const std::vector<std::uint32_t> picks = {0, 17, 60, 120, std::uint32_t(m.vertex_count() - 1)};
+  const std::vector<double> got = glossy_vertex_matrices(m, o, picks);
+  for (std::size_t i = 0; i < picks.size(); ++i) {
+    const std::vector<double> want = vertex_glossy_matrix(t, m, picks[i]);
+    for (std::size_t k = 0; k < want.size(); ++k)
+      ASSERT_NEAR(got[i * want.size() + k], want[k], 1e-6 * (1 + std::abs(want[k]))) << picks[i] << " " << k;
+  }
+  EXPECT_THROW(glossy_vertex_matrices(m, o, std::vector<std::uint32_t>{std::uint32_t(m.vertex_count())}), Error);
+}
+
 TEST(GlossyTransfer, RefusesBadOptions) {
   const Mesh m = test::quad(2);
   TransferOptions o = glossy_options(TransferMode::Shadowed, kMaxGlossyBands + 1, 64);

@@ -46,6 +46,16 @@ std::vector<double> phong_lobe_factors_recurrence(double e, int bands);
 // a normal that is not unit length (within 1e-6).
 std::vector<double> hemisphere_product_matrix(const glm::dvec3& n, int bands);
 
+// That product rule itself: directions and weights over the hemisphere of n
+// integrating every product of two functions of `bands` bands exactly
+// (what an unoccluded vertex's glossy shading sums over without forming the
+// matrix). Throws as hemisphere_product_matrix.
+struct HemisphereRule {
+  std::vector<glm::dvec3> directions;
+  std::vector<double> weights;
+};
+HemisphereRule hemisphere_rule(const glm::dvec3& n, int bands);
+
 // rho_s sum_lm Lambda_l L'_lm Y_lm(r): the glossy exit radiance of one
 // channel from its transferred incident radiance `transferred` (bands^2
 // coefficients), the factors `lambda` (at least `bands` of them) and the unit

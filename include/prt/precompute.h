@@ -47,6 +47,15 @@ inline constexpr int kMaxGlossyBands = 12;
 // the same mesh, options and thread count give the same bits.
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
 
+// Reference: the shadowed glossy transfer matrices M_p (nc x nc row-major,
+// double, nc = bands^2) of the listed vertices only, traced as
+// compute_transfer traces them (direction set of options.seed, offset) with
+// options.samples; for measuring how far the stored matrices' sampling is
+// from exact (many samples here, at a few vertices). Zero for a vertex
+// without a normal. Throws prt::Error on bad options or an index out of range.
+std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptions& options,
+                                           std::span<const std::uint32_t> vertices);
+
 // ---- wavelet transfer (docs/WAVELETS.md) -------------------------------------------
 struct WaveletOptions {
   int cube_res = 32;          // face size r: power of two in [2, 256]

@@ -37,6 +37,18 @@
 //   the quantity above (up to float ray tracing); tests check it against
 //   closed forms.
 //
+// Glossy (ReferenceOptions::glossy; docs/CONVENTIONS.md "Glossy transfer"):
+// B also has the view-dependent part toward the eye point,
+//   rho_s integral over n.w > 0 of Li(w) phi_e(r.w) dw,  phi_e(t) = (e + 1)/(2 pi) max(t, 0)^e,
+// r the mirror direction of v = normalize(eye - p) about n (0 when n.v <= 0),
+// with Li as above, except that a ray hitting a front face sees there, in
+// interreflected mode, the full diffuse exit radiance of that point (its own
+// `bounces` bounces: what prt's interreflected transfer at the hit holds),
+// also with bounces = 0 (then its direct light). Per iteration two more
+// directions: one from the map's distribution and one from the lobe (density
+// phi_e(r.w)), MIS with the power heuristic for the map's light; light from
+// surfaces by the lobe direction alone. No SH anywhere.
+//
 // Rays leave p + offset n with tnear = offset (precompute/ray_scene.h). At
 // a hit the shading normal is the barycentric interpolation of the triangle's
 // vertex normals (the geometric normal where that vanishes) and the albedo is
@@ -68,6 +80,12 @@ struct ReferenceOptions {
   std::uint64_t seed = 1;        // same seed, mesh, map and options -> same bits
   double offset = 0;             // ray origin offset; 0: default_ray_offset(mesh) = 1e-4 x bounding-box diagonal
   glm::dmat3 rotation{1.0};      // rotates the lighting: light from d arrives from R d, L_rot(d) = L(R^T d)
+  // Glossy: adds rho_s (specular) x the Phong lobe of exponent e (gloss)
+  // about the eye's mirror direction; `albedo` stays the diffuse rho_d.
+  bool glossy = false;
+  glm::dvec3 eye{0.0, 0.0, 3.0};
+  double gloss = 16.0;           // 0 to glossy::kMaxGloss
+  double specular = 0.5;         // 0 to 1
 };
 
 inline constexpr int kMaxReferenceBounces = 64;

@@ -14,6 +14,12 @@
 //   bounces  0 (shadowed) .. n interreflection bounces, against an
 //            interreflected reference with `truth_bounces` bounces
 //   terms    wavelet K (one precompute at `cube_res`, `threshold`)
+//   glossy   glossy transfer (docs/GLOSSY.md) at `glossy_bands` x Phong
+//            exponents `glossy_gloss`, shadowed, the glossy part alone seen
+//            from `glossy_eye`, against a glossy reference per exponent; each
+//            row also gives the intrinsic SH error: the same SH formula with
+//            the matrices traced at `glossy_exact_samples` at the error
+//            vertices (exact up to their own, much smaller, sampling error)
 #pragma once
 
 #include <prt/accuracy.h>
@@ -39,6 +45,14 @@ struct ReportOptions {
   std::vector<int> bounces;         // bounces sweep (0 = shadowed)
   int bounce_bands = 5, bounce_samples = 1024;
   std::vector<int> terms;           // wavelet K sweep (empty: none)
+  std::vector<int> glossy_bands;    // glossy sweep (empty: none), 1 to kMaxGlossyBands
+  std::vector<double> glossy_gloss; // its Phong exponents
+  int glossy_samples = 1024;        // the stored matrices' samples
+  int glossy_exact_samples = 16384; // the intrinsic error's matrices
+  int truth_glossy_samples = 65536; // glossy reference samples per vertex
+  // The eye: NaN (default) puts it where prt render's default camera is
+  // (in front of the mesh along +Z, framing its bounding sphere).
+  glm::dvec3 glossy_eye{NAN, NAN, NAN};
   int cube_res = 32;
   double threshold = 1e-2;
   glm::vec3 albedo{0.8f};
@@ -64,6 +78,8 @@ struct ReportRow {
   std::uint64_t bytes = 0;  // transfer file size
   Accuracy error;
   double self_rms = NAN;    // samples sweep: rel. RMS against the largest sample count
+  double gloss = NAN;       // glossy sweep: the Phong exponent
+  Accuracy intrinsic;       // glossy sweep: the SH formula with (nearly) exact matrices
 };
 
 // A setting's result at every vertex, for pictures.
@@ -74,6 +90,8 @@ struct ReportPicture {
 
 struct Report {
   ErrorSet shadowed_truth, interreflected_truth;
+  std::vector<ErrorSet> glossy_truth;      // one per ReportOptions::glossy_gloss
+  glm::dvec3 glossy_eye{0.0};              // the eye the glossy sweep used
   std::vector<ReportRow> rows;
   std::vector<glm::vec3> image_reference;  // every vertex (empty: no pictures)
   std::vector<glm::vec3> image_std_error;  // its standard error per vertex

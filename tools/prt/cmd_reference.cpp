@@ -26,7 +26,8 @@ namespace prt::cli {
 namespace {
 
 struct ReferenceArgs {
-  std::string mesh, env, output, mode = "shadowed", albedo = "0.8,0.8,0.8", rotate;
+  std::string mesh, env, output, mode = "shadowed", albedo = "0.8,0.8,0.8", rotate, material = "diffuse", eye;
+  std::vector<const CLI::Option*> glossy_opts;  // --material glossy only
   ReferenceOptions opt;
   MeshOptions mesh_opt;
   int threads = 0;
@@ -45,6 +46,17 @@ int run_reference(ReferenceArgs& a) {
     double e[3];
     parse_triple(a.rotate, "--rotate", e);
     a.opt.rotation = sh::rotation_from_euler(e[0], e[1], e[2]);
+  }
+  a.opt.glossy = a.material == "glossy";
+  for (const CLI::Option* o : a.glossy_opts)
+    if (o->count() > 0 && !a.opt.glossy) throw UsageError(o->get_name() + " applies to --material glossy only");
+  if (a.opt.glossy) {
+    if (a.eye.empty()) throw UsageError("--material glossy needs --eye x,y,z (the point the vertices are seen from)");
+    if (a.opt.mode == TransferMode::Unshadowed)
+      throw UsageError("--material glossy needs --mode shadowed or interreflected");
+    double e[3];
+    parse_triple(a.eye, "--eye", e);
+    a.opt.eye = {e[0], e[1], e[2]};
   }
   if (a.opt.offset < 0 || !std::isfinite(a.opt.offset))
     throw UsageError("--offset: must be a finite number >= 0 (0: 1e-4 x the bounding-box diagonal)");
@@ -82,9 +94,12 @@ int run_reference(ReferenceArgs& a) {
       b2 += double(glm::dot(r.radiance[v], r.radiance[v]));
       worst = std::max(worst, double(std::max({r.std_error[v].x, r.std_error[v].y, r.std_error[v].z})));
     }
-    fmt::print(stderr, "wrote {}: {} vertices, {}{}, {} samples/vertex, {:.2f} s\n", a.output, r.radiance.size(),
+    fmt::print(stderr, "wrote {}: {} vertices, {}{}{}, {} samples/vertex, {:.2f} s\n", a.output, r.radiance.size(),
                transfer_mode_name(a.opt.mode),
                a.opt.mode == TransferMode::Interreflected ? fmt::format(" ({} bounces)", a.opt.bounces) : "",
+               a.opt.glossy ? fmt::format(", glossy e {:g} rho_s {:g} from {:g},{:g},{:g}", a.opt.gloss,
+                                          a.opt.specular, a.opt.eye.x, a.opt.eye.y, a.opt.eye.z)
+                            : "",
                a.opt.samples, secs);
     fmt::print(stderr, "standard error: {:.3g} relative RMS, largest {:.3g}\n", b2 > 0 ? std::sqrt(se2 / b2) : 0.0,
                worst);
@@ -104,6 +119,8 @@ Run add_reference(CLI::App& app) {
       "Output: vertex,r,g,b,se_r,se_g,se_b (se: standard error of each value). Use the same mesh options\n"
       "(--weld), --albedo and --rotate as the PRT run you compare against with `prt compare`.\n"
       "Defaults match prt precompute (albedo 0.8, shadowed, 1 bounce). Ctrl-C stops without writing.\n"
+      "--material glossy --eye x,y,z adds rho_s x a Phong lobe of exponent --gloss about the eye's mirror direction\n"
+      "(map and lobe sampling, MIS; docs/GLOSSY.md): the ground truth of prt relight --eye.\n"
       "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
@@ -131,6 +148,18 @@ Run add_reference(CLI::App& app) {
                 "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
                 "diagonal (default 1e-4 x the diagonal)")
       ->check(positive_number());
+  s->add_option("--material", a->material, "diffuse, or glossy: also the view-dependent Phong lobe (--eye, --gloss, "
+                "--specular)")
+      ->check(CLI::IsMember({"diffuse", "glossy"}))
+      ->capture_default_str();
+  a->glossy_opts.push_back(s->add_option("--eye", a->eye, "Glossy: the eye point x,y,z")->check(triple_value("x,y,z")));
+  a->glossy_opts.push_back(
+      s->add_option("--gloss", a->opt.gloss, "Glossy: Phong exponent e, 0 to 4096")
+          ->check(number_range(0, 4096))
+          ->capture_default_str());
+  a->glossy_opts.push_back(s->add_option("--specular", a->opt.specular, "Glossy: the lobe's strength rho_s, 0 to 1")
+                               ->check(number_range(0, 1))
+                               ->capture_default_str());
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position (as prt precompute --weld)");
   s->add_option("-t,--threads", a->threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");

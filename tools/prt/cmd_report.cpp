@@ -39,14 +39,17 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ReportArgs {
-  std::string mesh, env, out = "prt-report", albedo = "0.8,0.8,0.8", cache;
+  std::string mesh, env, out = "prt-report", albedo = "0.8,0.8,0.8", cache, sweeps = "bands,samples,bounces,terms,glossy";
   MeshOptions mesh_opt;
   int threads = 0, image_size = 360;
   bool quick = false, no_cache = false, no_plots = false, quiet = false;
 };
 
 // Which reference a row is measured against.
-const char* reference_of(const ReportRow& r) { return r.sweep == "bounces" ? "interreflected" : "shadowed"; }
+std::string reference_of(const ReportRow& r) {
+  if (r.sweep == "glossy") return fmt::format("glossy e={:g}", r.gloss);
+  return r.sweep == "bounces" ? "interreflected" : "shadowed";
+}
 
 // Rows on the Pareto front of (precompute time, error), per reference: no
 // other row of the same reference is at least as fast and as accurate and
@@ -55,7 +58,7 @@ std::vector<bool> pareto_front(const std::vector<ReportRow>& rows) {
   std::vector<bool> front(rows.size(), true);
   for (std::size_t i = 0; i < rows.size(); ++i)
     for (std::size_t j = 0; j < rows.size() && front[i]; ++j) {
-      if (i == j || std::string_view(reference_of(rows[i])) != reference_of(rows[j])) continue;
+      if (i == j || reference_of(rows[i]) != reference_of(rows[j])) continue;
       const ReportRow &a = rows[i], &b = rows[j];
       const bool no_worse = b.precompute_s <= a.precompute_s && b.error.rel_rms <= a.error.rel_rms;
       const bool better = b.precompute_s < a.precompute_s || b.error.rel_rms < a.error.rel_rms;
@@ -97,15 +100,16 @@ std::string bytes_text(double b) {
 std::string csv_text(const std::vector<ReportRow>& rows, const std::vector<bool>& front, std::size_t vertices) {
   std::string s =
       "sweep,basis,reference,bands,samples,bounces,terms,cube_res,precompute_s,relight_ms,bytes,bytes_per_vertex,"
-      "rel_rms,rel_rms_raw,noise_floor,p99_rel,self_rms,pareto\n";
+      "rel_rms,rel_rms_raw,noise_floor,p99_rel,self_rms,pareto,gloss,intrinsic_rel_rms\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const ReportRow& r = rows[i];
-    s += fmt::format("{},{},{},{},{},{},{},{},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}\n", r.sweep,
+    s += fmt::format("{},{},{},{},{},{},{},{},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{}\n", r.sweep,
                      r.basis, reference_of(r), r.bands, r.samples, r.bounces, r.terms, r.cube_res, r.precompute_s,
                      r.relight_ms, r.bytes, double(r.bytes) / double(vertices), r.error.rel_rms,
                      r.error.rel_rms_raw, r.error.noise_floor, r.error.p99_rel,
                      std::isnan(r.self_rms) ? std::string("nan") : fmt::format("{:.6g}", r.self_rms),
-                     front[i] ? 1 : 0);
+                     front[i] ? 1 : 0, std::isnan(r.gloss) ? std::string("nan") : fmt::format("{:g}", r.gloss),
+                     r.sweep == "glossy" ? fmt::format("{:.6g}", r.intrinsic.rel_rms) : std::string("nan"));
   }
   return s;
 }
@@ -115,6 +119,22 @@ std::string csv_text(const std::vector<ReportRow>& rows, const std::vector<bool>
 std::string error_text(const Accuracy& e) {
   const bool unresolved = e.rel_rms < 2 * e.noise_floor;
   return fmt::format("{:.3g}{}", e.rel_rms, unresolved ? " *" : "");
+}
+
+// The glossy sweep: one row per (bands, e), the error next to the intrinsic
+// SH error and their ratio (issue 15's target: at most 1.2).
+std::string glossy_table(const std::vector<ReportRow>& rows, std::size_t vertices) {
+  std::string s =
+      "| e | bands | precompute (s) | relight (ms/frame) | per vertex | rel. RMS | intrinsic | ratio | p99 |\n"
+      "|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const ReportRow& r : rows) {
+    if (r.sweep != "glossy") continue;
+    s += fmt::format("| {:g} | {} | {:.2f} | {:.2f} | {} | {} | {} | {:.2f} | {:.3g} |\n", r.gloss, r.bands,
+                     r.precompute_s, r.relight_ms, bytes_text(double(r.bytes) / double(vertices)), error_text(r.error),
+                     error_text(r.intrinsic), r.intrinsic.rel_rms > 0 ? r.error.rel_rms / r.intrinsic.rel_rms : NAN,
+                     r.error.p99_rel);
+  }
+  return s;
 }
 
 std::string table(const std::vector<ReportRow>& rows, const std::vector<bool>& front, const std::string& sweep,
@@ -236,6 +256,22 @@ int run_report_command(ReportArgs& a) {
   for (const char* name : {"report.md", "report.csv", "report.json", "plots.py", "plots.log"})
     check_not_input("--out", (fs::path(a.out) / name).string(), {{"MESH", a.mesh}, {"ENV", a.env}});
   ReportOptions opt = report_options(a.quick);
+  // --sweeps: the others are emptied.
+  std::vector<std::string> chosen;
+  for (std::size_t at = 0; at <= a.sweeps.size();) {
+    const std::size_t comma = std::min(a.sweeps.find(',', at), a.sweeps.size());
+    chosen.push_back(a.sweeps.substr(at, comma - at));
+    at = comma + 1;
+  }
+  const auto keep = [&](const char* name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
+  for (const std::string& c : chosen)
+    if (c != "bands" && c != "samples" && c != "bounces" && c != "terms" && c != "glossy")
+      throw UsageError("--sweeps: unknown sweep '" + c + "' (bands, samples, bounces, terms, glossy)");
+  if (!keep("bands")) opt.bands.clear();
+  if (!keep("samples")) opt.samples.clear();
+  if (!keep("bounces")) opt.bounces.clear();
+  if (!keep("terms")) opt.terms.clear();
+  if (!keep("glossy")) opt.glossy_bands.clear();
   opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   opt.threads = a.threads;
   std::error_code ec;
@@ -315,11 +351,17 @@ int run_report_command(ReportArgs& a) {
   // report.md
   std::string md = fmt::format("# prt report: {} under {}\n\n", meta["mesh_name"].get<std::string>(),
                                meta["map_name"].get<std::string>());
+  const std::size_t error_vertices =
+      !rep.shadowed_truth.vertices.empty()  ? rep.shadowed_truth.vertices.size()
+      : !rep.glossy_truth.empty()           ? rep.glossy_truth.front().vertices.size()
+                                            : rep.interreflected_truth.vertices.size();
   md += fmt::format(
       "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
-      "Monte Carlo reference (`prt reference`: shadowed {} samples per vertex, noise floor {:.3g}",
-      V, a.albedo, a.quick ? "quick" : "full", rep.shadowed_truth.vertices.size(), opt.truth_samples,
-      meta["shadowed_noise_floor"].get<double>());
+      "Monte Carlo reference (`prt reference`",
+      V, a.albedo, a.quick ? "quick" : "full", error_vertices);
+  if (!rep.shadowed_truth.vertices.empty())
+    md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
+                      meta["shadowed_noise_floor"].get<double>());
   if (!rep.interreflected_truth.vertices.empty())
     md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
                       opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
@@ -329,13 +371,17 @@ int run_report_command(ReportArgs& a) {
       "error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time per frame "
       "(lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), median. "
       "Storage: the transfer file.\n\n";
-  md += "![error against precompute time](error_vs_time.png)\n\n";
+  const auto has = [&](const char* sweep) {
+    return std::any_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; });
+  };
+  if (has("bands") || has("samples") || has("bounces") || has("terms"))
+    md += "![error against precompute time](error_vs_time.png)\n\n";
   const auto section = [&](const char* sweep, const std::string& title, const std::string& text) {
     if (std::none_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; })) return;
     md += "## " + title + "\n\n" + text + "\n\n" + table(rep.rows, front, sweep, V) + "\n";
   };
   section("bands", "SH bands", fmt::format("Shadowed, {} samples per vertex.", opt.bands_samples));
-  md += "![error against bands and K](error_vs_settings.png)\n\n";
+  if (has("bands") || has("terms")) md += "![error against bands and K](error_vs_settings.png)\n\n";
   std::string fit_text = fmt::format("Shadowed, {} bands.", opt.samples_bands);
   if (!std::isnan(fit.slope))
     fit_text += fmt::format(" Fitted slope of error against samples (log-log): **{:.2f}** against the reference", fit.slope);
@@ -345,13 +391,25 @@ int run_report_command(ReportArgs& a) {
   fit_text += "; Monte Carlo converges with slope -0.5. \"Sampling alone\" is the error against the sweep's "
               "largest sample count at the same bands, which the band truncation does not hide.";
   section("samples", "Samples per vertex", fit_text);
-  md += "![error against samples](error_vs_samples.png)\n\n";
+  if (has("samples")) md += "![error against samples](error_vs_samples.png)\n\n";
   section("bounces", "Interreflection bounces",
           fmt::format("{} bands, {} samples; 0 is the shadowed transfer. Against the interreflected reference.",
                       opt.bounce_bands, opt.bounce_samples));
   section("terms", "Wavelet terms K",
           fmt::format("Haar on a {}x{}x6 cube, threshold {}, area-weighted selection; one precompute.", opt.cube_res,
                       opt.cube_res, opt.threshold));
+  if (std::any_of(rep.rows.begin(), rep.rows.end(), [](const ReportRow& r) { return r.sweep == "glossy"; })) {
+    std::string noise;
+    for (std::size_t g = 0; g < rep.glossy_truth.size(); ++g)
+      noise += fmt::format("{}e = {:g}: {:.3g}", g ? ", " : "", opt.glossy_gloss[g], rep.glossy_truth[g].noise_floor());
+    md += fmt::format(
+        "## Glossy transfer\n\nShadowed glossy matrices at {} samples, the glossy part alone (rho_s = 1, no "
+        "diffuse) seen from ({:.4g}, {:.4g}, {:.4g}), against a glossy reference per exponent ({} samples per "
+        "vertex; noise floors {}). Intrinsic: the same SH formula with matrices traced at {} samples at the error "
+        "vertices: what the band count alone costs (docs/GLOSSY.md).\n\n{}\n",
+        opt.glossy_samples, rep.glossy_eye.x, rep.glossy_eye.y, rep.glossy_eye.z, opt.truth_glossy_samples, noise,
+        opt.glossy_exact_samples, glossy_table(rep.rows, V));
+  }
   if (meta.contains("pictures"))
     md += fmt::format("## Pictures\n\n![reference, settings and error heat maps](images.png)\n\nThe reference here "
                       "has {} samples at every vertex (noise floor {:.3g}); heat maps show |result - reference| / "
@@ -393,6 +451,8 @@ Run add_report(CLI::App& app) {
   s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)");
   s->add_flag("--no-cache", a->no_cache, "Always recompute the references");
   s->add_flag("--no-plots", a->no_plots, "Tables only (no Python)");
+  s->add_option("--sweeps", a->sweeps, "Which sweeps, comma-separated: bands, samples, bounces, terms, glossy")
+      ->capture_default_str();
   s->add_option("--image-size", a->image_size, "Picture size in pixels")->check(int_range(16, 4096))->capture_default_str();
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
   s->add_option("-t,--threads", a->threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
