@@ -7,6 +7,7 @@
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/projection.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 
@@ -21,6 +22,7 @@
 #include <cstring>
 #include <regex>
 #include <thread>
+#include <tuple>
 
 namespace prt {
 namespace {
@@ -101,6 +103,75 @@ TEST(PrecomputeCli, BadOptionsFailBeforeAnyWork) {
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.prt")));
     EXPECT_FALSE(std::filesystem::exists(dir.file("x.csv")));
   }
+}
+
+// Glossy end to end: precompute --material glossy writes a version 3 file
+// whose relighting through `prt relight --eye` is the library's
+// relight_glossy of the same inputs (float CSV: 1e-6 relative).
+TEST(PrecomputeCli, GlossyThroughTheCommandLine) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(6));
+  const std::string mesh = dir.file("fb.off"), env = write_constant_map(dir, 1.0f);
+  for (const char* mode : {"shadowed", "interreflected"}) {
+    const Result p = run_prt(dir, {"precompute", mesh, "-o", dir.file("g.prt"), "--material", "glossy", "--mode", mode,
+                                   "--bands", "4", "--samples", "128", "--albedo", "0.9,0.6,0.3", "-q"});
+    ASSERT_EQ(p.code, 0) << describe_run(p);
+    EXPECT_EQ(read_transfer_version(dir.file("g.prt")), 3u);
+    const Result r = run_prt(dir, {"relight", mesh, dir.file("g.prt"), env, "-o", dir.file("g.csv"), "--eye",
+                                   "0.5,2,1", "--gloss", "12", "--specular", "0.4", "-q"});
+    ASSERT_EQ(r.code, 0) << describe_run(r);
+    const Mesh m = load_mesh(mesh);
+    const Transfer t = read_transfer(dir.file("g.prt"));
+    GlossyShading s;
+    s.eye = {0.5, 2, 1};
+    s.gloss = 12;
+    s.specular = 0.4;
+    const std::vector<glm::vec3> want = relight_glossy(t, m, project(load_envmap(env), 4), s);
+    const std::vector<glm::vec3> got = read_vertex_csv(dir.file("g.csv"));
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t v = 0; v < got.size(); ++v)
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(got[v][c], want[v][c], 1e-6 * (1 + std::abs(want[v][c]))) << mode << v;
+    const Result info = run_prt(dir, {"info", dir.file("g.prt")});
+    EXPECT_NE(info.out.find("glossy matrices"), std::string::npos) << info.out;
+  }
+}
+
+TEST(PrecomputeCli, GlossyOptionsAreChecked) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(4));
+  const std::string mesh = dir.file("fb.off"), env = write_constant_map(dir, 1.0f);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("d.prt"), "--bands", "3", "--samples", "32", "-q"}).code, 0);
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("ir.prt"), "--bands", "3", "--samples", "32", "--mode",
+                          "interreflected", "--material", "glossy", "-q"})
+                .code,
+            0);
+  const std::string out = dir.file("x.csv");
+  // exit status, words of the message
+  const std::vector<std::tuple<std::vector<std::string>, int, std::string>> cases = {
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--material", "glossy", "--mode", "unshadowed"}, 2, "shadowed or interreflected"},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--material", "glossy", "--bands", "13"}, 2, "at most 12"},
+      {{"precompute", mesh, "-o", dir.file("x.prt"), "--material", "shiny"}, 2, "--material"},
+      {{"relight", mesh, dir.file("d.prt"), env, "-o", out, "--gloss", "3"}, 2, "needs --eye"},
+      {{"relight", mesh, dir.file("d.prt"), env, "-o", out, "--eye", "0,1,0"}, 1, "no glossy matrices"},
+      {{"relight", mesh, dir.file("ir.prt"), env, "-o", out, "--eye", "0,1,0", "--diffuse", "2"}, 2, "outside [0, 1]"},
+      {{"relight", mesh, dir.file("ir.prt"), env, "-o", out, "--eye", "0,1,0", "--diffuse", "0.5"}, 1, "albedo 0.8"},
+      {{"relight", mesh, dir.file("ir.prt"), env, "-o", out, "--eye", "0,1,0", "--gloss", "-1"}, 2, "--gloss"},
+      {{"relight", mesh, dir.file("ir.prt"), env, "-o", out, "--eye", "0,nan,0"}, 2, "--eye"},
+      {{"reference", mesh, env, "-o", out, "--material", "glossy"}, 2, "needs --eye"},
+      {{"reference", mesh, env, "-o", out, "--gloss", "4"}, 2, "--material glossy only"},
+  };
+  for (const auto& [args, code, words] : cases) {
+    const Result r = run_prt(dir, args);
+    EXPECT_EQ(r.code, code) << describe_run(r);
+    EXPECT_NE(r.err.find(words), std::string::npos) << describe_run(r);
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.prt")));
+  }
+  // The glossy reference and prt compare on its output.
+  const Result ref = run_prt(dir, {"reference", mesh, env, "-o", dir.file("ref.csv"), "--material", "glossy", "--eye",
+                                   "0,2,1", "--samples", "16", "-q"});
+  ASSERT_EQ(ref.code, 0) << describe_run(ref);
+  EXPECT_EQ(read_vertex_csv(dir.file("ref.csv")).size(), load_mesh(mesh).vertex_count());
 }
 
 // The band limit says why it is 16 (docs/CONVENTIONS.md, "Band counts"),
