@@ -35,4 +35,19 @@ inline Transfer synthetic_transfer(const Mesh& m, int bands, int channels, int a
   return t;
 }
 
+// The same with glossy matrices (random, like the coefficients) for every
+// stored vertex: mode Shadowed (one symmetric matrix, the upper triangle) or
+// Interreflected (a full matrix per channel), every k-th vertex analytic.
+inline Transfer synthetic_glossy_transfer(const Mesh& m, int bands, int channels, TransferMode mode,
+                                          int analytic_every = 0) {
+  Transfer t = synthetic_transfer(m, bands, channels, analytic_every);
+  t.mode = mode;
+  t.glossy = true;
+  t.glossy_matrices.resize(t.stored_vertices() * t.glossy_stride());
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(-0.05f, 0.1f);
+  for (float& c : t.glossy_matrices) c = u(rng);
+  return t;
+}
+
 }  // namespace prt::bench

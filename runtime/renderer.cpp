@@ -4,6 +4,7 @@
 // display.cpp's and default_camera() camera.cpp's.
 #include <prt/error.h>
 #include <prt/filter.h>
+#include <prt/glossy.h>
 #include <prt/names.h>
 #include <prt/render.h>
 #include <prt/sh.h>
@@ -82,7 +83,7 @@ namespace {
 constexpr EnumName<Shading> kShadingNames[] = {
     {Shading::Transfer, "transfer"},     {Shading::Direct, "direct"},    {Shading::Unshadowed, "unshadowed"},
     {Shading::Lambert, "lambert"},       {Shading::AmbientOcclusion, "ao"}, {Shading::BentNormal, "bent"},
-    {Shading::VertexColors, "colors"},
+    {Shading::VertexColors, "colors"},   {Shading::Glossy, "glossy"},
 };
 constexpr EnumName<ToneMap> kToneMapNames[] = {
     {ToneMap::Clamp, "clamp"}, {ToneMap::Reinhard, "reinhard"}, {ToneMap::Aces, "aces"}};
@@ -120,6 +121,8 @@ struct Renderer::Impl {
   // By (coeffs, vec4s, channels, source, vertex albedo); compiled when first used.
   std::map<std::array<int, 5>, GLuint> relight_programs;
   GLuint radiance_buffer = 0;  // vec4 per vertex, written by the relighting pass
+  // By (coeffs, nc, glossy channels, symmetric); compiled when first used.
+  std::map<std::array<int, 4>, GLuint> glossy_programs;
   std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
   GLuint vao = 0, empty_vao = 0;
   GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
@@ -130,6 +133,17 @@ struct Renderer::Impl {
   bool has_direct = false;        // an interreflected transfer's direct part (maybe all analytic)
   Source source = Source::Stored;  // of transfer and direct
   GLuint slot_buffer = 0;          // Source::Mixed: per vertex its row, or Transfer::kAnalytic
+  // Glossy transfers: every vertex's matrices (glossy.comp.glsl's layout),
+  // what glossy_shading_problem needs of the transfer (its arrays left
+  // empty), and the lobe of set_glossy.
+  TransferArray glossy_array;
+  int glossy_row_texels = 0;
+  Transfer glossy_header;
+  // From set_glossy (eye unused: the camera's): rho_s Lambda_l(e) per band
+  // and rho_d / albedo per channel, the glossy pass's uniforms.
+  std::array<float, kMaxRenderBands> lobe_factors{};
+  glm::vec3 diffuse_scale{1.0f};
+  void set_lobe(const GlossyShading& s);
   std::vector<float> light;  // bands^2 vec4s as uploaded before truncation
   // Per-vertex attributes: normals, per-vertex albedo (vertex-coloured transfers), AO, bent normals, colours.
   GLuint normal_buffer = 0, albedo_buffer = 0, ao_buffer = 0, bent_buffer = 0, color_buffer = 0;
@@ -160,16 +174,28 @@ struct Renderer::Impl {
   void check_current_version();
   void create_objects();
   void draw(const Camera& cam, int width, int height);
-  void draw_mesh(const glm::mat4& view_proj);
+  void draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye);
   void display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb);
   GLuint attribute_program(int mode);
   GLuint relight_program(int coeffs, int vec4s, int channels, Source source, bool vertex_albedo);
-  GLuint relight();
+  GLuint relight(const glm::dvec3& eye);
+  GLuint glossy_program(int coeffs);
   void upload_lighting();
   void destroy();
   void delete_mesh_objects();
   void resize(int w, int h);
 };
+
+void Renderer::Impl::set_lobe(const GlossyShading& s) {
+  const std::vector<double> lambda = prt::glossy::phong_lobe_factors(s.gloss, glossy_header.bands);
+  lobe_factors.fill(0.0f);
+  for (std::size_t l = 0; l < lambda.size(); ++l) lobe_factors[l] = float(s.specular * lambda[l]);
+  // relight_glossy's scaling of the diffuse part: rho_d / albedo, 0 for rho_d = 0.
+  diffuse_scale = glm::vec3(1.0f);
+  if (!(s.diffuse.x < 0 && s.diffuse.y < 0 && s.diffuse.z < 0))
+    for (int c = 0; c < 3; ++c)
+      diffuse_scale[c] = s.diffuse[c] == 0.0 ? 0.0f : float(s.diffuse[c] / double(glossy_header.albedo[c]));
+}
 
 // The caller's context (Renderer(use_current_context)) must be 4.5 core.
 void Renderer::Impl::check_current_version() {
@@ -197,6 +223,21 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
                          fmt::format("#define COEFFS {}\n#define BANDS {}\n#define VEC4S {}\n#define CHANNELS {}\n"
                                      "#define SOURCE {}\n#define VERTEX_ALBEDO {}\n",
                                      coeffs, shader_bands, vec4s, ch, int(from), vertex_albedo ? 1 : 0));
+  }
+  return p;
+}
+
+GLuint Renderer::Impl::glossy_program(int coeffs) {
+  const int nc = bands * bands, gch = glossy_header.glossy_channels();
+  const bool symmetric = glossy_header.glossy_symmetric();
+  GLuint& p = glossy_programs[{coeffs, nc, gch, symmetric ? 1 : 0}];
+  if (!p) {
+    const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
+    p = gl::link_compute(shaders::glossy_comp_glsl, "glossy",
+                         fmt::format("#define COEFFS {}\n#define BANDS {}\n#define NC {}\n#define GCH {}\n"
+                                     "#define SYMMETRIC {}\n#define CH_FLOATS {}\n#define ROW_TEXELS {}\n",
+                                     coeffs, shader_bands, nc, gch, symmetric ? 1 : 0, (nc * nc + 3) / 4 * 4,
+                                     glossy_row_texels));
   }
   return p;
 }
@@ -232,12 +273,15 @@ void Renderer::Impl::resize(int w, int h) {
 }
 
 void Renderer::Impl::delete_mesh_objects() {
-  const GLuint buffers[] = {position_buffer, index_buffer,  transfer.buffer, direct.buffer, slot_buffer, normal_buffer,
-                            albedo_buffer,   ao_buffer,     bent_buffer,     color_buffer,  radiance_buffer};
+  const GLuint buffers[] = {position_buffer, index_buffer, transfer.buffer, direct.buffer,
+                            glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
+                            ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
-  const GLuint textures[] = {transfer.texture, direct.texture};
+  const GLuint textures[] = {transfer.texture, direct.texture, glossy_array.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
-  transfer = direct = TransferArray{};
+  transfer = direct = glossy_array = TransferArray{};
+  glossy_row_texels = 0;
+  glossy_header = Transfer{};
   has_direct = false;
   source = Source::Stored;
   slot_buffer = 0;
@@ -259,6 +303,7 @@ void Renderer::Impl::destroy() {
     const GLuint vaos[] = {vao, empty_vao};
     glDeleteVertexArrays(2, vaos);
     for (const auto& [key, p] : relight_programs) glDeleteProgram(p);
+    for (const auto& [key, p] : glossy_programs) glDeleteProgram(p);
     glDeleteProgram(background_program);
     glDeleteProgram(display_program);
     for (GLuint p : attribute_programs) glDeleteProgram(p);
@@ -341,6 +386,57 @@ TransferArray make_transfer_array(const float* t, std::size_t vertices, int chan
   return a;
 }
 
+// Floats of one vertex's glossy row on the GPU (glossy.comp.glsl): the
+// packed triangle, or each channel's full matrix, padded to a multiple of 4.
+std::size_t glossy_row_floats(const Transfer& t) {
+  const std::size_t nc = std::size_t(t.bands) * t.bands;
+  return t.glossy_symmetric() ? (nc * (nc + 1) / 2 + 3) / 4 * 4
+                              : std::size_t(t.glossy_channels()) * ((nc * nc + 3) / 4 * 4);
+}
+
+// Every vertex's glossy matrices, row v = vertex v, as glossy.comp.glsl reads
+// them, with its buffer texture. Analytic vertices store none: their
+// hemisphere product matrices are evaluated here (vertex_glossy_matrix), so
+// the shader has one path and no slots. Throws when the rows exceed the
+// buffer texture limit, before building them.
+TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh) {
+  const std::size_t row = glossy_row_floats(t), bytes = t.vertices * row * sizeof(float);
+  GLint max_texels = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  if (t.vertices * row / 4 > std::size_t(max_texels))
+    throw Error(fmt::format("glossy matrices of {} vertices at {} bands need {} bytes on the GPU ({} per vertex); "
+                            "this OpenGL's buffer texture limit is {} texels of 16 bytes ({} bytes): use fewer bands "
+                            "(prt precompute --bands) or a smaller mesh",
+                            t.vertices, t.bands, bytes, row * sizeof(float), max_texels,
+                            std::size_t(max_texels) * 16));
+  const std::size_t nc = std::size_t(t.bands) * t.bands, channel = (nc * nc + 3) / 4 * 4;
+  std::vector<float> out(t.vertices * row, 0.0f);
+  for (std::size_t v = 0; v < t.vertices; ++v) {
+    float* dst = out.data() + v * row;
+    if (const float* src = t.stored_glossy(v)) {
+      if (t.glossy_symmetric()) std::copy_n(src, nc * (nc + 1) / 2, dst);
+      else
+        for (int c = 0; c < t.glossy_channels(); ++c) std::copy_n(src + std::size_t(c) * nc * nc, nc * nc, dst + std::size_t(c) * channel);
+      continue;
+    }
+    const std::vector<double> m = vertex_glossy_matrix(t, mesh, v);  // every channel's
+    if (t.glossy_symmetric()) {
+      for (std::size_t i = 0, k = 0; i < nc; ++i)
+        for (std::size_t j = i; j < nc; ++j, ++k) dst[k] = float(m[i * nc + j]);
+    } else {
+      for (int c = 0; c < t.glossy_channels(); ++c)
+        for (std::size_t i = 0; i < nc * nc; ++i) dst[std::size_t(c) * channel + i] = float(m[i]);
+    }
+  }
+  TransferArray a;
+  a.bytes = bytes;
+  a.buffer = make_buffer(out.data(), bytes);
+  glCreateTextures(GL_TEXTURE_BUFFER, 1, &a.texture);
+  glTextureBuffer(a.texture, GL_RGBA32F, a.buffer);
+  a.channels = t.glossy_channels();
+  return a;
+}
+
 }  // namespace
 
 void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
@@ -348,6 +444,9 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   check_matches(t, mesh, "transfer");
   if (t.bands > kMaxRenderBands)
     throw Error(fmt::format("transfer has {} bands; the renderer takes 1 to {}", t.bands, kMaxRenderBands));
+  if (t.glossy && t.bands > kMaxRenderGlossyBands)
+    throw Error(fmt::format("glossy transfer has {} bands; the renderer takes glossy matrices of 1 to {}", t.bands,
+                            kMaxRenderGlossyBands));
   const std::size_t rows = t.stored_vertices();
   set_mesh(mesh, t.albedo, t.vertex_colors);
   Impl& m = *impl_;
@@ -379,10 +478,23 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
   if (!t.bent_normals.empty())
     m.bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
+  if (t.glossy) {
+    m.glossy_array = make_glossy_array(t, mesh);
+    m.glossy_row_texels = int(glossy_row_floats(t) / 4);
+    // What glossy_shading_problem reads of the transfer: the header, not its arrays.
+    m.glossy_header = Transfer{};
+    m.glossy_header.bands = t.bands;
+    m.glossy_header.channels = t.channels;
+    m.glossy_header.mode = t.mode;
+    m.glossy_header.albedo = t.albedo;
+    m.glossy_header.vertex_colors = t.vertex_colors;
+    m.glossy_header.glossy = true;
+    m.set_lobe(GlossyShading{});
+  }
   check_gl("uploading the transfer");
   m.bands = m.band_limit = t.bands;
   m.channels = t.channels;
-  m.shading = Shading::Transfer;
+  m.shading = t.glossy ? Shading::Glossy : Shading::Transfer;
 }
 
 void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors) {
@@ -467,6 +579,7 @@ bool Renderer::has_shading(Shading s) const {
     case Shading::Transfer:
     case Shading::Unshadowed: return m.bands > 0;
     case Shading::Direct: return m.has_direct;
+    case Shading::Glossy: return m.glossy_array.texture != 0;
     case Shading::AmbientOcclusion: return m.ao_buffer != 0;
     case Shading::BentNormal: return m.bent_buffer != 0;
     case Shading::VertexColors: return m.have_colors;
@@ -484,7 +597,9 @@ void Renderer::set_shading(Shading s) {
   if (s == Shading::VertexColors) PRT_CHECK(m.have_colors);
   // What the transfer file holds is data: an error to report.
   if (!has_shading(s)) {
-    const char* why = s == Shading::Direct ? "the transfer is not interreflected" : "the transfer file has no such data";
+    const char* why = s == Shading::Direct   ? "the transfer is not interreflected"
+                      : s == Shading::Glossy ? "the transfer has no glossy matrices (prt precompute --material glossy)"
+                                             : "the transfer file has no such data";
     throw Error("shading '" + std::string(shading_name(s)) + "' is unavailable: " + why);
   }
   impl_->shading = s;
@@ -507,7 +622,35 @@ void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
 std::size_t Renderer::transfer_bytes() const {
   const Impl& m = *impl_;
   const std::size_t slots = m.source == Source::Mixed ? m.vertex_count * sizeof(std::uint32_t) : 0;
-  return m.transfer.bytes + m.direct.bytes + slots;
+  return m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots;
+}
+
+void Renderer::set_glossy(double gloss, double specular, const glm::dvec3& diffuse) {
+  Impl& m = *impl_;
+  PRT_CHECK(m.glossy_array);
+  GlossyShading s;
+  s.gloss = gloss;
+  s.specular = specular;
+  s.diffuse = diffuse;
+  if (const std::string p = glossy_shading_problem(m.glossy_header, s); !p.empty()) throw Error(p);
+  m.set_lobe(s);
+}
+
+std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
+  Impl& m = *impl_;
+  PRT_CHECK(m.has_sh_transfer());
+  PRT_CHECK(m.have_lighting);
+  PRT_CHECK(m.shading == Shading::Transfer || m.shading == Shading::Direct || m.shading == Shading::Unshadowed ||
+            m.shading == Shading::Glossy);
+  m.make_current();
+  const GLuint buffer = m.relight(eye);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  std::vector<float> rgba(m.vertex_count * 4);
+  glGetNamedBufferSubData(buffer, 0, GLsizeiptr(rgba.size() * sizeof(float)), rgba.data());
+  check_gl("reading the vertex radiance back");
+  std::vector<glm::vec3> out(m.vertex_count);
+  for (std::size_t v = 0; v < m.vertex_count; ++v) out[v] = {rgba[4 * v], rgba[4 * v + 1], rgba[4 * v + 2]};
+  return out;
 }
 
 void Renderer::set_environment(const EnvMap& map) {
@@ -560,7 +703,7 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
   PRT_CHECK_OP(width, >, 0);
   PRT_CHECK_OP(height, >, 0);
   const bool lit = m.shading == Shading::Transfer || m.shading == Shading::Direct ||
-                   m.shading == Shading::Unshadowed || m.shading == Shading::Lambert;
+                   m.shading == Shading::Unshadowed || m.shading == Shading::Lambert || m.shading == Shading::Glossy;
   if (m.has_mesh() && lit) PRT_CHECK(m.have_lighting);
   if (m.has_mesh() && m.shading == Shading::VertexColors) PRT_CHECK(m.have_colors);
   // Errors: what this OpenGL can draw, and the camera (the user's --camera).
@@ -612,15 +755,16 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const double dist = glm::length(fwd);
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
-    m.draw_mesh(glm::mat4(proj * view));
+    m.draw_mesh(glm::mat4(proj * view), cam.eye);
   }
   glBindVertexArray(0);
   check_gl("rendering");
 }
 
 // The relighting pass of the current transfer shading (Transfer, Direct,
-// Unshadowed) into radiance_buffer; returns that buffer.
-GLuint Renderer::Impl::relight() {
+// Unshadowed, Glossy: its diffuse part, then glossy.comp.glsl toward `eye`)
+// into radiance_buffer; returns that buffer.
+GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
   const TransferArray& a = shading == Shading::Direct && direct ? direct : transfer;
   const Source s = shading == Shading::Unshadowed ? Source::Analytic : source;
   const bool vertex_albedo = albedo_buffer != 0;
@@ -639,16 +783,28 @@ GLuint Renderer::Impl::relight() {
   glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);
   glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
+  if (shading == Shading::Glossy) {
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the glossy pass reads the diffuse radiance
+    glUseProgram(glossy_program(band_limit * band_limit));
+    glUniform1ui(0, GLuint(vertex_count));
+    glUniform3f(1, float(eye.x), float(eye.y), float(eye.z));
+    glUniform3fv(2, 1, &diffuse_scale[0]);
+    glUniform1fv(3, kMaxRenderBands, lobe_factors.data());
+    glBindTextureUnit(4, glossy_array.texture);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, position_buffer);
+    glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
+  }
   glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);
   return radiance_buffer;
 }
 
-void Renderer::Impl::draw_mesh(const glm::mat4& view_proj) {
+void Renderer::Impl::draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye) {
   int mode = attribute_mode(shading);
   GLuint data = 0;
   GLsizei stride = sizeof(glm::vec3);
   if (mode == 0) {  // a transfer array dotted with the lighting, then drawn as vertex colours
-    data = relight();
+    data = relight(eye);
     stride = 4 * sizeof(float);
     mode = attribute_mode(Shading::VertexColors);
   } else {

@@ -848,5 +848,322 @@ TEST_F(RenderCli, CtrlCDuringASequenceLeavesNoFrame) {
   EXPECT_TRUE(test::temporaries(dir).empty());
 }
 
+// prt render of a glossy file: glossy shading by default, the lobe options
+// change the image; on another file --gloss and its kind are refused (exit
+// 2) and --shading glossy names the file (exit 1).
+TEST_F(RenderCli, GlossyFiles) {
+  const std::string gprt = dir.file("ball_glossy.prt");
+  const auto pre = test::run_prt(dir, {"precompute", mesh, "-o", gprt, "-m", "shadowed", "-b", "3", "--samples",
+                                       "16", "--material", "glossy", "-q"});
+  ASSERT_EQ(pre.code, 0) << test::describe_run(pre);
+  const auto size = std::vector<std::string>{"--width", "32", "--height", "32"};
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {mesh, gprt, env, "-o", dir.file(out)};
+    args.insert(args.end(), size.begin(), size.end());
+    args.insert(args.end(), extra.begin(), extra.end());
+    return render(args);
+  };
+  for (const auto& [out, extra] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {"default.exr", {}},
+           {"glossy.exr", {"--shading", "glossy", "--gloss", "16", "--specular", "0.5"}},
+           {"shiny.exr", {"--gloss", "64", "--specular", "1", "--diffuse", "0.2,0.3,0.4"}},
+           {"diffuse.exr", {"--shading", "transfer"}}}) {
+    const auto res = run(out, extra);
+    ASSERT_EQ(res.code, 0) << test::describe_run(res);
+  }
+  const std::string default_bytes = test::read_file(dir.file("default.exr"));
+  EXPECT_EQ(default_bytes, test::read_file(dir.file("glossy.exr")));  // the defaults: glossy, e 16, rho_s 0.5
+  EXPECT_NE(default_bytes, test::read_file(dir.file("shiny.exr")));
+  EXPECT_NE(default_bytes, test::read_file(dir.file("diffuse.exr")));
+  for (const char* opt : {"--gloss", "--specular", "--diffuse"}) {
+    const auto res = render({mesh, prt, env, "-o", dir.file("no.exr"), opt, "0.5"});
+    EXPECT_EQ(res.code, 2) << opt << "\n" << test::describe_run(res);
+    EXPECT_NE(res.err.find(std::string(opt) + " needs a glossy transfer (prt precompute --material glossy)"),
+              std::string::npos)
+        << res.err;
+  }
+  const auto shading = render({mesh, prt, env, "-o", dir.file("no.exr"), "--shading", "glossy"});
+  EXPECT_EQ(shading.code, 1) << test::describe_run(shading);
+  EXPECT_NE(shading.err.find(prt + ": --shading glossy needs a glossy transfer"), std::string::npos) << shading.err;
+  const auto bad = run("no.exr", {"--diffuse", "2"});
+  EXPECT_EQ(bad.code, 2) << test::describe_run(bad);
+  EXPECT_NE(bad.err.find("--diffuse: 2 is outside [0, 1]"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("no.exr")));
+}
+
+// ---- glossy shading (Shading::Glossy) ----------------------------------------
+
+// The runtime cannot include prt/precompute.h (layering), so it keeps its own
+// copy of the glossy band limit.
+static_assert(kMaxRenderGlossyBands == kMaxGlossyBands);
+
+// GPU vs CPU glossy radiance per vertex, relative to max(|expected|, 10% of
+// the largest value): the glossy pass sums bands^4 / 2 float products of
+// float matrix entries (the CPU the same entries in double) and forms the
+// mirror direction and basis in float; measured 2e-5 at 5 bands, so 1e-3
+// (kVertexTolerance's budget) leaves room for other drivers.
+constexpr double kGlossyTolerance = 1e-3;
+
+std::vector<glm::dvec3> smooth_light(int bands) { return project(latlong_of(smooth_env, 128, 64), bands); }
+
+// A glossy transfer of floor_and_ball (RGB albedo; stored and analytic vertices).
+Transfer glossy_floor_and_ball(const Mesh& mesh, TransferMode mode, int bands) {
+  TransferOptions o;
+  o.mode = mode;
+  o.bands = bands;
+  o.samples = 64;
+  o.bounces = 1;
+  o.albedo = glm::vec3(0.8f, 0.6f, 0.4f);
+  o.glossy = true;
+  return compute_transfer(mesh, o);
+}
+
+// The worst relative error of got against expected (see kGlossyTolerance);
+// expects every vertex within the tolerance.
+double expect_radiance_near(const std::vector<glm::vec3>& got, const std::vector<glm::vec3>& expected,
+                            const std::string& what) {
+  EXPECT_EQ(got.size(), expected.size()) << what;
+  double scale = 0, worst = 0;
+  for (const auto& e : expected) scale = std::max({scale, double(e.x), double(e.y), double(e.z)});
+  EXPECT_GT(scale, 0.1) << what;
+  int bad = 0;
+  for (std::size_t v = 0; v < std::min(got.size(), expected.size()); ++v)
+    for (int c = 0; c < 3; ++c) {
+      const double err = std::abs(double(got[v][c]) - expected[v][c]) / std::max(std::abs(double(expected[v][c])), 0.1 * scale);
+      worst = std::max(worst, err);
+      if (err > kGlossyTolerance && ++bad <= 5)
+        ADD_FAILURE() << what << ": vertex " << v << " channel " << c << ": GPU " << got[v][c] << ", CPU "
+                      << expected[v][c];
+    }
+  EXPECT_EQ(bad, 0) << what << ": vertices off by more than " << kGlossyTolerance;
+  ::testing::Test::RecordProperty("worst_relative_error_" + what, std::to_string(worst));
+  return worst;
+}
+
+// The largest difference between two radiance arrays, over the largest value of a.
+double relative_difference(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
+  double scale = 0, diff = 0;
+  for (std::size_t v = 0; v < a.size(); ++v)
+    for (int c = 0; c < 3; ++c) {
+      scale = std::max(scale, std::abs(double(a[v][c])));
+      diff = std::max(diff, std::abs(double(a[v][c]) - b[v][c]));
+    }
+  return diff / scale;
+}
+
+// The same transfer at its first `bands` bands (the leading blocks of its
+// coefficients and glossy matrices): what set_band_limit(bands) shades.
+Transfer truncated_glossy(const Transfer& t, int bands) {
+  Transfer out = t;
+  out.bands = bands;
+  const std::size_t nc = std::size_t(t.bands) * t.bands, kc = std::size_t(bands) * bands;
+  auto cut = [&](const std::vector<float>& rows) {
+    std::vector<float> r;
+    for (std::size_t i = 0; i < rows.size(); i += nc) r.insert(r.end(), rows.begin() + std::ptrdiff_t(i), rows.begin() + std::ptrdiff_t(i + kc));
+    return r;
+  };
+  out.coeffs = cut(t.coeffs);
+  out.direct = cut(t.direct);
+  out.glossy_matrices.clear();
+  for (std::size_t row = 0; row < t.stored_vertices(); ++row) {
+    const float* m = t.glossy_matrices.data() + row * t.glossy_stride();
+    for (int c = 0; c < t.glossy_channels(); ++c)
+      for (std::size_t i = 0; i < kc; ++i)
+        for (std::size_t j = t.glossy_symmetric() ? i : 0; j < kc; ++j)
+          out.glossy_matrices.push_back(t.glossy_symmetric() ? m[i * nc - i * (i - 1) / 2 + (j - i)]
+                                                             : m[std::size_t(c) * nc * nc + i * nc + j]);
+  }
+  return out;
+}
+
+// Every vertex's glossy radiance from the GPU pass equals relight_glossy's at
+// the same eye, for shadowed (symmetric, one matrix) and interreflected (RGB,
+// one full matrix per channel) transfers, with stored and analytic vertices;
+// a new lobe set live, a diffuse override and a band limit as well.
+TEST(RenderGlossy, VertexRadianceEqualsRelightGlossy) {
+  REQUIRE_RENDERER(r);
+  const Mesh mesh = test::floor_and_ball(8);
+  const int bands = 5;
+  const std::vector<glm::dvec3> light = smooth_light(bands);
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    const std::string name(transfer_mode_name(mode));
+    SCOPED_TRACE(name);
+    const Transfer t = glossy_floor_and_ball(mesh, mode, bands);
+    ASSERT_EQ(t.channels, 3);
+    ASSERT_GT(t.analytic_vertices(), 0u);
+    ASSERT_GT(t.stored_vertices(), 0u);
+    r->set_mesh(mesh, t);
+    EXPECT_EQ(r->shading(), Shading::Glossy);  // a glossy transfer's default
+    EXPECT_TRUE(r->has_shading(Shading::Glossy));
+    // Every vertex's matrices, each channel's padded to a multiple of 4 floats, beside the diffuse rows.
+    const std::size_t nc = bands * bands;
+    const std::size_t glossy_row = mode == TransferMode::Shadowed ? 328 : 3 * 628;
+    ASSERT_EQ(glossy_row, mode == TransferMode::Shadowed ? (nc * (nc + 1) / 2 + 3) / 4 * 4 : 3 * ((nc * nc + 3) / 4 * 4));
+    Renderer diffuse_only;
+    diffuse_only.set_mesh(mesh, [&] {
+      Transfer plain = t;
+      plain.glossy = false;
+      plain.glossy_matrices.clear();
+      return plain;
+    }());
+    EXPECT_EQ(r->transfer_bytes(), diffuse_only.transfer_bytes() + t.vertices * glossy_row * 4);
+    r->set_lighting(light);
+
+    GlossyShading s;
+    s.eye = {0.7, 2.2, 2.4};
+    const std::vector<glm::vec3> cpu = relight_glossy(t, mesh, light, s);
+    expect_radiance_near(r->vertex_radiance(s.eye), cpu, name + "_default_lobe");
+    // The lobe matters here: the glossy part is far above the tolerance.
+    EXPECT_GT(relative_difference(cpu, relight(t, mesh, light)), 0.1);
+
+    s.gloss = 64;
+    s.specular = 0.9;
+    s.diffuse = mode == TransferMode::Shadowed ? glm::dvec3(0.3, 0.5, 0.2) : glm::dvec3(0.0);
+    r->set_glossy(s.gloss, s.specular, s.diffuse);
+    const std::vector<glm::vec3> cpu2 = relight_glossy(t, mesh, light, s);
+    EXPECT_GT(relative_difference(cpu2, cpu), 0.1);
+    expect_radiance_near(r->vertex_radiance(s.eye), cpu2, name + "_live_lobe");
+
+    r->set_band_limit(3);
+    std::vector<glm::dvec3> light3(light.begin(), light.begin() + 9);
+    expect_radiance_near(r->vertex_radiance(s.eye), relight_glossy(truncated_glossy(t, 3), mesh, light3, s),
+                         name + "_band_limit_3");
+  }
+}
+
+// The frame: pixels at the camera grid's vertices equal relight_glossy at
+// the camera's eye, before and after a live change of the lobe.
+TEST(RenderGlossy, PixelsAtVerticesEqualRelightGlossyAtTheEye) {
+  REQUIRE_RENDERER(r);
+  const CameraGrid g = camera_grid(false);
+  TransferOptions o;
+  o.mode = TransferMode::Shadowed;
+  o.bands = 4;
+  o.samples = 128;
+  o.albedo = glm::vec3(0.8f);
+  o.glossy = true;
+  const Transfer t = compute_transfer(g.mesh, o);
+  const auto [analytic, stored] = analytic_and_stored(t, g);
+  ASSERT_GT(analytic, 0);
+  ASSERT_GT(stored, 0);
+  const std::vector<glm::dvec3> light = smooth_light(o.bands);
+  r->set_mesh(g.mesh, t);
+  r->set_lighting(light);
+  GlossyShading s;
+  s.eye = g.camera.eye;
+  const Image first = r->render(g.camera, g.size, g.size);
+  expect_pixels_at_vertices(first, g, relight_glossy(t, g.mesh, light, s), "glossy");
+  s.gloss = 4;
+  s.specular = 1.0;
+  r->set_glossy(s.gloss, s.specular);
+  const Image second = r->render(g.camera, g.size, g.size);
+  expect_pixels_at_vertices(second, g, relight_glossy(t, g.mesh, light, s), "glossy_live");
+  double changed = 0;
+  for (std::size_t i = 0; i < first.rgb.size(); ++i) changed = std::max(changed, double(std::abs(first.rgb[i] - second.rgb[i])));
+  EXPECT_GT(changed, 0.05);
+}
+
+// Moving the eye changes the glossy radiance (as the CPU says) and not the
+// diffuse one; with rho_s = 0 the glossy shading is the diffuse shading.
+TEST(RenderGlossy, TheEyeMovesTheHighlightNotTheDiffuse) {
+  REQUIRE_RENDERER(r);
+  const Mesh mesh = test::floor_and_ball(6);
+  const Transfer t = glossy_floor_and_ball(mesh, TransferMode::Shadowed, 4);
+  const std::vector<glm::dvec3> light = smooth_light(4);
+  r->set_mesh(mesh, t);
+  r->set_lighting(light);
+  const glm::dvec3 a(0.7, 2.2, 2.4), b(-2.0, 1.0, 1.5);
+  const std::vector<glm::vec3> ga = r->vertex_radiance(a), gb = r->vertex_radiance(b);
+  EXPECT_GT(relative_difference(ga, gb), 0.1);
+  GlossyShading s;
+  s.eye = b;
+  expect_radiance_near(gb, relight_glossy(t, mesh, light, s), "eye_b");
+  r->set_shading(Shading::Transfer);
+  const std::vector<glm::vec3> da = r->vertex_radiance(a), db = r->vertex_radiance(b);
+  EXPECT_EQ(da, db);  // the diffuse pass does not read the eye
+  r->set_shading(Shading::Glossy);
+  r->set_glossy(16, 0.0);
+  EXPECT_EQ(r->vertex_radiance(a), da);
+  // The frames: the same camera target seen from two eyes; the diffuse
+  // frames differ only by the projection, so compare the glossy minus the
+  // diffuse frame of each eye.
+  const Camera ca{a, {0, 0.3, 0}, {0, 1, 0}, 50}, cb{b, {0, 0.3, 0}, {0, 1, 0}, 50};
+  r->set_glossy(16, 0.5);
+  const Image glossy_a = r->render(ca, 32, 32), glossy_b = r->render(cb, 32, 32);
+  r->set_shading(Shading::Transfer);
+  const Image diffuse_a = r->render(ca, 32, 32), diffuse_b = r->render(cb, 32, 32);
+  double spec_a = 0, spec_b = 0;
+  for (std::size_t i = 0; i < glossy_a.rgb.size(); ++i) {
+    spec_a += glossy_a.rgb[i] - diffuse_a.rgb[i];
+    spec_b += glossy_b.rgb[i] - diffuse_b.rgb[i];
+  }
+  EXPECT_GT(spec_a, 0.0);
+  EXPECT_GT(std::abs(spec_a - spec_b), 0.05 * spec_a);
+}
+
+// What a non-glossy transfer refuses, and the lobe values set_glossy refuses
+// (glossy_shading_problem's rules and messages).
+TEST(RenderGlossy, UnavailableAndBadValuesAreRefused) {
+  REQUIRE_RENDERER(r);
+  const Mesh mesh = test::floor_and_ball(4);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 16;
+  r->set_mesh(mesh, compute_transfer(mesh, o));
+  EXPECT_EQ(r->shading(), Shading::Transfer);
+  EXPECT_FALSE(r->has_shading(Shading::Glossy));
+  try {
+    r->set_shading(Shading::Glossy);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("shading 'glossy' is unavailable"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(r->set_glossy(16, 0.5), InternalError);  // the caller's bug: no glossy transfer
+  EXPECT_EQ(parse_shading("glossy"), Shading::Glossy);
+  EXPECT_EQ(shading_name(Shading::Glossy), "glossy");
+
+  const Transfer t = glossy_floor_and_ball(mesh, TransferMode::Interreflected, 3);
+  r->set_mesh(mesh, t);
+  EXPECT_THROW(r->set_glossy(-1, 0.5), Error);
+  EXPECT_THROW(r->set_glossy(5000, 0.5), Error);
+  EXPECT_THROW(r->set_glossy(16, 1.5), Error);
+  try {
+    r->set_glossy(16, 0.5, glm::dvec3(0.5));  // interreflected: only its own albedo or 0
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bounces were computed with albedo"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(r->set_glossy(16, 0.5, glm::dvec3(0.0)));
+}
+
+// The band limit: a flat quad's vertices are all analytic (no stored rows),
+// so its transfer can claim any band count. 12 bands shade (the shader's
+// largest arrays) and agree with the CPU; 13 are refused.
+TEST(RenderGlossy, TwelveBandsShadeThirteenAreRefused) {
+  REQUIRE_RENDERER(r);
+  const Mesh quad = test::quad(2);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 16;
+  o.glossy = true;
+  Transfer t = compute_transfer(quad, o);
+  ASSERT_EQ(t.stored_vertices(), 0u);
+  t.bands = kMaxRenderGlossyBands;
+  ASSERT_EQ(transfer_problem(t), "");
+  const std::vector<glm::dvec3> light = smooth_light(t.bands);
+  r->set_mesh(quad, t);
+  r->set_lighting(light);
+  GlossyShading s;
+  s.eye = {0.3, 1.5, 1.0};
+  expect_radiance_near(r->vertex_radiance(s.eye), relight_glossy(t, quad, light, s), "twelve_bands");
+  t.bands = kMaxRenderGlossyBands + 1;
+  try {
+    r->set_mesh(quad, t);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("glossy transfer has 13 bands"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace prt

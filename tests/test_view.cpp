@@ -184,6 +184,19 @@ TEST_F(ViewCli, WaveletScreenshotMatchesRender) {
   check_screenshot_matches_render({"--terms", "40"}, true);
 }
 
+// A glossy file: the window shows glossy shading by default with the lobe of
+// --gloss and --specular, as prt render does.
+TEST_F(ViewCli, GlossyScreenshotMatchesRender) {
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
+  TransferOptions o;
+  o.mode = TransferMode::Shadowed;
+  o.bands = 3;
+  o.samples = 16;
+  o.glossy = true;
+  write_transfer(prt, compute_transfer(load_mesh(mesh), o));
+  check_screenshot_matches_render({"--gloss", "1", "--specular", "1"});
+}
+
 TEST_F(ViewCli, NoDisplayPointsToRender) {
   const std::string err = (dir.io() / "nodisplay_err.txt").string();
   const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY " + test::shell_quote(PRT_EXE) + " view " +
@@ -265,6 +278,35 @@ TEST(ViewInput, WaveletKeys) {
   EXPECT_EQ(s.selection, 1);
   on_key(s, input::kKeyG, input::kPress, 0);
   EXPECT_EQ(s.selection, 0);
+}
+
+// L / shift+L double and halve the gloss exponent within [0, 4096] (0 and 1
+// step into each other); = / - move the specular strength by 0.05 within
+// [0, 1], landing on both ends exactly.
+TEST(ViewInput, GlossyKeys) {
+  ViewState s;
+  EXPECT_EQ(s.gloss, 16.0);
+  EXPECT_EQ(s.specular, 0.5);
+  on_key(s, input::kKeyL, input::kPress, 0);
+  EXPECT_EQ(s.gloss, 32.0);
+  for (int i = 0; i < 20; ++i) on_key(s, input::kKeyL, input::kRepeat, 0);
+  EXPECT_EQ(s.gloss, 4096.0);
+  for (int i = 0; i < 12; ++i) on_key(s, input::kKeyL, input::kPress, input::kModShift);
+  EXPECT_EQ(s.gloss, 1.0);
+  on_key(s, input::kKeyL, input::kPress, input::kModShift);
+  EXPECT_EQ(s.gloss, 0.0);
+  on_key(s, input::kKeyL, input::kPress, input::kModShift);
+  EXPECT_EQ(s.gloss, 0.0);
+  on_key(s, input::kKeyL, input::kPress, 0);
+  EXPECT_EQ(s.gloss, 1.0);
+  on_key(s, input::kKeyEqual, input::kPress, 0);
+  EXPECT_NEAR(s.specular, 0.55, 1e-12);
+  for (int i = 0; i < 30; ++i) on_key(s, input::kKeyEqual, input::kRepeat, 0);
+  EXPECT_EQ(s.specular, 1.0);
+  for (int i = 0; i < 30; ++i) on_key(s, input::kKeyMinus, input::kPress, 0);
+  EXPECT_EQ(s.specular, 0.0);
+  on_key(s, input::kKeyR, input::kPress, 0);  // the lobe is the look: reset keeps it
+  EXPECT_EQ(s.gloss, 1.0);
 }
 
 TEST(ViewInput, MouseOrbitsZoomsAndTurnsTheEnvironment) {

@@ -7,7 +7,10 @@
 // (unoccluded) vertices evaluates the clamped cosine about the vertex normal
 // from the lighting (prt/transfer.h); the mesh is drawn with the result
 // interpolated (Gouraud), so pixels at vertices equal prt::relight() of
-// those vertices. The environment is drawn as background,
+// those vertices. Glossy transfers (prt/transfer.h, "glossy shading") add a
+// second compute pass: each vertex's glossy matrix times the lighting, seen
+// along the mirror of the direction to the camera's eye (shaders/glossy.comp.glsl,
+// docs/RUNTIME.md "Glossy"). The environment is drawn as background,
 // looked up per pixel by the view direction.
 //
 // Conventions (docs/CONVENTIONS.md): rotating the lighting by R moves light
@@ -55,6 +58,10 @@ namespace prt {
 
 // The most bands the renderer's lighting block holds (16^2 = 256 vec4s).
 inline constexpr int kMaxRenderBands = 16;
+// The most bands of a glossy transfer the renderer takes: prt::kMaxGlossyBands
+// (prt/precompute.h, which the runtime does not include; tests/test_render_glossy.cpp
+// pins the two equal). The glossy pass keeps bands^2 basis values per invocation.
+inline constexpr int kMaxRenderGlossyBands = 12;
 
 // What the mesh shows (prt view's M key, prt render --shading).
 enum class Shading {
@@ -67,8 +74,11 @@ enum class Shading {
   AmbientOcclusion,  // grey: the file's per-vertex ambient occlusion (files that have it)
   BentNormal,        // 0.5 + 0.5 x the file's bent normal as RGB (files that have it)
   VertexColors,      // linear RGB per vertex from set_vertex_colors (CPU relighting, e.g. wavelets)
+  Glossy,            // glossy files only: the transfer's diffuse part plus the view-dependent Phong lobe
+                     // (prt::relight_glossy toward the camera's eye; set_glossy), both on the GPU
 };
-std::string_view shading_name(Shading s);  // "transfer", "direct", "unshadowed", "lambert", "ao", "bent", "colors"
+// "transfer", "direct", "unshadowed", "lambert", "ao", "bent", "colors", "glossy"
+std::string_view shading_name(Shading s);
 Shading parse_shading(std::string_view name);  // throws prt::Error listing the names
 
 // From linear HDR to display values in [0, 1] (then sRGB-encoded by the
@@ -148,7 +158,9 @@ class Renderer {
   // its stored vertices, and for a transfer with analytic vertices their
   // slots (any band count up to kMaxRenderBands, 1 or 3 channels).
   // Throws prt::Error when the transfer was not computed for this mesh
-  // (vertex count, mesh hash) or its arrays are inconsistent.
+  // (vertex count, mesh hash) or its arrays are inconsistent, and for glossy
+  // matrices of more than kMaxRenderGlossyBands bands or more bytes than
+  // this OpenGL's buffer texture limit (the message names both).
   void set_mesh(const Mesh& mesh, const Transfer& transfer);
   // Uploads the mesh alone, with no SH transfer (e.g. for wavelet relighting
   // on the CPU): Shading::VertexColors (after set_vertex_colors) and Lambert
@@ -161,8 +173,11 @@ class Renderer {
   // and 4 bytes of slot per vertex when some vertices are analytic. When
   // those slots would cost more than the analytic rows they spare, set_mesh
   // evaluates the analytic rows on the CPU and uploads every vertex's row,
-  // without slots. Normals and colours are not counted (every shading mode
-  // has them).
+  // without slots. Glossy transfers add their matrices, one row per vertex
+  // (analytic vertices' hemisphere matrices evaluated by set_mesh; see
+  // docs/RUNTIME.md, "Glossy"): glossy_stride() floats padded to a multiple
+  // of 4 (per channel when interreflected). Normals, positions and colours
+  // are not counted (every shading mode has them).
   std::size_t transfer_bytes() const;
 
   // The lighting of the next frames: RGB coefficients, at least bands()^2
@@ -179,8 +194,9 @@ class Renderer {
   void set_band_limit(int bands);
   int band_limit() const;
 
-  // What the mesh shows (default Transfer; set_mesh resets it). has_shading
-  // says whether the uploaded mesh and transfer support a mode: Direct needs
+  // What the mesh shows (default Transfer, Glossy for a glossy transfer;
+  // set_mesh resets it). has_shading says whether the uploaded mesh and
+  // transfer support a mode: Glossy needs glossy matrices, Direct needs
   // an interreflected transfer, AmbientOcclusion and BentNormal a file that
   // has them, VertexColors a set_vertex_colors call. set_shading throws
   // prt::Error for a mode the transfer file has no data for (Direct of a
@@ -196,6 +212,24 @@ class Renderer {
   // CPU relighting). Contract (prt::InternalError): a mesh is uploaded and
   // colors has one entry per vertex.
   void set_vertex_colors(std::span<const glm::vec3> colors);
+
+  // The Phong lobe of Shading::Glossy, live (no re-upload; set_mesh resets
+  // it to GlossyShading's defaults: e 16, rho_s 0.5, the transfer's own
+  // albedo): exponent e (gloss), strength rho_s (specular) and diffuse albedo
+  // rho_d per channel (negative: the transfer's own), as prt::GlossyShading.
+  // The eye point is the camera's (Camera::eye) at each frame. Throws
+  // prt::Error with glossy_shading_problem's message for values it refuses
+  // (e outside [0, 4096], rho_s outside [0, 1], a rho_d the transfer cannot
+  // take). Contract (prt::InternalError): a glossy transfer is uploaded.
+  void set_glossy(double gloss, double specular, const glm::dvec3& diffuse = glm::dvec3(-1.0));
+
+  // Runs the relighting pass of the current shading (Transfer, Direct,
+  // Unshadowed or Glossy) for eye point `eye` and reads back the per-vertex
+  // radiance the mesh is drawn with: linear RGB, one per vertex, what
+  // prt::relight (relight_glossy at that eye) computes. For tests and tools.
+  // Contract (prt::InternalError): a transfer and lighting are uploaded and
+  // the shading is one of those four.
+  std::vector<glm::vec3> vertex_radiance(const glm::dvec3& eye);
 
   // Background: a lat-long or cube map (uploaded once as a float texture),
   // drawn behind the mesh with the rotation of set_environment_rotation.

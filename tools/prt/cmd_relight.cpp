@@ -32,9 +32,8 @@ namespace {
 struct RelightArgs {
   std::string mesh, transfer, env, output, rotate, window = "none", selection = "area";
   // Glossy: the eye point, and the lobe's exponent and strength (docs/GLOSSY.md).
-  std::string eye, diffuse;
-  double gloss = 16, specular = 0.5;
-  std::vector<const CLI::Option*> glossy_opts;  // need --eye
+  std::string eye;
+  GlossyArgs lobe;  // needs --eye
   double window_width = 0;
   int terms = 100;
   bool direct = false, quiet = false;
@@ -129,7 +128,7 @@ int run_relight(const RelightArgs& a) {
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
 
   const bool glossy = !a.eye.empty();
-  for (const CLI::Option* o : a.glossy_opts)
+  for (const CLI::Option* o : a.lobe.options)
     if (o->count() > 0 && !glossy)
       throw UsageError(o->get_name() + " shapes the glossy part, which needs --eye x,y,z (the point the vertices are "
                        "seen from)");
@@ -139,17 +138,9 @@ int run_relight(const RelightArgs& a) {
     double e[3];
     parse_triple(a.eye, "--eye", e);
     shading.eye = {e[0], e[1], e[2]};
-    shading.gloss = a.gloss;
-    shading.specular = a.specular;
-    if (!a.diffuse.empty()) {
-      double d[3];
-      const bool one = a.diffuse.find(',') == std::string::npos;
-      parse_triple(one ? a.diffuse + "," + a.diffuse + "," + a.diffuse : a.diffuse, "--diffuse", d);
-      for (double x : d)
-        if (!(x >= 0.0 && x <= 1.0))
-          throw UsageError(fmt::format("--diffuse: {} is outside [0, 1] (an albedo)", a.diffuse));
-      shading.diffuse = {d[0], d[1], d[2]};
-    }
+    shading.gloss = a.lobe.gloss;
+    shading.specular = a.lobe.specular;
+    shading.diffuse = parse_diffuse(a.lobe.diffuse);
   }
 
   const Scene scene = load_scene(a.mesh, a.transfer, a.env);
@@ -234,18 +225,9 @@ Run add_relight(CLI::App& app) {
           ->capture_default_str());
   s->add_option("--eye", a->eye, "Glossy files: the eye point x,y,z the radiance is seen from")
       ->check(triple_value("x,y,z"));
-  a->glossy_opts.push_back(
-      s->add_option("--gloss", a->gloss, "Glossy: Phong exponent e of the lobe (e + 1)/(2 pi) cos^e, 0 to 4096")
-          ->check(number_range(0, 4096))
-          ->capture_default_str());
-  a->glossy_opts.push_back(s->add_option("--specular", a->specular, "Glossy: the lobe's strength rho_s, 0 to 1")
-                               ->check(number_range(0, 1))
-                               ->capture_default_str());
-  a->glossy_opts.push_back(s->add_option("--diffuse", a->diffuse,
-                                         "Glossy: diffuse albedo rho_d (one value or r,g,b in [0, 1]; default: the "
-                                         "transfer's own; 0: the glossy part alone)"));
-  for (const CLI::Option* o : a->glossy_opts) a->sh_only.push_back(o);
-  a->sh_only.push_back(a->glossy_opts.empty() ? nullptr : s->get_option("--eye"));
+  add_glossy_options(s, a->lobe);
+  for (const CLI::Option* o : a->lobe.options) a->sh_only.push_back(o);
+  a->sh_only.push_back(s->get_option("--eye"));
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }

@@ -33,6 +33,7 @@ struct RenderArgs {
   double fov = 40, spin = 0;
   bool frames_given = false, spin_given = false, quiet = false;
   LookArgs look;
+  GlossyArgs lobe;  // glossy files only
 };
 
 // OUT.png, frame 3 -> OUT_0003.png
@@ -56,7 +57,15 @@ int run_render(const RenderArgs& a) {
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
   const bool wavelet = scene.basis == TransferBasis::Wavelet;
-  const Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet);
+  const bool glossy = !wavelet && t.glossy;
+  if (a.lobe.given() && !glossy) {
+    for (const CLI::Option* o : a.lobe.options)
+      if (o->count() > 0)
+        throw UsageError(o->get_name() + " needs a glossy transfer (prt precompute --material glossy); " + a.transfer +
+                         " has none");
+  }
+  const glm::dvec3 diffuse = parse_diffuse(a.lobe.diffuse);
+  const Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);
 
   Camera cam = default_camera(mesh, a.fov);
   if (!a.camera.empty()) parse_camera(a.camera, cam);
@@ -74,9 +83,18 @@ int run_render(const RenderArgs& a) {
                   ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
   } else {
     if (look.shading == Shading::Direct) check_direct(t, a.transfer, "--shading direct");
+    if (look.shading == Shading::Glossy && !glossy)
+      throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
     renderer.set_mesh(mesh, t);
     renderer.set_band_limit(look.bands);
     renderer.set_shading(look.shading);
+    if (glossy) {  // the file's rules for --diffuse (an interreflected file takes its own albedo or 0)
+      try {
+        renderer.set_glossy(a.lobe.gloss, a.lobe.specular, diffuse);
+      } catch (const Error& e) {
+        throw Error(a.transfer + ": " + e.what());
+      }
+    }
   }
 
   // SH: project once; each frame only rotates the coefficients. Wavelet: each
@@ -146,6 +164,8 @@ Run add_render(CLI::App& app) {
       "The environment is drawn as background; lighting and background turn together with --rotate/--spin.\n"
       "SH transfers are relit on the GPU; wavelet transfers (prt precompute --basis wavelet) on the CPU each\n"
       "frame (rotated map resampled into the cube, K Haar terms, --terms/--selection), then drawn.\n"
+      "Glossy files (prt precompute --material glossy) show --shading glossy by default: the diffuse transfer plus\n"
+      "a Phong lobe (--gloss, --specular, --diffuse) seen from the camera's eye, both on the GPU.\n"
       "EXR output keeps linear floats (times 2^exposure); PNG and other 8-bit formats get the tone map\n"
       "(--tonemap, default clamp) and sRGB encoding.\n"
       "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10");
@@ -170,6 +190,7 @@ Run add_render(CLI::App& app) {
       ->check(finite_number())
       ->each([a](const std::string&) { a->spin_given = true; });
   add_look_options(s, a->look);
+  add_glossy_options(s, a->lobe);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_render(*a); };
 }

@@ -44,8 +44,9 @@ namespace {
 constexpr const char* kControls =
     "Controls: left-drag orbit the camera | scroll zoom | right-drag or shift+left-drag rotate the environment\n"
     "          (lighting and background together) | space toggle auto-rotate of the environment\n"
-    "          M / shift+M next / previous shading: transfer, direct (interreflected files), unshadowed,\n"
-    "            lambert (no PRT), ambient occlusion, bent normals (files that have them)\n"
+    "          M / shift+M next / previous shading: glossy (glossy files), transfer, direct (interreflected\n"
+    "            files), unshadowed, lambert (no PRT), ambient occlusion, bent normals (files that have them)\n"
+    "          L / shift+L glossy exponent e x2 / /2 (0 to 4096) | = / - glossy strength rho_s +- 0.05 (0 to 1)\n"
     "          0 all bands, 1-9 shade with that many bands (16 -> 9 -> 4 coefficients: 4, 3, 2)\n"
     "          W cycle SH windowing: none, hanning, lanczos, auto\n"
     "          E / shift+E exposure up / down half a stop | T cycle tone map: clamp, reinhard, aces\n"
@@ -61,6 +62,7 @@ struct ViewArgs {
   double fov = 40;
   bool quiet = false;
   LookArgs look;
+  GlossyArgs lobe;  // glossy files: the starting lobe
 };
 
 bool is_map_file(const std::filesystem::path& p) {
@@ -100,7 +102,8 @@ static_assert(input::kKeySpace == GLFW_KEY_SPACE && input::kKey0 == GLFW_KEY_0 &
 static_assert(input::kKeyB == GLFW_KEY_B && input::kKeyE == GLFW_KEY_E && input::kKeyG == GLFW_KEY_G &&
               input::kKeyH == GLFW_KEY_H && input::kKeyM == GLFW_KEY_M && input::kKeyN == GLFW_KEY_N &&
               input::kKeyP == GLFW_KEY_P && input::kKeyQ == GLFW_KEY_Q && input::kKeyR == GLFW_KEY_R &&
-              input::kKeyS == GLFW_KEY_S && input::kKeyT == GLFW_KEY_T && input::kKeyW == GLFW_KEY_W);
+              input::kKeyS == GLFW_KEY_S && input::kKeyT == GLFW_KEY_T && input::kKeyW == GLFW_KEY_W &&
+              input::kKeyL == GLFW_KEY_L && input::kKeyMinus == GLFW_KEY_MINUS && input::kKeyEqual == GLFW_KEY_EQUAL);
 static_assert(input::kKeyLeftBracket == GLFW_KEY_LEFT_BRACKET && input::kKeyRightBracket == GLFW_KEY_RIGHT_BRACKET &&
               input::kKeyEscape == GLFW_KEY_ESCAPE);
 
@@ -127,6 +130,7 @@ std::string shading_label(Shading s, const Transfer& t) {
     case Shading::AmbientOcclusion: return "ambient occlusion";
     case Shading::BentNormal: return "bent normals";
     case Shading::VertexColors: return "vertex colours";
+    case Shading::Glossy: return "glossy " + std::string(transfer_mode_name(t.mode));
   }
   return "?";
 }
@@ -247,10 +251,16 @@ class Viewer {
         throw Error("--shading " + std::string(shading_name(look.shading)) +
                     ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
       st.wavelet_lambert = look.shading == Shading::Lambert;
-      shading_index_ = 0;
+      // What B switches to: the SH file's default shading.
+      const Shading sh = renderer.has_shading(Shading::Glossy) ? Shading::Glossy : Shading::Transfer;
+      shading_index_ = int(std::find(std::begin(kShadings), std::end(kShadings), sh) - std::begin(kShadings));
     } else {
       renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
     }
+    st.gloss = a.lobe.gloss;
+    st.specular = a.lobe.specular;
+    diffuse_ = parse_diffuse(a.lobe.diffuse);
+    glossy_ = have_sh && t_.glossy;
     playlist_ = map_playlist(a.env);
     map_index_ = std::size_t(std::find(playlist_.begin(), playlist_.end(),
                                        std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
@@ -296,6 +306,15 @@ class Viewer {
       light_window_ = st.window;
     }
     st.terms = std::min(st.terms, wavelet_coeffs_ > 0 ? wavelet_coeffs_ : st.terms);
+    if (glossy_ && (st.gloss != gloss_ || st.specular != specular_)) {  // live: uniforms only
+      try {
+        renderer_.set_glossy(st.gloss, st.specular, diffuse_);
+      } catch (const Error& e) {
+        throw Error(a_.transfer + ": " + e.what());  // only --diffuse can be refused (the keys keep the ranges)
+      }
+      gloss_ = st.gloss;
+      specular_ = st.specular;
+    }
   }
 
   // The lighting of environment rotation R: the rotated SH coefficients and
@@ -315,9 +334,12 @@ class Viewer {
   // The title's part after the frame time: what is shown, the map, the display.
   std::string title(const ViewState& st) const {
     const sh::Window wk = kWindows[st.window];
+    const Shading shown = kShadings[shading_index_];
+    const std::string lobe =
+        shown == Shading::Glossy ? fmt::format(" - gloss e {:g}, specular {:.2f}", st.gloss, st.specular) : "";
     const std::string basis =
-        !st.wavelet ? fmt::format("{} - {} bands{}", shading_label(kShadings[shading_index_], t_), keep_bands_,
-                                  wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)))
+        !st.wavelet ? fmt::format("{} - {} bands{}{}", shading_label(shown, t_), keep_bands_,
+                                  wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)), lobe)
         : st.wavelet_lambert ? std::string("plain Lambert (no PRT)")
                              : fmt::format("wavelet {}^2 x 6, K = {} ({}), CPU {:.1f} ms", scene_.wavelet.cube_res,
                                            st.terms, wavelet::selection_name(selection(st)), wavelet_ms_);
@@ -360,6 +382,9 @@ class Viewer {
   int light_bands_ = -1, light_window_ = -1, keep_bands_ = 0;
   sh::Rotation rotation_;
   double wavelet_ms_ = 0;
+  bool glossy_ = false;
+  glm::dvec3 diffuse_{-1.0};
+  double gloss_ = -1, specular_ = -1;  // as last given to the renderer (-1: not yet)
 };
 
 int run_view(const ViewArgs& a) {
@@ -377,7 +402,15 @@ int run_view(const ViewArgs& a) {
 
   bool have_sh = false, have_wavelet = false;
   const Scene scene = load_view_scene(a, have_sh, have_wavelet);
-  const Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet);
+  const bool glossy = have_sh && scene.transfer.glossy;
+  if (!glossy)
+    for (const CLI::Option* o : a.lobe.options)
+      if (o->count() > 0)
+        throw UsageError(o->get_name() + " needs a glossy transfer (prt precompute --material glossy); " + a.transfer +
+                         " has none");
+  parse_diffuse(a.lobe.diffuse);  // a bad value exits 2 before any window opens
+  const Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet,
+                               glossy && scene.basis == TransferBasis::SH);
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -490,6 +523,7 @@ Run add_view(CLI::App& app) {
   s->add_option("--second", a->second,
                 "A transfer of the other basis (SH or wavelet) for the same mesh: B switches between the two");
   add_look_options(s, a->look);
+  add_glossy_options(s, a->lobe);
   s->add_flag("-q,--quiet", a->quiet, "No summary and controls on stderr");
   return [a] { return run_view(*a); };
 }

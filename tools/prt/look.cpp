@@ -79,11 +79,12 @@ CLI::Validator camera_value() {
 }
 
 void add_look_options(CLI::App* s, LookArgs& a) {
-  s->add_option("--shading", a.shading,
-                "transfer (the file's), direct (shadowed part of an interreflected file), unshadowed, lambert "
-                "(no PRT), ao, bent")
-      ->check(shading_value())
-      ->capture_default_str();
+  a.shading_option = s->add_option("--shading", a.shading,
+                                   "transfer (the file's diffuse transfer), direct (shadowed part of an "
+                                   "interreflected file), unshadowed, lambert (no PRT), ao, bent, glossy (glossy "
+                                   "files' default: diffuse plus the view-dependent lobe)")
+                         ->check(shading_value())
+                         ->capture_default_str();
   a.bands_option = s->add_option("--bands", a.bands,
                                  "SH: shade with the first N bands only (0: all of the file's; at most 16, what the "
                                  "renderer's lighting block holds)")
@@ -113,7 +114,7 @@ void parse_camera(const std::string& text, Camera& cam) {
     throw UsageError("--camera: " + problem);
 }
 
-Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {
+Look parse_look(const LookArgs& a, int sh_bands, bool wavelet, bool glossy) {
   Look look;
   if (sh_bands == 0)
     for (const CLI::Option* o : {a.bands_option, a.window_option})
@@ -123,7 +124,8 @@ Look parse_look(const LookArgs& a, int sh_bands, bool wavelet) {
       if (o && o->count() > 0)
         throw Error(o->get_name() + " applies to wavelet transfers (prt precompute --basis wavelet); this one is SH");
   // Each name and number was checked while parsing (add_look_options).
-  look.shading = for_option("--shading", [&] { return parse_shading(a.shading); });
+  const bool chosen = a.shading_option && a.shading_option->count() > 0;
+  look.shading = glossy && !chosen ? Shading::Glossy : for_option("--shading", [&] { return parse_shading(a.shading); });
   if (a.bands > sh_bands && sh_bands > 0)
     throw Error(fmt::format("--bands {}: the transfer has {} bands", a.bands, sh_bands));
   look.bands = a.bands == 0 ? sh_bands : a.bands;

@@ -20,7 +20,7 @@ struct LookArgs {
   double exposure = 0;
   int bands = 0;    // 0: all of the file's
   int terms = 100;  // wavelet lighting terms K
-  CLI::Option *bands_option = nullptr, *window_option = nullptr, *terms_option = nullptr,
+  CLI::Option *shading_option = nullptr, *bands_option = nullptr, *window_option = nullptr, *terms_option = nullptr,
               *selection_option = nullptr;
 };
 
@@ -40,8 +40,10 @@ struct Look {
 // Checks the options against what was loaded: an SH transfer of `sh_bands`
 // bands (0: none) and/or a wavelet transfer (`wavelet`); SH-only options
 // given without an SH transfer, and wavelet-only ones without a wavelet
-// transfer, are refused. Throws prt::Error naming the option.
-Look parse_look(const LookArgs& args, int sh_bands, bool wavelet);
+// transfer, are refused. Throws prt::Error naming the option. Without
+// --shading, a `glossy` transfer shows Shading::Glossy (the renderer's
+// default for it), others Shading::Transfer.
+Look parse_look(const LookArgs& args, int sh_bands, bool wavelet, bool glossy = false);
 
 // The lighting to upload: the first `bands` bands of `light` windowed (the
 // window's width is bands + 1 for Hanning and Lanczos, so band bands-1 keeps

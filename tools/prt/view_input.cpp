@@ -62,6 +62,15 @@ KeyAction on_key(ViewState& s, int key, int action, int mods) {
     case input::kKeyLeftBracket: s.terms = std::max(1, s.terms / 2); break;
     case input::kKeyRightBracket: s.terms = std::min(1 << 20, s.terms * 2); break;
     case input::kKeyG: s.selection = 1 - s.selection; break;
+    case input::kKeyL:
+      if (shift) s.gloss = s.gloss <= 1.0 ? 0.0 : s.gloss / 2;
+      else s.gloss = s.gloss == 0.0 ? 1.0 : std::min(kMaxViewGloss, s.gloss * 2);
+      break;
+    case input::kKeyMinus:
+    case input::kKeyEqual:  // in whole steps, so that repeated presses land on 0 and 1 exactly
+      s.specular = std::clamp(std::round(s.specular / kSpecularStep) + (key == input::kKeyEqual ? 1 : -1), 0.0,
+                              1.0 / kSpecularStep) * kSpecularStep;
+      break;
     case input::kKeyR:  // the view; the look (bands, shading, exposure, ...) stays
       s.yaw = s.pitch = s.env_yaw = s.env_pitch = s.env_auto = 0;
       s.zoom = 1;

@@ -21,9 +21,9 @@ namespace input {  // GLFW's codes (GLFW/glfw3.h)
 inline constexpr int kRelease = 0, kPress = 1, kRepeat = 2;
 inline constexpr int kModShift = 0x0001;
 inline constexpr int kMouseLeft = 0, kMouseRight = 1;
-inline constexpr int kKeySpace = 32, kKey0 = 48, kKey9 = 57;
-inline constexpr int kKeyB = 66, kKeyE = 69, kKeyG = 71, kKeyH = 72, kKeyM = 77, kKeyN = 78, kKeyP = 80,
-                     kKeyQ = 81, kKeyR = 82, kKeyS = 83, kKeyT = 84, kKeyW = 87;
+inline constexpr int kKeySpace = 32, kKeyMinus = 45, kKey0 = 48, kKey9 = 57, kKeyEqual = 61;
+inline constexpr int kKeyB = 66, kKeyE = 69, kKeyG = 71, kKeyH = 72, kKeyL = 76, kKeyM = 77, kKeyN = 78,
+                     kKeyP = 80, kKeyQ = 81, kKeyR = 82, kKeyS = 83, kKeyT = 84, kKeyW = 87;
 inline constexpr int kKeyLeftBracket = 91, kKeyRightBracket = 93, kKeyEscape = 256;
 }  // namespace input
 
@@ -31,8 +31,14 @@ inline constexpr int kKeyLeftBracket = 91, kKeyRightBracket = 93, kKeyEscape = 2
 inline constexpr sh::Window kWindows[] = {sh::Window::None, sh::Window::Hanning, sh::Window::Lanczos,
                                           sh::Window::Auto};
 inline constexpr ToneMap kToneMaps[] = {ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces};
-inline constexpr Shading kShadings[] = {Shading::Transfer, Shading::Direct,           Shading::Unshadowed,
-                                        Shading::Lambert,  Shading::AmbientOcclusion, Shading::BentNormal};
+inline constexpr Shading kShadings[] = {Shading::Glossy,  Shading::Transfer,         Shading::Direct,
+                                        Shading::Unshadowed, Shading::Lambert,     Shading::AmbientOcclusion,
+                                        Shading::BentNormal};
+
+// The glossy lobe's live ranges (L / shift+L, = / -): the exponent e in [0,
+// kMaxViewGloss] (prt::glossy::kMaxGloss), doubled and halved (1 halves to
+// 0, 0 doubles to 1); the strength rho_s in [0, 1] by kSpecularStep.
+inline constexpr double kMaxViewGloss = 4096.0, kSpecularStep = 0.05;
 
 struct ViewState {
   // Camera orbit about the base camera's target: yaw about +Y, pitch up (degrees).
@@ -52,6 +58,7 @@ struct ViewState {
   bool wavelet_lambert = false;  // in wavelet mode, M toggles to plain Lambert
   int terms = 100;               // wavelet K, in [1, 2^20] (the frame loop clamps it to 6 r^2)
   int selection = 0;             // 0 area, 1 magnitude
+  double gloss = 16, specular = 0.5;  // glossy files: the lobe's e and rho_s (Renderer::set_glossy)
   bool dragging = false, env_dragging = false;
   double last_x = 0, last_y = 0;  // the cursor at the last event
   bool screenshot_requested = false;
@@ -71,7 +78,8 @@ void on_scroll(ViewState& s, double dy);
 // A key pressed or repeated (releases do nothing): 0-9 bands, space
 // auto-rotate, S screenshot, M / shift+M shading, W window, T tone map,
 // E / shift+E exposure +- half a stop, N / P maps, B basis, [ ] K / 2 and
-// x 2, G selection, R reset the view (not the look), H and Esc / Q (returned).
+// x 2, G selection, L / shift+L gloss e x 2 and / 2, = / - specular rho_s
+// +- 0.05, R reset the view (not the look), H and Esc / Q (returned).
 KeyAction on_key(ViewState& s, int key, int action, int mods);
 // Files dropped on the window: the first is loaded by the next frame.
 void on_drop(ViewState& s, int count, const char** paths);

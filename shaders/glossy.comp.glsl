@@ -1,0 +1,138 @@
+#version 450 core
+// Glossy PRT pass (Shading::Glossy), after relight.comp.glsl has written each
+// vertex's diffuse radiance: one invocation per vertex adds the view-dependent
+// part toward the eye point (the camera's eye), prt::relight_glossy's formula
+// (prt/transfer.h, docs/CONVENTIONS.md "Glossy transfer"):
+//   radiance = diffuse x u_diffuse_scale + sum_lm rho_s Lambda_l(e) (M_p L)_lm Y_lm(r)
+// with r = 2 (n.v) n - v, v the unit direction to the eye, when n.v > 0.
+//
+// M_p comes from a buffer texture of RGBA32F texels, one row of ROW_TEXELS
+// texels per vertex, row v = vertex v (analytic vertices' hemisphere product
+// matrices evaluated by the renderer at set_mesh):
+//   SYMMETRIC 1 (shadowed): the upper triangle, rows i = 0..NC-1 from column
+//     i on (prt::Transfer's packing), one channel, padded to 4 floats;
+//   SYMMETRIC 0 (interreflected): GCH (1 or 3) full NC x NC row-major
+//     matrices, each padded to CH_FLOATS (a multiple of 4) floats.
+// Only the leading COEFFS x COEFFS block is used (live band truncation: the
+// transfer of BANDS bands); NC = the file's bands^2 fixes the layout.
+// The renderer compiles one program per (COEFFS, NC, GCH, SYMMETRIC),
+// inserting the #defines after the version line.
+layout(local_size_x = 64) in;
+
+layout(binding = 4) uniform samplerBuffer u_glossy;
+layout(std140, binding = 1) uniform LightBlock { vec4 L[256]; };
+layout(std430, binding = 2) buffer RadianceBuffer { vec4 radiance[]; };
+layout(std430, binding = 5) readonly buffer NormalBuffer { float normals[]; };
+layout(std430, binding = 7) readonly buffer PositionBuffer { float positions[]; };
+
+layout(location = 0) uniform uint u_vertices;
+layout(location = 1) uniform vec3 u_eye;
+layout(location = 2) uniform vec3 u_diffuse_scale;  // rho_d / albedo per channel (1: the transfer's own)
+layout(location = 3) uniform float u_lobe[16];       // rho_s Lambda_l(e), per band
+
+// w[k] = u_lobe[l] Y_k(d) for k < COEFFS: the SH basis by relight.comp.glsl's
+// recurrence (core/sh.cpp's, Sloan JCGT 2013), (c, s) = sqrt(2) (Re, Im) (x + i y)^m.
+void lobe_basis(vec3 d, out float w[COEFFS]) {
+  float pmm = 0.28209479177387814;  // Y_00
+  float c = 1.4142135623730951, s = 0.0;
+  for (int m = 0; m < BANDS; ++m) {
+    if (m > 0) {
+      pmm *= -sqrt((2.0 * float(m) + 1.0) / (2.0 * float(m)));
+      const float c1 = c * d.x - s * d.y;
+      s = c * d.y + s * d.x;
+      c = c1;
+    }
+    float p2 = 0.0, p1 = pmm;
+    for (int l = m; l < BANDS; ++l) {
+      float p = pmm;
+      if (l == m + 1) {
+        p = sqrt(2.0 * float(m) + 3.0) * d.z * pmm;
+      } else if (l > m + 1) {
+        const float l2 = float(l * l), m2 = float(m * m), lm1 = float((l - 1) * (l - 1));
+        p = sqrt((4.0 * l2 - 1.0) / (l2 - m2)) * (d.z * p1 - sqrt((lm1 - m2) / (4.0 * lm1 - 1.0)) * p2);
+      }
+      if (l > m) {
+        p2 = p1;
+        p1 = p;
+      }
+      const int k = l * (l + 1);
+      if (m == 0) {
+        w[k] = u_lobe[l] * p;
+      } else {
+        w[k + m] = u_lobe[l] * p * c;
+        w[k - m] = u_lobe[l] * p * s;
+      }
+    }
+  }
+}
+
+// sum_ij w_i M_ij L_j (RGB) for the vertex whose row starts at texel `base`.
+// The matrix is read in order, one texel per 4 floats (t holds the texel of
+// float k); rows are cut at COEFFS, so a fetch follows each row's start.
+vec3 glossy_part(int base, const float w[COEFFS]) {
+  vec3 g = vec3(0.0);
+#if SYMMETRIC
+  // Row i from column i on: M_ii w_i L_i + sum_{j>i} M_ij (w_i L_j + w_j L_i).
+  for (int i = 0; i < COEFFS; ++i) {
+    int k = i * NC - (i * (i - 1)) / 2;
+    vec4 t = texelFetch(u_glossy, base + (k >> 2));
+    vec3 ml = t[k & 3] * L[i].rgb;  // (M L)_i over columns j >= i
+    float mw = 0.0;                 // sum_{j>i} M_ij w_j
+    for (int j = i + 1; j < COEFFS; ++j) {
+      ++k;
+      if ((k & 3) == 0) t = texelFetch(u_glossy, base + (k >> 2));
+      const float m = t[k & 3];
+      ml += m * L[j].rgb;
+      mw += m * w[j];
+    }
+    g += w[i] * ml + mw * L[i].rgb;
+  }
+#elif GCH == 1
+  // One matrix for the three colours of the lighting.
+  for (int i = 0; i < COEFFS; ++i) {
+    int k = i * NC;
+    vec4 t = texelFetch(u_glossy, base + (k >> 2));
+    vec3 ml = vec3(0.0);
+    for (int j = 0; j < COEFFS; ++j, ++k) {
+      if (j > 0 && (k & 3) == 0) t = texelFetch(u_glossy, base + (k >> 2));
+      ml += t[k & 3] * L[j].rgb;
+    }
+    g += w[i] * ml;
+  }
+#else
+  // One matrix per colour channel.
+  for (int c = 0; c < 3; ++c) {
+    for (int i = 0; i < COEFFS; ++i) {
+      int k = c * CH_FLOATS + i * NC;
+      vec4 t = texelFetch(u_glossy, base + (k >> 2));
+      float ml = 0.0;
+      for (int j = 0; j < COEFFS; ++j, ++k) {
+        if (j > 0 && (k & 3) == 0) t = texelFetch(u_glossy, base + (k >> 2));
+        ml += t[k & 3] * L[j][c];
+      }
+      g[c] += w[i] * ml;
+    }
+  }
+#endif
+  return g;
+}
+
+void main() {
+  const uint v = gl_GlobalInvocationID.x;
+  if (v >= u_vertices) return;
+  vec3 r = radiance[v].rgb * u_diffuse_scale;
+  vec3 n = vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+  if (dot(n, n) > 0.0) {
+    n = normalize(n);
+    const vec3 to_eye = u_eye - vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    const float d = length(to_eye);
+    const vec3 view = d > 0.0 ? to_eye / d : n;
+    const float ndv = dot(n, view);
+    if (ndv > 0.0) {  // the eye above the vertex's horizon; else the diffuse part alone
+      float w[COEFFS];
+      lobe_basis(2.0 * ndv * n - view, w);
+      r += glossy_part(int(v) * ROW_TEXELS, w);
+    }
+  }
+  radiance[v] = vec4(r, 1.0);
+}
