@@ -140,6 +140,38 @@ TEST(ErrorSetCache, RoundTripsAndRefusesDamage) {
 
 // A small grid: every sweep's rows, errors that fall with bands on a smooth
 // map, the sampling-alone error where it belongs, pictures.
+// The glossy sweep: a row per (bands, e); with the "exact" matrices traced at
+// the stored matrices' own samples the intrinsic error is the error itself
+// (the same rays; float storage of the stored ones: 1e-4 relative), and with
+// more samples it differs; more bands are more accurate at e = 4, whose lobe
+// needs about 5.
+TEST(Report, GlossySweep) {
+  const Mesh m = small_scene();
+  const EnvMap map = sky_with_sun();
+  ReportOptions o;
+  o.glossy_bands = {2, 5};
+  o.glossy_gloss = {4, 30};
+  o.glossy_samples = 128;
+  o.glossy_exact_samples = 128;
+  o.truth_vertices = 200;
+  o.truth_glossy_samples = 2048;
+  o.image_samples = 0;
+  o.relight_seconds = 0;
+  const Report r = run_report(m, map, o, "");
+  ASSERT_EQ(r.rows.size(), 4u);
+  ASSERT_EQ(r.glossy_truth.size(), 2u);
+  for (const ReportRow& row : r.rows) {
+    EXPECT_EQ(row.sweep, "glossy");
+    EXPECT_NEAR(row.error.rel_rms, row.intrinsic.rel_rms, 1e-4 * row.error.rel_rms) << row.bands << " " << row.gloss;
+  }
+  EXPECT_LT(r.rows[2].error.rel_rms, 0.5 * r.rows[0].error.rel_rms);  // 5 bands vs 2 at e = 4
+  o.glossy_exact_samples = 2048;
+  const Report more = run_report(m, map, o, "");
+  EXPECT_NE(more.rows[3].intrinsic.rel_rms, more.rows[3].error.rel_rms);
+  o.glossy_gloss.clear();
+  EXPECT_THROW(run_report(m, map, o, ""), Error);
+}
+
 TEST(Report, SmallGrid) {
   const Mesh m = small_scene();
   const EnvMap map = sky_with_sun();
@@ -348,8 +380,10 @@ TEST(ReportCli, WritesTablesCsvAndPlots) {
   for (const char* s : {"## SH bands", "## Samples per vertex", "## Interreflection bounces", "## Wavelet terms K",
                         "Fitted slope"})
     EXPECT_NE(md.find(s), std::string::npos) << s;
-  // Header plus the quick grid's rows: 5 bands, 3 samples, 3 bounces, 3 K.
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 5 + 3 + 3 + 3) << csv;
+  // Header plus the quick grid's rows: 5 bands, 3 samples, 3 bounces, 3 K,
+  // glossy 2 bands x 1 exponent.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 5 + 3 + 3 + 3 + 2) << csv;
+  EXPECT_NE(md.find("## Glossy transfer"), std::string::npos) << md;
   EXPECT_NE(csv.find("pareto"), std::string::npos);
   // Whether the plots can be made here is asked of the interpreter prt uses
   // (cmd_report.cpp: $PRT_PYTHON, else /usr/bin/python3), not read from the report.
@@ -395,6 +429,11 @@ TEST(ReportCli, BadInputIsRefusedByName) {
                           std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--bounce-tolerance", "0.1"});
   EXPECT_EQ(r.code, 2) << test::describe_run(r);
   EXPECT_FALSE(std::filesystem::exists(dir.file("t.prt")));
+  r = test::run_prt(dir, {"report", mesh, std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "-o", dir.file("rep"),
+                          "--sweeps", "bands,shiny"});
+  EXPECT_EQ(r.code, 2) << test::describe_run(r);
+  EXPECT_NE(r.err.find("unknown sweep 'shiny'"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("rep") + "/report.md"));
 }
 
 TEST(PrecomputeCli, TargetErrorWritesTheChosenTransfer) {
