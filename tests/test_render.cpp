@@ -877,8 +877,8 @@ TEST_F(RenderCli, GlossyFiles) {
   EXPECT_NE(default_bytes, test::read_file(dir.file("diffuse.exr")));
   for (const char* opt : {"--gloss", "--specular", "--diffuse"}) {
     const auto res = render({mesh, prt, env, "-o", dir.file("no.exr"), opt, "0.5"});
-    EXPECT_EQ(res.code, 2) << opt << "\n" << test::describe_run(res);
-    EXPECT_NE(res.err.find(std::string(opt) + " needs a glossy transfer (prt precompute --material glossy)"),
+    EXPECT_EQ(res.code, 1) << opt << "\n" << test::describe_run(res);
+    EXPECT_NE(res.err.find(prt + ": " + opt + " needs a glossy transfer (prt precompute --material glossy)"),
               std::string::npos)
         << res.err;
   }

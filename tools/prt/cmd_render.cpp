@@ -61,8 +61,9 @@ int run_render(const RenderArgs& a) {
   if (a.lobe.given() && !glossy) {
     for (const CLI::Option* o : a.lobe.options)
       if (o->count() > 0)
-        throw UsageError(o->get_name() + " needs a glossy transfer (prt precompute --material glossy); " + a.transfer +
-                         " has none");
+        // An option that does not fit the file: the file's mismatch (exit 1, naming it).
+        throw Error(a.transfer + ": " + o->get_name() +
+                    " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   }
   const glm::dvec3 diffuse = parse_diffuse(a.lobe.diffuse);
   const Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);

@@ -406,8 +406,9 @@ int run_view(const ViewArgs& a) {
   if (!glossy)
     for (const CLI::Option* o : a.lobe.options)
       if (o->count() > 0)
-        throw UsageError(o->get_name() + " needs a glossy transfer (prt precompute --material glossy); " + a.transfer +
-                         " has none");
+        // An option that does not fit the file: the file's mismatch (exit 1, naming it).
+        throw Error(a.transfer + ": " + o->get_name() +
+                    " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   parse_diffuse(a.lobe.diffuse);  // a bad value exits 2 before any window opens
   const Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet,
                                glossy && scene.basis == TransferBasis::SH);
