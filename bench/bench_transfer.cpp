@@ -129,12 +129,11 @@ void BM_ShadowedSixBands(benchmark::State& state) {
 }
 BENCHMARK(BM_ShadowedSixBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
-void BM_GlossySixBands(benchmark::State& state) {
+// Glossy transfer of bunny00 at `bands` in `mode` (1 bounce when interreflected).
+void glossy_transfer(benchmark::State& state, prt::TransferMode mode, int bands) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
-  prt::TransferOptions o;
-  o.mode = prt::TransferMode::Shadowed;
-  o.samples = kSamples;
-  o.bands = 6;
+  prt::TransferOptions o = options(mode, 1);
+  o.bands = bands;
   o.glossy = true;
   prt::Transfer t;
   for (auto _ : state) {
@@ -144,20 +143,12 @@ void BM_GlossySixBands(benchmark::State& state) {
   count_analytic(state, t);
   state.counters["glossy_bytes_per_vertex"] = 4.0 * double(t.glossy_matrices.size()) / double(t.vertices);
 }
+
+void BM_GlossySixBands(benchmark::State& state) { glossy_transfer(state, prt::TransferMode::Shadowed, 6); }
 BENCHMARK(BM_GlossySixBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 void BM_GlossyInterreflectedFiveBands(benchmark::State& state) {
-  if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
-  prt::TransferOptions o = options(prt::TransferMode::Interreflected, 1);
-  o.bands = 5;
-  o.glossy = true;
-  prt::Transfer t;
-  for (auto _ : state) {
-    t = prt::compute_transfer(*bunny(), o);
-    benchmark::DoNotOptimize(t.glossy_matrices.data());
-  }
-  count_analytic(state, t);
-  state.counters["glossy_bytes_per_vertex"] = 4.0 * double(t.glossy_matrices.size()) / double(t.vertices);
+  glossy_transfer(state, prt::TransferMode::Interreflected, 5);
 }
 BENCHMARK(BM_GlossyInterreflectedFiveBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
