@@ -133,6 +133,12 @@ TEST(PrecomputeCli, GlossyThroughTheCommandLine) {
       for (int c = 0; c < 3; ++c) ASSERT_NEAR(got[v][c], want[v][c], 1e-6 * (1 + std::abs(want[v][c]))) << mode << v;
     const Result info = run_prt(dir, {"info", dir.file("g.prt")});
     EXPECT_NE(info.out.find("glossy matrices"), std::string::npos) << info.out;
+    const Result json = run_prt(dir, {"info", dir.file("g.prt"), "--json"});
+    EXPECT_NE(json.out.find("\"material\": \"glossy\""), std::string::npos) << json.out;
+    EXPECT_NE(json.out.find(std::string("\"floats_per_stored_vertex\": ") +
+                            (std::string(mode) == "shadowed" ? "136" : "768")),
+              std::string::npos)
+        << json.out;
   }
 }
 

@@ -42,6 +42,12 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   j["samples"] = t.samples;
   j["albedo"] = {t.albedo.x, t.albedo.y, t.albedo.z};
   j["vertex_colors"] = t.vertex_colors;
+  // Glossy matrices (docs/FORMAT.md, "Glossy matrices"): their layout.
+  j["material"] = t.glossy ? "glossy" : "diffuse";
+  if (t.glossy)
+    j["glossy"] = {{"symmetric", t.glossy_symmetric()},
+                   {"channels", t.glossy_channels()},
+                   {"floats_per_stored_vertex", t.glossy_stride()}};
   j["seed"] = t.seed;
   j["vertices"] = t.vertices;
   j["mesh_hash"] = fmt::format("{:#018x}", t.mesh_hash);
