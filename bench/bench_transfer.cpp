@@ -1,6 +1,7 @@
 // bench/bench_transfer.cpp - shadowed transfer on bunny00 (37.7k vertices,
 // 5 bands, 1024 rays per vertex) against the same rays traced by bare Embree
 // with no SH work, and the cost of an interreflection bounce.
+#include <prt/cpca.h>
 #include <prt/precompute.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
@@ -151,5 +152,33 @@ void BM_GlossyInterreflectedFiveBands(benchmark::State& state) {
   glossy_transfer(state, prt::TransferMode::Interreflected, 5);
 }
 BENCHMARK(BM_GlossyInterreflectedFiveBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
+// Clustered PCA of bunny00's 5-band shadowed glossy matrices (issue 16, in
+// progress): fit time at K clusters x N vectors, with the relative squared
+// error of the matrices (not yet the relit error) and the bytes per vertex.
+void BM_CpcaGlossyFiveBands(benchmark::State& state) {
+  if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
+  static const prt::Transfer t = [] {
+    prt::TransferOptions o = options(prt::TransferMode::Shadowed);
+    o.bands = 5;
+    o.glossy = true;
+    return prt::compute_transfer(*bunny(), o);
+  }();
+  prt::CpcaOptions o;
+  o.clusters = int(state.range(0));
+  o.vectors = int(state.range(1));
+  prt::Cpca m;
+  for (auto _ : state) m = prt::fit_cpca(t.glossy_matrices, t.glossy_stride(), o);
+  double total = 0;
+  for (float v : t.glossy_matrices) total += double(v) * v;
+  state.counters["rel_error"] = std::sqrt(m.squared_error / total);
+  state.counters["rounds"] = m.rounds;
+  const double stored = double(t.stored_vertices());
+  state.counters["bytes_per_vertex"] =
+      (4.0 * o.vectors * stored + 4.0 * double(m.means.size() + m.bases.size())) / stored;
+  state.counters["uncompressed_bytes_per_vertex"] = 4.0 * double(t.glossy_stride());
+}
+BENCHMARK(BM_CpcaGlossyFiveBands)->Args({1, 24})->Args({64, 8})->Args({256, 8})->Unit(benchmark::kMillisecond)
+    ->UseRealTime()->Iterations(1);
 
 }  // namespace

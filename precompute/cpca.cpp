@@ -1,0 +1,303 @@
+// Clustered PCA (prt/cpca.h). The scatter matrices by BLAS rank-k updates,
+// their top eigenvectors by LAPACK's dsyevr (both OpenBLAS), the assignment
+// by one matrix product per block of points against every cluster's mean and
+// basis at once.
+#include <prt/cpca.h>
+
+#include <prt/error.h>
+
+#include <fmt/format.h>
+
+#include <cblas.h>
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+// LAPACK (OpenBLAS exports the Fortran symbols; Debian ships no LAPACKE
+// with it): eigenvalues and eigenvectors of a symmetric matrix, a range of
+// them by index. The trailing lengths are gfortran's hidden string lengths.
+extern "C" void dsyevr_(const char* jobz, const char* range, const char* uplo, const int* n, double* a, const int* lda,
+                        const double* vl, const double* vu, const int* il, const int* iu, const double* abstol, int* m,
+                        double* w, double* z, const int* ldz, int* isuppz, double* work, const int* lwork, int* iwork,
+                        const int* liwork, int* info, std::size_t, std::size_t, std::size_t);
+
+namespace prt {
+
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t& x) {
+  std::uint64_t z = (x += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+double uniform(std::uint64_t& state) { return double(splitmix64(state) >> 11) * 0x1.0p-53; }
+
+// The top `count` eigenvectors of the symmetric n x n matrix `a` (upper
+// triangle, row-major; destroyed), largest eigenvalue first, as rows of `out`.
+void top_eigenvectors(int n, double* a, int count, double* out) {
+  if (count == 0) return;
+  // Row-major upper = column-major lower.
+  const char jobz = 'V', range = 'I', uplo = 'L';
+  const int il = n - count + 1, iu = n, ldz = n;
+  const double vl = 0, vu = 0, abstol = 0;  // 0: LAPACK's default accuracy
+  int m = 0, info = 0;
+  std::vector<double> w(std::size_t(n), 0.0), z(std::size_t(n) * count, 0.0);
+  std::vector<int> isuppz(std::size_t(2) * count, 0);
+  int lwork = -1, liwork = -1, iwork_query = 0;
+  double work_query = 0;
+  dsyevr_(&jobz, &range, &uplo, &n, a, &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(), &ldz, isuppz.data(),
+          &work_query, &lwork, &iwork_query, &liwork, &info, 1, 1, 1);
+  lwork = int(work_query);
+  liwork = iwork_query;
+  std::vector<double> work(std::size_t(std::max(lwork, 1)), 0.0);
+  std::vector<int> iwork(std::size_t(std::max(liwork, 1)), 0);
+  dsyevr_(&jobz, &range, &uplo, &n, a, &n, &vl, &vu, &il, &iu, &abstol, &m, w.data(), z.data(), &ldz, isuppz.data(),
+          work.data(), &lwork, iwork.data(), &liwork, &info, 1, 1, 1);
+  if (info != 0 || m != count) throw Error(fmt::format("cpca: the eigensolver failed (dsyevr info {}, {} of {})", info, m, count));
+  // Ascending eigenvalues in z's columns: the last is the largest. A
+  // deterministic sign: each vector's largest entry positive.
+  for (int j = 0; j < count; ++j) {
+    const double* col = z.data() + std::size_t(count - 1 - j) * n;
+    double* row = out + std::size_t(j) * n;
+    std::size_t big = 0;
+    for (int i = 0; i < n; ++i)
+      if (std::abs(col[i]) > std::abs(col[big])) big = std::size_t(i);
+    const double s = col[big] < 0 ? -1.0 : 1.0;
+    for (int i = 0; i < n; ++i) row[i] = s * col[i];
+  }
+}
+
+struct Fitter {
+  const std::vector<double>& x;  // points x dim
+  std::size_t P, D;
+  int K, N;
+
+  // Means and bases from the assignment; an empty cluster gets the point
+  // the current model reconstructs worst (its error then drops to 0).
+  void refit(Cpca& m, const std::vector<double>& point_error) const {
+    std::vector<std::vector<std::uint32_t>> members(std::size_t(K), std::vector<std::uint32_t>{});
+    for (std::size_t p = 0; p < P; ++p) members[m.cluster[p]].push_back(std::uint32_t(p));
+    std::vector<std::uint8_t> taken(P, 0);
+    for (int k = 0; k < K; ++k) {
+      if (!members[std::size_t(k)].empty()) continue;
+      std::size_t worst = 0;
+      double e = -1;
+      for (std::size_t p = 0; p < P; ++p)
+        if (!taken[p] && members[m.cluster[p]].size() > 1 && point_error[p] > e) e = point_error[p], worst = p;
+      auto& from = members[m.cluster[worst]];
+      from.erase(std::find(from.begin(), from.end(), std::uint32_t(worst)));
+      members[std::size_t(k)].push_back(std::uint32_t(worst));
+      m.cluster[worst] = std::uint32_t(k);
+      taken[worst] = 1;
+    }
+    tbb::parallel_for(0, K, [&](int k) {
+      const auto& mem = members[std::size_t(k)];
+      double* mean = m.means.data() + std::size_t(k) * D;
+      std::fill(mean, mean + D, 0.0);
+      for (std::uint32_t p : mem)
+        for (std::size_t i = 0; i < D; ++i) mean[i] += x[p * D + i];
+      for (std::size_t i = 0; i < D; ++i) mean[i] /= double(mem.size());
+      if (N == 0) return;
+      std::vector<double> centred(mem.size() * D), scatter(D * D, 0.0);
+      for (std::size_t r = 0; r < mem.size(); ++r)
+        for (std::size_t i = 0; i < D; ++i) centred[r * D + i] = x[mem[r] * D + i] - mean[i];
+      cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, int(D), int(mem.size()), 1.0, centred.data(), int(D), 0.0,
+                  scatter.data(), int(D));
+      top_eigenvectors(int(D), scatter.data(), N, m.bases.data() + std::size_t(k) * N * D);
+    });
+  }
+
+  // err[p][k] for every point and cluster, from one product per block of
+  // points against Q = every cluster's [mean; basis] rows:
+  //   |x - m|^2 - sum_j ((x - m) . b_j)^2
+  //   = |x|^2 - 2 x.m + |m|^2 - sum_j (x.b_j - m.b_j)^2.
+  // Assigns each point to its best cluster (keeping it on ties) and returns
+  // how many moved; point_error gets each point's error in its cluster.
+  std::size_t assign(Cpca& m, std::vector<double>& point_error) const {
+    const std::size_t rows = std::size_t(K) * (N + 1);
+    std::vector<double> mm(std::size_t(K), 0.0), mb(std::size_t(K) * N, 0.0);
+    for (int k = 0; k < K; ++k) {
+      const double* mean = m.means.data() + std::size_t(k) * D;
+      mm[std::size_t(k)] = cblas_ddot(int(D), mean, 1, mean, 1);
+      for (int j = 0; j < N; ++j)
+        mb[std::size_t(k) * N + j] = cblas_ddot(int(D), mean, 1, m.bases.data() + (std::size_t(k) * N + j) * D, 1);
+    }
+    std::vector<double> Q(rows * D);
+    for (int k = 0; k < K; ++k) {
+      std::copy_n(m.means.data() + std::size_t(k) * D, D, Q.data() + std::size_t(k) * (N + 1) * D);
+      std::copy_n(m.bases.data() + std::size_t(k) * N * D, std::size_t(N) * D, Q.data() + (std::size_t(k) * (N + 1) + 1) * D);
+    }
+    constexpr std::size_t kBlock = 256;
+    const std::size_t blocks = (P + kBlock - 1) / kBlock;
+    std::vector<std::size_t> moved(blocks, 0);
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+      const std::size_t p0 = b * kBlock, n = std::min(P, p0 + kBlock) - p0;
+      std::vector<double> G(n * rows);
+      cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, int(n), int(rows), int(D), 1.0, x.data() + p0 * D, int(D),
+                  Q.data(), int(D), 0.0, G.data(), int(rows));
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t p = p0 + i;
+        const double xx = cblas_ddot(int(D), x.data() + p * D, 1, x.data() + p * D, 1);
+        const double* g = G.data() + i * rows;
+        const auto error = [&](int k) {
+          const double* gk = g + std::size_t(k) * (N + 1);
+          double e = xx - 2.0 * gk[0] + mm[std::size_t(k)];
+          for (int j = 0; j < N; ++j) {
+            const double c = gk[1 + j] - mb[std::size_t(k) * N + j];
+            e -= c * c;
+          }
+          return std::max(e, 0.0);
+        };
+        const int here = int(m.cluster[p]);
+        double best = error(here);
+        int to = here;
+        for (int k = 0; k < K; ++k) {
+          if (k == here) continue;
+          const double e = error(k);
+          // Strictly better by more than rounding: no point moves back and forth.
+          if (e < best * (1.0 - 1e-12) - 1e-300) best = e, to = k;
+        }
+        if (to != here) {
+          m.cluster[p] = std::uint32_t(to);
+          ++moved[b];
+        }
+        point_error[p] = best;
+      }
+    });
+    std::size_t total = 0;
+    for (std::size_t c : moved) total += c;
+    return total;
+  }
+
+  // Weights and each point's error, computed directly.
+  double finish(Cpca& m, std::vector<double>& point_error) const {
+    m.weights.assign(P * std::size_t(N), 0.0);
+    tbb::parallel_for(std::size_t(0), P, [&](std::size_t p) {
+      const std::size_t k = m.cluster[p];
+      const double* mean = m.means.data() + k * D;
+      std::vector<double> r(D);
+      for (std::size_t i = 0; i < D; ++i) r[i] = x[p * D + i] - mean[i];
+      for (int j = 0; j < N; ++j) {
+        const double* b = m.bases.data() + (k * N + j) * D;
+        const double w = cblas_ddot(int(D), r.data(), 1, b, 1);
+        m.weights[p * N + j] = w;
+        cblas_daxpy(int(D), -w, b, 1, r.data(), 1);
+      }
+      point_error[p] = cblas_ddot(int(D), r.data(), 1, r.data(), 1);
+    });
+    double total = 0;
+    for (double e : point_error) total += e;
+    return total;
+  }
+};
+
+}  // namespace
+
+void Cpca::reconstruct(std::size_t p, double* out) const {
+  PRT_CHECK_OP(p, <, points);
+  const std::size_t k = cluster[p];
+  std::copy_n(means.data() + k * dim, dim, out);
+  for (int j = 0; j < vectors; ++j) {
+    const double w = weights[p * std::size_t(vectors) + j];
+    const double* b = bases.data() + (k * vectors + j) * dim;
+    for (std::size_t i = 0; i < dim; ++i) out[i] += w * b[i];
+  }
+}
+
+Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
+  if (dim == 0 || points.size() % dim != 0 || points.empty())
+    throw Error(fmt::format("cpca: {} values are not whole points of {} values", points.size(), dim));
+  const std::size_t P = points.size() / dim;
+  if (o.clusters < 1 || std::size_t(o.clusters) > P)
+    throw Error(fmt::format("cpca: clusters must be 1 to the number of points ({}), got {}", P, o.clusters));
+  if (o.vectors < 0 || std::size_t(o.vectors) > dim)
+    throw Error(fmt::format("cpca: vectors must be 0 to the signal's dimension ({}), got {}", dim, o.vectors));
+  if (o.iterations < 1) throw Error(fmt::format("cpca: iterations must be at least 1, got {}", o.iterations));
+  if (dim > (1u << 14)) throw Error(fmt::format("cpca: a signal of {} values is too long (at most 16384)", dim));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
+  if (start && (start->dim != dim || start->points != P || start->clusters > o.clusters))
+    throw Error("cpca: the warm start is a fit of other points or of more clusters");
+
+  const std::vector<double> x(points.begin(), points.end());
+  const int K = o.clusters, N = o.vectors;
+  const Fitter fit{x, P, dim, K, N};
+  Cpca m;
+  m.dim = dim;
+  m.points = P;
+  m.clusters = K;
+  m.vectors = N;
+  m.means.assign(std::size_t(K) * dim, 0.0);
+  m.bases.assign(std::size_t(K) * N * dim, 0.0);
+  m.cluster.assign(P, 0);
+  std::vector<double> point_error(P, 0.0);
+
+  if (start) {
+    // The earlier clusters; each new one takes the point the earlier fit
+    // reconstructs worst (refit does that for empty clusters).
+    m.cluster = start->cluster;
+    std::vector<double> r(dim);
+    for (std::size_t p = 0; p < P; ++p) {
+      start->reconstruct(p, r.data());
+      double e = 0;
+      for (std::size_t i = 0; i < dim; ++i) e += (x[p * dim + i] - r[i]) * (x[p * dim + i] - r[i]);
+      point_error[p] = e;
+    }
+  } else {
+    // k-means++ seeds; every point in its nearest seed's cluster.
+    std::uint64_t state = o.seed;
+    std::vector<std::size_t> seeds = {std::size_t(uniform(state) * double(P)) % P};
+    std::vector<double> d2(P, std::numeric_limits<double>::infinity());
+    const auto dist2 = [&](std::size_t p, std::size_t q) {
+      double s = 0;
+      for (std::size_t i = 0; i < dim; ++i) s += (x[p * dim + i] - x[q * dim + i]) * (x[p * dim + i] - x[q * dim + i]);
+      return s;
+    };
+    for (int k = 0; k < K; ++k) {
+      if (k > 0) {
+        double total = 0;
+        for (double d : d2) total += d;
+        std::size_t next = 0;
+        if (total > 0) {
+          double t = uniform(state) * total;
+          for (next = 0; next + 1 < P && t >= d2[next]; ++next) t -= d2[next];
+        } else {
+          while (std::find(seeds.begin(), seeds.end(), next) != seeds.end()) ++next;  // all points equal
+        }
+        seeds.push_back(next);
+      }
+      const std::size_t s = seeds.back();
+      tbb::parallel_for(std::size_t(0), P, [&](std::size_t p) {
+        const double d = dist2(p, s);
+        if (d < d2[p]) {
+          d2[p] = d;
+          m.cluster[p] = std::uint32_t(k);
+        }
+      });
+      d2[s] = 0;
+      m.cluster[s] = std::uint32_t(k);
+    }
+    point_error = d2;
+  }
+
+  for (m.rounds = 0; m.rounds < o.iterations;) {
+    fit.refit(m, point_error);
+    ++m.rounds;
+    const std::size_t moved = fit.assign(m, point_error);
+    double total = 0;
+    for (double e : point_error) total += e;
+    m.round_error.push_back(total);
+    if (moved == 0) break;
+  }
+  // The last assignment may have moved points: refit so that every cluster's
+  // mean and basis are those of its points.
+  if (!m.round_error.empty() && m.rounds == o.iterations) fit.refit(m, point_error);
+  m.squared_error = fit.finish(m, point_error);
+  return m;
+}
+
+}  // namespace prt
