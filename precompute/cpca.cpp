@@ -5,10 +5,13 @@
 #include <prt/cpca.h>
 
 #include <prt/error.h>
+#include <prt/precompute.h>
 
 #include <fmt/format.h>
 
 #include <cblas.h>
+
+#include "blas.h"
 
 #include <tbb/parallel_for.h>
 
@@ -223,6 +226,7 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
   if (start && (start->dim != dim || start->points != P || start->clusters > o.clusters))
     throw Error("cpca: the warm start is a fit of other points or of more clusters");
 
+  detail::blas_single_threaded();
   const std::vector<double> x(points.begin(), points.end());
   const int K = o.clusters, N = o.vectors;
   const Fitter fit{x, P, dim, K, N};
@@ -298,6 +302,44 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
   if (!m.round_error.empty() && m.rounds == o.iterations) fit.refit(m, point_error);
   m.squared_error = fit.finish(m, point_error);
   return m;
+}
+
+namespace {
+
+ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, const CompressOptions& o) {
+  ClusteredSignal s;
+  s.dim = dim;
+  const std::size_t count = dim ? rows.size() / dim : 0;
+  if (count == 0) return s;  // no stored row: nothing to fit
+  CpcaOptions c;
+  c.clusters = int(std::min<std::size_t>(std::size_t(o.clusters), count));
+  c.vectors = int(std::min<std::size_t>(std::size_t(o.vectors), dim));
+  c.iterations = o.iterations;
+  c.seed = o.seed;
+  const Cpca m = fit_cpca(rows, dim, c);
+  s.clusters = m.clusters;
+  s.vectors = m.vectors;
+  s.means.assign(m.means.begin(), m.means.end());
+  s.bases.assign(m.bases.begin(), m.bases.end());
+  s.cluster = m.cluster;
+  s.weights.assign(m.weights.begin(), m.weights.end());
+  return s;
+}
+
+}  // namespace
+
+CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& o) {
+  if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
+  if (o.clusters < 1) throw Error(fmt::format("--clusters must be at least 1, got {}", o.clusters));
+  if (o.vectors < 0) throw Error(fmt::format("--pca must be at least 0, got {}", o.vectors));
+  CompressedTransfer c;
+  c.coeffs = compress_rows(t.coeffs, t.stride(), o);
+  if (t.glossy) c.glossy = compress_rows(t.glossy_matrices, t.glossy_stride(), o);
+  c.transfer = t;
+  c.transfer.coeffs.clear();
+  c.transfer.direct.clear();
+  c.transfer.glossy_matrices.clear();
+  return c;
 }
 
 }  // namespace prt

@@ -29,6 +29,8 @@
 
 #include <cblas.h>
 
+#include "blas.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -176,6 +178,7 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Prog
   const bool gather = o.mode == TransferMode::Interreflected && o.bounces > 0;
 
   const bool glossy = o.glossy;
+  if (glossy) detail::blas_single_threaded();
   const bool glossy_ir = glossy && o.mode == TransferMode::Interreflected;
   const bool want_hits = gather || glossy_ir;
   t.glossy = glossy;
@@ -405,6 +408,7 @@ std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptio
   o.glossy = true;
   o.mode = TransferMode::Shadowed;
   check_options(o, mesh);
+  detail::blas_single_threaded();
   for (std::uint32_t v : vertices)
     if (v >= mesh.vertex_count())
       throw Error(fmt::format("glossy matrices: vertex {} is out of range (the mesh has {})", v, mesh.vertex_count()));

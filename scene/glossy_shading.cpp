@@ -72,6 +72,13 @@ std::string glossy_shading_problem(const Transfer& t, const GlossyShading& s) {
   return {};
 }
 
+glm::dvec3 glossy_diffuse_scale(const Transfer& t, const GlossyShading& s) {
+  glm::dvec3 scale(1.0);
+  if (!(s.diffuse.x < 0 && s.diffuse.y < 0 && s.diffuse.z < 0))
+    for (int c = 0; c < 3; ++c) scale[c] = s.diffuse[c] == 0.0 ? 0.0 : s.diffuse[c] / double(t.albedo[c]);
+  return scale;
+}
+
 std::vector<glm::vec3> relight_glossy(const Transfer& t, const Mesh& mesh, const std::vector<glm::dvec3>& light,
                                       const GlossyShading& s) {
   if (auto p = glossy_shading_problem(t, s); !p.empty()) throw Error(p);
@@ -82,9 +89,7 @@ std::vector<glm::vec3> relight_glossy(const Transfer& t, const Mesh& mesh, const
   PRT_CHECK_OP(mesh.vertex_count(), ==, t.vertices);
   // The diffuse part: prt's own relighting, scaled per channel.
   std::vector<glm::vec3> out = relight(t, mesh, light);
-  glm::dvec3 scale(1.0);
-  if (!(s.diffuse.x < 0 && s.diffuse.y < 0 && s.diffuse.z < 0))
-    for (int c = 0; c < 3; ++c) scale[c] = s.diffuse[c] == 0.0 ? 0.0 : s.diffuse[c] / double(t.albedo[c]);
+  const glm::dvec3 scale = glossy_diffuse_scale(t, s);
   const std::vector<double> lambda = glossy::phong_lobe_factors(s.gloss, n);
   const int gch = t.glossy_channels();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, t.vertices), [&](const tbb::blocked_range<std::size_t>& range) {

@@ -9,7 +9,7 @@ PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git
   # numerics, threading, ray tracing
-  libtbb-dev libembree-dev libglm-dev libxxhash-dev libopenblas-serial-dev
+  libtbb-dev libembree-dev libglm-dev libxxhash-dev libopenblas-pthread-dev
   # images and meshes
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
   # command line, JSON, logging

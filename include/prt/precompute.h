@@ -7,6 +7,7 @@
 
 #include <prt/mesh.h>
 #include <prt/progress.h>
+#include <prt/compressed_transfer.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
 
@@ -55,6 +56,20 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, cons
 // without a normal. Throws prt::Error on bad options or an index out of range.
 std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptions& options,
                                            std::span<const std::uint32_t> vertices);
+
+// ---- compression (prt/cpca.h, prt/compressed_transfer.h; issue 16, in progress) ----
+struct CompressOptions {
+  int clusters = 64;        // K (at most the stored rows; fewer rows: one cluster per row)
+  int vectors = 8;          // N, 0 to each signal's dimension (capped there)
+  int iterations = 20;
+  std::uint64_t seed = 1;
+};
+
+// Clustered PCA of the transfer's stored rows (all channels of a row as one
+// signal) and, when it has them, of its glossy matrices, each fitted on its
+// own. The direct part of an interreflected transfer is dropped. Throws
+// prt::Error for bad options.
+CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& options);
 
 // ---- wavelet transfer (docs/WAVELETS.md) -------------------------------------------
 struct WaveletOptions {

@@ -193,6 +193,9 @@ struct GlossyShading {
 // The problem with `s` for `t` (or ""): finite eye, e and rho_s in range,
 // rho_d in [0, 1] or the transfer's own, and glossy matrices present.
 std::string glossy_shading_problem(const Transfer& t, const GlossyShading& s);
+// The factor per channel the diffuse part is scaled by: rho_d / albedo (1
+// for the transfer's own albedo, 0 for rho_d = 0). For a valid shading.
+glm::dvec3 glossy_diffuse_scale(const Transfer& t, const GlossyShading& s);
 
 // L_o of every vertex toward the eye (RGB): diffuse rho_d/pi Int L V cos+ (the
 // transfer's coefficients, scaled as above) plus rho_s sum_lm Lambda_l(e)

@@ -1,0 +1,61 @@
+// prt/compressed_transfer.h - transfer compressed by clustered PCA (Sloan,
+// Hall, Hart & Snyder 2003; issue 16, in progress: the data, its CPU
+// relighting and decompression; files, `prt compress` and the GPU decode are
+// to come). The fit is prt::precompute's (prt/cpca.h, compress_transfer in
+// prt/precompute.h).
+//
+// A stored row x_p of a transfer (a vertex's diffuse coefficients, all its
+// channels; or its glossy matrices) is approximated as
+//   x_p ~ m_k + sum_{j < N} w_pj b_kj,   k = cluster[p],
+// so that relighting needs, per frame, only the lighting through each
+// cluster's mean and basis (K (N + 1) products with L) and per vertex the N
+// weights: B_p = (m_k . L) + sum_j w_pj (b_kj . L), and for glossy
+// L'_p = (M_k L) + sum_j w_pj (B_kj L) before the view-dependent lobe.
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace prt {
+
+// One compressed array: `dim` values per row, in float.
+struct ClusteredSignal {
+  int clusters = 0, vectors = 0;
+  std::size_t dim = 0;
+  std::vector<float> means;            // clusters x dim
+  std::vector<float> bases;            // clusters x vectors x dim
+  std::vector<std::uint32_t> cluster;  // per row
+  std::vector<float> weights;          // rows x vectors
+  std::size_t rows() const { return cluster.size(); }
+  // Bytes of the representation: per row 4 (cluster) + 4 N (weights), per
+  // cluster 4 (N + 1) dim.
+  std::size_t bytes() const;
+  // Row r's approximation (dim values).
+  void reconstruct(std::size_t r, float* out) const;
+};
+
+// A transfer whose stored rows (and glossy matrices) are compressed:
+// `transfer` holds everything else (header, slots, ambient occlusion, bent
+// normals) with its coeffs, direct and glossy_matrices arrays empty.
+struct CompressedTransfer {
+  Transfer transfer;
+  ClusteredSignal coeffs;  // the rows of Transfer::coeffs (stride() values each)
+  ClusteredSignal glossy;  // the rows of Transfer::glossy_matrices (glossy_stride() each), when transfer.glossy
+};
+
+// The transfer the compressed one approximates, every row reconstructed.
+Transfer decompress(const CompressedTransfer& c);
+
+// relight() and relight_glossy() of the compressed transfer by per-cluster
+// products (see above); the same results as of decompress(c) up to float
+// rounding. `mesh` is the mesh it was computed for.
+std::vector<glm::vec3> relight(const CompressedTransfer& c, const Mesh& mesh, const std::vector<glm::dvec3>& light);
+std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& mesh,
+                                      const std::vector<glm::dvec3>& light, const GlossyShading& shading);
+
+}  // namespace prt

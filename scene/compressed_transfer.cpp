@@ -1,0 +1,184 @@
+// Transfer compressed by clustered PCA (prt/compressed_transfer.h):
+// decompression, and CPU relighting by per-cluster lighting products.
+#include <prt/compressed_transfer.h>
+
+#include <prt/error.h>
+#include <prt/glossy.h>
+#include <prt/sh.h>
+
+#include <fmt/format.h>
+
+#include <glm/geometric.hpp>
+
+#include <tbb/parallel_for.h>
+
+namespace prt {
+
+std::size_t ClusteredSignal::bytes() const {
+  return rows() * (4 + 4 * std::size_t(vectors)) + std::size_t(clusters) * 4 * (std::size_t(vectors) + 1) * dim;
+}
+
+void ClusteredSignal::reconstruct(std::size_t r, float* out) const {
+  PRT_CHECK_OP(r, <, rows());
+  const std::size_t k = cluster[r];
+  std::vector<double> acc(means.begin() + std::ptrdiff_t(k * dim), means.begin() + std::ptrdiff_t((k + 1) * dim));
+  for (int j = 0; j < vectors; ++j) {
+    const double w = weights[r * std::size_t(vectors) + j];
+    const float* b = bases.data() + (k * vectors + j) * dim;
+    for (std::size_t i = 0; i < dim; ++i) acc[i] += w * b[i];
+  }
+  for (std::size_t i = 0; i < dim; ++i) out[i] = float(acc[i]);
+}
+
+namespace {
+
+void check_signal(const ClusteredSignal& s, std::size_t rows, std::size_t dim, const char* what) {
+  if (s.rows() != rows || s.dim != dim || s.means.size() != std::size_t(s.clusters) * dim ||
+      s.bases.size() != std::size_t(s.clusters) * s.vectors * dim || s.weights.size() != rows * std::size_t(s.vectors))
+    throw Error(fmt::format("compressed transfer: the {} do not match the transfer ({} rows of {})", what, rows, dim));
+  for (std::uint32_t k : s.cluster)
+    if (k >= std::uint32_t(s.clusters)) throw Error(fmt::format("compressed transfer: the {} name cluster {}", what, k));
+}
+
+void check(const CompressedTransfer& c) {
+  const Transfer& t = c.transfer;
+  check_signal(c.coeffs, t.stored_vertices(), t.stride(), "coefficients");
+  if (t.glossy) check_signal(c.glossy, t.stored_vertices(), t.glossy_stride(), "glossy matrices");
+}
+
+// The transfer with every stored row zero: what relight() needs for its
+// analytic vertices (and the stored ones then come from the clusters).
+Transfer zero_rows(const CompressedTransfer& c) {
+  Transfer t = c.transfer;
+  t.coeffs.assign(t.stored_vertices() * t.stride(), 0.0f);
+  if (t.glossy) t.glossy_matrices.assign(t.stored_vertices() * t.glossy_stride(), 0.0f);
+  return t;
+}
+
+// Per cluster, the lighting through its mean and each basis vector of the
+// coefficients: [k][j] (j = 0 the mean, 1.. the basis), RGB.
+std::vector<glm::dvec3> cluster_products(const ClusteredSignal& s, int channels, int nc,
+                                         const std::vector<glm::dvec3>& light) {
+  const int per = s.vectors + 1;
+  std::vector<glm::dvec3> out(std::size_t(s.clusters) * per, glm::dvec3(0.0));
+  for (int k = 0; k < s.clusters; ++k)
+    for (int j = 0; j < per; ++j) {
+      const float* v = j == 0 ? s.means.data() + std::size_t(k) * s.dim
+                              : s.bases.data() + (std::size_t(k) * s.vectors + (j - 1)) * s.dim;
+      glm::dvec3 r(0.0);
+      for (int c = 0; c < 3; ++c) {
+        const float* vc = v + (channels == 1 ? 0 : std::size_t(c) * nc);
+        for (int i = 0; i < nc; ++i) r[c] += double(vc[i]) * light[std::size_t(i)][c];
+      }
+      out[std::size_t(k) * per + j] = r;
+    }
+  return out;
+}
+
+// The diffuse radiance of every stored row: mean product + sum_j w_j basis product.
+template <typename F>
+void for_stored(const Transfer& t, F&& f) {
+  tbb::parallel_for(std::size_t(0), t.vertices, [&](std::size_t v) {
+    const std::size_t r = t.slots.empty() ? v : t.slots[v];
+    if (r != Transfer::kAnalytic) f(v, r);
+  });
+}
+
+glm::dvec3 row_radiance(const ClusteredSignal& s, const std::vector<glm::dvec3>& products, std::size_t r) {
+  const int per = s.vectors + 1;
+  const std::size_t k = s.cluster[r];
+  glm::dvec3 b = products[k * per];
+  for (int j = 0; j < s.vectors; ++j) b += double(s.weights[r * s.vectors + j]) * products[k * per + 1 + j];
+  return b;
+}
+
+}  // namespace
+
+Transfer decompress(const CompressedTransfer& c) {
+  check(c);
+  Transfer t = c.transfer;
+  const std::size_t rows = t.stored_vertices();
+  t.coeffs.assign(rows * t.stride(), 0.0f);
+  for (std::size_t r = 0; r < rows; ++r) c.coeffs.reconstruct(r, t.coeffs.data() + r * t.stride());
+  if (t.glossy) {
+    t.glossy_matrices.assign(rows * t.glossy_stride(), 0.0f);
+    for (std::size_t r = 0; r < rows; ++r) c.glossy.reconstruct(r, t.glossy_matrices.data() + r * t.glossy_stride());
+  }
+  return t;
+}
+
+std::vector<glm::vec3> relight(const CompressedTransfer& c, const Mesh& mesh, const std::vector<glm::dvec3>& light) {
+  check(c);
+  const Transfer z = zero_rows(c);
+  std::vector<glm::vec3> out = relight(z, mesh, light);  // analytic vertices; checks the lighting's size
+  const std::vector<glm::dvec3> p = cluster_products(c.coeffs, z.channels, z.bands * z.bands, light);
+  for_stored(z, [&](std::size_t v, std::size_t r) { out[v] = glm::vec3(row_radiance(c.coeffs, p, r)); });
+  return out;
+}
+
+std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& mesh,
+                                      const std::vector<glm::dvec3>& light, const GlossyShading& s) {
+  check(c);
+  const Transfer z = zero_rows(c);
+  std::vector<glm::vec3> out = relight_glossy(z, mesh, light, s);  // analytic vertices; checks the shading
+  const int n = z.bands;
+  const std::size_t nc = std::size_t(n) * n;
+  const glm::dvec3 scale = glossy_diffuse_scale(z, s);
+  const std::vector<glm::dvec3> p = cluster_products(c.coeffs, z.channels, int(nc), light);
+  // Per cluster: M L for its mean and each basis matrix, nc RGB values each.
+  const ClusteredSignal& g = c.glossy;
+  const int per = g.vectors + 1, gch = z.glossy_channels();
+  std::vector<glm::dvec3> ml(std::size_t(g.clusters) * per * nc, glm::dvec3(0.0));
+  tbb::parallel_for(0, g.clusters, [&](int k) {
+    for (int j = 0; j < per; ++j) {
+      const float* M = j == 0 ? g.means.data() + std::size_t(k) * g.dim
+                              : g.bases.data() + (std::size_t(k) * g.vectors + (j - 1)) * g.dim;
+      glm::dvec3* dst = ml.data() + (std::size_t(k) * per + j) * nc;
+      if (z.glossy_symmetric()) {
+        std::size_t q = 0;
+        for (std::size_t a = 0; a < nc; ++a)
+          for (std::size_t b = a; b < nc; ++b, ++q) {
+            dst[a] += double(M[q]) * light[b];
+            if (b != a) dst[b] += double(M[q]) * light[a];
+          }
+      } else {
+        for (int ch = 0; ch < 3; ++ch) {
+          const float* Mc = M + std::size_t(gch == 3 ? ch : 0) * nc * nc;
+          for (std::size_t a = 0; a < nc; ++a)
+            for (std::size_t b = 0; b < nc; ++b) dst[a][ch] += double(Mc[a * nc + b]) * light[b][ch];
+        }
+      }
+    }
+  });
+  const std::vector<double> lambda = glossy::phong_lobe_factors(s.gloss, n);
+  for_stored(z, [&](std::size_t v, std::size_t r) {
+    glm::dvec3 rgb = glm::dvec3(out[v]) + scale * row_radiance(c.coeffs, p, r);  // out[v]: 0 for a stored row
+    const glm::vec3 nf = mesh.normals[v];
+    if (nf != glm::vec3(0.0f) && s.specular > 0) {
+      const glm::dvec3 nrm = glm::normalize(glm::dvec3(nf));
+      const glm::dvec3 to_eye = s.eye - glm::dvec3(mesh.positions[v]);
+      const double d = glm::length(to_eye);
+      const glm::dvec3 view = d > 0 ? to_eye / d : nrm;
+      const double ndv = glm::dot(nrm, view);
+      if (ndv > 0) {
+        const glm::dvec3 mirror = 2.0 * ndv * nrm - view;
+        std::vector<double> y(nc);
+        sh::eval<double>(n, mirror.x, mirror.y, mirror.z, y.data());
+        const std::size_t k = g.cluster[r];
+        glm::dvec3 gl(0.0);
+        for (int l = 0; l < n; ++l)
+          for (int m = -l; m <= l; ++m) {
+            const std::size_t i = std::size_t(sh::index(l, m));
+            glm::dvec3 li = ml[(k * per) * nc + i];
+            for (int j = 0; j < g.vectors; ++j) li += double(g.weights[r * g.vectors + j]) * ml[(k * per + 1 + j) * nc + i];
+            gl += lambda[std::size_t(l)] * y[i] * li;
+          }
+        rgb += s.specular * gl;
+      }
+    }
+    out[v] = glm::vec3(rgb);
+  });
+  return out;
+}
+
+}  // namespace prt

@@ -1,0 +1,112 @@
+// Compressed transfer (prt/compressed_transfer.h, compress_transfer):
+// relighting by per-cluster products is relighting the reconstruction;
+// with as many vectors as the signal has values it is the uncompressed
+// relighting; the representation's size is what it says.
+#include <prt/compressed_transfer.h>
+#include <prt/error.h>
+#include <prt/precompute.h>
+
+#include "test_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace prt {
+namespace {
+
+// Float rows and float products, summed in double: a few float ulps of the
+// largest radiance.
+constexpr double kFloat = 1e-5;
+
+std::vector<glm::dvec3> lighting(int bands) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g;
+  std::vector<glm::dvec3> l(std::size_t(bands) * bands);
+  for (auto& c : l) c = {g(rng), g(rng), g(rng)};
+  l[0] += glm::dvec3(4.0);
+  return l;
+}
+
+double largest(const std::vector<glm::vec3>& a) {
+  double m = 0;
+  for (const auto& v : a) m = std::max({m, double(std::abs(v.x)), double(std::abs(v.y)), double(std::abs(v.z))});
+  return m;
+}
+
+void expect_close(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size());
+  const double tol = kFloat * largest(b);
+  for (std::size_t v = 0; v < a.size(); ++v)
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(a[v][c], b[v][c], tol) << what << " vertex " << v;
+}
+
+Transfer glossy_transfer(TransferMode mode, const Mesh& m) {
+  TransferOptions o;
+  o.mode = mode;
+  o.bands = 3;
+  o.samples = 128;
+  o.glossy = true;
+  o.albedo = glm::vec3(0.9f, 0.6f, 0.3f);
+  return compute_transfer(m, o);
+}
+
+TEST(CompressedTransfer, AllVectorsIsTheUncompressedTransfer) {
+  const Mesh m = test::floor_and_ball(8);
+  const std::vector<glm::dvec3> L = lighting(3);
+  GlossyShading s;
+  s.eye = {0.4, 2.5, 1.0};
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    const Transfer t = glossy_transfer(mode, m);
+    CompressOptions o;
+    o.clusters = 3;
+    o.vectors = 1 << 20;  // capped at each signal's dimension
+    const CompressedTransfer c = compress_transfer(t, o);
+    EXPECT_EQ(std::size_t(c.coeffs.vectors), t.stride());
+    EXPECT_EQ(std::size_t(c.glossy.vectors), t.glossy_stride());
+    expect_close(relight(c, m, L), relight(t, m, L), "diffuse");
+    expect_close(relight_glossy(c, m, L, s), relight_glossy(t, m, L, s), "glossy");
+  }
+}
+
+TEST(CompressedTransfer, PerClusterProductsAreTheReconstructionRelit) {
+  const Mesh m = test::floor_and_ball(10);
+  const std::vector<glm::dvec3> L = lighting(3);
+  GlossyShading s;
+  s.eye = {-0.5, 2.0, 1.5};
+  s.gloss = 8;
+  s.diffuse = glm::dvec3(0.9f, 0.6f, 0.3f);
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    const Transfer t = glossy_transfer(mode, m);
+    CompressOptions o;
+    o.clusters = 4;
+    o.vectors = 2;
+    const CompressedTransfer c = compress_transfer(t, o);
+    const Transfer d = decompress(c);
+    expect_close(relight(c, m, L), relight(d, m, L), "diffuse");
+    expect_close(relight_glossy(c, m, L, s), relight_glossy(d, m, L, s), "glossy");
+    // Lossy here: the reconstruction differs from the original.
+    double diff = 0;
+    for (std::size_t i = 0; i < t.glossy_matrices.size(); ++i) diff += std::abs(d.glossy_matrices[i] - t.glossy_matrices[i]);
+    EXPECT_GT(diff, 1e-3);
+    // Size: per row a cluster index and N weights, per cluster N + 1 rows of dim.
+    const std::size_t rows = t.stored_vertices();
+    EXPECT_EQ(c.glossy.bytes(), rows * (4 + 4 * 2) + 4 * 3 * t.glossy_stride() * 4);
+  }
+}
+
+TEST(CompressedTransfer, RefusesBadOptions) {
+  const Mesh m = test::floor_and_ball(4);
+  const Transfer t = glossy_transfer(TransferMode::Shadowed, m);
+  CompressOptions o;
+  o.clusters = 0;
+  EXPECT_THROW(compress_transfer(t, o), Error);
+  o.clusters = 2;
+  o.vectors = -1;
+  EXPECT_THROW(compress_transfer(t, o), Error);
+}
+
+}  // namespace
+}  // namespace prt
