@@ -1,7 +1,10 @@
 // bench/bench_transfer.cpp - shadowed transfer on bunny00 (37.7k vertices,
 // 5 bands, 1024 rays per vertex) against the same rays traced by bare Embree
 // with no SH work, and the cost of an interreflection bounce.
+#include <prt/compression_error.h>
 #include <prt/cpca.h>
+#include <prt/envmap.h>
+#include <prt/projection.h>
 #include <prt/precompute.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
@@ -153,32 +156,37 @@ void BM_GlossyInterreflectedFiveBands(benchmark::State& state) {
 }
 BENCHMARK(BM_GlossyInterreflectedFiveBands)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
-// Clustered PCA of bunny00's 5-band shadowed glossy matrices (issue 16, in
-// progress): fit time at K clusters x N vectors, with the relative squared
-// error of the matrices (not yet the relit error) and the bytes per vertex.
-void BM_CpcaGlossyFiveBands(benchmark::State& state) {
+// Clustered PCA of bunny00's transfer (issue 16, in progress): fit time at
+// K clusters x N vectors, bytes against the uncompressed rows, and the relit
+// error against the uncompressed transfer (prt/compression_error.h) under
+// the five bundled maps (envmaps/) and, glossy, a ring of 8 views (e = 16,
+// rho_s 0.5, the diffuse part included and compressed alike).
+void compression(benchmark::State& state, bool glossy, int bands) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
-  static const prt::Transfer t = [] {
-    prt::TransferOptions o = options(prt::TransferMode::Shadowed);
-    o.bands = 5;
-    o.glossy = true;
-    return prt::compute_transfer(*bunny(), o);
-  }();
-  prt::CpcaOptions o;
-  o.clusters = int(state.range(0));
-  o.vectors = int(state.range(1));
-  prt::Cpca m;
-  for (auto _ : state) m = prt::fit_cpca(t.glossy_matrices, t.glossy_stride(), o);
-  double total = 0;
-  for (float v : t.glossy_matrices) total += double(v) * v;
-  state.counters["rel_error"] = std::sqrt(m.squared_error / total);
-  state.counters["rounds"] = m.rounds;
-  const double stored = double(t.stored_vertices());
-  state.counters["bytes_per_vertex"] =
-      (4.0 * o.vectors * stored + 4.0 * double(m.means.size() + m.bases.size())) / stored;
-  state.counters["uncompressed_bytes_per_vertex"] = 4.0 * double(t.glossy_stride());
+  prt::TransferOptions o = options(prt::TransferMode::Shadowed);
+  o.bands = bands;
+  o.glossy = glossy;
+  const prt::Transfer t = prt::compute_transfer(*bunny(), o);
+  prt::CompressionErrorOptions e;
+  for (const char* map : {"city", "courtyard", "forest", "studio", "sunset"})
+    e.lights.push_back(prt::project(prt::load_envmap(std::string(PRT_SOURCE_DIR) + "/envmaps/" + map + ".exr"), bands));
+  if (glossy) e.eyes = prt::eye_ring(*bunny(), 8);
+  prt::CompressOptions c;
+  c.clusters = int(state.range(0));
+  c.vectors = int(state.range(1));
+  prt::CompressedTransfer ct;
+  for (auto _ : state) ct = prt::compress_transfer(t, c);
+  const double rows = 4.0 * double(glossy ? t.glossy_matrices.size() : t.coeffs.size());
+  const double packed = double(glossy ? ct.glossy.bytes() : ct.coeffs.bytes());
+  state.counters["ratio"] = rows / packed;
+  state.counters["bytes_per_vertex"] = packed / double(t.vertices);
+  state.counters["relit_error"] = prt::compression_error(t, ct, *bunny(), e);
 }
-BENCHMARK(BM_CpcaGlossyFiveBands)->Args({1, 24})->Args({64, 8})->Args({256, 8})->Unit(benchmark::kMillisecond)
-    ->UseRealTime()->Iterations(1);
+void BM_CompressGlossyFiveBands(benchmark::State& state) { compression(state, true, 5); }
+BENCHMARK(BM_CompressGlossyFiveBands)->Args({1, 24})->Args({64, 8})->Args({128, 8})->Args({256, 8})
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+void BM_CompressDiffuseSixBands(benchmark::State& state) { compression(state, false, 6); }
+BENCHMARK(BM_CompressDiffuseSixBands)->Args({1, 8})->Args({16, 4})->Args({64, 4})->Args({64, 8})
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 }  // namespace
