@@ -3,12 +3,15 @@
 // with as many vectors as the signal has values it is the uncompressed
 // relighting; the representation's size is what it says.
 #include <prt/compressed_transfer.h>
+#include <prt/compression_error.h>
 #include <prt/error.h>
 #include <prt/precompute.h>
 
 #include "test_meshes.h"
 
 #include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
 
 #include <cmath>
 #include <random>
@@ -95,6 +98,45 @@ TEST(CompressedTransfer, PerClusterProductsAreTheReconstructionRelit) {
     const std::size_t rows = t.stored_vertices();
     EXPECT_EQ(c.glossy.bytes(), rows * (4 + 4 * 2) + 4 * 3 * t.glossy_stride() * 4);
   }
+}
+
+// The relit error: 0 for an exact compression (float rounding), the RMS of
+// the relit difference for a lossy one, measured independently here.
+TEST(CompressionError, IsTheRelitDifference) {
+  const Mesh m = test::floor_and_ball(8);
+  const Transfer t = glossy_transfer(TransferMode::Shadowed, m);
+  CompressionErrorOptions e;
+  e.lights = {lighting(3)};
+  EXPECT_THROW(compression_error(t, compress_transfer(t, {}), m, e), Error);  // glossy: no eyes
+  e.eyes = eye_ring(m, 4);
+  ASSERT_EQ(e.eyes.size(), 4u);
+  EXPECT_NEAR(glm::length(e.eyes[0] - e.eyes[2]), 2 * glm::length(e.eyes[1] - 0.5 * (e.eyes[0] + e.eyes[2])), 1e-9);
+  EXPECT_GT(e.eyes[0].z, e.eyes[2].z);  // the first on +Z
+  CompressOptions all;
+  all.clusters = 2;
+  all.vectors = 1 << 20;
+  EXPECT_LT(compression_error(t, compress_transfer(t, all), m, e), 1e-5);
+  CompressOptions lossy;
+  lossy.clusters = 2;
+  lossy.vectors = 1;
+  const CompressedTransfer c = compress_transfer(t, lossy);
+  double diff = 0, ref = 0;
+  for (const glm::dvec3& eye : e.eyes) {
+    GlossyShading s;
+    s.eye = eye;
+    s.gloss = e.gloss;
+    s.specular = e.specular;
+    const std::vector<glm::vec3> a = relight_glossy(c, m, e.lights[0], s), b = relight_glossy(t, m, e.lights[0], s);
+    for (std::size_t v = 0; v < a.size(); ++v) {
+      diff += glm::dot(glm::dvec3(a[v] - b[v]), glm::dvec3(a[v] - b[v]));
+      ref += glm::dot(glm::dvec3(b[v]), glm::dvec3(b[v]));
+    }
+  }
+  const double got = compression_error(t, c, m, e);
+  EXPECT_GT(got, 1e-3);
+  EXPECT_NEAR(got, std::sqrt(diff / ref), 1e-9);
+  e.lights.clear();
+  EXPECT_THROW(compression_error(t, c, m, e), Error);
 }
 
 TEST(CompressedTransfer, RefusesBadOptions) {
