@@ -1,6 +1,7 @@
 // The settings grid of `prt report` (prt/report.h).
 #include <prt/report.h>
 
+#include <prt/compression_error.h>
 #include <prt/error.h>
 #include <prt/glossy.h>
 #include <prt/projection.h>
@@ -178,12 +179,9 @@ struct Runner {
         for (std::size_t i = 0; i < at.size(); ++i) {
           const std::uint32_t v = at[i];
           const glm::dvec3 n = glm::normalize(glm::dvec3(mesh.normals[v]));
-          const glm::dvec3 to_eye = shading.eye - glm::dvec3(mesh.positions[v]);
-          const glm::dvec3 view = glm::normalize(to_eye);
-          const double ndv = glm::dot(n, view);
           glm::dvec3 value(0.0);
-          if (ndv > 0) {
-            const glm::dvec3 r = 2.0 * ndv * n - view;
+          if (const auto mirror = glossy::mirror_direction(n, glm::dvec3(mesh.positions[v]), shading.eye)) {
+            const glm::dvec3 r = *mirror;
             const double* M = exact.data() + i * nc * nc;
             for (int c = 0; c < 3; ++c) {
               for (std::size_t p = 0; p < nc; ++p) {
@@ -374,18 +372,8 @@ Report run_report(const Mesh& mesh, const EnvMap& map, const ReportOptions& opti
   if (!options.terms.empty()) run.terms_sweep();
   if (!options.glossy_bands.empty()) {
     report.glossy_eye = options.glossy_eye;
-    if (std::isnan(report.glossy_eye.x)) {
-      // prt render's default camera (prt/render.h: default_camera, 40 degrees).
-      glm::dvec3 lo(mesh.positions[0]), hi = lo;
-      for (const glm::vec3& p : mesh.positions) {
-        lo = glm::min(lo, glm::dvec3(p));
-        hi = glm::max(hi, glm::dvec3(p));
-      }
-      const glm::dvec3 c = 0.5 * (lo + hi);
-      double radius = 0;
-      for (const glm::vec3& p : mesh.positions) radius = std::max(radius, glm::length(glm::dvec3(p) - c));
-      report.glossy_eye = c + glm::dvec3(0, 0, 1.05 * radius / std::sin(20.0 * M_PI / 180.0));
-    }
+    // NaN: prt render's default camera (prt/render.h: default_camera, 40 degrees).
+    if (std::isnan(report.glossy_eye.x)) report.glossy_eye = eye_ring(mesh, 1).front();
     for (double e : options.glossy_gloss) {
       ReferenceOptions r;
       r.glossy = true;

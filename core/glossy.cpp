@@ -99,6 +99,15 @@ std::vector<double> hemisphere_product_matrix(const glm::dvec3& n, int bands) {
   return m;
 }
 
+std::optional<glm::dvec3> mirror_direction(const glm::dvec3& n, const glm::dvec3& p, const glm::dvec3& eye) {
+  const glm::dvec3 to_eye = eye - p;
+  const double d = glm::length(to_eye);
+  const glm::dvec3 view = d > 0.0 ? to_eye / d : n;
+  const double ndv = glm::dot(n, view);
+  if (!(ndv > 0.0)) return std::nullopt;
+  return 2.0 * ndv * n - view;
+}
+
 double glossy_radiance(const std::vector<double>& transferred, const std::vector<double>& lambda, int bands,
                        const glm::dvec3& r, double rho_s) {
   PRT_CHECK_OP(transferred.size(), >=, std::size_t(bands) * bands);

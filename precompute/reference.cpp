@@ -409,11 +409,7 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
       // above the horizon.
       std::optional<PhongLobe> lobe;
       if (options.glossy && options.specular > 0) {
-        const glm::dvec3 to_eye = options.eye - p;
-        const double d = glm::length(to_eye);
-        const glm::dvec3 view = d > 0 ? to_eye / d : nv;
-        const double ndv = glm::dot(nv, view);
-        if (ndv > 0) lobe = PhongLobe{glm::normalize(2.0 * ndv * nv - view), options.gloss};
+        if (const auto r = glossy::mirror_direction(nv, p, options.eye)) lobe = PhongLobe{glm::normalize(*r), options.gloss};
       }
       // Welford's running mean and sum of squared deviations, per channel.
       glm::dvec3 mean(0.0), m2(0.0);

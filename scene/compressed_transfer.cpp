@@ -156,14 +156,9 @@ std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& m
     const glm::vec3 nf = mesh.normals[v];
     if (nf != glm::vec3(0.0f) && s.specular > 0) {
       const glm::dvec3 nrm = glm::normalize(glm::dvec3(nf));
-      const glm::dvec3 to_eye = s.eye - glm::dvec3(mesh.positions[v]);
-      const double d = glm::length(to_eye);
-      const glm::dvec3 view = d > 0 ? to_eye / d : nrm;
-      const double ndv = glm::dot(nrm, view);
-      if (ndv > 0) {
-        const glm::dvec3 mirror = 2.0 * ndv * nrm - view;
+      if (const auto mirror = glossy::mirror_direction(nrm, glm::dvec3(mesh.positions[v]), s.eye)) {
         std::vector<double> y(nc);
-        sh::eval<double>(n, mirror.x, mirror.y, mirror.z, y.data());
+        sh::eval<double>(n, mirror->x, mirror->y, mirror->z, y.data());
         const std::size_t k = g.cluster[r];
         glm::dvec3 gl(0.0);
         for (int l = 0; l < n; ++l)

@@ -99,14 +99,9 @@ std::vector<glm::vec3> relight_glossy(const Transfer& t, const Mesh& mesh, const
       const glm::vec3 nf = mesh.normals[v];
       if (nf != glm::vec3(0.0f) && s.specular > 0.0) {
         const glm::dvec3 nrm = glm::normalize(glm::dvec3(nf));
-        const glm::dvec3 to_eye = s.eye - glm::dvec3(mesh.positions[v]);
-        const double d = glm::length(to_eye);
-        const glm::dvec3 view = d > 0.0 ? to_eye / d : nrm;
-        const double ndv = glm::dot(nrm, view);
-        if (ndv > 0.0) {
+        if (const auto mirror = glossy::mirror_direction(nrm, glm::dvec3(mesh.positions[v]), s.eye)) {
           // y = Lambda Y(r): the glossy part is y . (M L) = (M^T y) . L.
-          const glm::dvec3 mirror = 2.0 * ndv * nrm - view;
-          sh::eval<double>(n, mirror.x, mirror.y, mirror.z, y.data());
+          sh::eval<double>(n, mirror->x, mirror->y, mirror->z, y.data());
           for (int l = 0; l < n; ++l)
             for (int m = -l; m <= l; ++m) y[std::size_t(sh::index(l, m))] *= lambda[std::size_t(l)];
           glm::dvec3 g(0.0);

@@ -17,6 +17,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <optional>
 #include <vector>
 
 namespace prt::glossy {
@@ -55,6 +56,11 @@ struct HemisphereRule {
   std::vector<double> weights;
 };
 HemisphereRule hemisphere_rule(const glm::dvec3& n, int bands);
+
+// The mirror direction r = 2 (n.v) n - v of the view v = normalize(eye - p)
+// about the unit normal n, or nothing when the eye is not above the horizon
+// (n.v <= 0: no glossy part). An eye at p itself sees along n.
+std::optional<glm::dvec3> mirror_direction(const glm::dvec3& n, const glm::dvec3& p, const glm::dvec3& eye);
 
 // rho_s sum_lm Lambda_l L'_lm Y_lm(r): the glossy exit radiance of one
 // channel from its transferred incident radiance `transferred` (bands^2
