@@ -323,6 +323,23 @@ ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, c
   s.bases.assign(m.bases.begin(), m.bases.end());
   s.cluster = m.cluster;
   s.weights.assign(m.weights.begin(), m.weights.end());
+  if (o.weight_bits == 16) {
+    // One scale per cluster and vector: its largest |w| maps to 32767.
+    const std::size_t N = std::size_t(s.vectors);
+    s.weight_bits = 16;
+    s.weight_scales.assign(std::size_t(s.clusters) * N, 0.0f);
+    for (std::size_t r = 0; r < count; ++r)
+      for (std::size_t j = 0; j < N; ++j) {
+        float& sc = s.weight_scales[s.cluster[r] * N + j];
+        sc = std::max(sc, std::abs(s.weights[r * N + j]) / 32767.0f);
+      }
+    for (std::size_t r = 0; r < count; ++r)
+      for (std::size_t j = 0; j < N; ++j) {
+        const float sc = s.weight_scales[s.cluster[r] * N + j];
+        float& w = s.weights[r * N + j];
+        w = sc > 0 ? float(std::lround(w / sc)) * sc : 0.0f;
+      }
+  }
   return s;
 }
 
@@ -332,6 +349,8 @@ CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& o
   if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
   if (o.clusters < 1) throw Error(fmt::format("--clusters must be at least 1, got {}", o.clusters));
   if (o.vectors < 0) throw Error(fmt::format("--pca must be at least 0, got {}", o.vectors));
+  if (o.weight_bits != 32 && o.weight_bits != 16)
+    throw Error(fmt::format("--weights must be 32 (float) or 16 bits, got {}", o.weight_bits));
   CompressedTransfer c;
   c.coeffs = compress_rows(t.coeffs, t.stride(), o);
   if (t.glossy) c.glossy = compress_rows(t.glossy_matrices, t.glossy_stride(), o);

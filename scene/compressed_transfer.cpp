@@ -15,7 +15,8 @@
 namespace prt {
 
 std::size_t ClusteredSignal::bytes() const {
-  return rows() * (4 + 4 * std::size_t(vectors)) + std::size_t(clusters) * 4 * (std::size_t(vectors) + 1) * dim;
+  const std::size_t N = std::size_t(vectors), K = std::size_t(clusters);
+  return rows() * (4 + std::size_t(weight_bits / 8) * N) + K * 4 * (N + 1) * dim + (weight_bits == 16 ? K * N * 4 : 0);
 }
 
 void ClusteredSignal::reconstruct(std::size_t r, float* out) const {
@@ -38,6 +39,9 @@ void check_signal(const ClusteredSignal& s, std::size_t rows, std::size_t dim, c
     throw Error(fmt::format("compressed transfer: the {} do not match the transfer ({} rows of {})", what, rows, dim));
   for (std::uint32_t k : s.cluster)
     if (k >= std::uint32_t(s.clusters)) throw Error(fmt::format("compressed transfer: the {} name cluster {}", what, k));
+  if (s.weight_bits != 32 && !(s.weight_bits == 16 && s.weight_scales.size() == std::size_t(s.clusters) * s.vectors))
+    throw Error(fmt::format("compressed transfer: the {} have {}-bit weights with {} scales", what, s.weight_bits,
+                            s.weight_scales.size()));
 }
 
 void check(const CompressedTransfer& c) {

@@ -139,6 +139,42 @@ TEST(CompressionError, IsTheRelitDifference) {
   EXPECT_THROW(compression_error(t, c, m, e), Error);
 }
 
+// 16-bit weights: the same fit, each weight within half its scale step, so
+// each row within sqrt(sum_j (s_kj / 2)^2) of the float weights' (the basis
+// is orthonormal); fewer bytes.
+TEST(CompressedTransfer, SixteenBitWeightsStayWithinHalfAStep) {
+  const Mesh m = test::floor_and_ball(10);
+  const Transfer t = glossy_transfer(TransferMode::Interreflected, m);
+  CompressOptions o;
+  o.clusters = 5;
+  o.vectors = 3;
+  const CompressedTransfer full = compress_transfer(t, o);
+  o.weight_bits = 16;
+  const CompressedTransfer half = compress_transfer(t, o);
+  EXPECT_EQ(half.glossy.cluster, full.glossy.cluster);
+  EXPECT_LT(half.glossy.bytes(), full.glossy.bytes());
+  EXPECT_EQ(full.glossy.bytes() - half.glossy.bytes(),
+            full.glossy.rows() * 2 * 3 - std::size_t(5 * 3 * 4));  // 2 bytes less per weight, plus the scales
+  for (const auto* pair : {&half.coeffs, &half.glossy}) {
+    const ClusteredSignal& h = *pair;
+    const ClusteredSignal& f = pair == &half.coeffs ? full.coeffs : full.glossy;
+    std::vector<float> a(h.dim), b(h.dim);
+    bool moved = false;
+    for (std::size_t r = 0; r < h.rows(); ++r) {
+      h.reconstruct(r, a.data());
+      f.reconstruct(r, b.data());
+      double d2 = 0, bound = 0;
+      for (std::size_t i = 0; i < h.dim; ++i) d2 += double(a[i] - b[i]) * (a[i] - b[i]);
+      for (int j = 0; j < h.vectors; ++j) bound += std::pow(0.5 * h.weight_scales[h.cluster[r] * h.vectors + j], 2);
+      ASSERT_LE(std::sqrt(d2), std::sqrt(bound) * (1 + 1e-3) + 1e-7) << r;
+      moved = moved || d2 > 0;
+    }
+    EXPECT_TRUE(moved);  // the quantisation did change something
+  }
+  o.weight_bits = 8;
+  EXPECT_THROW(compress_transfer(t, o), Error);
+}
+
 TEST(CompressedTransfer, RefusesBadOptions) {
   const Mesh m = test::floor_and_ball(4);
   const Transfer t = glossy_transfer(TransferMode::Shadowed, m);

@@ -30,10 +30,15 @@ struct ClusteredSignal {
   std::vector<float> means;            // clusters x dim
   std::vector<float> bases;            // clusters x vectors x dim
   std::vector<std::uint32_t> cluster;  // per row
-  std::vector<float> weights;          // rows x vectors
+  std::vector<float> weights;          // rows x vectors (16-bit: the values the quantised ones stand for)
+  // 32: float weights; 16: each weight quantised to round(w / s) s with
+  // s = max |w| / 32767 over its cluster's rows, one scale per cluster and
+  // vector (weight_scales, clusters x vectors): error at most s / 2 per weight.
+  int weight_bits = 32;
+  std::vector<float> weight_scales;
   std::size_t rows() const { return cluster.size(); }
-  // Bytes of the representation: per row 4 (cluster) + 4 N (weights), per
-  // cluster 4 (N + 1) dim.
+  // Bytes of the representation: per row 4 (cluster) + (weight_bits / 8) N
+  // (weights), per cluster 4 (N + 1) dim, and 4 N scales when 16-bit.
   std::size_t bytes() const;
   // Row r's approximation (dim values).
   void reconstruct(std::size_t r, float* out) const;

@@ -63,6 +63,7 @@ struct CompressOptions {
   int vectors = 8;          // N, 0 to each signal's dimension (capped there)
   int iterations = 20;
   std::uint64_t seed = 1;
+  int weight_bits = 32;     // 32 (float) or 16 (ClusteredSignal::weight_bits)
 };
 
 // Clustered PCA of the transfer's stored rows (all channels of a row as one
