@@ -175,6 +175,46 @@ TEST(CompressedTransfer, SixteenBitWeightsStayWithinHalfAStep) {
   EXPECT_THROW(compress_transfer(t, o), Error);
 }
 
+// Where theory bounds the relit error: a mono diffuse row x relit under one
+// channel of L gives x . L, so |B - B~| = |(x - x~) . L| <= |x - x~| |L|
+// (Cauchy-Schwarz), per vertex and channel; some vertex comes within a
+// factor of 3 of it under a random lighting (the bound is not vacuous).
+TEST(CompressedTransfer, RelitErrorWithinTheTransferErrorBound) {
+  const Mesh m = test::floor_and_ball(10);
+  TransferOptions to;
+  to.bands = 4;
+  to.samples = 128;
+  const Transfer t = compute_transfer(m, to);
+  ASSERT_EQ(t.channels, 1);
+  CompressOptions o;
+  o.clusters = 3;
+  o.vectors = 2;
+  const CompressedTransfer c = compress_transfer(t, o);
+  const std::vector<glm::dvec3> L = lighting(4);
+  const std::vector<glm::vec3> a = relight(c, m, L), b = relight(t, m, L);
+  double norm[3] = {0, 0, 0};
+  for (const glm::dvec3& l : L)
+    for (int ch = 0; ch < 3; ++ch) norm[ch] += l[ch] * l[ch];
+  std::vector<float> rec(t.stride());
+  std::size_t checked = 0;
+  double tightest = 0;
+  for (std::size_t v = 0; v < t.vertices; ++v) {
+    const float* x = t.stored(v);
+    if (!x) continue;
+    c.coeffs.reconstruct(t.slots.empty() ? v : t.slots[v], rec.data());
+    double e2 = 0;
+    for (std::size_t k = 0; k < rec.size(); ++k) e2 += double(x[k] - rec[k]) * (x[k] - rec[k]);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double bound = std::sqrt(e2 * norm[ch]);
+      ASSERT_LE(std::abs(a[v][ch] - b[v][ch]), bound * (1 + 1e-4) + 1e-6) << v;
+      if (bound > 0) tightest = std::max(tightest, std::abs(a[v][ch] - b[v][ch]) / bound);
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 50u);
+  EXPECT_GT(tightest, 0.3);  // a bound the data comes near, not a vacuous one
+}
+
 TEST(CompressedTransfer, RefusesBadOptions) {
   const Mesh m = test::floor_and_ball(4);
   const Transfer t = glossy_transfer(TransferMode::Shadowed, m);
