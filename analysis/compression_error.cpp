@@ -3,9 +3,12 @@
 
 #include <prt/error.h>
 
+#include <fmt/format.h>
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace prt {
@@ -54,6 +57,68 @@ double compression_error(const Transfer& t, const CompressedTransfer& c, const M
     }
   }
   return ref > 0 ? std::sqrt(diff / ref) : 0.0;
+}
+
+namespace {
+
+// ClusteredSignal::bytes of a fit before it is made.
+std::size_t planned_bytes(std::size_t rows, std::size_t dim, int K, int N, int bits) {
+  if (rows == 0) return 0;
+  const std::size_t k = std::min<std::size_t>(std::size_t(K), rows), n = std::min<std::size_t>(std::size_t(N), dim);
+  return rows * (4 + std::size_t(bits / 8) * n) + k * 4 * (n + 1) * dim + (bits == 16 ? k * n * 4 : 0);
+}
+
+}  // namespace
+
+CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
+                                     double target, int weight_bits) {
+  if (!(target > 0 && target < 1)) throw Error(fmt::format("--target-error must be in (0, 1), got {:g}", target));
+  const std::size_t rows = t.stored_vertices();
+  struct Candidate {
+    int K, N;
+    std::size_t bytes;
+  };
+  std::vector<Candidate> grid;
+  for (int K : {1, 4, 16, 64, 128, 256})
+    for (int N : {1, 2, 4, 8, 12, 16, 24}) {
+      if (std::size_t(K) > std::max<std::size_t>(rows, 1)) continue;
+      const std::size_t b = planned_bytes(rows, t.stride(), K, N, weight_bits) +
+                            (t.glossy ? planned_bytes(rows, t.glossy_stride(), K, N, weight_bits) : 0);
+      grid.push_back({K, N, b});
+    }
+  std::stable_sort(grid.begin(), grid.end(), [](const Candidate& a, const Candidate& b) { return a.bytes < b.bytes; });
+  CompressionChoice best;
+  double best_error = INFINITY, previous_error = NAN;
+  std::string previous;
+  for (const Candidate& c : grid) {
+    CompressOptions o;
+    o.clusters = c.K;
+    o.vectors = c.N;
+    o.weight_bits = weight_bits;
+    CompressedTransfer ct = compress_transfer(t, o);
+    const double e = compression_error(t, ct, mesh, errors);
+    ++best.tried;
+    best_error = std::min(best_error, e);
+    if (e <= target) {
+      best.options = o;
+      best.compressed = std::move(ct);
+      best.error = e;
+      best.bytes = c.bytes;
+      best.explanation =
+          fmt::format("chose {} clusters x {} vectors ({}-bit weights): {:.1f} bytes per vertex, relit error {:.4g} <= "
+                      "{:g}{}; {} of {} candidates tried, smallest first",
+                      c.K, c.N, weight_bits, double(c.bytes) / double(t.vertices), e, target,
+                      previous.empty() ? std::string()
+                                       : fmt::format(" (the next smaller, {}, measured {:.4g})", previous, previous_error),
+                      best.tried, grid.size());
+      return best;
+    }
+    previous = fmt::format("{} x {}", c.K, c.N);
+    previous_error = e;
+  }
+  throw Error(fmt::format("no compression of {} clusters or fewer x {} vectors or fewer reaches relit error {:g} "
+                          "(the best measured {:.4g}); store the transfer uncompressed",
+                          grid.empty() ? 0 : 256, 24, target, best_error));
 }
 
 }  // namespace prt

@@ -215,6 +215,40 @@ TEST(CompressedTransfer, RelitErrorWithinTheTransferErrorBound) {
   EXPECT_GT(tightest, 0.3);  // a bound the data comes near, not a vacuous one
 }
 
+// The choice meets the target, and no candidate of fewer bytes does (each
+// checked again here); a stricter target costs at least as many bytes; an
+// unreachable one is refused saying so.
+TEST(CompressionChoice, IsTheSmallestThatMeetsTheTarget) {
+  const Mesh m = test::floor_and_ball(8);
+  TransferOptions to;
+  to.bands = 4;
+  to.samples = 64;
+  const Transfer t = compute_transfer(m, to);
+  CompressionErrorOptions e;
+  e.lights = {lighting(4)};
+  const CompressionChoice loose = choose_compression(t, m, e, 0.05);
+  EXPECT_LE(loose.error, 0.05);
+  EXPECT_NE(loose.explanation.find("chose"), std::string::npos) << loose.explanation;
+  EXPECT_EQ(loose.bytes, loose.compressed.coeffs.bytes());
+  const CompressionChoice tight = choose_compression(t, m, e, 0.005);
+  EXPECT_LE(tight.error, 0.005);
+  EXPECT_GE(tight.bytes, loose.bytes);
+  EXPECT_GT(tight.tried, loose.tried);
+  // Every smaller candidate misses: the ones the search tried before, again.
+  for (int K : {1, 4, 16, 64, 128, 256})
+    for (int N : {1, 2, 4, 8, 12, 16, 24}) {
+      CompressOptions o;
+      o.clusters = K;
+      o.vectors = N;
+      o.weight_bits = 16;
+      if (std::size_t(K) > t.stored_vertices()) continue;
+      const CompressedTransfer c = compress_transfer(t, o);
+      if (c.coeffs.bytes() < tight.bytes) EXPECT_GT(compression_error(t, c, m, e), 0.005) << K << " x " << N;
+    }
+  EXPECT_THROW(choose_compression(t, m, e, 1e-9), Error);
+  EXPECT_THROW(choose_compression(t, m, e, 0), Error);
+}
+
 TEST(CompressedTransfer, RefusesBadOptions) {
   const Mesh m = test::floor_and_ball(4);
   const Transfer t = glossy_transfer(TransferMode::Shadowed, m);

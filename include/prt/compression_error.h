@@ -5,11 +5,13 @@
 #pragma once
 
 #include <prt/compressed_transfer.h>
+#include <prt/precompute.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 
 #include <glm/vec3.hpp>
 
+#include <string>
 #include <vector>
 
 namespace prt {
@@ -26,6 +28,24 @@ struct CompressionErrorOptions {
 // eyes for a glossy transfer.
 double compression_error(const Transfer& t, const CompressedTransfer& c, const Mesh& mesh,
                          const CompressionErrorOptions& options);
+
+// The smallest compression (in bytes: both signals' ClusteredSignal::bytes)
+// among a grid of K x N (K in 1, 4, 16, 64, 128, 256; N in 1, 2, 4, 8, 12,
+// 16, 24; capped at the rows and each signal's dimension) whose relit error
+// is at most `target`: candidates are tried in increasing size, and the first
+// that meets the target is the answer. `explanation` says what was chosen and
+// what the next smaller candidate measured. Throws prt::Error when none does
+// (naming the best error reached) or for a target outside (0, 1).
+struct CompressionChoice {
+  CompressOptions options;
+  CompressedTransfer compressed;
+  double error = 0;
+  std::size_t bytes = 0;
+  int tried = 0;
+  std::string explanation;
+};
+CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
+                                     double target, int weight_bits = 16);
 
 // `count` eye points on a horizontal ring around the mesh's bounding-box
 // centre at the distance of prt render's default camera (a 40 degree view
