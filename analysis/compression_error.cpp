@@ -61,17 +61,11 @@ double compression_error(const Transfer& t, const CompressedTransfer& c, const M
 
 namespace {
 
-// ClusteredSignal::bytes of a fit before it is made.
-std::size_t planned_bytes(std::size_t rows, std::size_t dim, int K, int N, int bits) {
-  if (rows == 0) return 0;
-  const std::size_t k = std::min<std::size_t>(std::size_t(K), rows), n = std::min<std::size_t>(std::size_t(N), dim);
-  return rows * (4 + std::size_t(bits / 8) * n) + k * 4 * (n + 1) * dim + (bits == 16 ? k * n * 4 : 0);
-}
 
 }  // namespace
 
 CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
-                                     double target, int weight_bits) {
+                                     double target, int weight_bits, const Progress& progress) {
   if (!(target > 0 && target < 1)) throw Error(fmt::format("--target-error must be in (0, 1), got {:g}", target));
   const std::size_t rows = t.stored_vertices();
   struct Candidate {
@@ -82,8 +76,9 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
   for (int K : {1, 4, 16, 64, 128, 256})
     for (int N : {1, 2, 4, 8, 12, 16, 24}) {
       if (std::size_t(K) > std::max<std::size_t>(rows, 1)) continue;
-      const std::size_t b = planned_bytes(rows, t.stride(), K, N, weight_bits) +
-                            (t.glossy ? planned_bytes(rows, t.glossy_stride(), K, N, weight_bits) : 0);
+      const std::size_t b =
+          ClusteredSignal::planned_bytes(rows, t.stride(), K, N, weight_bits) +
+          (t.glossy ? ClusteredSignal::planned_bytes(rows, t.glossy_stride(), K, N, weight_bits) : 0);
       grid.push_back({K, N, b});
     }
   std::stable_sort(grid.begin(), grid.end(), [](const Candidate& a, const Candidate& b) { return a.bytes < b.bytes; });
@@ -98,6 +93,8 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
     CompressedTransfer ct = compress_transfer(t, o);
     const double e = compression_error(t, ct, mesh, errors);
     ++best.tried;
+    if (progress && !progress(std::size_t(best.tried), grid.size(), "choosing clusters x vectors"))
+      throw Error("cancelled");
     best_error = std::min(best_error, e);
     if (e <= target) {
       best.options = o;

@@ -295,6 +295,8 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
     double total = 0;
     for (double e : point_error) total += e;
     m.round_error.push_back(total);
+    if (o.progress && !o.progress(std::size_t(m.rounds), std::size_t(o.iterations), "clustered PCA"))
+      throw Error("cancelled");
     if (moved == 0) break;
   }
   // The last assignment may have moved points: refit so that every cluster's
@@ -306,7 +308,8 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
 
 namespace {
 
-ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, const CompressOptions& o) {
+ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, const CompressOptions& o,
+                              const char* phase) {
   ClusteredSignal s;
   s.dim = dim;
   const std::size_t count = dim ? rows.size() / dim : 0;
@@ -316,6 +319,8 @@ ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, c
   c.vectors = int(std::min<std::size_t>(std::size_t(o.vectors), dim));
   c.iterations = o.iterations;
   c.seed = o.seed;
+  if (o.progress)
+    c.progress = [&](std::size_t done, std::size_t total, const char*) { return o.progress(done, total, phase); };
   const Cpca m = fit_cpca(rows, dim, c);
   s.clusters = m.clusters;
   s.vectors = m.vectors;
@@ -337,7 +342,7 @@ ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, c
       for (std::size_t j = 0; j < N; ++j) {
         const float sc = s.weight_scales[s.cluster[r] * N + j];
         float& w = s.weights[r * N + j];
-        w = sc > 0 ? float(std::lround(w / sc)) * sc : 0.0f;
+        w = quantised_weight(w, sc);
       }
   }
   return s;
@@ -352,8 +357,8 @@ CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& o
   if (o.weight_bits != 32 && o.weight_bits != 16)
     throw Error(fmt::format("--weights must be 32 (float) or 16 bits, got {}", o.weight_bits));
   CompressedTransfer c;
-  c.coeffs = compress_rows(t.coeffs, t.stride(), o);
-  if (t.glossy) c.glossy = compress_rows(t.glossy_matrices, t.glossy_stride(), o);
+  c.coeffs = compress_rows(t.coeffs, t.stride(), o, "coefficients");
+  if (t.glossy) c.glossy = compress_rows(t.glossy_matrices, t.glossy_stride(), o, "glossy matrices");
   c.transfer = t;
   c.transfer.coeffs.clear();
   c.transfer.direct.clear();

@@ -6,18 +6,28 @@
 #include <prt/glossy.h>
 #include <prt/sh.h>
 
+#include "transfer_rules.h"
+
 #include <fmt/format.h>
 
 #include <glm/geometric.hpp>
 
 #include <tbb/parallel_for.h>
 
+#include <cmath>
+
 namespace prt {
 
-std::size_t ClusteredSignal::bytes() const {
-  const std::size_t N = std::size_t(vectors), K = std::size_t(clusters);
-  return rows() * (4 + std::size_t(weight_bits / 8) * N) + K * 4 * (N + 1) * dim + (weight_bits == 16 ? K * N * 4 : 0);
+std::size_t ClusteredSignal::planned_bytes(std::size_t rows, std::size_t dim, int clusters, int vectors,
+                                           int weight_bits) {
+  if (rows == 0) return 0;
+  const std::size_t K = std::min<std::size_t>(std::size_t(clusters), rows);
+  const std::size_t N = std::min<std::size_t>(std::size_t(vectors), dim);
+  return rows * (std::size_t(index_bits_for(int(K)) / 8) + std::size_t(weight_bits / 8) * N) + K * 4 * (N + 1) * dim +
+         (weight_bits == 16 ? K * N * 4 : 0);
 }
+
+std::size_t ClusteredSignal::bytes() const { return planned_bytes(rows(), dim, clusters, vectors, weight_bits); }
 
 void ClusteredSignal::reconstruct(std::size_t r, float* out) const {
   PRT_CHECK_OP(r, <, rows());
@@ -33,21 +43,59 @@ void ClusteredSignal::reconstruct(std::size_t r, float* out) const {
 
 namespace {
 
-void check_signal(const ClusteredSignal& s, std::size_t rows, std::size_t dim, const char* what) {
-  if (s.rows() != rows || s.dim != dim || s.means.size() != std::size_t(s.clusters) * dim ||
-      s.bases.size() != std::size_t(s.clusters) * s.vectors * dim || s.weights.size() != rows * std::size_t(s.vectors))
-    throw Error(fmt::format("compressed transfer: the {} do not match the transfer ({} rows of {})", what, rows, dim));
-  for (std::uint32_t k : s.cluster)
-    if (k >= std::uint32_t(s.clusters)) throw Error(fmt::format("compressed transfer: the {} name cluster {}", what, k));
-  if (s.weight_bits != 32 && !(s.weight_bits == 16 && s.weight_scales.size() == std::size_t(s.clusters) * s.vectors))
-    throw Error(fmt::format("compressed transfer: the {} have {}-bit weights with {} scales", what, s.weight_bits,
-                            s.weight_scales.size()));
+std::string signal_problem(const ClusteredSignal& s, std::size_t rows, std::size_t dim, const char* what) {
+  if (s.dim != dim)
+    return fmt::format("the compressed {} have {} values per row; the transfer's rows have {}", what, s.dim, dim);
+  if (s.rows() != rows)
+    return fmt::format("the compressed {} have {} rows; the transfer stores {} vertices", what, s.rows(), rows);
+  if (rows == 0) {
+    if (s.clusters != 0 || s.vectors != 0 || !s.means.empty() || !s.bases.empty() || !s.weights.empty())
+      return fmt::format("the compressed {} have clusters but no rows", what);
+    return {};
+  }
+  if (s.clusters < 1 || s.clusters > (1 << 24))
+    return fmt::format("the compressed {} have {} clusters; expected 1 to 2^24", what, s.clusters);
+  if (s.vectors < 0 || std::size_t(s.vectors) > dim)
+    return fmt::format("the compressed {} have {} principal vectors; expected 0 to {} (the row length)", what,
+                       s.vectors, dim);
+  const std::size_t K = std::size_t(s.clusters), N = std::size_t(s.vectors);
+  if (s.means.size() != K * dim || s.bases.size() != K * N * dim || s.weights.size() != rows * N)
+    return fmt::format("the compressed {} have {} means, {} basis values and {} weights; expected {}, {} and {}", what,
+                       s.means.size(), s.bases.size(), s.weights.size(), K * dim, K * N * dim, rows * N);
+  if (s.weight_bits != 32 && s.weight_bits != 16)
+    return fmt::format("the compressed {} have {}-bit weights; expected 32 or 16", what, s.weight_bits);
+  if (s.weight_scales.size() != (s.weight_bits == 16 ? K * N : 0))
+    return fmt::format("the compressed {} have {} weight scales; {}-bit weights take {}", what, s.weight_scales.size(),
+                       s.weight_bits, s.weight_bits == 16 ? K * N : 0);
+  for (std::size_t r = 0; r < rows; ++r)
+    if (s.cluster[r] >= K)
+      return fmt::format("row {} of the compressed {} is in cluster {}; there are {}", r, what, s.cluster[r], K);
+  const auto finite = [&](const std::vector<float>& a, const char* part) -> std::string {
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!std::isfinite(a[i]))
+        return fmt::format("the compressed {} have a non-finite {} ({:g} at index {})", what, part, double(a[i]), i);
+    return {};
+  };
+  for (const auto& [a, part] : {std::pair{&s.means, "mean"}, std::pair{&s.bases, "basis value"},
+                                std::pair{&s.weights, "weight"}, std::pair{&s.weight_scales, "weight scale"}})
+    if (auto p = finite(*a, part); !p.empty()) return p;
+  if (s.weight_bits == 16) {
+    for (float sc : s.weight_scales)
+      if (!(sc >= 0.0f)) return fmt::format("the compressed {} have a negative weight scale ({:g})", what, double(sc));
+    for (std::size_t r = 0; r < rows; ++r)
+      for (std::size_t j = 0; j < N; ++j) {
+        const float sc = s.weight_scales[s.cluster[r] * N + j], w = s.weights[r * N + j];
+        if (quantised_weight(w, sc) != w)
+          return fmt::format("row {} of the compressed {} has weight {} = {:g}, not a multiple of its scale {:g} within "
+                             "32767 steps (16-bit weights)",
+                             r, what, j, double(w), double(sc));
+      }
+  }
+  return {};
 }
 
 void check(const CompressedTransfer& c) {
-  const Transfer& t = c.transfer;
-  check_signal(c.coeffs, t.stored_vertices(), t.stride(), "coefficients");
-  if (t.glossy) check_signal(c.glossy, t.stored_vertices(), t.glossy_stride(), "glossy matrices");
+  if (auto p = compressed_transfer_problem(c); !p.empty()) throw Error("compressed transfer: " + p);
 }
 
 // The transfer with every stored row zero: what relight() needs for its
@@ -97,6 +145,16 @@ glm::dvec3 row_radiance(const ClusteredSignal& s, const std::vector<glm::dvec3>&
 }
 
 }  // namespace
+
+std::string compressed_transfer_problem(const CompressedTransfer& c) {
+  const Transfer& t = c.transfer;
+  if (auto p = detail::transfer_problem_without_rows(t); !p.empty()) return p;
+  if (auto p = signal_problem(c.coeffs, t.stored_vertices(), t.stride(), "coefficients"); !p.empty()) return p;
+  if (t.glossy) return signal_problem(c.glossy, t.stored_vertices(), t.glossy_stride(), "glossy matrices");
+  if (c.glossy.rows() != 0 || c.glossy.clusters != 0)
+    return "compressed glossy matrices in a transfer without the glossy flag";
+  return {};
+}
 
 Transfer decompress(const CompressedTransfer& c) {
   check(c);

@@ -172,11 +172,19 @@ std::string finite_problem(const Transfer& t) {
 
 }  // namespace
 
-std::string transfer_problem(const Transfer& t) {
+namespace {
+
+// transfer_problem's checks; with rows_elsewhere the stored rows (coefficients,
+// direct part, glossy matrices) must be empty: they are held compressed.
+std::string problem(const Transfer& t, bool rows_elsewhere) {
   using detail::TransferArray;
   if (auto p = slots_problem(t); !p.empty()) return p;
   const detail::TransferHeader h = detail::header_of(t);
   if (auto p = detail::header_problem(h); !p.empty()) return p;
+  if (rows_elsewhere) {
+    if (!t.coeffs.empty() || !t.direct.empty() || !t.glossy_matrices.empty())
+      return "a compressed transfer holds its coefficients, direct part and glossy matrices in its clusters only";
+  }
   // The coefficients are always there (with no stored vertex, empty); the
   // other arrays may be absent.
   const std::pair<TransferArray, std::size_t> arrays[] = {
@@ -187,15 +195,23 @@ std::string transfer_problem(const Transfer& t) {
       {TransferArray::BounceEnergy, t.bounce_energy.size()},
   };
   for (const auto& [a, count] : arrays)
-    if (a == TransferArray::Coeffs || count > 0)
+    if ((a == TransferArray::Coeffs && !rows_elsewhere) || count > 0)
       if (auto p = detail::array_problem(a, count, h); !p.empty()) return p;
-  if (t.glossy) {
+  if (t.glossy && !rows_elsewhere) {
     if (auto p = detail::array_problem(TransferArray::Glossy, t.glossy_matrices.size(), h); !p.empty()) return p;
   } else if (!t.glossy_matrices.empty()) {
     return "glossy matrices without the glossy flag";
   }
   return finite_problem(t);
 }
+
+}  // namespace
+
+std::string transfer_problem(const Transfer& t) { return problem(t, false); }
+
+namespace detail {
+std::string transfer_problem_without_rows(const Transfer& t) { return problem(t, true); }
+}  // namespace detail
 
 std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors) {
   static_assert(sizeof(glm::vec3) == 12);

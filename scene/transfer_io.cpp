@@ -73,15 +73,19 @@ constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
 constexpr std::uint32_t kBasisSH = 0;
 constexpr std::uint32_t kBasisWavelet = 1;
 constexpr std::uint32_t kFlagVertexColors = 1u << 0;
-constexpr std::uint32_t kFlagGlossy = 1u << 1;  // version 3: glossy transfer matrices (section 7)
+constexpr std::uint32_t kFlagGlossy = 1u << 1;      // version 3: glossy transfer matrices (section 7)
+constexpr std::uint32_t kFlagCompressed = 1u << 2;  // version 4: rows compressed by clustered PCA (sections 8, 9)
 constexpr std::uint32_t kKnownFlagsV2 = kFlagVertexColors;
-constexpr std::uint32_t kKnownFlags = kFlagVertexColors | kFlagGlossy;
+constexpr std::uint32_t kKnownFlagsV3 = kFlagVertexColors | kFlagGlossy;
+constexpr std::uint32_t kKnownFlags = kKnownFlagsV3 | kFlagCompressed;
 
 constexpr std::uint32_t kTypeF32 = 1;
 constexpr std::uint32_t kTypeF64 = 2;
 constexpr std::uint32_t kTypeU64 = 3;  // wavelet files only
 constexpr std::uint32_t kTypeU32 = 4;
 constexpr std::uint32_t kTypeI16 = 5;
+constexpr std::uint32_t kTypeU8 = 6;   // version 4: the compressed signals (byte records)
+constexpr std::uint32_t kTypeU16 = 7;  // inside a compressed signal only: cluster indices
 
 // Kinds 1 to 5 are the arrays of a Transfer (detail::TransferArray), 6 the
 // file's form of its slots.
@@ -94,6 +98,8 @@ enum Kind : std::uint32_t {
   kBounceEnergy = std::uint32_t(TransferArray::BounceEnergy),
   kAnalyticMask = 6,  // version 2
   kGlossy = std::uint32_t(TransferArray::Glossy),  // version 3
+  kCompressedCoeffs = 8,                            // version 4
+  kCompressedGlossy = 9,                            // version 4
 };
 
 struct KindInfo {
@@ -103,7 +109,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 7> kKinds = {{
+constexpr std::array<KindInfo, 9> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -111,11 +117,14 @@ constexpr std::array<KindInfo, 7> kKinds = {{
     {kBounceEnergy, detail::array_name(TransferArray::BounceEnergy), kTypeF64, false},
     {kAnalyticMask, "analytic vertices", kTypeU32, false},
     {kGlossy, detail::array_name(TransferArray::Glossy), kTypeF32, true},
+    {kCompressedCoeffs, "compressed coefficients", kTypeU8, true},
+    {kCompressedGlossy, "compressed glossy matrices", kTypeU8, true},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
 constexpr std::size_t kKindsV2 = 6;
 constexpr std::size_t kKindsV3 = 7;
+constexpr std::size_t kKindsV4 = 9;
 
 // Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
 constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
@@ -130,12 +139,15 @@ std::uint32_t type_bytes(std::uint32_t type) {
   switch (type) {
     case kTypeF64:
     case kTypeU64: return 8;
-    case kTypeI16: return 2;
+    case kTypeI16:
+    case kTypeU16: return 2;
+    case kTypeU8: return 1;
     default: return 4;
   }
 }
 constexpr EnumName<std::uint32_t> kTypeNames[] = {
-    {kTypeF32, "f32"}, {kTypeF64, "f64"}, {kTypeU64, "u64"}, {kTypeU32, "u32"}, {kTypeI16, "i16"},
+    {kTypeF32, "f32"}, {kTypeF64, "f64"}, {kTypeU64, "u64"}, {kTypeU32, "u32"},
+    {kTypeI16, "i16"}, {kTypeU8, "u8"},  {kTypeU16, "u16"},
 };
 // TransferSection::type is a C string: the names are literals.
 const char* type_name(std::uint32_t type) { return enum_name(kTypeNames, type).data(); }
@@ -170,7 +182,19 @@ using detail::TransferHeader;
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6.
-std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v) {
+std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v, bool compressed) {
+  if (kind == kCompressedCoeffs || kind == kCompressedGlossy) {
+    const char* name = kind_info(kind)->name;
+    if (!compressed)
+      return fmt::format("has a '{}' section, but the header's flags say the file is not compressed", name);
+    if (kind == kCompressedGlossy && !v.glossy)
+      return fmt::format("has a '{}' section, but the header's flags say it has no glossy matrices", name);
+    return {};  // the record is checked as it is read (read_signal)
+  }
+  if (compressed && (kind == kCoeffs || kind == kDirect || kind == kGlossy))
+    return fmt::format("has a '{}' section, but the header's flags say its rows are compressed (sections 8 and 9 "
+                       "hold them)",
+                       kind_info(kind)->name);
   if (kind == kGlossy && !v.glossy)
     return fmt::format("has a '{}' section, but the header's flags say it has none", kind_info(kind)->name);
   if (kind != kAnalyticMask) return detail::array_problem(TransferArray(kind), count, v);
@@ -214,6 +238,77 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
 // Whether `t` stores section `kind`: the coefficients always, the others when non-empty.
 bool has_section(const Transfer& t, std::uint32_t kind) {
   return kind == kCoeffs || (kind == kGlossy && t.glossy) || section_array(t, kind).second > 0;
+}
+
+// ---- compressed signals (sections 8 and 9; docs/FORMAT.md "Compressed transfer") ----
+
+// The record's header: u32 clusters, u32 vectors, u32 dim, u32 weight type,
+// u32 index type, u32 zero, u64 rows; then its arrays, each zero-padded to 8
+// bytes: f32 means, f32 bases, f32 weight scales (16-bit weights only),
+// cluster indices (u8, u16 or u32), weights (f32 or i16).
+constexpr std::uint64_t kSignalHeaderSize = 32;
+
+std::uint32_t index_type(int bits) { return bits == 8 ? kTypeU8 : bits == 16 ? kTypeU16 : kTypeU32; }
+std::uint32_t weight_type(int bits) { return bits == 16 ? kTypeI16 : kTypeF32; }
+
+// The byte sizes of a record's arrays, in order, and the record's size.
+struct SignalLayout {
+  std::uint64_t means, bases, scales, index, weights;
+  std::uint64_t total() const {
+    std::uint64_t t = kSignalHeaderSize;
+    for (std::uint64_t b : {means, bases, scales, index, weights}) t = sat_add(t, sat_add(b, padding(b)));
+    return t;
+  }
+};
+// With K <= 2^24, N <= dim <= 3 x 144^2 and rows <= 2^32 no product overflows.
+SignalLayout signal_layout(std::uint64_t K, std::uint64_t N, std::uint64_t dim, std::uint64_t rows,
+                           std::uint32_t wtype, std::uint32_t itype) {
+  return {4 * K * dim, 4 * K * N * dim, wtype == kTypeI16 ? 4 * K * N : 0, rows * type_bytes(itype),
+          rows * N * type_bytes(wtype)};
+}
+
+std::uint64_t signal_record_bytes(const ClusteredSignal& g) {
+  return signal_layout(std::uint64_t(g.clusters), std::uint64_t(g.vectors), g.dim, g.rows(),
+                       weight_type(g.weight_bits), index_type(g.index_bits()))
+      .total();
+}
+
+// The record of `g` (consistent: compressed_transfer_problem passed).
+std::vector<unsigned char> encode_signal(const ClusteredSignal& g) {
+  const std::uint32_t wtype = weight_type(g.weight_bits), itype = index_type(g.index_bits());
+  const std::size_t N = std::size_t(g.vectors);
+  std::vector<unsigned char> out(std::size_t(signal_record_bytes(g)), 0);
+  unsigned char* p = out.data();
+  store<std::uint32_t>(p + 0, std::uint32_t(g.clusters));
+  store<std::uint32_t>(p + 4, std::uint32_t(g.vectors));
+  store<std::uint32_t>(p + 8, std::uint32_t(g.dim));
+  store<std::uint32_t>(p + 12, wtype);
+  store<std::uint32_t>(p + 16, itype);
+  store<std::uint64_t>(p + 24, g.rows());
+  std::uint64_t at = kSignalHeaderSize;
+  const auto put = [&](const void* src, std::uint64_t bytes) {
+    if (bytes) std::memcpy(p + at, src, bytes);
+    at += bytes + padding(bytes);
+  };
+  put(g.means.data(), 4 * g.means.size());
+  put(g.bases.data(), 4 * g.bases.size());
+  put(g.weight_scales.data(), 4 * g.weight_scales.size());
+  for (std::size_t r = 0; r < g.rows(); ++r) {
+    const std::uint32_t k = g.cluster[r];
+    if (itype == kTypeU8) p[at + r] = std::uint8_t(k);
+    else if (itype == kTypeU16) store<std::uint16_t>(p + at + 2 * r, std::uint16_t(k));
+    else store<std::uint32_t>(p + at + 4 * r, k);
+  }
+  at += g.rows() * type_bytes(itype) + padding(g.rows() * type_bytes(itype));
+  if (wtype == kTypeF32) {
+    put(g.weights.data(), 4 * g.weights.size());
+  } else {
+    for (std::size_t r = 0; r < g.rows(); ++r)
+      for (std::size_t j = 0; j < N; ++j)
+        store<std::int16_t>(p + at + 2 * (r * N + j),
+                            weight_code(g.weights[r * N + j], g.weight_scales[g.cluster[r] * N + j]));
+  }
+  return out;
 }
 
 // ---- writing ------------------------------------------------------------------------
@@ -324,15 +419,14 @@ void write_file(const std::string& path, const unsigned char (&header)[kHeaderSi
 
 std::uint64_t transfer_file_size(const Transfer& t) { return file_size_of(transfer_sections(t)); }
 
-void write_transfer(const std::string& path, const Transfer& t) {
-  if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
-  const std::vector<TransferSection> sections = transfer_sections(t);
+namespace {
 
-  unsigned char header[kHeaderSize] = {};  // reserved bytes stay zero
+// The 128-byte header of an SH transfer file.
+void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::uint32_t version, std::uint32_t flags,
+                 std::size_t section_count) {
+  std::memset(header, 0, kHeaderSize);  // reserved bytes stay zero
   std::memcpy(header, kMagic.data(), kMagic.size());
-  // Version 3 only where it is needed: transfers without glossy matrices stay
-  // readable by a prt that reads version 2.
-  store<std::uint32_t>(header + kOffVersion, transfer_format_version(t.glossy));
+  store<std::uint32_t>(header + kOffVersion, version);
   store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
   store<std::uint32_t>(header + kOffBasis, kBasisSH);
   store<std::uint32_t>(header + kOffBands, std::uint32_t(t.bands));
@@ -341,19 +435,66 @@ void write_transfer(const std::string& path, const Transfer& t) {
   store<std::uint32_t>(header + kOffBounces, std::uint32_t(t.bounces));
   store<std::uint32_t>(header + kOffSamples, std::uint32_t(t.samples));
   for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
-  store<std::uint32_t>(header + kOffFlags, (t.vertex_colors ? kFlagVertexColors : 0u) | (t.glossy ? kFlagGlossy : 0u));
+  store<std::uint32_t>(header + kOffFlags,
+                       flags | (t.vertex_colors ? kFlagVertexColors : 0u) | (t.glossy ? kFlagGlossy : 0u));
   store<std::uint64_t>(header + kOffSeed, t.seed);
   store<std::uint64_t>(header + kOffVertices, t.vertices);
   store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
-  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
+  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(section_count));
   store<std::uint64_t>(header + kOffStored, stored_of(t));
   store<std::uint64_t>(header + kOffShadingHash, t.shading_hash);
+}
 
+}  // namespace
+
+void write_transfer(const std::string& path, const Transfer& t) {
+  if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
+  const std::vector<TransferSection> sections = transfer_sections(t);
+  unsigned char header[kHeaderSize];
+  // Version 3 only where it is needed: transfers without glossy matrices stay
+  // readable by a prt that reads version 2.
+  fill_header(header, t, transfer_format_version(t.glossy), 0u, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
                    s.kind == kAnalyticMask ? mask.data() : section_array(t, s.kind).first});
+  write_file(path, header, raw);
+}
+
+std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
+  std::vector<TransferSection> s;
+  for (const auto& sec : transfer_sections(c.transfer))
+    if (sec.kind != kCoeffs && sec.kind != kGlossy) s.push_back(sec);
+  const auto add = [&](std::uint32_t kind, const ClusteredSignal& g) {
+    const std::uint64_t bytes = signal_record_bytes(g);
+    s.push_back({kind, kind_info(kind)->name, 1, bytes, bytes, true, type_name(kTypeU8)});
+  };
+  add(kCompressedCoeffs, c.coeffs);
+  if (c.transfer.glossy) add(kCompressedGlossy, c.glossy);
+  return s;
+}
+
+std::uint64_t transfer_file_size(const CompressedTransfer& c) { return file_size_of(transfer_sections(c)); }
+
+void write_compressed_transfer(const std::string& path, const CompressedTransfer& c) {
+  if (auto p = compressed_transfer_problem(c); !p.empty())
+    throw Error(path + ": cannot write this compressed transfer: " + p);
+  const Transfer& t = c.transfer;
+  const std::vector<TransferSection> sections = transfer_sections(c);
+  unsigned char header[kHeaderSize];
+  fill_header(header, t, kCompressedFormatVersion, kFlagCompressed, sections.size());
+  const std::vector<std::uint32_t> mask = analytic_mask(t);
+  const std::vector<unsigned char> coeffs = encode_signal(c.coeffs);
+  const std::vector<unsigned char> glossy = t.glossy ? encode_signal(c.glossy) : std::vector<unsigned char>{};
+  std::vector<RawSection> raw;
+  for (const auto& s : sections) {
+    const void* data = s.kind == kAnalyticMask       ? mask.data()
+                       : s.kind == kCompressedCoeffs ? coeffs.data()
+                       : s.kind == kCompressedGlossy ? glossy.data()
+                                                     : section_array(t, s.kind).first;
+    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
+  }
   write_file(path, header, raw);
 }
 
@@ -367,10 +508,13 @@ class Reader {
 
   Error fail(const std::string& what) const { return Error(path_ + ": " + what); }
 
-  Transfer read();
+  // An SH transfer; a compressed one into *compressed (its uncompressed part
+  // returned), which must then be given (and only then).
+  Transfer read(CompressedTransfer* compressed = nullptr);
   WaveletTransfer read_wavelet();
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }
+  std::uint32_t flags() const { return load<std::uint32_t>(h_ + kOffFlags); }
 
  private:
   void open_file();
@@ -388,6 +532,8 @@ class Reader {
   std::uint64_t checksum(std::uint64_t bytes);
   template <typename T>
   void read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count);
+  ClusteredSignal read_signal(std::uint64_t offset, std::uint64_t bytes, const char* name, std::uint64_t rows,
+                              std::uint64_t dim);
 
   std::string path_;
   std::ifstream f_;
@@ -451,6 +597,79 @@ void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64
   read_at(offset, dst.data(), count * sizeof(T));
 }
 
+ClusteredSignal Reader::read_signal(std::uint64_t offset, std::uint64_t bytes, const char* name, std::uint64_t rows,
+                                    std::uint64_t dim) {
+  if (bytes < kSignalHeaderSize)
+    throw fail(fmt::format("bad section '{}': {} bytes; its record header alone takes {}", name, bytes,
+                           kSignalHeaderSize));
+  unsigned char h[kSignalHeaderSize];
+  read_at(offset, h, sizeof h);
+  const std::uint32_t K = load<std::uint32_t>(h + 0), N = load<std::uint32_t>(h + 4), d = load<std::uint32_t>(h + 8);
+  const std::uint32_t wtype = load<std::uint32_t>(h + 12), itype = load<std::uint32_t>(h + 16);
+  const std::uint64_t n = load<std::uint64_t>(h + 24);
+  const auto bad = [&](const std::string& what) { return fail(fmt::format("bad section '{}': {}", name, what)); };
+  if (d != dim) throw bad(fmt::format("rows of {} values; the header's bands, channels and mode give {}", d, dim));
+  if (n != rows) throw bad(fmt::format("{} rows; the header says {} stored vertices", n, rows));
+  if (rows == 0 ? K != 0 || N != 0 : K < 1 || K > (1u << 24))
+    throw bad(fmt::format("{} clusters for {} rows; expected {}", K, rows, rows == 0 ? "0 (and 0 vectors)" : "1 to 2^24"));
+  if (N > dim) throw bad(fmt::format("{} principal vectors; expected at most {} (the row length)", N, dim));
+  if (wtype != kTypeF32 && wtype != kTypeI16)
+    throw bad(fmt::format("weight type {}; expected {} (f32) or {} (i16)", wtype, kTypeF32, kTypeI16));
+  ClusteredSignal g;
+  g.clusters = int(K);
+  g.vectors = int(N);
+  g.dim = std::size_t(d);
+  g.weight_bits = wtype == kTypeI16 ? 16 : 32;
+  const std::uint32_t narrowest = index_type(g.index_bits());
+  if (itype != narrowest)
+    throw bad(fmt::format("cluster index type {}; {} clusters take {} ({})", itype, K, narrowest, type_name(narrowest)));
+  if (load<std::uint32_t>(h + 20) != 0) throw bad("reserved bytes 20-23 of its record are not zero");
+  const SignalLayout L = signal_layout(K, N, d, n, wtype, itype);
+  if (L.total() != bytes)
+    throw bad(fmt::format("{} bytes; a record of {} clusters x {} vectors of {} values and {} rows takes {}", bytes, K, N,
+                          d, n, L.total()));
+  std::uint64_t at = offset + kSignalHeaderSize;
+  const auto next = [&](std::uint64_t size) {
+    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
+    const std::uint64_t pad = padding(size);
+    read_at(at + size, got, pad);
+    if (std::memcmp(got, zeros, pad) != 0) throw bad("the padding inside its record is not zero");
+    at += size + pad;
+  };
+  read_section(at, g.means, L.means / 4);
+  next(L.means);
+  read_section(at, g.bases, L.bases / 4);
+  next(L.bases);
+  read_section(at, g.weight_scales, L.scales / 4);
+  next(L.scales);
+  g.cluster.resize(std::size_t(n));
+  if (itype == kTypeU32) {
+    read_section(at, g.cluster, n);
+  } else {
+    std::vector<unsigned char> raw;
+    read_section(at, raw, L.index);
+    for (std::size_t r = 0; r < n; ++r)
+      g.cluster[r] = itype == kTypeU8 ? raw[r] : load<std::uint16_t>(raw.data() + 2 * r);
+  }
+  next(L.index);
+  if (wtype == kTypeF32) {
+    read_section(at, g.weights, L.weights / 4);
+  } else {
+    std::vector<std::int16_t> q;
+    read_section(at, q, L.weights / 2);
+    g.weights.resize(q.size());
+    for (std::size_t r = 0; r < n; ++r)
+      for (std::size_t j = 0; j < N; ++j) {
+        const std::uint32_t k = g.cluster[r];
+        // An index out of range is reported by compressed_transfer_problem.
+        const float sc = k < K ? g.weight_scales[std::size_t(k) * N + j] : 0.0f;
+        g.weights[r * N + j] = float(q[r * N + j]) * sc;
+      }
+  }
+  next(L.weights);
+  return g;
+}
+
 void Reader::open_file() {
   size_ = check_input_file(path_, "a transfer file");
   if (size_ == 0) throw fail("file is empty (not a prt transfer file)");
@@ -503,7 +722,7 @@ std::uint32_t Reader::read_basis() {
   return basis;
 }
 
-Transfer Reader::read() {
+Transfer Reader::read(CompressedTransfer* compressed_out) {
   open_file();
   read_head();
   verify();
@@ -528,22 +747,29 @@ Transfer Reader::read() {
                          // Version 1 stores every vertex.
                          version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
   const bool v1 = version_ == 1;
-  const std::size_t known_kinds = v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : kKindsV3;
+  const std::size_t known_kinds = v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : version_ == 3 ? kKindsV3 : kKindsV4;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
-  const std::uint32_t known_flags = version_ >= 3 ? kKnownFlags : kKnownFlagsV2;
+  const std::uint32_t known_flags = version_ >= 4 ? kKnownFlags : version_ == 3 ? kKnownFlagsV3 : kKnownFlagsV2;
   if (flags & ~known_flags)
     throw fail(fmt::format("bad header: unknown flags 0x{:x} in a version {} file", flags & ~known_flags, version_));
   v.glossy = (flags & kFlagGlossy) != 0;
+  const bool compressed = (flags & kFlagCompressed) != 0;
+  if (compressed && !compressed_out)
+    throw fail("holds a transfer compressed by clustered PCA (prt compress): prt relight, render, view and info take "
+               "it; the library reads it with prt::read_compressed_transfer");
+  if (!compressed && compressed_out)
+    throw fail("holds an uncompressed transfer (prt::read_transfer reads it; prt compress compresses it)");
   if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
   for (std::uint64_t i = kOffReserved; i < kHeaderSize; ++i)
     if (h[i] != 0 && (v1 || i < kOffStored || i >= kOffReservedV2))
       throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
   // The coefficients alone take 4 x channels x bands^2 bytes per stored
   // vertex, the analytic-vertex mask 1 bit per vertex.
+  // A compressed row takes at least a byte (its cluster index).
   const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands * v.bands);
-  if (v.stored > size_ / (4 * stride))
+  if (v.stored > size_ / (compressed ? 1 : 4 * stride))
     throw fail(fmt::format("bad header: {}{} vertices cannot fit in a file of {} bytes (at {} bytes per vertex)", v.stored,
-                           v1 ? "" : " stored", size_, 4 * stride));
+                           v1 ? "" : " stored", size_, compressed ? 1 : 4 * stride));
   if (v.stored < v.vertices && mask_words(v.vertices) > size_ / 4)
     throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their analytic-vertex mask alone "
                            "takes {})",
@@ -588,12 +814,14 @@ Transfer Reader::read() {
                              k ? fmt::format(" in a version {} file", version_) : std::string()));
     if (kind <= previous)
       throw fail("bad section table: " + where + " ('" + k->name + "') is out of order or repeated");
-    if (i == 0 && kind != kCoeffs) throw fail("bad section table: no 'coefficients' section");
+    // (A compressed section in an uncompressed file is named below.)
+    if (i == 0 && !compressed && kind != kCoeffs && kind != kCompressedCoeffs)
+      throw fail("bad section table: no 'coefficients' section");
     previous = kind;
     if (type != k->type)
       throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", k->name, type,
                              k->type, type_name(k->type)));
-    if (auto p = section_problem(kind, count, v); !p.empty()) throw fail("bad section table: " + p);
+    if (auto p = section_problem(kind, count, v, compressed); !p.empty()) throw fail("bad section table: " + p);
     // count is now at most bands^2 x channels x vertices: no overflow below.
     if (bytes != count * type_bytes(type))
       throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", k->name, count,
@@ -610,6 +838,18 @@ Transfer Reader::read() {
       case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
       case kAnalyticMask: read_section(data, mask, count); break;
       case kGlossy: read_section(data, t.glossy_matrices, count); break;
+      case kCompressedCoeffs:
+        compressed_out->coeffs = read_signal(data, bytes, k->name, v.stored, stride);
+        break;
+      case kCompressedGlossy: {
+        Transfer shape;  // glossy_stride() of the header's bands, channels and mode
+        shape.bands = int(v.bands);
+        shape.channels = int(v.channels);
+        shape.mode = TransferMode(v.mode);
+        shape.glossy = true;
+        compressed_out->glossy = read_signal(data, bytes, k->name, v.stored, shape.glossy_stride());
+        break;
+      }
     }
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
@@ -623,8 +863,14 @@ Transfer Reader::read() {
     throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
                            "are analytic",
                            v.vertices - v.stored, v.vertices));
-  if (v.glossy && previous < kGlossy)
+  if (compressed) {
+    if (previous < kCompressedCoeffs) throw fail("bad section table: no 'compressed coefficients' section");
+    if (v.glossy && previous < kCompressedGlossy)
+      throw fail("bad section table: no 'compressed glossy matrices' section, but the header's flags say the file has "
+                 "glossy matrices");
+  } else if (v.glossy && previous < kGlossy) {
     throw fail("bad section table: no 'glossy matrices' section, but the header's flags say the file has one");
+  }
 
   // 5. Values: the mask marks exactly the vertices the header says are
   // analytic, and nothing past the last vertex; then the validator (every
@@ -644,6 +890,11 @@ Transfer Reader::read() {
     for (std::size_t vtx = 0; vtx < t.vertices; ++vtx)
       if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) t.slots[vtx] = row++;
   }
+  if (compressed_out) {
+    compressed_out->transfer = std::move(t);
+    if (auto p = compressed_transfer_problem(*compressed_out); !p.empty()) throw fail(p);
+    return {};
+  }
   if (auto p = transfer_problem(t); !p.empty()) throw fail(p);
   return t;
 }
@@ -651,6 +902,12 @@ Transfer Reader::read() {
 }  // namespace
 
 Transfer read_transfer(const std::string& path) { return Reader(path).read(); }
+
+CompressedTransfer read_compressed_transfer(const std::string& path) {
+  CompressedTransfer c;
+  Reader(path).read(&c);
+  return c;
+}
 
 // ---- checking and describing ----------------------------------------------------------
 
@@ -689,11 +946,18 @@ void check_matches(const Transfer& t, const Mesh& mesh, const std::string& trans
                           analytic));
 }
 
-std::string describe_transfer(const Transfer& t) {
-  const auto line = [](const char* label, const std::string& value) {
-    return fmt::format("  {:<17} {}\n", label, value);
-  };
-  std::string s = fmt::format("prt transfer (format version {})\n", transfer_format_version(t.glossy));
+namespace {
+
+std::string describe_line(const char* label, const std::string& value) {
+  return fmt::format("  {:<17} {}\n", label, value);
+}
+
+// describe_transfer of `t` as stored in `sections`, `file_size` bytes,
+// `compression` lines before the sizes.
+std::string describe(const Transfer& t, std::uint32_t version, const std::vector<TransferSection>& sections,
+                     std::uint64_t file_size, const std::string& compression) {
+  const auto line = describe_line;
+  std::string s = fmt::format("prt transfer (format version {})\n", version);
   s += line("basis", "spherical harmonics");
   s += line("bands", fmt::format("{} ({} coefficients per channel)", t.bands, t.bands * t.bands));
   s += line("channels",
@@ -714,7 +978,9 @@ std::string describe_transfer(const Transfer& t) {
   s += line("vertices", fmt::format("{}", t.vertices));
   s += line("mesh hash", fmt::format("0x{:016x}", t.mesh_hash));
   bool first = true;
-  for (const auto& sec : transfer_sections(t)) {
+  std::uint64_t per_vertex = 0;
+  for (const auto& sec : sections) {
+    if (sec.per_vertex && t.vertices > 0) per_vertex += sec.bytes / t.vertices;
     std::string v = fmt::format("{:<18} {:>12} bytes", sec.name, sec.bytes);
     if (sec.per_vertex && t.vertices > 0)
       v += fmt::format(" ({} per vertex)", sec.bytes / t.vertices);
@@ -724,14 +990,13 @@ std::string describe_transfer(const Transfer& t) {
     first = false;
   }
   const std::size_t analytic = t.analytic_vertices();
-  s += line("analytic", fmt::format("{} of {} vertices ({:.1f}%; unoccluded: clamped cosine evaluated at run time), "
-                                    "{} bytes saved",
+  s += line("analytic", fmt::format("{} of {} vertices ({:.1f}%; unoccluded: clamped cosine evaluated at run time)",
                                     analytic, t.vertices,
-                                    t.vertices ? 100.0 * double(analytic) / double(t.vertices) : 0.0,
-                                    analytic_bytes_saved(t)));
-  s += line("bytes per vertex",
-            fmt::format("{}{}", transfer_bytes_per_vertex(t), analytic ? " (mean over all vertices)" : ""));
-  s += line("file size", fmt::format("{} bytes", transfer_file_size(t)));
+                                    t.vertices ? 100.0 * double(analytic) / double(t.vertices) : 0.0) +
+                            (compression.empty() ? fmt::format(", {} bytes saved", analytic_bytes_saved(t)) : ""));
+  s += compression;
+  s += line("bytes per vertex", fmt::format("{}{}", per_vertex, analytic ? " (mean over all vertices)" : ""));
+  s += line("file size", fmt::format("{} bytes", file_size));
   if (!t.ao.empty()) {
     double lo = t.ao[0], hi = t.ao[0], sum = 0;
     for (float a : t.ao) {
@@ -750,6 +1015,28 @@ std::string describe_transfer(const Transfer& t) {
     s += line("bounce energy", e);
   }
   return s;
+}
+
+// One signal's line: K x N, widths, bytes and the ratio to the rows it replaces.
+std::string describe_signal(const char* label, const ClusteredSignal& g) {
+  const std::uint64_t rows = 4 * std::uint64_t(g.rows()) * g.dim;
+  return describe_line(label, fmt::format("{} clusters x {} principal vectors of {} values, {}-bit weights, {}-bit "
+                                          "cluster index: {} bytes for {} rows ({:.1f}x fewer than {} bytes of float "
+                                          "rows)",
+                                          g.clusters, g.vectors, g.dim, g.weight_bits, g.index_bits(), g.bytes(),
+                                          g.rows(), g.bytes() ? double(rows) / double(g.bytes()) : 0.0, rows));
+}
+
+}  // namespace
+
+std::string describe_transfer(const Transfer& t) {
+  return describe(t, transfer_format_version(t.glossy), transfer_sections(t), transfer_file_size(t), "");
+}
+
+std::string describe_transfer(const CompressedTransfer& c) {
+  std::string comp = describe_signal("compressed", c.coeffs);
+  if (c.transfer.glossy) comp += describe_signal("compressed glossy", c.glossy);
+  return describe(c.transfer, kCompressedFormatVersion, transfer_sections(c), transfer_file_size(c), comp);
 }
 
 // ---- wavelet transfers (docs/FORMAT.md, "Wavelet transfer") ----------------------
@@ -810,6 +1097,12 @@ std::string_view basis_name(TransferBasis b) { return enum_name(kBasisNames, b);
 
 TransferBasis read_transfer_basis(const std::string& path) {
   return Reader(path).read_basis() == kBasisWavelet ? TransferBasis::Wavelet : TransferBasis::SH;
+}
+
+bool transfer_is_compressed(const std::string& path) {
+  Reader r(path);
+  if (r.read_basis() != kBasisSH) throw r.fail("holds a wavelet transfer, not spherical harmonics");
+  return r.version() >= 4 && (r.flags() & kFlagCompressed) != 0;
 }
 
 std::uint32_t read_transfer_version(const std::string& path) {

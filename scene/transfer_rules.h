@@ -46,6 +46,11 @@ constexpr const char* array_name(TransferArray a) { return enum_name(kTransferAr
 // are there exactly when h.glossy.
 std::string array_problem(TransferArray a, std::uint64_t count, const TransferHeader& h);
 
+// transfer_problem(t) for the part of a compressed transfer that is not
+// compressed (CompressedTransfer::transfer): everything but the stored rows,
+// which must be empty (coefficients, direct part, glossy matrices).
+std::string transfer_problem_without_rows(const Transfer& t);
+
 // What is wrong with the scalar values of a wavelet transfer, or "".
 std::string wavelet_header_problem(std::int64_t cube_res, double threshold, const glm::vec3& albedo,
                                    std::uint64_t vertices);

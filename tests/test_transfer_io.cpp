@@ -465,7 +465,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 3"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 4"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -752,6 +752,196 @@ TEST(TransferRead, GlossyMatricesInconsistentWithTheHeader) {
   put(b, kFlagsAt, std::uint32_t(2));
   reseal(b);
   expect_bytes_error(dir, b, {"no 'glossy matrices' section", "flags say the file has one"}, "flag without section");
+}
+
+// ---- compressed transfers (version 4, docs/FORMAT.md "Compressed transfer") ---------------
+
+void expect_same_signal(const prt::ClusteredSignal& a, const prt::ClusteredSignal& b) {
+  EXPECT_EQ(a.clusters, b.clusters);
+  EXPECT_EQ(a.vectors, b.vectors);
+  EXPECT_EQ(a.dim, b.dim);
+  EXPECT_EQ(a.weight_bits, b.weight_bits);
+  EXPECT_EQ(a.cluster, b.cluster);
+  EXPECT_TRUE(same_bits(a.means, b.means));
+  EXPECT_TRUE(same_bits(a.bases, b.bases));
+  EXPECT_TRUE(same_bits(a.weights, b.weights));
+  EXPECT_TRUE(same_bits(a.weight_scales, b.weight_scales));
+}
+
+prt::CompressedTransfer compressed(const Transfer& t, int clusters, int vectors, int bits) {
+  prt::CompressOptions o;
+  o.clusters = clusters;
+  o.vectors = vectors;
+  o.weight_bits = bits;
+  o.iterations = 4;
+  return prt::compress_transfer(t, o);
+}
+
+// A compressed file's bytes with its section offsets (as sample_file).
+Sample compressed_sample(const TempDir& dir, const prt::CompressedTransfer& c) {
+  const std::string path = dir.file("sample.prtt");
+  prt::write_compressed_transfer(path, c);
+  Sample s{read_file(path), {}};
+  std::size_t at = kHeader;
+  for (std::uint32_t i = 0; i < get<std::uint32_t>(s.bytes, kSectionCountAt); ++i) {
+    s.section_at.push_back(at);
+    const auto bytes = get<std::uint64_t>(s.bytes, at + 16);
+    at += kSectionHeader + bytes + (8 - bytes % 8) % 8;
+  }
+  return s;
+}
+
+// Expects `read` to throw prt::Error naming `path` with every one of `words`.
+template <typename Read>
+void expect_error_of(Read read, const std::string& path, const std::vector<std::string>& words,
+                     const std::string& what) {
+  try {
+    read(path);
+    ADD_FAILURE() << what << ": the file was accepted";
+  } catch (const prt::Error& e) {
+    const std::string msg = e.what();
+    EXPECT_TRUE(contains(msg, path)) << what << ": message does not name the file: " << msg;
+    for (const auto& w : words) EXPECT_TRUE(contains(msg, w)) << what << ": expected '" << w << "' in: " << msg;
+  }
+}
+
+TEST(CompressedFile, RoundTripIsBitExactAsVersionFour) {
+  TempDir dir;
+  struct Case {
+    Transfer t;
+    int clusters, vectors, bits;
+    std::uint32_t index_type;  // docs/FORMAT.md: 6 u8, 7 u16
+  };
+  const std::vector<Case> cases = {
+      {mixed_transfer(), 3, 4, 32, 6},  // interreflected RGB, 14 of 40 analytic, direct part dropped
+      {mixed_transfer(), 3, 4, 16, 6},
+      {with_glossy(make_transfer(TransferMode::Shadowed, 1, 4, 40, {false, true, false, false})), 4, 3, 16, 6},
+      {with_glossy(mixed_transfer()), 2, 5, 32, 6},
+      {make_transfer(TransferMode::Shadowed, 1, 3, 700, {}), 300, 2, 16, 7},  // 300 clusters: 16-bit indices
+  };
+  for (const Case& k : cases) {
+    const prt::CompressedTransfer c = compressed(k.t, k.clusters, k.vectors, k.bits);
+    const Sample s = compressed_sample(dir, c);
+    const std::string path = dir.file("sample.prtt");
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 4u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 4u, 4u);
+    EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(c));
+    EXPECT_TRUE(prt::transfer_is_compressed(path));
+    // The coefficients' record: its header as the document lays it out.
+    const std::size_t rec = s.section_at[s.section_at.size() - (k.t.glossy ? 2 : 1)];
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, rec), 8u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, rec + 4), 6u);  // u8
+    const std::size_t r = rec + kSectionHeader;
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, r + 0), std::uint32_t(c.coeffs.clusters));
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, r + 4), std::uint32_t(c.coeffs.vectors));
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, r + 8), k.t.stride());
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, r + 12), k.bits == 16 ? 5u : 1u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, r + 16), k.index_type);
+    EXPECT_EQ(get<std::uint64_t>(s.bytes, r + 24), k.t.stored_vertices());
+    EXPECT_EQ(get<float>(s.bytes, r + 32), c.coeffs.means[0]);
+    const prt::CompressedTransfer back = prt::read_compressed_transfer(path);
+    expect_identical(back.transfer, c.transfer);
+    expect_same_signal(back.coeffs, c.coeffs);
+    expect_same_signal(back.glossy, c.glossy);
+    // And written again, the same bytes.
+    prt::write_compressed_transfer(dir.file("again.prtt"), back);
+    EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+    const std::string d = prt::describe_transfer(back);
+    EXPECT_TRUE(contains(d, "format version 4")) << d;
+    EXPECT_TRUE(contains(d, std::to_string(c.coeffs.clusters) + " clusters x " + std::to_string(c.coeffs.vectors) +
+                                " principal vectors"))
+        << d;
+  }
+}
+
+TEST(CompressedFile, EachReaderRefusesTheOtherKind) {
+  TempDir dir;
+  const Transfer t = mixed_transfer();
+  const std::string plain = dir.file("plain.prtt"), packed = dir.file("packed.prtt");
+  prt::write_transfer(plain, t);
+  prt::write_compressed_transfer(packed, compressed(t, 2, 3, 32));
+  EXPECT_FALSE(prt::transfer_is_compressed(plain));
+  expect_error_of(prt::read_transfer, packed, {"compressed by clustered PCA", "read_compressed_transfer"},
+                  "read_transfer of a compressed file");
+  expect_error_of(prt::read_compressed_transfer, plain, {"uncompressed transfer", "prt compress"},
+                  "read_compressed_transfer of a plain file");
+}
+
+TEST(CompressedRead, EveryInconsistencyIsRefusedByName) {
+  TempDir dir;
+  // Shadowed mono, 4 bands (16 values a row), 40 rows in 3 clusters of 3
+  // vectors, 16-bit weights. The record: 32 (header) + 192 (means) + 576
+  // (bases) + 36 (scales) + 4 (padding) + 40 (u8 indices) + 240 (weights).
+  const Transfer t = make_transfer(TransferMode::Shadowed, 1, 4, 40, {false, true, false, false});
+  const prt::CompressedTransfer c = compressed(t, 3, 3, 16);
+  ASSERT_EQ(c.coeffs.clusters, 3);
+  const Sample s = compressed_sample(dir, c);
+  const std::size_t sec = s.section_at.back(), r = sec + kSectionHeader;
+  ASSERT_EQ(get<std::uint64_t>(s.bytes, sec + 16), 1120u);
+  const std::size_t pad_at = r + 32 + 192 + 576 + 36, index_at = pad_at + 4, weights_at = index_at + 40;
+  const auto read = prt::read_compressed_transfer;
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& words, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    const std::string path = dir.file("bad.prtt");
+    write_file(path, b);
+    expect_error_of(read, path, words, what);
+  };
+  edit(kVersionAt, std::uint32_t(3), {"unknown flags 0x4 in a version 3 file"}, "compressed in version 3");
+  edit(kFlagsAt, std::uint32_t(0), {"uncompressed transfer"}, "flag cleared");
+  edit(kFlagsAt, std::uint32_t(6), {"no 'compressed glossy matrices' section"}, "glossy flag without its record");
+  edit(r + 8, std::uint32_t(15), {"'compressed coefficients'", "rows of 15 values", "give 16"}, "dim");
+  edit(r + 24, std::uint64_t(39), {"39 rows", "40 stored vertices"}, "rows");
+  edit(r + 0, std::uint32_t(0), {"0 clusters for 40 rows"}, "no cluster");
+  edit(r + 0, std::uint32_t(300), {"cluster index type 6", "300 clusters take 7 (u16)"}, "index too narrow");
+  edit(r + 4, std::uint32_t(17), {"17 principal vectors", "at most 16"}, "vectors");
+  edit(r + 12, std::uint32_t(2), {"weight type 2"}, "weight type");
+  edit(r + 20, std::uint32_t(1), {"reserved bytes 20-23"}, "reserved");
+  edit(r + 4, std::uint32_t(1), {"1120 bytes", "a record of 3 clusters x 1 vectors"}, "size against the layout");
+  edit(pad_at + 1, std::uint8_t(1), {"padding inside its record"}, "padding");
+  edit(index_at + 7, std::uint8_t(3), {"row 7 of the compressed coefficients is in cluster 3; there are 3"}, "index");
+  edit(r + 32 + 4 * 5, std::numeric_limits<float>::infinity(), {"non-finite mean"}, "mean");
+  edit(weights_at + 2 * 4, std::int16_t(-32768), {"row 1 of the compressed coefficients has weight 1",
+                                                   "within 32767 steps"}, "weight code out of range");
+  // A compressed section in an uncompressed file.
+  const Sample plain = sample_file(dir, t);
+  std::string b = plain.bytes;
+  put(b, kVersionAt, std::uint32_t(4));
+  put(b, plain.section_at[0], std::uint32_t(8));
+  put(b, plain.section_at[0] + 4, std::uint32_t(6));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_transfer, dir.file("bad.prtt"), {"'compressed coefficients' section", "not compressed"},
+                  "record in a plain file");
+}
+
+TEST(CompressedWrite, RefusesWhatCouldNotBeReadBack) {
+  TempDir dir;
+  prt::CompressedTransfer c = compressed(mixed_transfer(), 2, 3, 32);
+  const std::string path = dir.file("out.prtt");
+  const auto refused = [&](const prt::CompressedTransfer& bad, const std::string& words) {
+    try {
+      prt::write_compressed_transfer(path, bad);
+      ADD_FAILURE() << "written: " << words;
+    } catch (const prt::Error& e) {
+      EXPECT_TRUE(contains(e.what(), path + ": cannot write this compressed transfer")) << e.what();
+      EXPECT_TRUE(contains(e.what(), words)) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(path));
+  };
+  prt::CompressedTransfer bad = c;
+  bad.coeffs.cluster[5] = 2;
+  refused(bad, "in cluster 2; there are 2");
+  bad = c;
+  bad.transfer.coeffs.assign(bad.transfer.stored_vertices() * bad.transfer.stride(), 0.0f);
+  refused(bad, "in its clusters only");
+  bad = c;
+  bad.coeffs.weights.pop_back();
+  refused(bad, "weights");
+  bad = c;
+  bad.coeffs.weight_bits = 16;
+  refused(bad, "weight scales");
 }
 
 // ---- writing -----------------------------------------------------------------------------

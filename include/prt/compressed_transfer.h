@@ -18,6 +18,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -37,12 +38,30 @@ struct ClusteredSignal {
   int weight_bits = 32;
   std::vector<float> weight_scales;
   std::size_t rows() const { return cluster.size(); }
-  // Bytes of the representation: per row 4 (cluster) + (weight_bits / 8) N
-  // (weights), per cluster 4 (N + 1) dim, and 4 N scales when 16-bit.
+  // Bits of a stored cluster index: the narrowest of 8, 16, 32 that holds
+  // clusters - 1 (files store it so; in memory it is always 32).
+  int index_bits() const { return index_bits_for(clusters); }
+  static int index_bits_for(int clusters) { return clusters <= 256 ? 8 : clusters <= 65536 ? 16 : 32; }
+  // Bytes of the representation as stored: per row index_bits / 8 (cluster)
+  // + (weight_bits / 8) N (weights), per cluster 4 (N + 1) dim, and 4 N
+  // scales when 16-bit (without the file's 32-byte signal header and padding).
   std::size_t bytes() const;
+  // bytes() of a fit of `rows` rows of `dim` values with K clusters and N
+  // vectors (each capped as compress_transfer caps them) before it is made.
+  static std::size_t planned_bytes(std::size_t rows, std::size_t dim, int clusters, int vectors, int weight_bits);
   // Row r's approximation (dim values).
   void reconstruct(std::size_t r, float* out) const;
 };
+
+// A 16-bit weight as stored: w / scale rounded to the nearest integer,
+// within +-32767 (0 for a zero scale); and the weight it stands for, that
+// code times the scale in float (what ClusteredSignal::weights holds).
+inline std::int16_t weight_code(float w, float scale) {
+  if (!(scale > 0.0f)) return 0;
+  const long q = std::lround(w / scale);
+  return std::int16_t(q < -32767 ? -32767 : q > 32767 ? 32767 : q);
+}
+inline float quantised_weight(float w, float scale) { return float(weight_code(w, scale)) * scale; }
 
 // A transfer whose stored rows (and glossy matrices) are compressed:
 // `transfer` holds everything else (header, slots, ambient occlusion, bent
@@ -52,6 +71,15 @@ struct CompressedTransfer {
   ClusteredSignal coeffs;  // the rows of Transfer::coeffs (stride() values each)
   ClusteredSignal glossy;  // the rows of Transfer::glossy_matrices (glossy_stride() each), when transfer.glossy
 };
+
+// What is wrong with `c`, or "": the uncompressed part as transfer_problem
+// (prt/transfer.h) with its coefficients, direct part and glossy matrices
+// empty; each signal one row per stored vertex of the transfer's stride
+// (glossy_stride() for the glossy one, present exactly when
+// transfer.glossy), 1 <= clusters <= 2^24, 0 <= vectors <= dim, arrays of
+// their sizes, cluster indices below clusters, every value finite, 16-bit
+// weights multiples of their scale within 32767 steps.
+std::string compressed_transfer_problem(const CompressedTransfer& c);
 
 // The transfer the compressed one approximates, every row reconstructed.
 Transfer decompress(const CompressedTransfer& c);

@@ -36,6 +36,7 @@ double compression_error(const Transfer& t, const CompressedTransfer& c, const M
 // that meets the target is the answer. `explanation` says what was chosen and
 // what the next smaller candidate measured. Throws prt::Error when none does
 // (naming the best error reached) or for a target outside (0, 1).
+// `progress` is called after each candidate (tried, grid size).
 struct CompressionChoice {
   CompressOptions options;
   CompressedTransfer compressed;
@@ -45,7 +46,7 @@ struct CompressionChoice {
   std::string explanation;
 };
 CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
-                                     double target, int weight_bits = 16);
+                                     double target, int weight_bits = 16, const Progress& progress = {});
 
 // `count` eye points on a horizontal ring around the mesh's bounding-box
 // centre at the distance of prt render's default camera (a 40 degree view

@@ -28,6 +28,8 @@
 #pragma once
 
 #include <cstddef>
+#include <prt/progress.h>
+
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -39,6 +41,9 @@ struct CpcaOptions {
   int vectors = 8;           // N principal vectors per cluster, 0 to dim
   int iterations = 20;       // at most this many rounds of assign + refit (>= 1)
   std::uint64_t seed = 1;    // k-means++ seeding
+  // Called after each round (rounds done, iterations, "clustered PCA");
+  // returning false cancels: fit_cpca throws prt::Error("cancelled").
+  Progress progress;
 };
 
 struct Cpca {

@@ -64,6 +64,7 @@ struct CompressOptions {
   int iterations = 20;
   std::uint64_t seed = 1;
   int weight_bits = 32;     // 32 (float) or 16 (ClusteredSignal::weight_bits)
+  Progress progress;        // per round of each fit (CpcaOptions::progress; phase "coefficients" or "glossy matrices")
 };
 
 // Clustered PCA of the transfer's stored rows (all channels of a row as one

@@ -9,6 +9,7 @@
 // basis field says which one a file holds.
 #pragma once
 
+#include <prt/compressed_transfer.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
@@ -20,14 +21,17 @@
 
 namespace prt {
 
-// The version this prt writes for SH transfers (docs/FORMAT.md); it reads
-// this one and every earlier one (version 1: every vertex stored). Wavelet
-// transfers are written as version kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 3;
+// The newest version of SH transfer files (docs/FORMAT.md); this prt reads
+// it and every earlier one (version 1: every vertex stored). Each file is
+// written in the oldest version that holds it: compressed transfers 4,
+// glossy ones 3, the others 2. Wavelet transfers are written as version
+// kWaveletFormatVersion.
+inline constexpr std::uint32_t kTransferFormatVersion = 4;
+inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // The version write_transfer writes for `t`: 3 with glossy matrices, 2
 // otherwise (so that a prt reading version 2 reads every file it could).
-inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? kTransferFormatVersion : 2u; }
+inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }
 
 // Writes `t` to `path` through write_atomically: a failure (or the process
 // being killed) leaves any existing file untouched and no temporary behind.
@@ -38,16 +42,9 @@ void write_transfer(const std::string& path, const Transfer& t);
 
 // Reads a transfer file. Validates everything before returning: signature,
 // version, size (truncation), checksum, header values, section table, and
-// the data (transfer_problem). Throws prt::Error "PATH: problem" otherwise.
+// the data (transfer_problem). Throws prt::Error "PATH: problem" otherwise,
+// and for a compressed file (read_compressed_transfer reads those).
 Transfer read_transfer(const std::string& path);
-
-// Throws prt::Error unless `t` was computed for `mesh` (same vertex count and
-// Mesh::hash(); the mesh has vertex colours when t's albedo is them; and when
-// t has analytic vertices, the same shading_hash: those are shaded from the
-// mesh's normals and colours); `transfer_path` names the transfer in the
-// message. Every command that pairs a transfer with a mesh (relight, render,
-// view) and the renderer call it, so they refuse alike.
-void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path);
 
 // A multi-line human-readable summary (bands, channels, mode, bounces,
 // samples, albedo, vertices, mesh hash, sections and sizes, bytes per vertex,
@@ -77,6 +74,41 @@ std::uint64_t analytic_bytes_saved(const Transfer& t);
 // Exact size in bytes of the file write_transfer writes for `t`.
 std::uint64_t transfer_file_size(const Transfer& t);
 
+// ---- compressed transfers (version 4, flag bit 2; docs/FORMAT.md "Compressed transfer") ----
+// Writes `c` (prt/compressed_transfer.h) through write_atomically; throws
+// prt::Error "PATH: cannot write this compressed transfer: PROBLEM" before
+// writing anything if compressed_transfer_problem(c) finds it inconsistent.
+// 16-bit weights are stored as their codes (weight_code), and read back as
+// the same floats: the round trip is bit-exact.
+void write_compressed_transfer(const std::string& path, const CompressedTransfer& c);
+// Reads one with read_transfer's checks and compressed_transfer_problem's;
+// throws prt::Error "PATH: problem", also for an uncompressed file.
+CompressedTransfer read_compressed_transfer(const std::string& path);
+// Whether the SH file at `path` is compressed (the header's checks of
+// read_transfer_basis; throws for a wavelet file's "not SH" as that does not).
+bool transfer_is_compressed(const std::string& path);
+// The sections write_compressed_transfer stores, in file order, and the
+// file's exact size.
+std::vector<TransferSection> transfer_sections(const CompressedTransfer& c);
+std::uint64_t transfer_file_size(const CompressedTransfer& c);
+// check_matches of its uncompressed part.
+inline void check_matches(const CompressedTransfer& c, const Mesh& mesh, const std::string& transfer_path);
+// describe_transfer of the uncompressed part, then per signal its clusters,
+// vectors, weight and index widths, bytes and ratio to the rows it replaces.
+std::string describe_transfer(const CompressedTransfer& c);
+
+// Throws prt::Error unless `t` was computed for `mesh` (same vertex count and
+// Mesh::hash(); the mesh has vertex colours when t's albedo is them; and when
+// t has analytic vertices, the same shading_hash: those are shaded from the
+// mesh's normals and colours); `transfer_path` names the transfer in the
+// message. Every command that pairs a transfer with a mesh (relight, render,
+// view) and the renderer call it, so they refuse alike.
+void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path);
+
+inline void check_matches(const CompressedTransfer& c, const Mesh& mesh, const std::string& transfer_path) {
+  check_matches(c.transfer, mesh, transfer_path);
+}
+
 // ---- the basis a file holds ---------------------------------------------------
 enum class TransferBasis { SH, Wavelet };
 std::string_view basis_name(TransferBasis b);  // "sh", "wavelet"
@@ -86,7 +118,7 @@ std::string_view basis_name(TransferBasis b);  // "sh", "wavelet"
 // verify the checksum or the sections (read_transfer / read_wavelet_transfer
 // do). Throws prt::Error "PATH: problem".
 TransferBasis read_transfer_basis(const std::string& path);
-// The same header checks; returns the file's format version (1 or 2 for SH).
+// The same header checks; returns the file's format version (1 to 4 for SH).
 std::uint32_t read_transfer_version(const std::string& path);
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------

@@ -1,6 +1,7 @@
 // Fuzz target: the transfer file reader (docs/FORMAT.md), both bases:
-// read_transfer_basis, read_transfer_version, read_transfer and
-// read_wavelet_transfer, and the description of what was read.
+// read_transfer_basis, read_transfer_version, transfer_is_compressed,
+// read_transfer, read_compressed_transfer and read_wavelet_transfer, and the
+// description of what was read.
 //
 // The checksum: the trailer holds XXH3-64 of every byte before it, which a
 // mutated input almost never matches, so the reader would stop there. When
@@ -56,7 +57,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   prt::fuzz::expect_only_prt_errors([&] {
     const std::uint32_t version = prt::read_transfer_version(path);
     if (version < 1 || version > prt::kTransferFormatVersion) prt::fuzz::finding("read_transfer_version out of range");
-    if (prt::read_transfer_basis(path) == prt::TransferBasis::SH) {
+    if (prt::read_transfer_basis(path) == prt::TransferBasis::SH && prt::transfer_is_compressed(path)) {
+      const prt::CompressedTransfer c = prt::read_compressed_transfer(path);
+      (void)prt::describe_transfer(c);
+      (void)prt::decompress(c);
+      round_trip(c, prt::read_compressed_transfer,
+                 [](const std::string& p, const prt::CompressedTransfer& x) { prt::write_compressed_transfer(p, x); });
+    } else if (prt::read_transfer_basis(path) == prt::TransferBasis::SH) {
       const prt::Transfer t = prt::read_transfer(path);
       (void)prt::describe_transfer(t);
       (void)prt::transfer_sections(t);
@@ -74,5 +81,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // The other basis's reader refuses the file (with a prt::Error).
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_wavelet_transfer(path); });
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_transfer(path); });
+  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_compressed_transfer(path); });
   return 0;
 }

@@ -24,5 +24,6 @@ Run add_compare(CLI::App& app);    // cmd_compare.cpp
 Run add_info(CLI::App& app);       // cmd_info.cpp
 Run add_view(CLI::App& app);       // cmd_view.cpp
 Run add_report(CLI::App& app);     // cmd_report.cpp
+Run add_compress(CLI::App& app);   // cmd_compress.cpp
 
 }  // namespace prt::cli

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   };
   add(prt::cli::add_project);
   add(prt::cli::add_precompute);
+  add(prt::cli::add_compress);
   add(prt::cli::add_relight);
   add(prt::cli::add_render);
   add(prt::cli::add_reference);

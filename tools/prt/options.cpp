@@ -236,6 +236,10 @@ bool same_file(const std::string& a, const std::string& b) {
 }
 
 void check_not_input(const std::string& option, const std::string& output, std::initializer_list<Input> inputs) {
+  check_not_input(option, output, std::span<const Input>(inputs.begin(), inputs.size()));
+}
+
+void check_not_input(const std::string& option, const std::string& output, std::span<const Input> inputs) {
   for (const Input& in : inputs) {
     if (in.path.empty() || output.empty() || !same_file(output, in.path)) continue;
     throw UsageError(fmt::format("{} {}: is the input {}{}; prt does not write over its inputs (choose another "

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <limits>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -118,6 +119,7 @@ bool same_file(const std::string& a, const std::string& b);
 // hard link) or, when one does not exist yet, the same path. No command
 // writes over its own input.
 void check_not_input(const std::string& option, const std::string& output, std::initializer_list<Input> inputs);
+void check_not_input(const std::string& option, const std::string& output, std::span<const Input> inputs);
 
 // The glossy lobe's options (prt relight, prt render; docs/CONVENTIONS.md,
 // "Glossy transfer"): --gloss e (0 to 4096), --specular rho_s (0 to 1) and
