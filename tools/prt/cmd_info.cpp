@@ -68,6 +68,27 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   return j;
 }
 
+nlohmann::ordered_json signal_json(const ClusteredSignal& g) {
+  return {{"clusters", g.clusters},       {"vectors", g.vectors},         {"values_per_row", g.dim},
+          {"rows", g.rows()},             {"weight_bits", g.weight_bits}, {"index_bits", g.index_bits()},
+          {"bytes", g.bytes()},           {"float_row_bytes", 4 * g.rows() * g.dim}};
+}
+
+// The uncompressed part's fields, its sections as stored, and per signal its clusters.
+nlohmann::ordered_json to_json(const std::string& path, const CompressedTransfer& c) {
+  nlohmann::ordered_json j = to_json(path, c.transfer, kCompressedFormatVersion);
+  j["sections"] = sections_json(transfer_sections(c));
+  j.erase("analytic_bytes_saved");
+  std::uint64_t per_vertex = 0;
+  for (const auto& s : transfer_sections(c))
+    if (s.per_vertex && c.transfer.vertices) per_vertex += s.bytes / c.transfer.vertices;
+  j["bytes_per_vertex"] = per_vertex;
+  j["file_bytes"] = transfer_file_size(c);
+  j["compressed"] = {{"coefficients", signal_json(c.coeffs)}};
+  if (c.transfer.glossy) j["compressed"]["glossy_matrices"] = signal_json(c.glossy);
+  return j;
+}
+
 nlohmann::ordered_json to_json(const std::string& path, const WaveletTransfer& t) {
   nlohmann::ordered_json j;
   j["file"] = path;
@@ -99,6 +120,14 @@ int run_info(const InfoArgs& a) {
       fmt::print("{}: {}", a.file, describe_transfer(w));
     return 0;
   }
+  if (transfer_is_compressed(a.file)) {
+    const CompressedTransfer c = read_compressed_transfer(a.file);  // validates everything
+    if (a.json)
+      fmt::print("{}\n", to_json(a.file, c).dump(2));
+    else
+      fmt::print("{}: {}", a.file, describe_transfer(c));
+    return 0;
+  }
   const Transfer t = read_transfer(a.file);  // validates everything; throws naming the file
   const std::uint32_t version = read_transfer_version(a.file);
   if (a.json) {
@@ -121,7 +150,8 @@ Run add_info(CLI::App& app) {
       "Reads and validates the whole file (signature, version, size, checksum, every value) and prints its\n"
       "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes, and how\n"
       "many vertices are analytic (unoccluded: no stored transfer) with the bytes that saves;\n"
-      "for a wavelet transfer: cube resolution, threshold, kept fraction and bytes per vertex.\n"
+      "for a wavelet transfer: cube resolution, threshold, kept fraction and bytes per vertex; for a compressed\n"
+      "one (prt compress) its clusters, principal vectors, weight and index widths and bytes per signal.\n"
       "The format is specified in docs/FORMAT.md. Exits non-zero, naming the problem, on a bad file.\n"
       "Example: prt info bunny.prtt --json");
   s->add_option("FILE", a->file, "Transfer file written by prt precompute")->required();

@@ -28,6 +28,10 @@ struct PrecomputeArgs {
   WaveletOptions wopt;
   MeshOptions mesh_opt;
   bool quiet = false;
+  // --compress KxN: write the transfer compressed by clustered PCA (prt compress).
+  std::string compress;
+  int compress_weights = 16;
+  const CLI::Option* compress_weights_opt = nullptr;
   // Options given on the command line (to refuse those the basis does not take).
   std::vector<const CLI::Option*> sh_only, wavelet_only;
   // --target-error: the error target, its map and reference cache; bands,
@@ -38,6 +42,24 @@ struct PrecomputeArgs {
                     *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr,
                     *material_opt = nullptr;
 };
+
+// --compress KxN into o (UsageError naming the option otherwise).
+void parse_compress(const std::string& text, CompressOptions& o) {
+  const std::size_t x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    std::size_t used = 0;
+    o.clusters = std::stoi(text.substr(0, x), &used);
+    if (used != x) throw std::invalid_argument("K");
+    const std::string n = text.substr(x + 1);
+    o.vectors = std::stoi(n, &used);
+    if (used != n.size()) throw std::invalid_argument("N");
+  } catch (const std::exception&) {
+    throw UsageError("--compress " + text + ": expected KxN, clusters x principal vectors (e.g. 128x8)");
+  }
+  if (o.clusters < 1 || o.clusters > (1 << 24) || o.vectors < 0)
+    throw UsageError("--compress " + text + ": K must be 1 to 2^24 and N at least 0");
+}
 
 // The rules across options (each value alone is checked while parsing):
 // UsageError, before anything is read.
@@ -181,6 +203,11 @@ int run_precompute(PrecomputeArgs& a) {
   a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   for_path("--output", [&] { check_writable(a.output); });
 
+  CompressOptions copt;  // checked before the long work
+  copt.weight_bits = a.compress_weights;
+  if (!a.compress.empty()) parse_compress(a.compress, copt);
+  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
+    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
@@ -192,6 +219,18 @@ int run_precompute(PrecomputeArgs& a) {
                            });
   if (!computed) return 130;
   const Transfer& t = *computed;
+  if (!a.compress.empty()) {
+    CompressOptions o = copt;
+    const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "precompute", [&](const Progress& p) {
+      o.progress = p;
+      return compress_transfer(t, o);
+    });
+    if (!c) return 130;
+    out.write([&] { write_compressed_transfer(a.output, *c); });
+    if (const int rc = out.commit(); rc != 0) return rc;
+    if (!a.quiet) fmt::print(stderr, "wrote {} (compressed):\n{}", a.output, describe_transfer(*c));
+    return 0;
+  }
   out.write([&] { write_transfer(a.output, t); });
   if (const int rc = out.commit(); rc != 0) return rc;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -312,6 +351,14 @@ Run add_precompute(CLI::App& app) {
                 "diagonal (default 1e-4 x the diagonal)")
       ->check(positive_number());
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
+  a->sh_only.push_back(s->add_option("--compress", a->compress,
+                                     "Write the transfer compressed by clustered PCA: K clusters x N principal "
+                                     "vectors, e.g. 128x8 (prt compress; docs/COMPRESSION.md)"));
+  a->compress_weights_opt = s->add_option("--compress-weights", a->compress_weights,
+                                          "Bits per weight of --compress: 16 or 32")
+                                ->check(CLI::IsMember({16, 32}))
+                                ->capture_default_str();
+  a->sh_only.push_back(a->compress_weights_opt);
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_precompute(*a); };
 }

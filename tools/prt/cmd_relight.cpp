@@ -143,11 +143,14 @@ int run_relight(const RelightArgs& a) {
     shading.diffuse = parse_diffuse(a.lobe.diffuse);
   }
 
-  const Scene scene = load_scene(a.mesh, a.transfer, a.env);
+  const Scene scene = load_scene(a.mesh, a.transfer, a.env, 0, "relight", false, true);
   const Mesh& mesh = scene.mesh;
-  const Transfer& t = scene.transfer;
+  const Transfer& t = scene.transfer;  // compressed: the header part (its rows are in scene.compressed)
   const EnvMap& env = scene.env;
   if (a.direct) check_direct(t, a.transfer, "--direct");
+  if (a.direct && scene.compressed)
+    throw Error(a.transfer + ": --direct: a compressed transfer keeps no direct part (prt compress drops it); relight "
+                "the uncompressed file");
   if (glossy)
     if (auto p = glossy_shading_problem(t, shading); !p.empty()) throw Error(a.transfer + ": " + p);
   if (!glossy && t.glossy && !a.quiet)
@@ -165,12 +168,20 @@ int run_relight(const RelightArgs& a) {
     sh::Rotation(t.bands, sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, r);
     light.swap(r);
   }
-  const std::vector<glm::vec3> rgb = glossy     ? relight_glossy(t, mesh, light, shading)
+  const CompressedTransfer* c = scene.compressed ? &*scene.compressed : nullptr;
+  const std::vector<glm::vec3> rgb = c ? (glossy ? relight_glossy(*c, mesh, light, shading) : relight(*c, mesh, light))
+                                     : glossy   ? relight_glossy(t, mesh, light, shading)
                                      : a.direct ? relight_direct(t, mesh, light)
                                                 : relight(t, mesh, light);
   const double frame_ms = ms_since(t1);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
+    if (c && !t.is_analytic(v)) {
+      std::vector<float> row(c->coeffs.dim);
+      c->coeffs.reconstruct(t.slots.empty() ? v : t.slots[v], row.data());
+      for (float x : row) m = std::max(m, double(std::abs(x)));
+      return m;
+    }
     for (double x : vertex_transfer(t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });

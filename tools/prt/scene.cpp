@@ -6,7 +6,8 @@
 
 namespace prt::cli {
 
-void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet) {
+void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet,
+                   bool allow_compressed) {
   // Without allow_wavelet, read_transfer itself refuses a wavelet file, naming its basis.
   s.basis = allow_wavelet ? read_transfer_basis(transfer) : TransferBasis::SH;
   if (s.basis == TransferBasis::Wavelet) {
@@ -14,7 +15,13 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
     check_matches(s.wavelet, s.mesh, transfer);
     return;
   }
-  s.transfer = read_transfer(transfer);
+  s.compressed.reset();
+  if (allow_compressed && transfer_is_compressed(transfer)) {
+    s.compressed = read_compressed_transfer(transfer);
+    s.transfer = s.compressed->transfer;
+  } else {
+    s.transfer = read_transfer(transfer);  // refuses a compressed file, naming the commands that take it
+  }
   check_matches(s.transfer, s.mesh, transfer);
   if (max_bands > 0 && s.transfer.bands > max_bands)
     throw Error(fmt::format("{}: {} bands; prt {} takes at most {} (what the renderer's lighting block holds; "
@@ -30,10 +37,10 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 }
 
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
-                 const char* command, bool allow_wavelet) {
+                 const char* command, bool allow_wavelet, bool allow_compressed) {
   Scene s;
   s.mesh = load_mesh(mesh);
-  load_transfer(s, transfer, max_bands, command, allow_wavelet);
+  load_transfer(s, transfer, max_bands, command, allow_wavelet, allow_compressed);
   s.env = load_envmap(env);
   require_finite(s.env);
   return s;

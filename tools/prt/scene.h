@@ -8,6 +8,7 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 
+#include <optional>
 #include <string>
 
 namespace prt::cli {
@@ -15,16 +16,18 @@ namespace prt::cli {
 struct Scene {
   Mesh mesh;
   TransferBasis basis = TransferBasis::SH;
-  Transfer transfer;        // basis SH
+  Transfer transfer;        // basis SH (compressed: the uncompressed part, its rows empty)
+  std::optional<CompressedTransfer> compressed;  // a file from prt compress (when the command takes them)
   WaveletTransfer wavelet;  // basis Wavelet
   EnvMap env;
 };
 
 // Throws prt::Error naming the file at fault; max_bands > 0 also refuses an
 // SH transfer with more bands, naming `command` in the message. Wavelet
-// files are refused unless allow_wavelet.
+// files are refused unless allow_wavelet, compressed ones unless
+// allow_compressed.
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands = 0,
-                 const char* command = "", bool allow_wavelet = false);
+                 const char* command = "", bool allow_wavelet = false, bool allow_compressed = false);
 
 // Throws prt::Error naming `path` unless `t` keeps a direct part (an
 // interreflected transfer): what `option` ("--direct", "--shading direct")
@@ -34,6 +37,6 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 // Loads a transfer file into `scene` (the mesh must be loaded) and checks it
 // against the mesh; the rules of load_scene.
 void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
-                   bool allow_wavelet);
+                   bool allow_wavelet, bool allow_compressed = false);
 
 }  // namespace prt::cli
