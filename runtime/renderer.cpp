@@ -164,6 +164,10 @@ struct Renderer::Impl {
   ClusterRows coeff_rows, glossy_rows;
   GLuint cluster_color_buffer = 0;  // Shading::Clusters
   void upload_cluster_lighting();
+  void upload_glossy_cluster_lighting();
+  std::vector<glm::dvec3> band_limited_lighting() const;
+  void upload_products(ClusterRows& rows, const std::vector<float>& vec4s);
+  bool glossy_products_stale = false;  // the lighting changed since the glossy products were computed
   std::vector<glm::dvec3> light_coeffs;  // bands^2, as given to set_lighting
   Transfer glossy_header;
   // From set_glossy (eye unused: the camera's): rho_s Lambda_l(e) per band
@@ -505,9 +509,10 @@ void check_bands(const Transfer& t) {
 
 // A compressed signal's rows for shaders/compressed.glsl: per row the
 // cluster index, then the weights (16-bit: the integers q = w / s, two per
-// word; 32-bit: floats), in a storage buffer. Throws when the buffer exceeds
-// the storage block limit.
-ClusterRows make_cluster_rows(const ClusteredSignal& s, const char* what) {
+// word; 32-bit: floats), in a storage buffer, and the buffer of its
+// per-cluster products (`run` vec4s per vector). Throws when a buffer
+// exceeds the storage block limit.
+ClusterRows make_cluster_rows(const ClusteredSignal& s, std::size_t run, const char* what) {
   ClusterRows r;
   r.vectors = s.vectors;
   r.weight_bits = s.weight_bits;
@@ -538,6 +543,12 @@ ClusterRows make_cluster_rows(const ClusteredSignal& s, const char* what) {
                             "is {} bytes",
                             what, rows, r.bytes, max_block));
   r.buffer = make_buffer(words.data(), words.size() * sizeof(std::uint32_t));
+  r.product_bytes = std::size_t(s.clusters) * (N + 1) * run * 16;
+  if (r.product_bytes > std::size_t(max_block))
+    throw Error(fmt::format("the per-cluster products of the compressed {} need {} bytes on the GPU; this OpenGL's "
+                            "storage block limit is {} bytes",
+                            what, r.product_bytes, max_block));
+  r.products = make_buffer(nullptr, std::max<std::size_t>(r.product_bytes, 16), GL_DYNAMIC_STORAGE_BIT);
   r.clusters = s;
   r.clusters.cluster.clear();
   r.clusters.weights.clear();
@@ -678,8 +689,8 @@ void Renderer::set_mesh(const Mesh& mesh, const CompressedTransfer& c) {
     m.slot_buffer = make_buffer(slots.data(), slots.size() * sizeof(std::uint32_t));
   }
   if (rows > 0) {
-    m.coeff_rows = make_cluster_rows(c.coeffs, "coefficients");
-    if (t.glossy) m.glossy_rows = make_cluster_rows(c.glossy, "glossy matrices");
+    m.coeff_rows = make_cluster_rows(c.coeffs, 1, "coefficients");
+    if (t.glossy) m.glossy_rows = make_cluster_rows(c.glossy, std::size_t(t.bands) * t.bands, "glossy matrices");
   }
   // Shading::Clusters: the glossy matrices' clusters when there are some
   // (the larger signal, what the glossy shading decodes), else the
@@ -765,28 +776,39 @@ void Renderer::Impl::upload_lighting() {
 // diffuse pass, K (N + 1) bands^2 for the glossy one.
 void Renderer::Impl::upload_cluster_lighting() {
   if (!compressed || light_coeffs.empty() || !coeff_rows) return;
+  upload_products(coeff_rows,
+                  product_vec4s(cluster_lighting(coeff_rows.clusters, channels, bands, band_limited_lighting()),
+                                coeff_rows.clusters, 1));
+  // The glossy products (K (N + 1) bands^2, the larger part) when a glossy
+  // frame first needs them (relight()), not while another shading is shown.
+  glossy_products_stale = bool(glossy_rows);
+  if (shading == Shading::Glossy) upload_glossy_cluster_lighting();
+}
+
+void Renderer::Impl::upload_glossy_cluster_lighting() {
+  if (!glossy_products_stale) return;
+  CompressedTransfer g;  // what glossy_cluster_lighting reads: the header and the glossy clusters
+  g.transfer = glossy_header;
+  g.glossy = glossy_rows.clusters;
+  upload_products(glossy_rows, product_vec4s(glossy_cluster_lighting(g, band_limited_lighting()), glossy_rows.clusters,
+                                             std::size_t(bands) * bands));
+  glossy_products_stale = false;
+}
+
+// The lighting's first band_limit^2 coefficients, zeros after them.
+std::vector<glm::dvec3> Renderer::Impl::band_limited_lighting() const {
   const std::size_t keep = std::size_t(band_limit) * band_limit;
   std::vector<glm::dvec3> L(light_coeffs.size(), glm::dvec3(0.0));
-  std::copy_n(light_coeffs.begin(), std::ptrdiff_t(keep), L.begin());
-  auto upload = [](ClusterRows& r, const std::vector<float>& v, const char* what) {
-    const std::size_t bytes = v.size() * sizeof(float);
-    if (!r.products || r.product_bytes != bytes) {
-      if (r.products) glDeleteBuffers(1, &r.products);
-      r.products = make_buffer(nullptr, bytes, GL_DYNAMIC_STORAGE_BIT);
-      r.product_bytes = bytes;
-    }
-    glNamedBufferSubData(r.products, 0, GLsizeiptr(bytes), v.data());
-    check_gl(what);
-  };
-  upload(coeff_rows, product_vec4s(cluster_lighting(coeff_rows.clusters, channels, bands, L), coeff_rows.clusters, 1),
-         "uploading the cluster lighting");
-  if (glossy_rows) {
-    CompressedTransfer g;  // what glossy_cluster_lighting reads: the header and the glossy clusters
-    g.transfer = glossy_header;
-    g.glossy = glossy_rows.clusters;
-    upload(glossy_rows, product_vec4s(glossy_cluster_lighting(g, L), glossy_rows.clusters, std::size_t(bands) * bands),
-           "uploading the glossy cluster lighting");
-  }
+  std::copy_n(light_coeffs.begin(), std::ptrdiff_t(std::min(keep, L.size())), L.begin());
+  return L;
+}
+
+// Uploads products (vec4s) into the rows' product buffer (make_cluster_rows').
+void Renderer::Impl::upload_products(ClusterRows& r, const std::vector<float>& v) {
+  const std::size_t bytes = v.size() * sizeof(float), allocated = std::max<std::size_t>(r.product_bytes, 16);
+  PRT_CHECK_OP(bytes, ==, allocated);
+  glNamedBufferSubData(r.products, 0, GLsizeiptr(bytes), v.data());
+  check_gl("uploading the cluster lighting");
 }
 
 void Renderer::set_band_limit(int b) {
@@ -1027,6 +1049,7 @@ GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);
   glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
   if (shading == Shading::Glossy) {
+    if (compressed) upload_glossy_cluster_lighting();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the glossy pass reads the diffuse radiance
     glUseProgram(glossy_program(band_limit * band_limit));
     glUniform1ui(0, GLuint(vertex_count));
