@@ -129,6 +129,17 @@ int main(int argc, char** argv) {
                     size, size, std::stoi(coeffs) * std::stoi(coeffs), p * 1e3, l * 1e3, p / l,
                     p / l <= 1.5 ? "met" : "NOT met");
     }
+  // Compressed transfer (issue 16): a frame (turn the lighting, draw) of the
+  // 128 x 8 16-bit compression against the uncompressed transfer.
+  for (const auto& [kind, what] : {std::pair{"0", "diffuse"}, std::pair{"1", "glossy shadowed"},
+                                    std::pair{"2", "glossy interreflected"}}) {
+    const double u = rep.seconds(std::string("BM_CompressedFrame/") + kind + "/0"),
+                 c = rep.seconds(std::string("BM_CompressedFrame/") + kind + "/1");
+    if (u > 0 && c > 0)
+      std::printf("frame 512x512, 5 bands RGB, %s: compressed 128 x 8 16-bit %.3f ms vs uncompressed %.3f ms: "
+                  "%.2f x (target <= 1: %s)\n",
+                  what, c * 1e3, u * 1e3, c / u, c / u <= 1 ? "met" : "NOT met");
+  }
   budget(rep, "CPU work per frame (rotate + apply + upload), 9 bands", "BM_CpuFrameWork/9", 100);
   budget(rep, "CPU work per frame (rotate + apply + upload), 16 bands", "BM_CpuFrameWork/16", 1000);
   budget(rep, "rotation build, 9 bands", "BM_RotationBuild/9", 10);

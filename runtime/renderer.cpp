@@ -2,6 +2,7 @@
 // background and display passes, read-back. See prt/render.h. The EGL
 // context is egl_context.cpp's, the GL helpers gl_util.cpp's, tone_map()
 // display.cpp's and default_camera() camera.cpp's.
+#include <prt/compressed_transfer.h>
 #include <prt/error.h>
 #include <prt/filter.h>
 #include <prt/glossy.h>
@@ -23,6 +24,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <string>
 #include <utility>
@@ -43,7 +45,8 @@ int attribute_mode(Shading s) {
     case Shading::Lambert: return 1;
     case Shading::AmbientOcclusion: return 2;
     case Shading::BentNormal: return 3;
-    case Shading::VertexColors: return 4;
+    case Shading::VertexColors:
+    case Shading::Clusters: return 4;
     default: return 0;
   }
 }
@@ -83,7 +86,7 @@ namespace {
 constexpr EnumName<Shading> kShadingNames[] = {
     {Shading::Transfer, "transfer"},     {Shading::Direct, "direct"},    {Shading::Unshadowed, "unshadowed"},
     {Shading::Lambert, "lambert"},       {Shading::AmbientOcclusion, "ao"}, {Shading::BentNormal, "bent"},
-    {Shading::VertexColors, "colors"},   {Shading::Glossy, "glossy"},
+    {Shading::VertexColors, "colors"},   {Shading::Glossy, "glossy"},     {Shading::Clusters, "clusters"},
 };
 constexpr EnumName<ToneMap> kToneMapNames[] = {
     {ToneMap::Clamp, "clamp"}, {ToneMap::Reinhard, "reinhard"}, {ToneMap::Aces, "aces"}};
@@ -111,6 +114,17 @@ struct TransferArray {
 // relight.comp.glsl's SOURCE: where each vertex's transfer comes from.
 enum class Source { Stored = 0, Mixed = 1, Analytic = 2 };
 
+// A compressed signal on the GPU (shaders/compressed.glsl): its rows (cluster
+// index and weights) in a storage buffer, and what the per-frame products
+// need on the CPU (means, bases, scales: the signal without its rows).
+struct ClusterRows {
+  GLuint buffer = 0, products = 0;  // rows; the products of the current lighting
+  int vectors = 0, weight_bits = 32, row_words = 0;
+  std::size_t bytes = 0, product_bytes = 0;
+  ClusteredSignal clusters;  // cluster and weights empty
+  explicit operator bool() const { return buffer != 0; }
+};
+
 }  // namespace
 
 struct Renderer::Impl {
@@ -118,11 +132,13 @@ struct Renderer::Impl {
   bool external = false;  // the caller's context (Renderer(use_current_context)); not ours to make current or destroy
 
   GLuint background_program = 0, display_program = 0;
-  // By (coeffs, vec4s, channels, source, vertex albedo); compiled when first used.
-  std::map<std::array<int, 5>, GLuint> relight_programs;
+  // By (coeffs, vec4s, channels, source, vertex albedo, compressed vectors
+  // (-1: not compressed), weight bits); compiled when first used.
+  std::map<std::array<int, 7>, GLuint> relight_programs;
   GLuint radiance_buffer = 0;  // vec4 per vertex, written by the relighting pass
-  // By (coeffs, nc, glossy channels, symmetric); compiled when first used.
-  std::map<std::array<int, 4>, GLuint> glossy_programs;
+  // By (coeffs, nc, glossy channels, symmetric, compressed vectors (-1: not
+  // compressed), weight bits, source); compiled when first used.
+  std::map<std::array<int, 7>, GLuint> glossy_programs;
   std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
   GLuint vao = 0, empty_vao = 0;
   GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
@@ -137,7 +153,22 @@ struct Renderer::Impl {
   // what glossy_shading_problem needs of the transfer (its arrays left
   // empty), and the lobe of set_glossy.
   TransferArray glossy_array;
+  bool has_glossy = false;
   int glossy_row_texels = 0;
+  // Compressed transfers (set_mesh(Mesh, CompressedTransfer)): the diffuse
+  // rows and the glossy rows as clusters and weights, decoded in the passes
+  // with per-cluster products uploaded by set_lighting. glossy_array then
+  // holds the analytic vertices' hemisphere matrices only, numbered by the
+  // low bits of their slots; transfer and direct are empty.
+  bool compressed = false;
+  ClusterRows coeff_rows, glossy_rows;
+  GLuint cluster_color_buffer = 0;  // Shading::Clusters
+  void upload_cluster_lighting();
+  void upload_glossy_cluster_lighting();
+  std::vector<glm::dvec3> band_limited_lighting() const;
+  void upload_products(ClusterRows& rows, const std::vector<float>& vec4s);
+  bool glossy_products_stale = false;  // the lighting changed since the glossy products were computed
+  std::vector<glm::dvec3> light_coeffs;  // bands^2, as given to set_lighting
   Transfer glossy_header;
   // From set_glossy (eye unused: the camera's): rho_s Lambda_l(e) per band
   // and rho_d / albedo per channel, the glossy pass's uniforms.
@@ -178,9 +209,11 @@ struct Renderer::Impl {
   void display_pass(const Display& d, GLuint target, int width, int height, bool encode_srgb);
   GLuint attribute_program(int mode);
   GLuint relight_program(int coeffs, int vec4s, int channels, Source source, bool vertex_albedo);
+  std::string compressed_defines(const ClusterRows& rows, int product_run) const;
   GLuint relight(const glm::dvec3& eye);
   GLuint glossy_program(int coeffs);
   void upload_lighting();
+  void finish_transfer(const Transfer& t, const Mesh& mesh, const std::vector<std::size_t>& glossy_vertices);
   void destroy();
   void delete_mesh_objects();
   void resize(int w, int h);
@@ -215,14 +248,24 @@ void Renderer::Impl::create_objects() {
   check_gl("creating the renderer's objects");
 }
 
+// The #defines and shared source of a compressed program (shaders/compressed.glsl).
+std::string Renderer::Impl::compressed_defines(const ClusterRows& r, int product_run) const {
+  return fmt::format("#define VECTORS {}\n#define WEIGHT_BITS {}\n#define ROW_WORDS {}\n#define PRODUCT_RUN {}\n{}", r.vectors,
+                     r.weight_bits, r.row_words, product_run, shaders::compressed_glsl);
+}
+
 GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source from, bool vertex_albedo) {
-  GLuint& p = relight_programs[{coeffs, vec4s, ch, int(from), vertex_albedo ? 1 : 0}];
+  // Unshadowed (Source::Analytic) reads no rows: the plain program.
+  const bool packed = compressed && from != Source::Analytic;
+  GLuint& p = relight_programs[{coeffs, vec4s, ch, int(from), vertex_albedo ? 1 : 0, packed ? coeff_rows.vectors : -1,
+                                packed ? coeff_rows.weight_bits : 0}];
   if (!p) {
     const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
     p = gl::link_compute(shaders::relight_comp_glsl, "relight",
                          fmt::format("#define COEFFS {}\n#define BANDS {}\n#define VEC4S {}\n#define CHANNELS {}\n"
-                                     "#define SOURCE {}\n#define VERTEX_ALBEDO {}\n",
-                                     coeffs, shader_bands, vec4s, ch, int(from), vertex_albedo ? 1 : 0));
+                                     "#define SOURCE {}\n#define VERTEX_ALBEDO {}\n#define COMPRESSED {}\n",
+                                     coeffs, shader_bands, vec4s, ch, int(from), vertex_albedo ? 1 : 0, packed ? 1 : 0) +
+                             (packed ? compressed_defines(coeff_rows, 1) : std::string()));
   }
   return p;
 }
@@ -230,14 +273,21 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
 GLuint Renderer::Impl::glossy_program(int coeffs) {
   const int nc = bands * bands, gch = glossy_header.glossy_channels();
   const bool symmetric = glossy_header.glossy_symmetric();
-  GLuint& p = glossy_programs[{coeffs, nc, gch, symmetric ? 1 : 0}];
+  // A compressed transfer without stored rows has every vertex's hemisphere
+  // matrix in glossy_array, row v = vertex v: the plain program.
+  const bool packed = compressed && glossy_rows;
+  const int from = source == Source::Mixed ? 1 : 0;
+  GLuint& p = glossy_programs[{coeffs, nc, gch, symmetric ? 1 : 0, packed ? glossy_rows.vectors : -1,
+                               packed ? glossy_rows.weight_bits : 0, packed ? from : 0}];
   if (!p) {
     const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
     p = gl::link_compute(shaders::glossy_comp_glsl, "glossy",
                          fmt::format("#define COEFFS {}\n#define BANDS {}\n#define NC {}\n#define GCH {}\n"
-                                     "#define SYMMETRIC {}\n#define CH_FLOATS {}\n#define ROW_TEXELS {}\n",
+                                     "#define SYMMETRIC {}\n#define CH_FLOATS {}\n#define ROW_TEXELS {}\n"
+                                     "#define COMPRESSED {}\n#define SOURCE {}\n",
                                      coeffs, shader_bands, nc, gch, symmetric ? 1 : 0, (nc * nc + 3) / 4 * 4,
-                                     glossy_row_texels));
+                                     glossy_row_texels, packed ? 1 : 0, packed ? from : 0) +
+                             (packed ? compressed_defines(glossy_rows, nc) : std::string()));
   }
   return p;
 }
@@ -275,13 +325,20 @@ void Renderer::Impl::resize(int w, int h) {
 void Renderer::Impl::delete_mesh_objects() {
   const GLuint buffers[] = {position_buffer, index_buffer, transfer.buffer, direct.buffer,
                             glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
-                            ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer};
+                            ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
+                            coeff_rows.buffer, coeff_rows.products, glossy_rows.buffer, glossy_rows.products,
+                            cluster_color_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   const GLuint textures[] = {transfer.texture, direct.texture, glossy_array.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
   transfer = direct = glossy_array = TransferArray{};
   glossy_row_texels = 0;
+  has_glossy = false;
   glossy_header = Transfer{};
+  compressed = false;
+  coeff_rows = glossy_rows = ClusterRows{};
+  cluster_color_buffer = 0;
+  light_coeffs.clear();
   has_direct = false;
   source = Source::Stored;
   slot_buffer = 0;
@@ -394,25 +451,28 @@ std::size_t glossy_row_floats(const Transfer& t) {
                               : std::size_t(t.glossy_channels()) * ((nc * nc + 3) / 4 * 4);
 }
 
-// Every vertex's glossy matrices, row v = vertex v, as glossy.comp.glsl reads
-// them, with its buffer texture. Analytic vertices store none: their
-// hemisphere product matrices are evaluated here (vertex_glossy_matrix), so
-// the shader has one path and no slots. Throws when the rows exceed the
-// buffer texture limit, before building them.
-TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh) {
-  const std::size_t row = glossy_row_floats(t), bytes = t.vertices * row * sizeof(float);
+// The glossy matrices of `vertices`, row i = vertices[i], as glossy.comp.glsl
+// reads them, with its buffer texture: every vertex's for a Transfer (row v
+// = vertex v), the analytic ones' for a compressed transfer. Analytic
+// vertices store none: their hemisphere product matrices are evaluated here
+// (vertex_glossy_matrix), so the shader reads them as it reads stored ones.
+// Throws when the rows exceed the buffer texture limit, before building them.
+TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh, const std::vector<std::size_t>& vertices) {
+  const std::size_t count = vertices.size(), row = glossy_row_floats(t), bytes = count * row * sizeof(float);
   GLint max_texels = 0;
   glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-  if (t.vertices * row / 4 > std::size_t(max_texels))
+  if (count * row / 4 > std::size_t(max_texels))
     throw Error(fmt::format("glossy matrices of {} vertices at {} bands need {} bytes on the GPU ({} per vertex); "
                             "this OpenGL's buffer texture limit is {} texels of 16 bytes ({} bytes): use fewer bands "
                             "(prt precompute --bands) or a smaller mesh",
-                            t.vertices, t.bands, bytes, row * sizeof(float), max_texels,
+                            count, t.bands, bytes, row * sizeof(float), max_texels,
                             std::size_t(max_texels) * 16));
+  if (count == 0) return {};
   const std::size_t nc = std::size_t(t.bands) * t.bands, channel = (nc * nc + 3) / 4 * 4;
-  std::vector<float> out(t.vertices * row, 0.0f);
-  for (std::size_t v = 0; v < t.vertices; ++v) {
-    float* dst = out.data() + v * row;
+  std::vector<float> out(count * row, 0.0f);
+  for (std::size_t n = 0; n < count; ++n) {
+    const std::size_t v = vertices[n];
+    float* dst = out.data() + n * row;
     if (const float* src = t.stored_glossy(v)) {
       if (t.glossy_symmetric()) std::copy_n(src, nc * (nc + 1) / 2, dst);
       else
@@ -437,16 +497,105 @@ TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh) {
   return a;
 }
 
-}  // namespace
-
-void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
-  if (const std::string p = transfer_problem(t); !p.empty()) throw Error("inconsistent transfer: " + p);
-  check_matches(t, mesh, "transfer");
+// What set_mesh refuses of any SH transfer, compressed or not: more bands
+// than the lighting block (or, glossy, the glossy pass) holds.
+void check_bands(const Transfer& t) {
   if (t.bands > kMaxRenderBands)
     throw Error(fmt::format("transfer has {} bands; the renderer takes 1 to {}", t.bands, kMaxRenderBands));
   if (t.glossy && t.bands > kMaxRenderGlossyBands)
     throw Error(fmt::format("glossy transfer has {} bands; the renderer takes glossy matrices of 1 to {}", t.bands,
                             kMaxRenderGlossyBands));
+}
+
+// A compressed signal's rows for shaders/compressed.glsl: per row the
+// cluster index, then the weights (16-bit: the integers q = w / s, two per
+// word; 32-bit: floats), in a storage buffer, and the buffer of its
+// per-cluster products (`run` vec4s per vector). Throws when a buffer
+// exceeds the storage block limit.
+ClusterRows make_cluster_rows(const ClusteredSignal& s, std::size_t run, const char* what) {
+  ClusterRows r;
+  r.vectors = s.vectors;
+  r.weight_bits = s.weight_bits;
+  r.row_words = 1 + (s.weight_bits == 16 ? (s.vectors + 1) / 2 : s.vectors);
+  const std::size_t N = std::size_t(s.vectors), rows = s.rows();
+  std::vector<std::uint32_t> words(std::max<std::size_t>(rows, 1) * std::size_t(r.row_words), 0u);
+  for (std::size_t p = 0; p < rows; ++p) {
+    std::uint32_t* w = words.data() + p * std::size_t(r.row_words);
+    const std::size_t k = s.cluster[p];
+    w[0] = s.cluster[p];
+    for (std::size_t j = 0; j < N; ++j) {
+      const float x = s.weights[p * N + j];
+      if (s.weight_bits == 16) {
+        // The integer the dequantised weight stands for (prt/compressed_transfer.h).
+        const std::int16_t q = weight_code(x, s.weight_scales[k * N + j]);
+        w[1 + j / 2] |= (std::uint32_t(std::int32_t(q)) & 0xffffu) << (16 * (j & 1));
+      } else {
+        std::memcpy(&w[1 + j], &x, sizeof(float));
+      }
+    }
+  }
+  GLint64 max_block = 0;
+  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+  r.bytes = rows * std::size_t(r.row_words) * sizeof(std::uint32_t);
+  if (r.bytes > std::size_t(max_block))
+    throw Error(fmt::format("compressed {} of {} rows need {} bytes on the GPU; this OpenGL's storage block limit "
+                            "is {} bytes",
+                            what, rows, r.bytes, max_block));
+  r.buffer = make_buffer(words.data(), words.size() * sizeof(std::uint32_t));
+  r.product_bytes = std::size_t(s.clusters) * (N + 1) * run * 16;
+  if (r.product_bytes > std::size_t(max_block))
+    throw Error(fmt::format("the per-cluster products of the compressed {} need {} bytes on the GPU; this OpenGL's "
+                            "storage block limit is {} bytes",
+                            what, r.product_bytes, max_block));
+  r.products = make_buffer(nullptr, std::max<std::size_t>(r.product_bytes, 16), GL_DYNAMIC_STORAGE_BIT);
+  r.clusters = s;
+  r.clusters.cluster.clear();
+  r.clusters.weights.clear();
+  return r;
+}
+
+// The products of cluster_lighting (or glossy_cluster_lighting: `run` RGB
+// values per vector) as the shaders read them, vec4s, each basis vector's
+// scaled by its 16-bit weights' scale (compressed.glsl's weights are the integers).
+std::vector<float> product_vec4s(const std::vector<glm::dvec3>& p, const ClusteredSignal& s, std::size_t run) {
+  const std::size_t per = std::size_t(s.vectors) + 1;
+  std::vector<float> out(std::max<std::size_t>(p.size(), 1) * 4, 0.0f);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::size_t kj = i / run, k = kj / per, j = kj % per;
+    const double scale = j == 0 || s.weight_bits != 16 ? 1.0 : double(s.weight_scales[k * (per - 1) + (j - 1)]);
+    for (int c = 0; c < 3; ++c) out[4 * i + std::size_t(c)] = float(scale * p[i][c]);
+  }
+  return out;
+}
+
+// A colour per cluster for Shading::Clusters: a hash of the index to a hue
+// of full saturation and a value in [0.55, 1] (never grey, the analytic
+// vertices' colour), linear RGB.
+glm::vec3 cluster_colour(std::uint32_t k) {
+  std::uint32_t h = k * 0x9e3779b9u;
+  h ^= h >> 16;
+  h *= 0x85ebca6bu;
+  h ^= h >> 13;
+  const float hue = float(h & 0xffffu) / 65536.0f * 6.0f, value = 0.55f + 0.45f * float((h >> 16) & 0xffu) / 255.0f;
+  const int sector = int(hue);
+  const float f = hue - float(sector);
+  const float rise = value * f, fall = value * (1.0f - f);
+  switch (sector) {
+    case 0: return {value, rise, 0.0f};
+    case 1: return {fall, value, 0.0f};
+    case 2: return {0.0f, value, rise};
+    case 3: return {0.0f, fall, value};
+    case 4: return {rise, 0.0f, value};
+    default: return {value, 0.0f, fall};
+  }
+}
+
+}  // namespace
+
+void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
+  if (const std::string p = transfer_problem(t); !p.empty()) throw Error("inconsistent transfer: " + p);
+  check_matches(t, mesh, "transfer");
+  check_bands(t);
   const std::size_t rows = t.stored_vertices();
   set_mesh(mesh, t.albedo, t.vertex_colors);
   Impl& m = *impl_;
@@ -475,26 +624,82 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
     if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), rows, t.channels, stride);
   }
   if (m.source == Source::Mixed) m.slot_buffer = make_buffer(t.slots.data(), t.slots.size() * sizeof(std::uint32_t));
-  if (!t.ao.empty()) m.ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
+  std::vector<std::size_t> every(t.glossy ? t.vertices : 0);
+  for (std::size_t v = 0; v < every.size(); ++v) every[v] = v;
+  m.finish_transfer(t, mesh, every);
+}
+
+// What both set_mesh overloads upload alike: ambient occlusion, bent
+// normals, the glossy rows of `glossy_vertices` (hemisphere matrices for
+// the analytic ones) and what the glossy pass needs of the header.
+void Renderer::Impl::finish_transfer(const Transfer& t, const Mesh& mesh, const std::vector<std::size_t>& glossy_vertices) {
+  if (!t.ao.empty()) ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
   if (!t.bent_normals.empty())
-    m.bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
+    bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
   if (t.glossy) {
-    m.glossy_array = make_glossy_array(t, mesh);
-    m.glossy_row_texels = int(glossy_row_floats(t) / 4);
+    glossy_array = make_glossy_array(t, mesh, glossy_vertices);
+    glossy_row_texels = int(glossy_row_floats(t) / 4);
+    has_glossy = true;
     // What glossy_shading_problem reads of the transfer: the header, not its arrays.
-    m.glossy_header = Transfer{};
-    m.glossy_header.bands = t.bands;
-    m.glossy_header.channels = t.channels;
-    m.glossy_header.mode = t.mode;
-    m.glossy_header.albedo = t.albedo;
-    m.glossy_header.vertex_colors = t.vertex_colors;
-    m.glossy_header.glossy = true;
-    m.set_lobe(GlossyShading{});
+    glossy_header = Transfer{};
+    glossy_header.bands = t.bands;
+    glossy_header.channels = t.channels;
+    glossy_header.mode = t.mode;
+    glossy_header.albedo = t.albedo;
+    glossy_header.vertex_colors = t.vertex_colors;
+    glossy_header.glossy = true;
+    set_lobe(GlossyShading{});
   }
   check_gl("uploading the transfer");
-  m.bands = m.band_limit = t.bands;
-  m.channels = t.channels;
-  m.shading = t.glossy ? Shading::Glossy : Shading::Transfer;
+  bands = band_limit = t.bands;
+  channels = t.channels;
+  shading = t.glossy ? Shading::Glossy : Shading::Transfer;
+}
+
+void Renderer::set_mesh(const Mesh& mesh, const CompressedTransfer& c) {
+  if (const std::string p = compressed_transfer_problem(c); !p.empty())
+    throw Error("inconsistent compressed transfer: " + p);
+  const Transfer& t = c.transfer;
+  check_matches(t, mesh, "transfer");
+  check_bands(t);
+  const std::size_t rows = t.stored_vertices(), analytic = t.vertices - rows;
+  if (t.vertices >= std::size_t(0x80000000u))
+    throw Error(fmt::format("compressed transfer of {} vertices: the renderer takes fewer than 2^31", t.vertices));
+  set_mesh(mesh, t.albedo, t.vertex_colors);
+  Impl& m = *impl_;
+  m.compressed = true;
+  m.has_direct = false;  // compress_transfer drops the direct part
+  // Analytic vertices are shaded as in the uncompressed path (from their
+  // normal in the diffuse pass, their hemisphere matrix in the glossy pass),
+  // told apart by their slot; stored rows have no dense form to fall back on.
+  m.source = rows == 0 ? Source::Analytic : analytic > 0 ? Source::Mixed : Source::Stored;
+  std::vector<std::size_t> analytic_list;
+  if (analytic > 0) {
+    // Slots: a stored vertex's row, or the top bit and the analytic vertex's index.
+    std::vector<std::uint32_t> slots(t.vertices);
+    for (std::size_t v = 0; v < t.vertices; ++v) {
+      if (t.is_analytic(v)) {
+        slots[v] = 0x80000000u | std::uint32_t(analytic_list.size());
+        analytic_list.push_back(v);
+      } else {
+        slots[v] = t.slots[v];
+      }
+    }
+    m.slot_buffer = make_buffer(slots.data(), slots.size() * sizeof(std::uint32_t));
+  }
+  if (rows > 0) {
+    m.coeff_rows = make_cluster_rows(c.coeffs, 1, "coefficients");
+    if (t.glossy) m.glossy_rows = make_cluster_rows(c.glossy, std::size_t(t.bands) * t.bands, "glossy matrices");
+  }
+  // Shading::Clusters: the glossy matrices' clusters when there are some
+  // (the larger signal, what the glossy shading decodes), else the
+  // coefficients'; analytic vertices grey.
+  const ClusteredSignal& shown = t.glossy ? c.glossy : c.coeffs;
+  std::vector<glm::vec3> colours(t.vertices, glm::vec3(0.5f));
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    if (!t.is_analytic(v)) colours[v] = cluster_colour(shown.cluster[t.slots.empty() ? v : t.slots[v]]);
+  m.cluster_color_buffer = make_buffer(colours.data(), colours.size() * sizeof(glm::vec3));
+  m.finish_transfer(t, mesh, analytic_list);
 }
 
 void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors) {
@@ -544,6 +749,7 @@ void Renderer::set_lighting(std::span<const glm::dvec3> coeffs) {
   m.light.assign(n * 4, 0.0f);
   for (std::size_t k = 0; k < n; ++k)
     for (int c = 0; c < 3; ++c) m.light[k * 4 + std::size_t(c)] = float(coeffs[k][c]);
+  m.light_coeffs.assign(coeffs.begin(), coeffs.begin() + std::ptrdiff_t(n));
   m.upload_lighting();
   m.irradiance = irradiance_matrices(coeffs);
   m.have_lighting = true;
@@ -559,6 +765,49 @@ void Renderer::Impl::upload_lighting() {
   make_current();
   glNamedBufferSubData(light_buffer, 0, GLsizeiptr(v.size() * sizeof(float)), v.data());
   check_gl("uploading the lighting");
+  upload_cluster_lighting();
+}
+
+// Compressed transfers: the per-cluster products of the lighting's first
+// band_limit^2 coefficients (the rest zero: the leading blocks of the
+// transfer, as the uncompressed passes' truncation), computed on the CPU by
+// the functions prt::relight uses, and uploaded. K (N + 1) vec4s for the
+// diffuse pass, K (N + 1) bands^2 for the glossy one.
+void Renderer::Impl::upload_cluster_lighting() {
+  if (!compressed || light_coeffs.empty() || !coeff_rows) return;
+  upload_products(coeff_rows,
+                  product_vec4s(cluster_lighting(coeff_rows.clusters, channels, bands, band_limited_lighting()),
+                                coeff_rows.clusters, 1));
+  // The glossy products (K (N + 1) bands^2, the larger part) when a glossy
+  // frame first needs them (relight()), not while another shading is shown.
+  glossy_products_stale = bool(glossy_rows);
+  if (shading == Shading::Glossy) upload_glossy_cluster_lighting();
+}
+
+void Renderer::Impl::upload_glossy_cluster_lighting() {
+  if (!glossy_products_stale) return;
+  CompressedTransfer g;  // what glossy_cluster_lighting reads: the header and the glossy clusters
+  g.transfer = glossy_header;
+  g.glossy = glossy_rows.clusters;
+  upload_products(glossy_rows, product_vec4s(glossy_cluster_lighting(g, band_limited_lighting()), glossy_rows.clusters,
+                                             std::size_t(bands) * bands));
+  glossy_products_stale = false;
+}
+
+// The lighting's first band_limit^2 coefficients, zeros after them.
+std::vector<glm::dvec3> Renderer::Impl::band_limited_lighting() const {
+  const std::size_t keep = std::size_t(band_limit) * band_limit;
+  std::vector<glm::dvec3> L(light_coeffs.size(), glm::dvec3(0.0));
+  std::copy_n(light_coeffs.begin(), std::ptrdiff_t(std::min(keep, L.size())), L.begin());
+  return L;
+}
+
+// Uploads products (vec4s) into the rows' product buffer (make_cluster_rows').
+void Renderer::Impl::upload_products(ClusterRows& r, const std::vector<float>& v) {
+  const std::size_t bytes = v.size() * sizeof(float), allocated = std::max<std::size_t>(r.product_bytes, 16);
+  PRT_CHECK_OP(bytes, ==, allocated);
+  glNamedBufferSubData(r.products, 0, GLsizeiptr(bytes), v.data());
+  check_gl("uploading the cluster lighting");
 }
 
 void Renderer::set_band_limit(int b) {
@@ -579,7 +828,8 @@ bool Renderer::has_shading(Shading s) const {
     case Shading::Transfer:
     case Shading::Unshadowed: return m.bands > 0;
     case Shading::Direct: return m.has_direct;
-    case Shading::Glossy: return m.glossy_array.texture != 0;
+    case Shading::Glossy: return m.has_glossy;
+    case Shading::Clusters: return m.cluster_color_buffer != 0;
     case Shading::AmbientOcclusion: return m.ao_buffer != 0;
     case Shading::BentNormal: return m.bent_buffer != 0;
     case Shading::VertexColors: return m.have_colors;
@@ -597,8 +847,11 @@ void Renderer::set_shading(Shading s) {
   if (s == Shading::VertexColors) PRT_CHECK(m.have_colors);
   // What the transfer file holds is data: an error to report.
   if (!has_shading(s)) {
-    const char* why = s == Shading::Direct   ? "the transfer is not interreflected"
+    const char* why = s == Shading::Direct && m.compressed
+                          ? "a compressed transfer keeps no direct part (compression drops it)"
+                      : s == Shading::Direct   ? "the transfer is not interreflected"
                       : s == Shading::Glossy ? "the transfer has no glossy matrices (prt precompute --material glossy)"
+                      : s == Shading::Clusters ? "the transfer is not compressed"
                                              : "the transfer file has no such data";
     throw Error("shading '" + std::string(shading_name(s)) + "' is unavailable: " + why);
   }
@@ -622,12 +875,13 @@ void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
 std::size_t Renderer::transfer_bytes() const {
   const Impl& m = *impl_;
   const std::size_t slots = m.source == Source::Mixed ? m.vertex_count * sizeof(std::uint32_t) : 0;
-  return m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots;
+  return m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots + m.coeff_rows.bytes +
+         m.coeff_rows.product_bytes + m.glossy_rows.bytes + m.glossy_rows.product_bytes;
 }
 
 void Renderer::set_glossy(double gloss, double specular, const glm::dvec3& diffuse) {
   Impl& m = *impl_;
-  PRT_CHECK(m.glossy_array);
+  PRT_CHECK(m.has_glossy);
   GlossyShading s;
   s.gloss = gloss;
   s.specular = specular;
@@ -639,10 +893,16 @@ void Renderer::set_glossy(double gloss, double specular, const glm::dvec3& diffu
 std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
   Impl& m = *impl_;
   PRT_CHECK(m.has_sh_transfer());
+  m.make_current();
+  if (m.shading == Shading::Clusters) {  // the colours the mesh is drawn with
+    std::vector<glm::vec3> out(m.vertex_count);
+    glGetNamedBufferSubData(m.cluster_color_buffer, 0, GLsizeiptr(out.size() * sizeof(glm::vec3)), out.data());
+    check_gl("reading the cluster colours back");
+    return out;
+  }
   PRT_CHECK(m.have_lighting);
   PRT_CHECK(m.shading == Shading::Transfer || m.shading == Shading::Direct || m.shading == Shading::Unshadowed ||
             m.shading == Shading::Glossy);
-  m.make_current();
   const GLuint buffer = m.relight(eye);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   std::vector<float> rgba(m.vertex_count * 4);
@@ -780,10 +1040,15 @@ GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
     if (s == Source::Mixed) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, slot_buffer);
   }
   glBindTextureUnit(3, a.texture);
+  if (compressed && s != Source::Analytic) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, coeff_rows.buffer);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, coeff_rows.products);
+  }
   glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);
   glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
   if (shading == Shading::Glossy) {
+    if (compressed) upload_glossy_cluster_lighting();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the glossy pass reads the diffuse radiance
     glUseProgram(glossy_program(band_limit * band_limit));
     glUniform1ui(0, GLuint(vertex_count));
@@ -791,6 +1056,11 @@ GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
     glUniform3fv(2, 1, &diffuse_scale[0]);
     glUniform1fv(3, kMaxRenderBands, lobe_factors.data());
     glBindTextureUnit(4, glossy_array.texture);
+    if (compressed && glossy_rows) {
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, glossy_rows.buffer);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, glossy_rows.products);
+      if (source == Source::Mixed) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, slot_buffer);
+    }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, position_buffer);
     glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
@@ -808,7 +1078,11 @@ void Renderer::Impl::draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye
     stride = 4 * sizeof(float);
     mode = attribute_mode(Shading::VertexColors);
   } else {
-    data = mode == 1 ? normal_buffer : mode == 2 ? ao_buffer : mode == 3 ? bent_buffer : color_buffer;
+    data = mode == 1                    ? normal_buffer
+           : mode == 2                  ? ao_buffer
+           : mode == 3                  ? bent_buffer
+           : shading == Shading::Clusters ? cluster_color_buffer
+                                        : color_buffer;
     if (mode == 2) stride = sizeof(float);
   }
   glEnable(GL_DEPTH_TEST);

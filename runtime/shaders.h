@@ -4,6 +4,7 @@
 namespace prt::shaders {
 extern const char* const relight_comp_glsl;
 extern const char* const glossy_comp_glsl;
+extern const char* const compressed_glsl;  // inserted after the #defines of a compressed program
 extern const char* const mesh_frag_glsl;
 extern const char* const background_vert_glsl;
 extern const char* const background_frag_glsl;

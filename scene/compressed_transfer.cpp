@@ -95,7 +95,7 @@ std::string signal_problem(const ClusteredSignal& s, std::size_t rows, std::size
 }
 
 void check(const CompressedTransfer& c) {
-  if (auto p = compressed_transfer_problem(c); !p.empty()) throw Error("compressed transfer: " + p);
+  if (const std::string p = compressed_transfer_problem(c); !p.empty()) throw Error("compressed transfer: " + p);
 }
 
 // The transfer with every stored row zero: what relight() needs for its
@@ -105,26 +105,6 @@ Transfer zero_rows(const CompressedTransfer& c) {
   t.coeffs.assign(t.stored_vertices() * t.stride(), 0.0f);
   if (t.glossy) t.glossy_matrices.assign(t.stored_vertices() * t.glossy_stride(), 0.0f);
   return t;
-}
-
-// Per cluster, the lighting through its mean and each basis vector of the
-// coefficients: [k][j] (j = 0 the mean, 1.. the basis), RGB.
-std::vector<glm::dvec3> cluster_products(const ClusteredSignal& s, int channels, int nc,
-                                         const std::vector<glm::dvec3>& light) {
-  const int per = s.vectors + 1;
-  std::vector<glm::dvec3> out(std::size_t(s.clusters) * per, glm::dvec3(0.0));
-  for (int k = 0; k < s.clusters; ++k)
-    for (int j = 0; j < per; ++j) {
-      const float* v = j == 0 ? s.means.data() + std::size_t(k) * s.dim
-                              : s.bases.data() + (std::size_t(k) * s.vectors + (j - 1)) * s.dim;
-      glm::dvec3 r(0.0);
-      for (int c = 0; c < 3; ++c) {
-        const float* vc = v + (channels == 1 ? 0 : std::size_t(c) * nc);
-        for (int i = 0; i < nc; ++i) r[c] += double(vc[i]) * light[std::size_t(i)][c];
-      }
-      out[std::size_t(k) * per + j] = r;
-    }
-  return out;
 }
 
 // The diffuse radiance of every stored row: mean product + sum_j w_j basis product.
@@ -156,39 +136,33 @@ std::string compressed_transfer_problem(const CompressedTransfer& c) {
   return {};
 }
 
-Transfer decompress(const CompressedTransfer& c) {
-  check(c);
-  Transfer t = c.transfer;
-  const std::size_t rows = t.stored_vertices();
-  t.coeffs.assign(rows * t.stride(), 0.0f);
-  for (std::size_t r = 0; r < rows; ++r) c.coeffs.reconstruct(r, t.coeffs.data() + r * t.stride());
-  if (t.glossy) {
-    t.glossy_matrices.assign(rows * t.glossy_stride(), 0.0f);
-    for (std::size_t r = 0; r < rows; ++r) c.glossy.reconstruct(r, t.glossy_matrices.data() + r * t.glossy_stride());
-  }
-  return t;
-}
-
-std::vector<glm::vec3> relight(const CompressedTransfer& c, const Mesh& mesh, const std::vector<glm::dvec3>& light) {
-  check(c);
-  const Transfer z = zero_rows(c);
-  std::vector<glm::vec3> out = relight(z, mesh, light);  // analytic vertices; checks the lighting's size
-  const std::vector<glm::dvec3> p = cluster_products(c.coeffs, z.channels, z.bands * z.bands, light);
-  for_stored(z, [&](std::size_t v, std::size_t r) { out[v] = glm::vec3(row_radiance(c.coeffs, p, r)); });
+std::vector<glm::dvec3> cluster_lighting(const ClusteredSignal& s, int channels, int bands,
+                                         std::span<const glm::dvec3> light) {
+  const int nc = bands * bands, per = s.vectors + 1;
+  PRT_CHECK_OP(light.size(), >=, std::size_t(nc));
+  PRT_CHECK_OP(s.dim, ==, std::size_t(channels) * nc);
+  std::vector<glm::dvec3> out(std::size_t(s.clusters) * per, glm::dvec3(0.0));
+  for (int k = 0; k < s.clusters; ++k)
+    for (int j = 0; j < per; ++j) {
+      const float* v = j == 0 ? s.means.data() + std::size_t(k) * s.dim
+                              : s.bases.data() + (std::size_t(k) * s.vectors + (j - 1)) * s.dim;
+      glm::dvec3 r(0.0);
+      for (int c = 0; c < 3; ++c) {
+        const float* vc = v + (channels == 1 ? 0 : std::size_t(c) * nc);
+        for (int i = 0; i < nc; ++i) r[c] += double(vc[i]) * light[std::size_t(i)][c];
+      }
+      out[std::size_t(k) * per + j] = r;
+    }
   return out;
 }
 
-std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& mesh,
-                                      const std::vector<glm::dvec3>& light, const GlossyShading& s) {
-  check(c);
-  const Transfer z = zero_rows(c);
-  std::vector<glm::vec3> out = relight_glossy(z, mesh, light, s);  // analytic vertices; checks the shading
-  const int n = z.bands;
-  const std::size_t nc = std::size_t(n) * n;
-  const glm::dvec3 scale = glossy_diffuse_scale(z, s);
-  const std::vector<glm::dvec3> p = cluster_products(c.coeffs, z.channels, int(nc), light);
-  // Per cluster: M L for its mean and each basis matrix, nc RGB values each.
+std::vector<glm::dvec3> glossy_cluster_lighting(const CompressedTransfer& c, std::span<const glm::dvec3> light) {
+  const Transfer& z = c.transfer;
+  PRT_CHECK(z.glossy);
+  const std::size_t nc = std::size_t(z.bands) * z.bands;
+  PRT_CHECK_OP(light.size(), >=, nc);
   const ClusteredSignal& g = c.glossy;
+  PRT_CHECK_OP(g.dim, ==, z.glossy_stride());
   const int per = g.vectors + 1, gch = z.glossy_channels();
   std::vector<glm::dvec3> ml(std::size_t(g.clusters) * per * nc, glm::dvec3(0.0));
   tbb::parallel_for(0, g.clusters, [&](int k) {
@@ -212,6 +186,43 @@ std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& m
       }
     }
   });
+  return ml;
+}
+
+Transfer decompress(const CompressedTransfer& c) {
+  check(c);
+  Transfer t = c.transfer;
+  const std::size_t rows = t.stored_vertices();
+  t.coeffs.assign(rows * t.stride(), 0.0f);
+  for (std::size_t r = 0; r < rows; ++r) c.coeffs.reconstruct(r, t.coeffs.data() + r * t.stride());
+  if (t.glossy) {
+    t.glossy_matrices.assign(rows * t.glossy_stride(), 0.0f);
+    for (std::size_t r = 0; r < rows; ++r) c.glossy.reconstruct(r, t.glossy_matrices.data() + r * t.glossy_stride());
+  }
+  return t;
+}
+
+std::vector<glm::vec3> relight(const CompressedTransfer& c, const Mesh& mesh, const std::vector<glm::dvec3>& light) {
+  check(c);
+  const Transfer z = zero_rows(c);
+  std::vector<glm::vec3> out = relight(z, mesh, light);  // analytic vertices; checks the lighting's size
+  const std::vector<glm::dvec3> p = cluster_lighting(c.coeffs, z.channels, z.bands, light);
+  for_stored(z, [&](std::size_t v, std::size_t r) { out[v] = glm::vec3(row_radiance(c.coeffs, p, r)); });
+  return out;
+}
+
+std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& mesh,
+                                      const std::vector<glm::dvec3>& light, const GlossyShading& s) {
+  check(c);
+  const Transfer z = zero_rows(c);
+  std::vector<glm::vec3> out = relight_glossy(z, mesh, light, s);  // analytic vertices; checks the shading
+  const int n = z.bands;
+  const std::size_t nc = std::size_t(n) * n;
+  const glm::dvec3 scale = glossy_diffuse_scale(z, s);
+  const std::vector<glm::dvec3> p = cluster_lighting(c.coeffs, z.channels, n, light);
+  const ClusteredSignal& g = c.glossy;
+  const int per = g.vectors + 1;
+  const std::vector<glm::dvec3> ml = glossy_cluster_lighting(c, light);  // [k][j][i], nc RGB per matrix
   const std::vector<double> lambda = glossy::phong_lobe_factors(s.gloss, n);
   for_stored(z, [&](std::size_t v, std::size_t r) {
     glm::dvec3 rgb = glm::dvec3(out[v]) + scale * row_radiance(c.coeffs, p, r);  // out[v]: 0 for a stored row

@@ -15,8 +15,16 @@
 //     matrices, each padded to CH_FLOATS (a multiple of 4) floats.
 // Only the leading COEFFS x COEFFS block is used (live band truncation: the
 // transfer of BANDS bands); NC = the file's bands^2 fixes the layout.
-// The renderer compiles one program per (COEFFS, NC, GCH, SYMMETRIC),
-// inserting the #defines after the version line.
+// The renderer compiles one program per (COEFFS, NC, GCH, SYMMETRIC,
+// COMPRESSED, ...), inserting the #defines after the version line.
+//
+// COMPRESSED 1 (a prt::CompressedTransfer, compressed.glsl): a stored row's
+// M_p L is P[k][0] + sum_j w_j P[k][1 + j], the per-frame products of each
+// cluster's mean and basis matrices with the lighting (PRODUCT_RUN = NC
+// vec4s each, the renderer's glossy_cluster_lighting), so the lobe is
+// sum_j w_j (sum_i w_i P[k][j]_i) with w_0 = 1. SOURCE 1: slots[v] says
+// whether vertex v is stored (its row) or analytic (top bit; the low bits
+// number its hemisphere matrix's row in u_glossy, which holds only those).
 layout(local_size_x = 64) in;
 
 layout(binding = 4) uniform samplerBuffer u_glossy;
@@ -117,6 +125,38 @@ vec3 glossy_part(int base, const float w[COEFFS]) {
   return g;
 }
 
+#if COMPRESSED
+#if SOURCE == 1
+layout(std430, binding = 4) readonly buffer SlotBuffer { uint slots[]; };
+#endif
+
+vec3 compressed_glossy_part(uint row, const float w[COEFFS]) {
+  const int base = cluster_run(row);
+  vec3 g = vec3(0.0);
+  for (int j = 0; j <= VECTORS; ++j) {
+    vec3 s = vec3(0.0);
+    for (int i = 0; i < COEFFS; ++i) s += w[i] * products[base + j * PRODUCT_RUN + i].rgb;
+    g += (j == 0 ? 1.0 : row_weight(row, j - 1)) * s;
+  }
+  return g;
+}
+#endif
+
+// The glossy part of vertex v toward the eye: its row's matrices, or its cluster's products.
+vec3 vertex_glossy_part(uint v, const float w[COEFFS]) {
+#if COMPRESSED
+#if SOURCE == 1
+  const uint slot = slots[v];
+  if ((slot & 0x80000000u) != 0u) return glossy_part(int(slot & 0x7fffffffu) * ROW_TEXELS, w);
+  return compressed_glossy_part(slot, w);
+#else
+  return compressed_glossy_part(v, w);
+#endif
+#else
+  return glossy_part(int(v) * ROW_TEXELS, w);
+#endif
+}
+
 void main() {
   const uint v = gl_GlobalInvocationID.x;
   if (v >= u_vertices) return;
@@ -131,7 +171,7 @@ void main() {
     if (ndv > 0.0) {  // the eye above the vertex's horizon; else the diffuse part alone
       float w[COEFFS];
       lobe_basis(2.0 * ndv * n - view, w);
-      r += glossy_part(int(v) * ROW_TEXELS, w);
+      r += vertex_glossy_part(v, w);
     }
   }
   radiance[v] = vec4(r, 1.0);

@@ -24,6 +24,16 @@
 //   1 mixed: slots[v] is the row of vertex v, or 0xffffffff for an analytic
 //     vertex, whose transfer is the clamped cosine about its normal;
 //   2 analytic: every vertex (Shading::Unshadowed; no transfer at all).
+// An analytic slot has its top bit set: 0xffffffff from a prt::Transfer;
+// compressed transfers number their analytic vertices in the low 31 bits
+// (glossy.comp.glsl reads their rows by it).
+//
+// COMPRESSED 1 (a prt::CompressedTransfer, compressed.glsl): a stored row is
+// no vector but its cluster k and N = VECTORS weights, and the per-frame
+// products of the lighting with each cluster's mean and basis vectors
+// (PRODUCT_RUN = 1 vec4 each, the renderer's cluster_lighting) give
+// B = P[k][0] + sum_j w_j P[k][1 + j]; the lighting block serves analytic
+// vertices only.
 layout(local_size_x = 64) in;
 
 layout(binding = 3) uniform samplerBuffer u_transfer;
@@ -34,7 +44,7 @@ layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; }
 layout(location = 0) uniform uint u_vertices;
 
 const int FETCHES = (COEFFS + 3) / 4;
-const uint ANALYTIC = 0xffffffffu;
+const uint ANALYTIC_BIT = 0x80000000u;
 
 #if SOURCE == 1
 layout(std430, binding = 4) readonly buffer SlotBuffer { uint slots[]; };
@@ -101,6 +111,14 @@ vec3 analytic_radiance(uint v) {
 }
 #endif
 
+#if COMPRESSED
+vec3 stored_radiance(uint row) {
+  const int base = cluster_run(row);
+  vec3 r = products[base].rgb;
+  for (int j = 0; j < VECTORS; ++j) r += row_weight(row, j) * products[base + 1 + j].rgb;
+  return r;
+}
+#else
 vec3 stored_radiance(uint row) {
   const int base = int(row) * (CHANNELS * VEC4S);
   vec3 r = vec3(0.0);
@@ -119,6 +137,7 @@ vec3 stored_radiance(uint row) {
   }
   return r;
 }
+#endif
 
 void main() {
   const uint v = gl_GlobalInvocationID.x;
@@ -127,7 +146,7 @@ void main() {
   const vec3 r = stored_radiance(v);
 #elif SOURCE == 1
   const uint row = slots[v];
-  const vec3 r = row == ANALYTIC ? analytic_radiance(v) : stored_radiance(row);
+  const vec3 r = (row & ANALYTIC_BIT) != 0u ? analytic_radiance(v) : stored_radiance(row);
 #else
   const vec3 r = analytic_radiance(v);
 #endif

@@ -5,6 +5,8 @@
 
 #include <prt/vertex_csv.h>
 #include <prt/compare.h>
+#include <prt/precompute.h>
+#include <prt/compression_error.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/projection.h>
@@ -279,6 +281,123 @@ void expect_refused(const TempDir& dir, const Result& r, int code, const std::st
   EXPECT_NE(r.err.find(message), std::string::npos) << what << ": expected '" << message << "'\n" << r.err;
   std::sort(inputs.begin(), inputs.end());
   EXPECT_EQ(dir.listing(), inputs) << what << ": something was written";
+}
+
+// ---- prt compress (docs/COMPRESSION.md) ------------------------------------------------
+
+std::string repo_envmap(const std::string& name) { return std::string(PRT_SOURCE_DIR) + "/envmaps/" + name; }
+
+std::string stderr_number_after(const std::string& err, const std::string& label) {
+  const std::size_t at = err.find(label);
+  if (at == std::string::npos) return {};
+  return err.substr(at + label.size(), err.find('\n', at) - at - label.size());
+}
+
+TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(6));
+  const std::string mesh = dir.file("fb.off"), env = repo_envmap("forest.exr");
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--material", "glossy", "--bands", "3",
+                          "--samples", "128", "-q"}).code, 0);
+  const Result c = run_prt(dir, {"compress", dir.file("t.prt"), "-o", dir.file("c.prt"), "--clusters", "4", "--pca",
+                                 "3", "--weights", "32", "--mesh", mesh, "--env", env});
+  ASSERT_EQ(c.code, 0) << describe_run(c);
+  // The library, on the same file and options: the same bytes.
+  const Transfer t = read_transfer(dir.file("t.prt"));
+  CompressOptions o;
+  o.clusters = 4;
+  o.vectors = 3;
+  o.weight_bits = 32;
+  const CompressedTransfer lib = compress_transfer(t, o);
+  write_compressed_transfer(dir.file("lib.prt"), lib);
+  EXPECT_EQ(read_file(dir.file("c.prt")), read_file(dir.file("lib.prt")));
+  // The error it printed is compression_error's (4 significant digits).
+  const Mesh m = load_mesh(mesh);
+  CompressionErrorOptions e;
+  e.lights.push_back(project(load_envmap(env), 3));
+  e.eyes = eye_ring(m, 8);
+  const double want = compression_error(t, lib, m, e);
+  const std::string printed = stderr_number_after(c.err, "views at e = 16): ");
+  ASSERT_FALSE(printed.empty()) << c.err;
+  EXPECT_NEAR(std::stod(printed), want, 1e-3 * want) << c.err;
+  // relight of the compressed file: the library's per-cluster relighting.
+  const Result r = run_prt(dir, {"relight", mesh, dir.file("c.prt"), env, "-o", dir.file("c.csv"), "--eye", "0.5,2,1",
+                                 "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  GlossyShading s;
+  s.eye = {0.5, 2, 1};
+  const std::vector<glm::vec3> lit = relight_glossy(read_compressed_transfer(dir.file("c.prt")), m,
+                                                    project(load_envmap(env), 3), s);
+  const std::vector<glm::vec3> got = read_vertex_csv(dir.file("c.csv"));
+  ASSERT_EQ(got.size(), lit.size());
+  for (std::size_t v = 0; v < got.size(); ++v)
+    for (int ch = 0; ch < 3; ++ch) ASSERT_NEAR(got[v][ch], lit[v][ch], 1e-6 * (1 + std::abs(lit[v][ch]))) << v;
+  // info names the clusters, in text and JSON.
+  const Result info = run_prt(dir, {"info", dir.file("c.prt")});
+  EXPECT_NE(info.out.find("4 clusters x 3 principal vectors"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("format version 4"), std::string::npos) << info.out;
+  const Result json = run_prt(dir, {"info", dir.file("c.prt"), "--json"});
+  EXPECT_NE(json.out.find("\"glossy_matrices\""), std::string::npos) << json.out;
+  // precompute --compress: the same file as precompute then compress.
+  const Result p = run_prt(dir, {"precompute", mesh, "-o", dir.file("p.prt"), "--material", "glossy", "--bands", "3",
+                                 "--samples", "128", "--compress", "4x3", "--compress-weights", "32", "-q"});
+  ASSERT_EQ(p.code, 0) << describe_run(p);
+  EXPECT_EQ(read_file(dir.file("p.prt")), read_file(dir.file("c.prt")));
+}
+
+TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(6));
+  const std::string mesh = dir.file("fb.off"), env = repo_envmap("studio.exr");
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--bands", "4", "--samples", "128", "-q"}).code,
+            0);
+  const Result c = run_prt(dir, {"compress", dir.file("t.prt"), "-o", dir.file("c.prt"), "--target-error", "0.02",
+                                 "--mesh", mesh, "--env", env});
+  ASSERT_EQ(c.code, 0) << describe_run(c);
+  const Transfer t = read_transfer(dir.file("t.prt"));
+  const Mesh m = load_mesh(mesh);
+  CompressionErrorOptions e;
+  e.lights.push_back(project(load_envmap(env), 4));
+  const CompressionChoice want = choose_compression(t, m, e, 0.02);
+  EXPECT_NE(c.err.find(want.explanation), std::string::npos) << c.err << "\nwanted: " << want.explanation;
+  const CompressedTransfer got = read_compressed_transfer(dir.file("c.prt"));
+  EXPECT_EQ(got.coeffs.clusters, want.compressed.coeffs.clusters);
+  EXPECT_EQ(got.coeffs.vectors, want.compressed.coeffs.vectors);
+  EXPECT_LE(want.error, 0.02);
+}
+
+TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(4));
+  const std::string mesh = dir.file("fb.off"), env = repo_envmap("studio.exr"), in = dir.file("t.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", in, "--bands", "3", "--samples", "32", "-q"}).code, 0);
+  ASSERT_EQ(run_prt(dir, {"compress", in, "-o", dir.file("c.prt"), "-q"}).code, 0);
+  struct Case {
+    std::vector<std::string> args;
+    int code;
+    std::string words;
+  };
+  const std::string out = dir.file("out.prt");
+  const std::vector<Case> cases = {
+      {{"compress", dir.file("c.prt"), "-o", out}, 1, "already compressed"},
+      {{"compress", in, "-o", out, "--target-error", "0.01"}, 2, "needs --mesh MESH and --env MAP"},
+      {{"compress", in, "-o", out, "--target-error", "0.01", "--clusters", "4", "--mesh", mesh, "--env", env}, 2,
+       "give the target or the two"},
+      {{"compress", in, "-o", out, "--weights", "8"}, 2, "--weights"},
+      {{"compress", in, "-o", out, "--views", "4"}, 2, "--views shapes the views"},
+      {{"compress", in, "-o", in}, 2, "is the input IN"},
+      {{"compress", in, "-o", out, "--mesh", dir.file("missing.off"), "--env", env}, 1, "missing.off"},
+      {{"compress", in, "-o", out, "--target-error", "1e-7", "--mesh", mesh, "--env", env}, 1, "reaches relit error"},
+      {{"precompute", mesh, "-o", out, "--compress", "4"}, 2, "expected KxN"},
+      {{"precompute", mesh, "-o", out, "--compress-weights", "32"}, 2, "--compress-weights is for --compress"},
+      {{"relight", mesh, dir.file("c.prt"), env, "-o", dir.file("x.csv"), "--direct"}, 1, "needs an interreflected"},
+  };
+  for (const Case& k : cases) {
+    const Result r = run_prt(dir, k.args);
+    EXPECT_EQ(r.code, k.code) << describe_run(r);
+    EXPECT_NE(r.err.find(k.words), std::string::npos) << describe_run(r);
+    EXPECT_FALSE(std::filesystem::exists(out)) << describe_run(r);
+  }
 }
 
 TEST(MalformedInput, MeshesAreRefusedByPrecomputeAndReference) {

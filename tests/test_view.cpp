@@ -309,6 +309,19 @@ TEST(ViewInput, GlossyKeys) {
   EXPECT_EQ(s.gloss, 1.0);
 }
 
+TEST(ViewInput, CTogglesClusterColours) {
+  ViewState s;
+  EXPECT_FALSE(s.clusters);
+  on_key(s, input::kKeyC, input::kPress, 0);
+  EXPECT_TRUE(s.clusters);
+  on_key(s, input::kKeyC, input::kRelease, 0);  // releases do nothing
+  EXPECT_TRUE(s.clusters);
+  on_key(s, input::kKeyC, input::kPress, 0);
+  EXPECT_FALSE(s.clusters);
+  EXPECT_EQ(parse_shading("clusters"), Shading::Clusters);
+  EXPECT_EQ(shading_name(Shading::Clusters), "clusters");
+}
+
 TEST(ViewInput, MouseOrbitsZoomsAndTurnsTheEnvironment) {
   ViewState s;
   on_cursor(s, 10, 10);  // no button: nothing turns

@@ -1,7 +1,8 @@
 // prt/compressed_transfer.h - transfer compressed by clustered PCA (Sloan,
 // Hall, Hart & Snyder 2003; issue 16, in progress: the data, its CPU
-// relighting and decompression; files, `prt compress` and the GPU decode are
-// to come). The fit is prt::precompute's (prt/cpca.h, compress_transfer in
+// relighting and decompression, and the per-cluster products the renderer
+// decodes with on the GPU (prt/render.h); files and `prt compress` are to
+// come). The fit is prt::precompute's (prt/cpca.h, compress_transfer in
 // prt/precompute.h).
 //
 // A stored row x_p of a transfer (a vertex's diffuse coefficients, all its
@@ -20,6 +21,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <span>
+#include <string>
 #include <vector>
 
 namespace prt {
@@ -80,6 +83,23 @@ struct CompressedTransfer {
 // their sizes, cluster indices below clusters, every value finite, 16-bit
 // weights multiples of their scale within 32767 steps.
 std::string compressed_transfer_problem(const CompressedTransfer& c);
+
+// The per-cluster lighting products, shared by the CPU relighting below and
+// the renderer (prt/render.h), which uploads them each frame:
+//
+// cluster_lighting: the lighting through cluster k's mean (j = 0) and basis
+// vector j - 1 (j = 1..N) of a diffuse signal whose rows are `channels` (1
+// or 3) runs of bands^2 coefficients, out[k (N + 1) + j] RGB (one channel
+// serves R, G and B). `light` holds at least bands^2 coefficients; only
+// those are read.
+std::vector<glm::dvec3> cluster_lighting(const ClusteredSignal& s, int channels, int bands,
+                                         std::span<const glm::dvec3> light);
+// glossy_cluster_lighting: M L for cluster k's mean matrix (j = 0) and each
+// basis matrix (j = 1..N) of c.glossy, in c.transfer's glossy layout
+// (packed symmetric, or nc x nc per channel): out[(k (N + 1) + j) nc + i] =
+// (M_kj L)_i RGB, nc = bands^2. Contract (prt::InternalError): c.transfer is
+// glossy and `light` holds at least nc coefficients.
+std::vector<glm::dvec3> glossy_cluster_lighting(const CompressedTransfer& c, std::span<const glm::dvec3> light);
 
 // The transfer the compressed one approximates, every row reconstructed.
 Transfer decompress(const CompressedTransfer& c);

@@ -40,6 +40,7 @@
 // caller: PRT_CHECK throws prt::InternalError. Each method says which.
 #pragma once
 
+#include <prt/compressed_transfer.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/mesh.h>
@@ -76,8 +77,10 @@ enum class Shading {
   VertexColors,      // linear RGB per vertex from set_vertex_colors (CPU relighting, e.g. wavelets)
   Glossy,            // glossy files only: the transfer's diffuse part plus the view-dependent Phong lobe
                      // (prt::relight_glossy toward the camera's eye; set_glossy), both on the GPU
+  Clusters,          // compressed transfers only: each stored vertex coloured by a hash of its cluster (the
+                     // glossy matrices' clusters when it has them, else the coefficients'), analytic ones grey
 };
-// "transfer", "direct", "unshadowed", "lambert", "ao", "bent", "colors", "glossy"
+// "transfer", "direct", "unshadowed", "lambert", "ao", "bent", "colors", "glossy", "clusters"
 std::string_view shading_name(Shading s);
 Shading parse_shading(std::string_view name);  // throws prt::Error listing the names
 
@@ -162,6 +165,19 @@ class Renderer {
   // matrices of more than kMaxRenderGlossyBands bands or more bytes than
   // this OpenGL's buffer texture limit (the message names both).
   void set_mesh(const Mesh& mesh, const Transfer& transfer);
+  // Uploads a compressed transfer (prt/compressed_transfer.h; docs/RUNTIME.md
+  // "Compressed transfer"): per stored row only its cluster index and N
+  // weights (16-bit weights as 16-bit integers), per vertex a slot when some
+  // are analytic, and for a glossy transfer the analytic vertices' hemisphere
+  // matrices. set_lighting then computes the per-cluster products on the CPU
+  // (cluster_lighting, glossy_cluster_lighting: what prt::relight uses) and
+  // uploads them; the passes combine each row's weights with them, so
+  // vertex_radiance is relight(c) / relight_glossy(c) up to float rounding.
+  // Shadings: Transfer, Glossy (glossy transfers), Unshadowed, Lambert, AO
+  // and BentNormal when the transfer has them, and Clusters; not Direct
+  // (compression drops the direct part). The errors of the overload above,
+  // and prt::Error with compressed_transfer_problem's message.
+  void set_mesh(const Mesh& mesh, const CompressedTransfer& transfer);
   // Uploads the mesh alone, with no SH transfer (e.g. for wavelet relighting
   // on the CPU): Shading::VertexColors (after set_vertex_colors) and Lambert
   // (albedo: `albedo`, or the mesh's colours when vertex_colors) are available.
@@ -176,8 +192,11 @@ class Renderer {
   // without slots. Glossy transfers add their matrices, one row per vertex
   // (analytic vertices' hemisphere matrices evaluated by set_mesh; see
   // docs/RUNTIME.md, "Glossy"): glossy_stride() floats padded to a multiple
-  // of 4 (per channel when interreflected). Normals, positions and colours
-  // are not counted (every shading mode has them).
+  // of 4 (per channel when interreflected). Compressed transfers: their
+  // rows' words (4 bytes of cluster index, then the weights: 2 or 4 bytes
+  // each, padded to 4 bytes a row), the slots, the analytic vertices' glossy
+  // rows and the per-cluster product buffers (16 bytes per product).
+  // Normals, positions and colours are not counted (every shading mode has them).
   std::size_t transfer_bytes() const;
 
   // The lighting of the next frames: RGB coefficients, at least bands()^2
@@ -197,8 +216,9 @@ class Renderer {
   // What the mesh shows (default Transfer, Glossy for a glossy transfer;
   // set_mesh resets it). has_shading says whether the uploaded mesh and
   // transfer support a mode: Glossy needs glossy matrices, Direct needs
-  // an interreflected transfer, AmbientOcclusion and BentNormal a file that
-  // has them, VertexColors a set_vertex_colors call. set_shading throws
+  // an interreflected transfer (never a compressed one), AmbientOcclusion
+  // and BentNormal a file that has them, VertexColors a set_vertex_colors
+  // call, Clusters a compressed transfer. set_shading throws
   // prt::Error for a mode the transfer file has no data for (Direct of a
   // transfer that is not interreflected, AmbientOcclusion or BentNormal of a
   // file without them: "shading 'ao' is unavailable: ..."). Contract
@@ -228,7 +248,8 @@ class Renderer {
   // radiance the mesh is drawn with: linear RGB, one per vertex, what
   // prt::relight (relight_glossy at that eye) computes. For tests and tools.
   // Contract (prt::InternalError): a transfer and lighting are uploaded and
-  // the shading is one of those four.
+  // the shading is one of those four. In Shading::Clusters: the cluster
+  // colours the mesh is drawn with (no lighting needed).
   std::vector<glm::vec3> vertex_radiance(const glm::dvec3& eye);
 
   // Background: a lat-long or cube map (uploaded once as a float texture),

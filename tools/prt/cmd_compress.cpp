@@ -83,7 +83,7 @@ int run_compress(CompressArgs& a) {
   std::string explanation;
   double error = -1;
   const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "compress", [&](const Progress& progress) {
-    if (a.target > 0) {
+    if (a.target_opt->count() > 0) {
       CompressionChoice choice = choose_compression(t, mesh, errors, a.target, a.opt.weight_bits, progress);
       explanation = choice.explanation;
       error = choice.error;
@@ -152,7 +152,7 @@ Run add_compress(CLI::App& app) {
   s->add_option("--seed", a->opt.seed, "Seed of the k-means++ seeding")->capture_default_str();
   a->target_opt = s->add_option("--target-error", a->target,
                                 "Choose K x N: the smallest whose relit error is at most this (in (0, 1))")
-                      ->check(CLI::Range(1e-9, 1.0 - 1e-9));
+                      ->check(CLI::Range(0.0, 1.0));  // 0 and 1 refused by choose_compression, saying why
   a->mesh_opt = s->add_option("--mesh", a->mesh, "The mesh the transfer was computed for (to measure the error)");
   a->env_opt = s->add_option("--env", a->envs, "Environment map the error is measured under (repeatable)");
   a->views_opt = s->add_option("--views", a->views, "Glossy: eye points on a ring around the mesh")

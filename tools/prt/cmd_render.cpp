@@ -52,7 +52,7 @@ int run_render(const RenderArgs& a) {
                     {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
   for_path("--output", [&] { check_image_output(a.output); });
 
-  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true);
+  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true);
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
@@ -86,7 +86,10 @@ int run_render(const RenderArgs& a) {
     if (look.shading == Shading::Direct) check_direct(t, a.transfer, "--shading direct");
     if (look.shading == Shading::Glossy && !glossy)
       throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
-    renderer.set_mesh(mesh, t);
+    if (scene.compressed)
+      renderer.set_mesh(mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
+    else
+      renderer.set_mesh(mesh, t);
     renderer.set_band_limit(look.bands);
     renderer.set_shading(look.shading);
     if (glossy) {  // the file's rules for --diffuse (an interreflected file takes its own albedo or 0)

@@ -46,6 +46,7 @@ constexpr const char* kControls =
     "          (lighting and background together) | space toggle auto-rotate of the environment\n"
     "          M / shift+M next / previous shading: glossy (glossy files), transfer, direct (interreflected\n"
     "            files), unshadowed, lambert (no PRT), ambient occlusion, bent normals (files that have them)\n"
+    "          C toggle cluster colours (compressed transfers: each vertex's cluster, analytic ones grey)\n"
     "          L / shift+L glossy exponent e x2 / /2 (0 to 4096) | = / - glossy strength rho_s +- 0.05 (0 to 1)\n"
     "          0 all bands, 1-9 shade with that many bands (16 -> 9 -> 4 coefficients: 4, 3, 2)\n"
     "          W cycle SH windowing: none, hanning, lanczos, auto\n"
@@ -99,7 +100,7 @@ static_assert(input::kRelease == GLFW_RELEASE && input::kPress == GLFW_PRESS && 
 static_assert(input::kModShift == GLFW_MOD_SHIFT);
 static_assert(input::kMouseLeft == GLFW_MOUSE_BUTTON_LEFT && input::kMouseRight == GLFW_MOUSE_BUTTON_RIGHT);
 static_assert(input::kKeySpace == GLFW_KEY_SPACE && input::kKey0 == GLFW_KEY_0 && input::kKey9 == GLFW_KEY_9);
-static_assert(input::kKeyB == GLFW_KEY_B && input::kKeyE == GLFW_KEY_E && input::kKeyG == GLFW_KEY_G &&
+static_assert(input::kKeyB == GLFW_KEY_B && input::kKeyC == GLFW_KEY_C && input::kKeyE == GLFW_KEY_E && input::kKeyG == GLFW_KEY_G &&
               input::kKeyH == GLFW_KEY_H && input::kKeyM == GLFW_KEY_M && input::kKeyN == GLFW_KEY_N &&
               input::kKeyP == GLFW_KEY_P && input::kKeyQ == GLFW_KEY_Q && input::kKeyR == GLFW_KEY_R &&
               input::kKeyS == GLFW_KEY_S && input::kKeyT == GLFW_KEY_T && input::kKeyW == GLFW_KEY_W &&
@@ -131,6 +132,7 @@ std::string shading_label(Shading s, const Transfer& t) {
     case Shading::BentNormal: return "bent normals";
     case Shading::VertexColors: return "vertex colours";
     case Shading::Glossy: return "glossy " + std::string(transfer_mode_name(t.mode));
+    case Shading::Clusters: return "compression clusters";
   }
   return "?";
 }
@@ -157,7 +159,7 @@ void save_window(const std::string& path, const std::vector<unsigned char>& code
 
 // MESH, TRANSFER and ENV, and with --second the transfer of the other basis.
 Scene load_view_scene(const ViewArgs& a, bool& have_sh, bool& have_wavelet) {
-  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true);
+  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true, true);
   have_sh = scene.basis == TransferBasis::SH;
   have_wavelet = !have_sh;
   if (!a.second.empty()) {  // the other basis, for the same mesh
@@ -238,7 +240,8 @@ class Viewer {
         wavelet_coeffs_(have_wavelet ? int(wavelet::cube_size(scene.wavelet.cube_res)) : 0),
         renderer_(renderer),
         rotation_(sh_bands_, glm::dmat3(1.0)) {
-    if (have_sh) renderer.set_mesh(scene.mesh, t_);
+    if (have_sh && scene.compressed) renderer.set_mesh(scene.mesh, *scene.compressed);
+    else if (have_sh) renderer.set_mesh(scene.mesh, t_);
     else renderer.set_mesh(scene.mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
     renderer.set_environment(scene.env);
     if (have_wavelet) playback_.emplace(scene.wavelet, scene.env);
@@ -287,6 +290,7 @@ class Viewer {
       st.toggle_basis = false;
       if (have_sh_ && have_wavelet_) st.wavelet = !st.wavelet;
       if (!st.wavelet) renderer_.set_shading(kShadings[shading_index_]);
+      st.clusters = clusters_ = false;
     }
     for (; st.shading_step != 0; st.shading_step += st.shading_step > 0 ? -1 : 1) {
       if (st.wavelet) {
@@ -297,6 +301,16 @@ class Viewer {
       do shading_index_ = ((shading_index_ + dir) % n + n) % n;
       while (!renderer_.has_shading(kShadings[shading_index_]));
       renderer_.set_shading(kShadings[shading_index_]);
+      st.clusters = false;  // M leaves the cluster colours
+    }
+    if (st.clusters != clusters_ && !st.wavelet) {
+      if (st.clusters && !renderer_.has_shading(Shading::Clusters)) {
+        fmt::print(stderr, "prt view: C: cluster colours need a compressed transfer\n");
+        st.clusters = false;
+      } else {
+        renderer_.set_shading(st.clusters ? Shading::Clusters : kShadings[shading_index_]);
+        clusters_ = st.clusters;
+      }
     }
     keep_bands_ = !have_sh_ ? sh_bands_ : st.bands == 0 ? t_.bands : std::min(t_.bands, st.bands);
     if (keep_bands_ != light_bands_ || st.window != light_window_) {
@@ -334,7 +348,7 @@ class Viewer {
   // The title's part after the frame time: what is shown, the map, the display.
   std::string title(const ViewState& st) const {
     const sh::Window wk = kWindows[st.window];
-    const Shading shown = kShadings[shading_index_];
+    const Shading shown = clusters_ ? Shading::Clusters : kShadings[shading_index_];
     const std::string lobe =
         shown == Shading::Glossy ? fmt::format(" - gloss e {:g}, specular {:.2f}", st.gloss, st.specular) : "";
     const std::string basis =
@@ -375,6 +389,7 @@ class Viewer {
   Renderer& renderer_;
   std::optional<WaveletPlayback> playback_;
   int shading_index_ = 0;
+  bool clusters_ = false;  // Shading::Clusters shown (ViewState::clusters, applied)
   std::vector<std::string> playlist_;
   std::size_t map_index_ = 0;
   std::string map_name_;

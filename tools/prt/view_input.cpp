@@ -62,6 +62,7 @@ KeyAction on_key(ViewState& s, int key, int action, int mods) {
     case input::kKeyLeftBracket: s.terms = std::max(1, s.terms / 2); break;
     case input::kKeyRightBracket: s.terms = std::min(1 << 20, s.terms * 2); break;
     case input::kKeyG: s.selection = 1 - s.selection; break;
+    case input::kKeyC: s.clusters = !s.clusters; break;
     case input::kKeyL:
       if (shift) s.gloss = s.gloss <= 1.0 ? 0.0 : s.gloss / 2;
       else s.gloss = s.gloss == 0.0 ? 1.0 : std::min(kMaxViewGloss, s.gloss * 2);

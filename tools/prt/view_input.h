@@ -22,7 +22,7 @@ inline constexpr int kRelease = 0, kPress = 1, kRepeat = 2;
 inline constexpr int kModShift = 0x0001;
 inline constexpr int kMouseLeft = 0, kMouseRight = 1;
 inline constexpr int kKeySpace = 32, kKeyMinus = 45, kKey0 = 48, kKey9 = 57, kKeyEqual = 61;
-inline constexpr int kKeyB = 66, kKeyE = 69, kKeyG = 71, kKeyH = 72, kKeyL = 76, kKeyM = 77, kKeyN = 78,
+inline constexpr int kKeyB = 66, kKeyC = 67, kKeyE = 69, kKeyG = 71, kKeyH = 72, kKeyL = 76, kKeyM = 77, kKeyN = 78,
                      kKeyP = 80, kKeyQ = 81, kKeyR = 82, kKeyS = 83, kKeyT = 84, kKeyW = 87;
 inline constexpr int kKeyLeftBracket = 91, kKeyRightBracket = 93, kKeyEscape = 256;
 }  // namespace input
@@ -59,6 +59,7 @@ struct ViewState {
   int terms = 100;               // wavelet K, in [1, 2^20] (the frame loop clamps it to 6 r^2)
   int selection = 0;             // 0 area, 1 magnitude
   double gloss = 16, specular = 0.5;  // glossy files: the lobe's e and rho_s (Renderer::set_glossy)
+  bool clusters = false;  // compressed transfers: Shading::Clusters shown instead of the shading (C toggles)
   bool dragging = false, env_dragging = false;
   double last_x = 0, last_y = 0;  // the cursor at the last event
   bool screenshot_requested = false;
@@ -79,7 +80,8 @@ void on_scroll(ViewState& s, double dy);
 // auto-rotate, S screenshot, M / shift+M shading, W window, T tone map,
 // E / shift+E exposure +- half a stop, N / P maps, B basis, [ ] K / 2 and
 // x 2, G selection, L / shift+L gloss e x 2 and / 2, = / - specular rho_s
-// +- 0.05, R reset the view (not the look), H and Esc / Q (returned).
+// +- 0.05, C cluster colours on / off, R reset the view (not the look), H
+// and Esc / Q (returned).
 KeyAction on_key(ViewState& s, int key, int action, int mods);
 // Files dropped on the window: the first is loaded by the next frame.
 void on_drop(ViewState& s, int count, const char** paths);
