@@ -133,8 +133,8 @@ int main(int argc, char** argv) {
   // 128 x 8 16-bit compression against the uncompressed transfer.
   for (const auto& [kind, what] : {std::pair{"0", "diffuse"}, std::pair{"1", "glossy shadowed"},
                                     std::pair{"2", "glossy interreflected"}}) {
-    const double u = rep.seconds(std::string("BM_CompressedFrame/") + kind + "/0"),
-                 c = rep.seconds(std::string("BM_CompressedFrame/") + kind + "/1");
+    const double u = rep.seconds(std::string("BM_CompressedFrame/") + kind + "/0/8"),
+                 c = rep.seconds(std::string("BM_CompressedFrame/") + kind + "/1/8");
     if (u > 0 && c > 0)
       std::printf("frame 512x512, 5 bands RGB, %s: compressed 128 x 8 16-bit %.3f ms vs uncompressed %.3f ms: "
                   "%.2f x (target <= 1: %s)\n",

@@ -128,7 +128,7 @@ BENCHMARK(BM_GlossyFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRea
 // draws at 512 x 512 (draw_only). state.range(0): 0 diffuse
 // (Shading::Transfer), 1 glossy shadowed, 2 glossy interreflected;
 // state.range(1): 1 compressed, 0 not. Counter transfer_MB: the bytes on
-// the GPU. The fit runs once per mode with few iterations (a frame's cost
+// the GPU; state.range(2): N. The fit runs once per mode and N with few iterations (a frame's cost
 // does not depend on the fit's quality).
 void BM_CompressedFrame(benchmark::State& state) {
   std::string why;
@@ -137,20 +137,22 @@ void BM_CompressedFrame(benchmark::State& state) {
   const int bands = 5, size = 512;
   const int kind = int(state.range(0));
   const bool packed = state.range(1) == 1;
+  const int vectors = state.range(2);
   const prt::TransferMode mode = kind == 2 ? prt::TransferMode::Interreflected : prt::TransferMode::Shadowed;
   const prt::Mesh& m = mesh();
-  static std::map<int, std::pair<prt::Transfer, prt::CompressedTransfer>> cache;
-  if (!cache.count(kind)) {
+  static std::map<std::pair<int, int>, std::pair<prt::Transfer, prt::CompressedTransfer>> cache;
+  const std::pair<int, int> key(kind, vectors);
+  if (!cache.count(key)) {
     prt::Transfer t = prt::bench::synthetic_glossy_transfer(m, bands, 3, mode, 14);
     prt::CompressOptions o;
     o.clusters = 128;
-    o.vectors = 8;
+    o.vectors = vectors;
     o.weight_bits = 16;
     o.iterations = 2;
     prt::CompressedTransfer c = prt::compress_transfer(t, o);
-    cache.emplace(kind, std::make_pair(std::move(t), std::move(c)));
+    cache.emplace(key, std::make_pair(std::move(t), std::move(c)));
   }
-  const auto& [t, c] = cache.at(kind);
+  const auto& [t, c] = cache.at(key);
   if (packed) r->set_mesh(m, c);
   else r->set_mesh(m, t);
   r->set_environment(environment());
@@ -172,7 +174,9 @@ void BM_CompressedFrame(benchmark::State& state) {
   state.counters["transfer_MB"] = double(r->transfer_bytes()) / 1e6;
   state.SetLabel(r->device());
 }
-BENCHMARK(BM_CompressedFrame)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CompressedFrame)->ArgsProduct({{0, 1, 2}, {0, 1}, {8}})->Unit(benchmark::kMillisecond)->UseRealTime();
+// The compressed frames' cost against N (128 clusters; N = 0: the means alone).
+BENCHMARK(BM_CompressedFrame)->ArgsProduct({{1, 2}, {1}, {0, 2, 4}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // CPU work per frame: rotation build and apply (RGB) and the lighting upload
 // (glNamedBufferSubData of bands^2 vec4s; the driver copies it, no wait).

@@ -308,8 +308,20 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
 
 namespace {
 
-ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, const CompressOptions& o,
-                              const char* phase) {
+void check_options(const CompressOptions& o) {
+  if (o.clusters < 1) throw Error(fmt::format("--clusters must be at least 1, got {}", o.clusters));
+  if (o.vectors < 0) throw Error(fmt::format("--pca must be at least 0, got {}", o.vectors));
+  if (o.glossy_clusters < 0) throw Error(fmt::format("--glossy-clusters must be at least 1, got {}", o.glossy_clusters));
+  if (o.glossy_vectors < -1) throw Error(fmt::format("--glossy-pca must be at least 0, got {}", o.glossy_vectors));
+  if (o.weight_bits != 32 && o.weight_bits != 16)
+    throw Error(fmt::format("--weights must be 32 (float) or 16 bits, got {}", o.weight_bits));
+}
+
+}  // namespace
+
+ClusteredSignal compress_signal(std::span<const float> rows, std::size_t dim, const CompressOptions& o,
+                                const char* phase) {
+  check_options(o);
   ClusteredSignal s;
   s.dim = dim;
   const std::size_t count = dim ? rows.size() / dim : 0;
@@ -348,17 +360,18 @@ ClusteredSignal compress_rows(const std::vector<float>& rows, std::size_t dim, c
   return s;
 }
 
-}  // namespace
 
 CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& o) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
-  if (o.clusters < 1) throw Error(fmt::format("--clusters must be at least 1, got {}", o.clusters));
-  if (o.vectors < 0) throw Error(fmt::format("--pca must be at least 0, got {}", o.vectors));
-  if (o.weight_bits != 32 && o.weight_bits != 16)
-    throw Error(fmt::format("--weights must be 32 (float) or 16 bits, got {}", o.weight_bits));
+  check_options(o);
   CompressedTransfer c;
-  c.coeffs = compress_rows(t.coeffs, t.stride(), o, "coefficients");
-  if (t.glossy) c.glossy = compress_rows(t.glossy_matrices, t.glossy_stride(), o, "glossy matrices");
+  c.coeffs = compress_signal(t.coeffs, t.stride(), o, "coefficients");
+  if (t.glossy) {
+    CompressOptions g = o;
+    if (o.glossy_clusters > 0) g.clusters = o.glossy_clusters;
+    if (o.glossy_vectors >= 0) g.vectors = o.glossy_vectors;
+    c.glossy = compress_signal(t.glossy_matrices, t.glossy_stride(), g, "glossy matrices");
+  }
   c.transfer = t;
   c.transfer.coeffs.clear();
   c.transfer.direct.clear();

@@ -21,6 +21,7 @@
 #include <glm/mat4x4.hpp>
 
 #include <algorithm>
+#include <numeric>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -138,7 +139,7 @@ struct Renderer::Impl {
   GLuint radiance_buffer = 0;  // vec4 per vertex, written by the relighting pass
   // By (coeffs, nc, glossy channels, symmetric, compressed vectors (-1: not
   // compressed), weight bits, source); compiled when first used.
-  std::map<std::array<int, 7>, GLuint> glossy_programs;
+  std::map<std::array<int, 8>, GLuint> glossy_programs;
   std::array<GLuint, 5> attribute_programs{};  // by attribute_mode(); compiled when first used
   GLuint vao = 0, empty_vao = 0;
   GLuint position_buffer = 0, index_buffer = 0, light_buffer = 0;
@@ -149,6 +150,21 @@ struct Renderer::Impl {
   bool has_direct = false;        // an interreflected transfer's direct part (maybe all analytic)
   Source source = Source::Stored;  // of transfer and direct
   GLuint slot_buffer = 0;          // Source::Mixed: per vertex its row, or Transfer::kAnalytic
+  // Compressed glossy transfers: the glossy pass's work by cluster
+  // (glossy.comp.glsl): 64 vertices per workgroup, all of one cluster
+  // (0xffffffff padding), and each workgroup's cluster (analytic vertices:
+  // 0xffffffff).
+  GLuint glossy_order_buffer = 0, glossy_chunk_buffer = 0;
+  std::size_t glossy_chunks = 0;
+  // The glossy products in uniform blocks (glossy.comp.glsl, PRODUCTS_UBO):
+  // block b, glossy_block_stride bytes from b's start in glossy_rows.products,
+  // holds clusters [b C, b C + C), C = glossy_block_clusters (0: the products
+  // do not fit a block; a storage buffer holds them). glossy_block_chunks[b]:
+  // the first chunk of block b's clusters; then the analytic chunks' first
+  // and the end.
+  int glossy_block_clusters = 0;
+  std::size_t glossy_block_stride = 0, glossy_cluster_bytes = 0;
+  std::vector<std::size_t> glossy_block_chunks;
   // Glossy transfers: every vertex's matrices (glossy.comp.glsl's layout),
   // what glossy_shading_problem needs of the transfer (its arrays left
   // empty), and the lobe of set_glossy.
@@ -277,8 +293,9 @@ GLuint Renderer::Impl::glossy_program(int coeffs) {
   // matrix in glossy_array, row v = vertex v: the plain program.
   const bool packed = compressed && glossy_rows;
   const int from = source == Source::Mixed ? 1 : 0;
+  const int block_vec4s = packed ? glossy_block_clusters * int(glossy_cluster_bytes / 16) : 0;
   GLuint& p = glossy_programs[{coeffs, nc, gch, symmetric ? 1 : 0, packed ? glossy_rows.vectors : -1,
-                               packed ? glossy_rows.weight_bits : 0, packed ? from : 0}];
+                               packed ? glossy_rows.weight_bits : 0, packed ? from : 0, block_vec4s}];
   if (!p) {
     const int shader_bands = int(std::lround(std::sqrt(double(coeffs))));
     p = gl::link_compute(shaders::glossy_comp_glsl, "glossy",
@@ -287,6 +304,8 @@ GLuint Renderer::Impl::glossy_program(int coeffs) {
                                      "#define COMPRESSED {}\n#define SOURCE {}\n",
                                      coeffs, shader_bands, nc, gch, symmetric ? 1 : 0, (nc * nc + 3) / 4 * 4,
                                      glossy_row_texels, packed ? 1 : 0, packed ? from : 0) +
+                             fmt::format("#define PRODUCTS_UBO {}\n#define BLOCK_VEC4S {}\n", block_vec4s > 0 ? 1 : 0,
+                                         std::max(block_vec4s, 1)) +
                              (packed ? compressed_defines(glossy_rows, nc) : std::string()));
   }
   return p;
@@ -327,7 +346,7 @@ void Renderer::Impl::delete_mesh_objects() {
                             glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
                             ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
                             coeff_rows.buffer, coeff_rows.products, glossy_rows.buffer, glossy_rows.products,
-                            cluster_color_buffer};
+                            cluster_color_buffer, glossy_order_buffer, glossy_chunk_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   const GLuint textures[] = {transfer.texture, direct.texture, glossy_array.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
@@ -337,7 +356,11 @@ void Renderer::Impl::delete_mesh_objects() {
   glossy_header = Transfer{};
   compressed = false;
   coeff_rows = glossy_rows = ClusterRows{};
-  cluster_color_buffer = 0;
+  cluster_color_buffer = glossy_order_buffer = glossy_chunk_buffer = 0;
+  glossy_chunks = 0;
+  glossy_block_clusters = 0;
+  glossy_block_stride = glossy_cluster_bytes = 0;
+  glossy_block_chunks.clear();
   light_coeffs.clear();
   has_direct = false;
   source = Source::Stored;
@@ -691,6 +714,45 @@ void Renderer::set_mesh(const Mesh& mesh, const CompressedTransfer& c) {
     m.coeff_rows = make_cluster_rows(c.coeffs, 1, "coefficients");
     if (t.glossy) m.glossy_rows = make_cluster_rows(c.glossy, std::size_t(t.bands) * t.bands, "glossy matrices");
   }
+  if (t.glossy && m.glossy_rows) {
+    // Vertices by cluster (analytic ones last: key K), cut into workgroups of 64.
+    constexpr std::uint32_t kNone = 0xffffffffu;
+    const std::uint32_t K = std::uint32_t(c.glossy.clusters);
+    std::vector<std::vector<std::uint32_t>> by(std::size_t(K) + 1);
+    for (std::uint32_t v = 0; v < std::uint32_t(t.vertices); ++v)
+      by[t.is_analytic(v) ? K : c.glossy.cluster[t.slots.empty() ? v : t.slots[v]]].push_back(v);
+    std::vector<std::uint32_t> order, chunk;
+    for (std::uint32_t k = 0; k <= K; ++k)
+      for (std::size_t at = 0; at < by[k].size(); at += 64) {
+        chunk.push_back(k == K ? kNone : k);
+        for (std::size_t i = 0; i < 64; ++i) order.push_back(at + i < by[k].size() ? by[k][at + i] : kNone);
+      }
+    m.glossy_chunks = chunk.size();
+    // Uniform blocks of as many clusters' products as the block size allows,
+    // each starting at the buffer offset alignment.
+    GLint64 block = 0, align = 0;
+    glGetInteger64v(GL_MAX_UNIFORM_BLOCK_SIZE, &block);
+    glGetInteger64v(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &align);
+    m.glossy_cluster_bytes = std::size_t(c.glossy.vectors + 1) * std::size_t(t.bands) * t.bands * 16;
+    const std::size_t per_block = std::min<std::size_t>(std::size_t(block) / m.glossy_cluster_bytes, K);
+    m.glossy_block_clusters = int(per_block);
+    m.glossy_block_chunks.clear();
+    if (per_block > 0) {
+      const std::size_t a = std::size_t(std::max<GLint64>(align, 16)), blocks = (K + per_block - 1) / per_block;
+      m.glossy_block_stride = (per_block * m.glossy_cluster_bytes + a - 1) / a * a;
+      for (std::size_t b = 0; b <= blocks; ++b)  // the first chunk of cluster b C (b = blocks: of the analytic ones)
+        m.glossy_block_chunks.push_back(std::size_t(
+            std::lower_bound(chunk.begin(), chunk.end(), std::uint32_t(std::min<std::size_t>(b * per_block, K)),
+                             [&](std::uint32_t x, std::uint32_t want) { return (x == kNone ? K : x) < want; }) -
+            chunk.begin()));
+      m.glossy_block_chunks.push_back(chunk.size());
+      glDeleteBuffers(1, &m.glossy_rows.products);
+      m.glossy_rows.product_bytes = blocks * m.glossy_block_stride;
+      m.glossy_rows.products = make_buffer(nullptr, m.glossy_rows.product_bytes, GL_DYNAMIC_STORAGE_BIT);
+    }
+    m.glossy_order_buffer = make_buffer(order.data(), std::max<std::size_t>(order.size(), 1) * sizeof(std::uint32_t));
+    m.glossy_chunk_buffer = make_buffer(chunk.data(), std::max<std::size_t>(chunk.size(), 1) * sizeof(std::uint32_t));
+  }
   // Shading::Clusters: the glossy matrices' clusters when there are some
   // (the larger signal, what the glossy shading decodes), else the
   // coefficients'; analytic vertices grey.
@@ -786,11 +848,18 @@ void Renderer::Impl::upload_cluster_lighting() {
 
 void Renderer::Impl::upload_glossy_cluster_lighting() {
   if (!glossy_products_stale) return;
-  CompressedTransfer g;  // what glossy_cluster_lighting reads: the header and the glossy clusters
-  g.transfer = glossy_header;
-  g.glossy = glossy_rows.clusters;
-  upload_products(glossy_rows, product_vec4s(glossy_cluster_lighting(g, band_limited_lighting()), glossy_rows.clusters,
-                                             std::size_t(bands) * bands));
+  std::vector<float> v = product_vec4s(glossy_cluster_lighting(glossy_header, glossy_rows.clusters,
+                                                               band_limited_lighting()),
+                                       glossy_rows.clusters, std::size_t(bands) * bands);
+  if (glossy_block_clusters > 0) {  // into the uniform blocks' layout
+    std::vector<float> blocks(glossy_rows.product_bytes / sizeof(float), 0.0f);
+    const std::size_t per = glossy_cluster_bytes / sizeof(float), C = std::size_t(glossy_block_clusters);
+    for (std::size_t k = 0; k < std::size_t(glossy_rows.clusters.clusters); ++k)
+      std::copy_n(v.begin() + std::ptrdiff_t(k * per), per,
+                  blocks.begin() + std::ptrdiff_t((k / C) * glossy_block_stride / sizeof(float) + (k % C) * per));
+    v.swap(blocks);
+  }
+  upload_products(glossy_rows, v);
   glossy_products_stale = false;
 }
 
@@ -875,7 +944,8 @@ void Renderer::set_vertex_colors(std::span<const glm::vec3> colors) {
 std::size_t Renderer::transfer_bytes() const {
   const Impl& m = *impl_;
   const std::size_t slots = m.source == Source::Mixed ? m.vertex_count * sizeof(std::uint32_t) : 0;
-  return m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots + m.coeff_rows.bytes +
+  const std::size_t order = m.glossy_chunks * (64 + 1) * sizeof(std::uint32_t);
+  return m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots + order + m.coeff_rows.bytes +
          m.coeff_rows.product_bytes + m.glossy_rows.bytes + m.glossy_rows.product_bytes;
 }
 
@@ -1059,11 +1129,31 @@ GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
     if (compressed && glossy_rows) {
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, glossy_rows.buffer);
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, glossy_rows.products);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, glossy_order_buffer);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, glossy_chunk_buffer);
       if (source == Source::Mixed) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, slot_buffer);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, position_buffer);
-    glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
+    if (!(compressed && glossy_rows)) {
+      glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
+    } else if (glossy_block_clusters == 0) {
+      glUniform1ui(21, 0u);  // u_chunk_base
+      glDispatchCompute(GLuint(glossy_chunks), 1, 1);
+    } else {
+      // One dispatch per uniform block of clusters, then the analytic vertices' chunks (block 0 bound, unread).
+      const std::size_t blocks = glossy_block_chunks.size() - 2;
+      for (std::size_t b = 0; b <= blocks; ++b) {
+        const std::size_t first = glossy_block_chunks[b], count = glossy_block_chunks[b + 1] - first;
+        if (count == 0) continue;
+        const std::size_t block = b < blocks ? b : 0;
+        glBindBufferRange(GL_UNIFORM_BUFFER, 2, glossy_rows.products, GLintptr(block * glossy_block_stride),
+                          GLsizeiptr(std::size_t(glossy_block_clusters) * glossy_cluster_bytes));
+        glUniform1ui(20, GLuint(block * std::size_t(glossy_block_clusters)));  // u_block_first
+        glUniform1ui(21, GLuint(first));                                         // u_chunk_base
+        glDispatchCompute(GLuint(count), 1, 1);
+      }
+    }
   }
   glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);
   return radiance_buffer;

@@ -156,12 +156,11 @@ std::vector<glm::dvec3> cluster_lighting(const ClusteredSignal& s, int channels,
   return out;
 }
 
-std::vector<glm::dvec3> glossy_cluster_lighting(const CompressedTransfer& c, std::span<const glm::dvec3> light) {
-  const Transfer& z = c.transfer;
+std::vector<glm::dvec3> glossy_cluster_lighting(const Transfer& z, const ClusteredSignal& g,
+                                                std::span<const glm::dvec3> light) {
   PRT_CHECK(z.glossy);
   const std::size_t nc = std::size_t(z.bands) * z.bands;
   PRT_CHECK_OP(light.size(), >=, nc);
-  const ClusteredSignal& g = c.glossy;
   PRT_CHECK_OP(g.dim, ==, z.glossy_stride());
   const int per = g.vectors + 1, gch = z.glossy_channels();
   std::vector<glm::dvec3> ml(std::size_t(g.clusters) * per * nc, glm::dvec3(0.0));
@@ -222,7 +221,7 @@ std::vector<glm::vec3> relight_glossy(const CompressedTransfer& c, const Mesh& m
   const std::vector<glm::dvec3> p = cluster_lighting(c.coeffs, z.channels, n, light);
   const ClusteredSignal& g = c.glossy;
   const int per = g.vectors + 1;
-  const std::vector<glm::dvec3> ml = glossy_cluster_lighting(c, light);  // [k][j][i], nc RGB per matrix
+  const std::vector<glm::dvec3> ml = glossy_cluster_lighting(c.transfer, c.glossy, light);  // [k][j][i], nc RGB per matrix
   const std::vector<double> lambda = glossy::phong_lobe_factors(s.gloss, n);
   for_stored(z, [&](std::size_t v, std::size_t r) {
     glm::dvec3 rgb = glm::dvec3(out[v]) + scale * row_radiance(c.coeffs, p, r);  // out[v]: 0 for a stored row

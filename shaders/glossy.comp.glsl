@@ -129,13 +129,33 @@ vec3 glossy_part(int base, const float w[COEFFS]) {
 #if SOURCE == 1
 layout(std430, binding = 4) readonly buffer SlotBuffer { uint slots[]; };
 #endif
+// Work is dispatched by cluster: workgroup g shades the up to 64 vertices
+// order[64 g ...] (0xffffffff: none), all of cluster chunk_cluster[g]
+// (0xffffffff: analytic vertices). The cluster is then the same for the
+// whole workgroup, so the products' addresses are too: loads the compiler
+// can make once per workgroup instead of once per invocation.
+// The chunks of a dispatch start at u_chunk_base. PRODUCTS_UBO 1: the
+// products of clusters u_block_first ... (BLOCK_VEC4S vec4s) in a uniform
+// block, whose loads at such a uniform address llvmpipe makes once per
+// SIMD group (about 1.3x faster frames than the storage buffer's, measured:
+// docs/RUNTIME.md); else the storage buffer of compressed.glsl.
+layout(std430, binding = 3) readonly buffer OrderBuffer { uint order[]; };
+layout(std430, binding = 6) readonly buffer ChunkBuffer { uint chunk_cluster[]; };
+layout(location = 21) uniform uint u_chunk_base;
+#if PRODUCTS_UBO
+layout(std140, binding = 2) uniform ProductBlock { vec4 block_products[BLOCK_VEC4S]; };
+layout(location = 20) uniform uint u_block_first;
+#define GLOSSY_PRODUCT(index) block_products[(index) - int(u_block_first) * (VECTORS + 1) * PRODUCT_RUN]
+#else
+#define GLOSSY_PRODUCT(index) products[index]
+#endif
 
-vec3 compressed_glossy_part(uint row, const float w[COEFFS]) {
-  const int base = cluster_run(row);
+vec3 compressed_glossy_part(uint row, uint cluster, const float w[COEFFS]) {
+  const int base = int(cluster) * (VECTORS + 1) * PRODUCT_RUN;
   vec3 g = vec3(0.0);
   for (int j = 0; j <= VECTORS; ++j) {
     vec3 s = vec3(0.0);
-    for (int i = 0; i < COEFFS; ++i) s += w[i] * products[base + j * PRODUCT_RUN + i].rgb;
+    for (int i = 0; i < COEFFS; ++i) s += w[i] * GLOSSY_PRODUCT(base + j * PRODUCT_RUN + i).rgb;
     g += (j == 0 ? 1.0 : row_weight(row, j - 1)) * s;
   }
   return g;
@@ -145,12 +165,13 @@ vec3 compressed_glossy_part(uint row, const float w[COEFFS]) {
 // The glossy part of vertex v toward the eye: its row's matrices, or its cluster's products.
 vec3 vertex_glossy_part(uint v, const float w[COEFFS]) {
 #if COMPRESSED
+  const uint cluster = chunk_cluster[gl_WorkGroupID.x + u_chunk_base];
 #if SOURCE == 1
   const uint slot = slots[v];
-  if ((slot & 0x80000000u) != 0u) return glossy_part(int(slot & 0x7fffffffu) * ROW_TEXELS, w);
-  return compressed_glossy_part(slot, w);
+  if (cluster == 0xffffffffu) return glossy_part(int(slot & 0x7fffffffu) * ROW_TEXELS, w);
+  return compressed_glossy_part(slot, cluster, w);
 #else
-  return compressed_glossy_part(v, w);
+  return compressed_glossy_part(v, cluster, w);
 #endif
 #else
   return glossy_part(int(v) * ROW_TEXELS, w);
@@ -158,8 +179,13 @@ vec3 vertex_glossy_part(uint v, const float w[COEFFS]) {
 }
 
 void main() {
+#if COMPRESSED
+  const uint v = order[64u * (gl_WorkGroupID.x + u_chunk_base) + gl_LocalInvocationID.x];
+  if (v == 0xffffffffu) return;
+#else
   const uint v = gl_GlobalInvocationID.x;
   if (v >= u_vertices) return;
+#endif
   vec3 r = radiance[v].rgb * u_diffuse_scale;
   vec3 n = vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
   if (dot(n, n) > 0.0) {

@@ -203,13 +203,39 @@ TEST(RenderCompressed, GlossyEqualsCpuRelightGlossy) {
     const std::size_t nc = std::size_t(t.bands) * t.bands, row_words = 1 + (N + 1) / 2;
     const std::size_t glossy_row =
         mode == TransferMode::Shadowed ? (nc * (nc + 1) / 2 + 3) / 4 * 4 : 3 * ((nc * nc + 3) / 4 * 4);
+    // And the glossy pass's work list: 64 vertices (65 words with its
+    // cluster) per chunk of one cluster's vertices, the analytic ones last.
+    std::vector<std::size_t> per_cluster(std::size_t(K), 0);
+    for (std::uint32_t k : c.glossy.cluster) ++per_cluster[k];
+    std::size_t chunks = (t.analytic_vertices() + 63) / 64;
+    for (std::size_t n : per_cluster) chunks += (n + 63) / 64;
     EXPECT_EQ(r->transfer_bytes(), 2 * t.stored_vertices() * row_words * 4 + 4 * t.vertices +
-                                       t.analytic_vertices() * glossy_row * 4 + std::size_t(K) * (N + 1) * 16 * (1 + nc));
+                                       t.analytic_vertices() * glossy_row * 4 + std::size_t(K) * (N + 1) * 16 * (1 + nc) +
+                                       chunks * 65 * 4);
   }
 }
 
 // With as many vectors as each signal has values the compression is exact
 // (up to float), so the compressed renderer shades as the uncompressed one.
+// More clusters than one uniform block holds (64 KB: 51 clusters of 5 x 16
+// products at 4 bands): the glossy pass runs one dispatch per block, each
+// reading its clusters at the block's offset; every vertex as the CPU's.
+TEST(RenderCompressed, GlossyProductsInSeveralUniformBlocks) {
+  REQUIRE_RENDERER(r);
+  const Mesh mesh = test::floor_and_ball(8);
+  const Transfer t = transfer_of(mesh, TransferMode::Shadowed, true, true);
+  ASSERT_EQ(t.bands, 4);
+  ASSERT_GE(t.stored_vertices(), 200u);
+  const CompressedTransfer c = compressed(t, 120, 4, 16);
+  ASSERT_EQ(c.glossy.clusters, 120);
+  r->set_mesh(mesh, c);
+  const std::vector<glm::dvec3> L = lighting(t.bands, 5);
+  r->set_lighting(L);
+  GlossyShading s;
+  s.eye = {0.3, 2.0, 2.6};
+  expect_near(r->vertex_radiance(s.eye), relight_glossy(c, mesh, L, s), "blocks");
+}
+
 TEST(RenderCompressed, AllVectorsIsTheUncompressedRenderer) {
   REQUIRE_RENDERER(r);
   const Mesh mesh = test::floor_and_ball(5);

@@ -95,11 +95,13 @@ std::string compressed_transfer_problem(const CompressedTransfer& c);
 std::vector<glm::dvec3> cluster_lighting(const ClusteredSignal& s, int channels, int bands,
                                          std::span<const glm::dvec3> light);
 // glossy_cluster_lighting: M L for cluster k's mean matrix (j = 0) and each
-// basis matrix (j = 1..N) of c.glossy, in c.transfer's glossy layout
-// (packed symmetric, or nc x nc per channel): out[(k (N + 1) + j) nc + i] =
-// (M_kj L)_i RGB, nc = bands^2. Contract (prt::InternalError): c.transfer is
-// glossy and `light` holds at least nc coefficients.
-std::vector<glm::dvec3> glossy_cluster_lighting(const CompressedTransfer& c, std::span<const glm::dvec3> light);
+// basis matrix (j = 1..N) of the glossy signal `g`, in the glossy layout of
+// transfer `t` (its header: packed symmetric, or nc x nc per channel):
+// out[(k (N + 1) + j) nc + i] = (M_kj L)_i RGB, nc = bands^2. Reads only g's
+// means and bases. Contract (prt::InternalError): t is glossy, g's rows are
+// its glossy_stride() long and `light` holds at least nc coefficients.
+std::vector<glm::dvec3> glossy_cluster_lighting(const Transfer& t, const ClusteredSignal& g,
+                                                std::span<const glm::dvec3> light);
 
 // The transfer the compressed one approximates, every row reconstructed.
 Transfer decompress(const CompressedTransfer& c);

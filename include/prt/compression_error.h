@@ -29,14 +29,20 @@ struct CompressionErrorOptions {
 double compression_error(const Transfer& t, const CompressedTransfer& c, const Mesh& mesh,
                          const CompressionErrorOptions& options);
 
-// The smallest compression (in bytes: both signals' ClusteredSignal::bytes)
-// among a grid of K x N (K in 1, 4, 16, 64, 128, 256; N in 1, 2, 4, 8, 12,
-// 16, 24; capped at the rows and each signal's dimension) whose relit error
-// is at most `target`: candidates are tried in increasing size, and the first
-// that meets the target is the answer. `explanation` says what was chosen and
-// what the next smaller candidate measured. Throws prt::Error when none does
-// (naming the best error reached) or for a target outside (0, 1).
-// `progress` is called after each candidate (tried, grid size).
+// The smallest compression (in bytes: ClusteredSignal::bytes) whose relit
+// error is at most `target`, chosen per signal among a grid of K x N (K in
+// 1, 4, 16, 64, 128, 256; N in 1, 2, 4, 8, 12, 16, 24; capped at the rows
+// and each signal's dimension), candidates tried in increasing size, the
+// first that meets its target the answer. The coefficients first, by the
+// error of the diffuse radiance alone: at most `target`, or target / 2 for a
+// glossy transfer; then its glossy matrices, with those coefficients, by the
+// error of the whole (diffuse and glossy) radiance over the eyes: at most
+// `target`. `explanation` says what was chosen per signal and what the next
+// smaller candidate measured; options holds the K x N (glossy_clusters and
+// glossy_vectors the glossy matrices'), error the final relit error. Throws
+// prt::Error when a signal's grid never meets its target (naming the best
+// error reached), for a target outside (0, 1) or an inconsistent transfer.
+// `progress` is called after each candidate (tried, both grids' size).
 struct CompressionChoice {
   CompressOptions options;
   CompressedTransfer compressed;

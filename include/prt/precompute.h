@@ -57,10 +57,12 @@ Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, cons
 std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptions& options,
                                            std::span<const std::uint32_t> vertices);
 
-// ---- compression (prt/cpca.h, prt/compressed_transfer.h; issue 16, in progress) ----
+// ---- compression (prt/cpca.h, prt/compressed_transfer.h; docs/COMPRESSION.md) ----
 struct CompressOptions {
   int clusters = 64;        // K (at most the stored rows; fewer rows: one cluster per row)
   int vectors = 8;          // N, 0 to each signal's dimension (capped there)
+  // The glossy matrices' own K and N (0 and -1: clusters and vectors above).
+  int glossy_clusters = 0, glossy_vectors = -1;
   int iterations = 20;
   std::uint64_t seed = 1;
   int weight_bits = 32;     // 32 (float) or 16 (ClusteredSignal::weight_bits)
@@ -72,6 +74,11 @@ struct CompressOptions {
 // own. The direct part of an interreflected transfer is dropped. Throws
 // prt::Error for bad options.
 CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& options);
+// One signal: `rows` (a multiple of dim values) fitted with options.clusters
+// and options.vectors (capped at the rows and at dim), weights of
+// options.weight_bits; `phase` names it to options.progress.
+ClusteredSignal compress_signal(std::span<const float> rows, std::size_t dim, const CompressOptions& options,
+                                const char* phase = "rows");
 
 // ---- wavelet transfer (docs/WAVELETS.md) -------------------------------------------
 struct WaveletOptions {
