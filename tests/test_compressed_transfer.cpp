@@ -251,6 +251,54 @@ TEST(CompressionChoice, IsTheSmallestThatMeetsTheTarget) {
   EXPECT_THROW(choose_compression(t, m, e, 0), Error);
 }
 
+// A glossy transfer: the coefficients chosen by the diffuse error alone at
+// half the target, then the glossy matrices by the whole error at the
+// target, each signal with its own K x N (options reproduce the choice);
+// no smaller glossy candidate meets the target with those coefficients.
+TEST(CompressionChoice, GlossyChoosesEachSignal) {
+  const Mesh m = test::floor_and_ball(8);
+  const Transfer t = glossy_transfer(TransferMode::Shadowed, m);
+  CompressionErrorOptions e;
+  e.lights = {lighting(3)};
+  e.eyes = eye_ring(m, 4);
+  const double target = 0.03;
+  const CompressionChoice c = choose_compression(t, m, e, target);
+  EXPECT_LE(c.error, target);
+  EXPECT_DOUBLE_EQ(c.error, compression_error(t, c.compressed, m, e));
+  EXPECT_NE(c.explanation.find("glossy matrices:"), std::string::npos) << c.explanation;
+  // The diffuse part alone, measured here.
+  Transfer diffuse = t;
+  diffuse.glossy = false;
+  diffuse.glossy_matrices.clear();
+  CompressedTransfer d = c.compressed;
+  d.transfer.glossy = false;
+  d.glossy = {};
+  EXPECT_LE(compression_error(diffuse, d, m, e), target / 2);
+  // The options make the same signals.
+  EXPECT_EQ(c.options.glossy_clusters, c.compressed.glossy.clusters);
+  EXPECT_EQ(c.options.glossy_vectors, c.compressed.glossy.vectors);
+  const CompressedTransfer again = compress_transfer(t, c.options);
+  EXPECT_EQ(again.coeffs.cluster, c.compressed.coeffs.cluster);
+  EXPECT_EQ(again.glossy.cluster, c.compressed.glossy.cluster);
+  EXPECT_EQ(again.glossy.weights, c.compressed.glossy.weights);
+  EXPECT_EQ(c.bytes, c.compressed.coeffs.bytes() + c.compressed.glossy.bytes());
+  // Every smaller glossy candidate, with the chosen coefficients, misses.
+  for (int K : {1, 4, 16, 64, 128, 256})
+    for (int N : {1, 2, 4, 8, 12, 16, 24}) {
+      if (std::size_t(K) > t.stored_vertices()) continue;
+      if (ClusteredSignal::planned_bytes(t.stored_vertices(), t.glossy_stride(), K, N, 16) >=
+          c.compressed.glossy.bytes())
+        continue;
+      CompressOptions o;
+      o.clusters = K;
+      o.vectors = N;
+      o.weight_bits = 16;
+      CompressedTransfer w = c.compressed;
+      w.glossy = compress_signal(t.glossy_matrices, t.glossy_stride(), o);
+      EXPECT_GT(compression_error(t, w, m, e), target) << K << " x " << N;
+    }
+}
+
 TEST(CompressedTransfer, RefusesBadOptions) {
   const Mesh m = test::floor_and_ball(4);
   const Transfer t = glossy_transfer(TransferMode::Shadowed, m);

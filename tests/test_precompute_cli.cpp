@@ -300,15 +300,19 @@ TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
   ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", dir.file("t.prt"), "--material", "glossy", "--bands", "3",
                           "--samples", "128", "-q"}).code, 0);
   const Result c = run_prt(dir, {"compress", dir.file("t.prt"), "-o", dir.file("c.prt"), "--clusters", "4", "--pca",
-                                 "3", "--weights", "32", "--mesh", mesh, "--env", env});
+                                 "3", "--glossy-clusters", "5", "--glossy-pca", "2", "--weights", "32", "--mesh", mesh,
+                                 "--env", env});
   ASSERT_EQ(c.code, 0) << describe_run(c);
   // The library, on the same file and options: the same bytes.
   const Transfer t = read_transfer(dir.file("t.prt"));
   CompressOptions o;
   o.clusters = 4;
   o.vectors = 3;
+  o.glossy_clusters = 5;
+  o.glossy_vectors = 2;
   o.weight_bits = 32;
   const CompressedTransfer lib = compress_transfer(t, o);
+  EXPECT_EQ(lib.glossy.clusters, 5);
   write_compressed_transfer(dir.file("lib.prt"), lib);
   EXPECT_EQ(read_file(dir.file("c.prt")), read_file(dir.file("lib.prt")));
   // The error it printed is compression_error's (4 significant digits).
@@ -335,14 +339,18 @@ TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
   // info names the clusters, in text and JSON.
   const Result info = run_prt(dir, {"info", dir.file("c.prt")});
   EXPECT_NE(info.out.find("4 clusters x 3 principal vectors"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("5 clusters x 2 principal vectors"), std::string::npos) << info.out;
   EXPECT_NE(info.out.find("format version 4"), std::string::npos) << info.out;
   const Result json = run_prt(dir, {"info", dir.file("c.prt"), "--json"});
   EXPECT_NE(json.out.find("\"glossy_matrices\""), std::string::npos) << json.out;
-  // precompute --compress: the same file as precompute then compress.
+  // precompute --compress KxN (both signals): the same file as precompute, then compress_transfer.
   const Result p = run_prt(dir, {"precompute", mesh, "-o", dir.file("p.prt"), "--material", "glossy", "--bands", "3",
                                  "--samples", "128", "--compress", "4x3", "--compress-weights", "32", "-q"});
   ASSERT_EQ(p.code, 0) << describe_run(p);
-  EXPECT_EQ(read_file(dir.file("p.prt")), read_file(dir.file("c.prt")));
+  o.glossy_clusters = 0;
+  o.glossy_vectors = -1;
+  write_compressed_transfer(dir.file("lib2.prt"), compress_transfer(t, o));
+  EXPECT_EQ(read_file(dir.file("p.prt")), read_file(dir.file("lib2.prt")));
 }
 
 TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
@@ -382,13 +390,14 @@ TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
       {{"compress", dir.file("c.prt"), "-o", out}, 1, "already compressed"},
       {{"compress", in, "-o", out, "--target-error", "0.01"}, 2, "needs --mesh MESH and --env MAP"},
       {{"compress", in, "-o", out, "--target-error", "0.01", "--clusters", "4", "--mesh", mesh, "--env", env}, 2,
-       "give the target or the two"},
+       "give the target or the sizes"},
       {{"compress", in, "-o", out, "--weights", "8"}, 2, "--weights"},
       {{"compress", in, "-o", out, "--views", "4"}, 2, "--views shapes the views"},
       {{"compress", in, "-o", in}, 2, "is the input IN"},
       {{"compress", in, "-o", out, "--mesh", dir.file("missing.off"), "--env", env}, 1, "missing.off"},
       {{"compress", in, "-o", out, "--target-error", "1e-7", "--mesh", mesh, "--env", env}, 1, "reaches relit error"},
       {{"precompute", mesh, "-o", out, "--compress", "4"}, 2, "expected KxN"},
+      {{"compress", in, "-o", out, "--glossy-pca", "4"}, 1, "--glossy-pca needs glossy matrices"},
       {{"precompute", mesh, "-o", out, "--compress-weights", "32"}, 2, "--compress-weights is for --compress"},
       {{"relight", mesh, dir.file("c.prt"), env, "-o", dir.file("x.csv"), "--direct"}, 1, "needs an interreflected"},
   };

@@ -24,19 +24,25 @@ namespace {
 struct CompressArgs {
   std::string input, output, mesh;
   std::vector<std::string> envs;
-  CompressOptions opt{.clusters = 64, .vectors = 8, .iterations = 20, .seed = 1, .weight_bits = 16, .progress = {}};
+  // Defaults: the smallest K x N measured to meet issue 16's targets on
+  // bunny00 (docs/COMPRESSION.md): diffuse 256 x 8, glossy matrices 128 x 8.
+  CompressOptions opt{.clusters = 256, .vectors = 8, .glossy_clusters = 128, .glossy_vectors = 8, .iterations = 20,
+                      .seed = 1, .weight_bits = 16, .progress = {}};
   double target = 0;
   int views = 8;
   double gloss = 16, specular = 0.5;
   bool quiet = false;
-  const CLI::Option *clusters_opt = nullptr, *pca_opt = nullptr, *target_opt = nullptr, *mesh_opt = nullptr,
+  const CLI::Option *clusters_opt = nullptr, *pca_opt = nullptr, *glossy_clusters_opt = nullptr,
+                    *glossy_pca_opt = nullptr, *target_opt = nullptr, *mesh_opt = nullptr,
                     *env_opt = nullptr, *views_opt = nullptr, *gloss_opt = nullptr, *specular_opt = nullptr;
 };
 
 void check_usage(const CompressArgs& a) {
   const bool target = a.target_opt->count() > 0, measure = a.mesh_opt->count() > 0 || a.env_opt->count() > 0;
-  if (target && (a.clusters_opt->count() > 0 || a.pca_opt->count() > 0))
-    throw UsageError("--target-error chooses --clusters and --pca; give the target or the two, not both");
+  for (const CLI::Option* o : {a.clusters_opt, a.pca_opt, a.glossy_clusters_opt, a.glossy_pca_opt})
+    if (target && o->count() > 0)
+      throw UsageError("--target-error chooses " + o->get_name() + " (and the other clusters and vectors); give the "
+                       "target or the sizes, not both");
   if ((target || measure) && (a.mesh.empty() || a.envs.empty()))
     throw UsageError(std::string(target ? "--target-error" : a.mesh.empty() ? "--env" : "--mesh") +
                      " needs --mesh MESH and --env MAP (at least one): the relit error is measured on the mesh under "
@@ -60,6 +66,11 @@ int run_compress(CompressArgs& a) {
     throw Error(a.input + ": already compressed (prt info shows its clusters); compress the uncompressed transfer "
                           "prt precompute wrote");
   const Transfer t = read_transfer(a.input);
+  if (!t.glossy)  // an option that does not fit the file: the file's mismatch
+    for (const CLI::Option* o : {a.glossy_clusters_opt, a.glossy_pca_opt})
+      if (o->count() > 0)
+        throw Error(a.input + ": " + o->get_name() + " needs glossy matrices, which this transfer does not have "
+                    "(prt precompute --material glossy makes them)");
   const bool measure = !a.mesh.empty();
   Mesh mesh;
   CompressionErrorOptions errors;
@@ -124,7 +135,8 @@ Run add_compress(CLI::App& app) {
   auto a = std::make_shared<CompressArgs>();
   CLI::App* s = app.add_subcommand("compress", "Compress a transfer file by clustered PCA (fewer bytes per vertex)");
   s->footer(
-      "Each stored row (a vertex's diffuse coefficients, all channels; or its glossy matrices) becomes its cluster's\n"
+      "Each stored row (a vertex's diffuse coefficients, all channels; or its glossy matrices: each signal with its\n"
+      "own K x N, --clusters/--pca and --glossy-clusters/--glossy-pca) becomes its cluster's\n"
       "mean plus N weighted principal vectors (Sloan et al. 2003): per vertex a cluster index (8 bits up to 256\n"
       "clusters) and N weights. Relighting then needs the lighting through each cluster's mean and vectors once per\n"
       "frame and N weights per vertex. prt relight, render, view and info take the output; the direct part of an\n"
@@ -143,6 +155,14 @@ Run add_compress(CLI::App& app) {
   a->pca_opt = s->add_option("-n,--pca", a->opt.vectors, "Principal vectors N per cluster (0 to the row length)")
                    ->check(int_range(0, 1 << 20))
                    ->capture_default_str();
+  a->glossy_clusters_opt = s->add_option("--glossy-clusters", a->opt.glossy_clusters,
+                                         "Glossy files: clusters of the glossy matrices")
+                               ->check(int_range(1, 1 << 24))
+                               ->capture_default_str();
+  a->glossy_pca_opt = s->add_option("--glossy-pca", a->opt.glossy_vectors,
+                                    "Glossy files: principal vectors per cluster of the glossy matrices")
+                          ->check(int_range(0, 1 << 20))
+                          ->capture_default_str();
   s->add_option("--weights", a->opt.weight_bits, "Bits per weight: 16 (one scale per cluster and vector) or 32 (float)")
       ->check(CLI::IsMember({16, 32}))
       ->capture_default_str();
