@@ -575,6 +575,37 @@ TEST_F(RenderCli, WritesLinearExr) {
     EXPECT_NEAR(centre[k], expected[k], kPixelNearVertexTolerance * expected[k]) << "channel " << k;
 }
 
+// A compressed file (prt compress) renders as the transfer it compresses: with
+// every principal vector kept and float weights, the same pixels up to float
+// rounding (1e-4 of the brightest: the per-cluster products are summed in
+// another order). Its cluster colours render; an uncompressed file has none,
+// and the message names it.
+TEST_F(RenderCli, CompressedFilesRenderAsTheirTransfer) {
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(6));
+  const std::string fb = dir.file("fb.off"), full = dir.file("fb.prt"), packed = dir.file("fbc.prt");
+  ASSERT_EQ(test::run_prt(dir, {"precompute", fb, "-o", full, "-b", "3", "-s", "64", "-q"}).code, 0);
+  const auto c = test::run_prt(dir, {"compress", full, "-o", packed, "--clusters", "4", "--pca", "9", "--weights", "32",
+                                     "-q"});
+  ASSERT_EQ(c.code, 0) << test::describe_run(c);
+  for (const auto& [in, out] : {std::pair{full, dir.file("full.exr")}, std::pair{packed, dir.file("packed.exr")}}) {
+    const auto r = render({fb, in, env, "-o", out, "--width", "64", "--height", "32", "-q"});
+    ASSERT_EQ(r.code, 0) << test::describe_run(r);
+  }
+  const EnvMap a = load_envmap(dir.file("full.exr"), Mapping::LatLong), b = load_envmap(dir.file("packed.exr"), Mapping::LatLong);
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  float top = 0;
+  for (float x : a.rgb) top = std::max(top, std::abs(x));
+  ASSERT_GT(top, 0.0f);
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) ASSERT_NEAR(a.rgb[i], b.rgb[i], 1e-4f * top) << i;
+  EXPECT_EQ(render({fb, packed, env, "-o", dir.file("k.png"), "--shading", "clusters", "-q"}).code, 0);
+  const auto no = render({fb, full, env, "-o", dir.file("n.png"), "--shading", "clusters", "-q"});
+  EXPECT_EQ(no.code, 1) << no.err;
+  EXPECT_NE(no.err.find(full + ": shading 'clusters' is unavailable: the transfer is not compressed"),
+            std::string::npos)
+      << no.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("n.png")));
+}
+
 TEST_F(RenderCli, FramesGetNumberedNames) {
   const auto res = test::run_prt(dir, {"render", dir.file("ball.off"), dir.file("ball.prt"), dir.file("env.exr"), "-o",
                                        dir.file("spin.png"), "--width", "24", "--height", "16", "--frames", "3",

@@ -38,6 +38,8 @@ struct CompressArgs {
 };
 
 void check_usage(const CompressArgs& a) {
+  if (a.target_opt->count() > 0 && !(a.target > 0 && a.target < 1))
+    throw UsageError(fmt::format("--target-error must be in (0, 1) (a relative RMS error), got {:g}", a.target));
   const bool target = a.target_opt->count() > 0, measure = a.mesh_opt->count() > 0 || a.env_opt->count() > 0;
   for (const CLI::Option* o : {a.clusters_opt, a.pca_opt, a.glossy_clusters_opt, a.glossy_pca_opt})
     if (target && o->count() > 0)

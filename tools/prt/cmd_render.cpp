@@ -91,7 +91,11 @@ int run_render(const RenderArgs& a) {
     else
       renderer.set_mesh(mesh, t);
     renderer.set_band_limit(look.bands);
-    renderer.set_shading(look.shading);
+    try {  // refused (exit 1) when the file lacks what the shading needs: name it
+      renderer.set_shading(look.shading);
+    } catch (const Error& e) {
+      throw Error(a.transfer + ": " + e.what());
+    }
     if (glossy) {  // the file's rules for --diffuse (an interreflected file takes its own albedo or 0)
       try {
         renderer.set_glossy(a.lobe.gloss, a.lobe.specular, diffuse);

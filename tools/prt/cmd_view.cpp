@@ -258,7 +258,11 @@ class Viewer {
       const Shading sh = renderer.has_shading(Shading::Glossy) ? Shading::Glossy : Shading::Transfer;
       shading_index_ = int(std::find(std::begin(kShadings), std::end(kShadings), sh) - std::begin(kShadings));
     } else {
-      renderer.set_shading(look.shading);  // refused (exit 1) when the file lacks what it needs
+      try {  // refused (exit 1) when the file lacks what it needs: name it
+        renderer.set_shading(look.shading);
+      } catch (const Error& e) {
+        throw Error(a.transfer + ": " + e.what());
+      }
     }
     st.gloss = a.lobe.gloss;
     st.specular = a.lobe.specular;
