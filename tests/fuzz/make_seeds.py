@@ -211,6 +211,17 @@ def transfer_seeds(out, tmp, prt):
         f = tmp / (name + ".prt")
         subprocess.run([prt, "precompute", str(mesh), "-o", str(f), "--threads", "1", "-q", *args], check=True)
         write(out, "transfer", name + ".prt", f.read_bytes())
+    # Compressed (version 4): 8-bit indices with 16-bit weights, float weights, and glossy matrices.
+    packed = {
+        "compressed-b3-w16": ("shadowed-b3", ["--clusters", "2", "--pca", "3"]),
+        "compressed-b3-w32": ("interreflected-colour", ["--clusters", "3", "--pca", "1", "--weights", "32"]),
+        "compressed-glossy": ("glossy-shadowed-b2", ["--clusters", "2", "--pca", "2", "--glossy-clusters", "3",
+                                                     "--glossy-pca", "1"]),
+    }
+    for name, (src, args) in packed.items():
+        f = tmp / (name + ".prt")
+        subprocess.run([prt, "compress", str(tmp / (src + ".prt")), "-o", str(f), "-q", *args], check=True)
+        write(out, "transfer", name + ".prt", f.read_bytes())
     return mesh, tmp / "shadowed-b3.prt"
 
 
