@@ -953,34 +953,9 @@ Transfer glossy_floor_and_ball(const Mesh& mesh, TransferMode mode, int bands) {
 // expects every vertex within the tolerance.
 double expect_radiance_near(const std::vector<glm::vec3>& got, const std::vector<glm::vec3>& expected,
                             const std::string& what) {
-  EXPECT_EQ(got.size(), expected.size()) << what;
-  double scale = 0, worst = 0;
-  for (const auto& e : expected) scale = std::max({scale, double(e.x), double(e.y), double(e.z)});
-  EXPECT_GT(scale, 0.1) << what;
-  int bad = 0;
-  for (std::size_t v = 0; v < std::min(got.size(), expected.size()); ++v)
-    for (int c = 0; c < 3; ++c) {
-      const double err = std::abs(double(got[v][c]) - expected[v][c]) / std::max(std::abs(double(expected[v][c])), 0.1 * scale);
-      worst = std::max(worst, err);
-      if (err > kGlossyTolerance && ++bad <= 5)
-        ADD_FAILURE() << what << ": vertex " << v << " channel " << c << ": GPU " << got[v][c] << ", CPU "
-                      << expected[v][c];
-    }
-  EXPECT_EQ(bad, 0) << what << ": vertices off by more than " << kGlossyTolerance;
-  ::testing::Test::RecordProperty("worst_relative_error_" + what, std::to_string(worst));
-  return worst;
+  return test::expect_radiance_near(got, expected, kGlossyTolerance, what, 0.1);
 }
-
-// The largest difference between two radiance arrays, over the largest value of a.
-double relative_difference(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
-  double scale = 0, diff = 0;
-  for (std::size_t v = 0; v < a.size(); ++v)
-    for (int c = 0; c < 3; ++c) {
-      scale = std::max(scale, std::abs(double(a[v][c])));
-      diff = std::max(diff, std::abs(double(a[v][c]) - b[v][c]));
-    }
-  return diff / scale;
-}
+using test::relative_difference;
 
 // The same transfer at its first `bands` bands (the leading blocks of its
 // coefficients and glossy matrices): what set_band_limit(bands) shades.

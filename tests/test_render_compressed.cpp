@@ -61,35 +61,9 @@ std::vector<glm::dvec3> lighting(int bands, unsigned seed) {
 }
 
 double expect_near(const std::vector<glm::vec3>& got, const std::vector<glm::vec3>& expected, const std::string& what) {
-  EXPECT_EQ(got.size(), expected.size()) << what;
-  double scale = 0, worst = 0;
-  for (const auto& e : expected) scale = std::max({scale, double(std::abs(e.x)), double(std::abs(e.y)), double(std::abs(e.z))});
-  EXPECT_GT(scale, 0.05) << what;
-  int bad = 0;
-  for (std::size_t v = 0; v < std::min(got.size(), expected.size()); ++v)
-    for (int c = 0; c < 3; ++c) {
-      const double err =
-          std::abs(double(got[v][c]) - expected[v][c]) / std::max(std::abs(double(expected[v][c])), 0.1 * scale);
-      worst = std::max(worst, err);
-      if (err > kTolerance && ++bad <= 5)
-        ADD_FAILURE() << what << ": vertex " << v << " channel " << c << ": GPU " << got[v][c] << ", CPU "
-                      << expected[v][c];
-    }
-  EXPECT_EQ(bad, 0) << what << ": vertices off by more than " << kTolerance;
-  ::testing::Test::RecordProperty("worst_relative_error_" + what, std::to_string(worst));
-  return worst;
+  return test::expect_radiance_near(got, expected, kTolerance, what);
 }
-
-// The largest difference between two radiance arrays, over the largest value of a.
-double relative_difference(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
-  double scale = 0, diff = 0;
-  for (std::size_t v = 0; v < a.size(); ++v)
-    for (int c = 0; c < 3; ++c) {
-      scale = std::max(scale, std::abs(double(a[v][c])));
-      diff = std::max(diff, std::abs(double(a[v][c]) - b[v][c]));
-    }
-  return diff / scale;
-}
+using test::relative_difference;
 
 // floor_and_ball's transfer (stored and analytic vertices): grey albedo
 // (one channel) or RGB, optionally with glossy matrices.

@@ -200,9 +200,8 @@ struct Sample {
   std::vector<std::size_t> section_at;
 };
 
-Sample sample_file(const TempDir& dir, const Transfer& t) {
-  const std::string path = dir.file("sample.prtt");
-  prt::write_transfer(path, t);
+// The file at `path`, its sections found by walking the table.
+Sample sample_of(const std::string& path) {
   Sample s{read_file(path), {}};
   std::size_t at = kHeader;
   for (std::uint32_t i = 0; i < get<std::uint32_t>(s.bytes, kSectionCountAt); ++i) {
@@ -211,6 +210,12 @@ Sample sample_file(const TempDir& dir, const Transfer& t) {
     at += kSectionHeader + bytes + (8 - bytes % 8) % 8;
   }
   return s;
+}
+
+Sample sample_file(const TempDir& dir, const Transfer& t) {
+  const std::string path = dir.file("sample.prtt");
+  prt::write_transfer(path, t);
+  return sample_of(path);
 }
 
 // ---- round trips -------------------------------------------------------------------
@@ -781,14 +786,7 @@ prt::CompressedTransfer compressed(const Transfer& t, int clusters, int vectors,
 Sample compressed_sample(const TempDir& dir, const prt::CompressedTransfer& c) {
   const std::string path = dir.file("sample.prtt");
   prt::write_compressed_transfer(path, c);
-  Sample s{read_file(path), {}};
-  std::size_t at = kHeader;
-  for (std::uint32_t i = 0; i < get<std::uint32_t>(s.bytes, kSectionCountAt); ++i) {
-    s.section_at.push_back(at);
-    const auto bytes = get<std::uint64_t>(s.bytes, at + 16);
-    at += kSectionHeader + bytes + (8 - bytes % 8) % 8;
-  }
-  return s;
+  return sample_of(path);
 }
 
 // Expects `read` to throw prt::Error naming `path` with every one of `words`.
