@@ -574,6 +574,9 @@ TEST(ReportCli, CompressionSweepAlone) {
   EXPECT_NE(md.find("### Diffuse, 8 bands"), std::string::npos) << md;
   EXPECT_EQ(md.find("## SH bands"), std::string::npos) << md;
   EXPECT_EQ(md.find("shadowed reference:"), std::string::npos) << md;  // no reference computed
+  EXPECT_NE(md.find("No reference: the compression sweep's errors are against the uncompressed"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("`prt report --quick --sweeps compression "), std::string::npos) << md;
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> header;
   for (std::size_t at = 0; at < csv.size();) {

@@ -466,22 +466,28 @@ int run_report_command(ReportArgs& a) {
       !rep.shadowed_truth.vertices.empty()  ? rep.shadowed_truth.vertices.size()
       : !rep.glossy_truth.empty()           ? rep.glossy_truth.front().vertices.size()
                                             : rep.interreflected_truth.vertices.size();
-  md += fmt::format(
-      "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
-      "Monte Carlo reference (`prt reference`",
-      V, a.albedo, a.quick ? "quick" : "full", error_vertices);
-  if (!rep.shadowed_truth.vertices.empty())
-    md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
-                      meta["shadowed_noise_floor"].get<double>());
-  if (!rep.interreflected_truth.vertices.empty())
-    md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
-                      opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
-  md +=
-      "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below twice "
-      "the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex relative "
-      "error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time per frame "
-      "(lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), median. "
-      "Storage: the transfer file.\n\n";
+  if (error_vertices == 0)  // the compression sweep alone: no reference
+    md += fmt::format("{} vertices, albedo {}, {} grid. No reference: the compression sweep's errors are against the "
+                      "uncompressed transfer.\n\n",
+                      V, a.albedo, a.quick ? "quick" : "full");
+  if (error_vertices > 0) {
+    md += fmt::format(
+        "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
+        "Monte Carlo reference (`prt reference`",
+        V, a.albedo, a.quick ? "quick" : "full", error_vertices);
+    if (!rep.shadowed_truth.vertices.empty())
+      md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
+                        meta["shadowed_noise_floor"].get<double>());
+    if (!rep.interreflected_truth.vertices.empty())
+      md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
+                        opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
+    md +=
+        "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below "
+        "twice the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex "
+        "relative error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time "
+        "per frame (lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), "
+        "median. Storage: the transfer file.\n\n";
+  }
   if (has("bands") || has("samples") || has("bounces") || has("terms"))
     md += "![error against precompute time](error_vs_time.png)\n\n";
   const auto section = [&](const char* sweep, const std::string& title, const std::string& text) {
@@ -564,8 +570,9 @@ int run_report_command(ReportArgs& a) {
   if (!plots_note.empty()) md += "- " + plots_note + "\n";
   if (has("compression") && !frames_why.empty()) md += "- no frame times: " + frames_why + "\n";
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  md += fmt::format("- Report made in {:.1f} s by `prt report{} {} {}`.\n", secs, a.quick ? " --quick" : "", a.mesh,
-                    a.env);
+  const bool all_sweeps = a.sweeps == ReportArgs{}.sweeps;
+  md += fmt::format("- Report made in {:.1f} s by `prt report{}{} {} {}`.\n", secs, a.quick ? " --quick" : "",
+                    all_sweeps ? std::string() : " --sweeps " + a.sweeps, a.mesh, a.env);
   write_text_file((fs::path(a.out) / "report.md").string(), md);
   if (!pictures_note.empty()) fmt::print(stderr, "warning: {}\n", pictures_note);
   if (has("compression") && !frames_why.empty()) fmt::print(stderr, "warning: no frame times: {}\n", frames_why);
