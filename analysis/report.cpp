@@ -17,7 +17,10 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <optional>
+#include <set>
 #include <string>
+#include <utility>
 
 namespace prt {
 
@@ -63,7 +66,18 @@ void validate(const ReportOptions& o) {
     if (!(e >= 0 && e <= glossy::kMaxGloss)) throw Error(fmt::format("report: gloss {:g} is outside [0, {:g}]", e, glossy::kMaxGloss));
   if (!o.glossy_bands.empty() && o.glossy_gloss.empty()) throw Error("report: the glossy sweep needs exponents");
   if (o.truth_glossy_samples < 2) throw Error("report: the glossy reference needs two samples");
-  if (o.bands.empty() && o.samples.empty() && o.bounces.empty() && o.terms.empty() && o.glossy_bands.empty())
+  in(o.compression_clusters, 1, 1 << 24, "compression clusters");
+  in(o.compression_vectors, 0, 1 << 16, "compression vectors");
+  in({o.compression_bands}, 1, 16, "compression bands");
+  in({o.compression_glossy_bands}, 0, kMaxGlossyBands, "compression glossy bands");
+  in({o.compression_iterations}, 1, 1 << 16, "compression iterations");
+  in({o.compression_eyes}, 1, 1 << 16, "compression eyes");
+  if (o.compression_weight_bits != 16 && o.compression_weight_bits != 32)
+    throw Error(fmt::format("report: compression weights are 16 or 32 bits, not {}", o.compression_weight_bits));
+  if (o.compression_clusters.empty() != o.compression_vectors.empty())
+    throw Error("report: the compression sweep needs both clusters and vectors");
+  if (o.bands.empty() && o.samples.empty() && o.bounces.empty() && o.terms.empty() && o.glossy_bands.empty() &&
+      o.compression_clusters.empty())
     throw Error("report: every sweep is empty");
   if (o.truth_vertices == 0 || o.truth_samples < 2 || o.truth_bounce_samples < 2)
     throw Error("report: the reference needs at least one vertex and two samples");
@@ -78,6 +92,9 @@ struct Runner {
   const ReportLog& log;
   Report& report;
   std::vector<glm::dvec3> light;  // the map's SH projection, 16 bands (all sweeps use a prefix)
+  std::optional<Transfer> diffuse_base, glossy_base;  // kept for the compression sweep
+
+  bool compression() const { return !o.compression_clusters.empty() && !o.compression_vectors.empty(); }
 
   void say(const std::string& line) const {
     if (log) log(line);
@@ -151,6 +168,7 @@ struct Runner {
       auto t0 = Clock::now();
       const Transfer transfer = compute_transfer(mesh, t, progress);
       const double seconds = seconds_since(t0);
+      if (compression() && bands == o.compression_glossy_bands && !glossy_base) glossy_base = transfer;
       t.samples = o.glossy_exact_samples;
       const std::vector<double> exact = glossy_vertex_matrices(mesh, t, at);
       const std::size_t nc = std::size_t(bands) * bands;
@@ -211,6 +229,7 @@ struct Runner {
     for (std::size_t i = 0; i < o.bands.size(); ++i) {
       double s = 0;
       const Transfer t = precompute(TransferMode::Shadowed, o.bands[i], o.bands_samples, 0, s);
+      if (compression() && t.bands == o.compression_bands && !diffuse_base) diffuse_base = t;
       std::vector<glm::vec3> rgb;
       report.rows.push_back(sh_row("bands", t, s, report.shadowed_truth, &rgb));
       if (i == 0 || i + 1 == o.bands.size()) picture(fmt::format("SH {} bands", t.bands), std::move(rgb));
@@ -288,9 +307,116 @@ struct Runner {
       if (K == mid) picture(fmt::format("wavelet K={}", K), std::move(rgb));
     }
   }
+
+  // The compression sweep: the diffuse base transfer (the bands sweep's, or
+  // computed here) and the glossy sweep's at compression_glossy_bands.
+  void compression_sweep() {
+    if (!diffuse_base) {
+      double s = 0;
+      diffuse_base = precompute(TransferMode::Shadowed, o.compression_bands, o.bands_samples, 0, s);
+      say(fmt::format("compression: {} bands, {} samples precomputed in {:.3g} s", o.compression_bands,
+                      o.bands_samples, s));
+    }
+    compress_rows(*diffuse_base);
+    if (glossy_base) compress_rows(*glossy_base);
+  }
+
+  // One row per K x N (capped; a cell that caps to an earlier one is left out).
+  void compress_rows(const Transfer& t) {
+    const char* what = t.glossy ? "glossy" : "diffuse";
+    const std::size_t rows = t.stored_vertices();
+    if (rows == 0) {
+      report.notes.push_back(fmt::format("compression ({}): every vertex is analytic, nothing to compress", what));
+      return;
+    }
+    const std::size_t dim = std::max(t.stride(), t.glossy ? t.glossy_stride() : std::size_t(0));
+    const std::vector<glm::dvec3> l(light.begin(), light.begin() + std::ptrdiff_t(t.bands) * t.bands);
+    CompressionErrorOptions errors;
+    errors.lights = {l};
+    const double specular = 0.5;
+    if (t.glossy) {
+      errors.eyes = report.compression_eyes;
+      errors.gloss = report.compression_gloss;
+      errors.specular = specular;
+    }
+    GlossyShading shading;  // the CPU timing's view: the first eye (prt render's default camera)
+    shading.eye = report.compression_eyes.front();
+    shading.gloss = errors.gloss;
+    shading.specular = specular;
+    const std::uint64_t raw = 4 * std::uint64_t(t.coeffs.size() + t.glossy_matrices.size());
+    const double raw_frame = o.frame_timer ? o.frame_timer(t, nullptr, l, errors.gloss, specular) : NAN;
+    sh::Rotation rot(t.bands, glm::dmat3(1.0));
+    std::vector<glm::dvec3> rotated(l.size());
+    std::set<std::pair<int, int>> done;
+    for (int K : o.compression_clusters)
+      for (int N : o.compression_vectors) {
+        const int k = int(std::min<std::size_t>(std::size_t(K), rows)), n = int(std::min<std::size_t>(std::size_t(N), dim));
+        if (!done.insert({k, n}).second) continue;
+        CompressOptions c;
+        c.clusters = k;
+        c.vectors = n;
+        c.iterations = o.compression_iterations;
+        c.weight_bits = o.compression_weight_bits;
+        c.progress = progress;
+        const auto t0 = Clock::now();
+        const CompressedTransfer ct = compress_transfer(t, c);
+        ReportRow row;
+        row.precompute_s = seconds_since(t0);
+        row.sweep = "compression";
+        row.basis = t.glossy ? "cpca glossy" : "cpca";
+        row.bands = t.bands;
+        row.samples = t.samples;
+        row.gloss = t.glossy ? errors.gloss : NAN;
+        row.clusters = k;
+        row.vectors = n;
+        row.bytes = ct.coeffs.bytes() + (t.glossy ? ct.glossy.bytes() : 0);
+        row.uncompressed_bytes = raw;
+        row.error.rel_rms = row.error.rel_rms_raw = compression_error(t, ct, mesh, errors);
+        row.error.noise_floor = 0;
+        row.error.p99_rel = NAN;
+        const glm::dmat3 R = timing_rotation();
+        std::vector<glm::vec3> rgb;
+        row.relight_ms = median_ms(o.relight_seconds, [&] {
+          rot.set(R);
+          rot.apply(l, rotated);
+          rgb = t.glossy ? relight_glossy(ct, mesh, rotated, shading) : relight(ct, mesh, rotated);
+        });
+        row.uncompressed_frame_ms = raw_frame;
+        row.frame_ms = o.frame_timer ? o.frame_timer(t, &ct, l, errors.gloss, specular) : NAN;
+        say(fmt::format("compression: {} {} bands, {} x {}: {:.1f} B/vertex (uncompressed {:.1f}), fit {:.3g} s, "
+                        "error {:.3g}, frame {:.3g} ms (uncompressed {:.3g})",
+                        what, t.bands, k, n, double(row.bytes) / double(mesh.vertex_count()),
+                        double(raw) / double(mesh.vertex_count()), row.precompute_s, row.error.rel_rms, row.frame_ms,
+                        raw_frame));
+        report.rows.push_back(std::move(row));
+      }
+  }
 };
 
 }  // namespace
+
+std::string report_reference(const ReportRow& r) {
+  if (r.sweep == "glossy") return fmt::format("glossy e={:g}", r.gloss);
+  if (r.sweep == "compression") return r.basis == "cpca glossy" ? "uncompressed glossy" : "uncompressed";
+  return r.sweep == "bounces" ? "interreflected" : "shadowed";
+}
+
+std::vector<bool> pareto_front(const std::vector<ReportRow>& rows) {
+  std::vector<bool> front(rows.size(), true);
+  std::vector<std::string> ref;
+  for (const ReportRow& r : rows) ref.push_back(report_reference(r));
+  // Compression rows trade bytes for error; the others precompute time.
+  const auto cost = [](const ReportRow& r) { return r.sweep == "compression" ? double(r.bytes) : r.precompute_s; };
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = 0; j < rows.size() && front[i]; ++j) {
+      if (i == j || ref[i] != ref[j]) continue;
+      const ReportRow &a = rows[i], &b = rows[j];
+      const bool no_worse = cost(b) <= cost(a) && b.error.rel_rms <= a.error.rel_rms;
+      const bool better = cost(b) < cost(a) || b.error.rel_rms < a.error.rel_rms;
+      if (no_worse && better) front[i] = false;
+    }
+  return front;
+}
 
 ReportOptions report_options(bool quick) {
   ReportOptions o;
@@ -301,6 +427,8 @@ ReportOptions report_options(bool quick) {
     o.terms = {10, 30, 100, 300, 1000};
     o.glossy_bands = {4, 6, 8, 10};
     o.glossy_gloss = {4, 16, 64};
+    o.compression_clusters = {1, 16, 64, 256};
+    o.compression_vectors = {1, 2, 4, 8, 16};
     return o;
   }
   o.bands = {3, 5, 8, 12, 16};
@@ -313,6 +441,8 @@ ReportOptions report_options(bool quick) {
   o.terms = {10, 100, 1000};
   o.glossy_bands = {4, 6};
   o.glossy_gloss = {16};
+  o.compression_clusters = {1, 16, 64};
+  o.compression_vectors = {1, 4, 16};
   o.glossy_samples = 256;
   o.glossy_exact_samples = 4096;
   o.truth_glossy_samples = 8192;
@@ -385,6 +515,11 @@ Report run_report(const Mesh& mesh, const EnvMap& map, const ReportOptions& opti
                                               options.truth_vertices, fmt::format("glossy reference e={:g}", e), &r));
     }
     run.glossy_sweep();
+  }
+  if (run.compression()) {
+    report.compression_eyes = eye_ring(mesh, options.compression_eyes);
+    if (run.glossy_base) report.compression_gloss = options.glossy_gloss[options.glossy_gloss.size() / 2];
+    run.compression_sweep();
   }
   return report;
 }

@@ -8,6 +8,8 @@ the fitted slopes) and draws:
   error_vs_time.png      error against precompute time, Pareto front marked
   error_vs_settings.png  error against SH bands and against wavelet terms K
   error_vs_samples.png   log-log error against samples with the fitted slope
+  compression.png        clustered PCA: bytes per vertex against relit error (log-log, Pareto
+                         front as a line) and GPU frame time against relit error
   images.png             the reference, a few settings, their error heat maps
 Needs matplotlib and numpy (Debian: python3-matplotlib, python3-numpy).
 """
@@ -50,6 +52,8 @@ def floor_line(ax, value, label):
 
 
 def error_vs_time(rows, meta, out):
+    if not any(r["sweep"] in SWEEP_STYLE for r in rows):
+        return
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for sweep, (label, color, marker) in SWEEP_STYLE.items():
         pts = [r for r in rows if r["sweep"] == sweep]
@@ -131,6 +135,71 @@ def error_vs_samples(rows, meta, out):
     plt.close(fig)
 
 
+COMPRESSION_STYLE = {
+    "cpca": ("diffuse", "tab:blue", "o", "C0-"),
+    "cpca glossy": ("glossy", "tab:red", "s", "C3--"),
+}
+
+
+def compression(rows, meta, out):
+    pts = [r for r in rows if r["sweep"] == "compression"]
+    if not pts:
+        return
+    info = meta.get("compression", {})
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.5))
+    timed = False
+    for basis, (label, color, marker, style) in COMPRESSION_STYLE.items():
+        sel = [r for r in pts if r["basis"] == basis]
+        if not sel:
+            continue
+        what = f"{label}, {int(sel[0]['bands'])} bands"
+        err = [max(r["rel_rms"], 1e-7) for r in sel]
+        left.scatter([r["bytes_per_vertex"] for r in sel], err, color=color, marker=marker, s=24, zorder=3,
+                     label=what)
+        for r, e in zip(sel, err):
+            left.annotate(f"{int(r['clusters'])}x{int(r['vectors'])}", (r["bytes_per_vertex"], e), fontsize=6,
+                          xytext=(3, 2), textcoords="offset points", color="0.35")
+        front = sorted((r for r in sel if r["pareto"] == 1), key=lambda r: r["bytes_per_vertex"])
+        left.plot([r["bytes_per_vertex"] for r in front], [max(r["rel_rms"], 1e-7) for r in front], style,
+                  linewidth=1, zorder=2, label=f"Pareto front ({label})")
+        left.axvline(sel[0]["uncompressed_bytes_per_vertex"], color=color, linestyle=":", linewidth=1)
+        left.annotate(f"uncompressed ({label})", (sel[0]["uncompressed_bytes_per_vertex"], 1.0),
+                      xycoords=("data", "axes fraction"), rotation=90, ha="right", va="top", fontsize=7, color=color)
+        frames = [r for r in sel if not np.isnan(r["frame_ms"])]
+        if frames:
+            timed = True
+            right.scatter([r["frame_ms"] for r in frames], [max(r["rel_rms"], 1e-7) for r in frames], color=color,
+                          marker=marker, s=24, zorder=3, label=what)
+            for r in frames:
+                right.annotate(f"{int(r['clusters'])}x{int(r['vectors'])}", (r["frame_ms"], max(r["rel_rms"], 1e-7)),
+                               fontsize=6, xytext=(3, 2), textcoords="offset points", color="0.35")
+            if not np.isnan(frames[0]["uncompressed_frame_ms"]):
+                right.axvline(frames[0]["uncompressed_frame_ms"], color=color, linestyle=":", linewidth=1,
+                              label=f"uncompressed ({label})")
+    left.set_xscale("log")
+    left.set_yscale("log")
+    left.set_xlabel("bytes per vertex (compressed signals, over all vertices)")
+    left.set_ylabel("relit error vs uncompressed (relative RMS)")
+    left.set_title(f"{int(info.get('weight_bits', 16))}-bit weights, K clusters x N vectors")
+    left.grid(True, which="both", alpha=0.3)
+    left.legend(fontsize=7)
+    if timed:
+        right.set_yscale("log")
+        right.set_xlabel(f"GPU frame time, {info.get('frame_size', 512)}^2 (ms, median)")
+        right.set_ylabel("relit error vs uncompressed (relative RMS)")
+        right.set_title(info.get("device", "") or "frame time", fontsize=8)
+        right.grid(True, which="both", alpha=0.3)
+        right.legend(fontsize=7)
+    else:
+        right.axis("off")
+        right.text(0.5, 0.5, "no frame times:\n" + (info.get("no_frames") or "not measured"), ha="center",
+                   va="center", fontsize=8, wrap=True, transform=right.transAxes)
+    fig.suptitle(f"{meta['mesh_name']} under {meta['map_name']}: clustered PCA compression")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "compression.png"), dpi=120)
+    plt.close(fig)
+
+
 def read_pfm(path):
     with open(path, "rb") as f:
         kind = f.readline().strip()
@@ -185,6 +254,7 @@ def main():
     error_vs_time(rows, meta, out)
     error_vs_settings(rows, meta, out)
     error_vs_samples(rows, meta, out)
+    compression(rows, meta, out)
     images(meta, out)
 
 

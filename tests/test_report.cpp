@@ -3,6 +3,7 @@
 // `prt precompute --target-error` on the command line.
 #include <prt/precompute.h>
 #include <prt/accuracy.h>
+#include <prt/compression_error.h>
 #include <prt/error.h>
 #include <prt/projection.h>
 #include <prt/report.h>
@@ -11,6 +12,7 @@
 #include <prt/tuning.h>
 
 #include "test_files.h"
+#include "test_gl.h"
 #include "test_meshes.h"
 #include "test_util.h"
 
@@ -20,6 +22,8 @@
 
 #include <cstring>
 #include <random>
+#include <set>
+#include <utility>
 
 namespace prt {
 namespace {
@@ -169,6 +173,146 @@ TEST(Report, GlossySweep) {
   const Report more = run_report(m, map, o, "");
   EXPECT_NE(more.rows[3].intrinsic.rel_rms, more.rows[3].error.rel_rms);
   o.glossy_gloss.clear();
+  EXPECT_THROW(run_report(m, map, o, ""), Error);
+}
+
+// The compression sweep: a row per K x N (capped; duplicates left out),
+// each row's bytes, error and frame times what compress_transfer,
+// compression_error and the frame timer give for that cell (recomputed
+// here), the Pareto flags a brute-force dominance check, N = the row length
+// nearly lossless; the glossy transfer of the glossy sweep compressed too.
+TEST(Report, CompressionSweep) {
+  const Mesh m = small_scene();
+  const EnvMap map = sky_with_sun();
+  ReportOptions o;
+  o.compression_clusters = {1, 4, 16};
+  o.compression_vectors = {0, 1, 4, 16, 40};  // 40 caps to 16 (4 bands, grey: 16 values a row): left out
+  o.compression_bands = 4;
+  o.bands_samples = 64;
+  o.glossy_bands = {2};
+  o.glossy_gloss = {8};
+  o.glossy_samples = 64;
+  o.glossy_exact_samples = 64;
+  o.truth_vertices = 50;
+  o.truth_glossy_samples = 64;
+  o.compression_glossy_bands = 2;
+  o.compression_eyes = 2;
+  o.image_samples = 0;
+  o.relight_seconds = 0;
+  // A frame timer that says which transfer it was given.
+  int calls = 0;
+  o.frame_timer = [&](const Transfer& t, const CompressedTransfer* c, std::span<const glm::dvec3> light, double gloss,
+                      double specular) {
+    ++calls;
+    EXPECT_EQ(light.size(), std::size_t(t.bands) * t.bands);
+    if (t.glossy) {
+      EXPECT_EQ(gloss, 8.0);
+      EXPECT_EQ(specular, 0.5);
+    }
+    return c ? 1000.0 * (t.glossy ? 2 : 1) + 10.0 * c->coeffs.clusters + (t.glossy ? c->glossy : c->coeffs).vectors
+             : t.glossy ? 7.0 : 3.0;
+  };
+  const Report r = run_report(m, map, o, "");
+  std::vector<const ReportRow*> diffuse, glossy;
+  for (const ReportRow& x : r.rows) {
+    if (x.sweep != "compression") continue;
+    (x.basis == "cpca glossy" ? glossy : diffuse).push_back(&x);
+  }
+  ASSERT_EQ(diffuse.size(), 3u * 4u);
+  ASSERT_EQ(glossy.size(), 3u * 4u);  // glossy_stride() = 10 at 2 bands: 16 and 40 cap to 10, one left out
+  EXPECT_EQ(calls, 2 + 24);           // each uncompressed transfer once, each row once
+  ASSERT_EQ(r.compression_eyes.size(), 2u);
+  EXPECT_EQ(r.compression_eyes, eye_ring(m, 2));
+
+  TransferOptions to;
+  to.mode = TransferMode::Shadowed;
+  to.bands = 4;
+  to.samples = 64;
+  to.albedo = o.albedo;
+  const Transfer td = compute_transfer(m, to);
+  to.bands = 2;
+  to.glossy = true;
+  const Transfer tg = compute_transfer(m, to);
+  ASSERT_EQ(td.stride(), 16u);
+  ASSERT_EQ(tg.glossy_stride(), 10u);
+  ASSERT_GE(td.stored_vertices(), 16u);
+  for (const auto& [t, rows] : {std::pair{&td, diffuse}, std::pair{&tg, glossy}}) {
+    CompressionErrorOptions e;
+    e.lights = {project(map, t->bands)};
+    if (t->glossy) {
+      e.eyes = eye_ring(m, 2);
+      e.gloss = 8;
+      e.specular = 0.5;
+    }
+    std::set<std::pair<int, int>> cells;
+    for (const ReportRow* row : rows) {
+      EXPECT_TRUE(cells.insert({row->clusters, row->vectors}).second) << row->clusters << " x " << row->vectors;
+      CompressOptions c;
+      c.clusters = row->clusters;
+      c.vectors = row->vectors;
+      c.iterations = o.compression_iterations;
+      c.weight_bits = 16;
+      const CompressedTransfer ct = compress_transfer(*t, c);
+      const std::string at = row->basis + " " + std::to_string(row->clusters) + " x " + std::to_string(row->vectors);
+      EXPECT_EQ(row->bytes, ct.coeffs.bytes() + (t->glossy ? ct.glossy.bytes() : 0)) << at;
+      EXPECT_EQ(row->uncompressed_bytes, 4 * (t->coeffs.size() + t->glossy_matrices.size())) << at;
+      // Tolerance: the same deterministic fit and sums; only summation order could differ.
+      EXPECT_NEAR(row->error.rel_rms, compression_error(*t, ct, m, e), 1e-12) << at;
+      EXPECT_EQ(row->frame_ms, 1000.0 * (t->glossy ? 2 : 1) + 10.0 * row->clusters + row->vectors) << at;
+      EXPECT_EQ(row->uncompressed_frame_ms, t->glossy ? 7.0 : 3.0) << at;
+      EXPECT_GT(row->precompute_s, 0) << at;
+      EXPECT_EQ(row->bands, t->bands) << at;
+    }
+    for (int K : {1, 4, 16})
+      for (int N : {0, 1, 4, int(std::max(t->stride(), t->glossy ? t->glossy_stride() : 0))})
+        EXPECT_TRUE(cells.count({K, N})) << K << " x " << N;
+    // N = the row length: lossless up to the 16-bit weights (each within
+    // max |w| / 65534 of its value: relative errors ~1e-5; 1e-3 is the budget).
+    for (const ReportRow* row : rows) {
+      if (row->vectors == int(t->glossy ? t->glossy_stride() : t->stride())) {
+        EXPECT_LT(row->error.rel_rms, 1e-3) << row->clusters;
+      } else if (row->vectors == 0) {
+        EXPECT_GT(row->error.rel_rms, 1e-3) << row->clusters;
+      }
+    }
+  }
+  // The Pareto flags: brute force over (bytes, error), per transfer.
+  const std::vector<bool> front = pareto_front(r.rows);
+  ASSERT_EQ(front.size(), r.rows.size());
+  int on_front = 0;
+  for (std::size_t i = 0; i < r.rows.size(); ++i) {
+    const ReportRow& a = r.rows[i];
+    if (a.sweep != "compression") continue;
+    bool dominated = false;
+    for (const ReportRow& b : r.rows)
+      if (b.sweep == "compression" && b.basis == a.basis && &a != &b)
+        dominated |= (b.bytes < a.bytes && b.error.rel_rms <= a.error.rel_rms) ||
+                     (b.bytes <= a.bytes && b.error.rel_rms < a.error.rel_rms);
+    EXPECT_EQ(front[i], !dominated) << a.basis << " " << a.clusters << " x " << a.vectors;
+    on_front += front[i];
+  }
+  EXPECT_GE(on_front, 2);
+  // The smallest row of each transfer is on the front, and so is the most accurate.
+  for (const auto* rows : {&diffuse, &glossy}) {
+    const auto smallest = std::min_element(rows->begin(), rows->end(), [](auto a, auto b) { return a->bytes < b->bytes; });
+    EXPECT_TRUE(front[std::size_t(*smallest - r.rows.data())]);
+  }
+
+  // Without a frame timer: no frame times. Without the glossy sweep: diffuse only.
+  o.frame_timer = nullptr;
+  o.glossy_bands.clear();
+  o.compression_vectors = {2};
+  const Report plain = run_report(m, map, o, "");
+  ASSERT_EQ(plain.rows.size(), 3u);
+  for (const ReportRow& x : plain.rows) {
+    EXPECT_EQ(x.basis, "cpca");
+    EXPECT_TRUE(std::isnan(x.frame_ms));
+    EXPECT_TRUE(std::isnan(x.uncompressed_frame_ms));
+  }
+  o.compression_vectors.clear();
+  EXPECT_THROW(run_report(m, map, o, ""), Error);  // clusters without vectors
+  o.compression_vectors = {2};
+  o.compression_weight_bits = 8;
   EXPECT_THROW(run_report(m, map, o, ""), Error);
 }
 
@@ -378,11 +522,13 @@ TEST(ReportCli, WritesTablesCsvAndPlots) {
   ASSERT_EQ(r.code, 0) << test::describe_run(r);
   const std::string md = test::read_file(out + "/report.md"), csv = test::read_file(out + "/report.csv");
   for (const char* s : {"## SH bands", "## Samples per vertex", "## Interreflection bounces", "## Wavelet terms K",
-                        "Fitted slope"})
+                        "Fitted slope", "## Compression (clustered PCA)"})
     EXPECT_NE(md.find(s), std::string::npos) << s;
   // Header plus the quick grid's rows: 5 bands, 3 samples, 3 bounces, 3 K,
-  // glossy 2 bands x 1 exponent.
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 5 + 3 + 3 + 3 + 2) << csv;
+  // glossy 2 bands x 1 exponent, compression 3 K x 3 N of the diffuse and
+  // of the glossy transfer.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 5 + 3 + 3 + 3 + 2 + 9 + 9) << csv;
+  EXPECT_NE(md.find("### Glossy, 4 bands"), std::string::npos) << md;
   EXPECT_NE(md.find("## Glossy transfer"), std::string::npos) << md;
   EXPECT_NE(csv.find("pareto"), std::string::npos);
   // Whether the plots can be made here is asked of the interpreter prt uses
@@ -394,7 +540,7 @@ TEST(ReportCli, WritesTablesCsvAndPlots) {
   const bool matplotlib =
       std::system((test::shell_quote(python) + " -c 'import matplotlib, numpy' >/dev/null 2>&1").c_str()) == 0;
   if (matplotlib) {
-    for (const char* png : {"error_vs_time.png", "error_vs_settings.png", "error_vs_samples.png"}) {
+    for (const char* png : {"error_vs_time.png", "error_vs_settings.png", "error_vs_samples.png", "compression.png"}) {
       ASSERT_TRUE(std::filesystem::exists(out + "/" + png)) << png << "\n" << md;
       EXPECT_GT(std::filesystem::file_size(out + "/" + png), 10000u) << png;
     }
@@ -412,6 +558,70 @@ TEST(ReportCli, WritesTablesCsvAndPlots) {
   EXPECT_NE(md2.find("reference read from"), std::string::npos);
   EXPECT_NE(md2.find("plots skipped (--no-plots)"), std::string::npos) << md2;
   if (!matplotlib) GTEST_SKIP() << python << " has no matplotlib: tables and the failure note checked, plots not";
+}
+
+// --sweeps compression alone: no reference, the diffuse transfer's K x N
+// rows with bytes, error and (with GL) frame times, or the reason there are
+// none; the CSV's Pareto column is the library's front.
+TEST(ReportCli, CompressionSweepAlone) {
+  TempDir dir;
+  const std::string out = dir.file("rep"), mesh = dir.file("scene.off");
+  test::write_off(mesh, small_scene());
+  const auto r = test::run_prt(dir, {"report", mesh, std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr", "--quick",
+                                     "--sweeps", "compression", "-o", out, "-q", "--no-plots"});
+  ASSERT_EQ(r.code, 0) << test::describe_run(r);
+  const std::string md = test::read_file(out + "/report.md"), csv = test::read_file(out + "/report.csv");
+  EXPECT_NE(md.find("### Diffuse, 8 bands"), std::string::npos) << md;
+  EXPECT_EQ(md.find("## SH bands"), std::string::npos) << md;
+  EXPECT_EQ(md.find("shadowed reference:"), std::string::npos) << md;  // no reference computed
+  EXPECT_NE(md.find("No reference: the compression sweep's errors are against the uncompressed"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("`prt report --quick --sweeps compression "), std::string::npos) << md;
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> header;
+  for (std::size_t at = 0; at < csv.size();) {
+    const std::size_t end = csv.find('\n', at);
+    std::vector<std::string> cells;
+    const std::string line = csv.substr(at, end - at);
+    for (std::size_t c = 0; c <= line.size();) {
+      const std::size_t comma = std::min(line.find(',', c), line.size());
+      cells.push_back(line.substr(c, comma - c));
+      c = comma + 1;
+    }
+    (header.empty() ? header : rows.emplace_back()) = cells;
+    at = end + 1;
+  }
+  ASSERT_EQ(rows.size(), 9u) << csv;  // the quick grid: 3 K x 3 N
+  const auto col = [&](const char* name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return std::size_t(it - header.begin());
+  };
+  const std::size_t frame = col("frame_ms"), raw_frame = col("uncompressed_frame_ms"), k = col("clusters"),
+                    pareto = col("pareto"), bpv = col("bytes_per_vertex"), raw = col("uncompressed_bytes_per_vertex");
+  bool timed = false;
+  int front = 0;
+  for (const auto& row : rows) {
+    ASSERT_EQ(row.size(), header.size());
+    EXPECT_EQ(row[0], "compression");
+    EXPECT_EQ(row[2], "uncompressed");
+    EXPECT_GE(std::stoi(row[k]), 1);
+    EXPECT_GT(std::stod(row[bpv]), 0);  // on ~430 vertices 64 clusters' bases outweigh the rows: no upper bound
+    EXPECT_EQ(std::stod(row[raw]), std::stod(rows[0][raw]));
+    timed = row[frame] != "nan";
+    if (timed) {
+      EXPECT_GT(std::stod(row[frame]), 0);
+      EXPECT_GT(std::stod(row[raw_frame]), 0);
+    }
+    front += row[pareto] == "1";
+  }
+  EXPECT_GE(front, 1);
+  if (!timed) {
+    EXPECT_NE(md.find("No frame times: "), std::string::npos) << md;
+    if (test::gl_required()) ADD_FAILURE() << "PRT_REQUIRE_GL is set, but the report has no frame times:\n" << md;
+  } else {
+    EXPECT_EQ(md.find("No frame times"), std::string::npos) << md;
+  }
 }
 
 TEST(ReportCli, BadInputIsRefusedByName) {

@@ -1,7 +1,8 @@
 // prt report: speed against error on the user's model and map. The grid is
 // prt::run_report (prt/report.h); this command writes its tables (report.md,
 // report.csv, report.json), renders pictures through prt::Renderer and runs
-// the embedded plotting script (scripts/report_plots.py) for the PNG plots.
+// the embedded plotting script (scripts/report_plots.py) for the PNG plots;
+// it also times the compression sweep's GPU frames (prt::FrameTimer).
 #include "commands.h"
 #include "look.h"
 #include "progress.h"
@@ -11,6 +12,7 @@
 #include <prt/mesh.h>
 #include <prt/render.h>
 #include <prt/report.h>
+#include <prt/rotation.h>
 
 #include <fmt/core.h>
 #include <fmt/format.h>
@@ -39,32 +41,76 @@ namespace {
 namespace fs = std::filesystem;
 
 struct ReportArgs {
-  std::string mesh, env, out = "prt-report", albedo = "0.8,0.8,0.8", cache, sweeps = "bands,samples,bounces,terms,glossy";
+  std::string mesh, env, out = "prt-report", albedo = "0.8,0.8,0.8", cache, sweeps = "bands,samples,bounces,terms,glossy,compression";
   MeshOptions mesh_opt;
   int threads = 0, image_size = 360;
   bool quick = false, no_cache = false, no_plots = false, quiet = false;
 };
 
-// Which reference a row is measured against.
-std::string reference_of(const ReportRow& r) {
-  if (r.sweep == "glossy") return fmt::format("glossy e={:g}", r.gloss);
-  return r.sweep == "bounces" ? "interreflected" : "shadowed";
-}
+// The frame size of the compression sweep's GPU timing, and its frames:
+// kWarmFrames untimed (compile, allocate), then the median of kTimedFrames.
+constexpr int kFrameSize = 512, kWarmFrames = 2, kTimedFrames = 7;
 
-// Rows on the Pareto front of (precompute time, error), per reference: no
-// other row of the same reference is at least as fast and as accurate and
-// strictly better in one.
-std::vector<bool> pareto_front(const std::vector<ReportRow>& rows) {
-  std::vector<bool> front(rows.size(), true);
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    for (std::size_t j = 0; j < rows.size() && front[i]; ++j) {
-      if (i == j || reference_of(rows[i]) != reference_of(rows[j])) continue;
-      const ReportRow &a = rows[i], &b = rows[j];
-      const bool no_worse = b.precompute_s <= a.precompute_s && b.error.rel_rms <= a.error.rel_rms;
-      const bool better = b.precompute_s < a.precompute_s || b.error.rel_rms < a.error.rel_rms;
-      if (no_worse && better) front[i] = false;
+// The report's one OpenGL context (pictures and frame times), made on first
+// use; `why` says why there is none.
+struct Gl {
+  std::unique_ptr<Renderer> renderer;
+  std::string why;
+  bool tried = false, environment = false;  // environment: the map uploaded for the frame timing
+  Renderer* get() {
+    if (!tried) {
+      tried = true;
+      try {
+        renderer = std::make_unique<Renderer>();
+      } catch (const Error& e) {
+        why = e.what();
+      }
     }
-  return front;
+    return renderer.get();
+  }
+};
+
+// prt::FrameTimer through prt::Renderer: the lighting turned about +Y by a
+// new angle each frame (as BM_CompressedFrame), the map as background, the
+// default camera, kFrameSize^2, draw_only (waits for the GPU). NaN, with
+// `why` set, when there is no context or the renderer refuses the transfer.
+double time_frames(Gl& gl, const Mesh& mesh, const EnvMap& map, const Transfer& t, const CompressedTransfer* c,
+                   std::span<const glm::dvec3> light, double gloss, double specular, std::string& why) {
+  Renderer* r = gl.get();
+  if (!r) {
+    why = gl.why;
+    return NAN;
+  }
+  try {
+    if (c) r->set_mesh(mesh, *c);
+    else r->set_mesh(mesh, t);
+    if (!gl.environment) r->set_environment(map);
+    gl.environment = true;
+    r->set_shading(t.glossy ? Shading::Glossy : Shading::Transfer);
+    if (t.glossy) r->set_glossy(gloss, specular);
+    const std::vector<glm::dvec3> l(light.begin(), light.end());
+    std::vector<glm::dvec3> rotated(l.size());
+    sh::Rotation rot(t.bands, glm::dmat3(1.0));
+    const Camera camera = default_camera(mesh);
+    double angle = 0;
+    std::vector<double> ms;
+    for (int i = 0; i < kWarmFrames + kTimedFrames; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      angle += 0.01;
+      const glm::dmat3 R = sh::rotation_axis_angle({0, 1, 0}, angle);
+      rot.set(R);
+      rot.apply(l, rotated);
+      r->set_lighting(rotated);
+      r->set_environment_rotation(R);
+      r->draw_only(camera, kFrameSize, kFrameSize);
+      if (i >= kWarmFrames) ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
+    return ms[ms.size() / 2];
+  } catch (const Error& e) {
+    why = e.what();
+    return NAN;
+  }
 }
 
 // Least-squares line through (log x, log y): y ~ e^intercept x^slope.
@@ -100,16 +146,22 @@ std::string bytes_text(double b) {
 std::string csv_text(const std::vector<ReportRow>& rows, const std::vector<bool>& front, std::size_t vertices) {
   std::string s =
       "sweep,basis,reference,bands,samples,bounces,terms,cube_res,precompute_s,relight_ms,bytes,bytes_per_vertex,"
-      "rel_rms,rel_rms_raw,noise_floor,p99_rel,self_rms,pareto,gloss,intrinsic_rel_rms\n";
+      "rel_rms,rel_rms_raw,noise_floor,p99_rel,self_rms,pareto,gloss,intrinsic_rel_rms,clusters,vectors,"
+      "uncompressed_bytes_per_vertex,frame_ms,uncompressed_frame_ms\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const ReportRow& r = rows[i];
-    s += fmt::format("{},{},{},{},{},{},{},{},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{}\n", r.sweep,
-                     r.basis, reference_of(r), r.bands, r.samples, r.bounces, r.terms, r.cube_res, r.precompute_s,
+    const auto num = [](double x) { return std::isnan(x) ? std::string("nan") : fmt::format("{:.6g}", x); };
+    const bool packed = r.sweep == "compression";
+    s += fmt::format("{},{},{},{},{},{},{},{},{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{},{},{},{},{},{},{}\n",
+                     r.sweep,
+                     r.basis, report_reference(r), r.bands, r.samples, r.bounces, r.terms, r.cube_res, r.precompute_s,
                      r.relight_ms, r.bytes, double(r.bytes) / double(vertices), r.error.rel_rms,
                      r.error.rel_rms_raw, r.error.noise_floor, r.error.p99_rel,
                      std::isnan(r.self_rms) ? std::string("nan") : fmt::format("{:.6g}", r.self_rms),
                      front[i] ? 1 : 0, std::isnan(r.gloss) ? std::string("nan") : fmt::format("{:g}", r.gloss),
-                     r.sweep == "glossy" ? fmt::format("{:.6g}", r.intrinsic.rel_rms) : std::string("nan"));
+                     r.sweep == "glossy" ? fmt::format("{:.6g}", r.intrinsic.rel_rms) : std::string("nan"), r.clusters,
+                     r.vectors, packed ? num(double(r.uncompressed_bytes) / double(vertices)) : std::string("nan"),
+                     num(r.frame_ms), num(r.uncompressed_frame_ms));
   }
   return s;
 }
@@ -133,6 +185,29 @@ std::string glossy_table(const std::vector<ReportRow>& rows, std::size_t vertice
                      r.precompute_s, r.relight_ms, bytes_text(double(r.bytes) / double(vertices)), error_text(r.error),
                      error_text(r.intrinsic), r.intrinsic.rel_rms > 0 ? r.error.rel_rms / r.intrinsic.rel_rms : NAN,
                      r.error.p99_rel);
+  }
+  return s;
+}
+
+// The compression sweep of one transfer (`basis`): per K x N the bytes per
+// vertex (and their share of the uncompressed rows'), the fit, the relit
+// error against the uncompressed transfer, CPU relight and GPU frame time.
+std::string compression_table(const std::vector<ReportRow>& rows, const std::vector<bool>& front,
+                              const std::string& basis, std::size_t vertices) {
+  std::string s =
+      "| K | N | per vertex | of uncompressed | fit (s) | relit error | relight (ms/frame) | frame (ms) | of "
+      "uncompressed | Pareto |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ReportRow& r = rows[i];
+    if (r.sweep != "compression" || r.basis != basis) continue;
+    const std::string frame = std::isnan(r.frame_ms) ? "-" : fmt::format("{:.3g}", r.frame_ms);
+    const std::string ratio = std::isnan(r.frame_ms) || std::isnan(r.uncompressed_frame_ms)
+                                  ? "-"
+                                  : fmt::format("{:.2f}", r.frame_ms / r.uncompressed_frame_ms);
+    s += fmt::format("| {} | {} | {} | {:.3f} | {:.2f} | {:.3g} | {:.2f} | {} | {} | {} |\n", r.clusters, r.vectors,
+                     bytes_text(double(r.bytes) / double(vertices)),
+                     r.uncompressed_bytes ? double(r.bytes) / double(r.uncompressed_bytes) : NAN, r.precompute_s,
+                     r.error.rel_rms, r.relight_ms, frame, ratio, front[i] ? "yes" : "");
   }
   return s;
 }
@@ -174,11 +249,14 @@ void write_error_pfm(const std::string& path, const Image& img) {
 
 // Renders the reference and each picture, and the error heat maps. Returns
 // the JSON entries; throws prt::Error when there is no GL 4.5 context.
-nlohmann::json render_pictures(const Mesh& mesh, const Report& report, const glm::vec3& albedo,
+nlohmann::json render_pictures(Gl& gl, const Mesh& mesh, const Report& report, const glm::vec3& albedo,
                                const std::string& out, int size) {
+  if (!gl.get()) throw Error(gl.why);
   fs::create_directories(fs::path(out) / "images");
-  Renderer renderer;
+  Renderer& renderer = *gl.get();
   renderer.set_mesh(mesh, albedo, false);
+  renderer.clear_environment();  // black behind the pictures (the frame timing draws the map)
+  gl.environment = false;
   const Camera camera = default_camera(mesh);
   // Exposure: the reference's 95th-percentile vertex luminance maps to 0.8 before the tone map.
   std::vector<float> lum;
@@ -265,13 +343,17 @@ int run_report_command(ReportArgs& a) {
   }
   const auto keep = [&](const char* name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
   for (const std::string& c : chosen)
-    if (c != "bands" && c != "samples" && c != "bounces" && c != "terms" && c != "glossy")
-      throw UsageError("--sweeps: unknown sweep '" + c + "' (bands, samples, bounces, terms, glossy)");
+    if (c != "bands" && c != "samples" && c != "bounces" && c != "terms" && c != "glossy" && c != "compression")
+      throw UsageError("--sweeps: unknown sweep '" + c + "' (bands, samples, bounces, terms, glossy, compression)");
   if (!keep("bands")) opt.bands.clear();
   if (!keep("samples")) opt.samples.clear();
   if (!keep("bounces")) opt.bounces.clear();
   if (!keep("terms")) opt.terms.clear();
   if (!keep("glossy")) opt.glossy_bands.clear();
+  if (!keep("compression")) {
+    opt.compression_clusters.clear();
+    opt.compression_vectors.clear();
+  }
   opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   opt.threads = a.threads;
   std::error_code ec;
@@ -289,6 +371,12 @@ int run_report_command(ReportArgs& a) {
   require_finite(map);
   if (map.is_cube()) throw Error(a.env + ": prt report needs a lat-long (2:1) map, not " + map.source_layout);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(map));
+  Gl gl;
+  std::string frames_why;
+  opt.frame_timer = [&](const Transfer& t, const CompressedTransfer* c, std::span<const glm::dvec3> light,
+                        double gloss, double specular) {
+    return time_frames(gl, mesh, map, t, c, light, gloss, specular, frames_why);
+  };
   const bool tty = isatty(2);
   const ReportLog log = [&](const std::string& line) {
     if (!a.quiet) fmt::print(stderr, "{}{}\n", tty ? "\r\033[K" : "", line);
@@ -332,11 +420,34 @@ int run_report_command(ReportArgs& a) {
                  {"self_intercept", fit_alone.intercept},
                  {"self_slope_range", {fit_alone.x0, fit_alone.x1}}});
   meta["samples_fit"] = fits;
+  const auto has = [&](const char* sweep) {
+    return std::any_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; });
+  };
+  const auto has_basis = [&](const char* basis) {
+    return std::any_of(rep.rows.begin(), rep.rows.end(),
+                       [&](const ReportRow& r) { return r.sweep == "compression" && r.basis == basis; });
+  };
+  const std::string gl_device = gl.renderer ? gl.renderer->device() : std::string();
+  if (has("compression")) {
+    nlohmann::json c{{"bands", opt.compression_bands},
+                     {"samples", opt.bands_samples},
+                     {"iterations", opt.compression_iterations},
+                     {"weight_bits", opt.compression_weight_bits},
+                     {"frame_size", kFrameSize},
+                     {"frames", kTimedFrames},
+                     {"device", gl_device},
+                     {"no_frames", frames_why}};
+    if (has_basis("cpca glossy"))
+      c.update({{"glossy_bands", opt.compression_glossy_bands},
+                {"gloss", rep.compression_gloss},
+                {"eyes", rep.compression_eyes.size()}});
+    meta["compression"] = c;
+  }
 
   std::string pictures_note;
   if (!rep.image_reference.empty()) {
     try {
-      meta["pictures"] = render_pictures(mesh, rep, opt.albedo, a.out, a.image_size);
+      meta["pictures"] = render_pictures(gl, mesh, rep, opt.albedo, a.out, a.image_size);
       meta["reference_image"] = "images/reference.png";
       meta["image_samples"] = rep.image_samples;
       meta["image_noise"] = rep.image_reference_noise;
@@ -355,25 +466,28 @@ int run_report_command(ReportArgs& a) {
       !rep.shadowed_truth.vertices.empty()  ? rep.shadowed_truth.vertices.size()
       : !rep.glossy_truth.empty()           ? rep.glossy_truth.front().vertices.size()
                                             : rep.interreflected_truth.vertices.size();
-  md += fmt::format(
-      "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
-      "Monte Carlo reference (`prt reference`",
-      V, a.albedo, a.quick ? "quick" : "full", error_vertices);
-  if (!rep.shadowed_truth.vertices.empty())
-    md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
-                      meta["shadowed_noise_floor"].get<double>());
-  if (!rep.interreflected_truth.vertices.empty())
-    md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
-                      opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
-  md +=
-      "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below twice "
-      "the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex relative "
-      "error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time per frame "
-      "(lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), median. "
-      "Storage: the transfer file.\n\n";
-  const auto has = [&](const char* sweep) {
-    return std::any_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; });
-  };
+  if (error_vertices == 0)  // the compression sweep alone: no reference
+    md += fmt::format("{} vertices, albedo {}, {} grid. No reference: the compression sweep's errors are against the "
+                      "uncompressed transfer.\n\n",
+                      V, a.albedo, a.quick ? "quick" : "full");
+  if (error_vertices > 0) {
+    md += fmt::format(
+        "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
+        "Monte Carlo reference (`prt reference`",
+        V, a.albedo, a.quick ? "quick" : "full", error_vertices);
+    if (!rep.shadowed_truth.vertices.empty())
+      md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
+                        meta["shadowed_noise_floor"].get<double>());
+    if (!rep.interreflected_truth.vertices.empty())
+      md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
+                        opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
+    md +=
+        "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below "
+        "twice the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex "
+        "relative error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time "
+        "per frame (lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), "
+        "median. Storage: the transfer file.\n\n";
+  }
   if (has("bands") || has("samples") || has("bounces") || has("terms"))
     md += "![error against precompute time](error_vs_time.png)\n\n";
   const auto section = [&](const char* sweep, const std::string& title, const std::string& text) {
@@ -410,6 +524,41 @@ int run_report_command(ReportArgs& a) {
         opt.glossy_samples, rep.glossy_eye.x, rep.glossy_eye.y, rep.glossy_eye.z, opt.truth_glossy_samples, noise,
         opt.glossy_exact_samples, glossy_table(rep.rows, V));
   }
+  if (has("compression")) {
+    const auto uncompressed = [&](const char* basis) {
+      for (const ReportRow& r : rep.rows)
+        if (r.sweep == "compression" && r.basis == basis) return r;
+      return ReportRow{};
+    };
+    const ReportRow d = uncompressed("cpca"), g = uncompressed("cpca glossy");
+    const auto frame = [](double ms) { return std::isnan(ms) ? std::string("-") : fmt::format("{:.3g} ms", ms); };
+    md += fmt::format(
+        "## Compression (clustered PCA)\n\nEach K clusters x N vectors fitted to the stored rows (docs/COMPRESSION.md) "
+        "with {}-bit weights, at most {} rounds of the fit. Per vertex: the signals' bytes as stored "
+        "(ClusteredSignal::bytes) over all {} vertices; \"of uncompressed\": their share of the uncompressed rows' "
+        "floats. Relit error: relative RMS of the compressed transfer's radiance against the uncompressed one's "
+        "under the map (compression_error), not against the reference. Relight: CPU, per frame (per-cluster "
+        "products and N weights a vertex). Frame: GPU, {}x{}, the lighting turned and the frame drawn, median of {} "
+        "frames{}; \"of uncompressed\": over the uncompressed transfer's frame, timed in the same run. Pareto: no "
+        "other row has no more bytes and no larger error, and less of one.\n\n",
+        opt.compression_weight_bits, opt.compression_iterations, V, kFrameSize, kFrameSize, kTimedFrames,
+        gl_device.empty() ? std::string() : " (" + gl_device + ")");
+    if (!frames_why.empty()) md += "No frame times: " + frames_why + "\n\n";
+    if (has_basis("cpca"))
+      md += fmt::format("### Diffuse, {} bands\n\nShadowed, {} samples: uncompressed {} a vertex, frame {}.\n\n{}\n",
+                        d.bands, d.samples, bytes_text(double(d.uncompressed_bytes) / double(V)),
+                        frame(d.uncompressed_frame_ms), compression_table(rep.rows, front, "cpca", V));
+    if (has_basis("cpca glossy"))
+      md += fmt::format(
+          "### Glossy, {} bands\n\nThe glossy sweep's transfer ({} samples), both signals (coefficients and "
+          "matrices) at the same K x N; error and frames with the diffuse part and the lobe e = {:g}, rho_s = 0.5, "
+          "the error over {} views around the mesh (eye_ring), frames from prt render's default camera. "
+          "Uncompressed {} a vertex, frame {}.\n\n{}\n",
+          g.bands, g.samples, g.gloss, rep.compression_eyes.size(),
+          bytes_text(double(g.uncompressed_bytes) / double(V)), frame(g.uncompressed_frame_ms),
+          compression_table(rep.rows, front, "cpca glossy", V));
+    md += "![bytes and frame time against error](compression.png)\n\n";
+  }
   if (meta.contains("pictures"))
     md += fmt::format("## Pictures\n\n![reference, settings and error heat maps](images.png)\n\nThe reference here "
                       "has {} samples at every vertex (noise floor {:.3g}); heat maps show |result - reference| / "
@@ -419,11 +568,14 @@ int run_report_command(ReportArgs& a) {
   for (const std::string& n : rep.notes) md += "- " + n + "\n";
   if (!pictures_note.empty()) md += "- " + pictures_note + "\n";
   if (!plots_note.empty()) md += "- " + plots_note + "\n";
+  if (has("compression") && !frames_why.empty()) md += "- no frame times: " + frames_why + "\n";
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  md += fmt::format("- Report made in {:.1f} s by `prt report{} {} {}`.\n", secs, a.quick ? " --quick" : "", a.mesh,
-                    a.env);
+  const bool all_sweeps = a.sweeps == ReportArgs{}.sweeps;
+  md += fmt::format("- Report made in {:.1f} s by `prt report{}{} {} {}`.\n", secs, a.quick ? " --quick" : "",
+                    all_sweeps ? std::string() : " --sweeps " + a.sweeps, a.mesh, a.env);
   write_text_file((fs::path(a.out) / "report.md").string(), md);
   if (!pictures_note.empty()) fmt::print(stderr, "warning: {}\n", pictures_note);
+  if (has("compression") && !frames_why.empty()) fmt::print(stderr, "warning: no frame times: {}\n", frames_why);
   if (!plots_note.empty()) fmt::print(stderr, "warning: {}\n", plots_note);
   if (!a.quiet) fmt::print(stderr, "wrote {}/report.md, report.csv, plots ({:.1f} s)\n", a.out, secs);
   return 0;
@@ -434,10 +586,12 @@ int run_report_command(ReportArgs& a) {
 Run add_report(CLI::App& app) {
   auto a = std::make_shared<ReportArgs>();
   CLI::App* s = app.add_subcommand(
-      "report", "Speed against error on a model and map: tables, CSV and plots over bands, samples, bounces and K");
+      "report",
+      "Speed against error on a model and map: tables, CSV and plots over bands, samples, bounces, K and compression");
   s->footer(
       "Runs the ground truth once (cached in DIR/cache), then precomputes and relights every setting of the grid\n"
-      "(full: bands 3..16, samples 64..4096, bounces 0..3, wavelet K 10..1000; --quick: a smaller grid and\n"
+      "(full: bands 3..16, samples 64..4096, bounces 0..3, wavelet K 10..1000, clustered PCA 1..256 clusters x\n"
+      "1..16 vectors; --quick: a smaller grid and\n"
       "reference) and writes DIR/report.md, report.csv, report.json and PNG plots (python3-matplotlib).\n"
       "See docs/REPORT.md. Ctrl-C stops without writing.\n"
       "Example: prt report bunny.off forest.exr --out bunny-report --quick");
@@ -451,7 +605,7 @@ Run add_report(CLI::App& app) {
   s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)");
   s->add_flag("--no-cache", a->no_cache, "Always recompute the references");
   s->add_flag("--no-plots", a->no_plots, "Tables only (no Python)");
-  s->add_option("--sweeps", a->sweeps, "Which sweeps, comma-separated: bands, samples, bounces, terms, glossy")
+  s->add_option("--sweeps", a->sweeps, "Which sweeps, comma-separated: bands, samples, bounces, terms, glossy, compression")
       ->capture_default_str();
   s->add_option("--image-size", a->image_size, "Picture size in pixels")->check(int_range(16, 4096))->capture_default_str();
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
