@@ -30,6 +30,7 @@
 #include "test_child.h"
 #include "test_files.h"
 #include "test_gl.h"
+#include "test_renderer.h"
 #include "test_meshes.h"
 
 namespace prt {
@@ -45,22 +46,7 @@ constexpr double kBackgroundTolerance = 1e-3;  // background texel lookup vs CPU
 // at most over the channels).
 constexpr double kPixelNearVertexTolerance = 5e-3;
 
-// A renderer, or the reason no context can be had here. Only a missing
-// context is a reason: any other error (a shader that does not build) goes
-// up and fails the test.
-std::unique_ptr<Renderer> try_renderer(std::string& why) {
-  try {
-    return std::make_unique<Renderer>();
-  } catch (const NoGlContext& e) {
-    why = e.what();
-    return nullptr;
-  }
-}
-
-#define REQUIRE_RENDERER(r)                            \
-  std::string why_##r;                                 \
-  std::unique_ptr<Renderer> r = try_renderer(why_##r); \
-  if (!r) PRT_SKIP_WITHOUT_GL(why_##r);
+using test::try_renderer;
 
 using Fn = std::function<glm::dvec3(const glm::dvec3&)>;
 

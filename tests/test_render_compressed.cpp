@@ -22,6 +22,7 @@
 #include <string>
 
 #include "test_gl.h"
+#include "test_renderer.h"
 #include "test_meshes.h"
 
 namespace prt {
@@ -36,19 +37,7 @@ namespace {
 // 1e-3 is the uncompressed renderer tests' budget (kGlossyTolerance).
 constexpr double kTolerance = 1e-3;
 
-std::unique_ptr<Renderer> try_renderer(std::string& why) {
-  try {
-    return std::make_unique<Renderer>();
-  } catch (const NoGlContext& e) {
-    why = e.what();
-    return nullptr;
-  }
-}
-
-#define REQUIRE_RENDERER(r)                            \
-  std::string why_##r;                                 \
-  std::unique_ptr<Renderer> r = try_renderer(why_##r); \
-  if (!r) PRT_SKIP_WITHOUT_GL(why_##r);
+using test::try_renderer;
 
 // A smooth positive lighting with some colour and some directional structure.
 std::vector<glm::dvec3> lighting(int bands, unsigned seed) {
