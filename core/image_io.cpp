@@ -1,5 +1,7 @@
 #include "image_io.h"
 
+#include <prt/color.h>
+
 #include "oiio_plugin.h"
 
 #include <prt/error.h>
@@ -381,9 +383,7 @@ void write_image_file(const std::string& path, const std::string& format_from, i
   if (!floating) {
     bytes.resize(rgb.size());
     for (std::size_t i = 0; i < rgb.size(); ++i) {
-      const float v = std::clamp(rgb[i], 0.0f, 1.0f);
-      const float e = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-      bytes[i] = static_cast<unsigned char>(std::lround(e * 255.0f));
+      bytes[i] = static_cast<unsigned char>(std::lround(srgb_encode(rgb[i]) * 255.0f));
     }
   }
   char err[1024] = {0};

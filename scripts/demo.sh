@@ -36,6 +36,9 @@ echo "== prt relight: the model under every bundled map"
 for env in envmaps/*.exr; do
   name=$(basename "$env" .exr)
   "$prt" relight models/scene.obj "$out/scene.interreflected.prt" "$env" -q -o "$out/scene.$name.ply"
+  # The same as 8-bit sRGB display colours, for mesh viewers that show only those.
+  "$prt" relight models/scene.obj "$out/scene.interreflected.prt" "$env" -q -o "$out/scene.$name.view.ply" \
+    --tonemap aces --srgb --exposure -1
 done
 
 echo

@@ -5,6 +5,8 @@
 
 #include <prt/vertex_csv.h>
 #include <prt/compare.h>
+#include <prt/render.h>
+#include <prt/color.h>
 #include <prt/precompute.h>
 #include <prt/compression_error.h>
 #include <prt/envmap.h>
@@ -406,6 +408,48 @@ TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
     EXPECT_EQ(r.code, k.code) << describe_run(r);
     EXPECT_NE(r.err.find(k.words), std::string::npos) << describe_run(r);
     EXPECT_FALSE(std::filesystem::exists(out)) << describe_run(r);
+  }
+}
+
+// prt relight --tonemap: display colours, what prt render's 8-bit images get
+// (exposure, tone map, sRGB with --srgb); a PLY then stores them as bytes,
+// round(255 v), which the mesh loader reads back as colours.
+TEST(RelightCli, TonemapWritesEightBitDisplayColours) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(4));
+  const std::string mesh = dir.file("fb.off"), env = repo_envmap("sunset.exr"), t = dir.file("t.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", t, "--bands", "3", "--samples", "32", "-q"}).code, 0);
+  ASSERT_EQ(run_prt(dir, {"relight", mesh, t, env, "-o", dir.file("lin.csv"), "-q"}).code, 0);
+  const std::vector<glm::vec3> linear = read_vertex_csv(dir.file("lin.csv"));
+  const Result r = run_prt(dir, {"relight", mesh, t, env, "-o", dir.file("d.ply"), "--tonemap", "aces", "--srgb",
+                                 "--exposure", "-1", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::string ply = read_file(dir.file("d.ply"));
+  ASSERT_NE(ply.find("property uchar red\nproperty uchar green\nproperty uchar blue\n"), std::string::npos);
+  std::size_t at = ply.find("end_header\n");
+  ASSERT_NE(at, std::string::npos);
+  at += 11;
+  const Display d{-1.0, ToneMap::Aces};
+  int checked = 0, bright = 0;
+  for (std::size_t v = 0; v < linear.size(); ++v, at += 6 * 4 + 3)
+    for (int c = 0; c < 3; ++c) {
+      const int want = int(std::lround(255.0f * srgb_encode(tone_map(linear[v][c], d))));
+      const int got = static_cast<unsigned char>(ply[at + 24 + std::size_t(c)]);
+      EXPECT_LE(std::abs(got - want), 1) << "vertex " << v << " channel " << c;  // the CSV's 9 digits
+      ++checked;
+      bright += got > 128;
+    }
+  EXPECT_EQ(checked, int(3 * linear.size()));
+  EXPECT_GT(bright, 0);
+  const Mesh back = load_mesh(dir.file("d.ply"));
+  ASSERT_EQ(back.colors.size(), linear.size());
+  // Without --tonemap, --srgb and --exposure are refused (the output would be radiance).
+  for (const char* o : {"--srgb", "--exposure"}) {
+    std::vector<std::string> args = {"relight", mesh, t, env, "-o", dir.file("x.ply"), o};
+    if (std::string(o) == "--exposure") args.push_back("1");
+    const Result bad = run_prt(dir, args);
+    EXPECT_EQ(bad.code, 2) << describe_run(bad);
+    EXPECT_NE(bad.err.find("give --tonemap"), std::string::npos) << bad.err;
   }
 }
 

@@ -10,9 +10,13 @@
 
 namespace prt {
 
-// Binary little-endian PLY: vertex x y z nx ny nz red green blue (float,
-// linear, unclamped: HDR radiance in the map's units), faces as
-// uchar-count/int-index lists. Written atomically (prt/io.h).
-void write_ply(const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& colors);
+// Binary little-endian PLY: vertex x y z nx ny nz red green blue, faces as
+// uchar-count/int-index lists. Written atomically (prt/io.h). Colours:
+// PlyColors::Float, linear and unclamped (HDR radiance in the map's units),
+// or PlyColors::Bytes, display values in [0, 1] (clamped) stored as uchar
+// round(255 v), what mesh viewers show (prt relight --tonemap, --srgb).
+enum class PlyColors { Float, Bytes };
+void write_ply(const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& colors,
+               PlyColors format = PlyColors::Float, const std::string& comment = "linear radiance per vertex");
 
 }  // namespace prt

@@ -4,6 +4,8 @@
 #include "scene.h"
 
 #include <prt/vertex_csv.h>
+#include <prt/color.h>
+#include <prt/render.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
 #include <prt/filter.h>
@@ -35,6 +37,12 @@ struct RelightArgs {
   std::string eye;
   GlossyArgs lobe;  // needs --eye
   double window_width = 0;
+  // Display output (--tonemap): exposure and tone map as prt render's 8-bit
+  // images, then sRGB encoding with --srgb; PLY colours as bytes.
+  std::string tonemap;
+  double exposure = 0;
+  bool srgb = false;
+  const CLI::Option *exposure_opt = nullptr, *srgb_opt = nullptr;
   int terms = 100;
   bool direct = false, quiet = false;
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
@@ -46,13 +54,25 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 // Writes the result through Outputs: all of it, or (failure, Ctrl-C)
 // nothing. Returns the exit status.
-int write_output(const std::string& ext, const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& rgb) {
+// With --tonemap the radiance becomes display values first (and the PLY's
+// colours bytes).
+int write_output(const RelightArgs& a, const std::string& ext, const Mesh& mesh, std::vector<glm::vec3> rgb) {
+  const bool display = !a.tonemap.empty();
+  if (display) {
+    const Display d{a.exposure, parse_tone_map(a.tonemap)};
+    for (glm::vec3& c : rgb)
+      for (int k = 0; k < 3; ++k) c[k] = a.srgb ? srgb_encode(tone_map(c[k], d)) : tone_map(c[k], d);
+  }
+  const std::string comment =
+      display ? fmt::format("display colours: exposure {:g}, tone map {}, {}", a.exposure, a.tonemap,
+                            a.srgb ? "sRGB-encoded" : "linear")
+              : std::string("linear radiance per vertex");
   Outputs out("relight");
   out.write([&] {
     if (ext == ".ply")
-      write_ply(path, mesh, rgb);
+      write_ply(a.output, mesh, rgb, display ? PlyColors::Bytes : PlyColors::Float, comment);
     else
-      write_vertex_csv(path, rgb, nullptr);
+      write_vertex_csv(a.output, rgb, nullptr);
   });
   return out.commit();
 }
@@ -92,7 +112,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
   const double relight_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
-  if (const int rc = write_output(ext, a.output, mesh, rgb); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, mesh, rgb); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr,
                "relight: {:.3f} ms per frame (lighting {:.3f} ms: resample, Haar, {} of {} terms by {}; transfer "
@@ -109,6 +129,10 @@ int run_relight(const RelightArgs& a) {
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   if (ext != ".ply" && ext != ".csv") throw UsageError("--output: " + a.output + ": expected a .ply or .csv file");
   check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+  for (const CLI::Option* o : {a.exposure_opt, a.srgb_opt})
+    if (o->count() > 0 && a.tonemap.empty())
+      throw UsageError(o->get_name() + " is for display colours: give --tonemap clamp, reinhard or aces too (without "
+                       "it the output is linear radiance)");
   for_path("--output", [&] { check_writable(a.output); });
 
   // The basis comes from the file; options of the other basis are refused.
@@ -185,7 +209,7 @@ int run_relight(const RelightArgs& a) {
     for (double x : vertex_transfer(t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
-  if (const int rc = write_output(ext, a.output, mesh, rgb); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, mesh, rgb); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
                        "wrote {} ({} vertices)\n",
@@ -206,7 +230,10 @@ Run add_relight(CLI::App& app) {
       "transfer itself is stored in float.\n"
       "A glossy file (prt precompute --material glossy) takes --eye x,y,z: each vertex's radiance toward that point,\n"
       "diffuse plus a Phong lobe of exponent --gloss and strength --specular (docs/GLOSSY.md).\n"
+      "PLY output is float colours (linear radiance, which many viewers cannot show); --tonemap aces --srgb\n"
+      "writes 8-bit display colours any viewer shows (--exposure first, in stops).\n"
       "Example: prt relight bunny.off bunny.prt envmaps/forest.exr --rotate 90,0,0 -o bunny.ply\n"
+      "         prt relight bunny.off bunny.prt envmaps/forest.exr -o view.ply --tonemap aces --srgb --exposure -1\n"
       "         prt relight bunny.off glossy.prt envmaps/forest.exr --eye 0,0.1,0.4 --gloss 16 -o g.csv\n"
       "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
@@ -239,6 +266,16 @@ Run add_relight(CLI::App& app) {
   add_glossy_options(s, a->lobe);
   for (const CLI::Option* o : a->lobe.options) a->sh_only.push_back(o);
   a->sh_only.push_back(s->get_option("--eye"));
+  s->add_option("--tonemap", a->tonemap,
+                "Display colours instead of radiance: exposure, then clamp, reinhard or aces to [0, 1] (as prt "
+                "render's 8-bit images); a PLY then has 8-bit colours")
+      ->check(parsed_by(parse_tone_map));
+  a->exposure_opt = s->add_option("--exposure", a->exposure, "With --tonemap: scale by 2^stops first")
+                        ->check(finite_number())
+                        ->capture_default_str();
+  a->srgb_opt = s->add_flag("--srgb", a->srgb,
+                            "With --tonemap: sRGB-encode the display values (what mesh viewers expect of 8-bit "
+                            "vertex colours)");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }

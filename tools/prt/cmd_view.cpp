@@ -8,6 +8,7 @@
 #include "scene.h"
 #include "view_input.h"
 
+#include <prt/color.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/paths.h>
@@ -151,8 +152,7 @@ std::string next_screenshot(const std::string& dir) {
 void save_window(const std::string& path, const std::vector<unsigned char>& codes, int w, int h) {
   std::vector<float> rgb(codes.size());
   for (std::size_t i = 0; i < codes.size(); ++i) {
-    const double v = codes[i] / 255.0;
-    rgb[i] = float(v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4));
+    rgb[i] = float(srgb_decode(codes[i] / 255.0));
   }
   write_image(path, w, h, rgb);
 }
