@@ -23,7 +23,7 @@ for env in envmaps/*.exr; do
   "$prt" project "$env" --bands 9 -o "$out/$name.sh9.json" --reconstruct "$out/$name.sh9.png" \
     --reconstruct-size 512x256
   "$prt" project "$env" --bands 3 --irradiance -q -o "$out/$name.irradiance.glsl" --format glsl \
-    --reconstruct "$out/$name.irradiance.png" --reconstruct-size 512x256
+    --reconstruct "$out/$name.irradiance.png" --reconstruct-size 512x256 --exposure auto
 done
 echo
 echo "== prt precompute: models/scene.obj, shadowed and interreflected transfer (5 bands, 1024 rays/vertex)"

@@ -125,7 +125,7 @@ TEST(CliHelp, ProjectHelpListsItsOptions) {
   const Result r = run_prt(dir, {"project", "--help"});
   EXPECT_EQ(r.code, 0) << describe_run(r);
   for (const char* word : {"ENV", "--bands", "--output", "--format", "--window", "--window-width", "--irradiance",
-                           "--rotate", "--mapping", "--quadrature", "--reconstruct", "--reconstruct-size", "--quiet",
+                           "--rotate", "--mapping", "--quadrature", "--reconstruct", "--reconstruct-size", "--exposure", "--quiet",
                            "json", "glsl", "cpp", "hcross", "vcross", "faces"})
     EXPECT_TRUE(contains(r.out, word)) << word << "\n" << r.out;
 }
@@ -345,6 +345,40 @@ TEST(CliProject, ReconstructSize) {
   ASSERT_EQ(m.rgb.size(), want.size());
   for (std::size_t i = 0; i < want.size(); ++i)
     ASSERT_NEAR(m.rgb[i], want[i], kImageRelTol * std::max(1.0f, std::abs(want[i]))) << i;
+}
+
+// --exposure scales the picture by 2^stops; auto puts the 99th percentile of
+// the pixels' largest channel at 1 (a brighter irradiance picture would
+// saturate most of its 8-bit pixels); without --reconstruct it is refused.
+TEST(CliProject, ReconstructExposure) {
+  TempDir dir;
+  const std::string env = repo_envmap("courtyard.exr");
+  const auto picture = [&](const std::string& name, const std::string& exposure) {
+    const std::string rec = dir.file(name);
+    const Result r = run_prt(dir, {"project", env, "--bands", "3", "--irradiance", "-o", dir.file(name + ".json"),
+                                   "--reconstruct", rec, "--reconstruct-size", "64x32", "--exposure", exposure, "-q"});
+    EXPECT_EQ(r.code, 0) << describe_run(r);
+    return prt::load_envmap(rec).rgb;
+  };
+  const std::vector<float> plain = picture("plain.exr", "0"), brighter = picture("bright.exr", "1.5"),
+                           automatic = picture("auto.exr", "auto");
+  ASSERT_EQ(plain.size(), brighter.size());
+  for (std::size_t i = 0; i < plain.size(); ++i)
+    ASSERT_NEAR(brighter[i], std::exp2(1.5f) * plain[i], kImageRelTol * std::max(1.0f, std::abs(brighter[i]))) << i;
+  std::vector<float> top;
+  for (std::size_t p = 0; p < automatic.size() / 3; ++p)
+    top.push_back(std::max({automatic[3 * p], automatic[3 * p + 1], automatic[3 * p + 2]}));
+  std::sort(top.begin(), top.end());
+  std::size_t above = 0, plain_above = 0;
+  for (float v : top) above += v > 1.0f + 1e-5f;
+  for (std::size_t p = 0; p < plain.size() / 3; ++p)
+    plain_above += std::max({plain[3 * p], plain[3 * p + 1], plain[3 * p + 2]}) > 1.0f;
+  EXPECT_NEAR(top[std::size_t(0.99 * double(top.size()))], 1.0f, 1e-5f);
+  EXPECT_LE(above, top.size() / 100 + 1);  // about 1% saturated
+  EXPECT_GT(plain_above, top.size() / 2);  // courtyard's irradiance at exposure 0: most pixels above 1
+  const Result bad = run_prt(dir, {"project", env, "--bands", "3", "--exposure", "1"});
+  EXPECT_EQ(bad.code, 2) << describe_run(bad);
+  EXPECT_TRUE(contains(bad.err, "give --reconstruct FILE")) << bad.err;
 }
 
 TEST(CliProject, RotateMatchesTheLibrary) {

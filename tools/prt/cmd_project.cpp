@@ -29,6 +29,8 @@ constexpr const char* kConvention =
 
 struct ProjectArgs {
   std::string env, output, format = "json", window = "none", rotate, reconstruct, reconstruct_size;
+  std::string exposure = "0";  // --exposure: the reconstruction times 2^stops, or "auto"
+  const CLI::Option* exposure_opt = nullptr;
   std::string mapping = "auto", quadrature = "box";
   int bands = 3;
   double window_width = 0;
@@ -80,9 +82,24 @@ void check_outputs(const ProjectArgs& a) {
     if (!path.empty())
       check_not_input(option, path,
                       {{"ENV", f[0]}, {"ENV", f[1]}, {"ENV", f[2]}, {"ENV", f[3]}, {"ENV", f[4]}, {"ENV", f[5]}});
+  if (a.reconstruct.empty() && a.exposure_opt->count() > 0)
+    throw UsageError("--exposure scales the --reconstruct image; give --reconstruct FILE too");
   if (to_file && !a.reconstruct.empty() && same_file(a.output, a.reconstruct))
     throw UsageError("--reconstruct " + a.reconstruct + ": is also the --output file; give the coefficients and the "
                      "reconstruction two names");
+}
+
+// --exposure: a number of stops, or "auto": the stops that put the 99th
+// percentile of the pixels' largest channel at 1 (about 1% of an 8-bit
+// picture saturated; 0 for an image without a positive pixel).
+double reconstruction_exposure(const std::string& text, const std::vector<float>& rgb) {
+  if (text != "auto") return std::stod(text);  // finite (checked while parsing)
+  std::vector<float> top(rgb.size() / 3);
+  for (std::size_t p = 0; p < top.size(); ++p) top[p] = std::max({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]});
+  if (top.empty()) return 0;
+  const std::size_t k = std::min(top.size() - 1, std::size_t(0.99 * double(top.size())));
+  std::nth_element(top.begin(), top.begin() + std::ptrdiff_t(k), top.end());
+  return top[k] > 0 ? -std::log2(double(top[k])) : 0.0;
 }
 
 // --reconstruct-size WxH (size_value() has checked it while parsing).
@@ -220,7 +237,12 @@ int run_project(const ProjectArgs& a) {
       rw = map.is_cube() ? 4 * map.width : map.width;
       rh = rw / 2;
     }
-    out.write([&] { write_image(a.reconstruct, rw, rh, reconstruct_latlong(c, rw, rh)); });
+    std::vector<float> img = reconstruct_latlong(c, rw, rh);
+    const double stops = reconstruction_exposure(a.exposure, img);
+    const float scale = float(std::exp2(stops));
+    for (float& v : img) v *= scale;
+    if (a.exposure == "auto" && !a.quiet) fmt::print(stderr, "--exposure auto: {:.2f} stops\n", stops);
+    out.write([&] { write_image(a.reconstruct, rw, rh, img); });
   }
   report_memory(extra);
   std::string text;
@@ -278,6 +300,11 @@ Run add_project(CLI::App& app) {
   s->add_option("--reconstruct-size", a->reconstruct_size,
                 "WxH of the reconstruction, each from 1 to 65536 (default: the map's size)")
       ->check(size_value(65536));
+  a->exposure_opt = s->add_option("--exposure", a->exposure,
+                                  "Scale the reconstruction by 2^stops before writing it (as prt render), or auto: "
+                                  "the 99th percentile of its pixels at 1 (8-bit pictures about 1% saturated)")
+                        ->check(finite_number() | CLI::IsMember({"auto"}))
+                        ->capture_default_str();
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   s->add_flag("--no-stream", a->no_stream,
               "Read the whole map before projecting (same coefficients; lat-long maps are otherwise streamed)");
