@@ -18,8 +18,11 @@ PACKAGES=(
   libegl-dev libgl-dev libopengl-dev libgles-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev xvfb xauth
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
-  # plots for reports
-  python3 python3-matplotlib python3-numpy
+  # plots for reports; the Python module (pybind11) and its tests
+  python3 python3-matplotlib python3-numpy python3-dev pybind11-dev python3-pybind11 python3-pytest
+  # test and export tooling: Node.js runs the npm packages of tests/js (the
+  # glTF-Validator, three.js, playwright-core); Chromium renders the web page
+  nodejs chromium
 )
 # scripts/fuzz.sh only (the test build and CI do not need them): clang, and
 # libclang-rt-14-dev for libFuzzer's runtime (libclang_rt.fuzzer, beside the
@@ -31,13 +34,28 @@ case "${1:-}" in
   *) echo "usage: $0 [--fuzz]" >&2; exit 2 ;;
 esac
 
+# Debian's nodejs ships npm as a package of its own; NodeSource's nodejs
+# (which some machines have) contains npm and conflicts with Debian's.
+command -v npm >/dev/null 2>&1 || PACKAGES+=(npm)
+
+# The npm packages, at the versions tests/js/package-lock.json pins; again
+# only when the lock file is newer than what is installed.
+npm_install() {
+  local dir=tests/js
+  cd "$(dirname "$0")/.."
+  if [ ! -f "$dir/node_modules/.package-lock.json" ] || [ "$dir/package-lock.json" -nt "$dir/node_modules/.package-lock.json" ]; then
+    echo "install-deps: installing the npm packages of $dir (package-lock.json)" >&2
+    npm ci --prefix "$dir" --no-audit --no-fund --loglevel=error >/dev/null
+  fi
+}
+
 missing=()
 for p in "${PACKAGES[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
     missing+=("$p")
   fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+[ ${#missing[@]} -eq 0 ] && { npm_install; exit 0; }
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then
@@ -49,3 +67,4 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "install-deps: done" >&2
+npm_install

@@ -10,6 +10,11 @@ jobs=$(nproc 2>/dev/null || echo 2)
 # that finds no OpenGL 4.5 context fails here instead of skipping
 # (tests/test_gl.h). PRT_REQUIRE_GL=0 turns that off.
 export PRT_REQUIRE_GL=${PRT_REQUIRE_GL:-1}
+# Likewise the interop tests (label interop): Node.js and the npm packages of
+# tests/js, Chromium and the Python module are installed by install-deps.sh,
+# so a test that finds one missing fails here instead of skipping.
+# PRT_REQUIRE_TOOLS=0 turns that off.
+export PRT_REQUIRE_TOOLS=${PRT_REQUIRE_TOOLS:-1}
 
 echo "== Release build and tests"
 scripts/build.sh build
