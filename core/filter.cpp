@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace prt::sh {
 
@@ -151,6 +152,25 @@ AutoWindow apply_window(std::span<glm::dvec3> c, Window kind, double width) {
   r.width = width;
   r.windowed = kind != Window::None;
   return r;
+}
+
+double peak_diffuse_radiance(std::span<const glm::dvec3> c) {
+  PRT_CHECK(!c.empty());
+  constexpr int kBands = 3;  // irradiance needs no more (A_l is under 2% of A_0 above)
+  const std::size_t n = std::min<std::size_t>(c.size(), kBands * kBands);
+  const SphereRule grid = gauss_legendre_sphere(48, 96);
+  double y[kBands * kBands];
+  double peak = 0;
+  for (const glm::dvec3& d : grid.directions) {
+    eval(kBands, d.x, d.y, d.z, y);
+    glm::dvec3 e(0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const int l = k < 1 ? 0 : (k < 4 ? 1 : 2);
+      e += clamped_cosine_factor(l) * y[k] * c[k];
+    }
+    peak = std::max({peak, e.x, e.y, e.z});
+  }
+  return peak / std::numbers::pi;
 }
 
 }  // namespace prt::sh

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the pictures in docs/images/ from the bundled scene:
+#   scene_sunset.png  the README's picture: prt render with its default camera and exposure
 #   view_scene.png    a prt view window (under Xvfb when there is no display)
 #   shading_modes.png prt render in each shading mode, side by side
 #   sh_vs_wavelet.png the same frame lit by 5-band SH and by wavelets (K = 100)
@@ -16,6 +17,10 @@ cam=3.0,2.0,4.2,0,0.3,0,0,1,0
 
 [ -f "$out/scene.ir.prt" ] || "$prt" precompute "$mesh" -o "$out/scene.ir.prt" --mode interreflected --bounces 2 -q
 [ -f "$out/scene.w.prt" ] || "$prt" precompute "$mesh" -o "$out/scene.w.prt" --basis wavelet --cube-res 32 -q
+
+# The README's picture: no --camera, no --exposure (framing_camera, auto exposure).
+"$prt" render "$mesh" "$out/scene.ir.prt" "$env" -q -o docs/images/scene_sunset.png --width 640 --height 400 \
+  --rotate 200,0,0
 
 # The viewer: its own screenshot after a few frames (the window's pixels).
 view=("$prt" view "$mesh" "$out/scene.ir.prt" "$env" --width 800 --height 500 --frames 5

@@ -5,11 +5,46 @@
 #include <prt/filter.h>
 #include <prt/names.h>
 #include <prt/quadrature.h>
+#include <prt/rotation.h>
+#include <prt/sh.h>
 
 #include <gtest/gtest.h>
 
 namespace prt {
 namespace {
+
+// sh::peak_diffuse_radiance, the automatic exposure's measure. A delta light
+// of power w from d, in 3 bands, gives E(mu) = w/4 (1 + 2 mu + 5/8 (3 mu^2 - 1))
+// at cos(angle to d) = mu, increasing for mu > -8/15: the peak is at n = d,
+// E = 17/16 w, radiance 17/16 w / pi. A constant map of radiance L lights a
+// white surface to exactly L. Higher bands do not count; negative lighting
+// gives 0.
+TEST(PeakDiffuseRadiance, ClosedForms) {
+  // The grid's nodes are at most 2.7 degrees apart; E is a quadratic in n, so
+  // the peak between nodes is missed by at most 1 - cos(1.9 deg) ~ 6e-4 of it.
+  constexpr double kGridTolerance = 1e-3;
+  const glm::dvec3 d = glm::normalize(glm::dvec3(0.3, -0.5, 0.81));  // on no node of the grid
+  const double w = 2.5;
+  std::vector<glm::dvec3> delta(16, glm::dvec3(0.0));
+  double y[16];
+  sh::eval(4, d.x, d.y, d.z, y);
+  for (int k = 0; k < 16; ++k) delta[k] = glm::dvec3(w * y[k], 0.5 * w * y[k], 0.0);
+  const double expected = 17.0 / 16.0 * w / M_PI;
+  EXPECT_NEAR(sh::peak_diffuse_radiance(delta), expected, kGridTolerance * expected);
+  // Band 3 of the delta light is ignored: the same value with it dropped.
+  EXPECT_DOUBLE_EQ(sh::peak_diffuse_radiance(delta), sh::peak_diffuse_radiance({delta.data(), 9}));
+  // Rotation-invariant (to the grid's tolerance).
+  std::vector<glm::dvec3> turned(9);
+  sh::Rotation(3, sh::rotation_from_euler(70, -25, 40)).apply(std::vector<glm::dvec3>(delta.begin(), delta.begin() + 9),
+                                                              turned);
+  EXPECT_NEAR(sh::peak_diffuse_radiance(turned), expected, kGridTolerance * expected);
+  // A constant map: c_0 = L sqrt(4 pi), exact at every node.
+  const double L = 0.7;
+  const std::vector<glm::dvec3> constant = {glm::dvec3(L * std::sqrt(4 * M_PI), 0.0, 0.0)};
+  EXPECT_NEAR(sh::peak_diffuse_radiance(constant), L, 1e-12);
+  const std::vector<glm::dvec3> negative = {glm::dvec3(-1.0)};
+  EXPECT_EQ(sh::peak_diffuse_radiance(negative), 0.0);
+}
 
 TEST(ClampedCosine, MatchesExactQuadratureForEveryBand) {
   // A_l = sqrt(4pi/(2l+1)) * integral of max(z,0) Y_l0; Gauss-Legendre in z on

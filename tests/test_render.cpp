@@ -5,6 +5,7 @@
 // can be made at all.
 #include <prt/precompute.h>
 #include <prt/envmap.h>
+#include <prt/filter.h>
 #include <prt/error.h>
 #include <prt/mesh.h>
 #include <prt/projection.h>
@@ -16,6 +17,7 @@
 #include <prt/wavelet_playback.h>
 #include <prt/wavelet_transfer.h>
 
+#include <glm/trigonometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -316,6 +318,47 @@ TEST(Render, DefaultCameraFramesTheBoundingSphere) {
   EXPECT_EQ(cam.up, glm::dvec3(0, 1, 0));
 }
 
+// framing_camera: every vertex inside the image with the 5% margin, the
+// model's image centred and touching the margin in its tighter direction,
+// for a wide, a tall and a square image and an edge-on flat model; the view
+// direction is the one documented.
+TEST(Render, FramingCameraFitsEveryVertexCentred) {
+  constexpr double kFit = 1e-9;  // the closed-form fit, up to rounding
+  const std::pair<std::string, Mesh> meshes[] = {
+      {"floor and ball", test::floor_and_ball(6)}, {"sphere", test::sphere(8, 16, 2.0f)}, {"quad", test::quad(4)}};
+  for (const auto& [name, mesh] : meshes)
+    for (const double aspect : {1.6, 0.5, 1.0})
+      for (const double el : {20.0, 0.0}) {
+        const Camera cam = framing_camera(mesh, 40, aspect, 35, el);
+        const glm::dvec3 back = glm::normalize(cam.eye - cam.target);
+        const double az = glm::radians(35.0), e = glm::radians(el);
+        EXPECT_NEAR(glm::dot(back, glm::dvec3(std::sin(az) * std::cos(e), std::sin(e), std::cos(az) * std::cos(e))),
+                    1.0, 1e-12);
+        const glm::dvec3 right = glm::normalize(glm::cross(cam.up, back)), up = glm::cross(back, right);
+        const double tv = std::tan(glm::radians(20.0)), th = tv * aspect;
+        double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+        for (const auto& p : mesh.positions) {
+          const glm::dvec3 q = glm::dvec3(p) - cam.eye;
+          const double depth = -glm::dot(q, back);
+          ASSERT_GT(depth, 0) << "a vertex behind the eye";
+          const double x = glm::dot(q, right) / (depth * th), y = glm::dot(q, up) / (depth * tv);
+          lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x), lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+        }
+        const std::string what = name + " aspect " + std::to_string(aspect) + " el " + std::to_string(el);
+        EXPECT_LE(hi_x, 0.95 + kFit) << what;
+        EXPECT_GE(lo_x, -0.95 - kFit) << what;
+        EXPECT_LE(hi_y, 0.95 + kFit) << what;
+        EXPECT_GE(lo_y, -0.95 - kFit) << what;
+        if (el == 0 && name == "quad") continue;  // seen edge-on: the eye stands back instead
+        // Centred on the tight axis, touching its margin; the other axis centred when it has room.
+        EXPECT_NEAR(std::max(hi_x - lo_x, hi_y - lo_y), 1.9, 1e-6) << what;
+        EXPECT_NEAR(hi_x + lo_x, 0, 1e-6) << what;
+        EXPECT_NEAR(hi_y + lo_y, 0, 1e-6) << what;
+      }
+  EXPECT_THROW(framing_camera(test::quad(2), 40, 0.0), Error);
+  EXPECT_THROW(framing_camera(test::quad(2), 180, 1.0), Error);
+}
+
 // Bad data and values from a user are prt::Error with a clear message;
 // calls that break the renderer's contract (out of order, out of range) are
 // a caller's bug: prt::InternalError, naming the check.
@@ -522,15 +565,16 @@ class RenderCli : public ::testing::Test {
 
 TEST_F(RenderCli, WritesLinearExr) {
   const auto res = test::run_prt(dir, {"render", dir.file("ball.off"), dir.file("ball.prt"), dir.file("env.exr"), "-o",
-                                       dir.file("out.exr"), "--width", "64", "--height", "32", "--rotate", "10,0,0"});
+                                       dir.file("out.exr"), "--width", "64", "--height", "32", "--rotate", "10,0,0",
+                                       "--camera", "0,0,4,0,0,0,0,1,0", "--exposure", "0"});
   ASSERT_EQ(res.code, 0) << test::describe_run(res);
   EXPECT_NE(res.err.find("OpenGL"), std::string::npos) << res.err;
   const EnvMap img = load_envmap(dir.file("out.exr"), Mapping::LatLong);
   ASSERT_EQ(img.width, 64);
   ASSERT_EQ(img.height, 32);
   // The four centre pixels surround the ball's vertex (0, 0, 1), half a
-  // pixel from it on each side (the default camera looks down -Z at the
-  // ball's centre): their mean is the vertex's radiance, the first-order
+  // pixel from it on each side (the camera looks down -Z at the ball's
+  // centre): their mean is the vertex's radiance, the first-order
   // terms of the interpolation cancelling. Linear radiance there,
   // computed here from the definitions alone: albedo / pi x the irradiance
   // of smooth_env turned by --rotate 10,0,0 (R = Ry(10 deg): g(d) =
@@ -755,7 +799,7 @@ TEST(Render, WaveletPlaybackPixelsEqualWaveletRelight) {
 // --exposure scales EXR output linearly (no tone map on float output).
 TEST_F(RenderCli, LookOptionsOnExr) {
   // 2:1 images: read back with load_envmap, which takes lat-long shapes only.
-  auto base = render({mesh, prt, env, "-o", dir.file("a.exr"), "--width", "32", "--height", "16"});
+  auto base = render({mesh, prt, env, "-o", dir.file("a.exr"), "--width", "32", "--height", "16", "--exposure", "0"});
   ASSERT_EQ(base.code, 0) << test::describe_run(base);
   auto bright = render({mesh, prt, env, "-o", dir.file("b.exr"), "--width", "32", "--height", "16", "--exposure", "1"});
   ASSERT_EQ(bright.code, 0) << test::describe_run(bright);
@@ -764,6 +808,30 @@ TEST_F(RenderCli, LookOptionsOnExr) {
   for (std::size_t i = 0; i < a.rgb.size(); ++i) EXPECT_FLOAT_EQ(b.rgb[i], 2 * a.rgb[i]) << i;
 }
 
+// Without --exposure (auto), the EXR is the one at --exposure 0 times 2^s,
+// s = -log2(peak_diffuse_radiance of the map's 3-band SH), the stops printed.
+TEST_F(RenderCli, AutoExposureShowsTheBrightestWhiteSurfaceAtOne) {
+  const std::vector<std::string> common = {mesh, prt, env, "--width", "32", "--height", "16", "--rotate", "30,0,0"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return render(args);
+  };
+  const auto a = with({"-o", dir.file("auto.exr")});
+  ASSERT_EQ(a.code, 0) << test::describe_run(a);
+  const auto z = with({"-o", dir.file("zero.exr"), "--exposure", "0"});
+  ASSERT_EQ(z.code, 0) << test::describe_run(z);
+  const double stops = -std::log2(sh::peak_diffuse_radiance(project(load_envmap(env), 3)));
+  char said[64];
+  std::snprintf(said, sizeof said, "--exposure auto: %+.2f stops", stops);
+  EXPECT_NE(a.err.find(said), std::string::npos) << a.err;
+  const EnvMap ia = load_envmap(dir.file("auto.exr"), Mapping::LatLong),
+               iz = load_envmap(dir.file("zero.exr"), Mapping::LatLong);
+  ASSERT_EQ(ia.rgb.size(), iz.rgb.size());
+  const float gain = float(std::exp2(stops));
+  for (std::size_t i = 0; i < ia.rgb.size(); ++i) EXPECT_FLOAT_EQ(ia.rgb[i], gain * iz.rgb[i]) << i;
+  EXPECT_GT(std::abs(stops), 0.1) << "the test map needs a peak away from 1 for this test to tell";
+}
 
 // ---- bad options and outputs (docs/HARD_CASES.md, "Bad options and outputs") ----
 
@@ -775,9 +843,9 @@ TEST_F(RenderCli, BadOptionValuesExitTwo) {
     std::string message;
   };
   const std::vector<Case> cases = {
-      {{"--exposure", "inf"}, "--exposure: must be a number in [-64, 64] (stops), got inf"},
-      {{"--exposure", "1e308"}, "--exposure: must be a number in [-64, 64] (stops), got 1e+308"},
-      {{"--exposure", "nan"}, "--exposure: must be a number in [-64, 64] (stops), got nan"},
+      {{"--exposure", "inf"}, "--exposure: must be a number in [-64, 64] (stops or auto), got inf"},
+      {{"--exposure", "1e308"}, "--exposure: must be a number in [-64, 64] (stops or auto), got 1e+308"},
+      {{"--exposure", "nan"}, "--exposure: must be a number in [-64, 64] (stops or auto), got nan"},
       {{"--fov", "nan"}, "--fov: must be a number in [1, 179], got nan"},
       {{"--spin", "inf"}, "--spin: must be a finite number, got inf"},
       {{"--shading", "colors"}, "--shading: colors is for callers that upload their own vertex colours"},

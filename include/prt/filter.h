@@ -59,4 +59,14 @@ AutoWindow choose_window(std::span<const glm::dvec3> c);
 // Applies `kind` of `width` (auto: chosen by choose_window, returned) in place.
 AutoWindow apply_window(std::span<glm::dvec3> c, Window kind, double width);
 
+// The brightest a white Lambertian surface can look under lighting `c` (RGB
+// SH of radiance, at least 1 band): the largest E(n) / pi over normals n and
+// channels, with E the irradiance of the first 3 bands (A_l c_lm, exact for
+// irradiance to within about 1% for any map, Ramamoorthi & Hanrahan 2001).
+// The maximum over a Gauss-Legendre grid of 48 x 96 normals (at most 2.7
+// degrees apart; E is a quadratic in n, so a peak between nodes is missed by
+// under 0.2%). It is what prt render / prt view's automatic exposure puts at
+// 1. 0 when the lighting is nowhere positive.
+double peak_diffuse_radiance(std::span<const glm::dvec3> c);
+
 }  // namespace prt::sh

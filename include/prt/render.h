@@ -117,6 +117,17 @@ struct Camera {
 // a 5% margin: eye = c + (0, 0, 1.05 r / sin(fov/2)), up = +Y.
 Camera default_camera(const Mesh& mesh, double fov_deg = 40.0);
 
+// The camera prt render and prt view use when none is given: a three-quarter
+// view from above, the eye in the direction (sin(az) cos(el), sin(el),
+// cos(az) cos(el)) from the model (az = 35, el = 20 degrees: from +Z, turned
+// toward +X and raised), up = +Y, at the smallest distance at which every
+// vertex projects inside the image (aspect = width / height) with a 5%
+// margin on each side, the target moved across the view so that the model's
+// image is centred. Tighter than the bounding sphere: the model fills the
+// frame in its wider direction.
+Camera framing_camera(const Mesh& mesh, double fov_deg = 40.0, double aspect = 1.0, double azimuth_deg = 35.0,
+                      double elevation_deg = 20.0);
+
 // A linear RGB float image, row 0 at the top (what write_image takes).
 struct Image {
   int width = 0, height = 0;

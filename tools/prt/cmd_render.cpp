@@ -66,9 +66,9 @@ int run_render(const RenderArgs& a) {
                     " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   }
   const glm::dvec3 diffuse = parse_diffuse(a.lobe.diffuse);
-  const Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);
+  Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);
 
-  Camera cam = default_camera(mesh, a.fov);
+  Camera cam = framing_camera(mesh, a.fov, double(a.width) / a.height);
   if (!a.camera.empty()) parse_camera(a.camera, cam);
   cam.fov_deg = a.fov;
 
@@ -109,8 +109,12 @@ int run_render(const RenderArgs& a) {
   // frame resamples the rotated map (no cheap rotation in that basis). Lambert
   // needs 3 bands of SH lighting in both.
   const int sh_bands = wavelet ? 3 : t.bands;
-  const std::vector<glm::dvec3> light =
-      windowed_lighting(project(env, sh_bands), wavelet ? sh_bands : look.bands, look.window);
+  std::vector<glm::dvec3> light = project(env, sh_bands);
+  if (look.auto_exposure) {
+    look.display.exposure = auto_exposure(sh_bands >= 3 ? light : project(env, 3));
+    if (!a.quiet) fmt::print(stderr, "--exposure auto: {:+.2f} stops\n", look.display.exposure);
+  }
+  light = windowed_lighting(std::move(light), wavelet ? sh_bands : look.bands, look.window);
   std::vector<glm::dvec3> rotated(light.size());
   const glm::dmat3 base = sh::rotation_from_euler(euler[0], euler[1], euler[2]);
   sh::Rotation rotation(sh_bands, base);
@@ -168,7 +172,9 @@ Run add_render(CLI::App& app) {
   CLI::App* s = app.add_subcommand("render", "Render a precomputed mesh under an environment map (headless OpenGL)");
   s->footer(
       "Per-vertex PRT shading on the GPU (OpenGL 4.5 through EGL, no display needed; Mesa llvmpipe works).\n"
-      "The default camera looks from +Z at the centre of the mesh's bounding box and frames its bounding sphere.\n"
+      "Without --camera: a three-quarter view from above (from +Z turned 35 degrees toward +X, 20 degrees up)\n"
+      "that frames every vertex with a 5% margin. Without --exposure (auto): a white diffuse surface facing the\n"
+      "map's brightest light shows at 1.\n"
       "The environment is drawn as background; lighting and background turn together with --rotate/--spin.\n"
       "SH transfers are relit on the GPU; wavelet transfers (prt precompute --basis wavelet) on the CPU each\n"
       "frame (rotated map resampled into the cube, K Haar terms, --terms/--selection), then drawn.\n"

@@ -429,8 +429,9 @@ int run_view(const ViewArgs& a) {
         throw Error(a.transfer + ": " + o->get_name() +
                     " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   parse_diffuse(a.lobe.diffuse);  // a bad value exits 2 before any window opens
-  const Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet,
-                               glossy && scene.basis == TransferBasis::SH);
+  Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet,
+                         glossy && scene.basis == TransferBasis::SH);
+  if (look.auto_exposure) look.display.exposure = auto_exposure(project(scene.env, 3));  // the first map's
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -460,7 +461,7 @@ int run_view(const ViewArgs& a) {
     fmt::print(stderr, "{}\n", kControls);
   }
   Viewer viewer(a, scene, have_sh, have_wavelet, look, renderer, st);
-  Camera base = default_camera(scene.mesh, a.fov);
+  Camera base = framing_camera(scene.mesh, a.fov, double(a.width) / a.height);
   if (!a.camera.empty()) parse_camera(a.camera, base);
   connect_input(window.get(), st);
 

@@ -100,8 +100,14 @@ void add_look_options(CLI::App* s, LookArgs& a) {
                     "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
           ->check(parsed_by(wavelet::parse_selection))
           ->capture_default_str();
-  s->add_option("--exposure", a.exposure, "Scale radiance by 2^EXPOSURE for display, -64 to 64 stops")
-      ->check(number_range(-64, 64, false, false, "stops"))
+  s->add_option("--exposure", a.exposure,
+                "Scale radiance by 2^EXPOSURE for display, -64 to 64 stops, or auto: a white diffuse surface facing "
+                "the map's brightest light shows at 1")
+      ->check(CLI::Validator(
+          [stops = number_range(-64, 64, false, false, "stops or auto")](std::string& text) {
+            return text == "auto" ? std::string() : stops(text);
+          },
+          ""))
       ->capture_default_str();
   s->add_option("--tonemap", a.tone_map, "8-bit output and the window: clamp, reinhard, aces")
       ->check(parsed_by(parse_tone_map))
@@ -132,9 +138,15 @@ Look parse_look(const LookArgs& a, int sh_bands, bool wavelet, bool glossy) {
   look.window = for_option("--window", [&] { return sh::parse_window(a.window); });
   look.terms = a.terms;
   look.selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
-  look.display.exposure = a.exposure;
+  look.auto_exposure = a.exposure == "auto";
+  look.display.exposure = look.auto_exposure ? 0.0 : std::stod(a.exposure);  // finite (checked while parsing)
   look.display.tone_map = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
   return look;
+}
+
+double auto_exposure(const std::vector<glm::dvec3>& light) {
+  const double peak = sh::peak_diffuse_radiance(light);
+  return peak > 0 ? std::clamp(-std::log2(peak), -64.0, 64.0) : 0.0;
 }
 
 std::vector<glm::dvec3> windowed_lighting(std::vector<glm::dvec3> light, int bands, sh::Window window) {

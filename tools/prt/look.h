@@ -17,7 +17,7 @@ namespace prt::cli {
 
 struct LookArgs {
   std::string shading = "transfer", tone_map = "clamp", window = "none", selection = "area";
-  double exposure = 0;
+  std::string exposure = "auto";  // stops, or auto (auto_exposure)
   int bands = 0;    // 0: all of the file's
   int terms = 100;  // wavelet lighting terms K
   CLI::Option *shading_option = nullptr, *bands_option = nullptr, *window_option = nullptr, *terms_option = nullptr,
@@ -35,6 +35,7 @@ struct Look {
   int terms = 100;
   wavelet::Selection selection = wavelet::Selection::AreaWeighted;
   Display display;
+  bool auto_exposure = false;  // --exposure auto (the default): display.exposure is set by the command from the map
 };
 
 // Checks the options against what was loaded: an SH transfer of `sh_bands`
@@ -44,6 +45,11 @@ struct Look {
 // --shading, a `glossy` transfer shows Shading::Glossy (the renderer's
 // default for it), others Shading::Transfer.
 Look parse_look(const LookArgs& args, int sh_bands, bool wavelet, bool glossy = false);
+
+// --exposure auto: the stops that show the brightest a white Lambertian
+// surface can be under this lighting (sh::peak_diffuse_radiance, 3 bands of
+// `light`, rotation-invariant) at 1; 0 for lighting nowhere positive.
+double auto_exposure(const std::vector<glm::dvec3>& light);
 
 // The lighting to upload: the first `bands` bands of `light` windowed (the
 // window's width is bands + 1 for Hanning and Lanczos, so band bands-1 keeps
