@@ -46,10 +46,10 @@ echo "== prt render: pictures of the relit model (headless OpenGL through EGL; n
 for env in envmaps/*.exr; do
   name=$(basename "$env" .exr)
   "$prt" render models/scene.obj "$out/scene.interreflected.prt" "$env" -q -o "$out/scene.$name.png" \
-    --width 640 --height 400 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0
+    --width 640 --height 400  # the default camera frames the model; the exposure follows the map
 done
 "$prt" render models/scene.obj "$out/scene.interreflected.prt" envmaps/sunset.exr -q -o "$out/turn.png" \
-  --width 320 --height 200 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --frames 12 --spin 30
+  --width 320 --height 200 --frames 12 --spin 30
 
 echo
 echo "== the all-frequency wavelet basis: shadowed transfer on a 6x32x32 cube map, relit with 100 Haar terms"
@@ -57,7 +57,7 @@ echo "== the all-frequency wavelet basis: shadowed transfer on a 6x32x32 cube ma
 for env in envmaps/*.exr; do
   name=$(basename "$env" .exr)
   "$prt" render models/scene.obj "$out/scene.wavelet.prt" "$env" -q -o "$out/scene.$name.wavelet.png" \
-    --width 640 --height 400 --exposure -1 --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --terms 100
+    --width 640 --height 400 --terms 100
 done
 
 echo
@@ -71,5 +71,5 @@ if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${CI:-}" ] && [ -t 1 ]; th
   echo
   echo "== prt view: close the window (Esc) to finish"
   "$prt" view models/scene.obj "$out/scene.interreflected.prt" envmaps/sunset.exr \
-    --second "$out/scene.wavelet.prt" --camera 3.0,2.0,4.2,0,0.3,0,0,1,0 --exposure -1 || true
+    --second "$out/scene.wavelet.prt" || true
 fi
