@@ -200,6 +200,7 @@ class PyProgress {
     fn_ = std::move(callback);
   }
   ~PyProgress() = default;
+  bool interrupted() const { return interrupts_.interrupted(); }
 
   prt::Progress callback() {
     return [this](std::size_t done, std::size_t total, const char* phase) { return update(done, total, phase); };
@@ -265,6 +266,10 @@ auto run_released(py::object progress, F&& f) {
     }
   }
   if (failure) p.rethrow(failure);
+  if (p.interrupted()) {  // Ctrl-C after the last progress call: still an interrupt
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
   return std::move(*result);
 }
 
