@@ -5,6 +5,7 @@ library.
 
     core <- scene <- precompute <- analysis
             scene <- runtime            (runtime: core and scene only)
+    python/ (the Python module): core, scene and precompute only
 
 Which header is whose is read from each library's CMakeLists.txt, whose
 prt_library(TARGET COMPONENT HEADERS a.h b.h ...) call also installs them.
@@ -29,6 +30,12 @@ ALLOWED = {
     "precompute": {"core", "scene", "precompute"},
     "analysis": {"core", "scene", "precompute", "analysis"},
     "runtime": {"core", "scene", "runtime"},
+}
+
+# Folders that are no library but a top layer linking some (like tools/prt,
+# which may use them all): the prt headers they may include.
+TOP_LAYERS = {
+    "python": {"core", "scene", "precompute"},  # the Python module (python/CMakeLists.txt)
 }
 
 # External headers that some libraries may not include (a renderer without
@@ -78,6 +85,8 @@ def check(root: pathlib.Path):
         files += [(lib, p) for p in sorted((root / lib).rglob("*")) if p.suffix in (".h", ".cpp")]
     files += [(owner[f"prt/{p.name}"], p) for p in sorted((root / "include" / "prt").glob("*.h"))
               if f"prt/{p.name}" in owner]
+    for top in TOP_LAYERS:
+        files += [(top, p) for p in sorted((root / top).rglob("*")) if p.suffix in (".h", ".cpp")]
     for lib, path in files:
         text = path.read_text(encoding="utf-8", errors="replace")
         rel = path.relative_to(root)
@@ -86,8 +95,9 @@ def check(root: pathlib.Path):
                 dep = owner.get(inc)
                 if dep is None:
                     problems.append(f"{rel}: includes <{inc}>, which belongs to no library")
-                elif dep not in ALLOWED[lib]:
-                    problems.append(f"{rel}: prt::{lib} includes <{inc}> of prt::{dep}, a layer it may not use")
+                elif dep not in ALLOWED.get(lib, TOP_LAYERS.get(lib, set())):
+                    who = f"prt::{lib}" if lib in ALLOWED else f"{lib}/"
+                    problems.append(f"{rel}: {who} includes <{inc}> of prt::{dep}, a layer it may not use")
             for prefix, libs in FORBIDDEN_EXTERNAL.items():
                 if inc.startswith(prefix) and lib in libs:
                     problems.append(f"{rel}: prt::{lib} includes <{inc}>")
@@ -116,8 +126,10 @@ def self_test(source: pathlib.Path) -> int:
             "runtime/b.cpp": "#include <prt/precompute.h>\n",  # runtime uses precompute
             "scene/c.cpp": "#include <embree3/rtcore.h>\n",    # Embree outside precompute
             "include/prt/stray.h": "#pragma once\n",           # a header of no library
+            "python/src/d.cpp": "#include <prt/render.h>\n",  # the Python module uses runtime
         }
         for rel, text in planted.items():
+            (root / rel).parent.mkdir(parents=True, exist_ok=True)
             (root / rel).write_text(text)
         found, _ = check(root)
     missed = [rel for rel in planted if not any(p.startswith(rel) for p in found)]

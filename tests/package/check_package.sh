@@ -10,7 +10,10 @@
 #   * builds tests/package/consumer against the moved prefix with
 #     find_package(prt 0.1 COMPONENTS scene / runtime / core) and runs it;
 #   * checks that a program linking only prt::runtime needs no Embree;
-#   * builds the same program with the pkg-config files.
+#   * builds the same program with the pkg-config files;
+#   * when the Python module is built (PRT_PYTHON: its interpreter,
+#     PRT_PYTHON_INSTALL_DIR: its directory under the prefix), imports the
+#     moved module and projects the .hdr through it.
 # Usage: check_package.sh BUILD_DIR SOURCE_DIR GENERATOR CXX_COMPILER LIBDIR BINDIR DATADIR INCLUDEDIR SHARED(ON|OFF)
 # Exit status 0 when everything holds; a message and 1 otherwise.
 set -euo pipefail
@@ -208,5 +211,24 @@ run "$tmp/pc.build.log" "$cxx" -std=c++20 -O1 "$src/tests/package/consumer/main.
 run "$tmp/pc.out" "$tmp/pc_scene"
 read -r _ r _ < <(grep "^radiance " "$tmp/pc.out")
 near "$r" 1 1e-5 || { cat "$tmp/pc.out" >&2; fail "the pkg-config build relit the white vertex to '$r', not 1"; }
+
+if [ -n "${PRT_PYTHON:-}" ]; then
+  step "the moved Python module imports and reads through the moved libraries and plugin"
+  pydir=$p/${PRT_PYTHON_INSTALL_DIR:?PRT_PYTHON_INSTALL_DIR is needed with PRT_PYTHON}
+  [ -f "$pydir/prt/__init__.py" ] || fail "$PRT_PYTHON_INSTALL_DIR/prt/__init__.py was not installed"
+  PYTHONPATH=$pydir LD_DEBUG=files "$PRT_PYTHON" -c '
+import math, sys, prt
+assert prt.__file__.startswith(sys.argv[1]), prt.__file__
+print("data_dir", prt.data_dir())
+print("L00", repr(float(prt.project(sys.argv[2], 1)[0][0])), "expected", repr(2 * math.sqrt(math.pi)))
+' "$pydir" "$tmp/const.hdr" >"$tmp/py.out" 2>"$tmp/py.ld" || { cat "$tmp/py.out"; tail -n 20 "$tmp/py.ld" >&2; fail "import prt from $pydir"; }
+  cat "$tmp/py.out"
+  grep -qx "data_dir $p/$datadir/prt" "$tmp/py.out" || fail "the moved module's prt.data_dir() is not $p/$datadir/prt"
+  read -r _ l00 _ < <(grep "^L00 " "$tmp/py.out")
+  near "$l00" 3.5449077018110318 1e-12 || fail "the moved module's L00 of the constant .hdr is '$l00', not 2 sqrt(pi)"
+  grep -q "calling init: $p/.*libprt_core\.so" "$tmp/py.ld" || fail "the module did not load libprt_core from $p"
+  grep -q "file=$p/$libdir/prt/libprt_oiio.so " "$tmp/py.ld" || fail "the module did not load the plugin from $p/$libdir/prt"
+  ! grep -E "file=($build|$src|$tmp/p1)" "$tmp/py.ld" || fail "the module loaded a file from the build, source or old install tree"
+fi
 
 echo "package: all checks passed"

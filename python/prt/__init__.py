@@ -1,0 +1,43 @@
+"""prt: Precomputed Radiance Transfer from Python (docs/PYTHON.md).
+
+Maps, meshes and transfer files as numpy arrays, and the computations of the
+prt command (project, precompute, relight, reference) with its defaults and
+its results: the same inputs give the same numbers as the command line.
+
+    import prt
+    mesh = prt.load_mesh("models/scene.obj")
+    t = prt.precompute(mesh, bands=3, samples=256, progress=True)
+    light = prt.project(prt.data_dir() + "/envmaps/sunset.exr", t.bands)
+    rgb = prt.relight(t, mesh, light)            # (V, 3) float32
+
+Errors in the inputs (a bad file, a bad value) raise prt.Error, a
+RuntimeError whose message names the file or argument.
+"""
+from ._prt import (  # noqa: F401
+    MAX_BANDS,
+    EnvMap,
+    Error,
+    Mesh,
+    Transfer,
+    __version__,
+    data_dir,
+    load_envmap,
+    load_mesh,
+    make_mesh,
+    precompute,
+    project,
+    read_transfer,
+    read_vertex_csv,
+    reference,
+    relight,
+    rotate_sh,
+    rotation_from_euler,
+    sh_eval,
+    write_vertex_csv,
+)
+
+__all__ = [
+    "MAX_BANDS", "EnvMap", "Error", "Mesh", "Transfer", "__version__", "data_dir", "load_envmap", "load_mesh",
+    "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
+    "rotation_from_euler", "sh_eval", "write_vertex_csv",
+]

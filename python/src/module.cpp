@@ -1,0 +1,810 @@
+// python/src/module.cpp - prt's Python module (pybind11): maps, meshes,
+// transfer files and the computations of the prt command as numpy arrays.
+// The top layer, like tools/prt: it only calls the libraries (docs/PYTHON.md).
+//
+// Arrays prt owns (a map's pixels, a mesh's vertices, a transfer's rows) are
+// read-only views that keep their object alive; everything computed is a new
+// array. Long computations (precompute, reference) release the GIL; their
+// progress callback takes it back, and Ctrl-C or an exception raised by the
+// callback stops them (the library's Progress returns false: prt/progress.h).
+#include <prt/compressed_transfer.h>
+#include <prt/envmap.h>
+#include <prt/error.h>
+#include <prt/filter.h>
+#include <prt/mesh.h>
+#include <prt/paths.h>
+#include <prt/precompute.h>
+#include <prt/progress.h>
+#include <prt/projection.h>
+#include <prt/reference.h>
+#include <prt/rotation.h>
+#include <prt/sh.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+#include <prt/vertex_csv.h>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <tbb/global_control.h>
+
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+#include <pthread.h>
+
+namespace py = pybind11;
+
+namespace {
+
+using prt::Error;
+
+// ---- arrays --------------------------------------------------------------------
+
+// A read-only numpy view of `data`, which `owner` keeps alive.
+template <typename T>
+py::array view(const T* data, std::vector<py::ssize_t> shape, py::handle owner) {
+  if (!data) return py::array_t<T>(shape);  // empty: nothing to share
+  py::array a(py::dtype::of<T>(), shape, data, owner);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+template <typename T>
+py::array_t<T> copy(const T* data, std::vector<py::ssize_t> shape) {
+  py::array_t<T> a(shape);
+  std::size_t n = 1;
+  for (auto s : shape) n *= std::size_t(s);
+  if (n) std::memcpy(a.mutable_data(), data, n * sizeof(T));
+  return a;
+}
+
+py::array_t<float> vec3s(const std::vector<glm::vec3>& v) {
+  return copy(reinterpret_cast<const float*>(v.data()), {py::ssize_t(v.size()), 3});
+}
+
+using DArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using FArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+
+// (N, 3) or (3,) -> N rows; `what` names the argument in the message.
+std::size_t rows_of3(const py::array& a, const char* what) {
+  if (a.ndim() == 1 && a.shape(0) == 3) return 1;
+  if (a.ndim() == 2 && a.shape(1) == 3) return std::size_t(a.shape(0));
+  throw Error(std::string(what) + ": expected an array of shape (N, 3) or (3,), got " +
+              std::string(py::str(a.attr("shape"))));
+}
+
+std::string shape_text(const py::array& a) { return py::str(a.attr("shape")); }
+
+// A read-only (N, 3) view of glm vectors (three floats each, packed).
+template <typename V>
+py::array view3(const std::vector<V>& v, py::handle owner) {
+  using T = typename V::value_type;
+  return view(v.empty() ? nullptr : reinterpret_cast<const T*>(v.data()), {py::ssize_t(v.size()), 3}, owner);
+}
+
+// Lighting coefficients (n*n, 3), float64.
+std::vector<glm::dvec3> to_coeffs(const py::handle& obj, const char* what) {
+  DArray a = DArray::ensure(obj);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3)
+    throw Error(std::string(what) + ": expected SH coefficients of shape (n*n, 3), got " +
+                (a ? shape_text(a) : std::string("something that is not an array")));
+  std::vector<glm::dvec3> c(std::size_t(a.shape(0)));
+  for (std::size_t k = 0; k < c.size(); ++k) c[k] = {a.at(k, 0), a.at(k, 1), a.at(k, 2)};
+  return c;
+}
+
+py::array_t<double> from_coeffs(const std::vector<glm::dvec3>& c) {
+  return copy(reinterpret_cast<const double*>(c.data()), {py::ssize_t(c.size()), 3});
+}
+
+int bands_of_count(std::size_t n, const char* what) {
+  const int b = int(std::lround(std::sqrt(double(n))));
+  if (b < 1 || std::size_t(b) * std::size_t(b) != n)
+    throw Error(std::string(what) + ": " + std::to_string(n) + " coefficients is not a square number n*n");
+  return b;
+}
+
+glm::vec3 to_albedo(const py::handle& obj) {
+  if (py::isinstance<py::float_>(obj) || py::isinstance<py::int_>(obj)) return glm::vec3(obj.cast<float>());
+  const auto v = obj.cast<std::vector<float>>();
+  if (v.size() != 3) throw Error("albedo: expected a number or 3 numbers r, g, b");
+  return {v[0], v[1], v[2]};
+}
+
+py::array_t<double> from_mat(const glm::dmat3& m) {
+  py::array_t<double> a({3, 3});
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) a.mutable_at(i, j) = m[j][i];  // glm is column-major
+  return a;
+}
+
+// A rotation: a 3x3 matrix, or (yaw, pitch, roll) in degrees as --rotate.
+glm::dmat3 to_rotation(const py::handle& obj, const char* what) {
+  DArray a = DArray::ensure(obj);
+  if (a && a.ndim() == 1 && a.shape(0) == 3) return prt::sh::rotation_from_euler(a.at(0), a.at(1), a.at(2));
+  if (a && a.ndim() == 2 && a.shape(0) == 3 && a.shape(1) == 3) {
+    glm::dmat3 m;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[j][i] = a.at(i, j);
+    return m;
+  }
+  throw Error(std::string(what) + ": expected a 3x3 rotation matrix or (yaw, pitch, roll) in degrees");
+}
+
+// ---- progress, Ctrl-C ----------------------------------------------------------
+
+// While one lives on Python's main thread, SIGINT sets a flag instead of
+// running Python's handler (which cannot run while the GIL is released);
+// the destructor puts Python's handler back. Elsewhere, or when SIGINT is not
+// Python's default handler, it leaves SIGINT alone.
+std::atomic<bool> g_interrupted{false};
+void on_sigint(int) { g_interrupted = true; }
+
+class InterruptScope {
+ public:
+  InterruptScope() {
+    if (PyGILState_Check() && py::module_::import("threading").attr("current_thread")().is(
+                                  py::module_::import("threading").attr("main_thread")())) {
+      py::object handler = py::module_::import("signal").attr("getsignal")(SIGINT);
+      if (!handler.is(py::module_::import("signal").attr("default_int_handler"))) return;
+      g_interrupted = false;
+      struct sigaction sa {};
+      sa.sa_handler = on_sigint;
+      sigemptyset(&sa.sa_mask);
+      sa.sa_flags = SA_RESTART;
+      installed_ = sigaction(SIGINT, &sa, &previous_) == 0;
+    }
+  }
+  ~InterruptScope() {
+    if (installed_) sigaction(SIGINT, &previous_, nullptr);
+  }
+  bool interrupted() const { return installed_ && g_interrupted; }
+  InterruptScope(const InterruptScope&) = delete;
+  InterruptScope& operator=(const InterruptScope&) = delete;
+
+ private:
+  bool installed_ = false;
+  struct sigaction previous_ {};
+};
+
+// The prt::Progress of one computation: checks for Ctrl-C on every call and
+// calls the Python callback (done, total, phase) at the start and end of each
+// phase and whenever another percent is done. A callback returning False, or
+// raising, cancels; its exception is kept and raised once the library has
+// stopped. Create and destroy it holding the GIL.
+class PyProgress {
+ public:
+  explicit PyProgress(py::object callback) {
+    if (callback.is_none() || (py::isinstance<py::bool_>(callback) && !callback.cast<bool>())) return;
+    if (py::isinstance<py::bool_>(callback)) {  // True: a line on sys.stderr
+      callback = py::cpp_function([](std::size_t done, std::size_t total, const std::string& phase) {
+        py::object err = py::module_::import("sys").attr("stderr");
+        const int pct = total ? int(100.0 * double(done) / double(total)) : 100;
+        err.attr("write")("\r" + phase + ": " + std::to_string(pct) + "% (" + std::to_string(done) + "/" +
+                          std::to_string(total) + ")" + (done == total ? "\n" : ""));
+        err.attr("flush")();
+      });
+    } else if (!PyCallable_Check(callback.ptr())) {
+      throw Error("progress: expected None, True, False or a callable (done, total, phase)");
+    }
+    fn_ = std::move(callback);
+  }
+  ~PyProgress() = default;
+  bool interrupted() const { return interrupts_.interrupted(); }
+
+  prt::Progress callback() {
+    return [this](std::size_t done, std::size_t total, const char* phase) { return update(done, total, phase); };
+  }
+
+  // After the computation (GIL held): raises what stopped it, if Python did.
+  // `e` is the library's exception, rethrown when Python did not stop it.
+  [[noreturn]] void rethrow(const std::exception_ptr& e) {
+    if (error_) {
+      std::unique_ptr<py::error_already_set> err = std::move(error_);
+      err->restore();
+      throw py::error_already_set();
+    }
+    if (interrupts_.interrupted()) {
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+      throw py::error_already_set();
+    }
+    std::rethrow_exception(e);
+  }
+
+ private:
+  bool update(std::size_t done, std::size_t total, const char* phase) {
+    if (interrupts_.interrupted() || stopped_) return false;
+    if (!fn_) return true;
+    const int pct = total ? int(100.0 * double(done) / double(total)) : 100;
+    if (phase_ == phase && (done == done_ || (done != total && pct == percent_))) return true;
+    phase_ = phase;
+    percent_ = pct;
+    done_ = done;
+    py::gil_scoped_acquire gil;
+    try {
+      py::object r = fn_(done, total, phase);
+      if (r.ptr() == Py_False) stopped_ = true;
+    } catch (py::error_already_set& e) {
+      error_ = std::make_unique<py::error_already_set>(std::move(e));
+      stopped_ = true;
+    }
+    return !stopped_;
+  }
+
+  InterruptScope interrupts_;
+  py::object fn_;
+  std::string phase_;
+  int percent_ = -1;
+  std::size_t done_ = 0;
+  std::atomic<bool> stopped_{false};
+  std::unique_ptr<py::error_already_set> error_;
+};
+
+// Runs f(progress) without the GIL; Python's reasons for stopping win over
+// the library's "cancelled".
+template <typename F>
+auto run_released(py::object progress, F&& f) {
+  PyProgress p(std::move(progress));
+  std::exception_ptr failure;
+  std::optional<std::invoke_result_t<F, prt::Progress>> result;
+  {
+    py::gil_scoped_release release;
+    try {
+      result.emplace(f(p.callback()));
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  }
+  if (failure) p.rethrow(failure);
+  if (p.interrupted()) {  // Ctrl-C after the last progress call: still an interrupt
+    PyErr_SetNone(PyExc_KeyboardInterrupt);
+    throw py::error_already_set();
+  }
+  return std::move(*result);
+}
+
+std::unique_ptr<tbb::global_control> limit_threads(int threads) {
+  if (threads < 0) throw Error("threads: must be >= 0 (0: all cores)");
+  if (threads == 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+}
+
+// ---- transfers -----------------------------------------------------------------
+
+// An SH transfer as Python sees it: the whole transfer (a compressed file's
+// rows reconstructed) and, for a compressed file, the compressed form, which
+// relight() uses as prt relight does.
+struct PyTransfer {
+  prt::Transfer t;
+  std::optional<prt::CompressedTransfer> compressed;
+  std::string source = "<computed>";
+};
+
+PyTransfer read_transfer(const std::string& path) {
+  PyTransfer p;
+  p.source = path;
+  if (prt::read_transfer_basis(path) == prt::TransferBasis::Wavelet)
+    throw Error(path + ": holds a wavelet transfer (prt precompute --basis wavelet); the Python module reads SH "
+                       "transfers only (use the prt command: prt relight --terms K)");
+  if (prt::transfer_is_compressed(path)) {
+    p.compressed = prt::read_compressed_transfer(path);
+    p.t = prt::decompress(*p.compressed);
+  } else {
+    p.t = prt::read_transfer(path);
+  }
+  return p;
+}
+
+py::object rows_view(const PyTransfer& p, const std::vector<float>& a, py::handle self) {
+  if (a.empty() && &a != &p.t.coeffs) return py::none();  // no direct part
+  const std::size_t nc = std::size_t(p.t.bands) * p.t.bands;
+  return view(a.data(), {py::ssize_t(p.t.stored_vertices()), p.t.channels, py::ssize_t(nc)}, self);
+}
+
+// ---- the map argument of project() ---------------------------------------------
+
+bool is_path(const py::handle& h) {
+  return py::isinstance<py::str>(h) || py::isinstance(h, py::module_::import("os").attr("PathLike"));
+}
+std::string path_of(const py::handle& h) { return py::str(py::module_::import("os").attr("fspath")(h)); }
+
+prt::EnvMap map_from_array(const py::handle& obj) {
+  FArray a = FArray::ensure(obj);
+  if (!a) throw Error("map: expected an EnvMap, a file name or an array of shape (H, W, 3) or (6, N, N, 3)");
+  if (a.ndim() == 3 && a.shape(2) == 3) {
+    std::vector<float> rgb(a.data(), a.data() + a.size());
+    return prt::make_latlong(int(a.shape(1)), int(a.shape(0)), std::move(rgb), "<array>");
+  }
+  if (a.ndim() == 4 && a.shape(0) == 6 && a.shape(1) == a.shape(2) && a.shape(3) == 3) {
+    std::vector<float> rgb(a.data(), a.data() + a.size());
+    return prt::make_cube(int(a.shape(1)), std::move(rgb), "<array>");
+  }
+  throw Error("map: expected an array of shape (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces), got " +
+              shape_text(a));
+}
+
+py::dict stats_dict(const prt::MapStats& s) {
+  py::dict d;
+  d["min"] = s.min;
+  d["max"] = s.max;
+  d["mean"] = s.mean;
+  d["pixels"] = s.pixels;
+  d["negative"] = s.negative;
+  d["nonfinite"] = s.nonfinite;
+  d["first_nonfinite"] = s.first_nonfinite;
+  return d;
+}
+
+py::dict mesh_report(const prt::MeshReport& r) {
+  py::dict d;
+  d["degenerate_triangles"] = r.degenerate_triangles;
+  d["unreferenced_vertices"] = r.unreferenced_vertices;
+  d["normals_computed"] = r.normals_computed;
+  d["zero_normals"] = r.zero_normals;
+  d["welded"] = r.welded;
+  d["nonmanifold_edges"] = r.nonmanifold_edges;
+  d["inconsistent_edges"] = r.inconsistent_edges;
+  d["file_had_normals"] = r.file_had_normals;
+  d["file_had_colors"] = r.file_had_colors;
+  return d;
+}
+
+prt::MeshOptions mesh_options(bool weld, bool file_normals, const std::string& weighting) {
+  prt::MeshOptions o;
+  o.weld = weld;
+  o.file_normals = file_normals;
+  if (weighting == "area")
+    o.weighting = prt::NormalWeighting::Area;
+  else if (weighting == "angle")
+    o.weighting = prt::NormalWeighting::Angle;
+  else
+    throw Error("weighting: expected 'area' or 'angle', got '" + weighting + "'");
+  return o;
+}
+
+std::vector<glm::vec3> to_vec3s(const py::handle& obj, const char* what) {
+  FArray a = FArray::ensure(obj);
+  if (!a || a.ndim() != 2 || a.shape(1) != 3)
+    throw Error(std::string(what) + ": expected an array of shape (N, 3)" + (a ? ", got " + shape_text(a) : ""));
+  std::vector<glm::vec3> v(std::size_t(a.shape(0)));
+  if (!v.empty()) std::memcpy(&v[0].x, a.data(), v.size() * sizeof(glm::vec3));
+  return v;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_prt, m) {
+  m.doc() = "prt: Precomputed Radiance Transfer (docs/PYTHON.md)";
+  m.attr("__version__") = PRT_VERSION;
+  m.attr("MAX_BANDS") = prt::sh::kMaxBands;
+  // prt::Error (a user's mistake, naming the file or option) -> prt.Error.
+  py::register_exception<Error>(m, "Error", PyExc_RuntimeError);
+
+  m.def("data_dir", [] { return prt::data_dir().string(); },
+        "The directory of prt's bundled data (envmaps/): $PRT_DATA_DIR, or the one installed with prt.");
+
+  // ---- maps ----
+  py::class_<prt::EnvMap>(m, "EnvMap", "An environment map: linear RGB float pixels (prt/envmap.h)")
+      .def_property_readonly(
+          "pixels",
+          [](py::object self) {
+            const auto& e = self.cast<const prt::EnvMap&>();
+            if (e.is_cube()) return view(e.rgb.data(), {6, e.width, e.width, 3}, self);
+            return view(e.rgb.data(), {e.height, e.width, 3}, self);
+          },
+          "float32, (H, W, 3) for a lat-long map (row 0 at the top), (6, N, N, 3) for a cube "
+          "(+X, -X, +Y, -Y, +Z, -Z); read-only")
+      .def_property_readonly("mapping", [](const prt::EnvMap& e) { return std::string(e.is_cube() ? "faces" : "latlong"); },
+                             "'latlong' or 'faces' (a cube)")
+      .def_property_readonly("width", [](const prt::EnvMap& e) { return e.width; })
+      .def_property_readonly("height", [](const prt::EnvMap& e) { return e.height; })
+      .def_property_readonly("source", [](const prt::EnvMap& e) { return e.source; })
+      .def_property_readonly("source_layout", [](const prt::EnvMap& e) { return e.source_layout; },
+                             "How the file stored it: 'lat-long', 'horizontal cross', ...")
+      .def_property_readonly("source_channels", [](const prt::EnvMap& e) { return e.source_channels; })
+      .def_property_readonly("stats", [](const prt::EnvMap& e) { return stats_dict(e.stats); },
+                             "min, max, mean, pixels, negative, nonfinite: what prt project prints")
+      .def("__repr__", [](const prt::EnvMap& e) { return "<prt.EnvMap " + prt::describe(e) + ">"; })
+      .def("__str__", [](const prt::EnvMap& e) { return prt::describe(e); });
+
+  m.def(
+      "load_envmap",
+      [](const py::object& path, const std::string& mapping) {
+        const prt::Mapping mp = prt::parse_mapping(mapping);
+        if (mp == prt::Mapping::Faces || py::isinstance<py::list>(path) || py::isinstance<py::tuple>(path)) {
+          const auto files = path.cast<std::vector<std::string>>();
+          if (files.size() != 6) throw Error("load_envmap: mapping 'faces' needs six files +X, -X, +Y, -Y, +Z, -Z");
+          return prt::load_cube_faces({files[0], files[1], files[2], files[3], files[4], files[5]});
+        }
+        return prt::load_envmap(path_of(path), mp);
+      },
+      py::arg("path"), py::arg("mapping") = "auto",
+      "Reads a map (EXR; HDR, PNG, ... through prt's OpenImageIO plugin). mapping: auto (from the shape), latlong, "
+      "hcross, vcross, or faces (path: six files).");
+
+  m.def(
+      "project",
+      [](const py::object& map, int bands, const std::string& mapping, const std::string& quadrature,
+         bool irradiance, const std::string& window, double window_width, const py::object& rotate) {
+        const prt::Quadrature q = prt::parse_quadrature(quadrature);
+        const prt::sh::Window w = prt::sh::parse_window(window);
+        std::optional<glm::dmat3> R;
+        if (!rotate.is_none()) R = to_rotation(rotate, "rotate");
+        std::vector<glm::dvec3> c;
+        if (py::isinstance<prt::EnvMap>(map)) {
+          const auto& e = map.cast<const prt::EnvMap&>();
+          py::gil_scoped_release release;
+          c = prt::project(e, bands, q);
+        } else if (py::isinstance<py::list>(map) || py::isinstance<py::tuple>(map)) {  // six face files
+          const auto f = map.cast<std::vector<std::string>>();
+          if (f.size() != 6) throw Error("map: a list of files is a cube's six faces +X, -X, +Y, -Y, +Z, -Z");
+          const prt::EnvMap e = prt::load_cube_faces({f[0], f[1], f[2], f[3], f[4], f[5]});
+          py::gil_scoped_release release;
+          c = prt::project(e, bands, q);
+        } else if (is_path(map)) {
+          const std::string path = path_of(map);
+          py::gil_scoped_release release;
+          c = prt::project_file(path, bands, q, prt::parse_mapping(mapping)).coeffs;  // as prt project
+        } else {
+          const prt::EnvMap e = map_from_array(map);
+          py::gil_scoped_release release;
+          c = prt::project(e, bands, q);
+        }
+        if (irradiance) prt::sh::scale_bands(std::span<glm::dvec3>(c), prt::sh::clamped_cosine_factors(bands));
+        prt::sh::apply_window(std::span<glm::dvec3>(c), w, window_width > 0 ? window_width : bands);
+        if (R) {
+          std::vector<glm::dvec3> r(c.size());
+          prt::sh::Rotation(bands, *R).apply(c, r);
+          c.swap(r);
+        }
+        return from_coeffs(c);
+      },
+      py::arg("map"), py::arg("bands") = 3, py::kw_only(), py::arg("mapping") = "auto",
+      py::arg("quadrature") = "box", py::arg("irradiance") = false, py::arg("window") = "none",
+      py::arg("window_width") = 0.0, py::arg("rotate") = py::none(),
+      "SH coefficients (bands*bands, 3) float64 of a map (an EnvMap, a file name, or an array (H, W, 3) or "
+      "(6, N, N, 3)), as prt project computes them: projection, then irradiance, window, rotation "
+      "(rotate: a 3x3 matrix or (yaw, pitch, roll) degrees as --rotate).");
+
+  m.def(
+      "sh_eval",
+      [](int bands, const py::object& dirs) {
+        prt::sh::check_bands(bands, "bands");
+        DArray d = DArray::ensure(dirs);
+        if (!d) throw Error("dirs: expected an array of shape (N, 3) or (3,)");
+        const std::size_t n = rows_of3(d, "dirs");
+        const std::size_t nc = std::size_t(bands) * bands;
+        std::vector<double> unit(3 * n);
+        for (std::size_t i = 0; i < n; ++i) {
+          const double* p = d.data() + 3 * i;
+          const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+          if (!(len > 0) || !std::isfinite(len))
+            throw Error("dirs: direction " + std::to_string(i) + " has length " + std::to_string(len) +
+                        "; give non-zero finite directions");
+          for (int k = 0; k < 3; ++k) unit[3 * i + k] = p[k] / len;
+        }
+        py::array_t<double> out(d.ndim() == 1 ? std::vector<py::ssize_t>{py::ssize_t(nc)}
+                                              : std::vector<py::ssize_t>{py::ssize_t(n), py::ssize_t(nc)});
+        prt::sh::eval_batch(bands, unit.data(), n, out.mutable_data());
+        return out;
+      },
+      py::arg("bands"), py::arg("dirs"),
+      "The bands*bands real SH basis functions at directions (N, 3) (normalised first): (N, bands*bands) "
+      "float64, index k = l(l+1)+m (docs/CONVENTIONS.md).");
+
+  m.def("rotation_from_euler",
+        [](double yaw, double pitch, double roll) { return from_mat(prt::sh::rotation_from_euler(yaw, pitch, roll)); },
+        py::arg("yaw"), py::arg("pitch"), py::arg("roll"),
+        "The 3x3 matrix --rotate yaw,pitch,roll (degrees) means: R = Ry(yaw) Rx(pitch) Rz(roll).");
+
+  m.def(
+      "rotate_sh",
+      [](const py::object& coeffs, const py::object& rotation) {
+        DArray c = DArray::ensure(coeffs);
+        if (!c || c.ndim() < 1 || c.ndim() > 2)
+          throw Error("coeffs: expected an array of shape (n*n,) or (n*n, C)");
+        const std::size_t nc = std::size_t(c.shape(0));
+        const int bands = bands_of_count(nc, "coeffs");
+        const std::size_t cols = c.ndim() == 2 ? std::size_t(c.shape(1)) : 1;
+        const prt::sh::Rotation rot(bands, to_rotation(rotation, "rotation"));
+        py::array_t<double> out(c.request().shape);
+        std::vector<double> in(nc), res(nc);
+        for (std::size_t j = 0; j < cols; ++j) {
+          for (std::size_t k = 0; k < nc; ++k) in[k] = c.data()[k * cols + j];
+          rot.apply(std::span<const double>(in), std::span<double>(res));
+          for (std::size_t k = 0; k < nc; ++k) out.mutable_data()[k * cols + j] = res[k];
+        }
+        return out;
+      },
+      py::arg("coeffs"), py::arg("rotation"),
+      "Rotates SH coefficients (n*n,) or (n*n, C): the lighting turned by a 3x3 matrix R or (yaw, pitch, roll) "
+      "degrees as --rotate (light from d arrives from R d).");
+
+  // ---- meshes ----
+  py::class_<prt::Mesh>(m, "Mesh", "A triangle mesh as prt loads it (prt/mesh.h)")
+      .def_property_readonly("positions",
+                             [](py::object self) {
+                               const auto& x = self.cast<const prt::Mesh&>();
+                               return view3(x.positions, self);
+                             },
+                             "float32 (V, 3), read-only")
+      .def_property_readonly("normals",
+                             [](py::object self) {
+                               const auto& x = self.cast<const prt::Mesh&>();
+                               return view3(x.normals, self);
+                             },
+                             "float32 (V, 3), unit or zero, read-only")
+      .def_property_readonly("triangles",
+                             [](py::object self) {
+                               const auto& x = self.cast<const prt::Mesh&>();
+                               return view3(x.triangles, self);
+                             },
+                             "uint32 (T, 3) vertex indices, counter-clockwise seen from the front, read-only")
+      .def_property_readonly("colors",
+                             [](py::object self) -> py::object {
+                               const auto& x = self.cast<const prt::Mesh&>();
+                               if (x.colors.empty()) return py::none();
+                               return view3(x.colors, self);
+                             },
+                             "float32 (V, 3) linear RGB from the file, or None")
+      .def_property_readonly("vertex_count", &prt::Mesh::vertex_count)
+      .def_property_readonly("source", [](const prt::Mesh& x) { return x.source; })
+      .def_property_readonly("hash", &prt::Mesh::hash, "XXH3-64 of positions and triangles (a transfer's mesh_hash)")
+      .def_property_readonly("report", [](const prt::Mesh& x) { return mesh_report(x.report); })
+      .def("__len__", &prt::Mesh::vertex_count)
+      .def("__repr__", [](const prt::Mesh& x) { return "<prt.Mesh " + prt::describe(x) + ">"; })
+      .def("__str__", [](const prt::Mesh& x) { return prt::describe(x); });
+
+  m.def(
+      "load_mesh",
+      [](const py::object& path, bool weld, bool file_normals, const std::string& weighting) {
+        const prt::MeshOptions o = mesh_options(weld, file_normals, weighting);
+        const std::string p = path_of(path);
+        py::gil_scoped_release release;
+        return prt::load_mesh(p, o);
+      },
+      py::arg("path"), py::kw_only(), py::arg("weld") = false, py::arg("file_normals") = true,
+      py::arg("weighting") = "area",
+      "Reads OBJ, PLY, OFF, STL, glTF/GLB as prt does (weld: as --weld).");
+
+  m.def(
+      "make_mesh",
+      [](const py::object& positions, const py::object& triangles, const py::object& normals,
+         const py::object& colors, bool weld) {
+        std::vector<glm::vec3> pos = to_vec3s(positions, "positions");
+        py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast> t =
+            py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>::ensure(triangles);
+        if (!t || t.ndim() != 2 || t.shape(1) != 3) throw Error("triangles: expected an integer array of shape (T, 3)");
+        std::vector<glm::uvec3> tri(std::size_t(t.shape(0)));
+        if (!tri.empty()) std::memcpy(&tri[0].x, t.data(), tri.size() * sizeof(glm::uvec3));
+        std::vector<glm::vec3> n = normals.is_none() ? std::vector<glm::vec3>{} : to_vec3s(normals, "normals");
+        std::vector<glm::vec3> c = colors.is_none() ? std::vector<glm::vec3>{} : to_vec3s(colors, "colors");
+        prt::MeshOptions o;
+        o.weld = weld;
+        return prt::make_mesh(std::move(pos), std::move(tri), std::move(n), std::move(c), o, "<arrays>");
+      },
+      py::arg("positions"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("colors") = py::none(),
+      py::kw_only(), py::arg("weld") = false,
+      "A mesh from arrays, checked as a loaded one (normals computed when not given).");
+
+  // ---- transfers ----
+  py::class_<PyTransfer>(m, "Transfer", "An SH transfer (prt/transfer.h): per-vertex transfer vectors")
+      .def_property_readonly("bands", [](const PyTransfer& p) { return p.t.bands; })
+      .def_property_readonly("channels", [](const PyTransfer& p) { return p.t.channels; })
+      .def_property_readonly("mode", [](const PyTransfer& p) { return std::string(prt::transfer_mode_name(p.t.mode)); })
+      .def_property_readonly("bounces", [](const PyTransfer& p) { return p.t.bounces; })
+      .def_property_readonly("samples", [](const PyTransfer& p) { return p.t.samples; })
+      .def_property_readonly("albedo", [](const PyTransfer& p) { return py::make_tuple(p.t.albedo.x, p.t.albedo.y, p.t.albedo.z); })
+      .def_property_readonly("vertex_colors", [](const PyTransfer& p) { return p.t.vertex_colors; })
+      .def_property_readonly("seed", [](const PyTransfer& p) { return p.t.seed; })
+      .def_property_readonly("vertices", [](const PyTransfer& p) { return p.t.vertices; })
+      .def_property_readonly("mesh_hash", [](const PyTransfer& p) { return p.t.mesh_hash; })
+      .def_property_readonly("glossy", [](const PyTransfer& p) { return p.t.glossy; },
+                             "Whether it holds glossy matrices (relight() uses the diffuse part)")
+      .def_property_readonly("compressed", [](const PyTransfer& p) { return p.compressed.has_value(); },
+                             "Read from a compressed file (prt compress): rows are reconstructed")
+      .def_property_readonly("source", [](const PyTransfer& p) { return p.source; })
+      .def_property_readonly("analytic_vertices", [](const PyTransfer& p) { return p.t.analytic_vertices(); })
+      .def_property_readonly("stored_vertices", [](const PyTransfer& p) { return p.t.stored_vertices(); })
+      .def_property_readonly(
+          "analytic",
+          [](const PyTransfer& p) {
+            py::array_t<bool> a(py::ssize_t(p.t.vertices));
+            for (std::size_t v = 0; v < p.t.vertices; ++v) a.mutable_at(v) = p.t.is_analytic(v);
+            return a;
+          },
+          "bool (V,): vertices that store no row (unoccluded: transfer evaluated from the mesh's normal)")
+      .def_property_readonly(
+          "slots",
+          [](const PyTransfer& p) {
+            py::array_t<std::int64_t> a(py::ssize_t(p.t.vertices));
+            for (std::size_t v = 0; v < p.t.vertices; ++v)
+              a.mutable_at(v) = p.t.slots.empty() ? std::int64_t(v)
+                                : p.t.slots[v] == prt::Transfer::kAnalytic ? -1
+                                                                           : std::int64_t(p.t.slots[v]);
+            return a;
+          },
+          "int64 (V,): each vertex's row in rows, or -1 when analytic")
+      .def_property_readonly("rows", [](py::object self) { const auto& p = self.cast<const PyTransfer&>(); return rows_view(p, p.t.coeffs, self); },
+                             "float32 (stored vertices, channels, bands^2): the stored rows, read-only")
+      .def_property_readonly("direct_rows", [](py::object self) { const auto& p = self.cast<const PyTransfer&>(); return rows_view(p, p.t.direct, self); },
+                             "Interreflected: the direct (shadowed) part's rows, or None")
+      .def_property_readonly("ao",
+                             [](py::object self) -> py::object {
+                               const auto& p = self.cast<const PyTransfer&>();
+                               if (p.t.ao.empty()) return py::none();
+                               return view(p.t.ao.data(), {py::ssize_t(p.t.ao.size())}, self);
+                             },
+                             "float32 (V,) ambient occlusion, or None")
+      .def_property_readonly("bent_normals",
+                             [](py::object self) -> py::object {
+                               const auto& p = self.cast<const PyTransfer&>();
+                               if (p.t.bent_normals.empty()) return py::none();
+                               return view3(p.t.bent_normals, self);
+                             },
+                             "float32 (V, 3), or None")
+      .def_property_readonly("bounce_energy", [](const PyTransfer& p) { return p.t.bounce_energy; })
+      .def(
+          "dense",
+          [](const PyTransfer& p, const prt::Mesh& mesh, bool direct) {
+            prt::check_matches(p.t, mesh, p.source);
+            const std::vector<float> d = prt::dense_transfer(p.t, mesh, direct);
+            return copy(d.data(), {py::ssize_t(p.t.vertices), p.t.channels, py::ssize_t(p.t.bands) * p.t.bands});
+          },
+          py::arg("mesh"), py::arg("direct") = false,
+          "float32 (V, channels, bands^2): every vertex's transfer, analytic ones evaluated from `mesh` "
+          "(the mesh it was computed for)")
+      .def(
+          "write",
+          [](const PyTransfer& p, const py::object& path) {
+            const std::string f = path_of(path);
+            if (p.compressed)
+              prt::write_compressed_transfer(f, *p.compressed);
+            else
+              prt::write_transfer(f, p.t);
+          },
+          py::arg("path"), "Writes the file (atomically) as prt precompute does (docs/FORMAT.md)")
+      .def("__repr__",
+           [](const PyTransfer& p) {
+             return "<prt.Transfer " + p.source + ": " + std::string(prt::transfer_mode_name(p.t.mode)) + ", " +
+                    std::to_string(p.t.bands) + " bands, " + std::to_string(p.t.channels) + " channel(s), " +
+                    std::to_string(p.t.vertices) + " vertices>";
+           })
+      .def("__str__", [](const PyTransfer& p) {
+        return p.compressed ? prt::describe_transfer(*p.compressed) : prt::describe_transfer(p.t);
+      });
+
+  m.def("read_transfer", [](const py::object& path) { return read_transfer(path_of(path)); }, py::arg("path"),
+        "Reads an SH transfer file (compressed ones too: their rows are reconstructed); refuses wavelet files.");
+
+  m.def(
+      "precompute",
+      [](const prt::Mesh& mesh, int bands, int samples, const std::string& mode, int bounces, const py::object& albedo,
+         bool vertex_colors, std::uint64_t seed, int threads, double offset, double bounce_tolerance,
+         const std::string& material, py::object progress) {
+        prt::TransferOptions o;
+        o.mode = prt::parse_transfer_mode(mode);
+        o.bands = bands;
+        o.samples = samples;
+        o.bounces = bounces;
+        o.albedo = to_albedo(albedo);
+        o.vertex_colors = vertex_colors;
+        o.seed = seed;
+        o.threads = threads;
+        o.offset = offset;
+        o.bounce_tolerance = bounce_tolerance;
+        if (material != "diffuse" && material != "glossy")
+          throw Error("material: expected 'diffuse' or 'glossy', got '" + material + "'");
+        o.glossy = material == "glossy";
+        PyTransfer p;
+        p.t = run_released(std::move(progress),
+                           [&](const prt::Progress& pr) { return prt::compute_transfer(mesh, o, pr); });
+        return p;
+      },
+      py::arg("mesh"), py::kw_only(), py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("mode") = "shadowed",
+      py::arg("bounces") = 1, py::arg("albedo") = 0.8, py::arg("vertex_colors") = false, py::arg("seed") = 1,
+      py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
+      py::arg("material") = "diffuse", py::arg("progress") = py::none(),
+      "Traces the transfer of every vertex as prt precompute does (same defaults; same seed and inputs, same "
+      "bits). Releases the GIL. progress: None, True (a line on stderr) or a callable (done, total, phase) "
+      "returning False to stop; Ctrl-C stops it (KeyboardInterrupt).");
+
+  m.def(
+      "relight",
+      [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& lighting, bool direct) {
+        const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
+        const std::size_t need = std::size_t(p.t.bands) * p.t.bands;
+        if (light.size() < need)
+          throw Error("lighting: " + std::to_string(light.size()) + " coefficients; " + p.source + " has " +
+                      std::to_string(p.t.bands) + " bands and needs " + std::to_string(need));
+        prt::check_matches(p.t, mesh, p.source);
+        if (direct && p.t.mode != prt::TransferMode::Interreflected)
+          throw Error(p.source + ": direct=True needs an interreflected transfer; this one is " +
+                      std::string(prt::transfer_mode_name(p.t.mode)));
+        if (direct && p.compressed)
+          throw Error(p.source + ": direct=True: a compressed transfer keeps no direct part");
+        std::vector<glm::vec3> rgb;
+        {
+          py::gil_scoped_release release;
+          rgb = p.compressed ? prt::relight(*p.compressed, mesh, light)
+                : direct     ? prt::relight_direct(p.t, mesh, light)
+                             : prt::relight(p.t, mesh, light);
+        }
+        return vec3s(rgb);
+      },
+      py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
+      "Outgoing radiance float32 (V, 3) under lighting coefficients (n*n, 3) (project()), as prt relight "
+      "computes it (its diffuse part for a glossy transfer).");
+
+  // ---- the reference ----
+  m.def(
+      "reference",
+      [](const prt::Mesh& mesh, const py::object& map, const std::string& mode, int bounces, const py::object& albedo,
+         bool vertex_colors, int samples, std::uint64_t seed, double offset, const py::object& rotate, int threads,
+         py::object progress) {
+        prt::ReferenceOptions o;
+        o.mode = prt::parse_transfer_mode(mode);
+        o.bounces = bounces;
+        o.albedo = to_albedo(albedo);
+        o.vertex_colors = vertex_colors;
+        o.samples = samples;
+        o.seed = seed;
+        o.offset = offset;
+        if (!rotate.is_none()) o.rotation = to_rotation(rotate, "rotate");
+        prt::EnvMap loaded;
+        const prt::EnvMap* e = nullptr;
+        if (py::isinstance<prt::EnvMap>(map)) {
+          e = &map.cast<const prt::EnvMap&>();
+        } else {
+          loaded = is_path(map) ? prt::load_envmap(path_of(map)) : map_from_array(map);
+          e = &loaded;
+        }
+        prt::require_finite(*e);
+        if (e->is_cube()) throw Error(e->source + ": the reference needs a lat-long (2:1) map, not " + e->source_layout);
+        const auto limit = limit_threads(threads);
+        const prt::ReferenceResult r = run_released(
+            std::move(progress), [&](const prt::Progress& pr) { return prt::render_reference(mesh, *e, o, pr); });
+        return py::make_tuple(vec3s(r.radiance), vec3s(r.std_error));
+      },
+      py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("mode") = "shadowed", py::arg("bounces") = 1,
+      py::arg("albedo") = 0.8, py::arg("vertex_colors") = false, py::arg("samples") = 4096, py::arg("seed") = 1,
+      py::arg("offset") = 0.0, py::arg("rotate") = py::none(), py::arg("threads") = 0,
+      py::arg("progress") = py::none(),
+      "Monte Carlo ground truth as prt reference computes it (same defaults, same bits): (radiance, std_error), "
+      "float32 (V, 3) each. map: an EnvMap, a file name or an (H, W, 3) array. Releases the GIL; progress as "
+      "precompute's.");
+
+  m.def(
+      "read_vertex_csv",
+      [](const py::object& path) {
+        std::vector<glm::vec3> se;
+        const std::vector<glm::vec3> rgb = prt::read_vertex_csv(path_of(path), &se);
+        return py::make_tuple(vec3s(rgb), se.empty() ? py::object(py::none()) : py::object(vec3s(se)));
+      },
+      py::arg("path"),
+      "Reads a vertex CSV (prt relight -o x.csv, prt reference): (rgb, std_error or None), float32 (V, 3).");
+
+  m.def(
+      "write_vertex_csv",
+      [](const py::object& path, const py::object& rgb, const py::object& std_error) {
+        const std::vector<glm::vec3> v = to_vec3s(rgb, "rgb");
+        std::vector<glm::vec3> se;
+        if (!std_error.is_none()) {
+          se = to_vec3s(std_error, "std_error");
+          if (se.size() != v.size()) throw Error("std_error: expected as many rows as rgb");
+        }
+        prt::write_vertex_csv(path_of(path), v, std_error.is_none() ? nullptr : &se);
+      },
+      py::arg("path"), py::arg("rgb"), py::arg("std_error") = py::none(),
+      "Writes a vertex CSV that prt compare reads.");
+}

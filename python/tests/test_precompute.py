@@ -1,0 +1,131 @@
+"""prt.precompute against prt precompute (same seed and inputs: the same bits,
+docs/PRECOMPUTE.md), its progress callback, cancelling, Ctrl-C, and that it
+runs without the GIL."""
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import prt
+from conftest import BANDS, MESH, SAMPLES, SEED, run_prt
+
+# A Python thread counts while precompute runs; with the GIL held it could
+# not run at all. The margins leave out the instants around the call (the
+# thread may run until the GIL is released and after it is taken back).
+GIL_MARGIN_S = 0.02
+# Rays per vertex for the GIL and Ctrl-C tests: long enough (0.5 s on 2
+# cores; 4x for Ctrl-C) to see another thread run, and to interrupt it mid-way.
+LONG_SAMPLES = 512
+
+
+def test_same_bits_as_cli(cli_transfer, mesh, tmp_path):
+    t = prt.precompute(mesh, bands=BANDS, samples=SAMPLES, mode="interreflected", bounces=1, seed=SEED)
+    want = prt.read_transfer(cli_transfer)
+    for name in ("rows", "direct_rows", "ao", "bent_normals", "slots"):
+        np.testing.assert_array_equal(getattr(t, name), getattr(want, name), err_msg=name)
+    assert t.bounce_energy == want.bounce_energy
+    out = tmp_path / "py.prt"
+    t.write(out)
+    assert out.read_bytes() == cli_transfer.read_bytes()
+
+
+def test_defaults_are_the_cli_defaults(mesh, tmp_path):
+    """prt precompute's defaults (5 bands, shadowed, albedo 0.8, seed 1), few rays."""
+    path = tmp_path / "d.prt"
+    run_prt("precompute", MESH, "-o", path, "--samples", 16, "-q")
+    t = prt.precompute(mesh, samples=16)
+    assert (t.bands, t.mode, t.seed) == (5, "shadowed", 1)
+    out = tmp_path / "py.prt"
+    t.write(out)
+    assert out.read_bytes() == path.read_bytes()
+
+
+def test_thread_count_does_not_change_the_bits(mesh):
+    a = prt.precompute(mesh, bands=BANDS, samples=SAMPLES, seed=SEED, threads=1)
+    b = prt.precompute(mesh, bands=BANDS, samples=SAMPLES, seed=SEED)
+    np.testing.assert_array_equal(a.rows, b.rows)
+
+
+def test_progress_is_called_per_phase(mesh):
+    calls = []
+    prt.precompute(mesh, bands=BANDS, samples=SAMPLES, mode="interreflected",
+                   progress=lambda done, total, phase: calls.append((done, total, phase)))
+    phases = list(dict.fromkeys(p for _, _, p in calls))
+    assert phases == ["rays", "bounces"]
+    for phase in phases:
+        seen = [(d, t) for d, t, p in calls if p == phase]
+        total = seen[0][1]
+        assert total == len(mesh) and all(t == total for _, t in seen)
+        done = [d for d, _ in seen]
+        assert done[-1] == total and done == sorted(done)
+        assert len(done) == len(set(done)) <= 102  # start, each percent, end
+
+
+def test_progress_true_prints_to_stderr(mesh, capsys):
+    prt.precompute(mesh, bands=1, samples=4, progress=True)
+    assert "rays: 100% (10757/10757)" in capsys.readouterr().err
+
+
+def test_progress_false_cancels(mesh):
+    with pytest.raises(prt.Error, match="cancelled"):
+        prt.precompute(mesh, bands=BANDS, samples=SAMPLES, progress=lambda d, t, p: d < t // 2 and None)
+
+
+def test_exception_in_progress_propagates(mesh):
+    def boom(done, total, phase):
+        if done > 0:
+            raise ValueError("stop here")
+
+    with pytest.raises(ValueError, match="stop here"):
+        prt.precompute(mesh, bands=BANDS, samples=SAMPLES, progress=boom)
+
+
+def test_bad_options_raise_prt_error(mesh):
+    with pytest.raises(prt.Error, match="mode"):
+        prt.precompute(mesh, mode="glowing")
+    with pytest.raises(prt.Error):
+        prt.precompute(mesh, albedo=1.5)
+
+
+def test_gil_is_released(mesh):
+    stamps = []
+    stop = threading.Event()
+
+    def count():
+        while not stop.is_set():
+            stamps.append(time.perf_counter())
+            time.sleep(0.001)
+
+    th = threading.Thread(target=count)
+    th.start()
+    try:
+        t0 = time.perf_counter()
+        prt.precompute(mesh, bands=BANDS, samples=LONG_SAMPLES)
+        t1 = time.perf_counter()
+    finally:
+        stop.set()
+        th.join()
+    inside = [s for s in stamps if t0 + GIL_MARGIN_S < s < t1 - GIL_MARGIN_S]
+    assert t1 - t0 > 4 * GIL_MARGIN_S, "precompute was too quick to tell"
+    # With the GIL held the thread could not tick at all; it ticks about
+    # every millisecond, so even a loaded machine gives it a few.
+    assert len(inside) >= 5
+
+
+@pytest.mark.parametrize("watch", [False, True])
+def test_ctrl_c_stops_with_keyboard_interrupt(mesh, watch):
+    done = []
+    progress = (lambda d, t, p: done.append((d, t))) if watch else None
+    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            prt.precompute(mesh, bands=BANDS, samples=4 * LONG_SAMPLES, progress=progress)
+    finally:
+        timer.cancel()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if watch:  # it stopped part of the way through
+        assert done and done[-1][0] < done[-1][1]
