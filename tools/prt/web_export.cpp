@@ -1,0 +1,177 @@
+// prt export --web: the static relighting page. See web_export.h, docs/WEB.md.
+#include "web_export.h"
+
+#include <prt/envmap.h>
+#include <prt/error.h>
+#include <prt/paths.h>
+#include <prt/projection.h>
+
+#include <fmt/core.h>
+#include <glm/gtc/packing.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <unistd.h>
+
+namespace prt::cli {
+
+// The page's sources (web/*), embedded by tools/prt/CMakeLists.txt.
+extern const char* const web_index_html;
+extern const char* const web_prt_sh_js;
+extern const char* const web_prt_viewer_js;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool is_map_file(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+}
+
+void write_bytes(const fs::path& path, const void* data, std::size_t size) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(static_cast<const char*>(data), std::streamsize(size));
+  f.close();
+  if (!f) throw Error(path.string() + ": write failed");
+}
+
+// A lat-long picture of the map for the page's background: lat-long maps as
+// they are; cube maps resampled (nearest texel) into 4N x 2N.
+std::vector<std::uint16_t> background(const EnvMap& map, int& width, int& height) {
+  std::vector<std::uint16_t> half;
+  if (!map.is_cube()) {
+    width = map.width;
+    height = map.height;
+    half.resize(map.rgb.size());
+    for (std::size_t i = 0; i < half.size(); ++i) half[i] = glm::packHalf1x16(map.rgb[i]);
+    return half;
+  }
+  const int N = map.width;
+  width = 4 * N;
+  height = 2 * N;
+  half.resize(std::size_t(width) * height * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      double s = 0, t = 0;
+      const int face = cube_face_coords(latlong_direction(x + 0.5, y + 0.5, width, height), s, t);
+      const int u = std::clamp(int((s + 1) * 0.5 * N), 0, N - 1), v = std::clamp(int((t + 1) * 0.5 * N), 0, N - 1);
+      const float* src = map.rgb.data() + ((std::size_t(face) * N + v) * N + u) * 3;
+      for (int c = 0; c < 3; ++c) half[(std::size_t(y) * width + x) * 3 + c] = glm::packHalf1x16(src[c]);
+    }
+  return half;
+}
+
+}  // namespace
+
+std::vector<std::string> web_maps(const std::string& env, std::string& initial) {
+  std::set<fs::path> bundled;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(data_dir() / "envmaps", ec))
+    if (e.is_regular_file(ec) && is_map_file(e.path())) bundled.insert(fs::weakly_canonical(e.path(), ec));
+  std::vector<std::string> list;
+  initial.clear();
+  if (!env.empty()) {
+    const fs::path p = fs::weakly_canonical(fs::absolute(env), ec);
+    if (!bundled.count(p)) list.push_back(env);
+    initial = bundled.count(p) ? p.string() : env;
+  }
+  for (const auto& p : bundled) list.push_back(p.string());
+  if (list.empty()) throw Error("no environment maps: none bundled in " + (data_dir() / "envmaps").string() + " (PRT_DATA_DIR) and no --env");
+  if (initial.empty()) initial = list.front();
+  return list;
+}
+
+void write_web_page(const WebPage& page, const Transfer& transfer,
+                    const std::function<void(const std::string& path)>& write_model, bool quiet) {
+  const fs::path dir(page.dir);
+  std::error_code ec;
+  if (fs::exists(dir, ec)) {
+    if (!fs::is_directory(dir, ec)) throw Error(page.dir + ": exists and is not a directory");
+    if (!fs::is_empty(dir, ec) && !page.force)
+      throw Error(page.dir + ": directory exists and is not empty (--force replaces it)");
+  }
+  const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  const std::string base = dir.filename().empty() ? dir.parent_path().filename().string() : dir.filename().string();
+  static int counter = 0;
+  const fs::path tmp = parent / fmt::format(".{}.tmp{}-{}", base, ::getpid(), counter++);
+  fs::remove_all(tmp, ec);
+  if (!fs::create_directories(tmp / "maps", ec) || ec)
+    throw Error(page.dir + ": cannot create " + tmp.string() + ": " + ec.message());
+  try {
+    write_bytes(tmp / "index.html", web_index_html, std::char_traits<char>::length(web_index_html));
+    write_bytes(tmp / "prt-sh.js", web_prt_sh_js, std::char_traits<char>::length(web_prt_sh_js));
+    write_bytes(tmp / "prt-viewer.js", web_prt_viewer_js, std::char_traits<char>::length(web_prt_viewer_js));
+    write_model((tmp / "model.glb").string());
+
+    nlohmann::json maps = nlohmann::json::array();
+    std::set<std::string> names;
+    std::string initial_name;
+    for (const std::string& path : page.maps) {
+      std::string name = fs::path(path).stem().string();
+      for (int i = 2; names.count(name); ++i) name = fs::path(path).stem().string() + fmt::format("-{}", i);
+      names.insert(name);
+      if (path == page.initial) initial_name = name;
+      const EnvMap map = load_envmap(path);
+      const std::vector<glm::dvec3> light = project(map, transfer.bands);
+      nlohmann::json coeffs = nlohmann::json::array();
+      for (const glm::dvec3& c : light) coeffs.push_back({c.x, c.y, c.z});
+      int w = 0, h = 0;
+      const std::vector<std::uint16_t> half = background(map, w, h);
+      const std::string file = "maps/" + name + ".rgb16f";
+      write_bytes(tmp / file, half.data(), half.size() * sizeof(std::uint16_t));
+      maps.push_back({{"name", name}, {"source", fs::path(path).filename().string()}, {"file", file},
+                      {"width", w}, {"height", h}, {"coefficients", coeffs}});
+      if (!quiet) fmt::print(stderr, "{}: {}x{}, {} bands projected\n", path, w, h, transfer.bands);
+    }
+    const Camera& c = page.camera;
+    nlohmann::json lighting = {
+        {"format", 1},
+        {"generator", "prt export --web"},
+        {"model", "model.glb"},
+        {"bands", transfer.bands},
+        {"convention", "prt: real orthonormal SH, Condon-Shortley phase, z polar axis, +Y up, k = l(l+1)+m "
+                       "(docs/CONVENTIONS.md); radiance in the map's units"},
+        {"maps", maps},
+        {"initial",
+         {{"map", initial_name},
+          {"camera", {c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z}},
+          {"fov", c.fov_deg},
+          {"rotate", {page.rotate[0], page.rotate[1], page.rotate[2]}},
+          {"spin", 0},
+          {"auto", page.turn},
+          {"exposure", page.display.exposure},
+          {"tonemap", std::string(tone_map_name(page.display.tone_map))}}}};
+    const std::string text = lighting.dump(1) + "\n";
+    write_bytes(tmp / "lighting.json", text.data(), text.size());
+
+    // Into place: an empty or absent dir is replaced by a rename; with
+    // --force an old one is moved aside first, then removed.
+    fs::path old;
+    if (fs::exists(dir, ec)) {
+      old = parent / fmt::format(".{}.old{}-{}", base, ::getpid(), counter++);
+      fs::rename(dir, old);
+    }
+    try {
+      fs::rename(tmp, dir);
+    } catch (...) {
+      if (!old.empty()) fs::rename(old, dir, ec);
+      throw;
+    }
+    if (!old.empty()) fs::remove_all(old, ec);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove_all(tmp, ec);
+    throw Error(page.dir + ": " + e.what());
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+}
+
+}  // namespace prt::cli
