@@ -7,7 +7,7 @@
 // another map, must fail the same comparison.
 //
 // node web_page_test.js --prt BUILD/prt --source SRC [--images DIR]
-//   --images DIR: also write DIR/web_page.png and DIR/web_render.png (the docs' pictures)
+//   --images DIR: also write DIR/web_{mono,rgb}_{page,render}.png (the docs' pictures)
 // Exit 0 pass, 1 fail, 77 skip (tools.js).
 'use strict';
 const { missing } = require('./tools');
@@ -125,80 +125,93 @@ function serve(dir) {
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 
+// One exported page against prt render. `controls`: also the negative controls.
+async function runCase(browser, tmp, name, precompute, controls) {
+  const mesh = path.join(args.source, 'models', 'scene.obj');
+  const transfer = path.join(tmp, name + '.prt');
+  // Few bands and rays: the comparison is of the two renderers, not of the transfer.
+  run(args.prt, ['precompute', mesh, '-o', transfer, ...precompute, '-q']);
+  const page = path.join(tmp, name);
+  run(args.prt, ['export', mesh, transfer, '--web', page, '--env', 'studio', '-q']);
+  const lighting = JSON.parse(fs.readFileSync(path.join(page, 'lighting.json')));
+  const bands = +precompute[precompute.indexOf('--bands') + 1];
+  if (lighting.bands !== bands || !lighting.maps.some((m) => m.name === 'forest') || lighting.initial.map !== 'studio')
+    fail('lighting.json: ' + JSON.stringify(lighting).slice(0, 200));
+
+  // A camera off the default one: turned 35 degrees about +Y around the
+  // target and raised, so the page's camera maths and --camera are both exercised.
+  const c = lighting.initial.camera, a = 35 * Math.PI / 180;
+  const off = [c[0] - c[3], c[1] - c[4], c[2] - c[5]];
+  const eye = [c[3] + Math.cos(a) * off[0] + Math.sin(a) * off[2], c[4] + 0.3 * Math.hypot(...off),
+               c[5] - Math.sin(a) * off[0] + Math.cos(a) * off[2]];
+  const camera = [...eye, c[3], c[4], c[5], 0, 1, 0].map((v) => +v.toFixed(6));
+  const W = 256, H = 192, fov = 35, rotate = [40, 20, 10], exposure = 0.5, map = 'studio';
+  const rendered = path.join(tmp, name + '.png');
+  run(args.prt, ['render', mesh, transfer, path.join(args.source, 'envmaps', map + '.exr'), '-o', rendered,
+                 '--width', String(W), '--height', String(H), '--camera', camera.join(','), '--fov', String(fov),
+                 '--rotate', rotate.join(','), '--exposure', String(exposure), '-q']);
+  const prt = readPng(fs.readFileSync(rendered));
+
+  const server = await serve(page);
+  try {
+    const context = await browser.newContext({ viewport: { width: W + 64, height: H + 160 }, deviceScaleFactor: 1 });
+    const tab = await context.newPage();
+    const errors = [];
+    tab.on('pageerror', (e) => errors.push(e.message));
+    tab.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+    const q = `?map=${map}&rotate=${rotate.join(',')}&exposure=${exposure}&camera=${camera.join(',')}` +
+              `&fov=${fov}&size=${W}x${H}&auto=0`;
+    await tab.goto(`http://127.0.0.1:${server.address().port}/index.html${q}`);
+    const info = await tab.evaluate(() => self.prtReady);
+    const canvas = tab.locator('#canvas');
+    const shot = async () => readPng(await canvas.screenshot());
+    const web = await shot();
+    await tab.evaluate(() => prtViewer.set({ model: false }));
+    const bg = await shot();
+    const status = await tab.locator('#status').textContent();
+    if (web.width !== W || web.height !== H || prt.width !== W || prt.height !== H)
+      throw new Error(`sizes: page ${web.width}x${web.height}, prt render ${prt.width}x${prt.height}, expected ${W}x${H}`);
+    const m = compare(web, prt, bg);
+    console.log(`${name}: page (${info.vertices} vertices, ${info.bands} bands, ${info.channels} channel(s); ` +
+                `"${status}") vs prt render: ${show(m)}`);
+    if (!passes(m)) fail(name + ': the page differs from prt render beyond the tolerances');
+    if (m.modelPixels < 0.1 * W * H) fail(name + ': the model covers only ' + m.modelPixels + ' pixels');
+    if (controls) {
+      await tab.evaluate(() => prtViewer.set({ model: true, spin: 90 }));
+      const mt = compare(await shot(), prt, bg);
+      await tab.evaluate(() => prtViewer.set({ spin: 0, map: 'forest' }));
+      const mo = compare(await shot(), prt, bg);
+      console.log(`${name}: negative control, environment turned 90 degrees more: ${show(mt)}`);
+      console.log(`${name}: negative control, map forest instead of studio: ${show(mo)}`);
+      if (passes(mt)) fail(name + ': the comparison passes with the environment turned 90 degrees');
+      if (passes(mo)) fail(name + ': the comparison passes under another map');
+    }
+    if (errors.length) fail(name + ': page errors: ' + errors.join('; '));
+    if (args.images) {
+      fs.mkdirSync(args.images, { recursive: true });
+      fs.writeFileSync(path.join(args.images, `web_${name}_page.png`), writePng(W, H, web.rgb));
+      fs.copyFileSync(rendered, path.join(args.images, `web_${name}_render.png`));
+    }
+    await context.close();
+  } finally {
+    server.close();
+  }
+}
+
 async function main() {
   const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'prt-web-'));
   const t0 = Date.now();
+  const browser = await chromium.launch({
+    executablePath: CHROMIUM,
+    args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist', '--no-sandbox'],
+  });
   try {
-    const mesh = path.join(args.source, 'models', 'scene.obj');
-    const transfer = path.join(tmp, 'scene.prt');
-    // Few bands and rays: the comparison is of the two renderers, not of the transfer.
-    run(args.prt, ['precompute', mesh, '-o', transfer, '--bands', '4', '--samples', '64', '-q']);
-    const page = path.join(tmp, 'page');
-    run(args.prt, ['export', mesh, transfer, '--web', page, '--env', 'studio', '-q']);
-    const lighting = JSON.parse(fs.readFileSync(path.join(page, 'lighting.json')));
-    if (lighting.bands !== 4 || !lighting.maps.some((m) => m.name === 'forest')) fail('lighting.json: ' + JSON.stringify(lighting).slice(0, 200));
-
-    // A camera off the default one: turned 35 degrees about +Y around the
-    // target and raised, so the orbit maths and --camera are both exercised.
-    const c = lighting.initial.camera, a = 35 * Math.PI / 180;
-    const off = [c[0] - c[3], c[1] - c[4], c[2] - c[5]];
-    const eye = [c[3] + Math.cos(a) * off[0] + Math.sin(a) * off[2], c[4] + 0.3 * Math.hypot(...off),
-                 c[5] - Math.sin(a) * off[0] + Math.cos(a) * off[2]];
-    const camera = [...eye, c[3], c[4], c[5], 0, 1, 0].map((v) => +v.toFixed(6));
-    const W = 256, H = 192, fov = 35, rotate = [40, 20, 10], exposure = 0.5, map = 'studio';
-    const rendered = path.join(tmp, 'render.png');
-    run(args.prt, ['render', mesh, transfer, path.join(args.source, 'envmaps', map + '.exr'), '-o', rendered,
-                   '--width', String(W), '--height', String(H), '--camera', camera.join(','), '--fov', String(fov),
-                   '--rotate', rotate.join(','), '--exposure', String(exposure), '-q']);
-    const prt = readPng(fs.readFileSync(rendered));
-
-    const server = await serve(page);
-    const browser = await chromium.launch({
-      executablePath: CHROMIUM,
-      args: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist', '--no-sandbox'],
-    });
-    try {
-      const context = await browser.newContext({ viewport: { width: W + 64, height: H + 160 }, deviceScaleFactor: 1 });
-      const tab = await context.newPage();
-      const errors = [];
-      tab.on('pageerror', (e) => errors.push(e.message));
-      tab.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-      const q = `?map=${map}&rotate=${rotate.join(',')}&exposure=${exposure}&camera=${camera.join(',')}` +
-                `&fov=${fov}&size=${W}x${H}&auto=0`;
-      await tab.goto(`http://127.0.0.1:${server.address().port}/index.html${q}`);
-      const info = await tab.evaluate(() => self.prtReady);
-      const canvas = tab.locator('#canvas');
-      const shot = async () => readPng(await canvas.screenshot());
-      const web = await shot();
-      const bg = await (async () => { await tab.evaluate(() => prtViewer.set({ model: false })); return shot(); })();
-      await tab.evaluate(() => prtViewer.set({ model: true, spin: 90 }));
-      const turned = await shot();
-      await tab.evaluate(() => prtViewer.set({ spin: 0, map: 'forest' }));
-      const other = await shot();
-      const status = await tab.locator('#status').textContent();
-      if (errors.length) fail('page errors: ' + errors.join('; '));
-      if (web.width !== W || web.height !== H || prt.width !== W || prt.height !== H)
-        throw new Error(`sizes: page ${web.width}x${web.height}, prt render ${prt.width}x${prt.height}, expected ${W}x${H}`);
-
-      const m = compare(web, prt, bg);
-      console.log(`page (${info.vertices} vertices, ${info.bands} bands; "${status}") vs prt render: ${show(m)}`);
-      if (!passes(m)) fail('the page differs from prt render beyond the tolerances');
-      if (m.modelPixels < 0.1 * W * H) fail('the model covers only ' + m.modelPixels + ' pixels');
-      const mt = compare(turned, prt, bg), mo = compare(other, prt, bg);
-      console.log(`negative control, environment turned 90 degrees: ${show(mt)}`);
-      console.log(`negative control, map forest instead of studio: ${show(mo)}`);
-      if (passes(mt)) fail('the comparison passes with the environment turned 90 degrees');
-      if (passes(mo)) fail('the comparison passes under another map');
-      if (args.images) {
-        fs.mkdirSync(args.images, { recursive: true });
-        fs.writeFileSync(path.join(args.images, 'web_page.png'), writePng(W, H, web.rgb));
-        fs.copyFileSync(rendered, path.join(args.images, 'web_render.png'));
-      }
-    } finally {
-      await browser.close();
-      server.close();
-    }
+    // Mono (one row for R, G and B) and RGB transfers take different shader paths.
+    await runCase(browser, tmp, 'mono', ['--bands', '4', '--samples', '64'], true);
+    await runCase(browser, tmp, 'rgb', ['--bands', '3', '--samples', '32', '--mode', 'interreflected',
+                                        '--albedo', '0.9,0.5,0.3'], false);
   } finally {
+    await browser.close();
     fs.rmSync(tmp, { recursive: true, force: true });
   }
   console.log(`${process.exitCode ? 'FAIL' : 'PASS'} (${((Date.now() - t0) / 1000).toFixed(1)} s)`);

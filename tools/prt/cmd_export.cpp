@@ -2,8 +2,10 @@
 // transfer dense in custom vertex attributes, optionally with colours baked
 // under a map (COLOR_0).
 #include "commands.h"
+#include "look.h"
 #include "progress.h"
 #include "scene.h"
+#include "web_export.h"
 
 #include <prt/compressed_transfer.h>
 #include <prt/envmap.h>
@@ -28,22 +30,35 @@ struct ExportArgs {
   double exposure = 0;
   bool quiet = false;
   const CLI::Option *rotate_opt = nullptr, *exposure_opt = nullptr;
+  // --web DIR: the relighting page (web_export.h, docs/WEB.md).
+  std::string web, env, camera, tone_map = "clamp";
+  double fov = 40;
+  bool force = false, turn = false;
+  std::vector<const CLI::Option*> web_opts;  // --env, --camera, --fov, --tonemap, --turn, --force
   // Every output goes through one Outputs (all or nothing): files added
   // later (a web page beside the model) are staged with the glTF.
 };
 
 int run_export(const ExportArgs& a) {
+  if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-  if (ext != ".glb" && ext != ".gltf")
+  if (!a.output.empty() && ext != ".glb" && ext != ".gltf")
     throw UsageError("--output: " + a.output + ": expected a .glb (binary glTF) or .gltf (JSON glTF) file");
   for (const CLI::Option* o : {a.rotate_opt, a.exposure_opt})
-    if (o->count() > 0 && a.bake.empty())
-      throw UsageError(o->get_name() + " applies to the baked colours: give --bake ENV too");
+    if (o->count() > 0 && a.bake.empty() && a.web.empty())
+      throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
+  for (const CLI::Option* o : a.web_opts)
+    if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
   double euler[3] = {0, 0, 0};
   if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
-  check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
-  for_path("--output", [&] { check_writable(a.output); });
+  if (!a.output.empty()) {
+    check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
+    for_path("--output", [&] { check_writable(a.output); });
+  }
+  if (!a.web.empty())
+    check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
+  const ToneMap tone = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
 
   // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
   // (sparse, per light-cube pixel) has none to give.
@@ -90,13 +105,34 @@ int run_export(const ExportArgs& a) {
     opts.bake.exposure = a.exposure;
   }
 
-  Outputs out("export");
-  out.write([&] { write_gltf(a.output, mesh, t, opts); });
-  if (const int rc = out.commit(); rc != 0) return rc;
-  if (!a.quiet)
-    fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
-               mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
-               opts.colors.empty() ? "" : ", COLOR_0");
+  if (!a.output.empty()) {
+    Outputs out("export");
+    out.write([&] { write_gltf(a.output, mesh, t, opts); });
+    if (const int rc = out.commit(); rc != 0) return rc;
+    if (!a.quiet)
+      fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
+                 mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
+                 opts.colors.empty() ? "" : ", COLOR_0");
+  }
+  if (!a.web.empty()) {
+    // The page's initial state, as prt render takes it: --camera (default:
+    // prt render's default camera), --fov, --rotate, --exposure, --tonemap.
+    WebPage page;
+    page.dir = a.web;
+    page.force = a.force;
+    page.turn = a.turn;
+    page.maps = web_maps(a.env, page.initial);
+    page.camera = default_camera(mesh, a.fov);
+    if (!a.camera.empty()) parse_camera(a.camera, page.camera);
+    page.camera.fov_deg = a.fov;
+    for (int k = 0; k < 3; ++k) page.rotate[k] = euler[k];
+    page.display = {a.exposure, tone};
+    write_web_page(page, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); }, a.quiet);
+    if (!a.quiet)
+      fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, {} maps): serve it with "
+                         "python3 -m http.server -d {} and open http://localhost:8000/\n",
+                 a.web, page.maps.size(), a.web);
+  }
   return 0;
 }
 
@@ -115,19 +151,33 @@ Run add_export(CLI::App& app) {
       "wavelet files are refused.\n"
       "--bake ENV adds COLOR_0: the radiance prt relight gives under ENV (--rotate), times 2^--exposure,\n"
       "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
+      "--web DIR writes a static page (index.html, prt-viewer.js, prt-sh.js, model.glb, lighting.json: every\n"
+      "bundled map's SH lighting at the transfer's bands, maps/*.rgb16f backgrounds) that relights the model in\n"
+      "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame.\n"
       "Example: prt export bunny.off bunny.prt -o bunny.glb\n"
+      "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
       "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress)")->required();
-  s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)")
-      ->required();
+  s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");
   s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it");
-  a->rotate_opt = s->add_option("-r,--rotate", a->rotate, "With --bake: rotate the lighting by yaw,pitch,roll degrees")
+  a->rotate_opt = s->add_option("-r,--rotate", a->rotate, "With --bake or --web: rotate the lighting by yaw,pitch,roll degrees")
                       ->check(triple_value("yaw,pitch,roll"));
   a->exposure_opt = s->add_option("--exposure", a->exposure, "With --bake: scale the radiance by 2^stops before "
-                                                             "clamping")
+                                                             "clamping; with --web: the initial exposure")
                         ->check(finite_number())
                         ->capture_default_str();
+  s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)");
+  a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)"));
+  a->web_opts.push_back(s->add_option("--camera", a->camera, "With --web: initial camera ex,ey,ez,tx,ty,tz,ux,uy,uz (as prt render)")
+                            ->check(camera_value()));
+  a->web_opts.push_back(s->add_option("--fov", a->fov, "With --web: vertical field of view in degrees, 1 to 179")
+                            ->check(number_range(1.0, 179.0))
+                            ->capture_default_str());
+  a->web_opts.push_back(s->add_option("--tonemap", a->tone_map, "With --web: initial tone map: clamp, reinhard, aces")
+                            ->capture_default_str());
+  a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web: start with the environment turning"));
+  a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_export(*a); };
 }

@@ -78,7 +78,13 @@ std::vector<std::string> web_maps(const std::string& env, std::string& initial) 
   std::vector<std::string> list;
   initial.clear();
   if (!env.empty()) {
-    const fs::path p = fs::weakly_canonical(fs::absolute(env), ec);
+    fs::path p = fs::weakly_canonical(fs::absolute(env), ec);
+    if (!fs::exists(p, ec)) {  // a bundled map's name: "studio" for envmaps/studio.exr
+      for (const auto& b : bundled)
+        if (b.stem() == env) p = b;
+      if (!bundled.count(p))
+        throw Error("--env: " + env + ": no such file, nor a bundled map (" + (data_dir() / "envmaps").string() + ")");
+    }
     if (!bundled.count(p)) list.push_back(env);
     initial = bundled.count(p) ? p.string() : env;
   }

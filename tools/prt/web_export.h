@@ -24,8 +24,9 @@ struct WebPage {
 };
 
 // The bundled maps (prt::data_dir()/envmaps: *.exr, *.hdr, *.pfm), sorted;
-// with `env` not empty, that file too (first when not among them). Returns
-// the list; `initial` gets the entry that is `env` (or the first).
+// with `env` not empty, that file too (first when not among them); `env`
+// may also name a bundled map ("studio"). Returns the list; `initial` gets
+// the entry that is `env` (or the first). Throws prt::Error naming --env.
 std::vector<std::string> web_maps(const std::string& env, std::string& initial);
 
 // Writes the page: index.html, prt-sh.js, prt-viewer.js (embedded in prt),
