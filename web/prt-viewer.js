@@ -410,7 +410,7 @@ void main() {
       const now = performance.now();
       if (now - fpsTime > 500) { fps = frames * 1000 / (now - fpsTime); frames = 0; fpsTime = now; }
       status.textContent = `${model.vertices} vertices, ${indices.length / 3} triangles, ${bands} bands, ` +
-        `${channels === 1 ? 'mono' : 'RGB'} ${model.info.mode || ''} transfer | ${W}x${H} | ${fps.toFixed(1)} fps`;
+        `${channels === 1 ? 'mono' : 'RGB'} ${model.info.mode || ''} transfer | ${W}x${H} | ${fps ? fps.toFixed(1) : "-"} fps`;
     }
 
     // Redraw on demand; the auto-turn animates at 20 degrees per second.

@@ -186,6 +186,37 @@ async function runCase(browser, tmp, name, precompute, controls) {
       if (passes(mt)) fail(name + ': the comparison passes with the environment turned 90 degrees');
       if (passes(mo)) fail(name + ': the comparison passes under another map');
     }
+    if (controls) {
+      // The controls move what they should: a drag orbits the eye about the
+      // target (same distance), the wheel moves it away, the turn advances the
+      // spin, the picker and the exposure slider set the state.
+      await tab.evaluate(() => prtViewer.set({ map: 'studio', spin: 0 }));
+      const before = await tab.evaluate(() => prtViewer.state.eye.slice());
+      const box = await canvas.boundingBox();
+      await tab.mouse.move(box.x + W / 2, box.y + H / 2);
+      await tab.mouse.down();
+      await tab.mouse.move(box.x + W / 2 + 40, box.y + H / 2 + 10, { steps: 4 });
+      await tab.mouse.up();
+      await tab.mouse.wheel(0, 200);
+      await tab.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+      const after = await tab.evaluate(() => prtViewer.state.eye.slice());
+      const dist = (e) => Math.hypot(e[0] - c[3], e[1] - c[4], e[2] - c[5]);
+      const moved = Math.hypot(after[0] - before[0], after[1] - before[1], after[2] - before[2]);
+      // The wheel: exp(200 x 0.001) = 1.22 times the distance.
+      if (!(moved > 0.05 * dist(before)) || !(Math.abs(dist(after) / dist(before) - Math.exp(0.2)) < 1e-6))
+        fail(`${name}: orbit/wheel: eye ${before} -> ${after}`);
+      await tab.check('#auto');
+      await tab.waitForTimeout(300);
+      const spin = await tab.evaluate(() => prtViewer.state.spin);
+      await tab.uncheck('#auto');
+      if (!(spin > 0)) fail(`${name}: the turn did not advance the spin (${spin})`);
+      await tab.selectOption('#map', 'forest');
+      await tab.locator('#exposure').fill('-2');
+      const st = await tab.evaluate(() => ({ map: prtViewer.state.map, exposure: prtViewer.state.exposure }));
+      if (st.map !== 'forest' || st.exposure !== -2) fail(`${name}: picker/slider: ${JSON.stringify(st)}`);
+      console.log(`${name}: controls: orbit moved the eye ${moved.toFixed(3)}, wheel x${(dist(after) / dist(before)).toFixed(3)}, ` +
+                  `turn ${spin.toFixed(1)} degrees in 0.3 s, map and exposure set`);
+    }
     if (errors.length) fail(name + ': page errors: ' + errors.join('; '));
     if (args.images) {
       fs.mkdirSync(args.images, { recursive: true });
