@@ -1,7 +1,7 @@
 // prt export --web (tools/prt/web_export.cpp, docs/WEB.md) without a
 // browser: the page's files are the sources in web/ byte for byte, lighting.json
 // holds the library's projection of every bundled map and the initial state
-// given, the backgrounds are the maps in half floats, and the directory rules
+// given, the backgrounds are the maps in half floats (and thumbnails), and the directory rules
 // (refusal, --force, no leftovers, option errors). The browser side is
 // tests/js/web_page_test.js (label interop).
 #include "test_files.h"
@@ -103,6 +103,16 @@ TEST(WebExport, WritesThePageTheLightingAndTheBackgrounds) {
       if (std::abs(v - w) > kHalfRelTol * std::abs(w) + 6e-8f) ++bad;  // 6e-8: the smallest subnormal half
     }
     EXPECT_EQ(bad, 0u) << name;
+    // The picker's thumbnail: a PNG, 128 x 64 (IHDR's width and height, big-endian).
+    const std::string png = read_file(fs::path(page) / m.at("thumbnail").get<std::string>());
+    ASSERT_GT(png.size(), 24u) << name;
+    EXPECT_EQ(png.substr(1, 3), "PNG") << name;
+    auto be32 = [&](std::size_t o) {
+      return (std::uint32_t(std::uint8_t(png[o])) << 24) | (std::uint32_t(std::uint8_t(png[o + 1])) << 16) |
+             (std::uint32_t(std::uint8_t(png[o + 2])) << 8) | std::uint32_t(std::uint8_t(png[o + 3]));
+    };
+    EXPECT_EQ(be32(16), 128u) << name;
+    EXPECT_EQ(be32(20), 64u) << name;
   }
   // Nothing but the inputs and the page is left in the parent directory.
   EXPECT_EQ(dir.listing(), (std::vector<std::string>{"page", "scene.prt"}));

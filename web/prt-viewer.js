@@ -263,7 +263,17 @@ void main() {
     // (RGB half floats, row 0 the top) fetched when first shown.
     const maps = lighting.maps;
     const mapSelect = $('map');
-    for (const m of maps) mapSelect.add(new Option(m.name, m.name));
+    for (const m of maps) {
+      mapSelect.add(new Option(m.name, m.name));
+      if (m.thumbnail) {  // click to pick
+        const img = new Image();
+        img.src = m.thumbnail;
+        img.alt = img.title = m.name;
+        img.dataset.map = m.name;
+        img.onclick = () => { apply({ map: m.name }); requestDraw(); };
+        $('thumbs').appendChild(img);
+      }
+    }
     const textures = new Map();
     async function mapTexture(m) {
       if (textures.has(m.name)) return textures.get(m.name);
@@ -314,6 +324,7 @@ void main() {
       if (s.model !== undefined) state.model = !!s.model;
       if (s.size !== undefined) fixedSize = s.size;
       mapSelect.value = state.map;
+      for (const img of $('thumbs').children) img.classList.toggle('on', img.dataset.map === state.map);
       $('exposure').value = state.exposure;
       $('exposure-value').textContent = (+state.exposure).toFixed(1);
       $('tonemap').value = state.tonemap;
@@ -345,10 +356,13 @@ void main() {
       let w, h;
       if (fixedSize) [w, h] = fixedSize;
       else {
-        const view = $('view'), dpr = self.devicePixelRatio || 1;
-        const side = Math.max(16, Math.min(view.clientWidth, view.clientHeight));
-        w = h = Math.round(side * dpr);
-        canvas.style.width = canvas.style.height = side + 'px';
+        // The window below the bar and above the status line.
+        const dpr = self.devicePixelRatio || 1;
+        const cw = Math.max(16, innerWidth - 16), ch = Math.max(16, innerHeight - $('bar').offsetHeight - status.offsetHeight - 16);
+        w = Math.round(cw * dpr);
+        h = Math.round(ch * dpr);
+        canvas.style.width = cw + 'px';
+        canvas.style.height = ch + 'px';
       }
       if (fixedSize) { canvas.style.width = w + 'px'; canvas.style.height = h + 'px'; }
       if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }

@@ -42,30 +42,54 @@ void write_bytes(const fs::path& path, const void* data, std::size_t size) {
   if (!f) throw Error(path.string() + ": write failed");
 }
 
-// A lat-long picture of the map for the page's background: lat-long maps as
-// they are; cube maps resampled (nearest texel) into 4N x 2N.
-std::vector<std::uint16_t> background(const EnvMap& map, int& width, int& height) {
-  std::vector<std::uint16_t> half;
+// A lat-long picture of the map for the page's background, linear floats:
+// lat-long maps as they are; cube maps resampled (nearest texel) into 4N x 2N.
+std::vector<float> background(const EnvMap& map, int& width, int& height) {
   if (!map.is_cube()) {
     width = map.width;
     height = map.height;
-    half.resize(map.rgb.size());
-    for (std::size_t i = 0; i < half.size(); ++i) half[i] = glm::packHalf1x16(map.rgb[i]);
-    return half;
+    return map.rgb;
   }
   const int N = map.width;
   width = 4 * N;
   height = 2 * N;
-  half.resize(std::size_t(width) * height * 3);
+  std::vector<float> rgb(std::size_t(width) * height * 3);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       double s = 0, t = 0;
       const int face = cube_face_coords(latlong_direction(x + 0.5, y + 0.5, width, height), s, t);
       const int u = std::clamp(int((s + 1) * 0.5 * N), 0, N - 1), v = std::clamp(int((t + 1) * 0.5 * N), 0, N - 1);
       const float* src = map.rgb.data() + ((std::size_t(face) * N + v) * N + u) * 3;
-      for (int c = 0; c < 3; ++c) half[(std::size_t(y) * width + x) * 3 + c] = glm::packHalf1x16(src[c]);
+      std::copy_n(src, 3, rgb.data() + (std::size_t(y) * width + x) * 3);
     }
-  return half;
+  return rgb;
+}
+
+// The picker's thumbnail: the background box-filtered to at most 128 x 64,
+// scaled so its mean luminance is 0.18 (maps differ by orders of magnitude),
+// then written as 8-bit sRGB (write_image clamps).
+void write_thumbnail(const fs::path& path, const std::vector<float>& rgb, int width, int height) {
+  const int tw = std::min(width, 128), th = std::max(1, std::min(height, tw / 2));
+  std::vector<float> out(std::size_t(tw) * th * 3, 0.0f);
+  for (int y = 0; y < th; ++y)
+    for (int x = 0; x < tw; ++x) {
+      const int x0 = x * width / tw, x1 = std::max(x0 + 1, (x + 1) * width / tw);
+      const int y0 = y * height / th, y1 = std::max(y0 + 1, (y + 1) * height / th);
+      double sum[3] = {0, 0, 0};
+      for (int yy = y0; yy < y1; ++yy)
+        for (int xx = x0; xx < x1; ++xx)
+          for (int c = 0; c < 3; ++c) {
+            const float v = rgb[(std::size_t(yy) * width + xx) * 3 + c];
+            if (std::isfinite(v)) sum[c] += v;
+          }
+      for (int c = 0; c < 3; ++c) out[(std::size_t(y) * tw + x) * 3 + c] = float(sum[c] / ((x1 - x0) * (y1 - y0)));
+    }
+  double lum = 0;
+  for (std::size_t i = 0; i < out.size(); i += 3) lum += 0.2126 * out[i] + 0.7152 * out[i + 1] + 0.0722 * out[i + 2];
+  lum /= double(tw) * th;
+  const float gain = lum > 0 ? float(0.18 / lum) : 1.0f;
+  for (float& v : out) v *= gain;
+  write_image(path.string(), tw, th, out);
 }
 
 }  // namespace
@@ -129,11 +153,14 @@ void write_web_page(const WebPage& page, const Transfer& transfer,
       nlohmann::json coeffs = nlohmann::json::array();
       for (const glm::dvec3& c : light) coeffs.push_back({c.x, c.y, c.z});
       int w = 0, h = 0;
-      const std::vector<std::uint16_t> half = background(map, w, h);
-      const std::string file = "maps/" + name + ".rgb16f";
+      const std::vector<float> rgb = background(map, w, h);
+      std::vector<std::uint16_t> half(rgb.size());
+      for (std::size_t i = 0; i < rgb.size(); ++i) half[i] = glm::packHalf1x16(rgb[i]);
+      const std::string file = "maps/" + name + ".rgb16f", thumb = "maps/" + name + ".png";
       write_bytes(tmp / file, half.data(), half.size() * sizeof(std::uint16_t));
+      write_thumbnail(tmp / thumb, rgb, w, h);
       maps.push_back({{"name", name}, {"source", fs::path(path).filename().string()}, {"file", file},
-                      {"width", w}, {"height", h}, {"coefficients", coeffs}});
+                      {"thumbnail", thumb}, {"width", w}, {"height", h}, {"coefficients", coeffs}});
       if (!quiet) fmt::print(stderr, "{}: {}x{}, {} bands projected\n", path, w, h, transfer.bands);
     }
     const Camera& c = page.camera;

@@ -33,7 +33,7 @@ std::vector<std::string> web_maps(const std::string& env, std::string& initial);
 // model.glb (write_model(path): the glTF writer), lighting.json (every map's
 // SH coefficients at the transfer's band count, the initial state) and
 // maps/NAME.rgb16f (each map as a lat-long background: RGB half floats, row
-// 0 at the top). Everything goes into a temporary sibling directory renamed
+// 0 at the top) and maps/NAME.png (the picker's 128 x 64 thumbnail). Everything goes into a temporary sibling directory renamed
 // to page.dir at the end; an existing page.dir that is not an empty
 // directory is refused (prt::Error naming it) unless page.force, when it is
 // replaced. Progress lines go to stderr unless quiet.
