@@ -91,7 +91,8 @@ class GltfValidator : public ::testing::Test {
 
 TEST_F(GltfValidator, EveryVariantPrtWritesHasNoErrors) {
   const std::string mono = precompute("mono.prt", {"--bands", "3"});
-  const std::string rgb = precompute("rgb.prt", {"--bands", "4", "--mode", "interreflected", "--albedo", "0.9,0.5,0.2"});
+  const std::string rgb =
+      precompute("rgb.prt", {"--bands", "4", "--mode", "interreflected", "--albedo", "0.9,0.5,0.2"});
   const std::string glossy = precompute("glossy.prt", {"--bands", "3", "--material", "glossy"});
   const std::string cprt = dir.file("mono.cprt");
   ASSERT_EQ(run_prt(dir, {"compress", mono, "-o", cprt, "--clusters", "16", "--pca", "4", "-q"}).code, 0);
