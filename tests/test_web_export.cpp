@@ -154,6 +154,16 @@ TEST(WebExport, AnotherMapComesFirstAndIsShownFirst) {
   EXPECT_EQ(j.at("initial").at("map"), "grey");
 }
 
+TEST(WebExport, WritesTheGltfTooAndTakesATrailingSlash) {
+  TempDir dir;
+  const std::string t = precompute(dir);
+  const Result r = run_prt(dir, {"export", kMesh, t, "-o", dir.file("m.glb"), "--web", dir.file("page") + "/", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  // The page's model is the -o file, byte for byte (one writer, the same options).
+  EXPECT_EQ(read_file(dir.file("m.glb")), read_file(fs::path(dir.file("page")) / "model.glb"));
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"m.glb", "page", "scene.prt"}));
+}
+
 TEST(WebExport, OptionErrors) {
   TempDir dir;
   const std::string t = precompute(dir);

@@ -56,8 +56,10 @@ int run_export(const ExportArgs& a) {
     check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
     for_path("--output", [&] { check_writable(a.output); });
   }
-  if (!a.web.empty())
+  if (!a.web.empty()) {
     check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
+    check_web_dir(a.web, a.force);
+  }
   const ToneMap tone = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
 
   // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
@@ -105,33 +107,42 @@ int run_export(const ExportArgs& a) {
     opts.bake.exposure = a.exposure;
   }
 
-  if (!a.output.empty()) {
-    Outputs out("export");
-    out.write([&] { write_gltf(a.output, mesh, t, opts); });
-    if (const int rc = out.commit(); rc != 0) return rc;
-    if (!a.quiet)
-      fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
-                 mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
-                 opts.colors.empty() ? "" : ", COLOR_0");
-  }
+  // One Outputs for the glTF and the page: a failure or Ctrl-C leaves neither.
+  Outputs out("export");
+  if (!a.output.empty()) out.write([&] { write_gltf(a.output, mesh, t, opts); });
+  std::unique_ptr<StagedPage> page;
   if (!a.web.empty()) {
     // The page's initial state, as prt render takes it: --camera (default:
     // prt render's default camera), --fov, --rotate, --exposure, --tonemap.
-    WebPage page;
-    page.dir = a.web;
-    page.force = a.force;
-    page.turn = a.turn;
-    page.maps = web_maps(a.env, page.initial);
-    page.camera = default_camera(mesh, a.fov);
-    if (!a.camera.empty()) parse_camera(a.camera, page.camera);
-    page.camera.fov_deg = a.fov;
-    for (int k = 0; k < 3; ++k) page.rotate[k] = euler[k];
-    page.display = {a.exposure, tone};
-    write_web_page(page, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); }, a.quiet);
-    if (!a.quiet)
-      fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, {} maps): serve it with "
+    WebPage w;
+    w.dir = a.web;
+    w.force = a.force;
+    w.turn = a.turn;
+    w.maps = web_maps(a.env, w.initial);
+    w.camera = default_camera(mesh, a.fov);
+    if (!a.camera.empty()) parse_camera(a.camera, w.camera);
+    w.camera.fov_deg = a.fov;
+    for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
+    w.display = {a.exposure, tone};
+    try {
+      page = stage_web_page(w, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); },
+                            [] { return Outputs::interrupted(); }, a.quiet);
+    } catch (const Error&) {
+      if (!Outputs::interrupted()) throw;  // Ctrl-C: commit() says so and exits 130
+    }
+    if (!a.quiet && page) fmt::print(stderr, "{}: {} maps\n", a.web, w.maps.size());
+  }
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (page) page->commit();
+  if (!a.quiet) {
+    if (!a.output.empty())
+      fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
+                 mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
+                 opts.colors.empty() ? "" : ", COLOR_0");
+    if (page)
+      fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, maps/): serve it with "
                          "python3 -m http.server -d {} and open http://localhost:8000/\n",
-                 a.web, page.maps.size(), a.web);
+                 a.web, a.web);
   }
   return 0;
 }

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <unistd.h>
 
@@ -118,22 +119,68 @@ std::vector<std::string> web_maps(const std::string& env, std::string& initial) 
   return list;
 }
 
-void write_web_page(const WebPage& page, const Transfer& transfer,
-                    const std::function<void(const std::string& path)>& write_model, bool quiet) {
-  const fs::path dir(page.dir);
+namespace {
+
+fs::path page_dir(const std::string& dir) {
+  fs::path d = fs::path(dir).lexically_normal();
+  if (d.filename().empty()) d = d.parent_path();  // "out/page/"
+  return d;
+}
+
+}  // namespace
+
+void check_web_dir(const std::string& dir, bool force) {
+  const fs::path d = page_dir(dir);
   std::error_code ec;
+  if (!fs::exists(d, ec)) return;
+  if (!fs::is_directory(d, ec)) throw Error(dir + ": exists and is not a directory");
+  if (!fs::is_empty(d, ec) && !force) throw Error(dir + ": directory exists and is not empty (--force replaces it)");
+}
+
+StagedPage::~StagedPage() {
+  std::error_code ec;
+  if (!tmp_.empty()) fs::remove_all(tmp_, ec);
+}
+
+void StagedPage::commit() {
+  PRT_CHECK(!tmp_.empty());
+  const fs::path dir(dir_), parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  std::error_code ec;
+  // An empty or absent dir is replaced by a rename; with --force an old one
+  // is moved aside first, then removed.
+  fs::path old;
   if (fs::exists(dir, ec)) {
-    if (!fs::is_directory(dir, ec)) throw Error(page.dir + ": exists and is not a directory");
-    if (!fs::is_empty(dir, ec) && !page.force)
-      throw Error(page.dir + ": directory exists and is not empty (--force replaces it)");
+    old = parent / fmt::format(".{}.old{}", dir.filename().string(), ::getpid());
+    fs::remove_all(old, ec);
+    fs::rename(dir, old, ec);
+    if (ec) throw Error(display_ + ": cannot move the old directory aside: " + ec.message());
   }
+  fs::rename(tmp_, dir, ec);
+  if (ec) {
+    std::error_code ec2;
+    if (!old.empty()) fs::rename(old, dir, ec2);
+    throw Error(display_ + ": cannot rename " + tmp_ + " into place: " + ec.message());
+  }
+  tmp_.clear();
+  if (!old.empty()) fs::remove_all(old, ec);
+}
+
+std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& transfer,
+                                           const std::function<void(const std::string& path)>& write_model,
+                                           const std::function<bool()>& cancelled, bool quiet) {
+  check_web_dir(page.dir, page.force);
+  const fs::path dir = page_dir(page.dir);
   const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
-  const std::string base = dir.filename().empty() ? dir.parent_path().filename().string() : dir.filename().string();
   static int counter = 0;
-  const fs::path tmp = parent / fmt::format(".{}.tmp{}-{}", base, ::getpid(), counter++);
+  const fs::path tmp = parent / fmt::format(".{}.tmp{}-{}", dir.filename().string(), ::getpid(), counter++);
+  std::error_code ec;
   fs::remove_all(tmp, ec);
   if (!fs::create_directories(tmp / "maps", ec) || ec)
     throw Error(page.dir + ": cannot create " + tmp.string() + ": " + ec.message());
+  auto staged = std::unique_ptr<StagedPage>(new StagedPage(dir.string(), tmp.string(), page.dir));
+  const auto check_cancelled = [&] {
+    if (cancelled && cancelled()) throw Error("cancelled");
+  };
   try {
     write_bytes(tmp / "index.html", web_index_html, std::char_traits<char>::length(web_index_html));
     write_bytes(tmp / "prt-sh.js", web_prt_sh_js, std::char_traits<char>::length(web_prt_sh_js));
@@ -144,11 +191,13 @@ void write_web_page(const WebPage& page, const Transfer& transfer,
     std::set<std::string> names;
     std::string initial_name;
     for (const std::string& path : page.maps) {
+      check_cancelled();
       std::string name = fs::path(path).stem().string();
       for (int i = 2; names.count(name); ++i) name = fs::path(path).stem().string() + fmt::format("-{}", i);
       names.insert(name);
       if (path == page.initial) initial_name = name;
       const EnvMap map = load_envmap(path);
+      require_finite(map);
       const std::vector<glm::dvec3> light = project(map, transfer.bands);
       nlohmann::json coeffs = nlohmann::json::array();
       for (const glm::dvec3& c : light) coeffs.push_back({c.x, c.y, c.z});
@@ -183,28 +232,11 @@ void write_web_page(const WebPage& page, const Transfer& transfer,
           {"tonemap", std::string(tone_map_name(page.display.tone_map))}}}};
     const std::string text = lighting.dump(1) + "\n";
     write_bytes(tmp / "lighting.json", text.data(), text.size());
-
-    // Into place: an empty or absent dir is replaced by a rename; with
-    // --force an old one is moved aside first, then removed.
-    fs::path old;
-    if (fs::exists(dir, ec)) {
-      old = parent / fmt::format(".{}.old{}-{}", base, ::getpid(), counter++);
-      fs::rename(dir, old);
-    }
-    try {
-      fs::rename(tmp, dir);
-    } catch (...) {
-      if (!old.empty()) fs::rename(old, dir, ec);
-      throw;
-    }
-    if (!old.empty()) fs::remove_all(old, ec);
+    check_cancelled();
   } catch (const fs::filesystem_error& e) {
-    fs::remove_all(tmp, ec);
-    throw Error(page.dir + ": " + e.what());
-  } catch (...) {
-    fs::remove_all(tmp, ec);
-    throw;
+    throw Error(page.dir + ": " + e.what());  // staged's destructor removes tmp
   }
+  return staged;
 }
 
 }  // namespace prt::cli
