@@ -221,7 +221,7 @@ void main() {
 
     // Transfer texture: [vertex][channel][vec4s], from the glTF's [channel][k] rows.
     const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
-    const texels = model.vertices * channels * vec4s, width = Math.min(maxTex, 4096);
+    const texels = model.vertices * channels * vec4s, width = Math.min(maxTex, 8192);
     const height = Math.ceil(texels / width);
     if (height > maxTex) fail(`the transfer (${texels} texels) does not fit this WebGL's ${maxTex}^2 texture`);
     const data = new Float32Array(width * height * 4);
