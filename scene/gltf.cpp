@@ -1,7 +1,8 @@
 // glTF 2.0 export (prt/gltf.h), written with tinygltf (Debian's
 // libtinygltf-dev, header only). Its implementation is compiled into this
-// file with hidden visibility, so prt::scene exports none of its symbols and
-// a consumer needs neither tinygltf nor its own copy to be the same version.
+// file, renamed (namespace prt_tinygltf) and with hidden visibility, so
+// prt::scene exports none of its symbols and clashes with no copy of
+// tinygltf a consumer links, shared or static (tests/gltf_reader.cpp is one).
 
 #include <prt/gltf.h>
 
@@ -31,6 +32,7 @@
 #include <vector>
 
 #pragma GCC visibility push(hidden)
+#define tinygltf prt_tinygltf  // (stays defined: this file's tinygltf:: is prt_tinygltf::)
 #define TINYGLTF_IMPLEMENTATION
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE

@@ -1,6 +1,7 @@
 // glTF export (prt/gltf.h, prt export): what the file holds, read back with
 // tinygltf (an independent reader of its own, compiled into this test), and
 // the round trip through prt precompute (Assimp reads glTF).
+#include "test_child.h"
 #include "test_files.h"
 #include "test_gltf.h"
 
@@ -278,6 +279,26 @@ TEST_F(ExportCli, BadInputsNameTheFile) {
   EXPECT_NE(r.err.find(wlt + ": holds a wavelet transfer"), std::string::npos) << r.err;
   // Nothing but the inputs.
   EXPECT_EQ(dir.listing(), (std::vector<std::string>{"s.prt", "s.wlt", "tri.obj"}));
+}
+
+// Ctrl-C while the file is written leaves the old file and no temporary.
+TEST_F(ExportCli, InterruptedExportWritesNothing) {
+  const std::string tfile = precompute("s.prt", {"--bands", "2"});
+  for (const char* name : {"old.glb", "old.gltf"}) {
+    SCOPED_TRACE(name);
+    const std::string out = dir.file(name);
+    prt::test::write_file(out, "old");
+    const auto before = dir.listing();
+    const auto r = prt::test::run_prt_interrupted(dir, {"export", kScene, tfile, "-o", out},
+                                                  "PRT_TEST_PAUSE_BEFORE_RENAME",
+                                                  {"PRT_TEST_PAUSE_BEFORE_RENAME=30000"});
+    EXPECT_TRUE(r.marker_seen) << r.err;
+    EXPECT_EQ(r.code, 130) << r.err;
+    EXPECT_NE(r.err.find("prt export: interrupted; nothing written"), std::string::npos) << r.err;
+    EXPECT_EQ(prt::test::read_file(out), "old");
+    EXPECT_EQ(dir.listing(), before);
+    EXPECT_TRUE(prt::test::temporaries(dir).empty());
+  }
 }
 
 TEST_F(ExportCli, HelpNamesTheLayout) {
