@@ -12,6 +12,8 @@ PACKAGES=(
   libtbb-dev libembree-dev libglm-dev libxxhash-dev libopenblas-pthread-dev
   # images and meshes
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
+  # glTF export (header only: scene/gltf.cpp compiles it in)
+  libtinygltf-dev
   # command line, JSON, logging
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # GL: headless EGL on Mesa (llvmpipe), GLFW window, Xvfb for window tests

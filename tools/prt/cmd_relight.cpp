@@ -187,11 +187,7 @@ int run_relight(const RelightArgs& a) {
   const double project_ms = ms_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : t.bands);
-  if (!a.rotate.empty()) {
-    std::vector<glm::dvec3> r(light.size());
-    sh::Rotation(t.bands, sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, r);
-    light.swap(r);
-  }
+  if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler);
   const CompressedTransfer* c = scene.compressed ? &*scene.compressed : nullptr;
   const std::vector<glm::vec3> rgb = c ? (glossy ? relight_glossy(*c, mesh, light, shading) : relight(*c, mesh, light))
                                      : glossy   ? relight_glossy(t, mesh, light, shading)

@@ -25,5 +25,6 @@ Run add_info(CLI::App& app);       // cmd_info.cpp
 Run add_view(CLI::App& app);       // cmd_view.cpp
 Run add_report(CLI::App& app);     // cmd_report.cpp
 Run add_compress(CLI::App& app);   // cmd_compress.cpp
+Run add_export(CLI::App& app);     // cmd_export.cpp
 
 }  // namespace prt::cli

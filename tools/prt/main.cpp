@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   add(prt::cli::add_precompute);
   add(prt::cli::add_compress);
   add(prt::cli::add_relight);
+  add(prt::cli::add_export);
   add(prt::cli::add_render);
   add(prt::cli::add_reference);
   add(prt::cli::add_compare);

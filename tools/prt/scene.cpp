@@ -1,6 +1,7 @@
 #include "scene.h"
 
 #include <prt/error.h>
+#include <prt/rotation.h>
 
 #include <fmt/format.h>
 
@@ -44,6 +45,12 @@ Scene load_scene(const std::string& mesh, const std::string& transfer, const std
   s.env = load_envmap(env);
   require_finite(s.env);
   return s;
+}
+
+void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double euler[3]) {
+  std::vector<glm::dvec3> r(light.size());
+  sh::Rotation(bands, sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, r);
+  light.swap(r);
 }
 
 }  // namespace prt::cli

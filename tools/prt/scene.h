@@ -8,8 +8,11 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 
+#include <glm/vec3.hpp>
+
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace prt::cli {
 
@@ -38,5 +41,10 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 // against the mesh; the rules of load_scene.
 void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
                    bool allow_wavelet, bool allow_compressed = false);
+
+// Rotates SH lighting (bands^2 RGB coefficients or more) by --rotate's
+// yaw, pitch, roll degrees, in place: what prt relight and prt export --bake
+// light a transfer with (sh::rotation_from_euler, sh::Rotation).
+void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double euler[3]);
 
 }  // namespace prt::cli

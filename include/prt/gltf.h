@@ -1,0 +1,71 @@
+// prt/gltf.h - glTF 2.0 export of a mesh and its SH transfer (docs/FORMAT.md,
+// "glTF export").
+//
+// One scene, one node, one mesh, one triangle primitive: indices (SCALAR
+// UNSIGNED_INT), POSITION (VEC3 FLOAT, with min and max), NORMAL (VEC3 FLOAT,
+// the mesh's unit normals; left out when a vertex has none, see below), the
+// dense transfer as custom attributes _PRT_T0 .. _PRT_T{n-1} (VEC4 FLOAT:
+// every vertex, analytic ones evaluated, prt::dense_transfer) and, when
+// baked, COLOR_0 (VEC3 FLOAT, linear, in [0, 1]). Coefficient j of a vertex's
+// row ([channel][k], k = l(l+1)+m) is component j % 4 of attribute j / 4; the
+// last attribute is zero-padded. asset.extras.prt describes all of it
+// (gltf_extras). ".glb" writes the binary container; ".gltf" writes JSON
+// with the one buffer embedded as a base64 data: URI (a single file, written
+// atomically; glTF viewers and Assimp read it).
+//
+// A vertex without a normal (unreferenced, or only on degenerate triangles:
+// MeshReport::zero_normals) would break glTF's rule that NORMAL is unit
+// length, so a mesh with such vertices is written without NORMAL (extras
+// "normals": "omitted"); its transfer rows are 0 either way.
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+// The bake that COLOR_0 holds (prt export --bake): what extras records of it.
+struct GltfBake {
+  std::string map;             // the environment map (as given)
+  double rotate[3] = {0, 0, 0};  // yaw, pitch, roll in degrees (prt relight --rotate)
+  double exposure = 0;         // stops: the colour is radiance x 2^exposure, clamped to [0, 1]
+};
+
+struct GltfOptions {
+  // COLOR_0: empty for none, else one linear RGB per vertex, each in [0, 1]
+  // (write_gltf refuses others), described by `bake`.
+  std::vector<glm::vec3> colors;
+  GltfBake bake;
+  // Recorded in extras: where the transfer came from (a path, or "").
+  std::string transfer_source;
+  std::string generator = "prt";  // asset.generator
+};
+
+// Attribute names: "_PRT_T0", "_PRT_T1", ...
+std::string gltf_transfer_attribute(int index);
+// How many VEC4 attributes a transfer of `bands` bands and `channels`
+// channels takes: ceil(channels bands^2 / 4).
+int gltf_transfer_attribute_count(int bands, int channels);
+
+// asset.extras.prt as JSON text (a compact object): format, basis, bands,
+// coefficients, channels, mode, attributes, layout, sh_convention, shading,
+// albedo, vertices, normals, material and, with colours, bake. write_gltf
+// writes exactly this object.
+std::string gltf_extras(const Mesh& mesh, const Transfer& t, const GltfOptions& opts = {});
+
+// Writes `mesh` and its transfer `t` (computed for it: the caller has run
+// check_matches) to `path`, binary for .glb and JSON for .gltf (any case),
+// through write_atomically. Throws prt::Error naming `path` for another
+// extension, a transfer that is not diffuse SH data (transfer_problem), a
+// vertex count that differs from the mesh's, colours of the wrong count or
+// outside [0, 1], and a failed write. A glossy transfer is written as its
+// diffuse part (extras "material": "diffuse part of a glossy transfer").
+void write_gltf(const std::string& path, const Mesh& mesh, const Transfer& t, const GltfOptions& opts = {});
+
+}  // namespace prt

@@ -1,0 +1,146 @@
+// The Khronos glTF-Validator (npm gltf-validator, run with Node through
+// tests/js/validate.mjs) on every kind of file prt export writes: no errors.
+// Label interop: without Node or the npm package the tests skip, or fail
+// when PRT_REQUIRE_TOOLS=1 (scripts/test.sh sets it).
+#include "test_files.h"
+
+#include <prt/gltf.h>
+#include <prt/mesh.h>
+#include <prt/precompute.h>
+#include <prt/transfer.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using prt::test::run_prt;
+using prt::test::TempDir;
+
+const std::string kSource = PRT_SOURCE_DIR;
+const std::string kScene = kSource + "/models/scene.obj";
+const std::string kStudio = kSource + "/envmaps/studio.exr";
+constexpr int kSamples = 32;  // few rays: the files' structure is tested, not accuracy
+
+bool tools_required() {
+  const char* v = std::getenv("PRT_REQUIRE_TOOLS");
+  return v != nullptr && std::string(v) == "1";
+}
+
+struct Validation {
+  int code = -1;
+  std::vector<nlohmann::json> reports;  // one per file, in order
+  std::string err;
+};
+
+// Runs validate.mjs on `files`; sets *missing when Node or the validator is not there.
+Validation validate(const TempDir& dir, const std::vector<std::string>& files, bool* missing) {
+  *missing = std::system("command -v node >/dev/null 2>&1") != 0;
+  if (*missing) return {};
+  const std::string out = (dir.io() / "validate.out").string(), err = (dir.io() / "validate.err").string();
+  std::string cmd = "node";
+  cmd.append(" ").append(prt::test::shell_quote(kSource + "/tests/js/validate.mjs"));
+  for (const std::string& f : files) cmd.append(" ").append(prt::test::shell_quote(f));
+  cmd.append(" >").append(prt::test::shell_quote(out)).append(" 2>").append(prt::test::shell_quote(err));
+  const int status = std::system(cmd.c_str());
+  Validation v;
+  v.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+  v.err = prt::test::read_file(err);
+  if (v.code == 77) {
+    *missing = true;
+    return v;
+  }
+  std::istringstream lines(prt::test::read_file(out));
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty()) v.reports.push_back(nlohmann::json::parse(line));
+  return v;
+}
+
+#define VALIDATE_OR_SKIP(v, dir, files)                                                                \
+  bool missing_ = false;                                                                               \
+  const Validation v = validate(dir, files, &missing_);                                                \
+  if (missing_) {                                                                                      \
+    if (tools_required()) FAIL() << "PRT_REQUIRE_TOOLS=1: Node or gltf-validator missing: " << v.err; \
+    GTEST_SKIP() << "Node or the gltf-validator npm package is missing (npm ci --prefix tests/js)";    \
+  }
+
+class GltfValidator : public ::testing::Test {
+ protected:
+  TempDir dir;
+  std::string precompute(const std::string& name, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"precompute", kScene, "-o", dir.file(name), "--samples",
+                                     std::to_string(kSamples), "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return dir.file(name);
+  }
+  std::string exported(const std::string& transfer, const std::string& name, const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"export", kScene, transfer, "-o", dir.file(name), "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return dir.file(name);
+  }
+};
+
+TEST_F(GltfValidator, EveryVariantPrtWritesHasNoErrors) {
+  const std::string mono = precompute("mono.prt", {"--bands", "3"});
+  const std::string rgb =
+      precompute("rgb.prt", {"--bands", "4", "--mode", "interreflected", "--albedo", "0.9,0.5,0.2"});
+  const std::string glossy = precompute("glossy.prt", {"--bands", "3", "--material", "glossy"});
+  const std::string cprt = dir.file("mono.cprt");
+  ASSERT_EQ(run_prt(dir, {"compress", mono, "-o", cprt, "--clusters", "16", "--pca", "4", "-q"}).code, 0);
+  std::vector<std::string> files = {
+      exported(mono, "mono.glb", {}),
+      exported(mono, "mono.gltf", {}),
+      exported(rgb, "rgb.glb", {}),
+      exported(rgb, "rgb.gltf", {}),
+      exported(mono, "mono-baked.glb", {"--bake", kStudio, "--exposure", "2"}),
+      exported(rgb, "rgb-baked.gltf", {"--bake", kStudio, "--rotate", "90,20,0", "--exposure", "-1"}),
+      exported(glossy, "glossy.glb", {}),
+      exported(cprt, "compressed.glb", {}),
+  };
+  // A mesh with a vertex without a normal: the file has no NORMAL.
+  const prt::Mesh loose = prt::make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {{0, 1, 2}});
+  prt::TransferOptions o;
+  o.bands = 2;
+  o.samples = kSamples;
+  files.push_back(dir.file("loose.glb"));
+  prt::write_gltf(files.back(), loose, prt::compute_transfer(loose, o));
+
+  VALIDATE_OR_SKIP(v, dir, files);
+  EXPECT_EQ(v.code, 0) << v.err;
+  ASSERT_EQ(v.reports.size(), files.size()) << v.err;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    EXPECT_EQ(v.reports[i].at("file"), files[i]);
+    EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
+    // Not required by the issue, but the files are meant to be clean.
+    EXPECT_EQ(v.reports[i].at("warnings"), 0) << v.reports[i].dump();
+  }
+}
+
+// The validator really reads the files: a POSITION max that is not the
+// largest coordinate is an error it reports (so a 0 above means something).
+TEST_F(GltfValidator, ReportsAnErrorInABrokenFile) {
+  const std::string mono = precompute("mono.prt", {"--bands", "2"});
+  const std::string good = exported(mono, "good.gltf", {});
+  nlohmann::json j = nlohmann::json::parse(prt::test::read_file(good));
+  const int pos = j["meshes"][0]["primitives"][0]["attributes"]["POSITION"];
+  j["accessors"][pos]["max"][0] = j["accessors"][pos]["max"][0].get<double>() + 1.0;
+  const std::string bad = dir.file("bad.gltf");
+  prt::test::write_file(bad, j.dump());
+  VALIDATE_OR_SKIP(v, dir, (std::vector<std::string>{good, bad}));
+  EXPECT_EQ(v.code, 1) << v.err;
+  ASSERT_EQ(v.reports.size(), 2u) << v.err;
+  EXPECT_EQ(v.reports[0].at("errors"), 0) << v.reports[0].dump();
+  EXPECT_GT(v.reports[1].at("errors"), 0) << v.reports[1].dump();
+  EXPECT_NE(v.reports[1].dump().find("ACCESSOR_MAX_MISMATCH"), std::string::npos) << v.reports[1].dump();
+}
+
+}  // namespace

@@ -1,0 +1,198 @@
+// prt export: a mesh and its SH transfer as glTF 2.0 (prt/gltf.h), the
+// transfer dense in custom vertex attributes, optionally with colours baked
+// under a map (COLOR_0).
+#include "commands.h"
+#include "look.h"
+#include "progress.h"
+#include "scene.h"
+#include "web_export.h"
+
+#include <prt/compressed_transfer.h>
+#include <prt/envmap.h>
+#include <prt/gltf.h>
+#include <prt/io.h>
+#include <prt/projection.h>
+#include <prt/render.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace prt::cli {
+
+namespace {
+
+struct ExportArgs {
+  std::string mesh, transfer, output, bake, rotate;
+  double exposure = 0;
+  bool quiet = false;
+  const CLI::Option *rotate_opt = nullptr, *exposure_opt = nullptr;
+  // --web DIR: the relighting page (web_export.h, docs/WEB.md).
+  std::string web, env, camera, tone_map = "clamp";
+  double fov = 40;
+  bool force = false, turn = false;
+  std::vector<const CLI::Option*> web_opts;  // --env, --camera, --fov, --tonemap, --turn, --force
+  // Every output goes through one Outputs (all or nothing): files added
+  // later (a web page beside the model) are staged with the glTF.
+};
+
+int run_export(const ExportArgs& a) {
+  if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
+  std::string ext = std::filesystem::path(a.output).extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  if (!a.output.empty() && ext != ".glb" && ext != ".gltf")
+    throw UsageError("--output: " + a.output + ": expected a .glb (binary glTF) or .gltf (JSON glTF) file");
+  for (const CLI::Option* o : {a.rotate_opt, a.exposure_opt})
+    if (o->count() > 0 && a.bake.empty() && a.web.empty())
+      throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
+  for (const CLI::Option* o : a.web_opts)
+    if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
+  double euler[3] = {0, 0, 0};
+  if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
+  if (!a.output.empty()) {
+    check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
+    for_path("--output", [&] { check_writable(a.output); });
+  }
+  if (!a.web.empty()) {
+    check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
+    check_web_dir(a.web, a.force);
+  }
+  const ToneMap tone = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
+
+  // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
+  // (sparse, per light-cube pixel) has none to give.
+  if (read_transfer_basis(a.transfer) == TransferBasis::Wavelet)
+    throw Error(a.transfer + ": holds a wavelet transfer; prt export writes SH transfers only (its vertex "
+                "attributes are SH rows): compute one with prt precompute --basis sh");
+  Scene scene;
+  scene.mesh = load_mesh(a.mesh);
+  load_transfer(scene, a.transfer, 0, "export", false, /*allow_compressed=*/true);
+  const Mesh& mesh = scene.mesh;
+  // A compressed file (prt compress) is exported as the rows it reconstructs.
+  const Transfer t = scene.compressed ? decompress(*scene.compressed) : scene.transfer;
+  if (!a.quiet) {
+    fmt::print(stderr, "{}\n", describe(mesh));
+    if (scene.compressed)
+      fmt::print(stderr, "{} is compressed: exporting its decompressed rows (prt::decompress)\n", a.transfer);
+    if (t.glossy)
+      fmt::print(stderr, "{} holds glossy matrices: exporting its diffuse transfer only (glTF attributes hold one "
+                         "row per vertex; the view-dependent part needs prt relight/render --eye)\n", a.transfer);
+  }
+
+  GltfOptions opts;
+  opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
+  opts.generator = "prt " PRT_VERSION " (prt export)";
+  if (!a.bake.empty()) {
+    EnvMap env = load_envmap(a.bake);
+    require_finite(env);
+    std::vector<glm::dvec3> light = project(env, t.bands);
+    if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler);
+    const std::vector<glm::vec3> rgb = relight(t, mesh, light);
+    const Display clamp{a.exposure, ToneMap::Clamp};
+    opts.colors.resize(rgb.size());
+    for (std::size_t v = 0; v < rgb.size(); ++v)
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(rgb[v][c]))
+          throw Error(fmt::format("relit radiance of vertex {} is {} ({} channel): the values of {} (max {}) times "
+                                  "the transfer of {} overflow float; scale the map down",
+                                  v, show_number(rgb[v][c]), "rgb"[c], a.bake, show_number(env.stats.max),
+                                  a.transfer));
+        opts.colors[v][c] = tone_map(rgb[v][c], clamp);
+      }
+    opts.bake.map = std::filesystem::path(a.bake).filename().string();
+    for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
+    opts.bake.exposure = a.exposure;
+  }
+
+  // One Outputs for the glTF and the page: a failure or Ctrl-C leaves neither.
+  Outputs out("export");
+  if (!a.output.empty()) out.write([&] { write_gltf(a.output, mesh, t, opts); });
+  std::unique_ptr<StagedPage> page;
+  if (!a.web.empty()) {
+    // The page's initial state, as prt render takes it: --camera (default:
+    // prt render's default camera), --fov, --rotate, --exposure, --tonemap.
+    WebPage w;
+    w.dir = a.web;
+    w.force = a.force;
+    w.turn = a.turn;
+    w.maps = web_maps(a.env, w.initial);
+    w.camera = default_camera(mesh, a.fov);
+    if (!a.camera.empty()) parse_camera(a.camera, w.camera);
+    w.camera.fov_deg = a.fov;
+    for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
+    w.display = {a.exposure, tone};
+    try {
+      page = stage_web_page(w, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); },
+                            [] { return Outputs::interrupted(); }, a.quiet);
+    } catch (const Error&) {
+      if (!Outputs::interrupted()) throw;  // Ctrl-C: commit() says so and exits 130
+    }
+    if (!a.quiet && page) fmt::print(stderr, "{}: {} maps\n", a.web, w.maps.size());
+  }
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (page) page->commit();
+  if (!a.quiet) {
+    if (!a.output.empty())
+      fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
+                 mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
+                 opts.colors.empty() ? "" : ", COLOR_0");
+    if (page)
+      fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, maps/): serve it with "
+                         "python3 -m http.server -d {} and open http://localhost:8000/\n",
+                 a.web, a.web);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Run add_export(CLI::App& app) {
+  auto a = std::make_shared<ExportArgs>();
+  CLI::App* s = app.add_subcommand("export", "Write a mesh and its SH transfer as glTF 2.0 (.glb or .gltf)");
+  s->footer(
+      "The transfer is written dense (every vertex, analytic ones evaluated) as custom vertex attributes\n"
+      "_PRT_T0, _PRT_T1, ... (VEC4 float: coefficient j of the row [channel][k] in attribute j/4, component\n"
+      "j%4), beside POSITION, NORMAL and the indices; asset.extras.prt describes them (docs/FORMAT.md,\n"
+      "\"glTF export\").\n"
+      "Relighting: radiance[c] = dot(row[c], L[c]), L[c] from prt project (prt's SH convention); a 1-channel\n"
+      "row serves R, G and B.\n"
+      ".glb is binary; .gltf is JSON with the buffer embedded (base64), one file either way.\n"
+      "Compressed files (prt compress) are exported decompressed; glossy files as their diffuse part;\n"
+      "wavelet files are refused.\n"
+      "--bake ENV adds COLOR_0: the radiance prt relight gives under ENV (--rotate), times 2^--exposure,\n"
+      "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
+      "--web DIR writes a static page (index.html, prt-viewer.js, prt-sh.js, model.glb, lighting.json: every\n"
+      "bundled map's SH lighting at the transfer's bands, maps/*.rgb16f backgrounds) that relights the model in\n"
+      "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame.\n"
+      "Example: prt export bunny.off bunny.prt -o bunny.glb\n"
+      "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
+      "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1");
+  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
+  s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress)")->required();
+  s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");
+  s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it");
+  a->rotate_opt = s->add_option("-r,--rotate", a->rotate, "With --bake or --web: rotate the lighting by yaw,pitch,roll degrees")
+                      ->check(triple_value("yaw,pitch,roll"));
+  a->exposure_opt = s->add_option("--exposure", a->exposure, "With --bake: scale the radiance by 2^stops before "
+                                                             "clamping; with --web: the initial exposure")
+                        ->check(finite_number())
+                        ->capture_default_str();
+  s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)");
+  a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)"));
+  a->web_opts.push_back(s->add_option("--camera", a->camera, "With --web: initial camera ex,ey,ez,tx,ty,tz,ux,uy,uz (as prt render)")
+                            ->check(camera_value()));
+  a->web_opts.push_back(s->add_option("--fov", a->fov, "With --web: vertical field of view in degrees, 1 to 179")
+                            ->check(number_range(1.0, 179.0))
+                            ->capture_default_str());
+  a->web_opts.push_back(s->add_option("--tonemap", a->tone_map, "With --web: initial tone map: clamp, reinhard, aces")
+                            ->capture_default_str());
+  a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web: start with the environment turning"));
+  a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));
+  s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
+  return [a] { return run_export(*a); };
+}
+
+}  // namespace prt::cli

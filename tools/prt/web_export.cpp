@@ -1,0 +1,242 @@
+// prt export --web: the static relighting page. See web_export.h, docs/WEB.md.
+#include "web_export.h"
+
+#include <prt/envmap.h>
+#include <prt/error.h>
+#include <prt/paths.h>
+#include <prt/projection.h>
+
+#include <fmt/core.h>
+#include <glm/gtc/packing.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <set>
+#include <unistd.h>
+
+namespace prt::cli {
+
+// The page's sources (web/*), embedded by tools/prt/CMakeLists.txt.
+extern const char* const web_index_html;
+extern const char* const web_prt_sh_js;
+extern const char* const web_prt_viewer_js;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool is_map_file(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+}
+
+void write_bytes(const fs::path& path, const void* data, std::size_t size) {
+  std::ofstream f(path, std::ios::binary);
+  f.write(static_cast<const char*>(data), std::streamsize(size));
+  f.close();
+  if (!f) throw Error(path.string() + ": write failed");
+}
+
+// A lat-long picture of the map for the page's background, linear floats:
+// lat-long maps as they are; cube maps resampled (nearest texel) into 4N x 2N.
+std::vector<float> background(const EnvMap& map, int& width, int& height) {
+  if (!map.is_cube()) {
+    width = map.width;
+    height = map.height;
+    return map.rgb;
+  }
+  const int N = map.width;
+  width = 4 * N;
+  height = 2 * N;
+  std::vector<float> rgb(std::size_t(width) * height * 3);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      double s = 0, t = 0;
+      const int face = cube_face_coords(latlong_direction(x + 0.5, y + 0.5, width, height), s, t);
+      const int u = std::clamp(int((s + 1) * 0.5 * N), 0, N - 1), v = std::clamp(int((t + 1) * 0.5 * N), 0, N - 1);
+      const float* src = map.rgb.data() + ((std::size_t(face) * N + v) * N + u) * 3;
+      std::copy_n(src, 3, rgb.data() + (std::size_t(y) * width + x) * 3);
+    }
+  return rgb;
+}
+
+// The picker's thumbnail: the background box-filtered to at most 128 x 64,
+// scaled so its mean luminance is 0.18 (maps differ by orders of magnitude),
+// then written as 8-bit sRGB (write_image clamps).
+void write_thumbnail(const fs::path& path, const std::vector<float>& rgb, int width, int height) {
+  const int tw = std::min(width, 128), th = std::max(1, std::min(height, tw / 2));
+  std::vector<float> out(std::size_t(tw) * th * 3, 0.0f);
+  for (int y = 0; y < th; ++y)
+    for (int x = 0; x < tw; ++x) {
+      const int x0 = x * width / tw, x1 = std::max(x0 + 1, (x + 1) * width / tw);
+      const int y0 = y * height / th, y1 = std::max(y0 + 1, (y + 1) * height / th);
+      double sum[3] = {0, 0, 0};
+      for (int yy = y0; yy < y1; ++yy)
+        for (int xx = x0; xx < x1; ++xx)
+          for (int c = 0; c < 3; ++c) {
+            const float v = rgb[(std::size_t(yy) * width + xx) * 3 + c];
+            if (std::isfinite(v)) sum[c] += v;
+          }
+      for (int c = 0; c < 3; ++c) out[(std::size_t(y) * tw + x) * 3 + c] = float(sum[c] / ((x1 - x0) * (y1 - y0)));
+    }
+  double lum = 0;
+  for (std::size_t i = 0; i < out.size(); i += 3) lum += 0.2126 * out[i] + 0.7152 * out[i + 1] + 0.0722 * out[i + 2];
+  lum /= double(tw) * th;
+  const float gain = lum > 0 ? float(0.18 / lum) : 1.0f;
+  for (float& v : out) v *= gain;
+  write_image(path.string(), tw, th, out);
+}
+
+}  // namespace
+
+std::vector<std::string> web_maps(const std::string& env, std::string& initial) {
+  std::set<fs::path> bundled;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(data_dir() / "envmaps", ec))
+    if (e.is_regular_file(ec) && is_map_file(e.path())) bundled.insert(fs::weakly_canonical(e.path(), ec));
+  std::vector<std::string> list;
+  initial.clear();
+  if (!env.empty()) {
+    fs::path p = fs::weakly_canonical(fs::absolute(env), ec);
+    if (!fs::exists(p, ec)) {  // a bundled map's name: "studio" for envmaps/studio.exr
+      for (const auto& b : bundled)
+        if (b.stem() == env) p = b;
+      if (!bundled.count(p))
+        throw Error("--env: " + env + ": no such file, nor a bundled map (" + (data_dir() / "envmaps").string() + ")");
+    }
+    if (!bundled.count(p)) list.push_back(env);
+    initial = bundled.count(p) ? p.string() : env;
+  }
+  for (const auto& p : bundled) list.push_back(p.string());
+  if (list.empty()) throw Error("no environment maps: none bundled in " + (data_dir() / "envmaps").string() + " (PRT_DATA_DIR) and no --env");
+  if (initial.empty()) initial = list.front();
+  return list;
+}
+
+namespace {
+
+fs::path page_dir(const std::string& dir) {
+  fs::path d = fs::path(dir).lexically_normal();
+  if (d.filename().empty()) d = d.parent_path();  // "out/page/"
+  return d;
+}
+
+}  // namespace
+
+void check_web_dir(const std::string& dir, bool force) {
+  const fs::path d = page_dir(dir);
+  std::error_code ec;
+  if (!fs::exists(d, ec)) return;
+  if (!fs::is_directory(d, ec)) throw Error(dir + ": exists and is not a directory");
+  if (!fs::is_empty(d, ec) && !force) throw Error(dir + ": directory exists and is not empty (--force replaces it)");
+}
+
+StagedPage::~StagedPage() {
+  std::error_code ec;
+  if (!tmp_.empty()) fs::remove_all(tmp_, ec);
+}
+
+void StagedPage::commit() {
+  PRT_CHECK(!tmp_.empty());
+  const fs::path dir(dir_), parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  std::error_code ec;
+  // An empty or absent dir is replaced by a rename; with --force an old one
+  // is moved aside first, then removed.
+  fs::path old;
+  if (fs::exists(dir, ec)) {
+    old = parent / fmt::format(".{}.old{}", dir.filename().string(), ::getpid());
+    fs::remove_all(old, ec);
+    fs::rename(dir, old, ec);
+    if (ec) throw Error(display_ + ": cannot move the old directory aside: " + ec.message());
+  }
+  fs::rename(tmp_, dir, ec);
+  if (ec) {
+    std::error_code ec2;
+    if (!old.empty()) fs::rename(old, dir, ec2);
+    throw Error(display_ + ": cannot rename " + tmp_ + " into place: " + ec.message());
+  }
+  tmp_.clear();
+  if (!old.empty()) fs::remove_all(old, ec);
+}
+
+std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& transfer,
+                                           const std::function<void(const std::string& path)>& write_model,
+                                           const std::function<bool()>& cancelled, bool quiet) {
+  check_web_dir(page.dir, page.force);
+  const fs::path dir = page_dir(page.dir);
+  const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+  static int counter = 0;
+  const fs::path tmp = parent / fmt::format(".{}.tmp{}-{}", dir.filename().string(), ::getpid(), counter++);
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  if (!fs::create_directories(tmp / "maps", ec) || ec)
+    throw Error(page.dir + ": cannot create " + tmp.string() + ": " + ec.message());
+  auto staged = std::unique_ptr<StagedPage>(new StagedPage(dir.string(), tmp.string(), page.dir));
+  const auto check_cancelled = [&] {
+    if (cancelled && cancelled()) throw Error("cancelled");
+  };
+  try {
+    write_bytes(tmp / "index.html", web_index_html, std::char_traits<char>::length(web_index_html));
+    write_bytes(tmp / "prt-sh.js", web_prt_sh_js, std::char_traits<char>::length(web_prt_sh_js));
+    write_bytes(tmp / "prt-viewer.js", web_prt_viewer_js, std::char_traits<char>::length(web_prt_viewer_js));
+    write_model((tmp / "model.glb").string());
+
+    nlohmann::json maps = nlohmann::json::array();
+    std::set<std::string> names;
+    std::string initial_name;
+    for (const std::string& path : page.maps) {
+      check_cancelled();
+      std::string name = fs::path(path).stem().string();
+      for (int i = 2; names.count(name); ++i) name = fs::path(path).stem().string() + fmt::format("-{}", i);
+      names.insert(name);
+      if (path == page.initial) initial_name = name;
+      const EnvMap map = load_envmap(path);
+      require_finite(map);
+      const std::vector<glm::dvec3> light = project(map, transfer.bands);
+      nlohmann::json coeffs = nlohmann::json::array();
+      for (const glm::dvec3& c : light) coeffs.push_back({c.x, c.y, c.z});
+      int w = 0, h = 0;
+      const std::vector<float> rgb = background(map, w, h);
+      std::vector<std::uint16_t> half(rgb.size());
+      for (std::size_t i = 0; i < rgb.size(); ++i) half[i] = glm::packHalf1x16(rgb[i]);
+      const std::string file = "maps/" + name + ".rgb16f", thumb = "maps/" + name + ".png";
+      write_bytes(tmp / file, half.data(), half.size() * sizeof(std::uint16_t));
+      write_thumbnail(tmp / thumb, rgb, w, h);
+      maps.push_back({{"name", name}, {"source", fs::path(path).filename().string()}, {"file", file},
+                      {"thumbnail", thumb}, {"width", w}, {"height", h}, {"coefficients", coeffs}});
+      if (!quiet) fmt::print(stderr, "{}: {}x{}, {} bands projected\n", path, w, h, transfer.bands);
+    }
+    const Camera& c = page.camera;
+    nlohmann::json lighting = {
+        {"format", 1},
+        {"generator", "prt export --web"},
+        {"model", "model.glb"},
+        {"bands", transfer.bands},
+        {"convention", "prt: real orthonormal SH, Condon-Shortley phase, z polar axis, +Y up, k = l(l+1)+m "
+                       "(docs/CONVENTIONS.md); radiance in the map's units"},
+        {"maps", maps},
+        {"initial",
+         {{"map", initial_name},
+          {"camera", {c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z}},
+          {"fov", c.fov_deg},
+          {"rotate", {page.rotate[0], page.rotate[1], page.rotate[2]}},
+          {"spin", 0},
+          {"auto", page.turn},
+          {"exposure", page.display.exposure},
+          {"tonemap", std::string(tone_map_name(page.display.tone_map))}}}};
+    const std::string text = lighting.dump(1) + "\n";
+    write_bytes(tmp / "lighting.json", text.data(), text.size());
+    check_cancelled();
+  } catch (const fs::filesystem_error& e) {
+    throw Error(page.dir + ": " + e.what());  // staged's destructor removes tmp
+  }
+  return staged;
+}
+
+}  // namespace prt::cli

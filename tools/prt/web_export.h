@@ -1,0 +1,70 @@
+// The relighting web page of prt export --web (docs/WEB.md): a static
+// directory that relights the exported glTF in WebGL2 as prt render draws it.
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/render.h>
+#include <prt/transfer.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace prt::cli {
+
+struct WebPage {
+  std::string dir;                // the directory to write
+  bool force = false;             // replace an existing non-empty dir
+  std::vector<std::string> maps;  // map files (the page's picker, in order)
+  std::string initial;            // one of maps: shown first
+  Camera camera;                  // the initial camera (eye, target, up, fov)
+  double rotate[3] = {0, 0, 0};   // initial --rotate yaw,pitch,roll
+  Display display;                // initial exposure and tone map
+  bool turn = false;              // start with the environment turning
+};
+
+// The bundled maps (prt::data_dir()/envmaps: *.exr, *.hdr, *.pfm), sorted;
+// with `env` not empty, that file too (first when not among them); `env`
+// may also name a bundled map ("studio"). Returns the list; `initial` gets
+// the entry that is `env` (or the first). Throws prt::Error naming --env.
+std::vector<std::string> web_maps(const std::string& env, std::string& initial);
+
+// Throws prt::Error naming `dir` when it exists and is not a directory, or
+// is a non-empty directory and not `force`. Call it before the work.
+void check_web_dir(const std::string& dir, bool force);
+
+// A page written into a temporary sibling of its directory, not yet in
+// place: commit() renames it to the directory (an existing one, allowed by
+// --force, is moved aside first, then removed); the destructor removes what
+// was not committed.
+class StagedPage {
+ public:
+  ~StagedPage();
+  StagedPage(const StagedPage&) = delete;
+  StagedPage& operator=(const StagedPage&) = delete;
+  void commit();  // throws prt::Error naming the directory
+
+ private:
+  friend std::unique_ptr<StagedPage> stage_web_page(const WebPage&, const Transfer&,
+                                                    const std::function<void(const std::string&)>&,
+                                                    const std::function<bool()>&, bool);
+  StagedPage(std::string dir, std::string tmp, std::string display)
+      : dir_(std::move(dir)), tmp_(std::move(tmp)), display_(std::move(display)) {}
+  std::string dir_, tmp_, display_;
+};
+
+// Writes the page, staged: index.html, prt-sh.js, prt-viewer.js (embedded
+// in prt), model.glb (write_model(path): the glTF writer), lighting.json
+// (every map's SH coefficients at the transfer's band count, the initial
+// state), maps/NAME.rgb16f (each map as a lat-long background: RGB half
+// floats, row 0 at the top) and maps/NAME.png (the picker's 128 x 64
+// thumbnail). Checks the directory first (check_web_dir). Throws
+// prt::Error("cancelled") when cancelled() turns true between maps (Ctrl-C),
+// prt::Error naming the file on a bad map or a failed write; nothing is
+// left then. Progress lines go to stderr unless quiet.
+std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& transfer,
+                                           const std::function<void(const std::string& path)>& write_model,
+                                           const std::function<bool()>& cancelled, bool quiet);
+
+}  // namespace prt::cli

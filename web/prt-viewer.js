@@ -1,0 +1,506 @@
+// prt-viewer.js - relights a prt glTF export (model.glb, docs/FORMAT.md) in
+// WebGL2 under the SH lighting of lighting.json, as prt render draws it
+// (runtime/renderer.cpp, shaders/*.glsl): per-vertex radiance = the
+// transfer row dotted with the rotated lighting (mono transfers: one row
+// for the three colour channels), Gouraud-interpolated, over the environment
+// drawn as background at the pixel's view direction, then exposure, tone map
+// and sRGB encoding per pixel. No third-party code; see docs/WEB.md.
+//
+// Where the transfer lives: an RGBA32F texture read in the vertex shader by
+// gl_VertexID (WebGL2 guarantees only 16 vertex attributes; 16 bands of RGB
+// transfer need 192 vec4s), laid out as relight.comp.glsl's buffer: per
+// vertex CHANNELS runs of VEC4S texels, each channel zero padded.
+//
+// Test hooks: URL query map, rotate=yaw,pitch,roll, spin (degrees about +Y),
+// exposure, tonemap, camera=ex,ey,ez,tx,ty,tz,ux,uy,uz, fov, size=WxH,
+// auto=0|1, model=0 (background only); window.prtReady resolves after the
+// first frame is drawn; window.prtViewer.set({...}) draws a frame with new
+// settings and resolves when it is on the canvas.
+(function () {
+  'use strict';
+  const SH = self.PrtSH;
+  const $ = (id) => document.getElementById(id);
+  const status = $('status');
+
+  let resolveReady, rejectReady;
+  self.prtReady = new Promise((res, rej) => { resolveReady = res; rejectReady = rej; });
+
+  function fail(message) {
+    status.textContent = 'error: ' + message;
+    rejectReady(new Error(message));
+    throw new Error(message);
+  }
+
+  // --- GLB --------------------------------------------------------------
+  function parseGlb(buf) {
+    const dv = new DataView(buf);
+    if (buf.byteLength < 20 || dv.getUint32(0, true) !== 0x46546c67) fail('model.glb: not a binary glTF');
+    let offset = 12, json = null, bin = null;
+    while (offset + 8 <= buf.byteLength) {
+      const len = dv.getUint32(offset, true), type = dv.getUint32(offset + 4, true);
+      const body = buf.slice(offset + 8, offset + 8 + len);
+      if (type === 0x4e4f534a) json = JSON.parse(new TextDecoder().decode(body));
+      else if (type === 0x004e4942) bin = body;
+      offset += 8 + len;
+    }
+    if (!json || !bin) fail('model.glb: no JSON or BIN chunk');
+    const comps = { SCALAR: 1, VEC2: 2, VEC3: 3, VEC4: 4 };
+    const accessor = (index) => {
+      const a = json.accessors[index], v = json.bufferViews[a.bufferView];
+      const n = comps[a.type], start = (v.byteOffset || 0) + (a.byteOffset || 0);
+      const Type = a.componentType === 5126 ? Float32Array : a.componentType === 5125 ? Uint32Array
+                 : a.componentType === 5123 ? Uint16Array : null;
+      if (!Type) fail('model.glb: accessor ' + index + ' has an unsupported component type');
+      const stride = v.byteStride || n * Type.BYTES_PER_ELEMENT;
+      if (stride === n * Type.BYTES_PER_ELEMENT) return new Type(bin, start, a.count * n);
+      const out = new Type(a.count * n), dv2 = new DataView(bin);
+      for (let i = 0; i < a.count; ++i)
+        for (let c = 0; c < n; ++c) {
+          const o = start + i * stride + c * Type.BYTES_PER_ELEMENT;
+          out[i * n + c] = Type === Float32Array ? dv2.getFloat32(o, true) : Type === Uint32Array ? dv2.getUint32(o, true) : dv2.getUint16(o, true);
+        }
+      return out;
+    };
+    const prim = json.meshes[0].primitives[0];
+    const info = json.asset && json.asset.extras && json.asset.extras.prt;
+    if (!info || info.basis !== 'sh') fail('model.glb: no asset.extras.prt with an SH transfer (prt export)');
+    const positions = accessor(prim.attributes.POSITION);
+    const vertices = positions.length / 3;
+    const names = info.attributes;
+    const rows = names.map((name) => {
+      if (prim.attributes[name] === undefined) fail('model.glb: attribute ' + name + ' missing');
+      return accessor(prim.attributes[name]);
+    });
+    return { info, vertices, positions, indices: accessor(prim.indices), rows };
+  }
+
+  // --- shaders ------------------------------------------------------------
+  const toneGlsl = `
+uniform float u_gain;  // 2^exposure
+uniform int u_tone;    // 0 clamp, 1 reinhard, 2 aces
+float tone(float v) {
+  v = max(v * u_gain, 0.0);
+  if (u_tone == 1) return v / (1.0 + v);
+  if (u_tone == 2) return clamp(v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14), 0.0, 1.0);
+  return min(v, 1.0);
+}
+float encode(float v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055; }
+vec4 display(vec3 c) { return vec4(encode(tone(c.r)), encode(tone(c.g)), encode(tone(c.b)), 1.0); }
+`;
+  const meshVert = (coeffs, vec4s, channels) => `#version 300 es
+precision highp float; precision highp int; precision highp sampler2D;
+#define COEFFS ${coeffs}
+#define VEC4S ${vec4s}
+#define CHANNELS ${channels}
+in vec3 a_position;
+uniform mat4 u_view_proj;
+uniform sampler2D u_transfer;
+uniform int u_width;
+layout(std140) uniform Light { vec4 L[VEC4S * 4]; };
+out vec3 v_radiance;
+vec4 fetch(int i) { return texelFetch(u_transfer, ivec2(i % u_width, i / u_width), 0); }
+void main() {
+  const int FETCHES = (COEFFS + 3) / 4;
+  int base = gl_VertexID * (CHANNELS * VEC4S);
+  vec3 r = vec3(0.0);
+  for (int i = 0; i < FETCHES; ++i) {
+    vec3 l0 = L[4 * i].rgb, l1 = L[4 * i + 1].rgb, l2 = L[4 * i + 2].rgb, l3 = L[4 * i + 3].rgb;
+#if CHANNELS == 1
+    vec4 t = fetch(base + i);
+    r += t.x * l0 + t.y * l1 + t.z * l2 + t.w * l3;
+#else
+    vec4 tr = fetch(base + i), tg = fetch(base + VEC4S + i), tb = fetch(base + 2 * VEC4S + i);
+    r += vec3(dot(tr, vec4(l0.r, l1.r, l2.r, l3.r)), dot(tg, vec4(l0.g, l1.g, l2.g, l3.g)),
+              dot(tb, vec4(l0.b, l1.b, l2.b, l3.b)));
+#endif
+  }
+  v_radiance = r;
+  gl_Position = u_view_proj * vec4(a_position, 1.0);
+}`;
+  const meshFrag = `#version 300 es
+precision highp float; precision highp int;
+in vec3 v_radiance;
+out vec4 o_color;
+${toneGlsl}
+void main() { o_color = display(v_radiance); }`;
+  const bgVert = `#version 300 es
+precision highp float;
+out vec2 v_ndc;
+void main() {
+  vec2 p = vec2(float((gl_VertexID & 1) << 2) - 1.0, float((gl_VertexID & 2) << 1) - 1.0);
+  v_ndc = p;
+  gl_Position = vec4(p, 1.0, 1.0);
+}`;
+  // shaders/background.frag.glsl's lookup (lat-long maps).
+  const bgFrag = `#version 300 es
+precision highp float; precision highp int; precision highp sampler2D;
+in vec2 v_ndc;
+out vec4 o_color;
+uniform vec3 u_forward, u_right, u_up;
+uniform mat3 u_rot_t;
+uniform sampler2D u_latlong;
+${toneGlsl}
+const float kPi = 3.14159265358979323846;
+void main() {
+  vec3 d = normalize(u_rot_t * normalize(u_forward + v_ndc.x * u_right + v_ndc.y * u_up));
+  float theta = acos(clamp(d.y, -1.0, 1.0));
+  float phi = atan(-d.x, d.z);
+  if (phi < 0.0) phi += 2.0 * kPi;
+  o_color = display(textureLod(u_latlong, vec2(phi / (2.0 * kPi), theta / kPi), 0.0).rgb);
+}`;
+
+  function program(gl, vs, fs, name) {
+    const p = gl.createProgram();
+    for (const [type, src] of [[gl.VERTEX_SHADER, vs], [gl.FRAGMENT_SHADER, fs]]) {
+      const s = gl.createShader(type);
+      gl.shaderSource(s, src);
+      gl.compileShader(s);
+      if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) fail(name + ' shader: ' + gl.getShaderInfoLog(s));
+      gl.attachShader(p, s);
+    }
+    gl.bindAttribLocation(p, 0, 'a_position');
+    gl.linkProgram(p);
+    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) fail(name + ' program: ' + gl.getProgramInfoLog(p));
+    const u = {};
+    const n = gl.getProgramParameter(p, gl.ACTIVE_UNIFORMS);
+    for (let i = 0; i < n; ++i) {
+      const name2 = gl.getActiveUniform(p, i).name.replace(/\[0\]$/, '');
+      u[name2] = gl.getUniformLocation(p, name2);
+    }
+    return { p, u };
+  }
+
+  // --- camera (glm::lookAt, glm::perspective; column-major) ---------------
+  const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const norm = (a) => { const l = Math.hypot(a[0], a[1], a[2]); return [a[0] / l, a[1] / l, a[2] / l]; };
+  const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+  const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+  function viewProj(cam, aspect) {
+    const f = norm(sub(cam.target, cam.eye)), s = norm(cross(f, cam.up)), u = cross(s, f);
+    const V = [s[0], u[0], -f[0], 0, s[1], u[1], -f[1], 0, s[2], u[2], -f[2], 0,
+               -dot(s, cam.eye), -dot(u, cam.eye), dot(f, cam.eye), 1];
+    const dist = Math.hypot(...sub(cam.target, cam.eye)), near = dist * 1e-3, far = dist * 1e3;
+    const t = Math.tan(cam.fov * Math.PI / 360);
+    const P = [1 / (aspect * t), 0, 0, 0, 0, 1 / t, 0, 0, 0, 0, -(far + near) / (far - near), -1,
+               0, 0, -2 * far * near / (far - near), 0];
+    const M = new Float32Array(16);
+    for (let c = 0; c < 4; ++c)
+      for (let r = 0; r < 4; ++r) {
+        let v = 0;
+        for (let k = 0; k < 4; ++k) v += P[4 * k + r] * V[4 * c + k];
+        M[4 * c + r] = v;
+      }
+    return { M, f, s, u, t };
+  }
+
+  // --- the page -----------------------------------------------------------
+  const q = new URLSearchParams(location.search);
+  const numbers = (text, count, what) => {
+    const v = text.split(',').map(Number);
+    if (v.length !== count || !v.every(Number.isFinite)) fail(`?${what}=: ${count} comma-separated numbers expected`);
+    return v;
+  };
+
+  async function fetchOk(url, kind) {
+    const r = await fetch(url);
+    if (!r.ok) fail(url + ': HTTP ' + r.status);
+    return kind === 'json' ? r.json() : r.arrayBuffer();
+  }
+
+  async function main() {
+    const canvas = $('canvas');
+    const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true, alpha: false });
+    if (!gl) fail('this browser has no WebGL2');
+    const lighting = await fetchOk('lighting.json', 'json');
+    const model = parseGlb(await fetchOk(lighting.model || 'model.glb'));
+    const bands = model.info.bands, channels = model.info.channels, n = bands * bands;
+    if (lighting.bands < bands) fail('lighting.json has ' + lighting.bands + ' bands, the model ' + bands);
+    const vec4s = (n + 3) >> 2;
+
+    // Transfer texture: [vertex][channel][vec4s], from the glTF's [channel][k] rows.
+    const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+    const texels = model.vertices * channels * vec4s, width = Math.min(maxTex, 8192);
+    const height = Math.ceil(texels / width);
+    if (height > maxTex) fail(`the transfer (${texels} texels) does not fit this WebGL's ${maxTex}^2 texture`);
+    const data = new Float32Array(width * height * 4);
+    for (let v = 0; v < model.vertices; ++v)
+      for (let c = 0; c < channels; ++c)
+        for (let k = 0; k < n; ++k) {
+          const j = c * n + k;
+          data[((v * channels + c) * vec4s) * 4 + k] = model.rows[j >> 2][4 * v + (j & 3)];
+        }
+    const transferTex = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, transferTex);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, width, height);
+    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, width, height, gl.RGBA, gl.FLOAT, data);
+    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
+
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    const pb = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, pb);
+    gl.bufferData(gl.ARRAY_BUFFER, model.positions, gl.STATIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    const ib = gl.createBuffer();
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
+    const indices = model.indices instanceof Uint32Array ? model.indices : new Uint32Array(model.indices);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indices, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+
+    const mesh = program(gl, meshVert(n, vec4s, channels), meshFrag, 'mesh');
+    const bg = program(gl, bgVert, bgFrag, 'background');
+    gl.uniformBlockBinding(mesh.p, gl.getUniformBlockIndex(mesh.p, 'Light'), 0);
+    const lightBuf = gl.createBuffer();
+    const lightData = new Float32Array(vec4s * 16);
+    gl.bindBuffer(gl.UNIFORM_BUFFER, lightBuf);
+    gl.bufferData(gl.UNIFORM_BUFFER, lightData.byteLength, gl.DYNAMIC_DRAW);
+    const emptyVao = gl.createVertexArray();
+
+    // Maps: the SH coefficients in lighting.json, the lat-long background
+    // (RGB half floats, row 0 the top) fetched when first shown.
+    const maps = lighting.maps;
+    const mapSelect = $('map');
+    for (const m of maps) {
+      mapSelect.add(new Option(m.name, m.name));
+      if (m.thumbnail) {  // click to pick
+        const img = new Image();
+        img.src = m.thumbnail;
+        img.alt = img.title = m.name;
+        img.dataset.map = m.name;
+        img.onclick = () => { apply({ map: m.name }); requestDraw(); };
+        $('thumbs').appendChild(img);
+      }
+    }
+    const textures = new Map();
+    async function mapTexture(m) {
+      if (textures.has(m.name)) return textures.get(m.name);
+      const half = new Uint16Array(await fetchOk(m.file));
+      if (half.length !== m.width * m.height * 3) fail(m.file + ': ' + half.length + ' values, expected ' + m.width * m.height * 3);
+      const t = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, t);
+      gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGB16F, m.width, m.height);
+      gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, m.width, m.height, gl.RGB, gl.HALF_FLOAT, half);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.REPEAT);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+      textures.set(m.name, t);
+      return t;
+    }
+
+    // State: prt render's options. rotate is --rotate, spin the extra turn about +Y.
+    const init = lighting.initial;
+    const home = { eye: init.camera.slice(0, 3), target: init.camera.slice(3, 6), up: init.camera.slice(6, 9) };
+    const state = {
+      map: init.map, rotate: init.rotate.slice(), spin: init.spin || 0, exposure: init.exposure,
+      tonemap: init.tonemap || 'clamp', fov: init.fov, auto: false, model: true,
+      eye: home.eye.slice(), target: home.target.slice(), up: home.up.slice(),
+    };
+    const tones = { clamp: 0, reinhard: 1, aces: 2 };
+    let fixedSize = null;
+    function apply(s) {
+      if (s.map !== undefined) {
+        if (!maps.some((m) => m.name === s.map)) fail('no map named ' + s.map + ' (' + maps.map((m) => m.name).join(', ') + ')');
+        state.map = s.map;
+      }
+      if (s.rotate !== undefined) state.rotate = s.rotate.slice();
+      if (s.spin !== undefined) state.spin = +s.spin;
+      if (s.exposure !== undefined) state.exposure = +s.exposure;
+      if (s.tonemap !== undefined) {
+        if (!(s.tonemap in tones)) fail('tonemap: clamp, reinhard or aces');
+        state.tonemap = s.tonemap;
+      }
+      if (s.fov !== undefined) state.fov = +s.fov;
+      if (s.camera !== undefined) {
+        state.eye = s.camera.slice(0, 3);
+        state.target = s.camera.slice(3, 6);
+        state.up = s.camera.slice(6, 9);
+      }
+      if (s.auto !== undefined) state.auto = !!s.auto;
+      if (s.model !== undefined) state.model = !!s.model;
+      if (s.size !== undefined) fixedSize = s.size;
+      mapSelect.value = state.map;
+      for (const img of $('thumbs').children) img.classList.toggle('on', img.dataset.map === state.map);
+      $('exposure').value = state.exposure;
+      $('exposure-value').textContent = (+state.exposure).toFixed(1);
+      $('tonemap').value = state.tonemap;
+      $('auto').checked = state.auto;
+      $('spin').value = ((state.spin % 360) + 360) % 360;
+      $('spin-value').textContent = Math.round(((state.spin % 360) + 360) % 360) + '\u00b0';
+    }
+    const fromUrl = {};
+    if (q.has('map')) fromUrl.map = q.get('map');
+    if (q.has('rotate')) fromUrl.rotate = numbers(q.get('rotate'), 3, 'rotate');
+    if (q.has('spin')) fromUrl.spin = numbers(q.get('spin'), 1, 'spin')[0];
+    if (q.has('exposure')) fromUrl.exposure = numbers(q.get('exposure'), 1, 'exposure')[0];
+    if (q.has('tonemap')) fromUrl.tonemap = q.get('tonemap');
+    if (q.has('camera')) fromUrl.camera = numbers(q.get('camera'), 9, 'camera');
+    if (q.has('fov')) fromUrl.fov = numbers(q.get('fov'), 1, 'fov')[0];
+    if (q.has('model')) fromUrl.model = q.get('model') !== '0';
+    fromUrl.auto = q.has('auto') ? q.get('auto') !== '0' : !!init.auto;
+    if (q.has('size')) {
+      const m = /^(\d+)x(\d+)$/.exec(q.get('size'));
+      if (!m) fail('?size=WxH expected');
+      fromUrl.size = [+m[1], +m[2]];
+    }
+    apply(fromUrl);
+
+    const rotation = new SH.Rotation(bands);
+    let frames = 0, fpsTime = performance.now(), fps = 0;
+
+    function resize() {
+      let w, h;
+      if (fixedSize) [w, h] = fixedSize;
+      else {
+        // The window below the bar and above the status line.
+        const dpr = self.devicePixelRatio || 1;
+        const cw = Math.max(16, innerWidth - 16), ch = Math.max(16, innerHeight - $('bar').offsetHeight - status.offsetHeight - 16);
+        w = Math.round(cw * dpr);
+        h = Math.round(ch * dpr);
+        canvas.style.width = cw + 'px';
+        canvas.style.height = ch + 'px';
+      }
+      if (fixedSize) { canvas.style.width = w + 'px'; canvas.style.height = h + 'px'; }
+      if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
+    }
+
+    async function draw() {
+      resize();
+      const m = maps.find((x) => x.name === state.map);
+      const tex = await mapTexture(m);
+      const R = SH.turned(state.spin, SH.fromEuler(state.rotate[0], state.rotate[1], state.rotate[2]));
+      rotation.set(R);
+      const L = rotation.apply(m.coefficients);
+      lightData.fill(0);
+      for (let k = 0; k < n; ++k) lightData.set(L[k], 4 * k);
+      const W = canvas.width, H = canvas.height, aspect = W / H;
+      const cam = { eye: state.eye, target: state.target, up: state.up, fov: state.fov };
+      const vp = viewProj(cam, aspect);
+      const gain = Math.pow(2, state.exposure), tone = tones[state.tonemap];
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.viewport(0, 0, W, H);
+      gl.clearColor(0, 0, 0, 1);
+      gl.clearDepth(1);
+      gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+      gl.disable(gl.DEPTH_TEST);
+      gl.disable(gl.CULL_FACE);
+      gl.useProgram(bg.p);
+      gl.uniform3fv(bg.u.u_forward, vp.f);
+      gl.uniform3fv(bg.u.u_right, scale(vp.s, vp.t * aspect));
+      gl.uniform3fv(bg.u.u_up, scale(vp.u, vp.t));
+      gl.uniformMatrix3fv(bg.u.u_rot_t, false, new Float32Array(R));  // row-major R read column-major: R^T
+      gl.uniform1f(bg.u.u_gain, gain);
+      gl.uniform1i(bg.u.u_tone, tone);
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, tex);
+      gl.uniform1i(bg.u.u_latlong, 0);
+      gl.bindVertexArray(emptyVao);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      if (state.model) {
+        gl.enable(gl.DEPTH_TEST);
+        gl.depthFunc(gl.LESS);
+        gl.useProgram(mesh.p);
+        gl.bindBuffer(gl.UNIFORM_BUFFER, lightBuf);
+        gl.bufferSubData(gl.UNIFORM_BUFFER, 0, lightData);
+        gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, lightBuf);
+        gl.uniformMatrix4fv(mesh.u.u_view_proj, false, vp.M);
+        gl.uniform1f(mesh.u.u_gain, gain);
+        gl.uniform1i(mesh.u.u_tone, tone);
+        gl.activeTexture(gl.TEXTURE1);
+        gl.bindTexture(gl.TEXTURE_2D, transferTex);
+        gl.uniform1i(mesh.u.u_transfer, 1);
+        gl.uniform1i(mesh.u.u_width, width);
+        gl.bindVertexArray(vao);
+        gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
+      }
+      gl.bindVertexArray(null);
+      const err = gl.getError();
+      if (err !== gl.NO_ERROR) fail('WebGL error 0x' + err.toString(16));
+      ++frames;
+      const now = performance.now();
+      if (now - fpsTime > 500) { fps = frames * 1000 / (now - fpsTime); frames = 0; fpsTime = now; }
+      status.textContent = `${model.vertices} vertices, ${indices.length / 3} triangles, ${bands} bands, ` +
+        `${channels === 1 ? 'mono' : 'RGB'} ${model.info.mode || ''} transfer | ${W}x${H} | ${fps ? fps.toFixed(1) : "-"} fps`;
+    }
+
+    // Redraw on demand; the auto-turn animates at 20 degrees per second.
+    let pending = false, last = performance.now();
+    function requestDraw() {
+      if (pending) return;
+      pending = true;
+      requestAnimationFrame(async (t) => {
+        pending = false;
+        if (state.auto) { apply({ spin: state.spin + 20 * Math.min(0.1, (t - last) / 1000) }); }
+        last = t;
+        await draw();
+        if (state.auto) requestDraw();
+      });
+    }
+
+    mapSelect.onchange = () => { apply({ map: mapSelect.value }); requestDraw(); };
+    $('exposure').oninput = () => { apply({ exposure: +$('exposure').value }); requestDraw(); };
+    $('tonemap').onchange = () => { apply({ tonemap: $('tonemap').value }); requestDraw(); };
+    $('auto').onchange = () => { apply({ auto: $('auto').checked }); last = performance.now(); requestDraw(); };
+    $('spin').oninput = () => { apply({ spin: +$('spin').value }); requestDraw(); };
+    $('reset').onclick = () => { apply({ camera: [...home.eye, ...home.target, ...home.up], fov: init.fov }); requestDraw(); };
+    addEventListener('resize', requestDraw);
+
+    // Orbit camera: drag turns the eye about the target (about up, and about
+    // the camera's right axis), the wheel moves it nearer or farther.
+    let drag = null;
+    canvas.addEventListener('pointerdown', (e) => { drag = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); });
+    canvas.addEventListener('pointerup', () => { drag = null; });
+    canvas.addEventListener('pointermove', (e) => {
+      if (!drag) return;
+      const dx = e.clientX - drag[0], dy = e.clientY - drag[1];
+      drag = [e.clientX, e.clientY];
+      const up = norm(state.up);
+      let off = sub(state.eye, state.target);
+      const turn = (v, axis, a) => {  // Rodrigues
+        const c = Math.cos(a), s = Math.sin(a);
+        return add(add(scale(v, c), scale(cross(axis, v), s)), scale(axis, dot(axis, v) * (1 - c)));
+      };
+      off = turn(off, up, -dx * 0.01);
+      const right = norm(cross(up, off));
+      const tilted = turn(off, right, -dy * 0.01);
+      if (Math.abs(dot(norm(tilted), up)) < 0.995) off = tilted;
+      state.eye = add(state.target, off);
+      requestDraw();
+    });
+    canvas.addEventListener('wheel', (e) => {
+      e.preventDefault();
+      const off = sub(state.eye, state.target);
+      state.eye = add(state.target, scale(off, Math.exp(e.deltaY * 0.001)));
+      requestDraw();
+    }, { passive: false });
+
+    const nextFrame = () => new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(res)));
+    self.prtViewer = {
+      state,
+      // Draws one frame with these settings (the URL's keys, as numbers and
+      // arrays); resolves once it is on the canvas.
+      async set(s) {
+        apply(s);
+        await draw();
+        gl.finish();
+        await nextFrame();
+        return { width: canvas.width, height: canvas.height };
+      },
+    };
+    await draw();
+    gl.finish();
+    await nextFrame();
+    resolveReady({ vertices: model.vertices, bands, channels, maps: maps.map((m) => m.name),
+                   width: canvas.width, height: canvas.height });
+    if (state.auto) requestDraw();
+  }
+
+  main().catch((e) => {
+    status.textContent = 'error: ' + e.message;
+    rejectReady(e);
+  });
+})();
