@@ -63,7 +63,13 @@ tinygltf::Value to_value(const json& j) {
     case json::value_t::string: return tinygltf::Value(j.get<std::string>());
     case json::value_t::boolean: return tinygltf::Value(j.get<bool>());
     case json::value_t::number_integer:
-    case json::value_t::number_unsigned: return tinygltf::Value(j.get<int>());
+    case json::value_t::number_unsigned: {
+      // tinygltf's integers are int; a count beyond that is written as a number.
+      const double d = j.get<double>();
+      if (d >= double(std::numeric_limits<int>::min()) && d <= double(std::numeric_limits<int>::max()))
+        return tinygltf::Value(j.get<int>());
+      return tinygltf::Value(d);
+    }
     case json::value_t::number_float: return tinygltf::Value(j.get<double>());
     default: return tinygltf::Value();
   }
@@ -229,6 +235,11 @@ void write_gltf(const std::string& path, const Mesh& mesh, const Transfer& t, co
   model.defaultScene = 0;
 
   const bool binary = ext == ".glb";
+  // A GLB's header and chunk lengths are 32-bit (the JSON chunk adds a few KB).
+  constexpr std::size_t kMaxGlbBuffer = std::numeric_limits<std::uint32_t>::max() - (std::size_t(1) << 20);
+  if (binary && model.buffers[0].data.size() > kMaxGlbBuffer)
+    throw Error(fmt::format("{}: {} bytes of vertex data do not fit a .glb (at most 4 GiB): write fewer bands, or "
+                            "a .gltf", path, model.buffers[0].data.size()));
   write_atomically(path, [&](const std::string& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw Error(path + ": cannot be written (cannot create " + tmp + ")");
