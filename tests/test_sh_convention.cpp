@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 namespace {
@@ -72,10 +73,11 @@ std::vector<glm::dvec3> lighting(unsigned seed) {
   return c;
 }
 
-sh::Sh9 as9(const std::vector<glm::dvec3>& c) {
-  sh::Sh9 s;
-  for (int k = 0; k < 9; ++k) s[k] = c[k];
-  return s;
+// As --format cpp prints a float.
+std::string fmt_float(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%#.9gf", v);
+  return b;
 }
 
 // ---- three.js -------------------------------------------------------------------
@@ -329,6 +331,33 @@ TEST(CliConvention, JsonSaysTheConventionAndHoldsTheEnginesArray) {
   const sh::UnityPacked packed = sh::unity_pack(want_u);
   EXPECT_EQ(u.at("unity_SH").at("unity_SHAr")[3].get<double>(), packed[0].w);
   EXPECT_EQ(u.at("unity_SH").at("unity_SHC")[0].get<double>(), packed[6].x);
+}
+
+TEST(CliConvention, CodeFormatsAreTheLibrarysShaderCode) {
+  prt::test::TempDir dir;
+  const std::string env = std::string(PRT_SOURCE_DIR) + "/envmaps/forest.exr";
+  prt::test::Result r = prt::test::run_prt(dir, {"project", env, "-q"});
+  ASSERT_EQ(r.code, 0) << prt::test::describe_run(r);
+  std::vector<glm::dvec3> c;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  for (const auto& t : j.at("coefficients"))
+    c.emplace_back(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
+  for (const char* conv : {"prt", "three", "filament", "unity"})
+    for (const char* format : {"glsl", "hlsl"}) {
+      r = prt::test::run_prt(dir, {"project", env, "-q", "--convention", conv, "--format", format});
+      ASSERT_EQ(r.code, 0) << prt::test::describe_run(r);
+      const std::string code =
+          sh::shader_code(sh::parse_convention(conv), c, false,
+                          std::string(format) == "glsl" ? sh::ShaderLanguage::Glsl : sh::ShaderLanguage::Hlsl);
+      EXPECT_NE(r.out.find(code), std::string::npos) << conv << " " << format << ":\n" << r.out;
+    }
+  r = prt::test::run_prt(dir, {"project", env, "-q", "--convention", "unity", "--format", "cpp"});
+  ASSERT_EQ(r.code, 0) << prt::test::describe_run(r);
+  EXPECT_NE(r.out.find("kPrtUnitySH[7][4]"), std::string::npos) << r.out;
+  r = prt::test::run_prt(dir, {"project", env, "-q", "--convention", "three", "--format", "cpp"});
+  ASSERT_EQ(r.code, 0) << prt::test::describe_run(r);
+  const sh::Sh9 t = sh::to_three(c);
+  EXPECT_NE(r.out.find(fmt_float(t[1].x)), std::string::npos) << r.out;
 }
 
 TEST(CliConvention, RefusesWhatAnEngineCannotTake) {
