@@ -20,10 +20,9 @@ constexpr double kPi = std::numbers::pi;
 
 // prt's 3-band basis is Y_k(d) = kSign[k] kNorm[k] kPoly[k](d) with kPoly =
 // 1, y, z, x, xy, yz, 3z^2-1, xz, x^2-y^2 (docs/CONVENTIONS.md's table).
-const double kNorm[9] = {
-    0.5 / std::sqrt(kPi),          std::sqrt(3 / (4 * kPi)),  std::sqrt(3 / (4 * kPi)),
-    std::sqrt(3 / (4 * kPi)),      std::sqrt(15 / (4 * kPi)), std::sqrt(15 / (4 * kPi)),
-    std::sqrt(5 / (16 * kPi)),     std::sqrt(15 / (4 * kPi)), std::sqrt(15 / (16 * kPi))};
+const double kNorm[9] = {0.5 / std::sqrt(kPi),      std::sqrt(3 / (4 * kPi)),  std::sqrt(3 / (4 * kPi)),
+                         std::sqrt(3 / (4 * kPi)),  std::sqrt(15 / (4 * kPi)), std::sqrt(15 / (4 * kPi)),
+                         std::sqrt(5 / (16 * kPi)), std::sqrt(15 / (4 * kPi)), std::sqrt(15 / (16 * kPi))};
 constexpr double kSign[9] = {1, -1, 1, -1, 1, -1, 1, -1, 1};
 constexpr int kBand[9] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
 // (-1)^(l+m): Y_lm(x, y, -z) = (-1)^(l+m) Y_lm(x, y, z) (z is the polar axis).
@@ -48,8 +47,7 @@ double cosine_over_pi(int k) { return clamped_cosine_factor(kBand[k]) / kPi; }
 
 Sh9 padded(std::span<const glm::dvec3> c) {
   if (c.size() != 1 && c.size() != 4 && c.size() != 9)
-    throw Error(fmt::format("engine SH conventions hold 1 to 3 bands (9 coefficients); got {} coefficients",
-                            c.size()));
+    throw Error(fmt::format("engine SH conventions hold 1 to 3 bands (9 coefficients); got {} coefficients", c.size()));
   Sh9 out{};
   for (std::size_t k = 0; k < c.size(); ++k) out[k] = c[k];
   return out;
@@ -165,7 +163,9 @@ glm::dvec3 filament_irradiance(const Sh9& s, const glm::dvec3& n) {
 glm::dvec3 unity_shade_sh9(const UnityPacked& p, const glm::dvec3& n) {
   const glm::dvec4 n4(n, 1.0);
   const glm::dvec4 b(n.x * n.y, n.y * n.z, n.z * n.z, n.z * n.x);
-  const auto dot4 = [](const glm::dvec4& a, const glm::dvec4& v) { return a.x * v.x + a.y * v.y + a.z * v.z + a.w * v.w; };
+  const auto dot4 = [](const glm::dvec4& a, const glm::dvec4& v) {
+    return a.x * v.x + a.y * v.y + a.z * v.z + a.w * v.w;
+  };
   glm::dvec3 r;
   for (int c = 0; c < 3; ++c) r[c] = dot4(p[c], n4) + dot4(p[3 + c], b);
   return r + glm::dvec3(p[6]) * (n.x * n.x - n.y * n.y);
@@ -205,8 +205,9 @@ std::string prt_functions(const Lang& L, int bands, bool irradiance) {
   std::string s;
   if (!irradiance) {
     const std::vector<double> a = clamped_cosine_factors(bands);
-    s += fmt::format("// A_l: the clamped cosine's factors (E_lm = A_l L_lm, no 1/pi).\n{} float PRT_SH_COSINE[{}] = {}",
-                     L.konst, bands, L.hlsl ? "{" : fmt::format("float[{}](", bands));
+    s +=
+        fmt::format("// A_l: the clamped cosine's factors (E_lm = A_l L_lm, no 1/pi).\n{} float PRT_SH_COSINE[{}] = {}",
+                    L.konst, bands, L.hlsl ? "{" : fmt::format("float[{}](", bands));
     for (int l = 0; l < bands; ++l) s += num(a[l]) + (l + 1 < bands ? ", " : "");
     s += L.hlsl ? "};\n" : ");\n";
   }
@@ -266,7 +267,8 @@ std::string three_functions(const Lang& L) {
   s += fmt::format("{} prt_sh_radiance({} d) {{\n", V, V);
   s += "    float x = d.x;\n    float y = d.y;\n    float z = d.z;\n"
        "    return PRT_SH_COEFFS[0] * 0.282095\n"
-       "        + PRT_SH_COEFFS[1] * (0.488603 * y) + PRT_SH_COEFFS[2] * (0.488603 * z) + PRT_SH_COEFFS[3] * (0.488603 * x)\n"
+       "        + PRT_SH_COEFFS[1] * (0.488603 * y) + PRT_SH_COEFFS[2] * (0.488603 * z) + PRT_SH_COEFFS[3] * (0.488603 "
+       "* x)\n"
        "        + PRT_SH_COEFFS[4] * (1.092548 * x * y) + PRT_SH_COEFFS[5] * (1.092548 * y * z)\n"
        "        + PRT_SH_COEFFS[6] * (0.315392 * (3.0 * z * z - 1.0))\n"
        "        + PRT_SH_COEFFS[7] * (1.092548 * x * z) + PRT_SH_COEFFS[8] * (0.546274 * (x * x - y * y));\n"
@@ -287,8 +289,9 @@ std::string three_functions(const Lang& L) {
 
 std::string filament_function(const Lang& L) {
   const std::string V = L.v3;
-  std::string s = "// Filament Irradiance_SphericalHarmonics (shaders/src/surface_light_indirect.fs): E(n)/pi\n"
-                  "// (Lambert's 1/pi folded in), clamped at 0 as Filament clamps it.\n";
+  std::string s =
+      "// Filament Irradiance_SphericalHarmonics (shaders/src/surface_light_indirect.fs): E(n)/pi\n"
+      "// (Lambert's 1/pi folded in), clamped at 0 as Filament clamps it.\n";
   s += fmt::format("{} prt_sh_irradiance({} n) {{\n", V, V);
   s += "    return max(PRT_SH_COEFFS[0]\n"
        "        + PRT_SH_COEFFS[1] * (n.y) + PRT_SH_COEFFS[2] * (n.z) + PRT_SH_COEFFS[3] * (n.x)\n"

@@ -114,12 +114,13 @@ TEST(ThreeConvention, GetAtIsPrtsRadianceAndGetIrradianceAtPrtsIrradiance) {
   const auto c = lighting(1);
   const sh::Sh9 t = sh::to_three(c);
   const auto dirs = random_directions(500, 2);
-  EXPECT_LT(worst_relative(dirs, [&](auto d) { return three_get_at(t, d); }, [&](auto d) { return prt_radiance(c, d); }),
-            kThreeConstantsTol);
   EXPECT_LT(worst_relative(
-                dirs, [&](auto d) { return three_get_irradiance_at(t, d); },
-                [&](auto d) { return prt_irradiance(c, d); }),
+                dirs, [&](auto d) { return three_get_at(t, d); }, [&](auto d) { return prt_radiance(c, d); }),
             kThreeConstantsTol);
+  EXPECT_LT(
+      worst_relative(
+          dirs, [&](auto d) { return three_get_irradiance_at(t, d); }, [&](auto d) { return prt_irradiance(c, d); }),
+      kThreeConstantsTol);
   // The library's copy of three's formulas is the same.
   for (const auto& d : dirs) {
     EXPECT_LT(max_abs(sh::three_get_at(t, d) - three_get_at(t, d)), kExactTol * 10);
@@ -146,8 +147,8 @@ TEST(ThreeConvention, NoCondonShortleyPhase) {
 // multiplies coefficient i by A[i] / pi with A the polynomial constants below.
 sh::Sh9 filament_from_prt(const std::vector<glm::dvec3>& radiance) {
   const double sqrt_pi = std::sqrt(kPi), s3 = std::sqrt(3.0), s5 = std::sqrt(5.0), s15 = std::sqrt(15.0);
-  const double A[9] = {1 / (2 * sqrt_pi),  -s3 / (2 * sqrt_pi), s3 / (2 * sqrt_pi),
-                       -s3 / (2 * sqrt_pi), s15 / (2 * sqrt_pi), -s15 / (2 * sqrt_pi),
+  const double A[9] = {1 / (2 * sqrt_pi),   -s3 / (2 * sqrt_pi),  s3 / (2 * sqrt_pi),
+                       -s3 / (2 * sqrt_pi), s15 / (2 * sqrt_pi),  -s15 / (2 * sqrt_pi),
                        s5 / (4 * sqrt_pi),  -s15 / (2 * sqrt_pi), s15 / (4 * sqrt_pi)};
   const double truncated_cos[3] = {kPi, 2 * kPi / 3, kPi / 4};
   const int band[9] = {0, 1, 1, 1, 2, 2, 2, 2, 2};
@@ -168,12 +169,15 @@ TEST(FilamentConvention, ArrayIsCmgensAndItsShaderGivesIrradianceOverPi) {
   const sh::Sh9 ref = filament_from_prt(c);
   for (int k = 0; k < 9; ++k) EXPECT_LT(max_abs(f[k] - ref[k]), kExactTol * max_abs(ref[0])) << k;
   const auto dirs = random_directions(500, 5);
-  const auto clamp0 = [](glm::dvec3 v) { return glm::dvec3(std::max(v.x, 0.0), std::max(v.y, 0.0), std::max(v.z, 0.0)); };
+  const auto clamp0 = [](glm::dvec3 v) {
+    return glm::dvec3(std::max(v.x, 0.0), std::max(v.y, 0.0), std::max(v.z, 0.0));
+  };
   EXPECT_LT(worst_relative(
                 dirs, [&](auto d) { return filament_irradiance_sh(f, d); },
                 [&](auto d) { return clamp0(prt_irradiance(c, d) / kPi); }),
             kExactTol);
-  for (const auto& d : dirs) EXPECT_LT(max_abs(sh::filament_irradiance(f, d) - filament_irradiance_sh(f, d)), kExactTol);
+  for (const auto& d : dirs)
+    EXPECT_LT(max_abs(sh::filament_irradiance(f, d) - filament_irradiance_sh(f, d)), kExactTol);
 }
 
 // ---- Unity ------------------------------------------------------------------------
@@ -204,7 +208,9 @@ sh::UnityPacked unity_pack(const sh::Sh9& sh) {
 }
 // CGIncludes/UnityCG.cginc: ShadeSH9 = SHEvalLinearL0L1 + SHEvalLinearL2 (linear colour space).
 glm::dvec3 shade_sh9(const sh::UnityPacked& p, const glm::dvec3& n) {
-  const auto dot = [](const glm::dvec4& a, const glm::dvec4& b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; };
+  const auto dot = [](const glm::dvec4& a, const glm::dvec4& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w;
+  };
   const glm::dvec4 normal(n, 1.0);
   glm::dvec3 x{dot(p[0], normal), dot(p[1], normal), dot(p[2], normal)};
   const glm::dvec4 vB(normal.x * normal.y, normal.y * normal.z, normal.z * normal.z, normal.z * normal.x);
@@ -223,10 +229,10 @@ TEST(UnityConvention, ShadeSH9AtTheMirroredNormalIsIrradianceOverPi) {
     for (int j = 0; j < 4; ++j) EXPECT_NEAR(p[i][j], pref[i][j], kExactTol * max_abs(ref[0])) << i << "," << j;
   const auto dirs = random_directions(500, 7);
   const auto unity_n = [](const glm::dvec3& d) { return glm::dvec3(d.x, d.y, -d.z); };
-  EXPECT_LT(worst_relative(
-                dirs, [&](auto d) { return shade_sh9(p, unity_n(d)); },
-                [&](auto d) { return prt_irradiance(c, d) / kPi; }),
-            kExactTol);
+  EXPECT_LT(
+      worst_relative(
+          dirs, [&](auto d) { return shade_sh9(p, unity_n(d)); }, [&](auto d) { return prt_irradiance(c, d) / kPi; }),
+      kExactTol);
   for (const auto& d : dirs) {
     EXPECT_LT(max_abs(sh::unity_shade_sh9(p, d) - shade_sh9(p, d)), kExactTol * 10);
     EXPECT_EQ(sh::to_engine_axes(sh::Convention::Unity, d), unity_n(d));
@@ -307,11 +313,12 @@ TEST(CliConvention, JsonSaysTheConventionAndHoldsTheEnginesArray) {
   };
   const auto coeffs = [](const nlohmann::json& j) {
     std::vector<glm::dvec3> c;
-    for (const auto& t : j.at("coefficients")) c.emplace_back(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
+    for (const auto& t : j.at("coefficients"))
+      c.emplace_back(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
     return c;
   };
-  const nlohmann::json p = json_of({}), t = json_of({"--convention", "three"}), f = json_of({"--convention", "filament"}),
-                       u = json_of({"--convention", "unity"});
+  const nlohmann::json p = json_of({}), t = json_of({"--convention", "three"}),
+                       f = json_of({"--convention", "filament"}), u = json_of({"--convention", "unity"});
   EXPECT_EQ(p.at("convention"), "prt");
   EXPECT_EQ(t.at("convention"), "three");
   EXPECT_EQ(f.at("convention"), "filament");
@@ -340,8 +347,7 @@ TEST(CliConvention, CodeFormatsAreTheLibrarysShaderCode) {
   ASSERT_EQ(r.code, 0) << prt::test::describe_run(r);
   std::vector<glm::dvec3> c;
   const nlohmann::json j = nlohmann::json::parse(r.out);
-  for (const auto& t : j.at("coefficients"))
-    c.emplace_back(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
+  for (const auto& t : j.at("coefficients")) c.emplace_back(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
   for (const char* conv : {"prt", "three", "filament", "unity"})
     for (const char* format : {"glsl", "hlsl"}) {
       r = prt::test::run_prt(dir, {"project", env, "-q", "--convention", conv, "--format", format});

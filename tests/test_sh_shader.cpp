@@ -156,7 +156,7 @@ std::string name(const Case& c) {
 
 void check(const Case& c, sh::ShaderLanguage lang,
            const std::function<std::vector<std::pair<glm::dvec3, glm::dvec3>>(const std::string&, bool,
-                                                                                const std::vector<glm::dvec3>&)>& run) {
+                                                                              const std::vector<glm::dvec3>&)>& run) {
   std::vector<glm::dvec3> coeffs = test::random_coefficients(c.bands, 100 + c.bands);
   coeffs[0] += glm::dvec3(6.0);
   std::string code = sh::shader_code(c.conv, coeffs, c.irradiance, lang);
@@ -198,9 +198,9 @@ void check(const Case& c, sh::ShaderLanguage lang,
 }
 
 const std::vector<Case> kCases = {
-    {sh::Convention::Prt, 1, false},   {sh::Convention::Prt, 2, false},      {sh::Convention::Prt, 3, false},
-    {sh::Convention::Prt, 6, false},   {sh::Convention::Prt, 10, false},     {sh::Convention::Prt, 3, true},
-    {sh::Convention::Prt, 6, true},    {sh::Convention::Three, 3, false},    {sh::Convention::Filament, 3, false},
+    {sh::Convention::Prt, 1, false},   {sh::Convention::Prt, 2, false},   {sh::Convention::Prt, 3, false},
+    {sh::Convention::Prt, 6, false},   {sh::Convention::Prt, 10, false},  {sh::Convention::Prt, 3, true},
+    {sh::Convention::Prt, 6, true},    {sh::Convention::Three, 3, false}, {sh::Convention::Filament, 3, false},
     {sh::Convention::Unity, 3, false}, {sh::Convention::Three, 2, false},
 };
 

@@ -28,10 +28,10 @@ bool tools_required() {
   return v && *v && std::string(v) != "0";
 }
 
-#define SKIP_WITHOUT_TOOL(why)                                                 \
-  do {                                                                         \
+#define SKIP_WITHOUT_TOOL(why)                                                   \
+  do {                                                                           \
     if (tools_required()) GTEST_FAIL() << "PRT_REQUIRE_TOOLS is set: " << (why); \
-    GTEST_SKIP() << (why);                                                     \
+    GTEST_SKIP() << (why);                                                       \
   } while (0)
 
 int shell(const std::string& cmd) {
@@ -83,9 +83,9 @@ TEST(ThreeInterop, SphericalHarmonics3OnPrtsExportIsPrtsLighting) {
     write_file(expect, j.dump());
 
     const std::string log = dir.file("node.txt");
-    const int rc = shell("node " + shell_quote(std::string(PRT_SOURCE_DIR) + "/tests/js/three_sh.mjs") + " " +
-                         shell_quote(three) + " " + shell_quote(prt_json) + " " + shell_quote(expect) + " >" +
-                         shell_quote(log) + " 2>&1");
+    const int rc =
+        shell("node " + shell_quote(std::string(PRT_SOURCE_DIR) + "/tests/js/three_sh.mjs") + " " + shell_quote(three) +
+              " " + shell_quote(prt_json) + " " + shell_quote(expect) + " >" + shell_quote(log) + " 2>&1");
     const std::string out = read_file(log);
     if (rc == 77) SKIP_WITHOUT_TOOL(out);
     EXPECT_EQ(rc, 0) << out;

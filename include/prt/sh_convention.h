@@ -69,7 +69,8 @@ std::vector<glm::dvec3> from_unity(const Sh9& l2);
 // The engines' formulas, at a unit direction in the engine's own axes:
 glm::dvec3 three_get_at(const Sh9& three, const glm::dvec3& d);             // getAt: radiance
 glm::dvec3 three_get_irradiance_at(const Sh9& three, const glm::dvec3& n);  // getIrradianceAt: E (no 1/pi)
-glm::dvec3 filament_irradiance(const Sh9& filament, const glm::dvec3& n);   // Irradiance_SphericalHarmonics: max(E/pi, 0)
+glm::dvec3 filament_irradiance(const Sh9& filament,
+                               const glm::dvec3& n);  // Irradiance_SphericalHarmonics: max(E/pi, 0)
 glm::dvec3 unity_shade_sh9(const UnityPacked& packed, const glm::dvec3& n);  // ShadeSH9, linear colour space: E/pi
 
 // Shader code for `prt project --format glsl|hlsl`: the constants and
