@@ -345,6 +345,8 @@ Run add_project(CLI::App& app) {
       "cross, or six faces (--mapping faces, ENV = 'sky_{face}.exr' with px nx py ny pz nz, or six comma-separated\n"
       "files +X,-X,+Y,-Y,+Z,-Z). A one-line summary of the map goes to stderr. A lat-long file is read and\n"
       "projected ~32 MiB of rows at a time, so a 16384x8192 map needs ~0.1 GiB, not 1.5 (docs/HARD_CASES.md).\n"
+      "Engines: --convention three|filament|unity writes three.js's, Filament's or Unity's array (3 bands; JSON,\n"
+      "glsl/hlsl with the engine's own evaluation, cpp; docs/CONVENTIONS.md, \"Engines' conventions\").\n"
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
   s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
   s->add_option("-b,--bands", a->bands,
