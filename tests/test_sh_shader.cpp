@@ -16,9 +16,8 @@
 #include <prt/sh.h>
 #include <prt/sh_convention.h>
 
-#include "egl_context.h"
-#include "gl_util.h"
 #include "test_gl.h"
+#include "test_sh_gpu.h"
 #include "test_util.h"
 
 #include <gtest/gtest.h>
@@ -50,68 +49,25 @@ std::string to_glsl(std::string hlsl) {
 
 class ShShader : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    try {
-      context_ = new gl::EglContext;
-      context_->create();
-    } catch (const NoGlContext& e) {
-      why_ = e.what();
-      delete context_;
-      context_ = nullptr;
-    }
-  }
-  static void TearDownTestSuite() {
-    delete context_;
-    context_ = nullptr;
-  }
   void SetUp() override {
-    if (!context_) PRT_SKIP_WITHOUT_GL(why_);
-    context_->make_current();
+    std::string why;
+    if (!test::sh_gpu_context(why)) PRT_SKIP_WITHOUT_GL(why);
   }
 
   // Runs `snippet` at `dirs`: (prt_sh_irradiance, prt_sh_radiance or 0) per direction.
   static std::vector<std::pair<glm::dvec3, glm::dvec3>> run(const std::string& snippet, bool radiance,
                                                             const std::vector<glm::dvec3>& dirs) {
-    const std::string src = std::string("#version 450\nlayout(local_size_x = 64) in;\n") +
-                            "layout(std430, binding = 0) readonly buffer Dirs { vec4 dirs[]; };\n"
-                            "layout(std430, binding = 1) writeonly buffer Outs { vec4 outs[]; };\n" +
-                            snippet +
-                            "void main() {\n"
-                            "    uint i = gl_GlobalInvocationID.x;\n"
-                            "    if (i >= uint(dirs.length())) return;\n"
-                            "    vec3 d = dirs[i].xyz;\n"
-                            "    outs[2u * i] = vec4(prt_sh_irradiance(d), 1.0);\n" +
-                            (radiance ? "    outs[2u * i + 1u] = vec4(prt_sh_radiance(d), 1.0);\n"
-                                      : "    outs[2u * i + 1u] = vec4(0.0);\n") +
-                            "}\n";
-    const GLuint prog = gl::link_compute(src.c_str(), "sh snippet", "");
-    std::vector<float> in;
-    for (const auto& d : dirs) in.insert(in.end(), {float(d.x), float(d.y), float(d.z), 0.0f});
-    const GLuint bin = gl::make_buffer(in.data(), in.size() * sizeof(float));
-    const GLuint bout = gl::make_buffer(nullptr, dirs.size() * 8 * sizeof(float), GL_DYNAMIC_STORAGE_BIT);
-    glUseProgram(prog);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, bin);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, bout);
-    glDispatchCompute(GLuint((dirs.size() + 63) / 64), 1, 1);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    std::vector<float> out(dirs.size() * 8);
-    glGetNamedBufferSubData(bout, 0, GLsizeiptr(out.size() * sizeof(float)), out.data());
-    gl::check_gl("sh snippet");
-    glDeleteBuffers(1, &bin);
-    glDeleteBuffers(1, &bout);
-    glDeleteProgram(prog);
+    const std::vector<glm::dvec3> out =
+        test::run_at_directions(snippet,
+                                std::string("    outs[2u * i] = vec4(prt_sh_irradiance(d), 1.0);\n") +
+                                    (radiance ? "    outs[2u * i + 1u] = vec4(prt_sh_radiance(d), 1.0);\n"
+                                              : "    outs[2u * i + 1u] = vec4(0.0);\n"),
+                                2, dirs);
     std::vector<std::pair<glm::dvec3, glm::dvec3>> r;
-    for (std::size_t i = 0; i < dirs.size(); ++i)
-      r.emplace_back(glm::dvec3(out[8 * i], out[8 * i + 1], out[8 * i + 2]),
-                     glm::dvec3(out[8 * i + 4], out[8 * i + 5], out[8 * i + 6]));
+    for (std::size_t i = 0; i < dirs.size(); ++i) r.emplace_back(out[2 * i], out[2 * i + 1]);
     return r;
   }
-
-  static gl::EglContext* context_;
-  static std::string why_;
 };
-gl::EglContext* ShShader::context_ = nullptr;
-std::string ShShader::why_;
 
 glm::dvec3 prt_sum(const std::vector<glm::dvec3>& c, const glm::dvec3& d, bool cosine) {
   const int bands = sh::bands_of(c.size());
