@@ -62,7 +62,7 @@ done
 
 echo
 echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands keep),"
-echo "<map>.irradiance.glsl (paste-ready 3-band irradiance), <map>.irradiance.png (irradiance map),"
+echo "<map>.irradiance.glsl (paste-ready 3-band irradiance and prt_sh_irradiance()), <map>.irradiance.png (irradiance map),"
 echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance),"
 echo "scene.<map>.png (rendered), turn_0000..0011.png (the sunset turning around the model),"
 echo "scene.<map>.wavelet.png (the same lit through the wavelet basis: compare the shadows under studio.exr)."

@@ -585,7 +585,7 @@ const BadCase kBadCases[] = {
      "", 1},
     {"ReconstructUnknownFormat", {"{forest}", "--reconstruct", "{dir}/rec.xyz"}, {"{dir}/rec.xyz"}, "", 2},
     // Bad options and outputs (docs/HARD_CASES.md): every bad value exits 2.
-    {"FormatYaml", {"{forest}", "--format", "yaml"}, {"--format: expected json, text, glsl or cpp, got 'yaml'"}, "", 2},
+    {"FormatYaml", {"{forest}", "--format", "yaml"}, {"--format: expected json, text, glsl, hlsl or cpp, got 'yaml'"}, "", 2},
     // sscanf's %d wrapped 4294967297 to 1: a 1x2 image was written.
     {"ReconstructSizeOverflow",
      {"{forest}", "--reconstruct", "{dir}/rec.exr", "--reconstruct-size", "4294967297x2"},

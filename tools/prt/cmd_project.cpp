@@ -9,6 +9,7 @@
 #include <prt/projection.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
+#include <prt/sh_convention.h>
 
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
@@ -27,11 +28,33 @@ constexpr const char* kConvention =
     "real orthonormal SH, Condon-Shortley phase, polar axis z, index k = l(l+1)+m; world right-handed, +Y up; "
     "in the map's units, no 1/pi (docs/CONVENTIONS.md)";
 
+// What an engine convention's array is (docs/CONVENTIONS.md, "Engines' conventions").
+std::string convention_detail(sh::Convention c) {
+  switch (c) {
+    case sh::Convention::Three:
+      return "three.js SphericalHarmonics3 (LightProbe.sh): radiance, no Condon-Shortley phase (prt's k = 1, 3, 5, 7 "
+             "negated), index l(l+1)+m, three's world axes = prt's (right-handed, +Y up); three applies the clamped "
+             "cosine itself (getIrradianceAt); load with new SphericalHarmonics3().fromArray(coefficients.flat()) "
+             "(docs/CONVENTIONS.md)";
+    case sh::Convention::Filament:
+      return "Filament IndirectLight::Builder::irradiance(3, sh), as cmgen --sh-shader writes it: irradiance / pi "
+             "(clamped cosine and Lambert's 1/pi applied), pre-multiplied by the basis constants, summed against 1, "
+             "y, z, x, yx, yz, 3z^2-1, zx, x^2-y^2 (Irradiance_SphericalHarmonics); Filament's world axes = prt's "
+             "(docs/CONVENTIONS.md)";
+    case sh::Convention::Unity:
+      return "Unity SphericalHarmonicsL2 (coefficients[i] = sh[r,i], sh[g,i], sh[b,i]): irradiance / pi "
+             "pre-multiplied by Unity's normalisation constants, in Unity's left-handed axes (prt's (x, y, z) is "
+             "Unity's (x, y, -z)); unity_SH: its packing unity_SHAr..unity_SHC for ShadeSH9 (docs/CONVENTIONS.md)";
+    case sh::Convention::Prt: break;
+  }
+  return kConvention;
+}
+
 struct ProjectArgs {
   std::string env, output, format = "json", window = "none", rotate, reconstruct, reconstruct_size;
   std::string exposure = "0";  // --exposure: the reconstruction times 2^stops, or "auto"
   const CLI::Option* exposure_opt = nullptr;
-  std::string mapping = "auto", quadrature = "box";
+  std::string mapping = "auto", quadrature = "box", convention = "prt";
   int bands = 3;
   double window_width = 0;
   bool irradiance = false, quiet = false, no_stream = false, peak_memory = false;
@@ -111,9 +134,12 @@ void parse_size(const std::string& text, int& w, int& h) {
 
 // JSON with one coefficient triple per line (nlohmann serialises every value:
 // escaping, and doubles in shortest round-trip form, i.e. full precision).
-std::string format_json(const std::vector<glm::dvec3>& c, int bands, const nlohmann::ordered_json& extra) {
-  std::string s = fmt::format("{{\n  \"bands\": {},\n  \"convention\": {},\n  \"coefficients\": [\n", bands,
-                              nlohmann::json(kConvention).dump());
+std::string format_json(const std::vector<glm::dvec3>& c, int bands, sh::Convention conv,
+                        const nlohmann::ordered_json& extra) {
+  std::string s = fmt::format("{{\n  \"bands\": {},\n  \"convention\": {},\n  \"convention_detail\": {},\n"
+                              "  \"coefficients\": [\n",
+                              bands, nlohmann::json(sh::convention_name(conv)).dump(),
+                              nlohmann::json(convention_detail(conv)).dump());
   for (std::size_t k = 0; k < c.size(); ++k)
     s += "    " + nlohmann::json({c[k].x, c[k].y, c[k].z}).dump() + (k + 1 < c.size() ? ",\n" : "\n");
   s += "  ]";
@@ -132,18 +158,32 @@ std::string format_text(const std::vector<glm::dvec3>& c, int bands, const std::
   return s;
 }
 
-std::string format_code(const std::vector<glm::dvec3>& c, int bands, const std::string& header, bool glsl) {
-  const int n = sh::num_coeffs(bands);
-  std::string s = "// " + header + "\n// " + kConvention + "\n";
-  if (glsl) {
-    s += fmt::format("const int PRT_SH_BANDS = {};\nconst vec3 PRT_SH_COEFFS[{}] = vec3[{}](\n", bands, n, n);
-    for (int k = 0; k < n; ++k)
-      s += fmt::format("    vec3({:.9g}, {:.9g}, {:.9g}){}\n", c[k].x, c[k].y, c[k].z, k + 1 < n ? "," : "");
-    s += ");\n";
+// glsl / hlsl: the constants and a function evaluating them (prt/sh_convention.h);
+// cpp: the constants (prt's, or the engine's array). c: prt's coefficients.
+std::string format_code(const std::vector<glm::dvec3>& c, int bands, const std::string& header,
+                        const std::string& format, sh::Convention conv, bool irradiance) {
+  std::string s = "// " + header + "\n// " + convention_detail(conv) + "\n";
+  if (format == "glsl" || format == "hlsl") {
+    s += sh::shader_code(conv, c, irradiance, format == "glsl" ? sh::ShaderLanguage::Glsl : sh::ShaderLanguage::Hlsl);
+  } else if (conv == sh::Convention::Unity) {
+    const sh::UnityPacked p = sh::unity_pack(sh::to_unity(c));
+    s += "// unity_SHAr, SHAg, SHAb, SHBr, SHBg, SHBb, SHC\nconstexpr float kPrtUnitySH[7][4] = {\n";
+    for (const auto& v : p) s += fmt::format("    {{{:#.9g}f, {:#.9g}f, {:#.9g}f, {:#.9g}f}},\n", v.x, v.y, v.z, v.w);
+    s += "};\n";
   } else {
+    std::vector<glm::dvec3> e = c;
+    if (conv == sh::Convention::Three) {
+      const sh::Sh9 t = sh::to_three(c);
+      e.assign(t.begin(), t.end());
+    } else if (conv == sh::Convention::Filament) {
+      const sh::Sh9 f = sh::to_filament(c);
+      e.assign(f.begin(), f.end());
+    }
+    const int n = int(e.size());
+    if (conv != sh::Convention::Prt) bands = 3;
     s += fmt::format("constexpr int kPrtShBands = {};\nconstexpr float kPrtShCoeffs[{}][3] = {{\n", bands, n);
     // '#' keeps the decimal point (2 -> 2.00000000f): always a valid float literal.
-    for (int k = 0; k < n; ++k) s += fmt::format("    {{{:#.9g}f, {:#.9g}f, {:#.9g}f}},\n", c[k].x, c[k].y, c[k].z);
+    for (int k = 0; k < n; ++k) s += fmt::format("    {{{:#.9g}f, {:#.9g}f, {:#.9g}f}},\n", e[k].x, e[k].y, e[k].z);
     s += "};\n";
   }
   return s;
@@ -154,6 +194,23 @@ int run_project(const ProjectArgs& a) {
   // numbers and sizes were checked while parsing).
   const Quadrature quad = for_option("--quadrature", [&] { return parse_quadrature(a.quadrature); });
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  const sh::Convention conv = for_option("--convention", [&] { return sh::parse_convention(a.convention); });
+  if (conv != sh::Convention::Prt) {
+    const std::string_view name = sh::convention_name(conv);
+    if (a.bands > sh::convention_max_bands(conv))
+      throw UsageError(fmt::format("--convention {}: the engine's array holds 3 bands (9 coefficients); got --bands "
+                                   "{}; give --bands 3 or fewer (missing bands are written as zeros)",
+                                   name, a.bands));
+    if (a.irradiance)
+      throw UsageError(fmt::format("--convention {} takes radiance: {}; leave out --irradiance", name,
+                                   conv == sh::Convention::Three
+                                       ? "three.js applies the clamped cosine itself (getIrradianceAt)"
+                                       : "its array is irradiance / pi already"));
+    if (a.format == "text")
+      throw UsageError(fmt::format("--convention {}: --format text is prt's (k, l, m) table; use json, glsl, hlsl "
+                                   "or cpp",
+                                   name));
+  }
   if (!a.reconstruct.empty())
     if (const std::string problem = image_output_type_problem(a.reconstruct); !problem.empty())
       throw UsageError("--reconstruct: " + problem);
@@ -246,12 +303,30 @@ int run_project(const ProjectArgs& a) {
   }
   report_memory(extra);
   std::string text;
-  if (a.format == "json")
-    text = format_json(c, a.bands, extra);
-  else if (a.format == "text")
+  if (a.format == "json") {
+    if (conv == sh::Convention::Prt) {
+      text = format_json(c, a.bands, conv, extra);
+    } else {
+      const sh::Sh9 e = conv == sh::Convention::Three    ? sh::to_three(c)
+                        : conv == sh::Convention::Filament ? sh::to_filament(c)
+                                                           : sh::to_unity(c);
+      extra["quantity"] = conv == sh::Convention::Three ? "radiance" : "irradiance / pi (pre-multiplied)";
+      if (conv == sh::Convention::Unity) {
+        nlohmann::ordered_json u;
+        static constexpr const char* names[7] = {"unity_SHAr", "unity_SHAg", "unity_SHAb", "unity_SHBr",
+                                                 "unity_SHBg", "unity_SHBb", "unity_SHC"};
+        const sh::UnityPacked p = sh::unity_pack(e);
+        for (int i = 0; i < 7; ++i) u[names[i]] = {p[i].x, p[i].y, p[i].z, p[i].w};
+        extra["unity_SH"] = u;
+      }
+      if (a.bands < 3) extra["bands_projected"] = a.bands;
+      text = format_json(std::vector<glm::dvec3>(e.begin(), e.end()), 3, conv, extra);
+    }
+  } else if (a.format == "text") {
     text = format_text(c, a.bands, header);
-  else
-    text = format_code(c, a.bands, header, a.format == "glsl");
+  } else {
+    text = format_code(c, a.bands, header, a.format, conv, a.irradiance);
+  }
   if (!a.output.empty() && a.output != "-") out.write([&] { write_text_file(a.output, text); });
   if (const int rc = out.commit(); rc != 0) return rc;
   if (a.output.empty() || a.output == "-") fmt::print("{}", text);
@@ -270,6 +345,8 @@ Run add_project(CLI::App& app) {
       "cross, or six faces (--mapping faces, ENV = 'sky_{face}.exr' with px nx py ny pz nz, or six comma-separated\n"
       "files +X,-X,+Y,-Y,+Z,-Z). A one-line summary of the map goes to stderr. A lat-long file is read and\n"
       "projected ~32 MiB of rows at a time, so a 16384x8192 map needs ~0.1 GiB, not 1.5 (docs/HARD_CASES.md).\n"
+      "Engines: --convention three|filament|unity writes three.js's, Filament's or Unity's array (3 bands; JSON,\n"
+      "glsl/hlsl with the engine's own evaluation, cpp; docs/CONVENTIONS.md, \"Engines' conventions\").\n"
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
   s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
   s->add_option("-b,--bands", a->bands,
@@ -278,8 +355,16 @@ Run add_project(CLI::App& app) {
       ->check(int_range(1, sh::kMaxBands))
       ->capture_default_str();
   s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");
-  s->add_option("-f,--format", a->format, "Output format: json, text (table), glsl or cpp (paste-ready snippet)")
-      ->check(one_of({"json", "text", "glsl", "cpp"}))
+  s->add_option("-f,--format", a->format,
+                "Output format: json, text (table), glsl, hlsl (the constants and a function evaluating them) or cpp "
+                "(paste-ready constants)")
+      ->check(one_of({"json", "text", "glsl", "hlsl", "cpp"}))
+      ->capture_default_str();
+  s->add_option("--convention", a->convention,
+                "SH convention of the output: prt, three (three.js SphericalHarmonics3), filament (IndirectLight "
+                "irradiance SH), unity (SphericalHarmonicsL2 and unity_SHAr..SHC); engines take 3 bands "
+                "(docs/CONVENTIONS.md, \"Engines' conventions\")")
+      ->check(one_of({"prt", "three", "filament", "unity"}))
       ->capture_default_str();
   s->add_option("-w,--window", a->window, "Windowing against ringing: none, hanning, lanczos, auto")
       ->check(parsed_by(sh::parse_window))
