@@ -99,7 +99,7 @@ json extras_object(const Mesh& mesh, const Transfer& t, const GltfOptions& opts)
        "prt: real orthonormal SH with the Condon-Shortley phase, z polar axis, +Y up (docs/CONVENTIONS.md)"},
       {"shading",
        "radiance[c] = dot(row[c], L[c]) with L[c] the SH coefficients of channel c of the environment's radiance "
-       "in prt's convention (what prt project writes); a 1-channel row serves R, G and B"},
+       "in prt's convention (prt project --convention prt, the default); a 1-channel row serves R, G and B"},
       {"albedo", t.vertex_colors ? json("vertex colours") : json::array({t.albedo.x, t.albedo.y, t.albedo.z})},
       {"vertices", t.vertices},
       {"normals", has_all_normals(mesh) ? "NORMAL" : "omitted: some vertices have none (their transfer is 0)"},

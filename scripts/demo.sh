@@ -52,6 +52,13 @@ done
   --width 320 --height 200 --frames 12 --spin 30
 
 echo
+echo "== prt export: the model with its transfer as glTF 2.0, and a relighting web page"
+"$prt" export models/scene.obj "$out/scene.interreflected.prt" -q -o "$out/scene.glb"
+"$prt" export models/scene.obj "$out/scene.interreflected.prt" -q -o "$out/scene.baked.glb" --bake envmaps/sunset.exr
+"$prt" export models/scene.obj "$out/scene.interreflected.prt" -q --web "$out/web" --force --env sunset --turn
+echo "serve it with: python3 -m http.server -d $out/web 8000, then open http://localhost:8000"
+
+echo
 echo "== the all-frequency wavelet basis: shadowed transfer on a 6x32x32 cube map, relit with 100 Haar terms"
 "$prt" precompute models/scene.obj -o "$out/scene.wavelet.prt" --basis wavelet --cube-res 32
 for env in envmaps/*.exr; do
@@ -65,7 +72,8 @@ echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands
 echo "<map>.irradiance.glsl (paste-ready 3-band irradiance and prt_sh_irradiance()), <map>.irradiance.png (irradiance map),"
 echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance),"
 echo "scene.<map>.png (rendered), turn_0000..0011.png (the sunset turning around the model),"
-echo "scene.<map>.wavelet.png (the same lit through the wavelet basis: compare the shadows under studio.exr)."
+echo "scene.<map>.wavelet.png (the same lit through the wavelet basis: compare the shadows under studio.exr),"
+echo "scene.glb (the model and its transfer, glTF 2.0; scene.baked.glb also has colours under sunset), web/ (the page)."
 
 if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${CI:-}" ] && [ -t 1 ]; then
   echo

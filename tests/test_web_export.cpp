@@ -9,6 +9,7 @@
 #include <prt/envmap.h>
 #include <prt/projection.h>
 
+#include <glm/geometric.hpp>
 #include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -75,11 +76,17 @@ TEST(WebExport, WritesThePageTheLightingAndTheBackgrounds) {
   EXPECT_EQ(init.at("tonemap"), "aces");
   EXPECT_EQ(init.at("fov"), 50.0);
   EXPECT_EQ(init.at("auto"), true);
-  // prt render's default camera for fov 50: from +Z, looking at the centre, +Y up.
+  // prt render's default camera (framing_camera, prt/render.h): from the
+  // direction (sin 35 cos 20, sin 20, cos 35 cos 20), +Y up.
   const auto& cam = init.at("camera");
   ASSERT_EQ(cam.size(), 9u);
-  EXPECT_GT(cam[2].get<double>(), cam[5].get<double>());
-  EXPECT_EQ(cam[0].get<double>(), cam[3].get<double>());
+  glm::dvec3 back(cam[0].get<double>() - cam[3].get<double>(), cam[1].get<double>() - cam[4].get<double>(),
+                  cam[2].get<double>() - cam[5].get<double>());
+  back = glm::normalize(back);
+  const double az = 35 * M_PI / 180, el = 20 * M_PI / 180;
+  EXPECT_NEAR(back.x, std::sin(az) * std::cos(el), 1e-6);  // the JSON's doubles, printed in full
+  EXPECT_NEAR(back.y, std::sin(el), 1e-6);
+  EXPECT_NEAR(back.z, std::cos(az) * std::cos(el), 1e-6);
   EXPECT_EQ(cam[7].get<double>(), 1.0);
 
   for (const auto& m : j.at("maps")) {
@@ -152,6 +159,10 @@ TEST(WebExport, AnotherMapComesFirstAndIsShownFirst) {
   EXPECT_EQ(j.at("maps").size(), bundled_names().size() + 1);
   EXPECT_EQ(j.at("maps")[0].at("name"), "grey");
   EXPECT_EQ(j.at("initial").at("map"), "grey");
+  // No --exposure: auto for the first map, as prt render (a white surface
+  // under a constant 0.5 reflects 0.5: +1 stop; the constant is projected
+  // exactly, to rounding).
+  EXPECT_NEAR(j.at("initial").at("exposure").get<double>(), 1.0, 1e-9);
 }
 
 TEST(WebExport, WritesTheGltfTooAndTakesATrailingSlash) {

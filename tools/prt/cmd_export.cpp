@@ -113,17 +113,21 @@ int run_export(const ExportArgs& a) {
   std::unique_ptr<StagedPage> page;
   if (!a.web.empty()) {
     // The page's initial state, as prt render takes it: --camera (default:
-    // prt render's default camera), --fov, --rotate, --exposure, --tonemap.
+    // prt render's framing camera, for a square canvas, which a wider one
+    // still fits), --fov, --rotate, --exposure (default: auto, for the
+    // first map), --tonemap.
     WebPage w;
     w.dir = a.web;
     w.force = a.force;
     w.turn = a.turn;
     w.maps = web_maps(a.env, w.initial);
-    w.camera = default_camera(mesh, a.fov);
+    w.camera = framing_camera(mesh, a.fov, 1.0);
     if (!a.camera.empty()) parse_camera(a.camera, w.camera);
     w.camera.fov_deg = a.fov;
     for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
-    w.display = {a.exposure, tone};
+    const double exposure =
+        a.exposure_opt->count() > 0 ? a.exposure : auto_exposure(project(load_envmap(w.initial), 3));
+    w.display = {exposure, tone};
     try {
       page = stage_web_page(w, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); },
                             [] { return Outputs::interrupted(); }, a.quiet);
@@ -177,7 +181,7 @@ Run add_export(CLI::App& app) {
   a->rotate_opt = s->add_option("-r,--rotate", a->rotate, "With --bake or --web: rotate the lighting by yaw,pitch,roll degrees")
                       ->check(triple_value("yaw,pitch,roll"));
   a->exposure_opt = s->add_option("--exposure", a->exposure, "With --bake: scale the radiance by 2^stops before "
-                                                             "clamping; with --web: the initial exposure")
+                                                             "clamping (default 0); with --web: the initial exposure (default: auto, as prt render)")
                         ->check(finite_number())
                         ->capture_default_str();
   s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)");
