@@ -409,7 +409,8 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
       // above the horizon.
       std::optional<PhongLobe> lobe;
       if (options.glossy && options.specular > 0) {
-        if (const auto r = glossy::mirror_direction(nv, p, options.eye)) lobe = PhongLobe{glm::normalize(*r), options.gloss};
+        if (const auto mirror = glossy::mirror_direction(nv, p, options.eye))
+          lobe = PhongLobe{glm::normalize(*mirror), options.gloss};
       }
       // Welford's running mean and sum of squared deviations, per channel.
       glm::dvec3 mean(0.0), m2(0.0);
