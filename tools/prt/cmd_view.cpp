@@ -67,22 +67,11 @@ struct ViewArgs {
   GlossyArgs lobe;  // glossy files: the starting lobe
 };
 
-bool is_map_file(const std::filesystem::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
-}
-
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
 // ones (prt::data_dir()/envmaps, and $PRT_ENVMAPS), sorted, ENV included.
 std::vector<std::string> map_playlist(const std::string& env) {
   std::set<std::filesystem::path> found;
-  auto add_dir = [&](const std::filesystem::path& dir) {
-    std::error_code ec;
-    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
-      if (e.is_regular_file(ec) && is_map_file(e.path()))
-        found.insert(std::filesystem::weakly_canonical(e.path(), ec));
-  };
+  auto add_dir = [&](const std::filesystem::path& dir) { found.merge(map_files_in(dir)); };
   const std::filesystem::path env_path = std::filesystem::absolute(env);
   add_dir(env_path.parent_path());
   if (const char* dir = std::getenv("PRT_ENVMAPS"); dir && *dir) add_dir(dir);

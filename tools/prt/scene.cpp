@@ -5,6 +5,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
+
 namespace prt::cli {
 
 void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet,
@@ -51,6 +54,18 @@ void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double eul
   std::vector<glm::dvec3> r(light.size());
   sh::Rotation(bands, sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, r);
   light.swap(r);
+}
+
+std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir) {
+  std::set<std::filesystem::path> found;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (e.is_regular_file(ec) && (ext == ".exr" || ext == ".hdr" || ext == ".pfm"))
+      found.insert(std::filesystem::weakly_canonical(e.path(), ec));
+  }
+  return found;
 }
 
 }  // namespace prt::cli

@@ -10,7 +10,9 @@
 
 #include <glm/vec3.hpp>
 
+#include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -46,5 +48,10 @@ void load_transfer(Scene& scene, const std::string& transfer, int max_bands, con
 // yaw, pitch, roll degrees, in place: what prt relight and prt export --bake
 // light a transfer with (sh::rotation_from_euler, sh::Rotation).
 void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double euler[3]);
+
+// The HDR map files (.exr, .hdr, .pfm, any case) directly in `dir`,
+// canonical and sorted; none when `dir` cannot be read. The maps prt view's
+// N / P and prt export --web's picker offer.
+std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir);
 
 }  // namespace prt::cli

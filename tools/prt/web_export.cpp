@@ -1,6 +1,8 @@
 // prt export --web: the static relighting page. See web_export.h, docs/WEB.md.
 #include "web_export.h"
 
+#include "scene.h"
+
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/paths.h>
@@ -29,12 +31,6 @@ extern const char* const web_prt_viewer_js;
 namespace fs = std::filesystem;
 
 namespace {
-
-bool is_map_file(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return ext == ".exr" || ext == ".hdr" || ext == ".pfm";
-}
 
 void write_bytes(const fs::path& path, const void* data, std::size_t size) {
   std::ofstream f(path, std::ios::binary);
@@ -96,10 +92,8 @@ void write_thumbnail(const fs::path& path, const std::vector<float>& rgb, int wi
 }  // namespace
 
 std::vector<std::string> web_maps(const std::string& env, std::string& initial) {
-  std::set<fs::path> bundled;
+  const std::set<fs::path> bundled = map_files_in(data_dir() / "envmaps");
   std::error_code ec;
-  for (const auto& e : fs::directory_iterator(data_dir() / "envmaps", ec))
-    if (e.is_regular_file(ec) && is_map_file(e.path())) bundled.insert(fs::weakly_canonical(e.path(), ec));
   std::vector<std::string> list;
   initial.clear();
   if (!env.empty()) {
