@@ -38,8 +38,6 @@ struct CompressArgs {
 };
 
 void check_usage(const CompressArgs& a) {
-  if (a.target_opt->count() > 0 && !(a.target > 0 && a.target < 1))
-    throw UsageError(fmt::format("--target-error must be in (0, 1) (a relative RMS error), got {:g}", a.target));
   const bool target = a.target_opt->count() > 0, measure = a.mesh_opt->count() > 0 || a.env_opt->count() > 0;
   for (const CLI::Option* o : {a.clusters_opt, a.pca_opt, a.glossy_clusters_opt, a.glossy_pca_opt})
     if (target && o->count() > 0)
@@ -171,21 +169,16 @@ Run add_compress(CLI::App& app) {
   s->add_option("--iterations", a->opt.iterations, "Rounds of assignment and refit at most")
       ->check(int_range(1, 1000))
       ->capture_default_str();
-  s->add_option("--seed", a->opt.seed, "Seed of the k-means++ seeding")->capture_default_str();
-  a->target_opt = s->add_option("--target-error", a->target,
-                                "Choose K x N: the smallest whose relit error is at most this (in (0, 1))")
-                      ->check(CLI::Range(0.0, 1.0));  // 0 and 1 refused by choose_compression, saying why
+  add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the k-means++ seeding");
+  a->target_opt = add_shared(s, SharedOption::TargetError, a->target,
+                             "Choose K x N: the smallest whose relit error is at most this");
   a->mesh_opt = s->add_option("--mesh", a->mesh, "The mesh the transfer was computed for (to measure the error)");
   a->env_opt = s->add_option("--env", a->envs, "Environment map the error is measured under (repeatable)");
   a->views_opt = s->add_option("--views", a->views, "Glossy: eye points on a ring around the mesh")
                      ->check(int_range(1, 1024))
                      ->capture_default_str();
-  a->gloss_opt = s->add_option("--gloss", a->gloss, "Glossy: Phong exponent e of the measured lobe")
-                     ->check(CLI::Range(0.0, 4096.0))
-                     ->capture_default_str();
-  a->specular_opt = s->add_option("--specular", a->specular, "Glossy: lobe strength rho_s of the measured lobe")
-                        ->check(CLI::Range(0.0, 1.0))
-                        ->capture_default_str();
+  a->gloss_opt = add_shared(s, SharedOption::Gloss, a->gloss, "Glossy: the measured lobe's exponent");
+  a->specular_opt = add_shared(s, SharedOption::Specular, a->specular, "Glossy: the measured lobe's strength");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_compress(*a); };
 }

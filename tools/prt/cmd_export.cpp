@@ -27,7 +27,7 @@ namespace {
 
 struct ExportArgs {
   std::string mesh, transfer, output, bake, rotate;
-  double exposure = 0;
+  std::string exposure;  // stops or auto; unset: 0 for --bake, auto for --web
   bool quiet = false;
   const CLI::Option *rotate_opt = nullptr, *exposure_opt = nullptr;
   // --web DIR: the relighting page (web_export.h, docs/WEB.md).
@@ -50,8 +50,7 @@ int run_export(const ExportArgs& a) {
       throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
   for (const CLI::Option* o : a.web_opts)
     if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
-  double euler[3] = {0, 0, 0};
-  if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
+  const std::array<double, 3> euler = rotate_degrees(a.rotate);
   if (!a.output.empty()) {
     check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
     for_path("--output", [&] { check_writable(a.output); });
@@ -60,7 +59,7 @@ int run_export(const ExportArgs& a) {
     check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
     check_web_dir(a.web, a.force);
   }
-  const ToneMap tone = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
+  const ToneMap tone = parse_tone_map(a.tone_map);  // checked while parsing
 
   // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
   // (sparse, per light-cube pixel) has none to give.
@@ -89,9 +88,10 @@ int run_export(const ExportArgs& a) {
     EnvMap env = load_envmap(a.bake);
     require_finite(env);
     std::vector<glm::dvec3> light = project(env, t.bands);
-    if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler);
+    if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
     const std::vector<glm::vec3> rgb = relight(t, mesh, light);
-    const Display clamp{a.exposure, ToneMap::Clamp};
+    const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
+    const Display clamp{given ? *given : auto_exposure(light), ToneMap::Clamp};
     opts.colors.resize(rgb.size());
     for (std::size_t v = 0; v < rgb.size(); ++v)
       for (int c = 0; c < 3; ++c) {
@@ -104,7 +104,7 @@ int run_export(const ExportArgs& a) {
       }
     opts.bake.map = std::filesystem::path(a.bake).filename().string();
     for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
-    opts.bake.exposure = a.exposure;
+    opts.bake.exposure = clamp.exposure;
   }
 
   // One Outputs for the glTF and the page: a failure or Ctrl-C leaves neither.
@@ -125,8 +125,8 @@ int run_export(const ExportArgs& a) {
     if (!a.camera.empty()) parse_camera(a.camera, w.camera);
     w.camera.fov_deg = a.fov;
     for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
-    const double exposure =
-        a.exposure_opt->count() > 0 ? a.exposure : auto_exposure(project(load_envmap(w.initial), 3));
+    const std::optional<double> given = exposure_stops(a.exposure.empty() ? "auto" : a.exposure);
+    const double exposure = given ? *given : auto_exposure(project(load_envmap(w.initial), 3));
     w.display = {exposure, tone};
     try {
       page = stage_web_page(w, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); },
@@ -178,21 +178,16 @@ Run add_export(CLI::App& app) {
   s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress)")->required();
   s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");
   s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it");
-  a->rotate_opt = s->add_option("-r,--rotate", a->rotate, "With --bake or --web: rotate the lighting by yaw,pitch,roll degrees")
-                      ->check(triple_value("yaw,pitch,roll"));
-  a->exposure_opt = s->add_option("--exposure", a->exposure, "With --bake: scale the radiance by 2^stops before "
-                                                             "clamping (default 0); with --web: the initial exposure (default: auto, as prt render)")
-                        ->check(finite_number())
-                        ->capture_default_str();
+  a->rotate_opt = add_shared(s, SharedOption::Rotate, a->rotate, "With --bake or --web: rotate the lighting");
+  a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
+                               "With --bake: scale the radiance by 2^stops before clamping (default 0); with --web: "
+                               "the initial exposure (default auto); auto: as prt render, for the --bake map and the "
+                               "page's first map");
   s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)");
   a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)"));
-  a->web_opts.push_back(s->add_option("--camera", a->camera, "With --web: initial camera ex,ey,ez,tx,ty,tz,ux,uy,uz (as prt render)")
-                            ->check(camera_value()));
-  a->web_opts.push_back(s->add_option("--fov", a->fov, "With --web: vertical field of view in degrees, 1 to 179")
-                            ->check(number_range(1.0, 179.0))
-                            ->capture_default_str());
-  a->web_opts.push_back(s->add_option("--tonemap", a->tone_map, "With --web: initial tone map: clamp, reinhard, aces")
-                            ->capture_default_str());
+  a->web_opts.push_back(add_shared(s, SharedOption::Camera, a->camera, "With --web: initial camera (as prt render)"));
+  a->web_opts.push_back(add_shared(s, SharedOption::Fov, a->fov, "With --web: vertical field of view"));
+  a->web_opts.push_back(add_shared(s, SharedOption::Tonemap, a->tone_map, "With --web: initial tone map"));
   a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web: start with the environment turning"));
   a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");

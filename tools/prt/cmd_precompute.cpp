@@ -292,33 +292,22 @@ Run add_precompute(CLI::App& app) {
       ->check(CLI::IsMember({"sh", "wavelet"}))
       ->capture_default_str();
   a->material_opt =
-      s->add_option("--material", a->material,
-                    "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
-                    "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12)")
-          ->check(CLI::IsMember({"diffuse", "glossy"}))
-          ->capture_default_str();
-  a->mode_opt = s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")
-                    ->check(parsed_by(parse_transfer_mode))
-                    ->capture_default_str();
-  a->bands_opt = s->add_option("-b,--bands", a->opt.bands,
-                               "SH bands n (n*n coefficients), 1 to 16: prt render and prt view draw at most 16, and "
-                               "transfer accuracy is measured up to 16 (docs/CONVENTIONS.md, \"Band counts\")")
-                     ->check(int_range(1, 16, "prt render and prt view draw at most 16 bands; transfer accuracy is "
-                                              "measured up to 16"))
-                     ->capture_default_str();
+      add_shared(s, SharedOption::Material, a->material,
+                 "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
+                 "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12)");
+  a->mode_opt = add_shared(s, SharedOption::Mode, a->mode, "Transfer: unshadowed (no rays), shadowed, or interreflected");
+  a->bands_opt = add_shared(s, SharedOption::BandsComputed, a->opt.bands,
+                            "SH bands n: prt render and prt view draw at most 16, and transfer accuracy is measured up "
+                            "to 16");
   a->samples_opt = s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
                        ->check(int_range(1, 1 << 24))
                        ->capture_default_str();
-  a->bounces_opt = s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode), at most")
-                       ->check(int_range(0, 64))
-                       ->capture_default_str();
+  a->bounces_opt = add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode), at most");
   a->sh_only.insert(a->sh_only.end(), {a->bands_opt, a->samples_opt, a->bounces_opt, a->material_opt});
   a->target_opt =
-      s->add_option("--target-error", a->target_error,
-                    "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
-                    "against the reference under --env is at most this, in (0, 1) (--bands/--samples/--bounces: "
-                    "the most to try)")
-          ->check(number_range(0.0, 1.0, true, true, "a relative RMS error"));
+      add_shared(s, SharedOption::TargetError, a->target_error,
+                 "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
+                 "against the reference under --env is at most this (--bands/--samples/--bounces: the most to try)");
   a->env_opt = s->add_option("--env", a->env, "Lat-long map the --target-error is measured under");
   a->cache_opt = s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)");
   a->tolerance_opt =
@@ -337,19 +326,12 @@ Run add_precompute(CLI::App& app) {
                     "Wavelet basis: relative L2 truncation error per vertex, in [0, 1) (0 keeps every non-zero term)")
           ->check(number_range(0.0, 1.0, false, true))
           ->capture_default_str());
-  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")
-      ->check(triple_value("r,g,b", kMinAlbedo, kMaxAlbedo, "energy conservation"))
-      ->capture_default_str();
+  add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo");
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
-  s->add_option("-t,--threads", a->opt.threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
+  add_shared(s, SharedOption::Threads, a->opt.threads, "Worker threads");
   a->sh_only.push_back(
-      s->add_option("--seed", a->opt.seed, "Seed of the direction set, 0 to 2^64-1 (same seed, same bits)")
-          ->check(seed_value())
-          ->capture_default_str());
-  s->add_option("--offset", a->opt.offset,
-                "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
-                "diagonal (default 1e-4 x the diagonal)")
-      ->check(positive_number());
+      add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the direction set"));
+  add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
   a->sh_only.push_back(s->add_option("--compress", a->compress,
                                      "Write the transfer compressed by clustered PCA: K clusters x N principal "

@@ -116,7 +116,7 @@ void check_outputs(const ProjectArgs& a) {
 // percentile of the pixels' largest channel at 1 (about 1% of an 8-bit
 // picture saturated; 0 for an image without a positive pixel).
 double reconstruction_exposure(const std::string& text, const std::vector<float>& rgb) {
-  if (text != "auto") return std::stod(text);  // finite (checked while parsing)
+  if (const std::optional<double> stops = exposure_stops(text)) return *stops;
   std::vector<float> top(rgb.size() / 3);
   for (std::size_t p = 0; p < top.size(); ++p) top[p] = std::max({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]});
   if (top.empty()) return 0;
@@ -217,8 +217,7 @@ int run_project(const ProjectArgs& a) {
   check_outputs(a);
   if (!a.output.empty() && a.output != "-") for_path("--output", [&] { check_writable(a.output); });
   if (!a.reconstruct.empty()) for_path("--reconstruct", [&] { check_image_output(a.reconstruct); });
-  double euler[3] = {0, 0, 0};
-  if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
+  const std::array<double, 3> euler = rotate_degrees(a.rotate);
   int rw = 0, rh = 0;
   if (!a.reconstruct_size.empty()) parse_size(a.reconstruct_size, rw, rh);
 
@@ -349,11 +348,9 @@ Run add_project(CLI::App& app) {
       "glsl/hlsl with the engine's own evaluation, cpp; docs/CONVENTIONS.md, \"Engines' conventions\").\n"
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
   s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
-  s->add_option("-b,--bands", a->bands,
-                "Number of bands n: degrees 0..n-1, n*n coefficients; every n from 1 to 64 computed to 1e-12 in "
-                "double (the box rule's pixel integrals, the cube's texel sum, --rotate; prt verify --bands-max 64)")
-      ->check(int_range(1, sh::kMaxBands))
-      ->capture_default_str();
+  add_shared(s, SharedOption::BandsProjected, a->bands,
+             "Number of bands n; every n computed to 1e-12 in double (the box rule's pixel integrals, the cube's "
+             "texel sum, --rotate; prt verify --bands-max 64)");
   s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");
   s->add_option("-f,--format", a->format,
                 "Output format: json, text (table), glsl, hlsl (the constants and a function evaluating them) or cpp "
@@ -366,14 +363,10 @@ Run add_project(CLI::App& app) {
                 "(docs/CONVENTIONS.md, \"Engines' conventions\")")
       ->check(one_of({"prt", "three", "filament", "unity"}))
       ->capture_default_str();
-  s->add_option("-w,--window", a->window, "Windowing against ringing: none, hanning, lanczos, auto")
-      ->check(parsed_by(sh::parse_window))
-      ->capture_default_str();
-  s->add_option("--window-width", a->window_width, "Window width w in bands (band l is scaled by f(l/w); default n)")
-      ->check(positive_number());
+  add_shared(s, SharedOption::Window, a->window, "Windowing against ringing");
+  add_shared(s, SharedOption::WindowWidth, a->window_width, "Window width w in bands (band l is scaled by f(l/w))");
   s->add_flag("--irradiance", a->irradiance, "Convolve with the clamped cosine: irradiance E_lm = A_l L_lm (no 1/pi)");
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)")
-      ->check(triple_value("yaw,pitch,roll"));
+  add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   s->add_option("-m,--mapping", a->mapping, "Map layout: auto, latlong, hcross, vcross, faces")
       ->check(parsed_by(parse_mapping))
       ->capture_default_str();
@@ -385,11 +378,9 @@ Run add_project(CLI::App& app) {
   s->add_option("--reconstruct-size", a->reconstruct_size,
                 "WxH of the reconstruction, each from 1 to 65536 (default: the map's size)")
       ->check(size_value(65536));
-  a->exposure_opt = s->add_option("--exposure", a->exposure,
-                                  "Scale the reconstruction by 2^stops before writing it (as prt render), or auto: "
-                                  "the 99th percentile of its pixels at 1 (8-bit pictures about 1% saturated)")
-                        ->check(finite_number() | CLI::IsMember({"auto"}))
-                        ->capture_default_str();
+  a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
+                               "Scale the reconstruction by 2^stops before writing it (as prt render); auto: the "
+                               "99th percentile of its pixels at 1 (8-bit pictures about 1% saturated)");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   s->add_flag("--no-stream", a->no_stream,
               "Read the whole map before projecting (same coefficients; lat-long maps are otherwise streamed)");

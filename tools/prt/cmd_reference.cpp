@@ -125,43 +125,24 @@ Run add_reference(CLI::App& app) {
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
   s->add_option("-o,--output", a->output, "CSV file to write")->required();
-  s->add_option("-m,--mode", a->mode, "unshadowed (no rays), shadowed, or interreflected")
-      ->check(parsed_by(parse_transfer_mode))
-      ->capture_default_str();
-  s->add_option("--bounces", a->opt.bounces, "Diffuse bounces (interreflected mode)")
-      ->check(int_range(0, kMaxReferenceBounces))
-      ->capture_default_str();
-  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b (>= 0)")
-      ->check(triple_value("r,g,b", 0.0))
-      ->capture_default_str();
+  add_shared(s, SharedOption::Mode, a->mode, "Light paths: unshadowed (no rays), shadowed, or interreflected");
+  add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode)");
+  add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo");
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-s,--samples", a->opt.samples,
                 "Iterations per vertex, each one map-sampled and one cosine-sampled direction")
       ->check(int_range(2, 1 << 24))
       ->capture_default_str();
-  s->add_option("--seed", a->opt.seed, "Random seed, 0 to 2^64-1 (same seed, same bits, any thread count)")
-      ->check(seed_value())
-      ->capture_default_str();
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees (R = Ry Rx Rz)")
-      ->check(triple_value("yaw,pitch,roll"));
-  s->add_option("--offset", a->opt.offset,
-                "Ray origin offset along the normal, in mesh units, > 0 and at most a tenth of the bounding-box "
-                "diagonal (default 1e-4 x the diagonal)")
-      ->check(positive_number());
-  s->add_option("--material", a->material, "diffuse, or glossy: also the view-dependent Phong lobe (--eye, --gloss, "
-                "--specular)")
-      ->check(CLI::IsMember({"diffuse", "glossy"}))
-      ->capture_default_str();
-  a->glossy_opts.push_back(s->add_option("--eye", a->eye, "Glossy: the eye point x,y,z")->check(triple_value("x,y,z")));
-  a->glossy_opts.push_back(
-      s->add_option("--gloss", a->opt.gloss, "Glossy: Phong exponent e, 0 to 4096")
-          ->check(number_range(0, 4096))
-          ->capture_default_str());
-  a->glossy_opts.push_back(s->add_option("--specular", a->opt.specular, "Glossy: the lobe's strength rho_s, 0 to 1")
-                               ->check(number_range(0, 1))
-                               ->capture_default_str());
+  add_shared(s, SharedOption::Seed, a->opt.seed, "Random seed (any thread count)");
+  add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
+  add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
+  add_shared(s, SharedOption::Material, a->material,
+             "diffuse, or glossy: also the view-dependent Phong lobe (--eye, --gloss, --specular)");
+  a->glossy_opts.push_back(add_shared(s, SharedOption::Eye, a->eye, "Glossy: the eye point"));
+  a->glossy_opts.push_back(add_shared(s, SharedOption::Gloss, a->opt.gloss, "Glossy: the lobe's exponent"));
+  a->glossy_opts.push_back(add_shared(s, SharedOption::Specular, a->opt.specular, "Glossy: the lobe's strength"));
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position (as prt precompute --weld)");
-  s->add_option("-t,--threads", a->threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
+  add_shared(s, SharedOption::Threads, a->threads, "Worker threads");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_reference(*a); };
 }

@@ -1,5 +1,6 @@
 // prt relight: CPU relighting of a precomputed mesh under an environment map.
 #include "commands.h"
+#include "look.h"
 #include "progress.h"
 #include "scene.h"
 
@@ -40,7 +41,7 @@ struct RelightArgs {
   // Display output (--tonemap): exposure and tone map as prt render's 8-bit
   // images, then sRGB encoding with --srgb; PLY colours as bytes.
   std::string tonemap;
-  double exposure = 0;
+  std::string exposure = "0";  // stops, or auto (look.h, auto_exposure)
   bool srgb = false;
   const CLI::Option *exposure_opt = nullptr, *srgb_opt = nullptr;
   int terms = 100;
@@ -56,15 +57,19 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 // nothing. Returns the exit status.
 // With --tonemap the radiance becomes display values first (and the PLY's
 // colours bytes).
-int write_output(const RelightArgs& a, const std::string& ext, const Mesh& mesh, std::vector<glm::vec3> rgb) {
+// --exposure auto: prt render's (auto_exposure of the map's 3-band lighting).
+int write_output(const RelightArgs& a, const std::string& ext, const Mesh& mesh, const EnvMap& env,
+                 std::vector<glm::vec3> rgb) {
   const bool display = !a.tonemap.empty();
+  const std::optional<double> given = exposure_stops(a.exposure);
+  const double stops = !display ? 0.0 : given ? *given : auto_exposure(project(env, 3));
   if (display) {
-    const Display d{a.exposure, parse_tone_map(a.tonemap)};
+    const Display d{stops, parse_tone_map(a.tonemap)};
     for (glm::vec3& c : rgb)
       for (int k = 0; k < 3; ++k) c[k] = a.srgb ? srgb_encode(tone_map(c[k], d)) : tone_map(c[k], d);
   }
   const std::string comment =
-      display ? fmt::format("display colours: exposure {:g}, tone map {}, {}", a.exposure, a.tonemap,
+      display ? fmt::format("display colours: exposure {:g}, tone map {}, {}", stops, a.tonemap,
                             a.srgb ? "sRGB-encoded" : "linear")
               : std::string("linear radiance per vertex");
   Outputs out("relight");
@@ -112,7 +117,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
   const double relight_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
-  if (const int rc = write_output(a, ext, mesh, rgb); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, mesh, env, rgb); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr,
                "relight: {:.3f} ms per frame (lighting {:.3f} ms: resample, Haar, {} of {} terms by {}; transfer "
@@ -123,8 +128,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
 }
 
 int run_relight(const RelightArgs& a) {
-  double euler[3] = {0, 0, 0};
-  if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
+  const std::array<double, 3> euler = rotate_degrees(a.rotate);
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   if (ext != ".ply" && ext != ".csv") throw UsageError("--output: " + a.output + ": expected a .ply or .csv file");
@@ -142,7 +146,7 @@ int run_relight(const RelightArgs& a) {
       if (o->count() > 0)
         throw Error(o->get_name() + " applies to SH transfers; " + a.transfer +
                     " holds a wavelet transfer (use --terms and --selection to control its lighting approximation)");
-    return run_wavelet(a, ext, euler);
+    return run_wavelet(a, ext, euler.data());
   }
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0)
@@ -187,7 +191,7 @@ int run_relight(const RelightArgs& a) {
   const double project_ms = ms_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : t.bands);
-  if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler);
+  if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
   const CompressedTransfer* c = scene.compressed ? &*scene.compressed : nullptr;
   const std::vector<glm::vec3> rgb = c ? (glossy ? relight_glossy(*c, mesh, light, shading) : relight(*c, mesh, light))
                                      : glossy   ? relight_glossy(t, mesh, light, shading)
@@ -205,7 +209,7 @@ int run_relight(const RelightArgs& a) {
     for (double x : vertex_transfer(t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
-  if (const int rc = write_output(a, ext, mesh, rgb); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, mesh, env, rgb); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
                        "wrote {} ({} vertices)\n",
@@ -237,38 +241,26 @@ Run add_relight(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map")->required();
   s->add_option("-o,--output", a->output, "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b)")
       ->required();
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees")
-      ->check(triple_value("yaw,pitch,roll"));
-  a->sh_only.push_back(
-      s->add_option("-w,--window", a->window, "SH: windowing: none, hanning, lanczos, auto")
-          ->check(parsed_by(sh::parse_window))
-          ->capture_default_str());
-  a->sh_only.push_back(s->add_option("--window-width", a->window_width, "SH: window width in bands (default: the band count)")
-                           ->check(positive_number()));
+  add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
+  a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));
+  a->sh_only.push_back(add_shared(s, SharedOption::WindowWidth, a->window_width, "SH: window width in bands"));
   a->sh_only.push_back(s->add_flag("--direct", a->direct,
                                    "SH, interreflected files: use the direct (shadowed) part only (refused for other "
                                    "files)"));
-  a->wavelet_only.push_back(s->add_option("-k,--terms", a->terms,
-                                          "Wavelet: lighting terms K kept per frame (K >= 6 r^2 keeps all)")
-                                ->check(int_range(0, 1 << 30))
-                                ->capture_default_str());
+  a->wavelet_only.push_back(add_shared(s, SharedOption::Terms, a->terms, "Wavelet: lighting terms K kept per frame"));
   a->wavelet_only.push_back(
-      s->add_option("--selection", a->selection,
-                    "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
-          ->check(parsed_by(wavelet::parse_selection))
-          ->capture_default_str());
-  s->add_option("--eye", a->eye, "Glossy files: the eye point x,y,z the radiance is seen from")
-      ->check(triple_value("x,y,z"));
+      add_shared(s, SharedOption::Selection, a->selection,
+                 "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)"));
+  add_shared(s, SharedOption::Eye, a->eye, "Glossy files: the eye point the radiance is seen from");
   add_glossy_options(s, a->lobe);
   for (const CLI::Option* o : a->lobe.options) a->sh_only.push_back(o);
   a->sh_only.push_back(s->get_option("--eye"));
-  s->add_option("--tonemap", a->tonemap,
-                "Display colours instead of radiance: exposure, then clamp, reinhard or aces to [0, 1] (as prt "
-                "render's 8-bit images); a PLY then has 8-bit colours")
-      ->check(parsed_by(parse_tone_map));
-  a->exposure_opt = s->add_option("--exposure", a->exposure, "With --tonemap: scale by 2^stops first")
-                        ->check(finite_number())
-                        ->capture_default_str();
+  add_shared(s, SharedOption::Tonemap, a->tonemap,
+             "Display colours instead of radiance: exposure, then the tone map to [0, 1] (as prt render's 8-bit "
+             "images); a PLY then has 8-bit colours");
+  a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
+                               "With --tonemap: scale by 2^stops first; auto: as prt render (a white diffuse surface "
+                               "facing the map's brightest light shows at 1)");
   a->srgb_opt = s->add_flag("--srgb", a->srgb,
                             "With --tonemap: sRGB-encode the display values (what mesh viewers expect of 8-bit "
                             "vertex colours)");

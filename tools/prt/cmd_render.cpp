@@ -43,8 +43,7 @@ std::string frame_path(const std::string& out, int frame) {
 }
 
 int run_render(const RenderArgs& a) {
-  double euler[3] = {0, 0, 0};
-  if (!a.rotate.empty()) parse_triple(a.rotate, "--rotate", euler);
+  const std::array<double, 3> euler = rotate_degrees(a.rotate);
   if (const std::string problem = image_output_type_problem(a.output); !problem.empty())
     throw UsageError("--output: " + problem);
   for (int f = 0; f < (a.frames_given ? a.frames : 1); ++f)
@@ -188,17 +187,12 @@ Run add_render(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
   s->add_option("-o,--output", a->output, "Output image (.png, .exr, ...); with --frames, OUT_0000.ext, ...")
       ->required();
-  s->add_option("--width", a->width, "Image width in pixels")->check(int_range(1, 16384))->capture_default_str();
-  s->add_option("--height", a->height, "Image height in pixels")->check(int_range(1, 16384))->capture_default_str();
-  s->add_option("--camera", a->camera, "Camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (eye, target, up)")
-      ->check(camera_value());
-  s->add_option("--fov", a->fov, "Vertical field of view in degrees, 1 to 179")
-      ->check(number_range(1.0, 179.0))
-      ->capture_default_str();
-  s->add_option("-r,--rotate", a->rotate, "Rotate the lighting by yaw,pitch,roll degrees")
-      ->check(triple_value("yaw,pitch,roll"));
-  s->add_option("--frames", a->frames, "Render K frames, spinning the environment about +Y")
-      ->check(int_range(1, 100000))
+  add_shared(s, SharedOption::Width, a->width, "Image width");
+  add_shared(s, SharedOption::Height, a->height, "Image height");
+  add_shared(s, SharedOption::Camera, a->camera, "Camera; default: the framing camera (below)");
+  add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view");
+  add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
+  add_shared(s, SharedOption::Frames, a->frames, "Render K frames, spinning the environment about +Y")
       ->each([a](const std::string&) { a->frames_given = true; });
   s->add_option("--spin", a->spin, "Degrees about +Y per frame (default 360 / frames)")
       ->check(finite_number())

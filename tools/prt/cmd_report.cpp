@@ -599,9 +599,7 @@ Run add_report(CLI::App& app) {
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
   s->add_option("-o,--out", a->out, "Output directory")->capture_default_str();
   s->add_flag("--quick", a->quick, "Small grid and reference (under a minute for ~40k vertices on 2 cores)");
-  s->add_option("--albedo", a->albedo, "Diffuse albedo r,g,b in [0,1]")
-      ->check(triple_value("r,g,b", 0.0, 1.0))
-      ->capture_default_str();
+  add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo");
   s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)");
   s->add_flag("--no-cache", a->no_cache, "Always recompute the references");
   s->add_flag("--no-plots", a->no_plots, "Tables only (no Python)");
@@ -609,7 +607,7 @@ Run add_report(CLI::App& app) {
       ->capture_default_str();
   s->add_option("--image-size", a->image_size, "Picture size in pixels")->check(int_range(16, 4096))->capture_default_str();
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
-  s->add_option("-t,--threads", a->threads, "Worker threads (0: all cores)")->check(int_range(0, 1024));
+  add_shared(s, SharedOption::Threads, a->threads, "Worker threads");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_report_command(*a); };
 }

@@ -519,15 +519,11 @@ Run add_view(CLI::App& app) {
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
-  s->add_option("--width", a->width, "Window width in pixels")->check(int_range(1, 16384))->capture_default_str();
-  s->add_option("--height", a->height, "Window height in pixels")->check(int_range(1, 16384))->capture_default_str();
-  s->add_option("--camera", a->camera, "Starting camera as ex,ey,ez,tx,ty,tz,ux,uy,uz (orbit is about the target)")
-      ->check(camera_value());
-  s->add_option("--fov", a->fov, "Vertical field of view in degrees, 1 to 179")
-      ->check(number_range(1.0, 179.0))
-      ->capture_default_str();
-  s->add_option("--frames", a->frames, "Render N frames, save --screenshot FILE and exit")
-      ->check(int_range(1, 1000000));
+  add_shared(s, SharedOption::Width, a->width, "Window width");
+  add_shared(s, SharedOption::Height, a->height, "Window height");
+  add_shared(s, SharedOption::Camera, a->camera, "Starting camera (orbit is about the target)");
+  add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view");
+  add_shared(s, SharedOption::Frames, a->frames, "Render N frames, save --screenshot FILE and exit");
   s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)");
   s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")->capture_default_str();
   s->add_option("--second", a->second,

@@ -2,7 +2,7 @@
 // returns the function that runs it once the command line is parsed.
 #pragma once
 
-#include "options.h"
+#include "shared_options.h"
 
 #include <prt/error.h>
 

@@ -85,33 +85,16 @@ void add_look_options(CLI::App* s, LookArgs& a) {
                                    "files' default: diffuse plus the view-dependent lobe)")
                          ->check(shading_value())
                          ->capture_default_str();
-  a.bands_option = s->add_option("--bands", a.bands,
-                                 "SH: shade with the first N bands only (0: all of the file's; at most 16, what the "
-                                 "renderer's lighting block holds)")
-                       ->check(int_range(0, kMaxRenderBands, "the renderer's lighting block holds 16 bands"));
-  a.window_option = s->add_option("--window", a.window, "SH: window against ringing: none, hanning, lanczos, auto")
-                        ->check(parsed_by(sh::parse_window))
-                        ->capture_default_str();
-  a.terms_option = s->add_option("-k,--terms", a.terms, "Wavelet: lighting terms K kept per frame (K >= 6 r^2: all)")
-                       ->check(int_range(1, 1 << 30))
-                       ->capture_default_str();
+  a.bands_option = add_shared(s, SharedOption::BandsShown, a.bands, "SH: shade with the first N bands only");
+  a.window_option = add_shared(s, SharedOption::Window, a.window, "SH: window against ringing");
+  a.terms_option = add_shared(s, SharedOption::Terms, a.terms, "Wavelet: lighting terms K kept per frame");
   a.selection_option =
-      s->add_option("--selection", a.selection,
-                    "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)")
-          ->check(parsed_by(wavelet::parse_selection))
-          ->capture_default_str();
-  s->add_option("--exposure", a.exposure,
-                "Scale radiance by 2^EXPOSURE for display, -64 to 64 stops, or auto: a white diffuse surface facing "
-                "the map's brightest light shows at 1")
-      ->check(CLI::Validator(
-          [stops = number_range(-64, 64, false, false, "stops or auto")](std::string& text) {
-            return text == "auto" ? std::string() : stops(text);
-          },
-          ""))
-      ->capture_default_str();
-  s->add_option("--tonemap", a.tone_map, "8-bit output and the window: clamp, reinhard, aces")
-      ->check(parsed_by(parse_tone_map))
-      ->capture_default_str();
+      add_shared(s, SharedOption::Selection, a.selection,
+                 "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)");
+  add_shared(s, SharedOption::Exposure, a.exposure,
+             "Scale radiance by 2^EXPOSURE for display; auto: a white diffuse surface facing the map's brightest light "
+             "shows at 1");
+  add_shared(s, SharedOption::Tonemap, a.tone_map, "8-bit output and the window");
 }
 
 // "ex,ey,ez,tx,ty,tz,ux,uy,uz" -> nine doubles.
@@ -139,7 +122,7 @@ Look parse_look(const LookArgs& a, int sh_bands, bool wavelet, bool glossy) {
   look.terms = a.terms;
   look.selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
   look.auto_exposure = a.exposure == "auto";
-  look.display.exposure = look.auto_exposure ? 0.0 : std::stod(a.exposure);  // finite (checked while parsing)
+  look.display.exposure = exposure_stops(a.exposure).value_or(0.0);
   look.display.tone_map = for_option("--tonemap", [&] { return parse_tone_map(a.tone_map); });
   return look;
 }

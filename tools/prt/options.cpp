@@ -191,35 +191,6 @@ CLI::Validator one_of(std::initializer_list<const char*> names) {
       "");
 }
 
-bool GlossyArgs::given() const {
-  for (const CLI::Option* o : options)
-    if (o->count() > 0) return true;
-  return false;
-}
-
-void add_glossy_options(CLI::App* s, GlossyArgs& a) {
-  a.options.push_back(
-      s->add_option("--gloss", a.gloss, "Glossy: Phong exponent e of the lobe (e + 1)/(2 pi) cos^e, 0 to 4096")
-          ->check(number_range(0, 4096))
-          ->capture_default_str());
-  a.options.push_back(s->add_option("--specular", a.specular, "Glossy: the lobe's strength rho_s, 0 to 1")
-                          ->check(number_range(0, 1))
-                          ->capture_default_str());
-  a.options.push_back(s->add_option("--diffuse", a.diffuse,
-                                    "Glossy: diffuse albedo rho_d (one value or r,g,b in [0, 1]; default: the "
-                                    "transfer's own; 0: the glossy part alone)"));
-}
-
-glm::dvec3 parse_diffuse(const std::string& text) {
-  if (text.empty()) return glm::dvec3(-1.0);
-  double d[3];
-  const bool one = text.find(',') == std::string::npos;
-  parse_triple(one ? text + "," + text + "," + text : text, "--diffuse", d);
-  for (double x : d)
-    if (!(x >= 0.0 && x <= 1.0)) throw UsageError(fmt::format("--diffuse: {} is outside [0, 1] (an albedo)", text));
-  return {d[0], d[1], d[2]};
-}
-
 void parse_triple(const std::string& text, const char* option, double out[3]) {
   const double inf = std::numeric_limits<double>::infinity();
   if (const std::string p = triple_problem(text, "a,b,c", -inf, inf, {}, out); !p.empty())

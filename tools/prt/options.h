@@ -121,20 +121,4 @@ bool same_file(const std::string& a, const std::string& b);
 void check_not_input(const std::string& option, const std::string& output, std::initializer_list<Input> inputs);
 void check_not_input(const std::string& option, const std::string& output, std::span<const Input> inputs);
 
-// The glossy lobe's options (prt relight, prt render; docs/CONVENTIONS.md,
-// "Glossy transfer"): --gloss e (0 to 4096), --specular rho_s (0 to 1) and
-// --diffuse rho_d (one value or r,g,b, each in [0, 1]; unset: the
-// transfer's own albedo). `options` lists the three, for the commands' rules
-// about when they apply.
-struct GlossyArgs {
-  double gloss = 16, specular = 0.5;
-  std::string diffuse;
-  std::vector<const CLI::Option*> options;
-  bool given() const;  // any of the three on the command line
-};
-void add_glossy_options(CLI::App* command, GlossyArgs& args);
-// --diffuse as prt::GlossyShading::diffuse: (-1, -1, -1) when unset; throws
-// UsageError naming --diffuse for a value outside [0, 1].
-glm::dvec3 parse_diffuse(const std::string& text);
-
 }  // namespace prt::cli
