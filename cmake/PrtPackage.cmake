@@ -105,7 +105,8 @@ set(_prt_dep_table
   "fmt::fmt-header-only|fmt|fmt"
   "spdlog::spdlog|spdlog|spdlog"
   "nlohmann_json::nlohmann_json|nlohmann_json|nlohmann_json"
-  "Threads::Threads|Threads|-pthread")
+  "Threads::Threads|Threads|-pthread"
+  "MPI::MPI_CXX|MPI COMPONENTS CXX|ompi-cxx")
 
 # For one link item of a prt library: sets <prefix>_KIND (skip, prt, dep,
 # flag), <prefix>_NAME (the component, or the item), <prefix>_FIND, <prefix>_PC.

@@ -151,12 +151,15 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
   const CubeTable cube(r);
   const float offset = offset_of(o, mesh);
   const detail::RayScene scene(mesh);
+  // This rank's vertices: [r0, r1) (prt/communicator.h).
+  const Communicator& comm = o.comm ? *o.comm : single_process();
+  const std::size_t r0 = range_begin(V, comm.rank(), comm.size()), r1 = range_begin(V, comm.rank() + 1, comm.size());
 
   // Pass 1: per block of vertices, the kept entries in vertex order.
   constexpr std::size_t kGrain = 32;
-  const std::size_t blocks = (V + kGrain - 1) / kGrain;
+  const std::size_t blocks = (r1 - r0 + kGrain - 1) / kGrain;
   std::vector<std::vector<Entry>> block_entries(blocks);
-  detail::ProgressTicker ticker(progress, V, "rays");
+  detail::ProgressTicker ticker(progress, r1 - r0, "rays");
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
     detail::enable_ftz_daz();
     if (ticker.cancelled()) return;
@@ -164,7 +167,7 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
     std::vector<std::pair<double, std::uint32_t>> order;
     order.reserve(n);
     std::vector<Entry>& entries = block_entries[b];
-    const std::size_t v0 = b * kGrain, v1 = std::min(V, v0 + kGrain);
+    const std::size_t v0 = r0 + b * kGrain, v1 = std::min(r1, v0 + kGrain);
     for (std::size_t v = v0; v < v1; ++v) {
       if (!trace_vertex(scene, mesh, v, cube, offset, t.data())) continue;
       const std::size_t before = entries.size();
@@ -176,27 +179,54 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
   });
   ticker.finish();
 
+  // This rank's entries in vertex order; then every rank's, on rank 0.
+  std::size_t own = 0;
+  for (const auto& e : block_entries) own += e.size();
+  std::vector<Entry> flat;
+  flat.reserve(own);
+  for (auto& e : block_entries) {
+    flat.insert(flat.end(), e.begin(), e.end());
+    std::vector<Entry>().swap(e);
+  }
+  if (comm.size() > 1) {
+    const auto rank_bytes = [&](std::size_t item) {
+      std::vector<std::size_t> b(std::size_t(comm.size()) + 1);
+      for (int q = 0; q <= comm.size(); ++q) b[std::size_t(q)] = range_begin(V, q, comm.size()) * item;
+      return b;
+    };
+    comm.all_gather(wt.vertex_kept.data(), rank_bytes(sizeof(std::uint32_t)));
+    const std::vector<std::size_t> sb = rank_bytes(sizeof(float));
+    comm.gather_to_root(reinterpret_cast<char*>(wt.vertex_scale.data()) + sb[std::size_t(comm.rank())],
+                        wt.vertex_scale.data(), sb);
+    std::vector<std::size_t> eb(std::size_t(comm.size()) + 1, 0);
+    for (int q = 0; q < comm.size(); ++q) {
+      std::size_t kept = 0;
+      for (std::size_t v = range_begin(V, q, comm.size()); v < range_begin(V, q + 1, comm.size()); ++v)
+        kept += wt.vertex_kept[v];
+      eb[std::size_t(q) + 1] = eb[std::size_t(q)] + kept * sizeof(Entry);
+    }
+    std::vector<Entry> all(comm.rank() == 0 ? eb.back() / sizeof(Entry) : 0);
+    comm.gather_to_root(flat.data(), all.data(), eb);
+    if (comm.rank() != 0) return WaveletTransfer{};
+    flat.swap(all);
+  }
+
   // Pass 2: transpose into columns. Walking vertices in order keeps every
   // column sorted by vertex.
   wt.col_offsets.assign(n + 1, 0);
-  for (const auto& entries : block_entries)
-    for (const Entry& e : entries) ++wt.col_offsets[e.j + 1];
+  for (const Entry& e : flat) ++wt.col_offsets[e.j + 1];
   for (std::size_t j = 0; j < n; ++j) wt.col_offsets[j + 1] += wt.col_offsets[j];
   const std::size_t total = wt.col_offsets[n];
   wt.col_vertices.resize(total);
   wt.col_values.resize(total);
   std::vector<std::uint64_t> cursor(wt.col_offsets.begin(), wt.col_offsets.end() - 1);
-  for (std::size_t b = 0; b < blocks; ++b) {
-    const std::vector<Entry>& entries = block_entries[b];
-    std::size_t k = 0;
-    for (std::size_t v = b * kGrain; v < std::min(V, (b + 1) * kGrain); ++v)
-      for (std::uint32_t i = 0; i < wt.vertex_kept[v]; ++i, ++k) {
-        const std::uint64_t pos = cursor[entries[k].j]++;
-        wt.col_vertices[pos] = std::uint32_t(v);
-        wt.col_values[pos] = entries[k].q;
-      }
-    std::vector<Entry>().swap(block_entries[b]);
-  }
+  std::size_t k = 0;
+  for (std::size_t v = 0; v < V; ++v)
+    for (std::uint32_t i = 0; i < wt.vertex_kept[v]; ++i, ++k) {
+      const std::uint64_t pos = cursor[flat[k].j]++;
+      wt.col_vertices[pos] = std::uint32_t(v);
+      wt.col_values[pos] = flat[k].q;
+    }
   return wt;
 }
 

@@ -8,8 +8,8 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake ninja-build pkg-config git
-  # numerics, threading, ray tracing
-  libtbb-dev libembree-dev libglm-dev libxxhash-dev libopenblas-pthread-dev
+  # numerics, threading, ray tracing; Open MPI (prt precompute under mpirun)
+  libtbb-dev libembree-dev libglm-dev libxxhash-dev libopenblas-pthread-dev libopenmpi-dev openmpi-bin
   # images and meshes
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
   # glTF export (header only: scene/gltf.cpp compiles it in)

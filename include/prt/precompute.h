@@ -5,6 +5,7 @@
 // prt/transfer_io.h and relit on the CPU or the GPU without Embree.
 #pragma once
 
+#include <prt/communicator.h>
 #include <prt/mesh.h>
 #include <prt/progress.h>
 #include <prt/compressed_transfer.h>
@@ -14,6 +15,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -38,7 +40,70 @@ struct TransferOptions {
   // Also the glossy transfer matrices (prt/transfer.h, Transfer::glossy), from
   // the same rays; shadowed or interreflected, bands at most kMaxGlossyBands.
   bool glossy = false;
+  // The most memory the process may hold while computing, in bytes (0: no
+  // limit; docs/PRECOMPUTE.md, "Memory"). What the result needs whatever the
+  // limit (the ray scene, the per-vertex arrays) comes first; the gather
+  // records of the bounces and the glossy hits stay in memory as far as the
+  // rest allows and go to a temporary file (TMPDIR) past it. The result is
+  // the same bits at any limit. A limit below TransferMemory::minimum throws
+  // prt::Error before any ray is traced.
+  std::size_t memory_limit = 0;
+  // The most bytes of those records kept in memory, whatever the limit
+  // leaves (the rest go to the temporary file); for tests and for a caller
+  // that wants memory for something else.
+  std::size_t records_in_memory_max = std::numeric_limits<std::size_t>::max();
+  // The processes sharing the job (prt/communicator.h): this one traces its
+  // range of the vertices; rank 0 returns the whole transfer, the others an
+  // empty one. nullptr: this process alone.
+  const Communicator* comm = nullptr;
+  // When set, compute_transfer fills it with its plan and what its records
+  // took (TransferMemory below).
+  struct TransferMemory* memory_report = nullptr;
 };
+
+// What compute_transfer holds for a mesh and options, in bytes, on the
+// calling rank: `base` the process before it starts (resident now: the
+// mesh, libraries), `fixed` what it adds whatever the limit (the ray
+// scene's estimate, per-vertex arrays, the output), `minimum` the smallest
+// memory_limit that works (base + fixed + the smallest block of vertices),
+// `per_vertex_records` the gather records and glossy hits a vertex may need
+// at most; after a run, `block` the vertices per block of the first pass and
+// the bytes of records it kept in memory and wrote to the temporary file.
+struct TransferMemory {
+  std::size_t base = 0, fixed = 0, minimum = 0, per_vertex_records = 0;
+  std::size_t block = 0;
+  std::uint64_t records_in_memory = 0, records_spilled = 0;
+};
+TransferMemory transfer_memory(const Mesh& mesh, const TransferOptions& options);
+
+// This process's resident memory now, in bytes (Linux; 0 where unknown).
+std::size_t resident_memory();
+
+// The default memory limit: 80% of the machine's memory (or of the cgroup's
+// limit, when lower), shared among `processes_here` processes on it.
+std::size_t default_memory_limit(int processes_here = 1);
+
+// ---- transfer at other points than the vertices ---------------------------------
+// Points on or near the mesh's surface (a lightmap's texels, probes): each
+// with a unit normal (zero: no transfer) and an albedo in [0, 1] (none given:
+// TransferOptions::albedo for all).
+struct SamplePoints {
+  std::vector<glm::vec3> positions, normals, albedo;
+};
+
+// The transfer at the points, as compute_transfer computes it at vertices
+// (the same direction set, offsets and sums), split over options.comm's
+// ranks and traced in blocks under options.memory_limit alike. The mesh
+// occludes them and, interreflected, lights them: with B bounces the mesh's
+// vertices are computed first with B - 1 (compute_transfer, their colours
+// with vertex_colors), and each point gathers their total once from its
+// rays' front hits, so the points hold bounces 1..B of the same light paths
+// (to float rounding: the vertices' sums are grouped differently). The
+// result's `vertices` is the number of points (rows in their order); no
+// bounce energies. Glossy is refused. Throws prt::Error for a point out of
+// range, a normal neither unit nor zero, or an albedo outside [0, 1].
+Transfer compute_point_transfer(const Mesh& mesh, const SamplePoints& points, const TransferOptions& options,
+                                const Progress& progress = {});
 
 // Glossy matrices have bands^4 entries: 12 bands are 83 KB per vertex (mono,
 // shadowed), far past any GPU's per-frame budget (docs/GLOSSY.md).
@@ -89,6 +154,9 @@ struct WaveletOptions {
   bool vertex_colors = false; // use the mesh's per-vertex colours as albedo (clamped to [0, 1])
   int threads = 0;            // 0: all cores
   double offset = 0;          // ray origin offset; 0: detail default (1e-4 x bounding-box diagonal)
+  // The processes sharing the job (as TransferOptions::comm): each traces
+  // its range, rank 0 returns the whole transfer, the others an empty one.
+  const Communicator* comm = nullptr;
 };
 
 // Traces one occlusion ray per texel above the horizon of every vertex (from

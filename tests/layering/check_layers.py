@@ -47,6 +47,7 @@ FORBIDDEN_EXTERNAL = {
     "EGL/": {"core", "scene", "precompute", "analysis"},
     "GLFW/": {"core", "scene", "precompute", "analysis", "runtime"},
     "CLI/": {"core", "scene", "precompute", "analysis", "runtime"},
+    "mpi.h": {"core", "scene", "analysis", "runtime"},  # Open MPI: precompute/mpi.cpp only
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)

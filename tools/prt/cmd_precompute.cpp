@@ -3,6 +3,7 @@
 #include "progress.h"
 
 #include <prt/precompute.h>
+#include <prt/mpi.h>
 #include <prt/io.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
@@ -15,6 +16,8 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <vector>
 
@@ -28,6 +31,7 @@ struct PrecomputeArgs {
   WaveletOptions wopt;
   MeshOptions mesh_opt;
   bool quiet = false;
+  std::string memory_limit;  // --memory-limit SIZE (memory_size_value); "" the default
   // --compress KxN: write the transfer compressed by clustered PCA (prt compress).
   std::string compress;
   int compress_weights = 16;
@@ -61,6 +65,44 @@ void parse_compress(const std::string& text, CompressOptions& o) {
     throw UsageError("--compress " + text + ": K must be 1 to 2^24 and N at least 0");
 }
 
+// Peak resident memory of this process so far (Linux: ru_maxrss is in KiB).
+std::size_t peak_resident_bytes() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return std::size_t(ru.ru_maxrss) * 1024;
+}
+
+// This process's place in an mpirun job (prt/mpi.h): rank 0 of 1 alone.
+const Communicator& job() { return mpi::launched() ? mpi::world() : single_process(); }
+bool is_root() { return job().rank() == 0; }
+
+// Test hook (tests/mpi): with PRT_TEST_FAIL_RANK=R in the environment, rank R
+// fails once its mesh is read, as a rank with a bad disk or too little
+// memory would, while the others go on to their first exchange.
+void test_fail_rank() {
+  const char* r = std::getenv("PRT_TEST_FAIL_RANK");
+  if (r && *r && std::atoi(r) == job().rank())
+    throw Error(fmt::format("rank {} of {} fails (PRT_TEST_FAIL_RANK)", job().rank(), job().size()));
+}
+
+// The progress of an mpirun job: rank 0's share, which the others keep pace
+// with (equal ranges), its phase named so.
+Progress job_progress(const Progress& p) {
+  if (job().size() == 1) return p;
+  return [p, label = std::make_shared<std::string>(), n = job().size()](std::size_t done, std::size_t total,
+                                                                        const char* phase) {
+    *label = fmt::format("{} (rank 0's share of {})", phase, n);
+    return p(done, total, label->c_str());
+  };
+}
+
+// --memory-limit: bytes; the default shares 80% of the machine among the
+// job's processes on it.
+std::size_t memory_limit(const PrecomputeArgs& a) {
+  return a.memory_limit.empty() ? default_memory_limit(mpi::launched() ? mpi::local_size() : 1)
+                                : parse_memory_size(a.memory_limit);
+}
+
 // The rules across options (each value alone is checked while parsing):
 // UsageError, before anything is read.
 void check_usage(const PrecomputeArgs& a) {
@@ -71,6 +113,9 @@ void check_usage(const PrecomputeArgs& a) {
                        "with); give --target-error too, or leave " + o->get_name() + " out");
   if (target && a.env.empty())
     throw UsageError("--target-error needs --env MAP: the error depends on the lighting");
+  if (target && job().size() > 1)
+    throw UsageError("--target-error runs in one process (it precomputes several settings and compares them with a "
+                     "reference): run it without mpirun");
   if (a.basis == "wavelet") {
     if (a.mode != "shadowed")
       throw UsageError("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed "
@@ -167,18 +212,22 @@ int run_wavelet(PrecomputeArgs& a) {
   a.wopt.vertex_colors = a.opt.vertex_colors;
   a.wopt.threads = a.opt.threads;
   a.wopt.offset = a.opt.offset;
-  for_path("--output", [&] { check_writable(a.output); });
+  a.wopt.comm = &job();
+  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
 
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
-  if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  test_fail_rank();
+  const bool quiet = a.quiet || !is_root();
+  if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
   Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   const std::optional<WaveletTransfer> computed =
       a.target_opt->count() > 0 ? run_wavelet_target(a, mesh)
-                         : run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
-                             return compute_wavelet_transfer(mesh, a.wopt, progress);
+                         : run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+                             return compute_wavelet_transfer(mesh, a.wopt, job_progress(progress));
                            });
   if (!computed) return 130;
+  if (!is_root()) return 0;  // rank 0 writes the file
   const WaveletTransfer& t = *computed;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.write([&] { write_wavelet_transfer(a.output, t); });
@@ -201,7 +250,15 @@ int run_precompute(PrecomputeArgs& a) {
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);
   a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
-  for_path("--output", [&] { check_writable(a.output); });
+  a.opt.comm = &job();
+  a.opt.memory_limit = memory_limit(a);
+  TransferMemory memory;
+  a.opt.memory_report = &memory;
+  // Test hook (tests/mpi): PRT_TEST_RECORDS_IN_MEMORY=BYTES caps the records
+  // kept in memory, so a small mesh sends the rest to the temporary file.
+  if (const char* cap = std::getenv("PRT_TEST_RECORDS_IN_MEMORY"); cap && *cap)
+    a.opt.records_in_memory_max = std::size_t(std::strtoull(cap, nullptr, 10));
+  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
 
   CompressOptions copt;  // checked before the long work
   copt.weight_bits = a.compress_weights;
@@ -210,14 +267,17 @@ int run_precompute(PrecomputeArgs& a) {
     throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
-  if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  test_fail_rank();
+  const bool quiet = a.quiet || !is_root();
+  if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
   Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   const std::optional<Transfer> computed =
       a.target_opt->count() > 0 ? run_target(a, mesh)
-                         : run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
-                             return compute_transfer(mesh, a.opt, progress);
-                           });
+                         : run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+                             return compute_transfer(mesh, a.opt, job_progress(progress));
+                           }, a.opt.memory_limit);
   if (!computed) return 130;
+  if (!is_root()) return 0;  // rank 0 compresses and writes the file
   const Transfer& t = *computed;
   if (!a.compress.empty()) {
     CompressOptions o = copt;
@@ -255,6 +315,13 @@ int run_precompute(PrecomputeArgs& a) {
                  a.opt.bounces, t.bounces < a.opt.bounces ? " (the last fell below --bounce-tolerance)" : "",
                  energies);
     }
+    if (memory.records_in_memory + memory.records_spilled > 0 || a.memory_limit.size())
+      fmt::print(stderr,
+                 "memory: peak {:.2f} GB resident of --memory-limit {:.2f} GB{}; gather records {:.1f} MB in memory, "
+                 "{:.1f} MB in the temporary file (blocks of {} vertices)\n",
+                 double(peak_resident_bytes()) / 1e9, double(a.opt.memory_limit) / 1e9,
+                 a.memory_limit.empty() ? " (the default)" : "", double(memory.records_in_memory) / 1e6,
+                 double(memory.records_spilled) / 1e6, memory.block);
     if (!t.ao.empty() && t.mode != TransferMode::Unshadowed) {
       double mean = 0;
       for (float v : t.ao) mean += v;
@@ -280,6 +347,11 @@ Run add_precompute(CLI::App& app) {
       "against a Monte Carlo reference under MAP (docs/REPORT.md).\n"
       "--material glossy also stores per-vertex transfer matrices (Sloan, Kautz & Snyder 2002) for a Phong lobe whose\n"
       "exponent and strength are chosen at run time (prt relight --eye --gloss --specular, prt render, prt view).\n"
+      "Memory: --memory-limit (default 80% of the machine's memory) bounds the process; the bounces' gather records\n"
+      "past it go to a temporary file in TMPDIR, and the file written is the same bytes at any limit.\n"
+      "Many processes: mpirun -np N prt precompute ... splits the vertices over N processes (on one machine or\n"
+      "several; each with its own --threads and --memory-limit) and writes the same bytes as one process\n"
+      "(docs/PRECOMPUTE.md, \"Memory\" and \"Many processes\").\n"
       "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
       "         prt precompute bunny.off -o bunny-glossy.prt --material glossy --bands 5\n"
       "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
@@ -333,6 +405,13 @@ Run add_precompute(CLI::App& app) {
       add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the direction set"));
   add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
+  a->sh_only.push_back(
+      s->add_option("--memory-limit", a->memory_limit,
+                    "The most memory the process may hold, e.g. 8G or 512M (K, M, G, T: powers of 1000; KiB, MiB, "
+                    "GiB, TiB: of 1024); default 80% of the machine's memory, shared among the mpirun processes on it. "
+                    "Past what the per-vertex arrays need, the bounces' gather records go to a temporary file in "
+                    "TMPDIR; the result is the same bits (docs/PRECOMPUTE.md, \"Memory\")")
+          ->check(memory_size_value()));
   a->sh_only.push_back(s->add_option("--compress", a->compress,
                                      "Write the transfer compressed by clustered PCA: K clusters x N principal "
                                      "vectors, e.g. 128x8 (prt compress; docs/COMPRESSION.md)"));

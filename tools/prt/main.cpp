@@ -3,6 +3,7 @@
 #include "commands.h"
 
 #include <prt/error.h>
+#include <prt/mpi.h>
 
 #include <fmt/core.h>
 
@@ -16,7 +17,30 @@
 // error (bad option: every bad option value, whether CLI11's validators or a
 // command's UsageError find it), 3 an internal error (a bug), 130
 // interrupted (Ctrl-C; nothing written).
+namespace {
+int run_command(int argc, char** argv);
+}  // namespace
+
+// Under mpirun (prt/mpi.h) every process runs the command; one that fails
+// ends the whole job (MPI_Abort) with its status, so no process waits for it
+// in an exchange.
 int main(int argc, char** argv) {
+  if (!prt::mpi::launched()) return run_command(argc, argv);
+  try {
+    prt::mpi::init(&argc, &argv);
+  } catch (const prt::Error& e) {
+    fmt::print(stderr, "prt: error: {}\n", e.what());
+    return 1;
+  }
+  const int rc = run_command(argc, argv);
+  if (rc != 0 && prt::mpi::world().size() > 1) prt::mpi::abort(rc);
+  prt::mpi::finalize();
+  return rc;
+}
+
+namespace {
+
+int run_command(int argc, char** argv) {
   CLI::App app{"prt: Precomputed Radiance Transfer toolkit (spherical harmonics and wavelets).\n"
                "Conventions: docs/CONVENTIONS.md. Each subcommand has --help.",
                "prt"};
@@ -57,7 +81,11 @@ int main(int argc, char** argv) {
   // Usage errors look alike, from CLI11 or from a command (UsageError):
   // "prt CMD: error: --option: what is wrong", and where the options are.
   const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
-  const std::string who = command.empty() ? "prt" : "prt " + command;
+  // Under mpirun with several processes each message says whose it is.
+  const int ranks = prt::mpi::launched() ? prt::mpi::world().size() : 1;
+  const std::string rank_tag =
+      ranks > 1 ? fmt::format(" (rank {} of {})", prt::mpi::world().rank(), ranks) : std::string();
+  const std::string who = (command.empty() ? "prt" : "prt " + command) + rank_tag;
   const auto usage_message = [who](const std::string& what) {
     return fmt::format("{0}: error: {1}\nRun '{0} --help' for the options.\n", who, what);
   };
@@ -82,15 +110,17 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "{}", usage_message(e.what()));
       return 2;
     } catch (const prt::Error& e) {
-      fmt::print(stderr, "prt {}: error: {}\n", sub->get_name(), e.what());
+      fmt::print(stderr, "prt {}{}: error: {}\n", sub->get_name(), rank_tag, e.what());
       return 1;
     } catch (const prt::InternalError& e) {
-      fmt::print(stderr, "prt {}: {}\nThis is a bug in prt; please report it.\n", sub->get_name(), e.what());
+      fmt::print(stderr, "prt {}{}: {}\nThis is a bug in prt; please report it.\n", sub->get_name(), rank_tag, e.what());
       return 3;
     } catch (const std::bad_alloc&) {
-      fmt::print(stderr, "prt {}: error: out of memory\n", sub->get_name());
+      fmt::print(stderr, "prt {}{}: error: out of memory\n", sub->get_name(), rank_tag);
       return 1;
     }
   }
   return 2;
 }
+
+}  // namespace

@@ -177,6 +177,37 @@ CLI::Validator cube_resolution() {
       "POW2 in [2, 256]");
 }
 
+namespace {
+// `text` in bytes, or -1 when it is no size.
+double memory_size(const std::string& text) {
+  double v = 0;
+  const std::size_t used = number_prefix(text.c_str(), v);
+  if (used == 0) return -1;
+  const std::string unit = text.substr(used);
+  static const std::pair<const char*, double> units[] = {
+      {"", 1},         {"B", 1},          {"K", 1e3},           {"KB", 1e3},           {"M", 1e6},
+      {"MB", 1e6},     {"G", 1e9},        {"GB", 1e9},          {"T", 1e12},           {"TB", 1e12},
+      {"KiB", 1024.0}, {"MiB", 1048576.0}, {"GiB", 1073741824.0}, {"TiB", 1099511627776.0}};
+  for (const auto& [name, scale] : units)
+    if (unit == name) return std::isfinite(v) && v >= 0 ? v * scale : -1;
+  return -1;
+}
+}  // namespace
+
+CLI::Validator memory_size_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        const double b = memory_size(s);
+        if (!(b >= 1e6 && b < 9.2e18))
+          return "must be a size from 1M to 9E, like 8G, 512M or 4GiB (K, M, G, T: powers of 1000; KiB, MiB, GiB, "
+                 "TiB: of 1024), got " + show_text(s);
+        return {};
+      },
+      "SIZE");
+}
+
+std::size_t parse_memory_size(const std::string& text) { return std::size_t(memory_size(text)); }
+
 CLI::Validator one_of(std::initializer_list<const char*> names) {
   std::vector<std::string> list(names.begin(), names.end());
   std::string expected;

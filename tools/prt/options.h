@@ -60,6 +60,10 @@ CLI::Validator triple_value(const char* names, double lo = -std::numeric_limits<
                             double hi = std::numeric_limits<double>::infinity(), std::string why = {});
 // A power of two from 2 to 256 (a wavelet cube face).
 CLI::Validator cube_resolution();
+// A size in bytes: a number with K, M, G or T (powers of 1000) or KiB, MiB,
+// GiB or TiB (of 1024), or none (bytes); at least 1 MB, below 2^63 bytes.
+CLI::Validator memory_size_value();
+std::size_t parse_memory_size(const std::string& text);  // checked by memory_size_value()
 // One of `names` (message: "expected a, b or c, got 'x'").
 CLI::Validator one_of(std::initializer_list<const char*> names);
 

@@ -1,5 +1,7 @@
 #include "progress.h"
 
+#include <prt/precompute.h>
+
 #include <fmt/core.h>
 #include <pthread.h>
 #include <unistd.h>
@@ -36,7 +38,16 @@ InterruptScope::~InterruptScope() {
 
 bool InterruptScope::interrupted() { return g_interrupted; }
 
-ProgressBar::ProgressBar(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {}
+ProgressBar::ProgressBar(bool quiet, std::size_t memory_limit)
+    : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0), memory_limit_(memory_limit) {}
+
+namespace {
+// " 1.23/4.00 GB": resident memory now against the limit; "" without one.
+std::string memory_text(std::size_t limit) {
+  if (limit == 0) return {};
+  return fmt::format(" {:.2f}/{:.2f} GB", double(resident_memory()) / 1e9, double(limit) / 1e9);
+}
+}  // namespace
 
 ProgressBar::~ProgressBar() {
   if (tty_ && !quiet_ && last_percent_ >= 0) fmt::print(stderr, "\n");
@@ -98,12 +109,13 @@ bool ProgressBar::update(std::size_t done, std::size_t total, const char* phase)
     last_draw_ = now;
     constexpr int kWidth = 30;
     const int filled = int(kWidth * double(done) / double(total));
-    fmt::print(stderr, "\r{:<8} [{}{}] {:3d}% {}/{}  {:.1f}s, ETA {:.1f}s  ", phase, std::string(filled, '#'),
-               std::string(kWidth - filled, ' '), percent, done, total, elapsed, eta);
+    fmt::print(stderr, "\r{:<8} [{}{}] {:3d}% {}/{}  {:.1f}s, ETA {:.1f}s{}  ", phase, std::string(filled, '#'),
+               std::string(kWidth - filled, ' '), percent, done, total, elapsed, eta, memory_text(memory_limit_));
     last_percent_ = percent;
   } else if (last_percent_ < 0 || percent / 25 != last_percent_ / 25 || (done == total && last_percent_ != 100)) {
     // Not a terminal (a log): a line at 0, 25, 50, 75 and 100%.
-    fmt::print(stderr, "{}: {}% ({}/{}), {:.1f}s elapsed\n", phase, percent, done, total, elapsed);
+    fmt::print(stderr, "{}: {}% ({}/{}), {:.1f}s elapsed{}\n", phase, percent, done, total, elapsed,
+               memory_text(memory_limit_));
     last_percent_ = percent;
   }
   std::fflush(stderr);

@@ -39,7 +39,9 @@ class InterruptScope {
 
 class ProgressBar {
  public:
-  explicit ProgressBar(bool quiet);
+  // memory_limit > 0: the bar also shows the process's resident memory
+  // against it ("1.23/4.00 GB").
+  explicit ProgressBar(bool quiet, std::size_t memory_limit = 0);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
@@ -52,6 +54,7 @@ class ProgressBar {
 
   InterruptScope interrupts_;
   bool quiet_, tty_;
+  std::size_t memory_limit_ = 0;
   std::string phase_;
   int last_percent_ = -1;
   std::chrono::steady_clock::time_point phase_start_, last_draw_;
@@ -61,10 +64,10 @@ class ProgressBar {
 // std::nullopt after printing "prt COMMAND: interrupted; nothing written"
 // when Ctrl-C cancelled it (the caller then exits 130).
 template <typename F>
-auto run_with_progress(bool quiet, const char* command, F&& compute)
+auto run_with_progress(bool quiet, const char* command, F&& compute, std::size_t memory_limit = 0)
     -> std::optional<std::invoke_result_t<F, Progress>> {
   {
-    ProgressBar bar(quiet);
+    ProgressBar bar(quiet, memory_limit);
     try {
       return compute(bar.callback());
     } catch (const Error&) {
