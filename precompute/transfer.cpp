@@ -112,10 +112,11 @@ std::size_t max_records_per_vertex(const TransferOptions& o, bool gather, bool g
   return (gather ? M * 3 * sizeof(std::pair<std::uint32_t, float>) : 0) + (glossy_ir ? M * sizeof(FrontHit) : 0);
 }
 
-// Estimated peak of Embree's BVH per triangle while building (RayScene;
-// measured on bumpy spheres of 0.4M and 2M triangles: 150-170 bytes per
-// triangle resident after the build, docs/PRECOMPUTE.md "Memory").
-constexpr std::size_t kRaySceneBytesPerTriangle = 192;
+// Embree's ray scene (RayScene) per triangle, with a margin: the bumpy sphere
+// of 2M triangles (scripts/make_bumpy_sphere.py) peaks 140 MB higher
+// shadowed (1 ray) than unshadowed (no scene): 70 bytes per triangle
+// (docs/PRECOMPUTE.md, "Memory").
+constexpr std::size_t kRaySceneBytesPerTriangle = 96;
 
 // How compute_transfer uses its memory on this rank: vertices per block of
 // the first pass and the bytes of records it keeps in memory.

@@ -85,9 +85,9 @@ int run_command(int argc, char** argv) {
   const int ranks = prt::mpi::launched() ? prt::mpi::world().size() : 1;
   const std::string rank_tag =
       ranks > 1 ? fmt::format(" (rank {} of {})", prt::mpi::world().rank(), ranks) : std::string();
-  const std::string who = (command.empty() ? "prt" : "prt " + command) + rank_tag;
-  const auto usage_message = [who](const std::string& what) {
-    return fmt::format("{0}: error: {1}\nRun '{0} --help' for the options.\n", who, what);
+  const std::string who = command.empty() ? "prt" : "prt " + command;
+  const auto usage_message = [who, rank_tag](const std::string& what) {
+    return fmt::format("{0}{2}: error: {1}\nRun '{0} --help' for the options.\n", who, what, rank_tag);
   };
   app.failure_message([usage_message](const CLI::App*, const CLI::Error& e) -> std::string {
     return usage_message(e.what());
