@@ -13,11 +13,11 @@
 #include <prt/render.h>
 #include <prt/transfer.h>
 
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -35,6 +35,12 @@ namespace {
 // Runs of vertices against one dispatch: the same shader arithmetic on the
 // same values, so the same bits.
 constexpr double kSameBits = 0.0;
+
+// `text` with each "{}" replaced by the next number, in order.
+std::string with(std::string text, std::initializer_list<std::size_t> numbers) {
+  for (std::size_t n : numbers) text.replace(text.find("{}"), 2, std::to_string(n));
+  return text;
+}
 
 // Sets PRT_TEST_GL_LIMITS while it lives (the renderer reads it in set_mesh).
 class TestLimits {
@@ -154,21 +160,21 @@ TEST(RenderLimits, WhatDoesNotFitIsRefusedNamingTheLimit) {
     // The rows of the buffer texture: 3 texels of 16 bytes each (9 coefficients padded to 12).
     TestLimits cap("GL_MAX_TEXTURE_BUFFER_SIZE=100");
     EXPECT_EQ(message([&] { r->set_mesh(mesh, t); }),
-              fmt::format("transfer of {} vertices x 1 channel x 9 coefficients (each channel padded to 12) needs {} "
-                          "bytes on the GPU in one buffer texture ({} texels of 16 bytes); this OpenGL's "
-                          "GL_MAX_TEXTURE_BUFFER_SIZE is 100 texels (1600 bytes): use fewer bands (prt precompute "
-                          "--bands) or a smaller mesh",
-                          rows, rows * 48, rows * 3));
+              with("transfer of {} vertices x 1 channel x 9 coefficients (each channel padded to 12) needs {} "
+                   "bytes on the GPU in one buffer texture ({} texels of 16 bytes); this OpenGL's "
+                   "GL_MAX_TEXTURE_BUFFER_SIZE is 100 texels (1600 bytes): use fewer bands (prt precompute "
+                   "--bands) or a smaller mesh",
+                   {rows, rows * 48, rows * 3}));
   }
   {
     // Glossy matrices: 3 bands, the packed triangle of 9 x 9 is 45 floats, padded to 48: 12 texels per vertex.
     const Transfer g = transfer_of(mesh, false, true);
-    TestLimits cap(fmt::format("GL_MAX_TEXTURE_BUFFER_SIZE={}", 12 * V - 1));
+    TestLimits cap("GL_MAX_TEXTURE_BUFFER_SIZE=" + std::to_string(12 * V - 1));
     EXPECT_EQ(message([&] { r->set_mesh(mesh, g); }),
-              fmt::format("glossy matrices of {} vertices at 3 bands (192 bytes per vertex) needs {} bytes on the GPU "
-                          "in one buffer texture ({} texels of 16 bytes); this OpenGL's GL_MAX_TEXTURE_BUFFER_SIZE is "
-                          "{} texels ({} bytes): use fewer bands (prt precompute --bands) or a smaller mesh",
-                          V, V * 192, V * 12, 12 * V - 1, (12 * V - 1) * 16));
+              with("glossy matrices of {} vertices at 3 bands (192 bytes per vertex) needs {} bytes on the GPU "
+                   "in one buffer texture ({} texels of 16 bytes); this OpenGL's GL_MAX_TEXTURE_BUFFER_SIZE is "
+                   "{} texels ({} bytes): use fewer bands (prt precompute --bands) or a smaller mesh",
+                   {V, V * 192, V * 12, 12 * V - 1, (12 * V - 1) * 16}));
   }
   {
     // A compressed glossy transfer's glossy pass goes by cluster and binds
@@ -177,12 +183,12 @@ TEST(RenderLimits, WhatDoesNotFitIsRefusedNamingTheLimit) {
     o.clusters = 4;
     o.vectors = 2;
     const CompressedTransfer c = compress_transfer(transfer_of(mesh, false, true), o);
-    TestLimits cap(fmt::format("GL_MAX_SHADER_STORAGE_BLOCK_SIZE={}", 16 * V - 16));
+    TestLimits cap("GL_MAX_SHADER_STORAGE_BLOCK_SIZE=" + std::to_string(16 * V - 16));
     EXPECT_EQ(message([&] { r->set_mesh(mesh, c); }),
-              fmt::format("compressed glossy shading of {} vertices binds its radiance (16 bytes per vertex) whole: "
-                          "{} bytes; this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: use a smaller mesh, "
-                          "or the uncompressed file",
-                          V, 16 * V, 16 * V - 16));
+              with("compressed glossy shading of {} vertices binds its radiance (16 bytes per vertex) whole: "
+                   "{} bytes; this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: use a smaller mesh, "
+                   "or the uncompressed file",
+                   {V, 16 * V, 16 * V - 16}));
   }
   {
     // Compressed rows: one storage buffer, 4 bytes of cluster and 2 of each of 2 weights (16-bit) per row.
@@ -193,9 +199,9 @@ TEST(RenderLimits, WhatDoesNotFitIsRefusedNamingTheLimit) {
     const CompressedTransfer c = compress_transfer(t, o);
     TestLimits cap("GL_MAX_SHADER_STORAGE_BLOCK_SIZE=1024");
     EXPECT_EQ(message([&] { r->set_mesh(mesh, c); }),
-              fmt::format("compressed coefficients of {} rows need {} bytes on the GPU in one storage buffer (8 per "
-                          "row); this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is 1024 bytes",
-                          rows, rows * 8));
+              with("compressed coefficients of {} rows need {} bytes on the GPU in one storage buffer (8 per "
+                   "row); this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is 1024 bytes",
+                   {rows, rows * 8}));
   }
   {
     // Limits that leave no run at all (16 bytes: one vertex of radiance, not 64).
