@@ -5,7 +5,9 @@
 
 #include <fmt/format.h>
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
+#include <cstdlib>
 
 namespace prt::gl {
 
@@ -17,9 +19,73 @@ bool has_extension(const char* list, const char* name) {
   return s.find(std::string(" ") + name + " ") != std::string::npos;
 }
 
-void check_gl(const char* what) {
+const char* error_name(unsigned e) {
+  switch (e) {
+    case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
+    case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
+    case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
+    case GL_STACK_OVERFLOW: return "GL_STACK_OVERFLOW";
+    case GL_STACK_UNDERFLOW: return "GL_STACK_UNDERFLOW";
+    case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
+    case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
+    case GL_CONTEXT_LOST: return "GL_CONTEXT_LOST";
+  }
+  return "unknown";
+}
+
+void check_gl(const std::string& what) {
   const GLenum e = glGetError();
-  if (e != GL_NO_ERROR) throw Error(std::string("OpenGL error ") + hex(e) + " in " + what);
+  if (e != GL_NO_ERROR)
+    throw Error(fmt::format("OpenGL error {} ({}) in {}", hex(e), error_name(e), what));
+}
+
+namespace {
+
+// PRT_TEST_GL_LIMITS="NAME=VALUE,...": lowers the named limits (tests make
+// the renderer meet them with small meshes).
+void apply_test_limits(Limits& l) {
+  const char* env = std::getenv("PRT_TEST_GL_LIMITS");
+  if (!env || !*env) return;
+  const std::string s = env;
+  for (std::size_t at = 0; at < s.size();) {
+    std::size_t end = s.find(',', at);
+    if (end == std::string::npos) end = s.size();
+    const std::string item = s.substr(at, end - at);
+    at = end + 1;
+    const std::size_t eq = item.find('=');
+    std::uint64_t value = 0;
+    const char* first = item.data() + (eq == std::string::npos ? item.size() : eq + 1);
+    const auto [ptr, ec] = std::from_chars(first, item.data() + item.size(), value);
+    const std::string name = item.substr(0, eq);
+    std::uint64_t* field = name == "GL_MAX_SHADER_STORAGE_BLOCK_SIZE" ? &l.storage_block
+                           : name == "GL_MAX_TEXTURE_BUFFER_SIZE"     ? &l.texture_buffer_texels
+                           : name == "GL_MAX_COMPUTE_WORK_GROUP_COUNT" ? &l.work_groups
+                                                                        : nullptr;
+    if (!field || eq == std::string::npos || ec != std::errc() || ptr != item.data() + item.size() || value == 0)
+      throw Error(fmt::format("PRT_TEST_GL_LIMITS: '{}' is not NAME=VALUE with NAME one of "
+                              "GL_MAX_SHADER_STORAGE_BLOCK_SIZE, GL_MAX_TEXTURE_BUFFER_SIZE, "
+                              "GL_MAX_COMPUTE_WORK_GROUP_COUNT and VALUE a positive integer",
+                              item));
+    *field = std::min(*field, value);
+  }
+}
+
+}  // namespace
+
+Limits limits() {
+  GLint64 block = 0, texels = 0, align = 0;
+  GLint groups = 0;
+  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+  glGetInteger64v(GL_MAX_TEXTURE_BUFFER_SIZE, &texels);
+  glGetInteger64v(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
+  glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &groups);
+  Limits l;
+  l.storage_block = std::uint64_t(std::max<GLint64>(block, 0));
+  l.texture_buffer_texels = std::uint64_t(std::max<GLint64>(texels, 0));
+  l.work_groups = std::uint64_t(std::max<GLint>(groups, 0));
+  l.storage_align = std::uint64_t(std::max<GLint64>(align, 1));
+  apply_test_limits(l);
+  return l;
 }
 
 std::string device_string() {

@@ -9,6 +9,7 @@
 #include <GL/glext.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace prt::gl {
@@ -20,8 +21,24 @@ std::string hex(unsigned v);
 // (an EGL or GL extension string); false for a null list.
 bool has_extension(const char* list, const char* name);
 
-// Throws prt::Error("OpenGL error 0x... in <what>") when glGetError() reports one.
-void check_gl(const char* what);
+// "GL_OUT_OF_MEMORY" for 0x0505, and so on; "unknown" for a code GL does not define.
+const char* error_name(unsigned error);
+
+// Throws prt::Error("OpenGL error 0x0505 (GL_OUT_OF_MEMORY) in <what>") when
+// glGetError() reports one.
+void check_gl(const std::string& what);
+
+// The implementation limits the renderer sizes its buffers and dispatches by.
+// PRT_TEST_GL_LIMITS="GL_MAX_SHADER_STORAGE_BLOCK_SIZE=4096,..." lowers any
+// of the first three (a test hook: tests meet the limits with small meshes);
+// prt::Error for a malformed value.
+struct Limits {
+  std::uint64_t storage_block = 0;          // GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes
+  std::uint64_t texture_buffer_texels = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE, texels
+  std::uint64_t work_groups = 0;            // GL_MAX_COMPUTE_WORK_GROUP_COUNT in x
+  std::uint64_t storage_align = 1;          // GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, bytes
+};
+Limits limits();
 
 // GL_RENDERER ", " GL_VERSION of the current context ("?" for a missing string).
 std::string device_string();

@@ -26,6 +26,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -202,6 +204,14 @@ struct Renderer::Impl {
 
   GLsizei index_count = 0;
   std::size_t vertex_count = 0;
+  // This OpenGL's limits (set_mesh), and the vertices of one compute
+  // dispatch: relight() shades the mesh in runs of `chunk` vertices, each
+  // binding its range of the per-vertex storage buffers, so that no binding
+  // exceeds GL_MAX_SHADER_STORAGE_BLOCK_SIZE and no dispatch
+  // GL_MAX_COMPUTE_WORK_GROUP_COUNT (llvmpipe: 128 MiB and 65535 groups of
+  // 64, 8.4M and 4.2M vertices).
+  gl::Limits limits;
+  std::size_t chunk = 0;
   int bands = 0, channels = 0, band_limit = 0;
   Shading shading = Shading::Transfer;
   bool have_lighting = false, have_colors = false;
@@ -436,30 +446,62 @@ int Renderer::bands() const { return impl_->bands; }
 
 namespace {
 
-// A transfer array as the shader's buffer texture wants it: each vertex's
-// channels padded with zeros to a multiple of 4 coefficients.
-std::vector<float> padded_transfer(const float* t, std::size_t vertices, int channels, int stride) {
-  const int padded = (stride + 3) / 4 * 4;
-  std::vector<float> out(vertices * std::size_t(channels) * std::size_t(padded), 0.0f);
-  for (std::size_t run = 0; run < vertices * std::size_t(channels); ++run)
-    std::copy_n(t + run * std::size_t(stride), stride, out.begin() + std::ptrdiff_t(run * std::size_t(padded)));
-  return out;
+// Bytes of staging per upload step: what a streamed upload holds on the CPU
+// besides the caller's arrays (no padded copy of a whole array is made).
+constexpr std::size_t kStagingBytes = std::size_t(4) << 20;
+
+// An immutable buffer of `count` rows of `row_floats` floats (at least 4
+// bytes), filled a block of rows at a time: fill(r, dst) writes row r's
+// row_floats floats (dst zeroed first) into a staging buffer, copied into
+// place on the GPU. The buffer's storage flags are make_buffer's default.
+GLuint upload_rows(std::size_t count, std::size_t row_floats, const std::function<void(std::size_t, float*)>& fill) {
+  const std::size_t row_bytes = row_floats * sizeof(float);
+  const GLuint buffer = make_buffer(nullptr, count * row_bytes);
+  if (count == 0) return buffer;
+  const std::size_t block = std::max<std::size_t>(1, std::min(count, kStagingBytes / row_bytes));
+  std::vector<float> rows(block * row_floats);
+  const GLuint staging = make_buffer(nullptr, rows.size() * sizeof(float), GL_DYNAMIC_STORAGE_BIT);
+  for (std::size_t first = 0; first < count; first += block) {
+    const std::size_t n = std::min(block, count - first);
+    std::fill(rows.begin(), rows.end(), 0.0f);
+    for (std::size_t r = 0; r < n; ++r) fill(first + r, rows.data() + r * row_floats);
+    glNamedBufferSubData(staging, 0, GLsizeiptr(n * row_bytes), rows.data());
+    glCopyNamedBufferSubData(staging, buffer, 0, GLintptr(first * row_bytes), GLsizeiptr(n * row_bytes));
+  }
+  glDeleteBuffers(1, &staging);
+  return buffer;
 }
 
-// Uploads a transfer array ([vertex][channel][k], k < stride) padded for the
-// shader, with its buffer texture. Throws when it exceeds the buffer texture
-// limit of the implementation.
-TransferArray make_transfer_array(const float* t, std::size_t vertices, int channels, int stride) {
-  const std::vector<float> padded = padded_transfer(t, vertices, channels, stride);
-  GLint max_texels = 0;
-  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-  if (padded.size() / 4 > std::size_t(max_texels))
-    throw Error(fmt::format("transfer of {} vertices x {} channels x {} coefficients exceeds this OpenGL's "
-                            "buffer texture limit ({} texels of 4 floats)",
-                            vertices, channels, stride, max_texels));
+// Throws, naming GL_MAX_TEXTURE_BUFFER_SIZE, unless `texels` RGBA32F
+// texels (`what`, e.g. "transfer of 10 vertices x ...") fit one buffer texture.
+void check_texture_buffer(std::uint64_t texels, const gl::Limits& lim, const std::string& what) {
+  if (texels <= lim.texture_buffer_texels) return;
+  throw Error(fmt::format("{} needs {} bytes on the GPU in one buffer texture ({} texels of 16 bytes); this OpenGL's "
+                          "GL_MAX_TEXTURE_BUFFER_SIZE is {} texels ({} bytes): use fewer bands (prt precompute "
+                          "--bands) or a smaller mesh",
+                          what, texels * 16, texels, lim.texture_buffer_texels, lim.texture_buffer_texels * 16));
+}
+
+// Uploads a transfer array ([row][channel][k], k < stride) padded for the
+// shader (each channel to a multiple of 4 coefficients, as relight.comp.glsl
+// reads it), with its buffer texture; row(r, scratch) gives row r's
+// channels x stride floats (a pointer into the caller's array, or scratch
+// filled). Throws, before uploading anything, when it exceeds the buffer
+// texture limit.
+TransferArray make_transfer_array(std::size_t rows, int channels, int stride, const gl::Limits& lim, const char* what,
+                                  const std::function<const float*(std::size_t, float*)>& row) {
+  const std::size_t padded = std::size_t((stride + 3) / 4 * 4), row_floats = std::size_t(channels) * padded;
+  check_texture_buffer(rows * row_floats / 4, lim,
+                       fmt::format("{} of {} vertices x {} channel{} x {} coefficients (each channel padded to {})",
+                                   what, rows, channels, channels == 1 ? "" : "s", stride, padded));
   TransferArray a;
-  a.bytes = padded.size() * sizeof(float);
-  a.buffer = make_buffer(padded.data(), padded.size() * sizeof(float));
+  a.bytes = rows * row_floats * sizeof(float);
+  std::vector<float> scratch(std::size_t(channels) * std::size_t(stride));
+  a.buffer = upload_rows(rows, row_floats, [&](std::size_t r, float* dst) {
+    const float* src = row(r, scratch.data());
+    for (int c = 0; c < channels; ++c)
+      std::copy_n(src + std::size_t(c) * std::size_t(stride), stride, dst + std::size_t(c) * padded);
+  });
   glCreateTextures(GL_TEXTURE_BUFFER, 1, &a.texture);
   glTextureBuffer(a.texture, GL_RGBA32F, a.buffer);
   a.channels = channels;
@@ -480,27 +522,23 @@ std::size_t glossy_row_floats(const Transfer& t) {
 // vertices store none: their hemisphere product matrices are evaluated here
 // (vertex_glossy_matrix), so the shader reads them as it reads stored ones.
 // Throws when the rows exceed the buffer texture limit, before building them.
-TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh, const std::vector<std::size_t>& vertices) {
+TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh, const std::vector<std::size_t>& vertices,
+                                const gl::Limits& lim) {
   const std::size_t count = vertices.size(), row = glossy_row_floats(t), bytes = count * row * sizeof(float);
-  GLint max_texels = 0;
-  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-  if (count * row / 4 > std::size_t(max_texels))
-    throw Error(fmt::format("glossy matrices of {} vertices at {} bands need {} bytes on the GPU ({} per vertex); "
-                            "this OpenGL's buffer texture limit is {} texels of 16 bytes ({} bytes): use fewer bands "
-                            "(prt precompute --bands) or a smaller mesh",
-                            count, t.bands, bytes, row * sizeof(float), max_texels,
-                            std::size_t(max_texels) * 16));
+  check_texture_buffer(count * row / 4, lim,
+                       fmt::format("glossy matrices of {} vertices at {} bands ({} bytes per vertex)", count, t.bands,
+                                   row * sizeof(float)));
   if (count == 0) return {};
   const std::size_t nc = std::size_t(t.bands) * t.bands, channel = (nc * nc + 3) / 4 * 4;
-  std::vector<float> out(count * row, 0.0f);
-  for (std::size_t n = 0; n < count; ++n) {
+  TransferArray a;
+  a.bytes = bytes;
+  a.buffer = upload_rows(count, row, [&](std::size_t n, float* dst) {
     const std::size_t v = vertices[n];
-    float* dst = out.data() + n * row;
     if (const float* src = t.stored_glossy(v)) {
       if (t.glossy_symmetric()) std::copy_n(src, nc * (nc + 1) / 2, dst);
       else
         for (int c = 0; c < t.glossy_channels(); ++c) std::copy_n(src + std::size_t(c) * nc * nc, nc * nc, dst + std::size_t(c) * channel);
-      continue;
+      return;
     }
     const std::vector<double> m = vertex_glossy_matrix(t, mesh, v);  // every channel's
     if (t.glossy_symmetric()) {
@@ -510,10 +548,7 @@ TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh, const std::
       for (int c = 0; c < t.glossy_channels(); ++c)
         for (std::size_t i = 0; i < nc * nc; ++i) dst[std::size_t(c) * channel + i] = float(m[i]);
     }
-  }
-  TransferArray a;
-  a.bytes = bytes;
-  a.buffer = make_buffer(out.data(), bytes);
+  });
   glCreateTextures(GL_TEXTURE_BUFFER, 1, &a.texture);
   glTextureBuffer(a.texture, GL_RGBA32F, a.buffer);
   a.channels = t.glossy_channels();
@@ -533,14 +568,25 @@ void check_bands(const Transfer& t) {
 // A compressed signal's rows for shaders/compressed.glsl: per row the
 // cluster index, then the weights (16-bit: the integers q = w / s, two per
 // word; 32-bit: floats), in a storage buffer, and the buffer of its
-// per-cluster products (`run` vec4s per vector). Throws when a buffer
-// exceeds the storage block limit.
-ClusterRows make_cluster_rows(const ClusteredSignal& s, std::size_t run, const char* what) {
+// per-cluster products (`run` vec4s per vector). Throws, naming
+// GL_MAX_SHADER_STORAGE_BLOCK_SIZE, when a buffer exceeds it.
+ClusterRows make_cluster_rows(const ClusteredSignal& s, std::size_t run, const char* what, const gl::Limits& lim) {
   ClusterRows r;
   r.vectors = s.vectors;
   r.weight_bits = s.weight_bits;
   r.row_words = 1 + (s.weight_bits == 16 ? (s.vectors + 1) / 2 : s.vectors);
   const std::size_t N = std::size_t(s.vectors), rows = s.rows();
+  // Both buffers are bound whole as storage blocks: checked before anything is built.
+  r.bytes = rows * std::size_t(r.row_words) * sizeof(std::uint32_t);
+  if (r.bytes > lim.storage_block)
+    throw Error(fmt::format("compressed {} of {} rows need {} bytes on the GPU in one storage buffer ({} per row); "
+                            "this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes",
+                            what, rows, r.bytes, std::size_t(r.row_words) * sizeof(std::uint32_t), lim.storage_block));
+  r.product_bytes = std::size_t(s.clusters) * (N + 1) * run * 16;
+  if (r.product_bytes > lim.storage_block)
+    throw Error(fmt::format("the per-cluster products of the compressed {} need {} bytes on the GPU in one storage "
+                            "buffer; this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes",
+                            what, r.product_bytes, lim.storage_block));
   std::vector<std::uint32_t> words(std::max<std::size_t>(rows, 1) * std::size_t(r.row_words), 0u);
   for (std::size_t p = 0; p < rows; ++p) {
     std::uint32_t* w = words.data() + p * std::size_t(r.row_words);
@@ -557,19 +603,7 @@ ClusterRows make_cluster_rows(const ClusteredSignal& s, std::size_t run, const c
       }
     }
   }
-  GLint64 max_block = 0;
-  glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-  r.bytes = rows * std::size_t(r.row_words) * sizeof(std::uint32_t);
-  if (r.bytes > std::size_t(max_block))
-    throw Error(fmt::format("compressed {} of {} rows need {} bytes on the GPU; this OpenGL's storage block limit "
-                            "is {} bytes",
-                            what, rows, r.bytes, max_block));
   r.buffer = make_buffer(words.data(), words.size() * sizeof(std::uint32_t));
-  r.product_bytes = std::size_t(s.clusters) * (N + 1) * run * 16;
-  if (r.product_bytes > std::size_t(max_block))
-    throw Error(fmt::format("the per-cluster products of the compressed {} need {} bytes on the GPU; this OpenGL's "
-                            "storage block limit is {} bytes",
-                            what, r.product_bytes, max_block));
   r.products = make_buffer(nullptr, std::max<std::size_t>(r.product_bytes, 16), GL_DYNAMIC_STORAGE_BIT);
   r.clusters = s;
   r.clusters.cluster.clear();
@@ -635,17 +669,22 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   m.source = rows == 0                                                              ? Source::Analytic
              : analytic > 0 && analytic * row_bytes > t.vertices * sizeof(std::uint32_t) ? Source::Mixed
                                                                                     : Source::Stored;
-  if (m.source == Source::Stored && analytic > 0) {
-    const std::vector<float> all = dense_transfer(t, mesh);
-    m.transfer = make_transfer_array(all.data(), t.vertices, t.channels, stride);
-    if (!t.direct.empty()) {
-      const std::vector<float> all_direct = dense_transfer(t, mesh, true);
-      m.direct = make_transfer_array(all_direct.data(), t.vertices, t.channels, stride);
-    }
-  } else {
-    m.transfer = make_transfer_array(t.coeffs.data(), rows, t.channels, stride);
-    if (!t.direct.empty()) m.direct = make_transfer_array(t.direct.data(), rows, t.channels, stride);
-  }
+  // The arrays go up a block of rows at a time, straight from t (no copy of
+  // a whole array on the CPU).
+  const auto array = [&](bool direct, const char* what) {
+    const std::vector<float>& a = direct ? t.direct : t.coeffs;
+    if (m.source == Source::Stored && analytic > 0)  // every vertex's row: dense_transfer's, one at a time
+      return make_transfer_array(t.vertices, t.channels, stride, m.limits, what, [&](std::size_t v, float* scratch) {
+        if (const float* row = direct ? t.stored_direct(v) : t.stored(v)) return row;
+        const std::vector<double> d = vertex_transfer(t, mesh, v, direct);
+        for (std::size_t i = 0; i < d.size(); ++i) scratch[i] = float(d[i]);
+        return static_cast<const float*>(scratch);
+      });
+    return make_transfer_array(rows, t.channels, stride, m.limits, what,
+                               [&](std::size_t r, float*) { return a.data() + r * t.stride(); });
+  };
+  m.transfer = array(false, "transfer");
+  if (!t.direct.empty()) m.direct = array(true, "direct part");
   if (m.source == Source::Mixed) m.slot_buffer = make_buffer(t.slots.data(), t.slots.size() * sizeof(std::uint32_t));
   std::vector<std::size_t> every(t.glossy ? t.vertices : 0);
   for (std::size_t v = 0; v < every.size(); ++v) every[v] = v;
@@ -660,7 +699,7 @@ void Renderer::Impl::finish_transfer(const Transfer& t, const Mesh& mesh, const 
   if (!t.bent_normals.empty())
     bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));
   if (t.glossy) {
-    glossy_array = make_glossy_array(t, mesh, glossy_vertices);
+    glossy_array = make_glossy_array(t, mesh, glossy_vertices, limits);
     glossy_row_texels = int(glossy_row_floats(t) / 4);
     has_glossy = true;
     // What glossy_shading_problem reads of the transfer: the header, not its arrays.
@@ -711,8 +750,9 @@ void Renderer::set_mesh(const Mesh& mesh, const CompressedTransfer& c) {
     m.slot_buffer = make_buffer(slots.data(), slots.size() * sizeof(std::uint32_t));
   }
   if (rows > 0) {
-    m.coeff_rows = make_cluster_rows(c.coeffs, 1, "coefficients");
-    if (t.glossy) m.glossy_rows = make_cluster_rows(c.glossy, std::size_t(t.bands) * t.bands, "glossy matrices");
+    m.coeff_rows = make_cluster_rows(c.coeffs, 1, "coefficients", m.limits);
+    if (t.glossy)
+      m.glossy_rows = make_cluster_rows(c.glossy, std::size_t(t.bands) * t.bands, "glossy matrices", m.limits);
   }
   if (t.glossy && m.glossy_rows) {
     // Vertices by cluster (analytic ones last: key K), cut into workgroups of 64.
@@ -728,6 +768,21 @@ void Renderer::set_mesh(const Mesh& mesh, const CompressedTransfer& c) {
         for (std::size_t i = 0; i < 64; ++i) order.push_back(at + i < by[k].size() ? by[k][at + i] : kNone);
       }
     m.glossy_chunks = chunk.size();
+    // The glossy pass goes by cluster, not by runs of vertices: it binds
+    // these whole, so each must fit one storage block.
+    const std::pair<const char*, std::size_t> whole[] = {
+        {"radiance (16 bytes per vertex)", t.vertices * 16},
+        {"normals (12 bytes per vertex)", t.vertices * 12},
+        {"positions (12 bytes per vertex)", t.vertices * 12},
+        {"slots (4 bytes per vertex)", analytic > 0 ? t.vertices * 4 : 0},
+        {"vertex order by cluster", order.size() * sizeof(std::uint32_t)},
+    };
+    for (const auto& [what, bytes] : whole)
+      if (bytes > m.limits.storage_block)
+        throw Error(fmt::format("compressed glossy shading of {} vertices binds its {} whole: {} bytes; this OpenGL's "
+                                "GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: use a smaller mesh, or the "
+                                "uncompressed file",
+                                t.vertices, what, bytes, m.limits.storage_block));
     // Uniform blocks of as many clusters' products as the block size allows,
     // each starting at the buffer offset alignment.
     GLint64 block = 0, align = 0;
@@ -768,9 +823,30 @@ void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_c
   if (vertex_colors && mesh.colors.size() != mesh.vertex_count())
     throw Error("the transfer was computed with vertex colours, but the mesh has none");
   if (mesh.triangles.empty()) throw Error("the mesh has no triangles");
+  // One glDrawElements call draws the mesh: its index count is a GLsizei.
+  if (mesh.triangles.size() > std::size_t(std::numeric_limits<GLsizei>::max()) / 3)
+    throw Error(fmt::format("the mesh has {} triangles; one draw call takes at most {} indices (GLsizei), {} "
+                            "triangles",
+                            mesh.triangles.size(), std::numeric_limits<GLsizei>::max(),
+                            std::numeric_limits<GLsizei>::max() / 3));
   Impl& m = *impl_;
   m.make_current();
   clear_mesh();
+  m.limits = gl::limits();
+  // Runs of vertices: at most GL_MAX_COMPUTE_WORK_GROUP_COUNT groups of 64,
+  // at most GL_MAX_SHADER_STORAGE_BLOCK_SIZE bytes of radiance (16 per
+  // vertex, the widest per-vertex storage buffer), and a multiple of the
+  // storage buffer offset alignment so that every run's ranges start aligned.
+  const std::uint64_t unit = std::lcm<std::uint64_t>(64, m.limits.storage_align);
+  m.chunk = std::size_t(std::min(m.limits.work_groups * 64, m.limits.storage_block / 16) / unit * unit);
+  if (m.chunk == 0)
+    throw Error(fmt::format("this OpenGL's limits leave no room for a run of the relighting pass: "
+                            "GL_MAX_COMPUTE_WORK_GROUP_COUNT {} (groups of 64 vertices), GL_MAX_SHADER_STORAGE_BLOCK_SIZE "
+                            "{} bytes (16 per vertex), GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT {} bytes",
+                            m.limits.work_groups, m.limits.storage_block, m.limits.storage_align));
+  const std::size_t mesh_bytes = mesh.positions.size() * sizeof(glm::vec3) * 2 +
+                                 mesh.triangles.size() * sizeof(glm::uvec3) + mesh.vertex_count() * 16 +
+                                 (vertex_colors ? mesh.colors.size() * sizeof(glm::vec3) : 0);
   m.position_buffer = make_buffer(mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
   m.index_buffer = make_buffer(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
   m.normal_buffer = make_buffer(mesh.normals.data(), mesh.normals.size() * sizeof(glm::vec3));
@@ -784,7 +860,8 @@ void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_c
   glVertexArrayAttribBinding(m.vao, 0, 0);
   glEnableVertexArrayAttrib(m.vao, 0);
   glVertexArrayElementBuffer(m.vao, m.index_buffer);
-  check_gl("uploading the mesh");
+  check_gl(fmt::format("uploading the mesh ({} vertices, {} triangles: {} bytes with the radiance buffer)",
+                       mesh.vertex_count(), mesh.triangles.size(), mesh_bytes));
   m.index_count = GLsizei(mesh.triangles.size() * 3);
   m.vertex_count = mesh.vertex_count();
   m.shading = Shading::VertexColors;  // until set_vertex_colors, or a transfer (the overload above)
@@ -1099,15 +1176,11 @@ GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
   const Source s = shading == Shading::Unshadowed ? Source::Analytic : source;
   const bool vertex_albedo = albedo_buffer != 0;
   glUseProgram(relight_program(band_limit * band_limit, (bands * bands + 3) / 4, channels, s, vertex_albedo));
-  glUniform1ui(0, GLuint(vertex_count));
   if (s != Source::Stored) {  // the clamped cosine of analytic vertices (relight.comp.glsl)
     float cosine[kMaxRenderBands] = {};
     for (int l = 0; l < bands; ++l) cosine[l] = float(sh::clamped_cosine_factor(l) / 3.14159265358979323846);
     glUniform1fv(2, kMaxRenderBands, cosine);
     if (!vertex_albedo) glUniform3f(1, albedo[0], albedo[1], albedo[2]);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
-    if (vertex_albedo) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, albedo_buffer);
-    if (s == Source::Mixed) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, slot_buffer);
   }
   glBindTextureUnit(3, a.texture);
   if (compressed && s != Source::Analytic) {
@@ -1115,43 +1188,79 @@ GLuint Renderer::Impl::relight(const glm::dvec3& eye) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, coeff_rows.products);
   }
   glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);
-  glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
+  // Runs of `chunk` vertices (set_mesh): each binds its range of the
+  // per-vertex storage buffers (bytes per vertex: radiance 16, normals,
+  // colours and positions 12, slots 4), which the shaders index from the
+  // run's first vertex (u_first); rows (buffer textures, compressed rows)
+  // are read by vertex or row number as before.
+  const auto bind_run = [](GLuint binding, GLuint buffer, std::size_t first, std::size_t n, std::size_t bytes) {
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, binding, buffer, GLintptr(first * bytes), GLsizeiptr(n * bytes));
+  };
+  for (std::size_t first = 0; first < vertex_count; first += chunk) {
+    const std::size_t n = std::min(chunk, vertex_count - first);
+    glUniform1ui(0, GLuint(n));      // u_vertices: of this run
+    glUniform1ui(18, GLuint(first));  // u_first
+    bind_run(2, radiance_buffer, first, n, 16);
+    if (s != Source::Stored) {
+      bind_run(5, normal_buffer, first, n, 12);
+      if (vertex_albedo) bind_run(6, albedo_buffer, first, n, 12);
+      if (s == Source::Mixed) bind_run(4, slot_buffer, first, n, 4);
+    }
+    glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
+  }
   if (shading == Shading::Glossy) {
     if (compressed) upload_glossy_cluster_lighting();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);  // the glossy pass reads the diffuse radiance
     glUseProgram(glossy_program(band_limit * band_limit));
-    glUniform1ui(0, GLuint(vertex_count));
     glUniform3f(1, float(eye.x), float(eye.y), float(eye.z));
     glUniform3fv(2, 1, &diffuse_scale[0]);
     glUniform1fv(3, kMaxRenderBands, lobe_factors.data());
     glBindTextureUnit(4, glossy_array.texture);
-    if (compressed && glossy_rows) {
+    if (!(compressed && glossy_rows)) {
+      for (std::size_t first = 0; first < vertex_count; first += chunk) {
+        const std::size_t n = std::min(chunk, vertex_count - first);
+        glUniform1ui(0, GLuint(n));       // u_vertices: of this run
+        glUniform1ui(22, GLuint(first));  // u_first
+        bind_run(2, radiance_buffer, first, n, 16);
+        bind_run(5, normal_buffer, first, n, 12);
+        bind_run(7, position_buffer, first, n, 12);
+        glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
+      }
+    } else {
+      // Work by cluster (order, chunk_cluster): the per-vertex buffers bound
+      // whole (set_mesh checked that they fit a storage block), dispatches of
+      // at most GL_MAX_COMPUTE_WORK_GROUP_COUNT workgroups from u_chunk_base.
+      glUniform1ui(0, GLuint(vertex_count));
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_buffer);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
+      glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, position_buffer);
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, glossy_rows.buffer);
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, glossy_rows.products);
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, glossy_order_buffer);
       glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, glossy_chunk_buffer);
       if (source == Source::Mixed) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, slot_buffer);
-    }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, normal_buffer);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, position_buffer);
-    if (!(compressed && glossy_rows)) {
-      glDispatchCompute(GLuint((vertex_count + 63) / 64), 1, 1);
-    } else if (glossy_block_clusters == 0) {
-      glUniform1ui(21, 0u);  // u_chunk_base
-      glDispatchCompute(GLuint(glossy_chunks), 1, 1);
-    } else {
-      // One dispatch per uniform block of clusters, then the analytic vertices' chunks (block 0 bound, unread).
-      const std::size_t blocks = glossy_block_chunks.size() - 2;
-      for (std::size_t b = 0; b <= blocks; ++b) {
-        const std::size_t first = glossy_block_chunks[b], count = glossy_block_chunks[b + 1] - first;
-        if (count == 0) continue;
-        const std::size_t block = b < blocks ? b : 0;
-        glBindBufferRange(GL_UNIFORM_BUFFER, 2, glossy_rows.products, GLintptr(block * glossy_block_stride),
-                          GLsizeiptr(std::size_t(glossy_block_clusters) * glossy_cluster_bytes));
-        glUniform1ui(20, GLuint(block * std::size_t(glossy_block_clusters)));  // u_block_first
-        glUniform1ui(21, GLuint(first));                                         // u_chunk_base
-        glDispatchCompute(GLuint(count), 1, 1);
+      const auto dispatch_chunks = [&](std::size_t first, std::size_t count) {
+        for (std::size_t done = 0; done < count;) {
+          const std::size_t n = std::min<std::size_t>(count - done, limits.work_groups);
+          glUniform1ui(21, GLuint(first + done));  // u_chunk_base
+          glDispatchCompute(GLuint(n), 1, 1);
+          done += n;
+        }
+      };
+      if (glossy_block_clusters == 0) {
+        dispatch_chunks(0, glossy_chunks);
+      } else {
+        // One dispatch per uniform block of clusters, then the analytic vertices' chunks (block 0 bound, unread).
+        const std::size_t blocks = glossy_block_chunks.size() - 2;
+        for (std::size_t b = 0; b <= blocks; ++b) {
+          const std::size_t first = glossy_block_chunks[b], count = glossy_block_chunks[b + 1] - first;
+          if (count == 0) continue;
+          const std::size_t block = b < blocks ? b : 0;
+          glBindBufferRange(GL_UNIFORM_BUFFER, 2, glossy_rows.products, GLintptr(block * glossy_block_stride),
+                            GLsizeiptr(std::size_t(glossy_block_clusters) * glossy_cluster_bytes));
+          glUniform1ui(20, GLuint(block * std::size_t(glossy_block_clusters)));  // u_block_first
+          dispatch_chunks(first, count);
+        }
       }
     }
   }

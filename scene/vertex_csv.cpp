@@ -9,8 +9,10 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -35,25 +37,42 @@ void append_value(std::string& s, float v) { fmt::format_to(std::back_inserter(s
 void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb,
                       const std::vector<glm::vec3>* std_error) {
   if (std_error) PRT_CHECK_OP(std_error->size(), ==, rgb.size());
-  std::string text;
-  text.reserve(rgb.size() * (std_error ? 80 : 40) + 32);
-  text.append(std_error ? kHeaderSe : kHeader).push_back('\n');
-  for (std::size_t v = 0; v < rgb.size(); ++v) {
-    fmt::format_to(std::back_inserter(text), "{}", v);
-    for (int c = 0; c < 3; ++c) {
+  // Every value is checked before anything is written (a device such as
+  // /dev/stdout is written in place).
+  for (std::size_t v = 0; v < rgb.size(); ++v)
+    for (int c = 0; c < 3; ++c)
       if (!std::isfinite(rgb[v][c]) || (std_error && !std::isfinite((*std_error)[v][c])))
         throw Error(fmt::format("{}: refusing to write a non-finite value at vertex {}", path, v));
-      text.push_back(',');
-      append_value(text, rgb[v][c]);
-    }
-    if (std_error)
+  // Streamed a block of lines at a time: the text (about 45 bytes per
+  // vertex) is never held whole.
+  constexpr std::size_t kFlushBytes = std::size_t(1) << 20;
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    if (!f) throw Error(path + ": cannot open for writing: " + std::strerror(errno));
+    std::string text;
+    text.reserve(kFlushBytes + 256);
+    text.append(std_error ? kHeaderSe : kHeader).push_back('\n');
+    for (std::size_t v = 0; v < rgb.size(); ++v) {
+      fmt::format_to(std::back_inserter(text), "{}", v);
       for (int c = 0; c < 3; ++c) {
         text.push_back(',');
-        append_value(text, (*std_error)[v][c]);
+        append_value(text, rgb[v][c]);
       }
-    text.push_back('\n');
-  }
-  write_text_file(path, text);
+      if (std_error)
+        for (int c = 0; c < 3; ++c) {
+          text.push_back(',');
+          append_value(text, (*std_error)[v][c]);
+        }
+      text.push_back('\n');
+      if (text.size() >= kFlushBytes) {
+        f.write(text.data(), std::streamsize(text.size()));
+        text.clear();
+      }
+    }
+    f.write(text.data(), std::streamsize(text.size()));
+    f.close();
+    if (!f) throw Error(path + ": write failed: " + std::strerror(errno));
+  });
 }
 
 std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm::vec3>* std_error) {

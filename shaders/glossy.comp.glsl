@@ -37,6 +37,11 @@ layout(location = 0) uniform uint u_vertices;
 layout(location = 1) uniform vec3 u_eye;
 layout(location = 2) uniform vec3 u_diffuse_scale;  // rho_d / albedo per channel (1: the transfer's own)
 layout(location = 3) uniform float u_lobe[16];       // rho_s Lambda_l(e), per band
+// COMPRESSED 0: runs of vertices as in relight.comp.glsl: this dispatch
+// shades vertices u_first .. u_first + u_vertices - 1, the radiance, normal
+// and position buffers bound from vertex u_first on. COMPRESSED 1: they are
+// bound whole (the work goes by cluster, order[] holds vertex numbers).
+layout(location = 22) uniform uint u_first;
 
 // w[k] = u_lobe[l] Y_k(d) for k < COEFFS: the SH basis by relight.comp.glsl's
 // recurrence (core/sh.cpp's, Sloan JCGT 2013), (c, s) = sqrt(2) (Re, Im) (x + i y)^m.
@@ -182,15 +187,17 @@ void main() {
 #if COMPRESSED
   const uint v = order[64u * (gl_WorkGroupID.x + u_chunk_base) + gl_LocalInvocationID.x];
   if (v == 0xffffffffu) return;
+  const uint i = v;  // the buffers are bound whole
 #else
-  const uint v = gl_GlobalInvocationID.x;
-  if (v >= u_vertices) return;
+  const uint i = gl_GlobalInvocationID.x;  // in the run
+  if (i >= u_vertices) return;
+  const uint v = u_first + i;
 #endif
-  vec3 r = radiance[v].rgb * u_diffuse_scale;
-  vec3 n = vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+  vec3 r = radiance[i].rgb * u_diffuse_scale;
+  vec3 n = vec3(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
   if (dot(n, n) > 0.0) {
     n = normalize(n);
-    const vec3 to_eye = u_eye - vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]);
+    const vec3 to_eye = u_eye - vec3(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
     const float d = length(to_eye);
     const vec3 view = d > 0.0 ? to_eye / d : n;
     const float ndv = dot(n, view);
@@ -200,5 +207,5 @@ void main() {
       r += vertex_glossy_part(v, w);
     }
   }
-  radiance[v] = vec4(r, 1.0);
+  radiance[i] = vec4(r, 1.0);
 }

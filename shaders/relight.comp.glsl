@@ -41,7 +41,15 @@ layout(binding = 3) uniform samplerBuffer u_transfer;
 layout(std140, binding = 1) uniform LightBlock { vec4 L[256]; };
 layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; };
 
+// The renderer shades the mesh in runs of vertices (no dispatch over
+// GL_MAX_COMPUTE_WORK_GROUP_COUNT, no storage binding over
+// GL_MAX_SHADER_STORAGE_BLOCK_SIZE): this dispatch shades vertices u_first ..
+// u_first + u_vertices - 1, and the per-vertex storage buffers (radiance,
+// normals, colours, slots) are bound from vertex u_first on, so they are
+// indexed by i = v - u_first. Rows (the buffer texture, compressed rows) are
+// read by vertex or row number.
 layout(location = 0) uniform uint u_vertices;
+layout(location = 18) uniform uint u_first;  // after u_cosine[16] (2 .. 17)
 
 const int FETCHES = (COEFFS + 3) / 4;
 const uint ANALYTIC_BIT = 0x80000000u;
@@ -99,11 +107,12 @@ vec3 clamped_cosine(vec3 n, vec3 rho) {
   return rho * r;
 }
 
-vec3 analytic_radiance(uint v) {
-  const vec3 n = vec3(normals[3 * v], normals[3 * v + 1], normals[3 * v + 2]);
+// i: the vertex's index in the run (its offset in the bound ranges).
+vec3 analytic_radiance(uint i) {
+  const vec3 n = vec3(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
 #if VERTEX_ALBEDO
   // compute_transfer clamps vertex colours to [0, 1] as albedo.
-  const vec3 rho = clamp(vec3(colors[3 * v], colors[3 * v + 1], colors[3 * v + 2]), 0.0, 1.0);
+  const vec3 rho = clamp(vec3(colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]), 0.0, 1.0);
 #else
   const vec3 rho = u_albedo;
 #endif
@@ -140,15 +149,15 @@ vec3 stored_radiance(uint row) {
 #endif
 
 void main() {
-  const uint v = gl_GlobalInvocationID.x;
-  if (v >= u_vertices) return;
+  const uint i = gl_GlobalInvocationID.x;  // in the run
+  if (i >= u_vertices) return;
 #if SOURCE == 0
-  const vec3 r = stored_radiance(v);
+  const vec3 r = stored_radiance(u_first + i);  // row v = vertex v
 #elif SOURCE == 1
-  const uint row = slots[v];
-  const vec3 r = (row & ANALYTIC_BIT) != 0u ? analytic_radiance(v) : stored_radiance(row);
+  const uint row = slots[i];
+  const vec3 r = (row & ANALYTIC_BIT) != 0u ? analytic_radiance(i) : stored_radiance(row);
 #else
-  const vec3 r = analytic_radiance(v);
+  const vec3 r = analytic_radiance(i);
 #endif
-  radiance[v] = vec4(r, 1.0);
+  radiance[i] = vec4(r, 1.0);
 }

@@ -879,6 +879,28 @@ TEST(Bounds, BoxAndDiagonal) {
   EXPECT_EQ(prt::Mesh{}.diagonal(), 0.0);
 }
 
+// Edge counts (MeshReport): a closed tetrahedron has none; one face turned
+// over makes its 3 edges inconsistently wound; a fourth triangle on an edge
+// makes it non-manifold; triangles with a repeated index are not counted.
+TEST(Edges, NonManifoldAndInconsistentEdgesAreCounted) {
+  const std::vector<glm::vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  const std::vector<glm::uvec3> closed = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  const prt::Mesh a = prt::make_mesh(p, closed);
+  EXPECT_EQ(a.report.nonmanifold_edges, 0u);
+  EXPECT_EQ(a.report.inconsistent_edges, 0u);
+  std::vector<glm::uvec3> flipped = closed;
+  flipped[0] = {0, 1, 2};
+  const prt::Mesh b = prt::make_mesh(p, flipped);
+  EXPECT_EQ(b.report.nonmanifold_edges, 0u);
+  EXPECT_EQ(b.report.inconsistent_edges, 3u);
+  std::vector<glm::uvec3> fin = closed;
+  fin.push_back({0, 1, 4});  // a third triangle on edge 0-1
+  fin.push_back({2, 2, 4});  // a repeated index: no edges
+  const prt::Mesh c = prt::make_mesh(p, fin);
+  EXPECT_EQ(c.report.nonmanifold_edges, 1u);
+  EXPECT_EQ(c.report.inconsistent_edges, 0u);
+}
+
 TEST(Describe, OneLine) {
   const prt::Mesh m = grid(2);
   const std::string d = describe(m);

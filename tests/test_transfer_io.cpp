@@ -1349,4 +1349,68 @@ TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {
   EXPECT_NE(r.code, 0) << describe_run(r);
 }
 
+// The reader's peak (docs/FORMAT.md, "Files at scale"): prt info holds a
+// file's arrays once, read section by section into their final vectors, and
+// no whole-file buffer. Between two files its peak resident set grows by
+// the arrays it keeps (rows, occlusion, bent normals, 4 bytes of slot per
+// vertex) and hardly more; a reader holding a file twice (a buffer of the
+// file, a copied Transfer, a copy of the rows) would grow by about twice.
+// Two large files, not a large and a tiny one: a child's peak (wait4) is at
+// least this test's own resident set when it forked (Linux counts it at
+// exec), which would hide a tiny file's peak.
+TEST(PrtInfo, PeakMemoryIsOneCopyOfTheArrays) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer's shadow memory and quarantine change the resident set";
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+  GTEST_SKIP() << "AddressSanitizer's shadow memory and quarantine change the resident set";
+#endif
+#endif
+  TempDir dir;
+  // V vertices, 4 bands, one channel, every 8th vertex analytic: 7/8 V rows
+  // of 64 bytes, 4 + 12 bytes of occlusion and bent normal and 4 of slot per
+  // vertex: 76 bytes per vertex held. Returns the bytes held.
+  const auto write = [&](const std::string& path, std::size_t V) {
+    prt::Transfer t;
+    t.bands = 4;
+    t.channels = 1;
+    t.mode = prt::TransferMode::Shadowed;
+    t.samples = 16;
+    t.albedo = glm::vec3(0.8f);
+    t.vertices = V;
+    t.slots.resize(V);
+    std::uint32_t rows = 0;
+    for (std::size_t v = 0; v < V; ++v) t.slots[v] = v % 8 == 3 ? prt::Transfer::kAnalytic : rows++;
+    t.coeffs.resize(std::size_t(rows) * t.stride());
+    for (std::size_t i = 0; i < t.coeffs.size(); ++i) t.coeffs[i] = float(i % 1000) * 1e-4f;
+    t.ao.assign(V, 0.5f);
+    t.bent_normals.assign(V, glm::vec3(0.0f, 1.0f, 0.0f));
+    t.shading_hash = 1;
+    prt::write_transfer(path, t);
+    return double(t.coeffs.size() * 4 + t.ao.size() * 4 + t.bent_normals.size() * 12 + t.slots.size() * 4);
+  };
+  const std::string a = dir.file("a.prtt"), b = dir.file("b.prtt");
+  const double held_a = write(a, 600000), held_b = write(b, 1200000);  // 45 MB and 91 MB
+  const BoundedResult ra = run_prt_bounded(dir, {"info", a});
+  const BoundedResult rb = run_prt_bounded(dir, {"info", b});
+  ASSERT_EQ(ra.code, 0) << describe_run(ra);
+  ASSERT_EQ(rb.code, 0) << describe_run(rb);
+  const double growth = double(rb.max_rss_kb - ra.max_rss_kb) * 1024.0, held = held_b - held_a;
+  // Beyond the arrays: allocator and page rounding of each array and the
+  // analytic-vertex mask (1 bit per vertex) while the slots are made from
+  // it; the buffers of constant size (the checksum's 1 MiB, streams) cancel
+  // between the two files. A few MiB at most, far below a second copy.
+  constexpr double kReaderSlackBytes = 4.0 * 1024 * 1024;
+  // Below: each array is written whole (zero-filled, then read into), so
+  // all of it is resident; 5% for the pages of the smaller run that the
+  // allocator had already mapped.
+  constexpr double kResidentFraction = 0.95;
+  const std::string what = "peak RSS " + std::to_string(rb.max_rss_kb) + " KiB and " + std::to_string(ra.max_rss_kb) +
+                           " KiB, arrays " + std::to_string(held_b) + " and " + std::to_string(held_a) + " bytes";
+  EXPECT_LE(growth, held + kReaderSlackBytes) << what;
+  EXPECT_GE(growth, kResidentFraction * held) << what;
+  RecordProperty("reader_growth_bytes", std::to_string(growth));
+  RecordProperty("arrays_growth_bytes", std::to_string(held));
+}
+
 }  // namespace

@@ -172,9 +172,13 @@ class Renderer {
   // its stored vertices, and for a transfer with analytic vertices their
   // slots (any band count up to kMaxRenderBands, 1 or 3 channels).
   // Throws prt::Error when the transfer was not computed for this mesh
-  // (vertex count, mesh hash) or its arrays are inconsistent, and for glossy
-  // matrices of more than kMaxRenderGlossyBands bands or more bytes than
-  // this OpenGL's buffer texture limit (the message names both).
+  // (vertex count, mesh hash) or its arrays are inconsistent, for glossy
+  // matrices of more than kMaxRenderGlossyBands bands, and for an array
+  // beyond this OpenGL's limits that cannot be split, before uploading it:
+  // the message names the limit (GL_MAX_TEXTURE_BUFFER_SIZE, ...), what
+  // needed it, the bytes and the limit's value (docs/RUNTIME.md "Limits";
+  // per-vertex buffers are bound in runs of vertices, so the vertex count
+  // meets no such limit).
   void set_mesh(const Mesh& mesh, const Transfer& transfer);
   // Uploads a compressed transfer (prt/compressed_transfer.h; docs/RUNTIME.md
   // "Compressed transfer"): per stored row only its cluster index and N

@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <utility>
 
 namespace prt::cli {
 
@@ -70,8 +71,9 @@ int run_export(const ExportArgs& a) {
   scene.mesh = load_mesh(a.mesh);
   load_transfer(scene, a.transfer, 0, "export", false, /*allow_compressed=*/true);
   const Mesh& mesh = scene.mesh;
-  // A compressed file (prt compress) is exported as the rows it reconstructs.
-  const Transfer t = scene.compressed ? decompress(*scene.compressed) : scene.transfer;
+  // A compressed file (prt compress) is exported as the rows it reconstructs;
+  // an uncompressed one moved, not copied.
+  const Transfer t = scene.compressed ? decompress(*scene.compressed) : std::move(scene.transfer);
   if (!a.quiet) {
     fmt::print(stderr, "{}\n", describe(mesh));
     if (scene.compressed)

@@ -27,6 +27,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <utility>
 
 namespace prt::cli {
 
@@ -54,7 +55,8 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 // Writes the result through Outputs: all of it, or (failure, Ctrl-C)
-// nothing. Returns the exit status.
+// nothing. Returns the exit status. `rgb` is taken by value (callers move
+// it in) and turned into display values in place: one copy of the colours.
 // With --tonemap the radiance becomes display values first (and the PLY's
 // colours bytes).
 // --exposure auto: prt render's (auto_exposure of the map's 3-band lighting).
@@ -117,13 +119,14 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
   const double relight_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
-  if (const int rc = write_output(a, ext, mesh, env, rgb); rc != 0) return rc;
+  const std::size_t written = rgb.size();
+  if (const int rc = write_output(a, ext, mesh, env, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr,
                "relight: {:.3f} ms per frame (lighting {:.3f} ms: resample, Haar, {} of {} terms by {}; transfer "
                "{:.3f} ms); map setup {:.1f} ms\nwrote {} ({} vertices)\n",
                light_ms + relight_ms, light_ms, lighting.terms().size(), t.coeff_count(),
-               wavelet::selection_name(selection), relight_ms, setup_ms, a.output, rgb.size());
+               wavelet::selection_name(selection), relight_ms, setup_ms, a.output, written);
   return 0;
 }
 
@@ -173,7 +176,7 @@ int run_relight(const RelightArgs& a) {
 
   const Scene scene = load_scene(a.mesh, a.transfer, a.env, 0, "relight", false, true);
   const Mesh& mesh = scene.mesh;
-  const Transfer& t = scene.transfer;  // compressed: the header part (its rows are in scene.compressed)
+  const Transfer& t = scene.transfer;  // compressed: the header fields (its arrays are in scene.compressed)
   const EnvMap& env = scene.env;
   if (a.direct) check_direct(t, a.transfer, "--direct");
   if (a.direct && scene.compressed)
@@ -193,27 +196,28 @@ int run_relight(const RelightArgs& a) {
   sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : t.bands);
   if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
   const CompressedTransfer* c = scene.compressed ? &*scene.compressed : nullptr;
-  const std::vector<glm::vec3> rgb = c ? (glossy ? relight_glossy(*c, mesh, light, shading) : relight(*c, mesh, light))
+  std::vector<glm::vec3> rgb = c ? (glossy ? relight_glossy(*c, mesh, light, shading) : relight(*c, mesh, light))
                                      : glossy   ? relight_glossy(t, mesh, light, shading)
                                      : a.direct ? relight_direct(t, mesh, light)
                                                 : relight(t, mesh, light);
   const double frame_ms = ms_since(t1);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
-    if (c && !t.is_analytic(v)) {
+    if (c && !c->transfer.is_analytic(v)) {
       std::vector<float> row(c->coeffs.dim);
-      c->coeffs.reconstruct(t.slots.empty() ? v : t.slots[v], row.data());
+      c->coeffs.reconstruct(c->transfer.slots.empty() ? v : c->transfer.slots[v], row.data());
       for (float x : row) m = std::max(m, double(std::abs(x)));
       return m;
     }
-    for (double x : vertex_transfer(t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
+    for (double x : vertex_transfer(c ? c->transfer : t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
-  if (const int rc = write_output(a, ext, mesh, env, rgb); rc != 0) return rc;
+  const std::size_t written = rgb.size();
+  if (const int rc = write_output(a, ext, mesh, env, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
                        "wrote {} ({} vertices)\n",
-               frame_ms, project_ms, a.output, rgb.size());
+               frame_ms, project_ms, a.output, written);
   return 0;
 }
 

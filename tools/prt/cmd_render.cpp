@@ -51,7 +51,7 @@ int run_render(const RenderArgs& a) {
                     {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
   for_path("--output", [&] { check_image_output(a.output); });
 
-  const Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true);
+  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true);
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
@@ -85,10 +85,17 @@ int run_render(const RenderArgs& a) {
     if (look.shading == Shading::Direct) check_direct(t, a.transfer, "--shading direct");
     if (look.shading == Shading::Glossy && !glossy)
       throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
-    if (scene.compressed)
-      renderer.set_mesh(mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
-    else
-      renderer.set_mesh(mesh, t);
+    try {  // refused (exit 1) when it exceeds this OpenGL's limits: the message names the limit; name the file
+      if (scene.compressed)
+        renderer.set_mesh(mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
+      else
+        renderer.set_mesh(mesh, t);
+    } catch (const NoGlContext&) {
+      throw;
+    } catch (const Error& e) {
+      throw Error(a.transfer + ": " + e.what());
+    }
+    release_uploaded(scene);  // the renderer has them: `mesh` and `t` keep their header fields only
     renderer.set_band_limit(look.bands);
     try {  // refused (exit 1) when the file lacks what the shading needs: name it
       renderer.set_shading(look.shading);

@@ -10,6 +10,31 @@
 
 namespace prt::cli {
 
+namespace {
+
+// The header fields of `t` without its arrays: what commands read of a
+// compressed transfer's uncompressed part (mode, bands, glossy, albedo),
+// without a second copy of its per-vertex slots, occlusion and bent normals.
+Transfer header_only(const Transfer& t) {
+  Transfer h;
+  h.bands = t.bands;
+  h.channels = t.channels;
+  h.mode = t.mode;
+  h.bounces = t.bounces;
+  h.samples = t.samples;
+  h.albedo = t.albedo;
+  h.vertex_colors = t.vertex_colors;
+  h.seed = t.seed;
+  h.vertices = t.vertices;
+  h.mesh_hash = t.mesh_hash;
+  h.shading_hash = t.shading_hash;
+  h.glossy = t.glossy;
+  h.direct_energy = t.direct_energy;
+  return h;
+}
+
+}  // namespace
+
 void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet,
                    bool allow_compressed) {
   // Without allow_wavelet, read_transfer itself refuses a wavelet file, naming its basis.
@@ -22,15 +47,26 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
   s.compressed.reset();
   if (allow_compressed && transfer_is_compressed(transfer)) {
     s.compressed = read_compressed_transfer(transfer);
-    s.transfer = s.compressed->transfer;
+    check_matches(s.compressed->transfer, s.mesh, transfer);
+    s.transfer = header_only(s.compressed->transfer);
   } else {
     s.transfer = read_transfer(transfer);  // refuses a compressed file, naming the commands that take it
+    check_matches(s.transfer, s.mesh, transfer);
   }
-  check_matches(s.transfer, s.mesh, transfer);
   if (max_bands > 0 && s.transfer.bands > max_bands)
     throw Error(fmt::format("{}: {} bands; prt {} takes at most {} (what the renderer's lighting block holds; "
                             "prt relight takes any)",
                             transfer, s.transfer.bands, command, max_bands));
+}
+
+void release_uploaded(Scene& s) {
+  PRT_CHECK(s.basis == TransferBasis::SH);
+  s.mesh.positions = {};
+  s.mesh.normals = {};
+  s.mesh.triangles = {};
+  s.mesh.colors = {};
+  s.transfer = header_only(s.transfer);
+  s.compressed.reset();
 }
 
 void check_direct(const Transfer& t, const std::string& path, const std::string& option) {

@@ -21,7 +21,7 @@ namespace prt::cli {
 struct Scene {
   Mesh mesh;
   TransferBasis basis = TransferBasis::SH;
-  Transfer transfer;        // basis SH (compressed: the uncompressed part, its rows empty)
+  Transfer transfer;        // basis SH (compressed: the header fields only; its arrays are in compressed->transfer)
   std::optional<CompressedTransfer> compressed;  // a file from prt compress (when the command takes them)
   WaveletTransfer wavelet;  // basis Wavelet
   EnvMap env;
@@ -43,6 +43,12 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 // against the mesh; the rules of load_scene.
 void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
                    bool allow_wavelet, bool allow_compressed = false);
+
+// After the renderer has uploaded an SH scene's mesh and transfer (it keeps
+// its own copy: on the GPU, or with Mesa's llvmpipe in this process), frees
+// the CPU's: the mesh's arrays, the transfer's arrays (its header fields
+// stay) and the compressed transfer. What prt render holds while it draws.
+void release_uploaded(Scene& scene);
 
 // Rotates SH lighting (bands^2 RGB coefficients or more) by --rotate's
 // yaw, pitch, roll degrees, in place: what prt relight and prt export --bake
