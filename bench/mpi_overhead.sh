@@ -7,7 +7,7 @@
 #
 #   bench/mpi_overhead.sh [--vertices N] [--samples S] [--runs K] [--prt build/prt]
 #
-# Defaults: 200000 vertices (scripts/make_bumpy_sphere.py), 256 rays,
+# Defaults: 200000 vertices (scripts/make_scale_mesh.py --bumps 0.06 0.022), 256 rays,
 # interreflected, 1 bounce, 3 runs of each; the best of each is compared.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,7 +25,7 @@ command -v mpirun >/dev/null || { echo "mpirun not found (Debian openmpi-bin)" >
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_vader_single_copy_mechanism=none
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-python3 scripts/make_bumpy_sphere.py --vertices "$vertices" -o "$work/mesh.ply" >/dev/null
+/usr/bin/python3 scripts/make_scale_mesh.py --vertices "$vertices" --bumps 0.06 0.022 -o "$work/mesh.ply" 2>/dev/null
 opts=(--mode interreflected --bounces 1 --samples "$samples" --bands 5 -q)
 seconds() { local t0 t1; t0=$(date +%s.%N); "$@"; t1=$(date +%s.%N); awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.2f", b - a }'; }
 less() { awk -v a="$1" -v b="$2" 'BEGIN { print (a < b) ? 1 : 0 }'; }
