@@ -113,7 +113,7 @@ std::size_t max_records_per_vertex(const TransferOptions& o, bool gather, bool g
 }
 
 // Embree's ray scene (RayScene) per triangle, with a margin: the bumpy sphere
-// of 2M triangles (scripts/make_bumpy_sphere.py) peaks 140 MB higher
+// of 2M triangles (scripts/make_scale_mesh.py-like) peaks 140 MB higher
 // shadowed (1 ray) than unshadowed (no scene): 70 bytes per triangle
 // (docs/PRECOMPUTE.md, "Memory").
 constexpr std::size_t kRaySceneBytesPerTriangle = 96;
