@@ -592,13 +592,14 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
     if (glossy) gather_to_root(t.glossy_matrices, V, comm);
     if (keep_everywhere) return std::move(t);
     if (comm.rank() != 0) return Transfer{};
-    compact_transfer(t, analytic);
+    // Vertices: analytic rows are dropped (relight evaluates them from the
+    // mesh's normals). Points keep every row: no mesh normal is theirs.
+    if (src.vertices) compact_transfer(t, analytic);
     return std::move(t);
   };
   if (emitters) {  // points: the direct part, plus the vertices' light gathered above
     t.direct = t.coeffs;
     for (std::size_t i = 0; i < t.coeffs.size(); ++i) t.coeffs[i] += bounce_light[i];
-    // A point none of whose rays is occluded gathers nothing: analytic as a vertex would be.
     return finish();
   }
   if (!gather) {

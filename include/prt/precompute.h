@@ -99,8 +99,9 @@ struct SamplePoints {
 // with vertex_colors), and each point gathers their total once from its
 // rays' front hits, so the points hold bounces 1..B of the same light paths
 // (to float rounding: the vertices' sums are grouped differently). The
-// result's `vertices` is the number of points (rows in their order); no
-// bounce energies. Glossy is refused. Throws prt::Error for a point out of
+// result's `vertices` is the number of points, with a row for every point
+// in their order (no analytic rows dropped: relight() would evaluate those
+// from the mesh's normals); no bounce energies. Glossy is refused. Throws prt::Error for a point out of
 // range, a normal neither unit nor zero, or an albedo outside [0, 1].
 Transfer compute_point_transfer(const Mesh& mesh, const SamplePoints& points, const TransferOptions& options,
                                 const Progress& progress = {});
