@@ -194,13 +194,6 @@ std::vector<std::uint8_t> pack(const std::vector<std::vector<Record>>& grains) {
   return bytes;
 }
 
-// The byte offsets of each rank's part of an array of V items of `item` bytes.
-std::vector<std::size_t> rank_blocks(std::size_t V, std::size_t item, const Communicator& comm) {
-  std::vector<std::size_t> b(std::size_t(comm.size()) + 1);
-  for (int r = 0; r <= comm.size(); ++r) b[std::size_t(r)] = range_begin(V, r, comm.size()) * item;
-  return b;
-}
-
 template <typename T>
 void all_gather(std::vector<T>& data, std::size_t V, const Communicator& comm) {
   if (comm.size() > 1) comm.all_gather(data.data(), rank_blocks(V, data.size() / std::max<std::size_t>(V, 1) * sizeof(T), comm));

@@ -189,13 +189,8 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
     std::vector<Entry>().swap(e);
   }
   if (comm.size() > 1) {
-    const auto rank_bytes = [&](std::size_t item) {
-      std::vector<std::size_t> b(std::size_t(comm.size()) + 1);
-      for (int q = 0; q <= comm.size(); ++q) b[std::size_t(q)] = range_begin(V, q, comm.size()) * item;
-      return b;
-    };
-    comm.all_gather(wt.vertex_kept.data(), rank_bytes(sizeof(std::uint32_t)));
-    const std::vector<std::size_t> sb = rank_bytes(sizeof(float));
+    comm.all_gather(wt.vertex_kept.data(), rank_blocks(V, sizeof(std::uint32_t), comm));
+    const std::vector<std::size_t> sb = rank_blocks(V, sizeof(float), comm);
     comm.gather_to_root(reinterpret_cast<char*>(wt.vertex_scale.data()) + sb[std::size_t(comm.rank())],
                         wt.vertex_scale.data(), sb);
     std::vector<std::size_t> eb(std::size_t(comm.size()) + 1, 0);

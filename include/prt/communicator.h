@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <span>
+#include <vector>
 
 namespace prt {
 
@@ -38,6 +39,14 @@ const Communicator& single_process();
 inline std::size_t range_begin(std::size_t count, int r, int ranks) {
   const std::size_t n = std::size_t(ranks), q = count / n, m = count % n;  // r * count / n without overflow
   return std::size_t(r) * q + std::size_t(r) * m / n;
+}
+
+// The byte offsets of each rank's part of an array of `count` items of
+// `item_bytes` (blocks for all_gather and gather_to_root).
+inline std::vector<std::size_t> rank_blocks(std::size_t count, std::size_t item_bytes, const Communicator& comm) {
+  std::vector<std::size_t> b(std::size_t(comm.size()) + 1);
+  for (int r = 0; r <= comm.size(); ++r) b[std::size_t(r)] = range_begin(count, r, comm.size()) * item_bytes;
+  return b;
 }
 
 }  // namespace prt

@@ -77,13 +77,6 @@ void release_free_memory() {
 #endif
 }
 
-// Peak resident memory of this process so far (Linux: ru_maxrss is in KiB).
-std::size_t peak_resident_bytes() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return std::size_t(ru.ru_maxrss) * 1024;
-}
-
 // This process's place in an mpirun job (prt/mpi.h): rank 0 of 1 alone.
 const Communicator& job() { return mpi::launched() ? mpi::world() : single_process(); }
 bool is_root() { return job().rank() == 0; }

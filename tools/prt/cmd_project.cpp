@@ -60,12 +60,8 @@ struct ProjectArgs {
   bool irradiance = false, quiet = false, no_stream = false, peak_memory = false;
 };
 
-// Peak resident memory of this process so far, in MiB (Linux: ru_maxrss is in KiB).
-double peak_rss_mib() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return double(ru.ru_maxrss) / 1024.0;
-}
+// Peak resident memory of this process so far, in MiB.
+double peak_rss_mib() { return double(peak_resident_bytes()) / (1024.0 * 1024.0); }
 
 // --mapping faces: the six files ENV names, a pattern with {face} (px nx py
 // ny pz nz) or six comma-separated files; UsageError otherwise.

@@ -1,5 +1,7 @@
 #include "progress.h"
 
+#include <sys/resource.h>
+
 #include <prt/precompute.h>
 
 #include <fmt/core.h>
@@ -37,6 +39,12 @@ InterruptScope::~InterruptScope() {
 }
 
 bool InterruptScope::interrupted() { return g_interrupted; }
+
+std::size_t peak_resident_bytes() {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  return std::size_t(ru.ru_maxrss) * 1024;
+}
 
 ProgressBar::ProgressBar(bool quiet, std::size_t memory_limit)
     : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0), memory_limit_(memory_limit) {}

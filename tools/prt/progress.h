@@ -37,6 +37,10 @@ class InterruptScope {
   static bool interrupted();
 };
 
+// Peak resident memory of this process so far, in bytes (getrusage's
+// ru_maxrss, KiB on Linux).
+std::size_t peak_resident_bytes();
+
 class ProgressBar {
  public:
   // memory_limit > 0: the bar also shows the process's resident memory
