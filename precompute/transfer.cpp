@@ -179,8 +179,8 @@ Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std:
   return p;
 }
 
-// The byte blocks of one block of vertices' records: per vertex, the number
-// of its records; the records themselves in vertex order.
+// One block of vertices' records as bytes: the workers' grains, in vertex
+// order (each vertex's offsets are kept apart, in memory).
 template <typename Record>
 std::vector<std::uint8_t> pack(const std::vector<std::vector<Record>>& grains) {
   std::size_t n = 0;
