@@ -18,8 +18,9 @@ export PRT_REQUIRE_TOOLS=${PRT_REQUIRE_TOOLS:-1}
 
 echo "== Release build and tests"
 scripts/build.sh build
-# Every label: unit, report, hard_cases and package (install the build, move
-# the prefix, build and run consumers against it; tests/package).
+# Every label: unit, report, hard_cases, package (install the build, move
+# the prefix, build and run consumers against it; tests/package), interop and
+# mpi (prt precompute under mpirun with 1 to 3 ranks; tests/mpi).
 ctest --test-dir build --output-on-failure --parallel "$jobs"
 
 echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
