@@ -626,9 +626,9 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
           const std::size_t v = r0 + i;
           std::fill(acc.begin(), acc.end(), 0.0);
           for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
-            const float* src = prev->data() + std::size_t(col[e]) * stride;
+            const float* emitter = prev->data() + std::size_t(col[e]) * stride;
             const double gv = val[e];
-            for (std::size_t k = 0; k < stride; ++k) acc[k] += gv * src[k];
+            for (std::size_t k = 0; k < stride; ++k) acc[k] += gv * emitter[k];
           }
           for (int c = 0; c < t.channels; ++c) {
             const double a = albedo(v, c) / M_PI;

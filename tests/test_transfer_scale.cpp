@@ -138,7 +138,9 @@ TEST(TransferScale, RanksGiveTheSameBits) {
   const Mesh m = test::floor_and_ball(24);
   for (const Case& c : cases()) {
     const Transfer one = compute_transfer(m, c.o);
-    if (c.o.mode != TransferMode::Unshadowed) ASSERT_GT(one.stored_vertices(), 100u) << c.name;
+    if (c.o.mode != TransferMode::Unshadowed) {
+      ASSERT_GT(one.stored_vertices(), 100u) << c.name;
+    }
     for (int n : {2, 3}) {
       ThreadRanks ranks(n);
       const Transfer split = ranks.run([&](const Communicator& comm) {
@@ -269,13 +271,16 @@ TEST(TransferScale, PointsAtTheVerticesAreTheVertices) {
       analytic += !stored;
       for (std::size_t k = 0; k < stride; ++k) {
         const std::size_t i = v * stride + k;
-        if (stored)
+        if (stored) {
           ASSERT_EQ(direct[i], dense_direct[i]) << c.name << ", vertex " << v;
-        else
+        } else {
           ASSERT_NEAR(direct[i], dense_direct[i], kAnalyticTol) << c.name << ", vertex " << v;
+        }
       }
     }
-    if (c.o.mode == TransferMode::Unshadowed) EXPECT_EQ(analytic, m.vertex_count()) << c.name;
+    if (c.o.mode == TransferMode::Unshadowed) {
+      EXPECT_EQ(analytic, m.vertex_count()) << c.name;
+    }
     if (c.o.mode != TransferMode::Interreflected) continue;
     double largest = 0, worst = 0, bounce = 0;
     for (std::size_t i = 0; i < dense.size(); ++i) {
