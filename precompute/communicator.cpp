@@ -14,7 +14,6 @@ class SingleProcess final : public Communicator {
   void gather_to_root(const void* mine, void* all, std::span<const std::size_t> blocks) const override {
     if (mine != all && blocks[1] > blocks[0]) std::memmove(all, mine, blocks[1] - blocks[0]);
   }
-  std::size_t max(std::size_t value) const override { return value; }
 };
 
 }  // namespace

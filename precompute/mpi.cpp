@@ -51,11 +51,6 @@ class World final : public Communicator {
       std::memmove(static_cast<char*>(all) + blocks[0], mine, blocks[1] - blocks[0]);
     exchange(mine, all, blocks, false);
   }
-  std::size_t max(std::size_t value) const override {
-    unsigned long long v = value, out = 0;
-    MPI_Allreduce(&v, &out, 1, MPI_UNSIGNED_LONG_LONG, MPI_MAX, MPI_COMM_WORLD);
-    return std::size_t(out);
-  }
 
  private:
   // Rounds of Allgatherv / Gatherv, each moving up to kChunk bytes of every

@@ -29,7 +29,7 @@ namespace {
 // N ranks as threads: each operation is a rendezvous of all of them.
 class ThreadRanks {
  public:
-  explicit ThreadRanks(int n) : n_(n), barrier_(n), data_(std::size_t(n)), mine_(std::size_t(n)), values_(std::size_t(n)) {}
+  explicit ThreadRanks(int n) : n_(n), barrier_(n), data_(std::size_t(n)), mine_(std::size_t(n)) {}
 
   class Rank final : public Communicator {
    public:
@@ -54,13 +54,6 @@ class ThreadRanks {
           std::memmove(static_cast<char*>(all) + blocks[std::size_t(q)], all_.mine_[std::size_t(q)],
                        blocks[std::size_t(q) + 1] - blocks[std::size_t(q)]);
       all_.barrier_.arrive_and_wait();
-    }
-    std::size_t max(std::size_t value) const override {
-      all_.values_[std::size_t(r_)] = value;
-      all_.barrier_.arrive_and_wait();
-      const std::size_t m = *std::max_element(all_.values_.begin(), all_.values_.end());
-      all_.barrier_.arrive_and_wait();
-      return m;
     }
 
    private:
@@ -87,7 +80,6 @@ class ThreadRanks {
   std::barrier<> barrier_;
   std::vector<void*> data_;
   std::vector<const void*> mine_;
-  std::vector<std::size_t> values_;
 };
 
 void expect_same(const Transfer& a, const Transfer& b, const std::string& what) {

@@ -27,8 +27,6 @@ class Communicator {
   // bytes), `all` the whole array on rank 0 (unused on the others); after the
   // call rank 0 holds every part there.
   virtual void gather_to_root(const void* mine, void* all, std::span<const std::size_t> blocks) const = 0;
-  // The largest of `value` over the ranks, on every rank.
-  virtual std::size_t max(std::size_t value) const = 0;
 };
 
 // One process: every operation is a no-op.

@@ -19,8 +19,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include <glm/vec3.hpp>
-
 #include <cstdint>
 #include <initializer_list>
 #include <limits>

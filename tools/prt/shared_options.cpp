@@ -110,8 +110,6 @@ CLI::Option* add_shared(CLI::App* c, SharedOption w, int& v, const std::string& 
 CLI::Option* add_shared(CLI::App* c, SharedOption w, double& v, const std::string& h) { return add(c, w, v, h); }
 CLI::Option* add_shared(CLI::App* c, SharedOption w, std::uint64_t& v, const std::string& h) { return add(c, w, v, h); }
 
-const CLI::Validator& shared_validator(SharedOption which) { return spec(which).validator; }
-
 std::optional<double> exposure_stops(const std::string& value) {
   if (value == "auto") return std::nullopt;
   return std::strtod(value.c_str(), nullptr);  // a finite number of stops (checked while parsing)

@@ -72,10 +72,6 @@ CLI::Option* add_shared(CLI::App* command, SharedOption which, int& value, const
 CLI::Option* add_shared(CLI::App* command, SharedOption which, double& value, const std::string& help);
 CLI::Option* add_shared(CLI::App* command, SharedOption which, std::uint64_t& value, const std::string& help);
 
-// The option's validator alone (for the tests, and for a value that comes
-// from elsewhere than the command line).
-const CLI::Validator& shared_validator(SharedOption which);
-
 // --exposure's value: the stops, or nullopt for auto (checked while parsing).
 std::optional<double> exposure_stops(const std::string& value);
 // --rotate's value in degrees (checked while parsing); "" is 0,0,0.
