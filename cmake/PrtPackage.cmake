@@ -101,6 +101,7 @@ set(_prt_dep_table
   "OpenGL::EGL|OpenGL COMPONENTS OpenGL EGL|egl"
   "PkgConfig::XXHASH|PKG:XXHASH:libxxhash|libxxhash"
   "PkgConfig::OPENBLAS|PKG:OPENBLAS:openblas|openblas"
+  "PkgConfig::STB|PKG:STB:stb|stb"
   "fmt::fmt|fmt|fmt"
   "fmt::fmt-header-only|fmt|fmt"
   "spdlog::spdlog|spdlog|spdlog"

@@ -369,4 +369,24 @@ void write_image(const std::string& path, int width, int height, const std::vect
   write_atomically(path, [&](const std::string& tmp) { detail::write_image_file(tmp, path, width, height, rgb, floating); });
 }
 
+void write_exr_rgba(const std::string& path, const RgbaImage& image) {
+  if (lower_extension(path) != ".exr") throw Error(path + ": an RGBA image is written as EXR (.exr)");
+  PRT_CHECK_OP(image.rgba.size(), ==, std::size_t(image.width) * image.height * 4);
+  write_atomically(path, [&](const std::string& tmp) {
+    detail::write_exr_rgba(tmp, path, image.width, image.height, image.rgba);
+  });
+}
+
+RgbaImage read_exr_rgba(const std::string& path) {
+  check_input_file(path, "an EXR image");
+  if (lower_extension(path) != ".exr") throw Error(path + ": expected an EXR image (.exr)");
+  const detail::RgbaImage raw = detail::read_exr_rgba(path);
+  RgbaImage out;
+  out.width = raw.width;
+  out.height = raw.height;
+  out.has_alpha = raw.has_alpha;
+  out.rgba = raw.rgba;
+  return out;
+}
+
 }  // namespace prt

@@ -392,4 +392,49 @@ void write_image_file(const std::string& path, const std::string& format_from, i
     throw Error(format_from + ": " + err);
 }
 
+void write_exr_rgba(const std::string& path, const std::string& shown, int width, int height,
+                    const std::vector<float>& rgba) {
+  try {
+    Imf::Header header(width, height);
+    const char* names[4] = {"R", "G", "B", "A"};
+    for (const char* c : names) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile file(path.c_str(), header);
+    Imf::FrameBuffer fb;
+    for (int c = 0; c < 4; ++c)
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(rgba.data() + c), 4 * sizeof(float),
+                                     4 * sizeof(float) * std::size_t(width)));
+    file.setFrameBuffer(fb);
+    file.writePixels(height);
+  } catch (const std::exception& e) {
+    throw Error(shown + ": cannot write EXR: " + e.what());
+  }
+}
+
+RgbaImage read_exr_rgba(const std::string& path) {
+  RgbaImage img;
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i dw = file.header().dataWindow();
+    img.width = dw.max.x - dw.min.x + 1;
+    img.height = dw.max.y - dw.min.y + 1;
+    if (img.width < 1 || img.height < 1 || std::size_t(img.width) * std::size_t(img.height) > (std::size_t(1) << 30))
+      throw Error(path + ": EXR data window is empty or too large");
+    img.has_alpha = file.header().channels().findChannel("A") != nullptr;
+    img.rgba.assign(std::size_t(img.width) * img.height * 4, 0.0f);
+    Imf::FrameBuffer fb;
+    const char* names[4] = {"R", "G", "B", "A"};
+    char* base = (char*)(img.rgba.data()) - (std::ptrdiff_t(dw.min.x) + std::ptrdiff_t(dw.min.y) * img.width) * 4 * sizeof(float);
+    for (int c = 0; c < 4; ++c)
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 4 * sizeof(float),
+                                     4 * sizeof(float) * std::size_t(img.width), 1, 1, c == 3 ? 1.0 : 0.0));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Error(path + ": cannot read EXR: " + e.what());
+  }
+  return img;
+}
+
 }  // namespace prt::detail

@@ -18,6 +18,16 @@ struct RawImage {
   std::vector<float> rgb;   // width*height*3, linear (sRGB-encoded files decoded)
 };
 
+struct RgbaImage {
+  int width = 0, height = 0;
+  bool has_alpha = false;
+  std::vector<float> rgba;  // width*height*4
+};
+// 4-channel float EXR (RGBA), written to `path` (messages name `shown`) and read.
+void write_exr_rgba(const std::string& path, const std::string& shown, int width, int height,
+                    const std::vector<float>& rgba);
+RgbaImage read_exr_rgba(const std::string& path);
+
 // The whole image: RowReader(path) read from row 0 to the last.
 RawImage read_image_file(const std::string& path);
 

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -213,6 +214,7 @@ struct Integrator {
   glm::dvec3 albedo;
   bool colors;
   double offset;
+  const std::function<glm::vec3(std::uint32_t, float, float)>* hit_albedo = nullptr;  // a scene's materials
 
   glm::vec3 origin(const glm::dvec3& p, const glm::dvec3& n) const { return glm::vec3(p + offset * n); }
 
@@ -308,7 +310,9 @@ struct Integrator {
       if (!(len > 0)) return false;
     }
     ns /= len;
-    if (colors)
+    if (hit_albedo && *hit_albedo)
+      rho = glm::dvec3(glm::clamp((*hit_albedo)(h.triangle, h.u, h.v), 0.0f, 1.0f));
+    else if (colors)
       rho = b0 * glm::dvec3(mesh.colors[tri.x]) + b1 * glm::dvec3(mesh.colors[tri.y]) +
             b2 * glm::dvec3(mesh.colors[tri.z]);
     else
@@ -359,14 +363,22 @@ namespace {
 
 // The reference at vertices[i] (every vertex when `vertices` is null) into
 // entry i of the result.
+// Points instead of vertices (lightmap texels): their own position, normal
+// and albedo; surfaces hit take `hit_albedo` when set.
+struct ReferencePoints {
+  std::span<const glm::vec3> positions, normals, albedo;
+  const std::function<glm::vec3(std::uint32_t, float, float)>* hit_albedo = nullptr;
+};
+
 ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
-                                      const std::vector<std::uint32_t>* vertices, const Progress& progress) {
+                                      const std::vector<std::uint32_t>* vertices, const Progress& progress,
+                                      const ReferencePoints* points = nullptr) {
   validate(mesh, map, options);
   if (vertices)
     for (std::uint32_t v : *vertices)
       if (v >= mesh.vertex_count())
         throw Error(fmt::format("reference: vertex {} is out of range (the mesh has {})", v, mesh.vertex_count()));
-  const std::size_t n = vertices ? vertices->size() : mesh.vertex_count();
+  const std::size_t n = points ? points->positions.size() : vertices ? vertices->size() : mesh.vertex_count();
   ReferenceResult result;
   result.radiance.assign(n, glm::vec3(0.0f));
   result.std_error.assign(n, glm::vec3(0.0f));
@@ -388,7 +400,8 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
                          options.bounces,
                          glm::dvec3(options.albedo),
                          colors,
-                         options.offset > 0 ? options.offset : detail::default_ray_offset(mesh)};
+                         options.offset > 0 ? options.offset : detail::default_ray_offset(mesh),
+                         points ? points->hit_albedo : nullptr};
 
   detail::ProgressTicker ticker(progress, n, "reference");
   ticker.start();
@@ -399,11 +412,13 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       if (ticker.cancelled()) return;
       const std::size_t v = vertices ? (*vertices)[i] : i;
-      glm::dvec3 nv(mesh.normals[v]);
+      glm::dvec3 nv(points ? points->normals[i] : mesh.normals[v]);
       if (!(glm::dot(nv, nv) > 0)) continue;  // no normal: radiance 0
       nv = glm::normalize(nv);
-      const glm::dvec3 p(mesh.positions[v]);
-      const glm::dvec3 rho_pi = (colors ? glm::dvec3(mesh.colors[v]) : glm::dvec3(options.albedo)) / kPi;
+      const glm::dvec3 p(points ? points->positions[i] : mesh.positions[v]);
+      const glm::dvec3 rho_pi = (points ? glm::dvec3(points->albedo[i])
+                                 : colors ? glm::dvec3(mesh.colors[v])
+                                          : glm::dvec3(options.albedo)) / kPi;
       Rng rng(options.seed, v);
       // Glossy: the lobe about the eye's mirror direction, when the eye is
       // above the horizon.
@@ -440,6 +455,19 @@ ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const Refe
 ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
                                  const std::vector<std::uint32_t>& vertices, const Progress& progress) {
   return render_reference_impl(mesh, map, options, &vertices, progress);
+}
+
+ReferenceResult render_reference_at_points(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
+                                           std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                                           std::span<const glm::vec3> albedo,
+                                           const std::function<glm::vec3(std::uint32_t, float, float)>& hit_albedo,
+                                           const Progress& progress) {
+  if (normals.size() != positions.size() || albedo.size() != positions.size())
+    throw Error(fmt::format("reference: {} points, {} normals and {} albedos (expected as many of each)",
+                            positions.size(), normals.size(), albedo.size()));
+  if (options.glossy) throw Error("reference: glossy is at vertices only (a lightmap is diffuse)");
+  const ReferencePoints points{positions, normals, albedo, &hit_albedo};
+  return render_reference_impl(mesh, map, options, nullptr, progress, &points);
 }
 
 }  // namespace prt

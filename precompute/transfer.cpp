@@ -25,6 +25,7 @@
 #include "progress_ticker.h"
 #include "ray_scene.h"
 #include "spill_store.h"
+#include "transfer_impl.h"
 
 #include <fmt/format.h>
 
@@ -48,6 +49,9 @@
 #include <memory>
 
 namespace prt {
+
+using detail::Source;
+
 
 namespace {
 
@@ -278,16 +282,6 @@ TransferMemory transfer_memory(const Mesh& mesh, const TransferOptions& o) {
 
 namespace {
 
-// Where the first pass traces from: the mesh's vertices, or other points
-// (SamplePoints) with their own albedo.
-struct Source {
-  const glm::vec3* positions = nullptr;
-  const glm::vec3* normals = nullptr;
-  std::size_t count = 0;
-  const glm::vec3* albedo = nullptr;  // per point (points only); nullptr: TransferOptions::albedo
-  bool vertices = true;               // the mesh's own vertices (their colours with vertex_colors)
-};
-
 // compute_transfer at `src` (the vertices: the transfer file's layout), or
 // at other points. `emitters` (points, interreflected): every vertex's dense
 // transfer of bounces - 1 bounces, gathered once at each point's front hits
@@ -454,9 +448,14 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
               }
             }
             if (gather && hits[k].front) {
-              const glm::uvec3 tri = mesh.triangles[hits[k].triangle];
-              const float bc[3] = {1.0f - hits[k].u - hits[k].v, hits[k].u, hits[k].v};
-              for (int c = 0; c < 3; ++c) r.emplace_back(tri[c], float(wc) * bc[c]);
+              if (src.hit_points) {  // points (texels): the one the hit lies on gathers alone
+                const std::uint32_t p = src.hit_points->point(hits[k].triangle, hits[k].u, hits[k].v);
+                if (p != detail::HitToPoint::kNone) r.emplace_back(p, float(wc));
+              } else {
+                const glm::uvec3 tri = mesh.triangles[hits[k].triangle];
+                const float bc[3] = {1.0f - hits[k].u - hits[k].v, hits[k].u, hits[k].v};
+                for (int c = 0; c < 3; ++c) r.emplace_back(tri[c], float(wc) * bc[c]);
+              }
             }
           }
         };
@@ -587,7 +586,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
     if (comm.rank() != 0) return Transfer{};
     // Vertices: analytic rows are dropped (relight evaluates them from the
     // mesh's normals). Points keep every row: no mesh normal is theirs.
-    if (src.vertices) compact_transfer(t, analytic);
+    if (src.vertices || src.compact) compact_transfer(t, analytic);
     return std::move(t);
   };
   if (emitters) {  // points: the direct part, plus the vertices' light gathered above
@@ -662,6 +661,11 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
 }
 
 }  // namespace
+
+Transfer detail::compute_at(const Mesh& mesh, const Source& src, const TransferOptions& o, const Progress& progress) {
+  check_options(o, mesh);
+  return compute_impl(mesh, src, o, progress, nullptr, 0, false);
+}
 
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Progress& progress) {
   check_options(o, mesh);

@@ -36,7 +36,6 @@
 #define TINYGLTF_IMPLEMENTATION
 #define TINYGLTF_NO_STB_IMAGE
 #define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
 #define TINYGLTF_NO_INCLUDE_JSON  // nlohmann/json.hpp is included above
 #include <tiny_gltf.h>
 #pragma GCC visibility pop

@@ -14,6 +14,8 @@ PACKAGES=(
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
   # glTF export (header only: scene/gltf.cpp compiles it in)
   libtinygltf-dev
+  # scene textures (PNG, JPEG): stb_image; the view panel: Dear ImGui
+  libstb-dev libimgui-dev
   # command line, JSON, logging
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # GL: headless EGL on Mesa (llvmpipe), GLFW window, Xvfb for window tests

@@ -151,6 +151,20 @@ std::string describe(const EnvMap& map);
 // "PATH: write failed: No space left on device"). Throws prt::Error.
 void write_image(const std::string& path, int width, int height, const std::vector<float>& rgb);
 
+// An RGBA float image, rows from the top (lightmaps: A = 1 where a triangle
+// covers the texel).
+struct RgbaImage {
+  int width = 0, height = 0;
+  bool has_alpha = false;   // read: the file had an A channel (else A = 1)
+  std::vector<float> rgba;  // width * height * 4
+};
+// Writes a 4-channel float EXR (R, G, B, A), atomically as write_image.
+// Throws prt::Error naming `path` unless it ends in .exr, or if the write fails.
+void write_exr_rgba(const std::string& path, const RgbaImage& image);
+// Reads an EXR's R, G, B and A (A = 1 when it has none) as floats. Throws
+// prt::Error naming `path` for a missing, unreadable or non-EXR file.
+RgbaImage read_exr_rgba(const std::string& path);
+
 // Throws prt::Error naming `path` unless write_image can write it: a known
 // image extension (.exr, .hdr, .tif, .tiff, .png, .jpg, .jpeg, .bmp, .tga)
 // in a writable directory.

@@ -9,6 +9,8 @@
 #include <prt/mesh.h>
 #include <prt/progress.h>
 #include <prt/compressed_transfer.h>
+#include <prt/lightmap.h>
+#include <prt/scene.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
 
@@ -105,6 +107,27 @@ struct SamplePoints {
 // range, a normal neither unit nor zero, or an albedo outside [0, 1].
 Transfer compute_point_transfer(const Mesh& mesh, const SamplePoints& points, const TransferOptions& options,
                                 const Progress& progress = {});
+
+// ---- lightmaps (prt/lightmap.h; docs/LIGHTMAPS.md) ----------------------------
+// Moves the texel samples that lie inside or behind geometry (a floor texel
+// under a wall standing on it, a wall texel below the floor it goes through)
+// to the geometry's visible side: 8 rays along the surface from each sample,
+// 1.5 texels long; the nearest back face one hits is stepped past (the sample
+// moves along its own surface). What production bakers do so that such
+// texels do not leak darkness (or light) into their visible neighbours.
+// Returns how many moved. `offset` 0: default_ray_offset.
+std::size_t move_texels_out_of_geometry(const Mesh& mesh, LightmapTexels& texels, double offset = 0);
+
+// The SH transfer of every covered texel, as compute_transfer computes it at
+// vertices (options.mode, bands, samples, seed, offset, memory_limit, comm;
+// no glossy), each texel with its own albedo (one channel when all are the
+// same grey). Interreflected: the texels gather their bounces from each
+// other (a front hit takes the transfer of the texel under its lightmap UV),
+// as vertices gather from vertices. Texels none of whose rays hit anything
+// are analytic (no row). Rank 0 returns the whole transfer, the others an
+// empty one.
+LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
+                                           const TransferOptions& options, const Progress& progress = {});
 
 // Glossy matrices have bands^4 entries: 12 bands are 83 KB per vertex (mono,
 // shadowed), far past any GPU's per-frame budget (docs/GLOSSY.md).

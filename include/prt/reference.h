@@ -67,6 +67,8 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <vector>
 
 namespace prt {
@@ -110,5 +112,17 @@ ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const Refe
 // range.
 ReferenceResult render_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
                                  const std::vector<std::uint32_t>& vertices, const Progress& progress = {});
+
+// The same at points on the mesh's surface (a lightmap's texels): each with
+// its position, unit normal (zero: radiance 0) and albedo; the stream of
+// point i is i. Surfaces the paths hit reflect `hit_albedo(triangle, u, v)`
+// (barycentrics of corners 1 and 2; a scene's textured materials, clamped
+// to [0, 1]) when it is set, else options.albedo / the mesh's colours.
+// Glossy is refused.
+ReferenceResult render_reference_at_points(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
+                                           std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                                           std::span<const glm::vec3> albedo,
+                                           const std::function<glm::vec3(std::uint32_t, float, float)>& hit_albedo = {},
+                                           const Progress& progress = {});
 
 }  // namespace prt

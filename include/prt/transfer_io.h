@@ -10,6 +10,7 @@
 #pragma once
 
 #include <prt/compressed_transfer.h>
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
@@ -150,5 +151,11 @@ std::string describe_transfer(const WaveletTransfer& t);
 // exact size of the file. Bytes per vertex: WaveletTransfer::bytes() / vertices.
 std::vector<TransferSection> transfer_sections(const WaveletTransfer& t);
 std::uint64_t transfer_file_size(const WaveletTransfer& t);
+
+// ---- lightmap transfers (docs/FORMAT.md, "Lightmap transfer") ----------------
+void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
+LightmapTransfer read_lightmap_transfer(const std::string& path);
+bool transfer_is_lightmap(const std::string& path);
+std::uint64_t transfer_file_size(const LightmapTransfer& t);
 
 }  // namespace prt

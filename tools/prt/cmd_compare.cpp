@@ -4,6 +4,7 @@
 #include <prt/vertex_csv.h>
 #include <prt/accuracy.h>
 #include <prt/compare.h>
+#include <prt/envmap.h>
 
 #include <glm/geometric.hpp>
 
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <optional>
 
@@ -26,10 +28,44 @@ struct CompareArgs {
 // JSON has no infinity: a black reference's infinite relative errors become null.
 nlohmann::json number(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
+bool is_exr(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return ext == ".exr";
+}
+
+// Two lightmaps (RGBA EXR, A = 1 at covered texels: prt relight and prt
+// reference --lightmap): the covered texels' RGB, in texel order.
+void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<glm::vec3>& a, std::vector<glm::vec3>& b) {
+  const RgbaImage ia = read_exr_rgba(pa), ib = read_exr_rgba(pb);
+  if (ia.width != ib.width || ia.height != ib.height)
+    throw Error(fmt::format("{} is {}x{} but {} is {}x{}: not lightmaps of the same atlas", pa, ia.width, ia.height, pb,
+                            ib.width, ib.height));
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < std::size_t(ia.width) * ia.height; ++i) {
+    const bool ca = ia.rgba[4 * i + 3] > 0.5f, cb = ib.rgba[4 * i + 3] > 0.5f;
+    if (ca != cb) ++differ;
+    if (!ca || !cb) continue;
+    a.emplace_back(ia.rgba[4 * i], ia.rgba[4 * i + 1], ia.rgba[4 * i + 2]);
+    b.emplace_back(ib.rgba[4 * i], ib.rgba[4 * i + 1], ib.rgba[4 * i + 2]);
+  }
+  if (differ)
+    throw Error(fmt::format("{} and {} cover different texels ({} differ in A): not lightmaps of the same scene and atlas",
+                            pa, pb, differ));
+  if (a.empty()) throw Error(fmt::format("{}: no covered texel (A = 1): not a prt lightmap", pa));
+}
+
 int run_compare(const CompareArgs& args) {
   std::vector<glm::vec3> se;
-  const std::vector<glm::vec3> a = read_vertex_csv(args.a);
-  const std::vector<glm::vec3> b = read_vertex_csv(args.b, &se);
+  std::vector<glm::vec3> a, b;
+  if (is_exr(args.a) || is_exr(args.b)) {
+    if (!is_exr(args.a) || !is_exr(args.b))
+      throw Error("prt compare takes two vertex CSVs or two lightmap EXRs, not one of each: " + args.a + ", " + args.b);
+    read_lightmaps(args.a, args.b, a, b);
+  } else {
+    a = read_vertex_csv(args.a);
+    b = read_vertex_csv(args.b, &se);
+  }
   if (a.size() != b.size())
     throw Error(fmt::format("{} has {} vertices but {} has {}: not results for the same mesh", args.a, a.size(),
                             args.b, b.size()));
@@ -81,11 +117,13 @@ Run add_compare(CLI::App& app) {
   auto a = std::make_shared<CompareArgs>();
   CLI::App* s = app.add_subcommand("compare", "Error of per-vertex radiance A.csv against a reference B.csv");
   s->footer(
-      "Files: vertex,r,g,b[,se_r,se_g,se_b] as written by prt relight and prt reference.\n"
+      "Files: vertex,r,g,b[,se_r,se_g,se_b] as written by prt relight and prt reference; or two lightmaps (RGBA\n"
+      "EXR of prt relight and prt reference --lightmap), compared over their covered texels (A = 1; the texels\n"
+      "are the 'vertices' below).\n"
       "Norms are Euclidean over RGB. eps keeps near-black vertices from dominating the relative errors.\n"
       "Example: prt compare cow_prt.csv cow_ref.csv --json");
-  s->add_option("A", a->a, "CSV to judge")->required();
-  s->add_option("B", a->b, "Reference CSV")->required();
+  s->add_option("A", a->a, "CSV (or lightmap EXR) to judge")->required();
+  s->add_option("B", a->b, "Reference CSV (or lightmap EXR)")->required();
   s->add_flag("--json", a->json, "Print the numbers as JSON");
   return [a] { return run_compare(*a); };
 }

@@ -2,7 +2,9 @@
 #include "commands.h"
 #include "progress.h"
 
+#include <prt/lightmap.h>
 #include <prt/precompute.h>
+#include <prt/scene.h>
 #include <prt/mpi.h>
 #include <prt/io.h>
 #include <prt/mesh.h>
@@ -35,6 +37,11 @@ struct PrecomputeArgs {
   MeshOptions mesh_opt;
   bool quiet = false;
   std::string memory_limit;  // --memory-limit SIZE (memory_size_value); "" the default
+  // --lightmap WxH: SCENE's texels (docs/LIGHTMAPS.md); --uv N: its UV set (-1: TEXCOORD_1 when present, else 0).
+  std::string lightmap;
+  int uv = -1;
+  const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr, *vertex_colors_opt = nullptr,
+                    *weld_opt = nullptr;
   // --compress KxN: write the transfer compressed by clustered PCA (prt compress).
   std::string compress;
   int compress_weights = 16;
@@ -247,7 +254,77 @@ int run_wavelet(PrecomputeArgs& a) {
   return 0;
 }
 
+// --lightmap WxH: the SH transfer of every covered texel of SCENE's atlas.
+int run_lightmap(PrecomputeArgs& a) {
+  if (a.basis != "sh") throw UsageError("--lightmap takes --basis sh (wavelet lightmaps are not available yet)");
+  for (const CLI::Option* o : {a.material_opt, a.target_opt, a.vertex_colors_opt, a.weld_opt})
+    if (o->count() > 0 && !(o == a.material_opt && a.material == "diffuse"))
+      throw UsageError(o->get_name() + " does not apply to --lightmap (a lightmap is diffuse; its albedo is the "
+                       "scene's materials, or --albedo)");
+  if (!a.compress.empty()) throw UsageError("--compress does not apply to --lightmap");
+  int width = 0, height = 0;
+  for_option("--lightmap", [&] { parse_lightmap_size(a.lightmap, width, height); });
+  a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
+  std::optional<glm::vec3> albedo;
+  if (a.albedo_opt->count() > 0) {
+    double rgb[3];
+    parse_triple(a.albedo, "--albedo", rgb);
+    albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  }
+  a.opt.comm = &job();
+  a.opt.memory_limit = memory_limit(a);
+  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(a.mesh, a.mesh_opt);
+  test_fail_rank();
+  const bool quiet = a.quiet || !is_root();
+  if (!quiet) fmt::print(stderr, "{}\n", describe(scene));
+  const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
+  LightmapTexels texels = lightmap_texels(scene, width, height, set, albedo ? &*albedo : nullptr);
+  const std::size_t moved = move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
+  if (!quiet) {
+    const std::size_t n = texels.layout.texels.size();
+    fmt::print(stderr,
+               "lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} sampled on a "
+               "partly covering triangle, {} moved out of geometry\n",
+               width, height, set, set, n, 100.0 * double(n) / (double(width) * height), texels.charts, texels.partial,
+               moved);
+    if (texels.shared)
+      fmt::print(stderr,
+                 "warning: {} texels are touched by two UV charts (less than a texel of padding between them): "
+                 "each holds one chart's light, and bilinear filtering bleeds it into the other; pack the lightmap "
+                 "UVs with more margin or use a larger atlas\n",
+                 texels.shared);
+    if (texels.uv_degenerate)
+      fmt::print(stderr, "warning: {} triangles have no area in UV set {}: they get no texels (black in the lightmap)\n",
+                 texels.uv_degenerate, set);
+  }
+  Outputs out("precompute");
+  const std::optional<LightmapTransfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+    return compute_lightmap_transfer(scene, texels, a.opt, job_progress(progress));
+  }, a.opt.memory_limit);
+  if (!computed) return 130;
+  if (!is_root()) return 0;
+  out.write([&] { write_lightmap_transfer(a.output, *computed); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!a.quiet) {
+    const Transfer& t = computed->transfer;
+    fmt::print(stderr,
+               "wrote {}: lightmap {}x{}, {} {} bands, {} channel{}, {} covered texels ({} analytic, no row stored), "
+               "{} bytes, {:.2f} s\n",
+               a.output, width, height, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s",
+               t.vertices, t.analytic_vertices(), transfer_file_size(*computed), secs);
+  }
+  return 0;
+}
+
 int run_precompute(PrecomputeArgs& a) {
+  if (a.lightmap_opt->count() > 0) {
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}});
+    return run_lightmap(a);
+  }
+  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   check_usage(a);
   if (a.basis == "wavelet") return run_wavelet(a);
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
@@ -361,8 +438,10 @@ Run add_precompute(CLI::App& app) {
       "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
       "         prt precompute bunny.off -o bunny-glossy.prt --material glossy --bands 5\n"
       "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
-      "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32");
-  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
+      "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32\n"
+      "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected -o room.prt");
+  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB (with --lightmap: a scene, glTF/GLB or OBJ)")
+      ->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
   s->add_option("--basis", a->basis,
                 "sh (spherical harmonics, all modes) or wavelet (all-frequency shadows: Haar on a cube map, "
@@ -404,13 +483,22 @@ Run add_precompute(CLI::App& app) {
                     "Wavelet basis: relative L2 truncation error per vertex, in [0, 1) (0 keeps every non-zero term)")
           ->check(number_range(0.0, 1.0, false, true))
           ->capture_default_str());
-  add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo");
-  s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
+  a->albedo_opt = add_shared(s, SharedOption::Albedo, a->albedo,
+                             "Diffuse albedo (with --lightmap: replaces the scene's materials)");
+  a->vertex_colors_opt = s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   add_shared(s, SharedOption::Threads, a->opt.threads, "Worker threads");
   a->sh_only.push_back(
       add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the direction set"));
   add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
-  s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
+  a->weld_opt = s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
+  a->lightmap_opt = s->add_option("--lightmap", a->lightmap,
+                                  "WxH: an SH lightmap instead of vertices: the transfer of every texel of a W x H "
+                                  "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
+                                  "lightmap UV set (docs/LIGHTMAPS.md)");
+  a->uv_opt = s->add_option("--uv", a->uv,
+                            "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
+                            "object has it, else TEXCOORD_0)")
+                  ->check(int_range(0, 7));
   a->sh_only.push_back(
       s->add_option("--memory-limit", a->memory_limit,
                     "The most memory the process may hold, e.g. 8G or 512M (K, M, G, T: powers of 1000; KiB, MiB, "

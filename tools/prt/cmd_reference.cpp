@@ -9,6 +9,9 @@
 #include <glm/geometric.hpp>
 #include <prt/envmap.h>
 #include <prt/io.h>
+#include <prt/lightmap.h>
+#include <prt/precompute.h>
+#include <prt/scene.h>
 #include <prt/mesh.h>
 #include <prt/reference.h>
 #include <prt/rotation.h>
@@ -19,6 +22,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <memory>
 
 namespace prt::cli {
@@ -32,7 +37,69 @@ struct ReferenceArgs {
   MeshOptions mesh_opt;
   int threads = 0;
   bool quiet = false;
+  std::string lightmap;  // --lightmap WxH: the texels of prt precompute --lightmap, as an RGBA EXR
+  int uv = -1;
+  const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr;
 };
+
+// --lightmap WxH: the reference at the texel sample points prt precompute
+// --lightmap traces (the same rasterisation, the same samples moved out of
+// geometry), written in the relit lightmap's layout.
+int run_lightmap(ReferenceArgs& a) {
+  if (a.opt.glossy) throw UsageError("--lightmap: a lightmap is diffuse (no --material glossy)");
+  if (a.opt.vertex_colors) throw UsageError("--vertex-colors does not apply to --lightmap (the scene's materials are the albedo)");
+  int width = 0, height = 0;
+  for_option("--lightmap", [&] { parse_lightmap_size(a.lightmap, width, height); });
+  std::string ext = std::filesystem::path(a.output).extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  if (ext != ".exr") throw UsageError("--output: " + a.output + ": a lightmap reference is an RGBA float EXR (.exr)");
+  for_path("--output", [&] { check_writable(a.output); });
+  std::unique_ptr<tbb::global_control> limit;
+  if (a.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(a.mesh, a.mesh_opt);
+  if (!a.quiet) fmt::print(stderr, "{}\n", describe(scene));
+  const EnvMap map = load_envmap(a.env);
+  require_finite(map);
+  if (map.is_cube()) throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
+  const bool override_albedo = a.albedo_opt->count() > 0;
+  const glm::vec3 albedo = a.opt.albedo;
+  const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
+  LightmapTexels texels = lightmap_texels(scene, width, height, set, override_albedo ? &albedo : nullptr);
+  move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
+  const std::function<glm::vec3(std::uint32_t, float, float)> hit_albedo = [&](std::uint32_t tri, float u, float v) {
+    return override_albedo ? albedo : scene.albedo(tri, u, v);
+  };
+  Outputs out("reference");
+  const std::optional<ReferenceResult> computed = run_with_progress(a.quiet, "reference", [&](const Progress& progress) {
+    return render_reference_at_points(scene.mesh, map, a.opt, texels.positions, texels.normals, texels.albedo,
+                                      hit_albedo, progress);
+  });
+  if (!computed) return 130;
+  const ReferenceResult& r = *computed;
+  const std::vector<glm::vec4> img = lightmap_image(texels.layout, r.radiance);
+  RgbaImage image;
+  image.width = width;
+  image.height = height;
+  image.rgba.resize(img.size() * 4);
+  for (std::size_t i = 0; i < img.size(); ++i)
+    for (int c = 0; c < 4; ++c) image.rgba[4 * i + std::size_t(c)] = img[i][c];
+  out.write([&] { write_exr_rgba(a.output, image); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet) {
+    double se2 = 0, b2 = 0;
+    for (std::size_t v = 0; v < r.radiance.size(); ++v) {
+      se2 += double(glm::dot(r.std_error[v], r.std_error[v]));
+      b2 += double(glm::dot(r.radiance[v], r.radiance[v]));
+    }
+    fmt::print(stderr, "wrote {}: lightmap {}x{}, {} covered texels, {}, {} samples/texel, {:.2f} s\n", a.output, width,
+               height, r.radiance.size(), transfer_mode_name(a.opt.mode), a.opt.samples,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    fmt::print(stderr, "standard error: {:.3g} relative RMS\n", b2 > 0 ? std::sqrt(se2 / b2) : 0.0);
+  }
+  return 0;
+}
 
 int run_reference(ReferenceArgs& a) {
   // Every option and the output path before any loading (each value alone
@@ -47,6 +114,11 @@ int run_reference(ReferenceArgs& a) {
     parse_triple(a.rotate, "--rotate", e);
     a.opt.rotation = sh::rotation_from_euler(e[0], e[1], e[2]);
   }
+  if (a.lightmap_opt->count() > 0) {
+    a.opt.glossy = a.material == "glossy";
+    return run_lightmap(a);
+  }
+  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   a.opt.glossy = a.material == "glossy";
   for (const CLI::Option* o : a.glossy_opts)
     if (o->count() > 0 && !a.opt.glossy) throw UsageError(o->get_name() + " applies to --material glossy only");
@@ -121,13 +193,19 @@ Run add_reference(CLI::App& app) {
       "Defaults match prt precompute (albedo 0.8, shadowed, 1 bounce). Ctrl-C stops without writing.\n"
       "--material glossy --eye x,y,z adds rho_s x a Phong lobe of exponent --gloss about the eye's mirror direction\n"
       "(map and lobe sampling, MIS; docs/GLOSSY.md): the ground truth of prt relight --eye.\n"
-      "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv");
+      "--lightmap WxH: at the texels of prt precompute SCENE --lightmap WxH, as an RGBA EXR (A = 1 at covered texels).\n"
+      "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv\n"
+      "         prt reference models/room.gltf forest.exr --lightmap 128x128 --mode interreflected -o ref.exr");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
   s->add_option("-o,--output", a->output, "CSV file to write")->required();
   add_shared(s, SharedOption::Mode, a->mode, "Light paths: unshadowed (no rays), shadowed, or interreflected");
   add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode)");
-  add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo");
+  a->albedo_opt = add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo (with --lightmap: replaces the scene's materials)");
+  a->lightmap_opt = s->add_option("--lightmap", a->lightmap,
+                                  "WxH: the reference at the texels of prt precompute --lightmap WxH (SCENE: glTF or "
+                                  "OBJ with vt), written as an RGBA float EXR in the relit lightmap's layout");
+  a->uv_opt = s->add_option("--uv", a->uv, "With --lightmap: the UV set (as prt precompute --uv)")->check(int_range(0, 7));
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-s,--samples", a->opt.samples,
                 "Iterations per vertex, each one map-sampled and one cosine-sampled direction")

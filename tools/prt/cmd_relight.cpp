@@ -11,6 +11,8 @@
 #include <prt/envmap.h>
 #include <prt/filter.h>
 #include <prt/io.h>
+#include <prt/lightmap.h>
+#include <prt/scene.h>
 #include <prt/mesh.h>
 #include <prt/ply.h>
 #include <prt/projection.h>
@@ -130,10 +132,66 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   return 0;
 }
 
+// A lightmap transfer (prt precompute --lightmap): an RGBA float EXR of the
+// atlas, A = 1 at covered texels, gutters dilated (docs/LIGHTMAPS.md).
+int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
+  if (ext != ".exr")
+    throw UsageError("--output: " + a.output + ": " + a.transfer + " is a lightmap: its relit atlas is an RGBA float "
+                     "EXR (.exr)");
+  for (const CLI::Option* o : a.sh_only)
+    if (o->count() > 0 && o->get_name() != "--window" && o->get_name() != "--window-width" && o->get_name() != "--direct")
+      throw UsageError(o->get_name() + " does not apply to a lightmap (diffuse: no eye, no lobe)");
+  for (const CLI::Option* o : a.wavelet_only)
+    if (o->count() > 0) throw UsageError(o->get_name() + " applies to wavelet transfers; " + a.transfer + " is an SH lightmap");
+  if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
+  const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  const LightmapTransfer lt = read_lightmap_transfer(a.transfer);
+  const prt::Scene scene = prt::load_scene(a.mesh);
+  const LightmapTexels texels =
+      lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
+                      lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
+  check_matches(lt, texels, a.transfer);
+  if (a.direct) check_direct(lt.transfer, a.transfer, "--direct");
+  EnvMap env = load_envmap(a.env);
+  require_finite(env);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(scene), describe(env));
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
+  sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : lt.transfer.bands);
+  if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
+  const Mesh points = texel_points(texels);
+  const std::vector<glm::vec3> rgb = a.direct ? relight_direct(lt.transfer, points, light) : relight(lt.transfer, points, light);
+  const double frame_ms = ms_since(t0);
+  check_relit(rgb, a, env, [&](std::size_t v) {
+    double m = 0;
+    for (double x : vertex_transfer(lt.transfer, points, v, a.direct)) m = std::max(m, std::abs(x));
+    return m;
+  });
+  const std::vector<glm::vec4> img = lightmap_image(lt.layout, rgb);
+  RgbaImage out_img;
+  out_img.width = lt.layout.width;
+  out_img.height = lt.layout.height;
+  out_img.rgba.resize(img.size() * 4);
+  for (std::size_t i = 0; i < img.size(); ++i)
+    for (int c = 0; c < 4; ++c) out_img.rgba[4 * i + std::size_t(c)] = img[i][c];
+  Outputs out("relight");
+  out.write([&] { write_exr_rgba(a.output, out_img); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels)\nwrote {} ({}x{} RGBA, {} covered texels)\n",
+               frame_ms, rgb.size(), a.output, lt.layout.width, lt.layout.height, lt.layout.texels.size());
+  return 0;
+}
+
 int run_relight(const RelightArgs& a) {
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  if (transfer_is_lightmap(a.transfer)) {
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+    for_path("--output", [&] { check_writable(a.output); });
+    return run_lightmap(a, ext, euler);
+  }
   if (ext != ".ply" && ext != ".csv") throw UsageError("--output: " + a.output + ": expected a .ply or .csv file");
   check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
   for (const CLI::Option* o : {a.exposure_opt, a.srgb_opt})
@@ -239,11 +297,14 @@ Run add_relight(CLI::App& app) {
       "Example: prt relight bunny.off bunny.prt envmaps/forest.exr --rotate 90,0,0 -o bunny.ply\n"
       "         prt relight bunny.off bunny.prt envmaps/forest.exr -o view.ply --tonemap aces --srgb --exposure -1\n"
       "         prt relight bunny.off glossy.prt envmaps/forest.exr --eye 0,0.1,0.4 --gloss 16 -o g.csv\n"
-      "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv");
-  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
+      "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv\n"
+      "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr");
+  s->add_option("MESH", a->mesh, "The mesh (or, for a lightmap, the scene) the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map")->required();
-  s->add_option("-o,--output", a->output, "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b)")
+  s->add_option("-o,--output", a->output,
+                "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b); a lightmap: .exr (RGBA float "
+                "atlas, A = 1 where a triangle covers the texel)")
       ->required();
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));

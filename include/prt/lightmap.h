@@ -1,0 +1,95 @@
+// prt/lightmap.h - texel-space transfer: SH lightmaps (docs/LIGHTMAPS.md).
+//
+// A lightmap is a W x H atlas laid out in one of a scene's UV sets. Texel
+// (x, y), counted from the top-left, covers UV [x/W, (x+1)/W] x [y/H, (y+1)/H]
+// (glTF's UV origin is the image's top-left, v down). Every texel a triangle
+// covers, even partly (conservative rasterisation), is a sample point with
+// its own transfer vector, computed and relit exactly as a vertex's
+// (prt/transfer.h): outgoing radiance B = sum_k T_k L_k, T including the
+// texel's albedo / pi.
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/scene.h>
+#include <prt/transfer.h>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+inline constexpr int kMaxLightmapSize = 16384;  // texels per side
+
+struct LightmapLayout {
+  int width = 0, height = 0;          // atlas size in texels, 1..kMaxLightmapSize each
+  int uv_set = 0;                     // the scene's UV set the atlas is laid out in (0 = TEXCOORD_0)
+  std::vector<std::uint32_t> texels;  // covered texels, index y * width + x (y from the top), strictly increasing
+  std::uint64_t scene_hash = 0;       // Scene::hash() of the scene it was computed for
+};
+
+struct LightmapTransfer {
+  Transfer transfer;     // one row per covered texel (transfer.vertices == layout.texels.size()), texel i = layout.texels[i]; analytic texels via transfer.slots as for vertices
+  LightmapLayout layout;
+};
+
+// What is wrong with `t`, or "" when nothing is: sizes in range, texels
+// strictly increasing and inside the atlas, one transfer row (or analytic
+// slot) per texel, transfer_problem(t.transfer) empty.
+std::string lightmap_problem(const LightmapTransfer& t);
+
+// The sample points of an atlas: one per covered texel, in texel order.
+struct LightmapTexels {
+  LightmapLayout layout;                   // texels and scene_hash filled in
+  std::vector<glm::vec3> positions;        // on the triangle (precompute may move them out of geometry)
+  std::vector<glm::vec3> normals;          // interpolated shading normal, unit (face normal where that is zero)
+  std::vector<glm::vec3> albedo;           // the scene's albedo there, clamped to [0, 1]
+  std::vector<std::uint32_t> triangle;     // the triangle the sample lies on
+  std::vector<glm::vec2> barycentric;      // (u, v) on it: the point is (1-u-v) p0 + u p1 + v p2
+  std::vector<float> texel_size;           // world-space length of a texel's edge on that triangle
+  std::size_t partial = 0;                 // texels whose centre no triangle covers (sampled on the covered part)
+  std::size_t shared = 0;                  // texels two UV charts touch (too little padding: they bleed)
+  std::size_t uv_degenerate = 0;           // triangles with area in space but none in the UV set (no texels)
+  std::size_t charts = 0;                  // UV charts (triangles joined by shared edges)
+};
+
+// Rasterises every triangle of `scene` into a width x height atlas of UV set
+// `uv_set`, conservatively: a texel belongs to the triangle that covers its
+// centre, else to the one covering most of it, and is sampled at its centre
+// or at the centroid of the covered part. `albedo` (non-null) replaces the
+// materials' albedo. Throws prt::Error naming the scene when charts overlap
+// (a texel covered more than once: a lightmap set gives each triangle its own
+// part of the atlas), when UVs leave [0, 1], or the size is out of range.
+LightmapTexels lightmap_texels(const Scene& scene, int width, int height, int uv_set,
+                               const glm::vec3* albedo = nullptr);
+
+// The texels as a point set (positions, normals, albedo as colours; no
+// triangles): what relight() and shading_hash() read for a lightmap's rows.
+Mesh texel_points(const LightmapTexels& texels);
+
+// Throws prt::Error (naming `path`) unless `t` was computed for `scene`'s
+// texels: same scene hash, atlas and covered texels, and shading hash.
+void check_matches(const LightmapTransfer& t, const LightmapTexels& texels, const std::string& path);
+
+// Exit radiance of every covered texel under lighting `light` (RGB, at least
+// the transfer's bands^2), in texel order (relight() of the rows).
+std::vector<glm::vec3> relight_lightmap(const LightmapTransfer& t, const LightmapTexels& texels,
+                                        const std::vector<glm::dvec3>& light);
+
+// The W x H RGBA image of per-texel values: RGB the value, A 1 at covered
+// texels; uncovered texels within `gutter` texels of covered ones take the
+// mean of their covered (or already filled) 8-neighbours, ring by ring, so
+// bilinear filtering never reads black; A stays 0 there. Rows from the top.
+std::vector<glm::vec4> lightmap_image(const LightmapLayout& layout, std::span<const glm::vec3> values, int gutter = 4);
+
+// Parses "WxH" (e.g. "1024x1024"); throws prt::Error for anything else or a
+// side outside 1..kMaxLightmapSize.
+void parse_lightmap_size(const std::string& text, int& width, int& height);
+
+}  // namespace prt

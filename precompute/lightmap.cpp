@@ -1,0 +1,114 @@
+// Lightmap transfer (prt/precompute.h, "Lightmaps"; docs/LIGHTMAPS.md): the
+// texels of prt/lightmap.h moved out of geometry, then traced as points that
+// gather their interreflection from each other.
+
+#include <prt/precompute.h>
+
+#include <prt/error.h>
+
+#include "ray_scene.h"
+#include "transfer_impl.h"
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace prt {
+
+namespace {
+
+// Rays per texel that look along the surface for geometry the sample is
+// inside or behind: 8 directions 45 degrees apart in the tangent plane,
+// enough to find a wall crossing the texel from any side.
+constexpr int kLeakRays = 8;
+
+}  // namespace
+
+std::size_t move_texels_out_of_geometry(const Mesh& mesh, LightmapTexels& texels, double offset_in) {
+  const float offset = float(offset_in > 0 ? offset_in : detail::default_ray_offset(mesh));
+  const detail::RayScene scene(mesh);
+  const std::size_t P = texels.positions.size();
+  std::vector<std::uint8_t> moved(P, 0);
+  tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
+    detail::enable_ftz_daz();
+    const glm::vec3 n = texels.normals[i];
+    if (glm::dot(n, n) == 0.0f) return;
+    // A tangent frame (Duff et al. 2017).
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
+    const glm::vec3 t1(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x), t2(b, sign + n.y * n.y * a, -n.y);
+    const glm::vec3 origin = texels.positions[i] + offset * n;
+    // Far enough to leave the texel from wherever in it the sample lies.
+    const float reach = 1.5f * texels.texel_size[i];
+    glm::vec3 dirs[kLeakRays];
+    for (int k = 0; k < kLeakRays; ++k) {
+      const double phi = 2.0 * M_PI * k / kLeakRays;
+      dirs[k] = glm::normalize(float(std::cos(phi)) * t1 + float(std::sin(phi)) * t2);
+    }
+    detail::Hit hits[kLeakRays];
+    scene.intersect8(origin, dirs, kLeakRays, offset, hits);
+    // The nearest back face within reach: the sample is inside or behind
+    // what that face bounds; step past it to the visible side.
+    float best = std::numeric_limits<float>::infinity();
+    int which = -1;
+    for (int k = 0; k < kLeakRays; ++k)
+      if (hits[k].hit() && !hits[k].front && hits[k].t < reach && hits[k].t < best) best = hits[k].t, which = k;
+    if (which < 0) return;
+    const float step = best + std::max(offset, 0.01f * texels.texel_size[i]);
+    texels.positions[i] += step * dirs[which];
+    moved[i] = 1;
+  });
+  std::size_t count = 0;
+  for (std::uint8_t m : moved) count += m;
+  return count;
+}
+
+LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
+                                           const TransferOptions& options, const Progress& progress) {
+  if (options.glossy) throw Error("glossy transfer is computed at vertices only: a lightmap is diffuse");
+  const std::size_t P = texels.layout.texels.size();
+  if (texels.positions.size() != P || texels.normals.size() != P || texels.albedo.size() != P)
+    throw Error("lightmap texels: positions, normals and albedo must have one entry per covered texel");
+  if (P > std::numeric_limits<std::uint32_t>::max() - 1) throw Error("lightmap: too many covered texels");
+  TransferOptions o = options;
+  o.vertex_colors = false;
+  // One albedo everywhere and grey (an untextured white scene, --albedo):
+  // one channel, as for a mesh without colours.
+  bool uniform = true;
+  for (const glm::vec3& a : texels.albedo) uniform = uniform && a == texels.albedo.front();
+  if (P > 0 && uniform) o.albedo = texels.albedo.front();
+  const bool per_point = !(uniform && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z);
+
+  const LightmapLayout& l = texels.layout;
+  std::vector<std::uint32_t> point_of_texel(std::size_t(l.width) * l.height, detail::HitToPoint::kNone);
+  for (std::size_t i = 0; i < P; ++i) point_of_texel[l.texels[i]] = std::uint32_t(i);
+  detail::HitToPoint map;
+  map.uv = scene.uv_sets.at(std::size_t(l.uv_set)).data();
+  map.triangles = scene.mesh.triangles.data();
+  map.width = l.width;
+  map.height = l.height;
+  map.point_of_texel = point_of_texel.data();
+
+  detail::Source src;
+  src.positions = texels.positions.data();
+  src.normals = texels.normals.data();
+  src.count = P;
+  src.albedo = per_point ? texels.albedo.data() : nullptr;
+  src.vertices = false;
+  src.hit_points = &map;
+  src.compact = true;
+  LightmapTransfer out;
+  out.transfer = detail::compute_at(scene.mesh, src, o, progress);
+  if (o.comm && o.comm->rank() != 0) return out;
+  out.transfer.vertex_colors = per_point;  // relight takes an analytic texel's albedo from texel_points' colours
+  out.transfer.mesh_hash = l.scene_hash;
+  out.transfer.shading_hash = shading_hash(texel_points(texels), per_point);
+  out.layout = l;
+  return out;
+}
+
+}  // namespace prt

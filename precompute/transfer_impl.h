@@ -1,0 +1,62 @@
+// Private to prt::precompute: the transfer pass at any set of points
+// (precompute/transfer.cpp), for the units that compute transfer at points of
+// their own choosing (lightmap texels: precompute/lightmap.cpp).
+#pragma once
+
+#include <prt/precompute.h>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+namespace prt::detail {
+
+// Interreflection at points that are themselves the emitters (texels): which
+// point a front hit (triangle, barycentrics u, v of corners 1 and 2) lands on.
+// For a lightmap, the covered texel under the hit's lightmap UV (the texel
+// that holds the hit point's transfer), or a covered neighbour where rounding
+// puts the UV on an uncovered one.
+struct HitToPoint {
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const glm::vec2* uv = nullptr;           // per mesh vertex, in [0, 1]
+  const glm::uvec3* triangles = nullptr;   // the mesh's
+  int width = 0, height = 0;
+  const std::uint32_t* point_of_texel = nullptr;  // width * height: the point index, or kNone
+
+  std::uint32_t point(std::uint32_t tri, float u, float v) const {
+    const glm::uvec3 t = triangles[tri];
+    const glm::vec2 p = (1.0f - u - v) * uv[t.x] + u * uv[t.y] + v * uv[t.z];
+    const int x = int(p.x * float(width)), y = int(p.y * float(height));
+    for (int ring = 0; ring <= 1; ++ring)
+      for (int dy = -ring; dy <= ring; ++dy)
+        for (int dx = -ring; dx <= ring; ++dx) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
+          const std::uint32_t i = point_of_texel[std::size_t(yy) * std::size_t(width) + std::size_t(xx)];
+          if (i != kNone) return i;
+        }
+    return kNone;
+  }
+};
+
+// Where the first pass traces from: the mesh's vertices, or other points
+// (SamplePoints, texels) with their own albedo.
+struct Source {
+  const glm::vec3* positions = nullptr;
+  const glm::vec3* normals = nullptr;
+  std::size_t count = 0;
+  const glm::vec3* albedo = nullptr;  // per point (points only); nullptr: TransferOptions::albedo
+  bool vertices = true;               // the mesh's own vertices (their colours with vertex_colors)
+  // Points that gather their bounces from each other (texels): with this,
+  // interreflection iterates over the points, as over vertices.
+  const HitToPoint* hit_points = nullptr;
+  bool compact = false;  // points: drop analytic rows (slots), as for vertices
+};
+
+// The transfer at `src` (checked options; no glossy at points).
+Transfer compute_at(const Mesh& mesh, const Source& src, const TransferOptions& options, const Progress& progress);
+
+}  // namespace prt::detail
