@@ -111,4 +111,49 @@ LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTex
   return out;
 }
 
+std::vector<float> point_obscurance(const Mesh& mesh, std::span<const glm::vec3> positions,
+                                    std::span<const glm::vec3> normals, double distance, int samples,
+                                    std::uint64_t seed, double offset_in) {
+  if (!(distance > 0) || !std::isfinite(distance))
+    throw Error(fmt::format("--obscurance: the distance d must be a finite number > 0, got {}", distance));
+  if (samples < 1) throw Error("obscurance: samples must be at least 1");
+  if (normals.size() != positions.size()) throw Error("obscurance: one normal per point");
+  const float offset = float(offset_in > 0 ? offset_in : detail::default_ray_offset(mesh));
+  const int M = 2 * samples;
+  const std::vector<glm::vec3> dirs = detail::direction_set(M, seed);
+  const detail::RayScene scene(mesh);
+  std::vector<float> out(positions.size(), 0.0f);
+  tbb::parallel_for(std::size_t(0), positions.size(), [&](std::size_t i) {
+    detail::enable_ftz_daz();
+    const glm::vec3 n = normals[i];
+    if (glm::dot(n, n) == 0.0f) return;
+    const glm::vec3 origin = positions[i] + offset * n;
+    // W = (1/pi) integral rho(t(w)) cos+ dw, rho(t) = min(t / d, 1), rho = 1
+    // for a ray that escapes; normalised by the set's own integral of cos+
+    // (as the transfer's occluded sums are), so an open point is exactly 1.
+    double acc = 0, all = 0;
+    glm::vec3 batch[8];
+    float cosine[8];
+    int count = 0;
+    detail::Hit hits[8];
+    const auto flush = [&] {
+      scene.intersect8(origin, batch, count, offset, hits);
+      for (int k = 0; k < count; ++k)
+        acc += cosine[k] * (hits[k].hit() ? std::min(double(hits[k].t) / distance, 1.0) : 1.0);
+      count = 0;
+    };
+    for (int j = 0; j < M; ++j) {
+      const float c = glm::dot(n, dirs[std::size_t(j)]);
+      if (c <= 0.0f) continue;
+      all += c;
+      cosine[count] = c;
+      batch[count++] = dirs[std::size_t(j)];
+      if (count == 8) flush();
+    }
+    if (count) flush();
+    out[i] = all > 0 ? float(acc / all) : 1.0f;
+  });
+  return out;
+}
+
 }  // namespace prt

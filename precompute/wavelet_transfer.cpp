@@ -127,7 +127,12 @@ float offset_of(const WaveletOptions& o, const Mesh& mesh) {
 
 }  // namespace
 
-WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& o, const Progress& progress) {
+namespace {
+
+// The transfer at the vertices of `mesh` (their positions, normals and, with
+// vertex_colors, colours), occluded by `occluders`.
+WaveletTransfer compute_wavelet_impl(const Mesh& occluders, const Mesh& mesh, const WaveletOptions& o,
+                                     const Progress& progress) {
   check_options(o, mesh);
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
@@ -149,8 +154,8 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
   wt.vertex_kept.assign(V, 0);
 
   const CubeTable cube(r);
-  const float offset = offset_of(o, mesh);
-  const detail::RayScene scene(mesh);
+  const float offset = offset_of(o, occluders);
+  const detail::RayScene scene(occluders);
   // This rank's vertices: [r0, r1) (prt/communicator.h).
   const Communicator& comm = o.comm ? *o.comm : single_process();
   const std::size_t r0 = range_begin(V, comm.rank(), comm.size()), r1 = range_begin(V, comm.rank() + 1, comm.size());
@@ -222,6 +227,20 @@ WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions&
       wt.col_vertices[pos] = std::uint32_t(v);
       wt.col_values[pos] = flat[k].q;
     }
+  return wt;
+}
+
+}  // namespace
+
+WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& o, const Progress& progress) {
+  return compute_wavelet_impl(mesh, mesh, o, progress);
+}
+
+WaveletTransfer compute_wavelet_at_points(const Mesh& occluders, const Mesh& points, const WaveletOptions& o,
+                                          const Progress& progress) {
+  detail::check_common_options(o.albedo, false, o.threads, o.offset, occluders);
+  WaveletTransfer wt = compute_wavelet_impl(occluders, points, o, progress);
+  wt.mesh_hash = occluders.hash();
   return wt;
 }
 

@@ -1,6 +1,8 @@
 // SH lightmaps (docs/LIGHTMAPS.md): the texels of an atlas (conservative
 // rasterisation, refusals), their sample points moved out of geometry, the
 // gutters, and texel transfer against the Monte Carlo reference.
+#include "test_scenes.h"
+
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/lightmap.h>
@@ -21,56 +23,11 @@
 namespace prt {
 namespace {
 
-// Builds scenes of quads and boxes; each quad its own lightmap chart.
-struct Builder {
-  std::vector<glm::vec3> positions, normals;
-  std::vector<glm::uvec3> triangles;
-  std::vector<glm::vec2> uv;  // the lightmap set (TEXCOORD_0 here)
-  std::vector<std::size_t> objects;
-  std::size_t open_tris = 0;
-
-  // A quad p0 p1 p2 p3 (counter-clockwise seen from the front), its chart the
-  // UV rectangle (u0, v0)-(u1, v1): p0 -> (u0, v1), p1 -> (u1, v1), p2 -> (u1, v0), p3 -> (u0, v0).
-  void quad(glm::vec3 p0, glm::vec3 p1, glm::vec3 p2, glm::vec3 p3, glm::vec4 chart) {
-    const glm::vec3 n = glm::normalize(glm::cross(p1 - p0, p3 - p0));
-    const auto base = std::uint32_t(positions.size());
-    for (const glm::vec3& p : {p0, p1, p2, p3}) positions.push_back(p), normals.push_back(n);
-    uv.insert(uv.end(), {{chart.x, chart.w}, {chart.z, chart.w}, {chart.z, chart.y}, {chart.x, chart.y}});
-    triangles.emplace_back(base, base + 1, base + 2);
-    triangles.emplace_back(base, base + 2, base + 3);
-    open_tris += 2;
-  }
-  void end_object() {
-    objects.push_back(open_tris);
-    open_tris = 0;
-  }
-  // An axis-aligned box, faces outward; its 6 charts in a row of cells
-  // starting at cell `first` of a `cells` x `cells` grid (each chart inset by `pad` of a cell).
-  void box(glm::vec3 lo, glm::vec3 hi, int first, int cells, float pad = 0.1f) {
-    const auto chart = [&](int c) {
-      const float s = 1.0f / float(cells);
-      const float x = float(c % cells) * s, y = float(c / cells) * s;
-      return glm::vec4(x + pad * s, y + pad * s, x + (1 - pad) * s, y + (1 - pad) * s);
-    };
-    const glm::vec3 a = lo, b = hi;
-    quad({a.x, a.y, b.z}, {b.x, a.y, b.z}, {b.x, b.y, b.z}, {a.x, b.y, b.z}, chart(first + 0));  // +z
-    quad({b.x, a.y, a.z}, {a.x, a.y, a.z}, {a.x, b.y, a.z}, {b.x, b.y, a.z}, chart(first + 1));  // -z
-    quad({b.x, a.y, b.z}, {b.x, a.y, a.z}, {b.x, b.y, a.z}, {b.x, b.y, b.z}, chart(first + 2));  // +x
-    quad({a.x, a.y, a.z}, {a.x, a.y, b.z}, {a.x, b.y, b.z}, {a.x, b.y, a.z}, chart(first + 3));  // -x
-    quad({a.x, b.y, b.z}, {b.x, b.y, b.z}, {b.x, b.y, a.z}, {a.x, b.y, a.z}, chart(first + 4));  // +y
-    quad({a.x, a.y, a.z}, {b.x, a.y, a.z}, {b.x, a.y, b.z}, {a.x, a.y, b.z}, chart(first + 5));  // -y
-  }
-  Scene build(std::vector<Material> materials = {}, std::vector<Texture> textures = {}) {
-    if (open_tris) end_object();
-    return make_scene(positions, triangles, {uv}, objects, std::move(materials), std::move(textures), normals);
-  }
-};
-
 // A floor (y = 0, 4 x 4, facing up) in cell 0 of a 3 x 3 grid of charts, and
 // a wall box standing on it across the middle, its bottom 0.05 below the floor
 // (as modelled walls go through floors), in cells 1..6.
 Scene wall_on_floor() {
-  Builder b;
+  test::SceneBuilder b;
   b.quad({-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, {-2, 0, -2}, {0.01f, 0.01f, 0.32f, 0.32f});
   b.end_object();
   b.box({-1.5f, -0.05f, -0.1f}, {1.5f, 1.5f, 0.1f}, 1, 3);
@@ -79,7 +36,7 @@ Scene wall_on_floor() {
 }
 
 TEST(LightmapTexels, QuadCoversExactlyItsTexels) {
-  Builder b;
+  test::SceneBuilder b;
   b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.25f, 0.25f, 0.75f, 0.75f});
   const Scene s = b.build();
   const LightmapTexels t = lightmap_texels(s, 8, 8, 0);
@@ -101,7 +58,7 @@ TEST(LightmapTexels, QuadCoversExactlyItsTexels) {
 TEST(LightmapTexels, ThinTriangleGetsATexelWhereverItPasses) {
   // A sliver 0.05 texels wide crossing 6 texels: no texel centre inside it,
   // yet every texel it crosses is sampled on it (conservative rasterisation).
-  Builder b;
+  test::SceneBuilder b;
   b.positions = {{0, 0, 0}, {6, 0, 0}, {6, 0, 0.05f}};
   b.normals.assign(3, {0, 1, 0});
   b.uv = {{1.0f / 8, 2.2f / 8}, {7.0f / 8, 2.2f / 8}, {7.0f / 8, 2.25f / 8}};
@@ -118,7 +75,7 @@ TEST(LightmapTexels, ThinTriangleGetsATexelWhereverItPasses) {
 }
 
 TEST(LightmapTexels, OverlappingChartsAreRefusedNamingTheObjects) {
-  Builder b;
+  test::SceneBuilder b;
   b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.1f, 0.1f, 0.6f, 0.6f});
   b.end_object();
   b.quad({0, 1, 1}, {1, 1, 1}, {1, 1, 0}, {0, 1, 0}, {0.4f, 0.4f, 0.9f, 0.9f});
@@ -138,7 +95,7 @@ TEST(LightmapTexels, OverlappingChartsAreRefusedNamingTheObjects) {
 
 TEST(LightmapTexels, AdjacentTrianglesOfOneChartDoNotCountAsOverlap) {
   // The quad's two triangles share the diagonal through many texels.
-  Builder b;
+  test::SceneBuilder b;
   b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.013f, 0.021f, 0.977f, 0.969f});
   EXPECT_NO_THROW(lightmap_texels(b.build(), 257, 193, 0));
 }
@@ -164,7 +121,7 @@ TEST(LightmapTexels, MissingUvSetAndUvsOutsideTheAtlasAreRefused) {
 }
 
 TEST(LightmapTexels, AlbedoIsTheMaterialTimesTheSrgbDecodedTexture) {
-  Builder b;
+  test::SceneBuilder b;
   b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.0f, 0.0f, 1.0f, 1.0f});
   Texture tex;
   tex.width = tex.height = 1;

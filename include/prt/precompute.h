@@ -129,6 +129,17 @@ std::size_t move_texels_out_of_geometry(const Mesh& mesh, LightmapTexels& texels
 LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
                                            const TransferOptions& options, const Progress& progress = {});
 
+// Obscurance (Zhukov, Iones & Kronin 1998; the seed's definition) at points:
+// W = (1/pi) integral rho(t(w)) max(n.w, 0) dw with rho(t) = min(t / d, 1)
+// for an occluder at distance t (1 where the ray escapes), from the
+// direction set of `samples` and `seed` (as the transfer's rays). 1: nothing
+// within d. As d grows W tends to the ambient occlusion kappa_A (every
+// occluder counts fully); a small d keeps only contact shadows.
+// Throws prt::Error for d <= 0 or not finite.
+std::vector<float> point_obscurance(const Mesh& mesh, std::span<const glm::vec3> positions,
+                                    std::span<const glm::vec3> normals, double distance, int samples = 1024,
+                                    std::uint64_t seed = 1, double offset = 0);
+
 // Glossy matrices have bands^4 entries: 12 bands are 83 KB per vertex (mono,
 // shadowed), far past any GPU's per-frame budget (docs/GLOSSY.md).
 inline constexpr int kMaxGlossyBands = 12;
@@ -192,6 +203,13 @@ struct WaveletOptions {
 // threads, vertex_colors without colours, more than 2^32 - 1 vertices).
 WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& options,
                                          const Progress& progress = {});
+
+// The same at other points (a lightmap's texels: texel_points()): the
+// points' positions, normals and (vertex_colors) colours, traced against
+// `occluders`. mesh_hash is the occluders'; a caller with another identity
+// for the points (a lightmap's scene hash) sets its own.
+WaveletTransfer compute_wavelet_at_points(const Mesh& occluders, const Mesh& points, const WaveletOptions& options,
+                                          const Progress& progress = {});
 
 // Reference: the dense texel-domain transfer t_i (no albedo, double) of the
 // listed vertices, [k][6 r^2], traced exactly as compute_wavelet_transfer

@@ -3,6 +3,7 @@
 #include "progress.h"
 
 #include <prt/lightmap.h>
+#include <prt/envmap.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
 #include <prt/mpi.h>
@@ -40,6 +41,9 @@ struct PrecomputeArgs {
   // --lightmap WxH: SCENE's texels (docs/LIGHTMAPS.md); --uv N: its UV set (-1: TEXCOORD_1 when present, else 0).
   std::string lightmap;
   int uv = -1;
+  // Extra maps of a lightmap (RGBA EXR in its layout): ambient occlusion, bent normals, obscurance.
+  std::string ao_map, bent_map, obscurance_map;
+  double obscurance = 0;
   const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr, *vertex_colors_opt = nullptr,
                     *weld_opt = nullptr;
   // --compress KxN: write the transfer compressed by clustered PCA (prt compress).
@@ -262,6 +266,16 @@ int run_lightmap(PrecomputeArgs& a) {
       throw UsageError(o->get_name() + " does not apply to --lightmap (a lightmap is diffuse; its albedo is the "
                        "scene's materials, or --albedo)");
   if (!a.compress.empty()) throw UsageError("--compress does not apply to --lightmap");
+  if (a.obscurance_map.empty() != !(a.obscurance > 0))
+    throw UsageError("--obscurance D and --obscurance-map FILE go together (the distance and where to write the map)");
+  for (const auto& [option, m] : {std::pair{"--ao-map", &a.ao_map}, std::pair{"--bent-normal-map", &a.bent_map},
+                                  std::pair{"--obscurance-map", &a.obscurance_map}})
+    if (!m->empty()) {
+      std::string ext = std::filesystem::path(*m).extension().string();
+      for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+      if (ext != ".exr") throw UsageError(*m + ": the extra maps are RGBA float EXR (.exr)");
+      if (is_root()) for_path(option, [&] { check_writable(*m); });
+    }
   int width = 0, height = 0;
   for_option("--lightmap", [&] { parse_lightmap_size(a.lightmap, width, height); });
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
@@ -305,6 +319,38 @@ int run_lightmap(PrecomputeArgs& a) {
   }, a.opt.memory_limit);
   if (!computed) return 130;
   if (!is_root()) return 0;
+  std::vector<float> obscurance;
+  if (a.obscurance > 0) {
+    const std::optional<std::vector<float>> w = run_with_progress(quiet, "precompute", [&](const Progress&) {
+      return point_obscurance(scene.mesh, texels.positions, texels.normals, a.obscurance, a.opt.samples, a.opt.seed,
+                              a.opt.offset);
+    });
+    if (!w) return 130;
+    obscurance = *w;
+  }
+  // An extra map: per-texel values in the lightmap's layout, A = coverage.
+  const auto write_map = [&](const std::string& path, const std::vector<glm::vec3>& values) {
+    const std::vector<glm::vec4> img = lightmap_image(texels.layout, values);
+    RgbaImage image;
+    image.width = width;
+    image.height = height;
+    image.rgba.resize(img.size() * 4);
+    for (std::size_t i = 0; i < img.size(); ++i)
+      for (int c = 0; c < 4; ++c) image.rgba[4 * i + std::size_t(c)] = img[i][c];
+    out.write([&] { write_exr_rgba(path, image); });
+  };
+  const Transfer& ct = computed->transfer;
+  if (!a.ao_map.empty()) {
+    std::vector<glm::vec3> v(ct.ao.size());
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = glm::vec3(ct.ao[i]);
+    write_map(a.ao_map, v);
+  }
+  if (!a.bent_map.empty()) write_map(a.bent_map, ct.bent_normals);
+  if (!a.obscurance_map.empty()) {
+    std::vector<glm::vec3> v(obscurance.size());
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = glm::vec3(obscurance[i]);
+    write_map(a.obscurance_map, v);
+  }
   out.write([&] { write_lightmap_transfer(a.output, *computed); });
   if (const int rc = out.commit(); rc != 0) return rc;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -325,6 +371,9 @@ int run_precompute(PrecomputeArgs& a) {
     return run_lightmap(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
+    throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
+                     "too (a vertex transfer keeps its ambient occlusion and bent normals in the file)");
   check_usage(a);
   if (a.basis == "wavelet") return run_wavelet(a);
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
@@ -499,6 +548,16 @@ Run add_precompute(CLI::App& app) {
                             "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
                             "object has it, else TEXCOORD_0)")
                   ->check(int_range(0, 7));
+  s->add_option("--ao-map", a->ao_map,
+                "With --lightmap: also write the texels' ambient occlusion (1/pi integral V cos) as an RGBA EXR in the "
+                "lightmap's layout (A = 1 at covered texels)");
+  s->add_option("--bent-normal-map", a->bent_map,
+                "With --lightmap: also write the texels' bent normals (world x, y, z in R, G, B) as an RGBA EXR");
+  s->add_option("--obscurance", a->obscurance,
+                "With --lightmap and --obscurance-map: obscurance distance d; an occluder at distance t counts "
+                "rho(t) = min(t/d, 1) (Zhukov et al. 1998)")
+      ->check(number_range(0.0, 1e30, true, false));
+  s->add_option("--obscurance-map", a->obscurance_map, "With --obscurance d: the obscurance map to write (RGBA EXR)");
   a->sh_only.push_back(
       s->add_option("--memory-limit", a->memory_limit,
                     "The most memory the process may hold, e.g. 8G or 512M (K, M, G, T: powers of 1000; KiB, MiB, "
