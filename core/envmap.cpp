@@ -372,20 +372,22 @@ void write_image(const std::string& path, int width, int height, const std::vect
 void write_exr_rgba(const std::string& path, const RgbaImage& image) {
   if (lower_extension(path) != ".exr") throw Error(path + ": an RGBA image is written as EXR (.exr)");
   PRT_CHECK_OP(image.rgba.size(), ==, std::size_t(image.width) * image.height * 4);
+  PRT_CHECK(image.std_error.empty() || image.std_error.size() == std::size_t(image.width) * image.height * 3);
   write_atomically(path, [&](const std::string& tmp) {
-    detail::write_exr_rgba(tmp, path, image.width, image.height, image.rgba);
+    detail::write_exr_rgba(tmp, path, image.width, image.height, image.rgba, image.std_error);
   });
 }
 
 RgbaImage read_exr_rgba(const std::string& path) {
   check_input_file(path, "an EXR image");
   if (lower_extension(path) != ".exr") throw Error(path + ": expected an EXR image (.exr)");
-  const detail::RgbaImage raw = detail::read_exr_rgba(path);
+  detail::RgbaImage raw = detail::read_exr_rgba(path);
   RgbaImage out;
   out.width = raw.width;
   out.height = raw.height;
   out.has_alpha = raw.has_alpha;
-  out.rgba = raw.rgba;
+  out.rgba = std::move(raw.rgba);
+  out.std_error = std::move(raw.std_error);
   return out;
 }
 

@@ -393,16 +393,23 @@ void write_image_file(const std::string& path, const std::string& format_from, i
 }
 
 void write_exr_rgba(const std::string& path, const std::string& shown, int width, int height,
-                    const std::vector<float>& rgba) {
+                    const std::vector<float>& rgba, const std::vector<float>& se) {
   try {
     Imf::Header header(width, height);
     const char* names[4] = {"R", "G", "B", "A"};
+    const char* se_names[3] = {"se.R", "se.G", "se.B"};
     for (const char* c : names) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
+    if (!se.empty())
+      for (const char* c : se_names) header.channels().insert(c, Imf::Channel(Imf::FLOAT));
     Imf::OutputFile file(path.c_str(), header);
     Imf::FrameBuffer fb;
     for (int c = 0; c < 4; ++c)
       fb.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(rgba.data() + c), 4 * sizeof(float),
                                      4 * sizeof(float) * std::size_t(width)));
+    if (!se.empty())
+      for (int c = 0; c < 3; ++c)
+        fb.insert(se_names[c], Imf::Slice(Imf::FLOAT, (char*)(se.data() + c), 3 * sizeof(float),
+                                          3 * sizeof(float) * std::size_t(width)));
     file.setFrameBuffer(fb);
     file.writePixels(height);
   } catch (const std::exception& e) {
@@ -420,13 +427,23 @@ RgbaImage read_exr_rgba(const std::string& path) {
     if (img.width < 1 || img.height < 1 || std::size_t(img.width) * std::size_t(img.height) > (std::size_t(1) << 30))
       throw Error(path + ": EXR data window is empty or too large");
     img.has_alpha = file.header().channels().findChannel("A") != nullptr;
+    const bool has_se = file.header().channels().findChannel("se.R") != nullptr;
     img.rgba.assign(std::size_t(img.width) * img.height * 4, 0.0f);
+    if (has_se) img.std_error.assign(std::size_t(img.width) * img.height * 3, 0.0f);
     Imf::FrameBuffer fb;
     const char* names[4] = {"R", "G", "B", "A"};
     char* base = (char*)(img.rgba.data()) - (std::ptrdiff_t(dw.min.x) + std::ptrdiff_t(dw.min.y) * img.width) * 4 * sizeof(float);
     for (int c = 0; c < 4; ++c)
       fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), 4 * sizeof(float),
                                      4 * sizeof(float) * std::size_t(img.width), 1, 1, c == 3 ? 1.0 : 0.0));
+    if (has_se) {
+      const char* se_names[3] = {"se.R", "se.G", "se.B"};
+      char* sb = (char*)(img.std_error.data()) -
+                 (std::ptrdiff_t(dw.min.x) + std::ptrdiff_t(dw.min.y) * img.width) * 3 * sizeof(float);
+      for (int c = 0; c < 3; ++c)
+        fb.insert(se_names[c], Imf::Slice(Imf::FLOAT, sb + c * sizeof(float), 3 * sizeof(float),
+                                          3 * sizeof(float) * std::size_t(img.width)));
+    }
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
   } catch (const Error&) {

@@ -21,11 +21,12 @@ struct RawImage {
 struct RgbaImage {
   int width = 0, height = 0;
   bool has_alpha = false;
-  std::vector<float> rgba;  // width*height*4
+  std::vector<float> rgba;       // width*height*4
+  std::vector<float> std_error;  // width*height*3 (channels se.R, se.G, se.B), or empty
 };
 // 4-channel float EXR (RGBA), written to `path` (messages name `shown`) and read.
 void write_exr_rgba(const std::string& path, const std::string& shown, int width, int height,
-                    const std::vector<float>& rgba);
+                    const std::vector<float>& rgba, const std::vector<float>& se = {});
 RgbaImage read_exr_rgba(const std::string& path);
 
 // The whole image: RowReader(path) read from row 0 to the last.

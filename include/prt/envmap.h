@@ -157,6 +157,9 @@ struct RgbaImage {
   int width = 0, height = 0;
   bool has_alpha = false;   // read: the file had an A channel (else A = 1)
   std::vector<float> rgba;  // width * height * 4
+  // Optional standard errors of RGB (prt reference --lightmap), width *
+  // height * 3, stored as the channels se.R, se.G, se.B; empty: none.
+  std::vector<float> std_error;
 };
 // Writes a 4-channel float EXR (R, G, B, A), atomically as write_image.
 // Throws prt::Error naming `path` unless it ends in .exr, or if the write fails.

@@ -36,7 +36,8 @@ bool is_exr(const std::string& path) {
 
 // Two lightmaps (RGBA EXR, A = 1 at covered texels: prt relight and prt
 // reference --lightmap): the covered texels' RGB, in texel order.
-void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<glm::vec3>& a, std::vector<glm::vec3>& b) {
+void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<glm::vec3>& a, std::vector<glm::vec3>& b,
+                    std::vector<glm::vec3>& se) {
   const RgbaImage ia = read_exr_rgba(pa), ib = read_exr_rgba(pb);
   if (ia.width != ib.width || ia.height != ib.height)
     throw Error(fmt::format("{} is {}x{} but {} is {}x{}: not lightmaps of the same atlas", pa, ia.width, ia.height, pb,
@@ -48,6 +49,7 @@ void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<gl
     if (!ca || !cb) continue;
     a.emplace_back(ia.rgba[4 * i], ia.rgba[4 * i + 1], ia.rgba[4 * i + 2]);
     b.emplace_back(ib.rgba[4 * i], ib.rgba[4 * i + 1], ib.rgba[4 * i + 2]);
+    if (!ib.std_error.empty()) se.emplace_back(ib.std_error[3 * i], ib.std_error[3 * i + 1], ib.std_error[3 * i + 2]);
   }
   if (differ)
     throw Error(fmt::format("{} and {} cover different texels ({} differ in A): not lightmaps of the same scene and atlas",
@@ -61,7 +63,7 @@ int run_compare(const CompareArgs& args) {
   if (is_exr(args.a) || is_exr(args.b)) {
     if (!is_exr(args.a) || !is_exr(args.b))
       throw Error("prt compare takes two vertex CSVs or two lightmap EXRs, not one of each: " + args.a + ", " + args.b);
-    read_lightmaps(args.a, args.b, a, b);
+    read_lightmaps(args.a, args.b, a, b, se);
   } else {
     a = read_vertex_csv(args.a);
     b = read_vertex_csv(args.b, &se);
