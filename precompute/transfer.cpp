@@ -109,11 +109,13 @@ void rank_k_update(int n, int k, double alpha, const double* a, double beta, dou
 namespace {
 
 // Bytes a vertex's records may take at most (M directions): its gather row
-// before merging (3 pairs per ray: the hit triangle's corners) and its front
-// hits (glossy interreflected).
-std::size_t max_records_per_vertex(const TransferOptions& o, bool gather, bool glossy_ir) {
+// before merging (`pairs` per ray: 3 for vertices, the hit triangle's
+// corners; 4 for texels, the bilinear neighbours) and its front hits (glossy
+// interreflected).
+std::size_t max_records_per_vertex(const TransferOptions& o, bool gather, bool glossy_ir, int pairs = 3) {
   const std::size_t M = 2 * std::size_t(o.samples);
-  return (gather ? M * 3 * sizeof(std::pair<std::uint32_t, float>) : 0) + (glossy_ir ? M * sizeof(FrontHit) : 0);
+  return (gather ? M * std::size_t(pairs) * sizeof(std::pair<std::uint32_t, float>) : 0) +
+         (glossy_ir ? M * sizeof(FrontHit) : 0);
 }
 
 // Embree's ray scene (RayScene) per triangle, with a margin: the bumpy sphere
@@ -133,7 +135,8 @@ struct Plan {
 // P points (the mesh's vertices, or SamplePoints), `own` of them this
 // rank's; `emitters`: points gathering the vertices' bounce light at once
 // (compute_point_transfer) instead of keeping records.
-Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std::size_t own, bool emitters, bool grey) {
+Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std::size_t own, bool emitters, bool grey,
+                 int pairs = 3) {
   Plan p;
   const bool trace = o.mode != TransferMode::Unshadowed;
   const bool gather = o.mode == TransferMode::Interreflected && o.bounces > 0 && !emitters;
@@ -154,8 +157,8 @@ Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std:
   fixed += (own + 1) * sizeof(std::uint64_t) * ((gather ? 1 : 0) + (glossy_ir ? 1 : 0));  // record offsets
   fixed += M * nc * (sizeof(float) + (o.glossy ? sizeof(double) : 0));  // the directions' SH tables
   fixed += trace ? mesh.triangles.size() * kRaySceneBytesPerTriangle : 0;
-  fixed += threads * (M * 3 * sizeof(std::pair<std::uint32_t, float>) + M * nc * sizeof(double));  // per-thread scratch
-  const std::size_t per_vertex = max_records_per_vertex(o, gather, glossy_ir);
+  fixed += threads * (M * std::size_t(pairs) * sizeof(std::pair<std::uint32_t, float>) + M * nc * sizeof(double));  // per-thread scratch
+  const std::size_t per_vertex = max_records_per_vertex(o, gather, glossy_ir, pairs);
   // A block's records: the workers' output, its copy into the block, and
   // the buffer a spilled block is read back into.
   const auto workspace = [&](std::size_t block) { return 3 * block * per_vertex; };
@@ -322,7 +325,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   const bool glossy_ir = glossy && o.mode == TransferMode::Interreflected;
   const bool want_hits = gather || glossy_ir || emitters;
   // Checked before any ray: throws for a limit below the minimum.
-  const Plan plan = plan_memory(mesh, V, o, own, emitters != nullptr, grey);
+  const Plan plan = plan_memory(mesh, V, o, own, emitters != nullptr, grey, src.hit_points ? 4 : 3);
   // Points: the light the vertices they see reflect onto them (one gather
   // of the vertices' transfer per front hit, scaled as the direct part).
   std::vector<float> bounce_light(emitters ? V * stride : 0, 0.0f);
@@ -448,9 +451,11 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
               }
             }
             if (gather && hits[k].front) {
-              if (src.hit_points) {  // points (texels): the one the hit lies on gathers alone
-                const std::uint32_t p = src.hit_points->point(hits[k].triangle, hits[k].u, hits[k].v);
-                if (p != detail::HitToPoint::kNone) r.emplace_back(p, float(wc));
+              if (src.hit_points) {  // points (texels): those around the hit's lightmap UV
+                std::uint32_t idx[4];
+                float wt[4];
+                const int np = src.hit_points->points(hits[k].triangle, hits[k].u, hits[k].v, idx, wt);
+                for (int q = 0; q < np; ++q) r.emplace_back(idx[q], float(wc) * wt[q]);
               } else {
                 const glm::uvec3 tri = mesh.triangles[hits[k].triangle];
                 const float bc[3] = {1.0f - hits[k].u - hits[k].v, hits[k].u, hits[k].v};

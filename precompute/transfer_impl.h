@@ -9,6 +9,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -25,6 +26,41 @@ struct HitToPoint {
   const glm::uvec3* triangles = nullptr;   // the mesh's
   int width = 0, height = 0;
   const std::uint32_t* point_of_texel = nullptr;  // width * height: the point index, or kNone
+
+  // Bilinear: the covered texels among the 4 around the hit's lightmap UV
+  // (texel centres at (i + 0.5) / size), their weights renormalised over the
+  // covered ones, as a GPU samples the dilated lightmap; where none of the
+  // 4 is covered, the nearest covered one (point()). Writes up to 4 (point,
+  // weight) pairs; returns how many.
+  int points(std::uint32_t tri, float u, float v, std::uint32_t* idx, float* weight) const {
+    const glm::uvec3 t = triangles[tri];
+    const glm::vec2 p = (1.0f - u - v) * uv[t.x] + u * uv[t.y] + v * uv[t.z];
+    const float x = p.x * float(width) - 0.5f, y = p.y * float(height) - 0.5f;
+    const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+    const float fx = x - float(x0), fy = y - float(y0);
+    int n = 0;
+    float sum = 0;
+    for (int dy = 0; dy <= 1; ++dy)
+      for (int dx = 0; dx <= 1; ++dx) {
+        const int xx = x0 + dx, yy = y0 + dy;
+        if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
+        const std::uint32_t i = point_of_texel[std::size_t(yy) * std::size_t(width) + std::size_t(xx)];
+        const float w = (dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy);
+        if (i == kNone || !(w > 0.0f)) continue;
+        idx[n] = i;
+        weight[n++] = w;
+        sum += w;
+      }
+    if (n == 0) {
+      const std::uint32_t i = point(tri, u, v);
+      if (i == kNone) return 0;
+      idx[0] = i;
+      weight[0] = 1.0f;
+      return 1;
+    }
+    for (int k = 0; k < n; ++k) weight[k] /= sum;
+    return n;
+  }
 
   std::uint32_t point(std::uint32_t tri, float u, float v) const {
     const glm::uvec3 t = triangles[tri];

@@ -246,11 +246,12 @@ TEST(Lightmap, TexelTransferMatchesTheReferenceUnderConstantLight) {
     const double rel = std::sqrt(e2 / b2), noise = std::sqrt(se2 / b2);
     // Shadowed: 1024 rays per texel, a quadrature error well below the
     // reference's noise (measured 0.91% against noise 0.93%). Interreflected
-    // adds the bounce's lookup of the texel under each hit, a discretisation
-    // at texel size that shrinks with it (measured, this scene: 3.6%, 2.0%,
-    // 1.2%, 0.8% at 16, 32, 64, 128 texels on the floor's side; noise 0.7%).
-    // 2% + 2 x the noise holds 64 with margin and fails at 16.
-    EXPECT_LT(rel, 0.02 + 2 * noise) << transfer_mode_name(mode) << " noise " << noise;
+    // adds the bounce's bilinear lookup of the texels around each hit, a
+    // discretisation at texel size that shrinks with it (measured, this
+    // scene: 3.1%, 1.5%, 1.0%, 0.76% at 16, 32, 64, 128 texels on the
+    // floor's side; noise 0.7%). 1.5% + 2 x the noise holds 64 with margin
+    // and fails at 16.
+    EXPECT_LT(rel, 0.015 + 2 * noise) << transfer_mode_name(mode) << " noise " << noise;
   }
 }
 
