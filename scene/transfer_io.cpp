@@ -75,9 +75,11 @@ constexpr std::uint32_t kBasisWavelet = 1;
 constexpr std::uint32_t kFlagVertexColors = 1u << 0;
 constexpr std::uint32_t kFlagGlossy = 1u << 1;      // version 3: glossy transfer matrices (section 7)
 constexpr std::uint32_t kFlagCompressed = 1u << 2;  // version 4: rows compressed by clustered PCA (sections 8, 9)
+constexpr std::uint32_t kFlagLightmap = 1u << 3;    // version 5: rows are a lightmap's covered texels (sections 10, 11)
 constexpr std::uint32_t kKnownFlagsV2 = kFlagVertexColors;
 constexpr std::uint32_t kKnownFlagsV3 = kFlagVertexColors | kFlagGlossy;
-constexpr std::uint32_t kKnownFlags = kKnownFlagsV3 | kFlagCompressed;
+constexpr std::uint32_t kKnownFlagsV4 = kKnownFlagsV3 | kFlagCompressed;
+constexpr std::uint32_t kKnownFlags = kKnownFlagsV4 | kFlagLightmap;
 
 constexpr std::uint32_t kTypeF32 = 1;
 constexpr std::uint32_t kTypeF64 = 2;
@@ -100,6 +102,8 @@ enum Kind : std::uint32_t {
   kGlossy = std::uint32_t(TransferArray::Glossy),  // version 3
   kCompressedCoeffs = 8,                            // version 4
   kCompressedGlossy = 9,                            // version 4
+  kLightmapLayout = 10,                             // version 5: u64 width, height, UV set, scene hash
+  kLightmapTexels = 11,                             // version 5: u32 covered texel y * width + x, increasing
 };
 
 struct KindInfo {
@@ -109,7 +113,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 9> kKinds = {{
+constexpr std::array<KindInfo, 11> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -119,12 +123,16 @@ constexpr std::array<KindInfo, 9> kKinds = {{
     {kGlossy, detail::array_name(TransferArray::Glossy), kTypeF32, true},
     {kCompressedCoeffs, "compressed coefficients", kTypeU8, true},
     {kCompressedGlossy, "compressed glossy matrices", kTypeU8, true},
+    {kLightmapLayout, "lightmap layout", kTypeU64, false},
+    {kLightmapTexels, "lightmap texels", kTypeU32, true},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
 constexpr std::size_t kKindsV2 = 6;
 constexpr std::size_t kKindsV3 = 7;
 constexpr std::size_t kKindsV4 = 9;
+constexpr std::size_t kKindsV5 = 11;
+constexpr std::uint64_t kLightmapLayoutWords = 4;
 
 // Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
 constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
@@ -182,7 +190,18 @@ using detail::TransferHeader;
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6.
-std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v, bool compressed) {
+std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v, bool compressed,
+                            bool lightmap = false) {
+  if (kind == kLightmapLayout || kind == kLightmapTexels) {
+    const char* name = kind_info(kind)->name;
+    if (!lightmap) return fmt::format("has a '{}' section, but the header's flags say the file is not a lightmap", name);
+    if (kind == kLightmapLayout && count != kLightmapLayoutWords)
+      return fmt::format("section '{}' has {} values; expected {} (width, height, UV set, scene hash)", name, count,
+                         kLightmapLayoutWords);
+    if (kind == kLightmapTexels && count != v.vertices)
+      return fmt::format("section '{}' has {} texels; the header says {}", name, count, v.vertices);
+    return {};
+  }
   if (kind == kCompressedCoeffs || kind == kCompressedGlossy) {
     const char* name = kind_info(kind)->name;
     if (!compressed)
@@ -510,7 +529,7 @@ class Reader {
 
   // An SH transfer; a compressed one into *compressed (its uncompressed part
   // returned), which must then be given (and only then).
-  Transfer read(CompressedTransfer* compressed = nullptr);
+  Transfer read(CompressedTransfer* compressed = nullptr, LightmapLayout* lightmap = nullptr);
   WaveletTransfer read_wavelet();
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }
@@ -722,7 +741,7 @@ std::uint32_t Reader::read_basis() {
   return basis;
 }
 
-Transfer Reader::read(CompressedTransfer* compressed_out) {
+Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightmap_out) {
   open_file();
   read_head();
   verify();
@@ -747,13 +766,26 @@ Transfer Reader::read(CompressedTransfer* compressed_out) {
                          // Version 1 stores every vertex.
                          version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
   const bool v1 = version_ == 1;
-  const std::size_t known_kinds = v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : version_ == 3 ? kKindsV3 : kKindsV4;
+  const std::size_t known_kinds =
+      v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : version_ == 3 ? kKindsV3 : version_ == 4 ? kKindsV4 : kKindsV5;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
-  const std::uint32_t known_flags = version_ >= 4 ? kKnownFlags : version_ == 3 ? kKnownFlagsV3 : kKnownFlagsV2;
+  const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
+                                    : version_ == 4 ? kKnownFlagsV4
+                                    : version_ == 3 ? kKnownFlagsV3
+                                                    : kKnownFlagsV2;
   if (flags & ~known_flags)
     throw fail(fmt::format("bad header: unknown flags 0x{:x} in a version {} file", flags & ~known_flags, version_));
   v.glossy = (flags & kFlagGlossy) != 0;
   const bool compressed = (flags & kFlagCompressed) != 0;
+  const bool lightmap = (flags & kFlagLightmap) != 0;
+  if (lightmap && !lightmap_out)
+    throw fail("holds a lightmap (the SH transfer of a scene's texels: prt precompute --lightmap): relight it with "
+               "prt relight SCENE FILE ENV -o lightmap.exr; the library reads it with prt::read_lightmap_transfer");
+  if (!lightmap && lightmap_out)
+    throw fail("holds a per-vertex transfer, not a lightmap (prt::read_transfer reads it; prt precompute SCENE "
+               "--lightmap WxH makes a lightmap)");
+  if (lightmap && (compressed || v.glossy))
+    throw fail("bad header: a lightmap is neither compressed nor glossy");
   if (compressed && !compressed_out)
     throw fail("holds a transfer compressed by clustered PCA (prt compress): prt relight, render, view and info take "
                "it; the library reads it with prt::read_compressed_transfer");
@@ -821,7 +853,7 @@ Transfer Reader::read(CompressedTransfer* compressed_out) {
     if (type != k->type)
       throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", k->name, type,
                              k->type, type_name(k->type)));
-    if (auto p = section_problem(kind, count, v, compressed); !p.empty()) throw fail("bad section table: " + p);
+    if (auto p = section_problem(kind, count, v, compressed, lightmap); !p.empty()) throw fail("bad section table: " + p);
     // count is now at most bands^2 x channels x vertices: no overflow below.
     if (bytes != count * type_bytes(type))
       throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", k->name, count,
@@ -838,6 +870,21 @@ Transfer Reader::read(CompressedTransfer* compressed_out) {
       case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
       case kAnalyticMask: read_section(data, mask, count); break;
       case kGlossy: read_section(data, t.glossy_matrices, count); break;
+      case kLightmapLayout: {
+        std::vector<std::uint64_t> words;
+        read_section(data, words, count);
+        const auto narrow = [&](std::uint64_t x, const char* what) {
+          if (x > std::uint64_t(kMaxLightmapSize))
+            throw fail(fmt::format("bad section 'lightmap layout': {} {} is out of range", what, x));
+          return int(x);
+        };
+        lightmap_out->width = narrow(words[0], "width");
+        lightmap_out->height = narrow(words[1], "height");
+        lightmap_out->uv_set = narrow(words[2], "UV set");
+        lightmap_out->scene_hash = words[3];
+        break;
+      }
+      case kLightmapTexels: read_section(data, lightmap_out->texels, count); break;
       case kCompressedCoeffs:
         compressed_out->coeffs = read_signal(data, bytes, k->name, v.stored, stride);
         break;
@@ -863,6 +910,9 @@ Transfer Reader::read(CompressedTransfer* compressed_out) {
     throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
                            "are analytic",
                            v.vertices - v.stored, v.vertices));
+  if (lightmap && previous < kLightmapTexels)
+    throw fail("bad section table: no 'lightmap layout' and 'lightmap texels' sections, but the header's flags say the "
+               "file is a lightmap");
   if (compressed) {
     if (previous < kCompressedCoeffs) throw fail("bad section table: no 'compressed coefficients' section");
     if (v.glossy && previous < kCompressedGlossy)
@@ -907,6 +957,65 @@ CompressedTransfer read_compressed_transfer(const std::string& path) {
   CompressedTransfer c;
   Reader(path).read(&c);
   return c;
+}
+
+// ---- lightmaps (sections 10 and 11; docs/FORMAT.md "Lightmap transfer") -------------
+
+std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
+  std::vector<TransferSection> s = transfer_sections(t.transfer);
+  for (const std::uint32_t kind : {kLightmapLayout, kLightmapTexels}) {
+    const KindInfo& k = *kind_info(kind);
+    const std::uint64_t count = kind == kLightmapLayout ? kLightmapLayoutWords : t.layout.texels.size();
+    s.push_back({kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex, type_name(k.type)});
+  }
+  return s;
+}
+
+std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_of(transfer_sections(t)); }
+
+void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t) {
+  if (auto p = lightmap_problem(t); !p.empty()) throw Error(path + ": cannot write this lightmap: " + p);
+  if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
+  const std::vector<TransferSection> sections = transfer_sections(t);
+  unsigned char header[kHeaderSize];
+  fill_header(header, t.transfer, kTransferFormatVersion, kFlagLightmap, sections.size());
+  const std::vector<std::uint32_t> mask = analytic_mask(t.transfer);
+  const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
+                                                      std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
+  std::vector<RawSection> raw;
+  for (const auto& s : sections) {
+    const void* data = s.kind == kAnalyticMask     ? mask.data()
+                       : s.kind == kLightmapLayout ? static_cast<const void*>(layout)
+                       : s.kind == kLightmapTexels ? static_cast<const void*>(t.layout.texels.data())
+                                                   : section_array(t.transfer, s.kind).first;
+    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
+  }
+  write_file(path, header, raw);
+}
+
+LightmapTransfer read_lightmap_transfer(const std::string& path) {
+  LightmapTransfer t;
+  Reader r(path);
+  t.transfer = r.read(nullptr, &t.layout);
+  if (auto p = lightmap_problem(t); !p.empty()) throw r.fail("bad lightmap: " + p);
+  return t;
+}
+
+bool transfer_is_lightmap(const std::string& path) {
+  Reader r(path);
+  if (r.read_basis() != kBasisSH) return false;
+  return r.version() >= 5 && (r.flags() & kFlagLightmap) != 0;
+}
+
+std::string describe_transfer(const LightmapTransfer& t) {
+  const LightmapLayout& l = t.layout;
+  const std::size_t n = l.texels.size();
+  const std::uint64_t size = transfer_file_size(t);
+  return fmt::format("lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}% of the atlas), {} analytic "
+                     "(no row stored), {:.1f} bytes per covered texel, scene hash {:016x}\n",
+                     l.width, l.height, l.uv_set, l.uv_set, n, 100.0 * double(n) / (double(l.width) * l.height),
+                     t.transfer.analytic_vertices(), n ? double(size) / double(n) : 0.0, l.scene_hash) +
+         describe_transfer(t.transfer);
 }
 
 // ---- checking and describing ----------------------------------------------------------

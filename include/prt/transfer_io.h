@@ -24,10 +24,10 @@ namespace prt {
 
 // The newest version of SH transfer files (docs/FORMAT.md); this prt reads
 // it and every earlier one (version 1: every vertex stored). Each file is
-// written in the oldest version that holds it: compressed transfers 4,
+// written in the oldest version that holds it: lightmaps 5, compressed transfers 4,
 // glossy ones 3, the others 2. Wavelet transfers are written as version
 // kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 4;
+inline constexpr std::uint32_t kTransferFormatVersion = 5;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // The version write_transfer writes for `t`: 3 with glossy matrices, 2
@@ -119,7 +119,7 @@ std::string_view basis_name(TransferBasis b);  // "sh", "wavelet"
 // verify the checksum or the sections (read_transfer / read_wavelet_transfer
 // do). Throws prt::Error "PATH: problem".
 TransferBasis read_transfer_basis(const std::string& path);
-// The same header checks; returns the file's format version (1 to 4 for SH).
+// The same header checks; returns the file's format version (1 to 5 for SH).
 std::uint32_t read_transfer_version(const std::string& path);
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
@@ -152,10 +152,24 @@ std::string describe_transfer(const WaveletTransfer& t);
 std::vector<TransferSection> transfer_sections(const WaveletTransfer& t);
 std::uint64_t transfer_file_size(const WaveletTransfer& t);
 
-// ---- lightmap transfers (docs/FORMAT.md, "Lightmap transfer") ----------------
+// ---- lightmap transfers (version 5, flag bit 3; docs/FORMAT.md, "Lightmap transfer") ----
+// An SH transfer whose rows are a lightmap's covered texels, with two more
+// sections: the layout (width, height, UV set, scene hash) and the covered
+// texels' indices. Written through write_atomically; throws prt::Error
+// "PATH: cannot write this lightmap: PROBLEM" (lightmap_problem) before
+// writing anything.
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
+// Reads one with read_transfer's checks plus the layout's (lightmap_problem);
+// throws prt::Error "PATH: problem", also for a per-vertex file (and
+// read_transfer refuses a lightmap, naming it).
 LightmapTransfer read_lightmap_transfer(const std::string& path);
+// Whether the file at `path` holds a lightmap (header checks only; false for
+// wavelet files).
 bool transfer_is_lightmap(const std::string& path);
+std::vector<TransferSection> transfer_sections(const LightmapTransfer& t);
 std::uint64_t transfer_file_size(const LightmapTransfer& t);
+// The atlas, covered and analytic texels and bytes per covered texel, then
+// describe_transfer of the rows.
+std::string describe_transfer(const LightmapTransfer& t);
 
 }  // namespace prt

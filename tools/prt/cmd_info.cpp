@@ -120,6 +120,24 @@ int run_info(const InfoArgs& a) {
       fmt::print("{}: {}", a.file, describe_transfer(w));
     return 0;
   }
+  if (transfer_is_lightmap(a.file)) {
+    const LightmapTransfer l = read_lightmap_transfer(a.file);  // validates everything
+    if (a.json) {
+      nlohmann::ordered_json j = to_json(a.file, l.transfer, kTransferFormatVersion);
+      j["sections"] = sections_json(transfer_sections(l));
+      j["file_bytes"] = transfer_file_size(l);
+      j["lightmap"] = {{"width", l.layout.width},
+                       {"height", l.layout.height},
+                       {"uv_set", l.layout.uv_set},
+                       {"covered_texels", l.layout.texels.size()},
+                       {"analytic_texels", l.transfer.analytic_vertices()},
+                       {"scene_hash", fmt::format("{:016x}", l.layout.scene_hash)}};
+      fmt::print("{}\n", j.dump(2));
+    } else {
+      fmt::print("{}: {}", a.file, describe_transfer(l));
+    }
+    return 0;
+  }
   if (transfer_is_compressed(a.file)) {
     const CompressedTransfer c = read_compressed_transfer(a.file);  // validates everything
     if (a.json)
