@@ -1,0 +1,152 @@
+// SH lightmaps through the command line and their files (docs/LIGHTMAPS.md,
+// docs/FORMAT.md "Lightmap transfer"): precompute, relight to an RGBA EXR,
+// the reference at the same texels, compare; refusals.
+#include "test_child.h"
+#include "test_files.h"
+#include "test_meshes.h"
+
+#include <prt/envmap.h>
+#include <prt/error.h>
+#include <prt/lightmap.h>
+#include <prt/scene.h>
+#include <prt/transfer_io.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+namespace prt {
+namespace {
+
+using namespace prt::test;
+
+const std::string kModels = PRT_SOURCE_DIR "/models";
+
+std::string write_constant_map(const TempDir& dir, float value) {
+  const std::string path = dir.file("constant.exr");
+  write_image(path, 64, 32, std::vector<float>(64 * 32 * 3, value));
+  return path;
+}
+
+// The relative RMS error line of prt compare's noise-corrected output.
+double noise_corrected(const std::string& out) {
+  const nlohmann::json j = nlohmann::json::parse(out);
+  return j["rel_rms_noise_corrected"].get<double>();
+}
+
+TEST(LightmapCli, PrecomputeRelightReferenceCompare) {
+  // Under constant light SH transfer is exact in any band count: the
+  // lightmap and the Monte Carlo truth at the same texels differ by the
+  // transfer's quadrature (256 rays) and the bounce's texel lookup only.
+  TempDir dir;
+  const std::string scene = kModels + "/wall-on-floor.gltf", env = write_constant_map(dir, 1.0f);
+  for (const char* mode : {"shadowed", "interreflected"}) {
+    const Result p = run_prt(dir, {"precompute", scene, "--lightmap", "48x48", "--mode", mode, "--samples", "256", "-q",
+                                   "-o", dir.file("s.prt"), "--ao-map", dir.file("ao.exr")});
+    ASSERT_EQ(p.code, 0) << describe_run(p);
+    const Result r = run_prt(dir, {"relight", scene, dir.file("s.prt"), env, "-q", "-o", dir.file("lm.exr")});
+    ASSERT_EQ(r.code, 0) << describe_run(r);
+    const Result ref = run_prt(dir, {"reference", scene, env, "--lightmap", "48x48", "--mode", mode, "--samples",
+                                     "512", "-q", "-o", dir.file("ref.exr")});
+    ASSERT_EQ(ref.code, 0) << describe_run(ref);
+    const Result c = run_prt(dir, {"compare", dir.file("lm.exr"), dir.file("ref.exr"), "--json"});
+    ASSERT_EQ(c.code, 0) << describe_run(c);
+    // 1024-ray quadrature is ~0.5%; 256 rays ~1%; the bounce lookup at this
+    // size ~1.5% (tests/test_lightmap.cpp); 4% is their sum with margin.
+    EXPECT_LT(noise_corrected(c.out), 0.04) << mode << "\n" << c.out;
+
+    // The layout: A = 1 exactly at the covered texels the file lists; gutters A = 0.
+    const LightmapTransfer lt = read_lightmap_transfer(dir.file("s.prt"));
+    const RgbaImage img = read_exr_rgba(dir.file("lm.exr"));
+    ASSERT_EQ(img.width, 48);
+    ASSERT_EQ(img.height, 48);
+    std::size_t covered = 0, gutter = 0;
+    for (std::size_t i = 0; i < 48u * 48u; ++i) {
+      if (img.rgba[4 * i + 3] == 1.0f) ++covered;
+      if (img.rgba[4 * i + 3] == 0.0f && img.rgba[4 * i] > 0.0f) ++gutter;
+      for (int ch = 0; ch < 3; ++ch) EXPECT_TRUE(std::isfinite(img.rgba[4 * i + std::size_t(ch)]));
+    }
+    EXPECT_EQ(covered, lt.layout.texels.size());
+    EXPECT_GT(gutter, 0u);
+    for (std::uint32_t t : lt.layout.texels) EXPECT_EQ(img.rgba[4 * std::size_t(t) + 3], 1.0f);
+    EXPECT_EQ(read_exr_rgba(dir.file("ao.exr")).width, 48);
+  }
+}
+
+TEST(LightmapCli, FilesRoundTripAndReadersTellThemApart) {
+  TempDir dir;
+  const std::string scene = kModels + "/wall-on-floor.gltf";
+  ASSERT_EQ(run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--samples", "64", "-q", "-o",
+                          dir.file("a.prt")})
+                .code,
+            0);
+  const LightmapTransfer t = read_lightmap_transfer(dir.file("a.prt"));
+  EXPECT_GT(t.transfer.analytic_vertices(), 0u);  // the floor's open corners see nothing
+  write_lightmap_transfer(dir.file("b.prt"), t);
+  EXPECT_EQ(read_file(dir.file("a.prt")), read_file(dir.file("b.prt")));
+  EXPECT_EQ(transfer_file_size(t), std::filesystem::file_size(dir.file("a.prt")));
+  EXPECT_TRUE(transfer_is_lightmap(dir.file("a.prt")));
+  try {
+    read_transfer(dir.file("a.prt"));
+    FAIL() << "read_transfer read a lightmap";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds a lightmap"), std::string::npos) << e.what();
+  }
+  // An inconsistent lightmap is refused before anything is written.
+  LightmapTransfer bad = t;
+  std::swap(bad.layout.texels[0], bad.layout.texels[1]);
+  EXPECT_THROW(write_lightmap_transfer(dir.file("c.prt"), bad), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("c.prt")));
+  // A truncated file names its problem.
+  const std::string bytes = read_file(dir.file("a.prt"));
+  write_file(dir.file("t.prt"), bytes.substr(0, bytes.size() - 100));
+  EXPECT_THROW(read_lightmap_transfer(dir.file("t.prt")), Error);
+  // A per-vertex file is not a lightmap.
+  test::write_off(dir.file("q.off"), test::quad(2));
+  ASSERT_EQ(run_prt(dir, {"precompute", dir.file("q.off"), "-o", dir.file("v.prt"), "-q", "--samples", "16"}).code, 0);
+  EXPECT_FALSE(transfer_is_lightmap(dir.file("v.prt")));
+  EXPECT_THROW(read_lightmap_transfer(dir.file("v.prt")), Error);
+}
+
+TEST(LightmapCli, RefusalsNameTheProblem) {
+  TempDir dir;
+  const std::string room = kModels + "/room.gltf", wall = kModels + "/wall-on-floor.gltf";
+  const std::string env = write_constant_map(dir, 1.0f);
+  // Option values: exit 2 before anything is read.
+  Result r = run_prt(dir, {"precompute", room, "--lightmap", "0x16", "-o", dir.file("o.prt")});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("WxH"), std::string::npos) << r.err;
+  r = run_prt(dir, {"precompute", room, "--uv", "1", "-o", dir.file("o.prt")});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  // A mesh format without UVs, and an OBJ without vt.
+  test::write_off(dir.file("q.off"), test::quad(2));
+  r = run_prt(dir, {"precompute", dir.file("q.off"), "--lightmap", "16x16", "-o", dir.file("o.prt")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("glTF"), std::string::npos) << r.err;
+  write_file(dir.file("novt.obj"), "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n");
+  r = run_prt(dir, {"precompute", dir.file("novt.obj"), "--lightmap", "16x16", "-o", dir.file("o.prt")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("Lightmap Pack"), std::string::npos) << r.err;
+  // A UV set whose charts overlap (TEXCOORD_0 of the room tiles its texture).
+  r = run_prt(dir, {"precompute", room, "--lightmap", "64x64", "--uv", "0", "-o", dir.file("o.prt")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_TRUE(r.err.find("overlap") != std::string::npos || r.err.find("leaves [0, 1]") != std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o.prt")));
+  // A lightmap used with another scene.
+  ASSERT_EQ(run_prt(dir, {"precompute", wall, "--lightmap", "16x16", "--samples", "16", "-q", "-o", dir.file("w.prt")})
+                .code,
+            0);
+  r = run_prt(dir, {"relight", room, dir.file("w.prt"), env, "-o", dir.file("o.exr")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("another scene"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o.exr")));
+  r = run_prt(dir, {"relight", wall, dir.file("w.prt"), env, "-o", dir.file("o.csv")});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find(".exr"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace prt
