@@ -13,6 +13,7 @@
 
 #include "egl_context.h"
 #include "gl_util.h"
+#include "lightmap_pass.h"
 #include "shaders.h"
 
 #include <fmt/format.h>
@@ -204,6 +205,9 @@ struct Renderer::Impl {
 
   GLsizei index_count = 0;
   std::size_t vertex_count = 0;
+  // A scene and its lightmap (set_scene): drawn by the lightmap pass instead of the mesh.
+  std::unique_ptr<detail::LightmapPass> lightmap;
+  bool lightmap_detail = true;
   // This OpenGL's limits (set_mesh), and the vertices of one compute
   // dispatch: relight() shades the mesh in runs of `chunk` vertices, each
   // binding its range of the per-vertex storage buffers, so that no binding
@@ -225,7 +229,7 @@ struct Renderer::Impl {
     if (!external) egl.make_current();
   }
   // For the contract checks (PRT_CHECK): what the caller has uploaded.
-  bool has_mesh() const { return index_count > 0; }
+  bool has_mesh() const { return index_count > 0 || lightmap != nullptr; }
   bool has_sh_transfer() const { return bands > 0; }
 
   void check_current_version();
@@ -352,6 +356,7 @@ void Renderer::Impl::resize(int w, int h) {
 }
 
 void Renderer::Impl::delete_mesh_objects() {
+  lightmap.reset();
   const GLuint buffers[] = {position_buffer, index_buffer, transfer.buffer, direct.buffer,
                             glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
                             ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
@@ -868,6 +873,31 @@ void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_c
   m.have_lighting = false;
 }
 
+void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
+  if (const std::string p = lightmap_problem(t); !p.empty()) throw Error("inconsistent lightmap: " + p);
+  check_bands(t.transfer);
+  const LightmapTexels texels = lightmap_texels(scene, t.layout.width, t.layout.height, t.layout.uv_set,
+                                                t.transfer.vertex_colors ? nullptr : &t.transfer.albedo);
+  check_matches(t, texels, "lightmap");
+  Impl& m = *impl_;
+  m.make_current();
+  clear_mesh();
+  m.limits = gl::limits();
+  m.lightmap = std::make_unique<detail::LightmapPass>(scene, texels, t, m.limits);
+  m.bands = m.band_limit = t.transfer.bands;
+  m.channels = t.transfer.channels;
+  m.shading = Shading::Transfer;
+}
+
+void Renderer::set_lightmap_detail(bool on) { impl_->lightmap_detail = on; }
+
+std::vector<glm::vec3> Renderer::lightmap_radiance() const {
+  const Impl& m = *impl_;
+  PRT_CHECK(m.lightmap != nullptr);
+  m.make_current();
+  return m.lightmap->radiance();
+}
+
 void Renderer::clear_mesh() {
   Impl& m = *impl_;
   m.make_current();
@@ -969,6 +999,7 @@ int Renderer::band_limit() const { return impl_->band_limit; }
 
 bool Renderer::has_shading(Shading s) const {
   const Impl& m = *impl_;
+  if (m.lightmap) return s == Shading::Transfer || (s == Shading::Direct && m.lightmap->has_direct());
   if (m.index_count == 0) return false;
   switch (s) {
     case Shading::Transfer:
@@ -1157,7 +1188,15 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }
 
-  if (m.index_count > 0) {
+  if (m.lightmap) {
+    const double dist = glm::length(fwd);
+    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
+    const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
+    glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.light_buffer);
+    m.lightmap->relight(m.band_limit, m.shading == Shading::Direct);
+    glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    m.lightmap->draw(glm::mat4(proj * view), m.lightmap_detail);
+  } else if (m.index_count > 0) {
     // Near/far planes from the distance to the target, generous on both sides.
     const double dist = glm::length(fwd);
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);

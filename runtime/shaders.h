@@ -10,4 +10,7 @@ extern const char* const background_vert_glsl;
 extern const char* const background_frag_glsl;
 extern const char* const attribute_vert_glsl;
 extern const char* const display_frag_glsl;
+extern const char* const lightmap_comp_glsl;
+extern const char* const lightmap_vert_glsl;
+extern const char* const lightmap_frag_glsl;
 }  // namespace prt::shaders

@@ -43,7 +43,9 @@
 #include <prt/compressed_transfer.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
+#include <prt/scene.h>
 #include <prt/transfer.h>
 
 #include <glm/mat3x3.hpp>
@@ -197,6 +199,22 @@ class Renderer {
   // on the CPU): Shading::VertexColors (after set_vertex_colors) and Lambert
   // (albedo: `albedo`, or the mesh's colours when vertex_colors) are available.
   void set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors = false);
+  // Uploads a scene and its SH lightmap (prt/lightmap.h; docs/RUNTIME.md
+  // "Lightmaps"), replacing any mesh: each frame the covered texels are
+  // relit on the GPU (their rows dotted with the lighting of set_lighting,
+  // analytic texels' rows evaluated here once) into a lightmap image with
+  // dilated gutters, and the scene is drawn sampling it bilinearly at its
+  // lightmap UVs; with set_lightmap_detail (the default) each fragment takes
+  // its material's albedo (base colour factor x texture at TEXCOORD_0) in
+  // place of its texel's. Shadings: Transfer, and Direct for an
+  // interreflected lightmap. Throws prt::Error when the lightmap was not
+  // computed for `scene` (check_matches) or its rows exceed this OpenGL's
+  // storage block size.
+  void set_scene(const Scene& scene, const LightmapTransfer& lightmap);
+  void set_lightmap_detail(bool on);
+  // The covered texels' radiance of the last frame drawn (set_scene only),
+  // in texel order: relight_lightmap's up to float rounding.
+  std::vector<glm::vec3> lightmap_radiance() const;
   void clear_mesh();
   int bands() const;  // of the uploaded SH transfer; 0 without one
   // Bytes of transfer data on the GPU: the stored rows of the transfer and

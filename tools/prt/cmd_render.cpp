@@ -72,7 +72,9 @@ int run_render(const RenderArgs& a) {
   cam.fov_deg = a.fov;
 
   Renderer renderer;
-  if (!a.quiet) fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(mesh), describe(env), renderer.device());
+  if (!a.quiet)
+    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", scene.world ? describe(*scene.world) : describe(mesh), describe(env),
+               renderer.device());
   renderer.set_environment(env);
   std::optional<WaveletPlayback> playback;
   if (wavelet) {
@@ -85,16 +87,7 @@ int run_render(const RenderArgs& a) {
     if (look.shading == Shading::Direct) check_direct(t, a.transfer, "--shading direct");
     if (look.shading == Shading::Glossy && !glossy)
       throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
-    try {  // refused (exit 1) when it exceeds this OpenGL's limits: the message names the limit; name the file
-      if (scene.compressed)
-        renderer.set_mesh(mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
-      else
-        renderer.set_mesh(mesh, t);
-    } catch (const NoGlContext&) {
-      throw;
-    } catch (const Error& e) {
-      throw Error(a.transfer + ": " + e.what());
-    }
+    upload(renderer, scene, a.transfer);
     release_uploaded(scene);  // the renderer has them: `mesh` and `t` keep their header fields only
     renderer.set_band_limit(look.bands);
     try {  // refused (exit 1) when the file lacks what the shading needs: name it

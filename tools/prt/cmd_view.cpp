@@ -229,8 +229,7 @@ class Viewer {
         wavelet_coeffs_(have_wavelet ? int(wavelet::cube_size(scene.wavelet.cube_res)) : 0),
         renderer_(renderer),
         rotation_(sh_bands_, glm::dmat3(1.0)) {
-    if (have_sh && scene.compressed) renderer.set_mesh(scene.mesh, *scene.compressed);
-    else if (have_sh) renderer.set_mesh(scene.mesh, t_);
+    if (have_sh) upload(renderer, scene, a.transfer);
     else renderer.set_mesh(scene.mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
     renderer.set_environment(scene.env);
     if (have_wavelet) playback_.emplace(scene.wavelet, scene.env);

@@ -59,6 +59,21 @@ void load_transfer(Scene& s, const std::string& transfer, int max_bands, const c
                             transfer, s.transfer.bands, command, max_bands));
 }
 
+void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_path) {
+  try {  // refused (exit 1) when it does not fit the scene or exceeds this OpenGL's limits: name the file
+    if (scene.lightmap)
+      renderer.set_scene(*scene.world, *scene.lightmap);
+    else if (scene.compressed)
+      renderer.set_mesh(scene.mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
+    else
+      renderer.set_mesh(scene.mesh, scene.transfer);
+  } catch (const NoGlContext&) {
+    throw;
+  } catch (const Error& e) {
+    throw Error(transfer_path + ": " + e.what());
+  }
+}
+
 void release_uploaded(Scene& s) {
   PRT_CHECK(s.basis == TransferBasis::SH);
   s.mesh.positions = {};
@@ -67,6 +82,8 @@ void release_uploaded(Scene& s) {
   s.mesh.colors = {};
   s.transfer = header_only(s.transfer);
   s.compressed.reset();
+  s.lightmap.reset();
+  s.world.reset();
 }
 
 void check_direct(const Transfer& t, const std::string& path, const std::string& option) {
@@ -79,8 +96,17 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
                  const char* command, bool allow_wavelet, bool allow_compressed) {
   Scene s;
-  s.mesh = load_mesh(mesh);
-  load_transfer(s, transfer, max_bands, command, allow_wavelet, allow_compressed);
+  if (transfer_is_lightmap(transfer)) {  // a scene and its lightmap (docs/LIGHTMAPS.md)
+    s.lightmap = read_lightmap_transfer(transfer);
+    s.world = prt::load_scene(mesh);
+    s.mesh = s.world->mesh;
+    s.transfer = header_only(s.lightmap->transfer);
+    if (max_bands > 0 && s.transfer.bands > max_bands)
+      throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, s.transfer.bands, command, max_bands));
+  } else {
+    s.mesh = load_mesh(mesh);
+    load_transfer(s, transfer, max_bands, command, allow_wavelet, allow_compressed);
+  }
   s.env = load_envmap(env);
   require_finite(s.env);
   return s;

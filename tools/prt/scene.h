@@ -3,7 +3,10 @@
 #pragma once
 
 #include <prt/envmap.h>
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
+#include <prt/render.h>
+#include <prt/scene.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
@@ -24,8 +27,16 @@ struct Scene {
   Transfer transfer;        // basis SH (compressed: the header fields only; its arrays are in compressed->transfer)
   std::optional<CompressedTransfer> compressed;  // a file from prt compress (when the command takes them)
   WaveletTransfer wavelet;  // basis Wavelet
+  // A lightmap (prt precompute SCENE --lightmap): the scene (its mesh is
+  // also `mesh`) and the lightmap; `transfer` then holds its header fields.
+  std::optional<prt::Scene> world;
+  std::optional<LightmapTransfer> lightmap;
   EnvMap env;
 };
+
+// Uploads the scene's transfer to `renderer` (set_scene, or set_mesh of the
+// compressed or plain transfer); an error names `transfer_path`.
+void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_path);
 
 // Throws prt::Error naming the file at fault; max_bands > 0 also refuses an
 // SH transfer with more bands, naming `command` in the message. Wavelet

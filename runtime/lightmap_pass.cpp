@@ -1,0 +1,213 @@
+// The lightmap pass (lightmap_pass.h; shaders/lightmap.comp.glsl,
+// lightmap.vert.glsl, lightmap.frag.glsl).
+#include "lightmap_pass.h"
+
+#include <prt/error.h>
+#include <prt/transfer.h>
+
+#include "shaders.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+
+namespace prt::detail {
+
+namespace {
+
+GLuint make_texture(int width, int height, const float* rgba, bool repeat) {
+  GLuint tex = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &tex);
+  glTextureStorage2D(tex, 1, GL_RGBA32F, width, height);
+  if (rgba) glTextureSubImage2D(tex, 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, rgba);
+  glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(tex, GL_TEXTURE_WRAP_S, repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  glTextureParameteri(tex, GL_TEXTURE_WRAP_T, repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+  return tex;
+}
+
+// The texels the image pass writes: every covered texel from itself, then
+// `rings` rings of gutter, each uncovered texel next to a written one
+// copying the source of its first written 8-neighbour (row by row), marked
+// with the top bit. prt::lightmap_image fills gutters with the neighbours'
+// mean instead; both keep A = 0 there and bilinear filtering off black.
+std::vector<std::uint32_t> image_writes(const LightmapLayout& l, int rings) {
+  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height);
+  constexpr std::uint32_t kNone = 0xffffffffu;
+  std::vector<std::uint32_t> source(W * H, kNone), out;
+  out.reserve(l.texels.size() * 2 * 2);
+  for (std::size_t i = 0; i < l.texels.size(); ++i) {
+    source[l.texels[i]] = std::uint32_t(i);
+    out.push_back(l.texels[i]);
+    out.push_back(std::uint32_t(i));
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ring;
+  for (int r = 0; r < rings; ++r) {
+    ring.clear();
+    for (std::size_t y = 0; y < H; ++y)
+      for (std::size_t x = 0; x < W; ++x) {
+        if (source[y * W + x] != kNone) continue;
+        std::uint32_t from = kNone;
+        for (int dy = -1; dy <= 1 && from == kNone; ++dy)
+          for (int dx = -1; dx <= 1 && from == kNone; ++dx) {
+            const long long xx = (long long)x + dx, yy = (long long)y + dy;
+            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H) continue;
+            from = source[std::size_t(yy) * W + std::size_t(xx)];
+          }
+        if (from != kNone) ring.emplace_back(std::uint32_t(y * W + x), from & 0x7fffffffu);
+      }
+    if (ring.empty()) break;
+    for (const auto& [texel, from] : ring) {
+      source[texel] = from | 0x80000000u;
+      out.push_back(texel);
+      out.push_back(from | 0x80000000u);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, const LightmapTransfer& t,
+                           const gl::Limits& limits) {
+  const Transfer& tr = t.transfer;
+  bands_ = tr.bands;
+  channels_ = tr.channels;
+  width_ = t.layout.width;
+  height_ = t.layout.height;
+  texels_ = t.layout.texels.size();
+  work_groups_ = std::max<std::uint64_t>(limits.work_groups, 1);
+  const Mesh points = texel_points(texels);
+  const std::size_t row_bytes = tr.stride() * sizeof(float);
+  if (texels_ * row_bytes > limits.storage_block || texels_ * 16 > limits.storage_block)
+    throw Error(fmt::format("the lightmap's {} texels x {} bytes of transfer exceed this OpenGL's storage block size "
+                            "({} MB, GL_MAX_SHADER_STORAGE_BLOCK_SIZE): use a smaller atlas or fewer bands",
+                            texels_, row_bytes, limits.storage_block >> 20));
+  // Dense rows: analytic texels evaluated from their normal and albedo here.
+  const std::vector<float> rows = dense_transfer(tr, points, false);
+  rows_ = gl::make_buffer(rows.data(), rows.size() * sizeof(float));
+  bytes_ = rows.size() * sizeof(float);
+  if (!tr.direct.empty()) {
+    const std::vector<float> d = dense_transfer(tr, points, true);
+    direct_ = gl::make_buffer(d.data(), d.size() * sizeof(float));
+    bytes_ += d.size() * sizeof(float);
+  }
+  radiance_ = gl::make_buffer(nullptr, std::max<std::size_t>(texels_, 1) * 16);
+  const std::vector<std::uint32_t> writes = image_writes(t.layout, 4);
+  writes_ = writes.size() / 2;
+  writes_buffer_ = gl::make_buffer(writes.data(), writes.size() * sizeof(std::uint32_t));
+  lightmap_ = make_texture(width_, height_, nullptr, false);
+  const float zero[4] = {0, 0, 0, 0};
+  glClearTexImage(lightmap_, 0, GL_RGBA, GL_FLOAT, zero);
+  const std::vector<glm::vec4> albedo = lightmap_image(t.layout, texels.albedo);
+  texel_albedo_ = make_texture(width_, height_, &albedo[0].x, false);
+  for (const Texture& tex : scene.textures) textures_.push_back(make_texture(tex.width, tex.height, &tex.texels[0].x, true));
+
+  // Geometry: positions, the base colour's UVs (set 0, or zeros), the lightmap UVs.
+  const Mesh& mesh = scene.mesh;
+  const std::size_t V = mesh.vertex_count();
+  positions_ = gl::make_buffer(mesh.positions.data(), V * sizeof(glm::vec3));
+  const std::vector<glm::vec2> none(scene.uv_sets.empty() ? V : 0, glm::vec2(0.0f));
+  uv_base_ = gl::make_buffer(scene.uv_sets.empty() ? none.data() : scene.uv_sets[0].data(), V * sizeof(glm::vec2));
+  uv_lightmap_ = gl::make_buffer(scene.uv_sets.at(std::size_t(t.layout.uv_set)).data(), V * sizeof(glm::vec2));
+  indices_ = gl::make_buffer(mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+  glCreateVertexArrays(1, &vao_);
+  const GLuint buffers[3] = {positions_, uv_base_, uv_lightmap_};
+  const GLint sizes[3] = {3, 2, 2};
+  for (GLuint a = 0; a < 3; ++a) {
+    glVertexArrayVertexBuffer(vao_, a, buffers[a], 0, GLsizei(sizes[a] * sizeof(float)));
+    glVertexArrayAttribFormat(vao_, a, sizes[a], GL_FLOAT, GL_FALSE, 0);
+    glVertexArrayAttribBinding(vao_, a, a);
+    glEnableVertexArrayAttrib(vao_, a);
+  }
+  glVertexArrayElementBuffer(vao_, indices_);
+  for (const SceneObject& o : scene.objects) {
+    Batch b;
+    b.first = GLsizei(o.first_triangle * 3);
+    b.count = GLsizei(o.triangle_count * 3);
+    if (o.material >= 0) {
+      const Material& m = scene.materials[std::size_t(o.material)];
+      b.base_color = m.base_color;
+      b.texture = m.texture_uv_set == 0 ? m.base_color_texture : -1;  // the pass samples textures at set 0
+    }
+    batches_.push_back(b);
+  }
+  draw_program_ = gl::link_program(shaders::lightmap_vert_glsl, shaders::lightmap_frag_glsl, "lightmap draw");
+  gl::check_gl("uploading the lightmap");
+}
+
+LightmapPass::~LightmapPass() {
+  const GLuint buffers[] = {rows_, direct_, radiance_, writes_buffer_, positions_, uv_base_, uv_lightmap_, indices_};
+  for (GLuint b : buffers)
+    if (b) glDeleteBuffers(1, &b);
+  if (lightmap_) glDeleteTextures(1, &lightmap_);
+  if (texel_albedo_) glDeleteTextures(1, &texel_albedo_);
+  if (!textures_.empty()) glDeleteTextures(GLsizei(textures_.size()), textures_.data());
+  if (vao_) glDeleteVertexArrays(1, &vao_);
+  if (draw_program_) glDeleteProgram(draw_program_);
+  for (const auto& [key, p] : programs_) glDeleteProgram(p);
+}
+
+GLuint LightmapPass::program(int pass, int coeffs) {
+  const auto key = std::make_pair(pass, pass == 0 ? coeffs : 0);
+  if (auto it = programs_.find(key); it != programs_.end()) return it->second;
+  const std::string defines = fmt::format("#define PASS {}\n#define COEFFS {}\n#define NC {}\n#define CHANNELS {}\n", pass,
+                                          key.second, bands_ * bands_, channels_);
+  return programs_[key] = gl::link_compute(shaders::lightmap_comp_glsl, "lightmap relight", defines);
+}
+
+void LightmapPass::relight(int band_limit, bool direct) {
+  const auto dispatch = [&](std::size_t count) {
+    glUniform1ui(0, GLuint(count));
+    glUniform1ui(1, GLuint(width_));
+    const std::size_t groups = (count + 63) / 64;
+    for (std::size_t g = 0; g < groups; g += work_groups_) {
+      glUniform1ui(2, GLuint(g * 64));
+      glDispatchCompute(GLuint(std::min<std::size_t>(work_groups_, groups - g)), 1, 1);
+    }
+  };
+  glUseProgram(program(0, band_limit * band_limit));
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, direct && direct_ ? direct_ : rows_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
+  dispatch(texels_);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glUseProgram(program(1, 0));
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, writes_buffer_);
+  glBindImageTexture(0, lightmap_, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  dispatch(writes_);
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  gl::check_gl("the lightmap pass");
+}
+
+void LightmapPass::draw(const glm::mat4& view_proj, bool detail) {
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  glUseProgram(draw_program_);
+  glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
+  glUniform1i(6, detail ? 1 : 0);
+  glBindTextureUnit(0, lightmap_);
+  glBindTextureUnit(1, texel_albedo_);
+  glBindVertexArray(vao_);
+  for (const Batch& b : batches_) {
+    glUniform4fv(4, 1, &b.base_color[0]);
+    glUniform1i(5, b.texture >= 0 ? 1 : 0);
+    if (b.texture >= 0) glBindTextureUnit(2, textures_[std::size_t(b.texture)]);
+    glDrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(std::uintptr_t(b.first) * sizeof(std::uint32_t)));
+  }
+  gl::check_gl("drawing the lightmapped scene");
+}
+
+std::vector<glm::vec3> LightmapPass::radiance() const {
+  std::vector<glm::vec4> r(texels_);
+  if (texels_) glGetNamedBufferSubData(radiance_, 0, GLsizeiptr(texels_ * 16), r.data());
+  std::vector<glm::vec3> out(texels_);
+  for (std::size_t i = 0; i < texels_; ++i) out[i] = glm::vec3(r[i]);
+  return out;
+}
+
+}  // namespace prt::detail

@@ -1,0 +1,68 @@
+// Private to prt::runtime: the lightmap pass (docs/RUNTIME.md, "Lightmaps").
+// A scene baked into an SH lightmap (prt/lightmap.h): every frame its covered
+// texels are relit on the GPU into a lightmap image (covered texels and their
+// gutters), then the scene's triangles are drawn sampling it at their
+// lightmap UVs. Renderer::set_scene owns one.
+#pragma once
+
+#include <prt/lightmap.h>
+#include <prt/scene.h>
+
+#include "gl_util.h"
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <map>
+#include <vector>
+
+namespace prt::detail {
+
+class LightmapPass {
+ public:
+  // Uploads the scene and the lightmap (the caller has run check_matches
+  // with `texels`). Throws prt::Error when the rows exceed this OpenGL's
+  // storage block size (limits.storage_block).
+  LightmapPass(const Scene& scene, const LightmapTexels& texels, const LightmapTransfer& t, const gl::Limits& limits);
+  ~LightmapPass();
+  LightmapPass(const LightmapPass&) = delete;
+  LightmapPass& operator=(const LightmapPass&) = delete;
+
+  int bands() const { return bands_; }
+  int channels() const { return channels_; }
+  bool has_direct() const { return direct_ != 0; }
+  std::size_t texels() const { return texels_; }
+  std::size_t bytes() const { return bytes_; }
+
+  // Relights the covered texels (the direct part with `direct`) with the
+  // lighting block at uniform binding 1 (its first band_limit^2 vec4s),
+  // and writes the lightmap image.
+  void relight(int band_limit, bool direct);
+  // Draws the scene (depth test on) into the bound framebuffer; `detail`:
+  // the materials' albedo per fragment instead of per texel.
+  void draw(const glm::mat4& view_proj, bool detail);
+  // The covered texels' radiance of the last relight (read back).
+  std::vector<glm::vec3> radiance() const;
+
+ private:
+  GLuint program(int pass, int coeffs);
+
+  int bands_ = 0, channels_ = 0, width_ = 0, height_ = 0;
+  std::size_t texels_ = 0, writes_ = 0, bytes_ = 0;
+  std::uint64_t work_groups_ = 65535;
+  GLuint rows_ = 0, direct_ = 0, radiance_ = 0, writes_buffer_ = 0;
+  GLuint lightmap_ = 0, texel_albedo_ = 0;
+  GLuint vao_ = 0, positions_ = 0, uv_base_ = 0, uv_lightmap_ = 0, indices_ = 0;
+  GLuint draw_program_ = 0;
+  std::map<std::pair<int, int>, GLuint> programs_;  // (pass, coeffs)
+  std::vector<GLuint> textures_;                     // the scene's, in its order
+  struct Batch {
+    GLsizei first = 0, count = 0;  // indices
+    glm::vec4 base_color{1.0f};
+    int texture = -1;
+  };
+  std::vector<Batch> batches_;  // one per object
+};
+
+}  // namespace prt::detail

@@ -1,0 +1,49 @@
+#version 450 core
+// Lightmap pass, relighting (runtime/lightmap_pass.cpp): one invocation per
+// covered texel (PASS 0) dots its transfer row with the rotated lighting into
+// radiance[i]; then (PASS 1) one invocation per texel written into the
+// lightmap image: the covered texels and the gutter texels, each copying the
+// radiance of its source texel (itself, or the covered texel its gutter ring
+// came from), A = 1 for covered texels and 0 for gutters (prt::lightmap_image's
+// layout). Rows are dense: [texel][channel][NC] floats, analytic texels
+// evaluated on the CPU when the scene is set. The renderer compiles one
+// program per (COEFFS, NC, CHANNELS, PASS): COEFFS = the live band limit's
+// bands^2 <= NC = the transfer's.
+layout(local_size_x = 64) in;
+
+layout(std140, binding = 1) uniform LightBlock { vec4 L[256]; };
+layout(location = 0) uniform uint u_count;
+layout(location = 1) uniform uint u_width;
+layout(location = 2) uniform uint u_first;  // runs of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT groups
+
+#if PASS == 0
+layout(std430, binding = 0) readonly buffer Rows { float rows[]; };
+layout(std430, binding = 2) writeonly buffer Radiance { vec4 radiance[]; };
+void main() {
+  const uint i = u_first + gl_GlobalInvocationID.x;
+  if (i >= u_count) return;
+  vec3 b = vec3(0.0);
+  const uint base = i * uint(CHANNELS * NC);
+  for (int k = 0; k < COEFFS; ++k) {
+#if CHANNELS == 1
+    b += rows[base + uint(k)] * L[k].rgb;
+#else
+    b += vec3(rows[base + uint(k)], rows[base + uint(NC + k)], rows[base + uint(2 * NC + k)]) * L[k].rgb;
+#endif
+  }
+  radiance[i] = vec4(b, 1.0);
+}
+#else
+layout(std430, binding = 2) readonly buffer Radiance { vec4 radiance[]; };
+// (texel y * width + x, source covered texel | 0x80000000 for a gutter)
+layout(std430, binding = 3) readonly buffer Writes { uvec2 writes[]; };
+layout(rgba32f, binding = 0) uniform writeonly image2D u_lightmap;
+void main() {
+  const uint i = u_first + gl_GlobalInvocationID.x;
+  if (i >= u_count) return;
+  const uvec2 w = writes[i];
+  const bool gutter = (w.y & 0x80000000u) != 0u;
+  const vec3 b = radiance[w.y & 0x7fffffffu].rgb;
+  imageStore(u_lightmap, ivec2(int(w.x % u_width), int(w.x / u_width)), vec4(b, gutter ? 0.0 : 1.0));
+}
+#endif

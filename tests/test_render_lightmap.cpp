@@ -1,0 +1,129 @@
+// The lightmap pass (docs/RUNTIME.md "Lightmaps"): the GPU's relit texels
+// against prt::relight_lightmap, and the frame's pixels against the CPU's
+// bilinear sample of the relit lightmap.
+#include "test_renderer.h"
+#include "test_scenes.h"
+#include "test_util.h"
+
+#include <prt/lightmap.h>
+#include <prt/precompute.h>
+#include <prt/projection.h>
+#include <prt/render.h>
+#include <prt/scene.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace prt {
+namespace {
+
+// float sums of at most 75 products on the GPU against double on the CPU:
+// 1e-4 relative to the brightest texel (float epsilon 1.2e-7 times the
+// terms and their cancellation, with margin).
+constexpr double kTexelTolerance = 1e-4;
+
+EnvMap smooth_map() {
+  return test::latlong_of(128, 64, [](const glm::dvec3& d) {
+    return glm::dvec3(1.0 + 0.8 * d.x, 0.7 + 0.5 * d.y, 0.9 - 0.6 * d.z + 0.3 * d.x * d.y);
+  });
+}
+
+// A floor quad with its own texture-coloured chart, and a box on it.
+Scene floor_and_box(bool textured) {
+  test::SceneBuilder b;
+  b.quad({-1, 0, 1}, {1, 0, 1}, {1, 0, -1}, {-1, 0, -1}, {0.02f, 0.02f, 0.48f, 0.48f});
+  b.end_object();
+  b.box({-0.3f, 0.0f, -0.3f}, {0.3f, 0.6f, 0.3f}, 8, 4);  // cells 8..13 of 4 x 4: below the floor's [0, 0.5]^2
+  b.end_object();
+  std::vector<Material> mats(2);
+  mats[0].base_color = glm::vec4(0.9f, 0.6f, 0.3f, 1.0f);
+  mats[1].base_color = glm::vec4(0.3f, 0.7f, 0.5f, 1.0f);
+  std::vector<Texture> tex;
+  if (textured) {
+    Texture t;
+    t.width = t.height = 2;
+    t.texels = {glm::vec4(1.0f), glm::vec4(0.5f), glm::vec4(0.5f), glm::vec4(1.0f)};
+    tex.push_back(t);
+    mats[0].base_color_texture = 0;
+  }
+  return b.build(mats, tex);
+}
+
+TEST(RenderLightmap, TexelsEqualRelightLightmap) {
+  REQUIRE_RENDERER(r);
+  for (TransferMode mode : {TransferMode::Shadowed, TransferMode::Interreflected}) {
+    const Scene s = floor_and_box(true);
+    LightmapTexels texels = lightmap_texels(s, 64, 64, 0);
+    move_texels_out_of_geometry(s.mesh, texels);
+    TransferOptions o;
+    o.mode = mode;
+    o.bands = 4;
+    o.samples = 128;
+    const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
+    ASSERT_GT(t.transfer.analytic_vertices(), 0u);  // both kinds of rows are checked
+    const std::vector<glm::dvec3> light = project(smooth_map(), 4);
+    r->set_scene(s, t);
+    r->set_lighting(light);
+    Camera cam;
+    cam.eye = {0, 3, 2};
+    cam.target = {0, 0, 0};
+    cam.up = {0, 1, 0};
+    r->render(cam, 64, 64);
+    test::expect_radiance_near(r->lightmap_radiance(), relight_lightmap(t, texels, light), kTexelTolerance,
+                               std::string(transfer_mode_name(mode)));
+    if (mode == TransferMode::Interreflected) {
+      r->set_shading(Shading::Direct);
+      r->render(cam, 64, 64);
+      test::expect_radiance_near(r->lightmap_radiance(), relight_direct(t.transfer, texel_points(texels), light),
+                                 kTexelTolerance, "direct");
+    }
+    EXPECT_THROW(r->set_shading(Shading::Lambert), Error);
+  }
+}
+
+TEST(RenderLightmap, PixelsAreTheBilinearLightmap) {
+  // Looking straight down at the floor beside the box: the pixel at the
+  // centre of the image shows floor point (0.6, 0, 0.6), whose lightmap UV
+  // lies between four covered texels; the CPU's bilinear sample of the
+  // relit lightmap (covered texels, no gutter involved) is what it must show.
+  REQUIRE_RENDERER(r);
+  const Scene s = floor_and_box(false);
+  const int N = 32;
+  LightmapTexels texels = lightmap_texels(s, N, N, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 128;
+  const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
+  const std::vector<glm::dvec3> light = project(smooth_map(), 3);
+  r->set_scene(s, t);
+  r->set_lighting(light);
+  r->set_lightmap_detail(false);
+  Camera cam;
+  cam.eye = {0.6, 2.0, 0.6};
+  cam.target = {0.6, 0.0, 0.6};
+  cam.up = {0, 0, -1};
+  cam.fov_deg = 20;
+  const int size = 33;  // an odd size: the centre pixel's centre is on the view axis
+  const Image img = r->render(cam, size, size);
+  const std::vector<glm::vec4> lm = lightmap_image(t.layout, relight_lightmap(t, texels, light));
+  // The floor chart maps x in [-1, 1] to u in [0.02, 0.48], z in [-1, 1] to v in [0.02, 0.48] (z = 1 at v = 0.48).
+  const double u = 0.02 + (0.6 + 1) / 2 * 0.46, v = 0.02 + (0.6 + 1) / 2 * 0.46;
+  const double x = u * N - 0.5, y = v * N - 0.5;
+  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  const double fx = x - x0, fy = y - y0;
+  const auto at = [&](int xx, int yy) { return glm::dvec3(lm[std::size_t(yy * N + xx)]); };
+  for (int dy = 0; dy <= 1; ++dy)
+    for (int dx = 0; dx <= 1; ++dx) ASSERT_EQ(lm[std::size_t((y0 + dy) * N + x0 + dx)].w, 1.0f);  // covered
+  const glm::dvec3 want = (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+                          fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+  const glm::vec3 got = img.at(size / 2, size / 2);
+  for (int c = 0; c < 3; ++c)
+    // The GPU's bilinear filter weights have 8 bits of sub-texel precision
+    // (llvmpipe, most GPUs): 1/256 of the neighbours' difference, ~1e-3 here.
+    EXPECT_NEAR(got[c], want[c], 2e-3 * std::max(1.0, want[c])) << "channel " << c;
+}
+
+}  // namespace
+}  // namespace prt
