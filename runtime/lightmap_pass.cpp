@@ -28,43 +28,19 @@ GLuint make_texture(int width, int height, const float* rgba, bool repeat) {
   return tex;
 }
 
-// The texels the image pass writes: every covered texel from itself, then
-// `rings` rings of gutter, each uncovered texel next to a written one
-// copying the source of its first written 8-neighbour (row by row), marked
-// with the top bit. prt::lightmap_image fills gutters with the neighbours'
-// mean instead; both keep A = 0 there and bilinear filtering off black.
+// The texels the image pass writes (texel, source covered texel; the top
+// bit marks a gutter): the covered texels and 4 rings of gutter
+// (lightmap_sources).
 std::vector<std::uint32_t> image_writes(const LightmapLayout& l, int rings) {
-  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height);
-  constexpr std::uint32_t kNone = 0xffffffffu;
-  std::vector<std::uint32_t> source(W * H, kNone), out;
-  out.reserve(l.texels.size() * 2 * 2);
-  for (std::size_t i = 0; i < l.texels.size(); ++i) {
-    source[l.texels[i]] = std::uint32_t(i);
-    out.push_back(l.texels[i]);
-    out.push_back(std::uint32_t(i));
-  }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> ring;
-  for (int r = 0; r < rings; ++r) {
-    ring.clear();
-    for (std::size_t y = 0; y < H; ++y)
-      for (std::size_t x = 0; x < W; ++x) {
-        if (source[y * W + x] != kNone) continue;
-        std::uint32_t from = kNone;
-        for (int dy = -1; dy <= 1 && from == kNone; ++dy)
-          for (int dx = -1; dx <= 1 && from == kNone; ++dx) {
-            const long long xx = (long long)x + dx, yy = (long long)y + dy;
-            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H) continue;
-            from = source[std::size_t(yy) * W + std::size_t(xx)];
-          }
-        if (from != kNone) ring.emplace_back(std::uint32_t(y * W + x), from & 0x7fffffffu);
-      }
-    if (ring.empty()) break;
-    for (const auto& [texel, from] : ring) {
-      source[texel] = from | 0x80000000u;
-      out.push_back(texel);
-      out.push_back(from | 0x80000000u);
+  const std::vector<std::uint32_t> source = lightmap_sources(l, rings);
+  std::vector<std::uint8_t> covered(source.size(), 0);
+  for (std::uint32_t t : l.texels) covered[t] = 1;
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < source.size(); ++i)
+    if (source[i] != kNoTexel) {
+      out.push_back(std::uint32_t(i));
+      out.push_back(source[i] | (covered[i] ? 0u : 0x80000000u));
     }
-  }
   return out;
 }
 

@@ -12,33 +12,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-// tinygltf's own includes, first with default visibility (the standard
-// library's and nlohmann::json's symbols stay what they are elsewhere).
-#include <algorithm>
-#include <array>
-#include <cassert>
-#include <cmath>
-#include <cstdint>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <functional>
-#include <limits>
-#include <map>
-#include <sstream>
-#include <string>
-#include <vector>
-
-#pragma GCC visibility push(hidden)
-#define tinygltf prt_tinygltf  // (stays defined: this file's tinygltf:: is prt_tinygltf::)
+// tinygltf's implementation, compiled here once (gltf_model.h includes its
+// declarations the same way for the other units).
 #define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_INCLUDE_JSON  // nlohmann/json.hpp is included above
-#include <tiny_gltf.h>
-#pragma GCC visibility pop
+#include "gltf_model.h"
+
+#include <fstream>
 
 namespace prt {
 
@@ -46,33 +25,6 @@ namespace {
 
 using json = nlohmann::json;
 
-// extras as tinygltf's Value (it serialises its own type).
-tinygltf::Value to_value(const json& j) {
-  switch (j.type()) {
-    case json::value_t::object: {
-      tinygltf::Value::Object o;
-      for (auto it = j.begin(); it != j.end(); ++it) o.emplace(it.key(), to_value(it.value()));
-      return tinygltf::Value(std::move(o));
-    }
-    case json::value_t::array: {
-      tinygltf::Value::Array a;
-      for (const json& e : j) a.push_back(to_value(e));
-      return tinygltf::Value(std::move(a));
-    }
-    case json::value_t::string: return tinygltf::Value(j.get<std::string>());
-    case json::value_t::boolean: return tinygltf::Value(j.get<bool>());
-    case json::value_t::number_integer:
-    case json::value_t::number_unsigned: {
-      // tinygltf's integers are int; a count beyond that is written as a number.
-      const double d = j.get<double>();
-      if (d >= double(std::numeric_limits<int>::min()) && d <= double(std::numeric_limits<int>::max()))
-        return tinygltf::Value(j.get<int>());
-      return tinygltf::Value(d);
-    }
-    case json::value_t::number_float: return tinygltf::Value(j.get<double>());
-    default: return tinygltf::Value();
-  }
-}
 
 bool has_all_normals(const Mesh& mesh) {
   if (mesh.normals.size() != mesh.vertex_count()) return false;
@@ -119,6 +71,38 @@ json extras_object(const Mesh& mesh, const Transfer& t, const GltfOptions& opts)
   return prt;
 }
 
+}  // namespace
+
+namespace detail {
+
+// extras as tinygltf's Value (it serialises its own type).
+tinygltf::Value to_value(const json& j) {
+  switch (j.type()) {
+    case json::value_t::object: {
+      tinygltf::Value::Object o;
+      for (auto it = j.begin(); it != j.end(); ++it) o.emplace(it.key(), to_value(it.value()));
+      return tinygltf::Value(std::move(o));
+    }
+    case json::value_t::array: {
+      tinygltf::Value::Array a;
+      for (const json& e : j) a.push_back(to_value(e));
+      return tinygltf::Value(std::move(a));
+    }
+    case json::value_t::string: return tinygltf::Value(j.get<std::string>());
+    case json::value_t::boolean: return tinygltf::Value(j.get<bool>());
+    case json::value_t::number_integer:
+    case json::value_t::number_unsigned: {
+      // tinygltf's integers are int; a count beyond that is written as a number.
+      const double d = j.get<double>();
+      if (d >= double(std::numeric_limits<int>::min()) && d <= double(std::numeric_limits<int>::max()))
+        return tinygltf::Value(j.get<int>());
+      return tinygltf::Value(d);
+    }
+    case json::value_t::number_float: return tinygltf::Value(j.get<double>());
+    default: return tinygltf::Value();
+  }
+}
+
 // Appends `bytes` to the buffer as a view of its own (4-byte aligned) and an
 // accessor over it; returns the accessor's index.
 int add_accessor(tinygltf::Model& model, const void* bytes, std::size_t size, int target, int component, int type,
@@ -149,7 +133,29 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-}  // namespace
+void write_model(const std::string& path, const tinygltf::Model& model, bool binary) {
+  // A GLB's header and chunk lengths are 32-bit (the JSON chunk adds a few KB).
+  constexpr std::size_t kMaxGlbBuffer = std::numeric_limits<std::uint32_t>::max() - (std::size_t(1) << 20);
+  if (binary && !model.buffers.empty() && model.buffers[0].data.size() > kMaxGlbBuffer)
+    throw Error(fmt::format("{}: {} bytes of data do not fit a .glb (at most 4 GiB): write fewer bands, or a .gltf",
+                            path, model.buffers[0].data.size()));
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw Error(path + ": cannot be written (cannot create " + tmp + ")");
+    tinygltf::TinyGLTF writer;
+    tinygltf::Model copy = model;  // (tinygltf's writer takes a non-const model)
+    if (!writer.WriteGltfSceneToStream(&copy, out, /*prettyPrint=*/false, binary))
+      throw Error(path + ": cannot be written (tinygltf failed)");
+    out.flush();
+    if (!out) throw Error(path + ": cannot be written (I/O error; disk full?)");
+  });
+}
+
+}  // namespace detail
+
+using detail::add_accessor;
+using detail::to_value;
+using detail::lower_extension;
 
 std::string gltf_transfer_attribute(int index) { return "_PRT_T" + std::to_string(index); }
 
@@ -233,21 +239,7 @@ void write_gltf(const std::string& path, const Mesh& mesh, const Transfer& t, co
   model.scenes.push_back(scene);
   model.defaultScene = 0;
 
-  const bool binary = ext == ".glb";
-  // A GLB's header and chunk lengths are 32-bit (the JSON chunk adds a few KB).
-  constexpr std::size_t kMaxGlbBuffer = std::numeric_limits<std::uint32_t>::max() - (std::size_t(1) << 20);
-  if (binary && model.buffers[0].data.size() > kMaxGlbBuffer)
-    throw Error(fmt::format("{}: {} bytes of vertex data do not fit a .glb (at most 4 GiB): write fewer bands, or "
-                            "a .gltf", path, model.buffers[0].data.size()));
-  write_atomically(path, [&](const std::string& tmp) {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path + ": cannot be written (cannot create " + tmp + ")");
-    tinygltf::TinyGLTF writer;
-    if (!writer.WriteGltfSceneToStream(&model, out, /*prettyPrint=*/false, binary))
-      throw Error(path + ": cannot be written (tinygltf failed)");
-    out.flush();
-    if (!out) throw Error(path + ": cannot be written (I/O error; disk full?)");
-  });
+  detail::write_model(path, model, ext == ".glb");
 }
 
 }  // namespace prt

@@ -81,6 +81,31 @@ struct UnionFind {
 
 }  // namespace
 
+std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& l, int gutter) {
+  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height);
+  std::vector<std::uint32_t> source(W * H, kNoTexel);
+  for (std::size_t i = 0; i < l.texels.size(); ++i) source[l.texels[i]] = std::uint32_t(i);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ring;
+  for (int r = 0; r < gutter; ++r) {
+    ring.clear();
+    for (std::size_t y = 0; y < H; ++y)
+      for (std::size_t x = 0; x < W; ++x) {
+        if (source[y * W + x] != kNoTexel) continue;
+        std::uint32_t from = kNoTexel;
+        for (int dy = -1; dy <= 1 && from == kNoTexel; ++dy)
+          for (int dx = -1; dx <= 1 && from == kNoTexel; ++dx) {
+            const long long xx = (long long)x + dx, yy = (long long)y + dy;
+            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H) continue;
+            from = source[std::size_t(yy) * W + std::size_t(xx)];
+          }
+        if (from != kNoTexel) ring.emplace_back(std::uint32_t(y * W + x), from);
+      }
+    if (ring.empty()) break;
+    for (const auto& [texel, from] : ring) source[texel] = from;
+  }
+  return source;
+}
+
 void parse_lightmap_size(const std::string& text, int& width, int& height) {
   const std::size_t x = text.find_first_of("xX");
   const auto number = [&](const std::string& s, int& out) {

@@ -38,13 +38,7 @@
 #include <memory>
 #include <string>
 
-#pragma GCC visibility push(hidden)
-#define tinygltf prt_tinygltf
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_INCLUDE_JSON
-#include <tiny_gltf.h>
-#pragma GCC visibility pop
+#include "gltf_model.h"
 
 #include <stb_image.h>
 

@@ -125,6 +125,39 @@ TEST_F(GltfValidator, EveryVariantPrtWritesHasNoErrors) {
   }
 }
 
+// A scene with its SH lightmap (docs/FORMAT.md "Lightmap export"): the
+// coefficient textures, with and without the baked lightmap, .glb and .gltf;
+// and the extras' decoding rule gives back the rows within half a step.
+TEST_F(GltfValidator, LightmapExportsHaveNoErrors) {
+  const std::string scene = kSource + "/models/room.gltf", lm = dir.file("room.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--samples", "64", "-q", "-o", lm}).code, 0);
+  std::vector<std::string> files = {dir.file("room.glb"), dir.file("room.gltf"), dir.file("room-baked.glb")};
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    std::vector<std::string> args = {"export", scene, lm, "-o", files[i], "-q"};
+    if (i == 2) args.insert(args.end(), {"--bake", kStudio, "--exposure", "1"});
+    const auto r = run_prt(dir, args);
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  VALIDATE_OR_SKIP(v, dir, files);
+  EXPECT_EQ(v.code, 0) << v.err;
+  ASSERT_EQ(v.reports.size(), files.size()) << v.err;
+  for (std::size_t i = 0; i < files.size(); ++i) EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
+}
+
+TEST(LightmapQuantization, DecodesWithinHalfAStep) {
+  std::vector<float> rows = {0.5f, -1.0f, 0.25f, 2.0f, 0.125f, -0.5f, 0.0f, 3.0f};  // 4 texels x 2 coefficients
+  for (int bits : {8, 16}) {
+    const prt::LightmapQuantization q = prt::quantize_lightmap(rows, 2, bits);
+    const double step0 = double(q.scale[0]) / ((1 << bits) - 1), step1 = double(q.scale[1]) / ((1 << bits) - 1);
+    EXPECT_FLOAT_EQ(q.bias[0], 0.0f);
+    EXPECT_FLOAT_EQ(q.scale[1], 4.0f);
+    for (std::size_t i = 0; i < 4; ++i) {
+      EXPECT_LE(std::abs(q.decoded[2 * i] - rows[2 * i]), 0.5 * step0 + 1e-7);
+      EXPECT_LE(std::abs(q.decoded[2 * i + 1] - rows[2 * i + 1]), 0.5 * step1 + 1e-7);
+    }
+  }
+}
+
 // The validator really reads the files: a POSITION max that is not the
 // largest coordinate is an error it reports (so a 0 above means something).
 TEST_F(GltfValidator, ReportsAnErrorInABrokenFile) {

@@ -19,10 +19,14 @@
 // "normals": "omitted"); its transfer rows are 0 either way.
 #pragma once
 
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
+#include <prt/scene.h>
 #include <prt/transfer.h>
 
 #include <glm/vec3.hpp>
+
+#include <cstdint>
 
 #include <cstddef>
 #include <string>
@@ -67,5 +71,37 @@ std::string gltf_extras(const Mesh& mesh, const Transfer& t, const GltfOptions& 
 // outside [0, 1], and a failed write. A glossy transfer is written as its
 // diffuse part (extras "material": "diffuse part of a glossy transfer").
 void write_gltf(const std::string& path, const Mesh& mesh, const Transfer& t, const GltfOptions& opts = {});
+
+// ---- lightmaps (docs/FORMAT.md, "Lightmap export") ------------------------------
+// Per-coefficient quantisation of a lightmap's dense rows (texel x stride):
+// value = bias[j] + scale[j] x code / (2^bits - 1), bias the coefficient's
+// minimum over the texels and scale its range; `decoded` is what a reader
+// gets back (for measuring the relit error the quantisation adds).
+struct LightmapQuantization {
+  int bits = 8;
+  std::vector<float> scale, bias;     // per coefficient j < stride
+  std::vector<std::uint16_t> codes;   // as rows
+  std::vector<float> decoded;         // as rows
+};
+LightmapQuantization quantize_lightmap(const std::vector<float>& rows, std::size_t stride, int bits);
+
+struct GltfLightmapOptions {
+  // The relit lightmap (linear radiance per covered texel, exposure applied):
+  // written as an sRGB PNG the materials show unlit at TEXCOORD_1; empty: none.
+  std::vector<glm::vec3> baked;
+  GltfBake bake;                  // what extras records of it
+  std::string transfer_source;    // recorded in extras
+  std::string generator = "prt";
+};
+
+// Writes `scene` (every object a node; world-space POSITION, NORMAL,
+// TEXCOORD_0, the lightmap UV set as TEXCOORD_1, its materials and textures)
+// and its lightmap `t` as coefficient textures: 8-bit RGBA PNGs, 4
+// coefficients each, gutters filled (lightmap_sources), with the scale and
+// bias of every coefficient and the decoding rule in asset.extras.prt.
+// .glb or .gltf (one file, images and buffer embedded), through
+// write_atomically. Throws prt::Error naming `path`.
+void write_gltf_lightmap(const std::string& path, const Scene& scene, const LightmapTransfer& t,
+                         const LightmapTexels& texels, const GltfLightmapOptions& opts = {});
 
 }  // namespace prt

@@ -88,6 +88,15 @@ std::vector<glm::vec3> relight_lightmap(const LightmapTransfer& t, const Lightma
 // bilinear filtering never reads black; A stays 0 there. Rows from the top.
 std::vector<glm::vec4> lightmap_image(const LightmapLayout& layout, std::span<const glm::vec3> values, int gutter = 4);
 
+// Per atlas texel (W x H, rows from the top), the covered texel (index into
+// layout.texels) whose value it shows: itself for a covered texel; for
+// uncovered texels within `gutter` rings of covered ones, the source of the
+// first already-filled 8-neighbour (row by row, ring by ring: a copy, where
+// lightmap_image takes the neighbours' mean); kNoTexel beyond. What the GPU
+// pass and the glTF export fill gutters with.
+inline constexpr std::uint32_t kNoTexel = 0xffffffffu;
+std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& layout, int gutter = 4);
+
 // Parses "WxH" (e.g. "1024x1024"); throws prt::Error for anything else or a
 // side outside 1..kMaxLightmapSize.
 void parse_lightmap_size(const std::string& text, int& width, int& height);

@@ -11,6 +11,8 @@
 #include <prt/envmap.h>
 #include <prt/gltf.h>
 #include <prt/io.h>
+#include <prt/lightmap.h>
+#include <prt/scene.h>
 #include <prt/projection.h>
 #include <prt/render.h>
 #include <prt/transfer.h>
@@ -40,6 +42,49 @@ struct ExportArgs {
   // later (a web page beside the model) are staged with the glTF.
 };
 
+// A lightmap (prt precompute SCENE --lightmap): the scene with its
+// coefficient textures (write_gltf_lightmap; docs/FORMAT.md "Lightmap export").
+int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler) {
+  if (!a.web.empty())
+    throw UsageError("--web: the relighting page shows per-vertex transfer; a lightmap's page is not available yet "
+                     "(export the .glb and relight its coefficient textures, docs/FORMAT.md \"Lightmap export\")");
+  if (a.output.empty()) throw UsageError("give --output FILE.glb|.gltf");
+  const LightmapTransfer lt = read_lightmap_transfer(a.transfer);
+  const prt::Scene scene = prt::load_scene(a.mesh);
+  const LightmapTexels texels = lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
+                                                lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
+  check_matches(lt, texels, a.transfer);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}", describe(scene), describe_transfer(lt));
+  GltfLightmapOptions opts;
+  opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
+  opts.generator = "prt " PRT_VERSION " (prt export)";
+  const Mesh points = texel_points(texels);
+  if (!a.bake.empty()) {
+    EnvMap env = load_envmap(a.bake);
+    require_finite(env);
+    std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
+    if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
+    const std::vector<glm::vec3> rgb = relight(lt.transfer, points, light);
+    const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
+    const double stops = given ? *given : auto_exposure(light);
+    opts.baked.resize(rgb.size());
+    for (std::size_t i = 0; i < rgb.size(); ++i) opts.baked[i] = rgb[i] * float(std::exp2(stops));
+    opts.bake.map = std::filesystem::path(a.bake).filename().string();
+    for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
+    opts.bake.exposure = stops;
+  }
+  Outputs out("export");
+  out.write([&] { write_gltf_lightmap(a.output, scene, lt, texels, opts); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet) {
+    const std::size_t stride = lt.transfer.stride();
+    fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures ({}x{} RGBA8, {} bytes per texel){}\n", a.output,
+               scene.objects.size(), (stride + 3) / 4, lt.layout.width, lt.layout.height, 4 * ((stride + 3) / 4),
+               opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)");
+  }
+  return 0;
+}
+
 int run_export(const ExportArgs& a) {
   if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
   std::string ext = std::filesystem::path(a.output).extension().string();
@@ -62,6 +107,7 @@ int run_export(const ExportArgs& a) {
   }
   const ToneMap tone = parse_tone_map(a.tone_map);  // checked while parsing
 
+  if (transfer_is_lightmap(a.transfer)) return run_export_lightmap(a, euler);
   // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
   // (sparse, per light-cube pixel) has none to give.
   if (read_transfer_basis(a.transfer) == TransferBasis::Wavelet)
