@@ -207,7 +207,7 @@ struct Renderer::Impl {
   std::size_t vertex_count = 0;
   // A scene and its lightmap (set_scene): drawn by the lightmap pass instead of the mesh.
   std::unique_ptr<detail::LightmapPass> lightmap;
-  bool lightmap_detail = true;
+  bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;
   // This OpenGL's limits (set_mesh), and the vertices of one compute
   // dispatch: relight() shades the mesh in runs of `chunk` vertices, each
   // binding its range of the per-vertex storage buffers, so that no binding
@@ -884,12 +884,14 @@ void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
   clear_mesh();
   m.limits = gl::limits();
   m.lightmap = std::make_unique<detail::LightmapPass>(scene, texels, t, m.limits);
+  m.lightmap_relit = false;
   m.bands = m.band_limit = t.transfer.bands;
   m.channels = t.transfer.channels;
   m.shading = Shading::Transfer;
 }
 
 void Renderer::set_lightmap_detail(bool on) { impl_->lightmap_detail = on; }
+void Renderer::set_lightmap_relight(bool on) { impl_->lightmap_relight = on; }
 
 std::vector<glm::vec3> Renderer::lightmap_radiance() const {
   const Impl& m = *impl_;
@@ -1193,7 +1195,8 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.light_buffer);
-    m.lightmap->relight(m.band_limit, m.shading == Shading::Direct);
+    if (m.lightmap_relight || !m.lightmap_relit) m.lightmap->relight(m.band_limit, m.shading == Shading::Direct);
+    m.lightmap_relit = true;
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     m.lightmap->draw(glm::mat4(proj * view), m.lightmap_detail);
   } else if (m.index_count > 0) {

@@ -212,6 +212,10 @@ class Renderer {
   // storage block size.
   void set_scene(const Scene& scene, const LightmapTransfer& lightmap);
   void set_lightmap_detail(bool on);
+  // false: frames keep the lightmap image of the last relit frame and only
+  // draw (a static lightmap, what an engine without PRT draws: the baseline
+  // of the lightmapped frame's cost, bench/lightmap_figures.cpp).
+  void set_lightmap_relight(bool on);
   // The covered texels' radiance of the last frame drawn (set_scene only),
   // in texel order: relight_lightmap's up to float rounding.
   std::vector<glm::vec3> lightmap_radiance() const;
