@@ -115,7 +115,7 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
                           "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
                           test::shell_quote(mesh) + " " + test::shell_quote(first) + " " + test::shell_quote(env) +
                           (wavelet_first ? " --second " + test::shell_quote(prt) : std::string()) +
-                          " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --screenshot " + test::shell_quote(shot) + look_args +
+                          " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --no-panel --screenshot " + test::shell_quote(shot) + look_args +
                           " </dev/null >/dev/null 2>" + test::shell_quote(err);
   const int status = std::system(cmd.c_str());
   const std::string view_err = test::read_file(err);
@@ -195,6 +195,46 @@ TEST_F(ViewCli, GlossyScreenshotMatchesRender) {
   o.glossy = true;
   write_transfer(prt, compute_transfer(load_mesh(mesh), o));
   check_screenshot_matches_render({"--gloss", "1", "--specular", "1"});
+}
+
+// The on-screen panel (Dear ImGui) is in the window: its screenshot differs
+// from one with --no-panel where the panel is (top left) and nowhere far from it.
+TEST_F(ViewCli, PanelIsOnScreenAndNoPanelHidesIt) {
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
+  std::string shots[2];
+  for (int with = 0; with < 2; ++with) {
+    shots[with] = dir.file(with ? "panel.png" : "nopanel.png");
+    const std::string err = (dir.io() / "panel_err.txt").string();
+    const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
+                            "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
+                            test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
+                            " --width 640 --height 320 --frames 3 -q" + (with ? "" : " --no-panel") +
+                            " --screenshot " + test::shell_quote(shots[with]) + " </dev/null >/dev/null 2>" +
+                            test::shell_quote(err);
+    const int status = std::system(cmd.c_str());
+    const std::string view_err = test::read_file(err);
+    const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+    if (code != 0 && view_err.find("OpenGL 4.5 core") != std::string::npos)
+      PRT_SKIP_WITHOUT_GL("Xvfb's GLX gives no OpenGL 4.5 core context: " + view_err);
+    ASSERT_EQ(code, 0) << view_err;
+  }
+  const EnvMap a = load_envmap(shots[1], Mapping::LatLong), b = load_envmap(shots[0], Mapping::LatLong);
+  ASSERT_EQ(a.width, 640);
+  ASSERT_EQ(b.width, 640);
+  // (640 x 320: load_envmap reads the screenshots, as 2:1 images.)
+  // Pixels that differ in the panel's corner (its window starts at 8, 8 and
+  // is some 280 wide), and in the opposite corner.
+  const auto differing = [&](int x0, int y0, int x1, int y1) {
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const std::size_t i = (std::size_t(y) * 640 + std::size_t(x)) * 3;
+        if (std::abs(a.rgb[i] - b.rgb[i]) + std::abs(a.rgb[i + 1] - b.rgb[i + 1]) + std::abs(a.rgb[i + 2] - b.rgb[i + 2]) > 0.05f) ++n;
+      }
+    return n;
+  };
+  EXPECT_GT(differing(10, 10, 200, 100), 2000);  // the panel's title bar, text and widgets over the scene
+  EXPECT_EQ(differing(560, 280, 640, 320), 0);    // far from the panel: the same frame
 }
 
 TEST_F(ViewCli, NoDisplayPointsToRender) {

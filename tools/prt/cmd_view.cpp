@@ -24,6 +24,8 @@
 #ifdef PRT_HAVE_GLFW
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
+
+#include "view_panel.h"
 #endif
 
 #include <algorithm>
@@ -62,7 +64,7 @@ struct ViewArgs {
   std::string mesh, transfer, env, second, camera, screenshot, screenshot_dir = ".";
   int width = 800, height = 600, frames = 0;
   double fov = 40;
-  bool quiet = false;
+  bool quiet = false, no_panel = false;
   LookArgs look;
   GlossyArgs lobe;  // glossy files: the starting lobe
 };
@@ -187,6 +189,9 @@ WindowPtr open_window(const ViewArgs& a) {
   return window;
 }
 
+// The panel, while there is one: events it takes are not prt's (and F1 toggles it).
+ViewPanel* g_panel = nullptr;
+
 // The window's events into the ViewState behind its user pointer (view_input.h).
 void connect_input(GLFWwindow* window, ViewState& st) {
   glfwSetWindowUserPointer(window, &st);
@@ -194,13 +199,21 @@ void connect_input(GLFWwindow* window, ViewState& st) {
     return *static_cast<ViewState*>(glfwGetWindowUserPointer(w));
   };
   glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int mods) {
+    if (g_panel && g_panel->visible && action == GLFW_PRESS && ViewPanel::wants_mouse()) return;
     double x = 0, y = 0;
     glfwGetCursorPos(w, &x, &y);
     on_mouse_button(state(w), button, action, mods, x, y);
   });
   glfwSetCursorPosCallback(window, [](GLFWwindow* w, double x, double y) { on_cursor(state(w), x, y); });
-  glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) { on_scroll(state(w), dy); });
+  glfwSetScrollCallback(window, [](GLFWwindow* w, double, double dy) {
+    if (!(g_panel && g_panel->visible && ViewPanel::wants_mouse())) on_scroll(state(w), dy);
+  });
   glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
+    if (g_panel && key == GLFW_KEY_F1 && action == GLFW_PRESS) {
+      g_panel->visible = !g_panel->visible;
+      return;
+    }
+    if (g_panel && g_panel->visible && ViewPanel::wants_keyboard()) return;
     switch (on_key(state(w), key, action, mods)) {
       case KeyAction::Quit: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
       case KeyAction::PrintControls: fmt::print(stderr, "{}\n", kControls); break;
@@ -337,6 +350,12 @@ class Viewer {
     }
   }
 
+  const std::string& map_name() const { return map_name_; }
+  std::string shown_label(const ViewState& st) const {
+    if (st.wavelet) return st.wavelet_lambert ? "plain Lambert (no PRT)" : "wavelet transfer";
+    return prt::cli::shading_label(clusters_ ? Shading::Clusters : kShadings[shading_index_], t_);
+  }
+
   // The title's part after the frame time: what is shown, the map, the display.
   std::string title(const ViewState& st) const {
     const sh::Window wk = kWindows[st.window];
@@ -452,6 +471,15 @@ int run_view(const ViewArgs& a) {
   Camera base = framing_camera(scene.mesh, a.fov, double(a.width) / a.height);
   if (!a.camera.empty()) parse_camera(a.camera, base);
   connect_input(window.get(), st);
+  // The panel after prt's callbacks: ImGui chains them.
+  std::optional<ViewPanel> panel;
+  if (!a.no_panel) {
+    panel.emplace(window.get());
+    g_panel = &*panel;
+  }
+  struct ForgetPanel {
+    ~ForgetPanel() { g_panel = nullptr; }
+  } forget_panel;
 
   using Clock = std::chrono::steady_clock;
   auto last = Clock::now(), title_time = last;
@@ -469,6 +497,18 @@ int run_view(const ViewArgs& a) {
     glfwGetFramebufferSize(window.get(), &fw, &fh);
     if (fw > 0 && fh > 0) {
       renderer.present(cam, fw, fh, fw, fh, Display{st.exposure, kToneMaps[st.tone]});
+      if (panel) {
+        PanelInfo info;
+        info.map = viewer.map_name();
+        info.shading = viewer.shown_label(st);
+        info.status = viewer.title(st);
+        info.file_bands = have_sh ? scene.transfer.bands : 0;
+        info.glossy = have_sh && scene.transfer.glossy;
+        info.wavelet = st.wavelet;
+        info.frame_ms = frame_ms;
+        info.device = renderer.device();
+        panel->draw(st, info);
+      }
       ++frame;
       const bool last_scripted = a.frames > 0 && frame >= a.frames;
       if (st.screenshot_requested || last_scripted) {
@@ -529,6 +569,9 @@ Run add_view(CLI::App& app) {
                 "A transfer of the other basis (SH or wavelet) for the same mesh: B switches between the two");
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
+  s->add_flag("--no-panel", a->no_panel,
+              "No on-screen panel (Dear ImGui: map, exposure, tone map, light rotation, shading, bands, gloss, frame "
+              "time; F1 hides and shows it)");
   s->add_flag("-q,--quiet", a->quiet, "No summary and controls on stderr");
   return [a] { return run_view(*a); };
 }

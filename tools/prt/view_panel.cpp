@@ -1,0 +1,88 @@
+#include "view_panel.h"
+
+#include <prt/render.h>
+
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <iterator>
+
+namespace prt::cli {
+
+ViewPanel::ViewPanel(GLFWwindow* window) {
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini in the user's directory
+  ImGui::StyleColorsDark();
+  ImGui_ImplGlfw_InitForOpenGL(window, true);
+  ImGui_ImplOpenGL3_Init("#version 450 core");
+}
+
+ViewPanel::~ViewPanel() {
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+}
+
+bool ViewPanel::wants_mouse() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
+bool ViewPanel::wants_keyboard() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard; }
+
+void ViewPanel::draw(ViewState& st, const PanelInfo& info) {
+  frame_times_.push_back(float(info.frame_ms));
+  if (frame_times_.size() > 120) frame_times_.erase(frame_times_.begin());
+  if (!visible) return;
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
+  ImGui::Begin("prt view", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::Text("%.2f ms/frame (%.0f fps)", info.frame_ms, info.frame_ms > 0 ? 1e3 / info.frame_ms : 0.0);
+  ImGui::PlotLines("##frame", frame_times_.data(), int(frame_times_.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(0, 32));
+  ImGui::Separator();
+  ImGui::Text("map: %s", info.map.c_str());
+  if (ImGui::Button("< map")) --st.map_step;
+  ImGui::SameLine();
+  if (ImGui::Button("map >")) ++st.map_step;
+  float exposure = float(st.exposure);
+  if (ImGui::SliderFloat("exposure", &exposure, -20.0f, 20.0f, "%+.1f stops")) st.exposure = exposure;
+  const char* tones[] = {"clamp", "reinhard", "aces"};
+  ImGui::Combo("tone map", &st.tone, tones, int(std::size(tones)));
+  ImGui::Separator();
+  float yaw = float(st.env_yaw), pitch = float(st.env_pitch);
+  if (ImGui::SliderFloat("light yaw", &yaw, -180.0f, 180.0f, "%.0f deg")) st.env_yaw = yaw;
+  if (ImGui::SliderFloat("light pitch", &pitch, -90.0f, 90.0f, "%.0f deg")) st.env_pitch = pitch;
+  ImGui::Checkbox("turn the light", &st.auto_rotate);
+  ImGui::Separator();
+  ImGui::Text("shading: %s", info.shading.c_str());
+  if (ImGui::Button("< shading")) --st.shading_step;
+  ImGui::SameLine();
+  if (ImGui::Button("shading >")) ++st.shading_step;
+  if (info.file_bands > 0) {
+    ImGui::SliderInt("bands", &st.bands, 0, info.file_bands, st.bands == 0 ? "all" : "%d");
+    const char* windows[] = {"none", "hanning", "lanczos", "auto"};
+    ImGui::Combo("window", &st.window, windows, std::min<int>(int(std::size(windows)), int(std::size(kWindows))));
+  }
+  if (info.glossy) {
+    float gloss = float(st.gloss), specular = float(st.specular);
+    if (ImGui::SliderFloat("gloss e", &gloss, 0.0f, float(kMaxViewGloss), "%.1f", ImGuiSliderFlags_Logarithmic))
+      st.gloss = gloss;
+    if (ImGui::SliderFloat("specular", &specular, 0.0f, 1.0f, "%.2f")) st.specular = specular;
+  }
+  if (info.wavelet) ImGui::SliderInt("terms K", &st.terms, 1, 1 << 14, "%d", ImGuiSliderFlags_Logarithmic);
+  ImGui::Separator();
+  if (ImGui::Button("screenshot")) st.screenshot_requested = true;
+  ImGui::SameLine();
+  ImGui::TextDisabled("F1 hides this panel");
+  ImGui::TextWrapped("%s", info.status.c_str());
+  ImGui::TextDisabled("%s", info.device.c_str());
+  ImGui::End();
+  ImGui::Render();
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+}  // namespace prt::cli
