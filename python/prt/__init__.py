@@ -17,15 +17,21 @@ from ._prt import (  # noqa: F401
     MAX_BANDS,
     EnvMap,
     Error,
+    Lightmap,
     Mesh,
+    Scene,
     Transfer,
     __version__,
     data_dir,
     load_envmap,
+    lightmap_from_rows,
     load_mesh,
+    load_scene,
     make_mesh,
     precompute,
+    precompute_lightmap,
     project,
+    read_lightmap,
     read_transfer,
     read_vertex_csv,
     reference,
@@ -37,7 +43,8 @@ from ._prt import (  # noqa: F401
 )
 
 __all__ = [
-    "MAX_BANDS", "EnvMap", "Error", "Mesh", "Transfer", "__version__", "data_dir", "load_envmap", "load_mesh",
+    "MAX_BANDS", "EnvMap", "Error", "Lightmap", "Mesh", "Scene", "Transfer", "lightmap_from_rows", "load_scene",
+    "precompute_lightmap", "read_lightmap", "__version__", "data_dir", "load_envmap", "load_mesh",
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv",
 ]

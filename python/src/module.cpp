@@ -11,7 +11,9 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/filter.h>
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
+#include <prt/scene.h>
 #include <prt/paths.h>
 #include <prt/precompute.h>
 #include <prt/progress.h>
@@ -807,4 +809,160 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("path"), py::arg("rgb"), py::arg("std_error") = py::none(),
       "Writes a vertex CSV that prt compare reads.");
+
+  // ---- scenes and lightmaps (docs/LIGHTMAPS.md) ----
+  py::class_<prt::Scene>(m, "Scene", "A scene (prt/scene.h): objects with materials and UV sets, flattened")
+      .def_property_readonly("positions", [](const prt::Scene& s) { return vec3s(s.mesh.positions); },
+                             "float32 (V, 3), world space")
+      .def_property_readonly("normals", [](const prt::Scene& s) { return vec3s(s.mesh.normals); }, "float32 (V, 3)")
+      .def_property_readonly("triangles",
+                             [](const prt::Scene& s) {
+                               return copy(reinterpret_cast<const std::uint32_t*>(s.mesh.triangles.data()),
+                                           {py::ssize_t(s.mesh.triangles.size()), 3});
+                             },
+                             "uint32 (T, 3)")
+      .def_property_readonly("uv_sets",
+                             [](const prt::Scene& s) {
+                               py::list l;
+                               for (const auto& set : s.uv_sets)
+                                 l.append(copy(reinterpret_cast<const float*>(set.data()), {py::ssize_t(set.size()), 2}));
+                               return l;
+                             },
+                             "list of float32 (V, 2): TEXCOORD_0, TEXCOORD_1, ... (glTF: origin top-left, v down)")
+      .def_property_readonly("objects",
+                             [](const prt::Scene& s) {
+                               py::list l;
+                               for (const auto& o : s.objects)
+                                 l.append(py::dict(py::arg("name") = o.name, py::arg("first_triangle") = o.first_triangle,
+                                                   py::arg("triangle_count") = o.triangle_count,
+                                                   py::arg("material") = o.material, py::arg("uv_sets") = o.uv_sets));
+                               return l;
+                             })
+      .def_property_readonly("hash", &prt::Scene::hash, "Scene hash (a lightmap's scene_hash)")
+      .def("lightmap_uv_set", &prt::Scene::lightmap_uv_set, py::arg("requested") = -1)
+      .def("__repr__", [](const prt::Scene& s) { return "<prt.Scene " + prt::describe(s) + ">"; });
+
+  m.def(
+      "load_scene",
+      [](const py::object& path) {
+        const std::string p = path_of(path);
+        py::gil_scoped_release release;
+        return prt::load_scene(p);
+      },
+      py::arg("path"), "Reads a glTF 2.0 (.gltf, .glb) or OBJ scene as prt precompute --lightmap does.");
+
+  py::class_<prt::LightmapTransfer>(m, "Lightmap", "An SH lightmap (prt/lightmap.h): transfer per covered texel")
+      .def_property_readonly("width", [](const prt::LightmapTransfer& l) { return l.layout.width; })
+      .def_property_readonly("height", [](const prt::LightmapTransfer& l) { return l.layout.height; })
+      .def_property_readonly("uv_set", [](const prt::LightmapTransfer& l) { return l.layout.uv_set; })
+      .def_property_readonly("scene_hash", [](const prt::LightmapTransfer& l) { return l.layout.scene_hash; })
+      .def_property_readonly("bands", [](const prt::LightmapTransfer& l) { return l.transfer.bands; })
+      .def_property_readonly("channels", [](const prt::LightmapTransfer& l) { return l.transfer.channels; })
+      .def_property_readonly("mode", [](const prt::LightmapTransfer& l) {
+        return std::string(prt::transfer_mode_name(l.transfer.mode));
+      })
+      .def_property_readonly("texels",
+                             [](const prt::LightmapTransfer& l) {
+                               return copy(l.layout.texels.data(), {py::ssize_t(l.layout.texels.size())});
+                             },
+                             "uint32 (N,): covered texels, y * width + x (rows from the top)")
+      .def_property_readonly("analytic",
+                             [](const prt::LightmapTransfer& l) {
+                               py::array_t<bool> a(py::ssize_t(l.transfer.vertices));
+                               for (std::size_t i = 0; i < l.transfer.vertices; ++i)
+                                 a.mutable_at(i) = l.transfer.is_analytic(i);
+                               return a;
+                             },
+                             "bool (N,): texels that store no row (nothing occludes them)")
+      .def(
+          "rows",
+          [](const prt::LightmapTransfer& l, const prt::Scene& scene) {
+            const prt::LightmapTexels tx = prt::lightmap_texels(scene, l.layout.width, l.layout.height, l.layout.uv_set,
+                                                                l.transfer.vertex_colors ? nullptr : &l.transfer.albedo);
+            prt::check_matches(l, tx, "lightmap");
+            const std::vector<float> d = prt::dense_transfer(l.transfer, prt::texel_points(tx));
+            return copy(d.data(), {py::ssize_t(l.transfer.vertices), l.transfer.channels,
+                                   py::ssize_t(l.transfer.bands) * l.transfer.bands});
+          },
+          py::arg("scene"),
+          "float32 (N, channels, bands^2): every covered texel's transfer, analytic ones evaluated from `scene`")
+      .def(
+          "relight",
+          [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& lighting) {
+            const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
+            if (light.size() < std::size_t(l.transfer.bands) * l.transfer.bands)
+              throw Error("lighting: fewer coefficients than the lightmap's bands^2");
+            std::vector<glm::vec4> img;
+            {
+              py::gil_scoped_release release;
+              const prt::LightmapTexels tx =
+                  prt::lightmap_texels(scene, l.layout.width, l.layout.height, l.layout.uv_set,
+                                       l.transfer.vertex_colors ? nullptr : &l.transfer.albedo);
+              prt::check_matches(l, tx, "lightmap");
+              img = prt::lightmap_image(l.layout, prt::relight_lightmap(l, tx, light));
+            }
+            return copy(reinterpret_cast<const float*>(img.data()), {l.layout.height, l.layout.width, 4});
+          },
+          py::arg("scene"), py::arg("lighting"),
+          "float32 (H, W, 4): prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)")
+      .def("write", [](const prt::LightmapTransfer& l, const py::object& path) {
+        prt::write_lightmap_transfer(path_of(path), l);
+      }, py::arg("path"), "Writes the lightmap file (docs/FORMAT.md), atomically")
+      .def("__repr__", [](const prt::LightmapTransfer& l) {
+        return "<prt.Lightmap " + std::to_string(l.layout.width) + "x" + std::to_string(l.layout.height) + ", " +
+               std::to_string(l.layout.texels.size()) + " covered texels, " + std::to_string(l.transfer.bands) +
+               " bands>";
+      });
+
+  m.def("read_lightmap", [](const py::object& path) { return prt::read_lightmap_transfer(path_of(path)); },
+        py::arg("path"), "Reads a lightmap file (prt precompute SCENE --lightmap WxH).");
+
+  m.def(
+      "precompute_lightmap",
+      [](const prt::Scene& scene, int width, int height, int uv_set, const std::string& mode, int bands, int samples,
+         int bounces, std::uint64_t seed) {
+        prt::TransferOptions o;
+        o.mode = prt::parse_transfer_mode(mode);
+        o.bands = bands;
+        o.samples = samples;
+        o.bounces = bounces;
+        o.seed = seed;
+        py::gil_scoped_release release;
+        prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, scene.lightmap_uv_set(uv_set));
+        prt::move_texels_out_of_geometry(scene.mesh, tx);
+        return prt::compute_lightmap_transfer(scene, tx, o);
+      },
+      py::arg("scene"), py::arg("width"), py::arg("height"), py::kw_only(), py::arg("uv_set") = -1,
+      py::arg("mode") = "shadowed", py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("bounces") = 1,
+      py::arg("seed") = 1, "The lightmap prt precompute SCENE --lightmap WxH computes (same bits).");
+
+  m.def(
+      "lightmap_from_rows",
+      [](const prt::Scene& scene, int width, int height, const py::object& rows, int uv_set, const std::string& mode) {
+        FArray a = FArray::ensure(rows);
+        const int set = scene.lightmap_uv_set(uv_set);
+        const prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
+        const std::size_t n = tx.layout.texels.size();
+        if (!a || a.ndim() != 3 || std::size_t(a.shape(0)) != n || (a.shape(1) != 1 && a.shape(1) != 3))
+          throw Error("rows: expected float32 (" + std::to_string(n) + ", 1 or 3, bands^2) for this atlas's covered texels");
+        const int bands = int(std::lround(std::sqrt(double(a.shape(2)))));
+        if (bands < 1 || bands * bands != a.shape(2)) throw Error("rows: the last axis must be bands^2");
+        prt::LightmapTransfer l;
+        l.layout = tx.layout;
+        prt::Transfer& t = l.transfer;
+        t.bands = bands;
+        t.channels = int(a.shape(1));
+        t.mode = prt::parse_transfer_mode(mode);
+        t.vertices = n;
+        t.vertex_colors = true;
+        t.mesh_hash = tx.layout.scene_hash;
+        t.shading_hash = prt::shading_hash(prt::texel_points(tx), true);
+        t.coeffs.assign(a.data(), a.data() + a.size());
+        if (auto p = prt::lightmap_problem(l); !p.empty()) throw Error("rows: " + p);
+        return l;
+      },
+      py::arg("scene"), py::arg("width"), py::arg("height"), py::arg("rows"), py::kw_only(), py::arg("uv_set") = -1,
+      py::arg("mode") = "shadowed",
+      "A lightmap from arrays: rows float32 (N, channels, bands^2), one per covered texel of the atlas (every "
+      "texel stored); .write() makes a file prt relight reads.");
 }
