@@ -530,7 +530,7 @@ class Reader {
   // An SH transfer; a compressed one into *compressed (its uncompressed part
   // returned), which must then be given (and only then).
   Transfer read(CompressedTransfer* compressed = nullptr, LightmapLayout* lightmap = nullptr);
-  WaveletTransfer read_wavelet();
+  WaveletTransfer read_wavelet(LightmapLayout* lightmap = nullptr);
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }
   std::uint32_t flags() const { return load<std::uint32_t>(h_ + kOffFlags); }
@@ -1003,7 +1003,7 @@ LightmapTransfer read_lightmap_transfer(const std::string& path) {
 
 bool transfer_is_lightmap(const std::string& path) {
   Reader r(path);
-  if (r.read_basis() != kBasisSH) return false;
+  if (r.read_basis() != kBasisSH) return (r.flags() & kFlagLightmap) != 0;
   return r.version() >= 5 && (r.flags() & kFlagLightmap) != 0;
 }
 
@@ -1165,6 +1165,8 @@ enum WaveletKind : std::uint32_t {
   kColValues = 18,
   kVertexScale = 19,
   kVertexAlbedo = 20,
+  kWaveletLightmapLayout = 21,  // a lightmap's (flag bit 3): u64 width, height, UV set, scene hash
+  kWaveletLightmapTexels = 22,  // u32 covered texels
 };
 
 struct WaveletSection {
@@ -1179,10 +1181,12 @@ struct WaveletSection {
 constexpr EnumName<std::uint32_t> kWaveletKindNames[] = {
     {kColOffsets, "column offsets"}, {kColVertices, "column vertices"}, {kColValues, "column values"},
     {kVertexScale, "vertex scales"}, {kVertexAlbedo, "vertex albedo"},
+    {kWaveletLightmapLayout, "lightmap layout"}, {kWaveletLightmapTexels, "lightmap texels"},
 };
 const char* wavelet_kind_name(std::uint32_t kind) { return enum_name(kWaveletKindNames, kind).data(); }
 
-std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t) {
+std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t, const LightmapLayout* lightmap = nullptr,
+                                            const std::uint64_t* layout_words = nullptr) {
   const auto n = wavelet_kind_name;
   std::vector<WaveletSection> s = {
       {kColOffsets, n(kColOffsets), kTypeU64, t.col_offsets.data(), t.col_offsets.size(), false},
@@ -1193,6 +1197,11 @@ std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t) {
   if (t.vertex_colors)
     s.push_back({kVertexAlbedo, n(kVertexAlbedo), kTypeF32, t.vertex_albedo.data(),
                  3 * std::uint64_t(t.vertex_albedo.size()), true});
+  if (lightmap) {
+    s.push_back({kWaveletLightmapLayout, n(kWaveletLightmapLayout), kTypeU64, layout_words, kLightmapLayoutWords, false});
+    s.push_back({kWaveletLightmapTexels, n(kWaveletLightmapTexels), kTypeU32, lightmap->texels.data(),
+                 lightmap->texels.size(), true});
+  }
   return s;
 }
 
@@ -1230,9 +1239,18 @@ std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
 
 std::uint64_t transfer_file_size(const WaveletTransfer& t) { return file_size_of(transfer_sections(t)); }
 
-void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
+namespace {
+
+void write_wavelet_file(const std::string& path, const WaveletTransfer& t, const LightmapLayout* lightmap) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this wavelet transfer: " + p);
-  const std::vector<WaveletSection> sections = wavelet_sections(t);
+  std::uint64_t words[kLightmapLayoutWords] = {};
+  if (lightmap) {
+    words[0] = std::uint64_t(lightmap->width);
+    words[1] = std::uint64_t(lightmap->height);
+    words[2] = std::uint64_t(lightmap->uv_set);
+    words[3] = lightmap->scene_hash;
+  }
+  const std::vector<WaveletSection> sections = wavelet_sections(t, lightmap, words);
 
   unsigned char header[kHeaderSize] = {};
   std::memcpy(header, kMagic.data(), kMagic.size());
@@ -1243,7 +1261,7 @@ void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
   store<std::uint32_t>(header + kOffChannels, 1);
   store<std::uint32_t>(header + kOffMode, std::uint32_t(TransferMode::Shadowed));
   for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
-  store<std::uint32_t>(header + kOffFlags, t.vertex_colors ? kFlagVertexColors : 0u);
+  store<std::uint32_t>(header + kOffFlags, (t.vertex_colors ? kFlagVertexColors : 0u) | (lightmap ? kFlagLightmap : 0u));
   store<std::uint64_t>(header + kOffVertices, t.vertices);
   store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
   store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
@@ -1255,9 +1273,23 @@ void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) {
   write_file(path, header, raw);
 }
 
+}  // namespace
+
+void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) { write_wavelet_file(path, t, nullptr); }
+
+void write_wavelet_lightmap(const std::string& path, const WaveletLightmap& t) {
+  LightmapTransfer shape;  // lightmap_problem of the layout against the texel count
+  shape.layout = t.layout;
+  shape.transfer.bands = 1;
+  shape.transfer.vertices = t.transfer.vertices;
+  shape.transfer.coeffs.assign(t.transfer.vertices, 0.0f);
+  if (auto p = lightmap_problem(shape); !p.empty()) throw Error(path + ": cannot write this wavelet lightmap: " + p);
+  write_wavelet_file(path, t.transfer, &t.layout);
+}
+
 namespace {
 
-WaveletTransfer Reader::read_wavelet() {
+WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
   open_file();
   read_head();
   verify();
@@ -1294,6 +1326,11 @@ WaveletTransfer Reader::read_wavelet() {
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   if (flags & ~kKnownFlags) throw fail(fmt::format("bad header: unknown flags 0x{:x}", flags & ~kKnownFlags));
   t.vertex_colors = (flags & kFlagVertexColors) != 0;
+  const bool lightmap = (flags & kFlagLightmap) != 0;
+  if (lightmap && !lightmap_out)
+    throw fail("holds a wavelet lightmap (prt precompute SCENE --lightmap --basis wavelet): relight it with prt relight "
+               "SCENE FILE ENV -o lightmap.exr; the library reads it with prt::read_wavelet_lightmap");
+  if (!lightmap && lightmap_out) throw fail("holds a per-vertex wavelet transfer, not a lightmap");
   for (std::uint64_t i = kOffWaveletReserved; i < kHeaderSize; ++i)
     if (h[i] != 0) throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
   if (t.vertices > size_ / 4)  // the scales alone take 4 bytes per vertex
@@ -1301,6 +1338,7 @@ WaveletTransfer Reader::read_wavelet() {
 
   std::vector<std::uint32_t> kinds = {kColOffsets, kColVertices, kColValues, kVertexScale};
   if (t.vertex_colors) kinds.push_back(kVertexAlbedo);
+  if (lightmap) kinds.insert(kinds.end(), {kWaveletLightmapLayout, kWaveletLightmapTexels});
   if (section_count_ != kinds.size())
     throw fail(fmt::format("bad section table: {} sections; a wavelet transfer {} vertex colours has {}", section_count_,
                            t.vertex_colors ? "with" : "without", kinds.size()));
@@ -1318,8 +1356,10 @@ WaveletTransfer Reader::read_wavelet() {
     if (kind != kinds[i])
       throw fail(
           fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
-    const std::uint32_t want_type = kind == kColOffsets ? kTypeU64 : kind == kColVertices ? kTypeU32
-                                  : kind == kColValues  ? kTypeI16 : kTypeF32;
+    const std::uint32_t want_type = kind == kColOffsets || kind == kWaveletLightmapLayout ? kTypeU64
+                                    : kind == kColVertices || kind == kWaveletLightmapTexels ? kTypeU32
+                                    : kind == kColValues                                     ? kTypeI16
+                                                                                             : kTypeF32;
     if (type != want_type)
       throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
                              want_type, type_name(want_type)));
@@ -1330,6 +1370,8 @@ WaveletTransfer Reader::read_wavelet() {
       case kColValues: want = t.col_vertices.size(); break;
       case kVertexScale: want = t.vertices; break;
       case kVertexAlbedo: want = 3 * std::uint64_t(t.vertices); break;
+      case kWaveletLightmapLayout: want = kLightmapLayoutWords; break;
+      case kWaveletLightmapTexels: want = t.vertices; break;
     }
     if (count != want)
       throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count, want));
@@ -1348,6 +1390,19 @@ WaveletTransfer Reader::read_wavelet() {
       case kColValues: read_section(data, t.col_values, count); break;
       case kVertexScale: read_section(data, t.vertex_scale, count); break;
       case kVertexAlbedo: read_section(data, t.vertex_albedo, count / 3); break;
+      case kWaveletLightmapLayout: {
+        std::vector<std::uint64_t> w;
+        read_section(data, w, count);
+        for (int k = 0; k < 3; ++k)
+          if (w[std::size_t(k)] > std::uint64_t(kMaxLightmapSize))
+            throw fail(fmt::format("bad section 'lightmap layout': value {} is out of range", w[std::size_t(k)]));
+        lightmap_out->width = int(w[0]);
+        lightmap_out->height = int(w[1]);
+        lightmap_out->uv_set = int(w[2]);
+        lightmap_out->scene_hash = w[3];
+        break;
+      }
+      case kWaveletLightmapTexels: read_section(data, lightmap_out->texels, count); break;
     }
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
@@ -1366,6 +1421,19 @@ WaveletTransfer Reader::read_wavelet() {
 }  // namespace
 
 WaveletTransfer read_wavelet_transfer(const std::string& path) { return Reader(path).read_wavelet(); }
+
+WaveletLightmap read_wavelet_lightmap(const std::string& path) {
+  WaveletLightmap t;
+  Reader r(path);
+  t.transfer = r.read_wavelet(&t.layout);
+  LightmapTransfer shape;
+  shape.layout = t.layout;
+  shape.transfer.bands = 1;
+  shape.transfer.vertices = t.transfer.vertices;
+  shape.transfer.coeffs.assign(t.transfer.vertices, 0.0f);
+  if (auto p = lightmap_problem(shape); !p.empty()) throw r.fail("bad lightmap: " + p);
+  return t;
+}
 
 void check_matches(const WaveletTransfer& t, const Mesh& mesh, const std::string& what) {
   check_mesh(t.vertices, t.mesh_hash, mesh, what, "prt precompute --basis wavelet");

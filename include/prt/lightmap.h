@@ -12,6 +12,7 @@
 #include <prt/mesh.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
+#include <prt/wavelet_transfer.h>
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -36,6 +37,13 @@ struct LightmapLayout {
 
 struct LightmapTransfer {
   Transfer transfer;     // one row per covered texel (transfer.vertices == layout.texels.size()), texel i = layout.texels[i]; analytic texels via transfer.slots as for vertices
+  LightmapLayout layout;
+};
+
+// The all-frequency variant: a wavelet transfer (prt/wavelet_transfer.h)
+// whose vertices are the covered texels (their albedo as vertex albedo).
+struct WaveletLightmap {
+  WaveletTransfer transfer;
   LightmapLayout layout;
 };
 

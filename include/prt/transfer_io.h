@@ -163,9 +163,14 @@ void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t)
 // throws prt::Error "PATH: problem", also for a per-vertex file (and
 // read_transfer refuses a lightmap, naming it).
 LightmapTransfer read_lightmap_transfer(const std::string& path);
-// Whether the file at `path` holds a lightmap (header checks only; false for
-// wavelet files).
+// Whether the file at `path` holds a lightmap, SH or wavelet (header checks
+// only; read_transfer_basis tells which).
 bool transfer_is_lightmap(const std::string& path);
+// A wavelet lightmap (prt precompute --lightmap --basis wavelet): a wavelet
+// transfer file whose "vertices" are covered texels, with flag bit 3 and the
+// layout and covered texels as sections 21 and 22 (docs/FORMAT.md).
+void write_wavelet_lightmap(const std::string& path, const WaveletLightmap& t);
+WaveletLightmap read_wavelet_lightmap(const std::string& path);
 std::vector<TransferSection> transfer_sections(const LightmapTransfer& t);
 std::uint64_t transfer_file_size(const LightmapTransfer& t);
 // The atlas, covered and analytic texels and bytes per covered texel, then

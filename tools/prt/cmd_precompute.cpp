@@ -260,7 +260,16 @@ int run_wavelet(PrecomputeArgs& a) {
 
 // --lightmap WxH: the SH transfer of every covered texel of SCENE's atlas.
 int run_lightmap(PrecomputeArgs& a) {
-  if (a.basis != "sh") throw UsageError("--lightmap takes --basis sh (wavelet lightmaps are not available yet)");
+  const bool wavelet = a.basis == "wavelet";
+  if (wavelet && a.mode != "shadowed")
+    throw UsageError("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed only");
+  if (wavelet)
+    for (const CLI::Option* o : a.sh_only)
+      if (o->count() > 0 && o != a.material_opt && o->get_name() != "--memory-limit")
+        throw UsageError(o->get_name() + " does not apply to --basis wavelet (--cube-res and --threshold set its size)");
+  if (!wavelet)
+    for (const CLI::Option* o : a.wavelet_only)
+      if (o->count() > 0) throw UsageError(o->get_name() + " applies to --basis wavelet only");
   for (const CLI::Option* o : {a.material_opt, a.target_opt, a.vertex_colors_opt, a.weld_opt})
     if (o->count() > 0 && !(o == a.material_opt && a.material == "diffuse"))
       throw UsageError(o->get_name() + " does not apply to --lightmap (a lightmap is diffuse; its albedo is the "
@@ -314,6 +323,31 @@ int run_lightmap(PrecomputeArgs& a) {
                  texels.uv_degenerate, set);
   }
   Outputs out("precompute");
+  if (wavelet) {  // the all-frequency variant: a wavelet transfer at the texels (docs/LIGHTMAPS.md)
+    a.wopt.threads = a.opt.threads;
+    a.wopt.offset = a.opt.offset;
+    a.wopt.comm = &job();
+    a.wopt.vertex_colors = true;
+    if (albedo) a.wopt.albedo = *albedo;
+    const Mesh points = texel_points(texels);
+    const std::optional<WaveletTransfer> w = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+      return compute_wavelet_at_points(scene.mesh, points, a.wopt, job_progress(progress));
+    });
+    if (!w) return 130;
+    if (!is_root()) return 0;
+    WaveletLightmap wl{*w, texels.layout};
+    wl.transfer.mesh_hash = texels.layout.scene_hash;
+    out.write([&] { write_wavelet_lightmap(a.output, wl); });
+    if (const int rc = out.commit(); rc != 0) return rc;
+    if (!a.quiet)
+      fmt::print(stderr, "wrote {}: wavelet lightmap {}x{}, cube {}, {} covered texels, {:.1f} coefficients and {:.1f} "
+                         "bytes per texel, {:.2f} s\n",
+                 a.output, width, height, wl.transfer.cube_res, wl.transfer.vertices,
+                 double(wl.transfer.kept()) / double(std::max<std::size_t>(wl.transfer.vertices, 1)),
+                 double(wl.transfer.bytes()) / double(std::max<std::size_t>(wl.transfer.vertices, 1)),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    return 0;
+  }
   const std::optional<LightmapTransfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
     return compute_lightmap_transfer(scene, texels, a.opt, job_progress(progress));
   }, a.opt.memory_limit);

@@ -132,6 +132,50 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   return 0;
 }
 
+// An RGBA float EXR of per-texel radiance in the lightmap's layout.
+void write_lightmap_exr(const std::string& path, const LightmapLayout& layout, const std::vector<glm::vec3>& rgb) {
+  const std::vector<glm::vec4> img = lightmap_image(layout, rgb);
+  RgbaImage out_img;
+  out_img.width = layout.width;
+  out_img.height = layout.height;
+  out_img.rgba.resize(img.size() * 4);
+  for (std::size_t i = 0; i < img.size(); ++i)
+    for (int c = 0; c < 4; ++c) out_img.rgba[4 * i + std::size_t(c)] = img[i][c];
+  write_exr_rgba(path, out_img);
+}
+
+// A wavelet lightmap: the texels' wavelet relighting with K terms (as per vertex).
+int run_wavelet_lightmap(const RelightArgs& a, const std::array<double, 3>& euler) {
+  for (const CLI::Option* o : a.sh_only)
+    if (o->count() > 0)
+      throw UsageError(o->get_name() + " applies to SH transfers; " + a.transfer + " is a wavelet lightmap (--terms, "
+                       "--selection)");
+  const wavelet::Selection selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
+  const WaveletLightmap wl = read_wavelet_lightmap(a.transfer);
+  const prt::Scene scene = prt::load_scene(a.mesh);
+  const LightmapTexels texels = lightmap_texels(scene, wl.layout.width, wl.layout.height, wl.layout.uv_set);
+  if (texels.layout.scene_hash != wl.layout.scene_hash || texels.layout.texels != wl.layout.texels)
+    throw Error(a.transfer + ": was computed for another scene or atlas (scene hash, covered texels differ)");
+  EnvMap env = load_envmap(a.env);
+  require_finite(env);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(scene), describe(env), describe_transfer(wl.transfer));
+  const auto t0 = std::chrono::steady_clock::now();
+  wavelet::FrameLighting lighting(env, wl.transfer.cube_res);
+  lighting.update(sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.terms, selection);
+  std::vector<glm::vec3> rgb;
+  wavelet_relight(wl.transfer, lighting.coefficients().data(), lighting.terms(), rgb);
+  const double ms = ms_since(t0);
+  check_relit(rgb, a, env, [&](std::size_t v) { return double(wl.transfer.vertex_scale[v]) * 32767.0; });
+  Outputs out("relight");
+  out.write([&] { write_lightmap_exr(a.output, wl.layout, rgb); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "relight: {:.3f} ms ({} of {} terms)\nwrote {} ({}x{} RGBA, {} covered texels)\n", ms,
+               lighting.terms().size(), wl.transfer.coeff_count(), a.output, wl.layout.width, wl.layout.height,
+               wl.layout.texels.size());
+  return 0;
+}
+
 // A lightmap transfer (prt precompute --lightmap): an RGBA float EXR of the
 // atlas, A = 1 at covered texels, gutters dilated (docs/LIGHTMAPS.md).
 int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
@@ -141,9 +185,10 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   for (const CLI::Option* o : a.sh_only)
     if (o->count() > 0 && o->get_name() != "--window" && o->get_name() != "--window-width" && o->get_name() != "--direct")
       throw UsageError(o->get_name() + " does not apply to a lightmap (diffuse: no eye, no lobe)");
+  if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
+  if (read_transfer_basis(a.transfer) == TransferBasis::Wavelet) return run_wavelet_lightmap(a, euler);
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0) throw UsageError(o->get_name() + " applies to wavelet transfers; " + a.transfer + " is an SH lightmap");
-  if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
   const LightmapTransfer lt = read_lightmap_transfer(a.transfer);
   const prt::Scene scene = prt::load_scene(a.mesh);
@@ -167,15 +212,8 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
     for (double x : vertex_transfer(lt.transfer, points, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
-  const std::vector<glm::vec4> img = lightmap_image(lt.layout, rgb);
-  RgbaImage out_img;
-  out_img.width = lt.layout.width;
-  out_img.height = lt.layout.height;
-  out_img.rgba.resize(img.size() * 4);
-  for (std::size_t i = 0; i < img.size(); ++i)
-    for (int c = 0; c < 4; ++c) out_img.rgba[4 * i + std::size_t(c)] = img[i][c];
   Outputs out("relight");
-  out.write([&] { write_exr_rgba(a.output, out_img); });
+  out.write([&] { write_lightmap_exr(a.output, lt.layout, rgb); });
   if (const int rc = out.commit(); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels)\nwrote {} ({}x{} RGBA, {} covered texels)\n",

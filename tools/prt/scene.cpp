@@ -97,6 +97,9 @@ Scene load_scene(const std::string& mesh, const std::string& transfer, const std
                  const char* command, bool allow_wavelet, bool allow_compressed) {
   Scene s;
   if (transfer_is_lightmap(transfer)) {  // a scene and its lightmap (docs/LIGHTMAPS.md)
+    if (read_transfer_basis(transfer) == TransferBasis::Wavelet)
+      throw Error(transfer + ": holds a wavelet lightmap: prt relight SCENE FILE ENV -o lightmap.exr relights it; prt " +
+                  std::string(command) + " shows SH lightmaps");
     s.lightmap = read_lightmap_transfer(transfer);
     s.world = prt::load_scene(mesh);
     s.mesh = s.world->mesh;
