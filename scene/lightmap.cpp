@@ -114,7 +114,7 @@ void parse_lightmap_size(const std::string& text, int& width, int& height) {
     return out >= 1 && out <= kMaxLightmapSize;
   };
   if (x == std::string::npos || !number(text.substr(0, x), width) || !number(text.substr(x + 1), height))
-    throw Error(fmt::format("--lightmap: must be WxH with W and H from 1 to {} (e.g. 1024x1024), got {}",
+    throw Error(fmt::format("must be WxH with W and H from 1 to {} (e.g. 1024x1024), got '{}'",
                             kMaxLightmapSize, text));
 }
 

@@ -8,6 +8,7 @@
 #include <prt/names.h>
 #include <prt/wavelet.h>
 
+#include "transfer_io_format.h"
 #include "transfer_rules.h"
 
 #include <fmt/format.h>
@@ -26,163 +27,9 @@
 
 namespace prt {
 
-namespace {
+using namespace detail::tio;
 
-// The format is little-endian IEEE 754; on such a machine its arrays are the
-// in-memory arrays, written and read without conversion.
-static_assert(std::endian::native == std::endian::little,
-              "transfer files are little-endian: add byte swapping before porting to a big-endian machine");
-static_assert(std::numeric_limits<float>::is_iec559 && std::numeric_limits<double>::is_iec559);
-static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "bent normals are stored as packed float triples");
-
-// ---- layout (docs/FORMAT.md) ---------------------------------------------------
-
-// "PRTT" then CR LF SUB LF, as PNG: a text-mode transfer that rewrites line
-// endings, or a 7-bit one, changes these bytes.
-constexpr std::array<char, 8> kMagic = {'P', 'R', 'T', 'T', '\r', '\n', '\x1a', '\n'};
-constexpr std::array<char, 4> kEndMagic = {'P', 'R', 'T', 'E'};
-constexpr std::uint64_t kHeaderSize = 128;
-constexpr std::uint64_t kSectionHeaderSize = 24;  // u32 kind, u32 type, u64 count, u64 bytes
-constexpr std::uint64_t kTrailerSize = 12;        // u64 XXH3-64 of all bytes before it, "PRTE"
-constexpr std::uint64_t kMinFileSize = kHeaderSize + kTrailerSize;
-constexpr std::uint64_t kAlign = 8;               // section data is zero-padded to a multiple of 8
-
-// Byte offsets of the header fields. Every field is naturally aligned.
-constexpr std::size_t kOffVersion = 8;        // u32
-constexpr std::size_t kOffHeaderSize = 12;    // u32
-constexpr std::size_t kOffBasis = 16;         // u32
-constexpr std::size_t kOffBands = 20;         // u32
-constexpr std::size_t kOffChannels = 24;      // u32
-constexpr std::size_t kOffMode = 28;          // u32
-constexpr std::size_t kOffBounces = 32;       // u32
-constexpr std::size_t kOffSamples = 36;       // u32
-constexpr std::size_t kOffAlbedo = 40;        // f32[3]
-constexpr std::size_t kOffFlags = 52;         // u32
-constexpr std::size_t kOffSeed = 56;          // u64
-constexpr std::size_t kOffVertices = 64;      // u64
-constexpr std::size_t kOffMeshHash = 72;      // u64
-constexpr std::size_t kOffSectionCount = 80;  // u32
-constexpr std::size_t kOffReserved = 84;      // version 1: zero up to kHeaderSize
-// Version 2 (analytic vertices): a u32 of zeros at 84, then
-constexpr std::size_t kOffStored = 88;        // u64: vertices with stored transfer
-constexpr std::size_t kOffShadingHash = 96;   // u64: shading_hash() of the mesh
-constexpr std::size_t kOffReservedV2 = 104;   // zero up to kHeaderSize
-// The wavelet basis did not change with version 2: its files stay version 1.
-constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
-
-constexpr std::uint32_t kBasisSH = 0;
-constexpr std::uint32_t kBasisWavelet = 1;
-constexpr std::uint32_t kFlagVertexColors = 1u << 0;
-constexpr std::uint32_t kFlagGlossy = 1u << 1;      // version 3: glossy transfer matrices (section 7)
-constexpr std::uint32_t kFlagCompressed = 1u << 2;  // version 4: rows compressed by clustered PCA (sections 8, 9)
-constexpr std::uint32_t kFlagLightmap = 1u << 3;    // version 5: rows are a lightmap's covered texels (sections 10, 11)
-constexpr std::uint32_t kKnownFlagsV2 = kFlagVertexColors;
-constexpr std::uint32_t kKnownFlagsV3 = kFlagVertexColors | kFlagGlossy;
-constexpr std::uint32_t kKnownFlagsV4 = kKnownFlagsV3 | kFlagCompressed;
-constexpr std::uint32_t kKnownFlags = kKnownFlagsV4 | kFlagLightmap;
-
-constexpr std::uint32_t kTypeF32 = 1;
-constexpr std::uint32_t kTypeF64 = 2;
-constexpr std::uint32_t kTypeU64 = 3;  // wavelet files only
-constexpr std::uint32_t kTypeU32 = 4;
-constexpr std::uint32_t kTypeI16 = 5;
-constexpr std::uint32_t kTypeU8 = 6;   // version 4: the compressed signals (byte records)
-constexpr std::uint32_t kTypeU16 = 7;  // inside a compressed signal only: cluster indices
-
-// Kinds 1 to 5 are the arrays of a Transfer (detail::TransferArray), 6 the
-// file's form of its slots.
-using detail::TransferArray;
-enum Kind : std::uint32_t {
-  kCoeffs = std::uint32_t(TransferArray::Coeffs),
-  kDirect = std::uint32_t(TransferArray::Direct),
-  kAO = std::uint32_t(TransferArray::AO),
-  kBentNormals = std::uint32_t(TransferArray::BentNormals),
-  kBounceEnergy = std::uint32_t(TransferArray::BounceEnergy),
-  kAnalyticMask = 6,  // version 2
-  kGlossy = std::uint32_t(TransferArray::Glossy),  // version 3
-  kCompressedCoeffs = 8,                            // version 4
-  kCompressedGlossy = 9,                            // version 4
-  kLightmapLayout = 10,                             // version 5: u64 width, height, UV set, scene hash
-  kLightmapTexels = 11,                             // version 5: u32 covered texel y * width + x, increasing
-};
-
-struct KindInfo {
-  std::uint32_t kind;
-  const char* name;
-  std::uint32_t type;
-  bool per_vertex;
-};
-// In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 11> kKinds = {{
-    {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
-    {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
-    {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
-    {kBentNormals, detail::array_name(TransferArray::BentNormals), kTypeF32, true},
-    {kBounceEnergy, detail::array_name(TransferArray::BounceEnergy), kTypeF64, false},
-    {kAnalyticMask, "analytic vertices", kTypeU32, false},
-    {kGlossy, detail::array_name(TransferArray::Glossy), kTypeF32, true},
-    {kCompressedCoeffs, "compressed coefficients", kTypeU8, true},
-    {kCompressedGlossy, "compressed glossy matrices", kTypeU8, true},
-    {kLightmapLayout, "lightmap layout", kTypeU64, false},
-    {kLightmapTexels, "lightmap texels", kTypeU32, true},
-}};
-// Section kinds a file of each version may hold (kinds 1..N).
-constexpr std::size_t kKindsV1 = 5;
-constexpr std::size_t kKindsV2 = 6;
-constexpr std::size_t kKindsV3 = 7;
-constexpr std::size_t kKindsV4 = 9;
-constexpr std::size_t kKindsV5 = 11;
-constexpr std::uint64_t kLightmapLayoutWords = 4;
-
-// Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
-constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
-
-const KindInfo* kind_info(std::uint32_t kind) {
-  for (const auto& k : kKinds)
-    if (k.kind == kind) return &k;
-  return nullptr;
-}
-
-std::uint32_t type_bytes(std::uint32_t type) {
-  switch (type) {
-    case kTypeF64:
-    case kTypeU64: return 8;
-    case kTypeI16:
-    case kTypeU16: return 2;
-    case kTypeU8: return 1;
-    default: return 4;
-  }
-}
-constexpr EnumName<std::uint32_t> kTypeNames[] = {
-    {kTypeF32, "f32"}, {kTypeF64, "f64"}, {kTypeU64, "u64"}, {kTypeU32, "u32"},
-    {kTypeI16, "i16"}, {kTypeU8, "u8"},  {kTypeU16, "u16"},
-};
-// TransferSection::type is a C string: the names are literals.
-const char* type_name(std::uint32_t type) { return enum_name(kTypeNames, type).data(); }
-
-// ---- small helpers ----------------------------------------------------------------
-
-std::string errno_text() { return errno != 0 ? std::strerror(errno) : "I/O error"; }
-
-template <typename T>
-T load(const unsigned char* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-template <typename T>
-void store(unsigned char* p, T v) {
-  std::memcpy(p, &v, sizeof v);
-}
-
-constexpr std::uint64_t padding(std::uint64_t bytes) { return (kAlign - bytes % kAlign) % kAlign; }
-
-// a + b, or the largest u64 if that overflows (sizes read from a damaged file).
-std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
-  return a > std::numeric_limits<std::uint64_t>::max() - b ? std::numeric_limits<std::uint64_t>::max() : a + b;
-}
-
+namespace detail::tio {
 // ---- the data rules (transfer_rules.h) and the file's own ------------------------
 
 using detail::TransferHeader;
@@ -332,26 +179,8 @@ std::vector<unsigned char> encode_signal(const ClusteredSignal& g) {
 
 // ---- writing ------------------------------------------------------------------------
 
-// An output stream that hashes what it writes.
-class HashedWriter {
- public:
-  explicit HashedWriter(std::ofstream& out) : out_(out) {}
-  void write(const void* data, std::uint64_t bytes) {
-    if (bytes == 0) return;
-    hash_.add(data, bytes);
-    raw(data, bytes);
-  }
-  void raw(const void* data, std::uint64_t bytes) {
-    out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
-  }
-  std::uint64_t digest() const { return hash_.digest(); }
 
- private:
-  std::ofstream& out_;
-  Hasher hash_;
-};
-
-}  // namespace
+}  // namespace detail::tio
 
 std::vector<TransferSection> transfer_sections(const Transfer& t) {
   std::vector<TransferSection> s;
@@ -385,7 +214,7 @@ std::uint64_t transfer_bytes_per_vertex(const Transfer& t) {
   return b;
 }
 
-namespace {
+namespace detail::tio {
 
 std::uint64_t file_size_of(const std::vector<TransferSection>& sections) {
   std::uint64_t size = kHeaderSize + kTrailerSize;
@@ -393,16 +222,10 @@ std::uint64_t file_size_of(const std::vector<TransferSection>& sections) {
   return size;
 }
 
-}  // namespace
+}  // namespace detail::tio
 
-namespace {
+namespace detail::tio {
 
-// One section as written: kind, element type, element count, bytes, data.
-struct RawSection {
-  std::uint32_t kind, type;
-  std::uint64_t count, bytes;
-  const void* data;
-};
 
 // Writes header, sections (each padded to kAlign) and the checksummed
 // trailer to a temporary file renamed over `path` (nothing half-written).
@@ -434,11 +257,11 @@ void write_file(const std::string& path, const unsigned char (&header)[kHeaderSi
   });
 }
 
-}  // namespace
+}  // namespace detail::tio
 
 std::uint64_t transfer_file_size(const Transfer& t) { return file_size_of(transfer_sections(t)); }
 
-namespace {
+namespace detail::tio {
 
 // The 128-byte header of an SH transfer file.
 void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::uint32_t version, std::uint32_t flags,
@@ -464,7 +287,7 @@ void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::u
   store<std::uint64_t>(header + kOffShadingHash, t.shading_hash);
 }
 
-}  // namespace
+}  // namespace detail::tio
 
 void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
@@ -519,48 +342,8 @@ void write_compressed_transfer(const std::string& path, const CompressedTransfer
 
 // ---- reading ------------------------------------------------------------------------
 
-namespace {
+namespace detail::tio {
 
-class Reader {
- public:
-  explicit Reader(const std::string& path) : path_(path) {}
-
-  Error fail(const std::string& what) const { return Error(path_ + ": " + what); }
-
-  // An SH transfer; a compressed one into *compressed (its uncompressed part
-  // returned), which must then be given (and only then).
-  Transfer read(CompressedTransfer* compressed = nullptr, LightmapLayout* lightmap = nullptr);
-  WaveletTransfer read_wavelet(LightmapLayout* lightmap = nullptr);
-  std::uint32_t read_basis();
-  std::uint32_t version() const { return version_; }
-  std::uint32_t flags() const { return load<std::uint32_t>(h_ + kOffFlags); }
-
- private:
-  void open_file();
-  void read_head();  // signature, version, header size: into h_, section_count_
-  void verify();     // trailer and checksum
-  void read_at(std::uint64_t offset, void* dst, std::uint64_t bytes) {
-    f_.clear();
-    f_.seekg(static_cast<std::streamoff>(offset));
-    f_.read(static_cast<char*>(dst), static_cast<std::streamsize>(bytes));
-    if (!f_ || std::uint64_t(f_.gcount()) != bytes)
-      throw fail(fmt::format("read error at byte {}: {}", offset, errno_text()));
-  }
-  void check_signature(const unsigned char* head, std::uint64_t have);
-  void explain_bad_size(std::uint32_t section_count);
-  std::uint64_t checksum(std::uint64_t bytes);
-  template <typename T>
-  void read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count);
-  ClusteredSignal read_signal(std::uint64_t offset, std::uint64_t bytes, const char* name, std::uint64_t rows,
-                              std::uint64_t dim);
-
-  std::string path_;
-  std::ifstream f_;
-  std::uint64_t size_ = 0;
-  unsigned char h_[kHeaderSize] = {};
-  std::uint32_t section_count_ = 0;
-  std::uint32_t version_ = 0;
-};
 
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size) {
   return fmt::format("truncated: expected {}{} bytes, file has {}", exact ? "" : "at least ", expected, size);
@@ -610,11 +393,6 @@ std::uint64_t Reader::checksum(std::uint64_t bytes) {
   return hash.digest();
 }
 
-template <typename T>
-void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count) {
-  dst.resize(count);
-  read_at(offset, dst.data(), count * sizeof(T));
-}
 
 ClusteredSignal Reader::read_signal(std::uint64_t offset, std::uint64_t bytes, const char* name, std::uint64_t rows,
                                     std::uint64_t dim) {
@@ -949,7 +727,7 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
   return t;
 }
 
-}  // namespace
+}  // namespace detail::tio
 
 Transfer read_transfer(const std::string& path) { return Reader(path).read(); }
 
@@ -959,68 +737,9 @@ CompressedTransfer read_compressed_transfer(const std::string& path) {
   return c;
 }
 
-// ---- lightmaps (sections 10 and 11; docs/FORMAT.md "Lightmap transfer") -------------
-
-std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
-  std::vector<TransferSection> s = transfer_sections(t.transfer);
-  for (const std::uint32_t kind : {kLightmapLayout, kLightmapTexels}) {
-    const KindInfo& k = *kind_info(kind);
-    const std::uint64_t count = kind == kLightmapLayout ? kLightmapLayoutWords : t.layout.texels.size();
-    s.push_back({kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex, type_name(k.type)});
-  }
-  return s;
-}
-
-std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_of(transfer_sections(t)); }
-
-void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t) {
-  if (auto p = lightmap_problem(t); !p.empty()) throw Error(path + ": cannot write this lightmap: " + p);
-  if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
-  const std::vector<TransferSection> sections = transfer_sections(t);
-  unsigned char header[kHeaderSize];
-  fill_header(header, t.transfer, kTransferFormatVersion, kFlagLightmap, sections.size());
-  const std::vector<std::uint32_t> mask = analytic_mask(t.transfer);
-  const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
-                                                      std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
-  std::vector<RawSection> raw;
-  for (const auto& s : sections) {
-    const void* data = s.kind == kAnalyticMask     ? mask.data()
-                       : s.kind == kLightmapLayout ? static_cast<const void*>(layout)
-                       : s.kind == kLightmapTexels ? static_cast<const void*>(t.layout.texels.data())
-                                                   : section_array(t.transfer, s.kind).first;
-    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
-  }
-  write_file(path, header, raw);
-}
-
-LightmapTransfer read_lightmap_transfer(const std::string& path) {
-  LightmapTransfer t;
-  Reader r(path);
-  t.transfer = r.read(nullptr, &t.layout);
-  if (auto p = lightmap_problem(t); !p.empty()) throw r.fail("bad lightmap: " + p);
-  return t;
-}
-
-bool transfer_is_lightmap(const std::string& path) {
-  Reader r(path);
-  if (r.read_basis() != kBasisSH) return (r.flags() & kFlagLightmap) != 0;
-  return r.version() >= 5 && (r.flags() & kFlagLightmap) != 0;
-}
-
-std::string describe_transfer(const LightmapTransfer& t) {
-  const LightmapLayout& l = t.layout;
-  const std::size_t n = l.texels.size();
-  const std::uint64_t size = transfer_file_size(t);
-  return fmt::format("lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}% of the atlas), {} analytic "
-                     "(no row stored), {:.1f} bytes per covered texel, scene hash {:016x}\n",
-                     l.width, l.height, l.uv_set, l.uv_set, n, 100.0 * double(n) / (double(l.width) * l.height),
-                     t.transfer.analytic_vertices(), n ? double(size) / double(n) : 0.0, l.scene_hash) +
-         describe_transfer(t.transfer);
-}
-
 // ---- checking and describing ----------------------------------------------------------
 
-namespace {
+namespace detail::tio {
 
 // Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
 void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,
@@ -1032,7 +751,7 @@ void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mes
                           what, vertices, mesh_hash, mesh.source, mesh.vertex_count(), hash, rerun));
 }
 
-}  // namespace
+}  // namespace detail::tio
 
 void check_matches(const Transfer& t, const Mesh& mesh, const std::string& transfer_path) {
   check_mesh(t.vertices, t.mesh_hash, mesh, transfer_path, "prt precompute");
@@ -1055,7 +774,7 @@ void check_matches(const Transfer& t, const Mesh& mesh, const std::string& trans
                           analytic));
 }
 
-namespace {
+namespace detail::tio {
 
 std::string describe_line(const char* label, const std::string& value) {
   return fmt::format("  {:<17} {}\n", label, value);
@@ -1136,7 +855,7 @@ std::string describe_signal(const char* label, const ClusteredSignal& g) {
                                           g.rows(), g.bytes() ? double(rows) / double(g.bytes()) : 0.0, rows));
 }
 
-}  // namespace
+}  // namespace detail::tio
 
 std::string describe_transfer(const Transfer& t) {
   return describe(t, transfer_format_version(t.glossy), transfer_sections(t), transfer_file_size(t), "");
@@ -1147,308 +866,4 @@ std::string describe_transfer(const CompressedTransfer& c) {
   if (c.transfer.glossy) comp += describe_signal("compressed glossy", c.glossy);
   return describe(c.transfer, kCompressedFormatVersion, transfer_sections(c), transfer_file_size(c), comp);
 }
-
-// ---- wavelet transfers (docs/FORMAT.md, "Wavelet transfer") ----------------------
-
-namespace {
-
-// Header fields that only a wavelet file uses (in the SH header's reserved bytes).
-constexpr std::size_t kOffCubeRes = kOffBands;  // u32: the face size r
-constexpr std::size_t kOffQuantisation = 84;    // u32
-constexpr std::size_t kOffThreshold = 88;       // f64
-constexpr std::size_t kOffWaveletReserved = 96; // zero up to kHeaderSize
-constexpr std::uint32_t kQuantInt16 = 1;        // int16 values, one f32 scale per vertex
-
-enum WaveletKind : std::uint32_t {
-  kColOffsets = 16,
-  kColVertices = 17,
-  kColValues = 18,
-  kVertexScale = 19,
-  kVertexAlbedo = 20,
-  kWaveletLightmapLayout = 21,  // a lightmap's (flag bit 3): u64 width, height, UV set, scene hash
-  kWaveletLightmapTexels = 22,  // u32 covered texels
-};
-
-struct WaveletSection {
-  std::uint32_t kind;
-  const char* name;
-  std::uint32_t type;
-  const void* data;
-  std::uint64_t count;
-  bool per_vertex;
-};
-
-constexpr EnumName<std::uint32_t> kWaveletKindNames[] = {
-    {kColOffsets, "column offsets"}, {kColVertices, "column vertices"}, {kColValues, "column values"},
-    {kVertexScale, "vertex scales"}, {kVertexAlbedo, "vertex albedo"},
-    {kWaveletLightmapLayout, "lightmap layout"}, {kWaveletLightmapTexels, "lightmap texels"},
-};
-const char* wavelet_kind_name(std::uint32_t kind) { return enum_name(kWaveletKindNames, kind).data(); }
-
-std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t, const LightmapLayout* lightmap = nullptr,
-                                            const std::uint64_t* layout_words = nullptr) {
-  const auto n = wavelet_kind_name;
-  std::vector<WaveletSection> s = {
-      {kColOffsets, n(kColOffsets), kTypeU64, t.col_offsets.data(), t.col_offsets.size(), false},
-      {kColVertices, n(kColVertices), kTypeU32, t.col_vertices.data(), t.col_vertices.size(), false},
-      {kColValues, n(kColValues), kTypeI16, t.col_values.data(), t.col_values.size(), false},
-      {kVertexScale, n(kVertexScale), kTypeF32, t.vertex_scale.data(), t.vertex_scale.size(), true},
-  };
-  if (t.vertex_colors)
-    s.push_back({kVertexAlbedo, n(kVertexAlbedo), kTypeF32, t.vertex_albedo.data(),
-                 3 * std::uint64_t(t.vertex_albedo.size()), true});
-  if (lightmap) {
-    s.push_back({kWaveletLightmapLayout, n(kWaveletLightmapLayout), kTypeU64, layout_words, kLightmapLayoutWords, false});
-    s.push_back({kWaveletLightmapTexels, n(kWaveletLightmapTexels), kTypeU32, lightmap->texels.data(),
-                 lightmap->texels.size(), true});
-  }
-  return s;
-}
-
-}  // namespace
-
-namespace {
-constexpr EnumName<TransferBasis> kBasisNames[] = {{TransferBasis::SH, "sh"}, {TransferBasis::Wavelet, "wavelet"}};
-}  // namespace
-
-std::string_view basis_name(TransferBasis b) { return enum_name(kBasisNames, b); }
-
-TransferBasis read_transfer_basis(const std::string& path) {
-  return Reader(path).read_basis() == kBasisWavelet ? TransferBasis::Wavelet : TransferBasis::SH;
-}
-
-bool transfer_is_compressed(const std::string& path) {
-  Reader r(path);
-  if (r.read_basis() != kBasisSH) throw r.fail("holds a wavelet transfer, not spherical harmonics");
-  return r.version() >= 4 && (r.flags() & kFlagCompressed) != 0;
-}
-
-std::uint32_t read_transfer_version(const std::string& path) {
-  Reader r(path);
-  r.read_basis();
-  return r.version();
-}
-
-std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
-  std::vector<TransferSection> out;
-  for (const auto& s : wavelet_sections(t))
-    out.push_back({s.kind, s.name, type_bytes(s.type), s.count, s.count * type_bytes(s.type), s.per_vertex,
-                   type_name(s.type)});
-  return out;
-}
-
-std::uint64_t transfer_file_size(const WaveletTransfer& t) { return file_size_of(transfer_sections(t)); }
-
-namespace {
-
-void write_wavelet_file(const std::string& path, const WaveletTransfer& t, const LightmapLayout* lightmap) {
-  if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this wavelet transfer: " + p);
-  std::uint64_t words[kLightmapLayoutWords] = {};
-  if (lightmap) {
-    words[0] = std::uint64_t(lightmap->width);
-    words[1] = std::uint64_t(lightmap->height);
-    words[2] = std::uint64_t(lightmap->uv_set);
-    words[3] = lightmap->scene_hash;
-  }
-  const std::vector<WaveletSection> sections = wavelet_sections(t, lightmap, words);
-
-  unsigned char header[kHeaderSize] = {};
-  std::memcpy(header, kMagic.data(), kMagic.size());
-  store<std::uint32_t>(header + kOffVersion, kWaveletVersion);
-  store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
-  store<std::uint32_t>(header + kOffBasis, kBasisWavelet);
-  store<std::uint32_t>(header + kOffCubeRes, std::uint32_t(t.cube_res));
-  store<std::uint32_t>(header + kOffChannels, 1);
-  store<std::uint32_t>(header + kOffMode, std::uint32_t(TransferMode::Shadowed));
-  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
-  store<std::uint32_t>(header + kOffFlags, (t.vertex_colors ? kFlagVertexColors : 0u) | (lightmap ? kFlagLightmap : 0u));
-  store<std::uint64_t>(header + kOffVertices, t.vertices);
-  store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
-  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
-  store<std::uint32_t>(header + kOffQuantisation, kQuantInt16);
-  store<double>(header + kOffThreshold, t.threshold);
-
-  std::vector<RawSection> raw;
-  for (const auto& s : sections) raw.push_back({s.kind, s.type, s.count, s.count * type_bytes(s.type), s.data});
-  write_file(path, header, raw);
-}
-
-}  // namespace
-
-void write_wavelet_transfer(const std::string& path, const WaveletTransfer& t) { write_wavelet_file(path, t, nullptr); }
-
-void write_wavelet_lightmap(const std::string& path, const WaveletLightmap& t) {
-  LightmapTransfer shape;  // lightmap_problem of the layout against the texel count
-  shape.layout = t.layout;
-  shape.transfer.bands = 1;
-  shape.transfer.vertices = t.transfer.vertices;
-  shape.transfer.coeffs.assign(t.transfer.vertices, 0.0f);
-  if (auto p = lightmap_problem(shape); !p.empty()) throw Error(path + ": cannot write this wavelet lightmap: " + p);
-  write_wavelet_file(path, t.transfer, &t.layout);
-}
-
-namespace {
-
-WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
-  open_file();
-  read_head();
-  verify();
-  const unsigned char* h = h_;
-  const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
-  if (basis == kBasisSH)
-    throw fail(fmt::format("holds a spherical-harmonics transfer (basis 'sh', {} bands), not a wavelet one: run prt "
-                           "precompute --basis wavelet for a wavelet transfer, or read it with prt::read_transfer",
-                           load<std::uint32_t>(h + kOffBands)));
-  if (basis != kBasisWavelet) throw fail(unknown_basis(basis));
-  if (version_ != kWaveletVersion)
-    throw fail(fmt::format("bad header: format version {} for a wavelet transfer (wavelet files are version {})",
-                           version_, kWaveletVersion));
-
-  WaveletTransfer t;
-  const std::uint32_t r = load<std::uint32_t>(h + kOffCubeRes);
-  const std::uint32_t channels = load<std::uint32_t>(h + kOffChannels), mode = load<std::uint32_t>(h + kOffMode);
-  t.threshold = load<double>(h + kOffThreshold);
-  t.albedo = {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)};
-  t.vertices = std::size_t(load<std::uint64_t>(h + kOffVertices));
-  t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
-  if (auto p = detail::wavelet_header_problem(r, t.threshold, t.albedo, t.vertices); !p.empty())
-    throw fail("bad header: " + p);
-  t.cube_res = int(r);
-  if (channels != 1) throw fail(fmt::format("bad header: channels is {}; a wavelet transfer has 1", channels));
-  if (mode != std::uint32_t(TransferMode::Shadowed))
-    throw fail(fmt::format("bad header: mode is {}; a wavelet transfer is shadowed (1)", mode));
-  if (load<std::uint32_t>(h + kOffBounces) != 0 || load<std::uint32_t>(h + kOffSamples) != 0 ||
-      load<std::uint64_t>(h + kOffSeed) != 0)
-    throw fail("bad header: bounces, samples and seed must be 0 in a wavelet transfer");
-  const std::uint32_t quant = load<std::uint32_t>(h + kOffQuantisation);
-  if (quant != kQuantInt16)
-    throw fail(fmt::format("bad header: unknown quantisation {} (1 is int16 with a scale per vertex)", quant));
-  const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
-  if (flags & ~kKnownFlags) throw fail(fmt::format("bad header: unknown flags 0x{:x}", flags & ~kKnownFlags));
-  t.vertex_colors = (flags & kFlagVertexColors) != 0;
-  const bool lightmap = (flags & kFlagLightmap) != 0;
-  if (lightmap && !lightmap_out)
-    throw fail("holds a wavelet lightmap (prt precompute SCENE --lightmap --basis wavelet): relight it with prt relight "
-               "SCENE FILE ENV -o lightmap.exr; the library reads it with prt::read_wavelet_lightmap");
-  if (!lightmap && lightmap_out) throw fail("holds a per-vertex wavelet transfer, not a lightmap");
-  for (std::uint64_t i = kOffWaveletReserved; i < kHeaderSize; ++i)
-    if (h[i] != 0) throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
-  if (t.vertices > size_ / 4)  // the scales alone take 4 bytes per vertex
-    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes", t.vertices, size_));
-
-  std::vector<std::uint32_t> kinds = {kColOffsets, kColVertices, kColValues, kVertexScale};
-  if (t.vertex_colors) kinds.push_back(kVertexAlbedo);
-  if (lightmap) kinds.insert(kinds.end(), {kWaveletLightmapLayout, kWaveletLightmapTexels});
-  if (section_count_ != kinds.size())
-    throw fail(fmt::format("bad section table: {} sections; a wavelet transfer {} vertex colours has {}", section_count_,
-                           t.vertex_colors ? "with" : "without", kinds.size()));
-
-  const std::uint64_t n = wavelet::cube_size(t.cube_res), data_end = size_ - kTrailerSize;
-  std::uint64_t offset = kHeaderSize;
-  for (std::uint32_t i = 0; i < section_count_; ++i) {
-    const char* name = wavelet_kind_name(kinds[i]);
-    if (offset + kSectionHeaderSize > data_end)
-      throw fail(fmt::format("bad section table: section {} ('{}') is missing", i + 1, name));
-    unsigned char sh[kSectionHeaderSize];
-    read_at(offset, sh, sizeof sh);
-    const std::uint32_t kind = load<std::uint32_t>(sh + 0), type = load<std::uint32_t>(sh + 4);
-    const std::uint64_t count = load<std::uint64_t>(sh + 8), bytes = load<std::uint64_t>(sh + 16);
-    if (kind != kinds[i])
-      throw fail(
-          fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
-    const std::uint32_t want_type = kind == kColOffsets || kind == kWaveletLightmapLayout ? kTypeU64
-                                    : kind == kColVertices || kind == kWaveletLightmapTexels ? kTypeU32
-                                    : kind == kColValues                                     ? kTypeI16
-                                                                                             : kTypeF32;
-    if (type != want_type)
-      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
-                             want_type, type_name(want_type)));
-    std::uint64_t want = 0;
-    switch (kind) {
-      case kColOffsets: want = n + 1; break;
-      case kColVertices: want = count; break;  // checked against the offsets below
-      case kColValues: want = t.col_vertices.size(); break;
-      case kVertexScale: want = t.vertices; break;
-      case kVertexAlbedo: want = 3 * std::uint64_t(t.vertices); break;
-      case kWaveletLightmapLayout: want = kLightmapLayoutWords; break;
-      case kWaveletLightmapTexels: want = t.vertices; break;
-    }
-    if (count != want)
-      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count, want));
-    const std::uint64_t data = offset + kSectionHeaderSize, eb = type_bytes(type);
-    if (count > (data_end - data) / eb)
-      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
-    if (bytes != count * eb)
-      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", name, count,
-                             type_name(type), bytes));
-    const std::uint64_t pad = padding(bytes);
-    if (bytes + pad > data_end - data)
-      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
-    switch (kind) {
-      case kColOffsets: read_section(data, t.col_offsets, count); break;
-      case kColVertices: read_section(data, t.col_vertices, count); break;
-      case kColValues: read_section(data, t.col_values, count); break;
-      case kVertexScale: read_section(data, t.vertex_scale, count); break;
-      case kVertexAlbedo: read_section(data, t.vertex_albedo, count / 3); break;
-      case kWaveletLightmapLayout: {
-        std::vector<std::uint64_t> w;
-        read_section(data, w, count);
-        for (int k = 0; k < 3; ++k)
-          if (w[std::size_t(k)] > std::uint64_t(kMaxLightmapSize))
-            throw fail(fmt::format("bad section 'lightmap layout': value {} is out of range", w[std::size_t(k)]));
-        lightmap_out->width = int(w[0]);
-        lightmap_out->height = int(w[1]);
-        lightmap_out->uv_set = int(w[2]);
-        lightmap_out->scene_hash = w[3];
-        break;
-      }
-      case kWaveletLightmapTexels: read_section(data, lightmap_out->texels, count); break;
-    }
-    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
-    read_at(data + bytes, got, pad);
-    if (std::memcmp(got, zeros, pad) != 0)
-      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", name));
-    offset = data + bytes + pad;
-  }
-  if (offset != data_end)
-    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
-  if (auto p = transfer_problem(t); !p.empty()) throw fail(p);
-  t.vertex_kept.assign(t.vertices, 0);
-  for (std::uint32_t v : t.col_vertices) ++t.vertex_kept[v];
-  return t;
-}
-
-}  // namespace
-
-WaveletTransfer read_wavelet_transfer(const std::string& path) { return Reader(path).read_wavelet(); }
-
-WaveletLightmap read_wavelet_lightmap(const std::string& path) {
-  WaveletLightmap t;
-  Reader r(path);
-  t.transfer = r.read_wavelet(&t.layout);
-  LightmapTransfer shape;
-  shape.layout = t.layout;
-  shape.transfer.bands = 1;
-  shape.transfer.vertices = t.transfer.vertices;
-  shape.transfer.coeffs.assign(t.transfer.vertices, 0.0f);
-  if (auto p = lightmap_problem(shape); !p.empty()) throw r.fail("bad lightmap: " + p);
-  return t;
-}
-
-void check_matches(const WaveletTransfer& t, const Mesh& mesh, const std::string& what) {
-  check_mesh(t.vertices, t.mesh_hash, mesh, what, "prt precompute --basis wavelet");
-}
-
-std::string describe_transfer(const WaveletTransfer& t) {
-  const double bpv = t.vertices > 0 ? double(t.bytes()) / double(t.vertices) : 0.0;
-  const std::string albedo = t.vertex_colors ? std::string("albedo: vertex colours")
-                                             : fmt::format("albedo {:.7g} {:.7g} {:.7g}", double(t.albedo.x),
-                                                           double(t.albedo.y), double(t.albedo.z));
-  return fmt::format("prt wavelet transfer (format version {}): cube {} ({} coefficients), threshold {:g}, int16 + f32 "
-                     "scale per vertex, {} vertices, kept {:.4g}% ({} coefficients), {:.1f} bytes/vertex, {}, mesh hash "
-                     "0x{:016x}, file {} bytes\n",
-                     kWaveletVersion, t.cube_res, t.coeff_count(), t.threshold, t.vertices, 100.0 * t.kept_fraction(),
-                     t.kept(), bpv, albedo, t.mesh_hash, transfer_file_size(t));
-}
-
 }  // namespace prt

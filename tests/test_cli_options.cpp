@@ -148,6 +148,11 @@ const std::vector<Shared>& shared_table() {
         {"colors", "colors is for callers that upload their own vertex colours"}},
        {"transfer", "ao"}},
       {"--selection", {{"random", "unknown wavelet term selection 'random' (expected area or magnitude)"}}, {"area", "magnitude"}},
+      {"--lightmap",
+       {{"0x16", "must be WxH with W and H from 1 to 16384 (e.g. 1024x1024), got '0x16'"},
+        {"64", "must be WxH with W and H from 1 to 16384 (e.g. 1024x1024), got '64'"}},
+       {"64x32"}},
+      {"--uv", {{"8", "must be a whole number from 0 to 7, got '8'"}}, {"0", "1"}},
   };
   return t;
 }

@@ -574,14 +574,13 @@ Run add_precompute(CLI::App& app) {
       add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the direction set"));
   add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
   a->weld_opt = s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
-  a->lightmap_opt = s->add_option("--lightmap", a->lightmap,
+  a->lightmap_opt = add_shared(s, SharedOption::Lightmap, a->lightmap,
                                   "WxH: an SH lightmap instead of vertices: the transfer of every texel of a W x H "
                                   "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
                                   "lightmap UV set (docs/LIGHTMAPS.md)");
-  a->uv_opt = s->add_option("--uv", a->uv,
+  a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv,
                             "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
-                            "object has it, else TEXCOORD_0)")
-                  ->check(int_range(0, 7));
+                            "object has it, else TEXCOORD_0)");
   s->add_option("--ao-map", a->ao_map,
                 "With --lightmap: also write the texels' ambient occlusion (1/pi integral V cos) as an RGBA EXR in the "
                 "lightmap's layout (A = 1 at covered texels)");

@@ -206,10 +206,10 @@ Run add_reference(CLI::App& app) {
   add_shared(s, SharedOption::Mode, a->mode, "Light paths: unshadowed (no rays), shadowed, or interreflected");
   add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode)");
   a->albedo_opt = add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo (with --lightmap: replaces the scene's materials)");
-  a->lightmap_opt = s->add_option("--lightmap", a->lightmap,
+  a->lightmap_opt = add_shared(s, SharedOption::Lightmap, a->lightmap,
                                   "WxH: the reference at the texels of prt precompute --lightmap WxH (SCENE: glTF or "
                                   "OBJ with vt), written as an RGBA float EXR in the relit lightmap's layout");
-  a->uv_opt = s->add_option("--uv", a->uv, "With --lightmap: the UV set (as prt precompute --uv)")->check(int_range(0, 7));
+  a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv, "With --lightmap: the UV set (as prt precompute --uv)");
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-s,--samples", a->opt.samples,
                 "Iterations per vertex, each one map-sampled and one cosine-sampled direction")

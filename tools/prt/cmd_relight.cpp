@@ -225,6 +225,10 @@ int run_relight(const RelightArgs& a) {
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  for (const CLI::Option* o : {a.exposure_opt, a.srgb_opt})
+    if (o->count() > 0 && a.tonemap.empty())
+      throw UsageError(o->get_name() + " is for display colours: give --tonemap clamp, reinhard or aces too (without "
+                       "it the output is linear radiance)");
   if (transfer_is_lightmap(a.transfer)) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
     for_path("--output", [&] { check_writable(a.output); });
@@ -232,10 +236,6 @@ int run_relight(const RelightArgs& a) {
   }
   if (ext != ".ply" && ext != ".csv") throw UsageError("--output: " + a.output + ": expected a .ply or .csv file");
   check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
-  for (const CLI::Option* o : {a.exposure_opt, a.srgb_opt})
-    if (o->count() > 0 && a.tonemap.empty())
-      throw UsageError(o->get_name() + " is for display colours: give --tonemap clamp, reinhard or aces too (without "
-                       "it the output is linear radiance)");
   for_path("--output", [&] { check_writable(a.output); });
 
   // The basis comes from the file; options of the other basis are refused.

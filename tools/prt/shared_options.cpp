@@ -1,5 +1,7 @@
 #include "shared_options.h"
 
+#include <prt/lightmap.h>
+
 #include "look.h"
 
 #include <prt/filter.h>
@@ -86,6 +88,13 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::BandsShown, Spec{"-b,--bands", int_range(0, kMaxRenderBands, "the renderer's lighting block holds 16 "
                                                                              "bands"),
                                   "0 (all of the file's) to 16"});
+    t.emplace(S::Lightmap, Spec{"--lightmap", parsed_by([](const std::string& text) {
+                                  int w = 0, h = 0;
+                                  parse_lightmap_size(text, w, h);
+                                  return w;
+                                }),
+                                fmt::format("WxH, 1 to {} texels a side", kMaxLightmapSize)});
+    t.emplace(S::UvSet, Spec{"--uv", int_range(0, 7), "0 to 7: TEXCOORD_N"});
     return t;
   }();
   return table;

@@ -63,6 +63,8 @@ enum class SharedOption {
   BandsComputed, // -b,--bands of a transfer prt precompute computes: 1 to 16 (what render and view draw)
   BandsProjected,// -b,--bands of a projected map (prt project): 1 to 64 (sh::kMaxBands, verified to 1e-12)
   BandsShown,    // -b,--bands a renderer shades with: 0 (all of the file's) to 16
+  Lightmap,      // --lightmap WxH: an atlas of 1 to 16384 texels a side (prt precompute and reference)
+  UvSet,         // --uv N: the lightmap's UV set, 0 to 7 (TEXCOORD_N)
 };
 
 // Adds option `which` to `command`, bound to `value`, with `help` (what the

@@ -1,0 +1,287 @@
+// Private to prt::scene: the transfer file format's framing, shared by the
+// units of each section family (docs/FORMAT.md; docs/ARCHITECTURE.md "Adding
+// a transfer kind or a basis"):
+//   scene/transfer_io.cpp           framing (header, section table, checksum,
+//                                   atomic write, the reader's common checks),
+//                                   the SH sections (kinds 1-7) and the
+//                                   compressed signals (8, 9)
+//   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
+//   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
+#pragma once
+
+#include <prt/compressed_transfer.h>
+#include <prt/error.h>
+#include <prt/hash.h>
+#include <prt/lightmap.h>
+#include <prt/names.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+
+#include "transfer_rules.h"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <bit>
+#include <cerrno>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace prt::detail::tio {
+
+
+// The format is little-endian IEEE 754; on such a machine its arrays are the
+// in-memory arrays, written and read without conversion.
+static_assert(std::endian::native == std::endian::little,
+              "transfer files are little-endian: add byte swapping before porting to a big-endian machine");
+static_assert(std::numeric_limits<float>::is_iec559 && std::numeric_limits<double>::is_iec559);
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "bent normals are stored as packed float triples");
+
+// ---- layout (docs/FORMAT.md) ---------------------------------------------------
+
+// "PRTT" then CR LF SUB LF, as PNG: a text-mode transfer that rewrites line
+// endings, or a 7-bit one, changes these bytes.
+constexpr std::array<char, 8> kMagic = {'P', 'R', 'T', 'T', '\r', '\n', '\x1a', '\n'};
+constexpr std::array<char, 4> kEndMagic = {'P', 'R', 'T', 'E'};
+constexpr std::uint64_t kHeaderSize = 128;
+constexpr std::uint64_t kSectionHeaderSize = 24;  // u32 kind, u32 type, u64 count, u64 bytes
+constexpr std::uint64_t kTrailerSize = 12;        // u64 XXH3-64 of all bytes before it, "PRTE"
+constexpr std::uint64_t kMinFileSize = kHeaderSize + kTrailerSize;
+constexpr std::uint64_t kAlign = 8;               // section data is zero-padded to a multiple of 8
+
+// Byte offsets of the header fields. Every field is naturally aligned.
+constexpr std::size_t kOffVersion = 8;        // u32
+constexpr std::size_t kOffHeaderSize = 12;    // u32
+constexpr std::size_t kOffBasis = 16;         // u32
+constexpr std::size_t kOffBands = 20;         // u32
+constexpr std::size_t kOffChannels = 24;      // u32
+constexpr std::size_t kOffMode = 28;          // u32
+constexpr std::size_t kOffBounces = 32;       // u32
+constexpr std::size_t kOffSamples = 36;       // u32
+constexpr std::size_t kOffAlbedo = 40;        // f32[3]
+constexpr std::size_t kOffFlags = 52;         // u32
+constexpr std::size_t kOffSeed = 56;          // u64
+constexpr std::size_t kOffVertices = 64;      // u64
+constexpr std::size_t kOffMeshHash = 72;      // u64
+constexpr std::size_t kOffSectionCount = 80;  // u32
+constexpr std::size_t kOffReserved = 84;      // version 1: zero up to kHeaderSize
+// Version 2 (analytic vertices): a u32 of zeros at 84, then
+constexpr std::size_t kOffStored = 88;        // u64: vertices with stored transfer
+constexpr std::size_t kOffShadingHash = 96;   // u64: shading_hash() of the mesh
+constexpr std::size_t kOffReservedV2 = 104;   // zero up to kHeaderSize
+// The wavelet basis did not change with version 2: its files stay version 1.
+constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
+
+constexpr std::uint32_t kBasisSH = 0;
+constexpr std::uint32_t kBasisWavelet = 1;
+constexpr std::uint32_t kFlagVertexColors = 1u << 0;
+constexpr std::uint32_t kFlagGlossy = 1u << 1;      // version 3: glossy transfer matrices (section 7)
+constexpr std::uint32_t kFlagCompressed = 1u << 2;  // version 4: rows compressed by clustered PCA (sections 8, 9)
+constexpr std::uint32_t kFlagLightmap = 1u << 3;    // version 5: rows are a lightmap's covered texels (sections 10, 11)
+constexpr std::uint32_t kKnownFlagsV2 = kFlagVertexColors;
+constexpr std::uint32_t kKnownFlagsV3 = kFlagVertexColors | kFlagGlossy;
+constexpr std::uint32_t kKnownFlagsV4 = kKnownFlagsV3 | kFlagCompressed;
+constexpr std::uint32_t kKnownFlags = kKnownFlagsV4 | kFlagLightmap;
+
+constexpr std::uint32_t kTypeF32 = 1;
+constexpr std::uint32_t kTypeF64 = 2;
+constexpr std::uint32_t kTypeU64 = 3;  // wavelet files only
+constexpr std::uint32_t kTypeU32 = 4;
+constexpr std::uint32_t kTypeI16 = 5;
+constexpr std::uint32_t kTypeU8 = 6;   // version 4: the compressed signals (byte records)
+constexpr std::uint32_t kTypeU16 = 7;  // inside a compressed signal only: cluster indices
+
+// Kinds 1 to 5 are the arrays of a Transfer (detail::TransferArray), 6 the
+// file's form of its slots.
+using detail::TransferArray;
+enum Kind : std::uint32_t {
+  kCoeffs = std::uint32_t(TransferArray::Coeffs),
+  kDirect = std::uint32_t(TransferArray::Direct),
+  kAO = std::uint32_t(TransferArray::AO),
+  kBentNormals = std::uint32_t(TransferArray::BentNormals),
+  kBounceEnergy = std::uint32_t(TransferArray::BounceEnergy),
+  kAnalyticMask = 6,  // version 2
+  kGlossy = std::uint32_t(TransferArray::Glossy),  // version 3
+  kCompressedCoeffs = 8,                            // version 4
+  kCompressedGlossy = 9,                            // version 4
+  kLightmapLayout = 10,                             // version 5: u64 width, height, UV set, scene hash
+  kLightmapTexels = 11,                             // version 5: u32 covered texel y * width + x, increasing
+};
+
+struct KindInfo {
+  std::uint32_t kind;
+  const char* name;
+  std::uint32_t type;
+  bool per_vertex;
+};
+// In file order: sections are stored by increasing kind.
+constexpr std::array<KindInfo, 11> kKinds = {{
+    {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
+    {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
+    {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
+    {kBentNormals, detail::array_name(TransferArray::BentNormals), kTypeF32, true},
+    {kBounceEnergy, detail::array_name(TransferArray::BounceEnergy), kTypeF64, false},
+    {kAnalyticMask, "analytic vertices", kTypeU32, false},
+    {kGlossy, detail::array_name(TransferArray::Glossy), kTypeF32, true},
+    {kCompressedCoeffs, "compressed coefficients", kTypeU8, true},
+    {kCompressedGlossy, "compressed glossy matrices", kTypeU8, true},
+    {kLightmapLayout, "lightmap layout", kTypeU64, false},
+    {kLightmapTexels, "lightmap texels", kTypeU32, true},
+}};
+// Section kinds a file of each version may hold (kinds 1..N).
+constexpr std::size_t kKindsV1 = 5;
+constexpr std::size_t kKindsV2 = 6;
+constexpr std::size_t kKindsV3 = 7;
+constexpr std::size_t kKindsV4 = 9;
+constexpr std::size_t kKindsV5 = 11;
+constexpr std::uint64_t kLightmapLayoutWords = 4;
+
+// Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
+constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
+
+inline const KindInfo* kind_info(std::uint32_t kind) {
+  for (const auto& k : kKinds)
+    if (k.kind == kind) return &k;
+  return nullptr;
+}
+
+inline std::uint32_t type_bytes(std::uint32_t type) {
+  switch (type) {
+    case kTypeF64:
+    case kTypeU64: return 8;
+    case kTypeI16:
+    case kTypeU16: return 2;
+    case kTypeU8: return 1;
+    default: return 4;
+  }
+}
+constexpr EnumName<std::uint32_t> kTypeNames[] = {
+    {kTypeF32, "f32"}, {kTypeF64, "f64"}, {kTypeU64, "u64"}, {kTypeU32, "u32"},
+    {kTypeI16, "i16"}, {kTypeU8, "u8"},  {kTypeU16, "u16"},
+};
+// TransferSection::type is a C string: the names are literals.
+inline const char* type_name(std::uint32_t type) { return enum_name(kTypeNames, type).data(); }
+
+// ---- small helpers ----------------------------------------------------------------
+
+inline std::string errno_text() { return errno != 0 ? std::strerror(errno) : "I/O error"; }
+
+template <typename T>
+T load(const unsigned char* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+template <typename T>
+void store(unsigned char* p, T v) {
+  std::memcpy(p, &v, sizeof v);
+}
+
+constexpr std::uint64_t padding(std::uint64_t bytes) { return (kAlign - bytes % kAlign) % kAlign; }
+
+// a + b, or the largest u64 if that overflows (sizes read from a damaged file).
+inline std::uint64_t sat_add(std::uint64_t a, std::uint64_t b) {
+  return a > std::numeric_limits<std::uint64_t>::max() - b ? std::numeric_limits<std::uint64_t>::max() : a + b;
+}
+
+
+// An output stream that hashes what it writes.
+class HashedWriter {
+ public:
+  explicit HashedWriter(std::ofstream& out) : out_(out) {}
+  void write(const void* data, std::uint64_t bytes) {
+    if (bytes == 0) return;
+    hash_.add(data, bytes);
+    raw(data, bytes);
+  }
+  void raw(const void* data, std::uint64_t bytes) {
+    out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+  }
+  std::uint64_t digest() const { return hash_.digest(); }
+
+ private:
+  std::ofstream& out_;
+  Hasher hash_;
+};
+
+// One section as written: kind, element type, element count, bytes, data.
+struct RawSection {
+  std::uint32_t kind, type;
+  std::uint64_t count, bytes;
+  const void* data;
+};
+
+// Writes header, sections (each padded to kAlign) and the checksummed
+// trailer to a temporary file renamed over `path` (nothing half-written).
+void write_file(const std::string& path, const unsigned char (&header)[kHeaderSize],
+                const std::vector<RawSection>& sections);
+// The size of a file of these sections.
+std::uint64_t file_size_of(const std::vector<TransferSection>& sections);
+// The 128-byte header of an SH transfer file.
+void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::uint32_t version, std::uint32_t flags,
+                 std::size_t section_count);
+// The analytic-vertex bit mask of `t` (empty when no vertex is analytic).
+std::vector<std::uint32_t> analytic_mask(const Transfer& t);
+// Pointer to the array of SH section `kind` of `t` and its element count.
+std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind);
+// "truncated: expected ... bytes, file has ..."
+std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size);
+std::string unknown_basis(std::uint32_t basis);
+// Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
+void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,
+                const char* rerun);
+
+class Reader {
+ public:
+  explicit Reader(const std::string& path) : path_(path) {}
+
+  Error fail(const std::string& what) const { return Error(path_ + ": " + what); }
+
+  // An SH transfer; a compressed one into *compressed (its uncompressed part
+  // returned), which must then be given (and only then).
+  Transfer read(CompressedTransfer* compressed = nullptr, LightmapLayout* lightmap = nullptr);
+  WaveletTransfer read_wavelet(LightmapLayout* lightmap = nullptr);
+  std::uint32_t read_basis();
+  std::uint32_t version() const { return version_; }
+  std::uint32_t flags() const { return load<std::uint32_t>(h_ + kOffFlags); }
+
+ private:
+  void open_file();
+  void read_head();  // signature, version, header size: into h_, section_count_
+  void verify();     // trailer and checksum
+  void read_at(std::uint64_t offset, void* dst, std::uint64_t bytes) {
+    f_.clear();
+    f_.seekg(static_cast<std::streamoff>(offset));
+    f_.read(static_cast<char*>(dst), static_cast<std::streamsize>(bytes));
+    if (!f_ || std::uint64_t(f_.gcount()) != bytes)
+      throw fail(fmt::format("read error at byte {}: {}", offset, errno_text()));
+  }
+  void check_signature(const unsigned char* head, std::uint64_t have);
+  void explain_bad_size(std::uint32_t section_count);
+  std::uint64_t checksum(std::uint64_t bytes);
+  template <typename T>
+  void read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count);
+  ClusteredSignal read_signal(std::uint64_t offset, std::uint64_t bytes, const char* name, std::uint64_t rows,
+                              std::uint64_t dim);
+
+  std::string path_;
+  std::ifstream f_;
+  std::uint64_t size_ = 0;
+  unsigned char h_[kHeaderSize] = {};
+  std::uint32_t section_count_ = 0;
+  std::uint32_t version_ = 0;
+};
+
+template <typename T>
+void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count) {
+  dst.resize(count);
+  read_at(offset, dst.data(), count * sizeof(T));
+}
+
+}  // namespace prt::detail::tio

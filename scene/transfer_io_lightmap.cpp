@@ -1,0 +1,79 @@
+// Lightmap sections of transfer files (kinds 10 and 11, flag bit 3, version
+// 5; docs/FORMAT.md "Lightmap transfer"). The framing: transfer_io_format.h.
+#include <prt/transfer_io.h>
+
+#include <prt/error.h>
+#include <prt/io.h>
+#include <prt/wavelet.h>
+
+#include "transfer_io_format.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+
+namespace prt {
+
+using namespace detail::tio;
+
+// ---- lightmaps (sections 10 and 11; docs/FORMAT.md "Lightmap transfer") -------------
+
+std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
+  std::vector<TransferSection> s = transfer_sections(t.transfer);
+  for (const std::uint32_t kind : {kLightmapLayout, kLightmapTexels}) {
+    const KindInfo& k = *kind_info(kind);
+    const std::uint64_t count = kind == kLightmapLayout ? kLightmapLayoutWords : t.layout.texels.size();
+    s.push_back({kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex, type_name(k.type)});
+  }
+  return s;
+}
+
+std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_of(transfer_sections(t)); }
+
+void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t) {
+  if (auto p = lightmap_problem(t); !p.empty()) throw Error(path + ": cannot write this lightmap: " + p);
+  if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
+  const std::vector<TransferSection> sections = transfer_sections(t);
+  unsigned char header[kHeaderSize];
+  fill_header(header, t.transfer, kTransferFormatVersion, kFlagLightmap, sections.size());
+  const std::vector<std::uint32_t> mask = analytic_mask(t.transfer);
+  const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
+                                                      std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
+  std::vector<RawSection> raw;
+  for (const auto& s : sections) {
+    const void* data = s.kind == kAnalyticMask     ? mask.data()
+                       : s.kind == kLightmapLayout ? static_cast<const void*>(layout)
+                       : s.kind == kLightmapTexels ? static_cast<const void*>(t.layout.texels.data())
+                                                   : section_array(t.transfer, s.kind).first;
+    raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
+  }
+  write_file(path, header, raw);
+}
+
+LightmapTransfer read_lightmap_transfer(const std::string& path) {
+  LightmapTransfer t;
+  Reader r(path);
+  t.transfer = r.read(nullptr, &t.layout);
+  if (auto p = lightmap_problem(t); !p.empty()) throw r.fail("bad lightmap: " + p);
+  return t;
+}
+
+bool transfer_is_lightmap(const std::string& path) {
+  Reader r(path);
+  if (r.read_basis() != kBasisSH) return (r.flags() & kFlagLightmap) != 0;
+  return r.version() >= 5 && (r.flags() & kFlagLightmap) != 0;
+}
+
+std::string describe_transfer(const LightmapTransfer& t) {
+  const LightmapLayout& l = t.layout;
+  const std::size_t n = l.texels.size();
+  const std::uint64_t size = transfer_file_size(t);
+  return fmt::format("lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}% of the atlas), {} analytic "
+                     "(no row stored), {:.1f} bytes per covered texel, scene hash {:016x}\n",
+                     l.width, l.height, l.uv_set, l.uv_set, n, 100.0 * double(n) / (double(l.width) * l.height),
+                     t.transfer.analytic_vertices(), n ? double(size) / double(n) : 0.0, l.scene_hash) +
+         describe_transfer(t.transfer);
+}
+
+}  // namespace prt
