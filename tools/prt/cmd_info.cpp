@@ -112,6 +112,22 @@ nlohmann::ordered_json to_json(const std::string& path, const WaveletTransfer& t
 }
 
 int run_info(const InfoArgs& a) {
+  if (read_transfer_basis(a.file) == TransferBasis::Wavelet && transfer_is_lightmap(a.file)) {
+    const WaveletLightmap w = read_wavelet_lightmap(a.file);  // validates everything
+    if (a.json) {
+      nlohmann::ordered_json j = to_json(a.file, w.transfer);
+      j["lightmap"] = {{"width", w.layout.width},
+                       {"height", w.layout.height},
+                       {"uv_set", w.layout.uv_set},
+                       {"covered_texels", w.layout.texels.size()},
+                       {"scene_hash", fmt::format("{:016x}", w.layout.scene_hash)}};
+      fmt::print("{}\n", j.dump(2));
+    } else {
+      fmt::print("{}: wavelet lightmap {}x{} in UV set {}, {} covered texels; {}", a.file, w.layout.width,
+                 w.layout.height, w.layout.uv_set, w.layout.texels.size(), describe_transfer(w.transfer));
+    }
+    return 0;
+  }
   if (read_transfer_basis(a.file) == TransferBasis::Wavelet) {
     const WaveletTransfer w = read_wavelet_transfer(a.file);  // validates everything
     if (a.json)
