@@ -7,6 +7,7 @@
 #include <prt/lightmap.h>
 #include <prt/precompute.h>
 
+#include "bare_trace.h"
 #include "ray_scene.h"
 
 #include <benchmark/benchmark.h>
@@ -60,28 +61,8 @@ void BM_LightmapBareEmbree(benchmark::State& state) {
   const auto& N = f.texels.normals;
   for (auto _ : state) {
     const prt::detail::RayScene scene(f.scene.mesh);
-    const float offset = float(prt::detail::default_ray_offset(f.scene.mesh));
-    std::atomic<long> hits{0};
-    tbb::parallel_for(std::size_t(0), (P.size() + 63) / 64, [&](std::size_t block) {
-      prt::detail::enable_ftz_daz();
-      long local = 0;
-      glm::vec3 batch[8];
-      for (std::size_t v = block * 64; v < std::min(P.size(), block * 64 + 64); ++v) {
-        const glm::vec3 n = N[v], o = P[v] + offset * n;
-        int count = 0;
-        for (const glm::vec3& d : dirs) {
-          if (glm::dot(n, d) <= 0.0f) continue;
-          batch[count++] = d;
-          if (count == 8) {
-            local += __builtin_popcount(scene.occluded8(o, batch, 8, offset));
-            count = 0;
-          }
-        }
-        if (count) local += __builtin_popcount(scene.occluded8(o, batch, count, offset));
-      }
-      hits += local;
-    });
-    benchmark::DoNotOptimize(hits.load());
+    benchmark::DoNotOptimize(prt_bench::trace_bare(scene, P.data(), N.data(), P.size(), dirs,
+                                                   float(prt::detail::default_ray_offset(f.scene.mesh))));
   }
   state.counters["texels"] = double(P.size());
 }

@@ -9,6 +9,7 @@
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 
+#include "bare_trace.h"
 #include "ray_scene.h"
 
 #include <benchmark/benchmark.h>
@@ -74,28 +75,8 @@ void BM_BareEmbree(benchmark::State& state) {
   }
   for (auto _ : state) {
     const prt::detail::RayScene scene(m);
-    const float offset = float(prt::detail::default_ray_offset(m));
-    std::atomic<long> hits{0};
-    tbb::parallel_for(std::size_t(0), (m.vertex_count() + 63) / 64, [&](std::size_t block) {
-      prt::detail::enable_ftz_daz();
-      long local = 0;
-      glm::vec3 batch[8];
-      for (std::size_t v = block * 64; v < std::min(m.vertex_count(), block * 64 + 64); ++v) {
-        const glm::vec3 n = m.normals[v], o = m.positions[v] + offset * n;
-        int count = 0;
-        for (int j = 0; j < M; ++j) {
-          if (glm::dot(n, dirs[j]) <= 0.0f) continue;
-          batch[count++] = dirs[j];
-          if (count == 8) {
-            local += __builtin_popcount(scene.occluded8(o, batch, 8, offset));
-            count = 0;
-          }
-        }
-        if (count) local += __builtin_popcount(scene.occluded8(o, batch, count, offset));
-      }
-      hits += local;
-    });
-    benchmark::DoNotOptimize(hits.load());
+    benchmark::DoNotOptimize(prt_bench::trace_bare(scene, m.positions.data(), m.normals.data(), m.vertex_count(), dirs,
+                                                   float(prt::detail::default_ray_offset(m))));
   }
 }
 BENCHMARK(BM_BareEmbree)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);

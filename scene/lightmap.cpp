@@ -81,6 +81,17 @@ struct UnionFind {
 
 }  // namespace
 
+RgbaImage lightmap_rgba(const LightmapLayout& layout, std::span<const glm::vec3> values, int gutter) {
+  const std::vector<glm::vec4> img = lightmap_image(layout, values, gutter);
+  RgbaImage out;
+  out.width = layout.width;
+  out.height = layout.height;
+  out.rgba.resize(img.size() * 4);
+  for (std::size_t i = 0; i < img.size(); ++i)
+    for (int c = 0; c < 4; ++c) out.rgba[4 * i + std::size_t(c)] = img[i][c];
+  return out;
+}
+
 std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& l, int gutter) {
   const std::size_t W = std::size_t(l.width), H = std::size_t(l.height);
   std::vector<std::uint32_t> source(W * H, kNoTexel);

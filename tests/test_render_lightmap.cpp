@@ -127,3 +127,60 @@ TEST(RenderLightmap, PixelsAreTheBilinearLightmap) {
 
 }  // namespace
 }  // namespace prt
+
+namespace prt {
+namespace {
+
+TEST(RenderLightmap, NoCrackAcrossAChartSeam) {
+  // A floor of two quads meeting at x = 0, each its own chart far apart in
+  // the atlas (a UV seam), and a box standing across the seam so the light
+  // changes along it. Seen from straight above, the column of pixels on
+  // either side of the seam must differ no more than neighbouring columns
+  // on one side do: the gutters keep bilinear filtering at each chart's edge
+  // on its own texels, so no black or foreign texel shows as a line.
+  REQUIRE_RENDERER(r);
+  test::SceneBuilder b;
+  b.quad({-1, 0, 1}, {0, 0, 1}, {0, 0, -1}, {-1, 0, -1}, {0.05f, 0.05f, 0.30f, 0.55f});
+  b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, -1}, {0, 0, -1}, {0.55f, 0.05f, 0.80f, 0.55f});
+  b.end_object();
+  b.box({-0.25f, 0.0f, -0.25f}, {0.25f, 0.5f, 0.25f}, 30, 6, 0.1f);  // cells 30..35 of 6 x 6: the last row, clear of both
+  b.end_object();
+  const Scene s = b.build();
+  LightmapTexels texels = lightmap_texels(s, 96, 96, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o;
+  o.bands = 4;
+  o.samples = 256;
+  const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
+  r->set_scene(s, t);
+  r->set_lighting(project(smooth_map(), 4));
+  Camera cam;
+  cam.eye = {0.0, 3.0, 0.0};
+  cam.target = {0.0, 0.0, 0.0};
+  cam.up = {0, 0, -1};
+  cam.fov_deg = 40;
+  const int size = 128;  // the seam x = 0 projects between columns 63 and 64
+  const Image img = r->render(cam, size, size);
+  // The texels on either side of the seam are sampled a texel apart (96
+  // texels over the atlas, a chart a quarter of it for 1 m: 4.2 cm, 2.5
+  // pixels here), so the step across the seam is the light's change over a
+  // texel: compare it with the steepest change over 3 pixel columns on one
+  // side. A crack (black, or another chart's light) is a step of the order of
+  // the radiance itself.
+  double seam = 0, away = 0, level = 0;
+  for (int y = 8; y < size - 8; ++y) {
+    // (Rows the box covers show its top: one chart, continuous across x = 0.)
+    const glm::vec3 p = img.at(63, y), q = img.at(64, y);
+    seam = std::max(seam, double(glm::length(q - p)));
+    away = std::max(away, double(std::max(glm::length(p - img.at(60, y)), glm::length(img.at(67, y) - q))));
+    level = std::max(level, double(glm::length(p)));
+  }
+  ASSERT_GT(away, 0.0);
+  EXPECT_LE(seam, 1.5 * away + 1e-4) << "seam " << seam << ", 3 columns on one side " << away;
+  EXPECT_LT(seam, 0.1 * level) << "seam " << seam << ", radiance " << level;
+  ::testing::Test::RecordProperty("seam_step", std::to_string(seam));
+  ::testing::Test::RecordProperty("neighbour_step", std::to_string(away));
+}
+
+}  // namespace
+}  // namespace prt

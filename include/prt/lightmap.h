@@ -9,6 +9,7 @@
 // texel's albedo / pi.
 #pragma once
 
+#include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
@@ -95,6 +96,10 @@ std::vector<glm::vec3> relight_lightmap(const LightmapTransfer& t, const Lightma
 // mean of their covered (or already filled) 8-neighbours, ring by ring, so
 // bilinear filtering never reads black; A stays 0 there. Rows from the top.
 std::vector<glm::vec4> lightmap_image(const LightmapLayout& layout, std::span<const glm::vec3> values, int gutter = 4);
+
+// lightmap_image as the RGBA float image prt writes as EXR (prt relight,
+// prt reference --lightmap, the extra maps of prt precompute).
+RgbaImage lightmap_rgba(const LightmapLayout& layout, std::span<const glm::vec3> values, int gutter = 4);
 
 // Per atlas texel (W x H, rows from the top), the covered texel (index into
 // layout.texels) whose value it shows: itself for a covered texel; for

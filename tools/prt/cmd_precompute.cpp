@@ -364,14 +364,7 @@ int run_lightmap(PrecomputeArgs& a) {
   }
   // An extra map: per-texel values in the lightmap's layout, A = coverage.
   const auto write_map = [&](const std::string& path, const std::vector<glm::vec3>& values) {
-    const std::vector<glm::vec4> img = lightmap_image(texels.layout, values);
-    RgbaImage image;
-    image.width = width;
-    image.height = height;
-    image.rgba.resize(img.size() * 4);
-    for (std::size_t i = 0; i < img.size(); ++i)
-      for (int c = 0; c < 4; ++c) image.rgba[4 * i + std::size_t(c)] = img[i][c];
-    out.write([&] { write_exr_rgba(path, image); });
+    out.write([&, image = lightmap_rgba(texels.layout, values)] { write_exr_rgba(path, image); });
   };
   const Transfer& ct = computed->transfer;
   if (!a.ao_map.empty()) {

@@ -78,15 +78,9 @@ int run_lightmap(ReferenceArgs& a) {
   });
   if (!computed) return 130;
   const ReferenceResult& r = *computed;
-  const std::vector<glm::vec4> img = lightmap_image(texels.layout, r.radiance);
-  RgbaImage image;
-  image.width = width;
-  image.height = height;
-  image.rgba.resize(img.size() * 4);
-  for (std::size_t i = 0; i < img.size(); ++i)
-    for (int c = 0; c < 4; ++c) image.rgba[4 * i + std::size_t(c)] = img[i][c];
+  RgbaImage image = lightmap_rgba(texels.layout, r.radiance);
   // The standard errors beside (covered texels only), for prt compare's noise correction.
-  image.std_error.assign(img.size() * 3, 0.0f);
+  image.std_error.assign(std::size_t(width) * std::size_t(height) * 3, 0.0f);
   for (std::size_t i = 0; i < r.std_error.size(); ++i)
     for (int c = 0; c < 3; ++c) image.std_error[3 * std::size_t(texels.layout.texels[i]) + std::size_t(c)] = r.std_error[i][c];
   out.write([&] { write_exr_rgba(a.output, image); });

@@ -134,14 +134,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
 
 // An RGBA float EXR of per-texel radiance in the lightmap's layout.
 void write_lightmap_exr(const std::string& path, const LightmapLayout& layout, const std::vector<glm::vec3>& rgb) {
-  const std::vector<glm::vec4> img = lightmap_image(layout, rgb);
-  RgbaImage out_img;
-  out_img.width = layout.width;
-  out_img.height = layout.height;
-  out_img.rgba.resize(img.size() * 4);
-  for (std::size_t i = 0; i < img.size(); ++i)
-    for (int c = 0; c < 4; ++c) out_img.rgba[4 * i + std::size_t(c)] = img[i][c];
-  write_exr_rgba(path, out_img);
+  write_exr_rgba(path, lightmap_rgba(layout, rgb));
 }
 
 // A wavelet lightmap: the texels' wavelet relighting with K terms (as per vertex).
@@ -229,6 +222,8 @@ int run_relight(const RelightArgs& a) {
     if (o->count() > 0 && a.tonemap.empty())
       throw UsageError(o->get_name() + " is for display colours: give --tonemap clamp, reinhard or aces too (without "
                        "it the output is linear radiance)");
+  if (ext != ".ply" && ext != ".csv" && ext != ".exr")
+    throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr)");
   if (transfer_is_lightmap(a.transfer)) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
     for_path("--output", [&] { check_writable(a.output); });
