@@ -147,7 +147,9 @@ TEST(LightmapImage, GuttersTakeTheirCoveredNeighboursAndKeepAlphaZero) {
   EXPECT_EQ(img[12], glm::vec4(0.25f, 0.5f, 1.0f, 1.0f));
   for (int y = 1; y <= 3; ++y)
     for (int x = 1; x <= 3; ++x)
-      if (y * 5 + x != 12) EXPECT_EQ(img[std::size_t(y * 5 + x)], glm::vec4(0.25f, 0.5f, 1.0f, 0.0f));
+      if (y * 5 + x != 12) {
+        EXPECT_EQ(img[std::size_t(y * 5 + x)], glm::vec4(0.25f, 0.5f, 1.0f, 0.0f));
+      }
   EXPECT_EQ(img[0], glm::vec4(0.0f));  // beyond one ring: untouched
 }
 
