@@ -56,6 +56,20 @@ bool on_path(const char* exe) {
   return false;
 }
 
+// Runs `prt view ARGS` (quoted already) under Xvfb, stdin closed and stderr
+// kept: its exit status and stderr. Under the sanitizer build, Mesa's GLX
+// driver (dlclosed at exit) shows its allocations as leaks from an unknown
+// module; leak checking stays on for every other test, the EGL renderer's
+// included.
+std::pair<int, std::string> run_view(const test::TempDir& dir, const std::string& args) {
+  const std::string err = (dir.io() / "view_err.txt").string();
+  const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
+                          "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " + args +
+                          " </dev/null >/dev/null 2>" + test::shell_quote(err);
+  const int status = std::system(cmd.c_str());
+  return {(status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1, test::read_file(err)};
+}
+
 
 int srgb_code(float linear) {
   const double v = std::clamp(double(linear), 0.0, 1.0);
@@ -107,19 +121,11 @@ void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& lo
   std::string look_args;
   for (const auto& s : look) look_args.append(1, ' ').append(test::shell_quote(s));
   const std::string shot = dir.file("view.png"), ref = dir.file("render.png");
-  const std::string err = (dir.io() / "view_err.txt").string();
-  // Under the sanitizer build, Mesa's GLX driver (dlclosed at exit) shows its
-  // allocations as leaks from an unknown module; leak checking stays on for
-  // every other test, the EGL renderer's included.
-  const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
-                          "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
-                          test::shell_quote(mesh) + " " + test::shell_quote(first) + " " + test::shell_quote(env) +
-                          (wavelet_first ? " --second " + test::shell_quote(prt) : std::string()) +
-                          " --width " + std::to_string(kW) + " --height " + std::to_string(kH) + " --frames 3 --no-panel --screenshot " + test::shell_quote(shot) + look_args +
-                          " </dev/null >/dev/null 2>" + test::shell_quote(err);
-  const int status = std::system(cmd.c_str());
-  const std::string view_err = test::read_file(err);
-  const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  const auto [code, view_err] =
+      run_view(dir, test::shell_quote(mesh) + " " + test::shell_quote(first) + " " + test::shell_quote(env) +
+                        (wavelet_first ? " --second " + test::shell_quote(prt) : std::string()) + " --width " +
+                        std::to_string(kW) + " --height " + std::to_string(kH) +
+                        " --frames 3 --no-panel --screenshot " + test::shell_quote(shot) + look_args);
   if (code != 0 && view_err.find("OpenGL 4.5 core") != std::string::npos)
     PRT_SKIP_WITHOUT_GL("Xvfb's GLX gives no OpenGL 4.5 core context: " + view_err);
   ASSERT_EQ(code, 0) << view_err;
@@ -204,16 +210,10 @@ TEST_F(ViewCli, PanelIsOnScreenAndNoPanelHidesIt) {
   std::string shots[2];
   for (int with = 0; with < 2; ++with) {
     shots[with] = dir.file(with ? "panel.png" : "nopanel.png");
-    const std::string err = (dir.io() / "panel_err.txt").string();
-    const std::string cmd = "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
-                            "xvfb-run -a -s '-screen 0 1024x768x24' " + test::shell_quote(PRT_EXE) + " view " +
-                            test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
-                            " --width 640 --height 320 --frames 3 -q" + (with ? "" : " --no-panel") +
-                            " --screenshot " + test::shell_quote(shots[with]) + " </dev/null >/dev/null 2>" +
-                            test::shell_quote(err);
-    const int status = std::system(cmd.c_str());
-    const std::string view_err = test::read_file(err);
-    const int code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+    const auto [code, view_err] =
+        run_view(dir, test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " + test::shell_quote(env) +
+                          " --width 640 --height 320 --frames 3 -q" + (with ? "" : " --no-panel") + " --screenshot " +
+                          test::shell_quote(shots[with]));
     if (code != 0 && view_err.find("OpenGL 4.5 core") != std::string::npos)
       PRT_SKIP_WITHOUT_GL("Xvfb's GLX gives no OpenGL 4.5 core context: " + view_err);
     ASSERT_EQ(code, 0) << view_err;
