@@ -76,12 +76,13 @@ LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTex
   if (P > std::numeric_limits<std::uint32_t>::max() - 1) throw Error("lightmap: too many covered texels");
   TransferOptions o = options;
   o.vertex_colors = false;
-  // One albedo everywhere and grey (an untextured white scene, --albedo):
-  // one channel, as for a mesh without colours.
+  // One albedo everywhere (an untextured one-colour scene, --albedo): the
+  // transfer's albedo, as for a mesh without colours (one channel when it
+  // is grey); the texels' own albedo otherwise (vertex_colors).
   bool uniform = true;
   for (const glm::vec3& a : texels.albedo) uniform = uniform && a == texels.albedo.front();
   if (P > 0 && uniform) o.albedo = texels.albedo.front();
-  const bool per_point = !(uniform && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z);
+  const bool per_point = !uniform;
 
   const LightmapLayout& l = texels.layout;
   std::vector<std::uint32_t> point_of_texel(std::size_t(l.width) * l.height, detail::HitToPoint::kNone);

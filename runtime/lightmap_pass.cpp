@@ -103,7 +103,11 @@ LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, con
     Batch b;
     b.first = GLsizei(o.first_triangle * 3);
     b.count = GLsizei(o.triangle_count * 3);
-    if (o.material >= 0) {
+    if (!tr.vertex_colors) {
+      // One albedo for every texel (--albedo): it is every fragment's too,
+      // so detail changes nothing; the materials' albedo is not the scene's.
+      b.base_color = glm::vec4(tr.albedo, 1.0f);
+    } else if (o.material >= 0) {
       const Material& m = scene.materials[std::size_t(o.material)];
       b.base_color = m.base_color;
       b.texture = m.texture_uv_set == 0 ? m.base_color_texture : -1;  // the pass samples textures at set 0

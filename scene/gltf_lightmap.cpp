@@ -255,6 +255,8 @@ void write_gltf_lightmap(const std::string& path, const Scene& scene, const Ligh
                   "TEXCOORD_1 (gutters are filled)"},
       {"sh_convention", "prt (docs/CONVENTIONS.md)"},
   };
+  if (!t.transfer.vertex_colors)  // one albedo for all (--albedo): the materials' is not in the rows
+    prt["albedo"] = {t.transfer.albedo.x, t.transfer.albedo.y, t.transfer.albedo.z};
   if (!opts.transfer_source.empty()) prt["transfer"] = opts.transfer_source;
   if (baked_texture >= 0)
     prt["bake"] = {{"map", opts.bake.map},

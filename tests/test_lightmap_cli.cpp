@@ -12,10 +12,12 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 
+#include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <string>
 
@@ -174,6 +176,65 @@ TEST(LightmapCli, RefusalsNameTheProblem) {
   r = run_prt(dir, {"relight", wall, dir.file("w.prt"), env, "-o", dir.file("o.csv")});
   EXPECT_EQ(r.code, 2) << describe_run(r);
   EXPECT_NE(r.err.find(".exr"), std::string::npos) << r.err;
+}
+
+TEST(LightmapCli, ExportWritesTheRelightingPage) {
+  // prt export SCENE lightmap.prt --web DIR (docs/WEB.md "Lightmaps"): the
+  // page's glTF is the lightmap export, and lightmap_albedo.rgb16f the
+  // texels' albedo image (what the page divides out under texture detail).
+  // The page itself is drawn against prt render in web.PageMatchesRender.
+  TempDir dir;
+  const std::string room = kModels + "/room.gltf";
+  ASSERT_EQ(run_prt(dir, {"precompute", room, "--lightmap", "24x20", "--samples", "16", "-q", "-o", dir.file("r.prt")})
+                .code,
+            0);
+  Result r = run_prt(dir, {"export", room, dir.file("r.prt"), "--web", dir.file("page"), "--env", "studio",
+                           "--camera", "1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json lighting = nlohmann::json::parse(read_file(dir.file("page/lighting.json")));
+  EXPECT_EQ(lighting["bands"], 5);
+  EXPECT_EQ(lighting["lightmap_albedo"]["width"], 24);
+  EXPECT_EQ(lighting["lightmap_albedo"]["height"], 20);
+  EXPECT_EQ(lighting["initial"]["camera"][0], 1.7);
+  const std::string glb = read_file(dir.file("page/model.glb"));
+  EXPECT_NE(glb.find("\"prt SH lightmap\""), std::string::npos);
+  EXPECT_EQ(glb.find("KHR_materials_unlit"), std::string::npos);  // the page relights: no bake in its model
+  // The albedo image: lightmap_image of the texels' albedo, as half floats.
+  const LightmapTransfer t = read_lightmap_transfer(dir.file("r.prt"));
+  const prt::Scene scene = load_scene(room);
+  const LightmapTexels texels = lightmap_texels(scene, 24, 20, t.layout.uv_set);
+  const std::vector<glm::vec4> want = lightmap_image(t.layout, texels.albedo);
+  const std::string half = read_file(dir.file("page") + "/" + lighting["lightmap_albedo"]["file"].get<std::string>());
+  ASSERT_EQ(half.size(), want.size() * 3 * 2);
+  double worst = 0;
+  for (std::size_t i = 0; i < want.size() * 3; ++i) {
+    std::uint16_t h = 0;
+    std::memcpy(&h, half.data() + 2 * i, 2);
+    worst = std::max(worst, double(std::abs(glm::unpackHalf1x16(h) - want[i / 3][int(i % 3)])));
+  }
+  EXPECT_LE(worst, 1.0 / 1024);  // half precision: 11 significant bits, albedo <= 1
+  // --bake goes into -o's glTF only: without -o it is refused before any work.
+  r = run_prt(dir, {"export", room, dir.file("r.prt"), "--web", dir.file("page2"), "--bake", "studio"});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("--output"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("page2")));
+  // One coloured albedo for all (--albedo r,g,b): the lightmap relights and
+  // exports (the texels' albedo at load is the given one).
+  ASSERT_EQ(run_prt(dir, {"precompute", room, "--lightmap", "16x16", "--samples", "16", "--albedo", "0.9,0.5,0.3",
+                          "-q", "-o", dir.file("c.prt")})
+                .code,
+            0);
+  r = run_prt(dir, {"relight", room, dir.file("c.prt"), write_constant_map(dir, 1.0f), "-o", dir.file("c.exr"), "-q"});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"export", room, dir.file("c.prt"), "-o", dir.file("c.glb"), "-q"});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  const std::string cglb = read_file(dir.file("c.glb"));
+  ASSERT_GT(cglb.size(), 20u);
+  std::uint32_t json_bytes = 0;  // the GLB's first chunk: its JSON
+  std::memcpy(&json_bytes, cglb.data() + 12, 4);
+  const nlohmann::json info = nlohmann::json::parse(cglb.substr(20, json_bytes))["asset"]["extras"]["prt"];
+  ASSERT_TRUE(info.contains("albedo")) << info.dump();
+  EXPECT_NEAR(info["albedo"][1].get<double>(), 0.5, 1e-6);
 }
 
 }  // namespace

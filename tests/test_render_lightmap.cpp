@@ -184,3 +184,47 @@ TEST(RenderLightmap, NoCrackAcrossAChartSeam) {
 
 }  // namespace
 }  // namespace prt
+
+namespace prt {
+namespace {
+
+TEST(RenderLightmap, OneColouredAlbedoForAllKeepsItUnderDetail) {
+  // A lightmap computed with one albedo for every texel (--albedo r,g,b):
+  // the scene's materials are not in its rows, so it must upload (its
+  // texels' albedo is the given one) and detail must change nothing.
+  REQUIRE_RENDERER(r);
+  const Scene s = floor_and_box(true);
+  const glm::vec3 albedo(0.9f, 0.5f, 0.3f);
+  LightmapTexels texels = lightmap_texels(s, 32, 32, 0, &albedo);
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 64;
+  const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
+  EXPECT_FALSE(t.transfer.vertex_colors);
+  EXPECT_EQ(t.transfer.channels, 3);
+  EXPECT_EQ(t.transfer.albedo, albedo);
+  ASSERT_NO_THROW(r->set_scene(s, t));
+  r->set_lighting(project(smooth_map(), 3));
+  Camera cam;
+  cam.eye = {0.5, 2.0, 1.5};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 1, 0};
+  r->set_lightmap_detail(false);
+  const Image flat = r->render(cam, 48, 48);
+  r->set_lightmap_detail(true);
+  const Image detailed = r->render(cam, 48, 48);
+  double most = 0, diff = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x)
+      for (int c = 0; c < 3; ++c) {
+        most = std::max(most, double(flat.at(x, y)[c]));
+        diff = std::max(diff, std::abs(double(flat.at(x, y)[c]) - double(detailed.at(x, y)[c])));
+      }
+  ASSERT_GT(most, 0.0);
+  // albedo x (1 / albedo) in float: a few ulps.
+  EXPECT_LE(diff, 1e-6 * most);
+}
+
+}  // namespace
+}  // namespace prt

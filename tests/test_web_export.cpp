@@ -59,7 +59,7 @@ TEST(WebExport, WritesThePageTheLightingAndTheBackgrounds) {
                                  "--exposure", "-1.5", "--tonemap", "aces", "--fov", "50", "--turn", "-q"});
   ASSERT_EQ(r.code, 0) << describe_run(r);
   EXPECT_TRUE(r.err.empty()) << r.err;
-  for (const char* f : {"index.html", "prt-sh.js", "prt-viewer.js"})
+  for (const char* f : {"index.html", "prt-sh.js", "prt-png.js", "prt-viewer.js"})
     EXPECT_EQ(read_file(fs::path(page) / f), read_file(fs::path(PRT_SOURCE_DIR) / "web" / f)) << f;
   EXPECT_EQ(read_file(fs::path(page) / "model.glb").substr(0, 4), "glTF");
 

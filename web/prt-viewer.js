@@ -11,14 +11,26 @@
 // transfer need 192 vec4s), laid out as relight.comp.glsl's buffer: per
 // vertex CHANNELS runs of VEC4S texels, each channel zero padded.
 //
+// A lightmap (prt precompute SCENE --lightmap, exported by write_gltf_lightmap):
+// the scene's objects drawn with their lightmap UVs (TEXCOORD_1); each
+// fragment samples the 8-bit coefficient textures (one TEXTURE_2D_ARRAY
+// layer per 4 coefficients) bilinearly, decodes value = bias + scale x
+// byte / 255 and dots it with the rotated lighting, as the lightmap pass of
+// prt render relights texels and samples the result (the two are equal: both
+// are linear in the texel values); with detail (the default, as prt render)
+// the material's albedo at the fragment replaces the texel's
+// (lightmap_albedo.rgb16f). The PNGs are decoded here (DecompressionStream),
+// not by the browser, so their bytes arrive unchanged (no colour management,
+// no premultiplied alpha).
+//
 // Test hooks: URL query map, rotate=yaw,pitch,roll, spin (degrees about +Y),
 // exposure, tonemap, camera=ex,ey,ez,tx,ty,tz,ux,uy,uz, fov, size=WxH,
-// auto=0|1, model=0 (background only); window.prtReady resolves after the
+// auto=0|1, model=0 (background only), detail=0|1 (lightmaps); window.prtReady resolves after the
 // first frame is drawn; window.prtViewer.set({...}) draws a frame with new
 // settings and resolves when it is on the canvas.
 (function () {
   'use strict';
-  const SH = self.PrtSH;
+  const SH = self.PrtSH, PNG = self.PrtPNG;
   const $ = (id) => document.getElementById(id);
   const status = $('status');
 
@@ -61,17 +73,57 @@
         }
       return out;
     };
-    const prim = json.meshes[0].primitives[0];
     const info = json.asset && json.asset.extras && json.asset.extras.prt;
     if (!info || info.basis !== 'sh') fail('model.glb: no asset.extras.prt with an SH transfer (prt export)');
+    // The bytes of a buffer view (images).
+    const view = (index) => {
+      const v = json.bufferViews[index];
+      return new Uint8Array(bin, v.byteOffset || 0, v.byteLength);
+    };
+    return { json, info, accessor, view };
+  }
+
+  // The per-vertex model (write_gltf): one primitive, the transfer rows in
+  // the attributes info.attributes names.
+  function vertexGeometry(glb) {
+    const { json, info, accessor } = glb;
+    const prim = json.meshes[0].primitives[0];
     const positions = accessor(prim.attributes.POSITION);
     const vertices = positions.length / 3;
-    const names = info.attributes;
-    const rows = names.map((name) => {
+    const rows = info.attributes.map((name) => {
       if (prim.attributes[name] === undefined) fail('model.glb: attribute ' + name + ' missing');
       return accessor(prim.attributes[name]);
     });
-    return { info, vertices, positions, indices: accessor(prim.indices), rows };
+    return { vertices, positions, indices: accessor(prim.indices), rows };
+  }
+
+  // --- PNG -> RGBA8 (prt-png.js; inflated here by the browser) -----------
+  async function decodePng(bytes, what) {
+    let png, px;
+    try {
+      png = PNG.chunks(bytes, what);
+      const stream = new Blob(png.idat).stream().pipeThrough(new DecompressionStream('deflate'));
+      px = PNG.unfilter(new Uint8Array(await new Response(stream).arrayBuffer()), png.width, png.height, png.channels, what);
+    } catch (e) {
+      fail(e.message);
+    }
+    const { width, height, channels } = png;
+    const rgba = new Uint8Array(width * height * 4);
+    for (let i = 0; i < width * height; ++i) {
+      const s = px.subarray(i * channels, (i + 1) * channels), grey = channels < 3;
+      rgba[4 * i] = s[0];
+      rgba[4 * i + 1] = grey ? s[0] : s[1];
+      rgba[4 * i + 2] = grey ? s[0] : s[2];
+      rgba[4 * i + 3] = channels === 2 ? s[1] : channels === 4 ? s[3] : 255;
+    }
+    return { width, height, rgba };
+  }
+
+  // The image of glTF texture `index`, decoded.
+  function textureImage(glb, index, what) {
+    const t = glb.json.textures[index], img = t && glb.json.images[t.source];
+    if (!img || img.bufferView === undefined) fail(`model.glb: ${what}: texture ${index} has no embedded image`);
+    return decodePng(glb.view(img.bufferView), `model.glb: ${what} (image ${t.source})`);
   }
 
   // --- shaders ------------------------------------------------------------
@@ -123,6 +175,53 @@ in vec3 v_radiance;
 out vec4 o_color;
 ${toneGlsl}
 void main() { o_color = display(v_radiance); }`;
+  // The lightmap's shaders: K + sum over layers g of dot(texel_g, A[3g + c])
+  // is bias . L + (scale x byte / 255) . L per channel c, folded on the CPU
+  // each frame (lightmapModel's light()).
+  const lightmapVert = `#version 300 es
+precision highp float;
+in vec3 a_position;
+in vec2 a_uv0;
+in vec2 a_uv1;
+uniform mat4 u_view_proj;
+out vec2 v_uv0;
+out vec2 v_uv1;
+void main() {
+  v_uv0 = a_uv0;
+  v_uv1 = a_uv1;
+  gl_Position = u_view_proj * vec4(a_position, 1.0);
+}`;
+  // shaders/lightmap.frag.glsl's detail: the material's albedo over the texel's.
+  const lightmapFrag = (groups) => `#version 300 es
+precision highp float; precision highp int; precision highp sampler2D; precision highp sampler2DArray;
+#define GROUPS ${groups}
+in vec2 v_uv0;
+in vec2 v_uv1;
+out vec4 o_color;
+uniform sampler2DArray u_coefficients;
+uniform sampler2D u_texel_albedo;
+uniform sampler2D u_base;
+uniform vec4 u_base_color;
+uniform int u_has_texture;
+uniform int u_base_uv;
+uniform int u_detail;
+layout(std140) uniform Light { vec4 K; vec4 A[3 * GROUPS]; };
+${toneGlsl}
+void main() {
+  vec3 r = K.rgb;
+  for (int g = 0; g < GROUPS; ++g) {
+    vec4 t = texture(u_coefficients, vec3(v_uv1, float(g)));
+    r += vec3(dot(t, A[3 * g]), dot(t, A[3 * g + 1]), dot(t, A[3 * g + 2]));
+  }
+  if (u_detail != 0) {
+    vec3 albedo = u_base_color.rgb;
+    if (u_has_texture != 0) albedo *= texture(u_base, u_base_uv == 1 ? v_uv1 : v_uv0).rgb;
+    vec3 texel = texture(u_texel_albedo, v_uv1).rgb;
+    for (int c = 0; c < 3; ++c)
+      if (texel[c] > 1e-3) r[c] *= clamp(albedo[c], 0.0, 1.0) / texel[c];
+  }
+  o_color = display(r);
+}`;
   const bgVert = `#version 300 es
 precision highp float;
 out vec2 v_ndc;
@@ -158,7 +257,7 @@ void main() {
       if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) fail(name + ' shader: ' + gl.getShaderInfoLog(s));
       gl.attachShader(p, s);
     }
-    gl.bindAttribLocation(p, 0, 'a_position');
+    ['a_position', 'a_uv0', 'a_uv1'].forEach((a, i) => gl.bindAttribLocation(p, i, a));
     gl.linkProgram(p);
     if (!gl.getProgramParameter(p, gl.LINK_STATUS)) fail(name + ' program: ' + gl.getProgramInfoLog(p));
     const u = {};
@@ -195,6 +294,244 @@ void main() {
     return { M, f, s, u, t };
   }
 
+  // --- the two kinds of model -----------------------------------------------
+  // Each draws itself with the rotated lighting L (n = bands^2 RGB triples)
+  // after the background: draw(viewProj, L, gain, tone, state).
+
+  // Per-vertex transfer: an RGBA32F texture [vertex][channel][vec4s] from
+  // the glTF's [channel][k] rows, read in the vertex shader.
+  function vertexModel(gl, glb) {
+    const model = vertexGeometry(glb);
+    const bands = glb.info.bands, channels = glb.info.channels, n = bands * bands;
+    const vec4s = (n + 3) >> 2;
+    const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+    const texels = model.vertices * channels * vec4s, width = Math.min(maxTex, 8192);
+    const height = Math.ceil(texels / width);
+    if (height > maxTex) fail(`the transfer (${texels} texels) does not fit this WebGL's ${maxTex}^2 texture`);
+    const data = new Float32Array(width * height * 4);
+    for (let v = 0; v < model.vertices; ++v)
+      for (let c = 0; c < channels; ++c)
+        for (let k = 0; k < n; ++k) {
+          const j = c * n + k;
+          data[((v * channels + c) * vec4s) * 4 + k] = model.rows[j >> 2][4 * v + (j & 3)];
+        }
+    const transferTex = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, transferTex);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, width, height);
+    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, width, height, gl.RGBA, gl.FLOAT, data);
+    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
+
+    const indices = model.indices instanceof Uint32Array ? model.indices : new Uint32Array(model.indices);
+    const vao = geometry(gl, [model.positions], indices);
+    const mesh = program(gl, meshVert(n, vec4s, channels), meshFrag, 'mesh');
+    const light = uniformBlock(gl, mesh, vec4s * 16);
+    return {
+      vertices: model.vertices,
+      describe: () => `${model.vertices} vertices, ${indices.length / 3} triangles, ${bands} bands, ` +
+                      `${channels === 1 ? 'mono' : 'RGB'} ${glb.info.mode || ''} transfer`,
+      draw(M, L, gain, tone) {
+        light.data.fill(0);
+        for (let k = 0; k < n; ++k) light.data.set(L[k], 4 * k);
+        gl.useProgram(mesh.p);
+        light.bind();
+        gl.uniformMatrix4fv(mesh.u.u_view_proj, false, M);
+        gl.uniform1f(mesh.u.u_gain, gain);
+        gl.uniform1i(mesh.u.u_tone, tone);
+        gl.activeTexture(gl.TEXTURE1);
+        gl.bindTexture(gl.TEXTURE_2D, transferTex);
+        gl.uniform1i(mesh.u.u_transfer, 1);
+        gl.uniform1i(mesh.u.u_width, width);
+        gl.bindVertexArray(vao);
+        gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
+      },
+    };
+  }
+
+  // A vertex array of float attributes 0, 1, ... (tightly packed arrays of
+  // 3, 2, 2 components) and 32-bit indices.
+  function geometry(gl, attributes, indices) {
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    attributes.forEach((data, a) => {
+      gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
+      gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(a);
+      gl.vertexAttribPointer(a, a === 0 ? 3 : 2, gl.FLOAT, false, 0, 0);
+    });
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, gl.createBuffer());
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indices, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    return vao;
+  }
+
+  // The uniform block Light of `prog` (binding 0): data (floats), bind()
+  // uploads and binds it.
+  function uniformBlock(gl, prog, floats) {
+    gl.uniformBlockBinding(prog.p, gl.getUniformBlockIndex(prog.p, 'Light'), 0);
+    const buffer = gl.createBuffer(), data = new Float32Array(floats);
+    gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
+    gl.bufferData(gl.UNIFORM_BUFFER, data.byteLength, gl.DYNAMIC_DRAW);
+    return {
+      data,
+      bind() {
+        gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
+        gl.bufferSubData(gl.UNIFORM_BUFFER, 0, data);
+        gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, buffer);
+      },
+    };
+  }
+
+  function texture2d(gl, width, height, format, type, internal, data, wrap, filter) {
+    const t = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    gl.texStorage2D(gl.TEXTURE_2D, 1, internal, width, height);
+    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, width, height, format, type, data);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, filter || gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, filter || gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, wrap[0]);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, wrap[1]);
+    return t;
+  }
+
+  // A lightmap (docs/FORMAT.md "Lightmap export"): every node's primitives
+  // in one vertex array (world-space vertices: prt writes no node
+  // transforms), drawn per material; the coefficient textures in one
+  // texture array; the texel albedo of lighting.json's lightmap_albedo.
+  async function lightmapModel(gl, glb, lighting) {
+    const { json, info, accessor } = glb;
+    const bands = info.bands, channels = info.channels, n = bands * bands, stride = info.coefficients;
+    const W = info.lightmap.width, H = info.lightmap.height, uvSet = 'TEXCOORD_' + info.lightmap.texcoord;
+    const groups = info.textures.length;
+    if (stride !== channels * n || groups !== Math.ceil(stride / 4) || info.scale.length !== stride ||
+        info.bias.length !== stride || info.bits !== 8)
+      fail('model.glb: asset.extras.prt: an inconsistent lightmap description (docs/FORMAT.md "Lightmap export")');
+    if (groups > gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS))
+      fail(`model.glb: ${groups} coefficient textures exceed this WebGL's ${gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS)} texture layers`);
+
+    // Geometry, gathered per material.
+    const positions = [], uv0 = [], uv1 = [], perMaterial = new Map();
+    let vertices = 0, triangles = 0, objects = 0;
+    for (const nodeIndex of json.scenes[json.scene || 0].nodes) {
+      const node = json.nodes[nodeIndex];
+      if (node.matrix || node.translation || node.rotation || node.scale || node.children)
+        fail('model.glb: node ' + nodeIndex + ' has a transform or children (prt export writes world-space vertices)');
+      if (node.mesh === undefined) continue;
+      ++objects;
+      for (const prim of json.meshes[node.mesh].primitives) {
+        if (prim.mode !== undefined && prim.mode !== 4) fail('model.glb: a primitive that is not triangles');
+        if (prim.attributes[uvSet] === undefined) fail('model.glb: node ' + nodeIndex + ' has no ' + uvSet);
+        const p = accessor(prim.attributes.POSITION), count = p.length / 3;
+        const t1 = accessor(prim.attributes[uvSet]);
+        const t0 = prim.attributes.TEXCOORD_0 !== undefined ? accessor(prim.attributes.TEXCOORD_0) : new Float32Array(2 * count);
+        const idx = accessor(prim.indices);
+        positions.push(p);
+        uv0.push(t0);
+        uv1.push(t1);
+        const key = prim.material === undefined ? -1 : prim.material;
+        if (!perMaterial.has(key)) perMaterial.set(key, []);
+        const list = perMaterial.get(key);
+        for (let i = 0; i < idx.length; ++i) list.push(idx[i] + vertices);
+        vertices += count;
+        triangles += idx.length / 3;
+      }
+    }
+    const concat = (parts) => {
+      const out = new Float32Array(parts.reduce((s, a) => s + a.length, 0));
+      let o = 0;
+      for (const a of parts) { out.set(a, o); o += a.length; }
+      return out;
+    };
+    const batches = [], all = [];
+    for (const [material, list] of perMaterial) {
+      batches.push({ material, first: all.length, count: list.length });
+      for (const i of list) all.push(i);
+    }
+    const vao = geometry(gl, [concat(positions), concat(uv0), concat(uv1)], new Uint32Array(all));
+
+    // Materials: base colour factor x texture (sRGB; linear after sampling).
+    const clampWrap = [gl.CLAMP_TO_EDGE, gl.CLAMP_TO_EDGE], repeat = [gl.REPEAT, gl.REPEAT];
+    const materials = new Map();
+    for (const key of perMaterial.keys()) {
+      const m = key >= 0 ? json.materials[key] : {};
+      const pbr = m.pbrMetallicRoughness || {};
+      const entry = { color: pbr.baseColorFactor || [1, 1, 1, 1], texture: null, uv: 0 };
+      // One albedo for all (--albedo): every fragment's too, as prt render.
+      if (info.albedo) entry.color = [...info.albedo, 1];
+      else if (pbr.baseColorTexture) {
+        const img = await textureImage(glb, pbr.baseColorTexture.index, `material ${m.name || key}`);
+        entry.texture = texture2d(gl, img.width, img.height, gl.RGBA, gl.UNSIGNED_BYTE, gl.SRGB8_ALPHA8, img.rgba, repeat);
+        entry.uv = pbr.baseColorTexture.texCoord || 0;
+      }
+      materials.set(key, entry);
+    }
+
+    // The coefficient textures: layer g holds coefficients 4g .. 4g + 3.
+    const coefficients = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D_ARRAY, coefficients);
+    gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA8, W, H, groups);
+    for (let g = 0; g < groups; ++g) {
+      const img = await textureImage(glb, info.textures[g], 'coefficient texture ' + g);
+      if (img.width !== W || img.height !== H) fail(`model.glb: coefficient texture ${g} is ${img.width}x${img.height}, the lightmap ${W}x${H}`);
+      gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, g, W, H, 1, gl.RGBA, gl.UNSIGNED_BYTE, img.rgba);
+    }
+    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, p, gl.LINEAR);
+    for (const p of [gl.TEXTURE_WRAP_S, gl.TEXTURE_WRAP_T]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, p, gl.CLAMP_TO_EDGE);
+
+    const a = lighting.lightmap_albedo;
+    if (!a || a.width !== W || a.height !== H) fail('lighting.json: no lightmap_albedo of the lightmap\'s size');
+    const half = new Uint16Array(await fetchOk(a.file));
+    if (half.length !== W * H * 3) fail(a.file + ': ' + half.length + ' values, expected ' + W * H * 3);
+    const texelAlbedo = texture2d(gl, W, H, gl.RGB, gl.HALF_FLOAT, gl.RGB16F, half, clampWrap);
+
+    const prog = program(gl, lightmapVert, lightmapFrag(groups), 'lightmap');
+    const light = uniformBlock(gl, prog, 4 + 12 * groups);
+    return {
+      vertices,
+      lightmap: { width: W, height: H, objects, triangles },
+      describe: () => `${objects} objects, ${triangles} triangles, ${W}x${H} lightmap, ${bands} bands, ` +
+                      `${channels === 1 ? 'mono' : 'RGB'} ${info.mode || ''} transfer`,
+      draw(M, L, gain, tone, state) {
+        // value_j = bias_j + scale_j t_j (t = byte / 255, what the sampler
+        // returns); radiance_c = sum_j value_j L[k_j][c] over the j of
+        // channel c (every j for a 1-channel row).
+        const d = light.data;
+        d.fill(0);
+        for (let j = 0; j < stride; ++j) {
+          const k = j % n, c = Math.floor(j / n), g = j >> 2, i = j & 3;
+          for (let ch = 0; ch < 3; ++ch) {
+            if (channels !== 1 && c !== ch) continue;
+            d[ch] += info.bias[j] * L[k][ch];
+            d[4 + (3 * g + ch) * 4 + i] = info.scale[j] * L[k][ch];
+          }
+        }
+        gl.useProgram(prog.p);
+        light.bind();
+        gl.uniformMatrix4fv(prog.u.u_view_proj, false, M);
+        gl.uniform1f(prog.u.u_gain, gain);
+        gl.uniform1i(prog.u.u_tone, tone);
+        gl.uniform1i(prog.u.u_detail, state.detail ? 1 : 0);
+        gl.activeTexture(gl.TEXTURE1);
+        gl.bindTexture(gl.TEXTURE_2D_ARRAY, coefficients);
+        gl.uniform1i(prog.u.u_coefficients, 1);
+        gl.activeTexture(gl.TEXTURE2);
+        gl.bindTexture(gl.TEXTURE_2D, texelAlbedo);
+        gl.uniform1i(prog.u.u_texel_albedo, 2);
+        gl.uniform1i(prog.u.u_base, 3);
+        gl.bindVertexArray(vao);
+        for (const b of batches) {
+          const m = materials.get(b.material);
+          gl.uniform4fv(prog.u.u_base_color, m.color);
+          gl.uniform1i(prog.u.u_has_texture, m.texture ? 1 : 0);
+          gl.uniform1i(prog.u.u_base_uv, m.uv);
+          gl.activeTexture(gl.TEXTURE3);
+          gl.bindTexture(gl.TEXTURE_2D, m.texture);
+          gl.drawElements(gl.TRIANGLES, b.count, gl.UNSIGNED_INT, 4 * b.first);
+        }
+      },
+    };
+  }
+
   // --- the page -----------------------------------------------------------
   const q = new URLSearchParams(location.search);
   const numbers = (text, count, what) => {
@@ -214,49 +551,11 @@ void main() {
     const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true, alpha: false });
     if (!gl) fail('this browser has no WebGL2');
     const lighting = await fetchOk('lighting.json', 'json');
-    const model = parseGlb(await fetchOk(lighting.model || 'model.glb'));
-    const bands = model.info.bands, channels = model.info.channels, n = bands * bands;
+    const glb = parseGlb(await fetchOk(lighting.model || 'model.glb'));
+    const bands = glb.info.bands, channels = glb.info.channels;
     if (lighting.bands < bands) fail('lighting.json has ' + lighting.bands + ' bands, the model ' + bands);
-    const vec4s = (n + 3) >> 2;
-
-    // Transfer texture: [vertex][channel][vec4s], from the glTF's [channel][k] rows.
-    const maxTex = gl.getParameter(gl.MAX_TEXTURE_SIZE);
-    const texels = model.vertices * channels * vec4s, width = Math.min(maxTex, 8192);
-    const height = Math.ceil(texels / width);
-    if (height > maxTex) fail(`the transfer (${texels} texels) does not fit this WebGL's ${maxTex}^2 texture`);
-    const data = new Float32Array(width * height * 4);
-    for (let v = 0; v < model.vertices; ++v)
-      for (let c = 0; c < channels; ++c)
-        for (let k = 0; k < n; ++k) {
-          const j = c * n + k;
-          data[((v * channels + c) * vec4s) * 4 + k] = model.rows[j >> 2][4 * v + (j & 3)];
-        }
-    const transferTex = gl.createTexture();
-    gl.bindTexture(gl.TEXTURE_2D, transferTex);
-    gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, width, height);
-    gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, width, height, gl.RGBA, gl.FLOAT, data);
-    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
-
-    const vao = gl.createVertexArray();
-    gl.bindVertexArray(vao);
-    const pb = gl.createBuffer();
-    gl.bindBuffer(gl.ARRAY_BUFFER, pb);
-    gl.bufferData(gl.ARRAY_BUFFER, model.positions, gl.STATIC_DRAW);
-    gl.enableVertexAttribArray(0);
-    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
-    const ib = gl.createBuffer();
-    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, ib);
-    const indices = model.indices instanceof Uint32Array ? model.indices : new Uint32Array(model.indices);
-    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indices, gl.STATIC_DRAW);
-    gl.bindVertexArray(null);
-
-    const mesh = program(gl, meshVert(n, vec4s, channels), meshFrag, 'mesh');
+    const model = glb.info.format === 'prt SH lightmap' ? await lightmapModel(gl, glb, lighting) : vertexModel(gl, glb);
     const bg = program(gl, bgVert, bgFrag, 'background');
-    gl.uniformBlockBinding(mesh.p, gl.getUniformBlockIndex(mesh.p, 'Light'), 0);
-    const lightBuf = gl.createBuffer();
-    const lightData = new Float32Array(vec4s * 16);
-    gl.bindBuffer(gl.UNIFORM_BUFFER, lightBuf);
-    gl.bufferData(gl.UNIFORM_BUFFER, lightData.byteLength, gl.DYNAMIC_DRAW);
     const emptyVao = gl.createVertexArray();
 
     // Maps: the SH coefficients in lighting.json, the lat-long background
@@ -297,7 +596,7 @@ void main() {
     const home = { eye: init.camera.slice(0, 3), target: init.camera.slice(3, 6), up: init.camera.slice(6, 9) };
     const state = {
       map: init.map, rotate: init.rotate.slice(), spin: init.spin || 0, exposure: init.exposure,
-      tonemap: init.tonemap || 'clamp', fov: init.fov, auto: false, model: true,
+      tonemap: init.tonemap || 'clamp', fov: init.fov, auto: false, model: true, detail: true,
       eye: home.eye.slice(), target: home.target.slice(), up: home.up.slice(),
     };
     const tones = { clamp: 0, reinhard: 1, aces: 2 };
@@ -322,6 +621,7 @@ void main() {
       }
       if (s.auto !== undefined) state.auto = !!s.auto;
       if (s.model !== undefined) state.model = !!s.model;
+      if (s.detail !== undefined) state.detail = !!s.detail;
       if (s.size !== undefined) fixedSize = s.size;
       mapSelect.value = state.map;
       for (const img of $('thumbs').children) img.classList.toggle('on', img.dataset.map === state.map);
@@ -329,6 +629,7 @@ void main() {
       $('exposure-value').textContent = (+state.exposure).toFixed(1);
       $('tonemap').value = state.tonemap;
       $('auto').checked = state.auto;
+      $('detail').checked = state.detail;
       $('spin').value = ((state.spin % 360) + 360) % 360;
       $('spin-value').textContent = Math.round(((state.spin % 360) + 360) % 360) + '\u00b0';
     }
@@ -341,6 +642,7 @@ void main() {
     if (q.has('camera')) fromUrl.camera = numbers(q.get('camera'), 9, 'camera');
     if (q.has('fov')) fromUrl.fov = numbers(q.get('fov'), 1, 'fov')[0];
     if (q.has('model')) fromUrl.model = q.get('model') !== '0';
+    if (q.has('detail')) fromUrl.detail = q.get('detail') !== '0';
     fromUrl.auto = q.has('auto') ? q.get('auto') !== '0' : !!init.auto;
     if (q.has('size')) {
       const m = /^(\d+)x(\d+)$/.exec(q.get('size'));
@@ -375,8 +677,6 @@ void main() {
       const R = SH.turned(state.spin, SH.fromEuler(state.rotate[0], state.rotate[1], state.rotate[2]));
       rotation.set(R);
       const L = rotation.apply(m.coefficients);
-      lightData.fill(0);
-      for (let k = 0; k < n; ++k) lightData.set(L[k], 4 * k);
       const W = canvas.width, H = canvas.height, aspect = W / H;
       const cam = { eye: state.eye, target: state.target, up: state.up, fov: state.fov };
       const vp = viewProj(cam, aspect);
@@ -403,19 +703,7 @@ void main() {
       if (state.model) {
         gl.enable(gl.DEPTH_TEST);
         gl.depthFunc(gl.LESS);
-        gl.useProgram(mesh.p);
-        gl.bindBuffer(gl.UNIFORM_BUFFER, lightBuf);
-        gl.bufferSubData(gl.UNIFORM_BUFFER, 0, lightData);
-        gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, lightBuf);
-        gl.uniformMatrix4fv(mesh.u.u_view_proj, false, vp.M);
-        gl.uniform1f(mesh.u.u_gain, gain);
-        gl.uniform1i(mesh.u.u_tone, tone);
-        gl.activeTexture(gl.TEXTURE1);
-        gl.bindTexture(gl.TEXTURE_2D, transferTex);
-        gl.uniform1i(mesh.u.u_transfer, 1);
-        gl.uniform1i(mesh.u.u_width, width);
-        gl.bindVertexArray(vao);
-        gl.drawElements(gl.TRIANGLES, indices.length, gl.UNSIGNED_INT, 0);
+        model.draw(vp.M, L, gain, tone, state);
       }
       gl.bindVertexArray(null);
       const err = gl.getError();
@@ -423,8 +711,7 @@ void main() {
       ++frames;
       const now = performance.now();
       if (now - fpsTime > 500) { fps = frames * 1000 / (now - fpsTime); frames = 0; fpsTime = now; }
-      status.textContent = `${model.vertices} vertices, ${indices.length / 3} triangles, ${bands} bands, ` +
-        `${channels === 1 ? 'mono' : 'RGB'} ${model.info.mode || ''} transfer | ${W}x${H} | ${fps ? fps.toFixed(1) : "-"} fps`;
+      status.textContent = `${model.describe()} | ${W}x${H} | ${fps ? fps.toFixed(1) : '-'} fps`;
     }
 
     // Redraw on demand; the auto-turn animates at 20 degrees per second.
@@ -444,6 +731,8 @@ void main() {
     mapSelect.onchange = () => { apply({ map: mapSelect.value }); requestDraw(); };
     $('exposure').oninput = () => { apply({ exposure: +$('exposure').value }); requestDraw(); };
     $('tonemap').onchange = () => { apply({ tonemap: $('tonemap').value }); requestDraw(); };
+    $('detail').onchange = () => { apply({ detail: $('detail').checked }); requestDraw(); };
+    $('detail-label').hidden = !model.lightmap;
     $('auto').onchange = () => { apply({ auto: $('auto').checked }); last = performance.now(); requestDraw(); };
     $('spin').oninput = () => { apply({ spin: +$('spin').value }); requestDraw(); };
     $('reset').onclick = () => { apply({ camera: [...home.eye, ...home.target, ...home.up], fov: init.fov }); requestDraw(); };
@@ -494,7 +783,7 @@ void main() {
     await draw();
     gl.finish();
     await nextFrame();
-    resolveReady({ vertices: model.vertices, bands, channels, maps: maps.map((m) => m.name),
+    resolveReady({ vertices: model.vertices, bands, channels, lightmap: model.lightmap, maps: maps.map((m) => m.name),
                    width: canvas.width, height: canvas.height });
     if (state.auto) requestDraw();
   }

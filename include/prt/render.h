@@ -206,7 +206,8 @@ class Renderer {
   // dilated gutters, and the scene is drawn sampling it bilinearly at its
   // lightmap UVs; with set_lightmap_detail (the default) each fragment takes
   // its material's albedo (base colour factor x texture at TEXCOORD_0) in
-  // place of its texel's. Shadings: Transfer, and Direct for an
+  // place of its texel's (a lightmap computed with one albedo for all,
+  // --albedo, keeps it: detail changes nothing there). Shadings: Transfer, and Direct for an
   // interreflected lightmap. Throws prt::Error when the lightmap was not
   // computed for `scene` (check_matches) or its rows exceed this OpenGL's
   // storage block size.

@@ -2,45 +2,11 @@
 // not interlaced): returns {width, height, rgb: Uint8Array (3 per pixel)}.
 'use strict';
 const zlib = require('zlib');
+const PNG = require('../../web/prt-png.js');
 
 function readPng(buf) {
-  if (buf.readUInt32BE(0) !== 0x89504e47) throw new Error('not a PNG');
-  let off = 8, width = 0, height = 0, depth = 0, type = 0, interlace = 0;
-  const idat = [];
-  while (off < buf.length) {
-    const len = buf.readUInt32BE(off), kind = buf.toString('latin1', off + 4, off + 8);
-    const body = buf.subarray(off + 8, off + 8 + len);
-    if (kind === 'IHDR') {
-      width = body.readUInt32BE(0);
-      height = body.readUInt32BE(4);
-      depth = body[8];
-      type = body[9];
-      interlace = body[12];
-    } else if (kind === 'IDAT') idat.push(body);
-    else if (kind === 'IEND') break;
-    off += 12 + len;
-  }
-  const channels = { 0: 1, 2: 3, 4: 2, 6: 4 }[type];
-  if (depth !== 8 || !channels || interlace) throw new Error(`PNG type ${type} depth ${depth} interlace ${interlace} not supported`);
-  const raw = zlib.inflateSync(Buffer.concat(idat));
-  const stride = width * channels, out = Buffer.alloc(stride * height);
-  for (let y = 0; y < height; ++y) {
-    const f = raw[y * (stride + 1)], src = raw.subarray(y * (stride + 1) + 1, (y + 1) * (stride + 1));
-    const row = out.subarray(y * stride, (y + 1) * stride), prev = y > 0 ? out.subarray((y - 1) * stride, y * stride) : null;
-    for (let i = 0; i < stride; ++i) {
-      const a = i >= channels ? row[i - channels] : 0, b = prev ? prev[i] : 0, c = prev && i >= channels ? prev[i - channels] : 0;
-      let p;
-      if (f === 0) p = 0;
-      else if (f === 1) p = a;
-      else if (f === 2) p = b;
-      else if (f === 3) p = (a + b) >> 1;
-      else if (f === 4) {
-        const pa = Math.abs(b - c), pb = Math.abs(a - c), pc = Math.abs(a + b - 2 * c);
-        p = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
-      } else throw new Error('bad PNG filter ' + f);
-      row[i] = (src[i] + p) & 255;
-    }
-  }
+  const { width, height, channels, idat } = PNG.chunks(new Uint8Array(buf.buffer, buf.byteOffset, buf.length), 'PNG');
+  const out = PNG.unfilter(zlib.inflateSync(Buffer.concat(idat)), width, height, channels, 'PNG');
   const rgb = new Uint8Array(width * height * 3);
   for (let i = 0; i < width * height; ++i)
     for (let c = 0; c < 3; ++c) rgb[3 * i + c] = out[i * channels + (channels >= 3 ? c : 0)];

@@ -45,7 +45,7 @@ const kMaskLevels = 6;
 // way, and one whose model colour is within kMaskLevels of the background
 // behind it falls in or out of a mask on a 1-level difference. Measured
 // 0.9985 (mono) and 0.9988 (RGB); the negative controls give 0.15.
-const kMinIoU = 0.99;
+const kMinIoU = 0.99;  // tolerances.minIoU
 // Over the pixels both call model: the mean absolute difference. Radiance is
 // dot(transfer, rotated lighting) in float on both sides, Gouraud
 // interpolation and the same tone map: what is left is float rounding, the
@@ -104,8 +104,19 @@ function compare(a, b, bg) {
     meanBackground: nBg ? sumBg / nBg : 0,
   };
 }
-const passes = (m) => m.iou >= kMinIoU && m.meanModel <= kMaxMeanModel && m.p99Model <= kMaxP99Model &&
-                      m.meanBackground <= kMaxMeanBackground;
+const tolerances = { minIoU: kMinIoU, maxMeanModel: kMaxMeanModel, maxP99Model: kMaxP99Model,
+                     maxMeanBackground: kMaxMeanBackground };
+// Lightmaps: the page relights the glTF's 8-bit coefficients (bias + scale
+// x byte / 255, docs/FORMAT.md "Lightmap export"), prt render the float
+// rows. Each coefficient is off by up to scale / 510, and 9 to 48 of them of
+// either sign add up per pixel: in the room (dim, interreflected, exposure
+// +1.5) that is a level or two nearly everywhere. Measured: room mean 0.93,
+// p99 5 levels; wall (mono, brighter) 0.12 and 1. The negative controls
+// give 25 and 12 (mean) there.
+const lightmapTolerances = { ...tolerances, maxMeanModel: 2.0, maxP99Model: 8 };
+
+const passesWithin = (m, t) => m.iou >= t.minIoU && m.meanModel <= t.maxMeanModel && m.p99Model <= t.maxP99Model &&
+                               m.meanBackground <= t.maxMeanBackground;
 const show = (m) => `model pixels ${m.modelPixels}, IoU ${m.iou.toFixed(4)}, mean ${m.meanModel.toFixed(3)}, ` +
                     `p99 ${m.p99Model}, background mean ${m.meanBackground.toFixed(3)}`;
 
@@ -125,27 +136,34 @@ function serve(dir) {
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 
-// One exported page against prt render. `controls`: also the negative controls.
-async function runCase(browser, tmp, name, precompute, controls) {
-  const mesh = path.join(args.source, 'models', 'scene.obj');
+// One exported page against prt render. `c`: scene (a path under the
+// source tree), precompute (its arguments), camera (9 numbers; default: the
+// page's initial camera turned and raised), exposure, negatives (also the
+// negative controls), controls (also the controls' checks), textured (a
+// lightmap with a textured material: the detail toggle must change the
+// frame), tolerances (this case's; default: the per-vertex ones).
+async function runCase(browser, tmp, name, c) {
+  const mesh = path.join(args.source, c.scene);
   const transfer = path.join(tmp, name + '.prt');
   // Few bands and rays: the comparison is of the two renderers, not of the transfer.
-  run(args.prt, ['precompute', mesh, '-o', transfer, ...precompute, '-q']);
+  run(args.prt, ['precompute', mesh, '-o', transfer, ...c.precompute, '-q']);
   const page = path.join(tmp, name);
   run(args.prt, ['export', mesh, transfer, '--web', page, '--env', 'studio', '-q']);
   const lighting = JSON.parse(fs.readFileSync(path.join(page, 'lighting.json')));
-  const bands = +precompute[precompute.indexOf('--bands') + 1];
+  const bands = +c.precompute[c.precompute.indexOf('--bands') + 1];
   if (lighting.bands !== bands || !lighting.maps.some((m) => m.name === 'forest') || lighting.initial.map !== 'studio')
     fail('lighting.json: ' + JSON.stringify(lighting).slice(0, 200));
+  const tol = c.tolerances || tolerances;
 
   // A camera off the default one: turned 35 degrees about +Y around the
   // target and raised, so the page's camera maths and --camera are both exercised.
-  const c = lighting.initial.camera, a = 35 * Math.PI / 180;
-  const off = [c[0] - c[3], c[1] - c[4], c[2] - c[5]];
-  const eye = [c[3] + Math.cos(a) * off[0] + Math.sin(a) * off[2], c[4] + 0.3 * Math.hypot(...off),
-               c[5] - Math.sin(a) * off[0] + Math.cos(a) * off[2]];
-  const camera = [...eye, c[3], c[4], c[5], 0, 1, 0].map((v) => +v.toFixed(6));
-  const W = 256, H = 192, fov = 35, rotate = [40, 20, 10], exposure = 0.5, map = 'studio';
+  const i0 = lighting.initial.camera, a = 35 * Math.PI / 180;
+  const off = [i0[0] - i0[3], i0[1] - i0[4], i0[2] - i0[5]];
+  const eye = [i0[3] + Math.cos(a) * off[0] + Math.sin(a) * off[2], i0[4] + 0.3 * Math.hypot(...off),
+               i0[5] - Math.sin(a) * off[0] + Math.cos(a) * off[2]];
+  const camera = (c.camera || [...eye, i0[3], i0[4], i0[5], 0, 1, 0]).map((v) => +v.toFixed(6));
+  const target = camera.slice(3, 6);
+  const W = 256, H = 192, fov = 35, rotate = [40, 20, 10], exposure = c.exposure, map = 'studio';
   const rendered = path.join(tmp, name + '.png');
   run(args.prt, ['render', mesh, transfer, path.join(args.source, 'envmaps', map + '.exr'), '-o', rendered,
                  '--width', String(W), '--height', String(H), '--camera', camera.join(','), '--fov', String(fov),
@@ -172,21 +190,33 @@ async function runCase(browser, tmp, name, precompute, controls) {
     if (web.width !== W || web.height !== H || prt.width !== W || prt.height !== H)
       throw new Error(`sizes: page ${web.width}x${web.height}, prt render ${prt.width}x${prt.height}, expected ${W}x${H}`);
     const m = compare(web, prt, bg);
-    console.log(`${name}: page (${info.vertices} vertices, ${info.bands} bands, ${info.channels} channel(s); ` +
+    const passes = (x) => passesWithin(x, tol);
+    console.log(`${name}: page (${info.lightmap ? `lightmap ${info.lightmap.width}x${info.lightmap.height}, ` : ''}` +
+                `${info.vertices} vertices, ${info.bands} bands, ${info.channels} channel(s); ` +
                 `"${status}") vs prt render: ${show(m)}`);
     if (!passes(m)) fail(name + ': the page differs from prt render beyond the tolerances');
     if (m.modelPixels < 0.1 * W * H) fail(name + ': the model covers only ' + m.modelPixels + ' pixels');
-    if (controls) {
+    if (c.negatives) {
       await tab.evaluate(() => prtViewer.set({ model: true, spin: 90 }));
       const mt = compare(await shot(), prt, bg);
       await tab.evaluate(() => prtViewer.set({ spin: 0, map: 'forest' }));
       const mo = compare(await shot(), prt, bg);
+      await tab.evaluate(() => prtViewer.set({ map: 'studio' }));
       console.log(`${name}: negative control, environment turned 90 degrees more: ${show(mt)}`);
       console.log(`${name}: negative control, map forest instead of studio: ${show(mo)}`);
       if (passes(mt)) fail(name + ': the comparison passes with the environment turned 90 degrees');
       if (passes(mo)) fail(name + ': the comparison passes under another map');
     }
-    if (controls) {
+    if (c.textured) {
+      // The detail toggle: without it the textured floor is the texel's
+      // albedo, bilinear at lightmap resolution; the frame must change.
+      await tab.evaluate(() => prtViewer.set({ model: true, detail: false }));
+      const flat = compare(await shot(), web, bg);
+      await tab.evaluate(() => prtViewer.set({ detail: true }));
+      console.log(`${name}: detail off against on: ${show(flat)}`);
+      if (!(flat.meanModel > 0.5)) fail(`${name}: turning texture detail off did not change the frame`);
+    }
+    if (c.controls) {
       // The controls move what they should: a drag orbits the eye about the
       // target, the wheel moves it away, the turn advances the spin, a
       // thumbnail, the picker and the exposure slider set the state.
@@ -200,7 +230,7 @@ async function runCase(browser, tmp, name, precompute, controls) {
       await tab.mouse.wheel(0, 200);
       await tab.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
       const after = await tab.evaluate(() => prtViewer.state.eye.slice());
-      const dist = (e) => Math.hypot(e[0] - c[3], e[1] - c[4], e[2] - c[5]);
+      const dist = (e) => Math.hypot(e[0] - target[0], e[1] - target[1], e[2] - target[2]);
       const moved = Math.hypot(after[0] - before[0], after[1] - before[1], after[2] - before[2]);
       // The wheel: exp(200 x 0.001) = 1.22 times the distance.
       if (!(moved > 0.05 * dist(before)) || !(Math.abs(dist(after) / dist(before) - Math.exp(0.2)) < 1e-6))
@@ -241,9 +271,22 @@ async function main() {
   });
   try {
     // Mono (one row for R, G and B) and RGB transfers take different shader paths.
-    await runCase(browser, tmp, 'mono', ['--bands', '4', '--samples', '64'], true);
-    await runCase(browser, tmp, 'rgb', ['--bands', '3', '--samples', '32', '--mode', 'interreflected',
-                                        '--albedo', '0.9,0.5,0.3'], false);
+    const obj = 'models/scene.obj';
+    await runCase(browser, tmp, 'mono', { scene: obj, precompute: ['--bands', '4', '--samples', '64'], exposure: 0.5,
+                                          negatives: true, controls: true });
+    await runCase(browser, tmp, 'rgb', { scene: obj, exposure: 0.5, precompute: ['--bands', '3', '--samples', '32',
+                                         '--mode', 'interreflected', '--albedo', '0.9,0.5,0.3'] });
+    // Lightmaps: the room (its materials, a textured floor, interreflected:
+    // RGB rows), seen from inside; the wall on the floor with one albedo
+    // (mono rows), from outside.
+    await runCase(browser, tmp, 'lightmap_room', {
+      scene: 'models/room.gltf', exposure: 1.5, camera: [1.7, 1.7, 1.8, -0.6, 0.6, -0.9, 0, 1, 0],
+      precompute: ['--lightmap', '64x64', '--bands', '3', '--samples', '64', '--mode', 'interreflected'],
+      tolerances: lightmapTolerances, negatives: true, textured: true });
+    await runCase(browser, tmp, 'lightmap_wall', {
+      scene: 'models/wall-on-floor.gltf', exposure: 0,
+      precompute: ['--lightmap', '64x64', '--bands', '4', '--samples', '64', '--albedo', '0.7,0.7,0.7'],
+      tolerances: lightmapTolerances });
   } finally {
     await browser.close();
     fs.rmSync(tmp, { recursive: true, force: true });

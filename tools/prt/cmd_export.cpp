@@ -42,13 +42,53 @@ struct ExportArgs {
   // later (a web page beside the model) are staged with the glTF.
 };
 
+// The page's initial state, as prt render takes it: --camera (default:
+// prt render's framing camera of `mesh`, for a square canvas, which a wider
+// one still fits), --fov, --rotate, --exposure (default: auto, for the first
+// map), --tonemap.
+WebPage web_page(const ExportArgs& a, const Mesh& mesh, const std::array<double, 3>& euler, ToneMap tone) {
+  WebPage w;
+  w.dir = a.web;
+  w.force = a.force;
+  w.turn = a.turn;
+  w.maps = web_maps(a.env, w.initial);
+  w.camera = framing_camera(mesh, a.fov, 1.0);
+  if (!a.camera.empty()) parse_camera(a.camera, w.camera);
+  w.camera.fov_deg = a.fov;
+  for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
+  const std::optional<double> given = exposure_stops(a.exposure.empty() ? "auto" : a.exposure);
+  const double exposure = given ? *given : auto_exposure(project(load_envmap(w.initial), 3));
+  w.display = {exposure, tone};
+  return w;
+}
+
+// Stages the page (stage_web_page); null when Ctrl-C stopped it (then the
+// Outputs' commit says so and exits 130).
+std::unique_ptr<StagedPage> stage_page(const ExportArgs& a, const WebPage& w, int bands,
+                                       const std::function<void(const std::string&)>& write_model) {
+  std::unique_ptr<StagedPage> page;
+  try {
+    page = stage_web_page(w, bands, write_model, [] { return Outputs::interrupted(); }, a.quiet);
+  } catch (const Error&) {
+    if (!Outputs::interrupted()) throw;
+  }
+  if (!a.quiet && page) fmt::print(stderr, "{}: {} maps\n", a.web, w.maps.size());
+  return page;
+}
+
+void print_page_written(const ExportArgs& a) {
+  fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, maps/): serve it with "
+                     "python3 -m http.server -d {} and open http://localhost:8000/\n",
+             a.web, a.web);
+}
+
 // A lightmap (prt precompute SCENE --lightmap): the scene with its
-// coefficient textures (write_gltf_lightmap; docs/FORMAT.md "Lightmap export").
-int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler) {
-  if (!a.web.empty())
-    throw UsageError("--web: the relighting page shows per-vertex transfer; a lightmap's page is not available yet "
-                     "(export the .glb and relight its coefficient textures, docs/FORMAT.md \"Lightmap export\")");
-  if (a.output.empty()) throw UsageError("give --output FILE.glb|.gltf");
+// coefficient textures (write_gltf_lightmap; docs/FORMAT.md "Lightmap export"),
+// and the page that relights them (docs/WEB.md "Lightmaps").
+int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler, ToneMap tone) {
+  if (!a.bake.empty() && a.output.empty())
+    throw UsageError("--bake: a lightmap's baked texture goes into the glTF of --output (the page relights the "
+                     "coefficient textures): give --output FILE.glb too");
   const LightmapTransfer lt = read_lightmap_transfer(a.transfer);
   const prt::Scene scene = prt::load_scene(a.mesh);
   const LightmapTexels texels = lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
@@ -58,8 +98,8 @@ int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler)
   GltfLightmapOptions opts;
   opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
   opts.generator = "prt " PRT_VERSION " (prt export)";
-  const Mesh points = texel_points(texels);
-  if (!a.bake.empty()) {
+  if (!a.bake.empty() && !a.output.empty()) {
+    const Mesh points = texel_points(texels);
     EnvMap env = load_envmap(a.bake);
     require_finite(env);
     std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
@@ -74,13 +114,28 @@ int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler)
     opts.bake.exposure = stops;
   }
   Outputs out("export");
-  out.write([&] { write_gltf_lightmap(a.output, scene, lt, texels, opts); });
+  if (!a.output.empty()) out.write([&] { write_gltf_lightmap(a.output, scene, lt, texels, opts); });
+  std::unique_ptr<StagedPage> page;
+  if (!a.web.empty()) {
+    // The page's model: the scene's own materials (no bake: the page relights).
+    WebPage w = web_page(a, scene.mesh, euler, tone);
+    w.lightmap_albedo = lightmap_image(lt.layout, texels.albedo);
+    w.lightmap_width = lt.layout.width;
+    w.lightmap_height = lt.layout.height;
+    GltfLightmapOptions page_opts = opts;
+    page_opts.baked.clear();
+    page = stage_page(a, w, lt.transfer.bands,
+                      [&](const std::string& path) { write_gltf_lightmap(path, scene, lt, texels, page_opts); });
+  }
   if (const int rc = out.commit(); rc != 0) return rc;
+  if (page) page->commit();
   if (!a.quiet) {
     const std::size_t stride = lt.transfer.stride();
-    fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures ({}x{} RGBA8, {} bytes per texel){}\n", a.output,
-               scene.objects.size(), (stride + 3) / 4, lt.layout.width, lt.layout.height, 4 * ((stride + 3) / 4),
-               opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)");
+    if (!a.output.empty())
+      fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures ({}x{} RGBA8, {} bytes per texel){}\n",
+                 a.output, scene.objects.size(), (stride + 3) / 4, lt.layout.width, lt.layout.height,
+                 4 * ((stride + 3) / 4), opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)");
+    if (page) print_page_written(a);
   }
   return 0;
 }
@@ -107,7 +162,7 @@ int run_export(const ExportArgs& a) {
   }
   const ToneMap tone = parse_tone_map(a.tone_map);  // checked while parsing
 
-  if (transfer_is_lightmap(a.transfer)) return run_export_lightmap(a, euler);
+  if (transfer_is_lightmap(a.transfer)) return run_export_lightmap(a, euler, tone);
   // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
   // (sparse, per light-cube pixel) has none to give.
   if (read_transfer_basis(a.transfer) == TransferBasis::Wavelet)
@@ -159,31 +214,9 @@ int run_export(const ExportArgs& a) {
   Outputs out("export");
   if (!a.output.empty()) out.write([&] { write_gltf(a.output, mesh, t, opts); });
   std::unique_ptr<StagedPage> page;
-  if (!a.web.empty()) {
-    // The page's initial state, as prt render takes it: --camera (default:
-    // prt render's framing camera, for a square canvas, which a wider one
-    // still fits), --fov, --rotate, --exposure (default: auto, for the
-    // first map), --tonemap.
-    WebPage w;
-    w.dir = a.web;
-    w.force = a.force;
-    w.turn = a.turn;
-    w.maps = web_maps(a.env, w.initial);
-    w.camera = framing_camera(mesh, a.fov, 1.0);
-    if (!a.camera.empty()) parse_camera(a.camera, w.camera);
-    w.camera.fov_deg = a.fov;
-    for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
-    const std::optional<double> given = exposure_stops(a.exposure.empty() ? "auto" : a.exposure);
-    const double exposure = given ? *given : auto_exposure(project(load_envmap(w.initial), 3));
-    w.display = {exposure, tone};
-    try {
-      page = stage_web_page(w, t, [&](const std::string& path) { write_gltf(path, mesh, t, opts); },
-                            [] { return Outputs::interrupted(); }, a.quiet);
-    } catch (const Error&) {
-      if (!Outputs::interrupted()) throw;  // Ctrl-C: commit() says so and exits 130
-    }
-    if (!a.quiet && page) fmt::print(stderr, "{}: {} maps\n", a.web, w.maps.size());
-  }
+  if (!a.web.empty())
+    page = stage_page(a, web_page(a, mesh, euler, tone), t.bands,
+                      [&](const std::string& path) { write_gltf(path, mesh, t, opts); });
   if (const int rc = out.commit(); rc != 0) return rc;
   if (page) page->commit();
   if (!a.quiet) {
@@ -191,10 +224,7 @@ int run_export(const ExportArgs& a) {
       fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
                  mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
                  opts.colors.empty() ? "" : ", COLOR_0");
-    if (page)
-      fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, maps/): serve it with "
-                         "python3 -m http.server -d {} and open http://localhost:8000/\n",
-                 a.web, a.web);
+    if (page) print_page_written(a);
   }
   return 0;
 }
@@ -214,14 +244,18 @@ Run add_export(CLI::App& app) {
       ".glb is binary; .gltf is JSON with the buffer embedded (base64), one file either way.\n"
       "Compressed files (prt compress) are exported decompressed; glossy files as their diffuse part;\n"
       "wavelet files are refused.\n"
+      "A lightmap (prt precompute SCENE --lightmap) is exported as the scene, one node per object, its lightmap\n"
+      "UVs as TEXCOORD_1 and its transfer as 8-bit coefficient textures with a scale and bias per coefficient\n"
+      "(docs/FORMAT.md, \"Lightmap export\"); --bake adds the baked lightmap; --web relights it per pixel.\n"
       "--bake ENV adds COLOR_0: the radiance prt relight gives under ENV (--rotate), times 2^--exposure,\n"
       "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
-      "--web DIR writes a static page (index.html, prt-viewer.js, prt-sh.js, model.glb, lighting.json: every\n"
+      "--web DIR writes a static page (index.html, its scripts, model.glb, lighting.json: every\n"
       "bundled map's SH lighting at the transfer's bands, maps/*.rgb16f backgrounds) that relights the model in\n"
       "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame.\n"
       "Example: prt export bunny.off bunny.prt -o bunny.glb\n"
       "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
-      "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1");
+      "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1\n"
+      "         prt export room.gltf room.prt -o room.glb --web room-web --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress)")->required();
   s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");

@@ -26,6 +26,7 @@ namespace prt::cli {
 // The page's sources (web/*), embedded by tools/prt/CMakeLists.txt.
 extern const char* const web_index_html;
 extern const char* const web_prt_sh_js;
+extern const char* const web_prt_png_js;
 extern const char* const web_prt_viewer_js;
 
 namespace fs = std::filesystem;
@@ -159,7 +160,7 @@ void StagedPage::commit() {
   if (!old.empty()) fs::remove_all(old, ec);
 }
 
-std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& transfer,
+std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
                                            const std::function<void(const std::string& path)>& write_model,
                                            const std::function<bool()>& cancelled, bool quiet) {
   check_web_dir(page.dir, page.force);
@@ -178,6 +179,7 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& 
   try {
     write_bytes(tmp / "index.html", web_index_html, std::char_traits<char>::length(web_index_html));
     write_bytes(tmp / "prt-sh.js", web_prt_sh_js, std::char_traits<char>::length(web_prt_sh_js));
+    write_bytes(tmp / "prt-png.js", web_prt_png_js, std::char_traits<char>::length(web_prt_png_js));
     write_bytes(tmp / "prt-viewer.js", web_prt_viewer_js, std::char_traits<char>::length(web_prt_viewer_js));
     write_model((tmp / "model.glb").string());
 
@@ -192,7 +194,7 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& 
       if (path == page.initial) initial_name = name;
       const EnvMap map = load_envmap(path);
       require_finite(map);
-      const std::vector<glm::dvec3> light = project(map, transfer.bands);
+      const std::vector<glm::dvec3> light = project(map, bands);
       nlohmann::json coeffs = nlohmann::json::array();
       for (const glm::dvec3& c : light) coeffs.push_back({c.x, c.y, c.z});
       int w = 0, h = 0;
@@ -204,14 +206,14 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& 
       write_thumbnail(tmp / thumb, rgb, w, h);
       maps.push_back({{"name", name}, {"source", fs::path(path).filename().string()}, {"file", file},
                       {"thumbnail", thumb}, {"width", w}, {"height", h}, {"coefficients", coeffs}});
-      if (!quiet) fmt::print(stderr, "{}: {}x{}, {} bands projected\n", path, w, h, transfer.bands);
+      if (!quiet) fmt::print(stderr, "{}: {}x{}, {} bands projected\n", path, w, h, bands);
     }
     const Camera& c = page.camera;
     nlohmann::json lighting = {
         {"format", 1},
         {"generator", "prt export --web"},
         {"model", "model.glb"},
-        {"bands", transfer.bands},
+        {"bands", bands},
         {"convention", "prt: real orthonormal SH, Condon-Shortley phase, z polar axis, +Y up, k = l(l+1)+m "
                        "(docs/CONVENTIONS.md); radiance in the map's units"},
         {"maps", maps},
@@ -224,6 +226,15 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& 
           {"auto", page.turn},
           {"exposure", page.display.exposure},
           {"tonemap", std::string(tone_map_name(page.display.tone_map))}}}};
+    if (!page.lightmap_albedo.empty()) {
+      PRT_CHECK(page.lightmap_albedo.size() == std::size_t(page.lightmap_width) * page.lightmap_height);
+      std::vector<std::uint16_t> half(page.lightmap_albedo.size() * 3);
+      for (std::size_t i = 0; i < page.lightmap_albedo.size(); ++i)
+        for (int ch = 0; ch < 3; ++ch) half[i * 3 + std::size_t(ch)] = glm::packHalf1x16(page.lightmap_albedo[i][ch]);
+      const std::string file = "lightmap_albedo.rgb16f";
+      write_bytes(tmp / file, half.data(), half.size() * sizeof(std::uint16_t));
+      lighting["lightmap_albedo"] = {{"file", file}, {"width", page.lightmap_width}, {"height", page.lightmap_height}};
+    }
     const std::string text = lighting.dump(1) + "\n";
     write_bytes(tmp / "lighting.json", text.data(), text.size());
     check_cancelled();

@@ -4,7 +4,8 @@
 
 #include <prt/mesh.h>
 #include <prt/render.h>
-#include <prt/transfer.h>
+
+#include <glm/vec4.hpp>
 
 #include <functional>
 #include <memory>
@@ -22,6 +23,13 @@ struct WebPage {
   double rotate[3] = {0, 0, 0};   // initial --rotate yaw,pitch,roll
   Display display;                // initial exposure and tone map
   bool turn = false;              // start with the environment turning
+  // A lightmap's page (model.glb from write_gltf_lightmap): the texels'
+  // own albedo as a W x H image (lightmap_image: gutters filled), which the
+  // page divides out where a fragment takes its material's albedo, as
+  // prt render does (Renderer::set_lightmap_detail). Empty for per-vertex
+  // transfer.
+  std::vector<glm::vec4> lightmap_albedo;
+  int lightmap_width = 0, lightmap_height = 0;
 };
 
 // The bundled maps (prt::data_dir()/envmaps: *.exr, *.hdr, *.pfm), sorted;
@@ -46,7 +54,7 @@ class StagedPage {
   void commit();  // throws prt::Error naming the directory
 
  private:
-  friend std::unique_ptr<StagedPage> stage_web_page(const WebPage&, const Transfer&,
+  friend std::unique_ptr<StagedPage> stage_web_page(const WebPage&, int,
                                                     const std::function<void(const std::string&)>&,
                                                     const std::function<bool()>&, bool);
   StagedPage(std::string dir, std::string tmp, std::string display)
@@ -54,16 +62,17 @@ class StagedPage {
   std::string dir_, tmp_, display_;
 };
 
-// Writes the page, staged: index.html, prt-sh.js, prt-viewer.js (embedded
+// Writes the page, staged: index.html, prt-sh.js, prt-png.js, prt-viewer.js (embedded
 // in prt), model.glb (write_model(path): the glTF writer), lighting.json
-// (every map's SH coefficients at the transfer's band count, the initial
-// state), maps/NAME.rgb16f (each map as a lat-long background: RGB half
+// (every map's SH coefficients at `bands`, the transfer's band count, the
+// initial state), maps/NAME.rgb16f (each map as a lat-long background: RGB half
 // floats, row 0 at the top) and maps/NAME.png (the picker's 128 x 64
-// thumbnail). Checks the directory first (check_web_dir). Throws
+// thumbnail) and, for a lightmap, lightmap_albedo.rgb16f (the texel albedo,
+// RGB half floats, row 0 at the top). Checks the directory first (check_web_dir). Throws
 // prt::Error("cancelled") when cancelled() turns true between maps (Ctrl-C),
 // prt::Error naming the file on a bad map or a failed write; nothing is
 // left then. Progress lines go to stderr unless quiet.
-std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, const Transfer& transfer,
+std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
                                            const std::function<void(const std::string& path)>& write_model,
                                            const std::function<bool()>& cancelled, bool quiet);
 
