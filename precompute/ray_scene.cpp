@@ -69,7 +69,7 @@ double default_ray_offset(const Mesh& mesh) {
   return std::max({1e-4 * mesh.diagonal(), 64.0 * FLT_EPSILON * magnitude, 1e-30});
 }
 
-RayScene::RayScene(const Mesh& mesh) : mesh_(mesh) {
+RayScene::RayScene(const Mesh& mesh, bool robust) : mesh_(mesh) {
   // make_mesh refuses larger coordinates; a Mesh built by hand is checked here.
   const glm::vec3 lo = mesh.bounds_min(), hi = mesh.bounds_max();
   const double extent = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y),
@@ -91,6 +91,7 @@ RayScene::RayScene(const Mesh& mesh) : mesh_(mesh) {
   RTCScene scene = rtcNewScene(device);
   scene_ = scene;
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+  if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   // Embree's own buffers (rtcSetNewGeometryBuffer) are padded as it needs.
   auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -237,8 +238,73 @@ Hit RayScene::intersect1(const glm::vec3& o, const glm::vec3& d, float tnear) co
   return h;
 }
 
-bool RayScene::occluded1(const glm::vec3& o, const glm::vec3& d, float tnear) const {
+namespace {
+
+// The point of triangle abc nearest p (Ericson, Real-Time Collision
+// Detection, 5.1.5), in double.
+glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const glm::dvec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const glm::dvec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+struct ClosestQuery {
+  const Mesh* mesh;
+  glm::dvec3 p;
+  double best2;
+  std::uint32_t triangle = ~0u;
+  glm::dvec3 point{0.0};
+};
+
+bool closest_callback(RTCPointQueryFunctionArguments* args) {
+  auto* q = static_cast<ClosestQuery*>(args->userPtr);
+  const glm::uvec3& t = q->mesh->triangles[args->primID];
+  const glm::dvec3 c = closest_on_triangle(q->p, glm::dvec3(q->mesh->positions[t.x]), glm::dvec3(q->mesh->positions[t.y]),
+                                           glm::dvec3(q->mesh->positions[t.z]));
+  const glm::dvec3 d = c - q->p;
+  const double d2 = glm::dot(d, d);
+  if (d2 >= q->best2) return false;
+  q->best2 = d2;
+  q->triangle = args->primID;
+  q->point = c;
+  args->query->radius = float(std::sqrt(d2));
+  return true;
+}
+
+}  // namespace
+
+std::uint32_t RayScene::closest_point(const glm::vec3& p, float radius, glm::dvec3& point) const {
+  RTCPointQuery query;
+  query.x = p.x;
+  query.y = p.y;
+  query.z = p.z;
+  query.time = 0.0f;
+  query.radius = radius;
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  ClosestQuery q{&mesh_, glm::dvec3(p), double(radius) * double(radius)};
+  rtcPointQuery(scene_of(scene_), &query, &context, closest_callback, &q);
+  point = q.point;
+  return q.triangle;
+}
+
+bool RayScene::occluded1(const glm::vec3& o, const glm::vec3& d, float tnear, float tfar) const {
   RTCRay ray = single_ray(o, d, tnear);
+  ray.tfar = tfar;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   rtcOccluded1(scene_of(scene_), &ctx, &ray);

@@ -12,6 +12,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace prt::detail {
@@ -37,7 +38,10 @@ class RayScene {
   // Throws prt::Error naming the mesh if its coordinates are beyond
   // kMaxCoordinate (prt/mesh.h) or its diagonal is below kMinRayDiagonal,
   // before Embree sees it, or if Embree fails.
-  explicit RayScene(const Mesh& mesh);
+  // robust: Embree's watertight mode (no ray slips between two triangles
+  // that share an edge; slower): what probe volumes trace with, where one
+  // stray ray lights a closed box.
+  explicit RayScene(const Mesh& mesh, bool robust = false);
   ~RayScene();
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
@@ -49,7 +53,12 @@ class RayScene {
   void intersect8(const glm::vec3& origin, const glm::vec3* dirs, int count, float tnear, Hit* hits) const;
   // One ray.
   Hit intersect1(const glm::vec3& origin, const glm::vec3& dir, float tnear) const;
-  bool occluded1(const glm::vec3& origin, const glm::vec3& dir, float tnear) const;
+  // Something hits in [tnear, tfar] (default: the whole ray).
+  bool occluded1(const glm::vec3& origin, const glm::vec3& dir, float tnear,
+                 float tfar = std::numeric_limits<float>::infinity()) const;
+  // The triangle nearest p within `radius` (~0u: none) and its nearest
+  // point (Embree's point query, exact distances in double).
+  std::uint32_t closest_point(const glm::vec3& p, float radius, glm::dvec3& point) const;
 
   const Mesh& mesh() const { return mesh_; }
 

@@ -8,6 +8,7 @@
 #include <prt/glossy.h>
 
 #include "progress_ticker.h"
+#include "random.h"
 #include "ray_scene.h"
 
 #include <fmt/format.h>
@@ -29,46 +30,10 @@ namespace prt {
 
 namespace {
 
+using detail::Rng;
+using detail::basis;
+using detail::sample_cosine;
 constexpr double kPi = 3.14159265358979323846;
-
-// ---- random numbers -----------------------------------------------------------
-// splitmix64 (Steele, Lea & Flood 2014) expands (seed, vertex) into the state of
-// xoshiro256++ (Blackman & Vigna 2018). Both are tiny, fast and fully specified,
-// so the stream is the same on every platform and standard library.
-
-std::uint64_t splitmix64(std::uint64_t& x) {
-  std::uint64_t z = (x += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-class Rng {
- public:
-  Rng(std::uint64_t seed, std::uint64_t stream) {
-    std::uint64_t x = seed;
-    const std::uint64_t mixed = splitmix64(x) ^ (stream * 0xd1342543de82ef95ull + 0x632be59bd9b4e019ull);
-    x = mixed;
-    for (auto& w : s_) w = splitmix64(x);
-  }
-  std::uint64_t next() {
-    const std::uint64_t result = rotl(s_[0] + s_[3], 23) + s_[0];
-    const std::uint64_t t = s_[1] << 17;
-    s_[2] ^= s_[0];
-    s_[3] ^= s_[1];
-    s_[1] ^= s_[2];
-    s_[0] ^= s_[3];
-    s_[2] ^= t;
-    s_[3] = rotl(s_[3], 45);
-    return result;
-  }
-  // Uniform in [0, 1), 53 random bits.
-  double uniform() { return double(next() >> 11) * 0x1.0p-53; }
-
- private:
-  static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-  std::uint64_t s_[4];
-};
 
 // ---- the environment: radiance lookup and importance sampling -----------------
 
@@ -154,28 +119,6 @@ class EnvLight {
   int last_row_ = 0;
   double total_ = 0;              // sum over pixels of m x omega
 };
-
-// ---- hemisphere ---------------------------------------------------------------
-
-// Orthonormal basis around a unit n (Duff et al., "Building an Orthonormal
-// Basis, Revisited", JCGT 2017).
-void basis(const glm::dvec3& n, glm::dvec3& t, glm::dvec3& b) {
-  const double sign = std::copysign(1.0, n.z);
-  const double a = -1.0 / (sign + n.z);
-  const double c = n.x * n.y * a;
-  t = {1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x};
-  b = {c, sign + n.y * n.y * a, -n.y};
-}
-
-// Cosine-weighted direction about n (Malley: uniform disc, lifted); density
-// max(n.w, 0) / pi.
-glm::dvec3 sample_cosine(Rng& rng, const glm::dvec3& n) {
-  const double u0 = rng.uniform(), u1 = rng.uniform();
-  const double r = std::sqrt(u0), phi = 2.0 * kPi * u1;
-  glm::dvec3 t, b;
-  basis(n, t, b);
-  return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1.0 - u0)) * n);
-}
 
 // Power heuristic (beta = 2) weight of technique a divided by its density:
 // w_a / p_a = p_a / (p_a^2 + p_b^2). Measured against the balance heuristic:

@@ -499,6 +499,17 @@ Scene load_scene(const std::string& path, const MeshOptions& options) {
   }
 }
 
+Scene load_scene_or_mesh(const std::string& path, const MeshOptions& options) {
+  switch (detail::mesh_format(path)) {
+    case detail::MeshFormat::Gltf:
+    case detail::MeshFormat::Glb:
+    case detail::MeshFormat::Obj: return load_scene(path, options);
+    default: break;
+  }
+  Mesh m = load_mesh(path, options);
+  return make_scene(std::move(m.positions), std::move(m.triangles), {}, {}, {}, {}, std::move(m.normals));
+}
+
 Scene make_scene(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangles,
                  std::vector<std::vector<glm::vec2>> uv_sets, std::vector<std::size_t> object_triangles,
                  std::vector<Material> materials, std::vector<Texture> textures, std::vector<glm::vec3> normals) {

@@ -24,6 +24,8 @@ namespace {
 
 constexpr std::string_view kHeader = "vertex,r,g,b";
 constexpr std::string_view kHeaderSe = "vertex,r,g,b,se_r,se_g,se_b";
+constexpr std::string_view kPointHeader = "point,r,g,b";
+constexpr std::string_view kPointHeaderSe = "point,r,g,b,se_r,se_g,se_b";
 
 // %.9g: nine significant digits, so every float reads back exactly.
 void append_value(std::string& s, float v) { fmt::format_to(std::back_inserter(s), "{:.9g}", double(v)); }
@@ -35,14 +37,15 @@ void append_value(std::string& s, float v) { fmt::format_to(std::back_inserter(s
 }  // namespace
 
 void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb,
-                      const std::vector<glm::vec3>* std_error) {
+                      const std::vector<glm::vec3>* std_error, CsvKey key) {
+  const bool points = key == CsvKey::Point;
   if (std_error) PRT_CHECK_OP(std_error->size(), ==, rgb.size());
   // Every value is checked before anything is written (a device such as
   // /dev/stdout is written in place).
   for (std::size_t v = 0; v < rgb.size(); ++v)
     for (int c = 0; c < 3; ++c)
       if (!std::isfinite(rgb[v][c]) || (std_error && !std::isfinite((*std_error)[v][c])))
-        throw Error(fmt::format("{}: refusing to write a non-finite value at vertex {}", path, v));
+        throw Error(fmt::format("{}: refusing to write a non-finite value at {} {}", path, points ? "point" : "vertex", v));
   // Streamed a block of lines at a time: the text (about 45 bytes per
   // vertex) is never held whole.
   constexpr std::size_t kFlushBytes = std::size_t(1) << 20;
@@ -51,7 +54,7 @@ void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb
     if (!f) throw Error(path + ": cannot open for writing: " + std::strerror(errno));
     std::string text;
     text.reserve(kFlushBytes + 256);
-    text.append(std_error ? kHeaderSe : kHeader).push_back('\n');
+    text.append(points ? (std_error ? kPointHeaderSe : kPointHeader) : (std_error ? kHeaderSe : kHeader)).push_back('\n');
     for (std::size_t v = 0; v < rgb.size(); ++v) {
       fmt::format_to(std::back_inserter(text), "{}", v);
       for (int c = 0; c < 3; ++c) {
@@ -75,7 +78,7 @@ void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb
   });
 }
 
-std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm::vec3>* std_error) {
+std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm::vec3>* std_error, CsvKey* key) {
   check_input_file(path, "a vertex CSV file");  // not a FIFO or /dev/zero: read whole below
   std::ifstream f(path, std::ios::binary);
   if (!f) throw Error(path + ": cannot open for reading");
@@ -86,6 +89,7 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
   if (std_error) std_error->clear();
   std::size_t pos = 0, line_no = 0;
   bool with_se = false;
+  std::string_view what = "vertex";
   while (pos < text.size()) {
     std::size_t end = text.find('\n', pos);
     if (end == std::string::npos) end = text.size();
@@ -94,9 +98,11 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line_no == 1) {
-      if (line == kHeaderSe)
+      if (line == kPointHeader || line == kPointHeaderSe) what = "point";
+      if (key) *key = what == "point" ? CsvKey::Point : CsvKey::Vertex;
+      if (line == kHeaderSe || line == kPointHeaderSe)
         with_se = true;
-      else if (line != kHeader)
+      else if (line != kHeader && line != kPointHeader)
         fail(path, 1,
              "expected the header '" + std::string(kHeader) + "' or '" + std::string(kHeaderSe) + "', got '" +
                  std::string(line.substr(0, 80)) + "'");
@@ -124,9 +130,9 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
         std::size_t index = 0;
         const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), index);
         if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty())
-          fail(path, line_no, "vertex index '" + std::string(tok.substr(0, 40)) + "' is not a whole number");
+          fail(path, line_no, fmt::format("{} index '{}' is not a whole number", what, tok.substr(0, 40)));
         if (index != rgb.size())
-          fail(path, line_no, fmt::format("expected vertex {}, got {}", rgb.size(), index));
+          fail(path, line_no, fmt::format("expected {} {}, got {}", what, rgb.size(), index));
         continue;
       }
       double x = 0;
@@ -141,8 +147,57 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
     if (with_se && std_error) std_error->emplace_back(float(values[4]), float(values[5]), float(values[6]));
   }
   if (line_no == 0) throw Error(path + ": empty file (expected the header '" + std::string(kHeader) + "')");
-  if (rgb.empty()) throw Error(path + ": no vertex lines after the header");
+  if (rgb.empty()) throw Error(fmt::format("{}: no {} lines after the header", path, what));
   return rgb;
+}
+
+QueryPoints read_points_csv(const std::string& path) {
+  check_input_file(path, "a points CSV file");
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path + ": cannot open for reading");
+  const std::string text{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+  if (f.bad()) throw Error(path + ": read error");
+  constexpr std::string_view kPoints = "x,y,z,nx,ny,nz";
+  QueryPoints q;
+  std::size_t pos = 0, line_no = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line_no == 1) {
+      if (line != kPoints)
+        fail(path, 1, fmt::format("expected the header '{}', got '{}'", kPoints, line.substr(0, 80)));
+      continue;
+    }
+    if (line.empty()) {
+      if (text.find_first_not_of("\r\n", pos) == std::string::npos) break;
+      fail(path, line_no, "blank line");
+    }
+    double v[6];
+    std::size_t start = 0;
+    for (int col = 0; col < 6; ++col) {
+      const std::size_t comma = line.find(',', start);
+      const bool last = col == 5;
+      if ((!last && comma == std::string_view::npos) || (last && comma != std::string_view::npos))
+        fail(path, line_no, "expected 6 comma-separated numbers: x,y,z,nx,ny,nz");
+      const std::string_view tok = line.substr(start, last ? std::string_view::npos : comma - start);
+      start = comma + 1;
+      const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v[col]);
+      if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty() || !std::isfinite(v[col]))
+        fail(path, line_no, fmt::format("field {} '{}' is not a finite number", col + 1, tok.substr(0, 40)));
+    }
+    const glm::dvec3 n(v[3], v[4], v[5]);
+    const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+    if (!(len > 0)) fail(path, line_no, "the normal (nx,ny,nz) is zero");
+    q.positions.emplace_back(v[0], v[1], v[2]);
+    q.normals.push_back(n / len);
+  }
+  if (line_no == 0) throw Error(path + ": empty file (expected the header 'x,y,z,nx,ny,nz')");
+  if (q.positions.empty()) throw Error(path + ": no points after the header");
+  return q;
 }
 
 }  // namespace prt

@@ -178,12 +178,12 @@ const std::map<std::string, std::vector<Refusal>>& bands_table() {
 }
 
 // Options two or more commands take whose values are no number or name to
-// check: flags, files and directories, and --samples, which counts rays per
+// check: flags, files and directories (--at: a points CSV), and --samples, which counts rays per
 // vertex in prt precompute (1 and up) but Monte Carlo iterations in prt
 // reference (2 and up: a standard error needs two).
 const std::set<std::string> kNoSharedValue = {"--help",   "--quiet",  "--output", "--env",   "--mesh",
                                               "--cache",  "--json",   "--weld",   "--vertex-colors",     "--samples",
-                                              "--bands"};  // --bands: bands_table()
+                                              "--bands",  "--at"};  // --bands: bands_table()
 
 // The message a usage error prints after "error: OPTION: ", or the whole
 // error line.

@@ -7,6 +7,7 @@
 
 #include <prt/communicator.h>
 #include <prt/mesh.h>
+#include <prt/probes.h>
 #include <prt/progress.h>
 #include <prt/compressed_transfer.h>
 #include <prt/lightmap.h>
@@ -18,10 +19,15 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <span>
 #include <vector>
 
 namespace prt {
+
+namespace detail {
+class RayScene;
+}  // namespace detail
 
 // ---- SH transfer (docs/PRECOMPUTE.md) -----------------------------------------
 struct TransferOptions {
@@ -216,5 +222,55 @@ WaveletTransfer compute_wavelet_at_points(const Mesh& occluders, const Mesh& poi
 // does. B_v = rho_v sum_i t_i l_i is the direct per-texel relighting.
 std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOptions& options,
                                            std::span<const std::uint32_t> vertices);
+
+// ---- probe volumes (prt/probes.h; docs/PROBES.md) ----------------------------------
+
+struct ProbeOptions {
+  TransferMode mode = TransferMode::Shadowed;  // shadowed or interreflected
+  int bands = 3;              // of each probe's incident light (1 to 8)
+  int cube_res = 64;          // visibility cube face size at its finest (power of two, 4 to 64)
+  int depth_res = 8;          // octahedral depth moments (2 to 32)
+  int rays_per_texel = 16;    // a k x k grid of rays in each texel of the base cube (cube_res / 4): 1, 4, 9, ... 64
+  int bounces = 1;            // interreflected: diffuse bounces (1 to 8)
+  int bounce_bands = 3;       // interreflected: environment bands the bounce matrices take (1 to 16)
+  bool override_albedo = false;
+  glm::vec3 albedo{0.8f};     // with override_albedo: every surface's (else the scene's materials)
+  std::uint64_t seed = 1;     // jitters the rays inside the texels and the bounce directions
+  int threads = 0;            // 0: all cores
+  double offset = 0;          // ray offset off surfaces; 0: 1e-4 x the scene's diagonal
+};
+
+// Traces every probe of `grid` (probe_grid(scene.mesh, dims)) against the
+// scene: per probe 6 (r/4)^2 k^2 rays jittered in the texels of a base
+// cube of face r/4, and again one ray per finest texel (16 per base
+// texel) where a base texel is neither all visible nor all blocked. A probe
+// lying on a surface (a hit nearer than 2% of the smallest spacing) is
+// moved to 4% off it, on its front side (ProbeTransfer::positions); a probe
+// whose rays strike back faces more often than not is Invalid; one whose
+// every ray escapes is Sky. Interreflected: each front-face hit continues as
+// a diffuse path (cosine-weighted, one direction per hit, `bounces` deep)
+// whose escape adds albedo x Y_k(w1) omega x Y_j(w2) to the bounce matrix.
+// Deterministic for any thread count (each probe its own generator).
+// Progress: phase "probes"; cancellable (prt::Error("cancelled")).
+ProbeTransfer compute_probe_transfer(const Scene& scene, const ProbeGrid& grid, const ProbeOptions& options,
+                                     const Progress& progress = {});
+
+// Exact segment visibility between query points and probes, traced against
+// the scene (what prt relight --at weights the probes with; prt/probes.h
+// ProbeVisibility): the fraction of 5 segments from p to the probe's
+// position and to 4 points around it (a tenth of the smallest spacing
+// away, perpendicular to the segment) that nothing blocks. Thread-safe.
+class ProbeOcclusion {
+ public:
+  ProbeOcclusion(const Mesh& mesh, const ProbeGrid& grid);
+  ~ProbeOcclusion();
+  ProbeOcclusion(const ProbeOcclusion&) = delete;
+  ProbeOcclusion& operator=(const ProbeOcclusion&) = delete;
+  double operator()(const glm::dvec3& probe, const glm::dvec3& p) const;
+
+ private:
+  std::unique_ptr<detail::RayScene> rays_;
+  double spread_ = 0, offset_ = 0;
+};
 
 }  // namespace prt

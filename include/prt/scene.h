@@ -80,6 +80,10 @@ struct Scene {
 // refuses, a missing or undecodable image, a non-triangle primitive mode
 // (skipped with a count if others remain), UVs that are not finite.
 Scene load_scene(const std::string& path, const MeshOptions& options = {});
+// A scene from any mesh file: glTF and OBJ as load_scene; other formats
+// (OFF, PLY, STL, ...) as load_mesh gives them, one object, no materials
+// (white), no UVs. For what needs no lightmap UVs (probe volumes).
+Scene load_scene_or_mesh(const std::string& path, const MeshOptions& options = {});
 
 // Builds a scene from arrays (tests, generated scenes): one object per
 // entry of `object_triangles` (triangle counts, in order), one material

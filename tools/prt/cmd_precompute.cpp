@@ -41,6 +41,10 @@ struct PrecomputeArgs {
   // --lightmap WxH: SCENE's texels (docs/LIGHTMAPS.md); --uv N: its UV set (-1: TEXCOORD_1 when present, else 0).
   std::string lightmap;
   int uv = -1;
+  // --probes NXxNYxNZ: a probe volume over SCENE (docs/PROBES.md).
+  std::string probes;
+  ProbeOptions popt;
+  const CLI::Option *probes_opt = nullptr, *probe_cube_opt = nullptr, *bounce_bands_opt = nullptr;
   // Extra maps of a lightmap (RGBA EXR in its layout): ambient occlusion, bent normals, obscurance.
   std::string ao_map, bent_map, obscurance_map;
   double obscurance = 0;
@@ -392,7 +396,92 @@ int run_lightmap(PrecomputeArgs& a) {
   return 0;
 }
 
+// --probes NXxNYxNZ: the probe volume over SCENE's bounding box.
+int run_probes(PrecomputeArgs& a) {
+  if (a.lightmap_opt->count() > 0) throw UsageError("--probes and --lightmap are two runs (a probe volume, a lightmap)");
+  if (a.basis != "sh") throw UsageError("--basis does not apply to --probes (a probe stores a visibility cube; docs/PROBES.md)");
+  for (const CLI::Option* o : {a.material_opt, a.target_opt, a.vertex_colors_opt, a.weld_opt, a.uv_opt, a.tolerance_opt,
+                               a.compress_weights_opt})
+    if (o->count() > 0 && !(o == a.material_opt && a.material == "diffuse"))
+      throw UsageError(o->get_name() + " does not apply to --probes");
+  for (const CLI::Option* o : a.wavelet_only)
+    if (o->count() > 0) throw UsageError(o->get_name() + " does not apply to --probes (--probe-cube sets its cube)");
+  if (!a.compress.empty() || !a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty())
+    throw UsageError("--compress and the lightmap's extra maps do not apply to --probes");
+  if (job().size() > 1) throw UsageError("--probes runs in one process (not under mpirun) for now");
+  const std::array<int, 3> dims = for_option("--probes", [&] { return parse_probe_dims(a.probes); });
+  ProbeOptions o = a.popt;
+  o.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
+  if (o.mode == TransferMode::Unshadowed)
+    throw UsageError("--mode unshadowed does not apply to --probes (a probe's light is the scene's occlusion of the map)");
+  o.bands = a.bands_opt->count() > 0 ? a.opt.bands : 3;
+  if (o.bands > 8) throw UsageError(fmt::format("--bands {}: a probe's light takes at most 8 bands", o.bands));
+  o.bounces = a.opt.bounces;
+  if (o.mode == TransferMode::Interreflected && (o.bounces < 1 || o.bounces > 8))
+    throw UsageError(fmt::format("--bounces {}: probes take 1 to 8", o.bounces));
+  if (a.bounce_bands_opt->count() > 0 && o.mode != TransferMode::Interreflected)
+    throw UsageError("--bounce-bands applies to --mode interreflected");
+  // --samples: rays per probe, as k^2 rays in each of the cube's 6 r^2 texels.
+  if (a.samples_opt->count() > 0) {
+    const double per_texel = double(a.opt.samples) / (6.0 * o.cube_res * o.cube_res);
+    const int k = std::clamp(int(std::lround(std::sqrt(std::max(per_texel, 1.0)))), 1, 8);
+    o.rays_per_texel = k * k;
+  }
+  o.seed = a.opt.seed;
+  o.threads = a.opt.threads;
+  o.offset = a.opt.offset;
+  if (a.albedo_opt->count() > 0) {
+    double rgb[3];
+    parse_triple(a.albedo, "--albedo", rgb);
+    o.override_albedo = true;
+    o.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  }
+  for_path("--output", [&] { check_writable(a.output); });
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene scene = load_scene_or_mesh(a.mesh, a.mesh_opt);
+  if (scene.materials.empty() && !o.override_albedo) {  // a bare mesh: --albedo's default
+    double rgb[3];
+    parse_triple(a.albedo, "--albedo", rgb);
+    o.override_albedo = true;
+    o.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  }
+  const ProbeGrid grid = probe_grid(scene.mesh, dims);
+  if (!a.quiet) {
+    const glm::dvec3 sp = grid.spacing();
+    fmt::print(stderr, "{}\nprobes {}x{}x{} ({} in all) over [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}], spacing "
+                       "{:.4g} x {:.4g} x {:.4g}; {} bands, {}, visibility cube {} ({} rays per probe)\n",
+               describe(scene), dims[0], dims[1], dims[2], grid.count(), grid.min.x, grid.max.x, grid.min.y, grid.max.y,
+               grid.min.z, grid.max.z, sp.x, sp.y, sp.z, o.bands, transfer_mode_name(o.mode), o.cube_res,
+               6 * o.cube_res * o.cube_res * o.rays_per_texel);
+  }
+  Outputs out("precompute");
+  const std::optional<ProbeTransfer> computed = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+    return compute_probe_transfer(scene, grid, o, progress);
+  });
+  if (!computed) return 130;
+  const ProbeTransfer& t = *computed;
+  out.write([&] { write_probe_transfer(a.output, t); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet) {
+    std::size_t counts[3] = {0, 0, 0};
+    for (ProbeState st : t.state) ++counts[int(st)];
+    fmt::print(stderr,
+               "wrote {}: {} probes: {} stored, {} see only sky (nothing stored), {} inside geometry (no weight); "
+               "{} bytes ({:.0f} per stored probe), {:.2f} s\n",
+               a.output, t.probes(), counts[1], counts[0], counts[2], t.bytes(),
+               counts[1] ? double(t.bytes()) / double(counts[1]) : 0.0,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return 0;
+}
+
 int run_precompute(PrecomputeArgs& a) {
+  if (a.probes_opt->count() > 0) {
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}});
+    return run_probes(a);
+  }
+  for (const CLI::Option* o : {a.probe_cube_opt, a.bounce_bands_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " applies to --probes");
   if (a.lightmap_opt->count() > 0) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     return run_lightmap(a);
@@ -515,7 +604,8 @@ Run add_precompute(CLI::App& app) {
       "         prt precompute bunny.off -o bunny-glossy.prt --material glossy --bands 5\n"
       "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32\n"
-      "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected -o room.prt");
+      "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected -o room.prt\n"
+      "         prt precompute models/room.gltf --probes 16x8x16 -o room-probes.prt");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB (with --lightmap: a scene, glTF/GLB or OBJ)")
       ->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
@@ -574,6 +664,19 @@ Run add_precompute(CLI::App& app) {
   a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv,
                             "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
                             "object has it, else TEXCOORD_0)");
+  a->probes_opt = s->add_option("--probes", a->probes,
+                                "NXxNYxNZ: a relightable probe volume instead of vertices: probes on a grid spanning "
+                                "SCENE's bounding box, corners included (docs/PROBES.md); --bands (default 3), --mode "
+                                "shadowed|interreflected, --samples (rays per probe)");
+  a->probe_cube_opt = s->add_option("--probe-cube", a->popt.cube_res,
+                                    "With --probes: the visibility cube's finest face size r (4 to 64; traced at r/4, refined where an edge crosses)")
+                          ->check(CLI::IsMember({4, 8, 16, 32, 64}))
+                          ->capture_default_str();
+  a->bounce_bands_opt = s->add_option("--bounce-bands", a->popt.bounce_bands,
+                                      "With --probes --mode interreflected: the environment bands the bounce light "
+                                      "takes (1 to 16)")
+                            ->check(int_range(1, 16))
+                            ->capture_default_str();
   s->add_option("--ao-map", a->ao_map,
                 "With --lightmap: also write the texels' ambient occlusion (1/pi integral V cos) as an RGBA EXR in the "
                 "lightmap's layout (A = 1 at covered texels)");

@@ -40,7 +40,54 @@ struct ReferenceArgs {
   std::string lightmap;  // --lightmap WxH: the texels of prt precompute --lightmap, as an RGBA EXR
   int uv = -1;
   const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr;
+  std::string at;  // --at POINTS.csv: E(p, n)/pi at query points (what a probe volume gives there)
 };
+
+// --at POINTS.csv: the radiance a white Lambertian surface at each point,
+// facing its normal, reflects: E(p, n)/pi by Monte Carlo from p itself
+// (no probes), what prt relight SCENE probes.prt ENV --at gives
+// (docs/PROBES.md). Surfaces the paths hit reflect the scene's materials
+// (or --albedo).
+int run_at(ReferenceArgs& a) {
+  if (a.opt.glossy) throw UsageError("--at: the reference at query points is diffuse (no --material glossy)");
+  if (a.opt.vertex_colors) throw UsageError("--vertex-colors does not apply to --at");
+  std::string ext = std::filesystem::path(a.output).extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  if (ext != ".csv") throw UsageError("--output: " + a.output + ": the reference at query points is a .csv (point,r,g,b,...)");
+  check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"ENV", a.env}, {"--at", a.at}});
+  for_path("--output", [&] { check_writable(a.output); });
+  std::unique_ptr<tbb::global_control> limit;
+  if (a.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene scene = load_scene_or_mesh(a.mesh, a.mesh_opt);
+  const bool override_albedo = a.albedo_opt->count() > 0 || scene.materials.empty();
+  const glm::vec3 albedo = a.opt.albedo;
+  const QueryPoints q = read_points_csv(a.at);
+  const EnvMap map = load_envmap(a.env);
+  require_finite(map);
+  if (map.is_cube()) throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
+  std::vector<glm::vec3> positions(q.positions.size()), normals(q.normals.size()), white(q.positions.size(), glm::vec3(1.0f));
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    positions[i] = glm::vec3(q.positions[i]);
+    normals[i] = glm::vec3(q.normals[i]);
+  }
+  const std::function<glm::vec3(std::uint32_t, float, float)> hit_albedo = [&](std::uint32_t tri, float u, float v) {
+    return override_albedo ? albedo : glm::clamp(scene.albedo(tri, u, v), 0.0f, 1.0f);
+  };
+  Outputs out("reference");
+  const std::optional<ReferenceResult> computed = run_with_progress(a.quiet, "reference", [&](const Progress& progress) {
+    return render_reference_at_points(scene.mesh, map, a.opt, positions, normals, white, hit_albedo, progress);
+  });
+  if (!computed) return 130;
+  out.write([&] { write_vertex_csv(a.output, computed->radiance, &computed->std_error, CsvKey::Point); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "wrote {}: {} points, {}, {} samples/point, {:.2f} s\n", a.output, positions.size(),
+               transfer_mode_name(a.opt.mode), a.opt.samples,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return 0;
+}
 
 // --lightmap WxH: the reference at the texel sample points prt precompute
 // --lightmap traces (the same rasterisation, the same samples moved out of
@@ -113,8 +160,13 @@ int run_reference(ReferenceArgs& a) {
     a.opt.rotation = sh::rotation_from_euler(e[0], e[1], e[2]);
   }
   if (a.lightmap_opt->count() > 0) {
+    if (!a.at.empty()) throw UsageError("--at and --lightmap are two runs (query points, a lightmap's texels)");
     a.opt.glossy = a.material == "glossy";
     return run_lightmap(a);
+  }
+  if (!a.at.empty()) {
+    a.opt.glossy = a.material == "glossy";
+    return run_at(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   a.opt.glossy = a.material == "glossy";
@@ -193,7 +245,8 @@ Run add_reference(CLI::App& app) {
       "(map and lobe sampling, MIS; docs/GLOSSY.md): the ground truth of prt relight --eye.\n"
       "--lightmap WxH: at the texels of prt precompute SCENE --lightmap WxH, as an RGBA EXR (A = 1 at covered texels).\n"
       "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv\n"
-      "         prt reference models/room.gltf forest.exr --lightmap 128x128 --mode interreflected -o ref.exr");
+      "         prt reference models/room.gltf forest.exr --lightmap 128x128 --mode interreflected -o ref.exr\n"
+      "         prt reference models/room.gltf forest.exr --at points.csv -o ref.csv");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
   s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
   s->add_option("-o,--output", a->output, "CSV file to write")->required();
@@ -204,6 +257,9 @@ Run add_reference(CLI::App& app) {
                                   "WxH: the reference at the texels of prt precompute --lightmap WxH (SCENE: glTF or "
                                   "OBJ with vt), written as an RGBA float EXR in the relit lightmap's layout");
   a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv, "With --lightmap: the UV set (as prt precompute --uv)");
+  s->add_option("--at", a->at,
+                "POINTS.csv (header x,y,z,nx,ny,nz): the reference at these points instead of vertices: E(p, n)/pi, "
+                "what a white Lambertian surface there reflects (probe volumes, docs/PROBES.md); writes point,r,g,b,...");
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-s,--samples", a->opt.samples,
                 "Iterations per vertex, each one map-sampled and one cosine-sampled direction")

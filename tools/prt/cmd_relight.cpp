@@ -12,6 +12,8 @@
 #include <prt/filter.h>
 #include <prt/io.h>
 #include <prt/lightmap.h>
+#include <prt/precompute.h>
+#include <prt/probes.h>
 #include <prt/scene.h>
 #include <prt/mesh.h>
 #include <prt/ply.h>
@@ -23,6 +25,7 @@
 #include <prt/wavelet_transfer.h>
 
 #include <fmt/core.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -50,6 +53,7 @@ struct RelightArgs {
   int terms = 100;
   bool direct = false, quiet = false;
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
+  std::string at;  // --at POINTS.csv: query points of a probe volume
 };
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -214,6 +218,67 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   return 0;
 }
 
+// A probe volume (prt precompute SCENE --probes): E(p, n)/pi at each query
+// point from the probes interpolated there (docs/PROBES.md).
+int run_probes(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
+  if (a.at.empty())
+    throw UsageError(a.transfer + " is a probe volume: give --at POINTS.csv (x,y,z,nx,ny,nz per line) and -o OUT.csv");
+  if (ext != ".csv") throw UsageError("--output: " + a.output + ": a probe volume's queries are written as .csv (point,r,g,b)");
+  for (const auto* list : {&a.sh_only, &a.wavelet_only})
+    for (const CLI::Option* o : *list)
+      if (o->count() > 0) throw UsageError(o->get_name() + " does not apply to a probe volume");
+  if (!a.tonemap.empty()) throw UsageError("--tonemap: a probe volume's queries are written as linear radiance");
+  check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"ENV", a.env}, {"--at", a.at}});
+  for_path("--output", [&] { check_writable(a.output); });
+  const auto t0 = std::chrono::steady_clock::now();
+  const ProbeTransfer t = read_probe_transfer(a.transfer);
+  const prt::Scene scene = load_scene_or_mesh(a.mesh);
+  if (scene.hash() != t.scene_hash)
+    throw Error(a.transfer + ": computed for another scene than " + a.mesh + " (its geometry or UVs differ): rerun "
+                "prt precompute " + a.mesh + " --probes ...");
+  const QueryPoints q = read_points_csv(a.at);
+  EnvMap env = load_envmap(a.env);
+  require_finite(env);
+  ProbeRelighter relighter(t, env);
+  relighter.set_rotation(sh::rotation_from_euler(euler[0], euler[1], euler[2]));
+  const double t_light = ms_since(t0);
+  // The probes the queries need, relit once each.
+  const std::vector<std::uint32_t> slots = t.stored_slots();
+  // Weights: trilinear x visibility traced from each point to its 8 probes.
+  const ProbeOcclusion occlusion(scene.mesh, t.grid);
+  const ProbeVisibility visible = [&](const glm::dvec3& probe, const glm::dvec3& p) { return occlusion(probe, p); };
+  std::vector<ProbeWeights> weights(q.positions.size());
+  tbb::parallel_for(std::size_t(0), q.positions.size(),
+                    [&](std::size_t i) { weights[i] = probe_weights(t, slots, q.positions[i], q.normals[i], visible); });
+  std::vector<std::uint32_t> need;
+  for (const ProbeWeights& w : weights)
+    for (int c = 0; c < w.count; ++c) need.push_back(w.probe[std::size_t(c)]);
+  std::sort(need.begin(), need.end());
+  need.erase(std::unique(need.begin(), need.end()), need.end());
+  std::vector<glm::vec3> sh;
+  relighter.relight(need, sh);
+  const int nc = t.bands * t.bands;
+  std::vector<glm::vec3> rgb(q.positions.size());
+  std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
+  for (std::size_t i = 0; i < q.positions.size(); ++i) {
+    std::fill(mix.begin(), mix.end(), glm::vec3(0.0f));
+    for (int c = 0; c < weights[i].count; ++c) {
+      const float w = weights[i].weight[std::size_t(c)];
+      if (w == 0) continue;
+      const std::size_t at = std::size_t(std::lower_bound(need.begin(), need.end(), weights[i].probe[std::size_t(c)]) - need.begin());
+      for (int k = 0; k < nc; ++k) mix[std::size_t(k)] += w * sh[at * std::size_t(nc) + std::size_t(k)];
+    }
+    rgb[i] = glm::vec3(lambert_from_sh(mix, t.bands, q.normals[i]));
+  }
+  Outputs out("relight");
+  out.write([&] { write_vertex_csv(a.output, rgb, nullptr, CsvKey::Point); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "wrote {}: {} points from {} of {} probes ({} bands, {}), lighting {:.1f} ms, {:.1f} ms in all\n",
+               a.output, rgb.size(), need.size(), t.probes(), t.bands, transfer_mode_name(t.mode), t_light, ms_since(t0));
+  return 0;
+}
+
 int run_relight(const RelightArgs& a) {
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   std::string ext = std::filesystem::path(a.output).extension().string();
@@ -224,6 +289,8 @@ int run_relight(const RelightArgs& a) {
                        "it the output is linear radiance)");
   if (ext != ".ply" && ext != ".csv" && ext != ".exr")
     throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr)");
+  if (is_probe_file(a.transfer)) return run_probes(a, ext, euler);
+  if (!a.at.empty()) throw UsageError("--at gives query points of a probe volume: " + a.transfer + " is not one");
   if (transfer_is_lightmap(a.transfer)) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
     for_path("--output", [&] { check_writable(a.output); });
@@ -331,7 +398,8 @@ Run add_relight(CLI::App& app) {
       "         prt relight bunny.off bunny.prt envmaps/forest.exr -o view.ply --tonemap aces --srgb --exposure -1\n"
       "         prt relight bunny.off glossy.prt envmaps/forest.exr --eye 0,0.1,0.4 --gloss 16 -o g.csv\n"
       "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv\n"
-      "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr");
+      "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr\n"
+      "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
   s->add_option("MESH", a->mesh, "The mesh (or, for a lightmap, the scene) the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map")->required();
@@ -362,6 +430,9 @@ Run add_relight(CLI::App& app) {
   a->srgb_opt = s->add_flag("--srgb", a->srgb,
                             "With --tonemap: sRGB-encode the display values (what mesh viewers expect of 8-bit "
                             "vertex colours)");
+  s->add_option("--at", a->at,
+                "A probe volume (prt precompute --probes): the query points, a CSV with header x,y,z,nx,ny,nz; "
+                "writes point,r,g,b: E(p, n)/pi from the probes interpolated at p (docs/PROBES.md)");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }

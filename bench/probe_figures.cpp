@@ -1,0 +1,388 @@
+// prt_probe_figures: the figures of docs/PROBES.md. For a scene, a map and
+// a grid (shadowed probes), against a ground truth computed here by tracing
+// one ray per map pixel from each point (no visibility cube, no SH):
+//   truth(p, n)  = (1/pi) sum_pixels V(p, w) L w.n+ omega        E(p, n)/pi
+//   ideal(p)     = sum_pixels V(p, w) L Y_k(w) omega              the exact n-band SH of the occluded light
+// it prints
+//   * at probe positions: the relative RMS error of the probes against the
+//     truth, and that of the ideal n-band output (the intrinsic error), over
+//     all stored probes and over the dim ones (truth below a tenth of the
+//     median), each with 6 axis normals;
+//   * between probes: at random points in cells whose 8 probes are all
+//     stored (in the air), and at points near surfaces (within a quarter of
+//     the smallest spacing), the error of the probes (visibility-aware
+//     weights) and of the ideal probes trilinearly interpolated;
+//   * inside closed geometry (points of the box --box x0,y0,z0,x1,y1,z1
+//     whose 6 axis rays all meet a back face first): the mean relit value
+//     over the mean over free space;
+//   * --spacing: the between-probe error for several grids.
+// usage: prt_probe_figures SCENE MAP NXxNYxNZ [--rotate y,p,r] [--box ...] [--points N] [--spacing]
+#include <prt/envmap.h>
+#include <prt/precompute.h>
+#include <prt/probes.h>
+#include <prt/rotation.h>
+#include <prt/scene.h>
+#include <prt/sh.h>
+#include <prt/filter.h>
+
+#include "ray_scene.h"
+
+#include <fmt/core.h>
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace prt;
+
+namespace {
+
+struct Pixel {
+  glm::vec3 dir;
+  glm::dvec3 power;  // L x omega
+};
+
+// The truth's rays: one per map pixel (downsampled to --truth-width, 1024 by default)
+// The map's pixels (downsampled 2 x 2 until at most `width` wide), rotated.
+std::vector<Pixel> map_pixels(const EnvMap& map, const glm::dmat3& R, int width) {
+  int f = 1;
+  while (map.width / (2 * f) >= width && map.width % (2 * f) == 0 && map.height % (2 * f) == 0) f *= 2;
+  std::vector<Pixel> out;
+  for (int by = 0; by < map.height; by += f)
+    for (int bx = 0; bx < map.width; bx += f) {
+      glm::dvec3 d(0.0), p(0.0);
+      for (int y = by; y < by + f; ++y)
+        for (int x = bx; x < bx + f; ++x) {
+          const double w = latlong_pixel_solid_angle(y, map.width, map.height);
+          d += latlong_direction(x + 0.5, y + 0.5, map.width, map.height) * w;
+          const float* c = map.rgb.data() + (std::size_t(y) * map.width + std::size_t(x)) * 3;
+          p += glm::dvec3(c[0], c[1], c[2]) * w;
+        }
+      out.push_back({glm::vec3(R * glm::normalize(d)), p});
+    }
+  return out;
+}
+
+struct Truth {
+  std::vector<glm::dvec3> sh;  // n^2: the exact SH of the occluded light
+  std::vector<std::uint8_t> visible;
+};
+
+Truth trace_truth(const detail::RayScene& rays, const std::vector<Pixel>& px, const glm::vec3& p, int bands, float offset) {
+  Truth t;
+  const int nc = bands * bands;
+  t.sh.assign(std::size_t(nc), glm::dvec3(0.0));
+  t.visible.resize(px.size());
+  std::vector<double> y(static_cast<std::size_t>(nc));
+  glm::vec3 dirs[8];
+  for (std::size_t i = 0; i < px.size(); i += 8) {
+    const int n = int(std::min<std::size_t>(8, px.size() - i));
+    for (int q = 0; q < n; ++q) dirs[q] = px[i + std::size_t(q)].dir;
+    const std::uint32_t occ = rays.occluded8(p, dirs, n, offset);
+    for (int q = 0; q < n; ++q) {
+      const bool vis = !((occ >> q) & 1u);
+      t.visible[i + std::size_t(q)] = vis;
+      if (!vis) continue;
+      const glm::dvec3 d(dirs[q]);
+      sh::eval(bands, d.x, d.y, d.z, y.data());
+      for (int k = 0; k < nc; ++k) t.sh[std::size_t(k)] += y[std::size_t(k)] * px[i + std::size_t(q)].power;
+    }
+  }
+  return t;
+}
+
+glm::dvec3 truth_lambert(const Truth& t, const std::vector<Pixel>& px, const glm::dvec3& n) {
+  glm::dvec3 e(0.0);
+  for (std::size_t i = 0; i < px.size(); ++i)
+    if (t.visible[i]) e += std::max(0.0, glm::dot(glm::dvec3(px[i].dir), n)) * px[i].power;
+  return e / M_PI;
+}
+
+glm::dvec3 sh_lambert(const std::vector<glm::dvec3>& sh, int bands, const glm::dvec3& n) {
+  std::vector<glm::vec3> f(sh.size());
+  for (std::size_t i = 0; i < sh.size(); ++i) f[i] = glm::vec3(sh[i]);
+  return lambert_from_sh(f, bands, n);
+}
+
+// Relative RMS of a against b (sum |a-b|^2 / sum |b|^2).
+struct Err {
+  double num = 0, den = 0;
+  std::size_t n = 0;
+  void add(const glm::dvec3& a, const glm::dvec3& b) {
+    num += glm::dot(a - b, a - b);
+    den += glm::dot(b, b);
+    ++n;
+  }
+  double rel() const { return den > 0 ? std::sqrt(num / den) : 0; }
+};
+
+const glm::dvec3 kAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    fmt::print(stderr, "usage: prt_probe_figures SCENE MAP NXxNYxNZ [--rotate y,p,r] [--box x0,y0,z0,x1,y1,z1] "
+                       "[--points N] [--spacing] [--cube r]\n");
+    return 2;
+  }
+  const std::string scene_path = argv[1], map_path = argv[2];
+  double euler[3] = {0, 0, 0}, box[6] = {0, 0, 0, 0, 0, 0};
+  bool have_box = false, spacing_table = false, chebyshev = false;
+  int points = 400, cube = 0, depth = 0, truth_width = 1024;
+  for (int i = 4; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--rotate" && i + 1 < argc) std::sscanf(argv[++i], "%lf,%lf,%lf", &euler[0], &euler[1], &euler[2]);
+    else if (a == "--box" && i + 1 < argc) {
+      have_box = std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%lf,%lf", &box[0], &box[1], &box[2], &box[3], &box[4], &box[5]) == 6;
+    } else if (a == "--points" && i + 1 < argc) points = std::atoi(argv[++i]);
+    else if (a == "--cube" && i + 1 < argc) cube = std::atoi(argv[++i]);
+    else if (a == "--depth" && i + 1 < argc) depth = std::atoi(argv[++i]);
+    else if (a == "--truth-width" && i + 1 < argc) truth_width = std::atoi(argv[++i]);
+    else if (a == "--spacing") spacing_table = true;
+    else if (a == "--chebyshev") chebyshev = true;  // the depth moments' weights instead of traced visibility
+  }
+  const Scene scene = load_scene_or_mesh(scene_path);
+  const EnvMap map = load_envmap(map_path);
+  const glm::dmat3 R = sh::rotation_from_euler(euler[0], euler[1], euler[2]);
+  const std::vector<Pixel> px = map_pixels(map, R, truth_width);
+  const detail::RayScene rays(scene.mesh);
+  const float offset = float(detail::default_ray_offset(scene.mesh));
+  const int bands = 3, nc = bands * bands;
+
+  const auto run_grid = [&](const std::array<int, 3>& dims, bool report) {
+    ProbeOptions o;
+    if (cube > 0) o.cube_res = cube;
+    if (depth > 0) o.depth_res = depth;
+    const ProbeGrid grid = probe_grid(scene.mesh, dims);
+    const auto t0 = std::chrono::steady_clock::now();
+    const ProbeTransfer t = compute_probe_transfer(scene, grid, o);
+    const double t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ProbeRelighter relighter(t, map);
+    relighter.set_rotation(R);
+    std::vector<glm::vec3> lit;
+    relighter.relight(lit);
+    const std::vector<std::uint32_t> slots = t.stored_slots();
+    const std::size_t P = t.probes();
+    const ProbeOcclusion occlusion(scene.mesh, grid);
+    const ProbeVisibility visible = [&](const glm::dvec3& probe, const glm::dvec3& p) {
+      return chebyshev ? 1.0 : occlusion(probe, p);
+    };
+    const auto weights_at = [&](const glm::dvec3& p, const glm::dvec3& n) {
+      return chebyshev ? probe_weights(t, slots, p, n) : probe_weights(t, slots, p, n, visible);
+    };
+    // Ideal probes: the exact SH at every probe's position.
+    std::vector<Truth> ideal(P);
+    tbb::parallel_for(std::size_t(0), P, [&](std::size_t p) {
+      detail::enable_ftz_daz();
+      if (t.state[p] != ProbeState::Invalid) ideal[p] = trace_truth(rays, px, t.positions[p], bands, offset);
+    });
+    // At the probes. Dim probes: those whose mean truth over the 6 normals
+    // is between a hundredth and a quarter of the median probe's (they see
+    // a little of the map: the dim ones inside a room lit through an
+    // opening; below a hundredth, a probe sees the map only through the
+    // cracks where walls meet at grazing angles, and every estimate there,
+    // the truth's too, is a handful of rays).
+    Err ours_all, ideal_all, ours_dim, ideal_dim;
+    std::vector<double> mean_of(P, -1.0);
+    for (std::size_t p = 0; p < P; ++p)
+      if (t.state[p] == ProbeState::Stored) {
+        double m = 0;
+        for (const glm::dvec3& n : kAxes) {
+          const glm::dvec3 v = truth_lambert(ideal[p], px, n);
+          m += (v.x + v.y + v.z) / 6;
+        }
+        mean_of[p] = m;
+      }
+    std::vector<double> sorted;
+    for (double m : mean_of)
+      if (m >= 0) sorted.push_back(m);
+    std::sort(sorted.begin(), sorted.end());
+    const double dim_below = sorted.empty() ? 0 : 0.25 * sorted[sorted.size() / 2], dim_above = dim_below * 0.04;
+    std::size_t dim_probes = 0;
+    for (std::size_t p = 0; p < P; ++p) {
+      if (t.state[p] != ProbeState::Stored) continue;
+      std::vector<glm::vec3> mine(lit.begin() + std::ptrdiff_t(p * nc), lit.begin() + std::ptrdiff_t((p + 1) * nc));
+      const bool dim = mean_of[p] > dim_above && mean_of[p] < dim_below;
+      dim_probes += dim;
+      if (dim && std::getenv("PRT_PROBE_DEBUG")) {
+        const std::size_t s2 = slots[p];
+        fmt::print("dim probe {} at {:.3f} {:.3f} {:.3f}: nodes {} (complement {}), partial {}; visible map pixels {}\n", p,
+                   t.positions[p].x, t.positions[p].y, t.positions[p].z, t.vis_offsets[s2 + 1] - t.vis_offsets[s2],
+                   int(t.vis_complement[s2]), t.partial_offsets[s2 + 1] - t.partial_offsets[s2],
+                   std::count(ideal[p].visible.begin(), ideal[p].visible.end(), 1));
+        for (const glm::dvec3& n : kAxes) {
+          const glm::dvec3 tr = truth_lambert(ideal[p], px, n), a = lambert_from_sh(mine, bands, n), b = sh_lambert(ideal[p].sh, bands, n);
+          fmt::print("   n {:+.0f} {:+.0f} {:+.0f}: truth {:.3e} probes {:.3e} ideal {:.3e}\n", n.x, n.y, n.z, tr.x, a.x, b.x);
+        }
+      }
+      for (const glm::dvec3& n : kAxes) {
+        const glm::dvec3 truth = truth_lambert(ideal[p], px, n);
+        const glm::dvec3 a = lambert_from_sh(mine, bands, n), b = sh_lambert(ideal[p].sh, bands, n);
+        ours_all.add(a, truth);
+        ideal_all.add(b, truth);
+        if (std::getenv("PRT_PROBE_WORST") && glm::length(a - b) > std::atof(std::getenv("PRT_PROBE_WORST")))
+          fmt::print("probe {} ({:.3f} {:.3f} {:.3f}) n {:+.0f} {:+.0f} {:+.0f}: truth {:.4g} probes {:.4g} ideal {:.4g}; partial {}\n", p,
+                     t.positions[p].x, t.positions[p].y, t.positions[p].z, n.x, n.y, n.z, truth.x, a.x, b.x,
+                     t.partial_offsets[slots[p] + 1] - t.partial_offsets[slots[p]]);
+        if (dim) {
+          ours_dim.add(a, truth);
+          ideal_dim.add(b, truth);
+        }
+      }
+    }
+    // Between probes.
+    std::mt19937 gen(7);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const glm::dvec3 sp = grid.spacing();
+    const double smallest = std::min({sp.x > 0 ? sp.x : 1e30, sp.y > 0 ? sp.y : 1e30, sp.z > 0 ? sp.z : 1e30});
+    Err air_ours, air_ideal, near_ours, near_ideal;
+    std::vector<glm::dvec3> qp;
+    std::vector<int> kind;  // 0 air, 1 near
+    for (int tries = 0; int(qp.size()) < 2 * points && tries < 200 * points; ++tries) {
+      const glm::dvec3 p = grid.min + (grid.max - grid.min) * glm::dvec3(U(gen), U(gen), U(gen));
+      const ProbeWeights w = trilinear_weights(grid, p);
+      bool air = true;
+      for (int c = 0; c < 8; ++c) air = air && t.state[w.probe[std::size_t(c)]] == ProbeState::Stored;
+      glm::dvec3 at;
+      const bool near = rays.closest_point(glm::vec3(p), float(0.25 * smallest), at) != ~0u;
+      // Inside a solid (the closest surface's back side) is not a query point.
+      if (near && glm::length(p - at) < 1e-3 * smallest) continue;
+      const int count_air = int(std::count(kind.begin(), kind.end(), 0));
+      if (near && int(qp.size()) - count_air < points) {
+        qp.push_back(p);
+        kind.push_back(1);
+      } else if (air && !near && count_air < points) {
+        qp.push_back(p);
+        kind.push_back(0);
+      }
+    }
+    std::vector<glm::dvec3> truths(qp.size() * 6), ours(qp.size() * 6), ideals(qp.size() * 6);
+    tbb::parallel_for(std::size_t(0), qp.size(), [&](std::size_t i) {
+      detail::enable_ftz_daz();
+      const Truth tr = trace_truth(rays, px, glm::vec3(qp[i]), bands, offset);
+      const ProbeWeights tw = trilinear_weights(grid, qp[i]);
+      for (int a = 0; a < 6; ++a) {
+        const glm::dvec3 n = kAxes[a];
+        truths[i * 6 + std::size_t(a)] = truth_lambert(tr, px, n);
+        const ProbeWeights w = weights_at(qp[i], n);
+        std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
+        std::vector<glm::dvec3> imix(std::size_t(nc), glm::dvec3(0.0));
+        for (int c = 0; c < w.count; ++c)
+          for (int k = 0; k < nc; ++k)
+            mix[std::size_t(k)] += w.weight[std::size_t(c)] * lit[std::size_t(w.probe[std::size_t(c)]) * nc + std::size_t(k)];
+        for (int c = 0; c < tw.count; ++c) {
+          const Truth& ip = ideal[tw.probe[std::size_t(c)]];
+          if (ip.sh.empty()) continue;
+          for (int k = 0; k < nc; ++k) imix[std::size_t(k)] += double(tw.weight[std::size_t(c)]) * ip.sh[std::size_t(k)];
+        }
+        ours[i * 6 + std::size_t(a)] = lambert_from_sh(mix, bands, n);
+        ideals[i * 6 + std::size_t(a)] = sh_lambert(imix, bands, n);
+      }
+    });
+    for (std::size_t i = 0; i < qp.size(); ++i)
+      for (int a = 0; a < 6; ++a) {
+        const std::size_t j = i * 6 + std::size_t(a);
+        (kind[i] == 0 ? air_ours : near_ours).add(ours[j], truths[j]);
+        (kind[i] == 0 ? air_ideal : near_ideal).add(ideals[j], truths[j]);
+      }
+    if (report) {
+      std::size_t counts[3] = {0, 0, 0};
+      for (ProbeState s : t.state) ++counts[int(s)];
+      fmt::print("grid {}x{}x{} (spacing {:.3f} {:.3f} {:.3f}): {} stored, {} sky, {} invalid; precompute {:.2f} s, {} bytes\n",
+                 dims[0], dims[1], dims[2], sp.x, sp.y, sp.z, counts[1], counts[0], counts[2], t_pre, t.bytes());
+      fmt::print("at probes ({} values): probes {:.4f}, ideal 3-band {:.4f}, ratio {:.3f}\n", ours_all.n, ours_all.rel(),
+                 ideal_all.rel(), ours_all.rel() / std::max(ideal_all.rel(), 1e-12));
+      fmt::print("at dim probes ({} probes, mean truth in ({:.4g}, {:.4g})): probes {:.4f}, ideal 3-band {:.4f}, ratio {:.3f}\n",
+                 dim_probes, dim_above, dim_below, ours_dim.rel(), ideal_dim.rel(), ours_dim.rel() / std::max(ideal_dim.rel(), 1e-12));
+      fmt::print("between probes, in the air ({} values): probes {:.4f}, ideal trilinear {:.4f}, ratio {:.3f}\n", air_ours.n,
+                 air_ours.rel(), air_ideal.rel(), air_ours.rel() / std::max(air_ideal.rel(), 1e-12));
+      fmt::print("between probes, near surfaces ({} values): probes {:.4f}, ideal trilinear {:.4f}, ratio {:.3f}\n",
+                 near_ours.n, near_ours.rel(), near_ideal.rel(), near_ours.rel() / std::max(near_ideal.rel(), 1e-12));
+    } else {
+      fmt::print("| {}x{}x{} | {:.3f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} |\n", dims[0], dims[1], dims[2],
+                 std::max({sp.x, sp.y, sp.z}), air_ours.rel(), air_ideal.rel(), near_ours.rel(), near_ideal.rel());
+    }
+    if (have_box && report) {
+      // Inside the box against free space (the air points above).
+      double inside = 0, free = 0;
+      std::size_t ni = 0, nf = 0;
+      for (int i = 0, tries = 0; i < points && tries < 100 * points; ++tries) {
+        const glm::dvec3 p(box[0] + (box[3] - box[0]) * U(gen), box[1] + (box[4] - box[1]) * U(gen),
+                           box[2] + (box[5] - box[2]) * U(gen));
+        // Inside closed geometry: every axis ray meets a back face first.
+        bool inside_box = true;
+        for (const glm::dvec3& a : kAxes) {
+          const detail::Hit h = rays.intersect1(glm::vec3(p), glm::vec3(a), 0.0f);
+          inside_box = inside_box && h.hit() && !h.front;
+        }
+        if (!inside_box) continue;
+        ++i;
+        for (const glm::dvec3& n : kAxes) {
+          const ProbeWeights w = weights_at(p, n);
+          std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
+          for (int c = 0; c < w.count; ++c)
+            for (int k = 0; k < nc; ++k)
+              mix[std::size_t(k)] += w.weight[std::size_t(c)] * lit[std::size_t(w.probe[std::size_t(c)]) * nc + std::size_t(k)];
+          const glm::dvec3 v = lambert_from_sh(mix, bands, n);
+          inside += v.x + v.y + v.z;
+          ++ni;
+        }
+      }
+      for (std::size_t i = 0; i < qp.size(); ++i)
+        if (kind[i] == 0)
+          for (int a = 0; a < 6; ++a) {
+            const glm::dvec3 v = ours[i * 6 + std::size_t(a)];
+            free += v.x + v.y + v.z;
+            ++nf;
+          }
+      fmt::print("inside the box: mean {:.4g}, free space {:.4g}: {:.2f}%\n", inside / double(ni), free / double(std::max<std::size_t>(nf, 1)),
+                 100.0 * (inside / double(ni)) / std::max(free / double(std::max<std::size_t>(nf, 1)), 1e-30));
+    }
+    return t;
+  };
+  std::array<int, 3> dims{};
+  std::sscanf(argv[3], "%dx%dx%d", &dims[0], &dims[1], &dims[2]);
+  if (std::getenv("PRT_PROBE_VOLUME_ONLY")) {
+    // The relighting cost of this grid: precompute, then set_rotation (the
+    // map splatted into the rotated cube, its pyramid) and relight every
+    // probe, 5 times, a new rotation each.
+    ProbeOptions o;
+    if (cube > 0) o.cube_res = cube;
+    const auto t0 = std::chrono::steady_clock::now();
+    const ProbeTransfer t = compute_probe_transfer(scene, probe_grid(scene.mesh, dims), o);
+    const double t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ProbeRelighter relighter(t, map);
+    std::vector<glm::vec3> lit;
+    double best_light = 1e30, best_sum = 1e30;
+    for (int i = 0; i < 5; ++i) {
+      const auto a = std::chrono::steady_clock::now();
+      relighter.set_rotation(sh::rotation_from_euler(10.0 * i, 5.0, 0.0));
+      const auto b = std::chrono::steady_clock::now();
+      relighter.relight(lit);
+      const auto c = std::chrono::steady_clock::now();
+      best_light = std::min(best_light, std::chrono::duration<double, std::milli>(b - a).count());
+      best_sum = std::min(best_sum, std::chrono::duration<double, std::milli>(c - b).count());
+    }
+    std::size_t nodes = t.vis_nodes.size(), partial = t.partial_nodes.size();
+    fmt::print("volume {}x{}x{}: {} probes, {} stored; precompute {:.1f} s; {} bytes ({:.0f} per stored probe; {:.1f} "
+               "nodes and {:.1f} partial texels each); relight: lighting {:.2f} ms + probes {:.2f} ms = {:.2f} ms (best of 5)\n",
+               dims[0], dims[1], dims[2], t.probes(), t.stored(), t_pre, t.bytes(),
+               double(t.bytes()) / double(std::max<std::size_t>(t.stored(), 1)), double(nodes) / double(std::max<std::size_t>(t.stored(), 1)),
+               double(partial) / double(std::max<std::size_t>(t.stored(), 1)), best_light, best_sum, best_light + best_sum);
+    return 0;
+  }
+  run_grid(dims, true);
+  if (spacing_table) {
+    fmt::print("| grid | spacing | air: probes | air: ideal trilinear | near: probes | near: ideal trilinear |\n|---|--:|--:|--:|--:|--:|\n");
+    for (int s : {1, 2, 4})
+      run_grid({std::max(2, dims[0] * s / 2), std::max(2, dims[1] * s / 2), std::max(2, dims[2] * s / 2)}, false);
+  }
+  return 0;
+}

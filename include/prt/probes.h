@@ -1,0 +1,226 @@
+// prt/probes.h - relightable probe volumes (docs/PROBES.md): points on a
+// regular grid over a scene whose incident light follows the environment.
+//
+// A probe at x stores what it takes to give, for any environment L, the
+// n-band SH projection of its incident radiance
+//   Li(x, w) = V(x, w) L(w)                        (shadowed)
+//            + (1 - V(x, w)) Lo(hit(x, w), -w)     (interreflected: the
+//              diffuse exit radiance of the surface the ray x -> w meets)
+// without band-limiting the environment's side of the direct light:
+//   * a visibility cube: 6 r^2 bits, texel i set when the ray from x through
+//     its centre region escapes (the majority of the texel's rays); the
+//     direct part of coefficient k is then sum_i V_i G_k(i) with
+//     G_k(i) = sum over the map's pixels p that fall in texel i (after the
+//     rotation) of Y_k(w_p) L_p omega_p, exact per map pixel, so a sun of
+//     1e5 counts where it is and nowhere else. Relighting sums G over the
+//     visible texels through a quadtree of each face (a full node adds its
+//     pyramid sum), so its cost follows the visibility's edges, not 6 r^2;
+//   * interreflected: the bounce part as a matrix from the environment's
+//     first `bounce_bands` bands to the probe's n^2 coefficients, per
+//     channel (one when the albedo is grey). The light that reaches the
+//     surfaces goes through the band limit here (docs/PROBES.md measures
+//     what that costs);
+//   * depth moments (mean and mean square of the capped hit distance) on
+//     an octahedral map, for the visibility-aware weights below (DDGI,
+//     Majercik et al. 2019).
+// Probes whose every ray escapes store nothing (their light is the whole
+// map's projection); probes inside geometry (more than half their rays
+// strike back faces) store nothing and get no weight.
+//
+// Query (p, n): the 8 probes of p's cell, weight trilinear x validity x a
+// Chebyshev visibility test of the segment probe -> p against the probe's
+// depth moments (cubed, crushed below 0.2 as DDGI does), with p moved
+// along n by a tenth of the smallest spacing; the weighted mean of their SH
+// divided by max(sum of weights, kProbeMinWeight), so a point no probe can
+// see (inside a closed box) gets (almost) nothing instead of the mean of
+// probes that cannot see it. E(p, n)/pi = sum_k A_l/pi L_k Y_k(n) (A_l of
+// prt/filter.h).
+#pragma once
+
+#include <prt/envmap.h>
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace prt {
+
+struct ProbeGrid {
+  std::array<int, 3> dims{2, 2, 2};  // NX, NY, NZ, each >= 2
+  glm::dvec3 min{0.0}, max{1.0};     // the scene's bounding box: probe (0,0,0) at min, (NX-1,NY-1,NZ-1) at max
+
+  std::size_t count() const { return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]); }
+  // Probe (i, j, k) is entry i + NX (j + NY k).
+  std::size_t index(int i, int j, int k) const {
+    return std::size_t(i) + std::size_t(dims[0]) * (std::size_t(j) + std::size_t(dims[1]) * std::size_t(k));
+  }
+  // min + (max - min) (i/(NX-1), j/(NY-1), k/(NZ-1)).
+  glm::dvec3 position(int i, int j, int k) const;
+  glm::dvec3 spacing() const;  // (max - min) / (dims - 1)
+};
+
+inline constexpr int kMaxProbeDim = 1024;
+inline constexpr std::size_t kMaxProbes = std::size_t(1) << 24;
+// Below this total weight a query's light fades to 0 (docs/PROBES.md, "Leaks").
+inline constexpr double kProbeMinWeight = 0.05;
+
+// "NXxNYxNZ" -> dims, each 2..kMaxProbeDim, at most kMaxProbes in all.
+// Throws prt::Error with the rule.
+std::array<int, 3> parse_probe_dims(std::string_view text);
+// The grid over `mesh`'s bounding box (a flat box keeps its thickness 0:
+// the probes of that axis coincide; precompute moves probes off surfaces).
+ProbeGrid probe_grid(const Mesh& mesh, const std::array<int, 3>& dims);
+
+enum class ProbeState : std::uint8_t {
+  Sky = 0,      // every ray escapes: stores nothing, its light is the map's
+  Stored = 1,   // visibility, depth moments (and bounce matrices)
+  Invalid = 2,  // inside geometry: stores nothing, weight 0
+};
+
+struct ProbeTransfer {
+  ProbeGrid grid;
+  int bands = 3;          // of each probe's output: its incident light's SH
+  int cube_res = 64;      // visibility cube face size at its finest (power of two, 4..64)
+  int depth_res = 8;      // octahedral depth map size (2..32)
+  TransferMode mode = TransferMode::Shadowed;
+  int bounces = 0;        // interreflected: diffuse bounces traced (>= 1)
+  int bounce_bands = 0;   // interreflected: bands of the environment the bounce matrices take
+  int channels = 1;       // of the bounce matrices: 3 when the albedo is not grey
+  int rays_per_texel = 4; // rays per texel of the traced base cube (cube_res / 4), a k x k grid
+  std::uint64_t seed = 1;
+  std::uint64_t scene_hash = 0;  // Scene::hash() of the scene it was computed for (0: a bare mesh's Mesh::hash)
+  float depth_cap = 0;           // hit distances are capped here (1.5 x the largest spacing)
+
+  std::vector<ProbeState> state;       // per probe
+  std::vector<glm::vec3> positions;    // per probe: the grid point, moved off a surface it lies on
+  // Per stored probe, in probe order:
+  // The visibility cube as the quadtree nodes that are uniformly visible
+  // (or, with vis_complement, uniformly blocked: the fewer), node ids of
+  // probe_node_id; probe s's are [vis_offsets[s], vis_offsets[s + 1]).
+  std::vector<std::uint16_t> vis_nodes;
+  std::vector<std::uint64_t> vis_offsets;   // stored + 1, from 0
+  std::vector<std::uint8_t> vis_complement; // per stored probe
+  // Finest texels an edge crosses (left clear in the nodes above), each
+  // with the 4 x 4 sub-texels whose ray escaped (bit 4 sy + sx, sx along
+  // the face's u): probe s's are [partial_offsets[s], partial_offsets[s + 1]).
+  std::vector<std::uint16_t> partial_nodes;
+  std::vector<std::uint16_t> partial_mask;
+  std::vector<std::uint64_t> partial_offsets;  // stored + 1, from 0
+  std::vector<std::uint16_t> depth;       // 2 depth_res^2 each: mean, mean square / cap^2, unorm16
+  std::vector<float> bounce;              // interreflected: channels x n^2 x bounce_bands^2 each, row-major
+
+  std::size_t probes() const { return grid.count(); }
+  std::size_t stored() const;  // probes in state Stored
+  std::size_t bounce_floats_per_probe() const;
+  // Bytes of the per-probe data (state, positions, and the stored arrays).
+  std::size_t bytes() const;
+  // Per probe: its index among the stored probes, or ~0u.
+  std::vector<std::uint32_t> stored_slots() const;
+};
+
+// The quadtree of a visibility cube of face size r (a power of two up to
+// 64): per face, level 0 the r x r texels, level L the (r >> L)^2 blocks,
+// up to one node for the face; node (face, level, x, y) has id
+// face * nodes_per_face + offset(level) + y (r >> level) + x, with
+// offset(L) = sum_{l < L} (r >> l)^2 and nodes_per_face = (4 r^2 - 1) / 3
+// (6 faces of r = 64: 32,766 ids, a u16).
+std::uint16_t probe_node_id(int r, int face, int level, int x, int y);
+// The nodes of a cube's bits (texel i = (face r + v) r + u, bit i % 32 of
+// word i / 32) that are uniformly set, or with *complement the uniformly
+// clear ones (whichever list is shorter): what ProbeTransfer stores.
+std::vector<std::uint16_t> probe_visibility_nodes(std::span<const std::uint32_t> bits, int r, bool& complement);
+
+// What is wrong with `t` (sizes, ranges, finite values), or "".
+std::string probe_transfer_problem(const ProbeTransfer& t);
+
+// Files (docs/FORMAT.md "Probe volume"): write through a temporary file and
+// rename; read validates everything (checksum, sizes, probe_transfer_problem)
+// and throws prt::Error naming the file. is_probe_file: the file's
+// signature is a probe volume's (false for anything else, readable or not).
+void write_probe_transfer(const std::string& path, const ProbeTransfer& t);
+ProbeTransfer read_probe_transfer(const std::string& path);
+bool is_probe_file(const std::string& path);
+
+// Relighting (docs/PROBES.md "Relighting"): holds the map, downsampled
+// once (solid-angle weighted, to at most 4 map pixels per visibility texel
+// width) and its bounce SH; set_rotation() rebuilds the per-frame sums
+// (every map pixel splatted into the rotated visibility cube, the
+// pyramid of each face, the rotated bounce SH); relight() gives the probes'
+// SH (n^2 RGB each), Sky probes the whole map's, Invalid ones zero.
+class ProbeRelighter {
+ public:
+  // Throws prt::Error on a cube map or non-finite pixels.
+  ProbeRelighter(const ProbeTransfer& t, const EnvMap& map);
+  // Light from direction d arrives from R d (L_rot(d) = L(R^T d)), as prt relight --rotate.
+  void set_rotation(const glm::dmat3& R);
+  // SH of every probe's incident light: out[probe * n^2 + k]. Parallel.
+  void relight(std::vector<glm::vec3>& out) const;
+  // The same for the listed probes only: out[i * n^2 + k] for probes[i].
+  void relight(std::span<const std::uint32_t> probes, std::vector<glm::vec3>& out) const;
+  // The whole map's SH (what a Sky probe gets) under the current rotation.
+  std::span<const glm::vec3> sky() const;
+  const ProbeTransfer& transfer() const { return t_; }
+
+ private:
+  void relight_one(std::size_t probe, glm::vec3* out) const;
+  const ProbeTransfer& t_;
+  int nc_ = 0, levels_ = 0;
+  std::size_t nodes_per_face_ = 0;
+  std::vector<std::size_t> level_offset_;
+  // The map, downsampled: directions, solid angle x radiance.
+  std::vector<glm::vec3> dirs_;
+  std::vector<glm::vec3> power_;
+  std::vector<glm::dvec3> bounce_sh_, bounce_rot_;
+  std::vector<float> sums_;  // nodes x nc x 3
+  std::vector<glm::vec3> total_;
+  std::vector<std::uint32_t> slot_;
+  // Per frame, for the partial texels: every map pixel's texel, sub-texel
+  // and SH contribution, bucketed by texel.
+  std::vector<std::uint32_t> bucket_offset_, bucket_pixel_;
+  std::vector<std::uint8_t> pixel_sub_, uneven_;
+  std::vector<float> pixel_sh_;
+};
+
+// Weights of the probes that light a query at p with normal n (see above):
+// up to 8 (probe, weight) pairs, weights already divided by
+// max(sum, kProbeMinWeight).
+struct ProbeWeights {
+  std::array<std::uint32_t, 8> probe{};
+  std::array<float, 8> weight{};
+  int count = 0;
+};
+// `slots`: t.stored_slots() (computed once for many queries). `visible`,
+// when set, replaces the depth moments' Chebyshev test: the visibility
+// (0..1) between a probe's position and the query point, traced (prt
+// precompute's ProbeOcclusion: what prt relight --at uses).
+using ProbeVisibility = std::function<double(const glm::dvec3& probe, const glm::dvec3& point)>;
+ProbeWeights probe_weights(const ProbeTransfer& t, std::span<const std::uint32_t> slots, const glm::dvec3& p,
+                           const glm::dvec3& n, const ProbeVisibility& visible = {});
+// Plain trilinear weights (no visibility): the baseline of docs/PROBES.md.
+ProbeWeights trilinear_weights(const ProbeGrid& g, const glm::dvec3& p);
+
+// E(p, n)/pi of the SH radiance `sh` (bands^2 RGB): the radiance a white
+// Lambertian surface facing n reflects.
+glm::dvec3 lambert_from_sh(std::span<const glm::vec3> sh, int bands, const glm::dvec3& n);
+
+// The Chebyshev visibility of a point at `distance` in direction `dir` from
+// probe slot `slot` (stored probes only): 1 when nearer than the mean
+// depth there, else sigma^2 / (sigma^2 + (d - mean)^2), cubed and crushed
+// below 0.2. Bilinear over the octahedral map (continuous everywhere).
+double probe_visibility(const ProbeTransfer& t, std::size_t slot, const glm::dvec3& dir, double distance);
+
+// Octahedral mapping of a unit direction to [0, 1]^2 and back (docs/CONVENTIONS.md).
+glm::dvec2 octahedral_encode(const glm::dvec3& d);
+glm::dvec3 octahedral_decode(const glm::dvec2& uv);
+
+}  // namespace prt

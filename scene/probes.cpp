@@ -1,0 +1,765 @@
+// Probe volumes (prt/probes.h; docs/PROBES.md): the grid, relighting,
+// visibility-aware interpolation and the probe file.
+#include <prt/probes.h>
+
+#include <prt/error.h>
+#include <prt/filter.h>
+#include <prt/hash.h>
+#include <prt/io.h>
+#include <prt/rotation.h>
+#include <prt/sh.h>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+
+namespace prt {
+
+// ---- the grid -------------------------------------------------------------------
+
+glm::dvec3 ProbeGrid::position(int i, int j, int k) const {
+  const glm::dvec3 f(double(i) / (dims[0] - 1), double(j) / (dims[1] - 1), double(k) / (dims[2] - 1));
+  return min + (max - min) * f;
+}
+
+glm::dvec3 ProbeGrid::spacing() const {
+  return (max - min) / glm::dvec3(dims[0] - 1, dims[1] - 1, dims[2] - 1);
+}
+
+std::array<int, 3> parse_probe_dims(std::string_view text) {
+  const auto bad = [&] {
+    return Error(fmt::format("--probes: expected NXxNYxNZ, each 2 to {} (e.g. 16x8x16), at most {} probes, got '{}'",
+                             kMaxProbeDim, kMaxProbes, text));
+  };
+  std::array<int, 3> d{};
+  const char* p = text.data();
+  const char* end = text.data() + text.size();
+  for (int a = 0; a < 3; ++a) {
+    const auto r = std::from_chars(p, end, d[std::size_t(a)]);
+    if (r.ec != std::errc() || d[std::size_t(a)] < 2 || d[std::size_t(a)] > kMaxProbeDim) throw bad();
+    p = r.ptr;
+    if (a < 2) {
+      if (p == end || (*p != 'x' && *p != 'X')) throw bad();
+      ++p;
+    }
+  }
+  if (p != end) throw bad();
+  if (std::size_t(d[0]) * std::size_t(d[1]) * std::size_t(d[2]) > kMaxProbes) throw bad();
+  return d;
+}
+
+ProbeGrid probe_grid(const Mesh& mesh, const std::array<int, 3>& dims) {
+  if (mesh.positions.empty()) throw Error("probes: the scene has no vertices");
+  ProbeGrid g;
+  g.dims = dims;
+  g.min = g.max = glm::dvec3(mesh.positions.front());
+  for (const glm::vec3& p : mesh.positions) {
+    g.min = glm::min(g.min, glm::dvec3(p));
+    g.max = glm::max(g.max, glm::dvec3(p));
+  }
+  return g;
+}
+
+// ---- the transfer ------------------------------------------------------------------
+
+std::size_t ProbeTransfer::stored() const {
+  return std::size_t(std::count(state.begin(), state.end(), ProbeState::Stored));
+}
+
+std::size_t ProbeTransfer::bounce_floats_per_probe() const {
+  if (mode != TransferMode::Interreflected) return 0;
+  return std::size_t(channels) * std::size_t(sh::num_coeffs(bands)) * std::size_t(sh::num_coeffs(bounce_bands));
+}
+
+std::size_t ProbeTransfer::bytes() const {
+  return state.size() + positions.size() * sizeof(glm::vec3) + vis_nodes.size() * 2 + vis_offsets.size() * 8 + vis_complement.size() + partial_nodes.size() * 4 +
+         partial_offsets.size() * 8 + depth.size() * 2 +
+         bounce.size() * 4;
+}
+
+std::vector<std::uint32_t> ProbeTransfer::stored_slots() const {
+  std::vector<std::uint32_t> slot(state.size(), ~0u);
+  std::uint32_t n = 0;
+  for (std::size_t p = 0; p < state.size(); ++p)
+    if (state[p] == ProbeState::Stored) slot[p] = n++;
+  return slot;
+}
+
+std::string probe_transfer_problem(const ProbeTransfer& t) {
+  const ProbeGrid& g = t.grid;
+  for (int a = 0; a < 3; ++a)
+    if (g.dims[std::size_t(a)] < 2 || g.dims[std::size_t(a)] > kMaxProbeDim)
+      return fmt::format("grid dimension {} is {} (2 to {})", a, g.dims[std::size_t(a)], kMaxProbeDim);
+  if (g.count() > kMaxProbes) return fmt::format("{} probes (at most {})", g.count(), kMaxProbes);
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(g.min[a]) || !std::isfinite(g.max[a]) || g.max[a] < g.min[a]) return "the grid's box is not finite";
+  if (t.bands < 1 || t.bands > 8) return fmt::format("{} output bands (1 to 8)", t.bands);
+  if (t.cube_res < 4 || t.cube_res > 64 || !std::has_single_bit(unsigned(t.cube_res)))
+    return fmt::format("visibility cube size {} (a power of two, 4 to 64)", t.cube_res);
+  if (t.depth_res < 2 || t.depth_res > 32) return fmt::format("depth map size {} (2 to 32)", t.depth_res);
+  if (t.rays_per_texel < 1) return "no rays per texel";
+  if (t.mode != TransferMode::Shadowed && t.mode != TransferMode::Interreflected)
+    return "mode must be shadowed or interreflected";
+  if (t.mode == TransferMode::Interreflected) {
+    if (t.bounces < 1 || t.bounce_bands < 1 || t.bounce_bands > 16) return "interreflected: bounces >= 1, bounce bands 1 to 16";
+    if (t.channels != 1 && t.channels != 3) return "channels must be 1 or 3";
+  }
+  if (!(t.depth_cap > 0) || !std::isfinite(t.depth_cap)) return "depth cap not positive";
+  const std::size_t P = g.count();
+  if (t.state.size() != P || t.positions.size() != P) return "state and positions must have one entry per probe";
+  std::size_t stored = 0;
+  for (ProbeState s : t.state) {
+    if (s != ProbeState::Sky && s != ProbeState::Stored && s != ProbeState::Invalid) return "unknown probe state";
+    stored += s == ProbeState::Stored;
+  }
+  for (const glm::vec3& p : t.positions)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return "a probe position is not finite";
+  if (t.vis_offsets.size() != stored + 1 || t.vis_complement.size() != stored || t.vis_offsets.front() != 0 ||
+      t.vis_offsets.back() != t.vis_nodes.size())
+    return fmt::format("visibility node offsets do not match {} stored probes and {} nodes", stored, t.vis_nodes.size());
+  for (std::size_t i = 0; i + 1 < t.vis_offsets.size(); ++i)
+    if (t.vis_offsets[i + 1] < t.vis_offsets[i]) return "visibility node offsets decrease";
+  const std::size_t r = std::size_t(t.cube_res), ids = 6 * ((4 * r * r - 1) / 3);
+  for (std::uint16_t id : t.vis_nodes)
+    if (id >= ids) return fmt::format("visibility node {} (a cube of {} has {} nodes)", id, t.cube_res, ids);
+  for (std::uint8_t c : t.vis_complement)
+    if (c > 1) return "visibility complement flag not 0 or 1";
+  if (t.partial_offsets.size() != stored + 1 || t.partial_offsets.front() != 0 ||
+      t.partial_offsets.back() != t.partial_nodes.size() || t.partial_mask.size() != t.partial_nodes.size())
+    return fmt::format("partial texel offsets do not match {} stored probes and {} texels", stored, t.partial_nodes.size());
+  for (std::size_t i = 0; i + 1 < t.partial_offsets.size(); ++i)
+    if (t.partial_offsets[i + 1] < t.partial_offsets[i]) return "partial texel offsets decrease";
+  const std::size_t per_face = (4 * r * r - 1) / 3;
+  for (std::uint16_t id : t.partial_nodes)
+    if (id % per_face >= r * r) return fmt::format("partial texel {} is not a finest texel of a cube of {}", id, t.cube_res);
+  if (t.depth.size() != stored * 2 * std::size_t(t.depth_res) * t.depth_res)
+    return fmt::format("{} depth values for {} stored probes", t.depth.size(), stored);
+  if (t.bounce.size() != stored * t.bounce_floats_per_probe())
+    return fmt::format("{} bounce values for {} stored probes", t.bounce.size(), stored);
+  for (float v : t.bounce)
+    if (!std::isfinite(v)) return "a bounce matrix value is not finite";
+  return "";
+}
+
+// ---- the file (docs/FORMAT.md "Probe volume") ----------------------------------------
+
+namespace {
+
+constexpr char kProbeMagic[8] = {'P', 'R', 'T', 'P', '\r', '\n', '\x1a', '\n'};
+constexpr char kEnd[4] = {'P', 'R', 'T', 'E'};
+constexpr std::uint32_t kProbeVersion = 1;
+
+class Out {
+ public:
+  void raw(const void* data, std::size_t n) {
+    const std::size_t at = bytes.size();
+    bytes.resize(at + n);
+    if (n > 0) std::memcpy(bytes.data() + at, data, n);
+  }
+  template <typename T>
+  void put(const T& v) {
+    raw(&v, sizeof(T));
+  }
+  template <typename T>
+  void array(const std::vector<T>& v) {
+    put(std::uint64_t(v.size()));
+    raw(v.data(), v.size() * sizeof(T));
+  }
+  std::vector<unsigned char> bytes;
+};
+
+class In {
+ public:
+  In(const std::vector<unsigned char>& b, const std::string& path) : b_(b), path_(path) {}
+  template <typename T>
+  T get() {
+    need(sizeof(T));
+    T v;
+    std::memcpy(&v, b_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return v;
+  }
+  template <typename T>
+  void array(std::vector<T>& v, const char* what) {
+    const std::uint64_t n = get<std::uint64_t>();
+    if (n > (b_.size() - at_) / sizeof(T)) throw Error(fmt::format("{}: {}: {} entries run past the end of the file", path_, what, n));
+    v.resize(std::size_t(n));
+    std::memcpy(v.data(), b_.data() + at_, std::size_t(n) * sizeof(T));
+    at_ += std::size_t(n) * sizeof(T);
+  }
+  std::size_t at() const { return at_; }
+
+ private:
+  void need(std::size_t n) const {
+    if (b_.size() - at_ < n) throw Error(path_ + ": truncated probe file");
+  }
+  const std::vector<unsigned char>& b_;
+  const std::string& path_;
+  std::size_t at_ = 0;
+};
+
+}  // namespace
+
+void write_probe_transfer(const std::string& path, const ProbeTransfer& t) {
+  if (const std::string p = probe_transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this probe volume: " + p);
+  Out o;
+  o.raw(kProbeMagic, 8);
+  o.put(kProbeVersion);
+  for (int a = 0; a < 3; ++a) o.put(std::int32_t(t.grid.dims[std::size_t(a)]));
+  for (int a = 0; a < 3; ++a) o.put(t.grid.min[a]);
+  for (int a = 0; a < 3; ++a) o.put(t.grid.max[a]);
+  for (std::int32_t v : {t.bands, t.cube_res, t.depth_res, int(t.mode), t.bounces, t.bounce_bands, t.channels, t.rays_per_texel})
+    o.put(v);
+  o.put(t.seed);
+  o.put(t.scene_hash);
+  o.put(t.depth_cap);
+  std::vector<std::uint8_t> state(t.state.size());
+  for (std::size_t i = 0; i < state.size(); ++i) state[i] = std::uint8_t(t.state[i]);
+  o.array(state);
+  o.array(t.positions);
+  o.array(t.vis_nodes);
+  o.array(t.vis_offsets);
+  o.array(t.vis_complement);
+  o.array(t.partial_nodes);
+  o.array(t.partial_mask);
+  o.array(t.partial_offsets);
+  o.array(t.depth);
+  o.array(t.bounce);
+  const std::uint64_t h = hash64(o.bytes.data(), o.bytes.size());
+  o.put(h);
+  o.raw(kEnd, 4);
+  write_atomically(path, [&](const std::string& tmp) {
+    std::ofstream f(tmp, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(o.bytes.data()), std::streamsize(o.bytes.size()));
+    f.close();
+    if (!f) throw Error(path + ": write failed");
+  });
+}
+
+bool is_probe_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  char head[8] = {};
+  f.read(head, 8);
+  return f && std::memcmp(head, kProbeMagic, 8) == 0;
+}
+
+ProbeTransfer read_probe_transfer(const std::string& path) {
+  check_input_file(path, "a probe volume");
+  std::ifstream f(path, std::ios::binary);
+  std::vector<unsigned char> b((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (!f.eof() && f.fail()) throw Error(path + ": read error");
+  if (b.size() < 8 || std::memcmp(b.data(), kProbeMagic, 8) != 0)
+    throw Error(path + ": not a probe volume (prt precompute SCENE --probes NXxNYxNZ writes one)");
+  if (b.size() < 8 + 4 + 12 || std::memcmp(b.data() + b.size() - 4, kEnd, 4) != 0)
+    throw Error(path + ": truncated probe file (no end marker)");
+  std::uint64_t stored_hash;
+  std::memcpy(&stored_hash, b.data() + b.size() - 12, 8);
+  if (hash64(b.data(), b.size() - 12) != stored_hash) throw Error(path + ": checksum mismatch: the file is damaged");
+  b.resize(b.size() - 12);
+  In in(b, path);
+  for (int i = 0; i < 8; ++i) in.get<char>();
+  const auto version = in.get<std::uint32_t>();
+  if (version != kProbeVersion)
+    throw Error(fmt::format("{}: probe file version {} (this prt reads {})", path, version, kProbeVersion));
+  ProbeTransfer t;
+  for (int a = 0; a < 3; ++a) t.grid.dims[std::size_t(a)] = in.get<std::int32_t>();
+  for (int a = 0; a < 3; ++a) t.grid.min[a] = in.get<double>();
+  for (int a = 0; a < 3; ++a) t.grid.max[a] = in.get<double>();
+  t.bands = in.get<std::int32_t>();
+  t.cube_res = in.get<std::int32_t>();
+  t.depth_res = in.get<std::int32_t>();
+  const std::int32_t mode = in.get<std::int32_t>();
+  if (mode != int(TransferMode::Shadowed) && mode != int(TransferMode::Interreflected))
+    throw Error(fmt::format("{}: unknown mode {}", path, mode));
+  t.mode = TransferMode(mode);
+  t.bounces = in.get<std::int32_t>();
+  t.bounce_bands = in.get<std::int32_t>();
+  t.channels = in.get<std::int32_t>();
+  t.rays_per_texel = in.get<std::int32_t>();
+  t.seed = in.get<std::uint64_t>();
+  t.scene_hash = in.get<std::uint64_t>();
+  t.depth_cap = in.get<float>();
+  std::vector<std::uint8_t> state;
+  in.array(state, "probe states");
+  t.state.resize(state.size());
+  for (std::size_t i = 0; i < state.size(); ++i) {
+    if (state[i] > 2) throw Error(fmt::format("{}: probe {} has an unknown state {}", path, i, state[i]));
+    t.state[i] = ProbeState(state[i]);
+  }
+  in.array(t.positions, "probe positions");
+  in.array(t.vis_nodes, "visibility nodes");
+  in.array(t.vis_offsets, "visibility node offsets");
+  in.array(t.vis_complement, "visibility complement flags");
+  in.array(t.partial_nodes, "partial texels");
+  in.array(t.partial_mask, "partial texel masks");
+  in.array(t.partial_offsets, "partial texel offsets");
+  in.array(t.depth, "depth moments");
+  in.array(t.bounce, "bounce matrices");
+  if (in.at() != b.size()) throw Error(path + ": bytes after the last array");
+  if (const std::string p = probe_transfer_problem(t); !p.empty()) throw Error(path + ": inconsistent probe volume: " + p);
+  return t;
+}
+
+// ---- the visibility quadtree ------------------------------------------------------------
+
+namespace {
+
+std::size_t level_offset(int r, int level) {
+  std::size_t o = 0;
+  for (int l = 0; l < level; ++l) o += std::size_t(r >> l) * std::size_t(r >> l);
+  return o;
+}
+
+}  // namespace
+
+std::uint16_t probe_node_id(int r, int face, int level, int x, int y) {
+  const std::size_t per_face = (4 * std::size_t(r) * std::size_t(r) - 1) / 3;
+  return std::uint16_t(std::size_t(face) * per_face + level_offset(r, level) + std::size_t(y) * std::size_t(r >> level) +
+                       std::size_t(x));
+}
+
+std::vector<std::uint16_t> probe_visibility_nodes(std::span<const std::uint32_t> bits, int r, bool& complement) {
+  PRT_CHECK(r >= 1 && r <= 64 && std::has_single_bit(unsigned(r)));
+  PRT_CHECK(bits.size() * 32 >= std::size_t(6) * r * r);
+  const int levels = std::countr_zero(unsigned(r)) + 1;
+  // Per face, counts of set bits per node, bottom-up.
+  std::vector<std::uint16_t> on, off;
+  std::vector<std::uint32_t> count;
+  for (int face = 0; face < 6; ++face) {
+    count.assign(level_offset(r, levels), 0);
+    for (int v = 0; v < r; ++v)
+      for (int u = 0; u < r; ++u) {
+        const std::size_t i = (std::size_t(face) * r + std::size_t(v)) * r + std::size_t(u);
+        count[std::size_t(v) * r + std::size_t(u)] = (bits[i >> 5] >> (i & 31)) & 1u;
+      }
+    for (int l = 1; l < levels; ++l) {
+      const int size = r >> l;
+      for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+          std::uint32_t c = 0;
+          for (int q = 0; q < 4; ++q)
+            c += count[level_offset(r, l - 1) + std::size_t(2 * y + (q >> 1)) * std::size_t(2 * size) + std::size_t(2 * x + (q & 1))];
+          count[level_offset(r, l) + std::size_t(y) * size + std::size_t(x)] = c;
+        }
+    }
+    struct Node { int level, x, y; };
+    std::vector<Node> stack{{levels - 1, 0, 0}};
+    while (!stack.empty()) {
+      const Node n = stack.back();
+      stack.pop_back();
+      const std::uint32_t c = count[level_offset(r, n.level) + std::size_t(n.y) * std::size_t(r >> n.level) + std::size_t(n.x)];
+      const std::uint32_t full = std::uint32_t(1) << (2 * n.level);
+      if (c == full) on.push_back(probe_node_id(r, face, n.level, n.x, n.y));
+      else if (c == 0) off.push_back(probe_node_id(r, face, n.level, n.x, n.y));
+      else
+        for (int q = 3; q >= 0; --q) stack.push_back({n.level - 1, 2 * n.x + (q & 1), 2 * n.y + (q >> 1)});
+    }
+  }
+  complement = off.size() < on.size();
+  return complement ? off : on;
+}
+
+// ---- octahedral map ------------------------------------------------------------------
+
+glm::dvec2 octahedral_encode(const glm::dvec3& d) {
+  const double s = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+  double x = d.x / s, y = d.y / s;
+  if (d.z < 0) {
+    const double ox = (1.0 - std::abs(y)) * (x >= 0 ? 1.0 : -1.0), oy = (1.0 - std::abs(x)) * (y >= 0 ? 1.0 : -1.0);
+    x = ox;
+    y = oy;
+  }
+  return {x * 0.5 + 0.5, y * 0.5 + 0.5};
+}
+
+glm::dvec3 octahedral_decode(const glm::dvec2& uv) {
+  double x = uv.x * 2 - 1, y = uv.y * 2 - 1;
+  const double z = 1.0 - std::abs(x) - std::abs(y);
+  if (z < 0) {
+    const double ox = (1.0 - std::abs(y)) * (x >= 0 ? 1.0 : -1.0), oy = (1.0 - std::abs(x)) * (y >= 0 ? 1.0 : -1.0);
+    x = ox;
+    y = oy;
+  }
+  return glm::normalize(glm::dvec3(x, y, z));
+}
+
+// ---- visibility-aware weights -------------------------------------------------------
+
+double probe_visibility(const ProbeTransfer& t, std::size_t slot, const glm::dvec3& dir, double distance) {
+  const int N = t.depth_res;
+  const std::uint16_t* m = t.depth.data() + slot * 2 * std::size_t(N) * N;
+  const glm::dvec2 uv = octahedral_encode(dir);
+  const double fx = uv.x * N - 0.5, fy = uv.y * N - 0.5;
+  const int x0 = int(std::floor(fx)), y0 = int(std::floor(fy));
+  const double ax = fx - x0, ay = fy - y0;
+  // Octahedral border: a texel past an edge is its mirror across the edge's midpoint.
+  const auto texel = [&](int x, int y) {
+    if (x < 0) { x = -x - 1; y = N - 1 - y; }
+    else if (x >= N) { x = 2 * N - 1 - x; y = N - 1 - y; }
+    if (y < 0) { y = -y - 1; x = N - 1 - x; }
+    else if (y >= N) { y = 2 * N - 1 - y; x = N - 1 - x; }
+    return std::size_t(std::clamp(y, 0, N - 1)) * N + std::size_t(std::clamp(x, 0, N - 1));
+  };
+  double mean = 0, mean2 = 0;
+  for (int dy = 0; dy <= 1; ++dy)
+    for (int dx = 0; dx <= 1; ++dx) {
+      const double w = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay);
+      const std::size_t i = texel(x0 + dx, y0 + dy);
+      mean += w * m[2 * i] / 65535.0;
+      mean2 += w * m[2 * i + 1] / 65535.0;
+    }
+  const double cap = t.depth_cap;
+  mean *= cap;
+  mean2 *= cap * cap;
+  if (distance <= mean) return 1.0;
+  const double var = std::max(mean2 - mean * mean, 1e-8 * cap * cap);
+  const double d = distance - mean;
+  double v = var / (var + d * d);
+  v = v * v * v;
+  if (v < 0.2) v *= v * v / 0.04;  // DDGI's crush: a little light does not leak
+  return v;
+}
+
+ProbeWeights trilinear_weights(const ProbeGrid& g, const glm::dvec3& p) {
+  int i0[3];
+  double f[3];
+  const glm::dvec3 s = g.spacing();
+  for (int a = 0; a < 3; ++a) {
+    const int n = g.dims[std::size_t(a)];
+    double x = s[a] > 0 ? (p[a] - g.min[a]) / s[a] : 0.0;
+    x = std::clamp(x, 0.0, double(n - 1));
+    i0[a] = std::min(int(std::floor(x)), n - 2);
+    f[a] = x - i0[a];
+  }
+  ProbeWeights w;
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    w.probe[std::size_t(c)] = std::uint32_t(g.index(i0[0] + dx, i0[1] + dy, i0[2] + dz));
+    w.weight[std::size_t(c)] = float((dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]));
+  }
+  w.count = 8;
+  return w;
+}
+
+ProbeWeights probe_weights(const ProbeTransfer& t, std::span<const std::uint32_t> slots, const glm::dvec3& p,
+                           const glm::dvec3& n, const ProbeVisibility& visible) {
+  const glm::dvec3 s = t.grid.spacing();
+  double smallest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+    if (s[a] > 0) smallest = std::min(smallest, s[a]);
+  if (!std::isfinite(smallest)) smallest = 0;
+  const double nl = glm::length(n);
+  // The depth moments see a surface point's own surface: look from a
+  // tenth of a spacing off it. Traced visibility starts its segments off the
+  // surface itself and needs no bias (a bias would carry a point inside a
+  // box out through its wall).
+  const glm::dvec3 q = nl > 0 && !visible ? p + n / nl * (0.1 * smallest) : p;
+  ProbeWeights w = trilinear_weights(t.grid, p);
+  PRT_CHECK(slots.size() == t.state.size());
+  double sum = 0;
+  for (int c = 0; c < 8; ++c) {
+    const std::uint32_t probe = w.probe[std::size_t(c)];
+    double weight = w.weight[std::size_t(c)];
+    if (weight > 0) {
+      if (t.state[probe] == ProbeState::Invalid) {
+        weight = 0;
+      } else if (visible) {
+        weight *= visible(glm::dvec3(t.positions[probe]), q);
+      } else if (t.state[probe] == ProbeState::Stored) {
+        const glm::dvec3 d = q - glm::dvec3(t.positions[probe]);
+        const double dist = glm::length(d);
+        if (dist > 0) weight *= probe_visibility(t, slots[probe], d / dist, dist);
+      }
+    }
+    w.weight[std::size_t(c)] = float(weight);
+    sum += weight;
+  }
+  const double norm = 1.0 / std::max(sum, kProbeMinWeight);
+  for (float& x : w.weight) x = float(x * norm);
+  return w;
+}
+
+glm::dvec3 lambert_from_sh(std::span<const glm::vec3> sh, int bands, const glm::dvec3& n) {
+  const int nc = sh::num_coeffs(bands);
+  PRT_CHECK(sh.size() >= std::size_t(nc));
+  std::vector<double> y(static_cast<std::size_t>(nc));
+  const glm::dvec3 u = glm::normalize(n);
+  sh::eval(bands, u.x, u.y, u.z, y.data());
+  glm::dvec3 out(0.0);
+  for (int l = 0; l < bands; ++l) {
+    const double a = sh::clamped_cosine_factor(l) / M_PI;
+    for (int m = -l; m <= l; ++m) {
+      const int k = sh::index(l, m);
+      out += a * y[std::size_t(k)] * glm::dvec3(sh[std::size_t(k)]);
+    }
+  }
+  return out;
+}
+
+// ---- relighting ------------------------------------------------------------------------
+
+namespace {
+
+// The texel of direction d in a cube of face size r: face * r^2 + v * r + u;
+// *sub: its 4 x 4 sub-texel, 4 sy + sx.
+std::size_t cube_texel(const glm::dvec3& d, int r, int* sub = nullptr) {
+  double s = 0, t = 0;
+  const int face = cube_face_coords(d, s, t);
+  const double fu = std::clamp((s + 1) * 0.5 * r, 0.0, double(r) - 1e-9), fv = std::clamp((t + 1) * 0.5 * r, 0.0, double(r) - 1e-9);
+  const int u = int(fu), v = int(fv);
+  if (sub) *sub = std::min(3, int((fv - v) * 4)) * 4 + std::min(3, int((fu - u) * 4));
+  return (std::size_t(face) * r + std::size_t(v)) * r + std::size_t(u);
+}
+
+}  // namespace
+
+ProbeRelighter::ProbeRelighter(const ProbeTransfer& t, const EnvMap& map) : t_(t) {
+  if (const std::string p = probe_transfer_problem(t); !p.empty()) throw Error("probe volume: " + p);
+  require_finite(map);
+  nc_ = sh::num_coeffs(t.bands);
+  const int r = t.cube_res;
+  levels_ = std::countr_zero(unsigned(r)) + 1;  // sizes r, r/2, ..., 1
+  level_offset_.resize(std::size_t(levels_) + 1, 0);
+  for (int l = 0; l < levels_; ++l)
+    level_offset_[std::size_t(l) + 1] = level_offset_[std::size_t(l)] + std::size_t(r >> l) * std::size_t(r >> l);
+  nodes_per_face_ = level_offset_.back();
+  sums_.assign(6 * nodes_per_face_ * std::size_t(nc_) * 3, 0.0f);
+  total_.assign(std::size_t(nc_), glm::vec3(0.0f));
+
+  // The map, downsampled by an integer factor f (solid-angle weighted sums
+  // of f x f blocks): at least 4 map pixels across a visibility texel.
+  const auto add_block = [&](const std::vector<std::pair<glm::dvec3, double>>& px, const std::vector<glm::dvec3>& rad) {
+    glm::dvec3 dir(0.0), power(0.0);
+    for (std::size_t i = 0; i < px.size(); ++i) {
+      dir += px[i].first * px[i].second;
+      power += rad[i] * px[i].second;
+    }
+    if (glm::length(dir) > 0) {
+      dirs_.push_back(glm::vec3(glm::normalize(dir)));
+      power_.push_back(glm::vec3(power));
+    }
+  };
+  std::vector<std::pair<glm::dvec3, double>> px;
+  std::vector<glm::dvec3> rad;
+  if (map.is_cube()) {
+    const int N = map.width;
+    int f = 1;
+    while (N % (2 * f) == 0 && N / (2 * f) >= 2 * r) f *= 2;
+    for (int face = 0; face < 6; ++face)
+      for (int by = 0; by < N; by += f)
+        for (int bx = 0; bx < N; bx += f) {
+          px.clear();
+          rad.clear();
+          for (int y = by; y < by + f; ++y)
+            for (int x = bx; x < bx + f; ++x) {
+              px.emplace_back(cube_texel_direction(face, x, y, N), cube_texel_solid_angle(x, y, N));
+              const float* c = map.rgb.data() + ((std::size_t(face) * N + std::size_t(y)) * N + std::size_t(x)) * 3;
+              rad.emplace_back(c[0], c[1], c[2]);
+            }
+          add_block(px, rad);
+        }
+  } else {
+    const int W = map.width, H = map.height;
+    int f = 1;
+    while (W % (2 * f) == 0 && H % (2 * f) == 0 && W / (2 * f) >= 16 * r) f *= 2;
+    for (int by = 0; by < H; by += f)
+      for (int bx = 0; bx < W; bx += f) {
+        px.clear();
+        rad.clear();
+        for (int y = by; y < by + f; ++y)
+          for (int x = bx; x < bx + f; ++x) {
+            px.emplace_back(latlong_direction(x + 0.5, y + 0.5, W, H), latlong_pixel_solid_angle(y, W, H));
+            const float* c = map.rgb.data() + (std::size_t(y) * W + std::size_t(x)) * 3;
+            rad.emplace_back(c[0], c[1], c[2]);
+          }
+        add_block(px, rad);
+      }
+  }
+  if (t.mode == TransferMode::Interreflected) {
+    // The bounce side: the map's first bounce_bands bands, point quadrature
+    // over the same blocks (the light the surfaces get goes through this
+    // band limit, docs/PROBES.md).
+    const int nb = sh::num_coeffs(t.bounce_bands);
+    bounce_sh_.assign(std::size_t(nb), glm::dvec3(0.0));
+    std::vector<double> y(static_cast<std::size_t>(nb));
+    for (std::size_t i = 0; i < dirs_.size(); ++i) {
+      sh::eval(t.bounce_bands, double(dirs_[i].x), double(dirs_[i].y), double(dirs_[i].z), y.data());
+      for (int k = 0; k < nb; ++k) bounce_sh_[std::size_t(k)] += y[std::size_t(k)] * glm::dvec3(power_[i]);
+    }
+    bounce_rot_ = bounce_sh_;
+  }
+
+  slot_ = t.stored_slots();
+  set_rotation(glm::dmat3(1.0));
+}
+
+void ProbeRelighter::set_rotation(const glm::dmat3& R) {
+  const int r = t_.cube_res;
+  const std::size_t stride = std::size_t(nc_) * 3;
+  std::fill(sums_.begin(), sums_.end(), 0.0f);
+  const std::size_t texels = 6 * std::size_t(r) * std::size_t(r), P = dirs_.size();
+  // Every map pixel: its texel, sub-texel and SH contribution (parallel).
+  std::vector<std::uint32_t> texel_of(P);
+  pixel_sub_.resize(P);
+  pixel_sh_.resize(P * stride);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<double> y(static_cast<std::size_t>(nc_));
+    for (std::size_t i = range.begin(); i < range.end(); ++i) {
+      const glm::dvec3 d = R * glm::dvec3(dirs_[i]);
+      int sub = 0;
+      texel_of[i] = std::uint32_t(cube_texel(d, r, &sub));
+      pixel_sub_[i] = std::uint8_t(sub);
+      sh::eval(t_.bands, d.x, d.y, d.z, y.data());
+      float* px = pixel_sh_.data() + i * stride;
+      for (int k = 0; k < nc_; ++k)
+        for (int c = 0; c < 3; ++c) px[std::size_t(k) * 3 + std::size_t(c)] = float(y[std::size_t(k)] * double(power_[i][c]));
+    }
+  });
+  // Bucketed by texel (a counting sort, in pixel order within a texel).
+  bucket_offset_.assign(texels + 1, 0);
+  for (std::uint32_t texel : texel_of) ++bucket_offset_[texel + 1];
+  for (std::size_t i = 0; i < texels; ++i) bucket_offset_[i + 1] += bucket_offset_[i];
+  bucket_pixel_.resize(P);
+  {
+    std::vector<std::uint32_t> fill(bucket_offset_.begin(), bucket_offset_.end() - 1);
+    for (std::size_t i = 0; i < P; ++i) bucket_pixel_[fill[texel_of[i]]++] = std::uint32_t(i);
+  }
+  // Per texel (parallel): its sum (level 0, in double, in pixel order) and
+  // whether its light is uneven (one map pixel holds over a quarter of its
+  // power in some channel): partial texels there sum their visible
+  // sub-texels' pixels; elsewhere the texel's sum by the visible fraction.
+  std::vector<double> acc(texels * stride, 0.0);
+  uneven_.assign(texels, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, texels, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t texel = range.begin(); texel < range.end(); ++texel) {
+      double* a = acc.data() + texel * stride;
+      glm::vec3 most(0.0f), sum(0.0f);
+      for (std::uint32_t b = bucket_offset_[texel]; b < bucket_offset_[texel + 1]; ++b) {
+        const std::uint32_t i = bucket_pixel_[b];
+        const float* px = pixel_sh_.data() + std::size_t(i) * stride;
+        for (std::size_t j = 0; j < stride; ++j) a[j] += double(px[j]);
+        most = glm::max(most, glm::abs(power_[i]));
+        sum += glm::abs(power_[i]);
+      }
+      for (int c = 0; c < 3; ++c)
+        if (most[c] > 0.25f * sum[c] && bucket_offset_[texel + 1] - bucket_offset_[texel] > 1) uneven_[texel] = 1;
+    }
+  });
+  // The pyramid: level 0 from acc, each level the sum of its 4 children (in double).
+  std::vector<double> cur, next;
+  std::fill(total_.begin(), total_.end(), glm::vec3(0.0f));
+  std::vector<glm::dvec3> total(std::size_t(nc_), glm::dvec3(0.0));
+  for (int face = 0; face < 6; ++face) {
+    cur.assign(acc.begin() + std::ptrdiff_t(std::size_t(face) * r * r * stride),
+               acc.begin() + std::ptrdiff_t(std::size_t(face + 1) * r * r * stride));
+    for (int l = 0; l < levels_; ++l) {
+      const int size = r >> l;
+      float* out = sums_.data() + (std::size_t(face) * nodes_per_face_ + level_offset_[std::size_t(l)]) * stride;
+      for (std::size_t i = 0; i < cur.size(); ++i) out[i] = float(cur[i]);
+      if (l + 1 == levels_) {
+        for (int k = 0; k < nc_; ++k)
+          for (int c = 0; c < 3; ++c) total[std::size_t(k)][c] += cur[std::size_t(k) * 3 + std::size_t(c)];
+        break;
+      }
+      const int half = size / 2;
+      next.assign(std::size_t(half) * half * stride, 0.0);
+      for (int v = 0; v < size; ++v)
+        for (int u = 0; u < size; ++u) {
+          const double* src = cur.data() + (std::size_t(v) * size + std::size_t(u)) * stride;
+          double* dst = next.data() + (std::size_t(v / 2) * half + std::size_t(u / 2)) * stride;
+          for (std::size_t j = 0; j < stride; ++j) dst[j] += src[j];
+        }
+      cur.swap(next);
+    }
+  }
+  for (int k = 0; k < nc_; ++k) total_[std::size_t(k)] = glm::vec3(total[std::size_t(k)]);
+  if (!bounce_sh_.empty()) {
+    bounce_rot_.resize(bounce_sh_.size());
+    sh::Rotation(t_.bounce_bands, R).apply(bounce_sh_, bounce_rot_);
+  }
+}
+
+std::span<const glm::vec3> ProbeRelighter::sky() const { return total_; }
+
+void ProbeRelighter::relight_one(std::size_t probe, glm::vec3* out) const {
+  const ProbeState st = t_.state[probe];
+  if (st == ProbeState::Invalid) {
+    std::fill(out, out + nc_, glm::vec3(0.0f));
+    return;
+  }
+  if (st == ProbeState::Sky) {
+    std::copy(total_.begin(), total_.end(), out);
+    return;
+  }
+  const std::size_t s = slot_[probe], stride = std::size_t(nc_) * 3;
+  float acc[8 * 8 * 3] = {};  // nc <= 64 (8 bands)
+  for (std::uint64_t i = t_.vis_offsets[s]; i < t_.vis_offsets[s + 1]; ++i) {
+    const float* src = sums_.data() + std::size_t(t_.vis_nodes[i]) * stride;
+    for (std::size_t j = 0; j < stride; ++j) acc[j] += src[j];
+  }
+  const bool comp = t_.vis_complement[s] != 0;
+  // The finest texels an edge crosses: the map pixels in their visible sub-texels.
+  float part[8 * 8 * 3] = {};
+  const std::size_t r = std::size_t(t_.cube_res);
+  for (std::uint64_t i = t_.partial_offsets[s]; i < t_.partial_offsets[s + 1]; ++i) {
+    const std::size_t id = t_.partial_nodes[i], face = id / nodes_per_face_;
+    const std::size_t texel = face * r * r + (id - face * nodes_per_face_);
+    const std::uint16_t mask = t_.partial_mask[i];
+    if (!uneven_[texel]) {  // light spread over the texel: its sum by the visible fraction
+      const float f = float(std::popcount(mask)) / 16.0f;
+      const float* src = sums_.data() + id * stride;
+      for (std::size_t j = 0; j < stride; ++j) part[j] += f * src[j];
+      continue;
+    }
+    for (std::uint32_t b = bucket_offset_[texel]; b < bucket_offset_[texel + 1]; ++b) {
+      const std::uint32_t px = bucket_pixel_[b];
+      if (!((mask >> pixel_sub_[px]) & 1u)) continue;
+      const float* src = pixel_sh_.data() + std::size_t(px) * stride;
+      for (std::size_t j = 0; j < stride; ++j) part[j] += src[j];
+    }
+  }
+  for (int k = 0; k < nc_; ++k)
+    for (int c = 0; c < 3; ++c) {
+      const float a = acc[std::size_t(k) * 3 + std::size_t(c)];
+      out[k][c] = (comp ? total_[std::size_t(k)][c] - a : a) + part[std::size_t(k) * 3 + std::size_t(c)];
+    }
+  if (!bounce_rot_.empty()) {
+    const int nb = sh::num_coeffs(t_.bounce_bands);
+    const float* B = t_.bounce.data() + s * t_.bounce_floats_per_probe();
+    for (int c = 0; c < 3; ++c) {
+      const float* Bc = B + (t_.channels == 1 ? 0 : std::size_t(c) * std::size_t(nc_) * std::size_t(nb));
+      for (int k = 0; k < nc_; ++k) {
+        double v = 0;
+        const float* row = Bc + std::size_t(k) * std::size_t(nb);
+        for (int j = 0; j < nb; ++j) v += double(row[j]) * bounce_rot_[std::size_t(j)][c];
+        out[k][c] += float(v);
+      }
+    }
+  }
+}
+
+void ProbeRelighter::relight(std::vector<glm::vec3>& out) const {
+  const std::size_t P = t_.probes();
+  out.resize(P * std::size_t(nc_));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P, 256), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t p = range.begin(); p < range.end(); ++p) relight_one(p, out.data() + p * std::size_t(nc_));
+  });
+}
+
+void ProbeRelighter::relight(std::span<const std::uint32_t> probes, std::vector<glm::vec3>& out) const {
+  out.resize(probes.size() * std::size_t(nc_));
+  for (std::size_t i = 0; i < probes.size(); ++i) {
+    if (probes[i] >= t_.probes()) throw Error(fmt::format("probe {} of {}", probes[i], t_.probes()));
+    relight_one(probes[i], out.data() + i * std::size_t(nc_));
+  }
+}
+
+}  // namespace prt
