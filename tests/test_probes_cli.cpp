@@ -5,12 +5,15 @@
 #include "test_meshes.h"
 
 #include <prt/probes.h>
+#include <prt/sh_convention.h>
 #include <prt/vertex_csv.h>
 
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -57,6 +60,72 @@ TEST(ProbesCli, PrecomputeRelightReferenceCompare) {
   // docs/PROBES.md) and the reference's noise (2048 samples, corrected
   // here): 15% leaves room; a probe lit from the wrong side gives 40% and more.
   EXPECT_LT(j["rel_rms_noise_corrected"].get<double>(), 0.15) << r.out;
+}
+
+TEST(ProbesCli, ExportGivesEnginesTheProbesLight) {
+  // prt export SCENE probes.prt --bake ENV -o probes.json --matrices m.bin:
+  // each stored probe's three.js and Unity arrays, evaluated by the
+  // engines' own formulas (prt/sh_convention.h), give the E/pi prt relight
+  // --at gives at the probe (1e-5 relative: float JSON values); the
+  // matrices, applied to the map's 3-band SH, give the band-limited light
+  // (a sky probe's matrix is the identity: SH orthonormality, 1e-3).
+  TempDir dir;
+  ASSERT_EQ(run_prt(dir, {"precompute", kRoom, "--probes", "5x3x5", "-q", "-o", dir.file("p.prt")}).code, 0);
+  Result r = run_prt(dir, {"export", kRoom, dir.file("p.prt"), "--bake", kSunset, "--rotate", "30,0,0", "-o",
+                           dir.file("probes.json"), "--matrices", dir.file("m.bin"), "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json j = nlohmann::json::parse(read_file(dir.file("probes.json")));
+  const ProbeTransfer t = read_probe_transfer(dir.file("p.prt"));
+  ASSERT_EQ(j["probes"].size(), t.probes());
+  std::string csv = "x,y,z,nx,ny,nz\n";
+  std::vector<std::size_t> which;
+  // Probes at their grid points (not moved off a surface): a query there
+  // takes that probe alone.
+  for (int k = 1; k < 4; ++k)
+    for (int i = 1; i < 4; ++i) {
+      const std::size_t p = t.grid.index(i, 1, k);
+      if (t.state[p] != ProbeState::Stored || glm::dvec3(t.positions[p]) != glm::dvec3(glm::vec3(t.grid.position(i, 1, k))))
+        continue;
+      which.push_back(p);
+      const glm::vec3 x = t.positions[p];
+      csv += fmt::format("{},{},{},0.3,0.9,-0.3\n", x.x, x.y, x.z);
+    }
+  ASSERT_GE(which.size(), 4u);
+  write_file(dir.file("at.csv"), csv);
+  r = run_prt(dir, {"relight", kRoom, dir.file("p.prt"), kSunset, "--rotate", "30,0,0", "--at", dir.file("at.csv"), "-o",
+                    dir.file("at_out.csv"), "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::vector<glm::vec3> want = read_vertex_csv(dir.file("at_out.csv"));
+  const glm::dvec3 n = glm::normalize(glm::dvec3(0.3, 0.9, -0.3));
+  for (std::size_t i = 0; i < which.size(); ++i) {
+    const nlohmann::json& probe = j["probes"][which[i]];
+    sh::Sh9 three{}, unity{};
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c) {
+        three[std::size_t(k)][c] = probe["three"][k][c].get<double>();
+        unity[std::size_t(k)][c] = probe["unity"][k][c].get<double>();
+      }
+    const glm::dvec3 e3 = sh::three_get_irradiance_at(three, n) / M_PI;
+    const glm::dvec3 eu = sh::unity_shade_sh9(sh::unity_pack(unity), sh::to_engine_axes(sh::Convention::Unity, n));
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(e3[c], want[i][c], 1e-5 * (1 + std::abs(want[i][c]))) << "probe " << which[i];
+      EXPECT_NEAR(eu[c], want[i][c], 1e-5 * (1 + std::abs(want[i][c]))) << "probe " << which[i];
+    }
+  }
+  // The matrices: header, then positions and states, then the matrices.
+  const std::string bin = read_file(dir.file("m.bin"));
+  ASSERT_GE(bin.size(), 80u);
+  EXPECT_EQ(bin.substr(0, 8), "PRTPMAT1");
+  const std::size_t header = 8 + 4 + 12 + 48 + 16, P = t.probes();
+  ASSERT_EQ(bin.size(), header + P * 16 + P * 9 * 9 * 4);
+  int sky = -1;
+  for (std::size_t p = 0; p < P; ++p)
+    if (t.state[p] == ProbeState::Sky) sky = int(p);
+  if (sky >= 0) {
+    const float* m = reinterpret_cast<const float*>(bin.data() + header + P * 16) + std::size_t(sky) * 81;
+    for (int k = 0; k < 9; ++k)
+      for (int q = 0; q < 9; ++q) EXPECT_NEAR(m[k * 9 + q], k == q ? 1.0 : 0.0, 1e-3) << k << "," << q;
+  }
 }
 
 TEST(ProbesCli, RefusalsNameTheProblem) {

@@ -232,7 +232,7 @@ struct ProbeOptions {
   int depth_res = 8;          // octahedral depth moments (2 to 32)
   int rays_per_texel = 16;    // a k x k grid of rays in each texel of the base cube (cube_res / 4): 1, 4, 9, ... 64
   int bounces = 1;            // interreflected: diffuse bounces (1 to 8)
-  int bounce_bands = 3;       // interreflected: environment bands the bounce matrices take (1 to 16)
+  int bounce_bands = 6;       // interreflected: environment bands the bounce matrices take (1 to 16)
   bool override_albedo = false;
   glm::vec3 albedo{0.8f};     // with override_albedo: every surface's (else the scene's materials)
   std::uint64_t seed = 1;     // jitters the rays inside the texels and the bounce directions

@@ -191,6 +191,22 @@ class ProbeRelighter {
   std::vector<float> pixel_sh_;
 };
 
+// Each probe's transfer as an SH matrix, for engines that light probes
+// from SH lighting (Far Cry 3's relightable probes): out_k = sum_j
+// M[c][k][j] L_j(c) with L the map's first `in_bands` bands (prt's
+// convention), M = sum over the visible texels of Y_k Y_j omega (the edge
+// texels by their visible sub-texels' share) plus the bounce matrix
+// (interreflected; its bands cut or padded to in_bands). Per probe
+// channels x n^2 x in_bands^2 floats (channels: t.channels when
+// interreflected, else 1), every probe (sky ones: the SH product's
+// identity block; invalid ones: zero). The band limit of L is what the
+// visibility cube avoids: docs/PROBES.md measures what it costs.
+std::vector<float> probe_sh_matrices(const ProbeTransfer& t, int in_bands, int& channels);
+// The binary file of probe_sh_matrices (docs/FORMAT.md "Probe matrices"),
+// written through a temporary file.
+void write_probe_matrices(const std::string& path, const ProbeTransfer& t, const std::vector<float>& matrices,
+                          int in_bands, int channels);
+
 // Weights of the probes that light a query at p with normal n (see above):
 // up to 8 (probe, weight) pairs, weights already divided by
 // max(sum, kProbeMinWeight).

@@ -12,6 +12,9 @@
 #include <prt/gltf.h>
 #include <prt/io.h>
 #include <prt/lightmap.h>
+#include <prt/rotation.h>
+#include <prt/sh_convention.h>
+#include <prt/probes.h>
 #include <prt/scene.h>
 #include <prt/projection.h>
 #include <prt/render.h>
@@ -19,6 +22,7 @@
 #include <prt/transfer_io.h>
 
 #include <fmt/core.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -38,6 +42,10 @@ struct ExportArgs {
   double fov = 40;
   bool force = false, turn = false;
   std::vector<const CLI::Option*> web_opts;  // --env, --camera, --fov, --tonemap, --turn, --force
+  // A probe volume (prt precompute --probes): --matrices FILE.bin, their input bands.
+  std::string matrices;
+  int matrix_bands = 3;
+  const CLI::Option* matrix_bands_opt = nullptr;
   // Every output goes through one Outputs (all or nothing): files added
   // later (a web page beside the model) are staged with the glTF.
 };
@@ -140,8 +148,88 @@ int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler,
   return 0;
 }
 
+// A probe volume (prt precompute SCENE --probes): every probe relit under
+// --bake ENV as engines' SH (three.js LightProbe, Unity SphericalHarmonicsL2)
+// in a JSON file, and with --matrices its SH transfer matrices in a binary
+// file (docs/PROBES.md "Export").
+int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
+  if (!a.web.empty()) throw UsageError("--web shows a mesh's or a lightmap's transfer; a probe volume exports as JSON (-o FILE.json)");
+  if (a.bake.empty()) throw UsageError(a.transfer + " is a probe volume: give --bake ENV (the map its probes are relit under) and -o FILE.json");
+  std::string ext = std::filesystem::path(a.output).extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  if (ext != ".json") throw UsageError("--output: " + a.output + ": a probe volume exports as .json");
+  if (!a.matrices.empty()) {
+    check_not_input("--matrices", a.matrices, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"--bake", a.bake}});
+    for_path("--matrices", [&] { check_writable(a.matrices); });
+  }
+  const ProbeTransfer t = read_probe_transfer(a.transfer);
+  const prt::Scene scene = load_scene_or_mesh(a.mesh);
+  if (scene.hash() != t.scene_hash)
+    throw Error(a.transfer + ": computed for another scene than " + a.mesh + ": rerun prt precompute " + a.mesh + " --probes ...");
+  if (t.bands != 3) throw Error(fmt::format("{}: {} bands; engines' probes hold 3 (L2): precompute with --bands 3", a.transfer, t.bands));
+  EnvMap env = load_envmap(a.bake);
+  require_finite(env);
+  ProbeRelighter relighter(t, env);
+  relighter.set_rotation(sh::rotation_from_euler(euler[0], euler[1], euler[2]));
+  std::vector<glm::vec3> lit;
+  relighter.relight(lit);
+  nlohmann::ordered_json probes = nlohmann::ordered_json::array();
+  const char* states[] = {"sky", "stored", "invalid"};
+  for (std::size_t p = 0; p < t.probes(); ++p) {
+    std::vector<glm::dvec3> rad(9);
+    for (int k = 0; k < 9; ++k) rad[std::size_t(k)] = glm::dvec3(lit[p * 9 + std::size_t(k)]);
+    const sh::Sh9 three = sh::to_three(rad), unity = sh::to_unity(rad);
+    nlohmann::ordered_json th = nlohmann::ordered_json::array(), un = nlohmann::ordered_json::array();
+    for (int k = 0; k < 9; ++k) {
+      th.push_back({three[std::size_t(k)].x, three[std::size_t(k)].y, three[std::size_t(k)].z});
+      un.push_back({unity[std::size_t(k)].x, unity[std::size_t(k)].y, unity[std::size_t(k)].z});
+    }
+    const glm::vec3 x = t.positions[p];
+    const glm::dvec3 xu = sh::to_engine_axes(sh::Convention::Unity, glm::dvec3(x));
+    probes.push_back({{"position", {x.x, x.y, x.z}}, {"state", states[int(t.state[p])]}, {"three", th},
+                      {"unity_position", {xu.x, xu.y, xu.z}}, {"unity", un}});
+  }
+  const glm::dvec3 sp = t.grid.spacing();
+  nlohmann::ordered_json doc = {
+      {"format", "prt probe volume SH"},
+      {"generator", "prt " PRT_VERSION " (prt export)"},
+      {"scene", std::filesystem::path(a.mesh).filename().string()},
+      {"probes_file", std::filesystem::path(a.transfer).filename().string()},
+      {"map", std::filesystem::path(a.bake).filename().string()},
+      {"rotate", {euler[0], euler[1], euler[2]}},
+      {"grid", {{"dims", t.grid.dims}, {"min", {t.grid.min.x, t.grid.min.y, t.grid.min.z}},
+                {"max", {t.grid.max.x, t.grid.max.y, t.grid.max.z}}, {"spacing", {sp.x, sp.y, sp.z}},
+                {"order", "probe i + NX (j + NY k) at min + (max - min) (i, j, k) / (dims - 1); position: moved off "
+                          "surfaces (docs/PROBES.md)"}}},
+      {"three", "THREE.LightProbe(new THREE.SphericalHarmonics3().fromArray(three.flat())): the probe's incident "
+                "radiance, three.js's SphericalHarmonics3 convention, three's axes (= prt's)"},
+      {"unity", "UnityEngine.Rendering.SphericalHarmonicsL2: sh[channel, k] = unity[k][channel] (E/pi with Unity's "
+                "constants folded in, as LightProbes hold it), at unity_position (Unity's left-handed axes: z negated)"},
+      {"states", "sky: sees only the map (nothing stored); stored; invalid: inside geometry (zero, give it no weight)"},
+      {"probes", probes}};
+  Outputs out("export");
+  const std::string text = doc.dump(1) + "\n";
+  out.write([&] { write_text_file(a.output, text); });
+  if (!a.matrices.empty()) {
+    int channels = 1;
+    const std::vector<float> m = probe_sh_matrices(t, a.matrix_bands, channels);
+    out.write([&] { write_probe_matrices(a.matrices, t, m, a.matrix_bands, channels); });
+  }
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "wrote {}: {} probes relit under {} (three.js and Unity L2){}\n", a.output, t.probes(), a.bake,
+               a.matrices.empty() ? "" : fmt::format("; {}: {} x {} SH matrices", a.matrices, 9, a.matrix_bands * a.matrix_bands));
+  return 0;
+}
+
 int run_export(const ExportArgs& a) {
   if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
+  if (is_probe_file(a.transfer)) {
+    if (!a.output.empty()) check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"--bake", a.bake}});
+    return run_export_probes(a, rotate_degrees(a.rotate));
+  }
+  if (!a.matrices.empty() || a.matrix_bands_opt->count() > 0)
+    throw UsageError("--matrices and --matrix-bands apply to a probe volume (prt precompute --probes)");
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   if (!a.output.empty() && ext != ".glb" && ext != ".gltf")
@@ -247,6 +335,8 @@ Run add_export(CLI::App& app) {
       "A lightmap (prt precompute SCENE --lightmap) is exported as the scene, one node per object, its lightmap\n"
       "UVs as TEXCOORD_1 and its transfer as 8-bit coefficient textures with a scale and bias per coefficient\n"
       "(docs/FORMAT.md, \"Lightmap export\"); --bake adds the baked lightmap; --web relights it per pixel.\n"
+      "A probe volume (prt precompute SCENE --probes) is exported relit under --bake ENV as JSON: each probe's\n"
+      "three.js LightProbe and Unity SphericalHarmonicsL2 arrays; --matrices adds its SH matrices (docs/PROBES.md).\n"
       "--bake ENV adds COLOR_0: the radiance prt relight gives under ENV (--rotate), times 2^--exposure,\n"
       "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
       "--web DIR writes a static page (index.html, its scripts, model.glb, lighting.json: every\n"
@@ -255,7 +345,8 @@ Run add_export(CLI::App& app) {
       "Example: prt export bunny.off bunny.prt -o bunny.glb\n"
       "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
       "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1\n"
-      "         prt export room.gltf room.prt -o room.glb --web room-web --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0");
+      "         prt export room.gltf room.prt -o room.glb --web room-web --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0\n"
+      "         prt export room.gltf room-probes.prt --bake forest.exr -o probes.json --matrices probes.bin");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress)")->required();
   s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");
@@ -272,6 +363,12 @@ Run add_export(CLI::App& app) {
   a->web_opts.push_back(add_shared(s, SharedOption::Tonemap, a->tone_map, "With --web: initial tone map"));
   a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web: start with the environment turning"));
   a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));
+  s->add_option("--matrices", a->matrices,
+                "A probe volume: also write every probe's SH transfer matrix (its light from the map's first "
+                "--matrix-bands bands) as a binary file (docs/FORMAT.md \"Probe matrices\")");
+  a->matrix_bands_opt = s->add_option("--matrix-bands", a->matrix_bands, "With --matrices: the map's bands the matrices take")
+                            ->check(int_range(1, 16))
+                            ->capture_default_str();
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_export(*a); };
 }
