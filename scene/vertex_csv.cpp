@@ -34,6 +34,38 @@ void append_value(std::string& s, float v) { fmt::format_to(std::back_inserter(s
   throw Error(fmt::format("{}:{}: {}", path, line, what));
 }
 
+// The whole of a text file (not a FIFO or /dev/zero: check_input_file).
+std::string read_text(const std::string& path, std::string_view kind) {
+  check_input_file(path, kind);
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw Error(path + ": cannot open for reading");
+  std::string text{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+  if (f.bad()) throw Error(path + ": read error");
+  return text;
+}
+
+// Calls f(line number from 1, line without its CR LF) for each line; a
+// blank line is allowed only at the end (then the loop stops). Returns the
+// number of lines read.
+template <typename F>
+std::size_t for_each_line(const std::string& path, const std::string& text, F&& f) {
+  std::size_t pos = 0, line_no = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty() && line_no > 1) {
+      if (text.find_first_not_of("\r\n", pos) == std::string::npos) break;
+      fail(path, line_no, "blank line");
+    }
+    f(line_no, line);
+  }
+  return line_no;
+}
+
 }  // namespace
 
 void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb,
@@ -79,24 +111,12 @@ void write_vertex_csv(const std::string& path, const std::vector<glm::vec3>& rgb
 }
 
 std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm::vec3>* std_error, CsvKey* key) {
-  check_input_file(path, "a vertex CSV file");  // not a FIFO or /dev/zero: read whole below
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(path + ": cannot open for reading");
-  const std::string text{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-  if (f.bad()) throw Error(path + ": read error");
-
+  const std::string text = read_text(path, "a vertex CSV file");
   std::vector<glm::vec3> rgb;
   if (std_error) std_error->clear();
-  std::size_t pos = 0, line_no = 0;
   bool with_se = false;
   std::string_view what = "vertex";
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    std::string_view line(text.data() + pos, end - pos);
-    pos = end + 1;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  const std::size_t lines = for_each_line(path, text, [&](std::size_t line_no, std::string_view line) {
     if (line_no == 1) {
       if (line == kPointHeader || line == kPointHeaderSe) what = "point";
       if (key) *key = what == "point" ? CsvKey::Point : CsvKey::Vertex;
@@ -106,12 +126,7 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
         fail(path, 1,
              "expected the header '" + std::string(kHeader) + "' or '" + std::string(kHeaderSe) + "', got '" +
                  std::string(line.substr(0, 80)) + "'");
-      continue;
-    }
-    if (line.empty()) {
-      // Only trailing blank lines are allowed.
-      if (text.find_first_not_of("\r\n", pos) == std::string::npos) break;
-      fail(path, line_no, "blank line");
+      return;
     }
     const int columns = with_se ? 7 : 4;
     double values[7];
@@ -145,36 +160,20 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
     }
     rgb.emplace_back(float(values[1]), float(values[2]), float(values[3]));
     if (with_se && std_error) std_error->emplace_back(float(values[4]), float(values[5]), float(values[6]));
-  }
-  if (line_no == 0) throw Error(path + ": empty file (expected the header '" + std::string(kHeader) + "')");
+  });
+  if (lines == 0) throw Error(path + ": empty file (expected the header '" + std::string(kHeader) + "')");
   if (rgb.empty()) throw Error(fmt::format("{}: no {} lines after the header", path, what));
   return rgb;
 }
 
 QueryPoints read_points_csv(const std::string& path) {
-  check_input_file(path, "a points CSV file");
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(path + ": cannot open for reading");
-  const std::string text{std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-  if (f.bad()) throw Error(path + ": read error");
+  const std::string text = read_text(path, "a points CSV file");
   constexpr std::string_view kPoints = "x,y,z,nx,ny,nz";
   QueryPoints q;
-  std::size_t pos = 0, line_no = 0;
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    std::string_view line(text.data() + pos, end - pos);
-    pos = end + 1;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  const std::size_t lines = for_each_line(path, text, [&](std::size_t line_no, std::string_view line) {
     if (line_no == 1) {
-      if (line != kPoints)
-        fail(path, 1, fmt::format("expected the header '{}', got '{}'", kPoints, line.substr(0, 80)));
-      continue;
-    }
-    if (line.empty()) {
-      if (text.find_first_not_of("\r\n", pos) == std::string::npos) break;
-      fail(path, line_no, "blank line");
+      if (line != kPoints) fail(path, 1, fmt::format("expected the header '{}', got '{}'", kPoints, line.substr(0, 80)));
+      return;
     }
     double v[6];
     std::size_t start = 0;
@@ -194,8 +193,8 @@ QueryPoints read_points_csv(const std::string& path) {
     if (!(len > 0)) fail(path, line_no, "the normal (nx,ny,nz) is zero");
     q.positions.emplace_back(v[0], v[1], v[2]);
     q.normals.push_back(n / len);
-  }
-  if (line_no == 0) throw Error(path + ": empty file (expected the header 'x,y,z,nx,ny,nz')");
+  });
+  if (lines == 0) throw Error(path + ": empty file (expected the header 'x,y,z,nx,ny,nz')");
   if (q.positions.empty()) throw Error(path + ": no points after the header");
   return q;
 }
