@@ -404,6 +404,40 @@ void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
 }
 
 void Renderer::set_lightmap_detail(bool on) { impl_->lightmap_detail = on; }
+
+void Renderer::set_probe_object(const Mesh& object, const ProbeTransfer& probes, const glm::vec3& albedo) {
+  Impl& m = *impl_;
+  m.make_current();
+  m.probe_object.reset();
+  m.probe_lit = false;
+  m.limits = gl::limits();
+  m.probe_object = std::make_unique<detail::ProbePass>(object, probes, albedo, m.limits);
+}
+
+void Renderer::set_probe_lighting(std::span<const glm::vec3> probe_sh) {
+  Impl& m = *impl_;
+  if (!m.probe_object) throw Error("set_probe_lighting: no probe-lit object (set_probe_object)");
+  m.make_current();
+  m.probe_object->set_lighting(probe_sh);
+  m.probe_lit = true;
+}
+
+void Renderer::set_probe_object_model(const glm::mat4& model) {
+  if (!impl_->probe_object) throw Error("set_probe_object_model: no probe-lit object (set_probe_object)");
+  impl_->probe_object->set_model(model);
+}
+
+std::vector<glm::vec3> Renderer::probe_object_radiance() const {
+  if (!impl_->probe_object) return {};
+  impl_->make_current();
+  return impl_->probe_object->radiance();
+}
+
+void Renderer::clear_probe_object() {
+  impl_->make_current();
+  impl_->probe_object.reset();
+  impl_->probe_lit = false;
+}
 void Renderer::set_lightmap_relight(bool on) { impl_->lightmap_relight = on; }
 
 std::vector<glm::vec3> Renderer::lightmap_radiance() const {
@@ -651,6 +685,14 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     m.draw_mesh(glm::mat4(proj * view), cam.eye);
+  }
+  if (m.probe_object) {
+    if (!m.probe_lit) throw Error("render: the probe-lit object has no lighting yet (set_probe_lighting)");
+    const double dist = glm::length(fwd);
+    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
+    const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
+    glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    m.probe_object->draw(glm::mat4(proj * view), m.attribute_program(attribute_mode(Shading::VertexColors)));
   }
   glBindVertexArray(0);
   check_gl("rendering");

@@ -16,6 +16,7 @@
 #include "egl_context.h"
 #include "gl_util.h"
 #include "lightmap_pass.h"
+#include "probe_pass.h"
 
 #include <glm/mat4x4.hpp>
 
@@ -157,6 +158,9 @@ struct Renderer::Impl {
   // A scene and its lightmap (set_scene): drawn by the lightmap pass instead of the mesh.
   std::unique_ptr<detail::LightmapPass> lightmap;
   bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;
+  // An object lit by a probe volume (set_probe_object), drawn after the scene.
+  std::unique_ptr<detail::ProbePass> probe_object;
+  bool probe_lit = false;
   // This OpenGL's limits (set_mesh), and the vertices of one compute
   // dispatch: relight() shades the mesh in runs of `chunk` vertices, each
   // binding its range of the per-vertex storage buffers, so that no binding

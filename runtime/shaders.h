@@ -13,4 +13,5 @@ extern const char* const display_frag_glsl;
 extern const char* const lightmap_comp_glsl;
 extern const char* const lightmap_vert_glsl;
 extern const char* const lightmap_frag_glsl;
+extern const char* const probe_object_comp_glsl;
 }  // namespace prt::shaders

@@ -237,6 +237,38 @@ TEST_F(ViewCli, PanelIsOnScreenAndNoPanelHidesIt) {
   EXPECT_EQ(differing(560, 280, 640, 320), 0);    // far from the panel: the same frame
 }
 
+TEST_F(ViewCli, ProbeLitObjectIsDrawn) {
+  // prt view SCENE LIGHTMAP ENV --probes P --object MESH (docs/PROBES.md):
+  // the window's screenshot with the object differs from the scene alone
+  // in the object's pixels, not everywhere.
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
+  const std::string room = PRT_SOURCE_DIR "/models/room.gltf", obj = PRT_SOURCE_DIR "/models/scene.obj";
+  ASSERT_EQ(test::run_prt(dir, {"precompute", room, "--lightmap", "32x32", "--samples", "64", "-q", "-o", dir.file("lm.prt")}).code, 0);
+  ASSERT_EQ(test::run_prt(dir, {"precompute", room, "--probes", "4x3x4", "--samples", "1536", "-q", "-o", dir.file("p.prt")}).code, 0);
+  std::string shots[2];
+  for (int with = 0; with < 2; ++with) {
+    shots[with] = dir.file(with ? "object.png" : "scene.png");
+    const std::string extra = with ? " --probes " + test::shell_quote(dir.file("p.prt")) + " --object " + test::shell_quote(obj) +
+                                         " --object-at 0.8,1.2,0.8 --object-size 0.8"
+                                   : "";
+    const auto [code, view_err] =
+        run_view(dir, test::shell_quote(room) + " " + test::shell_quote(dir.file("lm.prt")) + " " + test::shell_quote(env) +
+                          " --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0 --width 320 --height 160 --frames 2 --no-panel -q" +
+                          extra + " --screenshot " + test::shell_quote(shots[with]));
+    if (code != 0 && view_err.find("OpenGL 4.5 core") != std::string::npos)
+      PRT_SKIP_WITHOUT_GL("Xvfb's GLX gives no OpenGL 4.5 core context: " + view_err);
+    ASSERT_EQ(code, 0) << view_err;
+  }
+  const EnvMap a = load_envmap(shots[0], Mapping::LatLong), b = load_envmap(shots[1], Mapping::LatLong);
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  std::size_t changed = 0;
+  for (std::size_t i = 0; i < a.rgb.size(); i += 3)
+    changed += std::abs(a.rgb[i] - b.rgb[i]) + std::abs(a.rgb[i + 1] - b.rgb[i + 1]) + std::abs(a.rgb[i + 2] - b.rgb[i + 2]) > 0.02f;
+  const std::size_t pixels = a.rgb.size() / 3;
+  EXPECT_GT(changed, pixels / 50);
+  EXPECT_LT(changed, pixels / 2);
+}
+
 TEST_F(ViewCli, NoDisplayPointsToRender) {
   const std::string err = (dir.io() / "nodisplay_err.txt").string();
   const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY " + test::shell_quote(PRT_EXE) + " view " +

@@ -44,11 +44,13 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/lightmap.h>
+#include <prt/probes.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
 
 #include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
 #include <memory>
@@ -220,6 +222,21 @@ class Renderer {
   // The covered texels' radiance of the last frame drawn (set_scene only),
   // in texel order: relight_lightmap's up to float rounding.
   std::vector<glm::vec3> lightmap_radiance() const;
+  // An object lit by a probe volume (prt/probes.h; docs/PROBES.md
+  // "Rendering"), drawn after the scene or mesh: each frame, per vertex on
+  // the GPU, E/pi from the relit probes interpolated at its world position
+  // (the model matrix of set_probe_object_model) with trilinear weights
+  // times the probes' depth-moment visibility (prt::probe_weights without a
+  // tracer), times `albedo`. Takes 3-band volumes; set_probe_lighting gives
+  // the relit probes (ProbeRelighter::relight: 9 per probe) and must be
+  // called before a frame. Throws prt::Error on another band count or
+  // buffers past this OpenGL's limits.
+  void set_probe_object(const Mesh& object, const ProbeTransfer& probes, const glm::vec3& albedo);
+  void set_probe_lighting(std::span<const glm::vec3> probe_sh);
+  void set_probe_object_model(const glm::mat4& model);
+  // The object's vertices' radiance of the last frame drawn.
+  std::vector<glm::vec3> probe_object_radiance() const;
+  void clear_probe_object();
   void clear_mesh();
   int bands() const;  // of the uploaded SH transfer; 0 without one
   // Bytes of transfer data on the GPU: the stored rows of the transfer and

@@ -2,6 +2,7 @@
 // environment map (prt::Renderer, EGL, no display needed).
 #include "commands.h"
 #include "look.h"
+#include "probe_object.h"
 #include "progress.h"
 #include "scene.h"
 
@@ -32,6 +33,8 @@ struct RenderArgs {
   int width = 512, height = 512, frames = 1;
   double fov = 40, spin = 0;
   bool frames_given = false, spin_given = false, quiet = false;
+  ProbeObjectArgs probe;  // --probes FILE --object MESH (docs/PROBES.md "Rendering")
+  std::vector<const CLI::Option*> probe_opts;
   LookArgs look;
   GlossyArgs lobe;  // glossy files only
 };
@@ -104,6 +107,16 @@ int run_render(const RenderArgs& a) {
     }
   }
 
+  // --probes --object: an object lit by the probe volume, on a path through it.
+  for (const CLI::Option* o : a.probe_opts)
+    if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
+      throw UsageError(o->get_name() + ": --probes FILE and --object MESH go together");
+  std::optional<ProbeObject> probe_object;
+  if (!a.probe.probes.empty()) {
+    probe_object.emplace(a.probe, a.mesh, env, renderer);
+    if (!a.quiet) fmt::print(stderr, "{}\n", probe_object->describe());
+  }
+
   // SH: project once; each frame only rotates the coefficients. Wavelet: each
   // frame resamples the rotated map (no cheap rotation in that basis). Lambert
   // needs 3 bands of SH lighting in both.
@@ -135,6 +148,7 @@ int run_render(const RenderArgs& a) {
       rotation.apply(light, rotated);
       renderer.set_lighting(rotated);
       renderer.set_environment_rotation(R);
+      if (probe_object) probe_object->frame(renderer, R, double(f) / a.frames);
       if (wavelet && look.shading == Shading::Transfer) {
         cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
       } else if (wavelet) {
@@ -187,6 +201,15 @@ Run add_render(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
   s->add_option("-o,--output", a->output, "Output image (.png, .exr, ...); with --frames, OUT_0000.ext, ...")
       ->required();
+  a->probe_opts.push_back(s->add_option("--probes", a->probe.probes,
+                                       "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it"));
+  a->probe_opts.push_back(s->add_option("--object", a->probe.object,
+                                       "With --probes: a mesh lit by the probes, moving on a circle through the volume "
+                                       "(one turn over the frames; docs/PROBES.md)"));
+  a->probe_opts.push_back(s->add_option("--object-size", a->probe.size,
+                                       "With --object: its bounding box's diagonal (default twice the smallest probe spacing)")
+                              ->check(number_range(0.0, 1e30, true, false)));
+  a->probe_opts.push_back(s->add_option("--object-at", a->probe.at, "With --object: a fixed position x,y,z instead of the path"));
   add_shared(s, SharedOption::Width, a->width, "Image width");
   add_shared(s, SharedOption::Height, a->height, "Image height");
   add_shared(s, SharedOption::Camera, a->camera, "Camera; default: the framing camera (below)");

@@ -5,6 +5,7 @@
 // Screenshots are the window's own pixels, as shown.
 #include "commands.h"
 #include "look.h"
+#include "probe_object.h"
 #include "scene.h"
 #include "view_input.h"
 
@@ -67,6 +68,8 @@ struct ViewArgs {
   bool quiet = false, no_panel = false;
   LookArgs look;
   GlossyArgs lobe;  // glossy files: the starting lobe
+  ProbeObjectArgs probe;  // --probes FILE --object MESH (docs/PROBES.md "Rendering")
+  std::vector<const CLI::Option*> probe_opts;
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
@@ -276,6 +279,10 @@ class Viewer {
     map_name_ = std::filesystem::path(a.env).filename().string();
     projected_ = project(scene.env, sh_bands_);
     rotated_.resize(projected_.size());
+    if (!a.probe.probes.empty()) {
+      probe_object_.emplace(a.probe, a.mesh, scene.env, renderer);
+      if (!a.quiet) fmt::print(stderr, "{}\n", probe_object_->describe());
+    }
   }
 
   // Settings changed by keys since the last frame: a dropped or the
@@ -343,6 +350,10 @@ class Viewer {
     rotation_.apply(light_, rotated_);
     renderer_.set_lighting(rotated_);
     renderer_.set_environment_rotation(R);
+    if (probe_object_) {  // one turn of its path every 600 frames
+      probe_object_->frame(renderer_, R, probe_path_);
+      probe_path_ = std::fmod(probe_path_ + 1.0 / 600.0, 1.0);
+    }
     if (st.wavelet && !st.wavelet_lambert) {
       wavelet_ms_ = 0.1 * playback_->frame(renderer_, R, st.terms, selection(st)) + 0.9 * wavelet_ms_;
     } else if (st.wavelet) {
@@ -384,6 +395,7 @@ class Viewer {
       projected_ = project(m, sh_bands_);
       renderer_.set_environment(m);
       if (playback_) playback_->set_environment(m);
+      if (probe_object_) probe_object_->set_environment(m);
       map_name_ = std::filesystem::path(path).filename().string();
       light_bands_ = -1;  // re-window
       if (!a_.quiet) fmt::print(stderr, "{}\n", describe(m));
@@ -392,6 +404,8 @@ class Viewer {
     }
   }
 
+  std::optional<ProbeObject> probe_object_;
+  double probe_path_ = 0;
   const ViewArgs& a_;
   const Scene& scene_;
   const Transfer& t_;
@@ -414,6 +428,9 @@ class Viewer {
 };
 
 int run_view(const ViewArgs& a) {
+  for (const CLI::Option* o : a.probe_opts)
+    if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
+      throw UsageError(o->get_name() + ": --probes FILE and --object MESH go together");
   if (a.screenshot.empty() && a.frames > 0) throw UsageError("--frames needs --screenshot FILE");
   if (!a.screenshot.empty() && a.frames == 0) throw UsageError("--screenshot needs --frames N");
   if (!a.screenshot.empty()) {
@@ -558,6 +575,14 @@ Run add_view(CLI::App& app) {
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
+  a->probe_opts.push_back(s->add_option("--probes", a->probe.probes,
+                                       "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it"));
+  a->probe_opts.push_back(s->add_option("--object", a->probe.object,
+                                       "With --probes: a mesh lit by the probes, circling through the volume"));
+  a->probe_opts.push_back(s->add_option("--object-size", a->probe.size,
+                                       "With --object: its bounding box's diagonal (default twice the smallest probe spacing)")
+                              ->check(number_range(0.0, 1e30, true, false)));
+  a->probe_opts.push_back(s->add_option("--object-at", a->probe.at, "With --object: a fixed position x,y,z instead of the path"));
   add_shared(s, SharedOption::Width, a->width, "Window width");
   add_shared(s, SharedOption::Height, a->height, "Window height");
   add_shared(s, SharedOption::Camera, a->camera, "Starting camera (orbit is about the target)");

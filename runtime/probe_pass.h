@@ -1,0 +1,53 @@
+// Private to prt::runtime: an object lit by a probe volume (docs/PROBES.md
+// "Rendering"; shaders/probe_object.comp.glsl). Each frame a compute pass
+// places the object's vertices (its model matrix), interpolates the relit
+// probes at each (trilinear x the probes' depth moments' Chebyshev test),
+// and writes its radiance (E/pi x albedo); then the object is drawn with
+// those as vertex colours. Renderer::set_probe_object owns one.
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/probes.h>
+
+#include "gl_util.h"
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+
+#include <span>
+#include <vector>
+
+namespace prt::detail {
+
+class ProbePass {
+ public:
+  // Throws prt::Error for a volume of other than 3 bands or buffers past
+  // this OpenGL's storage block size.
+  ProbePass(const Mesh& object, const ProbeTransfer& probes, const glm::vec3& albedo, const gl::Limits& limits);
+  ~ProbePass();
+  ProbePass(const ProbePass&) = delete;
+  ProbePass& operator=(const ProbePass&) = delete;
+
+  // The relit probes' SH, 9 per probe (ProbeRelighter::relight).
+  void set_lighting(std::span<const glm::vec3> sh);
+  void set_model(const glm::mat4& model) { model_ = model; }
+  // Computes the vertices' radiance and draws the object (depth test on)
+  // with `draw_program` (the renderer's vertex-colour program).
+  void draw(const glm::mat4& view_proj, GLuint draw_program);
+  std::vector<glm::vec3> radiance() const;  // per vertex, the last frame's
+
+ private:
+  std::size_t vertices_ = 0, probes_ = 0;
+  GLsizei index_count_ = 0;
+  std::uint64_t work_groups_ = 65535;
+  glm::mat4 model_{1.0f};
+  glm::vec3 albedo_{1.0f};
+  glm::vec3 min_{0.0f}, spacing_{0.0f};
+  glm::ivec3 dims_{2};
+  int depth_res_ = 8;
+  float cap_ = 1, bias_ = 0;
+  GLuint positions_ = 0, normals_ = 0, indices_ = 0, sh_ = 0, info_ = 0, probe_pos_ = 0, depth_ = 0;
+  GLuint radiance_ = 0, world_ = 0, vao_ = 0, program_ = 0;
+};
+
+}  // namespace prt::detail

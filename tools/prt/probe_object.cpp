@@ -1,0 +1,67 @@
+#include "probe_object.h"
+
+#include "options.h"
+
+#include <prt/error.h>
+#include <prt/scene.h>
+
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+namespace prt::cli {
+
+ProbeObject::ProbeObject(const ProbeObjectArgs& a, const std::string& scene, const EnvMap& env, Renderer& renderer) {
+  t_ = read_probe_transfer(a.probes);
+  if (load_scene_or_mesh(scene).hash() != t_.scene_hash)
+    throw Error(a.probes + ": computed for another scene than " + scene + ": rerun prt precompute " + scene + " --probes ...");
+  if (t_.bands != 3) throw Error(fmt::format("{}: {} bands; the probe-lit object takes 3 (prt precompute --probes --bands 3)", a.probes, t_.bands));
+  const Mesh object = load_mesh(a.object);
+  vertices_ = object.vertex_count();
+  name_ = std::filesystem::path(a.object).filename().string();
+  const glm::dvec3 lo(object.bounds_min()), hi(object.bounds_max());
+  object_centre_ = (lo + hi) * 0.5;
+  const glm::dvec3 sp = t_.grid.spacing();
+  double smallest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k)
+    if (sp[k] > 0) smallest = std::min(smallest, sp[k]);
+  if (!std::isfinite(smallest)) smallest = 1;
+  const double size = a.size > 0 ? a.size : 2.0 * smallest;
+  const double diag = glm::length(hi - lo);
+  scale_ = diag > 0 ? size / diag : 1.0;
+  const glm::dvec3 gmin = t_.grid.min, gmax = t_.grid.max;
+  if (!a.at.empty()) {
+    double xyz[3];
+    parse_triple(a.at, "--object-at", xyz);
+    centre_ = {xyz[0], xyz[1], xyz[2]};
+    fixed_ = true;
+  } else {
+    // A circle at a third of the volume's height, a quarter of its width across.
+    centre_ = {(gmin.x + gmax.x) / 2, gmin.y + (gmax.y - gmin.y) / 3, (gmin.z + gmax.z) / 2};
+    radius_ = 0.25 * std::min(gmax.x - gmin.x, gmax.z - gmin.z);
+  }
+  relighter_ = std::make_unique<ProbeRelighter>(t_, env);
+  renderer.set_probe_object(object, t_, glm::vec3(0.8f));
+}
+
+void ProbeObject::frame(Renderer& renderer, const glm::dmat3& R, double t) {
+  relighter_->set_rotation(R);
+  relighter_->relight(lit_);
+  renderer.set_probe_lighting(lit_);
+  const double a = 2 * M_PI * t;
+  const glm::dvec3 at = fixed_ ? centre_ : centre_ + radius_ * glm::dvec3(std::cos(a), 0.0, std::sin(a));
+  glm::dmat4 model = glm::translate(glm::dmat4(1.0), at) * glm::scale(glm::dmat4(1.0), glm::dvec3(scale_)) *
+                     glm::translate(glm::dmat4(1.0), -object_centre_);
+  renderer.set_probe_object_model(glm::mat4(model));
+}
+
+std::string ProbeObject::describe() const {
+  return fmt::format("{}: {} vertices lit by {} probes ({}x{}x{}, {})", name_, vertices_, t_.probes(), t_.grid.dims[0],
+                     t_.grid.dims[1], t_.grid.dims[2], transfer_mode_name(t_.mode));
+}
+
+}  // namespace prt::cli
