@@ -153,6 +153,8 @@ const std::vector<Shared>& shared_table() {
         {"64", "must be WxH with W and H from 1 to 16384 (e.g. 1024x1024), got '64'"}},
        {"64x32"}},
       {"--uv", {{"8", "must be a whole number from 0 to 7, got '8'"}}, {"0", "1"}},
+      {"--object-at", {{"1,2", "expected three numbers x,y,z, got '1,2'"}}, {"0,1,0"}},
+      {"--object-size", {{"0", "must be a positive number, got 0"}}, {"0.5"}},
   };
   return t;
 }
@@ -178,12 +180,14 @@ const std::map<std::string, std::vector<Refusal>>& bands_table() {
 }
 
 // Options two or more commands take whose values are no number or name to
-// check: flags, files and directories (--at: a points CSV), and --samples, which counts rays per
+// check: flags, files and directories (--at: a points CSV; --object a mesh;
+// --probes a probe file in render and view, NXxNYxNZ in precompute, checked
+// there), and --samples, which counts rays per
 // vertex in prt precompute (1 and up) but Monte Carlo iterations in prt
 // reference (2 and up: a standard error needs two).
 const std::set<std::string> kNoSharedValue = {"--help",   "--quiet",  "--output", "--env",   "--mesh",
                                               "--cache",  "--json",   "--weld",   "--vertex-colors",     "--samples",
-                                              "--bands",  "--at"};  // --bands: bands_table()
+                                              "--bands",  "--at",     "--probes", "--object"};  // --bands: bands_table()
 
 // The message a usage error prints after "error: OPTION: ", or the whole
 // error line.

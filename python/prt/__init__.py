@@ -19,6 +19,7 @@ from ._prt import (  # noqa: F401
     Error,
     Lightmap,
     Mesh,
+    ProbeVolume,
     Scene,
     Transfer,
     __version__,
@@ -30,8 +31,10 @@ from ._prt import (  # noqa: F401
     make_mesh,
     precompute,
     precompute_lightmap,
+    precompute_probes,
     project,
     read_lightmap,
+    read_probes,
     read_transfer,
     read_vertex_csv,
     reference,
@@ -43,8 +46,8 @@ from ._prt import (  # noqa: F401
 )
 
 __all__ = [
-    "MAX_BANDS", "EnvMap", "Error", "Lightmap", "Mesh", "Scene", "Transfer", "lightmap_from_rows", "load_scene",
-    "precompute_lightmap", "read_lightmap", "__version__", "data_dir", "load_envmap", "load_mesh",
+    "MAX_BANDS", "EnvMap", "Error", "Lightmap", "Mesh", "ProbeVolume", "Scene", "Transfer", "lightmap_from_rows", "load_scene",
+    "precompute_lightmap", "precompute_probes", "read_lightmap", "read_probes", "__version__", "data_dir", "load_envmap", "load_mesh",
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv",
 ]

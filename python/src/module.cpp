@@ -16,6 +16,7 @@
 #include <prt/scene.h>
 #include <prt/paths.h>
 #include <prt/precompute.h>
+#include <prt/probes.h>
 #include <prt/progress.h>
 #include <prt/projection.h>
 #include <prt/reference.h>
@@ -319,6 +320,16 @@ bool is_path(const py::handle& h) {
   return py::isinstance<py::str>(h) || py::isinstance(h, py::module_::import("os").attr("PathLike"));
 }
 std::string path_of(const py::handle& h) { return py::str(py::module_::import("os").attr("fspath")(h)); }
+
+prt::EnvMap map_from_array(const py::handle& obj);
+
+// A map argument: an EnvMap (returned as is), a file name or an array
+// (loaded into `storage`, which is returned).
+const prt::EnvMap& map_argument(const py::object& map, prt::EnvMap& storage) {
+  if (py::isinstance<prt::EnvMap>(map)) return map.cast<const prt::EnvMap&>();
+  storage = is_path(map) ? prt::load_envmap(path_of(map)) : map_from_array(map);
+  return storage;
+}
 
 prt::EnvMap map_from_array(const py::handle& obj) {
   FArray a = FArray::ensure(obj);
@@ -764,13 +775,7 @@ PYBIND11_MODULE(_prt, m) {
         o.offset = offset;
         if (!rotate.is_none()) o.rotation = to_rotation(rotate, "rotate");
         prt::EnvMap loaded;
-        const prt::EnvMap* e = nullptr;
-        if (py::isinstance<prt::EnvMap>(map)) {
-          e = &map.cast<const prt::EnvMap&>();
-        } else {
-          loaded = is_path(map) ? prt::load_envmap(path_of(map)) : map_from_array(map);
-          e = &loaded;
-        }
+        const prt::EnvMap* e = &map_argument(map, loaded);
         prt::require_finite(*e);
         if (e->is_cube()) throw Error(e->source + ": the reference needs a lat-long (2:1) map, not " + e->source_layout);
         const auto limit = limit_threads(threads);
@@ -965,4 +970,127 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("mode") = "shadowed",
       "A lightmap from arrays: rows float32 (N, channels, bands^2), one per covered texel of the atlas (every "
       "texel stored); .write() makes a file prt relight reads.");
+
+  // ---- probe volumes (prt/probes.h, docs/PROBES.md) -------------------------------
+  py::class_<prt::ProbeTransfer>(m, "ProbeVolume", "A relightable probe volume (prt precompute SCENE --probes)")
+      .def_property_readonly("dims", [](const prt::ProbeTransfer& t) { return py::make_tuple(t.grid.dims[0], t.grid.dims[1], t.grid.dims[2]); })
+      .def_property_readonly("min", [](const prt::ProbeTransfer& t) { return py::make_tuple(t.grid.min.x, t.grid.min.y, t.grid.min.z); })
+      .def_property_readonly("max", [](const prt::ProbeTransfer& t) { return py::make_tuple(t.grid.max.x, t.grid.max.y, t.grid.max.z); })
+      .def_property_readonly("bands", [](const prt::ProbeTransfer& t) { return t.bands; })
+      .def_property_readonly("mode", [](const prt::ProbeTransfer& t) { return std::string(prt::transfer_mode_name(t.mode)); })
+      .def_property_readonly("scene_hash", [](const prt::ProbeTransfer& t) { return t.scene_hash; })
+      .def_property_readonly("states",
+                             [](const prt::ProbeTransfer& t) {
+                               py::array_t<std::uint8_t> a(py::ssize_t(t.state.size()));
+                               for (std::size_t i = 0; i < t.state.size(); ++i) a.mutable_at(i) = std::uint8_t(t.state[i]);
+                               return a;
+                             },
+                             "uint8 (P,): 0 sky (stores nothing), 1 stored, 2 invalid (inside geometry); probe i + NX (j + NY k)")
+      .def_property_readonly("positions",
+                             [](const prt::ProbeTransfer& t) {
+                               return copy(reinterpret_cast<const float*>(t.positions.data()), {py::ssize_t(t.positions.size()), 3});
+                             },
+                             "float32 (P, 3): where each probe is (grid points moved off surfaces)")
+      .def_property_readonly("nbytes", &prt::ProbeTransfer::bytes)
+      .def(
+          "relight",
+          [](const prt::ProbeTransfer& t, const py::object& map, const py::object& rotate) {
+            prt::EnvMap loaded;
+            const prt::EnvMap* e = &map_argument(map, loaded);
+            const glm::dmat3 R = rotate.is_none() ? glm::dmat3(1.0) : to_rotation(rotate, "rotate");
+            std::vector<glm::vec3> lit;
+            {
+              py::gil_scoped_release release;
+              prt::ProbeRelighter r(t, *e);
+              r.set_rotation(R);
+              r.relight(lit);
+            }
+            const py::ssize_t nc = py::ssize_t(t.bands) * t.bands;
+            return copy(reinterpret_cast<const float*>(lit.data()), {py::ssize_t(t.probes()), nc, 3});
+          },
+          py::arg("map"), py::kw_only(), py::arg("rotate") = py::none(),
+          "float32 (P, bands^2, 3): every probe's incident light's SH under the map (a file, an EnvMap or an array), "
+          "rotated as prt relight --rotate")
+      .def(
+          "at",
+          [](const prt::ProbeTransfer& t, const prt::Scene& scene, const py::object& points, const py::object& normals,
+             const py::object& sh) {
+            DArray p = DArray::ensure(points), n = DArray::ensure(normals);
+            FArray l = FArray::ensure(sh);
+            const py::ssize_t nc = py::ssize_t(t.bands) * t.bands;
+            if (!p || !n || p.ndim() != 2 || p.shape(1) != 3 || n.ndim() != 2 || n.shape(0) != p.shape(0) || n.shape(1) != 3)
+              throw Error("points and normals: float (N, 3) each");
+            if (!l || l.ndim() != 3 || l.shape(0) != py::ssize_t(t.probes()) || l.shape(1) != nc || l.shape(2) != 3)
+              throw Error("sh: float32 (P, bands^2, 3), what relight() returns");
+            if (scene.hash() != t.scene_hash) throw Error("scene: not the scene the probe volume was computed for");
+            const std::size_t N = std::size_t(p.shape(0));
+            std::vector<float> out(N * 3);
+            {
+              py::gil_scoped_release release;
+              const std::vector<std::uint32_t> slots = t.stored_slots();
+              const prt::ProbeOcclusion occlusion(scene.mesh, t.grid);
+              const prt::ProbeVisibility visible = [&](const glm::dvec3& a, const glm::dvec3& b) { return occlusion(a, b); };
+              const float* L = l.data();
+              for (std::size_t i = 0; i < N; ++i) {
+                const glm::dvec3 q(p.at(i, 0), p.at(i, 1), p.at(i, 2)), nn(n.at(i, 0), n.at(i, 1), n.at(i, 2));
+                const prt::ProbeWeights w = prt::probe_weights(t, slots, q, nn, visible);
+                std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
+                for (int c = 0; c < w.count; ++c)
+                  for (py::ssize_t k = 0; k < nc; ++k) {
+                    const float* src = L + (std::size_t(w.probe[std::size_t(c)]) * std::size_t(nc) + std::size_t(k)) * 3;
+                    mix[std::size_t(k)] += w.weight[std::size_t(c)] * glm::vec3(src[0], src[1], src[2]);
+                  }
+                const glm::dvec3 e = glm::length(nn) > 0 ? prt::lambert_from_sh(mix, t.bands, nn) : glm::dvec3(0.0);
+                for (int c = 0; c < 3; ++c) out[i * 3 + std::size_t(c)] = float(e[c]);
+              }
+            }
+            return copy(out.data(), {py::ssize_t(N), 3});
+          },
+          py::arg("scene"), py::arg("points"), py::arg("normals"), py::arg("sh"),
+          "float32 (N, 3): E(p, n)/pi at the points from the relit probes `sh`, as prt relight --at (traced visibility)")
+      .def(
+          "matrices",
+          [](const prt::ProbeTransfer& t, int in_bands) {
+            int channels = 1;
+            const std::vector<float> mm = prt::probe_sh_matrices(t, in_bands, channels);
+            return copy(mm.data(), {py::ssize_t(t.probes()), channels, py::ssize_t(t.bands) * t.bands,
+                                    py::ssize_t(in_bands) * in_bands});
+          },
+          py::arg("in_bands") = 3,
+          "float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes")
+      .def("write", [](const prt::ProbeTransfer& t, const py::object& path) { prt::write_probe_transfer(path_of(path), t); },
+           py::arg("path"), "Writes the probe file (docs/FORMAT.md \"Probe volume\"), atomically")
+      .def("__repr__", [](const prt::ProbeTransfer& t) {
+        return "<prt.ProbeVolume " + std::to_string(t.grid.dims[0]) + "x" + std::to_string(t.grid.dims[1]) + "x" +
+               std::to_string(t.grid.dims[2]) + ", " + std::to_string(t.stored()) + " stored, " +
+               std::string(prt::transfer_mode_name(t.mode)) + ">";
+      });
+
+  m.def("read_probes", [](const py::object& path) { return prt::read_probe_transfer(path_of(path)); }, py::arg("path"),
+        "Reads a probe volume (prt precompute SCENE --probes NXxNYxNZ).");
+
+  m.def(
+      "precompute_probes",
+      [](const prt::Scene& scene, const py::object& dims, const std::string& mode, int bands, int bounce_bands,
+         int bounces, std::uint64_t seed) {
+        const auto d = dims.cast<std::tuple<int, int, int>>();
+        prt::ProbeOptions o;
+        o.mode = prt::parse_transfer_mode(mode);
+        o.bands = bands;
+        o.bounce_bands = bounce_bands;
+        o.bounces = bounces;
+        o.seed = seed;
+        const std::array<int, 3> dd = {std::get<0>(d), std::get<1>(d), std::get<2>(d)};
+        for (int k : dd)
+          if (k < 2 || k > prt::kMaxProbeDim) throw Error("dims: each 2 to " + std::to_string(prt::kMaxProbeDim));
+        if (scene.materials.empty()) {  // a bare mesh: prt precompute's --albedo default
+          o.override_albedo = true;
+          o.albedo = glm::vec3(0.8f);
+        }
+        py::gil_scoped_release release;
+        return prt::compute_probe_transfer(scene, prt::probe_grid(scene.mesh, dd), o);
+      },
+      py::arg("scene"), py::arg("dims"), py::kw_only(), py::arg("mode") = "shadowed", py::arg("bands") = 3,
+      py::arg("bounce_bands") = 6, py::arg("bounces") = 1, py::arg("seed") = 1,
+      "The probe volume prt precompute SCENE --probes NXxNYxNZ computes (same bits).");
 }

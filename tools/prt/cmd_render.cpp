@@ -46,6 +46,9 @@ std::string frame_path(const std::string& out, int frame) {
 }
 
 int run_render(const RenderArgs& a) {
+  for (const CLI::Option* o : a.probe_opts)
+    if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
+      throw UsageError("--probes FILE and --object MESH go together (" + o->get_name() + " was given)");
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   if (const std::string problem = image_output_type_problem(a.output); !problem.empty())
     throw UsageError("--output: " + problem);
@@ -108,9 +111,6 @@ int run_render(const RenderArgs& a) {
   }
 
   // --probes --object: an object lit by the probe volume, on a path through it.
-  for (const CLI::Option* o : a.probe_opts)
-    if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
-      throw UsageError(o->get_name() + ": --probes FILE and --object MESH go together");
   std::optional<ProbeObject> probe_object;
   if (!a.probe.probes.empty()) {
     probe_object.emplace(a.probe, a.mesh, env, renderer);
@@ -206,10 +206,9 @@ Run add_render(CLI::App& app) {
   a->probe_opts.push_back(s->add_option("--object", a->probe.object,
                                        "With --probes: a mesh lit by the probes, moving on a circle through the volume "
                                        "(one turn over the frames; docs/PROBES.md)"));
-  a->probe_opts.push_back(s->add_option("--object-size", a->probe.size,
-                                       "With --object: its bounding box's diagonal (default twice the smallest probe spacing)")
-                              ->check(number_range(0.0, 1e30, true, false)));
-  a->probe_opts.push_back(s->add_option("--object-at", a->probe.at, "With --object: a fixed position x,y,z instead of the path"));
+  a->probe_opts.push_back(add_shared(s, SharedOption::ObjectSize, a->probe.size,
+                                     "With --object: its bounding box's diagonal (default twice the smallest probe spacing)"));
+  a->probe_opts.push_back(add_shared(s, SharedOption::ObjectAt, a->probe.at, "With --object: a fixed position instead of the path"));
   add_shared(s, SharedOption::Width, a->width, "Image width");
   add_shared(s, SharedOption::Height, a->height, "Image height");
   add_shared(s, SharedOption::Camera, a->camera, "Camera; default: the framing camera (below)");

@@ -430,7 +430,7 @@ class Viewer {
 int run_view(const ViewArgs& a) {
   for (const CLI::Option* o : a.probe_opts)
     if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
-      throw UsageError(o->get_name() + ": --probes FILE and --object MESH go together");
+      throw UsageError("--probes FILE and --object MESH go together (" + o->get_name() + " was given)");
   if (a.screenshot.empty() && a.frames > 0) throw UsageError("--frames needs --screenshot FILE");
   if (!a.screenshot.empty() && a.frames == 0) throw UsageError("--screenshot needs --frames N");
   if (!a.screenshot.empty()) {
@@ -579,10 +579,9 @@ Run add_view(CLI::App& app) {
                                        "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it"));
   a->probe_opts.push_back(s->add_option("--object", a->probe.object,
                                        "With --probes: a mesh lit by the probes, circling through the volume"));
-  a->probe_opts.push_back(s->add_option("--object-size", a->probe.size,
-                                       "With --object: its bounding box's diagonal (default twice the smallest probe spacing)")
-                              ->check(number_range(0.0, 1e30, true, false)));
-  a->probe_opts.push_back(s->add_option("--object-at", a->probe.at, "With --object: a fixed position x,y,z instead of the path"));
+  a->probe_opts.push_back(add_shared(s, SharedOption::ObjectSize, a->probe.size,
+                                     "With --object: its bounding box's diagonal (default twice the smallest probe spacing)"));
+  a->probe_opts.push_back(add_shared(s, SharedOption::ObjectAt, a->probe.at, "With --object: a fixed position instead of the path"));
   add_shared(s, SharedOption::Width, a->width, "Window width");
   add_shared(s, SharedOption::Height, a->height, "Window height");
   add_shared(s, SharedOption::Camera, a->camera, "Starting camera (orbit is about the target)");

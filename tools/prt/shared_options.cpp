@@ -95,6 +95,8 @@ const std::map<SharedOption, Spec>& specs() {
                                 }),
                                 fmt::format("WxH, 1 to {} texels a side", kMaxLightmapSize)});
     t.emplace(S::UvSet, Spec{"--uv", int_range(0, 7), "0 to 7: TEXCOORD_N"});
+    t.emplace(S::ObjectAt, Spec{"--object-at", triple_value("x,y,z"), "x,y,z"});
+    t.emplace(S::ObjectSize, Spec{"--object-size", positive_number(), "a positive length (scene units)"});
     return t;
   }();
   return table;

@@ -65,6 +65,8 @@ enum class SharedOption {
   BandsShown,    // -b,--bands a renderer shades with: 0 (all of the file's) to 16
   Lightmap,      // --lightmap WxH: an atlas of 1 to 16384 texels a side (prt precompute and reference)
   UvSet,         // --uv N: the lightmap's UV set, 0 to 7 (TEXCOORD_N)
+  ObjectAt,      // --object-at x,y,z: three finite numbers (render and view's probe-lit object)
+  ObjectSize,    // --object-size d: a positive number (its bounding box's diagonal)
 };
 
 // Adds option `which` to `command`, bound to `value`, with `help` (what the
