@@ -32,6 +32,7 @@ ProbeObject::ProbeObject(const ProbeObjectArgs& a, const std::string& scene, con
   if (!std::isfinite(smallest)) smallest = 1;
   const double size = a.size > 0 ? a.size : 2.0 * smallest;
   const double diag = glm::length(hi - lo);
+  object_diagonal_ = diag;
   scale_ = diag > 0 ? size / diag : 1.0;
   const glm::dvec3 gmin = t_.grid.min, gmax = t_.grid.max;
   if (!a.at.empty()) {
@@ -49,14 +50,33 @@ ProbeObject::ProbeObject(const ProbeObjectArgs& a, const std::string& scene, con
 }
 
 void ProbeObject::frame(Renderer& renderer, const glm::dmat3& R, double t) {
-  relighter_->set_rotation(R);
-  relighter_->relight(lit_);
-  renderer.set_probe_lighting(lit_);
   const double a = 2 * M_PI * t;
   const glm::dvec3 at = fixed_ ? centre_ : centre_ + radius_ * glm::dvec3(std::cos(a), 0.0, std::sin(a));
   glm::dmat4 model = glm::translate(glm::dmat4(1.0), at) * glm::scale(glm::dmat4(1.0), glm::dvec3(scale_)) *
                      glm::translate(glm::dmat4(1.0), -object_centre_);
   renderer.set_probe_object_model(glm::mat4(model));
+  // Only the probes of the cells the object's bounding sphere reaches are
+  // relit: its vertices read no others.
+  relighter_->set_rotation(R);
+  const glm::dvec3 sp = t_.grid.spacing();
+  const double reach = 0.5 * object_diagonal_ * scale_;
+  std::vector<std::uint32_t> probes;
+  int lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    const int n = t_.grid.dims[std::size_t(k)];
+    const double a0 = sp[k] > 0 ? (at[k] - reach - t_.grid.min[k]) / sp[k] : 0.0, a1 = sp[k] > 0 ? (at[k] + reach - t_.grid.min[k]) / sp[k] : 0.0;
+    lo[k] = std::clamp(int(std::floor(a0)), 0, n - 1);
+    hi[k] = std::clamp(int(std::ceil(a1)), 0, n - 1);
+  }
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y)
+      for (int x = lo[0]; x <= hi[0]; ++x) probes.push_back(std::uint32_t(t_.grid.index(x, y, z)));
+  std::vector<glm::vec3> some;
+  relighter_->relight(probes, some);
+  lit_.resize(t_.probes() * 9);
+  for (std::size_t i = 0; i < probes.size(); ++i)
+    std::copy_n(some.begin() + std::ptrdiff_t(i * 9), 9, lit_.begin() + std::ptrdiff_t(std::size_t(probes[i]) * 9));
+  renderer.set_probe_lighting(lit_);
 }
 
 std::string ProbeObject::describe() const {

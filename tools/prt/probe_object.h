@@ -40,7 +40,7 @@ class ProbeObject {
   std::unique_ptr<ProbeRelighter> relighter_;
   std::vector<glm::vec3> lit_;
   glm::dvec3 centre_{0.0}, object_centre_{0.0};
-  double radius_ = 0, scale_ = 1;
+  double radius_ = 0, scale_ = 1, object_diagonal_ = 0;
   bool fixed_ = false;
   std::size_t vertices_ = 0;
   std::string name_;
