@@ -421,9 +421,11 @@ int run_probes(PrecomputeArgs& a) {
     throw UsageError(fmt::format("--bounces {}: probes take 1 to 8", o.bounces));
   if (a.bounce_bands_opt->count() > 0 && o.mode != TransferMode::Interreflected)
     throw UsageError("--bounce-bands applies to --mode interreflected");
-  // --samples: rays per probe, as k^2 rays in each of the cube's 6 r^2 texels.
+  // --samples: rays per probe, as k^2 rays in each of the base cube's 6 (r/4)^2
+  // texels (compute_probe_transfer traces at r/4, then refines at the edges).
+  const int base = std::max(1, o.cube_res / 4);
   if (a.samples_opt->count() > 0) {
-    const double per_texel = double(a.opt.samples) / (6.0 * o.cube_res * o.cube_res);
+    const double per_texel = double(a.opt.samples) / (6.0 * base * base);
     const int k = std::clamp(int(std::lround(std::sqrt(std::max(per_texel, 1.0)))), 1, 8);
     o.rays_per_texel = k * k;
   }
@@ -449,10 +451,10 @@ int run_probes(PrecomputeArgs& a) {
   if (!a.quiet) {
     const glm::dvec3 sp = grid.spacing();
     fmt::print(stderr, "{}\nprobes {}x{}x{} ({} in all) over [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}], spacing "
-                       "{:.4g} x {:.4g} x {:.4g}; {} bands, {}, visibility cube {} ({} rays per probe)\n",
+                       "{:.4g} x {:.4g} x {:.4g}; {} bands, {}, visibility cube {} ({} rays per probe, more at edges)\n",
                describe(scene), dims[0], dims[1], dims[2], grid.count(), grid.min.x, grid.max.x, grid.min.y, grid.max.y,
                grid.min.z, grid.max.z, sp.x, sp.y, sp.z, o.bands, transfer_mode_name(o.mode), o.cube_res,
-               6 * o.cube_res * o.cube_res * o.rays_per_texel);
+               6 * base * base * o.rays_per_texel);
   }
   Outputs out("precompute");
   const std::optional<ProbeTransfer> computed = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
