@@ -192,7 +192,7 @@ class In {
     const std::uint64_t n = get<std::uint64_t>();
     if (n > (b_.size() - at_) / sizeof(T)) throw Error(fmt::format("{}: {}: {} entries run past the end of the file", path_, what, n));
     v.resize(std::size_t(n));
-    std::memcpy(v.data(), b_.data() + at_, std::size_t(n) * sizeof(T));
+    if (n > 0) std::memcpy(v.data(), b_.data() + at_, std::size_t(n) * sizeof(T));
     at_ += std::size_t(n) * sizeof(T);
   }
   std::size_t at() const { return at_; }
