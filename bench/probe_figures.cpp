@@ -17,6 +17,9 @@
 //     over the mean over free space;
 //   * --spacing: the between-probe error for several grids.
 // usage: prt_probe_figures SCENE MAP NXxNYxNZ [--rotate y,p,r] [--box ...] [--points N] [--spacing]
+//        prt_probe_figures SCENE MAP PROBES.prt [--frame MESH]   (the volume's relighting time,
+//          against a diffuse PRT frame of MESH in the same process; PRT_PROBE_VOLUME_ONLY=1 with a
+//          grid precomputes it first)
 #include <prt/envmap.h>
 #include <prt/precompute.h>
 #include <prt/probes.h>
@@ -24,6 +27,11 @@
 #include <prt/scene.h>
 #include <prt/sh.h>
 #include <prt/filter.h>
+#include <prt/mesh.h>
+#include <prt/projection.h>
+#include <prt/render.h>
+
+#include "synthetic_transfer.h"
 
 #include "ray_scene.h"
 
@@ -46,6 +54,11 @@ namespace {
 struct Pixel {
   glm::vec3 dir;
   glm::dvec3 power;  // L x omega
+  // Bright pixels (over a 1e-4 share of the map's power): 4 x 4 directions
+  // across the pixel, the visible share of which is its visibility (the
+  // area visibility a Monte Carlo estimate converges to; one ray through
+  // the centre would decide a partly hidden sun all or nothing).
+  std::vector<glm::vec3> spread;
 };
 
 // The truth's rays: one per map pixel (downsampled to --truth-width, 1024 by default)
@@ -54,6 +67,7 @@ std::vector<Pixel> map_pixels(const EnvMap& map, const glm::dmat3& R, int width)
   int f = 1;
   while (map.width / (2 * f) >= width && map.width % (2 * f) == 0 && map.height % (2 * f) == 0) f *= 2;
   std::vector<Pixel> out;
+  std::vector<std::pair<int, int>> pixel_block;
   for (int by = 0; by < map.height; by += f)
     for (int bx = 0; bx < map.width; bx += f) {
       glm::dvec3 d(0.0), p(0.0);
@@ -64,14 +78,25 @@ std::vector<Pixel> map_pixels(const EnvMap& map, const glm::dmat3& R, int width)
           const float* c = map.rgb.data() + (std::size_t(y) * map.width + std::size_t(x)) * 3;
           p += glm::dvec3(c[0], c[1], c[2]) * w;
         }
-      out.push_back({glm::vec3(R * glm::normalize(d)), p});
+      out.push_back({glm::vec3(R * glm::normalize(d)), p, {}});
+      pixel_block.push_back({bx, by});
     }
+  glm::dvec3 total(0.0);
+  for (const Pixel& q : out) total += q.power;
+  const double share = 1e-4 * (total.x + total.y + total.z);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (out[i].power.x + out[i].power.y + out[i].power.z <= share) continue;
+    for (int sy = 0; sy < 4; ++sy)
+      for (int sx = 0; sx < 4; ++sx)
+        out[i].spread.push_back(glm::vec3(R * latlong_direction(pixel_block[i].first + f * (sx + 0.5) / 4.0,
+                                                               pixel_block[i].second + f * (sy + 0.5) / 4.0, map.width, map.height)));
+  }
   return out;
 }
 
 struct Truth {
   std::vector<glm::dvec3> sh;  // n^2: the exact SH of the occluded light
-  std::vector<std::uint8_t> visible;
+  std::vector<float> visible;  // per pixel, 0..1
 };
 
 Truth trace_truth(const detail::RayScene& rays, const std::vector<Pixel>& px, const glm::vec3& p, int bands, float offset) {
@@ -86,12 +111,21 @@ Truth trace_truth(const detail::RayScene& rays, const std::vector<Pixel>& px, co
     for (int q = 0; q < n; ++q) dirs[q] = px[i + std::size_t(q)].dir;
     const std::uint32_t occ = rays.occluded8(p, dirs, n, offset);
     for (int q = 0; q < n; ++q) {
-      const bool vis = !((occ >> q) & 1u);
+      const Pixel& pix = px[i + std::size_t(q)];
+      float vis = (occ >> q) & 1u ? 0.0f : 1.0f;
+      if (!pix.spread.empty()) {
+        std::uint32_t open = 0;
+        for (std::size_t a = 0; a < pix.spread.size(); a += 8) {
+          const int m = int(std::min<std::size_t>(8, pix.spread.size() - a));
+          open += std::uint32_t(m - std::popcount(rays.occluded8(p, pix.spread.data() + a, m, offset)));
+        }
+        vis = float(open) / float(pix.spread.size());
+      }
       t.visible[i + std::size_t(q)] = vis;
-      if (!vis) continue;
+      if (vis == 0) continue;
       const glm::dvec3 d(dirs[q]);
       sh::eval(bands, d.x, d.y, d.z, y.data());
-      for (int k = 0; k < nc; ++k) t.sh[std::size_t(k)] += y[std::size_t(k)] * px[i + std::size_t(q)].power;
+      for (int k = 0; k < nc; ++k) t.sh[std::size_t(k)] += y[std::size_t(k)] * pix.power * double(vis);
     }
   }
   return t;
@@ -100,7 +134,7 @@ Truth trace_truth(const detail::RayScene& rays, const std::vector<Pixel>& px, co
 glm::dvec3 truth_lambert(const Truth& t, const std::vector<Pixel>& px, const glm::dvec3& n) {
   glm::dvec3 e(0.0);
   for (std::size_t i = 0; i < px.size(); ++i)
-    if (t.visible[i]) e += std::max(0.0, glm::dot(glm::dvec3(px[i].dir), n)) * px[i].power;
+    if (t.visible[i] > 0) e += std::max(0.0, glm::dot(glm::dvec3(px[i].dir), n)) * px[i].power * double(t.visible[i]);
   return e / M_PI;
 }
 
@@ -124,6 +158,27 @@ struct Err {
 
 const glm::dvec3 kAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 
+// A diffuse 3-band RGB PRT frame of `path` at 512 x 512 (background and
+// mesh, waited for): the median of 20, after one to warm up.
+double diffuse_frame_ms(const std::string& path, const EnvMap& map) {
+  Renderer r;
+  const Mesh m = load_mesh(path);
+  r.set_mesh(m, bench::synthetic_transfer(m, 3, 3));
+  r.set_environment(map);
+  r.set_lighting(project(map, 3));
+  r.set_shading(Shading::Transfer);
+  const Camera cam = default_camera(m);
+  r.draw_only(cam, 512, 512);
+  std::vector<double> ms;
+  for (int i = 0; i < 20; ++i) {
+    const auto a = std::chrono::steady_clock::now();
+    r.draw_only(cam, 512, 512);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+  }
+  std::nth_element(ms.begin(), ms.begin() + 10, ms.end());
+  return ms[10];
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -136,6 +191,7 @@ int main(int argc, char** argv) {
   double euler[3] = {0, 0, 0}, box[6] = {0, 0, 0, 0, 0, 0};
   bool have_box = false, spacing_table = false, chebyshev = false;
   int points = 400, cube = 0, depth = 0, truth_width = 1024;
+  std::string frame_mesh;
   for (int i = 4; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--rotate" && i + 1 < argc) std::sscanf(argv[++i], "%lf,%lf,%lf", &euler[0], &euler[1], &euler[2]);
@@ -146,7 +202,8 @@ int main(int argc, char** argv) {
     else if (a == "--depth" && i + 1 < argc) depth = std::atoi(argv[++i]);
     else if (a == "--truth-width" && i + 1 < argc) truth_width = std::atoi(argv[++i]);
     else if (a == "--spacing") spacing_table = true;
-    else if (a == "--chebyshev") chebyshev = true;  // the depth moments' weights instead of traced visibility
+    else if (a == "--chebyshev") chebyshev = true;
+    else if (a == "--frame" && i + 1 < argc) frame_mesh = argv[++i];  // the depth moments' weights instead of traced visibility
   }
   const Scene scene = load_scene_or_mesh(scene_path);
   const EnvMap map = load_envmap(map_path);
@@ -348,34 +405,54 @@ int main(int argc, char** argv) {
     return t;
   };
   std::array<int, 3> dims{};
-  std::sscanf(argv[3], "%dx%dx%d", &dims[0], &dims[1], &dims[2]);
-  if (std::getenv("PRT_PROBE_VOLUME_ONLY")) {
-    // The relighting cost of this grid: precompute, then set_rotation (the
-    // map splatted into the rotated cube, its pyramid) and relight every
-    // probe, 5 times, a new rotation each.
-    ProbeOptions o;
-    if (cube > 0) o.cube_res = cube;
-    const auto t0 = std::chrono::steady_clock::now();
-    const ProbeTransfer t = compute_probe_transfer(scene, probe_grid(scene.mesh, dims), o);
-    const double t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const bool volume_file = is_probe_file(argv[3]);
+  if (!volume_file) std::sscanf(argv[3], "%dx%dx%d", &dims[0], &dims[1], &dims[2]);
+  if (volume_file || std::getenv("PRT_PROBE_VOLUME_ONLY")) {
+    // The relighting cost of this volume (argv[3] a probe file, or a grid
+    // precomputed here): set_rotation (the map splatted into the rotated
+    // cube, its pyramid) and relight every probe, 15 rotations, the median;
+    // with --frame MESH, against a diffuse 3-band RGB PRT frame of MESH at
+    // 512 x 512 (prt::Renderer, whatever OpenGL EGL gives) in this process.
+    double t_pre = 0;
+    ProbeTransfer t;
+    if (volume_file) t = read_probe_transfer(argv[3]);
+    else {
+      ProbeOptions o;
+      if (cube > 0) o.cube_res = cube;
+      const auto t0 = std::chrono::steady_clock::now();
+      t = compute_probe_transfer(scene, probe_grid(scene.mesh, dims), o);
+      t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
     ProbeRelighter relighter(t, map);
     std::vector<glm::vec3> lit;
-    double best_light = 1e30, best_sum = 1e30;
-    for (int i = 0; i < 5; ++i) {
+    std::vector<double> light, sum, both;
+    for (int i = 0; i < 15; ++i) {
       const auto a = std::chrono::steady_clock::now();
       relighter.set_rotation(sh::rotation_from_euler(10.0 * i, 5.0, 0.0));
       const auto b = std::chrono::steady_clock::now();
       relighter.relight(lit);
       const auto c = std::chrono::steady_clock::now();
-      best_light = std::min(best_light, std::chrono::duration<double, std::milli>(b - a).count());
-      best_sum = std::min(best_sum, std::chrono::duration<double, std::milli>(c - b).count());
+      light.push_back(std::chrono::duration<double, std::milli>(b - a).count());
+      sum.push_back(std::chrono::duration<double, std::milli>(c - b).count());
+      both.push_back(light.back() + sum.back());
     }
+    const auto median = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+      return v[v.size() / 2];
+    };
     std::size_t nodes = t.vis_nodes.size(), partial = t.partial_nodes.size();
     fmt::print("volume {}x{}x{}: {} probes, {} stored; precompute {:.1f} s; {} bytes ({:.0f} per stored probe; {:.1f} "
-               "nodes and {:.1f} partial texels each); relight: lighting {:.2f} ms + probes {:.2f} ms = {:.2f} ms (best of 5)\n",
-               dims[0], dims[1], dims[2], t.probes(), t.stored(), t_pre, t.bytes(),
+               "nodes and {:.1f} partial texels each); {} bright map pixels; relight (median of 15 rotations): lighting {:.2f} ms + "
+               "probes {:.2f} ms = {:.2f} ms (best {:.2f} ms)\n",
+               t.grid.dims[0], t.grid.dims[1], t.grid.dims[2], t.probes(), t.stored(), t_pre, t.bytes(),
                double(t.bytes()) / double(std::max<std::size_t>(t.stored(), 1)), double(nodes) / double(std::max<std::size_t>(t.stored(), 1)),
-               double(partial) / double(std::max<std::size_t>(t.stored(), 1)), best_light, best_sum, best_light + best_sum);
+               double(partial) / double(std::max<std::size_t>(t.stored(), 1)), relighter.bright_pixels(), median(light), median(sum),
+               median(both), *std::min_element(both.begin(), both.end()));
+    if (!frame_mesh.empty()) {
+      const double frame = diffuse_frame_ms(frame_mesh, map);
+      fmt::print("diffuse PRT frame of {} (3 bands RGB, 512 x 512, median of 20): {:.2f} ms; volume relight / frame: {:.2f}x (medians)\n",
+                 frame_mesh, frame, median(both) / frame);
+    }
     return 0;
   }
   run_grid(dims, true);

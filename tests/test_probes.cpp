@@ -143,6 +143,39 @@ TEST(ProbeRelight, MatchesTheTracedLightUnderASun) {
   EXPECT_GE(checked, 15);
 }
 
+TEST(ProbeRelight, EveryBandCountSumsTheSameLight) {
+  // The 3-band relighting runs a vectorised kernel (32 floats a node), other
+  // band counts a plain loop. The visibility is the same whatever the
+  // bands, so a 5-band relighting's first 9 coefficients must equal the
+  // 3-band one's: to float rounding (1e-5 of the sky's norm; the sums run in
+  // another order), for every probe (nodes, complements and partial
+  // texels), under a sky with a sun 4 degrees wide that the box's edges
+  // cross as the probes on the floor see it (bright pixels in partial
+  // texels).
+  const Scene s = floor_and_closed_box();
+  ProbeOptions o;
+  o.seed = 5;
+  const ProbeTransfer t3 = compute_probe_transfer(s, probe_grid(s.mesh, {3, 3, 3}), o);
+  ProbeTransfer t5 = t3;
+  t5.bands = 5;
+  const glm::dvec3 sun = glm::normalize(glm::dvec3(-1.0, 0.35, 0.2));
+  const EnvMap map = test::latlong_of(512, 256, [&](const glm::dvec3& d) {
+    const double v = 0.2 + 0.1 * d.z + (glm::dot(d, sun) > 0.9994 ? 2000.0 : 0.0);
+    return glm::dvec3(v, 0.9 * v, 0.8 * v);
+  });
+  ProbeRelighter r3(t3, map), r5(t5, map);
+  EXPECT_GT(r3.bright_pixels(), 0u);  // the sun goes the exact way
+  std::vector<glm::vec3> a, b;
+  r3.relight(a);
+  r5.relight(b);
+  double norm = 0;
+  for (int k = 0; k < 9; ++k) norm += glm::dot(glm::dvec3(r3.sky()[std::size_t(k)]), glm::dvec3(r3.sky()[std::size_t(k)]));
+  for (std::size_t p = 0; p < t3.probes(); ++p)
+    for (int k = 0; k < 9; ++k)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(a[p * 9 + std::size_t(k)][c], b[p * 25 + std::size_t(k)][c], 1e-5 * std::sqrt(norm)) << "probe " << p << " k " << k;
+}
+
 TEST(ProbeRelight, SkyProbesGetTheMapsProjection) {
   // A small triangle far below: the probes above see only sky and store
   // nothing; their light is the map's SH (point quadrature over the map's

@@ -151,15 +151,23 @@ void write_probe_transfer(const std::string& path, const ProbeTransfer& t);
 ProbeTransfer read_probe_transfer(const std::string& path);
 bool is_probe_file(const std::string& path);
 
-// Relighting (docs/PROBES.md "Relighting"): holds the map, downsampled
-// once (solid-angle weighted, to at most 4 map pixels per visibility texel
-// width) and its bounce SH; set_rotation() rebuilds the per-frame sums
-// (every map pixel splatted into the rotated visibility cube, the
-// pyramid of each face, the rotated bounce SH); relight() gives the probes'
-// SH (n^2 RGB each), Sky probes the whole map's, Invalid ones zero.
+// Relighting (docs/PROBES.md "Relighting"). The constructor splits the
+// map (downsampled once by solid-angle-weighted sums, to about 16 pixels
+// across a visibility texel) into its bright pixels (radiance over
+// kProbeBrightRatio times the map's mean and kProbeLocalRatio times the
+// mean 4 texels around them, at most 1/64 of them, the brightest)
+// and the rest, resampled into a smooth cube of face 2r.
+// set_rotation() rebuilds the per-frame sums: each finest texel of the
+// rotated visibility cube gets the smooth cube sampled (bilinear) at its
+// four quarter-texel centres, exactly weighted, plus every bright pixel
+// splatted exactly into its texel; then the pyramid of each face and the
+// rotated bounce SH. relight() gives the probes' SH (n^2 RGB each), Sky
+// probes the whole map's, Invalid ones zero.
+inline constexpr double kProbeBrightRatio = 32.0, kProbeLocalRatio = 4.0;
 class ProbeRelighter {
  public:
-  // Throws prt::Error on a cube map or non-finite pixels.
+  // Throws prt::Error on a probe volume that is inconsistent or a map with
+  // non-finite pixels.
   ProbeRelighter(const ProbeTransfer& t, const EnvMap& map);
   // Light from direction d arrives from R d (L_rot(d) = L(R^T d)), as prt relight --rotate.
   void set_rotation(const glm::dmat3& R);
@@ -170,25 +178,37 @@ class ProbeRelighter {
   // The whole map's SH (what a Sky probe gets) under the current rotation.
   std::span<const glm::vec3> sky() const;
   const ProbeTransfer& transfer() const { return t_; }
+  // How many of the map's pixels are relit exactly as bright ones.
+  std::size_t bright_pixels() const { return bright_.size(); }
 
  private:
-  void relight_one(std::size_t probe, glm::vec3* out) const;
+  void relight_range(std::size_t begin, std::size_t end, const std::uint32_t* probes, glm::vec3* out) const;
   const ProbeTransfer& t_;
   int nc_ = 0, levels_ = 0;
+  std::size_t stride_ = 0;  // floats per node: nc x 3 padded to a multiple of 8
   std::size_t nodes_per_face_ = 0;
   std::vector<std::size_t> level_offset_;
-  // The map, downsampled: directions, solid angle x radiance.
+  // The map, downsampled: directions, solid angle x radiance; the bright ones' indices.
   std::vector<glm::vec3> dirs_;
   std::vector<glm::vec3> power_;
+  std::vector<std::uint32_t> bright_;
+  // The rest as radiance on a cube of face 2r (map frame), and the world
+  // directions and Y_k omega of the 2r cube's texel centres (the finest
+  // texels' quarters).
+  std::vector<glm::vec3> smooth_;
+  std::vector<glm::vec3> quarter_dir_;
+  std::vector<float> quarter_y_;
   std::vector<glm::dvec3> bounce_sh_, bounce_rot_;
-  std::vector<float> sums_;  // nodes x nc x 3
+  std::vector<float> sums_;     // nodes x stride, from sums_at_ (64-byte aligned)
+  std::size_t sums_at_ = 0;
+  std::vector<float> smooth0_;  // finest texels x stride: their smooth part alone
   std::vector<glm::vec3> total_;
+  std::vector<float> total_padded_;  // the same, stride floats
   std::vector<std::uint32_t> slot_;
-  // Per frame, for the partial texels: every map pixel's texel, sub-texel
-  // and SH contribution, bucketed by texel.
-  std::vector<std::uint32_t> bucket_offset_, bucket_pixel_;
-  std::vector<std::uint8_t> pixel_sub_, uneven_;
-  std::vector<float> pixel_sh_;
+  // Per frame, the finest texels that hold bright pixels: their slot (-1:
+  // none) and per slot the sums of their 16 sub-texels (stride each).
+  std::vector<std::int32_t> cell_slot_;
+  std::vector<float> cell_sums_;
 };
 
 // Each probe's transfer as an SH matrix, for engines that light probes
