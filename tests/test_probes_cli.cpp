@@ -74,6 +74,16 @@ TEST(ProbesCli, ExportGivesEnginesTheProbesLight) {
   Result r = run_prt(dir, {"export", kRoom, dir.file("p.prt"), "--bake", kSunset, "--rotate", "30,0,0", "-o",
                            dir.file("probes.json"), "--matrices", dir.file("m.bin"), "-q"});
   ASSERT_EQ(r.code, 0) << describe_run(r);
+  // The spelling, --probes FILE, writes the same bytes; with another
+  // transfer beside it, a usage error that says to export that one apart.
+  r = run_prt(dir, {"export", kRoom, "--probes", dir.file("p.prt"), "--bake", kSunset, "--rotate", "30,0,0", "-o",
+                    dir.file("probes2.json"), "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_EQ(read_file(dir.file("probes2.json")), read_file(dir.file("probes.json")));
+  r = run_prt(dir, {"export", kRoom, dir.file("other.prt"), "--probes", dir.file("p.prt"), "--bake", kSunset, "-o",
+                    dir.file("probes3.json")});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("its own run"), std::string::npos) << r.err;
   const nlohmann::json j = nlohmann::json::parse(read_file(dir.file("probes.json")));
   const ProbeTransfer t = read_probe_transfer(dir.file("p.prt"));
   ASSERT_EQ(j["probes"].size(), t.probes());

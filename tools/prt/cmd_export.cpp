@@ -34,6 +34,7 @@ namespace {
 
 struct ExportArgs {
   std::string mesh, transfer, output, bake, rotate;
+  std::string probes;    // --probes FILE: the probe volume to export (or as TRANSFER)
   std::string exposure;  // stops or auto; unset: 0 for --bake, auto for --web
   bool quiet = false;
   const CLI::Option *rotate_opt = nullptr, *exposure_opt = nullptr;
@@ -222,7 +223,18 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
   return 0;
 }
 
-int run_export(const ExportArgs& a) {
+int run_export(const ExportArgs& given) {
+  ExportArgs a = given;
+  if (!a.probes.empty()) {
+    if (!a.transfer.empty() && a.transfer != a.probes)
+      throw UsageError("--probes " + a.probes + " exports a probe volume as JSON; " + a.transfer +
+                       " is exported in its own run (prt export SCENE " + a.transfer + " -o FILE.glb)");
+    a.transfer = a.probes;
+    if (a.output.empty()) throw UsageError("--probes: give -o FILE.json (and --bake ENV)");
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"--probes", a.probes}, {"--bake", a.bake}});
+    return run_export_probes(a, rotate_degrees(a.rotate));
+  }
+  if (a.transfer.empty()) throw UsageError("give TRANSFER (a file from prt precompute or prt compress) or --probes FILE");
   if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
   if (is_probe_file(a.transfer)) {
     if (!a.output.empty()) check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"--bake", a.bake}});
@@ -335,7 +347,8 @@ Run add_export(CLI::App& app) {
       "A lightmap (prt precompute SCENE --lightmap) is exported as the scene, one node per object, its lightmap\n"
       "UVs as TEXCOORD_1 and its transfer as 8-bit coefficient textures with a scale and bias per coefficient\n"
       "(docs/FORMAT.md, \"Lightmap export\"); --bake adds the baked lightmap; --web relights it per pixel.\n"
-      "A probe volume (prt precompute SCENE --probes) is exported relit under --bake ENV as JSON: each probe's\n"
+      "A probe volume (prt precompute SCENE --probes), given as TRANSFER or --probes FILE, is exported relit\n"
+      "under --bake ENV as JSON: each probe's\n"
       "three.js LightProbe and Unity SphericalHarmonicsL2 arrays; --matrices adds its SH matrices (docs/PROBES.md).\n"
       "--bake ENV adds COLOR_0: the radiance prt relight gives under ENV (--rotate), times 2^--exposure,\n"
       "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
@@ -346,9 +359,12 @@ Run add_export(CLI::App& app) {
       "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
       "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1\n"
       "         prt export room.gltf room.prt -o room.glb --web room-web --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0\n"
-      "         prt export room.gltf room-probes.prt --bake forest.exr -o probes.json --matrices probes.bin");
+      "         prt export room.gltf --probes room-probes.prt --bake forest.exr -o probes.json --matrices probes.bin");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
-  s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress)")->required();
+  s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress); a probe volume may "
+                                         "come here or as --probes");
+  s->add_option("--probes", a->probes, "A probe volume (prt precompute SCENE --probes) to export relit under --bake ENV "
+                                       "as JSON (-o FILE.json)");
   s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");
   s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it");
   a->rotate_opt = add_shared(s, SharedOption::Rotate, a->rotate, "With --bake or --web: rotate the lighting");
