@@ -43,6 +43,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -159,8 +160,20 @@ struct Err {
 const glm::dvec3 kAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 
 // A diffuse 3-band RGB PRT frame of `path` at 512 x 512 (background and
-// mesh, waited for): the median of 20, after one to warm up.
-double diffuse_frame_ms(const std::string& path, const EnvMap& map) {
+// mesh, waited for): the median of 20, after one to warm up. With a 3-band
+// volume and its relit probes, also the GPU's share of a probe-lit object:
+// the upload of every relit probe (set_probe_lighting, waited for by the
+// next frame) and the frame with the same mesh drawn again as a probe-lit
+// object (its per-vertex interpolation pass), medians of 20.
+struct FrameFigures {
+  double frame = 0, upload_and_frame = 0, object_frame = 0;
+};
+double median_ms(std::vector<double> ms) {
+  std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
+  return ms[ms.size() / 2];
+}
+FrameFigures frame_figures(const std::string& path, const EnvMap& map, const ProbeTransfer* probes,
+                           const std::vector<glm::vec3>& lit) {
   Renderer r;
   const Mesh m = load_mesh(path);
   r.set_mesh(m, bench::synthetic_transfer(m, 3, 3));
@@ -168,15 +181,38 @@ double diffuse_frame_ms(const std::string& path, const EnvMap& map) {
   r.set_lighting(project(map, 3));
   r.set_shading(Shading::Transfer);
   const Camera cam = default_camera(m);
-  r.draw_only(cam, 512, 512);
-  std::vector<double> ms;
-  for (int i = 0; i < 20; ++i) {
-    const auto a = std::chrono::steady_clock::now();
+  const auto time = [&](const std::function<void()>& before) {
     r.draw_only(cam, 512, 512);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+    std::vector<double> ms;
+    for (int i = 0; i < 20; ++i) {
+      const auto a = std::chrono::steady_clock::now();
+      before();
+      r.draw_only(cam, 512, 512);
+      ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+    }
+    return median_ms(ms);
+  };
+  FrameFigures f;
+  f.frame = time([] {});
+  if (probes && probes->bands == 3) {
+    r.set_probe_object(m, *probes, glm::vec3(0.8f));
+    // The mesh scaled into the volume's centre cell region (where it is drawn
+    // does not change the per-vertex work).
+    glm::dvec3 lo(m.positions[0]), hi = lo;
+    for (const glm::vec3& p : m.positions) {
+      lo = glm::min(lo, glm::dvec3(p));
+      hi = glm::max(hi, glm::dvec3(p));
+    }
+    const glm::dvec3 centre = 0.5 * (probes->grid.min + probes->grid.max);
+    const double scale = 2.0 * glm::length(probes->grid.spacing()) / std::max(glm::length(hi - lo), 1e-30);
+    glm::mat4 model = glm::mat4(float(scale));
+    model[3] = glm::vec4(glm::vec3(centre - scale * 0.5 * (lo + hi)), 1.0f);
+    r.set_probe_object_model(model);
+    r.set_probe_lighting(lit);
+    f.object_frame = time([] {});
+    f.upload_and_frame = time([&] { r.set_probe_lighting(lit); });
   }
-  std::nth_element(ms.begin(), ms.begin() + 10, ms.end());
-  return ms[10];
+  return f;
 }
 
 }  // namespace
@@ -449,9 +485,14 @@ int main(int argc, char** argv) {
                double(partial) / double(std::max<std::size_t>(t.stored(), 1)), relighter.bright_pixels(), median(light), median(sum),
                median(both), *std::min_element(both.begin(), both.end()));
     if (!frame_mesh.empty()) {
-      const double frame = diffuse_frame_ms(frame_mesh, map);
+      const FrameFigures f = frame_figures(frame_mesh, map, &t, lit);
       fmt::print("diffuse PRT frame of {} (3 bands RGB, 512 x 512, median of 20): {:.2f} ms; volume relight / frame: {:.2f}x (medians)\n",
-                 frame_mesh, frame, median(both) / frame);
+                 frame_mesh, f.frame, median(both) / f.frame);
+      if (f.object_frame > 0)
+        fmt::print("GPU, the same mesh also drawn as a probe-lit object: frame {:.2f} ms (+{:.2f} ms: its interpolation pass "
+                   "and draw); every relit probe uploaded before it: {:.2f} ms (+{:.2f} ms: the upload, {:.1f} MB)\n",
+                   f.object_frame, f.object_frame - f.frame, f.upload_and_frame, f.upload_and_frame - f.object_frame,
+                   double(lit.size()) * 12.0 / 1e6);
     }
     return 0;
   }

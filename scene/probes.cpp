@@ -18,6 +18,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <numbers>
@@ -247,6 +248,10 @@ void write_probe_transfer(const std::string& path, const ProbeTransfer& t) {
 }
 
 bool is_probe_file(const std::string& path) {
+  // Only a regular file is opened: a FIFO would block here, before the
+  // reader that names the problem (check_input_file) is reached.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   std::ifstream f(path, std::ios::binary);
   char head[8] = {};
   f.read(head, 8);

@@ -33,6 +33,20 @@ TEST(ProbesCli, PrecomputeRelightReferenceCompare) {
   ASSERT_TRUE(is_probe_file(dir.file("p.prt")));
   const ProbeTransfer t = read_probe_transfer(dir.file("p.prt"));
   EXPECT_EQ(t.bands, 3);  // the default for probes
+  // prt info describes it (text and JSON, the counts the file holds).
+  r = run_prt(dir, {"info", dir.file("p.prt"), "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  {
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["kind"], "probe volume");
+    EXPECT_EQ(j["dims"], nlohmann::json({5, 4, 5}));
+    EXPECT_EQ(j["stored"].get<std::size_t>(), t.stored());
+    EXPECT_EQ(j["stored"].get<std::size_t>() + j["sky"].get<std::size_t>() + j["invalid"].get<std::size_t>(), t.probes());
+    EXPECT_EQ(j["bytes"].get<std::size_t>(), t.bytes());
+  }
+  r = run_prt(dir, {"info", dir.file("p.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.out.find("probe volume 5x4x5"), std::string::npos) << r.out;
   // Query points at the stored probes, facing up and sideways: there the
   // relit value is the probe's own (its trilinear weight is 1).
   std::string csv = "x,y,z,nx,ny,nz\n";

@@ -96,7 +96,7 @@ struct ProbeTransfer {
   int bounces = 0;        // interreflected: diffuse bounces traced (>= 1)
   int bounce_bands = 0;   // interreflected: bands of the environment the bounce matrices take
   int channels = 1;       // of the bounce matrices: 3 when the albedo is not grey
-  int rays_per_texel = 4; // rays per texel of the traced base cube (cube_res / 4), a k x k grid
+  int rays_per_texel = 4; // rays per texel of the traced base cube (cube_res / 4): k^2, a k x k jittered grid
   std::uint64_t seed = 1;
   std::uint64_t scene_hash = 0;  // Scene::hash() of the scene it was computed for (0: a bare mesh's Mesh::hash)
   float depth_cap = 0;           // hit distances are capped here (1.5 x the largest spacing)
@@ -146,7 +146,8 @@ std::string probe_transfer_problem(const ProbeTransfer& t);
 // Files (docs/FORMAT.md "Probe volume"): write through a temporary file and
 // rename; read validates everything (checksum, sizes, probe_transfer_problem)
 // and throws prt::Error naming the file. is_probe_file: the file's
-// signature is a probe volume's (false for anything else, readable or not).
+// signature is a probe volume's (false for anything else, readable or not,
+// and for anything but a regular file: a FIFO is not opened).
 void write_probe_transfer(const std::string& path, const ProbeTransfer& t);
 ProbeTransfer read_probe_transfer(const std::string& path);
 bool is_probe_file(const std::string& path);

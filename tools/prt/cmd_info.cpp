@@ -1,6 +1,7 @@
 // prt info: what a transfer file holds (docs/FORMAT.md).
 #include "commands.h"
 
+#include <prt/probes.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 
@@ -111,7 +112,70 @@ nlohmann::ordered_json to_json(const std::string& path, const WaveletTransfer& t
   return j;
 }
 
+// A probe volume (prt precompute SCENE --probes; docs/PROBES.md).
+nlohmann::ordered_json to_json(const std::string& path, const ProbeTransfer& t) {
+  std::size_t sky = 0, invalid = 0;
+  for (ProbeState s : t.state) {
+    sky += s == ProbeState::Sky;
+    invalid += s == ProbeState::Invalid;
+  }
+  const std::size_t stored = t.stored();
+  const double per = double(std::max<std::size_t>(stored, 1));
+  const glm::dvec3 spacing = t.grid.spacing();
+  nlohmann::ordered_json j;
+  j["file"] = path;
+  j["kind"] = "probe volume";
+  j["dims"] = t.grid.dims;
+  j["min"] = {t.grid.min.x, t.grid.min.y, t.grid.min.z};
+  j["max"] = {t.grid.max.x, t.grid.max.y, t.grid.max.z};
+  j["spacing"] = {spacing.x, spacing.y, spacing.z};
+  j["probes"] = t.probes();
+  j["stored"] = stored;
+  j["sky"] = sky;
+  j["invalid"] = invalid;
+  j["bands"] = t.bands;
+  j["mode"] = std::string(transfer_mode_name(t.mode));
+  j["bounces"] = t.bounces;
+  j["bounce_bands"] = t.bounce_bands;
+  j["bounce_channels"] = t.mode == TransferMode::Interreflected ? t.channels : 0;
+  j["cube_res"] = t.cube_res;
+  j["rays_per_base_texel"] = t.rays_per_texel;
+  j["depth_res"] = t.depth_res;
+  j["seed"] = t.seed;
+  j["scene_hash"] = fmt::format("{:#018x}", t.scene_hash);
+  j["nodes_per_stored_probe"] = double(t.vis_nodes.size()) / per;
+  j["partial_texels_per_stored_probe"] = double(t.partial_nodes.size()) / per;
+  j["bytes"] = t.bytes();
+  j["bytes_per_stored_probe"] = double(t.bytes()) / per;
+  return j;
+}
+
 int run_info(const InfoArgs& a) {
+  if (is_probe_file(a.file)) {
+    const ProbeTransfer t = read_probe_transfer(a.file);  // validates everything
+    const nlohmann::ordered_json j = to_json(a.file, t);
+    if (a.json) {
+      fmt::print("{}\n", j.dump(2));
+      return 0;
+    }
+    const glm::dvec3 sp = t.grid.spacing();
+    fmt::print("{}: probe volume {}x{}x{} ({} probes: {} stored, {} see only sky, {} inside geometry)\n", a.file,
+               t.grid.dims[0], t.grid.dims[1], t.grid.dims[2], t.probes(), t.stored(), j["sky"].get<std::size_t>(),
+               j["invalid"].get<std::size_t>());
+    fmt::print("  box ({:.4g}, {:.4g}, {:.4g}) to ({:.4g}, {:.4g}, {:.4g}), spacing {:.4g} x {:.4g} x {:.4g}\n", t.grid.min.x,
+               t.grid.min.y, t.grid.min.z, t.grid.max.x, t.grid.max.y, t.grid.max.z, sp.x, sp.y, sp.z);
+    fmt::print("  {} bands out, {}{}; visibility cube {}^2 a face ({} rays per base texel), depth moments {}^2\n", t.bands,
+               transfer_mode_name(t.mode),
+               t.mode == TransferMode::Interreflected
+                   ? fmt::format(" ({} bounces, bounce matrices from {} bands, {} channel{})", t.bounces, t.bounce_bands,
+                                 t.channels, t.channels == 1 ? "" : "s")
+                   : std::string(),
+               t.cube_res, t.rays_per_texel, t.depth_res);
+    fmt::print("  {} bytes, {:.0f} per stored probe ({:.1f} quadtree nodes, {:.1f} partial texels each); scene hash {}\n",
+               t.bytes(), j["bytes_per_stored_probe"].get<double>(), j["nodes_per_stored_probe"].get<double>(),
+               j["partial_texels_per_stored_probe"].get<double>(), j["scene_hash"].get<std::string>());
+    return 0;
+  }
   if (read_transfer_basis(a.file) == TransferBasis::Wavelet && transfer_is_lightmap(a.file)) {
     const WaveletLightmap w = read_wavelet_lightmap(a.file);  // validates everything
     if (a.json) {
@@ -185,10 +249,11 @@ Run add_info(CLI::App& app) {
       "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes, and how\n"
       "many vertices are analytic (unoccluded: no stored transfer) with the bytes that saves;\n"
       "for a wavelet transfer: cube resolution, threshold, kept fraction and bytes per vertex; for a compressed\n"
-      "one (prt compress) its clusters, principal vectors, weight and index widths and bytes per signal.\n"
+      "one (prt compress) its clusters, principal vectors, weight and index widths and bytes per signal;\n"
+      "for a probe volume (prt precompute SCENE --probes) its grid, probe states, cube and sizes.\n"
       "The format is specified in docs/FORMAT.md. Exits non-zero, naming the problem, on a bad file.\n"
       "Example: prt info bunny.prtt --json");
-  s->add_option("FILE", a->file, "Transfer file written by prt precompute")->required();
+  s->add_option("FILE", a->file, "Transfer file written by prt precompute or prt compress, or a probe volume")->required();
   s->add_flag("--json", a->json, "Print a JSON object instead of text");
   return [a] { return run_info(*a); };
 }
