@@ -10,6 +10,8 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   # numerics, threading, ray tracing; Open MPI (prt precompute under mpirun)
   libtbb-dev libembree-dev libglm-dev libxxhash-dev libopenblas-pthread-dev libopenmpi-dev openmpi-bin
+  # small dense linear algebra (header only): the compression meter's eigenproblems
+  libeigen3-dev
   # images and meshes
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
   # glTF export (header only: scene/gltf.cpp compiles it in)

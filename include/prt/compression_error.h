@@ -11,6 +11,8 @@
 
 #include <glm/vec3.hpp>
 
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -58,5 +60,89 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
 // centre at the distance of prt render's default camera (a 40 degree view
 // framing the bounding sphere), starting on +Z.
 std::vector<glm::dvec3> eye_ring(const Mesh& mesh, int count);
+
+// ---- The error over a distribution of lightings and views ----
+// (docs/COMPRESSION.md "The error distribution"). A compression is judged
+// by its relit error under many lightings and views, not one: each given
+// map under `rotations` uniformly random rotations (the environment turns
+// at run time), and for glossy transfers from eyes all around the mesh, at
+// several Phong exponents and specular strengths. Each sample (lighting,
+// and for glossy: eye, exponent, strength) gives one relative RMS over the
+// vertices, sqrt(sum |a - b|^2 / sum |b|^2) as compression_error; the
+// statistics are over the samples.
+
+// One map's SH lighting (RGB, at least the transfer's bands^2), and its name.
+struct NamedLighting {
+  std::string name;
+  std::vector<glm::dvec3> sh;
+};
+
+struct ErrorDistribution {
+  std::vector<NamedLighting> maps;
+  int rotations = 24;         // per map: the map as given, then rotations - 1 uniformly random ones
+  std::uint64_t seed = 1;     // of the rotations
+  int eyes = 32;              // glossy: eye points on a sphere around the mesh (eye_sphere)
+  std::vector<double> glosses{4, 8, 16, 32};      // glossy: Phong exponents
+  std::vector<double> speculars{0.25, 0.5, 1.0};  // glossy: specular strengths rho_s
+  // A sentence naming what it holds (maps, rotations, eyes, lobes).
+  std::string describe(bool glossy) const;
+};
+
+// The lightings of `d`: map-major, every map's `rotations` rotations of its
+// SH (the first unrotated), `bands`^2 coefficients each.
+std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribution& d, int bands);
+
+// `count` eye points spread evenly over a sphere around the mesh's
+// bounding-box centre (a Fibonacci lattice), at the distance of prt render's
+// default camera (eye_ring's distance).
+std::vector<glm::dvec3> eye_sphere(const Mesh& mesh, int count);
+
+// Which statistic --target-error holds to (docs/COMPRESSION.md says why p95).
+enum class ErrorStatistic { P95, Mean };
+const char* statistic_name(ErrorStatistic s);
+
+struct ErrorStats {
+  double mean = 0, p95 = 0, max = 0;  // over the samples
+  double pooled = 0;                  // every sample's squares summed before the ratio
+  std::size_t samples = 0, vertices = 0;  // vertices: those measured (a subset when a search samples them)
+  // The transfer-space bound: the largest relative RMS that any lighting
+  // (any SH vector, RGB) can give the diffuse radiance, sqrt of the largest
+  // generalised eigenvalue of (sum_v d_v d_v^T, sum_v x_v x_v^T), d the
+  // rows' differences and x the rows; for glossy transfers the same of the
+  // whole radiance pooled over the eye sphere, the largest over the
+  // exponents and strengths. Lighting-independent: no lighting exceeds it.
+  double bound = 0;
+  double value(ErrorStatistic s) const { return s == ErrorStatistic::Mean ? mean : p95; }
+};
+
+// Measures compressions of one transfer under one distribution. The
+// constructor computes everything that does not depend on the compression
+// (the reference radiance, the lightings, the eyes' lobes); each call then
+// costs one pass over the measured vertices' rows. `max_vertices` > 0
+// measures a fixed random subset of that many vertices (a search's quick
+// estimate; 0: all). Throws prt::Error for a distribution without maps, or
+// without eyes, exponents or strengths for a glossy transfer.
+class CompressionErrorMeter {
+ public:
+  CompressionErrorMeter(const Transfer& t, const Mesh& mesh, const ErrorDistribution& d, std::size_t max_vertices = 0);
+  ~CompressionErrorMeter();
+  CompressionErrorMeter(CompressionErrorMeter&&) noexcept;
+  // The error of the diffuse radiance alone with the coefficients `coeffs`
+  // (glossy transfers: their diffuse part, under the lightings only).
+  ErrorStats diffuse(const ClusteredSignal& coeffs, bool bound = false) const;
+  // The error of the whole radiance (diffuse and glossy) of a glossy
+  // transfer with these coefficients and glossy matrices.
+  ErrorStats glossy(const ClusteredSignal& coeffs, const ClusteredSignal& glossy, bool bound = false) const;
+  // The error of the glossy part alone (rho_s times the lobe's radiance),
+  // over the samples whose eye sees some of it.
+  ErrorStats glossy_part(const ClusteredSignal& glossy, bool bound = false) const;
+  // Either, as fits the transfer.
+  ErrorStats operator()(const CompressedTransfer& c, bool bound = true) const;
+  std::size_t vertices() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace prt

@@ -223,8 +223,8 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
   return 0;
 }
 
-int run_export(const ExportArgs& given) {
-  ExportArgs a = given;
+int run_export(const ExportArgs& args) {
+  ExportArgs a = args;  // --probes FILE becomes the transfer
   if (!a.probes.empty()) {
     if (!a.transfer.empty() && a.transfer != a.probes)
       throw UsageError("--probes " + a.probes + " exports a probe volume as JSON; " + a.transfer +

@@ -1,0 +1,244 @@
+// The error of a compression over a distribution of lightings and views
+// (prt::CompressionErrorMeter, prt/compression_error.h): every sample is the
+// relit error compression_error measures by relighting, the statistics are
+// those of the samples, the bound is one no lighting exceeds.
+#include <prt/compressed_transfer.h>
+#include <prt/compression_error.h>
+#include <prt/error.h>
+#include <prt/precompute.h>
+#include <prt/rotation.h>
+
+#include "test_meshes.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <vector>
+
+namespace prt {
+namespace {
+
+// The meter reconstructs rows in float and sums in double; relighting the
+// compressed transfer goes through float per-cluster products: the two
+// relative errors agree to a few float ulps of the radiance over its error,
+// here (errors of 1e-3 and more) to 1e-4 of the error.
+constexpr double kRelative = 1e-4;
+
+std::vector<glm::dvec3> random_lighting(int bands, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  std::vector<glm::dvec3> l(std::size_t(bands) * bands);
+  for (auto& c : l) c = {g(rng), g(rng), g(rng)};
+  l[0] += glm::dvec3(5.0, 4.0, 3.0);
+  return l;
+}
+
+Transfer make_transfer(const Mesh& m, TransferMode mode, bool glossy, glm::vec3 albedo) {
+  TransferOptions o;
+  o.mode = mode;
+  o.bands = 3;
+  o.samples = 128;
+  o.glossy = glossy;
+  o.albedo = albedo;
+  return compute_transfer(m, o);
+}
+
+ErrorDistribution small_distribution() {
+  ErrorDistribution d;
+  d.maps = {{"a", random_lighting(4, 1)}, {"b", random_lighting(4, 2)}};
+  d.rotations = 3;
+  d.eyes = 5;
+  d.glosses = {4, 16};
+  d.speculars = {0.3, 1.0};
+  return d;
+}
+
+std::vector<double> sorted(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+// Every sample of the meter, recomputed by relighting (compression_error of
+// one lighting, one eye, one lobe), in any order: the same statistics.
+void expect_samples_are_relit_errors(const Transfer& t, const Mesh& m) {
+  const ErrorDistribution d = small_distribution();
+  CompressOptions o;
+  o.clusters = 3;
+  o.vectors = 1;
+  const CompressedTransfer c = compress_transfer(t, o);
+  const CompressionErrorMeter meter(t, m, d);
+  const ErrorStats s = meter(c);
+  const auto lights = distribution_lightings(d, t.bands);
+  ASSERT_EQ(lights.size(), 6u);
+  std::vector<double> errors;
+  if (!t.glossy) {
+    for (const auto& l : lights) {
+      CompressionErrorOptions e;
+      e.lights = {l};
+      errors.push_back(compression_error(t, c, m, e));
+    }
+  } else {
+    for (const glm::dvec3& eye : eye_sphere(m, d.eyes))
+      for (double gloss : d.glosses)
+        for (const auto& l : lights)
+          for (double rho : d.speculars) {
+            CompressionErrorOptions e;
+            e.lights = {l};
+            e.eyes = {eye};
+            e.gloss = gloss;
+            e.specular = rho;
+            errors.push_back(compression_error(t, c, m, e));
+          }
+  }
+  ASSERT_EQ(s.samples, errors.size());
+  const std::vector<double> e = sorted(errors);
+  const double mean = std::accumulate(e.begin(), e.end(), 0.0) / double(e.size());
+  const double p95 = e[std::size_t(std::ceil(0.95 * double(e.size()))) - 1];
+  EXPECT_GT(mean, 1e-3) << "a lossy compression";
+  EXPECT_NEAR(s.mean, mean, kRelative * mean);
+  EXPECT_NEAR(s.p95, p95, kRelative * p95);
+  EXPECT_NEAR(s.max, e.back(), kRelative * e.back());
+  EXPECT_LE(s.mean, s.p95);
+  EXPECT_LE(s.p95, s.max);
+  EXPECT_EQ(s.vertices, t.vertices);
+}
+
+TEST(CompressionErrorMeter, EverySampleIsTheRelitErrorDiffuse) {
+  const Mesh m = test::floor_and_ball(8);
+  expect_samples_are_relit_errors(make_transfer(m, TransferMode::Shadowed, false, glm::vec3(0.8f)), m);
+  expect_samples_are_relit_errors(make_transfer(m, TransferMode::Interreflected, false, glm::vec3(0.9f, 0.6f, 0.3f)), m);
+}
+
+TEST(CompressionErrorMeter, EverySampleIsTheRelitErrorGlossy) {
+  const Mesh m = test::floor_and_ball(8);
+  expect_samples_are_relit_errors(make_transfer(m, TransferMode::Shadowed, true, glm::vec3(0.8f)), m);
+  expect_samples_are_relit_errors(make_transfer(m, TransferMode::Interreflected, true, glm::vec3(0.9f, 0.6f, 0.3f)), m);
+}
+
+// No lighting, however unnatural (any SH vector, any sign), gives the
+// diffuse radiance a larger relative error than the bound; and the bound is
+// not slack: the worst of many random lightings comes near it.
+TEST(CompressionErrorMeter, NoLightingExceedsTheBound) {
+  const Mesh m = test::floor_and_ball(8);
+  for (const bool rgb : {false, true}) {
+    const Transfer t = make_transfer(m, rgb ? TransferMode::Interreflected : TransferMode::Shadowed, false,
+                                     rgb ? glm::vec3(0.9f, 0.6f, 0.3f) : glm::vec3(0.8f));
+    CompressOptions o;
+    o.clusters = 2;
+    o.vectors = 2;
+    const CompressedTransfer c = compress_transfer(t, o);
+    const ErrorStats s = CompressionErrorMeter(t, m, small_distribution())(c);
+    ASSERT_GT(s.bound, s.max);
+    std::mt19937 rng(9);
+    std::normal_distribution<double> g;
+    double worst = 0;
+    for (int i = 0; i < 3000; ++i) {
+      std::vector<glm::dvec3> l(9);
+      for (auto& x : l) x = {g(rng), rgb ? g(rng) : 0.0, rgb ? g(rng) : 0.0};
+      CompressionErrorOptions e;
+      e.lights = {l};
+      const double err = compression_error(t, c, m, e);
+      EXPECT_LE(err, s.bound * (1 + kRelative)) << "lighting " << i;
+      worst = std::max(worst, err);
+    }
+    EXPECT_GT(worst, 0.5 * s.bound) << "rgb " << rgb;
+  }
+}
+
+// Glossy: the bound holds for the error pooled over the eye sphere, at each
+// exponent and strength of the distribution.
+TEST(CompressionErrorMeter, NoLightingExceedsTheGlossyBound) {
+  const Mesh m = test::floor_and_ball(8);
+  const Transfer t = make_transfer(m, TransferMode::Shadowed, true, glm::vec3(0.8f));
+  CompressOptions o;
+  o.clusters = 2;
+  o.vectors = 1;
+  const CompressedTransfer c = compress_transfer(t, o);
+  const ErrorDistribution d = small_distribution();
+  const ErrorStats s = CompressionErrorMeter(t, m, d)(c);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  for (int i = 0; i < 200; ++i) {
+    std::vector<glm::dvec3> l(9);
+    for (auto& x : l) x = {g(rng), g(rng), g(rng)};
+    CompressionErrorOptions e;
+    e.lights = {l};
+    e.eyes = eye_sphere(m, d.eyes);
+    e.gloss = d.glosses[std::size_t(i) % d.glosses.size()];
+    e.specular = d.speculars[std::size_t(i / 2) % d.speculars.size()];
+    EXPECT_LE(compression_error(t, c, m, e), s.bound * (1 + kRelative)) << "lighting " << i;
+  }
+}
+
+// A subset of vertices measures nearly what all of them do.
+TEST(CompressionErrorMeter, ASubsetOfVerticesEstimatesTheWhole) {
+  const Mesh m = test::floor_and_ball(12);
+  const Transfer t = make_transfer(m, TransferMode::Shadowed, true, glm::vec3(0.8f));
+  CompressOptions o;
+  o.clusters = 4;
+  o.vectors = 2;
+  const CompressedTransfer c = compress_transfer(t, o);
+  const ErrorDistribution d = small_distribution();
+  const CompressionErrorMeter all(t, m, d), some(t, m, d, t.vertices / 3);
+  EXPECT_EQ(some.vertices(), t.vertices / 3);
+  const ErrorStats a = all(c, false), b = some(c, false);
+  EXPECT_EQ(b.vertices, t.vertices / 3);
+  EXPECT_NE(a.mean, b.mean);
+  // A third of the vertices: the mean within a quarter of itself.
+  EXPECT_NEAR(b.mean, a.mean, 0.25 * a.mean);
+}
+
+// Rotations keep each band's power; the first lighting of a map is the map.
+TEST(CompressionErrorMeter, RotationsKeepEachBandsPower) {
+  ErrorDistribution d = small_distribution();
+  d.rotations = 7;
+  const auto lights = distribution_lightings(d, 4);
+  ASSERT_EQ(lights.size(), 14u);
+  for (std::size_t k = 0; k < lights.size(); ++k) {
+    const auto& map = d.maps[k / 7].sh;
+    if (k % 7 == 0) {
+      for (std::size_t i = 0; i < 16; ++i) EXPECT_EQ(lights[k][i], map[i]);
+    }
+    for (int l = 0; l < 4; ++l) {
+      double a = 0, b = 0;
+      for (int i = l * l; i < (l + 1) * (l + 1); ++i) {
+        a += glm::dot(lights[k][std::size_t(i)], lights[k][std::size_t(i)]);
+        b += glm::dot(map[std::size_t(i)], map[std::size_t(i)]);
+      }
+      EXPECT_NEAR(a, b, 1e-9 * b) << "lighting " << k << " band " << l;
+    }
+  }
+  // Different rotations: not all the same lighting.
+  EXPECT_NE(lights[1][1], lights[2][1]);
+  d.rotations = 0;
+  EXPECT_THROW(distribution_lightings(d, 4), Error);
+  d.rotations = 1;
+  EXPECT_THROW(distribution_lightings(d, 5), Error);  // the maps have 4 bands
+}
+
+// Eyes all around: on eye_ring's sphere, spread over every direction.
+TEST(CompressionErrorMeter, EyesCoverTheSphere) {
+  const Mesh m = test::floor_and_ball(8);
+  const std::vector<glm::dvec3> eyes = eye_sphere(m, 64), ring = eye_ring(m, 4);
+  ASSERT_EQ(eyes.size(), 64u);
+  const glm::dvec3 c = 0.5 * (ring[0] + ring[2]);
+  const double r = glm::length(ring[0] - c);
+  glm::dvec3 sum(0.0);
+  int above = 0;
+  for (const glm::dvec3& e : eyes) {
+    EXPECT_NEAR(glm::length(e - c), r, 1e-9 * r);
+    sum += (e - c) / r;
+    above += e.y > c.y;
+  }
+  EXPECT_LT(glm::length(sum) / 64.0, 0.05);
+  EXPECT_EQ(above, 32);
+  EXPECT_THROW(eye_sphere(m, 0), Error);
+}
+
+}  // namespace
+}  // namespace prt
