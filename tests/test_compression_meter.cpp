@@ -175,6 +175,76 @@ TEST(CompressionErrorMeter, NoLightingExceedsTheGlossyBound) {
   }
 }
 
+// The glossy part alone: every sample is the relit error of the lobe's
+// radiance (no diffuse part, rho_s = 1), over the samples that see some.
+TEST(CompressionErrorMeter, TheGlossyPartAlone) {
+  const Mesh m = test::floor_and_ball(8);
+  const Transfer t = make_transfer(m, TransferMode::Shadowed, true, glm::vec3(0.8f));
+  CompressOptions o;
+  o.clusters = 3;
+  o.vectors = 1;
+  const CompressedTransfer c = compress_transfer(t, o);
+  const ErrorDistribution d = small_distribution();
+  const ErrorStats s = CompressionErrorMeter(t, m, d).glossy_part(c.glossy, true);
+  std::vector<double> errors;
+  for (const glm::dvec3& eye : eye_sphere(m, d.eyes))
+    for (double gloss : d.glosses)
+      for (const auto& l : distribution_lightings(d, t.bands)) {
+        GlossyShading g;
+        g.eye = eye;
+        g.gloss = gloss;
+        g.specular = 1.0;
+        g.diffuse = glm::dvec3(0.0);
+        // The coefficients uncompressed: only the glossy matrices differ.
+        CompressedTransfer only = c;
+        CompressOptions exact;
+        exact.clusters = 1;
+        exact.vectors = 1 << 20;
+        only.coeffs = compress_transfer(t, exact).coeffs;
+        const std::vector<glm::vec3> a = relight_glossy(only, m, l, g), b = relight_glossy(t, m, l, g);
+        double diff = 0, ref = 0;
+        for (std::size_t v = 0; v < a.size(); ++v) {
+          diff += glm::dot(glm::dvec3(a[v] - b[v]), glm::dvec3(a[v] - b[v]));
+          ref += glm::dot(glm::dvec3(b[v]), glm::dvec3(b[v]));
+        }
+        if (ref > 0) errors.push_back(std::sqrt(diff / ref));
+      }
+  ASSERT_EQ(s.samples, errors.size());
+  const std::vector<double> e = sorted(errors);
+  const double mean = std::accumulate(e.begin(), e.end(), 0.0) / double(e.size());
+  EXPECT_GT(mean, 1e-3);
+  EXPECT_NEAR(s.mean, mean, kRelative * mean);
+  EXPECT_NEAR(s.p95, e[std::size_t(std::ceil(0.95 * double(e.size()))) - 1], kRelative * s.p95);
+  EXPECT_NEAR(s.max, e.back(), kRelative * e.back());
+  // The bound: no lighting (any SH vector) gives the glossy part, pooled
+  // over the eye sphere, a larger error, at any of the exponents.
+  CompressedTransfer only = c;
+  CompressOptions exact;
+  exact.clusters = 1;
+  exact.vectors = 1 << 20;
+  only.coeffs = compress_transfer(t, exact).coeffs;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> gauss;
+  for (int i = 0; i < 60; ++i) {
+    std::vector<glm::dvec3> l(9);
+    for (auto& x : l) x = {gauss(rng), gauss(rng), gauss(rng)};
+    double diff = 0, ref = 0;
+    for (const glm::dvec3& eye : eye_sphere(m, d.eyes)) {
+      GlossyShading g;
+      g.eye = eye;
+      g.gloss = d.glosses[std::size_t(i) % d.glosses.size()];
+      g.specular = 1.0;
+      g.diffuse = glm::dvec3(0.0);
+      const std::vector<glm::vec3> a = relight_glossy(only, m, l, g), b = relight_glossy(t, m, l, g);
+      for (std::size_t v = 0; v < a.size(); ++v) {
+        diff += glm::dot(glm::dvec3(a[v] - b[v]), glm::dvec3(a[v] - b[v]));
+        ref += glm::dot(glm::dvec3(b[v]), glm::dvec3(b[v]));
+      }
+    }
+    EXPECT_LE(std::sqrt(diff / ref), s.bound * (1 + kRelative)) << "lighting " << i;
+  }
+}
+
 // A subset of vertices measures nearly what all of them do.
 TEST(CompressionErrorMeter, ASubsetOfVerticesEstimatesTheWhole) {
   const Mesh m = test::floor_and_ball(12);
