@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 // LAPACK (OpenBLAS exports the Fortran symbols; Debian ships no LAPACKE
 // with it): eigenvalues and eigenvectors of a symmetric matrix, a range of
@@ -198,36 +199,8 @@ struct Fitter {
   }
 };
 
-}  // namespace
 
-void Cpca::reconstruct(std::size_t p, double* out) const {
-  PRT_CHECK_OP(p, <, points);
-  const std::size_t k = cluster[p];
-  std::copy_n(means.data() + k * dim, dim, out);
-  for (int j = 0; j < vectors; ++j) {
-    const double w = weights[p * std::size_t(vectors) + j];
-    const double* b = bases.data() + (k * vectors + j) * dim;
-    for (std::size_t i = 0; i < dim; ++i) out[i] += w * b[i];
-  }
-}
-
-Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
-  if (dim == 0 || points.size() % dim != 0 || points.empty())
-    throw Error(fmt::format("cpca: {} values are not whole points of {} values", points.size(), dim));
-  const std::size_t P = points.size() / dim;
-  if (o.clusters < 1 || std::size_t(o.clusters) > P)
-    throw Error(fmt::format("cpca: clusters must be 1 to the number of points ({}), got {}", P, o.clusters));
-  if (o.vectors < 0 || std::size_t(o.vectors) > dim)
-    throw Error(fmt::format("cpca: vectors must be 0 to the signal's dimension ({}), got {}", dim, o.vectors));
-  if (o.iterations < 1) throw Error(fmt::format("cpca: iterations must be at least 1, got {}", o.iterations));
-  if (dim > (1u << 14)) throw Error(fmt::format("cpca: a signal of {} values is too long (at most 16384)", dim));
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
-  if (start && (start->dim != dim || start->points != P || start->clusters > o.clusters))
-    throw Error("cpca: the warm start is a fit of other points or of more clusters");
-
-  detail::blas_single_threaded();
-  const std::vector<double> x(points.begin(), points.end());
+Cpca fit_points(const std::vector<double>& x, std::size_t P, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
   const int K = o.clusters, N = o.vectors;
   const Fitter fit{x, P, dim, K, N};
   Cpca m;
@@ -306,6 +279,189 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
   return m;
 }
 
+
+// The points' affine span when it is much narrower than their dimension:
+// x_p = origin + sum_i z_pi u_i up to a residual, the u_i orthonormal (rows
+// of u). Glossy matrices are the case: a 5-band symmetric matrix has 325
+// values but its entries are products of two 5-band functions integrated
+// against one visibility, which lives in the 9-band (81) space, so the rows
+// span 81 dimensions. Fitting there is the same fit (distances, scatter and
+// principal vectors all lie in the span) at a quarter of the assignment's
+// products and a small fraction of the eigensolver's.
+struct PointSpan {
+  std::vector<double> origin;  // dim: the points' mean
+  std::vector<double> u;       // r x dim, orthonormal rows
+  std::size_t r = 0;
+  double residual = 0;         // sum_p |x_p - its projection|^2 (the dropped eigenvalues)
+};
+
+// The dropped directions hold at most this fraction of the points' centred
+// energy: a relative RMS of 1e-6, above float rows' own rounding (their
+// energy ~1e-14 of the total) and far below any compression's error.
+constexpr double kSpanResidual = 1e-12;
+
+std::optional<PointSpan> narrow_span(const std::vector<double>& x, std::size_t P, std::size_t dim, int vectors) {
+  if (dim < 32 || P < 2 * dim) return std::nullopt;  // too short to gain, or too few points to tell
+  PointSpan s;
+  s.origin.assign(dim, 0.0);
+  for (std::size_t p = 0; p < P; ++p)
+    for (std::size_t i = 0; i < dim; ++i) s.origin[i] += x[p * dim + i];
+  for (double& v : s.origin) v /= double(P);
+  // The centred scatter, by blocks of points in a fixed order (the same bits
+  // on any number of threads).
+  constexpr std::size_t kBlock = 4096;
+  const std::size_t blocks = (P + kBlock - 1) / kBlock;
+  std::vector<std::vector<double>> part(blocks);
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    const std::size_t p0 = b * kBlock, n = std::min(P, p0 + kBlock) - p0;
+    std::vector<double> c(n * dim);
+    for (std::size_t q = 0; q < n; ++q)
+      for (std::size_t i = 0; i < dim; ++i) c[q * dim + i] = x[(p0 + q) * dim + i] - s.origin[i];
+    part[b].assign(dim * dim, 0.0);
+    cblas_dsyrk(CblasRowMajor, CblasUpper, CblasTrans, int(dim), int(n), 1.0, c.data(), int(dim), 0.0,
+                part[b].data(), int(dim));
+  });
+  std::vector<double> scatter(dim * dim, 0.0);
+  for (const auto& c : part)
+    for (std::size_t i = 0; i < c.size(); ++i) scatter[i] += c[i];
+  double total = 0;
+  for (std::size_t i = 0; i < dim; ++i) total += scatter[i * dim + i];
+  if (!(total > 0)) return std::nullopt;
+  std::vector<double> values, vecs(dim * dim);
+  {
+    std::vector<double> a = scatter;
+    values = std::vector<double>(dim);
+    // All eigenpairs, largest first (top_eigenvectors gives the vectors; the
+    // values are the Rayleigh quotients, exact for eigenvectors).
+    top_eigenvectors(int(dim), a.data(), int(dim), vecs.data());
+    for (std::size_t j = 0; j < dim; ++j) {
+      const double* v = vecs.data() + j * dim;
+      double q = 0;
+      for (std::size_t i = 0; i < dim; ++i) {
+        double row = 0;
+        for (std::size_t k = 0; k < dim; ++k) row += scatter[std::min(i, k) * dim + std::max(i, k)] * v[k];
+        q += v[i] * row;
+      }
+      values[j] = std::max(q, 0.0);
+    }
+  }
+  std::size_t r = dim;
+  double dropped = 0;
+  while (r > 0 && dropped + values[r - 1] <= kSpanResidual * total) dropped += values[--r];
+  r = std::max<std::size_t>(r, 1);
+  if (4 * r > 3 * dim || std::size_t(vectors) > r) return std::nullopt;  // not narrow enough to pay
+  s.r = r;
+  s.residual = dropped;
+  s.u.assign(vecs.begin(), vecs.begin() + std::ptrdiff_t(r * dim));
+  return s;
+}
+
+// fit_points in the span's coordinates, the result mapped back: means =
+// origin + u^T m', bases = u^T b' (orthonormal: u's rows are), the same
+// clusters and weights; the residual added to the errors.
+Cpca fit_in_span(const std::vector<double>& x, std::size_t P, std::size_t dim, const PointSpan& s, const CpcaOptions& o,
+                 const Cpca* start) {
+  const std::size_t r = s.r;
+  std::vector<double> c(P * dim), z(P * r);
+  for (std::size_t p = 0; p < P; ++p)
+    for (std::size_t i = 0; i < dim; ++i) c[p * dim + i] = x[p * dim + i] - s.origin[i];
+  cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, int(P), int(r), int(dim), 1.0, c.data(), int(dim), s.u.data(),
+              int(dim), 0.0, z.data(), int(r));
+  c = {};
+  // Into the span: a point (origin subtracted) or a direction.
+  const auto into = [&](const double* v, bool point, double* out) {
+    for (std::size_t j = 0; j < r; ++j) {
+      double d = 0;
+      for (std::size_t i = 0; i < dim; ++i) d += s.u[j * dim + i] * (v[i] - (point ? s.origin[i] : 0.0));
+      out[j] = d;
+    }
+  };
+  Cpca zs;
+  if (start) {
+    zs = *start;
+    zs.dim = r;
+    zs.means.assign(std::size_t(start->clusters) * r, 0.0);
+    zs.bases.assign(std::size_t(start->clusters) * start->vectors * r, 0.0);
+    for (std::size_t k = 0; k < std::size_t(start->clusters); ++k) into(start->means.data() + k * dim, true, zs.means.data() + k * r);
+    for (std::size_t b = 0; b < std::size_t(start->clusters) * start->vectors; ++b)
+      into(start->bases.data() + b * dim, false, zs.bases.data() + b * r);
+  }
+  Cpca f = fit_points(z, P, r, o, start ? &zs : nullptr);
+  Cpca m = f;
+  m.dim = dim;
+  const auto out_of = [&](const double* v, bool point, double* out) {
+    for (std::size_t i = 0; i < dim; ++i) out[i] = point ? s.origin[i] : 0.0;
+    for (std::size_t j = 0; j < r; ++j)
+      for (std::size_t i = 0; i < dim; ++i) out[i] += v[j] * s.u[j * dim + i];
+  };
+  m.means.assign(std::size_t(m.clusters) * dim, 0.0);
+  m.bases.assign(std::size_t(m.clusters) * m.vectors * dim, 0.0);
+  for (std::size_t k = 0; k < std::size_t(m.clusters); ++k) out_of(f.means.data() + k * r, true, m.means.data() + k * dim);
+  for (std::size_t b = 0; b < std::size_t(m.clusters) * m.vectors; ++b)
+    out_of(f.bases.data() + b * r, false, m.bases.data() + b * dim);
+  for (double& e : m.round_error) e += s.residual;
+  m.squared_error += s.residual;
+  return m;
+}
+
+}  // namespace
+
+void Cpca::reconstruct(std::size_t p, double* out) const {
+  PRT_CHECK_OP(p, <, points);
+  const std::size_t k = cluster[p];
+  std::copy_n(means.data() + k * dim, dim, out);
+  for (int j = 0; j < vectors; ++j) {
+    const double w = weights[p * std::size_t(vectors) + j];
+    const double* b = bases.data() + (k * vectors + j) * dim;
+    for (std::size_t i = 0; i < dim; ++i) out[i] += w * b[i];
+  }
+}
+
+Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
+  if (dim == 0 || points.size() % dim != 0 || points.empty())
+    throw Error(fmt::format("cpca: {} values are not whole points of {} values", points.size(), dim));
+  const std::size_t P = points.size() / dim;
+  if (o.clusters < 1 || std::size_t(o.clusters) > P)
+    throw Error(fmt::format("cpca: clusters must be 1 to the number of points ({}), got {}", P, o.clusters));
+  if (o.vectors < 0 || std::size_t(o.vectors) > dim)
+    throw Error(fmt::format("cpca: vectors must be 0 to the signal's dimension ({}), got {}", dim, o.vectors));
+  if (o.iterations < 1) throw Error(fmt::format("cpca: iterations must be at least 1, got {}", o.iterations));
+  if (dim > (1u << 14)) throw Error(fmt::format("cpca: a signal of {} values is too long (at most 16384)", dim));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
+  if (start && (start->dim != dim || start->points != P || start->clusters > o.clusters))
+    throw Error("cpca: the warm start is a fit of other points or of more clusters");
+
+  detail::blas_single_threaded();
+  std::vector<double> x(points.begin(), points.end());
+  if (std::optional<PointSpan> span = narrow_span(x, P, dim, o.vectors)) return fit_in_span(x, P, dim, *span, o, start);
+  return fit_points(x, P, dim, o, start);
+}
+
+Cpca apply_cpca(const Cpca& model, std::span<const float> points) {
+  const std::size_t dim = model.dim;
+  if (dim == 0 || points.size() % dim != 0 || points.empty())
+    throw Error(fmt::format("cpca: {} values are not whole points of {} values", points.size(), dim));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
+  detail::blas_single_threaded();
+  const std::size_t P = points.size() / dim;
+  const std::vector<double> x(points.begin(), points.end());
+  const Fitter fit{x, P, dim, model.clusters, model.vectors};
+  Cpca m;
+  m.dim = dim;
+  m.points = P;
+  m.clusters = model.clusters;
+  m.vectors = model.vectors;
+  m.means = model.means;
+  m.bases = model.bases;
+  m.cluster.assign(P, 0);
+  std::vector<double> point_error(P, 0.0);
+  fit.assign(m, point_error);
+  m.squared_error = fit.finish(m, point_error);
+  return m;
+}
+
 namespace {
 
 void check_options(const CompressOptions& o) {
@@ -319,32 +475,82 @@ void check_options(const CompressOptions& o) {
 
 }  // namespace
 
-ClusteredSignal compress_signal(std::span<const float> rows, std::size_t dim, const CompressOptions& o,
-                                const char* phase) {
-  check_options(o);
+const char* compression_metric_name(CompressionMetric m) { return m == CompressionMetric::Band ? "band" : "plain"; }
+
+std::vector<double> metric_scales(const Transfer& t, bool glossy, CompressionMetric metric) {
+  const std::size_t dim = glossy ? t.glossy_stride() : t.stride();
+  std::vector<double> scale(dim, 1.0);
+  if (metric == CompressionMetric::Plain) return scale;
+  const int n = t.bands;
+  const std::size_t nc = std::size_t(n) * n;
+  std::vector<int> band_of(nc);
+  for (int l = 0; l < n; ++l)
+    for (int k = l * l; k < (l + 1) * (l + 1); ++k) band_of[std::size_t(k)] = l;
+  // Each value's block and how many matrix entries it stands for.
+  std::vector<std::size_t> block(dim);
+  std::vector<double> copies(dim, 1.0);
+  std::size_t blocks = 0;
+  if (!glossy) {
+    for (std::size_t i = 0; i < dim; ++i) block[i] = (i / nc) * std::size_t(n) + std::size_t(band_of[i % nc]);
+    blocks = std::size_t(t.channels) * n;
+  } else if (t.glossy_symmetric()) {
+    std::size_t k = 0;
+    for (std::size_t p = 0; p < nc; ++p)
+      for (std::size_t q = p; q < nc; ++q, ++k) {
+        // The block of (l1, l2) and of (l2, l1) are one: a symmetric matrix.
+        const std::size_t a = std::size_t(band_of[p]), b = std::size_t(band_of[q]);
+        block[k] = std::min(a, b) * std::size_t(n) + std::max(a, b);
+        copies[k] = p == q ? 1.0 : 2.0;
+      }
+    blocks = std::size_t(n) * n;
+  } else {
+    for (std::size_t i = 0; i < dim; ++i) {
+      const std::size_t c = i / (nc * nc), e = i % (nc * nc);
+      block[i] = (c * std::size_t(n) + std::size_t(band_of[e / nc])) * std::size_t(n) + std::size_t(band_of[e % nc]);
+    }
+    blocks = std::size_t(t.glossy_channels()) * n * n;
+  }
+  const std::vector<float>& rows = glossy ? t.glossy_matrices : t.coeffs;
+  std::vector<double> sum(blocks, 0.0), count(blocks, 0.0);
+  const std::size_t R = dim ? rows.size() / dim : 0;
+  for (std::size_t r = 0; r < R; ++r)
+    for (std::size_t i = 0; i < dim; ++i) {
+      const double v = rows[r * dim + i];
+      sum[block[i]] += copies[i] * v * v;
+    }
+  for (std::size_t i = 0; i < dim; ++i) count[block[i]] += copies[i] * double(R);
+  for (std::size_t i = 0; i < dim; ++i) {
+    const double ms = count[block[i]] > 0 ? sum[block[i]] / count[block[i]] : 0.0;
+    scale[i] = std::sqrt(copies[i]) * (ms > 0 ? std::pow(ms, -0.25) : 1.0);
+  }
+  return scale;
+}
+
+ClusteredSignal signal_from_fit(const Cpca& m, int vectors, int weight_bits, std::span<const double> scales) {
+  PRT_CHECK(vectors >= 0 && vectors <= m.vectors);
+  PRT_CHECK(scales.empty() || scales.size() == m.dim);
   ClusteredSignal s;
-  s.dim = dim;
-  const std::size_t count = dim ? rows.size() / dim : 0;
-  if (count == 0) return s;  // no stored row: nothing to fit
-  CpcaOptions c;
-  c.clusters = int(std::min<std::size_t>(std::size_t(o.clusters), count));
-  c.vectors = int(std::min<std::size_t>(std::size_t(o.vectors), dim));
-  c.iterations = o.iterations;
-  c.seed = o.seed;
-  if (o.progress)
-    c.progress = [&](std::size_t done, std::size_t total, const char*) { return o.progress(done, total, phase); };
-  const Cpca m = fit_cpca(rows, dim, c);
+  s.dim = m.dim;
   s.clusters = m.clusters;
-  s.vectors = m.vectors;
-  s.means.assign(m.means.begin(), m.means.end());
-  s.bases.assign(m.bases.begin(), m.bases.end());
+  s.vectors = vectors;
+  const std::size_t D = m.dim, N = std::size_t(vectors), M = std::size_t(m.vectors), K = std::size_t(m.clusters);
+  const auto unscale = [&](std::size_t i) { return scales.empty() ? 1.0 : 1.0 / scales[i]; };
+  s.means.resize(K * D);
+  for (std::size_t k = 0; k < K; ++k)
+    for (std::size_t i = 0; i < D; ++i) s.means[k * D + i] = float(m.means[k * D + i] * unscale(i));
+  s.bases.resize(K * N * D);
+  for (std::size_t k = 0; k < K; ++k)
+    for (std::size_t j = 0; j < N; ++j)
+      for (std::size_t i = 0; i < D; ++i) s.bases[(k * N + j) * D + i] = float(m.bases[(k * M + j) * D + i] * unscale(i));
   s.cluster = m.cluster;
-  s.weights.assign(m.weights.begin(), m.weights.end());
-  if (o.weight_bits == 16) {
+  const std::size_t count = m.points;
+  s.weights.resize(count * N);
+  for (std::size_t r = 0; r < count; ++r)
+    for (std::size_t j = 0; j < N; ++j) s.weights[r * N + j] = float(m.weights[r * M + j]);
+  if (weight_bits == 16) {
     // One scale per cluster and vector: its largest |w| maps to 32767.
-    const std::size_t N = std::size_t(s.vectors);
     s.weight_bits = 16;
-    s.weight_scales.assign(std::size_t(s.clusters) * N, 0.0f);
+    s.weight_scales.assign(K * N, 0.0f);
     for (std::size_t r = 0; r < count; ++r)
       for (std::size_t j = 0; j < N; ++j) {
         float& sc = s.weight_scales[s.cluster[r] * N + j];
@@ -360,17 +566,41 @@ ClusteredSignal compress_signal(std::span<const float> rows, std::size_t dim, co
   return s;
 }
 
+ClusteredSignal compress_signal(std::span<const float> rows, std::size_t dim, const CompressOptions& o,
+                                const char* phase, std::span<const double> scales) {
+  check_options(o);
+  if (!scales.empty() && scales.size() != dim)
+    throw Error(fmt::format("compress: {} metric scales for rows of {} values", scales.size(), dim));
+  ClusteredSignal s;
+  s.dim = dim;
+  const std::size_t count = dim ? rows.size() / dim : 0;
+  if (count == 0) return s;  // no stored row: nothing to fit
+  CpcaOptions c;
+  c.clusters = int(std::min<std::size_t>(std::size_t(o.clusters), count));
+  c.vectors = int(std::min<std::size_t>(std::size_t(o.vectors), dim));
+  c.iterations = o.iterations;
+  c.seed = o.seed;
+  if (o.progress)
+    c.progress = [&](std::size_t done, std::size_t total, const char*) { return o.progress(done, total, phase); };
+  if (scales.empty()) return signal_from_fit(fit_cpca(rows, dim, c), c.vectors, o.weight_bits);
+  std::vector<float> scaled(rows.begin(), rows.end());
+  for (std::size_t i = 0; i < scaled.size(); ++i) scaled[i] = float(double(scaled[i]) * scales[i % dim]);
+  return signal_from_fit(fit_cpca(scaled, dim, c), c.vectors, o.weight_bits, scales);
+}
 
 CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& o) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
   check_options(o);
   CompressedTransfer c;
-  c.coeffs = compress_signal(t.coeffs, t.stride(), o, "coefficients");
+  const bool plain = o.metric == CompressionMetric::Plain;
+  c.coeffs = compress_signal(t.coeffs, t.stride(), o, "coefficients",
+                             plain ? std::vector<double>{} : metric_scales(t, false, o.metric));
   if (t.glossy) {
     CompressOptions g = o;
     if (o.glossy_clusters > 0) g.clusters = o.glossy_clusters;
     if (o.glossy_vectors >= 0) g.vectors = o.glossy_vectors;
-    c.glossy = compress_signal(t.glossy_matrices, t.glossy_stride(), g, "glossy matrices");
+    c.glossy = compress_signal(t.glossy_matrices, t.glossy_stride(), g, "glossy matrices",
+                               plain ? std::vector<double>{} : metric_scales(t, true, o.metric));
   }
   c.transfer = t;
   c.transfer.coeffs.clear();

@@ -312,3 +312,96 @@ TEST(CompressionErrorMeter, EyesCoverTheSphere) {
 
 }  // namespace
 }  // namespace prt
+
+namespace prt {
+namespace {
+
+// The band metric: each band block's mean square, scaled, is the square
+// root of its own (halfway, in logarithm, to unit); Plain leaves values be.
+TEST(CompressionMetric, BandHalvesEachBlocksLogPower) {
+  const Mesh m = test::floor_and_ball(6);
+  const Transfer t = make_transfer(m, TransferMode::Interreflected, false, glm::vec3(0.9f, 0.6f, 0.3f));
+  for (double s : metric_scales(t, false, CompressionMetric::Plain)) EXPECT_EQ(s, 1.0);
+  const std::vector<double> s = metric_scales(t, false, CompressionMetric::Band);
+  ASSERT_EQ(s.size(), t.stride());
+  const std::size_t nc = std::size_t(t.bands) * t.bands, rows = t.coeffs.size() / t.stride();
+  for (std::size_t c = 0; c < std::size_t(t.channels); ++c)
+    for (int l = 0; l < t.bands; ++l) {
+      double raw = 0, scaled = 0, n = 0;
+      for (std::size_t r = 0; r < rows; ++r)
+        for (std::size_t k = std::size_t(l * l); k < std::size_t((l + 1) * (l + 1)); ++k) {
+          const std::size_t i = c * nc + k;
+          const double v = t.coeffs[r * t.stride() + i];
+          raw += v * v;
+          scaled += (v * s[i]) * (v * s[i]);
+          n += 1;
+        }
+      EXPECT_NEAR(scaled / n, std::sqrt(raw / n), 1e-9 * std::sqrt(raw / n)) << "channel " << c << " band " << l;
+    }
+}
+
+// signal_from_fit: all vectors of a fit in the band metric give back the
+// rows (the scales undone); fewer vectors, a truncation, only add error.
+TEST(CompressionMetric, SignalFromFitUndoesTheScalesAndTruncates) {
+  const Mesh m = test::floor_and_ball(6);
+  const Transfer t = make_transfer(m, TransferMode::Shadowed, false, glm::vec3(0.8f));
+  const std::vector<double> s = metric_scales(t, false, CompressionMetric::Band);
+  const std::size_t D = t.stride();
+  std::vector<float> scaled(t.coeffs);
+  for (std::size_t i = 0; i < scaled.size(); ++i) scaled[i] = float(scaled[i] * s[i % D]);
+  CpcaOptions o;
+  o.clusters = 3;
+  o.vectors = int(D);
+  const Cpca f = fit_cpca(scaled, D, o);
+  CompressedTransfer c;
+  c.transfer = t;
+  c.transfer.coeffs.clear();
+  c.coeffs = signal_from_fit(f, int(D), 32, s);
+  const Transfer back = decompress(c);
+  double big = 0;
+  for (float v : t.coeffs) big = std::max(big, double(std::abs(v)));
+  for (std::size_t i = 0; i < t.coeffs.size(); ++i) ASSERT_NEAR(back.coeffs[i], t.coeffs[i], 1e-5 * big) << i;  // float rows
+  const ErrorDistribution d = small_distribution();
+  const CompressionErrorMeter meter(t, m, d);
+  double previous = 0;
+  for (int n = int(D); n >= 0; n -= 2) {
+    const double e = meter.diffuse(signal_from_fit(f, n, 16, s)).mean;
+    EXPECT_GE(e, previous * (1 - 1e-9)) << n << " vectors";
+    previous = e;
+  }
+  EXPECT_GT(previous, 1e-3);
+}
+
+// The distribution's choice meets its target, measured on every vertex; the
+// quick search's is not much larger than the exhaustive one's.
+TEST(CompressionChoice, MeetsItsTargetOverTheDistribution) {
+  const Mesh m = test::floor_and_ball(8);
+  for (bool glossy : {false, true}) {
+    const Transfer t = make_transfer(m, TransferMode::Shadowed, glossy, glm::vec3(0.8f));
+    const ErrorDistribution d = small_distribution();
+    ChoiceOptions o;
+    o.target = 0.02;
+    const CompressionChoice quick = choose_compression(t, m, d, o);
+    o.exhaustive = true;
+    const CompressionChoice full = choose_compression(t, m, d, o);
+    for (const CompressionChoice* c : {&quick, &full}) {
+      const CompressionErrorMeter meter(t, m, d);
+      const ErrorStats e = meter(c->compressed);
+      EXPECT_LE(e.p95, o.target) << glossy;
+      EXPECT_NEAR(e.p95, c->whole.p95, 1e-9) << glossy;
+      EXPECT_LE(e.p95, e.bound + 1e-12) << glossy;
+      EXPECT_EQ(c->bytes, c->compressed.coeffs.bytes() + (glossy ? c->compressed.glossy.bytes() : 0));
+    }
+    // The quick search truncates fits of more vectors and stops early: on
+    // this small mesh measured at most 1.3x (the size margin).
+    EXPECT_LE(double(quick.bytes), 1.3 * double(full.bytes)) << glossy;
+    EXPECT_LE(quick.fits, full.fits) << glossy;
+  }
+  ChoiceOptions bad;
+  bad.target = 0;
+  const Transfer t = make_transfer(m, TransferMode::Shadowed, false, glm::vec3(0.8f));
+  EXPECT_THROW(choose_compression(t, m, small_distribution(), bad), Error);
+}
+
+}  // namespace
+}  // namespace prt

@@ -4,7 +4,8 @@
 // a single cluster's basis is the covariance's top eigenvectors (checked
 // against the variance each captures); the error never grows from round to
 // round, nor as K or N grows from a warm start; the same bits on any number
-// of threads; bad input refused.
+// of threads; points of a narrow span fitted as their coordinates; a fit
+// applied to its own points reproduces it; bad input refused.
 #include <prt/cpca.h>
 #include <prt/error.h>
 
@@ -163,6 +164,86 @@ TEST(Cpca, SameBitsOnAnyNumberOfThreads) {
   EXPECT_EQ(one.weights, many.weights);
   o.seed = 2;
   EXPECT_NE(fit_cpca(x, dim, o).cluster, one.cluster);  // the seed matters
+}
+
+// Points of a narrow affine span of a long signal (glossy matrices: 325
+// values spanning 81 dimensions) are fitted in the span's coordinates: the
+// same fit as of those coordinates themselves, mapped back.
+TEST(Cpca, NarrowSpanFitsAsItsCoordinates) {
+  const std::size_t r = 10, dim = 64, n = 300;
+  const std::vector<float> z = subspace_points(4, 3, n, r, 7);  // 4 clusters of 3-dimensional subspaces in 10
+  const std::size_t P = z.size() / r;
+  // An orthonormal embedding u (r x dim, Gram-Schmidt of random rows) and an offset.
+  std::vector<double> u = [&] {
+    const std::vector<float> g = random_points(r, dim, 8);
+    std::vector<double> v(g.begin(), g.end());
+    for (std::size_t j = 0; j < r; ++j) {
+      for (std::size_t k = 0; k < j; ++k) {
+        double d = 0;
+        for (std::size_t i = 0; i < dim; ++i) d += v[j * dim + i] * v[k * dim + i];
+        for (std::size_t i = 0; i < dim; ++i) v[j * dim + i] -= d * v[k * dim + i];
+      }
+      double len = 0;
+      for (std::size_t i = 0; i < dim; ++i) len += v[j * dim + i] * v[j * dim + i];
+      for (std::size_t i = 0; i < dim; ++i) v[j * dim + i] /= std::sqrt(len);
+    }
+    return v;
+  }();
+  std::vector<float> x(P * dim);
+  for (std::size_t p = 0; p < P; ++p)
+    for (std::size_t i = 0; i < dim; ++i) {
+      double v = 0.5 + 0.01 * double(i);
+      for (std::size_t j = 0; j < r; ++j) v += double(z[p * r + j]) * u[j * dim + i];
+      x[p * dim + i] = float(v);
+    }
+  CpcaOptions o;
+  o.clusters = 4;
+  o.vectors = 2;  // fewer than the subspaces': a nonzero error to compare
+  o.iterations = 30;
+  const Cpca in_z = fit_cpca(z, r, o), in_x = fit_cpca(x, dim, o);
+  EXPECT_EQ(in_x.dim, dim);
+  EXPECT_EQ(in_z.cluster, in_x.cluster);
+  // float rows of values ~20 summed over the points: relative 1e-6 (the
+  // rows' own rounding, not the fit's).
+  constexpr double kRows = 1e-6;
+  EXPECT_NEAR(in_x.squared_error, in_z.squared_error, kRows * norm2(z));
+  EXPECT_GT(in_x.squared_error, 1.0);
+  // Bases orthonormal in the long signal; reconstruction errors as stated.
+  for (int k = 0; k < in_x.clusters; ++k)
+    for (int a = 0; a < in_x.vectors; ++a)
+      for (int b = 0; b < in_x.vectors; ++b) {
+        double d = 0;
+        for (std::size_t i = 0; i < dim; ++i)
+          d += in_x.bases[(std::size_t(k) * 2 + a) * dim + i] * in_x.bases[(std::size_t(k) * 2 + b) * dim + i];
+        EXPECT_NEAR(d, a == b ? 1.0 : 0.0, 1e-9);
+      }
+  double direct = 0;
+  std::vector<double> rec(dim);
+  for (std::size_t p = 0; p < P; ++p) {
+    in_x.reconstruct(p, rec.data());
+    for (std::size_t i = 0; i < dim; ++i) direct += std::pow(double(x[p * dim + i]) - rec[i], 2);
+  }
+  EXPECT_NEAR(direct, in_x.squared_error, kRows * norm2(x));
+  // A warm start in the span still never loses.
+  o.clusters = 6;
+  const Cpca grown = fit_cpca(x, dim, o, &in_x);
+  EXPECT_LE(grown.squared_error, in_x.squared_error * (1 + 1e-9));
+}
+
+// apply_cpca of a converged fit to its own points: the same clusters and error.
+TEST(Cpca, ApplyingAFitToItsOwnPointsReproducesIt) {
+  const std::size_t dim = 8;
+  const std::vector<float> x = subspace_points(3, 2, 200, dim, 9);
+  CpcaOptions o;
+  o.clusters = 3;
+  o.vectors = 1;
+  o.iterations = 50;
+  const Cpca m = fit_cpca(x, dim, o);
+  ASSERT_LT(m.rounds, o.iterations);  // converged: no point moves
+  const Cpca a = apply_cpca(m, x);
+  EXPECT_EQ(a.cluster, m.cluster);
+  EXPECT_NEAR(a.squared_error, m.squared_error, 1e-9 * norm2(x));
+  EXPECT_THROW(apply_cpca(m, std::span<const float>(x.data(), 7)), Error);
 }
 
 TEST(Cpca, RefusesBadInput) {

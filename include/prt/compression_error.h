@@ -31,31 +31,6 @@ struct CompressionErrorOptions {
 double compression_error(const Transfer& t, const CompressedTransfer& c, const Mesh& mesh,
                          const CompressionErrorOptions& options);
 
-// The smallest compression (in bytes: ClusteredSignal::bytes) whose relit
-// error is at most `target`, chosen per signal among a grid of K x N (K in
-// 1, 4, 16, 64, 128, 256; N in 1, 2, 4, 8, 12, 16, 24; capped at the rows
-// and each signal's dimension), candidates tried in increasing size, the
-// first that meets its target the answer. The coefficients first, by the
-// error of the diffuse radiance alone: at most `target`, or target / 2 for a
-// glossy transfer; then its glossy matrices, with those coefficients, by the
-// error of the whole (diffuse and glossy) radiance over the eyes: at most
-// `target`. `explanation` says what was chosen per signal and what the next
-// smaller candidate measured; options holds the K x N (glossy_clusters and
-// glossy_vectors the glossy matrices'), error the final relit error. Throws
-// prt::Error when a signal's grid never meets its target (naming the best
-// error reached), for a target outside (0, 1) or an inconsistent transfer.
-// `progress` is called after each candidate (tried, both grids' size).
-struct CompressionChoice {
-  CompressOptions options;
-  CompressedTransfer compressed;
-  double error = 0;
-  std::size_t bytes = 0;
-  int tried = 0;
-  std::string explanation;
-};
-CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
-                                     double target, int weight_bits = 16, const Progress& progress = {});
-
 // `count` eye points on a horizontal ring around the mesh's bounding-box
 // centre at the distance of prt render's default camera (a 40 degree view
 // framing the bounding sphere), starting on +Z.
@@ -144,5 +119,78 @@ class CompressionErrorMeter {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// ---- Choosing K x N by the error over the distribution ----
+// (issue 27, in progress: not yet what `prt compress --target-error` runs,
+// which still uses the ring search below; measured on bunny00's 5-band
+// glossy transfer under one map, the quick search takes 35 s on 2 cores,
+// docs/COMPRESSION.md). Per signal, the smallest
+// compression (in bytes: ClusteredSignal::bytes) whose error `statistic`
+// over the distribution is at most `target`: the coefficients by the
+// diffuse radiance's error (at most target sqrt(1/2) for a glossy
+// transfer), then the glossy matrices, with those coefficients, by the
+// whole radiance's error.
+// Candidates: K in 1, 2, 4, 8, 16, 32, 48, 64, 96, 128, 192, 256 x N in 1, 2,
+// 3, 4, 5, 6, 8, 10, 12, 14, 16, 20, 24 (capped at the rows and at the
+// signal's length), in the metric `metric`.
+//
+// The quick search (exhaustive false): for each K in increasing order, one
+// fit of every row with the most vectors that could still be smaller than
+// the best found, warm started from the previous K's clusters and cut short
+// at `search_rounds` rounds; every smaller N is that fit truncated (the
+// first N principal vectors of the same clusters), found by bisection and
+// measured on `search_vertices` vertices (glossy; the diffuse error is exact
+// at no cost); it stops where K's clusters alone outweigh the best. The best
+// is then fitted in full (the rounds of `iterations`, warm started) and
+// measured on every vertex; if it misses, the next N of the same K is
+// tried, and so on. The exhaustive search fits every candidate in full,
+// smallest first, and measures it on every vertex: slow, and what the quick
+// one is measured against.
+struct ChoiceOptions {
+  double target = 0.01;
+  ErrorStatistic statistic = ErrorStatistic::P95;
+  CompressionMetric metric = CompressionMetric::Band;
+  int weight_bits = 16;
+  int iterations = 20;                 // rounds of the final fit
+  int search_rounds = 6;               // rounds of each quick fit
+  std::size_t search_vertices = 4096;  // glossy: vertices the quick search measures (0: all)
+  bool exhaustive = false;
+  std::uint64_t seed = 1;
+  Progress progress;                   // after each candidate measured (tried, candidates, phase)
+};
+
+struct CompressionChoice {
+  CompressOptions options;      // K x N of each signal, the metric, the weights
+  CompressedTransfer compressed;
+  ErrorStats diffuse, glossy, whole;  // on every vertex, bounds included (glossy: the glossy part alone)
+  std::size_t bytes = 0;        // both signals
+  double error = 0;             // the ring search's (below): the relit error under its lightings and eyes
+  int tried = 0, fits = 0;      // candidates measured, clustered PCA fits run
+  std::string explanation;      // what was chosen per signal, and its errors
+};
+
+// Throws prt::Error for a target outside (0, 1), a bad transfer or
+// distribution, or when no candidate of a signal meets the target (naming
+// the best error reached).
+CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const ErrorDistribution& d,
+                                     const ChoiceOptions& options);
+
+// The search of `prt compress --target-error` today (issue 27 replaces it by
+// the one above once it is fast enough): the smallest compression whose
+// relit error under `errors` (its lightings; glossy: its eyes, exponent and
+// strength) is at most `target`, per signal among a grid of K x N (K in 1,
+// 4, 16, 64, 128, 256; N in 1, 2, 4, 8, 12, 16, 24; capped at the rows and
+// each signal's dimension), candidates fitted in full and tried in
+// increasing size, the first that meets its target the answer. The
+// coefficients first, by the error of the diffuse radiance alone: at most
+// `target`, or target / 2 for a glossy transfer; then its glossy matrices,
+// with those coefficients, by the error of the whole radiance: at most
+// `target`. `explanation` says what was chosen per signal and what the next
+// smaller candidate measured; options holds the K x N, error the final
+// relit error. Throws prt::Error when a signal's grid never meets its
+// target (naming the best error reached), for a target outside (0, 1) or an
+// inconsistent transfer. `progress` is called after each candidate.
+CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
+                                     double target, int weight_bits = 16, const Progress& progress = {});
 
 }  // namespace prt

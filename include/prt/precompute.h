@@ -10,6 +10,7 @@
 #include <prt/probes.h>
 #include <prt/progress.h>
 #include <prt/compressed_transfer.h>
+#include <prt/cpca.h>
 #include <prt/lightmap.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
@@ -164,6 +165,20 @@ std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptio
                                            std::span<const std::uint32_t> vertices);
 
 // ---- compression (prt/cpca.h, prt/compressed_transfer.h; docs/COMPRESSION.md) ----
+// How clustered PCA weighs a signal's values (docs/COMPRESSION.md "The
+// metric"). Plain: as they are (the least squared error of the rows).
+// Band: each band block (diffuse: a channel's band l; glossy matrices: the
+// block of output band l1 and input band l2, per channel) scaled by the
+// inverse square root of its root mean square over the rows: halfway (in
+// logarithm) between the rows as they are and every band block at unit
+// mean square, so that the fit spends more of its error on the weak bands
+// without giving up the strong ones, and the relit error moves less from
+// one lighting to another (docs/COMPRESSION.md measures both ends).
+// The stored means and bases are the fit's, scaled back (orthonormal in the
+// metric, not in the rows' own values).
+enum class CompressionMetric { Plain, Band };
+const char* compression_metric_name(CompressionMetric m);
+
 struct CompressOptions {
   int clusters = 64;        // K (at most the stored rows; fewer rows: one cluster per row)
   int vectors = 8;          // N, 0 to each signal's dimension (capped there)
@@ -173,7 +188,16 @@ struct CompressOptions {
   std::uint64_t seed = 1;
   int weight_bits = 32;     // 32 (float) or 16 (ClusteredSignal::weight_bits)
   Progress progress;        // per round of each fit (CpcaOptions::progress; phase "coefficients" or "glossy matrices")
+  CompressionMetric metric = CompressionMetric::Plain;
 };
+
+// The per-value scales of `metric` for the rows of t's coefficients (glossy
+// false: stride() values) or glossy matrices (glossy_stride()): each value
+// is multiplied by its scale before the fit. Plain: all 1. Band: 1 / the
+// square root of the root mean square of the value's band block over the
+// stored rows (1 for an all-zero block); a packed symmetric matrix's
+// off-diagonal values also by sqrt(2) (they stand for two entries).
+std::vector<double> metric_scales(const Transfer& t, bool glossy, CompressionMetric metric);
 
 // Clustered PCA of the transfer's stored rows (all channels of a row as one
 // signal) and, when it has them, of its glossy matrices, each fitted on its
@@ -183,8 +207,15 @@ CompressedTransfer compress_transfer(const Transfer& t, const CompressOptions& o
 // One signal: `rows` (a multiple of dim values) fitted with options.clusters
 // and options.vectors (capped at the rows and at dim), weights of
 // options.weight_bits; `phase` names it to options.progress.
+// `scales` (empty or dim values): the metric (metric_scales), which
+// options.metric then does not choose.
 ClusteredSignal compress_signal(std::span<const float> rows, std::size_t dim, const CompressOptions& options,
-                                const char* phase = "rows");
+                                const char* phase = "rows", std::span<const double> scales = {});
+// A fit of rows scaled by `scales` (empty: 1) as a signal: means and bases
+// scaled back, the first `vectors` (<= fit.vectors) of each cluster kept,
+// weights quantised to `weight_bits`. compress_signal's last step; the
+// compression search's truncation of a fit to fewer vectors.
+ClusteredSignal signal_from_fit(const Cpca& fit, int vectors, int weight_bits, std::span<const double> scales = {});
 
 // ---- wavelet transfer (docs/WAVELETS.md) -------------------------------------------
 struct WaveletOptions {
