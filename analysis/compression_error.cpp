@@ -73,6 +73,17 @@ namespace {
 const int kClusters[] = {1, 2, 4, 8, 16, 32, 48, 64, 96, 128, 192, 256};
 const int kVectors[] = {1, 2, 3, 4, 5, 6, 8, 10, 12, 14, 16, 20, 24};
 
+// The quick search's glossy samples: per map this many rotations and eyes at
+// most (with 5 maps and 12 lobes 3840 samples: a p95 from about 190 above it).
+constexpr int kSearchRotations = 8, kSearchEyes = 8;
+// Rows up to this long get a fit of their own for each N the quick search
+// measures (cheap: diffuse rows, 3 x 36 values at 6 bands); longer ones the
+// truncation of one fit per K. A truncation, or a fit warm started from
+// one of more vectors, keeps clusters shaped for more vectors and
+// overstates the error: on bunny00's 6-band diffuse rows truncations chose
+// 64.4 B per vertex where fitting every candidate in full finds 36.3.
+constexpr std::size_t kRefitRows = 128;
+
 struct Candidate {
   int K, N;
   std::size_t bytes;
@@ -84,7 +95,7 @@ struct SignalSearch {
   std::size_t dim = 0;
   std::vector<double> scales;
   const char* what = "";
-  std::function<double(const ClusteredSignal&, bool full)> measure;  // full: on every vertex
+  std::function<double(const ClusteredSignal&, bool full)> measure;  // full: the final measure
   double target = 0;
 };
 
@@ -175,6 +186,7 @@ struct Searcher {
   // The quick search (see ChoiceOptions).
   Result quick(const SignalSearch& s, const std::vector<float>& scaled) {
     const std::vector<int> ks = clusters_for(s), ns = vectors_for(s);
+    const bool short_rows = s.dim <= kRefitRows;
     std::size_t best_bytes = std::numeric_limits<std::size_t>::max();
     int bestK = 0, bestN = 0;
     double lowest = INFINITY;
@@ -186,9 +198,13 @@ struct Searcher {
       for (int N : ns)
         if (bytes(s, K, N) < best_bytes) nmax = N;
       if (nmax < 0) continue;
-      Cpca f = fit(s, scaled, K, nmax, o.search_rounds, previous_fit ? &*previous_fit : nullptr);
-      // The smallest N of this fit that meets the target, by bisection over
-      // the N up to nmax (truncating a fit to fewer vectors only adds error).
+      // Long rows: one fit of this K with nmax vectors, warm started from
+      // the previous K's, each smaller N its truncation. Short rows: a fit
+      // of its own for each N measured, from k-means++ seeds.
+      std::optional<Cpca> f;
+      if (!short_rows) f = fit(s, scaled, K, nmax, o.search_rounds, previous_fit ? &*previous_fit : nullptr);
+      // The smallest N of this K that meets the target, by bisection over
+      // the N up to nmax (fewer vectors only add error).
       std::vector<int> here;
       for (int N : ns)
         if (N <= nmax) here.push_back(N);
@@ -196,7 +212,9 @@ struct Searcher {
       std::map<std::size_t, double> measured;
       const auto at = [&](std::size_t i) {
         if (auto it = measured.find(i); it != measured.end()) return it->second;
-        const double e = measure(s, signal_from_fit(f, here[i], o.weight_bits, s.scales), false);
+        const double e = measure(s, signal_from_fit(short_rows ? fit(s, scaled, K, here[i], o.search_rounds, nullptr) : *f,
+                                                    here[i], o.weight_bits, s.scales),
+                                 false);
         tick(s.what);
         lowest = std::min(lowest, e);
         return measured[i] = e;
@@ -211,17 +229,18 @@ struct Searcher {
         best_bytes = bytes(s, K, here[hi]);
         bestK = K;
         bestN = here[hi];
-        best_fit = f;
+        if (f) best_fit = f;
         if (hi > 0 && measured.count(hi - 1))
           previous = fmt::format("{} x {} measured {:.4g}", K, here[hi - 1], measured[hi - 1]);
       }
-      previous_fit = std::move(f);
+      if (f) previous_fit = std::move(f);
     }
-    if (!best_fit) never(s, lowest);
-    // The best in full, measured on every vertex; more vectors while it misses.
+    if (bestK == 0) never(s, lowest);
+    // The best in full (long rows: warm started), under the final measure;
+    // more vectors while it misses.
     for (int N : ns) {
       if (N < bestN) continue;
-      const Cpca f = fit(s, scaled, bestK, N, o.iterations, &*best_fit);
+      const Cpca f = fit(s, scaled, bestK, N, o.iterations, best_fit ? &*best_fit : nullptr);
       ClusteredSignal sig = signal_from_fit(f, N, o.weight_bits, s.scales);
       const double e = measure(s, sig, true);
       tick(s.what);
@@ -253,10 +272,18 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
   if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
   if (o.weight_bits != 16 && o.weight_bits != 32) throw Error(fmt::format("--weights must be 16 or 32, got {}", o.weight_bits));
   if (o.iterations < 1 || o.search_rounds < 1) throw Error("compress: the fits need at least one round");
-  const CompressionErrorMeter full(t, mesh, d);
+  // The final measure: every lighting and view, on `measure_vertices`
+  // vertices (glossy); the search's: fewer rotations and eyes on
+  // `search_vertices`.
+  const auto subset = [&](std::size_t n) { return t.glossy && n > 0 && n < t.vertices ? n : std::size_t(0); };
+  const CompressionErrorMeter full(t, mesh, d, subset(o.measure_vertices));
   std::optional<CompressionErrorMeter> quick;
-  if (t.glossy && !o.exhaustive && o.search_vertices > 0 && o.search_vertices < t.vertices)
-    quick.emplace(t, mesh, d, o.search_vertices);
+  if (t.glossy && !o.exhaustive) {
+    ErrorDistribution fewer = d;
+    fewer.rotations = std::min(d.rotations, kSearchRotations);
+    fewer.eyes = std::min(d.eyes, kSearchEyes);
+    quick.emplace(t, mesh, fewer, subset(o.search_vertices));
+  }
   const CompressionErrorMeter& search_meter = quick ? *quick : full;
   Searcher searcher{o};
   {
@@ -329,129 +356,6 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
     line("diffuse part", best.diffuse);
     line("glossy part", best.glossy);
   }
-  return best;
-}
-
-namespace legacy {
-
-struct Candidate {
-  int K, N;
-  std::size_t bytes;
-};
-
-// The K x N grid of choose_compression for one signal, smallest first.
-std::vector<Candidate> grid_for(std::size_t rows, std::size_t dim, int bits) {
-  std::vector<Candidate> grid;
-  for (int K : {1, 4, 16, 64, 128, 256})
-    for (int N : {1, 2, 4, 8, 12, 16, 24}) {
-      if (std::size_t(K) > std::max<std::size_t>(rows, 1)) continue;
-      grid.push_back({K, N, ClusteredSignal::planned_bytes(rows, dim, K, N, bits)});
-    }
-  std::stable_sort(grid.begin(), grid.end(), [](const Candidate& a, const Candidate& b) { return a.bytes < b.bytes; });
-  return grid;
-}
-
-// The first candidate of `grid` whose error (measure(signal)) is at most
-// `target`: the fitted signal, its error, and the sentence that says so.
-struct Found {
-  Candidate at;
-  ClusteredSignal signal;
-  double error = 0;
-  std::string explanation;
-};
-template <typename Measure>
-Found search(const std::vector<Candidate>& grid, std::span<const float> rows, std::size_t dim, int bits,
-             double target, const char* what, Measure measure, const std::function<void()>& tick) {
-  double best = INFINITY, previous_error = NAN;
-  std::string previous;
-  int tried = 0;
-  for (const Candidate& c : grid) {
-    CompressOptions o;
-    o.clusters = c.K;
-    o.vectors = c.N;
-    o.weight_bits = bits;
-    ClusteredSignal g = compress_signal(rows, dim, o, what);
-    const double e = measure(g);
-    ++tried;
-    tick();
-    best = std::min(best, e);
-    if (e <= target)
-      return {c, std::move(g), e,
-              fmt::format("{}: {} clusters x {} vectors ({}-bit weights), {} bytes, relit error {:.4g} <= {:.4g}{}; "
-                          "{} of {} candidates tried, smallest first",
-                          what, c.K, c.N, bits, c.bytes, e, target,
-                          previous.empty() ? std::string()
-                                           : fmt::format(" (the next smaller, {}, measured {:.4g})", previous,
-                                                         previous_error),
-                          tried, grid.size())};
-    previous = fmt::format("{} x {}", c.K, c.N);
-    previous_error = e;
-  }
-  throw Error(fmt::format("no compression of the {} of 256 clusters or fewer x 24 vectors or fewer reaches relit "
-                          "error {:g} (the best measured {:.4g}); store the transfer uncompressed",
-                          what, target, best));
-}
-
-}  // namespace legacy
-
-CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const CompressionErrorOptions& errors,
-                                     double target, int weight_bits, const Progress& progress) {
-  if (!(target > 0 && target < 1)) throw Error(fmt::format("--target-error must be in (0, 1), got {:g}", target));
-  if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
-  const std::size_t rows = t.stored_vertices();
-  const std::vector<legacy::Candidate> diffuse_grid = legacy::grid_for(rows, t.stride(), weight_bits);
-  const std::vector<legacy::Candidate> glossy_grid = t.glossy ? legacy::grid_for(rows, t.glossy_stride(), weight_bits)
-                                                      : std::vector<legacy::Candidate>{};
-  const std::size_t total = diffuse_grid.size() + glossy_grid.size();
-  std::size_t done = 0;
-  const std::function<void()> tick = [&] {
-    ++done;
-    if (progress && !progress(done, total, "choosing clusters x vectors")) throw Error("cancelled");
-  };
-  CompressionChoice best;
-  best.compressed.transfer = t;
-  best.compressed.transfer.coeffs.clear();
-  best.compressed.transfer.direct.clear();
-  best.compressed.transfer.glossy_matrices.clear();
-  // The diffuse rows first, measured on the diffuse radiance alone: the
-  // whole target without glossy matrices, half of it with them (the glossy
-  // search below then meets the target with the coefficients chosen here).
-  Transfer diffuse = t;
-  diffuse.glossy = false;
-  diffuse.glossy_matrices.clear();
-  CompressedTransfer trial;
-  trial.transfer = best.compressed.transfer;
-  trial.transfer.glossy = false;
-  const double diffuse_target = t.glossy ? target / 2 : target;
-  legacy::Found d = legacy::search(diffuse_grid, t.coeffs, t.stride(), weight_bits, diffuse_target, "coefficients",
-                   [&](const ClusteredSignal& g) {
-                     trial.coeffs = g;
-                     return compression_error(diffuse, trial, mesh, errors);
-                   }, tick);
-  best.compressed.coeffs = std::move(d.signal);
-  best.options.clusters = d.at.K;
-  best.options.vectors = d.at.N;
-  best.options.weight_bits = weight_bits;
-  best.error = d.error;
-  best.bytes = d.at.bytes;
-  best.explanation = d.explanation;
-  if (t.glossy) {
-    CompressedTransfer whole = best.compressed;
-    legacy::Found g = legacy::search(glossy_grid, t.glossy_matrices, t.glossy_stride(), weight_bits, target, "glossy matrices",
-                     [&](const ClusteredSignal& s) {
-                       whole.glossy = s;
-                       return compression_error(t, whole, mesh, errors);
-                     }, tick);
-    best.compressed.glossy = std::move(g.signal);
-    best.options.glossy_clusters = g.at.K;
-    best.options.glossy_vectors = g.at.N;
-    best.error = g.error;
-    best.bytes += g.at.bytes;
-    best.explanation += "; then " + g.explanation + " (diffuse and glossy together)";
-  }
-  best.tried = int(done);
-  best.explanation = fmt::format("chose {:.1f} bytes per vertex: {}", double(best.bytes) / double(t.vertices),
-                                 best.explanation);
   return best;
 }
 

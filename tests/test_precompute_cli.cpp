@@ -317,15 +317,17 @@ TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
   EXPECT_EQ(lib.glossy.clusters, 5);
   write_compressed_transfer(dir.file("lib.prt"), lib);
   EXPECT_EQ(read_file(dir.file("c.prt")), read_file(dir.file("lib.prt")));
-  // The error it printed is compression_error's (4 significant digits).
+  // The error it printed is the meter's over the command's distribution
+  // (the one map under 24 rotations, 32 eyes), printed to 3 decimals in %.
   const Mesh m = load_mesh(mesh);
-  CompressionErrorOptions e;
-  e.lights.push_back(project(load_envmap(env), 3));
-  e.eyes = eye_ring(m, 8);
-  const double want = compression_error(t, lib, m, e);
-  const std::string printed = stderr_number_after(c.err, "views at e = 16): ");
-  ASSERT_FALSE(printed.empty()) << c.err;
-  EXPECT_NEAR(std::stod(printed), want, 1e-3 * want) << c.err;
+  ErrorDistribution d;
+  d.maps.push_back({"forest", project(load_envmap(env), 3)});
+  const ErrorStats want = CompressionErrorMeter(t, m, d)(lib, true);
+  for (const auto& [after, value] : {std::pair{"p95 ", want.p95}, std::pair{"exceeds it) ", want.bound}}) {
+    const std::string printed = stderr_number_after(c.err, after);
+    ASSERT_FALSE(printed.empty()) << after << c.err;
+    EXPECT_NEAR(std::stod(printed), 100 * value, 0.0005 + 1e-9) << after << c.err;
+  }
   // relight of the compressed file: the library's per-cluster relighting.
   const Result r = run_prt(dir, {"relight", mesh, dir.file("c.prt"), env, "-o", dir.file("c.csv"), "--eye", "0.5,2,1",
                                  "-q"});
@@ -366,14 +368,33 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   ASSERT_EQ(c.code, 0) << describe_run(c);
   const Transfer t = read_transfer(dir.file("t.prt"));
   const Mesh m = load_mesh(mesh);
-  CompressionErrorOptions e;
-  e.lights.push_back(project(load_envmap(env), 4));
-  const CompressionChoice want = choose_compression(t, m, e, 0.02);
-  EXPECT_NE(c.err.find(want.explanation), std::string::npos) << c.err << "\nwanted: " << want.explanation;
+  ErrorDistribution d;  // the command's: the one map under 24 rotations
+  d.maps.push_back({"studio", project(load_envmap(env), 4)});
+  ChoiceOptions o;
+  o.target = 0.02;
+  const CompressionChoice want = choose_compression(t, m, d, o);
+  // The explanation up to its timings, and the figures after them.
+  const std::string head = want.explanation.substr(0, want.explanation.find(" search:"));
+  const std::string tail = want.explanation.substr(want.explanation.find("\ndiffuse radiance"));
+  EXPECT_NE(c.err.find(head), std::string::npos) << c.err << "\nwanted: " << head;
+  EXPECT_NE(c.err.find(tail), std::string::npos) << c.err << "\nwanted: " << tail;
   const CompressedTransfer got = read_compressed_transfer(dir.file("c.prt"));
   EXPECT_EQ(got.coeffs.clusters, want.compressed.coeffs.clusters);
   EXPECT_EQ(got.coeffs.vectors, want.compressed.coeffs.vectors);
-  EXPECT_LE(want.error, 0.02);
+  EXPECT_LE(want.whole.p95, 0.02);
+  // --measure: the file's error under another map (the meter's, to the 3
+  // decimals in % it prints), on stdout; nothing written.
+  const std::string other = repo_envmap("sunset.exr");
+  const Result m2 = run_prt(dir, {"compress", dir.file("t.prt"), "--measure", dir.file("c.prt"), "--mesh", mesh, "--env",
+                                  other, "-q"});
+  ASSERT_EQ(m2.code, 0) << describe_run(m2);
+  ErrorDistribution held;
+  held.maps.push_back({"sunset", project(load_envmap(other), 4)});
+  const ErrorStats e = CompressionErrorMeter(t, m, held)(got, true);
+  const std::string printed = stderr_number_after(m2.out, "p95 ");
+  ASSERT_FALSE(printed.empty()) << m2.out;
+  EXPECT_NEAR(std::stod(printed), 100 * e.p95, 0.0005 + 1e-9) << m2.out;
+  EXPECT_GT(e.p95, 0.0);
 }
 
 TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
@@ -390,14 +411,18 @@ TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
   const std::string out = dir.file("out.prt");
   const std::vector<Case> cases = {
       {{"compress", dir.file("c.prt"), "-o", out}, 1, "already compressed"},
-      {{"compress", in, "-o", out, "--target-error", "0.01"}, 2, "needs --mesh MESH and --env MAP"},
+      {{"compress", in, "-o", out, "--target-error", "0.01"}, 2, "needs --mesh MESH"},
       {{"compress", in, "-o", out, "--target-error", "0.01", "--clusters", "4", "--mesh", mesh, "--env", env}, 2,
        "give the target or the sizes"},
       {{"compress", in, "-o", out, "--weights", "8"}, 2, "--weights"},
-      {{"compress", in, "-o", out, "--views", "4"}, 2, "--views shapes the views"},
+      {{"compress", in, "-o", out, "--eyes", "4"}, 2, "--eyes shapes the lightings and views"},
+      {{"compress", in, "--measure", dir.file("c.prt"), "-o", out, "--mesh", mesh}, 2, "--measure writes nothing"},
+      {{"compress", in, "--measure", dir.file("c.prt")}, 2, "--measure needs --mesh"},
+      {{"compress", in}, 2, "--output is required"},
+      {{"compress", in, "-o", out, "--metric", "plain"}, 2, "--metric is for --target-error"},
       {{"compress", in, "-o", in}, 2, "is the input IN"},
       {{"compress", in, "-o", out, "--mesh", dir.file("missing.off"), "--env", env}, 1, "missing.off"},
-      {{"compress", in, "-o", out, "--target-error", "1e-7", "--mesh", mesh, "--env", env}, 1, "reaches relit error"},
+      {{"compress", in, "-o", out, "--target-error", "1e-12", "--mesh", mesh, "--env", env}, 1, "reaches p95 error"},
       {{"precompute", mesh, "-o", out, "--compress", "4"}, 2, "expected KxN"},
       {{"compress", in, "-o", out, "--glossy-pca", "4"}, 1, "--glossy-pca needs glossy matrices"},
       {{"precompute", mesh, "-o", out, "--compress-weights", "32"}, 2, "--compress-weights is for --compress"},

@@ -6,6 +6,7 @@
 #include <prt/compression_error.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/paths.h>
 #include <prt/precompute.h>
 #include <prt/projection.h>
 #include <prt/transfer_io.h>
@@ -13,6 +14,8 @@
 #include <fmt/core.h>
 
 #include <chrono>
+#include <filesystem>
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,45 +25,105 @@ namespace prt::cli {
 namespace {
 
 struct CompressArgs {
-  std::string input, output, mesh;
+  std::string input, output, mesh, measure;  // measure: a compressed file to measure (--measure)
   std::vector<std::string> envs;
   // Defaults: the smallest K x N measured to meet issue 16's targets on
   // bunny00 (docs/COMPRESSION.md): diffuse 256 x 8, glossy matrices 128 x 8.
   CompressOptions opt{.clusters = 256, .vectors = 8, .glossy_clusters = 128, .glossy_vectors = 8, .iterations = 20,
                       .seed = 1, .weight_bits = 16, .progress = {}};
   double target = 0;
-  int views = 8;
-  double gloss = 16, specular = 0.5;
-  bool quiet = false;
+  // The error distribution (docs/COMPRESSION.md "The error distribution").
+  int rotations = 24, eyes = 32;
+  std::string statistic = "p95", metric = "band";
+  bool exhaustive = false, quiet = false;
   const CLI::Option *clusters_opt = nullptr, *pca_opt = nullptr, *glossy_clusters_opt = nullptr,
-                    *glossy_pca_opt = nullptr, *target_opt = nullptr, *mesh_opt = nullptr,
-                    *env_opt = nullptr, *views_opt = nullptr, *gloss_opt = nullptr, *specular_opt = nullptr;
+                    *glossy_pca_opt = nullptr, *target_opt = nullptr, *mesh_opt = nullptr, *env_opt = nullptr,
+                    *rotations_opt = nullptr, *eyes_opt = nullptr, *statistic_opt = nullptr, *metric_opt = nullptr,
+                    *exhaustive_opt = nullptr, *measure_opt = nullptr;
 };
 
 void check_usage(const CompressArgs& a) {
-  const bool target = a.target_opt->count() > 0, measure = a.mesh_opt->count() > 0 || a.env_opt->count() > 0;
+  const bool target = a.target_opt->count() > 0, measure = target || a.mesh_opt->count() > 0;
+  if (!a.measure.empty()) {
+    if (target) throw UsageError("--measure measures a compressed file; --target-error makes one: give one of them");
+    if (!a.output.empty()) throw UsageError("--measure writes nothing; leave --output out");
+    if (a.mesh.empty()) throw UsageError("--measure needs --mesh MESH: the relit error is measured on the mesh");
+    for (const CLI::Option* o : {a.clusters_opt, a.pca_opt, a.glossy_clusters_opt, a.glossy_pca_opt})
+      if (o->count() > 0) throw UsageError(o->get_name() + " makes a compression; --measure measures one");
+  } else if (a.output.empty()) {
+    throw UsageError("--output is required (or --measure COMPRESSED to measure a compressed file)");
+  }
   for (const CLI::Option* o : {a.clusters_opt, a.pca_opt, a.glossy_clusters_opt, a.glossy_pca_opt})
     if (target && o->count() > 0)
       throw UsageError("--target-error chooses " + o->get_name() + " (and the other clusters and vectors); give the "
                        "target or the sizes, not both");
-  if ((target || measure) && (a.mesh.empty() || a.envs.empty()))
-    throw UsageError(std::string(target ? "--target-error" : a.mesh.empty() ? "--env" : "--mesh") +
-                     " needs --mesh MESH and --env MAP (at least one): the relit error is measured on the mesh under "
-                     "those maps");
-  for (const CLI::Option* o : {a.views_opt, a.gloss_opt, a.specular_opt})
+  if (measure && a.mesh.empty())
+    throw UsageError("--target-error needs --mesh MESH: the relit error is measured on the mesh (under the --env maps, or the "
+                     "bundled ones)");
+  for (const CLI::Option* o : {a.env_opt, a.rotations_opt, a.eyes_opt})
     if (o->count() > 0 && !measure)
-      throw UsageError(o->get_name() + " shapes the views the glossy error is measured from; give --mesh and --env "
-                       "(and --target-error to choose by it)");
+      throw UsageError(o->get_name() + " shapes the lightings and views the error is measured under; give --mesh (and "
+                       "--target-error to choose by it)");
+  for (const CLI::Option* o : {a.statistic_opt, a.metric_opt, a.exhaustive_opt})
+    if (o->count() > 0 && !target)
+      throw UsageError(o->get_name() + " is for --target-error (how it chooses); give --target-error too");
   std::vector<Input> inputs = {{"IN", a.input}};
   if (!a.mesh.empty()) inputs.push_back({"--mesh", a.mesh});
   for (const auto& e : a.envs) inputs.push_back({"--env", e});
   check_not_input("--output", a.output, std::span<const Input>(inputs));
 }
 
+// The lightings and views the error is measured under: each --env map (or,
+// with none, every bundled one) under --rotations rotations; glossy: --eyes
+// eyes on a sphere, the meter's exponents and strengths.
+ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
+  ErrorDistribution d;
+  std::vector<std::string> paths = a.envs;
+  if (paths.empty()) {
+    const std::filesystem::path dir = data_dir() / "envmaps";
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+      if (e.path().extension() == ".exr") paths.push_back(e.path().string());
+    std::sort(paths.begin(), paths.end());
+    if (paths.empty())
+      throw Error(dir.string() + ": no bundled maps to measure the error under (PRT_DATA_DIR); give --env MAP");
+  }
+  for (const auto& path : paths) {
+    const EnvMap env = load_envmap(path);
+    require_finite(env);
+    d.maps.push_back({std::filesystem::path(path).stem().string(), project(env, bands)});
+  }
+  d.rotations = a.rotations;
+  d.eyes = a.eyes;
+  return d;
+}
+
 std::string bytes_text(double b) { return b >= 1e6 ? fmt::format("{:.2f} MB", b / 1e6) : fmt::format("{:.1f} KB", b / 1e3); }
+
+// --measure: a compressed file's error against IN, over the distribution.
+int run_measure(const CompressArgs& a) {
+  const Transfer t = read_transfer(a.input);
+  const CompressedTransfer c = read_compressed_transfer(a.measure);
+  if (c.transfer.vertices != t.vertices || c.transfer.bands != t.bands || c.transfer.glossy != t.glossy ||
+      c.coeffs.rows() != t.coeffs.size() / std::max<std::size_t>(t.stride(), 1))
+    throw Error(a.measure + ": not a compression of " + a.input + " (other vertices, bands or signals)");
+  const Mesh mesh = load_mesh(a.mesh);
+  check_matches(t, mesh, a.input);
+  const ErrorDistribution d = error_distribution(a, t.bands);
+  const std::optional<ErrorStats> e = run_with_progress(a.quiet, "measure", [&](const Progress&) {
+    return CompressionErrorMeter(t, mesh, d)(c, true);
+  });
+  if (!e) return 130;
+  fmt::print("{} against {}: relit error over {}: mean {:.3f}%, p95 {:.3f}%, max {:.3f}% over {} samples; "
+             "transfer-space bound (no lighting exceeds it) {:.3f}%\n",
+             a.measure, a.input, d.describe(t.glossy), 100 * e->mean, 100 * e->p95, 100 * e->max, e->samples,
+             100 * e->bound);
+  return 0;
+}
 
 int run_compress(CompressArgs& a) {
   check_usage(a);
+  if (!a.measure.empty()) return run_measure(a);
   for_path("--output", [&] { check_writable(a.output); });
   if (transfer_is_compressed(a.input))
     throw Error(a.input + ": already compressed (prt info shows its clusters); compress the uncompressed transfer "
@@ -73,37 +136,36 @@ int run_compress(CompressArgs& a) {
                     "(prt precompute --material glossy makes them)");
   const bool measure = !a.mesh.empty();
   Mesh mesh;
-  CompressionErrorOptions errors;
+  ErrorDistribution d;
   if (measure) {
     mesh = load_mesh(a.mesh);
     check_matches(t, mesh, a.input);
-    for (const auto& path : a.envs) {
-      const EnvMap env = load_envmap(path);
-      require_finite(env);
-      errors.lights.push_back(project(env, t.bands));
-    }
-    if (t.glossy) {
-      errors.eyes = eye_ring(mesh, a.views);
-      errors.gloss = a.gloss;
-      errors.specular = a.specular;
-    }
+    d = error_distribution(a, t.bands);
   }
 
   Outputs out("compress");  // from here Ctrl-C stops cleanly, the write step included
   const auto t0 = std::chrono::steady_clock::now();
   std::string explanation;
-  double error = -1;
+  std::optional<ErrorStats> stats;
   const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "compress", [&](const Progress& progress) {
     if (a.target_opt->count() > 0) {
-      CompressionChoice choice = choose_compression(t, mesh, errors, a.target, a.opt.weight_bits, progress);
+      ChoiceOptions o;
+      o.target = a.target;
+      o.statistic = a.statistic == "mean" ? ErrorStatistic::Mean : ErrorStatistic::P95;
+      o.metric = a.metric == "plain" ? CompressionMetric::Plain : CompressionMetric::Band;
+      o.weight_bits = a.opt.weight_bits;
+      o.iterations = a.opt.iterations;
+      o.seed = a.opt.seed;
+      o.exhaustive = a.exhaustive;
+      o.progress = progress;
+      CompressionChoice choice = choose_compression(t, mesh, d, o);
       explanation = choice.explanation;
-      error = choice.error;
       return std::move(choice.compressed);
     }
     CompressOptions o = a.opt;
     o.progress = progress;
     CompressedTransfer r = compress_transfer(t, o);
-    if (measure) error = compression_error(t, r, mesh, errors);
+    if (measure) stats = CompressionErrorMeter(t, mesh, d)(r, true);
     return r;
   });
   if (!c) return 130;
@@ -120,10 +182,12 @@ int run_compress(CompressArgs& a) {
                "compress: {:.1f} s; rows {} -> {} ({:.1f}x fewer bytes{}); file {} -> {}\n", seconds,
                bytes_text(double(rows)), bytes_text(double(packed)), packed ? double(rows) / double(packed) : 0.0,
                t.direct.empty() ? "" : ", the direct part dropped", bytes_text(before), bytes_text(after));
-    if (error >= 0)
-      fmt::print(stderr, "relit error (relative RMS against the uncompressed transfer, {} map{}{}): {:.4g}\n",
-                 errors.lights.size(), errors.lights.size() == 1 ? "" : "s",
-                 t.glossy ? fmt::format(", {} views at e = {:g}", errors.eyes.size(), errors.gloss) : "", error);
+    if (stats)
+      fmt::print(stderr, "relit error over {}: mean {:.3f}%, p95 {:.3f}%, max {:.3f}% over {} samples; transfer-space "
+                 "bound (no lighting exceeds it) {:.3f}%\n",
+                 d.describe(t.glossy), 100 * stats->mean, 100 * stats->p95, 100 * stats->max, stats->samples,
+                 100 * stats->bound);
+    if (!explanation.empty()) fmt::print(stderr, "measured over {}\n", d.describe(t.glossy));
     fmt::print(stderr, "wrote {}\n", a.output);
   }
   return 0;
@@ -143,12 +207,18 @@ Run add_compress(CLI::App& app) {
       "interreflected file is dropped. 16-bit weights (the default) cost no relit error in the third digit on the\n"
       "measured meshes and half the per-vertex bytes of float ones (docs/COMPRESSION.md).\n"
       "--target-error e chooses the smallest K x N (in bytes) whose relit error, the relative RMS radiance against\n"
-      "the uncompressed transfer under the --env maps (glossy: from --views eye points around the mesh), is at most\n"
-      "e, and says why. With --mesh and --env and a fixed K x N it prints that error.\n"
+      "the uncompressed transfer, has its 95th percentile (--statistic) at most e over a distribution: each --env map\n"
+      "(default: the bundled ones) under --rotations random rotations, glossy files from --eyes eyes on a sphere at\n"
+      "Phong exponents 4 to 32 and strengths 0.25 to 1; it prints the mean, p95 and max over the distribution and\n"
+      "a transfer-space bound no lighting exceeds. With --mesh and a fixed K x N it prints the same figures.\n"
       "Example: prt compress glossy.prt -o glossy.cprt --clusters 128 --pca 8\n"
-      "         prt compress bunny.prt -o bunny.cprt --target-error 0.005 --mesh bunny.off --env envmaps/forest.exr");
+      "         prt compress bunny.prt -o bunny.cprt --target-error 0.01 --mesh bunny.off\n"
+      "         prt compress bunny.prt --measure bunny.cprt --mesh bunny.off --env other.exr   # held-back maps");
   s->add_option("IN", a->input, "Transfer file from prt precompute")->required();
-  s->add_option("-o,--output", a->output, "Compressed transfer file to write")->required();
+  s->add_option("-o,--output", a->output, "Compressed transfer file to write");
+  a->measure_opt = s->add_option("--measure", a->measure,
+                                 "Measure this compressed file (made from IN) over the distribution instead: its mean, "
+                                 "p95 and max relit error and bound, on stdout; writes nothing");
   a->clusters_opt = s->add_option("-k,--clusters", a->opt.clusters, "Clusters K (at most the stored vertices)")
                         ->check(int_range(1, 1 << 24))
                         ->capture_default_str();
@@ -173,12 +243,28 @@ Run add_compress(CLI::App& app) {
   a->target_opt = add_shared(s, SharedOption::TargetError, a->target,
                              "Choose K x N: the smallest whose relit error is at most this");
   a->mesh_opt = s->add_option("--mesh", a->mesh, "The mesh the transfer was computed for (to measure the error)");
-  a->env_opt = s->add_option("--env", a->envs, "Environment map the error is measured under (repeatable)");
-  a->views_opt = s->add_option("--views", a->views, "Glossy: eye points on a ring around the mesh")
-                     ->check(int_range(1, 1024))
-                     ->capture_default_str();
-  a->gloss_opt = add_shared(s, SharedOption::Gloss, a->gloss, "Glossy: the measured lobe's exponent");
-  a->specular_opt = add_shared(s, SharedOption::Specular, a->specular, "Glossy: the measured lobe's strength");
+  a->env_opt = s->add_option("--env", a->envs,
+                             "Environment map the error is measured under (repeatable; default: the bundled maps)");
+  a->rotations_opt = s->add_option("--rotations", a->rotations,
+                                   "Lightings per map: the map as given, then random rotations")
+                         ->check(int_range(1, 4096))
+                         ->capture_default_str();
+  a->eyes_opt = s->add_option("--eyes", a->eyes, "Glossy: eye points on a sphere around the mesh")
+                    ->check(int_range(1, 4096))
+                    ->capture_default_str();
+  a->statistic_opt = s->add_option("--statistic", a->statistic,
+                                   "What --target-error holds to: the 95th percentile over the lightings and views, "
+                                   "or the mean")
+                         ->check(CLI::IsMember({"p95", "mean"}))
+                         ->capture_default_str();
+  a->metric_opt = s->add_option("--metric", a->metric,
+                                "--target-error's fits: band (each SH band block weighed halfway to unit power) or "
+                                "plain (the rows as they are)")
+                      ->check(CLI::IsMember({"band", "plain"}))
+                      ->capture_default_str();
+  a->exhaustive_opt = s->add_flag("--exhaustive", a->exhaustive,
+                                  "--target-error: fit every candidate in full (slow; what the quick search is "
+                                  "measured against)");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_compress(*a); };
 }
