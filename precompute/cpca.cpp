@@ -41,8 +41,9 @@ std::uint64_t splitmix64(std::uint64_t& x) {
 double uniform(std::uint64_t& state) { return double(splitmix64(state) >> 11) * 0x1.0p-53; }
 
 // The top `count` eigenvectors of the symmetric n x n matrix `a` (upper
-// triangle, row-major; destroyed), largest eigenvalue first, as rows of `out`.
-void top_eigenvectors(int n, double* a, int count, double* out) {
+// triangle, row-major; destroyed), largest eigenvalue first, as rows of
+// `out`; their eigenvalues in `values` when not null.
+void top_eigenvectors(int n, double* a, int count, double* out, double* values = nullptr) {
   if (count == 0) return;
   // Row-major upper = column-major lower.
   const char jobz = 'V', range = 'I', uplo = 'L';
@@ -66,6 +67,7 @@ void top_eigenvectors(int n, double* a, int count, double* out) {
   // deterministic sign: each vector's largest entry positive.
   for (int j = 0; j < count; ++j) {
     const double* col = z.data() + std::size_t(count - 1 - j) * n;
+    if (values) values[j] = w[std::size_t(count - 1 - j)];
     double* row = out + std::size_t(j) * n;
     std::size_t big = 0;
     for (int i = 0; i < n; ++i)
@@ -327,24 +329,10 @@ std::optional<PointSpan> narrow_span(const std::vector<double>& x, std::size_t P
   double total = 0;
   for (std::size_t i = 0; i < dim; ++i) total += scatter[i * dim + i];
   if (!(total > 0)) return std::nullopt;
-  std::vector<double> values, vecs(dim * dim);
-  {
-    std::vector<double> a = scatter;
-    values = std::vector<double>(dim);
-    // All eigenpairs, largest first (top_eigenvectors gives the vectors; the
-    // values are the Rayleigh quotients, exact for eigenvectors).
-    top_eigenvectors(int(dim), a.data(), int(dim), vecs.data());
-    for (std::size_t j = 0; j < dim; ++j) {
-      const double* v = vecs.data() + j * dim;
-      double q = 0;
-      for (std::size_t i = 0; i < dim; ++i) {
-        double row = 0;
-        for (std::size_t k = 0; k < dim; ++k) row += scatter[std::min(i, k) * dim + std::max(i, k)] * v[k];
-        q += v[i] * row;
-      }
-      values[j] = std::max(q, 0.0);
-    }
-  }
+  // All eigenpairs, largest first.
+  std::vector<double> values(dim), vecs(dim * dim);
+  top_eigenvectors(int(dim), scatter.data(), int(dim), vecs.data(), values.data());
+  for (double& v : values) v = std::max(v, 0.0);
   std::size_t r = dim;
   double dropped = 0;
   while (r > 0 && dropped + values[r - 1] <= kSpanResidual * total) dropped += values[--r];
@@ -436,30 +424,6 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
   std::vector<double> x(points.begin(), points.end());
   if (std::optional<PointSpan> span = narrow_span(x, P, dim, o.vectors)) return fit_in_span(x, P, dim, *span, o, start);
   return fit_points(x, P, dim, o, start);
-}
-
-Cpca apply_cpca(const Cpca& model, std::span<const float> points) {
-  const std::size_t dim = model.dim;
-  if (dim == 0 || points.size() % dim != 0 || points.empty())
-    throw Error(fmt::format("cpca: {} values are not whole points of {} values", points.size(), dim));
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
-  detail::blas_single_threaded();
-  const std::size_t P = points.size() / dim;
-  const std::vector<double> x(points.begin(), points.end());
-  const Fitter fit{x, P, dim, model.clusters, model.vectors};
-  Cpca m;
-  m.dim = dim;
-  m.points = P;
-  m.clusters = model.clusters;
-  m.vectors = model.vectors;
-  m.means = model.means;
-  m.bases = model.bases;
-  m.cluster.assign(P, 0);
-  std::vector<double> point_error(P, 0.0);
-  fit.assign(m, point_error);
-  m.squared_error = fit.finish(m, point_error);
-  return m;
 }
 
 namespace {

@@ -69,10 +69,4 @@ struct Cpca {
 Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& options,
               const Cpca* start = nullptr);
 
-// The clusters, means and bases of `model` applied to other points (of its
-// dimension): each point in the cluster that reconstructs it best, its
-// weights the projections on that cluster's basis; no refit. What a fit of
-// a subset of the points says of them all (the compression search).
-Cpca apply_cpca(const Cpca& model, std::span<const float> points);
-
 }  // namespace prt
