@@ -264,6 +264,32 @@ std::string describe_stats(const char* what, const ErrorStats& e) {
                      100 * e.mean, 100 * e.p95, 100 * e.max, e.samples, 100 * e.bound);
 }
 
+// What the file records of the choice (docs/FORMAT.md, kind 12).
+CompressionChoiceRecord choice_record(const ErrorDistribution& d, const ChoiceOptions& o, bool glossy,
+                                      const ErrorStats& whole) {
+  CompressionChoiceRecord r;
+  r.target = o.target;
+  r.statistic = statistic_name(o.statistic);
+  r.metric = compression_metric_name(o.metric);
+  r.exhaustive = o.exhaustive;
+  for (const NamedLighting& m : d.maps) r.maps.push_back(m.name);
+  for (const NamedLighting& m : d.spectra) r.spectra.push_back(m.name);
+  r.rotations = d.rotations;
+  r.seed = d.seed;
+  if (glossy) {
+    r.eyes = d.eyes;
+    r.exponents = d.glosses;
+    r.speculars = d.speculars;
+  }
+  r.mean = whole.mean;
+  r.p95 = whole.p95;
+  r.max = whole.max;
+  r.bound = whole.bound;
+  r.samples = whole.samples;
+  r.vertices = whole.vertices;
+  return r;
+}
+
 }  // namespace
 
 CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const ErrorDistribution& d,
@@ -356,6 +382,7 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
     line("diffuse part", best.diffuse);
     line("glossy part", best.glossy);
   }
+  best.compressed.choice = choice_record(d, o, t.glossy, best.whole);
   return best;
 }
 

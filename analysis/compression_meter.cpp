@@ -98,10 +98,14 @@ double largest_ratio(const Mat& G, const Mat& B) {
 }  // namespace
 
 std::string ErrorDistribution::describe(bool glossy) const {
-  std::string names;
-  for (const NamedLighting& m : maps) names += (names.empty() ? "" : ", ") + m.name;
-  std::string s = fmt::format("{} map{} ({}) x {} rotation{}", maps.size(), maps.size() == 1 ? "" : "s", names,
+  const auto names = [](const std::vector<NamedLighting>& v) {
+    std::string n;
+    for (const NamedLighting& m : v) n += (n.empty() ? "" : ", ") + m.name;
+    return n;
+  };
+  std::string s = fmt::format("{} map{} ({}) x {} rotation{}", maps.size(), maps.size() == 1 ? "" : "s", names(maps),
                               rotations, rotations == 1 ? "" : "s");
+  if (!spectra.empty()) s += fmt::format(" taking their own spectra and those of {} in turn", names(spectra));
   if (glossy) {
     std::string g, r;
     for (double e : glosses) g += (g.empty() ? "" : ", ") + fmt::format("{:g}", e);
@@ -111,23 +115,56 @@ std::string ErrorDistribution::describe(bool glossy) const {
   return s;
 }
 
+std::vector<double> band_spectrum(std::span<const glm::dvec3> sh, int bands) {
+  if (bands < 1 || sh.size() < std::size_t(bands) * bands)
+    throw Error(fmt::format("band_spectrum: {} coefficients, {} bands need {}", sh.size(), bands,
+                            std::size_t(std::max(bands, 0)) * std::max(bands, 0)));
+  std::vector<double> norm(bands, 0.0);
+  for (int l = 0; l < bands; ++l)
+    for (int i = l * l; i < (l + 1) * (l + 1); ++i) norm[l] += glm::dot(sh[i], sh[i]);
+  const double n0 = std::sqrt(norm[0]);
+  for (double& n : norm) n = n0 > 0 ? std::sqrt(n) / n0 : 0.0;
+  return norm;
+}
+
 std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribution& d, int bands) {
   if (d.maps.empty()) throw Error("compression error: no lighting to measure it under");
   if (d.rotations < 1) throw Error(fmt::format("compression error: rotations must be at least 1, got {}", d.rotations));
   const std::size_t nc = std::size_t(bands) * bands;
+  const auto check_bands = [&](const NamedLighting& m) {
+    if (m.sh.size() < nc)
+      throw Error(fmt::format("compression error: {} has {} bands of lighting, the transfer needs {}", m.name,
+                              sh::bands_of(m.sh.size()), bands));
+  };
+  // A band the map lacks (norm below this fraction of band 0's) is left as
+  // it is: scaling it would be scaling rounding noise.
+  constexpr double kAbsentBand = 1e-6;
   std::vector<std::vector<glm::dvec3>> out;
   std::uint64_t state = d.seed;
   sh::Rotation rot(bands, glm::dmat3(1.0));
   for (const NamedLighting& m : d.maps) {
-    if (m.sh.size() < nc)
-      throw Error(fmt::format("compression error: {} has {} bands of lighting, the transfer needs {}", m.name,
-                              sh::bands_of(m.sh.size()), bands));
+    check_bands(m);
     const std::span<const glm::dvec3> in(m.sh.data(), nc);
+    const std::vector<double> own = band_spectrum(in, bands);
+    // Per spectrum in turn: the scale of each band (the first: the map's own).
+    std::vector<std::vector<double>> scales{std::vector<double>(bands, 1.0)};
+    for (const NamedLighting& s : d.spectra) {
+      check_bands(s);
+      if (s.name == m.name) continue;
+      const std::vector<double> to = band_spectrum(s.sh, bands);
+      std::vector<double> k(bands, 1.0);
+      for (int l = 1; l < bands; ++l)
+        if (own[l] > kAbsentBand) k[l] = to[l] / own[l];
+      scales.push_back(std::move(k));
+    }
     out.emplace_back(in.begin(), in.end());
     for (int r = 1; r < d.rotations; ++r) {
       rot.set(random_rotation(state));
       std::vector<glm::dvec3> o(nc);
       rot.apply(in, o);
+      const std::vector<double>& k = scales[std::size_t(r - 1) % scales.size()];
+      for (int l = 1; l < bands; ++l)
+        for (int i = l * l; i < (l + 1) * (l + 1); ++i) o[i] *= k[l];
       out.push_back(std::move(o));
     }
   }

@@ -130,9 +130,13 @@ std::string compressed_transfer_problem(const CompressedTransfer& c) {
   const Transfer& t = c.transfer;
   if (auto p = detail::transfer_problem_without_rows(t); !p.empty()) return p;
   if (auto p = signal_problem(c.coeffs, t.stored_vertices(), t.stride(), "coefficients"); !p.empty()) return p;
-  if (t.glossy) return signal_problem(c.glossy, t.stored_vertices(), t.glossy_stride(), "glossy matrices");
-  if (c.glossy.rows() != 0 || c.glossy.clusters != 0)
+  if (t.glossy) {
+    if (auto p = signal_problem(c.glossy, t.stored_vertices(), t.glossy_stride(), "glossy matrices"); !p.empty())
+      return p;
+  } else if (c.glossy.rows() != 0 || c.glossy.clusters != 0) {
     return "compressed glossy matrices in a transfer without the glossy flag";
+  }
+  if (c.choice) return compression_choice_problem(*c.choice);
   return {};
 }
 

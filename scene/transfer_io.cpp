@@ -49,6 +49,14 @@ std::string section_problem(std::uint32_t kind, std::uint64_t count, const Trans
       return fmt::format("section '{}' has {} texels; the header says {}", name, count, v.vertices);
     return {};
   }
+  if (kind == kCompressionChoice) {
+    const char* name = kind_info(kind)->name;
+    if (!compressed)
+      return fmt::format("has a '{}' section, but the header's flags say the file is not compressed", name);
+    if (count < 2 || count > kMaxChoiceBytes)
+      return fmt::format("section '{}' has {} bytes; a record has 2 to {}", name, count, kMaxChoiceBytes);
+    return {};  // the JSON is checked as it is read
+  }
   if (kind == kCompressedCoeffs || kind == kCompressedGlossy) {
     const char* name = kind_info(kind)->name;
     if (!compressed)
@@ -314,7 +322,15 @@ std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
   };
   add(kCompressedCoeffs, c.coeffs);
   if (c.transfer.glossy) add(kCompressedGlossy, c.glossy);
+  if (c.choice) {
+    const std::uint64_t bytes = compression_choice_json(*c.choice).size();
+    s.push_back({kCompressionChoice, kind_info(kCompressionChoice)->name, 1, bytes, bytes, false, type_name(kTypeU8)});
+  }
   return s;
+}
+
+std::uint32_t transfer_format_version(const CompressedTransfer& c) {
+  return c.choice ? kChosenCompressionFormatVersion : kCompressedFormatVersion;
 }
 
 std::uint64_t transfer_file_size(const CompressedTransfer& c) { return file_size_of(transfer_sections(c)); }
@@ -325,15 +341,17 @@ void write_compressed_transfer(const std::string& path, const CompressedTransfer
   const Transfer& t = c.transfer;
   const std::vector<TransferSection> sections = transfer_sections(c);
   unsigned char header[kHeaderSize];
-  fill_header(header, t, kCompressedFormatVersion, kFlagCompressed, sections.size());
+  fill_header(header, t, transfer_format_version(c), kFlagCompressed, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t);
   const std::vector<unsigned char> coeffs = encode_signal(c.coeffs);
   const std::vector<unsigned char> glossy = t.glossy ? encode_signal(c.glossy) : std::vector<unsigned char>{};
+  const std::string choice = c.choice ? compression_choice_json(*c.choice) : std::string();
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
     const void* data = s.kind == kAnalyticMask       ? mask.data()
                        : s.kind == kCompressedCoeffs ? coeffs.data()
                        : s.kind == kCompressedGlossy ? glossy.data()
+                       : s.kind == kCompressionChoice ? static_cast<const void*>(choice.data())
                                                      : section_array(t, s.kind).first;
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
   }
@@ -545,7 +563,7 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
                          version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
   const bool v1 = version_ == 1;
   const std::size_t known_kinds =
-      v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : version_ == 3 ? kKindsV3 : version_ == 4 ? kKindsV4 : kKindsV5;
+      v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : version_ == 3 ? kKindsV3 : version_ == 4 ? kKindsV4 : version_ == 5 ? kKindsV5 : kKindsV6;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -666,6 +684,16 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
       case kCompressedCoeffs:
         compressed_out->coeffs = read_signal(data, bytes, k->name, v.stored, stride);
         break;
+      case kCompressionChoice: {
+        std::string json(count, '\0');
+        read_at(data, reinterpret_cast<unsigned char*>(json.data()), count);
+        try {
+          compressed_out->choice = parse_compression_choice(json);
+        } catch (const Error& e) {
+          throw fail(fmt::format("bad section '{}': {}", k->name, e.what()));
+        }
+        break;
+      }
       case kCompressedGlossy: {
         Transfer shape;  // glossy_stride() of the header's bands, channels and mode
         shape.bands = int(v.bands);
@@ -864,6 +892,7 @@ std::string describe_transfer(const Transfer& t) {
 std::string describe_transfer(const CompressedTransfer& c) {
   std::string comp = describe_signal("compressed", c.coeffs);
   if (c.transfer.glossy) comp += describe_signal("compressed glossy", c.glossy);
-  return describe(c.transfer, kCompressedFormatVersion, transfer_sections(c), transfer_file_size(c), comp);
+  if (c.choice) comp += describe_line("choice", describe_choice(*c.choice));
+  return describe(c.transfer, transfer_format_version(c), transfer_sections(c), transfer_file_size(c), comp);
 }
 }  // namespace prt

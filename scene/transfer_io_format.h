@@ -111,6 +111,7 @@ enum Kind : std::uint32_t {
   kCompressedGlossy = 9,                            // version 4
   kLightmapLayout = 10,                             // version 5: u64 width, height, UV set, scene hash
   kLightmapTexels = 11,                             // version 5: u32 covered texel y * width + x, increasing
+  kCompressionChoice = 12,                          // version 6: what a compression was chosen for (UTF-8 JSON)
 };
 
 struct KindInfo {
@@ -120,7 +121,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 11> kKinds = {{
+constexpr std::array<KindInfo, 12> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -132,6 +133,7 @@ constexpr std::array<KindInfo, 11> kKinds = {{
     {kCompressedGlossy, "compressed glossy matrices", kTypeU8, true},
     {kLightmapLayout, "lightmap layout", kTypeU64, false},
     {kLightmapTexels, "lightmap texels", kTypeU32, true},
+    {kCompressionChoice, "compression choice", kTypeU8, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
@@ -139,6 +141,10 @@ constexpr std::size_t kKindsV2 = 6;
 constexpr std::size_t kKindsV3 = 7;
 constexpr std::size_t kKindsV4 = 9;
 constexpr std::size_t kKindsV5 = 11;
+constexpr std::size_t kKindsV6 = 12;
+// The longest compression choice record a reader takes (its JSON is under a
+// kilobyte for a handful of maps; this leaves room for thousands).
+constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
 constexpr std::uint64_t kLightmapLayoutWords = 4;
 
 // Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.

@@ -36,7 +36,7 @@ void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t)
   if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  fill_header(header, t.transfer, kTransferFormatVersion, kFlagLightmap, sections.size());
+  fill_header(header, t.transfer, kLightmapFormatVersion, kFlagLightmap, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t.transfer);
   const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
                                                       std::uint64_t(t.layout.uv_set), t.layout.scene_hash};

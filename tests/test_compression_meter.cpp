@@ -291,6 +291,48 @@ TEST(CompressionErrorMeter, RotationsKeepEachBandsPower) {
   EXPECT_THROW(distribution_lightings(d, 5), Error);  // the maps have 4 bands
 }
 
+// Spectra: rotation r >= 1 takes in turn the map's own band spectrum and
+// each other's (a map's own name skipped); the rotation is the same as
+// without spectra, and only each band's scale changes.
+TEST(CompressionErrorMeter, RotationsTakeOnTheSpectraInTurn) {
+  ErrorDistribution d = small_distribution();
+  d.rotations = 6;
+  const auto plain = distribution_lightings(d, 4);
+  d.spectra = {{"a", d.maps[0].sh}, {"c", random_lighting(4, 3)}};
+  const auto lights = distribution_lightings(d, 4);
+  ASSERT_EQ(lights.size(), plain.size());
+  const std::vector<double> c = band_spectrum(d.spectra[1].sh, 4);
+  for (std::size_t m = 0; m < 2; ++m) {
+    // Map "a" skips the spectrum "a" (its own): it turns through own, c;
+    // map "b" through own, a, c.
+    const std::vector<std::vector<double>> turn =
+        m == 0 ? std::vector<std::vector<double>>{band_spectrum(d.maps[0].sh, 4), c}
+               : std::vector<std::vector<double>>{band_spectrum(d.maps[1].sh, 4), band_spectrum(d.maps[0].sh, 4), c};
+    for (int r = 0; r < 6; ++r) {
+      const std::size_t k = m * 6 + std::size_t(r);
+      const std::vector<double> want = r == 0 ? band_spectrum(d.maps[m].sh, 4) : turn[std::size_t(r - 1) % turn.size()];
+      const std::vector<double> got = band_spectrum(lights[k], 4);
+      for (int l = 0; l < 4; ++l) EXPECT_NEAR(got[l], want[l], 1e-9) << "map " << m << " rotation " << r << " band " << l;
+      // Band 0 is never scaled; each band is the plain lighting's times one factor.
+      EXPECT_EQ(lights[k][0], plain[k][0]);
+      for (int l = 1; l < 4; ++l) {
+        const double f = got[l] / band_spectrum(plain[k], 4)[l];
+        for (int i = l * l; i < (l + 1) * (l + 1); ++i)
+          for (int ch = 0; ch < 3; ++ch)
+            EXPECT_NEAR(lights[k][i][ch], f * plain[k][i][ch], 1e-9 * (1 + std::abs(plain[k][i][ch])));
+      }
+    }
+  }
+  // A map lacking a band keeps it absent rather than scaling noise.
+  d.maps[0].sh.assign(16, glm::dvec3(0));
+  d.maps[0].sh[0] = glm::dvec3(1);
+  for (const auto& L : distribution_lightings(d, 4))
+    if (L[0] == glm::dvec3(1)) EXPECT_EQ(band_spectrum(L, 4), (std::vector<double>{1, 0, 0, 0}));
+  EXPECT_THROW(band_spectrum(d.maps[0].sh, 5), Error);
+  d.spectra[1].sh.resize(9);  // 3 bands: too few for the transfer's 4
+  EXPECT_THROW(distribution_lightings(d, 4), Error);
+}
+
 // Eyes all around: on eye_ring's sphere, spread over every direction.
 TEST(CompressionErrorMeter, EyesCoverTheSphere) {
   const Mesh m = test::floor_and_ball(8);
@@ -391,6 +433,19 @@ TEST(CompressionChoice, MeetsItsTargetOverTheDistribution) {
       EXPECT_NEAR(e.p95, c->whole.p95, 1e-9) << glossy;
       EXPECT_LE(e.p95, e.bound + 1e-12) << glossy;
       EXPECT_EQ(c->bytes, c->compressed.coeffs.bytes() + (glossy ? c->compressed.glossy.bytes() : 0));
+      // The file's record of what it was chosen for.
+      ASSERT_TRUE(c->compressed.choice.has_value());
+      const CompressionChoiceRecord& r = *c->compressed.choice;
+      EXPECT_EQ(r.target, o.target);
+      EXPECT_EQ(r.exhaustive, c == &full);
+      EXPECT_EQ(r.maps, (std::vector<std::string>{"a", "b"}));
+      EXPECT_EQ(r.rotations, d.rotations);
+      EXPECT_EQ(r.eyes, glossy ? d.eyes : 0);
+      EXPECT_EQ(r.exponents, glossy ? d.glosses : std::vector<double>{});
+      EXPECT_EQ(r.p95, c->whole.p95);
+      EXPECT_EQ(r.bound, c->whole.bound);
+      EXPECT_EQ(r.samples, c->whole.samples);
+      EXPECT_EQ(compression_choice_problem(r), "");
     }
     // The quick search truncates fits of more vectors and stops early: on
     // this small mesh measured at most 1.3x (the size margin).

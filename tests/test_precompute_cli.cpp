@@ -295,6 +295,14 @@ std::string stderr_number_after(const std::string& err, const std::string& label
   return err.substr(at + label.size(), err.find('\n', at) - at - label.size());
 }
 
+// prt compress's default spectra (--spectra): the bundled maps', at `bands`.
+std::vector<NamedLighting> bundled_spectra(int bands) {
+  std::vector<NamedLighting> s;
+  for (const char* name : {"city", "courtyard", "forest", "studio", "sunset"})
+    s.push_back({name, project(load_envmap(repo_envmap(std::string(name) + ".exr")), bands)});
+  return s;
+}
+
 TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
   TempDir dir;
   test::write_off(dir.file("fb.off"), test::floor_and_ball(6));
@@ -318,10 +326,12 @@ TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
   write_compressed_transfer(dir.file("lib.prt"), lib);
   EXPECT_EQ(read_file(dir.file("c.prt")), read_file(dir.file("lib.prt")));
   // The error it printed is the meter's over the command's distribution
-  // (the one map under 24 rotations, 32 eyes), printed to 3 decimals in %.
+  // (the one map under 24 rotations taking on the bundled maps' spectra, 32
+  // eyes), printed to 3 decimals in %.
   const Mesh m = load_mesh(mesh);
   ErrorDistribution d;
   d.maps.push_back({"forest", project(load_envmap(env), 3)});
+  d.spectra = bundled_spectra(3);
   const ErrorStats want = CompressionErrorMeter(t, m, d)(lib, true);
   for (const auto& [after, value] : {std::pair{"p95 ", want.p95}, std::pair{"exceeds it) ", want.bound}}) {
     const std::string printed = stderr_number_after(c.err, after);
@@ -368,8 +378,9 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   ASSERT_EQ(c.code, 0) << describe_run(c);
   const Transfer t = read_transfer(dir.file("t.prt"));
   const Mesh m = load_mesh(mesh);
-  ErrorDistribution d;  // the command's: the one map under 24 rotations
+  ErrorDistribution d;  // the command's: the one map under 24 rotations, taking on the bundled maps' spectra
   d.maps.push_back({"studio", project(load_envmap(env), 4)});
+  d.spectra = bundled_spectra(4);
   ChoiceOptions o;
   o.target = 0.02;
   const CompressionChoice want = choose_compression(t, m, d, o);
@@ -382,6 +393,18 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   EXPECT_EQ(got.coeffs.clusters, want.compressed.coeffs.clusters);
   EXPECT_EQ(got.coeffs.vectors, want.compressed.coeffs.vectors);
   EXPECT_LE(want.whole.p95, 0.02);
+  // The file records what it was chosen for, and prt info says it.
+  ASSERT_TRUE(got.choice.has_value());
+  EXPECT_EQ(compression_choice_json(*got.choice), compression_choice_json(*want.compressed.choice));
+  const Result info = run_prt(dir, {"info", dir.file("c.prt")});
+  ASSERT_EQ(info.code, 0) << describe_run(info);
+  for (const char* w : {"format version 6", "chosen for a p95 relit error of at most 2%", "1 map (studio) x 24 rotations",
+                        "those of city, courtyard, forest, studio, sunset in turn"})
+    EXPECT_NE(info.out.find(w), std::string::npos) << w << " in " << info.out;
+  const Result json = run_prt(dir, {"info", dir.file("c.prt"), "--json"});
+  ASSERT_EQ(json.code, 0) << describe_run(json);
+  for (const char* w : {"\"choice\": {", "\"target\": 0.02,", "\"spectra\": [", "\"measured\": {"})
+    EXPECT_NE(json.out.find(w), std::string::npos) << w << " in " << json.out;
   // --measure: the file's error under another map (the meter's, to the 3
   // decimals in % it prints), on stdout; nothing written.
   const std::string other = repo_envmap("sunset.exr");
@@ -420,6 +443,9 @@ TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
       {{"compress", in, "--measure", dir.file("c.prt")}, 2, "--measure needs --mesh"},
       {{"compress", in}, 2, "--output is required"},
       {{"compress", in, "-o", out, "--metric", "plain"}, 2, "--metric is for --target-error"},
+      {{"compress", in, "-o", out, "--spectra", env}, 2, "--spectra shapes the lightings"},
+      {{"compress", in, "-o", out, "--target-error", "0.01", "--mesh", mesh, "--own-spectra", "--spectra", env}, 2,
+       "give one of them"},
       {{"compress", in, "-o", in}, 2, "is the input IN"},
       {{"compress", in, "-o", out, "--mesh", dir.file("missing.off"), "--env", env}, 1, "missing.off"},
       {{"compress", in, "-o", out, "--target-error", "1e-12", "--mesh", mesh, "--env", env}, 1, "reaches p95 error"},

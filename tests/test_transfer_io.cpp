@@ -470,7 +470,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 5"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 6"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -940,6 +940,102 @@ TEST(CompressedWrite, RefusesWhatCouldNotBeReadBack) {
   bad = c;
   bad.coeffs.weight_bits = 16;
   refused(bad, "weight scales");
+}
+
+// ---- the compression choice record (version 6, kind 12) ----------------------------------
+
+prt::CompressionChoiceRecord sample_choice() {
+  prt::CompressionChoiceRecord r;
+  r.target = 0.01;
+  r.maps = {"sunset"};
+  r.spectra = {"city", "studio"};
+  r.rotations = 24;
+  r.seed = 7;
+  r.eyes = 32;
+  r.exponents = {4, 8};
+  r.speculars = {0.5};
+  r.mean = 0.004;
+  r.p95 = 0.0087;
+  r.max = 0.017;
+  r.bound = 0.037;
+  r.samples = 9216;
+  r.vertices = 40;
+  return r;
+}
+
+TEST(CompressedFile, ChoiceRecordRoundTripsAsVersionSix) {
+  TempDir dir;
+  prt::CompressedTransfer c = compressed(with_glossy(mixed_transfer()), 2, 3, 16);
+  const std::uint64_t without = prt::transfer_file_size(c);
+  c.choice = sample_choice();
+  const Sample s = compressed_sample(dir, c);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 6u);
+  EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(c));
+  // The last section: kind 12, u8, its JSON's bytes.
+  const std::size_t sec = s.section_at.back();
+  const std::string json = prt::compression_choice_json(*c.choice);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, sec), 12u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, sec + 4), 6u);
+  EXPECT_EQ(get<std::uint64_t>(s.bytes, sec + 16), json.size());
+  EXPECT_EQ(s.bytes.substr(sec + kSectionHeader, json.size()), json);
+  EXPECT_EQ(prt::transfer_file_size(c), without + kSectionHeader + json.size() + (8 - json.size() % 8) % 8);
+  const prt::CompressedTransfer back = prt::read_compressed_transfer(dir.file("sample.prtt"));
+  ASSERT_TRUE(back.choice.has_value());
+  EXPECT_EQ(prt::compression_choice_json(*back.choice), json);
+  EXPECT_EQ(back.choice->spectra, c.choice->spectra);
+  EXPECT_EQ(back.choice->exponents, c.choice->exponents);
+  EXPECT_EQ(back.choice->samples, 9216u);
+  prt::write_compressed_transfer(dir.file("again.prtt"), back);
+  EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+  const std::string d = prt::describe_transfer(back);
+  for (const char* w : {"format version 6", "chosen for a p95 relit error of at most 1%", "sunset",
+                        "those of city, studio in turn", "32 eyes", "p95 0.870%", "bound 3.700%"})
+    EXPECT_TRUE(contains(d, w)) << w << " in " << d;
+  // Without a record: version 4, as before.
+  c.choice.reset();
+  EXPECT_EQ(get<std::uint32_t>(compressed_sample(dir, c).bytes, kVersionAt), 4u);
+}
+
+TEST(CompressedRead, BadChoiceRecordsAreRefusedByName) {
+  TempDir dir;
+  prt::CompressedTransfer c = compressed(mixed_transfer(), 2, 3, 16);
+  c.choice = sample_choice();
+  c.choice->eyes = 0;  // diffuse
+  c.choice->exponents.clear();
+  c.choice->speculars.clear();
+  const Sample s = compressed_sample(dir, c);
+  const std::size_t sec = s.section_at.back(), data = sec + kSectionHeader;
+  const std::string json = prt::compression_choice_json(*c.choice);
+  const auto with_json = [&](std::string text, const std::vector<std::string>& words, const std::string& what) {
+    text.resize(json.size(), ' ');  // same length: the layout stays valid
+    std::string b = s.bytes;
+    b.replace(data, json.size(), text);
+    reseal(b);
+    write_file(dir.file("bad.prtt"), b);
+    expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"), words, what);
+  };
+  with_json("{\"target\": 0.01", {"bad section 'compression choice'", "not a JSON object"}, "truncated JSON");
+  with_json("[1, 2]", {"not a JSON object"}, "an array");
+  std::string missing = json;
+  missing.replace(missing.find("\"rotations\""), 11, "\"rotationz\"");
+  with_json(missing, {"'compression choice'", "rotations"}, "a key missing");
+  std::string wrong = json;
+  wrong.replace(wrong.find("\"p95\""), 5, "\"p96\"");
+  with_json(wrong, {"statistic 'p96'"}, "an unknown statistic");
+  std::string big = json;
+  big.replace(big.find("0.01,"), 5, "1.50,");
+  with_json(big, {"target 1.5 is not in (0, 1)"}, "a target out of range");
+  // In an uncompressed file's version, and in a file that is not compressed.
+  std::string b = s.bytes;
+  put(b, kVersionAt, std::uint32_t(5));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"), {"unknown kind 12 in a version 5 file"},
+                  "kind 12 in version 5");
+  // The writer refuses what the reader would.
+  c.choice->rotations = 0;
+  EXPECT_THROW(prt::write_compressed_transfer(dir.file("out.prtt"), c), prt::Error);
+  EXPECT_FALSE(fs::exists(dir.file("out.prtt")));
 }
 
 // ---- writing -----------------------------------------------------------------------------

@@ -1,9 +1,10 @@
 // prt/compressed_transfer.h - transfer compressed by clustered PCA (Sloan,
-// Hall, Hart & Snyder 2003; issue 16, in progress: the data, its CPU
+// Hall, Hart & Snyder 2003; docs/COMPRESSION.md): the data, its CPU
 // relighting and decompression, and the per-cluster products the renderer
-// decodes with on the GPU (prt/render.h); files and `prt compress` are to
-// come). The fit is prt::precompute's (prt/cpca.h, compress_transfer in
-// prt/precompute.h).
+// decodes with on the GPU (prt/render.h). The fit is prt::precompute's
+// (prt/cpca.h, compress_transfer in prt/precompute.h), the choice of its
+// size by a relit-error target prt::analysis's (prt/compression_error.h);
+// files are prt/transfer_io.h's.
 //
 // A stored row x_p of a transfer (a vertex's diffuse coefficients, all its
 // channels; or its glossy matrices) is approximated as
@@ -21,8 +22,10 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace prt {
@@ -66,6 +69,38 @@ inline std::int16_t weight_code(float w, float scale) {
 }
 inline float quantised_weight(float w, float scale) { return float(weight_code(w, scale)) * scale; }
 
+// What a compression's size was chosen for (`prt compress --target-error`,
+// prt::choose_compression; docs/COMPRESSION.md): the target, the error
+// distribution it was measured over and the figures measured there. Files
+// store it as JSON (docs/FORMAT.md, kind 12; version 6).
+struct CompressionChoiceRecord {
+  double target = 0;                       // relative RMS radiance error, in (0, 1)
+  std::string statistic = "p95";           // what the target holds to: "p95" or "mean" over the samples
+  std::string metric = "band";             // the fits' metric: "band" or "plain"
+  bool exhaustive = false;                 // the search: every candidate fitted in full, or the quick one
+  std::vector<std::string> maps, spectra;  // the lighting maps' names; the spectra the rotations took on in turn
+  int rotations = 0;                       // per map
+  std::uint64_t seed = 0;                  // of the rotations
+  int eyes = 0;                            // glossy: eyes on a sphere (0: diffuse)
+  std::vector<double> exponents, speculars;  // glossy: Phong exponents and specular strengths
+  // Measured on the chosen compression: the whole radiance's relit error
+  // over the samples, and the transfer-space bound (no lighting exceeds it).
+  double mean = 0, p95 = 0, max = 0, bound = 0;
+  std::uint64_t samples = 0, vertices = 0;  // vertices: those measured
+};
+// What is wrong with `r`, or "": target in (0, 1), a known statistic and
+// metric, at least one map, rotations >= 1, eyes >= 0 with exponents and
+// strengths exactly when eyes > 0, every figure finite and >= 0, mean <= max,
+// samples and vertices >= 1.
+std::string compression_choice_problem(const CompressionChoiceRecord& r);
+// The record as one JSON object (docs/FORMAT.md lists its keys), and back:
+// parse_compression_choice throws prt::Error naming the problem (not JSON,
+// a key missing or of the wrong type, compression_choice_problem's).
+std::string compression_choice_json(const CompressionChoiceRecord& r);
+CompressionChoiceRecord parse_compression_choice(std::string_view json);
+// One paragraph for prt info: the target, the distribution, the figures.
+std::string describe_choice(const CompressionChoiceRecord& r);
+
 // A transfer whose stored rows (and glossy matrices) are compressed:
 // `transfer` holds everything else (header, slots, ambient occlusion, bent
 // normals) with its coeffs, direct and glossy_matrices arrays empty.
@@ -73,6 +108,7 @@ struct CompressedTransfer {
   Transfer transfer;
   ClusteredSignal coeffs;  // the rows of Transfer::coeffs (stride() values each)
   ClusteredSignal glossy;  // the rows of Transfer::glossy_matrices (glossy_stride() each), when transfer.glossy
+  std::optional<CompressionChoiceRecord> choice;  // what its size was chosen for, when it was chosen by a target
 };
 
 // What is wrong with `c`, or "": the uncompressed part as transfer_problem
@@ -81,7 +117,8 @@ struct CompressedTransfer {
 // (glossy_stride() for the glossy one, present exactly when
 // transfer.glossy), 1 <= clusters <= 2^24, 0 <= vectors <= dim, arrays of
 // their sizes, cluster indices below clusters, every value finite, 16-bit
-// weights multiples of their scale within 32767 steps.
+// weights multiples of their scale within 32767 steps; and the choice
+// record's compression_choice_problem.
 std::string compressed_transfer_problem(const CompressedTransfer& c);
 
 // The per-cluster lighting products, shared by the CPU relighting below and

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -59,13 +60,27 @@ struct ErrorDistribution {
   int eyes = 32;              // glossy: eye points on a sphere around the mesh (eye_sphere)
   std::vector<double> glosses{4, 8, 16, 32};      // glossy: Phong exponents
   std::vector<double> speculars{0.25, 0.5, 1.0};  // glossy: specular strengths rho_s
+  // Band spectra the rotated lightings take on in turn (docs/COMPRESSION.md
+  // "Spectra"): rotation r >= 1 of a map keeps the map's own band spectrum
+  // for r = 1, 1 + (S + 1), ...; otherwise takes that of spectra[(r - 1) mod
+  // (S + 1) - 1], S = spectra.size(): every band l >= 1 scaled so that its
+  // norm (RGB, over m) relative to band 0's is the spectrum map's. A map's
+  // own name in `spectra` is skipped, as is a band the map lacks (norm under
+  // 1e-6 of band 0's: nothing to scale). Empty: every lighting keeps its map's.
+  std::vector<NamedLighting> spectra;
   // A sentence naming what it holds (maps, rotations, eyes, lobes).
   std::string describe(bool glossy) const;
 };
 
 // The lightings of `d`: map-major, every map's `rotations` rotations of its
-// SH (the first unrotated), `bands`^2 coefficients each.
+// SH (the first unrotated; the others in turn with the map's own band spectrum
+// and with each of d.spectra's), `bands`^2 coefficients each.
 std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribution& d, int bands);
+
+// The norm of each band l < `bands` of `sh` (RGB, sqrt of the sum over m and
+// channels of the squares), divided by band 0's (band 0: 1; all 0 when band
+// 0 is 0). Throws prt::Error when `sh` has fewer than bands^2 coefficients.
+std::vector<double> band_spectrum(std::span<const glm::dvec3> sh, int bands);
 
 // `count` eye points spread evenly over a sphere around the mesh's
 // bounding-box centre (a Fibonacci lattice), at the distance of prt render's

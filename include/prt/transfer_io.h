@@ -24,11 +24,14 @@ namespace prt {
 
 // The newest version of SH transfer files (docs/FORMAT.md); this prt reads
 // it and every earlier one (version 1: every vertex stored). Each file is
-// written in the oldest version that holds it: lightmaps 5, compressed transfers 4,
-// glossy ones 3, the others 2. Wavelet transfers are written as version
+// written in the oldest version that holds it: compressed transfers with a
+// choice record 6, lightmaps 5, other compressed transfers 4, glossy ones 3,
+// the others 2. Wavelet transfers are written as version
 // kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 5;
+inline constexpr std::uint32_t kTransferFormatVersion = 6;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
+inline constexpr std::uint32_t kLightmapFormatVersion = 5;
+inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // The version write_transfer writes for `t`: 3 with glossy matrices, 2
 // otherwise (so that a prt reading version 2 reads every file it could).
@@ -91,6 +94,9 @@ bool transfer_is_compressed(const std::string& path);
 // The sections write_compressed_transfer stores, in file order, and the
 // file's exact size.
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c);
+// The version write_compressed_transfer writes for `c`: 6 with a choice
+// record, 4 without.
+std::uint32_t transfer_format_version(const CompressedTransfer& c);
 std::uint64_t transfer_file_size(const CompressedTransfer& c);
 // check_matches of its uncompressed part.
 inline void check_matches(const CompressedTransfer& c, const Mesh& mesh, const std::string& transfer_path);

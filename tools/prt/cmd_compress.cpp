@@ -26,7 +26,7 @@ namespace {
 
 struct CompressArgs {
   std::string input, output, mesh, measure;  // measure: a compressed file to measure (--measure)
-  std::vector<std::string> envs;
+  std::vector<std::string> envs, spectra;
   // Defaults: the smallest K x N measured to meet issue 16's targets on
   // bunny00 (docs/COMPRESSION.md): diffuse 256 x 8, glossy matrices 128 x 8.
   CompressOptions opt{.clusters = 256, .vectors = 8, .glossy_clusters = 128, .glossy_vectors = 8, .iterations = 20,
@@ -35,11 +35,12 @@ struct CompressArgs {
   // The error distribution (docs/COMPRESSION.md "The error distribution").
   int rotations = 24, eyes = 32;
   std::string statistic = "p95", metric = "band";
-  bool exhaustive = false, quiet = false;
+  bool exhaustive = false, own_spectra = false, quiet = false;
   const CLI::Option *clusters_opt = nullptr, *pca_opt = nullptr, *glossy_clusters_opt = nullptr,
                     *glossy_pca_opt = nullptr, *target_opt = nullptr, *mesh_opt = nullptr, *env_opt = nullptr,
                     *rotations_opt = nullptr, *eyes_opt = nullptr, *statistic_opt = nullptr, *metric_opt = nullptr,
-                    *exhaustive_opt = nullptr, *measure_opt = nullptr;
+                    *exhaustive_opt = nullptr, *measure_opt = nullptr, *spectra_opt = nullptr,
+                    *own_spectra_opt = nullptr;
 };
 
 void check_usage(const CompressArgs& a) {
@@ -60,7 +61,9 @@ void check_usage(const CompressArgs& a) {
   if (measure && a.mesh.empty())
     throw UsageError("--target-error needs --mesh MESH: the relit error is measured on the mesh (under the --env maps, or the "
                      "bundled ones)");
-  for (const CLI::Option* o : {a.env_opt, a.rotations_opt, a.eyes_opt})
+  if (a.spectra_opt->count() > 0 && a.own_spectra_opt->count() > 0)
+    throw UsageError("--own-spectra leaves the maps' spectra as they are; --spectra adds others': give one of them");
+  for (const CLI::Option* o : {a.env_opt, a.rotations_opt, a.eyes_opt, a.spectra_opt, a.own_spectra_opt})
     if (o->count() > 0 && !measure)
       throw UsageError(o->get_name() + " shapes the lightings and views the error is measured under; give --mesh (and "
                        "--target-error to choose by it)");
@@ -70,28 +73,47 @@ void check_usage(const CompressArgs& a) {
   std::vector<Input> inputs = {{"IN", a.input}};
   if (!a.mesh.empty()) inputs.push_back({"--mesh", a.mesh});
   for (const auto& e : a.envs) inputs.push_back({"--env", e});
+  for (const auto& e : a.spectra) inputs.push_back({"--spectra", e});
   check_not_input("--output", a.output, std::span<const Input>(inputs));
 }
 
-// The lightings and views the error is measured under: each --env map (or,
-// with none, every bundled one) under --rotations rotations; glossy: --eyes
-// eyes on a sphere, the meter's exponents and strengths.
-ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
-  ErrorDistribution d;
-  std::vector<std::string> paths = a.envs;
-  if (paths.empty()) {
-    const std::filesystem::path dir = data_dir() / "envmaps";
-    std::error_code ec;
-    for (const auto& e : std::filesystem::directory_iterator(dir, ec))
-      if (e.path().extension() == ".exr") paths.push_back(e.path().string());
-    std::sort(paths.begin(), paths.end());
-    if (paths.empty())
-      throw Error(dir.string() + ": no bundled maps to measure the error under (PRT_DATA_DIR); give --env MAP");
-  }
+std::vector<std::string> bundled_maps() {
+  const std::filesystem::path dir = data_dir() / "envmaps";
+  std::vector<std::string> paths;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.path().extension() == ".exr") paths.push_back(e.path().string());
+  std::sort(paths.begin(), paths.end());
+  if (paths.empty())
+    throw Error(dir.string() + ": no bundled maps to measure the error under (PRT_DATA_DIR); give --env MAP");
+  return paths;
+}
+
+std::vector<NamedLighting> load_lightings(const std::vector<std::string>& paths, int bands) {
+  std::vector<NamedLighting> out;
   for (const auto& path : paths) {
     const EnvMap env = load_envmap(path);
     require_finite(env);
-    d.maps.push_back({std::filesystem::path(path).stem().string(), project(env, bands)});
+    out.push_back({std::filesystem::path(path).stem().string(), project(env, bands)});
+  }
+  return out;
+}
+
+// The lightings and views the error is measured under: each --env map (or,
+// with none, every bundled one) under --rotations rotations, taking in turn
+// their own band spectra and those of the --spectra maps (default: the
+// bundled ones; none for --measure, which measures under the maps as given,
+// or with --own-spectra); glossy: --eyes eyes on a sphere, the meter's
+// exponents and strengths.
+ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
+  ErrorDistribution d;
+  const std::vector<std::string> maps = a.envs.empty() ? bundled_maps() : a.envs;
+  d.maps = load_lightings(maps, bands);
+  if (!a.spectra.empty()) {
+    d.spectra = load_lightings(a.spectra, bands);
+  } else if (!a.own_spectra && a.measure.empty()) {
+    const std::vector<std::string> bundled = bundled_maps();
+    d.spectra = bundled == maps ? d.maps : load_lightings(bundled, bands);
   }
   d.rotations = a.rotations;
   d.eyes = a.eyes;
@@ -208,7 +230,9 @@ Run add_compress(CLI::App& app) {
       "measured meshes and half the per-vertex bytes of float ones (docs/COMPRESSION.md).\n"
       "--target-error e chooses the smallest K x N (in bytes) whose relit error, the relative RMS radiance against\n"
       "the uncompressed transfer, has its 95th percentile (--statistic) at most e over a distribution: each --env map\n"
-      "(default: the bundled ones) under --rotations random rotations, glossy files from --eyes eyes on a sphere at\n"
+      "(default: the bundled ones) under --rotations random rotations, which take on in turn the map's own SH band\n"
+      "spectrum and the bundled maps' (--spectra, --own-spectra: lighting as bright in fine detail as other natural\n"
+      "maps are), glossy files from --eyes eyes on a sphere at\n"
       "Phong exponents 4 to 32 and strengths 0.25 to 1; it prints the mean, p95 and max over the distribution and\n"
       "a transfer-space bound no lighting exceeds. With --mesh and a fixed K x N it prints the same figures.\n"
       "Example: prt compress glossy.prt -o glossy.cprt --clusters 128 --pca 8\n"
@@ -249,6 +273,11 @@ Run add_compress(CLI::App& app) {
                                    "Lightings per map: the map as given, then random rotations")
                          ->check(int_range(1, 4096))
                          ->capture_default_str();
+  a->spectra_opt = s->add_option("--spectra", a->spectra,
+                                 "Maps whose SH band spectra the rotated lightings take on in turn, beside their own "
+                                 "(repeatable; default: the bundled maps; --measure: none)");
+  a->own_spectra_opt = s->add_flag("--own-spectra", a->own_spectra,
+                                   "Every lighting keeps its map's own band spectrum (no --spectra)");
   a->eyes_opt = s->add_option("--eyes", a->eyes, "Glossy: eye points on a sphere around the mesh")
                     ->check(int_range(1, 4096))
                     ->capture_default_str();

@@ -77,7 +77,7 @@ nlohmann::ordered_json signal_json(const ClusteredSignal& g) {
 
 // The uncompressed part's fields, its sections as stored, and per signal its clusters.
 nlohmann::ordered_json to_json(const std::string& path, const CompressedTransfer& c) {
-  nlohmann::ordered_json j = to_json(path, c.transfer, kCompressedFormatVersion);
+  nlohmann::ordered_json j = to_json(path, c.transfer, transfer_format_version(c));
   j["sections"] = sections_json(transfer_sections(c));
   j.erase("analytic_bytes_saved");
   std::uint64_t per_vertex = 0;
@@ -87,6 +87,7 @@ nlohmann::ordered_json to_json(const std::string& path, const CompressedTransfer
   j["file_bytes"] = transfer_file_size(c);
   j["compressed"] = {{"coefficients", signal_json(c.coeffs)}};
   if (c.transfer.glossy) j["compressed"]["glossy_matrices"] = signal_json(c.glossy);
+  if (c.choice) j["compressed"]["choice"] = nlohmann::ordered_json::parse(compression_choice_json(*c.choice));
   return j;
 }
 
@@ -203,7 +204,7 @@ int run_info(const InfoArgs& a) {
   if (transfer_is_lightmap(a.file)) {
     const LightmapTransfer l = read_lightmap_transfer(a.file);  // validates everything
     if (a.json) {
-      nlohmann::ordered_json j = to_json(a.file, l.transfer, kTransferFormatVersion);
+      nlohmann::ordered_json j = to_json(a.file, l.transfer, kLightmapFormatVersion);
       j["sections"] = sections_json(transfer_sections(l));
       j["file_bytes"] = transfer_file_size(l);
       j["lightmap"] = {{"width", l.layout.width},
