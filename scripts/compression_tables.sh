@@ -16,6 +16,8 @@ cd "$(dirname "$0")/.."
 prt=${PRT:-build/prt}
 out=${OUT:-out/compression_tables}
 mkdir -p "$out"
+# shellcheck source=scripts/compression_inputs.sh
+. scripts/compression_inputs.sh
 meshes=("$@")
 [ ${#meshes[@]} -gt 0 ] || meshes=(bunny00 cow fandisk lion)
 maps=()
@@ -42,11 +44,7 @@ PY
 echo "| mesh | transfer | chosen by | K x N (diffuse / glossy) | B per stored row | compressed | fewer bytes | p95 relit error | time (s) |"
 echo "|---|---|---|---|---:|---:|---:|---:|---:|"
 for name in "${meshes[@]}"; do
-  mesh=../shared/meshes/$name.off
-  [ -f "$mesh" ] || { echo "skipping $name: $mesh is absent" >&2; continue; }
-  [ -f "$out/$name-d6.prt" ] || "$prt" precompute "$mesh" -o "$out/$name-d6.prt" --bands 6 --samples 1024 -q
-  [ -f "$out/$name-g5.prt" ] ||
-    "$prt" precompute "$mesh" -o "$out/$name-g5.prt" --material glossy --bands 5 --samples 1024 -q
+  ensure_transfers "$name" "$out" || continue
   for kind in diffuse glossy; do
     in=$out/$name-d6.prt target=0.005
     [ $kind = glossy ] && in=$out/$name-g5.prt target=0.01

@@ -222,6 +222,15 @@ def transfer_seeds(out, tmp, prt):
         f = tmp / (name + ".prt")
         subprocess.run([prt, "compress", str(tmp / (src + ".prt")), "-o", str(f), "-q", *args], check=True)
         write(out, "transfer", name + ".prt", f.read_bytes())
+    # Chosen by a target (version 6: the compression choice record, kind 12).
+    env = tmp / "grad.exr"
+    subprocess.run(["oiiotool", "--pattern", "fill:top=1,0.5,0.25:bottom=0.1,0.2,0.4", "16x8", "3", "-d", "float",
+                    "-o", str(env)], check=True)
+    f = tmp / "compressed-chosen.prt"
+    subprocess.run([prt, "compress", str(tmp / "glossy-shadowed-b2.prt"), "-o", str(f), "-q", "--target-error", "0.2",
+                    "--mesh", str(mesh), "--env", str(env), "--own-spectra", "--rotations", "2", "--eyes", "2"],
+                   check=True)
+    write(out, "transfer", "compressed-chosen.prt", f.read_bytes())
     return mesh, tmp / "shadowed-b3.prt"
 
 
