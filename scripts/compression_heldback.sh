@@ -19,6 +19,8 @@ cd "$(dirname "$0")/.."
 prt=${PRT:-build/prt}
 out=${OUT:-out/compression_heldback}
 mkdir -p "$out"
+# shellcheck source=scripts/compression_inputs.sh
+. scripts/compression_inputs.sh
 meshes=("$@")
 [ ${#meshes[@]} -gt 0 ] || meshes=(bunny00 lion)
 E=envmaps
@@ -39,11 +41,7 @@ choose() {  # transfer mesh target args...
 echo "| mesh | transfer | chosen under sunset, spectra | B/vertex | search (s) | city | courtyard | forest | studio | sunset | smallest meeting e under the other four (B/vertex) | ratio |"
 echo "|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
 for name in "${meshes[@]}"; do
-  mesh=../shared/meshes/$name.off
-  [ -f "$mesh" ] || { echo "skipping $name: $mesh is absent" >&2; continue; }
-  [ -f "$out/$name-d6.prt" ] || "$prt" precompute "$mesh" -o "$out/$name-d6.prt" --bands 6 --samples 1024 -q
-  [ -f "$out/$name-g5.prt" ] ||
-    "$prt" precompute "$mesh" -o "$out/$name-g5.prt" --material glossy --bands 5 --samples 1024 -q
+  ensure_transfers "$name" "$out" || continue
   for kind in glossy diffuse; do
     in=$out/$name-d6.prt target=0.005
     [ $kind = glossy ] && in=$out/$name-g5.prt target=0.01

@@ -147,17 +147,20 @@ class CompressionErrorMeter {
 // signal's length), in the metric `metric`.
 //
 // The quick search (exhaustive false): for each K in increasing order, one
-// fit of every row with the most vectors that could still be smaller than
-// the best found, warm started from the previous K's clusters and cut short
-// at `search_rounds` rounds; every smaller N is that fit truncated (the
-// first N principal vectors of the same clusters), found by bisection and
-// measured on `search_vertices` vertices under at most 8 rotations of each
-// map and 8 eyes (glossy; the diffuse error is exact at no cost); it stops where K's clusters alone outweigh the best. The best
-// is then fitted in full (the rounds of `iterations`, warm started) and
-// measured under the whole distribution (glossy: on `measure_vertices`
-// vertices); if it misses, the next N of the same K is tried, and so on. The exhaustive search fits every candidate in full,
-// smallest first, and measures it under the whole distribution: slow, and what the quick
-// one is measured against.
+// fit of every row from k-means++ seeds with the most vectors that could
+// still be smaller than the best found, cut short at `search_rounds` rounds
+// (short rows, dim <= 128: a fit per N measured); every smaller N is that
+// fit truncated (the first N principal vectors of the same clusters), found
+// by bisection and measured on `search_vertices` vertices under at most 8
+// rotations of each map and 8 eyes (glossy; the diffuse error is exact at no
+// cost). The smallest N that meets the target there is fitted in full (the
+// rounds of `iterations`, warm started from the search's fit) and measured
+// under the whole distribution (glossy: on `measure_vertices` vertices),
+// with more N while it misses; only a compression that meets the target in
+// full becomes the best, and the search stops where K's clusters alone
+// outweigh it. The exhaustive search fits every candidate in full,
+// smallest first, and measures it under the whole distribution: slow, and
+// what the quick one is measured against.
 struct ChoiceOptions {
   double target = 0.01;
   ErrorStatistic statistic = ErrorStatistic::P95;
