@@ -277,6 +277,7 @@ CompressionChoiceRecord choice_record(const ErrorDistribution& d, const ChoiceOp
   r.exhaustive = o.exhaustive;
   for (const NamedLighting& m : d.maps) r.maps.push_back(m.name);
   for (const NamedLighting& m : d.spectra) r.spectra.push_back(m.name);
+  r.sun = d.sun;
   r.rotations = d.rotations;
   r.seed = d.seed;
   if (glossy) {

@@ -106,6 +106,7 @@ std::string ErrorDistribution::describe(bool glossy) const {
   std::string s = fmt::format("{} map{} ({}) x {} rotation{}", maps.size(), maps.size() == 1 ? "" : "s", names(maps),
                               rotations, rotations == 1 ? "" : "s");
   if (!spectra.empty()) s += fmt::format(" taking their own spectra and those of {} in turn", names(spectra));
+  if (sun) s += fmt::format(", and a point light (the sun) x {} rotation{}", rotations, rotations == 1 ? "" : "s");
   if (glossy) {
     std::string g, r;
     for (double e : glosses) g += (g.empty() ? "" : ", ") + fmt::format("{:g}", e);
@@ -165,6 +166,20 @@ std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribut
       const std::vector<double>& k = scales[std::size_t(r - 1) % scales.size()];
       for (int l = 1; l < bands; ++l)
         for (int i = l * l; i < (l + 1) * (l + 1); ++i) o[i] *= k[l];
+      out.push_back(std::move(o));
+    }
+  }
+  if (d.sun) {
+    // A unit delta overhead: its SH coefficients are the basis there.
+    std::vector<double> y(nc);
+    sh::eval(bands, 0.0, 1.0, 0.0, y.data());
+    std::vector<glm::dvec3> up(nc);
+    for (std::size_t i = 0; i < nc; ++i) up[i] = glm::dvec3(y[i]);
+    out.push_back(up);
+    for (int r = 1; r < d.rotations; ++r) {
+      rot.set(random_rotation(state));
+      std::vector<glm::dvec3> o(nc);
+      rot.apply(up, o);
       out.push_back(std::move(o));
     }
   }

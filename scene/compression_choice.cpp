@@ -42,6 +42,7 @@ std::string compression_choice_json(const CompressionChoiceRecord& r) {
   j["search"] = r.exhaustive ? "exhaustive" : "quick";
   j["maps"] = r.maps;
   j["spectra"] = r.spectra;
+  j["sun"] = r.sun;
   j["rotations"] = r.rotations;
   j["seed"] = r.seed;
   j["eyes"] = r.eyes;
@@ -65,6 +66,7 @@ CompressionChoiceRecord parse_compression_choice(std::string_view text) {
     r.exhaustive = search == "exhaustive";
     r.maps = j.at("maps").get<std::vector<std::string>>();
     r.spectra = j.at("spectra").get<std::vector<std::string>>();
+    r.sun = j.at("sun").get<bool>();
     r.rotations = j.at("rotations").get<int>();
     r.seed = j.at("seed").get<std::uint64_t>();
     r.eyes = j.at("eyes").get<int>();
@@ -97,6 +99,7 @@ std::string describe_choice(const CompressionChoiceRecord& r) {
                               r.maps.size(), r.maps.size() == 1 ? "" : "s", list(r.maps), r.rotations,
                               r.rotations == 1 ? "" : "s");
   if (!r.spectra.empty()) s += fmt::format(" taking their own spectra and those of {} in turn", list(r.spectra));
+  if (r.sun) s += fmt::format(", and a point light (the sun) x {} rotation{}", r.rotations, r.rotations == 1 ? "" : "s");
   if (r.eyes > 0)
     s += fmt::format("; {} eyes on a sphere, exponents {}, specular {}", r.eyes, list(r.exponents), list(r.speculars));
   s += fmt::format(": measured mean {:.3f}%, p95 {:.3f}%, max {:.3f}% over {} samples on {} vertices; transfer-space "

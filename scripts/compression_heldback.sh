@@ -3,17 +3,20 @@
 # each mesh (default: bunny00 and lion from ../shared/meshes) a glossy 5-band
 # and a diffuse 6-band shadowed transfer (1024 rays), compressed by
 # prt compress --target-error (glossy 0.01, diffuse 0.005) under sunset alone
-#   1. with the default spectra (the bundled maps'),
-#   2. with its own spectrum only (--own-spectra),
-#   3. with the spectra of three maps, the fourth held back entirely (once
-#      for studio, once for city),
+#   1. as the defaults have it (the bundled maps' spectra and the sun),
+#   2. without the sun (--no-sun),
+#   3. with its own spectrum only and no sun (the distribution before both),
+#   4. with the spectra of three maps and the sun, studio held back entirely,
 # each then measured (--measure, every vertex, 24 rotations, glossy 32 eyes)
-# under every bundled map alone; and the smallest compression meeting the
-# target under the four held-back maps themselves (--own-spectra), the size
-# the issue compares with. Prints markdown rows: the chosen size, the
-# search's time, the p95 under each map, the smallest size and the ratio.
-# EXHAUSTIVE=1 adds --exhaustive for case 1 (slow: every candidate fitted).
-# Needs a built prt (scripts/build.sh). About 12 minutes a mesh on 2 cores.
+# under every bundled map alone and under a small sun in a dim sky (made
+# here: 3x3 pixels of 2e4 over 0.25 at 256x128); and the smallest
+# compression meeting the target under the four other bundled maps
+# themselves (--own-spectra --no-sun), the size the issue compares with.
+# Prints markdown rows: the chosen size, the search's time, the p95 under
+# each map, the smallest size and the ratio. EXHAUSTIVE=1 adds case 1 with
+# --exhaustive (slow: every candidate fitted in full).
+# Needs a built prt (scripts/build.sh) and oiiotool. About 15 minutes a
+# mesh on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 prt=${PRT:-build/prt}
@@ -24,10 +27,14 @@ mkdir -p "$out"
 meshes=("$@")
 [ ${#meshes[@]} -gt 0 ] || meshes=(bunny00 lion)
 E=envmaps
-all=(city courtyard forest studio sunset)
+all=(city courtyard forest studio sunset sun)
 
+[ -f "$out/sun.exr" ] || oiiotool --pattern constant:color=0.25,0.25,0.25 256x128 3 -d float \
+  --fill:color=20000,20000,20000 3x3+100+30 -o "$out/sun.exr"
 p95() {  # transfer compressed mesh map -> "0.872" (percent)
-  "$prt" compress "$1" --measure "$2" --mesh "$3" --env "$E/$4.exr" -q | sed -E 's/.* p95 ([0-9.]+)%.*/\1/'
+  local map=$E/$4.exr
+  [ "$4" = sun ] && map=$out/sun.exr
+  "$prt" compress "$1" --measure "$2" --mesh "$3" --env "$map" -q | sed -E 's/.* p95 ([0-9.]+)%.*/\1/'
 }
 # chooses into $out/c.prt; sets size (bytes per vertex) and secs
 choose() {  # transfer mesh target args...
@@ -38,8 +45,8 @@ choose() {  # transfer mesh target args...
   secs=$(sed -nE 's/^compress: ([0-9.]+) s.*/\1/p' "$out/log.txt")
 }
 
-echo "| mesh | transfer | chosen under sunset, spectra | B/vertex | search (s) | city | courtyard | forest | studio | sunset | smallest meeting e under the other four (B/vertex) | ratio |"
-echo "|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
+echo "| mesh | transfer | chosen under sunset with | B/vertex | search (s) | city | courtyard | forest | studio | sunset | sun | smallest meeting e under the other four (B/vertex) | ratio |"
+echo "|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|"
 for name in "${meshes[@]}"; do
   ensure_transfers "$name" "$out" || continue
   for kind in glossy diffuse; do
@@ -47,12 +54,12 @@ for name in "${meshes[@]}"; do
     [ $kind = glossy ] && in=$out/$name-g5.prt target=0.01
     others=()
     for m in city courtyard forest studio; do others+=(--env "$E/$m.exr"); done
-    choose "$in" "$mesh" $target "${others[@]}" --own-spectra
+    choose "$in" "$mesh" $target "${others[@]}" --own-spectra --no-sun
     smallest=$size
-    cases=("bundled (default)|" "own only|--own-spectra"
-           "courtyard, forest, studio (city held back)|--spectra $E/courtyard.exr --spectra $E/forest.exr --spectra $E/studio.exr"
-           "city, courtyard, forest (studio held back)|--spectra $E/city.exr --spectra $E/courtyard.exr --spectra $E/forest.exr")
-    [ "${EXHAUSTIVE:-0}" = 1 ] && cases+=("bundled, --exhaustive|--exhaustive")
+    cases=("the defaults (bundled spectra, sun)|" "bundled spectra, no sun|--no-sun"
+           "own spectrum, no sun|--own-spectra --no-sun"
+           "city, courtyard, forest spectra, sun (studio held back)|--spectra $E/city.exr --spectra $E/courtyard.exr --spectra $E/forest.exr")
+    [ "${EXHAUSTIVE:-0}" = 1 ] && cases+=("the defaults, --exhaustive|--exhaustive")
     for c in "${cases[@]}"; do
       label=${c%%|*} args=${c#*|}
       # shellcheck disable=SC2086  # args: words on purpose

@@ -7,6 +7,7 @@
 #include <prt/error.h>
 #include <prt/precompute.h>
 #include <prt/rotation.h>
+#include <prt/sh.h>
 
 #include "test_meshes.h"
 
@@ -55,6 +56,7 @@ ErrorDistribution small_distribution() {
   d.eyes = 5;
   d.glosses = {4, 16};
   d.speculars = {0.3, 1.0};
+  d.sun = false;
   return d;
 }
 
@@ -333,6 +335,44 @@ TEST(CompressionErrorMeter, RotationsTakeOnTheSpectraInTurn) {
   EXPECT_THROW(distribution_lightings(d, 4), Error);
 }
 
+// The sun: a map more, after the others, each lighting a unit delta (its
+// band norms sqrt(2l + 1) of band 0's: the most any nonnegative lighting
+// has), the first overhead, the others rotated; never re-spectralised.
+TEST(CompressionErrorMeter, TheSunIsAPointLightUnderTheRotations) {
+  ErrorDistribution d = small_distribution();
+  d.rotations = 5;
+  d.spectra = {{"c", random_lighting(4, 3)}};
+  const auto without = distribution_lightings(d, 4);
+  d.sun = true;
+  const auto lights = distribution_lightings(d, 4);
+  ASSERT_EQ(lights.size(), without.size() + 5);
+  for (std::size_t k = 0; k < without.size(); ++k) EXPECT_EQ(lights[k], without[k]);
+  std::vector<double> up(16);
+  sh::eval(4, 0.0, 1.0, 0.0, up.data());
+  for (int i = 0; i < 16; ++i) EXPECT_EQ(lights[without.size()][i], glm::dvec3(up[i]));
+  for (std::size_t k = without.size(); k < lights.size(); ++k) {
+    const std::vector<double> b = band_spectrum(lights[k], 4);
+    for (int l = 0; l < 4; ++l) EXPECT_NEAR(b[l], std::sqrt(2.0 * l + 1), 1e-9) << k << " band " << l;
+    // A delta somewhere: its value there is sum_l (2l + 1) / (4 pi), the
+    // largest of the band-limited delta. Its direction from its band 1,
+    // which is linear in it: dir = M^T c / |M e_x|^2, M's columns the band
+    // 1 of the axes (orthogonal up to that scale).
+    glm::dvec3 dir(0);
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> e(16);
+      sh::eval(4, axis == 0 ? 1.0 : 0.0, axis == 1 ? 1.0 : 0.0, axis == 2 ? 1.0 : 0.0, e.data());
+      for (int i = 1; i < 4; ++i) dir[axis] += e[i] * lights[k][i].x;
+    }
+    dir = glm::normalize(dir);
+    std::vector<double> y(16);
+    sh::eval(4, dir.x, dir.y, dir.z, y.data());
+    double at = 0;
+    for (int i = 0; i < 16; ++i) at += lights[k][i].x * y[i];
+    EXPECT_NEAR(at, 16.0 / (4 * M_PI), 1e-9) << k;
+  }
+  EXPECT_NE(lights[without.size() + 1], lights[without.size() + 2]);
+}
+
 // Eyes all around: on eye_ring's sphere, spread over every direction.
 TEST(CompressionErrorMeter, EyesCoverTheSphere) {
   const Mesh m = test::floor_and_ball(8);
@@ -440,6 +480,7 @@ TEST(CompressionChoice, MeetsItsTargetOverTheDistribution) {
       EXPECT_EQ(r.exhaustive, c == &full);
       EXPECT_EQ(r.maps, (std::vector<std::string>{"a", "b"}));
       EXPECT_EQ(r.rotations, d.rotations);
+      EXPECT_EQ(r.sun, d.sun);
       EXPECT_EQ(r.eyes, glossy ? d.eyes : 0);
       EXPECT_EQ(r.exponents, glossy ? d.glosses : std::vector<double>{});
       EXPECT_EQ(r.p95, c->whole.p95);

@@ -326,8 +326,8 @@ TEST(CompressCli, CompressRelightInfoAndPrecomputeAgreeWithTheLibrary) {
   write_compressed_transfer(dir.file("lib.prt"), lib);
   EXPECT_EQ(read_file(dir.file("c.prt")), read_file(dir.file("lib.prt")));
   // The error it printed is the meter's over the command's distribution
-  // (the one map under 24 rotations taking on the bundled maps' spectra, 32
-  // eyes), printed to 3 decimals in %.
+  // (the one map under 24 rotations taking on the bundled maps' spectra, the
+  // sun, 32 eyes), printed to 3 decimals in %.
   const Mesh m = load_mesh(mesh);
   ErrorDistribution d;
   d.maps.push_back({"forest", project(load_envmap(env), 3)});
@@ -378,7 +378,7 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   ASSERT_EQ(c.code, 0) << describe_run(c);
   const Transfer t = read_transfer(dir.file("t.prt"));
   const Mesh m = load_mesh(mesh);
-  ErrorDistribution d;  // the command's: the one map under 24 rotations, taking on the bundled maps' spectra
+  ErrorDistribution d;  // the command's: the one map under 24 rotations, taking on the bundled maps' spectra; the sun
   d.maps.push_back({"studio", project(load_envmap(env), 4)});
   d.spectra = bundled_spectra(4);
   ChoiceOptions o;
@@ -399,7 +399,8 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   const Result info = run_prt(dir, {"info", dir.file("c.prt")});
   ASSERT_EQ(info.code, 0) << describe_run(info);
   for (const char* w : {"format version 6", "chosen for a p95 relit error of at most 2%", "1 map (studio) x 24 rotations",
-                        "those of city, courtyard, forest, studio, sunset in turn"})
+                        "those of city, courtyard, forest, studio, sunset in turn",
+                        "and a point light (the sun) x 24 rotations"})
     EXPECT_NE(info.out.find(w), std::string::npos) << w << " in " << info.out;
   const Result json = run_prt(dir, {"info", dir.file("c.prt"), "--json"});
   ASSERT_EQ(json.code, 0) << describe_run(json);
@@ -411,7 +412,8 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   const Result m2 = run_prt(dir, {"compress", dir.file("t.prt"), "--measure", dir.file("c.prt"), "--mesh", mesh, "--env",
                                   other, "-q"});
   ASSERT_EQ(m2.code, 0) << describe_run(m2);
-  ErrorDistribution held;
+  ErrorDistribution held;  // --measure: the map as given, no spectra, no sun
+  held.sun = false;
   held.maps.push_back({"sunset", project(load_envmap(other), 4)});
   const ErrorStats e = CompressionErrorMeter(t, m, held)(got, true);
   const std::string printed = stderr_number_after(m2.out, "p95 ");
@@ -444,6 +446,7 @@ TEST(CompressCli, BadUseIsRefusedAndWritesNothing) {
       {{"compress", in}, 2, "--output is required"},
       {{"compress", in, "-o", out, "--metric", "plain"}, 2, "--metric is for --target-error"},
       {{"compress", in, "-o", out, "--spectra", env}, 2, "--spectra shapes the lightings"},
+      {{"compress", in, "-o", out, "--no-sun"}, 2, "--no-sun shapes the lightings"},
       {{"compress", in, "-o", out, "--target-error", "0.01", "--mesh", mesh, "--own-spectra", "--spectra", env}, 2,
        "give one of them"},
       {{"compress", in, "-o", in}, 2, "is the input IN"},

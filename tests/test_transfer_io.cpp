@@ -949,6 +949,7 @@ prt::CompressionChoiceRecord sample_choice() {
   r.target = 0.01;
   r.maps = {"sunset"};
   r.spectra = {"city", "studio"};
+  r.sun = true;
   r.rotations = 24;
   r.seed = 7;
   r.eyes = 32;
@@ -983,13 +984,15 @@ TEST(CompressedFile, ChoiceRecordRoundTripsAsVersionSix) {
   ASSERT_TRUE(back.choice.has_value());
   EXPECT_EQ(prt::compression_choice_json(*back.choice), json);
   EXPECT_EQ(back.choice->spectra, c.choice->spectra);
+  EXPECT_TRUE(back.choice->sun);
   EXPECT_EQ(back.choice->exponents, c.choice->exponents);
   EXPECT_EQ(back.choice->samples, 9216u);
   prt::write_compressed_transfer(dir.file("again.prtt"), back);
   EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
   const std::string d = prt::describe_transfer(back);
   for (const char* w : {"format version 6", "chosen for a p95 relit error of at most 1%", "sunset",
-                        "those of city, studio in turn", "32 eyes", "p95 0.870%", "bound 3.700%"})
+                        "those of city, studio in turn", "and a point light (the sun) x 24 rotations", "32 eyes",
+                        "p95 0.870%", "bound 3.700%"})
     EXPECT_TRUE(contains(d, w)) << w << " in " << d;
   // Without a record: version 4, as before.
   c.choice.reset();

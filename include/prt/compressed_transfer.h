@@ -79,6 +79,7 @@ struct CompressionChoiceRecord {
   std::string metric = "band";             // the fits' metric: "band" or "plain"
   bool exhaustive = false;                 // the search: every candidate fitted in full, or the quick one
   std::vector<std::string> maps, spectra;  // the lighting maps' names; the spectra the rotations took on in turn
+  bool sun = false;                        // a point light too (prt::ErrorDistribution::sun)
   int rotations = 0;                       // per map
   std::uint64_t seed = 0;                  // of the rotations
   int eyes = 0;                            // glossy: eyes on a sphere (0: diffuse)

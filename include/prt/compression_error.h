@@ -68,13 +68,19 @@ struct ErrorDistribution {
   // own name in `spectra` is skipped, as is a band the map lacks (norm under
   // 1e-6 of band 0's: nothing to scale). Empty: every lighting keeps its map's.
   std::vector<NamedLighting> spectra;
+  // A point light (the sun: a delta in direction, the most concentrated
+  // lighting there is, docs/COMPRESSION.md "The sun") as one more map after
+  // `maps`: overhead, then under rotations - 1 random rotations, always at
+  // its own spectrum.
+  bool sun = true;
   // A sentence naming what it holds (maps, rotations, eyes, lobes).
   std::string describe(bool glossy) const;
 };
 
 // The lightings of `d`: map-major, every map's `rotations` rotations of its
 // SH (the first unrotated; the others in turn with the map's own band spectrum
-// and with each of d.spectra's), `bands`^2 coefficients each.
+// and with each of d.spectra's), then with d.sun the point light's (the
+// first overhead, +Y), `bands`^2 coefficients each.
 std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribution& d, int bands);
 
 // The norm of each band l < `bands` of `sh` (RGB, sqrt of the sum over m and

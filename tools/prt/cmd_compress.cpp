@@ -35,12 +35,12 @@ struct CompressArgs {
   // The error distribution (docs/COMPRESSION.md "The error distribution").
   int rotations = 24, eyes = 32;
   std::string statistic = "p95", metric = "band";
-  bool exhaustive = false, own_spectra = false, quiet = false;
+  bool exhaustive = false, own_spectra = false, no_sun = false, quiet = false;
   const CLI::Option *clusters_opt = nullptr, *pca_opt = nullptr, *glossy_clusters_opt = nullptr,
                     *glossy_pca_opt = nullptr, *target_opt = nullptr, *mesh_opt = nullptr, *env_opt = nullptr,
                     *rotations_opt = nullptr, *eyes_opt = nullptr, *statistic_opt = nullptr, *metric_opt = nullptr,
                     *exhaustive_opt = nullptr, *measure_opt = nullptr, *spectra_opt = nullptr,
-                    *own_spectra_opt = nullptr;
+                    *own_spectra_opt = nullptr, *no_sun_opt = nullptr;
 };
 
 void check_usage(const CompressArgs& a) {
@@ -63,7 +63,7 @@ void check_usage(const CompressArgs& a) {
                      "bundled ones)");
   if (a.spectra_opt->count() > 0 && a.own_spectra_opt->count() > 0)
     throw UsageError("--own-spectra leaves the maps' spectra as they are; --spectra adds others': give one of them");
-  for (const CLI::Option* o : {a.env_opt, a.rotations_opt, a.eyes_opt, a.spectra_opt, a.own_spectra_opt})
+  for (const CLI::Option* o : {a.env_opt, a.rotations_opt, a.eyes_opt, a.spectra_opt, a.own_spectra_opt, a.no_sun_opt})
     if (o->count() > 0 && !measure)
       throw UsageError(o->get_name() + " shapes the lightings and views the error is measured under; give --mesh (and "
                        "--target-error to choose by it)");
@@ -103,7 +103,7 @@ std::vector<NamedLighting> load_lightings(const std::vector<std::string>& paths,
 // with none, every bundled one) under --rotations rotations, taking in turn
 // their own band spectra and those of the --spectra maps (default: the
 // bundled ones; none for --measure, which measures under the maps as given,
-// or with --own-spectra); glossy: --eyes eyes on a sphere, the meter's
+// or with --own-spectra), and the sun (not for --measure or with --no-sun); glossy: --eyes eyes on a sphere, the meter's
 // exponents and strengths.
 ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
   ErrorDistribution d;
@@ -115,6 +115,7 @@ ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
     const std::vector<std::string> bundled = bundled_maps();
     d.spectra = bundled == maps ? d.maps : load_lightings(bundled, bands);
   }
+  d.sun = !a.no_sun && a.measure.empty();
   d.rotations = a.rotations;
   d.eyes = a.eyes;
   return d;
@@ -232,7 +233,7 @@ Run add_compress(CLI::App& app) {
       "the uncompressed transfer, has its 95th percentile (--statistic) at most e over a distribution: each --env map\n"
       "(default: the bundled ones) under --rotations random rotations, which take on in turn the map's own SH band\n"
       "spectrum and the bundled maps' (--spectra, --own-spectra: lighting as bright in fine detail as other natural\n"
-      "maps are), glossy files from --eyes eyes on a sphere at\n"
+      "maps are), and a point light under as many rotations (--no-sun), glossy files from --eyes eyes on a sphere at\n"
       "Phong exponents 4 to 32 and strengths 0.25 to 1; it prints the mean, p95 and max over the distribution and\n"
       "a transfer-space bound no lighting exceeds. With --mesh and a fixed K x N it prints the same figures.\n"
       "Example: prt compress glossy.prt -o glossy.cprt --clusters 128 --pca 8\n"
@@ -278,6 +279,9 @@ Run add_compress(CLI::App& app) {
                                  "(repeatable; default: the bundled maps; --measure: none)");
   a->own_spectra_opt = s->add_flag("--own-spectra", a->own_spectra,
                                    "Every lighting keeps its map's own band spectrum (no --spectra)");
+  a->no_sun_opt = s->add_flag("--no-sun", a->no_sun,
+                              "Leave out the point light (a sun) the distribution adds to the maps (--measure: "
+                              "always left out)");
   a->eyes_opt = s->add_option("--eyes", a->eyes, "Glossy: eye points on a sphere around the mesh")
                     ->check(int_range(1, 4096))
                     ->capture_default_str();
