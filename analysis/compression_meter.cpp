@@ -143,21 +143,9 @@ std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribut
   std::vector<std::vector<glm::dvec3>> out;
   std::uint64_t state = d.seed;
   sh::Rotation rot(bands, glm::dmat3(1.0));
-  for (const NamedLighting& m : d.maps) {
-    check_bands(m);
-    const std::span<const glm::dvec3> in(m.sh.data(), nc);
-    const std::vector<double> own = band_spectrum(in, bands);
-    // Per spectrum in turn: the scale of each band (the first: the map's own).
-    std::vector<std::vector<double>> scales{std::vector<double>(bands, 1.0)};
-    for (const NamedLighting& s : d.spectra) {
-      check_bands(s);
-      if (s.name == m.name) continue;
-      const std::vector<double> to = band_spectrum(s.sh, bands);
-      std::vector<double> k(bands, 1.0);
-      for (int l = 1; l < bands; ++l)
-        if (own[l] > kAbsentBand) k[l] = to[l] / own[l];
-      scales.push_back(std::move(k));
-    }
+  // `in` as it is, then under rotations - 1 random rotations, rotation r
+  // with its bands scaled by scales[(r - 1) mod size].
+  const auto add_rotations = [&](std::span<const glm::dvec3> in, const std::vector<std::vector<double>>& scales) {
     out.emplace_back(in.begin(), in.end());
     for (int r = 1; r < d.rotations; ++r) {
       rot.set(random_rotation(state));
@@ -168,6 +156,24 @@ std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribut
         for (int i = l * l; i < (l + 1) * (l + 1); ++i) o[i] *= k[l];
       out.push_back(std::move(o));
     }
+  };
+  const std::vector<std::vector<double>> own_only{std::vector<double>(bands, 1.0)};
+  for (const NamedLighting& m : d.maps) {
+    check_bands(m);
+    const std::span<const glm::dvec3> in(m.sh.data(), nc);
+    const std::vector<double> own = band_spectrum(in, bands);
+    // Per spectrum in turn: the scale of each band (the first: the map's own).
+    std::vector<std::vector<double>> scales = own_only;
+    for (const NamedLighting& s : d.spectra) {
+      check_bands(s);
+      if (s.name == m.name) continue;
+      const std::vector<double> to = band_spectrum(s.sh, bands);
+      std::vector<double> k(bands, 1.0);
+      for (int l = 1; l < bands; ++l)
+        if (own[l] > kAbsentBand) k[l] = to[l] / own[l];
+      scales.push_back(std::move(k));
+    }
+    add_rotations(in, scales);
   }
   if (d.sun) {
     // A unit delta overhead: its SH coefficients are the basis there.
@@ -175,13 +181,7 @@ std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribut
     sh::eval(bands, 0.0, 1.0, 0.0, y.data());
     std::vector<glm::dvec3> up(nc);
     for (std::size_t i = 0; i < nc; ++i) up[i] = glm::dvec3(y[i]);
-    out.push_back(up);
-    for (int r = 1; r < d.rotations; ++r) {
-      rot.set(random_rotation(state));
-      std::vector<glm::dvec3> o(nc);
-      rot.apply(up, o);
-      out.push_back(std::move(o));
-    }
+    add_rotations(up, own_only);
   }
   return out;
 }
