@@ -487,7 +487,7 @@ TEST(Reference, WhiteFurnaceInsideTheBoxConvergesToOne) {
 }
 
 // 555 vertices (139 blocks of 4), interreflected; the run on several threads
-// is repeated (at most 5 times) until its progress reports came from two
+// is repeated (at most 20 times) until its progress reports came from two
 // threads (tests/test_threads.h), so the work compared really was shared.
 TEST(Reference, SameBitsForAnyThreadCount) {
   const prt::Mesh m = prt::test::floor_and_ball(16);

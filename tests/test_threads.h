@@ -9,6 +9,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_scheduler_observer.h>
 
+#include <chrono>
 #include <cstddef>
 #include <map>
 #include <mutex>
@@ -52,17 +53,24 @@ class ThreadWitness {
 };
 
 // Calls run(progress) until the progress reports of each of `phases` came
-// from two or more threads (at most 5 calls: a run may happen not to share
-// on a loaded machine) and returns the last result; `threads` receives the
-// fewest threads seen in a phase on that call (the test asserts >= 2).
+// from two or more threads and returns the last result; `threads` receives
+// the fewest threads seen in a phase on that call (the test asserts >= 2).
+// A run of a few milliseconds may finish before a sleeping worker is woken
+// on a loaded machine: CI's 2 cores running two test processes at once gave
+// five runs in a row on one thread (Reference.SameBitsForAnyThreadCount,
+// 10 ms a run). So it tries up to 20 times, pausing a little longer after
+// each miss (10, 20, ... ms: under 2 s in all) to give the other process's
+// burst time to pass.
 template <typename Run>
 auto until_shared(const Run& run, const std::vector<const char*>& phases, std::size_t& threads) {
+  constexpr int kAttempts = 20;
   threads = 0;
   for (int attempt = 0;; ++attempt) {
     ThreadWitness witness;
     auto result = run(witness.progress());
     threads = witness.fewest(phases);
-    if (threads >= 2 || attempt == 4) return result;
+    if (threads >= 2 || attempt + 1 == kAttempts) return result;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10 * (attempt + 1)));
   }
 }
 

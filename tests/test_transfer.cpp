@@ -197,7 +197,7 @@ TEST(Transfer, RgbAlbedoStoresThreeChannelsGreyStoresOne) {
 // interreflected (8 bands, 256 rays: enough work in the bounce phase for a
 // second thread to join it). The mesh has 3,721 + 266 vertices (63 blocks of
 // 64); the
-// run on several threads is repeated (at most 5 times) until the progress
+// run on several threads is repeated (at most 20 times) until the progress
 // reports show two threads computed blocks of every phase, so the comparison
 // is between one thread and work that really was shared.
 TEST(Transfer, DeterministicAcrossThreadCounts) {

@@ -542,7 +542,7 @@ TEST(WaveletTransfer, AlbedoAndVertexColours) {
 // Bit for bit the same wavelet transfer on one thread and on several, and the
 // same relighting. The mesh has 8,281 + 266 vertices: 268 blocks of 32 for
 // the transfer, 5 ranges of 2048 for relighting. The runs on several threads
-// are repeated (at most 5 times) until two threads did blocks (progress
+// are repeated (at most 20 times) until two threads did blocks (progress
 // reports) and a TBB worker joined the relighting, so the comparisons are
 // against work that really was shared.
 TEST(WaveletTransfer, DeterministicAcrossRunsAndThreadCounts) {
