@@ -95,7 +95,8 @@ struct SignalSearch {
   std::size_t dim = 0;
   std::vector<double> scales;
   const char* what = "";
-  std::function<double(const ClusteredSignal&, bool full)> measure;  // full: the final measure
+  // full: the final measure, with the transfer-space bound
+  std::function<ErrorStats(const ClusteredSignal&, bool full)> measure;
   double target = 0;
 };
 
@@ -105,9 +106,9 @@ struct Searcher {
   std::size_t total = 0;
   double fit_seconds = 0, measure_seconds = 0;
   static double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-  double measure(const SignalSearch& s, const ClusteredSignal& g, bool all) {
+  ErrorStats measure(const SignalSearch& s, const ClusteredSignal& g, bool all) {
     const double t0 = now();
-    const double e = s.measure(g, all);
+    const ErrorStats e = s.measure(g, all);
     measure_seconds += now() - t0;
     return e;
   }
@@ -120,7 +121,7 @@ struct Searcher {
 
   std::size_t row_count(const SignalSearch& s) const { return s.dim ? s.rows.size() / s.dim : 0; }
 
-  Cpca fit(const SignalSearch& s, const std::vector<float>& scaled, int K, int N, int rounds, const Cpca* start) {
+  Cpca fit(const CpcaPoints& scaled, int K, int N, int rounds, const Cpca* start) {
     CpcaOptions c;
     c.clusters = K;
     c.vectors = N;
@@ -128,7 +129,7 @@ struct Searcher {
     c.seed = o.seed;
     ++fits;
     const double t0 = now();
-    Cpca f = fit_cpca(scaled, s.dim, c, start && start->clusters <= K ? start : nullptr);
+    Cpca f = fit_cpca(scaled, c, start && start->clusters <= K ? start : nullptr);
     fit_seconds += now() - t0;
     return f;
   }
@@ -155,6 +156,7 @@ struct Searcher {
     ClusteredSignal signal;
     double error = 0;
     std::string previous;  // the next smaller candidate measured, and its error
+    ErrorStats stats;      // its final measure (bound included)
   };
 
   [[noreturn]] void never(const SignalSearch& s, double best) const {
@@ -164,7 +166,7 @@ struct Searcher {
   }
 
   // Every candidate fitted in full, smallest first.
-  Result exhaustive(const SignalSearch& s, const std::vector<float>& scaled) {
+  Result exhaustive(const SignalSearch& s, const CpcaPoints& scaled) {
     std::vector<Candidate> grid;
     for (int K : clusters_for(s))
       for (int N : vectors_for(s)) grid.push_back({K, N, bytes(s, K, N)});
@@ -172,19 +174,20 @@ struct Searcher {
     double best = INFINITY;
     std::string previous;
     for (const Candidate& c : grid) {
-      const Cpca f = fit(s, scaled, c.K, c.N, o.iterations, nullptr);
+      const Cpca f = fit(scaled, c.K, c.N, o.iterations, nullptr);
       ClusteredSignal sig = signal_from_fit(f, c.N, o.weight_bits, s.scales);
-      const double e = measure(s, sig, true);
+      ErrorStats stats = measure(s, sig, true);
+      const double e = stats.value(o.statistic);
       tick(s.what);
       best = std::min(best, e);
-      if (e <= s.target) return {c.K, c.N, std::move(sig), e, previous};
+      if (e <= s.target) return {c.K, c.N, std::move(sig), e, previous, stats};
       previous = fmt::format("{} x {} measured {:.4g}", c.K, c.N, e);
     }
     never(s, best);
   }
 
   // The quick search (see ChoiceOptions).
-  Result quick(const SignalSearch& s, const std::vector<float>& scaled) {
+  Result quick(const SignalSearch& s, const CpcaPoints& scaled) {
     const std::vector<int> ks = clusters_for(s), ns = vectors_for(s);
     const bool short_rows = s.dim <= kRefitRows;
     std::optional<Result> best;
@@ -202,7 +205,7 @@ struct Searcher {
       // kept lion's glossy matrices in a poor optimum (at 32 x 24 1.42%
       // against 0.73% from seeds; the search chose 4.7x the bytes).
       std::optional<Cpca> f;
-      if (!short_rows) f = fit(s, scaled, K, nmax, o.search_rounds, nullptr);
+      if (!short_rows) f = fit(scaled, K, nmax, o.search_rounds, nullptr);
       // The smallest N of this K that passes, by bisection over the N up to
       // nmax (fewer vectors only add error).
       std::vector<int> here;
@@ -212,9 +215,10 @@ struct Searcher {
       std::map<std::size_t, double> measured;
       const auto at = [&](std::size_t i) {
         if (auto it = measured.find(i); it != measured.end()) return it->second;
-        const double e = measure(s, signal_from_fit(short_rows ? fit(s, scaled, K, here[i], o.search_rounds, nullptr) : *f,
+        const double e = measure(s, signal_from_fit(short_rows ? fit(scaled, K, here[i], o.search_rounds, nullptr) : *f,
                                                     here[i], o.weight_bits, s.scales),
-                                 false);
+                                 false)
+                             .value(o.statistic);
         tick(s.what);
         lowest = std::min(lowest, e);
         return measured[i] = e;
@@ -235,14 +239,15 @@ struct Searcher {
                                : std::string();
         for (std::size_t i = hi; i < here.size(); ++i) {
           const int N = here[i];
-          const Cpca full = fit(s, scaled, K, N, o.iterations, f ? &*f : nullptr);
+          const Cpca full = fit(scaled, K, N, o.iterations, f ? &*f : nullptr);
           ClusteredSignal sig = signal_from_fit(full, N, o.weight_bits, s.scales);
-          const double e = measure(s, sig, true);
+          ErrorStats stats = measure(s, sig, true);
+          const double e = stats.value(o.statistic);
           tick(s.what);
           lowest = std::min(lowest, e);
           if (e <= s.target) {
             best_bytes = bytes(s, K, N);
-            best = Result{K, N, std::move(sig), e, miss};
+            best = Result{K, N, std::move(sig), e, miss, stats};
             break;
           }
           miss = fmt::format("{} x {} in full measured {:.4g}", K, N, e);
@@ -257,8 +262,9 @@ struct Searcher {
     std::vector<float> scaled(s.rows.begin(), s.rows.end());
     if (!s.scales.empty())
       for (std::size_t i = 0; i < scaled.size(); ++i) scaled[i] = float(double(scaled[i]) * s.scales[i % s.dim]);
-    if (row_count(s) == 0) return {1, 0, ClusteredSignal{0, 0, s.dim, {}, {}, {}, {}, o.weight_bits, {}}, 0.0, {}};
-    return o.exhaustive ? exhaustive(s, scaled) : quick(s, scaled);
+    if (row_count(s) == 0) return {1, 0, ClusteredSignal{0, 0, s.dim, {}, {}, {}, {}, o.weight_bits, {}}, 0.0, {}, {}};
+    const CpcaPoints points(scaled, s.dim);  // made ready once for every fit of the search
+    return o.exhaustive ? exhaustive(s, points) : quick(s, points);
   }
 };
 
@@ -337,12 +343,12 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
   // diffuse part dominates.
   const double diffuse_target = t.glossy ? o.target * std::sqrt(0.5) : o.target;
   SignalSearch coeffs{t.coeffs, t.stride(), metric_scales(t, false, o.metric), "coefficients",
-                      [&](const ClusteredSignal& g, bool) { return full.diffuse(g).value(o.statistic); }, diffuse_target};
+                      [&](const ClusteredSignal& g, bool all) { return full.diffuse(g, all); }, diffuse_target};
   Searcher::Result dr = searcher.run(coeffs);
   best.compressed.coeffs = std::move(dr.signal);
   best.options.clusters = dr.K;
   best.options.vectors = dr.N;
-  best.diffuse = full.diffuse(best.compressed.coeffs, true);
+  best.diffuse = dr.stats;
   best.bytes = best.compressed.coeffs.bytes();
   best.explanation = fmt::format("coefficients: {} clusters x {} vectors, {} bytes, diffuse {} error {:.4g} <= {:.4g}{}",
                                  dr.K, dr.N, best.compressed.coeffs.bytes(), statistic_name(o.statistic), dr.error,
@@ -351,8 +357,7 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
     const ClusteredSignal& chosen = best.compressed.coeffs;
     SignalSearch gl{t.glossy_matrices, t.glossy_stride(), metric_scales(t, true, o.metric), "glossy matrices",
                     [&](const ClusteredSignal& g, bool all) {
-                      const CompressionErrorMeter& m = all ? full : search_meter;
-                      return m.glossy(chosen, g).value(o.statistic);
+                      return all ? full.glossy(chosen, g, true) : search_meter.glossy(chosen, g);
                     },
                     o.target};
     Searcher::Result gr = searcher.run(gl);
@@ -364,7 +369,7 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
                                     gr.K, gr.N, best.compressed.glossy.bytes(), statistic_name(o.statistic), gr.error,
                                     o.target, gr.previous.empty() ? "" : " (the next smaller, " + gr.previous + ")");
     best.glossy = full.glossy_part(best.compressed.glossy, true);
-    best.whole = full.glossy(best.compressed.coeffs, best.compressed.glossy, true);
+    best.whole = gr.stats;
     best.bytes += best.compressed.glossy.bytes();
   } else {
     best.whole = best.diffuse;

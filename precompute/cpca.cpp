@@ -347,15 +347,20 @@ std::optional<PointSpan> narrow_span(const std::vector<double>& x, std::size_t P
 // fit_points in the span's coordinates, the result mapped back: means =
 // origin + u^T m', bases = u^T b' (orthonormal: u's rows are), the same
 // clusters and weights; the residual added to the errors.
-Cpca fit_in_span(const std::vector<double>& x, std::size_t P, std::size_t dim, const PointSpan& s, const CpcaOptions& o,
-                 const Cpca* start) {
+// The points' coordinates in the span (P x r).
+std::vector<double> span_coordinates(const std::vector<double>& x, std::size_t P, std::size_t dim, const PointSpan& s) {
   const std::size_t r = s.r;
   std::vector<double> c(P * dim), z(P * r);
   for (std::size_t p = 0; p < P; ++p)
     for (std::size_t i = 0; i < dim; ++i) c[p * dim + i] = x[p * dim + i] - s.origin[i];
   cblas_dgemm(CblasRowMajor, CblasNoTrans, CblasTrans, int(P), int(r), int(dim), 1.0, c.data(), int(dim), s.u.data(),
               int(dim), 0.0, z.data(), int(r));
-  c = {};
+  return z;
+}
+
+Cpca fit_in_span(const std::vector<double>& z, std::size_t P, std::size_t dim, const PointSpan& s, const CpcaOptions& o,
+                 const Cpca* start) {
+  const std::size_t r = s.r;
   // Into the span: a point (origin subtracted) or a direction.
   const auto into = [&](const double* v, bool point, double* out) {
     for (std::size_t j = 0; j < r; ++j) {
@@ -405,25 +410,70 @@ void Cpca::reconstruct(std::size_t p, double* out) const {
   }
 }
 
-Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
+namespace {
+
+std::size_t checked_points(std::span<const float> points, std::size_t dim) {
   if (dim == 0 || points.size() % dim != 0 || points.empty())
     throw Error(fmt::format("cpca: {} values are not whole points of {} values", points.size(), dim));
-  const std::size_t P = points.size() / dim;
+  if (dim > (1u << 14)) throw Error(fmt::format("cpca: a signal of {} values is too long (at most 16384)", dim));
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
+  return points.size() / dim;
+}
+
+void check_fit(std::size_t P, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
   if (o.clusters < 1 || std::size_t(o.clusters) > P)
     throw Error(fmt::format("cpca: clusters must be 1 to the number of points ({}), got {}", P, o.clusters));
   if (o.vectors < 0 || std::size_t(o.vectors) > dim)
     throw Error(fmt::format("cpca: vectors must be 0 to the signal's dimension ({}), got {}", dim, o.vectors));
   if (o.iterations < 1) throw Error(fmt::format("cpca: iterations must be at least 1, got {}", o.iterations));
-  if (dim > (1u << 14)) throw Error(fmt::format("cpca: a signal of {} values is too long (at most 16384)", dim));
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (!std::isfinite(points[i])) throw Error(fmt::format("cpca: point {} has a non-finite value", i / dim));
   if (start && (start->dim != dim || start->points != P || start->clusters > o.clusters))
     throw Error("cpca: the warm start is a fit of other points or of more clusters");
+}
 
+}  // namespace
+
+Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
+  const std::size_t P = checked_points(points, dim);
+  check_fit(P, dim, o, start);
   detail::blas_single_threaded();
   std::vector<double> x(points.begin(), points.end());
-  if (std::optional<PointSpan> span = narrow_span(x, P, dim, o.vectors)) return fit_in_span(x, P, dim, *span, o, start);
+  if (std::optional<PointSpan> span = narrow_span(x, P, dim, o.vectors))
+    return fit_in_span(span_coordinates(x, P, dim, *span), P, dim, *span, o, start);
   return fit_points(x, P, dim, o, start);
+}
+
+// The span is found with no vectors asked for; a fit of more vectors than
+// it has dimensions fits the points themselves (converted again: they are
+// not kept twice).
+struct CpcaPoints::Prepared {
+  std::span<const float> points;
+  std::size_t dim = 0, P = 0;
+  std::optional<PointSpan> span;
+  std::vector<double> x;  // the points (no span) or their span coordinates
+};
+
+CpcaPoints::CpcaPoints(std::span<const float> points, std::size_t dim) : p_(std::make_unique<Prepared>()) {
+  p_->P = checked_points(points, dim);
+  p_->points = points;
+  p_->dim = dim;
+  detail::blas_single_threaded();
+  std::vector<double> x(points.begin(), points.end());
+  p_->span = narrow_span(x, p_->P, dim, 0);
+  p_->x = p_->span ? span_coordinates(x, p_->P, dim, *p_->span) : std::move(x);
+}
+CpcaPoints::~CpcaPoints() = default;
+CpcaPoints::CpcaPoints(CpcaPoints&&) noexcept = default;
+std::size_t CpcaPoints::dim() const { return p_->dim; }
+std::size_t CpcaPoints::count() const { return p_->P; }
+
+Cpca fit_cpca(const CpcaPoints& points, const CpcaOptions& o, const Cpca* start) {
+  const CpcaPoints::Prepared& p = points.prepared();
+  check_fit(p.P, p.dim, o, start);
+  detail::blas_single_threaded();
+  if (!p.span) return fit_points(p.x, p.P, p.dim, o, start);
+  if (std::size_t(o.vectors) <= p.span->r) return fit_in_span(p.x, p.P, p.dim, *p.span, o, start);
+  return fit_points(std::vector<double>(p.points.begin(), p.points.end()), p.P, p.dim, o, start);
 }
 
 namespace {

@@ -4,8 +4,8 @@
 // a single cluster's basis is the covariance's top eigenvectors (checked
 // against the variance each captures); the error never grows from round to
 // round, nor as K or N grows from a warm start; the same bits on any number
-// of threads; points of a narrow span fitted as their coordinates; bad
-// input refused.
+// of threads; points of a narrow span fitted as their coordinates; points
+// prepared once fit to the same bits; bad input refused.
 #include <prt/cpca.h>
 #include <prt/error.h>
 
@@ -166,14 +166,10 @@ TEST(Cpca, SameBitsOnAnyNumberOfThreads) {
   EXPECT_NE(fit_cpca(x, dim, o).cluster, one.cluster);  // the seed matters
 }
 
-// Points of a narrow affine span of a long signal (glossy matrices: 325
-// values spanning 81 dimensions) are fitted in the span's coordinates: the
-// same fit as of those coordinates themselves, mapped back.
-TEST(Cpca, NarrowSpanFitsAsItsCoordinates) {
-  const std::size_t r = 10, dim = 64, n = 300;
-  const std::vector<float> z = subspace_points(4, 3, n, r, 7);  // 4 clusters of 3-dimensional subspaces in 10
+// z (points of r values) embedded in dim values: an orthonormal embedding u
+// (r x dim, Gram-Schmidt of random rows) and an offset.
+std::vector<float> embedded(const std::vector<float>& z, std::size_t r, std::size_t dim) {
   const std::size_t P = z.size() / r;
-  // An orthonormal embedding u (r x dim, Gram-Schmidt of random rows) and an offset.
   std::vector<double> u = [&] {
     const std::vector<float> g = random_points(r, dim, 8);
     std::vector<double> v(g.begin(), g.end());
@@ -196,6 +192,17 @@ TEST(Cpca, NarrowSpanFitsAsItsCoordinates) {
       for (std::size_t j = 0; j < r; ++j) v += double(z[p * r + j]) * u[j * dim + i];
       x[p * dim + i] = float(v);
     }
+  return x;
+}
+
+// Points of a narrow affine span of a long signal (glossy matrices: 325
+// values spanning 81 dimensions) are fitted in the span's coordinates: the
+// same fit as of those coordinates themselves, mapped back.
+TEST(Cpca, NarrowSpanFitsAsItsCoordinates) {
+  const std::size_t r = 10, dim = 64, n = 300;
+  const std::vector<float> z = subspace_points(4, 3, n, r, 7);  // 4 clusters of 3-dimensional subspaces in 10
+  const std::size_t P = z.size() / r;
+  const std::vector<float> x = embedded(z, r, dim);
   CpcaOptions o;
   o.clusters = 4;
   o.vectors = 2;  // fewer than the subspaces': a nonzero error to compare
@@ -228,6 +235,44 @@ TEST(Cpca, NarrowSpanFitsAsItsCoordinates) {
   o.clusters = 6;
   const Cpca grown = fit_cpca(x, dim, o, &in_x);
   EXPECT_LE(grown.squared_error, in_x.squared_error * (1 + 1e-9));
+}
+
+bool same_bits(const Cpca& a, const Cpca& b) {
+  return a.dim == b.dim && a.points == b.points && a.clusters == b.clusters && a.vectors == b.vectors &&
+         a.means == b.means && a.bases == b.bases && a.cluster == b.cluster && a.weights == b.weights &&
+         a.round_error == b.round_error && a.squared_error == b.squared_error && a.rounds == b.rounds;
+}
+
+// Points prepared once (CpcaPoints: prt compress --target-error's search)
+// fit to the same bits as the points given directly: in a narrow span, past
+// it (more vectors than the span has dimensions: the points themselves),
+// warm started, and rows too short for a span.
+TEST(Cpca, PreparedPointsFitTheSameBits) {
+  const std::size_t r = 10, dim = 64;
+  const std::vector<float> x = embedded(subspace_points(4, 3, 300, r, 7), r, dim);
+  const CpcaPoints prepared(x, dim);
+  EXPECT_EQ(prepared.dim(), dim);
+  EXPECT_EQ(prepared.count(), x.size() / dim);
+  CpcaOptions o;
+  o.clusters = 4;
+  o.iterations = 8;
+  for (int vectors : {0, 2, int(r), int(r) + 2}) {
+    o.vectors = vectors;
+    const Cpca direct = fit_cpca(x, dim, o), ready = fit_cpca(prepared, o);
+    EXPECT_TRUE(same_bits(direct, ready)) << vectors << " vectors";
+    CpcaOptions more = o;
+    more.clusters = 6;
+    EXPECT_TRUE(same_bits(fit_cpca(x, dim, more, &direct), fit_cpca(prepared, more, &ready))) << vectors << " vectors, warm";
+  }
+  const std::vector<float> shortrows = random_points(200, 6, 3);
+  o.vectors = 3;
+  EXPECT_TRUE(same_bits(fit_cpca(shortrows, 6, o), fit_cpca(CpcaPoints(shortrows, 6), o)));
+  // Bad options are refused as fit_cpca refuses them.
+  o.clusters = int(prepared.count()) + 1;
+  EXPECT_THROW(fit_cpca(prepared, o), Error);
+  std::vector<float> bad = x;
+  bad[5] = std::nanf("");
+  EXPECT_THROW(CpcaPoints(bad, dim), Error);
 }
 
 TEST(Cpca, RefusesBadInput) {

@@ -164,7 +164,8 @@ class CompressionErrorMeter {
 // under the whole distribution (glossy: on `measure_vertices` vertices),
 // with more N while it misses; only a compression that meets the target in
 // full becomes the best, and the search stops where K's clusters alone
-// outweigh it. The exhaustive search fits every candidate in full,
+// outweigh it. The rows are made ready once for all its fits
+// (prt::CpcaPoints). The exhaustive search fits every candidate in full,
 // smallest first, and measures it under the whole distribution: slow, and
 // what the quick one is measured against.
 struct ChoiceOptions {
