@@ -20,18 +20,11 @@
 # mesh on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-prt=${PRT:-build/prt}
-out=${OUT:-out/compression_heldback}
-mkdir -p "$out"
 # shellcheck source=scripts/compression_inputs.sh
 . scripts/compression_inputs.sh
-meshes=("$@")
-[ ${#meshes[@]} -gt 0 ] || meshes=(bunny00 lion)
-E=envmaps
+heldback_setup "$@"
 all=(city courtyard forest studio sunset sun)
 
-[ -f "$out/sun.exr" ] || oiiotool --pattern constant:color=0.25,0.25,0.25 256x128 3 -d float \
-  --fill:color=20000,20000,20000 3x3+100+30 -o "$out/sun.exr"
 p95() {  # transfer compressed mesh map -> "0.872" (percent)
   local map=$E/$4.exr
   [ "$4" = sun ] && map=$out/sun.exr
