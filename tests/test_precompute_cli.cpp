@@ -393,6 +393,11 @@ TEST(CompressCli, TargetErrorChoosesTheLibrarysChoiceAndSaysWhy) {
   EXPECT_EQ(got.coeffs.clusters, want.compressed.coeffs.clusters);
   EXPECT_EQ(got.coeffs.vectors, want.compressed.coeffs.vectors);
   EXPECT_LE(want.whole.p95, 0.02);
+  // A compression no smaller than the rows it replaces is said to be (here,
+  // a mesh of a few hundred vertices, it is).
+  const std::size_t stored = 4 * t.coeffs.size(), packed = got.coeffs.bytes();
+  EXPECT_EQ(c.err.find("the uncompressed " + dir.file("t.prt") + " is smaller") != std::string::npos, packed >= stored)
+      << c.err << "\n" << packed << " bytes for " << stored;
   // The file records what it was chosen for, and prt info says it.
   ASSERT_TRUE(got.choice.has_value());
   EXPECT_EQ(compression_choice_json(*got.choice), compression_choice_json(*want.compressed.choice));
