@@ -302,7 +302,7 @@ struct PointSpan {
 // energy ~1e-14 of the total) and far below any compression's error.
 constexpr double kSpanResidual = 1e-12;
 
-std::optional<PointSpan> narrow_span(const std::vector<double>& x, std::size_t P, std::size_t dim, int vectors) {
+std::optional<PointSpan> narrow_span(const std::vector<double>& x, std::size_t P, std::size_t dim) {
   if (dim < 32 || P < 2 * dim) return std::nullopt;  // too short to gain, or too few points to tell
   PointSpan s;
   s.origin.assign(dim, 0.0);
@@ -337,7 +337,7 @@ std::optional<PointSpan> narrow_span(const std::vector<double>& x, std::size_t P
   double dropped = 0;
   while (r > 0 && dropped + values[r - 1] <= kSpanResidual * total) dropped += values[--r];
   r = std::max<std::size_t>(r, 1);
-  if (4 * r > 3 * dim || std::size_t(vectors) > r) return std::nullopt;  // not narrow enough to pay
+  if (4 * r > 3 * dim) return std::nullopt;  // not narrow enough to pay
   s.r = r;
   s.residual = dropped;
   s.u.assign(vecs.begin(), vecs.begin() + std::ptrdiff_t(r * dim));
@@ -433,19 +433,8 @@ void check_fit(std::size_t P, std::size_t dim, const CpcaOptions& o, const Cpca*
 
 }  // namespace
 
-Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
-  const std::size_t P = checked_points(points, dim);
-  check_fit(P, dim, o, start);
-  detail::blas_single_threaded();
-  std::vector<double> x(points.begin(), points.end());
-  if (std::optional<PointSpan> span = narrow_span(x, P, dim, o.vectors))
-    return fit_in_span(span_coordinates(x, P, dim, *span), P, dim, *span, o, start);
-  return fit_points(x, P, dim, o, start);
-}
-
-// The span is found with no vectors asked for; a fit of more vectors than
-// it has dimensions fits the points themselves (converted again: they are
-// not kept twice).
+// A fit of more vectors than the span has dimensions fits the points
+// themselves (converted again: they are not kept twice).
 struct CpcaPoints::Prepared {
   std::span<const float> points;
   std::size_t dim = 0, P = 0;
@@ -459,13 +448,17 @@ CpcaPoints::CpcaPoints(std::span<const float> points, std::size_t dim) : p_(std:
   p_->dim = dim;
   detail::blas_single_threaded();
   std::vector<double> x(points.begin(), points.end());
-  p_->span = narrow_span(x, p_->P, dim, 0);
+  p_->span = narrow_span(x, p_->P, dim);
   p_->x = p_->span ? span_coordinates(x, p_->P, dim, *p_->span) : std::move(x);
 }
 CpcaPoints::~CpcaPoints() = default;
 CpcaPoints::CpcaPoints(CpcaPoints&&) noexcept = default;
 std::size_t CpcaPoints::dim() const { return p_->dim; }
 std::size_t CpcaPoints::count() const { return p_->P; }
+
+Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions& o, const Cpca* start) {
+  return fit_cpca(CpcaPoints(points, dim), o, start);
+}
 
 Cpca fit_cpca(const CpcaPoints& points, const CpcaOptions& o, const Cpca* start) {
   const CpcaPoints::Prepared& p = points.prepared();

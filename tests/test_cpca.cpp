@@ -5,7 +5,7 @@
 // against the variance each captures); the error never grows from round to
 // round, nor as K or N grows from a warm start; the same bits on any number
 // of threads; points of a narrow span fitted as their coordinates; points
-// prepared once fit to the same bits; bad input refused.
+// prepared once serve many fits; bad input refused.
 #include <prt/cpca.h>
 #include <prt/error.h>
 
@@ -244,10 +244,12 @@ bool same_bits(const Cpca& a, const Cpca& b) {
 }
 
 // Points prepared once (CpcaPoints: prt compress --target-error's search)
-// fit to the same bits as the points given directly: in a narrow span, past
-// it (more vectors than the span has dimensions: the points themselves),
-// warm started, and rows too short for a span.
-TEST(Cpca, PreparedPointsFitTheSameBits) {
+// serve many fits, in any order, each to the same bits as a fit of freshly
+// prepared points (fit_cpca of the floats): in a narrow span, past it (more
+// vectors than the span has dimensions: the points themselves), warm
+// started, and rows too short for a span. Nothing of one fit stays behind
+// for the next.
+TEST(Cpca, PreparedPointsServeManyFits) {
   const std::size_t r = 10, dim = 64;
   const std::vector<float> x = embedded(subspace_points(4, 3, 300, r, 7), r, dim);
   const CpcaPoints prepared(x, dim);
@@ -256,17 +258,23 @@ TEST(Cpca, PreparedPointsFitTheSameBits) {
   CpcaOptions o;
   o.clusters = 4;
   o.iterations = 8;
-  for (int vectors : {0, 2, int(r), int(r) + 2}) {
+  for (int vectors : {int(r) + 2, 2, 0, int(r), 2}) {
     o.vectors = vectors;
-    const Cpca direct = fit_cpca(x, dim, o), ready = fit_cpca(prepared, o);
-    EXPECT_TRUE(same_bits(direct, ready)) << vectors << " vectors";
+    const Cpca fresh = fit_cpca(x, dim, o), reused = fit_cpca(prepared, o);
+    EXPECT_TRUE(same_bits(fresh, reused)) << vectors << " vectors";
     CpcaOptions more = o;
     more.clusters = 6;
-    EXPECT_TRUE(same_bits(fit_cpca(x, dim, more, &direct), fit_cpca(prepared, more, &ready))) << vectors << " vectors, warm";
+    EXPECT_TRUE(same_bits(fit_cpca(x, dim, more, &fresh), fit_cpca(prepared, more, &reused))) << vectors << " vectors, warm";
   }
   const std::vector<float> shortrows = random_points(200, 6, 3);
+  const CpcaPoints short_prepared(shortrows, 6);
   o.vectors = 3;
-  EXPECT_TRUE(same_bits(fit_cpca(shortrows, 6, o), fit_cpca(CpcaPoints(shortrows, 6), o)));
+  const Cpca first = fit_cpca(short_prepared, o);
+  o.vectors = 5;
+  fit_cpca(short_prepared, o);
+  o.vectors = 3;
+  EXPECT_TRUE(same_bits(first, fit_cpca(short_prepared, o)));
+  EXPECT_TRUE(same_bits(first, fit_cpca(shortrows, 6, o)));
   // Bad options are refused as fit_cpca refuses them.
   o.clusters = int(prepared.count()) + 1;
   EXPECT_THROW(fit_cpca(prepared, o), Error);

@@ -74,10 +74,10 @@ Cpca fit_cpca(std::span<const float> points, std::size_t dim, const CpcaOptions&
 // same rows for a dozen sizes): their conversion to double and, for long
 // rows, their narrow affine span (glossy matrices: 325 values spanning 81
 // dimensions, found from the points' scatter and its eigenvectors; on
-// 45,235 rows about 0.7 s of each fit before). A fit of prepared points is
-// the fit of the same points given directly, bit for bit (tested). Keeps a
-// view of `points`: they must outlive it. Throws as fit_cpca does for bad
-// sizes or non-finite values.
+// 45,235 rows about 0.7 s of each fit before). The fit of floats above
+// prepares them and fits; prepared points serve any number of fits, each the
+// same bits as on fresh ones (tested). Keeps a view of `points`: they must
+// outlive it. Throws as fit_cpca does for bad sizes or non-finite values.
 class CpcaPoints {
  public:
   CpcaPoints(std::span<const float> points, std::size_t dim);
