@@ -262,7 +262,12 @@ struct Searcher {
     std::vector<float> scaled(s.rows.begin(), s.rows.end());
     if (!s.scales.empty())
       for (std::size_t i = 0; i < scaled.size(); ++i) scaled[i] = float(double(scaled[i]) * s.scales[i % s.dim]);
-    if (row_count(s) == 0) return {1, 0, ClusteredSignal{0, 0, s.dim, {}, {}, {}, {}, o.weight_bits, {}}, 0.0, {}, {}};
+    if (row_count(s) == 0) {  // every vertex analytic: nothing to fit, its error measured all the same
+      Result r{1, 0, ClusteredSignal{0, 0, s.dim, {}, {}, {}, {}, o.weight_bits, {}}, 0.0, {}, {}};
+      r.stats = s.measure(r.signal, true);
+      r.error = r.stats.value(o.statistic);
+      return r;
+    }
     const CpcaPoints points(scaled, s.dim);  // made ready once for every fit of the search
     return o.exhaustive ? exhaustive(s, points) : quick(s, points);
   }

@@ -493,6 +493,20 @@ TEST(CompressionChoice, MeetsItsTargetOverTheDistribution) {
     EXPECT_LE(double(quick.bytes), 1.3 * double(full.bytes)) << glossy;
     EXPECT_LE(quick.fits, full.fits) << glossy;
   }
+  // A convex sphere: every vertex analytic, nothing to compress; the choice
+  // says so with its error measured (zero), not with no samples at all.
+  const Mesh ball = test::sphere(8, 16);
+  for (bool glossy : {false, true}) {
+    const Transfer none = make_transfer(ball, TransferMode::Shadowed, glossy, glm::vec3(0.8f));
+    ASSERT_TRUE(none.coeffs.empty()) << glossy;
+    ChoiceOptions o;
+    o.target = 0.02;
+    const CompressionChoice c = choose_compression(none, ball, small_distribution(), o);
+    EXPECT_EQ(c.bytes, 0u) << glossy;
+    EXPECT_GT(c.whole.samples, 0u) << glossy;
+    EXPECT_GT(c.diffuse.samples, 0u) << glossy;
+    EXPECT_EQ(c.whole.p95, 0.0) << glossy;
+  }
   ChoiceOptions bad;
   bad.target = 0;
   const Transfer t = make_transfer(m, TransferMode::Shadowed, false, glm::vec3(0.8f));
