@@ -346,11 +346,8 @@ Fit fit_lobes(int bands, const double* t, const FitOptions& o) {
       fit.axes[3 * std::size_t(i) + 2] = 1;
   fit.start_residual = res;
   res = refine(P, K, fit.axes, fit.coeffs, o.rounds, norm2, fit.rounds);
-  // The best coefficients for the final axes (least squares with the small
-  // ridge): kept only if lower still.
-  for (int i = 0; i < K; ++i) P.columns(fit.axes.data() + 3 * i, cols.data() + std::size_t(i) * nc);
-  const double polished = P.solve_coeffs(cols, K, g);
-  if (polished < res) fit.coeffs = g, res = polished;
+  // refine leaves the coefficients the best for its final axes (it projects
+  // them out): nothing to polish.
   fit.residual = res;
   return fit;
 }
