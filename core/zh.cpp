@@ -352,4 +352,17 @@ Fit fit_lobes(int bands, const double* t, const FitOptions& o) {
   return fit;
 }
 
+double fit_coeffs(int bands, int lobes, const double* axes, const double* t, double* coeffs) {
+  if (bands < 1 || bands > kMaxBands || lobes < 1 || lobes > kMaxLobes)
+    throw Error(fmt::format("zonal harmonics: {} lobes of {} bands (1 to {} lobes, 1 to {} bands)", lobes, bands,
+                            kMaxLobes, kMaxBands));
+  const int nc = bands * bands;
+  const Problem P{bands, lobes, nc, t};
+  std::vector<double> cols(std::size_t(lobes) * nc), g;
+  for (int i = 0; i < lobes; ++i) P.columns(axes + 3 * i, cols.data() + std::size_t(i) * nc);
+  const double res = P.solve_coeffs(cols, lobes, g);
+  std::copy(g.begin(), g.end(), coeffs);
+  return res;
+}
+
 }  // namespace prt::zh

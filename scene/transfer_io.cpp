@@ -526,14 +526,14 @@ void Reader::verify() {
 }
 
 std::string unknown_basis(std::uint32_t basis) {
-  return fmt::format("unknown basis {} (0 is spherical harmonics, 1 wavelet)", basis);
+  return fmt::format("unknown basis {} (0 is spherical harmonics, 1 wavelet, 2 zonal harmonics)", basis);
 }
 
 std::uint32_t Reader::read_basis() {
   open_file();
   read_head();
   const std::uint32_t basis = load<std::uint32_t>(h_ + kOffBasis);
-  if (basis != kBasisSH && basis != kBasisWavelet) throw fail(unknown_basis(basis));
+  if (basis != kBasisSH && basis != kBasisWavelet && basis != kBasisZH) throw fail(unknown_basis(basis));
   return basis;
 }
 
@@ -551,6 +551,11 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
                            "relight it with prt relight (prt::read_wavelet_transfer), or run prt precompute --basis "
                            "sh for an SH transfer",
                            load<std::uint32_t>(h + kOffBands)));
+  if (basis == kBasisZH)
+    throw fail(fmt::format("holds a zonal-harmonic (local deformable) transfer (basis 'zh', {} lobes of {} bands), not "
+                           "spherical harmonics: read it with prt::read_zh_transfer (prt::posed_transfer gives a "
+                           "pose's SH transfer), or run prt precompute --basis sh for an SH transfer",
+                           load<std::uint32_t>(h + kOffLobes), load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisSH) throw fail(unknown_basis(basis));
   TransferHeader v{load<std::uint32_t>(h + kOffBands),
                          load<std::uint32_t>(h + kOffChannels),

@@ -7,6 +7,7 @@
 //                                   compressed signals (8, 9)
 //   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
 //   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
+//   scene/transfer_io_zh.cpp        zonal-harmonic transfers (basis 2, kinds 24-26)
 #pragma once
 
 #include <prt/compressed_transfer.h>
@@ -79,6 +80,8 @@ constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
 
 constexpr std::uint32_t kBasisSH = 0;
 constexpr std::uint32_t kBasisWavelet = 1;
+constexpr std::uint32_t kBasisZH = 2;  // local deformable PRT (prt/zh_transfer.h): its own version, kZhFormatVersion
+constexpr std::size_t kOffLobes = 84;  // u32, basis 2 only: lobes per vertex (read by every reader's refusal)
 constexpr std::uint32_t kFlagVertexColors = 1u << 0;
 constexpr std::uint32_t kFlagGlossy = 1u << 1;      // version 3: glossy transfer matrices (section 7)
 constexpr std::uint32_t kFlagCompressed = 1u << 2;  // version 4: rows compressed by clustered PCA (sections 8, 9)
@@ -239,6 +242,8 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
 // "truncated: expected ... bytes, file has ..."
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size);
 std::string unknown_basis(std::uint32_t basis);
+// One "  label             value" line of describe_transfer.
+std::string describe_line(const char* label, const std::string& value);
 // Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
 void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,
                 const char* rerun);
@@ -253,6 +258,7 @@ class Reader {
   // returned), which must then be given (and only then).
   Transfer read(CompressedTransfer* compressed = nullptr, LightmapLayout* lightmap = nullptr);
   WaveletTransfer read_wavelet(LightmapLayout* lightmap = nullptr);
+  ZhTransfer read_zh();
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }
   std::uint32_t flags() const { return load<std::uint32_t>(h_ + kOffFlags); }

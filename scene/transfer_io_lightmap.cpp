@@ -61,7 +61,9 @@ LightmapTransfer read_lightmap_transfer(const std::string& path) {
 
 bool transfer_is_lightmap(const std::string& path) {
   Reader r(path);
-  if (r.read_basis() != kBasisSH) return (r.flags() & kFlagLightmap) != 0;
+  const std::uint32_t basis = r.read_basis();
+  if (basis == kBasisZH) return false;  // per vertex only (its reader refuses any other flag)
+  if (basis != kBasisSH) return (r.flags() & kFlagLightmap) != 0;
   return r.version() >= 5 && (r.flags() & kFlagLightmap) != 0;
 }
 

@@ -78,18 +78,24 @@ std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t, const Lig
 }  // namespace detail::tio
 
 namespace detail::tio {
-constexpr EnumName<TransferBasis> kBasisNames[] = {{TransferBasis::SH, "sh"}, {TransferBasis::Wavelet, "wavelet"}};
+constexpr EnumName<TransferBasis> kBasisNames[] = {
+    {TransferBasis::SH, "sh"}, {TransferBasis::Wavelet, "wavelet"}, {TransferBasis::ZH, "zh"}};
 }  // namespace detail::tio
 
 std::string_view basis_name(TransferBasis b) { return enum_name(kBasisNames, b); }
 
 TransferBasis read_transfer_basis(const std::string& path) {
-  return Reader(path).read_basis() == kBasisWavelet ? TransferBasis::Wavelet : TransferBasis::SH;
+  const std::uint32_t basis = Reader(path).read_basis();
+  return basis == kBasisWavelet ? TransferBasis::Wavelet : basis == kBasisZH ? TransferBasis::ZH : TransferBasis::SH;
 }
 
 bool transfer_is_compressed(const std::string& path) {
   Reader r(path);
-  if (r.read_basis() != kBasisSH) throw r.fail("holds a wavelet transfer, not spherical harmonics");
+  const std::uint32_t basis = r.read_basis();
+  // No zonal-harmonic file is compressed: false lets a caller go on to
+  // read_transfer, whose refusal names read_zh_transfer.
+  if (basis == kBasisZH) return false;
+  if (basis != kBasisSH) throw r.fail("holds a wavelet transfer, not spherical harmonics");
   return r.version() >= 4 && (r.flags() & kFlagCompressed) != 0;
 }
 
@@ -169,6 +175,11 @@ WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
     throw fail(fmt::format("holds a spherical-harmonics transfer (basis 'sh', {} bands), not a wavelet one: run prt "
                            "precompute --basis wavelet for a wavelet transfer, or read it with prt::read_transfer",
                            load<std::uint32_t>(h + kOffBands)));
+  if (basis == kBasisZH)
+    throw fail(fmt::format("holds a zonal-harmonic (local deformable) transfer (basis 'zh', {} lobes of {} bands), not "
+                           "a wavelet one: read it with prt::read_zh_transfer, or run prt precompute --basis wavelet "
+                           "for a wavelet transfer",
+                           load<std::uint32_t>(h + kOffLobes), load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisWavelet) throw fail(unknown_basis(basis));
   if (version_ != kWaveletVersion)
     throw fail(fmt::format("bad header: format version {} for a wavelet transfer (wavelet files are version {})",

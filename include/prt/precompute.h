@@ -15,6 +15,7 @@
 #include <prt/scene.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
+#include <prt/zh_transfer.h>
 
 #include <glm/vec3.hpp>
 
@@ -154,6 +155,24 @@ inline constexpr int kMaxGlossyBands = 12;
 // Computes the transfer. Throws prt::Error on bad options. Deterministic:
 // the same mesh, options and thread count give the same bits.
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
+
+struct ZhFitOptions {
+  int lobes = 4;
+  int rounds = 12;  // zh::FitOptions::rounds
+  int threads = 0;  // 0: all
+};
+
+// Local deformable PRT (prt/zh_transfer.h, docs/LDPRT.md): fits
+// options.lobes lobes to every stored row of `t` (computed for the
+// rest pose `mesh`, check_matches): the axes on the rows' channel sum (one
+// channel: the row), each channel's coefficients by least squares for those
+// axes, the axes then moved into the vertex's rest frame. A vertex without a
+// frame stores zero lobes (its transfer is zero: no normal). `progress` (may
+// be empty) is called with rows done and total; returning false cancels
+// (prt::Error("cancelled"), as compute_transfer). Throws prt::Error for a
+// glossy transfer, bands over zh::kMaxBands or lobes out of range.
+ZhTransfer fit_zh_transfer(const Transfer& t, const Mesh& mesh, const ZhFitOptions& options,
+                           const Progress& progress = {});
 
 // Reference: the shadowed glossy transfer matrices M_p (nc x nc row-major,
 // double, nc = bands^2) of the listed vertices only, traced as

@@ -3,10 +3,11 @@
 //
 // The file format (little-endian header, typed sections, XXH3-64 checksum)
 // is specified in docs/FORMAT.md; the in-memory layout it stores is that of
-// prt::Transfer (prt/transfer.h) for the SH basis and prt::WaveletTransfer
-// (prt/wavelet_transfer.h) for the wavelet basis. Both bases share the
-// header, the section framing, the checksum and the atomic write; the header's
-// basis field says which one a file holds.
+// prt::Transfer (prt/transfer.h) for the SH basis, prt::WaveletTransfer
+// (prt/wavelet_transfer.h) for the wavelet basis and prt::ZhTransfer
+// (prt/zh_transfer.h) for the zonal-harmonic (local deformable) one. The bases
+// share the header, the section framing, the checksum and the atomic write;
+// the header's basis field says which one a file holds.
 #pragma once
 
 #include <prt/compressed_transfer.h>
@@ -14,6 +15,7 @@
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
+#include <prt/zh_transfer.h>
 
 #include <cstdint>
 #include <string>
@@ -33,6 +35,8 @@ inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
+// Zonal-harmonic (local deformable) transfers have their own version line.
+inline constexpr std::uint32_t kZhFormatVersion = 1;
 // The version write_transfer writes for `t`: 3 with glossy matrices, 2
 // otherwise (so that a prt reading version 2 reads every file it could).
 inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }
@@ -90,6 +94,8 @@ void write_compressed_transfer(const std::string& path, const CompressedTransfer
 CompressedTransfer read_compressed_transfer(const std::string& path);
 // Whether the SH file at `path` is compressed (the header's checks of
 // read_transfer_basis; throws for a wavelet file's "not SH" as that does not).
+// A zonal-harmonic file is not compressed: false (read_transfer then refuses
+// it, naming read_zh_transfer).
 bool transfer_is_compressed(const std::string& path);
 // The sections write_compressed_transfer stores, in file order, and the
 // file's exact size.
@@ -117,15 +123,16 @@ inline void check_matches(const CompressedTransfer& c, const Mesh& mesh, const s
 }
 
 // ---- the basis a file holds ---------------------------------------------------
-enum class TransferBasis { SH, Wavelet };
-std::string_view basis_name(TransferBasis b);  // "sh", "wavelet"
+enum class TransferBasis { SH, Wavelet, ZH };
+std::string_view basis_name(TransferBasis b);  // "sh", "wavelet", "zh"
 
 // Reads just the header: the file's existence, signature, version, header
 // size and basis field, with read_transfer's messages for each. Does not
 // verify the checksum or the sections (read_transfer / read_wavelet_transfer
-// do). Throws prt::Error "PATH: problem".
+// do, and read_zh_transfer). Throws prt::Error "PATH: problem".
 TransferBasis read_transfer_basis(const std::string& path);
-// The same header checks; returns the file's format version (1 to 5 for SH).
+// The same header checks; returns the file's format version (1 to 6 for SH,
+// 1 for wavelet and zonal-harmonic files).
 std::uint32_t read_transfer_version(const std::string& path);
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
@@ -157,6 +164,34 @@ std::string describe_transfer(const WaveletTransfer& t);
 // exact size of the file. Bytes per vertex: WaveletTransfer::bytes() / vertices.
 std::vector<TransferSection> transfer_sections(const WaveletTransfer& t);
 std::uint64_t transfer_file_size(const WaveletTransfer& t);
+
+// ---- zonal-harmonic transfers (basis 2; docs/FORMAT.md, "Zonal-harmonic transfer") ----
+// Local deformable PRT (prt/zh_transfer.h): per stored vertex, its lobes' axes in
+// its rest frame and channels x lobes x bands coefficients; analytic vertices
+// store nothing (an analytic-vertex mask, as the SH file's). Written as
+// version kZhFormatVersion through write_atomically; throws prt::Error "PATH:
+// cannot write this zonal-harmonic transfer: PROBLEM" before writing anything
+// if zh_transfer_problem(t) finds it inconsistent. The round trip is
+// bit-exact (slots come back empty when no vertex is analytic).
+void write_zh_transfer(const std::string& path, const ZhTransfer& t);
+// Reads one, validating signature, version, size, checksum, header, section
+// table and every value (zh_transfer_problem). Throws prt::Error "PATH:
+// problem"; on an SH or wavelet file the message says so and names their
+// readers, as read_transfer and read_wavelet_transfer do on a ZH file.
+ZhTransfer read_zh_transfer(const std::string& path);
+// The sections write_zh_transfer stores for `t`, in file order, and the
+// exact size of the file.
+std::vector<TransferSection> transfer_sections(const ZhTransfer& t);
+std::uint64_t transfer_file_size(const ZhTransfer& t);
+// A multi-line summary (lobes, bands, channels, mode, bounces, samples,
+// albedo, vertices and analytic ones, fit error, bytes per vertex, mesh and
+// topology hashes, file size). Ends with a newline.
+std::string describe_transfer(const ZhTransfer& t);
+// Throws prt::Error unless `t` was computed for `mesh` as its rest pose (same
+// vertex count and Mesh::hash(); vertex colours when t's albedo is them);
+// `what` names the transfer. A deformed pose is checked by check_pose
+// (prt/zh_transfer.h) instead: its positions, and so its hash, differ.
+void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& what);
 
 // ---- lightmap transfers (version 5, flag bit 3; docs/FORMAT.md, "Lightmap transfer") ----
 // An SH transfer whose rows are a lightmap's covered texels, with two more

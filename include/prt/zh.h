@@ -77,4 +77,10 @@ struct Fit {
 // out of range.
 Fit fit_lobes(int bands, const double* t, const FitOptions& options);
 
+// The best coefficients (lobes x bands, lobe-major) of lobes at the given
+// unit axes for the SH vector t, band by band as the fit solves them;
+// returns the residual |t - to_sh(axes, coeffs)|^2. Throws prt::Error as
+// fit_lobes for counts out of range.
+double fit_coeffs(int bands, int lobes, const double* axes, const double* t, double* coeffs);
+
 }  // namespace prt::zh

@@ -206,6 +206,9 @@ def transfer_seeds(out, tmp, prt):
         "wavelet-r2": ["--basis", "wavelet", "--cube-res", "2"],
         "wavelet-r4-colour": ["--basis", "wavelet", "--cube-res", "4", "--threshold", "0",
                               "--vertex-colors"],
+        "zh-k2-b3": ["--basis", "zh", "--lobes", "2", "--bands", "3", "--samples", "64"],
+        "zh-k1-colour": ["--basis", "zh", "--lobes", "1", "--mode", "interreflected", "--bands", "2", "--samples",
+                         "64", "--vertex-colors"],
     }
     for name, args in runs.items():
         f = tmp / (name + ".prt")

@@ -1,7 +1,7 @@
-// Fuzz target: the transfer file reader (docs/FORMAT.md), both bases:
+// Fuzz target: the transfer file reader (docs/FORMAT.md), every basis:
 // read_transfer_basis, read_transfer_version, transfer_is_compressed,
-// read_transfer, read_compressed_transfer and read_wavelet_transfer, and the
-// description of what was read.
+// read_transfer, read_compressed_transfer, read_wavelet_transfer and
+// read_zh_transfer, and the description of what was read.
 //
 // The checksum: the trailer holds XXH3-64 of every byte before it, which a
 // mutated input almost never matches, so the reader would stop there. When
@@ -70,6 +70,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       (void)prt::transfer_bytes_per_vertex(t);
       (void)prt::analytic_bytes_saved(t);
       round_trip(t, prt::read_transfer, [](const std::string& p, const prt::Transfer& x) { prt::write_transfer(p, x); });
+    } else if (prt::read_transfer_basis(path) == prt::TransferBasis::ZH) {
+      const prt::ZhTransfer t = prt::read_zh_transfer(path);
+      (void)prt::describe_transfer(t);
+      (void)prt::transfer_sections(t);
+      round_trip(t, prt::read_zh_transfer, [](const std::string& p, const prt::ZhTransfer& x) { prt::write_zh_transfer(p, x); });
     } else {
       const prt::WaveletTransfer t = prt::read_wavelet_transfer(path);
       (void)prt::describe_transfer(t);
@@ -82,5 +87,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_wavelet_transfer(path); });
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_transfer(path); });
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_compressed_transfer(path); });
+  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_zh_transfer(path); });
   return 0;
 }

@@ -177,6 +177,36 @@ int run_info(const InfoArgs& a) {
                j["partial_texels_per_stored_probe"].get<double>(), j["scene_hash"].get<std::string>());
     return 0;
   }
+  if (read_transfer_basis(a.file) == TransferBasis::ZH) {
+    const ZhTransfer z = read_zh_transfer(a.file);  // validates everything
+    if (a.json) {
+      nlohmann::ordered_json j;
+      j["file"] = a.file;
+      j["format_version"] = kZhFormatVersion;
+      j["basis"] = "zh";
+      j["lobes"] = z.lobes;
+      j["bands"] = z.bands;
+      j["channels"] = z.channels;
+      j["mode"] = std::string(transfer_mode_name(z.mode));
+      j["bounces"] = z.bounces;
+      j["samples"] = z.samples;
+      j["albedo"] = {z.albedo.x, z.albedo.y, z.albedo.z};
+      j["vertex_colors"] = z.vertex_colors;
+      j["seed"] = z.seed;
+      j["vertices"] = z.vertices;
+      j["analytic_vertices"] = z.analytic_vertices();
+      j["stored_vertices"] = z.stored_vertices();
+      j["fit_error"] = z.fit_error;
+      j["mesh_hash"] = fmt::format("{:#018x}", z.mesh_hash);
+      j["topology_hash"] = fmt::format("{:#018x}", z.topology_hash);
+      j["sections"] = sections_json(transfer_sections(z));
+      j["file_bytes"] = transfer_file_size(z);
+      fmt::print("{}\n", j.dump(2));
+    } else {
+      fmt::print("{}: {}", a.file, describe_transfer(z));
+    }
+    return 0;
+  }
   if (read_transfer_basis(a.file) == TransferBasis::Wavelet && transfer_is_lightmap(a.file)) {
     const WaveletLightmap w = read_wavelet_lightmap(a.file);  // validates everything
     if (a.json) {

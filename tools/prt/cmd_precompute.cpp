@@ -13,6 +13,8 @@
 #include <prt/transfer_io.h>
 #include <prt/tuning.h>
 #include <prt/wavelet_transfer.h>
+#include <prt/zh.h>
+#include <prt/zh_transfer.h>
 
 #include <fmt/core.h>
 
@@ -56,6 +58,9 @@ struct PrecomputeArgs {
   const CLI::Option* compress_weights_opt = nullptr;
   // Options given on the command line (to refuse those the basis does not take).
   std::vector<const CLI::Option*> sh_only, wavelet_only;
+  // --basis zh: lobes per vertex (docs/LDPRT.md).
+  int lobes = 4;
+  const CLI::Option* lobes_opt = nullptr;
   // --target-error: the error target, its map and reference cache; bands,
   // samples and bounces given on the command line are the most it may choose.
   double target_error = 0;
@@ -259,6 +264,65 @@ int run_wavelet(PrecomputeArgs& a) {
                a.output, t.cube_res, t.coeff_count(), t.threshold, t.vertices, 100.0 * t.kept_fraction(),
                t.vertices ? double(t.kept()) / double(t.vertices) : 0.0,
                t.vertices ? double(t.bytes()) / double(t.vertices) : 0.0, transfer_file_size(t), secs);
+  return 0;
+}
+
+// --basis zh: the SH transfer, then K zonal-harmonic lobes per vertex in its
+// rest frame (local deformable PRT; prt/zh_transfer.h, docs/LDPRT.md).
+int run_zh(PrecomputeArgs& a) {
+  if (a.material == "glossy")
+    throw UsageError("--material glossy does not apply to --basis zh (its lobes hold the diffuse transfer; "
+                     "docs/LDPRT.md)");
+  for (const CLI::Option* o : {a.target_opt, a.env_opt, a.cache_opt, a.compress_weights_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " does not apply to --basis zh (--lobes sets its size)");
+  if (!a.compress.empty())
+    throw UsageError("--compress does not apply to --basis zh (its K lobes per vertex are its compression)");
+  if (a.opt.bands > zh::kMaxBands)
+    throw UsageError(fmt::format("--basis zh takes --bands at most {} (a lobe's profile; past it the SH vector is "
+                                 "the cheaper form)", zh::kMaxBands));
+  a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
+  double rgb[3];
+  parse_triple(a.albedo, "--albedo", rgb);
+  a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  a.opt.comm = &job();
+  a.opt.memory_limit = memory_limit(a);
+  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  test_fail_rank();
+  release_free_memory();
+  const bool quiet = a.quiet || !is_root();
+  if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  Outputs out("precompute");
+  const std::optional<Transfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+    return compute_transfer(mesh, a.opt, job_progress(progress));
+  }, a.opt.memory_limit);
+  if (!computed) return 130;
+  if (!is_root()) return 0;  // rank 0 fits and writes
+  const auto t1 = std::chrono::steady_clock::now();
+  ZhFitOptions fo;
+  fo.lobes = a.lobes;
+  fo.threads = a.opt.threads;
+  const std::optional<ZhTransfer> z = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+    return fit_zh_transfer(*computed, mesh, fo, progress);
+  });
+  if (!z) return 130;
+  const auto t2 = std::chrono::steady_clock::now();
+  out.write([&] { write_zh_transfer(a.output, *z); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet) {
+    const std::size_t stored = z->stored_vertices();
+    fmt::print(stderr,
+               "wrote {}: {} lobes x {} bands, {}, {} channel{}, {} vertices ({} analytic, no lobes stored), fit error "
+               "{:.3f}% of the SH transfer, {:.1f} bytes per stored vertex (the SH rows: {}), precompute {:.2f} s, "
+               "fit {:.2f} s\n",
+               a.output, z->lobes, z->bands, transfer_mode_name(z->mode), z->channels, z->channels == 1 ? "" : "s",
+               z->vertices, z->analytic_vertices(), 100.0 * z->fit_error, 4.0 * double(z->stride()),
+               4 * computed->stride(), std::chrono::duration<double>(t1 - t0).count(),
+               std::chrono::duration<double>(t2 - t1).count());
+    (void)stored;
+  }
   return 0;
 }
 
@@ -478,6 +542,8 @@ int run_probes(PrecomputeArgs& a) {
 }
 
 int run_precompute(PrecomputeArgs& a) {
+  if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
+    throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
   if (a.probes_opt->count() > 0) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     return run_probes(a);
@@ -492,6 +558,13 @@ int run_precompute(PrecomputeArgs& a) {
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
     throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
                      "too (a vertex transfer keeps its ambient occlusion and bent normals in the file)");
+  if (a.basis != "zh" && a.lobes_opt->count() > 0) throw UsageError("--lobes applies to --basis zh only");
+  if (a.basis == "zh") {
+    for (const CLI::Option* o : a.wavelet_only)
+      if (o->count() > 0) throw UsageError(o->get_name() + " applies to --basis wavelet only");
+    check_not_input("--output", a.output, {{"MESH", a.mesh}});
+    return run_zh(a);
+  }
   check_usage(a);
   if (a.basis == "wavelet") return run_wavelet(a);
   a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
@@ -593,6 +666,8 @@ Run add_precompute(CLI::App& app) {
       "reflect all light). A grey albedo stores one channel. Ctrl-C stops without writing anything.\n"
       "--basis wavelet (shadowed only; --cube-res, default 32, and --threshold, default 1e-2) stores sparse int16\n"
       "Haar coefficients per vertex for all-frequency shadows; relight it with prt relight --terms K.\n"
+      "--basis zh (--lobes K, default 4) fits K zonal-harmonic lobes to each vertex's SH transfer, stored in the\n"
+      "vertex's own frame: prt relight POSED file.prt ENV relights any pose of the mesh (docs/LDPRT.md).\n"
       "--target-error e --env MAP chooses bands, bounces and samples: the cheapest that reach relative RMS e\n"
       "against a Monte Carlo reference under MAP (docs/REPORT.md).\n"
       "--material glossy also stores per-vertex transfer matrices (Sloan, Kautz & Snyder 2002) for a Phong lobe whose\n"
@@ -606,16 +681,23 @@ Run add_precompute(CLI::App& app) {
       "         prt precompute bunny.off -o bunny-glossy.prt --material glossy --bands 5\n"
       "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32\n"
+      "         prt precompute models/tube.obj -o tube-zh.prt --basis zh --lobes 4 --bands 6\n"
       "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected -o room.prt\n"
       "         prt precompute models/room.gltf --probes 16x8x16 -o room-probes.prt");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB (with --lightmap: a scene, glTF/GLB or OBJ)")
       ->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
   s->add_option("--basis", a->basis,
-                "sh (spherical harmonics, all modes) or wavelet (all-frequency shadows: Haar on a cube map, "
-                "Ng et al. 2003)")
-      ->check(CLI::IsMember({"sh", "wavelet"}))
+                "sh (spherical harmonics, all modes), wavelet (all-frequency shadows: Haar on a cube map, "
+                "Ng et al. 2003) or zh (local deformable PRT: --lobes zonal-harmonic lobes per vertex in its own frame, "
+                "which follow the mesh when it bends; Sloan, Luna & Snyder 2005; docs/LDPRT.md)")
+      ->check(CLI::IsMember({"sh", "wavelet", "zh"}))
       ->capture_default_str();
+  a->lobes_opt = s->add_option("--lobes", a->lobes,
+                               "--basis zh: zonal-harmonic lobes per vertex K (1 to 8; 4 keeps the 6-band shadowed "
+                               "transfer within about 1.3% on the shared meshes)")
+                     ->check(int_range(1, zh::kMaxLobes))
+                     ->capture_default_str();
   a->material_opt =
       add_shared(s, SharedOption::Material, a->material,
                  "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "

@@ -23,6 +23,8 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>
+#include <prt/zh_transfer.h>
+#include <prt/deform.h>
 
 #include <fmt/core.h>
 #include <tbb/parallel_for.h>
@@ -54,6 +56,7 @@ struct RelightArgs {
   bool direct = false, quiet = false;
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
   std::string at;  // --at POINTS.csv: query points of a probe volume
+  std::string deform;  // --deform bend:ANGLE|twist:ANGLE: a procedural pose of MESH (zh files)
 };
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -133,6 +136,51 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
                "{:.3f} ms); map setup {:.1f} ms\nwrote {} ({} vertices)\n",
                light_ms + relight_ms, light_ms, lighting.terms().size(), t.coeff_count(),
                wavelet::selection_name(selection), relight_ms, setup_ms, a.output, written);
+  return 0;
+}
+
+// A local deformable transfer (prt precompute --basis zh): MESH is a pose of
+// the rest mesh (same vertices and triangles); each vertex's lobes are turned
+// into its posed frame, then relit as an SH transfer (docs/LDPRT.md).
+int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
+  for (const CLI::Option* o : a.wavelet_only)
+    if (o->count() > 0) throw UsageError(o->get_name() + " applies to wavelet transfers; " + a.transfer + " holds lobes");
+  if (a.direct) throw UsageError("--direct: " + a.transfer + " holds lobes of one transfer (no direct part)");
+  if (!a.eye.empty()) throw UsageError("--eye: " + a.transfer + " is diffuse (lobes of a diffuse transfer)");
+  const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
+  const Mesh posed = deform_mesh(load_mesh(a.mesh), deform);
+  const ZhTransfer z = read_zh_transfer(a.transfer);
+  check_pose(z, posed, a.transfer);
+  EnvMap env = load_envmap(a.env);
+  require_finite(env);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(posed), describe(env), describe_transfer(z));
+  auto t0 = std::chrono::steady_clock::now();
+  PoseReport report;
+  const Transfer t = posed_as_transfer(z, posed, &report);
+  const double pose_ms = ms_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  std::vector<glm::dvec3> light = project(env, t.bands);
+  const double project_ms = ms_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : t.bands);
+  if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
+  std::vector<glm::vec3> rgb = relight(t, posed, light);
+  const double frame_ms = ms_since(t0);
+  check_relit(rgb, a, env, [&](std::size_t v) {
+    double m = 0;
+    for (double x : vertex_transfer(t, posed, v)) m = std::max(m, std::abs(x));
+    return m;
+  });
+  if (!a.quiet && report.no_frame > 0)
+    fmt::print(stderr, "{} vertices have no frame in this pose (no normal: only zero-area triangles around them): "
+                       "their transfer is zero\n", report.no_frame);
+  const std::size_t written = rgb.size();
+  if (const int rc = write_output(a, ext, posed, env, std::move(rgb)); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "relight: pose {:.3f} ms ({} lobes turned into each vertex's posed frame), {:.3f} ms per frame "
+                       "(window, rotation, transfer; projection {:.1f} ms once)\nwrote {} ({} vertices)\n",
+               pose_ms, z.lobes, frame_ms, project_ms, a.output, written);
   return 0;
 }
 
@@ -289,6 +337,9 @@ int run_relight(const RelightArgs& a) {
                        "it the output is linear radiance)");
   if (ext != ".ply" && ext != ".csv" && ext != ".exr")
     throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr)");
+  if (!a.deform.empty() && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
+    throw UsageError("--deform: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a "
+                     "deformation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
   if (is_probe_file(a.transfer)) return run_probes(a, ext, euler);
   if (!a.at.empty()) throw UsageError("--at gives query points of a probe volume: " + a.transfer + " is not one");
   if (transfer_is_lightmap(a.transfer)) {
@@ -309,6 +360,7 @@ int run_relight(const RelightArgs& a) {
                     " holds a wavelet transfer (use --terms and --selection to control its lighting approximation)");
     return run_wavelet(a, ext, euler.data());
   }
+  if (basis == TransferBasis::ZH) return run_zh(a, ext, euler);
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0)
       throw Error(o->get_name() + " applies to wavelet transfers; " + a.transfer +
@@ -398,9 +450,13 @@ Run add_relight(CLI::App& app) {
       "         prt relight bunny.off bunny.prt envmaps/forest.exr -o view.ply --tonemap aces --srgb --exposure -1\n"
       "         prt relight bunny.off glossy.prt envmaps/forest.exr --eye 0,0.1,0.4 --gloss 16 -o g.csv\n"
       "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv\n"
+      "         prt relight tube-bent.obj tube-zh.prt envmaps/forest.exr -o bent.ply   (a pose of a --basis zh mesh)\n"
       "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr\n"
       "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
-  s->add_option("MESH", a->mesh, "The mesh (or, for a lightmap, the scene) the transfer was computed for")->required();
+  s->add_option("MESH", a->mesh,
+                "The mesh (or, for a lightmap, the scene) the transfer was computed for; for a --basis zh transfer, any "
+                "pose of it (the same vertices and triangles)")
+      ->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map")->required();
   s->add_option("-o,--output", a->output,
@@ -417,6 +473,17 @@ Run add_relight(CLI::App& app) {
   a->wavelet_only.push_back(
       add_shared(s, SharedOption::Selection, a->selection,
                  "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)"));
+  s->add_option("--deform", a->deform,
+                "--basis zh files: pose MESH procedurally first: bend:ANGLE (its y extent bent into an arc of ANGLE "
+                "degrees towards +x) or twist:ANGLE (about y); the PLY output is then the posed mesh (prt/deform.h)")
+      ->check([](const std::string& v) {
+        try {
+          parse_deform(v);
+          return std::string();
+        } catch (const Error& e) {
+          return std::string(e.what());
+        }
+      });
   add_shared(s, SharedOption::Eye, a->eye, "Glossy files: the eye point the radiance is seen from");
   add_glossy_options(s, a->lobe);
   for (const CLI::Option* o : a->lobe.options) a->sh_only.push_back(o);

@@ -1,0 +1,116 @@
+// prt/zh_transfer.h - local, deformable PRT (Sloan, Luna & Snyder,
+// SIGGRAPH 2005): each vertex's transfer as a few zonal-harmonic lobes
+// (prt/zh.h) whose axes are stored in the vertex's own frame, so that the
+// transfer turns with the surface when the mesh deforms (docs/LDPRT.md).
+//
+// The vertex frame (docs/CONVENTIONS.md, "Vertex frames"): columns tangent,
+// bitangent, normal, right-handed, from the mesh's normal and the edge rule:
+// among the triangles using the vertex, in file order, and in each the edge
+// to the next corner (winding order) then the previous one, the first edge
+// whose part perpendicular to the normal is at least kFrameEdgeMin of its
+// length gives the tangent (that part, normalised); bitangent = normal x
+// tangent. The edges are the mesh's own, so the frame moves with the
+// surface; a rigid motion turns it with the mesh. A vertex with a zero
+// normal (only degenerate triangles, or none) has no frame; a vertex with a
+// normal but no such edge gets one from its normal alone (FrameKind::Normal,
+// Duff et al. 2017's basis: it follows the normal, not the turn about it).
+#pragma once
+
+#include <prt/mesh.h>
+#include <prt/transfer.h>
+
+#include <glm/mat3x3.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+// The smallest share of an edge's length that must lie in the tangent plane
+// for it to set the tangent: below it the edge runs nearly along the normal
+// and its projection's direction is noise (1e-3: an edge within 0.06 degrees
+// of the normal).
+inline constexpr double kFrameEdgeMin = 1e-3;
+
+enum class FrameKind : std::uint8_t { None = 0, Edge = 1, Normal = 2 };
+
+struct VertexFrames {
+  std::vector<glm::mat3> frames;  // columns tangent, bitangent, normal; identity where kind is None
+  std::vector<FrameKind> kinds;
+};
+// Every vertex's frame (the edge rule above) from the mesh's positions,
+// triangles and normals.
+VertexFrames vertex_frames(const Mesh& mesh);
+
+// XXH3-64 of the vertex count (u64) and the triangles (u32 triples): what a
+// posed mesh must share with the rest pose.
+std::uint64_t topology_hash(const Mesh& mesh);
+
+// A local deformable transfer. Rows as prt::Transfer's: one per stored
+// vertex in vertex order (slots; analytic vertices store nothing and are the
+// clamped cosine about the posed normal, which one lobe holds exactly).
+struct ZhTransfer {
+  int bands = 0;       // n, 1 to zh::kMaxBands
+  int lobes = 0;       // K, 1 to zh::kMaxLobes
+  int channels = 1;    // 1 (grey albedo) or 3
+  TransferMode mode = TransferMode::Shadowed;
+  int bounces = 0;
+  int samples = 0;
+  glm::vec3 albedo{1.0f};
+  bool vertex_colors = false;
+  std::uint64_t seed = 0;
+  std::size_t vertices = 0;
+  std::uint64_t mesh_hash = 0;      // Mesh::hash() of the rest pose (positions and triangles)
+  std::uint64_t topology_hash = 0;  // topology_hash() of the rest pose
+  // Relative error of the fit over the stored rows, sqrt(sum |t - t~|^2 /
+  // sum |t|^2) in the SH transfer's space (diagnostic; stored in the file).
+  double fit_error = 0;
+
+  static constexpr std::uint32_t kAnalytic = Transfer::kAnalytic;
+  std::vector<std::uint32_t> slots;  // empty: every vertex stored, vertex v in row v
+  // Per stored row: lobes x 3 unit axes in the vertex's rest frame (x
+  // tangent, y bitangent, z normal), shared by the channels.
+  std::vector<float> axes;
+  // Per stored row: channels x lobes x bands coefficients g_il ([c][i][l]).
+  std::vector<float> coeffs;
+
+  std::size_t axes_stride() const { return std::size_t(lobes) * 3; }
+  std::size_t coeffs_stride() const { return std::size_t(channels) * lobes * bands; }
+  std::size_t stride() const { return axes_stride() + coeffs_stride(); }  // floats per stored row
+  bool is_analytic(std::size_t v) const { return !slots.empty() && slots[v] == kAnalytic; }
+  std::size_t row(std::size_t v) const { return slots.empty() ? v : slots[v]; }
+  std::size_t analytic_vertices() const;
+  std::size_t stored_vertices() const { return vertices - analytic_vertices(); }
+};
+
+// What is wrong with `t`, or "": bands, lobes, channels, mode, albedo, at
+// least one vertex, slots as prt::Transfer's, array sizes, unit finite axes
+// (|a| within 1e-3 of 1), finite coefficients.
+std::string zh_transfer_problem(const ZhTransfer& t);
+
+// Throws prt::Error unless `posed` can pose `t`: the same vertex count and
+// triangles (topology_hash), and vertex colours when t's albedo is them;
+// `what` names the transfer in the message.
+void check_pose(const ZhTransfer& t, const Mesh& posed, const std::string& what);
+
+// What posing found: vertices without a frame in the pose (zero transfer)
+// and vertices whose frame came from the normal alone.
+struct PoseReport {
+  std::size_t no_frame = 0;
+  std::size_t normal_only = 0;
+};
+
+// Every vertex's SH transfer (channels x bands^2 floats, row v = vertex v)
+// in the pose `posed` (check_pose): the lobes turned by each vertex's posed
+// frame, t_lm = sum_i g_il sqrt(4 pi/(2l+1)) Y_lm(F a_i); analytic vertices
+// the clamped cosine about the posed normal with the albedo. A vertex without
+// a posed frame gets zero (as a vertex without a normal at rest).
+std::vector<float> posed_transfer(const ZhTransfer& t, const Mesh& posed, PoseReport* report = nullptr);
+
+// The same as a prt::Transfer (every vertex stored, no analytic slot), for
+// the tools that take one: relight, the renderer, the reference comparison.
+Transfer posed_as_transfer(const ZhTransfer& t, const Mesh& posed, PoseReport* report = nullptr);
+
+}  // namespace prt

@@ -1,0 +1,334 @@
+// Zonal-harmonic transfer files (basis 2; docs/FORMAT.md "Zonal-harmonic
+// transfer"): the local deformable transfer of prt/zh_transfer.h. The
+// framing: transfer_io_format.h.
+#include <prt/transfer_io.h>
+
+#include <prt/error.h>
+#include <prt/zh.h>
+#include <prt/zh_transfer.h>
+
+#include "transfer_io_format.h"
+#include "transfer_rules.h"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+
+namespace prt {
+
+using namespace detail::tio;
+
+// ---- zonal-harmonic transfers (docs/FORMAT.md, "Zonal-harmonic transfer") --------
+
+namespace detail::tio {
+
+// Header fields that only a zonal-harmonic file uses (after the SH header's
+// common fields; the lobes at kOffLobes). The stored rows sit where an SH
+// file keeps its stored vertices, with the same meaning.
+constexpr std::size_t kOffZhStored = kOffStored;   // u64: vertices with a stored row
+constexpr std::size_t kOffTopologyHash = 96;       // u64: topology_hash() of the rest pose
+constexpr std::size_t kOffFitError = 104;          // f64: relative error of the fit
+constexpr std::size_t kOffZhReserved = 112;        // zero up to kHeaderSize
+constexpr std::uint32_t kZhKnownFlags = kFlagVertexColors;
+
+enum ZhKind : std::uint32_t {
+  kZhAnalyticMask = 24,  // u32 bit mask, as kind 6 of an SH file; only when some vertex is analytic
+  kZhAxes = 25,          // f32, stored rows x lobes x 3
+  kZhCoeffs = 26,        // f32, stored rows x channels x lobes x bands
+};
+
+struct ZhSection {
+  std::uint32_t kind;
+  const char* name;
+  std::uint32_t type;
+  const void* data;
+  std::uint64_t count;
+  bool per_vertex;
+};
+
+constexpr EnumName<std::uint32_t> kZhKindNames[] = {
+    {kZhAnalyticMask, "zh analytic vertices"}, {kZhAxes, "zh axes"}, {kZhCoeffs, "zh coefficients"}};
+const char* zh_kind_name(std::uint32_t kind) { return enum_name(kZhKindNames, kind).data(); }
+
+// The analytic-vertex bit mask of `t` (empty when no vertex is analytic):
+// bit v % 32 of word v / 32 is vertex v, as the SH file's kind 6.
+std::vector<std::uint32_t> zh_analytic_mask(const ZhTransfer& t) {
+  if (t.analytic_vertices() == 0 || t.slots.size() != t.vertices) return {};
+  std::vector<std::uint32_t> mask(mask_words(t.vertices), 0u);
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    if (t.slots[v] == ZhTransfer::kAnalytic) mask[v / 32] |= 1u << (v % 32);
+  return mask;
+}
+
+// The sections of `t` in file order; `mask` is zh_analytic_mask(t), or null
+// when only the sizes are wanted (the mask's count follows from the slots).
+std::vector<ZhSection> zh_sections(const ZhTransfer& t, const std::vector<std::uint32_t>* mask) {
+  const auto n = zh_kind_name;
+  std::vector<ZhSection> s;
+  if (t.analytic_vertices() > 0)
+    s.push_back({kZhAnalyticMask, n(kZhAnalyticMask), kTypeU32, mask ? mask->data() : nullptr,
+                 mask_words(t.vertices), false});
+  // The axes and coefficients always, as an SH file's coefficients (0 values when every vertex is analytic).
+  s.push_back({kZhAxes, n(kZhAxes), kTypeF32, t.axes.data(), t.axes.size(), true});
+  s.push_back({kZhCoeffs, n(kZhCoeffs), kTypeF32, t.coeffs.data(), t.coeffs.size(), true});
+  return s;
+}
+
+}  // namespace detail::tio
+
+std::vector<TransferSection> transfer_sections(const ZhTransfer& t) {
+  std::vector<TransferSection> out;
+  for (const auto& s : zh_sections(t, nullptr))
+    out.push_back({s.kind, s.name, type_bytes(s.type), s.count, s.count * type_bytes(s.type), s.per_vertex,
+                   type_name(s.type)});
+  return out;
+}
+
+std::uint64_t transfer_file_size(const ZhTransfer& t) { return file_size_of(transfer_sections(t)); }
+
+void write_zh_transfer(const std::string& path, const ZhTransfer& t) {
+  if (auto p = zh_transfer_problem(t); !p.empty())
+    throw Error(path + ": cannot write this zonal-harmonic transfer: " + p);
+  const std::vector<std::uint32_t> mask = zh_analytic_mask(t);
+  const std::vector<ZhSection> sections = zh_sections(t, &mask);
+
+  unsigned char header[kHeaderSize] = {};  // reserved bytes stay zero
+  std::memcpy(header, kMagic.data(), kMagic.size());
+  store<std::uint32_t>(header + kOffVersion, kZhFormatVersion);
+  store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
+  store<std::uint32_t>(header + kOffBasis, kBasisZH);
+  store<std::uint32_t>(header + kOffBands, std::uint32_t(t.bands));
+  store<std::uint32_t>(header + kOffChannels, std::uint32_t(t.channels));
+  store<std::uint32_t>(header + kOffMode, std::uint32_t(t.mode));
+  store<std::uint32_t>(header + kOffBounces, std::uint32_t(t.bounces));
+  store<std::uint32_t>(header + kOffSamples, std::uint32_t(t.samples));
+  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
+  store<std::uint32_t>(header + kOffFlags, t.vertex_colors ? kFlagVertexColors : 0u);
+  store<std::uint64_t>(header + kOffSeed, t.seed);
+  store<std::uint64_t>(header + kOffVertices, t.vertices);
+  store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
+  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
+  store<std::uint32_t>(header + kOffLobes, std::uint32_t(t.lobes));
+  store<std::uint64_t>(header + kOffZhStored, t.stored_vertices());
+  store<std::uint64_t>(header + kOffTopologyHash, t.topology_hash);
+  store<double>(header + kOffFitError, t.fit_error);
+
+  std::vector<RawSection> raw;
+  for (const auto& s : sections) raw.push_back({s.kind, s.type, s.count, s.count * type_bytes(s.type), s.data});
+  write_file(path, header, raw);
+}
+
+namespace detail::tio {
+
+ZhTransfer Reader::read_zh() {
+  open_file();
+  read_head();
+  verify();
+  const unsigned char* h = h_;
+  const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
+  if (basis == kBasisSH)
+    throw fail(fmt::format("holds a spherical-harmonics transfer (basis 'sh', {} bands), not a zonal-harmonic one: "
+                           "read it with prt::read_transfer, or run prt precompute --basis zh for a zonal-harmonic "
+                           "(local deformable) transfer",
+                           load<std::uint32_t>(h + kOffBands)));
+  if (basis == kBasisWavelet)
+    throw fail(fmt::format("holds a wavelet transfer (basis 'wavelet', cube resolution {}), not a zonal-harmonic one: "
+                           "read it with prt::read_wavelet_transfer, or run prt precompute --basis zh for a "
+                           "zonal-harmonic (local deformable) transfer",
+                           load<std::uint32_t>(h + kOffBands)));
+  if (basis != kBasisZH) throw fail(unknown_basis(basis));
+  if (version_ != kZhFormatVersion)
+    throw fail(fmt::format("bad header: format version {} for a zonal-harmonic transfer (zonal-harmonic files are "
+                           "version {})",
+                           version_, kZhFormatVersion));
+
+  // Header values: the lobe's own limits first, then the rules every SH
+  // header follows (channels, mode, bounces, samples, albedo, vertices, stored).
+  const std::uint32_t bands = load<std::uint32_t>(h + kOffBands), lobes = load<std::uint32_t>(h + kOffLobes);
+  if (bands < 1 || bands > std::uint32_t(zh::kMaxBands))
+    throw fail(fmt::format("bad header: bands is {}; a zonal-harmonic lobe has 1 to {}", bands, zh::kMaxBands));
+  if (lobes < 1 || lobes > std::uint32_t(zh::kMaxLobes))
+    throw fail(fmt::format("bad header: lobes is {}; must be 1 to {}", lobes, zh::kMaxLobes));
+  const TransferHeader v{bands,
+                         load<std::uint32_t>(h + kOffChannels),
+                         load<std::uint32_t>(h + kOffMode),
+                         load<std::uint32_t>(h + kOffBounces),
+                         load<std::uint32_t>(h + kOffSamples),
+                         {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
+                         load<std::uint64_t>(h + kOffVertices),
+                         load<std::uint64_t>(h + kOffZhStored)};
+  if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
+  const double fit_error = load<double>(h + kOffFitError);
+  if (!std::isfinite(fit_error) || fit_error < 0)
+    throw fail(fmt::format("bad header: fit error is {}; must be finite and at least 0", fit_error));
+  const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
+  if (flags & ~kZhKnownFlags)
+    throw fail(fmt::format("bad header: unknown flags 0x{:x} (a zonal-harmonic transfer has bit 0 only: vertex "
+                           "colours)",
+                           flags & ~kZhKnownFlags));
+  for (std::uint64_t i = kOffZhReserved; i < kHeaderSize; ++i)
+    if (h[i] != 0) throw fail(fmt::format("bad header: reserved byte {} is not zero", i));
+  // Each stored row takes 4 x (3 + channels x bands) x lobes bytes, the
+  // analytic-vertex mask 1 bit per vertex: what does not fit is refused
+  // before anything is allocated.
+  const std::uint64_t axes_stride = std::uint64_t(lobes) * 3;
+  const std::uint64_t coeffs_stride = std::uint64_t(v.channels) * lobes * bands;
+  const std::uint64_t row_bytes = 4 * (axes_stride + coeffs_stride);
+  if (v.stored > size_ / row_bytes)
+    throw fail(fmt::format("bad header: {} stored vertices cannot fit in a file of {} bytes (at {} bytes per vertex)",
+                           v.stored, size_, row_bytes));
+  const bool has_mask = v.stored < v.vertices;
+  if (has_mask && mask_words(v.vertices) > size_ / 4)
+    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their analytic-vertex mask alone "
+                           "takes {})",
+                           v.vertices, size_, 4 * mask_words(v.vertices)));
+
+  ZhTransfer t;
+  t.bands = int(bands);
+  t.lobes = int(lobes);
+  t.channels = int(v.channels);
+  t.mode = TransferMode(v.mode);
+  t.bounces = int(v.bounces);
+  t.samples = int(v.samples);
+  t.albedo = v.albedo;
+  t.vertex_colors = (flags & kFlagVertexColors) != 0;
+  t.seed = load<std::uint64_t>(h + kOffSeed);
+  t.vertices = std::size_t(v.vertices);
+  t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
+  t.topology_hash = load<std::uint64_t>(h + kOffTopologyHash);
+  t.fit_error = fit_error;
+
+  std::vector<std::uint32_t> kinds;
+  if (has_mask) kinds.push_back(kZhAnalyticMask);
+  kinds.insert(kinds.end(), {kZhAxes, kZhCoeffs});
+  if (section_count_ != kinds.size())
+    throw fail(fmt::format("bad section table: {} sections; a zonal-harmonic transfer {} has {}", section_count_,
+                           has_mask ? fmt::format("with {} analytic vertices", v.vertices - v.stored)
+                                    : std::string("with every vertex stored"),
+                           kinds.size()));
+
+  // Sections: the kinds the header implies, in order, each of its type and
+  // of the count the header gives, data padded with zeros.
+  std::vector<std::uint32_t> mask;
+  const std::uint64_t data_end = size_ - kTrailerSize;
+  std::uint64_t offset = kHeaderSize;
+  for (std::uint32_t i = 0; i < section_count_; ++i) {
+    const char* name = zh_kind_name(kinds[i]);
+    if (offset + kSectionHeaderSize > data_end)
+      throw fail(fmt::format("bad section table: section {} ('{}') is missing", i + 1, name));
+    unsigned char sh[kSectionHeaderSize];
+    read_at(offset, sh, sizeof sh);
+    const std::uint32_t kind = load<std::uint32_t>(sh + 0), type = load<std::uint32_t>(sh + 4);
+    const std::uint64_t count = load<std::uint64_t>(sh + 8), bytes = load<std::uint64_t>(sh + 16);
+    if (kind != kinds[i])
+      throw fail(
+          fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
+    const std::uint32_t want_type = kind == kZhAnalyticMask ? kTypeU32 : kTypeF32;
+    if (type != want_type)
+      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
+                             want_type, type_name(want_type)));
+    // Bounded by the file's size (checked above): no overflow.
+    const std::uint64_t want = kind == kZhAnalyticMask ? mask_words(v.vertices)
+                               : kind == kZhAxes       ? v.stored * axes_stride
+                                                       : v.stored * coeffs_stride;
+    if (count != want)
+      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count,
+                             kind == kZhAnalyticMask
+                                 ? fmt::format("(vertices + 31) / 32 = {}", want)
+                             : kind == kZhAxes
+                                 ? fmt::format("stored vertices x lobes x 3 = {} x {} x 3 = {}", v.stored, lobes, want)
+                                 : fmt::format("stored vertices x channels x lobes x bands = {} x {} x {} x {} = {}",
+                                               v.stored, v.channels, lobes, bands, want)));
+    const std::uint64_t data = offset + kSectionHeaderSize;
+    if (bytes != count * type_bytes(type))
+      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", name, count,
+                             type_name(type), bytes));
+    const std::uint64_t pad = padding(bytes);
+    if (bytes + pad > data_end - data)
+      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
+    switch (kind) {
+      case kZhAnalyticMask: read_section(data, mask, count); break;
+      case kZhAxes: read_section(data, t.axes, count); break;
+      case kZhCoeffs: read_section(data, t.coeffs, count); break;
+    }
+    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
+    read_at(data + bytes, got, pad);
+    if (std::memcmp(got, zeros, pad) != 0)
+      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", name));
+    offset = data + bytes + pad;
+  }
+  if (offset != data_end)
+    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
+
+  // Values: the mask marks exactly the vertices the header says are analytic,
+  // and nothing past the last vertex (then the slots are rebuilt from it, as
+  // an SH file's); then zh_transfer_problem (unit axes, finite coefficients).
+  if (has_mask) {
+    std::uint64_t marked = 0;
+    for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
+    const std::uint64_t tail = v.vertices % 32;
+    if (tail != 0 && (mask.back() >> tail) != 0)
+      throw fail(fmt::format("bad analytic-vertex mask: bits set past the last vertex ({})", v.vertices));
+    if (marked != v.vertices - v.stored)
+      throw fail(fmt::format("bad analytic-vertex mask: {} vertices marked analytic; the header says {} ({} vertices, "
+                             "{} stored)",
+                             marked, v.vertices - v.stored, v.vertices, v.stored));
+    t.slots.assign(t.vertices, ZhTransfer::kAnalytic);
+    std::uint32_t row = 0;
+    for (std::size_t vtx = 0; vtx < t.vertices; ++vtx)
+      if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) t.slots[vtx] = row++;
+  }
+  if (auto p = zh_transfer_problem(t); !p.empty()) throw fail(p);
+  return t;
+}
+
+}  // namespace detail::tio
+
+ZhTransfer read_zh_transfer(const std::string& path) { return Reader(path).read_zh(); }
+
+void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& what) {
+  check_mesh(t.vertices, t.mesh_hash, mesh, what, "prt precompute --basis zh");
+  // Analytic vertices take their albedo from the mesh's colours, as an SH
+  // transfer's do (posed_transfer; check_pose asks the same of a pose).
+  if (t.vertex_colors && mesh.colors.size() != mesh.vertex_count())
+    throw Error(fmt::format("{} uses vertex colours as albedo (computed with --vertex-colors), but {} has no vertex "
+                            "colours; give the coloured mesh, or run prt precompute --basis zh again without "
+                            "--vertex-colors",
+                            what, mesh.source));
+}
+
+std::string describe_transfer(const ZhTransfer& t) {
+  const auto line = describe_line;
+  const std::size_t analytic = t.analytic_vertices(), stored = t.vertices - analytic;
+  std::uint64_t bytes = 0;  // of the per-vertex sections
+  for (const auto& s : transfer_sections(t))
+    if (s.per_vertex) bytes += s.bytes;
+  std::string s = fmt::format("prt zonal-harmonic transfer (format version {})\n", kZhFormatVersion);
+  s += line("basis", "zonal harmonics (local deformable: lobe axes in each vertex's rest frame)");
+  s += line("lobes", fmt::format("{} per stored vertex", t.lobes));
+  s += line("bands", fmt::format("{} per lobe (posed: {} SH coefficients per channel)", t.bands, t.bands * t.bands));
+  s += line("channels",
+            fmt::format("{}{}", t.channels, t.channels == 1 ? " (grey: one channel serves R, G and B)" : " (RGB)"));
+  s += line("mode", std::string(transfer_mode_name(t.mode)));
+  s += line("bounces", fmt::format("{}", t.bounces));
+  s += line("samples", fmt::format("{}", t.samples));
+  s += line("albedo", fmt::format("{:.7g} {:.7g} {:.7g}{}", double(t.albedo.x), double(t.albedo.y), double(t.albedo.z),
+                                  t.vertex_colors ? " (vertex colours used as albedo)" : ""));
+  s += line("seed", fmt::format("{}", t.seed));
+  s += line("vertices", fmt::format("{} ({} stored, {} analytic: the clamped cosine about the posed normal, nothing "
+                                    "stored)",
+                                    t.vertices, stored, analytic));
+  s += line("fit error", fmt::format("{:.4g}% (relative, over the stored vertices' SH transfer)", 100.0 * t.fit_error));
+  s += line("bytes per vertex",
+            fmt::format("{} per stored vertex ({} axes, {} coefficients); {:.1f} mean over all vertices",
+                        4 * t.stride(), 4 * t.axes_stride(), 4 * t.coeffs_stride(),
+                        t.vertices > 0 ? double(bytes) / double(t.vertices) : 0.0));
+  s += line("mesh hash", fmt::format("0x{:016x} (rest pose)", t.mesh_hash));
+  s += line("topology hash", fmt::format("0x{:016x} (what a pose must share)", t.topology_hash));
+  s += line("file size", fmt::format("{} bytes", transfer_file_size(t)));
+  return s;
+}
+
+}  // namespace prt

@@ -1,0 +1,117 @@
+// Local deformable PRT through the real executable: prt precompute --basis
+// zh, prt info, prt relight of a pose (a file, or --deform), and the refusals.
+#include "test_files.h"
+
+#include <prt/deform.h>
+#include <prt/envmap.h>
+#include <prt/mesh.h>
+#include <prt/projection.h>
+#include <prt/transfer_io.h>
+#include <prt/vertex_csv.h>
+#include <prt/zh_transfer.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+
+namespace prt {
+namespace {
+
+using namespace prt::test;
+
+const std::string kTube = std::string(PRT_SOURCE_DIR) + "/models/tube.obj";
+const std::string kEnv = std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr";
+
+// The library's relighting of the file's pose `posed` (what prt relight
+// writes, before the CSV's float text).
+std::vector<glm::vec3> library_relight(const std::string& file, const Mesh& posed) {
+  const ZhTransfer z = read_zh_transfer(file);
+  const std::vector<glm::dvec3> light = project(load_envmap(kEnv), z.bands);
+  return relight(posed_as_transfer(z, posed), posed, light);
+}
+
+// CSV holds %.9g floats: the same floats, so equal to float rounding of the
+// sum's order (1e-6 of the largest radiance).
+void expect_same(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  double scale = 0;
+  for (const glm::vec3& c : b) scale = std::max(scale, double(std::max({c.x, c.y, c.z})));
+  ASSERT_GT(scale, 0.0);
+  for (std::size_t v = 0; v < a.size(); ++v)
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(a[v][c], b[v][c], 1e-6 * scale) << v;
+}
+
+TEST(LdprtCli, PrecomputeThenRelightPoses) {
+  TempDir dir;
+  const std::string z = dir.file("tube-zh.prt");
+  const Result p = run_prt(dir, {"precompute", kTube, "-o", z, "--basis", "zh", "--lobes", "2", "--bands", "4",
+                                 "--samples", "128"});
+  ASSERT_EQ(p.code, 0) << describe_run(p);
+  EXPECT_NE(p.err.find("2 lobes x 4 bands"), std::string::npos) << p.err;
+  const Result info = run_prt(dir, {"info", z, "--json"});
+  ASSERT_EQ(info.code, 0) << describe_run(info);
+  EXPECT_NE(info.out.find("\"lobes\": 2"), std::string::npos) << info.out;
+
+  const Mesh rest = load_mesh(kTube);
+  // The rest pose, then a bend given as --deform, then the same bend as a
+  // file (the PLY --deform wrote): the library's relighting of each.
+  const Result r0 = run_prt(dir, {"relight", kTube, z, kEnv, "-o", dir.file("rest.csv"), "-q"});
+  ASSERT_EQ(r0.code, 0) << describe_run(r0);
+  expect_same(read_vertex_csv(dir.file("rest.csv")), library_relight(z, rest));
+  const Mesh bent = deform_mesh(rest, parse_deform("bend:70"));
+  for (const char* out : {"bent.csv", "bent.ply"}) {
+    const Result r = run_prt(dir, {"relight", kTube, z, kEnv, "--deform", "bend:70", "-o", dir.file(out), "-q"});
+    ASSERT_EQ(r.code, 0) << describe_run(r);
+  }
+  const std::vector<glm::vec3> want = library_relight(z, bent);
+  expect_same(read_vertex_csv(dir.file("bent.csv")), want);
+  const Result rf = run_prt(dir, {"relight", dir.file("bent.ply"), z, kEnv, "-o", dir.file("posed.csv"), "-q"});
+  ASSERT_EQ(rf.code, 0) << describe_run(rf);
+  expect_same(read_vertex_csv(dir.file("posed.csv")), want);
+  // Bending changes the light (the test would pass on a transfer that ignores the pose otherwise).
+  const std::vector<glm::vec3> at_rest = read_vertex_csv(dir.file("rest.csv"));
+  double moved = 0;
+  for (std::size_t v = 0; v < want.size(); ++v) moved = std::max(moved, double(std::abs(want[v].x - at_rest[v].x)));
+  EXPECT_GT(moved, 0.05);
+}
+
+TEST(LdprtCli, RefusalsNameTheProblem) {
+  TempDir dir;
+  const std::string z = dir.file("z.prt"), sh = dir.file("sh.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", kTube, "-o", z, "--basis", "zh", "--lobes", "1", "--bands", "3", "--samples",
+                          "32", "-q"})
+                .code,
+            0);
+  ASSERT_EQ(run_prt(dir, {"precompute", kTube, "-o", sh, "--bands", "3", "--samples", "32", "-q"}).code, 0);
+  const std::string other = dir.file("other.off");
+  {
+    std::ofstream f(other);
+    f << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  }
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {{"precompute", kTube, "-o", dir.file("x.prt"), "--lobes", "3"}, "--basis zh only"},
+      {{"precompute", kTube, "-o", dir.file("x.prt"), "--basis", "zh", "--lobes", "9"}, "--lobes"},
+      {{"precompute", kTube, "-o", dir.file("x.prt"), "--basis", "zh", "--material", "glossy"}, "glossy"},
+      {{"precompute", kTube, "-o", dir.file("x.prt"), "--basis", "zh", "--compress", "8x2"}, "--compress"},
+      {{"precompute", kTube, "-o", dir.file("x.prt"), "--basis", "zh", "--cube-res", "16"}, "--basis wavelet only"},
+      {{"relight", other, z, kEnv, "-o", dir.file("x.csv")}, "topology"},
+      {{"relight", kTube, sh, kEnv, "--deform", "bend:30", "-o", dir.file("x.csv")}, "--basis zh"},
+      {{"relight", kTube, z, kEnv, "--deform", "bend:x", "-o", dir.file("x.csv")}, "bend:ANGLE"},
+      {{"relight", kTube, z, kEnv, "--terms", "10", "-o", dir.file("x.csv")}, "wavelet"},
+      {{"render", kTube, z, kEnv, "-o", dir.file("x.png")}, "zonal-harmonic"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run_prt(dir, c.args);
+    EXPECT_NE(r.code, 0) << describe_run(r);
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << describe_run(r);
+    for (const char* out : {"x.prt", "x.csv", "x.png"}) EXPECT_FALSE(std::filesystem::exists(dir.file(out))) << out;
+  }
+}
+
+}  // namespace
+}  // namespace prt

@@ -1,0 +1,445 @@
+// Zonal-harmonic (local deformable) transfers in files (docs/FORMAT.md,
+// "Zonal-harmonic transfer"): bit-exact round trips with and without
+// analytic vertices, the header and sections where the document puts them,
+// refusal of damaged files and of the other bases (both ways), and a writer
+// that refuses an inconsistent transfer without leaving a file.
+#include "test_files.h"
+#include "test_meshes.h"
+
+#include <prt/error.h>
+#include <prt/transfer.h>
+#include <prt/transfer_io.h>
+#include <prt/wavelet.h>
+#include <prt/wavelet_transfer.h>
+#include <prt/zh.h>
+#include <prt/zh_transfer.h>
+
+#include <gtest/gtest.h>
+// xxHash itself, compiled in (nothing links libxxhash): the checksum is
+// resealed with it, not with prt::Hasher.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace prt {
+namespace {
+
+using namespace prt::test;
+
+bool contains(const std::string& haystack, const std::string& needle) {
+  return haystack.find(needle) != std::string::npos;
+}
+
+// ---- fixtures -------------------------------------------------------------------
+
+// A transfer built by hand, consistent with its header: every third vertex
+// analytic when `analytic`, unit axes (some exactly the frame's, the others
+// random), coefficients falling with band, one -0 (bit-exactness counts it).
+ZhTransfer make_zh(std::size_t V, int bands, int lobes, int channels, bool analytic, bool vertex_colors,
+                   unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  ZhTransfer t;
+  t.bands = bands;
+  t.lobes = lobes;
+  t.channels = channels;
+  t.mode = channels == 3 ? TransferMode::Interreflected : TransferMode::Shadowed;
+  t.bounces = channels == 3 ? 2 : 0;
+  t.samples = 256;
+  t.albedo = {0.8f, 0.5f, 0.25f};
+  t.vertex_colors = vertex_colors;
+  t.seed = 0xfeedull + seed;
+  t.vertices = V;
+  t.mesh_hash = 0x1234567890abcdefull ^ seed;
+  t.topology_hash = 0x0fedcba987654321ull ^ seed;
+  t.fit_error = 0.0123 + 1e-3 * seed;
+  std::size_t stored = V;
+  if (analytic) {
+    t.slots.assign(V, ZhTransfer::kAnalytic);
+    std::uint32_t row = 0;
+    for (std::size_t v = 0; v < V; ++v)
+      if (v % 3 != 1) t.slots[v] = row++;
+    stored = row;
+  }
+  for (std::size_t r = 0; r < stored; ++r)
+    for (int i = 0; i < lobes; ++i) {
+      if (i == 0) {  // the normal, exactly
+        t.axes.insert(t.axes.end(), {0.0f, 0.0f, 1.0f});
+        continue;
+      }
+      const double x = g(rng), y = g(rng), z = g(rng), len = std::sqrt(x * x + y * y + z * z);
+      t.axes.insert(t.axes.end(), {float(x / len), float(y / len), float(z / len)});
+    }
+  for (std::size_t r = 0; r < stored; ++r)
+    for (int c = 0; c < channels; ++c)
+      for (int i = 0; i < lobes; ++i)
+        for (int l = 0; l < bands; ++l) t.coeffs.push_back(float(g(rng) / (1.0 + l)));
+  if (!t.coeffs.empty()) t.coeffs.back() = -0.0f;
+  return t;
+}
+
+// Bit-exact (memcmp, not ==: -0/+0 and NaN payloads count); empty arrays may have null data().
+template <typename V>
+bool same_bytes(const V& x, const V& y) {
+  return x.size() == y.size() && (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof x[0]) == 0);
+}
+
+void expect_identical(const ZhTransfer& a, const ZhTransfer& b) {
+  EXPECT_EQ(a.bands, b.bands);
+  EXPECT_EQ(a.lobes, b.lobes);
+  EXPECT_EQ(a.channels, b.channels);
+  EXPECT_EQ(a.mode, b.mode);
+  EXPECT_EQ(a.bounces, b.bounces);
+  EXPECT_EQ(a.samples, b.samples);
+  EXPECT_EQ(std::memcmp(&a.albedo, &b.albedo, sizeof a.albedo), 0);
+  EXPECT_EQ(a.vertex_colors, b.vertex_colors);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.mesh_hash, b.mesh_hash);
+  EXPECT_EQ(a.topology_hash, b.topology_hash);
+  EXPECT_EQ(std::memcmp(&a.fit_error, &b.fit_error, sizeof(double)), 0);
+  EXPECT_EQ(a.slots, b.slots);
+  EXPECT_TRUE(same_bytes(a.axes, b.axes));
+  EXPECT_TRUE(same_bytes(a.coeffs, b.coeffs));
+}
+
+template <typename T>
+void put(std::string& b, std::size_t at, T v) {
+  std::memcpy(&b[at], &v, sizeof v);
+}
+template <typename T>
+T get(const std::string& b, std::size_t at) {
+  T v;
+  std::memcpy(&v, &b[at], sizeof v);
+  return v;
+}
+// Recomputes the trailer's checksum after an edit, as a buggy or foreign
+// writer would produce: the reader must then catch the edit itself.
+void reseal(std::string& b) { put<std::uint64_t>(b, b.size() - 12, XXH3_64bits(b.data(), b.size() - 12)); }
+
+// Offsets of the data of the sections of a file, in order (docs/FORMAT.md).
+std::vector<std::size_t> section_data(const std::string& b) {
+  std::vector<std::size_t> at;
+  std::size_t off = 128;
+  const std::uint32_t count = get<std::uint32_t>(b, 80);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::uint64_t bytes = get<std::uint64_t>(b, off + 16);
+    at.push_back(off + 24);
+    off += 24 + bytes + (8 - bytes % 8) % 8;
+  }
+  return at;
+}
+
+void expect_error(const std::function<void()>& f, const std::vector<std::string>& words, const std::string& what) {
+  try {
+    f();
+    ADD_FAILURE() << what << ": no error";
+  } catch (const Error& e) {
+    for (const auto& w : words) EXPECT_TRUE(contains(e.what(), w)) << what << ": '" << e.what() << "' lacks '" << w << "'";
+  }
+}
+
+// ---- files --------------------------------------------------------------------------
+
+TEST(ZhTransferIo, RoundTripIsBitExact) {
+  TempDir dir;
+  const std::string path = dir.file("z.prtt");
+  unsigned seed = 1;
+  // 37 vertices: the analytic-vertex mask's last word is partly used.
+  for (int channels : {1, 3})
+    for (bool analytic : {false, true})
+      for (bool vc : {false, true}) {
+        const std::string what = "channels " + std::to_string(channels) + (analytic ? ", analytic" : "") +
+                                 (vc ? ", vertex colours" : "");
+        const ZhTransfer t = make_zh(37, 4, 3, channels, analytic, vc, seed++);
+        ASSERT_EQ(zh_transfer_problem(t), "") << what;
+        EXPECT_EQ(t.analytic_vertices(), analytic ? 12u : 0u) << what;
+        write_zh_transfer(path, t);
+        EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(t)) << what;
+        EXPECT_EQ(read_transfer_basis(path), TransferBasis::ZH) << what;
+        EXPECT_EQ(read_transfer_version(path), kZhFormatVersion) << what;
+        const ZhTransfer back = read_zh_transfer(path);
+        expect_identical(t, back);
+        const std::string first = read_file(path);
+        write_zh_transfer(path, back);  // writing what was read gives the same bytes
+        EXPECT_EQ(read_file(path), first) << what;
+      }
+  // Every vertex analytic: no row stored, the axes and coefficients sections empty but there.
+  ZhTransfer all = make_zh(5, 2, 1, 1, false, false, 40);
+  all.slots.assign(5, ZhTransfer::kAnalytic);
+  all.axes.clear();
+  all.coeffs.clear();
+  write_zh_transfer(path, all);
+  EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(all));
+  expect_identical(all, read_zh_transfer(path));
+  // The most lobes and bands, one vertex.
+  const ZhTransfer big = make_zh(1, zh::kMaxBands, zh::kMaxLobes, 3, false, false, 41);
+  write_zh_transfer(path, big);
+  expect_identical(big, read_zh_transfer(path));
+  // Slots numbering every vertex (none analytic) come back empty: the file
+  // keeps only the mask, as an SH file.
+  ZhTransfer numbered = make_zh(6, 3, 2, 1, false, false, 42);
+  numbered.slots = {0, 1, 2, 3, 4, 5};
+  write_zh_transfer(path, numbered);
+  const ZhTransfer back = read_zh_transfer(path);
+  EXPECT_TRUE(back.slots.empty());
+  numbered.slots.clear();
+  expect_identical(numbered, back);
+  EXPECT_EQ(dir.listing(), std::vector<std::string>{"z.prtt"});  // no temporaries left
+}
+
+TEST(ZhTransferIo, HeaderAndSectionsAreWhereTheDocumentSays) {
+  TempDir dir;
+  const std::string path = dir.file("z.prtt");
+  const ZhTransfer t = make_zh(10, 5, 3, 3, true, true, 3);
+  write_zh_transfer(path, t);
+  const std::string b = read_file(path);
+  const std::size_t S = t.stored_vertices();
+  EXPECT_EQ(S, 7u);
+  EXPECT_EQ(b.substr(0, 8), std::string("PRTT\r\n\x1a\n", 8));
+  EXPECT_EQ(get<std::uint32_t>(b, 8), 1u);     // version
+  EXPECT_EQ(get<std::uint32_t>(b, 12), 128u);  // header size
+  EXPECT_EQ(get<std::uint32_t>(b, 16), 2u);    // basis: zonal harmonics
+  EXPECT_EQ(get<std::uint32_t>(b, 20), 5u);    // bands
+  EXPECT_EQ(get<std::uint32_t>(b, 24), 3u);    // channels
+  EXPECT_EQ(get<std::uint32_t>(b, 28), 2u);    // interreflected
+  EXPECT_EQ(get<std::uint32_t>(b, 32), 2u);    // bounces
+  EXPECT_EQ(get<std::uint32_t>(b, 36), 256u);  // samples
+  EXPECT_EQ(get<float>(b, 44), 0.5f);          // albedo G
+  EXPECT_EQ(get<std::uint32_t>(b, 52), 1u);    // vertex colours
+  EXPECT_EQ(get<std::uint64_t>(b, 56), t.seed);
+  EXPECT_EQ(get<std::uint64_t>(b, 64), 10u);   // vertices
+  EXPECT_EQ(get<std::uint64_t>(b, 72), t.mesh_hash);
+  EXPECT_EQ(get<std::uint32_t>(b, 80), 3u);    // sections
+  EXPECT_EQ(get<std::uint32_t>(b, 84), 3u);    // lobes
+  EXPECT_EQ(get<std::uint64_t>(b, 88), S);     // stored rows
+  EXPECT_EQ(get<std::uint64_t>(b, 96), t.topology_hash);
+  EXPECT_EQ(get<double>(b, 104), t.fit_error);
+  for (std::size_t i = 112; i < 128; ++i) EXPECT_EQ(b[i], 0) << "reserved byte " << i;
+  const std::vector<std::size_t> at = section_data(b);
+  ASSERT_EQ(at.size(), 3u);
+  const std::uint32_t kinds[3] = {24, 25, 26}, types[3] = {4, 1, 1};
+  const std::uint64_t counts[3] = {1, S * 3 * 3, S * 3 * 3 * 5};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(get<std::uint32_t>(b, at[i] - 24), kinds[i]);
+    EXPECT_EQ(get<std::uint32_t>(b, at[i] - 20), types[i]);
+    EXPECT_EQ(get<std::uint64_t>(b, at[i] - 16), counts[i]);
+    EXPECT_EQ(get<std::uint64_t>(b, at[i] - 8), 4 * counts[i]);
+    EXPECT_EQ(at[i] % 8, 0u);
+  }
+  // Vertices 1, 4 and 7 are analytic.
+  EXPECT_EQ(get<std::uint32_t>(b, at[0]), (1u << 1) | (1u << 4) | (1u << 7));
+  EXPECT_EQ(get<float>(b, at[1] + 4 * (9 * 1 + 3 * 2 + 1)), t.axes[9 * 1 + 3 * 2 + 1]);    // row 1, lobe 2, y
+  EXPECT_EQ(get<float>(b, at[2] + 4 * (15 * 2 + 5 * 1 + 2)), t.coeffs[15 * 2 + 5 * 1 + 2]);  // row 0, channel 2, lobe 1, band 2
+  EXPECT_EQ(b.substr(b.size() - 4), "PRTE");
+  // Without analytic vertices, no mask section.
+  write_zh_transfer(path, make_zh(10, 5, 3, 1, false, false, 4));
+  const std::string c = read_file(path);
+  EXPECT_EQ(get<std::uint32_t>(c, 80), 2u);
+  EXPECT_EQ(get<std::uint64_t>(c, 88), 10u);
+  EXPECT_EQ(get<std::uint32_t>(c, 128), 25u);
+  const std::vector<TransferSection> s = transfer_sections(make_zh(10, 5, 3, 1, false, false, 4));
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_STREQ(s[0].name, "zh axes");
+  EXPECT_STREQ(s[1].name, "zh coefficients");
+  EXPECT_TRUE(s[1].per_vertex);
+  EXPECT_EQ(s[1].bytes, 4u * 10 * 3 * 5);
+}
+
+TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
+  TempDir dir;
+  const std::string path = dir.file("z.prtt"), bad = dir.file("bad.prtt");
+  // 25 stored rows of 3 lobes: 225 axis values and 225 coefficients, both padded.
+  const ZhTransfer t = make_zh(37, 3, 3, 1, true, false, 5);
+  write_zh_transfer(path, t);
+  const std::string good = read_file(path);
+  const std::vector<std::size_t> at = section_data(good);
+  ASSERT_EQ(at.size(), 3u);
+  auto expect_bytes = [&](const std::string& bytes, const std::vector<std::string>& words, const std::string& what) {
+    write_file(bad, bytes);
+    std::vector<std::string> w = words;
+    w.push_back(bad);  // every message names the file
+    expect_error([&] { read_zh_transfer(bad); }, w, what);
+  };
+  // Integrity: a flipped byte anywhere, a truncation.
+  std::string b = good;
+  b[at[2] + 5] ^= 0x10;
+  expect_bytes(b, {"corrupt: checksum mismatch"}, "flipped byte");
+  b = good;
+  b[90] ^= 0x01;
+  expect_bytes(b, {"corrupt: checksum mismatch"}, "flipped header byte");
+  expect_bytes(good.substr(0, good.size() - 100), {"truncated"}, "truncated");
+  expect_bytes(good.substr(0, 60), {"truncated"}, "truncated header");
+  // Resealed values a checksum cannot catch.
+  struct Case {
+    std::function<void(std::string&)> edit;
+    std::vector<std::string> words;
+  };
+  const std::vector<Case> cases = {
+      {[](std::string& x) { put<std::uint32_t>(x, 84, 9); }, {"bad header", "lobes is 9", "1 to 8"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 84, 0); }, {"bad header", "lobes is 0"}},
+      // A lobe count in range that the sections do not have.
+      {[](std::string& x) { put<std::uint32_t>(x, 84, 2); }, {"'zh axes' has 225 values", "25 x 2 x 3 = 150"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 20, 17); }, {"bands is 17", "1 to 16"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 24, 2); }, {"channels is 2"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 28, 3); }, {"unknown transfer mode 3"}},
+      {[](std::string& x) { put<float>(x, 40, 1.5f); }, {"albedo"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 52, 2); }, {"unknown flags 0x2"}},
+      {[](std::string& x) { put<std::uint64_t>(x, 64, 0); }, {"no vertices"}},
+      {[](std::string& x) { put<std::uint64_t>(x, 88, 38); }, {"more than its 37 vertices"}},
+      // Stored rows that the sections do not hold (the size check comes first when they cannot fit).
+      {[](std::string& x) { put<std::uint64_t>(x, 88, 26); }, {"'zh axes' has 225 values", "26 x 3 x 3 = 234"}},
+      {[](std::string& x) { put<std::uint64_t>(x, 88, 37); }, {"37 stored vertices cannot fit"}},
+      {[](std::string& x) {
+         put<std::uint64_t>(x, 64, 1ull << 40);
+         put<std::uint64_t>(x, 88, 1ull << 40);
+       },
+       {"stored vertices cannot fit in a file of"}},
+      {[](std::string& x) { put<std::uint64_t>(x, 64, 1ull << 40); }, {"analytic-vertex mask alone"}},
+      {[](std::string& x) { put<double>(x, 104, NAN); }, {"fit error"}},
+      {[](std::string& x) { put<double>(x, 104, -1.0); }, {"fit error"}},
+      {[](std::string& x) { x[120] = 1; }, {"reserved byte 120"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 8, 2); }, {"format version 2", "zonal-harmonic files are version 1"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 16, 7); }, {"unknown basis 7", "2 zonal harmonics"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 80, 2); }, {"2 sections", "with 12 analytic vertices has 3"}},
+      {[&](std::string& x) { put<std::uint32_t>(x, at[1] - 24, 26); }, {"section 2 has kind 26", "'zh axes'"}},
+      {[&](std::string& x) { put<std::uint32_t>(x, at[1] - 20, 2); }, {"'zh axes' has element type 2", "f32"}},
+      {[&](std::string& x) { put<std::uint64_t>(x, at[2] - 8, 12); }, {"'zh coefficients'", "but 12 bytes"}},
+      {[&](std::string& x) { put<std::uint64_t>(x, at[0] - 16, 1ull << 40); }, {"'zh analytic vertices' has"}},
+      // The mask: a bit past the last vertex, one vertex too many, one too few.
+      {[&](std::string& x) { put<std::uint32_t>(x, at[0] + 4, get<std::uint32_t>(x, at[0] + 4) | (1u << 5)); },
+       {"bits set past the last vertex (37)"}},
+      {[&](std::string& x) { put<std::uint32_t>(x, at[0], get<std::uint32_t>(x, at[0]) | 1u); },
+       {"13 vertices marked analytic; the header says 12"}},
+      {[&](std::string& x) { put<std::uint32_t>(x, at[0], get<std::uint32_t>(x, at[0]) & ~(1u << 1)); },
+       {"11 vertices marked analytic"}},
+      // Values: zh_transfer_problem.
+      {[&](std::string& x) { put<float>(x, at[1] + 4 * 3, 2.0f); }, {"not a unit vector"}},
+      {[&](std::string& x) { put<float>(x, at[2] + 4 * 7, INFINITY); }, {"not finite"}},
+      {[&](std::string& x) { x[at[2] + 4 * t.coeffs.size()] = 1; }, {"padding after section 'zh coefficients'"}},
+  };
+  ASSERT_NE((4 * t.coeffs.size()) % 8, 0u);  // the coefficients are padded (the last case)
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    b = good;
+    cases[i].edit(b);
+    reseal(b);
+    expect_bytes(b, cases[i].words, "case " + std::to_string(i));
+  }
+  // Data after the end.
+  b = good;
+  b.insert(b.size() - 12, 8, '\0');
+  reseal(b);
+  expect_bytes(b, {"8 bytes between the last section and the trailer"}, "extra bytes");
+}
+
+TEST(ZhTransferIo, EachReaderRefusesTheOtherBasesNamingThem) {
+  TempDir dir;
+  const std::string zh = dir.file("z.prtt"), sh = dir.file("s.prtt"), wl = dir.file("w.prtt");
+  write_zh_transfer(zh, make_zh(4, 3, 2, 1, false, false, 6));
+  Transfer s;
+  s.bands = 3;
+  s.vertices = 2;
+  s.coeffs.assign(2 * 9, 0.5f);
+  write_transfer(sh, s);
+  WaveletTransfer w;  // no coefficient kept: the smallest valid wavelet transfer
+  w.cube_res = 2;
+  w.vertices = 2;
+  w.col_offsets.assign(wavelet::cube_size(2) + 1, 0);
+  w.vertex_scale.assign(2, 0.0f);
+  w.vertex_kept.assign(2, 0);
+  write_wavelet_transfer(wl, w);
+
+  EXPECT_EQ(read_transfer_basis(zh), TransferBasis::ZH);
+  EXPECT_EQ(basis_name(TransferBasis::ZH), "zh");
+  expect_error([&] { read_transfer(zh); },
+               {zh, "holds a zonal-harmonic (local deformable) transfer", "2 lobes of 3 bands", "prt::read_zh_transfer"},
+               "SH reader");
+  expect_error([&] { read_wavelet_transfer(zh); },
+               {zh, "holds a zonal-harmonic (local deformable) transfer", "prt::read_zh_transfer"}, "wavelet reader");
+  expect_error([&] { read_compressed_transfer(zh); }, {zh, "zonal-harmonic", "prt::read_zh_transfer"},
+               "compressed reader");
+  expect_error([&] { read_zh_transfer(sh); }, {sh, "spherical-harmonics", "3 bands", "prt::read_transfer"}, "ZH on SH");
+  expect_error([&] { read_zh_transfer(wl); }, {wl, "wavelet transfer", "prt::read_wavelet_transfer"}, "ZH on wavelet");
+  // What prt info and relight ask first: neither compressed nor a lightmap,
+  // so they go on to a reader whose refusal names read_zh_transfer.
+  EXPECT_FALSE(transfer_is_compressed(zh));
+  EXPECT_FALSE(transfer_is_lightmap(zh));
+}
+
+TEST(ZhTransferIo, WriterRefusesInconsistentTransfersAndWritesNothing) {
+  TempDir dir;
+  const std::string path = dir.file("z.prtt");
+  const ZhTransfer good = make_zh(8, 3, 2, 3, true, false, 7);
+  std::vector<std::pair<ZhTransfer, std::string>> cases;
+  ZhTransfer t = good;
+  t.axes.pop_back();
+  cases.push_back({t, "axis values"});
+  t = good;
+  t.coeffs.push_back(0.0f);
+  cases.push_back({t, "coefficients for"});
+  t = good;
+  t.lobes = 9;
+  cases.push_back({t, "lobes is 9"});
+  t = good;
+  t.bands = 17;
+  cases.push_back({t, "bands is 17"});
+  t = good;
+  t.channels = 2;
+  cases.push_back({t, "channels is 2"});
+  t = good;
+  t.axes[4] = 3.0f;
+  cases.push_back({t, "not a unit vector"});
+  t = good;
+  t.coeffs[2] = NAN;
+  cases.push_back({t, "not finite"});
+  t = good;
+  t.slots[0] = 1;
+  cases.push_back({t, "slot of vertex 0"});
+  t = good;
+  t.fit_error = -0.5;
+  cases.push_back({t, "fit error"});
+  for (const auto& [z, words] : cases) {
+    expect_error([&] { write_zh_transfer(path, z); }, {path, "cannot write this zonal-harmonic transfer", words}, words);
+    EXPECT_FALSE(std::filesystem::exists(path)) << words;
+  }
+  EXPECT_TRUE(dir.listing().empty());
+  // A refused write leaves an existing file as it was.
+  write_zh_transfer(path, good);
+  const std::string before = read_file(path);
+  expect_error([&] { write_zh_transfer(path, cases[0].first); }, {path}, "over an existing file");
+  EXPECT_EQ(read_file(path), before);
+  EXPECT_EQ(dir.listing(), std::vector<std::string>{"z.prtt"});
+}
+
+TEST(ZhTransferIo, DescribeAndCheckMatchesTheRestPose) {
+  const Mesh m = test::quad(2);
+  ZhTransfer t = make_zh(m.vertex_count(), 3, 2, 1, true, false, 8);
+  t.mesh_hash = m.hash();
+  t.topology_hash = topology_hash(m);
+  const std::string d = describe_transfer(t);
+  for (const char* w : {"zonal-harmonic", "format version 1", "lobes", "2 per stored vertex", "bands", "fit error",
+                        "bytes per vertex", "topology hash", "file size"})
+    EXPECT_TRUE(contains(d, w)) << "'" << w << "' missing from:\n" << d;
+  EXPECT_TRUE(contains(d, std::to_string(transfer_file_size(t)) + " bytes")) << d;
+  EXPECT_TRUE(contains(d, std::to_string(t.analytic_vertices()) + " analytic")) << d;
+  ASSERT_FALSE(d.empty());
+  EXPECT_EQ(d.back(), '\n');
+
+  EXPECT_NO_THROW(check_matches(t, m, "z.prtt"));
+  const Mesh other = test::quad(3);
+  expect_error([&] { check_matches(t, other, "z.prtt"); }, {"z.prtt", "different mesh", "prt precompute --basis zh"},
+               "other mesh");
+  t.vertex_colors = true;
+  expect_error([&] { check_matches(t, m, "z.prtt"); }, {"z.prtt", "vertex colours"}, "no colours");
+}
+
+}  // namespace
+}  // namespace prt
