@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <numbers>
 
 namespace prt::zh {
@@ -92,29 +93,43 @@ void normalise(double* a) {
 // triangle, row-major, is read and overwritten) by Cholesky: the ridge keeps
 // it definite; a pivot that rounding still drove to zero or below leaves
 // that unknown at zero.
-void solve_spd(int k, double* M, const double* b, double* x) {
-  for (int j = 0; j < k; ++j) {
-    double d = M[j * k + j];
-    for (int p = 0; p < j; ++p) d -= M[j * k + p] * M[j * k + p];
-    d = d > 0 ? std::sqrt(d) : 0.0;
-    M[j * k + j] = d;
-    for (int i = j + 1; i < k; ++i) {
-      double v = M[i * k + j];
-      for (int p = 0; p < j; ++p) v -= M[i * k + p] * M[j * k + p];
-      M[i * k + j] = d > 0 ? v / d : 0.0;
-    }
-  }
+// The factor L and the pivots' reciprocals `inv` stay in M and inv for
+// solve_factored.
+void solve_factored(int k, const double* L, const double* inv, const double* b, double* x) {
   for (int i = 0; i < k; ++i) {  // L y = b
     double v = b[i];
-    for (int p = 0; p < i; ++p) v -= M[i * k + p] * x[p];
-    x[i] = M[i * k + i] > 0 ? v / M[i * k + i] : 0.0;
+    for (int p = 0; p < i; ++p) v -= L[i * k + p] * x[p];
+    x[i] = v * inv[i];
   }
   for (int i = k - 1; i >= 0; --i) {  // L^T x = y
     double v = x[i];
-    for (int p = i + 1; p < k; ++p) v -= M[p * k + i] * x[p];
-    x[i] = M[i * k + i] > 0 ? v / M[i * k + i] : 0.0;
+    for (int p = i + 1; p < k; ++p) v -= L[p * k + i] * x[p];
+    x[i] = v * inv[i];
   }
 }
+
+void solve_spd(int k, double* M, double* inv, const double* b, double* x) {
+  // The pivots' reciprocals, each taken once: the solve is a chain of
+  // dependent divisions otherwise.
+  for (int j = 0; j < k; ++j) {
+    double d = M[j * k + j];
+    for (int p = 0; p < j; ++p) d -= M[j * k + p] * M[j * k + p];
+    inv[j] = d > 0 ? 1.0 / std::sqrt(d) : 0.0;
+    for (int i = j + 1; i < k; ++i) {
+      double v = M[i * k + j];
+      for (int p = 0; p < j; ++p) v -= M[i * k + p] * M[j * k + p];
+      M[i * k + j] = v * inv[j];
+    }
+  }
+  solve_factored(k, M, inv, b, x);
+}
+
+// Each band's K x K normal equations, factored (Cholesky: L, lower triangle
+// row-major, and its pivots' reciprocals), as solve_coeffs leaves them.
+struct NormalEquations {
+  std::array<double, kMaxBands * kMaxLobes * kMaxLobes> L;
+  std::array<double, kMaxBands * kMaxLobes> inv;
+};
 
 struct Problem {
   int n, K, nc;
@@ -136,19 +151,21 @@ struct Problem {
     return solve_coeffs(cols, lobes, g, r);
   }
   // The same, r getting t - the lobes. Small fixed-capacity matrices: no
-  // allocation (the Levenberg-Marquardt rounds call this 2K + 1 times each).
-  double solve_coeffs(const std::vector<double>& cols, int lobes, std::vector<double>& g, std::vector<double>& r) const {
+  // allocation (the Levenberg-Marquardt rounds call this often). `keep`:
+  // receives each band's factored normal equations (for the Jacobian).
+  double solve_coeffs(const std::vector<double>& cols, int lobes, std::vector<double>& g, std::vector<double>& r,
+                      NormalEquations* keep = nullptr) const {
     g.assign(std::size_t(lobes) * n, 0.0);
     r.assign(t, t + nc);
     std::array<double, kMaxLobes * kMaxLobes> M;
-    std::array<double, kMaxLobes> b, x;
+    std::array<double, kMaxLobes> b, x, inv;
     for (int l = 0; l < n; ++l) {
       const int k0 = l * l, w = 2 * l + 1;
       for (int i = 0; i < lobes; ++i) {
         const double* ci = cols.data() + std::size_t(i) * nc + k0;
         double bi = 0;
         for (int m = 0; m < w; ++m) bi += ci[m] * t[k0 + m];
-        b[i] = bi;
+        b[std::size_t(i)] = bi;
         for (int j = 0; j <= i; ++j) {
           const double* cj = cols.data() + std::size_t(j) * nc + k0;
           double d = 0;
@@ -160,11 +177,15 @@ struct Problem {
       for (int i = 0; i < lobes; ++i) trace += M[std::size_t(i * lobes + i)];
       const double ridge = kRidge * std::max(trace / lobes, 1e-300);
       for (int i = 0; i < lobes; ++i) M[std::size_t(i * lobes + i)] += ridge;
-      solve_spd(lobes, M.data(), b.data(), x.data());
+      solve_spd(lobes, M.data(), inv.data(), b.data(), x.data());
+      if (keep) {
+        std::copy_n(M.begin(), kMaxLobes * kMaxLobes, keep->L.begin() + std::ptrdiff_t(l) * kMaxLobes * kMaxLobes);
+        std::copy_n(inv.begin(), kMaxLobes, keep->inv.begin() + std::ptrdiff_t(l) * kMaxLobes);
+      }
       for (int i = 0; i < lobes; ++i) {
-        g[std::size_t(i) * n + l] = x[i];
+        g[std::size_t(i) * n + l] = x[std::size_t(i)];
         const double* ci = cols.data() + std::size_t(i) * nc + k0;
-        for (int m = 0; m < w; ++m) r[std::size_t(k0 + m)] -= x[i] * ci[m];
+        for (int m = 0; m < w; ++m) r[std::size_t(k0 + m)] -= x[std::size_t(i)] * ci[m];
       }
     }
     double res = 0;
@@ -218,13 +239,17 @@ double refine(const Problem& P, int lobes, std::vector<double>& axes, std::vecto
   using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 2 * kMaxLobes, 1>;
   const int nc = P.nc, np = 2 * lobes;
   std::vector<double> cols(static_cast<std::size_t>(lobes * nc)), trial_cols, r, rd, g, trial_axes;
+  // The factored normal equations at the current axes (and at a trial's),
+  // for the Jacobian.
+  auto base = std::make_unique<NormalEquations>(), trial_base = std::make_unique<NormalEquations>();
   const auto project = [&](const std::vector<double>& a, std::vector<double>& c, std::vector<double>& gg,
-                           std::vector<double>& rr) {
+                           std::vector<double>& rr, NormalEquations* keep) {
     c.resize(cols.size());
     for (int i = 0; i < lobes; ++i) P.columns(a.data() + 3 * i, c.data() + std::size_t(i) * nc);
-    return P.solve_coeffs(c, lobes, gg, rr);
+    return P.solve_coeffs(c, lobes, gg, rr, keep);
   };
-  double res = project(axes, cols, g, r);
+  double res = project(axes, cols, g, r, base.get());
+  std::vector<double> tg, dcol(static_cast<std::size_t>(nc));
   double mu = 1e-3;
   Mat J(nc, np);
   Small JtJ(np, np), A(np, np);
@@ -236,19 +261,42 @@ double refine(const Problem& P, int lobes, std::vector<double>& axes, std::vecto
       tangents(axes.data() + 3 * i, u, v);
       frames[std::size_t(i)] = {u[0], u[1], u[2], v[0], v[1], v[2]};
     }
-    // d r / d offset, one lobe's column changed at a time.
+    // d r / d offset (Golub & Pereyra 1973): with the coefficients x the
+    // best for the axes, moving lobe i's column by dc changes the residual by
+    //   dr = -(I - C G^-1 C^T) dc x_i - C G^-1 e_i (dc . r),
+    // band by band, G = C^T C as the projection factored it; dc by a forward
+    // difference of the column. (Differencing the whole projection instead
+    // took a factorisation per column, most of the fit's time.)
     for (int i = 0; i < lobes; ++i)
       for (int d = 0; d < 2; ++d) {
-        trial_axes = axes;
-        double* a = trial_axes.data() + 3 * i;
         const auto& f = frames[std::size_t(i)];
-        for (int c = 0; c < 3; ++c) a[c] += kStep * f[std::size_t(3 * d + c)];
+        double a[3];
+        for (int c = 0; c < 3; ++c) a[c] = axes[std::size_t(3 * i + c)] + kStep * f[std::size_t(3 * d + c)];
         normalise(a);
-        trial_cols = cols;
-        P.columns(a, trial_cols.data() + std::size_t(i) * nc);
-        std::vector<double> gd;
-        P.solve_coeffs(trial_cols, lobes, gd, rd);
-        for (int k = 0; k < nc; ++k) J(k, 2 * i + d) = (rd[std::size_t(k)] - r[std::size_t(k)]) / kStep;
+        P.columns(a, dcol.data());
+        const double* ci = cols.data() + std::size_t(i) * nc;
+        for (int k = 0; k < nc; ++k) dcol[std::size_t(k)] = (dcol[std::size_t(k)] - ci[k]) / kStep;
+        for (int l = 0; l < P.n; ++l) {
+          const int k0 = l * l, w = 2 * l + 1;
+          const double xi = g[std::size_t(i) * P.n + l];
+          std::array<double, kMaxLobes> z, y;
+          for (int j = 0; j < lobes; ++j) {
+            const double* cj = cols.data() + std::size_t(j) * nc + k0;
+            double s = 0;
+            for (int m = 0; m < w; ++m) s += cj[m] * dcol[std::size_t(k0 + m)];
+            z[std::size_t(j)] = xi * s;
+          }
+          double s = 0;
+          for (int m = 0; m < w; ++m) s += dcol[std::size_t(k0 + m)] * r[std::size_t(k0 + m)];
+          z[std::size_t(i)] -= s;
+          solve_factored(lobes, base->L.data() + std::size_t(l) * kMaxLobes * kMaxLobes,
+                         base->inv.data() + std::size_t(l) * kMaxLobes, z.data(), y.data());
+          for (int m = 0; m < w; ++m) {
+            double v = -xi * dcol[std::size_t(k0 + m)];
+            for (int j = 0; j < lobes; ++j) v += y[std::size_t(j)] * cols[std::size_t(j) * nc + std::size_t(k0 + m)];
+            J(k0 + m, 2 * i + d) = v;
+          }
+        }
       }
     const Eigen::Map<const Vec> rv(r.data(), nc);
     JtJ.noalias() = J.transpose() * J;
@@ -267,14 +315,14 @@ double refine(const Problem& P, int lobes, std::vector<double>& axes, std::vecto
         for (int c = 0; c < 3; ++c) a[c] -= step[2 * i] * f[std::size_t(c)] + step[2 * i + 1] * f[std::size_t(3 + c)];
         normalise(a);
       }
-      std::vector<double> tg;
-      const double tres = project(trial_axes, trial_cols, tg, rd);
+      const double tres = project(trial_axes, trial_cols, tg, rd, trial_base.get());
       if (std::isfinite(tres) && tres < res) {
         small = res - tres < kConverged * res;
         axes.swap(trial_axes);
         cols.swap(trial_cols);
         g.swap(tg);
         r.swap(rd);
+        base.swap(trial_base);
         res = tres;
         mu = std::max(mu / 3, 1e-9);
         improved = true;
