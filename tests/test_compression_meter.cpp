@@ -329,7 +329,9 @@ TEST(CompressionErrorMeter, RotationsTakeOnTheSpectraInTurn) {
   d.maps[0].sh.assign(16, glm::dvec3(0));
   d.maps[0].sh[0] = glm::dvec3(1);
   for (const auto& L : distribution_lightings(d, 4)) {
-    if (L[0] == glm::dvec3(1)) EXPECT_EQ(band_spectrum(L, 4), (std::vector<double>{1, 0, 0, 0}));
+    if (L[0] == glm::dvec3(1)) {
+      EXPECT_EQ(band_spectrum(L, 4), (std::vector<double>{1, 0, 0, 0}));
+    }
   }
   EXPECT_THROW(band_spectrum(d.maps[0].sh, 5), Error);
   d.spectra[1].sh.resize(9);  // 3 bands: too few for the transfer's 4
