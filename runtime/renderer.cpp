@@ -165,7 +165,8 @@ void Renderer::Impl::delete_mesh_objects() {
                             glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
                             ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
                             coeff_rows.buffer, coeff_rows.products, glossy_rows.buffer, glossy_rows.products,
-                            cluster_color_buffer, glossy_order_buffer, glossy_chunk_buffer};
+                            cluster_color_buffer, glossy_order_buffer, glossy_chunk_buffer,
+                            zh_rows, zh_neighbours, rest_positions, rest_normals};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   const GLuint textures[] = {transfer.texture, direct.texture, glossy_array.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
@@ -185,6 +186,11 @@ void Renderer::Impl::delete_mesh_objects() {
   source = Source::Stored;
   slot_buffer = 0;
   position_buffer = index_buffer = 0;
+  zh = false;
+  zh_rows = zh_neighbours = rest_positions = rest_normals = 0;
+  zh_bytes = 0;
+  zh_lobes = zh_lobe_bands = 0;
+  pose = Deform{};
   normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = radiance_buffer = 0;
 }
 
@@ -493,6 +499,7 @@ bool Renderer::has_shading(Shading s) const {
   const Impl& m = *impl_;
   if (m.lightmap) return s == Shading::Transfer || (s == Shading::Direct && m.lightmap->has_direct());
   if (m.index_count == 0) return false;
+  if (m.zh) return s == Shading::Transfer || s == Shading::Lambert;
   switch (s) {
     case Shading::Transfer:
     case Shading::Unshadowed: return m.bands > 0;
@@ -545,7 +552,7 @@ std::size_t Renderer::transfer_bytes() const {
   const Impl& m = *impl_;
   const std::size_t slots = m.source == Source::Mixed ? m.vertex_count * sizeof(std::uint32_t) : 0;
   const std::size_t order = m.glossy_chunks * (64 + 1) * sizeof(std::uint32_t);
-  return m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots + order + m.coeff_rows.bytes +
+  return m.zh_bytes + m.transfer.bytes + m.direct.bytes + m.glossy_array.bytes + slots + order + m.coeff_rows.bytes +
          m.coeff_rows.product_bytes + m.glossy_rows.bytes + m.glossy_rows.product_bytes;
 }
 
@@ -563,7 +570,7 @@ std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
   PRT_CHECK(m.have_lighting);
   PRT_CHECK(m.shading == Shading::Transfer || m.shading == Shading::Direct || m.shading == Shading::Unshadowed ||
             m.shading == Shading::Glossy);
-  const GLuint buffer = m.relight(eye);
+  const GLuint buffer = m.zh ? m.zh_relight() : m.relight(eye);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   std::vector<float> rgba(m.vertex_count * 4);
   glGetNamedBufferSubData(buffer, 0, GLsizeiptr(rgba.size() * sizeof(float)), rgba.data());
@@ -703,8 +710,10 @@ void Renderer::Impl::draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye
   int mode = attribute_mode(shading);
   GLuint data = 0;
   GLsizei stride = sizeof(glm::vec3);
+  // A deforming mesh: its pass poses it (and relights it) before any drawing.
+  const GLuint zh_radiance = zh ? zh_relight() : 0;
   if (mode == 0) {  // a transfer array dotted with the lighting, then drawn as vertex colours
-    data = relight(eye);
+    data = zh ? zh_radiance : relight(eye);
     stride = 4 * sizeof(float);
     mode = attribute_mode(Shading::VertexColors);
   } else {

@@ -153,6 +153,19 @@ struct Renderer::Impl {
   GLuint display_fbo = 0, display_rb = 0;
   int display_width = 0, display_height = 0;
 
+  // A local deformable transfer (set_mesh(Mesh, ZhTransfer); zh_pass.cpp):
+  // its lobe rows, each vertex's tangent neighbour, the rest positions and
+  // normals; position_buffer and normal_buffer then hold the pose.
+  bool zh = false;
+  int zh_lobes = 0, zh_lobe_bands = 0;
+  GLuint zh_rows = 0, zh_neighbours = 0, rest_positions = 0, rest_normals = 0;
+  std::size_t zh_bytes = 0;
+  std::map<std::array<int, 5>, GLuint> zh_programs;
+  Deform pose;             // Kind::None: the posed buffers hold the pose (set_pose of arrays, or the rest)
+  double pose_amount = 0;
+  glm::vec4 deform_frame{0.0f};  // the rest pose's y0, length along y, centre x and z (prt/deform.h)
+  GLuint zh_relight();
+
   GLsizei index_count = 0;
   std::size_t vertex_count = 0;
   // A scene and its lightmap (set_scene): drawn by the lightmap pass instead of the mesh.

@@ -32,7 +32,7 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
                          fmt::format("#define COEFFS {}\n#define BANDS {}\n#define VEC4S {}\n#define CHANNELS {}\n"
                                      "#define SOURCE {}\n#define VERTEX_ALBEDO {}\n#define COMPRESSED {}\n",
                                      coeffs, shader_bands, vec4s, ch, int(from), vertex_albedo ? 1 : 0, packed ? 1 : 0) +
-                             (packed ? compressed_defines(coeff_rows, 1) : std::string()));
+                             shaders::sh_bands_glsl + (packed ? compressed_defines(coeff_rows, 1) : std::string()));
   }
   return p;
 }

@@ -34,6 +34,8 @@ VertexFrames vertex_frames(const Mesh& mesh) {
   VertexFrames f;
   f.frames.assign(V, glm::mat3(1.0f));
   f.kinds.assign(V, FrameKind::None);
+  f.edge.resize(V);
+  for (std::size_t v = 0; v < V; ++v) f.edge[v] = std::uint32_t(v);
   PRT_CHECK_OP(mesh.normals.size(), ==, V);
   // Triangles in file order; in each, the edge to the next corner then to the
   // previous one; the first whose part in the tangent plane is long enough.
@@ -53,6 +55,7 @@ VertexFrames vertex_frames(const Mesh& mesh) {
         const glm::dvec3 t = p / plen;
         f.frames[v] = glm::mat3(glm::vec3(t), glm::vec3(glm::cross(nd, t)), n);
         f.kinds[v] = FrameKind::Edge;
+        f.edge[v] = w;
         break;
       }
     }

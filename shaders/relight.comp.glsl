@@ -37,8 +37,7 @@
 layout(local_size_x = 64) in;
 
 layout(binding = 3) uniform samplerBuffer u_transfer;
-// Rotated lighting: one RGB(+pad) vec4 per coefficient; up to 16 bands.
-layout(std140, binding = 1) uniform LightBlock { vec4 L[256]; };
+// The lighting block L: sh_bands.glsl (inserted with the #defines).
 layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; };
 
 // The renderer shades the mesh in runs of vertices (no dispatch over
@@ -70,40 +69,14 @@ layout(location = 1) uniform vec3 u_albedo;
 layout(location = 2) uniform float u_cosine[16];
 
 // Radiance of a vertex with normal n and albedo rho under the lighting's
-// first BANDS bands: rho sum_l (A_l / pi) sum_m Y_lm(n) L_lm, the SH basis
-// by the fully normalised recurrence of core/sh.cpp (Sloan, JCGT 2013), with
-// (c, s) = sqrt(2) (Re, Im) (x + i y)^m. A zero normal gives 0, as its
-// stored transfer would.
+// first BANDS bands: rho sum_l (A_l / pi) sum_m Y_lm(n) L_lm (sh_bands.glsl).
+// A zero normal gives 0, as its stored transfer would.
 vec3 clamped_cosine(vec3 n, vec3 rho) {
   if (dot(n, n) == 0.0) return vec3(0.0);
+  vec3 S[BANDS];
+  sh_band_sums(n, S);
   vec3 r = vec3(0.0);
-  float pmm = 0.28209479177387814;  // Y_00 = 1 / (2 sqrt(pi))
-  float c = 1.4142135623730951, s = 0.0;
-  for (int m = 0; m < BANDS; ++m) {
-    if (m > 0) {
-      pmm *= -sqrt((2.0 * float(m) + 1.0) / (2.0 * float(m)));  // s^m is folded into (c, s)
-      const float c1 = c * n.x - s * n.y;
-      s = c * n.y + s * n.x;
-      c = c1;
-    }
-    float p2 = 0.0, p1 = pmm;
-    for (int l = m; l < BANDS; ++l) {
-      float p = pmm;
-      if (l == m + 1) {
-        p = sqrt(2.0 * float(m) + 3.0) * n.z * pmm;
-      } else if (l > m + 1) {
-        const float l2 = float(l * l), m2 = float(m * m), lm1 = float((l - 1) * (l - 1));
-        p = sqrt((4.0 * l2 - 1.0) / (l2 - m2)) * (n.z * p1 - sqrt((lm1 - m2) / (4.0 * lm1 - 1.0)) * p2);
-      }
-      if (l > m) {
-        p2 = p1;
-        p1 = p;
-      }
-      const int k = l * (l + 1);
-      const vec3 y = m == 0 ? p * L[k].rgb : p * (c * L[k + m].rgb + s * L[k - m].rgb);
-      r += u_cosine[l] * y;
-    }
-  }
+  for (int l = 0; l < BANDS; ++l) r += u_cosine[l] * S[l];
   return rho * r;
 }
 

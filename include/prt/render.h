@@ -48,6 +48,8 @@
 #include <prt/mesh.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
+#include <prt/deform.h>
+#include <prt/zh_transfer.h>
 
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
@@ -201,6 +203,24 @@ class Renderer {
   // on the CPU): Shading::VertexColors (after set_vertex_colors) and Lambert
   // (albedo: `albedo`, or the mesh's colours when vertex_colors) are available.
   void set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_colors = false);
+  // Local deformable PRT (prt/zh_transfer.h; docs/RUNTIME.md, "Deforming
+  // meshes"): uploads the rest mesh and its lobes (analytic vertices as one
+  // lobe along the normal); each frame a compute pass poses every vertex,
+  // builds its posed frame, turns its lobes into it and relights them
+  // (shaders/zh.comp.glsl), and the mesh is drawn at the posed positions.
+  // The pose is the rest pose until set_pose. Shadings: Transfer and
+  // Lambert. Throws prt::Error when z was not computed for `rest`
+  // (check_matches), or its bands exceed kMaxRenderBands.
+  void set_mesh(const Mesh& rest, const ZhTransfer& z);
+  // The pose of the next frames: a bend or twist of the rest pose at
+  // `amount` of its angle (prt/deform.h's deform_mesh, computed on the GPU
+  // each frame), or given per vertex (positions and normals, e.g. a pose
+  // read from a file or skinned on the CPU). Contract (prt::InternalError):
+  // a zonal-harmonic mesh is uploaded; one position and normal per vertex.
+  void set_pose(const Deform& deform, double amount = 1.0);
+  void set_pose(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals);
+  // The posed positions of the last frame drawn (or relit by vertex_radiance).
+  std::vector<glm::vec3> posed_positions() const;
   // Uploads a scene and its SH lightmap (prt/lightmap.h; docs/RUNTIME.md
   // "Lightmaps"), replacing any mesh: each frame the covered texels are
   // relit on the GPU (their rows dotted with the lighting of set_lighting,

@@ -39,6 +39,10 @@ enum class FrameKind : std::uint8_t { None = 0, Edge = 1, Normal = 2 };
 struct VertexFrames {
   std::vector<glm::mat3> frames;  // columns tangent, bitangent, normal; identity where kind is None
   std::vector<FrameKind> kinds;
+  // The vertex at the other end of the edge that gave the tangent (kind
+  // Edge), else the vertex itself: what the GPU pass takes the tangent from
+  // in a pose (docs/RUNTIME.md, "Deforming meshes").
+  std::vector<std::uint32_t> edge;
 };
 // Every vertex's frame (the edge rule above) from the mesh's positions,
 // triangles and normals.

@@ -1,0 +1,167 @@
+// The local deformable pass (renderer_impl.h): a zonal-harmonic transfer's
+// lobes uploaded by set_mesh, the pose, and the compute pass that poses,
+// frames and relights every vertex (shaders/zh.comp.glsl).
+#include "renderer_impl.h"
+
+#include <prt/filter.h>
+#include <prt/sh.h>
+#include <prt/transfer_io.h>
+#include <prt/zh.h>
+
+#include "shaders.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace prt {
+
+using gl::check_gl;
+using gl::make_buffer;
+
+namespace {
+
+// Floats of one vertex's row on the GPU: LOBES axes as vec4s, then the
+// coefficients [c][i][l] padded to whole vec4s (zh.comp.glsl's layout).
+std::size_t zh_row_floats(const ZhTransfer& z) {
+  return std::size_t(z.lobes) * 4 + (z.coeffs_stride() + 3) / 4 * 4;
+}
+
+}  // namespace
+
+void Renderer::set_mesh(const Mesh& rest, const ZhTransfer& z) {
+  if (const std::string p = zh_transfer_problem(z); !p.empty()) throw Error("inconsistent zonal-harmonic transfer: " + p);
+  check_matches(z, rest, "zonal-harmonic transfer");
+  if (z.bands > kMaxRenderBands)
+    throw Error(fmt::format("the transfer has {} bands; the renderer draws at most {}", z.bands, kMaxRenderBands));
+  set_mesh(rest, z.albedo, z.vertex_colors);
+  Impl& m = *impl_;
+  const std::size_t V = rest.vertex_count();
+  // Posed positions and normals: written by the pass (procedural poses) or
+  // by set_pose (given ones); they start at the rest pose.
+  glDeleteBuffers(1, &m.position_buffer);
+  glDeleteBuffers(1, &m.normal_buffer);
+  m.position_buffer = make_buffer(rest.positions.data(), V * sizeof(glm::vec3), GL_DYNAMIC_STORAGE_BIT);
+  m.normal_buffer = make_buffer(rest.normals.data(), V * sizeof(glm::vec3), GL_DYNAMIC_STORAGE_BIT);
+  glVertexArrayVertexBuffer(m.vao, 0, m.position_buffer, 0, sizeof(glm::vec3));
+  m.rest_positions = make_buffer(rest.positions.data(), V * sizeof(glm::vec3));
+  m.rest_normals = make_buffer(rest.normals.data(), V * sizeof(glm::vec3));
+  const VertexFrames frames = vertex_frames(rest);
+  m.zh_neighbours = make_buffer(frames.edge.data(), V * sizeof(std::uint32_t));
+  // Every vertex's row; an analytic vertex's transfer, the clamped cosine
+  // about its normal, is one lobe along the frame's z with the profile
+  // rho (A_l / pi) / zonal_factor(l) (prt/zh.h: t_lm = g_l zonal_factor(l) Y_lm).
+  const std::size_t row = zh_row_floats(z);
+  const int n = z.bands, K = z.lobes, C = z.channels;
+  // The pass binds whole buffers (a vertex reads its neighbour anywhere).
+  if (V * row * sizeof(float) > m.limits.storage_block)
+    throw Error(fmt::format("the zonal-harmonic transfer needs {} bytes in one storage buffer ({} vertices x {} bytes); "
+                            "this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: use fewer lobes or bands",
+                            V * row * sizeof(float), V, row * sizeof(float), m.limits.storage_block));
+  m.zh_rows = upload_rows(V, row, [&](std::size_t v, float* dst) {
+    std::fill(dst, dst + row, 0.0f);
+    float* g = dst + 4 * K;
+    if (z.is_analytic(v)) {
+      const glm::vec3 rho = z.vertex_colors ? glm::clamp(rest.colors[v], 0.0f, 1.0f) : z.albedo;
+      for (int i = 0; i < K; ++i) dst[4 * i + 2] = 1.0f;
+      for (int c = 0; c < C; ++c)
+        for (int l = 0; l < n; ++l)
+          g[(c * K) * n + l] =
+              float(double(rho[c]) * sh::clamped_cosine_factor(l) / std::numbers::pi / zh::zonal_factor(l));
+      return;
+    }
+    const std::size_t r = z.row(v);
+    const float* a = z.axes.data() + r * z.axes_stride();
+    for (int i = 0; i < K; ++i) std::copy_n(a + 3 * i, 3, dst + 4 * i);
+    std::copy_n(z.coeffs.data() + r * z.coeffs_stride(), z.coeffs_stride(), g);
+  });
+  check_gl(fmt::format("uploading the zonal-harmonic transfer ({} vertices, {} lobes of {} bands)", V, K, n));
+  m.zh_bytes = V * row * sizeof(float) + V * sizeof(std::uint32_t);
+  m.zh = true;
+  m.zh_lobes = K;
+  m.zh_lobe_bands = n;
+  m.bands = m.band_limit = n;
+  m.channels = C;
+  m.source = Source::Stored;
+  m.pose = Deform{};
+  const glm::vec3 lo = rest.bounds_min(), hi = rest.bounds_max();
+  m.deform_frame = {lo.y, hi.y - lo.y, 0.5f * (lo.x + hi.x), 0.5f * (lo.z + hi.z)};
+  m.shading = Shading::Transfer;
+}
+
+void Renderer::set_pose(const Deform& d, double amount) {
+  Impl& m = *impl_;
+  PRT_CHECK(m.zh);
+  if (d.kind == Deform::Kind::None || amount == 0 || !(m.deform_frame.y > 0)) {
+    // The rest pose: the given-pose path with the rest arrays.
+    m.make_current();
+    glCopyNamedBufferSubData(m.rest_positions, m.position_buffer, 0, 0, GLsizeiptr(m.vertex_count * sizeof(glm::vec3)));
+    glCopyNamedBufferSubData(m.rest_normals, m.normal_buffer, 0, 0, GLsizeiptr(m.vertex_count * sizeof(glm::vec3)));
+    check_gl("restoring the rest pose");
+    m.pose = Deform{};
+    return;
+  }
+  m.pose = d;
+  m.pose_amount = amount;
+}
+
+void Renderer::set_pose(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals) {
+  Impl& m = *impl_;
+  PRT_CHECK(m.zh);
+  PRT_CHECK_OP(positions.size(), ==, m.vertex_count);
+  PRT_CHECK_OP(normals.size(), ==, m.vertex_count);
+  m.make_current();
+  glNamedBufferSubData(m.position_buffer, 0, GLsizeiptr(positions.size_bytes()), positions.data());
+  glNamedBufferSubData(m.normal_buffer, 0, GLsizeiptr(normals.size_bytes()), normals.data());
+  check_gl("uploading a pose");
+  m.pose = Deform{};
+}
+
+std::vector<glm::vec3> Renderer::posed_positions() const {
+  const Impl& m = *impl_;
+  PRT_CHECK(m.zh);
+  m.make_current();
+  std::vector<glm::vec3> out(m.vertex_count);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(m.position_buffer, 0, GLsizeiptr(out.size() * sizeof(glm::vec3)), out.data());
+  check_gl("reading the posed positions back");
+  return out;
+}
+
+GLuint Renderer::Impl::zh_relight() {
+  const int pose_kind = pose.kind == Deform::Kind::Bend ? 1 : pose.kind == Deform::Kind::Twist ? 2 : 0;
+  GLuint& p = zh_programs[{band_limit, zh_lobe_bands, zh_lobes, channels, pose_kind}];
+  if (!p)
+    p = gl::link_compute(shaders::zh_comp_glsl, "zonal-harmonic pass",
+                         fmt::format("#define BANDS {}\n#define LOBE_BANDS {}\n#define LOBES {}\n#define CHANNELS {}\n"
+                                     "#define POSE {}\n",
+                                     band_limit, zh_lobe_bands, zh_lobes, channels, pose_kind) +
+                             shaders::sh_bands_glsl);
+  glUseProgram(p);
+  glUniform1f(2, deform_frame.x);
+  glUniform1f(3, deform_frame.y);
+  glUniform2f(4, deform_frame.z, deform_frame.w);
+  glUniform1f(5, float(pose_amount * pose.degrees * std::numbers::pi / 180.0));
+  float zonal[kMaxRenderBands] = {};
+  for (int l = 0; l < zh_lobe_bands; ++l) zonal[l] = float(zh::zonal_factor(l));
+  glUniform1fv(6, kMaxRenderBands, zonal);
+  glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
+  const GLuint storage[][2] = {{7, zh_rows},         {8, zh_neighbours},   {9, rest_positions},   {10, rest_normals},
+                               {11, position_buffer}, {12, normal_buffer}, {2, radiance_buffer}};
+  for (const auto& [binding, buffer] : storage) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer);
+  // Whole buffers bound (a vertex reads its neighbour's position anywhere);
+  // dispatches of at most `chunk` vertices for the work group count.
+  for (std::size_t first = 0; first < vertex_count; first += chunk) {
+    const std::size_t n = std::min(chunk, vertex_count - first);
+    glUniform1ui(0, GLuint(n));
+    glUniform1ui(1, GLuint(first));
+    glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
+  }
+  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  check_gl("the zonal-harmonic pass");
+  return radiance_buffer;
+}
+
+}  // namespace prt

@@ -1,0 +1,146 @@
+#version 450 core
+// Local deformable PRT (prt/zh_transfer.h, docs/RUNTIME.md "Deforming
+// meshes"): each vertex's zonal-harmonic lobes turned into its posed frame
+// and relit, one invocation per vertex. The mesh is then drawn with these
+// radiances (attribute.vert.glsl, MODE 4) at the posed positions this pass
+// writes.
+//
+// #defines (the renderer compiles one program per combination): BANDS (the
+// lighting's bands used: the lobes' profiles are cut there too), LOBE_BANDS
+// (the profiles' stored bands), LOBES, CHANNELS, POSE:
+//   0 given: posed positions and normals are in their buffers (uploaded, or
+//     written by a skinning pass);
+//   1 bend, 2 twist: computed here from the rest pose (prt/deform.h, the
+//     same formulas and the normal by the deformation's cofactor matrix).
+// The lighting block and sh_band_sums: sh_bands.glsl, inserted with them.
+//
+// The posed frame (docs/CONVENTIONS.md, "Vertex frames"): normal n, tangent
+// from the edge to the neighbour the rest pose's edge rule chose
+// (u_neighbour; the pose would choose the same unless that edge became
+// degenerate), projected into the tangent plane; too short a projection:
+// the frame of the normal alone (Duff et al. 2017); no normal: dark.
+layout(local_size_x = 64) in;
+
+// Per vertex: LOBES unit axes in its rest frame (xyz, w unused), then the
+// coefficients [c][i][l] as floats, padded to whole vec4s.
+layout(std430, binding = 7) readonly buffer LobeBuffer { vec4 lobes[]; };
+layout(std430, binding = 8) readonly buffer NeighbourBuffer { uint neighbour[]; };
+layout(std430, binding = 9) readonly buffer RestPositions { float rest_p[]; };
+layout(std430, binding = 10) readonly buffer RestNormals { float rest_n[]; };
+layout(std430, binding = 11) buffer PosedPositions { float posed_p[]; };
+layout(std430, binding = 12) buffer PosedNormals { float posed_n[]; };
+layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; };
+
+layout(location = 0) uniform uint u_vertices;  // of this dispatch
+layout(location = 1) uniform uint u_first;
+// Bend and twist (prt/deform.h): the rest pose's y0, its length L along y,
+// the centre (xc, zc), and the angle theta at this frame (radians).
+layout(location = 2) uniform float u_y0;
+layout(location = 3) uniform float u_length;
+layout(location = 4) uniform vec2 u_centre;
+layout(location = 5) uniform float u_theta;
+// zh::zonal_factor(l) = sqrt(4 pi / (2l + 1)) per band.
+layout(location = 6) uniform float u_zonal[16];
+
+const int COEFF_FLOATS = CHANNELS * LOBES * LOBE_BANDS;
+const int ROW_VEC4S = LOBES + (COEFF_FLOATS + 3) / 4;
+const float FRAME_EDGE_MIN = 1e-3;  // prt::kFrameEdgeMin
+
+vec3 load3(uint v, bool rest, bool normal) {
+  const uint i = 3u * v;
+  if (rest) return normal ? vec3(rest_n[i], rest_n[i + 1], rest_n[i + 2]) : vec3(rest_p[i], rest_p[i + 1], rest_p[i + 2]);
+  return normal ? vec3(posed_n[i], posed_n[i + 1], posed_n[i + 2]) : vec3(posed_p[i], posed_p[i + 1], posed_p[i + 2]);
+}
+
+#if POSE != 0
+// Vertex v's posed position, and its posed normal when `with_normal`.
+vec3 deform(uint v, bool with_normal, out vec3 normal) {
+  const vec3 p = load3(v, true, false);
+  const float s = p.y - u_y0, dx = p.x - u_centre.x, dz = p.z - u_centre.y;
+  vec3 q;
+  mat3 J = mat3(1.0);
+#if POSE == 1
+  const float k = u_theta / u_length, phi = k * s, c = cos(phi), sn = sin(phi), uk = 1.0 - k * dx;
+  const float sinc = abs(phi) > 1e-4 ? sn / phi : 1.0 - phi * phi / 6.0;
+  const float cosc = abs(phi) > 1e-4 ? (1.0 - c) / phi : 0.5 * phi;
+  q = vec3(u_centre.x + dx * c + s * cosc, u_y0 + s * sinc - dx * sn, p.z);
+  J[0] = vec3(c, -sn, 0.0);
+  J[1] = vec3(uk * sn, uk * c, 0.0);
+#else
+  const float r = u_theta / u_length, psi = r * s, c = cos(psi), sn = sin(psi);
+  q = vec3(u_centre.x + c * dx + sn * dz, p.y, u_centre.y - sn * dx + c * dz);
+  J[0] = vec3(c, 0.0, -sn);
+  J[1] = vec3(r * (-sn * dx + c * dz), 1.0, r * (-c * dx - sn * dz));
+  J[2] = vec3(sn, 0.0, c);
+#endif
+  normal = vec3(0.0);
+  if (with_normal) {
+    const vec3 n = load3(v, true, true);
+    if (dot(n, n) > 0.0) {
+      const vec3 m = mat3(cross(J[1], J[2]), cross(J[2], J[0]), cross(J[0], J[1])) * n;
+      const float len = length(m);
+      normal = len > 0.0 ? m / len : vec3(0.0);
+    }
+  }
+  return q;
+}
+#endif
+
+void main() {
+  const uint i = gl_GlobalInvocationID.x;
+  if (i >= u_vertices) return;
+  const uint v = u_first + i;
+  vec3 p, n, q;
+#if POSE == 0
+  p = load3(v, false, false);
+  n = load3(v, false, true);
+  q = load3(neighbour[v], false, false);
+#else
+  vec3 unused;
+  p = deform(v, true, n);
+  q = deform(neighbour[v], false, unused);
+  const uint o = 3u * v;
+  posed_p[o] = p.x, posed_p[o + 1] = p.y, posed_p[o + 2] = p.z;
+  posed_n[o] = n.x, posed_n[o + 1] = n.y, posed_n[o + 2] = n.z;
+#endif
+  if (dot(n, n) == 0.0) {  // no normal, no frame: dark
+    radiance[v] = vec4(0.0, 0.0, 0.0, 1.0);
+    return;
+  }
+  // The frame: tangent from the chosen edge, else from the normal alone.
+  const vec3 e = q - p;
+  const vec3 proj = e - dot(e, n) * n;
+  vec3 t, b;
+  if (length(proj) >= FRAME_EDGE_MIN * length(e) && dot(e, e) > 0.0) {
+    t = normalize(proj);
+    b = cross(n, t);
+  } else {
+    const float sg = n.z >= 0.0 ? 1.0 : -1.0;
+    const float a = -1.0 / (sg + n.z), bb = n.x * n.y * a;
+    t = vec3(1.0 + sg * n.x * n.x * a, sg * bb, -sg * n.x);
+    b = vec3(bb, sg + n.y * n.y * a, -n.y);
+  }
+  const mat3 F = mat3(t, b, n);
+  const uint base = v * uint(ROW_VEC4S);
+  vec3 r = vec3(0.0);
+  for (int lobe = 0; lobe < LOBES; ++lobe) {
+    const vec3 axis = normalize(F * lobes[base + uint(lobe)].xyz);
+    vec3 S[BANDS];
+    sh_band_sums(axis, S);
+    for (int l = 0; l < BANDS; ++l) {
+#if CHANNELS == 1
+      const int f = lobe * LOBE_BANDS + l;
+      const float g = lobes[base + uint(LOBES + f / 4)][f % 4];
+      r += (g * u_zonal[l]) * S[l];
+#else
+      vec3 g;
+      for (int ch = 0; ch < 3; ++ch) {
+        const int f = (ch * LOBES + lobe) * LOBE_BANDS + l;
+        g[ch] = lobes[base + uint(LOBES + f / 4)][f % 4];
+      }
+      r += g * u_zonal[l] * S[l];
+#endif
+    }
+  }
+  radiance[v] = vec4(r, 1.0);
+}
