@@ -6,6 +6,7 @@
 #include <prt/sh.h>
 #include <prt/transfer_io.h>
 
+#include "sh_glsl.h"
 #include "shaders.h"
 
 #include <fmt/format.h>
@@ -32,7 +33,7 @@ GLuint Renderer::Impl::relight_program(int coeffs, int vec4s, int ch, Source fro
                          fmt::format("#define COEFFS {}\n#define BANDS {}\n#define VEC4S {}\n#define CHANNELS {}\n"
                                      "#define SOURCE {}\n#define VERTEX_ALBEDO {}\n#define COMPRESSED {}\n",
                                      coeffs, shader_bands, vec4s, ch, int(from), vertex_albedo ? 1 : 0, packed ? 1 : 0) +
-                             shaders::sh_bands_glsl + (packed ? compressed_defines(coeff_rows, 1) : std::string()));
+                             sh_band_sums_glsl(shader_bands) + (packed ? compressed_defines(coeff_rows, 1) : std::string()));
   }
   return p;
 }

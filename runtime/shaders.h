@@ -14,6 +14,6 @@ extern const char* const lightmap_comp_glsl;
 extern const char* const lightmap_vert_glsl;
 extern const char* const lightmap_frag_glsl;
 extern const char* const probe_object_comp_glsl;
-extern const char* const sh_bands_glsl;  // inserted after the #defines of the relighting and zonal-harmonic passes
+extern const char* const sh_bands_glsl;  // the lighting block before sh_glsl.h's sh_band_sums
 extern const char* const zh_comp_glsl;
 }  // namespace prt::shaders

@@ -8,6 +8,7 @@
 #include <prt/transfer_io.h>
 #include <prt/zh.h>
 
+#include "sh_glsl.h"
 #include "shaders.h"
 
 #include <fmt/format.h>
@@ -138,7 +139,7 @@ GLuint Renderer::Impl::zh_relight() {
                          fmt::format("#define BANDS {}\n#define LOBE_BANDS {}\n#define LOBES {}\n#define CHANNELS {}\n"
                                      "#define POSE {}\n",
                                      band_limit, zh_lobe_bands, zh_lobes, channels, pose_kind) +
-                             shaders::sh_bands_glsl);
+                             sh_band_sums_glsl(band_limit));
   glUseProgram(p);
   glUniform1f(2, deform_frame.x);
   glUniform1f(3, deform_frame.y);

@@ -37,7 +37,8 @@
 layout(local_size_x = 64) in;
 
 layout(binding = 3) uniform samplerBuffer u_transfer;
-// The lighting block L: sh_bands.glsl (inserted with the #defines).
+// The lighting block L and sh_band_sums: sh_bands.glsl and runtime/sh_glsl.cpp
+// (inserted with the #defines).
 layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; };
 
 // The renderer shades the mesh in runs of vertices (no dispatch over
@@ -69,7 +70,7 @@ layout(location = 1) uniform vec3 u_albedo;
 layout(location = 2) uniform float u_cosine[16];
 
 // Radiance of a vertex with normal n and albedo rho under the lighting's
-// first BANDS bands: rho sum_l (A_l / pi) sum_m Y_lm(n) L_lm (sh_bands.glsl).
+// first BANDS bands: rho sum_l (A_l / pi) sum_m Y_lm(n) L_lm (sh_band_sums).
 // A zero normal gives 0, as its stored transfer would.
 vec3 clamped_cosine(vec3 n, vec3 rho) {
   if (dot(n, n) == 0.0) return vec3(0.0);

@@ -12,7 +12,8 @@
 //     written by a skinning pass);
 //   1 bend, 2 twist: computed here from the rest pose (prt/deform.h, the
 //     same formulas and the normal by the deformation's cofactor matrix).
-// The lighting block and sh_band_sums: sh_bands.glsl, inserted with them.
+// The lighting block and sh_band_sums: sh_bands.glsl and runtime/sh_glsl.cpp,
+// inserted with them.
 //
 // The posed frame (docs/CONVENTIONS.md, "Vertex frames"): normal n, tangent
 // from the edge to the neighbour the rest pose's edge rule chose
