@@ -15,7 +15,7 @@ namespace prt {
 
 Deform parse_deform(std::string_view text) {
   const auto bad = [&](const char* why) {
-    return Error(fmt::format("--deform {}: {}; expected bend:ANGLE or twist:ANGLE in degrees (e.g. bend:60)", text, why));
+    return Error(fmt::format("{}: {}; expected bend:ANGLE or twist:ANGLE in degrees (e.g. bend:60)", text, why));
   };
   const std::size_t colon = text.find(':');
   if (colon == std::string_view::npos) throw bad("no ':'");

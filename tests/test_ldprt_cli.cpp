@@ -76,6 +76,35 @@ TEST(LdprtCli, PrecomputeThenRelightPoses) {
   EXPECT_GT(moved, 0.05);
 }
 
+// prt render follows --deform: one frame at the whole angle, a sequence from
+// rest and back (its first frame the rest pose's image, its middle the
+// whole angle's); the image moves with the pose.
+TEST(LdprtCli, RenderFollowsTheDeformation) {
+  TempDir dir;
+  const std::string z = dir.file("z.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", kTube, "-o", z, "--basis", "zh", "--lobes", "2", "--bands", "3", "--samples",
+                          "32", "-q"})
+                .code,
+            0);
+  const auto render = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"render", kTube, z, kEnv, "-o", dir.file(out), "--width", "128", "--height", "64",
+                                     "--camera", "0,1,7,0,1,0,0,1,0", "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Result r = run_prt(dir, args);
+    if (r.code != 0 && r.err.find("no OpenGL 4.5 context") != std::string::npos) return false;
+    EXPECT_EQ(r.code, 0) << describe_run(r);
+    return true;
+  };
+  if (!render("rest.exr", {})) GTEST_SKIP() << "no OpenGL 4.5 context";
+  ASSERT_TRUE(render("bent.exr", {"--deform", "bend:90"}));
+  ASSERT_TRUE(render("seq.exr", {"--deform", "bend:90", "--frames", "4", "--spin", "0"}));
+  const auto pixels = [&](const std::string& f) { return load_envmap(dir.file(f), Mapping::LatLong).rgb; };
+  const std::vector<float> rest = pixels("rest.exr"), bent = pixels("bent.exr");
+  EXPECT_NE(rest, bent);
+  EXPECT_EQ(pixels("seq_0000.exr"), rest);
+  EXPECT_EQ(pixels("seq_0002.exr"), bent);
+}
+
 TEST(LdprtCli, RefusalsNameTheProblem) {
   TempDir dir;
   const std::string z = dir.file("z.prt"), sh = dir.file("sh.prt");
@@ -103,7 +132,9 @@ TEST(LdprtCli, RefusalsNameTheProblem) {
       {{"relight", kTube, sh, kEnv, "--deform", "bend:30", "-o", dir.file("x.csv")}, "--basis zh"},
       {{"relight", kTube, z, kEnv, "--deform", "bend:x", "-o", dir.file("x.csv")}, "bend:ANGLE"},
       {{"relight", kTube, z, kEnv, "--terms", "10", "-o", dir.file("x.csv")}, "wavelet"},
-      {{"render", kTube, z, kEnv, "-o", dir.file("x.png")}, "zonal-harmonic"},
+      {{"render", kTube, z, kEnv, "--shading", "ao", "-o", dir.file("x.png")}, "transfer or lambert"},
+      {{"render", kTube, sh, kEnv, "--deform", "bend:20", "-o", dir.file("x.png")}, "--basis zh"},
+      {{"render", kTube, z, kEnv, "--deform", "fold:20", "-o", dir.file("x.png")}, "unknown deformation"},
   };
   for (const Case& c : cases) {
     const Result r = run_prt(dir, c.args);

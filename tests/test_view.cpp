@@ -106,7 +106,9 @@ class ViewCli : public ::testing::Test {
   }
   test::TempDir dir;
   std::string mesh, prt, env, wavelet;
-  void check_screenshot_matches_render(const std::vector<std::string>& look, bool wavelet_first = false);
+  // `file`: the transfer to show (default: prt, or wavelet with wavelet_first).
+  void check_screenshot_matches_render(const std::vector<std::string>& look, bool wavelet_first = false,
+                                       const std::string& file = {});
 };
 
 // 256x128: the images are read back with load_envmap, which takes 2:1 lat-long shapes only.
@@ -116,8 +118,9 @@ constexpr int kW = 256, kH = 128;
 // with the options `look` (shading, exposure, tone map, ...).
 // With wavelet_first, the view shows the wavelet transfer (SH as --second)
 // and prt render renders the wavelet transfer.
-void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& look, bool wavelet_first) {
-  const std::string first = wavelet_first ? wavelet : prt;
+void ViewCli::check_screenshot_matches_render(const std::vector<std::string>& look, bool wavelet_first,
+                                               const std::string& file) {
+  const std::string first = !file.empty() ? file : wavelet_first ? wavelet : prt;
   std::string look_args;
   for (const auto& s : look) look_args.append(1, ' ').append(test::shell_quote(s));
   const std::string shot = dir.file("view.png"), ref = dir.file("render.png");
@@ -205,6 +208,33 @@ TEST_F(ViewCli, GlossyScreenshotMatchesRender) {
 
 // The on-screen panel (Dear ImGui) is in the window: its screenshot differs
 // from one with --no-panel where the panel is (top left) and nowhere far from it.
+// A zonal-harmonic (local deformable) file at rest: as prt render draws it;
+// with --deform the window animates the bend (a smoke test: the pose at a
+// scripted frame is not prt render's).
+TEST_F(ViewCli, ZonalHarmonicScreenshotMatchesRenderAndDeforms) {
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
+  const Mesh m = load_mesh(mesh);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 64;
+  ZhFitOptions f;
+  f.lobes = 2;
+  const std::string zh = dir.file("ball_zh.prt");
+  write_zh_transfer(zh, fit_zh_transfer(compute_transfer(m, o), m, f));
+  check_screenshot_matches_render({}, false, zh);
+  const std::string shot = dir.file("bent.png");
+  const auto [code, err] = run_view(dir, test::shell_quote(mesh) + " " + test::shell_quote(zh) + " " +
+                                             test::shell_quote(env) + " --deform bend:90 --frames 20 --no-panel -q "
+                                             "--screenshot " + test::shell_quote(shot));
+  ASSERT_EQ(code, 0) << err;
+  EXPECT_TRUE(std::filesystem::exists(shot));
+  const auto [bad, bad_err] = run_view(dir, test::shell_quote(mesh) + " " + test::shell_quote(prt) + " " +
+                                                test::shell_quote(env) + " --deform bend:90 --frames 2 -q "
+                                                "--screenshot " + test::shell_quote(dir.file("x.png")));
+  EXPECT_EQ(bad, 1) << bad_err;
+  EXPECT_NE(bad_err.find("--basis zh"), std::string::npos) << bad_err;
+}
+
 TEST_F(ViewCli, PanelIsOnScreenAndNoPanelHidesIt) {
   if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
   std::string shots[2];

@@ -14,6 +14,7 @@
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_playback.h>
+#include <prt/deform.h>
 
 #include <fmt/core.h>
 #include <glm/trigonometric.hpp>
@@ -37,6 +38,7 @@ struct RenderArgs {
   std::vector<const CLI::Option*> probe_opts;
   LookArgs look;
   GlossyArgs lobe;  // glossy files only
+  std::string deform;  // --deform bend:ANGLE|twist:ANGLE (zonal-harmonic files)
 };
 
 // OUT.png, frame 3 -> OUT_0003.png
@@ -57,7 +59,14 @@ int run_render(const RenderArgs& a) {
                     {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
   for_path("--output", [&] { check_image_output(a.output); });
 
-  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true);
+  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true, true);
+  const bool zh = scene.zh.has_value();
+  if (!a.deform.empty() && !zh)
+    throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
+                "docs/LDPRT.md); this one is baked for one pose");
+  const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
+  if (zh && a.look.shading_option->count() > 0 && a.look.shading != "transfer" && a.look.shading != "lambert")
+    throw Error(a.transfer + ": --shading " + a.look.shading + ": a zonal-harmonic transfer shows transfer or lambert");
   const Mesh& mesh = scene.mesh;
   const Transfer& t = scene.transfer;
   const EnvMap& env = scene.env;
@@ -73,7 +82,14 @@ int run_render(const RenderArgs& a) {
   const glm::dvec3 diffuse = parse_diffuse(a.lobe.diffuse);
   Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);
 
-  Camera cam = framing_camera(mesh, a.fov, double(a.width) / a.height);
+  // A deforming mesh is framed in its rest and its most deformed pose.
+  Mesh framed;
+  if (zh && deform.kind != Deform::Kind::None) {
+    framed.positions = mesh.positions;
+    const Mesh posed = deform_mesh(mesh, deform);
+    framed.positions.insert(framed.positions.end(), posed.positions.begin(), posed.positions.end());
+  }
+  Camera cam = framing_camera(framed.positions.empty() ? mesh : framed, a.fov, double(a.width) / a.height);
   if (!a.camera.empty()) parse_camera(a.camera, cam);
   cam.fov_deg = a.fov;
 
@@ -149,6 +165,10 @@ int run_render(const RenderArgs& a) {
       renderer.set_lighting(rotated);
       renderer.set_environment_rotation(R);
       if (probe_object) probe_object->frame(renderer, R, double(f) / a.frames);
+      // The deformation: the whole angle in one frame; over several, from
+      // the rest pose to the whole angle and back.
+      if (zh && deform.kind != Deform::Kind::None)
+        renderer.set_pose(deform, a.frames > 1 ? 0.5 * (1.0 - std::cos(2.0 * M_PI * f / a.frames)) : 1.0);
       if (wavelet && look.shading == Shading::Transfer) {
         cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
       } else if (wavelet) {
@@ -195,7 +215,9 @@ Run add_render(CLI::App& app) {
       "a Phong lobe (--gloss, --specular, --diffuse) seen from the camera's eye, both on the GPU.\n"
       "EXR output keeps linear floats (times 2^exposure); PNG and other 8-bit formats get the tone map\n"
       "(--tonemap, default clamp) and sRGB encoding.\n"
-      "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10");
+      "Zonal-harmonic files (prt precompute --basis zh) follow a deformation: --deform bend:ANGLE or twist:ANGLE.\n"
+      "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10\n"
+      "         prt render models/tube.obj tube-zh.prt envmaps/forest.exr --deform bend:120 --frames 48 -o tube.png");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
@@ -219,6 +241,11 @@ Run add_render(CLI::App& app) {
   s->add_option("--spin", a->spin, "Degrees about +Y per frame (default 360 / frames)")
       ->check(finite_number())
       ->each([a](const std::string&) { a->spin_given = true; });
+  s->add_option("--deform", a->deform,
+                "--basis zh files: deform the mesh on the GPU, bend:ANGLE (its y extent bent into an arc of ANGLE "
+                "degrees towards +x) or twist:ANGLE (about y); with --frames, from the rest pose to the whole angle and "
+                "back while the environment turns (prt/deform.h, docs/LDPRT.md)")
+      ->check(deform_value());
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");

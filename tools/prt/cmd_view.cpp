@@ -15,6 +15,7 @@
 #include <prt/paths.h>
 #include <prt/projection.h>
 #include <prt/render.h>
+#include <prt/deform.h>
 #include <prt/rotation.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
@@ -70,6 +71,7 @@ struct ViewArgs {
   GlossyArgs lobe;  // glossy files: the starting lobe
   ProbeObjectArgs probe;  // --probes FILE --object MESH (docs/PROBES.md "Rendering")
   std::vector<const CLI::Option*> probe_opts;
+  std::string deform;  // --deform bend:ANGLE|twist:ANGLE (zonal-harmonic files): animated
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
@@ -153,9 +155,14 @@ void save_window(const std::string& path, const std::vector<unsigned char>& code
 
 // MESH, TRANSFER and ENV, and with --second the transfer of the other basis.
 Scene load_view_scene(const ViewArgs& a, bool& have_sh, bool& have_wavelet) {
-  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true, true);
-  have_sh = scene.basis == TransferBasis::SH;
-  have_wavelet = !have_sh;
+  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true, true, true);
+  have_sh = scene.basis == TransferBasis::SH || scene.basis == TransferBasis::ZH;
+  have_wavelet = scene.basis == TransferBasis::Wavelet;
+  if (!a.deform.empty() && !scene.zh)
+    throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
+                "docs/LDPRT.md); this one is baked for one pose");
+  if (!a.second.empty() && scene.zh)
+    throw UsageError("--second: " + a.transfer + " is a zonal-harmonic transfer; --second pairs an SH and a wavelet one");
   if (!a.second.empty()) {  // the other basis, for the same mesh
     Scene other;
     other.mesh = std::move(scene.mesh);
@@ -485,7 +492,18 @@ int run_view(const ViewArgs& a) {
     fmt::print(stderr, "{}\n", kControls);
   }
   Viewer viewer(a, scene, have_sh, have_wavelet, look, renderer, st);
-  Camera base = framing_camera(scene.mesh, a.fov, double(a.width) / a.height);
+  // A deforming mesh: framed in its rest and its most deformed pose, and
+  // bent (twisted) from rest to the whole angle and back every 4 seconds
+  // (scripted frames: 30 to a second).
+  const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
+  Mesh framed;
+  if (deform.kind != Deform::Kind::None) {
+    framed.positions = scene.mesh.positions;
+    const Mesh posed = deform_mesh(scene.mesh, deform);
+    framed.positions.insert(framed.positions.end(), posed.positions.begin(), posed.positions.end());
+  }
+  Camera base = framing_camera(framed.positions.empty() ? scene.mesh : framed, a.fov, double(a.width) / a.height);
+  const auto start = std::chrono::steady_clock::now();
   if (!a.camera.empty()) parse_camera(a.camera, base);
   connect_input(window.get(), st);
   // The panel after prt's callbacks: ImGui chains them.
@@ -509,6 +527,10 @@ int run_view(const ViewArgs& a) {
     const Camera cam = orbit_camera(base, st);
     viewer.apply(st);
     viewer.light(st, environment_rotation(st));
+    if (deform.kind != Deform::Kind::None) {
+      const double t = a.frames > 0 ? frame / 30.0 : std::chrono::duration<double>(now - start).count();
+      renderer.set_pose(deform, 0.5 * (1.0 - std::cos(2.0 * M_PI * t / 4.0)));
+    }
 
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window.get(), &fw, &fh);
@@ -586,6 +608,10 @@ Run add_view(CLI::App& app) {
   add_shared(s, SharedOption::Height, a->height, "Window height");
   add_shared(s, SharedOption::Camera, a->camera, "Starting camera (orbit is about the target)");
   add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view");
+  s->add_option("--deform", a->deform,
+                "--basis zh files: bend:ANGLE or twist:ANGLE, animated on the GPU from the rest pose to the whole angle "
+                "and back every 4 seconds (prt/deform.h, docs/LDPRT.md)")
+      ->check(deform_value());
   add_shared(s, SharedOption::Frames, a->frames, "Render N frames, save --screenshot FILE and exit");
   s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)");
   s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")->capture_default_str();

@@ -1,5 +1,7 @@
 #include "options.h"
 
+#include <prt/deform.h>
+#include <prt/error.h>
 #include <prt/wavelet.h>
 
 #include <fmt/format.h>
@@ -207,6 +209,19 @@ CLI::Validator memory_size_value() {
 }
 
 std::size_t parse_memory_size(const std::string& text) { return std::size_t(memory_size(text)); }
+
+CLI::Validator deform_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        try {
+          parse_deform(s);
+          return {};
+        } catch (const Error& e) {
+          return e.what();
+        }
+      },
+      "bend:ANGLE|twist:ANGLE");
+}
 
 CLI::Validator one_of(std::initializer_list<const char*> names) {
   std::vector<std::string> list(names.begin(), names.end());

@@ -62,6 +62,8 @@ CLI::Validator cube_resolution();
 // GiB or TiB (of 1024), or none (bytes); at least 1 MB, below 2^63 bytes.
 CLI::Validator memory_size_value();
 std::size_t parse_memory_size(const std::string& text);  // checked by memory_size_value()
+// A deformation: bend:ANGLE or twist:ANGLE (prt::parse_deform's message).
+CLI::Validator deform_value();
 // One of `names` (message: "expected a, b or c, got 'x'").
 CLI::Validator one_of(std::initializer_list<const char*> names);
 

@@ -36,9 +36,30 @@ Transfer header_only(const Transfer& t) {
 }  // namespace
 
 void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet,
-                   bool allow_compressed) {
-  // Without allow_wavelet, read_transfer itself refuses a wavelet file, naming its basis.
-  s.basis = allow_wavelet ? read_transfer_basis(transfer) : TransferBasis::SH;
+                   bool allow_compressed, bool allow_zh) {
+  // Without allow_wavelet (allow_zh), read_transfer itself refuses a wavelet
+  // (zonal-harmonic) file, naming its basis.
+  s.basis = allow_wavelet || allow_zh ? read_transfer_basis(transfer) : TransferBasis::SH;
+  if (s.basis == TransferBasis::Wavelet && !allow_wavelet) s.basis = TransferBasis::SH;
+  if (s.basis == TransferBasis::ZH && !allow_zh) s.basis = TransferBasis::SH;
+  if (s.basis == TransferBasis::ZH) {
+    s.zh = read_zh_transfer(transfer);
+    check_matches(*s.zh, s.mesh, transfer);
+    const ZhTransfer& z = *s.zh;
+    s.transfer = Transfer{};
+    s.transfer.bands = z.bands;
+    s.transfer.channels = z.channels;
+    s.transfer.mode = z.mode;
+    s.transfer.bounces = z.bounces;
+    s.transfer.samples = z.samples;
+    s.transfer.albedo = z.albedo;
+    s.transfer.vertex_colors = z.vertex_colors;
+    s.transfer.vertices = z.vertices;
+    s.transfer.mesh_hash = z.mesh_hash;
+    if (max_bands > 0 && z.bands > max_bands)
+      throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, z.bands, command, max_bands));
+    return;
+  }
   if (s.basis == TransferBasis::Wavelet) {
     s.wavelet = read_wavelet_transfer(transfer);
     check_matches(s.wavelet, s.mesh, transfer);
@@ -63,6 +84,8 @@ void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_
   try {  // refused (exit 1) when it does not fit the scene or exceeds this OpenGL's limits: name the file
     if (scene.lightmap)
       renderer.set_scene(*scene.world, *scene.lightmap);
+    else if (scene.zh)
+      renderer.set_mesh(scene.mesh, *scene.zh);  // the rest pose; set_pose moves it
     else if (scene.compressed)
       renderer.set_mesh(scene.mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
     else
@@ -75,7 +98,8 @@ void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_
 }
 
 void release_uploaded(Scene& s) {
-  PRT_CHECK(s.basis == TransferBasis::SH);
+  PRT_CHECK(s.basis == TransferBasis::SH || s.basis == TransferBasis::ZH);
+  s.zh.reset();
   s.mesh.positions = {};
   s.mesh.normals = {};
   s.mesh.triangles = {};
@@ -94,7 +118,7 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 }
 
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
-                 const char* command, bool allow_wavelet, bool allow_compressed) {
+                 const char* command, bool allow_wavelet, bool allow_compressed, bool allow_zh) {
   Scene s;
   if (transfer_is_lightmap(transfer)) {  // a scene and its lightmap (docs/LIGHTMAPS.md)
     if (read_transfer_basis(transfer) == TransferBasis::Wavelet)
@@ -108,7 +132,7 @@ Scene load_scene(const std::string& mesh, const std::string& transfer, const std
       throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, s.transfer.bands, command, max_bands));
   } else {
     s.mesh = load_mesh(mesh);
-    load_transfer(s, transfer, max_bands, command, allow_wavelet, allow_compressed);
+    load_transfer(s, transfer, max_bands, command, allow_wavelet, allow_compressed, allow_zh);
   }
   s.env = load_envmap(env);
   require_finite(s.env);

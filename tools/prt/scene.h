@@ -10,6 +10,7 @@
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
+#include <prt/zh_transfer.h>
 
 #include <glm/vec3.hpp>
 
@@ -27,6 +28,9 @@ struct Scene {
   Transfer transfer;        // basis SH (compressed: the header fields only; its arrays are in compressed->transfer)
   std::optional<CompressedTransfer> compressed;  // a file from prt compress (when the command takes them)
   WaveletTransfer wavelet;  // basis Wavelet
+  // Basis ZH (prt precompute --basis zh): the lobes, `transfer` then holds
+  // their header fields (bands, channels, mode, albedo); `mesh` is the rest pose.
+  std::optional<ZhTransfer> zh;
   // A lightmap (prt precompute SCENE --lightmap): the scene (its mesh is
   // also `mesh`) and the lightmap; `transfer` then holds its header fields.
   std::optional<prt::Scene> world;
@@ -41,9 +45,10 @@ void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_
 // Throws prt::Error naming the file at fault; max_bands > 0 also refuses an
 // SH transfer with more bands, naming `command` in the message. Wavelet
 // files are refused unless allow_wavelet, compressed ones unless
-// allow_compressed.
+// allow_compressed, zonal-harmonic ones unless allow_zh.
 Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands = 0,
-                 const char* command = "", bool allow_wavelet = false, bool allow_compressed = false);
+                 const char* command = "", bool allow_wavelet = false, bool allow_compressed = false,
+                 bool allow_zh = false);
 
 // Throws prt::Error naming `path` unless `t` keeps a direct part (an
 // interreflected transfer): what `option` ("--direct", "--shading direct")
@@ -53,7 +58,7 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
 // Loads a transfer file into `scene` (the mesh must be loaded) and checks it
 // against the mesh; the rules of load_scene.
 void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
-                   bool allow_wavelet, bool allow_compressed = false);
+                   bool allow_wavelet, bool allow_compressed = false, bool allow_zh = false);
 
 // After the renderer has uploaded an SH scene's mesh and transfer (it keeps
 // its own copy: on the GPU, or with Mesa's llvmpipe in this process), frees
