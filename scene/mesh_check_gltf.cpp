@@ -84,6 +84,7 @@ class GltfCheck {
     check_accessors();
     check_meshes();
     check_nodes();
+    check_skins();
   }
 
  private:
@@ -405,32 +406,82 @@ class GltfCheck {
   }
 
   // Throws unless every index of accessor `a` (its base values and sparse
-  // replacements) is below `vertices`.
-  void check_indices(std::uint64_t a, std::uint64_t vertices, const std::string& what) {
+  // replacements) is below `vertices`. `joints`: the accessor is a
+  // primitive's JOINTS_0 (unsigned VEC4s, each component a joint of its
+  // skin, `vertices` then the skin's joint count).
+  void check_indices(std::uint64_t a, std::uint64_t vertices, const std::string& what, bool joints = false) {
     const Accessor& acc = accessors_[a];
-    if (acc.type != "SCALAR" || (acc.component_type != 5121 && acc.component_type != 5123 && acc.component_type != 5125))
-      fail(fmt::format("{}: its indices (accessor {}) are not unsigned integer scalars", what, a));
-    const std::uint64_t csize = component_size(acc.component_type);
+    if (acc.type != (joints ? "VEC4" : "SCALAR") ||
+        (acc.component_type != 5121 && acc.component_type != 5123 && (joints || acc.component_type != 5125)))
+      fail(fmt::format("{}: its {} (accessor {}) are not unsigned integer {}", what, joints ? "JOINTS_0" : "indices", a,
+                       joints ? "VEC4s (8 or 16 bits)" : "scalars"));
+    const std::uint64_t csize = component_size(acc.component_type), comps = joints ? 4 : 1;
     auto scan = [&](const std::vector<unsigned char>& d, std::uint64_t step, std::uint64_t count) {
-      for (std::uint64_t i = 0; i < count; ++i) {
-        const unsigned char* p = d.data() + i * step;
-        const std::uint64_t v = csize == 1 ? p[0] : csize == 2 ? std::uint64_t(p[0] | p[1] << 8) : le32(p);
-        if (v >= vertices)
+      for (std::uint64_t i = 0; i < count; ++i)
+        for (std::uint64_t c = 0; c < comps; ++c) {
+          const unsigned char* p = d.data() + i * step + c * csize;
+          const std::uint64_t v = csize == 1 ? p[0] : csize == 2 ? std::uint64_t(p[0] | p[1] << 8) : le32(p);
+          if (v < vertices) continue;
+          if (joints)
+            fail(fmt::format("{} uses joint {} (vertex {} of accessor {}), out of range (its skin has {} joints)", what,
+                             v, i, a, vertices));
           fail(fmt::format("{} uses vertex {} (index {} of accessor {}), out of range (its POSITION has {} vertices)",
                            what, v, i, a, vertices));
-      }
+        }
     };
+    const std::uint64_t elem = comps * csize;
     if (acc.view) {
       const View& v = views_[*acc.view];
-      const std::uint64_t step = v.stride ? v.stride : csize;
-      const std::uint64_t bytes = acc.count == 0 ? 0 : (acc.count - 1) * step + csize;
+      const std::uint64_t step = v.stride ? v.stride : elem;
+      const std::uint64_t bytes = acc.count == 0 ? 0 : (acc.count - 1) * step + elem;
       scan(buffer_bytes(v.buffer, v.offset + acc.offset, bytes), step, acc.count);
     }
     if (acc.sparse) {
       const json& values = doc_["accessors"][a]["sparse"]["values"];
       const View& v = views_[values["bufferView"].get<std::uint64_t>()];
       const std::uint64_t n = doc_["accessors"][a]["sparse"]["count"].get<std::uint64_t>();
-      scan(buffer_bytes(v.buffer, v.offset + uint_member(values, "byteOffset", 0, what), n * csize), csize, n);
+      scan(buffer_bytes(v.buffer, v.offset + uint_member(values, "byteOffset", 0, what), n * elem), elem, n);
+    }
+  }
+
+  // Skins, which Assimp reads with the mesh: each a list of joint nodes and
+  // their inverse bind matrices, float MAT4s, one per joint at least. glTF
+  // lets the matrices be left out (identity), but Assimp 5.2 then follows a
+  // null pointer, and reads past the array when there are fewer than joints:
+  // both are refused here with what to do. A node's skin must exist, and
+  // its mesh's JOINTS_0 name joints of that skin.
+  void check_skins() {
+    const json& skins = array("skins");
+    const std::size_t nodes = array("nodes").size();
+    std::vector<std::uint64_t> joints(skins.size());
+    for (std::size_t s = 0; s < skins.size(); ++s) {
+      const std::string what = fmt::format("skin {}", s);
+      const auto j = skins[s].find("joints");
+      if (j == skins[s].end() || !j->is_array() || j->empty()) fail(what + " has no joints");
+      for (const json& n : *j)
+        if (!n.is_number_unsigned() || n.get<std::uint64_t>() >= nodes)
+          fail(fmt::format("{}: joint {} is not a node (the file has {} nodes)", what, n.dump().substr(0, 20), nodes));
+      joints[s] = j->size();
+      if (!skins[s].contains("inverseBindMatrices"))
+        fail(what + " has no inverseBindMatrices: prt's glTF reader (Assimp) needs them; export the skin with its "
+                    "inverse bind matrices (Blender's glTF exporter writes them)");
+      const Accessor& m = accessors_[index(skins[s], "inverseBindMatrices", "accessors", what)];
+      if (m.type != "MAT4" || m.component_type != 5126 || m.count < joints[s])
+        fail(fmt::format("{}: inverseBindMatrices must be float MAT4, one per joint ({}); it is {} of componentType "
+                         "{}, {} of them", what, joints[s], m.type, m.component_type, m.count));
+    }
+    const json& node_list = array("nodes");
+    const json& meshes = array("meshes");
+    for (std::size_t i = 0; i < node_list.size(); ++i) {
+      if (!node_list[i].contains("skin")) continue;
+      const std::string what = fmt::format("node {}", i);
+      const std::uint64_t s = index(node_list[i], "skin", "skins", what);
+      if (!node_list[i].contains("mesh")) continue;
+      const json& prims = meshes[node_list[i]["mesh"].get<std::size_t>()]["primitives"];
+      for (std::size_t p = 0; p < prims.size(); ++p)
+        if (const auto attrs = prims[p].find("attributes"); attrs->contains("JOINTS_0"))
+          check_indices((*attrs)["JOINTS_0"].get<std::uint64_t>(), joints[s],
+                        fmt::format("{} (skin {}) mesh primitive {}", what, s, p), true);
     }
   }
 

@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -34,9 +35,10 @@ constexpr std::size_t kOffZhReserved = 112;        // zero up to kHeaderSize
 constexpr std::uint32_t kZhKnownFlags = kFlagVertexColors;
 
 enum ZhKind : std::uint32_t {
-  kZhAnalyticMask = 24,  // u32 bit mask, as kind 6 of an SH file; only when some vertex is analytic
-  kZhAxes = 25,          // f32, stored rows x lobes x 3
-  kZhCoeffs = 26,        // f32, stored rows x channels x lobes x bands
+  kZhAnalyticMask = 24,   // u32 bit mask, as kind 6 of an SH file; only when some vertex is analytic
+  kZhAxes = 25,           // f32, stored rows x lobes x 3
+  kZhCoeffs = 26,         // f32, stored rows x channels x lobes x bands
+  kZhRestOcclusion = 27,  // f32, one per vertex in [0, 1]; only when ZhTransfer::rest_ao is not empty
 };
 
 struct ZhSection {
@@ -49,7 +51,10 @@ struct ZhSection {
 };
 
 constexpr EnumName<std::uint32_t> kZhKindNames[] = {
-    {kZhAnalyticMask, "zh analytic vertices"}, {kZhAxes, "zh axes"}, {kZhCoeffs, "zh coefficients"}};
+    {kZhAnalyticMask, "zh analytic vertices"},
+    {kZhAxes, "zh axes"},
+    {kZhCoeffs, "zh coefficients"},
+    {kZhRestOcclusion, "zh rest occlusion"}};
 const char* zh_kind_name(std::uint32_t kind) { return enum_name(kZhKindNames, kind).data(); }
 
 // The analytic-vertex bit mask of `t` (empty when no vertex is analytic):
@@ -73,6 +78,9 @@ std::vector<ZhSection> zh_sections(const ZhTransfer& t, const std::vector<std::u
   // The axes and coefficients always, as an SH file's coefficients (0 values when every vertex is analytic).
   s.push_back({kZhAxes, n(kZhAxes), kTypeF32, t.axes.data(), t.axes.size(), true});
   s.push_back({kZhCoeffs, n(kZhCoeffs), kTypeF32, t.coeffs.data(), t.coeffs.size(), true});
+  // Every vertex's, analytic ones too (a pose may shadow them).
+  if (!t.rest_ao.empty())
+    s.push_back({kZhRestOcclusion, n(kZhRestOcclusion), kTypeF32, t.rest_ao.data(), t.rest_ao.size(), true});
   return s;
 }
 
@@ -200,14 +208,24 @@ ZhTransfer Reader::read_zh() {
   t.topology_hash = load<std::uint64_t>(h + kOffTopologyHash);
   t.fit_error = fit_error;
 
+  // The rest occlusion is optional: told by the section count alone, as
+  // the mask is by the header (its count is the vertices', checked below).
   std::vector<std::uint32_t> kinds;
   if (has_mask) kinds.push_back(kZhAnalyticMask);
   kinds.insert(kinds.end(), {kZhAxes, kZhCoeffs});
+  if (section_count_ == kinds.size() + 1) kinds.push_back(kZhRestOcclusion);
   if (section_count_ != kinds.size())
-    throw fail(fmt::format("bad section table: {} sections; a zonal-harmonic transfer {} has {}", section_count_,
+    throw fail(fmt::format("bad section table: {} sections; a zonal-harmonic transfer {} has {} ({} with its rest "
+                           "occlusion)",
+                           section_count_,
                            has_mask ? fmt::format("with {} analytic vertices", v.vertices - v.stored)
                                     : std::string("with every vertex stored"),
-                           kinds.size()));
+                           kinds.size(), kinds.size() + 1));
+  // One f32 per vertex: what does not fit is refused before anything is allocated.
+  if (kinds.back() == kZhRestOcclusion && v.vertices > size_ / 4)
+    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their rest occlusion alone "
+                           "takes {})",
+                           v.vertices, size_, 4 * v.vertices));
 
   // Sections: the kinds the header implies, in order, each of its type and
   // of the count the header gives, data padded with zeros.
@@ -230,15 +248,18 @@ ZhTransfer Reader::read_zh() {
       throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
                              want_type, type_name(want_type)));
     // Bounded by the file's size (checked above): no overflow.
-    const std::uint64_t want = kind == kZhAnalyticMask ? mask_words(v.vertices)
-                               : kind == kZhAxes       ? v.stored * axes_stride
-                                                       : v.stored * coeffs_stride;
+    const std::uint64_t want = kind == kZhAnalyticMask    ? mask_words(v.vertices)
+                               : kind == kZhAxes          ? v.stored * axes_stride
+                               : kind == kZhRestOcclusion ? v.vertices
+                                                          : v.stored * coeffs_stride;
     if (count != want)
       throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count,
                              kind == kZhAnalyticMask
                                  ? fmt::format("(vertices + 31) / 32 = {}", want)
                              : kind == kZhAxes
                                  ? fmt::format("stored vertices x lobes x 3 = {} x {} x 3 = {}", v.stored, lobes, want)
+                             : kind == kZhRestOcclusion
+                                 ? fmt::format("one per vertex, {}", want)
                                  : fmt::format("stored vertices x channels x lobes x bands = {} x {} x {} x {} = {}",
                                                v.stored, v.channels, lobes, bands, want)));
     const std::uint64_t data = offset + kSectionHeaderSize;
@@ -252,6 +273,7 @@ ZhTransfer Reader::read_zh() {
       case kZhAnalyticMask: read_section(data, mask, count); break;
       case kZhAxes: read_section(data, t.axes, count); break;
       case kZhCoeffs: read_section(data, t.coeffs, count); break;
+      case kZhRestOcclusion: read_section(data, t.rest_ao, count); break;
     }
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
@@ -264,7 +286,8 @@ ZhTransfer Reader::read_zh() {
 
   // Values: the mask marks exactly the vertices the header says are analytic,
   // and nothing past the last vertex (then the slots are rebuilt from it, as
-  // an SH file's); then zh_transfer_problem (unit axes, finite coefficients).
+  // an SH file's); then zh_transfer_problem (unit axes, finite coefficients,
+  // rest occlusion in [0, 1]).
   if (has_mask) {
     std::uint64_t marked = 0;
     for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
@@ -302,7 +325,7 @@ void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& wha
 std::string describe_transfer(const ZhTransfer& t) {
   const auto line = describe_line;
   const std::size_t analytic = t.analytic_vertices(), stored = t.vertices - analytic;
-  std::uint64_t bytes = 0;  // of the per-vertex sections
+  std::uint64_t bytes = 0;  // of the per-vertex sections (the rest occlusion's included)
   for (const auto& s : transfer_sections(t))
     if (s.per_vertex) bytes += s.bytes;
   std::string s = fmt::format("prt zonal-harmonic transfer (format version {})\n", kZhFormatVersion);
@@ -321,9 +344,20 @@ std::string describe_transfer(const ZhTransfer& t) {
                                     "stored)",
                                     t.vertices, stored, analytic));
   s += line("fit error", fmt::format("{:.4g}% (relative, over the stored vertices' SH transfer)", 100.0 * t.fit_error));
+  if (t.rest_ao.empty()) {
+    s += line("rest occlusion", "none");
+  } else {
+    double mean = 0;  // in double: a float sum of a million values loses the fourth digit
+    for (float a : t.rest_ao) mean += a;
+    mean /= double(t.rest_ao.size());
+    const auto [lo, hi] = std::minmax_element(t.rest_ao.begin(), t.rest_ao.end());
+    s += line("rest occlusion", fmt::format("dynamic AO of the rest pose, every vertex: mean {:.4f}, {:.4f} to {:.4f}",
+                                            mean, double(*lo), double(*hi)));
+  }
   s += line("bytes per vertex",
-            fmt::format("{} per stored vertex ({} axes, {} coefficients); {:.1f} mean over all vertices",
+            fmt::format("{} per stored vertex ({} axes, {} coefficients){}; {:.1f} mean over all vertices",
                         4 * t.stride(), 4 * t.axes_stride(), 4 * t.coeffs_stride(),
+                        t.rest_ao.empty() ? "" : ", 4 per vertex (rest occlusion)",
                         t.vertices > 0 ? double(bytes) / double(t.vertices) : 0.0));
   s += line("mesh hash", fmt::format("0x{:016x} (rest pose)", t.mesh_hash));
   s += line("topology hash", fmt::format("0x{:016x} (what a pose must share)", t.topology_hash));

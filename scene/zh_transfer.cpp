@@ -119,6 +119,12 @@ std::string zh_transfer_problem(const ZhTransfer& t) {
   for (std::size_t i = 0; i < t.coeffs.size(); ++i)
     if (!std::isfinite(t.coeffs[i]))
       return fmt::format("coefficient {} of stored vertex {} is not finite", i % t.coeffs_stride(), i / t.coeffs_stride());
+  if (!t.rest_ao.empty() && t.rest_ao.size() != t.vertices)
+    return fmt::format("{} rest occlusion values for {} vertices (one per vertex, or none)", t.rest_ao.size(),
+                       t.vertices);
+  for (std::size_t v = 0; v < t.rest_ao.size(); ++v)
+    if (!(t.rest_ao[v] >= 0.0f && t.rest_ao[v] <= 1.0f))
+      return fmt::format("rest occlusion of vertex {} is {}; must be in [0, 1]", v, t.rest_ao[v]);
   return {};
 }
 

@@ -1,8 +1,9 @@
 // Zonal-harmonic (local deformable) transfers in files (docs/FORMAT.md,
 // "Zonal-harmonic transfer"): bit-exact round trips with and without
-// analytic vertices, the header and sections where the document puts them,
-// refusal of damaged files and of the other bases (both ways), and a writer
-// that refuses an inconsistent transfer without leaving a file.
+// analytic vertices and the rest pose's occlusion, the header and sections
+// where the document puts them, refusal of damaged files and of the other
+// bases (both ways), and a writer that refuses an inconsistent transfer
+// without leaving a file.
 #include "test_files.h"
 #include "test_meshes.h"
 
@@ -109,6 +110,18 @@ void expect_identical(const ZhTransfer& a, const ZhTransfer& b) {
   EXPECT_EQ(a.slots, b.slots);
   EXPECT_TRUE(same_bytes(a.axes, b.axes));
   EXPECT_TRUE(same_bytes(a.coeffs, b.coeffs));
+  EXPECT_TRUE(same_bytes(a.rest_ao, b.rest_ao));
+}
+
+// A rest occlusion for every vertex of `t`: its ends 0 and 1 exactly, the
+// rest between.
+void add_rest_ao(ZhTransfer& t, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  t.rest_ao.resize(t.vertices);
+  for (float& a : t.rest_ao) a = u(rng);
+  t.rest_ao.front() = 0.0f;
+  t.rest_ao.back() = 1.0f;
 }
 
 template <typename T>
@@ -156,27 +169,34 @@ TEST(ZhTransferIo, RoundTripIsBitExact) {
   // 37 vertices: the analytic-vertex mask's last word is partly used.
   for (int channels : {1, 3})
     for (bool analytic : {false, true})
-      for (bool vc : {false, true}) {
-        const std::string what = "channels " + std::to_string(channels) + (analytic ? ", analytic" : "") +
-                                 (vc ? ", vertex colours" : "");
-        const ZhTransfer t = make_zh(37, 4, 3, channels, analytic, vc, seed++);
-        ASSERT_EQ(zh_transfer_problem(t), "") << what;
-        EXPECT_EQ(t.analytic_vertices(), analytic ? 12u : 0u) << what;
-        write_zh_transfer(path, t);
-        EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(t)) << what;
-        EXPECT_EQ(read_transfer_basis(path), TransferBasis::ZH) << what;
-        EXPECT_EQ(read_transfer_version(path), kZhFormatVersion) << what;
-        const ZhTransfer back = read_zh_transfer(path);
-        expect_identical(t, back);
-        const std::string first = read_file(path);
-        write_zh_transfer(path, back);  // writing what was read gives the same bytes
-        EXPECT_EQ(read_file(path), first) << what;
-      }
+      for (bool vc : {false, true})
+        for (bool ao : {false, true}) {
+          const std::string what = "channels " + std::to_string(channels) + (analytic ? ", analytic" : "") +
+                                   (vc ? ", vertex colours" : "") + (ao ? ", rest occlusion" : "");
+          ZhTransfer t = make_zh(37, 4, 3, channels, analytic, vc, seed++);
+          if (ao) add_rest_ao(t, seed);
+          ASSERT_EQ(zh_transfer_problem(t), "") << what;
+          EXPECT_EQ(t.analytic_vertices(), analytic ? 12u : 0u) << what;
+          write_zh_transfer(path, t);
+          EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(t)) << what;
+          EXPECT_EQ(read_transfer_basis(path), TransferBasis::ZH) << what;
+          EXPECT_EQ(read_transfer_version(path), kZhFormatVersion) << what;
+          const ZhTransfer back = read_zh_transfer(path);
+          expect_identical(t, back);
+          const std::string first = read_file(path);
+          write_zh_transfer(path, back);  // writing what was read gives the same bytes
+          EXPECT_EQ(read_file(path), first) << what;
+        }
   // Every vertex analytic: no row stored, the axes and coefficients sections empty but there.
   ZhTransfer all = make_zh(5, 2, 1, 1, false, false, 40);
   all.slots.assign(5, ZhTransfer::kAnalytic);
   all.axes.clear();
   all.coeffs.clear();
+  write_zh_transfer(path, all);
+  EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(all));
+  expect_identical(all, read_zh_transfer(path));
+  // The rest occlusion is every vertex's, analytic ones too.
+  add_rest_ao(all, 43);
   write_zh_transfer(path, all);
   EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(all));
   expect_identical(all, read_zh_transfer(path));
@@ -252,6 +272,30 @@ TEST(ZhTransferIo, HeaderAndSectionsAreWhereTheDocumentSays) {
   EXPECT_STREQ(s[1].name, "zh coefficients");
   EXPECT_TRUE(s[1].per_vertex);
   EXPECT_EQ(s[1].bytes, 4u * 10 * 3 * 5);
+  // The rest occlusion: a last section, kind 27, one f32 per vertex (all 10,
+  // the analytic ones too), the section count one more.
+  ZhTransfer r = t;
+  add_rest_ao(r, 9);
+  write_zh_transfer(path, r);
+  const std::string d = read_file(path);
+  EXPECT_EQ(get<std::uint32_t>(d, 80), 4u);
+  const std::vector<std::size_t> ad = section_data(d);
+  ASSERT_EQ(ad.size(), 4u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(ad[i], at[i]);  // the others where they were
+  EXPECT_EQ(get<std::uint32_t>(d, ad[3] - 24), 27u);
+  EXPECT_EQ(get<std::uint32_t>(d, ad[3] - 20), 1u);
+  EXPECT_EQ(get<std::uint64_t>(d, ad[3] - 16), 10u);
+  EXPECT_EQ(get<std::uint64_t>(d, ad[3] - 8), 40u);
+  EXPECT_EQ(ad[3] % 8, 0u);
+  for (std::size_t v = 0; v < 10; ++v) EXPECT_EQ(get<float>(d, ad[3] + 4 * v), r.rest_ao[v]) << v;
+  EXPECT_EQ(d.size(), b.size() + 24 + 40);
+  const std::vector<TransferSection> rs = transfer_sections(r);
+  ASSERT_EQ(rs.size(), 4u);
+  EXPECT_EQ(rs[3].kind, 27u);
+  EXPECT_STREQ(rs[3].name, "zh rest occlusion");
+  EXPECT_TRUE(rs[3].per_vertex);
+  EXPECT_EQ(rs[3].count, 10u);
+  EXPECT_EQ(rs[3].bytes, 40u);
 }
 
 TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
@@ -338,6 +382,63 @@ TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
   b.insert(b.size() - 12, 8, '\0');
   reseal(b);
   expect_bytes(b, {"8 bytes between the last section and the trailer"}, "extra bytes");
+}
+
+TEST(ZhTransferIo, DamagedRestOcclusionIsRefused) {
+  TempDir dir;
+  const std::string path = dir.file("z.prtt"), bad = dir.file("bad.prtt");
+  ZhTransfer t = make_zh(37, 3, 3, 1, true, false, 11);
+  write_zh_transfer(path, t);
+  const std::string without = read_file(path);
+  add_rest_ao(t, 12);
+  write_zh_transfer(path, t);
+  const std::string good = read_file(path);
+  const std::vector<std::size_t> at = section_data(good);
+  ASSERT_EQ(at.size(), 4u);
+  struct Case {
+    const std::string* file;
+    std::function<void(std::string&)> edit;
+    std::vector<std::string> words;
+  };
+  const std::vector<Case> cases = {
+      // Values outside [0, 1] (zh_transfer_problem).
+      {&good, [&](std::string& x) { put<float>(x, at[3] + 4 * 5, 1.5f); }, {"rest occlusion of vertex 5 is 1.5"}},
+      {&good, [&](std::string& x) { put<float>(x, at[3] + 4 * 6, -0.25f); }, {"rest occlusion of vertex 6", "[0, 1]"}},
+      {&good, [&](std::string& x) { put<float>(x, at[3], NAN); }, {"rest occlusion of vertex 0"}},
+      // Section counts and the section itself.
+      {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 5); },
+       {"5 sections", "has 3 (4 with its rest occlusion)"}},
+      {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 3); }, {"between the last section and the trailer"}},
+      {&without, [](std::string& x) { put<std::uint32_t>(x, 80, 4); }, {"section 4 ('zh rest occlusion') is missing"}},
+      {&good, [&](std::string& x) { put<std::uint32_t>(x, at[3] - 24, 28); }, {"section 4 has kind 28", "expected 27"}},
+      {&good, [&](std::string& x) { put<std::uint32_t>(x, at[3] - 20, 2); },
+       {"'zh rest occlusion' has element type 2"}},
+      {&good, [&](std::string& x) { put<std::uint64_t>(x, at[3] - 16, 36); },
+       {"'zh rest occlusion' has 36 values", "one per vertex, 37"}},
+      // More vertices than the file can hold values for (the mask would fit).
+      {&good, [](std::string& x) { put<std::uint64_t>(x, 64, 2000); },
+       {"2000 vertices cannot fit", "rest occlusion alone"}},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    std::string b = *cases[i].file;
+    cases[i].edit(b);
+    reseal(b);
+    write_file(bad, b);
+    std::vector<std::string> w = cases[i].words;
+    w.push_back(bad);
+    expect_error([&] { read_zh_transfer(bad); }, w, "case " + std::to_string(i));
+  }
+  // The writer refuses a wrong count or a value out of range, writing nothing.
+  const std::string out = dir.file("out.prtt");
+  ZhTransfer z = t;
+  z.rest_ao.pop_back();
+  expect_error([&] { write_zh_transfer(out, z); }, {out, "36 rest occlusion values for 37 vertices"}, "short");
+  z = t;
+  z.rest_ao[3] = 1.0f + 1e-6f;
+  expect_error([&] { write_zh_transfer(out, z); }, {out, "rest occlusion of vertex 3"}, "above 1");
+  z.rest_ao[3] = NAN;
+  expect_error([&] { write_zh_transfer(out, z); }, {out, "rest occlusion of vertex 3"}, "NaN");
+  EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 TEST(ZhTransferIo, EachReaderRefusesTheOtherBasesNamingThem) {
@@ -432,6 +533,13 @@ TEST(ZhTransferIo, DescribeAndCheckMatchesTheRestPose) {
   EXPECT_TRUE(contains(d, std::to_string(t.analytic_vertices()) + " analytic")) << d;
   ASSERT_FALSE(d.empty());
   EXPECT_EQ(d.back(), '\n');
+  EXPECT_TRUE(contains(d, "rest occlusion") && contains(d, "none")) << d;
+  ZhTransfer r = t;
+  r.rest_ao = {0.25f, 0.5f, 0.75f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.0f};  // the quad's 9 vertices: mean 0.7222
+  const std::string e = describe_transfer(r);
+  EXPECT_TRUE(contains(e, "mean 0.7222, 0.0000 to 1.0000")) << e;
+  EXPECT_TRUE(contains(e, std::to_string(transfer_file_size(r)) + " bytes")) << e;
+  EXPECT_TRUE(contains(e, "4 per vertex (rest occlusion)")) << e;
 
   EXPECT_NO_THROW(check_matches(t, m, "z.prtt"));
   const Mesh other = test::quad(3);

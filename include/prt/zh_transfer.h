@@ -79,6 +79,7 @@ struct ZhTransfer {
   std::vector<float> axes;
   // Per stored row: channels x lobes x bands coefficients g_il ([c][i][l]).
   std::vector<float> coeffs;
+  std::vector<float> rest_ao;  // dynamic_ao() of the rest pose, per vertex, or empty (prt/dynamic_ao.h)
 
   std::size_t axes_stride() const { return std::size_t(lobes) * 3; }
   std::size_t coeffs_stride() const { return std::size_t(channels) * lobes * bands; }
@@ -91,7 +92,8 @@ struct ZhTransfer {
 
 // What is wrong with `t`, or "": bands, lobes, channels, mode, albedo, at
 // least one vertex, slots as prt::Transfer's, array sizes, unit finite axes
-// (|a| within 1e-3 of 1), finite coefficients.
+// (|a| within 1e-3 of 1), finite coefficients, rest occlusion empty or one
+// value in [0, 1] per vertex.
 std::string zh_transfer_problem(const ZhTransfer& t);
 
 // Throws prt::Error unless `posed` can pose `t`: the same vertex count and

@@ -25,6 +25,7 @@
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
 #include <prt/deform.h>
+#include <prt/skin.h>
 
 #include <fmt/core.h>
 #include <tbb/parallel_for.h>
@@ -57,6 +58,10 @@ struct RelightArgs {
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
   std::string at;  // --at POINTS.csv: query points of a probe volume
   std::string deform;  // --deform bend:ANGLE|twist:ANGLE: a procedural pose of MESH (zh files)
+  // --time SECONDS [--animation N]: MESH (a skinned glTF) posed by its skin at that time (zh files).
+  double time = 0;
+  int animation = 0;
+  const CLI::Option *time_opt = nullptr, *animation_opt = nullptr;
 };
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
@@ -149,7 +154,20 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   if (!a.eye.empty()) throw UsageError("--eye: " + a.transfer + " is diffuse (lobes of a diffuse transfer)");
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
   const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
-  const Mesh posed = deform_mesh(load_mesh(a.mesh), deform);
+  const bool timed = a.time_opt->count() > 0;
+  if (a.animation_opt->count() > 0 && !timed)
+    throw UsageError("--animation picks the animation that --time samples: give --time SECONDS too");
+  if (timed && !a.deform.empty())
+    throw UsageError("--time and --deform: give one pose, the skin's at a time (--time) or a procedural one "
+                     "(--deform)");
+  // --time: MESH's own skin (glTF) poses it, from the rest mesh load_mesh
+  // reads (the one the transfer was computed on; prt/skin.h).
+  const Mesh posed = [&] {
+    if (!timed) return deform_mesh(load_mesh(a.mesh), deform);
+    const Mesh rest = load_mesh(a.mesh);
+    const Skin skin = load_skin(a.mesh, rest);
+    return skin_mesh(rest, skin, joint_matrices(skin, a.time, a.animation));
+  }();
   const ZhTransfer z = read_zh_transfer(a.transfer);
   check_pose(z, posed, a.transfer);
   EnvMap env = load_envmap(a.env);
@@ -340,6 +358,9 @@ int run_relight(const RelightArgs& a) {
   if (!a.deform.empty() && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
     throw UsageError("--deform: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a "
                      "deformation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
+  if (a.time_opt->count() > 0 && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
+    throw UsageError("--time: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a skin's "
+                     "animation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
   if (is_probe_file(a.transfer)) return run_probes(a, ext, euler);
   if (!a.at.empty()) throw UsageError("--at gives query points of a probe volume: " + a.transfer + " is not one");
   if (transfer_is_lightmap(a.transfer)) {
@@ -451,6 +472,7 @@ Run add_relight(CLI::App& app) {
       "         prt relight bunny.off glossy.prt envmaps/forest.exr --eye 0,0.1,0.4 --gloss 16 -o g.csv\n"
       "         prt relight bunny.off bunny.wlt envmaps/forest.exr --terms 200 -o bunny.csv\n"
       "         prt relight tube-bent.obj tube-zh.prt envmaps/forest.exr -o bent.ply   (a pose of a --basis zh mesh)\n"
+      "         prt relight models/tube-skinned.gltf tube-zh.prt envmaps/forest.exr --time 1 -o bent.ply   (its skin)\n"
       "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr\n"
       "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
   s->add_option("MESH", a->mesh,
@@ -476,14 +498,14 @@ Run add_relight(CLI::App& app) {
   s->add_option("--deform", a->deform,
                 "--basis zh files: pose MESH procedurally first: bend:ANGLE (its y extent bent into an arc of ANGLE "
                 "degrees towards +x) or twist:ANGLE (about y); the PLY output is then the posed mesh (prt/deform.h)")
-      ->check([](const std::string& v) {
-        try {
-          parse_deform(v);
-          return std::string();
-        } catch (const Error& e) {
-          return std::string(e.what());
-        }
-      });
+      ->check(deform_value());
+  a->time_opt = s->add_option("--time", a->time,
+                              "--basis zh files: pose MESH, a skinned glTF, by its skin at SECONDS of its animation "
+                              "(looping: the time wraps); the PLY output is then the posed mesh (prt/skin.h)")
+                    ->check(finite_number());
+  a->animation_opt = s->add_option("--animation", a->animation,
+                                   "With --time: which of the file's animations, from 0 (default 0)")
+                         ->check(int_range(0, 1 << 20));
   add_shared(s, SharedOption::Eye, a->eye, "Glossy files: the eye point the radiance is seen from");
   add_glossy_options(s, a->lobe);
   for (const CLI::Option* o : a->lobe.options) a->sh_only.push_back(o);
