@@ -182,6 +182,16 @@ std::vector<float> posed_transfer(const ZhTransfer& t, const Mesh& posed, PoseRe
   return out;
 }
 
+std::vector<float> dynamic_ao_factor(const ZhTransfer& t, const Mesh& posed, const DynamicAoOptions& options) {
+  if (t.rest_ao.size() != t.vertices)
+    throw Error("the zonal-harmonic transfer holds no rest occlusion: compute it with prt precompute --basis zh "
+                "--dynamic-ao (prt::dynamic_ao of the rest pose)");
+  check_pose(t, posed, "the zonal-harmonic transfer");
+  std::vector<float> f = dynamic_ao(posed, options);
+  for (std::size_t v = 0; v < f.size(); ++v) f[v] = (f[v] + kAoFloor) / (t.rest_ao[v] + kAoFloor);
+  return f;
+}
+
 Transfer posed_as_transfer(const ZhTransfer& t, const Mesh& posed, PoseReport* report) {
   Transfer out;
   out.coeffs = posed_transfer(t, posed, report);

@@ -60,8 +60,8 @@ fit_table() {
 bend_table() {
   local mesh=${1:-models/tube.obj}
   local ao=""
-  "$prt" relight --help | grep -q -- "--dynamic-ao" && ao=1
-  "$prt" precompute "$mesh" -o "$tmp/zh.prt" --basis zh --lobes 4 --bands "$bands" --samples 1024 -q
+  case "$("$prt" relight --help)" in *--dynamic-ao*) ao=1 ;; esac
+  "$prt" precompute "$mesh" -o "$tmp/zh.prt" --basis zh --lobes 4 --bands "$bands" --samples 1024 -q ${ao:+--dynamic-ao}
   echo "$(basename "$mesh"): the rest pose's lobes (K = 4, $bands bands, 1024 rays) relit bent, against a fresh"
   echo "SH precompute of the bent mesh ($bands bands, 1024 rays), map $(basename "$env"); relative RMS (99th percentile"
   echo "of the per-vertex relative error)."

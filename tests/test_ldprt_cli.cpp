@@ -76,6 +76,35 @@ TEST(LdprtCli, PrecomputeThenRelightPoses) {
   EXPECT_GT(moved, 0.05);
 }
 
+// --dynamic-ao: stored by precompute, applied by relight as the library's
+// dynamic_ao_factor; refused for a file without it and for other bases.
+TEST(LdprtCli, DynamicAoThroughTheCommandLine) {
+  TempDir dir;
+  const std::string z = dir.file("z.prt"), plain = dir.file("plain.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", kTube, "-o", z, "--basis", "zh", "--lobes", "2", "--bands", "3", "--samples",
+                          "32", "--dynamic-ao", "-q"})
+                .code,
+            0);
+  ASSERT_EQ(run_prt(dir, {"precompute", kTube, "-o", plain, "--basis", "zh", "--lobes", "2", "--bands", "3",
+                          "--samples", "32", "-q"})
+                .code,
+            0);
+  const Result r = run_prt(dir, {"relight", kTube, z, kEnv, "--deform", "bend:100", "--dynamic-ao", "-o",
+                                 dir.file("ao.csv"), "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const Mesh bent = deform_mesh(load_mesh(kTube), parse_deform("bend:100"));
+  std::vector<glm::vec3> want = library_relight(z, bent);
+  const std::vector<float> f = dynamic_ao_factor(read_zh_transfer(z), bent);
+  for (std::size_t v = 0; v < want.size(); ++v) want[v] *= f[v];
+  expect_same(read_vertex_csv(dir.file("ao.csv")), want);
+  const Result no = run_prt(dir, {"relight", kTube, plain, kEnv, "--dynamic-ao", "-o", dir.file("x.csv")});
+  EXPECT_EQ(no.code, 1) << describe_run(no);
+  EXPECT_NE(no.err.find("no rest occlusion"), std::string::npos) << no.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("x.csv")));
+  const Result sh = run_prt(dir, {"precompute", kTube, "-o", dir.file("x.prt"), "--dynamic-ao"});
+  EXPECT_EQ(sh.code, 2) << describe_run(sh);
+}
+
 // prt render follows --deform: one frame at the whole angle, a sequence from
 // rest and back (its first frame the rest pose's image, its middle the
 // whole angle's); the image moves with the pose.

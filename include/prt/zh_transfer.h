@@ -16,6 +16,7 @@
 // Duff et al. 2017's basis: it follows the normal, not the turn about it).
 #pragma once
 
+#include <prt/dynamic_ao.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 
@@ -114,6 +115,16 @@ struct PoseReport {
 // the clamped cosine about the posed normal with the albedo. A vertex without
 // a posed frame gets zero (as a vertex without a normal at rest).
 std::vector<float> posed_transfer(const ZhTransfer& t, const Mesh& posed, PoseReport* report = nullptr);
+
+// Dynamic ambient occlusion (prt/dynamic_ao.h; docs/LDPRT.md): the factor
+// each vertex's posed radiance is scaled by to restore the occlusion the
+// local lobes cannot follow, (A_pose + kAoFloor) / (A_rest + kAoFloor), A the
+// dynamic_ao of the pose and of the rest pose (ZhTransfer::rest_ao, which
+// the file must hold: prt precompute --basis zh --dynamic-ao). At rest it
+// is 1. Throws prt::Error when t has no rest occlusion or posed is no pose
+// of it (check_pose).
+inline constexpr float kAoFloor = 0.05f;  // keeps a vertex dark at rest from taking huge factors (A's error ~0.04)
+std::vector<float> dynamic_ao_factor(const ZhTransfer& t, const Mesh& posed, const DynamicAoOptions& options = {});
 
 // The same as a prt::Transfer (every vertex stored, no analytic slot), for
 // the tools that take one: relight, the renderer, the reference comparison.

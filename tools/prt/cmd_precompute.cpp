@@ -15,6 +15,7 @@
 #include <prt/wavelet_transfer.h>
 #include <prt/zh.h>
 #include <prt/zh_transfer.h>
+#include <prt/dynamic_ao.h>
 
 #include <fmt/core.h>
 
@@ -60,7 +61,8 @@ struct PrecomputeArgs {
   std::vector<const CLI::Option*> sh_only, wavelet_only;
   // --basis zh: lobes per vertex (docs/LDPRT.md).
   int lobes = 4;
-  const CLI::Option* lobes_opt = nullptr;
+  bool dynamic_ao = false;  // also store the rest pose's dynamic ambient occlusion (prt relight --dynamic-ao)
+  const CLI::Option *lobes_opt = nullptr, *dynamic_ao_opt = nullptr;
   // --target-error: the error target, its map and reference cache; bands,
   // samples and bounces given on the command line are the most it may choose.
   double target_error = 0;
@@ -304,10 +306,15 @@ int run_zh(PrecomputeArgs& a) {
   ZhFitOptions fo;
   fo.lobes = a.lobes;
   fo.threads = a.opt.threads;
-  const std::optional<ZhTransfer> z = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
+  std::optional<ZhTransfer> z = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
     return fit_zh_transfer(*computed, mesh, fo, progress);
   });
   if (!z) return 130;
+  if (a.dynamic_ao) {
+    DynamicAoOptions ao;
+    ao.threads = a.opt.threads;
+    z->rest_ao = dynamic_ao(mesh, ao);
+  }
   const auto t2 = std::chrono::steady_clock::now();
   out.write([&] { write_zh_transfer(a.output, *z); });
   if (const int rc = out.commit(); rc != 0) return rc;
@@ -558,7 +565,8 @@ int run_precompute(PrecomputeArgs& a) {
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
     throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
                      "too (a vertex transfer keeps its ambient occlusion and bent normals in the file)");
-  if (a.basis != "zh" && a.lobes_opt->count() > 0) throw UsageError("--lobes applies to --basis zh only");
+  for (const CLI::Option* o : {a.lobes_opt, a.dynamic_ao_opt})
+    if (a.basis != "zh" && o->count() > 0) throw UsageError(o->get_name() + " applies to --basis zh only");
   if (a.basis == "zh") {
     for (const CLI::Option* o : a.wavelet_only)
       if (o->count() > 0) throw UsageError(o->get_name() + " applies to --basis wavelet only");
@@ -698,6 +706,10 @@ Run add_precompute(CLI::App& app) {
                                "transfer within about 1.3% on the shared meshes)")
                      ->check(int_range(1, zh::kMaxLobes))
                      ->capture_default_str();
+  a->dynamic_ao_opt = s->add_flag("--dynamic-ao", a->dynamic_ao,
+                                  "--basis zh: also store the rest pose's dynamic ambient occlusion (Bunnell 2005; 4 "
+                                  "bytes a vertex), which prt relight --dynamic-ao compares a pose's with to restore "
+                                  "the distant occlusion the lobes cannot follow");
   a->material_opt =
       add_shared(s, SharedOption::Material, a->material,
                  "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "

@@ -58,6 +58,8 @@ struct RelightArgs {
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
   std::string at;  // --at POINTS.csv: query points of a probe volume
   std::string deform;  // --deform bend:ANGLE|twist:ANGLE: a procedural pose of MESH (zh files)
+  bool dynamic_ao = false;  // --dynamic-ao (zh files): scale by the pose's dynamic AO over the rest pose's
+  const CLI::Option* dynamic_ao_opt = nullptr;
   // --time SECONDS [--animation N]: MESH (a skinned glTF) posed by its skin at that time (zh files).
   double time = 0;
   int animation = 0;
@@ -170,6 +172,9 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   }();
   const ZhTransfer z = read_zh_transfer(a.transfer);
   check_pose(z, posed, a.transfer);
+  if (a.dynamic_ao && z.rest_ao.empty())
+    throw Error(a.transfer + ": --dynamic-ao: it holds no rest occlusion; compute it with prt precompute --basis zh "
+                "--dynamic-ao");
   EnvMap env = load_envmap(a.env);
   require_finite(env);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(posed), describe(env), describe_transfer(z));
@@ -185,6 +190,18 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
   std::vector<glm::vec3> rgb = relight(t, posed, light);
   const double frame_ms = ms_since(t0);
+  double ao_ms = 0;
+  if (a.dynamic_ao) {
+    t0 = std::chrono::steady_clock::now();
+    std::vector<float> f;
+    try {
+      f = dynamic_ao_factor(z, posed);
+    } catch (const Error& e) {
+      throw Error(a.transfer + ": --dynamic-ao: " + e.what());
+    }
+    for (std::size_t v = 0; v < rgb.size(); ++v) rgb[v] *= f[v];
+    ao_ms = ms_since(t0);
+  }
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
     for (double x : vertex_transfer(t, posed, v)) m = std::max(m, std::abs(x));
@@ -197,8 +214,9 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   if (const int rc = write_output(a, ext, posed, env, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: pose {:.3f} ms ({} lobes turned into each vertex's posed frame), {:.3f} ms per frame "
-                       "(window, rotation, transfer; projection {:.1f} ms once)\nwrote {} ({} vertices)\n",
-               pose_ms, z.lobes, frame_ms, project_ms, a.output, written);
+                       "(window, rotation, transfer; projection {:.1f} ms once){}\nwrote {} ({} vertices)\n",
+               pose_ms, z.lobes, frame_ms, project_ms,
+               a.dynamic_ao ? fmt::format(", dynamic AO {:.1f} ms", ao_ms) : std::string(), a.output, written);
   return 0;
 }
 
@@ -355,6 +373,9 @@ int run_relight(const RelightArgs& a) {
                        "it the output is linear radiance)");
   if (ext != ".ply" && ext != ".csv" && ext != ".exr")
     throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr)");
+  if (a.dynamic_ao_opt->count() > 0 && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
+    throw UsageError("--dynamic-ao: " + a.transfer + " is not a --basis zh transfer (dynamic ambient occlusion "
+                     "restores the distant occlusion a deforming mesh's local lobes cannot follow)");
   if (!a.deform.empty() && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
     throw UsageError("--deform: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a "
                      "deformation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
@@ -495,6 +516,10 @@ Run add_relight(CLI::App& app) {
   a->wavelet_only.push_back(
       add_shared(s, SharedOption::Selection, a->selection,
                  "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)"));
+  a->dynamic_ao_opt = s->add_flag(
+      "--dynamic-ao", a->dynamic_ao,
+      "--basis zh files computed with --dynamic-ao: scale each vertex by the pose's dynamic ambient occlusion over the "
+      "rest pose's (Bunnell 2005): the distant occluders a bend brings or takes away, which the lobes cannot follow");
   s->add_option("--deform", a->deform,
                 "--basis zh files: pose MESH procedurally first: bend:ANGLE (its y extent bent into an arc of ANGLE "
                 "degrees towards +x) or twist:ANGLE (about y); the PLY output is then the posed mesh (prt/deform.h)")
