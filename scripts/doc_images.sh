@@ -4,6 +4,7 @@
 #   view_scene.png    a prt view window (under Xvfb when there is no display)
 #   shading_modes.png prt render in each shading mode, side by side
 #   sh_vs_wavelet.png the same frame lit by 5-band SH and by wavelets (K = 100)
+#   ldprt_bend.png    the bundled tube's zonal-harmonic lobes at rest and bent 120 degrees (docs/LDPRT.md)
 # Needs a built prt (scripts/build.sh build), xvfb-run and python3-matplotlib
 # (scripts/install-deps.sh installs both). Takes about a minute on 2 cores.
 set -euo pipefail
@@ -36,6 +37,13 @@ done
 "$prt" render "$mesh" "$out/scene.w.prt" "$env" -q -o "$out/basis_wavelet.png" --width 400 --height 250 \
   --camera "$cam" --exposure -1 --terms 100
 
+# Local deformable PRT: one file of lobes, two poses, the same camera.
+[ -f "$out/tube.zh.prt" ] || "$prt" precompute models/tube.obj -o "$out/tube.zh.prt" --basis zh --lobes 4 --bands 6 -q
+for pose in 0 120; do
+  "$prt" render models/tube.obj "$out/tube.zh.prt" "$env" -q -o "$out/tube_bend$pose.png" --width 400 --height 300 \
+    --camera 0.6,1.2,4.6,0.6,1.0,0,0,1,0 --rotate 60,0,0 --deform bend:$pose
+done
+
 # Debian's python3 (python3-matplotlib), not a pyenv or venv one that lacks it.
 py=/usr/bin/python3
 [ -x "$py" ] || py=python3
@@ -64,5 +72,7 @@ grid([("mode_transfer", "interreflected (2 bounces)"), ("mode_direct", "shadowed
       ("mode_ao", "ambient occlusion"), ("mode_bent", "bent normals")], 3, "docs/images/shading_modes.png")
 grid([("basis_sh", "SH, 5 bands (25 coefficients), shadowed"),
       ("basis_wavelet", "Haar wavelets, 6x32x32 cube, K = 100, shadowed")], 2, "docs/images/sh_vs_wavelet.png")
+grid([("tube_bend0", "rest pose"), ("tube_bend120", "bent 120 degrees: the same lobes, turned on the GPU")], 2,
+     "docs/images/ldprt_bend.png")
 PY
-echo "wrote docs/images/view_scene.png, shading_modes.png, sh_vs_wavelet.png"
+echo "wrote docs/images/view_scene.png, shading_modes.png, sh_vs_wavelet.png, ldprt_bend.png"
