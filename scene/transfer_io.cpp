@@ -736,21 +736,7 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
   // 5. Values: the mask marks exactly the vertices the header says are
   // analytic, and nothing past the last vertex; then the validator (every
   // value finite).
-  if (!mask.empty()) {
-    std::uint64_t marked = 0;
-    for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
-    const std::uint64_t tail = v.vertices % 32;
-    if (tail != 0 && (mask.back() >> tail) != 0)
-      throw fail(fmt::format("bad analytic-vertex mask: bits set past the last vertex ({})", v.vertices));
-    if (marked != v.vertices - v.stored)
-      throw fail(fmt::format("bad analytic-vertex mask: {} vertices marked analytic; the header says {} ({} vertices, "
-                             "{} stored)",
-                             marked, v.vertices - v.stored, v.vertices, v.stored));
-    t.slots.assign(t.vertices, Transfer::kAnalytic);
-    std::uint32_t row = 0;
-    for (std::size_t vtx = 0; vtx < t.vertices; ++vtx)
-      if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) t.slots[vtx] = row++;
-  }
+  if (!mask.empty()) t.slots = slots_from_mask(mask, v.vertices, v.stored);
   if (compressed_out) {
     compressed_out->transfer = std::move(t);
     if (auto p = compressed_transfer_problem(*compressed_out); !p.empty()) throw fail(p);
@@ -773,6 +759,24 @@ CompressedTransfer read_compressed_transfer(const std::string& path) {
 // ---- checking and describing ----------------------------------------------------------
 
 namespace detail::tio {
+
+std::vector<std::uint32_t> Reader::slots_from_mask(const std::vector<std::uint32_t>& mask, std::uint64_t vertices,
+                                                   std::uint64_t stored) const {
+  std::uint64_t marked = 0;
+  for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
+  const std::uint64_t tail = vertices % 32;
+  if (tail != 0 && (mask.back() >> tail) != 0)
+    throw fail(fmt::format("bad analytic-vertex mask: bits set past the last vertex ({})", vertices));
+  if (marked != vertices - stored)
+    throw fail(fmt::format("bad analytic-vertex mask: {} vertices marked analytic; the header says {} ({} vertices, "
+                           "{} stored)",
+                           marked, vertices - stored, vertices, stored));
+  std::vector<std::uint32_t> slots(vertices, Transfer::kAnalytic);
+  std::uint32_t row = 0;
+  for (std::size_t vtx = 0; vtx < vertices; ++vtx)
+    if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) slots[vtx] = row++;
+  return slots;
+}
 
 // Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
 void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,

@@ -258,6 +258,11 @@ class Reader {
   // returned), which must then be given (and only then).
   Transfer read(CompressedTransfer* compressed = nullptr, LightmapLayout* lightmap = nullptr);
   WaveletTransfer read_wavelet(LightmapLayout* lightmap = nullptr);
+  // The slots of an analytic-vertex mask (kind 6 of SH files, 24 of ZH
+  // ones): throws unless it marks exactly vertices - stored vertices and
+  // nothing past the last vertex.
+  std::vector<std::uint32_t> slots_from_mask(const std::vector<std::uint32_t>& mask, std::uint64_t vertices,
+                                             std::uint64_t stored) const;
   ZhTransfer read_zh();
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }

@@ -288,21 +288,7 @@ ZhTransfer Reader::read_zh() {
   // and nothing past the last vertex (then the slots are rebuilt from it, as
   // an SH file's); then zh_transfer_problem (unit axes, finite coefficients,
   // rest occlusion in [0, 1]).
-  if (has_mask) {
-    std::uint64_t marked = 0;
-    for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
-    const std::uint64_t tail = v.vertices % 32;
-    if (tail != 0 && (mask.back() >> tail) != 0)
-      throw fail(fmt::format("bad analytic-vertex mask: bits set past the last vertex ({})", v.vertices));
-    if (marked != v.vertices - v.stored)
-      throw fail(fmt::format("bad analytic-vertex mask: {} vertices marked analytic; the header says {} ({} vertices, "
-                             "{} stored)",
-                             marked, v.vertices - v.stored, v.vertices, v.stored));
-    t.slots.assign(t.vertices, ZhTransfer::kAnalytic);
-    std::uint32_t row = 0;
-    for (std::size_t vtx = 0; vtx < t.vertices; ++vtx)
-      if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) t.slots[vtx] = row++;
-  }
+  if (has_mask) t.slots = slots_from_mask(mask, v.vertices, v.stored);
   if (auto p = zh_transfer_problem(t); !p.empty()) throw fail(p);
   return t;
 }
