@@ -166,7 +166,8 @@ void Renderer::Impl::delete_mesh_objects() {
                             ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
                             coeff_rows.buffer, coeff_rows.products, glossy_rows.buffer, glossy_rows.products,
                             cluster_color_buffer, glossy_order_buffer, glossy_chunk_buffer,
-                            zh_rows, zh_neighbours, rest_positions, rest_normals};
+                            zh_rows, zh_neighbours, rest_positions, rest_normals, skin_joints, skin_weights,
+                            joint_matrix_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   const GLuint textures[] = {transfer.texture, direct.texture, glossy_array.texture};
   glDeleteTextures(GLsizei(std::size(textures)), textures);
@@ -191,6 +192,9 @@ void Renderer::Impl::delete_mesh_objects() {
   zh_bytes = 0;
   zh_lobes = zh_lobe_bands = 0;
   pose = Deform{};
+  skin_joints = skin_weights = joint_matrix_buffer = 0;
+  skin_joint_count = 0;
+  skin_pose = false;
   normal_buffer = albedo_buffer = ao_buffer = bent_buffer = color_buffer = radiance_buffer = 0;
 }
 

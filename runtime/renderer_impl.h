@@ -164,6 +164,12 @@ struct Renderer::Impl {
   Deform pose;             // Kind::None: the posed buffers hold the pose (set_pose of arrays, or the rest)
   double pose_amount = 0;
   glm::vec4 deform_frame{0.0f};  // the rest pose's y0, length along y, centre x and z (prt/deform.h)
+  // A skin (set_skin): each vertex's joints (uvec4) and weights (vec4), and
+  // the joint matrices (mat4) of the last set_pose of matrices; skin_pose:
+  // the pass skins the rest pose with them (zh.comp.glsl, POSE 3).
+  GLuint skin_joints = 0, skin_weights = 0, joint_matrix_buffer = 0;
+  std::size_t skin_joint_count = 0;
+  bool skin_pose = false;
   GLuint zh_relight();
 
   GLsizei index_count = 0;

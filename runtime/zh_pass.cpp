@@ -24,6 +24,10 @@ using gl::make_buffer;
 
 namespace {
 
+// Storage buffers the skinned pass binds (zh.comp.glsl, POSE 3): the seven of
+// every pose, the joints, the weights and the joint matrices.
+constexpr GLint kSkinStorageBlocks = 10;
+
 // Floats of one vertex's row on the GPU: LOBES axes as vec4s, then the
 // coefficients [c][i][l] padded to whole vec4s (zh.comp.glsl's layout).
 std::size_t zh_row_floats(const ZhTransfer& z) {
@@ -87,6 +91,7 @@ void Renderer::set_mesh(const Mesh& rest, const ZhTransfer& z) {
   m.channels = C;
   m.source = Source::Stored;
   m.pose = Deform{};
+  m.skin_pose = false;
   const glm::vec3 lo = rest.bounds_min(), hi = rest.bounds_max();
   m.deform_frame = {lo.y, hi.y - lo.y, 0.5f * (lo.x + hi.x), 0.5f * (lo.z + hi.z)};
   m.shading = Shading::Transfer;
@@ -102,10 +107,12 @@ void Renderer::set_pose(const Deform& d, double amount) {
     glCopyNamedBufferSubData(m.rest_normals, m.normal_buffer, 0, 0, GLsizeiptr(m.vertex_count * sizeof(glm::vec3)));
     check_gl("restoring the rest pose");
     m.pose = Deform{};
+    m.skin_pose = false;
     return;
   }
   m.pose = d;
   m.pose_amount = amount;
+  m.skin_pose = false;
 }
 
 void Renderer::set_pose(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals) {
@@ -118,6 +125,56 @@ void Renderer::set_pose(std::span<const glm::vec3> positions, std::span<const gl
   glNamedBufferSubData(m.normal_buffer, 0, GLsizeiptr(normals.size_bytes()), normals.data());
   check_gl("uploading a pose");
   m.pose = Deform{};
+  m.skin_pose = false;
+}
+
+void Renderer::set_skin(const Skin& skin) {
+  Impl& m = *impl_;
+  PRT_CHECK(m.zh);
+  const std::size_t V = m.vertex_count, J = skin.joint_count;
+  if (skin.vertex_count() != V || skin.vertex_weights.size() != V)
+    throw Error(fmt::format("{}: the skin has {} vertices ({} weights), the mesh {}", skin.source, skin.vertex_count(),
+                            skin.vertex_weights.size(), V));
+  if (J == 0) throw Error(skin.source + ": the skin has no joints");
+  for (std::size_t v = 0; v < V; ++v)
+    for (int k = 0; k < 4; ++k)
+      if (skin.vertex_weights[v][k] != 0.0f && skin.vertex_joints[v][k] >= J)
+        throw Error(fmt::format("{}: vertex {} names joint {}, out of range ({} joints)", skin.source, v,
+                                skin.vertex_joints[v][k], J));
+  m.make_current();
+  // The skinned pass binds three storage buffers more than the others (10
+  // in all; GL 4.5 promises a compute shader 8, drivers give 16 or more).
+  GLint blocks = 0;
+  glGetIntegerv(GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS, &blocks);
+  if (blocks < kSkinStorageBlocks)
+    throw Error(fmt::format("GPU skinning binds {} storage buffers in one compute shader; this OpenGL's "
+                            "GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS is {}: pose the mesh on the CPU (skin_mesh) and "
+                            "give the pose as arrays",
+                            kSkinStorageBlocks, blocks));
+  if (J * sizeof(glm::mat4) > m.limits.storage_block)
+    throw Error(fmt::format("{}: {} joint matrices need {} bytes in one storage buffer; this OpenGL's "
+                            "GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes",
+                            skin.source, J, J * sizeof(glm::mat4), m.limits.storage_block));
+  const GLuint old[] = {m.skin_joints, m.skin_weights, m.joint_matrix_buffer};
+  glDeleteBuffers(GLsizei(std::size(old)), old);
+  m.skin_joints = make_buffer(skin.vertex_joints.data(), V * sizeof(glm::uvec4));
+  m.skin_weights = make_buffer(skin.vertex_weights.data(), V * sizeof(glm::vec4));
+  m.joint_matrix_buffer = make_buffer(nullptr, J * sizeof(glm::mat4), GL_DYNAMIC_STORAGE_BIT);
+  check_gl(fmt::format("uploading a skin ({} vertices, {} joints)", V, J));
+  m.skin_joint_count = J;
+  m.skin_pose = false;  // no matrices yet: the pose stays what it was
+}
+
+void Renderer::set_pose(std::span<const glm::mat4> joint_matrices) {
+  Impl& m = *impl_;
+  PRT_CHECK(m.zh);
+  PRT_CHECK(m.skin_joint_count > 0);
+  PRT_CHECK_OP(joint_matrices.size(), ==, m.skin_joint_count);
+  m.make_current();
+  glNamedBufferSubData(m.joint_matrix_buffer, 0, GLsizeiptr(joint_matrices.size_bytes()), joint_matrices.data());
+  check_gl("uploading joint matrices");
+  m.pose = Deform{};
+  m.skin_pose = true;
 }
 
 std::vector<glm::vec3> Renderer::posed_positions() const {
@@ -132,7 +189,8 @@ std::vector<glm::vec3> Renderer::posed_positions() const {
 }
 
 GLuint Renderer::Impl::zh_relight() {
-  const int pose_kind = pose.kind == Deform::Kind::Bend ? 1 : pose.kind == Deform::Kind::Twist ? 2 : 0;
+  const int pose_kind =
+      skin_pose ? 3 : pose.kind == Deform::Kind::Bend ? 1 : pose.kind == Deform::Kind::Twist ? 2 : 0;
   GLuint& p = zh_programs[{band_limit, zh_lobe_bands, zh_lobes, channels, pose_kind}];
   if (!p)
     p = gl::link_compute(shaders::zh_comp_glsl, "zonal-harmonic pass",
@@ -152,6 +210,10 @@ GLuint Renderer::Impl::zh_relight() {
   const GLuint storage[][2] = {{7, zh_rows},         {8, zh_neighbours},   {9, rest_positions},   {10, rest_normals},
                                {11, position_buffer}, {12, normal_buffer}, {2, radiance_buffer}};
   for (const auto& [binding, buffer] : storage) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer);
+  if (skin_pose) {
+    const GLuint skin[][2] = {{13, skin_joints}, {14, skin_weights}, {15, joint_matrix_buffer}};
+    for (const auto& [binding, buffer] : skin) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer);
+  }
   // Whole buffers bound (a vertex reads its neighbour's position anywhere);
   // dispatches of at most `chunk` vertices for the work group count.
   for (std::size_t first = 0; first < vertex_count; first += chunk) {

@@ -8,10 +8,13 @@
 // #defines (the renderer compiles one program per combination): BANDS (the
 // lighting's bands used: the lobes' profiles are cut there too), LOBE_BANDS
 // (the profiles' stored bands), LOBES, CHANNELS, POSE:
-//   0 given: posed positions and normals are in their buffers (uploaded, or
-//     written by a skinning pass);
+//   0 given: posed positions and normals are in their buffers (uploaded by
+//     set_pose, or the rest pose);
 //   1 bend, 2 twist: computed here from the rest pose (prt/deform.h, the
-//     same formulas and the normal by the deformation's cofactor matrix).
+//     same formulas and the normal by the deformation's cofactor matrix);
+//   3 skinned: linear blend skinning of the rest pose by the joint matrices
+//     (prt/skin.h's skin_mesh: M = sum_k w_k M_{j_k}, the position M p, the
+//     normal M's 3x3 cofactor times n, normalised).
 // The lighting block and sh_band_sums: sh_bands.glsl and runtime/sh_glsl.cpp,
 // inserted with them.
 //
@@ -31,6 +34,13 @@ layout(std430, binding = 10) readonly buffer RestNormals { float rest_n[]; };
 layout(std430, binding = 11) buffer PosedPositions { float posed_p[]; };
 layout(std430, binding = 12) buffer PosedNormals { float posed_n[]; };
 layout(std430, binding = 2) writeonly buffer RadianceBuffer { vec4 radiance[]; };
+#if POSE == 3
+// Per vertex its four joints and their weights (set_skin, uploaded once),
+// and per joint its matrix of this frame (set_pose).
+layout(std430, binding = 13) readonly buffer SkinJoints { uvec4 skin_joints[]; };
+layout(std430, binding = 14) readonly buffer SkinWeights { vec4 skin_weights[]; };
+layout(std430, binding = 15) readonly buffer JointMatrices { mat4 joint_matrix[]; };
+#endif
 
 layout(location = 0) uniform uint u_vertices;  // of this dispatch
 layout(location = 1) uniform uint u_first;
@@ -53,7 +63,28 @@ vec3 load3(uint v, bool rest, bool normal) {
   return normal ? vec3(posed_n[i], posed_n[i + 1], posed_n[i + 2]) : vec3(posed_p[i], posed_p[i + 1], posed_p[i + 2]);
 }
 
-#if POSE != 0
+// The cofactor matrix det(J) J^-T (columns J1 x J2, J2 x J0, J0 x J1) times
+// n, normalised: a posed normal (prt/deform.h); zero when n or the result is.
+vec3 posed_normal(mat3 J, vec3 n) {
+  if (dot(n, n) == 0.0) return vec3(0.0);
+  const vec3 m = mat3(cross(J[1], J[2]), cross(J[2], J[0]), cross(J[0], J[1])) * n;
+  const float len = length(m);
+  return len > 0.0 ? m / len : vec3(0.0);
+}
+
+#if POSE == 3
+// Vertex v's posed position, and its posed normal when `with_normal`. A
+// joint of weight 0 is skipped, as skin_mesh skips it (its index is not read).
+vec3 deform(uint v, bool with_normal, out vec3 normal) {
+  const uvec4 j = skin_joints[v];
+  const vec4 w = skin_weights[v];
+  mat4 M = mat4(0.0);
+  for (int k = 0; k < 4; ++k)
+    if (w[k] != 0.0) M += joint_matrix[j[k]] * w[k];
+  normal = with_normal ? posed_normal(mat3(M), load3(v, true, true)) : vec3(0.0);
+  return (M * vec4(load3(v, true, false), 1.0)).xyz;
+}
+#elif POSE != 0
 // Vertex v's posed position, and its posed normal when `with_normal`.
 vec3 deform(uint v, bool with_normal, out vec3 normal) {
   const vec3 p = load3(v, true, false);
@@ -74,15 +105,7 @@ vec3 deform(uint v, bool with_normal, out vec3 normal) {
   J[1] = vec3(r * (-sn * dx + c * dz), 1.0, r * (-c * dx - sn * dz));
   J[2] = vec3(sn, 0.0, c);
 #endif
-  normal = vec3(0.0);
-  if (with_normal) {
-    const vec3 n = load3(v, true, true);
-    if (dot(n, n) > 0.0) {
-      const vec3 m = mat3(cross(J[1], J[2]), cross(J[2], J[0]), cross(J[0], J[1])) * n;
-      const float len = length(m);
-      normal = len > 0.0 ? m / len : vec3(0.0);
-    }
-  }
+  normal = with_normal ? posed_normal(J, load3(v, true, true)) : vec3(0.0);
   return q;
 }
 #endif

@@ -155,6 +155,13 @@ const std::vector<Shared>& shared_table() {
       {"--uv", {{"8", "must be a whole number from 0 to 7, got '8'"}}, {"0", "1"}},
       {"--object-at", {{"1,2", "expected three numbers x,y,z, got '1,2'"}}, {"0,1,0"}},
       {"--object-size", {{"0", "must be a positive number, got 0"}}, {"0.5"}},
+      {"--deform",
+       {{"fold:30", "fold:30: unknown deformation; expected bend:ANGLE or twist:ANGLE in degrees (e.g. bend:60)"},
+        {"bend:1000", "bend:1000: the angle is beyond 720 degrees; expected bend:ANGLE or twist:ANGLE in degrees (e.g. "
+                      "bend:60)"}},
+       {"bend:30", "twist:-90"}},
+      {"--time", {{"inf", "must be a finite number, got inf"}}, {"1.5"}},
+      {"--animation", {{"-1", "must be a whole number from 0 to 1048576, got '-1'"}}, {"0"}},
   };
   return t;
 }
@@ -187,7 +194,7 @@ const std::map<std::string, std::vector<Refusal>>& bands_table() {
 // reference (2 and up: a standard error needs two).
 const std::set<std::string> kNoSharedValue = {"--help",   "--quiet",  "--output", "--env",   "--mesh",
                                               "--cache",  "--json",   "--weld",   "--vertex-colors",     "--samples",
-                                              "--bands",  "--at",     "--probes", "--object"};  // --bands: bands_table()
+                                              "--bands",  "--at",     "--probes", "--object", "--dynamic-ao"};  // --bands: bands_table()
 
 // The message a usage error prints after "error: OPTION: ", or the whole
 // error line.

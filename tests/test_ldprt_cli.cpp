@@ -1,5 +1,6 @@
 // Local deformable PRT through the real executable: prt precompute --basis
-// zh, prt info, prt relight of a pose (a file, or --deform), and the refusals.
+// zh, prt info, prt relight of a pose (a file, or --deform), prt render of a
+// deformation and of a skin's animation, and the refusals.
 #include "test_files.h"
 
 #include <prt/deform.h>
@@ -21,6 +22,7 @@ namespace {
 using namespace prt::test;
 
 const std::string kTube = std::string(PRT_SOURCE_DIR) + "/models/tube.obj";
+const std::string kSkinned = std::string(PRT_SOURCE_DIR) + "/models/tube-skinned.gltf";  // a 2 s looping bend
 const std::string kEnv = std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr";
 
 // The library's relighting of the file's pose `posed` (what prt relight
@@ -134,6 +136,56 @@ TEST(LdprtCli, RenderFollowsTheDeformation) {
   EXPECT_EQ(pixels("seq_0002.exr"), bent);
 }
 
+// prt render of a skinned glTF with a zh file plays the skin's animation
+// (skinned on the GPU): one frame at --time (default 0, wrapping), --frames N
+// one loop from there, frame f at f / N of it (of 4 frames of the 2 s loop,
+// frame 2 is --time 1); the camera is the same at every time, so equal poses
+// give equal images. The pose moves the image. Refusals name the problem.
+TEST(LdprtCli, RenderAnimatesASkin) {
+  TempDir dir;
+  const std::string z = dir.file("z.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", kSkinned, "-o", z, "--basis", "zh", "--lobes", "2", "--bands", "3",
+                          "--samples", "32", "-q"})
+                .code,
+            0);
+  const auto render = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"render", kSkinned, z, kEnv, "-o", dir.file(out), "--width", "96", "--height",
+                                     "48", "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const Result r = run_prt(dir, args);
+    if (r.code != 0 && r.err.find("no OpenGL 4.5 context") != std::string::npos) return false;
+    EXPECT_EQ(r.code, 0) << describe_run(r);
+    return true;
+  };
+  if (!render("t0.exr", {})) GTEST_SKIP() << "no OpenGL 4.5 context";
+  ASSERT_TRUE(render("t1.exr", {"--time", "1"}));
+  ASSERT_TRUE(render("t3.exr", {"--time", "3", "--animation", "0"}));
+  ASSERT_TRUE(render("seq.exr", {"--frames", "4", "--spin", "0"}));
+  const auto pixels = [&](const std::string& f) { return load_envmap(dir.file(f), Mapping::LatLong).rgb; };
+  const std::vector<float> t0 = pixels("t0.exr"), t1 = pixels("t1.exr");
+  EXPECT_NE(t0, t1);
+  EXPECT_EQ(pixels("t3.exr"), t1);
+  EXPECT_EQ(pixels("seq_0000.exr"), t0);
+  EXPECT_EQ(pixels("seq_0002.exr"), t1);
+  EXPECT_NE(pixels("seq_0001.exr"), t0);
+
+  struct Case {
+    std::vector<std::string> args;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {{"render", kSkinned, z, kEnv, "--deform", "bend:30", "-o", dir.file("x.png")}, "one pose source"},
+      {{"render", kSkinned, z, kEnv, "--animation", "1", "-o", dir.file("x.png")}, "no animation 1"},
+      {{"render", kSkinned, z, kEnv, "--time", "inf", "-o", dir.file("x.png")}, "--time"},
+  };
+  for (const Case& c : cases) {
+    const Result r = run_prt(dir, c.args);
+    EXPECT_NE(r.code, 0) << describe_run(r);
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << describe_run(r);
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+  }
+}
+
 TEST(LdprtCli, RefusalsNameTheProblem) {
   TempDir dir;
   const std::string z = dir.file("z.prt"), sh = dir.file("sh.prt");
@@ -164,6 +216,9 @@ TEST(LdprtCli, RefusalsNameTheProblem) {
       {{"render", kTube, z, kEnv, "--shading", "ao", "-o", dir.file("x.png")}, "transfer or lambert"},
       {{"render", kTube, sh, kEnv, "--deform", "bend:20", "-o", dir.file("x.png")}, "--basis zh"},
       {{"render", kTube, z, kEnv, "--deform", "fold:20", "-o", dir.file("x.png")}, "unknown deformation"},
+      {{"render", kTube, z, kEnv, "--time", "1", "-o", dir.file("x.png")}, "no skin to animate"},
+      {{"render", kTube, z, kEnv, "--animation", "0", "-o", dir.file("x.png")}, "no skin to animate"},
+      {{"render", kTube, sh, kEnv, "--time", "1", "-o", dir.file("x.png")}, "--basis zh"},
   };
   for (const Case& c : cases) {
     const Result r = run_prt(dir, c.args);

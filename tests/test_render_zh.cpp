@@ -1,6 +1,7 @@
 // The GPU's local deformable pass (shaders/zh.comp.glsl) against the CPU
 // (prt::posed_transfer, prt::relight): at rest, bent and twisted on the GPU,
-// a pose given as arrays, and the posed positions it draws with.
+// a pose given as arrays, skinned on the GPU (against prt::skin_mesh), and
+// the posed positions it draws with.
 #include "test_meshes.h"
 #include "test_renderer.h"
 #include "test_util.h"
@@ -9,6 +10,7 @@
 #include <prt/precompute.h>
 #include <prt/projection.h>
 #include <prt/render.h>
+#include <prt/skin.h>
 #include <prt/zh_transfer.h>
 
 #include <gtest/gtest.h>
@@ -27,11 +29,14 @@ constexpr double kGpuTol = 2e-4;
 // on the CPU, for a mesh of size ~2.
 constexpr double kPositionTol = 1e-5;
 
+const std::string kTubeObj = std::string(PRT_SOURCE_DIR) + "/models/tube.obj";
+const std::string kSkinned = std::string(PRT_SOURCE_DIR) + "/models/tube-skinned.gltf";  // a 2 s looping bend
+
 struct Tube {
-  Mesh rest = load_mesh(std::string(PRT_SOURCE_DIR) + "/models/tube.obj");
+  Mesh rest;
   ZhTransfer z;
   std::vector<glm::dvec3> light = random_coefficients(4, 9);
-  explicit Tube(int channels = 1) {
+  explicit Tube(int channels = 1, const std::string& path = kTubeObj) : rest(load_mesh(path)) {
     TransferOptions o;
     o.bands = 4;
     o.samples = 64;
@@ -78,6 +83,65 @@ TEST(RenderZh, PosesOnTheGpuMatchTheCpu) {
     r->set_pose(Deform{});
     expect_close(r->vertex_radiance({0, 0, 3}), t.cpu(t.rest), "rest again");
   }
+}
+
+// Skinned on the GPU (POSE 3: the joint matrices uploaded, each vertex
+// blended from the rest pose) against skin_mesh on the CPU, in grey and RGB,
+// at three times of the bundled tube's bend; another kind of pose takes over
+// and the skin's comes back.
+TEST(RenderZh, SkinnedOnTheGpuMatchesTheCpu) {
+  REQUIRE_RENDERER(r);
+  for (int channels : {1, 3}) {
+    const Tube t(channels, kSkinned);
+    const Skin skin = load_skin(kSkinned, t.rest);
+    r->set_mesh(t.rest, t.z);
+    r->set_lighting(t.light);
+    r->set_skin(skin);
+    expect_close(r->vertex_radiance({0, 0, 3}), t.cpu(t.rest), "a skin alone keeps the rest pose");
+    const auto expect_skinned = [&](double time, const std::string& what) {
+      const std::vector<glm::mat4> M = joint_matrices(skin, time);
+      r->set_pose(M);
+      const Mesh posed = skin_mesh(t.rest, skin, M);
+      expect_close(r->vertex_radiance({0, 0, 3}), t.cpu(posed), what.c_str());
+      const std::vector<glm::vec3> p = r->posed_positions();
+      ASSERT_EQ(p.size(), posed.positions.size());
+      double moved = 0;  // from rest: the comparison is not of two rest poses
+      for (std::size_t v = 0; v < p.size(); ++v) {
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(p[v][c], posed.positions[v][c], kPositionTol) << what << " " << v;
+        moved = std::max(moved, double(glm::length(posed.positions[v] - t.rest.positions[v])));
+      }
+      EXPECT_GT(moved, 0.1) << what;
+    };
+    for (double time : {0.3, 1.0, 1.7}) expect_skinned(time, "skinned at " + std::to_string(time) + " s");
+    const Deform bend = parse_deform("bend:80");
+    r->set_pose(bend, 0.5);
+    expect_close(r->vertex_radiance({0, 0, 3}), t.cpu(deform_mesh(t.rest, bend, 0.5)), "bent after the skin");
+    expect_skinned(1.0, "skinned again");
+  }
+}
+
+TEST(RenderZh, RefusesASkinOfAnotherMesh) {
+  REQUIRE_RENDERER(r);
+  const Tube t(1, kSkinned);
+  const Skin skin = load_skin(kSkinned, t.rest);
+  r->set_mesh(t.rest, t.z);
+  Skin fewer = skin;
+  fewer.vertex_joints.pop_back();
+  fewer.vertex_weights.pop_back();
+  EXPECT_THROW(r->set_skin(fewer), Error);
+  Skin out_of_range = skin;
+  out_of_range.vertex_joints[7] = glm::uvec4(4, 0, 0, 0);  // 4 joints: 0 to 3
+  out_of_range.vertex_weights[7] = glm::vec4(1, 0, 0, 0);
+  EXPECT_THROW(r->set_skin(out_of_range), Error);
+  // A joint out of range with weight 0 is never read (skin_mesh skips it too).
+  Skin unread = skin;
+  unread.vertex_joints[7] = glm::uvec4(0, 99, 99, 99);
+  unread.vertex_weights[7] = glm::vec4(1, 0, 0, 0);
+  r->set_skin(unread);
+  r->set_lighting(t.light);
+  const std::vector<glm::mat4> M = joint_matrices(skin, 1.0);
+  r->set_pose(M);
+  expect_close(r->vertex_radiance({0, 0, 3}), t.cpu(skin_mesh(t.rest, unread, M)), "weight-0 joints");
 }
 
 TEST(RenderZh, DrawsThePose) {

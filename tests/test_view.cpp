@@ -235,6 +235,63 @@ TEST_F(ViewCli, ZonalHarmonicScreenshotMatchesRenderAndDeforms) {
   EXPECT_NE(bad_err.find("--basis zh"), std::string::npos) << bad_err;
 }
 
+// A skinned glTF with a zonal-harmonic file: the window plays the skin's
+// animation at 30 scripted frames a second, so its 31st frame is the pose at
+// 1 s, prt render --time 1's image (the same camera: both frame the rest pose
+// and poses over the loop), and not --time 0's. One pose source: --deform is
+// refused, as is an animation the file lacks.
+TEST_F(ViewCli, SkinnedZonalHarmonicPlaysTheAnimation) {
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
+  const std::string skinned = std::string(PRT_SOURCE_DIR) + "/models/tube-skinned.gltf";  // a 2 s looping bend
+  const Mesh m = load_mesh(skinned);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 32;
+  ZhFitOptions f;
+  f.lobes = 2;
+  const std::string zh = dir.file("tube_zh.prt");
+  write_zh_transfer(zh, fit_zh_transfer(compute_transfer(m, o), m, f));
+  const std::string files = test::shell_quote(skinned) + " " + test::shell_quote(zh) + " " + test::shell_quote(env);
+  const std::string size = " --width " + std::to_string(kW) + " --height " + std::to_string(kH);
+  const std::string shot = dir.file("skinned.png");
+  const auto [code, err] =
+      run_view(dir, files + size + " --frames 31 --no-panel -q --screenshot " + test::shell_quote(shot));
+  if (code != 0 && err.find("OpenGL 4.5 core") != std::string::npos)
+    PRT_SKIP_WITHOUT_GL("Xvfb's GLX gives no OpenGL 4.5 core context: " + err);
+  ASSERT_EQ(code, 0) << err;
+  ASSERT_TRUE(std::filesystem::exists(shot));
+  // Pixels more than kMaxCodeDiff codes from prt render's image at `time`.
+  const EnvMap view = load_envmap(shot, Mapping::LatLong);
+  const auto pixels_off = [&](const char* time) {
+    const std::string ref = dir.file(std::string("render_") + time + ".png");
+    const auto res = test::run_prt(dir, {"render", skinned, zh, env, "-o", ref, "--width", std::to_string(kW),
+                                         "--height", std::to_string(kH), "--time", time, "-q"});
+    EXPECT_EQ(res.code, 0) << test::describe_run(res);
+    const EnvMap r = load_envmap(ref, Mapping::LatLong);
+    int off = 0;
+    for (std::size_t i = 0; i < r.rgb.size(); i += 3) {
+      int diff = 0;
+      for (std::size_t c = 0; c < 3; ++c)
+        diff = std::max(diff, std::abs(srgb_code(view.rgb[i + c]) - srgb_code(r.rgb[i + c])));
+      off += diff > kMaxCodeDiff;
+    }
+    return off;
+  };
+  const int off_at_1 = pixels_off("1"), off_at_0 = pixels_off("0");
+  std::printf("31st frame vs prt render: %d pixels over %d at --time 1, %d at --time 0\n", off_at_1, kMaxCodeDiff,
+              off_at_0);
+  EXPECT_LE(off_at_1, int(kEdgeFraction * kW * kH));
+  EXPECT_GT(off_at_0, int(10 * kEdgeFraction * kW * kH));  // the bend moves a tenth of the image and more
+  for (const auto& [extra, says] : {std::pair<std::string, std::string>{" --deform bend:90", "one pose source"},
+                                    {" --animation 1", "no animation 1"}}) {
+    const auto [bad, bad_err] =
+        run_view(dir, files + extra + " --frames 2 -q --screenshot " + test::shell_quote(dir.file("x.png")));
+    EXPECT_EQ(bad, 1) << bad_err;
+    EXPECT_NE(bad_err.find(says), std::string::npos) << bad_err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("x.png")));
+  }
+}
+
 TEST_F(ViewCli, PanelIsOnScreenAndNoPanelHidesIt) {
   if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
   std::string shots[2];

@@ -47,6 +47,7 @@
 #include <prt/probes.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
+#include <prt/skin.h>
 #include <prt/transfer.h>
 #include <prt/deform.h>
 #include <prt/zh_transfer.h>
@@ -219,6 +220,26 @@ class Renderer {
   // a zonal-harmonic mesh is uploaded; one position and normal per vertex.
   void set_pose(const Deform& deform, double amount = 1.0);
   void set_pose(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals);
+  // A skinned mesh (prt/skin.h): uploads the skin of the zonal-harmonic mesh
+  // (each vertex's four joints and weights, once), replacing any earlier one;
+  // the pose stays what it was until set_pose of joint matrices. set_mesh
+  // drops it. Throws prt::Error when the skin is not of this mesh (another
+  // vertex count), has no joints, or a vertex gives a weight other than 0 to a
+  // joint the skin does not have (load_skin's skins never do), and when this
+  // OpenGL cannot bind the skinned pass's buffers (the message names
+  // GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS, below the pass's 10, or
+  // GL_MAX_SHADER_STORAGE_BLOCK_SIZE for the joint matrices; skin_mesh on the
+  // CPU and set_pose of arrays remain). Contract (prt::InternalError): a
+  // zonal-harmonic mesh is uploaded.
+  void set_skin(const Skin& skin);
+  // The pose of the next frames, skinned on the GPU each frame from the rest
+  // pose (only these matrices are uploaded): one matrix per joint of the
+  // skin, joint_matrices(skin, time, animation)'s, blended per vertex as
+  // skin_mesh blends them (the position M p, the normal by M's cofactor), so
+  // posed_positions and vertex_radiance are skin_mesh's pose up to float
+  // rounding. Until another set_pose. Contract (prt::InternalError): a skin
+  // is uploaded and one matrix is given per joint.
+  void set_pose(std::span<const glm::mat4> joint_matrices);
   // The posed positions of the last frame drawn (or relit by vertex_radiance).
   std::vector<glm::vec3> posed_positions() const;
   // Uploads a scene and its SH lightmap (prt/lightmap.h; docs/RUNTIME.md

@@ -707,7 +707,7 @@ Run add_precompute(CLI::App& app) {
                      ->check(int_range(1, zh::kMaxLobes))
                      ->capture_default_str();
   a->dynamic_ao_opt = s->add_flag("--dynamic-ao", a->dynamic_ao,
-                                  "--basis zh: also store the rest pose's dynamic ambient occlusion (Bunnell 2005; 4 "
+                                  "With --basis zh: also store the rest pose's dynamic ambient occlusion (Bunnell 2005; 4 "
                                   "bytes a vertex), which prt relight --dynamic-ao compares a pose's with to restore "
                                   "the distant occlusion the lobes cannot follow");
   a->material_opt =

@@ -518,19 +518,16 @@ Run add_relight(CLI::App& app) {
                  "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)"));
   a->dynamic_ao_opt = s->add_flag(
       "--dynamic-ao", a->dynamic_ao,
-      "--basis zh files computed with --dynamic-ao: scale each vertex by the pose's dynamic ambient occlusion over the "
+      "Zonal-harmonic files computed with --dynamic-ao: scale each vertex by the pose's dynamic ambient occlusion over the "
       "rest pose's (Bunnell 2005): the distant occluders a bend brings or takes away, which the lobes cannot follow");
-  s->add_option("--deform", a->deform,
-                "--basis zh files: pose MESH procedurally first: bend:ANGLE (its y extent bent into an arc of ANGLE "
-                "degrees towards +x) or twist:ANGLE (about y); the PLY output is then the posed mesh (prt/deform.h)")
-      ->check(deform_value());
-  a->time_opt = s->add_option("--time", a->time,
-                              "--basis zh files: pose MESH, a skinned glTF, by its skin at SECONDS of its animation "
-                              "(looping: the time wraps); the PLY output is then the posed mesh (prt/skin.h)")
-                    ->check(finite_number());
-  a->animation_opt = s->add_option("--animation", a->animation,
-                                   "With --time: which of the file's animations, from 0 (default 0)")
-                         ->check(int_range(0, 1 << 20));
+  add_shared(s, SharedOption::Deform, a->deform,
+             "Zonal-harmonic files (prt precompute --basis zh): pose MESH procedurally first: bend (its y extent "
+             "bent into an arc of ANGLE degrees towards +x) or twist (about y); the PLY output is then the posed mesh "
+             "(prt/deform.h)");
+  a->time_opt = add_shared(s, SharedOption::Time, a->time,
+                           "Zonal-harmonic files: pose MESH, a skinned glTF, by its skin at this time of its "
+                           "animation; the PLY output is then the posed mesh (prt/skin.h)");
+  a->animation_opt = add_shared(s, SharedOption::Animation, a->animation, "With --time: which of the file's animations");
   add_shared(s, SharedOption::Eye, a->eye, "Glossy files: the eye point the radiance is seen from");
   add_glossy_options(s, a->lobe);
   for (const CLI::Option* o : a->lobe.options) a->sh_only.push_back(o);

@@ -15,12 +15,16 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet_playback.h>
 #include <prt/deform.h>
+#include <prt/skin.h>
 
 #include <fmt/core.h>
 #include <glm/trigonometric.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <sstream>
@@ -39,6 +43,12 @@ struct RenderArgs {
   LookArgs look;
   GlossyArgs lobe;  // glossy files only
   std::string deform;  // --deform bend:ANGLE|twist:ANGLE (zonal-harmonic files)
+  // A skinned glTF MESH with a zonal-harmonic file: the time (of one frame,
+  // or the first of --frames) and the animation.
+  double time = 0;
+  int animation = 0;
+  const CLI::Option* time_opt = nullptr;
+  const CLI::Option* animation_opt = nullptr;
 };
 
 // OUT.png, frame 3 -> OUT_0003.png
@@ -65,6 +75,10 @@ int run_render(const RenderArgs& a) {
     throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
                 "docs/LDPRT.md); this one is baked for one pose");
   const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
+  // A skinned glTF with a zonal-harmonic file: its animation, skinned on the GPU.
+  const std::optional<Skin> skin = zh ? load_mesh_skin(a.mesh, scene.mesh) : std::nullopt;
+  check_skin_options(skin, zh, !a.deform.empty(), {a.time_opt, a.animation_opt}, a.mesh, a.transfer);
+  const double duration = skin ? animation_duration(*skin, a.animation) : 0.0;
   if (zh && a.look.shading_option->count() > 0 && a.look.shading != "transfer" && a.look.shading != "lambert")
     throw Error(a.transfer + ": --shading " + a.look.shading + ": a zonal-harmonic transfer shows transfer or lambert");
   const Mesh& mesh = scene.mesh;
@@ -82,13 +96,16 @@ int run_render(const RenderArgs& a) {
   const glm::dvec3 diffuse = parse_diffuse(a.lobe.diffuse);
   Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);
 
-  // A deforming mesh is framed in its rest and its most deformed pose.
+  // A deforming mesh is framed in its rest and its most deformed pose; a
+  // skinned one in its rest and poses over its animation's loop (the same
+  // camera at every --time).
   Mesh framed;
   if (zh && deform.kind != Deform::Kind::None) {
     framed.positions = mesh.positions;
     const Mesh posed = deform_mesh(mesh, deform);
     framed.positions.insert(framed.positions.end(), posed.positions.begin(), posed.positions.end());
   }
+  if (skin) framed.positions = animation_extent(mesh, *skin, a.animation);
   Camera cam = framing_camera(framed.positions.empty() ? mesh : framed, a.fov, double(a.width) / a.height);
   if (!a.camera.empty()) parse_camera(a.camera, cam);
   cam.fov_deg = a.fov;
@@ -97,6 +114,12 @@ int run_render(const RenderArgs& a) {
   if (!a.quiet)
     fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", scene.world ? describe(*scene.world) : describe(mesh), describe(env),
                renderer.device());
+  if (skin && !a.quiet)
+    fmt::print(stderr, "skinned on the GPU: {} joints, {}\n", skin->joint_count,
+               skin->animations.empty()
+                   ? std::string("no animation (the rest pose)")
+                   : fmt::format("animation {} '{}' ({:g} s loop)", a.animation,
+                                 skin->animations[std::size_t(a.animation)].name, duration));
   renderer.set_environment(env);
   std::optional<WaveletPlayback> playback;
   if (wavelet) {
@@ -110,6 +133,7 @@ int run_render(const RenderArgs& a) {
     if (look.shading == Shading::Glossy && !glossy)
       throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
     upload(renderer, scene, a.transfer);
+    if (skin) renderer.set_skin(*skin);
     release_uploaded(scene);  // the renderer has them: `mesh` and `t` keep their header fields only
     renderer.set_band_limit(look.bands);
     try {  // refused (exit 1) when the file lacks what the shading needs: name it
@@ -169,6 +193,8 @@ int run_render(const RenderArgs& a) {
       // the rest pose to the whole angle and back.
       if (zh && deform.kind != Deform::Kind::None)
         renderer.set_pose(deform, a.frames > 1 ? 0.5 * (1.0 - std::cos(2.0 * M_PI * f / a.frames)) : 1.0);
+      // The skin: --time, and over several frames one loop from there.
+      if (skin) renderer.set_pose(joint_matrices(*skin, a.time + duration * f / a.frames, a.animation));
       if (wavelet && look.shading == Shading::Transfer) {
         cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
       } else if (wavelet) {
@@ -215,9 +241,12 @@ Run add_render(CLI::App& app) {
       "a Phong lobe (--gloss, --specular, --diffuse) seen from the camera's eye, both on the GPU.\n"
       "EXR output keeps linear floats (times 2^exposure); PNG and other 8-bit formats get the tone map\n"
       "(--tonemap, default clamp) and sRGB encoding.\n"
-      "Zonal-harmonic files (prt precompute --basis zh) follow a deformation: --deform bend:ANGLE or twist:ANGLE.\n"
+      "Zonal-harmonic files (prt precompute --basis zh) follow a deformation: --deform bend:ANGLE or twist:ANGLE,\n"
+      "or when MESH is a skinned glTF its animation, skinned on the GPU: one frame at --time (default 0), --frames N\n"
+      "one loop from there.\n"
       "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10\n"
-      "         prt render models/tube.obj tube-zh.prt envmaps/forest.exr --deform bend:120 --frames 48 -o tube.png");
+      "         prt render models/tube.obj tube-zh.prt envmaps/forest.exr --deform bend:120 --frames 48 -o tube.png\n"
+      "         prt render models/tube-skinned.gltf zh.prt envmaps/forest.exr --frames 48 --spin 0 -o tube.png");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
   s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
   s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
@@ -241,11 +270,15 @@ Run add_render(CLI::App& app) {
   s->add_option("--spin", a->spin, "Degrees about +Y per frame (default 360 / frames)")
       ->check(finite_number())
       ->each([a](const std::string&) { a->spin_given = true; });
-  s->add_option("--deform", a->deform,
-                "--basis zh files: deform the mesh on the GPU, bend:ANGLE (its y extent bent into an arc of ANGLE "
-                "degrees towards +x) or twist:ANGLE (about y); with --frames, from the rest pose to the whole angle and "
-                "back while the environment turns (prt/deform.h, docs/LDPRT.md)")
-      ->check(deform_value());
+  add_shared(s, SharedOption::Deform, a->deform,
+             "Zonal-harmonic files (prt precompute --basis zh): deform the mesh on the GPU, bend (its y extent bent "
+             "into an arc of ANGLE degrees towards +x) or twist (about y); with --frames, from the rest pose to the "
+             "whole angle and back while the environment turns (prt/deform.h, docs/LDPRT.md)");
+  a->time_opt = add_shared(s, SharedOption::Time, a->time,
+                           "Zonal-harmonic files of a skinned glTF MESH: its pose at this time of the animation; with "
+                           "--frames the first frame's, the frames then one loop (prt/skin.h)");
+  a->animation_opt = add_shared(s, SharedOption::Animation, a->animation,
+                                "A skinned glTF MESH: which of the file's animations");
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");

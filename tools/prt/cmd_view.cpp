@@ -17,6 +17,7 @@
 #include <prt/render.h>
 #include <prt/deform.h>
 #include <prt/rotation.h>
+#include <prt/skin.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_playback.h>
@@ -72,6 +73,8 @@ struct ViewArgs {
   ProbeObjectArgs probe;  // --probes FILE --object MESH (docs/PROBES.md "Rendering")
   std::vector<const CLI::Option*> probe_opts;
   std::string deform;  // --deform bend:ANGLE|twist:ANGLE (zonal-harmonic files): animated
+  int animation = 0;   // a skinned glTF MESH (zonal-harmonic files): the animation played
+  const CLI::Option* animation_opt = nullptr;
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
@@ -452,6 +455,10 @@ int run_view(const ViewArgs& a) {
 
   bool have_sh = false, have_wavelet = false;
   const Scene scene = load_view_scene(a, have_sh, have_wavelet);
+  // A skinned glTF with a zonal-harmonic file: its animation, skinned on the GPU.
+  const std::optional<Skin> skin = scene.zh ? load_mesh_skin(a.mesh, scene.mesh) : std::nullopt;
+  check_skin_options(skin, scene.zh.has_value(), !a.deform.empty(), {a.animation_opt}, a.mesh, a.transfer);
+  const double duration = skin ? animation_duration(*skin, a.animation) : 0.0;
   const bool glossy = have_sh && scene.transfer.glossy;
   if (!glossy)
     for (const CLI::Option* o : a.lobe.options)
@@ -494,13 +501,25 @@ int run_view(const ViewArgs& a) {
   Viewer viewer(a, scene, have_sh, have_wavelet, look, renderer, st);
   // A deforming mesh: framed in its rest and its most deformed pose, and
   // bent (twisted) from rest to the whole angle and back every 4 seconds
-  // (scripted frames: 30 to a second).
+  // (scripted frames: 30 to a second). A skinned one: framed in its rest and
+  // poses over its animation's loop, which plays in real time (scripted: 30
+  // frames to a second).
   const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
   Mesh framed;
   if (deform.kind != Deform::Kind::None) {
     framed.positions = scene.mesh.positions;
     const Mesh posed = deform_mesh(scene.mesh, deform);
     framed.positions.insert(framed.positions.end(), posed.positions.begin(), posed.positions.end());
+  }
+  if (skin) {
+    renderer.set_skin(*skin);
+    framed.positions = animation_extent(scene.mesh, *skin, a.animation);
+    if (!a.quiet)
+      fmt::print(stderr, "skinned on the GPU: {} joints, {}\n", skin->joint_count,
+                 skin->animations.empty()
+                     ? std::string("no animation (the rest pose)")
+                     : fmt::format("animation {} '{}' ({:g} s loop)", a.animation,
+                                   skin->animations[std::size_t(a.animation)].name, duration));
   }
   Camera base = framing_camera(framed.positions.empty() ? scene.mesh : framed, a.fov, double(a.width) / a.height);
   const auto start = std::chrono::steady_clock::now();
@@ -530,6 +549,10 @@ int run_view(const ViewArgs& a) {
     if (deform.kind != Deform::Kind::None) {
       const double t = a.frames > 0 ? frame / 30.0 : std::chrono::duration<double>(now - start).count();
       renderer.set_pose(deform, 0.5 * (1.0 - std::cos(2.0 * M_PI * t / 4.0)));
+    }
+    if (skin) {
+      const double t = a.frames > 0 ? frame / 30.0 : std::chrono::duration<double>(now - start).count();
+      renderer.set_pose(joint_matrices(*skin, t, a.animation));
     }
 
     int fw = 0, fh = 0;
@@ -608,10 +631,12 @@ Run add_view(CLI::App& app) {
   add_shared(s, SharedOption::Height, a->height, "Window height");
   add_shared(s, SharedOption::Camera, a->camera, "Starting camera (orbit is about the target)");
   add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view");
-  s->add_option("--deform", a->deform,
-                "--basis zh files: bend:ANGLE or twist:ANGLE, animated on the GPU from the rest pose to the whole angle "
-                "and back every 4 seconds (prt/deform.h, docs/LDPRT.md)")
-      ->check(deform_value());
+  add_shared(s, SharedOption::Deform, a->deform,
+             "Zonal-harmonic files (prt precompute --basis zh): a bend or twist, animated on the GPU from the rest "
+             "pose to the whole angle and back every 4 seconds (prt/deform.h, docs/LDPRT.md)");
+  a->animation_opt = add_shared(s, SharedOption::Animation, a->animation,
+                                "Zonal-harmonic files of a skinned glTF MESH, whose animation plays on the GPU in real "
+                                "time, looping: which of the file's animations (prt/skin.h)");
   add_shared(s, SharedOption::Frames, a->frames, "Render N frames, save --screenshot FILE and exit");
   s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)");
   s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")->capture_default_str();

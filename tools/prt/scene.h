@@ -11,6 +11,9 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
+#include <prt/skin.h>
+
+#include <CLI/CLI.hpp>
 
 #include <glm/vec3.hpp>
 
@@ -75,5 +78,25 @@ void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double eul
 // canonical and sorted; none when `dir` cannot be read. The maps prt view's
 // N / P and prt export --web's picker offer.
 std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir);
+
+// ---- a skinned glTF MESH whose zonal-harmonic transfer follows its animation
+// (prt render and prt view skin it on the GPU; docs/LDPRT.md) ----
+
+// MESH's skin when MESH is a glTF 2.0 file (.gltf, .glb) that lists one
+// (load_skin, whose errors surface: a skin prt cannot pose is refused, not
+// left still); nullopt for any other file, and a glTF without skins.
+std::optional<Skin> load_mesh_skin(const std::string& path, const Mesh& mesh);
+// Seconds of one loop of `animation` (0 for a skin without animations: the
+// rest pose). Throws prt::Error, naming the file, for an animation it lacks.
+double animation_duration(const Skin& skin, int animation);
+// The points the camera frames: the rest positions, then those of a few
+// poses evenly spaced over the animation's loop.
+std::vector<glm::vec3> animation_extent(const Mesh& rest, const Skin& skin, int animation);
+// The refusals (prt::Error, exit 1, naming the file that does not fit): the
+// given ones of `options` (--time, --animation) without a zonal-harmonic
+// transfer or without a skin; --deform (`deform`) with a skin (one pose source).
+void check_skin_options(const std::optional<Skin>& skin, bool zh, bool deform,
+                        const std::vector<const CLI::Option*>& options, const std::string& mesh,
+                        const std::string& transfer);
 
 }  // namespace prt::cli

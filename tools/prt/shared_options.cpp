@@ -97,6 +97,9 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::UvSet, Spec{"--uv", int_range(0, 7), "0 to 7: TEXCOORD_N"});
     t.emplace(S::ObjectAt, Spec{"--object-at", triple_value("x,y,z"), "x,y,z"});
     t.emplace(S::ObjectSize, Spec{"--object-size", positive_number(), "a positive length (scene units)"});
+    t.emplace(S::Deform, Spec{"--deform", deform_value(), "bend:ANGLE or twist:ANGLE, degrees, at most 720"});
+    t.emplace(S::Time, Spec{"--time", finite_number(), "seconds, looping"});
+    t.emplace(S::Animation, Spec{"--animation", int_range(0, 1 << 20), "0 to 2^20, the file's order"});
     return t;
   }();
   return table;

@@ -67,6 +67,9 @@ enum class SharedOption {
   UvSet,         // --uv N: the lightmap's UV set, 0 to 7 (TEXCOORD_N)
   ObjectAt,      // --object-at x,y,z: three finite numbers (render and view's probe-lit object)
   ObjectSize,    // --object-size d: a positive number (its bounding box's diagonal)
+  Deform,        // --deform bend:ANGLE|twist:ANGLE: a procedural pose (prt/deform.h), |ANGLE| <= 720 degrees
+  Time,          // --time SECONDS: a finite time in a skinned glTF's animation (it loops)
+  Animation,     // --animation N: which of a glTF's animations, 0 to 2^20
 };
 
 // Adds option `which` to `command`, bound to `value`, with `help` (what the
