@@ -2,6 +2,7 @@
 // zh, prt info, prt relight of a pose (a file, or --deform), prt render of a
 // deformation and of a skin's animation, and the refusals.
 #include "test_files.h"
+#include "test_ldprt.h"
 
 #include <prt/deform.h>
 #include <prt/envmap.h>
@@ -20,29 +21,6 @@ namespace prt {
 namespace {
 
 using namespace prt::test;
-
-const std::string kTube = std::string(PRT_SOURCE_DIR) + "/models/tube.obj";
-const std::string kSkinned = std::string(PRT_SOURCE_DIR) + "/models/tube-skinned.gltf";  // a 2 s looping bend
-const std::string kEnv = std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr";
-
-// The library's relighting of the file's pose `posed` (what prt relight
-// writes, before the CSV's float text).
-std::vector<glm::vec3> library_relight(const std::string& file, const Mesh& posed) {
-  const ZhTransfer z = read_zh_transfer(file);
-  const std::vector<glm::dvec3> light = project(load_envmap(kEnv), z.bands);
-  return relight(posed_as_transfer(z, posed), posed, light);
-}
-
-// CSV holds %.9g floats: the same floats, so equal to float rounding of the
-// sum's order (1e-6 of the largest radiance).
-void expect_same(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
-  ASSERT_EQ(a.size(), b.size());
-  double scale = 0;
-  for (const glm::vec3& c : b) scale = std::max(scale, double(std::max({c.x, c.y, c.z})));
-  ASSERT_GT(scale, 0.0);
-  for (std::size_t v = 0; v < a.size(); ++v)
-    for (int c = 0; c < 3; ++c) ASSERT_NEAR(a[v][c], b[v][c], 1e-6 * scale) << v;
-}
 
 TEST(LdprtCli, PrecomputeThenRelightPoses) {
   TempDir dir;

@@ -2,6 +2,7 @@
 // skinning against a rigid motion, time wrapping, the refusals of bad files,
 // and prt relight --time through the real executable.
 #include "test_files.h"
+#include "test_ldprt.h"
 
 #include <prt/envmap.h>
 #include <prt/error.h>
@@ -31,9 +32,6 @@ namespace {
 
 using namespace prt::test;
 
-const std::string kSkinned = std::string(PRT_SOURCE_DIR) + "/models/tube-skinned.gltf";
-const std::string kTube = std::string(PRT_SOURCE_DIR) + "/models/tube.obj";
-const std::string kEnv = std::string(PRT_SOURCE_DIR) + "/envmaps/sunset.exr";
 
 // Positions compared after skinning in double and storing in float: a float
 // ulp of the tube's largest coordinate (2) is 2.4e-7; 1e-6 allows a few.
@@ -420,17 +418,6 @@ TEST(Skin, RefusesBadFiles) {
 
 // ---- prt relight --time ----------------------------------------------------------------------
 
-// CSV holds %.9g floats: the same floats, so equal to float rounding of the
-// sum's order (1e-6 of the largest radiance), as tests/test_ldprt_cli.cpp.
-void expect_same(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
-  ASSERT_EQ(a.size(), b.size());
-  double scale = 0;
-  for (const glm::vec3& c : b) scale = std::max(scale, double(std::max({c.x, c.y, c.z})));
-  ASSERT_GT(scale, 0.0);
-  for (std::size_t v = 0; v < a.size(); ++v)
-    for (int c = 0; c < 3; ++c) ASSERT_NEAR(a[v][c], b[v][c], 1e-6 * scale) << v;
-}
-
 TEST(SkinCli, RelightAtATimeIsTheSkinnedPose) {
   TempDir dir;
   const std::string z = dir.file("tube-zh.prt"), sh = dir.file("sh.prt");
@@ -443,12 +430,10 @@ TEST(SkinCli, RelightAtATimeIsTheSkinnedPose) {
   const Mesh rest = load_mesh(kSkinned);
   const Skin skin = load_skin(kSkinned, rest);
   const Mesh posed = skin_mesh(rest, skin, joint_matrices(skin, 1.0));
-  const ZhTransfer zt = read_zh_transfer(z);
-  const std::vector<glm::dvec3> light = project(load_envmap(kEnv), zt.bands);
-  const std::vector<glm::vec3> want = relight(posed_as_transfer(zt, posed), posed, light);
+  const std::vector<glm::vec3> want = library_relight(z, posed);
   expect_same(read_vertex_csv(dir.file("x.csv")), want);
   // The pose changes the light (a relighting that ignored --time would fail above only by chance).
-  const std::vector<glm::vec3> at_rest = relight(posed_as_transfer(zt, rest), rest, light);
+  const std::vector<glm::vec3> at_rest = library_relight(z, rest);
   double moved = 0;
   for (std::size_t v = 0; v < want.size(); ++v) moved = std::max(moved, double(std::abs(want[v].x - at_rest[v].x)));
   EXPECT_GT(moved, 0.05);
