@@ -107,9 +107,9 @@ int main(int argc, char** argv) {
     using clock = std::chrono::steady_clock;
     std::vector<double> t_static, t_gpu, t_cpu;
     prt::sh::Rotation rot(bands, glm::dmat3(1.0));
-    // One upload each kind per frame would time the uploads: instead two
-    // renderers' worth of state is not possible on one context, so each kind
-    // runs a block of frames in turn, blocks interleaved.
+    // One renderer holds one mesh at a time, and uploading a mesh each frame
+    // would time the upload: each kind runs a block of frames in turn (its
+    // upload and a warm-up frame untimed), the blocks interleaved.
     const int block = 5;
     for (int first = 0; first < frames; first += block) {
       for (int kind = 0; kind < 3; ++kind) {

@@ -319,7 +319,6 @@ int run_zh(PrecomputeArgs& a) {
   out.write([&] { write_zh_transfer(a.output, *z); });
   if (const int rc = out.commit(); rc != 0) return rc;
   if (!a.quiet) {
-    const std::size_t stored = z->stored_vertices();
     fmt::print(stderr,
                "wrote {}: {} lobes x {} bands, {}, {} channel{}, {} vertices ({} analytic, no lobes stored), fit error "
                "{:.3f}% of the SH transfer, {:.1f} bytes per stored vertex (the SH rows: {}), precompute {:.2f} s, "
@@ -328,7 +327,6 @@ int run_zh(PrecomputeArgs& a) {
                z->vertices, z->analytic_vertices(), 100.0 * z->fit_error, 4.0 * double(z->stride()),
                4 * computed->stride(), std::chrono::duration<double>(t1 - t0).count(),
                std::chrono::duration<double>(t2 - t1).count());
-    (void)stored;
   }
   return 0;
 }
