@@ -3,7 +3,11 @@
 // of the same mesh at the same bands, in one process on one context.
 //
 //   prt_ldprt_frame MESH [--frames N] [--size S] [--lobes K] [--bands n] [--channels C] [--deform bend:ANGLE]
+//                        [--tangent uv|edge]
 //
+// --tangent uv (the default) reads the mesh's texture coordinates, so its
+// vertex frames take the UV tangent where it has them (two neighbours posed
+// per vertex); edge: the edge rule (one).
 // Transfers are synthetic (random; the cost does not depend on the values).
 // Each frame turns the lighting (SH rotation on the CPU, uploaded) and draws
 // (background + mesh, glFinish, no read-back); the deforming mesh's frame
@@ -49,6 +53,7 @@ prt::ZhTransfer synthetic_zh(const prt::Mesh& m, int lobes, int bands, int chann
   z.vertices = m.vertex_count();
   z.mesh_hash = m.hash();
   z.topology_hash = prt::topology_hash(m);
+  z.tangents = prt::vertex_frames(m).rules;  // UV tangents where the mesh was read with its UVs
   std::mt19937 rng(1);
   std::normal_distribution<float> g;
   std::uniform_real_distribution<float> u(-0.1f, 0.3f);
@@ -74,12 +79,12 @@ int main(int argc, char** argv) {
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0) {
     std::fprintf(stderr,
                  "usage: %s MESH [--frames N] [--size S] [--lobes K] [--bands n] [--channels C] "
-                 "[--deform bend:ANGLE]\n",
+                 "[--deform bend:ANGLE] [--tangent uv|edge]\n",
                  argv[0]);
     return 2;
   }
   int frames = 60, size = 512, lobes = 4, bands = 5, channels = 1;
-  std::string deform_text = "bend:90";
+  std::string deform_text = "bend:90", frame_rule = "uv";
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--frames") frames = std::atoi(v.c_str());
@@ -88,13 +93,16 @@ int main(int argc, char** argv) {
     else if (k == "--bands") bands = std::atoi(v.c_str());
     else if (k == "--channels") channels = std::atoi(v.c_str());
     else if (k == "--deform") deform_text = v;
+    else if (k == "--tangent") frame_rule = v;
     else {
       std::fprintf(stderr, "unknown option %s\n", k.c_str());
       return 2;
     }
   }
   try {
-    const prt::Mesh mesh = prt::load_mesh(argv[1]);
+    prt::MeshOptions mo;
+    mo.uvs = frame_rule == "uv";  // the UV tangent's rule reads two neighbours a vertex, the edge rule's one
+    const prt::Mesh mesh = prt::load_mesh(argv[1], mo);
     const prt::Deform deform = prt::parse_deform(deform_text);
     const prt::EnvMap env = prt::load_envmap(PRT_SOURCE_DIR "/envmaps/forest.exr");
     const std::vector<glm::dvec3> light = prt::project(env, bands);
@@ -142,8 +150,8 @@ int main(int argc, char** argv) {
     std::printf("device: %s\nmesh: %s, %zu vertices, %zu triangles; %dx%d; %d frames each (median)\n",
                 r.device().c_str(), argv[1], mesh.vertex_count(), mesh.triangles.size(), size, size, frames);
     std::printf("static diffuse PRT, %d bands, %d channel(s):             %8.2f ms\n", bands, channels, s);
-    std::printf("deforming (%s on the GPU), %d lobes x %d bands:  %8.2f ms  (%.2fx the static frame)\n",
-                deform_text.c_str(), lobes, bands, g, g / s);
+    std::printf("deforming (%s on the GPU), %d lobes x %d bands, %s tangents:  %8.2f ms  (%.2fx the static frame)\n",
+                deform_text.c_str(), lobes, bands, frame_rule.c_str(), g, g / s);
     std::printf("deforming (pose deformed on the CPU, uploaded):        %8.2f ms  (%.2fx)\n", c, c / s);
     return 0;
   } catch (const prt::Error& e) {

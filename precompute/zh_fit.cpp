@@ -54,6 +54,7 @@ ZhTransfer fit_zh_transfer(const Transfer& t, const Mesh& mesh, const ZhFitOptio
     if (!t.is_analytic(v)) vertex_of[r++] = std::uint32_t(v);
 
   const VertexFrames frames = vertex_frames(mesh);
+  z.tangents = frames.rules;
   const int n = t.bands, K = o.lobes, C = t.channels, nc = n * n;
   zh::FitOptions fo;
   fo.lobes = K;

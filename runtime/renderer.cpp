@@ -166,7 +166,7 @@ void Renderer::Impl::delete_mesh_objects() {
                             ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
                             coeff_rows.buffer, coeff_rows.products, glossy_rows.buffer, glossy_rows.products,
                             cluster_color_buffer, glossy_order_buffer, glossy_chunk_buffer,
-                            zh_rows, zh_neighbours, rest_positions, rest_normals, skin_joints, skin_weights,
+                            zh_rows, zh_rules, rest_positions, rest_normals, skin_joints, skin_weights,
                             joint_matrix_buffer};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   const GLuint textures[] = {transfer.texture, direct.texture, glossy_array.texture};
@@ -188,7 +188,7 @@ void Renderer::Impl::delete_mesh_objects() {
   slot_buffer = 0;
   position_buffer = index_buffer = 0;
   zh = false;
-  zh_rows = zh_neighbours = rest_positions = rest_normals = 0;
+  zh_rows = zh_rules = rest_positions = rest_normals = 0;
   zh_bytes = 0;
   zh_lobes = zh_lobe_bands = 0;
   pose = Deform{};

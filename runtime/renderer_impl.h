@@ -158,7 +158,7 @@ struct Renderer::Impl {
   // normals; position_buffer and normal_buffer then hold the pose.
   bool zh = false;
   int zh_lobes = 0, zh_lobe_bands = 0;
-  GLuint zh_rows = 0, zh_neighbours = 0, rest_positions = 0, rest_normals = 0;
+  GLuint zh_rows = 0, zh_rules = 0, rest_positions = 0, rest_normals = 0;
   std::size_t zh_bytes = 0;
   std::map<std::array<int, 5>, GLuint> zh_programs;
   Deform pose;             // Kind::None: the posed buffers hold the pose (set_pose of arrays, or the rest)

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 
 namespace prt {
@@ -53,8 +54,9 @@ void Renderer::set_mesh(const Mesh& rest, const ZhTransfer& z) {
   glVertexArrayVertexBuffer(m.vao, 0, m.position_buffer, 0, sizeof(glm::vec3));
   m.rest_positions = make_buffer(rest.positions.data(), V * sizeof(glm::vec3));
   m.rest_normals = make_buffer(rest.normals.data(), V * sizeof(glm::vec3));
-  const VertexFrames frames = vertex_frames(rest);
-  m.zh_neighbours = make_buffer(frames.edge.data(), V * sizeof(std::uint32_t));
+  // The tangent rules as uvec4 (a, b, wa's bits, wb's bits): TangentRule's layout.
+  static_assert(sizeof(TangentRule) == 4 * sizeof(std::uint32_t) && offsetof(TangentRule, wb) == 12);
+  m.zh_rules = make_buffer(z.tangents.data(), V * sizeof(TangentRule));
   // Every vertex's row; an analytic vertex's transfer, the clamped cosine
   // about its normal, is one lobe along the frame's z with the profile
   // rho (A_l / pi) / zonal_factor(l) (prt/zh.h: t_lm = g_l zonal_factor(l) Y_lm).
@@ -83,7 +85,7 @@ void Renderer::set_mesh(const Mesh& rest, const ZhTransfer& z) {
     std::copy_n(z.coeffs.data() + r * z.coeffs_stride(), z.coeffs_stride(), g);
   });
   check_gl(fmt::format("uploading the zonal-harmonic transfer ({} vertices, {} lobes of {} bands)", V, K, n));
-  m.zh_bytes = V * row * sizeof(float) + V * sizeof(std::uint32_t);
+  m.zh_bytes = V * row * sizeof(float) + V * sizeof(TangentRule);
   m.zh = true;
   m.zh_lobes = K;
   m.zh_lobe_bands = n;
@@ -207,7 +209,7 @@ GLuint Renderer::Impl::zh_relight() {
   for (int l = 0; l < zh_lobe_bands; ++l) zonal[l] = float(zh::zonal_factor(l));
   glUniform1fv(6, kMaxRenderBands, zonal);
   glBindBufferBase(GL_UNIFORM_BUFFER, 1, light_buffer);
-  const GLuint storage[][2] = {{7, zh_rows},         {8, zh_neighbours},   {9, rest_positions},   {10, rest_normals},
+  const GLuint storage[][2] = {{7, zh_rows},         {8, zh_rules},   {9, rest_positions},   {10, rest_normals},
                                {11, position_buffer}, {12, normal_buffer}, {2, radiance_buffer}};
   for (const auto& [binding, buffer] : storage) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer);
   if (skin_pose) {

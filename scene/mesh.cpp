@@ -212,6 +212,57 @@ void compute_normals(Mesh& mesh, const std::vector<glm::vec3>& file_normals, con
   }
 }
 
+// Every triangle's corners' first texture coordinates, in the order
+// load_mesh flattens the scene's triangles (meshes in order, triangles only);
+// empty unless every mesh has them (a mesh without would leave corners
+// undefined).
+std::vector<glm::vec2> corner_uvs_of(const aiScene* scene, std::size_t triangles) {
+  std::vector<glm::vec2> uvs;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    if (!scene->mMeshes[m]->HasTextureCoords(0)) return {};
+  uvs.reserve(3 * triangles);
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* am = scene->mMeshes[m];
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      for (int k = 0; k < 3; ++k) {
+        const aiVector3D& t = am->mTextureCoords[0][face.mIndices[k]];  // indices checked by load_mesh
+        uvs.emplace_back(t.x, t.y);
+      }
+    }
+  }
+  return uvs.size() == 3 * triangles ? uvs : std::vector<glm::vec2>{};
+}
+
+// An OBJ's UVs: load_mesh joins its corners without them (so seams do not
+// split vertices); a second parse without joining keeps one vertex per
+// corner, in the same triangle order. Its corners' positions must equal the
+// joined mesh's; otherwise no UVs (reported).
+std::vector<glm::vec2> obj_corner_uvs(const std::string& path, Mesh& mesh) {
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  if (scene == nullptr) return {};
+  std::size_t f_total = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* am = scene->mMeshes[m];
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      if (f_total >= mesh.triangles.size()) return mesh.report.uvs_dropped = true, std::vector<glm::vec2>{};
+      for (int k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= am->mNumVertices) return mesh.report.uvs_dropped = true, std::vector<glm::vec2>{};
+        const aiVector3D& p = am->mVertices[face.mIndices[k]];
+        if (glm::vec3(p.x, p.y, p.z) != mesh.positions[mesh.triangles[f_total][k]])
+          return mesh.report.uvs_dropped = true, std::vector<glm::vec2>{};
+      }
+      ++f_total;
+    }
+  }
+  if (f_total != mesh.triangles.size()) return mesh.report.uvs_dropped = true, std::vector<glm::vec2>{};
+  return corner_uvs_of(scene, f_total);
+}
+
 }  // namespace
 
 std::uint64_t Mesh::hash() const {
@@ -364,13 +415,31 @@ Mesh load_mesh(const std::string& path, const MeshOptions& options) {
       triangles.push_back(t);
     }
   }
+  // Texture coordinates per corner, where the file's vertices carry them.
+  std::vector<glm::vec2> uvs;
+  if (options.uvs && !per_corner) uvs = corner_uvs_of(scene, triangles.size());
   // Assimp's copy goes before make_mesh works on ours: the mesh is held once.
   importer.FreeScene();
   if (positions.empty()) throw Error(path + ": no vertices");
   if (triangles.empty())
     throw Error(path + ": no triangles" +
                 (skipped ? fmt::format(" (only {} points or lines)", skipped) : std::string()));
-  return make_mesh(std::move(positions), std::move(triangles), std::move(normals), std::move(colors), options, path);
+  Mesh mesh =
+      make_mesh(std::move(positions), std::move(triangles), std::move(normals), std::move(colors), options, path);
+  if (options.uvs && format == detail::MeshFormat::Obj) uvs = obj_corner_uvs(path, mesh);
+  if (!uvs.empty()) set_corner_uvs(mesh, std::move(uvs));
+  return mesh;
+}
+
+void set_corner_uvs(Mesh& mesh, std::vector<glm::vec2> corner_uvs) {
+  if (corner_uvs.size() != 3 * mesh.triangles.size())
+    throw Error(fmt::format("{}: {} texture coordinates for {} triangles (3 per triangle, one per corner)", mesh.source,
+                            corner_uvs.size(), mesh.triangles.size()));
+  for (std::size_t i = 0; i < corner_uvs.size(); ++i)
+    if (!std::isfinite(corner_uvs[i].x) || !std::isfinite(corner_uvs[i].y))
+      throw Error(fmt::format("{}: triangle {} has a non-finite texture coordinate ({}, {})", mesh.source, i / 3,
+                              corner_uvs[i].x, corner_uvs[i].y));
+  mesh.corner_uvs = std::move(corner_uvs);
 }
 
 std::string describe(const Mesh& mesh) {
@@ -392,6 +461,8 @@ std::string describe(const Mesh& mesh) {
   if (r.inconsistent_edges) s += fmt::format(", {} edges between inconsistently wound triangles", r.inconsistent_edges);
   if (r.welded) s += fmt::format(", {} welded", r.welded);
   if (!mesh.colors.empty()) s += ", vertex colours";
+  if (!mesh.corner_uvs.empty()) s += ", texture coordinates";
+  if (mesh.report.uvs_dropped) s += ", texture coordinates not read (the OBJ's corners did not line up)";
   return s;
 }
 

@@ -39,6 +39,8 @@ enum ZhKind : std::uint32_t {
   kZhAxes = 25,           // f32, stored rows x lobes x 3
   kZhCoeffs = 26,         // f32, stored rows x channels x lobes x bands
   kZhRestOcclusion = 27,  // f32, one per vertex in [0, 1]; only when ZhTransfer::rest_ao is not empty
+  kZhTangentVertices = 28,  // u32, 2 per vertex: a tangent rule's neighbours a, b (prt::TangentRule)
+  kZhTangentWeights = 29,   // f32, 2 per vertex: its weights wa, wb
 };
 
 struct ZhSection {
@@ -54,7 +56,9 @@ constexpr EnumName<std::uint32_t> kZhKindNames[] = {
     {kZhAnalyticMask, "zh analytic vertices"},
     {kZhAxes, "zh axes"},
     {kZhCoeffs, "zh coefficients"},
-    {kZhRestOcclusion, "zh rest occlusion"}};
+    {kZhRestOcclusion, "zh rest occlusion"},
+    {kZhTangentVertices, "zh tangent rule vertices"},
+    {kZhTangentWeights, "zh tangent rule weights"}};
 const char* zh_kind_name(std::uint32_t kind) { return enum_name(kZhKindNames, kind).data(); }
 
 // The analytic-vertex bit mask of `t` (empty when no vertex is analytic):
@@ -78,6 +82,10 @@ std::vector<ZhSection> zh_sections(const ZhTransfer& t, const std::vector<std::u
   // The axes and coefficients always, as an SH file's coefficients (0 values when every vertex is analytic).
   s.push_back({kZhAxes, n(kZhAxes), kTypeF32, t.axes.data(), t.axes.size(), true});
   s.push_back({kZhCoeffs, n(kZhCoeffs), kTypeF32, t.coeffs.data(), t.coeffs.size(), true});
+  // The tangent rules, always, every vertex's (the data: write_zh_transfer
+  // splits them into the two arrays).
+  s.push_back({kZhTangentVertices, n(kZhTangentVertices), kTypeU32, nullptr, 2 * t.tangents.size(), true});
+  s.push_back({kZhTangentWeights, n(kZhTangentWeights), kTypeF32, nullptr, 2 * t.tangents.size(), true});
   // Every vertex's, analytic ones too (a pose may shadow them).
   if (!t.rest_ao.empty())
     s.push_back({kZhRestOcclusion, n(kZhRestOcclusion), kTypeF32, t.rest_ao.data(), t.rest_ao.size(), true});
@@ -123,8 +131,21 @@ void write_zh_transfer(const std::string& path, const ZhTransfer& t) {
   store<std::uint64_t>(header + kOffTopologyHash, t.topology_hash);
   store<double>(header + kOffFitError, t.fit_error);
 
+  std::vector<std::uint32_t> rule_vertices;
+  std::vector<float> rule_weights;
+  rule_vertices.reserve(2 * t.tangents.size());
+  rule_weights.reserve(2 * t.tangents.size());
+  for (const TangentRule& r : t.tangents) {
+    rule_vertices.insert(rule_vertices.end(), {r.a, r.b});
+    rule_weights.insert(rule_weights.end(), {r.wa, r.wb});
+  }
   std::vector<RawSection> raw;
-  for (const auto& s : sections) raw.push_back({s.kind, s.type, s.count, s.count * type_bytes(s.type), s.data});
+  for (const auto& s : sections) {
+    const void* data = s.kind == kZhTangentVertices  ? rule_vertices.data()
+                       : s.kind == kZhTangentWeights ? static_cast<const void*>(rule_weights.data())
+                                                     : s.data;
+    raw.push_back({s.kind, s.type, s.count, s.count * type_bytes(s.type), data});
+  }
   write_file(path, header, raw);
 }
 
@@ -147,6 +168,10 @@ ZhTransfer Reader::read_zh() {
                            "zonal-harmonic (local deformable) transfer",
                            load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisZH) throw fail(unknown_basis(basis));
+  if (version_ == 1)
+    throw fail(fmt::format("is a zonal-harmonic transfer of format version 1, which kept no tangent rules (version {} "
+                           "does): run prt precompute --basis zh again",
+                           kZhFormatVersion));
   if (version_ != kZhFormatVersion)
     throw fail(fmt::format("bad header: format version {} for a zonal-harmonic transfer (zonal-harmonic files are "
                            "version {})",
@@ -212,7 +237,7 @@ ZhTransfer Reader::read_zh() {
   // the mask is by the header (its count is the vertices', checked below).
   std::vector<std::uint32_t> kinds;
   if (has_mask) kinds.push_back(kZhAnalyticMask);
-  kinds.insert(kinds.end(), {kZhAxes, kZhCoeffs});
+  kinds.insert(kinds.end(), {kZhAxes, kZhCoeffs, kZhTangentVertices, kZhTangentWeights});
   if (section_count_ == kinds.size() + 1) kinds.push_back(kZhRestOcclusion);
   if (section_count_ != kinds.size())
     throw fail(fmt::format("bad section table: {} sections; a zonal-harmonic transfer {} has {} ({} with its rest "
@@ -221,15 +246,17 @@ ZhTransfer Reader::read_zh() {
                            has_mask ? fmt::format("with {} analytic vertices", v.vertices - v.stored)
                                     : std::string("with every vertex stored"),
                            kinds.size(), kinds.size() + 1));
-  // One f32 per vertex: what does not fit is refused before anything is allocated.
-  if (kinds.back() == kZhRestOcclusion && v.vertices > size_ / 4)
-    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their rest occlusion alone "
-                           "takes {})",
-                           v.vertices, size_, 4 * v.vertices));
+  // Sixteen bytes per vertex (the tangent rules), four more with the rest
+  // occlusion: what does not fit is refused before anything is allocated.
+  if (v.vertices > size_ / 16)
+    throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their tangent rules alone "
+                           "take {})",
+                           v.vertices, size_, 16 * v.vertices));
 
   // Sections: the kinds the header implies, in order, each of its type and
   // of the count the header gives, data padded with zeros.
-  std::vector<std::uint32_t> mask;
+  std::vector<std::uint32_t> mask, rule_vertices;
+  std::vector<float> rule_weights;
   const std::uint64_t data_end = size_ - kTrailerSize;
   std::uint64_t offset = kHeaderSize;
   for (std::uint32_t i = 0; i < section_count_; ++i) {
@@ -243,7 +270,7 @@ ZhTransfer Reader::read_zh() {
     if (kind != kinds[i])
       throw fail(
           fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
-    const std::uint32_t want_type = kind == kZhAnalyticMask ? kTypeU32 : kTypeF32;
+    const std::uint32_t want_type = kind == kZhAnalyticMask || kind == kZhTangentVertices ? kTypeU32 : kTypeF32;
     if (type != want_type)
       throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
                              want_type, type_name(want_type)));
@@ -251,7 +278,8 @@ ZhTransfer Reader::read_zh() {
     const std::uint64_t want = kind == kZhAnalyticMask    ? mask_words(v.vertices)
                                : kind == kZhAxes          ? v.stored * axes_stride
                                : kind == kZhRestOcclusion ? v.vertices
-                                                          : v.stored * coeffs_stride;
+                               : kind == kZhCoeffs        ? v.stored * coeffs_stride
+                                                          : 2 * v.vertices;
     if (count != want)
       throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count,
                              kind == kZhAnalyticMask
@@ -260,8 +288,10 @@ ZhTransfer Reader::read_zh() {
                                  ? fmt::format("stored vertices x lobes x 3 = {} x {} x 3 = {}", v.stored, lobes, want)
                              : kind == kZhRestOcclusion
                                  ? fmt::format("one per vertex, {}", want)
-                                 : fmt::format("stored vertices x channels x lobes x bands = {} x {} x {} x {} = {}",
-                                               v.stored, v.channels, lobes, bands, want)));
+                             : kind == kZhCoeffs
+                                 ? fmt::format("stored vertices x channels x lobes x bands = {} x {} x {} x {} = {}",
+                                               v.stored, v.channels, lobes, bands, want)
+                                 : fmt::format("two per vertex, {}", want)));
     const std::uint64_t data = offset + kSectionHeaderSize;
     if (bytes != count * type_bytes(type))
       throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", name, count,
@@ -274,6 +304,8 @@ ZhTransfer Reader::read_zh() {
       case kZhAxes: read_section(data, t.axes, count); break;
       case kZhCoeffs: read_section(data, t.coeffs, count); break;
       case kZhRestOcclusion: read_section(data, t.rest_ao, count); break;
+      case kZhTangentVertices: read_section(data, rule_vertices, count); break;
+      case kZhTangentWeights: read_section(data, rule_weights, count); break;
     }
     unsigned char zeros[kAlign] = {}, got[kAlign] = {};
     read_at(data + bytes, got, pad);
@@ -289,6 +321,9 @@ ZhTransfer Reader::read_zh() {
   // an SH file's); then zh_transfer_problem (unit axes, finite coefficients,
   // rest occlusion in [0, 1]).
   if (has_mask) t.slots = slots_from_mask(mask, v.vertices, v.stored);
+  t.tangents.resize(t.vertices);
+  for (std::size_t i = 0; i < t.vertices; ++i)
+    t.tangents[i] = {rule_vertices[2 * i], rule_vertices[2 * i + 1], rule_weights[2 * i], rule_weights[2 * i + 1]};
   if (auto p = zh_transfer_problem(t); !p.empty()) throw fail(p);
   return t;
 }
@@ -330,6 +365,10 @@ std::string describe_transfer(const ZhTransfer& t) {
                                     "stored)",
                                     t.vertices, stored, analytic));
   s += line("fit error", fmt::format("{:.4g}% (relative, over the stored vertices' SH transfer)", 100.0 * t.fit_error));
+  const TangentCounts tc = tangent_counts(t);
+  s += line("tangents", fmt::format("{} from texture coordinates, {} by the edge rule, {} none (the frame of the normal "
+                                    "alone)",
+                                    tc.uv, tc.edge, tc.none));
   if (t.rest_ao.empty()) {
     s += line("rest occlusion", "none");
   } else {
@@ -341,7 +380,8 @@ std::string describe_transfer(const ZhTransfer& t) {
                                             mean, double(*lo), double(*hi)));
   }
   s += line("bytes per vertex",
-            fmt::format("{} per stored vertex ({} axes, {} coefficients){}; {:.1f} mean over all vertices",
+            fmt::format("{} per stored vertex ({} axes, {} coefficients), 16 per vertex (tangent rule){}; {:.1f} mean "
+                        "over all vertices",
                         4 * t.stride(), 4 * t.axes_stride(), 4 * t.coeffs_stride(),
                         t.rest_ao.empty() ? "" : ", 4 per vertex (rest occlusion)",
                         t.vertices > 0 ? double(bytes) / double(t.vertices) : 0.0));

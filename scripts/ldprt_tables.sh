@@ -6,7 +6,8 @@
 #                                             the shadowed precompute's (6 bands, 1024 rays)
 #   scripts/ldprt_tables.sh bend [MESH]       a bent pose relit from the rest pose's lobes against a fresh
 #                                             precompute of the bent mesh (SH, the same bands and rays), per
-#                                             bend angle; with --dynamic-ao when prt relight has it
+#                                             bend and twist angle; UV frames and the edge rule's, and with
+#                                             --dynamic-ao
 #
 # Defaults: fit on models/tube.obj and, when ../shared/meshes is there, lion, cow and bunny00; bend on
 # models/tube.obj. Map: ENV (default envmaps/sunset.exr); reference: REF_SAMPLES (default 4096) per vertex.
@@ -59,33 +60,31 @@ fit_table() {
 
 bend_table() {
   local mesh=${1:-models/tube.obj}
-  local ao=""
-  case "$("$prt" relight --help)" in *--dynamic-ao*) ao=1 ;; esac
-  "$prt" precompute "$mesh" -o "$tmp/zh.prt" --basis zh --lobes 4 --bands "$bands" --samples 1024 -q ${ao:+--dynamic-ao}
+  "$prt" precompute "$mesh" -o "$tmp/zh.prt" --basis zh --lobes 4 --bands "$bands" --samples 1024 -q --dynamic-ao
+  # The same lobes in the edge rule's frames (the same SH transfer: the frames only turn the stored axes).
+  "$prt" precompute "$mesh" -o "$tmp/zh-edge.prt" --basis zh --lobes 4 --bands "$bands" --samples 1024 -q \
+    --tangent edge
   echo "$(basename "$mesh"): the rest pose's lobes (K = 4, $bands bands, 1024 rays) relit bent, against a fresh"
   echo "SH precompute of the bent mesh ($bands bands, 1024 rays), map $(basename "$env"); relative RMS (99th percentile"
-  echo "of the per-vertex relative error)."
+  echo "of the per-vertex relative error). Frames: the UV tangent where the mesh has texture coordinates"
+  echo "(--tangent uv, the default), or the edge rule everywhere (--tangent edge)."
   echo
-  if [ -n "$ao" ]; then
-    echo "| bend | lobes as they are | with --dynamic-ao |"
-    echo "|--:|--:|--:|"
-  else
-    echo "| bend | lobes as they are |"
-    echo "|--:|--:|"
-  fi
-  for angle in 0 30 60 90 120 150 180; do
-    "$prt" relight "$mesh" "$tmp/zh.prt" "$env" --deform bend:$angle -q -o "$tmp/bent.ply"
-    "$prt" precompute "$tmp/bent.ply" -o "$tmp/fresh.prt" --bands "$bands" --samples 1024 -q
-    "$prt" relight "$tmp/bent.ply" "$tmp/fresh.prt" "$env" -q -o "$tmp/fresh.csv"
-    "$prt" relight "$mesh" "$tmp/zh.prt" "$env" --deform bend:$angle -q -o "$tmp/zh.csv"
-    e=$("$prt" compare "$tmp/zh.csv" "$tmp/fresh.csv" --json | python3 -c "import json,sys; d=json.load(sys.stdin); print('%.4f (%.3f)' % (d['rel_rms'], d['p99_rel']))")
-    if [ -n "$ao" ]; then
-      "$prt" relight "$mesh" "$tmp/zh.prt" "$env" --deform bend:$angle --dynamic-ao -q -o "$tmp/ao.csv"
-      a=$("$prt" compare "$tmp/ao.csv" "$tmp/fresh.csv" --json | python3 -c "import json,sys; d=json.load(sys.stdin); print('%.4f (%.3f)' % (d['rel_rms'], d['p99_rel']))")
-      echo "| $angle | $e | $a |"
-    else
-      echo "| $angle | $e |"
-    fi
+  cmp() { "$prt" compare "$1" "$tmp/fresh.csv" --json | python3 -c "import json,sys; d=json.load(sys.stdin); print('%.4f (%.3f)' % (d['rel_rms'], d['p99_rel']))"; }
+  for kind in bend twist; do
+    local angles="0 30 60 90 120 150 180"
+    [ $kind = twist ] && angles="90 180 360"
+    echo "| $kind | lobes as they are | edge-rule frames | with --dynamic-ao |"
+    echo "|--:|--:|--:|--:|"
+    for angle in $angles; do
+      "$prt" relight "$mesh" "$tmp/zh.prt" "$env" --deform $kind:$angle -q -o "$tmp/bent.ply"
+      "$prt" precompute "$tmp/bent.ply" -o "$tmp/fresh.prt" --bands "$bands" --samples 1024 -q
+      "$prt" relight "$tmp/bent.ply" "$tmp/fresh.prt" "$env" -q -o "$tmp/fresh.csv"
+      "$prt" relight "$mesh" "$tmp/zh.prt" "$env" --deform $kind:$angle -q -o "$tmp/zh.csv"
+      "$prt" relight "$mesh" "$tmp/zh-edge.prt" "$env" --deform $kind:$angle -q -o "$tmp/edge.csv"
+      "$prt" relight "$mesh" "$tmp/zh.prt" "$env" --deform $kind:$angle --dynamic-ao -q -o "$tmp/ao.csv"
+      echo "| $angle | $(cmp "$tmp/zh.csv") | $(cmp "$tmp/edge.csv") | $(cmp "$tmp/ao.csv") |"
+    done
+    echo
   done
 }
 

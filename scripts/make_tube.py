@@ -4,7 +4,12 @@ PRT, docs/LDPRT.md). A closed tube standing on +Y, 2 units tall, ringed by
 ridges whose grooves shadow each other (the local transfer that should follow
 a bend), capped at both ends. Smooth: one normal per vertex (the analytic
 normal of the surface of revolution), so a pose's normals come from the same
-rule (prt/deform.h carries them).
+rule (prt/deform.h carries them). Texture coordinates: u around the tube
+(0 to 1 from +x towards +z, so the tangent runs round it), v up it; the OBJ
+gives each corner its own (the seam's last column u = 1, the caps a planar
+map), the glTF one per vertex (the seam's triangles then run u from 31/32
+back to 0, and the caps' UVs have no area: those vertices take the edge
+rule, docs/CONVENTIONS.md "Vertex frames").
 
     python3 scripts/make_tube.py [--rings N] [--segments M] [-o FILE]
     python3 scripts/make_tube.py --gltf models/tube-skinned.gltf
@@ -14,7 +19,7 @@ deterministic. `--rings 1560 --segments 64` gives a 100k-vertex tube for the
 frame benchmark (docs/LDPRT.md). CC0, like the model.
 
 --gltf FILE writes the same tube skinned, as glTF 2.0 with its buffer embedded
-(instead of the OBJ): POSITION, NORMAL, JOINTS_0, WEIGHTS_0 and indices, a
+(instead of the OBJ): POSITION, NORMAL, TEXCOORD_0, JOINTS_0, WEIGHTS_0 and indices, a
 chain of 4 joints up +Y (at y = 0, 0.5, 1.0, 1.5), and one looping animation,
 "bend" (2 s), that bends the tube towards +x and back (prt/skin.h). The
 vertices are numbered in the order the triangles first use them, every one
@@ -86,7 +91,14 @@ def tube(rings, segments):
     return pos, nrm, tris
 
 
-def write_obj(path, pos, nrm, tris):
+def vertex_uv(v, rings, segments):
+    """Side vertex v's (u, v): u around (segment / segments), v up (ring / (rings - 1))."""
+    i, j = divmod(v, segments)
+    return j / segments, i / (rings - 1)
+
+
+def write_obj(path, pos, nrm, tris, rings, segments):
+    side = rings * segments
     with open(path, "w", newline="\n") as f:
         f.write("# prt's bundled deformable model: a ridged tube (scripts/make_tube.py; CC0)\n")
         f.write(f"# {len(pos)} vertices, {len(tris)} triangles, +Y up\n")
@@ -94,8 +106,28 @@ def write_obj(path, pos, nrm, tris):
             f.write("v %.6f %.6f %.6f\n" % p)
         for n in nrm:
             f.write("vn %.6f %.6f %.6f\n" % n)
+        # Texture coordinates per corner: the side's grid with one more column
+        # (u = 1, the seam's far side), then the caps' planar map.
+        for i in range(rings):
+            for j in range(segments + 1):
+                f.write("vt %.6f %.6f\n" % (j / segments, i / (rings - 1)))
+        for p in pos:
+            f.write("vt %.6f %.6f\n" % (0.5 + p[0] / (2 * RADIUS), 0.5 + p[2] / (2 * RADIUS)))
+        cap_vt = (rings) * (segments + 1)
         for t in tris:
-            f.write("f %d//%d %d//%d %d//%d\n" % (t[0] + 1, t[0] + 1, t[1] + 1, t[1] + 1, t[2] + 1, t[2] + 1))
+            cap = any(v >= side for v in t)
+            # A side triangle's corners at the seam (column 0) take u = 1 when the triangle spans it.
+            cols = [v % segments for v in t if v < side]
+            wraps = not cap and max(cols) == segments - 1 and min(cols) == 0
+            corners = []
+            for v in t:
+                if cap:
+                    vt = cap_vt + v
+                else:
+                    i, j = divmod(v, segments)
+                    vt = i * (segments + 1) + (segments if wraps and j == 0 else j)
+                corners.append("%d/%d/%d" % (v + 1, vt + 1, v + 1))
+            f.write("f " + " ".join(corners) + "\n")
 
 
 def skin_weights(y):
@@ -117,7 +149,10 @@ def skin_weights(y):
     return (k, k + 1), (1.0 - w, w)
 
 
-def write_gltf(path, pos, nrm, tris):
+def write_gltf(path, pos, nrm, tris, rings, segments):
+    side = rings * segments
+    uv = [vertex_uv(v, rings, segments) if v < side else (0.5, 0.0 if p[1] == 0.0 else 1.0)
+          for v, p in enumerate(pos)]
     # Renumber the vertices in the order the triangles first use them (see the
     # module's docstring): Assimp 5.3+ would, so every version keeps this order.
     order = {}
@@ -130,6 +165,7 @@ def write_gltf(path, pos, nrm, tris):
         new_of[new] = old
     pos = [pos[v] for v in new_of]
     nrm = [nrm[v] for v in new_of]
+    uv = [uv[v] for v in new_of]
     tris = [tuple(order[v] for v in t) for t in tris]
 
     buf = bytearray()
@@ -156,6 +192,7 @@ def write_gltf(path, pos, nrm, tris):
     hi = [max(f32(p[k]) for p in pos) for k in range(3)]
     a_pos = add(b"".join(struct.pack("<3f", *p) for p in pos), len(pos), FLOAT, "VEC3", ARRAY, (lo, hi))
     a_nrm = add(b"".join(struct.pack("<3f", *n) for n in nrm), len(nrm), FLOAT, "VEC3", ARRAY)
+    a_uv = add(b"".join(struct.pack("<2f", *t) for t in uv), len(uv), FLOAT, "VEC2", ARRAY)
     joints, weights = [], []
     for p in pos:
         (j0, j1), (w0, w1) = skin_weights(p[1])
@@ -196,7 +233,8 @@ def write_gltf(path, pos, nrm, tris):
         "scenes": [{"nodes": [0, 1]}],
         "nodes": nodes,
         "meshes": [{"name": "tube", "primitives": [{
-            "attributes": {"POSITION": a_pos, "NORMAL": a_nrm, "JOINTS_0": a_joints, "WEIGHTS_0": a_weights},
+            "attributes": {"POSITION": a_pos, "NORMAL": a_nrm, "TEXCOORD_0": a_uv, "JOINTS_0": a_joints,
+                           "WEIGHTS_0": a_weights},
             "indices": a_idx, "mode": 4}]}],
         "skins": [{"name": "spine", "joints": list(range(1, len(JOINT_Y) + 1)), "inverseBindMatrices": a_ibm,
                    "skeleton": 1}],
@@ -226,9 +264,9 @@ def main():
         ap.error("--rings at least 2 and --segments at least 3")
     pos, nrm, tris = tube(a.rings, a.segments)
     if a.gltf:
-        write_gltf(a.gltf, pos, nrm, tris)
+        write_gltf(a.gltf, pos, nrm, tris, a.rings, a.segments)
     else:
-        write_obj(a.output, pos, nrm, tris)
+        write_obj(a.output, pos, nrm, tris, a.rings, a.segments)
 
 
 if __name__ == "__main__":

@@ -19,16 +19,17 @@
 // inserted with them.
 //
 // The posed frame (docs/CONVENTIONS.md, "Vertex frames"): normal n, tangent
-// from the edge to the neighbour the rest pose's edge rule chose
-// (u_neighbour; the pose would choose the same unless that edge became
-// degenerate), projected into the tangent plane; too short a projection:
-// the frame of the normal alone (Duff et al. 2017); no normal: dark.
+// by the vertex's rule (prt::TangentRule, set at rest: the UV tangent or the
+// edge rule), wa (p_a - p) + wb (p_b - p) projected into the tangent plane;
+// too short a projection, or no rule: the frame of the normal alone (Duff et
+// al. 2017); no normal: dark.
 layout(local_size_x = 64) in;
 
 // Per vertex: LOBES unit axes in its rest frame (xyz, w unused), then the
 // coefficients [c][i][l] as floats, padded to whole vec4s.
 layout(std430, binding = 7) readonly buffer LobeBuffer { vec4 lobes[]; };
-layout(std430, binding = 8) readonly buffer NeighbourBuffer { uint neighbour[]; };
+// Per vertex its tangent rule: a, b, and the bits of wa, wb.
+layout(std430, binding = 8) readonly buffer RuleBuffer { uvec4 rule[]; };
 layout(std430, binding = 9) readonly buffer RestPositions { float rest_p[]; };
 layout(std430, binding = 10) readonly buffer RestNormals { float rest_n[]; };
 layout(std430, binding = 11) buffer PosedPositions { float posed_p[]; };
@@ -115,14 +116,18 @@ void main() {
   if (i >= u_vertices) return;
   const uint v = u_first + i;
   vec3 p, n, q;
+  const uvec4 ru = rule[v];
+  const vec2 w = uintBitsToFloat(ru.zw);
 #if POSE == 0
   p = load3(v, false, false);
   n = load3(v, false, true);
-  q = load3(neighbour[v], false, false);
+  q = w.x * (load3(ru.x, false, false) - p);
+  if (w.y != 0.0) q += w.y * (load3(ru.y, false, false) - p);
 #else
   vec3 unused;
   p = deform(v, true, n);
-  q = deform(neighbour[v], false, unused);
+  q = w.x * (deform(ru.x, false, unused) - p);
+  if (w.y != 0.0) q += w.y * (deform(ru.y, false, unused) - p);
   const uint o = 3u * v;
   posed_p[o] = p.x, posed_p[o + 1] = p.y, posed_p[o + 2] = p.z;
   posed_n[o] = n.x, posed_n[o + 1] = n.y, posed_n[o + 2] = n.z;
@@ -131,8 +136,8 @@ void main() {
     radiance[v] = vec4(0.0, 0.0, 0.0, 1.0);
     return;
   }
-  // The frame: tangent from the chosen edge, else from the normal alone.
-  const vec3 e = q - p;
+  // The frame: tangent by the rule, else from the normal alone.
+  const vec3 e = q;
   const vec3 proj = e - dot(e, n) * n;
   vec3 t, b;
   if (length(proj) >= FRAME_EDGE_MIN * length(e) && dot(e, e) > 0.0) {

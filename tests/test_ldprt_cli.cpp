@@ -56,6 +56,48 @@ TEST(LdprtCli, PrecomputeThenRelightPoses) {
   EXPECT_GT(moved, 0.05);
 }
 
+// --tangent: the UV tangent from the tube's texture coordinates by default,
+// the edge rule when asked; the same SH transfer and fit, only the frames
+// (and so the stored axes) differ; refused for other bases and other values.
+TEST(LdprtCli, TangentFromTheUvsOrTheEdgeRule) {
+  TempDir dir;
+  const std::string uv = dir.file("uv.prt"), edge = dir.file("edge.prt");
+  const std::vector<std::string> common = {"--basis", "zh", "--lobes", "2", "--bands", "3", "--samples", "64"};
+  std::vector<std::string> a = {"precompute", kTube, "-o", uv};
+  a.insert(a.end(), common.begin(), common.end());
+  const Result pu = run_prt(dir, a);
+  ASSERT_EQ(pu.code, 0) << describe_run(pu);
+  EXPECT_NE(pu.err.find("vertex frames: 2020 tangents from texture coordinates, 30 by the edge rule"), std::string::npos)
+      << pu.err;
+  a[3] = edge;
+  a.insert(a.end(), {"--tangent", "edge"});
+  const Result pe = run_prt(dir, a);
+  ASSERT_EQ(pe.code, 0) << describe_run(pe);
+  EXPECT_NE(pe.err.find("vertex frames: 0 tangents from texture coordinates, 2050 by the edge rule"), std::string::npos)
+      << pe.err;
+  const ZhTransfer zu = read_zh_transfer(uv), ze = read_zh_transfer(edge);
+  EXPECT_EQ(zu.coeffs, ze.coeffs);  // the frames turn the axes only
+  EXPECT_NE(zu.axes, ze.axes);
+  EXPECT_EQ(zu.fit_error, ze.fit_error);
+  const Result info = run_prt(dir, {"info", uv});
+  EXPECT_NE(info.out.find("2020 from texture coordinates, 30 by the edge rule, 0 none"), std::string::npos) << info.out;
+  const Result json = run_prt(dir, {"info", edge, "--json"});
+  EXPECT_NE(json.out.find(R"("tangents": {
+    "uv": 0,
+    "edge": 2050,
+    "none": 0
+  })"),
+            std::string::npos)
+      << json.out;
+  const Result sh = run_prt(dir, {"precompute", kTube, "-o", dir.file("x.prt"), "--tangent", "edge"});
+  EXPECT_EQ(sh.code, 2) << describe_run(sh);
+  EXPECT_NE(sh.err.find("--tangent applies to --basis zh only"), std::string::npos) << sh.err;
+  a.back() = "bitangent";
+  const Result bad = run_prt(dir, a);
+  EXPECT_EQ(bad.code, 2) << describe_run(bad);
+  EXPECT_NE(bad.err.find("--tangent"), std::string::npos) << bad.err;
+}
+
 // --dynamic-ao: stored by precompute, applied by relight as the library's
 // dynamic_ao_factor; refused for a file without it and for other bases.
 TEST(LdprtCli, DynamicAoThroughTheCommandLine) {

@@ -300,6 +300,96 @@ TEST_F(MeshFiles, GltfWithEmbeddedBuffer) {
   for (const auto& n : m.normals) EXPECT_EQ(n, vec3(0, 0, 1));
 }
 
+TEST_F(MeshFiles, ObjTextureCoordinatesArePerCornerAndJoinNothing) {
+  // The 2x2 grid of quads with its own texture coordinates per face: u = x +
+  // 10 f on face f, so every interior vertex has several (a seam at every
+  // edge). Read with MeshOptions::uvs, the vertices are the 9 joined without
+  // them (the same hash), and each triangle's corners keep their face's.
+  std::string obj;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) obj += "v " + std::to_string(i) + " 0 " + std::to_string(j) + "\n";
+  int f = 0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i, ++f) {
+      const int corners[4][2] = {{i, j}, {i, j + 1}, {i + 1, j + 1}, {i + 1, j}};
+      for (const auto& c : corners) obj += "vt " + std::to_string(c[0] + 10 * f) + " " + std::to_string(c[1]) + "\n";
+      obj += "f";
+      for (int k = 0; k < 4; ++k)
+        obj += " " + std::to_string(corners[k][1] * 3 + corners[k][0] + 1) + "/" + std::to_string(4 * f + k + 1);
+      obj += "\n";
+    }
+  const std::string path = write("uv.obj", obj);
+  const prt::Mesh plain = prt::load_mesh(path);
+  EXPECT_TRUE(plain.corner_uvs.empty());
+  prt::MeshOptions with;
+  with.uvs = true;
+  const prt::Mesh m = prt::load_mesh(path, with);
+  EXPECT_EQ(m.vertex_count(), 9u);
+  EXPECT_EQ(m.hash(), plain.hash());
+  ASSERT_EQ(m.corner_uvs.size(), 3 * m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const vec3 p = m.positions[m.triangles[t][k]];
+      EXPECT_EQ(m.corner_uvs[3 * t + k], glm::vec2(p.x + 10.0f * float(t / 2), p.z)) << t << " " << k;
+    }
+  EXPECT_NE(prt::describe(m).find("texture coordinates"), std::string::npos);
+  // A file without any: none, and nothing reported dropped.
+  const prt::Mesh none = prt::load_mesh(write("no-uv.obj", "v 0 0 0\nv 1 0 0\nv 0 0 1\nf 1 3 2\n"), with);
+  EXPECT_TRUE(none.corner_uvs.empty());
+  EXPECT_FALSE(none.report.uvs_dropped);
+}
+
+TEST_F(MeshFiles, PlyAndGltfTextureCoordinatesFollowTheirVertices) {
+  const std::string ply = write("uv.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 4\n"
+                                "property float x\nproperty float y\nproperty float z\n"
+                                "property float u\nproperty float v\n"
+                                "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                                "0 0 1 0.5 0.25\n1 0 1 1 0.25\n1 0 0 1 0.75\n0 0 0 0.5 0.75\n"
+                                "3 0 1 2\n3 0 2 3\n");
+  prt::MeshOptions with;
+  with.uvs = true;
+  const prt::Mesh m = prt::load_mesh(ply, with);
+  const glm::vec2 uv[4] = {{0.5f, 0.25f}, {1, 0.25f}, {1, 0.75f}, {0.5f, 0.75f}};
+  ASSERT_EQ(m.corner_uvs.size(), 6u);
+  for (std::size_t t = 0; t < 2; ++t)
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(m.corner_uvs[3 * t + k], uv[m.triangles[t][k]]) << t << " " << k;
+  EXPECT_TRUE(prt::load_mesh(ply).corner_uvs.empty());  // only when asked
+
+  // glTF's TEXCOORD_0: Assimp turns v over (v' = 1 - v), as glTF's origin is
+  // the image's top left; the u direction, which the frames use, is the file's.
+  const float pos[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  const float tex[4][2] = {{0, 0}, {2, 0}, {2, 1}, {0, 1}};
+  const std::uint16_t idx[6] = {0, 1, 2, 0, 2, 3};
+  std::vector<std::uint8_t> buf(sizeof(pos) + sizeof(tex) + sizeof(idx));
+  std::memcpy(buf.data(), pos, sizeof(pos));
+  std::memcpy(buf.data() + sizeof(pos), tex, sizeof(tex));
+  std::memcpy(buf.data() + sizeof(pos) + sizeof(tex), idx, sizeof(idx));
+  const std::string json = R"({
+  "asset": {"version": "2.0"},
+  "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}]}],
+  "buffers": [{"byteLength": 92, "uri": "data:application/octet-stream;base64,)" +
+                           base64(buf) + R"("}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                  {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                  {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})";
+  const prt::Mesh g = prt::load_mesh(write("uv.gltf", json), with);
+  ASSERT_EQ(g.corner_uvs.size(), 6u);
+  for (std::size_t t = 0; t < 2; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = g.triangles[t][k];
+      EXPECT_EQ(g.corner_uvs[3 * t + k].x, tex[v][0]) << t << " " << k;
+      EXPECT_EQ(std::abs(g.corner_uvs[3 * t + k].y - 0.5f), 0.5f) << t << " " << k;  // 0 or 1, either way round
+    }
+}
+
 // ---- load errors -------------------------------------------------------------
 
 TEST_F(MeshFiles, MissingDirectoryEmptyAndGarbage) {

@@ -36,7 +36,14 @@ struct Tube {
   Mesh rest;
   ZhTransfer z;
   std::vector<glm::dvec3> light = random_coefficients(4, 9);
-  explicit Tube(int channels = 1, const std::string& path = kTubeObj) : rest(load_mesh(path)) {
+  // uvs: frames from the model's texture coordinates (a tangent rule of two
+  // neighbours), else the edge rule (one).
+  explicit Tube(int channels = 1, const std::string& path = kTubeObj, bool uvs = true)
+      : rest(load_mesh(path, [&] {
+          MeshOptions m;
+          m.uvs = uvs;
+          return m;
+        }())) {
     TransferOptions o;
     o.bands = 4;
     o.samples = 64;
@@ -47,6 +54,11 @@ struct Tube {
     light[0] = glm::dvec3(2.0);  // mostly positive light
   }
   std::vector<glm::vec3> cpu(const Mesh& posed) const { return relight(posed_as_transfer(z, posed), posed, light); }
+  std::size_t uv_frames() const {
+    std::size_t n = 0;
+    for (std::size_t v = 0; v < z.vertices; ++v) n += rule_kind(z.tangents[v], std::uint32_t(v)) == FrameKind::Uv;
+    return n;
+  }
 };
 
 void expect_close(const std::vector<glm::vec3>& gpu, const std::vector<glm::vec3>& cpu, const char* what) {
@@ -60,9 +72,15 @@ void expect_close(const std::vector<glm::vec3>& gpu, const std::vector<glm::vec3
 
 TEST(RenderZh, PosesOnTheGpuMatchTheCpu) {
   REQUIRE_RENDERER(r);
+  // Grey with UV frames, colour with the edge rule's: both kinds of tangent rule on the GPU.
   for (int channels : {1, 3}) {
-    const Tube t(channels);
+    const Tube t(channels, kTubeObj, channels == 1);
     ASSERT_EQ(t.z.channels, channels);
+    if (channels == 1) {
+      EXPECT_GT(t.uv_frames(), t.z.vertices * 9 / 10);
+    } else {
+      EXPECT_EQ(t.uv_frames(), 0u);
+    }
     r->set_mesh(t.rest, t.z);
     r->set_lighting(t.light);
     expect_close(r->vertex_radiance({0, 0, 3}), t.cpu(t.rest), "rest");

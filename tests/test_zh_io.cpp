@@ -43,7 +43,9 @@ bool contains(const std::string& haystack, const std::string& needle) {
 
 // A transfer built by hand, consistent with its header: every third vertex
 // analytic when `analytic`, unit axes (some exactly the frame's, the others
-// random), coefficients falling with band, one -0 (bit-exactness counts it).
+// random), coefficients falling with band, one -0 (bit-exactness counts it),
+// tangent rules of the three kinds in turn (edge, UV, none; none alone below
+// 3 vertices).
 ZhTransfer make_zh(std::size_t V, int bands, int lobes, int channels, bool analytic, bool vertex_colors,
                    unsigned seed) {
   std::mt19937 rng(seed);
@@ -84,6 +86,15 @@ ZhTransfer make_zh(std::size_t V, int bands, int lobes, int channels, bool analy
       for (int i = 0; i < lobes; ++i)
         for (int l = 0; l < bands; ++l) t.coeffs.push_back(float(g(rng) / (1.0 + l)));
   if (!t.coeffs.empty()) t.coeffs.back() = -0.0f;
+  for (std::size_t v = 0; v < V; ++v) {
+    const auto a = std::uint32_t((v + 1) % V), b = std::uint32_t((v + 2) % V), self = std::uint32_t(v);
+    if (V < 3 || v % 3 == 2)
+      t.tangents.push_back({self, self, 0.0f, 0.0f});
+    else if (v % 3 == 0)
+      t.tangents.push_back({a, a, 1.0f, 0.0f});
+    else
+      t.tangents.push_back({a, b, float(g(rng)), -0.0f});
+  }
   return t;
 }
 
@@ -111,6 +122,7 @@ void expect_identical(const ZhTransfer& a, const ZhTransfer& b) {
   EXPECT_TRUE(same_bytes(a.axes, b.axes));
   EXPECT_TRUE(same_bytes(a.coeffs, b.coeffs));
   EXPECT_TRUE(same_bytes(a.rest_ao, b.rest_ao));
+  EXPECT_TRUE(same_bytes(a.tangents, b.tangents));
 }
 
 // A rest occlusion for every vertex of `t`: its ends 0 and 1 exactly, the
@@ -225,7 +237,7 @@ TEST(ZhTransferIo, HeaderAndSectionsAreWhereTheDocumentSays) {
   const std::size_t S = t.stored_vertices();
   EXPECT_EQ(S, 7u);
   EXPECT_EQ(b.substr(0, 8), std::string("PRTT\r\n\x1a\n", 8));
-  EXPECT_EQ(get<std::uint32_t>(b, 8), 1u);     // version
+  EXPECT_EQ(get<std::uint32_t>(b, 8), 2u);     // version
   EXPECT_EQ(get<std::uint32_t>(b, 12), 128u);  // header size
   EXPECT_EQ(get<std::uint32_t>(b, 16), 2u);    // basis: zonal harmonics
   EXPECT_EQ(get<std::uint32_t>(b, 20), 5u);    // bands
@@ -238,17 +250,17 @@ TEST(ZhTransferIo, HeaderAndSectionsAreWhereTheDocumentSays) {
   EXPECT_EQ(get<std::uint64_t>(b, 56), t.seed);
   EXPECT_EQ(get<std::uint64_t>(b, 64), 10u);   // vertices
   EXPECT_EQ(get<std::uint64_t>(b, 72), t.mesh_hash);
-  EXPECT_EQ(get<std::uint32_t>(b, 80), 3u);    // sections
+  EXPECT_EQ(get<std::uint32_t>(b, 80), 5u);    // sections
   EXPECT_EQ(get<std::uint32_t>(b, 84), 3u);    // lobes
   EXPECT_EQ(get<std::uint64_t>(b, 88), S);     // stored rows
   EXPECT_EQ(get<std::uint64_t>(b, 96), t.topology_hash);
   EXPECT_EQ(get<double>(b, 104), t.fit_error);
   for (std::size_t i = 112; i < 128; ++i) EXPECT_EQ(b[i], 0) << "reserved byte " << i;
   const std::vector<std::size_t> at = section_data(b);
-  ASSERT_EQ(at.size(), 3u);
-  const std::uint32_t kinds[3] = {24, 25, 26}, types[3] = {4, 1, 1};
-  const std::uint64_t counts[3] = {1, S * 3 * 3, S * 3 * 3 * 5};
-  for (int i = 0; i < 3; ++i) {
+  ASSERT_EQ(at.size(), 5u);
+  const std::uint32_t kinds[5] = {24, 25, 26, 28, 29}, types[5] = {4, 1, 1, 4, 1};
+  const std::uint64_t counts[5] = {1, S * 3 * 3, S * 3 * 3 * 5, 2 * 10, 2 * 10};
+  for (int i = 0; i < 5; ++i) {
     EXPECT_EQ(get<std::uint32_t>(b, at[i] - 24), kinds[i]);
     EXPECT_EQ(get<std::uint32_t>(b, at[i] - 20), types[i]);
     EXPECT_EQ(get<std::uint64_t>(b, at[i] - 16), counts[i]);
@@ -259,43 +271,53 @@ TEST(ZhTransferIo, HeaderAndSectionsAreWhereTheDocumentSays) {
   EXPECT_EQ(get<std::uint32_t>(b, at[0]), (1u << 1) | (1u << 4) | (1u << 7));
   EXPECT_EQ(get<float>(b, at[1] + 4 * (9 * 1 + 3 * 2 + 1)), t.axes[9 * 1 + 3 * 2 + 1]);    // row 1, lobe 2, y
   EXPECT_EQ(get<float>(b, at[2] + 4 * (15 * 2 + 5 * 1 + 2)), t.coeffs[15 * 2 + 5 * 1 + 2]);  // row 0, channel 2, lobe 1, band 2
+  // Tangent rules, every vertex's: neighbours (a, b), then weights (wa, wb).
+  for (std::size_t v = 0; v < 10; ++v) {
+    EXPECT_EQ(get<std::uint32_t>(b, at[3] + 8 * v), t.tangents[v].a) << v;
+    EXPECT_EQ(get<std::uint32_t>(b, at[3] + 8 * v + 4), t.tangents[v].b) << v;
+    EXPECT_EQ(get<float>(b, at[4] + 8 * v), t.tangents[v].wa) << v;
+    EXPECT_EQ(get<float>(b, at[4] + 8 * v + 4), t.tangents[v].wb) << v;
+  }
   EXPECT_EQ(b.substr(b.size() - 4), "PRTE");
   // Without analytic vertices, no mask section.
   write_zh_transfer(path, make_zh(10, 5, 3, 1, false, false, 4));
   const std::string c = read_file(path);
-  EXPECT_EQ(get<std::uint32_t>(c, 80), 2u);
+  EXPECT_EQ(get<std::uint32_t>(c, 80), 4u);
   EXPECT_EQ(get<std::uint64_t>(c, 88), 10u);
   EXPECT_EQ(get<std::uint32_t>(c, 128), 25u);
   const std::vector<TransferSection> s = transfer_sections(make_zh(10, 5, 3, 1, false, false, 4));
-  ASSERT_EQ(s.size(), 2u);
+  ASSERT_EQ(s.size(), 4u);
   EXPECT_STREQ(s[0].name, "zh axes");
   EXPECT_STREQ(s[1].name, "zh coefficients");
   EXPECT_TRUE(s[1].per_vertex);
   EXPECT_EQ(s[1].bytes, 4u * 10 * 3 * 5);
+  EXPECT_STREQ(s[2].name, "zh tangent rule vertices");
+  EXPECT_STREQ(s[3].name, "zh tangent rule weights");
+  EXPECT_EQ(s[2].bytes + s[3].bytes, 16u * 10);
   // The rest occlusion: a last section, kind 27, one f32 per vertex (all 10,
   // the analytic ones too), the section count one more.
   ZhTransfer r = t;
   add_rest_ao(r, 9);
   write_zh_transfer(path, r);
   const std::string d = read_file(path);
-  EXPECT_EQ(get<std::uint32_t>(d, 80), 4u);
+  EXPECT_EQ(get<std::uint32_t>(d, 80), 6u);
   const std::vector<std::size_t> ad = section_data(d);
-  ASSERT_EQ(ad.size(), 4u);
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(ad[i], at[i]);  // the others where they were
-  EXPECT_EQ(get<std::uint32_t>(d, ad[3] - 24), 27u);
-  EXPECT_EQ(get<std::uint32_t>(d, ad[3] - 20), 1u);
-  EXPECT_EQ(get<std::uint64_t>(d, ad[3] - 16), 10u);
-  EXPECT_EQ(get<std::uint64_t>(d, ad[3] - 8), 40u);
-  EXPECT_EQ(ad[3] % 8, 0u);
-  for (std::size_t v = 0; v < 10; ++v) EXPECT_EQ(get<float>(d, ad[3] + 4 * v), r.rest_ao[v]) << v;
+  ASSERT_EQ(ad.size(), 6u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(ad[i], at[i]);  // the others where they were
+  EXPECT_EQ(get<std::uint32_t>(d, ad[5] - 24), 27u);
+  EXPECT_EQ(get<std::uint32_t>(d, ad[5] - 20), 1u);
+  EXPECT_EQ(get<std::uint64_t>(d, ad[5] - 16), 10u);
+  EXPECT_EQ(get<std::uint64_t>(d, ad[5] - 8), 40u);
+  EXPECT_EQ(ad[5] % 8, 0u);
+  for (std::size_t v = 0; v < 10; ++v) EXPECT_EQ(get<float>(d, ad[5] + 4 * v), r.rest_ao[v]) << v;
   EXPECT_EQ(d.size(), b.size() + 24 + 40);
   const std::vector<TransferSection> rs = transfer_sections(r);
-  ASSERT_EQ(rs.size(), 4u);
-  EXPECT_EQ(rs[3].kind, 27u);
-  EXPECT_STREQ(rs[3].name, "zh rest occlusion");
-  EXPECT_TRUE(rs[3].per_vertex);
-  EXPECT_EQ(rs[3].count, 10u);
-  EXPECT_EQ(rs[3].bytes, 40u);
+  ASSERT_EQ(rs.size(), 6u);
+  EXPECT_EQ(rs[5].kind, 27u);
+  EXPECT_STREQ(rs[5].name, "zh rest occlusion");
+  EXPECT_TRUE(rs[5].per_vertex);
+  EXPECT_EQ(rs[5].count, 10u);
+  EXPECT_EQ(rs[5].bytes, 40u);
 }
 
 TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
@@ -306,7 +328,7 @@ TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
   write_zh_transfer(path, t);
   const std::string good = read_file(path);
   const std::vector<std::size_t> at = section_data(good);
-  ASSERT_EQ(at.size(), 3u);
+  ASSERT_EQ(at.size(), 5u);
   auto expect_bytes = [&](const std::string& bytes, const std::vector<std::string>& words, const std::string& what) {
     write_file(bad, bytes);
     std::vector<std::string> w = words;
@@ -341,19 +363,25 @@ TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
       {[](std::string& x) { put<std::uint64_t>(x, 88, 38); }, {"more than its 37 vertices"}},
       // Stored rows that the sections do not hold (the size check comes first when they cannot fit).
       {[](std::string& x) { put<std::uint64_t>(x, 88, 26); }, {"'zh axes' has 225 values", "26 x 3 x 3 = 234"}},
-      {[](std::string& x) { put<std::uint64_t>(x, 88, 37); }, {"37 stored vertices cannot fit"}},
+      {[](std::string& x) {
+         put<std::uint64_t>(x, 64, 200);
+         put<std::uint64_t>(x, 88, 200);
+       },
+       {"200 stored vertices cannot fit"}},
       {[](std::string& x) {
          put<std::uint64_t>(x, 64, 1ull << 40);
          put<std::uint64_t>(x, 88, 1ull << 40);
        },
        {"stored vertices cannot fit in a file of"}},
       {[](std::string& x) { put<std::uint64_t>(x, 64, 1ull << 40); }, {"analytic-vertex mask alone"}},
+      {[](std::string& x) { put<std::uint64_t>(x, 64, 1000); }, {"1000 vertices cannot fit", "tangent rules alone"}},
       {[](std::string& x) { put<double>(x, 104, NAN); }, {"fit error"}},
       {[](std::string& x) { put<double>(x, 104, -1.0); }, {"fit error"}},
       {[](std::string& x) { x[120] = 1; }, {"reserved byte 120"}},
-      {[](std::string& x) { put<std::uint32_t>(x, 8, 2); }, {"format version 2", "zonal-harmonic files are version 1"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 8, 3); }, {"format version 3", "zonal-harmonic files are version 2"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 8, 1); }, {"format version 1", "no tangent rules", "precompute"}},
       {[](std::string& x) { put<std::uint32_t>(x, 16, 7); }, {"unknown basis 7", "2 zonal harmonics"}},
-      {[](std::string& x) { put<std::uint32_t>(x, 80, 2); }, {"2 sections", "with 12 analytic vertices has 3"}},
+      {[](std::string& x) { put<std::uint32_t>(x, 80, 2); }, {"2 sections", "with 12 analytic vertices has 5"}},
       {[&](std::string& x) { put<std::uint32_t>(x, at[1] - 24, 26); }, {"section 2 has kind 26", "'zh axes'"}},
       {[&](std::string& x) { put<std::uint32_t>(x, at[1] - 20, 2); }, {"'zh axes' has element type 2", "f32"}},
       {[&](std::string& x) { put<std::uint64_t>(x, at[2] - 8, 12); }, {"'zh coefficients'", "but 12 bytes"}},
@@ -369,6 +397,15 @@ TEST(ZhTransferIo, DamagedFilesAreRefusedWithClearMessages) {
       {[&](std::string& x) { put<float>(x, at[1] + 4 * 3, 2.0f); }, {"not a unit vector"}},
       {[&](std::string& x) { put<float>(x, at[2] + 4 * 7, INFINITY); }, {"not finite"}},
       {[&](std::string& x) { x[at[2] + 4 * t.coeffs.size()] = 1; }, {"padding after section 'zh coefficients'"}},
+      // The tangent rules: a section's kind or type, a neighbour out of range, a
+      // weight not finite, a shape none of the three.
+      {[&](std::string& x) { put<std::uint32_t>(x, at[3] - 24, 29); }, {"section 4 has kind 29", "expected 28"}},
+      {[&](std::string& x) { put<std::uint32_t>(x, at[4] - 20, 4); }, {"'zh tangent rule weights' has element type 4"}},
+      {[&](std::string& x) { put<std::uint64_t>(x, at[3] - 16, 73); }, {"'zh tangent rule vertices' has 73", "two per vertex, 74"}},
+      {[&](std::string& x) { put<std::uint32_t>(x, at[3] + 8 * 4, 37); }, {"tangent rule of vertex 4", "vertex 37, out of range"}},
+      {[&](std::string& x) { put<float>(x, at[4] + 8 * 3, NAN); }, {"tangent rule of vertex 3", "non-finite weight"}},
+      {[&](std::string& x) { put<float>(x, at[4] + 8 * 3 + 4, 0.5f); }, {"tangent rule of vertex 3", "is none of"}},
+      {[&](std::string& x) { put<float>(x, at[4] + 8 * 2, 1.0f); }, {"tangent rule of vertex 2", "is none of"}},
   };
   ASSERT_NE((4 * t.coeffs.size()) % 8, 0u);  // the coefficients are padded (the last case)
   for (std::size_t i = 0; i < cases.size(); ++i) {
@@ -394,7 +431,7 @@ TEST(ZhTransferIo, DamagedRestOcclusionIsRefused) {
   write_zh_transfer(path, t);
   const std::string good = read_file(path);
   const std::vector<std::size_t> at = section_data(good);
-  ASSERT_EQ(at.size(), 4u);
+  ASSERT_EQ(at.size(), 6u);
   struct Case {
     const std::string* file;
     std::function<void(std::string&)> edit;
@@ -402,22 +439,22 @@ TEST(ZhTransferIo, DamagedRestOcclusionIsRefused) {
   };
   const std::vector<Case> cases = {
       // Values outside [0, 1] (zh_transfer_problem).
-      {&good, [&](std::string& x) { put<float>(x, at[3] + 4 * 5, 1.5f); }, {"rest occlusion of vertex 5 is 1.5"}},
-      {&good, [&](std::string& x) { put<float>(x, at[3] + 4 * 6, -0.25f); }, {"rest occlusion of vertex 6", "[0, 1]"}},
-      {&good, [&](std::string& x) { put<float>(x, at[3], NAN); }, {"rest occlusion of vertex 0"}},
+      {&good, [&](std::string& x) { put<float>(x, at[5] + 4 * 5, 1.5f); }, {"rest occlusion of vertex 5 is 1.5"}},
+      {&good, [&](std::string& x) { put<float>(x, at[5] + 4 * 6, -0.25f); }, {"rest occlusion of vertex 6", "[0, 1]"}},
+      {&good, [&](std::string& x) { put<float>(x, at[5], NAN); }, {"rest occlusion of vertex 0"}},
       // Section counts and the section itself.
-      {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 5); },
-       {"5 sections", "has 3 (4 with its rest occlusion)"}},
-      {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 3); }, {"between the last section and the trailer"}},
-      {&without, [](std::string& x) { put<std::uint32_t>(x, 80, 4); }, {"section 4 ('zh rest occlusion') is missing"}},
-      {&good, [&](std::string& x) { put<std::uint32_t>(x, at[3] - 24, 28); }, {"section 4 has kind 28", "expected 27"}},
-      {&good, [&](std::string& x) { put<std::uint32_t>(x, at[3] - 20, 2); },
+      {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 7); },
+       {"7 sections", "has 5 (6 with its rest occlusion)"}},
+      {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 5); }, {"between the last section and the trailer"}},
+      {&without, [](std::string& x) { put<std::uint32_t>(x, 80, 6); }, {"section 6 ('zh rest occlusion') is missing"}},
+      {&good, [&](std::string& x) { put<std::uint32_t>(x, at[5] - 24, 28); }, {"section 6 has kind 28", "expected 27"}},
+      {&good, [&](std::string& x) { put<std::uint32_t>(x, at[5] - 20, 2); },
        {"'zh rest occlusion' has element type 2"}},
-      {&good, [&](std::string& x) { put<std::uint64_t>(x, at[3] - 16, 36); },
+      {&good, [&](std::string& x) { put<std::uint64_t>(x, at[5] - 16, 36); },
        {"'zh rest occlusion' has 36 values", "one per vertex, 37"}},
       // More vertices than the file can hold values for (the mask would fit).
       {&good, [](std::string& x) { put<std::uint64_t>(x, 64, 2000); },
-       {"2000 vertices cannot fit", "rest occlusion alone"}},
+       {"2000 vertices cannot fit", "tangent rules alone"}},
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
     std::string b = *cases[i].file;
@@ -507,6 +544,12 @@ TEST(ZhTransferIo, WriterRefusesInconsistentTransfersAndWritesNothing) {
   t = good;
   t.fit_error = -0.5;
   cases.push_back({t, "fit error"});
+  t = good;
+  t.tangents.pop_back();
+  cases.push_back({t, "7 tangent rules for 8 vertices"});
+  t = good;
+  t.tangents[1].b = 8;
+  cases.push_back({t, "names vertex 8, out of range"});
   for (const auto& [z, words] : cases) {
     expect_error([&] { write_zh_transfer(path, z); }, {path, "cannot write this zonal-harmonic transfer", words}, words);
     EXPECT_FALSE(std::filesystem::exists(path)) << words;
@@ -526,7 +569,8 @@ TEST(ZhTransferIo, DescribeAndCheckMatchesTheRestPose) {
   t.mesh_hash = m.hash();
   t.topology_hash = topology_hash(m);
   const std::string d = describe_transfer(t);
-  for (const char* w : {"zonal-harmonic", "format version 1", "lobes", "2 per stored vertex", "bands", "fit error",
+  for (const char* w : {"zonal-harmonic", "format version 2", "lobes", "tangents", "3 from texture coordinates",
+                        "3 by the edge rule", "3 none", "2 per stored vertex", "bands", "fit error",
                         "bytes per vertex", "topology hash", "file size"})
     EXPECT_TRUE(contains(d, w)) << "'" << w << "' missing from:\n" << d;
   EXPECT_TRUE(contains(d, std::to_string(transfer_file_size(t)) + " bytes")) << d;

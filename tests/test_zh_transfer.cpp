@@ -1,5 +1,5 @@
 // Local deformable transfer (prt/zh_transfer.h, prt/deform.h): the vertex
-// frame's edge rule and its degenerate cases, the fit's stored error, the
+// frame's UV tangent and edge rule and their degenerate cases, the fit's stored error, the
 // exactness of a rigid pose, the flipped-normal and no-frame rules, and the
 // procedural bend and twist.
 #include "test_meshes.h"
@@ -74,6 +74,117 @@ TEST(VertexFrames, EdgeRuleOnAQuad) {
   }
 }
 
+// Corner UVs for every triangle of `m` from a linear map of the position,
+// (u, v) = (U . p, W . p).
+Mesh with_linear_uvs(Mesh m, const glm::dvec3& U, const glm::dvec3& W) {
+  std::vector<glm::vec2> uv;
+  for (const glm::uvec3& t : m.triangles)
+    for (int c = 0; c < 3; ++c) {
+      const glm::dvec3 p(m.positions[t[c]]);
+      uv.emplace_back(float(glm::dot(U, p)), float(glm::dot(W, p)));
+    }
+  set_corner_uvs(m, std::move(uv));
+  return m;
+}
+
+// The mesh under the linear map A: positions A p, normals by the cofactor
+// (A^-T n, normalised); the corner UVs kept.
+Mesh mapped(const Mesh& m, const glm::dmat3& A) {
+  const glm::dmat3 N = glm::transpose(glm::inverse(A));
+  std::vector<glm::vec3> p, n;
+  for (const glm::vec3& q : m.positions) p.push_back(glm::vec3(A * glm::dvec3(q)));
+  for (const glm::vec3& q : m.normals) n.push_back(glm::vec3(glm::normalize(N * glm::dvec3(q))));
+  Mesh out = make_mesh(p, m.triangles, n, m.colors);
+  if (!m.corner_uvs.empty()) set_corner_uvs(out, m.corner_uvs);
+  return out;
+}
+
+TEST(VertexFrames, UvTangentIsTheDirectionOfIncreasingU) {
+  // The quad's texture turned by 30 degrees: u grows along (cos, 0, sin) in
+  // every triangle, so every vertex's tangent is that direction, where the
+  // edge rule's follows each vertex's first edge (+x or +z here).
+  const double a = M_PI / 6;
+  const glm::dvec3 dir(std::cos(a), 0, std::sin(a));
+  const Mesh q = with_linear_uvs(quad(4), dir, glm::dvec3(-std::sin(a), 0, std::cos(a)));
+  const VertexFrames f = vertex_frames(q);
+  for (std::size_t v = 0; v < q.vertex_count(); ++v) {
+    ASSERT_EQ(f.kinds[v], FrameKind::Uv) << v;
+    EXPECT_NE(f.rules[v].a, f.rules[v].b) << v;  // two edges of a triangle
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(f.frames[v][0][c], dir[c], kFrameTol) << v;
+    EXPECT_NEAR(f.frames[v][2].y, 1.0, kFrameTol) << v;
+  }
+  // Scaling u or v changes nothing; mirroring u turns the tangent over. (The
+  // tangent is dP/du, the direction along which v stays put.)
+  const glm::dvec3 perp(-std::sin(a), 0, std::cos(a));
+  const VertexFrames g = vertex_frames(with_linear_uvs(quad(4), 7.0 * dir, 0.1 * perp));
+  const VertexFrames h = vertex_frames(with_linear_uvs(quad(4), -dir, perp));
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(g.frames[4][0][c], dir[c], kFrameTol);
+    EXPECT_NEAR(h.frames[4][0][c], -dir[c], kFrameTol);
+  }
+  // Without UVs, the edge rule (vertex 0: +z, EdgeRuleOnAQuad).
+  EXPECT_EQ(vertex_frames(quad(4)).kinds[4], FrameKind::Edge);
+}
+
+TEST(VertexFrames, UvRuleCarriesTheTangentThroughAnAffineMap) {
+  // Under a linear map A every triangle's dP/du becomes A dP/du, so the UV
+  // tangent of the mapped quad (computed afresh from its UVs) is the rest
+  // rules evaluated on the mapped positions: the pose carries the UV tangent.
+  const Mesh rest = with_linear_uvs(quad(5), glm::dvec3(0.8, 0, 0.6), glm::dvec3(-0.6, 0, 0.8));
+  const VertexFrames r = vertex_frames(rest);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-0.6, 0.6);
+  for (int trial = 0; trial < 4; ++trial) {
+    glm::dmat3 A = random_rotation(rng);
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) A[c][k] += u(rng);  // shear and stretch, far from rigid
+    const Mesh posed = mapped(rest, A);
+    const VertexFrames carried = posed_frames(posed, r.rules), fresh = vertex_frames(posed);
+    for (std::size_t v = 0; v < rest.vertex_count(); ++v) {
+      ASSERT_EQ(carried.kinds[v], FrameKind::Uv) << v;
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(carried.frames[v][c][k], fresh.frames[v][c][k], 1e-5) << trial << " " << v;
+    }
+  }
+}
+
+TEST(VertexFrames, MirroredUvSeamTakesTheEdgeRule) {
+  // u = |x| on the quad: the triangles left and right of x = 0 have opposite
+  // dP/du, which cancel on the seam's vertices (agreement 0 < 0.5): those take
+  // the edge rule; the rest the UV tangent, -x on the left, +x on the right.
+  Mesh q = quad(4);
+  std::vector<glm::vec2> uv;
+  for (const glm::uvec3& t : q.triangles) {
+    const float side = q.positions[t[0]].x + q.positions[t[1]].x + q.positions[t[2]].x < 0 ? -1.0f : 1.0f;
+    for (int c = 0; c < 3; ++c) uv.emplace_back(side * q.positions[t[c]].x, q.positions[t[c]].z);
+  }
+  set_corner_uvs(q, uv);
+  const VertexFrames f = vertex_frames(q);
+  for (std::size_t v = 0; v < q.vertex_count(); ++v) {
+    const float x = q.positions[v].x;
+    if (x == 0.0f) {
+      EXPECT_EQ(f.kinds[v], FrameKind::Edge) << v;
+      continue;
+    }
+    ASSERT_EQ(f.kinds[v], FrameKind::Uv) << v;
+    EXPECT_NEAR(f.frames[v][0].x, x < 0 ? -1.0 : 1.0, kFrameTol) << v;
+  }
+  // UVs of no area (every corner the same) give no tangent: the edge rule everywhere.
+  Mesh flat = quad(2);
+  set_corner_uvs(flat, std::vector<glm::vec2>(3 * flat.triangles.size(), glm::vec2(0.5f)));
+  for (FrameKind k : vertex_frames(flat).kinds) EXPECT_EQ(k, FrameKind::Edge);
+  // A wrong count or a non-finite coordinate is refused, naming the mesh.
+  EXPECT_THROW(set_corner_uvs(flat, std::vector<glm::vec2>(5)), Error);
+  std::vector<glm::vec2> nan(3 * flat.triangles.size(), glm::vec2(0.5f));
+  nan[4].y = NAN;
+  try {
+    set_corner_uvs(flat, nan);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("triangle 1 has a non-finite texture coordinate"), std::string::npos) << e.what();
+  }
+}
+
 TEST(VertexFrames, TurnWithTheMesh) {
   const Mesh m = sphere(8, 16);
   std::mt19937_64 rng(5);
@@ -108,10 +219,15 @@ TEST(VertexFrames, DegenerateNeighbourhoods) {
 // A ball over a floor: shadows on the floor, occlusion under the ball, and
 // unoccluded (analytic) vertices on top.
 struct Fitted {
-  Mesh mesh = floor_and_ball(6);
-  Transfer sh = shadowed(mesh, 5);
+  Mesh mesh;
+  Transfer sh;
   ZhTransfer zh;
-  explicit Fitted(int lobes) {
+  // uvs: the floor and ball with planar texture coordinates (UV frames where
+  // the projection is not along the normal, the edge rule elsewhere).
+  explicit Fitted(int lobes, bool uvs = false)
+      : mesh(uvs ? with_linear_uvs(floor_and_ball(6), glm::dvec3(0.9, 0.1, 0.3), glm::dvec3(-0.3, 0.2, 0.9))
+                 : floor_and_ball(6)),
+        sh(shadowed(mesh, 5)) {
     ZhFitOptions o;
     o.lobes = lobes;
     zh = fit_zh_transfer(sh, mesh, o);
@@ -147,11 +263,21 @@ TEST(ZhTransfer, RestPoseIsTheFitItRecords) {
   EXPECT_LT(Fitted(4).zh.fit_error, Fitted(1).zh.fit_error);
 }
 
-TEST(ZhTransfer, RigidPoseIsExact) {
+class RigidPose : public ::testing::TestWithParam<bool> {};
+
+TEST_P(RigidPose, IsExact) {
   // The mesh turned as a whole: each vertex's posed SH is its rest SH turned
   // by sh::Rotation, and its radiance under L is the rest radiance under L
-  // turned back.
-  const Fitted f(4);
+  // turned back; with the edge rule's frames and with UV frames.
+  const Fitted f(4, GetParam());
+  std::size_t uv = 0;
+  for (std::size_t v = 0; v < f.mesh.vertex_count(); ++v)
+    uv += rule_kind(f.zh.tangents[v], std::uint32_t(v)) == FrameKind::Uv;
+  if (GetParam()) {
+    EXPECT_GT(uv, f.mesh.vertex_count() / 2);
+  } else {
+    EXPECT_EQ(uv, 0u);
+  }
   std::mt19937_64 rng(11);
   const glm::dmat3 R = random_rotation(rng);
   const Mesh posed = rotated(f.mesh, R);
@@ -184,6 +310,8 @@ TEST(ZhTransfer, RigidPoseIsExact) {
   std::printf("rigid pose relit against the rest relit under the lighting turned back: %.2g of the brightest\n",
               worst_radiance);
 }
+INSTANTIATE_TEST_SUITE_P(ZhTransfer, RigidPose, ::testing::Values(false, true),
+                         [](const auto& info) { return info.param ? "UvFrames" : "EdgeFrames"; });
 
 TEST(ZhTransfer, FlippedNormalTurnsTheLobesAboutTheTangent) {
   // The rule: a posed frame is built from the posed normal whatever it is; a

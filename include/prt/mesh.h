@@ -7,6 +7,7 @@
 // merges vertices that share a position.
 #pragma once
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstddef>
@@ -34,6 +35,11 @@ struct MeshOptions {
   bool weld = false;               // merge vertices with bit-identical positions
   bool file_normals = true;        // use the file's normals when it has them
   NormalWeighting weighting = NormalWeighting::Area;  // for computed normals
+  // Read the first texture coordinates (glTF TEXCOORD_0, OBJ vt, PLY u v)
+  // into Mesh::corner_uvs. Off by default: only the local deformable fit's
+  // vertex frames use them (prt/zh_transfer.h), and an OBJ then takes a
+  // second parse (its corners are joined without their UVs).
+  bool uvs = false;
 };
 
 // What loading found and did; printed by the command line.
@@ -51,6 +57,9 @@ struct MeshReport {
   // file's word on which side is the front) and reports them.
   std::size_t nonmanifold_edges = 0;
   std::size_t inconsistent_edges = 0;
+  // MeshOptions::uvs asked for an OBJ's UVs, but its second parse (corners
+  // not joined) did not line up with the first, so none were read.
+  bool uvs_dropped = false;
   bool file_had_normals = false;
   bool file_had_colors = false;
 };
@@ -60,6 +69,10 @@ struct Mesh {
   std::vector<glm::vec3> normals;        // unit length, or zero (see MeshReport)
   std::vector<glm::uvec3> triangles;     // counter-clockwise seen from the front
   std::vector<glm::vec3> colors;         // per-vertex linear RGB from the file, or empty
+  // Texture coordinates per triangle corner (3 per triangle, in triangle
+  // order), or empty: per corner, so a vertex on a UV seam keeps each
+  // side's. Not part of hash(): they move no ray.
+  std::vector<glm::vec2> corner_uvs;
   std::string source;
   MeshReport report;
 
@@ -95,6 +108,10 @@ Mesh load_mesh(const std::string& path, const MeshOptions& options = {});
 Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangles,
                std::vector<glm::vec3> normals = {}, std::vector<glm::vec3> colors = {},
                const MeshOptions& options = {}, std::string source = "<memory>");
+
+// Sets mesh.corner_uvs (3 per triangle); throws prt::Error naming the mesh
+// for another count or a non-finite coordinate (with its triangle).
+void set_corner_uvs(Mesh& mesh, std::vector<glm::vec2> corner_uvs);
 
 // One line: "bunny.off: 37706 vertices, 75408 triangles, normals computed (area), 0 degenerate, ...".
 std::string describe(const Mesh& mesh);

@@ -36,7 +36,7 @@ inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
-inline constexpr std::uint32_t kZhFormatVersion = 1;
+inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
 // The version write_transfer writes for `t`: 3 with glossy matrices, 2
 // otherwise (so that a prt reading version 2 reads every file it could).
 inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }

@@ -336,6 +336,7 @@ py::dict pose_report(const prt::PoseReport& r) {
   py::dict d;
   d["no_frame"] = r.no_frame;
   d["normal_only"] = r.normal_only;
+  d["uv"] = r.uv;
   return d;
 }
 
@@ -601,6 +602,13 @@ PYBIND11_MODULE(_prt, m) {
                                return view3(x.colors, self);
                              },
                              "float32 (V, 3) linear RGB from the file, or None")
+      .def_property_readonly("corner_uvs",
+                             [](py::object self) -> py::object {
+                               const auto& x = self.cast<const prt::Mesh&>();
+                               if (x.corner_uvs.empty()) return py::none();
+                               return view(&x.corner_uvs[0].x, {py::ssize_t(x.triangles.size()), 3, 2}, self);
+                             },
+                             "float32 (T, 3, 2) texture coordinates per triangle corner (load_mesh(uvs=True)), or None")
       .def_property_readonly("vertex_count", &prt::Mesh::vertex_count)
       .def_property_readonly("source", [](const prt::Mesh& x) { return x.source; })
       .def_property_readonly("hash", &prt::Mesh::hash, "XXH3-64 of positions and triangles (a transfer's mesh_hash)")
@@ -611,15 +619,18 @@ PYBIND11_MODULE(_prt, m) {
 
   m.def(
       "load_mesh",
-      [](const py::object& path, bool weld, bool file_normals, const std::string& weighting) {
-        const prt::MeshOptions o = mesh_options(weld, file_normals, weighting);
+      [](const py::object& path, bool weld, bool file_normals, const std::string& weighting, bool uvs) {
+        prt::MeshOptions o = mesh_options(weld, file_normals, weighting);
+        o.uvs = uvs;
         const std::string p = path_of(path);
         py::gil_scoped_release release;
         return prt::load_mesh(p, o);
       },
       py::arg("path"), py::kw_only(), py::arg("weld") = false, py::arg("file_normals") = true,
-      py::arg("weighting") = "area",
-      "Reads OBJ, PLY, OFF, STL, glTF/GLB as prt does (weld: as --weld).");
+      py::arg("weighting") = "area", py::arg("uvs") = false,
+      "Reads OBJ, PLY, OFF, STL, glTF/GLB as prt does (weld: as --weld). uvs: also read the first texture "
+      "coordinates per triangle corner (Mesh.corner_uvs), which fit_zh's vertex frames take their tangent from, as "
+      "prt precompute --basis zh does (its --tangent uv, the default).");
 
   m.def(
       "make_mesh",
@@ -847,6 +858,21 @@ PYBIND11_MODULE(_prt, m) {
                         {py::ssize_t(p.z.stored_vertices()), p.z.channels, p.z.lobes, p.z.bands}, self);
           },
           "float32 (stored vertices, channels, lobes, bands): each lobe's zonal coefficients g_il; read-only")
+      .def_property_readonly(
+          "tangent_rules",
+          [](const PyZhTransfer& p) {
+            const std::size_t V = p.z.tangents.size();
+            py::array_t<std::uint32_t> vertices({py::ssize_t(V), py::ssize_t(2)});
+            py::array_t<float> weights({py::ssize_t(V), py::ssize_t(2)});
+            for (std::size_t v = 0; v < V; ++v) {
+              vertices.mutable_at(v, 0) = p.z.tangents[v].a, vertices.mutable_at(v, 1) = p.z.tangents[v].b;
+              weights.mutable_at(v, 0) = p.z.tangents[v].wa, weights.mutable_at(v, 1) = p.z.tangents[v].wb;
+            }
+            return py::make_tuple(vertices, weights);
+          },
+          "(uint32 (V, 2) neighbours a, b; float32 (V, 2) weights wa, wb): each vertex's tangent in any pose is the "
+          "part of wa (p_a - p) + wb (p_b - p) perpendicular to its normal (docs/CONVENTIONS.md, \"Vertex frames\": "
+          "a = b the edge rule, a != b the UV tangent, a = b = the vertex none)")
       .def("write", [](const PyZhTransfer& p, const py::object& path) { prt::write_zh_transfer(path_of(path), p.z); },
            py::arg("path"), "Writes the file (atomically) as prt precompute --basis zh does (docs/FORMAT.md)")
       .def("describe", [](const PyZhTransfer& p) { return prt::describe_transfer(p.z); },
@@ -918,8 +944,9 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("transfer"), py::arg("mesh"), py::kw_only(), py::arg("report") = false,
       "float32 (V, channels, bands^2): every vertex's SH transfer in the pose `mesh` (the rest mesh's "
       "vertices and triangles, moved: deform(), or any mesh with the same topology), each vertex's lobes turned "
-      "into its posed frame. report=True: (rows, {'no_frame': n, 'normal_only': n}), the vertices without a "
-      "frame in the pose (zero transfer) and those whose frame came from the normal alone.");
+      "into its posed frame. report=True: (rows, {'no_frame': n, 'normal_only': n, 'uv': n}), the vertices "
+      "without a frame in the pose (zero transfer), those whose frame came from the normal alone, and those whose "
+      "tangent is the UV tangent.");
 
   m.def(
       "relight",

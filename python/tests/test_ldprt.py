@@ -26,7 +26,7 @@ FLOAT_ROUNDING = 1e-5
 
 @pytest.fixture(scope="session")
 def tube():
-    return prt.load_mesh(TUBE)
+    return prt.load_mesh(TUBE, uvs=True)  # as prt precompute --basis zh reads it (--tangent uv)
 
 
 def cli_zh(path, *extra, bands=BANDS, lobes=LOBES):
@@ -67,8 +67,29 @@ def test_fit_is_the_clis_bits(tube, tmp_path, mode, albedo, extra):
     for name in ("bands", "lobes", "channels", "mode", "bounces", "samples", "albedo", "vertex_colors", "seed",
                  "vertices", "fit_error", "analytic_vertices", "stored_vertices", "mesh_hash", "topology_hash"):
         assert getattr(got, name) == getattr(want, name), name
+    for g, w in zip(got.tangent_rules, want.tangent_rules):
+        np.testing.assert_array_equal(g, w, err_msg="tangent_rules")
     out = tmp_path / "py.prt"
     got.write(out)
+    assert out.read_bytes() == path.read_bytes()
+
+
+def test_frames_follow_the_uvs_where_loaded(tube, tmp_path):
+    """A mesh loaded with its texture coordinates gives UV tangents (the
+    rules name two neighbours); without them, the edge rule (one neighbour):
+    what prt precompute --basis zh --tangent edge writes."""
+    assert tube.corner_uvs.shape == (len(tube.triangles), 3, 2)
+    plain = prt.load_mesh(TUBE)
+    assert plain.corner_uvs is None and plain.hash == tube.hash
+    t = prt.precompute(plain, bands=BANDS, samples=SAMPLES, seed=SEED)
+    edge = prt.fit_zh(t, plain, lobes=LOBES)
+    uv = prt.fit_zh(t, tube, lobes=LOBES)
+    (ev, ew), (uv_v, uw) = edge.tangent_rules, uv.tangent_rules
+    assert (ev[:, 0] == ev[:, 1]).all() and (ew[:, 1] == 0).all()
+    assert (uv_v[:, 0] != uv_v[:, 1]).mean() > 0.9  # the tube's seam-free OBJ: all but the caps' rims
+    path = cli_zh(tmp_path / "edge.prt", "--tangent", "edge")
+    out = tmp_path / "py.prt"
+    edge.write(out)
     assert out.read_bytes() == path.read_bytes()
 
 
@@ -145,7 +166,7 @@ def test_pose_at_rest_is_the_sh_transfer(tube):
     assert z.fit_error < 1e-6
     rows, report = prt.pose(z, tube, report=True)
     assert rows.shape == (len(tube), 1, EXACT_BANDS ** 2) and rows.dtype == np.float32
-    assert report == {"no_frame": 0, "normal_only": 0}
+    assert report["no_frame"] == report["normal_only"] == 0 and report["uv"] > 0.9 * len(tube)
     want = t.dense(tube)
     assert np.abs(rows - want).max() <= FLOAT_ROUNDING * np.abs(want).max()
     np.testing.assert_array_equal(prt.pose(z, tube), rows)
@@ -159,7 +180,8 @@ def test_rigid_motion_rotates_the_transfer(zh, tube):
     turned = prt.make_mesh(tube.positions @ R.T, tube.triangles, tube.normals @ R.T)
     rest, rep = prt.pose(zh, tube, report=True)
     got, rep_turned = prt.pose(zh, turned, report=True)
-    assert rep == rep_turned == {"no_frame": 0, "normal_only": 0}
+    # The turned mesh has no UVs of its own: the rest's rules carry the UV tangents.
+    assert rep == rep_turned and rep["no_frame"] == rep["normal_only"] == 0 and rep["uv"] > 0.9 * len(tube)
     want = prt.rotate_sh(rest[:, 0, :].T.astype(np.float64), R).T
     assert np.abs(got[:, 0, :] - want).max() <= FLOAT_ROUNDING * np.abs(want).max()
 

@@ -214,6 +214,19 @@ def transfer_seeds(out, tmp, prt):
         f = tmp / (name + ".prt")
         subprocess.run([prt, "precompute", str(mesh), "-o", str(f), "--threads", "1", "-q", *args], check=True)
         write(out, "transfer", name + ".prt", f.read_bytes())
+    # A zonal-harmonic transfer with UV tangent rules (two neighbours) beside
+    # the edge rule's: the mesh with planar texture coordinates (u = x, v = z;
+    # the box's upright faces have none of area there, so they take the edge rule).
+    uv_mesh = tmp / "tiny-uv.ply"
+    s = ply_header("ascii", False, False, False).replace("property float z\n",
+                                                         "property float z\nproperty float u\nproperty float v\n")
+    s += "".join("%g %g %g %g %g\n" % (p + (p[0], p[2])) for p in POS)
+    s += "".join("3 %d %d %d\n" % t for t in TRIS)
+    uv_mesh.write_text(s)
+    f = tmp / "zh-uv.prt"
+    subprocess.run([prt, "precompute", str(uv_mesh), "-o", str(f), "--threads", "1", "-q", "--basis", "zh", "--lobes",
+                    "2", "--bands", "2", "--samples", "64"], check=True)
+    write(out, "transfer", "zh-uv.prt", f.read_bytes())
     # Compressed (version 4): 8-bit indices with 16-bit weights, float weights, and glossy matrices.
     packed = {
         "compressed-b3-w16": ("shadowed-b3", ["--clusters", "2", "--pca", "3"]),

@@ -4,6 +4,7 @@
 #include <prt/probes.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/zh_transfer.h>
 
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
@@ -199,6 +200,8 @@ int run_info(const InfoArgs& a) {
       j["fit_error"] = z.fit_error;
       j["mesh_hash"] = fmt::format("{:#018x}", z.mesh_hash);
       j["topology_hash"] = fmt::format("{:#018x}", z.topology_hash);
+      const TangentCounts tc = tangent_counts(z);
+      j["tangents"] = {{"uv", tc.uv}, {"edge", tc.edge}, {"none", tc.none}};
       j["sections"] = sections_json(transfer_sections(z));
       j["file_bytes"] = transfer_file_size(z);
       fmt::print("{}\n", j.dump(2));

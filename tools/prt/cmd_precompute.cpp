@@ -62,7 +62,8 @@ struct PrecomputeArgs {
   // --basis zh: lobes per vertex (docs/LDPRT.md).
   int lobes = 4;
   bool dynamic_ao = false;  // also store the rest pose's dynamic ambient occlusion (prt relight --dynamic-ao)
-  const CLI::Option *lobes_opt = nullptr, *dynamic_ao_opt = nullptr;
+  std::string tangent = "uv";  // the tangent of each vertex frame: uv (where the mesh has UVs) or edge
+  const CLI::Option *lobes_opt = nullptr, *dynamic_ao_opt = nullptr, *tangent_opt = nullptr;
   // --target-error: the error target, its map and reference cache; bands,
   // samples and bounces given on the command line are the most it may choose.
   double target_error = 0;
@@ -291,6 +292,7 @@ int run_zh(PrecomputeArgs& a) {
   if (is_root()) for_path("--output", [&] { check_writable(a.output); });
 
   const auto t0 = std::chrono::steady_clock::now();
+  a.mesh_opt.uvs = a.tangent == "uv";  // the UV tangent, where the file has texture coordinates
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   test_fail_rank();
   release_free_memory();
@@ -327,6 +329,10 @@ int run_zh(PrecomputeArgs& a) {
                z->vertices, z->analytic_vertices(), 100.0 * z->fit_error, 4.0 * double(z->stride()),
                4 * computed->stride(), std::chrono::duration<double>(t1 - t0).count(),
                std::chrono::duration<double>(t2 - t1).count());
+    const TangentCounts tc = tangent_counts(*z);
+    fmt::print(stderr, "vertex frames: {} tangents from texture coordinates, {} by the edge rule, {} from the normal "
+               "alone (docs/CONVENTIONS.md, \"Vertex frames\")\n",
+               tc.uv, tc.edge, tc.none);
   }
   return 0;
 }
@@ -563,7 +569,7 @@ int run_precompute(PrecomputeArgs& a) {
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
     throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
                      "too (a vertex transfer keeps its ambient occlusion and bent normals in the file)");
-  for (const CLI::Option* o : {a.lobes_opt, a.dynamic_ao_opt})
+  for (const CLI::Option* o : {a.lobes_opt, a.dynamic_ao_opt, a.tangent_opt})
     if (a.basis != "zh" && o->count() > 0) throw UsageError(o->get_name() + " applies to --basis zh only");
   if (a.basis == "zh") {
     for (const CLI::Option* o : a.wavelet_only)
@@ -708,6 +714,12 @@ Run add_precompute(CLI::App& app) {
                                   "With --basis zh: also store the rest pose's dynamic ambient occlusion (Bunnell 2005; 4 "
                                   "bytes a vertex), which prt relight --dynamic-ao compares a pose's with to restore "
                                   "the distant occlusion the lobes cannot follow");
+  a->tangent_opt = s->add_option("--tangent", a->tangent,
+                                "With --basis zh: each vertex frame's tangent: uv (the direction of increasing u of "
+                                "the mesh's first texture coordinates, where it has them; the edge rule elsewhere) or "
+                                "edge (the edge rule everywhere); docs/CONVENTIONS.md, \"Vertex frames\"")
+                      ->check(CLI::IsMember({"uv", "edge"}))
+                      ->capture_default_str();
   a->material_opt =
       add_shared(s, SharedOption::Material, a->material,
                  "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
