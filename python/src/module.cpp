@@ -28,16 +28,21 @@
 #include <prt/vertex_csv.h>
 #include <prt/zh_transfer.h>
 
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <tbb/global_control.h>
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -79,16 +84,119 @@ py::array_t<float> vec3s(const std::vector<glm::vec3>& v) {
 
 using DArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using FArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using UArray = py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>;
+
+std::string shape_text(const py::array& a) { return py::str(a.attr("shape")); }
+
+// ---- array arguments (docs/PYTHON.md, "Arguments") -----------------------------
+//
+// Every array a caller passes goes through arg_array: whatever numpy reads as
+// an array (lists, tuples, any real dtype, non-contiguous or Fortran-ordered
+// arrays: read by value, in C order) is taken; complex, boolean, object,
+// string and date arrays are refused, as are ragged lists; each refusal is a
+// prt.Error naming the argument. Then real_array (values finite where the
+// callee needs them) or index_array (whole numbers in [0, 2^32): a fraction
+// is refused, not truncated) gives the typed copy, and the shape checks
+// follow at the call.
+
+py::array arg_array(const py::handle& obj, const std::string& what) {
+  if (obj.is_none()) throw Error(what + ": expected an array, got None");
+  py::object a;
+  try {
+    a = py::module_::import("numpy").attr("asarray")(obj);
+  } catch (py::error_already_set& e) {
+    throw Error(what + ": cannot be read as an array (" + std::string(py::str(e.value())) + ")");
+  }
+  const py::array arr = a.cast<py::array>();
+  const char kind = arr.dtype().kind();
+  const std::string dt = py::str(arr.dtype());
+  if (kind == 'b') throw Error(what + ": an array of booleans (dtype bool); numbers are expected");
+  if (kind == 'c')
+    throw Error(what + ": an array of complex numbers (dtype " + dt +
+                "); real numbers are expected (pass .real if that is what is meant)");
+  if (kind == 'O')
+    throw Error(what + ": an array of Python objects (dtype object: ragged lists, or elements that are not "
+                       "numbers); a rectangular array of numbers is expected");
+  if (kind != 'i' && kind != 'u' && kind != 'f')
+    throw Error(what + ": dtype " + dt + " is not a number type; an array of numbers is expected");
+  return arr;
+}
+
+// The [i, j, ...] position of flat element k of an array of `shape`.
+std::string index_text(std::size_t k, const py::array& a) {
+  std::vector<std::size_t> idx(std::size_t(a.ndim()));
+  for (py::ssize_t d = a.ndim() - 1; d >= 0; --d) {
+    const auto n = std::size_t(a.shape(d));
+    idx[std::size_t(d)] = n ? k % n : 0;
+    k = n ? k / n : 0;
+  }
+  std::string s = "[";
+  for (std::size_t d = 0; d < idx.size(); ++d) s += (d ? ", " : "") + std::to_string(idx[d]);
+  return s + "]";
+}
+
+std::string number_text(double x) { return py::str(py::float_(x)); }
+
+// A real array as T (double or float), every value finite when `finite`
+// (float: also within float's range, which would otherwise become inf).
+template <typename T>
+py::array_t<T, py::array::c_style | py::array::forcecast> real_array(const py::handle& obj, const std::string& what,
+                                                                     bool finite = true) {
+  const py::array raw = arg_array(obj, what);
+  DArray d = DArray::ensure(raw);
+  if (!d) throw Error(what + ": cannot be read as an array of numbers");
+  if (finite) {
+    const double* x = d.data();
+    for (std::size_t k = 0; k < std::size_t(d.size()); ++k) {
+      if (!std::isfinite(x[k]))
+        throw Error(what + ": element " + index_text(k, d) + " is " + number_text(x[k]) + "; values must be finite");
+      if (std::is_same_v<T, float> && std::abs(x[k]) > double(std::numeric_limits<float>::max()))
+        throw Error(what + ": element " + index_text(k, d) + " is " + number_text(x[k]) +
+                    ", beyond float32's range (values are stored as float32)");
+    }
+  }
+  if constexpr (std::is_same_v<T, double>) {
+    return d;
+  } else {
+    return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(d);
+  }
+}
+
+// An index array as uint32: whole numbers from 0 to 2^32 - 1; integers of
+// any width, or floats that hold whole numbers (a fraction is refused).
+UArray index_array(const py::handle& obj, const std::string& what) {
+  const py::array raw = arg_array(obj, what);
+  DArray d = DArray::ensure(raw);  // exact for every uint32 (and reports what is out of range)
+  if (raw.dtype().kind() != 'f') {
+    // Integers beyond 2^53 would round in double: check them as integers.
+    py::array_t<std::int64_t, py::array::c_style | py::array::forcecast> i =
+        raw.dtype().kind() == 'u' && raw.dtype().itemsize() == 8
+            ? py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>()
+            : py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(raw);
+    if (i) {
+      for (std::size_t k = 0; k < std::size_t(i.size()); ++k)
+        if (i.data()[k] < 0 || i.data()[k] > std::int64_t(std::numeric_limits<std::uint32_t>::max()))
+          throw Error(what + ": element " + index_text(k, i) + " is " + std::to_string(i.data()[k]) +
+                      "; indices must be in [0, 2^32)");
+    }
+  }
+  for (std::size_t k = 0; k < std::size_t(d.size()); ++k) {
+    const double x = d.data()[k];
+    if (!std::isfinite(x) || x != std::floor(x))
+      throw Error(what + ": element " + index_text(k, d) + " is " + number_text(x) +
+                  "; indices must be whole numbers (refused rather than truncated)");
+    if (x < 0 || x > double(std::numeric_limits<std::uint32_t>::max()))
+      throw Error(what + ": element " + index_text(k, d) + " is " + number_text(x) + "; indices must be in [0, 2^32)");
+  }
+  return UArray::ensure(d);
+}
 
 // (N, 3) or (3,) -> N rows; `what` names the argument in the message.
 std::size_t rows_of3(const py::array& a, const char* what) {
   if (a.ndim() == 1 && a.shape(0) == 3) return 1;
   if (a.ndim() == 2 && a.shape(1) == 3) return std::size_t(a.shape(0));
-  throw Error(std::string(what) + ": expected an array of shape (N, 3) or (3,), got " +
-              std::string(py::str(a.attr("shape"))));
+  throw Error(std::string(what) + ": expected an array of shape (N, 3) or (3,), got " + shape_text(a));
 }
-
-std::string shape_text(const py::array& a) { return py::str(a.attr("shape")); }
 
 // A read-only (N, 3) view of glm vectors (three floats each, packed).
 template <typename V>
@@ -97,25 +205,14 @@ py::array view3(const std::vector<V>& v, py::handle owner) {
   return view(v.empty() ? nullptr : reinterpret_cast<const T*>(v.data()), {py::ssize_t(v.size()), 3}, owner);
 }
 
-// Lighting coefficients (n*n, 3), float64.
+// Lighting coefficients (n*n, 3), float64, every one finite (a NaN would
+// reach every vertex).
 std::vector<glm::dvec3> to_coeffs(const py::handle& obj, const char* what) {
-  DArray a = DArray::ensure(obj);
-  if (!a || a.ndim() != 2 || a.shape(1) != 3)
-    throw Error(std::string(what) + ": expected SH coefficients of shape (n*n, 3), got " +
-                (a ? shape_text(a) : std::string("something that is not an array")));
+  DArray a = real_array<double>(obj, what);
+  if (a.ndim() != 2 || a.shape(1) != 3 || a.shape(0) < 1)
+    throw Error(std::string(what) + ": expected SH coefficients of shape (n*n, 3), got " + shape_text(a));
   std::vector<glm::dvec3> c(std::size_t(a.shape(0)));
   for (std::size_t k = 0; k < c.size(); ++k) c[k] = {a.at(k, 0), a.at(k, 1), a.at(k, 2)};
-  return c;
-}
-
-// to_coeffs, and every coefficient finite (a NaN would reach every vertex).
-std::vector<glm::dvec3> to_finite_coeffs(const py::handle& obj, const char* what) {
-  std::vector<glm::dvec3> c = to_coeffs(obj, what);
-  for (std::size_t k = 0; k < c.size(); ++k)
-    for (int j = 0; j < 3; ++j)
-      if (!std::isfinite(c[k][j]))
-        throw Error(std::string(what) + ": coefficient " + std::to_string(k) + " (channel " + std::to_string(j) +
-                    ") is not finite");
   return c;
 }
 
@@ -130,11 +227,13 @@ int bands_of_count(std::size_t n, const char* what) {
   return b;
 }
 
+// A number, or three (r, g, b); the library checks the range [0, 1].
 glm::vec3 to_albedo(const py::handle& obj) {
-  if (py::isinstance<py::float_>(obj) || py::isinstance<py::int_>(obj)) return glm::vec3(obj.cast<float>());
-  const auto v = obj.cast<std::vector<float>>();
-  if (v.size() != 3) throw Error("albedo: expected a number or 3 numbers r, g, b");
-  return {v[0], v[1], v[2]};
+  FArray a = real_array<float>(obj, "albedo");
+  if (a.ndim() == 0) return glm::vec3(a.data()[0]);
+  if (a.ndim() != 1 || a.shape(0) != 3)
+    throw Error("albedo: expected a number or 3 numbers r, g, b, got an array of shape " + shape_text(a));
+  return {a.data()[0], a.data()[1], a.data()[2]};
 }
 
 py::array_t<double> from_mat(const glm::dmat3& m) {
@@ -145,16 +244,28 @@ py::array_t<double> from_mat(const glm::dmat3& m) {
 }
 
 // A rotation: a 3x3 matrix, or (yaw, pitch, roll) in degrees as --rotate.
+// A rotation matrix must be one: orthonormal to this (a float32 matrix's
+// rounding, 1e-7 per entry, with room) and of determinant +1 (no mirror).
+constexpr double kRotationTol = 1e-5;
+
 glm::dmat3 to_rotation(const py::handle& obj, const char* what) {
-  DArray a = DArray::ensure(obj);
-  if (a && a.ndim() == 1 && a.shape(0) == 3) return prt::sh::rotation_from_euler(a.at(0), a.at(1), a.at(2));
-  if (a && a.ndim() == 2 && a.shape(0) == 3 && a.shape(1) == 3) {
+  DArray a = real_array<double>(obj, what);
+  if (a.ndim() == 1 && a.shape(0) == 3) return prt::sh::rotation_from_euler(a.at(0), a.at(1), a.at(2));
+  if (a.ndim() == 2 && a.shape(0) == 3 && a.shape(1) == 3) {
     glm::dmat3 m;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) m[j][i] = a.at(i, j);
+    const glm::dmat3 g = glm::transpose(m) * m;
+    double off = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) off = std::max(off, std::abs(g[i][j] - (i == j ? 1.0 : 0.0)));
+    if (off > kRotationTol || !(glm::determinant(m) > 0))
+      throw Error(std::string(what) + ": not a rotation matrix (R^T R differs from the identity by " + number_text(off) +
+                  ", determinant " + number_text(glm::determinant(m)) + "; a rotation is orthonormal with determinant 1)");
     return m;
   }
-  throw Error(std::string(what) + ": expected a 3x3 rotation matrix or (yaw, pitch, roll) in degrees");
+  throw Error(std::string(what) + ": expected a 3x3 rotation matrix or (yaw, pitch, roll) in degrees, got shape " +
+              shape_text(a));
 }
 
 // ---- progress, Ctrl-C ----------------------------------------------------------
@@ -355,6 +466,22 @@ std::string path_of(const py::handle& h) { return py::str(py::module_::import("o
 
 prt::EnvMap map_from_array(const py::handle& obj);
 
+// A list or tuple of six file names (str or os.PathLike): a cube's faces
+// +X, -X, +Y, -Y, +Z, -Z; anything else is not (an array's nested lists).
+std::optional<std::array<std::string, 6>> face_files(const py::handle& h) {
+  if (!py::isinstance<py::list>(h) && !py::isinstance<py::tuple>(h)) return std::nullopt;
+  const py::sequence seq = py::reinterpret_borrow<py::sequence>(h);
+  bool paths = py::len(seq) > 0;
+  for (const py::handle item : seq) paths = paths && is_path(item);
+  if (!paths) return std::nullopt;
+  if (py::len(seq) != 6)
+    throw Error("map: a list of " + std::to_string(py::len(seq)) +
+                " files; a cube's faces are six files +X, -X, +Y, -Y, +Z, -Z");
+  std::array<std::string, 6> f;
+  for (std::size_t i = 0; i < 6; ++i) f[i] = path_of(seq[i]);
+  return f;
+}
+
 // A map argument: an EnvMap (returned as is), a file name or an array
 // (loaded into `storage`, which is returned).
 const prt::EnvMap& map_argument(const py::object& map, prt::EnvMap& storage) {
@@ -364,8 +491,7 @@ const prt::EnvMap& map_argument(const py::object& map, prt::EnvMap& storage) {
 }
 
 prt::EnvMap map_from_array(const py::handle& obj) {
-  FArray a = FArray::ensure(obj);
-  if (!a) throw Error("map: expected an EnvMap, a file name or an array of shape (H, W, 3) or (6, N, N, 3)");
+  FArray a = real_array<float>(obj, "map");
   if (a.ndim() == 3 && a.shape(2) == 3) {
     std::vector<float> rgb(a.data(), a.data() + a.size());
     return prt::make_latlong(int(a.shape(1)), int(a.shape(0)), std::move(rgb), "<array>");
@@ -417,10 +543,15 @@ prt::MeshOptions mesh_options(bool weld, bool file_normals, const std::string& w
   return o;
 }
 
-std::vector<glm::vec3> to_vec3s(const py::handle& obj, const char* what) {
-  FArray a = FArray::ensure(obj);
-  if (!a || a.ndim() != 2 || a.shape(1) != 3)
-    throw Error(std::string(what) + ": expected an array of shape (N, 3)" + (a ? ", got " + shape_text(a) : ""));
+// An (N, 3) array of finite values (exactly N rows when `rows` is given).
+std::vector<glm::vec3> to_vec3s(const py::handle& obj, const char* what, std::optional<std::size_t> rows = {},
+                                const char* rows_of = nullptr) {
+  FArray a = real_array<float>(obj, what);
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    throw Error(std::string(what) + ": expected an array of shape (N, 3), got " + shape_text(a));
+  if (rows && std::size_t(a.shape(0)) != *rows)
+    throw Error(std::string(what) + ": " + std::to_string(a.shape(0)) + " rows; expected one per " + rows_of + ", " +
+                std::to_string(*rows));
   std::vector<glm::vec3> v(std::size_t(a.shape(0)));
   if (!v.empty()) std::memcpy(&v[0].x, a.data(), v.size() * sizeof(glm::vec3));
   return v;
@@ -466,11 +597,10 @@ PYBIND11_MODULE(_prt, m) {
       "load_envmap",
       [](const py::object& path, const std::string& mapping) {
         const prt::Mapping mp = prt::parse_mapping(mapping);
-        if (mp == prt::Mapping::Faces || py::isinstance<py::list>(path) || py::isinstance<py::tuple>(path)) {
-          const auto files = path.cast<std::vector<std::string>>();
-          if (files.size() != 6) throw Error("load_envmap: mapping 'faces' needs six files +X, -X, +Y, -Y, +Z, -Z");
-          return prt::load_cube_faces({files[0], files[1], files[2], files[3], files[4], files[5]});
-        }
+        const std::optional<std::array<std::string, 6>> files = face_files(path);
+        if (files) return prt::load_cube_faces(*files);
+        if (mp == prt::Mapping::Faces || py::isinstance<py::list>(path) || py::isinstance<py::tuple>(path))
+          throw Error("path: mapping 'faces' needs a list of six files +X, -X, +Y, -Y, +Z, -Z");
         return prt::load_envmap(path_of(path), mp);
       },
       py::arg("path"), py::arg("mapping") = "auto",
@@ -490,10 +620,8 @@ PYBIND11_MODULE(_prt, m) {
           const auto& e = map.cast<const prt::EnvMap&>();
           py::gil_scoped_release release;
           c = prt::project(e, bands, q);
-        } else if (py::isinstance<py::list>(map) || py::isinstance<py::tuple>(map)) {  // six face files
-          const auto f = map.cast<std::vector<std::string>>();
-          if (f.size() != 6) throw Error("map: a list of files is a cube's six faces +X, -X, +Y, -Y, +Z, -Z");
-          const prt::EnvMap e = prt::load_cube_faces({f[0], f[1], f[2], f[3], f[4], f[5]});
+        } else if (const auto f = face_files(map)) {  // six face files
+          const prt::EnvMap e = prt::load_cube_faces(*f);
           py::gil_scoped_release release;
           c = prt::project(e, bands, q);
         } else if (is_path(map)) {
@@ -525,8 +653,7 @@ PYBIND11_MODULE(_prt, m) {
       "sh_eval",
       [](int bands, const py::object& dirs) {
         prt::sh::check_bands(bands, "bands");
-        DArray d = DArray::ensure(dirs);
-        if (!d) throw Error("dirs: expected an array of shape (N, 3) or (3,)");
+        DArray d = real_array<double>(dirs, "dirs");
         const std::size_t n = rows_of3(d, "dirs");
         const std::size_t nc = std::size_t(bands) * bands;
         std::vector<double> unit(3 * n);
@@ -548,16 +675,20 @@ PYBIND11_MODULE(_prt, m) {
       "float64, index k = l(l+1)+m (docs/CONVENTIONS.md).");
 
   m.def("rotation_from_euler",
-        [](double yaw, double pitch, double roll) { return from_mat(prt::sh::rotation_from_euler(yaw, pitch, roll)); },
+        [](double yaw, double pitch, double roll) {
+          for (const auto& [name, x] : {std::pair{"yaw", yaw}, std::pair{"pitch", pitch}, std::pair{"roll", roll}})
+            if (!std::isfinite(x)) throw Error(std::string(name) + ": " + number_text(x) + " degrees; must be finite");
+          return from_mat(prt::sh::rotation_from_euler(yaw, pitch, roll));
+        },
         py::arg("yaw"), py::arg("pitch"), py::arg("roll"),
         "The 3x3 matrix --rotate yaw,pitch,roll (degrees) means: R = Ry(yaw) Rx(pitch) Rz(roll).");
 
   m.def(
       "rotate_sh",
       [](const py::object& coeffs, const py::object& rotation) {
-        DArray c = DArray::ensure(coeffs);
-        if (!c || c.ndim() < 1 || c.ndim() > 2)
-          throw Error("coeffs: expected an array of shape (n*n,) or (n*n, C)");
+        DArray c = real_array<double>(coeffs, "coeffs");
+        if (c.ndim() < 1 || c.ndim() > 2 || c.shape(0) < 1)
+          throw Error("coeffs: expected an array of shape (n*n,) or (n*n, C), got " + shape_text(c));
         const std::size_t nc = std::size_t(c.shape(0));
         const int bands = bands_of_count(nc, "coeffs");
         const std::size_t cols = c.ndim() == 2 ? std::size_t(c.shape(1)) : 1;
@@ -637,13 +768,20 @@ PYBIND11_MODULE(_prt, m) {
       [](const py::object& positions, const py::object& triangles, const py::object& normals,
          const py::object& colors, bool weld) {
         std::vector<glm::vec3> pos = to_vec3s(positions, "positions");
-        py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast> t =
-            py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>::ensure(triangles);
-        if (!t || t.ndim() != 2 || t.shape(1) != 3) throw Error("triangles: expected an integer array of shape (T, 3)");
+        if (pos.empty()) throw Error("positions: no vertices (an array of shape (0, 3))");
+        UArray t = index_array(triangles, "triangles");
+        if (t.ndim() != 2 || t.shape(1) != 3 || t.shape(0) < 1)
+          throw Error("triangles: expected an integer array of shape (T, 3), T >= 1, got " + shape_text(t));
+        for (std::size_t k = 0; k < std::size_t(t.size()); ++k)
+          if (t.data()[k] >= pos.size())
+            throw Error("triangles: element " + index_text(k, t) + " is " + std::to_string(t.data()[k]) +
+                        ", out of range: positions holds " + std::to_string(pos.size()) + " vertices");
         std::vector<glm::uvec3> tri(std::size_t(t.shape(0)));
         if (!tri.empty()) std::memcpy(&tri[0].x, t.data(), tri.size() * sizeof(glm::uvec3));
-        std::vector<glm::vec3> n = normals.is_none() ? std::vector<glm::vec3>{} : to_vec3s(normals, "normals");
-        std::vector<glm::vec3> c = colors.is_none() ? std::vector<glm::vec3>{} : to_vec3s(colors, "colors");
+        const std::size_t V = pos.size();
+        std::vector<glm::vec3> n =
+            normals.is_none() ? std::vector<glm::vec3>{} : to_vec3s(normals, "normals", V, "position");
+        std::vector<glm::vec3> c = colors.is_none() ? std::vector<glm::vec3>{} : to_vec3s(colors, "colors", V, "position");
         prt::MeshOptions o;
         o.weld = weld;
         return prt::make_mesh(std::move(pos), std::move(tri), std::move(n), std::move(c), o, "<arrays>");
@@ -951,7 +1089,7 @@ PYBIND11_MODULE(_prt, m) {
   m.def(
       "relight",
       [](const PyZhTransfer& p, const prt::Mesh& posed, const py::object& lighting, bool direct) {
-        const std::vector<glm::dvec3> light = to_finite_coeffs(lighting, "lighting");
+        const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
         const std::size_t need = std::size_t(p.z.bands) * p.z.bands;
         if (light.size() < need)
           throw Error("lighting: " + std::to_string(light.size()) + " coefficients; " + p.source + " has " +
@@ -1155,11 +1293,11 @@ PYBIND11_MODULE(_prt, m) {
   m.def(
       "lightmap_from_rows",
       [](const prt::Scene& scene, int width, int height, const py::object& rows, int uv_set, const std::string& mode) {
-        FArray a = FArray::ensure(rows);
+        FArray a = real_array<float>(rows, "rows");
         const int set = scene.lightmap_uv_set(uv_set);
         const prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
         const std::size_t n = tx.layout.texels.size();
-        if (!a || a.ndim() != 3 || std::size_t(a.shape(0)) != n || (a.shape(1) != 1 && a.shape(1) != 3))
+        if (a.ndim() != 3 || std::size_t(a.shape(0)) != n || (a.shape(1) != 1 && a.shape(1) != 3))
           throw Error("rows: expected float32 (" + std::to_string(n) + ", 1 or 3, bands^2) for this atlas's covered texels");
         const int bands = int(std::lround(std::sqrt(double(a.shape(2)))));
         if (bands < 1 || bands * bands != a.shape(2)) throw Error("rows: the last axis must be bands^2");
@@ -1226,12 +1364,13 @@ PYBIND11_MODULE(_prt, m) {
           "at",
           [](const prt::ProbeTransfer& t, const prt::Scene& scene, const py::object& points, const py::object& normals,
              const py::object& sh) {
-            DArray p = DArray::ensure(points), n = DArray::ensure(normals);
-            FArray l = FArray::ensure(sh);
+            DArray p = real_array<double>(points, "points"), n = real_array<double>(normals, "normals");
+            FArray l = real_array<float>(sh, "sh");
             const py::ssize_t nc = py::ssize_t(t.bands) * t.bands;
-            if (!p || !n || p.ndim() != 2 || p.shape(1) != 3 || n.ndim() != 2 || n.shape(0) != p.shape(0) || n.shape(1) != 3)
-              throw Error("points and normals: float (N, 3) each");
-            if (!l || l.ndim() != 3 || l.shape(0) != py::ssize_t(t.probes()) || l.shape(1) != nc || l.shape(2) != 3)
+            if (p.ndim() != 2 || p.shape(1) != 3 || n.ndim() != 2 || n.shape(0) != p.shape(0) || n.shape(1) != 3)
+              throw Error("points and normals: float (N, 3) each, as many normals as points; got " + shape_text(p) +
+                          " and " + shape_text(n));
+            if (l.ndim() != 3 || l.shape(0) != py::ssize_t(t.probes()) || l.shape(1) != nc || l.shape(2) != 3)
               throw Error("sh: float32 (P, bands^2, 3), what relight() returns");
             if (scene.hash() != t.scene_hash) throw Error("scene: not the scene the probe volume was computed for");
             const std::size_t N = std::size_t(p.shape(0));
