@@ -38,7 +38,9 @@
 #include <tbb/global_control.h>
 
 #include <array>
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
@@ -443,6 +445,31 @@ struct PyZhTransfer {
   std::string source = "<computed>";
 };
 
+// prt::check_matches(p.t, mesh) for a Mesh held by Python, whose hashes are
+// kept on the object: a prt.Mesh never changes after it is made (its arrays
+// are read-only views, and every function returns a new mesh), so the mesh
+// and shading hashes of the same object stay right. The fast path only
+// passes what check_matches would pass; anything else goes to check_matches
+// for its error. (Hashing 10k vertices costs ~25 us, a third of a 3-band
+// relight: bench/python_relight_overhead.py.)
+void check_matches_cached(const PyTransfer& p, const py::object& mesh_obj) {
+  const auto& mesh = mesh_obj.cast<const prt::Mesh&>();  // mesh_arg checked the type
+  py::dict cache = mesh_obj.attr("__dict__");
+  const auto cached = [&](const char* key, auto compute) {
+    if (!cache.contains(key)) cache[key] = compute();
+    return cache[key].cast<std::uint64_t>();
+  };
+  const bool ok =
+      mesh.vertex_count() == p.t.vertices &&
+      cached("_prt_mesh_hash", [&] { return mesh.hash(); }) == p.t.mesh_hash &&
+      (!p.t.vertex_colors || mesh.colors.size() == mesh.vertex_count()) &&
+      (p.t.analytic_vertices() == 0 ||
+       (p.t.vertex_colors ? cached("_prt_shading_hash_colors", [&] { return prt::shading_hash(mesh, true); })
+                          : cached("_prt_shading_hash", [&] { return prt::shading_hash(mesh, false); })) ==
+           p.t.shading_hash);
+  if (!ok) prt::check_matches(p.t, mesh, p.source);
+}
+
 py::dict pose_report(const prt::PoseReport& r) {
   py::dict d;
   d["no_frame"] = r.no_frame;
@@ -707,7 +734,7 @@ PYBIND11_MODULE(_prt, m) {
       "degrees as --rotate (light from d arrives from R d).");
 
   // ---- meshes ----
-  py::class_<prt::Mesh>(m, "Mesh", "A triangle mesh as prt loads it (prt/mesh.h)")
+  py::class_<prt::Mesh>(m, "Mesh", "A triangle mesh as prt loads it (prt/mesh.h)", py::dynamic_attr())
       .def_property_readonly("positions",
                              [](py::object self) {
                                const auto& x = self.cast<const prt::Mesh&>();
@@ -914,13 +941,17 @@ PYBIND11_MODULE(_prt, m) {
 
   m.def(
       "relight",
-      [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& lighting, bool direct) {
+      [](const PyTransfer& p, const py::object& mesh_obj, const py::object& lighting, bool direct) {
+        if (!py::isinstance<prt::Mesh>(mesh_obj))
+          throw Error("mesh: expected a prt.Mesh (load_mesh, make_mesh), got " +
+                      std::string(py::str(py::type::of(mesh_obj).attr("__name__"))));
+        const auto& mesh = mesh_obj.cast<const prt::Mesh&>();
         const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
         const std::size_t need = std::size_t(p.t.bands) * p.t.bands;
         if (light.size() < need)
           throw Error("lighting: " + std::to_string(light.size()) + " coefficients; " + p.source + " has " +
                       std::to_string(p.t.bands) + " bands and needs " + std::to_string(need));
-        prt::check_matches(p.t, mesh, p.source);
+        check_matches_cached(p, mesh_obj);
         if (direct && p.t.mode != prt::TransferMode::Interreflected)
           throw Error(p.source + ": direct=True needs an interreflected transfer; this one is " +
                       std::string(prt::transfer_mode_name(p.t.mode)));
@@ -938,6 +969,28 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
       "Outgoing radiance float32 (V, 3) under lighting coefficients (n*n, 3) (project()), as prt relight "
       "computes it (its diffuse part for a glossy transfer).");
+
+  // The C++ call relight() wraps, timed here (median seconds a call over
+  // `repeats`), so a benchmark compares the module's call with it in one
+  // process (bench/python_relight_overhead.py). Not part of the API.
+  m.def(
+      "_time_relight",
+      [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& lighting, int repeats) {
+        const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
+        if (repeats < 1) throw Error("repeats: must be at least 1");
+        prt::check_matches(p.t, mesh, p.source);
+        std::vector<double> t(static_cast<std::size_t>(repeats));
+        py::gil_scoped_release release;
+        for (double& s : t) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const std::vector<glm::vec3> rgb = prt::relight(p.t, mesh, light);
+          s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          if (rgb.empty()) s = 0;  // keeps the call
+        }
+        std::sort(t.begin(), t.end());
+        return t[t.size() / 2];
+      },
+      py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::arg("repeats") = 200);
 
   // ---- local deformable PRT (prt/zh_transfer.h, docs/LDPRT.md) ----
   py::class_<PyZhTransfer>(m, "ZhTransfer",

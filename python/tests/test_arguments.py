@@ -207,6 +207,24 @@ def test_integral_floats_are_indices_and_integers_are_reals(cube):
     assert prt.make_mesh(CUBE_P.astype(np.int64), CUBE_T.astype(np.int16)).hash == cube.hash
 
 
+def test_relight_checks_its_mesh_every_call(cube, transfer):
+    """relight keeps a mesh's hashes on the Mesh object (a prt.Mesh never
+    changes): another mesh, or something that is not one, is still refused."""
+    L = lighting()
+    want = prt.relight(transfer, cube, L)
+    np.testing.assert_array_equal(prt.relight(transfer, cube, L), want)  # the cached path: the same numbers
+    moved = prt.make_mesh(CUBE_P * 2, CUBE_T)
+    for _ in range(2):
+        with pytest.raises(prt.Error, match="different mesh|mesh hash"):
+            prt.relight(transfer, moved, L)
+    turned = prt.make_mesh(CUBE_P, CUBE_T, -cube.normals)  # same positions, other normals: the shading hash
+    if transfer.analytic_vertices:
+        with pytest.raises(prt.Error, match="other normals"):
+            prt.relight(transfer, turned, L)
+    with pytest.raises(prt.Error, match="mesh: expected a prt.Mesh"):
+        prt.relight(transfer, "cube.obj", L)
+
+
 def test_scalars_that_must_be_finite(cube):
     for yaw in (math.nan, math.inf):
         with pytest.raises(prt.Error, match="yaw"):
