@@ -941,7 +941,8 @@ PYBIND11_MODULE(_prt, m) {
 
   m.def(
       "relight",
-      [](const PyTransfer& p, const py::object& mesh_obj, const py::object& lighting, bool direct) {
+      [](const PyTransfer& p, const py::object& mesh_obj, const py::object& lighting, bool direct,
+         const py::object& eye, double gloss, double specular, const py::object& diffuse) -> py::object {
         if (!py::isinstance<prt::Mesh>(mesh_obj))
           throw Error("mesh: expected a prt.Mesh (load_mesh, make_mesh), got " +
                       std::string(py::str(py::type::of(mesh_obj).attr("__name__"))));
@@ -957,18 +958,61 @@ PYBIND11_MODULE(_prt, m) {
                       std::string(prt::transfer_mode_name(p.t.mode)));
         if (direct && p.compressed)
           throw Error(p.source + ": direct=True: a compressed transfer keeps no direct part");
-        std::vector<glm::vec3> rgb;
-        {
-          py::gil_scoped_release release;
-          rgb = p.compressed ? prt::relight(*p.compressed, mesh, light)
-                : direct     ? prt::relight_direct(p.t, mesh, light)
-                             : prt::relight(p.t, mesh, light);
+        if (eye.is_none()) {
+          for (const auto& [name, given] : {std::pair{"gloss", gloss != 16.0}, std::pair{"specular", specular != 0.5},
+                                            std::pair{"diffuse", !diffuse.is_none()}})
+            if (given)
+              throw Error(std::string(name) + ": shapes the glossy part, which needs eye= (the point the vertices are "
+                          "seen from)");
+          std::vector<glm::vec3> rgb;
+          {
+            py::gil_scoped_release release;
+            rgb = p.compressed ? prt::relight(*p.compressed, mesh, light)
+                  : direct     ? prt::relight_direct(p.t, mesh, light)
+                               : prt::relight(p.t, mesh, light);
+          }
+          return vec3s(rgb);
         }
-        return vec3s(rgb);
+        // Glossy: toward one eye (3,) -> (V, 3), or many (E, 3) -> (E, V, 3).
+        if (direct) throw Error("direct: the glossy part (eye=) has no direct-only form");
+        const DArray eyes = real_array<double>(eye, "eye");
+        if (!(eyes.ndim() == 1 && eyes.shape(0) == 3) && !(eyes.ndim() == 2 && eyes.shape(1) == 3 && eyes.shape(0) >= 1))
+          throw Error("eye: expected a point (3,) or points (E, 3), E >= 1, got shape " + shape_text(eyes));
+        prt::GlossyShading shading;
+        shading.gloss = gloss;
+        shading.specular = specular;
+        if (!diffuse.is_none()) {
+          const FArray d = real_array<float>(diffuse, "diffuse");
+          if (d.ndim() == 0) shading.diffuse = glm::dvec3(d.data()[0]);
+          else if (d.ndim() == 1 && d.shape(0) == 3) shading.diffuse = {d.data()[0], d.data()[1], d.data()[2]};
+          else throw Error("diffuse: expected rho_d, a number or 3 numbers r, g, b, got shape " + shape_text(d));
+        }
+        const std::size_t E = eyes.ndim() == 1 ? 1 : std::size_t(eyes.shape(0));
+        std::vector<glm::vec3> rgb;
+        rgb.reserve(E * mesh.vertex_count());
+        for (std::size_t e = 0; e < E; ++e) {
+          shading.eye = {eyes.data()[3 * e], eyes.data()[3 * e + 1], eyes.data()[3 * e + 2]};
+          if (auto problem = prt::glossy_shading_problem(p.t, shading); !problem.empty())
+            throw Error(p.source + ": " + problem);
+          py::gil_scoped_release release;
+          const std::vector<glm::vec3> one = p.compressed ? prt::relight_glossy(*p.compressed, mesh, light, shading)
+                                                          : prt::relight_glossy(p.t, mesh, light, shading);
+          rgb.insert(rgb.end(), one.begin(), one.end());
+        }
+        if (eyes.ndim() == 1) return vec3s(rgb);
+        return copy(reinterpret_cast<const float*>(rgb.data()),
+                    {py::ssize_t(E), py::ssize_t(mesh.vertex_count()), 3});
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
+      py::arg("eye") = py::none(), py::arg("gloss") = 16.0, py::arg("specular") = 0.5,
+      py::arg("diffuse") = py::none(),
       "Outgoing radiance float32 (V, 3) under lighting coefficients (n*n, 3) (project()), as prt relight "
-      "computes it (its diffuse part for a glossy transfer).");
+      "computes it (its diffuse part for a glossy transfer without eye=).\n\n"
+      "Glossy transfer (precompute(material='glossy')): eye, a point (3,) in mesh units, gives each vertex's "
+      "radiance toward it, float32 (V, 3), as prt relight --eye x,y,z; eye (E, 3), toward each of E points, "
+      "float32 (E, V, 3). gloss: the Phong exponent e >= 0 (--gloss, 16); specular: the lobe's strength rho_s "
+      ">= 0 (--specular, 0.5); diffuse: rho_d, a number or (r, g, b) in [0, 1] (--diffuse; None: the "
+      "transfer's own albedo). docs/GLOSSY.md.");
 
   // The C++ call relight() wraps, timed here (median seconds a call over
   // `repeats`), so a benchmark compares the module's call with it in one
