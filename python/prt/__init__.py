@@ -22,6 +22,7 @@ from ._prt import (  # noqa: F401
     ProbeVolume,
     Scene,
     Transfer,
+    WaveletTransfer,
     ZhTransfer,
     __version__,
     data_dir,
@@ -40,6 +41,7 @@ from ._prt import (  # noqa: F401
     read_lightmap,
     read_probes,
     read_transfer,
+    read_wavelet,
     read_zh,
     read_vertex_csv,
     reference,
@@ -55,4 +57,5 @@ __all__ = [
     "precompute_lightmap", "precompute_probes", "read_lightmap", "read_probes", "__version__", "data_dir", "load_envmap", "load_mesh",
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
+    "WaveletTransfer", "read_wavelet",
 ]

@@ -26,6 +26,8 @@
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/vertex_csv.h>
+#include <prt/wavelet.h>
+#include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
 
 #include <glm/geometric.hpp>
@@ -191,6 +193,25 @@ UArray index_array(const py::handle& obj, const std::string& what) {
       throw Error(what + ": element " + index_text(k, d) + " is " + number_text(x) + "; indices must be in [0, 2^32)");
   }
   return UArray::ensure(d);
+}
+
+// A whole-number argument: a Python or numpy integer (not a bool, not a
+// float, even a whole one: a count is written as one), within int's range.
+int int_arg(const py::handle& obj, const std::string& what) {
+  if (py::isinstance<py::bool_>(obj) || py::isinstance(obj, py::module_::import("numpy").attr("bool_")))
+    throw Error(what + ": a bool (" + std::string(py::str(obj)) + "); a whole number is expected");
+  if (!py::isinstance<py::int_>(obj) && !py::isinstance(obj, py::module_::import("numpy").attr("integer")))
+    throw Error(what + ": expected a whole number, got " + std::string(py::str(py::type::of(obj).attr("__name__"))) +
+                " " + std::string(py::repr(obj)));
+  const py::int_ i(py::reinterpret_borrow<py::object>(obj));
+  const long long v = PyLong_AsLongLong(i.ptr());
+  if (v == -1 && PyErr_Occurred()) {
+    PyErr_Clear();
+    throw Error(what + ": " + std::string(py::str(obj)) + " is out of range");
+  }
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
+    throw Error(what + ": " + std::to_string(v) + " is out of range");
+  return int(v);
 }
 
 // (N, 3) or (3,) -> N rows; `what` names the argument in the message.
@@ -424,8 +445,7 @@ PyTransfer read_transfer(const std::string& path) {
   p.source = path;
   const prt::TransferBasis basis = prt::read_transfer_basis(path);
   if (basis == prt::TransferBasis::Wavelet)
-    throw Error(path + ": holds a wavelet transfer (prt precompute --basis wavelet); the Python module reads SH "
-                       "transfers only (use the prt command: prt relight --terms K)");
+    throw Error(path + ": holds a wavelet transfer (prt precompute --basis wavelet); read it with prt.read_wavelet");
   if (basis == prt::TransferBasis::ZH)
     throw Error(path + ": holds a zonal-harmonic (local deformable) transfer (prt precompute --basis zh); read it "
                        "with prt.read_zh");
@@ -469,6 +489,12 @@ void check_matches_cached(const PyTransfer& p, const py::object& mesh_obj) {
            p.t.shading_hash);
   if (!ok) prt::check_matches(p.t, mesh, p.source);
 }
+
+// A wavelet transfer (prt/wavelet_transfer.h, docs/WAVELETS.md) and its source.
+struct PyWavelet {
+  prt::WaveletTransfer t;
+  std::string source = "<computed>";
+};
 
 py::dict pose_report(const prt::PoseReport& r) {
   py::dict d;
@@ -909,9 +935,33 @@ PYBIND11_MODULE(_prt, m) {
 
   m.def(
       "precompute",
-      [](const prt::Mesh& mesh, int bands, int samples, const std::string& mode, int bounces, const py::object& albedo,
-         bool vertex_colors, std::uint64_t seed, int threads, double offset, double bounce_tolerance,
-         const std::string& material, py::object progress) {
+      [](const prt::Mesh& mesh, const py::object& bands_arg, int samples, const std::string& mode, int bounces,
+         const py::object& albedo, bool vertex_colors, std::uint64_t seed, int threads, double offset,
+         double bounce_tolerance, const std::string& material, const std::string& basis, int cube_res,
+         double threshold, py::object progress) -> py::object {
+        if (basis != "sh" && basis != "wavelet")
+          throw Error("basis: expected 'sh' or 'wavelet' (for 'zh', fit_zh the SH transfer), got '" + basis + "'");
+        if (basis == "wavelet") {
+          // The CLI's rules: shadowed, diffuse; its size set by cube_res and threshold.
+          if (!bands_arg.is_none()) throw Error("bands: does not apply to basis='wavelet' (cube_res and threshold set its size)");
+          if (mode != "shadowed") throw Error("mode: basis='wavelet' is shadowed only, got '" + mode + "'");
+          if (material != "diffuse") throw Error("material: basis='wavelet' is diffuse only");
+          prt::WaveletOptions w;
+          w.cube_res = cube_res;
+          w.threshold = threshold;
+          w.albedo = to_albedo(albedo);
+          w.vertex_colors = vertex_colors;
+          if (threads < 0) throw Error("threads: must be >= 0 (0: all cores)");
+          w.threads = threads;
+          w.offset = offset;
+          PyWavelet p;
+          p.t = run_released(std::move(progress),
+                             [&](const prt::Progress& pr) { return prt::compute_wavelet_transfer(mesh, w, pr); });
+          return py::cast(std::move(p));
+        }
+        if (cube_res != 32 || threshold != 1e-2)
+          throw Error(std::string(cube_res != 32 ? "cube_res" : "threshold") + ": applies to basis='wavelet' only");
+        const int bands = bands_arg.is_none() ? 5 : int_arg(bands_arg, "bands");
         prt::TransferOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bands = bands;
@@ -929,14 +979,18 @@ PYBIND11_MODULE(_prt, m) {
         PyTransfer p;
         p.t = run_released(std::move(progress),
                            [&](const prt::Progress& pr) { return prt::compute_transfer(mesh, o, pr); });
-        return p;
+        return py::cast(std::move(p));
       },
-      py::arg("mesh"), py::kw_only(), py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("mode") = "shadowed",
-      py::arg("bounces") = 1, py::arg("albedo") = 0.8, py::arg("vertex_colors") = false, py::arg("seed") = 1,
-      py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
-      py::arg("material") = "diffuse", py::arg("progress") = py::none(),
+      py::arg("mesh"), py::kw_only(), py::arg("bands") = py::none(), py::arg("samples") = 1024,
+      py::arg("mode") = "shadowed", py::arg("bounces") = 1, py::arg("albedo") = 0.8, py::arg("vertex_colors") = false,
+      py::arg("seed") = 1, py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
+      py::arg("material") = "diffuse", py::arg("basis") = "sh", py::arg("cube_res") = 32, py::arg("threshold") = 1e-2,
+      py::arg("progress") = py::none(),
       "Traces the transfer of every vertex as prt precompute does (same defaults; same seed and inputs, same "
-      "bits). Releases the GIL. progress: None, True (a line on stderr) or a callable (done, total, phase) "
+      "bits): a Transfer (bands: SH bands, default 5). basis='wavelet': a WaveletTransfer, as prt precompute "
+      "--basis wavelet (shadowed, diffuse; cube_res: the cube's face size r, a power of two 2 to 256, default 32; "
+      "threshold: the relative L2 error each vertex's kept coefficients may leave, default 1e-2; samples, seed and "
+      "bounces do not apply: one ray per cube texel). Releases the GIL. progress: None, True (a line on stderr) or a callable (done, total, phase) "
       "returning False to stop; Ctrl-C stops it (KeyboardInterrupt).");
 
   m.def(
@@ -1035,6 +1089,94 @@ PYBIND11_MODULE(_prt, m) {
         return t[t.size() / 2];
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::arg("repeats") = 200);
+
+  // ---- wavelet transfer (prt/wavelet_transfer.h, docs/WAVELETS.md) ----
+  py::class_<PyWavelet>(m, "WaveletTransfer",
+                        "An all-frequency shadowed transfer (Ng, Ramamoorthi & Hanrahan 2003): per vertex, the "
+                        "largest Haar wavelet coefficients of its visibility times cosine on a cube map")
+      .def_property_readonly("cube_res", [](const PyWavelet& p) { return p.t.cube_res; }, "The cube's face size r")
+      .def_property_readonly("coefficient_count", [](const PyWavelet& p) { return p.t.coeff_count(); }, "6 r^2")
+      .def_property_readonly("vertices", [](const PyWavelet& p) { return p.t.vertices; })
+      .def_property_readonly("threshold", [](const PyWavelet& p) { return p.t.threshold; })
+      .def_property_readonly("albedo", [](const PyWavelet& p) { return py::make_tuple(p.t.albedo.x, p.t.albedo.y, p.t.albedo.z); })
+      .def_property_readonly("vertex_colors", [](const PyWavelet& p) { return p.t.vertex_colors; })
+      .def_property_readonly("mesh_hash", [](const PyWavelet& p) { return p.t.mesh_hash; })
+      .def_property_readonly("kept", [](const PyWavelet& p) { return p.t.kept(); }, "Coefficients kept, all vertices")
+      .def_property_readonly("kept_fraction", [](const PyWavelet& p) { return p.t.kept_fraction(); },
+                             "Kept coefficients over vertices x 6 r^2")
+      .def_property_readonly("nbytes", [](const PyWavelet& p) { return p.t.bytes(); })
+      .def_property_readonly("source", [](const PyWavelet& p) { return p.source; })
+      .def(
+          "coefficients",
+          [](const PyWavelet& p, std::int64_t v) {
+            if (v < 0 || std::uint64_t(v) >= p.t.vertices)
+              throw Error("vertex: " + std::to_string(v) + " is out of range (" + std::to_string(p.t.vertices) +
+                          " vertices)");
+            const std::vector<float> c = prt::wavelet_vertex_coefficients(p.t, std::size_t(v));
+            return copy(c.data(), {py::ssize_t(c.size())});
+          },
+          py::arg("vertex"),
+          "float32 (6 r^2,): the vertex's dequantised Haar coefficients (zeros where dropped), in prt/wavelet.h's "
+          "index order")
+      .def("write", [](const PyWavelet& p, const py::object& path) { prt::write_wavelet_transfer(path_of(path), p.t); },
+           py::arg("path"), "Writes the file (atomically) as prt precompute --basis wavelet does (docs/FORMAT.md)")
+      .def("describe", [](const PyWavelet& p) { return prt::describe_transfer(p.t); }, "prt info's text")
+      .def("__str__", [](const PyWavelet& p) { return prt::describe_transfer(p.t); })
+      .def("__repr__", [](const PyWavelet& p) {
+        return "<prt.WaveletTransfer " + p.source + ": cube " + std::to_string(p.t.cube_res) + ", " +
+               std::to_string(p.t.vertices) + " vertices, " + std::to_string(p.t.kept()) + " coefficients kept>";
+      });
+
+  m.def(
+      "read_wavelet",
+      [](const py::object& path) {
+        PyWavelet p;
+        p.source = path_of(path);
+        p.t = prt::read_wavelet_transfer(p.source);
+        return p;
+      },
+      py::arg("path"), "Reads a wavelet transfer file (prt precompute --basis wavelet).");
+
+  m.def(
+      "relight",
+      [](const PyWavelet& p, const prt::Mesh& mesh, const py::object& map, int terms, const std::string& selection,
+         const py::object& rotate) {
+        if (terms < 1) throw Error("terms: must be at least 1 (K >= 6 r^2 keeps all)");
+        const prt::wavelet::Selection sel = [&] {
+          try {
+            return prt::wavelet::parse_selection(selection);
+          } catch (const Error& e) {
+            throw Error(std::string("selection: ") + e.what());
+          }
+        }();
+        if (py::isinstance<py::array>(map) && !py::isinstance<prt::EnvMap>(map)) {
+          // SH coefficients are not a map: say so rather than read them as pixels.
+          const py::array a = map.cast<py::array>();
+          if (a.ndim() == 2 && a.shape(1) == 3)
+            throw Error("map: a wavelet transfer relights from the map itself (an EnvMap, a file name or an (H, W, "
+                        "3) array), not from SH coefficients");
+        }
+        const glm::dmat3 R = rotate.is_none() ? glm::dmat3(1.0) : to_rotation(rotate, "rotate");
+        prt::check_matches(p.t, mesh, p.source);
+        prt::EnvMap loaded;
+        const prt::EnvMap* e = &map_argument(map, loaded);
+        prt::require_finite(*e);
+        std::vector<glm::vec3> rgb;
+        {
+          py::gil_scoped_release release;
+          prt::wavelet::FrameLighting lighting(*e, p.t.cube_res);
+          lighting.update(R, terms, sel);
+          prt::wavelet_relight(p.t, lighting.coefficients().data(), lighting.terms(), rgb);
+        }
+        return vec3s(rgb);
+      },
+      py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("terms") = 100,
+      py::arg("selection") = "area", py::arg("rotate") = py::none(),
+      "A wavelet transfer: outgoing radiance float32 (V, 3) under a map (an EnvMap, a file name or an (H, W, 3) "
+      "array), as prt relight --terms K --selection S [--rotate] computes it: the map resampled to the cube "
+      "(rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept "
+      "(selection 'area': |c| times the support's area, Ng et al.; 'magnitude': |c|), and each vertex's sum "
+      "over them.");
 
   // ---- local deformable PRT (prt/zh_transfer.h, docs/LDPRT.md) ----
   py::class_<PyZhTransfer>(m, "ZhTransfer",
