@@ -13,8 +13,11 @@
 // nothing.
 #include <prt/compression_error.h>
 
+#include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/glossy.h>
+#include <prt/paths.h>
+#include <prt/projection.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
 
@@ -27,6 +30,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <numeric>
 
 namespace prt {
@@ -96,6 +100,48 @@ double largest_ratio(const Mat& G, const Mat& B) {
 }
 
 }  // namespace
+
+namespace {
+
+std::vector<std::string> bundled_maps() {
+  const std::filesystem::path dir = data_dir() / "envmaps";
+  std::vector<std::string> paths;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
+    if (e.path().extension() == ".exr") paths.push_back(e.path().string());
+  std::sort(paths.begin(), paths.end());
+  if (paths.empty())
+    throw Error(dir.string() + ": no bundled maps to measure the error under (PRT_DATA_DIR); give the maps");
+  return paths;
+}
+
+std::vector<NamedLighting> load_lightings(const std::vector<std::string>& paths, int bands) {
+  std::vector<NamedLighting> out;
+  for (const auto& path : paths) {
+    const EnvMap env = load_envmap(path);
+    require_finite(env);
+    out.push_back({std::filesystem::path(path).stem().string(), project(env, bands)});
+  }
+  return out;
+}
+
+}  // namespace
+
+ErrorDistribution make_error_distribution(const DistributionSpec& spec, int bands) {
+  ErrorDistribution d;
+  const std::vector<std::string> maps = spec.maps.empty() ? bundled_maps() : spec.maps;
+  d.maps = load_lightings(maps, bands);
+  if (!spec.spectra.empty()) {
+    d.spectra = load_lightings(spec.spectra, bands);
+  } else if (!spec.own_spectra) {
+    const std::vector<std::string> bundled = bundled_maps();
+    d.spectra = bundled == maps ? d.maps : load_lightings(bundled, bands);
+  }
+  d.sun = spec.sun;
+  d.rotations = spec.rotations;
+  d.eyes = spec.eyes;
+  return d;
+}
 
 std::string ErrorDistribution::describe(bool glossy) const {
   const auto names = [](const std::vector<NamedLighting>& v) {

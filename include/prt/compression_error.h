@@ -81,6 +81,22 @@ struct ErrorDistribution {
 // SH (the first unrotated; the others in turn with the map's own band spectrum
 // and with each of d.spectra's), then with d.sun the point light's (the
 // first overhead, +Y), `bands`^2 coefficients each.
+// What prt compress measures under, as files and counts (docs/COMPRESSION.md
+// "The error distribution"): `maps` (empty: every bundled map,
+// data_dir()/envmaps/*.exr, sorted by name), each projected to `bands`; the
+// band spectra the rotations take on: `spectra` (empty: the bundled maps',
+// unless own_spectra: none); the sun unless `sun` is false. Throws
+// prt::Error naming a map that cannot be read or is not finite, or when no
+// map is given and none is bundled.
+struct DistributionSpec {
+  std::vector<std::string> maps, spectra;
+  bool own_spectra = false;
+  bool sun = true;
+  int rotations = 24;
+  int eyes = 32;
+};
+ErrorDistribution make_error_distribution(const DistributionSpec& spec, int bands);
+
 std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribution& d, int bands);
 
 // The norm of each band l < `bands` of `sh` (RGB, sqrt of the sum over m and

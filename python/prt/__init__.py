@@ -25,6 +25,8 @@ from ._prt import (  # noqa: F401
     WaveletTransfer,
     ZhTransfer,
     __version__,
+    compress,
+    compression_error,
     data_dir,
     deform,
     fit_zh,
@@ -57,5 +59,5 @@ __all__ = [
     "precompute_lightmap", "precompute_probes", "read_lightmap", "read_probes", "__version__", "data_dir", "load_envmap", "load_mesh",
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
-    "WaveletTransfer", "read_wavelet",
+    "WaveletTransfer", "read_wavelet", "compress", "compression_error",
 ]

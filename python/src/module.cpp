@@ -8,6 +8,7 @@
 // progress callback takes it back, and Ctrl-C or an exception raised by the
 // callback stops them (the library's Progress returns false: prt/progress.h).
 #include <prt/compressed_transfer.h>
+#include <prt/compression_error.h>
 #include <prt/deform.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
@@ -1067,6 +1068,134 @@ PYBIND11_MODULE(_prt, m) {
       "float32 (E, V, 3). gloss: the Phong exponent e >= 0 (--gloss, 16); specular: the lobe's strength rho_s "
       ">= 0 (--specular, 0.5); diffuse: rho_d, a number or (r, g, b) in [0, 1] (--diffuse; None: the "
       "transfer's own albedo). docs/GLOSSY.md.");
+
+  // ---- compression (prt compress; docs/COMPRESSION.md) ----
+  // The distribution prt compress measures under, from the keyword arguments.
+  const auto distribution = [](const prt::Transfer& t, const py::object& envs, const py::object& spectra,
+                               bool own_spectra, bool sun, int rotations, int eyes) {
+    prt::DistributionSpec spec;
+    const auto paths = [](const py::object& list, const char* what) {
+      std::vector<std::string> out;
+      if (list.is_none()) return out;
+      if (is_path(list)) return std::vector<std::string>{path_of(list)};
+      for (const py::handle item : list) {
+        if (!is_path(item)) throw Error(std::string(what) + ": expected map files (str or os.PathLike)");
+        out.push_back(path_of(item));
+      }
+      return out;
+    };
+    spec.maps = paths(envs, "envs");
+    spec.spectra = paths(spectra, "spectra");
+    if (own_spectra && !spec.spectra.empty())
+      throw Error("own_spectra: leaves the maps' spectra as they are; spectra= adds others': give one of them");
+    spec.own_spectra = own_spectra;
+    spec.sun = sun;
+    if (rotations < 1) throw Error("rotations: must be at least 1");
+    if (eyes < 1) throw Error("eyes: must be at least 1");
+    spec.rotations = rotations;
+    spec.eyes = eyes;
+    return prt::make_error_distribution(spec, t.bands);
+  };
+  const auto stats_dict = [](const prt::ErrorStats& e) {
+    py::dict d;
+    d["mean"] = e.mean;
+    d["p95"] = e.p95;
+    d["max"] = e.max;
+    d["samples"] = e.samples;
+    d["bound"] = e.bound;
+    return d;
+  };
+
+  m.def(
+      "compress",
+      [distribution](const PyTransfer& p, int clusters, int pca, int glossy_clusters, int glossy_pca, int weights,
+                     int iterations, std::uint64_t seed, const py::object& target_error, const py::object& mesh,
+                     const py::object& envs, const py::object& spectra, bool own_spectra, bool sun, int rotations,
+                     int eyes, const std::string& statistic, const std::string& metric, bool exhaustive,
+                     py::object progress) {
+        if (p.compressed)
+          throw Error(p.source + ": already compressed; compress the uncompressed transfer precompute made");
+        if (weights != 16 && weights != 32) throw Error("weights: 16 or 32 (bits per stored weight)");
+        if (statistic != "p95" && statistic != "mean") throw Error("statistic: 'p95' or 'mean', got '" + statistic + "'");
+        if (metric != "band" && metric != "plain") throw Error("metric: 'band' or 'plain', got '" + metric + "'");
+        PyTransfer out;
+        out.source = "<compressed>";
+        if (target_error.is_none()) {
+          if (!p.t.glossy && (glossy_clusters != 128 || glossy_pca != 8))
+            throw Error(p.source + ": glossy_clusters and glossy_pca need glossy matrices, which this transfer does "
+                        "not have");
+          prt::CompressOptions o{.clusters = clusters, .vectors = pca, .glossy_clusters = glossy_clusters,
+                                 .glossy_vectors = glossy_pca, .iterations = iterations, .seed = seed,
+                                 .weight_bits = weights, .progress = {}};
+          out.compressed = run_released(std::move(progress), [&](const prt::Progress& pr) {
+            prt::CompressOptions oo = o;
+            oo.progress = pr;
+            return prt::compress_transfer(p.t, oo);
+          });
+        } else {
+          if (mesh.is_none()) throw Error("mesh: target_error measures the relit error on the mesh: give mesh=");
+          const double target = target_error.cast<double>();
+          const auto& m = mesh.cast<const prt::Mesh&>();
+          prt::check_matches(p.t, m, p.source);
+          const prt::ErrorDistribution d = distribution(p.t, envs, spectra, own_spectra, sun, rotations, eyes);
+          prt::ChoiceOptions o;
+          o.target = target;
+          o.statistic = statistic == "mean" ? prt::ErrorStatistic::Mean : prt::ErrorStatistic::P95;
+          o.metric = metric == "plain" ? prt::CompressionMetric::Plain : prt::CompressionMetric::Band;
+          o.weight_bits = weights;
+          o.iterations = iterations;
+          o.seed = seed;
+          o.exhaustive = exhaustive;
+          out.compressed = run_released(std::move(progress), [&](const prt::Progress& pr) {
+            prt::ChoiceOptions oo = o;
+            oo.progress = pr;
+            return prt::choose_compression(p.t, m, d, oo).compressed;
+          });
+        }
+        out.t = prt::decompress(*out.compressed);
+        return out;
+      },
+      py::arg("transfer"), py::kw_only(), py::arg("clusters") = 256, py::arg("pca") = 8,
+      py::arg("glossy_clusters") = 128, py::arg("glossy_pca") = 8, py::arg("weights") = 16, py::arg("iterations") = 20,
+      py::arg("seed") = 1, py::arg("target_error") = py::none(), py::arg("mesh") = py::none(),
+      py::arg("envs") = py::none(), py::arg("spectra") = py::none(), py::arg("own_spectra") = false,
+      py::arg("sun") = true, py::arg("rotations") = 24, py::arg("eyes") = 32, py::arg("statistic") = "p95",
+      py::arg("metric") = "band", py::arg("exhaustive") = false, py::arg("progress") = py::none(),
+      "Clustered PCA of a transfer (Sloan et al. 2003) as prt compress does, the same bits: a compressed Transfer "
+      "(.compressed True; relight() uses its per-cluster products; .write() the file prt compress writes). "
+      "Sizes: clusters K and pca N (the glossy matrices' own glossy_clusters, glossy_pca), weights 16 or 32 bits. "
+      "Or target_error (relative RMS, with mesh=): the smallest K x N whose relit error (statistic 'p95' or "
+      "'mean', in metric 'band' or 'plain') meets it under the distribution: envs (map files; None: the bundled "
+      "maps) under `rotations` rotations taking on the spectra of `spectra` (None: the bundled maps'; "
+      "own_spectra=True: none), the sun unless sun=False, and for glossy transfers `eyes` views. "
+      "docs/COMPRESSION.md. Releases the GIL; progress as precompute's.");
+
+  m.def(
+      "compression_error",
+      [distribution, stats_dict](const PyTransfer& p, const PyTransfer& c, const prt::Mesh& mesh, const py::object& envs,
+                                 int rotations, int eyes) {
+        if (p.compressed) throw Error("transfer: " + p.source + " is compressed; give the uncompressed one it came from");
+        if (!c.compressed) throw Error("compressed: " + c.source + " is not compressed (compress() or prt compress)");
+        const prt::Transfer& ct = c.compressed->transfer;
+        if (ct.vertices != p.t.vertices || ct.bands != p.t.bands || ct.glossy != p.t.glossy ||
+            c.compressed->coeffs.rows() != p.t.coeffs.size() / std::max<std::size_t>(p.t.stride(), 1))
+          throw Error("compressed: " + c.source + " is not a compression of " + p.source +
+                      " (other vertices, bands or signals)");
+        prt::check_matches(p.t, mesh, p.source);
+        const prt::ErrorDistribution d = distribution(p.t, envs, py::none(), true, false, rotations, eyes);
+        prt::ErrorStats e;
+        {
+          py::gil_scoped_release release;
+          e = prt::CompressionErrorMeter(p.t, mesh, d)(*c.compressed, true);
+        }
+        return stats_dict(e);
+      },
+      py::arg("transfer"), py::arg("compressed"), py::arg("mesh"), py::kw_only(), py::arg("envs") = py::none(),
+      py::arg("rotations") = 24, py::arg("eyes") = 32,
+      "The relit error of a compressed transfer against the one it came from, as prt compress --measure: a dict "
+      "mean, p95, max (relative RMS over the vertices, per sample), samples, and bound (the transfer-space bound "
+      "no lighting exceeds), over the maps `envs` (None: the bundled ones) as given under `rotations` rotations "
+      "(and glossy: `eyes` views).");
 
   // The C++ call relight() wraps, timed here (median seconds a call over
   // `repeats`), so a benchmark compares the module's call with it in one

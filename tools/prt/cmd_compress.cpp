@@ -77,28 +77,6 @@ void check_usage(const CompressArgs& a) {
   check_not_input("--output", a.output, std::span<const Input>(inputs));
 }
 
-std::vector<std::string> bundled_maps() {
-  const std::filesystem::path dir = data_dir() / "envmaps";
-  std::vector<std::string> paths;
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec))
-    if (e.path().extension() == ".exr") paths.push_back(e.path().string());
-  std::sort(paths.begin(), paths.end());
-  if (paths.empty())
-    throw Error(dir.string() + ": no bundled maps to measure the error under (PRT_DATA_DIR); give --env MAP");
-  return paths;
-}
-
-std::vector<NamedLighting> load_lightings(const std::vector<std::string>& paths, int bands) {
-  std::vector<NamedLighting> out;
-  for (const auto& path : paths) {
-    const EnvMap env = load_envmap(path);
-    require_finite(env);
-    out.push_back({std::filesystem::path(path).stem().string(), project(env, bands)});
-  }
-  return out;
-}
-
 // The lightings and views the error is measured under: each --env map (or,
 // with none, every bundled one) under --rotations rotations, taking in turn
 // their own band spectra and those of the --spectra maps (default: the
@@ -106,19 +84,14 @@ std::vector<NamedLighting> load_lightings(const std::vector<std::string>& paths,
 // or with --own-spectra), and the sun (not for --measure or with --no-sun); glossy: --eyes eyes on a sphere, the meter's
 // exponents and strengths.
 ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
-  ErrorDistribution d;
-  const std::vector<std::string> maps = a.envs.empty() ? bundled_maps() : a.envs;
-  d.maps = load_lightings(maps, bands);
-  if (!a.spectra.empty()) {
-    d.spectra = load_lightings(a.spectra, bands);
-  } else if (!a.own_spectra && a.measure.empty()) {
-    const std::vector<std::string> bundled = bundled_maps();
-    d.spectra = bundled == maps ? d.maps : load_lightings(bundled, bands);
-  }
-  d.sun = !a.no_sun && a.measure.empty();
-  d.rotations = a.rotations;
-  d.eyes = a.eyes;
-  return d;
+  DistributionSpec spec;
+  spec.maps = a.envs;
+  spec.spectra = a.spectra;
+  spec.own_spectra = a.own_spectra || !a.measure.empty();
+  spec.sun = !a.no_sun && a.measure.empty();
+  spec.rotations = a.rotations;
+  spec.eyes = a.eyes;
+  return make_error_distribution(spec, bands);
 }
 
 std::string bytes_text(double b) { return b >= 1e6 ? fmt::format("{:.2f} MB", b / 1e6) : fmt::format("{:.1f} KB", b / 1e3); }
