@@ -30,6 +30,7 @@ from ._prt import (  # noqa: F401
     data_dir,
     deform,
     fit_zh,
+    info,
     load_envmap,
     lightmap_from_rows,
     load_mesh,
@@ -51,6 +52,7 @@ from ._prt import (  # noqa: F401
     rotate_sh,
     rotation_from_euler,
     sh_eval,
+    verify,
     write_vertex_csv,
 )
 
@@ -60,4 +62,5 @@ __all__ = [
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
     "WaveletTransfer", "read_wavelet", "compress", "compression_error",
+    "info", "verify",
 ]

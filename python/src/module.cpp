@@ -12,6 +12,7 @@
 #include <prt/deform.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
+#include <prt/file_info.h>
 #include <prt/filter.h>
 #include <prt/lightmap.h>
 #include <prt/mesh.h>
@@ -26,6 +27,7 @@
 #include <prt/sh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/verify.h>
 #include <prt/vertex_csv.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>
@@ -1068,6 +1070,49 @@ PYBIND11_MODULE(_prt, m) {
       "float32 (E, V, 3). gloss: the Phong exponent e >= 0 (--gloss, 16); specular: the lobe's strength rho_s "
       ">= 0 (--specular, 0.5); diffuse: rho_d, a number or (r, g, b) in [0, 1] (--diffuse; None: the "
       "transfer's own albedo). docs/GLOSSY.md.");
+
+  // ---- info and verify ----
+  m.def(
+      "info",
+      [](const py::object& path) {
+        const std::string p = path_of(path);
+        std::string text;
+        {
+          py::gil_scoped_release release;
+          text = prt::file_info_json(p);
+        }
+        return py::module_::import("json").attr("loads")(text);
+      },
+      py::arg("path"),
+      "What a prt file holds (any transfer file, compressed, wavelet, zonal-harmonic, lightmap or probe volume), "
+      "validated completely: the dict prt info --json prints (docs/FORMAT.md).");
+
+  m.def(
+      "verify",
+      [](int bands_max, int float_bands, py::object progress) {
+        if (bands_max < 3 || bands_max > prt::sh::kMaxBands)
+          throw Error("bands_max: must be 3 to " + std::to_string(prt::sh::kMaxBands));
+        if (float_bands < 1 || float_bands > prt::sh::kMaxBands)
+          throw Error("float_bands: must be 1 to " + std::to_string(prt::sh::kMaxBands));
+        prt::VerifyOptions o;
+        o.bands_max = bands_max;
+        o.float_bands = float_bands;
+        const std::vector<prt::CheckResult> checks = run_released(std::move(progress), [&](const prt::Progress& pr) {
+          std::size_t done = 0;
+          return prt::run_verify(o, [&](const prt::CheckResult&) {
+            if (pr && !pr(++done, 0, "checks")) throw Error("cancelled");
+          });
+        });
+        py::list out;
+        for (const prt::CheckResult& c : checks)
+          out.append(py::dict(py::arg("group") = c.group, py::arg("name") = c.name, py::arg("error") = c.error,
+                              py::arg("tolerance") = c.tolerance, py::arg("why") = c.why,
+                              py::arg("passed") = c.pass()));
+        return out;
+      },
+      py::kw_only(), py::arg("bands_max") = 32, py::arg("float_bands") = 16, py::arg("progress") = py::none(),
+      "prt verify's checks of the SH numerics against exact answers, as records: a list of dicts group, name (what "
+      "was measured), error, tolerance, why (why the tolerance is what it is), passed. Releases the GIL.");
 
   // ---- compression (prt compress; docs/COMPRESSION.md) ----
   // The distribution prt compress measures under, from the keyword arguments.
