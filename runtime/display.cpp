@@ -1,6 +1,8 @@
 // The CPU version of the display pass (exposure, tone map). See prt/render.h.
 #include <prt/render.h>
 
+#include <prt/filter.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -18,6 +20,18 @@ float tone_map(float linear, const Display& d) {
 
 void tone_map(std::vector<float>& rgb, const Display& d) {
   for (float& v : rgb) v = tone_map(v, d);
+}
+
+void finish_frame(std::vector<float>& rgb, const Display& d, bool linear) {
+  if (!linear) return tone_map(rgb, d);
+  const float gain = float(std::exp2(d.exposure));
+  if (gain != 1.0f)
+    for (float& v : rgb) v *= gain;
+}
+
+double auto_exposure(const std::vector<glm::dvec3>& light) {
+  const double peak = sh::peak_diffuse_radiance(light);
+  return peak > 0 ? std::clamp(-std::log2(peak), -64.0, 64.0) : 0.0;
 }
 
 }  // namespace prt

@@ -108,6 +108,15 @@ struct Display {
 // The CPU version of the display pass (the same formula as shaders/display.frag.glsl).
 float tone_map(float linear, const Display& display);
 void tone_map(std::vector<float>& rgb, const Display& display);
+// What a frame's values become when written (prt render's files, prt.render's
+// arrays): `linear` keeps linear values scaled by 2^exposure (EXR and other
+// float formats); otherwise the tone map's display values in [0, 1] (8-bit
+// formats, before sRGB encoding).
+void finish_frame(std::vector<float>& rgb, const Display& display, bool linear);
+// --exposure auto: the stops that show the brightest a white Lambertian
+// surface can be under this lighting (sh::peak_diffuse_radiance, 3 bands of
+// `light`, rotation-invariant) at 1; 0 for lighting nowhere positive.
+double auto_exposure(const std::vector<glm::dvec3>& light);
 
 // A perspective camera; the image's vertical field of view is fov_deg, the
 // horizontal one follows from the image's aspect ratio.

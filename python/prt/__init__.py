@@ -49,6 +49,7 @@ from ._prt import (  # noqa: F401
     read_vertex_csv,
     reference,
     relight,
+    render,
     rotate_sh,
     rotation_from_euler,
     sh_eval,
@@ -62,5 +63,5 @@ __all__ = [
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
     "WaveletTransfer", "read_wavelet", "compress", "compression_error",
-    "info", "verify",
+    "info", "verify", "render",
 ]

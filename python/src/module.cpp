@@ -23,6 +23,7 @@
 #include <prt/progress.h>
 #include <prt/projection.h>
 #include <prt/reference.h>
+#include <prt/render.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
 #include <prt/transfer.h>
@@ -45,6 +46,11 @@
 #include <array>
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <thread>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -432,6 +438,102 @@ std::unique_ptr<tbb::global_control> limit_threads(int threads) {
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
 }
 
+// ---- rendering -----------------------------------------------------------------
+//
+// One OpenGL context for the process: an EGL context is current on one thread
+// at a time, so the renderer lives on a thread of its own, made with it on the
+// first render() and reused by every later one, whichever Python thread
+// calls; calls are served in turn. Stopped at interpreter exit (the renderer
+// destroyed on its thread).
+class GlWorker {
+ public:
+  static GlWorker& get() {
+    static GlWorker* w = [] {
+      started_ = true;
+      return new GlWorker();  // lives to the end; atexit stops its thread
+    }();
+    return *w;
+  }
+  static bool started() { return started_; }
+  // Runs f(renderer) on the GL thread and returns its result, rethrowing its
+  // exception; the first call creates the renderer (NoGlContext when there
+  // is no OpenGL 4.5: every later call says so again).
+  template <typename F>
+  auto run(F&& f) -> decltype(f(std::declval<prt::Renderer&>())) {
+    using R = decltype(f(std::declval<prt::Renderer&>()));
+    std::optional<R> result;
+    std::exception_ptr error;
+    bool done = false;
+    std::mutex m;
+    std::condition_variable cv;
+    post([&] {
+      try {
+        if (!renderer_) {
+          if (failure_) std::rethrow_exception(failure_);
+          try {
+            renderer_ = std::make_unique<prt::Renderer>();
+          } catch (...) {
+            failure_ = std::current_exception();
+            throw;
+          }
+        }
+        result.emplace(f(*renderer_));
+      } catch (...) {
+        error = std::current_exception();
+      }
+      std::lock_guard<std::mutex> lock(m);
+      done = true;
+      cv.notify_one();
+    });
+    std::unique_lock<std::mutex> lock(m);
+    cv.wait(lock, [&] { return done; });
+    if (error) std::rethrow_exception(error);
+    return std::move(*result);
+  }
+  void stop() {
+    if (!thread_.joinable()) return;
+    post([this] { renderer_.reset(); });
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stopping_ = true;
+    }
+    cv_.notify_one();
+    thread_.join();
+  }
+
+ private:
+  GlWorker() : thread_([this] { loop(); }) {}
+  void post(std::function<void()> task) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (stopping_) throw Error("the renderer has stopped (the interpreter is exiting)");
+      tasks_.push_back(std::move(task));
+    }
+    cv_.notify_one();
+  }
+  void loop() {
+    for (;;) {
+      std::function<void()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        cv_.wait(lock, [this] { return stopping_ || !tasks_.empty(); });
+        if (tasks_.empty()) return;  // stopping, and nothing left
+        task = std::move(tasks_.front());
+        tasks_.pop_front();
+      }
+      task();
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> tasks_;
+  bool stopping_ = false;
+  std::unique_ptr<prt::Renderer> renderer_;
+  std::exception_ptr failure_;
+  std::thread thread_;  // last: started once the rest is ready
+  static inline std::atomic<bool> started_{false};
+};
+
 // ---- transfers -----------------------------------------------------------------
 
 // An SH transfer as Python sees it: the whole transfer (a compressed file's
@@ -617,6 +719,12 @@ std::vector<glm::vec3> to_vec3s(const py::handle& obj, const char* what, std::op
 
 PYBIND11_MODULE(_prt, m) {
   m.doc() = "prt: Precomputed Radiance Transfer (docs/PYTHON.md)";
+  // The renderer's thread stops before the interpreter does (GlWorker).
+  py::module_::import("atexit").attr("register")(py::cpp_function([] {
+    if (!GlWorker::started()) return;
+    py::gil_scoped_release release;
+    GlWorker::get().stop();
+  }));
   m.attr("__version__") = PRT_VERSION;
   m.attr("MAX_BANDS") = prt::sh::kMaxBands;
   // prt::Error (a user's mistake, naming the file or option) -> prt.Error.
@@ -1070,6 +1178,172 @@ PYBIND11_MODULE(_prt, m) {
       "float32 (E, V, 3). gloss: the Phong exponent e >= 0 (--gloss, 16); specular: the lobe's strength rho_s "
       ">= 0 (--specular, 0.5); diffuse: rho_d, a number or (r, g, b) in [0, 1] (--diffuse; None: the "
       "transfer's own albedo). docs/GLOSSY.md.");
+
+  // ---- rendering (prt/render.h; docs/RUNTIME.md) ----
+  m.def(
+      "render",
+      [](const py::object& transfer, const prt::Mesh& mesh, const py::object& map, int width, int height,
+         const py::object& camera, double fov, const py::object& rotate, const py::object& exposure,
+         const std::string& tone_map, bool linear, const py::object& shading, const py::object& bands_arg,
+         double gloss, double specular, const py::object& diffuse, const py::object& deform, double amount) {
+        const bool is_zh = py::isinstance<PyZhTransfer>(transfer);
+        if (!is_zh && !py::isinstance<PyTransfer>(transfer))
+          throw Error("transfer: expected a Transfer or a ZhTransfer (read_transfer, precompute, compress, read_zh, "
+                      "fit_zh); wavelet transfers render with the prt command");
+        const PyTransfer* p = is_zh ? nullptr : &transfer.cast<const PyTransfer&>();
+        const PyZhTransfer* z = is_zh ? &transfer.cast<const PyZhTransfer&>() : nullptr;
+        const std::string& source = is_zh ? z->source : p->source;
+        if (is_zh)
+          prt::check_matches(z->z, mesh, source);
+        else
+          prt::check_matches(p->t, mesh, source);
+        const int file_bands = is_zh ? z->z.bands : p->t.bands;
+        const bool glossy = !is_zh && p->t.glossy;
+        if (file_bands > prt::kMaxRenderBands)
+          throw Error(source + ": " + std::to_string(file_bands) + " bands; the renderer draws at most " +
+                      std::to_string(prt::kMaxRenderBands));
+        if (width < 1 || height < 1 || width > 16384 || height > 16384)
+          throw Error("width, height: 1 to 16384 pixels each, got " + std::to_string(width) + " x " +
+                      std::to_string(height));
+        if (!std::isfinite(fov) || fov <= 0 || fov >= 180) throw Error("fov: degrees in (0, 180), got " + number_text(fov));
+        const int bands = bands_arg.is_none() ? file_bands : int_arg(bands_arg, "bands");
+        if (bands < 1 || bands > file_bands)
+          throw Error("bands: 1 to the transfer's " + std::to_string(file_bands) + ", got " + std::to_string(bands));
+        // The shading: the renderer's default for the file (glossy: the lobe too), or the one named.
+        const prt::Shading shade = [&] {
+          if (shading.is_none()) return glossy ? prt::Shading::Glossy : prt::Shading::Transfer;
+          try {
+            return prt::parse_shading(shading.cast<std::string>());
+          } catch (const Error& e) {
+            throw Error(std::string("shading: ") + e.what());
+          }
+        }();
+        if (!glossy && (gloss != 16.0 || specular != 0.5 || !diffuse.is_none()))
+          throw Error(source + ": gloss, specular and diffuse need a glossy transfer (precompute(material='glossy'))");
+        glm::dvec3 rho_d(-1.0);
+        if (!diffuse.is_none()) {
+          const FArray d = real_array<float>(diffuse, "diffuse");
+          if (d.ndim() == 0) rho_d = glm::dvec3(d.data()[0]);
+          else if (d.ndim() == 1 && d.shape(0) == 3) rho_d = {d.data()[0], d.data()[1], d.data()[2]};
+          else throw Error("diffuse: expected rho_d, a number or 3 numbers r, g, b, got shape " + shape_text(d));
+        }
+        std::optional<prt::Deform> pose;
+        if (!deform.is_none()) {
+          if (!is_zh) throw Error(source + ": deform needs a zonal-harmonic transfer (fit_zh; docs/LDPRT.md)");
+          pose = prt::parse_deform(deform.cast<std::string>());
+          if (!std::isfinite(amount)) throw Error("amount: must be finite (0: the rest pose, 1: the whole angle)");
+        }
+        prt::Display display;
+        try {
+          display.tone_map = prt::parse_tone_map(tone_map);
+        } catch (const Error& e) {
+          throw Error(std::string("tone_map: ") + e.what());
+        }
+        const bool auto_exposure = py::isinstance<py::str>(exposure) && exposure.cast<std::string>() == "auto";
+        if (!auto_exposure) {
+          const DArray ev = real_array<double>(exposure, "exposure");
+          if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
+          display.exposure = ev.data()[0];
+        }
+        const glm::dmat3 R = rotate.is_none() ? glm::dmat3(1.0) : to_rotation(rotate, "rotate");
+        prt::Camera cam;
+        std::optional<prt::Mesh> framed;
+        if (pose && pose->kind != prt::Deform::Kind::None) {  // framed at rest and at its most deformed, as prt render
+          framed.emplace();
+          framed->positions = mesh.positions;
+          const prt::Mesh posed = prt::deform_mesh(mesh, *pose);
+          framed->positions.insert(framed->positions.end(), posed.positions.begin(), posed.positions.end());
+        }
+        cam = prt::framing_camera(framed ? *framed : mesh, fov, double(width) / height);
+        if (!camera.is_none()) {
+          py::object eye, target, up;
+          if (py::isinstance<py::dict>(camera)) {
+            const py::dict d = camera.cast<py::dict>();
+            for (const auto& [k, v] : d) {
+              const std::string key = py::str(k);
+              if (key == "eye") eye = py::reinterpret_borrow<py::object>(v);
+              else if (key == "target") target = py::reinterpret_borrow<py::object>(v);
+              else if (key == "up") up = py::reinterpret_borrow<py::object>(v);
+              else throw Error("camera: unknown key '" + key + "' (eye, target, up)");
+            }
+            if (!eye || !target) throw Error("camera: a dict needs 'eye' and 'target' (and 'up', default +Y)");
+          } else {
+            const DArray c = real_array<double>(camera, "camera");
+            if (!(c.ndim() == 2 && (c.shape(0) == 2 || c.shape(0) == 3) && c.shape(1) == 3))
+              throw Error("camera: expected (eye, target) or (eye, target, up), 3 numbers each, or a dict; got shape " +
+                          shape_text(c));
+            cam.eye = {c.at(0, 0), c.at(0, 1), c.at(0, 2)};
+            cam.target = {c.at(1, 0), c.at(1, 1), c.at(1, 2)};
+            cam.up = c.shape(0) == 3 ? glm::dvec3(c.at(2, 0), c.at(2, 1), c.at(2, 2)) : glm::dvec3(0, 1, 0);
+          }
+          const auto point = [](const py::object& o, const char* what) {
+            const DArray a = real_array<double>(o, what);
+            if (a.ndim() != 1 || a.shape(0) != 3) throw Error(std::string(what) + ": 3 numbers, got shape " + shape_text(a));
+            return glm::dvec3(a.at(0), a.at(1), a.at(2));
+          };
+          if (eye) {
+            cam.eye = point(eye, "camera eye");
+            cam.target = point(target, "camera target");
+            cam.up = up ? point(up, "camera up") : glm::dvec3(0, 1, 0);
+          }
+        }
+        cam.fov_deg = fov;
+        prt::EnvMap loaded;
+        const prt::EnvMap* e = &map_argument(map, loaded);
+        prt::require_finite(*e);
+        std::vector<glm::dvec3> light, rotated;
+        prt::Image img;
+        {
+          py::gil_scoped_release release;
+          light = prt::project(*e, file_bands);
+          if (auto_exposure) display.exposure = prt::auto_exposure(file_bands >= 3 ? light : prt::project(*e, 3));
+          std::fill(light.begin() + std::ptrdiff_t(std::size_t(bands) * bands), light.end(), glm::dvec3(0.0));
+          rotated.resize(light.size());
+          prt::sh::Rotation(file_bands, R).apply(light, rotated);
+          img = GlWorker::get().run([&](prt::Renderer& r) {
+            r.set_environment(*e);
+            try {
+              if (is_zh)
+                r.set_mesh(mesh, z->z);
+              else if (p->compressed)
+                r.set_mesh(mesh, *p->compressed);
+              else
+                r.set_mesh(mesh, p->t);
+              r.set_band_limit(bands);
+              r.set_shading(shade);
+              if (glossy) r.set_glossy(gloss, specular, rho_d);
+            } catch (const prt::NoGlContext&) {
+              throw;
+            } catch (const Error& x) {
+              throw Error(source + ": " + x.what());
+            }
+            if (pose) r.set_pose(*pose, amount);
+            r.set_lighting(rotated);
+            r.set_environment_rotation(R);
+            return r.render(cam, width, height);
+          });
+          prt::finish_frame(img.rgb, display, linear);
+        }
+        return copy(img.rgb.data(), {py::ssize_t(img.height), py::ssize_t(img.width), 3});
+      },
+      py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("width") = 512,
+      py::arg("height") = 512, py::arg("camera") = py::none(), py::arg("fov") = 40.0, py::arg("rotate") = py::none(),
+      py::arg("exposure") = "auto", py::arg("tone_map") = "clamp", py::arg("linear") = false,
+      py::arg("shading") = py::none(), py::arg("bands") = py::none(), py::arg("gloss") = 16.0,
+      py::arg("specular") = 0.5, py::arg("diffuse") = py::none(), py::arg("deform") = py::none(),
+      py::arg("amount") = 1.0,
+      "A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the "
+      "first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is "
+      "the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 "
+      "matrix or yaw, pitch, roll degrees). camera: None (the framing camera: a three-quarter view from above that "
+      "frames every vertex), (eye, target[, up]) or a dict; fov: vertical degrees. exposure: stops or 'auto' (a "
+      "white diffuse surface facing the brightest light shows at 1). Values: the tone map's display values in "
+      "[0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear "
+      "radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', "
+      "'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, "
+      "else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform "
+      "('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose. Raises prt.Error where no "
+      "OpenGL 4.5 context can be had.");
 
   // ---- info and verify ----
   m.def(

@@ -127,11 +127,6 @@ Look parse_look(const LookArgs& a, int sh_bands, bool wavelet, bool glossy) {
   return look;
 }
 
-double auto_exposure(const std::vector<glm::dvec3>& light) {
-  const double peak = sh::peak_diffuse_radiance(light);
-  return peak > 0 ? std::clamp(-std::log2(peak), -64.0, 64.0) : 0.0;
-}
-
 std::vector<glm::dvec3> windowed_lighting(std::vector<glm::dvec3> light, int bands, sh::Window window) {
   const std::size_t n = std::min(light.size(), std::size_t(bands) * bands);
   std::fill(light.begin() + std::ptrdiff_t(n), light.end(), glm::dvec3(0.0));
@@ -143,13 +138,7 @@ void write_frame(const std::string& path, Image img, const Display& d) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   const bool linear = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff";
-  if (linear) {
-    const float gain = float(std::exp2(d.exposure));
-    if (gain != 1.0f)
-      for (float& v : img.rgb) v *= gain;
-  } else {
-    tone_map(img.rgb, d);
-  }
+  finish_frame(img.rgb, d, linear);
   write_image(path, img.width, img.height, img.rgb);
 }
 

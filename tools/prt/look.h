@@ -46,11 +46,6 @@ struct Look {
 // default for it), others Shading::Transfer.
 Look parse_look(const LookArgs& args, int sh_bands, bool wavelet, bool glossy = false);
 
-// --exposure auto: the stops that show the brightest a white Lambertian
-// surface can be under this lighting (sh::peak_diffuse_radiance, 3 bands of
-// `light`, rotation-invariant) at 1; 0 for lighting nowhere positive.
-double auto_exposure(const std::vector<glm::dvec3>& light);
-
 // The lighting to upload: the first `bands` bands of `light` windowed (the
 // window's width is bands + 1 for Hanning and Lanczos, so band bands-1 keeps
 // a non-zero weight; auto picks the weakest non-negative Hanning window),

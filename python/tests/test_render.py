@@ -1,0 +1,107 @@
+"""prt.render against prt render (docs/RUNTIME.md): the same frame, linear
+(what prt render writes to EXR) bit for bit, for a diffuse, a glossy, a
+compressed and a zonal-harmonic transfer (bent); the display values are the
+tone map of the linear ones; one context serves every call and thread."""
+import math
+import threading
+
+import numpy as np
+import pytest
+
+import prt
+from conftest import BANDS, ENV, ENV2, MESH, SAMPLES, SEED, run_prt
+
+TUBE = MESH.parent / "tube.obj"
+W, H = 96, 48  # 2:1, so the EXR reads back as a lat-long map
+
+
+def gl_or_skip():
+    t = prt.precompute(prt.make_mesh([[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 2, 1]]), bands=1, samples=1)
+    try:
+        prt.render(t, prt.make_mesh([[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 2, 1]]), ENV, width=2, height=1)
+    except prt.Error as e:
+        if "no OpenGL 4.5 context" in str(e):
+            pytest.skip(str(e))
+        raise
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    gl_or_skip()
+    d = tmp_path_factory.mktemp("render")
+    f = {"sh": d / "sh.prt", "glossy": d / "g.prt", "compressed": d / "c.prt", "zh": d / "z.prt"}
+    run_prt("precompute", MESH, "-o", f["sh"], "--bands", BANDS, "--samples", SAMPLES, "--seed", SEED, "-q")
+    run_prt("precompute", MESH, "-o", f["glossy"], "--material", "glossy", "--bands", BANDS, "--samples", SAMPLES,
+            "-q")
+    run_prt("compress", f["sh"], "-o", f["compressed"], "--clusters", 4, "--pca", 2, "-q")
+    run_prt("precompute", TUBE, "-o", f["zh"], "--basis", "zh", "--lobes", 2, "--bands", 3, "--samples", SAMPLES, "-q")
+    return f
+
+
+def cli_frame(tmp_path, mesh, transfer, env, *extra):
+    out = tmp_path / "frame.exr"
+    run_prt("render", mesh, transfer, env, "-o", out, "--width", W, "--height", H, *extra, "-q")
+    return prt.load_envmap(out, "latlong").pixels
+
+
+@pytest.mark.parametrize("kind,env,cli,kw", [
+    ("sh", ENV, ["--exposure", "0"], dict(exposure=0)),
+    ("sh", ENV2, ["--exposure", "1.5", "--rotate", "30,10,0", "--camera", "2,1.5,3,0,0.3,0,0,1,0", "--fov", "30"],
+     dict(exposure=1.5, rotate=(30, 10, 0), camera=((2, 1.5, 3), (0, 0.3, 0), (0, 1, 0)), fov=30)),
+    ("sh", ENV, ["--shading", "ao"], dict(shading="ao")),
+    ("glossy", ENV, ["--gloss", "8", "--specular", "0.7"], dict(gloss=8.0, specular=0.7)),
+    ("compressed", ENV2, ["--bands", "2"], dict(bands=2)),
+    ("zh", ENV, ["--deform", "bend:70"], dict(deform="bend:70")),
+])
+def test_linear_frame_is_prt_renders_exr(files, tmp_path, kind, env, cli, kw):
+    mesh_path = TUBE if kind == "zh" else MESH
+    want = cli_frame(tmp_path, mesh_path, files[kind], env, *cli)
+    t = prt.read_zh(files[kind]) if kind == "zh" else prt.read_transfer(files[kind])
+    got = prt.render(t, prt.load_mesh(mesh_path), env, width=W, height=H, linear=True, **kw)
+    assert got.shape == (H, W, 3) and got.dtype == np.float32
+    np.testing.assert_array_equal(got, want)
+
+
+def test_display_values_are_the_tone_map(files):
+    t, mesh = prt.read_transfer(files["sh"]), prt.load_mesh(MESH)
+    lin = prt.render(t, mesh, ENV, width=W, height=H, exposure=0.5, linear=True)  # times 2^0.5
+    for tone, f in [("clamp", lambda v: np.minimum(v, 1)), ("reinhard", lambda v: v / (1 + v))]:
+        shown = prt.render(t, mesh, ENV, width=W, height=H, exposure=0.5, tone_map=tone)
+        assert shown.min() >= 0 and shown.max() <= 1
+        np.testing.assert_allclose(shown, f(np.maximum(lin, 0)), rtol=1e-6, atol=1e-7)
+    # auto exposure: a white diffuse surface facing the brightest light at 1 (some pixels reach it).
+    auto = prt.render(t, mesh, ENV, width=W, height=H, linear=True)
+    assert 0.2 < auto.max()
+
+
+def test_one_context_serves_every_thread(files):
+    t, mesh = prt.read_transfer(files["sh"]), prt.load_mesh(MESH)
+    want = prt.render(t, mesh, ENV, width=32, height=32, exposure=0)
+    out = [None] * 4
+
+    def body(i):
+        out[i] = prt.render(t, mesh, ENV, width=32, height=32, exposure=0)
+
+    threads = [threading.Thread(target=body, args=(i,)) for i in range(4)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    for o in out:
+        np.testing.assert_array_equal(o, want)
+
+
+def test_render_arguments_are_checked(files):
+    t, mesh = prt.read_transfer(files["sh"]), prt.load_mesh(MESH)
+    for kw, words in [({"width": 0}, "width"), ({"fov": 180}, "fov"), ({"bands": 9}, "bands"),
+                      ({"shading": "shiny"}, "shading"), ({"tone_map": "filmic"}, "tone_map"),
+                      ({"exposure": math.nan}, "exposure"), ({"camera": ((0, 0, 3),)}, "camera"),
+                      ({"camera": {"eye": (0, 0, 3)}}, "camera"), ({"gloss": 4.0}, "glossy"),
+                      ({"deform": "bend:30"}, "zonal-harmonic"), ({"rotate": 2 * np.eye(3)}, "rotate"),
+                      ({"camera": ((0, 0, 0), (0, 0, 0))}, "camera|eye")]:
+        with pytest.raises(prt.Error, match=words):
+            prt.render(t, mesh, ENV, **{"width": 8, "height": 8, **kw})
+    with pytest.raises(prt.Error, match="different mesh|mesh hash"):
+        prt.render(t, prt.load_mesh(TUBE), ENV, width=8, height=8)
+    with pytest.raises(prt.Error, match="Transfer or a ZhTransfer"):
+        prt.render("t.prt", mesh, ENV)
