@@ -14,6 +14,7 @@
 #include <prt/error.h>
 #include <prt/file_info.h>
 #include <prt/filter.h>
+#include <prt/gltf.h>
 #include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
@@ -48,6 +49,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <filesystem>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -1344,6 +1346,73 @@ PYBIND11_MODULE(_prt, m) {
       "else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform "
       "('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose. Raises prt.Error where no "
       "OpenGL 4.5 context can be had.");
+
+  // ---- glTF export (prt/gltf.h; docs/FORMAT.md "glTF export") ----
+  m.def(
+      "export_gltf",
+      [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& path, const py::object& bake,
+         const py::object& rotate, const py::object& exposure) {
+        prt::check_matches(p.t, mesh, p.source);
+        const std::string out = path_of(path);
+        if (bake.is_none() && (!rotate.is_none() || !exposure.is_none()))
+          throw Error(std::string(rotate.is_none() ? "exposure" : "rotate") +
+                      ": applies to the baked colours: give bake= (a map file) too");
+        const prt::Transfer t = p.compressed ? prt::decompress(*p.compressed) : p.t;
+        prt::GltfOptions opts;
+        opts.transfer_source = p.source == "<computed>" || p.source == "<compressed>"
+                                   ? std::string()
+                                   : std::filesystem::path(p.source).filename().string();
+        opts.generator = "prt " PRT_VERSION " (prt export)";
+        if (!bake.is_none()) {
+          // COLOR_0 as prt export --bake: the relit radiance times 2^exposure, clamped to [0, 1].
+          if (!is_path(bake)) throw Error("bake: expected a map file (str or os.PathLike), as prt export --bake");
+          const std::string map = path_of(bake);
+          prt::EnvMap env = prt::load_envmap(map);
+          prt::require_finite(env);
+          std::vector<glm::dvec3> light = prt::project(env, t.bands);
+          double euler[3] = {0, 0, 0};
+          if (!rotate.is_none()) {
+            const DArray r = real_array<double>(rotate, "rotate");
+            if (r.ndim() != 1 || r.shape(0) != 3)
+              throw Error("rotate: (yaw, pitch, roll) in degrees, as prt export --rotate (recorded in extras)");
+            for (int k = 0; k < 3; ++k) euler[k] = r.data()[k];
+            std::vector<glm::dvec3> turned(light.size());
+            prt::sh::Rotation(t.bands, prt::sh::rotation_from_euler(euler[0], euler[1], euler[2])).apply(light, turned);
+            light.swap(turned);
+          }
+          const std::vector<glm::vec3> rgb = prt::relight(t, mesh, light);
+          prt::Display clamp{0.0, prt::ToneMap::Clamp};
+          if (!exposure.is_none()) {
+            if (py::isinstance<py::str>(exposure) && exposure.cast<std::string>() == "auto") {
+              clamp.exposure = prt::auto_exposure(light);
+            } else {
+              const DArray ev = real_array<double>(exposure, "exposure");
+              if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
+              clamp.exposure = ev.data()[0];
+            }
+          }
+          opts.colors.resize(rgb.size());
+          for (std::size_t v = 0; v < rgb.size(); ++v)
+            for (int c = 0; c < 3; ++c) {
+              if (!std::isfinite(rgb[v][c]))
+                throw Error("bake: the relit radiance of vertex " + std::to_string(v) + " overflows float; scale "
+                            "the map down");
+              opts.colors[v][c] = prt::tone_map(rgb[v][c], clamp);
+            }
+          opts.bake.map = std::filesystem::path(map).filename().string();
+          for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
+          opts.bake.exposure = clamp.exposure;
+        }
+        py::gil_scoped_release release;
+        prt::write_gltf(out, mesh, t, opts);
+      },
+      py::arg("transfer"), py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("bake") = py::none(),
+      py::arg("rotate") = py::none(), py::arg("exposure") = py::none(),
+      "Writes the mesh and its SH transfer as glTF 2.0 (.glb binary, .gltf JSON; docs/FORMAT.md \"glTF "
+      "export\"), as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes "
+      "_PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in "
+      "asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, "
+      "roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.");
 
   // ---- info and verify ----
   m.def(
