@@ -30,6 +30,7 @@ from ._prt import (  # noqa: F401
     data_dir,
     deform,
     export_gltf,
+    export_web,
     fit_zh,
     info,
     load_envmap,
@@ -64,5 +65,5 @@ __all__ = [
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
     "WaveletTransfer", "read_wavelet", "compress", "compression_error",
-    "info", "verify", "render", "export_gltf",
+    "info", "verify", "render", "export_gltf", "export_web",
 ]

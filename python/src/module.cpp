@@ -30,6 +30,7 @@
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/verify.h>
+#include <prt/web_export.h>
 #include <prt/vertex_csv.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>
@@ -1348,17 +1349,21 @@ PYBIND11_MODULE(_prt, m) {
       "OpenGL 4.5 context can be had.");
 
   // ---- glTF export (prt/gltf.h; docs/FORMAT.md "glTF export") ----
-  m.def(
-      "export_gltf",
-      [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& path, const py::object& bake,
-         const py::object& rotate, const py::object& exposure) {
+  // What prt export writes for a transfer: its rows (a compressed one's
+  // reconstructed) and the glTF options, COLOR_0 baked from `bake` as --bake.
+  struct Export {
+    prt::Transfer t;
+    prt::GltfOptions opts;
+  };
+  const auto gltf_export = [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& bake,
+                              const py::object& rotate, const py::object& exposure) {
         prt::check_matches(p.t, mesh, p.source);
-        const std::string out = path_of(path);
         if (bake.is_none() && (!rotate.is_none() || !exposure.is_none()))
           throw Error(std::string(rotate.is_none() ? "exposure" : "rotate") +
                       ": applies to the baked colours: give bake= (a map file) too");
-        const prt::Transfer t = p.compressed ? prt::decompress(*p.compressed) : p.t;
-        prt::GltfOptions opts;
+        Export x{p.compressed ? prt::decompress(*p.compressed) : p.t, {}};
+        const prt::Transfer& t = x.t;
+        prt::GltfOptions& opts = x.opts;
         opts.transfer_source = p.source == "<computed>" || p.source == "<compressed>"
                                    ? std::string()
                                    : std::filesystem::path(p.source).filename().string();
@@ -1403,8 +1408,17 @@ PYBIND11_MODULE(_prt, m) {
           for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
           opts.bake.exposure = clamp.exposure;
         }
+        return x;
+  };
+
+  m.def(
+      "export_gltf",
+      [gltf_export](const PyTransfer& p, const prt::Mesh& mesh, const py::object& path, const py::object& bake,
+                    const py::object& rotate, const py::object& exposure) {
+        const std::string out = path_of(path);
+        const Export x = gltf_export(p, mesh, bake, rotate, exposure);
         py::gil_scoped_release release;
-        prt::write_gltf(out, mesh, t, opts);
+        prt::write_gltf(out, mesh, x.t, x.opts);
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("bake") = py::none(),
       py::arg("rotate") = py::none(), py::arg("exposure") = py::none(),
@@ -1413,6 +1427,65 @@ PYBIND11_MODULE(_prt, m) {
       "_PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in "
       "asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, "
       "roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.");
+
+  m.def(
+      "export_web",
+      [gltf_export](const PyTransfer& p, const prt::Mesh& mesh, const py::object& dir, const py::object& env,
+                    const py::object& camera, double fov, const py::object& rotate, const py::object& exposure,
+                    const std::string& tone_map, bool turn, bool force, const py::object& bake) {
+        // The model: the glTF prt export writes (its bake recorded with the page's rotate and exposure, as the
+        // command's --bake, --rotate and --exposure serve both).
+        const Export x = gltf_export(p, mesh, bake, bake.is_none() ? py::none() : rotate,
+                                     bake.is_none() ? py::none() : exposure);
+        prt::WebPage w;
+        w.dir = path_of(dir);
+        w.force = force;
+        w.turn = turn;
+        w.maps = prt::web_maps(env.is_none() ? std::string() : path_of(env), w.initial);
+        if (!std::isfinite(fov) || fov <= 0 || fov >= 180) throw Error("fov: degrees in (0, 180), got " + number_text(fov));
+        w.camera = prt::framing_camera(mesh, fov, 1.0);
+        if (!camera.is_none()) {
+          const DArray c = real_array<double>(camera, "camera");
+          if (!(c.ndim() == 2 && (c.shape(0) == 2 || c.shape(0) == 3) && c.shape(1) == 3))
+            throw Error("camera: expected (eye, target) or (eye, target, up), 3 numbers each; got shape " + shape_text(c));
+          w.camera.eye = {c.at(0, 0), c.at(0, 1), c.at(0, 2)};
+          w.camera.target = {c.at(1, 0), c.at(1, 1), c.at(1, 2)};
+          w.camera.up = c.shape(0) == 3 ? glm::dvec3(c.at(2, 0), c.at(2, 1), c.at(2, 2)) : glm::dvec3(0, 1, 0);
+        }
+        w.camera.fov_deg = fov;
+        if (!rotate.is_none()) {
+          const DArray r = real_array<double>(rotate, "rotate");
+          if (r.ndim() != 1 || r.shape(0) != 3) throw Error("rotate: (yaw, pitch, roll) in degrees");
+          for (int k = 0; k < 3; ++k) w.rotate[k] = r.data()[k];
+        }
+        try {
+          w.display.tone_map = prt::parse_tone_map(tone_map);
+        } catch (const Error& e) {
+          throw Error(std::string("tone_map: ") + e.what());
+        }
+        if (exposure.is_none() || (py::isinstance<py::str>(exposure) && exposure.cast<std::string>() == "auto")) {
+          w.display.exposure = prt::auto_exposure(prt::project(prt::load_envmap(w.initial), 3));
+        } else {
+          const DArray ev = real_array<double>(exposure, "exposure");
+          if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
+          w.display.exposure = ev.data()[0];
+        }
+        py::gil_scoped_release release;
+        std::unique_ptr<prt::StagedPage> page = prt::stage_web_page(
+            w, x.t.bands, [&](const std::string& path) { prt::write_gltf(path, mesh, x.t, x.opts); }, {}, true);
+        page->commit();
+      },
+      py::arg("transfer"), py::arg("mesh"), py::arg("dir"), py::kw_only(), py::arg("env") = py::none(),
+      py::arg("camera") = py::none(), py::arg("fov") = 40.0, py::arg("rotate") = py::none(),
+      py::arg("exposure") = py::none(), py::arg("tone_map") = "clamp", py::arg("turn") = false, py::arg("force") = false,
+      py::arg("bake") = py::none(),
+      "Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does, the same "
+      "files: index.html and its scripts, model.glb, lighting.json (every map's SH), maps/ (the bundled maps, "
+      "and `env` first when given: a file or a bundled map's name). Its initial state: camera (None: the "
+      "framing camera; (eye, target[, up])), fov, rotate (yaw, pitch, roll), exposure (stops or 'auto'; None: "
+      "'auto' for the page, 0 for a bake, as the command), "
+      "tone_map, turn. An existing non-empty dir is refused unless force=True; written whole or not at all. "
+      "bake: COLOR_0 in the model, as export_gltf (turned by rotate, exposure as given).");
 
   // ---- info and verify ----
   m.def(

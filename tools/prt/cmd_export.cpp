@@ -5,7 +5,6 @@
 #include "look.h"
 #include "progress.h"
 #include "scene.h"
-#include "web_export.h"
 
 #include <prt/compressed_transfer.h>
 #include <prt/envmap.h>
@@ -18,6 +17,7 @@
 #include <prt/scene.h>
 #include <prt/projection.h>
 #include <prt/render.h>
+#include <prt/web_export.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 

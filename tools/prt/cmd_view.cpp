@@ -15,6 +15,7 @@
 #include <prt/paths.h>
 #include <prt/projection.h>
 #include <prt/render.h>
+#include <prt/web_export.h>
 #include <prt/deform.h>
 #include <prt/rotation.h>
 #include <prt/skin.h>

@@ -150,18 +150,6 @@ void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double eul
   light.swap(r);
 }
 
-std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir) {
-  std::set<std::filesystem::path> found;
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    std::string ext = e.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (e.is_regular_file(ec) && (ext == ".exr" || ext == ".hdr" || ext == ".pfm"))
-      found.insert(std::filesystem::weakly_canonical(e.path(), ec));
-  }
-  return found;
-}
-
 namespace {
 
 // Poses of the animation, evenly spaced over one loop, that the camera

@@ -74,11 +74,6 @@ void release_uploaded(Scene& scene);
 // light a transfer with (sh::rotation_from_euler, sh::Rotation).
 void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double euler[3]);
 
-// The HDR map files (.exr, .hdr, .pfm, any case) directly in `dir`,
-// canonical and sorted; none when `dir` cannot be read. The maps prt view's
-// N / P and prt export --web's picker offer.
-std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir);
-
 // ---- a skinned glTF MESH whose zonal-harmonic transfer follows its animation
 // (prt render and prt view skin it on the GPU; docs/LDPRT.md) ----
 

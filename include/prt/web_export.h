@@ -1,5 +1,6 @@
-// The relighting web page of prt export --web (docs/WEB.md): a static
-// directory that relights the exported glTF in WebGL2 as prt render draws it.
+// prt/web_export.h - the relighting web page of prt export --web and
+// prt.export_web (docs/WEB.md): a static directory that relights the
+// exported glTF in WebGL2 as prt render draws it.
 #pragma once
 
 #include <prt/mesh.h>
@@ -7,12 +8,14 @@
 
 #include <glm/vec4.hpp>
 
+#include <filesystem>
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
-namespace prt::cli {
+namespace prt {
 
 struct WebPage {
   std::string dir;                // the directory to write
@@ -31,6 +34,11 @@ struct WebPage {
   std::vector<glm::vec4> lightmap_albedo;
   int lightmap_width = 0, lightmap_height = 0;
 };
+
+// The HDR map files (.exr, .hdr, .pfm, any case) directly in `dir`,
+// canonical and sorted; none when `dir` cannot be read. The maps prt view's
+// N / P and the web page's picker offer.
+std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir);
 
 // The bundled maps (prt::data_dir()/envmaps: *.exr, *.hdr, *.pfm), sorted;
 // with `env` not empty, that file too (first when not among them); `env`
@@ -76,4 +84,4 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
                                            const std::function<void(const std::string& path)>& write_model,
                                            const std::function<bool()>& cancelled, bool quiet);
 
-}  // namespace prt::cli
+}  // namespace prt

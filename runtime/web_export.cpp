@@ -1,7 +1,5 @@
 // prt export --web: the static relighting page. See web_export.h, docs/WEB.md.
-#include "web_export.h"
-
-#include "scene.h"
+#include <prt/web_export.h>
 
 #include <prt/envmap.h>
 #include <prt/error.h>
@@ -21,13 +19,16 @@
 #include <set>
 #include <unistd.h>
 
-namespace prt::cli {
+namespace prt {
 
-// The page's sources (web/*), embedded by tools/prt/CMakeLists.txt.
+// The page's sources (web/*), embedded by runtime/CMakeLists.txt.
+namespace detail {
 extern const char* const web_index_html;
 extern const char* const web_prt_sh_js;
 extern const char* const web_prt_png_js;
 extern const char* const web_prt_viewer_js;
+}  // namespace detail
+using detail::web_index_html, detail::web_prt_sh_js, detail::web_prt_png_js, detail::web_prt_viewer_js;
 
 namespace fs = std::filesystem;
 
@@ -91,6 +92,18 @@ void write_thumbnail(const fs::path& path, const std::vector<float>& rgb, int wi
 }
 
 }  // namespace
+
+std::set<std::filesystem::path> map_files_in(const std::filesystem::path& dir) {
+  std::set<std::filesystem::path> found;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    std::string ext = e.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (e.is_regular_file(ec) && (ext == ".exr" || ext == ".hdr" || ext == ".pfm"))
+      found.insert(std::filesystem::weakly_canonical(e.path(), ec));
+  }
+  return found;
+}
 
 std::vector<std::string> web_maps(const std::string& env, std::string& initial) {
   const std::set<fs::path> bundled = map_files_in(data_dir() / "envmaps");
@@ -244,4 +257,4 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
   return staged;
 }
 
-}  // namespace prt::cli
+}  // namespace prt
