@@ -231,3 +231,56 @@ def test_scalars_that_must_be_finite(cube):
             prt.rotation_from_euler(yaw, 0, 0)
     with pytest.raises(prt.Error, match="amount"):
         prt.deform(cube, "bend:30", math.nan)
+
+
+def public_callables():
+    """(name, callable) of every public function and method of the module."""
+    out = []
+    for name in prt.__all__:
+        obj = getattr(prt, name)
+        if isinstance(obj, type):
+            for attr, value in vars(obj).items():
+                if not attr.startswith("__") and callable(value) and not isinstance(value, property):
+                    out.append((f"{name}.{attr}", value))
+        elif callable(obj):
+            out.append((name, obj))
+    return out
+
+
+SCALAR_BAD = {
+    "int": [(True, "bool"), (2.5, "whole number"), ("3", "whole number"), (2 ** 64, "out of range"),
+            (None, "whole number")],
+    "float": [(True, "bool"), (math.nan, "finite"), (math.inf, "finite"), (-math.inf, "finite"),
+              ("1.5", "real number"), (1j, "real number")],
+}
+
+
+def test_every_scalar_argument_is_checked():
+    """Every int and float parameter of every public function and method,
+    by position or keyword: bools, fractions, strings, values out of range,
+    NaN and inf are refused with a prt.Error naming the parameter (before
+    anything else is looked at: the other arguments are placeholders)."""
+    checked = 0
+    for fname, fn in public_callables():
+        specs = prt._scalar_params(fn.__doc__)
+        placeholder = {p: (1 if k == "int" else 1.0) for _, p, k in specs}  # valid values before the one tried
+        by_position = {p_: p for p_, p, _ in specs if p_ is not None}
+        for position, param, kind in specs:
+            for value, words in SCALAR_BAD[kind]:
+                if position is not None:
+                    before = [placeholder.get(by_position.get(i), None) for i in range(position)]
+                    call = lambda: fn(*(before + [value]))  # noqa: E731
+                else:
+                    call = lambda: fn(**{param: value})  # noqa: E731
+                with pytest.raises(prt.Error) as info:
+                    call()
+                assert str(info.value).startswith(param + ":") and words in str(info.value), \
+                    f"{fname}({param}={value!r}): {info.value}"
+            checked += 1
+    assert checked >= 60, checked  # every function's counts, sizes, seeds, angles and weights
+
+
+def test_scalar_checks_keep_the_docs_and_valid_values():
+    assert prt.precompute.__doc__.startswith("precompute(")
+    assert prt.rotation_from_euler(30, 0, 0).shape == (3, 3)
+    assert prt.rotation_from_euler(np.float32(30), np.int64(0), 0).shape == (3, 3)  # numpy scalars are numbers
