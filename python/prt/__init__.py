@@ -77,8 +77,11 @@ __all__ = [
 # or float parameters is wrapped here: each such argument, given by position
 # or keyword, is checked first (a whole number that is not a bool, within
 # the C int's range, or for a seed within [0, 2^64); a real number that is
-# finite), and refused with a prt.Error naming it. The wrapper keeps the
-# function's __doc__ (help() and the stubs read it).
+# finite), and refused with a prt.Error naming it. And where pybind11 cannot
+# convert an argument (a str where a Mesh is meant, a keyword the function
+# does not have), its TypeError, which names no argument, becomes a prt.Error
+# that names it. The wrapper keeps the function's __doc__ (help() and the
+# stubs read it).
 import functools as _functools
 import re as _re
 
@@ -109,6 +112,70 @@ def _scalar_params(doc):
     return list(specs.values())
 
 
+def _signatures(doc):
+    """Each overload's parameters: [[(name, type or None, positional)], ...]."""
+    out = []
+    for line in (doc or "").splitlines():
+        m = _SIGNATURE.match(_re.sub(r"^\d+\. ", "", line.strip()))
+        if not m:
+            continue
+        params, keyword_only = [], False
+        for arg in [a.strip() for a in _re.split(r",(?![^\[]*\])", m.group(2)) if a.strip()]:
+            if arg == "*":
+                keyword_only = True
+                continue
+            am = _re.match(r"^(\w+)(?:: ([\w.]+))?", arg)
+            if am:
+                params.append((am.group(1), am.group(2), not keyword_only))
+        out.append(params)
+    return out
+
+
+_PY_TYPES = {"str": str, "bool": (bool, _numpy.bool_), "int": (int, _numpy.integer),
+             "float": (int, float, _numpy.integer, _numpy.floating)}
+
+
+def _expected(typ):
+    """(isinstance test, name) of a pybind11 type name; None for any object."""
+    if typ is None or typ == "object":
+        return None
+    if typ.startswith("prt._prt."):
+        cls = globals().get(typ[len("prt._prt."):])
+        return (cls, "a prt." + typ[len("prt._prt."):]) if cls is not None else None
+    if typ in _PY_TYPES:
+        return (_PY_TYPES[typ], {"str": "a str", "bool": "a bool", "int": "a whole number",
+                                 "float": "a real number"}[typ])
+    return None
+
+
+def _explain(name, doc, args, kwargs):
+    """Which argument pybind11 could not convert, as prt.Error's message."""
+    overloads = _signatures(doc)
+    names = {p for params in overloads for p, _, _ in params}
+    for k in kwargs:
+        if k not in names:
+            return f"{k}: not an argument of {name} (its arguments: {', '.join(sorted(names))})"
+    expected = {}
+    for params in overloads:
+        positional = [p for p in params if p[2]]
+        for i, (p, typ, _) in enumerate(positional):
+            if i < len(args):
+                expected.setdefault((i, p), []).append(_expected(typ))
+        for p, typ, _ in params:
+            if p in kwargs:
+                expected.setdefault((None, p), []).append(_expected(typ))
+    for (i, p), tests in sorted(expected.items(), key=lambda kv: (kv[0][0] is None, kv[0][0] or 0)):
+        value = args[i] if i is not None else kwargs[p]
+        if any(t is None or isinstance(value, t[0]) for t in tests):
+            continue
+        wanted = " or ".join(dict.fromkeys(t[1] for t in tests))
+        return f"{p}: expected {wanted}, got {type(value).__name__} {value!r:.60}"
+    most = max(len([p for p in params if p[2]]) for params in overloads) if overloads else 0
+    if len(args) > most:
+        return f"{name}: takes at most {most} positional arguments, got {len(args)}"
+    return f"{name}: missing or mistyped arguments (help(prt.{name}) lists them)"
+
+
 def _check_scalar(param, kind, value):
     if isinstance(value, (bool, _numpy.bool_)):
         raise Error(f"{param}: a bool ({value}); a {'whole' if kind == 'int' else 'real'} number is expected")
@@ -125,10 +192,8 @@ def _check_scalar(param, kind, value):
         raise Error(f"{param}: {float(value)}; must be finite")
 
 
-def _checked(fn):
+def _checked(fn, name):
     specs = _scalar_params(fn.__doc__)
-    if not specs:
-        return fn
 
     @_functools.wraps(fn)
     def call(*args, **kwargs):
@@ -137,7 +202,12 @@ def _checked(fn):
                 _check_scalar(param, kind, args[position])
             elif param in kwargs:
                 _check_scalar(param, kind, kwargs[param])
-        return fn(*args, **kwargs)
+        try:
+            return fn(*args, **kwargs)
+        except TypeError as e:
+            if "incompatible function arguments" not in str(e) and "incompatible constructor" not in str(e):
+                raise
+            raise Error(_explain(name, fn.__doc__, args, kwargs)) from None
 
     return call
 
@@ -147,9 +217,7 @@ for _name in __all__:
     if isinstance(_obj, type):
         for _attr, _value in list(vars(_obj).items()):
             if not _attr.startswith("__") and callable(_value) and not isinstance(_value, property):
-                _wrapped = _checked(_value)
-                if _wrapped is not _value:
-                    setattr(_obj, _attr, _wrapped)
+                setattr(_obj, _attr, _checked(_value, f"{_name}.{_attr}"))
     elif callable(_obj) and not isinstance(_obj, type):
-        globals()[_name] = _checked(_obj)
+        globals()[_name] = _checked(_obj, _name)
 del _name, _obj

@@ -623,7 +623,13 @@ py::object rows_view(const PyTransfer& p, const std::vector<float>& a, py::handl
 bool is_path(const py::handle& h) {
   return py::isinstance<py::str>(h) || py::isinstance(h, py::module_::import("os").attr("PathLike"));
 }
-std::string path_of(const py::handle& h) { return py::str(py::module_::import("os").attr("fspath")(h)); }
+// A file name argument (str or os.PathLike) as a string; `what` names it.
+std::string path_of(const py::handle& h, const std::string& what) {
+  if (!is_path(h))
+    throw Error(what + ": expected a file name (str or os.PathLike), got " +
+                std::string(py::str(py::type::of(h).attr("__name__"))));
+  return py::str(py::module_::import("os").attr("fspath")(h));
+}
 
 prt::EnvMap map_from_array(const py::handle& obj);
 
@@ -639,7 +645,7 @@ std::optional<std::array<std::string, 6>> face_files(const py::handle& h) {
     throw Error("map: a list of " + std::to_string(py::len(seq)) +
                 " files; a cube's faces are six files +X, -X, +Y, -Y, +Z, -Z");
   std::array<std::string, 6> f;
-  for (std::size_t i = 0; i < 6; ++i) f[i] = path_of(seq[i]);
+  for (std::size_t i = 0; i < 6; ++i) f[i] = path_of(seq[i], "map");
   return f;
 }
 
@@ -647,7 +653,7 @@ std::optional<std::array<std::string, 6>> face_files(const py::handle& h) {
 // (loaded into `storage`, which is returned).
 const prt::EnvMap& map_argument(const py::object& map, prt::EnvMap& storage) {
   if (py::isinstance<prt::EnvMap>(map)) return map.cast<const prt::EnvMap&>();
-  storage = is_path(map) ? prt::load_envmap(path_of(map)) : map_from_array(map);
+  storage = is_path(map) ? prt::load_envmap(path_of(map, "map")) : map_from_array(map);
   return storage;
 }
 
@@ -768,7 +774,7 @@ PYBIND11_MODULE(_prt, m) {
         if (files) return prt::load_cube_faces(*files);
         if (mp == prt::Mapping::Faces || py::isinstance<py::list>(path) || py::isinstance<py::tuple>(path))
           throw Error("path: mapping 'faces' needs a list of six files +X, -X, +Y, -Y, +Z, -Z");
-        return prt::load_envmap(path_of(path), mp);
+        return prt::load_envmap(path_of(path, "path"), mp);
       },
       py::arg("path"), py::arg("mapping") = "auto",
       "Reads a map (EXR; HDR, PNG, ... through prt's OpenImageIO plugin). mapping: auto (from the shape), latlong, "
@@ -792,7 +798,7 @@ PYBIND11_MODULE(_prt, m) {
           py::gil_scoped_release release;
           c = prt::project(e, bands, q);
         } else if (is_path(map)) {
-          const std::string path = path_of(map);
+          const std::string path = path_of(map, "map");
           py::gil_scoped_release release;
           c = prt::project_file(path, bands, q, prt::parse_mapping(mapping)).coeffs;  // as prt project
         } else {
@@ -920,7 +926,7 @@ PYBIND11_MODULE(_prt, m) {
       [](const py::object& path, bool weld, bool file_normals, const std::string& weighting, bool uvs) {
         prt::MeshOptions o = mesh_options(weld, file_normals, weighting);
         o.uvs = uvs;
-        const std::string p = path_of(path);
+        const std::string p = path_of(path, "path");
         py::gil_scoped_release release;
         return prt::load_mesh(p, o);
       },
@@ -1027,7 +1033,7 @@ PYBIND11_MODULE(_prt, m) {
       .def(
           "write",
           [](const PyTransfer& p, const py::object& path) {
-            const std::string f = path_of(path);
+            const std::string f = path_of(path, "path");
             if (p.compressed)
               prt::write_compressed_transfer(f, *p.compressed);
             else
@@ -1044,7 +1050,7 @@ PYBIND11_MODULE(_prt, m) {
         return p.compressed ? prt::describe_transfer(*p.compressed) : prt::describe_transfer(p.t);
       });
 
-  m.def("read_transfer", [](const py::object& path) { return read_transfer(path_of(path)); }, py::arg("path"),
+  m.def("read_transfer", [](const py::object& path) { return read_transfer(path_of(path, "path")); }, py::arg("path"),
         "Reads an SH transfer file (compressed ones too: their rows are reconstructed); refuses wavelet files.");
 
   m.def(
@@ -1371,7 +1377,7 @@ PYBIND11_MODULE(_prt, m) {
         if (!bake.is_none()) {
           // COLOR_0 as prt export --bake: the relit radiance times 2^exposure, clamped to [0, 1].
           if (!is_path(bake)) throw Error("bake: expected a map file (str or os.PathLike), as prt export --bake");
-          const std::string map = path_of(bake);
+          const std::string map = path_of(bake, "bake");
           prt::EnvMap env = prt::load_envmap(map);
           prt::require_finite(env);
           std::vector<glm::dvec3> light = prt::project(env, t.bands);
@@ -1415,7 +1421,7 @@ PYBIND11_MODULE(_prt, m) {
       "export_gltf",
       [gltf_export](const PyTransfer& p, const prt::Mesh& mesh, const py::object& path, const py::object& bake,
                     const py::object& rotate, const py::object& exposure) {
-        const std::string out = path_of(path);
+        const std::string out = path_of(path, "path");
         const Export x = gltf_export(p, mesh, bake, rotate, exposure);
         py::gil_scoped_release release;
         prt::write_gltf(out, mesh, x.t, x.opts);
@@ -1438,10 +1444,10 @@ PYBIND11_MODULE(_prt, m) {
         const Export x = gltf_export(p, mesh, bake, bake.is_none() ? py::none() : rotate,
                                      bake.is_none() ? py::none() : exposure);
         prt::WebPage w;
-        w.dir = path_of(dir);
+        w.dir = path_of(dir, "dir");
         w.force = force;
         w.turn = turn;
-        w.maps = prt::web_maps(env.is_none() ? std::string() : path_of(env), w.initial);
+        w.maps = prt::web_maps(env.is_none() ? std::string() : path_of(env, "env"), w.initial);
         if (!std::isfinite(fov) || fov <= 0 || fov >= 180) throw Error("fov: degrees in (0, 180), got " + number_text(fov));
         w.camera = prt::framing_camera(mesh, fov, 1.0);
         if (!camera.is_none()) {
@@ -1491,7 +1497,7 @@ PYBIND11_MODULE(_prt, m) {
   m.def(
       "info",
       [](const py::object& path) {
-        const std::string p = path_of(path);
+        const std::string p = path_of(path, "path");
         std::string text;
         {
           py::gil_scoped_release release;
@@ -1538,10 +1544,10 @@ PYBIND11_MODULE(_prt, m) {
     const auto paths = [](const py::object& list, const char* what) {
       std::vector<std::string> out;
       if (list.is_none()) return out;
-      if (is_path(list)) return std::vector<std::string>{path_of(list)};
+      if (is_path(list)) return std::vector<std::string>{path_of(list, what)};
       for (const py::handle item : list) {
         if (!is_path(item)) throw Error(std::string(what) + ": expected map files (str or os.PathLike)");
-        out.push_back(path_of(item));
+        out.push_back(path_of(item, what));
       }
       return out;
     };
@@ -1708,7 +1714,7 @@ PYBIND11_MODULE(_prt, m) {
           py::arg("vertex"),
           "float32 (6 r^2,): the vertex's dequantised Haar coefficients (zeros where dropped), in prt/wavelet.h's "
           "index order")
-      .def("write", [](const PyWavelet& p, const py::object& path) { prt::write_wavelet_transfer(path_of(path), p.t); },
+      .def("write", [](const PyWavelet& p, const py::object& path) { prt::write_wavelet_transfer(path_of(path, "path"), p.t); },
            py::arg("path"), "Writes the file (atomically) as prt precompute --basis wavelet does (docs/FORMAT.md)")
       .def("describe", [](const PyWavelet& p) { return prt::describe_transfer(p.t); }, "prt info's text")
       .def("__str__", [](const PyWavelet& p) { return prt::describe_transfer(p.t); })
@@ -1721,7 +1727,7 @@ PYBIND11_MODULE(_prt, m) {
       "read_wavelet",
       [](const py::object& path) {
         PyWavelet p;
-        p.source = path_of(path);
+        p.source = path_of(path, "path");
         p.t = prt::read_wavelet_transfer(p.source);
         return p;
       },
@@ -1840,7 +1846,7 @@ PYBIND11_MODULE(_prt, m) {
           "(uint32 (V, 2) neighbours a, b; float32 (V, 2) weights wa, wb): each vertex's tangent in any pose is the "
           "part of wa (p_a - p) + wb (p_b - p) perpendicular to its normal (docs/CONVENTIONS.md, \"Vertex frames\": "
           "a = b the edge rule, a != b the UV tangent, a = b = the vertex none)")
-      .def("write", [](const PyZhTransfer& p, const py::object& path) { prt::write_zh_transfer(path_of(path), p.z); },
+      .def("write", [](const PyZhTransfer& p, const py::object& path) { prt::write_zh_transfer(path_of(path, "path"), p.z); },
            py::arg("path"), "Writes the file (atomically) as prt precompute --basis zh does (docs/FORMAT.md)")
       .def("describe", [](const PyZhTransfer& p) { return prt::describe_transfer(p.z); },
            "prt info's text: lobes, bands, channels, mode, vertices, fit error, sizes, hashes")
@@ -1855,7 +1861,7 @@ PYBIND11_MODULE(_prt, m) {
       "read_zh",
       [](const py::object& path) {
         PyZhTransfer p;
-        p.source = path_of(path);
+        p.source = path_of(path, "path");
         p.z = prt::read_zh_transfer(p.source);
         return p;
       },
@@ -1973,7 +1979,7 @@ PYBIND11_MODULE(_prt, m) {
       "read_vertex_csv",
       [](const py::object& path) {
         std::vector<glm::vec3> se;
-        const std::vector<glm::vec3> rgb = prt::read_vertex_csv(path_of(path), &se);
+        const std::vector<glm::vec3> rgb = prt::read_vertex_csv(path_of(path, "path"), &se);
         return py::make_tuple(vec3s(rgb), se.empty() ? py::object(py::none()) : py::object(vec3s(se)));
       },
       py::arg("path"),
@@ -1988,7 +1994,7 @@ PYBIND11_MODULE(_prt, m) {
           se = to_vec3s(std_error, "std_error");
           if (se.size() != v.size()) throw Error("std_error: expected as many rows as rgb");
         }
-        prt::write_vertex_csv(path_of(path), v, std_error.is_none() ? nullptr : &se);
+        prt::write_vertex_csv(path_of(path, "path"), v, std_error.is_none() ? nullptr : &se);
       },
       py::arg("path"), py::arg("rgb"), py::arg("std_error") = py::none(),
       "Writes a vertex CSV that prt compare reads.");
@@ -2028,7 +2034,7 @@ PYBIND11_MODULE(_prt, m) {
   m.def(
       "load_scene",
       [](const py::object& path) {
-        const std::string p = path_of(path);
+        const std::string p = path_of(path, "path");
         py::gil_scoped_release release;
         return prt::load_scene(p);
       },
@@ -2089,7 +2095,7 @@ PYBIND11_MODULE(_prt, m) {
           py::arg("scene"), py::arg("lighting"),
           "float32 (H, W, 4): prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)")
       .def("write", [](const prt::LightmapTransfer& l, const py::object& path) {
-        prt::write_lightmap_transfer(path_of(path), l);
+        prt::write_lightmap_transfer(path_of(path, "path"), l);
       }, py::arg("path"), "Writes the lightmap file (docs/FORMAT.md), atomically")
       .def("__repr__", [](const prt::LightmapTransfer& l) {
         return "<prt.Lightmap " + std::to_string(l.layout.width) + "x" + std::to_string(l.layout.height) + ", " +
@@ -2097,7 +2103,7 @@ PYBIND11_MODULE(_prt, m) {
                " bands>";
       });
 
-  m.def("read_lightmap", [](const py::object& path) { return prt::read_lightmap_transfer(path_of(path)); },
+  m.def("read_lightmap", [](const py::object& path) { return prt::read_lightmap_transfer(path_of(path, "path")); },
         py::arg("path"), "Reads a lightmap file (prt precompute SCENE --lightmap WxH).");
 
   m.def(
@@ -2237,7 +2243,7 @@ PYBIND11_MODULE(_prt, m) {
           },
           py::arg("in_bands") = 3,
           "float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes")
-      .def("write", [](const prt::ProbeTransfer& t, const py::object& path) { prt::write_probe_transfer(path_of(path), t); },
+      .def("write", [](const prt::ProbeTransfer& t, const py::object& path) { prt::write_probe_transfer(path_of(path, "path"), t); },
            py::arg("path"), "Writes the probe file (docs/FORMAT.md \"Probe volume\"), atomically")
       .def("__repr__", [](const prt::ProbeTransfer& t) {
         return "<prt.ProbeVolume " + std::to_string(t.grid.dims[0]) + "x" + std::to_string(t.grid.dims[1]) + "x" +
@@ -2245,7 +2251,7 @@ PYBIND11_MODULE(_prt, m) {
                std::string(prt::transfer_mode_name(t.mode)) + ">";
       });
 
-  m.def("read_probes", [](const py::object& path) { return prt::read_probe_transfer(path_of(path)); }, py::arg("path"),
+  m.def("read_probes", [](const py::object& path) { return prt::read_probe_transfer(path_of(path, "path")); }, py::arg("path"),
         "Reads a probe volume (prt precompute SCENE --probes NXxNYxNZ).");
 
   m.def(

@@ -284,3 +284,30 @@ def test_scalar_checks_keep_the_docs_and_valid_values():
     assert prt.precompute.__doc__.startswith("precompute(")
     assert prt.rotation_from_euler(30, 0, 0).shape == (3, 3)
     assert prt.rotation_from_euler(np.float32(30), np.int64(0), 0).shape == (3, 3)  # numpy scalars are numbers
+
+
+def test_arguments_of_the_wrong_type_are_named(cube, transfer):
+    """Where pybind11 cannot convert an argument, the prt.Error names it and
+    what it expected (its own TypeError names none)."""
+    L = lighting()
+    for call, words in [
+        (lambda: prt.relight("t.prt", cube, L), "transfer: expected a prt.Transfer or a prt.WaveletTransfer or "
+                                                "a prt.ZhTransfer, got str"),
+        (lambda: prt.precompute("cube.obj"), "mesh: expected a prt.Mesh, got str"),
+        (lambda: prt.load_mesh("cube.obj", weld="yes"), "weld: expected a bool, got str"),
+        (lambda: prt.project(envmap(), mapping=3), "mapping: expected a str, got int"),
+        (lambda: prt.read_zh(5), "path: expected a file name"),
+        (lambda: prt.load_mesh(None), "path: expected a file name"),
+        (lambda: prt.pose(transfer, cube), "transfer: expected a prt.ZhTransfer, got Transfer"),
+        (lambda: prt.sh_eval(), "sh_eval: missing"),
+    ]:
+        with pytest.raises(prt.Error) as info:
+            call()
+        assert str(info.value).startswith(words), str(info.value)
+
+
+def test_every_function_names_an_unknown_keyword():
+    for fname, fn in public_callables():
+        with pytest.raises(prt.Error) as info:
+            fn(no_such_argument=1)
+        assert str(info.value).startswith("no_such_argument: not an argument of"), f"{fname}: {info.value}"
