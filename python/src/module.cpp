@@ -33,6 +33,7 @@
 #include <prt/web_export.h>
 #include <prt/vertex_csv.h>
 #include <prt/wavelet.h>
+#include <prt/wavelet_playback.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
 
@@ -1194,20 +1195,37 @@ PYBIND11_MODULE(_prt, m) {
       [](const py::object& transfer, const prt::Mesh& mesh, const py::object& map, int width, int height,
          const py::object& camera, double fov, const py::object& rotate, const py::object& exposure,
          const std::string& tone_map, bool linear, const py::object& shading, const py::object& bands_arg,
-         double gloss, double specular, const py::object& diffuse, const py::object& deform, double amount) {
-        const bool is_zh = py::isinstance<PyZhTransfer>(transfer);
-        if (!is_zh && !py::isinstance<PyTransfer>(transfer))
-          throw Error("transfer: expected a Transfer or a ZhTransfer (read_transfer, precompute, compress, read_zh, "
-                      "fit_zh); wavelet transfers render with the prt command");
-        const PyTransfer* p = is_zh ? nullptr : &transfer.cast<const PyTransfer&>();
+         double gloss, double specular, const py::object& diffuse, const py::object& deform, double amount, int terms,
+         const std::string& selection) {
+        const bool is_zh = py::isinstance<PyZhTransfer>(transfer), is_wavelet = py::isinstance<PyWavelet>(transfer);
+        if (!is_zh && !is_wavelet && !py::isinstance<PyTransfer>(transfer))
+          throw Error("transfer: expected a Transfer, a WaveletTransfer or a ZhTransfer (read_transfer, precompute, "
+                      "compress, read_wavelet, read_zh, fit_zh)");
+        const PyTransfer* p = is_zh || is_wavelet ? nullptr : &transfer.cast<const PyTransfer&>();
         const PyZhTransfer* z = is_zh ? &transfer.cast<const PyZhTransfer&>() : nullptr;
-        const std::string& source = is_zh ? z->source : p->source;
+        const PyWavelet* wt = is_wavelet ? &transfer.cast<const PyWavelet&>() : nullptr;
+        const std::string& source = is_zh ? z->source : is_wavelet ? wt->source : p->source;
         if (is_zh)
           prt::check_matches(z->z, mesh, source);
+        else if (is_wavelet)
+          prt::check_matches(wt->t, mesh, source);
         else
           prt::check_matches(p->t, mesh, source);
-        const int file_bands = is_zh ? z->z.bands : p->t.bands;
-        const bool glossy = !is_zh && p->t.glossy;
+        // The wavelet terms: a wavelet transfer's (relit on the CPU each frame, drawn as vertex colours).
+        if (!is_wavelet && (terms != 100 || selection != "area"))
+          throw Error(std::string(terms != 100 ? "terms" : "selection") + ": applies to a wavelet transfer");
+        if (is_wavelet && !bands_arg.is_none()) throw Error("bands: a wavelet transfer has no SH bands to limit");
+        if (terms < 1) throw Error("terms: must be at least 1 (K >= 6 r^2 keeps all)");
+        const prt::wavelet::Selection sel = [&] {
+          try {
+            return prt::wavelet::parse_selection(selection);
+          } catch (const Error& e) {
+            throw Error(std::string("selection: ") + e.what());
+          }
+        }();
+        // A wavelet transfer's SH lighting is Lambert's (3 bands), as prt render.
+        const int file_bands = is_zh ? z->z.bands : is_wavelet ? 3 : p->t.bands;
+        const bool glossy = p != nullptr && p->t.glossy;
         if (file_bands > prt::kMaxRenderBands)
           throw Error(source + ": " + std::to_string(file_bands) + " bands; the renderer draws at most " +
                       std::to_string(prt::kMaxRenderBands));
@@ -1221,11 +1239,16 @@ PYBIND11_MODULE(_prt, m) {
         // The shading: the renderer's default for the file (glossy: the lobe too), or the one named.
         const prt::Shading shade = [&] {
           if (shading.is_none()) return glossy ? prt::Shading::Glossy : prt::Shading::Transfer;
+          prt::Shading sh;
           try {
-            return prt::parse_shading(shading.cast<std::string>());
+            sh = prt::parse_shading(shading.cast<std::string>());
           } catch (const Error& e) {
             throw Error(std::string("shading: ") + e.what());
           }
+          if ((is_wavelet || is_zh) && sh != prt::Shading::Transfer && sh != prt::Shading::Lambert)
+            throw Error("shading: a " + std::string(is_wavelet ? "wavelet" : "zonal-harmonic") +
+                        " transfer shows 'transfer' or 'lambert'");
+          return sh;
         }();
         if (!glossy && (gloss != 16.0 || specular != 0.5 || !diffuse.is_none()))
           throw Error(source + ": gloss, specular and diffuse need a glossy transfer (precompute(material='glossy'))");
@@ -1311,6 +1334,18 @@ PYBIND11_MODULE(_prt, m) {
           prt::sh::Rotation(file_bands, R).apply(light, rotated);
           img = GlWorker::get().run([&](prt::Renderer& r) {
             r.set_environment(*e);
+            if (is_wavelet) {  // as prt render: the CPU's relighting drawn as vertex colours, or Lambert
+              r.set_mesh(mesh, wt->t.albedo, wt->t.vertex_colors);
+              r.set_lighting(rotated);
+              r.set_environment_rotation(R);
+              if (shade == prt::Shading::Transfer) {
+                prt::WaveletPlayback playback(wt->t, *e);
+                playback.frame(r, R, terms, sel);
+              } else {
+                r.set_shading(prt::Shading::Lambert);
+              }
+              return r.render(cam, width, height);
+            }
             try {
               if (is_zh)
                 r.set_mesh(mesh, z->z);
@@ -1340,7 +1375,7 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("exposure") = "auto", py::arg("tone_map") = "clamp", py::arg("linear") = false,
       py::arg("shading") = py::none(), py::arg("bands") = py::none(), py::arg("gloss") = 16.0,
       py::arg("specular") = 0.5, py::arg("diffuse") = py::none(), py::arg("deform") = py::none(),
-      py::arg("amount") = 1.0,
+      py::arg("amount") = 1.0, py::arg("terms") = 100, py::arg("selection") = "area",
       "A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the "
       "first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is "
       "the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 "
@@ -1351,7 +1386,8 @@ PYBIND11_MODULE(_prt, m) {
       "radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', "
       "'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, "
       "else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform "
-      "('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose. Raises prt.Error where no "
+      "('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a "
+      "wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). Raises prt.Error where no "
       "OpenGL 4.5 context can be had.");
 
   // ---- glTF export (prt/gltf.h; docs/FORMAT.md "glTF export") ----

@@ -103,5 +103,26 @@ def test_render_arguments_are_checked(files):
             prt.render(t, mesh, ENV, **{"width": 8, "height": 8, **kw})
     with pytest.raises(prt.Error, match="different mesh|mesh hash"):
         prt.render(t, prt.load_mesh(TUBE), ENV, width=8, height=8)
-    with pytest.raises(prt.Error, match="Transfer or a ZhTransfer"):
+    with pytest.raises(prt.Error, match="Transfer, a WaveletTransfer or a ZhTransfer"):
         prt.render("t.prt", mesh, ENV)
+    with pytest.raises(prt.Error, match="terms"):
+        prt.render(t, mesh, ENV, terms=5)
+
+
+@pytest.mark.parametrize("cli,kw", [
+    ([], {}),
+    (["--terms", "30", "--selection", "magnitude", "--rotate", "40,0,0"],
+     dict(terms=30, selection="magnitude", rotate=(40, 0, 0))),
+    (["--shading", "lambert"], dict(shading="lambert")),
+])
+def test_wavelet_frame_is_prt_renders_exr(tmp_path, cli, kw):
+    gl_or_skip()
+    w = tmp_path / "w.prt"
+    run_prt("precompute", MESH, "-o", w, "--basis", "wavelet", "--cube-res", 8, "-q")
+    want = cli_frame(tmp_path, MESH, w, ENV, "--exposure", "0", *cli)
+    got = prt.render(prt.read_wavelet(w), prt.load_mesh(MESH), ENV, width=W, height=H, linear=True, exposure=0, **kw)
+    np.testing.assert_array_equal(got, want)
+    with pytest.raises(prt.Error, match="bands"):
+        prt.render(prt.read_wavelet(w), prt.load_mesh(MESH), ENV, bands=2)
+    with pytest.raises(prt.Error, match="shading"):
+        prt.render(prt.read_wavelet(w), prt.load_mesh(MESH), ENV, shading="ao")
