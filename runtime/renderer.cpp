@@ -811,6 +811,26 @@ Image Renderer::render(const Camera& cam, int width, int height, const Display* 
   return img;
 }
 
+std::vector<float> Renderer::coverage() const {
+  const Impl& m = *impl_;
+  PRT_CHECK(m.fbo_width > 0 && m.fbo_height > 0);  // a frame was drawn
+  m.make_current();
+  const int width = m.fbo_width, height = m.fbo_height;
+  std::vector<float> depth(std::size_t(width) * height);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadnPixels(0, 0, width, height, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * sizeof(float)), depth.data());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  check_gl("reading the frame's depth back");
+  // The clear value is exactly 1 (far_depth); anything drawn lies in front of
+  // the far plane (dist x 1e3) and so below it.
+  std::vector<float> alpha(depth.size());
+  for (int y = 0; y < height; ++y)  // GL row 0 is the bottom
+    for (int x = 0; x < width; ++x)
+      alpha[std::size_t(y) * width + x] = depth[std::size_t(height - 1 - y) * width + x] < 1.0f ? 1.0f : 0.0f;
+  return alpha;
+}
+
 void Renderer::draw_only(const Camera& cam, int width, int height) {
   impl_->draw(cam, width, height);
   glFinish();

@@ -1225,5 +1225,47 @@ TEST(RenderGlossy, TwelveBandsShadeThirteenAreRefused) {
   }
 }
 
+// Renderer::coverage (prt render --alpha): 1 where the mesh covers the
+// pixel's centre, 0 where the background shows, whatever the background's
+// colour. A tessellated unit sphere seen along -z: pixels whose centre ray
+// passes within 0.95 of its centre hit it (the inscribed polygon reaches
+// cos(pi/16) = 0.98 of the radius everywhere), those beyond 1.0 miss it.
+TEST(Render, CoverageIsOneExactlyWhereTheMeshIs) {
+  REQUIRE_RENDERER(r);
+  const Mesh mesh = test::sphere(16, 32, 1.0f);
+  r->set_environment(latlong_of(smooth_env, 64, 32));  // a background that is nowhere black
+  r->set_mesh(mesh, glm::vec3(0.5f));
+  r->set_shading(Shading::Lambert);
+  const std::vector<glm::dvec3> light(9, glm::dvec3(0.0));  // black: the mesh draws black on a bright background
+  r->set_lighting(light);
+  Camera cam;
+  cam.eye = {0, 0, 4};
+  cam.fov_deg = 40;
+  const int w = 48, h = 32;
+  const Image img = r->render(cam, w, h);
+  const std::vector<float> alpha = r->coverage();
+  ASSERT_EQ(alpha.size(), std::size_t(w) * h);
+  const double tan_half = std::tan(glm::radians(cam.fov_deg) / 2);
+  int inside = 0, outside = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      // The pixel centre's ray (row 0 at the top) and its closest approach to the origin.
+      const glm::dvec3 d = glm::normalize(glm::dvec3((2 * (x + 0.5) / w - 1) * tan_half * w / h,
+                                                     (1 - 2 * (y + 0.5) / h) * tan_half, -1.0));
+      const double miss = glm::length(glm::cross(d, -cam.eye));
+      const float a = alpha[std::size_t(y) * w + x];
+      if (miss < 0.95) {
+        EXPECT_EQ(a, 1.0f) << x << "," << y;
+        EXPECT_EQ(img.at(x, y), glm::vec3(0.0f));  // and there the mesh's black, not the background
+        ++inside;
+      } else if (miss > 1.0) {
+        EXPECT_EQ(a, 0.0f) << x << "," << y;
+        ++outside;
+      }
+    }
+  EXPECT_GT(inside, 100);
+  EXPECT_GT(outside, 100);
+}
+
 }  // namespace
 }  // namespace prt

@@ -311,7 +311,7 @@ TEST_P(RigidPose, IsExact) {
               worst_radiance);
 }
 INSTANTIATE_TEST_SUITE_P(ZhTransfer, RigidPose, ::testing::Values(false, true),
-                         [](const auto& info) { return info.param ? "UvFrames" : "EdgeFrames"; });
+                         [](const auto& p) { return p.param ? "UvFrames" : "EdgeFrames"; });
 
 TEST(ZhTransfer, FlippedNormalTurnsTheLobesAboutTheTangent) {
   // The rule: a posed frame is built from the posed normal whatever it is; a

@@ -228,6 +228,18 @@ std::vector<float> probe_sh_matrices(const ProbeTransfer& t, int in_bands, int& 
 void write_probe_matrices(const std::string& path, const ProbeTransfer& t, const std::vector<float>& matrices,
                           int in_bands, int channels);
 
+// The engines' JSON of prt export --probes (docs/PROBES.md "Export"): every
+// probe of `t` (3 bands: throws prt::Error otherwise) relit under `map`
+// turned by rotation_from_euler(rotate) (yaw, pitch, roll degrees), as
+// three.js LightProbe and Unity SphericalHarmonicsL2 coefficients with its
+// position in both engines' axes and its state, and the grid; the names
+// are recorded as given. The text ends in a newline.
+struct ProbeExportNames {
+  std::string scene, probes_file, map, generator;
+};
+std::string probe_engine_json(const ProbeTransfer& t, const EnvMap& map, const std::array<double, 3>& rotate,
+                              const ProbeExportNames& names);
+
 // Weights of the probes that light a query at p with normal n (see above):
 // up to 8 (probe, weight) pairs, weights already divided by
 // max(sum, kProbeMinWeight).

@@ -375,6 +375,12 @@ class Renderer {
   // frame (exposure and tone map applied on the GPU, in [0, 1], before sRGB
   // encoding).
   Image render(const Camera& camera, int width, int height, const Display* display = nullptr);
+  // The coverage of the last frame drawn (render, draw_only or present), read
+  // from its depth buffer: 1 where the mesh, scene or probe-lit object covers
+  // the pixel's centre, 0 where the background (or black) shows; width x
+  // height values, row 0 at the top (the alpha of prt render --alpha and
+  // prt.render(alpha=True)). Contract (prt::InternalError): a frame was drawn.
+  std::vector<float> coverage() const;
   // Draws the frame and waits for the GPU, without reading it back (timing).
   // The errors and contract of render().
   void draw_only(const Camera& camera, int width, int height);

@@ -30,6 +30,7 @@ from ._prt import (  # noqa: F401
     data_dir,
     deform,
     export_gltf,
+    export_probes,
     export_web,
     fit_zh,
     info,
@@ -47,6 +48,7 @@ from ._prt import (  # noqa: F401
     read_probes,
     read_transfer,
     read_wavelet,
+    read_exr,
     read_zh,
     read_vertex_csv,
     reference,
@@ -65,7 +67,7 @@ __all__ = [
     "make_mesh", "precompute", "project", "read_transfer", "read_vertex_csv", "reference", "relight", "rotate_sh",
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
     "WaveletTransfer", "read_wavelet", "compress", "compression_error",
-    "info", "verify", "render", "export_gltf", "export_web",
+    "info", "verify", "render", "export_gltf", "export_web", "export_probes", "read_exr",
 ]
 
 

@@ -75,7 +75,7 @@ class Lightmap:
         ...
     def relight(self, scene: Scene, lighting: Any) -> numpy.ndarray:
         """
-        float32 (H, W, 4): prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)
+        The lightmap relit under `lighting` (coefficients (n*n, 3), project()) on `scene` (the Scene it was computed for): float32 (H, W, 4), prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)
         """
     def rows(self, scene: Scene) -> numpy.ndarray:
         """
@@ -97,7 +97,7 @@ class Lightmap:
         ...
     def write(self, path: Any) -> None:
         """
-        Writes the lightmap file (docs/FORMAT.md), atomically
+        Writes the lightmap file to `path` (docs/FORMAT.md), atomically (a temporary file, then renamed).
         """
 
 class Mesh:
@@ -158,7 +158,7 @@ class ProbeVolume:
         ...
     def at(self, scene: Scene, points: Any, normals: Any, sh: Any) -> numpy.ndarray:
         """
-        float32 (N, 3): E(p, n)/pi at the points from the relit probes `sh`, as prt relight --at (traced visibility)
+        float32 (N, 3): E(p, n)/pi at `points` (N, 3) with unit `normals` (N, 3) in `scene` (the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility)
         """
     @property
     def bands(self) -> Any:
@@ -201,7 +201,7 @@ class ProbeVolume:
         """
     def write(self, path: Any) -> None:
         """
-        Writes the probe file (docs/FORMAT.md "Probe volume"), atomically
+        Writes the probe file to `path` (docs/FORMAT.md "Probe volume"), atomically.
         """
 
 class Scene:
@@ -216,7 +216,9 @@ class Scene:
         Scene hash (a lightmap's scene_hash)
         """
     def lightmap_uv_set(self, requested: int = ...) -> int:
-        ...
+        """
+        The UV set a lightmap is laid out in: `requested` (>= 0; every object must have it) or, with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises prt.Error naming the objects that lack it.
+        """
     @property
     def normals(self) -> numpy.ndarray:
         """
@@ -289,7 +291,7 @@ class Transfer:
         """
     def dense(self, mesh: Mesh, direct: bool = ...) -> numpy.ndarray:
         """
-        float32 (V, channels, bands^2): every vertex's transfer, analytic ones evaluated from `mesh` (the mesh it was computed for)
+        float32 (V, channels, bands^2): every vertex's transfer, analytic ones evaluated from `mesh` (the mesh it was computed for); direct=True: an interreflected transfer's direct (0-bounce) part
         """
     @property
     def direct_rows(self) -> Any:
@@ -337,37 +339,60 @@ class Transfer:
         ...
     def write(self, path: Any) -> None:
         """
-        Writes the file (atomically) as prt precompute does (docs/FORMAT.md)
+        Writes the file to `path` (atomically) as prt precompute does (docs/FORMAT.md); a compressed transfer as prt compress does.
         """
 
 def lightmap_from_rows(scene: Scene, width: int, height: int, rows: Any, *, uv_set: int = ..., mode: str = ...) -> Lightmap:
     """
-    A lightmap from arrays: rows float32 (N, channels, bands^2), one per covered texel of the atlas (every texel stored); .write() makes a file prt relight reads.
+    A lightmap from arrays, for a Scene: every texel of the atlas stored (none analytic); .write() makes a file prt relight reads.
+
+    Arguments:
+      scene: the Scene; width, height: the atlas in texels; uv_set: its UV set (-1: as precompute_lightmap).
+      rows: float32 (N, channels, bands^2), one per covered texel, in texel order.
+      mode: the transfer mode recorded ('shadowed', 'interreflected', ...).
+
+    Returns a Lightmap.
     """
 
 def load_scene(path: Any) -> Scene:
     """
-    Reads a glTF 2.0 (.gltf, .glb) or OBJ scene as prt precompute --lightmap does.
+    Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.
     """
 
 def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ...) -> Lightmap:
     """
-    The lightmap prt precompute SCENE --lightmap WxH computes (same bits).
+    The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.
+
+    Arguments (prt precompute's option in brackets):
+      scene: a Scene (load_scene).
+      width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].
+      uv_set: the scene's UV set the atlas is laid out in (-1: TEXCOORD_1 where every object has it, else TEXCOORD_0) [--uv].
+      bands [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
+
+    Returns a Lightmap.
     """
 
 def precompute_probes(scene: Scene, dims: Any, *, mode: str = ..., bands: int = ..., bounce_bands: int = ..., bounces: int = ..., seed: int = ...) -> ProbeVolume:
     """
-    The probe volume prt precompute SCENE --probes NXxNYxNZ computes (same bits).
+    The relightable probe volume prt precompute SCENE --probes NXxNYxNZ computes (the same bits). Releases the GIL.
+
+    Arguments (prt precompute's option in brackets):
+      scene: a Scene (load_scene).
+      dims: (NX, NY, NZ) probes, 2 to the limit each, spanning the scene's bounding box, corners included [--probes].
+      mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH (3) [--bands].
+      bounce_bands: the environment bands the bounce light takes (6) [--bounce-bands]; bounces [--bounces]; seed [--seed].
+
+    Returns a ProbeVolume.
     """
 
 def read_lightmap(path: Any) -> Lightmap:
     """
-    Reads a lightmap file (prt precompute SCENE --lightmap WxH).
+    Reads the lightmap file at `path` (prt precompute SCENE --lightmap WxH). Returns a Lightmap.
     """
 
 def read_probes(path: Any) -> ProbeVolume:
     """
-    Reads a probe volume (prt precompute SCENE --probes NXxNYxNZ).
+    Reads the probe volume at `path` (prt precompute SCENE --probes NXxNYxNZ). Returns a ProbeVolume.
     """
 
 __version__: str
@@ -384,60 +409,149 @@ def load_envmap(path: Any, mapping: str = ...) -> EnvMap:
 
 def load_mesh(path: Any, *, weld: bool = ..., file_normals: bool = ..., weighting: str = ..., uvs: bool = ...) -> Mesh:
     """
-    Reads OBJ, PLY, OFF, STL, glTF/GLB as prt does (weld: as --weld). uvs: also read the first texture coordinates per triangle corner (Mesh.corner_uvs), which fit_zh's vertex frames take their tangent from, as prt precompute --basis zh does (its --tangent uv, the default).
+    Reads a mesh file as every prt command does.
+
+    Arguments:
+      path: OBJ, PLY, OFF, STL, glTF/GLB.
+      weld: merge vertices that share a position [--weld].
+      weighting: how vertex normals are averaged where they are computed: 'area' (the default) or 'angle' (corner angles).
+      file_normals: keep the file's normals where it has them (True; False: compute them).
+      uvs: also read the first texture coordinates per triangle corner (Mesh.corner_uvs): fit_zh's vertex frames take their tangent from them, as prt precompute --basis zh (--tangent uv, the default).
+
+    Returns a Mesh (immutable).
     """
 
 def make_mesh(positions: Any, triangles: Any, normals: Any = ..., colors: Any = ..., *, weld: bool = ...) -> Mesh:
     """
-    A mesh from arrays, checked as a loaded one (normals computed when not given).
+    A mesh from arrays, checked as a loaded one.
+
+    Arguments:
+      positions: (V, 3) finite, float32 range; triangles: (T, 3) vertex indices (whole numbers).
+      normals: (V, 3), or None to compute them (angle-weighted); colors: (V, 3) linear RGB in [0, 1], or None.
+      weld: merge vertices that share a position.
+
+    Returns a Mesh.
     """
 
 def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., progress: Any = ...) -> Any:
     """
-    Traces the transfer of every vertex as prt precompute does (same defaults; same seed and inputs, same bits): a Transfer (bands: SH bands, default 5). basis='wavelet': a WaveletTransfer, as prt precompute --basis wavelet (shadowed, diffuse; cube_res: the cube's face size r, a power of two 2 to 256, default 32; threshold: the relative L2 error each vertex's kept coefficients may leave, default 1e-2; samples, seed and bounces do not apply: one ray per cube texel). Releases the GIL. progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).
+    Traces the transfer of every vertex, as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.
+
+    Arguments (prt precompute's option in brackets):
+      mesh: the Mesh (load_mesh, make_mesh); units are the mesh's.
+      bands: SH bands n, n*n coefficients per channel, 1 to 16 (None: 5) [--bands].
+      samples: rays per vertex (about), 1 to 2^24 (1024) [--samples].
+      mode: 'unshadowed' (no rays), 'shadowed' or 'interreflected' [--mode].
+      bounces: diffuse bounces of 'interreflected', 0 to 64 (1) [--bounces].
+      albedo: diffuse albedo, a number or (r, g, b), each in [0, 1] (0.8) [--albedo].
+      vertex_colors: the mesh's vertex colours as albedo [--vertex-colors].
+      seed: seed of the direction set, 0 to 2^64 - 1 (1) [--seed].
+      threads: worker threads, 0 (every core) to 1024 [--threads]; the result does not depend on it.
+      offset: ray origin offset along the normal in mesh units (0: 1e-4 x the bounding-box diagonal) [--offset].
+      bounce_tolerance: stop adding bounces once one adds less than this fraction of the direct energy, [0, 1) (0: never) [--bounce-tolerance].
+      material: 'diffuse', or 'glossy': also the transfer matrices of glossy PRT (at most 12 bands; docs/GLOSSY.md) [--material].
+      basis: 'sh'; or 'wavelet': a WaveletTransfer (shadowed, diffuse; samples, seed and bounces do not apply: one ray per cube texel) [--basis].
+      cube_res: wavelet basis: the cube's face size r, a power of two 2 to 256 (32) [--cube-res].
+      threshold: wavelet basis: the relative L2 error each vertex's kept coefficients may leave, [0, 1) (0.01) [--threshold].
+      progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).
+
+    Returns a Transfer (a WaveletTransfer for basis='wavelet').
     """
 
 def project(map: Any, bands: int = ..., *, mapping: str = ..., quadrature: str = ..., irradiance: bool = ..., window: str = ..., window_width: float = ..., rotate: Any = ...) -> numpy.ndarray:
     """
-    SH coefficients (bands*bands, 3) float64 of a map (an EnvMap, a file name, or an array (H, W, 3) or (6, N, N, 3)), as prt project computes them: projection, then irradiance, window, rotation (rotate: a 3x3 matrix or (yaw, pitch, roll) degrees as --rotate).
+    SH coefficients of a map, as prt project computes them: projection, then irradiance, window and rotation.
+
+    Arguments (prt project's option in brackets):
+      map: an EnvMap, a file name, a list of six face files, or an array (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces +X, -X, +Y, -Y, +Z, -Z).
+      bands: SH bands n, 1 to 16 [--bands].
+      mapping: how to read a file: 'auto' (from the shape), 'latlong', 'hcross', 'vcross' or 'faces' [--mapping].
+      quadrature: 'box' (texels are area averages, integrated exactly) or 'point' (point samples; lat-long only) [--quadrature].
+      irradiance: convolve with the clamped cosine (Ramamoorthi & Hanrahan's A_l) [--irradiance].
+      window: 'none', 'hanning', 'lanczos' or 'auto' ringing suppression [--window]; window_width: its width in bands (0: bands + 1) [--window-width].
+      rotate: a 3x3 rotation R or (yaw, pitch, roll) degrees; light from d arrives from R d [--rotate].
+
+    Returns float64 (bands*bands, 3), index k = l(l+1)+m (docs/CONVENTIONS.md).
     """
 
 def read_transfer(path: Any) -> Transfer:
     """
-    Reads an SH transfer file (compressed ones too: their rows are reconstructed); refuses wavelet files.
+    Reads the SH transfer file at `path` (compressed ones too: their rows are reconstructed); refuses wavelet and zonal-harmonic files, naming read_wavelet and read_zh. Returns a Transfer.
     """
 
 def read_vertex_csv(path: Any) -> tuple:
     """
-    Reads a vertex CSV (prt relight -o x.csv, prt reference): (rgb, std_error or None), float32 (V, 3).
+    Reads the vertex CSV at `path` (prt relight -o x.csv, prt reference): (rgb, std_error or None), float32 (V, 3).
     """
 
 def reference(mesh: Mesh, map: Any, *, mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., samples: int = ..., seed: int = ..., offset: float = ..., rotate: Any = ..., threads: int = ..., progress: Any = ...) -> tuple:
     """
-    Monte Carlo ground truth as prt reference computes it (same defaults, same bits): (radiance, std_error), float32 (V, 3) each. map: an EnvMap, a file name or an (H, W, 3) array. Releases the GIL; progress as precompute's.
+    Monte Carlo ground truth, as prt reference computes it (the same defaults, the same bits): every vertex's outgoing radiance traced against the map itself, no SH. Releases the GIL.
+
+    Arguments (prt reference's option in brackets):
+      mesh: the Mesh.
+      map: an EnvMap, a file name or an (H, W, 3) lat-long array of linear radiance.
+      samples: paths per vertex (4096) [--samples].
+      mode: 'unshadowed', 'shadowed' or 'interreflected' [--mode]; bounces: of 'interreflected' [--bounces].
+      albedo: a number or (r, g, b) in [0, 1] (0.8) [--albedo]; vertex_colors: the mesh's colours as albedo.
+      seed [--seed], threads [--threads], offset (mesh units; 0: 1e-4 x the diagonal) [--offset].
+      rotate: the map turned by a 3x3 rotation R or (yaw, pitch, roll) degrees (light from d arrives from R d) [--rotate].
+      progress: as precompute's.
+
+    Returns (radiance, std_error): float32 (V, 3) each, linear RGB.
     """
 
 @overload
 def relight(transfer: Transfer, mesh: Any, lighting: Any, *, direct: bool = ..., eye: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ...) -> Any:
     """
-    Outgoing radiance float32 (V, 3) under lighting coefficients (n*n, 3) (project()), as prt relight computes it (its diffuse part for a glossy transfer without eye=).
+    Outgoing radiance under SH lighting, as prt relight computes it (a glossy transfer's diffuse part without eye=).
 
-    Glossy transfer (precompute(material='glossy')): eye, a point (3,) in mesh units, gives each vertex's radiance toward it, float32 (V, 3), as prt relight --eye x,y,z; eye (E, 3), toward each of E points, float32 (E, V, 3). gloss: the Phong exponent e >= 0 (--gloss, 16); specular: the lobe's strength rho_s >= 0 (--specular, 0.5); diffuse: rho_d, a number or (r, g, b) in [0, 1] (--diffuse; None: the transfer's own albedo). docs/GLOSSY.md.
+    Arguments (prt relight's option in brackets):
+      transfer: a Transfer (precompute, read_transfer, compress).
+      mesh: the Mesh it was computed for (checked).
+      lighting: coefficients (n*n, 3) or (n*n,) (project()); at least the transfer's bands.
+      direct: an interreflected transfer's direct (0-bounce) part only [--direct].
+      eye: a glossy transfer's eye point (3,) in mesh units, or (E, 3) for E eyes [--eye].
+      gloss: the Phong exponent e, 0 to 4096 (16) [--gloss]; specular: the lobe's strength rho_s in [0, 1] (0.5) [--specular].
+      diffuse: rho_d, a number or (r, g, b) in [0, 1] (None: the transfer's own albedo) [--diffuse]. docs/GLOSSY.md.
+
+    Returns float32 (V, 3) linear RGB radiance; with eye (E, 3): (E, V, 3).
     """
 @overload
 def relight(transfer: WaveletTransfer, mesh: Mesh, map: Any, *, terms: int = ..., selection: str = ..., rotate: Any = ...) -> numpy.ndarray:
     """
-    A wavelet transfer: outgoing radiance float32 (V, 3) under a map (an EnvMap, a file name or an (H, W, 3) array), as prt relight --terms K --selection S [--rotate] computes it: the map resampled to the cube (rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept (selection 'area': |c| times the support's area, Ng et al.; 'magnitude': |c|), and each vertex's sum over them.
+    A wavelet transfer's outgoing radiance under a map, as prt relight --terms K --selection S [--rotate]: the map resampled to the cube (rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept, each vertex's sum over them.
+
+    Arguments:
+      transfer: a WaveletTransfer; mesh: the Mesh it was computed for.
+      map: an EnvMap, a file name or an (H, W, 3) array.
+      terms: K, the coefficients kept (100) [--terms].
+      selection: 'area' (|c| times its support's area, Ng et al. 2003) or 'magnitude' (|c|) [--selection].
+      rotate: a 3x3 rotation or (yaw, pitch, roll) degrees [--rotate].
+
+    Returns float32 (V, 3).
     """
 @overload
 def relight(transfer: ZhTransfer, mesh: Mesh, lighting: Any, *, direct: bool = ...) -> numpy.ndarray:
     """
-    A zonal-harmonic transfer: outgoing radiance float32 (V, 3) of the pose `mesh` under lighting coefficients (n*n, 3) (project()), as prt relight POSED f.prt ENV [--deform ...] computes it.
+    A zonal-harmonic transfer's outgoing radiance in the pose `mesh`, as prt relight POSED f.prt ENV [--deform ...].
+
+    Arguments:
+      transfer: a ZhTransfer (fit_zh, read_zh); mesh: the rest mesh or any pose of it (deform, pose).
+      lighting: coefficients (n*n, 3) (project()); direct: the direct part only [--direct].
+
+    Returns float32 (V, 3).
     """
 
 def rotate_sh(coeffs: Any, rotation: Any) -> numpy.ndarray:
     """
-    Rotates SH coefficients (n*n,) or (n*n, C): the lighting turned by a 3x3 matrix R or (yaw, pitch, roll) degrees as --rotate (light from d arrives from R d).
+    Rotates SH coefficients: the lighting turned so that light from d arrives from R d (prt's --rotate).
+
+    Arguments:
+      coeffs: (n*n,) or (n*n, C).
+      rotation: a 3x3 rotation matrix R, or (yaw, pitch, roll) degrees as --rotate.
+
+    Returns float64 of coeffs' shape.
     """
 
 def rotation_from_euler(yaw: float, pitch: float, roll: float) -> numpy.ndarray:
@@ -447,12 +561,20 @@ def rotation_from_euler(yaw: float, pitch: float, roll: float) -> numpy.ndarray:
 
 def sh_eval(bands: int, dirs: Any) -> numpy.ndarray:
     """
-    The bands*bands real SH basis functions at directions (N, 3) (normalised first): (N, bands*bands) float64, index k = l(l+1)+m (docs/CONVENTIONS.md).
+    The real SH basis functions at directions.
+
+    Arguments:
+      bands: n, 1 to 16; dirs: (N, 3) directions (normalised first).
+
+    Returns float64 (N, bands*bands), index k = l(l+1)+m (docs/CONVENTIONS.md).
     """
 
 def write_vertex_csv(path: Any, rgb: Any, std_error: Any = ...) -> None:
     """
     Writes a vertex CSV that prt compare reads.
+
+    Arguments:
+      path: the file; rgb: float (V, 3) per vertex; std_error: (V, 3) standard errors, or None.
     """
 
 class ZhTransfer:
@@ -550,17 +672,31 @@ class ZhTransfer:
         ...
     def write(self, path: Any) -> None:
         """
-        Writes the file (atomically) as prt precompute --basis zh does (docs/FORMAT.md)
+        Writes the file to `path` (atomically) as prt precompute --basis zh does (docs/FORMAT.md).
         """
 
 def deform(mesh: Mesh, deformation: str, amount: float = ...) -> Mesh:
     """
-    A pose of `mesh` as prt relight --deform makes it: 'bend:ANGLE' (its y extent bent into an arc of ANGLE degrees towards +x) or 'twist:ANGLE' (about y), at `amount` of the angle. Same vertices and triangles; new positions and normals.
+    A pose of `mesh`, as prt relight --deform makes it. Same vertices and triangles; new positions and normals.
+
+    Arguments:
+      mesh: the rest Mesh.
+      deformation: 'bend:ANGLE' (its y extent bent into an arc of ANGLE degrees towards +x) or 'twist:ANGLE' (about y) [--deform].
+      amount: the fraction of the angle (1: all of it).
+
+    Returns a Mesh.
     """
 
 def fit_zh(transfer: Transfer, mesh: Mesh, *, lobes: int = ..., rounds: int = ..., threads: int = ..., progress: Any = ...) -> ZhTransfer:
     """
-    Fits `lobes` zonal-harmonic lobes (1 to 8) to every stored row of an SH transfer computed for `mesh` (the rest pose), as prt precompute --basis zh --lobes K does after its SH pass (the same bits, for any `threads`). Refuses a glossy transfer and more than 16 bands. Releases the GIL; progress as precompute's.
+    Fits zonal-harmonic lobes to every stored row of an SH transfer computed for `mesh` (the rest pose), as prt precompute --basis zh --lobes K does after its SH pass (the same bits, for any `threads`). Refuses a glossy transfer and more than 16 bands. Releases the GIL.
+
+    Arguments (prt precompute's option in brackets):
+      transfer: a Transfer; mesh: its Mesh (with uvs=True for UV tangents).
+      lobes: K, 1 to 8 (4) [--lobes]; rounds: the fit's refinement rounds (12).
+      threads; progress: as precompute's. The frames' tangent: the UV rule where the mesh has corner UVs, else the edge rule (--tangent).
+
+    Returns a ZhTransfer.
     """
 
 def pose(transfer: ZhTransfer, mesh: Mesh, *, report: bool = ...) -> Any:
@@ -570,7 +706,7 @@ def pose(transfer: ZhTransfer, mesh: Mesh, *, report: bool = ...) -> Any:
 
 def read_zh(path: Any) -> ZhTransfer:
     """
-    Reads a zonal-harmonic (local deformable) transfer file (prt precompute --basis zh).
+    Reads the zonal-harmonic (local deformable) transfer file at `path` (prt precompute --basis zh). Returns a ZhTransfer.
     """
 
 class WaveletTransfer:
@@ -632,45 +768,89 @@ class WaveletTransfer:
         ...
     def write(self, path: Any) -> None:
         """
-        Writes the file (atomically) as prt precompute --basis wavelet does (docs/FORMAT.md)
+        Writes the file to `path` (atomically) as prt precompute --basis wavelet does (docs/FORMAT.md).
         """
 
 def read_wavelet(path: Any) -> WaveletTransfer:
     """
-    Reads a wavelet transfer file (prt precompute --basis wavelet).
+    Reads the wavelet transfer file at `path` (prt precompute --basis wavelet). Returns a WaveletTransfer.
     """
 
 def compress(transfer: Transfer, *, clusters: int = ..., pca: int = ..., glossy_clusters: int = ..., glossy_pca: int = ..., weights: int = ..., iterations: int = ..., seed: int = ..., target_error: Any = ..., mesh: Any = ..., envs: Any = ..., spectra: Any = ..., own_spectra: bool = ..., sun: bool = ..., rotations: int = ..., eyes: int = ..., statistic: str = ..., metric: str = ..., exhaustive: bool = ..., progress: Any = ...) -> Transfer:
     """
-    Clustered PCA of a transfer (Sloan et al. 2003) as prt compress does, the same bits: a compressed Transfer (.compressed True; relight() uses its per-cluster products; .write() the file prt compress writes). Sizes: clusters K and pca N (the glossy matrices' own glossy_clusters, glossy_pca), weights 16 or 32 bits. Or target_error (relative RMS, with mesh=): the smallest K x N whose relit error (statistic 'p95' or 'mean', in metric 'band' or 'plain') meets it under the distribution: envs (map files; None: the bundled maps) under `rotations` rotations taking on the spectra of `spectra` (None: the bundled maps'; own_spectra=True: none), the sun unless sun=False, and for glossy transfers `eyes` views. docs/COMPRESSION.md. Releases the GIL; progress as precompute's.
+    Clustered PCA of a transfer (Sloan et al. 2003), as prt compress does (the same bits): .compressed is True, relight() uses its per-cluster products, .write() writes the file prt compress writes. docs/COMPRESSION.md. Releases the GIL.
+
+    Arguments (prt compress's option in brackets):
+      transfer: a Transfer (not compressed).
+      clusters, pca: K clusters of N principal vectors [--clusters, --pca]; glossy_clusters, glossy_pca: the glossy matrices' own [--glossy-clusters, --glossy-pca].
+      weights: 16 or 32 bits per weight [--weights].
+      iterations: k-means rounds [--iterations]; seed [--seed].
+      target_error: instead of sizes, the smallest K x N whose relit error meets it (relative RMS, with mesh=) [--target-error]:
+        statistic 'p95' or 'mean'; metric 'band' or 'plain'; exhaustive: try every size, not the search [--exhaustive];
+        envs (map files; None: the bundled maps) under `rotations` rotations taking on the spectra of `spectra`
+        (None: the bundled maps'; own_spectra=True: none), the sun unless sun=False, and glossy: `eyes` views.
+      mesh: the Mesh the transfer was computed for (target_error).
+      progress: as precompute's.
+
+    Returns a Transfer (compressed).
     """
 
 def compression_error(transfer: Transfer, compressed: Transfer, mesh: Mesh, *, envs: Any = ..., rotations: int = ..., eyes: int = ...) -> dict:
     """
-    The relit error of a compressed transfer against the one it came from, as prt compress --measure: a dict mean, p95, max (relative RMS over the vertices, per sample), samples, and bound (the transfer-space bound no lighting exceeds), over the maps `envs` (None: the bundled ones) as given under `rotations` rotations (and glossy: `eyes` views).
+    The relit error of a compressed transfer against the one it came from, as prt compress --measure.
+
+    Arguments:
+      transfer: the Transfer it came from; compressed: the compressed Transfer; mesh: the Mesh both were computed for.
+      envs: map files (None: the bundled ones), each under `rotations` rotations; eyes: glossy views per rotation.
+
+    Returns a dict: mean, p95, max (relative RMS over the vertices, per sample), samples, bound (the transfer-space bound no lighting exceeds).
     """
 
 def info(path: Any) -> Any:
     """
-    What a prt file holds (any transfer file, compressed, wavelet, zonal-harmonic, lightmap or probe volume), validated completely: the dict prt info --json prints (docs/FORMAT.md).
+    What the prt file at `path` holds (any transfer file, compressed, wavelet, zonal-harmonic, lightmap or probe volume), validated completely: the dict prt info --json prints (docs/FORMAT.md).
     """
 
 def verify(*, bands_max: int = ..., float_bands: int = ..., progress: Any = ...) -> list:
     """
-    prt verify's checks of the SH numerics against exact answers, as records: a list of dicts group, name (what was measured), error, tolerance, why (why the tolerance is what it is), passed. Releases the GIL.
+    prt verify's checks of the SH numerics against exact answers, as records. Releases the GIL.
+
+    Arguments:
+      bands_max: the highest band checked [--bands-max]; float_bands: the bands checked in float as well [--float-bands].
+      progress: as precompute's.
+
+    Returns a list of dicts: group, name (what was measured), error, tolerance, why (why the tolerance is what it is), passed.
     """
 
-def render(transfer: Any, mesh: Mesh, map: Any, *, width: int = ..., height: int = ..., camera: Any = ..., fov: float = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., linear: bool = ..., shading: Any = ..., bands: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ..., deform: Any = ..., amount: float = ..., terms: int = ..., selection: str = ...) -> numpy.ndarray:
+def render(transfer: Any, mesh: Any, map: Any, *, width: int = ..., height: int = ..., camera: Any = ..., fov: float = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., linear: bool = ..., shading: Any = ..., bands: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ..., deform: Any = ..., amount: float = ..., terms: int = ..., selection: str = ..., alpha: bool = ..., probes: Any = ..., object: Any = ..., object_at: Any = ..., object_size: float = ...) -> numpy.ndarray:
     """
-    A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 matrix or yaw, pitch, roll degrees). camera: None (the framing camera: a three-quarter view from above that frames every vertex), (eye, target[, up]) or a dict; fov: vertical degrees. exposure: stops or 'auto' (a white diffuse surface facing the brightest light shows at 1). Values: the tone map's display values in [0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', 'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform ('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). Raises prt.Error where no OpenGL 4.5 context can be had.
+    A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 matrix or yaw, pitch, roll degrees). camera: None (the framing camera: a three-quarter view from above that frames every vertex), (eye, target[, up]) or a dict; fov: vertical degrees. exposure: stops or 'auto' (a white diffuse surface facing the brightest light shows at 1). Values: the tone map's display values in [0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', 'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform ('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its Scene (mesh=the Scene; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object (a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal (0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: (height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render --alpha). Raises prt.Error where no OpenGL 4.5 context can be had.
     """
 
 def export_gltf(transfer: Transfer, mesh: Mesh, path: Any, *, bake: Any = ..., rotate: Any = ..., exposure: Any = ...) -> None:
     """
-    Writes the mesh and its SH transfer as glTF 2.0 (.glb binary, .gltf JSON; docs/FORMAT.md "glTF export"), as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes _PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.
+    Writes the mesh and its SH transfer as glTF 2.0 (.glb binary, .gltf JSON; docs/FORMAT.md "glTF export") to `path`, as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes _PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.
     """
 
 def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., camera: Any = ..., fov: float = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ...) -> None:
     """
-    Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does, the same files: index.html and its scripts, model.glb, lighting.json (every map's SH), maps/ (the bundled maps, and `env` first when given: a file or a bundled map's name). Its initial state: camera (None: the framing camera; (eye, target[, up])), fov, rotate (yaw, pitch, roll), exposure (stops or 'auto'; None: 'auto' for the page, 0 for a bake, as the command), tone_map, turn. An existing non-empty dir is refused unless force=True; written whole or not at all. bake: COLOR_0 in the model, as export_gltf (turned by rotate, exposure as given).
+    Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does (the same files): index.html and its scripts, model.glb, lighting.json (every map's SH), maps/. Written whole or not at all.
+
+    Arguments (prt export's option in brackets):
+      transfer: a Transfer; mesh: its Mesh; dir: the directory [--web].
+      env: the map shown first, a file or a bundled map's name (None: the bundled maps only) [--env].
+      camera: None (the framing camera) or (eye, target[, up]) [--camera]; fov: vertical degrees [--fov].
+      rotate: (yaw, pitch, roll) degrees [--rotate]; exposure: stops or 'auto' (None: 'auto' for the page, 0 for a bake) [--exposure].
+      tone_map: 'clamp', 'reinhard' or 'aces' [--tonemap]; turn: start with the environment turning [--turn].
+      force: replace an existing non-empty dir [--force]; bake: a map file: COLOR_0 in the model, as export_gltf [--bake].
+    """
+
+def export_probes(probes: Any, scene: Scene, bake: Any, path: Any, *, rotate: Any = ..., matrices: Any = ..., matrix_bands: int = ...) -> None:
+    """
+    Writes to `path` what prt export SCENE --probes PROBES --bake MAP -o PATH writes for the volume of `scene` (the same bytes): every probe relit under the map (bake: a map file, turned by rotate, yaw, pitch, roll degrees) as three.js LightProbe and Unity SphericalHarmonicsL2 coefficients, with positions in both engines' axes (docs/PROBES.md "Export"). PATH ends in .json. probes: a ProbeVolume or its file (the file's name is recorded, as the command records it). matrices: also write each probe's SH transfer matrix (--matrices FILE.bin), taking matrix_bands bands of lighting (--matrix-bands).
+    """
+
+def read_exr(path: Any) -> numpy.ndarray:
+    """
+    The pixels of the EXR image at `path` as float32 (height, width, 4) when it has an alpha channel (prt render --alpha, lightmaps: A is coverage), else (height, width, 3); row 0 at the top.
     """

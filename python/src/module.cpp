@@ -15,11 +15,13 @@
 #include <prt/file_info.h>
 #include <prt/filter.h>
 #include <prt/gltf.h>
+#include <prt/io.h>
 #include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
 #include <prt/paths.h>
 #include <prt/precompute.h>
+#include <prt/probe_object.h>
 #include <prt/probes.h>
 #include <prt/progress.h>
 #include <prt/projection.h>
@@ -782,6 +784,24 @@ PYBIND11_MODULE(_prt, m) {
       "hcross, vcross, or faces (path: six files).");
 
   m.def(
+      "read_exr",
+      [](const py::object& path) {
+        const std::string p = path_of(path, "path");
+        prt::RgbaImage img;
+        {
+          py::gil_scoped_release release;
+          img = prt::read_exr_rgba(p);
+        }
+        if (img.has_alpha) return copy(img.rgba.data(), {py::ssize_t(img.height), py::ssize_t(img.width), 4});
+        std::vector<float> rgb(std::size_t(img.width) * img.height * 3);
+        for (std::size_t i = 0; i < rgb.size() / 3; ++i)
+          std::copy_n(img.rgba.begin() + std::ptrdiff_t(i * 4), 3, rgb.begin() + std::ptrdiff_t(i * 3));
+        return copy(rgb.data(), {py::ssize_t(img.height), py::ssize_t(img.width), 3});
+      },
+      py::arg("path"),
+      "The pixels of the EXR image at `path` as float32 (height, width, 4) when it has an alpha channel (prt render --alpha, lightmaps: A is coverage), else (height, width, 3); row 0 at the top.");
+
+  m.def(
       "project",
       [](const py::object& map, int bands, const std::string& mapping, const std::string& quadrature,
          bool irradiance, const std::string& window, double window_width, const py::object& rotate) {
@@ -819,9 +839,18 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("map"), py::arg("bands") = 3, py::kw_only(), py::arg("mapping") = "auto",
       py::arg("quadrature") = "box", py::arg("irradiance") = false, py::arg("window") = "none",
       py::arg("window_width") = 0.0, py::arg("rotate") = py::none(),
-      "SH coefficients (bands*bands, 3) float64 of a map (an EnvMap, a file name, or an array (H, W, 3) or "
-      "(6, N, N, 3)), as prt project computes them: projection, then irradiance, window, rotation "
-      "(rotate: a 3x3 matrix or (yaw, pitch, roll) degrees as --rotate).");
+      "SH coefficients of a map, as prt project computes them: projection, then irradiance, window and rotation.\n"
+      "\n"
+      "Arguments (prt project's option in brackets):\n"
+      "  map: an EnvMap, a file name, a list of six face files, or an array (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces +X, -X, +Y, -Y, +Z, -Z).\n"
+      "  bands: SH bands n, 1 to 16 [--bands].\n"
+      "  mapping: how to read a file: 'auto' (from the shape), 'latlong', 'hcross', 'vcross' or 'faces' [--mapping].\n"
+      "  quadrature: 'box' (texels are area averages, integrated exactly) or 'point' (point samples; lat-long only) [--quadrature].\n"
+      "  irradiance: convolve with the clamped cosine (Ramamoorthi & Hanrahan's A_l) [--irradiance].\n"
+      "  window: 'none', 'hanning', 'lanczos' or 'auto' ringing suppression [--window]; window_width: its width in bands (0: bands + 1) [--window-width].\n"
+      "  rotate: a 3x3 rotation R or (yaw, pitch, roll) degrees; light from d arrives from R d [--rotate].\n"
+      "\n"
+      "Returns float64 (bands*bands, 3), index k = l(l+1)+m (docs/CONVENTIONS.md).");
 
   m.def(
       "sh_eval",
@@ -845,8 +874,12 @@ PYBIND11_MODULE(_prt, m) {
         return out;
       },
       py::arg("bands"), py::arg("dirs"),
-      "The bands*bands real SH basis functions at directions (N, 3) (normalised first): (N, bands*bands) "
-      "float64, index k = l(l+1)+m (docs/CONVENTIONS.md).");
+      "The real SH basis functions at directions.\n"
+      "\n"
+      "Arguments:\n"
+      "  bands: n, 1 to 16; dirs: (N, 3) directions (normalised first).\n"
+      "\n"
+      "Returns float64 (N, bands*bands), index k = l(l+1)+m (docs/CONVENTIONS.md).");
 
   m.def("rotation_from_euler",
         [](double yaw, double pitch, double roll) {
@@ -877,8 +910,13 @@ PYBIND11_MODULE(_prt, m) {
         return out;
       },
       py::arg("coeffs"), py::arg("rotation"),
-      "Rotates SH coefficients (n*n,) or (n*n, C): the lighting turned by a 3x3 matrix R or (yaw, pitch, roll) "
-      "degrees as --rotate (light from d arrives from R d).");
+      "Rotates SH coefficients: the lighting turned so that light from d arrives from R d (prt's --rotate).\n"
+      "\n"
+      "Arguments:\n"
+      "  coeffs: (n*n,) or (n*n, C).\n"
+      "  rotation: a 3x3 rotation matrix R, or (yaw, pitch, roll) degrees as --rotate.\n"
+      "\n"
+      "Returns float64 of coeffs' shape.");
 
   // ---- meshes ----
   py::class_<prt::Mesh>(m, "Mesh", "A triangle mesh as prt loads it (prt/mesh.h)", py::dynamic_attr())
@@ -933,9 +971,16 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("path"), py::kw_only(), py::arg("weld") = false, py::arg("file_normals") = true,
       py::arg("weighting") = "area", py::arg("uvs") = false,
-      "Reads OBJ, PLY, OFF, STL, glTF/GLB as prt does (weld: as --weld). uvs: also read the first texture "
-      "coordinates per triangle corner (Mesh.corner_uvs), which fit_zh's vertex frames take their tangent from, as "
-      "prt precompute --basis zh does (its --tangent uv, the default).");
+      "Reads a mesh file as every prt command does.\n"
+      "\n"
+      "Arguments:\n"
+      "  path: OBJ, PLY, OFF, STL, glTF/GLB.\n"
+      "  weld: merge vertices that share a position [--weld].\n"
+      "  weighting: how vertex normals are averaged where they are computed: 'area' (the default) or 'angle' (corner angles).\n"
+      "  file_normals: keep the file's normals where it has them (True; False: compute them).\n"
+      "  uvs: also read the first texture coordinates per triangle corner (Mesh.corner_uvs): fit_zh's vertex frames take their tangent from them, as prt precompute --basis zh (--tangent uv, the default).\n"
+      "\n"
+      "Returns a Mesh (immutable).");
 
   m.def(
       "make_mesh",
@@ -962,7 +1007,14 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("positions"), py::arg("triangles"), py::arg("normals") = py::none(), py::arg("colors") = py::none(),
       py::kw_only(), py::arg("weld") = false,
-      "A mesh from arrays, checked as a loaded one (normals computed when not given).");
+      "A mesh from arrays, checked as a loaded one.\n"
+      "\n"
+      "Arguments:\n"
+      "  positions: (V, 3) finite, float32 range; triangles: (T, 3) vertex indices (whole numbers).\n"
+      "  normals: (V, 3), or None to compute them (angle-weighted); colors: (V, 3) linear RGB in [0, 1], or None.\n"
+      "  weld: merge vertices that share a position.\n"
+      "\n"
+      "Returns a Mesh.");
 
   // ---- transfers ----
   py::class_<PyTransfer>(m, "Transfer", "An SH transfer (prt/transfer.h): per-vertex transfer vectors")
@@ -1030,7 +1082,7 @@ PYBIND11_MODULE(_prt, m) {
           },
           py::arg("mesh"), py::arg("direct") = false,
           "float32 (V, channels, bands^2): every vertex's transfer, analytic ones evaluated from `mesh` "
-          "(the mesh it was computed for)")
+          "(the mesh it was computed for); direct=True: an interreflected transfer's direct (0-bounce) part")
       .def(
           "write",
           [](const PyTransfer& p, const py::object& path) {
@@ -1040,7 +1092,7 @@ PYBIND11_MODULE(_prt, m) {
             else
               prt::write_transfer(f, p.t);
           },
-          py::arg("path"), "Writes the file (atomically) as prt precompute does (docs/FORMAT.md)")
+          py::arg("path"), "Writes the file to `path` (atomically) as prt precompute does (docs/FORMAT.md); a compressed transfer as prt compress does.")
       .def("__repr__",
            [](const PyTransfer& p) {
              return "<prt.Transfer " + p.source + ": " + std::string(prt::transfer_mode_name(p.t.mode)) + ", " +
@@ -1052,7 +1104,7 @@ PYBIND11_MODULE(_prt, m) {
       });
 
   m.def("read_transfer", [](const py::object& path) { return read_transfer(path_of(path, "path")); }, py::arg("path"),
-        "Reads an SH transfer file (compressed ones too: their rows are reconstructed); refuses wavelet files.");
+        "Reads the SH transfer file at `path` (compressed ones too: their rows are reconstructed); refuses wavelet and zonal-harmonic files, naming read_wavelet and read_zh. Returns a Transfer.");
 
   m.def(
       "precompute",
@@ -1107,12 +1159,27 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("seed") = 1, py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
       py::arg("material") = "diffuse", py::arg("basis") = "sh", py::arg("cube_res") = 32, py::arg("threshold") = 1e-2,
       py::arg("progress") = py::none(),
-      "Traces the transfer of every vertex as prt precompute does (same defaults; same seed and inputs, same "
-      "bits): a Transfer (bands: SH bands, default 5). basis='wavelet': a WaveletTransfer, as prt precompute "
-      "--basis wavelet (shadowed, diffuse; cube_res: the cube's face size r, a power of two 2 to 256, default 32; "
-      "threshold: the relative L2 error each vertex's kept coefficients may leave, default 1e-2; samples, seed and "
-      "bounces do not apply: one ray per cube texel). Releases the GIL. progress: None, True (a line on stderr) or a callable (done, total, phase) "
-      "returning False to stop; Ctrl-C stops it (KeyboardInterrupt).");
+      "Traces the transfer of every vertex, as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.\n"
+      "\n"
+      "Arguments (prt precompute's option in brackets):\n"
+      "  mesh: the Mesh (load_mesh, make_mesh); units are the mesh's.\n"
+      "  bands: SH bands n, n*n coefficients per channel, 1 to 16 (None: 5) [--bands].\n"
+      "  samples: rays per vertex (about), 1 to 2^24 (1024) [--samples].\n"
+      "  mode: 'unshadowed' (no rays), 'shadowed' or 'interreflected' [--mode].\n"
+      "  bounces: diffuse bounces of 'interreflected', 0 to 64 (1) [--bounces].\n"
+      "  albedo: diffuse albedo, a number or (r, g, b), each in [0, 1] (0.8) [--albedo].\n"
+      "  vertex_colors: the mesh's vertex colours as albedo [--vertex-colors].\n"
+      "  seed: seed of the direction set, 0 to 2^64 - 1 (1) [--seed].\n"
+      "  threads: worker threads, 0 (every core) to 1024 [--threads]; the result does not depend on it.\n"
+      "  offset: ray origin offset along the normal in mesh units (0: 1e-4 x the bounding-box diagonal) [--offset].\n"
+      "  bounce_tolerance: stop adding bounces once one adds less than this fraction of the direct energy, [0, 1) (0: never) [--bounce-tolerance].\n"
+      "  material: 'diffuse', or 'glossy': also the transfer matrices of glossy PRT (at most 12 bands; docs/GLOSSY.md) [--material].\n"
+      "  basis: 'sh'; or 'wavelet': a WaveletTransfer (shadowed, diffuse; samples, seed and bounces do not apply: one ray per cube texel) [--basis].\n"
+      "  cube_res: wavelet basis: the cube's face size r, a power of two 2 to 256 (32) [--cube-res].\n"
+      "  threshold: wavelet basis: the relative L2 error each vertex's kept coefficients may leave, [0, 1) (0.01) [--threshold].\n"
+      "  progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).\n"
+      "\n"
+      "Returns a Transfer (a WaveletTransfer for basis='wavelet').");
 
   m.def(
       "relight",
@@ -1181,31 +1248,52 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
       py::arg("eye") = py::none(), py::arg("gloss") = 16.0, py::arg("specular") = 0.5,
       py::arg("diffuse") = py::none(),
-      "Outgoing radiance float32 (V, 3) under lighting coefficients (n*n, 3) (project()), as prt relight "
-      "computes it (its diffuse part for a glossy transfer without eye=).\n\n"
-      "Glossy transfer (precompute(material='glossy')): eye, a point (3,) in mesh units, gives each vertex's "
-      "radiance toward it, float32 (V, 3), as prt relight --eye x,y,z; eye (E, 3), toward each of E points, "
-      "float32 (E, V, 3). gloss: the Phong exponent e >= 0 (--gloss, 16); specular: the lobe's strength rho_s "
-      ">= 0 (--specular, 0.5); diffuse: rho_d, a number or (r, g, b) in [0, 1] (--diffuse; None: the "
-      "transfer's own albedo). docs/GLOSSY.md.");
+      "Outgoing radiance under SH lighting, as prt relight computes it (a glossy transfer's diffuse part without eye=).\n"
+      "\n"
+      "Arguments (prt relight's option in brackets):\n"
+      "  transfer: a Transfer (precompute, read_transfer, compress).\n"
+      "  mesh: the Mesh it was computed for (checked).\n"
+      "  lighting: coefficients (n*n, 3) or (n*n,) (project()); at least the transfer's bands.\n"
+      "  direct: an interreflected transfer's direct (0-bounce) part only [--direct].\n"
+      "  eye: a glossy transfer's eye point (3,) in mesh units, or (E, 3) for E eyes [--eye].\n"
+      "  gloss: the Phong exponent e, 0 to 4096 (16) [--gloss]; specular: the lobe's strength rho_s in [0, 1] (0.5) [--specular].\n"
+      "  diffuse: rho_d, a number or (r, g, b) in [0, 1] (None: the transfer's own albedo) [--diffuse]. docs/GLOSSY.md.\n"
+      "\n"
+      "Returns float32 (V, 3) linear RGB radiance; with eye (E, 3): (E, V, 3).");
 
   // ---- rendering (prt/render.h; docs/RUNTIME.md) ----
   m.def(
       "render",
-      [](const py::object& transfer, const prt::Mesh& mesh, const py::object& map, int width, int height,
+      [](const py::object& transfer, const py::object& mesh_arg, const py::object& map, int width, int height,
          const py::object& camera, double fov, const py::object& rotate, const py::object& exposure,
          const std::string& tone_map, bool linear, const py::object& shading, const py::object& bands_arg,
          double gloss, double specular, const py::object& diffuse, const py::object& deform, double amount, int terms,
-         const std::string& selection) {
+         const std::string& selection, bool alpha, const py::object& probes, const py::object& object,
+         const py::object& object_at, double object_size) {
         const bool is_zh = py::isinstance<PyZhTransfer>(transfer), is_wavelet = py::isinstance<PyWavelet>(transfer);
-        if (!is_zh && !is_wavelet && !py::isinstance<PyTransfer>(transfer))
-          throw Error("transfer: expected a Transfer, a WaveletTransfer or a ZhTransfer (read_transfer, precompute, "
-                      "compress, read_wavelet, read_zh, fit_zh)");
-        const PyTransfer* p = is_zh || is_wavelet ? nullptr : &transfer.cast<const PyTransfer&>();
+        const bool is_lightmap = py::isinstance<prt::LightmapTransfer>(transfer);
+        if (!is_zh && !is_wavelet && !is_lightmap && !py::isinstance<PyTransfer>(transfer))
+          throw Error("transfer: expected a Transfer, a WaveletTransfer, a ZhTransfer or a Lightmap (read_transfer, "
+                      "precompute, compress, read_wavelet, read_zh, fit_zh, read_lightmap, precompute_lightmap)");
+        // A lightmap draws its scene; every other transfer its mesh.
+        if (is_lightmap ? !py::isinstance<prt::Scene>(mesh_arg) : !py::isinstance<prt::Mesh>(mesh_arg))
+          throw Error(is_lightmap ? "mesh: a Lightmap is drawn on its Scene (load_scene), not a " +
+                                        std::string(py::str(py::type::of(mesh_arg).attr("__name__")))
+                                  : "mesh: expected a Mesh (load_mesh, make_mesh), not a " +
+                                        std::string(py::str(py::type::of(mesh_arg).attr("__name__"))) +
+                                        (py::isinstance<prt::Scene>(mesh_arg) ? " (a Scene goes with its Lightmap)" : ""));
+        const prt::LightmapTransfer* lm = is_lightmap ? &transfer.cast<const prt::LightmapTransfer&>() : nullptr;
+        const prt::Scene* world = is_lightmap ? &mesh_arg.cast<const prt::Scene&>() : nullptr;
+        const prt::Mesh& mesh = is_lightmap ? world->mesh : mesh_arg.cast<const prt::Mesh&>();
+        const PyTransfer* p = is_zh || is_wavelet || is_lightmap ? nullptr : &transfer.cast<const PyTransfer&>();
         const PyZhTransfer* z = is_zh ? &transfer.cast<const PyZhTransfer&>() : nullptr;
         const PyWavelet* wt = is_wavelet ? &transfer.cast<const PyWavelet&>() : nullptr;
-        const std::string& source = is_zh ? z->source : is_wavelet ? wt->source : p->source;
-        if (is_zh)
+        static const std::string lightmap_source = "transfer (the lightmap)";
+        const std::string& source = is_zh ? z->source : is_wavelet ? wt->source : is_lightmap ? lightmap_source : p->source;
+        if (is_lightmap) {
+          if (lm->layout.scene_hash != world->hash())
+            throw Error("transfer: the lightmap was computed for another scene than `mesh` (scene hashes differ)");
+        } else if (is_zh)
           prt::check_matches(z->z, mesh, source);
         else if (is_wavelet)
           prt::check_matches(wt->t, mesh, source);
@@ -1224,7 +1312,7 @@ PYBIND11_MODULE(_prt, m) {
           }
         }();
         // A wavelet transfer's SH lighting is Lambert's (3 bands), as prt render.
-        const int file_bands = is_zh ? z->z.bands : is_wavelet ? 3 : p->t.bands;
+        const int file_bands = is_zh ? z->z.bands : is_wavelet ? 3 : is_lightmap ? lm->transfer.bands : p->t.bands;
         const bool glossy = p != nullptr && p->t.glossy;
         if (file_bands > prt::kMaxRenderBands)
           throw Error(source + ": " + std::to_string(file_bands) + " bands; the renderer draws at most " +
@@ -1248,6 +1336,8 @@ PYBIND11_MODULE(_prt, m) {
           if ((is_wavelet || is_zh) && sh != prt::Shading::Transfer && sh != prt::Shading::Lambert)
             throw Error("shading: a " + std::string(is_wavelet ? "wavelet" : "zonal-harmonic") +
                         " transfer shows 'transfer' or 'lambert'");
+          if (is_lightmap && sh != prt::Shading::Transfer && sh != prt::Shading::Direct)
+            throw Error("shading: a lightmap shows 'transfer' or (interreflected) 'direct'");
           return sh;
         }();
         if (!glossy && (gloss != 16.0 || specular != 0.5 || !diffuse.is_none()))
@@ -1264,6 +1354,43 @@ PYBIND11_MODULE(_prt, m) {
           if (!is_zh) throw Error(source + ": deform needs a zonal-harmonic transfer (fit_zh; docs/LDPRT.md)");
           pose = prt::parse_deform(deform.cast<std::string>());
           if (!std::isfinite(amount)) throw Error("amount: must be finite (0: the rest pose, 1: the whole angle)");
+        }
+        // An object lit by a probe volume, drawn with the mesh or scene (prt render --probes --object).
+        std::optional<prt::ProbeTransfer> volume;
+        const prt::Mesh* probe_mesh = nullptr;
+        prt::ProbeObjectPlacement place;
+        if (probes.is_none() != object.is_none()) throw Error("probes and object go together (a volume and the Mesh it lights)");
+        if (probes.is_none() && (!object_at.is_none() || object_size != 0.0))
+          throw Error(std::string(object_at.is_none() ? "object_size" : "object_at") + ": applies to a probe-lit object (probes=, object=)");
+        if (!probes.is_none()) {
+          if (!py::isinstance<prt::ProbeTransfer>(probes))
+            throw Error("probes: expected a ProbeVolume (read_probes, precompute_probes)");
+          if (!py::isinstance<prt::Mesh>(object)) throw Error("object: expected a Mesh (load_mesh, make_mesh)");
+          volume = probes.cast<const prt::ProbeTransfer&>();
+          probe_mesh = &object.cast<const prt::Mesh&>();
+          // The volume's scene hash covers the scene's UV sets, which a Mesh lacks: a Mesh read from a
+          // file is checked against the scene in that file, as prt render --probes checks MESH (a glTF's
+          // scene and mesh readers may differ in a position's last bit, so not the mesh's own hash).
+          const auto matches = [&] {
+            if (world) return world->hash() == volume->scene_hash;
+            if (prt::make_scene(mesh.positions, mesh.triangles, {}, {}, {}, {}, mesh.normals).hash() == volume->scene_hash)
+              return true;
+            std::error_code ec;
+            if (mesh.source.empty() || !std::filesystem::is_regular_file(mesh.source, ec)) return false;
+            const prt::Scene from_file = prt::load_scene_or_mesh(mesh.source);
+            return from_file.mesh.vertex_count() == mesh.vertex_count() && from_file.hash() == volume->scene_hash;
+          };
+          if (!matches())
+            throw Error("probes: computed for another scene than the one drawn (scene hashes differ; pass the Scene or "
+                        "Mesh the volume was computed for)");
+          if (!std::isfinite(object_size) || object_size < 0)
+            throw Error("object_size: the object's bounding-box diagonal in scene units, > 0 (0: twice the probe spacing)");
+          place.size = object_size;
+          if (!object_at.is_none()) {
+            const DArray at = real_array<double>(object_at, "object_at");
+            if (at.ndim() != 1 || at.shape(0) != 3) throw Error("object_at: 3 numbers x, y, z, got shape " + shape_text(at));
+            place.at = glm::dvec3(at.at(0), at.at(1), at.at(2));
+          }
         }
         prt::Display display;
         try {
@@ -1325,6 +1452,7 @@ PYBIND11_MODULE(_prt, m) {
         prt::require_finite(*e);
         std::vector<glm::dvec3> light, rotated;
         prt::Image img;
+        std::vector<float> coverage;
         {
           py::gil_scoped_release release;
           light = prt::project(*e, file_bands);
@@ -1334,6 +1462,25 @@ PYBIND11_MODULE(_prt, m) {
           prt::sh::Rotation(file_bands, R).apply(light, rotated);
           img = GlWorker::get().run([&](prt::Renderer& r) {
             r.set_environment(*e);
+            r.clear_probe_object();
+            // The probe-lit object, as prt render's first frame (t = 0 of its path, or at object_at).
+            std::optional<prt::ProbeObject> probe_object;
+            const auto frame = [&] {
+              if (volume) {
+                try {
+                  probe_object.emplace(*volume, *probe_mesh, *e, r, place);
+                } catch (const prt::NoGlContext&) {
+                  throw;
+                } catch (const Error& x) {
+                  throw Error(std::string("probes: ") + x.what());
+                }
+                probe_object->frame(r, R, 0.0);
+              }
+              prt::Image out = r.render(cam, width, height);
+              if (alpha) coverage = r.coverage();
+              r.clear_probe_object();
+              return out;
+            };
             if (is_wavelet) {  // as prt render: the CPU's relighting drawn as vertex colours, or Lambert
               r.set_mesh(mesh, wt->t.albedo, wt->t.vertex_colors);
               r.set_lighting(rotated);
@@ -1344,10 +1491,12 @@ PYBIND11_MODULE(_prt, m) {
               } else {
                 r.set_shading(prt::Shading::Lambert);
               }
-              return r.render(cam, width, height);
+              return frame();
             }
             try {
-              if (is_zh)
+              if (is_lightmap)
+                r.set_scene(*world, *lm);
+              else if (is_zh)
                 r.set_mesh(mesh, z->z);
               else if (p->compressed)
                 r.set_mesh(mesh, *p->compressed);
@@ -1364,18 +1513,26 @@ PYBIND11_MODULE(_prt, m) {
             if (pose) r.set_pose(*pose, amount);
             r.set_lighting(rotated);
             r.set_environment_rotation(R);
-            return r.render(cam, width, height);
+            return frame();
           });
           prt::finish_frame(img.rgb, display, linear);
         }
-        return copy(img.rgb.data(), {py::ssize_t(img.height), py::ssize_t(img.width), 3});
+        if (!alpha) return copy(img.rgb.data(), {py::ssize_t(img.height), py::ssize_t(img.width), 3});
+        std::vector<float> rgba(coverage.size() * 4);
+        for (std::size_t i = 0; i < coverage.size(); ++i) {
+          std::copy_n(img.rgb.begin() + std::ptrdiff_t(i * 3), 3, rgba.begin() + std::ptrdiff_t(i * 4));
+          rgba[i * 4 + 3] = coverage[i];
+        }
+        return copy(rgba.data(), {py::ssize_t(img.height), py::ssize_t(img.width), 4});
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("width") = 512,
       py::arg("height") = 512, py::arg("camera") = py::none(), py::arg("fov") = 40.0, py::arg("rotate") = py::none(),
       py::arg("exposure") = "auto", py::arg("tone_map") = "clamp", py::arg("linear") = false,
       py::arg("shading") = py::none(), py::arg("bands") = py::none(), py::arg("gloss") = 16.0,
       py::arg("specular") = 0.5, py::arg("diffuse") = py::none(), py::arg("deform") = py::none(),
-      py::arg("amount") = 1.0, py::arg("terms") = 100, py::arg("selection") = "area",
+      py::arg("amount") = 1.0, py::arg("terms") = 100, py::arg("selection") = "area", py::arg("alpha") = false,
+      py::arg("probes") = py::none(), py::arg("object") = py::none(), py::arg("object_at") = py::none(),
+      py::arg("object_size") = 0.0,
       "A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the "
       "first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is "
       "the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 "
@@ -1387,8 +1544,12 @@ PYBIND11_MODULE(_prt, m) {
       "'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, "
       "else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform "
       "('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a "
-      "wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). Raises prt.Error where no "
-      "OpenGL 4.5 context can be had.");
+      "wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its "
+      "Scene (mesh=the Scene; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object "
+      "(a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal "
+      "(0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: "
+      "(height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render "
+      "--alpha). Raises prt.Error where no OpenGL 4.5 context can be had.");
 
   // ---- glTF export (prt/gltf.h; docs/FORMAT.md "glTF export") ----
   // What prt export writes for a transfer: its rows (a compressed one's
@@ -1465,7 +1626,7 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("transfer"), py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("bake") = py::none(),
       py::arg("rotate") = py::none(), py::arg("exposure") = py::none(),
       "Writes the mesh and its SH transfer as glTF 2.0 (.glb binary, .gltf JSON; docs/FORMAT.md \"glTF "
-      "export\"), as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes "
+      "export\") to `path`, as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes "
       "_PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in "
       "asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, "
       "roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.");
@@ -1521,13 +1682,15 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("camera") = py::none(), py::arg("fov") = 40.0, py::arg("rotate") = py::none(),
       py::arg("exposure") = py::none(), py::arg("tone_map") = "clamp", py::arg("turn") = false, py::arg("force") = false,
       py::arg("bake") = py::none(),
-      "Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does, the same "
-      "files: index.html and its scripts, model.glb, lighting.json (every map's SH), maps/ (the bundled maps, "
-      "and `env` first when given: a file or a bundled map's name). Its initial state: camera (None: the "
-      "framing camera; (eye, target[, up])), fov, rotate (yaw, pitch, roll), exposure (stops or 'auto'; None: "
-      "'auto' for the page, 0 for a bake, as the command), "
-      "tone_map, turn. An existing non-empty dir is refused unless force=True; written whole or not at all. "
-      "bake: COLOR_0 in the model, as export_gltf (turned by rotate, exposure as given).");
+      "Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does (the same files): index.html and its scripts, model.glb, lighting.json (every map's SH), maps/. Written whole or not at all.\n"
+      "\n"
+      "Arguments (prt export's option in brackets):\n"
+      "  transfer: a Transfer; mesh: its Mesh; dir: the directory [--web].\n"
+      "  env: the map shown first, a file or a bundled map's name (None: the bundled maps only) [--env].\n"
+      "  camera: None (the framing camera) or (eye, target[, up]) [--camera]; fov: vertical degrees [--fov].\n"
+      "  rotate: (yaw, pitch, roll) degrees [--rotate]; exposure: stops or 'auto' (None: 'auto' for the page, 0 for a bake) [--exposure].\n"
+      "  tone_map: 'clamp', 'reinhard' or 'aces' [--tonemap]; turn: start with the environment turning [--turn].\n"
+      "  force: replace an existing non-empty dir [--force]; bake: a map file: COLOR_0 in the model, as export_gltf [--bake].");
 
   // ---- info and verify ----
   m.def(
@@ -1542,8 +1705,7 @@ PYBIND11_MODULE(_prt, m) {
         return py::module_::import("json").attr("loads")(text);
       },
       py::arg("path"),
-      "What a prt file holds (any transfer file, compressed, wavelet, zonal-harmonic, lightmap or probe volume), "
-      "validated completely: the dict prt info --json prints (docs/FORMAT.md).");
+      "What the prt file at `path` holds (any transfer file, compressed, wavelet, zonal-harmonic, lightmap or probe volume), validated completely: the dict prt info --json prints (docs/FORMAT.md).");
 
   m.def(
       "verify",
@@ -1569,8 +1731,13 @@ PYBIND11_MODULE(_prt, m) {
         return out;
       },
       py::kw_only(), py::arg("bands_max") = 32, py::arg("float_bands") = 16, py::arg("progress") = py::none(),
-      "prt verify's checks of the SH numerics against exact answers, as records: a list of dicts group, name (what "
-      "was measured), error, tolerance, why (why the tolerance is what it is), passed. Releases the GIL.");
+      "prt verify's checks of the SH numerics against exact answers, as records. Releases the GIL.\n"
+      "\n"
+      "Arguments:\n"
+      "  bands_max: the highest band checked [--bands-max]; float_bands: the bands checked in float as well [--float-bands].\n"
+      "  progress: as precompute's.\n"
+      "\n"
+      "Returns a list of dicts: group, name (what was measured), error, tolerance, why (why the tolerance is what it is), passed.");
 
   // ---- compression (prt compress; docs/COMPRESSION.md) ----
   // The distribution prt compress measures under, from the keyword arguments.
@@ -1638,8 +1805,8 @@ PYBIND11_MODULE(_prt, m) {
         } else {
           if (mesh.is_none()) throw Error("mesh: target_error measures the relit error on the mesh: give mesh=");
           const double target = target_error.cast<double>();
-          const auto& m = mesh.cast<const prt::Mesh&>();
-          prt::check_matches(p.t, m, p.source);
+          const auto& target_mesh = mesh.cast<const prt::Mesh&>();
+          prt::check_matches(p.t, target_mesh, p.source);
           const prt::ErrorDistribution d = distribution(p.t, envs, spectra, own_spectra, sun, rotations, eyes);
           prt::ChoiceOptions o;
           o.target = target;
@@ -1652,7 +1819,7 @@ PYBIND11_MODULE(_prt, m) {
           out.compressed = run_released(std::move(progress), [&](const prt::Progress& pr) {
             prt::ChoiceOptions oo = o;
             oo.progress = pr;
-            return prt::choose_compression(p.t, m, d, oo).compressed;
+            return prt::choose_compression(p.t, target_mesh, d, oo).compressed;
           });
         }
         out.t = prt::decompress(*out.compressed);
@@ -1664,14 +1831,21 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("envs") = py::none(), py::arg("spectra") = py::none(), py::arg("own_spectra") = false,
       py::arg("sun") = true, py::arg("rotations") = 24, py::arg("eyes") = 32, py::arg("statistic") = "p95",
       py::arg("metric") = "band", py::arg("exhaustive") = false, py::arg("progress") = py::none(),
-      "Clustered PCA of a transfer (Sloan et al. 2003) as prt compress does, the same bits: a compressed Transfer "
-      "(.compressed True; relight() uses its per-cluster products; .write() the file prt compress writes). "
-      "Sizes: clusters K and pca N (the glossy matrices' own glossy_clusters, glossy_pca), weights 16 or 32 bits. "
-      "Or target_error (relative RMS, with mesh=): the smallest K x N whose relit error (statistic 'p95' or "
-      "'mean', in metric 'band' or 'plain') meets it under the distribution: envs (map files; None: the bundled "
-      "maps) under `rotations` rotations taking on the spectra of `spectra` (None: the bundled maps'; "
-      "own_spectra=True: none), the sun unless sun=False, and for glossy transfers `eyes` views. "
-      "docs/COMPRESSION.md. Releases the GIL; progress as precompute's.");
+      "Clustered PCA of a transfer (Sloan et al. 2003), as prt compress does (the same bits): .compressed is True, relight() uses its per-cluster products, .write() writes the file prt compress writes. docs/COMPRESSION.md. Releases the GIL.\n"
+      "\n"
+      "Arguments (prt compress's option in brackets):\n"
+      "  transfer: a Transfer (not compressed).\n"
+      "  clusters, pca: K clusters of N principal vectors [--clusters, --pca]; glossy_clusters, glossy_pca: the glossy matrices' own [--glossy-clusters, --glossy-pca].\n"
+      "  weights: 16 or 32 bits per weight [--weights].\n"
+      "  iterations: k-means rounds [--iterations]; seed [--seed].\n"
+      "  target_error: instead of sizes, the smallest K x N whose relit error meets it (relative RMS, with mesh=) [--target-error]:\n"
+      "    statistic 'p95' or 'mean'; metric 'band' or 'plain'; exhaustive: try every size, not the search [--exhaustive];\n"
+      "    envs (map files; None: the bundled maps) under `rotations` rotations taking on the spectra of `spectra`\n"
+      "    (None: the bundled maps'; own_spectra=True: none), the sun unless sun=False, and glossy: `eyes` views.\n"
+      "  mesh: the Mesh the transfer was computed for (target_error).\n"
+      "  progress: as precompute's.\n"
+      "\n"
+      "Returns a Transfer (compressed).");
 
   m.def(
       "compression_error",
@@ -1695,10 +1869,13 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("transfer"), py::arg("compressed"), py::arg("mesh"), py::kw_only(), py::arg("envs") = py::none(),
       py::arg("rotations") = 24, py::arg("eyes") = 32,
-      "The relit error of a compressed transfer against the one it came from, as prt compress --measure: a dict "
-      "mean, p95, max (relative RMS over the vertices, per sample), samples, and bound (the transfer-space bound "
-      "no lighting exceeds), over the maps `envs` (None: the bundled ones) as given under `rotations` rotations "
-      "(and glossy: `eyes` views).");
+      "The relit error of a compressed transfer against the one it came from, as prt compress --measure.\n"
+      "\n"
+      "Arguments:\n"
+      "  transfer: the Transfer it came from; compressed: the compressed Transfer; mesh: the Mesh both were computed for.\n"
+      "  envs: map files (None: the bundled ones), each under `rotations` rotations; eyes: glossy views per rotation.\n"
+      "\n"
+      "Returns a dict: mean, p95, max (relative RMS over the vertices, per sample), samples, bound (the transfer-space bound no lighting exceeds).");
 
   // The C++ call relight() wraps, timed here (median seconds a call over
   // `repeats`), so a benchmark compares the module's call with it in one
@@ -1751,7 +1928,7 @@ PYBIND11_MODULE(_prt, m) {
           "float32 (6 r^2,): the vertex's dequantised Haar coefficients (zeros where dropped), in prt/wavelet.h's "
           "index order")
       .def("write", [](const PyWavelet& p, const py::object& path) { prt::write_wavelet_transfer(path_of(path, "path"), p.t); },
-           py::arg("path"), "Writes the file (atomically) as prt precompute --basis wavelet does (docs/FORMAT.md)")
+           py::arg("path"), "Writes the file to `path` (atomically) as prt precompute --basis wavelet does (docs/FORMAT.md).")
       .def("describe", [](const PyWavelet& p) { return prt::describe_transfer(p.t); }, "prt info's text")
       .def("__str__", [](const PyWavelet& p) { return prt::describe_transfer(p.t); })
       .def("__repr__", [](const PyWavelet& p) {
@@ -1767,7 +1944,7 @@ PYBIND11_MODULE(_prt, m) {
         p.t = prt::read_wavelet_transfer(p.source);
         return p;
       },
-      py::arg("path"), "Reads a wavelet transfer file (prt precompute --basis wavelet).");
+      py::arg("path"), "Reads the wavelet transfer file at `path` (prt precompute --basis wavelet). Returns a WaveletTransfer.");
 
   m.def(
       "relight",
@@ -1804,11 +1981,16 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("terms") = 100,
       py::arg("selection") = "area", py::arg("rotate") = py::none(),
-      "A wavelet transfer: outgoing radiance float32 (V, 3) under a map (an EnvMap, a file name or an (H, W, 3) "
-      "array), as prt relight --terms K --selection S [--rotate] computes it: the map resampled to the cube "
-      "(rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept "
-      "(selection 'area': |c| times the support's area, Ng et al.; 'magnitude': |c|), and each vertex's sum "
-      "over them.");
+      "A wavelet transfer's outgoing radiance under a map, as prt relight --terms K --selection S [--rotate]: the map resampled to the cube (rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept, each vertex's sum over them.\n"
+      "\n"
+      "Arguments:\n"
+      "  transfer: a WaveletTransfer; mesh: the Mesh it was computed for.\n"
+      "  map: an EnvMap, a file name or an (H, W, 3) array.\n"
+      "  terms: K, the coefficients kept (100) [--terms].\n"
+      "  selection: 'area' (|c| times its support's area, Ng et al. 2003) or 'magnitude' (|c|) [--selection].\n"
+      "  rotate: a 3x3 rotation or (yaw, pitch, roll) degrees [--rotate].\n"
+      "\n"
+      "Returns float32 (V, 3).");
 
   // ---- local deformable PRT (prt/zh_transfer.h, docs/LDPRT.md) ----
   py::class_<PyZhTransfer>(m, "ZhTransfer",
@@ -1883,7 +2065,7 @@ PYBIND11_MODULE(_prt, m) {
           "part of wa (p_a - p) + wb (p_b - p) perpendicular to its normal (docs/CONVENTIONS.md, \"Vertex frames\": "
           "a = b the edge rule, a != b the UV tangent, a = b = the vertex none)")
       .def("write", [](const PyZhTransfer& p, const py::object& path) { prt::write_zh_transfer(path_of(path, "path"), p.z); },
-           py::arg("path"), "Writes the file (atomically) as prt precompute --basis zh does (docs/FORMAT.md)")
+           py::arg("path"), "Writes the file to `path` (atomically) as prt precompute --basis zh does (docs/FORMAT.md).")
       .def("describe", [](const PyZhTransfer& p) { return prt::describe_transfer(p.z); },
            "prt info's text: lobes, bands, channels, mode, vertices, fit error, sizes, hashes")
       .def("__str__", [](const PyZhTransfer& p) { return prt::describe_transfer(p.z); })
@@ -1901,7 +2083,7 @@ PYBIND11_MODULE(_prt, m) {
         p.z = prt::read_zh_transfer(p.source);
         return p;
       },
-      py::arg("path"), "Reads a zonal-harmonic (local deformable) transfer file (prt precompute --basis zh).");
+      py::arg("path"), "Reads the zonal-harmonic (local deformable) transfer file at `path` (prt precompute --basis zh). Returns a ZhTransfer.");
 
   m.def(
       "fit_zh",
@@ -1919,9 +2101,14 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("transfer"), py::arg("mesh"), py::kw_only(), py::arg("lobes") = 4, py::arg("rounds") = 12,
       py::arg("threads") = 0, py::arg("progress") = py::none(),
-      "Fits `lobes` zonal-harmonic lobes (1 to 8) to every stored row of an SH transfer computed for `mesh` (the "
-      "rest pose), as prt precompute --basis zh --lobes K does after its SH pass (the same bits, for any "
-      "`threads`). Refuses a glossy transfer and more than 16 bands. Releases the GIL; progress as precompute's.");
+      "Fits zonal-harmonic lobes to every stored row of an SH transfer computed for `mesh` (the rest pose), as prt precompute --basis zh --lobes K does after its SH pass (the same bits, for any `threads`). Refuses a glossy transfer and more than 16 bands. Releases the GIL.\n"
+      "\n"
+      "Arguments (prt precompute's option in brackets):\n"
+      "  transfer: a Transfer; mesh: its Mesh (with uvs=True for UV tangents).\n"
+      "  lobes: K, 1 to 8 (4) [--lobes]; rounds: the fit's refinement rounds (12).\n"
+      "  threads; progress: as precompute's. The frames' tangent: the UV rule where the mesh has corner UVs, else the edge rule (--tangent).\n"
+      "\n"
+      "Returns a ZhTransfer.");
 
   m.def(
       "deform",
@@ -1932,9 +2119,14 @@ PYBIND11_MODULE(_prt, m) {
         return prt::deform_mesh(mesh, d, amount);
       },
       py::arg("mesh"), py::arg("deformation"), py::arg("amount") = 1.0,
-      "A pose of `mesh` as prt relight --deform makes it: 'bend:ANGLE' (its y extent bent into an arc of ANGLE "
-      "degrees towards +x) or 'twist:ANGLE' (about y), at `amount` of the angle. Same vertices and triangles; "
-      "new positions and normals.");
+      "A pose of `mesh`, as prt relight --deform makes it. Same vertices and triangles; new positions and normals.\n"
+      "\n"
+      "Arguments:\n"
+      "  mesh: the rest Mesh.\n"
+      "  deformation: 'bend:ANGLE' (its y extent bent into an arc of ANGLE degrees towards +x) or 'twist:ANGLE' (about y) [--deform].\n"
+      "  amount: the fraction of the angle (1: all of it).\n"
+      "\n"
+      "Returns a Mesh.");
 
   m.def(
       "pose",
@@ -1976,8 +2168,13 @@ PYBIND11_MODULE(_prt, m) {
         return vec3s(rgb);
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
-      "A zonal-harmonic transfer: outgoing radiance float32 (V, 3) of the pose `mesh` under lighting "
-      "coefficients (n*n, 3) (project()), as prt relight POSED f.prt ENV [--deform ...] computes it.");
+      "A zonal-harmonic transfer's outgoing radiance in the pose `mesh`, as prt relight POSED f.prt ENV [--deform ...].\n"
+      "\n"
+      "Arguments:\n"
+      "  transfer: a ZhTransfer (fit_zh, read_zh); mesh: the rest mesh or any pose of it (deform, pose).\n"
+      "  lighting: coefficients (n*n, 3) (project()); direct: the direct part only [--direct].\n"
+      "\n"
+      "Returns float32 (V, 3).");
 
   // ---- the reference ----
   m.def(
@@ -2007,9 +2204,19 @@ PYBIND11_MODULE(_prt, m) {
       py::arg("albedo") = 0.8, py::arg("vertex_colors") = false, py::arg("samples") = 4096, py::arg("seed") = 1,
       py::arg("offset") = 0.0, py::arg("rotate") = py::none(), py::arg("threads") = 0,
       py::arg("progress") = py::none(),
-      "Monte Carlo ground truth as prt reference computes it (same defaults, same bits): (radiance, std_error), "
-      "float32 (V, 3) each. map: an EnvMap, a file name or an (H, W, 3) array. Releases the GIL; progress as "
-      "precompute's.");
+      "Monte Carlo ground truth, as prt reference computes it (the same defaults, the same bits): every vertex's outgoing radiance traced against the map itself, no SH. Releases the GIL.\n"
+      "\n"
+      "Arguments (prt reference's option in brackets):\n"
+      "  mesh: the Mesh.\n"
+      "  map: an EnvMap, a file name or an (H, W, 3) lat-long array of linear radiance.\n"
+      "  samples: paths per vertex (4096) [--samples].\n"
+      "  mode: 'unshadowed', 'shadowed' or 'interreflected' [--mode]; bounces: of 'interreflected' [--bounces].\n"
+      "  albedo: a number or (r, g, b) in [0, 1] (0.8) [--albedo]; vertex_colors: the mesh's colours as albedo.\n"
+      "  seed [--seed], threads [--threads], offset (mesh units; 0: 1e-4 x the diagonal) [--offset].\n"
+      "  rotate: the map turned by a 3x3 rotation R or (yaw, pitch, roll) degrees (light from d arrives from R d) [--rotate].\n"
+      "  progress: as precompute's.\n"
+      "\n"
+      "Returns (radiance, std_error): float32 (V, 3) each, linear RGB.");
 
   m.def(
       "read_vertex_csv",
@@ -2019,7 +2226,7 @@ PYBIND11_MODULE(_prt, m) {
         return py::make_tuple(vec3s(rgb), se.empty() ? py::object(py::none()) : py::object(vec3s(se)));
       },
       py::arg("path"),
-      "Reads a vertex CSV (prt relight -o x.csv, prt reference): (rgb, std_error or None), float32 (V, 3).");
+      "Reads the vertex CSV at `path` (prt relight -o x.csv, prt reference): (rgb, std_error or None), float32 (V, 3).");
 
   m.def(
       "write_vertex_csv",
@@ -2033,7 +2240,10 @@ PYBIND11_MODULE(_prt, m) {
         prt::write_vertex_csv(path_of(path, "path"), v, std_error.is_none() ? nullptr : &se);
       },
       py::arg("path"), py::arg("rgb"), py::arg("std_error") = py::none(),
-      "Writes a vertex CSV that prt compare reads.");
+      "Writes a vertex CSV that prt compare reads.\n"
+      "\n"
+      "Arguments:\n"
+      "  path: the file; rgb: float (V, 3) per vertex; std_error: (V, 3) standard errors, or None.");
 
   // ---- scenes and lightmaps (docs/LIGHTMAPS.md) ----
   py::class_<prt::Scene>(m, "Scene", "A scene (prt/scene.h): objects with materials and UV sets, flattened")
@@ -2064,7 +2274,10 @@ PYBIND11_MODULE(_prt, m) {
                                return l;
                              })
       .def_property_readonly("hash", &prt::Scene::hash, "Scene hash (a lightmap's scene_hash)")
-      .def("lightmap_uv_set", &prt::Scene::lightmap_uv_set, py::arg("requested") = -1)
+      .def("lightmap_uv_set", &prt::Scene::lightmap_uv_set, py::arg("requested") = -1,
+           "The UV set a lightmap is laid out in: `requested` (>= 0; every object must have it) or, with -1, "
+           "TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises prt.Error "
+           "naming the objects that lack it.")
       .def("__repr__", [](const prt::Scene& s) { return "<prt.Scene " + prt::describe(s) + ">"; });
 
   m.def(
@@ -2074,7 +2287,7 @@ PYBIND11_MODULE(_prt, m) {
         py::gil_scoped_release release;
         return prt::load_scene(p);
       },
-      py::arg("path"), "Reads a glTF 2.0 (.gltf, .glb) or OBJ scene as prt precompute --lightmap does.");
+      py::arg("path"), "Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.");
 
   py::class_<prt::LightmapTransfer>(m, "Lightmap", "An SH lightmap (prt/lightmap.h): transfer per covered texel")
       .def_property_readonly("width", [](const prt::LightmapTransfer& l) { return l.layout.width; })
@@ -2129,10 +2342,11 @@ PYBIND11_MODULE(_prt, m) {
             return copy(reinterpret_cast<const float*>(img.data()), {l.layout.height, l.layout.width, 4});
           },
           py::arg("scene"), py::arg("lighting"),
-          "float32 (H, W, 4): prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)")
+          "The lightmap relit under `lighting` (coefficients (n*n, 3), project()) on `scene` (the Scene it was computed for): "
+          "float32 (H, W, 4), prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)")
       .def("write", [](const prt::LightmapTransfer& l, const py::object& path) {
         prt::write_lightmap_transfer(path_of(path, "path"), l);
-      }, py::arg("path"), "Writes the lightmap file (docs/FORMAT.md), atomically")
+      }, py::arg("path"), "Writes the lightmap file to `path` (docs/FORMAT.md), atomically (a temporary file, then renamed).")
       .def("__repr__", [](const prt::LightmapTransfer& l) {
         return "<prt.Lightmap " + std::to_string(l.layout.width) + "x" + std::to_string(l.layout.height) + ", " +
                std::to_string(l.layout.texels.size()) + " covered texels, " + std::to_string(l.transfer.bands) +
@@ -2140,7 +2354,7 @@ PYBIND11_MODULE(_prt, m) {
       });
 
   m.def("read_lightmap", [](const py::object& path) { return prt::read_lightmap_transfer(path_of(path, "path")); },
-        py::arg("path"), "Reads a lightmap file (prt precompute SCENE --lightmap WxH).");
+        py::arg("path"), "Reads the lightmap file at `path` (prt precompute SCENE --lightmap WxH). Returns a Lightmap.");
 
   m.def(
       "precompute_lightmap",
@@ -2159,7 +2373,15 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("scene"), py::arg("width"), py::arg("height"), py::kw_only(), py::arg("uv_set") = -1,
       py::arg("mode") = "shadowed", py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("bounces") = 1,
-      py::arg("seed") = 1, "The lightmap prt precompute SCENE --lightmap WxH computes (same bits).");
+      py::arg("seed") = 1, "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
+      "\n"
+      "Arguments (prt precompute's option in brackets):\n"
+      "  scene: a Scene (load_scene).\n"
+      "  width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].\n"
+      "  uv_set: the scene's UV set the atlas is laid out in (-1: TEXCOORD_1 where every object has it, else TEXCOORD_0) [--uv].\n"
+      "  bands [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
+      "\n"
+      "Returns a Lightmap.");
 
   m.def(
       "lightmap_from_rows",
@@ -2188,8 +2410,14 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("scene"), py::arg("width"), py::arg("height"), py::arg("rows"), py::kw_only(), py::arg("uv_set") = -1,
       py::arg("mode") = "shadowed",
-      "A lightmap from arrays: rows float32 (N, channels, bands^2), one per covered texel of the atlas (every "
-      "texel stored); .write() makes a file prt relight reads.");
+      "A lightmap from arrays, for a Scene: every texel of the atlas stored (none analytic); .write() makes a file prt relight reads.\n"
+      "\n"
+      "Arguments:\n"
+      "  scene: the Scene; width, height: the atlas in texels; uv_set: its UV set (-1: as precompute_lightmap).\n"
+      "  rows: float32 (N, channels, bands^2), one per covered texel, in texel order.\n"
+      "  mode: the transfer mode recorded ('shadowed', 'interreflected', ...).\n"
+      "\n"
+      "Returns a Lightmap.");
 
   // ---- probe volumes (prt/probes.h, docs/PROBES.md) -------------------------------
   py::class_<prt::ProbeTransfer>(m, "ProbeVolume", "A relightable probe volume (prt precompute SCENE --probes)")
@@ -2268,7 +2496,8 @@ PYBIND11_MODULE(_prt, m) {
             return copy(out.data(), {py::ssize_t(N), 3});
           },
           py::arg("scene"), py::arg("points"), py::arg("normals"), py::arg("sh"),
-          "float32 (N, 3): E(p, n)/pi at the points from the relit probes `sh`, as prt relight --at (traced visibility)")
+          "float32 (N, 3): E(p, n)/pi at `points` (N, 3) with unit `normals` (N, 3) in `scene` (the Scene the volume "
+          "was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility)")
       .def(
           "matrices",
           [](const prt::ProbeTransfer& t, int in_bands) {
@@ -2280,7 +2509,7 @@ PYBIND11_MODULE(_prt, m) {
           py::arg("in_bands") = 3,
           "float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes")
       .def("write", [](const prt::ProbeTransfer& t, const py::object& path) { prt::write_probe_transfer(path_of(path, "path"), t); },
-           py::arg("path"), "Writes the probe file (docs/FORMAT.md \"Probe volume\"), atomically")
+           py::arg("path"), "Writes the probe file to `path` (docs/FORMAT.md \"Probe volume\"), atomically.")
       .def("__repr__", [](const prt::ProbeTransfer& t) {
         return "<prt.ProbeVolume " + std::to_string(t.grid.dims[0]) + "x" + std::to_string(t.grid.dims[1]) + "x" +
                std::to_string(t.grid.dims[2]) + ", " + std::to_string(t.stored()) + " stored, " +
@@ -2288,7 +2517,67 @@ PYBIND11_MODULE(_prt, m) {
       });
 
   m.def("read_probes", [](const py::object& path) { return prt::read_probe_transfer(path_of(path, "path")); }, py::arg("path"),
-        "Reads a probe volume (prt precompute SCENE --probes NXxNYxNZ).");
+        "Reads the probe volume at `path` (prt precompute SCENE --probes NXxNYxNZ). Returns a ProbeVolume.");
+
+  m.def(
+      "export_probes",
+      [](const py::object& probes, const prt::Scene& scene, const py::object& bake, const py::object& path,
+         const py::object& rotate, const py::object& matrices, int matrix_bands) {
+        const std::string out = path_of(path, "path");
+        // A ProbeVolume, or its file (named in the JSON as prt export names it).
+        std::optional<prt::ProbeTransfer> read;
+        std::string probes_file = "<computed>";
+        if (is_path(probes)) {
+          const std::string p = path_of(probes, "probes");
+          read = prt::read_probe_transfer(p);
+          probes_file = std::filesystem::path(p).filename().string();
+        } else if (!py::isinstance<prt::ProbeTransfer>(probes)) {
+          throw Error("probes: expected a ProbeVolume (read_probes, precompute_probes) or its file");
+        }
+        const prt::ProbeTransfer& t = read ? *read : probes.cast<const prt::ProbeTransfer&>();
+        if (!is_path(bake)) throw Error("bake: expected a map file (str or os.PathLike), as prt export --bake");
+        const std::string map = path_of(bake, "bake");
+        if (scene.hash() != t.scene_hash)
+          throw Error("probes: computed for another scene than `scene` (scene hashes differ)");
+        std::string ext = std::filesystem::path(out).extension().string();
+        for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+        if (ext != ".json") throw Error("path: " + out + ": a probe volume exports as .json");
+        std::array<double, 3> euler = {0, 0, 0};
+        if (!rotate.is_none()) {
+          const DArray r = real_array<double>(rotate, "rotate");
+          if (r.ndim() != 1 || r.shape(0) != 3)
+            throw Error("rotate: (yaw, pitch, roll) in degrees, as prt export --rotate (recorded in the file)");
+          for (int k = 0; k < 3; ++k) euler[std::size_t(k)] = r.data()[k];
+        }
+        constexpr int kMaxMatrixBands = 16;  // prt export --matrix-bands's range
+        if (matrix_bands < 1 || matrix_bands > kMaxMatrixBands)
+          throw Error("matrix_bands: 1 to " + std::to_string(kMaxMatrixBands) + ", got " + std::to_string(matrix_bands));
+        if (matrices.is_none() && matrix_bands != 3) throw Error("matrix_bands: applies with matrices= (a file)");
+        const std::string matrices_path = matrices.is_none() ? std::string() : path_of(matrices, "matrices");
+        py::gil_scoped_release release;
+        prt::EnvMap env = prt::load_envmap(map);
+        prt::require_finite(env);
+        prt::ProbeExportNames names;
+        names.scene = std::filesystem::path(scene.mesh.source).filename().string();
+        names.probes_file = probes_file;
+        names.map = std::filesystem::path(map).filename().string();
+        names.generator = "prt " PRT_VERSION " (prt export)";
+        const std::string text = prt::probe_engine_json(t, env, euler, names);
+        prt::write_text_file(out, text);
+        if (!matrices_path.empty()) {
+          int channels = 1;
+          const std::vector<float> mats = prt::probe_sh_matrices(t, matrix_bands, channels);
+          prt::write_probe_matrices(matrices_path, t, mats, matrix_bands, channels);
+        }
+      },
+      py::arg("probes"), py::arg("scene"), py::arg("bake"), py::arg("path"), py::kw_only(),
+      py::arg("rotate") = py::none(), py::arg("matrices") = py::none(), py::arg("matrix_bands") = 3,
+      "Writes to `path` what prt export SCENE --probes PROBES --bake MAP -o PATH writes for the volume of `scene` (the same bytes): every probe relit "
+      "under the map (bake: a map file, turned by rotate, yaw, pitch, roll degrees) as three.js LightProbe and "
+      "Unity SphericalHarmonicsL2 coefficients, with positions in both engines' axes (docs/PROBES.md \"Export\"). "
+      "PATH ends in .json. probes: a ProbeVolume or its file (the file's name is recorded, as the command records "
+      "it). matrices: also write each probe's SH transfer matrix (--matrices FILE.bin), taking matrix_bands bands "
+      "of lighting (--matrix-bands).");
 
   m.def(
       "precompute_probes",
@@ -2313,5 +2602,13 @@ PYBIND11_MODULE(_prt, m) {
       },
       py::arg("scene"), py::arg("dims"), py::kw_only(), py::arg("mode") = "shadowed", py::arg("bands") = 3,
       py::arg("bounce_bands") = 6, py::arg("bounces") = 1, py::arg("seed") = 1,
-      "The probe volume prt precompute SCENE --probes NXxNYxNZ computes (same bits).");
+      "The relightable probe volume prt precompute SCENE --probes NXxNYxNZ computes (the same bits). Releases the GIL.\n"
+      "\n"
+      "Arguments (prt precompute's option in brackets):\n"
+      "  scene: a Scene (load_scene).\n"
+      "  dims: (NX, NY, NZ) probes, 2 to the limit each, spanning the scene's bounding box, corners included [--probes].\n"
+      "  mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH (3) [--bands].\n"
+      "  bounce_bands: the environment bands the bounce light takes (6) [--bounce-bands]; bounces [--bounces]; seed [--seed].\n"
+      "\n"
+      "Returns a ProbeVolume.");
 }

@@ -2,6 +2,7 @@
 precompute --probes, relit and queried as prt relight --at, the matrices of
 prt export --matrices, as arrays."""
 import numpy as np
+import pytest
 
 import prt
 from conftest import ENV, SOURCE, run_prt
@@ -50,3 +51,28 @@ def test_relight_and_at_match_prt_relight(tmp_path):
     assert m.shape == (75, 1, 9, 9)
     invalid = np.flatnonzero(v.states == 2)
     assert np.all(m[invalid] == 0)
+
+
+def test_export_probes_is_prt_exports_file(tmp_path):
+    vol = tmp_path / "vol.prt"
+    run_prt("precompute", SCENE, "--probes", "4x3x4", "--seed", "7", "-q", "-o", vol)
+    cli_json, cli_bin = tmp_path / "cli.json", tmp_path / "cli.bin"
+    run_prt("export", SCENE, "--probes", vol, "--bake", ENV, "--rotate", "30,0,0", "-o", cli_json, "--matrices",
+            cli_bin, "--matrix-bands", "4", "-q")
+    py_json, py_bin = tmp_path / "py.json", tmp_path / "py.bin"
+    prt.export_probes(vol, prt.load_scene(SCENE), ENV, py_json, rotate=(30, 0, 0), matrices=py_bin, matrix_bands=4)
+    assert py_json.read_bytes() == cli_json.read_bytes()
+    assert py_bin.read_bytes() == cli_bin.read_bytes()
+    # A ProbeVolume object: the same numbers, its file unnamed.
+    prt.export_probes(prt.read_probes(vol), prt.load_scene(SCENE), ENV, py_json, rotate=(30, 0, 0))
+    import json
+    a, b = json.loads(py_json.read_text()), json.loads(cli_json.read_text())
+    assert a.pop("probes_file") == "<computed>" and b.pop("probes_file") == "vol.prt"
+    assert a == b
+    for kw, words in [(dict(path=tmp_path / "p.txt"), "json"), (dict(matrix_bands=2), "matrices"),
+                      (dict(rotate=(1, 2)), "rotate")]:
+        args = {"path": py_json, **kw}
+        with pytest.raises(prt.Error, match=words):
+            prt.export_probes(vol, prt.load_scene(SCENE), ENV, **args)
+    with pytest.raises(prt.Error, match="another scene"):
+        prt.export_probes(vol, prt.load_scene(SOURCE / "models" / "wall-on-floor.gltf"), ENV, py_json)

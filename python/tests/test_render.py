@@ -103,7 +103,7 @@ def test_render_arguments_are_checked(files):
             prt.render(t, mesh, ENV, **{"width": 8, "height": 8, **kw})
     with pytest.raises(prt.Error, match="different mesh|mesh hash"):
         prt.render(t, prt.load_mesh(TUBE), ENV, width=8, height=8)
-    with pytest.raises(prt.Error, match="Transfer, a WaveletTransfer or a ZhTransfer"):
+    with pytest.raises(prt.Error, match="a Transfer, a WaveletTransfer, a ZhTransfer or a Lightmap"):
         prt.render("t.prt", mesh, ENV)
     with pytest.raises(prt.Error, match="terms"):
         prt.render(t, mesh, ENV, terms=5)
@@ -126,3 +126,65 @@ def test_wavelet_frame_is_prt_renders_exr(tmp_path, cli, kw):
         prt.render(prt.read_wavelet(w), prt.load_mesh(MESH), ENV, bands=2)
     with pytest.raises(prt.Error, match="shading"):
         prt.render(prt.read_wavelet(w), prt.load_mesh(MESH), ENV, shading="ao")
+
+
+def test_alpha_is_prt_renders_rgba_exr(files, tmp_path):
+    out = tmp_path / "a.exr"
+    run_prt("render", MESH, files["sh"], ENV, "-o", out, "--width", W, "--height", H, "--exposure", "0", "--alpha",
+            "-q")
+    want = prt.read_exr(out)
+    assert want.shape == (H, W, 4)
+    t, mesh = prt.read_transfer(files["sh"]), prt.load_mesh(MESH)
+    got = prt.render(t, mesh, ENV, width=W, height=H, linear=True, exposure=0, alpha=True)
+    assert got.shape == (H, W, 4) and got.dtype == np.float32
+    np.testing.assert_array_equal(got, want)
+    # The colour is the 3-channel frame's; the alpha is coverage, 0 or 1, both present.
+    np.testing.assert_array_equal(got[..., :3], prt.render(t, mesh, ENV, width=W, height=H, linear=True, exposure=0))
+    a = got[..., 3]
+    assert set(np.unique(a)) == {0.0, 1.0} and 0.05 < a.mean() < 0.95
+    r = run_prt("render", MESH, files["sh"], ENV, "-o", tmp_path / "a.png", "--alpha", "-q", check=False)
+    assert r.returncode == 2 and "written as EXR" in r.stderr  # prt render --alpha writes EXR only
+
+
+LIGHTMAP_SCENE = MESH.parent / "wall-on-floor.gltf"
+ROOM = MESH.parent / "room.gltf"
+
+
+def test_lightmap_frame_is_prt_renders_exr(tmp_path):
+    gl_or_skip()
+    lm = tmp_path / "lm.prt"
+    run_prt("precompute", LIGHTMAP_SCENE, "--lightmap", "24x24", "--samples", "32", "--bands", "3", "-q", "-o", lm)
+    for cli, kw in [([], {}), (["--rotate", "60,0,0", "--bands", "2"], dict(rotate=(60, 0, 0), bands=2))]:
+        want = cli_frame(tmp_path, LIGHTMAP_SCENE, lm, ENV, "--exposure", "0", *cli)
+        got = prt.render(prt.read_lightmap(lm), prt.load_scene(LIGHTMAP_SCENE), ENV, width=W, height=H, linear=True,
+                         exposure=0, **kw)
+        np.testing.assert_array_equal(got, want)
+    with pytest.raises(prt.Error, match="Scene"):
+        prt.render(prt.read_lightmap(lm), prt.load_mesh(MESH), ENV)
+    with pytest.raises(prt.Error, match="another scene"):
+        prt.render(prt.read_lightmap(lm), prt.load_scene(ROOM), ENV)
+    with pytest.raises(prt.Error, match="shading"):
+        prt.render(prt.read_lightmap(lm), prt.load_scene(LIGHTMAP_SCENE), ENV, shading="ao")
+
+
+def test_probe_lit_object_is_prt_renders_exr(files, tmp_path):
+    room, vol = tmp_path / "room.prt", tmp_path / "vol.prt"
+    run_prt("precompute", ROOM, "-o", room, "--samples", "32", "--bands", "3", "-q")
+    run_prt("precompute", ROOM, "--probes", "4x3x4", "-q", "-o", vol)
+    inside = dict(camera=((1.8, 1.8, 1.8), (0, 0.8, 0)), exposure=0)  # in the closed room, the object in view
+    cam = ["--camera", "1.8,1.8,1.8,0,0.8,0,0,1,0", "--exposure", "0"]
+    for cli, kw in [([], {}), (["--object-at", "0.5,1,0", "--object-size", "0.8"],
+                               dict(object_at=(0.5, 1, 0), object_size=0.8))]:
+        want = cli_frame(tmp_path, ROOM, room, ENV, *cam, "--probes", vol, "--object", MESH, *cli)
+        got = prt.render(prt.read_transfer(room), prt.load_mesh(ROOM), ENV, width=W, height=H, linear=True,
+                         probes=prt.read_probes(vol), object=prt.load_mesh(MESH), **inside, **kw)
+        np.testing.assert_array_equal(got, want)
+        plain = prt.render(prt.read_transfer(room), prt.load_mesh(ROOM), ENV, width=W, height=H, linear=True, **inside)
+        assert (plain != got).any(axis=2).mean() > 0.01  # the object shows
+    with pytest.raises(prt.Error, match="another scene"):
+        prt.render(prt.read_transfer(files["sh"]), prt.load_mesh(MESH), ENV, probes=prt.read_probes(vol),
+                   object=prt.load_mesh(MESH))
+    with pytest.raises(prt.Error, match="go together"):
+        prt.render(prt.read_transfer(room), prt.load_mesh(ROOM), ENV, probes=prt.read_probes(vol))
+    with pytest.raises(prt.Error, match="object_at"):
+        prt.render(prt.read_transfer(room), prt.load_mesh(ROOM), ENV, object_at=(0, 0, 0))

@@ -42,4 +42,4 @@ def test_stubs_declare_every_public_name_with_its_docs():
 def test_help_reads_like_the_commands_help():
     doc = prt.precompute.__doc__
     assert doc.startswith("precompute(mesh: prt._prt.Mesh, *, bands")
-    assert "as prt precompute does" in doc and "Releases the GIL" in doc
+    assert "as prt precompute MESH does" in doc and "Releases the GIL" in doc

@@ -37,7 +37,7 @@ struct RenderArgs {
   std::string mesh, transfer, env, output, camera, rotate;
   int width = 512, height = 512, frames = 1;
   double fov = 40, spin = 0;
-  bool frames_given = false, spin_given = false, quiet = false;
+  bool frames_given = false, spin_given = false, quiet = false, alpha = false;
   ProbeObjectArgs probe;  // --probes FILE --object MESH (docs/PROBES.md "Rendering")
   std::vector<const CLI::Option*> probe_opts;
   LookArgs look;
@@ -64,6 +64,11 @@ int run_render(const RenderArgs& a) {
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   if (const std::string problem = image_output_type_problem(a.output); !problem.empty())
     throw UsageError("--output: " + problem);
+  if (a.alpha && image_output_type_problem(a.output).empty()) {
+    std::string ext = std::filesystem::path(a.output).extension().string();
+    for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext != ".exr") throw UsageError("--alpha: " + a.output + ": an image with alpha is written as EXR (.exr)");
+  }
   for (int f = 0; f < (a.frames_given ? a.frames : 1); ++f)
     check_not_input("--output", a.frames_given ? frame_path(a.output, f) : a.output,
                     {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
@@ -153,7 +158,7 @@ int run_render(const RenderArgs& a) {
   // --probes --object: an object lit by the probe volume, on a path through it.
   std::optional<ProbeObject> probe_object;
   if (!a.probe.probes.empty()) {
-    probe_object.emplace(a.probe, a.mesh, env, renderer);
+    probe_object.emplace(load_probe_object(a.probe, a.mesh, env, renderer));
     if (!a.quiet) fmt::print(stderr, "{}\n", probe_object->describe());
   }
 
@@ -204,7 +209,11 @@ int run_render(const RenderArgs& a) {
       render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       width = img.width;
       height = img.height;
-      out.write([&] { write_frame(a.frames_given ? frame_path(a.output, f) : a.output, std::move(img), look.display); });
+      const std::vector<float> alpha = a.alpha ? renderer.coverage() : std::vector<float>{};
+      out.write([&] {
+        write_frame(a.frames_given ? frame_path(a.output, f) : a.output, std::move(img), look.display,
+                    a.alpha ? &alpha : nullptr);
+      });
     }
     if (!Outputs::interrupted()) progress(std::size_t(a.frames), std::size_t(a.frames), "frames");
   }
@@ -281,6 +290,8 @@ Run add_render(CLI::App& app) {
                                 "A skinned glTF MESH: which of the file's animations");
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
+  s->add_flag("--alpha", a->alpha,
+              "Write RGBA (EXR only): A = 1 where the model covers the pixel, 0 where the background shows");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_render(*a); };
 }

@@ -291,7 +291,7 @@ class Viewer {
     projected_ = project(scene.env, sh_bands_);
     rotated_.resize(projected_.size());
     if (!a.probe.probes.empty()) {
-      probe_object_.emplace(a.probe, a.mesh, scene.env, renderer);
+      probe_object_.emplace(load_probe_object(a.probe, a.mesh, scene.env, renderer));
       if (!a.quiet) fmt::print(stderr, "{}\n", probe_object_->describe());
     }
   }

@@ -134,12 +134,22 @@ std::vector<glm::dvec3> windowed_lighting(std::vector<glm::dvec3> light, int ban
   return light;
 }
 
-void write_frame(const std::string& path, Image img, const Display& d) {
+void write_frame(const std::string& path, Image img, const Display& d, const std::vector<float>* alpha) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   const bool linear = ext == ".exr" || ext == ".hdr" || ext == ".pfm" || ext == ".tif" || ext == ".tiff";
   finish_frame(img.rgb, d, linear);
-  write_image(path, img.width, img.height, img.rgb);
+  if (!alpha) return write_image(path, img.width, img.height, img.rgb);
+  RgbaImage rgba;
+  rgba.width = img.width;
+  rgba.height = img.height;
+  rgba.has_alpha = true;
+  rgba.rgba.resize(alpha->size() * 4);
+  for (std::size_t i = 0; i < alpha->size(); ++i) {
+    for (int c = 0; c < 3; ++c) rgba.rgba[i * 4 + std::size_t(c)] = img.rgb[i * 3 + std::size_t(c)];
+    rgba.rgba[i * 4 + 3] = (*alpha)[i];
+  }
+  write_exr_rgba(path, rgba);
 }
 
 }  // namespace prt::cli

@@ -61,7 +61,10 @@ CLI::Validator camera_value();
 void parse_camera(const std::string& text, Camera& camera);
 
 // Writes a frame: EXR (and other float formats) keep linear values scaled by
-// 2^exposure; 8-bit formats get the tone map, then sRGB encoding.
-void write_frame(const std::string& path, Image image, const Display& display);
+// 2^exposure; 8-bit formats get the tone map, then sRGB encoding. With
+// `alpha` (Renderer::coverage, one per pixel): an RGBA EXR (the caller has
+// checked the extension).
+void write_frame(const std::string& path, Image image, const Display& display,
+                 const std::vector<float>* alpha = nullptr);
 
 }  // namespace prt::cli

@@ -5,83 +5,30 @@
 #include <prt/error.h>
 #include <prt/scene.h>
 
-#include <fmt/format.h>
-#include <glm/gtc/matrix_transform.hpp>
-
-#include <algorithm>
-#include <cmath>
 #include <filesystem>
-#include <limits>
 
 namespace prt::cli {
 
-ProbeObject::ProbeObject(const ProbeObjectArgs& a, const std::string& scene, const EnvMap& env, Renderer& renderer) {
-  t_ = read_probe_transfer(a.probes);
-  if (load_scene_or_mesh(scene).hash() != t_.scene_hash)
+ProbeObject load_probe_object(const ProbeObjectArgs& a, const std::string& scene, const EnvMap& env,
+                              Renderer& renderer) {
+  ProbeTransfer t = read_probe_transfer(a.probes);
+  if (load_scene_or_mesh(scene).hash() != t.scene_hash)
     throw Error(a.probes + ": computed for another scene than " + scene + ": rerun prt precompute " + scene + " --probes ...");
-  if (t_.bands != 3) throw Error(fmt::format("{}: {} bands; the probe-lit object takes 3 (prt precompute --probes --bands 3)", a.probes, t_.bands));
-  const Mesh object = load_mesh(a.object);
-  vertices_ = object.vertex_count();
-  name_ = std::filesystem::path(a.object).filename().string();
-  const glm::dvec3 lo(object.bounds_min()), hi(object.bounds_max());
-  object_centre_ = (lo + hi) * 0.5;
-  const glm::dvec3 sp = t_.grid.spacing();
-  double smallest = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 3; ++k)
-    if (sp[k] > 0) smallest = std::min(smallest, sp[k]);
-  if (!std::isfinite(smallest)) smallest = 1;
-  const double size = a.size > 0 ? a.size : 2.0 * smallest;
-  const double diag = glm::length(hi - lo);
-  object_diagonal_ = diag;
-  scale_ = diag > 0 ? size / diag : 1.0;
-  const glm::dvec3 gmin = t_.grid.min, gmax = t_.grid.max;
+  ProbeObjectPlacement place;
+  place.size = a.size;
   if (!a.at.empty()) {
     double xyz[3];
     parse_triple(a.at, "--object-at", xyz);
-    centre_ = {xyz[0], xyz[1], xyz[2]};
-    fixed_ = true;
-  } else {
-    // A circle at a third of the volume's height, a quarter of its width across.
-    centre_ = {(gmin.x + gmax.x) / 2, gmin.y + (gmax.y - gmin.y) / 3, (gmin.z + gmax.z) / 2};
-    radius_ = 0.25 * std::min(gmax.x - gmin.x, gmax.z - gmin.z);
+    place.at = glm::dvec3(xyz[0], xyz[1], xyz[2]);
   }
-  relighter_ = std::make_unique<ProbeRelighter>(t_, env);
-  renderer.set_probe_object(object, t_, glm::vec3(0.8f));
-}
-
-void ProbeObject::frame(Renderer& renderer, const glm::dmat3& R, double t) {
-  const double a = 2 * M_PI * t;
-  const glm::dvec3 at = fixed_ ? centre_ : centre_ + radius_ * glm::dvec3(std::cos(a), 0.0, std::sin(a));
-  glm::dmat4 model = glm::translate(glm::dmat4(1.0), at) * glm::scale(glm::dmat4(1.0), glm::dvec3(scale_)) *
-                     glm::translate(glm::dmat4(1.0), -object_centre_);
-  renderer.set_probe_object_model(glm::mat4(model));
-  // Only the probes of the cells the object's bounding sphere reaches are
-  // relit: its vertices read no others.
-  relighter_->set_rotation(R);
-  const glm::dvec3 sp = t_.grid.spacing();
-  const double reach = 0.5 * object_diagonal_ * scale_;
-  std::vector<std::uint32_t> probes;
-  int lo[3], hi[3];
-  for (int k = 0; k < 3; ++k) {
-    const int n = t_.grid.dims[std::size_t(k)];
-    const double a0 = sp[k] > 0 ? (at[k] - reach - t_.grid.min[k]) / sp[k] : 0.0, a1 = sp[k] > 0 ? (at[k] + reach - t_.grid.min[k]) / sp[k] : 0.0;
-    lo[k] = std::clamp(int(std::floor(a0)), 0, n - 1);
-    hi[k] = std::clamp(int(std::ceil(a1)), 0, n - 1);
+  const Mesh object = load_mesh(a.object);
+  try {  // the volume's refusals (its band count, buffers past this OpenGL's limits), naming the file
+    return ProbeObject(std::move(t), object, env, renderer, place, std::filesystem::path(a.object).filename().string());
+  } catch (const NoGlContext&) {
+    throw;
+  } catch (const Error& e) {
+    throw Error(a.probes + ": " + e.what());
   }
-  for (int z = lo[2]; z <= hi[2]; ++z)
-    for (int y = lo[1]; y <= hi[1]; ++y)
-      for (int x = lo[0]; x <= hi[0]; ++x) probes.push_back(std::uint32_t(t_.grid.index(x, y, z)));
-  std::vector<glm::vec3> some;
-  relighter_->relight(probes, some);
-  lit_.resize(t_.probes() * 9);
-  for (std::size_t i = 0; i < probes.size(); ++i)
-    std::copy_n(some.begin() + std::ptrdiff_t(i * 9), 9, lit_.begin() + std::ptrdiff_t(std::size_t(probes[i]) * 9));
-  renderer.set_probe_lighting(lit_);
-}
-
-std::string ProbeObject::describe() const {
-  return fmt::format("{}: {} vertices lit by {} probes ({}x{}x{}, {})", name_, vertices_, t_.probes(), t_.grid.dims[0],
-                     t_.grid.dims[1], t_.grid.dims[2], transfer_mode_name(t_.mode));
 }
 
 }  // namespace prt::cli
