@@ -352,8 +352,9 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   const double w = 4.0 * M_PI / M;
   const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
 
-  std::unique_ptr<detail::RayScene> scene;
-  if (trace) scene = std::make_unique<detail::RayScene>(mesh);
+  std::unique_ptr<detail::RayScene> own_scene;
+  if (trace && !src.scene) own_scene = std::make_unique<detail::RayScene>(mesh);
+  const detail::RayScene* scene = src.scene ? src.scene : own_scene.get();
   // Vertices with a normal and no occluded ray: their transfer is the
   // analytic clamped cosine, stored by no one (compact_transfer below).
   std::vector<std::uint8_t> analytic(V, 0);
@@ -566,7 +567,8 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
     store.append(glossy_ir ? pack(grain_hits) : std::vector<std::uint8_t>{});
   }
   first.finish();
-  scene.reset();
+  own_scene.reset();
+  scene = nullptr;
   if (o.memory_report) {
     *o.memory_report = plan.memory;
     o.memory_report->block = plan.block;

@@ -90,6 +90,9 @@ struct Source {
   // interreflection iterates over the points, as over vertices.
   const HitToPoint* hit_points = nullptr;
   bool compact = false;  // points: drop analytic rows (slots), as for vertices
+  // The mesh's ray scene, built once by a caller that traces many batches
+  // (adaptive sample points); nullptr: built for this call.
+  const RayScene* scene = nullptr;
 };
 
 // The transfer at `src` (checked options; no glossy at points).

@@ -43,6 +43,10 @@ std::size_t Transfer::analytic_vertices() const {
   return std::size_t(std::count(slots.begin(), slots.end(), kAnalytic));
 }
 
+std::size_t Transfer::interpolated_vertices() const {
+  return std::size_t(std::count_if(interpolated.begin(), interpolated.end(), [](std::uint8_t x) { return x != 0; }));
+}
+
 // ---- the validator ------------------------------------------------------------------
 
 namespace detail {

@@ -84,6 +84,15 @@ struct Transfer {
   }
   double direct_energy = 0;             // interreflected: mean |T| of the direct part (not stored in files)
 
+  // Adaptive sample points (docs/PRECOMPUTE.md, "Adaptive sample points"):
+  // interpolated[v] is 1 where vertex v's transfer (and glossy matrices,
+  // ambient occlusion, bent normal) was interpolated from traced vertices
+  // around it instead of traced, 0 where it was traced. Empty: every vertex
+  // traced (any transfer not computed adaptively). Stored in the file as the
+  // 'interpolated vertices' bit mask (docs/FORMAT.md).
+  std::vector<std::uint8_t> interpolated;
+  std::size_t interpolated_vertices() const;  // counted over `interpolated`
+
   std::size_t stride() const { return std::size_t(channels) * bands * bands; }
   bool is_analytic(std::size_t v) const { return !slots.empty() && slots[v] == kAnalytic; }
   std::size_t analytic_vertices() const;  // counted over slots
