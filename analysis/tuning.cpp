@@ -50,7 +50,14 @@ struct Search {
     t.bounce_tolerance = 0;
     if (t.mode == TransferMode::Interreflected && bounces == 0) t.mode = TransferMode::Shadowed;
     const auto t0 = Clock::now();
-    Transfer transfer = compute_transfer(mesh, t, progress);
+    Transfer transfer;
+    if (o.adaptive) {
+      AdaptiveOptions a = o.adaptive_options;
+      if (a.tolerance <= 0) a.tolerance = o.target / 2;
+      transfer = compute_adaptive_transfer(mesh, t, a, progress);
+    } else {
+      transfer = compute_transfer(mesh, t, progress);
+    }
     seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     return transfer;
   }

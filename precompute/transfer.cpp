@@ -213,11 +213,11 @@ void gather_to_root(std::vector<T>& data, std::size_t V, const Communicator& com
 }
 
 // Interreflected glossy: M_p[c] += w sum_front hits Y(s) T_q[c]^T, T_q the
-// final diffuse transfer (t.coeffs, one row per vertex) at the hit point by
+// final diffuse transfer (`vertex_rows`, t.coeffs' rows for every mesh vertex) at the hit point by
 // its barycentric coordinates; per vertex one BLAS product
 // (nc x H) (H x channels nc). Vertices [v0, v0 + offsets.size() - 1), their
 // hits in `store`'s blocks (block b of `blocks` vertices).
-void add_glossy_bounce_light(Transfer& t, const Mesh& mesh, const detail::SpillStore& store,
+void add_glossy_bounce_light(Transfer& t, const float* vertex_rows, const Mesh& mesh, const detail::SpillStore& store,
                              const std::vector<std::uint64_t>& offsets, std::size_t v0, std::size_t block,
                              const std::vector<double>& Y, double w, const Progress& progress) {
   const std::size_t nc = std::size_t(t.bands) * t.bands, stride = t.stride();
@@ -244,7 +244,7 @@ void add_glossy_bounce_light(Transfer& t, const Mesh& mesh, const detail::SpillS
           const double bc[3] = {1.0 - hits[h].u - hits[h].v, hits[h].u, hits[h].v};
           double* th = Th.data() + h * stride;
           for (int c = 0; c < 3; ++c) {
-            const float* src = t.coeffs.data() + std::size_t(tri[c]) * stride;
+            const float* src = vertex_rows + std::size_t(tri[c]) * stride;
             for (std::size_t k = 0; k < stride; ++k) th[k] += bc[c] * src[k];
           }
         }
@@ -583,11 +583,18 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   else gather_to_root(t.coeffs, V, comm);
   gather_to_root(t.ao, V, comm);
   gather_to_root(t.bent_normals, V, comm);
-  gather_to_root(analytic, V, comm);
+  if (keep_everywhere) all_gather(analytic, V, comm);
+  else gather_to_root(analytic, V, comm);
+  if (src.analytic_out) *src.analytic_out = analytic;
   if (emitters) gather_to_root(bounce_light, V, comm);
 
   const auto finish = [&]() {
-    if (glossy_ir) add_glossy_bounce_light(t, mesh, store, frow, r0, plan.block, Ydbl, w, progress);
+    if (glossy_ir) {
+      std::vector<float> dense;
+      if (src.expand) (*src.expand)(t.coeffs, dense, true);
+      add_glossy_bounce_light(t, src.expand ? dense.data() : t.coeffs.data(), mesh, store, frow, r0, plan.block, Ydbl,
+                              w, progress);
+    }
     if (glossy) gather_to_root(t.glossy_matrices, V, comm);
     if (keep_everywhere) return std::move(t);
     if (comm.rank() != 0) return Transfer{};
@@ -617,7 +624,10 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   std::vector<float> next(V * stride), other(o.bounces > 1 ? V * stride : 0);
   const std::vector<float>* prev = &t.direct;
   std::vector<std::uint8_t> buffer;
+  std::vector<float> vertex_rows;  // with expand: every mesh vertex's row of the previous bounce
   for (int b = 1; b <= o.bounces; ++b) {
+    if (src.expand) (*src.expand)(*prev, vertex_rows, b == 1);
+    const float* emitting = src.expand ? vertex_rows.data() : prev->data();
     detail::ProgressTicker bounce(progress, own, "bounces");
     for (std::size_t blk = 0; blk * plan.block < own; ++blk) {
       const std::size_t b0 = blk * plan.block, b1 = std::min(own, b0 + plan.block);
@@ -632,7 +642,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
           const std::size_t v = r0 + i;
           std::fill(acc.begin(), acc.end(), 0.0);
           for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
-            const float* emitter = prev->data() + std::size_t(col[e]) * stride;
+            const float* emitter = emitting + std::size_t(col[e]) * stride;
             const double gv = val[e];
             for (std::size_t k = 0; k < stride; ++k) acc[k] += gv * emitter[k];
           }
@@ -669,9 +679,12 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
 
 }  // namespace
 
-Transfer detail::compute_at(const Mesh& mesh, const Source& src, const TransferOptions& o, const Progress& progress) {
+void detail::check_transfer_options(const TransferOptions& o, const Mesh& mesh) { check_options(o, mesh); }
+
+Transfer detail::compute_at(const Mesh& mesh, const Source& src, const TransferOptions& o, const Progress& progress,
+                            bool keep_everywhere) {
   check_options(o, mesh);
-  return compute_impl(mesh, src, o, progress, nullptr, 0, false);
+  return compute_impl(mesh, src, o, progress, nullptr, 0, keep_everywhere);
 }
 
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Progress& progress) {

@@ -11,7 +11,9 @@
 #include <cstddef>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
+#include <vector>
 
 namespace prt::detail {
 
@@ -93,9 +95,29 @@ struct Source {
   // The mesh's ray scene, built once by a caller that traces many batches
   // (adaptive sample points); nullptr: built for this call.
   const RayScene* scene = nullptr;
+  // Points that are some of the mesh's vertices (adaptive sample points,
+  // precompute/adaptive.cpp): the interreflection gathers from every vertex
+  // (the gather's columns are mesh vertices), whose rows `expand` makes from
+  // the points' rows (P x stride in, V x stride out: the points' own rows
+  // copied, the other vertices interpolated). Glossy interreflected takes
+  // the hits' final transfer from it too.
+  // `transfer`: the rows are transfer (the direct part, or the total), else
+  // one bounce's light alone.
+  const std::function<void(const std::vector<float>& point_rows, std::vector<float>& vertex_rows, bool transfer)>*
+      expand = nullptr;
+  // Filled on rank 0 (every rank with keep_everywhere) with each point's
+  // analytic flag (1: no occluded ray), before any compaction.
+  std::vector<std::uint8_t>* analytic_out = nullptr;
 };
 
-// The transfer at `src` (checked options; no glossy at points).
-Transfer compute_at(const Mesh& mesh, const Source& src, const TransferOptions& options, const Progress& progress);
+// Throws prt::Error for options compute_transfer refuses on `mesh`.
+void check_transfer_options(const TransferOptions& options, const Mesh& mesh);
+
+// The transfer at `src` (checked options; no glossy at points but for
+// subsets of vertices with `expand`). keep_everywhere: every rank returns
+// the whole, uncompacted transfer (its coefficients; ambient occlusion, bent
+// normals and glossy matrices on rank 0 only).
+Transfer compute_at(const Mesh& mesh, const Source& src, const TransferOptions& options, const Progress& progress,
+                    bool keep_everywhere = false);
 
 }  // namespace prt::detail

@@ -197,6 +197,36 @@ TEST(TransferScale, RecordsPastTheLimitGiveTheSameBits) {
   }
 }
 
+// Adaptive sample points (precompute/adaptive.cpp) split every batch over
+// the ranks, which all make the same choices: the same bits as one process,
+// the interpolated vertices included; and under a memory limit that sends
+// the bounces' records to the temporary file.
+TEST(TransferScale, AdaptiveRanksAndLimitsGiveTheSameBits) {
+  const Mesh m = test::floor_and_ball(60);
+  for (const Case& c : cases()) {
+    if (c.o.mode == TransferMode::Unshadowed) continue;
+    AdaptiveReport r;
+    const Transfer one = compute_adaptive_transfer(m, c.o, {}, {}, &r);
+    ASSERT_GT(one.interpolated_vertices(), 100u) << c.name;
+    for (int n : {2, 3}) {
+      ThreadRanks ranks(n);
+      const Transfer split = ranks.run([&](const Communicator& comm) {
+        TransferOptions o = c.o;
+        o.comm = &comm;
+        return compute_adaptive_transfer(m, o, {});
+      });
+      expect_same(one, split, std::string(c.name) + ", adaptive, " + std::to_string(n) + " ranks");
+      EXPECT_EQ(one.interpolated, split.interpolated) << c.name;
+    }
+    if (c.o.mode != TransferMode::Interreflected) continue;
+    TransferOptions o = c.o;
+    o.records_in_memory_max = 4096;  // a few vertices' records: the rest to the temporary file
+    const Transfer capped = compute_adaptive_transfer(m, o, {});
+    expect_same(one, capped, std::string(c.name) + ", adaptive, records capped");
+    EXPECT_EQ(one.interpolated, capped.interpolated) << c.name;
+  }
+}
+
 TEST(TransferScale, TooSmallALimitIsRefusedBeforeAnyRay) {
   const Mesh m = test::floor_and_ball(24);
   TransferOptions o = cases()[2].o;

@@ -156,6 +156,64 @@ inline constexpr int kMaxGlossyBands = 12;
 // the same mesh, options and thread count give the same bits.
 Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress = {});
 
+// ---- adaptive sample points (docs/PRECOMPUTE.md, "Adaptive sample points") ----
+// compute_transfer traces every vertex; a dense scan has far more vertices
+// than its transfer has detail. compute_adaptive_transfer traces a nested
+// subset (Poisson-disk levels, coarse to fine), predicts the rest of each
+// level from the traced vertices around them along the surface, traces a
+// few probes of every patch of predictions and the whole patch where the
+// probes' error exceeds the tolerance.
+struct AdaptiveOptions {
+  // TOL: the relative RMS error interpolation may add to a patch's transfer
+  // (band-weighted: relit radiance under typical lighting; docs/PRECOMPUTE.md).
+  // 0: default_adaptive_tolerance(samples). Any value in (0, 1).
+  double tolerance = 0;
+  double probe_fraction = 1.0 / 16;  // of each patch's predictions traced to check it, (0, 1]
+  int min_probes = 3;                // probes per patch at least
+  // Trace this fraction of the interpolated vertices once more at the end
+  // and report their interpolation error (AdaptiveReport::verified...); the
+  // verified vertices keep the traced transfer. [0, 1].
+  double verify_fraction = 0;
+  std::uint64_t seed = 1;  // which vertices probe and verify
+};
+
+// The default TOL for `samples` rays: 0.01 at 1024, scaled with the
+// sampling noise (1 / sqrt(samples)), so that interpolation adds well under
+// the noise the rays already have (docs/PRECOMPUTE.md measures 1.02-1.07x
+// the full run's error against prt reference at it).
+double default_adaptive_tolerance(int samples);
+// The largest TOL prt precompute --adaptive takes without --adaptive-any:
+// 1.5x the default, where the measured error stays within 1.1x the full run's.
+double max_adaptive_tolerance(int samples);
+
+// What an adaptive run did: vertices traced (probes, failing patches and
+// the levels' own) and interpolated, per level; the verification's error
+// (the metric of TOL) over the verified vertices.
+struct AdaptiveReport {
+  double tolerance = 0;
+  int levels = 0;
+  std::size_t vertices = 0, traced = 0, interpolated = 0, probes = 0, patches = 0, failed_patches = 0;
+  // Vertices traced summed over every pass (interreflected: the choice's,
+  // then the chosen ones' again), each about `samples` rays; compute_transfer's is `vertices`.
+  std::size_t traces = 0;
+  std::size_t verified = 0, verified_over = 0;  // verified vertices; how many above TOL
+  double verified_rms = 0, verified_p95 = 0, verified_max = 0;
+  double seconds_selecting = 0, seconds_tracing = 0, seconds_predicting = 0;
+};
+
+// The transfer of compute_transfer (same options, rows, file layout), with
+// Transfer::interpolated marking the vertices interpolated. Shadowed: the
+// levels' batches are the result. Interreflected: the vertices are chosen
+// on the shadowed transfer, then the chosen ones traced again with the
+// bounces, gathering from every vertex (the others interpolated at each
+// bounce). Glossy: the matrices at the traced vertices are traced, the rest
+// interpolated (about each vertex's hemisphere product matrix). Unshadowed
+// traces nothing: every vertex is computed. Composes with memory_limit and
+// comm (every rank runs the same choices; each batch is split over the ranks).
+// Throws prt::Error on bad options.
+Transfer compute_adaptive_transfer(const Mesh& mesh, const TransferOptions& options, const AdaptiveOptions& adaptive,
+                                   const Progress& progress = {}, AdaptiveReport* report = nullptr);
+
 struct ZhFitOptions {
   int lobes = 4;
   int rounds = 12;  // zh::FitOptions::rounds

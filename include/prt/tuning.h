@@ -50,6 +50,11 @@ struct TargetOptions {
                                   // on closed meshes: docs/REPORT.md)
   std::size_t truth_vertices = 1024;
   int max_truth_samples = 1 << 18;  // refuse targets whose reference would need more
+  // Every trial (and so the result) computed with adaptive sample points
+  // (compute_adaptive_transfer): the error measured includes what
+  // interpolation adds. Its tolerance 0: target / 2 (the target picks TOL).
+  bool adaptive = false;
+  AdaptiveOptions adaptive_options;
 };
 
 struct TargetTrial {

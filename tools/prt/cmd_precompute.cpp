@@ -71,6 +71,11 @@ struct PrecomputeArgs {
   const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr, *mode_opt = nullptr,
                     *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr,
                     *material_opt = nullptr;
+  // --adaptive [TOL]: adaptive sample points (docs/PRECOMPUTE.md); "" not given, "default" without a value.
+  std::string adaptive;
+  AdaptiveOptions aopt;
+  bool adaptive_any = false;  // --adaptive-any: a TOL above max_adaptive_tolerance
+  const CLI::Option *adaptive_opt = nullptr, *verify_opt = nullptr, *adaptive_any_opt = nullptr;
 };
 
 // --compress KxN into o (UsageError naming the option otherwise).
@@ -175,6 +180,60 @@ void check_usage(const PrecomputeArgs& a) {
   check_not_input("--output", a.output, {{"MESH", a.mesh}, {"--env", a.env}});
 }
 
+// --adaptive [TOL] into a.aopt.tolerance (0: the default for the samples,
+// or with --target-error, target / 2); refuses a TOL past
+// max_adaptive_tolerance without --adaptive-any.
+void parse_adaptive(PrecomputeArgs& a) {
+  if (a.adaptive_opt->count() == 0) {
+    for (const CLI::Option* o : {a.verify_opt, a.adaptive_any_opt})
+      if (o->count() > 0) throw UsageError(o->get_name() + " is for --adaptive; give --adaptive too");
+    return;
+  }
+  if (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0)
+    throw UsageError("--adaptive chooses among a mesh's vertices: not for --probes or --lightmap (a lightmap's texels "
+                     "are traced every one)");
+  if (a.basis == "wavelet")
+    throw UsageError("--adaptive applies to --basis sh and zh (SH transfer); a wavelet transfer traces every vertex");
+  if (a.adaptive == "default" || a.adaptive.empty()) {
+    a.aopt.tolerance = 0;
+    return;
+  }
+  double tol = 0;
+  try {
+    std::size_t used = 0;
+    tol = std::stod(a.adaptive, &used);
+    if (used != a.adaptive.size()) throw std::invalid_argument("trailing");
+  } catch (const std::exception&) {
+    throw UsageError("--adaptive " + a.adaptive + ": expected a tolerance, a number in (0, 1) (e.g. 0.01), or no value");
+  }
+  if (!(tol > 0 && tol < 1))
+    throw UsageError(fmt::format("--adaptive {}: the tolerance must be in (0, 1)", a.adaptive));
+  const double most = max_adaptive_tolerance(a.opt.samples);
+  if (tol > most && !a.adaptive_any)
+    throw UsageError(fmt::format("--adaptive {}: above {:.3g}, the largest tolerance for {} samples whose error stays "
+                                 "within 1.1x the full run's (docs/PRECOMPUTE.md, \"Adaptive sample points\"); give "
+                                 "--adaptive-any to use it anyway",
+                                 a.adaptive, most, a.opt.samples));
+  a.aopt.tolerance = tol;
+}
+
+// What --adaptive did, on stderr.
+void print_adaptive(const AdaptiveReport& r, const Transfer& t) {
+  fmt::print(stderr,
+             "adaptive (TOL {:.3g}): traced {} of {} vertices ({:.1f}%), {} interpolated; {} vertex traces in all "
+             "({:.2f}x fewer than tracing every vertex); {} levels, {} patches of which {} traced whole, {} probes; "
+             "selecting {:.2f} s, tracing {:.2f} s, predicting {:.2f} s\n",
+             r.tolerance, r.traced, r.vertices, r.vertices ? 100.0 * double(r.traced) / double(r.vertices) : 100.0,
+             t.interpolated_vertices(), r.traces, r.traces ? double(r.vertices) / double(r.traces) : 1.0, r.levels,
+             r.patches, r.failed_patches, r.probes, r.seconds_selecting, r.seconds_tracing, r.seconds_predicting);
+  if (r.verified > 0)
+    fmt::print(stderr,
+               "verify: traced {} interpolated vertices again: error RMS {:.4f}, 95th percentile {:.4f}, max {:.4f} "
+               "(TOL {:.3g}; {} above it, {:.1f}%); they now hold the traced transfer\n",
+               r.verified, r.verified_rms, r.verified_p95, r.verified_max, r.tolerance, r.verified_over,
+               100.0 * double(r.verified_over) / double(r.verified));
+}
+
 // The reference cache of --target-error: --cache, else $XDG_CACHE_HOME/prt,
 // else ~/.cache/prt, else none.
 std::string target_cache(const std::string& given) {
@@ -220,6 +279,8 @@ std::optional<Transfer> run_target(PrecomputeArgs& a, const Mesh& mesh) {
   TargetOptions t;
   t.target = a.target_error;
   t.transfer = a.opt;
+  t.adaptive = a.adaptive_opt->count() > 0;
+  t.adaptive_options = a.aopt;
   // Unless given: the largest the search may choose.
   if (a.bands_opt->count() == 0) t.transfer.bands = 16;
   if (a.samples_opt->count() == 0) t.transfer.samples = 4096;
@@ -300,7 +361,8 @@ int run_zh(PrecomputeArgs& a) {
   if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
   Outputs out("precompute");
   const std::optional<Transfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
-    return compute_transfer(mesh, a.opt, job_progress(progress));
+    return a.adaptive_opt->count() > 0 ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress))
+                                        : compute_transfer(mesh, a.opt, job_progress(progress));
   }, a.opt.memory_limit);
   if (!computed) return 130;
   if (!is_root()) return 0;  // rank 0 fits and writes
@@ -553,6 +615,7 @@ int run_probes(PrecomputeArgs& a) {
 }
 
 int run_precompute(PrecomputeArgs& a) {
+  parse_adaptive(a);
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
   if (a.probes_opt->count() > 0) {
@@ -606,10 +669,13 @@ int run_precompute(PrecomputeArgs& a) {
   const bool quiet = a.quiet || !is_root();
   if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
   Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
+  AdaptiveReport adaptive;
+  const bool adapt = a.adaptive_opt->count() > 0;
   const std::optional<Transfer> computed =
       a.target_opt->count() > 0 ? run_target(a, mesh)
                          : run_with_progress(quiet, "precompute", [&](const Progress& progress) {
-                             return compute_transfer(mesh, a.opt, job_progress(progress));
+                             return adapt ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress), &adaptive)
+                                          : compute_transfer(mesh, a.opt, job_progress(progress));
                            }, a.opt.memory_limit);
   if (!computed) return 130;
   if (!is_root()) return 0;  // rank 0 compresses and writes the file
@@ -657,6 +723,7 @@ int run_precompute(PrecomputeArgs& a) {
                  double(peak_resident_bytes()) / 1e9, double(a.opt.memory_limit) / 1e9,
                  a.memory_limit.empty() ? " (the default)" : "", double(memory.records_in_memory) / 1e6,
                  double(memory.records_spilled) / 1e6, memory.block);
+    if (adapt && a.target_opt->count() == 0) print_adaptive(adaptive, t);
     if (!t.ao.empty() && t.mode != TransferMode::Unshadowed) {
       double mean = 0;
       for (float v : t.ao) mean += v;
@@ -808,6 +875,22 @@ Run add_precompute(CLI::App& app) {
                                 ->check(CLI::IsMember({16, 32}))
                                 ->capture_default_str();
   a->sh_only.push_back(a->compress_weights_opt);
+  a->adaptive_opt =
+      s->add_option("--adaptive", a->adaptive,
+                    "Adaptive sample points: trace a subset of the vertices and interpolate the rest along the surface "
+                    "where probes show interpolation adds at most TOL (relative RMS of the transfer, band-weighted); "
+                    "without a value 0.01 x sqrt(1024 / samples) (docs/PRECOMPUTE.md)")
+          ->expected(0, 1)
+          ->default_str("")
+          ->type_name("[TOL]");
+  a->verify_opt = s->add_option("--verify-adaptive", a->aopt.verify_fraction,
+                                "With --adaptive: trace this fraction of the interpolated vertices again and report "
+                                "their error against TOL (they keep the traced transfer)")
+                      ->check(CLI::Range(0.0, 1.0))
+                      ->type_name("FRACTION");
+  a->adaptive_any_opt = s->add_flag("--adaptive-any", a->adaptive_any,
+                                    "With --adaptive TOL: take a TOL above 1.5x the default (the error may then pass "
+                                    "1.1x the full run's)");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_precompute(*a); };
 }
