@@ -15,6 +15,7 @@
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
@@ -698,6 +699,68 @@ TEST(BadOptions, TargetErrorAndItsOptionsAreChecked) {
   runs.push_back({{"precompute", mesh, "-o", out, "--target-error", "0.1", "--env", env, "--mode", "unshadowed"},
                   {"--target-error: the unshadowed transfer has no sampling to choose"}});
   expect_refusals(dir, runs, 2);
+}
+
+TEST(BadOptions, AdaptiveAndItsOptionsAreChecked) {
+  TempDir dir;
+  const std::string mesh = write_quad(dir), out = dir.file("x.prt");
+  std::vector<Refusal> runs;
+  for (const char* bad : {"0", "-0.01", "1", "nan", "abc", "0.01x"})
+    runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", bad}, {"--adaptive ", bad}});
+  // Past 1.5x the default for the samples: the error may pass 1.1x the full run's.
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "0.02"}, {"above 0.015", "--adaptive-any"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "0.04", "--samples", "256"},
+                  {"above 0.03", "256 samples"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--verify-adaptive", "0.1"}, {"--verify-adaptive is for --adaptive"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive-any"}, {"--adaptive-any is for --adaptive"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "--basis", "wavelet"}, {"--adaptive applies to --basis sh"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "--lightmap", "64x64"}, {"not for --probes or --lightmap"}});
+  expect_refusals(dir, runs, 2);
+  const Result r = run_prt(dir, {"precompute", mesh, "-o", out, "--adaptive", "--verify-adaptive", "2"});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// --adaptive writes what compute_adaptive_transfer computes (the same
+// bits, the interpolated vertices marked) and says what it traced.
+TEST(PrecomputeCli, AdaptiveIsTheLibrarysAndSaysWhatItTraced) {
+  TempDir dir;
+  const Mesh m = test::floor_and_ball(60);
+  const std::string mesh = dir.file("ball.off");
+  test::write_off(mesh, m);
+  const Mesh loaded = load_mesh(mesh);
+  TransferOptions o;
+  o.bands = 4;
+  o.samples = 256;
+  o.albedo = glm::vec3(0.8f);
+  for (const char* tol : {"", "0.005"}) {
+    std::vector<std::string> args = {"precompute", mesh, "-o", dir.file("a.prt"), "--bands", "4", "--samples", "256",
+                                     "--adaptive"};
+    if (*tol) args.push_back(tol);
+    const Result r = run_prt(dir, args);
+    ASSERT_EQ(r.code, 0) << describe_run(r);
+    AdaptiveOptions a;
+    a.tolerance = *tol ? std::stod(tol) : 0.0;
+    AdaptiveReport rep;
+    const Transfer lib = compute_adaptive_transfer(loaded, o, a, {}, &rep);
+    const Transfer file = read_transfer(dir.file("a.prt"));
+    EXPECT_EQ(file.coeffs, lib.coeffs) << tol;
+    EXPECT_EQ(file.slots, lib.slots) << tol;
+    EXPECT_EQ(file.interpolated, lib.interpolated) << tol;
+    ASSERT_GT(lib.interpolated_vertices(), 0u) << tol;
+    EXPECT_NE(r.err.find(fmt::format("traced {} of {} vertices", rep.traced, rep.vertices)), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(fmt::format("adaptive (TOL {:.3g})", rep.tolerance)), std::string::npos) << r.err;
+  }
+  // --verify-adaptive: the report, and the verified vertices traced.
+  const Result v = run_prt(dir, {"precompute", mesh, "-o", dir.file("v.prt"), "--bands", "4", "--samples", "256",
+                                 "--adaptive", "--verify-adaptive", "0.5"});
+  ASSERT_EQ(v.code, 0) << describe_run(v);
+  EXPECT_NE(v.err.find("verify: traced "), std::string::npos) << v.err;
+  EXPECT_LT(read_transfer(dir.file("v.prt")).interpolated_vertices(), read_transfer(dir.file("a.prt")).interpolated_vertices());
+  // --adaptive-any takes a tolerance past the default range.
+  const Result any = run_prt(dir, {"precompute", mesh, "-o", dir.file("w.prt"), "--samples", "256", "--adaptive", "0.2",
+                                   "--adaptive-any", "-q"});
+  EXPECT_EQ(any.code, 0) << describe_run(any);
 }
 
 TEST(BadOptions, BadOptionValuesExitTwo) {

@@ -100,6 +100,10 @@ def main():
             "glossy": ["--material", "glossy", "--bands", "3"],
             "glossy-interreflected": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",
                                       "--albedo", "0.9,0.6,0.3"],
+            # adaptive sample points: every rank makes the same choices, each batch split over the ranks
+            "adaptive": ["--bands", "4", "--adaptive"],
+            "adaptive-glossy-interreflected": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",
+                                               "--albedo", "0.9,0.6,0.3", "--adaptive", "--verify-adaptive", "0.2"],
         }
         for name, opts in list(modes.items()) + [("wavelet", ["--basis", "wavelet", "--cube-res", "8"])]:
             o = (common if name != "wavelet" else ["-q"]) + opts
