@@ -381,4 +381,60 @@ class ProbeOcclusion {
   double spread_ = 0, offset_ = 0;
 };
 
+
+// ---- subdividing coarse meshes (docs/PRECOMPUTE.md, "Subdividing coarse meshes") ----
+// The converse of adaptive sample points (D3DX's ComputeDirectLightingSHAdaptive):
+// a coarse mesh's per-vertex transfer cannot hold a shadow edge that crosses
+// a big triangle. subdivide_for_transfer splits the edges whose two ends'
+// transfer differs by more than the tolerance at their midpoints, round by
+// round, and returns the refined mesh with its transfer.
+struct SubdivideOptions {
+  // Split an edge whose ends' transfer differs by more than this: the
+  // band-weighted row difference sqrt(sum_c sum_k w_l (a - b)^2 / channels),
+  // w_l = (l + 1)^-2, relative to the RMS over the input's vertices of
+  // sqrt(sum_c sum_k w_l a^2 / channels) (the metric of AdaptiveOptions'
+  // tolerance). In (0, 1).
+  double tolerance = 0.02;
+  std::size_t max_vertices = 0;  // cap on the refined mesh's vertex count; 0: 4x the input's
+  int max_rounds = 8;            // rounds of splitting, at least 1
+};
+
+// What subdivide_for_transfer did: the vertex counts, the edges split (one
+// new vertex each), the rounds that split any, whether the cap stopped it
+// (edges over the tolerance were left), and its time.
+struct SubdivideReport {
+  std::size_t input_vertices = 0, vertices = 0, split_edges = 0;
+  int rounds = 0;
+  bool capped = false;
+  double seconds = 0;
+};
+
+struct Subdivided {
+  Mesh mesh;
+  Transfer transfer;
+};
+
+// Each round: the transfer of the current mesh; the edges over the
+// tolerance, split at their midpoints, largest difference first, until the
+// next split would pass max_vertices (then `capped`, and no further round).
+// A triangle with 1, 2 or 3 split edges becomes 2, 3 or 4 (winding kept; two
+// split edges: the shorter diagonal of the quad left). An edge shared by
+// triangles (by position: vertices a seam duplicates count as one edge) is
+// split in all of them. A new vertex: the edge's midpoint, the normalised
+// mean of its ends' normals, their mean colour, and per corner the mean UV
+// (Mesh::corner_uvs). It stops when no edge exceeds the tolerance, at the
+// cap or after max_rounds. The transfer returned is compute_transfer(mesh,
+// options) of the refined mesh, the same bits; when the report says neither
+// capped nor max_rounds rounds, no edge of it exceeds the tolerance (edges
+// with a vertex without a normal are not measured). Shadowed: new vertices
+// are traced alone each round (the geometry rays hit is the input's), the
+// whole refined mesh once at the end; interreflected and unshadowed: the
+// whole mesh each round. Deterministic (the same bits for any thread
+// count); with options.comm every rank makes the same choices, rank 0
+// returns the transfer (the others an empty one) and every rank the mesh.
+// Throws prt::Error on bad options (compute_transfer's, a tolerance outside
+// (0, 1), max_vertices below the input's vertex count, max_rounds < 1).
+Subdivided subdivide_for_transfer(const Mesh& mesh, const TransferOptions& options, const SubdivideOptions& s,
+                                  const Progress& progress = {}, SubdivideReport* report = nullptr);
+
 }  // namespace prt
