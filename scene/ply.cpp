@@ -13,24 +13,26 @@ namespace prt {
 
 void write_ply(const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& colors, PlyColors format,
                const std::string& comment) {
-  const bool bytes = format == PlyColors::Bytes;
-  PRT_CHECK_OP(colors.size(), ==, mesh.vertex_count());
+  const bool bytes = format == PlyColors::Bytes, colored = !colors.empty();
+  PRT_CHECK(!colored || colors.size() == mesh.vertex_count());
   write_atomically(path, [&](const std::string& tmp) {
     std::ofstream f(tmp, std::ios::binary);
     if (!f) throw Error(path + ": cannot open for writing");
     const char* type = bytes ? "uchar" : "float";
-    f << "ply\nformat binary_little_endian 1.0\ncomment prt relight: " << comment << "\n"
+    f << "ply\nformat binary_little_endian 1.0\ncomment " << comment << "\n"
       << "element vertex " << mesh.vertex_count() << "\n"
       << "property float x\nproperty float y\nproperty float z\n"
-      << "property float nx\nproperty float ny\nproperty float nz\n"
-      << "property " << type << " red\nproperty " << type << " green\nproperty " << type << " blue\n"
-      << "element face " << mesh.triangles.size() << "\n"
+      << "property float nx\nproperty float ny\nproperty float nz\n";
+    if (colored) f << "property " << type << " red\nproperty " << type << " green\nproperty " << type << " blue\n";
+    f << "element face " << mesh.triangles.size() << "\n"
       << "property list uchar int vertex_indices\nend_header\n";
     std::vector<float> v(9);
     for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-      const glm::vec3 p = mesh.positions[i], nrm = mesh.normals[i], c = colors[i];
+      const glm::vec3 p = mesh.positions[i], nrm = mesh.normals[i], c = colored ? colors[i] : glm::vec3(0.0f);
       const float rec[9] = {p.x, p.y, p.z, nrm.x, nrm.y, nrm.z, c.x, c.y, c.z};
-      if (bytes) {
+      if (!colored) {
+        f.write(reinterpret_cast<const char*>(rec), 6 * sizeof(float));
+      } else if (bytes) {
         unsigned char rgb[3];
         for (int k = 0; k < 3; ++k) rgb[k] = static_cast<unsigned char>(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f));
         f.write(reinterpret_cast<const char*>(rec), 6 * sizeof(float));

@@ -15,8 +15,11 @@ namespace prt {
 // PlyColors::Float, linear and unclamped (HDR radiance in the map's units),
 // or PlyColors::Bytes, display values in [0, 1] (clamped) stored as uchar
 // round(255 v), what mesh viewers show (prt relight --tonemap, --srgb).
+// `colors` empty: no colour properties (a mesh alone, e.g. the refined mesh
+// of prt precompute --subdivide). `comment`: the header's comment line.
 enum class PlyColors { Float, Bytes };
 void write_ply(const std::string& path, const Mesh& mesh, const std::vector<glm::vec3>& colors,
-               PlyColors format = PlyColors::Float, const std::string& comment = "linear radiance per vertex");
+               PlyColors format = PlyColors::Float,
+               const std::string& comment = "prt relight: linear radiance per vertex");
 
 }  // namespace prt

@@ -87,9 +87,9 @@ int write_output(const RelightArgs& a, const std::string& ext, const Mesh& mesh,
       for (int k = 0; k < 3; ++k) c[k] = a.srgb ? srgb_encode(tone_map(c[k], d)) : tone_map(c[k], d);
   }
   const std::string comment =
-      display ? fmt::format("display colours: exposure {:g}, tone map {}, {}", stops, a.tonemap,
+      display ? fmt::format("prt relight: display colours: exposure {:g}, tone map {}, {}", stops, a.tonemap,
                             a.srgb ? "sRGB-encoded" : "linear")
-              : std::string("linear radiance per vertex");
+              : std::string("prt relight: linear radiance per vertex");
   Outputs out("relight");
   out.write([&] {
     if (ext == ".ply")
