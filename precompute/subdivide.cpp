@@ -79,17 +79,53 @@ void broadcast(std::vector<float>& data, const Communicator& comm) {
   comm.all_gather(data.data(), blocks);
 }
 
-// make_mesh renormalises the normals it is given (in double); the refined
-// mesh's normals must be a fixed point of that, so that the mesh written
-// and loaded again has the same normals (shading_hash: its analytic
-// vertices are shaded from them).
+// What make_mesh makes of `normals` given as a file's (it renormalises them
+// in double): a mesh of one degenerate triangle per normal.
+std::vector<glm::vec3> as_loaded(const std::vector<glm::vec3>& normals) {
+  std::vector<glm::uvec3> tris(normals.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) tris[i] = glm::uvec3(std::uint32_t(i));
+  return make_mesh(std::vector<glm::vec3>(normals.size(), glm::vec3(0.0f)), std::move(tris), normals).normals;
+}
+
+// The refined mesh, with normals that make_mesh keeps as they are: the mesh
+// written (prt precompute --subdivided-mesh) and loaded again must have the
+// same normals (shading_hash: analytic vertices are shaded from them), but
+// renormalising a float unit vector in double may move it by an ulp, and
+// again each time. Where it would, the nearest vector within 2 ulps per
+// component that stays put replaces it.
 Mesh build_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangles, std::vector<glm::vec3> normals,
                 std::vector<glm::vec3> colors, const std::string& source) {
-  for (int i = 0;; ++i) {
-    Mesh m = make_mesh(positions, triangles, normals, colors, {}, source);
-    if (m.normals == normals || i == 8) return m;
-    normals = m.normals;
+  Mesh m = make_mesh(positions, triangles, normals, colors, {}, source);
+  const std::vector<glm::vec3> again = as_loaded(m.normals);
+  std::vector<std::size_t> moved;
+  for (std::size_t v = 0; v < again.size(); ++v)
+    if (again[v] != m.normals[v]) moved.push_back(v);
+  if (moved.empty()) return m;
+  constexpr int kReach = 2, kSide = 2 * kReach + 1, kPerVertex = kSide * kSide * kSide;
+  std::vector<glm::vec3> candidates;
+  candidates.reserve(moved.size() * kPerVertex);
+  const auto step = [](float x, int k) {
+    for (; k > 0; --k) x = std::nextafter(x, std::numeric_limits<float>::infinity());
+    for (; k < 0; ++k) x = std::nextafter(x, -std::numeric_limits<float>::infinity());
+    return x;
+  };
+  for (std::size_t v : moved) {
+    const glm::vec3 n = m.normals[v];
+    for (int i = 0; i < kPerVertex; ++i)
+      candidates.emplace_back(step(n.x, i % kSide - kReach), step(n.y, i / kSide % kSide - kReach),
+                              step(n.z, i / (kSide * kSide) - kReach));
   }
+  const std::vector<glm::vec3> kept = as_loaded(candidates);
+  normals = m.normals;
+  for (std::size_t j = 0; j < moved.size(); ++j) {
+    const glm::dvec3 want = normals[moved[j]];
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = j * kPerVertex; i < (j + 1) * kPerVertex; ++i) {
+      const double d = glm::length(glm::dvec3(candidates[i]) - want);
+      if (kept[i] == candidates[i] && d < best) best = d, normals[moved[j]] = candidates[i];
+    }
+  }
+  return make_mesh(std::move(positions), std::move(triangles), std::move(normals), std::move(colors), {}, source);
 }
 
 // An edge of a triangle: its key (the ends' position ids, low first), its
