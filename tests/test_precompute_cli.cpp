@@ -7,6 +7,7 @@
 #include <prt/compare.h>
 #include <prt/render.h>
 #include <prt/color.h>
+#include <prt/ply.h>
 #include <prt/precompute.h>
 #include <prt/compression_error.h>
 #include <prt/envmap.h>
@@ -761,6 +762,119 @@ TEST(PrecomputeCli, AdaptiveIsTheLibrarysAndSaysWhatItTraced) {
   const Result any = run_prt(dir, {"precompute", mesh, "-o", dir.file("w.prt"), "--samples", "256", "--adaptive", "0.2",
                                    "--adaptive-any", "-q"});
   EXPECT_EQ(any.code, 0) << describe_run(any);
+}
+
+// --subdivide writes the refined mesh (PLY) with the transfer for it: what
+// subdivide_for_transfer computes, relit and exported with the refined mesh
+// (the glTF carries its vertices), with colours too; a failure writes neither.
+TEST(PrecomputeCli, SubdivideWritesTheRefinedMeshWithItsTransfer) {
+  TempDir dir;
+  const std::string mesh = dir.file("coarse.off"), env = write_constant_map(dir, 1.0f);
+  test::write_off(mesh, test::ball_over_floor(6, 8, 16, 0.4f, {0.0f, 0.9f, 0.0f}));
+  const Mesh loaded = load_mesh(mesh);
+  const Result r = run_prt(dir, {"precompute", mesh, "-o", dir.file("fine.prt"), "--bands", "4", "--samples", "256",
+                                 "--subdivide", "0.05"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  ASSERT_TRUE(std::filesystem::exists(dir.file("fine.ply")));  // the default: the output's name with .ply
+  TransferOptions o;
+  o.bands = 4;
+  o.samples = 256;
+  o.albedo = glm::vec3(0.8f);
+  SubdivideOptions s;
+  s.tolerance = 0.05;
+  SubdivideReport rep;
+  const Subdivided lib = subdivide_for_transfer(loaded, o, s, {}, &rep);
+  const Mesh refined = load_mesh(dir.file("fine.ply"));
+  EXPECT_EQ(refined.positions, lib.mesh.positions);
+  EXPECT_EQ(refined.triangles, lib.mesh.triangles);
+  EXPECT_EQ(refined.normals, lib.mesh.normals);
+  const Transfer file = read_transfer(dir.file("fine.prt"));
+  EXPECT_EQ(file.coeffs, lib.transfer.coeffs);
+  EXPECT_EQ(file.slots, lib.transfer.slots);
+  EXPECT_NO_THROW(check_matches(file, refined, "fine.prt"));
+  EXPECT_NE(r.err.find(fmt::format("subdivided: {} -> {} vertices in {} round{} ({} edges split{})", rep.input_vertices,
+                                   rep.vertices, rep.rounds, rep.rounds == 1 ? "" : "s", rep.split_edges,
+                                   rep.capped ? fmt::format(", capped at {}", 4 * loaded.vertex_count()) : "")),
+            std::string::npos)
+      << r.err;
+  ASSERT_GT(refined.vertex_count(), loaded.vertex_count());
+  // Relit with the refined mesh; refused with the coarse one.
+  const Result relit = run_prt(dir, {"relight", dir.file("fine.ply"), dir.file("fine.prt"), env, "-o", dir.file("r.csv"), "-q"});
+  ASSERT_EQ(relit.code, 0) << describe_run(relit);
+  EXPECT_EQ(read_vertex_csv(dir.file("r.csv")).size(), refined.vertex_count());
+  EXPECT_EQ(run_prt(dir, {"relight", mesh, dir.file("fine.prt"), env, "-o", dir.file("c.csv"), "-q"}).code, 1);
+  // The glTF export carries the refined mesh: every accessor has its vertices (or its triangles' corners).
+  const Result gltf = run_prt(dir, {"export", dir.file("fine.ply"), dir.file("fine.prt"), "-o", dir.file("x.gltf")});
+  ASSERT_EQ(gltf.code, 0) << describe_run(gltf);
+  const std::string json = read_file(dir.file("x.gltf"));
+  const std::regex count("\"count\":([0-9]+)");
+  std::size_t with_vertices = 0;
+  for (auto it = std::sregex_iterator(json.begin(), json.end(), count); it != std::sregex_iterator(); ++it) {
+    const std::size_t n = std::stoul((*it)[1]);
+    EXPECT_TRUE(n == refined.vertex_count() || n == 3 * refined.triangles.size()) << n;
+    with_vertices += n == refined.vertex_count();
+  }
+  EXPECT_GE(with_vertices, 3u);  // positions, normals, transfer
+
+  // Colours as albedo: the refined mesh keeps its (averaged) colours, and its file the transfer's shading.
+  Mesh coloured = loaded;
+  for (const glm::vec3& p : coloured.positions) coloured.colors.push_back(glm::vec3(0.5f + 0.2f * p.x, 0.6f, 0.5f - 0.2f * p.z));
+  write_ply(dir.file("coloured.ply"), coloured, coloured.colors, PlyColors::Float, "test");
+  const Result c = run_prt(dir, {"precompute", dir.file("coloured.ply"), "-o", dir.file("col.prt"), "--bands", "3",
+                                 "--samples", "128", "--vertex-colors", "--subdivide", "0.1", "--subdivided-mesh",
+                                 dir.file("col-fine.ply"), "-q"});
+  ASSERT_EQ(c.code, 0) << describe_run(c);
+  EXPECT_EQ(load_mesh(dir.file("col-fine.ply")).colors.size(), read_transfer(dir.file("col.prt")).vertices);
+  const Result cr = run_prt(dir, {"relight", dir.file("col-fine.ply"), dir.file("col.prt"), env, "-o", dir.file("cr.csv"), "-q"});
+  EXPECT_EQ(cr.code, 0) << describe_run(cr);
+
+  // Where the refined mesh cannot go, nothing is written.
+  const Result bad = run_prt(dir, {"precompute", mesh, "-o", dir.file("none.prt"), "--subdivide", "0.05",
+                                   "--subdivided-mesh", dir.file("nodir/none.ply"), "-q"});
+  EXPECT_EQ(bad.code, 1) << describe_run(bad);
+  EXPECT_NE(bad.err.find("--subdivided-mesh"), std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("none.prt")));
+}
+
+TEST(BadOptions, SubdivideAndItsOptionsAreChecked) {
+  TempDir dir;
+  const std::string mesh = write_quad(dir), out = dir.file("x.prt"), env = write_constant_map(dir, 1.0f);
+  const Mesh quad = load_mesh(mesh);
+  write_ply(dir.file("quad.ply"), quad, {}, PlyColors::Float, "test");
+  const std::string ply = dir.file("quad.ply");
+  std::vector<Refusal> runs;
+  for (const char* bad : {"0", "1", "-0.1", "nan", "abc"})
+    runs.push_back({{"precompute", mesh, "-o", out, "--subdivide", bad}, {"--subdivide"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--subdivide-max-vertices", "100"},
+                  {"--subdivide-max-vertices is for --subdivide"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--subdivided-mesh", dir.file("f.ply")},
+                  {"--subdivided-mesh is for --subdivide"}});
+  const std::vector<std::pair<std::vector<std::string>, std::string>> others = {
+      {{"--adaptive"}, "not with --adaptive"},
+      {{"--lightmap", "64x64"}, "not with --lightmap"},
+      {{"--probes", "2x2x2"}, "not with --probes"},
+      {{"--basis", "wavelet"}, "not with --basis wavelet"},
+      {{"--basis", "zh"}, "not with --basis zh"},
+      {{"--target-error", "0.1", "--env", env}, "not with --target-error"},
+  };
+  for (const auto& [extra, words] : others) {
+    std::vector<std::string> args = {"precompute", mesh, "-o", out, "--subdivide", "0.05"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    runs.push_back({args, {words}});
+  }
+  runs.push_back({{"precompute", mesh, "-o", out, "--subdivide", "0.05", "--subdivided-mesh", dir.file("f.obj")},
+                  {"--subdivided-mesh", "written as PLY"}});
+  runs.push_back({{"precompute", ply, "-o", out, "--subdivide", "0.05", "--subdivided-mesh", ply},
+                  {"--subdivided-mesh", "is the input MESH"}});
+  runs.push_back({{"precompute", mesh, "-o", dir.file("x.ply"), "--subdivide", "0.05", "--subdivided-mesh",
+                   dir.file("x.ply")},
+                  {"--subdivided-mesh", "is the input --output"}});
+  // The default (the output's name with .ply) would be MESH.
+  runs.push_back({{"precompute", ply, "-o", dir.file("quad.prt"), "--subdivide", "0.05"},
+                  {"the refined mesh would go to", "which is MESH", "give --subdivided-mesh"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--subdivide", "0.05", "--subdivide-max-vertices", "24"},
+                  {"--subdivide-max-vertices 24: below the mesh's 25 vertices"}});
+  expect_refusals(dir, runs, 2);
 }
 
 TEST(BadOptions, BadOptionValuesExitTwo) {

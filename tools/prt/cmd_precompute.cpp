@@ -4,6 +4,7 @@
 
 #include <prt/lightmap.h>
 #include <prt/envmap.h>
+#include <prt/ply.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
 #include <prt/mpi.h>
@@ -19,6 +20,7 @@
 
 #include <fmt/core.h>
 
+#include <cctype>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -76,6 +78,11 @@ struct PrecomputeArgs {
   AdaptiveOptions aopt;
   bool adaptive_any = false;  // --adaptive-any: a TOL above max_adaptive_tolerance
   const CLI::Option *adaptive_opt = nullptr, *verify_opt = nullptr, *adaptive_any_opt = nullptr;
+  // --subdivide TOL: refine a coarse mesh where its transfer changes (docs/PRECOMPUTE.md, "Subdividing coarse
+  // meshes"); --subdivided-mesh: where the refined mesh goes ("" the output's name with .ply).
+  SubdivideOptions sopt;
+  std::string subdivided_mesh;
+  const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
 };
 
 // --compress KxN into o (UsageError naming the option otherwise).
@@ -215,6 +222,46 @@ void parse_adaptive(PrecomputeArgs& a) {
                                  "--adaptive-any to use it anyway",
                                  a.adaptive, most, a.opt.samples));
   a.aopt.tolerance = tol;
+}
+
+// --subdivide's rules (UsageError, before anything is read); the refined
+// mesh's path into a.subdivided_mesh (default: the output's name with .ply).
+void check_subdivide(PrecomputeArgs& a) {
+  if (a.subdivide_opt->count() == 0) {
+    for (const CLI::Option* o : {a.subdivide_max_opt, a.subdivided_mesh_opt})
+      if (o->count() > 0) throw UsageError(o->get_name() + " is for --subdivide TOL; give --subdivide too");
+    return;
+  }
+  const auto refuse = [](const std::string& what) {
+    throw UsageError("--subdivide refines a mesh's vertices for its per-vertex SH transfer: not with " + what);
+  };
+  if (a.adaptive_opt->count() > 0) refuse("--adaptive (which traces fewer of the vertices; give one of the two)");
+  if (a.lightmap_opt->count() > 0) refuse("--lightmap (a lightmap's texels do not follow the vertices)");
+  if (a.probes_opt->count() > 0) refuse("--probes");
+  if (a.basis != "sh") refuse("--basis " + a.basis);
+  if (a.target_opt->count() > 0) refuse("--target-error (give --bands and --samples)");
+  if (a.subdivided_mesh.empty()) {
+    a.subdivided_mesh = std::filesystem::path(a.output).replace_extension(".ply").string();
+    if (same_file(a.subdivided_mesh, a.mesh) || same_file(a.subdivided_mesh, a.output))
+      throw UsageError(fmt::format("--subdivide: the refined mesh would go to {} (the output's name with .ply), which is "
+                                   "{}; give --subdivided-mesh FILE",
+                                   a.subdivided_mesh, same_file(a.subdivided_mesh, a.mesh) ? "MESH" : "--output"));
+  } else {
+    std::string ext = std::filesystem::path(a.subdivided_mesh).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".ply")
+      throw UsageError("--subdivided-mesh " + a.subdivided_mesh + ": the refined mesh is written as PLY (.ply)");
+    check_not_input("--subdivided-mesh", a.subdivided_mesh, {{"MESH", a.mesh}, {"--output", a.output}});
+  }
+}
+
+// What --subdivide did, on stderr.
+void print_subdivide(const SubdivideReport& r, std::size_t cap, const std::string& path, const Mesh& mesh) {
+  fmt::print(stderr, "subdivided: {} -> {} vertices in {} round{} ({} edges split{}), {:.2f} s\n", r.input_vertices,
+             r.vertices, r.rounds, r.rounds == 1 ? "" : "s", r.split_edges,
+             r.capped ? fmt::format(", capped at {}", cap) : std::string(), r.seconds);
+  fmt::print(stderr, "wrote {}: the refined mesh, {} vertices, {} triangles (the transfer is for it)\n", path,
+             mesh.vertex_count(), mesh.triangles.size());
 }
 
 // What --adaptive did, on stderr.
@@ -615,6 +662,7 @@ int run_probes(PrecomputeArgs& a) {
 }
 
 int run_precompute(PrecomputeArgs& a) {
+  check_subdivide(a);
   parse_adaptive(a);
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
@@ -656,6 +704,8 @@ int run_precompute(PrecomputeArgs& a) {
   if (const char* cap = std::getenv("PRT_TEST_RECORDS_IN_MEMORY"); cap && *cap)
     a.opt.records_in_memory_max = std::size_t(std::strtoull(cap, nullptr, 10));
   if (is_root()) for_path("--output", [&] { check_writable(a.output); });
+  const bool subdivide = a.subdivide_opt->count() > 0;
+  if (subdivide && is_root()) for_path("--subdivided-mesh", [&] { check_writable(a.subdivided_mesh); });
 
   CompressOptions copt;  // checked before the long work
   copt.weight_bits = a.compress_weights;
@@ -664,6 +714,9 @@ int run_precompute(PrecomputeArgs& a) {
     throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  if (subdivide && a.sopt.max_vertices != 0 && a.sopt.max_vertices < mesh.vertex_count())
+    throw UsageError(fmt::format("--subdivide-max-vertices {}: below the mesh's {} vertices (0: 4x the mesh's)",
+                                 a.sopt.max_vertices, mesh.vertex_count()));
   test_fail_rank();
   release_free_memory();
   const bool quiet = a.quiet || !is_root();
@@ -671,15 +724,31 @@ int run_precompute(PrecomputeArgs& a) {
   Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   AdaptiveReport adaptive;
   const bool adapt = a.adaptive_opt->count() > 0;
+  SubdivideReport subdivided;
+  std::optional<Mesh> refined;  // --subdivide: the mesh the transfer is for
   const std::optional<Transfer> computed =
       a.target_opt->count() > 0 ? run_target(a, mesh)
                          : run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+                             if (subdivide) {
+                               Subdivided d = subdivide_for_transfer(mesh, a.opt, a.sopt, job_progress(progress), &subdivided);
+                               refined = std::move(d.mesh);
+                               return std::move(d.transfer);
+                             }
                              return adapt ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress), &adaptive)
                                           : compute_transfer(mesh, a.opt, job_progress(progress));
                            }, a.opt.memory_limit);
   if (!computed) return 130;
   if (!is_root()) return 0;  // rank 0 compresses and writes the file
   const Transfer& t = *computed;
+  // The refined mesh goes with the transfer: both written, or neither.
+  const auto write_refined = [&] {
+    if (refined)
+      out.write([&] {
+        write_ply(a.subdivided_mesh, *refined, refined->colors, PlyColors::Float,
+                  "prt precompute --subdivide: refined mesh");
+      });
+  };
+  const std::size_t cap = a.sopt.max_vertices ? a.sopt.max_vertices : 4 * mesh.vertex_count();
   if (!a.compress.empty()) {
     CompressOptions o = copt;
     const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "precompute", [&](const Progress& p) {
@@ -688,11 +757,14 @@ int run_precompute(PrecomputeArgs& a) {
     });
     if (!c) return 130;
     out.write([&] { write_compressed_transfer(a.output, *c); });
+    write_refined();
     if (const int rc = out.commit(); rc != 0) return rc;
     if (!a.quiet) fmt::print(stderr, "wrote {} (compressed):\n{}", a.output, describe_transfer(*c));
+    if (!a.quiet && refined) print_subdivide(subdivided, cap, a.subdivided_mesh, *refined);
     return 0;
   }
   out.write([&] { write_transfer(a.output, t); });
+  write_refined();
   if (const int rc = out.commit(); rc != 0) return rc;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet) {
@@ -724,6 +796,7 @@ int run_precompute(PrecomputeArgs& a) {
                  a.memory_limit.empty() ? " (the default)" : "", double(memory.records_in_memory) / 1e6,
                  double(memory.records_spilled) / 1e6, memory.block);
     if (adapt && a.target_opt->count() == 0) print_adaptive(adaptive, t);
+    if (refined) print_subdivide(subdivided, cap, a.subdivided_mesh, *refined);
     if (!t.ao.empty() && t.mode != TransferMode::Unshadowed) {
       double mean = 0;
       for (float v : t.ao) mean += v;
@@ -762,7 +835,8 @@ Run add_precompute(CLI::App& app) {
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32\n"
       "         prt precompute models/tube.obj -o tube-zh.prt --basis zh --lobes 4 --bands 6\n"
       "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected -o room.prt\n"
-      "         prt precompute models/room.gltf --probes 16x8x16 -o room-probes.prt");
+      "         prt precompute models/room.gltf --probes 16x8x16 -o room-probes.prt\n"
+      "         prt precompute coarse.obj -o fine.prt --subdivide 0.02 --subdivided-mesh fine.ply");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB (with --lightmap: a scene, glTF/GLB or OBJ)")
       ->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
@@ -891,6 +965,21 @@ Run add_precompute(CLI::App& app) {
   a->adaptive_any_opt = s->add_flag("--adaptive-any", a->adaptive_any,
                                     "With --adaptive TOL: take a TOL above 1.5x the default (the error may then pass "
                                     "1.1x the full run's)");
+  a->subdivide_opt =
+      s->add_option("--subdivide", a->sopt.tolerance,
+                    "For coarse meshes: split the edges whose ends' transfer differs by more than TOL (relative, "
+                    "band-weighted: the metric of --adaptive) at their midpoints, round by round, and write the refined "
+                    "mesh (--subdivided-mesh) with the transfer for it (docs/PRECOMPUTE.md, \"Subdividing coarse "
+                    "meshes\")")
+          ->check(number_range(0.0, 1.0, true, true))
+          ->type_name("TOL");
+  a->subdivide_max_opt = s->add_option("--subdivide-max-vertices", a->sopt.max_vertices,
+                                       "With --subdivide: the most vertices the refined mesh may have (0: 4x the "
+                                       "mesh's)")
+                             ->capture_default_str();
+  a->subdivided_mesh_opt = s->add_option("--subdivided-mesh", a->subdivided_mesh,
+                                         "With --subdivide: where the refined mesh goes, PLY with normals (and "
+                                         "colours) (default: the output's name with .ply)");
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_precompute(*a); };
 }
