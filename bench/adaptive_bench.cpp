@@ -5,6 +5,7 @@
 // the reference.
 //   prt_adaptive_bench MESH ENV [--tol T] [--bands N] [--samples S] [--mode M]
 //                      [--reference REF.csv] [--full FULL.prt] [--verify F] [--glossy]
+//                      [--probe-fraction F] [--min-probes N]
 // --full FILE: the full run read from FILE when it exists (written there
 // otherwise), so that repeated runs compare against one full run; its time
 // is then the one recorded beside it (FILE.seconds).
@@ -74,6 +75,8 @@ int main(int argc, char** argv) {
     else if (k == "--full") full_path = next();
     else if (k == "--verify") a.verify_fraction = std::stod(next());
     else if (k == "--glossy") o.glossy = true;
+    else if (k == "--probe-fraction") a.probe_fraction = std::stod(next());
+    else if (k == "--min-probes") a.min_probes = std::stoi(next());
     else {
       fmt::print(stderr, "unknown argument {}\n", k);
       return 2;

@@ -17,7 +17,7 @@
 //    follows the normal exactly is not interpolated at all (D3DX's and
 //    Krivanek's gradients serve the same end).
 //  - verification: the predictions of each level fall into patches (cells
-//    of 8 level spacings); a fraction of every patch (at least 3) is traced
+//    of 16 level spacings); a fraction of every patch (at least 3) is traced
 //    as probes, and a patch whose probes' RMS error exceeds TOL is traced
 //    whole. The error: band-weighted ((l + 1)^-2, the power of typical
 //    lighting per band) RMS of the row difference, relative to the RMS of
@@ -36,6 +36,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -61,7 +62,7 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 // crease's two sides are not interpolated into each other.
 constexpr float kCreaseCos = 0.866f;
 constexpr int kMaxSources = 12;       // sources per prediction: the nearest of the cell and its neighbours
-constexpr double kPatchSpacings = 8;  // a patch: a cell of this many level spacings
+constexpr double kPatchSpacings = 16;  // a patch: a cell of this many level spacings
 constexpr double kFinestSpacing = 1.5;  // the last Poisson level's spacing, in mean edge lengths
 // A prediction whose sources' spread exceeds this many TOL is traced instead.
 // Measured (docs/PRECOMPUTE.md): without the rule, homer and mannequin-devil
@@ -238,65 +239,83 @@ std::vector<std::uint8_t> poisson_levels(const Mesh& m, const std::vector<std::u
 // Geodesic Voronoi cells of the traced vertices, walking edges that are not
 // creases: each vertex's site (nearest traced vertex; kNone where none is
 // reachable) and each site's neighbouring sites (cells sharing an edge), CSR
-// over vertex ids.
-struct Cells {
-  std::vector<std::uint32_t> site;
-  std::vector<std::uint32_t> offset, next;
-};
-
+// over vertex ids. Kept across levels: the traced set only grows, so each
+// update is a Dijkstra from the new sites alone, relaxing the vertices they
+// are nearer to (distances only fall).
 bool walkable(const Mesh& m, std::uint32_t a, std::uint32_t b) {
   return glm::dot(m.normals[a], m.normals[b]) >= kCreaseCos;
 }
 
-Cells voronoi(const Mesh& m, const Graph& g, const std::vector<std::uint8_t>& traced) {
-  const std::size_t V = m.vertex_count();
-  Cells c;
-  c.site.assign(V, kNone);
-  std::vector<float> dist(V, std::numeric_limits<float>::infinity());
-  using Item = std::pair<float, std::uint32_t>;
-  std::vector<Item> heap_storage;
-  heap_storage.reserve(V / 4);
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q(std::greater<Item>(), std::move(heap_storage));
-  for (std::uint32_t v = 0; v < V; ++v)
-    if (traced[v]) {
-      c.site[v] = v;
-      dist[v] = 0;
+class Cells {
+ public:
+  explicit Cells(std::size_t V) : site(V, kNone), dist_(V, std::numeric_limits<float>::infinity()) {}
+
+  std::vector<std::uint32_t> site;
+  std::vector<std::uint32_t> offset, next;
+
+  // Adds `sites` (vertices now traced) and rebuilds the neighbour lists.
+  void add(const Mesh& m, const Graph& g, std::vector<std::uint32_t> sites) {
+    using Item = std::pair<float, std::uint32_t>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+    std::sort(sites.begin(), sites.end());
+    for (std::uint32_t v : sites) {
+      site[v] = v;
+      dist_[v] = 0;
       q.push({0.0f, v});
     }
-  while (!q.empty()) {
-    const auto [d, u] = q.top();
-    q.pop();
-    if (d > dist[u]) continue;
-    for (std::uint32_t i = g.offset[u]; i < g.offset[u + 1]; ++i) {
-      const std::uint32_t w = g.next[i];
-      if (!walkable(m, u, w)) continue;
-      const float nd = d + glm::length(m.positions[w] - m.positions[u]);
-      if (nd < dist[w]) {
-        dist[w] = nd;
-        c.site[w] = c.site[u];
-        q.push({nd, w});
+    while (!q.empty()) {
+      const auto [d, u] = q.top();
+      q.pop();
+      if (d > dist_[u]) continue;
+      for (std::uint32_t i = g.offset[u]; i < g.offset[u + 1]; ++i) {
+        const std::uint32_t w = g.next[i];
+        if (!walkable(m, u, w)) continue;
+        const float nd = d + glm::length(m.positions[w] - m.positions[u]);
+        if (nd < dist_[w]) {
+          dist_[w] = nd;
+          site[w] = site[u];
+          q.push({nd, w});
+        }
       }
     }
+    // Neighbouring cells: a key (site << 32 | other site) per walkable edge
+    // across a cell boundary, deduplicated per vertex first, then sorted.
+    const std::size_t V = site.size();
+    std::vector<std::vector<std::uint64_t>> parts(std::size_t(std::max(1, tbb::this_task_arena::max_concurrency())) * 4);
+    const std::size_t chunk = (V + parts.size() - 1) / parts.size();
+    tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t part) {
+      std::vector<std::uint64_t>& out = parts[part];
+      std::uint32_t seen[16];
+      for (std::size_t u = part * chunk; u < std::min(V, (part + 1) * chunk); ++u) {
+        const std::uint32_t su = site[u];
+        if (su == kNone) continue;
+        int n = 0;
+        for (std::uint32_t i = g.offset[u]; i < g.offset[u + 1]; ++i) {
+          const std::uint32_t w = g.next[i], sw = site[w];
+          if (sw == kNone || sw == su || !walkable(m, std::uint32_t(u), w)) continue;
+          if (std::find(seen, seen + n, sw) != seen + n) continue;
+          if (n < 16) seen[n++] = sw;
+          out.push_back((std::uint64_t(su) << 32) | sw);
+        }
+      }
+    });
+    std::vector<std::uint64_t> keys;
+    std::size_t total = 0;
+    for (const auto& p : parts) total += p.size();
+    keys.reserve(total);
+    for (auto& p : parts) keys.insert(keys.end(), p.begin(), p.end());
+    tbb::parallel_sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    offset.assign(V + 1, 0);
+    for (std::uint64_t k : keys) ++offset[(k >> 32) + 1];
+    for (std::size_t v = 0; v < V; ++v) offset[v + 1] += offset[v];
+    next.resize(keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) next[i] = std::uint32_t(keys[i]);  // sorted by site: CSR order
   }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-  for (std::uint32_t u = 0; u < V; ++u) {
-    const std::uint32_t su = c.site[u];
-    if (su == kNone) continue;
-    for (std::uint32_t i = g.offset[u]; i < g.offset[u + 1]; ++i) {
-      const std::uint32_t w = g.next[i], sw = c.site[w];
-      if (sw == kNone || sw == su || !walkable(m, u, w)) continue;
-      pairs.push_back({su, sw});
-    }
-  }
-  tbb::parallel_sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  c.offset.assign(V + 1, 0);
-  for (const auto& [a, b] : pairs) ++c.offset[a + 1];
-  for (std::size_t v = 0; v < V; ++v) c.offset[v + 1] += c.offset[v];
-  c.next.resize(pairs.size());
-  for (std::size_t i = 0; i < pairs.size(); ++i) c.next[i] = pairs[i].second;
-  return c;
-}
+
+ private:
+  std::vector<float> dist_;
+};
 
 // Interpolation weights of the vertices not traced: for each, up to
 // kMaxSources traced vertices and normalised weights, in src/w from first[v].
@@ -359,6 +378,7 @@ class Adaptive {
   std::vector<glm::vec3> bent_;      // rank 0
   Weights weights_;
   std::vector<std::uint64_t> morton_;  // per vertex
+  std::vector<std::uint32_t> fresh_;   // traced since the Voronoi cells were last updated
   double ref_norm_ = 1;
   double eps_ = 0;  // added to squared distances: coincident vertices divide by no zero
   std::size_t done_ = 0;  // vertex traces so far (progress)
@@ -480,6 +500,7 @@ void Adaptive::trace(std::vector<std::uint32_t> vs) {
   });
   report_.traces += vs.size();
   done_ += vs.size();
+  fresh_.insert(fresh_.end(), vs.begin(), vs.end());
 }
 
 void Adaptive::fill(std::vector<float>& rows, int channels, bool about_normal) const {
@@ -641,13 +662,15 @@ Transfer Adaptive::run() {
     ref_norm_ = l0.empty() || n2 <= 0 ? 1.0 : std::sqrt(n2 / (double(l0.size()) * channels_));
   }
 
+  Cells cells(V_);
   for (int k = 1; k < count; ++k) {
     const auto t_pred = Clock::now();
     std::vector<std::uint32_t> cand;
     for (std::uint32_t v = 0; v < V_; ++v)
       if (active_[v] && level[v] == k) cand.push_back(v);
     if (cand.empty()) continue;
-    const Cells cells = voronoi(mesh_, graph, traced_);
+    cells.add(mesh_, graph, std::move(fresh_));
+    fresh_.clear();
     std::vector<float> pred(cand.size() * stride_);
     std::vector<std::uint32_t> wsrc(cand.size() * kMaxSources);
     std::vector<float> ww(cand.size() * kMaxSources);

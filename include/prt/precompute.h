@@ -168,7 +168,7 @@ struct AdaptiveOptions {
   // (band-weighted: relit radiance under typical lighting; docs/PRECOMPUTE.md).
   // 0: default_adaptive_tolerance(samples). Any value in (0, 1).
   double tolerance = 0;
-  double probe_fraction = 1.0 / 16;  // of each patch's predictions traced to check it, (0, 1]
+  double probe_fraction = 1.0 / 32;  // of each patch's predictions traced to check it, (0, 1]
   int min_probes = 3;                // probes per patch at least
   // Trace this fraction of the interpolated vertices once more at the end
   // and report their interpolation error (AdaptiveReport::verified...); the
