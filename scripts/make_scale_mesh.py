@@ -134,9 +134,18 @@ def main():
     p.add_argument("--bumps", type=float, nargs=2, default=BUMPS, metavar=("A1", "A2"),
                    help="amplitudes of the two bump patterns (default 0.12 0.04; 0.06 0.022 gives the mean "
                         "ambient occlusion of about 0.87 of docs/PRECOMPUTE.md's scanned-size model)")
+    p.add_argument("--noise", type=float, default=0.0, metavar="A",
+                   help="also move every vertex along its radius by a random amount in [-A, A] x the mean vertex "
+                        "spacing (seeded): the hostile mesh of docs/PRECOMPUTE.md's adaptive sample points, whose "
+                        "transfer differs from each vertex to the next (default 0: none)")
     a = p.parse_args()
     BUMPS = tuple(a.bumps)
     pos, tri = make(a.vertices)
+    if a.noise > 0:
+        spacing = math.sqrt(4.0 * math.pi / a.vertices)  # of the unit sphere's vertices
+        rng = np.random.default_rng(12345)
+        scale = 1.0 + a.noise * spacing * rng.uniform(-1.0, 1.0, len(pos))
+        pos = (pos * scale[:, None]).astype(np.float32)
     assert len(pos) == a.vertices and len(tri) == 2 * a.vertices - 4
     write_ply(a.output, pos, tri)
     print(f"wrote {a.output}: {len(pos)} vertices, {len(tri)} triangles", file=sys.stderr)
