@@ -104,6 +104,10 @@ def main():
             "adaptive": ["--bands", "4", "--adaptive"],
             "adaptive-glossy-interreflected": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",
                                                "--albedo", "0.9,0.6,0.3", "--adaptive", "--verify-adaptive", "0.2"],
+            # --subdivide: every rank makes the same splits; the refined mesh (OUT.ply) compared too
+            "subdivide": ["--bands", "4", "--subdivide", "0.05"],
+            "subdivide-interreflected-glossy": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",
+                                                "--subdivide", "0.05"],
         }
         for name, opts in list(modes.items()) + [("wavelet", ["--basis", "wavelet", "--cube-res", "8"])]:
             o = (common if name != "wavelet" else ["-q"]) + opts
@@ -126,6 +130,9 @@ def main():
                     failures.append("%s, %d ranks: exit %d: %s" % (name, n, r.returncode, r.stderr.strip()[-600:]))
                     continue
                 same = os.path.exists(out) and open(out, "rb").read() == reference
+                if "--subdivide" in opts:  # and the refined mesh written beside it
+                    mesh_out, mesh_one = out[:-len(".prt")] + ".ply", one[:-len(".prt")] + ".ply"
+                    same = same and os.path.exists(mesh_out) and open(mesh_out, "rb").read() == open(mesh_one, "rb").read()
                 print("%-24s %d rank%s: %s (%.2f s)" % (name, n, "" if n == 1 else "s",
                                                      "byte-identical" if same else "DIFFERENT", time.time() - t0))
                 if not same:
