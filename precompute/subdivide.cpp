@@ -151,8 +151,11 @@ class Subdivider {
   }
 
   Subdivided run(SubdivideReport& r) {
-    mesh_ = input_;
+    // The input with normals make_mesh keeps (an ulp from its own at most): split or not, the mesh returned
+    // must load back as it is.
+    mesh_ = build_mesh(input_.positions, input_.triangles, input_.normals, input_.colors, input_.source);
     corner_uvs_ = input_.corner_uvs;
+    if (!corner_uvs_.empty()) set_corner_uvs(mesh_, corner_uvs_);
     rows_for(0);
     // The scale: the RMS over the input's vertices with a normal of their rows' weighted norm.
     double sum = 0;

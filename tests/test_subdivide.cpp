@@ -375,6 +375,13 @@ TEST(Subdivide, TheRefinedMeshLoadsBackAsItWas) {
   EXPECT_EQ(back.triangles, d.mesh.triangles);
   EXPECT_EQ(back.normals, d.mesh.normals);
   EXPECT_NO_THROW(check_matches(d.transfer, back, "fine.prt"));
+  // Nothing split (the cap at the input's count): the mesh returned loads back as it is too.
+  s.max_vertices = m.vertex_count();
+  const Subdivided same = subdivide_for_transfer(m, o, s);
+  ASSERT_EQ(same.mesh.vertex_count(), m.vertex_count());
+  write_ply(dir.file("same.ply"), same.mesh, same.mesh.colors, PlyColors::Float, "test");
+  EXPECT_EQ(load_mesh(dir.file("same.ply")).normals, same.mesh.normals);
+  EXPECT_NO_THROW(check_matches(same.transfer, load_mesh(dir.file("same.ply")), "same.prt"));
 }
 
 TEST(Subdivide, TheCapHolds) {
@@ -399,7 +406,7 @@ TEST(Subdivide, TheCapHolds) {
   EXPECT_TRUE(r.capped);
   EXPECT_EQ(r.rounds, 0);
   EXPECT_EQ(same.mesh.hash(), m.hash());
-  expect_same_transfer(same.transfer, compute_transfer(m, o));
+  expect_same_transfer(same.transfer, compute_transfer(same.mesh, o));
 }
 
 TEST(Subdivide, OneRoundAtMost) {

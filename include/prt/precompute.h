@@ -422,14 +422,17 @@ struct Subdivided {
 // triangles (by position: vertices a seam duplicates count as one edge) is
 // split in all of them. A new vertex: the edge's midpoint, the normalised
 // mean of its ends' normals, their mean colour, and per corner the mean UV
-// (Mesh::corner_uvs). It stops when no edge exceeds the tolerance, at the
-// cap or after max_rounds. The transfer returned is compute_transfer(mesh,
-// options) of the refined mesh, the same bits; when the report says neither
-// capped nor max_rounds rounds, no edge of it exceeds the tolerance (edges
-// with a vertex without a normal are not measured). Shadowed: new vertices
-// are traced alone each round (the geometry rays hit is the input's), the
-// whole refined mesh once at the end; interreflected and unshadowed: the
-// whole mesh each round. Deterministic (the same bits for any thread
+// (Mesh::corner_uvs). Every normal of the refined mesh is one make_mesh
+// keeps as it is (within 2 ulps of the input's or the mean), so the mesh
+// written and loaded again is the transfer's. It stops when no edge exceeds
+// the tolerance, at the cap or after max_rounds. The transfer returned is
+// compute_transfer(mesh, options) of the refined mesh, the same bits; when
+// the report says neither capped nor max_rounds rounds, no edge of it
+// exceeds the tolerance (edges with a vertex without a normal are not
+// measured). Shadowed: new vertices are traced alone each round (the
+// geometry rays hit is the input's), the whole refined mesh when they show
+// no edge over the tolerance and at the end; interreflected and unshadowed:
+// the whole mesh each round. Deterministic (the same bits for any thread
 // count); with options.comm every rank makes the same choices, rank 0
 // returns the transfer (the others an empty one) and every rank the mesh.
 // Throws prt::Error on bad options (compute_transfer's, a tolerance outside
