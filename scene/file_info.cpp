@@ -54,6 +54,13 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   // Analytic (unoccluded) vertices store no transfer (docs/PRECOMPUTE.md).
   j["analytic_vertices"] = t.analytic_vertices();
   j["stored_vertices"] = t.stored_vertices();
+  // Adaptive sample points (docs/PRECOMPUTE.md): vertices interpolated from
+  // traced ones (the 'interpolated vertices' mask, docs/FORMAT.md). Always
+  // present: a file without the mask has every vertex traced (0, V, 1).
+  const std::size_t interpolated = std::min(t.interpolated_vertices(), t.vertices);
+  j["interpolated_vertices"] = interpolated;
+  j["traced_vertices"] = t.vertices - interpolated;
+  j["traced_fraction"] = t.vertices ? double(t.vertices - interpolated) / double(t.vertices) : 1.0;
   j["analytic_bytes_saved"] = analytic_bytes_saved(t);
   j["bytes_per_vertex"] = transfer_bytes_per_vertex(t);
   j["file_bytes"] = transfer_file_size(t);

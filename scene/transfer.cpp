@@ -141,6 +141,19 @@ std::string slots_problem(const Transfer& t) {
   return {};
 }
 
+// Transfer::interpolated: empty, or one flag of 0 or 1 per vertex.
+std::string interpolated_problem(const Transfer& t) {
+  if (t.interpolated.empty()) return {};
+  if (t.interpolated.size() != t.vertices)
+    return fmt::format("{} interpolated-vertex flags for {} vertices (one per vertex, or none)", t.interpolated.size(),
+                       t.vertices);
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    if (t.interpolated[v] > 1)
+      return fmt::format("vertex {} has interpolated-vertex flag {}; must be 0 (traced) or 1 (interpolated)", v,
+                         int(t.interpolated[v]));
+  return {};
+}
+
 // The first non-finite value, or "". Reported by vertex: that is what a user
 // can look up.
 std::string finite_problem(const Transfer& t) {
@@ -183,6 +196,7 @@ namespace {
 std::string problem(const Transfer& t, bool rows_elsewhere) {
   using detail::TransferArray;
   if (auto p = slots_problem(t); !p.empty()) return p;
+  if (auto p = interpolated_problem(t); !p.empty()) return p;
   const detail::TransferHeader h = detail::header_of(t);
   if (auto p = detail::header_problem(h); !p.empty()) return p;
   if (rows_elsewhere) {

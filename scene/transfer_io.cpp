@@ -36,9 +36,20 @@ using detail::TransferHeader;
 
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
-// 5, the analytic-vertex mask's for 6.
+// 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13.
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v, bool compressed,
                             bool lightmap = false) {
+  if (kind == kInterpolatedMask) {
+    const char* name = kind_info(kind)->name;
+    if (lightmap)
+      return fmt::format("has an '{}' section, but the header's flags say the file is a lightmap (every texel of a "
+                         "lightmap is traced)",
+                         name);
+    if (count != mask_words(v.vertices))
+      return fmt::format("section '{}' has {} words; expected (vertices + 31) / 32 = {}", name, count,
+                         mask_words(v.vertices));
+    return {};  // the bits are checked once read (interpolated_from_mask)
+  }
   if (kind == kLightmapLayout || kind == kLightmapTexels) {
     const char* name = kind_info(kind)->name;
     if (!lightmap) return fmt::format("has a '{}' section, but the header's flags say the file is not a lightmap", name);
@@ -94,6 +105,16 @@ std::vector<std::uint32_t> analytic_mask(const Transfer& t) {
   return mask;
 }
 
+// The interpolated-vertex bit mask of `t` (empty when no vertex is
+// interpolated: an all-zero Transfer::interpolated writes no section).
+std::vector<std::uint32_t> interpolated_mask(const Transfer& t) {
+  if (t.interpolated_vertices() == 0) return {};
+  std::vector<std::uint32_t> mask(mask_words(t.vertices), 0u);
+  for (std::size_t v = 0; v < std::min(t.vertices, t.interpolated.size()); ++v)
+    if (t.interpolated[v] != 0) mask[v / 32] |= 1u << (v % 32);
+  return mask;
+}
+
 // Pointer to the array of section `kind` and its element count.
 std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind) {
   switch (kind) {
@@ -105,6 +126,8 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
     // Built by the writer from the slots (analytic_mask).
     case kAnalyticMask: return {nullptr, stored_of(t) < t.vertices ? mask_words(t.vertices) : 0};
     case kGlossy: return {t.glossy_matrices.data(), t.glossy_matrices.size()};
+    // Built by the writer from Transfer::interpolated (interpolated_mask).
+    case kInterpolatedMask: return {nullptr, t.interpolated_vertices() > 0 ? mask_words(t.vertices) : 0};
   }
   return {nullptr, 0};
 }
@@ -297,25 +320,33 @@ void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::u
 
 }  // namespace detail::tio
 
+std::uint32_t transfer_format_version(const Transfer& t) {
+  return t.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : transfer_format_version(t.glossy);
+}
+
 void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  // Version 3 only where it is needed: transfers without glossy matrices stay
-  // readable by a prt that reads version 2.
-  fill_header(header, t, transfer_format_version(t.glossy), 0u, sections.size());
-  const std::vector<std::uint32_t> mask = analytic_mask(t);
+  // The oldest version that holds `t` (7 only with interpolated vertices, 3
+  // only with glossy matrices): an earlier prt reads every file it could.
+  fill_header(header, t, transfer_format_version(t), 0u, sections.size());
+  const std::vector<std::uint32_t> mask = analytic_mask(t), interpolated = interpolated_mask(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
-                   s.kind == kAnalyticMask ? mask.data() : section_array(t, s.kind).first});
+                   s.kind == kAnalyticMask       ? mask.data()
+                   : s.kind == kInterpolatedMask ? interpolated.data()
+                                                 : section_array(t, s.kind).first});
   write_file(path, header, raw);
 }
 
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
   std::vector<TransferSection> s;
+  std::vector<TransferSection> after;  // the interpolated-vertex mask: kind 13, after the records
   for (const auto& sec : transfer_sections(c.transfer))
-    if (sec.kind != kCoeffs && sec.kind != kGlossy) s.push_back(sec);
+    if (sec.kind == kInterpolatedMask) after.push_back(sec);
+    else if (sec.kind != kCoeffs && sec.kind != kGlossy) s.push_back(sec);
   const auto add = [&](std::uint32_t kind, const ClusteredSignal& g) {
     const std::uint64_t bytes = signal_record_bytes(g);
     s.push_back({kind, kind_info(kind)->name, 1, bytes, bytes, true, type_name(kTypeU8)});
@@ -326,10 +357,12 @@ std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
     const std::uint64_t bytes = compression_choice_json(*c.choice).size();
     s.push_back({kCompressionChoice, kind_info(kCompressionChoice)->name, 1, bytes, bytes, false, type_name(kTypeU8)});
   }
+  s.insert(s.end(), after.begin(), after.end());
   return s;
 }
 
 std::uint32_t transfer_format_version(const CompressedTransfer& c) {
+  if (c.transfer.interpolated_vertices() > 0) return kInterpolatedFormatVersion;
   return c.choice ? kChosenCompressionFormatVersion : kCompressedFormatVersion;
 }
 
@@ -342,13 +375,14 @@ void write_compressed_transfer(const std::string& path, const CompressedTransfer
   const std::vector<TransferSection> sections = transfer_sections(c);
   unsigned char header[kHeaderSize];
   fill_header(header, t, transfer_format_version(c), kFlagCompressed, sections.size());
-  const std::vector<std::uint32_t> mask = analytic_mask(t);
+  const std::vector<std::uint32_t> mask = analytic_mask(t), interpolated = interpolated_mask(t);
   const std::vector<unsigned char> coeffs = encode_signal(c.coeffs);
   const std::vector<unsigned char> glossy = t.glossy ? encode_signal(c.glossy) : std::vector<unsigned char>{};
   const std::string choice = c.choice ? compression_choice_json(*c.choice) : std::string();
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
     const void* data = s.kind == kAnalyticMask       ? mask.data()
+                       : s.kind == kInterpolatedMask ? interpolated.data()
                        : s.kind == kCompressedCoeffs ? coeffs.data()
                        : s.kind == kCompressedGlossy ? glossy.data()
                        : s.kind == kCompressionChoice ? static_cast<const void*>(choice.data())
@@ -567,8 +601,13 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
                          // Version 1 stores every vertex.
                          version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
   const bool v1 = version_ == 1;
-  const std::size_t known_kinds =
-      v1 ? kKindsV1 : version_ == 2 ? kKindsV2 : version_ == 3 ? kKindsV3 : version_ == 4 ? kKindsV4 : version_ == 5 ? kKindsV5 : kKindsV6;
+  const std::size_t known_kinds = v1              ? kKindsV1
+                                  : version_ == 2 ? kKindsV2
+                                  : version_ == 3 ? kKindsV3
+                                  : version_ == 4 ? kKindsV4
+                                  : version_ == 5 ? kKindsV5
+                                  : version_ == 6 ? kKindsV6
+                                                  : kKindsV7;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -625,7 +664,9 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
   t.vertices = std::size_t(v.vertices);
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
   if (!v1) t.shading_hash = load<std::uint64_t>(h + kOffShadingHash);
-  std::vector<std::uint32_t> mask;
+  std::vector<std::uint32_t> mask, interpolated;
+  std::uint32_t seen = 0;  // bit k: a section of kind k was read
+  const auto has = [&](std::uint32_t kind) { return (seen >> kind) & 1u; };
 
   // 4. Sections: known kinds in increasing order, each of the type and size
   // the header implies, data padded with zeros.
@@ -644,13 +685,16 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
     const KindInfo* k = kind_info(kind);
     if (!k || kind > known_kinds)
       throw fail(fmt::format("bad section table: {} has unknown kind {}{}", where, kind,
-                             k ? fmt::format(" in a version {} file", version_) : std::string()));
+                             k ? fmt::format(" in a version {} file ('{}' sections are version {} and later)", version_,
+                                             k->name, kind_version(kind))
+                               : std::string()));
     if (kind <= previous)
       throw fail("bad section table: " + where + " ('" + k->name + "') is out of order or repeated");
     // (A compressed section in an uncompressed file is named below.)
     if (i == 0 && !compressed && kind != kCoeffs && kind != kCompressedCoeffs)
       throw fail("bad section table: no 'coefficients' section");
     previous = kind;
+    seen |= 1u << kind;
     if (type != k->type)
       throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", k->name, type,
                              k->type, type_name(k->type)));
@@ -670,6 +714,7 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
       case kBentNormals: read_section(data, t.bent_normals, count / 3); break;
       case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
       case kAnalyticMask: read_section(data, mask, count); break;
+      case kInterpolatedMask: read_section(data, interpolated, count); break;
       case kGlossy: read_section(data, t.glossy_matrices, count); break;
       case kLightmapLayout: {
         std::vector<std::uint64_t> words;
@@ -721,22 +766,24 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
     throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
                            "are analytic",
                            v.vertices - v.stored, v.vertices));
-  if (lightmap && previous < kLightmapTexels)
+  if (lightmap && !has(kLightmapTexels))
     throw fail("bad section table: no 'lightmap layout' and 'lightmap texels' sections, but the header's flags say the "
                "file is a lightmap");
   if (compressed) {
-    if (previous < kCompressedCoeffs) throw fail("bad section table: no 'compressed coefficients' section");
-    if (v.glossy && previous < kCompressedGlossy)
+    if (!has(kCompressedCoeffs)) throw fail("bad section table: no 'compressed coefficients' section");
+    if (v.glossy && !has(kCompressedGlossy))
       throw fail("bad section table: no 'compressed glossy matrices' section, but the header's flags say the file has "
                  "glossy matrices");
-  } else if (v.glossy && previous < kGlossy) {
+  } else if (v.glossy && !has(kGlossy)) {
     throw fail("bad section table: no 'glossy matrices' section, but the header's flags say the file has one");
   }
 
   // 5. Values: the mask marks exactly the vertices the header says are
-  // analytic, and nothing past the last vertex; then the validator (every
+  // analytic, and nothing past the last vertex; the interpolated-vertex mask
+  // at least one vertex and nothing past the last; then the validator (every
   // value finite).
   if (!mask.empty()) t.slots = slots_from_mask(mask, v.vertices, v.stored);
+  if (has(kInterpolatedMask)) t.interpolated = interpolated_from_mask(interpolated, v.vertices);
   if (compressed_out) {
     compressed_out->transfer = std::move(t);
     if (auto p = compressed_transfer_problem(*compressed_out); !p.empty()) throw fail(p);
@@ -776,6 +823,21 @@ std::vector<std::uint32_t> Reader::slots_from_mask(const std::vector<std::uint32
   for (std::size_t vtx = 0; vtx < vertices; ++vtx)
     if (!((mask[vtx / 32] >> (vtx % 32)) & 1u)) slots[vtx] = row++;
   return slots;
+}
+
+std::vector<std::uint8_t> Reader::interpolated_from_mask(const std::vector<std::uint32_t>& mask,
+                                                        std::uint64_t vertices) const {
+  const std::uint64_t tail = vertices % 32;
+  if (tail != 0 && (mask.back() >> tail) != 0)
+    throw fail(fmt::format("bad interpolated-vertex mask: bits set past the last vertex ({})", vertices));
+  std::uint64_t marked = 0;
+  for (std::uint32_t w : mask) marked += std::uint64_t(std::popcount(w));
+  if (marked == 0)
+    throw fail("bad interpolated-vertex mask: no vertex is marked interpolated (a file carries the mask only when "
+               "some vertex is interpolated; an empty mask is not written)");
+  std::vector<std::uint8_t> out(vertices, 0);
+  for (std::size_t vtx = 0; vtx < vertices; ++vtx) out[vtx] = std::uint8_t((mask[vtx / 32] >> (vtx % 32)) & 1u);
+  return out;
 }
 
 // Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
@@ -844,9 +906,11 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
   s += line("mesh hash", fmt::format("0x{:016x}", t.mesh_hash));
   bool first = true;
   std::uint64_t per_vertex = 0;
+  std::size_t name_width = 18;  // the names in a column, the longest ones included
+  for (const auto& sec : sections) name_width = std::max(name_width, std::strlen(sec.name));
   for (const auto& sec : sections) {
     if (sec.per_vertex && t.vertices > 0) per_vertex += sec.bytes / t.vertices;
-    std::string v = fmt::format("{:<18} {:>12} bytes", sec.name, sec.bytes);
+    std::string v = fmt::format("{:<{}} {:>12} bytes", sec.name, name_width, sec.bytes);
     if (sec.per_vertex && t.vertices > 0)
       v += fmt::format(" ({} per vertex)", sec.bytes / t.vertices);
     else
@@ -859,6 +923,13 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
                                     analytic, t.vertices,
                                     t.vertices ? 100.0 * double(analytic) / double(t.vertices) : 0.0) +
                             (compression.empty() ? fmt::format(", {} bytes saved", analytic_bytes_saved(t)) : ""));
+  // Adaptive sample points: only a transfer with interpolated vertices has the line.
+  if (const std::size_t interpolated = t.interpolated_vertices(); interpolated > 0) {
+    const std::size_t traced = t.vertices - std::min(interpolated, t.vertices);
+    s += line("adaptive", fmt::format("traced {} of {} vertices ({:.1f}%), {} interpolated from traced neighbours",
+                                      traced, t.vertices,
+                                      t.vertices ? 100.0 * double(traced) / double(t.vertices) : 0.0, interpolated));
+  }
   s += compression;
   s += line("bytes per vertex", fmt::format("{}{}", per_vertex, analytic ? " (mean over all vertices)" : ""));
   s += line("file size", fmt::format("{} bytes", file_size));
@@ -895,7 +966,7 @@ std::string describe_signal(const char* label, const ClusteredSignal& g) {
 }  // namespace detail::tio
 
 std::string describe_transfer(const Transfer& t) {
-  return describe(t, transfer_format_version(t.glossy), transfer_sections(t), transfer_file_size(t), "");
+  return describe(t, transfer_format_version(t), transfer_sections(t), transfer_file_size(t), "");
 }
 
 std::string describe_transfer(const CompressedTransfer& c) {

@@ -3,8 +3,8 @@
 // a transfer kind or a basis"):
 //   scene/transfer_io.cpp           framing (header, section table, checksum,
 //                                   atomic write, the reader's common checks),
-//                                   the SH sections (kinds 1-7) and the
-//                                   compressed signals (8, 9)
+//                                   the SH sections (kinds 1-7, 12, 13) and
+//                                   the compressed signals (8, 9)
 //   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
 //   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
 //   scene/transfer_io_zh.cpp        zonal-harmonic transfers (basis 2, kinds 24-26)
@@ -115,6 +115,7 @@ enum Kind : std::uint32_t {
   kLightmapLayout = 10,                             // version 5: u64 width, height, UV set, scene hash
   kLightmapTexels = 11,                             // version 5: u32 covered texel y * width + x, increasing
   kCompressionChoice = 12,                          // version 6: what a compression was chosen for (UTF-8 JSON)
+  kInterpolatedMask = 13,                           // version 7: u32 bit mask of the interpolated vertices
 };
 
 struct KindInfo {
@@ -124,7 +125,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 12> kKinds = {{
+constexpr std::array<KindInfo, 13> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -137,6 +138,7 @@ constexpr std::array<KindInfo, 12> kKinds = {{
     {kLightmapLayout, "lightmap layout", kTypeU64, false},
     {kLightmapTexels, "lightmap texels", kTypeU32, true},
     {kCompressionChoice, "compression choice", kTypeU8, false},
+    {kInterpolatedMask, "interpolated vertices", kTypeU32, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
@@ -145,12 +147,19 @@ constexpr std::size_t kKindsV3 = 7;
 constexpr std::size_t kKindsV4 = 9;
 constexpr std::size_t kKindsV5 = 11;
 constexpr std::size_t kKindsV6 = 12;
+constexpr std::size_t kKindsV7 = 13;
+// The first version whose files may hold section `kind` (1 to 13).
+constexpr std::uint32_t kind_version(std::uint32_t kind) {
+  return kind <= kKindsV1 ? 1 : kind <= kKindsV2 ? 2 : kind <= kKindsV3 ? 3 : kind <= kKindsV4 ? 4
+         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : 7;
+}
 // The longest compression choice record a reader takes (its JSON is under a
 // kilobyte for a handful of maps; this leaves room for thousands).
 constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
 constexpr std::uint64_t kLightmapLayoutWords = 4;
 
-// Words of the analytic-vertex bit mask: bit v % 32 of word v / 32 is vertex v.
+// Words of the analytic- and interpolated-vertex bit masks: bit v % 32 of
+// word v / 32 is vertex v.
 constexpr std::uint64_t mask_words(std::uint64_t vertices) { return vertices / 32 + (vertices % 32 != 0); }
 
 inline const KindInfo* kind_info(std::uint32_t kind) {
@@ -237,6 +246,9 @@ void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::u
                  std::size_t section_count);
 // The analytic-vertex bit mask of `t` (empty when no vertex is analytic).
 std::vector<std::uint32_t> analytic_mask(const Transfer& t);
+// The interpolated-vertex bit mask of `t` (empty when no vertex is
+// interpolated: the file then has no section 13).
+std::vector<std::uint32_t> interpolated_mask(const Transfer& t);
 // Pointer to the array of SH section `kind` of `t` and its element count.
 std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind);
 // "truncated: expected ... bytes, file has ..."
@@ -263,6 +275,10 @@ class Reader {
   // nothing past the last vertex.
   std::vector<std::uint32_t> slots_from_mask(const std::vector<std::uint32_t>& mask, std::uint64_t vertices,
                                              std::uint64_t stored) const;
+  // Transfer::interpolated from the 'interpolated vertices' mask (kind 13):
+  // throws unless it marks at least one vertex and nothing past the last.
+  std::vector<std::uint8_t> interpolated_from_mask(const std::vector<std::uint32_t>& mask,
+                                                   std::uint64_t vertices) const;
   ZhTransfer read_zh();
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }

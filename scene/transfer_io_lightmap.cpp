@@ -20,7 +20,11 @@ using namespace detail::tio;
 // ---- lightmaps (sections 10 and 11; docs/FORMAT.md "Lightmap transfer") -------------
 
 std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
-  std::vector<TransferSection> s = transfer_sections(t.transfer);
+  // A lightmap holds no interpolated-vertex mask (write_lightmap_transfer
+  // refuses interpolated texels).
+  std::vector<TransferSection> s;
+  for (const auto& sec : transfer_sections(t.transfer))
+    if (sec.kind != kInterpolatedMask) s.push_back(sec);
   for (const std::uint32_t kind : {kLightmapLayout, kLightmapTexels}) {
     const KindInfo& k = *kind_info(kind);
     const std::uint64_t count = kind == kLightmapLayout ? kLightmapLayoutWords : t.layout.texels.size();
@@ -34,6 +38,9 @@ std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_o
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t) {
   if (auto p = lightmap_problem(t); !p.empty()) throw Error(path + ": cannot write this lightmap: " + p);
   if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
+  if (t.transfer.interpolated_vertices() > 0)
+    throw Error(path + ": cannot write this lightmap: a lightmap has no interpolated texels (every texel is traced; "
+                       "Transfer::interpolated must be empty or all zero)");
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
   fill_header(header, t.transfer, kLightmapFormatVersion, kFlagLightmap, sections.size());

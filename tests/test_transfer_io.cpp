@@ -7,6 +7,7 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/hash.h>
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
@@ -134,6 +135,7 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_TRUE(same_bits(a.bounce_energy, b.bounce_energy));
   EXPECT_EQ(a.glossy, b.glossy);
   EXPECT_TRUE(same_bits(a.glossy_matrices, b.glossy_matrices));
+  EXPECT_EQ(a.interpolated, b.interpolated);
 }
 
 // `t` with random glossy matrices for its stored rows (the layout of its mode).
@@ -470,7 +472,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 6"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 7"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -1041,6 +1043,273 @@ TEST(CompressedRead, BadChoiceRecordsAreRefusedByName) {
   EXPECT_FALSE(fs::exists(dir.file("out.prtt")));
 }
 
+// ---- interpolated vertices (version 7, kind 13; adaptive sample points) --------------------
+
+// `t` with the vertices `interpolated(v)` selects marked interpolated.
+template <typename Pick>
+Transfer with_interpolated(Transfer t, Pick interpolated) {
+  t.interpolated.assign(t.vertices, 0);
+  for (std::size_t v = 0; v < t.vertices; ++v) t.interpolated[v] = interpolated(v) ? 1 : 0;
+  return t;
+}
+
+// mixed_transfer() (every third vertex analytic) with every vertex but each
+// fourth interpolated: 10 of 40 traced (0, 4, ..., 36), 30 interpolated,
+// analytic ones among both (vertex 0 analytic and traced, 3 analytic and
+// interpolated).
+Transfer adaptive_transfer() {
+  return with_interpolated(mixed_transfer(), [](std::size_t v) { return v % 4 != 0; });
+}
+
+// The mask words docs/FORMAT.md specifies for `t.interpolated`.
+std::vector<std::uint32_t> interpolated_words(const Transfer& t) {
+  std::vector<std::uint32_t> w((t.vertices + 31) / 32, 0u);
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    if (t.interpolated[v]) w[v / 32] |= 1u << (v % 32);
+  return w;
+}
+
+// Checks that the last section of `s` is the interpolated-vertex mask of `t`.
+void expect_interpolated_section(const Sample& s, const Transfer& t) {
+  const std::size_t at = s.section_at.back();
+  const std::vector<std::uint32_t> words = interpolated_words(t);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at), 13u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at + 4), 4u);  // u32
+  EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 8), words.size());
+  EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 16), 4 * words.size());
+  for (std::size_t i = 0; i < words.size(); ++i)
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, at + kSectionHeader + 4 * i), words[i]) << "word " << i;
+  const std::size_t padded = 4 * words.size() + (8 - 4 * words.size() % 8) % 8;
+  EXPECT_EQ(s.bytes.size(), at + kSectionHeader + padded + kTrailer);  // the last section
+}
+
+TEST(TransferFile, InterpolatedVerticesRoundTripAsVersionSeven) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  // Vertex counts around the mask's 32-bit words; some, one (the last), all
+  // interpolated; with and without analytic vertices.
+  for (std::size_t vertices : {1u, 7u, 31u, 32u, 33u, 100u})
+    for (int pattern = 0; pattern < 3; ++pattern)
+      for (bool analytic : {false, true}) {
+        const auto pick = [&](std::size_t v) {
+          return pattern == 0 ? v % 3 != 1 || vertices == 1 : pattern == 1 ? v + 1 == vertices : true;
+        };
+        Transfer t = make_transfer(TransferMode::Interreflected, 3, 3, vertices, {true, true, true, true});
+        if (analytic) t = with_analytic(t, [](std::size_t v) { return v % 2 == 0; });
+        t = with_interpolated(t, pick);
+        SCOPED_TRACE(std::to_string(vertices) + " vertices, pattern " + std::to_string(pattern) +
+                     (analytic ? ", analytic ones" : ""));
+        const Sample s = sample_file(dir, t);
+        EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 7u);
+        EXPECT_EQ(prt::transfer_format_version(t), 7u);
+        EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
+        expect_interpolated_section(s, t);
+        prt::write_transfer(path, t);
+        const Transfer back = prt::read_transfer(path);
+        expect_identical(t, back);
+        EXPECT_EQ(back.interpolated_vertices(), t.interpolated_vertices());
+        EXPECT_EQ(prt::read_transfer_version(path), 7u);
+        prt::write_transfer(dir.file("again.prtt"), back);
+        EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+      }
+  // Glossy too: version 7 (it holds version 3's kind 7 as well).
+  const Transfer g = with_interpolated(with_glossy(mixed_transfer()), [](std::size_t v) { return v > 20; });
+  const Sample s = sample_file(dir, g);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 7u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[s.section_at.size() - 2]), 7u);
+  expect_interpolated_section(s, g);
+  expect_identical(prt::read_transfer(dir.file("sample.prtt")), g);
+}
+
+TEST(TransferFormat, InterpolatedVertexMaskIsWhereTheDocumentSays) {
+  TempDir dir;
+  const Transfer t = adaptive_transfer();
+  const Sample s = sample_file(dir, t);
+  ASSERT_EQ(get<std::uint32_t>(s.bytes, kSectionCountAt), 7u);
+  // Kind 13 after kind 6, u32, (40 + 31) / 32 = 2 words: bit v % 32 of word v / 32.
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[5]), 6u);
+  const std::size_t at = s.section_at[6];
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at), 13u);
+  EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 8), 2u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at + kSectionHeader), 0xeeeeeeeeu);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at + kSectionHeader + 4), 0xeeu);  // vertices 32-39; none past 39
+  // The mask adds its section and changes nothing else but the version and count.
+  const Sample before = sample_file(dir, mixed_transfer());
+  EXPECT_EQ(s.bytes.size(), before.bytes.size() + kSectionHeader + 8);
+  EXPECT_EQ(s.bytes.substr(kHeader, at - kHeader), before.bytes.substr(kHeader, at - kHeader));
+  const auto sections = prt::transfer_sections(t);
+  ASSERT_EQ(sections.size(), 7u);
+  EXPECT_STREQ(sections.back().name, "interpolated vertices");
+  EXPECT_STREQ(sections.back().type, "u32");
+  EXPECT_FALSE(sections.back().per_vertex);
+  // Not per vertex (as the analytic mask), and it saves nothing: the bytes
+  // per vertex and the analytic vertices' saving are those without it.
+  EXPECT_EQ(prt::transfer_bytes_per_vertex(t), prt::transfer_bytes_per_vertex(mixed_transfer()));
+  EXPECT_EQ(prt::analytic_bytes_saved(t), prt::analytic_bytes_saved(mixed_transfer()));
+}
+
+// Nothing interpolated (no mask, or every flag 0): no section, and the file
+// byte for byte what prt wrote before there were interpolated vertices.
+TEST(TransferFile, NoInterpolatedVertexWritesTheFileOfBefore) {
+  TempDir dir;
+  for (const Transfer& base : {full_transfer(), mixed_transfer(), with_glossy(mixed_transfer())}) {
+    const Sample plain = sample_file(dir, base);
+    const std::uint32_t version = base.glossy ? 3u : 2u;
+    EXPECT_EQ(get<std::uint32_t>(plain.bytes, kVersionAt), version);
+    Transfer zeros = base;
+    zeros.interpolated.assign(zeros.vertices, 0);
+    EXPECT_EQ(prt::transfer_format_version(zeros), version);
+    EXPECT_EQ(prt::transfer_file_size(zeros), plain.bytes.size());
+    EXPECT_EQ(prt::transfer_sections(zeros).size(), prt::transfer_sections(base).size());
+    EXPECT_EQ(sample_file(dir, zeros).bytes, plain.bytes);
+    const Transfer back = prt::read_transfer(dir.file("sample.prtt"));
+    EXPECT_TRUE(back.interpolated.empty());
+    EXPECT_EQ(back.interpolated_vertices(), 0u);
+    const std::string d = prt::describe_transfer(zeros);
+    EXPECT_FALSE(contains(d, "interpolated")) << d;
+    EXPECT_TRUE(contains(d, "format version " + std::to_string(version))) << d;
+  }
+}
+
+TEST(TransferRead, BadInterpolatedVertexMask) {
+  TempDir dir;
+  const Sample s = sample_file(dir, adaptive_transfer());
+  const std::size_t mask = s.section_at[6], words = mask + kSectionHeader;
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& expected, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, expected, what);
+  };
+  // The section in a file older than version 7.
+  edit(kVersionAt, std::uint32_t(6),
+       {"bad section table: section 7 of 7 has unknown kind 13 in a version 6 file",
+        "'interpolated vertices' sections are version 7 and later"},
+       "kind 13 in version 6");
+  edit(kVersionAt, std::uint32_t(2), {"7 sections; at most 6 kinds exist in version 2"}, "kind 13 in version 2");
+  edit(mask + 4, std::uint32_t(1), {"'interpolated vertices' has element type 1; expected 4 (u32)"}, "f32 mask");
+  edit(mask + 8, std::uint64_t(3), {"section 'interpolated vertices' has 3 words; expected (vertices + 31) / 32 = 2"},
+       "word count");
+  edit(mask + 8, std::uint64_t(1), {"'interpolated vertices' has 1 words; expected (vertices + 31) / 32 = 2"},
+       "word count too small");
+  edit(mask + 16, std::uint64_t(12), {"2 u32 values but 12 bytes"}, "byte size");
+  // Bits past vertex 39 (bit 8 of word 1) are not vertices.
+  edit(words + 4, get<std::uint32_t>(s.bytes, words + 4) | (1u << 8),
+       {"bad interpolated-vertex mask: bits set past the last vertex (40)"}, "tail bit");
+  edit(words + 4, get<std::uint32_t>(s.bytes, words + 4) | 0x80000000u, {"bits set past the last vertex (40)"},
+       "last bit of the last word");
+  // An all-zero mask: a file must not carry an empty one.
+  edit(words, std::uint64_t(0),
+       {"bad interpolated-vertex mask: no vertex is marked interpolated", "an empty mask is not written"},
+       "all-zero mask");
+  // The compressed reader is the same reader.
+  const Sample c = compressed_sample(dir, compressed(adaptive_transfer(), 2, 3, 16));
+  std::string b = c.bytes;
+  put(b, c.section_at.back() + kSectionHeader, std::uint64_t(0));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"), {"no vertex is marked interpolated"},
+                  "all-zero mask, compressed");
+  b = c.bytes;
+  put(b, kVersionAt, std::uint32_t(4));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
+                  {"unknown kind 13 in a version 4 file", "version 7 and later"}, "kind 13 in version 4");
+}
+
+TEST(TransferWrite, RefusesBadInterpolatedFlags) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  Transfer t = adaptive_transfer();
+  t.interpolated.pop_back();
+  EXPECT_EQ(prt::transfer_problem(t), "39 interpolated-vertex flags for 40 vertices (one per vertex, or none)");
+  EXPECT_THROW(prt::write_transfer(path, t), prt::Error);
+  t = adaptive_transfer();
+  t.interpolated[5] = 2;
+  EXPECT_EQ(prt::transfer_problem(t), "vertex 5 has interpolated-vertex flag 2; must be 0 (traced) or 1 (interpolated)");
+  try {
+    prt::write_transfer(path, t);
+    ADD_FAILURE() << "wrote a flag of 2";
+  } catch (const prt::Error& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": cannot write this transfer: " + prt::transfer_problem(t));
+  }
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_EQ(prt::transfer_problem(adaptive_transfer()), "");
+}
+
+TEST(CompressedFile, KeepsInterpolatedVerticesAsVersionSeven) {
+  TempDir dir;
+  const Transfer t = adaptive_transfer();
+  for (bool glossy : {false, true})
+    for (bool choice : {false, true}) {
+      SCOPED_TRACE(std::string(glossy ? "glossy" : "diffuse") + (choice ? ", with a choice record" : ""));
+      prt::CompressedTransfer c = compressed(glossy ? with_glossy(t) : t, 2, 3, 16);
+      EXPECT_EQ(c.transfer.interpolated, t.interpolated);  // compress_transfer keeps the mask
+      if (choice) c.choice = sample_choice();
+      EXPECT_EQ(prt::transfer_format_version(c), 7u);
+      const Sample s = compressed_sample(dir, c);
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 7u);
+      EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(c));
+      // Kind 13 last, after the records (8, 9) and the choice (12).
+      const std::size_t n = s.section_at.size();
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[n - 2]), choice ? 12u : glossy ? 9u : 8u);
+      expect_interpolated_section(s, t);
+      const prt::CompressedTransfer back = prt::read_compressed_transfer(dir.file("sample.prtt"));
+      expect_identical(back.transfer, c.transfer);
+      expect_same_signal(back.coeffs, c.coeffs);
+      EXPECT_EQ(prt::decompress(back).interpolated, t.interpolated);
+      prt::write_compressed_transfer(dir.file("again.prtt"), back);
+      EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+      const std::string d = prt::describe_transfer(back);
+      EXPECT_TRUE(contains(d, "format version 7")) << d;
+      EXPECT_TRUE(contains(d, "traced 10 of 40 vertices (25.0%), 30 interpolated")) << d;
+      // Without the mask: the version of before.
+      c.transfer.interpolated.clear();
+      EXPECT_EQ(get<std::uint32_t>(compressed_sample(dir, c).bytes, kVersionAt), choice ? 6u : 4u);
+    }
+}
+
+TEST(LightmapFile, HoldsNoInterpolatedTexels) {
+  TempDir dir;
+  prt::LightmapTransfer l;
+  l.transfer = make_transfer(TransferMode::Shadowed, 1, 2, 40, {false, true, false, false});
+  l.transfer.vertex_colors = false;
+  l.layout.width = l.layout.height = 8;
+  for (std::uint32_t i = 0; i < 40; ++i) l.layout.texels.push_back(i + 3);
+  l.layout.scene_hash = 0x1234;
+  const std::string path = dir.file("l.prtt");
+  prt::write_lightmap_transfer(path, l);
+  // Interpolated texels are refused by the writer; all-zero flags are nothing.
+  prt::LightmapTransfer zeros = l;
+  zeros.transfer.interpolated.assign(40, 0);
+  prt::write_lightmap_transfer(dir.file("z.prtt"), zeros);
+  EXPECT_EQ(read_file(dir.file("z.prtt")), read_file(path));
+  prt::LightmapTransfer bad = l;
+  bad.transfer.interpolated.assign(40, 1);
+  try {
+    prt::write_lightmap_transfer(dir.file("bad.prtt"), bad);
+    ADD_FAILURE() << "wrote a lightmap with interpolated texels";
+  } catch (const prt::Error& e) {
+    EXPECT_TRUE(contains(e.what(), dir.file("bad.prtt") + ": cannot write this lightmap: a lightmap has no "
+                                                           "interpolated texels"))
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.file("bad.prtt")));
+  // A crafted lightmap with the section (appended after kind 11, version 7): refused by name.
+  const Sample s = sample_of(path);
+  const Sample m = sample_file(dir, adaptive_transfer());
+  std::string b = s.bytes.substr(0, s.bytes.size() - kTrailer) +
+                  m.bytes.substr(m.section_at.back(), kSectionHeader + 8) + s.bytes.substr(s.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kVersionAt, 7);
+  put<std::uint32_t>(b, kSectionCountAt, get<std::uint32_t>(s.bytes, kSectionCountAt) + 1);
+  reseal(b);
+  write_file(dir.file("crafted.prtt"), b);
+  expect_error_of(prt::read_lightmap_transfer, dir.file("crafted.prtt"),
+                  {"has an 'interpolated vertices' section, but the header's flags say the file is a lightmap"},
+                  "mask in a lightmap");
+}
+
 // ---- writing -----------------------------------------------------------------------------
 
 TEST(TransferWrite, RefusesWhatCouldNotBeReadBack) {
@@ -1421,6 +1690,54 @@ TEST(PrtInfo, CountsAnalyticVertices) {
   EXPECT_EQ(j.at("stored_vertices"), 26);
   EXPECT_EQ(j.at("analytic_bytes_saved"), prt::analytic_bytes_saved(t));
   EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
+}
+
+TEST(PrtInfo, ReportsInterpolatedVertices) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt"), packed = dir.file("c.prtt"), plain = dir.file("p.prtt");
+  prt::write_transfer(path, adaptive_transfer());
+  Result r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "prt transfer (format version 7)")) << r.out;
+  EXPECT_TRUE(std::regex_search(
+      r.out, std::regex(R"(^  adaptive +traced 10 of 40 vertices \(25\.0%\), 30 interpolated)", std::regex::multiline)))
+      << r.out;
+  EXPECT_TRUE(contains(r.out, "interpolated vertices")) << r.out;  // the section
+  EXPECT_FALSE(contains(r.out, "prt now writes")) << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 7);
+  EXPECT_EQ(j.at("interpolated_vertices"), 30);
+  EXPECT_EQ(j.at("traced_vertices"), 10);
+  EXPECT_DOUBLE_EQ(j.at("traced_fraction").get<double>(), 0.25);
+  EXPECT_EQ(j.at("analytic_vertices"), 14);
+  EXPECT_EQ(j.at("sections").back().at("kind"), 13);
+  EXPECT_EQ(j.at("sections").back().at("name"), "interpolated vertices");
+
+  // Compressed: the same report.
+  prt::write_compressed_transfer(packed, compressed(adaptive_transfer(), 2, 3, 16));
+  r = run_prt(dir, {"info", packed});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "traced 10 of 40 vertices (25.0%), 30 interpolated")) << r.out;
+  r = run_prt(dir, {"info", packed, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 7);
+  EXPECT_EQ(j.at("interpolated_vertices"), 30);
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(packed));
+
+  // Without the mask every vertex was traced: no text line, and 0, V, 1 in the JSON.
+  prt::write_transfer(plain, mixed_transfer());
+  r = run_prt(dir, {"info", plain});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_FALSE(contains(r.out, "adaptive")) << r.out;
+  r = run_prt(dir, {"info", plain, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("interpolated_vertices"), 0);
+  EXPECT_EQ(j.at("traced_vertices"), 40);
+  EXPECT_EQ(j.at("traced_fraction").get<double>(), 1.0);
 }
 
 TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {

@@ -26,20 +26,28 @@ namespace prt {
 
 // The newest version of SH transfer files (docs/FORMAT.md); this prt reads
 // it and every earlier one (version 1: every vertex stored). Each file is
-// written in the oldest version that holds it: compressed transfers with a
-// choice record 6, lightmaps 5, other compressed transfers 4, glossy ones 3,
-// the others 2. Wavelet transfers are written as version
-// kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 6;
+// written in the oldest version that holds it: transfers (compressed or
+// not) with interpolated vertices 7, compressed transfers with a choice
+// record 6, lightmaps 5, other compressed transfers 4, glossy ones 3, the
+// others 2. Wavelet transfers are written as version kWaveletFormatVersion.
+inline constexpr std::uint32_t kTransferFormatVersion = 7;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
+// Kind 13: the 'interpolated vertices' mask (Transfer::interpolated, adaptive
+// sample points), written only when some vertex is interpolated.
+inline constexpr std::uint32_t kInterpolatedFormatVersion = 7;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
 inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
-// The version write_transfer writes for `t`: 3 with glossy matrices, 2
-// otherwise (so that a prt reading version 2 reads every file it could).
+// The version write_transfer writes for a transfer without interpolated
+// vertices: 3 with glossy matrices, 2 otherwise (so that a prt reading
+// version 2 reads every file it could).
 inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }
+// The version write_transfer writes for `t`: kInterpolatedFormatVersion (7)
+// when some vertex is interpolated (Transfer::interpolated_vertices() > 0),
+// else transfer_format_version(t.glossy).
+std::uint32_t transfer_format_version(const Transfer& t);
 
 // Writes `t` to `path` through write_atomically: a failure (or the process
 // being killed) leaves any existing file untouched and no temporary behind.
@@ -61,7 +69,7 @@ std::string describe_transfer(const Transfer& t);
 
 // ---- what a file holds (prt info, tests) ------------------------------------
 struct TransferSection {
-  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 5 bounce energy, 6 analytic vertices
+  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 6 analytic vertices ... 13 interpolated vertices
   const char* name = "";            // "coefficients", "direct", "ambient occlusion", ...
   std::uint32_t element_bytes = 0;  // 4 (f32) or 8 (f64)
   std::uint64_t count = 0;          // elements (scalars)
@@ -100,8 +108,9 @@ bool transfer_is_compressed(const std::string& path);
 // The sections write_compressed_transfer stores, in file order, and the
 // file's exact size.
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c);
-// The version write_compressed_transfer writes for `c`: 6 with a choice
-// record, 4 without.
+// The version write_compressed_transfer writes for `c`: 7 when some vertex
+// is interpolated (c.transfer.interpolated: compression keeps the mask),
+// else 6 with a choice record, 4 without.
 std::uint32_t transfer_format_version(const CompressedTransfer& c);
 std::uint64_t transfer_file_size(const CompressedTransfer& c);
 // check_matches of its uncompressed part.
@@ -131,8 +140,8 @@ std::string_view basis_name(TransferBasis b);  // "sh", "wavelet", "zh"
 // verify the checksum or the sections (read_transfer / read_wavelet_transfer
 // do, and read_zh_transfer). Throws prt::Error "PATH: problem".
 TransferBasis read_transfer_basis(const std::string& path);
-// The same header checks; returns the file's format version (1 to 6 for SH,
-// 1 for wavelet and zonal-harmonic files).
+// The same header checks; returns the file's format version (1 to 7 for SH,
+// 1 for wavelet files, 2 for zonal-harmonic ones).
 std::uint32_t read_transfer_version(const std::string& path);
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
@@ -197,8 +206,9 @@ void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& wha
 // An SH transfer whose rows are a lightmap's covered texels, with two more
 // sections: the layout (width, height, UV set, scene hash) and the covered
 // texels' indices. Written through write_atomically; throws prt::Error
-// "PATH: cannot write this lightmap: PROBLEM" (lightmap_problem) before
-// writing anything.
+// "PATH: cannot write this lightmap: PROBLEM" (lightmap_problem; also for
+// glossy matrices or interpolated texels, which a lightmap file does not
+// hold) before writing anything.
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
 // Reads one with read_transfer's checks plus the layout's (lightmap_problem);
 // throws prt::Error "PATH: problem", also for a per-vertex file (and

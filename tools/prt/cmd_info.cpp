@@ -74,9 +74,9 @@ int run_info(const InfoArgs& a) {
   const Transfer t = read_transfer(a.file);  // validates everything; throws naming the file
   const std::uint32_t version = read_transfer_version(a.file);
   fmt::print("{}: {}", a.file, describe_transfer(t));
-  if (version != transfer_format_version(t.glossy))
+  if (version != transfer_format_version(t))
     fmt::print("  (the file is format version {}; prt now writes version {}: sizes above are as it would write it)\n",
-               version, transfer_format_version(t.glossy));
+               version, transfer_format_version(t));
   return 0;
 }
 
@@ -88,7 +88,8 @@ Run add_info(CLI::App& app) {
   s->footer(
       "Reads and validates the whole file (signature, version, size, checksum, every value) and prints its\n"
       "header: bands, channels, mode, bounces, samples, albedo, vertices, mesh hash, sections and sizes, and how\n"
-      "many vertices are analytic (unoccluded: no stored transfer) with the bytes that saves;\n"
+      "many vertices are analytic (unoccluded: no stored transfer) with the bytes that saves, and for an\n"
+      "adaptive one (prt precompute --adaptive) how many were traced and how many interpolated;\n"
       "for a wavelet transfer: cube resolution, threshold, kept fraction and bytes per vertex; for a compressed\n"
       "one (prt compress) its clusters, principal vectors, weight and index widths and bytes per signal;\n"
       "for a probe volume (prt precompute SCENE --probes) its grid, probe states, cube and sizes.\n"
