@@ -11,6 +11,7 @@ they are kept there only if they add coverage.
 """
 import base64
 import json
+import math
 import pathlib
 import struct
 import subprocess
@@ -247,6 +248,22 @@ def transfer_seeds(out, tmp, prt):
                     "--mesh", str(mesh), "--env", str(env), "--own-spectra", "--rotations", "2", "--eyes", "2"],
                    check=True)
     write(out, "transfer", "compressed-chosen.prt", f.read_bytes())
+    # Adaptive sample points (version 7: the 'interpolated vertices' mask, kind
+    # 13). The tiny mesh is too small to interpolate anything: a 17 x 17 grid
+    # over a bump (289 vertices; about 180 interpolated), one band.
+    n = 17
+    grid = [(2 * i / (n - 1) - 1, 2 * j / (n - 1) - 1) for j in range(n) for i in range(n)]
+    quads = [(j * n + i, j * n + i + 1, (j + 1) * n + i, (j + 1) * n + i + 1) for j in range(n - 1) for i in range(n - 1)]
+    bump = tmp / "bump.ply"
+    s = ("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n"
+         "element face %d\nproperty list uchar int vertex_indices\nend_header\n" % (len(grid), 2 * len(quads)))
+    s += "".join("%g %g %g\n" % (x, 0.3 * math.exp(-3 * (x * x + z * z)), z) for x, z in grid)
+    s += "".join("3 %d %d %d\n3 %d %d %d\n" % (a, c, b, b, c, d) for a, b, c, d in quads)
+    bump.write_text(s)
+    f = tmp / "adaptive-b1.prt"
+    subprocess.run([prt, "precompute", str(bump), "-o", str(f), "--threads", "1", "-q", "--bands", "1", "--samples",
+                    "64", "--adaptive"], check=True)
+    write(out, "transfer", "adaptive-b1.prt", f.read_bytes())
     return mesh, tmp / "shadowed-b3.prt"
 
 
