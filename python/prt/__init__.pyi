@@ -304,6 +304,16 @@ class Transfer:
         Whether it holds glossy matrices (relight() uses the diffuse part)
         """
     @property
+    def interpolated(self) -> numpy.ndarray:
+        """
+        uint8 (V,), read-only: 1 where the vertex's transfer was interpolated from traced neighbours (adaptive sample points, prt precompute --adaptive), 0 where it was traced; None when every vertex was traced (the file has no 'interpolated vertices' mask)
+        """
+    @property
+    def interpolated_vertices(self) -> Any:
+        """
+        How many vertices were interpolated from traced neighbours (prt precompute --adaptive); 0 when every vertex was traced
+        """
+    @property
     def mesh_hash(self) -> Any:
         ...
     @property

@@ -1054,6 +1054,18 @@ PYBIND11_MODULE(_prt, m) {
             return a;
           },
           "int64 (V,): each vertex's row in rows, or -1 when analytic")
+      .def_property_readonly("interpolated_vertices", [](const PyTransfer& p) { return p.t.interpolated_vertices(); },
+                             "How many vertices were interpolated from traced neighbours (prt precompute --adaptive); "
+                             "0 when every vertex was traced")
+      .def_property_readonly("interpolated",
+                             [](py::object self) -> py::object {
+                               const auto& p = self.cast<const PyTransfer&>();
+                               if (p.t.interpolated.empty()) return py::none();
+                               return view(p.t.interpolated.data(), {py::ssize_t(p.t.interpolated.size())}, self);
+                             },
+                             "uint8 (V,), read-only: 1 where the vertex's transfer was interpolated from traced "
+                             "neighbours (adaptive sample points, prt precompute --adaptive), 0 where it was traced; "
+                             "None when every vertex was traced (the file has no 'interpolated vertices' mask)")
       .def_property_readonly("rows", [](py::object self) { const auto& p = self.cast<const PyTransfer&>(); return rows_view(p, p.t.coeffs, self); },
                              "float32 (stored vertices, channels, bands^2): the stored rows, read-only")
       .def_property_readonly("direct_rows", [](py::object self) { const auto& p = self.cast<const PyTransfer&>(); return rows_view(p, p.t.direct, self); },

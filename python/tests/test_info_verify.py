@@ -29,15 +29,39 @@ def files(tmp_path_factory):
     out["zh"] = d / "z.prt"
     run_prt("precompute", TUBE, "-o", out["zh"], "--basis", "zh", "--lobes", 2, "--bands", 3, "--samples", SAMPLES,
             "-q")
+    # Adaptive sample points: the 'interpolated vertices' mask (version 7), and compressed with it.
+    out["adaptive"] = d / "a.prt"
+    run_prt("precompute", TUBE, "-o", out["adaptive"], "--adaptive", "--bands", BANDS, "--samples", SAMPLES, "-q")
+    out["adaptive-compressed"] = d / "ac.prt"
+    run_prt("compress", out["adaptive"], "-o", out["adaptive-compressed"], "--clusters", 4, "--pca", 2, "-q")
     return out
 
 
-@pytest.mark.parametrize("kind", ["sh", "glossy", "compressed", "wavelet", "zh"])
+@pytest.mark.parametrize("kind", ["sh", "glossy", "compressed", "wavelet", "zh", "adaptive", "adaptive-compressed"])
 def test_info_is_prt_info_json(files, kind):
     want = json.loads(run_prt("info", files[kind], "--json").stdout)
     got = prt.info(files[kind])
     assert got == want
     assert list(got) == list(want)  # the same order of keys
+
+
+@pytest.mark.parametrize("kind", ["adaptive", "adaptive-compressed"])
+def test_interpolated_vertices(files, kind):
+    """Transfer.interpolated: the file's mask as a read-only uint8 array,
+    counted as prt info counts it; None for a transfer with every vertex traced."""
+    t = prt.read_transfer(files[kind])
+    j = prt.info(files[kind])
+    assert j["format_version"] == 7
+    a = t.interpolated
+    assert a.dtype.name == "uint8" and a.shape == (t.vertices,) and not a.flags.writeable
+    assert set(a.tolist()) <= {0, 1}
+    assert int(a.sum()) == t.interpolated_vertices == j["interpolated_vertices"] > 0
+    assert j["traced_vertices"] == t.vertices - t.interpolated_vertices
+    assert j["traced_fraction"] == pytest.approx(j["traced_vertices"] / t.vertices)
+    assert "interpolated" in str(t)
+    plain = prt.read_transfer(files["sh"])
+    assert plain.interpolated is None and plain.interpolated_vertices == 0
+    assert prt.info(files["sh"])["traced_fraction"] == 1
 
 
 def test_info_refuses_what_is_not_a_prt_file(tmp_path):
