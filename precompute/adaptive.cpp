@@ -358,6 +358,9 @@ class Adaptive {
   void fill_glossy(std::vector<float>& g, std::size_t gstride, bool symmetric, int channels) const;
   void fill_ao_bent(std::vector<float>& ao, std::vector<glm::vec3>& bent) const;
   Transfer finish_interreflected(const std::vector<std::uint32_t>& traced_list);
+  // Marks the interpolated vertices (an interpolated vertex all of whose
+  // sources are analytic is analytic too) and compacts the V rows of t.
+  void finish(Transfer& t, std::vector<std::uint8_t> analytic) const;
 
   const Mesh& mesh_;
   const TransferOptions& o_;
@@ -457,19 +460,9 @@ void Adaptive::trace(std::vector<std::uint32_t> vs) {
   tbb::parallel_sort(vs.begin(), vs.end(), [&](std::uint32_t a, std::uint32_t b) {
     return morton_[a] != morton_[b] ? morton_[a] < morton_[b] : a < b;
   });
-  std::vector<glm::vec3> pos(vs.size()), nrm(vs.size()), alb(so_.vertex_colors ? vs.size() : 0);
-  for (std::size_t i = 0; i < vs.size(); ++i) {
-    pos[i] = mesh_.positions[vs[i]];
-    nrm[i] = mesh_.normals[vs[i]];
-    if (so_.vertex_colors) alb[i] = albedo_[vs[i]];
-  }
-  detail::Source src;
-  src.positions = pos.data();
-  src.normals = nrm.data();
-  src.count = vs.size();
-  src.albedo = so_.vertex_colors ? alb.data() : nullptr;
-  src.vertices = false;
-  src.scene = &scene_;
+  const detail::VertexPoints points(mesh_, vs, so_.vertex_colors);
+  const std::vector<glm::vec3>& nrm = points.normals;
+  detail::Source src = points.source(&scene_);
   std::vector<std::uint8_t> analytic;
   src.analytic_out = &analytic;
   const std::size_t before = done_;
@@ -823,7 +816,11 @@ Transfer Adaptive::run() {
     fill_glossy(glossy_, gstride_, true, 1);
     t.glossy_matrices = std::move(glossy_);
   }
-  std::vector<std::uint8_t> analytic = analytic_;
+  finish(t, analytic_);
+  return t;
+}
+
+void Adaptive::finish(Transfer& t, std::vector<std::uint8_t> analytic) const {
   t.interpolated.assign(V_, 0);
   for (std::size_t v = 0; v < V_; ++v) {
     const std::uint32_t f = weights_.first[v];
@@ -831,12 +828,11 @@ Transfer Adaptive::run() {
     t.interpolated[v] = 1;
     // Every source unoccluded: the residual is zero, the row its own A(n): analytic.
     bool all = true;
-    for (std::uint32_t j = f; j < f + weights_.count[v]; ++j) all = all && analytic_[weights_.src[j]];
+    for (std::uint32_t j = f; j < f + weights_.count[v]; ++j) all = all && analytic[weights_.src[j]];
     analytic[v] = all;
   }
   if (report_.interpolated == 0) t.interpolated.clear();
   compact_transfer(t, analytic);
-  return t;
 }
 
 Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& traced_list) {
@@ -844,12 +840,8 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
   // bounce gathering from every vertex: the traced ones' rows, the others
   // interpolated with the weights of the choice.
   const std::size_t P = traced_list.size();
-  std::vector<glm::vec3> pos(P), nrm(P), alb(o_.vertex_colors ? P : 0);
-  for (std::size_t i = 0; i < P; ++i) {
-    pos[i] = mesh_.positions[traced_list[i]];
-    nrm[i] = mesh_.normals[traced_list[i]];
-    if (o_.vertex_colors) alb[i] = albedo_[traced_list[i]];
-  }
+  const detail::VertexPoints points(mesh_, traced_list, o_.vertex_colors);
+  const std::vector<glm::vec3>& nrm = points.normals;
   const auto scatter = [&](const auto& point_rows, auto& vertex_rows, std::size_t stride, auto zero) {
     vertex_rows.assign(V_ * stride, zero);
     for (std::size_t i = 0; i < P; ++i)
@@ -861,13 +853,7 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
         scatter(point_rows, vertex_rows, stride_, 0.0f);
         fill(vertex_rows, channels_, transfer);  // bounce light alone has no A(n) to interpolate about
       };
-  detail::Source src;
-  src.positions = pos.data();
-  src.normals = nrm.data();
-  src.count = P;
-  src.albedo = o_.vertex_colors ? alb.data() : nullptr;
-  src.vertices = false;
-  src.scene = &scene_;
+  detail::Source src = points.source(&scene_);
   src.expand = &expand;
   std::vector<std::uint8_t> analytic_points;
   src.analytic_out = &analytic_points;
@@ -918,17 +904,7 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
   }
   std::vector<std::uint8_t> analytic(V_, 0);
   for (std::size_t i = 0; i < P; ++i) analytic[traced_list[i]] = analytic_points[i];
-  t.interpolated.assign(V_, 0);
-  for (std::size_t v = 0; v < V_; ++v) {
-    const std::uint32_t f = weights_.first[v];
-    if (f == kNone) continue;
-    t.interpolated[v] = 1;
-    bool all = true;
-    for (std::uint32_t j = f; j < f + weights_.count[v]; ++j) all = all && analytic[weights_.src[j]];
-    analytic[v] = all;
-  }
-  if (report_.interpolated == 0) t.interpolated.clear();
-  compact_transfer(t, analytic);
+  finish(t, std::move(analytic));
   return t;
 }
 

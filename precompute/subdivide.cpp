@@ -208,18 +208,10 @@ class Subdivider {
       // The new vertices alone, against the input's geometry (the same surface).
       if (!scene_) scene_ = std::make_unique<detail::RayScene>(input_);
       const std::size_t P = V - from;
-      std::vector<glm::vec3> pos(mesh_.positions.begin() + std::ptrdiff_t(from), mesh_.positions.end());
-      std::vector<glm::vec3> nrm(mesh_.normals.begin() + std::ptrdiff_t(from), mesh_.normals.end());
-      std::vector<glm::vec3> alb;
-      if (o_.vertex_colors)
-        for (std::size_t v = from; v < V; ++v) alb.push_back(glm::clamp(mesh_.colors[v], 0.0f, 1.0f));
-      detail::Source src;
-      src.positions = pos.data();
-      src.normals = nrm.data();
-      src.count = P;
-      src.albedo = o_.vertex_colors ? alb.data() : nullptr;
-      src.vertices = false;
-      src.scene = scene_.get();
+      std::vector<std::uint32_t> ids(P);
+      std::iota(ids.begin(), ids.end(), std::uint32_t(from));
+      const detail::VertexPoints points(mesh_, ids, o_.vertex_colors);
+      const detail::Source src = points.source(scene_.get());
       const Transfer t = detail::compute_at(input_, src, choice_, progress_, true);
       PRT_CHECK_OP(t.stride(), ==, stride_);
       rows_.resize(from * stride_);

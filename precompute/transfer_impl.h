@@ -5,6 +5,7 @@
 
 #include <prt/precompute.h>
 
+#include <glm/common.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -108,6 +109,33 @@ struct Source {
   // Filled on rank 0 (every rank with keep_everywhere) with each point's
   // analytic flag (1: no occluded ray), before any compaction.
   std::vector<std::uint8_t>* analytic_out = nullptr;
+};
+
+// Some of the mesh's vertices as points (adaptive sample points, subdivision
+// rounds): their positions, normals and, with vertex_colors, colours clamped
+// to [0, 1] as albedo; source() is a Source over them tracing against
+// `scene` (nullptr: one built per call).
+struct VertexPoints {
+  std::vector<glm::vec3> positions, normals, albedo;
+  VertexPoints(const Mesh& mesh, const std::vector<std::uint32_t>& ids, bool vertex_colors) {
+    positions.reserve(ids.size());
+    normals.reserve(ids.size());
+    for (std::uint32_t v : ids) {
+      positions.push_back(mesh.positions[v]);
+      normals.push_back(mesh.normals[v]);
+      if (vertex_colors) albedo.push_back(glm::clamp(mesh.colors[v], 0.0f, 1.0f));
+    }
+  }
+  Source source(const RayScene* scene) const {
+    Source src;
+    src.positions = positions.data();
+    src.normals = normals.data();
+    src.count = positions.size();
+    src.albedo = albedo.empty() ? nullptr : albedo.data();
+    src.vertices = false;
+    src.scene = scene;
+    return src;
+  }
 };
 
 // Throws prt::Error for options compute_transfer refuses on `mesh`.
