@@ -459,6 +459,35 @@ TEST(Tuning, MeetsTheTargetOnAnIndependentReference) {
   }
 }
 
+// --target-error with --adaptive: every trial adaptive (TOL = target / 2),
+// so the error the search measures includes what interpolation adds; the
+// result still meets the target on an independent reference, and some of
+// its vertices are interpolated.
+TEST(Tuning, AdaptiveTrialsMeetTheTargetToo) {
+  const Mesh m = test::ball_over_floor(48, 8, 16, 0.35f, {0.1f, 0.45f, 0.0f});
+  const EnvMap map = sky_with_sun();
+  TargetOptions o;
+  o.target = 0.06;
+  o.transfer.albedo = glm::vec3(0.8f);
+  o.transfer.bands = 8;
+  o.transfer.samples = 1024;
+  o.truth_vertices = 256;
+  o.adaptive = true;
+  const TargetResult r = choose_transfer(m, map, o, "");
+  SCOPED_TRACE(r.explanation);
+  EXPECT_LE(r.error.rel_rms, kTargetMargin * o.target);
+  EXPECT_GT(r.transfer.interpolated_vertices(), 0u);
+  ErrorSetOptions check;
+  check.reference.albedo = glm::vec3(0.8f);
+  check.reference.samples = 4 * r.truth_samples;
+  check.reference.seed = 99;
+  check.vertices = m.vertex_count();
+  check.seed = 99;
+  const ErrorSet independent = make_error_set(m, map, check);
+  const Accuracy a = measure_accuracy(independent, relight(r.transfer, m, project(map, r.bands)));
+  EXPECT_LE(a.rel_rms, o.target) << "noise " << a.noise_floor;
+}
+
 // The wavelet basis: the fewest terms K that meet the target; K / 2 or the
 // previous rung of the ladder does not.
 TEST(Tuning, WaveletTermsMeetTheTarget) {
