@@ -52,7 +52,12 @@
 
 namespace prt {
 
-double default_adaptive_tolerance(int samples) { return 0.01 * std::sqrt(1024.0 / std::max(samples, 1)); }
+// 0.01 at 1024 samples and fewer, smaller with more: the full run's error
+// against the reference at 6 bands is mostly the bands' own (bunny00 under
+// sunset.exr: 0.0163, 0.0153, 0.0152 at 256, 1024, 4096 samples), so a TOL
+// grown with the noise of fewer samples would pass 1.1x it (1.25x at 256
+// samples and 0.03); more samples lower the noise, and TOL with it.
+double default_adaptive_tolerance(int samples) { return 0.01 * std::sqrt(1024.0 / std::max(samples, 1024)); }
 double max_adaptive_tolerance(int samples) { return 1.5 * default_adaptive_tolerance(samples); }
 
 namespace {

@@ -274,6 +274,7 @@ TEST(Adaptive, BadOptionsAreRefused) {
 
 TEST(Adaptive, DefaultToleranceFollowsTheSamplingNoise) {
   EXPECT_DOUBLE_EQ(default_adaptive_tolerance(1024), 0.01);
+  EXPECT_DOUBLE_EQ(default_adaptive_tolerance(256), 0.01);  // not looser with fewer rays: the bands' error dominates
   EXPECT_DOUBLE_EQ(default_adaptive_tolerance(4096), 0.005);
   EXPECT_DOUBLE_EQ(max_adaptive_tolerance(1024), 0.015);
 }

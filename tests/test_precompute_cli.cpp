@@ -710,8 +710,8 @@ TEST(BadOptions, AdaptiveAndItsOptionsAreChecked) {
     runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", bad}, {"--adaptive ", bad}});
   // Past 1.5x the default for the samples: the error may pass 1.1x the full run's.
   runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "0.02"}, {"above 0.015", "--adaptive-any"}});
-  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "0.04", "--samples", "256"},
-                  {"above 0.03", "256 samples"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "0.01", "--samples", "4096"},
+                  {"above 0.0075", "4096 samples"}});
   runs.push_back({{"precompute", mesh, "-o", out, "--verify-adaptive", "0.1"}, {"--verify-adaptive is for --adaptive"}});
   runs.push_back({{"precompute", mesh, "-o", out, "--adaptive-any"}, {"--adaptive-any is for --adaptive"}});
   runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "--basis", "wavelet"}, {"--adaptive applies to --basis sh"}});

@@ -177,10 +177,10 @@ struct AdaptiveOptions {
   std::uint64_t seed = 1;  // which vertices probe and verify
 };
 
-// The default TOL for `samples` rays: 0.01 at 1024, scaled with the
-// sampling noise (1 / sqrt(samples)), so that interpolation adds well under
-// the noise the rays already have (docs/PRECOMPUTE.md measures 1.02-1.07x
-// the full run's error against prt reference at it).
+// The default TOL for `samples` rays: 0.01 at 1024 and fewer, falling as
+// the sampling noise (1 / sqrt(samples)) past 1024, so that interpolation
+// adds well under the error the full run already has (docs/PRECOMPUTE.md
+// measures 1.00-1.03x the full run's error against prt reference at it).
 double default_adaptive_tolerance(int samples);
 // The largest TOL prt precompute --adaptive takes without --adaptive-any:
 // 1.5x the default, where the measured error stays within 1.1x the full run's.

@@ -953,7 +953,7 @@ Run add_precompute(CLI::App& app) {
       s->add_option("--adaptive", a->adaptive,
                     "Adaptive sample points: trace a subset of the vertices and interpolate the rest along the surface "
                     "where probes show interpolation adds at most TOL (relative RMS of the transfer, band-weighted); "
-                    "without a value 0.01 x sqrt(1024 / samples) (docs/PRECOMPUTE.md)")
+                    "without a value 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples (docs/PRECOMPUTE.md)")
           ->expected(0, 1)
           ->default_str("")
           ->type_name("[TOL]");
