@@ -199,7 +199,9 @@ nlohmann::ordered_json info(const std::string& path) {
   if (read_transfer_basis(path) == TransferBasis::Wavelet) return to_json(path, read_wavelet_transfer(path));
   if (transfer_is_lightmap(path)) {
     const LightmapTransfer l = read_lightmap_transfer(path);
-    nlohmann::ordered_json j = to_json(path, l.transfer, kLightmapFormatVersion);
+    // The file's own version: 7 with interpolated texels (the rows' keys
+    // interpolated_vertices, traced_vertices and traced_fraction count texels).
+    nlohmann::ordered_json j = to_json(path, l.transfer, read_transfer_version(path));
     j["sections"] = sections_json(transfer_sections(l));
     j["file_bytes"] = transfer_file_size(l);
     j["lightmap"] = {{"width", l.layout.width},
@@ -207,6 +209,7 @@ nlohmann::ordered_json info(const std::string& path) {
                      {"uv_set", l.layout.uv_set},
                      {"covered_texels", l.layout.texels.size()},
                      {"analytic_texels", l.transfer.analytic_vertices()},
+                     {"interpolated_texels", std::min(l.transfer.interpolated_vertices(), l.transfer.vertices)},
                      {"scene_hash", fmt::format("{:016x}", l.layout.scene_hash)}};
     return j;
   }

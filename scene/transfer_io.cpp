@@ -40,11 +40,9 @@ using detail::TransferHeader;
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v, bool compressed,
                             bool lightmap = false) {
   if (kind == kInterpolatedMask) {
+    // A lightmap's rows are its covered texels: the mask marks interpolated
+    // texels there (prt precompute --lightmap --adaptive), one bit per row.
     const char* name = kind_info(kind)->name;
-    if (lightmap)
-      return fmt::format("has an '{}' section, but the header's flags say the file is a lightmap (every texel of a "
-                         "lightmap is traced)",
-                         name);
     if (count != mask_words(v.vertices))
       return fmt::format("section '{}' has {} words; expected (vertices + 31) / 32 = {}", name, count,
                          mask_words(v.vertices));
@@ -879,10 +877,8 @@ std::string describe_line(const char* label, const std::string& value) {
   return fmt::format("  {:<17} {}\n", label, value);
 }
 
-// describe_transfer of `t` as stored in `sections`, `file_size` bytes,
-// `compression` lines before the sizes.
 std::string describe(const Transfer& t, std::uint32_t version, const std::vector<TransferSection>& sections,
-                     std::uint64_t file_size, const std::string& compression) {
+                     std::uint64_t file_size, const std::string& compression, const char* points) {
   const auto line = describe_line;
   std::string s = fmt::format("prt transfer (format version {})\n", version);
   s += line("basis", "spherical harmonics");
@@ -926,8 +922,8 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
   // Adaptive sample points: only a transfer with interpolated vertices has the line.
   if (const std::size_t interpolated = t.interpolated_vertices(); interpolated > 0) {
     const std::size_t traced = t.vertices - std::min(interpolated, t.vertices);
-    s += line("adaptive", fmt::format("traced {} of {} vertices ({:.1f}%), {} interpolated from traced neighbours",
-                                      traced, t.vertices,
+    s += line("adaptive", fmt::format("traced {} of {} {} ({:.1f}%), {} interpolated from traced neighbours",
+                                      traced, t.vertices, points,
                                       t.vertices ? 100.0 * double(traced) / double(t.vertices) : 0.0, interpolated));
   }
   s += compression;

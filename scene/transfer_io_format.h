@@ -256,6 +256,12 @@ std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size);
 std::string unknown_basis(std::uint32_t basis);
 // One "  label             value" line of describe_transfer.
 std::string describe_line(const char* label, const std::string& value);
+// describe_transfer of the SH rows `t` as stored in `sections` (a lightmap's
+// or compressed file's own), `file_size` bytes, `compression` lines before
+// the sizes; `points` names the rows in the adaptive line ("vertices", a
+// lightmap's "texels").
+std::string describe(const Transfer& t, std::uint32_t version, const std::vector<TransferSection>& sections,
+                     std::uint64_t file_size, const std::string& compression, const char* points = "vertices");
 // Throws unless a transfer of `vertices` vertices and `mesh_hash` was computed for `mesh`.
 void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,
                 const char* rerun);

@@ -1,5 +1,6 @@
 // Lightmap sections of transfer files (kinds 10 and 11, flag bit 3, version
-// 5; docs/FORMAT.md "Lightmap transfer"). The framing: transfer_io_format.h.
+// 5; version 7 with the interpolated-texel mask, kind 13; docs/FORMAT.md
+// "Lightmap transfer"). The framing: transfer_io_format.h.
 #include <prt/transfer_io.h>
 
 #include <prt/error.h>
@@ -20,39 +21,46 @@ using namespace detail::tio;
 // ---- lightmaps (sections 10 and 11; docs/FORMAT.md "Lightmap transfer") -------------
 
 std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
-  // A lightmap holds no interpolated-vertex mask (write_lightmap_transfer
-  // refuses interpolated texels).
   std::vector<TransferSection> s;
+  // The interpolated-texel mask (kind 13, adaptive sample points among the
+  // texels): after the layout and texels, as sections go by increasing kind.
+  std::vector<TransferSection> after;
   for (const auto& sec : transfer_sections(t.transfer))
-    if (sec.kind != kInterpolatedMask) s.push_back(sec);
+    if (sec.kind == kInterpolatedMask) after.push_back(sec);
+    else s.push_back(sec);
   for (const std::uint32_t kind : {kLightmapLayout, kLightmapTexels}) {
     const KindInfo& k = *kind_info(kind);
     const std::uint64_t count = kind == kLightmapLayout ? kLightmapLayoutWords : t.layout.texels.size();
     s.push_back({kind, k.name, type_bytes(k.type), count, count * type_bytes(k.type), k.per_vertex, type_name(k.type)});
   }
+  s.insert(s.end(), after.begin(), after.end());
   return s;
 }
 
 std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_of(transfer_sections(t)); }
 
+std::uint32_t transfer_format_version(const LightmapTransfer& t) {
+  // 7 only with the mask: a lightmap with every texel traced stays the
+  // version 5 file of before, byte for byte.
+  return t.transfer.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : kLightmapFormatVersion;
+}
+
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t) {
   if (auto p = lightmap_problem(t); !p.empty()) throw Error(path + ": cannot write this lightmap: " + p);
   if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
-  if (t.transfer.interpolated_vertices() > 0)
-    throw Error(path + ": cannot write this lightmap: a lightmap has no interpolated texels (every texel is traced; "
-                       "Transfer::interpolated must be empty or all zero)");
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  fill_header(header, t.transfer, kLightmapFormatVersion, kFlagLightmap, sections.size());
-  const std::vector<std::uint32_t> mask = analytic_mask(t.transfer);
+  fill_header(header, t.transfer, transfer_format_version(t), kFlagLightmap, sections.size());
+  const std::vector<std::uint32_t> mask = analytic_mask(t.transfer), interpolated = interpolated_mask(t.transfer);
   const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
                                                       std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
-    const void* data = s.kind == kAnalyticMask     ? mask.data()
-                       : s.kind == kLightmapLayout ? static_cast<const void*>(layout)
-                       : s.kind == kLightmapTexels ? static_cast<const void*>(t.layout.texels.data())
-                                                   : section_array(t.transfer, s.kind).first;
+    const void* data = s.kind == kAnalyticMask       ? mask.data()
+                       : s.kind == kInterpolatedMask ? interpolated.data()
+                       : s.kind == kLightmapLayout   ? static_cast<const void*>(layout)
+                       : s.kind == kLightmapTexels   ? static_cast<const void*>(t.layout.texels.data())
+                                                     : section_array(t.transfer, s.kind).first;
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
   }
   write_file(path, header, raw);
@@ -78,11 +86,13 @@ std::string describe_transfer(const LightmapTransfer& t) {
   const LightmapLayout& l = t.layout;
   const std::size_t n = l.texels.size();
   const std::uint64_t size = transfer_file_size(t);
+  // The rows as this file stores them: its version, its sections (the layout,
+  // texels and mask included) and size; the adaptive line counts texels.
   return fmt::format("lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}% of the atlas), {} analytic "
                      "(no row stored), {:.1f} bytes per covered texel, scene hash {:016x}\n",
                      l.width, l.height, l.uv_set, l.uv_set, n, 100.0 * double(n) / (double(l.width) * l.height),
                      t.transfer.analytic_vertices(), n ? double(size) / double(n) : 0.0, l.scene_hash) +
-         describe_transfer(t.transfer);
+         detail::tio::describe(t.transfer, transfer_format_version(t), transfer_sections(t), size, "", "texels");
 }
 
 }  // namespace prt

@@ -1270,44 +1270,136 @@ TEST(CompressedFile, KeepsInterpolatedVerticesAsVersionSeven) {
     }
 }
 
-TEST(LightmapFile, HoldsNoInterpolatedTexels) {
-  TempDir dir;
+// A 40-texel lightmap of an 8x8 atlas (texels 3 to 42): shadowed, grey, with
+// ambient occlusion; every third texel analytic when `analytic`.
+prt::LightmapTransfer sample_lightmap(bool analytic = false) {
   prt::LightmapTransfer l;
   l.transfer = make_transfer(TransferMode::Shadowed, 1, 2, 40, {false, true, false, false});
   l.transfer.vertex_colors = false;
+  if (analytic) l.transfer = with_analytic(l.transfer, [](std::size_t v) { return v % 3 == 0; });
   l.layout.width = l.layout.height = 8;
   for (std::uint32_t i = 0; i < 40; ++i) l.layout.texels.push_back(i + 3);
   l.layout.scene_hash = 0x1234;
-  const std::string path = dir.file("l.prtt");
+  return l;
+}
+
+Sample lightmap_sample(const TempDir& dir, const prt::LightmapTransfer& l) {
+  const std::string path = dir.file("lightmap.prtt");
   prt::write_lightmap_transfer(path, l);
-  // Interpolated texels are refused by the writer; all-zero flags are nothing.
+  return sample_of(path);
+}
+
+// Adaptive sample points among a lightmap's texels (prt precompute --lightmap
+// --adaptive): the mask over the texels after the layout and texels, version 7.
+TEST(LightmapFile, InterpolatedTexelsRoundTripAsVersionSeven) {
+  TempDir dir;
+  for (bool analytic : {false, true}) {
+    SCOPED_TRACE(analytic ? "analytic texels" : "every texel stored");
+    prt::LightmapTransfer l = sample_lightmap(analytic);
+    l.transfer = with_interpolated(l.transfer, [](std::size_t v) { return v % 4 != 0; });  // 10 of 40 traced
+    EXPECT_EQ(prt::transfer_format_version(l), 7u);
+    const Sample s = lightmap_sample(dir, l);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 7u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 8u, 8u);  // flag bit 3: a lightmap
+    EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(l));
+    const std::size_t n = s.section_at.size();
+    ASSERT_GE(n, 3u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[n - 3]), 10u);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[n - 2]), 11u);
+    expect_interpolated_section(s, l.transfer);
+    const auto sections = prt::transfer_sections(l);
+    ASSERT_EQ(sections.size(), n);
+    EXPECT_EQ(sections.back().kind, 13u);
+    const std::string path = dir.file("lightmap.prtt");
+    const prt::LightmapTransfer back = prt::read_lightmap_transfer(path);
+    expect_identical(l.transfer, back.transfer);
+    EXPECT_EQ(back.transfer.interpolated_vertices(), 30u);
+    EXPECT_EQ(back.layout.texels, l.layout.texels);
+    EXPECT_EQ(back.layout.scene_hash, l.layout.scene_hash);
+    EXPECT_EQ(prt::read_transfer_version(path), 7u);
+    EXPECT_TRUE(prt::transfer_is_lightmap(path));
+    expect_error_of(prt::read_transfer, path, {"holds a lightmap"}, "read_transfer of a version 7 lightmap");
+    prt::write_lightmap_transfer(dir.file("again.prtt"), back);
+    EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+    const std::string d = prt::describe_transfer(back);
+    EXPECT_TRUE(contains(d, "format version 7")) << d;
+    EXPECT_TRUE(contains(d, "traced 10 of 40 texels (25.0%), 30 interpolated")) << d;
+    EXPECT_TRUE(contains(d, "lightmap texels")) << d;  // the file's own sections
+    EXPECT_TRUE(contains(d, " " + std::to_string(s.bytes.size()) + " bytes\n")) << d;  // the file size
+  }
+}
+
+// Nothing interpolated (no flags, or every flag 0): the version 5 file of
+// before, byte for byte; the mask adds only its section (and the version and
+// count).
+TEST(LightmapFile, NoInterpolatedTexelWritesTheFileOfBefore) {
+  TempDir dir;
+  const prt::LightmapTransfer l = sample_lightmap(true);
+  const Sample plain = lightmap_sample(dir, l);
+  EXPECT_EQ(get<std::uint32_t>(plain.bytes, kVersionAt), 5u);
+  EXPECT_EQ(prt::transfer_format_version(l), 5u);
+  for (std::size_t at : plain.section_at) EXPECT_NE(get<std::uint32_t>(plain.bytes, at), 13u);
+  EXPECT_EQ(get<std::uint32_t>(plain.bytes, plain.section_at.back()), 11u);
   prt::LightmapTransfer zeros = l;
   zeros.transfer.interpolated.assign(40, 0);
-  prt::write_lightmap_transfer(dir.file("z.prtt"), zeros);
-  EXPECT_EQ(read_file(dir.file("z.prtt")), read_file(path));
-  prt::LightmapTransfer bad = l;
-  bad.transfer.interpolated.assign(40, 1);
-  try {
-    prt::write_lightmap_transfer(dir.file("bad.prtt"), bad);
-    ADD_FAILURE() << "wrote a lightmap with interpolated texels";
-  } catch (const prt::Error& e) {
-    EXPECT_TRUE(contains(e.what(), dir.file("bad.prtt") + ": cannot write this lightmap: a lightmap has no "
-                                                           "interpolated texels"))
-        << e.what();
-  }
-  EXPECT_FALSE(fs::exists(dir.file("bad.prtt")));
-  // A crafted lightmap with the section (appended after kind 11, version 7): refused by name.
-  const Sample s = sample_of(path);
-  const Sample m = sample_file(dir, adaptive_transfer());
-  std::string b = s.bytes.substr(0, s.bytes.size() - kTrailer) +
-                  m.bytes.substr(m.section_at.back(), kSectionHeader + 8) + s.bytes.substr(s.bytes.size() - kTrailer);
-  put<std::uint32_t>(b, kVersionAt, 7);
-  put<std::uint32_t>(b, kSectionCountAt, get<std::uint32_t>(s.bytes, kSectionCountAt) + 1);
+  EXPECT_EQ(prt::transfer_format_version(zeros), 5u);
+  EXPECT_EQ(prt::transfer_sections(zeros).size(), prt::transfer_sections(l).size());
+  EXPECT_EQ(lightmap_sample(dir, zeros).bytes, plain.bytes);
+  const prt::LightmapTransfer back = prt::read_lightmap_transfer(dir.file("lightmap.prtt"));
+  EXPECT_TRUE(back.transfer.interpolated.empty());
+  const std::string d = prt::describe_transfer(back);
+  EXPECT_TRUE(contains(d, "format version 5")) << d;
+  EXPECT_FALSE(contains(d, "interpolated")) << d;
+
+  // With the mask: the same bytes up to it.
+  prt::LightmapTransfer adaptive = l;
+  adaptive.transfer = with_interpolated(l.transfer, [](std::size_t v) { return v == 39; });
+  const Sample m = lightmap_sample(dir, adaptive);
+  const std::size_t at = m.section_at.back();
+  EXPECT_EQ(m.bytes.size(), plain.bytes.size() + kSectionHeader + 8);
+  EXPECT_EQ(m.bytes.substr(kHeader, at - kHeader), plain.bytes.substr(kHeader, plain.bytes.size() - kTrailer - kHeader));
+  std::string without = m.bytes.substr(0, at) + m.bytes.substr(m.bytes.size() - kTrailer);
+  put<std::uint32_t>(without, kVersionAt, 5);
+  put<std::uint32_t>(without, kSectionCountAt, get<std::uint32_t>(m.bytes, kSectionCountAt) - 1);
+  reseal(without);
+  EXPECT_EQ(without, plain.bytes);
+}
+
+// A lightmap's mask is checked as a per-vertex file's; the texels' are its rows.
+TEST(LightmapRead, BadInterpolatedTexelMask) {
+  TempDir dir;
+  prt::LightmapTransfer l = sample_lightmap();
+  l.transfer = with_interpolated(l.transfer, [](std::size_t v) { return v % 4 != 0; });
+  const Sample s = lightmap_sample(dir, l);
+  const std::size_t mask = s.section_at.back(), words = mask + kSectionHeader;
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& expected, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    write_file(dir.file("bad.prtt"), b);
+    expect_error_of(prt::read_lightmap_transfer, dir.file("bad.prtt"), expected, what);
+  };
+  edit(kVersionAt, std::uint32_t(5), {"unknown kind 13 in a version 5 file", "version 7 and later"},
+       "kind 13 in a version 5 lightmap");
+  edit(kVersionAt, std::uint32_t(6), {"unknown kind 13 in a version 6 file"}, "kind 13 in a version 6 lightmap");
+  edit(mask + 8, std::uint64_t(1), {"'interpolated vertices' has 1 words; expected (vertices + 31) / 32 = 2"},
+       "word count");
+  edit(words + 4, get<std::uint32_t>(s.bytes, words + 4) | (1u << 8), {"bits set past the last vertex (40)"},
+       "tail bit");
+  edit(words, std::uint64_t(0), {"no vertex is marked interpolated"}, "all-zero mask");
+  // The mask before the layout: out of order.
+  std::string b = s.bytes.substr(0, s.section_at[s.section_at.size() - 3]) +
+                  s.bytes.substr(mask, s.bytes.size() - kTrailer - mask) +
+                  s.bytes.substr(s.section_at[s.section_at.size() - 3], mask - s.section_at[s.section_at.size() - 3]) +
+                  s.bytes.substr(s.bytes.size() - kTrailer);
   reseal(b);
-  write_file(dir.file("crafted.prtt"), b);
-  expect_error_of(prt::read_lightmap_transfer, dir.file("crafted.prtt"),
-                  {"has an 'interpolated vertices' section, but the header's flags say the file is a lightmap"},
-                  "mask in a lightmap");
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_lightmap_transfer, dir.file("bad.prtt"), {"out of order"}, "mask before the layout");
+  // The writer refuses flags the reader would.
+  prt::LightmapTransfer bad = l;
+  bad.transfer.interpolated.pop_back();
+  EXPECT_THROW(prt::write_lightmap_transfer(dir.file("w.prtt"), bad), prt::Error);
+  EXPECT_FALSE(fs::exists(dir.file("w.prtt")));
 }
 
 // ---- writing -----------------------------------------------------------------------------
@@ -1738,6 +1830,46 @@ TEST(PrtInfo, ReportsInterpolatedVertices) {
   EXPECT_EQ(j.at("interpolated_vertices"), 0);
   EXPECT_EQ(j.at("traced_vertices"), 40);
   EXPECT_EQ(j.at("traced_fraction").get<double>(), 1.0);
+}
+
+// A lightmap with interpolated texels: the same report, counting texels.
+TEST(PrtInfo, ReportsInterpolatedTexels) {
+  TempDir dir;
+  const std::string path = dir.file("l.prtt"), plain = dir.file("p.prtt");
+  prt::LightmapTransfer l = sample_lightmap(true);
+  prt::write_lightmap_transfer(plain, l);
+  l.transfer = with_interpolated(l.transfer, [](std::size_t v) { return v % 4 != 0; });
+  prt::write_lightmap_transfer(path, l);
+  Result r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "prt transfer (format version 7)")) << r.out;
+  EXPECT_TRUE(std::regex_search(
+      r.out, std::regex(R"(^  adaptive +traced 10 of 40 texels \(25\.0%\), 30 interpolated)", std::regex::multiline)))
+      << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 7);
+  EXPECT_EQ(j.at("interpolated_vertices"), 30);
+  EXPECT_EQ(j.at("traced_vertices"), 10);
+  EXPECT_DOUBLE_EQ(j.at("traced_fraction").get<double>(), 0.25);
+  EXPECT_EQ(j.at("lightmap").at("interpolated_texels"), 30);
+  EXPECT_EQ(j.at("sections").back().at("kind"), 13);
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
+
+  // Every texel traced: version 5, no text line, and 0, V, 1 in the JSON.
+  r = run_prt(dir, {"info", plain});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "prt transfer (format version 5)")) << r.out;
+  EXPECT_FALSE(contains(r.out, "adaptive")) << r.out;
+  r = run_prt(dir, {"info", plain, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 5);
+  EXPECT_EQ(j.at("interpolated_vertices"), 0);
+  EXPECT_EQ(j.at("traced_vertices"), 40);
+  EXPECT_EQ(j.at("traced_fraction").get<double>(), 1.0);
+  EXPECT_EQ(j.at("lightmap").at("interpolated_texels"), 0);
 }
 
 TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {

@@ -27,9 +27,10 @@ namespace prt {
 // The newest version of SH transfer files (docs/FORMAT.md); this prt reads
 // it and every earlier one (version 1: every vertex stored). Each file is
 // written in the oldest version that holds it: transfers (compressed or
-// not) with interpolated vertices 7, compressed transfers with a choice
-// record 6, lightmaps 5, other compressed transfers 4, glossy ones 3, the
-// others 2. Wavelet transfers are written as version kWaveletFormatVersion.
+// not, lightmaps too) with interpolated vertices or texels 7, compressed
+// transfers with a choice record 6, other lightmaps 5, other compressed
+// transfers 4, glossy ones 3, the others 2. Wavelet transfers are written as
+// version kWaveletFormatVersion.
 inline constexpr std::uint32_t kTransferFormatVersion = 7;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
@@ -205,11 +206,16 @@ void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& wha
 // ---- lightmap transfers (version 5, flag bit 3; docs/FORMAT.md, "Lightmap transfer") ----
 // An SH transfer whose rows are a lightmap's covered texels, with two more
 // sections: the layout (width, height, UV set, scene hash) and the covered
-// texels' indices. Written through write_atomically; throws prt::Error
-// "PATH: cannot write this lightmap: PROBLEM" (lightmap_problem; also for
-// glossy matrices or interpolated texels, which a lightmap file does not
-// hold) before writing anything.
+// texels' indices; and, when some texel was interpolated from traced ones
+// (Transfer::interpolated: prt precompute --lightmap --adaptive), the
+// 'interpolated vertices' mask over the texels (version 7). Written through
+// write_atomically; throws prt::Error "PATH: cannot write this lightmap:
+// PROBLEM" (lightmap_problem; also for glossy matrices, which a lightmap file
+// does not hold) before writing anything.
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
+// The version write_lightmap_transfer writes for `t`: kInterpolatedFormatVersion
+// (7) when some texel is interpolated, else kLightmapFormatVersion (5).
+std::uint32_t transfer_format_version(const LightmapTransfer& t);
 // Reads one with read_transfer's checks plus the layout's (lightmap_problem);
 // throws prt::Error "PATH: problem", also for a per-vertex file (and
 // read_transfer refuses a lightmap, naming it).

@@ -264,6 +264,21 @@ def transfer_seeds(out, tmp, prt):
     subprocess.run([prt, "precompute", str(bump), "-o", str(f), "--threads", "1", "-q", "--bands", "1", "--samples",
                     "64", "--adaptive"], check=True)
     write(out, "transfer", "adaptive-b1.prt", f.read_bytes())
+    # Lightmaps (version 5: kinds 10 and 11) of the bump as an OBJ with planar
+    # texture coordinates, and with adaptive sample points among the texels
+    # (version 7: the 'interpolated vertices' mask, kind 13, after kind 11).
+    bump_obj = tmp / "bump.obj"
+    s = "".join("v %g %g %g\nvt %g %g\n" % (x, 0.3 * math.exp(-3 * (x * x + z * z)), z, (x + 1) / 2, (1 - z) / 2)
+                for x, z in grid)
+    s += "".join("f %d/%d %d/%d %d/%d\nf %d/%d %d/%d %d/%d\n" % (a + 1, a + 1, c + 1, c + 1, b + 1, b + 1,
+                                                               b + 1, b + 1, c + 1, c + 1, d + 1, d + 1)
+                 for a, b, c, d in quads)
+    bump_obj.write_text(s)
+    for name, args in (("lightmap-b1", []), ("lightmap-adaptive-b1", ["--adaptive"])):
+        f = tmp / (name + ".prt")
+        subprocess.run([prt, "precompute", str(bump_obj), "--lightmap", "16x16", "-o", str(f), "--threads", "1", "-q",
+                        "--bands", "1", "--samples", "64", *args], check=True)
+        write(out, "transfer", name + ".prt", f.read_bytes())
     return mesh, tmp / "shadowed-b3.prt"
 
 

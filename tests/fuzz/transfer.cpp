@@ -1,7 +1,8 @@
 // Fuzz target: the transfer file reader (docs/FORMAT.md), every basis:
 // read_transfer_basis, read_transfer_version, transfer_is_compressed,
-// read_transfer, read_compressed_transfer, read_wavelet_transfer and
-// read_zh_transfer, and the description of what was read.
+// transfer_is_lightmap, read_transfer, read_compressed_transfer,
+// read_lightmap_transfer, read_wavelet_transfer and read_zh_transfer, and the
+// description of what was read.
 //
 // The checksum: the trailer holds XXH3-64 of every byte before it, which a
 // mutated input almost never matches, so the reader would stop there. When
@@ -63,6 +64,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       (void)prt::decompress(c);
       round_trip(c, prt::read_compressed_transfer,
                  [](const std::string& p, const prt::CompressedTransfer& x) { prt::write_compressed_transfer(p, x); });
+    } else if (prt::read_transfer_basis(path) == prt::TransferBasis::SH && prt::transfer_is_lightmap(path)) {
+      // An SH lightmap: version 5, or 7 with its interpolated-texel mask.
+      const prt::LightmapTransfer l = prt::read_lightmap_transfer(path);
+      (void)prt::describe_transfer(l);
+      (void)prt::transfer_sections(l);
+      round_trip(l, prt::read_lightmap_transfer,
+                 [](const std::string& p, const prt::LightmapTransfer& x) { prt::write_lightmap_transfer(p, x); });
     } else if (prt::read_transfer_basis(path) == prt::TransferBasis::SH) {
       const prt::Transfer t = prt::read_transfer(path);
       (void)prt::describe_transfer(t);
@@ -87,6 +95,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_wavelet_transfer(path); });
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_transfer(path); });
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_compressed_transfer(path); });
+  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_lightmap_transfer(path); });
   prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_zh_transfer(path); });
   return 0;
 }
