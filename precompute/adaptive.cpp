@@ -25,7 +25,6 @@
 #include <prt/error.h>
 #include <prt/glossy.h>
 #include <prt/precompute.h>
-#include <prt/sh.h>
 
 #include "ray_scene.h"
 #include "transfer_impl.h"
@@ -84,14 +83,9 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-// The mesh's edges, both ways, as CSR.
-struct Graph {
-  std::vector<std::uint32_t> offset, next;
-};
-
-Graph adjacency(const Mesh& m) {
+// The mesh's edges, both ways, as CSR (into points' offset and next).
+void adjacency(const Mesh& m, detail::AdaptivePoints& g) {
   const std::size_t V = m.vertex_count();
-  Graph g;
   g.offset.assign(V + 1, 0);
   for (const glm::uvec3& t : m.triangles)
     for (int e = 0; e < 3; ++e) g.offset[t[e] + 1] += 2;
@@ -118,7 +112,6 @@ Graph adjacency(const Mesh& m) {
   }
   g.offset[V] = std::uint32_t(out);
   g.next.resize(out);
-  return g;
 }
 
 // Open-addressing map from a grid cell to the first vertex of its list.
@@ -181,9 +174,9 @@ std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
 // <= k nearer than the spacing), walking the vertices in Morton order; the
 // last level (count - 1) takes every vertex left.
 // Morton codes of the positions in the bounding box, 21 bits per axis.
-std::vector<std::uint64_t> morton_codes(const Mesh& m) {
-  const glm::vec3 lo = m.bounds_min(), ext = m.bounds_max() - lo + glm::vec3(1e-20f);
-  std::vector<std::uint64_t> codes(m.vertex_count());
+std::vector<std::uint64_t> morton_codes(const detail::AdaptivePoints& m, glm::vec3 lo, glm::vec3 hi) {
+  const glm::vec3 ext = hi - lo + glm::vec3(1e-20f);
+  std::vector<std::uint64_t> codes(m.count);
   tbb::parallel_for(std::size_t(0), codes.size(), [&](std::size_t v) {
     const glm::vec3 q = glm::clamp((m.positions[v] - lo) / ext, glm::vec3(0.0f), glm::vec3(1.0f));
     const std::uint32_t x = std::uint32_t(q.x * 2097151.0f), y = std::uint32_t(q.y * 2097151.0f),
@@ -195,9 +188,9 @@ std::vector<std::uint64_t> morton_codes(const Mesh& m) {
   return codes;
 }
 
-std::vector<std::uint8_t> poisson_levels(const Mesh& m, const std::vector<std::uint8_t>& active,
+std::vector<std::uint8_t> poisson_levels(const detail::AdaptivePoints& m, const std::vector<std::uint8_t>& active,
                                          const std::vector<std::uint64_t>& morton, double h0, int count) {
-  const std::size_t V = m.vertex_count();
+  const std::size_t V = m.count;
   std::vector<std::uint8_t> level(V, std::uint8_t(count - 1));
   std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
   order.reserve(V);
@@ -247,7 +240,7 @@ std::vector<std::uint8_t> poisson_levels(const Mesh& m, const std::vector<std::u
 // over vertex ids. Kept across levels: the traced set only grows, so each
 // update is a Dijkstra from the new sites alone, relaxing the vertices they
 // are nearer to (distances only fall).
-bool walkable(const Mesh& m, std::uint32_t a, std::uint32_t b) {
+bool walkable(const detail::AdaptivePoints& m, std::uint32_t a, std::uint32_t b) {
   return glm::dot(m.normals[a], m.normals[b]) >= kCreaseCos;
 }
 
@@ -259,7 +252,8 @@ class Cells {
   std::vector<std::uint32_t> offset, next;
 
   // Adds `sites` (vertices now traced) and rebuilds the neighbour lists.
-  void add(const Mesh& m, const Graph& g, std::vector<std::uint32_t> sites) {
+  void add(const detail::AdaptivePoints& g, std::vector<std::uint32_t> sites) {
+    const detail::AdaptivePoints& m = g;
     using Item = std::pair<float, std::uint32_t>;
     std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
     std::sort(sites.begin(), sites.end());
@@ -322,6 +316,34 @@ class Cells {
   std::vector<float> dist_;
 };
 
+// Some of the points (ids into them) as a Source: positions, normals and
+// per-point albedo copied; a lightmap's texels keep their map from hits to
+// texels (their bounces gather from every texel, through expand).
+struct Subset {
+  std::vector<glm::vec3> positions, normals, albedo;
+  const detail::HitToPoint* hit_points = nullptr;
+  Subset(const detail::AdaptivePoints& p, const std::vector<std::uint32_t>& ids) : hit_points(p.hit_points) {
+    positions.reserve(ids.size());
+    normals.reserve(ids.size());
+    for (std::uint32_t v : ids) {
+      positions.push_back(p.positions[v]);
+      normals.push_back(p.normals[v]);
+      if (!p.albedo.empty()) albedo.push_back(p.albedo[v]);
+    }
+  }
+  detail::Source source(const detail::RayScene* scene) const {
+    detail::Source src;
+    src.positions = positions.data();
+    src.normals = normals.data();
+    src.count = positions.size();
+    src.albedo = albedo.empty() ? nullptr : albedo.data();
+    src.vertices = false;
+    src.hit_points = hit_points;
+    src.scene = scene;
+    return src;
+  }
+};
+
 // Interpolation weights of the vertices not traced: for each, up to
 // kMaxSources traced vertices and normalised weights, in src/w from first[v].
 struct Weights {
@@ -335,9 +357,10 @@ using Sources = std::vector<std::pair<std::uint32_t, float>>;  // (vertex, dista
 
 class Adaptive {
  public:
-  Adaptive(const Mesh& mesh, const TransferOptions& o, const AdaptiveOptions& a, const Progress& progress,
-           AdaptiveReport& report)
-      : mesh_(mesh), o_(o), a_(a), progress_(progress), report_(report), V_(mesh.vertex_count()), scene_(mesh) {}
+  Adaptive(const Mesh& mesh, const detail::AdaptivePoints& points, const TransferOptions& o, const AdaptiveOptions& a,
+           const Progress& progress, AdaptiveReport& report)
+      : mesh_(mesh), pts_(points), pos_(points.positions), nrm_(points.normals), o_(o), a_(a), progress_(progress),
+        report_(report), V_(points.count), scene_(mesh) {}
 
   Transfer run();
 
@@ -358,6 +381,8 @@ class Adaptive {
   // (V rows), the others interpolated with weights_, per unit albedo and,
   // about_normal, as a residual about the vertex's own A(n).
   void fill(std::vector<float>& rows, int channels, bool about_normal) const;
+  // A(n) of every source of an interpolated vertex, once (fill reads it per bounce): source_an_ rows, source_slot_[v].
+  void cache_source_normals();
   // The same for glossy matrices (gstride floats per vertex): residuals about
   // the hemisphere product matrix.
   void fill_glossy(std::vector<float>& g, std::size_t gstride, bool symmetric, int channels) const;
@@ -367,7 +392,9 @@ class Adaptive {
   // sources are analytic is analytic too) and compacts the V rows of t.
   void finish(Transfer& t, std::vector<std::uint8_t> analytic) const;
 
-  const Mesh& mesh_;
+  const Mesh& mesh_;  // what rays hit
+  const detail::AdaptivePoints& pts_;
+  const glm::vec3 *pos_, *nrm_;  // the points'
   const TransferOptions& o_;
   const AdaptiveOptions& a_;
   const Progress& progress_;
@@ -385,6 +412,8 @@ class Adaptive {
   std::vector<float> ao_, glossy_;   // rank 0
   std::vector<glm::vec3> bent_;      // rank 0
   Weights weights_;
+  std::vector<std::uint32_t> source_slot_;  // per vertex: its row in source_an_, or kNone
+  std::vector<float> source_an_;            // nc_ per source
   std::vector<std::uint64_t> morton_;  // per vertex
   std::vector<std::uint32_t> fresh_;   // traced since the Voronoi cells were last updated
   double ref_norm_ = 1;
@@ -395,7 +424,7 @@ class Adaptive {
 void Adaptive::residual_of(std::uint32_t v) {
   thread_local std::vector<double> an;
   an.assign(std::size_t(nc_), 0.0);
-  analytic_transfer(o_.bands, 1, mesh_.normals[v], glm::vec3(1.0f), an.data());
+  analytic_transfer(o_.bands, 1, nrm_[v], glm::vec3(1.0f), an.data());
   const glm::vec3 rho = albedo_[v];
   int best = 0;
   for (int c = 1; c < channels_; ++c)
@@ -429,7 +458,7 @@ double Adaptive::predict(std::uint32_t v, Sources& sources, float* out, Sources&
   thread_local std::vector<double> an, acc;
   an.assign(std::size_t(nc_), 0.0);
   acc.assign(stride_, 0.0);
-  analytic_transfer(o_.bands, 1, mesh_.normals[v], glm::vec3(1.0f), an.data());
+  analytic_transfer(o_.bands, 1, nrm_[v], glm::vec3(1.0f), an.data());
   for (const auto& [u, w] : ws)
     for (std::size_t k = 0; k < stride_; ++k) acc[k] += double(w) * resid_[std::size_t(u) * stride_ + k];
   for (int c = 0; c < channels_; ++c)
@@ -449,13 +478,7 @@ double Adaptive::predict(std::uint32_t v, Sources& sources, float* out, Sources&
 }
 
 double Adaptive::error(const float* p, const float* t) const {
-  double e2 = 0;
-  for (int c = 0; c < channels_; ++c)
-    for (int k = 0; k < nc_; ++k) {
-      const double d = double(p[std::size_t(c) * nc_ + k]) - t[std::size_t(c) * nc_ + k];
-      e2 += band_weight_[std::size_t(k)] * d * d;
-    }
-  return std::sqrt(e2 / channels_) / ref_norm_;
+  return std::sqrt(detail::weighted_square(p, t, band_weight_, channels_)) / ref_norm_;
 }
 
 void Adaptive::trace(std::vector<std::uint32_t> vs) {
@@ -465,7 +488,7 @@ void Adaptive::trace(std::vector<std::uint32_t> vs) {
   tbb::parallel_sort(vs.begin(), vs.end(), [&](std::uint32_t a, std::uint32_t b) {
     return morton_[a] != morton_[b] ? morton_[a] < morton_[b] : a < b;
   });
-  const detail::VertexPoints points(mesh_, vs, so_.vertex_colors);
+  const Subset points(pts_, vs);
   const std::vector<glm::vec3>& nrm = points.normals;
   detail::Source src = points.source(&scene_);
   std::vector<std::uint8_t> analytic;
@@ -501,17 +524,31 @@ void Adaptive::trace(std::vector<std::uint32_t> vs) {
   fresh_.insert(fresh_.end(), vs.begin(), vs.end());
 }
 
+void Adaptive::cache_source_normals() {
+  source_slot_.assign(V_, kNone);
+  std::uint32_t n = 0;
+  for (std::uint32_t u : weights_.src)
+    if (source_slot_[u] == kNone) source_slot_[u] = n++;
+  source_an_.assign(std::size_t(n) * nc_, 0.0f);
+  tbb::parallel_for(std::size_t(0), V_, [&](std::size_t u) {
+    if (source_slot_[u] == kNone) return;
+    std::vector<double> an(static_cast<std::size_t>(nc_));
+    analytic_transfer(o_.bands, 1, nrm_[u], glm::vec3(1.0f), an.data());
+    std::copy(an.begin(), an.end(), source_an_.begin() + std::ptrdiff_t(std::size_t(source_slot_[u]) * nc_));
+  });
+}
+
 void Adaptive::fill(std::vector<float>& rows, int channels, bool about_normal) const {
   const std::size_t stride = std::size_t(channels) * nc_;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, V_, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<double> an(static_cast<std::size_t>(nc_)), acc(stride), un(static_cast<std::size_t>(nc_));
+    std::vector<double> an(static_cast<std::size_t>(nc_)), acc(stride);
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
       const std::uint32_t f = weights_.first[v];
       if (f == kNone) continue;
       std::fill(acc.begin(), acc.end(), 0.0);
       for (std::uint32_t j = f; j < f + weights_.count[v]; ++j) {
         const std::uint32_t u = weights_.src[j];
-        if (about_normal) analytic_transfer(o_.bands, 1, mesh_.normals[u], glm::vec3(1.0f), un.data());
+        const float* un = source_an_.data() + std::size_t(source_slot_[u]) * nc_;
         const glm::vec3 rho = albedo_[u];
         int best = 0;
         for (int c = 1; c < channels; ++c)
@@ -522,10 +559,10 @@ void Adaptive::fill(std::vector<float>& rows, int channels, bool about_normal) c
           const double inv = 1.0 / rho[from], w = weights_.w[j];
           const float* row = rows.data() + u * stride + std::size_t(from) * nc_;
           for (int k = 0; k < nc_; ++k)
-            acc[std::size_t(c) * nc_ + k] += w * ((about_normal ? un[std::size_t(k)] : 0.0) - inv * row[k]);
+            acc[std::size_t(c) * nc_ + k] += w * ((about_normal ? double(un[k]) : 0.0) - inv * row[k]);
         }
       }
-      if (about_normal) analytic_transfer(o_.bands, 1, mesh_.normals[v], glm::vec3(1.0f), an.data());
+      if (about_normal) analytic_transfer(o_.bands, 1, nrm_[v], glm::vec3(1.0f), an.data());
       for (int c = 0; c < channels; ++c)
         for (int k = 0; k < nc_; ++k)
           rows[v * stride + std::size_t(c) * nc_ + k] =
@@ -546,14 +583,14 @@ void Adaptive::fill_glossy(std::vector<float>& g, std::size_t gstride, bool symm
   tbb::parallel_for(std::size_t(0), V_, [&](std::size_t u) {
     if (!traced_[u] || !active_[u]) return;
     std::vector<float> h(gstride);
-    unpack(glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(mesh_.normals[u])), o_.bands), h.data());
+    unpack(glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm_[u])), o_.bands), h.data());
     for (std::size_t q = 0; q < gstride; ++q) resid[u * gstride + q] = h[q] - g[u * gstride + q];
   });
   tbb::parallel_for(std::size_t(0), V_, [&](std::size_t v) {
     const std::uint32_t f = weights_.first[v];
     if (f == kNone) return;
     std::vector<float> h(gstride);
-    unpack(glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(mesh_.normals[v])), o_.bands), h.data());
+    unpack(glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm_[v])), o_.bands), h.data());
     std::vector<double> acc(gstride, 0.0);
     for (std::uint32_t j = f; j < f + weights_.count[v]; ++j)
       for (std::size_t q = 0; q < gstride; ++q) acc[q] += double(weights_.w[j]) * resid[weights_.src[j] * gstride + q];
@@ -566,15 +603,15 @@ void Adaptive::fill_ao_bent(std::vector<float>& ao, std::vector<glm::vec3>& bent
     const std::uint32_t f = weights_.first[v];
     if (f == kNone) return;
     double a = 0;
-    glm::dvec3 b(mesh_.normals[v]);
+    glm::dvec3 b(nrm_[v]);
     for (std::uint32_t j = f; j < f + weights_.count[v]; ++j) {
       const std::uint32_t u = weights_.src[j];
       a += double(weights_.w[j]) * ao[u];
-      b += double(weights_.w[j]) * (glm::dvec3(bent[u]) - glm::dvec3(mesh_.normals[u]));
+      b += double(weights_.w[j]) * (glm::dvec3(bent[u]) - glm::dvec3(nrm_[u]));
     }
     ao[v] = float(std::clamp(a, 0.0, 1.0));
     const double len = glm::length(b);
-    bent[v] = len > 0 ? glm::vec3(b / len) : mesh_.normals[v];
+    bent[v] = len > 0 ? glm::vec3(b / len) : nrm_[v];
   });
 }
 
@@ -582,7 +619,7 @@ Transfer Adaptive::run() {
   const Communicator& comm = o_.comm ? *o_.comm : single_process();
   root_ = comm.rank() == 0;
   nc_ = o_.bands * o_.bands;
-  const bool grey = !o_.vertex_colors && o_.albedo.x == o_.albedo.y && o_.albedo.y == o_.albedo.z;
+  const bool grey = pts_.albedo.empty() && o_.albedo.x == o_.albedo.y && o_.albedo.y == o_.albedo.z;
   channels_ = grey ? 1 : 3;
   stride_ = std::size_t(channels_) * nc_;
   const bool interreflected = o_.mode == TransferMode::Interreflected;
@@ -596,10 +633,8 @@ Transfer Adaptive::run() {
   albedo_.resize(V_);
   for (std::size_t v = 0; v < V_; ++v)
     for (int c = 0; c < 3; ++c)
-      albedo_[v][c] = o_.vertex_colors ? std::clamp(mesh_.colors[v][c], 0.0f, 1.0f) : o_.albedo[c];
-  band_weight_.assign(std::size_t(nc_), 0.0);
-  for (int l = 0; l < o_.bands; ++l)
-    for (int m = -l; m <= l; ++m) band_weight_[std::size_t(sh::index(l, m))] = 1.0 / ((l + 1.0) * (l + 1.0));
+      albedo_[v][c] = pts_.albedo.empty() ? o_.albedo[c] : pts_.albedo[v][c];
+  band_weight_ = detail::band_weights(o_.bands);
   report_.tolerance = a_.tolerance > 0 ? a_.tolerance : default_adaptive_tolerance(o_.samples);
   report_.vertices = V_;
   const double tol = report_.tolerance;
@@ -612,31 +647,33 @@ Transfer Adaptive::run() {
   resid_.assign(V_ * stride_, 0.0f);
   if (root_) {
     ao_.assign(V_, 0.0f);
-    bent_.assign(mesh_.normals.begin(), mesh_.normals.end());
+    bent_.assign(nrm_, nrm_ + V_);
     glossy_.assign(V_ * gstride_, 0.0f);
   }
   weights_.first.assign(V_, kNone);
   weights_.count.assign(V_, 0);
   for (std::size_t v = 0; v < V_; ++v) {
-    const glm::vec3 n = mesh_.normals[v];
+    const glm::vec3 n = nrm_[v];
     active_[v] = glm::dot(n, n) > 0.0f;
     if (!active_[v]) traced_[v] = 1;  // no normal: no transfer (zero, as compute_transfer), nothing to trace
   }
-  // Level spacings from the bounding-box diagonal down to about the edge length.
-  double edge_sum = 0;
-  for (const glm::uvec3& t : mesh_.triangles)
-    for (int e = 0; e < 3; ++e) edge_sum += glm::length(glm::dvec3(mesh_.positions[t[(e + 1) % 3]]) - glm::dvec3(mesh_.positions[t[e]]));
-  const double edge = mesh_.triangles.empty() ? 0.0 : edge_sum / (3.0 * double(mesh_.triangles.size()));
-  const double diag = glm::length(glm::dvec3(mesh_.bounds_max()) - glm::dvec3(mesh_.bounds_min()));
+  // Level spacings from the bounding-box diagonal down to about the neighbours' spacing.
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (std::size_t v = 0; v < V_; ++v) {
+    lo = glm::min(lo, pos_[v]);
+    hi = glm::max(hi, pos_[v]);
+  }
+  if (V_ == 0) lo = hi = glm::vec3(0.0f);
+  const double edge = pts_.spacing;
+  const double diag = glm::length(glm::dvec3(hi) - glm::dvec3(lo));
   const double h0 = diag / 16;
   eps_ = 1e-12 * diag * diag;
   int count = 1;
   while (h0 / std::pow(2.0, count - 1) > kFinestSpacing * edge && count < 12) ++count;
   ++count;  // the last level: every vertex left
   report_.levels = count;
-  morton_ = morton_codes(mesh_);
-  const std::vector<std::uint8_t> level = poisson_levels(mesh_, active_, morton_, h0, count);
-  const Graph graph = adjacency(mesh_);
+  morton_ = morton_codes(pts_, lo, hi);
+  const std::vector<std::uint8_t> level = poisson_levels(pts_, active_, morton_, h0, count);
   report_.seconds_selecting += since(t_select);
 
   const auto timed_trace = [&](std::vector<std::uint32_t> vs) {
@@ -651,13 +688,8 @@ Transfer Adaptive::run() {
       if (active_[v] && level[v] == 0) l0.push_back(v);
     timed_trace(l0);
     double n2 = 0;
-    for (std::uint32_t v : l0)
-      for (int c = 0; c < channels_; ++c)
-        for (int k = 0; k < nc_; ++k) {
-          const double x = rows_[std::size_t(v) * stride_ + std::size_t(c) * nc_ + k];
-          n2 += band_weight_[std::size_t(k)] * x * x;
-        }
-    ref_norm_ = l0.empty() || n2 <= 0 ? 1.0 : std::sqrt(n2 / (double(l0.size()) * channels_));
+    for (std::uint32_t v : l0) n2 += detail::weighted_square(rows_.data() + std::size_t(v) * stride_, nullptr, band_weight_, channels_);
+    ref_norm_ = l0.empty() || n2 <= 0 ? 1.0 : std::sqrt(n2 / double(l0.size()));
   }
 
   Cells cells(V_);
@@ -667,7 +699,7 @@ Transfer Adaptive::run() {
     for (std::uint32_t v = 0; v < V_; ++v)
       if (active_[v] && level[v] == k) cand.push_back(v);
     if (cand.empty()) continue;
-    cells.add(mesh_, graph, std::move(fresh_));
+    cells.add(pts_, std::move(fresh_));
     fresh_.clear();
     std::vector<float> pred(cand.size() * stride_);
     std::vector<std::uint32_t> wsrc(cand.size() * kMaxSources);
@@ -679,10 +711,10 @@ Transfer Adaptive::run() {
         const std::uint32_t v = cand[i], site = cells.site[v];
         if (site == kNone) continue;  // no traced vertex reachable along the surface: traced
         src.clear();
-        const glm::vec3 p = mesh_.positions[v];
-        src.push_back({site, glm::length(mesh_.positions[site] - p)});
+        const glm::vec3 p = pos_[v];
+        src.push_back({site, glm::length(pos_[site] - p)});
         for (std::uint32_t j = cells.offset[site]; j < cells.offset[site + 1]; ++j)
-          src.push_back({cells.next[j], glm::length(mesh_.positions[cells.next[j]] - p)});
+          src.push_back({cells.next[j], glm::length(pos_[cells.next[j]] - p)});
         const double spread = predict(v, src, pred.data() + i * stride_, ws);
         // Sources that disagree by more than TOL: the vertex lies where transfer changes faster than the
         // level's spacing resolves (a shadow edge, a fold); no probe of its patch need see that. Traced.
@@ -704,7 +736,7 @@ Transfer Adaptive::run() {
         batch.push_back(cand[i]);
         continue;
       }
-      const glm::vec3 p = mesh_.positions[cand[i]];
+      const glm::vec3 p = pos_[cand[i]];
       keyed.push_back({cell_key(std::int64_t(std::floor(p.x / side)), std::int64_t(std::floor(p.y / side)),
                                 std::int64_t(std::floor(p.z / side))),
                        i});
@@ -809,8 +841,6 @@ Transfer Adaptive::run() {
   t.vertex_colors = o_.vertex_colors;
   t.seed = o_.seed;
   t.vertices = V_;
-  t.mesh_hash = mesh_.hash();
-  t.shading_hash = shading_hash(mesh_, o_.vertex_colors);
   if (!root_) return Transfer{};
   t.coeffs = std::move(rows_);
   t.ao = std::move(ao_);
@@ -845,8 +875,9 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
   // bounce gathering from every vertex: the traced ones' rows, the others
   // interpolated with the weights of the choice.
   const std::size_t P = traced_list.size();
-  const detail::VertexPoints points(mesh_, traced_list, o_.vertex_colors);
+  const Subset points(pts_, traced_list);
   const std::vector<glm::vec3>& nrm = points.normals;
+  cache_source_normals();
   const auto scatter = [&](const auto& point_rows, auto& vertex_rows, std::size_t stride, auto zero) {
     vertex_rows.assign(V_ * stride, zero);
     for (std::size_t i = 0; i < P; ++i)
@@ -884,8 +915,6 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
   t.vertex_colors = pt.vertex_colors;
   t.seed = pt.seed;
   t.vertices = V_;
-  t.mesh_hash = mesh_.hash();
-  t.shading_hash = shading_hash(mesh_, o_.vertex_colors);
   t.bounce_energy = pt.bounce_energy;
   t.direct_energy = pt.direct_energy;
   expand(pt.coeffs, t.coeffs, true);
@@ -915,9 +944,9 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
 
 }  // namespace
 
-Transfer compute_adaptive_transfer(const Mesh& mesh, const TransferOptions& options, const AdaptiveOptions& adaptive,
-                                   const Progress& progress, AdaptiveReport* report) {
-  detail::check_transfer_options(options, mesh);
+namespace detail {
+
+void check_adaptive_options(const AdaptiveOptions& adaptive, std::size_t points) {
   const auto bad = [](const std::string& what) { return Error("adaptive sample points: " + what); };
   if (!(adaptive.tolerance >= 0 && adaptive.tolerance < 1))
     throw bad(fmt::format("tolerance {} is outside [0, 1) (0: the default for the samples)", adaptive.tolerance));
@@ -926,21 +955,52 @@ Transfer compute_adaptive_transfer(const Mesh& mesh, const TransferOptions& opti
   if (adaptive.min_probes < 1) throw bad(fmt::format("min_probes {} is below 1", adaptive.min_probes));
   if (!(adaptive.verify_fraction >= 0 && adaptive.verify_fraction <= 1))
     throw bad(fmt::format("verify fraction {} is outside [0, 1]", adaptive.verify_fraction));
-  if (mesh.vertex_count() >= std::size_t(kNone)) throw bad("the mesh has 2^32 - 1 vertices or more");
+  if (points >= std::size_t(kNone)) throw bad("2^32 - 1 sample points or more");
+}
+
+Transfer adaptive_at(const Mesh& mesh, const AdaptivePoints& points, const TransferOptions& options,
+                     const AdaptiveOptions& adaptive, const Progress& progress, AdaptiveReport& report) {
+  check_adaptive_options(adaptive, points.count);
+  report = AdaptiveReport{};
+  std::unique_ptr<tbb::global_control> limit;
+  if (options.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, options.threads);
+  Adaptive a(mesh, points, options, adaptive, progress, report);
+  return a.run();
+}
+
+}  // namespace detail
+
+Transfer compute_adaptive_transfer(const Mesh& mesh, const TransferOptions& options, const AdaptiveOptions& adaptive,
+                                   const Progress& progress, AdaptiveReport* report) {
+  detail::check_transfer_options(options, mesh);
   AdaptiveReport local;
   AdaptiveReport& r = report ? *report : local;
-  r = AdaptiveReport{};
   if (options.mode == TransferMode::Unshadowed) {  // no rays: nothing to save
+    detail::check_adaptive_options(adaptive, mesh.vertex_count());
+    r = AdaptiveReport{};
     Transfer t = compute_transfer(mesh, options, progress);
     r.tolerance = adaptive.tolerance > 0 ? adaptive.tolerance : default_adaptive_tolerance(options.samples);
     r.vertices = r.traced = mesh.vertex_count();
     return t;
   }
-  std::unique_ptr<tbb::global_control> limit;
-  if (options.threads > 0)
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, options.threads);
-  Adaptive a(mesh, options, adaptive, progress, r);
-  return a.run();
+  detail::AdaptivePoints points;
+  points.positions = mesh.positions.data();
+  points.normals = mesh.normals.data();
+  points.count = mesh.vertex_count();
+  if (options.vertex_colors)
+    for (const glm::vec3& c : mesh.colors) points.albedo.push_back(glm::clamp(c, 0.0f, 1.0f));
+  adjacency(mesh, points);
+  double edge_sum = 0;
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int e = 0; e < 3; ++e)
+      edge_sum += glm::length(glm::dvec3(mesh.positions[t[(e + 1) % 3]]) - glm::dvec3(mesh.positions[t[e]]));
+  points.spacing = mesh.triangles.empty() ? 0.0 : edge_sum / (3.0 * double(mesh.triangles.size()));
+  Transfer t = detail::adaptive_at(mesh, points, options, adaptive, progress, r);
+  if (options.comm && options.comm->rank() != 0) return t;  // the file is rank 0's
+  t.mesh_hash = mesh.hash();
+  t.shading_hash = shading_hash(mesh, options.vertex_colors);
+  return t;
 }
 
 }  // namespace prt

@@ -67,49 +67,123 @@ std::size_t move_texels_out_of_geometry(const Mesh& mesh, LightmapTexels& texels
   return count;
 }
 
+namespace {
+
+// What a lightmap's texels are traced with: the options (one albedo
+// everywhere, an untextured one-colour scene or --albedo, is the transfer's
+// albedo, as for a mesh without colours: one channel when it is grey; the
+// texels' own albedo otherwise) and the map from a ray's hit to the texels
+// around it, through which the texels gather their bounces from each other.
+struct TexelSetup {
+  TransferOptions o;
+  bool per_point = false;
+  std::vector<std::uint32_t> point_of_texel;
+  detail::HitToPoint map;
+
+  TexelSetup(const Scene& scene, const LightmapTexels& texels, const TransferOptions& options) : o(options) {
+    if (options.glossy) throw Error("glossy transfer is computed at vertices only: a lightmap is diffuse");
+    const std::size_t P = texels.layout.texels.size();
+    if (texels.positions.size() != P || texels.normals.size() != P || texels.albedo.size() != P)
+      throw Error("lightmap texels: positions, normals and albedo must have one entry per covered texel");
+    if (P > std::numeric_limits<std::uint32_t>::max() - 1) throw Error("lightmap: too many covered texels");
+    o.vertex_colors = false;
+    bool uniform = true;
+    for (const glm::vec3& a : texels.albedo) uniform = uniform && a == texels.albedo.front();
+    if (P > 0 && uniform) o.albedo = texels.albedo.front();
+    per_point = !uniform;
+    const LightmapLayout& l = texels.layout;
+    point_of_texel.assign(std::size_t(l.width) * l.height, detail::HitToPoint::kNone);
+    for (std::size_t i = 0; i < P; ++i) point_of_texel[l.texels[i]] = std::uint32_t(i);
+    map.uv = scene.uv_sets.at(std::size_t(l.uv_set)).data();
+    map.triangles = scene.mesh.triangles.data();
+    map.width = l.width;
+    map.height = l.height;
+    map.point_of_texel = point_of_texel.data();
+  }
+
+  // The rows computed for the texels, as the lightmap's transfer (rank 0).
+  LightmapTransfer finish(Transfer t, const LightmapTexels& texels) const {
+    LightmapTransfer out;
+    out.transfer = std::move(t);
+    if (o.comm && o.comm->rank() != 0) return out;
+    out.transfer.vertex_colors = per_point;  // relight takes an analytic texel's albedo from texel_points' colours
+    out.transfer.mesh_hash = texels.layout.scene_hash;
+    out.transfer.shading_hash = shading_hash(texel_points(texels), per_point);
+    out.layout = texels.layout;
+    return out;
+  }
+};
+
+// Texels next to each other in the atlas (the 8 around) and in space: within
+// kNeighbourTexels texel sizes (the larger of the two), so a diagonal
+// neighbour on a stretched chart is one and a texel of another chart that
+// the packing put beside it is not. CSR into `points`.
+constexpr float kNeighbourTexels = 2.0f;
+
+void texel_neighbours(const LightmapTexels& texels, const std::vector<std::uint32_t>& point_of_texel,
+                      detail::AdaptivePoints& points) {
+  const LightmapLayout& l = texels.layout;
+  const std::size_t P = l.texels.size();
+  points.offset.assign(P + 1, 0);
+  points.next.clear();
+  points.next.reserve(8 * P);
+  double spacing = 0;
+  for (std::size_t i = 0; i < P; ++i) {
+    const int x = int(l.texels[i] % std::uint32_t(l.width)), y = int(l.texels[i] / std::uint32_t(l.width));
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int xx = x + dx, yy = y + dy;
+        if ((dx == 0 && dy == 0) || xx < 0 || yy < 0 || xx >= l.width || yy >= l.height) continue;
+        const std::uint32_t j = point_of_texel[std::size_t(yy) * std::size_t(l.width) + std::size_t(xx)];
+        if (j == detail::HitToPoint::kNone) continue;
+        const float reach = kNeighbourTexels * std::max(texels.texel_size[i], texels.texel_size[j]);
+        if (glm::length(texels.positions[i] - texels.positions[j]) > reach) continue;
+        points.next.push_back(j);
+      }
+    points.offset[i + 1] = std::uint32_t(points.next.size());
+    spacing += texels.texel_size[i];
+  }
+  points.spacing = P > 0 ? spacing / double(P) : 0.0;
+}
+
+}  // namespace
+
 LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
                                            const TransferOptions& options, const Progress& progress) {
-  if (options.glossy) throw Error("glossy transfer is computed at vertices only: a lightmap is diffuse");
-  const std::size_t P = texels.layout.texels.size();
-  if (texels.positions.size() != P || texels.normals.size() != P || texels.albedo.size() != P)
-    throw Error("lightmap texels: positions, normals and albedo must have one entry per covered texel");
-  if (P > std::numeric_limits<std::uint32_t>::max() - 1) throw Error("lightmap: too many covered texels");
-  TransferOptions o = options;
-  o.vertex_colors = false;
-  // One albedo everywhere (an untextured one-colour scene, --albedo): the
-  // transfer's albedo, as for a mesh without colours (one channel when it
-  // is grey); the texels' own albedo otherwise (vertex_colors).
-  bool uniform = true;
-  for (const glm::vec3& a : texels.albedo) uniform = uniform && a == texels.albedo.front();
-  if (P > 0 && uniform) o.albedo = texels.albedo.front();
-  const bool per_point = !uniform;
-
-  const LightmapLayout& l = texels.layout;
-  std::vector<std::uint32_t> point_of_texel(std::size_t(l.width) * l.height, detail::HitToPoint::kNone);
-  for (std::size_t i = 0; i < P; ++i) point_of_texel[l.texels[i]] = std::uint32_t(i);
-  detail::HitToPoint map;
-  map.uv = scene.uv_sets.at(std::size_t(l.uv_set)).data();
-  map.triangles = scene.mesh.triangles.data();
-  map.width = l.width;
-  map.height = l.height;
-  map.point_of_texel = point_of_texel.data();
-
+  const TexelSetup setup(scene, texels, options);
   detail::Source src;
   src.positions = texels.positions.data();
   src.normals = texels.normals.data();
-  src.count = P;
-  src.albedo = per_point ? texels.albedo.data() : nullptr;
+  src.count = texels.positions.size();
+  src.albedo = setup.per_point ? texels.albedo.data() : nullptr;
   src.vertices = false;
-  src.hit_points = &map;
+  src.hit_points = &setup.map;
   src.compact = true;
-  LightmapTransfer out;
-  out.transfer = detail::compute_at(scene.mesh, src, o, progress);
-  if (o.comm && o.comm->rank() != 0) return out;
-  out.transfer.vertex_colors = per_point;  // relight takes an analytic texel's albedo from texel_points' colours
-  out.transfer.mesh_hash = l.scene_hash;
-  out.transfer.shading_hash = shading_hash(texel_points(texels), per_point);
-  out.layout = l;
-  return out;
+  return setup.finish(detail::compute_at(scene.mesh, src, setup.o, progress), texels);
+}
+
+LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
+                                                    const TransferOptions& options, const AdaptiveOptions& adaptive,
+                                                    const Progress& progress, AdaptiveReport* report) {
+  const TexelSetup setup(scene, texels, options);
+  detail::check_transfer_options(setup.o, scene.mesh);
+  AdaptiveReport local;
+  AdaptiveReport& r = report ? *report : local;
+  detail::AdaptivePoints points;
+  points.positions = texels.positions.data();
+  points.normals = texels.normals.data();
+  points.count = texels.positions.size();
+  if (setup.per_point) points.albedo = texels.albedo;
+  points.hit_points = &setup.map;
+  texel_neighbours(texels, setup.point_of_texel, points);
+  if (options.mode == TransferMode::Unshadowed) {  // no rays: nothing to save
+    detail::check_adaptive_options(adaptive, points.count);
+    r = AdaptiveReport{};
+    r.tolerance = adaptive.tolerance > 0 ? adaptive.tolerance : default_adaptive_tolerance(options.samples);
+    r.vertices = r.traced = points.count;
+    return compute_lightmap_transfer(scene, texels, options, progress);
+  }
+  return setup.finish(detail::adaptive_at(scene.mesh, points, setup.o, adaptive, progress, r), texels);
 }
 
 std::vector<float> point_obscurance(const Mesh& mesh, std::span<const glm::vec3> positions,

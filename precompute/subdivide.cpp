@@ -23,7 +23,6 @@
 // result holds what the report says of it.
 #include <prt/error.h>
 #include <prt/precompute.h>
-#include <prt/sh.h>
 
 #include "ray_scene.h"
 #include "transfer_impl.h"
@@ -49,26 +48,6 @@ namespace prt {
 namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-
-// The band weights (l + 1)^-2 per coefficient k.
-std::vector<double> band_weights(int bands) {
-  std::vector<double> w(std::size_t(bands) * bands);
-  for (int l = 0; l < bands; ++l)
-    for (int m = -l; m <= l; ++m) w[std::size_t(sh::index(l, m))] = 1.0 / double((l + 1) * (l + 1));
-  return w;
-}
-
-// sum_c sum_k w_l (a - b)^2 / channels (b nullptr: of a alone).
-double weighted_square(const float* a, const float* b, const std::vector<double>& w, int channels) {
-  const std::size_t nc = w.size();
-  double s = 0;
-  for (int c = 0; c < channels; ++c)
-    for (std::size_t k = 0; k < nc; ++k) {
-      const double d = double(a[std::size_t(c) * nc + k]) - (b ? double(b[std::size_t(c) * nc + k]) : 0.0);
-      s += w[k] * d * d;
-    }
-  return s / channels;
-}
 
 // Every rank gets rank 0's `data` (count floats): an all-gather in which
 // rank 0's part is everything.
@@ -140,7 +119,7 @@ class Subdivider {
  public:
   Subdivider(const Mesh& input, const TransferOptions& o, const SubdivideOptions& s, const Progress& progress)
       : input_(input), o_(o), s_(s), progress_(progress), comm_(o.comm ? *o.comm : single_process()),
-        w_(band_weights(o.bands)) {
+        w_(detail::band_weights(o.bands)) {
     choice_ = o;
     choice_.glossy = false;  // the choice reads the diffuse rows only
     choice_.memory_report = nullptr;
@@ -162,7 +141,7 @@ class Subdivider {
     std::size_t n = 0;
     for (std::size_t v = 0; v < mesh_.vertex_count(); ++v) {
       if (!has_normal(v)) continue;
-      sum += weighted_square(rows_.data() + v * stride_, nullptr, w_, channels_);
+      sum += detail::weighted_square(rows_.data() + v * stride_, nullptr, w_, channels_);
       ++n;
     }
     ref_ = n ? std::sqrt(sum / double(n)) : 0.0;
@@ -293,7 +272,7 @@ class Subdivider {
   }
 
   double edge_error(std::uint32_t a, std::uint32_t b) const {
-    return std::sqrt(weighted_square(rows_.data() + std::size_t(a) * stride_, rows_.data() + std::size_t(b) * stride_,
+    return std::sqrt(detail::weighted_square(rows_.data() + std::size_t(a) * stride_, rows_.data() + std::size_t(b) * stride_,
                                      w_, channels_)) /
            ref_;
   }

@@ -138,6 +138,54 @@ struct VertexPoints {
   }
 };
 
+// Sample points chosen among by adaptive sample points (precompute/adaptive.cpp):
+// a mesh's vertices, or a lightmap's texels. Neighbours (CSR, both ways) are
+// what the choice walks along the surface: mesh edges, or texels next to each
+// other in one chart of the atlas.
+struct AdaptivePoints {
+  const glm::vec3* positions = nullptr;
+  const glm::vec3* normals = nullptr;  // unit, or zero: no transfer (zero row, never traced)
+  std::size_t count = 0;
+  std::vector<glm::vec3> albedo;       // per point, in [0, 1]; empty: TransferOptions::albedo
+  std::vector<std::uint32_t> offset, next;
+  double spacing = 0;                  // mean distance between neighbours (the finest level's scale)
+  const HitToPoint* hit_points = nullptr;  // texels: the bounces gather from them, as compute_at's points
+};
+
+// Throws prt::Error for adaptive options out of range (for `points` sample points).
+void check_adaptive_options(const AdaptiveOptions& adaptive, std::size_t points);
+
+// The adaptive transfer at `points` (checked options; glossy only for a
+// mesh's vertices): rows of every point, the interpolated ones marked in
+// Transfer::interpolated, analytic rows compacted; mesh_hash and
+// shading_hash left to the caller.
+Transfer adaptive_at(const Mesh& mesh, const AdaptivePoints& points, const TransferOptions& options,
+                     const AdaptiveOptions& adaptive, const Progress& progress, AdaptiveReport& report);
+
+// The metric of adaptive sample points' and subdivision's TOL
+// (docs/PRECOMPUTE.md): coefficient k of band l weighted (l + 1)^-2, the
+// power of typical lighting per band, so that a difference of rows measures
+// a difference of relit radiance.
+inline std::vector<double> band_weights(int bands) {
+  std::vector<double> w(std::size_t(bands) * std::size_t(bands));
+  for (int l = 0; l < bands; ++l)
+    for (int k = l * l; k < (l + 1) * (l + 1); ++k) w[std::size_t(k)] = 1.0 / double((l + 1) * (l + 1));
+  return w;
+}
+
+// sum_c sum_k w_k (a - b)^2 / channels over `channels` rows of w.size()
+// coefficients each (b nullptr: of a alone).
+inline double weighted_square(const float* a, const float* b, const std::vector<double>& w, int channels) {
+  const std::size_t nc = w.size();
+  double s = 0;
+  for (int c = 0; c < channels; ++c)
+    for (std::size_t k = 0; k < nc; ++k) {
+      const double d = double(a[std::size_t(c) * nc + k]) - (b ? double(b[std::size_t(c) * nc + k]) : 0.0);
+      s += w[k] * d * d;
+    }
+  return s / channels;
+}
+
 // Throws prt::Error for options compute_transfer refuses on `mesh`.
 void check_transfer_options(const TransferOptions& options, const Mesh& mesh);
 

@@ -2,8 +2,10 @@
 // the traced vertices hold the full run's bits, the interpolated ones stay
 // near it, noisy geometry is traced, and the choice is deterministic.
 #include "test_meshes.h"
+#include "test_scenes.h"
 
 #include <prt/error.h>
+#include <prt/lightmap.h>
 #include <prt/precompute.h>
 #include <prt/sh.h>
 #include <prt/transfer.h>
@@ -277,6 +279,106 @@ TEST(Adaptive, DefaultToleranceFollowsTheSamplingNoise) {
   EXPECT_DOUBLE_EQ(default_adaptive_tolerance(256), 0.01);  // not looser with fewer rays: the bands' error dominates
   EXPECT_DOUBLE_EQ(default_adaptive_tolerance(4096), 0.005);
   EXPECT_DOUBLE_EQ(max_adaptive_tolerance(1024), 0.015);
+}
+
+// ---- lightmap texels -------------------------------------------------------------
+
+// A floor (one large chart) under a box on legs' height (its 6 faces their
+// own charts): the floor's soft shadow is smooth transfer over thousands of
+// texels, the box's faces small charts next to each other in the atlas.
+Scene floor_and_box() {
+  test::SceneBuilder b;
+  b.quad({-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, {-2, 0, -2}, {0.01f, 0.01f, 0.64f, 0.64f});
+  b.end_object();
+  b.box({-0.5f, 0.4f, -0.5f}, {0.5f, 1.0f, 0.5f}, 8 * 12, 12);  // row 8: below the floor's chart
+  b.end_object();
+  return b.build();
+}
+
+double relit_error(const LightmapTransfer& a, const LightmapTransfer& b, const LightmapTexels& texels) {
+  const std::vector<glm::dvec3> l = light(a.transfer.bands);
+  const std::vector<glm::vec3> ra = relight_lightmap(a, texels, l), rb = relight_lightmap(b, texels, l);
+  double num = 0, den = 0;
+  for (std::size_t v = 0; v < ra.size(); ++v)
+    for (int c = 0; c < 3; ++c) {
+      num += double(ra[v][c] - rb[v][c]) * (ra[v][c] - rb[v][c]);
+      den += double(rb[v][c]) * rb[v][c];
+    }
+  return std::sqrt(num / den);
+}
+
+TEST(AdaptiveLightmap, TracedTexelsHoldTheFullRunsBitsAndTheRestStayNear) {
+  const Scene s = floor_and_box();
+  LightmapTexels texels = lightmap_texels(s, 160, 160, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  const TransferOptions o = options();
+  const LightmapTransfer full = compute_lightmap_transfer(s, texels, o);
+  AdaptiveReport r;
+  AdaptiveOptions a;
+  a.tolerance = 0.01;
+  const LightmapTransfer t = compute_adaptive_lightmap_transfer(s, texels, o, a, {}, &r);
+  const std::size_t P = texels.layout.texels.size();
+  ASSERT_EQ(t.transfer.vertices, P);
+  ASSERT_EQ(t.layout.texels, full.layout.texels);
+  EXPECT_EQ(t.transfer.mesh_hash, full.transfer.mesh_hash);
+  EXPECT_EQ(t.transfer.shading_hash, full.transfer.shading_hash);
+  EXPECT_EQ(t.transfer.interpolated_vertices(), r.interpolated);
+  EXPECT_EQ(r.vertices, P);
+  EXPECT_EQ(r.traced + r.interpolated, P);
+  // Most of the floor's texels are interpolated.
+  EXPECT_LT(double(r.traced), 0.6 * double(P)) << r.traced << " of " << P;
+  const Mesh points = texel_points(texels);
+  const std::vector<float> df = dense_transfer(full.transfer, points), da = dense_transfer(t.transfer, points);
+  const std::size_t stride = t.transfer.stride();
+  for (std::size_t i = 0; i < P; ++i) {
+    if (t.transfer.interpolated[i]) continue;
+    for (std::size_t k = 0; k < stride; ++k) ASSERT_EQ(da[i * stride + k], df[i * stride + k]) << "texel " << i;
+    ASSERT_EQ(t.transfer.ao[i], full.transfer.ao[i]) << i;
+  }
+  // TOL bounds patches' probe RMS; 2x is the slack of the vertex test (SmoothTransferIsInterpolatedWithinTheTolerance).
+  constexpr double kSlack = 2.0;
+  EXPECT_LT(relit_error(t, full, texels), kSlack * a.tolerance);
+  EXPECT_TRUE(lightmap_problem(t).empty()) << lightmap_problem(t);
+}
+
+TEST(AdaptiveLightmap, InterreflectedTexelsGatherFromTheInterpolatedOnesToo) {
+  const Scene s = floor_and_box();
+  LightmapTexels texels = lightmap_texels(s, 128, 128, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o = options(3, 256);
+  o.mode = TransferMode::Interreflected;
+  o.bounces = 2;
+  const LightmapTransfer full = compute_lightmap_transfer(s, texels, o);
+  AdaptiveReport r;
+  AdaptiveOptions a;
+  a.tolerance = 0.01;
+  const LightmapTransfer t = compute_adaptive_lightmap_transfer(s, texels, o, a, {}, &r);
+  const std::size_t P = texels.layout.texels.size();
+  EXPECT_GT(r.interpolated, P / 3) << r.interpolated << " of " << P;
+  EXPECT_EQ(r.traces, 2 * r.traced);  // chosen on the shadowed transfer, the chosen ones traced again
+  EXPECT_EQ(t.transfer.bounces, full.transfer.bounces);
+  // The bounce light at a traced texel gathers from interpolated ones: it is
+  // not the full run's bits, but near (a bounce carries a fraction of the
+  // light, its interpolation error that fraction of TOL's). 2x TOL as above.
+  constexpr double kSlack = 2.0;
+  EXPECT_LT(relit_error(t, full, texels), kSlack * a.tolerance);
+  // The bounces' light is far more than that error: the shadowed lightmap
+  // is more than 3x as far from the full run (so interpolated texels that
+  // lost their bounces, or bounces that lost them, would show).
+  TransferOptions shadowed = o;
+  shadowed.mode = TransferMode::Shadowed;
+  EXPECT_GT(relit_error(compute_lightmap_transfer(s, texels, shadowed), full, texels), 3 * kSlack * a.tolerance);
+}
+
+TEST(AdaptiveLightmap, BadOptionsAreRefused) {
+  const Scene s = floor_and_box();
+  const LightmapTexels texels = lightmap_texels(s, 32, 32, 0);
+  AdaptiveOptions a;
+  a.tolerance = 1.5;
+  EXPECT_THROW(compute_adaptive_lightmap_transfer(s, texels, options(), a), Error);
+  TransferOptions glossy = options();
+  glossy.glossy = true;
+  EXPECT_THROW(compute_adaptive_lightmap_transfer(s, texels, glossy, {}), Error);
 }
 
 }  // namespace

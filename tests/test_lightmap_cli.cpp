@@ -12,6 +12,7 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 
+#include <fmt/format.h>
 #include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -104,6 +105,38 @@ TEST(LightmapCli, WaveletLightmapAgreesWithTheReference) {
   r = run_prt(dir, {"render", scene, dir.file("w.prt"), env, "-o", dir.file("w.png")});
   EXPECT_EQ(r.code, 1) << describe_run(r);
   EXPECT_NE(r.err.find("wavelet lightmap"), std::string::npos) << r.err;
+}
+
+// --adaptive among a lightmap's texels: some interpolated and marked in the
+// file (prt info says how many were traced), relit near the full run's
+// lightmap under a real map.
+TEST(LightmapCli, AdaptiveTracesSomeTexelsAndRelightsNearTheFullRun) {
+  TempDir dir;
+  const std::string scene = kModels + "/wall-on-floor.gltf", env = PRT_SOURCE_DIR "/envmaps/sunset.exr";
+  const std::vector<std::string> common = {"precompute", scene, "--lightmap", "128x128", "--samples", "256", "--bands",
+                                           "4"};
+  std::vector<std::string> full = common, adaptive = common;
+  full.insert(full.end(), {"-q", "-o", dir.file("full.prt")});
+  adaptive.insert(adaptive.end(), {"--adaptive", "-o", dir.file("a.prt")});
+  ASSERT_EQ(run_prt(dir, full).code, 0);
+  const Result a = run_prt(dir, adaptive);
+  ASSERT_EQ(a.code, 0) << describe_run(a);
+  const LightmapTransfer lt = read_lightmap_transfer(dir.file("a.prt"));
+  const std::size_t P = lt.layout.texels.size(), interpolated = lt.transfer.interpolated_vertices();
+  EXPECT_GT(interpolated, P / 4) << interpolated << " of " << P;
+  EXPECT_NE(a.err.find(fmt::format("traced {} of {} texels", P - interpolated, P)), std::string::npos) << a.err;
+  for (const char* f : {"full", "a"}) {
+    const Result r = run_prt(dir, {"relight", scene, dir.file(std::string(f) + ".prt"), env, "-q", "-o",
+                                   dir.file(std::string(f) + ".exr")});
+    ASSERT_EQ(r.code, 0) << describe_run(r);
+  }
+  const Result c = run_prt(dir, {"compare", dir.file("a.exr"), dir.file("full.exr"), "--json"});
+  ASSERT_EQ(c.code, 0) << describe_run(c);
+  // TOL (0.01 by default) bounds patches' probe RMS in the transfer's
+  // band-weighted metric; 2x is the slack of the library's tests
+  // (tests/test_adaptive.cpp) for the relit error of every texel.
+  constexpr double kSlack = 2.0, kTol = 0.01;
+  EXPECT_LT(nlohmann::json::parse(c.out)["rel_rms"].get<double>(), kSlack * kTol) << c.out;
 }
 
 TEST(LightmapCli, FilesRoundTripAndReadersTellThemApart) {

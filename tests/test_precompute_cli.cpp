@@ -715,7 +715,7 @@ TEST(BadOptions, AdaptiveAndItsOptionsAreChecked) {
   runs.push_back({{"precompute", mesh, "-o", out, "--verify-adaptive", "0.1"}, {"--verify-adaptive is for --adaptive"}});
   runs.push_back({{"precompute", mesh, "-o", out, "--adaptive-any"}, {"--adaptive-any is for --adaptive"}});
   runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "--basis", "wavelet"}, {"--adaptive applies to --basis sh"}});
-  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "--lightmap", "64x64"}, {"not for --probes or --lightmap"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--adaptive", "--probes", "2x2x2"}, {"not for --probes"}});
   expect_refusals(dir, runs, 2);
   const Result r = run_prt(dir, {"precompute", mesh, "-o", out, "--adaptive", "--verify-adaptive", "2"});
   EXPECT_EQ(r.code, 2) << describe_run(r);

@@ -214,6 +214,18 @@ struct AdaptiveReport {
 Transfer compute_adaptive_transfer(const Mesh& mesh, const TransferOptions& options, const AdaptiveOptions& adaptive,
                                    const Progress& progress = {}, AdaptiveReport* report = nullptr);
 
+// The same among a lightmap's texels (compute_lightmap_transfer's rows): the
+// texels are the sample points, neighbours those next to each other in the
+// atlas (8 around) within two texels' world size of each other, so one
+// chart's texels predict each other and never another chart's (a UV seam is
+// walked by neither side: each side is traced where its own chart does not
+// reach). Interreflected: the bounces gather from every texel, the
+// interpolated ones too. Interpolated texels are marked in
+// out.transfer.interpolated; AdaptiveReport counts texels as vertices.
+LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
+                                                    const TransferOptions& options, const AdaptiveOptions& adaptive,
+                                                    const Progress& progress = {}, AdaptiveReport* report = nullptr);
+
 struct ZhFitOptions {
   int lobes = 4;
   int rounds = 12;  // zh::FitOptions::rounds

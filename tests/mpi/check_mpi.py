@@ -108,14 +108,21 @@ def main():
             "subdivide": ["--bands", "4", "--subdivide", "0.05"],
             "subdivide-interreflected-glossy": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",
                                                 "--subdivide", "0.05"],
+            # a lightmap's texels chosen adaptively (the scene below): the same choices on every rank
+            "lightmap-adaptive-interreflected": ["--lightmap", "48x48", "--mode", "interreflected", "--bands", "3",
+                                                 "--adaptive", "--verify-adaptive", "0.2"],
         }
+        # Runs on another input than the mesh above.
+        inputs = {"lightmap-adaptive-interreflected": os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                                                   "..", "models", "wall-on-floor.gltf")}
         for name, opts in list(modes.items()) + [("wavelet", ["--basis", "wavelet", "--cube-res", "8"])]:
             o = (common if name != "wavelet" else ["-q"]) + opts
             one = os.path.join(work, name + ".single.prt")
             # "spilled": the ranks keep 20 kB of records in memory and write
             # the rest to their temporary files (the single process keeps all).
             spill = {"PRT_TEST_RECORDS_IN_MEMORY": "20000"} if name.endswith("spilled") else {}
-            r = subprocess.run([args.prt, "precompute", mesh, "-o", one] + o, env=os.environ.copy(),
+            src = inputs.get(name, mesh)
+            r = subprocess.run([args.prt, "precompute", src, "-o", one] + o, env=os.environ.copy(),
                                capture_output=True, text=True, timeout=TIMEOUT_S)
             if r.returncode != 0:
                 failures.append("%s: the single process failed: %s" % (name, r.stderr.strip()))
@@ -124,7 +131,7 @@ def main():
             for n in [int(x) for x in args.ranks.split(",")]:
                 out = os.path.join(work, "%s.%d.prt" % (name, n))
                 t0 = time.time()
-                r = subprocess.run([mpirun, "--oversubscribe", "-np", str(n), args.prt, "precompute", mesh, "-o", out]
+                r = subprocess.run([mpirun, "--oversubscribe", "-np", str(n), args.prt, "precompute", src, "-o", out]
                                    + o, env=dict(env, **spill), capture_output=True, text=True, timeout=TIMEOUT_S)
                 if r.returncode != 0:
                     failures.append("%s, %d ranks: exit %d: %s" % (name, n, r.returncode, r.stderr.strip()[-600:]))

@@ -196,9 +196,9 @@ void parse_adaptive(PrecomputeArgs& a) {
       if (o->count() > 0) throw UsageError(o->get_name() + " is for --adaptive; give --adaptive too");
     return;
   }
-  if (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0)
-    throw UsageError("--adaptive chooses among a mesh's vertices: not for --probes or --lightmap (a lightmap's texels "
-                     "are traced every one)");
+  if (a.probes_opt->count() > 0)
+    throw UsageError("--adaptive chooses among a mesh's vertices or a lightmap's texels: not for --probes (a probe "
+                     "volume's probes are traced every one)");
   if (a.basis == "wavelet")
     throw UsageError("--adaptive applies to --basis sh and zh (SH transfer); a wavelet transfer traces every vertex");
   if (a.adaptive == "default" || a.adaptive.empty()) {
@@ -265,19 +265,22 @@ void print_subdivide(const SubdivideReport& r, std::size_t cap, const std::strin
 }
 
 // What --adaptive did, on stderr.
-void print_adaptive(const AdaptiveReport& r, const Transfer& t) {
+// `points`: what the sample points are ("vertices" or "texels").
+void print_adaptive(const AdaptiveReport& r, const Transfer& t, std::string_view points = "vertices") {
+  const std::string_view point = points == "texels" ? "texel" : "vertex";
   fmt::print(stderr,
-             "adaptive (TOL {:.3g}): traced {} of {} vertices ({:.1f}%), {} interpolated; {} vertex traces in all "
-             "({:.2f}x fewer than tracing every vertex); {} levels, {} patches of which {} traced whole, {} probes; "
+             "adaptive (TOL {:.3g}): traced {} of {} {} ({:.1f}%), {} interpolated; {} {} traces in all "
+             "({:.2f}x fewer than tracing every {}); {} levels, {} patches of which {} traced whole, {} probes; "
              "selecting {:.2f} s, tracing {:.2f} s, predicting {:.2f} s\n",
-             r.tolerance, r.traced, r.vertices, r.vertices ? 100.0 * double(r.traced) / double(r.vertices) : 100.0,
-             t.interpolated_vertices(), r.traces, r.traces ? double(r.vertices) / double(r.traces) : 1.0, r.levels,
-             r.patches, r.failed_patches, r.probes, r.seconds_selecting, r.seconds_tracing, r.seconds_predicting);
+             r.tolerance, r.traced, r.vertices, points,
+             r.vertices ? 100.0 * double(r.traced) / double(r.vertices) : 100.0, t.interpolated_vertices(), r.traces,
+             point, r.traces ? double(r.vertices) / double(r.traces) : 1.0, point, r.levels, r.patches,
+             r.failed_patches, r.probes, r.seconds_selecting, r.seconds_tracing, r.seconds_predicting);
   if (r.verified > 0)
     fmt::print(stderr,
-               "verify: traced {} interpolated vertices again: error RMS {:.4f}, 95th percentile {:.4f}, max {:.4f} "
+               "verify: traced {} interpolated {} again: error RMS {:.4f}, 95th percentile {:.4f}, max {:.4f} "
                "(TOL {:.3g}; {} above it, {:.1f}%); they now hold the traced transfer\n",
-               r.verified, r.verified_rms, r.verified_p95, r.verified_max, r.tolerance, r.verified_over,
+               r.verified, points, r.verified_rms, r.verified_p95, r.verified_max, r.tolerance, r.verified_over,
                100.0 * double(r.verified_over) / double(r.verified));
 }
 
@@ -536,8 +539,11 @@ int run_lightmap(PrecomputeArgs& a) {
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     return 0;
   }
+  const bool adapt = a.adaptive_opt->count() > 0;
+  AdaptiveReport adaptive;
   const std::optional<LightmapTransfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
-    return compute_lightmap_transfer(scene, texels, a.opt, job_progress(progress));
+    return adapt ? compute_adaptive_lightmap_transfer(scene, texels, a.opt, a.aopt, job_progress(progress), &adaptive)
+                 : compute_lightmap_transfer(scene, texels, a.opt, job_progress(progress));
   }, a.opt.memory_limit);
   if (!computed) return 130;
   if (!is_root()) return 0;
@@ -576,6 +582,7 @@ int run_lightmap(PrecomputeArgs& a) {
                "{} bytes, {:.2f} s\n",
                a.output, width, height, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s",
                t.vertices, t.analytic_vertices(), transfer_file_size(*computed), secs);
+    if (adapt) print_adaptive(adaptive, t, "texels");
   }
   return 0;
 }
@@ -951,14 +958,15 @@ Run add_precompute(CLI::App& app) {
   a->sh_only.push_back(a->compress_weights_opt);
   a->adaptive_opt =
       s->add_option("--adaptive", a->adaptive,
-                    "Adaptive sample points: trace a subset of the vertices and interpolate the rest along the surface "
+                    "Adaptive sample points: trace a subset of the vertices (with --lightmap, texels) and interpolate the "
+                    "rest along the surface "
                     "where probes show interpolation adds at most TOL (relative RMS of the transfer, band-weighted); "
                     "without a value 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples (docs/PRECOMPUTE.md)")
           ->expected(0, 1)
           ->default_str("")
           ->type_name("[TOL]");
   a->verify_opt = s->add_option("--verify-adaptive", a->aopt.verify_fraction,
-                                "With --adaptive: trace this fraction of the interpolated vertices again and report "
+                                "With --adaptive: trace this fraction of the interpolated vertices (texels) again and report "
                                 "their error against TOL (they keep the traced transfer)")
                       ->check(CLI::Range(0.0, 1.0))
                       ->type_name("FRACTION");
