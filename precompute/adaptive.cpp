@@ -316,33 +316,12 @@ class Cells {
   std::vector<float> dist_;
 };
 
-// Some of the points (ids into them) as a Source: positions, normals and
-// per-point albedo copied; a lightmap's texels keep their map from hits to
-// texels (their bounces gather from every texel, through expand).
-struct Subset {
-  std::vector<glm::vec3> positions, normals, albedo;
-  const detail::HitToPoint* hit_points = nullptr;
-  Subset(const detail::AdaptivePoints& p, const std::vector<std::uint32_t>& ids) : hit_points(p.hit_points) {
-    positions.reserve(ids.size());
-    normals.reserve(ids.size());
-    for (std::uint32_t v : ids) {
-      positions.push_back(p.positions[v]);
-      normals.push_back(p.normals[v]);
-      if (!p.albedo.empty()) albedo.push_back(p.albedo[v]);
-    }
-  }
-  detail::Source source(const detail::RayScene* scene) const {
-    detail::Source src;
-    src.positions = positions.data();
-    src.normals = normals.data();
-    src.count = positions.size();
-    src.albedo = albedo.empty() ? nullptr : albedo.data();
-    src.vertices = false;
-    src.hit_points = hit_points;
-    src.scene = scene;
-    return src;
-  }
-};
+// Some of the points (ids into them) as a Source.
+detail::VertexPoints subset(const detail::AdaptivePoints& p, const std::vector<std::uint32_t>& ids) {
+  detail::VertexPoints points(p.positions, p.normals, p.albedo.empty() ? nullptr : p.albedo.data(), ids);
+  points.hit_points = p.hit_points;
+  return points;
+}
 
 // Interpolation weights of the vertices not traced: for each, up to
 // kMaxSources traced vertices and normalised weights, in src/w from first[v].
@@ -488,7 +467,7 @@ void Adaptive::trace(std::vector<std::uint32_t> vs) {
   tbb::parallel_sort(vs.begin(), vs.end(), [&](std::uint32_t a, std::uint32_t b) {
     return morton_[a] != morton_[b] ? morton_[a] < morton_[b] : a < b;
   });
-  const Subset points(pts_, vs);
+  const detail::VertexPoints points = subset(pts_, vs);
   const std::vector<glm::vec3>& nrm = points.normals;
   detail::Source src = points.source(&scene_);
   std::vector<std::uint8_t> analytic;
@@ -875,7 +854,7 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
   // bounce gathering from every vertex: the traced ones' rows, the others
   // interpolated with the weights of the choice.
   const std::size_t P = traced_list.size();
-  const Subset points(pts_, traced_list);
+  const detail::VertexPoints points = subset(pts_, traced_list);
   const std::vector<glm::vec3>& nrm = points.normals;
   cache_source_normals();
   const auto scatter = [&](const auto& point_rows, auto& vertex_rows, std::size_t stride, auto zero) {

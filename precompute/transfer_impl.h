@@ -111,21 +111,27 @@ struct Source {
   std::vector<std::uint8_t>* analytic_out = nullptr;
 };
 
-// Some of the mesh's vertices as points (adaptive sample points, subdivision
-// rounds): their positions, normals and, with vertex_colors, colours clamped
-// to [0, 1] as albedo; source() is a Source over them tracing against
-// `scene` (nullptr: one built per call).
+// Some points as a Source (adaptive sample points' batches, subdivision
+// rounds): their positions, normals and per-point albedo (clamped to
+// [0, 1]) copied; source() is a Source over them tracing against `scene`
+// (nullptr: one built per call), with `hit_points` (texels gathering from
+// each other) when set.
 struct VertexPoints {
   std::vector<glm::vec3> positions, normals, albedo;
-  VertexPoints(const Mesh& mesh, const std::vector<std::uint32_t>& ids, bool vertex_colors) {
+  const HitToPoint* hit_points = nullptr;
+  // Points `ids` of arrays of positions, normals and albedo (nullptr: none per point).
+  VertexPoints(const glm::vec3* p, const glm::vec3* n, const glm::vec3* a, const std::vector<std::uint32_t>& ids) {
     positions.reserve(ids.size());
     normals.reserve(ids.size());
     for (std::uint32_t v : ids) {
-      positions.push_back(mesh.positions[v]);
-      normals.push_back(mesh.normals[v]);
-      if (vertex_colors) albedo.push_back(glm::clamp(mesh.colors[v], 0.0f, 1.0f));
+      positions.push_back(p[v]);
+      normals.push_back(n[v]);
+      if (a) albedo.push_back(glm::clamp(a[v], 0.0f, 1.0f));
     }
   }
+  // Vertices `ids` of `mesh`, their colours as albedo with vertex_colors.
+  VertexPoints(const Mesh& mesh, const std::vector<std::uint32_t>& ids, bool vertex_colors)
+      : VertexPoints(mesh.positions.data(), mesh.normals.data(), vertex_colors ? mesh.colors.data() : nullptr, ids) {}
   Source source(const RayScene* scene) const {
     Source src;
     src.positions = positions.data();
@@ -133,6 +139,7 @@ struct VertexPoints {
     src.count = positions.size();
     src.albedo = albedo.empty() ? nullptr : albedo.data();
     src.vertices = false;
+    src.hit_points = hit_points;
     src.scene = scene;
     return src;
   }

@@ -58,9 +58,8 @@ std::vector<glm::dvec3> light(int bands) {
   return l;
 }
 
-double relit_error(const Transfer& a, const Transfer& b, const Mesh& m) {
-  const std::vector<glm::dvec3> l = light(a.bands);
-  const std::vector<glm::vec3> ra = relight(a, m, l), rb = relight(b, m, l);
+// Relative RMS of radiance ra against rb over every point and channel.
+double relative_rms(const std::vector<glm::vec3>& ra, const std::vector<glm::vec3>& rb) {
   double num = 0, den = 0;
   for (std::size_t v = 0; v < ra.size(); ++v)
     for (int c = 0; c < 3; ++c) {
@@ -68,6 +67,11 @@ double relit_error(const Transfer& a, const Transfer& b, const Mesh& m) {
       den += double(rb[v][c]) * rb[v][c];
     }
   return std::sqrt(num / den);
+}
+
+double relit_error(const Transfer& a, const Transfer& b, const Mesh& m) {
+  const std::vector<glm::dvec3> l = light(a.bands);
+  return relative_rms(relight(a, m, l), relight(b, m, l));
 }
 
 TEST(Adaptive, TracedVerticesHoldTheFullRunsBits) {
@@ -297,14 +301,7 @@ Scene floor_and_box() {
 
 double relit_error(const LightmapTransfer& a, const LightmapTransfer& b, const LightmapTexels& texels) {
   const std::vector<glm::dvec3> l = light(a.transfer.bands);
-  const std::vector<glm::vec3> ra = relight_lightmap(a, texels, l), rb = relight_lightmap(b, texels, l);
-  double num = 0, den = 0;
-  for (std::size_t v = 0; v < ra.size(); ++v)
-    for (int c = 0; c < 3; ++c) {
-      num += double(ra[v][c] - rb[v][c]) * (ra[v][c] - rb[v][c]);
-      den += double(rb[v][c]) * rb[v][c];
-    }
-  return std::sqrt(num / den);
+  return relative_rms(relight_lightmap(a, texels, l), relight_lightmap(b, texels, l));
 }
 
 TEST(AdaptiveLightmap, TracedTexelsHoldTheFullRunsBitsAndTheRestStayNear) {
