@@ -838,6 +838,33 @@ TEST(PrecomputeCli, SubdivideWritesTheRefinedMeshWithItsTransfer) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("none.prt")));
 }
 
+// --subdivide with --target-error: the search's settings (chosen on the
+// input mesh), and without a value TOL = target / 2; the refinement is then
+// subdivide_for_transfer's with them.
+TEST(PrecomputeCli, SubdivideTakesTheTargetErrorsSettingsAndTolerance) {
+  TempDir dir;
+  const std::string mesh = dir.file("coarse.off"), env = write_constant_map(dir, 1.0f);
+  test::write_off(mesh, test::ball_over_floor(6, 8, 16, 0.4f, {0.0f, 0.9f, 0.0f}));
+  constexpr double kTarget = 0.1;
+  const Result r = run_prt(dir, {"precompute", mesh, "-o", dir.file("fine.prt"), "--target-error", "0.1", "--env", env,
+                                 "--cache", dir.file("cache"), "--subdivide"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("target error 0.1"), std::string::npos) << r.err;
+  const Transfer file = read_transfer(dir.file("fine.prt"));
+  const Mesh loaded = load_mesh(mesh), refined = load_mesh(dir.file("fine.ply"));
+  TransferOptions o;
+  o.bands = file.bands;
+  o.samples = file.samples;
+  o.albedo = glm::vec3(0.8f);
+  SubdivideOptions s;
+  s.tolerance = kTarget / 2;
+  const Subdivided lib = subdivide_for_transfer(loaded, o, s);
+  EXPECT_GT(lib.mesh.vertex_count(), loaded.vertex_count());
+  EXPECT_EQ(refined.positions, lib.mesh.positions);
+  EXPECT_EQ(file.coeffs, lib.transfer.coeffs);
+  EXPECT_NO_THROW(check_matches(file, refined, "fine.prt"));
+}
+
 TEST(BadOptions, SubdivideAndItsOptionsAreChecked) {
   TempDir dir;
   const std::string mesh = write_quad(dir), out = dir.file("x.prt"), env = write_constant_map(dir, 1.0f);
@@ -851,13 +878,13 @@ TEST(BadOptions, SubdivideAndItsOptionsAreChecked) {
                   {"--subdivide-max-vertices is for --subdivide"}});
   runs.push_back({{"precompute", mesh, "-o", out, "--subdivided-mesh", dir.file("f.ply")},
                   {"--subdivided-mesh is for --subdivide"}});
+  runs.push_back({{"precompute", mesh, "-o", out, "--subdivide"}, {"--subdivide needs a TOL", "--target-error"}});
   const std::vector<std::pair<std::vector<std::string>, std::string>> others = {
       {{"--adaptive"}, "not with --adaptive"},
       {{"--lightmap", "64x64"}, "not with --lightmap"},
       {{"--probes", "2x2x2"}, "not with --probes"},
       {{"--basis", "wavelet"}, "not with --basis wavelet"},
       {{"--basis", "zh"}, "not with --basis zh"},
-      {{"--target-error", "0.1", "--env", env}, "not with --target-error"},
   };
   for (const auto& [extra, words] : others) {
     std::vector<std::string> args = {"precompute", mesh, "-o", out, "--subdivide", "0.05"};

@@ -81,6 +81,7 @@ struct PrecomputeArgs {
   // --subdivide TOL: refine a coarse mesh where its transfer changes (docs/PRECOMPUTE.md, "Subdividing coarse
   // meshes"); --subdivided-mesh: where the refined mesh goes ("" the output's name with .ply).
   SubdivideOptions sopt;
+  std::string subdivide;  // --subdivide [TOL]: "" not given or no value (TOL = --target-error / 2)
   std::string subdivided_mesh;
   const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
 };
@@ -232,6 +233,24 @@ void check_subdivide(PrecomputeArgs& a) {
       if (o->count() > 0) throw UsageError(o->get_name() + " is for --subdivide TOL; give --subdivide too");
     return;
   }
+  if (a.subdivide.empty() || a.subdivide == "default") {
+    // --target-error picks TOL as for --adaptive: half the target, the rest of it left to the bands and rays.
+    if (a.target_opt->count() == 0)
+      throw UsageError("--subdivide needs a TOL (e.g. --subdivide 0.02), or --target-error E to pick TOL = E / 2");
+    a.sopt.tolerance = a.target_error / 2;
+  } else {
+    double tol = 0;
+    try {
+      std::size_t used = 0;
+      tol = std::stod(a.subdivide, &used);
+      if (used != a.subdivide.size()) throw std::invalid_argument("trailing");
+    } catch (const std::exception&) {
+      throw UsageError("--subdivide " + a.subdivide + ": expected a tolerance, a number in (0, 1) (e.g. 0.02)");
+    }
+    if (!(tol > 0 && tol < 1))
+      throw UsageError(fmt::format("--subdivide {}: the tolerance must be in (0, 1)", a.subdivide));
+    a.sopt.tolerance = tol;
+  }
   const auto refuse = [](const std::string& what) {
     throw UsageError("--subdivide refines a mesh's vertices for its per-vertex SH transfer: not with " + what);
   };
@@ -239,7 +258,6 @@ void check_subdivide(PrecomputeArgs& a) {
   if (a.lightmap_opt->count() > 0) refuse("--lightmap (a lightmap's texels do not follow the vertices)");
   if (a.probes_opt->count() > 0) refuse("--probes");
   if (a.basis != "sh") refuse("--basis " + a.basis);
-  if (a.target_opt->count() > 0) refuse("--target-error (give --bands and --samples)");
   if (a.subdivided_mesh.empty()) {
     a.subdivided_mesh = std::filesystem::path(a.output).replace_extension(".ply").string();
     if (same_file(a.subdivided_mesh, a.mesh) || same_file(a.subdivided_mesh, a.output))
@@ -324,7 +342,7 @@ std::optional<WaveletTransfer> run_wavelet_target(PrecomputeArgs& a, const Mesh&
 }
 
 // --target-error: the cheapest settings meeting the target (prt/tuning.h).
-std::optional<Transfer> run_target(PrecomputeArgs& a, const Mesh& mesh) {
+std::optional<TargetResult> run_target(PrecomputeArgs& a, const Mesh& mesh) {
   const EnvMap map = target_map(a);
   TargetOptions t;
   t.target = a.target_error;
@@ -338,9 +356,8 @@ std::optional<Transfer> run_target(PrecomputeArgs& a, const Mesh& mesh) {
   const std::optional<TargetResult> r = run_with_progress(a.quiet, "precompute", [&](const Progress& progress) {
     return choose_transfer(mesh, map, t, target_cache(a.cache), progress, target_log(a));
   });
-  if (!r) return std::nullopt;
-  if (!a.quiet) fmt::print(stderr, "target error {}: {}\n", a.target_error, r->explanation);
-  return std::move(r->transfer);
+  if (r && !a.quiet) fmt::print(stderr, "target error {}: {}\n", a.target_error, r->explanation);
+  return r;
 }
 
 // --basis wavelet: the all-frequency shadowed transfer (prt/wavelet_transfer.h).
@@ -733,17 +750,30 @@ int run_precompute(PrecomputeArgs& a) {
   const bool adapt = a.adaptive_opt->count() > 0;
   SubdivideReport subdivided;
   std::optional<Mesh> refined;  // --subdivide: the mesh the transfer is for
-  const std::optional<Transfer> computed =
-      a.target_opt->count() > 0 ? run_target(a, mesh)
-                         : run_with_progress(quiet, "precompute", [&](const Progress& progress) {
-                             if (subdivide) {
-                               Subdivided d = subdivide_for_transfer(mesh, a.opt, a.sopt, job_progress(progress), &subdivided);
-                               refined = std::move(d.mesh);
-                               return std::move(d.transfer);
-                             }
-                             return adapt ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress), &adaptive)
-                                          : compute_transfer(mesh, a.opt, job_progress(progress));
-                           }, a.opt.memory_limit);
+  // --target-error: the settings chosen on the input mesh; with --subdivide
+  // the refinement then runs with them (the chosen transfer is the input's).
+  std::optional<Transfer> computed;
+  if (a.target_opt->count() > 0) {
+    std::optional<TargetResult> r = run_target(a, mesh);
+    if (!r) return 130;
+    if (subdivide) {
+      a.opt.bands = r->bands;
+      a.opt.samples = r->samples;
+      a.opt.bounces = r->bounces;
+    } else {
+      computed = std::move(r->transfer);
+    }
+  }
+  if (!computed)
+    computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+      if (subdivide) {
+        Subdivided d = subdivide_for_transfer(mesh, a.opt, a.sopt, job_progress(progress), &subdivided);
+        refined = std::move(d.mesh);
+        return std::move(d.transfer);
+      }
+      return adapt ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress), &adaptive)
+                   : compute_transfer(mesh, a.opt, job_progress(progress));
+    }, a.opt.memory_limit);
   if (!computed) return 130;
   if (!is_root()) return 0;  // rank 0 compresses and writes the file
   const Transfer& t = *computed;
@@ -974,13 +1004,14 @@ Run add_precompute(CLI::App& app) {
                                     "With --adaptive TOL: take a TOL above 1.5x the default (the error may then pass "
                                     "1.1x the full run's)");
   a->subdivide_opt =
-      s->add_option("--subdivide", a->sopt.tolerance,
+      s->add_option("--subdivide", a->subdivide,
                     "For coarse meshes: split the edges whose ends' transfer differs by more than TOL (relative, "
                     "band-weighted: the metric of --adaptive) at their midpoints, round by round, and write the refined "
-                    "mesh (--subdivided-mesh) with the transfer for it (docs/PRECOMPUTE.md, \"Subdividing coarse "
-                    "meshes\")")
-          ->check(number_range(0.0, 1.0, true, true))
-          ->type_name("TOL");
+                    "mesh (--subdivided-mesh) with the transfer for it; with --target-error E, the search's settings "
+                    "and, without a value, TOL = E / 2 (docs/PRECOMPUTE.md, \"Subdividing coarse meshes\")")
+          ->expected(0, 1)
+          ->default_str("")
+          ->type_name("[TOL]");
   a->subdivide_max_opt = s->add_option("--subdivide-max-vertices", a->sopt.max_vertices,
                                        "With --subdivide: the most vertices the refined mesh may have (0: 4x the "
                                        "mesh's)")
