@@ -71,6 +71,16 @@ class Lightmap:
     def height(self) -> Any:
         ...
     @property
+    def interpolated(self) -> numpy.ndarray:
+        """
+        uint8 (N,), read-only: 1 where the texel's transfer was interpolated from traced neighbours (precompute_lightmap(adaptive=...), prt precompute --adaptive), 0 where it was traced; None when every texel was traced (the file has no interpolated-texel mask)
+        """
+    @property
+    def interpolated_texels(self) -> Any:
+        """
+        How many texels were interpolated from traced neighbours (adaptive sample points, prt precompute --lightmap WxH --adaptive); 0 when every texel was traced
+        """
+    @property
     def mode(self) -> Any:
         ...
     def relight(self, scene: Scene, lighting: Any) -> numpy.ndarray:
@@ -369,7 +379,7 @@ def load_scene(path: Any) -> Scene:
     Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.
     """
 
-def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ...) -> Lightmap:
+def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ...) -> Lightmap:
     """
     The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.
 
@@ -378,6 +388,7 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
       width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].
       uv_set: the scene's UV set the atlas is laid out in (-1: TEXCOORD_1 where every object has it, else TEXCOORD_0) [--uv].
       bands [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
+      adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.
 
     Returns a Lightmap.
     """
@@ -443,9 +454,9 @@ def make_mesh(positions: Any, triangles: Any, normals: Any = ..., colors: Any = 
     Returns a Mesh.
     """
 
-def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., progress: Any = ...) -> Any:
+def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., progress: Any = ...) -> Any:
     """
-    Traces the transfer of every vertex, as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.
+    Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.
 
     Arguments (prt precompute's option in brackets):
       mesh: the Mesh (load_mesh, make_mesh); units are the mesh's.
@@ -463,6 +474,9 @@ def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = 
       basis: 'sh'; or 'wavelet': a WaveletTransfer (shadowed, diffuse; samples, seed and bounces do not apply: one ray per cube texel) [--basis].
       cube_res: wavelet basis: the cube's face size r, a power of two 2 to 256 (32) [--cube-res].
       threshold: wavelet basis: the relative L2 error each vertex's kept coefficients may leave, [0, 1) (0.01) [--threshold].
+      adaptive: adaptive sample points (basis='sh'; docs/PRECOMPUTE.md): None traces every vertex; a tolerance TOL in (0, 1) traces a subset and interpolates the rest along the surface where probes show interpolation adds at most TOL (relative RMS, band-weighted); 0: the default TOL, 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples [--adaptive [TOL]: 0 is the option without a value]. The Transfer's .interpolated marks the interpolated vertices.
+      verify_adaptive: with adaptive: trace this fraction, [0, 1], of the interpolated vertices again (they keep the traced transfer) (0) [--verify-adaptive].
+      adaptive_any: with adaptive: take a TOL above 1.5x the default, which is refused otherwise [--adaptive-any].
       progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).
 
     Returns a Transfer (a WaveletTransfer for basis='wavelet').

@@ -60,6 +60,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -436,6 +437,48 @@ auto run_released(py::object progress, F&& f) {
     throw py::error_already_set();
   }
   return std::move(*result);
+}
+
+// adaptive=, verify_adaptive=, adaptive_any= of precompute and
+// precompute_lightmap: prt precompute's --adaptive [TOL], --verify-adaptive
+// F and --adaptive-any, the same rules (tools/prt/cmd_precompute.cpp,
+// parse_adaptive). None: every point traced; 0 is --adaptive without a
+// value (default_adaptive_tolerance(samples)); a TOL in (0, 1), refused
+// above max_adaptive_tolerance(samples) unless adaptive_any. Returns the
+// options, or nothing for adaptive=None.
+std::optional<prt::AdaptiveOptions> adaptive_arg(const py::object& adaptive, double verify, bool any, int samples) {
+  if (adaptive.is_none()) {
+    if (verify != 0) throw Error("verify_adaptive: is for adaptive sample points; give adaptive= too");
+    if (any) throw Error("adaptive_any: is for adaptive sample points; give adaptive= too");
+    return std::nullopt;
+  }
+  if (py::isinstance<py::bool_>(adaptive) || py::isinstance(adaptive, py::module_::import("numpy").attr("bool_")))
+    throw Error("adaptive: a bool (" + std::string(py::str(adaptive)) +
+                "); expected None, 0 (the default tolerance for the samples) or a tolerance in (0, 1)");
+  double tol = 0;
+  try {
+    tol = adaptive.cast<double>();
+  } catch (const py::cast_error&) {
+    throw Error("adaptive: expected None, 0 (the default tolerance for the samples) or a tolerance in (0, 1), got " +
+                std::string(py::str(py::type::of(adaptive).attr("__name__"))) + " " + std::string(py::repr(adaptive)));
+  }
+  if (tol != 0 && !(tol > 0 && tol < 1))
+    throw Error("adaptive: " + number_text(tol) + ": the tolerance must be in (0, 1) (0: the default for the samples)");
+  const double most = prt::max_adaptive_tolerance(samples);
+  if (tol > most && !any) {
+    char m[32];
+    std::snprintf(m, sizeof m, "%.3g", most);
+    throw Error("adaptive: " + number_text(tol) + ": above " + m + ", the largest tolerance for " +
+                std::to_string(samples) +
+                " samples whose error stays within 1.1x the full run's (docs/PRECOMPUTE.md, \"Adaptive sample "
+                "points\"); give adaptive_any=True to use it anyway");
+  }
+  if (!(verify >= 0 && verify <= 1))
+    throw Error("verify_adaptive: " + number_text(verify) + ": a fraction in [0, 1]");
+  prt::AdaptiveOptions a;  // probe fraction, probes and seed as the command's
+  a.tolerance = tol;
+  a.verify_fraction = verify;
+  return a;
 }
 
 std::unique_ptr<tbb::global_control> limit_threads(int threads) {
@@ -1123,10 +1166,14 @@ PYBIND11_MODULE(_prt, m) {
       [](const prt::Mesh& mesh, const py::object& bands_arg, int samples, const std::string& mode, int bounces,
          const py::object& albedo, bool vertex_colors, std::uint64_t seed, int threads, double offset,
          double bounce_tolerance, const std::string& material, const std::string& basis, int cube_res,
-         double threshold, py::object progress) -> py::object {
+         double threshold, const py::object& adaptive, double verify_adaptive, bool adaptive_any,
+         py::object progress) -> py::object {
         if (basis != "sh" && basis != "wavelet")
           throw Error("basis: expected 'sh' or 'wavelet' (for 'zh', fit_zh the SH transfer), got '" + basis + "'");
+        const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
         if (basis == "wavelet") {
+          if (adapt)
+            throw Error("adaptive: applies to basis='sh' (SH transfer); a wavelet transfer traces every vertex");
           // The CLI's rules: shadowed, diffuse; its size set by cube_res and threshold.
           if (!bands_arg.is_none()) throw Error("bands: does not apply to basis='wavelet' (cube_res and threshold set its size)");
           if (mode != "shadowed") throw Error("mode: basis='wavelet' is shadowed only, got '" + mode + "'");
@@ -1162,16 +1209,18 @@ PYBIND11_MODULE(_prt, m) {
           throw Error("material: expected 'diffuse' or 'glossy', got '" + material + "'");
         o.glossy = material == "glossy";
         PyTransfer p;
-        p.t = run_released(std::move(progress),
-                           [&](const prt::Progress& pr) { return prt::compute_transfer(mesh, o, pr); });
+        p.t = run_released(std::move(progress), [&](const prt::Progress& pr) {
+          return adapt ? prt::compute_adaptive_transfer(mesh, o, *adapt, pr) : prt::compute_transfer(mesh, o, pr);
+        });
         return py::cast(std::move(p));
       },
       py::arg("mesh"), py::kw_only(), py::arg("bands") = py::none(), py::arg("samples") = 1024,
       py::arg("mode") = "shadowed", py::arg("bounces") = 1, py::arg("albedo") = 0.8, py::arg("vertex_colors") = false,
       py::arg("seed") = 1, py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
       py::arg("material") = "diffuse", py::arg("basis") = "sh", py::arg("cube_res") = 32, py::arg("threshold") = 1e-2,
+      py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0, py::arg("adaptive_any") = false,
       py::arg("progress") = py::none(),
-      "Traces the transfer of every vertex, as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.\n"
+      "Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
       "  mesh: the Mesh (load_mesh, make_mesh); units are the mesh's.\n"
@@ -1189,6 +1238,9 @@ PYBIND11_MODULE(_prt, m) {
       "  basis: 'sh'; or 'wavelet': a WaveletTransfer (shadowed, diffuse; samples, seed and bounces do not apply: one ray per cube texel) [--basis].\n"
       "  cube_res: wavelet basis: the cube's face size r, a power of two 2 to 256 (32) [--cube-res].\n"
       "  threshold: wavelet basis: the relative L2 error each vertex's kept coefficients may leave, [0, 1) (0.01) [--threshold].\n"
+      "  adaptive: adaptive sample points (basis='sh'; docs/PRECOMPUTE.md): None traces every vertex; a tolerance TOL in (0, 1) traces a subset and interpolates the rest along the surface where probes show interpolation adds at most TOL (relative RMS, band-weighted); 0: the default TOL, 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples [--adaptive [TOL]: 0 is the option without a value]. The Transfer's .interpolated marks the interpolated vertices.\n"
+      "  verify_adaptive: with adaptive: trace this fraction, [0, 1], of the interpolated vertices again (they keep the traced transfer) (0) [--verify-adaptive].\n"
+      "  adaptive_any: with adaptive: take a TOL above 1.5x the default, which is refused otherwise [--adaptive-any].\n"
       "  progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).\n"
       "\n"
       "Returns a Transfer (a WaveletTransfer for basis='wavelet').");
@@ -2324,6 +2376,20 @@ PYBIND11_MODULE(_prt, m) {
                                return a;
                              },
                              "bool (N,): texels that store no row (nothing occludes them)")
+      .def_property_readonly("interpolated_texels",
+                             [](const prt::LightmapTransfer& l) { return l.transfer.interpolated_vertices(); },
+                             "How many texels were interpolated from traced neighbours (adaptive sample points, prt "
+                             "precompute --lightmap WxH --adaptive); 0 when every texel was traced")
+      .def_property_readonly("interpolated",
+                             [](py::object self) -> py::object {
+                               const auto& l = self.cast<const prt::LightmapTransfer&>();
+                               const std::vector<std::uint8_t>& mask = l.transfer.interpolated;
+                               if (mask.empty()) return py::none();
+                               return view(mask.data(), {py::ssize_t(mask.size())}, self);
+                             },
+                             "uint8 (N,), read-only: 1 where the texel's transfer was interpolated from traced "
+                             "neighbours (precompute_lightmap(adaptive=...), prt precompute --adaptive), 0 where it "
+                             "was traced; None when every texel was traced (the file has no interpolated-texel mask)")
       .def(
           "rows",
           [](const prt::LightmapTransfer& l, const prt::Scene& scene) {
@@ -2371,27 +2437,32 @@ PYBIND11_MODULE(_prt, m) {
   m.def(
       "precompute_lightmap",
       [](const prt::Scene& scene, int width, int height, int uv_set, const std::string& mode, int bands, int samples,
-         int bounces, std::uint64_t seed) {
+         int bounces, std::uint64_t seed, const py::object& adaptive, double verify_adaptive, bool adaptive_any) {
         prt::TransferOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bands = bands;
         o.samples = samples;
         o.bounces = bounces;
         o.seed = seed;
+        const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
         py::gil_scoped_release release;
         prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, scene.lightmap_uv_set(uv_set));
         prt::move_texels_out_of_geometry(scene.mesh, tx);
-        return prt::compute_lightmap_transfer(scene, tx, o);
+        return adapt ? prt::compute_adaptive_lightmap_transfer(scene, tx, o, *adapt)
+                     : prt::compute_lightmap_transfer(scene, tx, o);
       },
       py::arg("scene"), py::arg("width"), py::arg("height"), py::kw_only(), py::arg("uv_set") = -1,
       py::arg("mode") = "shadowed", py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("bounces") = 1,
-      py::arg("seed") = 1, "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
+      py::arg("seed") = 1, py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0,
+      py::arg("adaptive_any") = false,
+      "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
       "  scene: a Scene (load_scene).\n"
       "  width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].\n"
       "  uv_set: the scene's UV set the atlas is laid out in (-1: TEXCOORD_1 where every object has it, else TEXCOORD_0) [--uv].\n"
       "  bands [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
+      "  adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.\n"
       "\n"
       "Returns a Lightmap.");
 

@@ -55,3 +55,56 @@ def test_bad_rows_are_refused():
     s = prt.load_scene(SCENE)
     with pytest.raises(prt.Error, match="rows"):
         prt.lightmap_from_rows(s, 16, 16, np.zeros((3, 1, 9), np.float32))
+
+
+@pytest.mark.parametrize("cli, kwargs", [
+    (["--adaptive"], dict(adaptive=0)),
+    (["--adaptive", "0.012", "--verify-adaptive", "0.2"], dict(adaptive=0.012, verify_adaptive=0.2)),
+    (["--adaptive", "0.05", "--adaptive-any", "--mode", "interreflected"],
+     dict(adaptive=0.05, adaptive_any=True, mode="interreflected")),
+], ids=["default", "verify", "any-interreflected"])
+def test_adaptive_lightmap_is_the_cli_file(tmp_path, cli, kwargs):
+    """precompute_lightmap(adaptive=...) is prt precompute --lightmap WxH
+    --adaptive: the same bytes, the interpolated texels marked."""
+    path = tmp_path / "cli.prt"
+    run_prt("precompute", SCENE, "--lightmap", "48x48", "--samples", "64", "--bands", "3", "--seed", "7", *cli, "-q",
+            "-o", path)
+    s = prt.load_scene(SCENE)
+    lm = prt.precompute_lightmap(s, 48, 48, bands=3, samples=64, seed=7, **kwargs)
+    out = tmp_path / "py.prt"
+    lm.write(out)
+    assert out.read_bytes() == path.read_bytes()
+    m = lm.interpolated
+    assert m is not None and m.dtype == np.uint8 and m.shape == lm.texels.shape and not m.flags.writeable
+    assert 0 < lm.interpolated_texels == int(m.sum()) < len(lm.texels)
+    back = prt.read_lightmap(path)
+    np.testing.assert_array_equal(back.interpolated, m)
+    assert back.interpolated_texels == lm.interpolated_texels
+
+
+def test_adaptive_lightmap_traces_a_subset():
+    """Shadowed: the traced texels hold the full run's transfer; without
+    adaptive nothing is marked."""
+    s = prt.load_scene(SCENE)
+    full = prt.precompute_lightmap(s, 48, 48, bands=3, samples=64)
+    assert full.interpolated is None and full.interpolated_texels == 0
+    lm = prt.precompute_lightmap(s, 48, 48, bands=3, samples=64, adaptive=0.05, adaptive_any=True)
+    inter = lm.interpolated.astype(bool)
+    a, f = lm.rows(s), full.rows(s)
+    np.testing.assert_array_equal(a[~inter], f[~inter])
+    assert inter.any() and not np.array_equal(a[inter], f[inter])
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(adaptive=0.5), "adaptive: 0.5: above 0.015, the largest tolerance for 64 samples"),
+    (dict(adaptive=1.5, adaptive_any=True), "the tolerance must be in (0, 1)"),
+    (dict(adaptive=True), "adaptive: a bool"),
+    (dict(verify_adaptive=0.5), "verify_adaptive: is for adaptive sample points"),
+    (dict(adaptive_any=True), "adaptive_any: is for adaptive sample points"),
+    (dict(adaptive=0, verify_adaptive=-0.5), "verify_adaptive: -0.5: a fraction in [0, 1]"),
+])
+def test_adaptive_lightmap_refusals(kwargs, words):
+    s = prt.load_scene(SCENE)
+    with pytest.raises(prt.Error) as info:
+        prt.precompute_lightmap(s, 16, 16, bands=3, samples=64, **kwargs)
+    assert words in str(info.value)

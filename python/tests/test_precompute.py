@@ -129,3 +129,81 @@ def test_ctrl_c_stops_with_keyboard_interrupt(mesh, watch):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     if watch:  # it stopped part of the way through
         assert done and done[-1][0] < done[-1][1]
+
+
+# ---- adaptive sample points (prt precompute --adaptive; docs/PRECOMPUTE.md) ----
+
+TUBE = MESH.parent / "tube.obj"
+# At 64 rays which vertices interpolation takes is noisy (TOL is small next to
+# the noise): seed 1 interpolates some of the tube at each TOL below.
+ADAPTIVE_SEED = 1
+
+
+@pytest.fixture(scope="module")
+def tube():
+    return prt.load_mesh(TUBE)
+
+
+@pytest.mark.parametrize("cli, kwargs", [
+    (["--adaptive"], dict(adaptive=0)),
+    (["--adaptive", "0.012", "--verify-adaptive", "0.25"], dict(adaptive=0.012, verify_adaptive=0.25)),
+    (["--adaptive", "0.05", "--adaptive-any", "--mode", "interreflected"],
+     dict(adaptive=0.05, adaptive_any=True, mode="interreflected")),
+    (["--adaptive", "--material", "glossy"], dict(adaptive=0.0, material="glossy")),
+], ids=["default", "verify", "any-interreflected", "glossy"])
+def test_adaptive_same_bits_as_cli(tube, tmp_path, cli, kwargs):
+    path = tmp_path / "cli.prt"
+    run_prt("precompute", TUBE, "-o", path, "--bands", BANDS, "--samples", SAMPLES, "--seed", ADAPTIVE_SEED, *cli,
+            "-q")
+    t = prt.precompute(tube, bands=BANDS, samples=SAMPLES, seed=ADAPTIVE_SEED, **kwargs)
+    assert t.interpolated is not None and t.interpolated.dtype == np.uint8 and t.interpolated.shape == (len(tube),)
+    assert 0 < t.interpolated_vertices == int(t.interpolated.sum()) < len(tube)
+    want = prt.read_transfer(path)
+    np.testing.assert_array_equal(t.interpolated, want.interpolated)
+    out = tmp_path / "py.prt"
+    t.write(out)
+    assert out.read_bytes() == path.read_bytes()
+
+
+def test_adaptive_traces_a_subset_and_interpolates_the_rest(tube):
+    """Shadowed: the traced vertices hold the full run's transfer, the
+    interpolated ones are marked; adaptive=None (the default) traces all."""
+    full = prt.precompute(tube, bands=BANDS, samples=SAMPLES, seed=ADAPTIVE_SEED)
+    assert full.interpolated is None and full.interpolated_vertices == 0
+    t = prt.precompute(tube, bands=BANDS, samples=SAMPLES, seed=ADAPTIVE_SEED, adaptive=0.05, adaptive_any=True)
+    inter = t.interpolated.astype(bool)
+    assert inter.any() and not inter.all()
+    a, f = t.dense(tube), full.dense(tube)
+    np.testing.assert_array_equal(a[~inter], f[~inter])
+    assert not np.array_equal(a[inter], f[inter])
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(adaptive=0.0151), "adaptive: 0.0151: above 0.015, the largest tolerance for 64 samples"),
+    (dict(adaptive=0.5), "give adaptive_any=True to use it anyway"),
+    (dict(adaptive=1.0, adaptive_any=True), "adaptive: 1.0: the tolerance must be in (0, 1)"),
+    (dict(adaptive=-0.01), "the tolerance must be in (0, 1)"),
+    (dict(adaptive=float("nan")), "the tolerance must be in (0, 1)"),
+    (dict(adaptive=True), "adaptive: a bool"),
+    (dict(adaptive=False), "adaptive: a bool"),
+    (dict(adaptive="0.01"), "adaptive: expected None, 0"),
+    (dict(verify_adaptive=0.5), "verify_adaptive: is for adaptive sample points"),
+    (dict(adaptive_any=True), "adaptive_any: is for adaptive sample points"),
+    (dict(adaptive=0, verify_adaptive=1.5), "verify_adaptive: 1.5: a fraction in [0, 1]"),
+    (dict(adaptive=0, basis="wavelet"), "adaptive: applies to basis='sh'"),
+])
+def test_adaptive_refusals(tube, kwargs, words):
+    """What prt precompute refuses (parse_adaptive), refused with a prt.Error
+    naming the argument, before anything is traced."""
+    base = {} if kwargs.get("basis") == "wavelet" else dict(bands=BANDS, samples=SAMPLES)
+    with pytest.raises(prt.Error) as info:
+        prt.precompute(tube, **base, **kwargs)
+    assert words in str(info.value)
+
+
+def test_adaptive_tolerance_limit_follows_the_samples(tube):
+    """The largest TOL is 1.5x the default: 0.015 up to 1024 samples, 0.0075
+    at 4096 (0.01 x sqrt(1024 / samples)); above it needs adaptive_any."""
+    prt.precompute(tube, bands=1, samples=SAMPLES, adaptive=0.015)
+    with pytest.raises(prt.Error, match="above 0.0075, the largest tolerance for 4096 samples"):
+        prt.precompute(tube, bands=1, samples=4096, adaptive=0.008)
