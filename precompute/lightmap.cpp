@@ -167,6 +167,8 @@ LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const Li
                                                     const Progress& progress, AdaptiveReport* report) {
   const TexelSetup setup(scene, texels, options);
   detail::check_transfer_options(setup.o, scene.mesh);
+  if (texels.texel_size.size() != texels.positions.size())  // the neighbours' reach
+    throw Error("lightmap texels: texel_size must have one entry per covered texel (lightmap_texels fills it)");
   AdaptiveReport local;
   AdaptiveReport& r = report ? *report : local;
   detail::AdaptivePoints points;

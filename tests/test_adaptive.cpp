@@ -376,6 +376,9 @@ TEST(AdaptiveLightmap, BadOptionsAreRefused) {
   TransferOptions glossy = options();
   glossy.glossy = true;
   EXPECT_THROW(compute_adaptive_lightmap_transfer(s, texels, glossy, {}), Error);
+  LightmapTexels sizeless = texels;  // built by hand without texel sizes: refused, not read past the end
+  sizeless.texel_size.clear();
+  EXPECT_THROW(compute_adaptive_lightmap_transfer(s, sizeless, options(), {}), Error);
 }
 
 }  // namespace
