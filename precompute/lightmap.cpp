@@ -171,6 +171,13 @@ LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const Li
     throw Error("lightmap texels: texel_size must have one entry per covered texel (lightmap_texels fills it)");
   AdaptiveReport local;
   AdaptiveReport& r = report ? *report : local;
+  if (options.mode == TransferMode::Unshadowed) {  // no rays: nothing to save
+    detail::check_adaptive_options(adaptive, texels.positions.size());
+    r = AdaptiveReport{};
+    r.tolerance = adaptive.tolerance > 0 ? adaptive.tolerance : default_adaptive_tolerance(options.samples);
+    r.vertices = r.traced = texels.positions.size();
+    return compute_lightmap_transfer(scene, texels, options, progress);
+  }
   detail::AdaptivePoints points;
   points.positions = texels.positions.data();
   points.normals = texels.normals.data();
@@ -178,13 +185,6 @@ LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const Li
   if (setup.per_point) points.albedo = texels.albedo;
   points.hit_points = &setup.map;
   texel_neighbours(texels, setup.point_of_texel, points);
-  if (options.mode == TransferMode::Unshadowed) {  // no rays: nothing to save
-    detail::check_adaptive_options(adaptive, points.count);
-    r = AdaptiveReport{};
-    r.tolerance = adaptive.tolerance > 0 ? adaptive.tolerance : default_adaptive_tolerance(options.samples);
-    r.vertices = r.traced = points.count;
-    return compute_lightmap_transfer(scene, texels, options, progress);
-  }
   return setup.finish(detail::adaptive_at(scene.mesh, points, setup.o, adaptive, progress, r), texels);
 }
 

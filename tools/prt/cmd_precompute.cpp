@@ -188,6 +188,21 @@ void check_usage(const PrecomputeArgs& a) {
   check_not_input("--output", a.output, {{"MESH", a.mesh}, {"--env", a.env}});
 }
 
+// The value of `option` (--adaptive, --subdivide) as a tolerance in (0, 1);
+// `expected` ends the message for text that is no number.
+double parse_tolerance(const std::string& option, const std::string& text, const std::string& expected) {
+  double tol = 0;
+  try {
+    std::size_t used = 0;
+    tol = std::stod(text, &used);
+    if (used != text.size()) throw std::invalid_argument("trailing");
+  } catch (const std::exception&) {
+    throw UsageError(option + " " + text + ": expected a tolerance, " + expected);
+  }
+  if (!(tol > 0 && tol < 1)) throw UsageError(fmt::format("{} {}: the tolerance must be in (0, 1)", option, text));
+  return tol;
+}
+
 // --adaptive [TOL] into a.aopt.tolerance (0: the default for the samples,
 // or with --target-error, target / 2); refuses a TOL past
 // max_adaptive_tolerance without --adaptive-any.
@@ -206,16 +221,7 @@ void parse_adaptive(PrecomputeArgs& a) {
     a.aopt.tolerance = 0;
     return;
   }
-  double tol = 0;
-  try {
-    std::size_t used = 0;
-    tol = std::stod(a.adaptive, &used);
-    if (used != a.adaptive.size()) throw std::invalid_argument("trailing");
-  } catch (const std::exception&) {
-    throw UsageError("--adaptive " + a.adaptive + ": expected a tolerance, a number in (0, 1) (e.g. 0.01), or no value");
-  }
-  if (!(tol > 0 && tol < 1))
-    throw UsageError(fmt::format("--adaptive {}: the tolerance must be in (0, 1)", a.adaptive));
+  const double tol = parse_tolerance("--adaptive", a.adaptive, "a number in (0, 1) (e.g. 0.01), or no value");
   const double most = max_adaptive_tolerance(a.opt.samples);
   if (tol > most && !a.adaptive_any)
     throw UsageError(fmt::format("--adaptive {}: above {:.3g}, the largest tolerance for {} samples whose error stays "
@@ -239,17 +245,7 @@ void check_subdivide(PrecomputeArgs& a) {
       throw UsageError("--subdivide needs a TOL (e.g. --subdivide 0.02), or --target-error E to pick TOL = E / 2");
     a.sopt.tolerance = a.target_error / 2;
   } else {
-    double tol = 0;
-    try {
-      std::size_t used = 0;
-      tol = std::stod(a.subdivide, &used);
-      if (used != a.subdivide.size()) throw std::invalid_argument("trailing");
-    } catch (const std::exception&) {
-      throw UsageError("--subdivide " + a.subdivide + ": expected a tolerance, a number in (0, 1) (e.g. 0.02)");
-    }
-    if (!(tol > 0 && tol < 1))
-      throw UsageError(fmt::format("--subdivide {}: the tolerance must be in (0, 1)", a.subdivide));
-    a.sopt.tolerance = tol;
+    a.sopt.tolerance = parse_tolerance("--subdivide", a.subdivide, "a number in (0, 1) (e.g. 0.02)");
   }
   const auto refuse = [](const std::string& what) {
     throw UsageError("--subdivide refines a mesh's vertices for its per-vertex SH transfer: not with " + what);
