@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
 #include <assimp/config.h>
 #include <assimp/mesh.h>
@@ -263,6 +264,32 @@ std::vector<glm::vec2> obj_corner_uvs(const std::string& path, Mesh& mesh) {
   return corner_uvs_of(scene, f_total);
 }
 
+// Assimp opens a glTF's buffers at the file's directory + the URI as
+// written; the specification writes URIs percent-encoded ("buffer%20data.bin"
+// names "buffer data.bin"). Paths under the glTF's directory other than the
+// file itself are decoded, as the glTF check decoded them when it checked
+// those files.
+class GltfUriIOSystem : public Assimp::DefaultIOSystem {
+ public:
+  explicit GltfUriIOSystem(const std::string& gltf) : gltf_(gltf) {
+    dir_ = std::filesystem::path(gltf).parent_path().string();
+    if (!dir_.empty() && dir_.back() != '/') dir_ += '/';
+  }
+  bool Exists(const char* file) const override { return DefaultIOSystem::Exists(decoded(file).c_str()); }
+  Assimp::IOStream* Open(const char* file, const char* mode) override {
+    return DefaultIOSystem::Open(decoded(file).c_str(), mode);
+  }
+
+ private:
+  std::string decoded(const char* file) const {
+    const std::string f(file);
+    std::string d;
+    if (f == gltf_ || f.compare(0, dir_.size(), dir_) != 0 || !detail::percent_decode(f.substr(dir_.size()), d)) return f;
+    return dir_ + d;
+  }
+  std::string gltf_, dir_;
+};
+
 }  // namespace
 
 std::uint64_t Mesh::hash() const {
@@ -334,6 +361,16 @@ Mesh make_mesh(std::vector<glm::vec3> positions, std::vector<glm::uvec3> triangl
   return mesh;
 }
 
+void check_ray_origin(const glm::dvec3& p, std::size_t index, const std::string& what) {
+  if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+      std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= kMaxCoordinate)
+    return;
+  throw Error(fmt::format("{}: point {} ({:g}, {:g}, {:g}) is not finite or has a coordinate beyond prt's limit of {:g} "
+                          "(|x|, |y|, |z| <= {:g} in scene units, as for a mesh's vertices: float ray tracing breaks "
+                          "down past it)",
+                          what, index, p.x, p.y, p.z, kMaxCoordinate, kMaxCoordinate));
+}
+
 Mesh load_mesh(const std::string& path, const MeshOptions& options) {
   // A regular file (not a FIFO or a device), of a format prt reads, whose
   // structure holds what it declares (scene/mesh_check.h): only then does
@@ -352,6 +389,8 @@ Mesh load_mesh(const std::string& path, const MeshOptions& options) {
   const bool per_corner = format == detail::MeshFormat::Obj || format == detail::MeshFormat::Stl;
   unsigned flags = aiProcess_Triangulate | aiProcess_PreTransformVertices;
   Assimp::Importer importer;
+  if (format == detail::MeshFormat::Gltf || format == detail::MeshFormat::Glb)
+    importer.SetIOHandler(new GltfUriIOSystem(path));  // the importer owns it
   if (per_corner) {
     int removed = aiComponent_TEXCOORDS | aiComponent_TANGENTS_AND_BITANGENTS;
     if (format == detail::MeshFormat::Stl) removed |= aiComponent_NORMALS;

@@ -30,6 +30,10 @@ enum class MeshFormat { Obj, Ply, Off, Stl, Gltf, Glb };
 // .ply, .off, .stl, .gltf or .glb.
 MeshFormat mesh_format(const std::string& path);
 
+// How deep a glTF node hierarchy may nest (a root is at depth 0): Assimp
+// and the scene reader walk it recursively. Real files nest a few dozen.
+inline constexpr std::uint32_t kMaxNodeDepth = 256;
+
 // The structure check of `format` for the file at `path` of `size` bytes.
 void check_mesh_file(const std::string& path, MeshFormat format, std::uint64_t size);
 
@@ -38,6 +42,11 @@ void check_ply(const std::string& path, std::uint64_t size);
 void check_obj(const std::string& path, std::uint64_t size);
 void check_stl(const std::string& path, std::uint64_t size);
 void check_gltf(const std::string& path, std::uint64_t size, bool binary);
+
+// A relative URI reference's path with its percent escapes decoded (RFC
+// 3986: "buffer%20data.bin" names "buffer data.bin"); false when a '%' is
+// not followed by two hex digits or encodes a NUL byte.
+bool percent_decode(std::string_view uri, std::string& out);
 
 // Reads a file front to back through one block-sized buffer: text lines of
 // bounded length, and raw bytes. Messages name the file and the line.

@@ -89,6 +89,10 @@ int Scene::lightmap_uv_set(int requested) const {
         "or xatlas), or pick an existing set with --uv N",
         mesh.source, names.size(), objects.size(), set, set, list));
   };
+  if (requested < -1 || requested > kMaxLightmapUvSet)
+    throw Error(fmt::format("lightmap UV set {}: expected -1 (choose: TEXCOORD_1 where every object has it, else "
+                            "TEXCOORD_0) or 0 to {} (TEXCOORD_N)",
+                            requested, kMaxLightmapUvSet));
   if (requested >= 0) {
     const auto names = lacking(requested);
     if (!names.empty()) refuse(requested, names);
@@ -169,8 +173,22 @@ Scene finish_scene(Builder&& b, std::vector<Material> materials, std::vector<Tex
 }
 
 Texture decode_image(const unsigned char* bytes, int size, const std::string& name, bool srgb,
-                     const std::string& path) {
+                     const std::string& path, std::size_t& decoded_texels) {
   int w = 0, h = 0, comp = 0;
+  // The size from the header, before anything is decoded (a PNG of 16k x
+  // 16k pixels fits in a few kilobytes).
+  if (stbi_info_from_memory(bytes, size, &w, &h, &comp) && w > 0 && h > 0) {
+    const std::size_t texels = std::size_t(w) * std::size_t(h);
+    if (texels > kMaxTexturePixels)
+      throw Error(fmt::format("{}: image {} is {} x {} pixels; prt decodes images of at most {} pixels ({} MiB as linear "
+                              "RGBA): scale it down",
+                              path, name, w, h, kMaxTexturePixels, kMaxTexturePixels * sizeof(glm::vec4) >> 20));
+    if (decoded_texels + texels > kMaxSceneTexturePixels)
+      throw Error(fmt::format("{}: its textures take more than {} pixels in all ({} MiB as linear RGBA) at image {}; "
+                              "scale them down",
+                              path, kMaxSceneTexturePixels, kMaxSceneTexturePixels * sizeof(glm::vec4) >> 20, name));
+    decoded_texels += texels;
+  }
   std::unique_ptr<unsigned char, void (*)(void*)> data(stbi_load_from_memory(bytes, size, &w, &h, &comp, 4),
                                                        stbi_image_free);
   if (!data) throw Error(fmt::format("{}: image {} cannot be decoded: {}", path, name, stbi_failure_reason()));
@@ -199,6 +217,33 @@ bool keep_image_bytes(tg::Image* image, const int, std::string*, std::string*, i
   image->image.assign(bytes, bytes + size);
   image->width = image->height = -1;  // marks "undecoded"
   return true;
+}
+
+// KHR_texture_transform on the base colour texture moves where the albedo
+// is sampled; prt's consumers (the bake, the GPU lightmap pass, the glTF
+// and web exports) sample the UV set as it is, so a transform other than
+// the identity is refused rather than ignored. On other textures (normal,
+// occlusion, ...) it changes nothing prt reads.
+void refuse_texture_transform(const tg::Material& gm, const std::string& path) {
+  const auto& ext = gm.pbrMetallicRoughness.baseColorTexture.extensions;
+  const auto it = ext.find("KHR_texture_transform");
+  if (gm.pbrMetallicRoughness.baseColorTexture.index < 0 || it == ext.end()) return;
+  const tg::Value& t = it->second;
+  const auto is = [&](const char* key, double value) {
+    if (!t.Has(key)) return true;
+    const tg::Value& v = t.Get(key);
+    if (v.IsNumber()) return v.GetNumberAsDouble() == value;
+    for (int i = 0; i < int(v.ArrayLen()); ++i)
+      if (v.Get(i).GetNumberAsDouble() != value) return false;
+    return true;
+  };
+  const bool identity = is("offset", 0) && is("rotation", 0) && is("scale", 1) &&
+                        (!t.Has("texCoord") || t.Get("texCoord").GetNumberAsInt() == gm.pbrMetallicRoughness.baseColorTexture.texCoord);
+  if (!identity)
+    throw Error(fmt::format("{}: material {}: its baseColorTexture uses KHR_texture_transform (offset, rotation, scale or "
+                            "texCoord), which prt does not apply: the albedo would be sampled in the wrong place. Apply "
+                            "the transform to the UVs (or bake the texture) before exporting",
+                            path, gm.name.empty() ? std::string("(unnamed)") : gm.name));
 }
 
 glm::dmat4 node_matrix(const tg::Node& n) {
@@ -293,7 +338,9 @@ Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options
   std::vector<Texture> textures;
   std::map<int, int> texture_of_image;
   std::vector<Material> materials;
+  std::size_t decoded_texels = 0;
   for (const tg::Material& gm : model.materials) {
+    refuse_texture_transform(gm, path);
     Material m;
     m.name = gm.name;
     const auto& f = gm.pbrMetallicRoughness.baseColorFactor;
@@ -310,7 +357,9 @@ Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options
         const tg::Image& im = model.images[std::size_t(img)];
         const std::string name = !im.uri.empty() ? im.uri : !im.name.empty() ? im.name : fmt::format("image {}", img);
         if (im.image.empty()) throw Error(fmt::format("{}: image {} cannot be read (missing file?)", path, name));
-        textures.push_back(decode_image(im.image.data(), int(im.image.size()), name, true, path));
+        if (im.image.size() > std::size_t(std::numeric_limits<int>::max()))
+          throw Error(fmt::format("{}: image {} is {} bytes; prt reads images of at most 2 GiB", path, name, im.image.size()));
+        textures.push_back(decode_image(im.image.data(), int(im.image.size()), name, true, path, decoded_texels));
         it = texture_of_image.emplace(img, int(textures.size()) - 1).first;
       }
       m.base_color_texture = it->second;
@@ -323,7 +372,7 @@ Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options
   std::size_t skipped = 0;
   const std::function<void(int, const glm::dmat4&, int)> visit = [&](int ni, const glm::dmat4& parent, int depth) {
     if (ni < 0 || std::size_t(ni) >= model.nodes.size()) throw Error(fmt::format("{}: node {} does not exist", path, ni));
-    if (depth > 256) throw Error(fmt::format("{}: the node hierarchy is deeper than 256 (a cycle?)", path));
+    PRT_CHECK(depth <= int(detail::kMaxNodeDepth));  // check_gltf refuses deeper trees and cycles
     const tg::Node& node = model.nodes[std::size_t(ni)];
     const glm::dmat4 world = parent * node_matrix(node);
     if (node.mesh >= 0) {
@@ -420,6 +469,7 @@ Scene load_obj(const std::string& path, const MeshOptions& options) {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::map<std::string, int> texture_of_file;
+  std::size_t decoded_texels = 0;
   for (unsigned i = 0; i < as->mNumMaterials; ++i) {
     const aiMaterial* am = as->mMaterials[i];
     Material m;
@@ -436,8 +486,10 @@ Scene load_obj(const std::string& path, const MeshOptions& options) {
         std::ifstream in(file, std::ios::binary);
         const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
         if (!in && !in.eof()) throw Error(file + ": cannot be read");
+        if (bytes.size() > std::size_t(std::numeric_limits<int>::max()))
+          throw Error(fmt::format("{}: texture {} is {} bytes; prt reads images of at most 2 GiB", path, file, bytes.size()));
         textures.push_back(decode_image(reinterpret_cast<const unsigned char*>(bytes.data()), int(bytes.size()), file,
-                                        true, path));
+                                        true, path, decoded_texels));
         it = texture_of_file.emplace(file, int(textures.size()) - 1).first;
       }
       m.base_color_texture = it->second;

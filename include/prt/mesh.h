@@ -31,6 +31,12 @@ enum class NormalWeighting { Area, Angle };
 // every hit from 1e-13; precompute/ray_scene.h). docs/PRECOMPUTE.md.
 inline constexpr double kMaxCoordinate = 1e12;
 
+// Throws prt::Error "WHAT: point I (x, y, z) ..." unless `p` is finite and
+// within kMaxCoordinate: for points that become ray origins other than a
+// mesh's vertices (query points, a reference's texels; Embree aborts on
+// origins past 1.8e18). `index` names the point in the message.
+void check_ray_origin(const glm::dvec3& p, std::size_t index, const std::string& what);
+
 struct MeshOptions {
   bool weld = false;               // merge vertices with bit-identical positions
   bool file_normals = true;        // use the file's normals when it has them

@@ -22,6 +22,12 @@
 
 namespace prt {
 
+// The largest image a scene's reader decodes (8192 x 8192, 1 GiB as
+// linear RGBA floats), and all of a scene's images together (4 GiB):
+// checked from each image's header before it is decoded.
+inline constexpr std::size_t kMaxTexturePixels = std::size_t(1) << 26;
+inline constexpr std::size_t kMaxSceneTexturePixels = std::size_t(1) << 28;
+
 // A decoded texture: linear RGBA (sRGB-decoded for colour textures), rows
 // from the top of the image (glTF's UV origin is the image's top-left).
 struct Texture {
@@ -49,6 +55,10 @@ struct SceneObject {
   int uv_sets = 0;                // how many TEXCOORD_n it has (0, 1, 2, ...)
 };
 
+// The highest UV set a lightmap is laid out in (TEXCOORD_7; prt precompute
+// --uv 0 to 7): Scene::lightmap_uv_set refuses a request past it.
+inline constexpr int kMaxLightmapUvSet = 7;
+
 struct Scene {
   Mesh mesh;                                    // every object, world space, node transforms applied
   std::vector<std::vector<glm::vec2>> uv_sets;  // uv_sets[s][v]: TEXCOORD_s (glTF: origin top-left, v down); (0,0) where an object lacks it
@@ -60,9 +70,10 @@ struct Scene {
   // XXH3-64 of the mesh's positions and triangles (Mesh::hash) and every UV
   // set: what a lightmap transfer records to refuse another scene.
   std::uint64_t hash() const;
-  // The lightmap UV set: `requested` (>= 0, every object must have it) or,
-  // with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0.
-  // Throws prt::Error naming the objects that lack it and how to make
+  // The lightmap UV set: `requested` (0 to kMaxLightmapUvSet, every object
+  // must have it) or, with -1, TEXCOORD_1 when every object has two sets,
+  // else TEXCOORD_0. Throws prt::Error for any other number (prt precompute
+  // --uv's range), and naming the objects that lack the set and how to make
   // lightmap UVs (Blender's UV > Lightmap Pack, xatlas).
   int lightmap_uv_set(int requested = -1) const;
   // The albedo at a point of triangle `tri` with barycentrics (1-u-v, u, v):
@@ -72,13 +83,19 @@ struct Scene {
 };
 
 // Loads a scene (glTF 2.0 .gltf/.glb, or OBJ). The structure checks of
-// load_mesh run first (a malformed file is refused, not crashed on); then
+// load_mesh run first (a malformed file is refused, not crashed on; for
+// glTF every property against the specification's schema, node trees at
+// most 256 deep, image files regular files, URIs percent-decoded:
+// docs/HARD_CASES.md "glTF scenes"); then
 // every node's meshes are placed by its world transform (normals by its
 // inverse transpose, winding flipped under a mirroring transform), each
 // primitive an object. Images are decoded (PNG, JPEG) and colour textures
 // sRGB-decoded. Throws prt::Error naming the file for anything a mesh load
-// refuses, a missing or undecodable image, a non-triangle primitive mode
-// (skipped with a count if others remain), UVs that are not finite.
+// refuses, a missing or undecodable image, an image past kMaxTexturePixels
+// (or all of them past kMaxSceneTexturePixels; told from the headers before
+// decoding), KHR_texture_transform on a base colour texture (prt samples
+// the UV set as it is), a non-triangle primitive mode (skipped with a count
+// if others remain), UVs that are not finite.
 Scene load_scene(const std::string& path, const MeshOptions& options = {});
 // A scene from any mesh file: glTF and OBJ as load_scene; other formats
 // (OFF, PLY, STL, ...) as load_mesh gives them, one object, no materials
