@@ -45,10 +45,12 @@ void check_probe_options(const ProbeOptions& o) {
   const int k = int(std::lround(std::sqrt(double(o.rays_per_texel))));
   if (o.rays_per_texel < 1 || k * k != o.rays_per_texel || k > 8)
     throw Error(fmt::format("--probe-rays {} (a square: 1, 4, 9, ... 64)", o.rays_per_texel));
-  if (o.mode == TransferMode::Interreflected) {
-    if (o.bounces < 1 || o.bounces > 8) throw Error(fmt::format("--bounces {} (1 to 8 for probes)", o.bounces));
-    if (o.bounce_bands < 1 || o.bounce_bands > 16) throw Error(fmt::format("--bounce-bands {} (1 to 16)", o.bounce_bands));
-  }
+  // The bounce bands' range holds whatever the mode (as the command's --bounce-bands 1 to 16).
+  if (o.bounce_bands < 1 || o.bounce_bands > 16) throw Error(fmt::format("--bounce-bands {} (1 to 16)", o.bounce_bands));
+  if (o.mode == TransferMode::Interreflected && (o.bounces < 1 || o.bounces > kMaxProbeBounces))
+    throw Error(fmt::format("--bounces {} (1 to {} for probes)", o.bounces, kMaxProbeBounces));
+  if (o.threads < 0 || o.threads > kMaxThreads)
+    throw Error(fmt::format("--threads must be between 0 (every core) and {}, got {}", kMaxThreads, o.threads));
 }
 
 }  // namespace
@@ -56,6 +58,8 @@ void check_probe_options(const ProbeOptions& o) {
 ProbeTransfer compute_probe_transfer(const Scene& scene, const ProbeGrid& grid, const ProbeOptions& o,
                                      const Progress& progress) {
   check_probe_options(o);
+  // Before anything is allocated per probe (a hand-made grid has not been through probe_grid).
+  if (const std::string p = probe_dims_problem(grid.dims); !p.empty()) throw Error("probe grid: " + p);
   const Mesh& mesh = scene.mesh;
   detail::check_ray_offset(o.offset, mesh, "--offset");
   std::unique_ptr<tbb::global_control> limit;
@@ -346,6 +350,7 @@ ProbeOcclusion::ProbeOcclusion(const Mesh& mesh, const ProbeGrid& grid)
 ProbeOcclusion::~ProbeOcclusion() = default;
 
 double ProbeOcclusion::operator()(const glm::dvec3& probe, const glm::dvec3& p) const {
+  check_ray_origin(p, 0, "probe visibility");  // the query point: a caller's, not the grid's
   detail::enable_ftz_daz();
   const glm::dvec3 axis = probe - p;
   const double len = glm::length(axis);

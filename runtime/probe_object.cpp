@@ -58,8 +58,9 @@ void ProbeObject::frame(Renderer& renderer, const glm::dmat3& R, double t) {
   for (int k = 0; k < 3; ++k) {
     const int n = t_->grid.dims[std::size_t(k)];
     const double a0 = sp[k] > 0 ? (at[k] - reach - t_->grid.min[k]) / sp[k] : 0.0, a1 = sp[k] > 0 ? (at[k] + reach - t_->grid.min[k]) / sp[k] : 0.0;
-    lo[k] = std::clamp(int(std::floor(a0)), 0, n - 1);
-    hi[k] = std::clamp(int(std::ceil(a1)), 0, n - 1);
+    // Clamped as doubles: a spacing of 1e-40 (a flat axis) puts a0 past int's range.
+    lo[k] = int(std::clamp(std::floor(a0), 0.0, double(n - 1)));
+    hi[k] = int(std::clamp(std::ceil(a1), 0.0, double(n - 1)));
   }
   for (int z = lo[2]; z <= hi[2]; ++z)
     for (int y = lo[1]; y <= hi[1]; ++y)

@@ -6,6 +6,7 @@
 #include "test_util.h"
 
 #include <prt/error.h>
+#include <prt/hash.h>
 #include <prt/precompute.h>
 #include <prt/probes.h>
 #include <prt/projection.h>
@@ -14,8 +15,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
 #include <random>
+#include <string>
 
 namespace prt {
 namespace {
@@ -52,6 +59,44 @@ TEST(ProbeGrid, DimsAndPositions) {
   EXPECT_EQ(g.position(0, 0, 0), glm::dvec3(-4, 0, -4));  // corners included
   EXPECT_EQ(g.position(4, 2, 4), glm::dvec3(4, 1.2f, 4));
   EXPECT_EQ(g.index(1, 2, 3), 1u + 5u * (2u + 3u * 3u));
+}
+
+// One rule for a grid's dimensions (probe_dims_problem), in the parser, in
+// probe_grid and in compute_probe_transfer, before anything is allocated:
+// 1024 x 1024 x 1024 was std::bad_alloc from a grid made without the parser.
+TEST(ProbeGrid, OneRuleRefusesBadDimsBeforeAllocating) {
+  using D = std::array<int, 3>;
+  for (const D& good : {D{2, 2, 2}, D{kMaxProbeDim, 2, 2}, D{256, 256, 256}, D{1024, 1024, 16}})
+    EXPECT_EQ(probe_dims_problem(good), "") << good[0] << "x" << good[1] << "x" << good[2];
+  const Scene s = floor_and_closed_box();
+  const std::vector<std::pair<D, std::string>> bad = {
+      {{0, 2, 2}, "NX is 0"},       {{2, -1, 2}, "NY is -1"},  {{2, 2, 1}, "NZ is 1"},
+      {{2, 2, 1025}, "NZ is 1025"}, {{1024, 1024, 1024}, "1073741824 probes"}, {{1024, 1024, 17}, "17825792 probes"}};
+  for (const auto& [d, words] : bad) {
+    const std::string p = probe_dims_problem(d);
+    EXPECT_NE(p.find(words), std::string::npos) << p;
+    EXPECT_NE(p.find("each of NX, NY, NZ must be 2 to 1024, and NX x NY x NZ at most 16777216"), std::string::npos) << p;
+    const std::string text = std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
+    EXPECT_THROW(parse_probe_dims(text), Error) << text;
+    try {
+      probe_grid(s.mesh, d);
+      ADD_FAILURE() << text << ": probe_grid took it";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+    ProbeGrid g;  // a grid made by hand: compute_probe_transfer refuses it too
+    g.dims = d;
+    g.min = glm::dvec3(-1);
+    EXPECT_THROW(compute_probe_transfer(s, g, ProbeOptions{}), Error) << text;
+  }
+  EXPECT_EQ(parse_probe_dims("1024x1024x16"), (D{1024, 1024, 16}));
+  // The options' ranges, whatever the mode: bounce bands 1 to 16, threads 0 to kMaxThreads.
+  for (const auto& [bands, threads] : {std::pair{0, 0}, std::pair{17, 0}, std::pair{6, -1}, std::pair{6, kMaxThreads + 1}}) {
+    ProbeOptions o;
+    o.bounce_bands = bands;
+    o.threads = threads;
+    EXPECT_THROW(compute_probe_transfer(s, probe_grid(s.mesh, {2, 2, 2}), o), Error) << bands << " " << threads;
+  }
 }
 
 TEST(ProbeVisibility, QuadtreeNodesCoverTheBits) {
@@ -281,6 +326,465 @@ TEST(ProbeRelight, BounceOffABigFloorUnderAConstantSky) {
   relighter.relight(std::vector<std::uint32_t>{std::uint32_t(centre)}, lit);
   EXPECT_NEAR(lambert_from_sh(lit, 3, {0, -1, 0}).x, 0.5, 0.05 * 0.5);
   EXPECT_NEAR(lambert_from_sh(lit, 3, {0, 1, 0}).x, 1.0, 0.05);
+}
+
+// ---- hostile probe files (docs/FORMAT.md "Probe volume") ----------------------------
+
+// The bytes write_probe_transfer writes for `t`, without its validation: a
+// damaged volume as a file whose checksum (XXH3-64 of every byte before the
+// last 12) is right, so the reader gets past it to the structure.
+std::string probe_file_bytes(const ProbeTransfer& t) {
+  std::string b;
+  const auto raw = [&](const void* p, std::size_t n) {
+    if (n) b.append(static_cast<const char*>(p), n);
+  };
+  const auto put = [&](const auto& v) { raw(&v, sizeof v); };
+  const auto array = [&](const auto& v) {
+    put(std::uint64_t(v.size()));
+    raw(v.data(), v.size() * sizeof(v[0]));
+  };
+  raw("PRTP\r\n\x1a\n", 8);
+  put(std::uint32_t(1));
+  for (int a = 0; a < 3; ++a) put(std::int32_t(t.grid.dims[std::size_t(a)]));
+  for (int a = 0; a < 3; ++a) put(t.grid.min[a]);
+  for (int a = 0; a < 3; ++a) put(t.grid.max[a]);
+  for (std::int32_t v : {t.bands, t.cube_res, t.depth_res, int(t.mode), t.bounces, t.bounce_bands, t.channels, t.rays_per_texel})
+    put(v);
+  put(t.seed);
+  put(t.scene_hash);
+  put(t.depth_cap);
+  std::vector<std::uint8_t> state;
+  for (ProbeState st : t.state) state.push_back(std::uint8_t(st));
+  array(state);
+  array(t.positions);
+  array(t.vis_nodes);
+  array(t.vis_offsets);
+  array(t.vis_complement);
+  array(t.partial_nodes);
+  array(t.partial_mask);
+  array(t.partial_offsets);
+  array(t.depth);
+  array(t.bounce);
+  put(hash64(b.data(), b.size()));
+  raw("PRTE", 4);
+  return b;
+}
+
+// A node id's place in the quadtree of a cube of face r (probe_node_id backwards).
+struct QuadNode {
+  int face, level, x, y;
+};
+QuadNode quad_node(int r, std::uint16_t id) {
+  const int per_face = (4 * r * r - 1) / 3;
+  QuadNode n{id / per_face, 0, 0, 0};
+  int at = id % per_face;
+  while (at >= (r >> n.level) * (r >> n.level)) at -= (r >> n.level) * (r >> n.level), ++n.level;
+  n.x = at % (r >> n.level);
+  n.y = at / (r >> n.level);
+  return n;
+}
+
+// Whether probe slot s lists a node that holds finest texel (face, u, v).
+bool texel_listed(const ProbeTransfer& t, std::size_t s, int face, int u, int v) {
+  for (std::uint64_t i = t.vis_offsets[s]; i < t.vis_offsets[s + 1]; ++i) {
+    const QuadNode n = quad_node(t.cube_res, t.vis_nodes[i]);
+    if (n.face == face && (u >> n.level) == n.x && (v >> n.level) == n.y) return true;
+  }
+  return false;
+}
+
+// The probe of stored slot s.
+std::size_t probe_of_slot(const ProbeTransfer& t, std::size_t s) {
+  const std::vector<std::uint32_t> slots = t.stored_slots();
+  return std::size_t(std::find(slots.begin(), slots.end(), std::uint32_t(s)) - slots.begin());
+}
+
+void insert_node(ProbeTransfer& t, std::size_t s, std::uint16_t id) {
+  t.vis_nodes.insert(t.vis_nodes.begin() + std::ptrdiff_t(t.vis_offsets[s + 1]), id);
+  for (std::size_t k = s + 1; k < t.vis_offsets.size(); ++k) ++t.vis_offsets[k];
+}
+
+void insert_partial(ProbeTransfer& t, std::size_t s, std::uint16_t id, std::uint16_t mask) {
+  const std::ptrdiff_t at = std::ptrdiff_t(t.partial_offsets[s + 1]);
+  t.partial_nodes.insert(t.partial_nodes.begin() + at, id);
+  t.partial_mask.insert(t.partial_mask.begin() + at, mask);
+  for (std::size_t k = s + 1; k < t.partial_offsets.size(); ++k) ++t.partial_offsets[k];
+}
+
+// A small volume as prt computes it, with probes of both kinds (visible
+// nodes listed, and blocked ones: vis_complement) and partial texels:
+// around the closed box on the floor, interreflected (bounce matrices),
+// an 8^2 cube.
+ProbeTransfer small_volume() {
+  const Scene s = floor_and_closed_box();
+  ProbeOptions o;
+  o.seed = 5;
+  o.cube_res = 8;
+  o.mode = TransferMode::Interreflected;
+  o.bounce_bands = 2;
+  return compute_probe_transfer(s, probe_grid(s.mesh, {3, 3, 3}), o);
+}
+
+// What reading `bytes` as a probe file says: "" when it loads, else the
+// message (which must name the file first).
+std::string read_problem(const test::TempDir& dir, const std::string& bytes) {
+  const std::string path = dir.file("damaged.prt");
+  test::write_file(path, bytes);
+  try {
+    (void)read_probe_transfer(path);
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    if (m.rfind(path + ": ", 0) != 0) return "(the message does not start with the file) " + m;
+    return m;
+  }
+  return "";
+}
+
+TEST(ProbeFile, EveryDamagedIndexIsRefusedNamingTheFile) {
+  // Each kind of damage to the visibility quadtree and its arrays, at every
+  // stored probe where it applies, written with a right checksum: the
+  // reader refuses it with a prt::Error that starts with the file's path and
+  // says what is wrong (before, an id past the count or on a seventh face
+  // crashed prt relight and prt export --probes; overlapping nodes and
+  // partial texels under nodes were read and counted twice).
+  const ProbeTransfer t = small_volume();
+  const int r = t.cube_res;
+  const std::uint16_t per_face = std::uint16_t((4 * r * r - 1) / 3), ids = std::uint16_t(6 * per_face);
+  test::TempDir dir;
+  ASSERT_EQ(read_problem(dir, probe_file_bytes(t)), "");  // the encoding above is the file's
+  std::size_t complement = 0, partial = 0;
+  for (std::size_t s = 0; s < t.stored(); ++s) {
+    complement += t.vis_complement[s];
+    partial += t.partial_offsets[s + 1] > t.partial_offsets[s];
+  }
+  ASSERT_GE(complement, 1u);
+  ASSERT_LT(complement, t.stored());
+  ASSERT_GE(partial, 2u);
+
+  struct Damage {
+    const char* what;
+    std::function<bool(ProbeTransfer&, std::size_t)> apply;  // false: not for this probe
+    const char* expect;
+  };
+  const auto first_node = [](const ProbeTransfer& x, std::size_t s) { return x.vis_offsets[s + 1] > x.vis_offsets[s]; };
+  const auto first_partial = [](const ProbeTransfer& x, std::size_t s) {
+    return x.partial_offsets[s + 1] > x.partial_offsets[s];
+  };
+  const std::vector<Damage> damages = {
+      {"a node id past the count",
+       [&](ProbeTransfer& x, std::size_t s) { return first_node(x, s) && (x.vis_nodes[x.vis_offsets[s]] = ids, true); },
+       "is past the cube's nodes"},
+      {"a node id of 65535",
+       [&](ProbeTransfer& x, std::size_t s) { return first_node(x, s) && (x.vis_nodes[x.vis_offsets[s]] = 0xffff, true); },
+       "is past the cube's nodes"},
+      {"a node listed twice",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!first_node(x, s)) return false;
+         insert_node(x, s, x.vis_nodes[x.vis_offsets[s]]);
+         return true;
+       },
+       "is listed twice"},
+      {"a node's parent listed too",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!first_node(x, s)) return false;
+         const QuadNode n = quad_node(r, x.vis_nodes[x.vis_offsets[s]]);
+         if ((r >> n.level) == 1) return false;  // a face's root
+         insert_node(x, s, probe_node_id(r, n.face, n.level + 1, n.x / 2, n.y / 2));
+         return true;
+       },
+       "also listed (the nodes overlap)"},
+      {"a node's face root listed too",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!first_node(x, s)) return false;
+         const QuadNode n = quad_node(r, x.vis_nodes[x.vis_offsets[s]]);
+         if ((r >> n.level) == 1) return false;
+         insert_node(x, s, probe_node_id(r, n.face, std::countr_zero(unsigned(r)), 0, 0));
+         return true;
+       },
+       "also listed (the nodes overlap)"},
+      {"a node's child listed too",
+       [&](ProbeTransfer& x, std::size_t s) {
+         for (std::uint64_t i = x.vis_offsets[s]; i < x.vis_offsets[s + 1]; ++i) {
+           const QuadNode n = quad_node(r, x.vis_nodes[i]);
+           if (n.level == 0) continue;
+           insert_node(x, s, probe_node_id(r, n.face, n.level - 1, 2 * n.x + 1, 2 * n.y));
+           return true;
+         }
+         return false;
+       },
+       "also listed (the nodes overlap)"},
+      {"a partial texel on a seventh face (id % per_face is a finest texel)",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!first_partial(x, s)) return false;
+         std::uint16_t& id = x.partial_nodes[x.partial_offsets[s]];
+         id = std::uint16_t(6 * per_face + id % per_face);
+         return true;
+       },
+       "is past the cube's nodes"},
+      {"a partial texel that is a node above the finest level",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!first_partial(x, s)) return false;
+         std::uint16_t& id = x.partial_nodes[x.partial_offsets[s]];
+         id = probe_node_id(r, quad_node(r, id).face, 1, 0, 0);
+         return true;
+       },
+       "is not a finest texel"},
+      {"a partial texel id of 65535",
+       [&](ProbeTransfer& x, std::size_t s) {
+         return first_partial(x, s) && (x.partial_nodes[x.partial_offsets[s]] = 0xffff, true);
+       },
+       "is past the cube's nodes"},
+      {"a partial mask of 0",
+       [&](ProbeTransfer& x, std::size_t s) { return first_partial(x, s) && (x.partial_mask[x.partial_offsets[s]] = 0, true); },
+       "has sub-texel mask 0x0000"},
+      {"a partial mask of all 16 sub-texels",
+       [&](ProbeTransfer& x, std::size_t s) {
+         return first_partial(x, s) && (x.partial_mask[x.partial_offsets[s]] = 0xffff, true);
+       },
+       "has sub-texel mask 0xffff"},
+      {"a partial texel listed twice",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!first_partial(x, s)) return false;
+         insert_partial(x, s, x.partial_nodes[x.partial_offsets[s]], 0x00f0);
+         return true;
+       },
+       "is listed twice"},
+      {"a partial texel inside a visible node",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (x.vis_complement[s] || !first_node(x, s)) return false;
+         const QuadNode n = quad_node(r, x.vis_nodes[x.vis_offsets[s]]);
+         insert_partial(x, s, probe_node_id(r, n.face, 0, n.x << n.level, n.y << n.level), 0x0001);
+         return true;
+       },
+       "lies inside visibility node"},
+      {"a partial texel outside every blocked node (complement)",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!x.vis_complement[s]) return false;
+         for (int face = 0; face < 6; ++face)
+           for (int v = 0; v < r; ++v)
+             for (int u = 0; u < r; ++u)
+               if (!texel_listed(x, s, face, u, v)) {
+                 bool partial_there = false;
+                 for (std::uint64_t i = x.partial_offsets[s]; i < x.partial_offsets[s + 1]; ++i)
+                   partial_there |= x.partial_nodes[i] == probe_node_id(r, face, 0, u, v);
+                 if (partial_there) continue;
+                 insert_partial(x, s, probe_node_id(r, face, 0, u, v), 0x8000);
+                 return true;
+               }
+         return false;
+       },
+       "lies inside none of its blocked nodes"},
+      {"the complement flag flipped where partial texels lie outside the visible nodes",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (x.vis_complement[s] || !first_partial(x, s)) return false;
+         x.vis_complement[s] = 1;
+         return true;
+       },
+       "lies inside none of its blocked nodes"},
+      {"the complement flag cleared where partial texels lie inside the blocked nodes",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (!x.vis_complement[s] || !first_partial(x, s)) return false;
+         x.vis_complement[s] = 0;
+         return true;
+       },
+       "lies inside visibility node"},
+      {"a complement flag of 2", [&](ProbeTransfer& x, std::size_t s) { return (x.vis_complement[s] = 2, true); },
+       "complement flag not 0 or 1"},
+      {"a node offset past the node count",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.vis_offsets[s + 1] = x.vis_nodes.size() + 1, true); },
+       "visibility node offsets"},
+      {"a node offset that goes back",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (x.vis_offsets[s + 1] == 0 || s + 2 >= x.vis_offsets.size()) return false;
+         x.vis_offsets[s + 1] = x.vis_offsets[s + 2] + 1;
+         return true;
+       },
+       "visibility node offsets"},
+      {"a partial offset past the texel count",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.partial_offsets[s + 1] = x.partial_nodes.size() + 7, true); },
+       "partial texel offsets"},
+      {"a partial offset that goes back",
+       [&](ProbeTransfer& x, std::size_t s) {
+         if (s + 2 >= x.partial_offsets.size()) return false;
+         x.partial_offsets[s + 1] = x.partial_offsets[s + 2] + 1;
+         return true;
+       },
+       "partial texel offsets"},
+      {"a stored probe marked sky (the counts no longer match)",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.state[probe_of_slot(x, s)] = ProbeState::Sky, true); },
+       "do not match"},
+      {"a probe's state 3",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.state[probe_of_slot(x, s)] = ProbeState(3), true); },
+       "has an unknown state 3"},
+      {"a probe's position NaN",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.positions[probe_of_slot(x, s)].y = NAN, true); }, "position"},
+      {"a probe's position 1e30",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.positions[probe_of_slot(x, s)].z = 1e30f, true); }, "position"},
+      {"a bounce value NaN",
+       [&](ProbeTransfer& x, std::size_t s) { return (x.bounce[s * x.bounce_floats_per_probe() + 1] = NAN, true); },
+       "bounce matrix value is not finite"},
+      {"a probe's depth moments cut short",
+       [&](ProbeTransfer& x, std::size_t s) {
+         x.depth.erase(x.depth.begin() + std::ptrdiff_t(s * 2 * std::size_t(x.depth_res) * x.depth_res));
+         return true;
+       },
+       "depth values"},
+  };
+  for (const Damage& d : damages) {
+    std::size_t applied = 0;
+    for (std::size_t s = 0; s < t.stored(); ++s) {
+      ProbeTransfer x = t;
+      if (!d.apply(x, s)) continue;
+      ++applied;
+      const std::string m = read_problem(dir, probe_file_bytes(x));
+      EXPECT_NE(m.find(d.expect), std::string::npos) << d.what << " at stored probe " << s << ": " << (m.empty() ? "loaded" : m);
+    }
+    EXPECT_GE(applied, 1u) << d.what << ": applies to no probe of the volume";
+  }
+  // The header's values the arrays depend on.
+  const std::vector<std::pair<std::function<void(ProbeTransfer&)>, const char*>> header = {
+      {[](ProbeTransfer& x) { x.cube_res = 4; }, "probe"},  // its ids now past a 4^2 cube's 126, or not finest
+      {[](ProbeTransfer& x) { x.cube_res = 16; }, "probe"},  // ids of the 8^2 cube mean other nodes: overlaps, texels not finest
+      {[](ProbeTransfer& x) { x.cube_res = 6; }, "visibility cube size 6"},
+      {[](ProbeTransfer& x) { x.cube_res = 128; }, "visibility cube size 128"},
+      {[](ProbeTransfer& x) { x.grid.min.x = -1e13; }, "beyond prt's coordinate limit"},
+      {[](ProbeTransfer& x) { x.grid.max.y = std::numeric_limits<double>::infinity(); }, "the grid's box is not finite"},
+      {[](ProbeTransfer& x) { x.grid.max.z = x.grid.min.z - 1; }, "the grid's box is not finite"},
+      {[](ProbeTransfer& x) { x.grid.dims[1] = 4; }, "one entry per probe"},
+      {[](ProbeTransfer& x) { x.depth_cap = 0; }, "depth cap 0"},
+      {[](ProbeTransfer& x) { x.depth_cap = NAN; }, "depth cap nan"},
+      {[](ProbeTransfer& x) { x.depth_cap = 1e30f; }, "depth cap 1e+30"},
+      {[](ProbeTransfer& x) { x.depth_res = 9; }, "depth values"},
+      {[](ProbeTransfer& x) { x.bounce_bands = 3; }, "bounce values"},
+      {[](ProbeTransfer& x) { x.channels = 3; }, "bounce values"},
+      {[](ProbeTransfer& x) { x.bands = 9; }, "output bands"},
+  };
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    ProbeTransfer x = t;
+    header[i].first(x);
+    const std::string m = read_problem(dir, probe_file_bytes(x));
+    EXPECT_NE(m.find(header[i].second), std::string::npos) << "header damage " << i << ": " << (m.empty() ? "loaded" : m);
+  }
+}
+
+TEST(ProbeFile, WhatPrtWritesLoads) {
+  // Nothing prt writes is refused: volumes of every cube size, both modes,
+  // 1, 3 and 5 bands, one ray and 9 rays a base texel, over three scenes
+  // that give sky, stored and invalid probes, nodes of both kinds and
+  // partial texels; each written and read back as it was.
+  const Scene box = floor_and_closed_box();
+  test::SceneBuilder b;
+  b.quad({-1, 0, 1}, {1, 0, 1}, {1, 0, -1}, {-1, 0, -1}, {0, 0, 1, 1});
+  b.end_object();
+  b.box({-0.3f, 0.0f, -0.3f}, {0.3f, 0.5f, 0.3f}, 1, 4);
+  b.end_object();
+  b.box({0.4f, 0.2f, 0.4f}, {0.9f, 0.3f, 0.9f}, 1, 4);  // a slab in the air: edges seen from below and above
+  const Scene slab = b.build();
+  // Two specks at opposite corners of a 10-unit box and a small closed box
+  // around its centre: sky probes, stored ones and one inside (invalid).
+  test::SceneBuilder c;
+  c.quad({0, 0, 0}, {0.01f, 0, 0}, {0.01f, 0.01f, 0}, {0, 0.01f, 0}, {0, 0, 1, 1});
+  c.end_object();
+  c.quad({10, 10, 10}, {9.99f, 10, 10}, {9.99f, 9.99f, 10}, {10, 9.99f, 10}, {0, 0, 1, 1});
+  c.end_object();
+  c.box({4.4f, 4.4f, 4.4f}, {5.6f, 5.6f, 5.6f}, 1, 4);
+  const Scene specks = c.build();
+  test::TempDir dir;
+  std::size_t complement = 0, plain = 0, partial = 0, invalid = 0, sky = 0;
+  int run = 0;
+  for (const Scene* s : {&box, &slab, &specks})
+    for (int cube : {4, 8, 16, 32, 64}) {
+      ProbeOptions o;
+      o.cube_res = cube;
+      o.seed = std::uint64_t(7 + run);
+      o.bands = run % 3 == 0 ? 1 : run % 3 == 1 ? 3 : 5;
+      o.rays_per_texel = run % 2 ? 9 : 1;
+      if (run % 2) {
+        o.mode = TransferMode::Interreflected;
+        o.bounce_bands = 2;
+      }
+      ++run;
+      const ProbeTransfer t = compute_probe_transfer(*s, probe_grid(s->mesh, {3, 3, 3}), o);
+      EXPECT_EQ(probe_transfer_problem(t), "") << "cube " << cube;
+      const std::string path = dir.file("v" + std::to_string(run) + ".prt");
+      write_probe_transfer(path, t);
+      EXPECT_EQ(test::read_file(path), probe_file_bytes(t));
+      ProbeTransfer r;
+      ASSERT_NO_THROW(r = read_probe_transfer(path)) << path;
+      EXPECT_EQ(r.vis_nodes, t.vis_nodes);
+      EXPECT_EQ(r.partial_nodes, t.partial_nodes);
+      for (std::size_t k = 0; k < t.stored(); ++k) {
+        complement += t.vis_complement[k];
+        plain += !t.vis_complement[k];
+        partial += t.partial_offsets[k + 1] - t.partial_offsets[k];
+      }
+      for (ProbeState st : t.state) {
+        invalid += st == ProbeState::Invalid;
+        sky += st == ProbeState::Sky;
+      }
+    }
+  EXPECT_GT(complement, 0u);
+  EXPECT_GT(plain, 0u);
+  EXPECT_GT(partial, 0u);
+  EXPECT_GT(invalid, 0u);
+  EXPECT_GT(sky, 0u);
+}
+
+TEST(ProbeFile, QuadtreesBuiltAsPrtBuildsThemPass) {
+  // The validator against the writer's rule on random cubes, every size:
+  // visible texels set, edge texels (partial, any mask but 0 and all) left
+  // clear, the nodes from probe_visibility_nodes (visible ones or, when
+  // fewer, blocked ones: both happen here). Every such probe passes; the
+  // same probe with one of its nodes' children added does not.
+  std::mt19937 gen(11);
+  int complements = 0, plains = 0;
+  for (int r : {4, 8, 16, 32, 64})
+    for (int trial = 0; trial < 24; ++trial) {
+      std::vector<std::uint32_t> bits((6 * std::size_t(r) * r + 31) / 32, 0u);
+      ProbeTransfer t;
+      t.grid.dims = {2, 2, 2};
+      t.cube_res = r;
+      t.depth_res = 2;
+      t.depth_cap = 1;
+      t.state.assign(8, ProbeState::Sky);
+      t.state[3] = ProbeState::Stored;
+      t.positions.assign(8, glm::vec3(0.5f));
+      t.depth.assign(8, 0);
+      // Blobs (of either kind, against a background of either kind), their rims partial.
+      const bool background = trial % 2;
+      const int cx = int(gen() % unsigned(r)), cy = int(gen() % unsigned(r)), rad = int(gen() % unsigned(r));
+      for (int face = 0; face < 6; ++face)
+        for (int v = 0; v < r; ++v)
+          for (int u = 0; u < r; ++u) {
+            const int d2 = (u - cx) * (u - cx) + (v - cy) * (v - cy);
+            const bool in_blob = face == trial % 6 && d2 < rad * rad;
+            const bool rim = face == trial % 6 && std::abs(std::sqrt(double(d2)) - rad) < 0.8;
+            if (rim && gen() % 4 != 0) {
+              t.partial_nodes.push_back(probe_node_id(r, face, 0, u, v));
+              t.partial_mask.push_back(std::uint16_t(1 + gen() % 0xfffe));
+            } else if (in_blob != background) {
+              const std::size_t i = (std::size_t(face) * r + std::size_t(v)) * r + std::size_t(u);
+              bits[i >> 5] |= 1u << (i & 31);
+            }
+          }
+      bool complement = false;
+      t.vis_nodes = probe_visibility_nodes(bits, r, complement);
+      t.vis_complement = {std::uint8_t(complement)};
+      t.vis_offsets = {0, t.vis_nodes.size()};
+      t.partial_offsets = {0, t.partial_nodes.size()};
+      (complement ? complements : plains) += 1;
+      EXPECT_EQ(probe_transfer_problem(t), "") << "r " << r << " trial " << trial;
+      for (std::size_t i = 0; i < t.vis_nodes.size(); ++i) {
+        const QuadNode n = quad_node(r, t.vis_nodes[i]);
+        if (n.level == 0) continue;
+        ProbeTransfer x = t;
+        insert_node(x, 0, probe_node_id(r, n.face, n.level - 1, 2 * n.x, 2 * n.y + 1));
+        EXPECT_NE(probe_transfer_problem(x).find("overlap"), std::string::npos) << "r " << r << " trial " << trial;
+        break;
+      }
+    }
+  EXPECT_GT(complements, 0);
+  EXPECT_GT(plains, 0);
 }
 
 TEST(ProbeFile, RoundTripsAndRefusesDamage) {

@@ -4,6 +4,7 @@
 #include "test_files.h"
 #include "test_meshes.h"
 
+#include <prt/hash.h>
 #include <prt/probes.h>
 #include <prt/sh_convention.h>
 #include <prt/vertex_csv.h>
@@ -14,8 +15,12 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <functional>
 #include <string>
+#include <vector>
 
 namespace prt {
 namespace {
@@ -195,6 +200,152 @@ TEST(ProbesCli, RefusalsNameTheProblem) {
   r = run_prt(dir, {"relight", kRoom, dir.file("d.prt"), kStudio, "--at", dir.file("points.csv"), "-o", dir.file("o.csv")});
   EXPECT_EQ(r.code, 1) << describe_run(r);
   EXPECT_NE(r.err.find("checksum"), std::string::npos) << r.err;
+}
+
+// Query points (--at) are ray origins: coordinates past kMaxCoordinate (the
+// mesh readers' 1e12) aborted inside Embree (exit 134); read_points_csv now
+// refuses them as the mesh readers refuse such vertices, naming the file,
+// line and point, for every command that reads points. A normal of any
+// finite scale is its direction (1e200 overflowed its length: a zero normal).
+TEST(ProbesCli, QueryPointsBeyondTheCoordinateLimitAreRefused) {
+  TempDir dir;
+  ASSERT_EQ(run_prt(dir, {"precompute", kRoom, "--probes", "3x3x3", "-q", "-o", dir.file("p.prt")}).code, 0);
+  struct Bad {
+    std::string line, message;
+  };
+  const std::vector<Bad> bad = {
+      {"1e13,1,0,0,1,0",
+       "point 1 (1e+13, 1, 0) has a coordinate beyond prt's limit of 1e+12 (|x|, |y|, |z| <= 1e+12 in scene units, "
+       "as for a mesh's vertices: float ray tracing breaks down past it)"},
+      {"0,-1e30,0,0,1,0", "point 1 (0, -1e+30, 0) has a coordinate beyond prt's limit of 1e+12"},
+      {"0,1,1e300,0,1,0", "point 1 (0, 1, 1e+300) has a coordinate beyond prt's limit of 1e+12"},
+      {"0,1,1e999,0,1,0", "field 3 '1e999' is not a finite number"},
+      {"nan,1,0,0,1,0", "field 1 'nan' is not a finite number"},
+      {"0,inf,0,0,1,0", "field 2 'inf' is not a finite number"},
+  };
+  for (const Bad& b : bad) {
+    write_file(dir.file("far.csv"), "x,y,z,nx,ny,nz\n0,1,0,0,1,0\n" + b.line + "\n");
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"relight", kRoom, dir.file("p.prt"), kStudio, "--at", dir.file("far.csv"), "-o",
+                                   dir.file("o.csv")},
+          std::vector<std::string>{"reference", kRoom, kStudio, "--at", dir.file("far.csv"), "--samples", "4", "-o",
+                                   dir.file("o.csv")}}) {
+      const Result r = run_prt(dir, args);
+      EXPECT_EQ(r.code, 1) << args[0] << " " << b.line << "\n" << describe_run(r);
+      EXPECT_NE(r.err.find("error: " + dir.file("far.csv") + ":3: " + b.message), std::string::npos)
+          << args[0] << " " << b.line << "\n" << r.err;
+      EXPECT_FALSE(std::filesystem::exists(dir.file("o.csv")));
+    }
+  }
+  // At the limit, and normals of any scale: taken, the normals as their directions.
+  write_file(dir.file("edge.csv"), "x,y,z,nx,ny,nz\n1e12,1,-1e12,0,1,0\n0,1,0,0,1,0\n0,1,0,0,1e200,0\n0,1,0,0,1e-200,0\n");
+  Result r = run_prt(dir, {"relight", kRoom, dir.file("p.prt"), kStudio, "--at", dir.file("edge.csv"), "-o",
+                           dir.file("edge_relit.csv"), "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::vector<glm::vec3> relit = read_vertex_csv(dir.file("edge_relit.csv"));
+  ASSERT_EQ(relit.size(), 4u);
+  EXPECT_EQ(relit[2], relit[1]);
+  EXPECT_EQ(relit[3], relit[1]);
+  EXPECT_GT(relit[1].y, 0.0f);
+  r = run_prt(dir, {"reference", kRoom, kStudio, "--at", dir.file("edge.csv"), "--samples", "4", "-q", "-o",
+                    dir.file("edge_ref.csv")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_EQ(read_vertex_csv(dir.file("edge_ref.csv")).size(), 4u);
+}
+
+// Where each array of a probe file starts (its u64 count; docs/FORMAT.md
+// "Probe volume"): the header is 124 bytes, then state (1 byte each),
+// positions (12), visibility nodes (2), node offsets (8), complement flags
+// (1), partial texels (2), their masks (2), ...
+std::vector<std::size_t> probe_array_offsets(const std::string& bytes) {
+  const std::size_t sizes[] = {1, 12, 2, 8, 1, 2, 2, 8, 2, 4};
+  std::vector<std::size_t> at;
+  std::size_t p = 124;
+  for (std::size_t size : sizes) {
+    at.push_back(p);
+    std::uint64_t n = 0;
+    std::memcpy(&n, bytes.data() + p, 8);
+    p += 8 + std::size_t(n) * size;
+  }
+  return at;
+}
+
+TEST(ProbesCli, DamagedQuadtreesAreRefusedNotCrashedOn) {
+  // A probe file with a damaged visibility quadtree and its checksum
+  // recomputed (XXH3-64 of the bytes before the last 12): a partial texel
+  // on a seventh face (was SIGSEGV in prt relight and prt export --probes),
+  // a node listed with its face's root (was read, the light counted twice),
+  // a partial texel's mask 0. prt relight --at, prt export --probes and
+  // prt info refuse each: exit 1, the file and the problem named, nothing
+  // written.
+  TempDir dir;
+  ASSERT_EQ(run_prt(dir, {"precompute", kRoom, "--probes", "3x3x3", "--probe-cube", "8", "-q", "-o", dir.file("p.prt")}).code, 0);
+  const std::string good = read_file(dir.file("p.prt"));
+  const std::vector<std::size_t> at = probe_array_offsets(good);
+  const auto u16 = [](std::string& b, std::size_t pos) -> std::uint16_t {
+    std::uint16_t v;
+    std::memcpy(&v, b.data() + pos, 2);
+    return v;
+  };
+  const auto set_u16 = [](std::string& b, std::size_t pos, std::uint16_t v) { std::memcpy(b.data() + pos, &v, 2); };
+  const auto count = [&](int array) {
+    std::uint64_t n = 0;
+    std::memcpy(&n, good.data() + at[std::size_t(array)], 8);
+    return n;
+  };
+  ASSERT_GT(count(2), 0u);  // visibility nodes
+  ASSERT_GT(count(5), 0u);  // partial texels
+  const std::uint16_t per_face = (4 * 8 * 8 - 1) / 3;
+  struct Case {
+    std::string name, expect;
+    std::function<void(std::string&)> damage;
+  };
+  const std::vector<Case> cases = {
+      {"seventh-face.prt", "is past the cube's nodes",
+       [&](std::string& b) {
+         const std::size_t pos = at[5] + 8;
+         set_u16(b, pos, std::uint16_t(6 * per_face + u16(b, pos) % per_face));
+       }},
+      {"overlap.prt", "also listed (the nodes overlap)",
+       [&](std::string& b) {
+         // In the first probe with two nodes or more: its second node
+         // becomes the first one's face root (or, when the first is that
+         // root, one of the root's children).
+         std::size_t first = SIZE_MAX;
+         for (std::size_t s = 0; s + 1 < count(3) && first == SIZE_MAX; ++s) {
+           std::uint64_t o[2];
+           std::memcpy(o, b.data() + at[3] + 8 + 8 * s, 16);
+           if (o[1] >= o[0] + 2) first = std::size_t(o[0]);
+         }
+         ASSERT_NE(first, SIZE_MAX) << "no probe with two nodes";
+         const std::size_t pos = at[2] + 8 + 2 * first;
+         const std::uint16_t root = std::uint16_t((u16(b, pos) / per_face + 1) * per_face - 1);
+         set_u16(b, pos + 2, root == u16(b, pos) ? std::uint16_t(root - 1) : root);
+       }},
+      {"mask-zero.prt", "has sub-texel mask 0x0000", [&](std::string& b) { set_u16(b, at[6] + 8, 0); }},
+  };
+  write_file(dir.file("points.csv"), "x,y,z,nx,ny,nz\n0,1,0,0,1,0\n");
+  for (const Case& c : cases) {
+    std::string bytes = good;
+    c.damage(bytes);
+    const std::uint64_t h = hash64(bytes.data(), bytes.size() - 12);
+    std::memcpy(bytes.data() + bytes.size() - 12, &h, 8);
+    const std::string path = dir.file(c.name);
+    write_file(path, bytes);
+    const std::vector<std::vector<std::string>> commands = {
+        {"relight", kRoom, path, kSunset, "--at", dir.file("points.csv"), "-o", dir.file("o.csv")},
+        {"export", kRoom, "--probes", path, "--bake", kSunset, "-o", dir.file("o.json")},
+        {"info", path},
+    };
+    for (const std::vector<std::string>& args : commands) {
+      const Result r = run_prt(dir, args);
+      EXPECT_EQ(r.code, 1) << c.name << " " << args[0] << ": " << describe_run(r);
+      EXPECT_NE(r.err.find(path + ": inconsistent probe volume: probe "), std::string::npos) << c.name << ": " << r.err;
+      EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.name << ": " << r.err;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir.file("o.csv")));
+    EXPECT_FALSE(std::filesystem::exists(dir.file("o.json")));
+  }
 }
 
 }  // namespace

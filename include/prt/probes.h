@@ -70,15 +70,27 @@ struct ProbeGrid {
 };
 
 inline constexpr int kMaxProbeDim = 1024;
+// Diffuse bounces an interreflected volume traces (prt precompute --probes --bounces).
+inline constexpr int kMaxProbeBounces = 8;
 inline constexpr std::size_t kMaxProbes = std::size_t(1) << 24;
+// The most environment bands a probe's SH transfer matrix takes
+// (probe_sh_matrices; prt export --matrix-bands).
+inline constexpr int kMaxProbeMatrixBands = 16;
 // Below this total weight a query's light fades to 0 (docs/PROBES.md, "Leaks").
 inline constexpr double kProbeMinWeight = 0.05;
 
+// The one rule of a grid's dimensions: each of NX, NY, NZ from 2 to
+// kMaxProbeDim, and NX x NY x NZ at most kMaxProbes. Empty when `dims` keep
+// it, else what breaks it and the rule ("NX is 0; each of NX, NY, NZ must be
+// 2 to 1024, and NX x NY x NZ at most 16777216"). parse_probe_dims,
+// probe_grid and compute_probe_transfer refuse by it, before allocating.
+std::string probe_dims_problem(const std::array<int, 3>& dims);
 // "NXxNYxNZ" -> dims, each 2..kMaxProbeDim, at most kMaxProbes in all.
 // Throws prt::Error with the rule.
 std::array<int, 3> parse_probe_dims(std::string_view text);
 // The grid over `mesh`'s bounding box (a flat box keeps its thickness 0:
 // the probes of that axis coincide; precompute moves probes off surfaces).
+// Throws prt::Error for dims that break probe_dims_problem's rule.
 ProbeGrid probe_grid(const Mesh& mesh, const std::array<int, 3>& dims);
 
 enum class ProbeState : std::uint8_t {
@@ -140,7 +152,12 @@ std::uint16_t probe_node_id(int r, int face, int level, int x, int y);
 // clear ones (whichever list is shorter): what ProbeTransfer stores.
 std::vector<std::uint16_t> probe_visibility_nodes(std::span<const std::uint32_t> bits, int r, bool& complement);
 
-// What is wrong with `t` (sizes, ranges, finite values), or "".
+// What is wrong with `t` (sizes, ranges, finite values, and each stored
+// probe's quadtree: node and partial texel ids inside the cube, nodes
+// disjoint, partial texels once each, masks of 1 to 15 sub-texels, in the
+// cube's clear region; docs/FORMAT.md "Probe volume"), naming the probe, or
+// "". Whatever passes is safe for every consumer (ProbeRelighter,
+// probe_sh_matrices, probe_weights, the GPU pass). Linear in the arrays.
 std::string probe_transfer_problem(const ProbeTransfer& t);
 
 // Files (docs/FORMAT.md "Probe volume"): write through a temporary file and
