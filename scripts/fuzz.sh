@@ -20,11 +20,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-ALL_TARGETS=(off ply obj stl gltf glb exr hdr transfer csv)
+ALL_TARGETS=(off ply obj stl gltf glb scene exr hdr transfer csv probes)
 # Longest input per target, bytes: a few times the largest seed, and small
 # enough that each run stays fast. The committed corpus keeps to these.
-declare -A MAX_LEN=([off]=8192 [ply]=8192 [obj]=8192 [stl]=8192 [gltf]=4096 [glb]=4096
-                    [exr]=16384 [hdr]=8192 [transfer]=16384 [csv]=4096)
+declare -A MAX_LEN=([off]=8192 [ply]=8192 [obj]=8192 [stl]=8192 [gltf]=4096 [glb]=4096 [scene]=4096
+                    [exr]=16384 [hdr]=8192 [transfer]=16384 [csv]=4096 [probes]=16384)
 # Every run: 10 s per input, 2 GiB of memory, 512 MiB in one allocation (a
 # header that makes a library allocate what it declares is found at once).
 LIMITS=(-timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=512)

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -46,7 +47,7 @@ inline std::string scratch_path(const std::string& name) {
       std::filesystem::remove(p, e);
     }
   };
-  static std::vector<Remover> removers;  // one per name
+  static std::deque<Remover> removers;  // one per name (a deque: growing it moves no Remover, which would delete the file)
   bool known = false;
   for (const Remover& r : removers) known |= r.p == path;
   if (!known) removers.push_back({path});

@@ -5,8 +5,9 @@ Usage: make_seeds.py OUT_DIR PRT_EXE
 
 Makes OUT_DIR/<target>/seed-* for every target: small meshes in each format
 (written here), maps (with oiiotool), transfer files of both bases (with
-`PRT_EXE precompute` on a tiny mesh) and vertex CSVs (`PRT_EXE relight` and
-`PRT_EXE reference`). scripts/fuzz.sh --seeds merges them into corpus/;
+`PRT_EXE precompute` on a tiny mesh), vertex CSVs (`PRT_EXE relight` and
+`PRT_EXE reference`) and probe volumes (`PRT_EXE precompute --probes`, and
+damaged copies of one). scripts/fuzz.sh --seeds merges them into corpus/;
 they are kept there only if they add coverage.
 """
 import base64
@@ -173,6 +174,49 @@ def gltf_seeds(out):
         write(out, "glb", name + ".glb", struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
 
 
+# A 2 x 2 RGB PNG (the scene seeds' base colour texture).
+PNG_2X2 = ("iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAIAAAD91JpzAAAAFklEQVR4nGP43+CgIMDBIKBg4BCQAAAbUQNIoSgmuAAAAABJRU5ErkJggg==")
+
+
+def scene_seeds(out):
+    """Scenes for load_scene: a textured quad with two UV sets under a node tree (TRS, a matrix, a camera, a
+    morph target), and the two-mesh glTF with a material per mesh."""
+    pos = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+    buf = b"".join(struct.pack("<3f", *p) for p in pos) + struct.pack("<12f", *([0, 0, 1] * 4))
+    buf += struct.pack("<8f", 0, 1, 1, 1, 1, 0, 0, 0) + struct.pack("<8f", 0.1, 0.9, 0.9, 0.9, 0.9, 0.1, 0.1, 0.1)
+    buf += struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    views = [(0, 48), (48, 48), (96, 32), (128, 32), (160, 12)]
+    quad = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"children": [1, 2], "translation": [0, 0, 1], "rotation": [0, 0, 0, 1], "scale": [1, 1, 1]},
+                  {"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}, {"camera": 0}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "meshes": [{"weights": [0.0], "primitives": [{
+            "attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2, "TEXCOORD_1": 3}, "indices": 4, "material": 0,
+            "targets": [{"POSITION": 1}]}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0.5, 1],
+                                                "baseColorTexture": {"index": 0, "texCoord": 1}}}],
+        "textures": [{"sampler": 0, "source": 0}],
+        "samplers": [{"magFilter": 9729, "wrapS": 33071}],
+        "images": [{"uri": "data:image/png;base64," + PNG_2X2}],
+        "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": o, "byteLength": n} for o, n in views],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+    }
+    write(out, "scene", "quad.gltf", json.dumps(quad, separators=(",", ":")))
+    j, buf = gltf_parts(True)
+    j["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    j["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.6, 1]}}, {"doubleSided": True}]
+    j["meshes"][0]["primitives"][0]["material"] = 0
+    j["meshes"][1]["primitives"][0]["material"] = 1
+    write(out, "scene", "two-meshes.gltf", json.dumps(j, separators=(",", ":")))
+
+
 def image_seeds(out, tmp):
     def oiio(name, target, *args):
         f = tmp / name
@@ -282,6 +326,124 @@ def transfer_seeds(out, tmp, prt):
     return mesh, tmp / "shadowed-b3.prt"
 
 
+# The probe file's arrays in order (docs/FORMAT.md "Probe volume"): name, struct code.
+PROBE_ARRAYS = [("state", "B"), ("positions", "3f"), ("vis_nodes", "H"), ("vis_offsets", "Q"),
+                ("vis_complement", "B"), ("partial_nodes", "H"), ("partial_mask", "H"),
+                ("partial_offsets", "Q"), ("depth", "H"), ("bounce", "f")]
+PROBE_HEADER = 8 + 4 + 12 + 48 + 32 + 16 + 4  # signature to depth cap
+
+
+def probe_arrays(data):
+    """(header bytes, {name: list}) of a probe file (positions as flat floats)."""
+    at, arrays = PROBE_HEADER, {}
+    for name, code in PROBE_ARRAYS:
+        (n,) = struct.unpack_from("<Q", data, at)
+        at += 8
+        fmt = "<%d%s" % (3 * n if code == "3f" else n, code[-1])
+        arrays[name] = list(struct.unpack_from(fmt, data, at))
+        at += struct.calcsize(fmt)
+    return data[:PROBE_HEADER], arrays
+
+
+def probe_file(header, arrays):
+    """The probe file of header and arrays; the trailer's checksum is left 0: the
+    probes target writes the right one into inputs that end in PRTE."""
+    b = bytearray(header)
+    for name, code in PROBE_ARRAYS:
+        v = arrays[name]
+        n = len(v) // 3 if code == "3f" else len(v)
+        b += struct.pack("<Q", n) + struct.pack("<%d%s" % (len(v), code[-1]), *v)
+    return bytes(b) + struct.pack("<Q", 0) + b"PRTE"
+
+
+def probe_seeds(out, tmp, prt, mesh):
+    """Probe volumes of the tiny mesh (prt precompute --probes), and damaged
+    copies: each kind of bad index or structure the reader must refuse."""
+    runs = {
+        "probes-shadowed-c4": ["--probes", "2x2x2", "--probe-cube", "4"],
+        "probes-b2-c8": ["--probes", "3x2x3", "--probe-cube", "8", "--bands", "2", "--samples", "24"],
+        "probes-interreflected-colour": ["--probes", "2x2x2", "--probe-cube", "4", "--mode", "interreflected",
+                                         "--bounce-bands", "2", "--albedo", "0.8,0.5,0.3", "--bands", "1"],
+    }
+    # Sky and invalid probes too: two specks at opposite corners of a 10-unit
+    # box and a small closed box (faces outward) around the grid's centre
+    # probe (3 x 3 x 3: 6 stored, 20 sky, 1 invalid).
+    verts = [(0, 0, 0), (0.01, 0, 0), (0, 0.01, 0), (10, 10, 10), (9.99, 10, 10), (10, 9.99, 10)]
+    faces = [(0, 1, 2), (3, 5, 4)]
+    verts += [(5 + x, 5 + y, 5 + z) for z in (-0.6, 0.6) for y in (-0.6, 0.6) for x in (-0.6, 0.6)]
+    for a, b, c, d in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
+        faces += [(6 + a, 6 + b, 6 + c), (6 + a, 6 + c, 6 + d)]
+    specks = tmp / "specks.off"
+    specks.write_text("OFF\n%d %d 0\n" % (len(verts), len(faces)) + "".join("%g %g %g\n" % v for v in verts) +
+                      "".join("3 %d %d %d\n" % f for f in faces))
+    files = {}
+    for name, args in list(runs.items()) + [("probes-sky-invalid", ["--probes", "3x3x3", "--probe-cube", "4"])]:
+        f = tmp / (name + ".prt")
+        scene = specks if name == "probes-sky-invalid" else mesh
+        subprocess.run([prt, "precompute", str(scene), "-o", str(f), "--threads", "1", "-q", *args], check=True)
+        files[name] = f.read_bytes()
+        write(out, "probes", name + ".prt", files[name])
+    header, a = probe_arrays(files["probes-shadowed-c4"])
+    r = struct.unpack_from("<i", header, 76)[0]  # cube_res: after the signature, version, dims, box and bands
+    per_face = (4 * r * r - 1) // 3
+    stored = len(a["vis_offsets"]) - 1
+
+    def damaged(name, change):
+        b = {k: list(v) for k, v in a.items()}
+        change(b)
+        write(out, "probes", "damaged-" + name + ".prt", probe_file(header, b))
+
+    def first(b, kind):  # the first stored probe with an entry of kind ('vis' or 'partial'): its range
+        offsets = b[kind + "_offsets"]
+        for s in range(stored):
+            if offsets[s + 1] > offsets[s]:
+                return s, offsets[s], offsets[s + 1]
+        raise RuntimeError("no probe with " + kind + " entries: pick another seed volume")
+
+    def insert(b, kind, s, values):
+        arrays = ["vis_nodes"] if kind == "vis" else ["partial_nodes", "partial_mask"]
+        at = b[kind + "_offsets"][s + 1]
+        for arr, v in zip(arrays, values):
+            b[arr][at:at] = [v]
+        for k in range(s + 1, stored + 1):
+            b[kind + "_offsets"][k] += 1
+
+    def node_past_count(b):
+        b["vis_nodes"][first(b, "vis")[1]] = 6 * per_face
+
+    def partial_seventh_face(b):
+        i = first(b, "partial")[1]
+        b["partial_nodes"][i] = 6 * per_face + b["partial_nodes"][i] % per_face
+
+    def node_twice(b):
+        s, i, _ = first(b, "vis")
+        insert(b, "vis", s, [b["vis_nodes"][i]])
+
+    def face_root_too(b):
+        s, i, _ = first(b, "vis")
+        insert(b, "vis", s, [(b["vis_nodes"][i] // per_face + 1) * per_face - 1])  # the face's last node: its root
+
+    def partial_mask_zero(b):
+        b["partial_mask"][first(b, "partial")[1]] = 0
+
+    def partial_not_finest(b):
+        i = first(b, "partial")[1]
+        b["partial_nodes"][i] = b["partial_nodes"][i] // per_face * per_face + r * r
+
+    def complement_flipped(b):
+        s = first(b, "partial")[0]
+        b["vis_complement"][s] ^= 1
+
+    def offset_past_count(b):
+        b["vis_offsets"][1] = len(b["vis_nodes"]) + 5
+
+    for name, change in (("node-past-count", node_past_count), ("partial-seventh-face", partial_seventh_face),
+                         ("node-twice", node_twice), ("node-and-face-root", face_root_too),
+                         ("partial-mask-zero", partial_mask_zero), ("partial-not-finest", partial_not_finest),
+                         ("complement-flipped", complement_flipped), ("offset-past-count", offset_past_count)):
+        damaged(name, change)
+
+
 def csv_seeds(out, tmp, prt, mesh, transfer):
     env = tmp / "env.exr"
     subprocess.run(["oiiotool", "--pattern", "constant:color=1,0.5,0.25", "16x8", "3", "-d", "float", "-o", str(env)],
@@ -307,9 +469,11 @@ def main():
         obj_seeds(out)
         stl_seeds(out)
         gltf_seeds(out)
+        scene_seeds(out)
         image_seeds(out, tmp)
         mesh, transfer = transfer_seeds(out, tmp, prt)
         csv_seeds(out, tmp, prt, mesh, transfer)
+        probe_seeds(out, tmp, prt, mesh)
 
 
 if __name__ == "__main__":
