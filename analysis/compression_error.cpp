@@ -313,6 +313,8 @@ CompressionChoice choose_compression(const Transfer& t, const Mesh& mesh, const 
   if (auto p = transfer_problem(t); !p.empty()) throw Error("compress: " + p);
   if (o.weight_bits != 16 && o.weight_bits != 32) throw Error(fmt::format("--weights must be 16 or 32, got {}", o.weight_bits));
   if (o.iterations < 1 || o.search_rounds < 1) throw Error("compress: the fits need at least one round");
+  if (o.iterations > kMaxCompressIterations || o.search_rounds > kMaxCompressIterations)
+    throw Error(fmt::format("--iterations must be 1 to {}, got {}", kMaxCompressIterations, o.iterations));
   // The final measure: every lighting and view, on `measure_vertices`
   // vertices (glossy); the search's: fewer rotations and eyes on
   // `search_vertices`.

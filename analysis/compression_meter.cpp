@@ -127,7 +127,19 @@ std::vector<NamedLighting> load_lightings(const std::vector<std::string>& paths,
 
 }  // namespace
 
+namespace {
+
+// The counts of a distribution, before any map is read or lighting made.
+void check_counts(int rotations, int eyes) {
+  if (rotations < 1 || rotations > kMaxErrorRotations)
+    throw Error(fmt::format("--rotations must be 1 to {}, got {}", kMaxErrorRotations, rotations));
+  if (eyes < 1 || eyes > kMaxErrorEyes) throw Error(fmt::format("--eyes must be 1 to {}, got {}", kMaxErrorEyes, eyes));
+}
+
+}  // namespace
+
 ErrorDistribution make_error_distribution(const DistributionSpec& spec, int bands) {
+  check_counts(spec.rotations, spec.eyes);
   ErrorDistribution d;
   const std::vector<std::string> maps = spec.maps.empty() ? bundled_maps() : spec.maps;
   d.maps = load_lightings(maps, bands);
@@ -176,7 +188,7 @@ std::vector<double> band_spectrum(std::span<const glm::dvec3> sh, int bands) {
 
 std::vector<std::vector<glm::dvec3>> distribution_lightings(const ErrorDistribution& d, int bands) {
   if (d.maps.empty()) throw Error("compression error: no lighting to measure it under");
-  if (d.rotations < 1) throw Error(fmt::format("compression error: rotations must be at least 1, got {}", d.rotations));
+  check_counts(d.rotations, d.eyes);
   const std::size_t nc = std::size_t(bands) * bands;
   const auto check_bands = [&](const NamedLighting& m) {
     if (m.sh.size() < nc)

@@ -59,7 +59,7 @@ void validate(const ReportOptions& o) {
   in(o.samples, 1, 1 << 24, "samples");
   in({o.bands_samples, o.bounce_samples}, 1, 1 << 24, "samples");
   in(o.bounces, 0, 64, "bounces");
-  in(o.terms, 1, std::numeric_limits<int>::max(), "wavelet terms");
+  in(o.terms, 1, wavelet::kMaxTerms, "wavelet terms");
   in(o.glossy_bands, 1, kMaxGlossyBands, "glossy bands");
   in({o.glossy_samples, o.glossy_exact_samples}, 1, 1 << 24, "glossy samples");
   for (double e : o.glossy_gloss)

@@ -136,6 +136,27 @@ void StagedWrites::discard() {
   staged_.clear();
 }
 
+bool same_file(const std::string& a, const std::string& b) {
+  namespace fs = std::filesystem;
+  if (a.empty() || b.empty()) return false;
+  std::error_code ea, eb;
+  const bool both = fs::exists(a, ea) && fs::exists(b, eb);
+  if (both) {
+    std::error_code ec;
+    const bool same = fs::equivalent(a, b, ec);
+    if (!ec) return same;
+  }
+  // Normalised: through the symbolic links of the part that exists, "." and ".." resolved.
+  const auto normal = [](const std::string& p) {
+    std::error_code ec;
+    fs::path abs = fs::absolute(p, ec);
+    if (ec) abs = fs::path(p);
+    fs::path canon = fs::weakly_canonical(abs, ec);
+    return (ec ? abs : canon).lexically_normal();
+  };
+  return normal(a) == normal(b);
+}
+
 void check_writable(const std::string& path) {
   namespace fs = std::filesystem;
   const fs::path p(path);

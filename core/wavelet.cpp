@@ -126,7 +126,7 @@ int support_size(int index_in_face, int r) {
 void select_terms(std::span<const float> coeffs, int channels, int r, int K, Selection selection,
                   std::vector<std::uint32_t>& out) {
   check_resolution(r);
-  if (K < 0) throw Error(fmt::format("the number of wavelet terms must be >= 0, got {}", K));
+  if (K < 0 || K > kMaxTerms) throw Error(fmt::format("the number of wavelet terms must be 0 to {}, got {}", kMaxTerms, K));
   PRT_CHECK(channels >= 1);
   const std::size_t n = cube_size(r), rr = std::size_t(r) * r;
   PRT_CHECK_OP(coeffs.size(), >=, n * channels);
@@ -385,7 +385,7 @@ void CubeSplatter::resample(const glm::dmat3& R, std::vector<float>& planar_out)
 FrameLighting::FrameLighting(const EnvMap& map, int cube_res) : splatter_(map, cube_res) {}
 
 void FrameLighting::update(const glm::dmat3& R, int K, Selection selection) {
-  if (K < 0) throw Error(fmt::format("the number of wavelet terms must be >= 0, got {}", K));
+  if (K < 0 || K > kMaxTerms) throw Error(fmt::format("the number of wavelet terms must be 0 to {}, got {}", kMaxTerms, K));
   const int r = splatter_.resolution();
   splatter_.resample(R, coeffs_);
   forward_cube(coeffs_.data(), r, 3);

@@ -472,10 +472,17 @@ Cpca fit_cpca(const CpcaPoints& points, const CpcaOptions& o, const Cpca* start)
 namespace {
 
 void check_options(const CompressOptions& o) {
-  if (o.clusters < 1) throw Error(fmt::format("--clusters must be at least 1, got {}", o.clusters));
-  if (o.vectors < 0) throw Error(fmt::format("--pca must be at least 0, got {}", o.vectors));
-  if (o.glossy_clusters < 0) throw Error(fmt::format("--glossy-clusters must be at least 1, got {}", o.glossy_clusters));
-  if (o.glossy_vectors < -1) throw Error(fmt::format("--glossy-pca must be at least 0, got {}", o.glossy_vectors));
+  if (o.clusters < 1 || o.clusters > kMaxClusters)
+    throw Error(fmt::format("--clusters must be 1 to {}, got {}", kMaxClusters, o.clusters));
+  if (o.vectors < 0 || o.vectors > kMaxVectors)
+    throw Error(fmt::format("--pca must be 0 to {}, got {}", kMaxVectors, o.vectors));
+  // 0 and -1: the glossy matrices take clusters and vectors above.
+  if (o.glossy_clusters < 0 || o.glossy_clusters > kMaxClusters)
+    throw Error(fmt::format("--glossy-clusters must be 1 to {}, got {}", kMaxClusters, o.glossy_clusters));
+  if (o.glossy_vectors < -1 || o.glossy_vectors > kMaxVectors)
+    throw Error(fmt::format("--glossy-pca must be 0 to {}, got {}", kMaxVectors, o.glossy_vectors));
+  if (o.iterations < 1 || o.iterations > kMaxCompressIterations)
+    throw Error(fmt::format("--iterations must be 1 to {}, got {}", kMaxCompressIterations, o.iterations));
   if (o.weight_bits != 32 && o.weight_bits != 16)
     throw Error(fmt::format("--weights must be 32 (float) or 16 bits, got {}", o.weight_bits));
 }

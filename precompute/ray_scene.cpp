@@ -1,6 +1,7 @@
 #include "ray_scene.h"
 
 #include <prt/error.h>
+#include <prt/precompute.h>
 #include <prt/transfer.h>
 
 #include <fmt/format.h>
@@ -45,7 +46,8 @@ void check_common_options(const glm::vec3& albedo, bool vertex_colors, int threa
                               kMaxAlbedo, double(albedo[c])));
   if (vertex_colors && mesh.colors.empty())
     throw Error(mesh.source + ": --vertex-colors given but the mesh has no vertex colours");
-  if (threads < 0) throw Error("--threads must be >= 0");
+  if (threads < 0 || threads > kMaxThreads)
+    throw Error(fmt::format("--threads must be between 0 (every core) and {}, got {}", kMaxThreads, threads));
   check_ray_offset(offset, mesh, "--offset");
 }
 

@@ -6,6 +6,7 @@
 
 #include <prt/error.h>
 #include <prt/glossy.h>
+#include <prt/precompute.h>
 
 #include "progress_ticker.h"
 #include "random.h"
@@ -270,16 +271,19 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o) {
   if (map.width < 1 || map.height < 1 || map.rgb.size() != std::size_t(map.width) * map.height * 3)
     throw Error("reference: " + map.source + ": empty or malformed lat-long map");
   require_finite(map);
-  if (o.samples < 2)
-    throw Error(fmt::format("reference: samples must be at least 2 (the standard error needs two), got {}", o.samples));
+  if (o.samples < 2 || o.samples > kMaxSamples)
+    throw Error(fmt::format("reference: samples must be 2 (the standard error needs two) to {}, got {}", kMaxSamples,
+                            o.samples));
   if (o.mode != TransferMode::Unshadowed && o.mode != TransferMode::Shadowed &&
       o.mode != TransferMode::Interreflected)
     throw Error(fmt::format("reference: unknown transfer mode {}", std::uint32_t(o.mode)));
   if (o.bounces < 0 || o.bounces > kMaxReferenceBounces)
     throw Error(fmt::format("reference: bounces must be from 0 to {}, got {}", kMaxReferenceBounces, o.bounces));
+  // The limits of every transfer's albedo (prt precompute's, transfer_problem's).
   for (int c = 0; c < 3; ++c)
-    if (!std::isfinite(o.albedo[c]) || o.albedo[c] < 0)
-      throw Error("reference: albedo must be finite and >= 0 in every channel");
+    if (!albedo_in_range(glm::vec3(o.albedo[c])))
+      throw Error(fmt::format("reference: albedo must be in [{}, {}] in every channel (energy conservation), got {:g}",
+                              kMinAlbedo, kMaxAlbedo, double(o.albedo[c])));
   detail::check_ray_offset(o.offset, mesh, "reference: ray offset (--offset)");
   const glm::dmat3 I = glm::transpose(o.rotation) * o.rotation;
   double err = std::abs(glm::determinant(o.rotation) - 1.0);
@@ -409,6 +413,7 @@ ReferenceResult render_reference_at_points(const Mesh& mesh, const EnvMap& map, 
     throw Error(fmt::format("reference: {} points, {} normals and {} albedos (expected as many of each)",
                             positions.size(), normals.size(), albedo.size()));
   if (options.glossy) throw Error("reference: glossy is at vertices only (a lightmap is diffuse)");
+  for (std::size_t i = 0; i < positions.size(); ++i) check_ray_origin(positions[i], i, "reference");
   const ReferencePoints points{positions, normals, albedo, &hit_albedo};
   return render_reference_impl(mesh, map, options, nullptr, progress, &points);
 }

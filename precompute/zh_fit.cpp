@@ -28,6 +28,8 @@ ZhTransfer fit_zh_transfer(const Transfer& t, const Mesh& mesh, const ZhFitOptio
   if (o.lobes < 1 || o.lobes > zh::kMaxLobes)
     throw Error(fmt::format("zonal-harmonic fit: lobes must be 1 to {}, got {}", zh::kMaxLobes, o.lobes));
   if (o.rounds < 0) throw Error("zonal-harmonic fit: rounds must be at least 0");
+  if (o.threads < 0 || o.threads > kMaxThreads)
+    throw Error(fmt::format("zonal-harmonic fit: threads must be 0 (every core) to {}, got {}", kMaxThreads, o.threads));
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 

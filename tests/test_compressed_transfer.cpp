@@ -224,6 +224,19 @@ TEST(CompressedTransfer, RefusesBadOptions) {
   o.clusters = 2;
   o.vectors = -1;
   EXPECT_THROW(compress_transfer(t, o), Error);
+  // prt compress's ranges, in the library: clusters and glossy clusters to
+  // kMaxClusters, vectors to kMaxVectors, iterations 1 to kMaxCompressIterations.
+  const auto refused = [&](auto field, int value) {
+    CompressOptions b;
+    b.*field = value;
+    EXPECT_THROW(compress_transfer(t, b), Error) << value;
+  };
+  refused(&CompressOptions::clusters, kMaxClusters + 1);
+  refused(&CompressOptions::glossy_clusters, kMaxClusters + 1);
+  refused(&CompressOptions::vectors, kMaxVectors + 1);
+  refused(&CompressOptions::glossy_vectors, kMaxVectors + 1);
+  refused(&CompressOptions::iterations, 0);
+  refused(&CompressOptions::iterations, kMaxCompressIterations + 1);
 }
 
 }  // namespace

@@ -289,6 +289,17 @@ TEST(CompressionErrorMeter, RotationsKeepEachBandsPower) {
   EXPECT_NE(lights[1][1], lights[2][1]);
   d.rotations = 0;
   EXPECT_THROW(distribution_lightings(d, 4), Error);
+  // prt compress --rotations and --eyes's ranges, in the library.
+  d.rotations = kMaxErrorRotations + 1;
+  EXPECT_THROW(distribution_lightings(d, 4), Error);
+  DistributionSpec spec;
+  spec.rotations = kMaxErrorRotations + 1;
+  EXPECT_THROW(make_error_distribution(spec, 4), Error);
+  spec.rotations = 24;
+  spec.eyes = kMaxErrorEyes + 1;
+  EXPECT_THROW(make_error_distribution(spec, 4), Error);
+  spec.eyes = 0;
+  EXPECT_THROW(make_error_distribution(spec, 4), Error);
   d.rotations = 1;
   EXPECT_THROW(distribution_lightings(d, 5), Error);  // the maps have 4 bands
 }

@@ -1289,6 +1289,28 @@ TEST(AtomicWrite, WritesThroughASymlink) {
   fs::remove_all(dir);
 }
 
+// prt::same_file: what refuses an output that is an input or another output
+// (prt.export_probes' path and matrices; the commands' rule).
+TEST(AtomicWrite, SameFileSeesLinksAndSpellings) {
+  const fs::path dir = fs::temp_directory_path() / ("prt_same_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "sub");
+  const fs::path a = dir / "a.txt", hard = dir / "hard.txt", soft = dir / "soft.txt";
+  prt::write_text_file(a.string(), "a");
+  fs::create_hard_link(a, hard);
+  fs::create_symlink(a, soft);
+  EXPECT_TRUE(prt::same_file(a.string(), a.string()));
+  EXPECT_TRUE(prt::same_file(a.string(), hard.string()));
+  EXPECT_TRUE(prt::same_file(soft.string(), a.string()));
+  EXPECT_TRUE(prt::same_file(a.string(), (dir / "sub" / ".." / "a.txt").string()));
+  // Files not written yet: the same normalised path.
+  EXPECT_TRUE(prt::same_file((dir / "new.bin").string(), (dir / "sub" / ".." / "." / "new.bin").string()));
+  EXPECT_FALSE(prt::same_file((dir / "new.bin").string(), (dir / "new.json").string()));
+  EXPECT_FALSE(prt::same_file(a.string(), (dir / "b.txt").string()));
+  EXPECT_FALSE(prt::same_file("", ""));
+  EXPECT_FALSE(prt::same_file(a.string(), ""));
+  fs::remove_all(dir);
+}
+
 TEST(AtomicWrite, AFifoIsWrittenInPlaceNotReplaced) {
   const fs::path dir = fs::temp_directory_path() / ("prt_fifo_" + std::to_string(::getpid()));
   fs::create_directories(dir);

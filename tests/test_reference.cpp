@@ -15,6 +15,7 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/mesh.h>
+#include <prt/precompute.h>
 #include <prt/quadrature.h>
 #include <prt/reference.h>
 #include <prt/rotation.h>
@@ -545,6 +546,13 @@ TEST(Reference, RejectsBadInput) {
   EXPECT_THROW(prt::render_reference(m, map, o), prt::Error);
   o = {};
   o.albedo = glm::vec3(-1.0f);
+  EXPECT_THROW(prt::render_reference(m, map, o), prt::Error);
+  // Every transfer's albedo range (prt precompute's, prt reference --albedo's): 2 was taken.
+  o = {};
+  o.albedo = glm::vec3(0.5f, 2.0f, 0.5f);
+  EXPECT_THROW(prt::render_reference(m, map, o), prt::Error);
+  o = {};
+  o.samples = prt::kMaxSamples + 1;  // prt reference --samples' range
   EXPECT_THROW(prt::render_reference(m, map, o), prt::Error);
   o = {};
   o.rotation = glm::dmat3(2.0);

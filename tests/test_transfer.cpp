@@ -411,6 +411,30 @@ TEST(Transfer, RejectsBadOptions) {
   TransferOptions o = opts(TransferMode::Shadowed);
   o.bands = 0;
   EXPECT_THROW(compute_transfer(m, o), Error);
+  // The command's ranges, in the library (a C++ or Python caller gets them
+  // too): 17 bands were taken here while prt precompute stopped at 16.
+  for (const auto& [field, bad, good] :
+       {std::tuple{&TransferOptions::bands, kMaxTransferBands + 1, kMaxTransferBands},
+        std::tuple{&TransferOptions::samples, kMaxSamples + 1, 1},
+        std::tuple{&TransferOptions::bounces, kMaxBounces + 1, kMaxBounces},
+        std::tuple{&TransferOptions::threads, kMaxThreads + 1, kMaxThreads},
+        std::tuple{&TransferOptions::threads, -1, 0}}) {
+    o = opts(TransferMode::Unshadowed, 2, 4);
+    o.*field = bad;
+    EXPECT_THROW(compute_transfer(m, o), Error) << bad;
+    o.*field = good;
+    EXPECT_NO_THROW(compute_transfer(m, o)) << good;
+  }
+  o = opts(TransferMode::Unshadowed);
+  o.bands = 17;
+  try {
+    compute_transfer(m, o);
+    ADD_FAILURE() << "17 bands taken";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "--bands must be between 1 and 16 (prt render and prt view draw at most 16 bands; transfer "
+                           "accuracy is measured up to 16), got 17");
+  }
+  o = opts(TransferMode::Shadowed);
   o = opts(TransferMode::Shadowed);
   o.samples = 0;
   EXPECT_THROW(compute_transfer(m, o), Error);

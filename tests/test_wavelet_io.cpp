@@ -454,6 +454,7 @@ TEST(FrameLighting, IsResampleThenHaarThenSelect) {
   ASSERT_EQ(fl.terms().size(), cube_size(r));
   for (std::size_t j = 0; j < cube_size(r); ++j) ASSERT_EQ(fl.terms()[j], j);
   EXPECT_THROW(fl.update(R, -1, wavelet::Selection::Magnitude), Error);
+  EXPECT_THROW(fl.update(R, wavelet::kMaxTerms + 1, wavelet::Selection::Magnitude), Error);  // --terms' range
   EXPECT_EQ(wavelet::parse_selection("area"), wavelet::Selection::AreaWeighted);
   EXPECT_EQ(wavelet::parse_selection("magnitude"), wavelet::Selection::Magnitude);
   EXPECT_THROW(wavelet::parse_selection("largest"), Error);

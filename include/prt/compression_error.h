@@ -77,6 +77,12 @@ struct ErrorDistribution {
   std::string describe(bool glossy) const;
 };
 
+// The counts' ranges (prt compress --rotations and --eyes take the same):
+// rotations 1 to kMaxErrorRotations per map, eyes 1 to kMaxErrorEyes.
+// make_error_distribution and distribution_lightings refuse others.
+inline constexpr int kMaxErrorRotations = 4096;
+inline constexpr int kMaxErrorEyes = 4096;
+
 // The lightings of `d`: map-major, every map's `rotations` rotations of its
 // SH (the first unrotated; the others in turn with the map's own band spectrum
 // and with each of d.spectra's), then with d.sun the point light's (the

@@ -84,4 +84,11 @@ void check_writable(const std::string& path);
 // Writes `text` to `path` through write_atomically. Throws prt::Error.
 void write_text_file(const std::string& path, const std::string& text);
 
+// Whether a and b name the same file: std::filesystem::equivalent when both
+// exist (also through a symbolic or hard link), else the same absolute,
+// normalised path (a file not written yet). Empty names name no file. What
+// refuses an output that is one of a call's inputs, or another of its
+// outputs (prt's commands: no output may be one of the inputs).
+bool same_file(const std::string& a, const std::string& b);
+
 }  // namespace prt

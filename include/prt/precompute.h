@@ -32,11 +32,23 @@ class RayScene;
 }  // namespace detail
 
 // ---- SH transfer (docs/PRECOMPUTE.md) -----------------------------------------
+// The ranges of the options every transfer computation takes (prt precompute's
+// --bands, --samples, --bounces, --threads take the same; the validators
+// below refuse the rest, so a C++ or Python caller gets the command's rules).
+// Bands: prt render and prt view draw at most 16 (kMaxRenderBands), and
+// transfer accuracy (the float basis table, docs/PERFORMANCE.md's error
+// tables, prt report's grid) is measured up to 16 (docs/CONVENTIONS.md,
+// "Band counts").
+inline constexpr int kMaxTransferBands = 16;
+inline constexpr int kMaxSamples = 1 << 24;  // rays per vertex (prt reference: paths per vertex)
+inline constexpr int kMaxBounces = 64;       // albedo 0.9: the 65th bounce would add 0.9^64 = 0.1% of the direct light
+inline constexpr int kMaxThreads = 1024;     // worker threads (0: every core)
+
 struct TransferOptions {
   TransferMode mode = TransferMode::Shadowed;
-  int bands = 5;                 // prt precompute takes 1..16 (docs/CONVENTIONS.md, "Band counts"); any up to sh::kMaxBands works here
-  int samples = 1024;            // ~rays per vertex: 2*samples directions over the sphere
-  int bounces = 1;               // interreflected only; 0 = shadowed; at most this many
+  int bands = 5;                 // 1 to kMaxTransferBands (docs/CONVENTIONS.md, "Band counts")
+  int samples = 1024;            // ~rays per vertex: 2*samples directions over the sphere, 1 to kMaxSamples
+  int bounces = 1;               // interreflected only; 0 = shadowed; at most this many (kMaxBounces)
   // Interreflected: stop adding bounces once one adds less than this fraction
   // of the direct transfer's energy (mean |T| over all coefficients; see
   // Transfer::bounce_energy); Transfer::bounces says how many were computed.
@@ -44,7 +56,7 @@ struct TransferOptions {
   double bounce_tolerance = 0;
   glm::vec3 albedo{1.0f};        // used when the mesh has no colours or vertex_colors is false
   bool vertex_colors = false;    // use the mesh's per-vertex colours as albedo
-  int threads = 0;               // 0: all cores
+  int threads = 0;               // 0: all cores; at most kMaxThreads
   std::uint64_t seed = 1;        // rotates the direction set; same seed, same inputs -> same bits
   double offset = 0;             // ray origin offset; 0: 1e-4 x the mesh's bounding-box diagonal
   // Also the glossy transfer matrices (prt/transfer.h, Transfer::glossy), from
@@ -136,6 +148,20 @@ std::size_t move_texels_out_of_geometry(const Mesh& mesh, LightmapTexels& texels
 // empty one.
 LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
                                            const TransferOptions& options, const Progress& progress = {});
+
+// Before rasterising a width x height atlas of `scene`'s UV set `uv_set`
+// (lightmap_texels takes 25 bytes a texel of the atlas, seconds for a large
+// one): throws prt::Error ("--memory-limit ...: too small") when
+// options.memory_limit (0: none) is below the least the transfer's plan will
+// need: the process now, the texels' samples (56 bytes each) and atlas map
+// (4 bytes a texel), and compute_lightmap_transfer's arrays and ray scene for
+// lightmap_texels_at_least texels (adaptive: for the texels alone, its
+// batches traced later). A limit refused here is one that plan refuses after
+// the rasterising; one passed here may still be refused there (the texels
+// are more than their UV area, the albedo may take three channels).
+// `albedo` (non-null): the texels' albedo (--albedo), else the scene's.
+void check_lightmap_memory(const Scene& scene, int width, int height, int uv_set, const TransferOptions& options,
+                           bool adaptive = false, const glm::vec3* albedo = nullptr);
 
 // Obscurance (Zhukov, Iones & Kronin 1998; the seed's definition) at points:
 // W = (1/pi) integral rho(t(w)) max(n.w, 0) dw with rho(t) = min(t / d, 1)
@@ -268,12 +294,19 @@ std::vector<double> glossy_vertex_matrices(const Mesh& mesh, const TransferOptio
 enum class CompressionMetric { Plain, Band };
 const char* compression_metric_name(CompressionMetric m);
 
+// The ranges of CompressOptions (prt compress's --clusters, --pca,
+// --glossy-clusters, --glossy-pca and --iterations take the same;
+// compress_transfer and compress_signal refuse the rest).
+inline constexpr int kMaxClusters = 1 << 24;
+inline constexpr int kMaxVectors = 1 << 20;
+inline constexpr int kMaxCompressIterations = 1000;
+
 struct CompressOptions {
-  int clusters = 64;        // K (at most the stored rows; fewer rows: one cluster per row)
-  int vectors = 8;          // N, 0 to each signal's dimension (capped there)
+  int clusters = 64;        // K, 1 to kMaxClusters (at most the stored rows; fewer rows: one cluster per row)
+  int vectors = 8;          // N, 0 to kMaxVectors (capped at each signal's dimension)
   // The glossy matrices' own K and N (0 and -1: clusters and vectors above).
   int glossy_clusters = 0, glossy_vectors = -1;
-  int iterations = 20;
+  int iterations = 20;      // 1 to kMaxCompressIterations
   std::uint64_t seed = 1;
   int weight_bits = 32;     // 32 (float) or 16 (ClusteredSignal::weight_bits)
   Progress progress;        // per round of each fit (CpcaOptions::progress; phase "coefficients" or "glossy matrices")
@@ -352,11 +385,11 @@ struct ProbeOptions {
   int depth_res = 8;          // octahedral depth moments (2 to 32)
   int rays_per_texel = 16;    // a k x k grid of rays in each texel of the base cube (cube_res / 4): 1, 4, 9, ... 64
   int bounces = 1;            // interreflected: diffuse bounces (1 to 8)
-  int bounce_bands = 6;       // interreflected: environment bands the bounce matrices take (1 to 16)
+  int bounce_bands = 6;       // interreflected: environment bands the bounce matrices take (1 to 16, whatever the mode)
   bool override_albedo = false;
   glm::vec3 albedo{0.8f};     // with override_albedo: every surface's (else the scene's materials)
   std::uint64_t seed = 1;     // jitters the rays inside the texels and the bounce directions
-  int threads = 0;            // 0: all cores
+  int threads = 0;            // 0: all cores; at most kMaxThreads
   double offset = 0;          // ray offset off surfaces; 0: 1e-4 x the scene's diagonal
 };
 

@@ -76,9 +76,9 @@ namespace prt {
 struct ReferenceOptions {
   TransferMode mode = TransferMode::Shadowed;
   int bounces = 1;               // interreflected only: extra diffuse bounces, 0..kMaxReferenceBounces (0 = shadowed)
-  glm::vec3 albedo{1.0f};        // rho, >= 0; used unless vertex_colors and the mesh has colours
+  glm::vec3 albedo{1.0f};        // rho, [kMinAlbedo, kMaxAlbedo] (energy conservation); used unless vertex_colors and the mesh has colours
   bool vertex_colors = false;    // rho = the mesh's per-vertex colours (interpolated at ray hits)
-  int samples = 4096;            // iterations per vertex, >= 2 (each: one map sample + one cosine sample)
+  int samples = 4096;            // iterations per vertex, 2 to kMaxSamples (each: one map sample + one cosine sample)
   std::uint64_t seed = 1;        // same seed, mesh, map and options -> same bits
   double offset = 0;             // ray origin offset; 0: default_ray_offset(mesh) = 1e-4 x bounding-box diagonal
   glm::dmat3 rotation{1.0};      // rotates the lighting: light from d arrives from R d, L_rot(d) = L(R^T d)

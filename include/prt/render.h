@@ -101,6 +101,14 @@ Shading parse_shading(std::string_view name);  // throws prt::Error listing the 
 enum class ToneMap { Clamp, Reinhard, Aces };
 std::string_view tone_map_name(ToneMap t);     // "clamp", "reinhard", "aces"
 ToneMap parse_tone_map(std::string_view name);  // throws prt::Error listing the names
+// The stops an exposure given by a caller may take (prt render, view,
+// relight, export and project's --exposure; prt.render, export_gltf,
+// export_web): 2^64 either way is far past what takes any map's radiance to
+// a displayable picture; beyond it the gain is a number float cannot hold
+// (2^128) or a picture of zeros, never a picture.
+inline constexpr double kMaxExposureStops = 64;
+// The vertical field of view a caller may give, in degrees (--fov).
+inline constexpr double kMinFov = 1, kMaxFov = 179;
 struct Display {
   double exposure = 0;  // stops
   ToneMap tone_map = ToneMap::Clamp;

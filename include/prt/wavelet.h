@@ -68,6 +68,10 @@ void inverse_cube(float* planar, int r, int channels = 3);
 int support_size(int index_in_face, int r);
 
 // ---- non-linear approximation ---------------------------------------------
+// The most terms a frame keeps (prt relight, render, view --terms 1 to 2^30;
+// K >= 6 r^2 keeps all of a cube's, 393,216 at r = 256).
+inline constexpr int kMaxTerms = 1 << 30;
+
 enum class Selection {
   Magnitude,     // w_j = |c_j|
   AreaWeighted,  // w_j = |c_j| support_j^2 / r^2 (Ng et al.: favours coarse terms)
@@ -78,7 +82,7 @@ enum class Selection {
 // Euclidean norm over the channels). Writes exactly min(K, 6 r^2) indices to
 // `out`, sorted ascending (column order for wavelet_relight). Ties are broken
 // by the smaller index, so the choice is deterministic. O(6 r^2) expected.
-// Throws prt::Error for K < 0.
+// Throws prt::Error for K < 0 or K > kMaxTerms.
 void select_terms(std::span<const float> coeffs, int channels, int r, int K, Selection selection,
                   std::vector<std::uint32_t>& out);
 
@@ -155,7 +159,7 @@ class FrameLighting {
 
   // Resamples with rotation R (light from d arrives from R d; docs/CONVENTIONS.md,
   // "Rotations"), transforms, and selects K terms (K >= 6 r^2: all of them, in
-  // index order). Throws prt::Error for K < 0. Deterministic.
+  // index order). Throws prt::Error for K < 0 or K > kMaxTerms. Deterministic.
   void update(const glm::dmat3& R, int K, Selection selection);
 
   // After update(): planar [3][6 r^2] Haar coefficients of the texel-average

@@ -168,7 +168,7 @@ class ProbeVolume:
         ...
     def at(self, scene: Scene, points: Any, normals: Any, sh: Any) -> numpy.ndarray:
         """
-        float32 (N, 3): E(p, n)/pi at `points` (N, 3) with unit `normals` (N, 3) in `scene` (the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility)
+        float32 (N, 3): E(p, n)/pi at `points` (N, 3) with `normals` (N, 3; each non-zero, normalised) in `scene` (the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility). Points and normals must be finite.
         """
     @property
     def bands(self) -> Any:
@@ -178,7 +178,7 @@ class ProbeVolume:
         ...
     def matrices(self, in_bands: int = ...) -> numpy.ndarray:
         """
-        float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes
+        float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes (in_bands 1 to 16, --matrix-bands)
         """
     @property
     def max(self) -> Any:
@@ -227,7 +227,7 @@ class Scene:
         """
     def lightmap_uv_set(self, requested: int = ...) -> int:
         """
-        The UV set a lightmap is laid out in: `requested` (>= 0; every object must have it) or, with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises prt.Error naming the objects that lack it.
+        The UV set a lightmap is laid out in: `requested` (0 to 7, TEXCOORD_N; every object must have it) or, with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises prt.Error for any other number, and naming the objects that lack the set.
         """
     @property
     def normals(self) -> numpy.ndarray:
@@ -367,7 +367,7 @@ def lightmap_from_rows(scene: Scene, width: int, height: int, rows: Any, *, uv_s
     A lightmap from arrays, for a Scene: every texel of the atlas stored (none analytic); .write() makes a file prt relight reads.
 
     Arguments:
-      scene: the Scene; width, height: the atlas in texels; uv_set: its UV set (-1: as precompute_lightmap).
+      scene: the Scene; width, height: the atlas in texels, 1 to 16384 each; uv_set: its UV set, 0 to 7 (-1: as precompute_lightmap).
       rows: float32 (N, channels, bands^2), one per covered texel, in texel order.
       mode: the transfer mode recorded ('shadowed', 'interreflected', ...).
 
@@ -386,8 +386,8 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
     Arguments (prt precompute's option in brackets):
       scene: a Scene (load_scene).
       width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].
-      uv_set: the scene's UV set the atlas is laid out in (-1: TEXCOORD_1 where every object has it, else TEXCOORD_0) [--uv].
-      bands [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
+      uv_set: the scene's UV set the atlas is laid out in, 0 to 7 (TEXCOORD_N), or -1: TEXCOORD_1 where every object has it, else TEXCOORD_0 [--uv].
+      bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
       adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.
 
     Returns a Lightmap.
@@ -399,9 +399,9 @@ def precompute_probes(scene: Scene, dims: Any, *, mode: str = ..., bands: int = 
 
     Arguments (prt precompute's option in brackets):
       scene: a Scene (load_scene).
-      dims: (NX, NY, NZ) probes, 2 to the limit each, spanning the scene's bounding box, corners included [--probes].
-      mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH (3) [--bands].
-      bounce_bands: the environment bands the bounce light takes (6) [--bounce-bands]; bounces [--bounces]; seed [--seed].
+      dims: (NX, NY, NZ) probes, three whole numbers, each 2 to 1024 and at most 16777216 in all, spanning the scene's bounding box, corners included [--probes].
+      mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH, 1 to 8 (3) [--bands].
+      bounce_bands: the environment bands the bounce light takes, 1 to 16 (6) [--bounce-bands]; bounces: 1 to 8, interreflected [--bounces]; seed [--seed].
 
     Returns a ProbeVolume.
     """
@@ -488,11 +488,11 @@ def project(map: Any, bands: int = ..., *, mapping: str = ..., quadrature: str =
 
     Arguments (prt project's option in brackets):
       map: an EnvMap, a file name, a list of six face files, or an array (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces +X, -X, +Y, -Y, +Z, -Z).
-      bands: SH bands n, 1 to 16 [--bands].
+      bands: SH bands n, 1 to 64 (MAX_BANDS) [--bands].
       mapping: how to read a file: 'auto' (from the shape), 'latlong', 'hcross', 'vcross' or 'faces' [--mapping].
       quadrature: 'box' (texels are area averages, integrated exactly) or 'point' (point samples; lat-long only) [--quadrature].
       irradiance: convolve with the clamped cosine (Ramamoorthi & Hanrahan's A_l) [--irradiance].
-      window: 'none', 'hanning', 'lanczos' or 'auto' ringing suppression [--window]; window_width: its width in bands (0: bands + 1) [--window-width].
+      window: 'none', 'hanning', 'lanczos' or 'auto' ringing suppression [--window]; window_width: its width in bands, > 0 (0: the band count) [--window-width].
       rotate: a 3x3 rotation R or (yaw, pitch, roll) degrees; light from d arrives from R d [--rotate].
 
     Returns float64 (bands*bands, 3), index k = l(l+1)+m (docs/CONVENTIONS.md).
@@ -588,7 +588,7 @@ def sh_eval(bands: int, dirs: Any) -> numpy.ndarray:
     The real SH basis functions at directions.
 
     Arguments:
-      bands: n, 1 to 16; dirs: (N, 3) directions (normalised first).
+      bands: n, 1 to 64 (MAX_BANDS); dirs: (N, 3) directions (normalised first).
 
     Returns float64 (N, bands*bands), index k = l(l+1)+m (docs/CONVENTIONS.md).
     """
@@ -871,7 +871,7 @@ def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., came
 
 def export_probes(probes: Any, scene: Scene, bake: Any, path: Any, *, rotate: Any = ..., matrices: Any = ..., matrix_bands: int = ...) -> None:
     """
-    Writes to `path` what prt export SCENE --probes PROBES --bake MAP -o PATH writes for the volume of `scene` (the same bytes): every probe relit under the map (bake: a map file, turned by rotate, yaw, pitch, roll degrees) as three.js LightProbe and Unity SphericalHarmonicsL2 coefficients, with positions in both engines' axes (docs/PROBES.md "Export"). PATH ends in .json. probes: a ProbeVolume or its file (the file's name is recorded, as the command records it). matrices: also write each probe's SH transfer matrix (--matrices FILE.bin), taking matrix_bands bands of lighting (--matrix-bands).
+    Writes to `path` what prt export SCENE --probes PROBES --bake MAP -o PATH writes for the volume of `scene` (the same bytes): every probe relit under the map (bake: a map file, turned by rotate, yaw, pitch, roll degrees) as three.js LightProbe and Unity SphericalHarmonicsL2 coefficients, with positions in both engines' axes (docs/PROBES.md "Export"). PATH ends in .json. probes: a ProbeVolume or its file (the file's name is recorded, as the command records it). matrices: also write each probe's SH transfer matrix (--matrices FILE.bin), taking matrix_bands bands of lighting, 1 to 16 (--matrix-bands). Neither output may be an input (the probes file, the map, the scene's file) or the other output; both are written, or neither.
     """
 
 def read_exr(path: Any) -> numpy.ndarray:

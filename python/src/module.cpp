@@ -481,10 +481,111 @@ std::optional<prt::AdaptiveOptions> adaptive_arg(const py::object& adaptive, dou
   return a;
 }
 
+// threads=: prt's --threads, 0 (every core) to prt::kMaxThreads.
+int threads_arg(int threads) {
+  if (threads < 0 || threads > prt::kMaxThreads)
+    throw Error("threads: must be 0 (every core) to " + std::to_string(prt::kMaxThreads) + ", got " +
+                std::to_string(threads));
+  return threads;
+}
+
 std::unique_ptr<tbb::global_control> limit_threads(int threads) {
-  if (threads < 0) throw Error("threads: must be >= 0 (0: all cores)");
-  if (threads == 0) return nullptr;
+  if (threads_arg(threads) == 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+}
+
+// A limit as the command prints it ({:g}: 64, not 64.0).
+std::string limit_text(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", x);
+  return b;
+}
+
+// An exposure in stops given by the caller (not 'auto'): finite (the
+// wrapper) and within the command's --exposure range, +-kMaxExposureStops.
+double exposure_arg(const py::object& exposure) {
+  const DArray ev = real_array<double>(exposure, "exposure");
+  if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
+  const double stops = ev.data()[0];
+  if (!(std::abs(stops) <= prt::kMaxExposureStops))
+    throw Error("exposure: must be a number in [-" + limit_text(prt::kMaxExposureStops) + ", " +
+                limit_text(prt::kMaxExposureStops) + "] (stops) or 'auto', got " + number_text(stops));
+  return stops;
+}
+
+// fov=: vertical degrees, prt's --fov range.
+void check_fov(double fov) {
+  if (!(fov >= prt::kMinFov && fov <= prt::kMaxFov))
+    throw Error("fov: vertical degrees, " + limit_text(prt::kMinFov) + " to " + limit_text(prt::kMaxFov) + ", got " +
+                number_text(fov));
+}
+
+// terms=: the wavelet terms K, 1 to wavelet::kMaxTerms (--terms).
+void check_terms(int terms) {
+  if (terms < 1 || terms > prt::wavelet::kMaxTerms)
+    throw Error("terms: must be 1 to " + std::to_string(prt::wavelet::kMaxTerms) + " (K >= 6 r^2 keeps all), got " +
+                std::to_string(terms));
+}
+
+// rho_d of diffuse=: a number or (r, g, b), each an albedo in [0, 1] (--diffuse).
+glm::dvec3 diffuse_arg(const py::object& diffuse) {
+  const FArray d = real_array<float>(diffuse, "diffuse");
+  glm::dvec3 rho;
+  if (d.ndim() == 0) rho = glm::dvec3(d.data()[0]);
+  else if (d.ndim() == 1 && d.shape(0) == 3) rho = {d.data()[0], d.data()[1], d.data()[2]};
+  else throw Error("diffuse: expected rho_d, a number or 3 numbers r, g, b, got shape " + shape_text(d));
+  if (!prt::albedo_in_range(glm::vec3(rho)))
+    throw Error("diffuse: each of r, g, b must be from 0 to 1 (an albedo), got (" + number_text(rho.x) + ", " +
+                number_text(rho.y) + ", " + number_text(rho.z) + ")");
+  return rho;
+}
+
+// uv_set= (and Scene.lightmap_uv_set's requested=): -1 (choose) or 0 to
+// kMaxLightmapUvSet, the rule of Scene::lightmap_uv_set, named here.
+int uv_set_arg(int uv_set, const char* what) {
+  if (uv_set < -1 || uv_set > prt::kMaxLightmapUvSet)
+    throw Error(std::string(what) + ": " + std::to_string(uv_set) +
+                ": expected -1 (choose: TEXCOORD_1 where every object has it, else TEXCOORD_0) or 0 to " +
+                std::to_string(prt::kMaxLightmapUvSet) + " (TEXCOORD_N)");
+  return uv_set;
+}
+
+// An output file named `what` of a call must be none of its inputs (a file
+// named by the call, a Mesh or Scene read from a file): prt's commands' rule
+// (the same file through a link too: prt::same_file).
+struct NamedInput {
+  std::string name, path;
+};
+void check_not_input(const std::string& what, const std::string& out, const std::vector<NamedInput>& inputs) {
+  for (const NamedInput& in : inputs)
+    if (prt::same_file(out, in.path))
+      throw Error(what + ": " + out + ": is the input " + in.name + (in.path == out ? "" : " (" + in.path + ")") +
+                  "; prt does not write over its inputs (choose another output name)");
+}
+
+// dims= of precompute_probes: (NX, NY, NZ), three whole numbers by the rule
+// of prt::probe_dims_problem (prt precompute --probes NXxNYxNZ's).
+std::array<int, 3> probe_dims_arg(const py::object& dims) {
+  const std::string rule = "dims: expected (NX, NY, NZ), three whole numbers, each 2 to " +
+                           std::to_string(prt::kMaxProbeDim) + ", at most " + std::to_string(prt::kMaxProbes) +
+                           " probes in all";
+  std::string shown = py::repr(dims);
+  if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
+  const std::string got = ", got " + std::string(py::str(py::type::of(dims).attr("__name__"))) + " " + shown;
+  if (dims.is_none() || py::isinstance<py::str>(dims) || py::isinstance<py::bytes>(dims) ||
+      !PySequence_Check(dims.ptr()))
+    throw Error(rule + got);
+  const Py_ssize_t n = PySequence_Size(dims.ptr());
+  if (n < 0) {  // a 0-d array: a sequence without a length
+    PyErr_Clear();
+    throw Error(rule + got);
+  }
+  if (n != 3) throw Error(rule + got + " (" + std::to_string(n) + " values)");
+  const py::sequence seq = py::reinterpret_borrow<py::sequence>(dims);
+  std::array<int, 3> d{};
+  for (std::size_t k = 0; k < 3; ++k) d[k] = int_arg(seq[k], "dims[" + std::to_string(k) + "]");
+  if (const std::string p = prt::probe_dims_problem(d); !p.empty()) throw Error("dims: " + shown + ": " + p);
+  return d;
 }
 
 // ---- rendering -----------------------------------------------------------------
@@ -674,7 +775,9 @@ std::string path_of(const py::handle& h, const std::string& what) {
   if (!is_path(h))
     throw Error(what + ": expected a file name (str or os.PathLike), got " +
                 std::string(py::str(py::type::of(h).attr("__name__"))));
-  return py::str(py::module_::import("os").attr("fspath")(h));
+  const std::string p = py::str(py::module_::import("os").attr("fspath")(h));
+  if (p.empty()) throw Error(what + ": expected a file name, got ''");  // as the command's path options
+  return p;
 }
 
 prt::EnvMap map_from_array(const py::handle& obj);
@@ -850,6 +953,9 @@ PYBIND11_MODULE(_prt, m) {
          bool irradiance, const std::string& window, double window_width, const py::object& rotate) {
         const prt::Quadrature q = prt::parse_quadrature(quadrature);
         const prt::sh::Window w = prt::sh::parse_window(window);
+        if (window_width < 0)  // prt project --window-width: a positive number of bands
+          throw Error("window_width: the window's width in bands, > 0 (0: the band count), got " +
+                      number_text(window_width));
         std::optional<glm::dmat3> R;
         if (!rotate.is_none()) R = to_rotation(rotate, "rotate");
         std::vector<glm::dvec3> c;
@@ -886,11 +992,11 @@ PYBIND11_MODULE(_prt, m) {
       "\n"
       "Arguments (prt project's option in brackets):\n"
       "  map: an EnvMap, a file name, a list of six face files, or an array (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces +X, -X, +Y, -Y, +Z, -Z).\n"
-      "  bands: SH bands n, 1 to 16 [--bands].\n"
+      "  bands: SH bands n, 1 to 64 (MAX_BANDS) [--bands].\n"
       "  mapping: how to read a file: 'auto' (from the shape), 'latlong', 'hcross', 'vcross' or 'faces' [--mapping].\n"
       "  quadrature: 'box' (texels are area averages, integrated exactly) or 'point' (point samples; lat-long only) [--quadrature].\n"
       "  irradiance: convolve with the clamped cosine (Ramamoorthi & Hanrahan's A_l) [--irradiance].\n"
-      "  window: 'none', 'hanning', 'lanczos' or 'auto' ringing suppression [--window]; window_width: its width in bands (0: bands + 1) [--window-width].\n"
+      "  window: 'none', 'hanning', 'lanczos' or 'auto' ringing suppression [--window]; window_width: its width in bands, > 0 (0: the band count) [--window-width].\n"
       "  rotate: a 3x3 rotation R or (yaw, pitch, roll) degrees; light from d arrives from R d [--rotate].\n"
       "\n"
       "Returns float64 (bands*bands, 3), index k = l(l+1)+m (docs/CONVENTIONS.md).");
@@ -920,7 +1026,7 @@ PYBIND11_MODULE(_prt, m) {
       "The real SH basis functions at directions.\n"
       "\n"
       "Arguments:\n"
-      "  bands: n, 1 to 16; dirs: (N, 3) directions (normalised first).\n"
+      "  bands: n, 1 to 64 (MAX_BANDS); dirs: (N, 3) directions (normalised first).\n"
       "\n"
       "Returns float64 (N, bands*bands), index k = l(l+1)+m (docs/CONVENTIONS.md).");
 
@@ -1183,8 +1289,7 @@ PYBIND11_MODULE(_prt, m) {
           w.threshold = threshold;
           w.albedo = to_albedo(albedo);
           w.vertex_colors = vertex_colors;
-          if (threads < 0) throw Error("threads: must be >= 0 (0: all cores)");
-          w.threads = threads;
+          w.threads = threads_arg(threads);
           w.offset = offset;
           PyWavelet p;
           p.t = run_released(std::move(progress),
@@ -1202,7 +1307,7 @@ PYBIND11_MODULE(_prt, m) {
         o.albedo = to_albedo(albedo);
         o.vertex_colors = vertex_colors;
         o.seed = seed;
-        o.threads = threads;
+        o.threads = threads_arg(threads);
         o.offset = offset;
         o.bounce_tolerance = bounce_tolerance;
         if (material != "diffuse" && material != "glossy")
@@ -1287,12 +1392,7 @@ PYBIND11_MODULE(_prt, m) {
         prt::GlossyShading shading;
         shading.gloss = gloss;
         shading.specular = specular;
-        if (!diffuse.is_none()) {
-          const FArray d = real_array<float>(diffuse, "diffuse");
-          if (d.ndim() == 0) shading.diffuse = glm::dvec3(d.data()[0]);
-          else if (d.ndim() == 1 && d.shape(0) == 3) shading.diffuse = {d.data()[0], d.data()[1], d.data()[2]};
-          else throw Error("diffuse: expected rho_d, a number or 3 numbers r, g, b, got shape " + shape_text(d));
-        }
+        if (!diffuse.is_none()) shading.diffuse = diffuse_arg(diffuse);
         const std::size_t E = eyes.ndim() == 1 ? 1 : std::size_t(eyes.shape(0));
         std::vector<glm::vec3> rgb;
         rgb.reserve(E * mesh.vertex_count());
@@ -1367,7 +1467,7 @@ PYBIND11_MODULE(_prt, m) {
         if (!is_wavelet && (terms != 100 || selection != "area"))
           throw Error(std::string(terms != 100 ? "terms" : "selection") + ": applies to a wavelet transfer");
         if (is_wavelet && !bands_arg.is_none()) throw Error("bands: a wavelet transfer has no SH bands to limit");
-        if (terms < 1) throw Error("terms: must be at least 1 (K >= 6 r^2 keeps all)");
+        check_terms(terms);
         const prt::wavelet::Selection sel = [&] {
           try {
             return prt::wavelet::parse_selection(selection);
@@ -1384,7 +1484,7 @@ PYBIND11_MODULE(_prt, m) {
         if (width < 1 || height < 1 || width > 16384 || height > 16384)
           throw Error("width, height: 1 to 16384 pixels each, got " + std::to_string(width) + " x " +
                       std::to_string(height));
-        if (!std::isfinite(fov) || fov <= 0 || fov >= 180) throw Error("fov: degrees in (0, 180), got " + number_text(fov));
+        check_fov(fov);
         const int bands = bands_arg.is_none() ? file_bands : int_arg(bands_arg, "bands");
         if (bands < 1 || bands > file_bands)
           throw Error("bands: 1 to the transfer's " + std::to_string(file_bands) + ", got " + std::to_string(bands));
@@ -1406,13 +1506,7 @@ PYBIND11_MODULE(_prt, m) {
         }();
         if (!glossy && (gloss != 16.0 || specular != 0.5 || !diffuse.is_none()))
           throw Error(source + ": gloss, specular and diffuse need a glossy transfer (precompute(material='glossy'))");
-        glm::dvec3 rho_d(-1.0);
-        if (!diffuse.is_none()) {
-          const FArray d = real_array<float>(diffuse, "diffuse");
-          if (d.ndim() == 0) rho_d = glm::dvec3(d.data()[0]);
-          else if (d.ndim() == 1 && d.shape(0) == 3) rho_d = {d.data()[0], d.data()[1], d.data()[2]};
-          else throw Error("diffuse: expected rho_d, a number or 3 numbers r, g, b, got shape " + shape_text(d));
-        }
+        const glm::dvec3 rho_d = diffuse.is_none() ? glm::dvec3(-1.0) : diffuse_arg(diffuse);
         std::optional<prt::Deform> pose;
         if (!deform.is_none()) {
           if (!is_zh) throw Error(source + ": deform needs a zonal-harmonic transfer (fit_zh; docs/LDPRT.md)");
@@ -1463,11 +1557,7 @@ PYBIND11_MODULE(_prt, m) {
           throw Error(std::string("tone_map: ") + e.what());
         }
         const bool auto_exposure = py::isinstance<py::str>(exposure) && exposure.cast<std::string>() == "auto";
-        if (!auto_exposure) {
-          const DArray ev = real_array<double>(exposure, "exposure");
-          if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
-          display.exposure = ev.data()[0];
-        }
+        if (!auto_exposure) display.exposure = exposure_arg(exposure);
         const glm::dmat3 R = rotate.is_none() ? glm::dmat3(1.0) : to_rotation(rotate, "rotate");
         prt::Camera cam;
         std::optional<prt::Mesh> framed;
@@ -1658,9 +1748,7 @@ PYBIND11_MODULE(_prt, m) {
             if (py::isinstance<py::str>(exposure) && exposure.cast<std::string>() == "auto") {
               clamp.exposure = prt::auto_exposure(light);
             } else {
-              const DArray ev = real_array<double>(exposure, "exposure");
-              if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
-              clamp.exposure = ev.data()[0];
+              clamp.exposure = exposure_arg(exposure);
             }
           }
           opts.colors.resize(rgb.size());
@@ -1683,6 +1771,8 @@ PYBIND11_MODULE(_prt, m) {
       [gltf_export](const PyTransfer& p, const prt::Mesh& mesh, const py::object& path, const py::object& bake,
                     const py::object& rotate, const py::object& exposure) {
         const std::string out = path_of(path, "path");
+        check_not_input("path", out, {{"transfer", p.source}, {"mesh", mesh.source},
+                                      {"bake", is_path(bake) ? path_of(bake, "bake") : std::string()}});
         const Export x = gltf_export(p, mesh, bake, rotate, exposure);
         py::gil_scoped_release release;
         prt::write_gltf(out, mesh, x.t, x.opts);
@@ -1706,10 +1796,13 @@ PYBIND11_MODULE(_prt, m) {
                                      bake.is_none() ? py::none() : exposure);
         prt::WebPage w;
         w.dir = path_of(dir, "dir");
+        check_not_input("dir", w.dir, {{"transfer", p.source}, {"mesh", mesh.source},
+                                       {"bake", is_path(bake) ? path_of(bake, "bake") : std::string()},
+                                       {"env", is_path(env) ? path_of(env, "env") : std::string()}});
         w.force = force;
         w.turn = turn;
         w.maps = prt::web_maps(env.is_none() ? std::string() : path_of(env, "env"), w.initial);
-        if (!std::isfinite(fov) || fov <= 0 || fov >= 180) throw Error("fov: degrees in (0, 180), got " + number_text(fov));
+        check_fov(fov);
         w.camera = prt::framing_camera(mesh, fov, 1.0);
         if (!camera.is_none()) {
           const DArray c = real_array<double>(camera, "camera");
@@ -1733,9 +1826,7 @@ PYBIND11_MODULE(_prt, m) {
         if (exposure.is_none() || (py::isinstance<py::str>(exposure) && exposure.cast<std::string>() == "auto")) {
           w.display.exposure = prt::auto_exposure(prt::project(prt::load_envmap(w.initial), 3));
         } else {
-          const DArray ev = real_array<double>(exposure, "exposure");
-          if (ev.ndim() != 0) throw Error("exposure: stops (a number) or 'auto'");
-          w.display.exposure = ev.data()[0];
+          w.display.exposure = exposure_arg(exposure);
         }
         py::gil_scoped_release release;
         std::unique_ptr<prt::StagedPage> page = prt::stage_web_page(
@@ -1804,8 +1895,16 @@ PYBIND11_MODULE(_prt, m) {
       "Returns a list of dicts: group, name (what was measured), error, tolerance, why (why the tolerance is what it is), passed.");
 
   // ---- compression (prt compress; docs/COMPRESSION.md) ----
+  // prt compress --rotations and --eyes's ranges (make_error_distribution refuses the rest too).
+  const auto check_measure = [](int rotations, int eyes) {
+    if (rotations < 1 || rotations > prt::kMaxErrorRotations)
+      throw Error("rotations: must be 1 to " + std::to_string(prt::kMaxErrorRotations) + ", got " +
+                  std::to_string(rotations));
+    if (eyes < 1 || eyes > prt::kMaxErrorEyes)
+      throw Error("eyes: must be 1 to " + std::to_string(prt::kMaxErrorEyes) + ", got " + std::to_string(eyes));
+  };
   // The distribution prt compress measures under, from the keyword arguments.
-  const auto distribution = [](const prt::Transfer& t, const py::object& envs, const py::object& spectra,
+  const auto distribution = [check_measure](const prt::Transfer& t, const py::object& envs, const py::object& spectra,
                                bool own_spectra, bool sun, int rotations, int eyes) {
     prt::DistributionSpec spec;
     const auto paths = [](const py::object& list, const char* what) {
@@ -1824,8 +1923,7 @@ PYBIND11_MODULE(_prt, m) {
       throw Error("own_spectra: leaves the maps' spectra as they are; spectra= adds others': give one of them");
     spec.own_spectra = own_spectra;
     spec.sun = sun;
-    if (rotations < 1) throw Error("rotations: must be at least 1");
-    if (eyes < 1) throw Error("eyes: must be at least 1");
+    check_measure(rotations, eyes);
     spec.rotations = rotations;
     spec.eyes = eyes;
     return prt::make_error_distribution(spec, t.bands);
@@ -1842,7 +1940,7 @@ PYBIND11_MODULE(_prt, m) {
 
   m.def(
       "compress",
-      [distribution](const PyTransfer& p, int clusters, int pca, int glossy_clusters, int glossy_pca, int weights,
+      [distribution, check_measure](const PyTransfer& p, int clusters, int pca, int glossy_clusters, int glossy_pca, int weights,
                      int iterations, std::uint64_t seed, const py::object& target_error, const py::object& mesh,
                      const py::object& envs, const py::object& spectra, bool own_spectra, bool sun, int rotations,
                      int eyes, const std::string& statistic, const std::string& metric, bool exhaustive,
@@ -1852,6 +1950,7 @@ PYBIND11_MODULE(_prt, m) {
         if (weights != 16 && weights != 32) throw Error("weights: 16 or 32 (bits per stored weight)");
         if (statistic != "p95" && statistic != "mean") throw Error("statistic: 'p95' or 'mean', got '" + statistic + "'");
         if (metric != "band" && metric != "plain") throw Error("metric: 'band' or 'plain', got '" + metric + "'");
+        check_measure(rotations, eyes);  // whether or not a target uses them, as the command's options
         PyTransfer out;
         out.source = "<compressed>";
         if (target_error.is_none()) {
@@ -1868,7 +1967,14 @@ PYBIND11_MODULE(_prt, m) {
           });
         } else {
           if (mesh.is_none()) throw Error("mesh: target_error measures the relit error on the mesh: give mesh=");
-          const double target = target_error.cast<double>();
+          if (!py::isinstance<prt::Mesh>(mesh))
+            throw Error("mesh: expected a prt.Mesh (load_mesh, make_mesh), got " +
+                        std::string(py::str(py::type::of(mesh).attr("__name__"))));
+          const DArray te = real_array<double>(target_error, "target_error");
+          if (te.ndim() != 0) throw Error("target_error: a relative RMS error in (0, 1), a number");
+          const double target = te.data()[0];
+          if (!(target > 0 && target < 1))
+            throw Error("target_error: a relative RMS error in (0, 1), got " + number_text(target));
           const auto& target_mesh = mesh.cast<const prt::Mesh&>();
           prt::check_matches(p.t, target_mesh, p.source);
           const prt::ErrorDistribution d = distribution(p.t, envs, spectra, own_spectra, sun, rotations, eyes);
@@ -2014,7 +2120,7 @@ PYBIND11_MODULE(_prt, m) {
       "relight",
       [](const PyWavelet& p, const prt::Mesh& mesh, const py::object& map, int terms, const std::string& selection,
          const py::object& rotate) {
-        if (terms < 1) throw Error("terms: must be at least 1 (K >= 6 r^2 keeps all)");
+        check_terms(terms);
         const prt::wavelet::Selection sel = [&] {
           try {
             return prt::wavelet::parse_selection(selection);
@@ -2156,8 +2262,7 @@ PYBIND11_MODULE(_prt, m) {
         prt::ZhFitOptions o;
         o.lobes = lobes;
         o.rounds = rounds;
-        if (threads < 0) throw Error("threads: must be >= 0 (0: all cores)");
-        o.threads = threads;
+        o.threads = threads_arg(threads);
         PyZhTransfer z;
         z.z = run_released(std::move(progress),
                            [&](const prt::Progress& pr) { return prt::fit_zh_transfer(p.t, mesh, o, pr); });
@@ -2338,10 +2443,13 @@ PYBIND11_MODULE(_prt, m) {
                                return l;
                              })
       .def_property_readonly("hash", &prt::Scene::hash, "Scene hash (a lightmap's scene_hash)")
-      .def("lightmap_uv_set", &prt::Scene::lightmap_uv_set, py::arg("requested") = -1,
-           "The UV set a lightmap is laid out in: `requested` (>= 0; every object must have it) or, with -1, "
-           "TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises prt.Error "
-           "naming the objects that lack it.")
+      .def(
+          "lightmap_uv_set",
+          [](const prt::Scene& s, int requested) { return s.lightmap_uv_set(uv_set_arg(requested, "requested")); },
+          py::arg("requested") = -1,
+          "The UV set a lightmap is laid out in: `requested` (0 to 7, TEXCOORD_N; every object must have it) or, "
+          "with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises "
+          "prt.Error for any other number, and naming the objects that lack the set.")
       .def("__repr__", [](const prt::Scene& s) { return "<prt.Scene " + prt::describe(s) + ">"; });
 
   m.def(
@@ -2445,8 +2553,15 @@ PYBIND11_MODULE(_prt, m) {
         o.bounces = bounces;
         o.seed = seed;
         const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
+        uv_set_arg(uv_set, "uv_set");
         py::gil_scoped_release release;
-        prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, scene.lightmap_uv_set(uv_set));
+        const int set = scene.lightmap_uv_set(uv_set);
+        // As the command: an atlas the machine's memory cannot hold is refused
+        // from its UV area, before its texels are rasterised.
+        prt::TransferOptions planned = o;
+        planned.memory_limit = prt::default_memory_limit();
+        prt::check_lightmap_memory(scene, width, height, set, planned, adapt.has_value());
+        prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
         prt::move_texels_out_of_geometry(scene.mesh, tx);
         return adapt ? prt::compute_adaptive_lightmap_transfer(scene, tx, o, *adapt)
                      : prt::compute_lightmap_transfer(scene, tx, o);
@@ -2460,8 +2575,8 @@ PYBIND11_MODULE(_prt, m) {
       "Arguments (prt precompute's option in brackets):\n"
       "  scene: a Scene (load_scene).\n"
       "  width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].\n"
-      "  uv_set: the scene's UV set the atlas is laid out in (-1: TEXCOORD_1 where every object has it, else TEXCOORD_0) [--uv].\n"
-      "  bands [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
+      "  uv_set: the scene's UV set the atlas is laid out in, 0 to 7 (TEXCOORD_N), or -1: TEXCOORD_1 where every object has it, else TEXCOORD_0 [--uv].\n"
+      "  bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
       "  adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.\n"
       "\n"
       "Returns a Lightmap.");
@@ -2470,7 +2585,7 @@ PYBIND11_MODULE(_prt, m) {
       "lightmap_from_rows",
       [](const prt::Scene& scene, int width, int height, const py::object& rows, int uv_set, const std::string& mode) {
         FArray a = real_array<float>(rows, "rows");
-        const int set = scene.lightmap_uv_set(uv_set);
+        const int set = scene.lightmap_uv_set(uv_set_arg(uv_set, "uv_set"));
         const prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
         const std::size_t n = tx.layout.texels.size();
         if (a.ndim() != 3 || std::size_t(a.shape(0)) != n || (a.shape(1) != 1 && a.shape(1) != 3))
@@ -2496,7 +2611,7 @@ PYBIND11_MODULE(_prt, m) {
       "A lightmap from arrays, for a Scene: every texel of the atlas stored (none analytic); .write() makes a file prt relight reads.\n"
       "\n"
       "Arguments:\n"
-      "  scene: the Scene; width, height: the atlas in texels; uv_set: its UV set (-1: as precompute_lightmap).\n"
+      "  scene: the Scene; width, height: the atlas in texels, 1 to 16384 each; uv_set: its UV set, 0 to 7 (-1: as precompute_lightmap).\n"
       "  rows: float32 (N, channels, bands^2), one per covered texel, in texel order.\n"
       "  mode: the transfer mode recorded ('shadowed', 'interreflected', ...).\n"
       "\n"
@@ -2556,6 +2671,18 @@ PYBIND11_MODULE(_prt, m) {
               throw Error("sh: float32 (P, bands^2, 3), what relight() returns");
             if (scene.hash() != t.scene_hash) throw Error("scene: not the scene the probe volume was computed for");
             const std::size_t N = std::size_t(p.shape(0));
+            // Every normal non-zero, and used as a unit normal: prt relight --at's rule for its points' normals.
+            std::vector<glm::dvec3> unit(N);
+            for (std::size_t i = 0; i < N; ++i) {
+              const glm::dvec3 nn(n.at(i, 0), n.at(i, 1), n.at(i, 2));
+              const double big = std::max({std::abs(nn.x), std::abs(nn.y), std::abs(nn.z)});  // finite (real_array)
+              if (!(big > 0))
+                throw Error("normals: row " + std::to_string(i) + " is (" + number_text(nn.x) + ", " +
+                            number_text(nn.y) + ", " + number_text(nn.z) +
+                            "); each normal must be non-zero (it is normalised)");
+              const double len = std::sqrt(nn.x * nn.x + nn.y * nn.y + nn.z * nn.z);  // as read_points_csv
+              unit[i] = len > 0 && std::isfinite(len) ? nn / len : glm::normalize(nn / big);
+            }
             std::vector<float> out(N * 3);
             {
               py::gil_scoped_release release;
@@ -2564,7 +2691,7 @@ PYBIND11_MODULE(_prt, m) {
               const prt::ProbeVisibility visible = [&](const glm::dvec3& a, const glm::dvec3& b) { return occlusion(a, b); };
               const float* L = l.data();
               for (std::size_t i = 0; i < N; ++i) {
-                const glm::dvec3 q(p.at(i, 0), p.at(i, 1), p.at(i, 2)), nn(n.at(i, 0), n.at(i, 1), n.at(i, 2));
+                const glm::dvec3 q(p.at(i, 0), p.at(i, 1), p.at(i, 2)), nn = unit[i];
                 const prt::ProbeWeights w = prt::probe_weights(t, slots, q, nn, visible);
                 std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
                 for (int c = 0; c < w.count; ++c)
@@ -2572,25 +2699,30 @@ PYBIND11_MODULE(_prt, m) {
                     const float* src = L + (std::size_t(w.probe[std::size_t(c)]) * std::size_t(nc) + std::size_t(k)) * 3;
                     mix[std::size_t(k)] += w.weight[std::size_t(c)] * glm::vec3(src[0], src[1], src[2]);
                   }
-                const glm::dvec3 e = glm::length(nn) > 0 ? prt::lambert_from_sh(mix, t.bands, nn) : glm::dvec3(0.0);
+                const glm::dvec3 e = prt::lambert_from_sh(mix, t.bands, nn);
                 for (int c = 0; c < 3; ++c) out[i * 3 + std::size_t(c)] = float(e[c]);
               }
             }
             return copy(out.data(), {py::ssize_t(N), 3});
           },
           py::arg("scene"), py::arg("points"), py::arg("normals"), py::arg("sh"),
-          "float32 (N, 3): E(p, n)/pi at `points` (N, 3) with unit `normals` (N, 3) in `scene` (the Scene the volume "
-          "was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility)")
+          "float32 (N, 3): E(p, n)/pi at `points` (N, 3) with `normals` (N, 3; each non-zero, normalised) in `scene` "
+          "(the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at "
+          "(traced visibility). Points and normals must be finite.")
       .def(
           "matrices",
           [](const prt::ProbeTransfer& t, int in_bands) {
+            if (in_bands < 1 || in_bands > prt::kMaxProbeMatrixBands)
+              throw Error("in_bands: 1 to " + std::to_string(prt::kMaxProbeMatrixBands) + ", got " +
+                          std::to_string(in_bands));
             int channels = 1;
             const std::vector<float> mm = prt::probe_sh_matrices(t, in_bands, channels);
             return copy(mm.data(), {py::ssize_t(t.probes()), channels, py::ssize_t(t.bands) * t.bands,
                                     py::ssize_t(in_bands) * in_bands});
           },
           py::arg("in_bands") = 3,
-          "float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes")
+          "float32 (P, channels, bands^2, in_bands^2): the SH transfer matrices prt export --matrices writes (in_bands "
+          "1 to 16, --matrix-bands)")
       .def("write", [](const prt::ProbeTransfer& t, const py::object& path) { prt::write_probe_transfer(path_of(path, "path"), t); },
            py::arg("path"), "Writes the probe file to `path` (docs/FORMAT.md \"Probe volume\"), atomically.")
       .def("__repr__", [](const prt::ProbeTransfer& t) {
@@ -2609,11 +2741,11 @@ PYBIND11_MODULE(_prt, m) {
         const std::string out = path_of(path, "path");
         // A ProbeVolume, or its file (named in the JSON as prt export names it).
         std::optional<prt::ProbeTransfer> read;
-        std::string probes_file = "<computed>";
+        std::string probes_file = "<computed>", probes_path;
         if (is_path(probes)) {
-          const std::string p = path_of(probes, "probes");
-          read = prt::read_probe_transfer(p);
-          probes_file = std::filesystem::path(p).filename().string();
+          probes_path = path_of(probes, "probes");
+          read = prt::read_probe_transfer(probes_path);
+          probes_file = std::filesystem::path(probes_path).filename().string();
         } else if (!py::isinstance<prt::ProbeTransfer>(probes)) {
           throw Error("probes: expected a ProbeVolume (read_probes, precompute_probes) or its file");
         }
@@ -2632,11 +2764,20 @@ PYBIND11_MODULE(_prt, m) {
             throw Error("rotate: (yaw, pitch, roll) in degrees, as prt export --rotate (recorded in the file)");
           for (int k = 0; k < 3; ++k) euler[std::size_t(k)] = r.data()[k];
         }
-        constexpr int kMaxMatrixBands = 16;  // prt export --matrix-bands's range
-        if (matrix_bands < 1 || matrix_bands > kMaxMatrixBands)
-          throw Error("matrix_bands: 1 to " + std::to_string(kMaxMatrixBands) + ", got " + std::to_string(matrix_bands));
+        if (matrix_bands < 1 || matrix_bands > prt::kMaxProbeMatrixBands)  // prt export --matrix-bands's range
+          throw Error("matrix_bands: 1 to " + std::to_string(prt::kMaxProbeMatrixBands) + ", got " +
+                      std::to_string(matrix_bands));
         if (matrices.is_none() && matrix_bands != 3) throw Error("matrix_bands: applies with matrices= (a file)");
         const std::string matrices_path = matrices.is_none() ? std::string() : path_of(matrices, "matrices");
+        // No output over an input (prt export's rule), nor the matrices over the JSON.
+        const std::vector<NamedInput> inputs = {{"probes", probes_path}, {"bake", map}, {"scene", scene.mesh.source}};
+        check_not_input("path", out, inputs);
+        if (!matrices_path.empty()) {
+          check_not_input("matrices", matrices_path, inputs);
+          if (prt::same_file(matrices_path, out))
+            throw Error("matrices: " + matrices_path + ": is also path" + (matrices_path == out ? "" : " (" + out + ")") +
+                        ", the JSON; the two outputs need two files (choose another name for one)");
+        }
         py::gil_scoped_release release;
         prt::EnvMap env = prt::load_envmap(map);
         prt::require_finite(env);
@@ -2646,12 +2787,17 @@ PYBIND11_MODULE(_prt, m) {
         names.map = std::filesystem::path(map).filename().string();
         names.generator = "prt " PRT_VERSION " (prt export)";
         const std::string text = prt::probe_engine_json(t, env, euler, names);
-        prt::write_text_file(out, text);
-        if (!matrices_path.empty()) {
-          int channels = 1;
-          const std::vector<float> mats = prt::probe_sh_matrices(t, matrix_bands, channels);
-          prt::write_probe_matrices(matrices_path, t, mats, matrix_bands, channels);
+        int channels = 1;
+        const std::vector<float> mats =
+            matrices_path.empty() ? std::vector<float>() : prt::probe_sh_matrices(t, matrix_bands, channels);
+        // Both files or neither (prt export's outputs are staged alike).
+        prt::StagedWrites staged;
+        {
+          prt::StagedWrites::Scope scope(staged);
+          prt::write_text_file(out, text);
+          if (!matrices_path.empty()) prt::write_probe_matrices(matrices_path, t, mats, matrix_bands, channels);
         }
+        staged.commit();
       },
       py::arg("probes"), py::arg("scene"), py::arg("bake"), py::arg("path"), py::kw_only(),
       py::arg("rotate") = py::none(), py::arg("matrices") = py::none(), py::arg("matrix_bands") = 3,
@@ -2660,22 +2806,20 @@ PYBIND11_MODULE(_prt, m) {
       "Unity SphericalHarmonicsL2 coefficients, with positions in both engines' axes (docs/PROBES.md \"Export\"). "
       "PATH ends in .json. probes: a ProbeVolume or its file (the file's name is recorded, as the command records "
       "it). matrices: also write each probe's SH transfer matrix (--matrices FILE.bin), taking matrix_bands bands "
-      "of lighting (--matrix-bands).");
+      "of lighting, 1 to 16 (--matrix-bands). Neither output may be an input (the probes file, the map, the "
+      "scene's file) or the other output; both are written, or neither.");
 
   m.def(
       "precompute_probes",
       [](const prt::Scene& scene, const py::object& dims, const std::string& mode, int bands, int bounce_bands,
          int bounces, std::uint64_t seed) {
-        const auto d = dims.cast<std::tuple<int, int, int>>();
+        const std::array<int, 3> dd = probe_dims_arg(dims);
         prt::ProbeOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bands = bands;
         o.bounce_bands = bounce_bands;
         o.bounces = bounces;
         o.seed = seed;
-        const std::array<int, 3> dd = {std::get<0>(d), std::get<1>(d), std::get<2>(d)};
-        for (int k : dd)
-          if (k < 2 || k > prt::kMaxProbeDim) throw Error("dims: each 2 to " + std::to_string(prt::kMaxProbeDim));
         if (scene.materials.empty()) {  // a bare mesh: prt precompute's --albedo default
           o.override_albedo = true;
           o.albedo = glm::vec3(0.8f);
@@ -2689,9 +2833,9 @@ PYBIND11_MODULE(_prt, m) {
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
       "  scene: a Scene (load_scene).\n"
-      "  dims: (NX, NY, NZ) probes, 2 to the limit each, spanning the scene's bounding box, corners included [--probes].\n"
-      "  mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH (3) [--bands].\n"
-      "  bounce_bands: the environment bands the bounce light takes (6) [--bounce-bands]; bounces [--bounces]; seed [--seed].\n"
+      "  dims: (NX, NY, NZ) probes, three whole numbers, each 2 to 1024 and at most 16777216 in all, spanning the scene's bounding box, corners included [--probes].\n"
+      "  mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH, 1 to 8 (3) [--bands].\n"
+      "  bounce_bands: the environment bands the bounce light takes, 1 to 16 (6) [--bounce-bands]; bounces: 1 to 8, interreflected [--bounces]; seed [--seed].\n"
       "\n"
       "Returns a ProbeVolume.");
 }

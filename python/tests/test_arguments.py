@@ -311,3 +311,99 @@ def test_every_function_names_an_unknown_keyword():
         with pytest.raises(prt.Error) as info:
             fn(no_such_argument=1)
         assert str(info.value).startswith("no_such_argument: not an argument of"), f"{fname}: {info.value}"
+
+
+# ---- numbers out of the command's range (issue 45) ------------------------------
+#
+# Every numeric argument against prt's option of the same name: the values
+# the command refuses are refused (a prt.Error naming the argument or the
+# option), the command's own limits still taken. The range checks come
+# before any OpenGL context is needed, so render()'s run without one.
+
+def range_refused(call, words):
+    with pytest.raises(Exception) as info:
+        call()
+    e = info.value
+    assert type(e) is prt.Error, f"{type(e).__name__}: {e}"
+    assert words in str(e), f"'{words}' not in: {e}"
+    return str(e)
+
+
+def test_numbers_beyond_the_commands_ranges_are_refused(cube, transfer, zh, tmp_path):
+    from conftest import ENV
+    E, L = envmap(), lighting()
+    glossy = prt.precompute(cube, bands=3, samples=8, material="glossy")
+    wavelet = prt.precompute(cube, basis="wavelet", cube_res=4)
+    cases = [
+        # render: --exposure [-64, 64] (1e308 was an all-white frame), --fov 1 to 179, --terms 1 to 2^30
+        (lambda: prt.render(transfer, cube, E, exposure=65), "exposure: must be a number in [-64, 64] (stops) or "
+                                                             "'auto', got 65.0"),
+        (lambda: prt.render(transfer, cube, E, exposure=-1e308), "exposure: must be a number in [-64, 64]"),
+        (lambda: prt.render(transfer, cube, E, fov=0.5), "fov: vertical degrees, 1 to 179, got 0.5"),
+        (lambda: prt.render(transfer, cube, E, fov=179.5), "fov: vertical degrees, 1 to 179"),
+        (lambda: prt.render(wavelet, cube, E, terms=2 ** 30 + 1), "terms: must be 1 to 1073741824"),
+        (lambda: prt.render(wavelet, cube, E, terms=0), "terms: must be 1 to 1073741824"),
+        (lambda: prt.render(glossy, cube, E, diffuse=-1), "diffuse: each of r, g, b must be from 0 to 1"),
+        # relight: --diffuse 0 to 1 (-1 was taken as 'the transfer's own albedo'), --gloss, --specular
+        (lambda: prt.relight(glossy, cube, L, eye=(0, 0, 3), diffuse=-1), "diffuse: each of r, g, b must be from 0 to 1"),
+        (lambda: prt.relight(glossy, cube, L, eye=(0, 0, 3), diffuse=(0.5, 2, 0.5)), "diffuse: each of r, g, b"),
+        (lambda: prt.relight(glossy, cube, L, eye=(0, 0, 3), gloss=4097), "gloss exponent is 4097"),
+        (lambda: prt.relight(glossy, cube, L, eye=(0, 0, 3), specular=1.5), "specular strength is 1.5"),
+        (lambda: prt.relight(wavelet, cube, E, terms=2 ** 30 + 1), "terms: must be 1 to 1073741824"),
+        # export_gltf and export_web: --exposure, --fov
+        (lambda: prt.export_gltf(transfer, cube, tmp_path / "x.glb", bake=ENV, exposure=1e308), "exposure: must be"),
+        (lambda: prt.export_web(transfer, cube, tmp_path / "w", exposure=-65), "exposure: must be a number in [-64"),
+        (lambda: prt.export_web(transfer, cube, tmp_path / "w", fov=0.5), "fov: vertical degrees, 1 to 179"),
+        # project: --window-width, a positive number of bands (negative became the default)
+        (lambda: prt.project(E, 3, window="hanning", window_width=-1), "window_width: the window's width in bands, > 0"),
+        (lambda: prt.project(E, 65), "--bands must be between 1 and 64"),
+        (lambda: prt.sh_eval(65, [0, 0, 1]), "bands must be between 1 and 64"),
+        # reference: --samples 2 to 2^24, --albedo 0 to 1 (2 was taken), --threads 0 to 1024, --bounces 0 to 64
+        (lambda: prt.reference(cube, E, samples=2 ** 24 + 1), "samples must be 2 (the standard error needs two) to "
+                                                               "16777216"),
+        (lambda: prt.reference(cube, E, samples=8, albedo=2), "reference: albedo must be in [0, 1]"),
+        (lambda: prt.reference(cube, E, samples=8, threads=1025), "threads: must be 0 (every core) to 1024, got 1025"),
+        (lambda: prt.reference(cube, E, samples=8, mode="interreflected", bounces=65), "bounces must be from 0 to 64"),
+        # fit_zh: --threads, --lobes
+        (lambda: prt.fit_zh(transfer, cube, threads=1025), "threads: must be 0 (every core) to 1024"),
+        (lambda: prt.fit_zh(transfer, cube, threads=-1), "threads: must be 0 (every core) to 1024, got -1"),
+        (lambda: prt.fit_zh(transfer, cube, lobes=9), "lobes must be 1 to 8"),
+        # verify: --bands-max 3 to 64
+        (lambda: prt.verify(bands_max=65), "bands_max: must be 3 to 64"),
+    ]
+    for call, words in cases:
+        range_refused(call, words)
+    # The limits themselves: taken.
+    assert prt.project(E, 3, window="hanning", window_width=0).shape == (9, 3)
+    assert prt.reference(cube, E, samples=2, albedo=1.0, threads=1024)[0].shape == (8, 3)
+    assert prt.fit_zh(transfer, cube, threads=1024).lobes == 4
+    assert prt.relight(glossy, cube, L, eye=(0, 0, 3), diffuse=(0, 1, 0.5), gloss=4096, specular=1).shape == (8, 3)
+    assert prt.relight(wavelet, cube, E, terms=2 ** 30).shape == (8, 3)
+
+
+def test_an_output_over_an_input_is_refused(cube, transfer, tmp_path):
+    """export_gltf and export_web write nothing over the files the call reads
+    (prt export's rule: the same file through a link too)."""
+    import os
+    import shutil
+    from conftest import ENV, MESH
+    env = tmp_path / "env.exr"
+    shutil.copy(ENV, env)
+    os.symlink(env, tmp_path / "env-link.glb")
+    tfile = tmp_path / "t.prt"
+    transfer.write(tfile)
+    t = prt.read_transfer(tfile)
+    mfile = tmp_path / "m.obj"
+    shutil.copy(MESH, mfile)
+    m = prt.load_mesh(mfile)
+    before = env.read_bytes(), tfile.read_bytes(), mfile.read_bytes()
+    range_refused(lambda: prt.export_gltf(t, cube, tmp_path / "env-link.glb", bake=env),
+                  "path: " + str(tmp_path / "env-link.glb") + ": is the input bake (" + str(env) + ")")
+    range_refused(lambda: prt.export_gltf(t, cube, tfile), "path: " + str(tfile) + ": is the input transfer")
+    mt = prt.precompute(m, bands=2, samples=4)
+    range_refused(lambda: prt.export_gltf(mt, m, mfile), "path: " + str(mfile) + ": is the input mesh")
+    range_refused(lambda: prt.export_web(t, cube, tfile), "dir: " + str(tfile) + ": is the input transfer")
+    range_refused(lambda: prt.export_web(t, cube, env, bake=env), "is the input bake")
+    assert (env.read_bytes(), tfile.read_bytes(), mfile.read_bytes()) == before
+    prt.export_gltf(t, cube, tmp_path / "out.glb", bake=env)  # another name: written
+    assert (tmp_path / "out.glb").stat().st_size > 0

@@ -86,3 +86,51 @@ def test_compress_arguments_are_checked(files):
     ]:
         with pytest.raises(prt.Error, match=words):
             call()
+
+
+# ---- hostile arguments (issue 45): prt compress's ranges, in the library ----
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(clusters=2 ** 24 + 1), "--clusters must be 1 to 16777216, got 16777217"),
+    (dict(clusters=0), "--clusters must be 1 to 16777216, got 0"),
+    (dict(pca=-1), "--pca must be 0 to 1048576, got -1"),
+    (dict(pca=2 ** 20 + 1), "--pca must be 0 to 1048576"),
+    (dict(iterations=0), "--iterations must be 1 to 1000, got 0"),
+    (dict(iterations=1001), "--iterations must be 1 to 1000, got 1001"),
+    (dict(target_error=0.05, rotations=4097), "rotations: must be 1 to 4096, got 4097"),  # was taken
+    (dict(target_error=0.05, rotations=0), "rotations: must be 1 to 4096, got 0"),
+    (dict(target_error=0.05, eyes=4097), "eyes: must be 1 to 4096, got 4097"),
+    (dict(target_error=0.05, eyes=0), "eyes: must be 1 to 4096"),
+    (dict(target_error=0.05, iterations=1001), "--iterations must be 1 to 1000"),
+    (dict(target_error="x"), "target_error: dtype"),  # was pybind11's cast error
+    (dict(target_error=1.5), "target_error: a relative RMS error in (0, 1), got 1.5"),
+    (dict(target_error=0.0), "target_error: a relative RMS error in (0, 1), got 0.0"),
+    (dict(target_error=[0.1, 0.2]), "target_error: a relative RMS error in (0, 1), a number"),
+])
+def test_compress_counts_out_of_range_are_refused(files, kw, words):
+    t = prt.read_transfer(files[0])
+    mesh = prt.load_mesh(MESH)
+    args = dict(kw)
+    if "target_error" in args:
+        args["mesh"] = mesh
+    with pytest.raises(Exception) as info:
+        prt.compress(t, **args)
+    assert type(info.value) is prt.Error and words in str(info.value), f"{type(info.value).__name__}: {info.value}"
+
+
+def test_compress_glossy_and_measure_ranges(files):
+    g = prt.read_transfer(files[1])
+    for kw, words in [(dict(glossy_clusters=2 ** 24 + 1), "--glossy-clusters must be 1 to 16777216"),
+                      (dict(glossy_pca=2 ** 20 + 1), "--glossy-pca must be 0 to 1048576")]:
+        with pytest.raises(prt.Error, match=re.escape(words)):
+            prt.compress(g, clusters=4, pca=2, **kw)
+    t = prt.read_transfer(files[0])
+    c = prt.compress(t, clusters=4, pca=2, iterations=1000)  # the limits themselves are taken
+    mesh = prt.load_mesh(MESH)
+    with pytest.raises(prt.Error, match="mesh: expected a prt.Mesh"):
+        prt.compress(t, target_error=0.05, mesh="scene.obj")  # was pybind11's cast error
+    for kw, words in [(dict(rotations=4097), "rotations: must be 1 to 4096"), (dict(eyes=0), "eyes: must be 1")]:
+        with pytest.raises(prt.Error, match=words):
+            prt.compression_error(t, c, mesh, **kw)
+    e = prt.compression_error(t, c, mesh, envs=[ENV], rotations=4096)
+    assert e["samples"] == 4096

@@ -108,3 +108,66 @@ def test_adaptive_lightmap_refusals(kwargs, words):
     with pytest.raises(prt.Error) as info:
         prt.precompute_lightmap(s, 16, 16, bands=3, samples=64, **kwargs)
     assert words in str(info.value)
+
+
+# ---- hostile arguments (issue 45): the command's ranges, refused by name ----
+
+UV_RULE = "expected -1 (choose: TEXCOORD_1 where every object has it, else TEXCOORD_0) or 0 to 7 (TEXCOORD_N)"
+
+
+def refused(call, *words):
+    with pytest.raises(Exception) as info:
+        call()
+    e = info.value
+    assert type(e) is prt.Error, f"{type(e).__name__}: {e}"
+    for w in words:
+        assert w in str(e), f"'{w}' not in: {e}"
+
+
+def test_uv_set_is_minus_one_or_a_texcoord_0_to_7():
+    s = prt.load_scene(SCENE)
+    rows = np.zeros((1, 1, 9), np.float32)
+    for bad in (-2, -100, 8, 2 ** 20):
+        refused(lambda: s.lightmap_uv_set(bad), f"requested: {bad}: " + UV_RULE)  # -2 was taken
+        refused(lambda: s.lightmap_uv_set(requested=bad), f"requested: {bad}: ")
+        refused(lambda: prt.precompute_lightmap(s, 16, 16, uv_set=bad, samples=8), f"uv_set: {bad}: " + UV_RULE)
+        refused(lambda: prt.lightmap_from_rows(s, 16, 16, rows, uv_set=bad), f"uv_set: {bad}: ")
+    # -1 chooses, 0 and 1 are the scene's; 7 is in range, and no object has it: the objects are named.
+    assert (s.lightmap_uv_set(), s.lightmap_uv_set(-1), s.lightmap_uv_set(0), s.lightmap_uv_set(1)) == (1, 1, 0, 1)
+    refused(lambda: s.lightmap_uv_set(7), "have no UV set 7 (TEXCOORD_7)")
+    assert prt.precompute_lightmap(s, 8, 8, uv_set=1, bands=2, samples=8).uv_set == 1
+
+
+@pytest.mark.parametrize("kw, words", [
+    (dict(bands=17), "--bands must be between 1 and 16"),  # was taken (prt precompute --lightmap stopped at 16)
+    (dict(bands=0), "--bands must be between 1 and 16"),
+    (dict(samples=0), "--samples must be between 1 and 16777216"),
+    (dict(samples=2 ** 24 + 1), "--samples must be between 1 and 16777216"),
+    (dict(bounces=65, mode="interreflected"), "--bounces must be between 0 and 64"),
+    (dict(width=0), "lightmap size 0x16 is outside 1..16384"),
+    (dict(height=16385), "lightmap size 16x16385 is outside 1..16384"),
+])
+def test_precompute_lightmap_counts_out_of_range_are_refused(kw, words):
+    s = prt.load_scene(SCENE)
+    args = {"width": 16, "height": 16, "samples": 8, **kw}
+    refused(lambda: prt.precompute_lightmap(s, args.pop("width"), args.pop("height"), **args), words)
+
+
+def test_precompute_lightmap_takes_the_limits():
+    s = prt.load_scene(SCENE)
+    assert prt.precompute_lightmap(s, 4, 4, bands=16, mode="unshadowed", samples=1).bands == 16
+    refused(lambda: prt.lightmap_from_rows(s, 0, 16, np.zeros((1, 1, 9), np.float32)), "lightmap size 0x16")
+
+
+def test_an_atlas_the_memory_cannot_hold_is_refused_before_rasterising():
+    # As prt precompute --lightmap 16384x16384: refused from the UV area
+    # (the command's plan), not after rasterising 2^28 texels.
+    # The room's atlas at 16384^2 needs at least 35.5 GB; on a machine whose
+    # 80% default limit holds that, the test would bake it: skip there.
+    with open("/proc/meminfo") as f:
+        total_kb = int(next(line for line in f if line.startswith("MemTotal")).split()[1])
+    if total_kb * 0.8 > 35.5e6:
+        pytest.skip("this machine's memory holds a 16384^2 atlas of the room")
+    s = prt.load_scene(SOURCE / "models" / "room.gltf")
+    with pytest.raises(prt.Error, match="refused before the texels are rasterised"):
+        prt.precompute_lightmap(s, 16384, 16384, samples=16)

@@ -90,6 +90,42 @@ def test_bad_options_raise_prt_error(mesh):
         prt.precompute(mesh, albedo=1.5)
 
 
+# Every count precompute takes, against prt precompute's range for the same
+# option (issue 45): refused by the library's validator (C++ callers get the
+# same), the boundary values still taken.
+@pytest.mark.parametrize("kw, words", [
+    (dict(bands=17), "--bands must be between 1 and 16 (prt render and prt view draw at most 16 bands"),  # was taken
+    (dict(bands=0), "--bands must be between 1 and 16"),
+    (dict(bands=64), "got 64"),
+    (dict(samples=0), "--samples must be between 1 and 16777216, got 0"),
+    (dict(samples=2 ** 24 + 1), "--samples must be between 1 and 16777216"),
+    (dict(bounces=-1), "--bounces must be between 0 and 64"),
+    (dict(bounces=65), "--bounces must be between 0 and 64"),
+    (dict(threads=-1), "threads: must be 0 (every core) to 1024, got -1"),
+    (dict(threads=1025), "threads: must be 0 (every core) to 1024, got 1025"),
+    (dict(basis="wavelet", threads=1025), "threads: must be 0 (every core) to 1024"),
+    (dict(material="glossy", bands=13), "at most 12"),
+    (dict(bounce_tolerance=1.0), "--bounce-tolerance"),
+    (dict(basis="wavelet", cube_res=3), "cube"),
+    (dict(basis="wavelet", threshold=1.0), "threshold"),
+    (dict(verify_adaptive=0.5), "verify_adaptive"),
+])
+def test_counts_out_of_the_commands_range_are_refused(mesh, kw, words):
+    with pytest.raises(Exception) as info:
+        prt.precompute(mesh, **{"samples": 8, **kw})
+    assert type(info.value) is prt.Error and words in str(info.value), f"{type(info.value).__name__}: {info.value}"
+
+
+def test_the_commands_limits_are_still_taken(mesh):
+    for kw in (dict(bands=16, mode="unshadowed"), dict(bands=1), dict(samples=1), dict(threads=1024),
+               dict(bounces=64, mode="unshadowed")):
+        t = prt.precompute(mesh, **{"samples": 8, **kw})
+        assert t.bands == kw.get("bands", 5)
+    # Glossy's own limit, 12 bands (bands^4 per vertex: a small mesh).
+    tri = prt.make_mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32), np.array([[0, 1, 2]]))
+    assert prt.precompute(tri, bands=12, material="glossy", samples=4).bands == 12
+
+
 def test_gil_is_released(mesh):
     stamps = []
     stop = threading.Event()
