@@ -162,6 +162,38 @@ LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTex
   return setup.finish(detail::compute_at(scene.mesh, src, setup.o, progress), texels);
 }
 
+void check_lightmap_memory(const Scene& scene, int width, int height, int uv_set, const TransferOptions& options,
+                           bool adaptive, const glm::vec3* albedo) {
+  if (options.memory_limit == 0) return;
+  const std::size_t P = lightmap_texels_at_least(scene, width, height, uv_set);
+  // What the plan in compute_at (after lightmap_texels, move_texels_out_of_geometry
+  // and TexelSetup) counts at least: the process then holds what it holds now
+  // and the texels (LightmapTexels: texel index, position, normal, albedo,
+  // triangle, barycentrics, texel size) and TexelSetup's map of the atlas;
+  // its arrays are those of P points or more, in one channel at least.
+  constexpr std::size_t kTexelBytes = sizeof(std::uint32_t) + 3 * sizeof(glm::vec3) + sizeof(std::uint32_t) +
+                                      sizeof(glm::vec2) + sizeof(float);
+  const std::size_t atlas = std::size_t(width) * std::size_t(height);
+  TransferOptions o = options;
+  o.vertex_colors = false;
+  o.glossy = false;
+  const bool grey = !albedo || (albedo->x == albedo->y && albedo->y == albedo->z);
+  // Adaptive texels are traced in batches, each planned on its own: only the texels themselves count here.
+  const bool batches = adaptive && options.mode != TransferMode::Unshadowed;
+  const TransferMemory plan = detail::point_transfer_memory(scene.mesh, batches ? 0 : P, o, grey, 4);
+  const std::size_t texels = P * kTexelBytes + atlas * sizeof(std::uint32_t);
+  const std::size_t least = plan.minimum + texels;
+  if (options.memory_limit >= least) return;
+  const auto gb = [](std::size_t b) { return fmt::format("{:.2f} GB", double(b) / 1e9); };
+  throw Error(fmt::format(
+      "--memory-limit {}: too small for a {}x{} lightmap of {} (at least {} covered texels, from the area of UV set "
+      "{}; {} triangles) with these options: the process holds {} before it starts, and the texels and the transfer's "
+      "ray scene and per-texel arrays need at least {} whatever the limit; the smallest limit that could work is {} "
+      "or more (--memory-limit {}M, or a smaller atlas); refused before the texels are rasterised",
+      gb(options.memory_limit), width, height, scene.mesh.source, P, uv_set, scene.mesh.triangles.size(),
+      gb(plan.base), gb(least - plan.base), gb(least), (least + 999999) / 1000000));
+}
+
 LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
                                                     const TransferOptions& options, const AdaptiveOptions& adaptive,
                                                     const Progress& progress, AdaptiveReport* report) {

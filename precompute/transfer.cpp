@@ -56,11 +56,14 @@ using detail::Source;
 namespace {
 
 void check_options(const TransferOptions& o, const Mesh& mesh) {
-  sh::check_bands(o.bands, "--bands");
-  if (o.samples < 1 || o.samples > (1 << 24))
-    throw Error(fmt::format("--samples must be between 1 and 16777216, got {}", o.samples));
-  if (o.bounces < 0 || o.bounces > 64)
-    throw Error(fmt::format("--bounces must be between 0 and 64, got {}", o.bounces));
+  if (o.bands < 1 || o.bands > kMaxTransferBands)
+    throw Error(fmt::format("--bands must be between 1 and {} (prt render and prt view draw at most {} bands; transfer "
+                            "accuracy is measured up to {}), got {}",
+                            kMaxTransferBands, kMaxTransferBands, kMaxTransferBands, o.bands));
+  if (o.samples < 1 || o.samples > kMaxSamples)
+    throw Error(fmt::format("--samples must be between 1 and {}, got {}", kMaxSamples, o.samples));
+  if (o.bounces < 0 || o.bounces > kMaxBounces)
+    throw Error(fmt::format("--bounces must be between 0 and {}, got {}", kMaxBounces, o.bounces));
   if (!(o.bounce_tolerance >= 0.0 && o.bounce_tolerance < 1.0))
     throw Error(fmt::format("--bounce-tolerance must be in [0, 1), got {:f}", o.bounce_tolerance));
   if (o.glossy && o.mode == TransferMode::Unshadowed)
@@ -280,6 +283,17 @@ TransferMemory transfer_memory(const Mesh& mesh, const TransferOptions& o) {
   const bool grey = !o.vertex_colors && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z;
   return plan_memory(mesh, V, unlimited,
                      range_begin(V, comm.rank() + 1, comm.size()) - range_begin(V, comm.rank(), comm.size()), false, grey)
+      .memory;
+}
+
+TransferMemory detail::point_transfer_memory(const Mesh& mesh, std::size_t points, const TransferOptions& o, bool grey,
+                                             int pairs) {
+  const Communicator& comm = o.comm ? *o.comm : single_process();
+  TransferOptions unlimited = o;
+  unlimited.memory_limit = 0;
+  return plan_memory(mesh, points, unlimited,
+                     range_begin(points, comm.rank() + 1, comm.size()) - range_begin(points, comm.rank(), comm.size()),
+                     false, grey, pairs)
       .memory;
 }
 

@@ -196,6 +196,14 @@ inline double weighted_square(const float* a, const float* b, const std::vector<
 // Throws prt::Error for options compute_transfer refuses on `mesh`.
 void check_transfer_options(const TransferOptions& options, const Mesh& mesh);
 
+// The plan compute_at makes for `points` points (no vertices, no emitters;
+// `grey`: one channel; `pairs` per ray of the gather: 3 for vertices, 4 for
+// texels) on this rank, as transfer_memory does for the vertices: `base` the
+// process now, `fixed` the arrays and scene, `minimum` the least limit. For a
+// plan known before the points are (check_lightmap_memory).
+TransferMemory point_transfer_memory(const Mesh& mesh, std::size_t points, const TransferOptions& options, bool grey,
+                                     int pairs);
+
 // The transfer at `src` (checked options; no glossy at points but for
 // subsets of vertices with `expand`). keep_everywhere: every rank returns
 // the whole, uncompacted transfer (its coefficients; ambient occlusion, bent

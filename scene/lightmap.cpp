@@ -129,12 +129,22 @@ void parse_lightmap_size(const std::string& text, int& width, int& height) {
                             kMaxLightmapSize, text));
 }
 
-LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
-  const Mesh& mesh = scene.mesh;
+namespace {
+
+// What lightmap_texels and lightmap_texels_at_least take: an atlas size in
+// range, and a UV set the scene has.
+void check_atlas(const Scene& scene, int W, int H, int uv_set) {
   if (W < 1 || H < 1 || W > kMaxLightmapSize || H > kMaxLightmapSize)
     throw Error(fmt::format("lightmap size {}x{} is outside 1..{}", W, H, kMaxLightmapSize));
   if (uv_set < 0 || std::size_t(uv_set) >= scene.uv_sets.size())
-    throw Error(fmt::format("{}: has no UV set {}", mesh.source, uv_set));
+    throw Error(fmt::format("{}: has no UV set {}", scene.mesh.source, uv_set));
+}
+
+}  // namespace
+
+LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
+  const Mesh& mesh = scene.mesh;
+  check_atlas(scene, W, H, uv_set);
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   const std::size_t T = mesh.triangles.size(), N = std::size_t(W) * H;
 
@@ -158,11 +168,11 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   std::vector<glm::vec2> sample(N);
   std::vector<std::uint8_t> shared(N, 0);
   std::size_t overlapped = 0, degenerate = 0;
-  std::vector<std::uint32_t> overlap_objects;
+  std::vector<std::uint32_t> overlap_objects;  // in the order found, each once
+  std::vector<std::uint8_t> object_noted(std::max<std::size_t>(scene.objects.size(), 1), 0);
   const auto note_overlap = [&](std::uint32_t tri) {
     const std::uint32_t o = scene.triangle_object.empty() ? 0 : scene.triangle_object[tri];
-    if (std::find(overlap_objects.begin(), overlap_objects.end(), o) == overlap_objects.end())
-      overlap_objects.push_back(o);
+    if (!object_noted[o]) object_noted[o] = 1, overlap_objects.push_back(o);  // (a search of the list: quadratic)
   };
   Poly p0, p1;
   for (std::size_t t = 0; t < T; ++t) {
@@ -285,6 +295,35 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
     if (shared[i]) ++out.shared;
   }
   return out;
+}
+
+std::size_t lightmap_texels_at_least(const Scene& scene, int W, int H, int uv_set) {
+  const Mesh& mesh = scene.mesh;
+  check_atlas(scene, W, H, uv_set);
+  const auto& uv = scene.uv_sets[std::size_t(uv_set)];
+  // The triangles' UV area in texels, each clipped to the atlas as
+  // lightmap_texels clips it (a texel's coverage sums these parts).
+  double area = 0;
+  Poly p0, p1;
+  glm::dvec2 centroid(0.0);
+  for (const glm::uvec3& tri : mesh.triangles) {
+    if (tri.x >= uv.size() || tri.y >= uv.size() || tri.z >= uv.size()) continue;
+    const glm::dvec2 a(double(uv[tri.x].x) * W, double(uv[tri.x].y) * H), b(double(uv[tri.y].x) * W, double(uv[tri.y].y) * H),
+        c(double(uv[tri.z].x) * W, double(uv[tri.z].y) * H);
+    const double area2 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+    if (!(std::abs(area2) > 1e-12) || !std::isfinite(area2)) continue;  // lightmap_texels skips it too
+    p0 = {a, b, c};
+    clip(p0, p1, 0, 0.0, false);
+    clip(p1, p0, 0, double(W), true);
+    clip(p0, p1, 1, 0.0, false);
+    clip(p1, p0, 1, double(H), true);
+    if (p0.size() >= 3) area += area_centroid(p0, centroid);
+  }
+  // A covered texel's coverage is at most 1 + kOverlapTolerance (more is
+  // refused as an overlap); the float sums of coverage round by far less
+  // than the 1e-3 kept aside.
+  const double texels = area / (1.0 + kOverlapTolerance) * (1.0 - 1e-3);
+  return texels > 0 ? std::size_t(std::min(texels, double(W) * double(H))) : 0;
 }
 
 Mesh texel_points(const LightmapTexels& texels) {

@@ -3,6 +3,7 @@
 
 #include <prt/error.h>
 #include <prt/io.h>
+#include <prt/mesh.h>
 
 #include <fmt/format.h>
 
@@ -188,11 +189,21 @@ QueryPoints read_points_csv(const std::string& path) {
       if (ec != std::errc() || p != tok.data() + tok.size() || tok.empty() || !std::isfinite(v[col]))
         fail(path, line_no, fmt::format("field {} '{}' is not a finite number", col + 1, tok.substr(0, 40)));
     }
-    const glm::dvec3 n(v[3], v[4], v[5]);
-    const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-    if (!(len > 0)) fail(path, line_no, "the normal (nx,ny,nz) is zero");
+    // Within the mesh readers' kMaxCoordinate: the points are ray origins
+    // (Embree traces in float, and aborts on origins past 1.8e18).
+    if (std::max({std::abs(v[0]), std::abs(v[1]), std::abs(v[2])}) > kMaxCoordinate)
+      fail(path, line_no,
+           fmt::format("point {} ({:g}, {:g}, {:g}) has a coordinate beyond prt's limit of {:g} (|x|, |y|, |z| <= {:g} "
+                       "in scene units, as for a mesh's vertices: float ray tracing breaks down past it)",
+                       q.positions.size(), v[0], v[1], v[2], kMaxCoordinate, kMaxCoordinate));
+    // The normal's direction: scaled by its largest component first, so
+    // that neither 1e200 (whose length overflows) nor 1e-200 (whose squares
+    // underflow) loses it.
+    const double big = std::max({std::abs(v[3]), std::abs(v[4]), std::abs(v[5])});
+    if (!(big > 0)) fail(path, line_no, "the normal (nx,ny,nz) is zero");
+    const glm::dvec3 n = glm::dvec3(v[3], v[4], v[5]) / big;
     q.positions.emplace_back(v[0], v[1], v[2]);
-    q.normals.push_back(n / len);
+    q.normals.push_back(n / std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z));
   });
   if (lines == 0) throw Error(path + ": empty file (expected the header 'x,y,z,nx,ny,nz')");
   if (q.positions.empty()) throw Error(path + ": no points after the header");

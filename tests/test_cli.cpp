@@ -781,6 +781,71 @@ TEST(CliOutputs, AnOutputThatIsAnInputIsRefused) {
   EXPECT_EQ(dir.listing(), (std::vector<std::string>{"env.exr", "hard.exr", "link.json"}));
 }
 
+// Two outputs that are one file: refused (exit 2) before any input is read,
+// by check_distinct_outputs (options.h) in every command with two outputs:
+// the same name, the same path spelled another way, a symbolic or hard link
+// to an existing file. Distinct names are not refused.
+TEST(CliOutputs, TwoOutputsThatAreOneFileAreRefused) {
+  TempDir dir;
+  const std::string scene = std::string(PRT_SOURCE_DIR) + "/models/wall-on-floor.gltf";
+  const std::string env = dir.file("env.exr");
+  write_constant_map(env, 16, 8, 0.5f);
+  write_file(dir.file("old.exr"), "an old map");
+  fs::create_symlink(dir.file("old.exr"), dir.work() / "link.exr");
+  fs::create_hard_link(dir.file("old.exr"), dir.work() / "hard.exr");
+  fs::create_directories(dir.work() / "sub");
+  const std::string here = dir.work().string();
+  const std::string dot = here + "/./a.exr", dotdot = here + "/sub/../a.exr";
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{"precompute", scene, "-o", dir.file("o.prt"), "--lightmap", "16x16", "--ao-map", dir.file("a.exr"),
+        "--bent-normal-map", dir.file("a.exr")},
+       "--bent-normal-map " + dir.file("a.exr") + ": is also the --ao-map file; give each output its own name"},
+      {{"precompute", scene, "-o", dir.file("o.prt"), "--lightmap", "16x16", "--ao-map", dir.file("a.exr"),
+        "--obscurance", "0.5", "--obscurance-map", dot},
+       "--obscurance-map " + dot + ": is also the --ao-map file (" + dir.file("a.exr") + ")"},
+      {{"precompute", scene, "-o", dir.file("o.prt"), "--lightmap", "16x16", "--ao-map", dir.file("old.exr"),
+        "--bent-normal-map", dir.file("link.exr")},
+       "--bent-normal-map " + dir.file("link.exr") + ": is also the --ao-map file (" + dir.file("old.exr") + ")"},
+      {{"precompute", scene, "-o", dir.file("o.prt"), "--lightmap", "16x16", "--ao-map", dir.file("hard.exr"),
+        "--bent-normal-map", dir.file("old.exr")},
+       "--bent-normal-map " + dir.file("old.exr") + ": is also the --ao-map file (" + dir.file("hard.exr") + ")"},
+      {{"precompute", scene, "-o", dir.file("a.exr"), "--lightmap", "16x16", "--ao-map", dotdot},
+       "--ao-map " + dotdot + ": is also the --output file (" + dir.file("a.exr") + ")"},
+      {{"precompute", scene, "-o", dir.file("o.ply"), "--subdivide", "0.1", "--subdivided-mesh", here + "/./o.ply"},
+       "--subdivided-mesh " + here + "/./o.ply: is also the --output file"},
+      {{"precompute", scene, "-o", dir.file("o.prt"), "--target-error", "0.1", "--env", env, "--cache",
+        dir.file("o.prt")},
+       "--cache " + dir.file("o.prt") + ": is also the --output file"},
+      {{"export", scene, "--probes", dir.file("p.prt"), "-o", dir.file("m.json"), "--bake", env, "--matrices",
+        dir.file("m.json")},
+       "--matrices " + dir.file("m.json") + ": is also the --output file"},
+      {{"export", scene, dir.file("t.prt"), "-o", dir.file("w.glb"), "--web", here + "/./w.glb"},
+       "--web " + here + "/./w.glb: is also the --output file"},
+      {{"project", env, "-o", dir.file("c.exr"), "--reconstruct", here + "/./c.exr"},
+       "--reconstruct " + here + "/./c.exr: is also the --output file"},
+      {{"view", scene, dir.file("t.prt"), env, "--frames", "1", "--screenshot", dir.file("s.png"), "--screenshot-dir",
+        dir.file("s.png")},
+       "--screenshot " + dir.file("s.png") + ": is also the --screenshot-dir file"},
+  };
+  const auto before = dir.listing();
+  for (const Case& c : cases) {
+    const Result r = run_prt(dir, c.args);
+    EXPECT_EQ(r.code, 2) << describe_run(r);
+    EXPECT_TRUE(contains(r.err, "error: " + c.message)) << c.message << "\n" << r.err;
+    EXPECT_EQ(dir.listing(), before);
+    EXPECT_EQ(read_file(dir.file("old.exr")), "an old map");
+  }
+  // Other names are not refused as the same file: the run goes on (and writes both maps).
+  const Result ok = run_prt(dir, {"precompute", scene, "-o", dir.file("o.prt"), "--lightmap", "16x16", "--samples",
+                                  "16", "-q", "--ao-map", dir.file("a.exr"), "--bent-normal-map", dir.file("b.exr")});
+  EXPECT_EQ(ok.code, 0) << describe_run(ok);
+  EXPECT_TRUE(fs::exists(dir.file("a.exr")) && fs::exists(dir.file("b.exr")));
+}
+
 // Ctrl-C while the outputs are written: exit 130, "interrupted; nothing
 // written", neither output changed, no temporary. PRT_TEST_PAUSE_BEFORE_RENAME
 // (prt/io.h) holds the write step open until the signal comes.

@@ -196,6 +196,48 @@ const std::set<std::string> kNoSharedValue = {"--help",   "--quiet",  "--output"
                                               "--cache",  "--json",   "--weld",   "--vertex-colors",     "--samples",
                                               "--bands",  "--at",     "--probes", "--object", "--dynamic-ao"};  // --bands: bands_table()
 
+// Every option and argument of every command that names a file or a
+// directory: each takes options.h's path_value(), so '' is refused while
+// parsing with the same message (`--ao-map ''` was taken as not given,
+// `--subdivided-mesh ''` and `-o ''` failed after the work).
+const std::map<std::string, std::set<std::string>>& path_options() {
+  static const std::map<std::string, std::set<std::string>> t = {
+      {"project", {"ENV", "--output", "--reconstruct"}},
+      {"precompute",
+       {"MESH", "--output", "--env", "--cache", "--ao-map", "--bent-normal-map", "--obscurance-map",
+        "--subdivided-mesh"}},
+      {"compress", {"IN", "--output", "--measure", "--mesh", "--env", "--spectra"}},
+      {"relight", {"MESH", "TRANSFER", "ENV", "--output", "--at"}},
+      {"export", {"MESH", "TRANSFER", "--probes", "--output", "--bake", "--web", "--env", "--matrices"}},
+      {"render", {"MESH", "TRANSFER", "ENV", "--output", "--probes", "--object"}},
+      {"reference", {"MESH", "ENV", "--output", "--at"}},
+      {"compare", {"A", "B"}},
+      {"info", {"FILE"}},
+      {"view", {"MESH", "TRANSFER", "ENV", "--probes", "--object", "--screenshot", "--screenshot-dir", "--second"}},
+      {"report", {"MESH", "ENV", "--out", "--cache"}},
+  };
+  return t;
+}
+
+// The long options of a command's --help that take a value (a type after
+// the names: "--ao-map TEXT", "--adaptive [TOL]"), flags left out.
+std::set<std::string> value_options_of(const TempDir& dir, const std::string& command) {
+  const Result r = run_prt(dir, {command, "--help"});
+  EXPECT_EQ(r.code, 0) << command << ": " << r.err;
+  std::set<std::string> names;
+  static const std::regex row(R"(^ +((?:-[a-zA-Z],)?--[a-z][a-z0-9-]*) +([A-Z\[][^ ]*))");
+  std::istringstream lines(r.out);
+  std::smatch m;
+  for (std::string line; std::getline(lines, line);)
+    if (std::regex_search(line, m, row)) {
+      const std::string names_part = m[1], type = m[2];
+      // A type is upper case (TEXT, INT:..., UINT, FLOAT, [TOL], FRACTION:...); a flag's help starts with a word.
+      if (!std::regex_match(type, std::regex(R"((\[[A-Z]+\]|[A-Z][A-Z0-9]*([:=].*)?))"))) continue;
+      names.insert(names_part.substr(names_part.find("--")));
+    }
+  return names;
+}
+
 // The message a usage error prints after "error: OPTION: ", or the whole
 // error line.
 std::string message_after(const std::string& err, const std::string& option) {
@@ -253,6 +295,68 @@ TEST(CliSharedOptions, EachRefusesABadValueAlike) {
             << "prt " << c << " " << s.option << " " << good << ": " << r.err;
       }
     }
+  }
+}
+
+// '' for any option of any command that takes a value is refused while
+// parsing (exit 2, the option named); for a path, with path_value()'s
+// message. The --help lists are read, so a new path option without the
+// validator fails here. Positional paths too.
+TEST(CliPathOptions, EmptyValuesAreRefusedWhileParsing) {
+  TempDir dir;
+  // Optional values, where '' is "no value": --adaptive's default TOL, --subdivide's (--target-error / 2).
+  const std::set<std::string> no_value = {"--adaptive", "--subdivide"};
+  std::size_t paths = 0, checked = 0;
+  for (const auto& [c, base] : commands()) {
+    const std::set<std::string> options = value_options_of(dir, c);
+    checked += options.size();
+    const std::set<std::string> expected_paths = path_options().count(c) ? path_options().at(c) : std::set<std::string>{};
+    for (const std::string& o : options) {
+      if (no_value.count(o)) continue;
+      std::vector<std::string> args = base;
+      // An option the placeholder already gives (-o) takes '' in its place.
+      bool replaced = false;
+      for (std::size_t i = 1; i + 1 < args.size(); ++i)
+        if (args[i] == o || (o == "--output" && args[i] == "-o")) args[i + 1] = "", replaced = true;
+      if (!replaced) args.insert(args.end(), {o, ""});
+      const Result r = run_prt(dir, args);
+      EXPECT_EQ(r.code, 2) << "prt " << c << " " << o << " '': " << r.err;
+      if (expected_paths.count(o)) {
+        ++paths;
+        EXPECT_EQ(message_after(r.err, o), "expected a path, got ''") << "prt " << c << " " << o << " ''";
+      } else {
+        EXPECT_NE(r.err.find("error: " + o + ": "), std::string::npos) << "prt " << c << " " << o << " '': " << r.err;
+      }
+    }
+    for (const std::string& p : expected_paths)
+      EXPECT_TRUE(p.rfind("--", 0) != 0 || options.count(p)) << "prt " << c << " lists no " << p << " in --help";
+  }
+  EXPECT_GT(checked, 150u) << "--help lists were not read";
+  EXPECT_EQ(paths, 34u);  // the --options of path_options()
+  // Positional paths: '' in place of each.
+  const std::vector<std::vector<std::string>> positional = {
+      {"precompute", "", "-o", "out.prt"},
+      {"relight", "mesh.obj", "", "env.exr", "-o", "out.csv"},
+      {"relight", "mesh.obj", "in.prt", "", "-o", "out.csv"},
+      {"reference", "", "env.exr", "-o", "out.csv"},
+      {"project", ""},
+      {"compress", "", "-o", "out.prt"},
+      {"info", ""},
+      {"compare", "a.csv", ""},
+      {"export", "", "in.prt", "-o", "out.glb"},
+      {"render", "mesh.obj", "in.prt", "", "-o", "out.png"},
+      {"view", "mesh.obj", "", "env.exr"},
+      {"report", "mesh.obj", ""},
+  };
+  for (const auto& args : positional) {
+    const Result r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 2) << "prt " << args[0] << " with an empty argument: " << r.err;
+    EXPECT_NE(r.err.find(": expected a path, got ''"), std::string::npos) << "prt " << args[0] << ": " << r.err;
+  }
+  // Names that are paths, however odd, are not refused for being paths.
+  for (const char* name : {" ", "./x.exr", "a b.exr"}) {
+    const Result r = run_prt(dir, {"project", "env.exr", "--reconstruct", name});
+    EXPECT_EQ(r.err.find("expected a path"), std::string::npos) << "'" << name << "': " << r.err;
   }
 }
 

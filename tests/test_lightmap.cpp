@@ -100,6 +100,47 @@ TEST(LightmapTexels, AdjacentTrianglesOfOneChartDoNotCountAsOverlap) {
   EXPECT_NO_THROW(lightmap_texels(b.build(), 257, 193, 0));
 }
 
+// lightmap_texels_at_least, the count a lightmap's memory is planned from
+// before its atlas is rasterised (check_lightmap_memory), never exceeds the
+// texels lightmap_texels finds (slivers, charts on texel edges, a chart
+// leaving the atlas by the UV slack, odd sizes), and is close to it where
+// the charts are large. check_lightmap_memory refuses a limit below it.
+TEST(LightmapTexels, TheCountFromTheUvAreaIsALowerBound) {
+  std::vector<Scene> scenes;
+  scenes.push_back(wall_on_floor());
+  {
+    test::SceneBuilder b;
+    b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.013f, 0.021f, 0.977f, 0.969f});
+    scenes.push_back(b.build());
+  }
+  {
+    test::SceneBuilder b;  // a sliver, and a quad leaving [0, 1] by less than the slack
+    b.positions = {{0, 0, 0}, {6, 0, 0}, {6, 0, 0.05f}, {0, 1, 0}, {1, 1, 0}, {1, 1, 1}, {0, 1, 1}};
+    b.normals.assign(7, {0, 1, 0});
+    b.uv = {{1.0f / 8, 2.2f / 8}, {7.0f / 8, 2.2f / 8}, {7.0f / 8, 2.25f / 8},
+            {0.5f, -0.00005f}, {1.00005f, -0.00005f}, {1.00005f, 0.2f}, {0.5f, 0.2f}};
+    b.triangles = {{0, 2, 1}, {3, 5, 4}, {3, 6, 5}};
+    b.open_tris = 3;
+    scenes.push_back(b.build());
+  }
+  for (std::size_t k = 0; k < scenes.size(); ++k)
+    for (const auto& [w, h] : {std::pair{1, 1}, {7, 5}, {16, 16}, {64, 64}, {257, 193}, {1024, 1024}}) {
+      const std::size_t least = lightmap_texels_at_least(scenes[k], w, h, 0);
+      const std::size_t found = lightmap_texels(scenes[k], w, h, 0).layout.texels.size();
+      EXPECT_LE(least, found) << "scene " << k << ", " << w << "x" << h;
+      if (k == 1 && w >= 64) {  // the partly covered texels of the chart's edge are all the difference
+        EXPECT_GT(double(least), (w >= 1024 ? 0.99 : 0.9) * double(found)) << w << "x" << h;
+      }
+    }
+  EXPECT_THROW(lightmap_texels_at_least(scenes[0], 0, 16, 0), Error);
+  EXPECT_THROW(lightmap_texels_at_least(scenes[0], 16, 16, 3), Error);
+  TransferOptions o;
+  o.memory_limit = 10'000'000;  // 10 MB: below the process, the texels' 56 bytes each and the atlas's 4 a texel
+  EXPECT_THROW(check_lightmap_memory(scenes[1], 4096, 4096, 0, o), Error);
+  o.memory_limit = 0;  // no limit: nothing to check
+  EXPECT_NO_THROW(check_lightmap_memory(scenes[1], 4096, 4096, 0, o));
+}
+
 TEST(LightmapTexels, MissingUvSetAndUvsOutsideTheAtlasAreRefused) {
   const Scene s = make_scene({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, {{0, 2, 1}}, {});
   try {
@@ -109,6 +150,20 @@ TEST(LightmapTexels, MissingUvSetAndUvsOutsideTheAtlasAreRefused) {
     EXPECT_NE(std::string(e.what()).find("Lightmap Pack"), std::string::npos) << e.what();
   }
   const Scene t = make_scene({{0, 0, 0}, {1, 0, 0}, {0, 0, 1}}, {{0, 2, 1}}, {{{0, 0}, {1.5f, 0}, {0, 1}}});
+  // -1 chooses, 0 to kMaxLightmapUvSet (prt precompute --uv's range) name a set; any other number is refused.
+  EXPECT_EQ(t.lightmap_uv_set(-1), 0);
+  EXPECT_EQ(t.lightmap_uv_set(0), 0);
+  for (int bad : {-2, -1000, kMaxLightmapUvSet + 1, 1 << 30}) {
+    try {
+      t.lightmap_uv_set(bad);
+      ADD_FAILURE() << bad << " was taken";
+    } catch (const Error& e) {
+      EXPECT_EQ(std::string(e.what()), "lightmap UV set " + std::to_string(bad) +
+                                           ": expected -1 (choose: TEXCOORD_1 where every object has it, else "
+                                           "TEXCOORD_0) or 0 to 7 (TEXCOORD_N)");
+    }
+  }
+  EXPECT_THROW(t.lightmap_uv_set(kMaxLightmapUvSet), Error);  // in range, but no object has it: the objects named
   EXPECT_THROW(lightmap_texels(t, 16, 16, 0), Error);
   EXPECT_THROW(lightmap_texels(t, 0, 16, 0), Error);
   int w = 0, h = 0;

@@ -111,6 +111,166 @@ TEST(PrecomputeCli, BadOptionsFailBeforeAnyWork) {
   }
 }
 
+// Counts and choices that were CLI11's own conversions (or none): each
+// refused while parsing with what it takes, in prt precompute and prt
+// compress. --subdivide-max-vertices took -1 (as 2^64 - 1), '' and 1e20;
+// --probe-cube and the weights' bits took '' and named no range; --compress ''
+// was taken as not given.
+TEST(PrecomputeCli, CountsAndChoicesAreRangeChecked) {
+  TempDir dir;
+  const std::string missing = dir.file("missing.off"), out = dir.file("x.prt");
+  const std::string vertices = "must be a whole number from 0 to 4294967295 (0: 4x the mesh's; a mesh's vertex "
+                               "indices are 32-bit), got ";
+  struct Option {
+    std::vector<std::string> context;  // what the option needs beside it
+    std::string option;
+    std::vector<std::pair<std::string, std::string>> bad;  // value, message after "--option: "
+    std::vector<std::string> good;
+  };
+  const std::vector<Option> options = {
+      {{"precompute", missing, "-o", out, "--subdivide", "0.1"},
+       "--subdivide-max-vertices",
+       {{"-1", vertices + "'-1'"},
+        {"", vertices + "''"},
+        {"1e20", vertices + "'1e20'"},
+        {"4294967296", vertices + "'4294967296'"},
+        {"18446744073709551616", vertices + "'18446744073709551616'"},
+        {"2.5", vertices + "'2.5'"},
+        {"+5", vertices + "'+5'"}},
+       {"0", "1000", "4294967295"}},
+      {{"precompute", missing, "-o", out, "--probes", "2x2x2"},
+       "--probe-cube",
+       {{"3", "must be 4, 8, 16, 32 or 64, got '3'"},
+        {"", "must be 4, 8, 16, 32 or 64, got ''"},
+        {"1e20", "must be 4, 8, 16, 32 or 64, got '1e20'"},
+        {"-4", "must be 4, 8, 16, 32 or 64, got '-4'"},
+        {"128", "must be 4, 8, 16, 32 or 64, got '128'"}},
+       {"4", "64"}},
+      {{"precompute", missing, "-o", out, "--compress", "8x2"},
+       "--compress-weights",
+       {{"8", "must be 16 or 32, got '8'"}, {"", "must be 16 or 32, got ''"}, {"16.0", "must be 16 or 32, got '16.0'"}},
+       {"16", "32"}},
+      {{"compress", dir.file("missing.prt"), "-o", out},
+       "--weights",
+       {{"8", "must be 16 or 32, got '8'"}, {"", "must be 16 or 32, got ''"}},
+       {"16", "32"}},
+      {{"precompute", missing, "-o", out, "--adaptive"},
+       "--verify-adaptive",
+       {{"", "must be a number in [0, 1], got ''"},
+        {"1.5", "must be a number in [0, 1], got 1.5"},
+        {"nan", "must be a number in [0, 1], got nan"}},
+       {"0", "0.25", "1"}},
+      {{"precompute", missing, "-o", out},
+       "--compress",
+       {{"", "expected KxN, clusters x principal vectors (e.g. 128x8), got ''"},
+        {"16", "expected KxN, clusters x principal vectors (e.g. 128x8), got '16'"},
+        {"-1x2", "expected KxN, clusters x principal vectors (e.g. 128x8), got '-1x2'"},
+        {"99999999999x2", "expected KxN, clusters x principal vectors (e.g. 128x8), got '99999999999x2'"},
+        {"0x8", "K must be 1 to 16777216 and N 0 to 1048576, got '0x8'"},
+        {"8x2000000", "K must be 1 to 16777216 and N 0 to 1048576, got '8x2000000'"}},
+       {"8x2", "1x0", "128x8"}},
+  };
+  for (const Option& o : options) {
+    for (const auto& [value, message] : o.bad) {
+      std::vector<std::string> args = o.context;
+      args.insert(args.end(), {o.option, value});
+      const Result r = run_prt(dir, args);
+      EXPECT_EQ(r.code, 2) << o.option << " '" << value << "'\n" << describe_run(r);
+      EXPECT_NE(r.err.find("prt " + o.context[0] + ": error: " + o.option + ": " + message), std::string::npos)
+          << o.option << " '" << value << "'\n" << r.err;
+    }
+    for (const std::string& value : o.good) {  // past the parser: the missing input is what stops it
+      std::vector<std::string> args = o.context;
+      args.insert(args.end(), {o.option, value});
+      const Result r = run_prt(dir, args);
+      EXPECT_EQ(r.code, 1) << o.option << " '" << value << "'\n" << describe_run(r);
+      EXPECT_NE(r.err.find("missing"), std::string::npos) << o.option << " '" << value << "'\n" << r.err;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// --memory-limit plans an SH transfer's memory: refused where nothing would
+// plan with it (it was taken and ignored with --probes and with a wavelet
+// lightmap), taken where the plan is.
+TEST(PrecomputeCli, MemoryLimitIsRefusedWhereItWouldBeIgnored) {
+  TempDir dir;
+  const std::string room = PRT_SOURCE_DIR "/models/room.gltf", out = dir.file("x.prt");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> refused = {
+      {{"precompute", room, "-o", out, "--probes", "3x3x3", "--memory-limit", "4G"},
+       "--memory-limit does not apply to --probes: it plans the memory of an SH transfer at vertices or texels"},
+      {{"precompute", room, "-o", out, "--lightmap", "16x16", "--basis", "wavelet", "--memory-limit", "4G"},
+       "--memory-limit does not apply to --basis wavelet: it plans the memory of an SH transfer at vertices or texels"},
+      {{"precompute", room, "-o", out, "--basis", "wavelet", "--memory-limit", "4G"},
+       "--memory-limit does not apply to --basis wavelet"},
+  };
+  for (const auto& [args, message] : refused) {
+    const Result r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 2) << describe_run(r);
+    EXPECT_NE(r.err.find("prt precompute: error: " + message), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("leave --memory-limit out"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // Vertices, lightmaps and zonal harmonics plan with it.
+  const std::string quad = write_quad(dir);
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"precompute", quad, "-o", out, "--samples", "16", "--memory-limit", "2G", "-q"},
+        std::vector<std::string>{"precompute", quad, "-o", out, "--samples", "16", "--memory-limit", "2G", "--basis",
+                                 "zh", "-q"},
+        std::vector<std::string>{"precompute", room, "-o", out, "--lightmap", "16x16", "--samples", "16",
+                                 "--memory-limit", "2G", "-q"}}) {
+    const Result r = run_prt(dir, args);
+    EXPECT_EQ(r.code, 0) << describe_run(r);
+  }
+}
+
+// A lightmap's memory is planned from its atlas before the atlas is
+// rasterised: a 16384x16384 atlas of the room (200M covered texels) ran past
+// 20 s and 17 GB before its plan refused the limit, 8192x8192 under 100M
+// peaked at 1.6 GB. Now both are refused in prt's start-up memory, naming the
+// smallest limit that could work; that limit passes this check (the plan
+// after rasterising, with the exact texels, may still ask for more).
+TEST(PrecomputeCli, LightmapMemoryIsPlannedBeforeRasterising) {
+  TempDir dir;
+  const std::string room = PRT_SOURCE_DIR "/models/room.gltf", out = dir.file("x.prt");
+  const std::string early = "refused before the texels are rasterised";
+  const std::vector<std::vector<std::string>> refused = {
+      {"--lightmap", "16384x16384", "--memory-limit", "16G"},
+      {"--lightmap", "8192x8192", "--memory-limit", "100M"},
+      {"--lightmap", "8192x8192", "--memory-limit", "100M", "--adaptive"},
+      {"--lightmap", "8192x8192", "--memory-limit", "1G", "--mode", "interreflected"},
+  };
+  for (const std::vector<std::string>& extra : refused) {
+    std::vector<std::string> args = {"precompute", room, "-o", out, "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const BoundedResult r = run_prt_bounded(dir, args, 60);
+    const std::string what = extra[1] + " " + extra[3] + (extra.size() > 4 ? " " + extra[4] : "");
+    EXPECT_FALSE(r.timed_out) << what;
+    EXPECT_EQ(r.code, 1) << what << "\n" << describe_run(r);
+    EXPECT_NE(r.err.find("prt precompute: error: --memory-limit "), std::string::npos) << what << "\n" << r.err;
+    EXPECT_NE(r.err.find(": too small for a " + extra[1] + " lightmap of " + room + " (at least "), std::string::npos)
+        << what << "\n" << r.err;
+    EXPECT_NE(r.err.find(early), std::string::npos) << what << "\n" << r.err;
+    EXPECT_LT(r.max_rss_kb, kRefusalRssKb) << what << ": peak RSS " << r.max_rss_kb << " KiB";
+    EXPECT_FALSE(std::filesystem::exists(out)) << what;
+  }
+  // The limit the refusal names passes the check before rasterising.
+  for (const char* mode : {"shadowed", "interreflected"}) {
+    const Result small = run_prt(dir, {"precompute", room, "-o", out, "--lightmap", "256x256", "--memory-limit", "1M",
+                                       "--mode", mode, "--samples", "16", "-q"});
+    ASSERT_EQ(small.code, 1) << describe_run(small);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(small.err, m, std::regex(R"(\(--memory-limit (\d+)M, or a smaller atlas\))")))
+        << small.err;
+    const Result at = run_prt(dir, {"precompute", room, "-o", out, "--lightmap", "256x256", "--memory-limit",
+                                    m[1].str() + "M", "--mode", mode, "--samples", "16", "-q"});
+    EXPECT_EQ(at.err.find(early), std::string::npos) << mode << " at " << m[1] << "M:\n" << at.err;
+    // Done, or refused by the plan with the exact texels (after rasterising).
+    EXPECT_TRUE(at.code == 0 || at.err.find("too small for " + room + " (") != std::string::npos)
+        << mode << "\n" << describe_run(at);
+  }
+}
+
 // Glossy end to end: precompute --material glossy writes a version 3 file
 // whose relighting through `prt relight --eye` is the library's
 // relight_glossy of the same inputs (float CSV: 1e-6 relative).
@@ -897,7 +1057,7 @@ TEST(BadOptions, SubdivideAndItsOptionsAreChecked) {
                   {"--subdivided-mesh", "is the input MESH"}});
   runs.push_back({{"precompute", mesh, "-o", dir.file("x.ply"), "--subdivide", "0.05", "--subdivided-mesh",
                    dir.file("x.ply")},
-                  {"--subdivided-mesh", "is the input --output"}});
+                  {"--subdivided-mesh", "is also the --output file; give each output its own name"}});
   // The default (the output's name with .ply) would be MESH.
   runs.push_back({{"precompute", ply, "-o", dir.file("quad.prt"), "--subdivide", "0.05"},
                   {"the refined mesh would go to", "which is MESH", "give --subdivided-mesh"}});

@@ -78,6 +78,15 @@ struct LightmapTexels {
 LightmapTexels lightmap_texels(const Scene& scene, int width, int height, int uv_set,
                                const glm::vec3* albedo = nullptr);
 
+// The fewest covered texels lightmap_texels(scene, width, height, uv_set)
+// can find, from one pass over the triangles, without rasterising: every
+// covered texel holds at most 1 + its overlap tolerance of the triangles'
+// UV area (clipped to the atlas), so the area bounds the count from below.
+// What a large atlas's memory is planned from before its texels exist
+// (check_lightmap_memory, prt/precompute.h). Throws prt::Error as
+// lightmap_texels does for a size out of range or a missing UV set.
+std::size_t lightmap_texels_at_least(const Scene& scene, int width, int height, int uv_set);
+
 // The texels as a point set (positions, normals, albedo as colours; no
 // triangles): what relight() and shading_hash() read for a lightmap's rows.
 Mesh texel_points(const LightmapTexels& texels);

@@ -33,8 +33,10 @@ std::vector<glm::vec3> read_vertex_csv(const std::string& path, std::vector<glm:
                                        CsvKey* key = nullptr);
 
 // Query points (POINTS.csv of --at): header x,y,z,nx,ny,nz, one point per
-// line, every value finite, each normal non-zero (normalised here). Throws
-// prt::Error naming the file and line.
+// line, every value finite, each coordinate within kMaxCoordinate (prt/mesh.h:
+// the mesh readers' limit; the points are ray origins), each normal non-zero
+// (normalised here, whatever its scale). Throws prt::Error naming the file
+// and line.
 struct QueryPoints {
   std::vector<glm::dvec3> positions, normals;
 };

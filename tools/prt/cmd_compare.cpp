@@ -124,8 +124,8 @@ Run add_compare(CLI::App& app) {
       "are the 'vertices' below).\n"
       "Norms are Euclidean over RGB. eps keeps near-black vertices from dominating the relative errors.\n"
       "Example: prt compare cow_prt.csv cow_ref.csv --json");
-  s->add_option("A", a->a, "CSV (or lightmap EXR) to judge")->required();
-  s->add_option("B", a->b, "Reference CSV (or lightmap EXR)")->required();
+  s->add_option("A", a->a, "CSV (or lightmap EXR) to judge")->check(path_value())->required();
+  s->add_option("B", a->b, "Reference CSV (or lightmap EXR)")->check(path_value())->required();
   s->add_flag("--json", a->json, "Print the numbers as JSON");
   return [a] { return run_compare(*a); };
 }

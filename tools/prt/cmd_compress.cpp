@@ -221,51 +221,53 @@ Run add_compress(CLI::App& app) {
       "Example: prt compress glossy.prt -o glossy.cprt --clusters 128 --pca 8\n"
       "         prt compress bunny.prt -o bunny.cprt --target-error 0.01 --mesh bunny.off\n"
       "         prt compress bunny.prt --measure bunny.cprt --mesh bunny.off --env other.exr   # held-back maps");
-  s->add_option("IN", a->input, "Transfer file from prt precompute")->required();
-  s->add_option("-o,--output", a->output, "Compressed transfer file to write");
+  s->add_option("IN", a->input, "Transfer file from prt precompute")->check(path_value())->required();
+  s->add_option("-o,--output", a->output, "Compressed transfer file to write")->check(path_value());
   a->measure_opt = s->add_option("--measure", a->measure,
                                  "Measure this compressed file (made from IN) over the distribution instead: its mean, "
-                                 "p95 and max relit error and bound, on stdout; writes nothing");
+                                 "p95 and max relit error and bound, on stdout; writes nothing")->check(path_value());
   a->clusters_opt = s->add_option("-k,--clusters", a->opt.clusters, "Clusters K (at most the stored vertices)")
-                        ->check(int_range(1, 1 << 24))
+                        ->check(int_range(1, kMaxClusters))
                         ->capture_default_str();
   a->pca_opt = s->add_option("-n,--pca", a->opt.vectors, "Principal vectors N per cluster (0 to the row length)")
-                   ->check(int_range(0, 1 << 20))
+                   ->check(int_range(0, kMaxVectors))
                    ->capture_default_str();
   a->glossy_clusters_opt = s->add_option("--glossy-clusters", a->opt.glossy_clusters,
                                          "Glossy files: clusters of the glossy matrices")
-                               ->check(int_range(1, 1 << 24))
+                               ->check(int_range(1, kMaxClusters))
                                ->capture_default_str();
   a->glossy_pca_opt = s->add_option("--glossy-pca", a->opt.glossy_vectors,
                                     "Glossy files: principal vectors per cluster of the glossy matrices")
-                          ->check(int_range(0, 1 << 20))
+                          ->check(int_range(0, kMaxVectors))
                           ->capture_default_str();
   s->add_option("--weights", a->opt.weight_bits, "Bits per weight: 16 (one scale per cluster and vector) or 32 (float)")
-      ->check(CLI::IsMember({16, 32}))
+      ->check(int_one_of({16, 32}))
       ->capture_default_str();
   s->add_option("--iterations", a->opt.iterations, "Rounds of assignment and refit at most")
-      ->check(int_range(1, 1000))
+      ->check(int_range(1, kMaxCompressIterations))
       ->capture_default_str();
   add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the k-means++ seeding");
   a->target_opt = add_shared(s, SharedOption::TargetError, a->target,
                              "Choose K x N: the smallest whose relit error is at most this");
-  a->mesh_opt = s->add_option("--mesh", a->mesh, "The mesh the transfer was computed for (to measure the error)");
+  a->mesh_opt = s->add_option("--mesh", a->mesh, "The mesh the transfer was computed for (to measure the error)")
+                    ->check(path_value());
   a->env_opt = s->add_option("--env", a->envs,
-                             "Environment map the error is measured under (repeatable; default: the bundled maps)");
+                             "Environment map the error is measured under (repeatable; default: the bundled maps)")
+                   ->check(path_value());
   a->rotations_opt = s->add_option("--rotations", a->rotations,
                                    "Lightings per map: the map as given, then random rotations")
-                         ->check(int_range(1, 4096))
+                         ->check(int_range(1, kMaxErrorRotations))
                          ->capture_default_str();
   a->spectra_opt = s->add_option("--spectra", a->spectra,
                                  "Maps whose SH band spectra the rotated lightings take on in turn, beside their own "
-                                 "(repeatable; default: the bundled maps; --measure: none)");
+                                 "(repeatable; default: the bundled maps; --measure: none)")->check(path_value());
   a->own_spectra_opt = s->add_flag("--own-spectra", a->own_spectra,
                                    "Every lighting keeps its map's own band spectrum (no --spectra)");
   a->no_sun_opt = s->add_flag("--no-sun", a->no_sun,
                               "Leave out the point light (a sun) the distribution adds to the maps (--measure: "
                               "always left out)");
   a->eyes_opt = s->add_option("--eyes", a->eyes, "Glossy: eye points on a sphere around the mesh")
-                    ->check(int_range(1, 4096))
+                    ->check(int_range(1, kMaxErrorEyes))
                     ->capture_default_str();
   a->statistic_opt = s->add_option("--statistic", a->statistic,
                                    "What --target-error holds to: the 95th percentile over the lightings and views, "

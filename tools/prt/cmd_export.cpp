@@ -192,6 +192,7 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
 
 int run_export(const ExportArgs& args) {
   ExportArgs a = args;  // --probes FILE becomes the transfer
+  check_distinct_outputs({{"--output", a.output}, {"--web", a.web}, {"--matrices", a.matrices}});
   if (!a.probes.empty()) {
     if (!a.transfer.empty() && a.transfer != a.probes)
       throw UsageError("--probes " + a.probes + " exports a probe volume as JSON; " + a.transfer +
@@ -327,20 +328,24 @@ Run add_export(CLI::App& app) {
       "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1\n"
       "         prt export room.gltf room.prt -o room.glb --web room-web --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0\n"
       "         prt export room.gltf --probes room-probes.prt --bake forest.exr -o probes.json --matrices probes.bin");
-  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
+  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->check(path_value())->required();
   s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress); a probe volume may "
-                                         "come here or as --probes");
+                                         "come here or as --probes")->check(path_value());
   s->add_option("--probes", a->probes, "A probe volume (prt precompute SCENE --probes) to export relit under --bake ENV "
-                                       "as JSON (-o FILE.json)");
-  s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)");
-  s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it");
+                                       "as JSON (-o FILE.json)")->check(path_value());
+  s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)")
+      ->check(path_value());
+  s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it")
+      ->check(path_value());
   a->rotate_opt = add_shared(s, SharedOption::Rotate, a->rotate, "With --bake or --web: rotate the lighting");
   a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
                                "With --bake: scale the radiance by 2^stops before clamping (default 0); with --web: "
                                "the initial exposure (default auto); auto: as prt render, for the --bake map and the "
                                "page's first map");
-  s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)");
-  a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)"));
+  s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)")
+      ->check(path_value());
+  a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)")
+                            ->check(path_value()));
   a->web_opts.push_back(add_shared(s, SharedOption::Camera, a->camera, "With --web: initial camera (as prt render)"));
   a->web_opts.push_back(add_shared(s, SharedOption::Fov, a->fov, "With --web: vertical field of view"));
   a->web_opts.push_back(add_shared(s, SharedOption::Tonemap, a->tone_map, "With --web: initial tone map"));
@@ -348,9 +353,9 @@ Run add_export(CLI::App& app) {
   a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));
   s->add_option("--matrices", a->matrices,
                 "A probe volume: also write every probe's SH transfer matrix (its light from the map's first "
-                "--matrix-bands bands) as a binary file (docs/FORMAT.md \"Probe matrices\")");
+                "--matrix-bands bands) as a binary file (docs/FORMAT.md \"Probe matrices\")")->check(path_value());
   a->matrix_bands_opt = s->add_option("--matrix-bands", a->matrix_bands, "With --matrices: the map's bands the matrices take")
-                            ->check(int_range(1, 16))
+                            ->check(int_range(1, kMaxProbeMatrixBands))
                             ->capture_default_str();
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_export(*a); };

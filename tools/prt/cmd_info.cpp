@@ -95,7 +95,8 @@ Run add_info(CLI::App& app) {
       "for a probe volume (prt precompute SCENE --probes) its grid, probe states, cube and sizes.\n"
       "The format is specified in docs/FORMAT.md. Exits non-zero, naming the problem, on a bad file.\n"
       "Example: prt info bunny.prtt --json");
-  s->add_option("FILE", a->file, "Transfer file written by prt precompute or prt compress, or a probe volume")->required();
+  s->add_option("FILE", a->file, "Transfer file written by prt precompute or prt compress, or a probe volume")
+      ->check(path_value())->required();
   s->add_flag("--json", a->json, "Print a JSON object instead of text");
   return [a] { return run_info(*a); };
 }

@@ -24,6 +24,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <sys/resource.h>
 #if defined(__GLIBC__)
@@ -36,6 +37,9 @@ namespace prt::cli {
 
 namespace {
 
+// --subdivide-max-vertices: a mesh's vertex indices are 32-bit (make_mesh refuses more vertices).
+constexpr std::uint64_t kMaxSubdivideVertices = std::numeric_limits<std::uint32_t>::max();
+
 struct PrecomputeArgs {
   std::string mesh, output, mode = "shadowed", albedo = "0.8,0.8,0.8", basis = "sh", material = "diffuse";
   TransferOptions opt;
@@ -43,6 +47,7 @@ struct PrecomputeArgs {
   MeshOptions mesh_opt;
   bool quiet = false;
   std::string memory_limit;  // --memory-limit SIZE (memory_size_value); "" the default
+  const CLI::Option* memory_limit_opt = nullptr;
   // --lightmap WxH: SCENE's texels (docs/LIGHTMAPS.md); --uv N: its UV set (-1: TEXCOORD_1 when present, else 0).
   std::string lightmap;
   int uv = -1;
@@ -86,22 +91,35 @@ struct PrecomputeArgs {
   const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
 };
 
-// --compress KxN into o (UsageError naming the option otherwise).
-void parse_compress(const std::string& text, CompressOptions& o) {
+// --compress KxN into o; "" or what is wrong with `text`.
+std::string compress_problem(const std::string& text, CompressOptions& o) {
   const std::size_t x = text.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument("no x");
-    std::size_t used = 0;
-    o.clusters = std::stoi(text.substr(0, x), &used);
-    if (used != x) throw std::invalid_argument("K");
-    const std::string n = text.substr(x + 1);
-    o.vectors = std::stoi(n, &used);
-    if (used != n.size()) throw std::invalid_argument("N");
-  } catch (const std::exception&) {
-    throw UsageError("--compress " + text + ": expected KxN, clusters x principal vectors (e.g. 128x8)");
-  }
-  if (o.clusters < 1 || o.clusters > (1 << 24) || o.vectors < 0)
-    throw UsageError("--compress " + text + ": K must be 1 to 2^24 and N at least 0");
+  const auto digits = [](const std::string& s) {
+    return !s.empty() && s.size() <= 9 && s.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (x == std::string::npos || !digits(text.substr(0, x)) || !digits(text.substr(x + 1)))
+    return "expected KxN, clusters x principal vectors (e.g. 128x8), got " + show_text(text);
+  o.clusters = std::stoi(text.substr(0, x));
+  o.vectors = std::stoi(text.substr(x + 1));
+  if (o.clusters < 1 || o.clusters > kMaxClusters || o.vectors > kMaxVectors)
+    return fmt::format("K must be 1 to {} and N 0 to {}, got {}", kMaxClusters, kMaxVectors, show_text(text));
+  return {};
+}
+
+// --compress's validator (checked while parsing: '' was taken as not given).
+CLI::Validator compress_value() {
+  return CLI::Validator(
+      [](std::string& text) {
+        CompressOptions o;
+        return compress_problem(text, o);
+      },
+      "KxN");
+}
+
+// --compress KxN into o (checked while parsing).
+void parse_compress(const std::string& text, CompressOptions& o) {
+  if (const std::string problem = compress_problem(text, o); !problem.empty())
+    throw UsageError("--compress: " + problem);
 }
 
 // Returns the heap's free pages to the system (glibc keeps what loading the
@@ -265,7 +283,7 @@ void check_subdivide(PrecomputeArgs& a) {
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
     if (ext != ".ply")
       throw UsageError("--subdivided-mesh " + a.subdivided_mesh + ": the refined mesh is written as PLY (.ply)");
-    check_not_input("--subdivided-mesh", a.subdivided_mesh, {{"MESH", a.mesh}, {"--output", a.output}});
+    check_not_input("--subdivided-mesh", a.subdivided_mesh, {{"MESH", a.mesh}, {"--env", a.env}});
   }
 }
 
@@ -469,7 +487,7 @@ int run_lightmap(PrecomputeArgs& a) {
     throw UsageError("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed only");
   if (wavelet)
     for (const CLI::Option* o : a.sh_only)
-      if (o->count() > 0 && o != a.material_opt && o->get_name() != "--memory-limit")
+      if (o->count() > 0 && o != a.material_opt)
         throw UsageError(o->get_name() + " does not apply to --basis wavelet (--cube-res and --threshold set its size)");
   if (!wavelet)
     for (const CLI::Option* o : a.wavelet_only)
@@ -507,6 +525,10 @@ int run_lightmap(PrecomputeArgs& a) {
   const bool quiet = a.quiet || !is_root();
   if (!quiet) fmt::print(stderr, "{}\n", describe(scene));
   const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
+  if (!wavelet) {  // a limit the transfer's plan would refuse, refused before the atlas is rasterised
+    release_free_memory();
+    check_lightmap_memory(scene, width, height, set, a.opt, a.adaptive_opt->count() > 0, albedo ? &*albedo : nullptr);
+  }
   LightmapTexels texels = lightmap_texels(scene, width, height, set, albedo ? &*albedo : nullptr);
   const std::size_t moved = move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
   if (!quiet) {
@@ -621,8 +643,8 @@ int run_probes(PrecomputeArgs& a) {
   o.bands = a.bands_opt->count() > 0 ? a.opt.bands : 3;
   if (o.bands > 8) throw UsageError(fmt::format("--bands {}: a probe's light takes at most 8 bands", o.bands));
   o.bounces = a.opt.bounces;
-  if (o.mode == TransferMode::Interreflected && (o.bounces < 1 || o.bounces > 8))
-    throw UsageError(fmt::format("--bounces {}: probes take 1 to 8", o.bounces));
+  if (o.mode == TransferMode::Interreflected && (o.bounces < 1 || o.bounces > kMaxProbeBounces))
+    throw UsageError(fmt::format("--bounces {}: probes take 1 to {}", o.bounces, kMaxProbeBounces));
   if (a.bounce_bands_opt->count() > 0 && o.mode != TransferMode::Interreflected)
     throw UsageError("--bounce-bands applies to --mode interreflected");
   // --samples: rays per probe, as k^2 rays in each of the base cube's 6 (r/4)^2
@@ -684,6 +706,24 @@ int run_probes(PrecomputeArgs& a) {
 int run_precompute(PrecomputeArgs& a) {
   check_subdivide(a);
   parse_adaptive(a);
+  // No output over another (each is kept off the inputs by check_not_input below).
+  check_distinct_outputs({{"--output", a.output},
+                          {"--ao-map", a.ao_map},
+                          {"--bent-normal-map", a.bent_map},
+                          {"--obscurance-map", a.obscurance_map},
+                          {"--subdivided-mesh", a.subdivided_mesh},
+                          {"--cache", a.cache}});
+  // --memory-limit plans an SH transfer's memory (docs/PRECOMPUTE.md, "Memory"); a probe volume or a wavelet
+  // transfer would ignore it.
+  if (a.memory_limit_opt->count() > 0 && (a.probes_opt->count() > 0 || a.basis == "wavelet"))
+    throw UsageError(fmt::format(
+        "--memory-limit does not apply to {}: it plans the memory of an SH transfer at vertices or texels (its per-point "
+        "arrays first, then the bounces' gather records, which go to a temporary file past the limit; "
+        "docs/PRECOMPUTE.md, \"Memory\"), and {} has no such plan{}; leave --memory-limit out",
+        a.probes_opt->count() > 0 ? "--probes" : "--basis wavelet",
+        a.probes_opt->count() > 0 ? "a probe volume" : "a wavelet transfer",
+        a.probes_opt->count() > 0 ? " (a 64x32x64 volume takes about 80 MB; docs/PROBES.md)"
+                                  : " (its size is set by --cube-res and --threshold)"));
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
   if (a.probes_opt->count() > 0) {
@@ -694,6 +734,9 @@ int run_precompute(PrecomputeArgs& a) {
     if (o->count() > 0) throw UsageError(o->get_name() + " applies to --probes");
   if (a.lightmap_opt->count() > 0) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
+    for (const auto& [option, path] : {std::pair{"--ao-map", &a.ao_map}, std::pair{"--bent-normal-map", &a.bent_map},
+                                       std::pair{"--obscurance-map", &a.obscurance_map}})
+      check_not_input(option, *path, {{"SCENE", a.mesh}});
     return run_lightmap(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
@@ -871,8 +914,9 @@ Run add_precompute(CLI::App& app) {
       "         prt precompute models/room.gltf --probes 16x8x16 -o room-probes.prt\n"
       "         prt precompute coarse.obj -o fine.prt --subdivide 0.02 --subdivided-mesh fine.ply");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB (with --lightmap: a scene, glTF/GLB or OBJ)")
+      ->check(path_value())
       ->required();
-  s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->required();
+  s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->check(path_value())->required();
   s->add_option("--basis", a->basis,
                 "sh (spherical harmonics, all modes), wavelet (all-frequency shadows: Haar on a cube map, "
                 "Ng et al. 2003) or zh (local deformable PRT: --lobes zonal-harmonic lobes per vertex in its own frame, "
@@ -911,8 +955,9 @@ Run add_precompute(CLI::App& app) {
       add_shared(s, SharedOption::TargetError, a->target_error,
                  "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
                  "against the reference under --env is at most this (--bands/--samples/--bounces: the most to try)");
-  a->env_opt = s->add_option("--env", a->env, "Lat-long map the --target-error is measured under");
-  a->cache_opt = s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)");
+  a->env_opt = s->add_option("--env", a->env, "Lat-long map the --target-error is measured under")->check(path_value());
+  a->cache_opt = s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)")
+                     ->check(path_value());
   a->tolerance_opt =
       s->add_option("--bounce-tolerance", a->opt.bounce_tolerance,
                     "Stop adding bounces once one adds less than this fraction of the direct part's energy, in "
@@ -950,7 +995,7 @@ Run add_precompute(CLI::App& app) {
                                 "shadowed|interreflected, --samples (rays per probe)");
   a->probe_cube_opt = s->add_option("--probe-cube", a->popt.cube_res,
                                     "With --probes: the visibility cube's finest face size r (4 to 64; traced at r/4, refined where an edge crosses)")
-                          ->check(CLI::IsMember({4, 8, 16, 32, 64}))
+                          ->check(int_one_of({4, 8, 16, 32, 64}))
                           ->capture_default_str();
   a->bounce_bands_opt = s->add_option("--bounce-bands", a->popt.bounce_bands,
                                       "With --probes --mode interreflected: the environment bands the bounce light "
@@ -959,27 +1004,33 @@ Run add_precompute(CLI::App& app) {
                             ->capture_default_str();
   s->add_option("--ao-map", a->ao_map,
                 "With --lightmap: also write the texels' ambient occlusion (1/pi integral V cos) as an RGBA EXR in the "
-                "lightmap's layout (A = 1 at covered texels)");
+                "lightmap's layout (A = 1 at covered texels)")->check(path_value());
   s->add_option("--bent-normal-map", a->bent_map,
-                "With --lightmap: also write the texels' bent normals (world x, y, z in R, G, B) as an RGBA EXR");
+                "With --lightmap: also write the texels' bent normals (world x, y, z in R, G, B) as an RGBA EXR")
+      ->check(path_value());
   s->add_option("--obscurance", a->obscurance,
                 "With --lightmap and --obscurance-map: obscurance distance d; an occluder at distance t counts "
                 "rho(t) = min(t/d, 1) (Zhukov et al. 1998)")
       ->check(number_range(0.0, 1e30, true, false));
-  s->add_option("--obscurance-map", a->obscurance_map, "With --obscurance d: the obscurance map to write (RGBA EXR)");
-  a->sh_only.push_back(
+  s->add_option("--obscurance-map", a->obscurance_map, "With --obscurance d: the obscurance map to write (RGBA EXR)")
+      ->check(path_value());
+  a->memory_limit_opt =
       s->add_option("--memory-limit", a->memory_limit,
                     "The most memory the process may hold, e.g. 8G or 512M (K, M, G, T: powers of 1000; KiB, MiB, "
                     "GiB, TiB: of 1024); default 80% of the machine's memory, shared among the mpirun processes on it. "
                     "Past what the per-vertex arrays need, the bounces' gather records go to a temporary file in "
-                    "TMPDIR; the result is the same bits (docs/PRECOMPUTE.md, \"Memory\")")
-          ->check(memory_size_value()));
+                    "TMPDIR; the result is the same bits; a limit the plan cannot meet is refused before the work "
+                    "(a lightmap's from its atlas, before rasterising it). SH transfer only: not --probes or --basis "
+                    "wavelet (docs/PRECOMPUTE.md, \"Memory\")")
+          ->check(memory_size_value());
+  a->sh_only.push_back(a->memory_limit_opt);
   a->sh_only.push_back(s->add_option("--compress", a->compress,
                                      "Write the transfer compressed by clustered PCA: K clusters x N principal "
-                                     "vectors, e.g. 128x8 (prt compress; docs/COMPRESSION.md)"));
+                                     "vectors, e.g. 128x8 (prt compress; docs/COMPRESSION.md)")
+                           ->check(compress_value()));
   a->compress_weights_opt = s->add_option("--compress-weights", a->compress_weights,
                                           "Bits per weight of --compress: 16 or 32")
-                                ->check(CLI::IsMember({16, 32}))
+                                ->check(int_one_of({16, 32}))
                                 ->capture_default_str();
   a->sh_only.push_back(a->compress_weights_opt);
   a->adaptive_opt =
@@ -994,7 +1045,7 @@ Run add_precompute(CLI::App& app) {
   a->verify_opt = s->add_option("--verify-adaptive", a->aopt.verify_fraction,
                                 "With --adaptive: trace this fraction of the interpolated vertices (texels) again and report "
                                 "their error against TOL (they keep the traced transfer)")
-                      ->check(CLI::Range(0.0, 1.0))
+                      ->check(number_range(0.0, 1.0))
                       ->type_name("FRACTION");
   a->adaptive_any_opt = s->add_flag("--adaptive-any", a->adaptive_any,
                                     "With --adaptive TOL: take a TOL above 1.5x the default (the error may then pass "
@@ -1011,10 +1062,12 @@ Run add_precompute(CLI::App& app) {
   a->subdivide_max_opt = s->add_option("--subdivide-max-vertices", a->sopt.max_vertices,
                                        "With --subdivide: the most vertices the refined mesh may have (0: 4x the "
                                        "mesh's)")
+                             ->check(count_range(0, kMaxSubdivideVertices, "0: 4x the mesh's; a mesh's vertex "
+                                                                           "indices are 32-bit"))
                              ->capture_default_str();
   a->subdivided_mesh_opt = s->add_option("--subdivided-mesh", a->subdivided_mesh,
                                          "With --subdivide: where the refined mesh goes, PLY with normals (and "
-                                         "colours) (default: the output's name with .ply)");
+                                         "colours) (default: the output's name with .ply)")->check(path_value());
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_precompute(*a); };
 }

@@ -103,9 +103,7 @@ void check_outputs(const ProjectArgs& a) {
                       {{"ENV", f[0]}, {"ENV", f[1]}, {"ENV", f[2]}, {"ENV", f[3]}, {"ENV", f[4]}, {"ENV", f[5]}});
   if (a.reconstruct.empty() && a.exposure_opt->count() > 0)
     throw UsageError("--exposure scales the --reconstruct image; give --reconstruct FILE too");
-  if (to_file && !a.reconstruct.empty() && same_file(a.output, a.reconstruct))
-    throw UsageError("--reconstruct " + a.reconstruct + ": is also the --output file; give the coefficients and the "
-                     "reconstruction two names");
+  check_distinct_outputs({{"--output", to_file ? a.output : ""}, {"--reconstruct", a.reconstruct}});
 }
 
 // --exposure: a number of stops, or "auto": the stops that put the 99th
@@ -343,11 +341,11 @@ Run add_project(CLI::App& app) {
       "Engines: --convention three|filament|unity writes three.js's, Filament's or Unity's array (3 bands; JSON,\n"
       "glsl/hlsl with the engine's own evaluation, cpp; docs/CONVENTIONS.md, \"Engines' conventions\").\n"
       "Example: prt project envmaps/forest.exr --bands 3 --irradiance --format glsl");
-  s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->required();
+  s->add_option("ENV", a->env, "Environment map file (or six faces, see below)")->check(path_value())->required();
   add_shared(s, SharedOption::BandsProjected, a->bands,
              "Number of bands n; every n computed to 1e-12 in double (the box rule's pixel integrals, the cube's "
              "texel sum, --rotate; prt verify --bands-max 64)");
-  s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)");
+  s->add_option("-o,--output", a->output, "Write the coefficients to this file (default: stdout)")->check(path_value());
   s->add_option("-f,--format", a->format,
                 "Output format: json, text (table), glsl, hlsl (the constants and a function evaluating them) or cpp "
                 "(paste-ready constants)")
@@ -370,7 +368,8 @@ Run add_project(CLI::App& app) {
                 "box: texels are area averages, integrated exactly; point: texels are point samples (lat-long only)")
       ->check(parsed_by(parse_quadrature))
       ->capture_default_str();
-  s->add_option("--reconstruct", a->reconstruct, "Also write the n-band reconstruction as a lat-long image");
+  s->add_option("--reconstruct", a->reconstruct, "Also write the n-band reconstruction as a lat-long image")
+      ->check(path_value());
   s->add_option("--reconstruct-size", a->reconstruct_size,
                 "WxH of the reconstruction, each from 1 to 65536 (default: the map's size)")
       ->check(size_value(65536));

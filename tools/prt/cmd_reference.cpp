@@ -247,9 +247,9 @@ Run add_reference(CLI::App& app) {
       "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv\n"
       "         prt reference models/room.gltf forest.exr --lightmap 128x128 --mode interreflected -o ref.exr\n"
       "         prt reference models/room.gltf forest.exr --at points.csv -o ref.csv");
-  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
-  s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
-  s->add_option("-o,--output", a->output, "CSV file to write")->required();
+  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->check(path_value())->required();
+  s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->check(path_value())->required();
+  s->add_option("-o,--output", a->output, "CSV file to write")->check(path_value())->required();
   add_shared(s, SharedOption::Mode, a->mode, "Light paths: unshadowed (no rays), shadowed, or interreflected");
   add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode)");
   a->albedo_opt = add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo (with --lightmap: replaces the scene's materials)");
@@ -259,7 +259,8 @@ Run add_reference(CLI::App& app) {
   a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv, "With --lightmap: the UV set (as prt precompute --uv)");
   s->add_option("--at", a->at,
                 "POINTS.csv (header x,y,z,nx,ny,nz): the reference at these points instead of vertices: E(p, n)/pi, "
-                "what a white Lambertian surface there reflects (probe volumes, docs/PROBES.md); writes point,r,g,b,...");
+                "what a white Lambertian surface there reflects (probe volumes, docs/PROBES.md); writes point,r,g,b,...")
+      ->check(path_value());
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
   s->add_option("-s,--samples", a->opt.samples,
                 "Iterations per vertex, each one map-sampled and one cosine-sampled direction")

@@ -498,13 +498,13 @@ Run add_relight(CLI::App& app) {
       "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
   s->add_option("MESH", a->mesh,
                 "The mesh (or, for a lightmap, the scene) the transfer was computed for; for a --basis zh transfer, any "
-                "pose of it (the same vertices and triangles)")
+                "pose of it (the same vertices and triangles)")->check(path_value())
       ->required();
-  s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
-  s->add_option("ENV", a->env, "Environment map")->required();
+  s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->check(path_value())->required();
+  s->add_option("ENV", a->env, "Environment map")->check(path_value())->required();
   s->add_option("-o,--output", a->output,
                 "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b); a lightmap: .exr (RGBA float "
-                "atlas, A = 1 where a triangle covers the texel)")
+                "atlas, A = 1 where a triangle covers the texel)")->check(path_value())
       ->required();
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));
@@ -543,7 +543,8 @@ Run add_relight(CLI::App& app) {
                             "vertex colours)");
   s->add_option("--at", a->at,
                 "A probe volume (prt precompute --probes): the query points, a CSV with header x,y,z,nx,ny,nz; "
-                "writes point,r,g,b: E(p, n)/pi from the probes interpolated at p (docs/PROBES.md)");
+                "writes point,r,g,b: E(p, n)/pi from the probes interpolated at p (docs/PROBES.md)")
+      ->check(path_value());
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }

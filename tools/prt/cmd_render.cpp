@@ -71,7 +71,11 @@ int run_render(const RenderArgs& a) {
   }
   for (int f = 0; f < (a.frames_given ? a.frames : 1); ++f)
     check_not_input("--output", a.frames_given ? frame_path(a.output, f) : a.output,
-                    {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+                    {{"MESH", a.mesh},
+                     {"TRANSFER", a.transfer},
+                     {"ENV", a.env},
+                     {"--probes", a.probe.probes},
+                     {"--object", a.probe.object}});
   for_path("--output", [&] { check_image_output(a.output); });
 
   Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true, true);
@@ -256,16 +260,18 @@ Run add_render(CLI::App& app) {
       "Example: prt render bunny.off bunny.prt envmaps/forest.exr -o bunny.png --frames 36 --spin 10\n"
       "         prt render models/tube.obj tube-zh.prt envmaps/forest.exr --deform bend:120 --frames 48 -o tube.png\n"
       "         prt render models/tube-skinned.gltf zh.prt envmaps/forest.exr --frames 48 --spin 0 -o tube.png");
-  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
-  s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
-  s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
+  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->check(path_value())->required();
+  s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->check(path_value())->required();
+  s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->check(path_value())->required();
   s->add_option("-o,--output", a->output, "Output image (.png, .exr, ...); with --frames, OUT_0000.ext, ...")
+      ->check(path_value())
       ->required();
   a->probe_opts.push_back(s->add_option("--probes", a->probe.probes,
-                                       "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it"));
+                                       "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it")
+                              ->check(path_value()));
   a->probe_opts.push_back(s->add_option("--object", a->probe.object,
                                        "With --probes: a mesh lit by the probes, moving on a circle through the volume "
-                                       "(one turn over the frames; docs/PROBES.md)"));
+                                       "(one turn over the frames; docs/PROBES.md)")->check(path_value()));
   a->probe_opts.push_back(add_shared(s, SharedOption::ObjectSize, a->probe.size,
                                      "With --object: its bounding box's diagonal (default twice the smallest probe spacing)"));
   a->probe_opts.push_back(add_shared(s, SharedOption::ObjectAt, a->probe.at, "With --object: a fixed position instead of the path"));

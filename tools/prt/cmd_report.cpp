@@ -595,12 +595,12 @@ Run add_report(CLI::App& app) {
       "reference) and writes DIR/report.md, report.csv, report.json and PNG plots (python3-matplotlib).\n"
       "See docs/REPORT.md. Ctrl-C stops without writing.\n"
       "Example: prt report bunny.off forest.exr --out bunny-report --quick");
-  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->required();
-  s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->required();
-  s->add_option("-o,--out", a->out, "Output directory")->capture_default_str();
+  s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->check(path_value())->required();
+  s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->check(path_value())->required();
+  s->add_option("-o,--out", a->out, "Output directory")->check(path_value())->capture_default_str();
   s->add_flag("--quick", a->quick, "Small grid and reference (under a minute for ~40k vertices on 2 cores)");
   add_shared(s, SharedOption::Albedo, a->albedo, "Diffuse albedo");
-  s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)");
+  s->add_option("--cache", a->cache, "Directory of cached references (default DIR/cache)")->check(path_value());
   s->add_flag("--no-cache", a->no_cache, "Always recompute the references");
   s->add_flag("--no-plots", a->no_plots, "Tables only (no Python)");
   s->add_option("--sweeps", a->sweeps, "Which sweeps, comma-separated: bands, samples, bounces, terms, glossy, compression")

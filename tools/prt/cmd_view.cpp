@@ -448,7 +448,13 @@ int run_view(const ViewArgs& a) {
     if (const std::string problem = image_output_type_problem(a.screenshot); !problem.empty())
       throw UsageError("--screenshot: " + problem);
     check_not_input("--screenshot", a.screenshot,
-                    {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}, {"--second", a.second}});
+                    {{"MESH", a.mesh},
+                     {"TRANSFER", a.transfer},
+                     {"ENV", a.env},
+                     {"--second", a.second},
+                     {"--probes", a.probe.probes},
+                     {"--object", a.probe.object}});
+    check_distinct_outputs({{"--screenshot-dir", a.screenshot_dir}, {"--screenshot", a.screenshot}});
     for_path("--screenshot", [&] { check_image_output(a.screenshot); });
   }
   if (!std::filesystem::is_directory(a.screenshot_dir))
@@ -618,13 +624,15 @@ Run add_view(CLI::App& app) {
             "the same options), saved as prt_view_NNNN.png in --screenshot-dir.\n"
             "Scripted: --frames N --screenshot FILE renders N frames, saves FILE and exits 0.\n"
             "Example: prt view bunny.off bunny.prt envmaps/forest.exr");
-  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->required();
-  s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->required();
-  s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->required();
+  s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->check(path_value())->required();
+  s->add_option("TRANSFER", a->transfer, "Transfer file from prt precompute")->check(path_value())->required();
+  s->add_option("ENV", a->env, "Environment map (lat-long or cube)")->check(path_value())->required();
   a->probe_opts.push_back(s->add_option("--probes", a->probe.probes,
-                                       "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it"));
+                                       "A probe volume of SCENE (prt precompute SCENE --probes): light --object with it")
+                              ->check(path_value()));
   a->probe_opts.push_back(s->add_option("--object", a->probe.object,
-                                       "With --probes: a mesh lit by the probes, circling through the volume"));
+                                       "With --probes: a mesh lit by the probes, circling through the volume")
+                              ->check(path_value()));
   a->probe_opts.push_back(add_shared(s, SharedOption::ObjectSize, a->probe.size,
                                      "With --object: its bounding box's diagonal (default twice the smallest probe spacing)"));
   a->probe_opts.push_back(add_shared(s, SharedOption::ObjectAt, a->probe.at, "With --object: a fixed position instead of the path"));
@@ -639,10 +647,13 @@ Run add_view(CLI::App& app) {
                                 "Zonal-harmonic files of a skinned glTF MESH, whose animation plays on the GPU in real "
                                 "time, looping: which of the file's animations (prt/skin.h)");
   add_shared(s, SharedOption::Frames, a->frames, "Render N frames, save --screenshot FILE and exit");
-  s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)");
-  s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")->capture_default_str();
+  s->add_option("--screenshot", a->screenshot, "With --frames: the image to save (.png, .exr, ...)")
+      ->check(path_value());
+  s->add_option("--screenshot-dir", a->screenshot_dir, "Where S saves prt_view_NNNN.png")
+      ->check(path_value())->capture_default_str();
   s->add_option("--second", a->second,
-                "A transfer of the other basis (SH or wavelet) for the same mesh: B switches between the two");
+                "A transfer of the other basis (SH or wavelet) for the same mesh: B switches between the two")
+      ->check(path_value());
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
   s->add_flag("--no-panel", a->no_panel,

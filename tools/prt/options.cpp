@@ -210,6 +210,40 @@ CLI::Validator memory_size_value() {
 
 std::size_t parse_memory_size(const std::string& text) { return std::size_t(memory_size(text)); }
 
+CLI::Validator count_range(std::uint64_t lo, std::uint64_t hi, std::string why) {
+  return CLI::Validator(
+      [lo, hi, why](std::string& s) -> std::string {
+        std::uint64_t v = 0;
+        if (!read_digits(s, hi, v) || v < lo)
+          return fmt::format("must be a whole number from {} to {}{}, got {}", lo, hi, because(why), show_text(s));
+        return {};
+      },
+      fmt::format("UINT in [{}, {}]", lo, hi));
+}
+
+CLI::Validator int_one_of(std::initializer_list<int> values, std::string why) {
+  std::vector<int> list(values.begin(), values.end());
+  std::string expected, set;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    expected += (i == 0 ? "" : i + 1 == list.size() ? " or " : ", ") + std::to_string(list[i]);
+    set += (i == 0 ? "" : ",") + std::to_string(list[i]);
+  }
+  return CLI::Validator(
+      [list, expected, why](std::string& s) -> std::string {
+        std::uint64_t v = 0;
+        if (read_digits(s, std::uint64_t(std::numeric_limits<int>::max()), v))
+          for (int n : list)
+            if (std::uint64_t(n) == v) return {};
+        return fmt::format("must be {}{}, got {}", expected, because(why), show_text(s));
+      },
+      "{" + set + "}");
+}
+
+CLI::Validator path_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string { return s.empty() ? "expected a path, got ''" : std::string(); }, "");
+}
+
 CLI::Validator deform_value() {
   return CLI::Validator(
       [](std::string& s) -> std::string {
@@ -243,15 +277,6 @@ void parse_triple(const std::string& text, const char* option, double out[3]) {
     throw UsageError(std::string(option) + ": " + p);
 }
 
-bool same_file(const std::string& a, const std::string& b) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec) && !ec;
-  const fs::path pa = fs::weakly_canonical(fs::absolute(a, ec), ec);
-  const fs::path pb = fs::weakly_canonical(fs::absolute(b, ec), ec);
-  return pa == pb;
-}
-
 void check_not_input(const std::string& option, const std::string& output, std::initializer_list<Input> inputs) {
   check_not_input(option, output, std::span<const Input>(inputs.begin(), inputs.size()));
 }
@@ -263,6 +288,20 @@ void check_not_input(const std::string& option, const std::string& output, std::
                                  "output name)",
                                  option, output, in.name, in.path == output ? "" : " (" + in.path + ")"));
   }
+}
+
+void check_distinct_outputs(std::initializer_list<Output> outputs) {
+  check_distinct_outputs(std::span<const Output>(outputs.begin(), outputs.size()));
+}
+
+void check_distinct_outputs(std::span<const Output> outputs) {
+  for (std::size_t j = 1; j < outputs.size(); ++j)
+    for (std::size_t i = 0; i < j; ++i) {
+      const Output &a = outputs[i], &b = outputs[j];
+      if (a.path.empty() || b.path.empty() || !same_file(a.path, b.path)) continue;
+      throw UsageError(fmt::format("{} {}: is also the {} file{}; give each output its own name", b.option, b.path,
+                                   a.option, a.path == b.path ? "" : " (" + a.path + ")"));
+    }
 }
 
 }  // namespace prt::cli

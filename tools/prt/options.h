@@ -15,6 +15,8 @@
 // at most 40 characters).
 #pragma once
 
+#include <prt/io.h>
+
 #include <prt/error.h>
 
 #include <CLI/CLI.hpp>
@@ -62,6 +64,17 @@ CLI::Validator cube_resolution();
 // GiB or TiB (of 1024), or none (bytes); at least 1 MB, below 2^63 bytes.
 CLI::Validator memory_size_value();
 std::size_t parse_memory_size(const std::string& text);  // checked by memory_size_value()
+// A count up to 2^64 - 1 (vertices, bytes): digits only, from lo to hi
+// (no sign, no exponent, no spaces: "-1" wrapped to 2^64 - 1, "1e20" was
+// CLI11's conversion error).
+CLI::Validator count_range(std::uint64_t lo, std::uint64_t hi, std::string why = {});
+// One of the whole numbers `values` (a choice of bits or sizes), digits only:
+// "must be 16 or 32, got '64'" (CLI::IsMember took '' and said "1e20" alone).
+CLI::Validator int_one_of(std::initializer_list<int> values, std::string why = {});
+// A file or directory name, for every path option and argument of every
+// command: not empty ('' named no file: `--ao-map ''` was taken as not
+// given, `-o ''` failed after the work). Message: "expected a path, got ''".
+CLI::Validator path_value();
 // A deformation: bend:ANGLE or twist:ANGLE (prt::parse_deform's message).
 CLI::Validator deform_value();
 // One of `names` (message: "expected a, b or c, got 'x'").
@@ -114,9 +127,8 @@ struct Input {
   std::string name, path;
 };
 
-// Whether a and b name the same file: std::filesystem::equivalent when both
-// exist (also through a symbolic or hard link), else the same absolute path.
-bool same_file(const std::string& a, const std::string& b);
+// Whether two paths name the same file: prt::same_file (prt/io.h).
+using prt::same_file;
 
 // Throws UsageError when `output`, given to `option`, is one of `inputs`:
 // the same file (std::filesystem::equivalent: also through a symbolic or
@@ -124,5 +136,19 @@ bool same_file(const std::string& a, const std::string& b);
 // writes over its own input.
 void check_not_input(const std::string& option, const std::string& output, std::initializer_list<Input> inputs);
 void check_not_input(const std::string& option, const std::string& output, std::span<const Input> inputs);
+
+// An output of a command: its option ("--output", "--ao-map") and its path
+// ("" when not given).
+struct Output {
+  std::string option, path;
+};
+
+// Throws UsageError when two of `outputs` are the same file (same_file: the
+// same path once made absolute and normal, "a.png" and "./a.png", or
+// std::filesystem::equivalent where both exist, through a symbolic or hard
+// link too): one would overwrite the other. Every command with more than one
+// output calls it, next to check_not_input.
+void check_distinct_outputs(std::initializer_list<Output> outputs);
+void check_distinct_outputs(std::span<const Output> outputs);
 
 }  // namespace prt::cli

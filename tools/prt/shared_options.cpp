@@ -5,6 +5,7 @@
 #include "look.h"
 
 #include <prt/filter.h>
+#include <prt/precompute.h>
 #include <prt/render.h>
 #include <prt/sh.h>
 #include <prt/transfer.h>
@@ -53,7 +54,7 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::Rotate, Spec{"-r,--rotate", triple_value("yaw,pitch,roll"), "degrees, R = Ry Rx Rz"});
     t.emplace(S::Tonemap, Spec{"--tonemap", parsed_by(parse_tone_map), "clamp, reinhard or aces"});
     t.emplace(S::Camera, Spec{"--camera", camera_value(), "eye, target, up: ex,ey,ez,tx,ty,tz,ux,uy,uz"});
-    t.emplace(S::Fov, Spec{"--fov", number_range(1.0, 179.0), "degrees, 1 to 179"});
+    t.emplace(S::Fov, Spec{"--fov", number_range(kMinFov, kMaxFov), fmt::format("degrees, {:g} to {:g}", kMinFov, kMaxFov)});
     t.emplace(S::Width, Spec{"--width", int_range(1, kMaxImageSide), fmt::format("pixels, 1 to {}", kMaxImageSide)});
     t.emplace(S::Height, Spec{"--height", int_range(1, kMaxImageSide), fmt::format("pixels, 1 to {}", kMaxImageSide)});
     t.emplace(S::Frames, Spec{"--frames", int_range(1, kMaxFrames), fmt::format("1 to {}", kMaxFrames)});
@@ -67,7 +68,7 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::Material, Spec{"--material", one_of({"diffuse", "glossy"}), "diffuse or glossy"});
     t.emplace(S::Bounces, Spec{"--bounces", int_range(0, kMaxBounces), fmt::format("0 to {}", kMaxBounces)});
     t.emplace(S::Seed, Spec{"--seed", seed_value(), "0 to 2^64 - 1; same seed, same bits"});
-    t.emplace(S::Threads, Spec{"-t,--threads", int_range(0, 1024), "0 (all cores) to 1024"});
+    t.emplace(S::Threads, Spec{"-t,--threads", int_range(0, kMaxThreads), fmt::format("0 (all cores) to {}", kMaxThreads)});
     t.emplace(S::Offset, Spec{"--offset", positive_number(),
                               "mesh units, > 0 and at most a tenth of the bounding-box diagonal; default 1e-4 x the "
                               "diagonal"});
@@ -76,7 +77,7 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::Window, Spec{"-w,--window", parsed_by(sh::parse_window), "none, hanning, lanczos or auto"});
     t.emplace(S::WindowWidth, Spec{"--window-width", positive_number(), "a positive number of bands; default the "
                                                                         "band count"});
-    t.emplace(S::Terms, Spec{"-k,--terms", int_range(1, 1 << 30), "1 to 2^30; K >= 6 r^2 keeps all"});
+    t.emplace(S::Terms, Spec{"-k,--terms", int_range(1, wavelet::kMaxTerms), "1 to 2^30; K >= 6 r^2 keeps all"});
     t.emplace(S::Selection, Spec{"--selection", parsed_by(wavelet::parse_selection), "area or magnitude"});
     t.emplace(S::BandsComputed,
               Spec{"-b,--bands",
@@ -94,7 +95,7 @@ const std::map<SharedOption, Spec>& specs() {
                                   return w;
                                 }),
                                 fmt::format("WxH, 1 to {} texels a side", kMaxLightmapSize)});
-    t.emplace(S::UvSet, Spec{"--uv", int_range(0, 7), "0 to 7: TEXCOORD_N"});
+    t.emplace(S::UvSet, Spec{"--uv", int_range(0, kMaxLightmapUvSet), fmt::format("0 to {}: TEXCOORD_N", kMaxLightmapUvSet)});
     t.emplace(S::ObjectAt, Spec{"--object-at", triple_value("x,y,z"), "x,y,z"});
     t.emplace(S::ObjectSize, Spec{"--object-size", positive_number(), "a positive length (scene units)"});
     t.emplace(S::Deform, Spec{"--deform", deform_value(), "bend:ANGLE or twist:ANGLE, degrees, at most 720"});
