@@ -369,14 +369,16 @@ TEST(Skin, RefusesBadFiles) {
   // A joint out of range: load_mesh's structure check refuses it (Assimp would read past the joints).
   add("joint", "uses joint 5 (vertex 1 of accessor 1), out of range (its skin has 1 joints)",
       [](Tiny& t) { t.joints[4] = 5; });
-  add("counts", "counts differ", [](Tiny& t) { t.weights_count = 2; });
+  // Attribute counts, interpolation names and key counts: the glTF check's (every reader's) refusals.
+  add("counts", "WEIGHTS_0 has 2 elements, POSITION 3", [](Tiny& t) { t.weights_count = 2; });
   // No inverse bind matrices (legal glTF, but Assimp 5.2 follows a null pointer): refused by load_mesh.
   add("inverse", "has no inverseBindMatrices", [](Tiny& t) { t.inverse_bind = false; });
   add("zero", "weights of vertex 2 are all zero", [](Tiny& t) { t.weights[8] = 0; });
   add("negative", "weight -0.5", [](Tiny& t) { t.weights[1] = -0.5f; });
   add("nan", "weight nan", [](Tiny& t) { t.weights[0] = std::nanf(""); });
-  add("interpolation", "interpolation 'QUADRATIC'", [](Tiny& t) { t.interpolation = "QUADRATIC"; });
-  add("keys", "1 output values for 2 keys", [](Tiny& t) { t.interpolation = "LINEAR", t.outputs = {0, 0, 0}; });
+  add("interpolation", "interpolation must be one of LINEAR, STEP, CUBICSPLINE, got \"QUADRATIC\"",
+      [](Tiny& t) { t.interpolation = "QUADRATIC"; });
+  add("keys", "1 outputs for 2 key frames", [](Tiny& t) { t.interpolation = "LINEAR", t.outputs = {0, 0, 0}; });
   add("times", "not increasing", [](Tiny& t) { t.interpolation = "LINEAR", t.times = {1, 0.5f}; });
   add("inf", "not finite", [](Tiny& t) { t.interpolation = "STEP", t.outputs = {0, 0, 0, INFINITY, 0, 0}; });
   for (const Case& c : cases) {
