@@ -30,6 +30,7 @@
 #include <prt/mesh.h>
 #include <prt/projection.h>
 #include <prt/render.h>
+#include <prt/transfer_file.h>
 
 #include "synthetic_transfer.h"
 
@@ -43,7 +44,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -215,6 +218,366 @@ FrameFigures frame_figures(const std::string& path, const EnvMap& map, const Pro
   return f;
 }
 
+// The grid argument: a probe volume file (a transfer of another kind is
+// refused, naming its kind), or nullopt for a grid NXxNYxNZ.
+std::optional<ProbeTransfer> volume_file_arg(const char* arg) {
+  if (!std::filesystem::is_regular_file(arg)) return std::nullopt;
+  return read_transfer_as<ProbeTransfer>(arg);
+}
+
+// The command line past SCENE MAP GRID.
+struct Args {
+  double euler[3] = {0, 0, 0}, box[6] = {0, 0, 0, 0, 0, 0};
+  bool have_box = false, spacing_table = false, chebyshev = false;
+  int points = 400, cube = 0, depth = 0, truth_width = 1024;
+  std::string frame_mesh;
+};
+
+Args parse_args(int argc, char** argv) {
+  Args g;
+  for (int i = 4; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--rotate" && i + 1 < argc) std::sscanf(argv[++i], "%lf,%lf,%lf", &g.euler[0], &g.euler[1], &g.euler[2]);
+    else if (a == "--box" && i + 1 < argc) {
+      g.have_box = std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%lf,%lf", &g.box[0], &g.box[1], &g.box[2], &g.box[3], &g.box[4],
+                               &g.box[5]) == 6;
+    } else if (a == "--points" && i + 1 < argc) g.points = std::atoi(argv[++i]);
+    else if (a == "--cube" && i + 1 < argc) g.cube = std::atoi(argv[++i]);
+    else if (a == "--depth" && i + 1 < argc) g.depth = std::atoi(argv[++i]);
+    else if (a == "--truth-width" && i + 1 < argc) g.truth_width = std::atoi(argv[++i]);
+    else if (a == "--spacing") g.spacing_table = true;
+    else if (a == "--chebyshev") g.chebyshev = true;
+    else if (a == "--frame" && i + 1 < argc) g.frame_mesh = argv[++i];  // the depth moments' weights instead of traced visibility
+  }
+  return g;
+}
+
+// What every grid's figures share: the scene, its rays, the map's pixels
+// (rotated by R) and the bands.
+struct Figures {
+  const Args& args;
+  const Scene& scene;
+  const EnvMap& map;
+  glm::dmat3 R;
+  std::vector<Pixel> px;
+  const detail::RayScene& rays;
+  float offset;
+  int bands, nc;
+};
+
+// One grid's volume, relit, with the ideal probes (the exact SH at every
+// probe's position) and the probe weights at a point.
+struct GridRun {
+  const ProbeGrid& grid;
+  const ProbeTransfer& t;
+  const std::vector<glm::vec3>& lit;  // nc per probe
+  const std::vector<Truth>& ideal;
+  std::function<ProbeWeights(const glm::dvec3&, const glm::dvec3&)> weights_at;
+};
+
+// The errors at the probes. Dim probes: those whose mean truth over the 6
+// normals is between a hundredth and a quarter of the median probe's (they
+// see a little of the map: the dim ones inside a room lit through an
+// opening; below a hundredth, a probe sees the map only through the cracks
+// where walls meet at grazing angles, and every estimate there, the truth's
+// too, is a handful of rays).
+struct AtProbes {
+  Err ours_all, ideal_all, ours_dim, ideal_dim;
+  std::size_t dim_probes = 0;
+  double dim_below = 0, dim_above = 0;
+};
+
+AtProbes at_probes(const Figures& fg, const GridRun& g) {
+  const ProbeTransfer& t = g.t;
+  const std::vector<Truth>& ideal = g.ideal;
+  const std::vector<Pixel>& px = fg.px;
+  const int bands = fg.bands, nc = fg.nc;
+  const std::vector<std::uint32_t> slots = t.stored_slots();
+  const std::size_t P = t.probes();
+  AtProbes r;
+  std::vector<double> mean_of(P, -1.0);
+  for (std::size_t p = 0; p < P; ++p)
+    if (t.state[p] == ProbeState::Stored) {
+      double m = 0;
+      for (const glm::dvec3& n : kAxes) {
+        const glm::dvec3 v = truth_lambert(ideal[p], px, n);
+        m += (v.x + v.y + v.z) / 6;
+      }
+      mean_of[p] = m;
+    }
+  std::vector<double> sorted;
+  for (double m : mean_of)
+    if (m >= 0) sorted.push_back(m);
+  std::sort(sorted.begin(), sorted.end());
+  r.dim_below = sorted.empty() ? 0 : 0.25 * sorted[sorted.size() / 2];
+  r.dim_above = r.dim_below * 0.04;
+  for (std::size_t p = 0; p < P; ++p) {
+    if (t.state[p] != ProbeState::Stored) continue;
+    std::vector<glm::vec3> mine(g.lit.begin() + std::ptrdiff_t(p * nc), g.lit.begin() + std::ptrdiff_t((p + 1) * nc));
+    const bool dim = mean_of[p] > r.dim_above && mean_of[p] < r.dim_below;
+    r.dim_probes += dim;
+    if (dim && std::getenv("PRT_PROBE_DEBUG")) {
+      const std::size_t s2 = slots[p];
+      fmt::print("dim probe {} at {:.3f} {:.3f} {:.3f}: nodes {} (complement {}), partial {}; visible map pixels {}\n", p,
+                 t.positions[p].x, t.positions[p].y, t.positions[p].z, t.vis_offsets[s2 + 1] - t.vis_offsets[s2],
+                 int(t.vis_complement[s2]), t.partial_offsets[s2 + 1] - t.partial_offsets[s2],
+                 std::count(ideal[p].visible.begin(), ideal[p].visible.end(), 1));
+      for (const glm::dvec3& n : kAxes) {
+        const glm::dvec3 tr = truth_lambert(ideal[p], px, n), a = lambert_from_sh(mine, bands, n), b = sh_lambert(ideal[p].sh, bands, n);
+        fmt::print("   n {:+.0f} {:+.0f} {:+.0f}: truth {:.3e} probes {:.3e} ideal {:.3e}\n", n.x, n.y, n.z, tr.x, a.x, b.x);
+      }
+    }
+    for (const glm::dvec3& n : kAxes) {
+      const glm::dvec3 truth = truth_lambert(ideal[p], px, n);
+      const glm::dvec3 a = lambert_from_sh(mine, bands, n), b = sh_lambert(ideal[p].sh, bands, n);
+      r.ours_all.add(a, truth);
+      r.ideal_all.add(b, truth);
+      if (std::getenv("PRT_PROBE_WORST") && glm::length(a - b) > std::atof(std::getenv("PRT_PROBE_WORST")))
+        fmt::print("probe {} ({:.3f} {:.3f} {:.3f}) n {:+.0f} {:+.0f} {:+.0f}: truth {:.4g} probes {:.4g} ideal {:.4g}; partial {}\n", p,
+                   t.positions[p].x, t.positions[p].y, t.positions[p].z, n.x, n.y, n.z, truth.x, a.x, b.x,
+                   t.partial_offsets[slots[p] + 1] - t.partial_offsets[slots[p]]);
+      if (dim) {
+        r.ours_dim.add(a, truth);
+        r.ideal_dim.add(b, truth);
+      }
+    }
+  }
+  return r;
+}
+
+// Query points between probes: up to `points` in the air (cells whose 8
+// probes are all stored; kind 0) and as many near surfaces (within a
+// quarter of the smallest spacing; kind 1).
+struct Queries {
+  std::vector<glm::dvec3> qp;
+  std::vector<int> kind;  // 0 air, 1 near
+};
+
+Queries query_points(const Figures& fg, const GridRun& g, std::mt19937& gen, std::uniform_real_distribution<double>& U) {
+  const ProbeGrid& grid = g.grid;
+  const int points = fg.args.points;
+  const glm::dvec3 sp = grid.spacing();
+  const double smallest = std::min({sp.x > 0 ? sp.x : 1e30, sp.y > 0 ? sp.y : 1e30, sp.z > 0 ? sp.z : 1e30});
+  Queries q;
+  for (int tries = 0; int(q.qp.size()) < 2 * points && tries < 200 * points; ++tries) {
+    const glm::dvec3 p = grid.min + (grid.max - grid.min) * glm::dvec3(U(gen), U(gen), U(gen));
+    const ProbeWeights w = trilinear_weights(grid, p);
+    bool air = true;
+    for (int c = 0; c < 8; ++c) air = air && g.t.state[w.probe[std::size_t(c)]] == ProbeState::Stored;
+    glm::dvec3 at;
+    const bool near = fg.rays.closest_point(glm::vec3(p), float(0.25 * smallest), at) != ~0u;
+    // Inside a solid (the closest surface's back side) is not a query point.
+    if (near && glm::length(p - at) < 1e-3 * smallest) continue;
+    const int count_air = int(std::count(q.kind.begin(), q.kind.end(), 0));
+    if (near && int(q.qp.size()) - count_air < points) {
+      q.qp.push_back(p);
+      q.kind.push_back(1);
+    } else if (air && !near && count_air < points) {
+      q.qp.push_back(p);
+      q.kind.push_back(0);
+    }
+  }
+  return q;
+}
+
+// At the query points, 6 axis normals each: the truth, the probes' relit
+// value and the ideal probes trilinearly interpolated.
+struct Between {
+  std::vector<glm::dvec3> truths, ours, ideals;  // 6 per query point
+};
+
+Between between_probes(const Figures& fg, const GridRun& g, const Queries& q) {
+  const int bands = fg.bands, nc = fg.nc;
+  const std::vector<glm::dvec3>& qp = q.qp;
+  Between r;
+  r.truths.resize(qp.size() * 6);
+  r.ours.resize(qp.size() * 6);
+  r.ideals.resize(qp.size() * 6);
+  tbb::parallel_for(std::size_t(0), qp.size(), [&](std::size_t i) {
+    detail::enable_ftz_daz();
+    const Truth tr = trace_truth(fg.rays, fg.px, glm::vec3(qp[i]), bands, fg.offset);
+    const ProbeWeights tw = trilinear_weights(g.grid, qp[i]);
+    for (int a = 0; a < 6; ++a) {
+      const glm::dvec3 n = kAxes[a];
+      r.truths[i * 6 + std::size_t(a)] = truth_lambert(tr, fg.px, n);
+      const ProbeWeights w = g.weights_at(qp[i], n);
+      std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
+      std::vector<glm::dvec3> imix(std::size_t(nc), glm::dvec3(0.0));
+      for (int c = 0; c < w.count; ++c)
+        for (int k = 0; k < nc; ++k)
+          mix[std::size_t(k)] += w.weight[std::size_t(c)] * g.lit[std::size_t(w.probe[std::size_t(c)]) * nc + std::size_t(k)];
+      for (int c = 0; c < tw.count; ++c) {
+        const Truth& ip = g.ideal[tw.probe[std::size_t(c)]];
+        if (ip.sh.empty()) continue;
+        for (int k = 0; k < nc; ++k) imix[std::size_t(k)] += double(tw.weight[std::size_t(c)]) * ip.sh[std::size_t(k)];
+      }
+      r.ours[i * 6 + std::size_t(a)] = lambert_from_sh(mix, bands, n);
+      r.ideals[i * 6 + std::size_t(a)] = sh_lambert(imix, bands, n);
+    }
+  });
+  return r;
+}
+
+// Inside the box against free space (the air points of `q`): printed.
+void box_figures(const Figures& fg, const GridRun& g, const Queries& q, const Between& b, std::mt19937& gen,
+                 std::uniform_real_distribution<double>& U) {
+  const double* box = fg.args.box;
+  const int points = fg.args.points, bands = fg.bands, nc = fg.nc;
+  double inside = 0, free = 0;
+  std::size_t ni = 0, nf = 0;
+  for (int i = 0, tries = 0; i < points && tries < 100 * points; ++tries) {
+    const glm::dvec3 p(box[0] + (box[3] - box[0]) * U(gen), box[1] + (box[4] - box[1]) * U(gen),
+                       box[2] + (box[5] - box[2]) * U(gen));
+    // Inside closed geometry: every axis ray meets a back face first.
+    bool inside_box = true;
+    for (const glm::dvec3& a : kAxes) {
+      const detail::Hit h = fg.rays.intersect1(glm::vec3(p), glm::vec3(a), 0.0f);
+      inside_box = inside_box && h.hit() && !h.front;
+    }
+    if (!inside_box) continue;
+    ++i;
+    for (const glm::dvec3& n : kAxes) {
+      const ProbeWeights w = g.weights_at(p, n);
+      std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
+      for (int c = 0; c < w.count; ++c)
+        for (int k = 0; k < nc; ++k)
+          mix[std::size_t(k)] += w.weight[std::size_t(c)] * g.lit[std::size_t(w.probe[std::size_t(c)]) * nc + std::size_t(k)];
+      const glm::dvec3 v = lambert_from_sh(mix, bands, n);
+      inside += v.x + v.y + v.z;
+      ++ni;
+    }
+  }
+  for (std::size_t i = 0; i < q.qp.size(); ++i)
+    if (q.kind[i] == 0)
+      for (int a = 0; a < 6; ++a) {
+        const glm::dvec3 v = b.ours[i * 6 + std::size_t(a)];
+        free += v.x + v.y + v.z;
+        ++nf;
+      }
+  fmt::print("inside the box: mean {:.4g}, free space {:.4g}: {:.2f}%\n", inside / double(ni), free / double(std::max<std::size_t>(nf, 1)),
+             100.0 * (inside / double(ni)) / std::max(free / double(std::max<std::size_t>(nf, 1)), 1e-30));
+}
+
+// One grid: precomputed, relit, its figures printed (report: in full; else
+// one row of the --spacing table).
+ProbeTransfer run_grid(const Figures& fg, const std::array<int, 3>& dims, bool report) {
+  const Args& args = fg.args;
+  ProbeOptions o;
+  if (args.cube > 0) o.cube_res = args.cube;
+  if (args.depth > 0) o.depth_res = args.depth;
+  const ProbeGrid grid = probe_grid(fg.scene.mesh, dims);
+  const auto t0 = std::chrono::steady_clock::now();
+  const ProbeTransfer t = compute_probe_transfer(fg.scene, grid, o);
+  const double t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ProbeRelighter relighter(t, fg.map);
+  relighter.set_rotation(fg.R);
+  std::vector<glm::vec3> lit;
+  relighter.relight(lit);
+  const std::vector<std::uint32_t> slots = t.stored_slots();
+  const std::size_t P = t.probes();
+  const ProbeOcclusion occlusion(fg.scene.mesh, grid);
+  const ProbeVisibility visible = [&](const glm::dvec3& probe, const glm::dvec3& p) {
+    return args.chebyshev ? 1.0 : occlusion(probe, p);
+  };
+  // Ideal probes: the exact SH at every probe's position.
+  std::vector<Truth> ideal(P);
+  tbb::parallel_for(std::size_t(0), P, [&](std::size_t p) {
+    detail::enable_ftz_daz();
+    if (t.state[p] != ProbeState::Invalid) ideal[p] = trace_truth(fg.rays, fg.px, t.positions[p], fg.bands, fg.offset);
+  });
+  const GridRun g{grid, t, lit, ideal, [&](const glm::dvec3& p, const glm::dvec3& n) {
+                    return args.chebyshev ? probe_weights(t, slots, p, n) : probe_weights(t, slots, p, n, visible);
+                  }};
+  const AtProbes at = at_probes(fg, g);
+  // Between probes.
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const glm::dvec3 sp = grid.spacing();
+  const Queries q = query_points(fg, g, gen, U);
+  const Between b = between_probes(fg, g, q);
+  Err air_ours, air_ideal, near_ours, near_ideal;
+  for (std::size_t i = 0; i < q.qp.size(); ++i)
+    for (int a = 0; a < 6; ++a) {
+      const std::size_t j = i * 6 + std::size_t(a);
+      (q.kind[i] == 0 ? air_ours : near_ours).add(b.ours[j], b.truths[j]);
+      (q.kind[i] == 0 ? air_ideal : near_ideal).add(b.ideals[j], b.truths[j]);
+    }
+  if (report) {
+    std::size_t counts[3] = {0, 0, 0};
+    for (ProbeState s : t.state) ++counts[int(s)];
+    fmt::print("grid {}x{}x{} (spacing {:.3f} {:.3f} {:.3f}): {} stored, {} sky, {} invalid; precompute {:.2f} s, {} bytes\n",
+               dims[0], dims[1], dims[2], sp.x, sp.y, sp.z, counts[1], counts[0], counts[2], t_pre, t.bytes());
+    fmt::print("at probes ({} values): probes {:.4f}, ideal 3-band {:.4f}, ratio {:.3f}\n", at.ours_all.n, at.ours_all.rel(),
+               at.ideal_all.rel(), at.ours_all.rel() / std::max(at.ideal_all.rel(), 1e-12));
+    fmt::print("at dim probes ({} probes, mean truth in ({:.4g}, {:.4g})): probes {:.4f}, ideal 3-band {:.4f}, ratio {:.3f}\n",
+               at.dim_probes, at.dim_above, at.dim_below, at.ours_dim.rel(), at.ideal_dim.rel(),
+               at.ours_dim.rel() / std::max(at.ideal_dim.rel(), 1e-12));
+    fmt::print("between probes, in the air ({} values): probes {:.4f}, ideal trilinear {:.4f}, ratio {:.3f}\n", air_ours.n,
+               air_ours.rel(), air_ideal.rel(), air_ours.rel() / std::max(air_ideal.rel(), 1e-12));
+    fmt::print("between probes, near surfaces ({} values): probes {:.4f}, ideal trilinear {:.4f}, ratio {:.3f}\n",
+               near_ours.n, near_ours.rel(), near_ideal.rel(), near_ours.rel() / std::max(near_ideal.rel(), 1e-12));
+  } else {
+    fmt::print("| {}x{}x{} | {:.3f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} |\n", dims[0], dims[1], dims[2],
+               std::max({sp.x, sp.y, sp.z}), air_ours.rel(), air_ideal.rel(), near_ours.rel(), near_ideal.rel());
+  }
+  if (args.have_box && report) box_figures(fg, g, q, b, gen, U);
+  return t;
+}
+
+// The relighting cost of a volume (argv[3] a probe file, or a grid
+// precomputed here): set_rotation (the map splatted into the rotated cube,
+// its pyramid) and relight every probe, 15 rotations, the median; with
+// --frame MESH, against a diffuse 3-band RGB PRT frame of MESH at 512 x 512
+// (prt::Renderer, whatever OpenGL EGL gives) in this process.
+void relight_cost(const Figures& fg, std::optional<ProbeTransfer>& volume, const std::array<int, 3>& dims) {
+  const Args& args = fg.args;
+  double t_pre = 0;
+  ProbeTransfer t;
+  if (volume.has_value()) t = std::move(*volume);
+  else {
+    ProbeOptions o;
+    if (args.cube > 0) o.cube_res = args.cube;
+    const auto t0 = std::chrono::steady_clock::now();
+    t = compute_probe_transfer(fg.scene, probe_grid(fg.scene.mesh, dims), o);
+    t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  ProbeRelighter relighter(t, fg.map);
+  std::vector<glm::vec3> lit;
+  std::vector<double> light, sum, both;
+  for (int i = 0; i < 15; ++i) {
+    const auto a = std::chrono::steady_clock::now();
+    relighter.set_rotation(sh::rotation_from_euler(10.0 * i, 5.0, 0.0));
+    const auto b = std::chrono::steady_clock::now();
+    relighter.relight(lit);
+    const auto c = std::chrono::steady_clock::now();
+    light.push_back(std::chrono::duration<double, std::milli>(b - a).count());
+    sum.push_back(std::chrono::duration<double, std::milli>(c - b).count());
+    both.push_back(light.back() + sum.back());
+  }
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  std::size_t nodes = t.vis_nodes.size(), partial = t.partial_nodes.size();
+  fmt::print("volume {}x{}x{}: {} probes, {} stored; precompute {:.1f} s; {} bytes ({:.0f} per stored probe; {:.1f} "
+             "nodes and {:.1f} partial texels each); {} bright map pixels; relight (median of 15 rotations): lighting {:.2f} ms + "
+             "probes {:.2f} ms = {:.2f} ms (best {:.2f} ms)\n",
+             t.grid.dims[0], t.grid.dims[1], t.grid.dims[2], t.probes(), t.stored(), t_pre, t.bytes(),
+             double(t.bytes()) / double(std::max<std::size_t>(t.stored(), 1)), double(nodes) / double(std::max<std::size_t>(t.stored(), 1)),
+             double(partial) / double(std::max<std::size_t>(t.stored(), 1)), relighter.bright_pixels(), median(light), median(sum),
+             median(both), *std::min_element(both.begin(), both.end()));
+  if (!args.frame_mesh.empty()) {
+    const FrameFigures f = frame_figures(args.frame_mesh, fg.map, &t, lit);
+    fmt::print("diffuse PRT frame of {} (3 bands RGB, 512 x 512, median of 20): {:.2f} ms; volume relight / frame: {:.2f}x (medians)\n",
+               args.frame_mesh, f.frame, median(both) / f.frame);
+    if (f.object_frame > 0)
+      fmt::print("GPU, the same mesh also drawn as a probe-lit object: frame {:.2f} ms (+{:.2f} ms: its interpolation pass "
+                 "and draw); every relit probe uploaded before it: {:.2f} ms (+{:.2f} ms: the upload, {:.1f} MB)\n",
+                 f.object_frame, f.object_frame - f.frame, f.upload_and_frame, f.upload_and_frame - f.object_frame,
+                 double(lit.size()) * 12.0 / 1e6);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -224,283 +587,27 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string scene_path = argv[1], map_path = argv[2];
-  double euler[3] = {0, 0, 0}, box[6] = {0, 0, 0, 0, 0, 0};
-  bool have_box = false, spacing_table = false, chebyshev = false;
-  int points = 400, cube = 0, depth = 0, truth_width = 1024;
-  std::string frame_mesh;
-  for (int i = 4; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--rotate" && i + 1 < argc) std::sscanf(argv[++i], "%lf,%lf,%lf", &euler[0], &euler[1], &euler[2]);
-    else if (a == "--box" && i + 1 < argc) {
-      have_box = std::sscanf(argv[++i], "%lf,%lf,%lf,%lf,%lf,%lf", &box[0], &box[1], &box[2], &box[3], &box[4], &box[5]) == 6;
-    } else if (a == "--points" && i + 1 < argc) points = std::atoi(argv[++i]);
-    else if (a == "--cube" && i + 1 < argc) cube = std::atoi(argv[++i]);
-    else if (a == "--depth" && i + 1 < argc) depth = std::atoi(argv[++i]);
-    else if (a == "--truth-width" && i + 1 < argc) truth_width = std::atoi(argv[++i]);
-    else if (a == "--spacing") spacing_table = true;
-    else if (a == "--chebyshev") chebyshev = true;
-    else if (a == "--frame" && i + 1 < argc) frame_mesh = argv[++i];  // the depth moments' weights instead of traced visibility
-  }
+  const Args args = parse_args(argc, argv);
   const Scene scene = load_scene_or_mesh(scene_path);
   const EnvMap map = load_envmap(map_path);
-  const glm::dmat3 R = sh::rotation_from_euler(euler[0], euler[1], euler[2]);
-  const std::vector<Pixel> px = map_pixels(map, R, truth_width);
+  const glm::dmat3 R = sh::rotation_from_euler(args.euler[0], args.euler[1], args.euler[2]);
   const detail::RayScene rays(scene.mesh);
-  const float offset = float(detail::default_ray_offset(scene.mesh));
-  const int bands = 3, nc = bands * bands;
-
-  const auto run_grid = [&](const std::array<int, 3>& dims, bool report) {
-    ProbeOptions o;
-    if (cube > 0) o.cube_res = cube;
-    if (depth > 0) o.depth_res = depth;
-    const ProbeGrid grid = probe_grid(scene.mesh, dims);
-    const auto t0 = std::chrono::steady_clock::now();
-    const ProbeTransfer t = compute_probe_transfer(scene, grid, o);
-    const double t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ProbeRelighter relighter(t, map);
-    relighter.set_rotation(R);
-    std::vector<glm::vec3> lit;
-    relighter.relight(lit);
-    const std::vector<std::uint32_t> slots = t.stored_slots();
-    const std::size_t P = t.probes();
-    const ProbeOcclusion occlusion(scene.mesh, grid);
-    const ProbeVisibility visible = [&](const glm::dvec3& probe, const glm::dvec3& p) {
-      return chebyshev ? 1.0 : occlusion(probe, p);
-    };
-    const auto weights_at = [&](const glm::dvec3& p, const glm::dvec3& n) {
-      return chebyshev ? probe_weights(t, slots, p, n) : probe_weights(t, slots, p, n, visible);
-    };
-    // Ideal probes: the exact SH at every probe's position.
-    std::vector<Truth> ideal(P);
-    tbb::parallel_for(std::size_t(0), P, [&](std::size_t p) {
-      detail::enable_ftz_daz();
-      if (t.state[p] != ProbeState::Invalid) ideal[p] = trace_truth(rays, px, t.positions[p], bands, offset);
-    });
-    // At the probes. Dim probes: those whose mean truth over the 6 normals
-    // is between a hundredth and a quarter of the median probe's (they see
-    // a little of the map: the dim ones inside a room lit through an
-    // opening; below a hundredth, a probe sees the map only through the
-    // cracks where walls meet at grazing angles, and every estimate there,
-    // the truth's too, is a handful of rays).
-    Err ours_all, ideal_all, ours_dim, ideal_dim;
-    std::vector<double> mean_of(P, -1.0);
-    for (std::size_t p = 0; p < P; ++p)
-      if (t.state[p] == ProbeState::Stored) {
-        double m = 0;
-        for (const glm::dvec3& n : kAxes) {
-          const glm::dvec3 v = truth_lambert(ideal[p], px, n);
-          m += (v.x + v.y + v.z) / 6;
-        }
-        mean_of[p] = m;
-      }
-    std::vector<double> sorted;
-    for (double m : mean_of)
-      if (m >= 0) sorted.push_back(m);
-    std::sort(sorted.begin(), sorted.end());
-    const double dim_below = sorted.empty() ? 0 : 0.25 * sorted[sorted.size() / 2], dim_above = dim_below * 0.04;
-    std::size_t dim_probes = 0;
-    for (std::size_t p = 0; p < P; ++p) {
-      if (t.state[p] != ProbeState::Stored) continue;
-      std::vector<glm::vec3> mine(lit.begin() + std::ptrdiff_t(p * nc), lit.begin() + std::ptrdiff_t((p + 1) * nc));
-      const bool dim = mean_of[p] > dim_above && mean_of[p] < dim_below;
-      dim_probes += dim;
-      if (dim && std::getenv("PRT_PROBE_DEBUG")) {
-        const std::size_t s2 = slots[p];
-        fmt::print("dim probe {} at {:.3f} {:.3f} {:.3f}: nodes {} (complement {}), partial {}; visible map pixels {}\n", p,
-                   t.positions[p].x, t.positions[p].y, t.positions[p].z, t.vis_offsets[s2 + 1] - t.vis_offsets[s2],
-                   int(t.vis_complement[s2]), t.partial_offsets[s2 + 1] - t.partial_offsets[s2],
-                   std::count(ideal[p].visible.begin(), ideal[p].visible.end(), 1));
-        for (const glm::dvec3& n : kAxes) {
-          const glm::dvec3 tr = truth_lambert(ideal[p], px, n), a = lambert_from_sh(mine, bands, n), b = sh_lambert(ideal[p].sh, bands, n);
-          fmt::print("   n {:+.0f} {:+.0f} {:+.0f}: truth {:.3e} probes {:.3e} ideal {:.3e}\n", n.x, n.y, n.z, tr.x, a.x, b.x);
-        }
-      }
-      for (const glm::dvec3& n : kAxes) {
-        const glm::dvec3 truth = truth_lambert(ideal[p], px, n);
-        const glm::dvec3 a = lambert_from_sh(mine, bands, n), b = sh_lambert(ideal[p].sh, bands, n);
-        ours_all.add(a, truth);
-        ideal_all.add(b, truth);
-        if (std::getenv("PRT_PROBE_WORST") && glm::length(a - b) > std::atof(std::getenv("PRT_PROBE_WORST")))
-          fmt::print("probe {} ({:.3f} {:.3f} {:.3f}) n {:+.0f} {:+.0f} {:+.0f}: truth {:.4g} probes {:.4g} ideal {:.4g}; partial {}\n", p,
-                     t.positions[p].x, t.positions[p].y, t.positions[p].z, n.x, n.y, n.z, truth.x, a.x, b.x,
-                     t.partial_offsets[slots[p] + 1] - t.partial_offsets[slots[p]]);
-        if (dim) {
-          ours_dim.add(a, truth);
-          ideal_dim.add(b, truth);
-        }
-      }
-    }
-    // Between probes.
-    std::mt19937 gen(7);
-    std::uniform_real_distribution<double> U(0.0, 1.0);
-    const glm::dvec3 sp = grid.spacing();
-    const double smallest = std::min({sp.x > 0 ? sp.x : 1e30, sp.y > 0 ? sp.y : 1e30, sp.z > 0 ? sp.z : 1e30});
-    Err air_ours, air_ideal, near_ours, near_ideal;
-    std::vector<glm::dvec3> qp;
-    std::vector<int> kind;  // 0 air, 1 near
-    for (int tries = 0; int(qp.size()) < 2 * points && tries < 200 * points; ++tries) {
-      const glm::dvec3 p = grid.min + (grid.max - grid.min) * glm::dvec3(U(gen), U(gen), U(gen));
-      const ProbeWeights w = trilinear_weights(grid, p);
-      bool air = true;
-      for (int c = 0; c < 8; ++c) air = air && t.state[w.probe[std::size_t(c)]] == ProbeState::Stored;
-      glm::dvec3 at;
-      const bool near = rays.closest_point(glm::vec3(p), float(0.25 * smallest), at) != ~0u;
-      // Inside a solid (the closest surface's back side) is not a query point.
-      if (near && glm::length(p - at) < 1e-3 * smallest) continue;
-      const int count_air = int(std::count(kind.begin(), kind.end(), 0));
-      if (near && int(qp.size()) - count_air < points) {
-        qp.push_back(p);
-        kind.push_back(1);
-      } else if (air && !near && count_air < points) {
-        qp.push_back(p);
-        kind.push_back(0);
-      }
-    }
-    std::vector<glm::dvec3> truths(qp.size() * 6), ours(qp.size() * 6), ideals(qp.size() * 6);
-    tbb::parallel_for(std::size_t(0), qp.size(), [&](std::size_t i) {
-      detail::enable_ftz_daz();
-      const Truth tr = trace_truth(rays, px, glm::vec3(qp[i]), bands, offset);
-      const ProbeWeights tw = trilinear_weights(grid, qp[i]);
-      for (int a = 0; a < 6; ++a) {
-        const glm::dvec3 n = kAxes[a];
-        truths[i * 6 + std::size_t(a)] = truth_lambert(tr, px, n);
-        const ProbeWeights w = weights_at(qp[i], n);
-        std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
-        std::vector<glm::dvec3> imix(std::size_t(nc), glm::dvec3(0.0));
-        for (int c = 0; c < w.count; ++c)
-          for (int k = 0; k < nc; ++k)
-            mix[std::size_t(k)] += w.weight[std::size_t(c)] * lit[std::size_t(w.probe[std::size_t(c)]) * nc + std::size_t(k)];
-        for (int c = 0; c < tw.count; ++c) {
-          const Truth& ip = ideal[tw.probe[std::size_t(c)]];
-          if (ip.sh.empty()) continue;
-          for (int k = 0; k < nc; ++k) imix[std::size_t(k)] += double(tw.weight[std::size_t(c)]) * ip.sh[std::size_t(k)];
-        }
-        ours[i * 6 + std::size_t(a)] = lambert_from_sh(mix, bands, n);
-        ideals[i * 6 + std::size_t(a)] = sh_lambert(imix, bands, n);
-      }
-    });
-    for (std::size_t i = 0; i < qp.size(); ++i)
-      for (int a = 0; a < 6; ++a) {
-        const std::size_t j = i * 6 + std::size_t(a);
-        (kind[i] == 0 ? air_ours : near_ours).add(ours[j], truths[j]);
-        (kind[i] == 0 ? air_ideal : near_ideal).add(ideals[j], truths[j]);
-      }
-    if (report) {
-      std::size_t counts[3] = {0, 0, 0};
-      for (ProbeState s : t.state) ++counts[int(s)];
-      fmt::print("grid {}x{}x{} (spacing {:.3f} {:.3f} {:.3f}): {} stored, {} sky, {} invalid; precompute {:.2f} s, {} bytes\n",
-                 dims[0], dims[1], dims[2], sp.x, sp.y, sp.z, counts[1], counts[0], counts[2], t_pre, t.bytes());
-      fmt::print("at probes ({} values): probes {:.4f}, ideal 3-band {:.4f}, ratio {:.3f}\n", ours_all.n, ours_all.rel(),
-                 ideal_all.rel(), ours_all.rel() / std::max(ideal_all.rel(), 1e-12));
-      fmt::print("at dim probes ({} probes, mean truth in ({:.4g}, {:.4g})): probes {:.4f}, ideal 3-band {:.4f}, ratio {:.3f}\n",
-                 dim_probes, dim_above, dim_below, ours_dim.rel(), ideal_dim.rel(), ours_dim.rel() / std::max(ideal_dim.rel(), 1e-12));
-      fmt::print("between probes, in the air ({} values): probes {:.4f}, ideal trilinear {:.4f}, ratio {:.3f}\n", air_ours.n,
-                 air_ours.rel(), air_ideal.rel(), air_ours.rel() / std::max(air_ideal.rel(), 1e-12));
-      fmt::print("between probes, near surfaces ({} values): probes {:.4f}, ideal trilinear {:.4f}, ratio {:.3f}\n",
-                 near_ours.n, near_ours.rel(), near_ideal.rel(), near_ours.rel() / std::max(near_ideal.rel(), 1e-12));
-    } else {
-      fmt::print("| {}x{}x{} | {:.3f} | {:.4f} | {:.4f} | {:.4f} | {:.4f} |\n", dims[0], dims[1], dims[2],
-                 std::max({sp.x, sp.y, sp.z}), air_ours.rel(), air_ideal.rel(), near_ours.rel(), near_ideal.rel());
-    }
-    if (have_box && report) {
-      // Inside the box against free space (the air points above).
-      double inside = 0, free = 0;
-      std::size_t ni = 0, nf = 0;
-      for (int i = 0, tries = 0; i < points && tries < 100 * points; ++tries) {
-        const glm::dvec3 p(box[0] + (box[3] - box[0]) * U(gen), box[1] + (box[4] - box[1]) * U(gen),
-                           box[2] + (box[5] - box[2]) * U(gen));
-        // Inside closed geometry: every axis ray meets a back face first.
-        bool inside_box = true;
-        for (const glm::dvec3& a : kAxes) {
-          const detail::Hit h = rays.intersect1(glm::vec3(p), glm::vec3(a), 0.0f);
-          inside_box = inside_box && h.hit() && !h.front;
-        }
-        if (!inside_box) continue;
-        ++i;
-        for (const glm::dvec3& n : kAxes) {
-          const ProbeWeights w = weights_at(p, n);
-          std::vector<glm::vec3> mix(std::size_t(nc), glm::vec3(0.0f));
-          for (int c = 0; c < w.count; ++c)
-            for (int k = 0; k < nc; ++k)
-              mix[std::size_t(k)] += w.weight[std::size_t(c)] * lit[std::size_t(w.probe[std::size_t(c)]) * nc + std::size_t(k)];
-          const glm::dvec3 v = lambert_from_sh(mix, bands, n);
-          inside += v.x + v.y + v.z;
-          ++ni;
-        }
-      }
-      for (std::size_t i = 0; i < qp.size(); ++i)
-        if (kind[i] == 0)
-          for (int a = 0; a < 6; ++a) {
-            const glm::dvec3 v = ours[i * 6 + std::size_t(a)];
-            free += v.x + v.y + v.z;
-            ++nf;
-          }
-      fmt::print("inside the box: mean {:.4g}, free space {:.4g}: {:.2f}%\n", inside / double(ni), free / double(std::max<std::size_t>(nf, 1)),
-                 100.0 * (inside / double(ni)) / std::max(free / double(std::max<std::size_t>(nf, 1)), 1e-30));
-    }
-    return t;
-  };
+  const int bands = 3;
+  const Figures fg{args, scene, map, R, map_pixels(map, R, args.truth_width), rays,
+                   float(detail::default_ray_offset(scene.mesh)), bands, bands * bands};
   std::array<int, 3> dims{};
-  const bool volume_file = is_probe_file(argv[3]);
+  std::optional<ProbeTransfer> volume = volume_file_arg(argv[3]);
+  const bool volume_file = volume.has_value();
   if (!volume_file) std::sscanf(argv[3], "%dx%dx%d", &dims[0], &dims[1], &dims[2]);
   if (volume_file || std::getenv("PRT_PROBE_VOLUME_ONLY")) {
-    // The relighting cost of this volume (argv[3] a probe file, or a grid
-    // precomputed here): set_rotation (the map splatted into the rotated
-    // cube, its pyramid) and relight every probe, 15 rotations, the median;
-    // with --frame MESH, against a diffuse 3-band RGB PRT frame of MESH at
-    // 512 x 512 (prt::Renderer, whatever OpenGL EGL gives) in this process.
-    double t_pre = 0;
-    ProbeTransfer t;
-    if (volume_file) t = read_probe_transfer(argv[3]);
-    else {
-      ProbeOptions o;
-      if (cube > 0) o.cube_res = cube;
-      const auto t0 = std::chrono::steady_clock::now();
-      t = compute_probe_transfer(scene, probe_grid(scene.mesh, dims), o);
-      t_pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    }
-    ProbeRelighter relighter(t, map);
-    std::vector<glm::vec3> lit;
-    std::vector<double> light, sum, both;
-    for (int i = 0; i < 15; ++i) {
-      const auto a = std::chrono::steady_clock::now();
-      relighter.set_rotation(sh::rotation_from_euler(10.0 * i, 5.0, 0.0));
-      const auto b = std::chrono::steady_clock::now();
-      relighter.relight(lit);
-      const auto c = std::chrono::steady_clock::now();
-      light.push_back(std::chrono::duration<double, std::milli>(b - a).count());
-      sum.push_back(std::chrono::duration<double, std::milli>(c - b).count());
-      both.push_back(light.back() + sum.back());
-    }
-    const auto median = [](std::vector<double> v) {
-      std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
-      return v[v.size() / 2];
-    };
-    std::size_t nodes = t.vis_nodes.size(), partial = t.partial_nodes.size();
-    fmt::print("volume {}x{}x{}: {} probes, {} stored; precompute {:.1f} s; {} bytes ({:.0f} per stored probe; {:.1f} "
-               "nodes and {:.1f} partial texels each); {} bright map pixels; relight (median of 15 rotations): lighting {:.2f} ms + "
-               "probes {:.2f} ms = {:.2f} ms (best {:.2f} ms)\n",
-               t.grid.dims[0], t.grid.dims[1], t.grid.dims[2], t.probes(), t.stored(), t_pre, t.bytes(),
-               double(t.bytes()) / double(std::max<std::size_t>(t.stored(), 1)), double(nodes) / double(std::max<std::size_t>(t.stored(), 1)),
-               double(partial) / double(std::max<std::size_t>(t.stored(), 1)), relighter.bright_pixels(), median(light), median(sum),
-               median(both), *std::min_element(both.begin(), both.end()));
-    if (!frame_mesh.empty()) {
-      const FrameFigures f = frame_figures(frame_mesh, map, &t, lit);
-      fmt::print("diffuse PRT frame of {} (3 bands RGB, 512 x 512, median of 20): {:.2f} ms; volume relight / frame: {:.2f}x (medians)\n",
-                 frame_mesh, f.frame, median(both) / f.frame);
-      if (f.object_frame > 0)
-        fmt::print("GPU, the same mesh also drawn as a probe-lit object: frame {:.2f} ms (+{:.2f} ms: its interpolation pass "
-                   "and draw); every relit probe uploaded before it: {:.2f} ms (+{:.2f} ms: the upload, {:.1f} MB)\n",
-                   f.object_frame, f.object_frame - f.frame, f.upload_and_frame, f.upload_and_frame - f.object_frame,
-                   double(lit.size()) * 12.0 / 1e6);
-    }
+    relight_cost(fg, volume, dims);
     return 0;
   }
-  run_grid(dims, true);
-  if (spacing_table) {
+  run_grid(fg, dims, true);
+  if (args.spacing_table) {
     fmt::print("| grid | spacing | air: probes | air: ideal trilinear | near: probes | near: ideal trilinear |\n|---|--:|--:|--:|--:|--:|\n");
     for (int s : {1, 2, 4})
-      run_grid({std::max(2, dims[0] * s / 2), std::max(2, dims[1] * s / 2), std::max(2, dims[2] * s / 2)}, false);
+      run_grid(fg, {std::max(2, dims[0] * s / 2), std::max(2, dims[1] * s / 2), std::max(2, dims[2] * s / 2)}, false);
   }
   return 0;
 }

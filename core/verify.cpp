@@ -321,32 +321,44 @@ std::vector<float> sample_cube(const std::vector<dvec3>& c, int N) {
 constexpr double kPixelFloat = 1e-6;
 constexpr const char* kPixelFloatWhy = "exact rule; pixels are stored as float (6e-8) ";
 
-}  // namespace
+// What run_verify's groups of checks share: the results so far (each
+// reported as it is added), the band counts and the test directions.
+struct Checks {
+  std::vector<CheckResult>& out;
+  const std::function<void(const CheckResult&)>& on_check;
+  int N, NF;  // bands; bands of the float checks
+  std::string nb;  // "N bands"
+  std::vector<dvec3> dirs;
 
-std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::function<void(const CheckResult&)>& on_check) {
-  std::vector<CheckResult> out;
-  auto add = [&](std::string group, std::string name, double err, double tol, std::string why) {
+  void add(std::string group, std::string name, double err, double tol, std::string why) {
     out.push_back({std::move(group), std::move(name), err, tol, std::move(why)});
     if (on_check) on_check(out.back());
-  };
-  const int N = opt.bands_max, NF = std::min(opt.float_bands, N);
-  const std::string nb = fmt::format("{} bands", N);
-  const std::vector<dvec3> dirs = test_directions(500, 7);
+  }
+};
 
-  // basis
-  add("basis", "orthonormality, Gauss-Legendre product rule, " + nb + ": max |G - I|", orthonormality_error<double>(N),
+// The basis: orthonormality, closed forms, an independent oracle, float.
+void check_basis(Checks& ck) {
+  const int N = ck.N;
+  const int NF = ck.NF;
+  const std::string& nb = ck.nb;
+  const std::vector<dvec3>& dirs = ck.dirs;
+  ck.add("basis", "orthonormality, Gauss-Legendre product rule, " + nb + ": max |G - I|", orthonormality_error<double>(N),
       kExact, kExactWhy);
-  add("basis", fmt::format("orthonormality, float evaluation, {} bands: max |G - I|", NF),
+  ck.add("basis", fmt::format("orthonormality, float evaluation, {} bands: max |G - I|", NF),
       orthonormality_error<float>(NF), kFloat, kFloatWhy);
-  add("basis", "closed forms of bands 0-2 (incl. Condon-Shortley signs): max |Y - formula|", closed_form_error(dirs),
+  ck.add("basis", "closed forms of bands 0-2 (incl. Condon-Shortley signs): max |Y - formula|", closed_form_error(dirs),
       kExact, kExactWhy);
-  add("basis", "std::sph_legendre oracle, " + nb + ", poles included: max |Y - ref| / band norm",
+  ck.add("basis", "std::sph_legendre oracle, " + nb + ", poles included: max |Y - ref| / band norm",
       sph_legendre_error(N, dirs), kExact, "independent implementation in double; both accurate to ~1e-14");
-  add("basis", "polar factor form agrees with direction form, " + nb, polar_vs_eval_error(N, dirs), kExact, kExactWhy);
-  add("basis", fmt::format("float vs double evaluation, {} bands: max |Yf - Yd| / band norm", NF),
+  ck.add("basis", "polar factor form agrees with direction form, " + nb, polar_vs_eval_error(N, dirs), kExact, kExactWhy);
+  ck.add("basis", fmt::format("float vs double evaluation, {} bands: max |Yf - Yd| / band norm", NF),
       float_eval_error(NF, dirs), kFloat, kFloatWhy);
+}
 
-  // closed-form projections
+// Projections with closed forms: caps, the clamped cosine, a rotated cap.
+void check_closed_form_projections(Checks& ck) {
+  const int N = ck.N;
+  const std::string& nb = ck.nb;
   {
     double e = 0.0;
     for (double deg : {5.0, 30.0, 90.0, 150.0, 180.0}) {
@@ -354,14 +366,14 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
       const auto c = zonal_projection(N, std::cos(a), [](double) { return 1.0; });
       for (int l = 0; l < N; ++l) e = std::max(e, std::abs(c[l] - cap_closed_form(l, a)));
     }
-    add("projection", "spherical caps 5-180 deg, " + nb + ": max |c_l0 - closed form|", e, kExact, kExactWhy);
+    ck.add("projection", "spherical caps 5-180 deg, " + nb + ": max |c_l0 - closed form|", e, kExact, kExactWhy);
   }
   {
     const auto c = zonal_projection(N, 0.0, [](double z) { return z; });
     double e = 0.0;
     for (int l = 0; l < N; ++l)
       e = std::max(e, std::abs(std::sqrt(4.0 * M_PI / (2.0 * l + 1.0)) * c[l] - sh::clamped_cosine_factor(l)));
-    add("projection", "clamped cosine: sqrt(4pi/(2l+1)) c_l0 vs A_l, " + nb, e, kExact, kExactWhy);
+    ck.add("projection", "clamped cosine: sqrt(4pi/(2l+1)) c_l0 vs A_l, " + nb, e, kExact, kExactWhy);
   }
   {
     // A cap of 40 degrees turned to direction d by the SH rotation equals the
@@ -381,10 +393,15 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
           e = std::max(e, std::abs(rotated[sh::index(l, m)] -
                                    cap_closed_form(l, a) * std::sqrt(4.0 * M_PI / (2.0 * l + 1.0)) * Y[sh::index(l, m)]));
     }
-    add("projection", "rotated cap: rotate(zonal) vs closed form at R z, " + nb, e, kExact, kExactWhy);
+    ck.add("projection", "rotated cap: rotate(zonal) vs closed form at R z, " + nb, e, kExact, kExactWhy);
   }
+}
 
-  // rotation
+// SH rotation: orthogonality, composition, round trips, rotate(eval).
+void check_rotations(Checks& ck) {
+  const int N = ck.N;
+  const std::string& nb = ck.nb;
+  const std::vector<dvec3>& dirs = ck.dirs;
   {
     // Up to 32 bands the Ivanic-Ruedenberg recurrence runs in double; above,
     // where in double it would lose about 5x per 8 bands (2e-11 at 64), in
@@ -405,27 +422,31 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
       comp = std::max(comp, band_product_error(A, B, &AB, false));
       round = std::max(round, band_product_error(A, At, nullptr, false));
     }
-    add("rotation", "orthogonality, " + nb + ", half turns and random: max |D D^T - I|", orth, tol, why);
-    add("rotation", "composition D(R)D(S) = D(RS), " + nb + ": max entry error", comp, tol, why);
-    add("rotation", "round trip D(R)D(R^T) = I, " + nb, round, tol, why);
-    add("rotation", "rotate(eval(d)) = eval(R d), " + nb + ", poles and half turns: max / band norm",
+    ck.add("rotation", "orthogonality, " + nb + ", half turns and random: max |D D^T - I|", orth, tol, why);
+    ck.add("rotation", "composition D(R)D(S) = D(RS), " + nb + ": max entry error", comp, tol, why);
+    ck.add("rotation", "round trip D(R)D(R^T) = I, " + nb, round, tol, why);
+    ck.add("rotation", "rotate(eval(d)) = eval(R d), " + nb + ", poles and half turns: max / band norm",
         rotate_eval_error(N, rots, dirs), tol, why);
   }
+}
 
-  // map projection
+// Projections of maps: a band-limited function on lat-long and cube maps,
+// the cube's row algorithm.
+void check_map_projections(Checks& ck) {
+  const int N = ck.N;
   {
     const int n = std::min(N, 8);
     const auto c = random_coefficients(n, 17);
     const double cn = norm(c);
     const EnvMap ll = make_latlong(256, 128, sample_latlong(c, 256, 128), "band-limited");
-    add("projection", fmt::format("band-limited {}-band function, 256x128 lat-long, point rule: |dc|/|c|", n),
+    ck.add("projection", fmt::format("band-limited {}-band function, 256x128 lat-long, point rule: |dc|/|c|", n),
         norm([&] {
           auto p = project(ll, n, Quadrature::Point);
           for (std::size_t k = 0; k < p.size(); ++k) p[k] -= c[k];
           return p;
         }()) / cn,
         kPixelFloat, std::string(kPixelFloatWhy) + "(Fejer rule, H >= 2n-1)");
-    add("projection", fmt::format("band-limited {}-band function, 256x128 lat-long, box rule: |dc|/|c|", n),
+    ck.add("projection", fmt::format("band-limited {}-band function, 256x128 lat-long, box rule: |dc|/|c|", n),
         norm([&] {
           auto p = project(ll, n, Quadrature::Box);
           for (std::size_t k = 0; k < p.size(); ++k) p[k] -= c[k];
@@ -433,7 +454,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
         }()) / cn,
         1e-3, "second order, O(h^2): point samples read as texel averages");
     const EnvMap cube = make_cube(64, sample_cube(c, 64), "band-limited cube");
-    add("projection", fmt::format("band-limited {}-band function, 6x64x64 cube map: |dc|/|c|", n),
+    ck.add("projection", fmt::format("band-limited {}-band function, 6x64x64 cube map: |dc|/|c|", n),
         norm([&] {
           auto p = project(cube, n);
           for (std::size_t k = 0; k < p.size(); ++k) p[k] -= c[k];
@@ -463,10 +484,16 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
         }
     auto got = project(cube, n);
     for (std::size_t k = 0; k < got.size(); ++k) got[k] -= direct[k];
-    add("projection",
+    ck.add("projection",
         fmt::format("cube great-circle row algorithm vs texel-by-texel sum, random 6x9x9, {} bands: |dc|/|c|", n),
         norm(got) / norm(direct), kExact, kExactWhy);
   }
+}
+
+// The white furnace, the lat-long reconstruction, the automatic window.
+void check_furnace_and_reconstruction(Checks& ck) {
+  const int N = ck.N;
+  const std::vector<dvec3>& dirs = ck.dirs;
   {
     // White furnace: a constant map of 1 gives c_00 = sqrt(4pi) and nothing
     // else (lat-long, exact texel integrals), and irradiance pi everywhere.
@@ -475,7 +502,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     auto c = project(ll, n);
     std::vector<dvec3> ref(c.size(), dvec3(0.0));
     ref[0] = dvec3(std::sqrt(4.0 * M_PI));
-    add("projection", fmt::format("constant map, 64x32 lat-long: max |c - sqrt(4pi) e_0|, {} bands", n),
+    ck.add("projection", fmt::format("constant map, 64x32 lat-long: max |c - sqrt(4pi) e_0|, {} bands", n),
         max_abs_diff(c, ref), kExact, kExactWhy);
     sh::scale_bands(std::span<dvec3>(c), sh::clamped_cosine_factors(n));
     double e = 0.0;
@@ -483,10 +510,10 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
       const dvec3 E = evaluate(c, d);
       e = std::max({e, std::abs(E.x - M_PI), std::abs(E.y - M_PI), std::abs(E.z - M_PI)});
     }
-    add("projection", "white furnace, lat-long: max |E(d) - pi|", e, kExact, kExactWhy);
+    ck.add("projection", "white furnace, lat-long: max |E(d) - pi|", e, kExact, kExactWhy);
     const EnvMap cube = make_cube(16, std::vector<float>(6 * 16 * 16 * 3, 1.0f), "constant cube");
     const auto cc = project(cube, 1);
-    add("projection", "constant cube map 6x16x16: |c_00 - sqrt(4pi)| (solid angles sum to 4pi)",
+    ck.add("projection", "constant cube map 6x16x16: |c_00 - sqrt(4pi)| (solid angles sum to 4pi)",
         std::abs(cc[0].x - std::sqrt(4.0 * M_PI)), kExact, kExactWhy);
   }
   {
@@ -502,7 +529,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
           scale = std::max(scale, std::abs(v[ch]));
         }
       }
-    add("reconstruction", "lat-long image vs direct evaluation, 12 bands: max error / max value", e / scale, kPixelFloat,
+    ck.add("reconstruction", "lat-long image vs direct evaluation, 12 bands: max error / max value", e / scale, kPixelFloat,
         "pixels stored as float");
   }
   {
@@ -513,10 +540,15 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     for (int ch = 0; ch < 3; ++ch) rgb[(std::size_t(20) * W + 37) * 3 + ch] = 1e5f;
     auto c = project(make_latlong(W, H, std::move(rgb), "sun"), n);
     const sh::AutoWindow r = sh::apply_window(std::span<dvec3>(c), sh::Window::Auto, 0);
-    add("filter", fmt::format("auto window on a 1e5 sun: min of reconstruction before {:f}, after (>= 0)", r.min_before),
+    ck.add("filter", fmt::format("auto window on a 1e5 sun: min of reconstruction before {:f}, after (>= 0)", r.min_before),
         std::max(0.0, -r.min_after), 0.0, "the window's guarantee on its check grid");
   }
-  // Hard cases (docs/HARD_CASES.md; tests/hard_cases has the rest).
+}
+
+// Hard cases (docs/HARD_CASES.md; tests/hard_cases has the rest).
+void check_hard_cases(Checks& ck) {
+  const int N = ck.N;
+  const std::string& nb = ck.nb;
   {
     double e = 0.0;  // the poles: Y_l0 = (+-1)^l sqrt((2l+1)/4pi), all m != 0 exactly 0
     std::vector<double> y(std::size_t(N) * N);
@@ -527,15 +559,15 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
           e = std::max(e, std::abs(y[std::size_t(sh::index(l, m))] - (m == 0 ? std::pow(z, l) * band_norm(l) : 0.0)) /
                               band_norm(l));
     }
-    add("hard cases", "the poles +-Z, " + nb + ": max |Y - exact| / band norm", e, kExact, kExactWhy);
+    ck.add("hard cases", "the poles +-Z, " + nb + ": max |Y - exact| / band norm", e, kExact, kExactWhy);
   }
   {
     const auto zero = project(make_latlong(16, 8, std::vector<float>(16 * 8 * 3, 0.0f), "zeros"), N);
-    add("hard cases", "all-zero map, " + nb + ": max |c|", max_abs_diff(zero, std::vector<dvec3>(zero.size(), dvec3(0.0))),
+    ck.add("hard cases", "all-zero map, " + nb + ": max |c|", max_abs_diff(zero, std::vector<dvec3>(zero.size(), dvec3(0.0))),
         0.0, "zero in, zero out: no term may be rounded away from 0");
     auto one = project(make_latlong(1, 1, {2.5f, 2.5f, 2.5f}, "1x1"), N);
     one[0] -= dvec3(2.5 * std::sqrt(4.0 * M_PI));
-    add("hard cases", "1x1 map (one pixel, the whole sphere), " + nb + ": max |c - 2.5 sqrt(4pi) e_0|",
+    ck.add("hard cases", "1x1 map (one pixel, the whole sphere), " + nb + ": max |c - 2.5 sqrt(4pi) e_0|",
         max_abs_diff(one, std::vector<dvec3>(one.size(), dvec3(0.0))), kExact, kExactWhy);
     // 2x1: two hemispheres; each coefficient is L0 int_0 Y + L1 int_1 Y.
     const auto two = project(make_latlong(2, 1, {1.0f, 1.0f, 1.0f, 3.0f, 3.0f, 3.0f}, "2x1"), N);
@@ -543,7 +575,7 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
                b = latlong_box_integrals(N, 0, M_PI, M_PI, 2 * M_PI, N + 64);
     double e = 0.0;
     for (std::size_t k = 0; k < two.size(); ++k) e = std::max(e, std::abs(two[k].x - (a[k] + 3.0 * b[k])));
-    add("hard cases", "2x1 map (two hemispheres), " + nb + ": max |c - exact box integrals|", e, kExact, kExactWhy);
+    ck.add("hard cases", "2x1 map (two hemispheres), " + nb + ": max |c - exact box integrals|", e, kExact, kExactWhy);
   }
   {
     // A sun of 1e6 in one pixel of a 1e-2 sky: its energy and shape are kept.
@@ -557,9 +589,23 @@ std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::functio
     double e = 0.0;
     for (std::size_t k = 0; k < c.size(); ++k)
       e = std::max(e, std::abs(c[k].x - ((k == 0 ? sky * std::sqrt(4.0 * M_PI) : 0.0) + (sun - sky) * pix[k])));
-    add("hard cases", "one-pixel sun of 1e6 in a 1e-2 sky, " + nb + ": max |c - exact| / sun energy", e / energy,
+    ck.add("hard cases", "one-pixel sun of 1e6 in a 1e-2 sky, " + nb + ": max |c - exact| / sun energy", e / energy,
         kExact, kExactWhy);
   }
+}
+
+}  // namespace
+
+std::vector<CheckResult> run_verify(const VerifyOptions& opt, const std::function<void(const CheckResult&)>& on_check) {
+  std::vector<CheckResult> out;
+  const int N = opt.bands_max;
+  Checks ck{out, on_check, N, std::min(opt.float_bands, N), fmt::format("{} bands", N), test_directions(500, 7)};
+  check_basis(ck);
+  check_closed_form_projections(ck);
+  check_rotations(ck);
+  check_map_projections(ck);
+  check_furnace_and_reconstruction(ck);
+  check_hard_cases(ck);
   return out;
 }
 

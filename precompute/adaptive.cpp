@@ -334,6 +334,34 @@ struct Weights {
 
 using Sources = std::vector<std::pair<std::uint32_t, float>>;  // (vertex, distance or weight)
 
+// The Poisson levels of the choice: each vertex's level, the first level's
+// spacing h0 (halved at each level) and the number of levels.
+struct Levels {
+  std::vector<std::uint8_t> level;
+  double h0 = 0;
+  int count = 0;
+};
+
+// One level's predictions of its n candidates: stride floats each, and the
+// weights that made them (wn[i] of them; 0: no prediction, traced).
+struct Predictions {
+  Predictions(std::size_t n, std::size_t stride)
+      : pred(n * stride), wsrc(n * kMaxSources), ww(n * kMaxSources), wn(n, 0) {}
+  std::vector<float> pred;
+  std::vector<std::uint32_t> wsrc;
+  std::vector<float> ww;
+  std::vector<std::uint8_t> wn;
+};
+
+// One level's patches: (patch key, candidate index) sorted by patch and,
+// within a patch, in a seeded order; each patch's [begin, end) in keyed; and
+// the candidates traced first (those without a prediction, each patch's probes).
+struct Patches {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  std::vector<std::pair<std::size_t, std::size_t>> ranges;
+  std::vector<std::uint32_t> batch;
+};
+
 class Adaptive {
  public:
   Adaptive(const Mesh& mesh, const detail::AdaptivePoints& points, const TransferOptions& o, const AdaptiveOptions& a,
@@ -346,6 +374,24 @@ class Adaptive {
  private:
   using Clock = std::chrono::steady_clock;
   static double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+  // run's phases: the options' sizes and the tolerance; the arrays and the
+  // Poisson levels; level 0 traced (the reference norm); each later level
+  // predicted, probed per patch and traced where a patch fails; the
+  // verification; the shadowed result.
+  void prepare();
+  Levels select_levels();
+  void timed_trace(std::vector<std::uint32_t> vs);  // trace, timed, with the progress callback
+  void trace_level0(const std::vector<std::uint8_t>& level);
+  void choose_level(int k, const Levels& levels, Cells& cells);
+  void predict_candidates(const std::vector<std::uint32_t>& cand, const Cells& cells, Predictions& pr) const;
+  Patches make_patches(int k, double h0, const std::vector<std::uint32_t>& cand, const std::vector<std::uint8_t>& wn);
+  // The not yet traced members of the patches whose probes' RMS error passes TOL.
+  std::vector<std::uint32_t> failing_patches(const std::vector<std::uint32_t>& cand, const Predictions& pr,
+                                             const Patches& pt);
+  void keep_predictions(const std::vector<std::uint32_t>& cand, const Predictions& pr);
+  void verify();
+  Transfer finish_shadowed();
 
   // Traces `vs` with the selection options into rows_ (ao_, bent_, glossy_
   // on rank 0), their residuals into resid_; marks them traced.
@@ -594,17 +640,14 @@ void Adaptive::fill_ao_bent(std::vector<float>& ao, std::vector<glm::vec3>& bent
   });
 }
 
-Transfer Adaptive::run() {
-  const Communicator& comm = o_.comm ? *o_.comm : single_process();
-  root_ = comm.rank() == 0;
+void Adaptive::prepare() {
   nc_ = o_.bands * o_.bands;
   const bool grey = pts_.albedo.empty() && o_.albedo.x == o_.albedo.y && o_.albedo.y == o_.albedo.z;
   channels_ = grey ? 1 : 3;
   stride_ = std::size_t(channels_) * nc_;
-  const bool interreflected = o_.mode == TransferMode::Interreflected;
   so_ = o_;
   so_.memory_report = nullptr;
-  if (interreflected) {  // chosen on the shadowed transfer; the bounces are traced once the choice is made
+  if (o_.mode == TransferMode::Interreflected) {  // chosen on the shadowed transfer; the bounces are traced once the choice is made
     so_.mode = TransferMode::Shadowed;
     so_.glossy = false;
   }
@@ -616,8 +659,9 @@ Transfer Adaptive::run() {
   band_weight_ = detail::band_weights(o_.bands);
   report_.tolerance = a_.tolerance > 0 ? a_.tolerance : default_adaptive_tolerance(o_.samples);
   report_.vertices = V_;
-  const double tol = report_.tolerance;
+}
 
+Levels Adaptive::select_levels() {
   const auto t_select = Clock::now();
   active_.assign(V_, 0);
   traced_.assign(V_, 0);
@@ -643,174 +687,181 @@ Transfer Adaptive::run() {
     hi = glm::max(hi, pos_[v]);
   }
   if (V_ == 0) lo = hi = glm::vec3(0.0f);
+  Levels levels;
   const double edge = pts_.spacing;
   const double diag = glm::length(glm::dvec3(hi) - glm::dvec3(lo));
-  const double h0 = diag / 16;
+  levels.h0 = diag / 16;
   eps_ = 1e-12 * diag * diag;
   int count = 1;
-  while (h0 / std::pow(2.0, count - 1) > kFinestSpacing * edge && count < 12) ++count;
+  while (levels.h0 / std::pow(2.0, count - 1) > kFinestSpacing * edge && count < 12) ++count;
   ++count;  // the last level: every vertex left
   report_.levels = count;
+  levels.count = count;
   morton_ = morton_codes(pts_, lo, hi);
-  const std::vector<std::uint8_t> level = poisson_levels(pts_, active_, morton_, h0, count);
+  levels.level = poisson_levels(pts_, active_, morton_, levels.h0, count);
   report_.seconds_selecting += since(t_select);
+  return levels;
+}
 
-  const auto timed_trace = [&](std::vector<std::uint32_t> vs) {
-    const auto t0 = Clock::now();
-    trace(std::move(vs));
-    report_.seconds_tracing += since(t0);
-    if (progress_ && !progress_(std::min(done_, V_), V_, "rays (adaptive)")) throw Error("cancelled");
-  };
-  {
-    std::vector<std::uint32_t> l0;
-    for (std::uint32_t v = 0; v < V_; ++v)
-      if (active_[v] && level[v] == 0) l0.push_back(v);
-    timed_trace(l0);
-    double n2 = 0;
-    for (std::uint32_t v : l0) n2 += detail::weighted_square(rows_.data() + std::size_t(v) * stride_, nullptr, band_weight_, channels_);
-    ref_norm_ = l0.empty() || n2 <= 0 ? 1.0 : std::sqrt(n2 / double(l0.size()));
-  }
+void Adaptive::timed_trace(std::vector<std::uint32_t> vs) {
+  const auto t0 = Clock::now();
+  trace(std::move(vs));
+  report_.seconds_tracing += since(t0);
+  if (progress_ && !progress_(std::min(done_, V_), V_, "rays (adaptive)")) throw Error("cancelled");
+}
 
-  Cells cells(V_);
-  for (int k = 1; k < count; ++k) {
-    const auto t_pred = Clock::now();
-    std::vector<std::uint32_t> cand;
-    for (std::uint32_t v = 0; v < V_; ++v)
-      if (active_[v] && level[v] == k) cand.push_back(v);
-    if (cand.empty()) continue;
-    cells.add(pts_, std::move(fresh_));
-    fresh_.clear();
-    std::vector<float> pred(cand.size() * stride_);
-    std::vector<std::uint32_t> wsrc(cand.size() * kMaxSources);
-    std::vector<float> ww(cand.size() * kMaxSources);
-    std::vector<std::uint8_t> wn(cand.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cand.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-      Sources src, ws;
-      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        const std::uint32_t v = cand[i], site = cells.site[v];
-        if (site == kNone) continue;  // no traced vertex reachable along the surface: traced
-        src.clear();
-        const glm::vec3 p = pos_[v];
-        src.push_back({site, glm::length(pos_[site] - p)});
-        for (std::uint32_t j = cells.offset[site]; j < cells.offset[site + 1]; ++j)
-          src.push_back({cells.next[j], glm::length(pos_[cells.next[j]] - p)});
-        const double spread = predict(v, src, pred.data() + i * stride_, ws);
-        // Sources that disagree by more than TOL: the vertex lies where transfer changes faster than the
-        // level's spacing resolves (a shadow edge, a fold); no probe of its patch need see that. Traced.
-        if (spread > kSpreadFactor * tol) continue;
-        wn[i] = std::uint8_t(ws.size());
-        for (std::size_t j = 0; j < ws.size(); ++j) {
-          wsrc[i * kMaxSources + j] = ws[j].first;
-          ww[i * kMaxSources + j] = ws[j].second;
-        }
-      }
-    });
-    // Patches: cells of kPatchSpacings level spacings; in each, members in a
-    // seeded order, the first ones probes.
-    const double side = kPatchSpacings * h0 / std::pow(2.0, k);
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;  // (patch key, candidate index)
-    std::vector<std::uint32_t> batch;
-    for (std::uint32_t i = 0; i < cand.size(); ++i) {
-      if (wn[i] == 0) {
-        batch.push_back(cand[i]);
-        continue;
-      }
-      const glm::vec3 p = pos_[cand[i]];
-      keyed.push_back({cell_key(std::int64_t(std::floor(p.x / side)), std::int64_t(std::floor(p.y / side)),
-                                std::int64_t(std::floor(p.z / side))),
-                       i});
-    }
-    const std::uint64_t salt = mix(a_.seed * 0x51ed27u + std::uint64_t(k));
-    tbb::parallel_sort(keyed.begin(), keyed.end(), [&](const auto& x, const auto& y) {
-      if (x.first != y.first) return x.first < y.first;
-      return mix(cand[x.second] ^ salt) < mix(cand[y.second] ^ salt);
-    });
-    std::vector<std::pair<std::size_t, std::size_t>> patches;  // [begin, end) in keyed
-    for (std::size_t i = 0; i < keyed.size();) {
-      std::size_t j = i;
-      while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
-      patches.push_back({i, j});
-      const std::size_t probes = std::min(j - i, std::max<std::size_t>(std::size_t(a_.min_probes),
-                                                                       std::size_t(std::ceil(a_.probe_fraction * double(j - i)))));
-      for (std::size_t q = i; q < i + probes; ++q) batch.push_back(cand[keyed[q].second]);
-      report_.probes += probes;
-      i = j;
-    }
-    report_.patches += patches.size();
-    report_.seconds_predicting += since(t_pred);
-    timed_trace(batch);
-    std::vector<std::uint32_t> failing;
-    for (const auto& [b, e] : patches) {
-      double e2 = 0;
-      std::size_t n = 0;
-      for (std::size_t q = b; q < e; ++q) {
-        const std::uint32_t i = keyed[q].second, v = cand[i];
-        if (!traced_[v]) break;  // the probes come first
-        const double err = error(pred.data() + std::size_t(i) * stride_, rows_.data() + std::size_t(v) * stride_);
-        e2 += err * err;
-        ++n;
-      }
-      if (n > 0 && std::sqrt(e2 / double(n)) > tol) {
-        ++report_.failed_patches;
-        for (std::size_t q = b; q < e; ++q)
-          if (!traced_[cand[keyed[q].second]]) failing.push_back(cand[keyed[q].second]);
-      }
-    }
-    timed_trace(failing);
-    // The rest: their predictions, and the weights that made them.
-    for (std::uint32_t i = 0; i < cand.size(); ++i) {
-      const std::uint32_t v = cand[i];
-      if (traced_[v]) continue;
-      std::copy_n(pred.begin() + std::ptrdiff_t(std::size_t(i) * stride_), stride_, rows_.begin() + std::ptrdiff_t(std::size_t(v) * stride_));
-      weights_.first[v] = std::uint32_t(weights_.src.size());
-      weights_.count[v] = wn[i];
-      weights_.src.insert(weights_.src.end(), wsrc.begin() + std::ptrdiff_t(i * kMaxSources),
-                          wsrc.begin() + std::ptrdiff_t(i * kMaxSources + wn[i]));
-      weights_.w.insert(weights_.w.end(), ww.begin() + std::ptrdiff_t(i * kMaxSources),
-                        ww.begin() + std::ptrdiff_t(i * kMaxSources + wn[i]));
-    }
-  }
-
-  // Verification: a seeded fraction of the interpolated vertices traced; their
-  // predictions compared, then replaced by the traced rows.
-  if (a_.verify_fraction > 0) {
-    std::vector<std::uint32_t> check;
-    const double cut = a_.verify_fraction * 18446744073709551615.0;
-    for (std::uint32_t v = 0; v < V_; ++v)
-      if (weights_.first[v] != kNone && (a_.verify_fraction >= 1 || double(mix(v ^ mix(a_.seed + 0x7e51f1u))) < cut))
-        check.push_back(v);
-    std::vector<float> before(check.size() * stride_);
-    for (std::size_t i = 0; i < check.size(); ++i)
-      std::copy_n(rows_.begin() + std::ptrdiff_t(std::size_t(check[i]) * stride_), stride_, before.begin() + std::ptrdiff_t(i * stride_));
-    timed_trace(check);
-    std::vector<double> errs(check.size());
-    double e2 = 0;
-    for (std::size_t i = 0; i < check.size(); ++i) {
-      errs[i] = error(before.data() + i * stride_, rows_.data() + std::size_t(check[i]) * stride_);
-      e2 += errs[i] * errs[i];
-      weights_.first[check[i]] = kNone;
-      weights_.count[check[i]] = 0;
-    }
-    report_.verified = check.size();
-    if (!check.empty()) {
-      report_.verified_rms = std::sqrt(e2 / double(check.size()));
-      report_.verified_over = std::size_t(std::count_if(errs.begin(), errs.end(), [&](double e) { return e > tol; }));
-      std::sort(errs.begin(), errs.end());
-      report_.verified_max = errs.back();
-      report_.verified_p95 = errs[std::min(errs.size() - 1, std::size_t(std::ceil(0.95 * double(errs.size()))) - 1)];
-    }
-  }
-
-  std::vector<std::uint32_t> traced_list;
+void Adaptive::trace_level0(const std::vector<std::uint8_t>& level) {
+  std::vector<std::uint32_t> l0;
   for (std::uint32_t v = 0; v < V_; ++v)
-    if (active_[v] && weights_.first[v] == kNone) traced_list.push_back(v);
-  report_.traced = traced_list.size();
-  report_.interpolated = 0;
-  for (std::size_t v = 0; v < V_; ++v) report_.interpolated += weights_.first[v] != kNone;
+    if (active_[v] && level[v] == 0) l0.push_back(v);
+  timed_trace(l0);
+  double n2 = 0;
+  for (std::uint32_t v : l0) n2 += detail::weighted_square(rows_.data() + std::size_t(v) * stride_, nullptr, band_weight_, channels_);
+  ref_norm_ = l0.empty() || n2 <= 0 ? 1.0 : std::sqrt(n2 / double(l0.size()));
+}
 
-  if (interreflected) return finish_interreflected(traced_list);
+void Adaptive::predict_candidates(const std::vector<std::uint32_t>& cand, const Cells& cells, Predictions& pr) const {
+  const double tol = report_.tolerance;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cand.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    Sources src, ws;
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const std::uint32_t v = cand[i], site = cells.site[v];
+      if (site == kNone) continue;  // no traced vertex reachable along the surface: traced
+      src.clear();
+      const glm::vec3 p = pos_[v];
+      src.push_back({site, glm::length(pos_[site] - p)});
+      for (std::uint32_t j = cells.offset[site]; j < cells.offset[site + 1]; ++j)
+        src.push_back({cells.next[j], glm::length(pos_[cells.next[j]] - p)});
+      const double spread = predict(v, src, pr.pred.data() + i * stride_, ws);
+      // Sources that disagree by more than TOL: the vertex lies where transfer changes faster than the
+      // level's spacing resolves (a shadow edge, a fold); no probe of its patch need see that. Traced.
+      if (spread > kSpreadFactor * tol) continue;
+      pr.wn[i] = std::uint8_t(ws.size());
+      for (std::size_t j = 0; j < ws.size(); ++j) {
+        pr.wsrc[i * kMaxSources + j] = ws[j].first;
+        pr.ww[i * kMaxSources + j] = ws[j].second;
+      }
+    }
+  });
+}
 
-  // Shadowed: the selection pass's rows are the result.
+Patches Adaptive::make_patches(int k, double h0, const std::vector<std::uint32_t>& cand,
+                               const std::vector<std::uint8_t>& wn) {
+  Patches pt;
+  const double side = kPatchSpacings * h0 / std::pow(2.0, k);
+  for (std::uint32_t i = 0; i < cand.size(); ++i) {
+    if (wn[i] == 0) {
+      pt.batch.push_back(cand[i]);
+      continue;
+    }
+    const glm::vec3 p = pos_[cand[i]];
+    pt.keyed.push_back({cell_key(std::int64_t(std::floor(p.x / side)), std::int64_t(std::floor(p.y / side)),
+                                 std::int64_t(std::floor(p.z / side))),
+                        i});
+  }
+  const std::uint64_t salt = mix(a_.seed * 0x51ed27u + std::uint64_t(k));
+  tbb::parallel_sort(pt.keyed.begin(), pt.keyed.end(), [&](const auto& x, const auto& y) {
+    if (x.first != y.first) return x.first < y.first;
+    return mix(cand[x.second] ^ salt) < mix(cand[y.second] ^ salt);
+  });
+  const auto& keyed = pt.keyed;
+  for (std::size_t i = 0; i < keyed.size();) {
+    std::size_t j = i;
+    while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
+    pt.ranges.push_back({i, j});
+    const std::size_t probes = std::min(j - i, std::max<std::size_t>(std::size_t(a_.min_probes),
+                                                                     std::size_t(std::ceil(a_.probe_fraction * double(j - i)))));
+    for (std::size_t q = i; q < i + probes; ++q) pt.batch.push_back(cand[keyed[q].second]);
+    report_.probes += probes;
+    i = j;
+  }
+  report_.patches += pt.ranges.size();
+  return pt;
+}
+
+std::vector<std::uint32_t> Adaptive::failing_patches(const std::vector<std::uint32_t>& cand, const Predictions& pr,
+                                                      const Patches& pt) {
+  std::vector<std::uint32_t> failing;
+  for (const auto& [b, e] : pt.ranges) {
+    double e2 = 0;
+    std::size_t n = 0;
+    for (std::size_t q = b; q < e; ++q) {
+      const std::uint32_t i = pt.keyed[q].second, v = cand[i];
+      if (!traced_[v]) break;  // the probes come first
+      const double err = error(pr.pred.data() + std::size_t(i) * stride_, rows_.data() + std::size_t(v) * stride_);
+      e2 += err * err;
+      ++n;
+    }
+    if (n > 0 && std::sqrt(e2 / double(n)) > report_.tolerance) {
+      ++report_.failed_patches;
+      for (std::size_t q = b; q < e; ++q)
+        if (!traced_[cand[pt.keyed[q].second]]) failing.push_back(cand[pt.keyed[q].second]);
+    }
+  }
+  return failing;
+}
+
+void Adaptive::keep_predictions(const std::vector<std::uint32_t>& cand, const Predictions& pr) {
+  for (std::uint32_t i = 0; i < cand.size(); ++i) {
+    const std::uint32_t v = cand[i];
+    if (traced_[v]) continue;
+    std::copy_n(pr.pred.begin() + std::ptrdiff_t(std::size_t(i) * stride_), stride_, rows_.begin() + std::ptrdiff_t(std::size_t(v) * stride_));
+    weights_.first[v] = std::uint32_t(weights_.src.size());
+    weights_.count[v] = pr.wn[i];
+    weights_.src.insert(weights_.src.end(), pr.wsrc.begin() + std::ptrdiff_t(i * kMaxSources),
+                        pr.wsrc.begin() + std::ptrdiff_t(i * kMaxSources + pr.wn[i]));
+    weights_.w.insert(weights_.w.end(), pr.ww.begin() + std::ptrdiff_t(i * kMaxSources),
+                      pr.ww.begin() + std::ptrdiff_t(i * kMaxSources + pr.wn[i]));
+  }
+}
+
+void Adaptive::choose_level(int k, const Levels& levels, Cells& cells) {
+  const auto t_pred = Clock::now();
+  std::vector<std::uint32_t> cand;
+  for (std::uint32_t v = 0; v < V_; ++v)
+    if (active_[v] && levels.level[v] == k) cand.push_back(v);
+  if (cand.empty()) return;
+  cells.add(pts_, std::move(fresh_));
+  fresh_.clear();
+  Predictions pr(cand.size(), stride_);
+  predict_candidates(cand, cells, pr);
+  const Patches pt = make_patches(k, levels.h0, cand, pr.wn);
+  report_.seconds_predicting += since(t_pred);
+  timed_trace(pt.batch);
+  timed_trace(failing_patches(cand, pr, pt));
+  keep_predictions(cand, pr);
+}
+
+void Adaptive::verify() {
+  const double tol = report_.tolerance;
+  std::vector<std::uint32_t> check;
+  const double cut = a_.verify_fraction * 18446744073709551615.0;
+  for (std::uint32_t v = 0; v < V_; ++v)
+    if (weights_.first[v] != kNone && (a_.verify_fraction >= 1 || double(mix(v ^ mix(a_.seed + 0x7e51f1u))) < cut))
+      check.push_back(v);
+  std::vector<float> before(check.size() * stride_);
+  for (std::size_t i = 0; i < check.size(); ++i)
+    std::copy_n(rows_.begin() + std::ptrdiff_t(std::size_t(check[i]) * stride_), stride_, before.begin() + std::ptrdiff_t(i * stride_));
+  timed_trace(check);
+  std::vector<double> errs(check.size());
+  double e2 = 0;
+  for (std::size_t i = 0; i < check.size(); ++i) {
+    errs[i] = error(before.data() + i * stride_, rows_.data() + std::size_t(check[i]) * stride_);
+    e2 += errs[i] * errs[i];
+    weights_.first[check[i]] = kNone;
+    weights_.count[check[i]] = 0;
+  }
+  report_.verified = check.size();
+  if (!check.empty()) {
+    report_.verified_rms = std::sqrt(e2 / double(check.size()));
+    report_.verified_over = std::size_t(std::count_if(errs.begin(), errs.end(), [&](double e) { return e > tol; }));
+    std::sort(errs.begin(), errs.end());
+    report_.verified_max = errs.back();
+    report_.verified_p95 = errs[std::min(errs.size() - 1, std::size_t(std::ceil(0.95 * double(errs.size()))) - 1)];
+  }
+}
+
+Transfer Adaptive::finish_shadowed() {
   Transfer t;
   t.bands = o_.bands;
   t.channels = channels_;
@@ -832,6 +883,30 @@ Transfer Adaptive::run() {
   }
   finish(t, analytic_);
   return t;
+}
+
+Transfer Adaptive::run() {
+  const Communicator& comm = o_.comm ? *o_.comm : single_process();
+  root_ = comm.rank() == 0;
+  prepare();
+  const Levels levels = select_levels();
+  trace_level0(levels.level);
+  Cells cells(V_);
+  for (int k = 1; k < levels.count; ++k) choose_level(k, levels, cells);
+
+  // Verification: a seeded fraction of the interpolated vertices traced; their
+  // predictions compared, then replaced by the traced rows.
+  if (a_.verify_fraction > 0) verify();
+
+  std::vector<std::uint32_t> traced_list;
+  for (std::uint32_t v = 0; v < V_; ++v)
+    if (active_[v] && weights_.first[v] == kNone) traced_list.push_back(v);
+  report_.traced = traced_list.size();
+  report_.interpolated = 0;
+  for (std::size_t v = 0; v < V_; ++v) report_.interpolated += weights_.first[v] != kNone;
+
+  if (o_.mode == TransferMode::Interreflected) return finish_interreflected(traced_list);
+  return finish_shadowed();  // the selection pass's rows are the result
 }
 
 void Adaptive::finish(Transfer& t, std::vector<std::uint8_t> analytic) const {
@@ -885,14 +960,7 @@ Transfer Adaptive::finish_interreflected(const std::vector<std::uint32_t>& trace
   done_ += P;
   if (!root_) return Transfer{};
   Transfer t;
-  t.bands = pt.bands;
-  t.channels = pt.channels;
-  t.mode = pt.mode;
-  t.bounces = pt.bounces;
-  t.samples = pt.samples;
-  t.albedo = pt.albedo;
-  t.vertex_colors = pt.vertex_colors;
-  t.seed = pt.seed;
+  t.header() = pt.header();
   t.vertices = V_;
   t.bounce_energy = pt.bounce_energy;
   t.direct_energy = pt.direct_energy;

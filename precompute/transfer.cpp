@@ -299,378 +299,438 @@ TransferMemory detail::point_transfer_memory(const Mesh& mesh, std::size_t point
 
 namespace {
 
-// compute_transfer at `src` (the vertices: the transfer file's layout), or
-// at other points. `emitters` (points, interreflected): every vertex's dense
-// transfer of bounces - 1 bounces, gathered once at each point's front hits
-// instead of keeping records. `keep_everywhere`: every rank returns the
-// whole, uncompacted transfer (compute_point_transfer's vertex pass).
-Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions& o, const Progress& progress,
-                      const std::vector<float>* emitters, int emitter_channels, bool keep_everywhere) {
-  const Communicator& comm = o.comm ? *o.comm : single_process();
-  std::unique_ptr<tbb::global_control> limit;
-  if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+// Points per worker task in compute_impl's passes.
+constexpr std::size_t kWorkerGrain = 64;
 
-  const int n = o.bands, nc = sh::num_coeffs(n);
-  const std::size_t V = src.count;
-  // This rank's points: [r0, r1).
-  const std::size_t r0 = range_begin(V, comm.rank(), comm.size()), r1 = range_begin(V, comm.rank() + 1, comm.size());
-  const std::size_t own = r1 - r0;
-  const bool grey = !src.albedo && !o.vertex_colors && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z;
+using Entry = std::pair<std::uint32_t, float>;  // a gather row's (emitting point, weight)
+
+// What compute_impl's phases share: the inputs, what the options ask for,
+// the memory plan, the direction set's tables and the ray scene.
+struct Run {
+  Run(const Mesh& m, const Source& s, const TransferOptions& opts, const Progress& p,
+      const std::vector<float>* emitting, int emitting_channels)
+      : mesh(m), src(s), o(opts), progress(p), comm(opts.comm ? *opts.comm : single_process()), emitters(emitting),
+        emitter_channels(emitting_channels), n(opts.bands), nc(sh::num_coeffs(opts.bands)), V(s.count),
+        r0(range_begin(V, comm.rank(), comm.size())), own(range_begin(V, comm.rank() + 1, comm.size()) - r0),
+        grey(!s.albedo && !opts.vertex_colors && opts.albedo.x == opts.albedo.y && opts.albedo.y == opts.albedo.z),
+        trace(opts.mode != TransferMode::Unshadowed),
+        gather(opts.mode == TransferMode::Interreflected && opts.bounces > 0 && !emitting), glossy(opts.glossy),
+        glossy_ir(opts.glossy && opts.mode == TransferMode::Interreflected),
+        want_hits(gather || glossy_ir || emitting), channels(grey ? 1 : 3), vertex_albedo{opts, m} {}
+
+  const Mesh& mesh;
+  const Source& src;
+  const TransferOptions& o;
+  const Progress& progress;
+  const Communicator& comm;
+  // Points, interreflected: every vertex's dense transfer of bounces - 1
+  // bounces (emitter_channels channels), gathered at each front hit.
+  const std::vector<float>* emitters;
+  int emitter_channels;
+  int n, nc;  // bands, coefficients per channel
+  std::size_t V, r0, own;  // the points; this rank's are [r0, r0 + own)
+  bool grey, trace, gather, glossy, glossy_ir, want_hits;
+  int channels;  // the transfer's: 1 for a grey albedo, else 3
+  std::size_t stride = 0, gstride = 0;  // floats per point of t.coeffs and of t.glossy_matrices
+  Plan plan;
+  Albedo vertex_albedo;
+  std::vector<double> A;  // the clamped cosine's factors per band
+  // The direction set (M directions of weight w), its basis in float and,
+  // glossy, in double (the products of the matrices sum many rays).
+  int M = 0;
+  std::vector<glm::vec3> dirs;
+  std::vector<float> Ytab;
+  std::vector<double> Ydbl;
+  double w = 0.0;
+  float offset = 0.0f;
+  const detail::RayScene* scene = nullptr;
+
+  float albedo(std::size_t v, int c) const {
+    return src.albedo ? src.albedo[v][c] : src.vertices ? vertex_albedo(v, c) : o.albedo[c];
+  }
+};
+
+// What the first pass keeps besides the transfer: which points are analytic,
+// their records and the points' gathered bounce light.
+struct FirstPass {
+  explicit FirstPass(const Run& run)
+      : store(run.plan.record_budget), grow(run.want_hits && run.gather ? run.own + 1 : 0, 0),
+        frow(run.glossy_ir ? run.own + 1 : 0, 0) {}
+
+  // Vertices with a normal and no occluded ray: their transfer is the
+  // analytic clamped cosine, stored by no one (finish_transfer compacts them).
+  std::vector<std::uint8_t> analytic;
+  // Points: the light the vertices they see reflect onto them (one gather
+  // of the vertices' transfer per front hit, scaled as the direct part).
+  std::vector<float> bounce_light;
+  // The records of this rank's vertices, a block of plan.block vertices at
+  // a time: block b's gather rows (the sparse gather matrix G, receiver
+  // vertex x emitting vertex, weight w cos barycentric, merged per emitter)
+  // in store block 2b, its front hits (glossy interreflected) in 2b + 1;
+  // per vertex the offsets of its records.
+  detail::SpillStore store;
+  std::vector<std::uint64_t> grow, frow;
+};
+
+// One worker's scratch for the vertex it traces, and that vertex's sums.
+struct Scratch {
+  explicit Scratch(const Run& run)
+      : Yn(std::size_t(run.nc)), occ(std::size_t(run.nc)), C(run.glossy ? std::size_t(run.nc) * run.nc : 0),
+        s(std::size_t(run.nc)), eacc(run.emitters ? run.stride : 0) {}
+
+  std::vector<double> Yn, occ;
+  std::vector<double> Yocc, C;  // glossy: the occluded rays' Y, and w Yocc^T Yocc
+  std::vector<Entry> r;
+  std::vector<float> s;  // S of the vertex
+  std::vector<double> eacc;  // points: sum of w cos barycentric T_vertex over front hits
+  glm::vec3 batch[8];
+  int batch_j[8];
+  detail::Hit hits[8];
+  std::size_t occluded_rays = 0;
+  double occ_cos = 0.0;
+  glm::dvec3 occ_dir{0.0};
+};
+
+// The header of the transfer compute_impl returns.
+Transfer transfer_header(const Run& run) {
+  const TransferOptions& o = run.o;
   Transfer t;
-  t.bands = n;
-  t.channels = grey ? 1 : 3;
+  t.bands = run.n;
+  t.channels = run.channels;
   t.mode = o.mode;
   t.bounces = o.mode == TransferMode::Interreflected ? o.bounces : 0;
   t.samples = o.mode == TransferMode::Unshadowed ? 0 : o.samples;
   t.albedo = o.albedo;
   t.vertex_colors = o.vertex_colors;
   t.seed = o.seed;
-  t.vertices = V;
-  t.mesh_hash = mesh.hash();
-  const std::size_t stride = t.stride();
-  const Albedo vertex_albedo{o, mesh};
-  const auto albedo = [&](std::size_t v, int c) {
-    return src.albedo ? src.albedo[v][c] : src.vertices ? vertex_albedo(v, c) : o.albedo[c];
-  };
+  t.vertices = run.V;
+  t.mesh_hash = run.mesh.hash();
+  return t;
+}
 
-  const bool trace = o.mode != TransferMode::Unshadowed;
-  const bool gather = o.mode == TransferMode::Interreflected && o.bounces > 0 && !emitters;
-  const bool glossy = o.glossy;
-  const bool glossy_ir = glossy && o.mode == TransferMode::Interreflected;
-  const bool want_hits = gather || glossy_ir || emitters;
-  // Checked before any ray: throws for a limit below the minimum.
-  const Plan plan = plan_memory(mesh, V, o, own, emitters != nullptr, grey, src.hit_points ? 4 : 3);
-  // Points: the light the vertices they see reflect onto them (one gather
-  // of the vertices' transfer per front hit, scaled as the direct part).
-  std::vector<float> bounce_light(emitters ? V * stride : 0, 0.0f);
+// The direction set and its basis tables, the ray offset.
+void make_tables(Run& run) {
+  const int M = 2 * run.o.samples, n = run.n, nc = run.nc;
+  run.M = M;
+  run.dirs = run.trace ? detail::direction_set(M, run.o.seed) : std::vector<glm::vec3>{};
+  const std::vector<glm::vec3>& dirs = run.dirs;
+  run.Ytab.resize(run.trace ? std::size_t(M) * nc : 0);
+  for (int j = 0; j < (run.trace ? M : 0); ++j)
+    sh::eval<float>(n, dirs[j].x, dirs[j].y, dirs[j].z, run.Ytab.data() + std::size_t(j) * nc);
+  run.Ydbl.resize(run.glossy ? std::size_t(M) * nc : 0);
+  for (int j = 0; j < (run.glossy ? M : 0); ++j)
+    sh::eval<double>(n, dirs[j].x, dirs[j].y, dirs[j].z, run.Ydbl.data() + std::size_t(j) * nc);
+  run.w = 4.0 * M_PI / M;
+  run.offset = float(run.o.offset > 0 ? run.o.offset : detail::default_ray_offset(run.mesh));
+}
 
-  // The direct transfer: albedo times S, the geometry-only transfer (one
-  // channel), S_k = (1/pi) integral V cos+ Y_k, written per vertex.
-  std::vector<double> A = sh::clamped_cosine_factors(n);
-  t.coeffs.assign(V * stride, 0.0f);
-  t.ao.assign(V, 1.0f);
-  t.bent_normals.assign(src.normals, src.normals + V);
+// Vertex v's direct transfer: albedo times S.
+void write_direct(const Run& run, Transfer& t, std::size_t v, const std::vector<float>& s) {
+  for (int c = 0; c < t.channels; ++c) {
+    const float a = run.albedo(v, c);
+    for (int k = 0; k < run.nc; ++k) t.coeffs[v * run.stride + std::size_t(c) * run.nc + k] = a * s[k];
+  }
+}
 
-  if (glossy) detail::blas_single_threaded();
-  t.glossy = glossy;
-  const std::size_t gstride = glossy ? t.glossy_stride() : 0;
-  if (glossy) t.glossy_matrices.assign(V * gstride, 0.0f);
+// One batch of `count` rays from `origin` (scratch.batch): the occluded
+// directions' cosine-weighted basis subtracted, their front hits recorded
+// for the bounce gather (and the glossy bounce light in `fronts`).
+void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, int count,
+                 std::vector<FrontHit>* fronts) {
+  const int nc = run.nc;
+  std::uint32_t occluded = 0;
+  if (run.want_hits) {
+    run.scene->intersect8(origin, sc.batch, count, run.offset, sc.hits);
+    for (int k = 0; k < count; ++k) occluded |= sc.hits[k].hit() ? 1u << k : 0u;
+  } else {
+    occluded = run.scene->occluded8(origin, sc.batch, count, run.offset);
+  }
+  for (int k = 0; k < count; ++k) {
+    if (!(occluded & (1u << k))) continue;
+    ++sc.occluded_rays;
+    const detail::Hit& hit = sc.hits[k];
+    const int j = sc.batch_j[k];
+    const double wc = run.w * glm::dot(nrm, run.dirs[j]);
+    const float* y = run.Ytab.data() + std::size_t(j) * nc;
+    for (int q = 0; q < nc; ++q) sc.occ[q] += wc * y[q];
+    sc.occ_cos += wc;
+    sc.occ_dir += wc * glm::dvec3(run.dirs[j]);
+    if (run.glossy)
+      sc.Yocc.insert(sc.Yocc.end(), run.Ydbl.begin() + std::ptrdiff_t(j) * nc, run.Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
+    if (run.glossy_ir && hit.front) fronts->push_back({std::uint32_t(j), hit.triangle, hit.u, hit.v});
+    if (run.emitters && hit.front) {
+      const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
+      const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
+      const std::size_t estride = std::size_t(run.emitter_channels) * nc;
+      for (int c = 0; c < 3; ++c) {
+        const double wb = double(float(wc) * bc[c]);
+        const float* e = run.emitters->data() + std::size_t(tri[c]) * estride;
+        for (int ch = 0; ch < run.channels; ++ch) {
+          const float* ec = e + (run.emitter_channels == 1 ? 0 : std::size_t(ch) * nc);
+          for (int q = 0; q < nc; ++q) sc.eacc[std::size_t(ch) * nc + q] += wb * ec[q];
+        }
+      }
+    }
+    if (run.gather && hit.front) {
+      if (run.src.hit_points) {  // points (texels): those around the hit's lightmap UV
+        std::uint32_t idx[4];
+        float wt[4];
+        const int np = run.src.hit_points->points(hit.triangle, hit.u, hit.v, idx, wt);
+        for (int q = 0; q < np; ++q) sc.r.emplace_back(idx[q], float(wc) * wt[q]);
+      } else {
+        const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
+        const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
+        for (int c = 0; c < 3; ++c) sc.r.emplace_back(tri[c], float(wc) * bc[c]);
+      }
+    }
+  }
+}
 
-  const int M = 2 * o.samples;
-  const std::vector<glm::vec3> dirs = trace ? detail::direction_set(M, o.seed) : std::vector<glm::vec3>{};
-  std::vector<float> Ytab(trace ? std::size_t(M) * nc : 0);
-  for (int j = 0; j < (trace ? M : 0); ++j) sh::eval<float>(n, dirs[j].x, dirs[j].y, dirs[j].z, Ytab.data() + std::size_t(j) * nc);
-  // Glossy: the basis in double (the products of the matrices sum many rays).
-  std::vector<double> Ydbl(glossy ? std::size_t(M) * nc : 0);
-  for (int j = 0; j < (glossy ? M : 0); ++j) sh::eval<double>(n, dirs[j].x, dirs[j].y, dirs[j].z, Ydbl.data() + std::size_t(j) * nc);
-  const double w = 4.0 * M_PI / M;
-  const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
+// Glossy: vertex v's matrix M_p = H(n) - w sum_occluded Y Y^T (upper
+// triangle from the BLAS); interreflected keeps it full, per channel, for
+// the bounce light added later.
+void write_glossy_matrix(const Run& run, Transfer& t, Scratch& sc, std::size_t v, glm::vec3 nrm) {
+  const int nc = run.nc;
+  rank_k_update(nc, int(sc.occluded_rays), run.w, sc.Yocc.data(), 0.0, sc.C.data());
+  const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm)), run.n);
+  float* g = t.glossy_matrices.data() + v * run.gstride;
+  std::size_t k = 0;
+  for (int p = 0; p < nc; ++p)
+    for (int q = run.glossy_ir ? 0 : p; q < nc; ++q) {
+      const int a = std::min(p, q), bq = std::max(p, q);
+      const double value = H[std::size_t(p) * nc + q] - sc.C[std::size_t(a) * nc + bq];
+      if (run.glossy_ir)
+        for (int c = 0; c < t.channels; ++c) g[std::size_t(c) * nc * nc + std::size_t(p) * nc + q] = float(value);
+      else
+        g[k++] = float(value);
+    }
+}
 
-  std::unique_ptr<detail::RayScene> own_scene;
-  if (trace && !src.scene) own_scene = std::make_unique<detail::RayScene>(mesh);
-  const detail::RayScene* scene = src.scene ? src.scene : own_scene.get();
-  // Vertices with a normal and no occluded ray: their transfer is the
-  // analytic clamped cosine, stored by no one (compact_transfer below).
-  std::vector<std::uint8_t> analytic(V, 0);
-  // The records of this rank's vertices, a block of plan.block vertices at
-  // a time: block b's gather rows (the sparse gather matrix G, receiver
-  // vertex x emitting vertex, weight w cos barycentric, merged per emitter)
-  // in store block 2b, its front hits (glossy interreflected) in 2b + 1;
-  // per vertex the offsets of its records.
-  detail::SpillStore store(plan.record_budget);
-  std::vector<std::uint64_t> grow(want_hits && gather ? own + 1 : 0, 0), frow(glossy_ir ? own + 1 : 0, 0);
-  using Entry = std::pair<std::uint32_t, float>;
+// A vertex's gather row scaled, its duplicate emitters merged in a fixed
+// order, appended to `rows`.
+void merge_gather_row(std::vector<Entry>& r, double scale, std::vector<Entry>& rows) {
+  for (auto& e : r) e.second = float(scale * e.second);
+  std::sort(r.begin(), r.end(), [](auto& a, auto& b) { return a.first < b.first; });
+  std::size_t out = 0;
+  for (std::size_t q = 0; q < r.size(); ++q) {
+    if (out > 0 && r[out - 1].first == r[q].first)
+      r[out - 1].second += r[q].second;
+    else
+      r[out++] = r[q];
+  }
+  rows.insert(rows.end(), r.begin(), r.begin() + std::ptrdiff_t(out));
+}
 
-  detail::ProgressTicker first(progress, own, trace ? "rays" : "transfer");
-  constexpr std::size_t kGrain = 64;
-  for (std::size_t b0 = 0; b0 < own; b0 += plan.block) {
-    const std::size_t b1 = std::min(own, b0 + plan.block), grains = (b1 - b0 + kGrain - 1) / kGrain;
-    std::vector<std::vector<Entry>> grain_rows(gather ? grains : 0);
-    std::vector<std::vector<FrontHit>> grain_hits(glossy_ir ? grains : 0);
+// Point r0 + i of this rank: its rays traced, its direct transfer, AO, bent
+// normal (and glossy matrix, bounce light) written, its records appended to
+// its grain's `rows` and `fronts` (null when not kept).
+void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, std::vector<Entry>* rows,
+                 std::vector<FrontHit>* fronts) {
+  const int n = run.n, nc = run.nc;
+  const std::size_t v = run.r0 + i, stride = run.stride;
+  const glm::vec3 nrm = run.src.normals[v];
+  if (glm::dot(nrm, nrm) == 0.0f) {  // unreferenced or no normal: no transfer
+    t.ao[v] = 0.0f;
+    if (run.gather) fp.grow[i + 1] = rows->size();
+    if (run.glossy_ir) fp.frow[i + 1] = fronts->size();
+    return;
+  }
+  sh::eval<double>(n, nrm.x, nrm.y, nrm.z, sc.Yn.data());
+  if (!run.trace) {
+    fp.analytic[v] = 1;
+    for (int l = 0; l < n; ++l)
+      for (int m = -l; m <= l; ++m) sc.s[sh::index(l, m)] = float(run.A[l] * sc.Yn[sh::index(l, m)] / M_PI);
+    write_direct(run, t, v, sc.s);
+    return;
+  }
+  std::fill(sc.occ.begin(), sc.occ.end(), 0.0);
+  sc.Yocc.clear();
+  sc.r.clear();
+  sc.occluded_rays = 0;
+  sc.occ_cos = 0.0;
+  sc.occ_dir = glm::dvec3(0.0);
+  const glm::vec3 origin = run.src.positions[v] + run.offset * nrm;
+  if (run.emitters) std::fill(sc.eacc.begin(), sc.eacc.end(), 0.0);
+  int count = 0;
+  double all_cos = 0.0;  // the direction set's own integral of cos+ (pi up to its quadrature error)
+  for (int j = 0; j < run.M; ++j) {
+    const float c = glm::dot(nrm, run.dirs[j]);
+    if (c <= 0.0f) continue;  // below the horizon: no ray
+    all_cos += run.w * c;
+    sc.batch[count] = run.dirs[j];
+    sc.batch_j[count++] = j;
+    if (count == 8) {
+      trace_batch(run, sc, nrm, origin, count, fronts);
+      count = 0;
+    }
+  }
+  if (count) trace_batch(run, sc, nrm, origin, count, fronts);
+  fp.analytic[v] = sc.occluded_rays == 0;
+  if (run.glossy && sc.occluded_rays > 0) write_glossy_matrix(run, t, sc, v, nrm);
+  // Scale the occluded sums so the set integrates cos+ to exactly pi: a
+  // fully occluded vertex then gets AO 0 and T_00 0 exactly.
+  const double scale = all_cos > 0.0 ? M_PI / all_cos : 1.0;
+  for (int l = 0; l < n; ++l)
+    for (int m = -l; m <= l; ++m) {
+      const int k = sh::index(l, m);
+      sc.s[k] = float((run.A[l] * sc.Yn[k] - scale * sc.occ[k]) / M_PI);
+    }
+  write_direct(run, t, v, sc.s);
+  if (run.emitters)  // (rho / pi) scale sum w cos b T_vertex: bounce b at the point is bounce b - 1 at the vertices
+    for (int c = 0; c < t.channels; ++c) {
+      const double a = run.albedo(v, c) / M_PI * scale;
+      for (int k = 0; k < nc; ++k)
+        fp.bounce_light[v * stride + std::size_t(c) * nc + k] = float(a * sc.eacc[std::size_t(c) * nc + k]);
+    }
+  t.ao[v] = float(std::clamp(1.0 - scale * sc.occ_cos / M_PI, 0.0, 1.0));
+  const glm::dvec3 bent = (2.0 * M_PI / 3.0) * glm::dvec3(nrm) - scale * sc.occ_dir;
+  const double len = glm::length(bent);
+  t.bent_normals[v] = len > 0 ? glm::vec3(bent / len) : nrm;
+  if (run.gather) {  // same scale as above
+    merge_gather_row(sc.r, scale, *rows);
+    fp.grow[i + 1] = rows->size();  // within the grain; made global by store_block
+  }
+  if (run.glossy_ir) fp.frow[i + 1] = fronts->size();
+}
+
+// Block [b0, b1)'s records into the store: the grains' offsets made
+// cumulative over the whole range, then G's block (the emitters, then the
+// weights) and the front hits.
+void store_block(const Run& run, FirstPass& fp, std::size_t b0, std::size_t b1,
+                 std::vector<std::vector<Entry>>& grain_rows, const std::vector<std::vector<FrontHit>>& grain_hits) {
+  const std::size_t grains = (b1 - b0 + kWorkerGrain - 1) / kWorkerGrain;
+  for (std::size_t grain = 0; grain < grains; ++grain) {
+    const std::size_t i0 = b0 + grain * kWorkerGrain, i1 = std::min(b1, i0 + kWorkerGrain);
+    if (run.gather) {
+      const std::uint64_t base = fp.grow[i0];
+      for (std::size_t i = i0; i < i1; ++i) fp.grow[i + 1] += base;
+    }
+    if (run.glossy_ir) {
+      const std::uint64_t base = fp.frow[i0];
+      for (std::size_t i = i0; i < i1; ++i) fp.frow[i + 1] += base;
+    }
+  }
+  std::vector<std::uint8_t> g;
+  if (run.gather) {
+    std::size_t nnz = 0;
+    for (const auto& rows : grain_rows) nnz += rows.size();
+    g.resize(nnz * (sizeof(std::uint32_t) + sizeof(float)));
+    auto* col = reinterpret_cast<std::uint32_t*>(g.data());
+    auto* val = reinterpret_cast<float*>(g.data() + nnz * sizeof(std::uint32_t));
+    std::size_t at = 0;
+    for (auto& rows : grain_rows) {
+      for (const Entry& e : rows) {
+        col[at] = e.first;
+        val[at++] = e.second;
+      }
+      std::vector<Entry>().swap(rows);
+    }
+  }
+  fp.store.append(std::move(g));
+  fp.store.append(run.glossy_ir ? pack(grain_hits) : std::vector<std::uint8_t>{});
+}
+
+// The first pass over this rank's points, a block of plan.block at a time:
+// rays, direct transfer and records.
+void trace_points(const Run& run, Transfer& t, FirstPass& fp) {
+  detail::ProgressTicker first(run.progress, run.own, run.trace ? "rays" : "transfer");
+  for (std::size_t b0 = 0; b0 < run.own; b0 += run.plan.block) {
+    const std::size_t b1 = std::min(run.own, b0 + run.plan.block);
+    const std::size_t grains = (b1 - b0 + kWorkerGrain - 1) / kWorkerGrain;
+    std::vector<std::vector<Entry>> grain_rows(run.gather ? grains : 0);
+    std::vector<std::vector<FrontHit>> grain_hits(run.glossy_ir ? grains : 0);
     tbb::parallel_for(std::size_t(0), grains, [&](std::size_t grain) {
       detail::enable_ftz_daz();
       if (first.cancelled()) return;
-      std::vector<double> Yn(nc), occ(nc);
-      std::vector<double> Yocc, C(glossy ? std::size_t(nc) * nc : 0);  // glossy: the occluded rays' Y, and w Yocc^T Yocc
-      std::vector<Entry> r;
-      std::vector<float> s(nc);  // S of the vertex
-      std::vector<double> eacc(emitters ? stride : 0);  // points: sum of w cos barycentric T_vertex over front hits
-      glm::vec3 batch[8];
-      int batch_j[8];
-      detail::Hit hits[8];
-      const std::size_t i0 = b0 + grain * kGrain, i1 = std::min(b1, i0 + kGrain);
-      for (std::size_t i = i0; i < i1; ++i) {
-        const std::size_t v = r0 + i;
-        const glm::vec3 nrm = src.normals[v];
-        if (glm::dot(nrm, nrm) == 0.0f) {  // unreferenced or no normal: no transfer
-          t.ao[v] = 0.0f;
-          if (gather) grow[i + 1] = grain_rows[grain].size();
-          if (glossy_ir) frow[i + 1] = grain_hits[grain].size();
-          continue;
-        }
-        sh::eval<double>(n, nrm.x, nrm.y, nrm.z, Yn.data());
-        const auto write_direct = [&] {
-          for (int c = 0; c < t.channels; ++c) {
-            const float a = albedo(v, c);
-            for (int k = 0; k < nc; ++k) t.coeffs[v * stride + std::size_t(c) * nc + k] = a * s[k];
-          }
-        };
-        if (!trace) {
-          analytic[v] = 1;
-          for (int l = 0; l < n; ++l)
-            for (int m = -l; m <= l; ++m) s[sh::index(l, m)] = float(A[l] * Yn[sh::index(l, m)] / M_PI);
-          write_direct();
-          continue;
-        }
-        std::fill(occ.begin(), occ.end(), 0.0);
-        Yocc.clear();
-        r.clear();
-        std::size_t occluded_rays = 0;
-        double occ_cos = 0.0;
-        glm::dvec3 occ_dir(0.0);
-        const glm::vec3 origin = src.positions[v] + offset * nrm;
-        if (emitters) std::fill(eacc.begin(), eacc.end(), 0.0);
-        auto row_of = [&](int count) {
-          // Occluded directions of this batch: subtract their cosine-weighted
-          // basis; record front hits for the bounce gather.
-          std::uint32_t occluded = 0;
-          if (want_hits) {
-            scene->intersect8(origin, batch, count, offset, hits);
-            for (int k = 0; k < count; ++k) occluded |= hits[k].hit() ? 1u << k : 0u;
-          } else {
-            occluded = scene->occluded8(origin, batch, count, offset);
-          }
-          for (int k = 0; k < count; ++k) {
-            if (!(occluded & (1u << k))) continue;
-            ++occluded_rays;
-            const int j = batch_j[k];
-            const double wc = w * glm::dot(nrm, dirs[j]);
-            const float* y = Ytab.data() + std::size_t(j) * nc;
-            for (int q = 0; q < nc; ++q) occ[q] += wc * y[q];
-            occ_cos += wc;
-            occ_dir += wc * glm::dvec3(dirs[j]);
-            if (glossy) Yocc.insert(Yocc.end(), Ydbl.begin() + std::ptrdiff_t(j) * nc, Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
-            if (glossy_ir && hits[k].front)
-              grain_hits[grain].push_back({std::uint32_t(j), hits[k].triangle, hits[k].u, hits[k].v});
-            if (emitters && hits[k].front) {
-              const glm::uvec3 tri = mesh.triangles[hits[k].triangle];
-              const float bc[3] = {1.0f - hits[k].u - hits[k].v, hits[k].u, hits[k].v};
-              const std::size_t estride = std::size_t(emitter_channels) * nc;
-              for (int c = 0; c < 3; ++c) {
-                const double wb = double(float(wc) * bc[c]);
-                const float* e = emitters->data() + std::size_t(tri[c]) * estride;
-                for (int ch = 0; ch < t.channels; ++ch) {
-                  const float* ec = e + (emitter_channels == 1 ? 0 : std::size_t(ch) * nc);
-                  for (int q = 0; q < nc; ++q) eacc[std::size_t(ch) * nc + q] += wb * ec[q];
-                }
-              }
-            }
-            if (gather && hits[k].front) {
-              if (src.hit_points) {  // points (texels): those around the hit's lightmap UV
-                std::uint32_t idx[4];
-                float wt[4];
-                const int np = src.hit_points->points(hits[k].triangle, hits[k].u, hits[k].v, idx, wt);
-                for (int q = 0; q < np; ++q) r.emplace_back(idx[q], float(wc) * wt[q]);
-              } else {
-                const glm::uvec3 tri = mesh.triangles[hits[k].triangle];
-                const float bc[3] = {1.0f - hits[k].u - hits[k].v, hits[k].u, hits[k].v};
-                for (int c = 0; c < 3; ++c) r.emplace_back(tri[c], float(wc) * bc[c]);
-              }
-            }
-          }
-        };
-        int count = 0;
-        double all_cos = 0.0;  // the direction set's own integral of cos+ (pi up to its quadrature error)
-        for (int j = 0; j < M; ++j) {
-          const float c = glm::dot(nrm, dirs[j]);
-          if (c <= 0.0f) continue;  // below the horizon: no ray
-          all_cos += w * c;
-          batch[count] = dirs[j];
-          batch_j[count++] = j;
-          if (count == 8) {
-            row_of(count);
-            count = 0;
-          }
-        }
-        if (count) row_of(count);
-        analytic[v] = occluded_rays == 0;
-        if (glossy && occluded_rays > 0) {
-          // M_p = H(n) - w sum_occluded Y Y^T (upper triangle from the BLAS).
-          rank_k_update(nc, int(occluded_rays), w, Yocc.data(), 0.0, C.data());
-          const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm)), n);
-          float* g = t.glossy_matrices.data() + v * gstride;
-          std::size_t k = 0;
-          for (int p = 0; p < nc; ++p)
-            for (int q = glossy_ir ? 0 : p; q < nc; ++q) {
-              const int a = std::min(p, q), bq = std::max(p, q);
-              const double value = H[std::size_t(p) * nc + q] - C[std::size_t(a) * nc + bq];
-              if (glossy_ir)  // full, per channel; the bounce light is added below
-                for (int c = 0; c < t.channels; ++c) g[std::size_t(c) * nc * nc + std::size_t(p) * nc + q] = float(value);
-              else
-                g[k++] = float(value);
-            }
-        }
-        // Scale the occluded sums so the set integrates cos+ to exactly pi: a
-        // fully occluded vertex then gets AO 0 and T_00 0 exactly.
-        const double scale = all_cos > 0.0 ? M_PI / all_cos : 1.0;
-        for (int l = 0; l < n; ++l)
-          for (int m = -l; m <= l; ++m) {
-            const int k = sh::index(l, m);
-            s[k] = float((A[l] * Yn[k] - scale * occ[k]) / M_PI);
-          }
-        write_direct();
-        if (emitters)  // (rho / pi) scale sum w cos b T_vertex: bounce b at the point is bounce b - 1 at the vertices
-          for (int c = 0; c < t.channels; ++c) {
-            const double a = albedo(v, c) / M_PI * scale;
-            for (int k = 0; k < nc; ++k)
-              bounce_light[v * stride + std::size_t(c) * nc + k] = float(a * eacc[std::size_t(c) * nc + k]);
-          }
-        t.ao[v] = float(std::clamp(1.0 - scale * occ_cos / M_PI, 0.0, 1.0));
-        const glm::dvec3 bent = (2.0 * M_PI / 3.0) * glm::dvec3(nrm) - scale * occ_dir;
-        const double len = glm::length(bent);
-        t.bent_normals[v] = len > 0 ? glm::vec3(bent / len) : nrm;
-        if (gather) {  // merge duplicate emitters, in a fixed order; same scale as above
-          for (auto& e : r) e.second = float(scale * e.second);
-          std::sort(r.begin(), r.end(), [](auto& a, auto& b) { return a.first < b.first; });
-          std::size_t out = 0;
-          for (std::size_t q = 0; q < r.size(); ++q) {
-            if (out > 0 && r[out - 1].first == r[q].first)
-              r[out - 1].second += r[q].second;
-            else
-              r[out++] = r[q];
-          }
-          auto& rows = grain_rows[grain];
-          rows.insert(rows.end(), r.begin(), r.begin() + std::ptrdiff_t(out));
-          grow[i + 1] = rows.size();  // within the grain; made global below
-        }
-        if (glossy_ir) frow[i + 1] = grain_hits[grain].size();
-      }
+      Scratch sc(run);
+      std::vector<Entry>* rows = run.gather ? &grain_rows[grain] : nullptr;
+      std::vector<FrontHit>* fronts = run.glossy_ir ? &grain_hits[grain] : nullptr;
+      const std::size_t i0 = b0 + grain * kWorkerGrain, i1 = std::min(b1, i0 + kWorkerGrain);
+      for (std::size_t i = i0; i < i1; ++i) trace_point(run, t, fp, sc, i, rows, fronts);
       first.tick(i1 - i0);
     });
     if (first.cancelled()) break;
-    // Offsets: the grains' counts made cumulative over the whole range.
-    for (std::size_t grain = 0; grain < grains; ++grain) {
-      const std::size_t i0 = b0 + grain * kGrain, i1 = std::min(b1, i0 + kGrain);
-      if (gather) {
-        const std::uint64_t base = grow[i0];
-        for (std::size_t i = i0; i < i1; ++i) grow[i + 1] += base;
-      }
-      if (glossy_ir) {
-        const std::uint64_t base = frow[i0];
-        for (std::size_t i = i0; i < i1; ++i) frow[i + 1] += base;
-      }
-    }
-    // G block: the emitters, then the weights.
-    std::vector<std::uint8_t> g;
-    if (gather) {
-      std::size_t nnz = 0;
-      for (const auto& rows : grain_rows) nnz += rows.size();
-      g.resize(nnz * (sizeof(std::uint32_t) + sizeof(float)));
-      auto* col = reinterpret_cast<std::uint32_t*>(g.data());
-      auto* val = reinterpret_cast<float*>(g.data() + nnz * sizeof(std::uint32_t));
-      std::size_t at = 0;
-      for (auto& rows : grain_rows) {
-        for (const Entry& e : rows) {
-          col[at] = e.first;
-          val[at++] = e.second;
-        }
-        std::vector<Entry>().swap(rows);
-      }
-    }
-    store.append(std::move(g));
-    store.append(glossy_ir ? pack(grain_hits) : std::vector<std::uint8_t>{});
+    store_block(run, fp, b0, b1, grain_rows, grain_hits);
   }
   first.finish();
-  own_scene.reset();
-  scene = nullptr;
-  if (o.memory_report) {
-    *o.memory_report = plan.memory;
-    o.memory_report->block = plan.block;
-    o.memory_report->records_in_memory = store.held_bytes();
-    o.memory_report->records_spilled = store.spilled_bytes();
+}
+
+// The end of compute_impl: the glossy bounce light, the glossy matrices to
+// rank 0, analytic rows dropped. Returns the transfer (empty off rank 0
+// unless keep_everywhere).
+Transfer finish_transfer(const Run& run, Transfer& t, FirstPass& fp, bool keep_everywhere) {
+  if (run.glossy_ir) {
+    std::vector<float> dense;
+    if (run.src.expand) (*run.src.expand)(t.coeffs, dense, true);
+    add_glossy_bounce_light(t, run.src.expand ? dense.data() : t.coeffs.data(), run.mesh, fp.store, fp.frow, run.r0,
+                            run.plan.block, run.Ydbl, run.w, run.progress);
   }
-  t.shading_hash = shading_hash(mesh, o.vertex_colors);
+  if (run.glossy) gather_to_root(t.glossy_matrices, run.V, run.comm);
+  if (keep_everywhere) return std::move(t);
+  if (run.comm.rank() != 0) return Transfer{};
+  // Vertices: analytic rows are dropped (relight evaluates them from the
+  // mesh's normals). Points keep every row: no mesh normal is theirs.
+  if (run.src.vertices || run.src.compact) compact_transfer(t, fp.analytic);
+  return std::move(t);
+}
 
-  // Every rank needs every vertex's direct transfer for the bounces and the
-  // glossy bounce light; rank 0 the rest for the file.
-  if (gather || glossy_ir || keep_everywhere) all_gather(t.coeffs, V, comm);
-  else gather_to_root(t.coeffs, V, comm);
-  gather_to_root(t.ao, V, comm);
-  gather_to_root(t.bent_normals, V, comm);
-  if (keep_everywhere) all_gather(analytic, V, comm);
-  else gather_to_root(analytic, V, comm);
-  if (src.analytic_out) *src.analytic_out = analytic;
-  if (emitters) gather_to_root(bounce_light, V, comm);
-
-  const auto finish = [&]() {
-    if (glossy_ir) {
-      std::vector<float> dense;
-      if (src.expand) (*src.expand)(t.coeffs, dense, true);
-      add_glossy_bounce_light(t, src.expand ? dense.data() : t.coeffs.data(), mesh, store, frow, r0, plan.block, Ydbl,
-                              w, progress);
+// One bounce over block `blk` of this rank's points: next = (rho / pi) G
+// emitting, G's block from the store.
+void gather_block(const Run& run, const FirstPass& fp, std::size_t blk, const float* emitting, std::vector<float>& next,
+                  std::vector<std::uint8_t>& buffer, detail::ProgressTicker& bounce) {
+  const std::size_t stride = run.stride;
+  const int nc = run.nc;
+  const std::vector<std::uint64_t>& grow = fp.grow;
+  const std::size_t b0 = blk * run.plan.block, b1 = std::min(run.own, b0 + run.plan.block);
+  const std::uint8_t* bytes = fp.store.get(2 * blk, buffer);
+  const std::size_t nnz = std::size_t(grow[b1] - grow[b0]);
+  const auto* col = reinterpret_cast<const std::uint32_t*>(bytes);
+  const auto* val = reinterpret_cast<const float*>(bytes + nnz * sizeof(std::uint32_t));
+  tbb::parallel_for(std::size_t(0), (b1 - b0 + kWorkerGrain - 1) / kWorkerGrain, [&](std::size_t grain) {
+    std::vector<double> acc(stride);
+    const std::size_t i0 = b0 + grain * kWorkerGrain, i1 = std::min(b1, i0 + kWorkerGrain);
+    for (std::size_t i = i0; i < i1; ++i) {
+      const std::size_t v = run.r0 + i;
+      std::fill(acc.begin(), acc.end(), 0.0);
+      for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
+        const float* emitter = emitting + std::size_t(col[e]) * stride;
+        const double gv = val[e];
+        for (std::size_t k = 0; k < stride; ++k) acc[k] += gv * emitter[k];
+      }
+      for (int c = 0; c < run.channels; ++c) {
+        const double a = run.albedo(v, c) / M_PI;
+        for (int k = 0; k < nc; ++k) next[v * stride + std::size_t(c) * nc + k] = float(a * acc[std::size_t(c) * nc + k]);
+      }
     }
-    if (glossy) gather_to_root(t.glossy_matrices, V, comm);
-    if (keep_everywhere) return std::move(t);
-    if (comm.rank() != 0) return Transfer{};
-    // Vertices: analytic rows are dropped (relight evaluates them from the
-    // mesh's normals). Points keep every row: no mesh normal is theirs.
-    if (src.vertices || src.compact) compact_transfer(t, analytic);
-    return std::move(t);
-  };
-  if (emitters) {  // points: the direct part, plus the vertices' light gathered above
-    t.direct = t.coeffs;
-    for (std::size_t i = 0; i < t.coeffs.size(); ++i) t.coeffs[i] += bounce_light[i];
-    return finish();
-  }
-  if (!gather) {
-    if (o.mode == TransferMode::Interreflected) t.direct = t.coeffs;
-    return finish();
-  }
+    bounce.tick(i1 - i0);
+  });
+}
 
-  // Bounces: T_{b+1}(v) = (rho_v / pi) sum_u G_vu T_b(u), each from the
-  // previous bounce alone; the total is summed separately. Each rank
-  // computes its vertices, then all of them are exchanged.
+// Bounces: T_{b+1}(v) = (rho_v / pi) sum_u G_vu T_b(u), each from the
+// previous bounce alone; the total is summed separately. Each rank
+// computes its vertices, then all of them are exchanged.
+void gather_bounces(const Run& run, Transfer& t, const FirstPass& fp) {
+  const TransferOptions& o = run.o;
+  const std::size_t V = run.V;
   t.direct = t.coeffs;
   double direct_energy = 0.0;
   for (float x : t.direct) direct_energy += std::abs(x);
   t.direct_energy = direct_energy / double(std::max<std::size_t>(V, 1));
   t.bounces = 0;
-  std::vector<float> next(V * stride), other(o.bounces > 1 ? V * stride : 0);
+  std::vector<float> next(V * run.stride), other(o.bounces > 1 ? V * run.stride : 0);
   const std::vector<float>* prev = &t.direct;
   std::vector<std::uint8_t> buffer;
   std::vector<float> vertex_rows;  // with expand: every mesh vertex's row of the previous bounce
   for (int b = 1; b <= o.bounces; ++b) {
-    if (src.expand) (*src.expand)(*prev, vertex_rows, b == 1);
-    const float* emitting = src.expand ? vertex_rows.data() : prev->data();
-    detail::ProgressTicker bounce(progress, own, "bounces");
-    for (std::size_t blk = 0; blk * plan.block < own; ++blk) {
-      const std::size_t b0 = blk * plan.block, b1 = std::min(own, b0 + plan.block);
-      const std::uint8_t* bytes = store.get(2 * blk, buffer);
-      const std::size_t nnz = std::size_t(grow[b1] - grow[b0]);
-      const auto* col = reinterpret_cast<const std::uint32_t*>(bytes);
-      const auto* val = reinterpret_cast<const float*>(bytes + nnz * sizeof(std::uint32_t));
-      tbb::parallel_for(std::size_t(0), (b1 - b0 + kGrain - 1) / kGrain, [&](std::size_t grain) {
-        std::vector<double> acc(stride);
-        const std::size_t i0 = b0 + grain * kGrain, i1 = std::min(b1, i0 + kGrain);
-        for (std::size_t i = i0; i < i1; ++i) {
-          const std::size_t v = r0 + i;
-          std::fill(acc.begin(), acc.end(), 0.0);
-          for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
-            const float* emitter = emitting + std::size_t(col[e]) * stride;
-            const double gv = val[e];
-            for (std::size_t k = 0; k < stride; ++k) acc[k] += gv * emitter[k];
-          }
-          for (int c = 0; c < t.channels; ++c) {
-            const double a = albedo(v, c) / M_PI;
-            for (int k = 0; k < nc; ++k) next[v * stride + std::size_t(c) * nc + k] = float(a * acc[std::size_t(c) * nc + k]);
-          }
-        }
-        bounce.tick(i1 - i0);
-      });
+    if (run.src.expand) (*run.src.expand)(*prev, vertex_rows, b == 1);
+    const float* emitting = run.src.expand ? vertex_rows.data() : prev->data();
+    detail::ProgressTicker bounce(run.progress, run.own, "bounces");
+    for (std::size_t blk = 0; blk * run.plan.block < run.own; ++blk) {
+      gather_block(run, fp, blk, emitting, next, buffer, bounce);
       if (bounce.cancelled()) break;
     }
     bounce.finish();
-    all_gather(next, V, comm);
+    all_gather(next, V, run.comm);
     double energy = 0.0;
     for (std::size_t i = 0; i < next.size(); ++i) {
       t.coeffs[i] += next[i];
@@ -684,11 +744,76 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
       prev = &other;
     }
   }
-  std::vector<float>().swap(next);
-  std::vector<float>().swap(other);
   // An analytic vertex has no gather row (no occluded ray), so no bounce
   // added anything to it: its total is its direct part, the clamped cosine.
-  return finish();
+}
+
+// compute_transfer at `src` (the vertices: the transfer file's layout), or
+// at other points. `emitters` (points, interreflected): every vertex's dense
+// transfer of bounces - 1 bounces, gathered once at each point's front hits
+// instead of keeping records. `keep_everywhere`: every rank returns the
+// whole, uncompacted transfer (compute_point_transfer's vertex pass).
+Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions& o, const Progress& progress,
+                      const std::vector<float>* emitters, int emitter_channels, bool keep_everywhere) {
+  std::unique_ptr<tbb::global_control> limit;
+  if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
+  Run run(mesh, src, o, progress, emitters, emitter_channels);
+  const Communicator& comm = run.comm;
+  const std::size_t V = run.V;
+  Transfer t = transfer_header(run);
+  run.stride = t.stride();
+  // Checked before any ray: throws for a limit below the minimum.
+  run.plan = plan_memory(mesh, V, o, run.own, emitters != nullptr, run.grey, src.hit_points ? 4 : 3);
+  FirstPass fp(run);
+  fp.bounce_light.assign(emitters ? V * run.stride : 0, 0.0f);
+
+  // The direct transfer: albedo times S, the geometry-only transfer (one
+  // channel), S_k = (1/pi) integral V cos+ Y_k, written per vertex.
+  run.A = sh::clamped_cosine_factors(run.n);
+  t.coeffs.assign(V * run.stride, 0.0f);
+  t.ao.assign(V, 1.0f);
+  t.bent_normals.assign(src.normals, src.normals + V);
+  if (run.glossy) detail::blas_single_threaded();
+  t.glossy = run.glossy;
+  run.gstride = run.glossy ? t.glossy_stride() : 0;
+  if (run.glossy) t.glossy_matrices.assign(V * run.gstride, 0.0f);
+  make_tables(run);
+  std::unique_ptr<detail::RayScene> own_scene;
+  if (run.trace && !src.scene) own_scene = std::make_unique<detail::RayScene>(mesh);
+  run.scene = src.scene ? src.scene : own_scene.get();
+  fp.analytic.assign(V, 0);
+
+  trace_points(run, t, fp);
+  own_scene.reset();
+  run.scene = nullptr;
+  if (o.memory_report) {
+    *o.memory_report = run.plan.memory;
+    o.memory_report->block = run.plan.block;
+    o.memory_report->records_in_memory = fp.store.held_bytes();
+    o.memory_report->records_spilled = fp.store.spilled_bytes();
+  }
+  t.shading_hash = shading_hash(mesh, o.vertex_colors);
+
+  // Every rank needs every vertex's direct transfer for the bounces and the
+  // glossy bounce light; rank 0 the rest for the file.
+  if (run.gather || run.glossy_ir || keep_everywhere) all_gather(t.coeffs, V, comm);
+  else gather_to_root(t.coeffs, V, comm);
+  gather_to_root(t.ao, V, comm);
+  gather_to_root(t.bent_normals, V, comm);
+  if (keep_everywhere) all_gather(fp.analytic, V, comm);
+  else gather_to_root(fp.analytic, V, comm);
+  if (src.analytic_out) *src.analytic_out = fp.analytic;
+  if (emitters) gather_to_root(fp.bounce_light, V, comm);
+
+  if (emitters) {  // points: the direct part, plus the vertices' light gathered above
+    t.direct = t.coeffs;
+    for (std::size_t i = 0; i < t.coeffs.size(); ++i) t.coeffs[i] += fp.bounce_light[i];
+  } else if (!run.gather) {
+    if (o.mode == TransferMode::Interreflected) t.direct = t.coeffs;
+  } else {
+    gather_bounces(run, t, fp);
+  }
+  return finish_transfer(run, t, fp, keep_everywhere);
 }
 
 }  // namespace

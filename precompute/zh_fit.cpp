@@ -34,16 +34,8 @@ ZhTransfer fit_zh_transfer(const Transfer& t, const Mesh& mesh, const ZhFitOptio
   if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
 
   ZhTransfer z;
-  z.bands = t.bands;
+  z.header() = t.header();
   z.lobes = o.lobes;
-  z.channels = t.channels;
-  z.mode = t.mode;
-  z.bounces = t.bounces;
-  z.samples = t.samples;
-  z.albedo = t.albedo;
-  z.vertex_colors = t.vertex_colors;
-  z.seed = t.seed;
-  z.vertices = t.vertices;
   z.mesh_hash = mesh.hash();
   z.topology_hash = topology_hash(mesh);
   z.slots = t.slots;

@@ -527,7 +527,11 @@ void Renderer::set_shading(Shading s) {
   if (s == Shading::VertexColors) PRT_CHECK(m.have_colors);
   // What the transfer file holds is data: an error to report.
   if (!has_shading(s)) {
-    const char* why = s == Shading::Direct && m.compressed
+    const char* why = m.lightmap && s != Shading::Direct
+                          ? "the renderer draws a lightmap's transfer and its direct part (--shading transfer or "
+                            "direct); its ambient occlusion and bent normals are images of prt precompute --ao-map "
+                            "and --bent-normal-map"
+                      : s == Shading::Direct && m.compressed
                           ? "a compressed transfer keeps no direct part (compression drops it)"
                       : s == Shading::Direct   ? "the transfer is not interreflected"
                       : s == Shading::Glossy ? "the transfer has no glossy matrices (prt precompute --material glossy)"

@@ -93,11 +93,7 @@ void Renderer::Impl::finish_transfer(const Transfer& t, const Mesh& mesh, const 
     has_glossy = true;
     // What glossy_shading_problem reads of the transfer: the header, not its arrays.
     glossy_header = Transfer{};
-    glossy_header.bands = t.bands;
-    glossy_header.channels = t.channels;
-    glossy_header.mode = t.mode;
-    glossy_header.albedo = t.albedo;
-    glossy_header.vertex_colors = t.vertex_colors;
+    glossy_header.header() = t.header();
     glossy_header.glossy = true;
     set_lobe(GlossyShading{});
   }

@@ -6,6 +6,7 @@
 #include <prt/lightmap.h>
 #include <prt/probes.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
@@ -184,38 +185,38 @@ nlohmann::ordered_json zh_json(const std::string& path, const ZhTransfer& z) {
 }
 
 nlohmann::ordered_json info(const std::string& path) {
-  if (is_probe_file(path)) return to_json(path, read_probe_transfer(path));  // each reader validates everything
-  if (read_transfer_basis(path) == TransferBasis::ZH) return zh_json(path, read_zh_transfer(path));
-  if (read_transfer_basis(path) == TransferBasis::Wavelet && transfer_is_lightmap(path)) {
-    const WaveletLightmap w = read_wavelet_lightmap(path);
-    nlohmann::ordered_json j = to_json(path, w.transfer);
-    j["lightmap"] = {{"width", w.layout.width},
-                     {"height", w.layout.height},
-                     {"uv_set", w.layout.uv_set},
-                     {"covered_texels", w.layout.texels.size()},
-                     {"scene_hash", fmt::format("{:016x}", w.layout.scene_hash)}};
-    return j;
-  }
-  if (read_transfer_basis(path) == TransferBasis::Wavelet) return to_json(path, read_wavelet_transfer(path));
-  if (transfer_is_lightmap(path)) {
-    const LightmapTransfer l = read_lightmap_transfer(path);
-    // The file's own version: 7 with interpolated texels (the rows' keys
-    // interpolated_vertices, traced_vertices and traced_fraction count texels).
-    nlohmann::ordered_json j = to_json(path, l.transfer, read_transfer_version(path));
-    j["sections"] = sections_json(transfer_sections(l));
-    j["file_bytes"] = transfer_file_size(l);
-    j["lightmap"] = {{"width", l.layout.width},
-                     {"height", l.layout.height},
-                     {"uv_set", l.layout.uv_set},
-                     {"covered_texels", l.layout.texels.size()},
-                     {"analytic_texels", l.transfer.analytic_vertices()},
-                     {"interpolated_texels", std::min(l.transfer.interpolated_vertices(), l.transfer.vertices)},
-                     {"scene_hash", fmt::format("{:016x}", l.layout.scene_hash)}};
-    return j;
-  }
-  if (transfer_is_compressed(path)) return to_json(path, read_compressed_transfer(path));
-  const Transfer t = read_transfer(path);
-  return to_json(path, t, read_transfer_version(path));
+  std::uint32_t version = 0;
+  const AnyTransfer any = read_transfer_file(path, &version);  // validates everything
+  const auto lightmap_json = [](const LightmapLayout& l) {
+    return nlohmann::ordered_json{{"width", l.width},
+                                  {"height", l.height},
+                                  {"uv_set", l.uv_set},
+                                  {"covered_texels", l.texels.size()}};
+  };
+  return dispatch(
+      any, [&](const Transfer& t) { return to_json(path, t, version); },
+      [&](const CompressedTransfer& c) { return to_json(path, c); },
+      [&](const WaveletTransfer& w) { return to_json(path, w); },
+      [&](const ZhTransfer& z) { return zh_json(path, z); },
+      [&](const LightmapTransfer& l) {
+        // The file's own version: 7 with interpolated texels (the rows' keys
+        // interpolated_vertices, traced_vertices and traced_fraction count texels).
+        nlohmann::ordered_json j = to_json(path, l.transfer, version);
+        j["sections"] = sections_json(transfer_sections(l));
+        j["file_bytes"] = transfer_file_size(l);
+        j["lightmap"] = lightmap_json(l.layout);
+        j["lightmap"]["analytic_texels"] = l.transfer.analytic_vertices();
+        j["lightmap"]["interpolated_texels"] = std::min(l.transfer.interpolated_vertices(), l.transfer.vertices);
+        j["lightmap"]["scene_hash"] = fmt::format("{:016x}", l.layout.scene_hash);
+        return j;
+      },
+      [&](const WaveletLightmap& w) {
+        nlohmann::ordered_json j = to_json(path, w.transfer);
+        j["lightmap"] = lightmap_json(w.layout);
+        j["lightmap"]["scene_hash"] = fmt::format("{:016x}", w.layout.scene_hash);
+        return j;
+      },
+      [&](const ProbeTransfer& p) { return to_json(path, p); });
 }
 
 }  // namespace

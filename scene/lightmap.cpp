@@ -140,6 +140,32 @@ void check_atlas(const Scene& scene, int W, int H, int uv_set) {
     throw Error(fmt::format("{}: has no UV set {}", scene.mesh.source, uv_set));
 }
 
+// Charts: triangles joined by an edge (two shared vertex indices).
+UnionFind uv_charts(const Mesh& mesh) {
+  const std::size_t T = mesh.triangles.size();
+  UnionFind charts(T);
+  std::unordered_map<std::uint64_t, std::uint32_t> edge;
+  edge.reserve(T * 3);
+  for (std::size_t t = 0; t < T; ++t)
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      if (a > b) std::swap(a, b);
+      const auto [it, fresh] = edge.emplace((std::uint64_t(a) << 32) | b, std::uint32_t(t));
+      if (!fresh) charts.join(it->second, std::uint32_t(t));
+    }
+  return charts;
+}
+
+// The names of `objects` (indices into scene.objects), the first 8 and how
+// many more, for a message; "the mesh" when the scene has no objects.
+std::string object_names(const Scene& scene, const std::vector<std::uint32_t>& objects) {
+  std::string names;
+  for (std::size_t k = 0; k < objects.size() && k < 8; ++k)
+    names += (k ? ", " : "") + (scene.objects.empty() ? std::string("the mesh") : scene.objects[objects[k]].name);
+  if (objects.size() > 8) names += fmt::format(" and {} more", objects.size() - 8);
+  return names;
+}
+
 }  // namespace
 
 LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
@@ -148,19 +174,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   const std::size_t T = mesh.triangles.size(), N = std::size_t(W) * H;
 
-  // Charts: triangles joined by an edge (two shared vertex indices).
-  UnionFind charts(T);
-  {
-    std::unordered_map<std::uint64_t, std::uint32_t> edge;
-    edge.reserve(T * 3);
-    for (std::size_t t = 0; t < T; ++t)
-      for (int k = 0; k < 3; ++k) {
-        std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-        if (a > b) std::swap(a, b);
-        const auto [it, fresh] = edge.emplace((std::uint64_t(a) << 32) | b, std::uint32_t(t));
-        if (!fresh) charts.join(it->second, std::uint32_t(t));
-      }
-  }
+  UnionFind charts = uv_charts(mesh);
 
   // Per texel: coverage, the best triangle so far and where it samples.
   std::vector<float> coverage(N, 0.0f), best_score(N, -1.0f);
@@ -239,11 +253,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
       }
   }
   if (overlapped > 0) {
-    std::string names;
-    for (std::size_t k = 0; k < overlap_objects.size() && k < 8; ++k)
-      names += (k ? ", " : "") +
-               (scene.objects.empty() ? std::string("the mesh") : scene.objects[overlap_objects[k]].name);
-    if (overlap_objects.size() > 8) names += fmt::format(" and {} more", overlap_objects.size() - 8);
+    const std::string names = object_names(scene, overlap_objects);
     throw Error(fmt::format("{}: the lightmap charts of UV set {} overlap: {} texels of the {}x{} atlas are covered more "
                             "than once, in {}. A lightmap UV set gives every triangle its own part of [0,1]^2 "
                             "(mirrored or tiled texture UVs cannot be one): make lightmap UVs with Blender's UV > "

@@ -452,30 +452,33 @@ bool is_index_list(const PlyElement& e, const PlyProperty& p) {
          (p.name == "vertex_indices" || p.name == "vertex_index");
 }
 
-}  // namespace
+constexpr std::size_t kPlyHeaderLine = 1 << 16;  // the longest header line read
+constexpr std::size_t kPlyDataLine = 1 << 16;    // the longest ASCII data line read
 
-void check_ply(const std::string& path, std::uint64_t size) {
-  constexpr std::size_t kHeaderLine = 1 << 16;
-  constexpr std::size_t kDataLine = 1 << 16;
-  FileScanner s(path, size);
-  std::string_view line;
-
-  // The header.
-  if (!s.line(line, kHeaderLine) || !equals_lower(trim(line), "ply"))
-    s.fail("not a PLY file (its first line is not 'ply')");
-  if (!s.line(line, kHeaderLine)) s.fail("the file ends in its header (expected 'format ...')");
-  auto tokens = split_tokens(line);
+// What a PLY header declares.
+struct PlyHeader {
   bool ascii = false, big_endian = false;
+  std::vector<PlyElement> elements;
+};
+
+// The header, from the "ply" line to end_header, each line checked.
+PlyHeader read_ply_header(FileScanner& s) {
+  std::string_view line;
+  if (!s.line(line, kPlyHeaderLine) || !equals_lower(trim(line), "ply"))
+    s.fail("not a PLY file (its first line is not 'ply')");
+  if (!s.line(line, kPlyHeaderLine)) s.fail("the file ends in its header (expected 'format ...')");
+  auto tokens = split_tokens(line);
+  PlyHeader h;
   if (tokens.size() != 3 || tokens[0] != "format" || tokens[2] != "1.0" ||
       !(tokens[1] == "ascii" || tokens[1] == "binary_little_endian" || tokens[1] == "binary_big_endian"))
     s.fail_line(fmt::format("expected 'format ascii 1.0', 'format binary_little_endian 1.0' or 'format "
                             "binary_big_endian 1.0', got {}",
                             quote_token(line)));
-  ascii = tokens[1] == "ascii";
-  big_endian = tokens[1] == "binary_big_endian";
-  std::vector<PlyElement> elements;
+  h.ascii = tokens[1] == "ascii";
+  h.big_endian = tokens[1] == "binary_big_endian";
+  std::vector<PlyElement>& elements = h.elements;
   for (;;) {
-    if (!s.line(line, kHeaderLine)) s.fail("has no end_header: the file ends in its header");
+    if (!s.line(line, kPlyHeaderLine)) s.fail("has no end_header: the file ends in its header");
     tokens = split_tokens(line);
     if (tokens.empty()) s.fail_line("a blank line in the header");
     const std::string_view key = tokens[0];
@@ -532,8 +535,15 @@ void check_ply(const std::string& path, std::uint64_t size) {
     s.fail_line(fmt::format("unknown header line {} (expected element, property, comment or end_header)",
                             quote_token(line)));
   }
+  return h;
+}
 
-  // What the header declares.
+// What the header declares: every element with entries has properties,
+// faces and strips a vertex index list, a vertex element with x, y and z, and
+// data that fits in the rest of the file. Returns the vertex count.
+std::uint64_t check_ply_declared(FileScanner& s, const PlyHeader& h) {
+  const std::vector<PlyElement>& elements = h.elements;
+  const bool ascii = h.ascii;
   const PlyElement* vertex = nullptr;
   for (const PlyElement& e : elements) {
     if (e.count > 0 && e.props.empty())
@@ -568,68 +578,79 @@ void check_ply(const std::string& path, std::uint64_t size) {
     s.fail(fmt::format("the header declares {} entries, which take at least {} bytes, but only {} bytes follow it",
                        list, need, s.remaining()));
   }
+  return nv;
+}
 
-  const auto index_error = [&](const PlyElement& e, std::uint64_t i, std::int64_t index) {
-    return fmt::format("{} {} uses vertex {}, out of range (the file has {} vertices)", e.name, i, index, nv);
-  };
-  const auto index_ok = [&](const PlyElement& e, std::int64_t index) {
-    return index < std::int64_t(nv) && index >= (e.name == "tristrips" ? -1 : 0);
-  };
+// The message for entry i of element e naming vertex `index`, out of range of
+// the file's `nv`; whether an index is in range (a strip may hold -1, its restart).
+std::string ply_index_error(const PlyElement& e, std::uint64_t i, std::int64_t index, std::uint64_t nv) {
+  return fmt::format("{} {} uses vertex {}, out of range (the file has {} vertices)", e.name, i, index, nv);
+}
 
-  if (ascii) {
-    for (const PlyElement& e : elements) {
-      for (std::uint64_t i = 0; i < e.count; ++i) {
-        if (!s.line(line, kDataLine))
-          s.fail(fmt::format("the file ends after {} of the {} {} entries its header declares", i, e.count, e.name));
-        tokens = split_tokens(line);
-        if (tokens.empty()) s.fail_line(fmt::format("a blank line where {} {} should be", e.name, i));
-        std::size_t pos = 0;
-        const auto short_line = [&] {
-          s.fail_line(fmt::format("{} {} has {} values, fewer than its properties take", e.name, i, tokens.size()));
-        };
-        for (const PlyProperty& p : e.props) {
-          std::int64_t value = 0;
-          if (!p.list) {
-            if (pos >= tokens.size()) short_line();
-            if (!ply_ascii_value(tokens[pos], p.type, value))
-              s.fail_line(fmt::format("{} {}: {} {} is not a {}", e.name, i, p.name, quote_token(tokens[pos]),
-                                      ply_name(p.type)));
-            ++pos;
-            continue;
-          }
+bool ply_index_ok(const PlyElement& e, std::int64_t index, std::uint64_t nv) {
+  return index < std::int64_t(nv) && index >= (e.name == "tristrips" ? -1 : 0);
+}
+
+// The ASCII data: one line per entry, every value of its property's type,
+// indices naming vertices of the `nv` the file has.
+void check_ply_ascii(FileScanner& s, const PlyHeader& h, std::uint64_t nv) {
+  std::string_view line;
+  std::vector<std::string_view> tokens;
+  for (const PlyElement& e : h.elements) {
+    for (std::uint64_t i = 0; i < e.count; ++i) {
+      if (!s.line(line, kPlyDataLine))
+        s.fail(fmt::format("the file ends after {} of the {} {} entries its header declares", i, e.count, e.name));
+      tokens = split_tokens(line);
+      if (tokens.empty()) s.fail_line(fmt::format("a blank line where {} {} should be", e.name, i));
+      std::size_t pos = 0;
+      const auto short_line = [&] {
+        s.fail_line(fmt::format("{} {} has {} values, fewer than its properties take", e.name, i, tokens.size()));
+      };
+      for (const PlyProperty& p : e.props) {
+        std::int64_t value = 0;
+        if (!p.list) {
           if (pos >= tokens.size()) short_line();
-          std::int64_t n = 0;
-          if (!ply_ascii_value(tokens[pos], p.count_type, n) || n < 0)
-            s.fail_line(fmt::format("{} {}: the count of {} {} is not a {} >= 0", e.name, i, p.name, quote_token(tokens[pos]),
-                                    ply_name(p.count_type)));
+          if (!ply_ascii_value(tokens[pos], p.type, value))
+            s.fail_line(fmt::format("{} {}: {} {} is not a {}", e.name, i, p.name, quote_token(tokens[pos]),
+                                    ply_name(p.type)));
           ++pos;
-          if (n == 0 && is_index_list(e, p)) s.fail_line(fmt::format("{} {} has no vertices", e.name, i));
-          if (tokens.size() - pos < std::uint64_t(n))
-            s.fail_line(fmt::format("{} {}: {} has {} entries but lists {}", e.name, i, p.name, n, tokens.size() - pos));
-          const bool indices = is_index_list(e, p);
-          for (std::int64_t j = 0; j < n; ++j, ++pos) {
-            if (!ply_ascii_value(tokens[pos], p.type, value))
-              s.fail_line(fmt::format("{} {}: {} entry {} {} is not a {}", e.name, i, p.name, j, quote_token(tokens[pos]),
-                                      ply_name(p.type)));
-            if (indices && !index_ok(e, value)) s.fail_line(index_error(e, i, value));
-          }
+          continue;
         }
-        if (pos != tokens.size())
-          s.fail_line(fmt::format("{} {} has {} values, more than its properties take ({}){}", e.name, i, tokens.size(),
-                                  pos,
-                                  e.name == "vertex" ? " (does the header declare more vertices than the file has?)"
-                                                     : ""));
+        if (pos >= tokens.size()) short_line();
+        std::int64_t n = 0;
+        if (!ply_ascii_value(tokens[pos], p.count_type, n) || n < 0)
+          s.fail_line(fmt::format("{} {}: the count of {} {} is not a {} >= 0", e.name, i, p.name, quote_token(tokens[pos]),
+                                  ply_name(p.count_type)));
+        ++pos;
+        if (n == 0 && is_index_list(e, p)) s.fail_line(fmt::format("{} {} has no vertices", e.name, i));
+        if (tokens.size() - pos < std::uint64_t(n))
+          s.fail_line(fmt::format("{} {}: {} has {} entries but lists {}", e.name, i, p.name, n, tokens.size() - pos));
+        const bool indices = is_index_list(e, p);
+        for (std::int64_t j = 0; j < n; ++j, ++pos) {
+          if (!ply_ascii_value(tokens[pos], p.type, value))
+            s.fail_line(fmt::format("{} {}: {} entry {} {} is not a {}", e.name, i, p.name, j, quote_token(tokens[pos]),
+                                    ply_name(p.type)));
+          if (indices && !ply_index_ok(e, value, nv)) s.fail_line(ply_index_error(e, i, value, nv));
+        }
       }
+      if (pos != tokens.size())
+        s.fail_line(fmt::format("{} {} has {} values, more than its properties take ({}){}", e.name, i, tokens.size(),
+                                pos,
+                                e.name == "vertex" ? " (does the header declare more vertices than the file has?)"
+                                                   : ""));
     }
-    return;
   }
+}
 
-  // Binary: walk the data, reading only the list counts and the indices.
+// The binary data (file size `size`): walk it, reading only the list counts
+// and the indices.
+void check_ply_binary(FileScanner& s, const PlyHeader& h, std::uint64_t nv, std::uint64_t size) {
+  const bool big_endian = h.big_endian;
   const auto truncated = [&](const PlyElement& e, std::uint64_t i) {
     s.fail(fmt::format("truncated: the data ends in {} {} of the {} its header declares (at byte {} of {})", e.name, i,
                        e.count, s.offset(), size));
   };
-  for (const PlyElement& e : elements) {
+  for (const PlyElement& e : h.elements) {
     const bool fixed = std::none_of(e.props.begin(), e.props.end(), [](const PlyProperty& p) { return p.list; });
     if (fixed) {
       std::uint64_t per = 0;
@@ -661,13 +682,27 @@ void check_ply(const std::string& path, std::uint64_t size) {
           if (!d) truncated(e, i);
           for (std::int64_t j = 0; j < chunk; ++j) {
             const std::int64_t index = ply_binary_int(d + j * item, p.type, big_endian);
-            if (!index_ok(e, index)) s.fail(fmt::format("{} (byte {})", index_error(e, i, index), s.offset()));
+            if (!ply_index_ok(e, index, nv))
+              s.fail(fmt::format("{} (byte {})", ply_index_error(e, i, index, nv), s.offset()));
           }
           done += chunk;
         }
       }
     }
   }
+}
+
+}  // namespace
+
+void check_ply(const std::string& path, std::uint64_t size) {
+  FileScanner s(path, size);
+  const PlyHeader h = read_ply_header(s);
+  const std::uint64_t nv = check_ply_declared(s, h);
+  if (h.ascii) {
+    check_ply_ascii(s, h, nv);
+    return;
+  }
+  check_ply_binary(s, h, nv, size);
 }
 
 // ---- OBJ ------------------------------------------------------------------------------------

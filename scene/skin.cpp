@@ -271,27 +271,19 @@ std::vector<std::uint32_t> assimp_order(const SkinReader& r, const tg::Primitive
   return order;
 }
 
-}  // namespace
+// What the phases of load_skin share: the file's reader and model, and
+// where its nodes are.
+struct SkinFile {
+  SkinReader& r;
+  const tg::Model& model;
+  std::vector<int> parent;      // per glTF node: its parent, or -1
+  std::vector<int> skin_index;  // per glTF node: its index into Skin::nodes, or -1
+};
 
-Skin load_skin(const std::string& path, const Mesh& mesh) {
-  const std::uint64_t size = check_input_file(path, "a skinned glTF file");
-  if (size == 0) throw Error(path + ": empty file");
-  const detail::MeshFormat format = detail::mesh_format(path);
-  if (format != detail::MeshFormat::Gltf && format != detail::MeshFormat::Glb)
-    throw Error(path + ": skins and animations are read from glTF 2.0 files (.gltf, .glb)");
-  detail::check_mesh_file(path, format, size);
-
-  tg::Model model;
-  tg::TinyGLTF loader;
-  loader.SetImageLoader(keep_no_image, nullptr);
-  std::string err, warn;
-  const bool ok = format == detail::MeshFormat::Glb ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                                                    : loader.LoadASCIIFromFile(&model, &err, &warn, path);
-  if (!ok) throw Error(fmt::format("{}: cannot be read as glTF: {}", path, err.empty() ? warn : err));
-  SkinReader r(path, model, size);
+// The node tree (a forest: check_mesh_file refuses anything else): each
+// node's parent, or -1.
+std::vector<int> node_parents(const SkinReader& r, const tg::Model& model) {
   const std::size_t node_count = model.nodes.size();
-
-  // The node tree (a forest: check_mesh_file refuses anything else).
   std::vector<int> parent(node_count, -1);
   for (std::size_t i = 0; i < node_count; ++i)
     for (int c : model.nodes[i].children) {
@@ -299,15 +291,22 @@ Skin load_skin(const std::string& path, const Mesh& mesh) {
         r.fail(fmt::format("node {}: child {} is out of range or has another parent", i, c));
       parent[std::size_t(c)] = int(i);
     }
-  const auto world = [&](int node) {  // rest world transform, in double
-    glm::dmat4 m(1.0);
-    for (int n = node; n >= 0; n = parent[std::size_t(n)])
-      m = rest_matrix(read_node(r, model.nodes[std::size_t(n)], n)) * m;
-    return m;
-  };
+  return parent;
+}
 
-  // The skinned mesh: the only mesh node of the scene load_mesh reads (the
-  // default one, else the first; Assimp's choice).
+// A node's rest world transform, in double.
+glm::dmat4 rest_world(const SkinFile& f, int node) {
+  glm::dmat4 m(1.0);
+  for (int n = node; n >= 0; n = f.parent[std::size_t(n)])
+    m = rest_matrix(read_node(f.r, f.model.nodes[std::size_t(n)], n)) * m;
+  return m;
+}
+
+// The skinned mesh's node: the only mesh node of the scene load_mesh reads
+// (the default one, else the first; Assimp's choice), with the file's one
+// skin and a mesh that exist.
+int skinned_mesh_node(const SkinReader& r, const tg::Model& model) {
+  const std::size_t node_count = model.nodes.size();
   if (model.scenes.empty()) r.fail("has no scene (nothing for load_mesh to read)");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (std::size_t(scene) >= model.scenes.size()) r.fail(fmt::format("its default scene {} does not exist", scene));
@@ -342,16 +341,20 @@ Skin load_skin(const std::string& path, const Mesh& mesh) {
     r.fail(fmt::format("node {}: skin {} does not exist", mesh_node, mn.skin));
   if (std::size_t(mn.mesh) >= model.meshes.size())
     r.fail(fmt::format("node {}: mesh {} does not exist", mesh_node, mn.mesh));
-  const tg::Mesh& gm = model.meshes[std::size_t(mn.mesh)];
-  const tg::Skin& gs = model.skins[std::size_t(mn.skin)];
+  return mesh_node;
+}
 
-  Skin skin;
-  skin.source = path;
-
-  // The joints, then every node above them.
+// The joints, then every node above them, into skin.nodes (f.skin_index
+// filled), and the joints' inverse bind matrices.
+void read_skeleton(SkinFile& f, const tg::Skin& gs, Skin& skin) {
+  const SkinReader& r = f.r;
+  const tg::Model& model = f.model;
+  const std::vector<int>& parent = f.parent;
+  const std::size_t node_count = model.nodes.size();
   if (gs.joints.empty()) r.fail("its skin has no joints");
-  std::vector<int> skin_index(node_count, -1);  // glTF node -> index into skin.nodes
-  std::vector<int> gltf_node;                   // skin.nodes index -> glTF node
+  std::vector<int>& skin_index = f.skin_index;
+  skin_index.assign(node_count, -1);
+  std::vector<int> gltf_node;  // skin.nodes index -> glTF node
   for (std::size_t j = 0; j < gs.joints.size(); ++j) {
     const int n = gs.joints[j];
     if (n < 0 || std::size_t(n) >= node_count)
@@ -387,14 +390,14 @@ Skin load_skin(const std::string& path, const Mesh& mesh) {
         glm::value_ptr(skin.nodes[j].inverse_bind)[k] = float(x);
       }
   }
+}
 
-  // W: the skinned node's world transform, as load_mesh applied it.
-  const glm::dmat4 w = world(mesh_node);
-  if (!finite(w[0]) || !finite(w[1]) || !finite(w[2]) || !finite(w[3]) || !(std::abs(glm::determinant(w)) > 0))
-    r.fail(fmt::format("the transform of the skinned mesh's node {} is singular or not finite", mesh_node));
-  skin.mesh_transform = glm::mat4(w);
-
-  // Per vertex, in load_mesh's order: check the positions, read the skin.
+// Per vertex of the mesh (node `mesh_node`, world transform w), in
+// load_mesh's order: check the positions against `mesh`, read the skin.
+void read_skin_vertices(const SkinFile& file, int mesh_node, const glm::dmat4& w, const Mesh& mesh, Skin& skin) {
+  const SkinReader& r = file.r;
+  const tg::Node& mn = file.model.nodes[std::size_t(mesh_node)];
+  const tg::Mesh& gm = file.model.meshes[std::size_t(mn.mesh)];
   const std::uint32_t joint_count = std::uint32_t(std::min<std::size_t>(skin.joint_count, 0xffffffffu));
   std::size_t loaded = 0;  // vertices so far, load_mesh's numbering
   double largest = 0;      // largest |coordinate| of the compared positions
@@ -475,80 +478,128 @@ Skin load_skin(const std::string& path, const Mesh& mesh) {
     }
   }
   PRT_CHECK_OP(loaded, ==, mesh.vertex_count());
+}
+
+// The keyframe values of channel c (its path, interpolation and times set)
+// from sampler output `gsmp`, checked.
+void read_channel_values(SkinReader& r, const tg::AnimationSampler& gsmp, const std::string& what, SkinChannel& c) {
+  const bool rotation = c.path == SkinChannel::Path::Rotation;
+  const int comps = rotation ? 4 : 3;
+  const std::vector<double> v = rotation
+                                    ? r.read(gsmp.output, 4,
+                                             {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
+                                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
+                                              TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                                             what + " output", SkinReader::Norm::Required)
+                                    : r.read(gsmp.output, 3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, what + " output");
+  const std::size_t per_key = c.interpolation == SkinChannel::Interpolation::CubicSpline ? 3 : 1;
+  const std::size_t keys = c.times.size();
+  if (v.size() != keys * per_key * std::size_t(comps))
+    r.fail(fmt::format("{}: {} output values for {} keys (expected {}{})", what, v.size() / std::size_t(comps),
+                       keys, keys * per_key, per_key == 3 ? ": in-tangent, value, out-tangent per key" : ""));
+  r.spend_keys(keys * (per_key + 1));
+  c.values.resize(keys * per_key);
+  for (std::size_t k = 0; k < c.values.size(); ++k) {
+    glm::dvec4 x(0.0);
+    for (int i = 0; i < comps; ++i) x[i] = v[k * std::size_t(comps) + std::size_t(i)];
+    if (!finite(x) || glm::length(x) > double(std::numeric_limits<float>::max()))
+      r.fail(fmt::format("{}: output value {} is not finite", what, k));
+    // A rotation key (not a tangent) must be a quaternion.
+    if (rotation && (per_key == 1 || k % 3 == 1) && !(glm::length(x) > kMinQuaternionLength))
+      r.fail(
+          fmt::format("{}: rotation key {} is not a quaternion (length {:g})", what, k / per_key, glm::length(x)));
+    c.values[k] = glm::vec4(x);
+  }
+}
+
+// Animation ai: the channels that move a node of the skeleton.
+SkinAnimation read_animation(SkinFile& f, std::size_t ai, const Skin& skin) {
+  SkinReader& r = f.r;
+  const std::size_t node_count = f.model.nodes.size();
+  const std::vector<int>& skin_index = f.skin_index;
+  const tg::Animation& ga = f.model.animations[ai];
+  SkinAnimation a;
+  a.name = ga.name;
+  std::vector<std::vector<float>> times(ga.samplers.size());
+  for (std::size_t si = 0; si < ga.samplers.size(); ++si) {
+    const std::string what = fmt::format("animation {} sampler {}", ai, si);
+    parse_interpolation(r, ga.samplers[si].interpolation, what);
+    times[si] = read_times(r, ga.samplers[si].input, what);
+    a.duration = std::max(a.duration, double(times[si].back()));
+  }
+  std::vector<char> targeted(skin.nodes.size() * 3, 0);
+  for (std::size_t ci = 0; ci < ga.channels.size(); ++ci) {
+    const tg::AnimationChannel& gc = ga.channels[ci];
+    const std::string what = fmt::format("animation {} channel {}", ai, ci);
+    if (gc.sampler < 0 || std::size_t(gc.sampler) >= ga.samplers.size())
+      r.fail(fmt::format("{}: sampler {} does not exist", what, gc.sampler));
+    if (gc.target_node < 0 || std::size_t(gc.target_node) >= node_count) continue;  // no node (an extension's target)
+    const int node = skin_index[std::size_t(gc.target_node)];
+    if (node < 0 || gc.target_path == "weights") continue;  // moves no joint (morph weights, other nodes)
+    SkinChannel c;
+    c.node = node;
+    if (gc.target_path == "translation")
+      c.path = SkinChannel::Path::Translation;
+    else if (gc.target_path == "rotation")
+      c.path = SkinChannel::Path::Rotation;
+    else if (gc.target_path == "scale")
+      c.path = SkinChannel::Path::Scale;
+    else
+      r.fail(fmt::format("{}: target path '{}' is none of glTF's", what, gc.target_path.substr(0, 40)));
+    if (skin.nodes[std::size_t(node)].matrix)
+      r.fail(
+          fmt::format("{} animates node {}, which has a matrix (glTF: an animated node has translation, rotation "
+                      "and scale)",
+                      what, gc.target_node));
+    char& seen = targeted[std::size_t(node) * 3 + std::size_t(c.path)];
+    if (seen) r.fail(fmt::format("{}: node {}'s {} is animated twice", what, gc.target_node, gc.target_path));
+    seen = 1;
+    const tg::AnimationSampler& gsmp = ga.samplers[std::size_t(gc.sampler)];
+    c.interpolation = parse_interpolation(r, gsmp.interpolation, what);
+    c.times = times[std::size_t(gc.sampler)];
+    read_channel_values(r, gsmp, what, c);
+    a.channels.push_back(std::move(c));
+  }
+  return a;
+}
+
+}  // namespace
+
+Skin load_skin(const std::string& path, const Mesh& mesh) {
+  const std::uint64_t size = check_input_file(path, "a skinned glTF file");
+  if (size == 0) throw Error(path + ": empty file");
+  const detail::MeshFormat format = detail::mesh_format(path);
+  if (format != detail::MeshFormat::Gltf && format != detail::MeshFormat::Glb)
+    throw Error(path + ": skins and animations are read from glTF 2.0 files (.gltf, .glb)");
+  detail::check_mesh_file(path, format, size);
+
+  tg::Model model;
+  tg::TinyGLTF loader;
+  loader.SetImageLoader(keep_no_image, nullptr);
+  std::string err, warn;
+  const bool ok = format == detail::MeshFormat::Glb ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
+                                                    : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+  if (!ok) throw Error(fmt::format("{}: cannot be read as glTF: {}", path, err.empty() ? warn : err));
+  SkinReader r(path, model, size);
+  SkinFile f{r, model, node_parents(r, model), {}};
+  const int mesh_node = skinned_mesh_node(r, model);
+  const tg::Node& mn = model.nodes[std::size_t(mesh_node)];
+  const tg::Skin& gs = model.skins[std::size_t(mn.skin)];
+
+  Skin skin;
+  skin.source = path;
+  read_skeleton(f, gs, skin);
+
+  // W: the skinned node's world transform, as load_mesh applied it.
+  const glm::dmat4 w = rest_world(f, mesh_node);
+  if (!finite(w[0]) || !finite(w[1]) || !finite(w[2]) || !finite(w[3]) || !(std::abs(glm::determinant(w)) > 0))
+    r.fail(fmt::format("the transform of the skinned mesh's node {} is singular or not finite", mesh_node));
+  skin.mesh_transform = glm::mat4(w);
+
+  read_skin_vertices(f, mesh_node, w, mesh, skin);
 
   // The animations: the channels that move a node of the skeleton.
-  for (std::size_t ai = 0; ai < model.animations.size(); ++ai) {
-    const tg::Animation& ga = model.animations[ai];
-    SkinAnimation a;
-    a.name = ga.name;
-    std::vector<std::vector<float>> times(ga.samplers.size());
-    for (std::size_t si = 0; si < ga.samplers.size(); ++si) {
-      const std::string what = fmt::format("animation {} sampler {}", ai, si);
-      parse_interpolation(r, ga.samplers[si].interpolation, what);
-      times[si] = read_times(r, ga.samplers[si].input, what);
-      a.duration = std::max(a.duration, double(times[si].back()));
-    }
-    std::vector<char> targeted(skin.nodes.size() * 3, 0);
-    for (std::size_t ci = 0; ci < ga.channels.size(); ++ci) {
-      const tg::AnimationChannel& gc = ga.channels[ci];
-      const std::string what = fmt::format("animation {} channel {}", ai, ci);
-      if (gc.sampler < 0 || std::size_t(gc.sampler) >= ga.samplers.size())
-        r.fail(fmt::format("{}: sampler {} does not exist", what, gc.sampler));
-      if (gc.target_node < 0 || std::size_t(gc.target_node) >= node_count) continue;  // no node (an extension's target)
-      const int node = skin_index[std::size_t(gc.target_node)];
-      if (node < 0 || gc.target_path == "weights") continue;  // moves no joint (morph weights, other nodes)
-      SkinChannel c;
-      c.node = node;
-      if (gc.target_path == "translation")
-        c.path = SkinChannel::Path::Translation;
-      else if (gc.target_path == "rotation")
-        c.path = SkinChannel::Path::Rotation;
-      else if (gc.target_path == "scale")
-        c.path = SkinChannel::Path::Scale;
-      else
-        r.fail(fmt::format("{}: target path '{}' is none of glTF's", what, gc.target_path.substr(0, 40)));
-      if (skin.nodes[std::size_t(node)].matrix)
-        r.fail(
-            fmt::format("{} animates node {}, which has a matrix (glTF: an animated node has translation, rotation "
-                        "and scale)",
-                        what, gc.target_node));
-      char& seen = targeted[std::size_t(node) * 3 + std::size_t(c.path)];
-      if (seen) r.fail(fmt::format("{}: node {}'s {} is animated twice", what, gc.target_node, gc.target_path));
-      seen = 1;
-      const tg::AnimationSampler& gsmp = ga.samplers[std::size_t(gc.sampler)];
-      c.interpolation = parse_interpolation(r, gsmp.interpolation, what);
-      c.times = times[std::size_t(gc.sampler)];
-      const bool rotation = c.path == SkinChannel::Path::Rotation;
-      const int comps = rotation ? 4 : 3;
-      const std::vector<double> v = rotation
-                                        ? r.read(gsmp.output, 4,
-                                                 {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE,
-                                                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT,
-                                                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
-                                                 what + " output", SkinReader::Norm::Required)
-                                        : r.read(gsmp.output, 3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, what + " output");
-      const std::size_t per_key = c.interpolation == SkinChannel::Interpolation::CubicSpline ? 3 : 1;
-      const std::size_t keys = c.times.size();
-      if (v.size() != keys * per_key * std::size_t(comps))
-        r.fail(fmt::format("{}: {} output values for {} keys (expected {}{})", what, v.size() / std::size_t(comps),
-                           keys, keys * per_key, per_key == 3 ? ": in-tangent, value, out-tangent per key" : ""));
-      r.spend_keys(keys * (per_key + 1));
-      c.values.resize(keys * per_key);
-      for (std::size_t k = 0; k < c.values.size(); ++k) {
-        glm::dvec4 x(0.0);
-        for (int i = 0; i < comps; ++i) x[i] = v[k * std::size_t(comps) + std::size_t(i)];
-        if (!finite(x) || glm::length(x) > double(std::numeric_limits<float>::max()))
-          r.fail(fmt::format("{}: output value {} is not finite", what, k));
-        // A rotation key (not a tangent) must be a quaternion.
-        if (rotation && (per_key == 1 || k % 3 == 1) && !(glm::length(x) > kMinQuaternionLength))
-          r.fail(
-              fmt::format("{}: rotation key {} is not a quaternion (length {:g})", what, k / per_key, glm::length(x)));
-        c.values[k] = glm::vec4(x);
-      }
-      a.channels.push_back(std::move(c));
-    }
-    skin.animations.push_back(std::move(a));
-  }
+  for (std::size_t ai = 0; ai < model.animations.size(); ++ai) skin.animations.push_back(read_animation(f, ai, skin));
   return skin;
 }
 

@@ -39,7 +39,7 @@ TransferMode parse_transfer_mode(std::string_view name) { return parse_enum(kTra
 
 std::string_view transfer_mode_name(TransferMode m) { return enum_name(kTransferModeNames, m); }
 
-std::size_t Transfer::analytic_vertices() const {
+std::size_t RowSlots::analytic_vertices() const {
   return std::size_t(std::count(slots.begin(), slots.end(), kAnalytic));
 }
 
@@ -51,12 +51,12 @@ std::size_t Transfer::interpolated_vertices() const {
 
 namespace detail {
 
-TransferHeader header_of(const Transfer& t) {
+HeaderValues header_of(const Transfer& t) {
   const std::uint64_t stored = t.slots.size() == t.vertices ? t.stored_vertices() : t.vertices;
   return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored, t.glossy};
 }
 
-std::string header_problem(const TransferHeader& h) {
+std::string header_problem(const HeaderValues& h) {
   constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
   if (h.bands < 1 || h.bands > sh::kMaxBands) return fmt::format("bands is {}; must be 1 to {}", h.bands, sh::kMaxBands);
   if (h.channels != 1 && h.channels != 3) return fmt::format("channels is {}; must be 1 or 3", h.channels);
@@ -76,7 +76,7 @@ std::string header_problem(const TransferHeader& h) {
   return {};
 }
 
-std::string array_problem(TransferArray a, std::uint64_t count, const TransferHeader& h) {
+std::string array_problem(TransferArray a, std::uint64_t count, const HeaderValues& h) {
   const char* name = array_name(a);
   const std::uint64_t stride = std::uint64_t(h.channels) * std::uint64_t(h.bands) * std::uint64_t(h.bands);
   switch (a) {
@@ -197,7 +197,7 @@ std::string problem(const Transfer& t, bool rows_elsewhere) {
   using detail::TransferArray;
   if (auto p = slots_problem(t); !p.empty()) return p;
   if (auto p = interpolated_problem(t); !p.empty()) return p;
-  const detail::TransferHeader h = detail::header_of(t);
+  const detail::HeaderValues h = detail::header_of(t);
   if (auto p = detail::header_problem(h); !p.empty()) return p;
   if (rows_elsewhere) {
     if (!t.coeffs.empty() || !t.direct.empty() || !t.glossy_matrices.empty())

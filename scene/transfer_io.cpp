@@ -32,12 +32,12 @@ using namespace detail::tio;
 namespace detail::tio {
 // ---- the data rules (transfer_rules.h) and the file's own ------------------------
 
-using detail::TransferHeader;
+using detail::HeaderValues;
 
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13.
-std::string section_problem(std::uint32_t kind, std::uint64_t count, const TransferHeader& v, bool compressed,
+std::string section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v, bool compressed,
                             bool lightmap = false) {
   if (kind == kInterpolatedMask) {
     // A lightmap's rows are its covered texels: the mask marks interpolated
@@ -401,6 +401,9 @@ std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size) {
 
 void Reader::check_signature(const unsigned char* head, std::uint64_t have) {
   const std::uint64_t n = std::min<std::uint64_t>(have, kMagic.size());
+  if (n >= 4 && std::memcmp(head, "PRTP", 4) == 0)
+    throw fail("a probe volume made by an older prt (its own format, 'PRTP', before probe volumes joined the transfer "
+               "format): precompute it again with prt precompute SCENE --probes NXxNYxNZ");
   if (std::memcmp(head, kMagic.data(), std::min<std::uint64_t>(n, 4)) != 0) throw fail("not a prt transfer file");
   if (n > 4 && std::memcmp(head + 4, kMagic.data() + 4, n - 4) != 0)
     throw fail("not a valid prt transfer file: its signature is damaged (\"PRTT\" is not followed by CR LF 0x1A LF), "
@@ -558,25 +561,37 @@ void Reader::verify() {
 }
 
 std::string unknown_basis(std::uint32_t basis) {
-  return fmt::format("unknown basis {} (0 is spherical harmonics, 1 wavelet, 2 zonal harmonics)", basis);
+  return fmt::format("unknown basis {} (0 is spherical harmonics, 1 wavelet, 2 zonal harmonics, 3 a probe volume)",
+                     basis);
 }
 
 std::uint32_t Reader::read_basis() {
   open_file();
   read_head();
   const std::uint32_t basis = load<std::uint32_t>(h_ + kOffBasis);
-  if (basis != kBasisSH && basis != kBasisWavelet && basis != kBasisZH) throw fail(unknown_basis(basis));
+  if (basis != kBasisSH && basis != kBasisWavelet && basis != kBasisZH && basis != kBasisProbes)
+    throw fail(unknown_basis(basis));
   return basis;
 }
 
-Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightmap_out) {
-  open_file();
-  read_head();
-  verify();
-  const unsigned char* h = h_;
-  const std::uint32_t section_count = section_count_;
+// What Reader::read gathers: the header's values, then the sections' arrays.
+struct ShFile {
+  CompressedTransfer* compressed_out = nullptr;
+  LightmapLayout* lightmap_out = nullptr;
+  HeaderValues v{};
+  bool compressed = false, lightmap = false;
+  std::size_t known_kinds = 0;  // the section kinds of the file's version
+  std::uint64_t stride = 0;     // values of a stored row's coefficients
+  Transfer t;
+  std::vector<std::uint32_t> mask, interpolated;
+  std::uint32_t seen = 0;  // bit k: a section of kind k was read
+  bool has(std::uint32_t kind) const { return (seen >> kind) & 1u; }
+};
 
-  // 3. Header values.
+// 3. Header values: the basis, flags, the transfer's values, what fits in
+// the file and the section count.
+void Reader::read_sh_header(ShFile& f) {
+  const unsigned char* h = h_;
   const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
   if (basis == kBasisWavelet)
     throw fail(fmt::format("holds a wavelet transfer (basis 'wavelet', cube resolution {}), not spherical harmonics: "
@@ -589,23 +604,17 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
                            "pose's SH transfer), or run prt precompute --basis sh for an SH transfer",
                            load<std::uint32_t>(h + kOffLobes), load<std::uint32_t>(h + kOffBands)));
   if (basis != kBasisSH) throw fail(unknown_basis(basis));
-  TransferHeader v{load<std::uint32_t>(h + kOffBands),
-                         load<std::uint32_t>(h + kOffChannels),
-                         load<std::uint32_t>(h + kOffMode),
-                         load<std::uint32_t>(h + kOffBounces),
-                         load<std::uint32_t>(h + kOffSamples),
-                         {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
-                         load<std::uint64_t>(h + kOffVertices),
-                         // Version 1 stores every vertex.
-                         version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices)};
+  HeaderValues& v = f.v;
+  // Version 1 stores every vertex.
+  v = header_values(h, version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices));
   const bool v1 = version_ == 1;
-  const std::size_t known_kinds = v1              ? kKindsV1
-                                  : version_ == 2 ? kKindsV2
-                                  : version_ == 3 ? kKindsV3
-                                  : version_ == 4 ? kKindsV4
-                                  : version_ == 5 ? kKindsV5
-                                  : version_ == 6 ? kKindsV6
-                                                  : kKindsV7;
+  f.known_kinds = v1              ? kKindsV1
+                  : version_ == 2 ? kKindsV2
+                  : version_ == 3 ? kKindsV3
+                  : version_ == 4 ? kKindsV4
+                  : version_ == 5 ? kKindsV5
+                  : version_ == 6 ? kKindsV6
+                                  : kKindsV7;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -614,20 +623,20 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
   if (flags & ~known_flags)
     throw fail(fmt::format("bad header: unknown flags 0x{:x} in a version {} file", flags & ~known_flags, version_));
   v.glossy = (flags & kFlagGlossy) != 0;
-  const bool compressed = (flags & kFlagCompressed) != 0;
-  const bool lightmap = (flags & kFlagLightmap) != 0;
-  if (lightmap && !lightmap_out)
+  const bool compressed = f.compressed = (flags & kFlagCompressed) != 0;
+  const bool lightmap = f.lightmap = (flags & kFlagLightmap) != 0;
+  if (lightmap && !f.lightmap_out)
     throw fail("holds a lightmap (the SH transfer of a scene's texels: prt precompute --lightmap): relight it with "
                "prt relight SCENE FILE ENV -o lightmap.exr; the library reads it with prt::read_lightmap_transfer");
-  if (!lightmap && lightmap_out)
+  if (!lightmap && f.lightmap_out)
     throw fail("holds a per-vertex transfer, not a lightmap (prt::read_transfer reads it; prt precompute SCENE "
                "--lightmap WxH makes a lightmap)");
   if (lightmap && (compressed || v.glossy))
     throw fail("bad header: a lightmap is neither compressed nor glossy");
-  if (compressed && !compressed_out)
+  if (compressed && !f.compressed_out)
     throw fail("holds a transfer compressed by clustered PCA (prt compress): prt relight, render, view and info take "
                "it; the library reads it with prt::read_compressed_transfer");
-  if (!compressed && compressed_out)
+  if (!compressed && f.compressed_out)
     throw fail("holds an uncompressed transfer (prt::read_transfer reads it; prt compress compresses it)");
   if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
   for (std::uint64_t i = kOffReserved; i < kHeaderSize; ++i)
@@ -636,20 +645,20 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
   // The coefficients alone take 4 x channels x bands^2 bytes per stored
   // vertex, the analytic-vertex mask 1 bit per vertex.
   // A compressed row takes at least a byte (its cluster index).
-  const std::uint64_t stride = std::uint64_t(v.channels) * std::uint64_t(v.bands * v.bands);
-  if (v.stored > size_ / (compressed ? 1 : 4 * stride))
+  f.stride = std::uint64_t(v.channels) * std::uint64_t(v.bands * v.bands);
+  if (v.stored > size_ / (compressed ? 1 : 4 * f.stride))
     throw fail(fmt::format("bad header: {}{} vertices cannot fit in a file of {} bytes (at {} bytes per vertex)", v.stored,
-                           v1 ? "" : " stored", size_, compressed ? 1 : 4 * stride));
+                           v1 ? "" : " stored", size_, compressed ? 1 : 4 * f.stride));
   if (v.stored < v.vertices && mask_words(v.vertices) > size_ / 4)
     throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their analytic-vertex mask alone "
                            "takes {})",
                            v.vertices, size_, 4 * mask_words(v.vertices)));
-  if (section_count == 0) throw fail("bad section table: no sections (the coefficients are required)");
-  if (section_count > known_kinds)
-    throw fail(fmt::format("bad section table: {} sections; at most {} kinds exist in version {}", section_count,
-                           known_kinds, version_));
+  if (section_count_ == 0) throw fail("bad section table: no sections (the coefficients are required)");
+  if (section_count_ > f.known_kinds)
+    throw fail(fmt::format("bad section table: {} sections; at most {} kinds exist in version {}", section_count_,
+                           f.known_kinds, version_));
 
-  Transfer t;
+  Transfer& t = f.t;
   t.bands = int(v.bands);
   t.channels = int(v.channels);
   t.mode = TransferMode(v.mode);
@@ -662,83 +671,70 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
   t.vertices = std::size_t(v.vertices);
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
   if (!v1) t.shading_hash = load<std::uint64_t>(h + kOffShadingHash);
-  std::vector<std::uint32_t> mask, interpolated;
-  std::uint32_t seen = 0;  // bit k: a section of kind k was read
-  const auto has = [&](std::uint32_t kind) { return (seen >> kind) & 1u; };
+}
 
-  // 4. Sections: known kinds in increasing order, each of the type and size
-  // the header implies, data padded with zeros.
-  const std::uint64_t data_end = size_ - kTrailerSize;
-  std::uint64_t offset = kHeaderSize;
+// 4. Sections: known kinds in increasing order, each of the type and size
+// the header implies (walk_sections: data padded with zeros), then the
+// sections the header's values require.
+void Reader::read_sh_sections(ShFile& f) {
+  const HeaderValues& v = f.v;
+  Transfer& t = f.t;
   std::uint32_t previous = 0;
-  for (std::uint32_t i = 0; i < section_count; ++i) {
-    const std::string where = fmt::format("section {} of {}", i + 1, section_count);
-    if (offset + kSectionHeaderSize > data_end) throw fail("bad section table: " + where + " is missing");
-    unsigned char sh[kSectionHeaderSize];
-    read_at(offset, sh, sizeof sh);
-    const std::uint32_t kind = load<std::uint32_t>(sh + 0);
-    const std::uint32_t type = load<std::uint32_t>(sh + 4);
-    const std::uint64_t count = load<std::uint64_t>(sh + 8);
-    const std::uint64_t bytes = load<std::uint64_t>(sh + 16);
-    const KindInfo* k = kind_info(kind);
-    if (!k || kind > known_kinds)
-      throw fail(fmt::format("bad section table: {} has unknown kind {}{}", where, kind,
+  const auto check = [&](const SectionHead& s) -> const char* {
+    const KindInfo* k = kind_info(s.kind);
+    const std::string where = fmt::format("section {} of {}", s.index + 1, section_count_);
+    if (!k || s.kind > f.known_kinds)
+      throw fail(fmt::format("bad section table: {} has unknown kind {}{}", where, s.kind,
                              k ? fmt::format(" in a version {} file ('{}' sections are version {} and later)", version_,
-                                             k->name, kind_version(kind))
+                                             k->name, kind_version(s.kind))
                                : std::string()));
-    if (kind <= previous)
+    if (s.kind <= previous)
       throw fail("bad section table: " + where + " ('" + k->name + "') is out of order or repeated");
     // (A compressed section in an uncompressed file is named below.)
-    if (i == 0 && !compressed && kind != kCoeffs && kind != kCompressedCoeffs)
+    if (s.index == 0 && !f.compressed && s.kind != kCoeffs && s.kind != kCompressedCoeffs)
       throw fail("bad section table: no 'coefficients' section");
-    previous = kind;
-    seen |= 1u << kind;
-    if (type != k->type)
-      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", k->name, type,
-                             k->type, type_name(k->type)));
-    if (auto p = section_problem(kind, count, v, compressed, lightmap); !p.empty()) throw fail("bad section table: " + p);
-    // count is now at most bands^2 x channels x vertices: no overflow below.
-    if (bytes != count * type_bytes(type))
-      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", k->name, count,
-                             type_name(type), bytes));
-    const std::uint64_t data = offset + kSectionHeaderSize;
-    const std::uint64_t pad = padding(bytes);
-    if (bytes + pad > data_end - data)
-      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", k->name));
-    switch (kind) {
-      case kCoeffs: read_section(data, t.coeffs, count); break;
-      case kDirect: read_section(data, t.direct, count); break;
-      case kAO: read_section(data, t.ao, count); break;
-      case kBentNormals: read_section(data, t.bent_normals, count / 3); break;
-      case kBounceEnergy: read_section(data, t.bounce_energy, count); break;
-      case kAnalyticMask: read_section(data, mask, count); break;
-      case kInterpolatedMask: read_section(data, interpolated, count); break;
-      case kGlossy: read_section(data, t.glossy_matrices, count); break;
+    previous = s.kind;
+    f.seen |= 1u << s.kind;
+    expect_type(k->name, s.type, k->type);
+    if (auto p = section_problem(s.kind, s.count, v, f.compressed, f.lightmap); !p.empty())
+      throw fail("bad section table: " + p);
+    return k->name;
+  };
+  const auto load_data = [&](const SectionHead& s) {
+    switch (s.kind) {
+      case kCoeffs: read_section(s.data, t.coeffs, s.count); break;
+      case kDirect: read_section(s.data, t.direct, s.count); break;
+      case kAO: read_section(s.data, t.ao, s.count); break;
+      case kBentNormals: read_section(s.data, t.bent_normals, s.count / 3); break;
+      case kBounceEnergy: read_section(s.data, t.bounce_energy, s.count); break;
+      case kAnalyticMask: read_section(s.data, f.mask, s.count); break;
+      case kInterpolatedMask: read_section(s.data, f.interpolated, s.count); break;
+      case kGlossy: read_section(s.data, t.glossy_matrices, s.count); break;
       case kLightmapLayout: {
         std::vector<std::uint64_t> words;
-        read_section(data, words, count);
+        read_section(s.data, words, s.count);
         const auto narrow = [&](std::uint64_t x, const char* what) {
           if (x > std::uint64_t(kMaxLightmapSize))
             throw fail(fmt::format("bad section 'lightmap layout': {} {} is out of range", what, x));
           return int(x);
         };
-        lightmap_out->width = narrow(words[0], "width");
-        lightmap_out->height = narrow(words[1], "height");
-        lightmap_out->uv_set = narrow(words[2], "UV set");
-        lightmap_out->scene_hash = words[3];
+        f.lightmap_out->width = narrow(words[0], "width");
+        f.lightmap_out->height = narrow(words[1], "height");
+        f.lightmap_out->uv_set = narrow(words[2], "UV set");
+        f.lightmap_out->scene_hash = words[3];
         break;
       }
-      case kLightmapTexels: read_section(data, lightmap_out->texels, count); break;
+      case kLightmapTexels: read_section(s.data, f.lightmap_out->texels, s.count); break;
       case kCompressedCoeffs:
-        compressed_out->coeffs = read_signal(data, bytes, k->name, v.stored, stride);
+        f.compressed_out->coeffs = read_signal(s.data, s.bytes, s.name, v.stored, f.stride);
         break;
       case kCompressionChoice: {
-        std::string json(count, '\0');
-        read_at(data, reinterpret_cast<unsigned char*>(json.data()), count);
+        std::string json(s.count, '\0');
+        read_at(s.data, reinterpret_cast<unsigned char*>(json.data()), s.count);
         try {
-          compressed_out->choice = parse_compression_choice(json);
+          f.compressed_out->choice = parse_compression_choice(json);
         } catch (const Error& e) {
-          throw fail(fmt::format("bad section '{}': {}", k->name, e.what()));
+          throw fail(fmt::format("bad section '{}': {}", s.name, e.what()));
         }
         break;
       }
@@ -748,47 +744,53 @@ Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightm
         shape.channels = int(v.channels);
         shape.mode = TransferMode(v.mode);
         shape.glossy = true;
-        compressed_out->glossy = read_signal(data, bytes, k->name, v.stored, shape.glossy_stride());
+        f.compressed_out->glossy = read_signal(s.data, s.bytes, s.name, v.stored, shape.glossy_stride());
         break;
       }
     }
-    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
-    read_at(data + bytes, got, pad);
-    if (std::memcmp(got, zeros, pad) != 0)
-      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", k->name));
-    offset = data + bytes + pad;
-  }
-  if (offset != data_end)
-    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
-  if (v.stored < v.vertices && mask.empty())
+  };
+  walk_sections(check, load_data);
+  if (v.stored < v.vertices && f.mask.empty())
     throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
                            "are analytic",
                            v.vertices - v.stored, v.vertices));
-  if (lightmap && !has(kLightmapTexels))
+  if (f.lightmap && !f.has(kLightmapTexels))
     throw fail("bad section table: no 'lightmap layout' and 'lightmap texels' sections, but the header's flags say the "
                "file is a lightmap");
-  if (compressed) {
-    if (!has(kCompressedCoeffs)) throw fail("bad section table: no 'compressed coefficients' section");
-    if (v.glossy && !has(kCompressedGlossy))
+  if (f.compressed) {
+    if (!f.has(kCompressedCoeffs)) throw fail("bad section table: no 'compressed coefficients' section");
+    if (v.glossy && !f.has(kCompressedGlossy))
       throw fail("bad section table: no 'compressed glossy matrices' section, but the header's flags say the file has "
                  "glossy matrices");
-  } else if (v.glossy && !has(kGlossy)) {
+  } else if (v.glossy && !f.has(kGlossy)) {
     throw fail("bad section table: no 'glossy matrices' section, but the header's flags say the file has one");
   }
+}
+
+Transfer Reader::read(CompressedTransfer* compressed_out, LightmapLayout* lightmap_out) {
+  open_file();
+  read_head();
+  verify();
+  ShFile f;
+  f.compressed_out = compressed_out;
+  f.lightmap_out = lightmap_out;
+  read_sh_header(f);
+  read_sh_sections(f);
 
   // 5. Values: the mask marks exactly the vertices the header says are
   // analytic, and nothing past the last vertex; the interpolated-vertex mask
   // at least one vertex and nothing past the last; then the validator (every
   // value finite).
-  if (!mask.empty()) t.slots = slots_from_mask(mask, v.vertices, v.stored);
-  if (has(kInterpolatedMask)) t.interpolated = interpolated_from_mask(interpolated, v.vertices);
+  Transfer& t = f.t;
+  if (!f.mask.empty()) t.slots = slots_from_mask(f.mask, f.v.vertices, f.v.stored);
+  if (f.has(kInterpolatedMask)) t.interpolated = interpolated_from_mask(f.interpolated, f.v.vertices);
   if (compressed_out) {
     compressed_out->transfer = std::move(t);
     if (auto p = compressed_transfer_problem(*compressed_out); !p.empty()) throw fail(p);
     return {};
   }
   if (auto p = transfer_problem(t); !p.empty()) throw fail(p);
-  return t;
+  return std::move(t);  // a member of f: not moved by itself
 }
 
 }  // namespace detail::tio

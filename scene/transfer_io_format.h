@@ -15,6 +15,7 @@
 #include <prt/hash.h>
 #include <prt/lightmap.h>
 #include <prt/names.h>
+#include <prt/probes.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 
@@ -81,6 +82,7 @@ constexpr std::uint32_t kWaveletVersion = kWaveletFormatVersion;
 constexpr std::uint32_t kBasisSH = 0;
 constexpr std::uint32_t kBasisWavelet = 1;
 constexpr std::uint32_t kBasisZH = 2;  // local deformable PRT (prt/zh_transfer.h): its own version, kZhFormatVersion
+constexpr std::uint32_t kBasisProbes = 3;  // a probe volume (prt/probes.h): its own version, kProbeFormatVersion
 constexpr std::size_t kOffLobes = 84;  // u32, basis 2 only: lobes per vertex (read by every reader's refusal)
 constexpr std::uint32_t kFlagVertexColors = 1u << 0;
 constexpr std::uint32_t kFlagGlossy = 1u << 1;      // version 3: glossy transfer matrices (section 7)
@@ -235,6 +237,28 @@ struct RawSection {
   const void* data;
 };
 
+// One section's head as read (Reader::walk_sections): its place in the table
+// (from 0), kind, element type, element count and bytes, the file offset of
+// its data, and the name the family's check gave it (for messages).
+struct SectionHead {
+  std::uint32_t index, kind, type;
+  std::uint64_t count, bytes, data;
+  const char* name = nullptr;
+};
+
+// The common header's values (bands to vertices) of the 128 bytes at `h`,
+// with `stored` rows (each family keeps that count where it likes).
+inline HeaderValues header_values(const unsigned char* h, std::uint64_t stored) {
+  return {load<std::uint32_t>(h + kOffBands),
+          load<std::uint32_t>(h + kOffChannels),
+          load<std::uint32_t>(h + kOffMode),
+          load<std::uint32_t>(h + kOffBounces),
+          load<std::uint32_t>(h + kOffSamples),
+          {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
+          load<std::uint64_t>(h + kOffVertices),
+          stored};
+}
+
 // Writes header, sections (each padded to kAlign) and the checksummed
 // trailer to a temporary file renamed over `path` (nothing half-written).
 void write_file(const std::string& path, const unsigned char (&header)[kHeaderSize],
@@ -266,6 +290,8 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
 void check_mesh(std::uint64_t vertices, std::uint64_t mesh_hash, const Mesh& mesh, const std::string& what,
                 const char* rerun);
 
+struct ShFile;  // what Reader::read gathers (scene/transfer_io.cpp)
+
 class Reader {
  public:
   explicit Reader(const std::string& path) : path_(path) {}
@@ -286,6 +312,8 @@ class Reader {
   std::vector<std::uint8_t> interpolated_from_mask(const std::vector<std::uint32_t>& mask,
                                                    std::uint64_t vertices) const;
   ZhTransfer read_zh();
+  ProbeTransfer read_probes();  // scene/transfer_io_probes.cpp
+  std::uint32_t section_count() const { return section_count_; }
   std::uint32_t read_basis();
   std::uint32_t version() const { return version_; }
   std::uint32_t flags() const { return load<std::uint32_t>(h_ + kOffFlags); }
@@ -306,8 +334,38 @@ class Reader {
   std::uint64_t checksum(std::uint64_t bytes);
   template <typename T>
   void read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count);
+  // The section table, the one loop of every family's reader. For each of
+  // the section_count_ sections after the header, in order, it
+  //   1. refuses a head that is not there: "section i of n is missing";
+  //   2. calls check(head) -> const char*: the family's rules for this place
+  //      (kind, order, element type by expect_type, count); it throws what
+  //      it refuses and returns the section's name (a literal);
+  //   3. refuses bytes other than count x type_bytes(type) (a count whose
+  //      bytes overflow included), and data or padding running into the
+  //      trailer ("runs past the end of the file");
+  //   4. calls load(head), head.name set: reads count elements at head.data
+  //      (bounded by the file's size: safe to allocate);
+  //   5. refuses padding that is not zero.
+  // Then it refuses bytes between the last section and the trailer. Every
+  // message starts "bad section table: " and names the section.
+  template <class Check, class Load>
+  void walk_sections(Check check, Load load);
+  // For walk_sections' check: refuses element type `type` in section `name`
+  // unless it is `want`.
+  void expect_type(const char* name, std::uint32_t type, std::uint32_t want) const {
+    if (type != want)
+      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type, want,
+                             type_name(want)));
+  }
   ClusteredSignal read_signal(std::uint64_t offset, std::uint64_t bytes, const char* name, std::uint64_t rows,
                               std::uint64_t dim);
+  // The parts of read (scene/transfer_io.cpp): the header's values, then the
+  // sections, into *f.
+  void read_sh_header(ShFile& f);
+  void read_sh_sections(ShFile& f);
+  // The header of a zonal-harmonic file (scene/transfer_io_zh.cpp): its
+  // values into *v, the transfer's scalars returned.
+  ZhTransfer read_zh_header(HeaderValues& v);
 
   std::string path_;
   std::ifstream f_;
@@ -321,6 +379,42 @@ template <typename T>
 void Reader::read_section(std::uint64_t offset, std::vector<T>& dst, std::uint64_t count) {
   dst.resize(count);
   read_at(offset, dst.data(), count * sizeof(T));
+}
+
+template <class Check, class Load>
+void Reader::walk_sections(Check check, Load load) {
+  const std::uint64_t data_end = size_ - kTrailerSize;  // verify() found the trailer: size_ >= kMinFileSize
+  std::uint64_t offset = kHeaderSize;
+  for (std::uint32_t i = 0; i < section_count_; ++i) {
+    if (offset + kSectionHeaderSize > data_end)
+      throw fail(fmt::format("bad section table: section {} of {} is missing", i + 1, section_count_));
+    unsigned char sh[kSectionHeaderSize];
+    read_at(offset, sh, sizeof sh);
+    SectionHead s{i,
+                  tio::load<std::uint32_t>(sh + 0),
+                  tio::load<std::uint32_t>(sh + 4),
+                  tio::load<std::uint64_t>(sh + 8),
+                  tio::load<std::uint64_t>(sh + 16),
+                  offset + kSectionHeaderSize};
+    s.name = check(static_cast<const SectionHead&>(s));
+    // A count whose bytes overflow cannot match any u64 of bytes; bytes
+    // within the file bound the count (safe to allocate).
+    const std::uint64_t room = data_end - s.data, element = type_bytes(s.type);
+    if (s.count > std::numeric_limits<std::uint64_t>::max() / element || s.bytes != s.count * element)
+      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", s.name, s.count,
+                             type_name(s.type), s.bytes));
+    const std::uint64_t pad = padding(s.bytes);
+    if (s.bytes > room || pad > room - s.bytes)
+      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", s.name));
+    load(static_cast<const SectionHead&>(s));
+    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
+    read_at(s.data + s.bytes, got, pad);
+    if (std::memcmp(got, zeros, pad) != 0)
+      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", s.name));
+    offset = s.data + s.bytes + pad;
+  }
+  if (offset != data_end)
+    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
 }
 
 }  // namespace prt::detail::tio

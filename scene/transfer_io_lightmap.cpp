@@ -74,14 +74,6 @@ LightmapTransfer read_lightmap_transfer(const std::string& path) {
   return t;
 }
 
-bool transfer_is_lightmap(const std::string& path) {
-  Reader r(path);
-  const std::uint32_t basis = r.read_basis();
-  if (basis == kBasisZH) return false;  // per vertex only (its reader refuses any other flag)
-  if (basis != kBasisSH) return (r.flags() & kFlagLightmap) != 0;
-  return r.version() >= 5 && (r.flags() & kFlagLightmap) != 0;
-}
-
 std::string describe_transfer(const LightmapTransfer& t) {
   const LightmapLayout& l = t.layout;
   const std::size_t n = l.texels.size();

@@ -77,34 +77,6 @@ std::vector<WaveletSection> wavelet_sections(const WaveletTransfer& t, const Lig
 
 }  // namespace detail::tio
 
-namespace detail::tio {
-constexpr EnumName<TransferBasis> kBasisNames[] = {
-    {TransferBasis::SH, "sh"}, {TransferBasis::Wavelet, "wavelet"}, {TransferBasis::ZH, "zh"}};
-}  // namespace detail::tio
-
-std::string_view basis_name(TransferBasis b) { return enum_name(kBasisNames, b); }
-
-TransferBasis read_transfer_basis(const std::string& path) {
-  const std::uint32_t basis = Reader(path).read_basis();
-  return basis == kBasisWavelet ? TransferBasis::Wavelet : basis == kBasisZH ? TransferBasis::ZH : TransferBasis::SH;
-}
-
-bool transfer_is_compressed(const std::string& path) {
-  Reader r(path);
-  const std::uint32_t basis = r.read_basis();
-  // No zonal-harmonic file is compressed: false lets a caller go on to
-  // read_transfer, whose refusal names read_zh_transfer.
-  if (basis == kBasisZH) return false;
-  if (basis != kBasisSH) throw r.fail("holds a wavelet transfer, not spherical harmonics");
-  return r.version() >= 4 && (r.flags() & kFlagCompressed) != 0;
-}
-
-std::uint32_t read_transfer_version(const std::string& path) {
-  Reader r(path);
-  r.read_basis();
-  return r.version();
-}
-
 std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
   std::vector<TransferSection> out;
   for (const auto& s : wavelet_sections(t))
@@ -114,6 +86,21 @@ std::vector<TransferSection> transfer_sections(const WaveletTransfer& t) {
 }
 
 std::uint64_t transfer_file_size(const WaveletTransfer& t) { return file_size_of(transfer_sections(t)); }
+
+std::vector<TransferSection> transfer_sections(const WaveletLightmap& t) {
+  std::vector<TransferSection> out;
+  for (const auto& s : wavelet_sections(t.transfer, &t.layout))
+    out.push_back({s.kind, s.name, type_bytes(s.type), s.count, s.count * type_bytes(s.type), s.per_vertex,
+                   type_name(s.type)});
+  return out;
+}
+
+std::uint64_t transfer_file_size(const WaveletLightmap& t) { return file_size_of(transfer_sections(t)); }
+
+std::string describe_transfer(const WaveletLightmap& t) {
+  return fmt::format("wavelet lightmap {}x{} in UV set {}, {} covered texels; {}", t.layout.width, t.layout.height,
+                     t.layout.uv_set, t.layout.texels.size(), describe_transfer(t.transfer));
+}
 
 namespace detail::tio {
 
@@ -224,56 +211,42 @@ WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
     throw fail(fmt::format("bad section table: {} sections; a wavelet transfer {} vertex colours has {}", section_count_,
                            t.vertex_colors ? "with" : "without", kinds.size()));
 
-  const std::uint64_t n = wavelet::cube_size(t.cube_res), data_end = size_ - kTrailerSize;
-  std::uint64_t offset = kHeaderSize;
-  for (std::uint32_t i = 0; i < section_count_; ++i) {
-    const char* name = wavelet_kind_name(kinds[i]);
-    if (offset + kSectionHeaderSize > data_end)
-      throw fail(fmt::format("bad section table: section {} ('{}') is missing", i + 1, name));
-    unsigned char sh[kSectionHeaderSize];
-    read_at(offset, sh, sizeof sh);
-    const std::uint32_t kind = load<std::uint32_t>(sh + 0), type = load<std::uint32_t>(sh + 4);
-    const std::uint64_t count = load<std::uint64_t>(sh + 8), bytes = load<std::uint64_t>(sh + 16);
-    if (kind != kinds[i])
-      throw fail(
-          fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
-    const std::uint32_t want_type = kind == kColOffsets || kind == kWaveletLightmapLayout ? kTypeU64
-                                    : kind == kColVertices || kind == kWaveletLightmapTexels ? kTypeU32
-                                    : kind == kColValues                                     ? kTypeI16
-                                                                                             : kTypeF32;
-    if (type != want_type)
-      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
-                             want_type, type_name(want_type)));
+  const std::uint64_t n = wavelet::cube_size(t.cube_res);
+  const auto check = [&](const SectionHead& s) -> const char* {
+    const std::uint32_t kind = kinds[s.index];
+    const char* name = wavelet_kind_name(kind);
+    if (s.kind != kind)
+      throw fail(fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", s.index + 1, s.kind, kind,
+                             name));
+    expect_type(name, s.type,
+                kind == kColOffsets || kind == kWaveletLightmapLayout     ? kTypeU64
+                : kind == kColVertices || kind == kWaveletLightmapTexels ? kTypeU32
+                : kind == kColValues                                     ? kTypeI16
+                                                                         : kTypeF32);
     std::uint64_t want = 0;
     switch (kind) {
       case kColOffsets: want = n + 1; break;
-      case kColVertices: want = count; break;  // checked against the offsets below
+      case kColVertices: want = s.count; break;  // checked against the offsets by transfer_problem
       case kColValues: want = t.col_vertices.size(); break;
       case kVertexScale: want = t.vertices; break;
       case kVertexAlbedo: want = 3 * std::uint64_t(t.vertices); break;
       case kWaveletLightmapLayout: want = kLightmapLayoutWords; break;
       case kWaveletLightmapTexels: want = t.vertices; break;
     }
-    if (count != want)
-      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count, want));
-    const std::uint64_t data = offset + kSectionHeaderSize, eb = type_bytes(type);
-    if (count > (data_end - data) / eb)
-      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
-    if (bytes != count * eb)
-      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", name, count,
-                             type_name(type), bytes));
-    const std::uint64_t pad = padding(bytes);
-    if (bytes + pad > data_end - data)
-      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
-    switch (kind) {
-      case kColOffsets: read_section(data, t.col_offsets, count); break;
-      case kColVertices: read_section(data, t.col_vertices, count); break;
-      case kColValues: read_section(data, t.col_values, count); break;
-      case kVertexScale: read_section(data, t.vertex_scale, count); break;
-      case kVertexAlbedo: read_section(data, t.vertex_albedo, count / 3); break;
+    if (s.count != want)
+      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, s.count, want));
+    return name;
+  };
+  walk_sections(check, [&](const SectionHead& s) {
+    switch (s.kind) {
+      case kColOffsets: read_section(s.data, t.col_offsets, s.count); break;
+      case kColVertices: read_section(s.data, t.col_vertices, s.count); break;
+      case kColValues: read_section(s.data, t.col_values, s.count); break;
+      case kVertexScale: read_section(s.data, t.vertex_scale, s.count); break;
+      case kVertexAlbedo: read_section(s.data, t.vertex_albedo, s.count / 3); break;
       case kWaveletLightmapLayout: {
         std::vector<std::uint64_t> w;
-        read_section(data, w, count);
+        read_section(s.data, w, s.count);
         for (int k = 0; k < 3; ++k)
           if (w[std::size_t(k)] > std::uint64_t(kMaxLightmapSize))
             throw fail(fmt::format("bad section 'lightmap layout': value {} is out of range", w[std::size_t(k)]));
@@ -283,16 +256,9 @@ WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
         lightmap_out->scene_hash = w[3];
         break;
       }
-      case kWaveletLightmapTexels: read_section(data, lightmap_out->texels, count); break;
+      case kWaveletLightmapTexels: read_section(s.data, lightmap_out->texels, s.count); break;
     }
-    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
-    read_at(data + bytes, got, pad);
-    if (std::memcmp(got, zeros, pad) != 0)
-      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", name));
-    offset = data + bytes + pad;
-  }
-  if (offset != data_end)
-    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
+  });
   if (auto p = transfer_problem(t); !p.empty()) throw fail(p);
   t.vertex_kept.assign(t.vertices, 0);
   for (std::uint32_t v : t.col_vertices) ++t.vertex_kept[v];

@@ -151,10 +151,7 @@ void write_zh_transfer(const std::string& path, const ZhTransfer& t) {
 
 namespace detail::tio {
 
-ZhTransfer Reader::read_zh() {
-  open_file();
-  read_head();
-  verify();
+ZhTransfer Reader::read_zh_header(HeaderValues& v) {
   const unsigned char* h = h_;
   const std::uint32_t basis = load<std::uint32_t>(h + kOffBasis);
   if (basis == kBasisSH)
@@ -184,14 +181,7 @@ ZhTransfer Reader::read_zh() {
     throw fail(fmt::format("bad header: bands is {}; a zonal-harmonic lobe has 1 to {}", bands, zh::kMaxBands));
   if (lobes < 1 || lobes > std::uint32_t(zh::kMaxLobes))
     throw fail(fmt::format("bad header: lobes is {}; must be 1 to {}", lobes, zh::kMaxLobes));
-  const TransferHeader v{bands,
-                         load<std::uint32_t>(h + kOffChannels),
-                         load<std::uint32_t>(h + kOffMode),
-                         load<std::uint32_t>(h + kOffBounces),
-                         load<std::uint32_t>(h + kOffSamples),
-                         {load<float>(h + kOffAlbedo), load<float>(h + kOffAlbedo + 4), load<float>(h + kOffAlbedo + 8)},
-                         load<std::uint64_t>(h + kOffVertices),
-                         load<std::uint64_t>(h + kOffZhStored)};
+  v = header_values(h, load<std::uint64_t>(h + kOffZhStored));
   if (auto p = detail::header_problem(v); !p.empty()) throw fail("bad header: " + p);
   const double fit_error = load<double>(h + kOffFitError);
   if (!std::isfinite(fit_error) || fit_error < 0)
@@ -206,14 +196,11 @@ ZhTransfer Reader::read_zh() {
   // Each stored row takes 4 x (3 + channels x bands) x lobes bytes, the
   // analytic-vertex mask 1 bit per vertex: what does not fit is refused
   // before anything is allocated.
-  const std::uint64_t axes_stride = std::uint64_t(lobes) * 3;
-  const std::uint64_t coeffs_stride = std::uint64_t(v.channels) * lobes * bands;
-  const std::uint64_t row_bytes = 4 * (axes_stride + coeffs_stride);
+  const std::uint64_t row_bytes = 4 * (std::uint64_t(lobes) * 3 + std::uint64_t(v.channels) * lobes * bands);
   if (v.stored > size_ / row_bytes)
     throw fail(fmt::format("bad header: {} stored vertices cannot fit in a file of {} bytes (at {} bytes per vertex)",
                            v.stored, size_, row_bytes));
-  const bool has_mask = v.stored < v.vertices;
-  if (has_mask && mask_words(v.vertices) > size_ / 4)
+  if (v.stored < v.vertices && mask_words(v.vertices) > size_ / 4)
     throw fail(fmt::format("bad header: {} vertices cannot fit in a file of {} bytes (their analytic-vertex mask alone "
                            "takes {})",
                            v.vertices, size_, 4 * mask_words(v.vertices)));
@@ -232,9 +219,21 @@ ZhTransfer Reader::read_zh() {
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
   t.topology_hash = load<std::uint64_t>(h + kOffTopologyHash);
   t.fit_error = fit_error;
+  return t;
+}
+
+ZhTransfer Reader::read_zh() {
+  open_file();
+  read_head();
+  verify();
+  HeaderValues v;
+  ZhTransfer t = read_zh_header(v);
+  const std::uint64_t lobes = std::uint64_t(t.lobes), bands = std::uint64_t(t.bands);
+  const std::uint64_t axes_stride = lobes * 3, coeffs_stride = std::uint64_t(v.channels) * lobes * bands;
 
   // The rest occlusion is optional: told by the section count alone, as
   // the mask is by the header (its count is the vertices', checked below).
+  const bool has_mask = v.stored < v.vertices;
   std::vector<std::uint32_t> kinds;
   if (has_mask) kinds.push_back(kZhAnalyticMask);
   kinds.insert(kinds.end(), {kZhAxes, kZhCoeffs, kZhTangentVertices, kZhTangentWeights});
@@ -254,34 +253,24 @@ ZhTransfer Reader::read_zh() {
                            v.vertices, size_, 16 * v.vertices));
 
   // Sections: the kinds the header implies, in order, each of its type and
-  // of the count the header gives, data padded with zeros.
+  // of the count the header gives (walk_sections: data padded with zeros).
   std::vector<std::uint32_t> mask, rule_vertices;
   std::vector<float> rule_weights;
-  const std::uint64_t data_end = size_ - kTrailerSize;
-  std::uint64_t offset = kHeaderSize;
-  for (std::uint32_t i = 0; i < section_count_; ++i) {
-    const char* name = zh_kind_name(kinds[i]);
-    if (offset + kSectionHeaderSize > data_end)
-      throw fail(fmt::format("bad section table: section {} ('{}') is missing", i + 1, name));
-    unsigned char sh[kSectionHeaderSize];
-    read_at(offset, sh, sizeof sh);
-    const std::uint32_t kind = load<std::uint32_t>(sh + 0), type = load<std::uint32_t>(sh + 4);
-    const std::uint64_t count = load<std::uint64_t>(sh + 8), bytes = load<std::uint64_t>(sh + 16);
-    if (kind != kinds[i])
-      throw fail(
-          fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", i + 1, kind, kinds[i], name));
-    const std::uint32_t want_type = kind == kZhAnalyticMask || kind == kZhTangentVertices ? kTypeU32 : kTypeF32;
-    if (type != want_type)
-      throw fail(fmt::format("bad section table: section '{}' has element type {}; expected {} ({})", name, type,
-                             want_type, type_name(want_type)));
+  const auto check = [&](const SectionHead& s) -> const char* {
+    const std::uint32_t kind = kinds[s.index];
+    const char* name = zh_kind_name(kind);
+    if (s.kind != kind)
+      throw fail(fmt::format("bad section table: section {} has kind {}; expected {} ('{}')", s.index + 1, s.kind, kind,
+                             name));
+    expect_type(name, s.type, kind == kZhAnalyticMask || kind == kZhTangentVertices ? kTypeU32 : kTypeF32);
     // Bounded by the file's size (checked above): no overflow.
     const std::uint64_t want = kind == kZhAnalyticMask    ? mask_words(v.vertices)
                                : kind == kZhAxes          ? v.stored * axes_stride
                                : kind == kZhRestOcclusion ? v.vertices
                                : kind == kZhCoeffs        ? v.stored * coeffs_stride
                                                           : 2 * v.vertices;
-    if (count != want)
-      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, count,
+    if (s.count != want)
+      throw fail(fmt::format("bad section table: section '{}' has {} values; expected {}", name, s.count,
                              kind == kZhAnalyticMask
                                  ? fmt::format("(vertices + 31) / 32 = {}", want)
                              : kind == kZhAxes
@@ -292,29 +281,18 @@ ZhTransfer Reader::read_zh() {
                                  ? fmt::format("stored vertices x channels x lobes x bands = {} x {} x {} x {} = {}",
                                                v.stored, v.channels, lobes, bands, want)
                                  : fmt::format("two per vertex, {}", want)));
-    const std::uint64_t data = offset + kSectionHeaderSize;
-    if (bytes != count * type_bytes(type))
-      throw fail(fmt::format("bad section table: section '{}' has {} {} values but {} bytes", name, count,
-                             type_name(type), bytes));
-    const std::uint64_t pad = padding(bytes);
-    if (bytes + pad > data_end - data)
-      throw fail(fmt::format("bad section table: section '{}' runs past the end of the file", name));
-    switch (kind) {
-      case kZhAnalyticMask: read_section(data, mask, count); break;
-      case kZhAxes: read_section(data, t.axes, count); break;
-      case kZhCoeffs: read_section(data, t.coeffs, count); break;
-      case kZhRestOcclusion: read_section(data, t.rest_ao, count); break;
-      case kZhTangentVertices: read_section(data, rule_vertices, count); break;
-      case kZhTangentWeights: read_section(data, rule_weights, count); break;
+    return name;
+  };
+  walk_sections(check, [&](const SectionHead& s) {
+    switch (s.kind) {
+      case kZhAnalyticMask: read_section(s.data, mask, s.count); break;
+      case kZhAxes: read_section(s.data, t.axes, s.count); break;
+      case kZhCoeffs: read_section(s.data, t.coeffs, s.count); break;
+      case kZhRestOcclusion: read_section(s.data, t.rest_ao, s.count); break;
+      case kZhTangentVertices: read_section(s.data, rule_vertices, s.count); break;
+      case kZhTangentWeights: read_section(s.data, rule_weights, s.count); break;
     }
-    unsigned char zeros[kAlign] = {}, got[kAlign] = {};
-    read_at(data + bytes, got, pad);
-    if (std::memcmp(got, zeros, pad) != 0)
-      throw fail(fmt::format("bad section table: the padding after section '{}' is not zero", name));
-    offset = data + bytes + pad;
-  }
-  if (offset != data_end)
-    throw fail(fmt::format("bad section table: {} bytes between the last section and the trailer", data_end - offset));
+  });
 
   // Values: the mask marks exactly the vertices the header says are analytic,
   // and nothing past the last vertex (then the slots are rebuilt from it, as

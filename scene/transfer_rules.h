@@ -17,7 +17,7 @@
 namespace prt::detail {
 
 // The scalar values of an SH transfer, wide enough for anything a file holds.
-struct TransferHeader {
+struct HeaderValues {
   std::int64_t bands, channels, mode, bounces, samples;
   glm::vec3 albedo;
   std::uint64_t vertices;
@@ -26,9 +26,9 @@ struct TransferHeader {
 };
 // Those of `t`; its stored vertices are counted over its slots when they are
 // one per vertex, and are all of its vertices otherwise.
-TransferHeader header_of(const Transfer& t);
+HeaderValues header_of(const Transfer& t);
 // What is wrong with the values, or "".
-std::string header_problem(const TransferHeader& h);
+std::string header_problem(const HeaderValues& h);
 
 // The arrays of a Transfer, numbered as their file sections (docs/FORMAT.md).
 enum class TransferArray : std::uint32_t {
@@ -44,7 +44,7 @@ constexpr const char* array_name(TransferArray a) { return enum_name(kTransferAr
 // vertex) in a transfer of valid values `h`, or "". Every array but the
 // coefficients may also be absent (not checked here); the glossy matrices
 // are there exactly when h.glossy.
-std::string array_problem(TransferArray a, std::uint64_t count, const TransferHeader& h);
+std::string array_problem(TransferArray a, std::uint64_t count, const HeaderValues& h);
 
 // transfer_problem(t) for the part of a compressed transfer that is not
 // compressed (CompressedTransfer::transfer): everything but the stored rows,

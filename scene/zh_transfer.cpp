@@ -176,10 +176,6 @@ TangentCounts tangent_counts(const ZhTransfer& t) {
   return c;
 }
 
-std::size_t ZhTransfer::analytic_vertices() const {
-  return std::size_t(std::count(slots.begin(), slots.end(), kAnalytic));
-}
-
 std::string zh_transfer_problem(const ZhTransfer& t) {
   if (t.bands < 1 || t.bands > zh::kMaxBands) return fmt::format("bands is {}; must be 1 to {}", t.bands, zh::kMaxBands);
   if (t.lobes < 1 || t.lobes > zh::kMaxLobes) return fmt::format("lobes is {}; must be 1 to {}", t.lobes, zh::kMaxLobes);
@@ -314,15 +310,7 @@ std::vector<float> dynamic_ao_factor(const ZhTransfer& t, const Mesh& posed, con
 Transfer posed_as_transfer(const ZhTransfer& t, const Mesh& posed, PoseReport* report) {
   Transfer out;
   out.coeffs = posed_transfer(t, posed, report);
-  out.bands = t.bands;
-  out.channels = t.channels;
-  out.mode = t.mode;
-  out.bounces = t.bounces;
-  out.samples = t.samples;
-  out.albedo = t.albedo;
-  out.vertex_colors = t.vertex_colors;
-  out.seed = t.seed;
-  out.vertices = t.vertices;
+  out.header() = t.header();
   out.mesh_hash = posed.hash();
   out.shading_hash = shading_hash(posed, t.vertex_colors);
   return out;

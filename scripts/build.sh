@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Configures and builds prt (Release by default) into build/.
 # Usage: scripts/build.sh [BUILD_DIR] [extra cmake arguments...]
+# TARGETS="a b" builds only those targets (default: all).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=${1:-build}
@@ -13,4 +14,6 @@ if [ ! -f "$dir/CMakeCache.txt" ]; then
 elif [ $# -gt 0 ]; then
   cmake -S . -B "$dir" "$@" >/dev/null
 fi
-cmake --build "$dir" --parallel "$jobs"
+targets=()
+for t in ${TARGETS:-}; do targets+=(--target "$t"); done
+cmake --build "$dir" --parallel "$jobs" "${targets[@]}"

@@ -2,10 +2,35 @@
 # Installs dependencies, builds prt with its tests, and runs the whole suite:
 # first the Release build, then the unit tests again under AddressSanitizer
 # and UndefinedBehaviorSanitizer. Exit status non-zero on any failure.
+# Each phase prints its time as it ends and all of them again at the end, with
+# ctest's time per label (sec*proc: the tests' own times, summed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/install-deps.sh
 jobs=$(nproc 2>/dev/null || echo 2)
+times=() logs=()
+# phase NAME COMMAND...: runs COMMAND, then prints and records its time.
+phase() {
+  local name=$1 start=$SECONDS
+  shift
+  echo "== $name"
+  "$@"
+  times+=("$(printf '%-20s %5d s' "$name" $((SECONDS - start)))")
+  echo "== $name: $((SECONDS - start)) s"
+}
+# At the end, passed or not: the phases' times, and each ctest run's
+# "Label Time Summary" (per label, the tests' own times summed: sec*proc).
+print_times() {
+  echo "== Times"
+  if [ ${#times[@]} -gt 0 ]; then printf '  %s\n' "${times[@]}"; fi
+  local log
+  for log in "${logs[@]}"; do
+    echo "  $log, by label:"
+    sed -n '/^Label Time Summary:/,/^$/p' "$log" | sed '1d;/^$/d;s/^/    /'
+  done
+}
+trap print_times EXIT
+
+phase "install dependencies" scripts/install-deps.sh
 # The machines this runs on have Mesa's llvmpipe (install-deps.sh): a GL test
 # that finds no OpenGL 4.5 context fails here instead of skipping
 # (tests/test_gl.h). PRT_REQUIRE_GL=0 turns that off.
@@ -16,17 +41,23 @@ export PRT_REQUIRE_GL=${PRT_REQUIRE_GL:-1}
 # PRT_REQUIRE_TOOLS=0 turns that off.
 export PRT_REQUIRE_TOOLS=${PRT_REQUIRE_TOOLS:-1}
 
-echo "== Release build and tests"
-scripts/build.sh build
+phase "Release build" scripts/build.sh build
 # Every label: unit, report, hard_cases, package (install the build, move
-# the prefix, build and run consumers against it; tests/package), interop and
-# mpi (prt precompute under mpirun with 1 to 3 ranks; tests/mpi).
-ctest --test-dir build --output-on-failure --parallel "$jobs"
+# the prefix, build and run consumers against it; tests/package), interop,
+# mpi (prt precompute under mpirun with 1 to 3 ranks; tests/mpi) and
+# verify64; slow marks the longest of them (tests/CMakeLists.txt), which
+# start first.
+release_tests() {
+  logs+=(build/ctest.log)
+  ctest --test-dir build --output-on-failure --parallel "$jobs" | tee build/ctest.log
+}
+phase "Release tests" release_tests
 
-echo "== AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
 # -O1 -g1: sanitizer builds compile much faster than -O2 -g and still give
-# line numbers in reports.
-scripts/build.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
+# line numbers in reports. Only what the sanitizer pass runs is built
+# (prt_unit_tests: prt, the programs labelled unit, the fuzz replays).
+TARGETS=prt_unit_tests phase "ASan+UBSan build" \
+  scripts/build.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
   -DPRT_SANITIZE=ON -DPRT_BUILD_BENCH=OFF
 # intercept_tls_get_addr=0: LeakSanitizer (GCC 12's, with Debian 12's glibc)
 # otherwise tracks each thread's dynamic TLS through __tls_get_addr and, once
@@ -36,6 +67,12 @@ scripts/build.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS
 # code layout). Leak checking stays on for the heap, stacks, globals and
 # static TLS.
 # tests/lsan.supp: leaks inside dependencies (oneTBB's observer proxy), never prt's.
-ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0 LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
-  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-  ctest --test-dir build-asan --output-on-failure --parallel "$jobs" -L unit
+# -LE slow: the longest unit tests (label slow) ran in the Release pass.
+asan_tests() {
+  logs+=(build-asan/ctest.log)
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0 LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
+    UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir build-asan --output-on-failure --parallel "$jobs" -L unit -LE slow | tee build-asan/ctest.log
+}
+phase "ASan+UBSan tests" asan_tests
+

@@ -9,6 +9,7 @@
 #include <prt/error.h>
 #include <prt/lightmap.h>
 #include <prt/scene.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 
@@ -88,7 +89,7 @@ TEST(LightmapCli, WaveletLightmapAgreesWithTheReference) {
   const std::string scene = kModels + "/wall-on-floor.gltf", env = write_constant_map(dir, 1.0f);
   Result r = run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--basis", "wavelet", "-q", "-o", dir.file("w.prt")});
   ASSERT_EQ(r.code, 0) << describe_run(r);
-  EXPECT_TRUE(transfer_is_lightmap(dir.file("w.prt")));
+  EXPECT_EQ(kind_of(read_transfer_file(dir.file("w.prt"))), TransferKind::WaveletLightmap);
   const WaveletLightmap wl = read_wavelet_lightmap(dir.file("w.prt"));
   write_wavelet_lightmap(dir.file("w2.prt"), wl);
   EXPECT_EQ(read_file(dir.file("w.prt")), read_file(dir.file("w2.prt")));
@@ -151,7 +152,7 @@ TEST(LightmapCli, FilesRoundTripAndReadersTellThemApart) {
   write_lightmap_transfer(dir.file("b.prt"), t);
   EXPECT_EQ(read_file(dir.file("a.prt")), read_file(dir.file("b.prt")));
   EXPECT_EQ(transfer_file_size(t), std::filesystem::file_size(dir.file("a.prt")));
-  EXPECT_TRUE(transfer_is_lightmap(dir.file("a.prt")));
+  EXPECT_EQ(kind_of(read_transfer_file(dir.file("a.prt"))), TransferKind::Lightmap);
   try {
     read_transfer(dir.file("a.prt"));
     FAIL() << "read_transfer read a lightmap";
@@ -170,7 +171,7 @@ TEST(LightmapCli, FilesRoundTripAndReadersTellThemApart) {
   // A per-vertex file is not a lightmap.
   test::write_off(dir.file("q.off"), test::quad(2));
   ASSERT_EQ(run_prt(dir, {"precompute", dir.file("q.off"), "-o", dir.file("v.prt"), "-q", "--samples", "16"}).code, 0);
-  EXPECT_FALSE(transfer_is_lightmap(dir.file("v.prt")));
+  EXPECT_EQ(kind_of(read_transfer_file(dir.file("v.prt"))), TransferKind::SH);
   EXPECT_THROW(read_lightmap_transfer(dir.file("v.prt")), Error);
 }
 

@@ -12,6 +12,8 @@
 #include <prt/projection.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
+#include <prt/transfer_file.h>
+#include <prt/transfer_io.h>
 
 #include <gtest/gtest.h>
 
@@ -330,43 +332,62 @@ TEST(ProbeRelight, BounceOffABigFloorUnderAConstantSky) {
 
 // ---- hostile probe files (docs/FORMAT.md "Probe volume") ----------------------------
 
-// The bytes write_probe_transfer writes for `t`, without its validation: a
-// damaged volume as a file whose checksum (XXH3-64 of every byte before the
-// last 12) is right, so the reader gets past it to the structure.
+// The bytes write_probe_transfer writes for `t` (docs/FORMAT.md "Probe
+// volume": the transfer format's header with basis 3, then sections 32-42),
+// without its validation: a damaged volume as a file whose checksum (XXH3-64
+// of every byte before the last 12) is right, so the reader gets past it to
+// the structure. ProbeFile.WhatPrtWritesLoads pins it to the writer.
 std::string probe_file_bytes(const ProbeTransfer& t) {
-  std::string b;
-  const auto raw = [&](const void* p, std::size_t n) {
-    if (n) b.append(static_cast<const char*>(p), n);
+  std::string b(128, '\0');  // the header; reserved bytes, albedo and flags stay zero
+  const auto at = [&](std::size_t offset, auto v) { std::memcpy(b.data() + offset, &v, sizeof v); };
+  b.replace(0, 8, "PRTT\r\n\x1a\n", 8);
+  at(8, kProbeFormatVersion);
+  at(12, std::uint32_t(128));  // header size
+  at(16, std::uint32_t(3));    // basis: a probe volume
+  at(20, std::uint32_t(t.bands));
+  at(24, std::uint32_t(t.channels));
+  at(28, std::uint32_t(t.mode));
+  at(32, std::uint32_t(t.bounces));
+  at(36, std::uint32_t(t.rays_per_texel));
+  at(56, std::uint64_t(t.seed));
+  at(64, std::uint64_t(t.probes()));
+  at(72, std::uint64_t(t.scene_hash));
+  at(80, std::uint32_t(11));  // sections
+  at(84, std::uint32_t(t.cube_res));
+  at(88, std::uint32_t(t.depth_res));
+  at(92, std::uint32_t(t.bounce_bands));
+  for (std::size_t a = 0; a < 3; ++a) at(96 + 4 * a, std::int32_t(t.grid.dims[a]));
+  at(108, float(t.depth_cap));
+  // Each section: u32 kind, u32 element type, u64 count, u64 bytes, the data, zeros to 8 bytes.
+  enum : std::uint32_t { F32 = 1, F64 = 2, U64 = 3, U8 = 6, U16 = 7 };
+  std::uint32_t kind = 32;
+  const auto section = [&](std::uint32_t type, std::uint64_t count, const void* data, std::size_t element) {
+    const std::uint64_t bytes = count * element;
+    const std::uint32_t head[2] = {kind++, type};
+    const std::uint64_t sizes[2] = {count, bytes};
+    b.append(reinterpret_cast<const char*>(head), sizeof head);
+    b.append(reinterpret_cast<const char*>(sizes), sizeof sizes);
+    if (bytes) b.append(static_cast<const char*>(data), bytes);
+    b.append((8 - bytes % 8) % 8, '\0');
   };
-  const auto put = [&](const auto& v) { raw(&v, sizeof v); };
-  const auto array = [&](const auto& v) {
-    put(std::uint64_t(v.size()));
-    raw(v.data(), v.size() * sizeof(v[0]));
-  };
-  raw("PRTP\r\n\x1a\n", 8);
-  put(std::uint32_t(1));
-  for (int a = 0; a < 3; ++a) put(std::int32_t(t.grid.dims[std::size_t(a)]));
-  for (int a = 0; a < 3; ++a) put(t.grid.min[a]);
-  for (int a = 0; a < 3; ++a) put(t.grid.max[a]);
-  for (std::int32_t v : {t.bands, t.cube_res, t.depth_res, int(t.mode), t.bounces, t.bounce_bands, t.channels, t.rays_per_texel})
-    put(v);
-  put(t.seed);
-  put(t.scene_hash);
-  put(t.depth_cap);
+  const auto array = [&](std::uint32_t type, const auto& v) { section(type, v.size(), v.data(), sizeof(v[0])); };
+  const double box[6] = {t.grid.min.x, t.grid.min.y, t.grid.min.z, t.grid.max.x, t.grid.max.y, t.grid.max.z};
+  section(F64, 6, box, sizeof(double));
   std::vector<std::uint8_t> state;
   for (ProbeState st : t.state) state.push_back(std::uint8_t(st));
-  array(state);
-  array(t.positions);
-  array(t.vis_nodes);
-  array(t.vis_offsets);
-  array(t.vis_complement);
-  array(t.partial_nodes);
-  array(t.partial_mask);
-  array(t.partial_offsets);
-  array(t.depth);
-  array(t.bounce);
-  put(hash64(b.data(), b.size()));
-  raw("PRTE", 4);
+  array(U8, state);
+  section(F32, 3 * t.positions.size(), t.positions.data(), sizeof(float));
+  array(U16, t.vis_nodes);
+  array(U64, t.vis_offsets);
+  array(U8, t.vis_complement);
+  array(U16, t.partial_nodes);
+  array(U16, t.partial_mask);
+  array(U64, t.partial_offsets);
+  array(U16, t.depth);
+  array(F32, t.bounce);
+  const std::uint64_t sum = hash64(b.data(), b.size());
+  b.append(reinterpret_cast<const char*>(&sum), 8);
+  b.append("PRTE", 4);
   return b;
 }
 
@@ -650,7 +671,7 @@ TEST(ProbeFile, EveryDamagedIndexIsRefusedNamingTheFile) {
       {[](ProbeTransfer& x) { x.grid.min.x = -1e13; }, "beyond prt's coordinate limit"},
       {[](ProbeTransfer& x) { x.grid.max.y = std::numeric_limits<double>::infinity(); }, "the grid's box is not finite"},
       {[](ProbeTransfer& x) { x.grid.max.z = x.grid.min.z - 1; }, "the grid's box is not finite"},
-      {[](ProbeTransfer& x) { x.grid.dims[1] = 4; }, "one entry per probe"},
+      {[](ProbeTransfer& x) { x.grid.dims[1] = 4; }, "'probe states' has 27 values; expected 36"},  // 3x4x3 probes
       {[](ProbeTransfer& x) { x.depth_cap = 0; }, "depth cap 0"},
       {[](ProbeTransfer& x) { x.depth_cap = NAN; }, "depth cap nan"},
       {[](ProbeTransfer& x) { x.depth_cap = 1e30f; }, "depth cap 1e+30"},
@@ -794,7 +815,9 @@ TEST(ProbeFile, RoundTripsAndRefusesDamage) {
   const ProbeTransfer t = compute_probe_transfer(s, probe_grid(s.mesh, {3, 2, 3}), o);
   test::TempDir dir;
   write_probe_transfer(dir.file("p.prt"), t);
-  EXPECT_TRUE(is_probe_file(dir.file("p.prt")));
+  std::uint32_t version = 0;
+  EXPECT_EQ(kind_of(read_transfer_file(dir.file("p.prt"), &version)), TransferKind::Probes);
+  EXPECT_EQ(version, kProbeFormatVersion);
   const ProbeTransfer r = read_probe_transfer(dir.file("p.prt"));
   EXPECT_EQ(r.vis_nodes, t.vis_nodes);
   EXPECT_EQ(r.partial_mask, t.partial_mask);
@@ -807,7 +830,13 @@ TEST(ProbeFile, RoundTripsAndRefusesDamage) {
   EXPECT_THROW(read_probe_transfer(dir.file("bad.prt")), Error);
   test::write_file(dir.file("short.prt"), bytes.substr(0, 100));
   EXPECT_THROW(read_probe_transfer(dir.file("short.prt")), Error);
-  EXPECT_FALSE(is_probe_file(dir.file("missing.prt")));
+  try {
+    (void)read_transfer_file(dir.file("missing.prt"));
+    ADD_FAILURE() << "a missing file was read";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(dir.file("missing.prt") + ": ", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no such file"), std::string::npos) << e.what();
+  }
   ProbeTransfer broken = t;
   broken.vis_offsets.back() += 1;
   EXPECT_THROW(write_probe_transfer(dir.file("x.prt"), broken), Error);

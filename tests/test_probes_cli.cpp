@@ -7,6 +7,7 @@
 #include <prt/hash.h>
 #include <prt/probes.h>
 #include <prt/sh_convention.h>
+#include <prt/transfer_file.h>
 #include <prt/vertex_csv.h>
 
 #include <fmt/format.h>
@@ -35,7 +36,7 @@ TEST(ProbesCli, PrecomputeRelightReferenceCompare) {
   TempDir dir;
   Result r = run_prt(dir, {"precompute", kRoom, "--probes", "5x4x5", "-q", "-o", dir.file("p.prt")});
   ASSERT_EQ(r.code, 0) << describe_run(r);
-  ASSERT_TRUE(is_probe_file(dir.file("p.prt")));
+  ASSERT_EQ(kind_of(read_transfer_file(dir.file("p.prt"))), TransferKind::Probes);
   const ProbeTransfer t = read_probe_transfer(dir.file("p.prt"));
   EXPECT_EQ(t.bands, 3);  // the default for probes
   // prt info describes it (text and JSON, the counts the file holds).
@@ -253,21 +254,31 @@ TEST(ProbesCli, QueryPointsBeyondTheCoordinateLimitAreRefused) {
   EXPECT_EQ(read_vertex_csv(dir.file("edge_ref.csv")).size(), 4u);
 }
 
-// Where each array of a probe file starts (its u64 count; docs/FORMAT.md
-// "Probe volume"): the header is 124 bytes, then state (1 byte each),
-// positions (12), visibility nodes (2), node offsets (8), complement flags
-// (1), partial texels (2), their masks (2), ...
-std::vector<std::size_t> probe_array_offsets(const std::string& bytes) {
-  const std::size_t sizes[] = {1, 12, 2, 8, 1, 2, 2, 8, 2, 4};
-  std::vector<std::size_t> at;
-  std::size_t p = 124;
-  for (std::size_t size : sizes) {
-    at.push_back(p);
-    std::uint64_t n = 0;
-    std::memcpy(&n, bytes.data() + p, 8);
-    p += 8 + std::size_t(n) * size;
+// Each array of a probe file (docs/FORMAT.md "Probe volume": the 128-byte
+// header, then sections 32-42, each a 24-byte header (u32 kind, u32 element
+// type, u64 count, u64 bytes), its data and zeros to 8 bytes), in file
+// order: its element count and where its data starts.
+struct ProbeArray {
+  std::uint64_t count;
+  std::size_t data;
+};
+enum ProbeSection : std::size_t { kGridBox, kStates, kPositions, kVisNodes, kVisOffsets, kComplement, kPartialTexels,
+                                  kPartialMasks };
+std::vector<ProbeArray> probe_arrays(const std::string& bytes) {
+  std::vector<ProbeArray> arrays;
+  std::size_t p = 128;
+  for (std::uint32_t kind = 32; kind <= 42; ++kind) {
+    std::uint32_t k = 0;
+    std::uint64_t count = 0, size = 0;
+    std::memcpy(&k, bytes.data() + p, 4);
+    std::memcpy(&count, bytes.data() + p + 8, 8);
+    std::memcpy(&size, bytes.data() + p + 16, 8);
+    EXPECT_EQ(k, kind) << "section " << arrays.size() + 1;
+    arrays.push_back({count, p + 24});
+    p += 24 + std::size_t(size) + std::size_t((8 - size % 8) % 8);
   }
-  return at;
+  EXPECT_EQ(p + 12, bytes.size());  // the trailer follows
+  return arrays;
 }
 
 TEST(ProbesCli, DamagedQuadtreesAreRefusedNotCrashedOn) {
@@ -281,20 +292,15 @@ TEST(ProbesCli, DamagedQuadtreesAreRefusedNotCrashedOn) {
   TempDir dir;
   ASSERT_EQ(run_prt(dir, {"precompute", kRoom, "--probes", "3x3x3", "--probe-cube", "8", "-q", "-o", dir.file("p.prt")}).code, 0);
   const std::string good = read_file(dir.file("p.prt"));
-  const std::vector<std::size_t> at = probe_array_offsets(good);
+  const std::vector<ProbeArray> at = probe_arrays(good);
   const auto u16 = [](std::string& b, std::size_t pos) -> std::uint16_t {
     std::uint16_t v;
     std::memcpy(&v, b.data() + pos, 2);
     return v;
   };
   const auto set_u16 = [](std::string& b, std::size_t pos, std::uint16_t v) { std::memcpy(b.data() + pos, &v, 2); };
-  const auto count = [&](int array) {
-    std::uint64_t n = 0;
-    std::memcpy(&n, good.data() + at[std::size_t(array)], 8);
-    return n;
-  };
-  ASSERT_GT(count(2), 0u);  // visibility nodes
-  ASSERT_GT(count(5), 0u);  // partial texels
+  ASSERT_GT(at[kVisNodes].count, 0u);
+  ASSERT_GT(at[kPartialTexels].count, 0u);
   const std::uint16_t per_face = (4 * 8 * 8 - 1) / 3;
   struct Case {
     std::string name, expect;
@@ -303,7 +309,7 @@ TEST(ProbesCli, DamagedQuadtreesAreRefusedNotCrashedOn) {
   const std::vector<Case> cases = {
       {"seventh-face.prt", "is past the cube's nodes",
        [&](std::string& b) {
-         const std::size_t pos = at[5] + 8;
+         const std::size_t pos = at[kPartialTexels].data;
          set_u16(b, pos, std::uint16_t(6 * per_face + u16(b, pos) % per_face));
        }},
       {"overlap.prt", "also listed (the nodes overlap)",
@@ -312,17 +318,17 @@ TEST(ProbesCli, DamagedQuadtreesAreRefusedNotCrashedOn) {
          // becomes the first one's face root (or, when the first is that
          // root, one of the root's children).
          std::size_t first = SIZE_MAX;
-         for (std::size_t s = 0; s + 1 < count(3) && first == SIZE_MAX; ++s) {
+         for (std::size_t s = 0; s + 1 < at[kVisOffsets].count && first == SIZE_MAX; ++s) {
            std::uint64_t o[2];
-           std::memcpy(o, b.data() + at[3] + 8 + 8 * s, 16);
+           std::memcpy(o, b.data() + at[kVisOffsets].data + 8 * s, 16);
            if (o[1] >= o[0] + 2) first = std::size_t(o[0]);
          }
          ASSERT_NE(first, SIZE_MAX) << "no probe with two nodes";
-         const std::size_t pos = at[2] + 8 + 2 * first;
+         const std::size_t pos = at[kVisNodes].data + 2 * first;
          const std::uint16_t root = std::uint16_t((u16(b, pos) / per_face + 1) * per_face - 1);
          set_u16(b, pos + 2, root == u16(b, pos) ? std::uint16_t(root - 1) : root);
        }},
-      {"mask-zero.prt", "has sub-texel mask 0x0000", [&](std::string& b) { set_u16(b, at[6] + 8, 0); }},
+      {"mask-zero.prt", "has sub-texel mask 0x0000", [&](std::string& b) { set_u16(b, at[kPartialMasks].data, 0); }},
   };
   write_file(dir.file("points.csv"), "x,y,z,nx,ny,nz\n0,1,0,0,1,0\n");
   for (const Case& c : cases) {

@@ -10,6 +10,7 @@
 #include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 
 #include <gtest/gtest.h>
@@ -188,6 +189,13 @@ void expect_read_error(const std::string& path, const std::vector<std::string>& 
   }
 }
 
+// The format version of the file at `path` (prt::read_transfer_file's).
+std::uint32_t file_version(const std::string& path) {
+  std::uint32_t version = 0;
+  (void)prt::read_transfer_file(path, &version);
+  return version;
+}
+
 // Writes `bytes` to a file and expects reading it to fail with `words`.
 void expect_bytes_error(const TempDir& dir, const std::string& bytes, const std::vector<std::string>& words,
                         const std::string& what) {
@@ -285,7 +293,7 @@ TEST(TransferFile, ReadsVersionOneFiles) {
   const std::string path = dir.file("v1.prtt");
   write_file(path, s.bytes);
   expect_identical(prt::read_transfer(path), t);
-  EXPECT_EQ(prt::read_transfer_version(path), 1u);
+  EXPECT_EQ(file_version(path), 1u);
   const Result r = run_prt(dir, {"info", path, "--json"});
   ASSERT_EQ(r.code, 0) << describe_run(r);
   EXPECT_EQ(nlohmann::json::parse(r.out).at("format_version"), 1);
@@ -826,7 +834,7 @@ TEST(CompressedFile, RoundTripIsBitExactAsVersionFour) {
     EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 4u);
     EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 4u, 4u);
     EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(c));
-    EXPECT_TRUE(prt::transfer_is_compressed(path));
+    EXPECT_EQ(prt::kind_of(prt::read_transfer_file(path)), prt::TransferKind::Compressed);
     // The coefficients' record: its header as the document lays it out.
     const std::size_t rec = s.section_at[s.section_at.size() - (k.t.glossy ? 2 : 1)];
     EXPECT_EQ(get<std::uint32_t>(s.bytes, rec), 8u);
@@ -860,7 +868,7 @@ TEST(CompressedFile, EachReaderRefusesTheOtherKind) {
   const std::string plain = dir.file("plain.prtt"), packed = dir.file("packed.prtt");
   prt::write_transfer(plain, t);
   prt::write_compressed_transfer(packed, compressed(t, 2, 3, 32));
-  EXPECT_FALSE(prt::transfer_is_compressed(plain));
+  EXPECT_EQ(prt::kind_of(prt::read_transfer_file(plain)), prt::TransferKind::SH);
   expect_error_of(prt::read_transfer, packed, {"compressed by clustered PCA", "read_compressed_transfer"},
                   "read_transfer of a compressed file");
   expect_error_of(prt::read_compressed_transfer, plain, {"uncompressed transfer", "prt compress"},
@@ -1108,7 +1116,7 @@ TEST(TransferFile, InterpolatedVerticesRoundTripAsVersionSeven) {
         const Transfer back = prt::read_transfer(path);
         expect_identical(t, back);
         EXPECT_EQ(back.interpolated_vertices(), t.interpolated_vertices());
-        EXPECT_EQ(prt::read_transfer_version(path), 7u);
+        EXPECT_EQ(file_version(path), 7u);
         prt::write_transfer(dir.file("again.prtt"), back);
         EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
       }
@@ -1316,8 +1324,9 @@ TEST(LightmapFile, InterpolatedTexelsRoundTripAsVersionSeven) {
     EXPECT_EQ(back.transfer.interpolated_vertices(), 30u);
     EXPECT_EQ(back.layout.texels, l.layout.texels);
     EXPECT_EQ(back.layout.scene_hash, l.layout.scene_hash);
-    EXPECT_EQ(prt::read_transfer_version(path), 7u);
-    EXPECT_TRUE(prt::transfer_is_lightmap(path));
+    std::uint32_t version = 0;
+    EXPECT_EQ(prt::kind_of(prt::read_transfer_file(path, &version)), prt::TransferKind::Lightmap);
+    EXPECT_EQ(version, 7u);
     expect_error_of(prt::read_transfer, path, {"holds a lightmap"}, "read_transfer of a version 7 lightmap");
     prt::write_lightmap_transfer(dir.file("again.prtt"), back);
     EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);

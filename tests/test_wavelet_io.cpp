@@ -14,6 +14,7 @@
 #include <prt/projection.h>
 #include <prt/rotation.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>
@@ -184,7 +185,7 @@ TEST(WaveletFile, RoundTripIsBitExact) {
       const WaveletTransfer t = random_transfer(r, 37, vc, unsigned(r) + (vc ? 100u : 0u));
       write_wavelet_transfer(path, t);
       EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(t));
-      EXPECT_EQ(read_transfer_basis(path), TransferBasis::Wavelet);
+      EXPECT_EQ(kind_of(read_transfer_file(path)), TransferKind::Wavelet);
       const WaveletTransfer back = read_wavelet_transfer(path);
       expect_identical(t, back);
       const std::string first = read_file(path);
@@ -279,7 +280,13 @@ TEST(WaveletFile, DamagedFilesAreRefusedWithClearMessages) {
       {[&](std::string& x) { put<double>(x, 88, 1.5); }, {"threshold is 1.5"}},
       {[&](std::string& x) { put<std::uint32_t>(x, 52, 1); }, {"4 sections", "with vertex colours has 5"}},
       {[&](std::string& x) { put<std::uint64_t>(x, 64, 11); }, {"'vertex scales' has 12 values; expected 11"}},
-      {[&](std::string& x) { put<std::uint64_t>(x, at[1] - 16, 1ull << 40); }, {"runs past the end"}},
+      {[&](std::string& x) { put<std::uint64_t>(x, at[1] - 16, 1ull << 40); },
+       {"'column vertices' has 1099511627776 u32 values but"}},
+      {[&](std::string& x) {
+         put<std::uint64_t>(x, at[1] - 16, 1ull << 40);
+         put<std::uint64_t>(x, at[1] - 8, 4ull << 40);
+       },
+       {"'column vertices' runs past the end"}},
       {[&](std::string& x) { put<std::uint32_t>(x, at[2] - 20, 1); }, {"element type 1", "i16"}},
       {[&](std::string& x) { put<std::uint32_t>(x, 16, 9); }, {"unknown basis 9"}},
       {[&](std::string& x) { x[120] = 1; }, {"reserved byte 120"}},
@@ -331,16 +338,16 @@ TEST(WaveletFile, EachReaderRefusesTheOtherBasisNamingIt) {
   s.vertices = 2;
   s.coeffs.assign(2 * 9, 0.5f);
   write_transfer(sh, s);
-  EXPECT_EQ(read_transfer_basis(sh), TransferBasis::SH);
-  EXPECT_EQ(read_transfer_basis(wl), TransferBasis::Wavelet);
-  EXPECT_EQ(basis_name(TransferBasis::SH), "sh");
-  EXPECT_EQ(basis_name(TransferBasis::Wavelet), "wavelet");
+  EXPECT_EQ(kind_of(read_transfer_file(sh)), TransferKind::SH);
+  EXPECT_EQ(kind_of(read_transfer_file(wl)), TransferKind::Wavelet);
+  EXPECT_EQ(kind_names(TransferKind::SH).id, "sh");
+  EXPECT_EQ(kind_names(TransferKind::Wavelet).id, "wavelet");
   expect_error([&] { read_transfer(wl); }, {wl, "holds a wavelet transfer", "prt relight", "--basis sh"}, "SH reader");
   expect_error([&] { read_wavelet_transfer(sh); }, {sh, "spherical-harmonics", "3 bands", "--basis wavelet"},
                "wavelet reader");
-  expect_error([&] { read_transfer_basis(dir.file("missing.prtt")); }, {"missing.prtt", "no such file"}, "missing");
+  expect_error([&] { read_transfer_file(dir.file("missing.prtt")); }, {"missing.prtt", "no such file"}, "missing");
   write_file(dir.file("text.prtt"), "hello, world");
-  expect_error([&] { read_transfer_basis(dir.file("text.prtt")); }, {"not a prt transfer file"}, "not a transfer");
+  expect_error([&] { read_transfer_file(dir.file("text.prtt")); }, {"not a prt transfer file"}, "not a transfer");
 }
 
 TEST(WaveletFile, WrongMeshIsRefused) {

@@ -9,6 +9,7 @@
 
 #include <prt/error.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_transfer.h>
@@ -191,8 +192,9 @@ TEST(ZhTransferIo, RoundTripIsBitExact) {
           EXPECT_EQ(t.analytic_vertices(), analytic ? 12u : 0u) << what;
           write_zh_transfer(path, t);
           EXPECT_EQ(std::filesystem::file_size(path), transfer_file_size(t)) << what;
-          EXPECT_EQ(read_transfer_basis(path), TransferBasis::ZH) << what;
-          EXPECT_EQ(read_transfer_version(path), kZhFormatVersion) << what;
+          std::uint32_t version = 0;
+          EXPECT_EQ(kind_of(read_transfer_file(path, &version)), TransferKind::ZH) << what;
+          EXPECT_EQ(version, kZhFormatVersion) << what;
           const ZhTransfer back = read_zh_transfer(path);
           expect_identical(t, back);
           const std::string first = read_file(path);
@@ -446,7 +448,7 @@ TEST(ZhTransferIo, DamagedRestOcclusionIsRefused) {
       {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 7); },
        {"7 sections", "has 5 (6 with its rest occlusion)"}},
       {&good, [](std::string& x) { put<std::uint32_t>(x, 80, 5); }, {"between the last section and the trailer"}},
-      {&without, [](std::string& x) { put<std::uint32_t>(x, 80, 6); }, {"section 6 ('zh rest occlusion') is missing"}},
+      {&without, [](std::string& x) { put<std::uint32_t>(x, 80, 6); }, {"section 6 of 6 is missing"}},
       {&good, [&](std::string& x) { put<std::uint32_t>(x, at[5] - 24, 28); }, {"section 6 has kind 28", "expected 27"}},
       {&good, [&](std::string& x) { put<std::uint32_t>(x, at[5] - 20, 2); },
        {"'zh rest occlusion' has element type 2"}},
@@ -495,8 +497,8 @@ TEST(ZhTransferIo, EachReaderRefusesTheOtherBasesNamingThem) {
   w.vertex_kept.assign(2, 0);
   write_wavelet_transfer(wl, w);
 
-  EXPECT_EQ(read_transfer_basis(zh), TransferBasis::ZH);
-  EXPECT_EQ(basis_name(TransferBasis::ZH), "zh");
+  EXPECT_EQ(kind_of(read_transfer_file(zh)), TransferKind::ZH);
+  EXPECT_EQ(kind_names(TransferKind::ZH).id, "zh");
   expect_error([&] { read_transfer(zh); },
                {zh, "holds a zonal-harmonic (local deformable) transfer", "2 lobes of 3 bands", "prt::read_zh_transfer"},
                "SH reader");
@@ -506,10 +508,13 @@ TEST(ZhTransferIo, EachReaderRefusesTheOtherBasesNamingThem) {
                "compressed reader");
   expect_error([&] { read_zh_transfer(sh); }, {sh, "spherical-harmonics", "3 bands", "prt::read_transfer"}, "ZH on SH");
   expect_error([&] { read_zh_transfer(wl); }, {wl, "wavelet transfer", "prt::read_wavelet_transfer"}, "ZH on wavelet");
-  // What prt info and relight ask first: neither compressed nor a lightmap,
-  // so they go on to a reader whose refusal names read_zh_transfer.
-  EXPECT_FALSE(transfer_is_compressed(zh));
-  EXPECT_FALSE(transfer_is_lightmap(zh));
+  // Not taken for a compressed transfer or a lightmap: their typed readers
+  // refuse it, naming what it holds.
+  expect_error([&] { (void)read_transfer_as<CompressedTransfer>(zh); },
+               {zh, "holds a zonal-harmonic (local deformable) transfer", "not a compressed SH transfer"},
+               "read as compressed");
+  expect_error([&] { (void)read_transfer_as<LightmapTransfer>(zh); },
+               {zh, "holds a zonal-harmonic (local deformable) transfer", "not an SH lightmap"}, "read as a lightmap");
 }
 
 TEST(ZhTransferIo, WriterRefusesInconsistentTransfersAndWritesNothing) {

@@ -160,14 +160,12 @@ std::vector<std::uint16_t> probe_visibility_nodes(std::span<const std::uint32_t>
 // probe_sh_matrices, probe_weights, the GPU pass). Linear in the arrays.
 std::string probe_transfer_problem(const ProbeTransfer& t);
 
-// Files (docs/FORMAT.md "Probe volume"): write through a temporary file and
-// rename; read validates everything (checksum, sizes, probe_transfer_problem)
-// and throws prt::Error naming the file. is_probe_file: the file's
-// signature is a probe volume's (false for anything else, readable or not,
-// and for anything but a regular file: a FIFO is not opened).
+// Files (docs/FORMAT.md "Probe volume"; a section family of the transfer
+// format, prt/transfer_file.h reads any kind): write through a temporary file
+// and rename; read validates everything (checksum, sizes,
+// probe_transfer_problem) and throws prt::Error naming the file.
 void write_probe_transfer(const std::string& path, const ProbeTransfer& t);
 ProbeTransfer read_probe_transfer(const std::string& path);
-bool is_probe_file(const std::string& path);
 
 // Relighting (docs/PROBES.md "Relighting"). The constructor splits the
 // map (downsampled once by solid-angle-weighted sums, to about 16 pixels

@@ -24,6 +24,40 @@ enum class TransferMode : std::uint32_t { Unshadowed = 0, Shadowed = 1, Interref
 TransferMode parse_transfer_mode(std::string_view name);  // "unshadowed", "shadowed", "interreflected"
 std::string_view transfer_mode_name(TransferMode m);
 
+// What every per-point transfer records of how it was computed: the file
+// header's values (docs/FORMAT.md), shared by Transfer and ZhTransfer (and so
+// by the compressed and lightmap kinds, which hold a Transfer). One struct,
+// so that a kind made from another copies it whole (header() = other.header()).
+struct TransferHeader {
+  int bands = 0;
+  int channels = 1;
+  TransferMode mode = TransferMode::Shadowed;
+  int bounces = 0;               // computed (at most TransferOptions::bounces)
+  int samples = 0;
+  glm::vec3 albedo{1.0f};
+  bool vertex_colors = false;
+  std::uint64_t seed = 0;
+  std::size_t vertices = 0;
+  std::uint64_t mesh_hash = 0;
+
+  TransferHeader& header() { return *this; }
+  const TransferHeader& header() const { return *this; }
+};
+
+// Which row of a kind's stored arrays holds vertex v (analytic vertices,
+// below, store none): shared by Transfer and ZhTransfer.
+// slots[v]: the row of vertex v, or kAnalytic. Empty: every vertex is
+// stored, vertex v in row v (no analytic vertex).
+struct RowSlots {
+  static constexpr std::uint32_t kAnalytic = 0xffffffffu;
+  std::vector<std::uint32_t> slots;
+
+  bool is_analytic(std::size_t v) const { return !slots.empty() && slots[v] == kAnalytic; }
+  // The row of vertex v, or kAnalytic.
+  std::size_t row(std::size_t v) const { return slots.empty() ? v : slots[v]; }
+  std::size_t analytic_vertices() const;  // counted over slots
+};
+
 // Per-vertex results. Layout of a transfer array: [row][channel][k] with
 // k < bands^2, channels 1 (grey albedo: one channel serves R, G and B) or 3,
 // one row per *stored* vertex, in vertex order.
@@ -36,27 +70,13 @@ std::string_view transfer_mode_name(TransferMode m);
 // clamped cosine about the mesh's normal, with the albedo compute_transfer
 // used (vertex_albedo). In an unshadowed transfer every vertex with a normal
 // is analytic, so nothing is stored but for vertices without one (transfer 0).
-struct Transfer {
-  int bands = 0;
-  int channels = 1;
-  TransferMode mode = TransferMode::Shadowed;
-  int bounces = 0;               // computed (at most TransferOptions::bounces)
-  int samples = 0;
-  glm::vec3 albedo{1.0f};
-  bool vertex_colors = false;
-  std::uint64_t seed = 0;
-  std::size_t vertices = 0;
-  std::uint64_t mesh_hash = 0;
+struct Transfer : TransferHeader, RowSlots {
   // shading_hash(mesh, vertex_colors) of the mesh the transfer was computed
   // for: analytic vertices take their normal and albedo from the mesh, which
   // mesh_hash (positions, triangles) does not cover. 0: not recorded (files
   // of format version 1, which have no analytic vertices).
   std::uint64_t shading_hash = 0;
 
-  // slots[v]: the row of vertex v in coeffs (and direct), or kAnalytic.
-  // Empty: every vertex is stored, vertex v in row v (no analytic vertex).
-  static constexpr std::uint32_t kAnalytic = 0xffffffffu;
-  std::vector<std::uint32_t> slots;
   std::vector<float> coeffs;         // stored rows: the transfer of `mode` (interreflected: direct + all bounces)
   std::vector<float> direct;         // interreflected only: the shadowed (0-bounce) part, same rows
   std::vector<float> ao;             // kappa_A = (1/pi) integral V max(n.w,0) dw, per vertex (1 if unshadowed)
@@ -94,25 +114,23 @@ struct Transfer {
   std::size_t interpolated_vertices() const;  // counted over `interpolated`
 
   std::size_t stride() const { return std::size_t(channels) * bands * bands; }
-  bool is_analytic(std::size_t v) const { return !slots.empty() && slots[v] == kAnalytic; }
-  std::size_t analytic_vertices() const;  // counted over slots
   std::size_t stored_vertices() const { return vertices - analytic_vertices(); }
   // The accessor every consumer uses: the stored transfer of vertex v
   // (stride() floats, [channel][k]), or nullptr when v is analytic (then it
   // is analytic_transfer() of the mesh's normal and vertex_albedo()).
-  const float* stored(std::size_t v) const { return row(coeffs, v); }
+  const float* stored(std::size_t v) const { return row_of(coeffs, v); }
   // The same for the direct part (interreflected transfers that keep it).
-  const float* stored_direct(std::size_t v) const { return row(direct, v); }
+  const float* stored_direct(std::size_t v) const { return row_of(direct, v); }
   // Vertex v's stored glossy matrices (glossy_stride() floats), or nullptr
   // when v is analytic or the transfer has none.
   const float* stored_glossy(std::size_t v) const {
-    const std::size_t r = slots.empty() ? v : slots[v];
+    const std::size_t r = row(v);
     return !glossy || r == kAnalytic ? nullptr : glossy_matrices.data() + r * glossy_stride();
   }
 
  private:
-  const float* row(const std::vector<float>& a, std::size_t v) const {
-    const std::size_t r = slots.empty() ? v : slots[v];
+  const float* row_of(const std::vector<float>& a, std::size_t v) const {
+    const std::size_t r = row(v);
     return r == kAnalytic ? nullptr : a.data() + r * stride();
   }
 };

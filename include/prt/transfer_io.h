@@ -13,6 +13,7 @@
 #include <prt/compressed_transfer.h>
 #include <prt/lightmap.h>
 #include <prt/mesh.h>
+#include <prt/probes.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
@@ -41,6 +42,8 @@ inline constexpr std::uint32_t kInterpolatedFormatVersion = 7;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
 inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
+// So do probe volumes (basis 3, sections 32-42), since they joined the format.
+inline constexpr std::uint32_t kProbeFormatVersion = 1;
 // The version write_transfer writes for a transfer without interpolated
 // vertices: 3 with glossy matrices, 2 otherwise (so that a prt reading
 // version 2 reads every file it could).
@@ -101,11 +104,6 @@ void write_compressed_transfer(const std::string& path, const CompressedTransfer
 // Reads one with read_transfer's checks and compressed_transfer_problem's;
 // throws prt::Error "PATH: problem", also for an uncompressed file.
 CompressedTransfer read_compressed_transfer(const std::string& path);
-// Whether the SH file at `path` is compressed (the header's checks of
-// read_transfer_basis; throws for a wavelet file's "not SH" as that does not).
-// A zonal-harmonic file is not compressed: false (read_transfer then refuses
-// it, naming read_zh_transfer).
-bool transfer_is_compressed(const std::string& path);
 // The sections write_compressed_transfer stores, in file order, and the
 // file's exact size.
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c);
@@ -132,18 +130,8 @@ inline void check_matches(const CompressedTransfer& c, const Mesh& mesh, const s
   check_matches(c.transfer, mesh, transfer_path);
 }
 
-// ---- the basis a file holds ---------------------------------------------------
-enum class TransferBasis { SH, Wavelet, ZH };
-std::string_view basis_name(TransferBasis b);  // "sh", "wavelet", "zh"
-
-// Reads just the header: the file's existence, signature, version, header
-// size and basis field, with read_transfer's messages for each. Does not
-// verify the checksum or the sections (read_transfer / read_wavelet_transfer
-// do, and read_zh_transfer). Throws prt::Error "PATH: problem".
-TransferBasis read_transfer_basis(const std::string& path);
-// The same header checks; returns the file's format version (1 to 7 for SH,
-// 1 for wavelet files, 2 for zonal-harmonic ones).
-std::uint32_t read_transfer_version(const std::string& path);
+// What a file holds: prt/transfer_file.h (read_transfer_file returns any
+// kind; nothing else asks a file what it is).
 
 // ---- wavelet transfers (basis 1; docs/FORMAT.md, "Wavelet transfer") -------------
 // Writes `t` through write_atomically. Throws prt::Error naming the file,
@@ -220,9 +208,6 @@ std::uint32_t transfer_format_version(const LightmapTransfer& t);
 // throws prt::Error "PATH: problem", also for a per-vertex file (and
 // read_transfer refuses a lightmap, naming it).
 LightmapTransfer read_lightmap_transfer(const std::string& path);
-// Whether the file at `path` holds a lightmap, SH or wavelet (header checks
-// only; read_transfer_basis tells which).
-bool transfer_is_lightmap(const std::string& path);
 // A wavelet lightmap (prt precompute --lightmap --basis wavelet): a wavelet
 // transfer file whose "vertices" are covered texels, with flag bit 3 and the
 // layout and covered texels as sections 21 and 22 (docs/FORMAT.md).
@@ -230,6 +215,16 @@ void write_wavelet_lightmap(const std::string& path, const WaveletLightmap& t);
 WaveletLightmap read_wavelet_lightmap(const std::string& path);
 std::vector<TransferSection> transfer_sections(const LightmapTransfer& t);
 std::uint64_t transfer_file_size(const LightmapTransfer& t);
+std::vector<TransferSection> transfer_sections(const WaveletLightmap& t);
+std::uint64_t transfer_file_size(const WaveletLightmap& t);
+// The grid, each probe's state and position, then the stored probes'
+// visibility, depth and bounce arrays (docs/FORMAT.md, "Probe volume").
+std::vector<TransferSection> transfer_sections(const ProbeTransfer& t);
+std::uint64_t transfer_file_size(const ProbeTransfer& t);
+// Its grid, probe states, cube and sizes (prt info).
+std::string describe_transfer(const ProbeTransfer& t);
+// The atlas and texels, then describe_transfer of the wavelet rows.
+std::string describe_transfer(const WaveletLightmap& t);
 // The atlas, covered and analytic texels and bytes per covered texel, then
 // describe_transfer of the rows.
 std::string describe_transfer(const LightmapTransfer& t);

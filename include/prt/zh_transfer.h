@@ -82,25 +82,15 @@ std::uint64_t topology_hash(const Mesh& mesh);
 // A local deformable transfer. Rows as prt::Transfer's: one per stored
 // vertex in vertex order (slots; analytic vertices store nothing and are the
 // clamped cosine about the posed normal, which one lobe holds exactly).
-struct ZhTransfer {
-  int bands = 0;       // n, 1 to zh::kMaxBands
-  int lobes = 0;       // K, 1 to zh::kMaxLobes
-  int channels = 1;    // 1 (grey albedo) or 3
-  TransferMode mode = TransferMode::Shadowed;
-  int bounces = 0;
-  int samples = 0;
-  glm::vec3 albedo{1.0f};
-  bool vertex_colors = false;
-  std::uint64_t seed = 0;
-  std::size_t vertices = 0;
-  std::uint64_t mesh_hash = 0;      // Mesh::hash() of the rest pose (positions and triangles)
+// The header (bands: n, 1 to zh::kMaxBands; channels 1 or 3; mesh_hash:
+// Mesh::hash() of the rest pose) and slots are prt::Transfer's.
+struct ZhTransfer : TransferHeader, RowSlots {
+  int lobes = 0;                    // K, 1 to zh::kMaxLobes
   std::uint64_t topology_hash = 0;  // topology_hash() of the rest pose
   // Relative error of the fit over the stored rows, sqrt(sum |t - t~|^2 /
   // sum |t|^2) in the SH transfer's space (diagnostic; stored in the file).
   double fit_error = 0;
 
-  static constexpr std::uint32_t kAnalytic = Transfer::kAnalytic;
-  std::vector<std::uint32_t> slots;  // empty: every vertex stored, vertex v in row v
   // Per stored row: lobes x 3 unit axes in the vertex's rest frame (x
   // tangent, y bitangent, z normal), shared by the channels.
   std::vector<float> axes;
@@ -114,9 +104,6 @@ struct ZhTransfer {
   std::size_t axes_stride() const { return std::size_t(lobes) * 3; }
   std::size_t coeffs_stride() const { return std::size_t(channels) * lobes * bands; }
   std::size_t stride() const { return axes_stride() + coeffs_stride(); }  // floats per stored row
-  bool is_analytic(std::size_t v) const { return !slots.empty() && slots[v] == kAnalytic; }
-  std::size_t row(std::size_t v) const { return slots.empty() ? v : slots[v]; }
-  std::size_t analytic_vertices() const;
   std::size_t stored_vertices() const { return vertices - analytic_vertices(); }
 };
 

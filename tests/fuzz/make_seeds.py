@@ -7,7 +7,7 @@ Makes OUT_DIR/<target>/seed-* for every target: small meshes in each format
 (written here), maps (with oiiotool), transfer files of both bases (with
 `PRT_EXE precompute` on a tiny mesh), vertex CSVs (`PRT_EXE relight` and
 `PRT_EXE reference`) and probe volumes (`PRT_EXE precompute --probes`, and
-damaged copies of one). scripts/fuzz.sh --seeds merges them into corpus/;
+damaged copies of one; two of the volumes go to the transfer target too). scripts/fuzz.sh --seeds merges them into corpus/;
 they are kept there only if they add coverage.
 """
 import base64
@@ -326,33 +326,38 @@ def transfer_seeds(out, tmp, prt):
     return mesh, tmp / "shadowed-b3.prt"
 
 
-# The probe file's arrays in order (docs/FORMAT.md "Probe volume"): name, struct code.
-PROBE_ARRAYS = [("state", "B"), ("positions", "3f"), ("vis_nodes", "H"), ("vis_offsets", "Q"),
-                ("vis_complement", "B"), ("partial_nodes", "H"), ("partial_mask", "H"),
-                ("partial_offsets", "Q"), ("depth", "H"), ("bounce", "f")]
-PROBE_HEADER = 8 + 4 + 12 + 48 + 32 + 16 + 4  # signature to depth cap
+# A probe volume's sections in order (docs/FORMAT.md "Probe volume": basis 3 of
+# the transfer format, kinds 32 to 42): name, struct code of the element type.
+PROBE_SECTIONS = [("grid", "d"), ("state", "B"), ("positions", "f"), ("vis_nodes", "H"), ("vis_offsets", "Q"),
+                  ("vis_complement", "B"), ("partial_nodes", "H"), ("partial_mask", "H"), ("partial_offsets", "Q"),
+                  ("depth", "H"), ("bounce", "f")]
+FIRST_PROBE_KIND = 32
+ELEMENT_TYPE = {"f": 1, "d": 2, "Q": 3, "B": 6, "H": 7}  # docs/FORMAT.md "Sections": f32, f64, u64, u8, u16
+HEADER_SIZE = 128
 
 
 def probe_arrays(data):
-    """(header bytes, {name: list}) of a probe file (positions as flat floats)."""
-    at, arrays = PROBE_HEADER, {}
-    for name, code in PROBE_ARRAYS:
-        (n,) = struct.unpack_from("<Q", data, at)
-        at += 8
-        fmt = "<%d%s" % (3 * n if code == "3f" else n, code[-1])
-        arrays[name] = list(struct.unpack_from(fmt, data, at))
-        at += struct.calcsize(fmt)
-    return data[:PROBE_HEADER], arrays
+    """(header bytes, {name: list}) of a probe volume (positions as flat floats)."""
+    at, arrays = HEADER_SIZE, {}
+    for i, (name, code) in enumerate(PROBE_SECTIONS):
+        kind, _, n, size = struct.unpack_from("<IIQQ", data, at)
+        if kind != FIRST_PROBE_KIND + i:
+            raise RuntimeError("section %d of the probe volume has kind %d, not %d" % (i + 1, kind,
+                                                                                        FIRST_PROBE_KIND + i))
+        arrays[name] = list(struct.unpack_from("<%d%s" % (n, code), data, at + 24))
+        at += 24 + size + (8 - size % 8) % 8
+    return data[:HEADER_SIZE], arrays
 
 
 def probe_file(header, arrays):
-    """The probe file of header and arrays; the trailer's checksum is left 0: the
-    probes target writes the right one into inputs that end in PRTE."""
+    """The probe volume of header and arrays; the trailer's checksum is left 0:
+    the probes target writes the right one into inputs that end in PRTE."""
     b = bytearray(header)
-    for name, code in PROBE_ARRAYS:
+    for i, (name, code) in enumerate(PROBE_SECTIONS):
         v = arrays[name]
-        n = len(v) // 3 if code == "3f" else len(v)
-        b += struct.pack("<Q", n) + struct.pack("<%d%s" % (len(v), code[-1]), *v)
+        data = struct.pack("<%d%s" % (len(v), code), *v)
+        b += struct.pack("<IIQQ", FIRST_PROBE_KIND + i, ELEMENT_TYPE[code], len(v), len(data))
+        b += data + bytes((8 - len(data) % 8) % 8)
     return bytes(b) + struct.pack("<Q", 0) + b"PRTE"
 
 
@@ -383,8 +388,11 @@ def probe_seeds(out, tmp, prt, mesh):
         subprocess.run([prt, "precompute", str(scene), "-o", str(f), "--threads", "1", "-q", *args], check=True)
         files[name] = f.read_bytes()
         write(out, "probes", name + ".prt", files[name])
+    # Two volumes for the transfer target too: a probe volume is one of the transfer file's kinds.
+    for name in ("probes-shadowed-c4", "probes-interreflected-colour"):
+        write(out, "transfer", name + ".prt", files[name])
     header, a = probe_arrays(files["probes-shadowed-c4"])
-    r = struct.unpack_from("<i", header, 76)[0]  # cube_res: after the signature, version, dims, box and bands
+    r = struct.unpack_from("<I", header, 84)[0]  # cube_res (docs/FORMAT.md "Probe volume": header offset 84)
     per_face = (4 * r * r - 1) // 3
     stored = len(a["vis_offsets"]) - 1
 

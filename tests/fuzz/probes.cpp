@@ -1,5 +1,6 @@
 // Fuzz target: the probe volume reader (docs/FORMAT.md "Probe volume"):
-// is_probe_file and read_probe_transfer, then, for a volume it accepts,
+// read_transfer_as<ProbeTransfer> (read_transfer_file, then the kind: a
+// transfer of another kind is refused naming it), then, for a volume it accepts,
 // every CPU consumer prt has, cheaply: what prt info --json describes, the
 // relighter (prt relight --at, prt export --probes, prt render's probe-lit
 // object and Python) under a small map with a sun (so the bright pixels'
@@ -13,9 +14,10 @@
 // end marker "PRTE" gets the checksum of its mutated bytes written into the
 // trailer before it is read, so the fuzzer reaches the header and arrays.
 //
-// Promises beyond "no crash": what read_probe_transfer accepts,
+// Promises beyond "no crash": what read_transfer_as<ProbeTransfer> accepts,
 // write_probe_transfer writes back to the same bytes (the format has no
-// slack), and every weight names a probe of the grid and is finite.
+// slack: one version, reserved bytes and padding checked zero), and every
+// weight names a probe of the grid and is finite.
 #include "fuzz_util.h"
 
 #include <prt/envmap.h>
@@ -24,6 +26,7 @@
 #include <prt/probes.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
+#include <prt/transfer_file.h>
 
 #include <cmath>
 #include <cstring>
@@ -85,7 +88,7 @@ void exercise(const std::string& path, const std::vector<std::uint8_t>& bytes, c
   } catch (const prt::Error& e) {
     prt::fuzz::finding(std::string("a probe volume read fails to write: ") + e.what());
   }
-  if (file_bytes(written) != bytes) prt::fuzz::finding("write_probe_transfer(read_probe_transfer(f)) differs from f");
+  if (file_bytes(written) != bytes) prt::fuzz::finding("write_probe_transfer(read(f)) differs from f");
   (void)prt::file_info_json(path);
   (void)t.bytes();
 
@@ -138,9 +141,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   prt::fuzz::write_file(path, bytes.data(), bytes.size());
 
-  (void)prt::is_probe_file(path);
   std::optional<prt::ProbeTransfer> t;
-  prt::fuzz::expect_only_prt_errors([&] { t = prt::read_probe_transfer(path); });
+  prt::fuzz::expect_only_prt_errors([&] { t = prt::read_transfer_as<prt::ProbeTransfer>(path); });
   if (!t) return 0;
   // Accepted: no consumer may refuse it (nor crash).
   try {

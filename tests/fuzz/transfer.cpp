@@ -1,8 +1,10 @@
-// Fuzz target: the transfer file reader (docs/FORMAT.md), every basis:
-// read_transfer_basis, read_transfer_version, transfer_is_compressed,
-// transfer_is_lightmap, read_transfer, read_compressed_transfer,
-// read_lightmap_transfer, read_wavelet_transfer and read_zh_transfer, and the
-// description of what was read.
+// Fuzz target: the transfer file reader (docs/FORMAT.md), every kind:
+// read_transfer_file (prt/transfer_file.h), then through dispatch, what each
+// kind's consumers ask of what was read (describe_transfer, transfer_sections;
+// an SH transfer's byte counts, a compressed one decompressed), and each
+// kind's own reader (read_transfer, read_compressed_transfer,
+// read_wavelet_transfer, read_zh_transfer, read_lightmap_transfer,
+// read_wavelet_lightmap, read_probe_transfer) on every input.
 //
 // The checksum: the trailer holds XXH3-64 of every byte before it, which a
 // mutated input almost never matches, so the reader would stop there. When
@@ -11,16 +13,25 @@
 // the header, the section table and the values. Inputs without the marker
 // are read as they are (the truncation and size messages).
 //
-// Round trip: what read_* accepts, write_* must write, and reading that back
-// and writing it again must give the same bytes.
+// Promises: what read_transfer_file accepts, write_transfer_file writes in
+// file_size(t) bytes, and reading that back as its kind (read_transfer_as)
+// and writing it again gives the same bytes. A file is of one kind: the
+// reader of the kind read_transfer_file names accepts it and every other
+// kind's reader refuses it; a file read_transfer_file refuses, every
+// reader refuses.
 #include "fuzz_util.h"
 
 #include <prt/hash.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 
+#include <array>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <optional>
+#include <string>
 #include <vector>
 
 namespace {
@@ -30,17 +41,66 @@ std::vector<char> file_bytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
 }
 
-template <typename T, typename Read, typename Write>
-void round_trip(const T& t, Read read, Write write) {
+// write_transfer_file(t), read back as its kind and written again: the same bytes, file_size(t) of them.
+template <typename T>
+void round_trip(const T& t, const prt::AnyTransfer& any) {
   static const std::string a = prt::fuzz::scratch_path("written-a.prt");
   static const std::string b = prt::fuzz::scratch_path("written-b.prt");
   try {
-    write(a, t);
-    write(b, read(a));
+    prt::write_transfer_file(a, t);
+    prt::write_transfer_file(b, prt::read_transfer_as<T>(a));
   } catch (const prt::Error& e) {
     prt::fuzz::finding(std::string("a transfer read back fails to write or read again: ") + e.what());
   }
-  if (file_bytes(a) != file_bytes(b)) prt::fuzz::finding("write(read(write(t))) differs from write(t)");
+  const std::vector<char> written = file_bytes(a);
+  if (written != file_bytes(b)) prt::fuzz::finding("write(read(write(t))) differs from write(t)");
+  if (written.size() != prt::file_size(any)) prt::fuzz::finding("file_size(t) is not the size written");
+}
+
+// What each kind's consumers ask of what was read (prt info, prt relight,
+// the tools' size reports), then the round trip.
+void exercise(const prt::AnyTransfer& any) {
+  (void)prt::describe(any);
+  const auto common = [&](const auto& t) {
+    (void)prt::describe_transfer(t);
+    (void)prt::transfer_sections(t);
+    round_trip(t, any);
+  };
+  prt::dispatch(
+      any,
+      [&](const prt::Transfer& t) {
+        (void)prt::transfer_bytes_per_vertex(t);
+        (void)prt::analytic_bytes_saved(t);
+        common(t);
+      },
+      [&](const prt::CompressedTransfer& c) {
+        (void)prt::decompress(c);
+        common(c);
+      },
+      [&](const prt::WaveletTransfer& t) { common(t); },
+      [&](const prt::ZhTransfer& t) { common(t); },
+      [&](const prt::LightmapTransfer& l) { common(l); },  // version 5, or 7 with its interpolated-texel mask
+      [&](const prt::WaveletLightmap& l) { common(l); },
+      [&](const prt::ProbeTransfer& p) {
+        (void)p.bytes();
+        common(p);
+      });
+}
+
+// Each kind's own reader on `path`, in TransferKind's order: whether it accepted the file.
+std::array<bool, prt::kTransferKinds> typed_reads(const std::string& path) {
+  const std::array<std::function<void()>, prt::kTransferKinds> readers = {
+      [&] { (void)prt::read_transfer(path); },          [&] { (void)prt::read_compressed_transfer(path); },
+      [&] { (void)prt::read_wavelet_transfer(path); },  [&] { (void)prt::read_zh_transfer(path); },
+      [&] { (void)prt::read_lightmap_transfer(path); }, [&] { (void)prt::read_wavelet_lightmap(path); },
+      [&] { (void)prt::read_probe_transfer(path); }};
+  std::array<bool, prt::kTransferKinds> accepted{};
+  for (std::size_t k = 0; k < readers.size(); ++k)
+    prt::fuzz::expect_only_prt_errors([&] {
+      readers[k]();
+      accepted[k] = true;
+    });
+  return accepted;
 }
 
 }  // namespace
@@ -55,47 +115,26 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   prt::fuzz::write_file(path, bytes.data(), bytes.size());
 
-  prt::fuzz::expect_only_prt_errors([&] {
-    const std::uint32_t version = prt::read_transfer_version(path);
-    if (version < 1 || version > prt::kTransferFormatVersion) prt::fuzz::finding("read_transfer_version out of range");
-    if (prt::read_transfer_basis(path) == prt::TransferBasis::SH && prt::transfer_is_compressed(path)) {
-      const prt::CompressedTransfer c = prt::read_compressed_transfer(path);
-      (void)prt::describe_transfer(c);
-      (void)prt::decompress(c);
-      round_trip(c, prt::read_compressed_transfer,
-                 [](const std::string& p, const prt::CompressedTransfer& x) { prt::write_compressed_transfer(p, x); });
-    } else if (prt::read_transfer_basis(path) == prt::TransferBasis::SH && prt::transfer_is_lightmap(path)) {
-      // An SH lightmap: version 5, or 7 with its interpolated-texel mask.
-      const prt::LightmapTransfer l = prt::read_lightmap_transfer(path);
-      (void)prt::describe_transfer(l);
-      (void)prt::transfer_sections(l);
-      round_trip(l, prt::read_lightmap_transfer,
-                 [](const std::string& p, const prt::LightmapTransfer& x) { prt::write_lightmap_transfer(p, x); });
-    } else if (prt::read_transfer_basis(path) == prt::TransferBasis::SH) {
-      const prt::Transfer t = prt::read_transfer(path);
-      (void)prt::describe_transfer(t);
-      (void)prt::transfer_sections(t);
-      (void)prt::transfer_bytes_per_vertex(t);
-      (void)prt::analytic_bytes_saved(t);
-      round_trip(t, prt::read_transfer, [](const std::string& p, const prt::Transfer& x) { prt::write_transfer(p, x); });
-    } else if (prt::read_transfer_basis(path) == prt::TransferBasis::ZH) {
-      const prt::ZhTransfer t = prt::read_zh_transfer(path);
-      (void)prt::describe_transfer(t);
-      (void)prt::transfer_sections(t);
-      round_trip(t, prt::read_zh_transfer, [](const std::string& p, const prt::ZhTransfer& x) { prt::write_zh_transfer(p, x); });
-    } else {
-      const prt::WaveletTransfer t = prt::read_wavelet_transfer(path);
-      (void)prt::describe_transfer(t);
-      (void)prt::transfer_sections(t);
-      round_trip(t, prt::read_wavelet_transfer,
-                 [](const std::string& p, const prt::WaveletTransfer& x) { prt::write_wavelet_transfer(p, x); });
+  std::optional<prt::AnyTransfer> any;
+  std::uint32_t version = 0;
+  prt::fuzz::expect_only_prt_errors([&] { any = prt::read_transfer_file(path, &version); });
+  const bool read = any.has_value();
+  const std::size_t kind = read ? any->index() : 0;
+  if (read) {
+    if (version < 1 || version > prt::kTransferFormatVersion) prt::fuzz::finding("the format version out of range");
+    // Accepted: no consumer may refuse it (nor crash).
+    try {
+      exercise(*any);
+    } catch (const prt::Error& e) {
+      prt::fuzz::finding(std::string("a transfer the reader accepts is refused by a consumer: ") + e.what());
     }
-  });
-  // The other basis's reader refuses the file (with a prt::Error).
-  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_wavelet_transfer(path); });
-  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_transfer(path); });
-  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_compressed_transfer(path); });
-  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_lightmap_transfer(path); });
-  prt::fuzz::expect_only_prt_errors([&] { (void)prt::read_zh_transfer(path); });
+  }
+  const std::array<bool, prt::kTransferKinds> accepted = typed_reads(path);
+  for (std::size_t k = 0; k < accepted.size(); ++k)
+    if (accepted[k] != (read && k == kind))
+      prt::fuzz::finding(std::string("the reader of kind '") + std::string(prt::kind_names(prt::TransferKind(k)).id) +
+                         (accepted[k] ? "' accepts a file read_transfer_file " +
+                                            std::string(read ? "reads as another kind" : "refuses")
+                                      : "' refuses a file read_transfer_file reads as that kind"));
   return 0;
 }

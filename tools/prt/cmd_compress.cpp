@@ -1,7 +1,7 @@
 // prt compress: a transfer file -> the same transfer compressed by clustered
 // PCA (docs/COMPRESSION.md), by a given K x N or by a relit-error target.
 #include "commands.h"
-#include "progress.h"
+#include "progress_bar.h"
 
 #include <prt/compression_error.h>
 #include <prt/envmap.h>
@@ -9,6 +9,7 @@
 #include <prt/paths.h>
 #include <prt/precompute.h>
 #include <prt/projection.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 
 #include <fmt/core.h>
@@ -94,12 +95,22 @@ ErrorDistribution error_distribution(const CompressArgs& a, int bands) {
   return make_error_distribution(spec, bands);
 }
 
+// IN: an SH transfer (prt precompute's), the one kind prt compress takes;
+// the others are refused with the kind table's sentence (prt/transfer_file.h).
+Transfer read_input(const std::string& path) {
+  AnyTransfer any = read_transfer_file(path);
+  require_support(kind_of(any), Consumer::Compress, path);
+  Transfer* t = std::get_if<Transfer>(&any);
+  PRT_CHECK(t && "the kind table's Compress column takes SH transfers only");
+  return std::move(*t);
+}
+
 std::string bytes_text(double b) { return b >= 1e6 ? fmt::format("{:.2f} MB", b / 1e6) : fmt::format("{:.1f} KB", b / 1e3); }
 
 // --measure: a compressed file's error against IN, over the distribution.
 int run_measure(const CompressArgs& a) {
-  const Transfer t = read_transfer(a.input);
-  const CompressedTransfer c = read_compressed_transfer(a.measure);
+  const Transfer t = read_input(a.input);
+  const CompressedTransfer c = read_transfer_as<CompressedTransfer>(a.measure);
   if (c.transfer.vertices != t.vertices || c.transfer.bands != t.bands || c.transfer.glossy != t.glossy ||
       c.coeffs.rows() != t.coeffs.size() / std::max<std::size_t>(t.stride(), 1))
     throw Error(a.measure + ": not a compression of " + a.input + " (other vertices, bands or signals)");
@@ -121,10 +132,7 @@ int run_compress(CompressArgs& a) {
   check_usage(a);
   if (!a.measure.empty()) return run_measure(a);
   for_path("--output", [&] { check_writable(a.output); });
-  if (transfer_is_compressed(a.input))
-    throw Error(a.input + ": already compressed (prt info shows its clusters); compress the uncompressed transfer "
-                          "prt precompute wrote");
-  const Transfer t = read_transfer(a.input);
+  const Transfer t = read_input(a.input);
   if (!t.glossy)  // an option that does not fit the file: the file's mismatch
     for (const CLI::Option* o : {a.glossy_clusters_opt, a.glossy_pca_opt})
       if (o->count() > 0)

@@ -3,8 +3,8 @@
 // under a map (COLOR_0).
 #include "commands.h"
 #include "look.h"
-#include "progress.h"
-#include "scene.h"
+#include "progress_bar.h"
+#include "inputs.h"
 
 #include <prt/compressed_transfer.h>
 #include <prt/envmap.h>
@@ -19,6 +19,7 @@
 #include <prt/render.h>
 #include <prt/web_export.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 
 #include <fmt/core.h>
@@ -94,11 +95,11 @@ void print_page_written(const ExportArgs& a) {
 // A lightmap (prt precompute SCENE --lightmap): the scene with its
 // coefficient textures (write_gltf_lightmap; docs/FORMAT.md "Lightmap export"),
 // and the page that relights them (docs/WEB.md "Lightmaps").
-int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler, ToneMap tone) {
+int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const std::array<double, 3>& euler,
+                        ToneMap tone) {
   if (!a.bake.empty() && a.output.empty())
     throw UsageError("--bake: a lightmap's baked texture goes into the glTF of --output (the page relights the "
                      "coefficient textures): give --output FILE.glb too");
-  const LightmapTransfer lt = read_lightmap_transfer(a.transfer);
   const prt::Scene scene = prt::load_scene(a.mesh);
   const LightmapTexels texels = lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
                                                 lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
@@ -152,8 +153,9 @@ int run_export_lightmap(const ExportArgs& a, const std::array<double, 3>& euler,
 // A probe volume (prt precompute SCENE --probes): every probe relit under
 // --bake ENV as engines' SH (three.js LightProbe, Unity SphericalHarmonicsL2)
 // in a JSON file, and with --matrices its SH transfer matrices in a binary
-// file (docs/PROBES.md "Export").
-int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
+// file (docs/PROBES.md "Export"). `held`: the volume when TRANSFER was read
+// already (to learn its kind); else --probes FILE is read after the checks.
+int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler, ProbeTransfer* held) {
   if (!a.web.empty()) throw UsageError("--web shows a mesh's or a lightmap's transfer; a probe volume exports as JSON (-o FILE.json)");
   if (a.bake.empty()) throw UsageError(a.transfer + " is a probe volume: give --bake ENV (the map its probes are relit under) and -o FILE.json");
   std::string ext = std::filesystem::path(a.output).extension().string();
@@ -163,7 +165,7 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
     check_not_input("--matrices", a.matrices, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"--bake", a.bake}});
     for_path("--matrices", [&] { check_writable(a.matrices); });
   }
-  const ProbeTransfer t = read_probe_transfer(a.transfer);
+  const ProbeTransfer t = held ? std::move(*held) : read_transfer_as<ProbeTransfer>(a.transfer);
   const prt::Scene scene = load_scene_or_mesh(a.mesh);
   if (scene.hash() != t.scene_hash)
     throw Error(a.transfer + ": computed for another scene than " + a.mesh + ": rerun prt precompute " + a.mesh + " --probes ...");
@@ -190,66 +192,20 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler) {
   return 0;
 }
 
-int run_export(const ExportArgs& args) {
-  ExportArgs a = args;  // --probes FILE becomes the transfer
-  check_distinct_outputs({{"--output", a.output}, {"--web", a.web}, {"--matrices", a.matrices}});
-  if (!a.probes.empty()) {
-    if (!a.transfer.empty() && a.transfer != a.probes)
-      throw UsageError("--probes " + a.probes + " exports a probe volume as JSON; " + a.transfer +
-                       " is exported in its own run (prt export SCENE " + a.transfer + " -o FILE.glb)");
-    a.transfer = a.probes;
-    if (a.output.empty()) throw UsageError("--probes: give -o FILE.json (and --bake ENV)");
-    check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"--probes", a.probes}, {"--bake", a.bake}});
-    return run_export_probes(a, rotate_degrees(a.rotate));
-  }
-  if (a.transfer.empty()) throw UsageError("give TRANSFER (a file from prt precompute or prt compress) or --probes FILE");
-  if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
-  if (is_probe_file(a.transfer)) {
-    if (!a.output.empty()) check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"--bake", a.bake}});
-    return run_export_probes(a, rotate_degrees(a.rotate));
-  }
-  if (!a.matrices.empty() || a.matrix_bands_opt->count() > 0)
-    throw UsageError("--matrices and --matrix-bands apply to a probe volume (prt precompute --probes)");
-  std::string ext = std::filesystem::path(a.output).extension().string();
-  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-  if (!a.output.empty() && ext != ".glb" && ext != ".gltf")
-    throw UsageError("--output: " + a.output + ": expected a .glb (binary glTF) or .gltf (JSON glTF) file");
-  for (const CLI::Option* o : {a.rotate_opt, a.exposure_opt})
-    if (o->count() > 0 && a.bake.empty() && a.web.empty())
-      throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
-  for (const CLI::Option* o : a.web_opts)
-    if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
-  const std::array<double, 3> euler = rotate_degrees(a.rotate);
-  if (!a.output.empty()) {
-    check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
-    for_path("--output", [&] { check_writable(a.output); });
-  }
-  if (!a.web.empty()) {
-    check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
-    check_web_dir(a.web, a.force);
-  }
-  const ToneMap tone = parse_tone_map(a.tone_map);  // checked while parsing
-
-  if (transfer_is_lightmap(a.transfer)) return run_export_lightmap(a, euler, tone);
-  // glTF attributes hold dense per-vertex SH rows: a wavelet transfer
-  // (sparse, per light-cube pixel) has none to give.
-  if (read_transfer_basis(a.transfer) == TransferBasis::Wavelet)
-    throw Error(a.transfer + ": holds a wavelet transfer; prt export writes SH transfers only (its vertex "
-                "attributes are SH rows): compute one with prt precompute --basis sh");
-  Scene scene;
-  scene.mesh = load_mesh(a.mesh);
-  load_transfer(scene, a.transfer, 0, "export", false, /*allow_compressed=*/true);
-  const Mesh& mesh = scene.mesh;
-  // A compressed file (prt compress) is exported as the rows it reconstructs;
-  // an uncompressed one moved, not copied.
-  const Transfer t = scene.compressed ? decompress(*scene.compressed) : std::move(scene.transfer);
+// A mesh's SH transfer `t` (checked against `mesh`; `compressed`: the rows a
+// compressed file reconstructs) as glTF, its rows dense in vertex attributes,
+// and the page that relights them.
+int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool compressed,
+                const std::array<double, 3>& euler, ToneMap tone) {
   if (!a.quiet) {
     fmt::print(stderr, "{}\n", describe(mesh));
-    if (scene.compressed)
+    if (compressed)
       fmt::print(stderr, "{} is compressed: exporting its decompressed rows (prt::decompress)\n", a.transfer);
     if (t.glossy)
-      fmt::print(stderr, "{} holds glossy matrices: exporting its diffuse transfer only (glTF attributes hold one "
-                         "row per vertex; the view-dependent part needs prt relight/render --eye)\n", a.transfer);
+      fmt::print(stderr,
+                 "{} holds glossy matrices: exporting its diffuse transfer only (glTF attributes hold one row per "
+                 "vertex; the view-dependent part needs prt relight/render --eye)\n",
+                 a.transfer);
   }
 
   GltfOptions opts;
@@ -295,6 +251,91 @@ int run_export(const ExportArgs& args) {
     if (page) print_page_written(a);
   }
   return 0;
+}
+
+UsageError not_gltf(const std::string& output) {
+  return UsageError("--output: " + output + ": expected a .glb (binary glTF) or .gltf (JSON glTF) file");
+}
+
+// The options of a glTF export (-o FILE.glb|.gltf, --bake, --web), checked
+// before anything is read: usage errors (exit 2) and outputs that cannot be
+// written.
+void check_gltf_options(const ExportArgs& a, bool gltf) {
+  if (!a.matrices.empty() || a.matrix_bands_opt->count() > 0)
+    throw UsageError("--matrices and --matrix-bands apply to a probe volume (prt precompute --probes)");
+  if (!a.output.empty() && !gltf) throw not_gltf(a.output);
+  for (const CLI::Option* o : {a.rotate_opt, a.exposure_opt})
+    if (o->count() > 0 && a.bake.empty() && a.web.empty())
+      throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
+  for (const CLI::Option* o : a.web_opts)
+    if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
+  if (!a.output.empty()) {
+    check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
+    for_path("--output", [&] { check_writable(a.output); });
+  }
+  if (!a.web.empty()) {
+    check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
+    check_web_dir(a.web, a.force);
+  }
+}
+
+int run_export(const ExportArgs& args) {
+  ExportArgs a = args;  // --probes FILE becomes the transfer
+  check_distinct_outputs({{"--output", a.output}, {"--web", a.web}, {"--matrices", a.matrices}});
+  if (!a.probes.empty()) {
+    if (!a.transfer.empty() && a.transfer != a.probes)
+      throw UsageError("--probes " + a.probes + " exports a probe volume as JSON; " + a.transfer +
+                       " is exported in its own run (prt export SCENE " + a.transfer + " -o FILE.glb)");
+    a.transfer = a.probes;
+    if (a.output.empty()) throw UsageError("--probes: give -o FILE.json (and --bake ENV)");
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"--probes", a.probes}, {"--bake", a.bake}});
+    return run_export_probes(a, rotate_degrees(a.rotate), nullptr);
+  }
+  if (a.transfer.empty()) throw UsageError("give TRANSFER (a file from prt precompute or prt compress) or --probes FILE");
+  if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
+  std::string ext = std::filesystem::path(a.output).extension().string();
+  for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  const bool gltf = ext == ".glb" || ext == ".gltf";
+  // -o FILE.json without --web: a probe volume given as TRANSFER, its
+  // probes' SH as JSON (as with --probes FILE); any other kind is refused.
+  const bool probe_json = ext == ".json" && a.web.empty();
+  if (probe_json) {
+    AnyTransfer any = read_transfer_file(a.transfer);
+    ProbeTransfer* p = std::get_if<ProbeTransfer>(&any);
+    if (!p) throw not_gltf(a.output);
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"--bake", a.bake}});
+    return run_export_probes(a, rotate_degrees(a.rotate), p);
+  }
+  check_gltf_options(a, gltf);
+  AnyTransfer any = read_transfer_file(a.transfer);
+  // The page, the glTF and its baked colours each take the kinds the table
+  // says (prt/transfer_file.h); the others are refused with its sentence.
+  if (!a.web.empty()) require_support(kind_of(any), Consumer::ExportWeb, a.transfer);
+  if (gltf) require_support(kind_of(any), Consumer::ExportGlb, a.transfer);
+  if (!a.bake.empty()) require_support(kind_of(any), Consumer::ExportBake, a.transfer);
+  const std::array<double, 3> euler = rotate_degrees(a.rotate);
+  const ToneMap tone = parse_tone_map(a.tone_map);  // checked while parsing
+
+  const auto refused = [](const auto&) -> int {
+    PRT_CHECK(false && "refused above by the kind table (Consumer::ExportGlb, ExportBake, ExportWeb)");
+    return 1;
+  };
+  return dispatch(
+      any,
+      [&](const Transfer& t) {
+        const Mesh mesh = load_mesh(a.mesh);
+        check_matches(t, mesh, a.transfer);
+        return export_mesh(a, mesh, t, false, euler, tone);
+      },
+      [&](const CompressedTransfer& c) {  // exported as the rows it reconstructs
+        const Mesh mesh = load_mesh(a.mesh);
+        check_matches(c, mesh, a.transfer);
+        return export_mesh(a, mesh, decompress(c), true, euler, tone);
+      },
+      [&](const LightmapTransfer& l) { return run_export_lightmap(a, l, euler, tone); },
+      [&](const WaveletTransfer& w) { return refused(w); }, [&](const ZhTransfer& z) { return refused(z); },
+      [&](const WaveletLightmap& w) { return refused(w); },
+      [&](const ProbeTransfer& p) { return refused(p); });  // (its JSON: above)
 }
 
 }  // namespace

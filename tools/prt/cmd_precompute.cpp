@@ -1,6 +1,6 @@
 // prt precompute: mesh -> per-vertex SH or wavelet transfer file.
 #include "commands.h"
-#include "progress.h"
+#include "progress_bar.h"
 
 #include <prt/lightmap.h>
 #include <prt/envmap.h>
@@ -703,6 +703,146 @@ int run_probes(PrecomputeArgs& a) {
   return 0;
 }
 
+// What an SH vertex transfer's run reports besides the transfer.
+struct ShReports {
+  TransferMemory memory;
+  AdaptiveReport adaptive;
+  SubdivideReport subdivided;
+  std::optional<Mesh> refined;  // --subdivide: the mesh the transfer is for
+};
+
+// The summary of an SH vertex transfer written (`secs` after loading began;
+// `cap`: the refined mesh's most vertices).
+void print_sh_summary(const PrecomputeArgs& a, const Transfer& t, const ShReports& rep, std::size_t cap, double secs) {
+  fmt::print(stderr, "wrote {}: {} {} bands, {} channel{}, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
+             a.output, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s", t.vertices,
+             4 * t.stride(), secs);
+  if (t.glossy)
+    fmt::print(stderr, "glossy matrices: {}x{}{}, {} bytes per stored vertex, {} per vertex on average\n",
+               t.bands * t.bands, t.bands * t.bands,
+               t.glossy_symmetric() ? " symmetric (upper triangle stored)"
+                                    : fmt::format(" x {} channel{}", t.glossy_channels(),
+                                                  t.glossy_channels() == 1 ? "" : "s"),
+               4 * t.glossy_stride(), 4 * t.glossy_matrices.size() / std::max<std::size_t>(t.vertices, 1));
+  fmt::print(stderr, "analytic (unoccluded, no stored transfer): {} of {} vertices ({:.1f}%), {} bytes saved\n",
+             t.analytic_vertices(), t.vertices,
+             t.vertices ? 100.0 * double(t.analytic_vertices()) / double(t.vertices) : 0.0, analytic_bytes_saved(t));
+  if (t.mode == TransferMode::Interreflected && a.opt.bounces > 0) {
+    std::string energies;
+    for (double e : t.bounce_energy) energies += fmt::format(" {:.3g}", t.direct_energy > 0 ? e / t.direct_energy : 0.0);
+    fmt::print(stderr, "bounces: {} of at most {}{}; energy of each relative to the direct part:{}\n", t.bounces,
+               a.opt.bounces, t.bounces < a.opt.bounces ? " (the last fell below --bounce-tolerance)" : "",
+               energies);
+  }
+  if (rep.memory.records_in_memory + rep.memory.records_spilled > 0 || a.memory_limit.size())
+    fmt::print(stderr,
+               "memory: peak {:.2f} GB resident of --memory-limit {:.2f} GB{}; gather records {:.1f} MB in memory, "
+               "{:.1f} MB in the temporary file (blocks of {} vertices)\n",
+               double(peak_resident_bytes()) / 1e9, double(a.opt.memory_limit) / 1e9,
+               a.memory_limit.empty() ? " (the default)" : "", double(rep.memory.records_in_memory) / 1e6,
+               double(rep.memory.records_spilled) / 1e6, rep.memory.block);
+  if (a.adaptive_opt->count() > 0 && a.target_opt->count() == 0) print_adaptive(rep.adaptive, t);
+  if (rep.refined) print_subdivide(rep.subdivided, cap, a.subdivided_mesh, *rep.refined);
+  if (!t.ao.empty() && t.mode != TransferMode::Unshadowed) {
+    double mean = 0;
+    for (float v : t.ao) mean += v;
+    fmt::print(stderr, "ambient occlusion: mean {:.4f}\n", mean / double(std::max<std::size_t>(t.ao.size(), 1)));
+  }
+}
+
+// The SH transfer at the mesh's vertices (the basis and options checked).
+int run_sh_vertices(PrecomputeArgs& a) {
+  a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
+  a.opt.glossy = a.material == "glossy";
+  double rgb[3];
+  parse_triple(a.albedo, "--albedo", rgb);
+  a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
+  a.opt.comm = &job();
+  a.opt.memory_limit = memory_limit(a);
+  ShReports rep;
+  a.opt.memory_report = &rep.memory;
+  // Test hook (tests/mpi): PRT_TEST_RECORDS_IN_MEMORY=BYTES caps the records
+  // kept in memory, so a small mesh sends the rest to the temporary file.
+  if (const char* cap = std::getenv("PRT_TEST_RECORDS_IN_MEMORY"); cap && *cap)
+    a.opt.records_in_memory_max = std::size_t(std::strtoull(cap, nullptr, 10));
+  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
+  const bool subdivide = a.subdivide_opt->count() > 0;
+  if (subdivide && is_root()) for_path("--subdivided-mesh", [&] { check_writable(a.subdivided_mesh); });
+
+  CompressOptions copt;  // checked before the long work
+  copt.weight_bits = a.compress_weights;
+  if (!a.compress.empty()) parse_compress(a.compress, copt);
+  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
+    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  if (subdivide && a.sopt.max_vertices != 0 && a.sopt.max_vertices < mesh.vertex_count())
+    throw UsageError(fmt::format("--subdivide-max-vertices {}: below the mesh's {} vertices (0: 4x the mesh's)",
+                                 a.sopt.max_vertices, mesh.vertex_count()));
+  test_fail_rank();
+  release_free_memory();
+  const bool quiet = a.quiet || !is_root();
+  if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
+  const bool adapt = a.adaptive_opt->count() > 0;
+  // --target-error: the settings chosen on the input mesh; with --subdivide
+  // the refinement then runs with them (the chosen transfer is the input's).
+  std::optional<Transfer> computed;
+  if (a.target_opt->count() > 0) {
+    std::optional<TargetResult> r = run_target(a, mesh);
+    if (!r) return 130;
+    if (subdivide) {
+      a.opt.bands = r->bands;
+      a.opt.samples = r->samples;
+      a.opt.bounces = r->bounces;
+    } else {
+      computed = std::move(r->transfer);
+    }
+  }
+  if (!computed)
+    computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+      if (subdivide) {
+        Subdivided d = subdivide_for_transfer(mesh, a.opt, a.sopt, job_progress(progress), &rep.subdivided);
+        rep.refined = std::move(d.mesh);
+        return std::move(d.transfer);
+      }
+      return adapt ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress), &rep.adaptive)
+                   : compute_transfer(mesh, a.opt, job_progress(progress));
+    }, a.opt.memory_limit);
+  if (!computed) return 130;
+  if (!is_root()) return 0;  // rank 0 compresses and writes the file
+  const Transfer& t = *computed;
+  // The refined mesh goes with the transfer: both written, or neither.
+  const auto write_refined = [&] {
+    if (rep.refined)
+      out.write([&] {
+        write_ply(a.subdivided_mesh, *rep.refined, rep.refined->colors, PlyColors::Float,
+                  "prt precompute --subdivide: refined mesh");
+      });
+  };
+  const std::size_t cap = a.sopt.max_vertices ? a.sopt.max_vertices : 4 * mesh.vertex_count();
+  if (!a.compress.empty()) {
+    CompressOptions o = copt;
+    const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "precompute", [&](const Progress& p) {
+      o.progress = p;
+      return compress_transfer(t, o);
+    });
+    if (!c) return 130;
+    out.write([&] { write_compressed_transfer(a.output, *c); });
+    write_refined();
+    if (const int rc = out.commit(); rc != 0) return rc;
+    if (!a.quiet) fmt::print(stderr, "wrote {} (compressed):\n{}", a.output, describe_transfer(*c));
+    if (!a.quiet && rep.refined) print_subdivide(rep.subdivided, cap, a.subdivided_mesh, *rep.refined);
+    return 0;
+  }
+  out.write([&] { write_transfer(a.output, t); });
+  write_refined();
+  if (const int rc = out.commit(); rc != 0) return rc;
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!a.quiet) print_sh_summary(a, t, rep, cap, secs);
+  return 0;
+}
+
 int run_precompute(PrecomputeArgs& a) {
   check_subdivide(a);
   parse_adaptive(a);
@@ -753,133 +893,179 @@ int run_precompute(PrecomputeArgs& a) {
   }
   check_usage(a);
   if (a.basis == "wavelet") return run_wavelet(a);
-  a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
-  a.opt.glossy = a.material == "glossy";
-  double rgb[3];
-  parse_triple(a.albedo, "--albedo", rgb);
-  a.opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
-  a.opt.comm = &job();
-  a.opt.memory_limit = memory_limit(a);
-  TransferMemory memory;
-  a.opt.memory_report = &memory;
-  // Test hook (tests/mpi): PRT_TEST_RECORDS_IN_MEMORY=BYTES caps the records
-  // kept in memory, so a small mesh sends the rest to the temporary file.
-  if (const char* cap = std::getenv("PRT_TEST_RECORDS_IN_MEMORY"); cap && *cap)
-    a.opt.records_in_memory_max = std::size_t(std::strtoull(cap, nullptr, 10));
-  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
-  const bool subdivide = a.subdivide_opt->count() > 0;
-  if (subdivide && is_root()) for_path("--subdivided-mesh", [&] { check_writable(a.subdivided_mesh); });
+  return run_sh_vertices(a);
+}
 
-  CompressOptions copt;  // checked before the long work
-  copt.weight_bits = a.compress_weights;
-  if (!a.compress.empty()) parse_compress(a.compress, copt);
-  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
-    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
-  const auto t0 = std::chrono::steady_clock::now();
-  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
-  if (subdivide && a.sopt.max_vertices != 0 && a.sopt.max_vertices < mesh.vertex_count())
-    throw UsageError(fmt::format("--subdivide-max-vertices {}: below the mesh's {} vertices (0: 4x the mesh's)",
-                                 a.sopt.max_vertices, mesh.vertex_count()));
-  test_fail_rank();
-  release_free_memory();
-  const bool quiet = a.quiet || !is_root();
-  if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
-  Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
-  AdaptiveReport adaptive;
-  const bool adapt = a.adaptive_opt->count() > 0;
-  SubdivideReport subdivided;
-  std::optional<Mesh> refined;  // --subdivide: the mesh the transfer is for
-  // --target-error: the settings chosen on the input mesh; with --subdivide
-  // the refinement then runs with them (the chosen transfer is the input's).
-  std::optional<Transfer> computed;
-  if (a.target_opt->count() > 0) {
-    std::optional<TargetResult> r = run_target(a, mesh);
-    if (!r) return 130;
-    if (subdivide) {
-      a.opt.bands = r->bands;
-      a.opt.samples = r->samples;
-      a.opt.bounces = r->bounces;
-    } else {
-      computed = std::move(r->transfer);
-    }
-  }
-  if (!computed)
-    computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
-      if (subdivide) {
-        Subdivided d = subdivide_for_transfer(mesh, a.opt, a.sopt, job_progress(progress), &subdivided);
-        refined = std::move(d.mesh);
-        return std::move(d.transfer);
-      }
-      return adapt ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress), &adaptive)
-                   : compute_transfer(mesh, a.opt, job_progress(progress));
-    }, a.opt.memory_limit);
-  if (!computed) return 130;
-  if (!is_root()) return 0;  // rank 0 compresses and writes the file
-  const Transfer& t = *computed;
-  // The refined mesh goes with the transfer: both written, or neither.
-  const auto write_refined = [&] {
-    if (refined)
-      out.write([&] {
-        write_ply(a.subdivided_mesh, *refined, refined->colors, PlyColors::Float,
-                  "prt precompute --subdivide: refined mesh");
-      });
-  };
-  const std::size_t cap = a.sopt.max_vertices ? a.sopt.max_vertices : 4 * mesh.vertex_count();
-  if (!a.compress.empty()) {
-    CompressOptions o = copt;
-    const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "precompute", [&](const Progress& p) {
-      o.progress = p;
-      return compress_transfer(t, o);
-    });
-    if (!c) return 130;
-    out.write([&] { write_compressed_transfer(a.output, *c); });
-    write_refined();
-    if (const int rc = out.commit(); rc != 0) return rc;
-    if (!a.quiet) fmt::print(stderr, "wrote {} (compressed):\n{}", a.output, describe_transfer(*c));
-    if (!a.quiet && refined) print_subdivide(subdivided, cap, a.subdivided_mesh, *refined);
-    return 0;
-  }
-  out.write([&] { write_transfer(a.output, t); });
-  write_refined();
-  if (const int rc = out.commit(); rc != 0) return rc;
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!a.quiet) {
-    fmt::print(stderr, "wrote {}: {} {} bands, {} channel{}, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
-               a.output, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s", t.vertices,
-               4 * t.stride(), secs);
-    if (t.glossy)
-      fmt::print(stderr, "glossy matrices: {}x{}{}, {} bytes per stored vertex, {} per vertex on average\n",
-                 t.bands * t.bands, t.bands * t.bands,
-                 t.glossy_symmetric() ? " symmetric (upper triangle stored)"
-                                      : fmt::format(" x {} channel{}", t.glossy_channels(),
-                                                    t.glossy_channels() == 1 ? "" : "s"),
-                 4 * t.glossy_stride(), 4 * t.glossy_matrices.size() / std::max<std::size_t>(t.vertices, 1));
-    fmt::print(stderr, "analytic (unoccluded, no stored transfer): {} of {} vertices ({:.1f}%), {} bytes saved\n",
-               t.analytic_vertices(), t.vertices,
-               t.vertices ? 100.0 * double(t.analytic_vertices()) / double(t.vertices) : 0.0, analytic_bytes_saved(t));
-    if (t.mode == TransferMode::Interreflected && a.opt.bounces > 0) {
-      std::string energies;
-      for (double e : t.bounce_energy) energies += fmt::format(" {:.3g}", t.direct_energy > 0 ? e / t.direct_energy : 0.0);
-      fmt::print(stderr, "bounces: {} of at most {}{}; energy of each relative to the direct part:{}\n", t.bounces,
-                 a.opt.bounces, t.bounces < a.opt.bounces ? " (the last fell below --bounce-tolerance)" : "",
-                 energies);
-    }
-    if (memory.records_in_memory + memory.records_spilled > 0 || a.memory_limit.size())
-      fmt::print(stderr,
-                 "memory: peak {:.2f} GB resident of --memory-limit {:.2f} GB{}; gather records {:.1f} MB in memory, "
-                 "{:.1f} MB in the temporary file (blocks of {} vertices)\n",
-                 double(peak_resident_bytes()) / 1e9, double(a.opt.memory_limit) / 1e9,
-                 a.memory_limit.empty() ? " (the default)" : "", double(memory.records_in_memory) / 1e6,
-                 double(memory.records_spilled) / 1e6, memory.block);
-    if (adapt && a.target_opt->count() == 0) print_adaptive(adaptive, t);
-    if (refined) print_subdivide(subdivided, cap, a.subdivided_mesh, *refined);
-    if (!t.ao.empty() && t.mode != TransferMode::Unshadowed) {
-      double mean = 0;
-      for (float v : t.ao) mean += v;
-      fmt::print(stderr, "ambient occlusion: mean {:.4f}\n", mean / double(std::max<std::size_t>(t.ao.size(), 1)));
-    }
-  }
-  return 0;
+// --basis and the options of --basis zh.
+void add_basis_options(CLI::App* s, PrecomputeArgs& a) {
+  s->add_option("--basis", a.basis,
+                "sh (spherical harmonics, all modes), wavelet (all-frequency shadows: Haar on a cube map, "
+                "Ng et al. 2003) or zh (local deformable PRT: --lobes zonal-harmonic lobes per vertex in its own frame, "
+                "which follow the mesh when it bends; Sloan, Luna & Snyder 2005; docs/LDPRT.md)")
+      ->check(CLI::IsMember({"sh", "wavelet", "zh"}))
+      ->capture_default_str();
+  a.lobes_opt = s->add_option("--lobes", a.lobes,
+                              "--basis zh: zonal-harmonic lobes per vertex K (1 to 8; 4 keeps the 6-band shadowed "
+                              "transfer within about 1.3% on the shared meshes)")
+                    ->check(int_range(1, zh::kMaxLobes))
+                    ->capture_default_str();
+  a.dynamic_ao_opt = s->add_flag("--dynamic-ao", a.dynamic_ao,
+                                 "With --basis zh: also store the rest pose's dynamic ambient occlusion (Bunnell 2005; 4 "
+                                 "bytes a vertex), which prt relight --dynamic-ao compares a pose's with to restore "
+                                 "the distant occlusion the lobes cannot follow");
+  a.tangent_opt = s->add_option("--tangent", a.tangent,
+                               "With --basis zh: each vertex frame's tangent: uv (the direction of increasing u of "
+                               "the mesh's first texture coordinates, where it has them; the edge rule elsewhere) or "
+                               "edge (the edge rule everywhere); docs/CONVENTIONS.md, \"Vertex frames\"")
+                     ->check(CLI::IsMember({"uv", "edge"}))
+                     ->capture_default_str();
+}
+
+// What the transfer holds and how it is computed: material, mode, bands, rays, bounces,
+// the error target, the wavelet basis's cube, albedo, threads, seed, offset, welding.
+void add_transfer_options(CLI::App* s, PrecomputeArgs& a) {
+  a.material_opt =
+      add_shared(s, SharedOption::Material, a.material,
+                 "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
+                 "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12)");
+  a.mode_opt = add_shared(s, SharedOption::Mode, a.mode, "Transfer: unshadowed (no rays), shadowed, or interreflected");
+  a.bands_opt = add_shared(s, SharedOption::BandsComputed, a.opt.bands,
+                           "SH bands n: prt render and prt view draw at most 16, and transfer accuracy is measured up "
+                           "to 16");
+  a.samples_opt = s->add_option("-s,--samples", a.opt.samples, "Rays per vertex (about)")
+                      ->check(int_range(1, 1 << 24))
+                      ->capture_default_str();
+  a.bounces_opt = add_shared(s, SharedOption::Bounces, a.opt.bounces, "Diffuse bounces (interreflected mode), at most");
+  a.sh_only.insert(a.sh_only.end(), {a.bands_opt, a.samples_opt, a.bounces_opt, a.material_opt});
+  a.target_opt =
+      add_shared(s, SharedOption::TargetError, a.target_error,
+                 "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
+                 "against the reference under --env is at most this (--bands/--samples/--bounces: the most to try)");
+  a.env_opt = s->add_option("--env", a.env, "Lat-long map the --target-error is measured under")->check(path_value());
+  a.cache_opt = s->add_option("--cache", a.cache, "Reference cache of --target-error (default ~/.cache/prt)")
+                    ->check(path_value());
+  a.tolerance_opt =
+      s->add_option("--bounce-tolerance", a.opt.bounce_tolerance,
+                    "Stop adding bounces once one adds less than this fraction of the direct part's energy, in "
+                    "[0, 1) (0: never)")
+          ->check(number_range(0.0, 1.0, false, true))
+          ->capture_default_str();
+  a.sh_only.push_back(a.tolerance_opt);
+  a.wavelet_only.push_back(
+      s->add_option("--cube-res", a.wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
+          ->check(cube_resolution())
+          ->capture_default_str());
+  a.wavelet_only.push_back(
+      s->add_option("--threshold", a.wopt.threshold,
+                    "Wavelet basis: relative L2 truncation error per vertex, in [0, 1) (0 keeps every non-zero term)")
+          ->check(number_range(0.0, 1.0, false, true))
+          ->capture_default_str());
+  a.albedo_opt = add_shared(s, SharedOption::Albedo, a.albedo,
+                            "Diffuse albedo (with --lightmap: replaces the scene's materials)");
+  a.vertex_colors_opt = s->add_flag("--vertex-colors", a.opt.vertex_colors, "Use the mesh's vertex colours as albedo");
+  add_shared(s, SharedOption::Threads, a.opt.threads, "Worker threads");
+  a.sh_only.push_back(
+      add_shared(s, SharedOption::Seed, a.opt.seed, "Seed of the direction set"));
+  add_shared(s, SharedOption::Offset, a.opt.offset, "Ray origin offset along the normal");
+  a.weld_opt = s->add_flag("--weld", a.mesh_opt.weld, "Merge vertices that share a position before precomputing");
+}
+
+// --lightmap, --probes and their options, and a lightmap's extra maps.
+void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
+  a.lightmap_opt = add_shared(s, SharedOption::Lightmap, a.lightmap,
+                                 "WxH: an SH lightmap instead of vertices: the transfer of every texel of a W x H "
+                                 "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
+                                 "lightmap UV set (docs/LIGHTMAPS.md)");
+  a.uv_opt = add_shared(s, SharedOption::UvSet, a.uv,
+                           "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
+                           "object has it, else TEXCOORD_0)");
+  a.probes_opt = s->add_option("--probes", a.probes,
+                               "NXxNYxNZ: a relightable probe volume instead of vertices: probes on a grid spanning "
+                               "SCENE's bounding box, corners included (docs/PROBES.md); --bands (default 3), --mode "
+                               "shadowed|interreflected, --samples (rays per probe)");
+  a.probe_cube_opt = s->add_option("--probe-cube", a.popt.cube_res,
+                                   "With --probes: the visibility cube's finest face size r (4 to 64; traced at r/4, refined where an edge crosses)")
+                         ->check(int_one_of({4, 8, 16, 32, 64}))
+                         ->capture_default_str();
+  a.bounce_bands_opt = s->add_option("--bounce-bands", a.popt.bounce_bands,
+                                     "With --probes --mode interreflected: the environment bands the bounce light "
+                                     "takes (1 to 16)")
+                           ->check(int_range(1, 16))
+                           ->capture_default_str();
+  s->add_option("--ao-map", a.ao_map,
+                "With --lightmap: also write the texels' ambient occlusion (1/pi integral V cos) as an RGBA EXR in the "
+                "lightmap's layout (A = 1 at covered texels)")->check(path_value());
+  s->add_option("--bent-normal-map", a.bent_map,
+                "With --lightmap: also write the texels' bent normals (world x, y, z in R, G, B) as an RGBA EXR")
+      ->check(path_value());
+  s->add_option("--obscurance", a.obscurance,
+                "With --lightmap and --obscurance-map: obscurance distance d; an occluder at distance t counts "
+                "rho(t) = min(t/d, 1) (Zhukov et al. 1998)")
+      ->check(number_range(0.0, 1e30, true, false));
+  s->add_option("--obscurance-map", a.obscurance_map, "With --obscurance d: the obscurance map to write (RGBA EXR)")
+      ->check(path_value());
+}
+
+// --memory-limit and --compress.
+void add_memory_options(CLI::App* s, PrecomputeArgs& a) {
+  a.memory_limit_opt =
+      s->add_option("--memory-limit", a.memory_limit,
+                    "The most memory the process may hold, e.g. 8G or 512M (K, M, G, T: powers of 1000; KiB, MiB, "
+                    "GiB, TiB: of 1024); default 80% of the machine's memory, shared among the mpirun processes on it. "
+                    "Past what the per-vertex arrays need, the bounces' gather records go to a temporary file in "
+                    "TMPDIR; the result is the same bits; a limit the plan cannot meet is refused before the work "
+                    "(a lightmap's from its atlas, before rasterising it). SH transfer only: not --probes or --basis "
+                    "wavelet (docs/PRECOMPUTE.md, \"Memory\")")
+          ->check(memory_size_value());
+  a.sh_only.push_back(a.memory_limit_opt);
+  a.sh_only.push_back(s->add_option("--compress", a.compress,
+                                    "Write the transfer compressed by clustered PCA: K clusters x N principal "
+                                    "vectors, e.g. 128x8 (prt compress; docs/COMPRESSION.md)")
+                          ->check(compress_value()));
+  a.compress_weights_opt = s->add_option("--compress-weights", a.compress_weights,
+                                         "Bits per weight of --compress: 16 or 32")
+                               ->check(int_one_of({16, 32}))
+                               ->capture_default_str();
+  a.sh_only.push_back(a.compress_weights_opt);
+}
+
+// --adaptive sample points and --subdivide.
+void add_adaptive_options(CLI::App* s, PrecomputeArgs& a) {
+  a.adaptive_opt =
+      s->add_option("--adaptive", a.adaptive,
+                    "Adaptive sample points: trace a subset of the vertices (with --lightmap, texels) and interpolate the "
+                    "rest along the surface "
+                    "where probes show interpolation adds at most TOL (relative RMS of the transfer, band-weighted); "
+                    "without a value 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples (docs/PRECOMPUTE.md)")
+          ->expected(0, 1)
+          ->default_str("")
+          ->type_name("[TOL]");
+  a.verify_opt = s->add_option("--verify-adaptive", a.aopt.verify_fraction,
+                               "With --adaptive: trace this fraction of the interpolated vertices (texels) again and report "
+                               "their error against TOL (they keep the traced transfer)")
+                     ->check(number_range(0.0, 1.0))
+                     ->type_name("FRACTION");
+  a.adaptive_any_opt = s->add_flag("--adaptive-any", a.adaptive_any,
+                                   "With --adaptive TOL: take a TOL above 1.5x the default (the error may then pass "
+                                   "1.1x the full run's)");
+  a.subdivide_opt =
+      s->add_option("--subdivide", a.subdivide,
+                    "For coarse meshes: split the edges whose ends' transfer differs by more than TOL (relative, "
+                    "band-weighted: the metric of --adaptive) at their midpoints, round by round, and write the refined "
+                    "mesh (--subdivided-mesh) with the transfer for it; with --target-error E, the search's settings "
+                    "and, without a value, TOL = E / 2 (docs/PRECOMPUTE.md, \"Subdividing coarse meshes\")")
+          ->expected(0, 1)
+          ->default_str("")
+          ->type_name("[TOL]");
+  a.subdivide_max_opt = s->add_option("--subdivide-max-vertices", a.sopt.max_vertices,
+                                      "With --subdivide: the most vertices the refined mesh may have (0: 4x the "
+                                      "mesh's)")
+                            ->check(count_range(0, kMaxSubdivideVertices, "0: 4x the mesh's; a mesh's vertex "
+                                                                          "indices are 32-bit"))
+                            ->capture_default_str();
+  a.subdivided_mesh_opt = s->add_option("--subdivided-mesh", a.subdivided_mesh,
+                                        "With --subdivide: where the refined mesh goes, PLY with normals (and "
+                                        "colours) (default: the output's name with .ply)")->check(path_value());
 }
 
 }  // namespace
@@ -917,157 +1103,11 @@ Run add_precompute(CLI::App& app) {
       ->check(path_value())
       ->required();
   s->add_option("-o,--output", a->output, "Transfer file to write (docs/FORMAT.md)")->check(path_value())->required();
-  s->add_option("--basis", a->basis,
-                "sh (spherical harmonics, all modes), wavelet (all-frequency shadows: Haar on a cube map, "
-                "Ng et al. 2003) or zh (local deformable PRT: --lobes zonal-harmonic lobes per vertex in its own frame, "
-                "which follow the mesh when it bends; Sloan, Luna & Snyder 2005; docs/LDPRT.md)")
-      ->check(CLI::IsMember({"sh", "wavelet", "zh"}))
-      ->capture_default_str();
-  a->lobes_opt = s->add_option("--lobes", a->lobes,
-                               "--basis zh: zonal-harmonic lobes per vertex K (1 to 8; 4 keeps the 6-band shadowed "
-                               "transfer within about 1.3% on the shared meshes)")
-                     ->check(int_range(1, zh::kMaxLobes))
-                     ->capture_default_str();
-  a->dynamic_ao_opt = s->add_flag("--dynamic-ao", a->dynamic_ao,
-                                  "With --basis zh: also store the rest pose's dynamic ambient occlusion (Bunnell 2005; 4 "
-                                  "bytes a vertex), which prt relight --dynamic-ao compares a pose's with to restore "
-                                  "the distant occlusion the lobes cannot follow");
-  a->tangent_opt = s->add_option("--tangent", a->tangent,
-                                "With --basis zh: each vertex frame's tangent: uv (the direction of increasing u of "
-                                "the mesh's first texture coordinates, where it has them; the edge rule elsewhere) or "
-                                "edge (the edge rule everywhere); docs/CONVENTIONS.md, \"Vertex frames\"")
-                      ->check(CLI::IsMember({"uv", "edge"}))
-                      ->capture_default_str();
-  a->material_opt =
-      add_shared(s, SharedOption::Material, a->material,
-                 "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
-                 "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12)");
-  a->mode_opt = add_shared(s, SharedOption::Mode, a->mode, "Transfer: unshadowed (no rays), shadowed, or interreflected");
-  a->bands_opt = add_shared(s, SharedOption::BandsComputed, a->opt.bands,
-                            "SH bands n: prt render and prt view draw at most 16, and transfer accuracy is measured up "
-                            "to 16");
-  a->samples_opt = s->add_option("-s,--samples", a->opt.samples, "Rays per vertex (about)")
-                       ->check(int_range(1, 1 << 24))
-                       ->capture_default_str();
-  a->bounces_opt = add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode), at most");
-  a->sh_only.insert(a->sh_only.end(), {a->bands_opt, a->samples_opt, a->bounces_opt, a->material_opt});
-  a->target_opt =
-      add_shared(s, SharedOption::TargetError, a->target_error,
-                 "Choose the fewest bands, bounces and samples (wavelet basis: terms K) whose relative RMS error "
-                 "against the reference under --env is at most this (--bands/--samples/--bounces: the most to try)");
-  a->env_opt = s->add_option("--env", a->env, "Lat-long map the --target-error is measured under")->check(path_value());
-  a->cache_opt = s->add_option("--cache", a->cache, "Reference cache of --target-error (default ~/.cache/prt)")
-                     ->check(path_value());
-  a->tolerance_opt =
-      s->add_option("--bounce-tolerance", a->opt.bounce_tolerance,
-                    "Stop adding bounces once one adds less than this fraction of the direct part's energy, in "
-                    "[0, 1) (0: never)")
-          ->check(number_range(0.0, 1.0, false, true))
-          ->capture_default_str();
-  a->sh_only.push_back(a->tolerance_opt);
-  a->wavelet_only.push_back(
-      s->add_option("--cube-res", a->wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
-          ->check(cube_resolution())
-          ->capture_default_str());
-  a->wavelet_only.push_back(
-      s->add_option("--threshold", a->wopt.threshold,
-                    "Wavelet basis: relative L2 truncation error per vertex, in [0, 1) (0 keeps every non-zero term)")
-          ->check(number_range(0.0, 1.0, false, true))
-          ->capture_default_str());
-  a->albedo_opt = add_shared(s, SharedOption::Albedo, a->albedo,
-                             "Diffuse albedo (with --lightmap: replaces the scene's materials)");
-  a->vertex_colors_opt = s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
-  add_shared(s, SharedOption::Threads, a->opt.threads, "Worker threads");
-  a->sh_only.push_back(
-      add_shared(s, SharedOption::Seed, a->opt.seed, "Seed of the direction set"));
-  add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
-  a->weld_opt = s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position before precomputing");
-  a->lightmap_opt = add_shared(s, SharedOption::Lightmap, a->lightmap,
-                                  "WxH: an SH lightmap instead of vertices: the transfer of every texel of a W x H "
-                                  "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
-                                  "lightmap UV set (docs/LIGHTMAPS.md)");
-  a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv,
-                            "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
-                            "object has it, else TEXCOORD_0)");
-  a->probes_opt = s->add_option("--probes", a->probes,
-                                "NXxNYxNZ: a relightable probe volume instead of vertices: probes on a grid spanning "
-                                "SCENE's bounding box, corners included (docs/PROBES.md); --bands (default 3), --mode "
-                                "shadowed|interreflected, --samples (rays per probe)");
-  a->probe_cube_opt = s->add_option("--probe-cube", a->popt.cube_res,
-                                    "With --probes: the visibility cube's finest face size r (4 to 64; traced at r/4, refined where an edge crosses)")
-                          ->check(int_one_of({4, 8, 16, 32, 64}))
-                          ->capture_default_str();
-  a->bounce_bands_opt = s->add_option("--bounce-bands", a->popt.bounce_bands,
-                                      "With --probes --mode interreflected: the environment bands the bounce light "
-                                      "takes (1 to 16)")
-                            ->check(int_range(1, 16))
-                            ->capture_default_str();
-  s->add_option("--ao-map", a->ao_map,
-                "With --lightmap: also write the texels' ambient occlusion (1/pi integral V cos) as an RGBA EXR in the "
-                "lightmap's layout (A = 1 at covered texels)")->check(path_value());
-  s->add_option("--bent-normal-map", a->bent_map,
-                "With --lightmap: also write the texels' bent normals (world x, y, z in R, G, B) as an RGBA EXR")
-      ->check(path_value());
-  s->add_option("--obscurance", a->obscurance,
-                "With --lightmap and --obscurance-map: obscurance distance d; an occluder at distance t counts "
-                "rho(t) = min(t/d, 1) (Zhukov et al. 1998)")
-      ->check(number_range(0.0, 1e30, true, false));
-  s->add_option("--obscurance-map", a->obscurance_map, "With --obscurance d: the obscurance map to write (RGBA EXR)")
-      ->check(path_value());
-  a->memory_limit_opt =
-      s->add_option("--memory-limit", a->memory_limit,
-                    "The most memory the process may hold, e.g. 8G or 512M (K, M, G, T: powers of 1000; KiB, MiB, "
-                    "GiB, TiB: of 1024); default 80% of the machine's memory, shared among the mpirun processes on it. "
-                    "Past what the per-vertex arrays need, the bounces' gather records go to a temporary file in "
-                    "TMPDIR; the result is the same bits; a limit the plan cannot meet is refused before the work "
-                    "(a lightmap's from its atlas, before rasterising it). SH transfer only: not --probes or --basis "
-                    "wavelet (docs/PRECOMPUTE.md, \"Memory\")")
-          ->check(memory_size_value());
-  a->sh_only.push_back(a->memory_limit_opt);
-  a->sh_only.push_back(s->add_option("--compress", a->compress,
-                                     "Write the transfer compressed by clustered PCA: K clusters x N principal "
-                                     "vectors, e.g. 128x8 (prt compress; docs/COMPRESSION.md)")
-                           ->check(compress_value()));
-  a->compress_weights_opt = s->add_option("--compress-weights", a->compress_weights,
-                                          "Bits per weight of --compress: 16 or 32")
-                                ->check(int_one_of({16, 32}))
-                                ->capture_default_str();
-  a->sh_only.push_back(a->compress_weights_opt);
-  a->adaptive_opt =
-      s->add_option("--adaptive", a->adaptive,
-                    "Adaptive sample points: trace a subset of the vertices (with --lightmap, texels) and interpolate the "
-                    "rest along the surface "
-                    "where probes show interpolation adds at most TOL (relative RMS of the transfer, band-weighted); "
-                    "without a value 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples (docs/PRECOMPUTE.md)")
-          ->expected(0, 1)
-          ->default_str("")
-          ->type_name("[TOL]");
-  a->verify_opt = s->add_option("--verify-adaptive", a->aopt.verify_fraction,
-                                "With --adaptive: trace this fraction of the interpolated vertices (texels) again and report "
-                                "their error against TOL (they keep the traced transfer)")
-                      ->check(number_range(0.0, 1.0))
-                      ->type_name("FRACTION");
-  a->adaptive_any_opt = s->add_flag("--adaptive-any", a->adaptive_any,
-                                    "With --adaptive TOL: take a TOL above 1.5x the default (the error may then pass "
-                                    "1.1x the full run's)");
-  a->subdivide_opt =
-      s->add_option("--subdivide", a->subdivide,
-                    "For coarse meshes: split the edges whose ends' transfer differs by more than TOL (relative, "
-                    "band-weighted: the metric of --adaptive) at their midpoints, round by round, and write the refined "
-                    "mesh (--subdivided-mesh) with the transfer for it; with --target-error E, the search's settings "
-                    "and, without a value, TOL = E / 2 (docs/PRECOMPUTE.md, \"Subdividing coarse meshes\")")
-          ->expected(0, 1)
-          ->default_str("")
-          ->type_name("[TOL]");
-  a->subdivide_max_opt = s->add_option("--subdivide-max-vertices", a->sopt.max_vertices,
-                                       "With --subdivide: the most vertices the refined mesh may have (0: 4x the "
-                                       "mesh's)")
-                             ->check(count_range(0, kMaxSubdivideVertices, "0: 4x the mesh's; a mesh's vertex "
-                                                                           "indices are 32-bit"))
-                             ->capture_default_str();
-  a->subdivided_mesh_opt = s->add_option("--subdivided-mesh", a->subdivided_mesh,
-                                         "With --subdivide: where the refined mesh goes, PLY with normals (and "
-                                         "colours) (default: the output's name with .ply)")->check(path_value());
+  add_basis_options(s, *a);
+  add_transfer_options(s, *a);
+  add_lightmap_options(s, *a);
+  add_memory_options(s, *a);
+  add_adaptive_options(s, *a);
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_precompute(*a); };
 }

@@ -1,6 +1,6 @@
 // prt project: environment map -> SH coefficients.
 #include "commands.h"
-#include "progress.h"
+#include "progress_bar.h"
 
 #include <prt/envmap.h>
 #include <prt/error.h>

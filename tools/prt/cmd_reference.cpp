@@ -1,7 +1,7 @@
 // prt reference: Monte Carlo ground truth of per-vertex outgoing radiance
 // (no spherical harmonics), written as a vertex CSV with standard errors.
 #include "commands.h"
-#include "progress.h"
+#include "progress_bar.h"
 
 #include <prt/vertex_csv.h>
 #include <prt/compare.h>

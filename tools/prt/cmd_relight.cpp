@@ -1,8 +1,8 @@
 // prt relight: CPU relighting of a precomputed mesh under an environment map.
 #include "commands.h"
 #include "look.h"
-#include "progress.h"
-#include "scene.h"
+#include "progress_bar.h"
+#include "inputs.h"
 
 #include <prt/vertex_csv.h>
 #include <prt/color.h>
@@ -115,10 +115,13 @@ void check_relit(const std::vector<glm::vec3>& rgb, const RelightArgs& a, const 
 }
 
 // A wavelet transfer: per-frame lighting (resample, Haar, K terms) and the sparse sum.
-int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler[3]) {
+int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler[3], const WaveletTransfer& t) {
+  for (const CLI::Option* o : a.sh_only)
+    if (o->count() > 0)
+      throw Error(o->get_name() + " applies to SH transfers; " + a.transfer +
+                  " holds a wavelet transfer (use --terms and --selection to control its lighting approximation)");
   const wavelet::Selection selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
   const Mesh mesh = load_mesh(a.mesh);
-  const WaveletTransfer t = read_wavelet_transfer(a.transfer);
   check_matches(t, mesh, a.transfer);
   EnvMap env = load_envmap(a.env);
   require_finite(env);
@@ -149,7 +152,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
 // A local deformable transfer (prt precompute --basis zh): MESH is a pose of
 // the rest mesh (same vertices and triangles); each vertex's lobes are turned
 // into its posed frame, then relit as an SH transfer (docs/LDPRT.md).
-int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
+int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler, const ZhTransfer& z) {
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0) throw UsageError(o->get_name() + " applies to wavelet transfers; " + a.transfer + " holds lobes");
   if (a.direct) throw UsageError("--direct: " + a.transfer + " holds lobes of one transfer (no direct part)");
@@ -170,7 +173,6 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
     const Skin skin = load_skin(a.mesh, rest);
     return skin_mesh(rest, skin, joint_matrices(skin, a.time, a.animation));
   }();
-  const ZhTransfer z = read_zh_transfer(a.transfer);
   check_pose(z, posed, a.transfer);
   if (a.dynamic_ao && z.rest_ao.empty())
     throw Error(a.transfer + ": --dynamic-ao: it holds no rest occlusion; compute it with prt precompute --basis zh "
@@ -220,19 +222,30 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   return 0;
 }
 
+// A lightmap's relit atlas is an EXR, checked before any work.
+void check_lightmap_output(const RelightArgs& a, const std::string& ext) {
+  if (ext != ".exr")
+    throw UsageError("--output: " + a.output + ": " + a.transfer + " is a lightmap: its relit atlas is an RGBA float "
+                     "EXR (.exr)");
+  if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
+  check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+  for_path("--output", [&] { check_writable(a.output); });
+}
+
 // An RGBA float EXR of per-texel radiance in the lightmap's layout.
 void write_lightmap_exr(const std::string& path, const LightmapLayout& layout, const std::vector<glm::vec3>& rgb) {
   write_exr_rgba(path, lightmap_rgba(layout, rgb));
 }
 
 // A wavelet lightmap: the texels' wavelet relighting with K terms (as per vertex).
-int run_wavelet_lightmap(const RelightArgs& a, const std::array<double, 3>& euler) {
+int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
+                         const WaveletLightmap& wl) {
+  check_lightmap_output(a, ext);
   for (const CLI::Option* o : a.sh_only)
     if (o->count() > 0)
       throw UsageError(o->get_name() + " applies to SH transfers; " + a.transfer + " is a wavelet lightmap (--terms, "
                        "--selection)");
   const wavelet::Selection selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
-  const WaveletLightmap wl = read_wavelet_lightmap(a.transfer);
   const prt::Scene scene = prt::load_scene(a.mesh);
   const LightmapTexels texels = lightmap_texels(scene, wl.layout.width, wl.layout.height, wl.layout.uv_set);
   if (texels.layout.scene_hash != wl.layout.scene_hash || texels.layout.texels != wl.layout.texels)
@@ -259,19 +272,15 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::array<double, 3>& eule
 
 // A lightmap transfer (prt precompute --lightmap): an RGBA float EXR of the
 // atlas, A = 1 at covered texels, gutters dilated (docs/LIGHTMAPS.md).
-int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
-  if (ext != ".exr")
-    throw UsageError("--output: " + a.output + ": " + a.transfer + " is a lightmap: its relit atlas is an RGBA float "
-                     "EXR (.exr)");
+int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
+                 const LightmapTransfer& lt) {
+  check_lightmap_output(a, ext);
   for (const CLI::Option* o : a.sh_only)
     if (o->count() > 0 && o->get_name() != "--window" && o->get_name() != "--window-width" && o->get_name() != "--direct")
       throw UsageError(o->get_name() + " does not apply to a lightmap (diffuse: no eye, no lobe)");
-  if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
-  if (read_transfer_basis(a.transfer) == TransferBasis::Wavelet) return run_wavelet_lightmap(a, euler);
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0) throw UsageError(o->get_name() + " applies to wavelet transfers; " + a.transfer + " is an SH lightmap");
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
-  const LightmapTransfer lt = read_lightmap_transfer(a.transfer);
   const prt::Scene scene = prt::load_scene(a.mesh);
   const LightmapTexels texels =
       lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
@@ -304,7 +313,8 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
 
 // A probe volume (prt precompute SCENE --probes): E(p, n)/pi at each query
 // point from the probes interpolated there (docs/PROBES.md).
-int run_probes(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler) {
+int run_probes(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
+               const ProbeTransfer& t) {
   if (a.at.empty())
     throw UsageError(a.transfer + " is a probe volume: give --at POINTS.csv (x,y,z,nx,ny,nz per line) and -o OUT.csv");
   if (ext != ".csv") throw UsageError("--output: " + a.output + ": a probe volume's queries are written as .csv (point,r,g,b)");
@@ -315,7 +325,6 @@ int run_probes(const RelightArgs& a, const std::string& ext, const std::array<do
   check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"PROBES", a.transfer}, {"ENV", a.env}, {"--at", a.at}});
   for_path("--output", [&] { check_writable(a.output); });
   const auto t0 = std::chrono::steady_clock::now();
-  const ProbeTransfer t = read_probe_transfer(a.transfer);
   const prt::Scene scene = load_scene_or_mesh(a.mesh);
   if (scene.hash() != t.scene_hash)
     throw Error(a.transfer + ": computed for another scene than " + a.mesh + " (its geometry or UVs differ): rerun "
@@ -363,6 +372,9 @@ int run_probes(const RelightArgs& a, const std::string& ext, const std::array<do
   return 0;
 }
 
+void check_vertex_output(const RelightArgs& a, const std::string& ext);
+int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler, AnyTransfer loaded);
+
 int run_relight(const RelightArgs& a) {
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   std::string ext = std::filesystem::path(a.output).extension().string();
@@ -373,36 +385,49 @@ int run_relight(const RelightArgs& a) {
                        "it the output is linear radiance)");
   if (ext != ".ply" && ext != ".csv" && ext != ".exr")
     throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr)");
-  if (a.dynamic_ao_opt->count() > 0 && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
+  // The file says which kind it holds; each kind's relighting takes the
+  // options that apply to it.
+  AnyTransfer any = read_transfer_file(a.transfer);
+  require_support(kind_of(any), Consumer::Relight, a.transfer);
+  const bool zh = kind_of(any) == TransferKind::ZH;
+  if (a.dynamic_ao_opt->count() > 0 && !zh)
     throw UsageError("--dynamic-ao: " + a.transfer + " is not a --basis zh transfer (dynamic ambient occlusion "
                      "restores the distant occlusion a deforming mesh's local lobes cannot follow)");
-  if (!a.deform.empty() && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
+  if (!a.deform.empty() && !zh)
     throw UsageError("--deform: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a "
                      "deformation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
-  if (a.time_opt->count() > 0 && (is_probe_file(a.transfer) || read_transfer_basis(a.transfer) != TransferBasis::ZH))
+  if (a.time_opt->count() > 0 && !zh)
     throw UsageError("--time: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a skin's "
                      "animation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
-  if (is_probe_file(a.transfer)) return run_probes(a, ext, euler);
-  if (!a.at.empty()) throw UsageError("--at gives query points of a probe volume: " + a.transfer + " is not one");
-  if (transfer_is_lightmap(a.transfer)) {
-    check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
-    for_path("--output", [&] { check_writable(a.output); });
-    return run_lightmap(a, ext, euler);
-  }
+  if (!a.at.empty() && kind_of(any) != TransferKind::Probes)
+    throw UsageError("--at gives query points of a probe volume: " + a.transfer + " is not one");
+  return dispatch(
+      // (run_sh takes the variant itself: the scene it loads keeps it.)
+      any, [&](const Transfer&) { return run_sh(a, ext, euler, std::move(any)); },
+      [&](const CompressedTransfer&) { return run_sh(a, ext, euler, std::move(any)); },
+      [&](const WaveletTransfer& t) {
+        check_vertex_output(a, ext);
+        return run_wavelet(a, ext, euler.data(), t);
+      },
+      [&](const ZhTransfer& z) {
+        check_vertex_output(a, ext);
+        return run_zh(a, ext, euler, z);
+      },
+      [&](const LightmapTransfer& l) { return run_lightmap(a, ext, euler, l); },
+      [&](const WaveletLightmap& w) { return run_wavelet_lightmap(a, ext, euler, w); },
+      [&](const ProbeTransfer& p) { return run_probes(a, ext, euler, p); });
+}
+
+// Per-vertex output: PLY or CSV, checked before any work.
+void check_vertex_output(const RelightArgs& a, const std::string& ext) {
   if (ext != ".ply" && ext != ".csv") throw UsageError("--output: " + a.output + ": expected a .ply or .csv file");
   check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
   for_path("--output", [&] { check_writable(a.output); });
+}
 
-  // The basis comes from the file; options of the other basis are refused.
-  const TransferBasis basis = read_transfer_basis(a.transfer);
-  if (basis == TransferBasis::Wavelet) {
-    for (const CLI::Option* o : a.sh_only)
-      if (o->count() > 0)
-        throw Error(o->get_name() + " applies to SH transfers; " + a.transfer +
-                    " holds a wavelet transfer (use --terms and --selection to control its lighting approximation)");
-    return run_wavelet(a, ext, euler.data());
-  }
-  if (basis == TransferBasis::ZH) return run_zh(a, ext, euler);
+// An SH transfer, compressed or not (its glossy part seen from --eye).
+int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler, AnyTransfer loaded) {
+  check_vertex_output(a, ext);
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0)
       throw Error(o->get_name() + " applies to wavelet transfers; " + a.transfer +
@@ -426,12 +451,13 @@ int run_relight(const RelightArgs& a) {
     shading.diffuse = parse_diffuse(a.lobe.diffuse);
   }
 
-  const Scene scene = load_scene(a.mesh, a.transfer, a.env, 0, "relight", false, true);
+  const Scene scene = load_scene(a.mesh, std::move(loaded), a.transfer, a.env, Consumer::Relight, 0, "relight");
+  const CompressedTransfer* c = scene.get<CompressedTransfer>();
   const Mesh& mesh = scene.mesh;
-  const Transfer& t = scene.transfer;  // compressed: the header fields (its arrays are in scene.compressed)
+  const Transfer& t = c ? c->transfer : *scene.get<Transfer>();
   const EnvMap& env = scene.env;
   if (a.direct) check_direct(t, a.transfer, "--direct");
-  if (a.direct && scene.compressed)
+  if (a.direct && c)
     throw Error(a.transfer + ": --direct: a compressed transfer keeps no direct part (prt compress drops it); relight "
                 "the uncompressed file");
   if (glossy)
@@ -447,7 +473,6 @@ int run_relight(const RelightArgs& a) {
   const auto t1 = std::chrono::steady_clock::now();
   sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : t.bands);
   if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
-  const CompressedTransfer* c = scene.compressed ? &*scene.compressed : nullptr;
   std::vector<glm::vec3> rgb = c ? (glossy ? relight_glossy(*c, mesh, light, shading) : relight(*c, mesh, light))
                                      : glossy   ? relight_glossy(t, mesh, light, shading)
                                      : a.direct ? relight_direct(t, mesh, light)

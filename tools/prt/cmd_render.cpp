@@ -2,9 +2,9 @@
 // environment map (prt::Renderer, EGL, no display needed).
 #include "commands.h"
 #include "look.h"
-#include "probe_object.h"
-#include "progress.h"
-#include "scene.h"
+#include "probe_object_options.h"
+#include "progress_bar.h"
+#include "inputs.h"
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
@@ -57,11 +57,30 @@ std::string frame_path(const std::string& out, int frame) {
   return (p.parent_path() / (p.stem().string() + fmt::format("_{:04d}", frame) + p.extension().string())).string();
 }
 
-int run_render(const RenderArgs& a) {
+// What run_render's phases share: the scene and what the options make of it.
+struct RenderJob {
+  Scene scene;
+  bool zh = false, wavelet = false, glossy = false;
+  Deform deform;
+  std::optional<Skin> skin;  // a skinned glTF with a zonal-harmonic file: its animation, skinned on the GPU
+  double duration = 0;       // the animation's loop, seconds
+  glm::dvec3 diffuse{0.0};   // --diffuse (glossy files)
+  Look look;
+  Camera cam;
+  // The renderer, made once the scene is checked; it and what draws with it
+  // (below) are destroyed before the members above.
+  std::optional<Renderer> renderer;
+  std::optional<WaveletPlayback> playback;  // a wavelet transfer's relighting
+  std::optional<ProbeObject> probe_object;  // --probes --object, lit by the probe volume
+};
+
+// The options that need no file: --probes with --object, --rotate (returned,
+// in degrees), --output's type and that it is none of the inputs, --alpha.
+std::array<double, 3> check_render_options(const RenderArgs& a) {
   for (const CLI::Option* o : a.probe_opts)
     if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
       throw UsageError("--probes FILE and --object MESH go together (" + o->get_name() + " was given)");
-  const std::array<double, 3> euler = rotate_degrees(a.rotate);
+  std::array<double, 3> euler = rotate_degrees(a.rotate);
   if (const std::string problem = image_output_type_problem(a.output); !problem.empty())
     throw UsageError("--output: " + problem);
   if (a.alpha && image_output_type_problem(a.output).empty()) {
@@ -77,95 +96,99 @@ int run_render(const RenderArgs& a) {
                      {"--probes", a.probe.probes},
                      {"--object", a.probe.object}});
   for_path("--output", [&] { check_image_output(a.output); });
+  return euler;
+}
 
-  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "render", true, true, true);
-  const bool zh = scene.zh.has_value();
+// What the loaded scene takes of the options: --deform and a skin need a
+// zonal-harmonic file, the glossy options a glossy one; the look.
+void check_render_scene(const RenderArgs& a, RenderJob& j) {
+  j.zh = j.scene.kind() == TransferKind::ZH;
+  const bool zh = j.zh;
   if (!a.deform.empty() && !zh)
     throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
                 "docs/LDPRT.md); this one is baked for one pose");
-  const Deform deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
+  j.deform = a.deform.empty() ? Deform{} : parse_deform(a.deform);
   // A skinned glTF with a zonal-harmonic file: its animation, skinned on the GPU.
-  const std::optional<Skin> skin = zh ? load_mesh_skin(a.mesh, scene.mesh) : std::nullopt;
-  check_skin_options(skin, zh, !a.deform.empty(), {a.time_opt, a.animation_opt}, a.mesh, a.transfer);
-  const double duration = skin ? animation_duration(*skin, a.animation) : 0.0;
+  j.skin = zh ? load_mesh_skin(a.mesh, j.scene.mesh) : std::nullopt;
+  check_skin_options(j.skin, zh, !a.deform.empty(), {a.time_opt, a.animation_opt}, a.mesh, a.transfer);
+  j.duration = j.skin ? animation_duration(*j.skin, a.animation) : 0.0;
   if (zh && a.look.shading_option->count() > 0 && a.look.shading != "transfer" && a.look.shading != "lambert")
     throw Error(a.transfer + ": --shading " + a.look.shading + ": a zonal-harmonic transfer shows transfer or lambert");
-  const Mesh& mesh = scene.mesh;
-  const Transfer& t = scene.transfer;
-  const EnvMap& env = scene.env;
-  const bool wavelet = scene.basis == TransferBasis::Wavelet;
-  const bool glossy = !wavelet && t.glossy;
-  if (a.lobe.given() && !glossy) {
+  const Transfer& t = j.scene.header;
+  j.wavelet = j.scene.kind() == TransferKind::Wavelet;
+  j.glossy = !j.wavelet && t.glossy;
+  if (a.lobe.given() && !j.glossy) {
     for (const CLI::Option* o : a.lobe.options)
       if (o->count() > 0)
         // An option that does not fit the file: the file's mismatch (exit 1, naming it).
         throw Error(a.transfer + ": " + o->get_name() +
                     " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   }
-  const glm::dvec3 diffuse = parse_diffuse(a.lobe.diffuse);
-  Look look = parse_look(a.look, wavelet ? 0 : t.bands, wavelet, glossy);
+  j.diffuse = parse_diffuse(a.lobe.diffuse);
+  j.look = parse_look(a.look, j.wavelet ? 0 : t.bands, j.wavelet, j.glossy);
+}
 
-  // A deforming mesh is framed in its rest and its most deformed pose; a
-  // skinned one in its rest and poses over its animation's loop (the same
-  // camera at every --time).
+// The camera: a deforming mesh is framed in its rest and its most deformed
+// pose; a skinned one in its rest and poses over its animation's loop (the
+// same camera at every --time).
+void frame_render_camera(const RenderArgs& a, RenderJob& j) {
+  const Mesh& mesh = j.scene.mesh;
   Mesh framed;
-  if (zh && deform.kind != Deform::Kind::None) {
+  if (j.zh && j.deform.kind != Deform::Kind::None) {
     framed.positions = mesh.positions;
-    const Mesh posed = deform_mesh(mesh, deform);
+    const Mesh posed = deform_mesh(mesh, j.deform);
     framed.positions.insert(framed.positions.end(), posed.positions.begin(), posed.positions.end());
   }
-  if (skin) framed.positions = animation_extent(mesh, *skin, a.animation);
-  Camera cam = framing_camera(framed.positions.empty() ? mesh : framed, a.fov, double(a.width) / a.height);
-  if (!a.camera.empty()) parse_camera(a.camera, cam);
-  cam.fov_deg = a.fov;
+  if (j.skin) framed.positions = animation_extent(mesh, *j.skin, a.animation);
+  j.cam = framing_camera(framed.positions.empty() ? mesh : framed, a.fov, double(a.width) / a.height);
+  if (!a.camera.empty()) parse_camera(a.camera, j.cam);
+  j.cam.fov_deg = a.fov;
+}
 
-  Renderer renderer;
-  if (!a.quiet)
-    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", scene.world ? describe(*scene.world) : describe(mesh), describe(env),
-               renderer.device());
-  if (skin && !a.quiet)
-    fmt::print(stderr, "skinned on the GPU: {} joints, {}\n", skin->joint_count,
-               skin->animations.empty()
-                   ? std::string("no animation (the rest pose)")
-                   : fmt::format("animation {} '{}' ({:g} s loop)", a.animation,
-                                 skin->animations[std::size_t(a.animation)].name, duration));
-  renderer.set_environment(env);
-  std::optional<WaveletPlayback> playback;
-  if (wavelet) {
-    renderer.set_mesh(mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
-    playback.emplace(scene.wavelet, env);
+// The environment and the transfer to the renderer, with the shading the
+// look asks for (refused, naming the file, when the file lacks what it needs).
+void upload_render_scene(const RenderArgs& a, RenderJob& j) {
+  Renderer& renderer = *j.renderer;
+  const Transfer& t = j.scene.header;  // the SH header fields (the arrays go to the renderer)
+  const Look& look = j.look;
+  renderer.set_environment(j.scene.env);
+  if (j.wavelet) {
+    upload(renderer, j.scene, a.transfer);
+    j.playback.emplace(*j.scene.wavelet(), j.scene.env);
     if (look.shading != Shading::Transfer && look.shading != Shading::Lambert)
       throw Error("--shading " + std::string(shading_name(look.shading)) +
                   ": a wavelet transfer shows transfer (the wavelet relighting) or lambert");
   } else {
     if (look.shading == Shading::Direct) check_direct(t, a.transfer, "--shading direct");
-    if (look.shading == Shading::Glossy && !glossy)
+    if (look.shading == Shading::Glossy && !j.glossy)
       throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
-    upload(renderer, scene, a.transfer);
-    if (skin) renderer.set_skin(*skin);
-    release_uploaded(scene);  // the renderer has them: `mesh` and `t` keep their header fields only
+    upload(renderer, j.scene, a.transfer);
+    if (j.skin) renderer.set_skin(*j.skin);
+    release_uploaded(j.scene);  // the renderer has them: `t` keeps the header fields
     renderer.set_band_limit(look.bands);
     try {  // refused (exit 1) when the file lacks what the shading needs: name it
       renderer.set_shading(look.shading);
     } catch (const Error& e) {
       throw Error(a.transfer + ": " + e.what());
     }
-    if (glossy) {  // the file's rules for --diffuse (an interreflected file takes its own albedo or 0)
+    if (j.glossy) {  // the file's rules for --diffuse (an interreflected file takes its own albedo or 0)
       try {
-        renderer.set_glossy(a.lobe.gloss, a.lobe.specular, diffuse);
+        renderer.set_glossy(a.lobe.gloss, a.lobe.specular, j.diffuse);
       } catch (const Error& e) {
         throw Error(a.transfer + ": " + e.what());
       }
     }
   }
+}
 
-  // --probes --object: an object lit by the probe volume, on a path through it.
-  std::optional<ProbeObject> probe_object;
-  if (!a.probe.probes.empty()) {
-    probe_object.emplace(load_probe_object(a.probe, a.mesh, env, renderer));
-    if (!a.quiet) fmt::print(stderr, "{}\n", probe_object->describe());
-  }
-
+// The lighting (SH of the map, exposure, window) and the frames, rotated by
+// `euler` then --spin, staged and written; returns the exit code.
+int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>& euler) {
+  Renderer& renderer = *j.renderer;
+  const Transfer& t = j.scene.header;
+  const EnvMap& env = j.scene.env;
+  const bool wavelet = j.wavelet;
+  Look& look = j.look;
   // SH: project once; each frame only rotates the coefficients. Wavelet: each
   // frame resamples the rotated map (no cheap rotation in that basis). Lambert
   // needs 3 bands of SH lighting in both.
@@ -197,19 +220,19 @@ int run_render(const RenderArgs& a) {
       rotation.apply(light, rotated);
       renderer.set_lighting(rotated);
       renderer.set_environment_rotation(R);
-      if (probe_object) probe_object->frame(renderer, R, double(f) / a.frames);
+      if (j.probe_object) j.probe_object->frame(renderer, R, double(f) / a.frames);
       // The deformation: the whole angle in one frame; over several, from
       // the rest pose to the whole angle and back.
-      if (zh && deform.kind != Deform::Kind::None)
-        renderer.set_pose(deform, a.frames > 1 ? 0.5 * (1.0 - std::cos(2.0 * M_PI * f / a.frames)) : 1.0);
+      if (j.zh && j.deform.kind != Deform::Kind::None)
+        renderer.set_pose(j.deform, a.frames > 1 ? 0.5 * (1.0 - std::cos(2.0 * M_PI * f / a.frames)) : 1.0);
       // The skin: --time, and over several frames one loop from there.
-      if (skin) renderer.set_pose(joint_matrices(*skin, a.time + duration * f / a.frames, a.animation));
+      if (j.skin) renderer.set_pose(joint_matrices(*j.skin, a.time + j.duration * f / a.frames, a.animation));
       if (wavelet && look.shading == Shading::Transfer) {
-        cpu_ms += playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
+        cpu_ms += j.playback->frame(renderer, R, look.terms, look.selection);  // drawn as vertex colours
       } else if (wavelet) {
         renderer.set_shading(Shading::Lambert);
       }
-      Image img = renderer.render(cam, a.width, a.height);
+      Image img = renderer.render(j.cam, a.width, a.height);
       render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       width = img.width;
       height = img.height;
@@ -232,9 +255,36 @@ int run_render(const RenderArgs& a) {
                1e3 * render_seconds / a.frames);
     if (wavelet && look.shading == Shading::Transfer)
       fmt::print(stderr, "wavelet relighting on the CPU: {:.2f} ms per frame (K = {}, {} selection, cube {}^2 x 6)\n",
-                 cpu_ms / a.frames, look.terms, wavelet::selection_name(look.selection), scene.wavelet.cube_res);
+                 cpu_ms / a.frames, look.terms, wavelet::selection_name(look.selection), j.scene.wavelet()->cube_res);
   }
   return 0;
+}
+
+int run_render(const RenderArgs& a) {
+  const std::array<double, 3> euler = check_render_options(a);
+  RenderJob j;
+  j.scene = load_scene(a.mesh, a.transfer, a.env, Consumer::Render, kMaxRenderBands, "render");
+  check_render_scene(a, j);
+  frame_render_camera(a, j);
+
+  Renderer& renderer = j.renderer.emplace();
+  if (!a.quiet)
+    fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", j.scene.world ? describe(*j.scene.world) : describe(j.scene.mesh),
+               describe(j.scene.env), renderer.device());
+  if (j.skin && !a.quiet)
+    fmt::print(stderr, "skinned on the GPU: {} joints, {}\n", j.skin->joint_count,
+               j.skin->animations.empty()
+                   ? std::string("no animation (the rest pose)")
+                   : fmt::format("animation {} '{}' ({:g} s loop)", a.animation,
+                                 j.skin->animations[std::size_t(a.animation)].name, j.duration));
+  upload_render_scene(a, j);
+
+  // --probes --object: an object lit by the probe volume, on a path through it.
+  if (!a.probe.probes.empty()) {
+    j.probe_object.emplace(load_probe_object(a.probe, a.mesh, j.scene.env, renderer));
+    if (!a.quiet) fmt::print(stderr, "{}\n", j.probe_object->describe());
+  }
+  return render_frames(a, j, euler);
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 // it also times the compression sweep's GPU frames (prt::FrameTimer).
 #include "commands.h"
 #include "look.h"
-#include "progress.h"
+#include "progress_bar.h"
 
 #include <prt/envmap.h>
 #include <prt/io.h>
@@ -328,7 +328,10 @@ std::string run_plots(const std::string& out) {
                      last == std::string::npos ? text : text.substr(last + 1));
 }
 
-int run_report_command(ReportArgs& a) {
+// The grid's options from the command line: --albedo, --quick, --sweeps
+// (the sweeps not named are emptied), --threads; --out's files kept off the
+// inputs.
+ReportOptions report_command_options(const ReportArgs& a) {
   double rgb[3];
   parse_triple(a.albedo, "--albedo", rgb);  // in [0, 1]: checked while parsing
   for (const char* name : {"report.md", "report.csv", "report.json", "plots.py", "plots.log"})
@@ -356,6 +359,225 @@ int run_report_command(ReportArgs& a) {
   }
   opt.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   opt.threads = a.threads;
+  return opt;
+}
+
+// Fits of error against samples: all points against the reference; the
+// sampling error alone on points with at most 1/4 of the largest count
+// (where the comparison's own sampling error is at most about half).
+struct SampleFits {
+  Fit fit, fit_alone;
+  int max_samples = 0;
+};
+
+SampleFits sample_fits(const Report& rep) {
+  std::vector<std::pair<double, double>> total, alone;
+  int max_samples = 0;
+  for (const ReportRow& r : rep.rows)
+    if (r.sweep == "samples") max_samples = std::max(max_samples, r.samples);
+  for (const ReportRow& r : rep.rows)
+    if (r.sweep == "samples") {
+      total.emplace_back(r.samples, r.error.rel_rms);
+      if (!std::isnan(r.self_rms) && 4 * r.samples <= max_samples) alone.emplace_back(r.samples, r.self_rms);
+    }
+  return {fit_loglog(total), fit_loglog(alone), max_samples};
+}
+
+// What the report's writers share once the grid has run.
+struct ReportRun {
+  const ReportArgs& a;
+  const ReportOptions& opt;
+  const Report& rep;
+  std::vector<bool> front;  // pareto_front(rep.rows)
+  std::size_t V = 0;        // the mesh's vertices
+  SampleFits fits;
+  std::string gl_device;          // the OpenGL device, "" without a context
+  const std::string& frames_why;  // why there are no frame times, "" when there are
+
+  bool has(const char* sweep) const {
+    return std::any_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; });
+  }
+  bool has_basis(const char* basis) const {
+    return std::any_of(rep.rows.begin(), rep.rows.end(),
+                       [&](const ReportRow& r) { return r.sweep == "compression" && r.basis == basis; });
+  }
+};
+
+// report.json, without the pictures.
+nlohmann::json report_meta(const ReportRun& r) {
+  const ReportArgs& a = r.a;
+  const ReportOptions& opt = r.opt;
+  const Report& rep = r.rep;
+  const std::size_t V = r.V;
+  const Fit& fit = r.fits.fit;
+  const Fit& fit_alone = r.fits.fit_alone;
+  nlohmann::json meta;
+  meta["mesh"] = a.mesh;
+  meta["map"] = a.env;
+  meta["mesh_name"] = fs::path(a.mesh).filename().string();
+  meta["map_name"] = fs::path(a.env).filename().string();
+  meta["vertices"] = V;
+  meta["quick"] = a.quick;
+  meta["shadowed_noise_floor"] = rep.shadowed_truth.vertices.empty() ? 0.0 : rep.shadowed_truth.noise_floor();
+  meta["interreflected_noise_floor"] =
+      rep.interreflected_truth.vertices.empty() ? 0.0 : rep.interreflected_truth.noise_floor();
+  nlohmann::json fits = nlohmann::json::object();
+  if (!std::isnan(fit.slope))
+    fits.update({{"slope", fit.slope}, {"intercept", fit.intercept}, {"slope_range", {fit.x0, fit.x1}}});
+  if (!std::isnan(fit_alone.slope))
+    fits.update({{"self_slope", fit_alone.slope},
+                 {"self_intercept", fit_alone.intercept},
+                 {"self_slope_range", {fit_alone.x0, fit_alone.x1}}});
+  meta["samples_fit"] = fits;
+  if (r.has("compression")) {
+    nlohmann::json c{{"bands", opt.compression_bands},
+                     {"samples", opt.bands_samples},
+                     {"iterations", opt.compression_iterations},
+                     {"weight_bits", opt.compression_weight_bits},
+                     {"frame_size", kFrameSize},
+                     {"frames", kTimedFrames},
+                     {"device", r.gl_device},
+                     {"no_frames", r.frames_why}};
+    if (r.has_basis("cpca glossy"))
+      c.update({{"glossy_bands", opt.compression_glossy_bands},
+                {"gloss", rep.compression_gloss},
+                {"eyes", rep.compression_eyes.size()}});
+    meta["compression"] = c;
+  }
+  return meta;
+}
+
+// report.md's title, what the errors are measured against, and the first plot.
+std::string report_intro(const ReportRun& r, const nlohmann::json& meta) {
+  const ReportArgs& a = r.a;
+  const ReportOptions& opt = r.opt;
+  const Report& rep = r.rep;
+  const std::size_t V = r.V;
+  std::string md = fmt::format("# prt report: {} under {}\n\n", meta["mesh_name"].get<std::string>(),
+                               meta["map_name"].get<std::string>());
+  const std::size_t error_vertices =
+      !rep.shadowed_truth.vertices.empty()  ? rep.shadowed_truth.vertices.size()
+      : !rep.glossy_truth.empty()           ? rep.glossy_truth.front().vertices.size()
+                                            : rep.interreflected_truth.vertices.size();
+  if (error_vertices == 0)  // the compression sweep alone: no reference
+    md += fmt::format("{} vertices, albedo {}, {} grid. No reference: the compression sweep's errors are against the "
+                      "uncompressed transfer.\n\n",
+                      V, a.albedo, a.quick ? "quick" : "full");
+  if (error_vertices > 0) {
+    md += fmt::format(
+        "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
+        "Monte Carlo reference (`prt reference`",
+        V, a.albedo, a.quick ? "quick" : "full", error_vertices);
+    if (!rep.shadowed_truth.vertices.empty())
+      md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
+                        meta["shadowed_noise_floor"].get<double>());
+    if (!rep.interreflected_truth.vertices.empty())
+      md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
+                        opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
+    md +=
+        "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below "
+        "twice the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex "
+        "relative error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time "
+        "per frame (lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), "
+        "median. Storage: the transfer file.\n\n";
+  }
+  if (r.has("bands") || r.has("samples") || r.has("bounces") || r.has("terms"))
+    md += "![error against precompute time](error_vs_time.png)\n\n";
+  return md;
+}
+
+// report.md's sections of the bands, samples, bounces, terms and glossy sweeps.
+std::string sweep_sections(const ReportRun& r) {
+  const ReportOptions& opt = r.opt;
+  const Report& rep = r.rep;
+  const std::size_t V = r.V;
+  const Fit& fit = r.fits.fit;
+  const Fit& fit_alone = r.fits.fit_alone;
+  const int max_samples = r.fits.max_samples;
+  std::string md;
+  const auto section = [&](const char* sweep, const std::string& title, const std::string& text) {
+    if (std::none_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& row) { return row.sweep == sweep; })) return;
+    md += "## " + title + "\n\n" + text + "\n\n" + table(rep.rows, r.front, sweep, V) + "\n";
+  };
+  section("bands", "SH bands", fmt::format("Shadowed, {} samples per vertex.", opt.bands_samples));
+  if (r.has("bands") || r.has("terms")) md += "![error against bands and K](error_vs_settings.png)\n\n";
+  std::string fit_text = fmt::format("Shadowed, {} bands.", opt.samples_bands);
+  if (!std::isnan(fit.slope))
+    fit_text += fmt::format(" Fitted slope of error against samples (log-log): **{:.2f}** against the reference", fit.slope);
+  if (!std::isnan(fit_alone.slope))
+    fit_text += fmt::format(", **{:.2f}** for the sampling error alone (against {} samples, points up to {})",
+                            fit_alone.slope, max_samples, max_samples / 4);
+  fit_text += "; Monte Carlo converges with slope -0.5. \"Sampling alone\" is the error against the sweep's "
+              "largest sample count at the same bands, which the band truncation does not hide.";
+  section("samples", "Samples per vertex", fit_text);
+  if (r.has("samples")) md += "![error against samples](error_vs_samples.png)\n\n";
+  section("bounces", "Interreflection bounces",
+          fmt::format("{} bands, {} samples; 0 is the shadowed transfer. Against the interreflected reference.",
+                      opt.bounce_bands, opt.bounce_samples));
+  section("terms", "Wavelet terms K",
+          fmt::format("Haar on a {}x{}x6 cube, threshold {}, area-weighted selection; one precompute.", opt.cube_res,
+                      opt.cube_res, opt.threshold));
+  if (std::any_of(rep.rows.begin(), rep.rows.end(), [](const ReportRow& row) { return row.sweep == "glossy"; })) {
+    std::string noise;
+    for (std::size_t g = 0; g < rep.glossy_truth.size(); ++g)
+      noise += fmt::format("{}e = {:g}: {:.3g}", g ? ", " : "", opt.glossy_gloss[g], rep.glossy_truth[g].noise_floor());
+    md += fmt::format(
+        "## Glossy transfer\n\nShadowed glossy matrices at {} samples, the glossy part alone (rho_s = 1, no "
+        "diffuse) seen from ({:.4g}, {:.4g}, {:.4g}), against a glossy reference per exponent ({} samples per "
+        "vertex; noise floors {}). Intrinsic: the same SH formula with matrices traced at {} samples at the error "
+        "vertices: what the band count alone costs (docs/GLOSSY.md).\n\n{}\n",
+        opt.glossy_samples, rep.glossy_eye.x, rep.glossy_eye.y, rep.glossy_eye.z, opt.truth_glossy_samples, noise,
+        opt.glossy_exact_samples, glossy_table(rep.rows, V));
+  }
+  return md;
+}
+
+// report.md's compression section.
+std::string compression_section(const ReportRun& r) {
+  const ReportOptions& opt = r.opt;
+  const Report& rep = r.rep;
+  const std::size_t V = r.V;
+  const std::string& gl_device = r.gl_device;
+  const std::string& frames_why = r.frames_why;
+  std::string md;
+  const auto uncompressed = [&](const char* basis) {
+    for (const ReportRow& row : rep.rows)
+      if (row.sweep == "compression" && row.basis == basis) return row;
+    return ReportRow{};
+  };
+  const ReportRow d = uncompressed("cpca"), g = uncompressed("cpca glossy");
+  const auto frame = [](double ms) { return std::isnan(ms) ? std::string("-") : fmt::format("{:.3g} ms", ms); };
+  md += fmt::format(
+      "## Compression (clustered PCA)\n\nEach K clusters x N vectors fitted to the stored rows (docs/COMPRESSION.md) "
+      "with {}-bit weights, at most {} rounds of the fit. Per vertex: the signals' bytes as stored "
+      "(ClusteredSignal::bytes) over all {} vertices; \"of uncompressed\": their share of the uncompressed rows' "
+      "floats. Relit error: relative RMS of the compressed transfer's radiance against the uncompressed one's "
+      "under the map (compression_error), not against the reference. Relight: CPU, per frame (per-cluster "
+      "products and N weights a vertex). Frame: GPU, {}x{}, the lighting turned and the frame drawn, median of {} "
+      "frames{}; \"of uncompressed\": over the uncompressed transfer's frame, timed in the same run. Pareto: no "
+      "other row has no more bytes and no larger error, and less of one.\n\n",
+      opt.compression_weight_bits, opt.compression_iterations, V, kFrameSize, kFrameSize, kTimedFrames,
+      gl_device.empty() ? std::string() : " (" + gl_device + ")");
+  if (!frames_why.empty()) md += "No frame times: " + frames_why + "\n\n";
+  if (r.has_basis("cpca"))
+    md += fmt::format("### Diffuse, {} bands\n\nShadowed, {} samples: uncompressed {} a vertex, frame {}.\n\n{}\n",
+                      d.bands, d.samples, bytes_text(double(d.uncompressed_bytes) / double(V)),
+                      frame(d.uncompressed_frame_ms), compression_table(rep.rows, r.front, "cpca", V));
+  if (r.has_basis("cpca glossy"))
+    md += fmt::format(
+        "### Glossy, {} bands\n\nThe glossy sweep's transfer ({} samples), both signals (coefficients and "
+        "matrices) at the same K x N; error and frames with the diffuse part and the lobe e = {:g}, rho_s = 0.5, "
+        "the error over {} views around the mesh (eye_ring), frames from prt render's default camera. "
+        "Uncompressed {} a vertex, frame {}.\n\n{}\n",
+        g.bands, g.samples, g.gloss, rep.compression_eyes.size(),
+        bytes_text(double(g.uncompressed_bytes) / double(V)), frame(g.uncompressed_frame_ms),
+        compression_table(rep.rows, r.front, "cpca glossy", V));
+  md += "![bytes and frame time against error](compression.png)\n\n";
+  return md;
+}
+
+int run_report_command(ReportArgs& a) {
+  ReportOptions opt = report_command_options(a);
   std::error_code ec;
   fs::create_directories(a.out, ec);
   if (ec || !fs::is_directory(a.out)) throw Error("--out: cannot create the directory " + a.out);
@@ -385,64 +607,10 @@ int run_report_command(ReportArgs& a) {
       a.quiet, "report", [&](const Progress& progress) { return run_report(mesh, map, opt, cache, progress, log); });
   if (!computed) return 130;
   const Report& rep = *computed;
-  const std::vector<bool> front = pareto_front(rep.rows);
-  const std::size_t V = mesh.vertex_count();
-
-  // Fits of error against samples: all points against the reference; the
-  // sampling error alone on points with at most 1/4 of the largest count
-  // (where the comparison's own sampling error is at most about half).
-  std::vector<std::pair<double, double>> total, alone;
-  int max_samples = 0;
-  for (const ReportRow& r : rep.rows)
-    if (r.sweep == "samples") max_samples = std::max(max_samples, r.samples);
-  for (const ReportRow& r : rep.rows)
-    if (r.sweep == "samples") {
-      total.emplace_back(r.samples, r.error.rel_rms);
-      if (!std::isnan(r.self_rms) && 4 * r.samples <= max_samples) alone.emplace_back(r.samples, r.self_rms);
-    }
-  const Fit fit = fit_loglog(total), fit_alone = fit_loglog(alone);
-
-  nlohmann::json meta;
-  meta["mesh"] = a.mesh;
-  meta["map"] = a.env;
-  meta["mesh_name"] = fs::path(a.mesh).filename().string();
-  meta["map_name"] = fs::path(a.env).filename().string();
-  meta["vertices"] = V;
-  meta["quick"] = a.quick;
-  meta["shadowed_noise_floor"] = rep.shadowed_truth.vertices.empty() ? 0.0 : rep.shadowed_truth.noise_floor();
-  meta["interreflected_noise_floor"] =
-      rep.interreflected_truth.vertices.empty() ? 0.0 : rep.interreflected_truth.noise_floor();
-  nlohmann::json fits = nlohmann::json::object();
-  if (!std::isnan(fit.slope))
-    fits.update({{"slope", fit.slope}, {"intercept", fit.intercept}, {"slope_range", {fit.x0, fit.x1}}});
-  if (!std::isnan(fit_alone.slope))
-    fits.update({{"self_slope", fit_alone.slope},
-                 {"self_intercept", fit_alone.intercept},
-                 {"self_slope_range", {fit_alone.x0, fit_alone.x1}}});
-  meta["samples_fit"] = fits;
-  const auto has = [&](const char* sweep) {
-    return std::any_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; });
-  };
-  const auto has_basis = [&](const char* basis) {
-    return std::any_of(rep.rows.begin(), rep.rows.end(),
-                       [&](const ReportRow& r) { return r.sweep == "compression" && r.basis == basis; });
-  };
-  const std::string gl_device = gl.renderer ? gl.renderer->device() : std::string();
-  if (has("compression")) {
-    nlohmann::json c{{"bands", opt.compression_bands},
-                     {"samples", opt.bands_samples},
-                     {"iterations", opt.compression_iterations},
-                     {"weight_bits", opt.compression_weight_bits},
-                     {"frame_size", kFrameSize},
-                     {"frames", kTimedFrames},
-                     {"device", gl_device},
-                     {"no_frames", frames_why}};
-    if (has_basis("cpca glossy"))
-      c.update({{"glossy_bands", opt.compression_glossy_bands},
-                {"gloss", rep.compression_gloss},
-                {"eyes", rep.compression_eyes.size()}});
-    meta["compression"] = c;
-  }
+  const ReportRun run{a, opt, rep, pareto_front(rep.rows), mesh.vertex_count(), sample_fits(rep),
+                      gl.renderer ? gl.renderer->device() : std::string(), frames_why};
+  const std::size_t V = run.V;
+  nlohmann::json meta = report_meta(run);
 
   std::string pictures_note;
   if (!rep.image_reference.empty()) {
@@ -455,110 +623,13 @@ int run_report_command(ReportArgs& a) {
       pictures_note = fmt::format("no pictures: {}", e.what());
     }
   }
-  write_text_file((fs::path(a.out) / "report.csv").string(), csv_text(rep.rows, front, V));
+  write_text_file((fs::path(a.out) / "report.csv").string(), csv_text(rep.rows, run.front, V));
   write_text_file((fs::path(a.out) / "report.json").string(), meta.dump(2) + "\n");
   std::string plots_note = a.no_plots ? "plots skipped (--no-plots)" : run_plots(a.out);
 
-  // report.md
-  std::string md = fmt::format("# prt report: {} under {}\n\n", meta["mesh_name"].get<std::string>(),
-                               meta["map_name"].get<std::string>());
-  const std::size_t error_vertices =
-      !rep.shadowed_truth.vertices.empty()  ? rep.shadowed_truth.vertices.size()
-      : !rep.glossy_truth.empty()           ? rep.glossy_truth.front().vertices.size()
-                                            : rep.interreflected_truth.vertices.size();
-  if (error_vertices == 0)  // the compression sweep alone: no reference
-    md += fmt::format("{} vertices, albedo {}, {} grid. No reference: the compression sweep's errors are against the "
-                      "uncompressed transfer.\n\n",
-                      V, a.albedo, a.quick ? "quick" : "full");
-  if (error_vertices > 0) {
-    md += fmt::format(
-        "{} vertices, albedo {}, {} grid. Errors are relative RMS over {} randomly chosen vertices against the "
-        "Monte Carlo reference (`prt reference`",
-        V, a.albedo, a.quick ? "quick" : "full", error_vertices);
-    if (!rep.shadowed_truth.vertices.empty())
-      md += fmt::format(": shadowed {} samples per vertex, noise floor {:.3g}", opt.truth_samples,
-                        meta["shadowed_noise_floor"].get<double>());
-    if (!rep.interreflected_truth.vertices.empty())
-      md += fmt::format("; interreflected, {} bounces, {} samples, noise floor {:.3g}", opt.truth_bounces,
-                        opt.truth_bounce_samples, meta["interreflected_noise_floor"].get<double>());
-    md +=
-        "), with the reference's own noise subtracted in quadrature (docs/REPORT.md); `*` marks an error below "
-        "twice the noise floor, which the reference does not resolve. p99: 99th percentile of the per-vertex "
-        "relative error (uncorrected). Precompute: wall time for the whole mesh on this machine; relight: CPU time "
-        "per frame (lighting rotation and every vertex's sum; wavelets: resample, Haar, K terms, sparse sum), "
-        "median. Storage: the transfer file.\n\n";
-  }
-  if (has("bands") || has("samples") || has("bounces") || has("terms"))
-    md += "![error against precompute time](error_vs_time.png)\n\n";
-  const auto section = [&](const char* sweep, const std::string& title, const std::string& text) {
-    if (std::none_of(rep.rows.begin(), rep.rows.end(), [&](const ReportRow& r) { return r.sweep == sweep; })) return;
-    md += "## " + title + "\n\n" + text + "\n\n" + table(rep.rows, front, sweep, V) + "\n";
-  };
-  section("bands", "SH bands", fmt::format("Shadowed, {} samples per vertex.", opt.bands_samples));
-  if (has("bands") || has("terms")) md += "![error against bands and K](error_vs_settings.png)\n\n";
-  std::string fit_text = fmt::format("Shadowed, {} bands.", opt.samples_bands);
-  if (!std::isnan(fit.slope))
-    fit_text += fmt::format(" Fitted slope of error against samples (log-log): **{:.2f}** against the reference", fit.slope);
-  if (!std::isnan(fit_alone.slope))
-    fit_text += fmt::format(", **{:.2f}** for the sampling error alone (against {} samples, points up to {})",
-                            fit_alone.slope, max_samples, max_samples / 4);
-  fit_text += "; Monte Carlo converges with slope -0.5. \"Sampling alone\" is the error against the sweep's "
-              "largest sample count at the same bands, which the band truncation does not hide.";
-  section("samples", "Samples per vertex", fit_text);
-  if (has("samples")) md += "![error against samples](error_vs_samples.png)\n\n";
-  section("bounces", "Interreflection bounces",
-          fmt::format("{} bands, {} samples; 0 is the shadowed transfer. Against the interreflected reference.",
-                      opt.bounce_bands, opt.bounce_samples));
-  section("terms", "Wavelet terms K",
-          fmt::format("Haar on a {}x{}x6 cube, threshold {}, area-weighted selection; one precompute.", opt.cube_res,
-                      opt.cube_res, opt.threshold));
-  if (std::any_of(rep.rows.begin(), rep.rows.end(), [](const ReportRow& r) { return r.sweep == "glossy"; })) {
-    std::string noise;
-    for (std::size_t g = 0; g < rep.glossy_truth.size(); ++g)
-      noise += fmt::format("{}e = {:g}: {:.3g}", g ? ", " : "", opt.glossy_gloss[g], rep.glossy_truth[g].noise_floor());
-    md += fmt::format(
-        "## Glossy transfer\n\nShadowed glossy matrices at {} samples, the glossy part alone (rho_s = 1, no "
-        "diffuse) seen from ({:.4g}, {:.4g}, {:.4g}), against a glossy reference per exponent ({} samples per "
-        "vertex; noise floors {}). Intrinsic: the same SH formula with matrices traced at {} samples at the error "
-        "vertices: what the band count alone costs (docs/GLOSSY.md).\n\n{}\n",
-        opt.glossy_samples, rep.glossy_eye.x, rep.glossy_eye.y, rep.glossy_eye.z, opt.truth_glossy_samples, noise,
-        opt.glossy_exact_samples, glossy_table(rep.rows, V));
-  }
-  if (has("compression")) {
-    const auto uncompressed = [&](const char* basis) {
-      for (const ReportRow& r : rep.rows)
-        if (r.sweep == "compression" && r.basis == basis) return r;
-      return ReportRow{};
-    };
-    const ReportRow d = uncompressed("cpca"), g = uncompressed("cpca glossy");
-    const auto frame = [](double ms) { return std::isnan(ms) ? std::string("-") : fmt::format("{:.3g} ms", ms); };
-    md += fmt::format(
-        "## Compression (clustered PCA)\n\nEach K clusters x N vectors fitted to the stored rows (docs/COMPRESSION.md) "
-        "with {}-bit weights, at most {} rounds of the fit. Per vertex: the signals' bytes as stored "
-        "(ClusteredSignal::bytes) over all {} vertices; \"of uncompressed\": their share of the uncompressed rows' "
-        "floats. Relit error: relative RMS of the compressed transfer's radiance against the uncompressed one's "
-        "under the map (compression_error), not against the reference. Relight: CPU, per frame (per-cluster "
-        "products and N weights a vertex). Frame: GPU, {}x{}, the lighting turned and the frame drawn, median of {} "
-        "frames{}; \"of uncompressed\": over the uncompressed transfer's frame, timed in the same run. Pareto: no "
-        "other row has no more bytes and no larger error, and less of one.\n\n",
-        opt.compression_weight_bits, opt.compression_iterations, V, kFrameSize, kFrameSize, kTimedFrames,
-        gl_device.empty() ? std::string() : " (" + gl_device + ")");
-    if (!frames_why.empty()) md += "No frame times: " + frames_why + "\n\n";
-    if (has_basis("cpca"))
-      md += fmt::format("### Diffuse, {} bands\n\nShadowed, {} samples: uncompressed {} a vertex, frame {}.\n\n{}\n",
-                        d.bands, d.samples, bytes_text(double(d.uncompressed_bytes) / double(V)),
-                        frame(d.uncompressed_frame_ms), compression_table(rep.rows, front, "cpca", V));
-    if (has_basis("cpca glossy"))
-      md += fmt::format(
-          "### Glossy, {} bands\n\nThe glossy sweep's transfer ({} samples), both signals (coefficients and "
-          "matrices) at the same K x N; error and frames with the diffuse part and the lobe e = {:g}, rho_s = 0.5, "
-          "the error over {} views around the mesh (eye_ring), frames from prt render's default camera. "
-          "Uncompressed {} a vertex, frame {}.\n\n{}\n",
-          g.bands, g.samples, g.gloss, rep.compression_eyes.size(),
-          bytes_text(double(g.uncompressed_bytes) / double(V)), frame(g.uncompressed_frame_ms),
-          compression_table(rep.rows, front, "cpca glossy", V));
-    md += "![bytes and frame time against error](compression.png)\n\n";
-  }
+  std::string md = report_intro(run, meta);
+  md += sweep_sections(run);
+  if (run.has("compression")) md += compression_section(run);
   if (meta.contains("pictures"))
     md += fmt::format("## Pictures\n\n![reference, settings and error heat maps](images.png)\n\nThe reference here "
                       "has {} samples at every vertex (noise floor {:.3g}); heat maps show |result - reference| / "
@@ -568,14 +639,14 @@ int run_report_command(ReportArgs& a) {
   for (const std::string& n : rep.notes) md += "- " + n + "\n";
   if (!pictures_note.empty()) md += "- " + pictures_note + "\n";
   if (!plots_note.empty()) md += "- " + plots_note + "\n";
-  if (has("compression") && !frames_why.empty()) md += "- no frame times: " + frames_why + "\n";
+  if (run.has("compression") && !frames_why.empty()) md += "- no frame times: " + frames_why + "\n";
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const bool all_sweeps = a.sweeps == ReportArgs{}.sweeps;
   md += fmt::format("- Report made in {:.1f} s by `prt report{}{} {} {}`.\n", secs, a.quick ? " --quick" : "",
                     all_sweeps ? std::string() : " --sweeps " + a.sweeps, a.mesh, a.env);
   write_text_file((fs::path(a.out) / "report.md").string(), md);
   if (!pictures_note.empty()) fmt::print(stderr, "warning: {}\n", pictures_note);
-  if (has("compression") && !frames_why.empty()) fmt::print(stderr, "warning: no frame times: {}\n", frames_why);
+  if (run.has("compression") && !frames_why.empty()) fmt::print(stderr, "warning: no frame times: {}\n", frames_why);
   if (!plots_note.empty()) fmt::print(stderr, "warning: {}\n", plots_note);
   if (!a.quiet) fmt::print(stderr, "wrote {}/report.md, report.csv, plots ({:.1f} s)\n", a.out, secs);
   return 0;

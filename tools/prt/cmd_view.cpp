@@ -5,8 +5,8 @@
 // Screenshots are the window's own pixels, as shown.
 #include "commands.h"
 #include "look.h"
-#include "probe_object.h"
-#include "scene.h"
+#include "probe_object_options.h"
+#include "inputs.h"
 #include "view_input.h"
 
 #include <prt/color.h>
@@ -157,28 +157,61 @@ void save_window(const std::string& path, const std::vector<unsigned char>& code
   write_image(path, w, h, rgb);
 }
 
+// What the window shows: SH rows on the GPU (`sh`) and/or the wavelet
+// playback (`wavelet`); `wavelet_first`: TRANSFER is the wavelet one, shown
+// first (with --second, B switches).
+struct ViewKinds {
+  bool sh = false, wavelet = false, wavelet_first = false;
+};
+
+// How prt view shows a kind it takes: SH rows (an SH, compressed or
+// zonal-harmonic transfer, an SH lightmap) or the wavelet playback.
+ViewKinds shown(const AnyTransfer& t) {
+  const ViewKinds sh{true, false, false}, wavelet{false, true, true};
+  return dispatch(
+      t, [&](const Transfer&) { return sh; }, [&](const CompressedTransfer&) { return sh; },
+      [&](const WaveletTransfer&) { return wavelet; }, [&](const ZhTransfer&) { return sh; },
+      [&](const LightmapTransfer&) { return sh; },
+      // refused by the kind table (Consumer::View)
+      [&](const WaveletLightmap&) { return ViewKinds{}; }, [&](const ProbeTransfer&) { return ViewKinds{}; });
+}
+
+// --second: a transfer of the other basis for the same mesh. Its wavelet
+// transfer goes to scene.second; when TRANSFER is the wavelet one, --second's
+// SH (or compressed) transfer takes its place in scene.transfer.
+void load_second(const ViewArgs& a, Scene& scene, ViewKinds& kinds) {
+  if (scene.get<ZhTransfer>())
+    throw UsageError("--second: " + a.transfer + " is a zonal-harmonic transfer; --second pairs an SH and a wavelet one");
+  Scene other;
+  other.mesh = std::move(scene.mesh);
+  load_transfer(other, a.second, Consumer::View, kMaxRenderBands, "view");
+  scene.mesh = std::move(other.mesh);
+  const ViewKinds second = shown(other.transfer);
+  // One of the two is a wavelet transfer; the other an SH one of the mesh
+  // (not a lightmap, whose scene MESH is not; not a zonal-harmonic one).
+  const bool pairs = kinds.wavelet ? other.kind() == TransferKind::SH || other.kind() == TransferKind::Compressed
+                                   : second.wavelet;
+  if (!pairs)
+    throw Error(fmt::format("--second {}: {} {}; give one SH and one wavelet transfer of the mesh", a.second,
+                            kinds.wavelet == second.wavelet ? "also" : "holds", kind_names(other.kind()).title));
+  if (kinds.wavelet) {
+    scene.second = std::move(std::get<WaveletTransfer>(scene.transfer));
+    scene.transfer = std::move(other.transfer);
+    scene.header = std::move(other.header);
+  } else {
+    scene.second = std::move(std::get<WaveletTransfer>(other.transfer));
+  }
+  kinds.sh = kinds.wavelet = true;
+}
+
 // MESH, TRANSFER and ENV, and with --second the transfer of the other basis.
-Scene load_view_scene(const ViewArgs& a, bool& have_sh, bool& have_wavelet) {
-  Scene scene = load_scene(a.mesh, a.transfer, a.env, kMaxRenderBands, "view", true, true, true);
-  have_sh = scene.basis == TransferBasis::SH || scene.basis == TransferBasis::ZH;
-  have_wavelet = scene.basis == TransferBasis::Wavelet;
-  if (!a.deform.empty() && !scene.zh)
+Scene load_view_scene(const ViewArgs& a, ViewKinds& kinds) {
+  Scene scene = load_scene(a.mesh, a.transfer, a.env, Consumer::View, kMaxRenderBands, "view");
+  kinds = shown(scene.transfer);
+  if (!a.deform.empty() && !scene.get<ZhTransfer>())
     throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
                 "docs/LDPRT.md); this one is baked for one pose");
-  if (!a.second.empty() && scene.zh)
-    throw UsageError("--second: " + a.transfer + " is a zonal-harmonic transfer; --second pairs an SH and a wavelet one");
-  if (!a.second.empty()) {  // the other basis, for the same mesh
-    Scene other;
-    other.mesh = std::move(scene.mesh);
-    load_transfer(other, a.second, kMaxRenderBands, "view", true);
-    scene.mesh = std::move(other.mesh);
-    if (other.basis == scene.basis)
-      throw Error("--second " + a.second + ": also a " + std::string(basis_name(other.basis)) + " transfer; give " +
-                  "one SH and one wavelet transfer of the mesh");
-    if (other.basis == TransferBasis::Wavelet) scene.wavelet = std::move(other.wavelet);
-    else scene.transfer = std::move(other.transfer);
-    have_sh = have_wavelet = true;
-  }
+  if (!a.second.empty()) load_second(a, scene, kinds);
   return scene;
 }
 
@@ -245,22 +278,21 @@ class Viewer {
  public:
   // Uploads the mesh and map, sets the starting look; throws prt::Error for
   // a shading the transfer cannot show.
-  Viewer(const ViewArgs& a, const Scene& scene, bool have_sh, bool have_wavelet, const Look& look, Renderer& renderer,
+  Viewer(const ViewArgs& a, const Scene& scene, const ViewKinds& kinds, const Look& look, Renderer& renderer,
          ViewState& st)
       : a_(a),
         scene_(scene),
-        t_(scene.transfer),
-        have_sh_(have_sh),
-        have_wavelet_(have_wavelet),
-        sh_bands_(have_sh ? scene.transfer.bands : 3),  // Lambert needs 3 bands of lighting
-        wavelet_coeffs_(have_wavelet ? int(wavelet::cube_size(scene.wavelet.cube_res)) : 0),
+        t_(scene.header),
+        have_sh_(kinds.sh),
+        have_wavelet_(kinds.wavelet),
+        sh_bands_(kinds.sh ? scene.header.bands : 3),  // Lambert needs 3 bands of lighting
+        wavelet_coeffs_(kinds.wavelet ? int(wavelet::cube_size(scene.wavelet()->cube_res)) : 0),
         renderer_(renderer),
         rotation_(sh_bands_, glm::dmat3(1.0)) {
-    if (have_sh) upload(renderer, scene, a.transfer);
-    else renderer.set_mesh(scene.mesh, scene.wavelet.albedo, scene.wavelet.vertex_colors);
+    upload(renderer, scene, a.transfer);  // the SH rows, or the wavelet transfer's mesh alone
     renderer.set_environment(scene.env);
-    if (have_wavelet) playback_.emplace(scene.wavelet, scene.env);
-    st.wavelet = scene.basis == TransferBasis::Wavelet;
+    if (kinds.wavelet) playback_.emplace(*scene.wavelet(), scene.env);
+    st.wavelet = kinds.wavelet_first;
     st.terms = look.terms;
     st.selection = look.selection == wavelet::Selection::AreaWeighted ? 0 : 1;
     shading_index_ = int(std::find(std::begin(kShadings), std::end(kShadings), look.shading) - std::begin(kShadings));
@@ -282,7 +314,7 @@ class Viewer {
     st.gloss = a.lobe.gloss;
     st.specular = a.lobe.specular;
     diffuse_ = parse_diffuse(a.lobe.diffuse);
-    glossy_ = have_sh && t_.glossy;
+    glossy_ = kinds.sh && t_.glossy;
     playlist_ = map_playlist(a.env);
     map_index_ = std::size_t(std::find(playlist_.begin(), playlist_.end(),
                                        std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
@@ -388,7 +420,7 @@ class Viewer {
         !st.wavelet ? fmt::format("{} - {} bands{}{}", shading_label(shown, t_), keep_bands_,
                                   wk == sh::Window::None ? "" : fmt::format(" ({} window)", sh::window_name(wk)), lobe)
         : st.wavelet_lambert ? std::string("plain Lambert (no PRT)")
-                             : fmt::format("wavelet {}^2 x 6, K = {} ({}), CPU {:.1f} ms", scene_.wavelet.cube_res,
+                             : fmt::format("wavelet {}^2 x 6, K = {} ({}), CPU {:.1f} ms", scene_.wavelet()->cube_res,
                                            st.terms, wavelet::selection_name(selection(st)), wavelet_ms_);
     return fmt::format("{} - {} - exposure {:+.1f}, {}{}", basis, map_name_, st.exposure,
                        tone_map_name(kToneMaps[st.tone]), st.auto_rotate ? " - auto-rotate" : "");
@@ -438,7 +470,9 @@ class Viewer {
   double gloss_ = -1, specular_ = -1;  // as last given to the renderer (-1: not yet)
 };
 
-int run_view(const ViewArgs& a) {
+// The options that need no file read: --probes with --object, --frames with
+// --screenshot (a writable image that is none of the inputs), --screenshot-dir.
+void check_view_options(const ViewArgs& a) {
   for (const CLI::Option* o : a.probe_opts)
     if (o->count() > 0 && (a.probe.probes.empty() || a.probe.object.empty()))
       throw UsageError("--probes FILE and --object MESH go together (" + o->get_name() + " was given)");
@@ -459,14 +493,17 @@ int run_view(const ViewArgs& a) {
   }
   if (!std::filesystem::is_directory(a.screenshot_dir))
     throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
+}
 
-  bool have_sh = false, have_wavelet = false;
-  const Scene scene = load_view_scene(a, have_sh, have_wavelet);
+int run_view(const ViewArgs& a) {
+  check_view_options(a);
+  ViewKinds kinds;
+  const Scene scene = load_view_scene(a, kinds);
   // A skinned glTF with a zonal-harmonic file: its animation, skinned on the GPU.
-  const std::optional<Skin> skin = scene.zh ? load_mesh_skin(a.mesh, scene.mesh) : std::nullopt;
-  check_skin_options(skin, scene.zh.has_value(), !a.deform.empty(), {a.animation_opt}, a.mesh, a.transfer);
+  const std::optional<Skin> skin = scene.get<ZhTransfer>() ? load_mesh_skin(a.mesh, scene.mesh) : std::nullopt;
+  check_skin_options(skin, scene.get<ZhTransfer>(), !a.deform.empty(), {a.animation_opt}, a.mesh, a.transfer);
   const double duration = skin ? animation_duration(*skin, a.animation) : 0.0;
-  const bool glossy = have_sh && scene.transfer.glossy;
+  const bool glossy = kinds.sh && scene.header.glossy;
   if (!glossy)
     for (const CLI::Option* o : a.lobe.options)
       if (o->count() > 0)
@@ -474,8 +511,7 @@ int run_view(const ViewArgs& a) {
         throw Error(a.transfer + ": " + o->get_name() +
                     " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   parse_diffuse(a.lobe.diffuse);  // a bad value exits 2 before any window opens
-  Look look = parse_look(a.look, have_sh ? scene.transfer.bands : 0, have_wavelet,
-                         glossy && scene.basis == TransferBasis::SH);
+  Look look = parse_look(a.look, kinds.sh ? scene.header.bands : 0, kinds.wavelet, glossy && !kinds.wavelet_first);
   if (look.auto_exposure) look.display.exposure = auto_exposure(project(scene.env, 3));  // the first map's
 
   const char* display = std::getenv("DISPLAY");
@@ -505,7 +541,7 @@ int run_view(const ViewArgs& a) {
     fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(scene.mesh), describe(scene.env), renderer.device());
     fmt::print(stderr, "{}\n", kControls);
   }
-  Viewer viewer(a, scene, have_sh, have_wavelet, look, renderer, st);
+  Viewer viewer(a, scene, kinds, look, renderer, st);
   // A deforming mesh: framed in its rest and its most deformed pose, and
   // bent (twisted) from rest to the whole angle and back every 4 seconds
   // (scripted frames: 30 to a second). A skinned one: framed in its rest and
@@ -571,8 +607,8 @@ int run_view(const ViewArgs& a) {
         info.map = viewer.map_name();
         info.shading = viewer.shown_label(st);
         info.status = viewer.title(st);
-        info.file_bands = have_sh ? scene.transfer.bands : 0;
-        info.glossy = have_sh && scene.transfer.glossy;
+        info.file_bands = kinds.sh ? scene.header.bands : 0;
+        info.glossy = kinds.sh && scene.header.glossy;
         info.wavelet = st.wavelet;
         info.frame_ms = frame_ms;
         info.device = renderer.device();

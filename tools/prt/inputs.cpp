@@ -1,4 +1,4 @@
-#include "scene.h"
+#include "inputs.h"
 
 #include <prt/error.h>
 #include <prt/rotation.h>
@@ -22,79 +22,62 @@ namespace {
 // without a second copy of its per-vertex slots, occlusion and bent normals.
 Transfer header_only(const Transfer& t) {
   Transfer h;
-  h.bands = t.bands;
-  h.channels = t.channels;
-  h.mode = t.mode;
-  h.bounces = t.bounces;
-  h.samples = t.samples;
-  h.albedo = t.albedo;
-  h.vertex_colors = t.vertex_colors;
-  h.seed = t.seed;
-  h.vertices = t.vertices;
-  h.mesh_hash = t.mesh_hash;
+  h.header() = t.header();
   h.shading_hash = t.shading_hash;
   h.glossy = t.glossy;
   h.direct_energy = t.direct_energy;
   return h;
 }
 
-}  // namespace
+bool is_lightmap(TransferKind k) { return k == TransferKind::Lightmap || k == TransferKind::WaveletLightmap; }
 
-void load_transfer(Scene& s, const std::string& transfer, int max_bands, const char* command, bool allow_wavelet,
-                   bool allow_compressed, bool allow_zh) {
-  // Without allow_wavelet (allow_zh), read_transfer itself refuses a wavelet
-  // (zonal-harmonic) file, naming its basis.
-  s.basis = allow_wavelet || allow_zh ? read_transfer_basis(transfer) : TransferBasis::SH;
-  if (s.basis == TransferBasis::Wavelet && !allow_wavelet) s.basis = TransferBasis::SH;
-  if (s.basis == TransferBasis::ZH && !allow_zh) s.basis = TransferBasis::SH;
-  if (s.basis == TransferBasis::ZH) {
-    s.zh = read_zh_transfer(transfer);
-    check_matches(*s.zh, s.mesh, transfer);
-    const ZhTransfer& z = *s.zh;
-    s.transfer = Transfer{};
-    s.transfer.bands = z.bands;
-    s.transfer.channels = z.channels;
-    s.transfer.mode = z.mode;
-    s.transfer.bounces = z.bounces;
-    s.transfer.samples = z.samples;
-    s.transfer.albedo = z.albedo;
-    s.transfer.vertex_colors = z.vertex_colors;
-    s.transfer.vertices = z.vertices;
-    s.transfer.mesh_hash = z.mesh_hash;
-    if (max_bands > 0 && z.bands > max_bands)
-      throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, z.bands, command, max_bands));
-    return;
-  }
-  if (s.basis == TransferBasis::Wavelet) {
-    s.wavelet = read_wavelet_transfer(transfer);
-    check_matches(s.wavelet, s.mesh, transfer);
-    return;
-  }
-  s.compressed.reset();
-  if (allow_compressed && transfer_is_compressed(transfer)) {
-    s.compressed = read_compressed_transfer(transfer);
-    check_matches(s.compressed->transfer, s.mesh, transfer);
-    s.transfer = header_only(s.compressed->transfer);
-  } else {
-    s.transfer = read_transfer(transfer);  // refuses a compressed file, naming the commands that take it
-    check_matches(s.transfer, s.mesh, transfer);
-  }
-  if (max_bands > 0 && s.transfer.bands > max_bands)
+// Each kind's match check against what it was computed for, and its SH header.
+void check_loaded(Scene& s, const std::string& transfer, int max_bands, const char* command) {
+  s.header = Transfer{};
+  dispatch(
+      s.transfer,
+      [&](const Transfer& t) {
+        check_matches(t, s.mesh, transfer);
+        s.header = header_only(t);
+      },
+      [&](const CompressedTransfer& c) {
+        check_matches(c, s.mesh, transfer);
+        s.header = header_only(c.transfer);
+      },
+      [&](const WaveletTransfer& w) { check_matches(w, s.mesh, transfer); },
+      [&](const ZhTransfer& z) {
+        check_matches(z, s.mesh, transfer);
+        s.header.header() = z.header();
+      },
+      [&](const LightmapTransfer& l) { s.header = header_only(l.transfer); },  // the renderer checks the scene
+      [&](const WaveletLightmap&) {},
+      [&](const ProbeTransfer&) {});
+  if (max_bands > 0 && s.header.bands > max_bands)
     throw Error(fmt::format("{}: {} bands; prt {} takes at most {} (what the renderer's lighting block holds; "
                             "prt relight takes any)",
-                            transfer, s.transfer.bands, command, max_bands));
+                            transfer, s.header.bands, command, max_bands));
+}
+
+}  // namespace
+
+void load_transfer(Scene& s, const std::string& transfer, Consumer consumer, int max_bands, const char* command) {
+  s.transfer = read_transfer_file(transfer);
+  require_support(s.kind(), consumer, transfer);
+  check_loaded(s, transfer, max_bands, command);
 }
 
 void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_path) {
   try {  // refused (exit 1) when it does not fit the scene or exceeds this OpenGL's limits: name the file
-    if (scene.lightmap)
-      renderer.set_scene(*scene.world, *scene.lightmap);
-    else if (scene.zh)
-      renderer.set_mesh(scene.mesh, *scene.zh);  // the rest pose; set_pose moves it
-    else if (scene.compressed)
-      renderer.set_mesh(scene.mesh, *scene.compressed);  // per-cluster products each frame, N weights per vertex
-    else
-      renderer.set_mesh(scene.mesh, scene.transfer);
+    dispatch(
+        scene.transfer, [&](const Transfer& t) { renderer.set_mesh(scene.mesh, t); },
+        // per-cluster products each frame, N weights per vertex
+        [&](const CompressedTransfer& c) { renderer.set_mesh(scene.mesh, c); },
+        // the wavelet playback relights on the CPU and uploads colours
+        [&](const WaveletTransfer& w) { renderer.set_mesh(scene.mesh, w.albedo, w.vertex_colors); },
+        [&](const ZhTransfer& z) { renderer.set_mesh(scene.mesh, z); },  // the rest pose; set_pose moves it
+        [&](const LightmapTransfer& l) { renderer.set_scene(*scene.world, l); },
+        [&](const WaveletLightmap&) { PRT_CHECK(false && "refused by the kind table (Consumer::Render, View)"); },
+        [&](const ProbeTransfer&) { PRT_CHECK(false && "refused by the kind table (Consumer::Render, View)"); });
   } catch (const NoGlContext&) {
     throw;
   } catch (const Error& e) {
@@ -103,15 +86,12 @@ void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_
 }
 
 void release_uploaded(Scene& s) {
-  PRT_CHECK(s.basis == TransferBasis::SH || s.basis == TransferBasis::ZH);
-  s.zh.reset();
+  PRT_CHECK(s.kind() != TransferKind::Wavelet && !s.second);
   s.mesh.positions = {};
   s.mesh.normals = {};
   s.mesh.triangles = {};
   s.mesh.colors = {};
-  s.transfer = header_only(s.transfer);
-  s.compressed.reset();
-  s.lightmap.reset();
+  s.transfer = Transfer{};
   s.world.reset();
 }
 
@@ -122,26 +102,27 @@ void check_direct(const Transfer& t, const std::string& path, const std::string&
                             path, option, transfer_mode_name(t.mode)));
 }
 
-Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands,
-                 const char* command, bool allow_wavelet, bool allow_compressed, bool allow_zh) {
+Scene load_scene(const std::string& mesh, AnyTransfer loaded, const std::string& transfer, const std::string& env,
+                 Consumer consumer, int max_bands, const char* command) {
   Scene s;
-  if (transfer_is_lightmap(transfer)) {  // a scene and its lightmap (docs/LIGHTMAPS.md)
-    if (read_transfer_basis(transfer) == TransferBasis::Wavelet)
-      throw Error(transfer + ": holds a wavelet lightmap: prt relight SCENE FILE ENV -o lightmap.exr relights it; prt " +
-                  std::string(command) + " shows SH lightmaps");
-    s.lightmap = read_lightmap_transfer(transfer);
+  s.transfer = std::move(loaded);
+  require_support(s.kind(), consumer, transfer);
+  // The kind says whether MESH is a mesh or a scene (a lightmap's, docs/LIGHTMAPS.md).
+  if (is_lightmap(s.kind())) {
     s.world = prt::load_scene(mesh);
     s.mesh = s.world->mesh;
-    s.transfer = header_only(s.lightmap->transfer);
-    if (max_bands > 0 && s.transfer.bands > max_bands)
-      throw Error(fmt::format("{}: {} bands; prt {} takes at most {}", transfer, s.transfer.bands, command, max_bands));
   } else {
     s.mesh = load_mesh(mesh);
-    load_transfer(s, transfer, max_bands, command, allow_wavelet, allow_compressed, allow_zh);
   }
+  check_loaded(s, transfer, max_bands, command);
   s.env = load_envmap(env);
   require_finite(s.env);
   return s;
+}
+
+Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, Consumer consumer,
+                 int max_bands, const char* command) {
+  return load_scene(mesh, read_transfer_file(transfer), transfer, env, consumer, max_bands, command);
 }
 
 void rotate_lighting(std::vector<glm::dvec3>& light, int bands, const double euler[3]) {

@@ -8,6 +8,7 @@
 #include <prt/render.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
@@ -26,47 +27,60 @@
 namespace prt::cli {
 
 struct Scene {
-  Mesh mesh;
-  TransferBasis basis = TransferBasis::SH;
-  Transfer transfer;        // basis SH (compressed: the header fields only; its arrays are in compressed->transfer)
-  std::optional<CompressedTransfer> compressed;  // a file from prt compress (when the command takes them)
-  WaveletTransfer wavelet;  // basis Wavelet
-  // Basis ZH (prt precompute --basis zh): the lobes, `transfer` then holds
-  // their header fields (bands, channels, mode, albedo); `mesh` is the rest pose.
-  std::optional<ZhTransfer> zh;
-  // A lightmap (prt precompute SCENE --lightmap): the scene (its mesh is
-  // also `mesh`) and the lightmap; `transfer` then holds its header fields.
-  std::optional<prt::Scene> world;
-  std::optional<LightmapTransfer> lightmap;
+  Mesh mesh;  // the mesh; for a lightmap, its scene's (`world`) mesh
+  // What TRANSFER holds (prt/transfer_file.h), checked to belong to `mesh`.
+  AnyTransfer transfer;
+  // The SH header fields (bands, channels, mode, glossy, albedo, ...) of the
+  // kinds with SH rows: an SH, compressed or lightmap transfer's, a
+  // zonal-harmonic one's (its lobes' bands); bands 0 for the others.
+  Transfer header;
+  std::optional<prt::Scene> world;        // a lightmap's scene (glTF or OBJ with its materials)
+  std::optional<WaveletTransfer> second;  // prt view --second: a wavelet transfer beside an SH one
   EnvMap env;
+
+  TransferKind kind() const { return kind_of(transfer); }
+  template <typename T>
+  const T* get() const {
+    return std::get_if<T>(&transfer);
+  }
+  // The wavelet transfer shown: TRANSFER's, or --second's.
+  const WaveletTransfer* wavelet() const {
+    const WaveletTransfer* w = get<WaveletTransfer>();
+    return w ? w : second ? &*second : nullptr;
+  }
 };
 
-// Uploads the scene's transfer to `renderer` (set_scene, or set_mesh of the
-// compressed or plain transfer); an error names `transfer_path`.
+// Uploads the scene's transfer to `renderer` (the kind's pass: set_scene of
+// a lightmap, set_mesh of a zonal-harmonic, compressed or SH transfer); an
+// error names `transfer_path`. Refuses (PRT_CHECK) the kinds the renderer
+// does not draw: callers refuse them first (Consumer::Render, View).
 void upload(Renderer& renderer, const Scene& scene, const std::string& transfer_path);
 
-// Throws prt::Error naming the file at fault; max_bands > 0 also refuses an
-// SH transfer with more bands, naming `command` in the message. Wavelet
-// files are refused unless allow_wavelet, compressed ones unless
-// allow_compressed, zonal-harmonic ones unless allow_zh.
-Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, int max_bands = 0,
-                 const char* command = "", bool allow_wavelet = false, bool allow_compressed = false,
-                 bool allow_zh = false);
+// Reads TRANSFER, refuses it unless `consumer` takes its kind (the sentence
+// of prt/transfer_file.h's table), loads MESH (a scene for the lightmap
+// kinds) and checks that the transfer belongs to it, and loads ENV (checked
+// to be finite). Throws prt::Error naming the file at fault; max_bands > 0
+// also refuses a transfer with more SH bands, naming `command`.
+Scene load_scene(const std::string& mesh, const std::string& transfer, const std::string& env, Consumer consumer,
+                 int max_bands = 0, const char* command = "");
+// The same with the transfer already read (`transfer` names its file).
+Scene load_scene(const std::string& mesh, AnyTransfer loaded, const std::string& transfer, const std::string& env,
+                 Consumer consumer, int max_bands = 0, const char* command = "");
 
 // Throws prt::Error naming `path` unless `t` keeps a direct part (an
 // interreflected transfer): what `option` ("--direct", "--shading direct")
 // shows.
 void check_direct(const Transfer& t, const std::string& path, const std::string& option);
 
-// Loads a transfer file into `scene` (the mesh must be loaded) and checks it
+// Reads a transfer file into `scene` (the mesh must be loaded) and checks it
 // against the mesh; the rules of load_scene.
-void load_transfer(Scene& scene, const std::string& transfer, int max_bands, const char* command,
-                   bool allow_wavelet, bool allow_compressed = false, bool allow_zh = false);
+void load_transfer(Scene& scene, const std::string& transfer, Consumer consumer, int max_bands = 0,
+                   const char* command = "");
 
-// After the renderer has uploaded an SH scene's mesh and transfer (it keeps
+// After the renderer has uploaded an SH-row scene's mesh and transfer (it keeps
 // its own copy: on the GPU, or with Mesa's llvmpipe in this process), frees
-// the CPU's: the mesh's arrays, the transfer's arrays (its header fields
-// stay) and the compressed transfer. What prt render holds while it draws.
+// the CPU's: the mesh's arrays and the transfer (its header fields stay in
+// Scene::header). What prt render holds while it draws.
 void release_uploaded(Scene& scene);
 
 // Rotates SH lighting (bands^2 RGB coefficients or more) by --rotate's

@@ -1,9 +1,10 @@
-#include "probe_object.h"
+#include "probe_object_options.h"
 
 #include "options.h"
 
 #include <prt/error.h>
 #include <prt/scene.h>
+#include <prt/transfer_file.h>
 
 #include <filesystem>
 
@@ -11,7 +12,7 @@ namespace prt::cli {
 
 ProbeObject load_probe_object(const ProbeObjectArgs& a, const std::string& scene, const EnvMap& env,
                               Renderer& renderer) {
-  ProbeTransfer t = read_probe_transfer(a.probes);
+  ProbeTransfer t = read_transfer_as<ProbeTransfer>(a.probes);  // another kind: refused, naming both
   if (load_scene_or_mesh(scene).hash() != t.scene_hash)
     throw Error(a.probes + ": computed for another scene than " + scene + ": rerun prt precompute " + scene + " --probes ...");
   ProbeObjectPlacement place;

@@ -1,0 +1,244 @@
+// python/src/bind_lightmap.cpp - prt's Python module: scenes and SH lightmaps
+// (Scene, load_scene, Lightmap, read_lightmap, precompute_lightmap,
+// lightmap_from_rows; docs/LIGHTMAPS.md).
+#include "module.h"
+
+#include <prt/lightmap.h>
+#include <prt/precompute.h>
+#include <prt/scene.h>
+#include <prt/transfer_io.h>
+
+namespace prt::python {
+namespace {
+
+// uv_set= (and Scene.lightmap_uv_set's requested=): -1 (choose) or 0 to
+// kMaxLightmapUvSet, the rule of Scene::lightmap_uv_set, named here.
+int uv_set_arg(int uv_set, const char* what) {
+  if (uv_set < -1 || uv_set > prt::kMaxLightmapUvSet)
+    throw Error(std::string(what) + ": " + std::to_string(uv_set) +
+                ": expected -1 (choose: TEXCOORD_1 where every object has it, else TEXCOORD_0) or 0 to " +
+                std::to_string(prt::kMaxLightmapUvSet) + " (TEXCOORD_N)");
+  return uv_set;
+}
+
+// Scene, load_scene.
+void bind_lightmap_scene(py::module_& m) {
+  // ---- scenes and lightmaps (docs/LIGHTMAPS.md) ----
+  py::class_<prt::Scene>(m, "Scene", "A scene (prt/scene.h): objects with materials and UV sets, flattened")
+      .def_property_readonly("positions", [](const prt::Scene& s) { return vec3s(s.mesh.positions); },
+                             "float32 (V, 3), world space")
+      .def_property_readonly("normals", [](const prt::Scene& s) { return vec3s(s.mesh.normals); }, "float32 (V, 3)")
+      .def_property_readonly("triangles",
+                             [](const prt::Scene& s) {
+                               return copy(reinterpret_cast<const std::uint32_t*>(s.mesh.triangles.data()),
+                                           {py::ssize_t(s.mesh.triangles.size()), 3});
+                             },
+                             "uint32 (T, 3)")
+      .def_property_readonly("uv_sets",
+                             [](const prt::Scene& s) {
+                               py::list l;
+                               for (const auto& set : s.uv_sets)
+                                 l.append(copy(reinterpret_cast<const float*>(set.data()), {py::ssize_t(set.size()), 2}));
+                               return l;
+                             },
+                             "list of float32 (V, 2): TEXCOORD_0, TEXCOORD_1, ... (glTF: origin top-left, v down)")
+      .def_property_readonly("objects",
+                             [](const prt::Scene& s) {
+                               py::list l;
+                               for (const auto& o : s.objects)
+                                 l.append(py::dict(py::arg("name") = o.name, py::arg("first_triangle") = o.first_triangle,
+                                                   py::arg("triangle_count") = o.triangle_count,
+                                                   py::arg("material") = o.material, py::arg("uv_sets") = o.uv_sets));
+                               return l;
+                             })
+      .def_property_readonly("hash", &prt::Scene::hash, "Scene hash (a lightmap's scene_hash)")
+      .def(
+          "lightmap_uv_set",
+          [](const prt::Scene& s, int requested) { return s.lightmap_uv_set(uv_set_arg(requested, "requested")); },
+          py::arg("requested") = -1,
+          "The UV set a lightmap is laid out in: `requested` (0 to 7, TEXCOORD_N; every object must have it) or, "
+          "with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises "
+          "prt.Error for any other number, and naming the objects that lack the set.")
+      .def("__repr__", [](const prt::Scene& s) { return "<prt.Scene " + prt::describe(s) + ">"; });
+
+  m.def(
+      "load_scene",
+      [](const py::object& path) {
+        const std::string p = path_of(path, "path");
+        py::gil_scoped_release release;
+        return prt::load_scene(p);
+      },
+      py::arg("path"), "Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.");
+}
+
+// Lightmap, read_lightmap.
+void bind_lightmap_transfer(py::module_& m) {
+  py::class_<prt::LightmapTransfer>(m, "Lightmap", "An SH lightmap (prt/lightmap.h): transfer per covered texel")
+      .def_property_readonly("width", [](const prt::LightmapTransfer& l) { return l.layout.width; })
+      .def_property_readonly("height", [](const prt::LightmapTransfer& l) { return l.layout.height; })
+      .def_property_readonly("uv_set", [](const prt::LightmapTransfer& l) { return l.layout.uv_set; })
+      .def_property_readonly("scene_hash", [](const prt::LightmapTransfer& l) { return l.layout.scene_hash; })
+      .def_property_readonly("bands", [](const prt::LightmapTransfer& l) { return l.transfer.bands; })
+      .def_property_readonly("channels", [](const prt::LightmapTransfer& l) { return l.transfer.channels; })
+      .def_property_readonly("mode", [](const prt::LightmapTransfer& l) {
+        return std::string(prt::transfer_mode_name(l.transfer.mode));
+      })
+      .def_property_readonly("texels",
+                             [](const prt::LightmapTransfer& l) {
+                               return copy(l.layout.texels.data(), {py::ssize_t(l.layout.texels.size())});
+                             },
+                             "uint32 (N,): covered texels, y * width + x (rows from the top)")
+      .def_property_readonly("analytic",
+                             [](const prt::LightmapTransfer& l) {
+                               py::array_t<bool> a(py::ssize_t(l.transfer.vertices));
+                               for (std::size_t i = 0; i < l.transfer.vertices; ++i)
+                                 a.mutable_at(i) = l.transfer.is_analytic(i);
+                               return a;
+                             },
+                             "bool (N,): texels that store no row (nothing occludes them)")
+      .def_property_readonly("interpolated_texels",
+                             [](const prt::LightmapTransfer& l) { return l.transfer.interpolated_vertices(); },
+                             "How many texels were interpolated from traced neighbours (adaptive sample points, prt "
+                             "precompute --lightmap WxH --adaptive); 0 when every texel was traced")
+      .def_property_readonly("interpolated",
+                             [](py::object self) -> py::object {
+                               const auto& l = self.cast<const prt::LightmapTransfer&>();
+                               const std::vector<std::uint8_t>& mask = l.transfer.interpolated;
+                               if (mask.empty()) return py::none();
+                               return view(mask.data(), {py::ssize_t(mask.size())}, self);
+                             },
+                             "uint8 (N,), read-only: 1 where the texel's transfer was interpolated from traced "
+                             "neighbours (precompute_lightmap(adaptive=...), prt precompute --adaptive), 0 where it "
+                             "was traced; None when every texel was traced (the file has no interpolated-texel mask)")
+      .def(
+          "rows",
+          [](const prt::LightmapTransfer& l, const prt::Scene& scene) {
+            const prt::LightmapTexels tx = prt::lightmap_texels(scene, l.layout.width, l.layout.height, l.layout.uv_set,
+                                                                l.transfer.vertex_colors ? nullptr : &l.transfer.albedo);
+            prt::check_matches(l, tx, "lightmap");
+            const std::vector<float> d = prt::dense_transfer(l.transfer, prt::texel_points(tx));
+            return copy(d.data(), {py::ssize_t(l.transfer.vertices), l.transfer.channels,
+                                   py::ssize_t(l.transfer.bands) * l.transfer.bands});
+          },
+          py::arg("scene"),
+          "float32 (N, channels, bands^2): every covered texel's transfer, analytic ones evaluated from `scene`")
+      .def(
+          "relight",
+          [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& lighting) {
+            const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
+            if (light.size() < std::size_t(l.transfer.bands) * l.transfer.bands)
+              throw Error("lighting: fewer coefficients than the lightmap's bands^2");
+            std::vector<glm::vec4> img;
+            {
+              py::gil_scoped_release release;
+              const prt::LightmapTexels tx =
+                  prt::lightmap_texels(scene, l.layout.width, l.layout.height, l.layout.uv_set,
+                                       l.transfer.vertex_colors ? nullptr : &l.transfer.albedo);
+              prt::check_matches(l, tx, "lightmap");
+              img = prt::lightmap_image(l.layout, prt::relight_lightmap(l, tx, light));
+            }
+            return copy(reinterpret_cast<const float*>(img.data()), {l.layout.height, l.layout.width, 4});
+          },
+          py::arg("scene"), py::arg("lighting"),
+          "The lightmap relit under `lighting` (coefficients (n*n, 3), project()) on `scene` (the Scene it was computed for): "
+          "float32 (H, W, 4), prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)")
+      .def("write", [](const prt::LightmapTransfer& l, const py::object& path) {
+        prt::write_lightmap_transfer(path_of(path, "path"), l);
+      }, py::arg("path"), "Writes the lightmap file to `path` (docs/FORMAT.md), atomically (a temporary file, then renamed).")
+      .def("__repr__", [](const prt::LightmapTransfer& l) {
+        return "<prt.Lightmap " + std::to_string(l.layout.width) + "x" + std::to_string(l.layout.height) + ", " +
+               std::to_string(l.layout.texels.size()) + " covered texels, " + std::to_string(l.transfer.bands) +
+               " bands>";
+      });
+
+  m.def("read_lightmap", [](const py::object& path) { return prt::read_lightmap_transfer(path_of(path, "path")); },
+        py::arg("path"), "Reads the lightmap file at `path` (prt precompute SCENE --lightmap WxH). Returns a Lightmap.");
+}
+
+// precompute_lightmap, lightmap_from_rows.
+void bind_lightmap_compute(py::module_& m) {
+  m.def(
+      "precompute_lightmap",
+      [](const prt::Scene& scene, int width, int height, int uv_set, const std::string& mode, int bands, int samples,
+         int bounces, std::uint64_t seed, const py::object& adaptive, double verify_adaptive, bool adaptive_any) {
+        prt::TransferOptions o;
+        o.mode = prt::parse_transfer_mode(mode);
+        o.bands = bands;
+        o.samples = samples;
+        o.bounces = bounces;
+        o.seed = seed;
+        const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
+        uv_set_arg(uv_set, "uv_set");
+        py::gil_scoped_release release;
+        const int set = scene.lightmap_uv_set(uv_set);
+        // As the command: an atlas the machine's memory cannot hold is refused
+        // from its UV area, before its texels are rasterised.
+        prt::TransferOptions planned = o;
+        planned.memory_limit = prt::default_memory_limit();
+        prt::check_lightmap_memory(scene, width, height, set, planned, adapt.has_value());
+        prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
+        prt::move_texels_out_of_geometry(scene.mesh, tx);
+        return adapt ? prt::compute_adaptive_lightmap_transfer(scene, tx, o, *adapt)
+                     : prt::compute_lightmap_transfer(scene, tx, o);
+      },
+      py::arg("scene"), py::arg("width"), py::arg("height"), py::kw_only(), py::arg("uv_set") = -1,
+      py::arg("mode") = "shadowed", py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("bounces") = 1,
+      py::arg("seed") = 1, py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0,
+      py::arg("adaptive_any") = false,
+      "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
+      "\n"
+      "Arguments (prt precompute's option in brackets):\n"
+      "  scene: a Scene (load_scene).\n"
+      "  width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].\n"
+      "  uv_set: the scene's UV set the atlas is laid out in, 0 to 7 (TEXCOORD_N), or -1: TEXCOORD_1 where every object has it, else TEXCOORD_0 [--uv].\n"
+      "  bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
+      "  adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.\n"
+      "\n"
+      "Returns a Lightmap.");
+
+  m.def(
+      "lightmap_from_rows",
+      [](const prt::Scene& scene, int width, int height, const py::object& rows, int uv_set, const std::string& mode) {
+        FArray a = real_array<float>(rows, "rows");
+        const int set = scene.lightmap_uv_set(uv_set_arg(uv_set, "uv_set"));
+        const prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
+        const std::size_t n = tx.layout.texels.size();
+        if (a.ndim() != 3 || std::size_t(a.shape(0)) != n || (a.shape(1) != 1 && a.shape(1) != 3))
+          throw Error("rows: expected float32 (" + std::to_string(n) + ", 1 or 3, bands^2) for this atlas's covered texels");
+        const int bands = int(std::lround(std::sqrt(double(a.shape(2)))));
+        if (bands < 1 || bands * bands != a.shape(2)) throw Error("rows: the last axis must be bands^2");
+        prt::LightmapTransfer l;
+        l.layout = tx.layout;
+        prt::Transfer& t = l.transfer;
+        t.bands = bands;
+        t.channels = int(a.shape(1));
+        t.mode = prt::parse_transfer_mode(mode);
+        t.vertices = n;
+        t.vertex_colors = true;
+        t.mesh_hash = tx.layout.scene_hash;
+        t.shading_hash = prt::shading_hash(prt::texel_points(tx), true);
+        t.coeffs.assign(a.data(), a.data() + a.size());
+        if (auto p = prt::lightmap_problem(l); !p.empty()) throw Error("rows: " + p);
+        return l;
+      },
+      py::arg("scene"), py::arg("width"), py::arg("height"), py::arg("rows"), py::kw_only(), py::arg("uv_set") = -1,
+      py::arg("mode") = "shadowed",
+      "A lightmap from arrays, for a Scene: every texel of the atlas stored (none analytic); .write() makes a file prt relight reads.\n"
+      "\n"
+      "Arguments:\n"
+      "  scene: the Scene; width, height: the atlas in texels, 1 to 16384 each; uv_set: its UV set, 0 to 7 (-1: as precompute_lightmap).\n"
+      "  rows: float32 (N, channels, bands^2), one per covered texel, in texel order.\n"
+      "  mode: the transfer mode recorded ('shadowed', 'interreflected', ...).\n"
+      "\n"
+      "Returns a Lightmap.");
+}
+
+}  // namespace
+
+void bind_lightmap(py::module_& m) {
+  bind_lightmap_scene(m);
+  bind_lightmap_transfer(m);
+  bind_lightmap_compute(m);
+}
+
+}  // namespace prt::python

@@ -1,0 +1,97 @@
+// python/src/bind_precompute.cpp - prt's Python module: precompute, the
+// transfer of a mesh (SH, adaptive sample points, or wavelet).
+#include "module.h"
+
+#include <prt/mesh.h>
+#include <prt/precompute.h>
+#include <prt/wavelet_transfer.h>
+
+namespace prt::python {
+
+// precompute.
+void bind_precompute(py::module_& m) {
+  m.def(
+      "precompute",
+      [](const prt::Mesh& mesh, const py::object& bands_arg, int samples, const std::string& mode, int bounces,
+         const py::object& albedo, bool vertex_colors, std::uint64_t seed, int threads, double offset,
+         double bounce_tolerance, const std::string& material, const std::string& basis, int cube_res,
+         double threshold, const py::object& adaptive, double verify_adaptive, bool adaptive_any,
+         py::object progress) -> py::object {
+        if (basis != "sh" && basis != "wavelet")
+          throw Error("basis: expected 'sh' or 'wavelet' (for 'zh', fit_zh the SH transfer), got '" + basis + "'");
+        const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
+        if (basis == "wavelet") {
+          if (adapt)
+            throw Error("adaptive: applies to basis='sh' (SH transfer); a wavelet transfer traces every vertex");
+          // The CLI's rules: shadowed, diffuse; its size set by cube_res and threshold.
+          if (!bands_arg.is_none()) throw Error("bands: does not apply to basis='wavelet' (cube_res and threshold set its size)");
+          if (mode != "shadowed") throw Error("mode: basis='wavelet' is shadowed only, got '" + mode + "'");
+          if (material != "diffuse") throw Error("material: basis='wavelet' is diffuse only");
+          prt::WaveletOptions w;
+          w.cube_res = cube_res;
+          w.threshold = threshold;
+          w.albedo = to_albedo(albedo);
+          w.vertex_colors = vertex_colors;
+          w.threads = threads_arg(threads);
+          w.offset = offset;
+          PyWavelet p;
+          p.t = run_released(std::move(progress),
+                             [&](const prt::Progress& pr) { return prt::compute_wavelet_transfer(mesh, w, pr); });
+          return py::cast(std::move(p));
+        }
+        if (cube_res != 32 || threshold != 1e-2)
+          throw Error(std::string(cube_res != 32 ? "cube_res" : "threshold") + ": applies to basis='wavelet' only");
+        const int bands = bands_arg.is_none() ? 5 : int_arg(bands_arg, "bands");
+        prt::TransferOptions o;
+        o.mode = prt::parse_transfer_mode(mode);
+        o.bands = bands;
+        o.samples = samples;
+        o.bounces = bounces;
+        o.albedo = to_albedo(albedo);
+        o.vertex_colors = vertex_colors;
+        o.seed = seed;
+        o.threads = threads_arg(threads);
+        o.offset = offset;
+        o.bounce_tolerance = bounce_tolerance;
+        if (material != "diffuse" && material != "glossy")
+          throw Error("material: expected 'diffuse' or 'glossy', got '" + material + "'");
+        o.glossy = material == "glossy";
+        PyTransfer p;
+        p.t = run_released(std::move(progress), [&](const prt::Progress& pr) {
+          return adapt ? prt::compute_adaptive_transfer(mesh, o, *adapt, pr) : prt::compute_transfer(mesh, o, pr);
+        });
+        return py::cast(std::move(p));
+      },
+      py::arg("mesh"), py::kw_only(), py::arg("bands") = py::none(), py::arg("samples") = 1024,
+      py::arg("mode") = "shadowed", py::arg("bounces") = 1, py::arg("albedo") = 0.8, py::arg("vertex_colors") = false,
+      py::arg("seed") = 1, py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
+      py::arg("material") = "diffuse", py::arg("basis") = "sh", py::arg("cube_res") = 32, py::arg("threshold") = 1e-2,
+      py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0, py::arg("adaptive_any") = false,
+      py::arg("progress") = py::none(),
+      "Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.\n"
+      "\n"
+      "Arguments (prt precompute's option in brackets):\n"
+      "  mesh: the Mesh (load_mesh, make_mesh); units are the mesh's.\n"
+      "  bands: SH bands n, n*n coefficients per channel, 1 to 16 (None: 5) [--bands].\n"
+      "  samples: rays per vertex (about), 1 to 2^24 (1024) [--samples].\n"
+      "  mode: 'unshadowed' (no rays), 'shadowed' or 'interreflected' [--mode].\n"
+      "  bounces: diffuse bounces of 'interreflected', 0 to 64 (1) [--bounces].\n"
+      "  albedo: diffuse albedo, a number or (r, g, b), each in [0, 1] (0.8) [--albedo].\n"
+      "  vertex_colors: the mesh's vertex colours as albedo [--vertex-colors].\n"
+      "  seed: seed of the direction set, 0 to 2^64 - 1 (1) [--seed].\n"
+      "  threads: worker threads, 0 (every core) to 1024 [--threads]; the result does not depend on it.\n"
+      "  offset: ray origin offset along the normal in mesh units (0: 1e-4 x the bounding-box diagonal) [--offset].\n"
+      "  bounce_tolerance: stop adding bounces once one adds less than this fraction of the direct energy, [0, 1) (0: never) [--bounce-tolerance].\n"
+      "  material: 'diffuse', or 'glossy': also the transfer matrices of glossy PRT (at most 12 bands; docs/GLOSSY.md) [--material].\n"
+      "  basis: 'sh'; or 'wavelet': a WaveletTransfer (shadowed, diffuse; samples, seed and bounces do not apply: one ray per cube texel) [--basis].\n"
+      "  cube_res: wavelet basis: the cube's face size r, a power of two 2 to 256 (32) [--cube-res].\n"
+      "  threshold: wavelet basis: the relative L2 error each vertex's kept coefficients may leave, [0, 1) (0.01) [--threshold].\n"
+      "  adaptive: adaptive sample points (basis='sh'; docs/PRECOMPUTE.md): None traces every vertex; a tolerance TOL in (0, 1) traces a subset and interpolates the rest along the surface where probes show interpolation adds at most TOL (relative RMS, band-weighted); 0: the default TOL, 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples [--adaptive [TOL]: 0 is the option without a value]. The Transfer's .interpolated marks the interpolated vertices.\n"
+      "  verify_adaptive: with adaptive: trace this fraction, [0, 1], of the interpolated vertices again (they keep the traced transfer) (0) [--verify-adaptive].\n"
+      "  adaptive_any: with adaptive: take a TOL above 1.5x the default, which is refused otherwise [--adaptive-any].\n"
+      "  progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).\n"
+      "\n"
+      "Returns a Transfer (a WaveletTransfer for basis='wavelet').");
+}
+
+}  // namespace prt::python
