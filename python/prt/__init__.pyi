@@ -498,9 +498,9 @@ def project(map: Any, bands: int = ..., *, mapping: str = ..., quadrature: str =
     Returns float64 (bands*bands, 3), index k = l(l+1)+m (docs/CONVENTIONS.md).
     """
 
-def read_transfer(path: Any) -> Transfer:
+def read_transfer(path: Any) -> Any:
     """
-    Reads the SH transfer file at `path` (compressed ones too: their rows are reconstructed); refuses wavelet and zonal-harmonic files, naming read_wavelet and read_zh. Returns a Transfer.
+    Reads any prt transfer file at `path` (validating all of it) and returns the object of its kind: a Transfer (an SH transfer; a compressed one with its rows reconstructed, relit by per-cluster products), a WaveletTransfer, a ZhTransfer, a Lightmap or a ProbeVolume. A wavelet lightmap is refused with what to do instead (prt info --kinds lists which kind goes where).
     """
 
 def read_vertex_csv(path: Any) -> tuple:

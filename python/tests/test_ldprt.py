@@ -287,10 +287,12 @@ def test_bad_lighting(zh, tube):
                                   prt.relight(zh, tube, light))
 
 
-def test_readers_name_each_other(cli_zh_file, cli_transfer):
-    with pytest.raises(prt.Error, match="read_zh"):
-        prt.read_transfer(cli_zh_file)
-    with pytest.raises(prt.Error):
+def test_read_transfer_reads_any_kind_and_read_zh_refuses_others(cli_zh_file, cli_transfer):
+    z = prt.read_transfer(cli_zh_file)  # any kind: the file's own object
+    assert isinstance(z, prt.ZhTransfer)
+    assert (z.lobes, z.bands, z.vertices) == (prt.read_zh(cli_zh_file).lobes, prt.read_zh(cli_zh_file).bands,
+                                              prt.read_zh(cli_zh_file).vertices)
+    with pytest.raises(prt.Error, match="not a zonal-harmonic"):
         prt.read_zh(cli_transfer)
 
 
