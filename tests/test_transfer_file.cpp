@@ -144,8 +144,10 @@ TEST(ConsumerTable, EveryRefusalIsASentenceAndRequireSupportSaysIt) {
         } catch (const prt::Error& e) {
           EXPECT_EQ(std::string(e.what()), "FILE: " + std::string(s.why));
         }
-        // A refusal says what to do instead: a command, a function or an option to use or leave out.
-        EXPECT_TRUE(s.why.find("prt ") != std::string_view::npos || s.why.find("--") != std::string_view::npos)
+        // A refusal says what to do instead: a command (prt X), a Python function (prt.x) or an option to use
+        // or leave out.
+        EXPECT_TRUE(s.why.find("prt ") != std::string_view::npos || s.why.find("prt.") != std::string_view::npos ||
+                    s.why.find("--") != std::string_view::npos)
             << s.why;
       }
     }
