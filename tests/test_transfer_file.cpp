@@ -180,6 +180,16 @@ TEST(ConsumerTable, CommandsRefuseWithTheTablesSentence) {
   }
 }
 
+TEST(ConsumerTable, PrtInfoKindsPrintsIt) {
+  TempDir d;
+  const Result r = run_prt(d, {"info", "--kinds"});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_EQ(r.out, prt::support_table_markdown());
+  // The table alone: with a file, or without either, a usage error.
+  EXPECT_EQ(run_prt(d, {"info", "--kinds", kTube}).code, 2);
+  EXPECT_EQ(run_prt(d, {"info"}).code, 2);
+}
+
 TEST(ConsumerTable, ArchitectureDocShowsTheTable) {
   const std::string doc = read_file(fs::path(PRT_SOURCE_DIR) / "docs" / "ARCHITECTURE.md");
   EXPECT_NE(doc.find(prt::support_table_markdown()), std::string::npos)
