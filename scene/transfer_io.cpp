@@ -293,25 +293,30 @@ std::uint64_t transfer_file_size(const Transfer& t) { return file_size_of(transf
 namespace detail::tio {
 
 // The 128-byte header of an SH transfer file.
-void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::uint32_t version, std::uint32_t flags,
-                 std::size_t section_count) {
-  std::memset(header, 0, kHeaderSize);  // reserved bytes stay zero
+void fill_common_header(unsigned char (&header)[kHeaderSize], std::uint32_t version, std::uint32_t basis,
+                        const TransferHeader& v, std::uint32_t flags, std::size_t section_count) {
   std::memcpy(header, kMagic.data(), kMagic.size());
   store<std::uint32_t>(header + kOffVersion, version);
   store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
-  store<std::uint32_t>(header + kOffBasis, kBasisSH);
-  store<std::uint32_t>(header + kOffBands, std::uint32_t(t.bands));
-  store<std::uint32_t>(header + kOffChannels, std::uint32_t(t.channels));
-  store<std::uint32_t>(header + kOffMode, std::uint32_t(t.mode));
-  store<std::uint32_t>(header + kOffBounces, std::uint32_t(t.bounces));
-  store<std::uint32_t>(header + kOffSamples, std::uint32_t(t.samples));
-  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
-  store<std::uint32_t>(header + kOffFlags,
-                       flags | (t.vertex_colors ? kFlagVertexColors : 0u) | (t.glossy ? kFlagGlossy : 0u));
-  store<std::uint64_t>(header + kOffSeed, t.seed);
-  store<std::uint64_t>(header + kOffVertices, t.vertices);
-  store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
+  store<std::uint32_t>(header + kOffBasis, basis);
+  store<std::uint32_t>(header + kOffBands, std::uint32_t(v.bands));
+  store<std::uint32_t>(header + kOffChannels, std::uint32_t(v.channels));
+  store<std::uint32_t>(header + kOffMode, std::uint32_t(v.mode));
+  store<std::uint32_t>(header + kOffBounces, std::uint32_t(v.bounces));
+  store<std::uint32_t>(header + kOffSamples, std::uint32_t(v.samples));
+  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * std::size_t(c), v.albedo[c]);
+  store<std::uint32_t>(header + kOffFlags, flags);
+  store<std::uint64_t>(header + kOffSeed, v.seed);
+  store<std::uint64_t>(header + kOffVertices, v.vertices);
+  store<std::uint64_t>(header + kOffMeshHash, v.mesh_hash);
   store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(section_count));
+}
+
+void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::uint32_t version, std::uint32_t flags,
+                 std::size_t section_count) {
+  std::memset(header, 0, kHeaderSize);  // reserved bytes stay zero
+  fill_common_header(header, version, kBasisSH, t.header(),
+                     flags | (t.vertex_colors ? kFlagVertexColors : 0u) | (t.glossy ? kFlagGlossy : 0u), section_count);
   store<std::uint64_t>(header + kOffStored, stored_of(t));
   store<std::uint64_t>(header + kOffShadingHash, t.shading_hash);
 }

@@ -265,6 +265,12 @@ void write_file(const std::string& path, const unsigned char (&header)[kHeaderSi
                 const std::vector<RawSection>& sections);
 // The size of a file of these sections.
 std::uint64_t file_size_of(const std::vector<TransferSection>& sections);
+// The header fields every family writes alike: signature, version, header
+// size, basis, the TransferHeader's values (albedo as given), flags and
+// section count. The family's own fields follow; the rest stays as it was
+// (callers start from zeros).
+void fill_common_header(unsigned char (&header)[kHeaderSize], std::uint32_t version, std::uint32_t basis,
+                        const TransferHeader& v, std::uint32_t flags, std::size_t section_count);
 // The 128-byte header of an SH transfer file.
 void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::uint32_t version, std::uint32_t flags,
                  std::size_t section_count);

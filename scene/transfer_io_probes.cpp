@@ -89,19 +89,17 @@ std::vector<RawSection> probe_raw_sections(const ProbeTransfer& t, const double 
 }
 
 void fill_probe_header(unsigned char (&h)[kHeaderSize], const ProbeTransfer& t) {
-  std::memcpy(h, kMagic.data(), kMagic.size());
-  store<std::uint32_t>(h + kOffVersion, kProbeFormatVersion);
-  store<std::uint32_t>(h + kOffHeaderSize, std::uint32_t(kHeaderSize));
-  store<std::uint32_t>(h + kOffBasis, kBasisProbes);
-  store<std::uint32_t>(h + kOffBands, std::uint32_t(t.bands));
-  store<std::uint32_t>(h + kOffChannels, std::uint32_t(t.channels));
-  store<std::uint32_t>(h + kOffMode, std::uint32_t(t.mode));
-  store<std::uint32_t>(h + kOffBounces, std::uint32_t(t.bounces));
-  store<std::uint32_t>(h + kOffSamples, std::uint32_t(t.rays_per_texel));
-  store<std::uint64_t>(h + kOffSeed, t.seed);
-  store<std::uint64_t>(h + kOffVertices, t.probes());
-  store<std::uint64_t>(h + kOffMeshHash, t.scene_hash);
-  store<std::uint32_t>(h + kOffSectionCount, std::uint32_t(kProbeSectionCount));
+  TransferHeader v;  // the common fields' meaning for a probe volume (docs/FORMAT.md)
+  v.bands = t.bands;
+  v.channels = t.channels;
+  v.mode = t.mode;
+  v.bounces = t.bounces;
+  v.samples = t.rays_per_texel;
+  v.albedo = glm::vec3(0.0f);  // none: zero bytes
+  v.seed = t.seed;
+  v.vertices = t.probes();
+  v.mesh_hash = t.scene_hash;
+  fill_common_header(h, kProbeFormatVersion, kBasisProbes, v, 0u, kProbeSectionCount);
   store<std::uint32_t>(h + kOffProbeCubeRes, std::uint32_t(t.cube_res));
   store<std::uint32_t>(h + kOffProbeDepthRes, std::uint32_t(t.depth_res));
   store<std::uint32_t>(h + kOffProbeBounceBands, std::uint32_t(t.bounce_bands));

@@ -111,21 +111,8 @@ void write_zh_transfer(const std::string& path, const ZhTransfer& t) {
   const std::vector<ZhSection> sections = zh_sections(t, &mask);
 
   unsigned char header[kHeaderSize] = {};  // reserved bytes stay zero
-  std::memcpy(header, kMagic.data(), kMagic.size());
-  store<std::uint32_t>(header + kOffVersion, kZhFormatVersion);
-  store<std::uint32_t>(header + kOffHeaderSize, std::uint32_t(kHeaderSize));
-  store<std::uint32_t>(header + kOffBasis, kBasisZH);
-  store<std::uint32_t>(header + kOffBands, std::uint32_t(t.bands));
-  store<std::uint32_t>(header + kOffChannels, std::uint32_t(t.channels));
-  store<std::uint32_t>(header + kOffMode, std::uint32_t(t.mode));
-  store<std::uint32_t>(header + kOffBounces, std::uint32_t(t.bounces));
-  store<std::uint32_t>(header + kOffSamples, std::uint32_t(t.samples));
-  for (int c = 0; c < 3; ++c) store<float>(header + kOffAlbedo + 4 * c, t.albedo[c]);
-  store<std::uint32_t>(header + kOffFlags, t.vertex_colors ? kFlagVertexColors : 0u);
-  store<std::uint64_t>(header + kOffSeed, t.seed);
-  store<std::uint64_t>(header + kOffVertices, t.vertices);
-  store<std::uint64_t>(header + kOffMeshHash, t.mesh_hash);
-  store<std::uint32_t>(header + kOffSectionCount, std::uint32_t(sections.size()));
+  fill_common_header(header, kZhFormatVersion, kBasisZH, t.header(), t.vertex_colors ? kFlagVertexColors : 0u,
+                     sections.size());
   store<std::uint32_t>(header + kOffLobes, std::uint32_t(t.lobes));
   store<std::uint64_t>(header + kOffZhStored, t.stored_vertices());
   store<std::uint64_t>(header + kOffTopologyHash, t.topology_hash);
