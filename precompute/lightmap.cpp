@@ -185,13 +185,19 @@ void check_lightmap_memory(const Scene& scene, int width, int height, int uv_set
   const std::size_t least = plan.minimum + texels;
   if (options.memory_limit >= least) return;
   const auto gb = [](std::size_t b) { return fmt::format("{:.2f} GB", double(b) / 1e9); };
+  // The limit suggested leaves room for the start-up memory (plan.base, the
+  // resident set now) to differ in the next run: it differed by 1 MB between
+  // two runs on CI (29 MB suggested, 30 MB wanted), so a suggestion with no
+  // room could be refused when taken.
+  constexpr std::size_t kStartupJitter = 4u << 20;
+  const std::size_t suggested = (least + kStartupJitter + 999999) / 1000000;
   throw Error(fmt::format(
       "--memory-limit {}: too small for a {}x{} lightmap of {} (at least {} covered texels, from the area of UV set "
       "{}; {} triangles) with these options: the process holds {} before it starts, and the texels and the transfer's "
       "ray scene and per-texel arrays need at least {} whatever the limit; the smallest limit that could work is {} "
       "or more (--memory-limit {}M, or a smaller atlas); refused before the texels are rasterised",
       gb(options.memory_limit), width, height, scene.mesh.source, P, uv_set, scene.mesh.triangles.size(),
-      gb(plan.base), gb(least - plan.base), gb(least), (least + 999999) / 1000000));
+      gb(plan.base), gb(least - plan.base), gb(least), suggested));
 }
 
 LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const LightmapTexels& texels,
