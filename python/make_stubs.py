@@ -100,6 +100,11 @@ def docstring(text, indent):
     return f'{indent}"""\n{body}\n{indent}"""\n'
 
 
+# Functions whose pybind11 signature says `object` where the stub can say
+# more: read_transfer returns the object of the file's kind.
+RETURNS = {"read_transfer": "Transfer | WaveletTransfer | ZhTransfer | Lightmap | ProbeVolume"}
+
+
 def function(name, obj, indent="", method=False):
     out = ""
     sigs = overloads(obj.__doc__)
@@ -115,7 +120,8 @@ def function(name, obj, indent="", method=False):
             args = re.sub(r"^self(: [^,]+)?", "self", args)
         if many:
             out += f"{indent}@overload\n"
-        out += f"{indent}def {name}({args}) -> {py_type(ret) if ret else 'None'}:\n{docstring(doc, indent + '    ')}"
+        ret = RETURNS.get(name) if not method and name in RETURNS else (py_type(ret) if ret else "None")
+        out += f"{indent}def {name}({args}) -> {ret}:\n{docstring(doc, indent + '    ')}"
     return out
 
 

@@ -1,10 +1,12 @@
 // The CPU version of the display pass (exposure, tone map). See prt/render.h.
 #include <prt/render.h>
 
+#include <prt/error.h>
 #include <prt/filter.h>
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace prt {
 
@@ -32,6 +34,32 @@ void finish_frame(std::vector<float>& rgb, const Display& d, bool linear) {
 double auto_exposure(const std::vector<glm::dvec3>& light) {
   const double peak = sh::peak_diffuse_radiance(light);
   return peak > 0 ? std::clamp(-std::log2(peak), -64.0, 64.0) : 0.0;
+}
+
+double frame_exposure(std::span<const float> rgb, std::span<const float> coverage) {
+  PRT_CHECK_OP(rgb.size() % 3, ==, 0u);  // RGB triples
+  const std::size_t n = rgb.size() / 3;
+  if (!coverage.empty()) PRT_CHECK_OP(coverage.size(), ==, n);  // one coverage value a pixel
+  const auto gather = [&](bool covered_only) {
+    std::vector<float> top;
+    top.reserve(n);
+    for (std::size_t p = 0; p < n; ++p) {
+      if (covered_only && !(coverage[p] >= 0.5f)) continue;
+      const float r = rgb[3 * p], g = rgb[3 * p + 1], b = rgb[3 * p + 2];
+      if (!std::isfinite(r) || !std::isfinite(g) || !std::isfinite(b)) continue;
+      top.push_back(std::max({r, g, b, 0.0f}));
+    }
+    return top;
+  };
+  std::vector<float> top = gather(!coverage.empty());
+  if (top.empty()) top = gather(false);  // nothing covered: the frame is the background
+  if (top.empty()) return 0;
+  // The nearest-rank percentile: index floor(q (n - 1)), so that n = 1 gives
+  // that pixel and q = 1 the maximum.
+  const std::size_t k = std::size_t(kAutoExposurePercentile * double(top.size() - 1));
+  std::nth_element(top.begin(), top.begin() + std::ptrdiff_t(k), top.end());
+  const double v = top[k];
+  return v > 0 ? std::clamp(std::log2(kAutoExposureTarget / v), -kMaxExposureStops, kMaxExposureStops) : 0.0;
 }
 
 }  // namespace prt

@@ -238,6 +238,7 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
           {"spin", 0},
           {"auto", page.turn},
           {"exposure", page.display.exposure},
+          {"auto_exposure", page.auto_exposure},
           {"tonemap", std::string(tone_map_name(page.display.tone_map))}}}};
     if (!page.lightmap_albedo.empty()) {
       PRT_CHECK(page.lightmap_albedo.size() == std::size_t(page.lightmap_width) * page.lightmap_height);

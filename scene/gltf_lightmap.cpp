@@ -271,6 +271,17 @@ json lightmap_extras(const LightmapExport& e, const LightmapTransfer& t, const L
 
 }  // namespace
 
+void bake_lightmap(GltfLightmapOptions& opts, const LightmapTransfer& t, const LightmapTexels& texels,
+                   const std::vector<glm::dvec3>& light, const std::string& map, const double euler[3], double stops) {
+  const std::vector<glm::vec3> rgb = relight(t.transfer, texel_points(texels), light);
+  const float scale = float(std::exp2(stops));
+  opts.baked.resize(rgb.size());
+  for (std::size_t i = 0; i < rgb.size(); ++i) opts.baked[i] = rgb[i] * scale;
+  opts.bake.map = map;
+  for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
+  opts.bake.exposure = stops;
+}
+
 void write_gltf_lightmap(const std::string& path, const Scene& scene, const LightmapTransfer& t,
                          const LightmapTexels& texels, const GltfLightmapOptions& opts) {
   const std::string ext = detail::lower_extension(path);

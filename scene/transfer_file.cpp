@@ -121,8 +121,7 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{true, "prt.read_transfer(FILE): a Lightmap"},
        S{true, "Lightmap.relight"},
        S{true, "prt.render"},
-       S{false, "is a lightmap: prt.export_gltf and prt.export_web take per-vertex transfers for now; export the "
-                "scene with its coefficient textures with prt export SCENE FILE -o OUT.glb (or --web DIR)"},
+       S{true, "prt.export_gltf(lightmap, scene, PATH), prt.export_web(lightmap, scene, DIR)"},
        S{true, "mpirun -np N prt precompute SCENE --lightmap WxH"},
        S{true, "prt precompute SCENE --lightmap WxH --memory-limit SIZE"}}}},
     {TransferKind::WaveletLightmap,

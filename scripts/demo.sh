@@ -20,8 +20,14 @@ echo
 echo "== prt project: bundled maps -> 9-band SH (81 RGB coefficients)"
 for env in envmaps/*.exr; do
   name=$(basename "$env" .exr)
-  "$prt" project "$env" --bands 9 -o "$out/$name.sh9.json" --reconstruct "$out/$name.sh9.png" \
-    --reconstruct-size 512x256
+  "$prt" project "$env" --bands 9 -o "$out/$name.sh9.json"
+  # The picture of what 9 bands keep, windowed (--window auto: the least Hanning
+  # window that leaves no negative lobe; unwindowed, city's rang negative over
+  # 21% of the picture) and exposed (the 99th percentile at 1: unexposed, 41%
+  # of it clipped). A second call: --window changes the coefficients too, and
+  # the JSON above keeps them unwindowed (those go to stdout, discarded).
+  "$prt" project "$env" --bands 9 -q --window auto --reconstruct "$out/$name.sh9.png" \
+    --reconstruct-size 512x256 --exposure auto >/dev/null
   "$prt" project "$env" --bands 3 --irradiance -q -o "$out/$name.irradiance.glsl" --format glsl \
     --reconstruct "$out/$name.irradiance.png" --reconstruct-size 512x256 --exposure auto
 done
@@ -68,7 +74,7 @@ for env in envmaps/*.exr; do
 done
 
 echo
-echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands keep),"
+echo "Wrote to $out/: <map>.sh9.json (coefficients), <map>.sh9.png (what 9 bands keep, windowed and exposed),"
 echo "<map>.irradiance.glsl (paste-ready 3-band irradiance and prt_sh_irradiance()), <map>.irradiance.png (irradiance map),"
 echo "scene.*.prt (transfer files), scene.<map>.ply (the relit model: float vertex colours, linear radiance),"
 echo "scene.<map>.png (rendered), turn_0000..0011.png (the sunset turning around the model),"

@@ -11,6 +11,7 @@
 #include <prt/mesh.h>
 #include <prt/projection.h>
 #include <prt/sh.h>
+#include <prt/vertex_csv.h>
 
 #include <gtest/gtest.h>
 
@@ -372,10 +373,12 @@ TEST(CliSharedOptions, BandsArePinnedPerCommand) {
     }
 }
 
-// --exposure auto in prt relight and prt export --bake is prt render's: the
-// stops that show a white diffuse surface facing the map's brightest light
-// at 1, -log2 of sh::peak_diffuse_radiance of its 3 bands. Each output
-// equals the one the same stops give when typed.
+// --exposure auto in prt relight and prt export --bake is prt render's rule
+// (prt::frame_exposure) with no frame: the stops that put the 99th
+// percentile (nearest rank, floor(0.99 (n - 1)) of n ascending) of the relit
+// vertices' largest channel at 1, each vertex counted once. The oracle
+// takes the linear colours of prt relight (CSV) and ranks them here. Each
+// output equals the one the same stops give when typed.
 TEST(CliSharedOptions, ExposureAutoIsRendersEverywhere) {
   TempDir dir;
   const std::string mesh = dir.file("m.off"), prt = dir.file("m.prt"), env = dir.file("sky.exr");
@@ -387,9 +390,14 @@ TEST(CliSharedOptions, ExposureAutoIsRendersEverywhere) {
       for (int c = 0; c < 3; ++c) rgb[(std::size_t(y) * 32 + x) * 3 + c] = 40.0f;
   prt::write_image(env, 32, 16, rgb);
   ASSERT_EQ(run_prt(dir, {"precompute", mesh, "-o", prt, "--bands", "3", "--samples", "64", "-q"}).code, 0);
-  const double peak = prt::sh::peak_diffuse_radiance(prt::project(prt::load_envmap(env), 3));
-  const double stops = -std::log2(peak);
+  ASSERT_EQ(run_prt(dir, {"relight", mesh, prt, env, "-o", dir.file("linear.csv"), "-q"}).code, 0);
+  std::vector<float> top;
+  for (const glm::vec3& c : prt::read_vertex_csv(dir.file("linear.csv"))) top.push_back(std::max({c.x, c.y, c.z, 0.0f}));
+  ASSERT_GT(top.size(), 100u) << "too few vertices for the 99th percentile to differ from the maximum";
+  std::sort(top.begin(), top.end());
+  const double stops = -std::log2(double(top[std::size_t(0.99 * double(top.size() - 1))]));
   ASSERT_GT(std::abs(stops), 1.0) << "the map should need an exposure";
+  ASSERT_GT(top.back(), top[std::size_t(0.99 * double(top.size() - 1))]) << "the maximum would give the same stops";
   char typed[64];
   std::snprintf(typed, sizeof typed, "%.17g", stops);
 

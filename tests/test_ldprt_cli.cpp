@@ -138,8 +138,9 @@ TEST(LdprtCli, RenderFollowsTheDeformation) {
                 .code,
             0);
   const auto render = [&](const std::string& out, std::vector<std::string> extra) {
+    // --exposure 0: auto would measure each run's own frame (a sequence keeps its first frame's).
     std::vector<std::string> args = {"render", kTube, z, kEnv, "-o", dir.file(out), "--width", "128", "--height", "64",
-                                     "--camera", "0,1,7,0,1,0,0,1,0", "-q"};
+                                     "--camera", "0,1,7,0,1,0,0,1,0", "--exposure", "0", "-q"};
     args.insert(args.end(), extra.begin(), extra.end());
     const Result r = run_prt(dir, args);
     if (r.code != 0 && r.err.find("no OpenGL 4.5 context") != std::string::npos) return false;
@@ -169,8 +170,9 @@ TEST(LdprtCli, RenderAnimatesASkin) {
                 .code,
             0);
   const auto render = [&](const std::string& out, std::vector<std::string> extra) {
+    // --exposure 0: auto would measure each run's own frame (a sequence keeps its first frame's).
     std::vector<std::string> args = {"render", kSkinned, z, kEnv, "-o", dir.file(out), "--width", "96", "--height",
-                                     "48", "-q"};
+                                     "48", "--exposure", "0", "-q"};
     args.insert(args.end(), extra.begin(), extra.end());
     const Result r = run_prt(dir, args);
     if (r.code != 0 && r.err.find("no OpenGL 4.5 context") != std::string::npos) return false;

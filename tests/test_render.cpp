@@ -4,6 +4,7 @@
 // Runs on Mesa llvmpipe; skips (with the reason) where no EGL/GL 4.5 context
 // can be made at all.
 #include <prt/precompute.h>
+#include <prt/color.h>
 #include <prt/envmap.h>
 #include <prt/filter.h>
 #include <prt/error.h>
@@ -20,6 +21,7 @@
 #include <glm/trigonometric.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -359,6 +361,110 @@ TEST(Render, FramingCameraFitsEveryVertexCentred) {
   EXPECT_THROW(framing_camera(test::quad(2), 180, 1.0), Error);
 }
 
+// The share of a mesh's area whose front faces the point e.
+double area_facing(const Mesh& m, const glm::dvec3& e) {
+  double facing = 0, total = 0;
+  for (const glm::uvec3& t : m.triangles) {
+    const glm::dvec3 p0(m.positions[t.x]);
+    const glm::dvec3 n = glm::cross(glm::dvec3(m.positions[t.y]) - p0, glm::dvec3(m.positions[t.z]) - p0);
+    total += glm::length(n);
+    if (glm::dot(n, e - p0) > 0) facing += glm::length(n);
+  }
+  return facing / total;
+}
+
+// scene_camera (prt/render.h): models/room.gltf encloses its centre, so the
+// eye is inside, where nearly every surface shows its front (from the
+// framing camera outside, the walls show their backs), on the side away
+// from the window (in the wall at -Z), orbiting inside; a model over a
+// ground plane, a closed model and a mesh without triangles keep the
+// framing camera, bit for bit.
+TEST(Render, SceneCameraGoesInsideARoomOnly) {
+  const Mesh room = load_scene(PRT_SOURCE_DIR "/models/room.gltf").mesh;
+  const glm::dvec3 lo(room.bounds_min()), hi(room.bounds_max()), c = (lo + hi) * 0.5;
+  ASSERT_TRUE(encloses_centre(room));
+  const Camera cam = scene_camera(room, 1.6);
+  EXPECT_EQ(cam.target, c);
+  EXPECT_EQ(cam.fov_deg, 70);
+  // The walls, floor and ceiling face every point inside; the box's far
+  // sides do not (its 6 faces are 4% of the area).
+  constexpr double kFrontShare = 0.9;
+  EXPECT_GT(area_facing(room, cam.eye), kFrontShare);
+  EXPECT_LT(area_facing(room, framing_camera(room, 40, 1.6).eye), 0.5);
+  // Away from the window: the eye's side turned 35 degrees from +Z, as the
+  // framing camera's from its front (within 10 degrees: the window is not
+  // centred, nor the box that hides part of it).
+  const glm::dvec3 side = glm::normalize(glm::dvec3(cam.eye.x - c.x, 0, cam.eye.z - c.z));
+  EXPECT_GT(glm::dot(side, glm::dvec3(std::sin(glm::radians(35.0)), 0, std::cos(glm::radians(35.0)))),
+            std::cos(glm::radians(10.0)));
+  for (int yaw = 0; yaw < 360; yaw += 15) {  // prt view's orbit about +Y through the target stays in the room
+    const glm::dvec3 e = c + sh::rotation_axis_angle({0, 1, 0}, glm::radians(double(yaw))) * (cam.eye - c);
+    EXPECT_TRUE(glm::all(glm::greaterThan(e, lo)) && glm::all(glm::lessThan(e, hi))) << "yaw " << yaw;
+  }
+  EXPECT_EQ(scene_camera(room, 1.0, 50.0).fov_deg, 50);
+  EXPECT_THROW(scene_camera(room, 1.0, 180.0), Error);
+
+  Mesh points;
+  points.positions = room.positions;
+  const std::pair<std::string, Mesh> outside[] = {{"scene.obj", load_mesh(PRT_SOURCE_DIR "/models/scene.obj")},
+                                                  {"floor and ball", test::floor_and_ball(6)},
+                                                  {"sphere", test::sphere(8, 16, 2.0f)},
+                                                  {"room's vertices", points}};
+  for (const auto& [name, mesh] : outside) {
+    EXPECT_FALSE(encloses_centre(mesh)) << name;
+    const Camera a = scene_camera(mesh, 1.6), b = framing_camera(mesh, 40, 1.6);
+    EXPECT_EQ(a.eye, b.eye) << name;
+    EXPECT_EQ(a.target, b.target) << name;
+    EXPECT_EQ(a.fov_deg, 40) << name;
+  }
+  // A sphere seen from inside, open nowhere: the eye toward +Z turned to +X
+  // and raised, as the framing camera's, 3/4 of the way to the wall.
+  const Mesh inside = test::sphere(16, 32, 2.0f, true);
+  ASSERT_TRUE(encloses_centre(inside));
+  const Camera in = scene_camera(inside, 1.0);
+  const double az = glm::radians(35.0), el = glm::radians(20.0);
+  const glm::dvec3 to_eye = in.eye - in.target;
+  EXPECT_NEAR(glm::dot(glm::normalize(to_eye), glm::dvec3(std::sin(az) * std::cos(el), std::sin(el), std::cos(az) * std::cos(el))),
+              1.0, 1e-12);
+  constexpr double kFacets = 0.97;  // 16 x 32 facets come within 3% of the radius
+  EXPECT_LE(glm::length(to_eye), 0.75 * 2.0 + 1e-12);
+  EXPECT_GE(glm::length(to_eye), 0.75 * 2.0 * kFacets);
+}
+
+// The room drawn from scene_camera: the walls fill the frame (the window's
+// background and nothing else left uncovered), where from the framing
+// camera outside the room is a box with the background around it; lit, the
+// frame is not black.
+TEST(Render, SceneCameraFillsTheFrameWithTheRoom) {
+  REQUIRE_RENDERER(r);
+  const Mesh room = load_scene(PRT_SOURCE_DIR "/models/room.gltf").mesh;
+  r->set_environment(latlong_of(smooth_env, 64, 32));
+  r->set_mesh(room, glm::vec3(0.5f));
+  r->set_shading(Shading::Lambert);
+  std::vector<glm::dvec3> light(9, glm::dvec3(0.0));
+  light[0] = glm::dvec3(1.0);  // uniform light: every surface lit alike
+  r->set_lighting(light);
+  const int w = 48, h = 32;
+  const auto covered = [&](const Camera& cam, double* mean) {
+    const Image img = r->render(cam, w, h);
+    const std::vector<float> alpha = r->coverage();
+    double n = 0, sum = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (alpha[std::size_t(y) * w + x] > 0) n += 1, sum += img.at(x, y).y;
+    if (mean) *mean = n > 0 ? sum / n : 0;
+    return n / (w * h);
+  };
+  double mean = 0;
+  constexpr double kFilled = 0.9;  // the window is 5% of the frame
+  const double inside = covered(scene_camera(room, double(w) / h), &mean);
+  const double outside = covered(framing_camera(room, 40, double(w) / h), nullptr);
+  std::printf("covered: %.3f of the frame from scene_camera, %.3f from framing_camera\n", inside, outside);
+  EXPECT_GT(inside, kFilled);
+  EXPECT_GT(mean, 0.1);  // albedo 0.5 under a uniform radiance of Y00 = 0.282: 0.141 on every surface
+  EXPECT_LT(outside, kFilled);
+}
+
 // Bad data and values from a user are prt::Error with a clear message;
 // calls that break the renderer's contract (out of order, out of range) are
 // a caller's bug: prt::InternalError, naming the check.
@@ -534,6 +640,62 @@ TEST(Render, DisplayPassEqualsCpuToneMap) {
   EXPECT_FLOAT_EQ(tone_map(1.0f, {1.0, ToneMap::Reinhard}), 2.0f / 3.0f);
   EXPECT_FLOAT_EQ(tone_map(-1.0f, {0.0, ToneMap::Aces}), 0.0f);
   EXPECT_FLOAT_EQ(tone_map(5.0f, {0.0, ToneMap::Clamp}), 1.0f);
+}
+
+// frame_exposure (--exposure auto): a synthetic frame of 200 covered pixels
+// whose largest channel is 0.01 i (i = 1..200, the channel varying) and 100
+// background pixels of 1000. The nearest rank floor(0.99 x 199) = 197 of the
+// ascending values is 1.98: -log2(1.98) stops, and after them exactly 2 of
+// the covered pixels (1%) exceed 1. The background does not count; without
+// coverage it does; negative and non-finite values count as 0 and not at
+// all; an all-black frame gives 0 stops.
+TEST(FrameExposure, PutsTheCoveredPixels99thPercentileAtOne) {
+  constexpr double kStopsTolerance = 1e-12;  // log2 in double of a float value: rounding only
+  std::vector<float> rgb, coverage;
+  for (int i = 1; i <= 200; ++i) {
+    glm::vec3 c(0.001f * float(i));  // the other channels: below the largest
+    c[i % 3] = 0.01f * float(i);
+    rgb.insert(rgb.end(), {c.x, c.y, c.z});
+    coverage.push_back(i % 2 ? 1.0f : 0.75f);  // >= 0.5 is covered
+  }
+  for (int i = 0; i < 100; ++i) {
+    rgb.insert(rgb.end(), {1000.0f, 0.0f, 0.0f});
+    coverage.push_back(i % 2 ? 0.0f : 0.25f);  // < 0.5: background
+  }
+  const double stops = frame_exposure(rgb, coverage);
+  EXPECT_NEAR(stops, -std::log2(double(0.01f * 198.0f)), kStopsTolerance);
+  int clipped = 0;
+  for (std::size_t p = 0; p < 200; ++p)
+    clipped += std::max({rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]}) * std::exp2(stops) > 1.0 + kStopsTolerance;
+  EXPECT_EQ(clipped, 2);  // 1% of the covered pixels
+  EXPECT_EQ(kAutoExposurePercentile, 0.99);
+  EXPECT_EQ(kAutoExposureTarget, 1.0);
+
+  // The background counts when nothing says which pixels are covered: 100 of
+  // 300 pixels at 1000 put the 99th percentile there.
+  EXPECT_NEAR(frame_exposure(rgb), -std::log2(1000.0), kStopsTolerance);
+  // Nothing covered: the frame is the background.
+  EXPECT_NEAR(frame_exposure(rgb, std::vector<float>(300, 0.0f)), -std::log2(1000.0), kStopsTolerance);
+
+  // Negative values count as 0 and NaN not at all: 200 pixels of -5 below
+  // the 200 covered ones and a NaN pixel leave the 99th percentile at rank
+  // floor(0.99 x 399) = 395 of 400, 0.01 x 196.
+  std::vector<float> more(rgb.begin(), rgb.begin() + 600), cov(coverage.begin(), coverage.begin() + 200);
+  for (int i = 0; i < 200; ++i) {
+    more.insert(more.end(), {-5.0f, -5.0f, -5.0f});
+    cov.push_back(1.0f);
+  }
+  more.insert(more.end(), {std::nanf(""), 1e30f, 1e30f});
+  cov.push_back(1.0f);
+  EXPECT_NEAR(frame_exposure(more, cov), -std::log2(double(0.01f * 196.0f)), kStopsTolerance);
+
+  // An all-black (or all-negative) frame: 0 stops, finite.
+  EXPECT_EQ(frame_exposure(std::vector<float>(30, 0.0f), std::vector<float>(10, 1.0f)), 0.0);
+  EXPECT_EQ(frame_exposure(std::vector<float>(30, -1.0f)), 0.0);
+  EXPECT_EQ(frame_exposure({}), 0.0);
+  // One pixel: its own value; a value past 2^64 clamps to kMaxExposureStops.
+  EXPECT_NEAR(frame_exposure(std::vector<float>{0.0f, 4.0f, 0.0f}), -2.0, kStopsTolerance);
+  EXPECT_EQ(frame_exposure(std::vector<float>{1e-30f, 0.0f, 0.0f}), kMaxExposureStops);
 }
 
 // ---- prt render ------------------------------------------------------------
@@ -809,9 +971,14 @@ TEST_F(RenderCli, LookOptionsOnExr) {
 }
 
 // Without --exposure (auto), the EXR is the one at --exposure 0 times 2^s,
-// s = -log2(peak_diffuse_radiance of the map's 3-band SH), the stops printed.
-TEST_F(RenderCli, AutoExposureShowsTheBrightestWhiteSurfaceAtOne) {
-  const std::vector<std::string> common = {mesh, prt, env, "--width", "32", "--height", "16", "--rotate", "30,0,0"};
+// the stops printed, s = -log2 of the frame's 99th percentile (nearest rank)
+// of the pixels' largest channel (frame_exposure). The camera is inside the
+// unit ball's radius of the view axis everywhere (the eye at 1.2, corners
+// 39 degrees off axis: rays pass within 0.76 of the centre), so every pixel
+// is the ball's.
+TEST_F(RenderCli, AutoExposureShowsTheFrames99thPercentileAtOne) {
+  const std::vector<std::string> common = {mesh, prt, env, "--width", "32", "--height", "16", "--rotate", "30,0,0",
+                                           "--camera", "0,0,1.2,0,0,0,0,1,0"};
   auto with = [&](std::vector<std::string> extra) {
     std::vector<std::string> args = common;
     args.insert(args.end(), extra.begin(), extra.end());
@@ -821,16 +988,53 @@ TEST_F(RenderCli, AutoExposureShowsTheBrightestWhiteSurfaceAtOne) {
   ASSERT_EQ(a.code, 0) << test::describe_run(a);
   const auto z = with({"-o", dir.file("zero.exr"), "--exposure", "0"});
   ASSERT_EQ(z.code, 0) << test::describe_run(z);
-  const double stops = -std::log2(sh::peak_diffuse_radiance(project(load_envmap(env), 3)));
-  char said[64];
-  std::snprintf(said, sizeof said, "--exposure auto: %+.2f stops", stops);
-  EXPECT_NE(a.err.find(said), std::string::npos) << a.err;
   const EnvMap ia = load_envmap(dir.file("auto.exr"), Mapping::LatLong),
                iz = load_envmap(dir.file("zero.exr"), Mapping::LatLong);
   ASSERT_EQ(ia.rgb.size(), iz.rgb.size());
+  std::vector<float> top;
+  for (std::size_t p = 0; p < iz.rgb.size(); p += 3) top.push_back(std::max({iz.rgb[p], iz.rgb[p + 1], iz.rgb[p + 2], 0.0f}));
+  std::sort(top.begin(), top.end());
+  const double stops = -std::log2(double(top[std::size_t(0.99 * double(top.size() - 1))]));
+  char said[64];
+  std::snprintf(said, sizeof said, "--exposure auto: %+.2f stops", stops);
+  EXPECT_NE(a.err.find(said), std::string::npos) << a.err;
   const float gain = float(std::exp2(stops));
   for (std::size_t i = 0; i < ia.rgb.size(); ++i) EXPECT_FLOAT_EQ(ia.rgb[i], gain * iz.rgb[i]) << i;
   EXPECT_GT(std::abs(stops), 0.1) << "the test map needs a peak away from 1 for this test to tell";
+}
+
+// The room (models/room.gltf, an interior lit through its window by
+// sunset.exr's sun), prt render's default camera (inside) and exposure: the
+// frame is exposed for what it shows. Displayed (clamp tone map, sRGB), its
+// median pixel was 18/255 under the map's rule (a white surface facing the
+// sun at 1) and is 64/255 under the frame's (320 x 160, a 64 x 64 lightmap;
+// here smaller and noisier); at most a few percent of the pixels clip (1% of
+// the room's, plus the window's sky, about 4% of the frame). kDarkMedian:
+// well above the old 18/255 and below what the frame's rule gives.
+TEST_F(RenderCli, AutoExposureShowsADarkInterior) {
+  constexpr double kDarkMedian = 40.0 / 255, kMostClipped = 0.08;
+  const std::string room = PRT_SOURCE_DIR "/models/room.gltf", sunset = PRT_SOURCE_DIR "/envmaps/sunset.exr";
+  const auto lm = test::run_prt(dir, {"precompute", room, "--lightmap", "32x32", "--samples", "64", "-q", "-o",
+                                      dir.file("room.prt")});
+  ASSERT_EQ(lm.code, 0) << test::describe_run(lm);
+  const auto res = render({room, dir.file("room.prt"), sunset, "-o", dir.file("room.exr"), "--width", "64", "--height", "32"});
+  ASSERT_EQ(res.code, 0) << test::describe_run(res);
+  const EnvMap img = load_envmap(dir.file("room.exr"), Mapping::LatLong);  // linear x 2^auto stops
+  std::vector<double> shown;
+  for (std::size_t p = 0; p < img.rgb.size(); p += 3)
+    shown.push_back(std::max({img.rgb[p], img.rgb[p + 1], img.rgb[p + 2]}));
+  std::sort(shown.begin(), shown.end());
+  const double median = shown[shown.size() / 2];
+  EXPECT_GT(srgb_encode(float(std::min(median, 1.0))), kDarkMedian) << "median displayed value, linear " << median;
+  const double clipped = double(shown.end() - std::upper_bound(shown.begin(), shown.end(), 1.0)) / double(shown.size());
+  EXPECT_LT(clipped, kMostClipped);
+  // The map's rule would have left it dark: this test tells the two apart.
+  const double map_stops = auto_exposure(project(load_envmap(sunset), 3));
+  const std::string said = "--exposure auto: ";
+  const std::size_t at = res.err.find(said);
+  ASSERT_NE(at, std::string::npos) << res.err;
+  const double stops = std::stod(res.err.substr(at + said.size()));  // printed to 0.01 stop
+  EXPECT_LT(srgb_encode(float(std::min(median * std::exp2(map_stops - stops), 1.0))), kDarkMedian);
 }
 
 // ---- bad options and outputs (docs/HARD_CASES.md, "Bad options and outputs") ----

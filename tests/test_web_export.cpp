@@ -73,11 +73,13 @@ TEST(WebExport, WritesThePageTheLightingAndTheBackgrounds) {
   EXPECT_EQ(init.at("map"), "studio");
   EXPECT_EQ(init.at("rotate"), nlohmann::json::array({10.0, 20.0, 30.0}));
   EXPECT_EQ(init.at("exposure"), -1.5);
+  EXPECT_EQ(init.at("auto_exposure"), false);  // a given exposure: the page does not measure
   EXPECT_EQ(init.at("tonemap"), "aces");
   EXPECT_EQ(init.at("fov"), 50.0);
   EXPECT_EQ(init.at("auto"), true);
-  // prt render's default camera (framing_camera, prt/render.h): from the
-  // direction (sin 35 cos 20, sin 20, cos 35 cos 20), +Y up.
+  // prt render's default camera (scene_camera, prt/render.h; from outside
+  // this model: framing_camera): from the direction (sin 35 cos 20, sin 20,
+  // cos 35 cos 20), +Y up.
   const auto& cam = init.at("camera");
   ASSERT_EQ(cam.size(), 9u);
   glm::dvec3 back(cam[0].get<double>() - cam[3].get<double>(), cam[1].get<double>() - cam[4].get<double>(),
@@ -159,9 +161,12 @@ TEST(WebExport, AnotherMapComesFirstAndIsShownFirst) {
   EXPECT_EQ(j.at("maps").size(), bundled_names().size() + 1);
   EXPECT_EQ(j.at("maps")[0].at("name"), "grey");
   EXPECT_EQ(j.at("initial").at("map"), "grey");
-  // No --exposure: auto for the first map, as prt render (a white surface
-  // under a constant 0.5 reflects 0.5: +1 stop; the constant is projected
-  // exactly, to rounding).
+  // No --exposure: auto; the page measures its first frame (prt render's
+  // rule, web/prt-viewer.js) and lighting.json's exposure is the fallback of
+  // a browser that cannot read a float frame back: the map's rule (a white
+  // surface under a constant 0.5 reflects 0.5: +1 stop; the constant is
+  // projected exactly, to rounding).
+  EXPECT_EQ(j.at("initial").at("auto_exposure"), true);
   EXPECT_NEAR(j.at("initial").at("exposure").get<double>(), 1.0, 1e-9);
 }
 

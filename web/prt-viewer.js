@@ -26,7 +26,7 @@
 // Test hooks: URL query map, rotate=yaw,pitch,roll, spin (degrees about +Y),
 // exposure, tonemap, camera=ex,ey,ez,tx,ty,tz,ux,uy,uz, fov, size=WxH,
 // auto=0|1, model=0 (background only), detail=0|1 (lightmaps); window.prtReady resolves after the
-// first frame is drawn; window.prtViewer.set({...}) draws a frame with new
+// first frame is drawn (with the exposure it was drawn at); window.prtViewer.set({...}) draws a frame with new
 // settings and resolves when it is on the canvas.
 (function () {
   'use strict';
@@ -129,7 +129,7 @@
   // --- shaders ------------------------------------------------------------
   const toneGlsl = `
 uniform float u_gain;  // 2^exposure
-uniform int u_tone;    // 0 clamp, 1 reinhard, 2 aces
+uniform int u_tone;    // 0 clamp, 1 reinhard, 2 aces; 3 linear radiance (the exposure's measurement, frameExposure)
 float tone(float v) {
   v = max(v * u_gain, 0.0);
   if (u_tone == 1) return v / (1.0 + v);
@@ -137,7 +137,10 @@ float tone(float v) {
   return min(v, 1.0);
 }
 float encode(float v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055; }
-vec4 display(vec3 c) { return vec4(encode(tone(c.r)), encode(tone(c.g)), encode(tone(c.b)), 1.0); }
+vec4 display(vec3 c) {
+  if (u_tone == 3) return vec4(c, 1.0);
+  return vec4(encode(tone(c.r)), encode(tone(c.g)), encode(tone(c.b)), 1.0);
+}
 `;
   const meshVert = (coeffs, vec4s, channels) => `#version 300 es
 precision highp float; precision highp int; precision highp sampler2D;
@@ -546,6 +549,34 @@ void main() {
     return kind === 'json' ? r.json() : r.arrayBuffer();
   }
 
+  // --- exposure auto ---------------------------------------------------------
+  // prt render's rule (frame_exposure, include/prt/render.h; the same two
+  // constants): the stops that put the 99th percentile of the shown pixels'
+  // largest channel (linear radiance) at 1. A high percentile of the largest
+  // channel: at most 1% of the model clips under the clamp tone map, a sun's
+  // few pixels do not darken the rest, and a dark interior is shown by its own
+  // light. rgba: linear RGBA floats; a pixel is shown where alpha >= 0.5
+  // (every pixel when none is); 0 stops when none is positive.
+  const kAutoExposurePercentile = 0.99, kAutoExposureTarget = 1.0, kMaxExposureStops = 64;
+  function frameExposure(rgba) {
+    const gather = (coveredOnly) => {
+      const top = [];
+      for (let i = 0; i + 3 < rgba.length; i += 4) {
+        if (coveredOnly && !(rgba[i + 3] >= 0.5)) continue;
+        const r = rgba[i], g = rgba[i + 1], b = rgba[i + 2];
+        if (!isFinite(r) || !isFinite(g) || !isFinite(b)) continue;
+        top.push(Math.max(r, g, b, 0));
+      }
+      return top;
+    };
+    let top = gather(true);
+    if (!top.length) top = gather(false);
+    if (!top.length) return 0;
+    top.sort((a, b) => a - b);
+    const v = top[Math.floor(kAutoExposurePercentile * (top.length - 1))];
+    return v > 0 ? Math.min(kMaxExposureStops, Math.max(-kMaxExposureStops, Math.log2(kAutoExposureTarget / v))) : 0;
+  }
+
   async function main() {
     const canvas = $('canvas');
     const gl = canvas.getContext('webgl2', { antialias: false, preserveDrawingBuffer: true, alpha: false });
@@ -677,13 +708,70 @@ void main() {
       const R = SH.turned(state.spin, SH.fromEuler(state.rotate[0], state.rotate[1], state.rotate[2]));
       rotation.set(R);
       const L = rotation.apply(m.coefficients);
-      const W = canvas.width, H = canvas.height, aspect = W / H;
+      const W = canvas.width, H = canvas.height;
+      if (measureExposure) {
+        measureExposure = false;
+        const stops = firstFrameExposure(tex, R, L, W, H);
+        if (stops !== null) apply({ exposure: stops });
+      }
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      drawFrame(tex, R, L, W, H, Math.pow(2, state.exposure), tones[state.tonemap], true);
+      const err = gl.getError();
+      if (err !== gl.NO_ERROR) fail('WebGL error 0x' + err.toString(16));
+      ++frames;
+      const now = performance.now();
+      if (now - fpsTime > 500) { fps = frames * 1000 / (now - fpsTime); frames = 0; fpsTime = now; }
+      status.textContent = `${model.describe()} | ${W}x${H} | ${fps ? fps.toFixed(1) : '-'} fps`;
+    }
+
+    // --exposure auto (lighting.json's initial.auto_exposure, unless the URL
+    // gives ?exposure=): once, from the first frame, then kept (the slider,
+    // other maps and the turn leave it). The frame is drawn linear (tone 3)
+    // into a float target, the model alone (alpha 1 where it covers, 0
+    // elsewhere), read back and measured by frameExposure. Without
+    // EXT_color_buffer_float (no float target to read) the page keeps
+    // lighting.json's exposure (prt export's fallback, docs/WEB.md).
+    let measureExposure = !!init.auto_exposure && !q.has('exposure');
+    function firstFrameExposure(tex, R, L, W, H) {
+      if (!gl.getExtension('EXT_color_buffer_float')) return null;
+      const color = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, color);
+      gl.texStorage2D(gl.TEXTURE_2D, 1, gl.RGBA32F, W, H);
+      const depth = gl.createRenderbuffer();
+      gl.bindRenderbuffer(gl.RENDERBUFFER, depth);
+      gl.renderbufferStorage(gl.RENDERBUFFER, gl.DEPTH_COMPONENT24, W, H);
+      const fb = gl.createFramebuffer();
+      gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+      gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, color, 0);
+      gl.framebufferRenderbuffer(gl.FRAMEBUFFER, gl.DEPTH_ATTACHMENT, gl.RENDERBUFFER, depth);
+      let stops = null;
+      if (gl.checkFramebufferStatus(gl.FRAMEBUFFER) === gl.FRAMEBUFFER_COMPLETE) {
+        const rgba = new Float32Array(W * H * 4);
+        drawFrame(tex, R, L, W, H, 1, 3, false);
+        gl.readPixels(0, 0, W, H, gl.RGBA, gl.FLOAT, rgba);
+        let covered = false;
+        for (let i = 3; i < rgba.length && !covered; i += 4) covered = rgba[i] >= 0.5;
+        if (!covered) {  // nothing of the model in view: the background is the frame
+          drawFrame(tex, R, L, W, H, 1, 3, true);
+          gl.readPixels(0, 0, W, H, gl.RGBA, gl.FLOAT, rgba);
+        }
+        stops = frameExposure(rgba);
+      }
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.deleteFramebuffer(fb);
+      gl.deleteRenderbuffer(depth);
+      gl.deleteTexture(color);
+      return stops;
+    }
+
+    // The frame into the bound framebuffer (W x H): the background (when
+    // `background`; else cleared to transparent black), then the model.
+    function drawFrame(tex, R, L, W, H, gain, tone, background) {
+      const aspect = W / H;
       const cam = { eye: state.eye, target: state.target, up: state.up, fov: state.fov };
       const vp = viewProj(cam, aspect);
-      const gain = Math.pow(2, state.exposure), tone = tones[state.tonemap];
-      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
       gl.viewport(0, 0, W, H);
-      gl.clearColor(0, 0, 0, 1);
+      gl.clearColor(0, 0, 0, background ? 1 : 0);
       gl.clearDepth(1);
       gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
       gl.disable(gl.DEPTH_TEST);
@@ -699,19 +787,13 @@ void main() {
       gl.bindTexture(gl.TEXTURE_2D, tex);
       gl.uniform1i(bg.u.u_latlong, 0);
       gl.bindVertexArray(emptyVao);
-      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      if (background) gl.drawArrays(gl.TRIANGLES, 0, 3);
       if (state.model) {
         gl.enable(gl.DEPTH_TEST);
         gl.depthFunc(gl.LESS);
         model.draw(vp.M, L, gain, tone, state);
       }
       gl.bindVertexArray(null);
-      const err = gl.getError();
-      if (err !== gl.NO_ERROR) fail('WebGL error 0x' + err.toString(16));
-      ++frames;
-      const now = performance.now();
-      if (now - fpsTime > 500) { fps = frames * 1000 / (now - fpsTime); frames = 0; fpsTime = now; }
-      status.textContent = `${model.describe()} | ${W}x${H} | ${fps ? fps.toFixed(1) : '-'} fps`;
     }
 
     // Redraw on demand; the auto-turn animates at 20 degrees per second.
@@ -784,7 +866,7 @@ void main() {
     gl.finish();
     await nextFrame();
     resolveReady({ vertices: model.vertices, bands, channels, lightmap: model.lightmap, maps: maps.map((m) => m.name),
-                   width: canvas.width, height: canvas.height });
+                   width: canvas.width, height: canvas.height, exposure: state.exposure });
     if (state.auto) requestDraw();
   }
 

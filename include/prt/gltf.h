@@ -94,6 +94,13 @@ struct GltfLightmapOptions {
   std::string generator = "prt";
 };
 
+// The baked lightmap of prt export --bake (and Python's export_gltf(bake=)):
+// opts.baked becomes the relit radiance of every covered texel of `t` under
+// the SH lighting `light` (already turned), times 2^stops; opts.bake records
+// `map` (a file name), `euler` and `stops`.
+void bake_lightmap(GltfLightmapOptions& opts, const LightmapTransfer& t, const LightmapTexels& texels,
+                   const std::vector<glm::dvec3>& light, const std::string& map, const double euler[3], double stops);
+
 // Writes `scene` (every object a node; world-space POSITION, NORMAL,
 // TEXCOORD_0, the lightmap UV set as TEXCOORD_1, its materials and textures)
 // and its lightmap `t` as coefficient textures: 8-bit RGBA PNGs, 4

@@ -57,6 +57,7 @@
 #include <glm/vec3.hpp>
 
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -109,6 +110,9 @@ ToneMap parse_tone_map(std::string_view name);  // throws prt::Error listing the
 inline constexpr double kMaxExposureStops = 64;
 // The vertical field of view a caller may give, in degrees (--fov).
 inline constexpr double kMinFov = 1, kMaxFov = 179;
+// --fov's default with --camera, and the default camera's from outside a room
+// (scene_camera).
+inline constexpr double kDefaultFov = 40;
 struct Display {
   double exposure = 0;  // stops
   ToneMap tone_map = ToneMap::Clamp;
@@ -121,10 +125,36 @@ void tone_map(std::vector<float>& rgb, const Display& display);
 // float formats); otherwise the tone map's display values in [0, 1] (8-bit
 // formats, before sRGB encoding).
 void finish_frame(std::vector<float>& rgb, const Display& display, bool linear);
-// --exposure auto: the stops that show the brightest a white Lambertian
-// surface can be under this lighting (sh::peak_diffuse_radiance, 3 bands of
-// `light`, rotation-invariant) at 1; 0 for lighting nowhere positive.
+// The stops that show the brightest a white Lambertian surface can be under
+// this lighting (sh::peak_diffuse_radiance, 3 bands of `light`,
+// rotation-invariant) at 1; 0 for lighting nowhere positive. Not what
+// --exposure auto chooses (frame_exposure, below): a map's sun sets it, so an
+// interior lit through a window by a small part of that sun came out at
+// 23/255.
 double auto_exposure(const std::vector<glm::dvec3>& light);
+
+// --exposure auto, "exposure from what the frame shows" (prt render, prt view
+// at open, prt.render; the web page's first frame, web/prt-viewer.js, with the
+// same two constants; prt relight and export --bake over the relit
+// vertices): the stops that put the kAutoExposurePercentile-th percentile of
+// the shown pixels' largest channel (linear radiance, before exposure and tone
+// map; negative values count as 0) at the display value kAutoExposureTarget.
+// The largest channel because a pixel clips when any of its channels does;
+// a high percentile rather than the maximum so that a few pixels of a sun or
+// a specular highlight do not darken the rest, and rather than a mean (a
+// log-average key) so that a bright exterior is not pushed into broad
+// clipping: with the clamp tone map at most 1 - percentile of the shown
+// pixels (1%) clip, whatever the map, and a dark interior lit through a
+// window is shown by its own light, not by the map's sun. The same rule as
+// prt project --exposure auto's picture. Shown pixels: those with
+// coverage >= 0.5 (Renderer::coverage(): the model, not the background);
+// every pixel when `coverage` is empty or covers none. Non-finite values are
+// skipped. 0 stops where no shown pixel is positive (an all-black frame);
+// the result is clamped to +-kMaxExposureStops. rgb: 3 floats a pixel (or a
+// vertex), coverage: one a pixel or empty.
+inline constexpr double kAutoExposurePercentile = 0.99;
+inline constexpr double kAutoExposureTarget = 1.0;
+double frame_exposure(std::span<const float> rgb, std::span<const float> coverage = {});
 
 // A perspective camera; the image's vertical field of view is fov_deg, the
 // horizontal one follows from the image's aspect ratio.
@@ -151,6 +181,28 @@ Camera default_camera(const Mesh& mesh, double fov_deg = 40.0);
 // frame in its wider direction.
 Camera framing_camera(const Mesh& mesh, double fov_deg = 40.0, double aspect = 1.0, double azimuth_deg = 35.0,
                       double elevation_deg = 20.0);
+
+// Whether `mesh` encloses the centre c of its bounding box, as a room does:
+// of 256 directions spread evenly over the sphere, at least 70% first meet
+// a triangle's front (counter-clockwise) side, and in the scene's shell: at
+// least 3/4 of the way from c to the bounding box. A model over a ground
+// plane meets the ground so in at most half (objects near c do not count);
+// a closed model meets its own back faces. False for a mesh without
+// triangles. Rays are traced on the CPU against every triangle (no
+// acceleration): skipped, false, unless at least half the mesh's area faces c.
+bool encloses_centre(const Mesh& mesh);
+
+// The camera prt render, prt view and prt export --web use when none is
+// given (docs/RUNTIME.md, "The default camera"). Outside (encloses_centre
+// false): framing_camera(mesh, fov, aspect), fov default 40 degrees. Inside:
+// the eye within the mesh, looking at c with a wide view (fov default 70
+// degrees): toward the openings (the mean of the directions whose rays from
+// c leave the mesh, made horizontal; -Z where none leave), turned and raised
+// as framing_camera turns and raises its eye from +Z (35 and 20 degrees);
+// at 3/4 of the distance from c to the nearest surface seen from c within
+// about 11.5 degrees of the horizontal (and of the surface behind the eye),
+// so that orbiting the eye about c keeps it inside. up = +Y.
+Camera scene_camera(const Mesh& mesh, double aspect, std::optional<double> fov_deg = std::nullopt);
 
 // A linear RGB float image, row 0 at the top (what write_image takes).
 struct Image {

@@ -25,6 +25,10 @@ struct WebPage {
   Camera camera;                  // the initial camera (eye, target, up, fov)
   double rotate[3] = {0, 0, 0};   // initial --rotate yaw,pitch,roll
   Display display;                // initial exposure and tone map
+  // --exposure auto: the page measures its first frame (frame_exposure's
+  // rule, web/prt-viewer.js) and display.exposure is only its fallback
+  // (a browser that cannot read back a float target).
+  bool auto_exposure = false;
   bool turn = false;              // start with the environment turning
   // A lightmap's page (model.glb from write_gltf_lightmap): the texels'
   // own albedo as a W x H image (lightmap_image: gutters filled), which the

@@ -498,7 +498,7 @@ def project(map: Any, bands: int = ..., *, mapping: str = ..., quadrature: str =
     Returns float64 (bands*bands, 3), index k = l(l+1)+m (docs/CONVENTIONS.md).
     """
 
-def read_transfer(path: Any) -> Any:
+def read_transfer(path: Any) -> Transfer | WaveletTransfer | ZhTransfer | Lightmap | ProbeVolume:
     """
     Reads any prt transfer file at `path` (validating all of it) and returns the object of its kind: a Transfer (an SH transfer; a compressed one with its rows reconstructed, relit by per-cluster products), a WaveletTransfer, a ZhTransfer, a Lightmap or a ProbeVolume. A wavelet lightmap is refused with what to do instead (prt info --kinds lists which kind goes where).
     """
@@ -846,27 +846,69 @@ def verify(*, bands_max: int = ..., float_bands: int = ..., progress: Any = ...)
     Returns a list of dicts: group, name (what was measured), error, tolerance, why (why the tolerance is what it is), passed.
     """
 
-def render(transfer: Any, mesh: Any, map: Any, *, width: int = ..., height: int = ..., camera: Any = ..., fov: float = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., linear: bool = ..., shading: Any = ..., bands: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ..., deform: Any = ..., amount: float = ..., terms: int = ..., selection: str = ..., alpha: bool = ..., probes: Any = ..., object: Any = ..., object_at: Any = ..., object_size: float = ...) -> numpy.ndarray:
+def render(transfer: Any, mesh: Any, map: Any, *, width: int = ..., height: int = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., linear: bool = ..., shading: Any = ..., bands: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ..., deform: Any = ..., amount: float = ..., terms: int = ..., selection: str = ..., alpha: bool = ..., probes: Any = ..., object: Any = ..., object_at: Any = ..., object_size: float = ...) -> numpy.ndarray:
     """
-    A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 matrix or yaw, pitch, roll degrees). camera: None (the framing camera: a three-quarter view from above that frames every vertex), (eye, target[, up]) or a dict; fov: vertical degrees. exposure: stops or 'auto' (a white diffuse surface facing the brightest light shows at 1). Values: the tone map's display values in [0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', 'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform ('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its Scene (mesh=the Scene; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object (a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal (0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: (height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render --alpha). Raises prt.Error where no OpenGL 4.5 context can be had.
+    A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 matrix or yaw, pitch, roll degrees). camera: None (prt render's default camera: a three-quarter view from above that frames every vertex, or from inside a room that encloses its centre), (eye, target[, up]) or a dict; fov: vertical degrees (None: 40, or 70 inside a room). exposure: stops or 'auto' (prt render's rule: the 99th percentile of the model's pixels in this frame, their largest channel, at 1). Values: the tone map's display values in [0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', 'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform ('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its Scene (mesh=the Scene; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object (a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal (0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: (height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render --alpha). Raises prt.Error where no OpenGL 4.5 context can be had.
     """
 
+@overload
 def export_gltf(transfer: Transfer, mesh: Mesh, path: Any, *, bake: Any = ..., rotate: Any = ..., exposure: Any = ...) -> None:
     """
     Writes the mesh and its SH transfer as glTF 2.0 (.glb binary, .gltf JSON; docs/FORMAT.md "glTF export") to `path`, as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes _PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.
     """
+@overload
+def export_gltf(transfer: Lightmap, mesh: Scene, path: Any, *, bake: Any = ..., rotate: Any = ..., exposure: Any = ...) -> None:
+    """
+    For a Lightmap and its Scene: writes the scene (one node per object) with the lightmap's coefficient textures as glTF 2.0 (docs/FORMAT.md "Lightmap export"), as prt export SCENE LIGHTMAP -o FILE does (extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', default 0), as --bake.
+    """
+@overload
+def export_gltf(transfer: WaveletTransfer, *args, **kwargs) -> None:
+    """
+    Refused, saying why and what to do (prt info --kinds).
+    """
+@overload
+def export_gltf(transfer: ZhTransfer, *args, **kwargs) -> None:
+    """
+    Refused, saying why and what to do (prt info --kinds).
+    """
+@overload
+def export_gltf(transfer: ProbeVolume, *args, **kwargs) -> None:
+    """
+    Refused, saying why and what to do (prt info --kinds).
+    """
 
-def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., camera: Any = ..., fov: float = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ...) -> None:
+@overload
+def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ...) -> None:
     """
     Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does (the same files): index.html and its scripts, model.glb, lighting.json (every map's SH), maps/. Written whole or not at all.
 
     Arguments (prt export's option in brackets):
       transfer: a Transfer; mesh: its Mesh; dir: the directory [--web].
       env: the map shown first, a file or a bundled map's name (None: the bundled maps only) [--env].
-      camera: None (the framing camera) or (eye, target[, up]) [--camera]; fov: vertical degrees [--fov].
+      camera: None (prt render's default camera: from outside, or inside a room) or (eye, target[, up]) [--camera]; fov: vertical degrees (None: 40, or 70 inside a room) [--fov].
       rotate: (yaw, pitch, roll) degrees [--rotate]; exposure: stops or 'auto' (None: 'auto' for the page, 0 for a bake) [--exposure].
       tone_map: 'clamp', 'reinhard' or 'aces' [--tonemap]; turn: start with the environment turning [--turn].
       force: replace an existing non-empty dir [--force]; bake: a map file: COLOR_0 in the model, as export_gltf [--bake].
+    """
+@overload
+def export_web(transfer: Lightmap, mesh: Scene, dir: Any, *, env: Any = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ...) -> None:
+    """
+    For a Lightmap and its Scene: the page that relights the lightmap per pixel (docs/WEB.md "Lightmaps"), as prt export SCENE LIGHTMAP --web DIR does; the other arguments as for a Transfer (bake= is refused: the page relights).
+    """
+@overload
+def export_web(transfer: WaveletTransfer, *args, **kwargs) -> None:
+    """
+    Refused, saying why and what to do (prt info --kinds).
+    """
+@overload
+def export_web(transfer: ZhTransfer, *args, **kwargs) -> None:
+    """
+    Refused, saying why and what to do (prt info --kinds).
+    """
+@overload
+def export_web(transfer: ProbeVolume, *args, **kwargs) -> None:
+    """
+    Refused, saying why and what to do (prt info --kinds).
     """
 
 def export_probes(probes: Any, scene: Scene, bake: Any, path: Any, *, rotate: Any = ..., matrices: Any = ..., matrix_bands: int = ...) -> None:

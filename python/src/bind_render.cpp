@@ -132,7 +132,8 @@ struct RenderCall {
   const py::object& map;
   int width, height;
   const py::object& camera;
-  double fov;
+  const py::object& fov_arg;  // None: the default camera's (40 degrees, 70 inside a room)
+  std::optional<double> fov;
   const py::object& rotate;
   const py::object& exposure;
   const std::string& tone_map;
@@ -268,7 +269,7 @@ void RenderCall::check_options() {
   if (width < 1 || height < 1 || width > 16384 || height > 16384)
     throw Error("width, height: 1 to 16384 pixels each, got " + std::to_string(width) + " x " +
                 std::to_string(height));
-  check_fov(fov);
+  fov = prt::python::fov_arg(fov_arg);
   bands = bands_arg.is_none() ? file_bands : int_arg(bands_arg, "bands");
   if (bands < 1 || bands > file_bands)
     throw Error("bands: 1 to the transfer's " + std::to_string(file_bands) + ", got " + std::to_string(bands));
@@ -354,7 +355,8 @@ void RenderCall::set_view() {
     const prt::Mesh posed = prt::deform_mesh(mesh, *pose);
     framed->positions.insert(framed->positions.end(), posed.positions.begin(), posed.positions.end());
   }
-  cam = prt::framing_camera(framed ? *framed : mesh, fov, double(width) / height);
+  // prt render's default camera: scene_camera, from outside or inside a room.
+  cam = prt::scene_camera(framed ? *framed : mesh, double(width) / height, fov);
   if (!camera.is_none()) {
     py::object eye, target, up;
     if (py::isinstance<py::dict>(camera)) {
@@ -386,8 +388,8 @@ void RenderCall::set_view() {
       cam.target = point(target, "camera target");
       cam.up = up ? point(up, "camera up") : glm::dvec3(0, 1, 0);
     }
+    cam.fov_deg = fov.value_or(prt::kDefaultFov);
   }
-  cam.fov_deg = fov;
 }
 
 // Without the GIL: the lighting (the map's SH, band-limited and turned), the
@@ -396,7 +398,6 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
   const prt::Mesh& mesh = *drawn_mesh;
   std::vector<glm::dvec3> light, rotated;
   light = prt::project(*e, file_bands);
-  if (auto_exposure) display.exposure = prt::auto_exposure(file_bands >= 3 ? light : prt::project(*e, 3));
   std::fill(light.begin() + std::ptrdiff_t(std::size_t(bands) * bands), light.end(), glm::dvec3(0.0));
   rotated.resize(light.size());
   prt::sh::Rotation(file_bands, R).apply(light, rotated);
@@ -417,7 +418,7 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
         probe_object->frame(r, R, 0.0);
       }
       prt::Image out = r.render(cam, width, height);
-      if (alpha) coverage = r.coverage();
+      if (alpha || auto_exposure) coverage = r.coverage();
       r.clear_probe_object();
       return out;
     };
@@ -455,6 +456,8 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
     r.set_environment_rotation(R);
     return frame();
   });
+  // exposure="auto": prt render's rule, from this frame (frame_exposure).
+  if (auto_exposure) display.exposure = prt::frame_exposure(img.rgb, coverage);
   prt::finish_frame(img.rgb, display, linear);
   return img;
 }
@@ -473,18 +476,18 @@ void bind_render(py::module_& m) {
   m.def(
       "render",
       [](const py::object& transfer, const py::object& mesh_arg, const py::object& map, int width, int height,
-         const py::object& camera, double fov, const py::object& rotate, const py::object& exposure,
+         const py::object& camera, const py::object& fov, const py::object& rotate, const py::object& exposure,
          const std::string& tone_map, bool linear, const py::object& shading, const py::object& bands_arg,
          double gloss, double specular, const py::object& diffuse, const py::object& deform, double amount, int terms,
          const std::string& selection, bool alpha, const py::object& probes, const py::object& object,
          const py::object& object_at, double object_size) {
-        RenderCall call{transfer, mesh_arg, map, width, height, camera, fov, rotate, exposure, tone_map, linear,
+        RenderCall call{transfer, mesh_arg, map, width, height, camera, fov, {}, rotate, exposure, tone_map, linear,
                         shading, bands_arg, gloss, specular, diffuse, deform, amount, terms, selection, alpha, probes,
                         object, object_at, object_size};
         return call.run();
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("width") = 512,
-      py::arg("height") = 512, py::arg("camera") = py::none(), py::arg("fov") = 40.0, py::arg("rotate") = py::none(),
+      py::arg("height") = 512, py::arg("camera") = py::none(), py::arg("fov") = py::none(), py::arg("rotate") = py::none(),
       py::arg("exposure") = "auto", py::arg("tone_map") = "clamp", py::arg("linear") = false,
       py::arg("shading") = py::none(), py::arg("bands") = py::none(), py::arg("gloss") = 16.0,
       py::arg("specular") = 0.5, py::arg("diffuse") = py::none(), py::arg("deform") = py::none(),
@@ -494,9 +497,10 @@ void bind_render(py::module_& m) {
       "A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the "
       "first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is "
       "the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 "
-      "matrix or yaw, pitch, roll degrees). camera: None (the framing camera: a three-quarter view from above that "
-      "frames every vertex), (eye, target[, up]) or a dict; fov: vertical degrees. exposure: stops or 'auto' (a "
-      "white diffuse surface facing the brightest light shows at 1). Values: the tone map's display values in "
+      "matrix or yaw, pitch, roll degrees). camera: None (prt render's default camera: a three-quarter view from above that "
+      "frames every vertex, or from inside a room that encloses its centre), (eye, target[, up]) or a dict; fov: "
+      "vertical degrees (None: 40, or 70 inside a room). exposure: stops or 'auto' (prt "
+      "render's rule: the 99th percentile of the model's pixels in this frame, their largest channel, at 1). Values: the tone map's display values in "
       "[0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear "
       "radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', "
       "'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, "

@@ -299,10 +299,15 @@ double exposure_arg(const py::object& exposure) {
   return stops;
 }
 
-void check_fov(double fov) {
+std::optional<double> fov_arg(const py::object& fov_obj) {
+  if (fov_obj.is_none()) return std::nullopt;
+  const DArray f = real_array<double>(fov_obj, "fov");
+  if (f.ndim() != 0) throw Error("fov: vertical degrees (a number) or None");
+  const double fov = f.data()[0];
   if (!(fov >= prt::kMinFov && fov <= prt::kMaxFov))
     throw Error("fov: vertical degrees, " + limit_text(prt::kMinFov) + " to " + limit_text(prt::kMaxFov) + ", got " +
                 number_text(fov));
+  return fov;
 }
 
 void check_terms(int terms) {

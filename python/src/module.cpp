@@ -24,14 +24,14 @@ PYBIND11_MODULE(_prt, m) {
 
   // The areas, in this order (module.h): a class before the functions whose
   // signatures name it; relight() of a Transfer after precompute, then of a
-  // WaveletTransfer (bind_wavelet) and of a ZhTransfer (bind_ldprt).
+  // WaveletTransfer (bind_wavelet) and of a ZhTransfer (bind_ldprt); export
+  // last (it takes a Transfer or a Lightmap).
   bind_maps(m);
   bind_mesh(m);
   bind_transfer(m);
   bind_precompute(m);
   bind_transfer_relight(m);
   bind_render(m);
-  bind_export(m);
   bind_info(m);
   bind_compress(m);
   bind_wavelet(m);
@@ -39,4 +39,5 @@ PYBIND11_MODULE(_prt, m) {
   bind_reference(m);
   bind_lightmap(m);
   bind_probes(m);
+  bind_export(m);  // after the Lightmap class its overloads name
 }

@@ -239,8 +239,9 @@ int threads_arg(int threads);
 // wrapper) and within the command's --exposure range, +-kMaxExposureStops.
 double exposure_arg(const py::object& exposure);
 
-// fov=: vertical degrees, prt's --fov range.
-void check_fov(double fov);
+// fov=: vertical degrees in prt's --fov range, or None (the default camera's
+// field of view: 40 degrees, 70 inside a room; prt render --fov).
+std::optional<double> fov_arg(const py::object& fov);
 
 // terms=: the wavelet terms K, 1 to wavelet::kMaxTerms (--terms).
 void check_terms(int terms);

@@ -27,6 +27,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <utility>
 
 namespace prt::cli {
@@ -44,6 +45,7 @@ struct ExportArgs {
   double fov = 40;
   bool force = false, turn = false;
   std::vector<const CLI::Option*> web_opts;  // --env, --camera, --fov, --tonemap, --turn, --force
+  const CLI::Option* fov_opt = nullptr;       // given: the default camera takes it (else 40, or 70 inside a room)
   // A probe volume (prt precompute --probes): --matrices FILE.bin, their input bands.
   std::string matrices;
   int matrix_bands = 3;
@@ -53,7 +55,7 @@ struct ExportArgs {
 };
 
 // The page's initial state, as prt render takes it: --camera (default:
-// prt render's framing camera of `mesh`, for a square canvas, which a wider
+// prt render's, scene_camera of `mesh`, for a square canvas, which a wider
 // one still fits), --fov, --rotate, --exposure (default: auto, for the first
 // map), --tonemap.
 WebPage web_page(const ExportArgs& a, const Mesh& mesh, const std::array<double, 3>& euler, ToneMap tone) {
@@ -62,13 +64,19 @@ WebPage web_page(const ExportArgs& a, const Mesh& mesh, const std::array<double,
   w.force = a.force;
   w.turn = a.turn;
   w.maps = web_maps(a.env, w.initial);
-  w.camera = framing_camera(mesh, a.fov, 1.0);
-  if (!a.camera.empty()) parse_camera(a.camera, w.camera);
-  w.camera.fov_deg = a.fov;
+  const std::optional<double> fov = a.fov_opt->count() > 0 ? std::optional<double>(a.fov) : std::nullopt;
+  w.camera = scene_camera(mesh, 1.0, fov);
+  if (!a.camera.empty()) {
+    parse_camera(a.camera, w.camera);
+    w.camera.fov_deg = a.fov;
+  }
   for (int k = 0; k < 3; ++k) w.rotate[k] = euler[k];
   const std::optional<double> given = exposure_stops(a.exposure.empty() ? "auto" : a.exposure);
+  // auto: the page measures its first frame; the map's rule (auto_exposure) is
+  // the exposure of a browser that cannot read one back.
   const double exposure = given ? *given : auto_exposure(project(load_envmap(w.initial), 3));
   w.display = {exposure, tone};
+  w.auto_exposure = !given;
   return w;
 }
 
@@ -109,19 +117,18 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
   opts.generator = "prt " PRT_VERSION " (prt export)";
   if (!a.bake.empty() && !a.output.empty()) {
-    const Mesh points = texel_points(texels);
     EnvMap env = load_envmap(a.bake);
     require_finite(env);
     std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
     if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
-    const std::vector<glm::vec3> rgb = relight(lt.transfer, points, light);
     const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
-    const double stops = given ? *given : auto_exposure(light);
-    opts.baked.resize(rgb.size());
-    for (std::size_t i = 0; i < rgb.size(); ++i) opts.baked[i] = rgb[i] * float(std::exp2(stops));
-    opts.bake.map = std::filesystem::path(a.bake).filename().string();
-    for (int k = 0; k < 3; ++k) opts.bake.rotate[k] = euler[k];
-    opts.bake.exposure = stops;
+    bake_lightmap(opts, lt, texels, light, std::filesystem::path(a.bake).filename().string(), euler.data(),
+                  given.value_or(0.0));
+    if (!given) {  // auto: prt render's rule over the baked texels, each counted once (frame_exposure)
+      const double stops = frame_exposure({reinterpret_cast<const float*>(opts.baked.data()), 3 * opts.baked.size()});
+      for (glm::vec3& c : opts.baked) c *= float(std::exp2(stops));
+      opts.bake.exposure = stops;
+    }
   }
   Outputs out("export");
   if (!a.output.empty()) out.write([&] { write_gltf_lightmap(a.output, scene, lt, texels, opts); });
@@ -218,7 +225,9 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
     if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
     const std::vector<glm::vec3> rgb = relight(t, mesh, light);
     const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
-    const Display clamp{given ? *given : auto_exposure(light), ToneMap::Clamp};
+    // auto: prt render's rule over the relit vertices, each counted once (frame_exposure).
+    const Display clamp{given ? *given : frame_exposure({reinterpret_cast<const float*>(rgb.data()), 3 * rgb.size()}),
+                        ToneMap::Clamp};
     opts.colors.resize(rgb.size());
     for (std::size_t v = 0; v < rgb.size(); ++v)
       for (int c = 0; c < 3; ++c) {
@@ -363,7 +372,9 @@ Run add_export(CLI::App& app) {
       "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
       "--web DIR writes a static page (index.html, its scripts, model.glb, lighting.json: every\n"
       "bundled map's SH lighting at the transfer's bands, maps/*.rgb16f backgrounds) that relights the model in\n"
-      "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame.\n"
+      "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame\n"
+      "(without --camera, prt render's default camera: inside a scene that encloses its centre, a room, the eye\n"
+      "inside; docs/RUNTIME.md, \"The default camera\").\n"
       "Example: prt export bunny.off bunny.prt -o bunny.glb\n"
       "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
       "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1\n"
@@ -381,14 +392,17 @@ Run add_export(CLI::App& app) {
   a->rotate_opt = add_shared(s, SharedOption::Rotate, a->rotate, "With --bake or --web: rotate the lighting");
   a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
                                "With --bake: scale the radiance by 2^stops before clamping (default 0); with --web: "
-                               "the initial exposure (default auto); auto: as prt render, for the --bake map and the "
-                               "page's first map");
+                               "the initial exposure (default auto); auto: prt render's rule (the 99th percentile of the "
+                               "model's largest channel at 1) over the baked vertices or texels, and on the page from "
+                               "its first frame");
   s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)")
       ->check(path_value());
   a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)")
                             ->check(path_value()));
   a->web_opts.push_back(add_shared(s, SharedOption::Camera, a->camera, "With --web: initial camera (as prt render)"));
-  a->web_opts.push_back(add_shared(s, SharedOption::Fov, a->fov, "With --web: vertical field of view"));
+  a->fov_opt = add_shared(s, SharedOption::Fov, a->fov,
+                          "With --web: vertical field of view (default 40, or 70 for the camera inside a room)");
+  a->web_opts.push_back(a->fov_opt);
   a->web_opts.push_back(add_shared(s, SharedOption::Tonemap, a->tone_map, "With --web: initial tone map"));
   a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web: start with the environment turning"));
   a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));

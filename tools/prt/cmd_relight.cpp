@@ -50,7 +50,7 @@ struct RelightArgs {
   // Display output (--tonemap): exposure and tone map as prt render's 8-bit
   // images, then sRGB encoding with --srgb; PLY colours as bytes.
   std::string tonemap;
-  std::string exposure = "0";  // stops, or auto (look.h, auto_exposure)
+  std::string exposure = "0";  // stops, or auto (frame_exposure over the relit vertices)
   bool srgb = false;
   const CLI::Option *exposure_opt = nullptr, *srgb_opt = nullptr;
   int terms = 100;
@@ -75,12 +75,14 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 // it in) and turned into display values in place: one copy of the colours.
 // With --tonemap the radiance becomes display values first (and the PLY's
 // colours bytes).
-// --exposure auto: prt render's (auto_exposure of the map's 3-band lighting).
-int write_output(const RelightArgs& a, const std::string& ext, const Mesh& mesh, const EnvMap& env,
-                 std::vector<glm::vec3> rgb) {
+// --exposure auto: prt render's rule (frame_exposure) with no frame: over the
+// relit vertices (or points), each counted once.
+int write_output(const RelightArgs& a, const std::string& ext, const Mesh& mesh, std::vector<glm::vec3> rgb) {
   const bool display = !a.tonemap.empty();
   const std::optional<double> given = exposure_stops(a.exposure);
-  const double stops = !display ? 0.0 : given ? *given : auto_exposure(project(env, 3));
+  const double stops = !display ? 0.0
+                       : given  ? *given
+                                : frame_exposure({reinterpret_cast<const float*>(rgb.data()), 3 * rgb.size()});
   if (display) {
     const Display d{stops, parse_tone_map(a.tonemap)};
     for (glm::vec3& c : rgb)
@@ -139,7 +141,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   const double relight_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
   const std::size_t written = rgb.size();
-  if (const int rc = write_output(a, ext, mesh, env, std::move(rgb)); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, mesh, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr,
                "relight: {:.3f} ms per frame (lighting {:.3f} ms: resample, Haar, {} of {} terms by {}; transfer "
@@ -213,7 +215,7 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
     fmt::print(stderr, "{} vertices have no frame in this pose (no normal: only zero-area triangles around them): "
                        "their transfer is zero\n", report.no_frame);
   const std::size_t written = rgb.size();
-  if (const int rc = write_output(a, ext, posed, env, std::move(rgb)); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, posed, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: pose {:.3f} ms ({} lobes turned into each vertex's posed frame), {:.3f} ms per frame "
                        "(window, rotation, transfer; projection {:.1f} ms once){}\nwrote {} ({} vertices)\n",
@@ -490,7 +492,7 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
     return m;
   });
   const std::size_t written = rgb.size();
-  if (const int rc = write_output(a, ext, mesh, env, std::move(rgb)); rc != 0) return rc;
+  if (const int rc = write_output(a, ext, mesh, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
     fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
                        "wrote {} ({} vertices)\n",
@@ -561,8 +563,8 @@ Run add_relight(CLI::App& app) {
              "Display colours instead of radiance: exposure, then the tone map to [0, 1] (as prt render's 8-bit "
              "images); a PLY then has 8-bit colours");
   a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
-                               "With --tonemap: scale by 2^stops first; auto: as prt render (a white diffuse surface "
-                               "facing the map's brightest light shows at 1)");
+                               "With --tonemap: scale by 2^stops first; auto: prt render's rule with no frame: the 99th "
+                               "percentile of the relit vertices' largest channel at 1 (each vertex counted once)");
   a->srgb_opt = s->add_flag("--srgb", a->srgb,
                             "With --tonemap: sRGB-encode the display values (what mesh viewers expect of 8-bit "
                             "vertex colours)");

@@ -49,6 +49,7 @@ struct RenderArgs {
   int animation = 0;
   const CLI::Option* time_opt = nullptr;
   const CLI::Option* animation_opt = nullptr;
+  const CLI::Option* fov_opt = nullptr;  // given: the default camera takes it (else 40, or 70 inside a room)
 };
 
 // OUT.png, frame 3 -> OUT_0003.png
@@ -128,9 +129,10 @@ void check_render_scene(const RenderArgs& a, RenderJob& j) {
   j.look = parse_look(a.look, j.wavelet ? 0 : t.bands, j.wavelet, j.glossy);
 }
 
-// The camera: a deforming mesh is framed in its rest and its most deformed
-// pose; a skinned one in its rest and poses over its animation's loop (the
-// same camera at every --time).
+// The camera: scene_camera (prt/render.h: from outside, or inside a mesh
+// that encloses its centre). A deforming mesh is framed in its rest and its
+// most deformed pose; a skinned one in its rest and poses over its
+// animation's loop (the same camera at every --time).
 void frame_render_camera(const RenderArgs& a, RenderJob& j) {
   const Mesh& mesh = j.scene.mesh;
   Mesh framed;
@@ -140,9 +142,12 @@ void frame_render_camera(const RenderArgs& a, RenderJob& j) {
     framed.positions.insert(framed.positions.end(), posed.positions.begin(), posed.positions.end());
   }
   if (j.skin) framed.positions = animation_extent(mesh, *j.skin, a.animation);
-  j.cam = framing_camera(framed.positions.empty() ? mesh : framed, a.fov, double(a.width) / a.height);
-  if (!a.camera.empty()) parse_camera(a.camera, j.cam);
-  j.cam.fov_deg = a.fov;
+  const std::optional<double> fov = a.fov_opt->count() > 0 ? std::optional<double>(a.fov) : std::nullopt;
+  j.cam = scene_camera(framed.positions.empty() ? mesh : framed, double(a.width) / a.height, fov);
+  if (!a.camera.empty()) {
+    parse_camera(a.camera, j.cam);
+    j.cam.fov_deg = a.fov;
+  }
 }
 
 // The environment and the transfer to the renderer, with the shading the
@@ -194,10 +199,6 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
   // needs 3 bands of SH lighting in both.
   const int sh_bands = wavelet ? 3 : t.bands;
   std::vector<glm::dvec3> light = project(env, sh_bands);
-  if (look.auto_exposure) {
-    look.display.exposure = auto_exposure(sh_bands >= 3 ? light : project(env, 3));
-    if (!a.quiet) fmt::print(stderr, "--exposure auto: {:+.2f} stops\n", look.display.exposure);
-  }
   light = windowed_lighting(std::move(light), wavelet ? sh_bands : look.bands, look.window);
   std::vector<glm::dvec3> rotated(light.size());
   const glm::dmat3 base = sh::rotation_from_euler(euler[0], euler[1], euler[2]);
@@ -236,7 +237,12 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
       render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       width = img.width;
       height = img.height;
-      const std::vector<float> alpha = a.alpha ? renderer.coverage() : std::vector<float>{};
+      const bool measure = look.auto_exposure && f == 0;
+      const std::vector<float> alpha = a.alpha || measure ? renderer.coverage() : std::vector<float>{};
+      if (measure) {  // --exposure auto: from the first frame, kept for the sequence (frame_exposure)
+        look.display.exposure = frame_exposure(img.rgb, alpha);
+        if (!a.quiet) fmt::print(stderr, "--exposure auto: {:+.2f} stops\n", look.display.exposure);
+      }
       out.write([&] {
         write_frame(a.frames_given ? frame_path(a.output, f) : a.output, std::move(img), look.display,
                     a.alpha ? &alpha : nullptr);
@@ -295,8 +301,11 @@ Run add_render(CLI::App& app) {
   s->footer(
       "Per-vertex PRT shading on the GPU (OpenGL 4.5 through EGL, no display needed; Mesa llvmpipe works).\n"
       "Without --camera: a three-quarter view from above (from +Z turned 35 degrees toward +X, 20 degrees up)\n"
-      "that frames every vertex with a 5% margin. Without --exposure (auto): a white diffuse surface facing the\n"
-      "map's brightest light shows at 1.\n"
+      "that frames every vertex with a 5% margin; for a scene that encloses its centre (a room: most rays from\n"
+      "the centre of its bounds meet a wall's front), the eye inside, looking across the room toward its openings\n"
+      "(windows), 70 degrees wide unless --fov (docs/RUNTIME.md, \"The default camera\"). Without --exposure (auto): from what the first frame shows,\n"
+      "the 99th percentile of the model's pixels (linear, their largest channel; not the background) at 1, kept\n"
+      "for every frame of a sequence: at most 1% of the model clips, and an interior shows by its own light.\n"
       "The environment is drawn as background; lighting and background turn together with --rotate/--spin.\n"
       "SH transfers are relit on the GPU; wavelet transfers (prt precompute --basis wavelet) on the CPU each\n"
       "frame (rotated map resampled into the cube, K Haar terms, --terms/--selection), then drawn.\n"
@@ -328,7 +337,7 @@ Run add_render(CLI::App& app) {
   add_shared(s, SharedOption::Width, a->width, "Image width");
   add_shared(s, SharedOption::Height, a->height, "Image height");
   add_shared(s, SharedOption::Camera, a->camera, "Camera; default: the framing camera (below)");
-  add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view");
+  a->fov_opt = add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view (default 40, or 70 for the camera inside a room)");
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   add_shared(s, SharedOption::Frames, a->frames, "Render K frames, spinning the environment about +Y")
       ->each([a](const std::string&) { a->frames_given = true; });

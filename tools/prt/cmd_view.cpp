@@ -76,6 +76,7 @@ struct ViewArgs {
   std::string deform;  // --deform bend:ANGLE|twist:ANGLE (zonal-harmonic files): animated
   int animation = 0;   // a skinned glTF MESH (zonal-harmonic files): the animation played
   const CLI::Option* animation_opt = nullptr;
+  const CLI::Option* fov_opt = nullptr;  // given: the default camera takes it (else 40, or 70 inside a room)
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
@@ -495,6 +496,19 @@ void check_view_options(const ViewArgs& a) {
     throw Error("--screenshot-dir " + a.screenshot_dir + ": not a directory");
 }
 
+// The starting camera: --camera, else scene_camera (prt/render.h) of the
+// framed positions, as prt render's: inside a room the eye is within the
+// orbit's reach of the room's centre, its target.
+Camera starting_camera(const ViewArgs& a, const Mesh& framed) {
+  const std::optional<double> fov = a.fov_opt->count() > 0 ? std::optional<double>(a.fov) : std::nullopt;
+  Camera base = scene_camera(framed, double(a.width) / a.height, fov);
+  if (!a.camera.empty()) {
+    parse_camera(a.camera, base);
+    base.fov_deg = a.fov;
+  }
+  return base;
+}
+
 int run_view(const ViewArgs& a) {
   check_view_options(a);
   ViewKinds kinds;
@@ -512,7 +526,6 @@ int run_view(const ViewArgs& a) {
                     " needs a glossy transfer (prt precompute --material glossy); this one has no glossy matrices");
   parse_diffuse(a.lobe.diffuse);  // a bad value exits 2 before any window opens
   Look look = parse_look(a.look, kinds.sh ? scene.header.bands : 0, kinds.wavelet, glossy && !kinds.wavelet_first);
-  if (look.auto_exposure) look.display.exposure = auto_exposure(project(scene.env, 3));  // the first map's
 
   const char* display = std::getenv("DISPLAY");
   const char* wayland = std::getenv("WAYLAND_DISPLAY");
@@ -564,9 +577,8 @@ int run_view(const ViewArgs& a) {
                      : fmt::format("animation {} '{}' ({:g} s loop)", a.animation,
                                    skin->animations[std::size_t(a.animation)].name, duration));
   }
-  Camera base = framing_camera(framed.positions.empty() ? scene.mesh : framed, a.fov, double(a.width) / a.height);
+  const Camera base = starting_camera(a, framed.positions.empty() ? scene.mesh : framed);
   const auto start = std::chrono::steady_clock::now();
-  if (!a.camera.empty()) parse_camera(a.camera, base);
   connect_input(window.get(), st);
   // The panel after prt's callbacks: ImGui chains them.
   std::optional<ViewPanel> panel;
@@ -601,6 +613,14 @@ int run_view(const ViewArgs& a) {
     int fw = 0, fh = 0;
     glfwGetFramebufferSize(window.get(), &fw, &fh);
     if (fw > 0 && fh > 0) {
+      if (look.auto_exposure) {
+        // --exposure auto: once, from the first frame (linear, read back),
+        // as prt render's; then it stays (E, the panel and other maps keep it).
+        look.auto_exposure = false;
+        const Image first = renderer.render(cam, fw, fh);
+        st.exposure = frame_exposure(first.rgb, renderer.coverage());
+        if (!a.quiet) fmt::print(stderr, "--exposure auto: {:+.2f} stops\n", st.exposure);
+      }
       renderer.present(cam, fw, fh, fw, fh, Display{st.exposure, kToneMaps[st.tone]});
       if (panel) {
         PanelInfo info;
@@ -654,7 +674,11 @@ Run add_view(CLI::App& app) {
   auto a = std::make_shared<ViewArgs>();
   CLI::App* s = app.add_subcommand("view", "Interactive window: a precomputed mesh relit under an environment map");
   s->footer(std::string("Same renderer as prt render, in a GLFW window (OpenGL 4.5 core; needs a display;\n"
-                        "without one it exits 1: use prt render, or xvfb-run).\n") +
+                        "without one it exits 1: use prt render, or xvfb-run).\n"
+                        "Without --camera: prt render's default camera (from outside, framing every vertex; inside a scene\n"
+                        "that encloses its centre, a room, the eye inside near enough to the centre to orbit it; docs/RUNTIME.md,\n"
+                        "\"The default camera\"). The panel starts folded to its title bar in the top-left corner: click it\n"
+                        "to open it.\n") +
             kControls +
             "\nScreenshots (S) are the window's pixels as shown (8-bit sRGB, the same codes as prt render's PNG with\n"
             "the same options), saved as prt_view_NNNN.png in --screenshot-dir.\n"
@@ -675,7 +699,7 @@ Run add_view(CLI::App& app) {
   add_shared(s, SharedOption::Width, a->width, "Window width");
   add_shared(s, SharedOption::Height, a->height, "Window height");
   add_shared(s, SharedOption::Camera, a->camera, "Starting camera (orbit is about the target)");
-  add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view");
+  a->fov_opt = add_shared(s, SharedOption::Fov, a->fov, "Vertical field of view (default 40, or 70 for the camera inside a room)");
   add_shared(s, SharedOption::Deform, a->deform,
              "Zonal-harmonic files (prt precompute --basis zh): a bend or twist, animated on the GPU from the rest "
              "pose to the whole angle and back every 4 seconds (prt/deform.h, docs/LDPRT.md)");

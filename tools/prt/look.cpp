@@ -92,8 +92,8 @@ void add_look_options(CLI::App* s, LookArgs& a) {
       add_shared(s, SharedOption::Selection, a.selection,
                  "Wavelet: which K terms: area (|c| x support area, Ng et al.'s choice) or magnitude (|c|)");
   add_shared(s, SharedOption::Exposure, a.exposure,
-             "Scale radiance by 2^EXPOSURE for display; auto: a white diffuse surface facing the map's brightest light "
-             "shows at 1");
+             "Scale radiance by 2^EXPOSURE for display; auto: from what the first frame shows, the 99th percentile of "
+             "the model's pixels (their largest channel) at 1, at most 1% of them clipped");
   add_shared(s, SharedOption::Tonemap, a.tone_map, "8-bit output and the window");
 }
 

@@ -17,7 +17,7 @@ namespace prt::cli {
 
 struct LookArgs {
   std::string shading = "transfer", tone_map = "clamp", window = "none", selection = "area";
-  std::string exposure = "auto";  // stops, or auto (auto_exposure)
+  std::string exposure = "auto";  // stops, or auto (frame_exposure of the first frame)
   int bands = 0;    // 0: all of the file's
   int terms = 100;  // wavelet lighting terms K
   CLI::Option *shading_option = nullptr, *bands_option = nullptr, *window_option = nullptr, *terms_option = nullptr,
@@ -35,7 +35,7 @@ struct Look {
   int terms = 100;
   wavelet::Selection selection = wavelet::Selection::AreaWeighted;
   Display display;
-  bool auto_exposure = false;  // --exposure auto (the default): display.exposure is set by the command from the map
+  bool auto_exposure = false;  // --exposure auto (the default): display.exposure is set by the command from its first frame
 };
 
 // Checks the options against what was loaded: an SH transfer of `sh_bands`

@@ -38,9 +38,12 @@ void ViewPanel::draw(ViewState& st, const PanelInfo& info) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
-  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  // Folded to its title bar in the corner at first, over the default
+  // camera's margin rather than the model; a click on the bar opens it.
+  ImGui::SetNextWindowPos(ImVec2(0, 0), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(300, 0), ImGuiCond_FirstUseEver);
-  ImGui::Begin("prt view", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
+  ImGui::Begin("prt view: click for the controls###prt view", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   ImGui::Text("%.2f ms/frame (%.0f fps)", info.frame_ms, info.frame_ms > 0 ? 1e3 / info.frame_ms : 0.0);
   ImGui::PlotLines("##frame", frame_times_.data(), int(frame_times_.size()), 0, nullptr, 0.0f, FLT_MAX, ImVec2(0, 32));
   ImGui::Separator();
