@@ -53,6 +53,23 @@ inline constexpr std::size_t kTransferKinds = std::variant_size_v<AnyTransfer>;
 
 inline TransferKind kind_of(const AnyTransfer& t) { return TransferKind(t.index()); }
 
+namespace detail {
+// No kind derives from another: dispatch's lambda for the base would take the
+// derived kind silently (a kind may hold another, as LightmapTransfer holds a
+// Transfer, but not be one).
+template <std::size_t... I>
+constexpr bool kinds_unrelated(std::index_sequence<I...>) {
+  constexpr auto derives = []<std::size_t J>(std::integral_constant<std::size_t, J>) {
+    return ((J != I && std::is_base_of_v<std::variant_alternative_t<I, AnyTransfer>,
+                                         std::variant_alternative_t<J, AnyTransfer>>) ||
+            ...);
+  };
+  return !(derives(std::integral_constant<std::size_t, I>{}) || ...);
+}
+}  // namespace detail
+static_assert(detail::kinds_unrelated(std::make_index_sequence<kTransferKinds>{}),
+              "a transfer kind derives from another: dispatch() would hand it to the base's lambda");
+
 // The kind of alternative T (a compile error for a type that is none).
 template <typename T, std::size_t I = 0>
 constexpr TransferKind kind_of_type() {

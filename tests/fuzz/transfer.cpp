@@ -89,11 +89,15 @@ void exercise(const prt::AnyTransfer& any) {
 
 // Each kind's own reader on `path`, in TransferKind's order: whether it accepted the file.
 std::array<bool, prt::kTransferKinds> typed_reads(const std::string& path) {
-  const std::array<std::function<void()>, prt::kTransferKinds> readers = {
-      [&] { (void)prt::read_transfer(path); },          [&] { (void)prt::read_compressed_transfer(path); },
-      [&] { (void)prt::read_wavelet_transfer(path); },  [&] { (void)prt::read_zh_transfer(path); },
-      [&] { (void)prt::read_lightmap_transfer(path); }, [&] { (void)prt::read_wavelet_lightmap(path); },
-      [&] { (void)prt::read_probe_transfer(path); }};
+  // std::to_array takes its size from the list: a kind without a reader here
+  // fails the static_assert (a std::array of kTransferKinds would be padded
+  // with an empty function).
+  const auto readers = std::to_array<std::function<void()>>(
+      {[&] { (void)prt::read_transfer(path); }, [&] { (void)prt::read_compressed_transfer(path); },
+       [&] { (void)prt::read_wavelet_transfer(path); }, [&] { (void)prt::read_zh_transfer(path); },
+       [&] { (void)prt::read_lightmap_transfer(path); }, [&] { (void)prt::read_wavelet_lightmap(path); },
+       [&] { (void)prt::read_probe_transfer(path); }});
+  static_assert(readers.size() == prt::kTransferKinds, "a typed reader for every kind, in TransferKind's order");
   std::array<bool, prt::kTransferKinds> accepted{};
   for (std::size_t k = 0; k < readers.size(); ++k)
     prt::fuzz::expect_only_prt_errors([&] {
