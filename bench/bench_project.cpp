@@ -20,12 +20,8 @@
 
 namespace {
 
+using prt_bench::forest;
 const std::string kForest = PRT_SOURCE_DIR "/envmaps/forest.exr";
-
-const prt::EnvMap& forest() {
-  static const prt::EnvMap map = prt::load_envmap(kForest);
-  return map;
-}
 
 // Pins the process to one thread while alive: oneTBB (prt::project) and
 // OpenEXR's decoding pool (load_envmap sets it to all cores on its first load,

@@ -32,13 +32,13 @@ const prt::Mesh* bunny() {
   return mesh;
 }
 
-constexpr int kBands = 5, kSamples = 1024;
+constexpr int kBands = 5, kRays = 1024;
 
 prt::TransferOptions options(prt::TransferMode mode, int bounces = 0) {
   prt::TransferOptions o;
   o.mode = mode;
   o.bands = kBands;
-  o.samples = kSamples;
+  o.samples = kRays;
   o.bounces = bounces;
   return o;
 }
@@ -67,7 +67,7 @@ BENCHMARK(BM_TransferShadowed)->Unit(benchmark::kMillisecond)->UseRealTime()->It
 void BM_BareEmbree(benchmark::State& state) {
   if (!bunny()) return state.SkipWithError("../shared/meshes/bunny00.off not found");
   const prt::Mesh& m = *bunny();
-  const int M = 2 * kSamples;
+  const int M = 2 * kRays;
   std::vector<glm::vec3> dirs(M);
   for (int i = 0; i < M; ++i) {
     const double z = 1.0 - (2.0 * i + 1.0) / M, r = std::sqrt(1.0 - z * z), phi = 2.0 * M_PI * std::fmod(i / 1.6180339887498949, 1.0);

@@ -7,6 +7,8 @@
 // against it (and against other naive alternatives), never as an absolute.
 #pragma once
 
+#include <prt/envmap.h>
+
 #include <glm/vec3.hpp>
 
 #include <cmath>
@@ -14,6 +16,12 @@
 #include <vector>
 
 namespace prt_bench {
+
+// The bundled forest map, loaded once: the benchmarks' fixed lighting.
+inline const prt::EnvMap& forest() {
+  static const prt::EnvMap map = prt::load_envmap(PRT_SOURCE_DIR "/envmaps/forest.exr");
+  return map;
+}
 
 // Real SH of `bands` bands at the unit direction d, z the polar axis, index
 // k = l(l+1)+m. std::sph_legendre(l, m, theta) = (-1)^m N_l^m P_l^m(cos theta)

@@ -5,6 +5,8 @@
 // cube, Haar transform, select K terms by area, RGB) + wavelet_relight over
 // every vertex. The transfer is computed once per process (tens of seconds on
 // 2 cores) and kept in a static.
+#include "bench_util.h"
+
 #include <prt/precompute.h>
 #include <prt/envmap.h>
 #include <prt/mesh.h>
@@ -34,10 +36,7 @@ const prt::WaveletTransfer* bunny_transfer() {
   return t;
 }
 
-const prt::EnvMap& forest() {
-  static const prt::EnvMap map = prt::load_envmap(PRT_SOURCE_DIR "/envmaps/forest.exr");
-  return map;
-}
+using prt_bench::forest;
 
 // The lighting turns by 1 degree per frame, as in a viewer.
 glm::dmat3 frame_rotation(long frame) { return prt::sh::rotation_from_euler(double(frame % 360), 0.0, 0.0); }

@@ -47,7 +47,7 @@ namespace prt {
 
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint32_t kNoVertex = std::numeric_limits<std::uint32_t>::max();
 
 // Every rank gets rank 0's `data` (count floats): an all-gather in which
 // rank 0's part is everything.
@@ -282,7 +282,7 @@ class Subdivider {
   std::size_t split(const std::vector<Candidate>& over, SubdivideReport& rep) {
     const std::size_t V = mesh_.vertex_count(), T = mesh_.triangles.size();
     std::vector<glm::vec3> pos = mesh_.positions, nrm = mesh_.normals, col = mesh_.colors;
-    std::vector<std::uint32_t> mid(3 * T, kNone);  // per triangle corner edge: its midpoint vertex
+    std::vector<std::uint32_t> mid(3 * T, kNoVertex);  // per triangle corner edge: its midpoint vertex
     for (const Candidate& c : over) {
       std::size_t needed = 0;  // distinct vertex pairs in the group
       for (std::size_t j = c.first; j < c.last; ++j)
@@ -291,7 +291,7 @@ class Subdivider {
         rep.capped = true;
         break;
       }
-      std::uint32_t m = kNone;
+      std::uint32_t m = kNoVertex;
       for (std::size_t j = c.first; j < c.last; ++j) {
         const EdgeUse& e = uses_[j];
         if (j == c.first || e.a != uses_[j - 1].a || e.b != uses_[j - 1].b) {
@@ -308,8 +308,8 @@ class Subdivider {
     }
     const std::size_t added = pos.size() - V;
     if (added == 0) return 0;
-    if (T + 3 * added >= std::size_t(kNone))
-      throw Error(fmt::format("subdividing for transfer: more than {} triangles", kNone - 1));
+    if (T + 3 * added >= std::size_t(kNoVertex))
+      throw Error(fmt::format("subdividing for transfer: more than {} triangles", kNoVertex - 1));
 
     const bool uvs = !corner_uvs_.empty();
     std::vector<glm::uvec3> tris;
@@ -337,7 +337,7 @@ class Subdivider {
       for (int k = 0; k < 3; ++k) {
         m[k].v = mid[3 * t + k];
         m[k].uv = (c[k].uv + c[(k + 1) % 3].uv) * 0.5f;
-        n += m[k].v != kNone;
+        n += m[k].v != kNoVertex;
       }
       // Rotated corners: r-th corner first.
       const auto C = [&](int r, int k) -> const Corner& { return c[(r + k) % 3]; };
@@ -346,12 +346,12 @@ class Subdivider {
         emit(c[0], c[1], c[2]);
       } else if (n == 1) {  // the split edge from corner r: (a, m, c), (m, b, c)
         int r = 0;
-        while (m[r].v == kNone) ++r;
+        while (m[r].v == kNoVertex) ++r;
         emit(C(r, 0), M(r, 0), C(r, 2));
         emit(M(r, 0), C(r, 1), C(r, 2));
       } else if (n == 2) {  // edges a-b and b-c split, c-a not: the corner at b, and the quad a m0 m1 c
         int u = 0;
-        while (m[u].v != kNone) ++u;
+        while (m[u].v != kNoVertex) ++u;
         const int r = (u + 1) % 3;
         const Corner &a = C(r, 0), &b = C(r, 1), &cc = C(r, 2), &m0 = M(r, 0), &m1 = M(r, 1);
         emit(m0, b, m1);

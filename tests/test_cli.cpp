@@ -36,7 +36,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kPi = 3.14159265358979323846;
+using prt::test::kPi;
 
 // ---- tolerances ---------------------------------------------------------------
 

@@ -3,6 +3,8 @@
 // `prt` executable (PRT_EXE) with its output captured.
 #pragma once
 
+#include <prt/envmap.h>
+
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -13,6 +15,7 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -196,6 +199,38 @@ constexpr long kRefusalRssKb = 100 * 1024;
 inline std::string describe_run(const Result& r) {
   return "exit " + std::to_string(r.code) + "\n--- stdout ---\n" + r.out.substr(0, 2000) + "\n--- stderr ---\n" +
          r.err.substr(0, 2000);
+}
+
+inline constexpr double kPi = 3.14159265358979323846;
+
+// PRT_REQUIRE_TOOLS (scripts/test.sh sets 1): a test that finds a tool it
+// needs (Node, Chromium, the Python module) missing fails instead of skipping.
+inline bool tools_required() {
+  const char* v = std::getenv("PRT_REQUIRE_TOOLS");
+  return v && *v && std::string(v) != "0";
+}
+
+// A 64 x 32 lat-long map of constant radiance `value` in `dir` (constant.exr).
+inline std::string write_constant_map(const TempDir& dir, float value) {
+  const std::string path = dir.file("constant.exr");
+  write_image(path, 64, 32, std::vector<float>(64 * 32 * 3, value));
+  return path;
+}
+
+// RFC 4648 base64 with padding, for data: URIs in hand-made glTF files.
+inline std::string base64(const std::vector<std::uint8_t>& bytes) {
+  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::uint32_t n = std::uint32_t(bytes[i]) << 16 |
+                            (i + 1 < bytes.size() ? std::uint32_t(bytes[i + 1]) << 8 : 0) |
+                            (i + 2 < bytes.size() ? std::uint32_t(bytes[i + 2]) : 0);
+    out += digits[n >> 18 & 63];
+    out += digits[n >> 12 & 63];
+    out += i + 1 < bytes.size() ? digits[n >> 6 & 63] : '=';
+    out += i + 2 < bytes.size() ? digits[n & 63] : '=';
+  }
+  return out;
 }
 
 }  // namespace prt::test

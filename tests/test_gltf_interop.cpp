@@ -21,16 +21,12 @@ namespace {
 
 using prt::test::run_prt;
 using prt::test::TempDir;
+using prt::test::tools_required;
 
 const std::string kSource = PRT_SOURCE_DIR;
 const std::string kScene = kSource + "/models/scene.obj";
 const std::string kStudio = kSource + "/envmaps/studio.exr";
 constexpr int kSamples = 32;  // few rays: the files' structure is tested, not accuracy
-
-bool tools_required() {
-  const char* v = std::getenv("PRT_REQUIRE_TOOLS");
-  return v != nullptr && std::string(v) == "1";
-}
 
 struct Validation {
   int code = -1;

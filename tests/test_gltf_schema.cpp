@@ -27,22 +27,9 @@
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using prt::test::base64;
 
 namespace {
-
-std::string base64(const std::vector<std::uint8_t>& b) {
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < b.size(); i += 3) {
-    const std::uint32_t v = std::uint32_t(b[i]) << 16 | (i + 1 < b.size() ? std::uint32_t(b[i + 1]) << 8 : 0) |
-                            (i + 2 < b.size() ? b[i + 2] : 0);
-    out += t[v >> 18 & 63];
-    out += t[v >> 12 & 63];
-    out += i + 1 < b.size() ? t[v >> 6 & 63] : '=';
-    out += i + 2 < b.size() ? t[v & 63] : '=';
-  }
-  return out;
-}
 
 // A 2 x 2 RGB PNG.
 const char* kPng =

@@ -30,12 +30,6 @@ using namespace prt::test;
 
 const std::string kModels = PRT_SOURCE_DIR "/models";
 
-std::string write_constant_map(const TempDir& dir, float value) {
-  const std::string path = dir.file("constant.exr");
-  write_image(path, 64, 32, std::vector<float>(64 * 32 * 3, value));
-  return path;
-}
-
 // The relative RMS error line of prt compare's noise-corrected output.
 double noise_corrected(const std::string& out) {
   const nlohmann::json j = nlohmann::json::parse(out);

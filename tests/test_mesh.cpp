@@ -28,6 +28,7 @@
 namespace fs = std::filesystem;
 using glm::uvec3;
 using glm::vec3;
+using prt::test::base64;
 
 namespace {
 
@@ -107,20 +108,6 @@ void split_cube(std::vector<vec3>& p, std::vector<uvec3>& t, float s = 1.0f) {
     t.emplace_back(b, b + 1, b + 2);
     t.emplace_back(b, b + 2, b + 3);
   }
-}
-
-std::string base64(const std::vector<std::uint8_t>& d) {
-  static const char* tab = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < d.size(); i += 3) {
-    const std::uint32_t v = (std::uint32_t(d[i]) << 16) | (i + 1 < d.size() ? std::uint32_t(d[i + 1]) << 8 : 0) |
-                            (i + 2 < d.size() ? std::uint32_t(d[i + 2]) : 0);
-    out += tab[(v >> 18) & 63];
-    out += tab[(v >> 12) & 63];
-    out += i + 1 < d.size() ? tab[(v >> 6) & 63] : '=';
-    out += i + 2 < d.size() ? tab[v & 63] : '=';
-  }
-  return out;
 }
 
 // ---- loading each format ---------------------------------------------------

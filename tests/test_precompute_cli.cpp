@@ -43,12 +43,6 @@ std::string write_quad(const TempDir& dir) {
   return path;
 }
 
-std::string write_constant_map(const TempDir& dir, float value) {
-  const std::string path = dir.file("constant.exr");
-  write_image(path, 64, 32, std::vector<float>(64 * 32 * 3, value));
-  return path;
-}
-
 TEST(PrecomputeCli, WhiteFurnaceThroughTheCommandLine) {
   // Albedo 1, unshadowed, constant map of 1: every vertex's radiance is 1
   // (float storage of the transfer: 1e-6).

@@ -12,7 +12,7 @@ namespace {
 // every band count. Up to 32 bands the recurrence runs in double (measured
 // 5e-14); above, in extended precision (measured 1e-14 at 64 bands, where the
 // double recurrence would reach 2e-11).
-constexpr double kDouble = 1e-12;
+constexpr double kRotationTol = 1e-12;
 
 std::vector<glm::dmat3> hard_rotations() {
   std::vector<glm::dmat3> r = {glm::dmat3(1.0),
@@ -54,7 +54,7 @@ TEST(Rotation, IdentityIsIdentity) {
 }
 
 TEST(Rotation, BandMatricesAreOrthogonalTo32Bands) {
-  for (const auto& R : hard_rotations()) EXPECT_LT(max_orthogonality_error(sh::Rotation(32, R)), kDouble);
+  for (const auto& R : hard_rotations()) EXPECT_LT(max_orthogonality_error(sh::Rotation(32, R)), kRotationTol);
 }
 
 TEST(Rotation, RotateEvalEqualsEvalRotatedDirection) {
@@ -71,7 +71,7 @@ TEST(Rotation, RotateEvalEqualsEvalRotatedDirection) {
       sh::eval<double>(n, rd.x, rd.y, rd.z, YR.data());
       for (int l = 0; l < n; ++l)
         for (int m = -l; m <= l; ++m)
-          ASSERT_NEAR(RY[sh::index(l, m)], YR[sh::index(l, m)], kDouble * test::band_norm(l)) << l << "," << m;
+          ASSERT_NEAR(RY[sh::index(l, m)], YR[sh::index(l, m)], kRotationTol * test::band_norm(l)) << l << "," << m;
     }
   }
 }
@@ -86,9 +86,9 @@ TEST(Rotation, CompositionAndRoundTrip) {
     sh::Rotation(n, B).apply(c, b);
     sh::Rotation(n, A).apply(b, ab);
     sh::Rotation(n, A * B).apply(c, direct);  // rotate by B, then by A == rotate by AB
-    EXPECT_LT(test::distance(ab, direct), kDouble * test::norm(c));
+    EXPECT_LT(test::distance(ab, direct), kRotationTol * test::norm(c));
     sh::Rotation(n, glm::transpose(A * B)).apply(direct, back);
-    EXPECT_LT(test::distance(back, c), kDouble * test::norm(c));
+    EXPECT_LT(test::distance(back, c), kRotationTol * test::norm(c));
   }
 }
 
@@ -168,7 +168,7 @@ TEST(Rotation, ExtendedPrecisionHoldsTo64Bands) {
       sh::eval<double>(n, rd.x, rd.y, rd.z, YR.data());
       for (int l = 0; l < n; ++l)
         for (int m = -l; m <= l; ++m)
-          ASSERT_NEAR(RY[sh::index(l, m)], YR[sh::index(l, m)], kDouble * test::band_norm(l)) << l << "," << m;
+          ASSERT_NEAR(RY[sh::index(l, m)], YR[sh::index(l, m)], kRotationTol * test::band_norm(l)) << l << "," << m;
     }
   }
   std::mt19937_64 rng(18);
@@ -178,7 +178,7 @@ TEST(Rotation, ExtendedPrecisionHoldsTo64Bands) {
   sh::Rotation(n, B).apply(c, b);
   sh::Rotation(n, A).apply(b, ab);
   sh::Rotation(n, A * B).apply(c, direct);
-  EXPECT_LT(test::distance(ab, direct), kDouble * test::norm(c));
+  EXPECT_LT(test::distance(ab, direct), kRotationTol * test::norm(c));
 
   sh::Rotation r(40, glm::dmat3(1.0));
   r.set(A);

@@ -24,7 +24,7 @@ using namespace prt;
 using prt::test::random_coefficients;
 using prt::test::random_directions;
 
-constexpr double kPi = std::numbers::pi;
+using prt::test::kPi;
 
 // The conversions are a few multiplications per coefficient in double: 1e-13
 // of the function's scale leaves room for the different order of the

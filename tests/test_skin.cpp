@@ -209,21 +209,6 @@ TEST(Skin, SingleJointRotationEqualsRotatingTheMesh) {
 
 // ---- small hand-made files ------------------------------------------------------------------
 
-std::string base64(const std::vector<unsigned char>& bytes) {
-  static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::uint32_t n = std::uint32_t(bytes[i]) << 16 |
-                            (i + 1 < bytes.size() ? std::uint32_t(bytes[i + 1]) << 8 : 0) |
-                            (i + 2 < bytes.size() ? std::uint32_t(bytes[i + 2]) : 0);
-    out += digits[n >> 18 & 63];
-    out += digits[n >> 12 & 63];
-    out += i + 1 < bytes.size() ? digits[n >> 6 & 63] : '=';
-    out += i + 2 < bytes.size() ? digits[n & 63] : '=';
-  }
-  return out;
-}
-
 template <typename T>
 void append(std::vector<unsigned char>& buf, const std::vector<T>& values) {
   const std::size_t at = buf.size();

@@ -43,7 +43,7 @@ Mesh plate_scene() {
   return make_mesh(std::move(p), std::move(t), {}, {}, {}, "plate over floor");
 }
 
-TransferOptions options(int bands = 4, int samples = 1024) {
+TransferOptions subdivide_options(int bands = 4, int samples = 1024) {
   TransferOptions o;
   o.bands = bands;
   o.samples = samples;
@@ -180,7 +180,7 @@ std::size_t t_junctions(const Mesh& m) {
 }
 
 TEST(Subdivide, RefinedTransferIsComputeTransfersBits) {
-  const TransferOptions o = options();
+  const TransferOptions o = subdivide_options();
   for (const Mesh& m : {coarse_scene(), plate_scene()}) {
     SubdivideOptions s;
     s.tolerance = 0.05;
@@ -200,7 +200,7 @@ TEST(Subdivide, RefinedTransferIsComputeTransfersBits) {
 
 TEST(Subdivide, NoEdgeExceedsTheToleranceWhenNeitherCappedNorOutOfRounds) {
   const Mesh m = plate_scene();
-  const TransferOptions o = options();
+  const TransferOptions o = subdivide_options();
   const Transfer coarse = compute_transfer(m, o);
   const Metric metric(coarse, m);
   EXPECT_GT(edge_differences(coarse, m, metric).first, 0.2);
@@ -219,7 +219,7 @@ TEST(Subdivide, NoEdgeExceedsTheToleranceWhenNeitherCappedNorOutOfRounds) {
 
 TEST(Subdivide, TheRefinedFloorHoldsTheShadowTheCoarseOneMisses) {
   const Mesh m = plate_scene();
-  const TransferOptions o = options();
+  const TransferOptions o = subdivide_options();
   // The reference: the transfer traced at points all over the floor.
   SamplePoints pts;
   for (int j = 0; j <= 40; ++j)
@@ -258,7 +258,7 @@ TEST(Subdivide, NoTJunctionsNothingOpensWindingKept) {
   // The check finds one: a triangle whose edge a-b has, on its other side, two triangles meeting at its midpoint.
   const Mesh t_mesh = make_mesh({{0, 0, 0}, {2, 0, 0}, {1, 0, -1}, {1, 0, 0}, {1, 0, 1}}, {{0, 2, 1}, {0, 3, 4}, {3, 1, 4}});
   EXPECT_EQ(t_junctions(t_mesh), 1u);
-  const TransferOptions o = options();
+  const TransferOptions o = subdivide_options();
   for (const Mesh& m : {coarse_scene(), plate_scene()}) {
     SubdivideOptions s;
     s.tolerance = 0.05;
@@ -307,7 +307,7 @@ TEST(Subdivide, SeamsOfDuplicatedVerticesSplitOnBothSides) {
     if ((p[t.x].x + p[t.y].x + p[t.z].x) > 0.0f && p[t.x].y == 0.0f)
       for (int k = 0; k < 3; ++k) colours[t[k]] = glm::vec3(0.3f);
   const Mesh m = make_mesh(std::move(p), std::move(tris), {}, std::move(colours), {}, "cut floor");
-  TransferOptions o = options();
+  TransferOptions o = subdivide_options();
   o.vertex_colors = true;
   SubdivideOptions s;
   s.tolerance = 0.05;
@@ -333,7 +333,7 @@ TEST(Subdivide, NewVerticesInterpolateNormalsColoursAndUvs) {
   for (const glm::uvec3& t : m.triangles)
     for (int k = 0; k < 3; ++k) uvs.push_back(uv(m.positions[t[k]]));
   set_corner_uvs(m, uvs);
-  TransferOptions o = options();
+  TransferOptions o = subdivide_options();
   o.vertex_colors = true;
   SubdivideOptions s;
   s.tolerance = 0.05;
@@ -362,7 +362,7 @@ TEST(Subdivide, TheRefinedMeshLoadsBackAsItWas) {
   // again is the transfer's (mesh hash and shading hash). models/scene.obj
   // has such normals (31 of its refined vertices at TOL 0.05).
   const Mesh m = load_mesh(std::string(PRT_SOURCE_DIR) + "/models/scene.obj");
-  TransferOptions o = options(3, 64);
+  TransferOptions o = subdivide_options(3, 64);
   SubdivideOptions s;
   s.tolerance = 0.05;
   const Subdivided d = subdivide_for_transfer(m, o, s);
@@ -386,7 +386,7 @@ TEST(Subdivide, TheRefinedMeshLoadsBackAsItWas) {
 
 TEST(Subdivide, TheCapHolds) {
   const Mesh m = coarse_scene();
-  const TransferOptions o = options();
+  const TransferOptions o = subdivide_options();
   SubdivideOptions s;
   s.tolerance = 0.05;
   s.max_vertices = m.vertex_count() + 25;
@@ -416,15 +416,15 @@ TEST(Subdivide, OneRoundAtMost) {
   s.max_vertices = 100000;
   s.max_rounds = 1;
   SubdivideReport r;
-  const Subdivided d = subdivide_for_transfer(m, options(), s, {}, &r);
+  const Subdivided d = subdivide_for_transfer(m, subdivide_options(), s, {}, &r);
   EXPECT_EQ(r.rounds, 1);
   EXPECT_FALSE(r.capped);
-  expect_same_transfer(d.transfer, compute_transfer(d.mesh, options()));
+  expect_same_transfer(d.transfer, compute_transfer(d.mesh, subdivide_options()));
 }
 
 TEST(Subdivide, BadOptionsAreRefused) {
   const Mesh m = plate_scene();
-  const TransferOptions o = options(3, 64);
+  const TransferOptions o = subdivide_options(3, 64);
   const auto refused = [&](SubdivideOptions s) { EXPECT_THROW(subdivide_for_transfer(m, o, s), Error); };
   for (double tol : {0.0, 1.0, -0.1, 2.0, std::nan("")}) {
     SubdivideOptions s;
@@ -447,7 +447,7 @@ TEST(Subdivide, BadOptionsAreRefused) {
 
 TEST(Subdivide, SameBitsForAnyThreadCount) {
   const Mesh m = coarse_scene();
-  TransferOptions o = options();
+  TransferOptions o = subdivide_options();
   SubdivideOptions s;
   s.tolerance = 0.05;
   s.max_vertices = 2000;
@@ -467,7 +467,7 @@ TEST(Subdivide, InterreflectedGlossyAndUnshadowed) {
   s.tolerance = 0.1;
   s.max_vertices = 100000;
   for (int kind = 0; kind < 4; ++kind) {
-    TransferOptions o = options(3, 256);
+    TransferOptions o = subdivide_options(3, 256);
     if (kind == 0) o.mode = TransferMode::Interreflected;
     if (kind == 1) o.glossy = true;
     if (kind == 2) o.mode = TransferMode::Interreflected, o.glossy = true;

@@ -29,11 +29,6 @@ namespace {
 using namespace prt;
 using namespace prt::test;
 
-bool tools_required() {
-  const char* v = std::getenv("PRT_REQUIRE_TOOLS");
-  return v && *v && std::string(v) != "0";
-}
-
 #define SKIP_WITHOUT_TOOL(why)                                                   \
   do {                                                                           \
     if (tools_required()) GTEST_FAIL() << "PRT_REQUIRE_TOOLS is set: " << (why); \

@@ -105,7 +105,7 @@ Transfer read_input(const std::string& path) {
   return std::move(*t);
 }
 
-std::string bytes_text(double b) { return b >= 1e6 ? fmt::format("{:.2f} MB", b / 1e6) : fmt::format("{:.1f} KB", b / 1e3); }
+std::string size_text(double b) { return b >= 1e6 ? fmt::format("{:.2f} MB", b / 1e6) : fmt::format("{:.1f} KB", b / 1e3); }
 
 // --measure: a compressed file's error against IN, over the distribution.
 int run_measure(const CompressArgs& a) {
@@ -184,8 +184,8 @@ int run_compress(CompressArgs& a) {
     if (!explanation.empty()) fmt::print(stderr, "{}\n", explanation);
     fmt::print(stderr,
                "compress: {:.1f} s; rows {} -> {} ({:.1f}x fewer bytes{}); file {} -> {}\n", seconds,
-               bytes_text(double(rows)), bytes_text(double(packed)), packed ? double(rows) / double(packed) : 0.0,
-               t.direct.empty() ? "" : ", the direct part dropped", bytes_text(before), bytes_text(after));
+               size_text(double(rows)), size_text(double(packed)), packed ? double(rows) / double(packed) : 0.0,
+               t.direct.empty() ? "" : ", the direct part dropped", size_text(before), size_text(after));
     if (stats)
       fmt::print(stderr, "relit error over {}: mean {:.3f}%, p95 {:.3f}%, max {:.3f}% over {} samples; transfer-space "
                  "bound (no lighting exceeds it) {:.3f}%\n",

@@ -60,7 +60,7 @@ int run_at(ReferenceArgs& a) {
   if (a.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = load_scene_or_mesh(a.mesh, a.mesh_opt);
+  const prt::Scene scene = load_scene_or_mesh(a.mesh, a.mesh_opt);
   const bool override_albedo = a.albedo_opt->count() > 0 || scene.materials.empty();
   const glm::vec3 albedo = a.opt.albedo;
   const QueryPoints q = read_points_csv(a.at);
@@ -105,7 +105,7 @@ int run_lightmap(ReferenceArgs& a) {
   if (a.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(a.mesh, a.mesh_opt);
+  const prt::Scene scene = load_scene(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(scene));
   const EnvMap map = load_envmap(a.env);
   require_finite(map);
