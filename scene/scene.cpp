@@ -9,6 +9,7 @@
 #include <prt/scene.h>
 
 #include <prt/error.h>
+#include <prt/lights.h>
 #include <prt/hash.h>
 #include <prt/io.h>
 
@@ -325,6 +326,37 @@ std::vector<std::uint32_t> read_indices(const tg::Model& model, int index, const
   return out;
 }
 
+// The KHR_lights_punctual light a node references ({"light": N}), placed by
+// the node's world transform: at its origin, shining along its -Z.
+Light gltf_light(const tg::Model& model, const tg::Node& node, const tg::Value& ext, const glm::dmat4& world,
+                 const std::string& path) {
+  const std::string where = fmt::format("{}: node {}", path, node.name.empty() ? std::string("(unnamed)") : node.name);
+  if (!ext.IsObject() || !ext.Has("light") || !ext.Get("light").IsNumber())
+    throw Error(where + ": KHR_lights_punctual needs {\"light\": index}");
+  const int li = ext.Get("light").GetNumberAsInt();
+  if (li < 0 || std::size_t(li) >= model.lights.size())
+    throw Error(fmt::format("{}: light {} does not exist ({} lights in KHR_lights_punctual)", where, li, model.lights.size()));
+  const tg::Light& gl = model.lights[std::size_t(li)];
+  Light l;
+  if (gl.type == "point") l.type = LightType::Point;
+  else if (gl.type == "spot") l.type = LightType::Spot;
+  else if (gl.type == "directional") l.type = LightType::Directional;
+  else throw Error(fmt::format("{}: light {} has type \"{}\", not point, spot or directional", where, li, gl.type));
+  l.name = !gl.name.empty() ? gl.name : fmt::format("light {}", li);
+  if (gl.color.size() == 3) l.color = {gl.color[0], gl.color[1], gl.color[2]};
+  else if (!gl.color.empty()) throw Error(fmt::format("{}: light {}: color must have 3 numbers", where, li));
+  l.intensity = gl.intensity;
+  if (gl.range > 0 && l.type != LightType::Directional) l.range = gl.range;  // tinygltf: 0 for none (infinite)
+  if (l.type == LightType::Spot) {
+    l.inner_cone = gl.spot.innerConeAngle;
+    l.outer_cone = gl.spot.outerConeAngle;
+  }
+  l.position = glm::dvec3(world * glm::dvec4(0.0, 0.0, 0.0, 1.0));
+  l.direction = glm::dmat3(world) * glm::dvec3(0.0, 0.0, -1.0);
+  check_light(l, where);
+  return l;
+}
+
 Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options) {
   tg::Model model;
   tg::TinyGLTF loader;
@@ -370,6 +402,7 @@ Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options
 
   Builder b;
   std::size_t skipped = 0;
+  std::vector<Light> lights;
   const std::function<void(int, const glm::dmat4&, int)> visit = [&](int ni, const glm::dmat4& parent, int depth) {
     if (ni < 0 || std::size_t(ni) >= model.nodes.size()) throw Error(fmt::format("{}: node {} does not exist", path, ni));
     PRT_CHECK(depth <= int(detail::kMaxNodeDepth));  // check_gltf refuses deeper trees and cycles
@@ -440,6 +473,8 @@ Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options
         b.objects.push_back(std::move(o));
       }
     }
+    if (const auto ext = node.extensions.find("KHR_lights_punctual"); ext != node.extensions.end())
+      lights.push_back(gltf_light(model, node, ext->second, world, path));
     for (int c : node.children) visit(c, world, depth + 1);
   };
   const int si = model.defaultScene >= 0 ? model.defaultScene : 0;
@@ -455,7 +490,9 @@ Scene load_gltf(const std::string& path, bool binary, const MeshOptions& options
   }
   if (b.triangles.empty() && skipped)
     throw Error(fmt::format("{}: no triangles (only {} point, line or strip primitives)", path, skipped));
-  return finish_scene(std::move(b), std::move(materials), std::move(textures), path, options);
+  Scene scene = finish_scene(std::move(b), std::move(materials), std::move(textures), path, options);
+  scene.lights = std::move(lights);
+  return scene;
 }
 
 // ---- OBJ --------------------------------------------------------------------

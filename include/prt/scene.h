@@ -9,6 +9,7 @@
 // (one UV set) and an MTL file's Kd / map_Kd.
 #pragma once
 
+#include <prt/lights.h>
 #include <prt/mesh.h>
 
 #include <glm/vec2.hpp>
@@ -66,6 +67,10 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::vector<std::uint32_t> triangle_object;   // per triangle: its object
+  // glTF KHR_lights_punctual lights on the scene's nodes, placed by their
+  // node's world transform (position: the node's origin; direction: its -Z);
+  // none for OBJ and the other mesh formats (prt/lights.h, docs/LIGHTS.md).
+  std::vector<Light> lights;
 
   // XXH3-64 of the mesh's positions and triangles (Mesh::hash) and every UV
   // set: what a lightmap transfer records to refuse another scene.
