@@ -8,6 +8,7 @@
 #include <prt/glossy.h>
 #include <prt/precompute.h>
 
+#include "light_visibility.h"
 #include "progress_ticker.h"
 #include "random.h"
 #include "ray_scene.h"
@@ -159,6 +160,7 @@ struct Integrator {
   bool colors;
   double offset;
   const std::function<glm::vec3(std::uint32_t, float, float)>* hit_albedo = nullptr;  // a scene's materials
+  std::span<const Light> lights;
 
   glm::vec3 origin(const glm::dvec3& p, const glm::dvec3& n) const { return glm::vec3(p + offset * n); }
 
@@ -169,6 +171,8 @@ struct Integrator {
     glm::dvec3 E(0.0);
     const glm::vec3 o = origin(p, n);
     const float tnear = float(offset);
+    // The lights: next-event estimation, exact (no random numbers drawn).
+    for (const Light& l : lights) E += detail::light_irradiance(l, p, n, scene, offset);
     // Technique 1: the map's distribution; counts only light from the map.
     if (env.can_sample()) {
       std::size_t pixel = 0;
@@ -210,6 +214,11 @@ struct Integrator {
     glm::dvec3 G(0.0);
     const glm::vec3 o = origin(p, n);
     const float tnear = float(offset);
+    for (const Light& l : lights) {
+      glm::dvec3 to_light;
+      const glm::dvec3 e = detail::light_irradiance(l, p, n, scene, offset, &to_light);
+      if (e.x > 0 || e.y > 0 || e.z > 0) G += e / glm::dot(n, to_light) * lobe.pdf(to_light);  // E_l phi_e(r.l) V
+    }
     if (env.can_sample()) {
       std::size_t pixel = 0;
       const glm::dvec3 w = env.sample(rng, pixel);
@@ -300,6 +309,10 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o) {
     if (!(o.specular >= 0 && o.specular <= 1))
       throw Error(fmt::format("reference: the specular strength must be 0 to 1, got {:g}", o.specular));
   }
+  for (std::size_t i = 0; i < o.lights.size(); ++i) {
+    Light copy = o.lights[i];
+    check_light(copy, fmt::format("reference: light {}", i));
+  }
   if (o.vertex_colors && !mesh.colors.empty() && mesh.colors.size() != mesh.vertex_count())
     throw Error("reference: " + mesh.source + " has colours for some vertices only");
 }
@@ -337,6 +350,8 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
   if (mode == TransferMode::Interreflected && options.bounces == 0 && !options.glossy) mode = TransferMode::Shadowed;
 
   const EnvLight env(map, options.rotation);
+  std::vector<Light> lights = options.lights;
+  for (Light& l : lights) check_light(l, "reference");  // normalises directions
   std::optional<detail::RayScene> scene;
   if (mode != TransferMode::Unshadowed) scene.emplace(mesh);
   const bool colors = options.vertex_colors && !mesh.colors.empty();
@@ -348,7 +363,8 @@ ReferenceResult render_reference_impl(const Mesh& mesh, const EnvMap& map, const
                          glm::dvec3(options.albedo),
                          colors,
                          options.offset > 0 ? options.offset : detail::default_ray_offset(mesh),
-                         points ? points->hit_albedo : nullptr};
+                         points ? points->hit_albedo : nullptr,
+                         lights};
 
   detail::ProgressTicker ticker(progress, n, "reference");
   ticker.start();

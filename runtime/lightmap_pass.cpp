@@ -138,7 +138,7 @@ GLuint LightmapPass::program(int pass, int coeffs) {
   return programs_[key] = gl::link_compute(shaders::lightmap_comp_glsl, "lightmap relight", defines);
 }
 
-void LightmapPass::relight(int band_limit, bool direct) {
+void LightmapPass::relight(int band_limit, bool direct, const std::function<void(GLuint radiance)>& add) {
   const auto dispatch = [&](std::size_t count) {
     glUniform1ui(0, GLuint(count));
     glUniform1ui(1, GLuint(width_));
@@ -153,6 +153,7 @@ void LightmapPass::relight(int band_limit, bool direct) {
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
   dispatch(texels_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  if (add) add(radiance_);
   glUseProgram(program(1, 0));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, writes_buffer_);
@@ -180,6 +181,13 @@ void LightmapPass::draw(const glm::mat4& view_proj, bool detail) {
                    reinterpret_cast<const void*>(std::uintptr_t(b.first) * sizeof(std::uint32_t)));
   }
   gl::check_gl("drawing the lightmapped scene");
+}
+
+void LightmapPass::draw_geometry() const {
+  glBindVertexArray(vao_);
+  for (const Batch& b : batches_)
+    glDrawElements(GL_TRIANGLES, b.count, GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(std::uintptr_t(b.first) * sizeof(std::uint32_t)));
 }
 
 std::vector<glm::vec3> LightmapPass::radiance() const {

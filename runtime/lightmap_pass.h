@@ -14,6 +14,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstddef>
+#include <functional>
 #include <map>
 #include <vector>
 
@@ -38,7 +39,12 @@ class LightmapPass {
   // Relights the covered texels (the direct part with `direct`) with the
   // lighting block at uniform binding 1 (its first band_limit^2 vec4s),
   // and writes the lightmap image.
-  void relight(int band_limit, bool direct);
+  // `add` (when set) adds to the covered texels' radiance (a vec4 buffer)
+  // before the image is written: the lights' direct light.
+  void relight(int band_limit, bool direct, const std::function<void(GLuint radiance)>& add = {});
+  // Draws every triangle with the bound program, positions at attribute 0
+  // (the lights' shadow maps).
+  void draw_geometry() const;
   // Draws the scene (depth test on) into the bound framebuffer; `detail`:
   // the materials' albedo per fragment instead of per texel.
   void draw(const glm::mat4& view_proj, bool detail);

@@ -161,6 +161,9 @@ void Renderer::Impl::resize(int w, int h) {
 
 void Renderer::Impl::delete_mesh_objects() {
   lightmap.reset();
+  glDeleteBuffers(3, light_points.data());
+  light_points = {};
+  light_point_count = 0;
   const GLuint buffers[] = {position_buffer, index_buffer, transfer.buffer, direct.buffer,
                             glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
                             ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
@@ -392,6 +395,7 @@ void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_c
                        mesh.vertex_count(), mesh.triangles.size(), mesh_bytes));
   m.index_count = GLsizei(mesh.triangles.size() * 3);
   m.vertex_count = mesh.vertex_count();
+  m.set_bounds(mesh);
   m.shading = Shading::VertexColors;  // until set_vertex_colors, or a transfer (the overload above)
   m.have_lighting = false;
 }
@@ -407,6 +411,7 @@ void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
   clear_mesh();
   m.limits = gl::limits();
   m.lightmap = std::make_unique<detail::LightmapPass>(scene, texels, t, m.limits);
+  m.set_bounds(scene.mesh);
   m.lightmap_relit = false;
   m.bands = m.band_limit = t.transfer.bands;
   m.channels = t.transfer.channels;
@@ -449,6 +454,86 @@ void Renderer::clear_probe_object() {
   impl_->probe_lit = false;
 }
 void Renderer::set_lightmap_relight(bool on) { impl_->lightmap_relight = on; }
+
+void Renderer::Impl::set_bounds(const Mesh& mesh) {
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (const glm::vec3& p : mesh.positions) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+  bounds_centre = mesh.positions.empty() ? glm::dvec3(0.0) : 0.5 * (lo + hi);
+  bounds_radius = mesh.positions.empty() ? 1.0 : std::max(0.5 * glm::length(hi - lo), 1e-30);
+  if (lights) lights->set_lights(light_list, bounds_centre, bounds_radius);
+}
+
+void Renderer::set_lights(std::span<const Light> lights) {
+  Impl& m = *impl_;
+  m.make_current();
+  if (!lights.empty() && m.zh)
+    throw Error("lights: a zonal-harmonic (deforming) mesh is not lit by lights on the GPU yet (its pose moves the "
+                "occluders every frame); prt relight lights it on the CPU");
+  m.light_list.assign(lights.begin(), lights.end());
+  if (m.light_list.empty()) {
+    m.lights.reset();
+    return;
+  }
+  if (!m.lights) {
+    m.lights = std::make_unique<detail::LightsPass>();
+    m.lights->set_size(m.shadow_size);
+  }
+  m.lights->set_lights(m.light_list, m.bounds_centre, m.bounds_radius);
+}
+
+void Renderer::set_light_points(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                                std::span<const glm::vec3> albedo) {
+  Impl& m = *impl_;
+  if (normals.size() != positions.size() || albedo.size() != positions.size())
+    throw Error(fmt::format("set_light_points: {} positions, {} normals, {} albedos (expected as many of each)",
+                            positions.size(), normals.size(), albedo.size()));
+  m.make_current();
+  glDeleteBuffers(3, m.light_points.data());
+  m.light_points[0] = make_buffer(positions.data(), positions.size() * sizeof(glm::vec3));
+  m.light_points[1] = make_buffer(normals.data(), normals.size() * sizeof(glm::vec3));
+  m.light_points[2] = make_buffer(albedo.data(), albedo.size() * sizeof(glm::vec3));
+  m.light_point_count = positions.size();
+}
+
+void Renderer::set_shadow_map_size(int size) {
+  Impl& m = *impl_;
+  m.make_current();
+  if (m.lights) m.lights->set_size(size);
+  else if (size < 16 || size > kMaxShadowMapSize)
+    throw Error(fmt::format("shadow map size must be 16 to {}, got {}", kMaxShadowMapSize, size));
+  m.shadow_size = size;
+}
+
+int Renderer::shadow_maps_drawn() const { return impl_->lights ? impl_->lights->maps_drawn() : 0; }
+
+void Renderer::Impl::apply_lights(GLuint radiance) {
+  if (!lights || lights->empty()) return;
+  detail::LightsPass::Points pts;
+  std::function<void()> occluders;
+  if (lightmap) {
+    if (light_point_count != lightmap->texels())
+      throw Error(fmt::format("lights on a lightmap need its {} texels' points (set_light_points; {} given)",
+                              lightmap->texels(), light_point_count));
+    pts = {light_points[0], light_points[1], light_points[2], glm::vec3(1.0f), light_point_count};
+    occluders = [this] { lightmap->draw_geometry(); };
+  } else {
+    pts = {position_buffer, normal_buffer, albedo_buffer, albedo, vertex_count};
+    occluders = [this] {
+      glBindVertexArray(vao);
+      glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+    };
+  }
+  GLint viewport[4];
+  GLint framebuffer = 0;
+  glGetIntegerv(GL_VIEWPORT, viewport);
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
+  lights->apply(occluders, pts, radiance, std::max<std::uint64_t>(limits.work_groups, 1));
+  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(framebuffer));
+  glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+}
 
 std::vector<glm::vec3> Renderer::lightmap_radiance() const {
   const Impl& m = *impl_;
@@ -579,6 +664,7 @@ std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
   PRT_CHECK(m.shading == Shading::Transfer || m.shading == Shading::Direct || m.shading == Shading::Unshadowed ||
             m.shading == Shading::Glossy);
   const GLuint buffer = m.zh ? m.zh_relight() : m.relight(eye);
+  if (!m.zh) m.apply_lights(buffer);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   std::vector<float> rgba(m.vertex_count * 4);
   glGetNamedBufferSubData(buffer, 0, GLsizeiptr(rgba.size() * sizeof(float)), rgba.data());
@@ -690,7 +776,8 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.light_buffer);
-    if (m.lightmap_relight || !m.lightmap_relit) m.lightmap->relight(m.band_limit, m.shading == Shading::Direct);
+    if (m.lightmap_relight || !m.lightmap_relit)
+      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, [&](GLuint radiance) { m.apply_lights(radiance); });
     m.lightmap_relit = true;
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     m.lightmap->draw(glm::mat4(proj * view), m.lightmap_detail);
@@ -722,6 +809,10 @@ void Renderer::Impl::draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye
   const GLuint zh_radiance = zh ? zh_relight() : 0;
   if (mode == 0) {  // a transfer array dotted with the lighting, then drawn as vertex colours
     data = zh ? zh_radiance : relight(eye);
+    if (!zh) {
+      apply_lights(data);
+      glEnable(GL_DEPTH_TEST);
+    }
     stride = 4 * sizeof(float);
     mode = attribute_mode(Shading::VertexColors);
   } else {

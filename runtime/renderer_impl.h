@@ -16,6 +16,7 @@
 #include "egl_context.h"
 #include "gl_util.h"
 #include "lightmap_pass.h"
+#include "lights_pass.h"
 #include "probe_pass.h"
 
 #include <glm/mat4x4.hpp>
@@ -176,6 +177,19 @@ struct Renderer::Impl {
   std::size_t vertex_count = 0;
   // A scene and its lightmap (set_scene): drawn by the lightmap pass instead of the mesh.
   std::unique_ptr<detail::LightmapPass> lightmap;
+  // Lights inside the scene (set_lights), their points for a lightmap
+  // (set_light_points: positions, normals, albedo as float triples), and the
+  // shaded geometry's bounding sphere (fits the directional lights' maps).
+  std::unique_ptr<detail::LightsPass> lights;
+  std::vector<Light> light_list;
+  int shadow_size = kDefaultShadowMapSize;
+  std::array<GLuint, 3> light_points{};
+  std::size_t light_point_count = 0;
+  glm::dvec3 bounds_centre{0.0};
+  double bounds_radius = 1.0;
+  void set_bounds(const Mesh& mesh);
+  // Adds the lights' direct light to `radiance` (a vec4 per shaded point).
+  void apply_lights(GLuint radiance);
   bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;
   // An object lit by a probe volume (set_probe_object), drawn after the scene.
   std::unique_ptr<detail::ProbePass> probe_object;

@@ -16,4 +16,7 @@ extern const char* const lightmap_frag_glsl;
 extern const char* const probe_object_comp_glsl;
 extern const char* const sh_bands_glsl;  // the lighting block before sh_glsl.h's sh_band_sums
 extern const char* const zh_comp_glsl;
+extern const char* const shadow_vert_glsl;
+extern const char* const shadow_frag_glsl;
+extern const char* const lights_comp_glsl;
 }  // namespace prt::shaders

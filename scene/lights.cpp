@@ -165,4 +165,14 @@ std::vector<Light> read_lights_json(const std::string& path) {
   return lights;
 }
 
+Light sun_light(const Sun& sun, const glm::dmat3& rotation) {
+  Light l;
+  l.type = LightType::Directional;
+  l.name = "sun";
+  l.intensity = std::max({sun.irradiance.x, sun.irradiance.y, sun.irradiance.z, 0.0});
+  l.color = l.intensity > 0 ? sun.irradiance / l.intensity : glm::dvec3(1.0);
+  l.direction = -glm::normalize(rotation * sun.direction);
+  return l;
+}
+
 }  // namespace prt

@@ -8,6 +8,7 @@
 #include <prt/io.h>
 #include <prt/rotation.h>
 #include <prt/sh.h>
+#include <prt/sun.h>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -74,8 +75,6 @@ glm::vec3 cube_bilinear(const std::vector<glm::vec3>& cube, int n, const glm::dv
   const auto at = [&](int u, int v) { return f[std::size_t(v) * std::size_t(n) + std::size_t(u)]; };
   return (1 - b) * ((1 - a) * at(u0, v0) + a * at(u1, v0)) + b * ((1 - a) * at(u0, v1) + a * at(u1, v1));
 }
-
-float luminance(const glm::vec3& c) { return 0.2126f * std::abs(c.x) + 0.7152f * std::abs(c.y) + 0.0722f * std::abs(c.z); }
 
 // One probe's SH (before the bounce): its nodes' sums (or the whole minus
 // them) plus its partial texels. Inlined into relight_range's clones (AVX2
@@ -258,41 +257,24 @@ MapBlocks map_blocks(const EnvMap& map, int r) {
   return b;
 }
 
-// The bright pixels: radiance over kProbeBrightRatio times the map's mean
-// and kProbeLocalRatio times the mean around them (8 lookups 4 texels
-// away: a sun up to a few degrees wide, not the inside of a bright window),
-// the brightest 1/64 of the pixels at most, in increasing order. They are
-// splatted exactly each frame; the rest is resampled.
+// The bright pixels (prt/sun.h, bright_cells): radiance over
+// kProbeBrightRatio times the map's mean and kProbeLocalRatio times the
+// mean around them (8 lookups 4 texels away: a sun up to a few degrees
+// wide, not the inside of a bright window), the brightest 1/64 of the
+// pixels at most, in increasing order. They are splatted exactly each
+// frame; the rest is resampled.
 std::vector<std::uint32_t> bright_blocks(const MapBlocks& blocks, int r) {
-  const std::vector<glm::vec3>& radiance = blocks.radiance;
-  const auto& block_of = blocks.block_of;
-  std::vector<std::uint32_t> bright;
+  std::vector<float> luminance(blocks.radiance.size());
+  for (std::size_t i = 0; i < luminance.size(); ++i) luminance[i] = abs_luminance(blocks.radiance[i]);
   double power = 0;
-  for (const glm::vec3& p : blocks.power) power += double(luminance(p));
-  const float threshold = float(kProbeBrightRatio * power / (4.0 * std::numbers::pi));
-  const double step = 8.0 / r;  // about 4 texels at a face's centre, in radians
-  const auto local_mean = [&](const glm::dvec3& d) {
-    const glm::dvec3 a = std::abs(d.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
-    const glm::dvec3 t1 = glm::normalize(glm::cross(d, a)), t2 = glm::cross(d, t1);
-    double sum = 0;
-    for (int q = 0; q < 8; ++q) {
-      const double phi = q * std::numbers::pi / 4;
-      sum += double(luminance(radiance[block_of(glm::normalize(d + step * (std::cos(phi) * t1 + std::sin(phi) * t2)))]));
-    }
-    return sum / 8;
-  };
-  for (std::size_t i = 0; i < blocks.power.size(); ++i) {
-    const float l = luminance(radiance[i]);
-    if (l > threshold && double(l) > kProbeLocalRatio * local_mean(glm::dvec3(blocks.dirs[i]))) bright.push_back(std::uint32_t(i));
-  }
-  const std::size_t cap = blocks.power.size() / 64;
-  if (bright.size() > cap) {
-    std::nth_element(bright.begin(), bright.begin() + std::ptrdiff_t(cap), bright.end(),
-                     [&](std::uint32_t a, std::uint32_t b) { return luminance(radiance[a]) > luminance(radiance[b]); });
-    bright.resize(cap);
-    std::sort(bright.begin(), bright.end());
-  }
-  return bright;
+  for (const glm::vec3& p : blocks.power) power += double(abs_luminance(p));
+  SphereCells cells;
+  cells.luminance = luminance;
+  cells.power = power;
+  cells.direction = [&](std::size_t i) { return glm::dvec3(blocks.dirs[i]); };
+  cells.cell_of = blocks.block_of;
+  cells.ring_step = 8.0 / r;  // about 4 texels at a face's centre, in radians
+  return bright_cells(cells);
 }
 
 }  // namespace

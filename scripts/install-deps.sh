@@ -2,7 +2,9 @@
 # Installs prt's build and runtime dependencies from Debian packages.
 # Idempotent: when every package is already installed it prints nothing and
 # touches nothing (no apt-get update). Needs root or sudo for the install step.
-# Usage: scripts/install-deps.sh [--fuzz]   (--fuzz: also clang and libFuzzer, for scripts/fuzz.sh)
+# Usage: scripts/install-deps.sh [--fuzz | --with-blender]
+#   --fuzz: also clang and libFuzzer, for scripts/fuzz.sh
+#   --with-blender: also Blender (Cycles), for scripts/lights_vs_blender.sh
 set -euo pipefail
 
 PACKAGES=(
@@ -34,10 +36,15 @@ PACKAGES=(
 # libclang-rt-14-dev for libFuzzer's runtime (libclang_rt.fuzzer, beside the
 # sanitizers'); Debian 12's clang is clang 14.
 FUZZ_PACKAGES=(clang libclang-rt-14-dev)
+# scripts/lights_vs_blender.sh only, an independent renderer to check prt
+# reference's lights against (docs/LIGHTS.md): Blender 3.4 with Cycles, a
+# large package with many libraries; the build, the tests and CI never use it.
+BLENDER_PACKAGES=(blender)
 case "${1:-}" in
   "") ;;
   --fuzz) PACKAGES+=("${FUZZ_PACKAGES[@]}") ;;
-  *) echo "usage: $0 [--fuzz]" >&2; exit 2 ;;
+  --with-blender) PACKAGES+=("${BLENDER_PACKAGES[@]}") ;;
+  *) echo "usage: $0 [--fuzz | --with-blender]" >&2; exit 2 ;;
 esac
 
 # Debian's nodejs ships npm as a package of its own; NodeSource's nodejs

@@ -13,6 +13,9 @@
 // angles, squared. A light is a point: shadows are sharp.
 #pragma once
 
+#include <prt/sun.h>
+
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <optional>
@@ -73,5 +76,11 @@ void check_light(Light& light, const std::string& where);
 // keys are refused (a misspelt key is not silently ignored). Throws
 // prt::Error naming the file, the light's index and the problem.
 std::vector<Light> read_lights_json(const std::string& path);
+
+// --sun auto's light: a directional light named "sun" of the sun's
+// irradiance (intensity its largest channel, color the irradiance over it),
+// travelling from the sun's direction turned by `rotation` (the lighting's:
+// light from d arrives from R d), shadows from the disc's centre.
+Light sun_light(const Sun& sun, const glm::dmat3& rotation = glm::dmat3(1.0));
 
 }  // namespace prt

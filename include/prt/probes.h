@@ -39,6 +39,7 @@
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
+#include <prt/sun.h>  // kProbeBrightRatio, kProbeLocalRatio
 #include <prt/transfer.h>
 
 #include <glm/mat3x3.hpp>
@@ -171,7 +172,8 @@ ProbeTransfer read_probe_transfer(const std::string& path);
 // map (downsampled once by solid-angle-weighted sums, to about 16 pixels
 // across a visibility texel) into its bright pixels (radiance over
 // kProbeBrightRatio times the map's mean and kProbeLocalRatio times the
-// mean 4 texels around them, at most 1/64 of them, the brightest)
+// mean 4 texels around them, at most 1/64 of them, the brightest:
+// prt/sun.h's bright_cells)
 // and the rest, resampled into a smooth cube of face 2r.
 // set_rotation() rebuilds the per-frame sums: each finest texel of the
 // rotated visibility cube gets the smooth cube sampled (bilinear) at its
@@ -179,7 +181,6 @@ ProbeTransfer read_probe_transfer(const std::string& path);
 // splatted exactly into its texel; then the pyramid of each face and the
 // rotated bounce SH. relight() gives the probes' SH (n^2 RGB each), Sky
 // probes the whole map's, Invalid ones zero.
-inline constexpr double kProbeBrightRatio = 32.0, kProbeLocalRatio = 4.0;
 class ProbeRelighter {
  public:
   // Throws prt::Error on a probe volume that is inconsistent or a map with

@@ -54,11 +54,21 @@
 // vertex normals (the geometric normal where that vanishes) and the albedo is
 // the interpolated vertex colour (vertex_colors) or `albedo`.
 //
+// Lights (ReferenceOptions::lights; prt/lights.h, docs/LIGHTS.md): Li also
+// holds each light's delta of radiance, whose integral against the cosine is
+// E_l(p) max(n.l, 0) V(p, l). Estimated by next-event estimation at every
+// vertex of every path (exactly, with its shadow ray: points cannot be hit by
+// rays, so nothing is counted twice), so in interreflected mode the lights'
+// light bounces as the map's does; glossy: the lobe's E_l phi_e(r.l) V. The
+// shadow rays are those of prt::DirectLight (prt/direct_light.h): the
+// reference's direct light from lights is that, without noise.
+//
 // Deterministic: each vertex draws from its own generator seeded by
 // (seed, vertex index), so results are bit-identical for any thread count.
 #pragma once
 
 #include <prt/envmap.h>
+#include <prt/lights.h>
 #include <prt/mesh.h>
 #include <prt/progress.h>
 #include <prt/transfer.h>
@@ -88,6 +98,9 @@ struct ReferenceOptions {
   glm::dvec3 eye{0.0, 0.0, 3.0};
   double gloss = 16.0;           // 0 to glossy::kMaxGloss
   double specular = 0.5;         // 0 to 1
+  // Lights inside the scene, in world space (not turned by `rotation`, which
+  // turns the map's light); each checked by check_light.
+  std::vector<Light> lights;
 };
 
 inline constexpr int kMaxReferenceBounces = 64;

@@ -44,6 +44,7 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/lightmap.h>
+#include <prt/lights.h>
 #include <prt/probes.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
@@ -67,6 +68,10 @@ namespace prt {
 
 // The most bands the renderer's lighting block holds (16^2 = 256 vec4s).
 inline constexpr int kMaxRenderBands = 16;
+// Shadow maps of lights (Renderer::set_lights): texels a side. 1024: within
+// 2% relative RMS of traced shadows on the bundled room (docs/LIGHTS.md "On
+// the GPU"); 8192: a 256 MiB cube of 32-bit distances.
+inline constexpr int kDefaultShadowMapSize = 1024, kMaxShadowMapSize = 8192;
 // The most bands of a glossy transfer the renderer takes: prt::kMaxGlossyBands
 // (prt/precompute.h, which the runtime does not include; tests/test_render_glossy.cpp
 // pins the two equal). The glossy pass keeps bands^2 basis values per invocation.
@@ -332,6 +337,29 @@ class Renderer {
   // The covered texels' radiance of the last frame drawn (set_scene only),
   // in texel order: relight_lightmap's up to float rounding.
   std::vector<glm::vec3> lightmap_radiance() const;
+  // Lights inside the scene (prt/lights.h; docs/LIGHTS.md "On the GPU"):
+  // every frame, each light's direct light albedo / pi x E_l max(n.l, 0) V is
+  // added at the shaded points, as prt relight adds it: the mesh's vertices
+  // (the Transfer, Direct and Glossy shadings of an SH or compressed
+  // transfer; a glossy lobe gets no highlight from lights), a lightmap's
+  // texels at the points of set_light_points. V comes from shadow maps: a
+  // cube per point or spot light, a square fitted to the mesh's bounding
+  // sphere per directional light, each redrawn only when its light moves.
+  // An empty span removes them. Throws prt::Error for a light check_light
+  // refuses, or with lights on a kind the pass does not light (a
+  // zonal-harmonic or wavelet mesh).
+  void set_lights(std::span<const Light> lights);
+  // A lightmap's points for the lights, in texel order: the texels' sample
+  // points moved out of geometry as prt precompute moved them
+  // (prt::move_texels_out_of_geometry: ray tracing, the caller's), their
+  // normals and albedo. Needed before a lightmap's frame with lights.
+  void set_light_points(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                        std::span<const glm::vec3> albedo);
+  // Shadow maps' size, texels a side: 16 to kMaxShadowMapSize
+  // (kDefaultShadowMapSize until set).
+  void set_shadow_map_size(int size);
+  // Shadow maps the last frame redrew (a cube counts once): what moved.
+  int shadow_maps_drawn() const;
   // An object lit by a probe volume (prt/probes.h; docs/PROBES.md
   // "Rendering"), drawn after the scene or mesh: each frame, per vertex on
   // the GPU, E/pi from the relit probes interpolated at its world position
@@ -411,7 +439,8 @@ class Renderer {
   // Runs the relighting pass of the current shading (Transfer, Direct,
   // Unshadowed or Glossy) for eye point `eye` and reads back the per-vertex
   // radiance the mesh is drawn with: linear RGB, one per vertex, what
-  // prt::relight (relight_glossy at that eye) computes. For tests and tools.
+  // prt::relight (relight_glossy at that eye) computes, plus the lights'
+  // direct light (set_lights). For tests and tools.
   // Contract (prt::InternalError): a transfer and lighting are uploaded and
   // the shading is one of those four. In Shading::Clusters: the cluster
   // colours the mesh is drawn with (no lighting needed).

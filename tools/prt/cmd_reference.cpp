@@ -1,6 +1,7 @@
 // prt reference: Monte Carlo ground truth of per-vertex outgoing radiance
 // (no spherical harmonics), written as a vertex CSV with standard errors.
 #include "commands.h"
+#include "light_options.h"
 #include "progress_bar.h"
 
 #include <prt/vertex_csv.h>
@@ -41,7 +42,23 @@ struct ReferenceArgs {
   int uv = -1;
   const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr;
   std::string at;  // --at POINTS.csv: E(p, n)/pi at query points (what a probe volume gives there)
+  LightArgs light;  // --lights, --sun (docs/LIGHTS.md)
 };
+
+// ENV (or `none`: black, the lights alone), a lat-long map; with --sun auto
+// its sun taken out into the lights. Adds the scene's and --lights files'
+// lights to a.opt.lights (`scene_lights`: the loaded scene's; null: read
+// from MESH).
+EnvMap reference_map(ReferenceArgs& a, const std::vector<Light>* scene_lights) {
+  EnvMap map = a.env == "none" ? make_latlong(2, 1, std::vector<float>(6, 0.0f), "none (no environment)")
+                               : load_envmap(a.env);
+  require_finite(map);
+  if (map.is_cube()) throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
+  a.opt.lights = command_lights(a.light, a.mesh, scene_lights);
+  if (auto sun = take_sun(a.light, map, a.opt.rotation, a.quiet)) a.opt.lights.push_back(std::move(*sun));
+  if (!a.quiet && !a.opt.lights.empty()) fmt::print(stderr, "lit by {} beside the map\n", describe_lights(a.opt.lights));
+  return map;
+}
 
 // --at POINTS.csv: the radiance a white Lambertian surface at each point,
 // facing its normal, reflects: E(p, n)/pi by Monte Carlo from p itself
@@ -64,9 +81,7 @@ int run_at(ReferenceArgs& a) {
   const bool override_albedo = a.albedo_opt->count() > 0 || scene.materials.empty();
   const glm::vec3 albedo = a.opt.albedo;
   const QueryPoints q = read_points_csv(a.at);
-  const EnvMap map = load_envmap(a.env);
-  require_finite(map);
-  if (map.is_cube()) throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
+  const EnvMap map = reference_map(a, &scene.lights);
   std::vector<glm::vec3> positions(q.positions.size()), normals(q.normals.size()), white(q.positions.size(), glm::vec3(1.0f));
   for (std::size_t i = 0; i < positions.size(); ++i) {
     positions[i] = glm::vec3(q.positions[i]);
@@ -107,9 +122,7 @@ int run_lightmap(ReferenceArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const prt::Scene scene = load_scene(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(scene));
-  const EnvMap map = load_envmap(a.env);
-  require_finite(map);
-  if (map.is_cube()) throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
+  const EnvMap map = reference_map(a, &scene.lights);
   const bool override_albedo = a.albedo_opt->count() > 0;
   const glm::vec3 albedo = a.opt.albedo;
   const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
@@ -191,11 +204,8 @@ int run_reference(ReferenceArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
-  const EnvMap map = load_envmap(a.env);
-  require_finite(map);
+  const EnvMap map = reference_map(a, nullptr);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(map));
-  if (map.is_cube())
-    throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
   if (a.opt.vertex_colors && mesh.colors.empty())
     fmt::print(stderr, "warning: {} has no vertex colours; using --albedo {}\n", a.mesh, a.albedo);
 
@@ -244,11 +254,17 @@ Run add_reference(CLI::App& app) {
       "--material glossy --eye x,y,z adds rho_s x a Phong lobe of exponent --gloss about the eye's mirror direction\n"
       "(map and lobe sampling, MIS; docs/GLOSSY.md): the ground truth of prt relight --eye.\n"
       "--lightmap WxH: at the texels of prt precompute SCENE --lightmap WxH, as an RGBA EXR (A = 1 at covered texels).\n"
+      "Lights inside the scene (a glTF's KHR_lights_punctual, --lights FILE.json, --sun auto; docs/LIGHTS.md) are\n"
+      "added by next-event estimation at every path vertex: their shadows and, interreflected, their bounce.\n"
       "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv\n"
       "         prt reference models/room.gltf forest.exr --lightmap 128x128 --mode interreflected -o ref.exr\n"
-      "         prt reference models/room.gltf forest.exr --at points.csv -o ref.csv");
+      "         prt reference models/room.gltf forest.exr --at points.csv -o ref.csv\n"
+      "         prt reference models/room.gltf none --lights lights.json --lightmap 64x64 -o lights.exr");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->check(path_value())->required();
-  s->add_option("ENV", a->env, "Lat-long environment map (EXR, HDR, ...)")->check(path_value())->required();
+  s->add_option("ENV,--env", a->env,
+                "Lat-long environment map (EXR, HDR, ...); none: no light from afar (the lights alone: --lights)")
+      ->check(path_value())
+      ->required();
   s->add_option("-o,--output", a->output, "CSV file to write")->check(path_value())->required();
   add_shared(s, SharedOption::Mode, a->mode, "Light paths: unshadowed (no rays), shadowed, or interreflected");
   add_shared(s, SharedOption::Bounces, a->opt.bounces, "Diffuse bounces (interreflected mode)");
@@ -276,6 +292,7 @@ Run add_reference(CLI::App& app) {
   a->glossy_opts.push_back(add_shared(s, SharedOption::Specular, a->opt.specular, "Glossy: the lobe's strength"));
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position (as prt precompute --weld)");
   add_shared(s, SharedOption::Threads, a->threads, "Worker threads");
+  add_light_options(s, a->light);
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_reference(*a); };
 }

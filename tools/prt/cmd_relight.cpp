@@ -3,6 +3,7 @@
 #include "look.h"
 #include "progress_bar.h"
 #include "inputs.h"
+#include "light_options.h"
 
 #include <prt/vertex_csv.h>
 #include <prt/color.h>
@@ -25,6 +26,7 @@
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
 #include <prt/deform.h>
+#include <prt/direct_light.h>
 #include <prt/skin.h>
 
 #include <fmt/core.h>
@@ -64,10 +66,83 @@ struct RelightArgs {
   double time = 0;
   int animation = 0;
   const CLI::Option *time_opt = nullptr, *animation_opt = nullptr;
+  LightArgs light;  // --lights, --sun (docs/LIGHTS.md)
 };
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The lights SCENE is lit with beside ENV's PRT: the scene's and --lights
+// files', and with --sun auto the map's sun, taken out of `env` here and
+// turned by --rotate with the sky (the scene's lights stay where they are).
+// `sun_map` (when given and a sun is found): the sun's pixels alone, ENV
+// less the sky left in `env`, whose bounce an interreflected transfer can
+// still carry (sun_bounce).
+std::vector<Light> relight_lights(const RelightArgs& a, EnvMap& env, const double euler[3],
+                                  const std::vector<Light>* scene_lights = nullptr,
+                                  std::optional<EnvMap>* sun_map = nullptr) {
+  std::vector<Light> lights = command_lights(a.light, a.mesh, scene_lights);
+  std::optional<EnvMap> whole;
+  if (a.light.sun_auto() && sun_map) whole = env;
+  if (auto sun = take_sun(a.light, env, sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.quiet)) {
+    lights.push_back(std::move(*sun));
+    if (whole) {
+      for (std::size_t i = 0; i < whole->rgb.size(); ++i) whole->rgb[i] -= env.rgb[i];
+      *sun_map = std::move(whole);
+    }
+  }
+  if (!a.quiet && !lights.empty()) fmt::print(stderr, "lit by {} beside the map\n", describe_lights(lights));
+  return lights;
+}
+
+// The sun's bounce when --sun auto took it out of the map: an interreflected
+// transfer T keeps its direct part T_d, so the sun's light projected alone
+// (L_sun, windowed and turned as the sky) bounces through T - T_d while its
+// direct light is traced (add_lights). Other transfers have no bounce to
+// give: said once.
+template <typename T, typename Points>
+void add_sun_bounce(std::vector<glm::vec3>& rgb, const RelightArgs& a, const std::optional<EnvMap>& sun_map,
+                    const T& t, const Points& points, sh::Window window, const double euler[3]) {
+  if (!sun_map) return;
+  if (t.mode != TransferMode::Interreflected) return;  // shadowed: the sun has no bounce to carry
+  std::vector<glm::dvec3> sun = project(*sun_map, t.bands);
+  sh::apply_window(std::span<glm::dvec3>(sun), window, a.window_width > 0 ? a.window_width : t.bands);
+  if (!a.rotate.empty()) rotate_lighting(sun, t.bands, euler);
+  const std::vector<glm::vec3> all = relight(t, points, sun), direct = relight_direct(t, points, sun);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += all[i] - direct[i];
+}
+
+// Adds the lights' direct light (prt/direct_light.h: albedo/pi x irradiance,
+// each light's shadow ray traced against `occluders`) at the points to
+// `rgb`. Returns the milliseconds it took (0 without lights).
+double add_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
+                  std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                  std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe = std::nullopt) {
+  if (lights.empty()) return 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const DirectLight direct(occluders);
+  const std::vector<glm::vec3> d = direct.radiance(lights, positions, normals, albedo, lobe);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += d[i];
+  return ms_since(t0);
+}
+
+// The same at a lightmap's texels, at the sample points prt precompute
+// traced from (moved out of geometry as it moves them: prt/precompute.h).
+double add_texel_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
+                        LightmapTexels texels) {
+  if (lights.empty()) return 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  move_texels_out_of_geometry(occluders, texels);
+  return ms_since(t0) + add_lights(rgb, lights, occluders, texels.positions, texels.normals, texels.albedo);
+}
+
+// Every vertex's albedo as `albedo(v)` gives it.
+template <typename F>
+std::vector<glm::vec3> albedo_of(std::size_t n, F albedo) {
+  std::vector<glm::vec3> out(n);
+  for (std::size_t v = 0; v < n; ++v) out[v] = albedo(v);
+  return out;
 }
 
 // Writes the result through Outputs: all of it, or (failure, Ctrl-C)
@@ -128,6 +203,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   EnvMap env = load_envmap(a.env);
   require_finite(env);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(mesh), describe(env), describe_transfer(t));
+  const std::vector<Light> lights = relight_lights(a, env, euler);
 
   auto t0 = std::chrono::steady_clock::now();
   wavelet::FrameLighting lighting(env, t.cube_res);
@@ -140,6 +216,8 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
   const double relight_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
+  add_lights(rgb, lights, mesh, mesh.positions, mesh.normals,
+             albedo_of(rgb.size(), [&](std::size_t v) { return t.vertex_colors ? t.vertex_albedo[v] : t.albedo; }));
   const std::size_t written = rgb.size();
   if (const int rc = write_output(a, ext, mesh, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
@@ -182,6 +260,7 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   EnvMap env = load_envmap(a.env);
   require_finite(env);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(posed), describe(env), describe_transfer(z));
+  const std::vector<Light> lights = relight_lights(a, env, euler.data());
   auto t0 = std::chrono::steady_clock::now();
   PoseReport report;
   const Transfer t = posed_as_transfer(z, posed, &report);
@@ -211,6 +290,8 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
     for (double x : vertex_transfer(t, posed, v)) m = std::max(m, std::abs(x));
     return m;
   });
+  add_lights(rgb, lights, posed, posed.positions, posed.normals,
+             albedo_of(rgb.size(), [&](std::size_t v) { return vertex_albedo(t, posed, v); }));
   if (!a.quiet && report.no_frame > 0)
     fmt::print(stderr, "{} vertices have no frame in this pose (no normal: only zero-area triangles around them): "
                        "their transfer is zero\n", report.no_frame);
@@ -255,6 +336,7 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std
   EnvMap env = load_envmap(a.env);
   require_finite(env);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n{}", describe(scene), describe(env), describe_transfer(wl.transfer));
+  const std::vector<Light> lights = relight_lights(a, env, euler.data(), &scene.lights);
   const auto t0 = std::chrono::steady_clock::now();
   wavelet::FrameLighting lighting(env, wl.transfer.cube_res);
   lighting.update(sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.terms, selection);
@@ -262,6 +344,7 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std
   wavelet_relight(wl.transfer, lighting.coefficients().data(), lighting.terms(), rgb);
   const double ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(wl.transfer.vertex_scale[v]) * 32767.0; });
+  add_texel_lights(rgb, lights, scene.mesh, texels);
   Outputs out("relight");
   out.write([&] { write_lightmap_exr(a.output, wl.layout, rgb); });
   if (const int rc = out.commit(); rc != 0) return rc;
@@ -292,24 +375,30 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   EnvMap env = load_envmap(a.env);
   require_finite(env);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(scene), describe(env));
+  std::optional<EnvMap> sun_map;
+  const std::vector<Light> lights = relight_lights(a, env, euler.data(), &scene.lights, &sun_map);
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
   sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : lt.transfer.bands);
   if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
   const Mesh points = texel_points(texels);
-  const std::vector<glm::vec3> rgb = a.direct ? relight_direct(lt.transfer, points, light) : relight(lt.transfer, points, light);
+  std::vector<glm::vec3> rgb = a.direct ? relight_direct(lt.transfer, points, light) : relight(lt.transfer, points, light);
+  if (!a.direct) add_sun_bounce(rgb, a, sun_map, lt.transfer, points, window, euler.data());
   const double frame_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
     for (double x : vertex_transfer(lt.transfer, points, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
+  const double lights_ms = add_texel_lights(rgb, lights, scene.mesh, texels);
   Outputs out("relight");
   out.write([&] { write_lightmap_exr(a.output, lt.layout, rgb); });
   if (const int rc = out.commit(); rc != 0) return rc;
   if (!a.quiet)
-    fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels)\nwrote {} ({}x{} RGBA, {} covered texels)\n",
-               frame_ms, rgb.size(), a.output, lt.layout.width, lt.layout.height, lt.layout.texels.size());
+    fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels){}\nwrote {} ({}x{} RGBA, {} covered texels)\n",
+               frame_ms, rgb.size(),
+               lights.empty() ? std::string() : fmt::format("; lights' direct light {:.1f} ms", lights_ms), a.output,
+               lt.layout.width, lt.layout.height, lt.layout.texels.size());
   return 0;
 }
 
@@ -334,6 +423,7 @@ int run_probes(const RelightArgs& a, const std::string& ext, const std::array<do
   const QueryPoints q = read_points_csv(a.at);
   EnvMap env = load_envmap(a.env);
   require_finite(env);
+  const std::vector<Light> lights = relight_lights(a, env, euler.data(), &scene.lights);
   ProbeRelighter relighter(t, env);
   relighter.set_rotation(sh::rotation_from_euler(euler[0], euler[1], euler[2]));
   const double t_light = ms_since(t0);
@@ -364,6 +454,12 @@ int run_probes(const RelightArgs& a, const std::string& ext, const std::array<do
       for (int k = 0; k < nc; ++k) mix[std::size_t(k)] += w * sh[at * std::size_t(nc) + std::size_t(k)];
     }
     rgb[i] = glm::vec3(lambert_from_sh(mix, t.bands, q.normals[i]));
+  }
+  // The lights at the points themselves (a white surface facing the normal):
+  // traced there, not interpolated from the probes.
+  if (!lights.empty()) {
+    const std::vector<glm::vec3> pos(q.positions.begin(), q.positions.end()), nrm(q.normals.begin(), q.normals.end());
+    add_lights(rgb, lights, scene.mesh, pos, nrm, std::vector<glm::vec3>(pos.size(), glm::vec3(1.0f)));
   }
   Outputs out("relight");
   out.write([&] { write_vertex_csv(a.output, rgb, nullptr, CsvKey::Point); });
@@ -453,11 +549,11 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
     shading.diffuse = parse_diffuse(a.lobe.diffuse);
   }
 
-  const Scene scene = load_scene(a.mesh, std::move(loaded), a.transfer, a.env, Consumer::Relight, 0, "relight");
+  Scene scene = load_scene(a.mesh, std::move(loaded), a.transfer, a.env, Consumer::Relight, 0, "relight");
   const CompressedTransfer* c = scene.get<CompressedTransfer>();
   const Mesh& mesh = scene.mesh;
   const Transfer& t = c ? c->transfer : *scene.get<Transfer>();
-  const EnvMap& env = scene.env;
+  EnvMap& env = scene.env;
   if (a.direct) check_direct(t, a.transfer, "--direct");
   if (a.direct && c)
     throw Error(a.transfer + ": --direct: a compressed transfer keeps no direct part (prt compress drops it); relight "
@@ -468,6 +564,11 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
     fmt::print(stderr, "{} holds glossy matrices: give --eye x,y,z (and --gloss, --specular) for the view-dependent "
                        "part; writing the diffuse part only\n", a.transfer);
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(env));
+  std::optional<EnvMap> sun_map;
+  const std::vector<Light> lights = relight_lights(a, env, euler.data(), nullptr, c ? nullptr : &sun_map);
+  if (c && a.light.sun_auto() && t.mode == TransferMode::Interreflected && !a.quiet)
+    fmt::print(stderr, "--sun auto: {} is compressed and keeps no direct part: the sun's bounce is left out (its "
+                       "direct light is traced)\n", a.transfer);
 
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<glm::dvec3> light = project(env, t.bands);
@@ -479,6 +580,7 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
                                      : glossy   ? relight_glossy(t, mesh, light, shading)
                                      : a.direct ? relight_direct(t, mesh, light)
                                                 : relight(t, mesh, light);
+  if (!a.direct) add_sun_bounce(rgb, a, sun_map, t, mesh, window, euler.data());
   const double frame_ms = ms_since(t1);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
@@ -491,12 +593,20 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
     for (double x : vertex_transfer(c ? c->transfer : t, mesh, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
+  std::optional<GlossyLobe> lobe;
+  if (glossy) lobe = GlossyLobe{shading.eye, shading.gloss, shading.specular};
+  const double lights_ms = add_lights(rgb, lights, mesh, mesh.positions, mesh.normals, albedo_of(rgb.size(), [&](std::size_t v) {
+    // The diffuse albedo the transfer's relighting used (--diffuse replaces it for a glossy file).
+    return glossy && shading.diffuse.x >= 0 ? glm::vec3(shading.diffuse) : vertex_albedo(t, mesh, v);
+  }), lobe);
   const std::size_t written = rgb.size();
   if (const int rc = write_output(a, ext, mesh, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)
-    fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once)\n"
+    fmt::print(stderr, "relight: {:.3f} ms per frame (window, rotation and transfer; projection {:.1f} ms once){}\n"
                        "wrote {} ({} vertices)\n",
-               frame_ms, project_ms, a.output, written);
+               frame_ms, project_ms,
+               lights.empty() ? std::string() : fmt::format("; lights' direct light {:.1f} ms", lights_ms), a.output,
+               written);
   return 0;
 }
 
@@ -572,6 +682,7 @@ Run add_relight(CLI::App& app) {
                 "A probe volume (prt precompute --probes): the query points, a CSV with header x,y,z,nx,ny,nz; "
                 "writes point,r,g,b: E(p, n)/pi from the probes interpolated at p (docs/PROBES.md)")
       ->check(path_value());
+  add_light_options(s, a->light);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_relight(*a); };
 }

@@ -5,6 +5,7 @@
 #include "probe_object_options.h"
 #include "progress_bar.h"
 #include "inputs.h"
+#include "light_options.h"
 
 #include <prt/envmap.h>
 #include <prt/mesh.h>
@@ -277,6 +278,10 @@ int run_render(const RenderArgs& a) {
   if (!a.quiet)
     fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", j.scene.world ? describe(*j.scene.world) : describe(j.scene.mesh),
                describe(j.scene.env), renderer.device());
+  if (!a.quiet && j.scene.world && !j.scene.world->lights.empty())
+    fmt::print(stderr, "note: {}'s {} are not drawn by prt render yet (docs/LIGHTS.md: prt relight and prt reference "
+                       "light with them); drawing the sky's transfer alone\n",
+               a.mesh, describe_lights(j.scene.world->lights));
   if (j.skin && !a.quiet)
     fmt::print(stderr, "skinned on the GPU: {} joints, {}\n", j.skin->joint_count,
                j.skin->animations.empty()

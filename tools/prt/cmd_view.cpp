@@ -7,6 +7,7 @@
 #include "look.h"
 #include "probe_object_options.h"
 #include "inputs.h"
+#include "light_options.h"
 #include "view_input.h"
 
 #include <prt/color.h>
@@ -213,6 +214,10 @@ Scene load_view_scene(const ViewArgs& a, ViewKinds& kinds) {
     throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
                 "docs/LDPRT.md); this one is baked for one pose");
   if (!a.second.empty()) load_second(a, scene, kinds);
+  if (!a.quiet && scene.world && !scene.world->lights.empty())
+    fmt::print(stderr, "note: {}'s {} are not drawn by prt view yet (docs/LIGHTS.md: prt relight and prt reference "
+                       "light with them); drawing the sky's transfer alone\n",
+               a.mesh, describe_lights(scene.world->lights));
   return scene;
 }
 

@@ -1,0 +1,230 @@
+// Lights inside the scene on the GPU (lights_pass.h; shaders/shadow.*.glsl,
+// shaders/lights.comp.glsl).
+#include "lights_pass.h"
+
+#include <prt/error.h>
+#include <prt/render.h>
+
+#include "shaders.h"
+
+#include <fmt/format.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/mat4x4.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace prt::detail {
+
+namespace {
+
+// A shaded point's shadow lookup is pushed this many shadow-map texels
+// (their world size at the point) along its normal, and passes within this
+// many texels of the stored depth: a surface never shadows itself (a texel
+// of the map covers a patch of the surface at a slant, whose depth varies
+// by up to a texel per texel at 45 degrees), while an occluder more than a
+// couple of texels away still does (measured against traced rays,
+// docs/LIGHTS.md "On the GPU": acne below 1.0, contact shadows lost past 3).
+constexpr float kNormalOffsetTexels = 1.5f, kDepthBiasTexels = 1.0f;
+constexpr float kNoOccluder = 1e30f;  // cleared depth: nothing in that direction
+
+// GL's cube-map faces (+X, -X, +Y, -Y, +Z, -Z): the axis and the up vector
+// that make a 90-degree view render each face as the sampler reads it.
+const std::array<glm::vec3, 6> kFaceAxis = {glm::vec3(1, 0, 0),  glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0),
+                                            glm::vec3(0, -1, 0), glm::vec3(0, 0, 1),  glm::vec3(0, 0, -1)};
+const std::array<glm::vec3, 6> kFaceUp = {glm::vec3(0, -1, 0), glm::vec3(0, -1, 0), glm::vec3(0, 0, 1),
+                                          glm::vec3(0, 0, -1), glm::vec3(0, -1, 0), glm::vec3(0, -1, 0)};
+
+bool same_light(const Light& a, const Light& b) {
+  // What the shadow map depends on: where the light is and, for a sun, its
+  // direction (a point or spot light's cube sees every direction).
+  if (a.type != b.type) return false;
+  if (a.type == LightType::Directional) return a.direction == b.direction;
+  return a.position == b.position;
+}
+
+struct GpuLight {
+  glm::vec4 p0, p1, p2, p3;
+  glm::mat4 view_proj;
+};
+
+// The directional map's frame: the bounding sphere seen along `dir` by an
+// orthographic camera whose near plane touches it.
+glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double radius, glm::dvec3& origin) {
+  origin = centre - dir * radius;
+  const glm::dvec3 up = std::abs(dir.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
+  const glm::dmat4 view = glm::lookAt(origin, centre, up);
+  const glm::dmat4 proj = glm::ortho(-radius, radius, -radius, radius, 0.0, 2.0 * radius);
+  return glm::mat4(proj * view);
+}
+
+}  // namespace
+
+LightsPass::LightsPass() {
+  shadow_program_ = gl::link_program(shaders::shadow_vert_glsl, shaders::shadow_frag_glsl, "shadow map");
+  apply_program_ = gl::link_compute(shaders::lights_comp_glsl, "lights",
+                                    fmt::format("#define KNORMAL_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n",
+                                                kNormalOffsetTexels, kDepthBiasTexels));
+  glCreateFramebuffers(1, &fbo_);
+  set_size(kDefaultShadowMapSize);
+}
+
+LightsPass::~LightsPass() {
+  glDeleteTextures(1, &cube_texture_);
+  glDeleteTextures(1, &sun_texture_);
+  glDeleteRenderbuffers(1, &depth_rb_);
+  glDeleteFramebuffers(1, &fbo_);
+  glDeleteBuffers(1, &light_buffer_);
+  glDeleteProgram(shadow_program_);
+  glDeleteProgram(apply_program_);
+}
+
+void LightsPass::set_size(int size) {
+  if (size < 16 || size > kMaxShadowMapSize)
+    throw Error(fmt::format("shadow map size must be 16 to {}, got {}", kMaxShadowMapSize, size));
+  if (size == size_) return;
+  size_ = size;
+  glDeleteRenderbuffers(1, &depth_rb_);
+  glCreateRenderbuffers(1, &depth_rb_);
+  glNamedRenderbufferStorage(depth_rb_, GL_DEPTH_COMPONENT32F, size, size);
+  glNamedFramebufferRenderbuffer(fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb_);
+  cubes_ = suns_ = -1;  // reallocated at the next apply
+  all_dirty_ = true;
+}
+
+void LightsPass::set_lights(std::span<const Light> lights, const glm::dvec3& centre, double radius) {
+  std::vector<Light> checked(lights.begin(), lights.end());
+  for (std::size_t i = 0; i < checked.size(); ++i) check_light(checked[i], fmt::format("light {}", i));
+  if (checked.size() != lights_.size() || centre != centre_ || radius != radius_) all_dirty_ = true;
+  dirty_.assign(checked.size(), true);
+  if (!all_dirty_)
+    for (std::size_t i = 0; i < checked.size(); ++i) dirty_[i] = !same_light(checked[i], lights_[i]);
+  lights_ = std::move(checked);
+  centre_ = centre;
+  radius_ = radius > 0 ? radius : 1.0;
+}
+
+void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
+  int cubes = 0, suns = 0;
+  for (const Light& l : lights_) (l.type == LightType::Directional ? suns : cubes) += 1;
+  const auto make = [&](GLenum target, GLuint& tex, int layers) {
+    glDeleteTextures(1, &tex);
+    glCreateTextures(target, 1, &tex);
+    glTextureStorage3D(tex, 1, GL_R32F, size_, size_, std::max(layers, 1) * (target == GL_TEXTURE_CUBE_MAP_ARRAY ? 6 : 1));
+    glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    all_dirty_ = true;
+  };
+  if (std::max(cubes, 1) != cubes_) make(GL_TEXTURE_CUBE_MAP_ARRAY, cube_texture_, cubes_ = std::max(cubes, 1));
+  if (std::max(suns, 1) != suns_) make(GL_TEXTURE_2D_ARRAY, sun_texture_, suns_ = std::max(suns, 1));
+
+  drawn_ = 0;
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glViewport(0, 0, size_, size_);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);  // back faces occlude, as in prt's ray tracing
+  glDisable(GL_BLEND);
+  glUseProgram(shadow_program_);
+  const float far_depth = 1.0f, none[4] = {kNoOccluder, 0, 0, 0};
+  int cube = 0, sun = 0;
+  for (std::size_t i = 0; i < lights_.size(); ++i) {
+    const Light& l = lights_[i];
+    const bool directional = l.type == LightType::Directional;
+    const int layer = directional ? sun++ : cube++;
+    if (!all_dirty_ && !dirty_[i]) continue;
+    ++drawn_;
+    if (directional) {
+      glm::dvec3 origin;
+      const glm::mat4 vp = sun_view_proj(l.direction, centre_, radius_, origin);
+      glNamedFramebufferTextureLayer(fbo_, GL_COLOR_ATTACHMENT0, sun_texture_, 0, layer);
+      glClearNamedFramebufferfv(fbo_, GL_COLOR, 0, none);
+      glClearNamedFramebufferfv(fbo_, GL_DEPTH, 0, &far_depth);
+      glUniformMatrix4fv(0, 1, GL_FALSE, &vp[0][0]);
+      glUniform4f(1, float(origin.x), float(origin.y), float(origin.z), 1.0f);
+      glUniform3f(2, float(l.direction.x), float(l.direction.y), float(l.direction.z));
+      draw_occluders();
+      continue;
+    }
+    const glm::vec3 at(l.position);
+    const double far = glm::length(l.position - centre_) + 1.01 * radius_;
+    const glm::mat4 proj = glm::perspective(glm::radians(90.0f), 1.0f, float(1e-4 * radius_), float(far));
+    glUniform4f(1, at.x, at.y, at.z, 0.0f);
+    for (int f = 0; f < 6; ++f) {
+      glNamedFramebufferTextureLayer(fbo_, GL_COLOR_ATTACHMENT0, cube_texture_, 0, 6 * layer + f);
+      glClearNamedFramebufferfv(fbo_, GL_COLOR, 0, none);
+      glClearNamedFramebufferfv(fbo_, GL_DEPTH, 0, &far_depth);
+      const glm::mat4 vp = proj * glm::lookAt(at, at + kFaceAxis[std::size_t(f)], kFaceUp[std::size_t(f)]);
+      glUniformMatrix4fv(0, 1, GL_FALSE, &vp[0][0]);
+      draw_occluders();
+    }
+  }
+  all_dirty_ = false;
+  std::fill(dirty_.begin(), dirty_.end(), false);
+  gl::check_gl("drawing the shadow maps");
+}
+
+void LightsPass::apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
+                       std::uint64_t work_groups) {
+  drawn_ = 0;
+  if (lights_.empty() || points.count == 0) return;
+  draw_maps(draw_occluders);
+  // The lights' records (lights.comp.glsl's GpuLight).
+  std::vector<GpuLight> g(lights_.size());
+  int cube = 0, sun = 0;
+  for (std::size_t i = 0; i < lights_.size(); ++i) {
+    const Light& l = lights_[i];
+    GpuLight& r = g[i];
+    const glm::dvec3 radiant = l.color * l.intensity;
+    const int type = l.type == LightType::Point ? 0 : l.type == LightType::Spot ? 1 : 2;
+    r.p1 = glm::vec4(glm::vec3(l.direction), l.range ? float(*l.range) : 0.0f);
+    if (type == 2) {
+      glm::dvec3 origin;
+      r.view_proj = sun_view_proj(l.direction, centre_, radius_, origin);
+      r.p0 = glm::vec4(glm::vec3(origin), 2.0f);
+      r.p2 = glm::vec4(glm::vec3(radiant), float(sun++));
+      r.p3 = glm::vec4(0.0f, 0.0f, float(2.0 * radius_ / size_), 0.0f);
+    } else {
+      r.p0 = glm::vec4(glm::vec3(l.position), float(type));
+      r.p2 = glm::vec4(glm::vec3(radiant), float(cube++));
+      // KHR's spot attenuation as scale and offset (prt::spot_attenuation).
+      const double scale = 1.0 / std::max(0.001, std::cos(l.inner_cone) - std::cos(l.outer_cone));
+      r.p3 = glm::vec4(float(scale), float(-std::cos(l.outer_cone) * scale), 2.0f / float(size_), 0.0f);
+      r.view_proj = glm::mat4(1.0f);
+    }
+  }
+  const std::size_t bytes = g.size() * sizeof(GpuLight);
+  if (bytes > light_buffer_bytes_) {
+    glDeleteBuffers(1, &light_buffer_);
+    light_buffer_ = gl::make_buffer(nullptr, bytes, GL_DYNAMIC_STORAGE_BIT);
+    light_buffer_bytes_ = bytes;
+  }
+  glNamedBufferSubData(light_buffer_, 0, GLsizeiptr(bytes), g.data());
+
+  glUseProgram(apply_program_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, light_buffer_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, points.positions);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, points.normals);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, points.albedo_buffer ? points.albedo_buffer : points.positions);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, radiance);
+  glBindTextureUnit(0, cube_texture_);
+  glBindTextureUnit(1, sun_texture_);
+  glUniform1ui(0, GLuint(points.count));
+  glUniform1ui(2, GLuint(lights_.size()));
+  glUniform4f(3, points.albedo.x, points.albedo.y, points.albedo.z, points.albedo_buffer ? 1.0f : 0.0f);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+  const std::size_t groups = (points.count + 63) / 64;
+  for (std::size_t first = 0; first < groups; first += work_groups) {
+    glUniform1ui(1, GLuint(first * 64));
+    glDispatchCompute(GLuint(std::min<std::uint64_t>(work_groups, groups - first)), 1, 1);
+  }
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);
+  gl::check_gl("the lights pass");
+}
+
+}  // namespace prt::detail

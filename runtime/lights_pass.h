@@ -1,0 +1,73 @@
+// Private to prt::runtime: lights inside the scene on the GPU (docs/LIGHTS.md
+// "On the GPU"). Each light's shadow map (a cube for point and spot lights,
+// distances from the light; a square fitted to the scene's bounding sphere for
+// directional lights, depths along the light), redrawn only when the light or
+// the occluders change; then one compute pass adds every light's direct light
+// at the shaded points (the mesh's vertices, a lightmap's texel sample points)
+// to the radiance the PRT pass wrote (shaders/lights.comp.glsl).
+#pragma once
+
+#include <prt/lights.h>
+
+#include "gl_util.h"
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <span>
+#include <vector>
+
+namespace prt::detail {
+
+class LightsPass {
+ public:
+  LightsPass();
+  ~LightsPass();
+  LightsPass(const LightsPass&) = delete;
+  LightsPass& operator=(const LightsPass&) = delete;
+
+  // The lights (checked by check_light); the scene's bounding sphere fits the
+  // directional lights' maps and bounds the cubes' far planes. Only lights
+  // that differ from the previous call's (or everything, when the count, the
+  // size or the sphere changes) get their shadow map redrawn.
+  void set_lights(std::span<const Light> lights, const glm::dvec3& centre, double radius);
+  // Shadow map size, texels a side (cube faces and directional maps).
+  void set_size(int size);
+  int size() const { return size_; }
+  bool empty() const { return lights_.empty(); }
+  // The occluders changed (a new pose): every map is redrawn.
+  void geometry_moved() { all_dirty_ = true; }
+
+  // The points lit (float triples; albedo_buffer 0: `albedo` for all), owned
+  // by the caller, `count` of them.
+  struct Points {
+    GLuint positions = 0, normals = 0, albedo_buffer = 0;
+    glm::vec3 albedo{1.0f};
+    std::size_t count = 0;
+  };
+  // Redraws the shadow maps that need it (draw_occluders draws every occluder
+  // triangle with positions at attribute 0, the program bound), then adds the
+  // lights' direct light to `radiance` (a vec4 per point). Leaves the
+  // framebuffer binding and viewport to the caller.
+  void apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
+             std::uint64_t work_groups);
+  // How many shadow maps the last apply() redrew (cube maps count once).
+  int maps_drawn() const { return drawn_; }
+
+ private:
+  void draw_maps(const std::function<void()>& draw_occluders);
+
+  std::vector<Light> lights_;
+  std::vector<bool> dirty_;
+  bool all_dirty_ = true;
+  glm::dvec3 centre_{0.0};
+  double radius_ = 1.0;
+  int size_ = 0, drawn_ = 0;
+  int cubes_ = 0, suns_ = 0;            // layers allocated
+  GLuint cube_texture_ = 0, sun_texture_ = 0, depth_rb_ = 0, fbo_ = 0;
+  GLuint shadow_program_ = 0, apply_program_ = 0, light_buffer_ = 0;
+  std::size_t light_buffer_bytes_ = 0;
+};
+
+}  // namespace prt::detail

@@ -1,0 +1,84 @@
+#version 450 core
+// Lights inside the scene (runtime/lights_pass.cpp, docs/LIGHTS.md "On the
+// GPU"): one invocation per shaded point (a vertex, a lightmap texel's sample
+// point) adds albedo / pi x sum over lights of E_l max(n . l, 0) V, where E_l
+// follows prt::sample_light (inverse square, KHR's range window and spot
+// attenuation) and V is the light's shadow map read at the point pushed
+// KNORMAL_OFFSET shadow-map texels along its normal (no acne on its own
+// surface), within a depth bias of KDEPTH_BIAS texels.
+layout(local_size_x = 64) in;
+
+struct GpuLight {
+  vec4 p0;  // xyz: position (point, spot) or the shadow plane's origin (directional); w: type (0 point, 1 spot, 2 directional)
+  vec4 p1;  // xyz: direction the light travels (spot, directional); w: range (0: none)
+  vec4 p2;  // rgb: color x intensity; w: the shadow map's layer
+  vec4 p3;  // x, y: the spot's scale and offset; z: a shadow texel's world size (at distance 1 for cubes)
+  mat4 view_proj;  // directional: world -> the shadow map's clip space
+};
+layout(std430, binding = 0) readonly buffer Lights { GpuLight lights[]; };
+layout(std430, binding = 1) readonly buffer Positions { float pos[]; };
+layout(std430, binding = 2) readonly buffer Normals { float nrm[]; };
+layout(std430, binding = 3) readonly buffer Albedo { float alb[]; };
+layout(std430, binding = 4) buffer Radiance { vec4 radiance[]; };
+layout(binding = 0) uniform samplerCubeArray u_cubes;
+layout(binding = 1) uniform sampler2DArray u_suns;
+layout(location = 0) uniform uint u_count;
+layout(location = 1) uniform uint u_first;
+layout(location = 2) uniform uint u_lights;
+layout(location = 3) uniform vec4 u_albedo;  // rgb: one albedo for all; w = 1: per point (Albedo)
+
+const float PI = 3.14159265358979;
+
+void main() {
+  const uint i = u_first + gl_GlobalInvocationID.x;
+  if (i >= u_count) return;
+  const vec3 p = vec3(pos[3u * i], pos[3u * i + 1u], pos[3u * i + 2u]);
+  vec3 n = vec3(nrm[3u * i], nrm[3u * i + 1u], nrm[3u * i + 2u]);
+  const float len = length(n);
+  if (!(len > 0.0)) return;  // no normal: radiance 0, as everywhere in prt
+  n /= len;
+  const vec3 rho = u_albedo.w > 0.5 ? vec3(alb[3u * i], alb[3u * i + 1u], alb[3u * i + 2u]) : u_albedo.rgb;
+  vec3 E = vec3(0.0);
+  for (uint k = 0u; k < u_lights; ++k) {
+    const int type = int(lights[k].p0.w);
+    vec3 irr = lights[k].p2.rgb, to_light;
+    float d = 1.0;
+    if (type == 2) {
+      to_light = -lights[k].p1.xyz;
+    } else {
+      const vec3 v = lights[k].p0.xyz - p;
+      d = length(v);
+      if (!(d > 0.0)) continue;
+      to_light = v / d;
+      float g = 1.0 / (d * d);
+      const float range = lights[k].p1.w;
+      if (range > 0.0) {
+        const float r = d / range, r2 = r * r;
+        g *= clamp(1.0 - r2 * r2, 0.0, 1.0);
+      }
+      if (type == 1) {
+        const float a = clamp(dot(lights[k].p1.xyz, -to_light) * lights[k].p3.x + lights[k].p3.y, 0.0, 1.0);
+        g *= a * a;
+      }
+      irr *= g;
+    }
+    const float c = dot(n, to_light);
+    if (!(c > 0.0) || !(max(irr.r, max(irr.g, irr.b)) > 0.0)) continue;
+    const float texel = type == 2 ? lights[k].p3.z : lights[k].p3.z * d;
+    const vec3 q = p + n * (KNORMAL_OFFSET * texel);
+    const float layer = lights[k].p2.w;
+    bool lit;
+    if (type == 2) {
+      const vec4 h = lights[k].view_proj * vec4(q, 1.0);
+      const vec2 uv = h.xy / h.w * 0.5 + 0.5;
+      const float depth = dot(q - lights[k].p0.xyz, lights[k].p1.xyz);
+      lit = any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) ||
+            depth <= texture(u_suns, vec3(uv, layer)).r + KDEPTH_BIAS * texel;
+    } else {
+      const vec3 v = q - lights[k].p0.xyz;
+      lit = length(v) <= texture(u_cubes, vec4(v, layer)).r + KDEPTH_BIAS * texel;
+    }
+    if (lit) E += irr * c;
+  }
+  radiance[i].rgb += rho / PI * E;
+}
