@@ -135,7 +135,11 @@ def property_type(doc):
 def klass(name, cls):
     out = f"class {name}:\n{docstring(cls.__doc__ or '', '    ')}"
     for attr, value in sorted(vars(cls).items()):
-        if attr.startswith("_") and attr not in ("__len__", "__str__", "__repr__"):
+        # __init__: the classes built from arguments (Light) declare their
+        # constructor; the others' is Python's default (no signature of its own).
+        if attr == "__init__" and not SIGNATURE.match(overloads(value.__doc__)[0][0]):
+            continue
+        if attr.startswith("_") and attr not in ("__init__", "__len__", "__str__", "__repr__"):
             continue
         if isinstance(value, property):
             doc = value.__doc__ or ""

@@ -32,7 +32,8 @@ class LightsPass {
   // that differ from the previous call's (or everything, when the count, the
   // size or the sphere changes) get their shadow map redrawn.
   void set_lights(std::span<const Light> lights, const glm::dvec3& centre, double radius);
-  // Shadow map size, texels a side (cube faces and directional maps).
+  // Shadow map size, texels a side of a cube face; a directional light's
+  // map, which spans the whole scene, has twice as many.
   void set_size(int size);
   int size() const { return size_; }
   bool empty() const { return lights_.empty(); }

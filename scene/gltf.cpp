@@ -10,6 +10,8 @@
 #include <prt/io.h>
 
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 #include <nlohmann/json.hpp>
 
 // tinygltf's implementation, compiled here once (gltf_model.h includes its
@@ -17,6 +19,7 @@
 #define TINYGLTF_IMPLEMENTATION
 #include "gltf_model.h"
 
+#include <cmath>
 #include <fstream>
 
 namespace prt {
@@ -68,6 +71,7 @@ json extras_object(const Mesh& mesh, const Transfer& t, const GltfOptions& opts)
         {"exposure", opts.bake.exposure},
         {"color", "linear radiance x 2^exposure, clamped to [0, 1] (prt relight, tone map clamp, not sRGB-encoded)"},
     };
+  if (!opts.colors.empty() && !opts.bake.lights.empty()) prt["bake"]["lights"] = opts.bake.lights;
   return prt;
 }
 
@@ -125,6 +129,46 @@ int add_accessor(tinygltf::Model& model, const void* bytes, std::size_t size, in
   a.count = count;
   model.accessors.push_back(a);
   return int(model.accessors.size()) - 1;
+}
+
+// The unit quaternion (x, y, z, w) turning -Z onto unit `d`: the rotation
+// of a light's node (KHR_lights_punctual: a light shines down its node's
+// -Z). Away from +Z, the shortest arc, (-Z x d, 1 + (-Z . d)) normalised:
+// (d.y, -d.x, 0, 1 - d.z). Toward +Z that vanishes and loses precision, so
+// there it is a half-turn about X (-Z onto +Z) followed by the shortest arc
+// from +Z onto d: (1 + d.z, 0, -d.x, d.y) normalised. Each form's norm is at
+// least 1 where it is used: no cancellation.
+std::vector<double> rotation_onto(const glm::dvec3& d) {
+  const glm::dvec4 q = d.z <= 0 ? glm::dvec4(d.y, -d.x, 0.0, 1.0 - d.z) : glm::dvec4(1.0 + d.z, 0.0, -d.x, d.y);
+  const double n = glm::length(q);
+  return {q.x / n, q.y / n, q.z / n, q.w / n};
+}
+
+void add_lights(tinygltf::Model& model, tinygltf::Scene& scene, const std::vector<Light>& lights,
+                const std::string& path) {
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    Light l = lights[i];
+    check_light(l, fmt::format("{}: light {}", path, i));  // (also makes direction unit length)
+    tinygltf::Light gl;
+    gl.name = l.name;
+    gl.type = std::string(light_type_name(l.type));
+    gl.color = {l.color.x, l.color.y, l.color.z};
+    gl.intensity = l.intensity;
+    if (l.type != LightType::Directional && l.range) gl.range = *l.range;  // tinygltf writes it when > 0
+    if (l.type == LightType::Spot) {
+      gl.spot.innerConeAngle = l.inner_cone;
+      gl.spot.outerConeAngle = l.outer_cone;
+    }
+    model.lights.push_back(gl);
+    tinygltf::Node node;
+    node.name = l.name;
+    if (l.position != glm::dvec3(0.0)) node.translation = {l.position.x, l.position.y, l.position.z};
+    if (l.type != LightType::Point) node.rotation = rotation_onto(l.direction);  // a point light shines every way
+    node.extensions["KHR_lights_punctual"] =
+        tinygltf::Value(tinygltf::Value::Object{{"light", tinygltf::Value(int(model.lights.size()) - 1)}});
+    model.nodes.push_back(std::move(node));
+    scene.nodes.push_back(int(model.nodes.size()) - 1);
+  }
 }
 
 std::string lower_extension(const std::string& path) {
@@ -236,6 +280,7 @@ void write_gltf(const std::string& path, const Mesh& mesh, const Transfer& t, co
   model.nodes.push_back(node);
   tinygltf::Scene scene;
   scene.nodes = {0};
+  detail::add_lights(model, scene, opts.lights, path);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
 

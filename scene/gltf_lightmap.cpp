@@ -266,6 +266,7 @@ json lightmap_extras(const LightmapExport& e, const LightmapTransfer& t, const L
                    {"exposure", opts.bake.exposure},
                    {"texture", e.baked_texture},
                    {"color", "sRGB-encoded radiance x 2^exposure clamped to [0, 1], at TEXCOORD_1 (KHR_materials_unlit)"}};
+  if (e.baked_texture >= 0 && !opts.bake.lights.empty()) prt["bake"]["lights"] = opts.bake.lights;
   return prt;
 }
 
@@ -314,6 +315,7 @@ void write_gltf_lightmap(const std::string& path, const Scene& scene, const Ligh
     if (o.triangle_count == 0) continue;
     add_object_node(e, o, lm_uv, gscene);
   }
+  detail::add_lights(model, gscene, opts.lights, path);
   model.scenes.push_back(gscene);
   model.defaultScene = 0;
 

@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include <prt/lights.h>
+
 #pragma GCC visibility push(hidden)
 #define tinygltf prt_tinygltf  // (stays defined: tinygltf:: is prt_tinygltf::)
 #define TINYGLTF_NO_STB_IMAGE
@@ -43,6 +45,12 @@ tinygltf::Value to_value(const nlohmann::json& j);
 // target 0 for none) and an accessor over it; returns the accessor's index.
 int add_accessor(tinygltf::Model& model, const void* bytes, std::size_t size, int target, int component, int type,
                  std::size_t count);
+// KHR_lights_punctual: each of `lights` (world space) in the model's list and
+// a node of its own placing it, added to `scene`'s root nodes (prt/gltf.h,
+// GltfOptions::lights). Throws prt::Error naming `path` and the light for
+// one check_light refuses.
+void add_lights(tinygltf::Model& model, tinygltf::Scene& scene, const std::vector<Light>& lights,
+                const std::string& path);
 // The extension of `path`, lower case, with its dot.
 std::string lower_extension(const std::string& path);
 // Writes `model` to `path` through write_atomically: binary (.glb) or JSON

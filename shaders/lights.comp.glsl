@@ -3,9 +3,11 @@
 // GPU"): one invocation per shaded point (a vertex, a lightmap texel's sample
 // point) adds albedo / pi x sum over lights of E_l max(n . l, 0) V, where E_l
 // follows prt::sample_light (inverse square, KHR's range window and spot
-// attenuation) and V is the light's shadow map read at the point pushed
-// KNORMAL_OFFSET shadow-map texels along its normal (no acne on its own
-// surface), within a depth bias of KDEPTH_BIAS texels.
+// attenuation) and V is the light's shadow map read at the point moved
+// KLIGHT_OFFSET shadow-map texels toward the light and KNORMAL_OFFSET x
+// sin(incidence) along its normal (no acne on its own surface, in corners or
+// at grazing light; runtime/lights_pass.cpp), within a depth bias of
+// KDEPTH_BIAS texels.
 layout(local_size_x = 64) in;
 
 struct GpuLight {
@@ -65,7 +67,7 @@ void main() {
     const float c = dot(n, to_light);
     if (!(c > 0.0) || !(max(irr.r, max(irr.g, irr.b)) > 0.0)) continue;
     const float texel = type == 2 ? lights[k].p3.z : lights[k].p3.z * d;
-    const vec3 q = p + n * (KNORMAL_OFFSET * texel);
+    const vec3 q = p + (to_light * KLIGHT_OFFSET + n * (KNORMAL_OFFSET * sqrt(max(1.0 - c * c, 0.0)))) * texel;
     const float layer = lights[k].p2.w;
     bool lit;
     if (type == 2) {

@@ -86,7 +86,15 @@ GltfFile read_gltf(const std::string& path) {
   EXPECT_EQ(warn, "") << path;
   EXPECT_EQ(m.asset.version, "2.0");
   EXPECT_EQ(m.scenes.size(), 1u);
-  EXPECT_EQ(m.nodes.size(), 1u);
+  // One node holds the mesh; any others place the scene's lights (KHR_lights_punctual).
+  std::size_t mesh_nodes = 0;
+  for (const tinygltf::Node& n : m.nodes) {
+    if (n.mesh >= 0) ++mesh_nodes;
+    else if (n.extensions.count("KHR_lights_punctual")) ++g.light_nodes;
+    else ADD_FAILURE() << path << ": node " << n.name << " holds neither the mesh nor a light";
+  }
+  EXPECT_EQ(mesh_nodes, 1u);
+  EXPECT_EQ(g.light_nodes, m.lights.size());
   EXPECT_EQ(m.buffers.size(), 1u);
   if (m.meshes.size() != 1 || m.meshes[0].primitives.size() != 1) {
     ADD_FAILURE() << path << ": not one mesh with one primitive";

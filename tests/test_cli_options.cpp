@@ -127,6 +127,7 @@ const std::vector<Shared>& shared_table() {
        {{"foo", "unknown mode 'foo' (expected unshadowed, shadowed or interreflected)"}},
        {"shadowed", "interreflected"}},
       {"--material", {{"metal", "expected diffuse or glossy, got 'metal'"}}, {"diffuse", "glossy"}},
+      {"--sun", {{"always", "expected auto or none, got 'always'"}}, {"auto", "none"}},
       {"--bounces", {{"65", "must be a whole number from 0 to 64, got '65'"}}, {"0", "64"}},
       {"--seed",
        {{"-1", "must be a whole number from 0 to 18446744073709551615 (digits only), got '-1'"},
@@ -195,7 +196,8 @@ const std::map<std::string, std::vector<Refusal>>& bands_table() {
 // reference (2 and up: a standard error needs two).
 const std::set<std::string> kNoSharedValue = {"--help",   "--quiet",  "--output", "--env",   "--mesh",
                                               "--cache",  "--json",   "--weld",   "--vertex-colors",     "--samples",
-                                              "--bands",  "--at",     "--probes", "--object", "--dynamic-ao"};  // --bands: bands_table()
+                                              "--bands",  "--at",     "--probes", "--object", "--dynamic-ao",
+                                              "--lights"};  // --lights: FILE.json or none  // --bands: bands_table()
 
 // Every option and argument of every command that names a file or a
 // directory: each takes options.h's path_value(), so '' is refused while

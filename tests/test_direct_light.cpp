@@ -17,7 +17,7 @@
 #include <numbers>
 #include <vector>
 
-namespace {
+namespace direct_light_test {  // named: the unity build joins this file with others
 
 using prt::Light;
 using prt::LightType;
@@ -200,4 +200,4 @@ TEST(ReferenceLights, BounceInsideAClosedSphereIsTheClosedForm) {
   }
 }
 
-}  // namespace
+}  // namespace direct_light_test

@@ -9,12 +9,15 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/gltf.h>
+#include <prt/lights.h>
 #include <prt/mesh.h>
 #include <prt/precompute.h>
 #include <prt/projection.h>
 #include <prt/rotation.h>
+#include <prt/scene.h>
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
+#include <prt/vertex_csv.h>
 
 #include <gtest/gtest.h>
 
@@ -22,7 +25,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -235,6 +240,155 @@ TEST_F(ExportCli, BakeWritesTheClampedRelitColour) {
   EXPECT_EQ(bake.at("map"), "studio.exr");
   EXPECT_EQ(bake.at("exposure"), 1.5);
   EXPECT_EQ(bake.at("rotate"), nlohmann::json::array({40.0, 10.0, -20.0}));
+}
+
+// Lights of every kind and direction: a spot turned up (+Z, the half-turn
+// the node's rotation handles apart), one turned down (-Z: no rotation),
+// spots either side of the horizontal, a directional light.
+const char* const kExportLightsJson = R"([
+  {"type": "point", "position": [0.5, 3, 1], "intensity": 20, "range": 12, "name": "bulb"},
+  {"type": "spot", "position": [0.2, 2.5, 0.3], "direction": [0.1, -1, 0.2], "intensity": 8, "color": [1, 0.8, 0.6],
+   "innerConeAngle": 0.3, "outerConeAngle": 0.6},
+  {"type": "spot", "position": [-0.4, 0.1, 0.2], "direction": [0.3, 0.4, -0.7], "intensity": 0.5, "range": 3},
+  {"type": "spot", "position": [0, 1, 0], "direction": [0, 0, 1], "intensity": 1},
+  {"type": "spot", "position": [0.1, 1, 0], "direction": [0, 0, -1], "intensity": 1},
+  {"type": "directional", "direction": [-0.3, -1, -0.2], "intensity": 0.7, "color": [0.9, 0.9, 1]}])";
+
+// The lights come back from the export as prt::load_scene reads glTF lights
+// (their node's world transform): the same type, name, colour, intensity,
+// range and cones to the bit (stored as JSON numbers of 17 digits), the same
+// position (the node's translation) and direction (the node's -Z turned by
+// its rotation, a quaternion built and applied in double).
+TEST_F(ExportCli, LightsRoundTripAsKhrLightsPunctual) {
+  const std::string tfile = precompute("s.prt", {"--bands", "2"});
+  const std::string lights = dir.file("lights.json");
+  prt::test::write_file(lights, kExportLightsJson);
+  const std::vector<prt::Light> want = prt::read_lights_json(lights);
+  // A few ulps of double from the quaternion's square root and products; a
+  // light's -Z turned the wrong way is off by order 1.
+  constexpr double kDirection = 1e-14;
+  for (const char* name : {"lit.glb", "lit.gltf"}) {
+    SCOPED_TRACE(name);
+    const std::string out = dir.file(name);
+    const auto r = run_prt(dir, {"export", kScene, tfile, "-o", out, "--lights", lights});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("; 6 lights (1 point, 4 spot, 1 directional) as KHR_lights_punctual)"), std::string::npos)
+        << r.err;
+    const GltfFile g = read_gltf(out);  // one mesh node beside the lights' nodes
+    EXPECT_EQ(g.light_nodes, want.size());
+    const std::vector<prt::Light> got = prt::load_scene(out).lights;
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      SCOPED_TRACE(want[i].name);
+      EXPECT_EQ(got[i].type, want[i].type);
+      EXPECT_EQ(got[i].name, want[i].name);
+      EXPECT_EQ(got[i].color, want[i].color);
+      EXPECT_EQ(got[i].intensity, want[i].intensity);
+      EXPECT_EQ(got[i].range, want[i].range);
+      EXPECT_EQ(got[i].position, want[i].position);
+      EXPECT_LT(glm::length(got[i].direction - want[i].direction), kDirection)
+          << got[i].direction.x << " " << got[i].direction.y << " " << got[i].direction.z;
+      if (want[i].type == prt::LightType::Spot) {
+        EXPECT_EQ(got[i].inner_cone, want[i].inner_cone);
+        EXPECT_EQ(got[i].outer_cone, want[i].outer_cone);
+      }
+    }
+  }
+  // KHR_lights_punctual is used, not required: a viewer without it still shows the mesh.
+  const nlohmann::json j = nlohmann::json::parse(prt::test::read_file(dir.file("lit.gltf")));
+  EXPECT_EQ(j.at("extensionsUsed"), nlohmann::json::array({"KHR_lights_punctual"}));
+  EXPECT_FALSE(j.contains("extensionsRequired"));
+  // Without lights nothing of the extension is written.
+  const auto r = run_prt(dir, {"export", kScene, tfile, "-o", dir.file("dark.gltf"), "--lights", "none", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string dark = prt::test::read_file(dir.file("dark.gltf"));
+  EXPECT_EQ(dark.find("KHR_lights_punctual"), std::string::npos);
+}
+
+// The writer refuses a light out of range, naming the file and the light.
+TEST_F(ExportCli, WriterRefusesABadLight) {
+  const prt::Mesh mesh = prt::load_mesh(kScene);
+  const prt::Transfer t = transfer_of(mesh, prt::TransferMode::Unshadowed, 2, glm::vec3(0.8f));
+  prt::GltfOptions o;
+  o.lights.emplace_back();
+  o.lights[0].intensity = -1;
+  const std::string path = dir.file("bad.glb");
+  try {
+    prt::write_gltf(path, mesh, t, o);
+    ADD_FAILURE() << "a negative intensity was written";
+  } catch (const prt::Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": light 0: point light: intensity must be"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+// A 256 x 128 sky of (0.15, 0.18, 0.25) with a 3 x 3-pixel sun of about 2e4
+// (as tests/test_lights_cli.cpp's: 97% of the map's power).
+std::string write_export_sun_map(const TempDir& dir) {
+  const int W = 256, H = 128;
+  std::vector<float> rgb(std::size_t(W) * H * 3);
+  for (std::size_t i = 0; i < rgb.size(); i += 3) rgb[i] = 0.15f, rgb[i + 1] = 0.18f, rgb[i + 2] = 0.25f;
+  for (int y = 40; y < 43; ++y)
+    for (int x = 60; x < 63; ++x) {
+      float* p = &rgb[(std::size_t(y) * W + std::size_t(x)) * 3];
+      p[0] = 20000, p[1] = 19000, p[2] = 17000;
+    }
+  const std::string path = dir.file("sun.exr");
+  prt::write_image(path, W, H, rgb);
+  return path;
+}
+
+// --bake includes the lights' direct light exactly as prt relight computes
+// it (the same library calls at the same points with the same albedo, in
+// the same order): COLOR_0, float, is relight's CSV (9 significant digits:
+// a float to the bit) times 2^exposure, a power of two, clamped to [0, 1]: equal
+// to the bit.
+// Under a black map with a lights file, and under a sun split off the map
+// (--sun auto) through an interreflected transfer, whose bounce relight adds.
+TEST_F(ExportCli, BakeAddsTheLightsDirectLightAsRelightDoes) {
+  const std::string lights = dir.file("lights.json");
+  prt::test::write_file(lights, kExportLightsJson);
+  struct Case {
+    std::string name, map;
+    std::vector<std::string> options;  // for both commands
+    double stops;
+  };
+  const std::string shadowed = precompute("s.prt", {"--bands", "3", "--mode", "shadowed"});
+  const std::string inter = precompute("i.prt", {"--bands", "3", "--mode", "interreflected"});
+  const std::vector<std::pair<std::string, Case>> cases = {
+      {shadowed, {"black", prt::test::write_constant_map(dir, 0.0f), {"--lights", lights}, -3}},
+      {inter, {"sun", write_export_sun_map(dir), {"--sun", "auto"}, -5}},
+  };
+  for (const auto& [tfile, c] : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string glb = dir.file(c.name + ".glb"), csv = dir.file(c.name + ".csv");
+    std::vector<std::string> e = {"export", kScene, tfile, "-o", glb, "--bake", c.map, "--exposure",
+                                  std::to_string(c.stops)};
+    e.insert(e.end(), c.options.begin(), c.options.end());
+    auto r = run_prt(dir, e);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("baked with"), std::string::npos) << r.err;
+    std::vector<std::string> rl = {"relight", kScene, tfile, c.map, "-o", csv, "-q"};
+    rl.insert(rl.end(), c.options.begin(), c.options.end());
+    r = run_prt(dir, rl);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::vector<glm::vec3> relit = prt::read_vertex_csv(csv);
+    const GltfFile g = read_gltf(glb);
+    ASSERT_EQ(g.colors.size(), relit.size());
+    const float scale = float(std::exp2(c.stops));
+    std::size_t inside = 0;  // lit and not clamped: where the sum shows
+    for (std::size_t v = 0; v < relit.size(); ++v)
+      for (int k = 0; k < 3; ++k) {
+        const float x = relit[v][k] * scale;
+        ASSERT_EQ(g.colors[v][k], std::clamp(x, 0.0f, 1.0f)) << "vertex " << v << " channel " << k;
+        inside += x > 0 && x < 1;
+      }
+    EXPECT_GT(inside, relit.size()) << "over a third of the values should be lit and not clamped";
+    EXPECT_NE(g.extras.at("prt").at("bake").value("lights", "").find(c.name == "sun" ? "the map's sun" : "6 lights"),
+              std::string::npos)
+        << g.extras.dump();
+  }
 }
 
 // A compressed file is exported as decompress() gives it.

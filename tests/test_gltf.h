@@ -18,12 +18,14 @@ struct GltfFile {
   std::vector<std::uint32_t> indices;
   std::vector<std::vector<float>> transfer;  // _PRT_T0, _PRT_T1, ...: 4 floats per vertex each
   nlohmann::json extras;                     // asset.extras
+  std::size_t light_nodes = 0;               // nodes placing a KHR_lights_punctual light
 };
 
 // Reads a .glb or .gltf file written by prt::write_gltf; fails the test
 // (gtest ADD_FAILURE, empty result) when tinygltf cannot, or the layout is
-// not the one promised (one scene, node, mesh, triangle primitive; float
-// VEC3 POSITION/NORMAL/COLOR_0, VEC4 _PRT_T*, UNSIGNED_INT indices).
+// not the one promised (one scene; one mesh node, and a node per light; one
+// mesh, one triangle primitive; float VEC3 POSITION/NORMAL/COLOR_0, VEC4
+// _PRT_T*, UNSIGNED_INT indices).
 GltfFile read_gltf(const std::string& path);
 
 }  // namespace prt::test

@@ -102,6 +102,15 @@ TEST_F(GltfValidator, EveryVariantPrtWritesHasNoErrors) {
       exported(glossy, "glossy.glb", {}),
       exported(cprt, "compressed.glb", {}),
   };
+  // The scene's lights as KHR_lights_punctual, a node each (every kind, a
+  // spot turned straight up: the node's half-turn), baked with them.
+  const std::string lights = dir.file("lights.json");
+  prt::test::write_file(lights, R"([{"type": "point", "position": [0.5, 3, 1], "intensity": 20, "range": 12},
+    {"type": "spot", "position": [0.2, 2.5, 0.3], "direction": [0.1, -1, 0.2], "intensity": 8, "outerConeAngle": 0.6},
+    {"type": "spot", "position": [0, 1, 0], "direction": [0, 0, 1]},
+    {"type": "directional", "direction": [-0.3, -1, -0.2], "intensity": 0.7}])");
+  files.push_back(exported(mono, "lit.gltf", {"--lights", lights}));
+  files.push_back(exported(rgb, "lit-baked.glb", {"--lights", lights, "--bake", kStudio, "--exposure", "-2"}));
   // A mesh with a vertex without a normal: the file has no NORMAL.
   const prt::Mesh loose = prt::make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, {{0, 1, 2}});
   prt::TransferOptions o;
@@ -127,10 +136,15 @@ TEST_F(GltfValidator, EveryVariantPrtWritesHasNoErrors) {
 TEST_F(GltfValidator, LightmapExportsHaveNoErrors) {
   const std::string scene = kSource + "/models/room.gltf", lm = dir.file("room.prt");
   ASSERT_EQ(run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--samples", "64", "-q", "-o", lm}).code, 0);
-  std::vector<std::string> files = {dir.file("room.glb"), dir.file("room.gltf"), dir.file("room-baked.glb")};
+  const std::string lights = dir.file("lights.json");  // kept as KHR_lights_punctual (the last file)
+  prt::test::write_file(lights,
+                        R"([{"type": "spot", "position": [1, 2.2, 1], "direction": [0, -1, 0], "intensity": 3}])");
+  std::vector<std::string> files = {dir.file("room.glb"), dir.file("room.gltf"), dir.file("room-baked.glb"),
+                                    dir.file("room-lit.glb")};
   for (std::size_t i = 0; i < files.size(); ++i) {
     std::vector<std::string> args = {"export", scene, lm, "-o", files[i], "-q"};
     if (i == 2) args.insert(args.end(), {"--bake", kStudio, "--exposure", "1"});
+    if (i == 3) args.insert(args.end(), {"--bake", kStudio, "--lights", lights});
     const auto r = run_prt(dir, args);
     ASSERT_EQ(r.code, 0) << r.err;
   }

@@ -8,6 +8,7 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/lightmap.h>
+#include <prt/lights.h>
 #include <prt/scene.h>
 #include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
@@ -18,6 +19,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -263,6 +265,169 @@ TEST(LightmapCli, ExportWritesTheRelightingPage) {
   const nlohmann::json info = nlohmann::json::parse(cglb.substr(20, json_bytes))["asset"]["extras"]["prt"];
   ASSERT_TRUE(info.contains("albedo")) << info.dump();
   EXPECT_NEAR(info["albedo"][1].get<double>(), 0.5, 1e-6);
+}
+
+// models/room.gltf with a light of its own (KHR_lights_punctual): a point
+// "lamp" at (0, 2, 0), written beside the test's files (its buffers by path).
+std::string write_room_with_lamp(const TempDir& dir) {
+  nlohmann::json g = nlohmann::json::parse(read_file(kModels + "/room.gltf"));
+  g["extensionsUsed"] = {"KHR_lights_punctual"};
+  g["extensions"]["KHR_lights_punctual"]["lights"] = {{{"type", "point"}, {"intensity", 2.0}, {"name", "lamp"}}};
+  g["nodes"].push_back({{"name", "lamp"}, {"translation", {0.0, 2.0, 0.0}},
+                        {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+  g["scenes"][0]["nodes"].push_back(g["nodes"].size() - 1);
+  for (auto& b : g["buffers"])
+    if (b.contains("uri") && b["uri"].get<std::string>().rfind("data:", 0) != 0)
+      b["uri"] = kModels + "/" + b["uri"].get<std::string>();
+  const std::string path = dir.file("lit-room.gltf");
+  write_file(path, g.dump());
+  return path;
+}
+
+// sRGB encoding (IEC 61966-2-1) of a linear value in [0, 1], in 8-bit codes (0 to 255, not rounded).
+double baked_srgb_code(double linear) {
+  const double c = std::clamp(linear, 0.0, 1.0);
+  return 255.0 * (c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055);
+}
+
+// The baked texture of an exported lightmap (the materials' base colour,
+// "prt_lightmap_baked", decoded by load_scene to linear) against prt
+// relight's EXR of the same inputs times 2^stops, at every covered texel (A
+// = 1 in the EXR): its 8-bit code is the radiance's, clamped and
+// sRGB-encoded, rounded. Half a code is the rounding; 1e-3 code allows for
+// float in the writer (pow; the exposure applied to the sum's parts). A
+// texel lit without a light, or from sample points not moved out of
+// geometry, is off by many codes.
+void expect_baked_is_relit(const prt::Scene& exported, const std::string& exr_path, double stops) {
+  constexpr double kHalfCode = 0.5 + 1e-3;
+  const RgbaImage exr = read_exr_rgba(exr_path);
+  const Texture* baked = nullptr;
+  for (const Texture& t : exported.textures)
+    if (t.name == "prt_lightmap_baked") baked = &t;
+  ASSERT_NE(baked, nullptr);
+  ASSERT_EQ(baked->width, exr.width);
+  ASSERT_EQ(baked->height, exr.height);
+  const double scale = std::exp2(stops);
+  std::size_t covered = 0, lit = 0;
+  for (std::size_t p = 0; p < baked->texels.size(); ++p) {
+    if (exr.rgba[4 * p + 3] != 1.0f) continue;
+    ++covered;
+    for (int c = 0; c < 3; ++c) {
+      const double want_code = baked_srgb_code(exr.rgba[4 * p + std::size_t(c)] * scale);
+      const double got_code = std::round(baked_srgb_code(baked->texels[p][c]));  // the byte load_scene decoded
+      ASSERT_LE(std::abs(got_code - want_code), kHalfCode) << "texel " << p << " channel " << c;
+      lit += want_code > 8 && want_code < 254;
+    }
+  }
+  EXPECT_GT(covered, 200u);
+  EXPECT_GT(lit, covered) << "over a third of the values should be lit and not clamped";
+}
+
+TEST(LightmapCli, ExportKeepsTheScenesLightsAndBakesTheirDirectLight) {
+  // prt export of a lightmap (docs/LIGHTS.md "Export"): the scene's own lamp
+  // and a --lights file's spot come back from the glTF as prt::load_scene
+  // reads them, and --bake's texture under a black map is prt relight's EXR
+  // of the same inputs (the lights' direct light at the texels moved out of
+  // geometry), sRGB-encoded to 8 bits.
+  TempDir dir;
+  const std::string scene = write_room_with_lamp(dir), black = write_constant_map(dir, 0.0f);
+  const std::string spots = dir.file("spot.json");
+  write_file(spots, R"([{"type": "spot", "position": [1.0, 2.2, 1.0], "direction": [0.2, -1, 0.1], "intensity": 3,
+                         "innerConeAngle": 0.3, "outerConeAngle": 0.7, "range": 9, "color": [1, 0.9, 0.7]}])");
+  Result r =
+      run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--samples", "16", "-q", "-o", dir.file("lm.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir,
+              {"export", scene, dir.file("lm.prt"), "-o", dir.file("lit.glb"), "--bake", black, "--lights", spots});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("; 2 lights (1 point, 1 spot) as KHR_lights_punctual"), std::string::npos) << r.err;
+  r = run_prt(dir, {"relight", scene, dir.file("lm.prt"), black, "--lights", spots, "-q", "-o", dir.file("lit.exr")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+
+  const prt::Scene out = load_scene(dir.file("lit.glb"));
+  std::vector<Light> want = load_scene(scene).lights, more = read_lights_json(spots);
+  want.insert(want.end(), more.begin(), more.end());
+  ASSERT_EQ(out.lights.size(), 2u);
+  // The node's rotation, a quaternion built and applied in double: a few ulps.
+  constexpr double kDirection = 1e-14;
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    SCOPED_TRACE(want[i].name);
+    EXPECT_EQ(out.lights[i].type, want[i].type);
+    EXPECT_EQ(out.lights[i].name, want[i].name);
+    EXPECT_EQ(out.lights[i].color, want[i].color);
+    EXPECT_EQ(out.lights[i].intensity, want[i].intensity);
+    EXPECT_EQ(out.lights[i].range, want[i].range);
+    EXPECT_EQ(out.lights[i].position, want[i].position);
+    EXPECT_LT(glm::length(out.lights[i].direction - want[i].direction), kDirection);
+    EXPECT_EQ(out.lights[i].inner_cone, want[i].inner_cone);
+    EXPECT_EQ(out.lights[i].outer_cone, want[i].outer_cone);
+  }
+
+  expect_baked_is_relit(out, dir.file("lit.exr"), 0);
+  const std::string glb = read_file(dir.file("lit.glb"));
+  EXPECT_NE(glb.find("their direct light traced as prt relight does"), std::string::npos);  // extras.prt.bake.lights
+
+  // --lights none drops the scene's own.
+  r = run_prt(dir, {"export", scene, dir.file("lm.prt"), "-o", dir.file("none.glb"), "--lights", "none", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(load_scene(dir.file("none.glb")).lights.empty());
+
+  // --sun auto with an interreflected lightmap: the map's sun traced, its
+  // bounce through T - T_direct, the lamp too, as relight adds them; 2^-5
+  // keeps most texels under the clamp.
+  const int W = 256, H = 128;  // a sky with a 3 x 3-pixel sun (97% of the power), as tests/test_lights_cli.cpp's
+  std::vector<float> sky(std::size_t(W) * H * 3);
+  for (std::size_t i = 0; i < sky.size(); i += 3) sky[i] = 0.15f, sky[i + 1] = 0.18f, sky[i + 2] = 0.25f;
+  for (int y = 40; y < 43; ++y)
+    for (int x = 60; x < 63; ++x)
+      for (int c = 0; c < 3; ++c)
+        sky[(std::size_t(y) * W + std::size_t(x)) * 3 + std::size_t(c)] = 20000.0f - 1500.0f * float(c);
+  const std::string sun = dir.file("sun.exr");
+  write_image(sun, W, H, sky);
+  r = run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--samples", "16", "--mode", "interreflected", "-q",
+                    "-o", dir.file("lmi.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"export", scene, dir.file("lmi.prt"), "-o", dir.file("sun.glb"), "--bake", sun, "--sun", "auto",
+                    "--rotate", "270,0,0", "--exposure", "-5", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"relight", scene, dir.file("lmi.prt"), sun, "--sun", "auto", "--rotate", "270,0,0", "-q", "-o",
+                    dir.file("sun.exr.exr")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  expect_baked_is_relit(load_scene(dir.file("sun.glb")), dir.file("sun.exr.exr"), -5);
+}
+
+TEST(LightmapCli, ExportRefusesLightsWhereTheyCannotGo) {
+  // The page relights the sky's PRT on the GPU and draws no lights yet: a
+  // scene with lights of its own (exit 1) or --lights FILE (a usage error)
+  // is refused with the reason, nothing written; --lights none writes it.
+  // --sun without --bake, and lights with a probe volume, are refused too.
+  TempDir dir;
+  const std::string scene = write_room_with_lamp(dir), room = kModels + "/room.gltf";
+  const std::string spots = dir.file("spot.json");
+  write_file(spots, R"([{"type": "spot", "position": [1.0, 2.2, 1.0], "direction": [0, -1, 0]}])");
+  Result r =
+      run_prt(dir, {"precompute", scene, "--lightmap", "16x16", "--samples", "16", "-q", "-o", dir.file("lm.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::string why = "the page relights the sky's PRT only (lights in the page are not implemented yet)";
+  r = run_prt(dir, {"export", scene, dir.file("lm.prt"), "--web", dir.file("page"), "-o", dir.file("a.glb")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("lit by 1 light (1 point): " + why), std::string::npos) << r.err;
+  r = run_prt(dir,
+              {"export", room, dir.file("lm.prt"), "--web", dir.file("page"), "--lights", "none", "--lights", spots});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("with --lights is lit by 1 light (1 spot): " + why), std::string::npos) << r.err;
+  // --sun is the bake's; a probe volume's JSON holds the map's SH alone.
+  r = run_prt(dir, {"export", scene, dir.file("lm.prt"), "-o", dir.file("a.glb"), "--sun", "auto"});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("--sun applies to the baked colours"), std::string::npos) << r.err;
+  r = run_prt(dir, {"export", scene, "--probes", dir.file("p.prt"), "--bake", "studio", "-o", dir.file("p.json"),
+                    "--lights", spots});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("lights inside the scene are not in it"), std::string::npos) << r.err;
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"lit-room.gltf", "lm.prt", "spot.json"}));
+  r = run_prt(dir, {"export", scene, dir.file("lm.prt"), "--web", dir.file("page"), "--lights", "none", "-q"});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("page/model.glb")));
 }
 
 }  // namespace

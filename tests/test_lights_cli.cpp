@@ -15,8 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace prt {
-namespace {
+namespace prt::lights_cli_test {  // named: the unity build joins this file with others
 
 using namespace prt::test;
 
@@ -170,5 +169,31 @@ TEST(LightsCli, BadLightsAreRefusedNamingTheFile) {
   EXPECT_NE(r.err.find("--sun"), std::string::npos) << r.err;
 }
 
-}  // namespace
-}  // namespace prt
+}  // namespace prt::lights_cli_test
+
+namespace prt::lights_cli_test {  // named: the unity build joins this file with others
+
+TEST(LightsCli, RenderDrawsLightsAndMovesThemAlongAPath) {
+  // prt render with lights: shadow maps redrawn only for what moved (the
+  // path's light every frame, the fixed one once), and a path naming a
+  // light that does not exist refused before any work.
+  using namespace prt::test;
+  TempDir dir;
+  const std::string room = kModels + "/room.gltf", black = write_constant_map(dir, 0.0f), lights = write_lights(dir);
+  Result r = run_prt(dir, {"precompute", room, "--lightmap", "32x32", "--samples", "16", "-q", "-o", dir.file("lm.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"render", room, dir.file("lm.prt"), black, "--lights", lights, "--light-path",
+                    "0:0.5,1.6,0.5;-0.5,1.6,0.5;-0.5,1.6,-0.5", "--frames", "3", "--width", "32", "--height", "24",
+                    "--exposure", "0", "-o", dir.file("f.png")});
+  if (r.code != 0 && r.err.find("EGL") != std::string::npos) GTEST_SKIP() << "no OpenGL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  // Frame 0 draws both maps; frames 1 and 2 the moving point light's alone.
+  EXPECT_NE(r.err.find("lights: 4 shadow map(s)"), std::string::npos) << r.err;
+  r = run_prt(dir, {"render", room, dir.file("lm.prt"), black, "--lights", lights, "--light-path", "7:0,1,0",
+                    "-o", dir.file("g.png")});
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("light 7 does not exist"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("g.png")));
+}
+
+}  // namespace prt::lights_cli_test

@@ -29,26 +29,7 @@ EnvMap smooth_map() {
   });
 }
 
-// A floor quad with its own texture-coloured chart, and a box on it.
-Scene floor_and_box(bool textured) {
-  test::SceneBuilder b;
-  b.quad({-1, 0, 1}, {1, 0, 1}, {1, 0, -1}, {-1, 0, -1}, {0.02f, 0.02f, 0.48f, 0.48f});
-  b.end_object();
-  b.box({-0.3f, 0.0f, -0.3f}, {0.3f, 0.6f, 0.3f}, 8, 4);  // cells 8..13 of 4 x 4: below the floor's [0, 0.5]^2
-  b.end_object();
-  std::vector<Material> mats(2);
-  mats[0].base_color = glm::vec4(0.9f, 0.6f, 0.3f, 1.0f);
-  mats[1].base_color = glm::vec4(0.3f, 0.7f, 0.5f, 1.0f);
-  std::vector<Texture> tex;
-  if (textured) {
-    Texture t;
-    t.width = t.height = 2;
-    t.texels = {glm::vec4(1.0f), glm::vec4(0.5f), glm::vec4(0.5f), glm::vec4(1.0f)};
-    tex.push_back(t);
-    mats[0].base_color_texture = 0;
-  }
-  return b.build(mats, tex);
-}
+using test::floor_and_box;
 
 TEST(RenderLightmap, TexelsEqualRelightLightmap) {
   REQUIRE_RENDERER(r);

@@ -17,8 +17,7 @@
 #include <string>
 #include <vector>
 
-namespace prt {
-namespace {
+namespace prt::sun_test {  // named: the unity build joins this file with others
 
 constexpr double kPi = 3.14159265358979323846;
 // Sums over a map's pixels in double, in another order than split_sun's:
@@ -305,5 +304,4 @@ TEST(Sun, BundledMaps) {
   }
 }
 
-}  // namespace
-}  // namespace prt
+}  // namespace prt::sun_test

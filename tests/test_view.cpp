@@ -181,6 +181,16 @@ TEST_F(ViewCli, ScreenshotMatchesRender) {
   check_screenshot_matches_render({});
 }
 
+// Lights (docs/LIGHTS.md): the window draws them as prt render does, a point
+// light and a directional one beside the map.
+TEST_F(ViewCli, ScreenshotMatchesRenderWithLights) {
+  if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
+  const std::string lights = dir.file("lights.json");
+  test::write_file(lights, R"([{"type": "point", "position": [1.2, 1.0, 1.5], "intensity": 4, "color": [1, 0.5, 0.2]},
+                               {"type": "directional", "direction": [1, -0.3, 0], "intensity": 1.5}])");
+  check_screenshot_matches_render({"--lights", lights, "--exposure", "-1"});
+}
+
 // The window's display pass (exposure, tone map, sRGB) and a non-PRT mode.
 TEST_F(ViewCli, ScreenshotMatchesRenderWithLookOptions) {
   if (!on_path("xvfb-run")) PRT_SKIP_WITHOUT_GL("xvfb-run is not on PATH (scripts/install-deps.sh installs xvfb)");
@@ -375,6 +385,53 @@ TEST_F(ViewCli, NoDisplayPointsToRender) {
 // ---- input -> ViewState (no window) -----------------------------------------
 
 using namespace cli;
+
+TEST(ViewInput, LightKeysEditTheSelectedLight) {
+  ViewState s;
+  s.light_step = 0.5;
+  Light point, sun;
+  point.position = {1, 2, 3};
+  point.intensity = 2;
+  sun.type = LightType::Directional;
+  sun.direction = {0, -1, 0};
+  s.lights = {point, sun};
+  s.sun = 1;
+  on_key(s, input::kKeyRight, input::kPress, 0);  // nothing selected: nothing moves
+  EXPECT_FALSE(s.lights_changed);
+  on_key(s, input::kKeyF, input::kPress, 0);
+  EXPECT_EQ(s.selected, 0);
+  on_key(s, input::kKeyRight, input::kPress, 0);
+  on_key(s, input::kKeyUp, input::kPress, 0);
+  on_key(s, input::kKeyPageUp, input::kRepeat, 0);
+  EXPECT_EQ(s.lights[0].position, glm::dvec3(1.5, 2.5, 2.5));
+  EXPECT_TRUE(s.lights_changed);
+  on_key(s, input::kKeyU, input::kPress, 0);
+  EXPECT_DOUBLE_EQ(s.lights[0].intensity, 2 * kLightGain);
+  on_key(s, input::kKeyU, input::kPress, input::kModShift);
+  on_key(s, input::kKeyU, input::kPress, input::kModShift);
+  EXPECT_DOUBLE_EQ(s.lights[0].intensity, 2 / kLightGain);
+  on_key(s, input::kKeyO, input::kPress, 0);
+  EXPECT_EQ(s.lights[0].color, kLightColours[1]);
+  // The sun turns rather than moves: 5 degrees about +Y, its elevation kept.
+  on_key(s, input::kKeyF, input::kPress, 0);
+  EXPECT_EQ(s.selected, 1);
+  on_key(s, input::kKeyUp, input::kPress, 0);
+  EXPECT_NEAR(glm::degrees(std::acos(-s.lights[1].direction.y)), kLightTurnDegrees, 1e-9);
+  EXPECT_NEAR(glm::length(s.lights[1].direction), 1.0, 1e-12);
+  // X removes it; the sun's index follows the list.
+  on_key(s, input::kKeyF, input::kPress, input::kModShift);
+  EXPECT_EQ(s.selected, 0);
+  on_key(s, input::kKeyX, input::kPress, 0);
+  ASSERT_EQ(s.lights.size(), 1u);
+  ASSERT_TRUE(s.sun.has_value());
+  EXPECT_EQ(*s.sun, 0u);
+  on_key(s, input::kKeyX, input::kPress, 0);
+  EXPECT_TRUE(s.lights.empty());
+  EXPECT_FALSE(s.sun.has_value());
+  EXPECT_EQ(s.selected, -1);
+  on_key(s, input::kKeyA, input::kPress, 0);
+  EXPECT_TRUE(s.add_light);  // the frame loop places it
+}
 
 TEST(ViewInput, KeysChangeTheLook) {
   ViewState s;

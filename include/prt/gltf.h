@@ -1,15 +1,16 @@
 // prt/gltf.h - glTF 2.0 export of a mesh and its SH transfer (docs/FORMAT.md,
 // "glTF export").
 //
-// One scene, one node, one mesh, one triangle primitive: indices (SCALAR
+// One scene, one mesh node, one mesh, one triangle primitive: indices (SCALAR
 // UNSIGNED_INT), POSITION (VEC3 FLOAT, with min and max), NORMAL (VEC3 FLOAT,
 // the mesh's unit normals; left out when a vertex has none, see below), the
 // dense transfer as custom attributes _PRT_T0 .. _PRT_T{n-1} (VEC4 FLOAT:
 // every vertex, analytic ones evaluated, prt::dense_transfer) and, when
-// baked, COLOR_0 (VEC3 FLOAT, linear, in [0, 1]). Coefficient j of a vertex's
-// row ([channel][k], k = l(l+1)+m) is component j % 4 of attribute j / 4; the
-// last attribute is zero-padded. asset.extras.prt describes all of it
-// (gltf_extras). ".glb" writes the binary container; ".gltf" writes JSON
+// baked, COLOR_0 (VEC3 FLOAT, linear, in [0, 1]); the scene's lights, if
+// any, as KHR_lights_punctual, a node each beside the mesh's. Coefficient j
+// of a vertex's row ([channel][k], k = l(l+1)+m) is component j % 4 of
+// attribute j / 4; the last attribute is zero-padded. asset.extras.prt
+// describes all of it (gltf_extras). ".glb" writes the binary container; ".gltf" writes JSON
 // with the one buffer embedded as a base64 data: URI (a single file, written
 // atomically; glTF viewers and Assimp read it).
 //
@@ -39,6 +40,7 @@ struct GltfBake {
   std::string map;             // the environment map (as given)
   double rotate[3] = {0, 0, 0};  // yaw, pitch, roll in degrees (prt relight --rotate)
   double exposure = 0;         // stops: the colour is radiance x 2^exposure, clamped to [0, 1]
+  std::string lights;          // the lights whose direct light the bake includes ("" none), as extras says
 };
 
 struct GltfOptions {
@@ -46,6 +48,12 @@ struct GltfOptions {
   // (write_gltf refuses others), described by `bake`.
   std::vector<glm::vec3> colors;
   GltfBake bake;
+  // The scene's lights (world space, prt/lights.h), written as
+  // KHR_lights_punctual: each light in the root's list and a root node of its
+  // own whose transform puts it at `position` with its -Z along `direction`
+  // (KHR: a light shines down its node's -Z), so prt::load_scene reads them
+  // back. The writers refuse a light check_light refuses.
+  std::vector<Light> lights;
   // Recorded in extras: where the transfer came from (a path, or "").
   std::string transfer_source;
   std::string generator = "prt";  // asset.generator
@@ -90,6 +98,7 @@ struct GltfLightmapOptions {
   // written as an sRGB PNG the materials show unlit at TEXCOORD_1; empty: none.
   std::vector<glm::vec3> baked;
   GltfBake bake;                  // what extras records of it
+  std::vector<Light> lights;      // KHR_lights_punctual, as GltfOptions::lights
   std::string transfer_source;    // recorded in extras
   std::string generator = "prt";
 };

@@ -68,10 +68,13 @@ namespace prt {
 
 // The most bands the renderer's lighting block holds (16^2 = 256 vec4s).
 inline constexpr int kMaxRenderBands = 16;
-// Shadow maps of lights (Renderer::set_lights): texels a side. 1024: within
-// 2% relative RMS of traced shadows on the bundled room (docs/LIGHTS.md "On
-// the GPU"); 8192: a 256 MiB cube of 32-bit distances.
-inline constexpr int kDefaultShadowMapSize = 1024, kMaxShadowMapSize = 8192;
+// Shadow maps of lights (Renderer::set_lights): texels a side of a point or
+// spot light's cube faces; a directional light's map, spanning the whole
+// scene, has twice as many. 512: within 0.3% relative RMS of traced shadows
+// on the bundled room, the sun 0 (docs/LIGHTS.md "On the GPU"), and a frame
+// with 4 moving lights and a turning sun 1.7x the static lightmapped frame
+// on llvmpipe (1024: 4.7x); 8192: a 1.5 GiB cube of 32-bit distances.
+inline constexpr int kDefaultShadowMapSize = 512, kMaxShadowMapSize = 8192;
 // The most bands of a glossy transfer the renderer takes: prt::kMaxGlossyBands
 // (prt/precompute.h, which the runtime does not include; tests/test_render_glossy.cpp
 // pins the two equal). The glossy pass keeps bands^2 basis values per invocation.

@@ -17,6 +17,7 @@ from ._prt import (  # noqa: F401
     MAX_BANDS,
     EnvMap,
     Error,
+    Light,
     Lightmap,
     Mesh,
     ProbeVolume,
@@ -29,6 +30,7 @@ from ._prt import (  # noqa: F401
     compression_error,
     data_dir,
     deform,
+    direct_light,
     export_gltf,
     export_probes,
     export_web,
@@ -45,6 +47,7 @@ from ._prt import (  # noqa: F401
     precompute_probes,
     project,
     read_lightmap,
+    read_lights,
     read_probes,
     read_transfer,
     read_wavelet,
@@ -57,6 +60,7 @@ from ._prt import (  # noqa: F401
     rotate_sh,
     rotation_from_euler,
     sh_eval,
+    split_sun,
     verify,
     write_vertex_csv,
 )
@@ -68,6 +72,7 @@ __all__ = [
     "rotation_from_euler", "sh_eval", "write_vertex_csv", "ZhTransfer", "deform", "fit_zh", "pose", "read_zh",
     "WaveletTransfer", "read_wavelet", "compress", "compression_error",
     "info", "verify", "render", "export_gltf", "export_web", "export_probes", "read_exr",
+    "Light", "read_lights", "split_sun", "direct_light",
 ]
 
 
@@ -223,3 +228,5 @@ for _name in __all__:
     elif callable(_obj) and not isinstance(_obj, type):
         globals()[_name] = _checked(_obj, _name)
 del _name, _obj
+# The one constructor that takes arguments: Light(type, *, color=..., ...).
+Light.__init__ = _checked(Light.__init__, "Light")

@@ -83,9 +83,14 @@ class Lightmap:
     @property
     def mode(self) -> Any:
         ...
-    def relight(self, scene: Scene, lighting: Any) -> numpy.ndarray:
+    def relight(self, scene: Scene, lighting: Any, *, lights: Any = ...) -> numpy.ndarray:
         """
-        The lightmap relit under `lighting` (coefficients (n*n, 3), project()) on `scene` (the Scene it was computed for): float32 (H, W, 4), prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)
+        The lightmap relit on `scene` (the Scene it was computed for), as prt relight SCENE LIGHTMAP ENV [--lights ...] -o x.exr: float32 (H, W, 4), its EXR (RGB linear radiance, A = 1 at covered texels, gutters filled).
+
+        Arguments:
+          scene: the Scene.
+          lighting: coefficients (n*n, 3) (project()), at least the lightmap's bands^2.
+          lights: a list of Light (None: none): their direct light, traced against the scene at the texels' sample points, is added [--lights]. Only these: the scene's own (scene.lights) are added by passing them too. The sun split (--sun auto) takes the map, which SH lighting no longer is: split_sun(map) first, project the sky, and pass the sun in lights= (docs/LIGHTS.md).
         """
     def rows(self, scene: Scene) -> numpy.ndarray:
         """
@@ -166,9 +171,9 @@ class ProbeVolume:
     """
     def __repr__(self) -> str:
         ...
-    def at(self, scene: Scene, points: Any, normals: Any, sh: Any) -> numpy.ndarray:
+    def at(self, scene: Scene, points: Any, normals: Any, sh: Any, *, lights: Any = ...) -> numpy.ndarray:
         """
-        float32 (N, 3): E(p, n)/pi at `points` (N, 3) with `normals` (N, 3; each non-zero, normalised) in `scene` (the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility). Points and normals must be finite.
+        float32 (N, 3): E(p, n)/pi at `points` (N, 3) with `normals` (N, 3; each non-zero, normalised) in `scene` (the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at (traced visibility). Points and normals must be finite. `lights`: a list of Light (None: none), their direct light E/pi traced at the points themselves and added, as prt relight --at --lights (only these: pass scene.lights too for the scene's own). The sun split (--sun auto): split_sun(map) first, relight() the sky and pass the sun in lights= (docs/LIGHTS.md).
         """
     @property
     def bands(self) -> Any:
@@ -228,6 +233,11 @@ class Scene:
     def lightmap_uv_set(self, requested: int = ...) -> int:
         """
         The UV set a lightmap is laid out in: `requested` (0 to 7, TEXCOORD_N; every object must have it) or, with -1, TEXCOORD_1 when every object has two sets, else TEXCOORD_0 (prt precompute --uv). Raises prt.Error for any other number, and naming the objects that lack the set.
+        """
+    @property
+    def lights(self) -> Any:
+        """
+        list of Light: the glTF's KHR_lights_punctual lights, placed by their nodes (none for OBJ): what prt relight and prt reference light the scene with unless --lights none. A copy: pass it (plus read_lights(path)) as lights= to light with them
         """
     @property
     def normals(self) -> numpy.ndarray:
@@ -508,25 +518,27 @@ def read_vertex_csv(path: Any) -> tuple:
     Reads the vertex CSV at `path` (prt relight -o x.csv, prt reference): (rgb, std_error or None), float32 (V, 3).
     """
 
-def reference(mesh: Mesh, map: Any, *, mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., samples: int = ..., seed: int = ..., offset: float = ..., rotate: Any = ..., threads: int = ..., progress: Any = ...) -> tuple:
+def reference(mesh: Mesh, map: Any, *, mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., samples: int = ..., seed: int = ..., offset: float = ..., rotate: Any = ..., threads: int = ..., progress: Any = ..., lights: Any = ..., sun: str = ...) -> tuple:
     """
     Monte Carlo ground truth, as prt reference computes it (the same defaults, the same bits): every vertex's outgoing radiance traced against the map itself, no SH. Releases the GIL.
 
     Arguments (prt reference's option in brackets):
       mesh: the Mesh.
-      map: an EnvMap, a file name or an (H, W, 3) lat-long array of linear radiance.
+      map: an EnvMap, a file name or an (H, W, 3) lat-long array of linear radiance; None: no light from afar (black; the lights alone) [ENV none].
       samples: paths per vertex (4096) [--samples].
       mode: 'unshadowed', 'shadowed' or 'interreflected' [--mode]; bounces: of 'interreflected' [--bounces].
       albedo: a number or (r, g, b) in [0, 1] (0.8) [--albedo]; vertex_colors: the mesh's colours as albedo.
       seed [--seed], threads [--threads], offset (mesh units; 0: 1e-4 x the diagonal) [--offset].
       rotate: the map turned by a 3x3 rotation R or (yaw, pitch, roll) degrees (light from d arrives from R d) [--rotate].
+      lights: a list of Light (None: none), in world space (not turned by rotate): each light's delta, estimated exactly at every vertex of every path with its shadow ray (in 'interreflected' mode the lights' light bounces too) [--lights]. Only these: a glTF's own lights (load_scene(path).lights) are added by passing them too (docs/LIGHTS.md).
+      sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun) and added to the lights as a directional light turned by rotate [--sun].
       progress: as precompute's.
 
     Returns (radiance, std_error): float32 (V, 3) each, linear RGB.
     """
 
 @overload
-def relight(transfer: Transfer, mesh: Any, lighting: Any, *, direct: bool = ..., eye: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ...) -> Any:
+def relight(transfer: Transfer, mesh: Any, lighting: Any, *, direct: bool = ..., eye: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ..., lights: Any = ...) -> Any:
     """
     Outgoing radiance under SH lighting, as prt relight computes it (a glossy transfer's diffuse part without eye=).
 
@@ -538,11 +550,12 @@ def relight(transfer: Transfer, mesh: Any, lighting: Any, *, direct: bool = ...,
       eye: a glossy transfer's eye point (3,) in mesh units, or (E, 3) for E eyes [--eye].
       gloss: the Phong exponent e, 0 to 4096 (16) [--gloss]; specular: the lobe's strength rho_s in [0, 1] (0.5) [--specular].
       diffuse: rho_d, a number or (r, g, b) in [0, 1] (None: the transfer's own albedo) [--diffuse]. docs/GLOSSY.md.
+      lights: a list of Light (None: none): their direct light, traced against the mesh at its vertices with the transfer's albedo (and, with eye, their glossy lobe), is added [--lights] (docs/LIGHTS.md). The sun split (--sun auto) needs the map: split_sun(map) first, project the sky, and pass the sun in lights=.
 
     Returns float32 (V, 3) linear RGB radiance; with eye (E, 3): (E, V, 3).
     """
 @overload
-def relight(transfer: WaveletTransfer, mesh: Mesh, map: Any, *, terms: int = ..., selection: str = ..., rotate: Any = ...) -> numpy.ndarray:
+def relight(transfer: WaveletTransfer, mesh: Mesh, map: Any, *, terms: int = ..., selection: str = ..., rotate: Any = ..., lights: Any = ..., sun: str = ...) -> numpy.ndarray:
     """
     A wavelet transfer's outgoing radiance under a map, as prt relight --terms K --selection S [--rotate]: the map resampled to the cube (rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept, each vertex's sum over them.
 
@@ -552,17 +565,20 @@ def relight(transfer: WaveletTransfer, mesh: Mesh, map: Any, *, terms: int = ...
       terms: K, the coefficients kept (100) [--terms].
       selection: 'area' (|c| times its support's area, Ng et al. 2003) or 'magnitude' (|c|) [--selection].
       rotate: a 3x3 rotation or (yaw, pitch, roll) degrees [--rotate].
+      lights: a list of Light (None: none): their direct light, traced against the mesh at its vertices with the transfer's albedo, is added [--lights] (docs/LIGHTS.md).
+      sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun), the rest relit through the transfer and the sun traced as a directional light turned by rotate [--sun].
 
     Returns float32 (V, 3).
     """
 @overload
-def relight(transfer: ZhTransfer, mesh: Mesh, lighting: Any, *, direct: bool = ...) -> numpy.ndarray:
+def relight(transfer: ZhTransfer, mesh: Mesh, lighting: Any, *, direct: bool = ..., lights: Any = ...) -> numpy.ndarray:
     """
     A zonal-harmonic transfer's outgoing radiance in the pose `mesh`, as prt relight POSED f.prt ENV [--deform ...].
 
     Arguments:
       transfer: a ZhTransfer (fit_zh, read_zh); mesh: the rest mesh or any pose of it (deform, pose).
       lighting: coefficients (n*n, 3) (project()); direct: the direct part only [--direct].
+      lights: a list of Light (None: none): their direct light, traced against the pose at its vertices, is added [--lights] (docs/LIGHTS.md). The sun split (--sun auto) needs the map: split_sun(map) first, project the sky, and pass the sun in lights=.
 
     Returns float32 (V, 3).
     """
@@ -919,4 +935,102 @@ def export_probes(probes: Any, scene: Scene, bake: Any, path: Any, *, rotate: An
 def read_exr(path: Any) -> numpy.ndarray:
     """
     The pixels of the EXR image at `path` as float32 (height, width, 4) when it has an alpha channel (prt render --alpha, lightmaps: A is coverage), else (height, width, 3); row 0 at the top.
+    """
+
+class Light:
+    """
+    A light inside the scene (prt/lights.h, docs/LIGHTS.md): a point, spot or directional light as glTF's KHR_lights_punctual defines it, in world space, in the map's radiance unit (a point light of intensity I gives irradiance I / d^2 facing it; a directional one I)
+    """
+    def __init__(self, type: str = ..., *, color: Any = ..., intensity: float = ..., range: Any = ..., position: Any = ..., direction: Any = ..., inner_cone_angle: float = ..., outer_cone_angle: float = ..., name: str = ...) -> None:
+        """
+        A light, checked as a --lights file's (a prt.Error names what is out of range).
+
+        Arguments (the lights file's key in brackets):
+          type: 'point', 'spot' or 'directional' [type].
+          color: linear RGB (r, g, b), each >= 0 ((1, 1, 1)) [color].
+          intensity: >= 0: candela for point and spot lights, lux for directional ones, in the map's radiance unit (1) [intensity].
+          range: point and spot: > 0, the distance past which the light gives nothing (KHR's window), or None [range].
+          position: point and spot: (x, y, z) in world space ((0, 0, 0)) [position].
+          direction: spot and directional (required): (x, y, z), the way the light travels (normalised) [direction].
+          inner_cone_angle, outer_cone_angle: spot: radians, 0 <= inner < outer <= pi/2 (0 and pi/4) [innerConeAngle, outerConeAngle].
+          name: a name for messages ('') [name].
+        """
+    def __repr__(self) -> str:
+        ...
+    @property
+    def color(self) -> Any:
+        """
+        (r, g, b), linear, each >= 0
+        """
+    @property
+    def direction(self) -> Any:
+        """
+        Spot and directional: the unit direction the light travels (a value set is normalised)
+        """
+    @property
+    def inner_cone_angle(self) -> Any:
+        """
+        Spot: radians, 0 <= inner < outer
+        """
+    @property
+    def intensity(self) -> Any:
+        """
+        Candela (point, spot) or lux (directional), >= 0, in the map's radiance unit
+        """
+    @property
+    def name(self) -> Any:
+        """
+        The light's name (a glTF light's name, or 'light N')
+        """
+    @property
+    def outer_cone_angle(self) -> Any:
+        """
+        Spot: radians, inner < outer <= pi/2
+        """
+    @property
+    def position(self) -> Any:
+        """
+        Point and spot: (x, y, z), world space
+        """
+    @property
+    def range(self) -> Any:
+        """
+        Point and spot: the distance past which the light gives nothing (> 0), or None
+        """
+    @property
+    def type(self) -> Any:
+        """
+        'point', 'spot' or 'directional'
+        """
+
+def read_lights(path: Any) -> list:
+    """
+    Reads the lights file at `path` (prt relight --lights FILE.json): a JSON array of point, spot and directional lights in world space (docs/LIGHTS.md). Returns a list of Light, each named by its "name" or 'light N'. Raises prt.Error naming the file, the light's index and the problem (an unknown key, a field out of range).
+    """
+
+def split_sun(map: Any, *, rotate: Any = ...) -> Any:
+    """
+    The sun split of prt relight --sun auto (docs/LIGHTS.md, prt/sun.h): the map's brightest compact source taken out of it as a directional light of the same irradiance, with sharp shadows.
+
+    Arguments:
+      map: an EnvMap, a file name or an array (H, W, 3) or (6, N, N, 3).
+      rotate: the rotation the map will be lit with, a 3x3 matrix or (yaw, pitch, roll) degrees (light from d arrives from R d) [--rotate]: it turns the sun's light and info's direction, not the sky (pass the same rotate= to the call that takes the sky).
+
+    Returns None when the map has no compact bright source (overcast, studio lamps), else (sky, sun, info): sky an EnvMap, the map less the sun's excess over its rim (same layout; sky + sun hold the map's power); sun a directional Light named 'sun'; info a dict: direction (unit, toward the sun, turned by rotate), irradiance (r, g, b) on a surface facing it, solid_angle (sr), pixels, power_fraction (its share of the map's luminance x solid angle).
+
+    For calls that take SH lighting (relight of a Transfer, ZhTransfer or Lightmap): project the sky and pass the sun in lights=.
+    """
+
+def direct_light(mesh: Any, lights: Any, positions: Any = ..., normals: Any = ..., *, albedo: Any = ..., offset: float = ...) -> numpy.ndarray:
+    """
+    The lights' direct light at points on the surfaces (prt/direct_light.h): B = albedo / pi x sum over lights of E_l max(n . l, 0) V, each light's visibility V traced (sharp shadows). What prt relight adds to the PRT relighting and the noise-free part of prt reference with lights. Releases the GIL.
+
+    Arguments:
+      mesh: a Mesh or a Scene: the occluders (and, without positions, the points: its vertices).
+      lights: a list of Light (None: none).
+      positions, normals: float (N, 3) each, the points and their normals (normalised; a zero normal gives 0), or None for both: the mesh's vertices and normals.
+      albedo: a number, (r, g, b) or (N, 3) per point, in [0, 1] (0.8, reference()'s default).
+      offset: the shadow rays' origin offset, mesh units (0: 1e-4 x the bounding-box diagonal) [--offset].
+
+    Returns float32 (N, 3) linear RGB radiance.
     """

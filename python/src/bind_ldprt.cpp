@@ -181,7 +181,8 @@ void bind_ldprt_pose(py::module_& m) {
 
   m.def(
       "relight",
-      [](const PyZhTransfer& p, const prt::Mesh& posed, const py::object& lighting, bool direct) {
+      [](const PyZhTransfer& p, const prt::Mesh& posed, const py::object& lighting, bool direct,
+         const py::object& lights) {
         const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
         const std::size_t need = std::size_t(p.z.bands) * p.z.bands;
         if (light.size() < need)
@@ -189,20 +190,29 @@ void bind_ldprt_pose(py::module_& m) {
                       std::to_string(p.z.bands) + " bands and needs " + std::to_string(need));
         if (direct) throw Error(p.source + ": direct=True: a zonal-harmonic transfer holds lobes of one transfer (no direct part)");
         prt::check_pose(p.z, posed, p.source);
+        const std::vector<prt::Light> ls = lights_arg(lights);
         std::vector<glm::vec3> rgb;
         {
           py::gil_scoped_release release;
           const prt::Transfer t = prt::posed_as_transfer(p.z, posed);
           rgb = prt::relight(t, posed, light);
+          if (!ls.empty()) {
+            // The pose's own shadows, with the albedo the transfer relit with (prt relight's add_lights).
+            std::vector<glm::vec3> albedo(rgb.size());
+            for (std::size_t v = 0; v < albedo.size(); ++v) albedo[v] = prt::vertex_albedo(t, posed, v);
+            add_direct_light(rgb, ls, posed, posed.positions, posed.normals, albedo);
+          }
         }
         return vec3s(rgb);
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
+      py::arg("lights") = py::none(),
       "A zonal-harmonic transfer's outgoing radiance in the pose `mesh`, as prt relight POSED f.prt ENV [--deform ...].\n"
       "\n"
       "Arguments:\n"
       "  transfer: a ZhTransfer (fit_zh, read_zh); mesh: the rest mesh or any pose of it (deform, pose).\n"
       "  lighting: coefficients (n*n, 3) (project()); direct: the direct part only [--direct].\n"
+      "  lights: a list of Light (None: none): their direct light, traced against the pose at its vertices, is added [--lights] (docs/LIGHTS.md). The sun split (--sun auto) needs the map: split_sun(map) first, project the sky, and pass the sun in lights=.\n"
       "\n"
       "Returns float32 (V, 3).");
 }

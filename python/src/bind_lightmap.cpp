@@ -52,6 +52,10 @@ void bind_lightmap_scene(py::module_& m) {
                                return l;
                              })
       .def_property_readonly("hash", &prt::Scene::hash, "Scene hash (a lightmap's scene_hash)")
+      .def_property_readonly("lights", [](const prt::Scene& s) { return s.lights; },
+                             "list of Light: the glTF's KHR_lights_punctual lights, placed by their nodes (none for "
+                             "OBJ): what prt relight and prt reference light the scene with unless --lights none. "
+                             "A copy: pass it (plus read_lights(path)) as lights= to light with them")
       .def(
           "lightmap_uv_set",
           [](const prt::Scene& s, int requested) { return s.lightmap_uv_set(uv_set_arg(requested, "requested")); },
@@ -124,24 +128,43 @@ void bind_lightmap_transfer(py::module_& m) {
           "float32 (N, channels, bands^2): every covered texel's transfer, analytic ones evaluated from `scene`")
       .def(
           "relight",
-          [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& lighting) {
+          [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& lighting,
+             const py::object& lights) {
             const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
             if (light.size() < std::size_t(l.transfer.bands) * l.transfer.bands)
               throw Error("lighting: fewer coefficients than the lightmap's bands^2");
+            const std::vector<prt::Light> ls = lights_arg(lights);
             std::vector<glm::vec4> img;
             {
               py::gil_scoped_release release;
-              const prt::LightmapTexels tx =
+              prt::LightmapTexels tx =
                   prt::lightmap_texels(scene, l.layout.width, l.layout.height, l.layout.uv_set,
                                        l.transfer.vertex_colors ? nullptr : &l.transfer.albedo);
               prt::check_matches(l, tx, "lightmap");
-              img = prt::lightmap_image(l.layout, prt::relight_lightmap(l, tx, light));
+              std::vector<glm::vec3> rgb = prt::relight_lightmap(l, tx, light);
+              if (!ls.empty()) {
+                // The lights at the points prt precompute traced from: the
+                // texels moved out of geometry as it moves them (prt relight's
+                // add_texel_lights), so that the bits are the command's.
+                prt::move_texels_out_of_geometry(scene.mesh, tx);
+                add_direct_light(rgb, ls, scene.mesh, tx.positions, tx.normals, tx.albedo);
+              }
+              img = prt::lightmap_image(l.layout, rgb);
             }
             return copy(reinterpret_cast<const float*>(img.data()), {l.layout.height, l.layout.width, 4});
           },
-          py::arg("scene"), py::arg("lighting"),
-          "The lightmap relit under `lighting` (coefficients (n*n, 3), project()) on `scene` (the Scene it was computed for): "
-          "float32 (H, W, 4), prt relight's EXR (RGB linear radiance, A = 1 at covered texels, gutters filled)")
+          py::arg("scene"), py::arg("lighting"), py::kw_only(), py::arg("lights") = py::none(),
+          "The lightmap relit on `scene` (the Scene it was computed for), as prt relight SCENE LIGHTMAP ENV "
+          "[--lights ...] -o x.exr: float32 (H, W, 4), its EXR (RGB linear radiance, A = 1 at covered texels, gutters "
+          "filled).\n"
+          "\n"
+          "Arguments:\n"
+          "  scene: the Scene.\n"
+          "  lighting: coefficients (n*n, 3) (project()), at least the lightmap's bands^2.\n"
+          "  lights: a list of Light (None: none): their direct light, traced against the scene at the texels' sample "
+          "points, is added [--lights]. Only these: the scene's own (scene.lights) are added by passing them too. "
+          "The sun split (--sun auto) takes the map, which SH lighting no longer is: split_sun(map) first, project "
+          "the sky, and pass the sun in lights= (docs/LIGHTS.md).")
       .def("write", [](const prt::LightmapTransfer& l, const py::object& path) {
         prt::write_lightmap_transfer(path_of(path, "path"), l);
       }, py::arg("path"), "Writes the lightmap file to `path` (docs/FORMAT.md), atomically (a temporary file, then renamed).")

@@ -85,7 +85,7 @@ void bind_probes_volume(py::module_& m) {
       .def(
           "at",
           [](const prt::ProbeTransfer& t, const prt::Scene& scene, const py::object& points, const py::object& normals,
-             const py::object& sh) {
+             const py::object& sh, const py::object& lights) {
             DArray p = real_array<double>(points, "points"), n = real_array<double>(normals, "normals");
             FArray l = real_array<float>(sh, "sh");
             const py::ssize_t nc = py::ssize_t(t.bands) * t.bands;
@@ -95,6 +95,7 @@ void bind_probes_volume(py::module_& m) {
             if (l.ndim() != 3 || l.shape(0) != py::ssize_t(t.probes()) || l.shape(1) != nc || l.shape(2) != 3)
               throw Error("sh: float32 (P, bands^2, 3), what relight() returns");
             if (scene.hash() != t.scene_hash) throw Error("scene: not the scene the probe volume was computed for");
+            const std::vector<prt::Light> ls = lights_arg(lights);
             const std::size_t N = std::size_t(p.shape(0));
             // Every normal non-zero, and used as a unit normal: prt relight --at's rule for its points' normals.
             std::vector<glm::dvec3> unit(N);
@@ -127,13 +128,30 @@ void bind_probes_volume(py::module_& m) {
                 const glm::dvec3 e = prt::lambert_from_sh(mix, t.bands, nn);
                 for (int c = 0; c < 3; ++c) out[i * 3 + std::size_t(c)] = float(e[c]);
               }
+              if (!ls.empty()) {
+                // The lights at the points themselves (a white surface facing
+                // the normal), traced there, not interpolated from the probes:
+                // prt relight --at's.
+                std::vector<glm::vec3> rgb(N), pos(N), nrm(N);
+                for (std::size_t i = 0; i < N; ++i) {
+                  rgb[i] = {out[i * 3], out[i * 3 + 1], out[i * 3 + 2]};
+                  pos[i] = glm::vec3(glm::dvec3(p.at(i, 0), p.at(i, 1), p.at(i, 2)));
+                  nrm[i] = glm::vec3(unit[i]);
+                }
+                add_direct_light(rgb, ls, scene.mesh, pos, nrm, std::vector<glm::vec3>(N, glm::vec3(1.0f)));
+                std::memcpy(out.data(), rgb.data(), N * sizeof(glm::vec3));
+              }
             }
             return copy(out.data(), {py::ssize_t(N), 3});
           },
-          py::arg("scene"), py::arg("points"), py::arg("normals"), py::arg("sh"),
+          py::arg("scene"), py::arg("points"), py::arg("normals"), py::arg("sh"), py::kw_only(),
+          py::arg("lights") = py::none(),
           "float32 (N, 3): E(p, n)/pi at `points` (N, 3) with `normals` (N, 3; each non-zero, normalised) in `scene` "
           "(the Scene the volume was computed for) from the relit probes `sh` (relight()'s), as prt relight --at "
-          "(traced visibility). Points and normals must be finite.")
+          "(traced visibility). Points and normals must be finite. `lights`: a list of Light (None: none), their "
+          "direct light E/pi traced at the points themselves and added, as prt relight --at --lights (only these: "
+          "pass scene.lights too for the scene's own). The sun split (--sun auto): split_sun(map) first, relight() "
+          "the sky and pass the sun in lights= (docs/LIGHTS.md).")
       .def(
           "matrices",
           [](const prt::ProbeTransfer& t, int in_bands) {

@@ -27,7 +27,7 @@ void bind_reference(py::module_& m) {
       "reference",
       [](const prt::Mesh& mesh, const py::object& map, const std::string& mode, int bounces, const py::object& albedo,
          bool vertex_colors, int samples, std::uint64_t seed, double offset, const py::object& rotate, int threads,
-         py::object progress) {
+         py::object progress, const py::object& lights, const std::string& sun) {
         prt::ReferenceOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bounces = bounces;
@@ -37,10 +37,23 @@ void bind_reference(py::module_& m) {
         o.seed = seed;
         o.offset = offset;
         if (!rotate.is_none()) o.rotation = to_rotation(rotate, "rotate");
+        o.lights = lights_arg(lights);
+        const bool split = sun_arg(sun);
+        // map=None: no light from afar (prt reference's ENV `none`): black.
         prt::EnvMap loaded;
-        const prt::EnvMap* e = &map_argument(map, loaded);
+        if (map.is_none()) loaded = prt::make_latlong(2, 1, std::vector<float>(6, 0.0f), "none (no environment)");
+        const prt::EnvMap* e = map.is_none() ? &loaded : &map_argument(map, loaded);
         prt::require_finite(*e);
         if (e->is_cube()) throw Error(e->source + ": the reference needs a lat-long (2:1) map, not " + e->source_layout);
+        // sun='auto': the map's sun taken out into the lights, as the command
+        // does (reference_map in tools/prt/cmd_reference.cpp).
+        if (split) {
+          if (e != &loaded) {
+            loaded = *e;
+            e = &loaded;
+          }
+          if (auto s = take_sun(loaded, o.rotation)) o.lights.push_back(std::move(*s));
+        }
         const auto limit = limit_threads(threads);
         const prt::ReferenceResult r = run_released(
             std::move(progress), [&](const prt::Progress& pr) { return prt::render_reference(mesh, *e, o, pr); });
@@ -49,17 +62,19 @@ void bind_reference(py::module_& m) {
       py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("mode") = "shadowed", py::arg("bounces") = 1,
       py::arg("albedo") = 0.8, py::arg("vertex_colors") = false, py::arg("samples") = 4096, py::arg("seed") = 1,
       py::arg("offset") = 0.0, py::arg("rotate") = py::none(), py::arg("threads") = 0,
-      py::arg("progress") = py::none(),
+      py::arg("progress") = py::none(), py::arg("lights") = py::none(), py::arg("sun") = "none",
       "Monte Carlo ground truth, as prt reference computes it (the same defaults, the same bits): every vertex's outgoing radiance traced against the map itself, no SH. Releases the GIL.\n"
       "\n"
       "Arguments (prt reference's option in brackets):\n"
       "  mesh: the Mesh.\n"
-      "  map: an EnvMap, a file name or an (H, W, 3) lat-long array of linear radiance.\n"
+      "  map: an EnvMap, a file name or an (H, W, 3) lat-long array of linear radiance; None: no light from afar (black; the lights alone) [ENV none].\n"
       "  samples: paths per vertex (4096) [--samples].\n"
       "  mode: 'unshadowed', 'shadowed' or 'interreflected' [--mode]; bounces: of 'interreflected' [--bounces].\n"
       "  albedo: a number or (r, g, b) in [0, 1] (0.8) [--albedo]; vertex_colors: the mesh's colours as albedo.\n"
       "  seed [--seed], threads [--threads], offset (mesh units; 0: 1e-4 x the diagonal) [--offset].\n"
       "  rotate: the map turned by a 3x3 rotation R or (yaw, pitch, roll) degrees (light from d arrives from R d) [--rotate].\n"
+      "  lights: a list of Light (None: none), in world space (not turned by rotate): each light's delta, estimated exactly at every vertex of every path with its shadow ray (in 'interreflected' mode the lights' light bounces too) [--lights]. Only these: a glTF's own lights (load_scene(path).lights) are added by passing them too (docs/LIGHTS.md).\n"
+      "  sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun) and added to the lights as a directional light turned by rotate [--sun].\n"
       "  progress: as precompute's.\n"
       "\n"
       "Returns (radiance, std_error): float32 (V, 3) each, linear RGB.");

@@ -202,7 +202,8 @@ void bind_transfer_relight(py::module_& m) {
   m.def(
       "relight",
       [](const PyTransfer& p, const py::object& mesh_obj, const py::object& lighting, bool direct,
-         const py::object& eye, double gloss, double specular, const py::object& diffuse) -> py::object {
+         const py::object& eye, double gloss, double specular, const py::object& diffuse,
+         const py::object& lights) -> py::object {
         if (!py::isinstance<prt::Mesh>(mesh_obj))
           throw Error("mesh: expected a prt.Mesh (load_mesh, make_mesh), got " +
                       std::string(py::str(py::type::of(mesh_obj).attr("__name__"))));
@@ -218,6 +219,17 @@ void bind_transfer_relight(py::module_& m) {
                       std::string(prt::transfer_mode_name(p.t.mode)));
         if (direct && p.compressed)
           throw Error(p.source + ": direct=True: a compressed transfer keeps no direct part");
+        const std::vector<prt::Light> ls = lights_arg(lights);
+        // The albedo the lights' direct light takes: the one the transfer's
+        // relighting used (prt relight's add_lights; diffuse= replaces it for
+        // a glossy transfer seen from an eye).
+        const prt::Transfer& own = p.compressed ? p.compressed->transfer : p.t;
+        const auto albedo = [&](const std::optional<glm::dvec3>& rho_d) {
+          std::vector<glm::vec3> a(mesh.vertex_count());
+          for (std::size_t v = 0; v < a.size(); ++v)
+            a[v] = rho_d ? glm::vec3(*rho_d) : prt::vertex_albedo(own, mesh, v);
+          return a;
+        };
         if (eye.is_none()) {
           for (const auto& [name, given] : {std::pair{"gloss", gloss != 16.0}, std::pair{"specular", specular != 0.5},
                                             std::pair{"diffuse", !diffuse.is_none()}})
@@ -230,6 +242,7 @@ void bind_transfer_relight(py::module_& m) {
             rgb = p.compressed ? prt::relight(*p.compressed, mesh, light)
                   : direct     ? prt::relight_direct(p.t, mesh, light)
                                : prt::relight(p.t, mesh, light);
+            if (!ls.empty()) add_direct_light(rgb, ls, mesh, mesh.positions, mesh.normals, albedo(std::nullopt));
           }
           return vec3s(rgb);
         }
@@ -243,6 +256,10 @@ void bind_transfer_relight(py::module_& m) {
         shading.specular = specular;
         if (!diffuse.is_none()) shading.diffuse = diffuse_arg(diffuse);
         const std::size_t E = eyes.ndim() == 1 ? 1 : std::size_t(eyes.shape(0));
+        const std::vector<glm::vec3> rho =
+            ls.empty() ? std::vector<glm::vec3>()
+                       : albedo(diffuse.is_none() ? std::nullopt : std::optional<glm::dvec3>(shading.diffuse));
+        std::unique_ptr<prt::DirectLight> traced;  // the occluders' BVH, built once for all the eyes
         std::vector<glm::vec3> rgb;
         rgb.reserve(E * mesh.vertex_count());
         for (std::size_t e = 0; e < E; ++e) {
@@ -250,8 +267,14 @@ void bind_transfer_relight(py::module_& m) {
           if (auto problem = prt::glossy_shading_problem(p.t, shading); !problem.empty())
             throw Error(p.source + ": " + problem);
           py::gil_scoped_release release;
-          const std::vector<glm::vec3> one = p.compressed ? prt::relight_glossy(*p.compressed, mesh, light, shading)
-                                                          : prt::relight_glossy(p.t, mesh, light, shading);
+          std::vector<glm::vec3> one = p.compressed ? prt::relight_glossy(*p.compressed, mesh, light, shading)
+                                                    : prt::relight_glossy(p.t, mesh, light, shading);
+          if (!ls.empty()) {
+            if (!traced) traced = std::make_unique<prt::DirectLight>(mesh);
+            const std::vector<glm::vec3> d = traced->radiance(
+                ls, mesh.positions, mesh.normals, rho, prt::GlossyLobe{shading.eye, shading.gloss, shading.specular});
+            for (std::size_t v = 0; v < one.size(); ++v) one[v] += d[v];
+          }
           rgb.insert(rgb.end(), one.begin(), one.end());
         }
         if (eyes.ndim() == 1) return vec3s(rgb);
@@ -260,7 +283,7 @@ void bind_transfer_relight(py::module_& m) {
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("lighting"), py::kw_only(), py::arg("direct") = false,
       py::arg("eye") = py::none(), py::arg("gloss") = 16.0, py::arg("specular") = 0.5,
-      py::arg("diffuse") = py::none(),
+      py::arg("diffuse") = py::none(), py::arg("lights") = py::none(),
       "Outgoing radiance under SH lighting, as prt relight computes it (a glossy transfer's diffuse part without eye=).\n"
       "\n"
       "Arguments (prt relight's option in brackets):\n"
@@ -271,6 +294,7 @@ void bind_transfer_relight(py::module_& m) {
       "  eye: a glossy transfer's eye point (3,) in mesh units, or (E, 3) for E eyes [--eye].\n"
       "  gloss: the Phong exponent e, 0 to 4096 (16) [--gloss]; specular: the lobe's strength rho_s in [0, 1] (0.5) [--specular].\n"
       "  diffuse: rho_d, a number or (r, g, b) in [0, 1] (None: the transfer's own albedo) [--diffuse]. docs/GLOSSY.md.\n"
+      "  lights: a list of Light (None: none): their direct light, traced against the mesh at its vertices with the transfer's albedo (and, with eye, their glossy lobe), is added [--lights] (docs/LIGHTS.md). The sun split (--sun auto) needs the map: split_sun(map) first, project the sky, and pass the sun in lights=.\n"
       "\n"
       "Returns float32 (V, 3) linear RGB radiance; with eye (E, 3): (E, V, 3).");
 }

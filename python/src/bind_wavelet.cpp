@@ -62,7 +62,7 @@ void bind_wavelet(py::module_& m) {
   m.def(
       "relight",
       [](const PyWavelet& p, const prt::Mesh& mesh, const py::object& map, int terms, const std::string& selection,
-         const py::object& rotate) {
+         const py::object& rotate, const py::object& lights, const std::string& sun) {
         check_terms(terms);
         const prt::wavelet::Selection sel = [&] {
           try {
@@ -80,20 +80,39 @@ void bind_wavelet(py::module_& m) {
         }
         const glm::dmat3 R = rotate.is_none() ? glm::dmat3(1.0) : to_rotation(rotate, "rotate");
         prt::check_matches(p.t, mesh, p.source);
+        std::vector<prt::Light> ls = lights_arg(lights);
+        const bool split = sun_arg(sun);
         prt::EnvMap loaded;
         const prt::EnvMap* e = &map_argument(map, loaded);
         prt::require_finite(*e);
         std::vector<glm::vec3> rgb;
         {
           py::gil_scoped_release release;
+          // sun='auto': the sky relit through the transfer, the sun traced
+          // (prt relight --sun auto; a wavelet transfer has no bounce to give it).
+          prt::EnvMap sky;
+          if (split) {
+            sky = *e;
+            if (auto s = take_sun(sky, R)) {
+              ls.push_back(std::move(*s));
+              e = &sky;
+            }
+          }
           prt::wavelet::FrameLighting lighting(*e, p.t.cube_res);
           lighting.update(R, terms, sel);
           prt::wavelet_relight(p.t, lighting.coefficients().data(), lighting.terms(), rgb);
+          if (!ls.empty()) {
+            std::vector<glm::vec3> albedo(rgb.size());
+            for (std::size_t v = 0; v < albedo.size(); ++v)
+              albedo[v] = p.t.vertex_colors ? p.t.vertex_albedo[v] : p.t.albedo;
+            add_direct_light(rgb, ls, mesh, mesh.positions, mesh.normals, albedo);
+          }
         }
         return vec3s(rgb);
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("terms") = 100,
-      py::arg("selection") = "area", py::arg("rotate") = py::none(),
+      py::arg("selection") = "area", py::arg("rotate") = py::none(), py::arg("lights") = py::none(),
+      py::arg("sun") = "none",
       "A wavelet transfer's outgoing radiance under a map, as prt relight --terms K --selection S [--rotate]: the map resampled to the cube (rotated: light from d arrives from R d), Haar-transformed, its `terms` largest coefficients kept, each vertex's sum over them.\n"
       "\n"
       "Arguments:\n"
@@ -102,6 +121,8 @@ void bind_wavelet(py::module_& m) {
       "  terms: K, the coefficients kept (100) [--terms].\n"
       "  selection: 'area' (|c| times its support's area, Ng et al. 2003) or 'magnitude' (|c|) [--selection].\n"
       "  rotate: a 3x3 rotation or (yaw, pitch, roll) degrees [--rotate].\n"
+      "  lights: a list of Light (None: none): their direct light, traced against the mesh at its vertices with the transfer's albedo, is added [--lights] (docs/LIGHTS.md).\n"
+      "  sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun), the rest relit through the transfer and the sun traced as a directional light turned by rotate [--sun].\n"
       "\n"
       "Returns float32 (V, 3).");
 }

@@ -28,6 +28,7 @@ PYBIND11_MODULE(_prt, m) {
   // last (it takes a Transfer or a Lightmap).
   bind_maps(m);
   bind_mesh(m);
+  bind_lights(m);
   bind_transfer(m);
   bind_precompute(m);
   bind_transfer_relight(m);

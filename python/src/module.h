@@ -12,8 +12,10 @@
 #pragma once
 
 #include <prt/compressed_transfer.h>
+#include <prt/direct_light.h>
 #include <prt/envmap.h>
 #include <prt/error.h>
+#include <prt/lights.h>
 #include <prt/precompute.h>
 #include <prt/progress.h>
 #include <prt/transfer.h>
@@ -36,6 +38,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -270,6 +273,32 @@ const prt::EnvMap& map_argument(const py::object& map, prt::EnvMap& storage);
 // An array (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces) as a map.
 prt::EnvMap map_from_array(const py::handle& obj);
 
+// ---- lights inside the scene (bind_lights.cpp; docs/LIGHTS.md) -----------------
+//
+// The lights= and sun= arguments of the relighting calls and reference(),
+// prt relight's and prt reference's --lights and --sun. lights= is the whole
+// list: a Scene's own lights (Scene.lights) are not added unless passed.
+
+// lights=: None (no lights) or a list (any iterable but a str) of prt.Light.
+std::vector<prt::Light> lights_arg(const py::object& lights, const char* what = "lights");
+
+// sun=: 'none' (false) or 'auto' (true), as --sun.
+bool sun_arg(const std::string& sun);
+
+// sun='auto' (tools/prt/light_options.cpp's take_sun): takes the map's sun out
+// of `map` (in place: the sky stays) and returns it as a directional light
+// turned by `rotation` (the lighting's); nullopt when the map has no compact
+// bright source.
+std::optional<prt::Light> take_sun(prt::EnvMap& map, const glm::dmat3& rotation);
+
+// Adds the lights' direct light (prt::DirectLight: albedo/pi x irradiance,
+// each light's shadow ray traced against `occluders`) at the points to
+// `rgb`, as prt relight's add_lights. Nothing without lights. Call without
+// the GIL.
+void add_direct_light(std::vector<glm::vec3>& rgb, const std::vector<prt::Light>& lights, const prt::Mesh& occluders,
+                      std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                      std::span<const glm::vec3> albedo, const std::optional<prt::GlossyLobe>& lobe = std::nullopt);
+
 // ---- transfers -----------------------------------------------------------------
 
 // An SH transfer as Python sees it: the whole transfer (a compressed file's
@@ -303,6 +332,7 @@ struct PyWavelet {
 
 void bind_maps(py::module_& m);              // bind_maps.cpp: EnvMap, load_envmap, project, SH
 void bind_mesh(py::module_& m);              // bind_mesh.cpp: Mesh, load_mesh, make_mesh
+void bind_lights(py::module_& m);            // bind_lights.cpp: Light, read_lights, split_sun, direct_light
 void bind_transfer(py::module_& m);          // bind_transfer.cpp: Transfer, read_transfer
 void bind_precompute(py::module_& m);        // bind_precompute.cpp: precompute
 void bind_transfer_relight(py::module_& m);  // bind_transfer.cpp: relight (Transfer)

@@ -124,7 +124,8 @@ def args(cube, transfer, zh, tmp_path):
             [L[:, :2], L[:4], L[:0], L.ravel()], words="lighting"),
         Arg("relight (zh) lighting", lambda v: prt.relight(zh, cube, v), L, REAL_BAD,
             [L[:, :2], L[:4], L[:0]], words="lighting"),
-        Arg("reference map", lambda v: prt.reference(cube, v, samples=8), E, {**REAL_BAD, **FLOAT32_BAD},
+        # map=None is no environment (prt reference's ENV `none`): not a bad value.
+        Arg("reference map", lambda v: prt.reference(cube, v, samples=8), E, {**OPTIONAL_BAD, **FLOAT32_BAD},
             [np.zeros((8, 16, 4)), np.zeros((16,))], words="map"),
         Arg("reference rotate", lambda v: prt.reference(cube, E, samples=8, rotate=v), R, OPTIONAL_BAD,
             [np.eye(2), -np.eye(3)], words="rotate"),

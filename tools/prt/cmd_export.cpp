@@ -1,16 +1,20 @@
 // prt export: a mesh and its SH transfer as glTF 2.0 (prt/gltf.h), the
 // transfer dense in custom vertex attributes, optionally with colours baked
-// under a map (COLOR_0).
+// under a map (COLOR_0), the scene's lights kept (KHR_lights_punctual).
 #include "commands.h"
 #include "look.h"
 #include "progress_bar.h"
 #include "inputs.h"
+#include "light_options.h"
 
 #include <prt/compressed_transfer.h>
+#include <prt/direct_light.h>
 #include <prt/envmap.h>
 #include <prt/gltf.h>
 #include <prt/io.h>
 #include <prt/lightmap.h>
+#include <prt/lights.h>
+#include <prt/precompute.h>
 #include <prt/rotation.h>
 #include <prt/sh_convention.h>
 #include <prt/probes.h>
@@ -25,6 +29,7 @@
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <optional>
@@ -50,9 +55,47 @@ struct ExportArgs {
   std::string matrices;
   int matrix_bands = 3;
   const CLI::Option* matrix_bands_opt = nullptr;
+  LightArgs light;  // --lights, --sun (docs/LIGHTS.md "Export")
   // Every output goes through one Outputs (all or nothing): files added
   // later (a web page beside the model) are staged with the glTF.
 };
+
+// The lights the exported scene holds (docs/LIGHTS.md "Export"): the scene's
+// own (`scene_lights` when the caller loaded it, else read from MESH) and
+// --lights files', as prt relight lights it (command_lights). The page draws
+// the sky's PRT alone, so --web refuses them.
+std::vector<Light> export_lights(const ExportArgs& a, const std::vector<Light>* scene_lights) {
+  std::vector<Light> lights = command_lights(a.light, a.mesh, scene_lights);
+  if (a.web.empty() || lights.empty()) return lights;
+  const bool from_files =
+      std::any_of(a.light.files.begin(), a.light.files.end(), [](const std::string& f) { return f != "none"; });
+  const std::string why = fmt::format(
+      "--web: {} {} lit by {}: the page relights the sky's PRT only (lights in the page are not implemented yet); give "
+      "--lights none to write the page without them, or export the glTF alone (-o FILE.glb keeps them; docs/LIGHTS.md "
+      "\"Export\")",
+      a.mesh, from_files ? "with --lights is" : "is", describe_lights(lights));
+  if (from_files) throw UsageError(why);
+  throw Error(why);
+}
+
+// The lights whose direct light a bake adds, as prt relight adds them: the
+// scene's `lights` and, with --sun auto, the map's sun, taken out of `env` and
+// turned by --rotate with the sky (take_sun). `sun_map` (when given and a sun
+// is found): the sun's pixels alone, whose bounce an interreflected transfer
+// carries (add_sun_bounce).
+std::vector<Light> bake_lights(const ExportArgs& a, std::vector<Light> lights, EnvMap& env,
+                               const std::array<double, 3>& euler, std::optional<EnvMap>* sun_map) {
+  add_map_sun(a.light, lights, env, sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.quiet, sun_map);
+  if (!a.quiet && !lights.empty()) fmt::print(stderr, "baked with {} beside the map\n", describe_lights(lights));
+  return lights;
+}
+
+// What extras records of the bake's lights ("" without).
+std::string bake_lights_note(const std::vector<Light>& lights, bool sun) {
+  if (lights.empty()) return {};
+  return fmt::format("{}{}: their direct light traced as prt relight does (docs/LIGHTS.md)", describe_lights(lights),
+                     sun ? ", the map's sun among them (--sun auto)" : "");
+}
 
 // The page's initial state, as prt render takes it: --camera (default:
 // prt render's, scene_camera of `mesh`, for a square canvas, which a wider
@@ -116,14 +159,26 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   GltfLightmapOptions opts;
   opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
   opts.generator = "prt " PRT_VERSION " (prt export)";
+  opts.lights = export_lights(a, &scene.lights);
   if (!a.bake.empty() && !a.output.empty()) {
     EnvMap env = load_envmap(a.bake);
     require_finite(env);
+    std::optional<EnvMap> sun_map;
+    const std::vector<Light> lit = bake_lights(a, opts.lights, env, euler, &sun_map);
     std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
     if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
     const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
-    bake_lightmap(opts, lt, texels, light, std::filesystem::path(a.bake).filename().string(), euler.data(),
-                  given.value_or(0.0));
+    const double fixed = given.value_or(0.0);  // auto: 0 here, then measured over the baked texels below
+    bake_lightmap(opts, lt, texels, light, std::filesystem::path(a.bake).filename().string(), euler.data(), fixed);
+    // The sun's bounce and the lights' direct light, as prt relight adds them
+    // to the texels (the lights traced from the sample points prt precompute
+    // used: moved out of geometry first), times the same 2^stops.
+    std::vector<glm::vec3> more(opts.baked.size(), glm::vec3(0.0f));
+    add_sun_bounce(more, sun_map, lt.transfer, texel_points(texels), sh::Window::None, 0, a.rotate.empty() ? nullptr : euler.data());
+    add_texel_lights(more, lit, scene.mesh, texels);
+    const float scale = float(std::exp2(fixed));
+    for (std::size_t i = 0; i < more.size(); ++i) opts.baked[i] += more[i] * scale;
+    opts.bake.lights = bake_lights_note(lit, lit.size() > opts.lights.size());
     if (!given) {  // auto: prt render's rule over the baked texels, each counted once (frame_exposure)
       const double stops = frame_exposure({reinterpret_cast<const float*>(opts.baked.data()), 3 * opts.baked.size()});
       for (glm::vec3& c : opts.baked) c *= float(std::exp2(stops));
@@ -141,6 +196,7 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
     w.lightmap_height = lt.layout.height;
     GltfLightmapOptions page_opts = opts;
     page_opts.baked.clear();
+    page_opts.lights.clear();  // (none: export_lights refuses them with --web)
     page = stage_page(a, w, lt.transfer.bands,
                       [&](const std::string& path) { write_gltf_lightmap(path, scene, lt, texels, page_opts); });
   }
@@ -149,9 +205,10 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   if (!a.quiet) {
     const std::size_t stride = lt.transfer.stride();
     if (!a.output.empty())
-      fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures ({}x{} RGBA8, {} bytes per texel){}\n",
+      fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures ({}x{} RGBA8, {} bytes per texel){}{}\n",
                  a.output, scene.objects.size(), (stride + 3) / 4, lt.layout.width, lt.layout.height,
-                 4 * ((stride + 3) / 4), opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)");
+                 4 * ((stride + 3) / 4), opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)",
+                 opts.lights.empty() ? "" : "; " + describe_lights(opts.lights) + " as KHR_lights_punctual");
     if (page) print_page_written(a);
   }
   return 0;
@@ -163,6 +220,9 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
 // file (docs/PROBES.md "Export"). `held`: the volume when TRANSFER was read
 // already (to learn its kind); else --probes FILE is read after the checks.
 int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler, ProbeTransfer* held) {
+  if (a.light.given())
+    throw UsageError("--lights and --sun: a probe volume's JSON holds each probe's SH of the map; lights inside the "
+                     "scene are not in it (docs/LIGHTS.md \"Export\")");
   if (!a.web.empty()) throw UsageError("--web shows a mesh's or a lightmap's transfer; a probe volume exports as JSON (-o FILE.json)");
   if (a.bake.empty()) throw UsageError(a.transfer + " is a probe volume: give --bake ENV (the map its probes are relit under) and -o FILE.json");
   std::string ext = std::filesystem::path(a.output).extension().string();
@@ -218,12 +278,26 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
   GltfOptions opts;
   opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
   opts.generator = "prt " PRT_VERSION " (prt export)";
+  opts.lights = export_lights(a, nullptr);
   if (!a.bake.empty()) {
     EnvMap env = load_envmap(a.bake);
     require_finite(env);
+    // As prt relight: a compressed file keeps no direct part, so the sun's
+    // bounce is left out there (its direct light is traced).
+    std::optional<EnvMap> sun_map;
+    const std::vector<Light> lit = bake_lights(a, opts.lights, env, euler, compressed ? nullptr : &sun_map);
+    if (compressed && a.light.sun_auto() && t.mode == TransferMode::Interreflected && !a.quiet)
+      fmt::print(stderr, "--sun auto: {} is compressed and keeps no direct part: the sun's bounce is left out (its "
+                         "direct light is traced)\n", a.transfer);
     std::vector<glm::dvec3> light = project(env, t.bands);
     if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
-    const std::vector<glm::vec3> rgb = relight(t, mesh, light);
+    std::vector<glm::vec3> rgb = relight(t, mesh, light);
+    add_sun_bounce(rgb, sun_map, t, mesh, sh::Window::None, 0, a.rotate.empty() ? nullptr : euler.data());
+    std::vector<glm::vec3> albedo(rgb.size());
+    // The albedo relight's lights use (a glossy file's: its diffuse one).
+    for (std::size_t v = 0; v < albedo.size(); ++v) albedo[v] = vertex_albedo(t, mesh, v);
+    add_direct_light(rgb, lit, mesh, mesh.positions, mesh.normals, albedo);
+    opts.bake.lights = bake_lights_note(lit, lit.size() > opts.lights.size());
     const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
     // auto: prt render's rule over the relit vertices, each counted once (frame_exposure).
     const Display clamp{given ? *given : frame_exposure({reinterpret_cast<const float*>(rgb.data()), 3 * rgb.size()}),
@@ -254,9 +328,10 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
   if (page) page->commit();
   if (!a.quiet) {
     if (!a.output.empty())
-      fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{})\n", a.output,
+      fmt::print(stderr, "wrote {} ({} vertices, {} triangles, {} transfer attributes{}{})\n", a.output,
                  mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
-                 opts.colors.empty() ? "" : ", COLOR_0");
+                 opts.colors.empty() ? "" : ", COLOR_0",
+                 opts.lights.empty() ? "" : "; " + describe_lights(opts.lights) + " as KHR_lights_punctual");
     if (page) print_page_written(a);
   }
   return 0;
@@ -278,6 +353,8 @@ void check_gltf_options(const ExportArgs& a, bool gltf) {
       throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
   for (const CLI::Option* o : a.web_opts)
     if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
+  if (a.light.sun_opt->count() > 0 && a.bake.empty())
+    throw UsageError("--sun applies to the baked colours (the map's sun traced as a light): give --bake ENV too");
   if (!a.output.empty()) {
     check_not_input("--output", a.output, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}});
     for_path("--output", [&] { check_writable(a.output); });
@@ -370,6 +447,9 @@ Run add_export(CLI::App& app) {
       "three.js LightProbe and Unity SphericalHarmonicsL2 arrays; --matrices adds its SH matrices (docs/PROBES.md).\n"
       "--bake ENV adds COLOR_0: the radiance prt relight gives under ENV (--rotate), times 2^--exposure,\n"
       "clamped to [0, 1], linear (not sRGB-encoded), as glTF requires.\n"
+      "The scene's lights (a glTF's KHR_lights_punctual, plus --lights FILE.json; --lights none drops the scene's)\n"
+      "are written as KHR_lights_punctual, a node each, and --bake adds their direct light as prt relight does\n"
+      "(--sun auto: the map's sun too); the page cannot draw lights yet and refuses them (docs/LIGHTS.md).\n"
       "--web DIR writes a static page (index.html, its scripts, model.glb, lighting.json: every\n"
       "bundled map's SH lighting at the transfer's bands, maps/*.rgb16f backgrounds) that relights the model in\n"
       "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame\n"
@@ -412,6 +492,7 @@ Run add_export(CLI::App& app) {
   a->matrix_bands_opt = s->add_option("--matrix-bands", a->matrix_bands, "With --matrices: the map's bands the matrices take")
                             ->check(int_range(1, kMaxProbeMatrixBands))
                             ->capture_default_str();
+  add_light_options(s, a->light);
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");
   return [a] { return run_export(*a); };
 }

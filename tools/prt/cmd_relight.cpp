@@ -75,66 +75,15 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 // The lights SCENE is lit with beside ENV's PRT: the scene's and --lights
 // files', and with --sun auto the map's sun, taken out of `env` here and
-// turned by --rotate with the sky (the scene's lights stay where they are).
-// `sun_map` (when given and a sun is found): the sun's pixels alone, ENV
-// less the sky left in `env`, whose bounce an interreflected transfer can
-// still carry (sun_bounce).
+// turned by --rotate with the sky (the scene's lights stay where they are);
+// `sun_map` as add_map_sun.
 std::vector<Light> relight_lights(const RelightArgs& a, EnvMap& env, const double euler[3],
                                   const std::vector<Light>* scene_lights = nullptr,
                                   std::optional<EnvMap>* sun_map = nullptr) {
   std::vector<Light> lights = command_lights(a.light, a.mesh, scene_lights);
-  std::optional<EnvMap> whole;
-  if (a.light.sun_auto() && sun_map) whole = env;
-  if (auto sun = take_sun(a.light, env, sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.quiet)) {
-    lights.push_back(std::move(*sun));
-    if (whole) {
-      for (std::size_t i = 0; i < whole->rgb.size(); ++i) whole->rgb[i] -= env.rgb[i];
-      *sun_map = std::move(whole);
-    }
-  }
+  add_map_sun(a.light, lights, env, sh::rotation_from_euler(euler[0], euler[1], euler[2]), a.quiet, sun_map);
   if (!a.quiet && !lights.empty()) fmt::print(stderr, "lit by {} beside the map\n", describe_lights(lights));
   return lights;
-}
-
-// The sun's bounce when --sun auto took it out of the map: an interreflected
-// transfer T keeps its direct part T_d, so the sun's light projected alone
-// (L_sun, windowed and turned as the sky) bounces through T - T_d while its
-// direct light is traced (add_lights). Other transfers have no bounce to
-// give: said once.
-template <typename T, typename Points>
-void add_sun_bounce(std::vector<glm::vec3>& rgb, const RelightArgs& a, const std::optional<EnvMap>& sun_map,
-                    const T& t, const Points& points, sh::Window window, const double euler[3]) {
-  if (!sun_map) return;
-  if (t.mode != TransferMode::Interreflected) return;  // shadowed: the sun has no bounce to carry
-  std::vector<glm::dvec3> sun = project(*sun_map, t.bands);
-  sh::apply_window(std::span<glm::dvec3>(sun), window, a.window_width > 0 ? a.window_width : t.bands);
-  if (!a.rotate.empty()) rotate_lighting(sun, t.bands, euler);
-  const std::vector<glm::vec3> all = relight(t, points, sun), direct = relight_direct(t, points, sun);
-  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += all[i] - direct[i];
-}
-
-// Adds the lights' direct light (prt/direct_light.h: albedo/pi x irradiance,
-// each light's shadow ray traced against `occluders`) at the points to
-// `rgb`. Returns the milliseconds it took (0 without lights).
-double add_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
-                  std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                  std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe = std::nullopt) {
-  if (lights.empty()) return 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  const DirectLight direct(occluders);
-  const std::vector<glm::vec3> d = direct.radiance(lights, positions, normals, albedo, lobe);
-  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += d[i];
-  return ms_since(t0);
-}
-
-// The same at a lightmap's texels, at the sample points prt precompute
-// traced from (moved out of geometry as it moves them: prt/precompute.h).
-double add_texel_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
-                        LightmapTexels texels) {
-  if (lights.empty()) return 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  move_texels_out_of_geometry(occluders, texels);
-  return ms_since(t0) + add_lights(rgb, lights, occluders, texels.positions, texels.normals, texels.albedo);
 }
 
 // Every vertex's albedo as `albedo(v)` gives it.
@@ -216,7 +165,7 @@ int run_wavelet(const RelightArgs& a, const std::string& ext, const double euler
   wavelet_relight(t, lighting.coefficients().data(), lighting.terms(), rgb);
   const double relight_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(t.vertex_scale[v]) * 32767.0; });
-  add_lights(rgb, lights, mesh, mesh.positions, mesh.normals,
+  add_direct_light(rgb, lights, mesh, mesh.positions, mesh.normals,
              albedo_of(rgb.size(), [&](std::size_t v) { return t.vertex_colors ? t.vertex_albedo[v] : t.albedo; }));
   const std::size_t written = rgb.size();
   if (const int rc = write_output(a, ext, mesh, std::move(rgb)); rc != 0) return rc;
@@ -290,7 +239,7 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
     for (double x : vertex_transfer(t, posed, v)) m = std::max(m, std::abs(x));
     return m;
   });
-  add_lights(rgb, lights, posed, posed.positions, posed.normals,
+  add_direct_light(rgb, lights, posed, posed.positions, posed.normals,
              albedo_of(rgb.size(), [&](std::size_t v) { return vertex_albedo(t, posed, v); }));
   if (!a.quiet && report.no_frame > 0)
     fmt::print(stderr, "{} vertices have no frame in this pose (no normal: only zero-area triangles around them): "
@@ -383,7 +332,7 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
   const Mesh points = texel_points(texels);
   std::vector<glm::vec3> rgb = a.direct ? relight_direct(lt.transfer, points, light) : relight(lt.transfer, points, light);
-  if (!a.direct) add_sun_bounce(rgb, a, sun_map, lt.transfer, points, window, euler.data());
+  if (!a.direct) add_sun_bounce(rgb, sun_map, lt.transfer, points, window, a.window_width, a.rotate.empty() ? nullptr : euler.data());
   const double frame_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
@@ -459,7 +408,7 @@ int run_probes(const RelightArgs& a, const std::string& ext, const std::array<do
   // traced there, not interpolated from the probes.
   if (!lights.empty()) {
     const std::vector<glm::vec3> pos(q.positions.begin(), q.positions.end()), nrm(q.normals.begin(), q.normals.end());
-    add_lights(rgb, lights, scene.mesh, pos, nrm, std::vector<glm::vec3>(pos.size(), glm::vec3(1.0f)));
+    add_direct_light(rgb, lights, scene.mesh, pos, nrm, std::vector<glm::vec3>(pos.size(), glm::vec3(1.0f)));
   }
   Outputs out("relight");
   out.write([&] { write_vertex_csv(a.output, rgb, nullptr, CsvKey::Point); });
@@ -580,7 +529,7 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
                                      : glossy   ? relight_glossy(t, mesh, light, shading)
                                      : a.direct ? relight_direct(t, mesh, light)
                                                 : relight(t, mesh, light);
-  if (!a.direct) add_sun_bounce(rgb, a, sun_map, t, mesh, window, euler.data());
+  if (!a.direct) add_sun_bounce(rgb, sun_map, t, mesh, window, a.window_width, a.rotate.empty() ? nullptr : euler.data());
   const double frame_ms = ms_since(t1);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
@@ -595,7 +544,7 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
   });
   std::optional<GlossyLobe> lobe;
   if (glossy) lobe = GlossyLobe{shading.eye, shading.gloss, shading.specular};
-  const double lights_ms = add_lights(rgb, lights, mesh, mesh.positions, mesh.normals, albedo_of(rgb.size(), [&](std::size_t v) {
+  const double lights_ms = add_direct_light(rgb, lights, mesh, mesh.positions, mesh.normals, albedo_of(rgb.size(), [&](std::size_t v) {
     // The diffuse albedo the transfer's relighting used (--diffuse replaces it for a glossy file).
     return glossy && shading.diffuse.x >= 0 ? glm::vec3(shading.diffuse) : vertex_albedo(t, mesh, v);
   }), lobe);

@@ -8,6 +8,8 @@
 #include "light_options.h"
 
 #include <prt/envmap.h>
+#include <prt/lightmap.h>
+#include <prt/precompute.h>
 #include <prt/mesh.h>
 #include <prt/projection.h>
 #include <prt/render.h>
@@ -51,6 +53,9 @@ struct RenderArgs {
   const CLI::Option* time_opt = nullptr;
   const CLI::Option* animation_opt = nullptr;
   const CLI::Option* fov_opt = nullptr;  // given: the default camera takes it (else 40, or 70 inside a room)
+  LightArgs light;                       // --lights, --sun (docs/LIGHTS.md)
+  std::vector<std::string> light_paths;  // --light-path INDEX:x,y,z;...
+  int shadow_size = kDefaultShadowMapSize;
 };
 
 // OUT.png, frame 3 -> OUT_0003.png
@@ -74,7 +79,30 @@ struct RenderJob {
   std::optional<Renderer> renderer;
   std::optional<WaveletPlayback> playback;  // a wavelet transfer's relighting
   std::optional<ProbeObject> probe_object;  // --probes --object, lit by the probe volume
+  // Lights inside the scene (docs/LIGHTS.md "On the GPU"), the map as
+  // loaded for the background when --sun auto took the sun out of
+  // scene.env, and a lightmap's points for the lights.
+  RenderLights lights;
+  std::optional<EnvMap> background;
+  std::optional<LightmapTexels> light_points;
 };
+
+// The lights: read, the sun split off, checked against the kind drawn; a
+// lightmap's texels moved out of geometry as prt precompute moved them (the
+// points prt relight lights), before the upload frees the scene.
+void prepare_lights(const RenderArgs& a, RenderJob& j) {
+  if (a.light.sun_auto()) j.background = j.scene.env;
+  const std::vector<Light>* own = j.scene.world ? &j.scene.world->lights : nullptr;
+  j.lights = render_lights(a.light, a.light_paths, j.scene.env, a.mesh, own, a.quiet);
+  if (j.lights.empty()) {
+    j.background.reset();
+    return;
+  }
+  j.light_points = renderer_light_points(j.scene, a.transfer);
+  if (!a.probe.object.empty() && !a.quiet)
+    fmt::print(stderr, "note: --object is lit by the probe volume alone: the lights' direct light on it is not drawn "
+                       "yet\n");
+}
 
 // The options that need no file: --probes with --object, --rotate (returned,
 // in degrees), --output's type and that it is none of the inputs, --alpha.
@@ -157,7 +185,8 @@ void upload_render_scene(const RenderArgs& a, RenderJob& j) {
   Renderer& renderer = *j.renderer;
   const Transfer& t = j.scene.header;  // the SH header fields (the arrays go to the renderer)
   const Look& look = j.look;
-  renderer.set_environment(j.scene.env);
+  renderer.set_environment(j.background ? *j.background : j.scene.env);
+  renderer.set_shadow_map_size(a.shadow_size);
   if (j.wavelet) {
     upload(renderer, j.scene, a.transfer);
     j.playback.emplace(*j.scene.wavelet(), j.scene.env);
@@ -169,6 +198,10 @@ void upload_render_scene(const RenderArgs& a, RenderJob& j) {
     if (look.shading == Shading::Glossy && !j.glossy)
       throw Error(a.transfer + ": --shading glossy needs a glossy transfer (prt precompute --material glossy)");
     upload(renderer, j.scene, a.transfer);
+    if (j.light_points) {  // after the scene's upload, which clears what a previous scene had
+      renderer.set_light_points(j.light_points->positions, j.light_points->normals, j.light_points->albedo);
+      j.light_points.reset();
+    }
     if (j.skin) renderer.set_skin(*j.skin);
     release_uploaded(j.scene);  // the renderer has them: `t` keeps the header fields
     renderer.set_band_limit(look.bands);
@@ -210,6 +243,7 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
   // leaves none of them, and the old files.
   Outputs out("render");
   double render_seconds = 0, cpu_ms = 0;
+  int maps_drawn = 0;  // shadow maps redrawn (only what moved)
   int width = 0, height = 0;
   {
     ProgressBar bar(a.quiet || a.frames == 1);
@@ -222,6 +256,7 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
       rotation.apply(light, rotated);
       renderer.set_lighting(rotated);
       renderer.set_environment_rotation(R);
+      if (!j.lights.empty()) renderer.set_lights(j.lights.at(double(f) / a.frames, R));
       if (j.probe_object) j.probe_object->frame(renderer, R, double(f) / a.frames);
       // The deformation: the whole angle in one frame; over several, from
       // the rest pose to the whole angle and back.
@@ -235,6 +270,7 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
         renderer.set_shading(Shading::Lambert);
       }
       Image img = renderer.render(j.cam, a.width, a.height);
+      maps_drawn += renderer.shadow_maps_drawn();
       render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       width = img.width;
       height = img.height;
@@ -260,6 +296,9 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
       fmt::print(stderr, "wrote {} ({}x{})\n", a.output, width, height);
     fmt::print(stderr, "{} frame(s), {:.2f} ms per frame (rotate, upload, draw, read back)\n", a.frames,
                1e3 * render_seconds / a.frames);
+    if (!j.lights.empty())
+      fmt::print(stderr, "lights: {} shadow map(s) of {} texels a side redrawn over {} frame(s) (only what moved)\n",
+                 maps_drawn, a.shadow_size, a.frames);
     if (wavelet && look.shading == Shading::Transfer)
       fmt::print(stderr, "wavelet relighting on the CPU: {:.2f} ms per frame (K = {}, {} selection, cube {}^2 x 6)\n",
                  cpu_ms / a.frames, look.terms, wavelet::selection_name(look.selection), j.scene.wavelet()->cube_res);
@@ -273,15 +312,12 @@ int run_render(const RenderArgs& a) {
   j.scene = load_scene(a.mesh, a.transfer, a.env, Consumer::Render, kMaxRenderBands, "render");
   check_render_scene(a, j);
   frame_render_camera(a, j);
+  prepare_lights(a, j);
 
   Renderer& renderer = j.renderer.emplace();
   if (!a.quiet)
     fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", j.scene.world ? describe(*j.scene.world) : describe(j.scene.mesh),
                describe(j.scene.env), renderer.device());
-  if (!a.quiet && j.scene.world && !j.scene.world->lights.empty())
-    fmt::print(stderr, "note: {}'s {} are not drawn by prt render yet (docs/LIGHTS.md: prt relight and prt reference "
-                       "light with them); drawing the sky's transfer alone\n",
-               a.mesh, describe_lights(j.scene.world->lights));
   if (j.skin && !a.quiet)
     fmt::print(stderr, "skinned on the GPU: {} joints, {}\n", j.skin->joint_count,
                j.skin->animations.empty()
@@ -360,6 +396,22 @@ Run add_render(CLI::App& app) {
                                 "A skinned glTF MESH: which of the file's animations");
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
+  add_light_options(s, a->light);
+  s->add_option("--light-path", a->light_paths,
+                "INDEX:x,y,z;x,y,z;...: light INDEX (as listed on stderr) goes round this closed path once over the "
+                "frames; repeatable")
+      ->check([](const std::string& v) -> std::string {
+        try {
+          parse_light_path(v);
+          return {};
+        } catch (const Error& e) {  // CLI11 names the option: the reason after it
+          const std::string m = e.what(), lead = "--light-path: ";
+          return m.rfind(lead, 0) == 0 ? m.substr(lead.size()) : m;
+        }
+      });
+  s->add_option("--shadow-map-size", a->shadow_size, "Lights' shadow maps, texels a side (cube faces, suns' maps)")
+      ->check(CLI::Range(16, kMaxShadowMapSize))
+      ->capture_default_str();
   s->add_flag("--alpha", a->alpha,
               "Write RGBA (EXR only): A = 1 where the model covers the pixel, 0 where the background shows");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");

@@ -39,6 +39,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -63,6 +64,9 @@ constexpr const char* kControls =
     "            selection: area-weighted / magnitude; in wavelet mode M toggles plain Lambert\n"
     "          N / P next / previous environment map (bundled maps and those beside ENV); drop a map file on\n"
     "            the window to load it | S screenshot | H print these controls | R reset view | Esc or Q quit\n"
+    "          Lights (--lights, --sun auto, a glTF's own): F / shift+F select the next / previous light,\n"
+    "            arrows move it along x and z (a directional one turns), page up / down along y, U / shift+U\n"
+    "            brighter / dimmer, O cycle its colour, X remove it, A add a point light at the view's centre\n"
     "          The title bar shows the frame time and the current settings.";
 
 struct ViewArgs {
@@ -78,6 +82,8 @@ struct ViewArgs {
   int animation = 0;   // a skinned glTF MESH (zonal-harmonic files): the animation played
   const CLI::Option* animation_opt = nullptr;
   const CLI::Option* fov_opt = nullptr;  // given: the default camera takes it (else 40, or 70 inside a room)
+  LightArgs light;  // --lights, --sun (docs/LIGHTS.md), edited live
+  int shadow_size = kDefaultShadowMapSize;
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
@@ -110,6 +116,10 @@ static_assert(input::kKeyB == GLFW_KEY_B && input::kKeyC == GLFW_KEY_C && input:
               input::kKeyL == GLFW_KEY_L && input::kKeyMinus == GLFW_KEY_MINUS && input::kKeyEqual == GLFW_KEY_EQUAL);
 static_assert(input::kKeyLeftBracket == GLFW_KEY_LEFT_BRACKET && input::kKeyRightBracket == GLFW_KEY_RIGHT_BRACKET &&
               input::kKeyEscape == GLFW_KEY_ESCAPE);
+static_assert(input::kKeyA == GLFW_KEY_A && input::kKeyF == GLFW_KEY_F && input::kKeyO == GLFW_KEY_O &&
+              input::kKeyU == GLFW_KEY_U && input::kKeyX == GLFW_KEY_X && input::kKeyRight == GLFW_KEY_RIGHT &&
+              input::kKeyLeft == GLFW_KEY_LEFT && input::kKeyDown == GLFW_KEY_DOWN && input::kKeyUp == GLFW_KEY_UP &&
+              input::kKeyPageUp == GLFW_KEY_PAGE_UP && input::kKeyPageDown == GLFW_KEY_PAGE_DOWN);
 
 std::string g_glfw_error;  // the last GLFW error message
 
@@ -214,10 +224,6 @@ Scene load_view_scene(const ViewArgs& a, ViewKinds& kinds) {
     throw Error(a.transfer + ": --deform needs a transfer that can follow a deformation (prt precompute --basis zh; "
                 "docs/LDPRT.md); this one is baked for one pose");
   if (!a.second.empty()) load_second(a, scene, kinds);
-  if (!a.quiet && scene.world && !scene.world->lights.empty())
-    fmt::print(stderr, "note: {}'s {} are not drawn by prt view yet (docs/LIGHTS.md: prt relight and prt reference "
-                       "light with them); drawing the sky's transfer alone\n",
-               a.mesh, describe_lights(scene.world->lights));
   return scene;
 }
 
@@ -284,8 +290,9 @@ class Viewer {
  public:
   // Uploads the mesh and map, sets the starting look; throws prt::Error for
   // a shading the transfer cannot show.
+  // `sky`: the map without its sun (--sun auto), projected in its place.
   Viewer(const ViewArgs& a, const Scene& scene, const ViewKinds& kinds, const Look& look, Renderer& renderer,
-         ViewState& st)
+         ViewState& st, const EnvMap* sky, std::optional<LightmapTexels> light_points)
       : a_(a),
         scene_(scene),
         t_(scene.header),
@@ -297,6 +304,8 @@ class Viewer {
         rotation_(sh_bands_, glm::dmat3(1.0)) {
     upload(renderer, scene, a.transfer);  // the SH rows, or the wavelet transfer's mesh alone
     renderer.set_environment(scene.env);
+    renderer.set_shadow_map_size(a.shadow_size);
+    if (light_points) renderer.set_light_points(light_points->positions, light_points->normals, light_points->albedo);
     if (kinds.wavelet) playback_.emplace(*scene.wavelet(), scene.env);
     st.wavelet = kinds.wavelet_first;
     st.terms = look.terms;
@@ -326,7 +335,7 @@ class Viewer {
                                        std::filesystem::weakly_canonical(std::filesystem::absolute(a.env)).string()) -
                              playlist_.begin());
     map_name_ = std::filesystem::path(a.env).filename().string();
-    projected_ = project(scene.env, sh_bands_);
+    projected_ = project(sky ? *sky : scene.env, sh_bands_);
     rotated_.resize(projected_.size());
     if (!a.probe.probes.empty()) {
       probe_object_.emplace(load_probe_object(a.probe, a.mesh, scene.env, renderer));
@@ -338,14 +347,14 @@ class Viewer {
   // next/previous map, the basis, the shading, bands and window, K.
   void apply(ViewState& st) {
     if (!st.dropped.empty()) {
-      load_map(st.dropped);
+      load_map(st.dropped, st);
       st.dropped.clear();
     }
     if (st.map_step != 0 && !playlist_.empty()) {
       const auto n = std::ptrdiff_t(playlist_.size());
       map_index_ = std::size_t(((std::ptrdiff_t(map_index_) + st.map_step) % n + n) % n);
       st.map_step = 0;
-      load_map(playlist_[map_index_]);
+      load_map(playlist_[map_index_], st);
     }
     if (st.toggle_basis) {
       st.toggle_basis = false;
@@ -437,11 +446,26 @@ class Viewer {
     return st.selection == 0 ? wavelet::Selection::AreaWeighted : wavelet::Selection::Magnitude;
   }
 
-  void load_map(const std::string& path) {
+  // With --sun auto each map's own sun is taken out and lights the scene
+  // (the sun light replaced, added or removed).
+  void load_map(const std::string& path, ViewState& st) {
     try {
       EnvMap m = load_envmap(path);
       require_finite(m);
-      projected_ = project(m, sh_bands_);
+      std::optional<SunSplit> split = a_.light.sun_auto() ? split_sun(m) : std::nullopt;
+      projected_ = project(split ? split->sky : m, sh_bands_);
+      if (a_.light.sun_auto()) {
+        if (st.sun) {
+          st.lights.erase(st.lights.begin() + std::ptrdiff_t(*st.sun));
+          st.sun.reset();
+          st.selected = -1;
+        }
+        if (split) {
+          st.sun = st.lights.size();
+          st.lights.push_back(sun_light(split->sun));
+        }
+        st.lights_changed = true;
+      }
       renderer_.set_environment(m);
       if (playback_) playback_->set_environment(m);
       if (probe_object_) probe_object_->set_environment(m);
@@ -504,6 +528,78 @@ void check_view_options(const ViewArgs& a) {
 // The starting camera: --camera, else scene_camera (prt/render.h) of the
 // framed positions, as prt render's: inside a room the eye is within the
 // orbit's reach of the room's centre, its target.
+// Lights (docs/LIGHTS.md): the scene's and --lights files', and with --sun
+// auto the map's sun, whose direction stays in the map's frame (the frame
+// loop turns it with the sky), the sky left, and a lightmap's points for them.
+struct ViewLights {
+  RenderLights lights;
+  EnvMap sky;
+  std::optional<LightmapTexels> points;
+};
+ViewLights view_lights(const ViewArgs& a, const Scene& scene) {
+  ViewLights v;
+  if (a.light.sun_auto()) v.sky = scene.env;
+  v.lights = render_lights(a.light, {}, v.sky, a.mesh, scene.world ? &scene.world->lights : nullptr, a.quiet);
+  if (!v.lights.empty()) v.points = renderer_light_points(scene, a.transfer);
+  return v;
+}
+
+// The lights' keys move a light by 2% of the scene's bounding-box diagonal a
+// press: 50 presses cross the scene.
+double light_step(const Mesh& mesh) {
+  if (mesh.positions.empty()) return 0.1;
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (const glm::vec3& p : mesh.positions) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+  return 0.02 * glm::length(hi - lo);
+}
+
+// The state the window opens with: the look's settings and the lights.
+ViewState starting_state(const Look& look, const RenderLights& lights, const Mesh& mesh) {
+  ViewState st;
+  st.bands = look.bands;
+  st.exposure = look.display.exposure;
+  st.tone = int(std::find(std::begin(kToneMaps), std::end(kToneMaps), look.display.tone_map) - std::begin(kToneMaps));
+  st.window = int(std::find(std::begin(kWindows), std::end(kWindows), look.window) - std::begin(kWindows));
+  st.lights = lights.lights;
+  if (lights.sun_direction) st.sun = st.lights.size() - 1;
+  st.light_step = light_step(mesh);
+  return st;
+}
+
+// A frame's lights: A's new light placed, then every light uploaded with the
+// sun turned with the sky (the pass redraws only the shadow maps of lights
+// that moved).
+void frame_lights(ViewState& st, Renderer& renderer, const Camera& cam, const std::string& transfer) {
+  if (st.add_light) {  // A: a point light at the view's centre, a tenth of the scene's size above it
+    st.add_light = false;
+    Light l;
+    l.name = fmt::format("light {}", st.lights.size());
+    l.position = cam.target + glm::dvec3(0.0, 5.0 * st.light_step, 0.0);
+    l.intensity = std::pow(25.0 * st.light_step, 2.0);  // irradiance 1 at half the scene's size
+    st.lights.push_back(l);
+    st.selected = int(st.lights.size()) - 1;
+    st.lights_changed = true;
+  }
+  if (!st.lights.empty() || st.lights_changed) {
+    // Every frame: the sun turns with the sky; the pass redraws only the
+    // shadow maps of lights that moved.
+    std::vector<Light> shown = st.lights;
+    if (st.sun) {
+      Light& sun = shown[*st.sun];
+      sun.direction = glm::normalize(environment_rotation(st) * sun.direction);
+    }
+    try {
+      renderer.set_lights(shown);
+    } catch (const Error& e) {
+      throw Error(transfer + ": " + e.what());
+    }
+    st.lights_changed = false;
+  }
+}
+
 Camera starting_camera(const ViewArgs& a, const Mesh& framed) {
   const std::optional<double> fov = a.fov_opt->count() > 0 ? std::optional<double>(a.fov) : std::nullopt;
   Camera base = scene_camera(framed, double(a.width) / a.height, fov);
@@ -518,6 +614,7 @@ int run_view(const ViewArgs& a) {
   check_view_options(a);
   ViewKinds kinds;
   const Scene scene = load_view_scene(a, kinds);
+  ViewLights lights = view_lights(a, scene);
   // A skinned glTF with a zonal-harmonic file: its animation, skinned on the GPU.
   const std::optional<Skin> skin = scene.get<ZhTransfer>() ? load_mesh_skin(a.mesh, scene.mesh) : std::nullopt;
   check_skin_options(skin, scene.get<ZhTransfer>(), !a.deform.empty(), {a.animation_opt}, a.mesh, a.transfer);
@@ -541,11 +638,7 @@ int run_view(const ViewArgs& a) {
   Glfw glfw;
   const WindowPtr window = open_window(a);
 
-  ViewState st;
-  st.bands = look.bands;
-  st.exposure = look.display.exposure;
-  st.tone = int(std::find(std::begin(kToneMaps), std::end(kToneMaps), look.display.tone_map) - std::begin(kToneMaps));
-  st.window = int(std::find(std::begin(kWindows), std::end(kWindows), look.window) - std::begin(kWindows));
+  ViewState st = starting_state(look, lights.lights, scene.mesh);
   // The renderer must go before the window (its objects live in the window's context).
   std::optional<Renderer> renderer_slot;
   renderer_slot.emplace(Renderer::use_current_context);
@@ -559,7 +652,8 @@ int run_view(const ViewArgs& a) {
     fmt::print(stderr, "{}\n{}\nOpenGL: {}\n", describe(scene.mesh), describe(scene.env), renderer.device());
     fmt::print(stderr, "{}\n", kControls);
   }
-  Viewer viewer(a, scene, kinds, look, renderer, st);
+  Viewer viewer(a, scene, kinds, look, renderer, st, lights.lights.sun_direction ? &lights.sky : nullptr,
+                std::move(lights.points));
   // A deforming mesh: framed in its rest and its most deformed pose, and
   // bent (twisted) from rest to the whole angle and back every 4 seconds
   // (scripted frames: 30 to a second). A skinned one: framed in its rest and
@@ -606,6 +700,7 @@ int run_view(const ViewArgs& a) {
     const Camera cam = orbit_camera(base, st);
     viewer.apply(st);
     viewer.light(st, environment_rotation(st));
+    frame_lights(st, renderer, cam, a.transfer);
     if (deform.kind != Deform::Kind::None) {
       const double t = a.frames > 0 ? frame / 30.0 : std::chrono::duration<double>(now - start).count();
       renderer.set_pose(deform, 0.5 * (1.0 - std::cos(2.0 * M_PI * t / 4.0)));
@@ -721,6 +816,10 @@ Run add_view(CLI::App& app) {
       ->check(path_value());
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
+  add_light_options(s, a->light);
+  s->add_option("--shadow-map-size", a->shadow_size, "Lights' shadow maps, texels a side (cube faces, suns' maps)")
+      ->check(CLI::Range(16, kMaxShadowMapSize))
+      ->capture_default_str();
   s->add_flag("--no-panel", a->no_panel,
               "No on-screen panel (Dear ImGui: map, exposure, tone map, light rotation, shading, bands, gloss, frame "
               "time; F1 hides and shows it)");

@@ -2,8 +2,10 @@
 #include "light_options.h"
 
 #include "options.h"
+#include "shared_options.h"
 
 #include <prt/error.h>
+#include <prt/precompute.h>
 #include <prt/scene.h>
 #include <prt/sun.h>
 
@@ -12,6 +14,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -30,12 +33,10 @@ void add_light_options(CLI::App* command, LightArgs& a) {
                        if (v.empty()) return "expected FILE.json or none";
                        return {};
                      });
-  a.sun_opt = command->add_option("--sun", a.sun,
-                                  "auto: find the map's sun (its brightest compact source), take it out of the map and "
-                                  "light with it as a directional light of the same irradiance with sharp shadows "
-                                  "(--rotate turns it with the sky); none: the map as it is")
-                  ->check(CLI::IsMember({"auto", "none"}))
-                  ->default_str("none");
+  a.sun_opt = add_shared(command, SharedOption::Sun, a.sun,
+                         "auto: find the map's sun (its brightest compact source), take it out of the map and light "
+                         "with it as a directional light of the same irradiance with sharp shadows (--rotate turns it "
+                         "with the sky); none: the map as it is");
 }
 
 namespace {
@@ -54,7 +55,7 @@ std::vector<Light> command_lights(const LightArgs& a, const std::string& scene_p
   std::vector<Light> lights;
   if (!none) {
     if (scene_lights) lights = *scene_lights;
-    else if (is_gltf(scene_path)) lights = load_scene(scene_path).lights;
+    else if (is_gltf(scene_path)) lights = prt::load_scene(scene_path).lights;
   }
   for (const std::string& f : a.files) {
     if (f == "none") continue;
@@ -89,6 +90,39 @@ std::optional<Light> take_sun(const LightArgs& a, EnvMap& env, const glm::dmat3&
   return l;
 }
 
+void add_map_sun(const LightArgs& args, std::vector<Light>& lights, EnvMap& env, const glm::dmat3& rotation,
+                 bool quiet, std::optional<EnvMap>* sun_map) {
+  std::optional<EnvMap> whole;
+  if (args.sun_auto() && sun_map) whole = env;
+  if (auto sun = take_sun(args, env, rotation, quiet)) {
+    lights.push_back(std::move(*sun));
+    if (whole) {
+      for (std::size_t i = 0; i < whole->rgb.size(); ++i) whole->rgb[i] -= env.rgb[i];
+      *sun_map = std::move(whole);
+    }
+  }
+}
+
+double add_direct_light(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
+                        std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
+                        std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe) {
+  if (lights.empty()) return 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  const DirectLight direct(occluders);
+  const std::vector<glm::vec3> d = direct.radiance(lights, positions, normals, albedo, lobe);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += d[i];
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double add_texel_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
+                        LightmapTexels texels) {
+  if (lights.empty()) return 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  move_texels_out_of_geometry(occluders, texels);
+  const double move_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return move_ms + add_direct_light(rgb, lights, occluders, texels.positions, texels.normals, texels.albedo);
+}
+
 std::string describe_lights(const std::vector<Light>& lights) {
   if (lights.empty()) return {};
   int n[3] = {0, 0, 0};
@@ -98,6 +132,106 @@ std::string describe_lights(const std::vector<Light>& lights) {
     if (n[int(t)] > 0)
       parts += fmt::format("{}{} {}", parts.empty() ? "" : ", ", n[int(t)], light_type_name(t));
   return fmt::format("{} light{} ({})", lights.size(), lights.size() == 1 ? "" : "s", parts);
+}
+
+glm::dvec3 LightPath::at(double t) const {
+  if (points.size() == 1) return points[0];
+  std::vector<double> cum(points.size() + 1, 0.0);  // arc length at each point, round the closed loop
+  for (std::size_t i = 0; i < points.size(); ++i)
+    cum[i + 1] = cum[i] + glm::length(points[(i + 1) % points.size()] - points[i]);
+  if (!(cum.back() > 0)) return points[0];
+  const double s = (t - std::floor(t)) * cum.back();
+  std::size_t i = std::size_t(std::upper_bound(cum.begin(), cum.end(), s) - cum.begin());
+  i = std::clamp<std::size_t>(i, 1, points.size()) - 1;
+  const double seg = cum[i + 1] - cum[i];
+  const double u = seg > 0 ? (s - cum[i]) / seg : 0.0;
+  return glm::mix(points[i], points[(i + 1) % points.size()], u);
+}
+
+LightPath parse_light_path(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return UsageError("--light-path: '" + text + "': " + why + " (expected INDEX:x,y,z;x,y,z;..., e.g. 0:1,2,0;-1,2,0)");
+  };
+  const std::size_t colon = text.find(':');
+  if (colon == std::string::npos || colon == 0) throw bad("no light index");
+  LightPath p;
+  try {
+    std::size_t used = 0;
+    const unsigned long long i = std::stoull(text.substr(0, colon), &used);
+    if (used != colon) throw bad("the light index is not a whole number");
+    p.light = std::size_t(i);
+  } catch (const std::logic_error&) {
+    throw bad("the light index is not a whole number");
+  }
+  std::string rest = text.substr(colon + 1);
+  std::size_t start = 0;
+  while (start <= rest.size()) {
+    const std::size_t end = std::min(rest.find(';', start), rest.size());
+    const std::string point = rest.substr(start, end - start);
+    if (!point.empty()) {
+      double xyz[3];
+      parse_triple(point, "--light-path", xyz);
+      p.points.emplace_back(xyz[0], xyz[1], xyz[2]);
+    }
+    start = end + 1;
+  }
+  if (p.points.empty()) throw bad("no points");
+  return p;
+}
+
+std::vector<Light> RenderLights::at(double t, const glm::dmat3& rotation) const {
+  std::vector<Light> out = lights;
+  for (const LightPath& p : paths) out[p.light].position = p.at(t);
+  if (sun_direction) out.back().direction = glm::normalize(rotation * *sun_direction);
+  return out;
+}
+
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene, const std::string& transfer) {
+  const TransferKind kind = scene.kind();
+  if (kind == TransferKind::Wavelet || kind == TransferKind::ZH)
+    throw Error(transfer + ": lights are drawn on the GPU with SH vertex transfers and lightmaps; a " +
+                std::string(kind == TransferKind::Wavelet ? "wavelet transfer is relit on the CPU each frame"
+                                                          : "zonal-harmonic transfer moves its occluders with its pose") +
+                ", which the lights pass does not follow yet: prt relight lights it (or give --lights none)");
+  const LightmapTransfer* l = scene.get<LightmapTransfer>();
+  if (!l) return std::nullopt;
+  LightmapTexels texels = lightmap_texels(*scene.world, l->layout.width, l->layout.height, l->layout.uv_set,
+                                          l->transfer.vertex_colors ? nullptr : &l->transfer.albedo);
+  move_texels_out_of_geometry(scene.world->mesh, texels);
+  return texels;
+}
+
+RenderLights render_lights(const LightArgs& args, const std::vector<std::string>& paths, EnvMap& env,
+                           const std::string& scene_path, const std::vector<Light>* scene_lights, bool quiet) {
+  RenderLights r;
+  r.lights = command_lights(args, scene_path, scene_lights);
+  const std::size_t placed = r.lights.size();
+  if (auto sun = take_sun(args, env, glm::dmat3(1.0), quiet)) {
+    r.sun_direction = sun->direction;
+    r.lights.push_back(std::move(*sun));
+  }
+  for (const std::string& text : paths) {
+    LightPath p = parse_light_path(text);
+    if (p.light >= placed)
+      throw UsageError(fmt::format("--light-path {}: light {} does not exist ({} light{} placed in the scene{})", text,
+                                   p.light, placed, placed == 1 ? "" : "s",
+                                   r.sun_direction ? "; the sun turns with the sky and takes no path" : ""));
+    if (r.lights[p.light].type == LightType::Directional)
+      throw UsageError(fmt::format("--light-path {}: light {} is directional (it has a direction, not a place)", text,
+                                   p.light));
+    r.paths.push_back(std::move(p));
+  }
+  if (!quiet && !r.lights.empty()) {
+    fmt::print(stderr, "lit by {} beside the map (shadow maps):\n", describe_lights(r.lights));
+    for (std::size_t i = 0; i < r.lights.size(); ++i) {
+      const Light& l = r.lights[i];
+      fmt::print(stderr, "  light {}: {} \"{}\", intensity {:g}{}\n", i, light_type_name(l.type), l.name, l.intensity,
+                 l.type == LightType::Directional
+                     ? fmt::format(", travelling ({:.3f}, {:.3f}, {:.3f})", l.direction.x, l.direction.y, l.direction.z)
+                     : fmt::format(" at ({:g}, {:g}, {:g})", l.position.x, l.position.y, l.position.z));
+    }
+  }
+  return r;
 }
 
 }  // namespace prt::cli

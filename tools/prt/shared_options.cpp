@@ -101,6 +101,7 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::Deform, Spec{"--deform", deform_value(), "bend:ANGLE or twist:ANGLE, degrees, at most 720"});
     t.emplace(S::Time, Spec{"--time", finite_number(), "seconds, looping"});
     t.emplace(S::Animation, Spec{"--animation", int_range(0, 1 << 20), "0 to 2^20, the file's order"});
+    t.emplace(S::Sun, Spec{"--sun", one_of({"auto", "none"}), "auto or none"});
     return t;
   }();
   return table;

@@ -70,6 +70,7 @@ enum class SharedOption {
   Deform,        // --deform bend:ANGLE|twist:ANGLE: a procedural pose (prt/deform.h), |ANGLE| <= 720 degrees
   Time,          // --time SECONDS: a finite time in a skinned glTF's animation (it loops)
   Animation,     // --animation N: which of a glTF's animations, 0 to 2^20
+  Sun,           // --sun auto|none: the map's sun as a directional light (docs/LIGHTS.md)
 };
 
 // Adds option `which` to `command`, bound to `value`, with `help` (what the

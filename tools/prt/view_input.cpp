@@ -3,6 +3,7 @@
 
 #include <prt/rotation.h>
 
+#include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 
 #include <algorithm>
@@ -39,6 +40,57 @@ void on_cursor(ViewState& s, double x, double y) {
 
 void on_scroll(ViewState& s, double dy) { s.zoom = std::clamp(s.zoom * std::pow(0.9, dy), 0.05, 20.0); }
 
+namespace {
+
+// The keys that edit the selected light (ViewState's lights).
+void on_light_key(ViewState& s, int key, bool shift) {
+  const int n = int(s.lights.size());
+  if (key == input::kKeyF) {
+    if (n > 0) s.selected = ((s.selected < 0 ? (shift ? 0 : -1) : s.selected) + (shift ? n - 1 : 1)) % n;
+    return;
+  }
+  if (s.selected < 0 || s.selected >= n) return;
+  Light& l = s.lights[std::size_t(s.selected)];
+  const double step = s.light_step;
+  const bool directional = l.type == LightType::Directional;
+  const auto turn = [&](const glm::dvec3& axis, double degrees) {
+    l.direction = glm::normalize(sh::rotation_axis_angle(axis, glm::radians(degrees)) * l.direction);
+  };
+  const glm::dvec3 side = glm::length(glm::cross(l.direction, glm::dvec3(0, 1, 0))) > 1e-6
+                              ? glm::normalize(glm::cross(l.direction, glm::dvec3(0, 1, 0)))
+                              : glm::dvec3(1, 0, 0);
+  switch (key) {
+    case input::kKeyRight: directional ? turn({0, 1, 0}, -kLightTurnDegrees) : void(l.position.x += step); break;
+    case input::kKeyLeft: directional ? turn({0, 1, 0}, kLightTurnDegrees) : void(l.position.x -= step); break;
+    case input::kKeyUp: directional ? turn(side, kLightTurnDegrees) : void(l.position.z -= step); break;
+    case input::kKeyDown: directional ? turn(side, -kLightTurnDegrees) : void(l.position.z += step); break;
+    case input::kKeyPageUp: if (!directional) l.position.y += step; break;
+    case input::kKeyPageDown: if (!directional) l.position.y -= step; break;
+    case input::kKeyU: l.intensity = shift ? l.intensity / kLightGain : l.intensity * kLightGain; break;
+    case input::kKeyO: {
+      std::size_t next = 0;
+      for (std::size_t i = 0; i < std::size(kLightColours); ++i)
+        if (glm::length(l.color - kLightColours[i]) < 1e-9) next = (i + 1) % std::size(kLightColours);
+      l.color = kLightColours[next];
+      break;
+    }
+    case input::kKeyX: remove_light(s, s.selected); break;
+    default: return;
+  }
+  s.lights_changed = true;
+}
+
+}  // namespace
+
+void remove_light(ViewState& s, int index) {
+  if (index < 0 || index >= int(s.lights.size())) return;
+  if (s.sun && *s.sun == std::size_t(index)) s.sun.reset();
+  else if (s.sun && *s.sun > std::size_t(index)) s.sun = *s.sun - 1;
+  s.lights.erase(s.lights.begin() + index);
+  if (s.selected >= int(s.lights.size())) s.selected = int(s.lights.size()) - 1;
+  s.lights_changed = true;
+}
+
 KeyAction on_key(ViewState& s, int key, int action, int mods) {
   if (action != input::kPress && action != input::kRepeat) return KeyAction::None;
   const bool shift = (mods & input::kModShift) != 0;
@@ -72,6 +124,17 @@ KeyAction on_key(ViewState& s, int key, int action, int mods) {
       s.specular = std::clamp(std::round(s.specular / kSpecularStep) + (key == input::kKeyEqual ? 1 : -1), 0.0,
                               1.0 / kSpecularStep) * kSpecularStep;
       break;
+    case input::kKeyF:
+    case input::kKeyRight:
+    case input::kKeyLeft:
+    case input::kKeyUp:
+    case input::kKeyDown:
+    case input::kKeyPageUp:
+    case input::kKeyPageDown:
+    case input::kKeyU:
+    case input::kKeyO:
+    case input::kKeyX: on_light_key(s, key, shift); break;
+    case input::kKeyA: s.add_light = true; break;
     case input::kKeyR:  // the view; the look (bands, shading, exposure, ...) stays
       s.yaw = s.pitch = s.env_yaw = s.env_pitch = s.env_auto = 0;
       s.zoom = 1;

@@ -13,7 +13,10 @@
 
 #include <glm/mat3x3.hpp>
 
+#include <cstddef>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace prt::cli {
 
@@ -25,6 +28,8 @@ inline constexpr int kKeySpace = 32, kKeyMinus = 45, kKey0 = 48, kKey9 = 57, kKe
 inline constexpr int kKeyB = 66, kKeyC = 67, kKeyE = 69, kKeyG = 71, kKeyH = 72, kKeyL = 76, kKeyM = 77, kKeyN = 78,
                      kKeyP = 80, kKeyQ = 81, kKeyR = 82, kKeyS = 83, kKeyT = 84, kKeyW = 87;
 inline constexpr int kKeyLeftBracket = 91, kKeyRightBracket = 93, kKeyEscape = 256;
+inline constexpr int kKeyA = 65, kKeyF = 70, kKeyO = 79, kKeyU = 85, kKeyX = 88;
+inline constexpr int kKeyRight = 262, kKeyLeft = 263, kKeyDown = 264, kKeyUp = 265, kKeyPageUp = 266, kKeyPageDown = 267;
 }  // namespace input
 
 // What W, T and M cycle through (ViewState holds indices into these).
@@ -63,7 +68,26 @@ struct ViewState {
   bool dragging = false, env_dragging = false;
   double last_x = 0, last_y = 0;  // the cursor at the last event
   bool screenshot_requested = false;
+  // Lights inside the scene (docs/LIGHTS.md), edited live: F / shift+F select
+  // the next / previous, the arrows move the selected light along x and z
+  // (a directional one turns: left/right about +Y, up/down tilts it), page
+  // up / down along y, by light_step; U / shift+U brighten and dim it by
+  // kLightGain; O cycles its colour through kLightColours; X removes it; A
+  // asks the frame loop for a new point light (at the camera's target).
+  // `sun`: the sun's index (--sun auto), whose direction is in the map's
+  // frame and turns with the sky.
+  std::vector<Light> lights;
+  std::optional<std::size_t> sun;
+  int selected = -1;            // -1: none
+  double light_step = 0.1;      // scene units a press (the frame loop sets it from the scene's size)
+  bool lights_changed = false;  // the frame loop uploads them
+  bool add_light = false;
 };
+
+// U / shift+U: a light's intensity times or over this; O: the colours cycled.
+inline constexpr double kLightGain = 1.25, kLightTurnDegrees = 5.0;
+inline constexpr glm::dvec3 kLightColours[] = {{1.0, 1.0, 1.0}, {1.0, 0.8, 0.6}, {0.6, 0.8, 1.0},
+                                               {1.0, 0.3, 0.2}, {0.3, 1.0, 0.4}, {0.3, 0.4, 1.0}};
 
 // What a key asks of the window beyond the state.
 enum class KeyAction { None, Quit, PrintControls };
@@ -81,8 +105,11 @@ void on_scroll(ViewState& s, double dy);
 // E / shift+E exposure +- half a stop, N / P maps, B basis, [ ] K / 2 and
 // x 2, G selection, L / shift+L gloss e x 2 and / 2, = / - specular rho_s
 // +- 0.05, C cluster colours on / off, R reset the view (not the look), H
-// and Esc / Q (returned).
+// and Esc / Q (returned); the lights' keys (ViewState).
 KeyAction on_key(ViewState& s, int key, int action, int mods);
+// Removes light `index` (the X key, the panel's button), keeping the
+// selection and the sun's index right.
+void remove_light(ViewState& s, int index);
 // Files dropped on the window: the first is loaded by the next frame.
 void on_drop(ViewState& s, int count, const char** paths);
 

@@ -8,6 +8,9 @@
 
 #include <fmt/format.h>
 
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
 #include <algorithm>
 #include <iterator>
 
@@ -30,6 +33,59 @@ ViewPanel::~ViewPanel() {
 
 bool ViewPanel::wants_mouse() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
 bool ViewPanel::wants_keyboard() { return ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard; }
+
+namespace {
+
+// The lights (docs/LIGHTS.md): select, place, recolour, dim, remove, add;
+// the same state the keys edit.
+void draw_lights(ViewState& st) {
+  ImGui::Separator();
+  if (!ImGui::CollapsingHeader(fmt::format("lights ({})###lights", st.lights.size()).c_str())) return;
+  int remove = -1;
+  for (int i = 0; i < int(st.lights.size()); ++i) {
+    Light& l = st.lights[std::size_t(i)];
+    ImGui::PushID(i);
+    const bool sun = st.sun && *st.sun == std::size_t(i);
+    if (ImGui::RadioButton(fmt::format("{} ({}{})", l.name, light_type_name(l.type), sun ? ", turns with the sky" : "")
+                               .c_str(),
+                           st.selected == i))
+      st.selected = i;
+    bool changed = false;
+    if (l.type == LightType::Directional) {
+      float d[3] = {float(l.direction.x), float(l.direction.y), float(l.direction.z)};
+      if (ImGui::DragFloat3("travels", d, 0.01f, -1.0f, 1.0f) && (d[0] != 0 || d[1] != 0 || d[2] != 0)) {
+        l.direction = glm::normalize(glm::dvec3(d[0], d[1], d[2]));
+        changed = true;
+      }
+    } else {
+      float p[3] = {float(l.position.x), float(l.position.y), float(l.position.z)};
+      if (ImGui::DragFloat3("position", p, float(st.light_step))) {
+        l.position = glm::dvec3(p[0], p[1], p[2]);
+        changed = true;
+      }
+    }
+    float c[3] = {float(l.color.x), float(l.color.y), float(l.color.z)};
+    if (ImGui::ColorEdit3("colour", c)) {
+      l.color = glm::max(glm::dvec3(c[0], c[1], c[2]), 0.0);
+      changed = true;
+    }
+    float intensity = float(l.intensity);
+    if (ImGui::DragFloat("intensity", &intensity, 0.01f * std::max(intensity, 0.01f), 0.0f, 1e9f, "%.3g",
+                         ImGuiSliderFlags_Logarithmic)) {
+      l.intensity = std::max(0.0f, intensity);
+      changed = true;
+    }
+    if (ImGui::Button("remove")) remove = i;
+    st.lights_changed |= changed;
+    ImGui::PopID();
+  }
+  if (remove >= 0) remove_light(st, remove);
+  if (ImGui::Button("add a point light")) st.add_light = true;
+  ImGui::SameLine();
+  ImGui::TextDisabled("F: select, arrows: move");
+}
+
+}  // namespace
 
 void ViewPanel::draw(ViewState& st, const PanelInfo& info) {
   frame_times_.push_back(float(info.frame_ms));
@@ -77,6 +133,7 @@ void ViewPanel::draw(ViewState& st, const PanelInfo& info) {
     if (ImGui::SliderFloat("specular", &specular, 0.0f, 1.0f, "%.2f")) st.specular = specular;
   }
   if (info.wavelet) ImGui::SliderInt("terms K", &st.terms, 1, 1 << 14, "%d", ImGuiSliderFlags_Logarithmic);
+  draw_lights(st);
   ImGui::Separator();
   if (ImGui::Button("screenshot")) st.screenshot_requested = true;
   ImGui::SameLine();
