@@ -133,7 +133,6 @@ void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
   if (std::max(cubes, 1) != cubes_) make(GL_TEXTURE_CUBE_MAP_ARRAY, cube_texture_, cubes_ = std::max(cubes, 1));
   if (std::max(suns, 1) != suns_) make(GL_TEXTURE_2D_ARRAY, sun_texture_, suns_ = std::max(suns, 1));
 
-  drawn_ = 0;
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
@@ -182,7 +181,6 @@ void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
 
 void LightsPass::apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
                        std::uint64_t work_groups) {
-  drawn_ = 0;
   if (lights_.empty() || points.count == 0) return;
   draw_maps(draw_occluders);
   // The lights' records (lights.comp.glsl's GpuLight).
@@ -228,6 +226,8 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   glUniform1ui(0, GLuint(points.count));
   glUniform1ui(2, GLuint(lights_.size()));
   glUniform4f(3, points.albedo.x, points.albedo.y, points.albedo.z, points.albedo_buffer ? 1.0f : 0.0f);
+  glUniform1ui(4, GLuint(points.position_stride));
+  glUniformMatrix3fv(5, 1, GL_FALSE, &points.normal_matrix[0][0]);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   const std::size_t groups = (points.count + 63) / 64;
   for (std::size_t first = 0; first < groups; first += work_groups) {

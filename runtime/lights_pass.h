@@ -11,6 +11,7 @@
 
 #include "gl_util.h"
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstddef>
@@ -46,6 +47,8 @@ class LightsPass {
     GLuint positions = 0, normals = 0, albedo_buffer = 0;
     glm::vec3 albedo{1.0f};
     std::size_t count = 0;
+    int position_stride = 3;          // floats per position (4: a vec4 buffer of world positions)
+    glm::mat3 normal_matrix{1.0f};    // the normals' model transform
   };
   // Redraws the shadow maps that need it (draw_occluders draws every occluder
   // triangle with positions at attribute 0, the program bound), then adds the
@@ -53,7 +56,9 @@ class LightsPass {
   // framebuffer binding and viewport to the caller.
   void apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
              std::uint64_t work_groups);
-  // How many shadow maps the last apply() redrew (cube maps count once).
+  // How many shadow maps were redrawn since begin_frame() (cube maps count
+  // once): a frame may apply the lights to several point sets.
+  void begin_frame() { drawn_ = 0; }
   int maps_drawn() const { return drawn_; }
 
  private:

@@ -85,7 +85,7 @@ void ProbePass::set_lighting(std::span<const glm::vec3> sh) {
   glNamedBufferSubData(sh_, 0, GLsizeiptr(v.size() * sizeof(glm::vec4)), v.data());
 }
 
-void ProbePass::draw(const glm::mat4& view_proj, GLuint draw_program) {
+void ProbePass::draw(const glm::mat4& view_proj, GLuint draw_program, const AddLight& add) {
   glUseProgram(program_);
   glUniform1ui(0, GLuint(vertices_));
   glUniformMatrix4fv(2, 1, GL_FALSE, &model_[0][0]);
@@ -105,7 +105,8 @@ void ProbePass::draw(const glm::mat4& view_proj, GLuint draw_program) {
     glUniform1ui(1, GLuint(g * 64));
     glDispatchCompute(GLuint(std::min<std::size_t>(work_groups_, groups - g)), 1, 1);
   }
-  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  glMemoryBarrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+  if (add) add(radiance_, world_, normals_, normal_matrix, albedo_, vertices_);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);

@@ -11,9 +11,11 @@
 
 #include "gl_util.h"
 
+#include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -33,7 +35,12 @@ class ProbePass {
   void set_model(const glm::mat4& model) { model_ = model; }
   // Computes the vertices' radiance and draws the object (depth test on)
   // with `draw_program` (the renderer's vertex-colour program).
-  void draw(const glm::mat4& view_proj, GLuint draw_program);
+  // `add` (when set) adds to the vertices' radiance (a vec4 buffer) before
+  // the draw, given the world positions (vec4s), the object-space normals
+  // (float triples), their normal matrix and the albedo: the lights.
+  using AddLight = std::function<void(GLuint radiance, GLuint world, GLuint normals, const glm::mat3& normal_matrix,
+                                      const glm::vec3& albedo, std::size_t vertices)>;
+  void draw(const glm::mat4& view_proj, GLuint draw_program, const AddLight& add = {});
   std::vector<glm::vec3> radiance() const;  // per vertex, the last frame's
 
  private:

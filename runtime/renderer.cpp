@@ -509,12 +509,12 @@ void Renderer::set_shadow_map_size(int size) {
 
 int Renderer::shadow_maps_drawn() const { return impl_->lights ? impl_->lights->maps_drawn() : 0; }
 
-void Renderer::Impl::apply_lights(GLuint radiance) {
+void Renderer::Impl::apply_lights(GLuint radiance, const detail::LightsPass::Points* object) {
   if (!lights || lights->empty()) return;
   detail::LightsPass::Points pts;
   std::function<void()> occluders;
   if (lightmap) {
-    if (light_point_count != lightmap->texels())
+    if (!object && light_point_count != lightmap->texels())
       throw Error(fmt::format("lights on a lightmap need its {} texels' points (set_light_points; {} given)",
                               lightmap->texels(), light_point_count));
     pts = {light_points[0], light_points[1], light_points[2], glm::vec3(1.0f), light_point_count};
@@ -530,7 +530,7 @@ void Renderer::Impl::apply_lights(GLuint radiance) {
   GLint framebuffer = 0;
   glGetIntegerv(GL_VIEWPORT, viewport);
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
-  lights->apply(occluders, pts, radiance, std::max<std::uint64_t>(limits.work_groups, 1));
+  lights->apply(occluders, object ? *object : pts, radiance, std::max<std::uint64_t>(limits.work_groups, 1));
   glBindFramebuffer(GL_FRAMEBUFFER, GLuint(framebuffer));
   glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
 }
@@ -664,6 +664,7 @@ std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
   PRT_CHECK(m.shading == Shading::Transfer || m.shading == Shading::Direct || m.shading == Shading::Unshadowed ||
             m.shading == Shading::Glossy);
   const GLuint buffer = m.zh ? m.zh_relight() : m.relight(eye);
+  if (m.lights) m.lights->begin_frame();
   if (!m.zh) m.apply_lights(buffer);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   std::vector<float> rgba(m.vertex_count * 4);
@@ -742,6 +743,7 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
       throw Error("camera: non-finite eye, target or up");
 
   m.resize(width, height);
+  if (m.lights) m.lights->begin_frame();
   glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
   glViewport(0, 0, width, height);
   const float black[4] = {0, 0, 0, 1};
@@ -794,7 +796,15 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-    m.probe_object->draw(glm::mat4(proj * view), m.attribute_program(attribute_mode(Shading::VertexColors)));
+    // The lights' direct light on it, shadowed by the scene (the scene's
+    // shadow maps; the object casts no shadow).
+    m.probe_object->draw(glm::mat4(proj * view), m.attribute_program(attribute_mode(Shading::VertexColors)),
+                         [&](GLuint radiance, GLuint world, GLuint normals, const glm::mat3& nm, const glm::vec3& albedo,
+                             std::size_t vertices) {
+                           if (!m.has_mesh()) return;
+                           detail::LightsPass::Points object{world, normals, 0, albedo, vertices, 4, nm};
+                           m.apply_lights(radiance, &object);
+                         });
   }
   glBindVertexArray(0);
   check_gl("rendering");

@@ -189,7 +189,8 @@ struct Renderer::Impl {
   double bounds_radius = 1.0;
   void set_bounds(const Mesh& mesh);
   // Adds the lights' direct light to `radiance` (a vec4 per shaded point).
-  void apply_lights(GLuint radiance);
+  // `object`: other points than the scene's (the probe-lit object's).
+  void apply_lights(GLuint radiance, const detail::LightsPass::Points* object = nullptr);
   bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;
   // An object lit by a probe volume (set_probe_object), drawn after the scene.
   std::unique_ptr<detail::ProbePass> probe_object;

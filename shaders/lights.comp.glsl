@@ -28,14 +28,17 @@ layout(location = 0) uniform uint u_count;
 layout(location = 1) uniform uint u_first;
 layout(location = 2) uniform uint u_lights;
 layout(location = 3) uniform vec4 u_albedo;  // rgb: one albedo for all; w = 1: per point (Albedo)
+layout(location = 4) uniform uint u_position_stride;  // floats per position: 3, or 4 (a vec4 buffer)
+layout(location = 5) uniform mat3 u_normal_matrix;    // the normals' model transform (identity: world space)
 
 const float PI = 3.14159265358979;
 
 void main() {
   const uint i = u_first + gl_GlobalInvocationID.x;
   if (i >= u_count) return;
-  const vec3 p = vec3(pos[3u * i], pos[3u * i + 1u], pos[3u * i + 2u]);
-  vec3 n = vec3(nrm[3u * i], nrm[3u * i + 1u], nrm[3u * i + 2u]);
+  const uint at = u_position_stride * i;
+  const vec3 p = vec3(pos[at], pos[at + 1u], pos[at + 2u]);
+  vec3 n = u_normal_matrix * vec3(nrm[3u * i], nrm[3u * i + 1u], nrm[3u * i + 2u]);
   const float len = length(n);
   if (!(len > 0.0)) return;  // no normal: radiance 0, as everywhere in prt
   n /= len;

@@ -128,6 +128,8 @@ const std::vector<Shared>& shared_table() {
        {"shadowed", "interreflected"}},
       {"--material", {{"metal", "expected diffuse or glossy, got 'metal'"}}, {"diffuse", "glossy"}},
       {"--sun", {{"always", "expected auto or none, got 'always'"}}, {"auto", "none"}},
+      {"--shadow-map-size", {{"8193", "must be a whole number from 16 to 8192, got '8193'"},
+                             {"15", "must be a whole number from 16 to 8192, got '15'"}}, {"16", "8192"}},
       {"--bounces", {{"65", "must be a whole number from 0 to 64, got '65'"}}, {"0", "64"}},
       {"--seed",
        {{"-1", "must be a whole number from 0 to 18446744073709551615 (digits only), got '-1'"},

@@ -8,9 +8,11 @@
 #include <prt/direct_light.h>
 #include <prt/lightmap.h>
 #include <prt/precompute.h>
+#include <prt/probes.h>
 #include <prt/render.h>
 #include <prt/scene.h>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -129,6 +131,61 @@ TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) 
   // Without the points, a lightmap's lights are refused, naming what is missing.
   r->set_light_points({}, {}, {});
   EXPECT_THROW(r->render(cam, 32, 32), Error);
+}
+
+TEST(RenderLights, TheProbeLitObjectIsLitAndShadowedByTheScene) {
+  // A ball behind the box from a low point light: the lights' direct light
+  // on its vertices (with lights minus without) is prt::DirectLight's at its
+  // world vertices, traced against the scene, and part of it is in the box's
+  // shadow. The ball itself casts no shadow (it is not in the maps).
+  REQUIRE_RENDERER(r);
+  const Scene s = test::floor_and_box(false);
+  LightmapTexels texels = lightmap_texels(s, 48, 48, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 16;
+  r->set_scene(s, compute_lightmap_transfer(s, texels, o));
+  r->set_lighting(std::vector<glm::dvec3>(9, glm::dvec3(0.0)));
+  r->set_light_points(texels.positions, texels.normals, texels.albedo);
+  r->set_shadow_map_size(kTestShadowMapSize);
+  const ProbeTransfer probes = compute_probe_transfer(s, probe_grid(s.mesh, {4, 3, 4}), ProbeOptions{});
+  const Mesh ball = test::sphere(24, 48, 1.0f);
+  const glm::vec3 albedo(0.7f, 0.6f, 0.5f);
+  r->set_probe_object(ball, probes, albedo);
+  r->set_probe_lighting(std::vector<glm::vec3>(probes.probes() * 9, glm::vec3(0.0f)));
+  const glm::mat4 model = glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0.75f, 0.25f, 0.0f)), glm::vec3(0.25f));
+  r->set_probe_object_model(model);
+  const std::vector<Light> lights{point_light({-1.2, 1.6, 0.05}, 2.0)};
+  Camera cam;
+  cam.eye = {0, 3, 2};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 1, 0};
+  r->set_lights(lights);
+  r->render(cam, 32, 32);
+  const std::vector<glm::vec3> lit = r->probe_object_radiance();
+  r->set_lights({});
+  r->render(cam, 32, 32);
+  const std::vector<glm::vec3> dark = r->probe_object_radiance();
+  std::vector<glm::vec3> positions, normals, gpu;
+  const glm::mat3 nm = glm::transpose(glm::inverse(glm::mat3(model)));
+  for (std::size_t v = 0; v < ball.vertex_count(); ++v) {
+    positions.push_back(glm::vec3(model * glm::vec4(ball.positions[v], 1.0f)));
+    normals.push_back(glm::normalize(nm * ball.normals[v]));
+    gpu.push_back(lit[v] - dark[v]);
+  }
+  const std::vector<glm::vec3> cpu =
+      DirectLight(s.mesh).radiance(lights, positions, normals, std::vector<glm::vec3>(positions.size(), albedo));
+  const Agreement a = agreement(gpu, cpu);
+  EXPECT_LT(a.rel_rms, kShadowMapRms);
+  EXPECT_LT(a.flipped, kFlippedFraction);
+  std::size_t shadowed = 0;
+  for (std::size_t v = 0; v < cpu.size(); ++v)
+    shadowed += cpu[v].x == 0.0f && glm::dot(glm::normalize(glm::dvec3(-1.2, 1.6, 0.05) - glm::dvec3(positions[v])),
+                                             glm::dvec3(normals[v])) > 0.1;
+  EXPECT_GT(shadowed, 10u);  // facing the light, behind the box
+  std::printf("object: %zu vertices (%zu facing the light in the box's shadow), relative RMS %.4f, flipped %.4f\n",
+              cpu.size(), shadowed, a.rel_rms, a.flipped);
 }
 
 }  // namespace prt::render_lights_test

@@ -99,9 +99,6 @@ void prepare_lights(const RenderArgs& a, RenderJob& j) {
     return;
   }
   j.light_points = renderer_light_points(j.scene, a.transfer);
-  if (!a.probe.object.empty() && !a.quiet)
-    fmt::print(stderr, "note: --object is lit by the probe volume alone: the lights' direct light on it is not drawn "
-                       "yet\n");
 }
 
 // The options that need no file: --probes with --object, --rotate (returned,
@@ -409,9 +406,7 @@ Run add_render(CLI::App& app) {
           return m.rfind(lead, 0) == 0 ? m.substr(lead.size()) : m;
         }
       });
-  s->add_option("--shadow-map-size", a->shadow_size, "Lights' shadow maps, texels a side (cube faces, suns' maps)")
-      ->check(CLI::Range(16, kMaxShadowMapSize))
-      ->capture_default_str();
+  add_shared(s, SharedOption::ShadowMapSize, a->shadow_size, "Lights' shadow maps");
   s->add_flag("--alpha", a->alpha,
               "Write RGBA (EXR only): A = 1 where the model covers the pixel, 0 where the background shows");
   s->add_flag("-q,--quiet", a->quiet, "No summary on stderr");

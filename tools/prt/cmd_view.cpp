@@ -817,9 +817,7 @@ Run add_view(CLI::App& app) {
   add_look_options(s, a->look);
   add_glossy_options(s, a->lobe);
   add_light_options(s, a->light);
-  s->add_option("--shadow-map-size", a->shadow_size, "Lights' shadow maps, texels a side (cube faces, suns' maps)")
-      ->check(CLI::Range(16, kMaxShadowMapSize))
-      ->capture_default_str();
+  add_shared(s, SharedOption::ShadowMapSize, a->shadow_size, "Lights' shadow maps");
   s->add_flag("--no-panel", a->no_panel,
               "No on-screen panel (Dear ImGui: map, exposure, tone map, light rotation, shading, bands, gloss, frame "
               "time; F1 hides and shows it)");

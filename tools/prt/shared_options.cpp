@@ -102,6 +102,9 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::Time, Spec{"--time", finite_number(), "seconds, looping"});
     t.emplace(S::Animation, Spec{"--animation", int_range(0, 1 << 20), "0 to 2^20, the file's order"});
     t.emplace(S::Sun, Spec{"--sun", one_of({"auto", "none"}), "auto or none"});
+    t.emplace(S::ShadowMapSize, Spec{"--shadow-map-size", int_range(16, kMaxShadowMapSize),
+                                     fmt::format("16 to {} texels a side of a cube face; a sun's map has twice as many",
+                                                 kMaxShadowMapSize)});
     return t;
   }();
   return table;

@@ -71,6 +71,7 @@ enum class SharedOption {
   Time,          // --time SECONDS: a finite time in a skinned glTF's animation (it loops)
   Animation,     // --animation N: which of a glTF's animations, 0 to 2^20
   Sun,           // --sun auto|none: the map's sun as a directional light (docs/LIGHTS.md)
+  ShadowMapSize, // --shadow-map-size N: lights' shadow maps, 16 to 8192 texels a side
 };
 
 // Adds option `which` to `command`, bound to `value`, with `help` (what the
