@@ -78,11 +78,7 @@ int main(int argc, char** argv) {
     const std::size_t nc = std::size_t(t.transfer.bands) * t.transfer.bands;
     r.set_lighting(std::vector<glm::dvec3>(nc, glm::dvec3(0.0)));
     r.set_light_points(texels.positions, texels.normals, texels.albedo);
-    glm::dvec3 lo(1e300), hi(-1e300);
-    for (const glm::vec3& p : scene.mesh.positions) {
-      lo = glm::min(lo, glm::dvec3(p));
-      hi = glm::max(hi, glm::dvec3(p));
-    }
+    const glm::dvec3 lo(scene.mesh.bounds_min()), hi(scene.mesh.bounds_max());
     const glm::dvec3 c = 0.5 * (lo + hi), e = hi - lo;
     const prt::Camera cam = prt::scene_camera(scene.mesh, 1280.0 / 720.0);
 

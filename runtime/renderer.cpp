@@ -456,13 +456,8 @@ void Renderer::clear_probe_object() {
 void Renderer::set_lightmap_relight(bool on) { impl_->lightmap_relight = on; }
 
 void Renderer::Impl::set_bounds(const Mesh& mesh) {
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (const glm::vec3& p : mesh.positions) {
-    lo = glm::min(lo, glm::dvec3(p));
-    hi = glm::max(hi, glm::dvec3(p));
-  }
-  bounds_centre = mesh.positions.empty() ? glm::dvec3(0.0) : 0.5 * (lo + hi);
-  bounds_radius = mesh.positions.empty() ? 1.0 : std::max(0.5 * glm::length(hi - lo), 1e-30);
+  bounds_centre = 0.5 * (glm::dvec3(mesh.bounds_min()) + glm::dvec3(mesh.bounds_max()));
+  bounds_radius = mesh.positions.empty() ? 1.0 : std::max(0.5 * mesh.diagonal(), 1e-30);
   if (lights) lights->set_lights(light_list, bounds_centre, bounds_radius);
 }
 
@@ -799,10 +794,10 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     // The lights' direct light on it, shadowed by the scene (the scene's
     // shadow maps; the object casts no shadow).
     m.probe_object->draw(glm::mat4(proj * view), m.attribute_program(attribute_mode(Shading::VertexColors)),
-                         [&](GLuint radiance, GLuint world, GLuint normals, const glm::mat3& nm, const glm::vec3& albedo,
+                         [&](GLuint radiance, GLuint world, GLuint normals, const glm::mat3& nm, const glm::vec3& rho,
                              std::size_t vertices) {
                            if (!m.has_mesh()) return;
-                           detail::LightsPass::Points object{world, normals, 0, albedo, vertices, 4, nm};
+                           detail::LightsPass::Points object{world, normals, 0, rho, vertices, 4, nm};
                            m.apply_lights(radiance, &object);
                          });
   }

@@ -39,7 +39,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -547,13 +546,7 @@ ViewLights view_lights(const ViewArgs& a, const Scene& scene) {
 // The lights' keys move a light by 2% of the scene's bounding-box diagonal a
 // press: 50 presses cross the scene.
 double light_step(const Mesh& mesh) {
-  if (mesh.positions.empty()) return 0.1;
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (const glm::vec3& p : mesh.positions) {
-    lo = glm::min(lo, glm::dvec3(p));
-    hi = glm::max(hi, glm::dvec3(p));
-  }
-  return 0.02 * glm::length(hi - lo);
+  return mesh.positions.empty() ? 0.1 : 0.02 * mesh.diagonal();
 }
 
 // The state the window opens with: the look's settings and the lights.
