@@ -82,11 +82,15 @@ TARGETS=prt_unit_tests phase "ASan+UBSan build" \
 # code layout). Leak checking stays on for the heap, stacks, globals and
 # static TLS.
 # tests/lsan.supp: leaks inside dependencies (oneTBB's observer proxy), never prt's.
-# -LE slow|release: the longest unit tests (label slow) and those that
-# measure what the sanitizers change (label release) ran in the Release pass.
+# -LE slow|release: the longest unit tests (label slow) and those labelled
+# release (tests/CMakeLists.txt says which and why) ran in the Release pass.
+# OPENBLAS_NUM_THREADS=1: OpenBLAS starts its threads when prt loads and they
+# spin (sched_yield) while a sanitized prt starts, about 0.13 s of CPU per run
+# of prt, which these tests run thousands of times. prt calls OpenBLAS from
+# one thread anyway (precompute/blas.cpp sets it to 1 before its first call).
 asan_tests() {
   logs+=(build-asan/ctest.log)
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0 LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
+  OPENBLAS_NUM_THREADS=1 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0 LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp \
     UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure --parallel "$jobs" -L unit -LE 'slow|release' | tee build-asan/ctest.log
 }
