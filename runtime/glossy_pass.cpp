@@ -72,6 +72,7 @@ TransferArray make_glossy_array(const Transfer& t, const Mesh& mesh, const std::
 }  // namespace detail::render
 
 void Renderer::Impl::set_lobe(const GlossyShading& s) {
+  lobe = s;
   const std::vector<double> lambda = prt::glossy::phong_lobe_factors(s.gloss, glossy_header.bands);
   lobe_factors.fill(0.0f);
   for (std::size_t l = 0; l < lambda.size(); ++l) lobe_factors[l] = float(s.specular * lambda[l]);

@@ -228,6 +228,9 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   glUniform4f(3, points.albedo.x, points.albedo.y, points.albedo.z, points.albedo_buffer ? 1.0f : 0.0f);
   glUniform1ui(4, GLuint(points.position_stride));
   glUniformMatrix3fv(5, 1, GL_FALSE, &points.normal_matrix[0][0]);
+  glUniform4f(8, points.eye.x, points.eye.y, points.eye.z, points.gloss);
+  glUniform1f(9, points.specular);
+  glUniform1ui(10, GLuint(points.radiance_stride));
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   const std::size_t groups = (points.count + 63) / 64;
   for (std::size_t first = 0; first < groups; first += work_groups) {

@@ -49,10 +49,15 @@ class LightsPass {
     std::size_t count = 0;
     int position_stride = 3;          // floats per position (4: a vec4 buffer of world positions)
     glm::mat3 normal_matrix{1.0f};    // the normals' model transform
+    int radiance_stride = 4;          // floats per point in the radiance buffer: 4 (vec4) or 3 (vertex colours)
+    // A glossy transfer's Phong lobe toward `eye` (specular 0: none), as
+    // prt::DirectLight adds it with a GlossyLobe.
+    glm::vec3 eye{0.0f};
+    float gloss = 0.0f, specular = 0.0f;
   };
   // Redraws the shadow maps that need it (draw_occluders draws every occluder
   // triangle with positions at attribute 0, the program bound), then adds the
-  // lights' direct light to `radiance` (a vec4 per point). Leaves the
+  // lights' direct light to `radiance` (radiance_stride floats per point, rgb first). Leaves the
   // framebuffer binding and viewport to the caller.
   void apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
              std::uint64_t work_groups);

@@ -166,7 +166,7 @@ void Renderer::Impl::delete_mesh_objects() {
   light_point_count = 0;
   const GLuint buffers[] = {position_buffer, index_buffer, transfer.buffer, direct.buffer,
                             glossy_array.buffer, slot_buffer,  normal_buffer,   albedo_buffer,
-                            ao_buffer,       bent_buffer,  color_buffer,    radiance_buffer,
+                            ao_buffer,       bent_buffer,  color_buffer,    lit_color_buffer, radiance_buffer,
                             coeff_rows.buffer, coeff_rows.products, glossy_rows.buffer, glossy_rows.products,
                             cluster_color_buffer, glossy_order_buffer, glossy_chunk_buffer,
                             zh_rows, zh_rules, rest_positions, rest_normals, skin_joints, skin_weights,
@@ -190,6 +190,7 @@ void Renderer::Impl::delete_mesh_objects() {
   source = Source::Stored;
   slot_buffer = 0;
   position_buffer = index_buffer = 0;
+  lit_color_buffer = 0;
   zh = false;
   zh_rows = zh_rules = rest_positions = rest_normals = 0;
   zh_bytes = 0;
@@ -458,15 +459,15 @@ void Renderer::set_lightmap_relight(bool on) { impl_->lightmap_relight = on; }
 void Renderer::Impl::set_bounds(const Mesh& mesh) {
   bounds_centre = 0.5 * (glm::dvec3(mesh.bounds_min()) + glm::dvec3(mesh.bounds_max()));
   bounds_radius = mesh.positions.empty() ? 1.0 : std::max(0.5 * mesh.diagonal(), 1e-30);
-  if (lights) lights->set_lights(light_list, bounds_centre, bounds_radius);
+  if (lights) {
+    lights->set_lights(light_list, bounds_centre, bounds_radius);
+    lights->geometry_moved();  // new occluders, maybe within the same bounds
+  }
 }
 
 void Renderer::set_lights(std::span<const Light> lights) {
   Impl& m = *impl_;
   m.make_current();
-  if (!lights.empty() && m.zh)
-    throw Error("lights: a zonal-harmonic (deforming) mesh is not lit by lights on the GPU yet (its pose moves the "
-                "occluders every frame); prt relight lights it on the CPU");
   m.light_list.assign(lights.begin(), lights.end());
   if (m.light_list.empty()) {
     m.lights.reset();
@@ -504,7 +505,19 @@ void Renderer::set_shadow_map_size(int size) {
 
 int Renderer::shadow_maps_drawn() const { return impl_->lights ? impl_->lights->maps_drawn() : 0; }
 
-void Renderer::Impl::apply_lights(GLuint radiance, const detail::LightsPass::Points* object) {
+GLuint Renderer::Impl::lit_colors(const glm::dvec3& eye) {
+  if (!lights || lights->empty()) return color_buffer;
+  // Colours relit on the CPU (a wavelet transfer's) plus the lights' direct
+  // light, added to a copy: the colours stay as uploaded.
+  const auto bytes = GLsizeiptr(vertex_count * sizeof(glm::vec3));
+  if (!lit_color_buffer) lit_color_buffer = make_buffer(nullptr, std::size_t(bytes), GL_DYNAMIC_STORAGE_BIT);
+  glCopyNamedBufferSubData(color_buffer, lit_color_buffer, 0, 0, bytes);
+  apply_lights(lit_color_buffer, eye, 3);
+  return lit_color_buffer;
+}
+
+void Renderer::Impl::apply_lights(GLuint radiance, const glm::dvec3& eye, int radiance_stride,
+                                  const detail::LightsPass::Points* object) {
   if (!lights || lights->empty()) return;
   detail::LightsPass::Points pts;
   std::function<void()> occluders;
@@ -516,6 +529,26 @@ void Renderer::Impl::apply_lights(GLuint radiance, const detail::LightsPass::Poi
     occluders = [this] { lightmap->draw_geometry(); };
   } else {
     pts = {position_buffer, normal_buffer, albedo_buffer, albedo, vertex_count};
+    if (shading == Shading::Glossy && has_glossy) {  // prt relight --eye: --diffuse or the transfer's, and the lobe
+      if (!(lobe.diffuse.x < 0 && lobe.diffuse.y < 0 && lobe.diffuse.z < 0)) {
+        pts.albedo_buffer = 0;
+        pts.albedo = glm::vec3(lobe.diffuse);
+      }
+      pts.eye = glm::vec3(eye);
+      pts.gloss = float(lobe.gloss);
+      pts.specular = float(lobe.specular);
+    }
+    if (zh) {
+      // A deforming mesh: its pose (zh_relight's) moved the occluders, maybe
+      // beyond the rest pose's bounds, which fit the directional lights'
+      // maps: every map is redrawn, around the pose's own bounds (read back:
+      // 12 bytes a vertex).
+      Mesh posed;
+      posed.positions.resize(vertex_count);
+      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+      glGetNamedBufferSubData(position_buffer, 0, GLsizeiptr(vertex_count * sizeof(glm::vec3)), posed.positions.data());
+      set_bounds(posed);
+    }
     occluders = [this] {
       glBindVertexArray(vao);
       glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
@@ -525,6 +558,7 @@ void Renderer::Impl::apply_lights(GLuint radiance, const detail::LightsPass::Poi
   GLint framebuffer = 0;
   glGetIntegerv(GL_VIEWPORT, viewport);
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
+  pts.radiance_stride = radiance_stride;
   lights->apply(occluders, object ? *object : pts, radiance, std::max<std::uint64_t>(limits.work_groups, 1));
   glBindFramebuffer(GL_FRAMEBUFFER, GLuint(framebuffer));
   glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
@@ -647,6 +681,17 @@ std::size_t Renderer::transfer_bytes() const {
 
 std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
   Impl& m = *impl_;
+  if (m.shading == Shading::VertexColors) {  // the colours plus the lights' direct light, as drawn
+    PRT_CHECK(m.has_mesh() && m.have_colors);
+    m.make_current();
+    if (m.lights) m.lights->begin_frame();
+    const GLuint drawn = m.lit_colors(eye);
+    std::vector<glm::vec3> out(m.vertex_count);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetNamedBufferSubData(drawn, 0, GLsizeiptr(out.size() * sizeof(glm::vec3)), out.data());
+    check_gl("reading the vertex colours back");
+    return out;
+  }
   PRT_CHECK(m.has_sh_transfer());
   m.make_current();
   if (m.shading == Shading::Clusters) {  // the colours the mesh is drawn with
@@ -660,7 +705,7 @@ std::vector<glm::vec3> Renderer::vertex_radiance(const glm::dvec3& eye) {
             m.shading == Shading::Glossy);
   const GLuint buffer = m.zh ? m.zh_relight() : m.relight(eye);
   if (m.lights) m.lights->begin_frame();
-  if (!m.zh) m.apply_lights(buffer);
+  m.apply_lights(buffer, eye);
   glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   std::vector<float> rgba(m.vertex_count * 4);
   glGetNamedBufferSubData(buffer, 0, GLsizeiptr(rgba.size() * sizeof(float)), rgba.data());
@@ -774,7 +819,7 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.light_buffer);
     if (m.lightmap_relight || !m.lightmap_relit)
-      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, [&](GLuint radiance) { m.apply_lights(radiance); });
+      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, [&](GLuint radiance) { m.apply_lights(radiance, cam.eye); });
     m.lightmap_relit = true;
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     m.lightmap->draw(glm::mat4(proj * view), m.lightmap_detail);
@@ -798,7 +843,7 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
                              std::size_t vertices) {
                            if (!m.has_mesh()) return;
                            detail::LightsPass::Points object{world, normals, 0, rho, vertices, 4, nm};
-                           m.apply_lights(radiance, &object);
+                           m.apply_lights(radiance, cam.eye, 4, &object);
                          });
   }
   glBindVertexArray(0);
@@ -814,10 +859,8 @@ void Renderer::Impl::draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye
   const GLuint zh_radiance = zh ? zh_relight() : 0;
   if (mode == 0) {  // a transfer array dotted with the lighting, then drawn as vertex colours
     data = zh ? zh_radiance : relight(eye);
-    if (!zh) {
-      apply_lights(data);
-      glEnable(GL_DEPTH_TEST);
-    }
+    apply_lights(data, eye);
+    glEnable(GL_DEPTH_TEST);
     stride = 4 * sizeof(float);
     mode = attribute_mode(Shading::VertexColors);
   } else {
@@ -827,6 +870,7 @@ void Renderer::Impl::draw_mesh(const glm::mat4& view_proj, const glm::dvec3& eye
            : shading == Shading::Clusters ? cluster_color_buffer
                                         : color_buffer;
     if (mode == 2) stride = sizeof(float);
+    if (shading == Shading::VertexColors && have_colors) data = lit_colors(eye);
   }
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);

@@ -144,10 +144,12 @@ struct Renderer::Impl {
   // and rho_d / albedo per channel, the glossy pass's uniforms.
   std::array<float, kMaxRenderBands> lobe_factors{};
   glm::vec3 diffuse_scale{1.0f};
+  GlossyShading lobe;  // as set_lobe last took it (the lights pass's lobe and diffuse albedo)
   void set_lobe(const GlossyShading& s);
   std::vector<float> light;  // bands^2 vec4s as uploaded before truncation
   // Per-vertex attributes: normals, per-vertex albedo (vertex-coloured transfers), AO, bent normals, colours.
   GLuint normal_buffer = 0, albedo_buffer = 0, ao_buffer = 0, bent_buffer = 0, color_buffer = 0;
+  GLuint lit_color_buffer = 0;  // color_buffer plus the lights' direct light (VertexColors with lights)
   GLuint latlong_texture = 0, cube_texture = 0;
   GLuint fbo = 0, color_texture = 0, depth_rb = 0;
   int fbo_width = 0, fbo_height = 0;
@@ -187,10 +189,16 @@ struct Renderer::Impl {
   std::size_t light_point_count = 0;
   glm::dvec3 bounds_centre{0.0};
   double bounds_radius = 1.0;
+  // The occluders' bounds, which the directional lights' maps are fitted to:
+  // a new mesh or pose, whose maps are then all redrawn.
   void set_bounds(const Mesh& mesh);
-  // Adds the lights' direct light to `radiance` (a vec4 per shaded point).
-  // `object`: other points than the scene's (the probe-lit object's).
-  void apply_lights(GLuint radiance, const detail::LightsPass::Points* object = nullptr);
+  // Adds the lights' direct light to `radiance` at the mesh's vertices (with
+  // a glossy shading's lobe toward `eye`), a lightmap's texels, or `object`'s
+  // points; radiance_stride floats per point (4: radiance_buffer; 3: colours).
+  void apply_lights(GLuint radiance, const glm::dvec3& eye, int radiance_stride = 4,
+                    const detail::LightsPass::Points* object = nullptr);
+  // color_buffer, or with lights a copy of it plus their direct light.
+  GLuint lit_colors(const glm::dvec3& eye);
   bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;
   // An object lit by a probe volume (set_probe_object), drawn after the scene.
   std::unique_ptr<detail::ProbePass> probe_object;

@@ -7,7 +7,9 @@
 // KLIGHT_OFFSET shadow-map texels toward the light and KNORMAL_OFFSET x
 // sin(incidence) along its normal (no acne on its own surface, in corners or
 // at grazing light; runtime/lights_pass.cpp), within a depth bias of
-// KDEPTH_BIAS texels.
+// KDEPTH_BIAS texels. A glossy point (u_specular > 0) adds each lit light's
+// Phong lobe rho_s E_l (e + 1) / (2 pi) max(r . l, 0)^e, r the mirror of the
+// direction to the eye, as prt::DirectLight does with a GlossyLobe.
 layout(local_size_x = 64) in;
 
 struct GpuLight {
@@ -21,7 +23,7 @@ layout(std430, binding = 0) readonly buffer Lights { GpuLight lights[]; };
 layout(std430, binding = 1) readonly buffer Positions { float pos[]; };
 layout(std430, binding = 2) readonly buffer Normals { float nrm[]; };
 layout(std430, binding = 3) readonly buffer Albedo { float alb[]; };
-layout(std430, binding = 4) buffer Radiance { vec4 radiance[]; };
+layout(std430, binding = 4) buffer Radiance { float rad[]; };  // u_radiance_stride floats per point (rgb first)
 layout(binding = 0) uniform samplerCubeArray u_cubes;
 layout(binding = 1) uniform sampler2DArray u_suns;
 layout(location = 0) uniform uint u_count;
@@ -30,6 +32,9 @@ layout(location = 2) uniform uint u_lights;
 layout(location = 3) uniform vec4 u_albedo;  // rgb: one albedo for all; w = 1: per point (Albedo)
 layout(location = 4) uniform uint u_position_stride;  // floats per position: 3, or 4 (a vec4 buffer)
 layout(location = 5) uniform mat3 u_normal_matrix;    // the normals' model transform (identity: world space)
+layout(location = 8) uniform vec4 u_lobe;             // xyz: the eye; w: the Phong exponent e
+layout(location = 9) uniform float u_specular;        // rho_s; 0: no lobe
+layout(location = 10) uniform uint u_radiance_stride; // floats per radiance: 4 (vec4) or 3 (vertex colours)
 
 const float PI = 3.14159265358979;
 
@@ -43,7 +48,19 @@ void main() {
   if (!(len > 0.0)) return;  // no normal: radiance 0, as everywhere in prt
   n /= len;
   const vec3 rho = u_albedo.w > 0.5 ? vec3(alb[3u * i], alb[3u * i + 1u], alb[3u * i + 2u]) : u_albedo.rgb;
-  vec3 E = vec3(0.0);
+  // The mirror of the direction to the eye (glossy::mirror_direction): none
+  // where the eye is behind the surface.
+  bool glossy = false;
+  vec3 mirror = vec3(0.0);
+  if (u_specular > 0.0) {
+    const vec3 to_eye = u_lobe.xyz - p;
+    const float de = length(to_eye);
+    const vec3 view = de > 0.0 ? to_eye / de : n;
+    const float ndv = dot(n, view);
+    glossy = ndv > 0.0;
+    if (glossy) mirror = normalize(2.0 * ndv * n - view);
+  }
+  vec3 E = vec3(0.0), G = vec3(0.0);
   for (uint k = 0u; k < u_lights; ++k) {
     const int type = int(lights[k].p0.w);
     vec3 irr = lights[k].p2.rgb, to_light;
@@ -83,7 +100,16 @@ void main() {
       const vec3 v = q - lights[k].p0.xyz;
       lit = length(v) <= texture(u_cubes, vec4(v, layer)).r + KDEPTH_BIAS * texel;
     }
-    if (lit) E += irr * c;
+    if (!lit) continue;
+    E += irr * c;
+    if (glossy) {
+      const float t = dot(mirror, to_light);
+      if (t > 0.0) G += irr * ((u_lobe.w + 1.0) / (2.0 * PI) * pow(t, u_lobe.w));
+    }
   }
-  radiance[i].rgb += rho / PI * E;
+  const vec3 add = rho / PI * E + u_specular * G;
+  const uint r = u_radiance_stride * i;
+  rad[r] += add.r;
+  rad[r + 1u] += add.g;
+  rad[r + 2u] += add.b;
 }

@@ -196,4 +196,37 @@ TEST(LightsCli, RenderDrawsLightsAndMovesThemAlongAPath) {
   EXPECT_FALSE(std::filesystem::exists(dir.file("g.png")));
 }
 
+TEST(LightsCli, RenderLightsWaveletAndDeformingTransfers) {
+  // A wavelet transfer (relit on the CPU, drawn as colours) and a
+  // zonal-harmonic one (posed on the GPU) take lights too; a deforming
+  // mesh's maps are redrawn every frame (its pose moves the occluders).
+  using namespace prt::test;
+  TempDir dir;
+  const std::string black = write_constant_map(dir, 0.0f), lights = write_lights(dir);
+  const std::string scene = kModels + "/scene.obj", tube = kModels + "/tube.obj";
+  Result r = run_prt(dir, {"precompute", scene, "--basis", "wavelet", "--cube-res", "8", "-q", "-o",
+                           dir.file("w.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"precompute", tube, "--basis", "zh", "--lobes", "2", "--bands", "3", "--samples", "16", "-q", "-o",
+                    dir.file("z.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::vector<std::string> size{"--width", "32", "--height", "24", "--exposure", "0"};
+  const auto render = [&](const std::string& mesh, const std::string& transfer, std::vector<std::string> more,
+                          const std::string& out) {
+    std::vector<std::string> args{"render", mesh, dir.file(transfer), black, "-o", dir.file(out)};
+    args.insert(args.end(), size.begin(), size.end());
+    args.insert(args.end(), more.begin(), more.end());
+    return run_prt(dir, args);
+  };
+  r = render(scene, "w.prt", {"--lights", lights}, "w_lit.png");
+  if (r.code != 0 && r.err.find("EGL") != std::string::npos) GTEST_SKIP() << "no OpenGL: " << r.err;
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("lights: 2 shadow map(s)"), std::string::npos) << r.err;
+  ASSERT_EQ(render(scene, "w.prt", {}, "w_dark.png").code, 0);
+  EXPECT_NE(read_file(dir.file("w_lit.png")), read_file(dir.file("w_dark.png")));  // black sky: the lights alone
+  r = render(tube, "z.prt", {"--lights", lights, "--deform", "bend:90", "--frames", "3"}, "z.png");
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("lights: 6 shadow map(s)"), std::string::npos) << r.err;  // both maps, every frame
+}
+
 }  // namespace prt::lights_cli_test

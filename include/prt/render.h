@@ -344,13 +344,14 @@ class Renderer {
   // every frame, each light's direct light albedo / pi x E_l max(n.l, 0) V is
   // added at the shaded points, as prt relight adds it: the mesh's vertices
   // (the Transfer, Direct and Glossy shadings of an SH or compressed
-  // transfer; a glossy lobe gets no highlight from lights), a lightmap's
-  // texels at the points of set_light_points. V comes from shadow maps: a
+  // transfer, Glossy with each light's Phong lobe toward the eye; the posed
+  // vertices of a zonal-harmonic mesh, whose maps are then redrawn every
+  // frame; VertexColors, e.g. a wavelet transfer's), a lightmap's texels at
+  // the points of set_light_points. V comes from shadow maps: a
   // cube per point or spot light, a square fitted to the mesh's bounding
   // sphere per directional light, each redrawn only when its light moves.
   // An empty span removes them. Throws prt::Error for a light check_light
-  // refuses, or with lights on a kind the pass does not light (a
-  // zonal-harmonic or wavelet mesh).
+  // refuses.
   void set_lights(std::span<const Light> lights);
   // A lightmap's points for the lights, in texel order: the texels' sample
   // points moved out of geometry as prt precompute moved them
@@ -446,7 +447,9 @@ class Renderer {
   // direct light (set_lights). For tests and tools.
   // Contract (prt::InternalError): a transfer and lighting are uploaded and
   // the shading is one of those four. In Shading::Clusters: the cluster
-  // colours the mesh is drawn with (no lighting needed).
+  // colours the mesh is drawn with (no lighting needed); in
+  // Shading::VertexColors: the colours of set_vertex_colors plus the
+  // lights' direct light (a mesh and colours uploaded).
   std::vector<glm::vec3> vertex_radiance(const glm::dvec3& eye);
 
   // Background: a lat-long or cube map (uploaded once as a float texture),

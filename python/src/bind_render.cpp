@@ -4,6 +4,8 @@
 
 #include <prt/deform.h>
 #include <prt/lightmap.h>
+#include <prt/lights.h>
+#include <prt/precompute.h>
 #include <prt/probe_object.h>
 #include <prt/probes.h>
 #include <prt/projection.h>
@@ -13,6 +15,8 @@
 #include <prt/transfer_io.h>
 #include <prt/wavelet.h>
 #include <prt/wavelet_playback.h>
+
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <condition_variable>
@@ -124,8 +128,8 @@ class GlWorker {
 // One render() call: its arguments, as the binding takes them, then what its
 // steps work out from them. run() takes the steps in order: check_target (the
 // transfer and the Mesh or Scene it is drawn on), check_options,
-// check_probes, set_view, then draw without the GIL; every check comes in the
-// order prt render's options are checked.
+// check_probes, check_lights, set_view, then draw without the GIL; every
+// check comes in the order prt render's options are checked.
 struct RenderCall {
   const py::object& transfer;
   const py::object& mesh_arg;
@@ -151,6 +155,9 @@ struct RenderCall {
   const py::object& object;
   const py::object& object_at;
   double object_size;
+  const py::object& lights_in;
+  const std::string& sun;
+  int shadow_map_size;
 
   // check_target: what is drawn (drawn_mesh: the Mesh, or the Scene's mesh).
   bool is_zh = false, is_wavelet = false, is_lightmap = false;
@@ -172,6 +179,9 @@ struct RenderCall {
   std::optional<prt::ProbeTransfer> volume;
   const prt::Mesh* probe_mesh = nullptr;
   prt::ProbeObjectPlacement place;
+  // check_lights.
+  std::vector<prt::Light> lights;
+  bool split_sun = false;
   // set_view.
   prt::Display display;
   bool auto_exposure = false;
@@ -182,6 +192,7 @@ struct RenderCall {
   void check_target();
   void check_options();
   void check_probes();
+  void check_lights();
   void set_view();
   prt::Image draw(const prt::EnvMap* e, std::vector<float>& coverage);
 };
@@ -190,6 +201,7 @@ py::array_t<float> RenderCall::run() {
   check_target();
   check_options();
   check_probes();
+  check_lights();
   set_view();
   prt::EnvMap loaded;
   const prt::EnvMap* e = &map_argument(map, loaded);
@@ -337,6 +349,19 @@ void RenderCall::check_probes() {
   }
 }
 
+// Lights inside the scene (prt render --lights, --sun; docs/LIGHTS.md "prt
+// render and prt view"), checked before any OpenGL is needed. lights= is the
+// whole list, as in the other calls that take it: a Scene's own lights are
+// not added unless passed (Scene.lights), unlike the command.
+void RenderCall::check_lights() {
+  lights = lights_arg(lights_in);
+  split_sun = sun_arg(sun);
+  if (shadow_map_size < 16 || shadow_map_size > prt::kMaxShadowMapSize)
+    throw Error("shadow_map_size: 16 to " + std::to_string(prt::kMaxShadowMapSize) +
+                " texels a side of a cube face (a sun's map has twice as many), got " +
+                std::to_string(shadow_map_size));
+}
+
 // The display (tone map, exposure), the lighting's rotation and the camera.
 void RenderCall::set_view() {
   const prt::Mesh& mesh = *drawn_mesh;
@@ -392,16 +417,47 @@ void RenderCall::set_view() {
   }
 }
 
-// Without the GIL: the lighting (the map's SH, band-limited and turned), the
-// frame drawn on the GL thread, then finished for display.
+// Without the GIL: the lights (the map's sun split off), the lighting (the
+// map's SH, band-limited and turned), the frame drawn on the GL thread, then
+// finished for display.
 prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) {
   const prt::Mesh& mesh = *drawn_mesh;
+  // sun='auto', as prt render --sun auto (render_lights in
+  // tools/prt/light_options.cpp): the sun split off in the map's frame and
+  // turned as the sky is (RenderLights::at), last among the lights; the sky
+  // is what the transfer, the wavelet playback and the probes are lit by,
+  // the map as given stays the background.
+  std::vector<prt::Light> frame_lights = lights;
+  prt::EnvMap sky;
+  const prt::EnvMap* lit = e;
+  if (split_sun) {
+    sky = *e;
+    if (std::optional<prt::Light> s = take_sun(sky, glm::dmat3(1.0))) {
+      s->direction = glm::normalize(R * s->direction);
+      frame_lights.push_back(std::move(*s));
+      lit = &sky;
+    }
+  }
+  // A lightmap's points for the lights: its texels moved out of geometry as
+  // prt precompute moved them (the points prt relight lights;
+  // renderer_light_points in tools/prt/light_options.cpp).
+  std::optional<prt::LightmapTexels> light_points;
+  if (is_lightmap && !frame_lights.empty()) {
+    light_points = prt::lightmap_texels(*world, lm->layout.width, lm->layout.height, lm->layout.uv_set,
+                                        lm->transfer.vertex_colors ? nullptr : &lm->transfer.albedo);
+    prt::move_texels_out_of_geometry(world->mesh, *light_points);
+  }
   std::vector<glm::dvec3> light, rotated;
-  light = prt::project(*e, file_bands);
+  light = prt::project(*lit, file_bands);
   std::fill(light.begin() + std::ptrdiff_t(std::size_t(bands) * bands), light.end(), glm::dvec3(0.0));
   rotated.resize(light.size());
   prt::sh::Rotation(file_bands, R).apply(light, rotated);
   prt::Image img = GlWorker::get().run([&](prt::Renderer& r) {
+    // No lights of an earlier call: their shadow maps are dropped too (drawn
+    // afresh for this frame, as prt render's first frame draws them; a map
+    // is otherwise kept while its light stays put, whatever mesh follows).
+    r.set_lights({});
+    r.set_shadow_map_size(shadow_map_size);
     r.set_environment(*e);
     r.clear_probe_object();
     // The probe-lit object, as prt render's first frame (t = 0 of its path, or at object_at).
@@ -409,7 +465,7 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
     const auto frame = [&] {
       if (volume) {
         try {
-          probe_object.emplace(*volume, *probe_mesh, *e, r, place);
+          probe_object.emplace(*volume, *probe_mesh, *lit, r, place);
         } catch (const prt::NoGlContext&) {
           throw;
         } catch (const Error& x) {
@@ -426,8 +482,9 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
       r.set_mesh(mesh, wt->t.albedo, wt->t.vertex_colors);
       r.set_lighting(rotated);
       r.set_environment_rotation(R);
+      if (!frame_lights.empty()) r.set_lights(frame_lights);
       if (shade == prt::Shading::Transfer) {
-        prt::WaveletPlayback playback(wt->t, *e);
+        prt::WaveletPlayback playback(wt->t, *lit);
         playback.frame(r, R, terms, sel);
       } else {
         r.set_shading(prt::Shading::Lambert);
@@ -451,9 +508,12 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
     } catch (const Error& x) {
       throw Error(source + ": " + x.what());
     }
+    if (light_points)  // after the scene's upload, which clears what an earlier one had
+      r.set_light_points(light_points->positions, light_points->normals, light_points->albedo);
     if (pose) r.set_pose(*pose, amount);
     r.set_lighting(rotated);
     r.set_environment_rotation(R);
+    if (!frame_lights.empty()) r.set_lights(frame_lights);
     return frame();
   });
   // exposure="auto": prt render's rule, from this frame (frame_exposure).
@@ -480,10 +540,11 @@ void bind_render(py::module_& m) {
          const std::string& tone_map, bool linear, const py::object& shading, const py::object& bands_arg,
          double gloss, double specular, const py::object& diffuse, const py::object& deform, double amount, int terms,
          const std::string& selection, bool alpha, const py::object& probes, const py::object& object,
-         const py::object& object_at, double object_size) {
+         const py::object& object_at, double object_size, const py::object& lights, const std::string& sun,
+         int shadow_map_size) {
         RenderCall call{transfer, mesh_arg, map, width, height, camera, fov, {}, rotate, exposure, tone_map, linear,
                         shading, bands_arg, gloss, specular, diffuse, deform, amount, terms, selection, alpha, probes,
-                        object, object_at, object_size};
+                        object, object_at, object_size, lights, sun, shadow_map_size};
         return call.run();
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("map"), py::kw_only(), py::arg("width") = 512,
@@ -493,7 +554,8 @@ void bind_render(py::module_& m) {
       py::arg("specular") = 0.5, py::arg("diffuse") = py::none(), py::arg("deform") = py::none(),
       py::arg("amount") = 1.0, py::arg("terms") = 100, py::arg("selection") = "area", py::arg("alpha") = false,
       py::arg("probes") = py::none(), py::arg("object") = py::none(), py::arg("object_at") = py::none(),
-      py::arg("object_size") = 0.0,
+      py::arg("object_size") = 0.0, py::arg("lights") = py::none(), py::arg("sun") = "none",
+      py::arg("shadow_map_size") = prt::kDefaultShadowMapSize,
       "A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the "
       "first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is "
       "the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 "
@@ -511,7 +573,13 @@ void bind_render(py::module_& m) {
       "(a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal "
       "(0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: "
       "(height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render "
-      "--alpha). Raises prt.Error where no OpenGL 4.5 context can be had.");
+      "--alpha). lights: a list of Light (None: none), each one's direct light drawn beside the map's PRT with shadow "
+      "maps, as prt render --lights (docs/LIGHTS.md); only these: a glTF's own lights (Scene.lights) are added by "
+      "passing them too. sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun), the rest "
+      "lighting the transfer and the sun drawn as a directional light turned by rotate, the map as given the "
+      "background (prt render --sun auto). shadow_map_size: the lights' shadow maps, 16 to 8192 texels a side of a "
+      "cube face (a sun's map has twice as many) [--shadow-map-size]. Raises prt.Error where no OpenGL 4.5 context "
+      "can be had.");
 }
 
 }  // namespace prt::python

@@ -1,7 +1,7 @@
 """Lights inside the scene from Python (docs/LIGHTS.md): prt.Light,
 read_lights, Scene.lights, split_sun, direct_light, and the lights= and sun=
-arguments of the relighting calls and reference(), against prt relight and
-prt reference --lights/--sun on the same files."""
+arguments of the relighting calls, reference() and render(), against prt
+relight, prt reference and prt render --lights/--sun on the same files."""
 import copy
 import json
 import math
@@ -325,11 +325,74 @@ def test_reference_sun_auto_is_prt_reference(files, tmp_path):
     np.testing.assert_array_equal(again, ref)
 
 
+# ---- render ------------------------------------------------------------------------------
+
+RW, RH = 96, 48  # 2:1, so the EXR reads back as a lat-long map; llvmpipe draws it in a fraction of a second
+
+
+def render_or_skip(*args, **kw):
+    """prt.render, skipping the test where no OpenGL 4.5 context can be had."""
+    try:
+        return prt.render(*args, **kw)
+    except prt.Error as e:
+        if "no OpenGL 4.5 context" in str(e):
+            pytest.skip(str(e))
+        raise
+
+
+def cli_frame(tmp_path, scene, transfer, *extra):
+    out = tmp_path / "frame.exr"
+    run_prt("render", scene, transfer, ENV, "-o", out, "--width", RW, "--height", RH, "--exposure", 0, *extra, "-q")
+    return prt.load_envmap(out, "latlong").pixels
+
+
+def test_render_with_lights_is_prt_render(files, room_lightmap, tmp_path):
+    """prt.render(lights=, sun=, shadow_map_size=) is prt render --lights
+    --sun --shadow-map-size's linear frame, on a lightmap (the lights at its
+    texels' points) and on a vertex transfer of the open scene (where the sun
+    reaches). Tolerance: none, as test_render.py's frames: the same renderer
+    on the same OpenGL gets the same lights, sky coefficients and points in
+    the same order, so the same bits come back."""
+    lights = prt.read_lights(files / "lights.json")
+    light_args = ["--lights", files / "lights.json"]
+    frame = dict(width=RW, height=RH, linear=True, exposure=0)
+    s, lm = prt.load_scene(ROOM), prt.read_lightmap(room_lightmap)
+    unlit = render_or_skip(lm, s, ENV, **frame)
+    got = prt.render(lm, s, ENV, lights=lights, **frame)
+    np.testing.assert_array_equal(got, cli_frame(tmp_path, ROOM, room_lightmap, *light_args))
+    # The lamp and the spot light the room (every pixel is the room's inside).
+    assert (got != unlit).any(axis=2).mean() > 0.5 and (got - unlit).max() > 1
+    coarse = prt.render(lm, s, ENV, lights=lights, shadow_map_size=16, **frame)
+    np.testing.assert_array_equal(coarse, cli_frame(tmp_path, ROOM, room_lightmap, *light_args,
+                                                    "--shadow-map-size", 16))
+    assert (coarse != got).any()  # the size is used: 16-texel maps blur the shadows' edges
+    # The lights do not outlast their call (the renderer serves every call).
+    np.testing.assert_array_equal(prt.render(lm, s, ENV, **frame), unlit)
+
+    t_path = files / "render-scene.prt"
+    run_prt("precompute", MESH, "--bands", 3, "--samples", 32, "--seed", 7, "-q", "-o", t_path)
+    mesh, t = prt.load_mesh(MESH), prt.read_transfer(t_path)
+    sun = dict(sun="auto", rotate=(30, 0, 0))
+    got = prt.render(t, mesh, ENV, lights=lights, **sun, **frame)
+    np.testing.assert_array_equal(got, cli_frame(tmp_path, MESH, t_path, *light_args, "--sun", "auto", "--rotate",
+                                                 "30,0,0"))
+    sun_only = prt.render(t, mesh, ENV, **sun, **frame)
+    np.testing.assert_array_equal(sun_only, cli_frame(tmp_path, MESH, t_path, "--sun", "auto", "--rotate", "30,0,0"))
+    # The split moves the sun's light from the smooth SH into a sharp
+    # directional light (lit faces brighter, shadowed ones darker), and the
+    # lamps add theirs: each changes the model's pixels.
+    unsplit = prt.render(t, mesh, ENV, rotate=(30, 0, 0), **frame)
+    assert (sun_only != unsplit).any(axis=2).mean() > 0.1
+    assert (got != sun_only).any(axis=2).mean() > 0.1 and (got - sun_only).max() > 0.1
+
+
 # ---- bad arguments -----------------------------------------------------------------------
 
 def test_bad_lights_and_sun_are_refused(files, tmp_path):
     mesh = prt.load_mesh(ROOM)
     lamp = prt.Light(position=(0, 2, 0))
+    tri = prt.make_mesh([[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 2, 1]])
+    tri_t = prt.precompute(tri, bands=1, samples=1)
     cases = [
         (lambda: prt.Light("lamp"), "type: 'lamp': expected 'point', 'spot' or 'directional'"),
         (lambda: prt.Light(intensity=-1), "Light: point light: intensity must be a finite number >= 0"),
@@ -358,6 +421,12 @@ def test_bad_lights_and_sun_are_refused(files, tmp_path):
         (lambda: prt.direct_light(mesh, [lamp], albedo=1.5), "albedo: 1.5 is outside [0, 1]"),
         (lambda: prt.reference(mesh, None, lights=[lamp], sun="yes", samples=2), "sun: 'yes': expected 'none'"),
         (lambda: prt.reference(mesh, None, lights=5, samples=2), "lights: expected a list of prt.Light"),
+        # render() checks them before it needs OpenGL.
+        (lambda: prt.render(tri_t, tri, ENV, lights=lamp), "got one Light (pass [light])"),
+        (lambda: prt.render(tri_t, tri, ENV, lights=[lamp, 5]), "lights[1]: expected a prt.Light, got int"),
+        (lambda: prt.render(tri_t, tri, ENV, sun="yes"), "sun: 'yes': expected 'none'"),
+        (lambda: prt.render(tri_t, tri, ENV, shadow_map_size=8), "shadow_map_size: 16 to 8192 texels a side"),
+        (lambda: prt.render(tri_t, tri, ENV, shadow_map_size=8193), "got 8193"),
     ]
     for call, words in cases:
         with pytest.raises(prt.Error) as info:

@@ -186,13 +186,7 @@ std::vector<Light> RenderLights::at(double t, const glm::dmat3& rotation) const 
   return out;
 }
 
-std::optional<LightmapTexels> renderer_light_points(const Scene& scene, const std::string& transfer) {
-  const TransferKind kind = scene.kind();
-  if (kind == TransferKind::Wavelet || kind == TransferKind::ZH)
-    throw Error(transfer + ": lights are drawn on the GPU with SH vertex transfers and lightmaps; a " +
-                std::string(kind == TransferKind::Wavelet ? "wavelet transfer is relit on the CPU each frame"
-                                                          : "zonal-harmonic transfer moves its occluders with its pose") +
-                ", which the lights pass does not follow yet: prt relight lights it (or give --lights none)");
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene) {
   const LightmapTransfer* l = scene.get<LightmapTransfer>();
   if (!l) return std::nullopt;
   LightmapTexels texels = lightmap_texels(*scene.world, l->layout.width, l->layout.height, l->layout.uv_set,

@@ -109,12 +109,10 @@ struct RenderLights {
   // The lights at fraction t of the frames with the sky turned by R.
   std::vector<Light> at(double t, const glm::dmat3& rotation) const;
 };
-// What a renderer needs beside the lights for `scene`: refuses the kinds the
-// GPU's lights pass does not light (wavelet, zonal harmonics: a sentence
-// naming TRANSFER), and for a lightmap returns its texels' sample points
+// What a renderer needs beside the lights for `scene`: for a lightmap, its texels' sample points
 // moved out of geometry as prt precompute moved them (the points prt
 // relight lights; Renderer::set_light_points), nullopt otherwise.
-std::optional<LightmapTexels> renderer_light_points(const Scene& scene, const std::string& transfer);
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene);
 
 // Reads the lights (command_lights, take_sun on `env` in place) and checks
 // the paths against them; `scene_lights` as command_lights.
