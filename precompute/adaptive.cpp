@@ -1021,6 +1021,7 @@ Transfer adaptive_at(const Mesh& mesh, const AdaptivePoints& points, const Trans
 Transfer compute_adaptive_transfer(const Mesh& mesh, const TransferOptions& options, const AdaptiveOptions& adaptive,
                                    const Progress& progress, AdaptiveReport* report) {
   detail::check_transfer_options(options, mesh);
+  detail::refuse_adaptive_light_bounce(options);
   AdaptiveReport local;
   AdaptiveReport& r = report ? *report : local;
   if (options.mode == TransferMode::Unshadowed) {  // no rays: nothing to save

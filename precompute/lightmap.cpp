@@ -91,6 +91,11 @@ struct TexelSetup {
     for (const glm::vec3& a : texels.albedo) uniform = uniform && a == texels.albedo.front();
     if (P > 0 && uniform) o.albedo = texels.albedo.front();
     per_point = !uniform;
+    if (o.light_bounce && o.light_bounce_patch == 0 && !texels.texel_size.empty()) {  // patches of a few texels
+      double mean = 0;
+      for (float s : texels.texel_size) mean += s;
+      o.light_bounce_patch = kLightBouncePatchSpacings * mean / double(texels.texel_size.size());
+    }
     const LightmapLayout& l = texels.layout;
     point_of_texel.assign(std::size_t(l.width) * l.height, detail::HitToPoint::kNone);
     for (std::size_t i = 0; i < P; ++i) point_of_texel[l.texels[i]] = std::uint32_t(i);
@@ -205,6 +210,7 @@ LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const Li
                                                     const Progress& progress, AdaptiveReport* report) {
   const TexelSetup setup(scene, texels, options);
   detail::check_transfer_options(setup.o, scene.mesh);
+  detail::refuse_adaptive_light_bounce(setup.o);
   if (texels.texel_size.size() != texels.positions.size())  // the neighbours' reach
     throw Error("lightmap texels: texel_size must have one entry per covered texel (lightmap_texels fills it)");
   AdaptiveReport local;

@@ -39,6 +39,7 @@
 #include <tbb/task_arena.h>
 
 #include <glm/common.hpp>
+#include <glm/gtc/packing.hpp>
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 
@@ -72,6 +73,19 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.glossy && o.bands > kMaxGlossyBands)
     throw Error(fmt::format("--bands must be at most {} for glossy transfer (each matrix has bands^4 entries), got {}",
                             kMaxGlossyBands, o.bands));
+  if (o.light_bounce) {
+    if (o.mode != TransferMode::Interreflected || o.bounces < 1)
+      throw Error("--light-bounce keeps the interreflected pass's gather: it needs --mode interreflected and --bounces 1 "
+                  "or more");
+    if (o.glossy) throw Error("--light-bounce: the lights bounce off diffuse surfaces; a glossy transfer keeps no operator");
+    if (o.comm && o.comm->size() > 1)
+      throw Error("--light-bounce runs in one process: its operator is made of every point's gather row at once (run "
+                  "it without mpirun)");
+    if (!(o.light_bounce_patch >= 0) || !std::isfinite(o.light_bounce_patch))
+      throw Error(fmt::format("--bounce-patch must be a finite size >= 0, got {}", o.light_bounce_patch));
+    if (!(o.light_bounce_ratio > 0) || !std::isfinite(o.light_bounce_ratio))
+      throw Error(fmt::format("--bounce-ratio must be a finite number > 0, got {}", o.light_bounce_ratio));
+  }
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 
@@ -748,6 +762,62 @@ void gather_bounces(const Run& run, Transfer& t, const FirstPass& fp) {
   // added anything to it: its total is its direct part, the clamped cosine.
 }
 
+// The lights' bounce operator (prt/light_bounce.h): the gather rows of the
+// bounces above, their columns merged into source patches (weights summed in
+// double). One process (check_options), so this rank's rows are all of them.
+// A weight as the file stores it: the nearest half-precision value (11
+// significant bits: 0.05% of a weight, against the operator's percent).
+float to_half_precision(double w) { return glm::unpackHalf1x16(glm::packHalf1x16(float(w))); }
+
+LightBounce keep_light_bounce(const Run& run, const FirstPass& fp, int bounces) {
+  static_assert(kMaxLightBounces == kMaxBounces);
+  LightBounce b;
+  b.bounces = bounces;
+  const std::size_t P = run.V;
+  detail::SourcePatches sp = detail::source_patches(run.src.positions, run.src.normals, P, run.o.light_bounce_patch);
+  b.patches = sp.patches;
+  b.patch.assign(sp.of_point.begin(), sp.of_point.begin() + std::ptrdiff_t(P));
+  b.parent = std::move(sp.parent);
+  b.offsets.assign(P + 1, 0);
+  // An entry whose emitting point lies at distance d goes to the coarsest
+  // patch whose cell is at most ratio x d: level floor(log2(ratio d / cell)).
+  const double reach = run.o.light_bounce_ratio / run.o.light_bounce_patch;
+  const auto level_at = [&](double d) {
+    const double x = reach * d;
+    return x < 2.0 ? 0 : std::min(sp.levels - 1, int(std::floor(std::log2(x))));
+  };
+  std::vector<std::uint8_t> buffer;
+  std::vector<std::pair<std::uint32_t, double>> row;
+  const std::vector<std::uint64_t>& grow = fp.grow;
+  for (std::size_t blk = 0; blk * run.plan.block < run.own; ++blk) {
+    const std::size_t b0 = blk * run.plan.block, b1 = std::min(run.own, b0 + run.plan.block);
+    const std::uint8_t* bytes = fp.store.get(2 * blk, buffer);
+    const std::size_t nnz = std::size_t(grow[b1] - grow[b0]);
+    const auto* col = reinterpret_cast<const std::uint32_t*>(bytes);
+    const auto* val = reinterpret_cast<const float*>(bytes + nnz * sizeof(std::uint32_t));
+    for (std::size_t i = b0; i < b1; ++i) {
+      row.clear();
+      const glm::dvec3 at(run.src.positions[run.r0 + i]);
+      for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
+        const int l = level_at(glm::length(glm::dvec3(run.src.positions[col[e]]) - at));
+        row.emplace_back(sp.of_point[std::size_t(l) * P + col[e]], val[e]);
+      }
+      std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      std::size_t out = 0;
+      for (std::size_t q = 0; q < row.size(); ++q) {
+        if (out > 0 && row[out - 1].first == row[q].first) row[out - 1].second += row[q].second;
+        else row[out++] = row[q];
+      }
+      for (std::size_t q = 0; q < out; ++q) {
+        b.source.push_back(row[q].first);
+        b.weight.push_back(to_half_precision(row[q].second));
+      }
+      b.offsets[run.r0 + i + 1] = std::uint32_t(b.source.size());
+    }
+  }
+  return b;
+}
+
 // compute_transfer at `src` (the vertices: the transfer file's layout), or
 // at other points. `emitters` (points, interreflected): every vertex's dense
 // transfer of bounces - 1 bounces, gathered once at each point's front hits
@@ -812,6 +882,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
     if (o.mode == TransferMode::Interreflected) t.direct = t.coeffs;
   } else {
     gather_bounces(run, t, fp);
+    if (o.light_bounce) t.light_bounce = keep_light_bounce(run, fp, t.bounces);
   }
   return finish_transfer(run, t, fp, keep_everywhere);
 }
@@ -826,8 +897,11 @@ Transfer detail::compute_at(const Mesh& mesh, const Source& src, const TransferO
   return compute_impl(mesh, src, o, progress, nullptr, 0, keep_everywhere);
 }
 
-Transfer compute_transfer(const Mesh& mesh, const TransferOptions& o, const Progress& progress) {
-  check_options(o, mesh);
+Transfer compute_transfer(const Mesh& mesh, const TransferOptions& options, const Progress& progress) {
+  check_options(options, mesh);
+  TransferOptions o = options;
+  if (o.light_bounce && o.light_bounce_patch == 0)  // patches of a few vertices
+    o.light_bounce_patch = kLightBouncePatchSpacings * std::max(detail::mean_edge_length(mesh), 1e-30);
   Source vertices;
   vertices.positions = mesh.positions.data();
   vertices.normals = mesh.normals.data();

@@ -211,4 +211,26 @@ TransferMemory point_transfer_memory(const Mesh& mesh, std::size_t points, const
 Transfer compute_at(const Mesh& mesh, const Source& src, const TransferOptions& options, const Progress& progress,
                     bool keep_everywhere = false);
 
+// The lights' bounce operator's source patches (precompute/light_bounce.cpp;
+// prt/light_bounce.h): nested grids of cells `cell`, 2 cell, 4 cell, ...
+// world units, up to one that spans the points' bounds; a patch is the points
+// in one cell with one dominant normal direction (the largest component of
+// the normal and its sign: the two sides of a wall, and walls meeting at a
+// corner, are apart; points without a normal form patches of their own).
+// Numbered level by level from the finest, in order of first appearance.
+struct SourcePatches {
+  int levels = 0;
+  std::uint32_t patches = 0;
+  std::vector<std::uint32_t> of_point;  // levels x points: point i's patch at level l is of_point[l * points + i]
+  std::vector<std::uint32_t> parent;    // per patch: its cell's patch at the next level, or LightBounce::kNoParent
+};
+SourcePatches source_patches(const glm::vec3* positions, const glm::vec3* normals, std::size_t count, double cell);
+
+// Throws prt::Error for options.light_bounce: adaptive sample points
+// interpolate some points' transfer, which then have no gather row.
+void refuse_adaptive_light_bounce(const TransferOptions& options);
+// The mean length of a mesh's edges (each triangle's three; 0 for none): the
+// spacing of its vertices, a vertex transfer's default patch size.
+double mean_edge_length(const Mesh& mesh);
+
 }  // namespace prt::detail

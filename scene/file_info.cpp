@@ -65,6 +65,20 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   j["analytic_bytes_saved"] = analytic_bytes_saved(t);
   j["bytes_per_vertex"] = transfer_bytes_per_vertex(t);
   j["file_bytes"] = transfer_file_size(t);
+  // The light-bounce operator (prt precompute --light-bounce; docs/LIGHTS.md
+  // "Bounce"): its size per receiver (a row per vertex, or per covered texel
+  // of a lightmap) and per source patch, and an SH row's bytes to compare.
+  if (const LightBounce& b = t.light_bounce; !b.empty()) {
+    const double receivers = double(std::max<std::size_t>(b.points(), 1)), entries = double(b.entries());
+    j["light_bounce"] = {{"bounces", b.bounces},
+                         {"patches", b.patches},
+                         {"entries", b.entries()},
+                         {"entries_per_vertex", entries / receivers},
+                         {"entries_per_patch", b.patches ? entries / double(b.patches) : 0.0},
+                         {"bytes", b.bytes()},
+                         {"bytes_per_vertex", double(b.bytes()) / receivers},
+                         {"sh_row_bytes", 4 * t.stride()}};
+  }
   if (!t.ao.empty()) {
     const auto [lo, hi] = std::minmax_element(t.ao.begin(), t.ao.end());
     double sum = 0;

@@ -220,6 +220,9 @@ std::string problem(const Transfer& t, bool rows_elsewhere) {
   } else if (!t.glossy_matrices.empty()) {
     return "glossy matrices without the glossy flag";
   }
+  if (auto p = light_bounce_problem(t.light_bounce, t.vertices); !p.empty()) return p;
+  if (!t.light_bounce.empty() && t.mode != TransferMode::Interreflected)
+    return "a light-bounce operator in a transfer that is not interreflected";
   return finite_problem(t);
 }
 

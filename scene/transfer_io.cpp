@@ -12,6 +12,7 @@
 #include "transfer_rules.h"
 
 #include <fmt/format.h>
+#include <glm/gtc/packing.hpp>
 
 #include <unistd.h>
 
@@ -24,6 +25,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 
 namespace prt {
 
@@ -34,11 +36,58 @@ namespace detail::tio {
 
 using detail::HeaderValues;
 
+// What is wrong with light-bounce section `kind` (14 to 19) holding `count`
+// elements, or "": the operator is an interreflected transfer's and never a
+// compressed file's; its header is two words, its patches one per vertex,
+// its offsets one more, its weights as many as its sources (`sources`: that
+// section's count, once read). Its values, and its parents' count (one per
+// patch), are light_bounce_problem's, once the whole operator is read.
+std::string light_bounce_section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v,
+                                         bool compressed, std::optional<std::uint64_t> sources) {
+  const char* name = kind_info(kind)->name;
+  if (compressed)
+    return fmt::format("has a '{}' section, but the header's flags say the file is compressed (compression keeps no "
+                       "light-bounce operator)",
+                       name);
+  if (v.mode != std::int64_t(TransferMode::Interreflected))
+    return fmt::format("has a '{}' section, but the header says the transfer is {} (a light-bounce operator is kept "
+                       "by interreflected transfers only)",
+                       name, transfer_mode_name(TransferMode(v.mode)));
+  if (kind == kLightBounceHeader && count != kLightBounceHeaderWords)
+    return fmt::format("section '{}' has {} values; expected {} (bounces, patches)", name, count,
+                       kLightBounceHeaderWords);
+  if (kind == kLightBouncePatches && count != v.vertices)
+    return fmt::format("section '{}' has {} values; expected one per vertex ({})", name, count, v.vertices);
+  if (kind == kLightBounceOffsets && count != v.vertices + 1)
+    return fmt::format("section '{}' has {} values; expected vertices + 1 = {}", name, count, v.vertices + 1);
+  if (kind == kLightBounceWeights && sources && count != *sources)
+    return fmt::format("section '{}' has {} values; 'light bounce sources' has {} (one weight per entry)", name,
+                       count, *sources);
+  return {};
+}
+
+// The operator's six sections come together: what is wrong when only some
+// of them were read (bit k of `seen`: kind k), or "".
+std::string light_bounce_sections_problem(std::uint32_t seen) {
+  std::string have, missing;
+  for (std::uint32_t kind : kLightBounceKinds) {
+    std::string& list = (seen >> kind) & 1u ? have : missing;
+    list += fmt::format("{}'{}'", list.empty() ? "" : ", ", kind_info(kind)->name);
+  }
+  if (have.empty() || missing.empty()) return {};
+  return fmt::format("the light-bounce operator's sections (kinds 14 to 19) come together, but the file has {} "
+                     "without {}",
+                     have, missing);
+}
+
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
-// 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13.
+// 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13,
+// the light-bounce operator's for 14 to 19 (`sources`: the count of kind 17,
+// once read).
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v, bool compressed,
-                            bool lightmap = false) {
+                            bool lightmap = false, std::optional<std::uint64_t> sources = std::nullopt) {
+  if (is_light_bounce_kind(kind)) return light_bounce_section_problem(kind, count, v, compressed, sources);
   if (kind == kInterpolatedMask) {
     // A lightmap's rows are its covered texels: the mask marks interpolated
     // texels there (prt precompute --lightmap --adaptive), one bit per row.
@@ -126,12 +175,33 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
     case kGlossy: return {t.glossy_matrices.data(), t.glossy_matrices.size()};
     // Built by the writer from Transfer::interpolated (interpolated_mask).
     case kInterpolatedMask: return {nullptr, t.interpolated_vertices() > 0 ? mask_words(t.vertices) : 0};
+    // Built by the writer (light_bounce_header).
+    case kLightBounceHeader: return {nullptr, t.light_bounce.empty() ? 0 : kLightBounceHeaderWords};
+    case kLightBouncePatches: return {t.light_bounce.patch.data(), t.light_bounce.patch.size()};
+    case kLightBounceOffsets: return {t.light_bounce.offsets.data(), t.light_bounce.offsets.size()};
+    case kLightBounceSources: return {t.light_bounce.source.data(), t.light_bounce.source.size()};
+    // Built by the writer (light_bounce_weights: 16 bits each).
+    case kLightBounceWeights: return {nullptr, t.light_bounce.weight.size()};
+    case kLightBounceParents: return {t.light_bounce.parent.data(), t.light_bounce.parent.size()};
   }
   return {nullptr, 0};
 }
 
-// Whether `t` stores section `kind`: the coefficients always, the others when non-empty.
+std::array<std::uint32_t, kLightBounceHeaderWords> light_bounce_header(const Transfer& t) {
+  return {std::uint32_t(t.light_bounce.bounces), t.light_bounce.patches};
+}
+
+std::vector<std::uint16_t> light_bounce_weights(const Transfer& t) {
+  std::vector<std::uint16_t> halves(t.light_bounce.weight.size());
+  for (std::size_t e = 0; e < halves.size(); ++e) halves[e] = glm::packHalf1x16(t.light_bounce.weight[e]);
+  return halves;
+}
+
+// Whether `t` stores section `kind`: the coefficients always, the light-bounce
+// operator's six with an operator (its sources and weights even when no
+// row has an entry), the others when non-empty.
 bool has_section(const Transfer& t, std::uint32_t kind) {
+  if (is_light_bounce_kind(kind)) return !t.light_bounce.empty();
   return kind == kCoeffs || (kind == kGlossy && t.glossy) || section_array(t, kind).second > 0;
 }
 
@@ -324,6 +394,7 @@ void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::u
 }  // namespace detail::tio
 
 std::uint32_t transfer_format_version(const Transfer& t) {
+  if (!t.light_bounce.empty()) return kLightBounceFormatVersion;
   return t.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : transfer_format_version(t.glossy);
 }
 
@@ -331,25 +402,31 @@ void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  // The oldest version that holds `t` (7 only with interpolated vertices, 3
-  // only with glossy matrices): an earlier prt reads every file it could.
+  // The oldest version that holds `t` (8 only with a light-bounce operator, 7
+  // only with interpolated vertices, 3 only with glossy matrices): an earlier
+  // prt reads every file it could.
   fill_header(header, t, transfer_format_version(t), 0u, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t), interpolated = interpolated_mask(t);
+  const auto bounce = light_bounce_header(t);
+  const std::vector<std::uint16_t> weights = light_bounce_weights(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
-                   s.kind == kAnalyticMask       ? mask.data()
-                   : s.kind == kInterpolatedMask ? interpolated.data()
-                                                 : section_array(t, s.kind).first});
+                   s.kind == kAnalyticMask         ? static_cast<const void*>(mask.data())
+                   : s.kind == kInterpolatedMask   ? interpolated.data()
+                   : s.kind == kLightBounceHeader  ? bounce.data()
+                   : s.kind == kLightBounceWeights ? static_cast<const void*>(weights.data())
+                                                   : section_array(t, s.kind).first});
   write_file(path, header, raw);
 }
 
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
   std::vector<TransferSection> s;
   std::vector<TransferSection> after;  // the interpolated-vertex mask: kind 13, after the records
+  // (No light-bounce operator: write_compressed_transfer refuses one.)
   for (const auto& sec : transfer_sections(c.transfer))
     if (sec.kind == kInterpolatedMask) after.push_back(sec);
-    else if (sec.kind != kCoeffs && sec.kind != kGlossy) s.push_back(sec);
+    else if (sec.kind != kCoeffs && sec.kind != kGlossy && !is_light_bounce_kind(sec.kind)) s.push_back(sec);
   const auto add = [&](std::uint32_t kind, const ClusteredSignal& g) {
     const std::uint64_t bytes = signal_record_bytes(g);
     s.push_back({kind, kind_info(kind)->name, 1, bytes, bytes, true, type_name(kTypeU8)});
@@ -374,6 +451,10 @@ std::uint64_t transfer_file_size(const CompressedTransfer& c) { return file_size
 void write_compressed_transfer(const std::string& path, const CompressedTransfer& c) {
   if (auto p = compressed_transfer_problem(c); !p.empty())
     throw Error(path + ": cannot write this compressed transfer: " + p);
+  // The file would silently lose it: refused until compression keeps one.
+  if (!c.transfer.light_bounce.empty())
+    throw Error(path + ": cannot write this compressed transfer: its light-bounce operator (prt precompute "
+                "--light-bounce) is not kept by compression yet; write the transfer uncompressed to keep it");
   const Transfer& t = c.transfer;
   const std::vector<TransferSection> sections = transfer_sections(c);
   unsigned char header[kHeaderSize];
@@ -590,6 +671,7 @@ struct ShFile {
   Transfer t;
   std::vector<std::uint32_t> mask, interpolated;
   std::uint32_t seen = 0;  // bit k: a section of kind k was read
+  std::optional<std::uint64_t> light_bounce_sources;  // the count of kind 17, once its head is read
   bool has(std::uint32_t kind) const { return (seen >> kind) & 1u; }
 };
 
@@ -619,7 +701,8 @@ void Reader::read_sh_header(ShFile& f) {
                   : version_ == 4 ? kKindsV4
                   : version_ == 5 ? kKindsV5
                   : version_ == 6 ? kKindsV6
-                                  : kKindsV7;
+                  : version_ == 7 ? kKindsV7
+                                  : kKindsV8;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -701,8 +784,9 @@ void Reader::read_sh_sections(ShFile& f) {
     previous = s.kind;
     f.seen |= 1u << s.kind;
     expect_type(k->name, s.type, k->type);
-    if (auto p = section_problem(s.kind, s.count, v, f.compressed, f.lightmap); !p.empty())
+    if (auto p = section_problem(s.kind, s.count, v, f.compressed, f.lightmap, f.light_bounce_sources); !p.empty())
       throw fail("bad section table: " + p);
+    if (s.kind == kLightBounceSources) f.light_bounce_sources = s.count;
     return k->name;
   };
   const auto load_data = [&](const SectionHead& s) {
@@ -715,6 +799,29 @@ void Reader::read_sh_sections(ShFile& f) {
       case kAnalyticMask: read_section(s.data, f.mask, s.count); break;
       case kInterpolatedMask: read_section(s.data, f.interpolated, s.count); break;
       case kGlossy: read_section(s.data, t.glossy_matrices, s.count); break;
+      case kLightBounceHeader: {
+        std::vector<std::uint32_t> words;
+        read_section(s.data, words, s.count);
+        // (0 would read as no operator, above 2^31 - 1 as negative; the
+        // rest is light_bounce_problem's, once the operator is read.)
+        if (words[0] < 1 || words[0] > std::uint32_t(kMaxLightBounces))
+          throw fail(fmt::format("bad section '{}': {} bounces; an operator applies 1 to {}", s.name, words[0],
+                                 kMaxLightBounces));
+        t.light_bounce.bounces = int(words[0]);
+        t.light_bounce.patches = words[1];
+        break;
+      }
+      case kLightBouncePatches: read_section(s.data, t.light_bounce.patch, s.count); break;
+      case kLightBounceOffsets: read_section(s.data, t.light_bounce.offsets, s.count); break;
+      case kLightBounceSources: read_section(s.data, t.light_bounce.source, s.count); break;
+      case kLightBounceWeights: {
+        std::vector<std::uint16_t> halves;
+        read_section(s.data, halves, s.count);
+        t.light_bounce.weight.resize(halves.size());
+        for (std::size_t e = 0; e < halves.size(); ++e) t.light_bounce.weight[e] = glm::unpackHalf1x16(halves[e]);
+        break;
+      }
+      case kLightBounceParents: read_section(s.data, t.light_bounce.parent, s.count); break;
       case kLightmapLayout: {
         std::vector<std::uint64_t> words;
         read_section(s.data, words, s.count);
@@ -759,6 +866,7 @@ void Reader::read_sh_sections(ShFile& f) {
     throw fail(fmt::format("bad section table: no 'analytic vertices' section, but the header says {} of {} vertices "
                            "are analytic",
                            v.vertices - v.stored, v.vertices));
+  if (auto p = light_bounce_sections_problem(f.seen); !p.empty()) throw fail("bad section table: " + p);
   if (f.lightmap && !f.has(kLightmapTexels))
     throw fail("bad section table: no 'lightmap layout' and 'lightmap texels' sections, but the header's flags say the "
                "file is a lightmap");
@@ -884,6 +992,23 @@ std::string describe_line(const char* label, const std::string& value) {
   return fmt::format("  {:<17} {}\n", label, value);
 }
 
+// The light-bounce operator's line (docs/LIGHTS.md "Bounce"), or "" without
+// one: its size per receiver (a row per point: `points`, plural, names them)
+// and per source patch, and its bytes per receiver against the SH row's.
+std::string describe_light_bounce(const Transfer& t, const char* points) {
+  const LightBounce& b = t.light_bounce;
+  if (b.empty()) return {};
+  const char* point = std::strcmp(points, "texels") == 0 ? "texel" : "vertex";
+  const double n = double(std::max<std::size_t>(b.points(), 1)), entries = double(b.entries());
+  return describe_line(
+      "light bounce",
+      fmt::format("{} bounce{} (applied at run time), {} source patches, {} entries: {:.2f} per receiver ({}), {:.2f} "
+                  "per source patch; {} bytes, {:.1f} per receiver against {} of an SH row ({} x {} x 4 bytes)",
+                  b.bounces, b.bounces == 1 ? "" : "s", b.patches, b.entries(), entries / n, point,
+                  b.patches ? entries / double(b.patches) : 0.0, b.bytes(), double(b.bytes()) / n,
+                  4 * t.stride(), t.channels, t.bands * t.bands));
+}
+
 std::string describe(const Transfer& t, std::uint32_t version, const std::vector<TransferSection>& sections,
                      std::uint64_t file_size, const std::string& compression, const char* points) {
   const auto line = describe_line;
@@ -933,6 +1058,7 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
                                       traced, t.vertices, points,
                                       t.vertices ? 100.0 * double(traced) / double(t.vertices) : 0.0, interpolated));
   }
+  s += describe_light_bounce(t, points);
   s += compression;
   s += line("bytes per vertex", fmt::format("{}{}", per_vertex, analytic ? " (mean over all vertices)" : ""));
   s += line("file size", fmt::format("{} bytes", file_size));

@@ -3,8 +3,9 @@
 // a transfer kind or a basis"):
 //   scene/transfer_io.cpp           framing (header, section table, checksum,
 //                                   atomic write, the reader's common checks),
-//                                   the SH sections (kinds 1-7, 12, 13) and
-//                                   the compressed signals (8, 9)
+//                                   the SH sections (kinds 1-7, 12, 13), the
+//                                   light-bounce operator (14-19) and the
+//                                   compressed signals (8, 9)
 //   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
 //   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
 //   scene/transfer_io_zh.cpp        zonal-harmonic transfers (basis 2, kinds 24-26)
@@ -100,6 +101,7 @@ constexpr std::uint32_t kTypeU32 = 4;
 constexpr std::uint32_t kTypeI16 = 5;
 constexpr std::uint32_t kTypeU8 = 6;   // version 4: the compressed signals (byte records)
 constexpr std::uint32_t kTypeU16 = 7;  // inside a compressed signal only: cluster indices
+constexpr std::uint32_t kTypeF16 = 8;  // version 8: IEEE 754 binary16, the light-bounce weights
 
 // Kinds 1 to 5 are the arrays of a Transfer (detail::TransferArray), 6 the
 // file's form of its slots.
@@ -118,6 +120,13 @@ enum Kind : std::uint32_t {
   kLightmapTexels = 11,                             // version 5: u32 covered texel y * width + x, increasing
   kCompressionChoice = 12,                          // version 6: what a compression was chosen for (UTF-8 JSON)
   kInterpolatedMask = 13,                           // version 7: u32 bit mask of the interpolated vertices
+  // Version 8: the light-bounce operator (prt/light_bounce.h), all six or none.
+  kLightBounceHeader = 14,                          // u32 bounces, patches
+  kLightBouncePatches = 15,                         // u32 per vertex: its source patch of the finest level
+  kLightBounceOffsets = 16,                         // u32, vertices + 1: each row's first entry
+  kLightBounceSources = 17,                         // u32 per entry: a source patch
+  kLightBounceWeights = 18,                         // f16 per entry: its weight
+  kLightBounceParents = 19,                         // u32 per patch: the coarser patch holding it, or 0xffffffff
 };
 
 struct KindInfo {
@@ -127,7 +136,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 13> kKinds = {{
+constexpr std::array<KindInfo, 19> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -141,6 +150,14 @@ constexpr std::array<KindInfo, 13> kKinds = {{
     {kLightmapTexels, "lightmap texels", kTypeU32, true},
     {kCompressionChoice, "compression choice", kTypeU8, false},
     {kInterpolatedMask, "interpolated vertices", kTypeU32, false},
+    // Not per vertex: the operator's size is reported on its own (prt info's
+    // "light bounce" line), and "bytes per vertex" stays the transfer's.
+    {kLightBounceHeader, "light bounce header", kTypeU32, false},
+    {kLightBouncePatches, "light bounce patches", kTypeU32, false},
+    {kLightBounceOffsets, "light bounce offsets", kTypeU32, false},
+    {kLightBounceSources, "light bounce sources", kTypeU32, false},
+    {kLightBounceWeights, "light bounce weights", kTypeF16, false},
+    {kLightBounceParents, "light bounce parents", kTypeU32, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
@@ -150,11 +167,22 @@ constexpr std::size_t kKindsV4 = 9;
 constexpr std::size_t kKindsV5 = 11;
 constexpr std::size_t kKindsV6 = 12;
 constexpr std::size_t kKindsV7 = 13;
-// The first version whose files may hold section `kind` (1 to 13).
+constexpr std::size_t kKindsV8 = 19;
+// The first version whose files may hold section `kind` (1 to 19).
 constexpr std::uint32_t kind_version(std::uint32_t kind) {
   return kind <= kKindsV1 ? 1 : kind <= kKindsV2 ? 2 : kind <= kKindsV3 ? 3 : kind <= kKindsV4 ? 4
-         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : 7;
+         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : kind <= kKindsV7 ? 7 : 8;
 }
+static_assert(kKindsV8 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
+              kind_version(kLightBounceParents) == kLightBounceFormatVersion);
+// The operator's sections, in file order.
+constexpr std::array<std::uint32_t, 6> kLightBounceKinds = {kLightBounceHeader,  kLightBouncePatches,
+                                                           kLightBounceOffsets, kLightBounceSources,
+                                                           kLightBounceWeights, kLightBounceParents};
+constexpr bool is_light_bounce_kind(std::uint32_t kind) {
+  return kind >= kLightBounceHeader && kind <= kLightBounceParents;
+}
+constexpr std::uint64_t kLightBounceHeaderWords = 2;  // bounces, patches
 // The longest compression choice record a reader takes (its JSON is under a
 // kilobyte for a handful of maps; this leaves room for thousands).
 constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
@@ -175,14 +203,15 @@ inline std::uint32_t type_bytes(std::uint32_t type) {
     case kTypeF64:
     case kTypeU64: return 8;
     case kTypeI16:
-    case kTypeU16: return 2;
+    case kTypeU16:
+    case kTypeF16: return 2;
     case kTypeU8: return 1;
     default: return 4;
   }
 }
 constexpr EnumName<std::uint32_t> kTypeNames[] = {
     {kTypeF32, "f32"}, {kTypeF64, "f64"}, {kTypeU64, "u64"}, {kTypeU32, "u32"},
-    {kTypeI16, "i16"}, {kTypeU8, "u8"},  {kTypeU16, "u16"},
+    {kTypeI16, "i16"}, {kTypeU8, "u8"},  {kTypeU16, "u16"}, {kTypeF16, "f16"},
 };
 // TransferSection::type is a C string: the names are literals.
 inline const char* type_name(std::uint32_t type) { return enum_name(kTypeNames, type).data(); }
@@ -279,8 +308,14 @@ std::vector<std::uint32_t> analytic_mask(const Transfer& t);
 // The interpolated-vertex bit mask of `t` (empty when no vertex is
 // interpolated: the file then has no section 13).
 std::vector<std::uint32_t> interpolated_mask(const Transfer& t);
-// Pointer to the array of SH section `kind` of `t` and its element count.
+// Pointer to the array of SH section `kind` of `t` and its element count
+// (the writer builds the masks and the light-bounce header: null for those).
 std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind);
+// The 'light bounce header' section of `t`: bounces, patches.
+std::array<std::uint32_t, kLightBounceHeaderWords> light_bounce_header(const Transfer& t);
+// The 'light bounce weights' section of `t`: each weight's binary16 bits
+// (exact: light_bounce_problem requires half-precision values).
+std::vector<std::uint16_t> light_bounce_weights(const Transfer& t);
 // "truncated: expected ... bytes, file has ..."
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size);
 std::string unknown_basis(std::uint32_t basis);

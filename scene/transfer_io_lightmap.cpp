@@ -1,5 +1,6 @@
 // Lightmap sections of transfer files (kinds 10 and 11, flag bit 3, version
-// 5; version 7 with the interpolated-texel mask, kind 13; docs/FORMAT.md
+// 5; version 7 with the interpolated-texel mask, kind 13; version 8 with the
+// light-bounce operator over the texels, kinds 14-19; docs/FORMAT.md
 // "Lightmap transfer"). The framing: transfer_io_format.h.
 #include <prt/transfer_io.h>
 
@@ -23,10 +24,11 @@ using namespace detail::tio;
 std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
   std::vector<TransferSection> s;
   // The interpolated-texel mask (kind 13, adaptive sample points among the
-  // texels): after the layout and texels, as sections go by increasing kind.
+  // texels) and the light-bounce operator (14-19): after the layout and
+  // texels, as sections go by increasing kind.
   std::vector<TransferSection> after;
   for (const auto& sec : transfer_sections(t.transfer))
-    if (sec.kind == kInterpolatedMask) after.push_back(sec);
+    if (sec.kind > kLightmapTexels) after.push_back(sec);
     else s.push_back(sec);
   for (const std::uint32_t kind : {kLightmapLayout, kLightmapTexels}) {
     const KindInfo& k = *kind_info(kind);
@@ -40,8 +42,9 @@ std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
 std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_of(transfer_sections(t)); }
 
 std::uint32_t transfer_format_version(const LightmapTransfer& t) {
-  // 7 only with the mask: a lightmap with every texel traced stays the
-  // version 5 file of before, byte for byte.
+  // 8 only with an operator, 7 only with the mask: a lightmap with neither
+  // stays the version 5 file of before, byte for byte.
+  if (!t.transfer.light_bounce.empty()) return kLightBounceFormatVersion;
   return t.transfer.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : kLightmapFormatVersion;
 }
 
@@ -52,15 +55,19 @@ void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t)
   unsigned char header[kHeaderSize];
   fill_header(header, t.transfer, transfer_format_version(t), kFlagLightmap, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t.transfer), interpolated = interpolated_mask(t.transfer);
+  const auto bounce = light_bounce_header(t.transfer);
+  const std::vector<std::uint16_t> weights = light_bounce_weights(t.transfer);
   const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
                                                       std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
-    const void* data = s.kind == kAnalyticMask       ? mask.data()
-                       : s.kind == kInterpolatedMask ? interpolated.data()
-                       : s.kind == kLightmapLayout   ? static_cast<const void*>(layout)
-                       : s.kind == kLightmapTexels   ? static_cast<const void*>(t.layout.texels.data())
-                                                     : section_array(t.transfer, s.kind).first;
+    const void* data = s.kind == kAnalyticMask         ? static_cast<const void*>(mask.data())
+                       : s.kind == kInterpolatedMask   ? interpolated.data()
+                       : s.kind == kLightBounceHeader  ? bounce.data()
+                       : s.kind == kLightBounceWeights ? static_cast<const void*>(weights.data())
+                       : s.kind == kLightmapLayout     ? static_cast<const void*>(layout)
+                       : s.kind == kLightmapTexels     ? static_cast<const void*>(t.layout.texels.data())
+                                                       : section_array(t.transfer, s.kind).first;
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
   }
   write_file(path, header, raw);

@@ -13,6 +13,7 @@
 #include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 
+#include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <sys/resource.h>
@@ -26,6 +27,7 @@
 #include <algorithm>
 #include <cctype>
 #include <csignal>
+#include <cstdio>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -137,6 +139,12 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_EQ(a.glossy, b.glossy);
   EXPECT_TRUE(same_bits(a.glossy_matrices, b.glossy_matrices));
   EXPECT_EQ(a.interpolated, b.interpolated);
+  EXPECT_EQ(a.light_bounce.bounces, b.light_bounce.bounces);
+  EXPECT_EQ(a.light_bounce.patches, b.light_bounce.patches);
+  EXPECT_EQ(a.light_bounce.patch, b.light_bounce.patch);
+  EXPECT_EQ(a.light_bounce.offsets, b.light_bounce.offsets);
+  EXPECT_EQ(a.light_bounce.source, b.light_bounce.source);
+  EXPECT_TRUE(same_bits(a.light_bounce.weight, b.light_bounce.weight));
 }
 
 // `t` with random glossy matrices for its stored rows (the layout of its mode).
@@ -480,7 +488,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 7"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 8"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -1411,6 +1419,389 @@ TEST(LightmapRead, BadInterpolatedTexelMask) {
   EXPECT_FALSE(fs::exists(dir.file("w.prtt")));
 }
 
+// ---- the light-bounce operator (version 8, kinds 14-18; prt/light_bounce.h) ----------------
+
+// A valid operator over `points` points (a transfer's vertices, a lightmap's
+// covered texels): point i in patch i % 3 of the finest level, patches 0 and
+// 1 in the coarser patch 3 (4 patches of two levels). The rows of patch 0
+// reach patches 1 and 2, those of 1 reach 0 and 2, those of 2 the coarse 3;
+// every fifth row reaches none. Random weights, half-precision values (what
+// an operator holds: files store 16 bits), none round: the round trip is
+// bit for bit. 40 points: 21 rows of 2 entries, 11 of 1: 53.
+prt::LightBounce sample_light_bounce(std::size_t points, int bounces = 2) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<float> weight(0.0f, 2.0f);
+  const std::vector<std::uint32_t> reach[3] = {{1, 2}, {0, 2}, {3}};
+  prt::LightBounce b;
+  b.bounces = bounces;
+  b.patches = 4;
+  b.parent = {3, 3, prt::LightBounce::kNoParent, prt::LightBounce::kNoParent};
+  b.offsets.push_back(0);
+  for (std::size_t i = 0; i < points; ++i) {
+    b.patch.push_back(std::uint32_t(i % 3));
+    if (i % 5 != 4)
+      for (std::uint32_t p : reach[i % 3]) {
+        b.source.push_back(p);
+        b.weight.push_back(glm::unpackHalf1x16(glm::packHalf1x16(weight(rng))));
+      }
+    b.offsets.push_back(std::uint32_t(b.source.size()));
+  }
+  return b;
+}
+
+// `t` (interreflected) with sample_light_bounce over its vertices.
+Transfer with_light_bounce(Transfer t, int bounces = 2) {
+  t.light_bounce = sample_light_bounce(t.vertices, bounces);
+  return t;
+}
+
+// sample_lightmap made interreflected (2 bounces): a lightmap that may keep an operator.
+prt::LightmapTransfer interreflected_lightmap(bool analytic = false) {
+  prt::LightmapTransfer l = sample_lightmap(analytic);
+  l.transfer.mode = TransferMode::Interreflected;
+  l.transfer.bounces = 2;
+  return l;
+}
+
+// The offset of the section of `kind` in `s`.
+std::size_t section_of(const Sample& s, std::uint32_t kind) {
+  for (std::size_t at : s.section_at)
+    if (get<std::uint32_t>(s.bytes, at) == kind) return at;
+  ADD_FAILURE() << "no section of kind " << kind;
+  return 0;
+}
+
+// Section `i` of `s` as stored: head, data and padding.
+std::string section_bytes(const Sample& s, std::size_t i) {
+  const std::size_t end = i + 1 < s.section_at.size() ? s.section_at[i + 1] : s.bytes.size() - kTrailer;
+  return s.bytes.substr(s.section_at[i], end - s.section_at[i]);
+}
+
+// The file `s` without the sections whose kind `drop` picks, as version
+// `version`, its section count lowered, resealed.
+template <typename Pick>
+std::string without_sections(const Sample& s, Pick drop, std::uint32_t version) {
+  std::string out = s.bytes.substr(0, kHeader);
+  std::uint32_t kept = 0;
+  for (std::size_t i = 0; i < s.section_at.size(); ++i)
+    if (!drop(get<std::uint32_t>(s.bytes, s.section_at[i]))) {
+      out += section_bytes(s, i);
+      ++kept;
+    }
+  out += s.bytes.substr(s.bytes.size() - kTrailer);
+  put<std::uint32_t>(out, kVersionAt, version);
+  put<std::uint32_t>(out, kSectionCountAt, kept);
+  reseal(out);
+  return out;
+}
+
+// Checks that the last six sections of `s` are those docs/FORMAT.md
+// specifies for `b`: kinds 14 to 19, u32 bounces and patches, u32 per point,
+// u32 per point and one more, u32 and f16 (IEEE 754 binary16) per entry,
+// u32 per patch, the arrays in order.
+void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
+  const std::size_t n = s.section_at.size(), points = b.patch.size(), entries = b.source.size();
+  ASSERT_GE(n, 6u);
+  const std::uint32_t types[6] = {4, 4, 4, 4, 8, 4}, sizes[6] = {4, 4, 4, 4, 2, 4};  // u32 x 4, f16, u32
+  const std::size_t counts[6] = {2, points, points + 1, entries, entries, b.patches};
+  for (std::size_t i = 0; i < 6; ++i) {
+    const std::size_t at = s.section_at[n - 6 + i];
+    SCOPED_TRACE("section of kind " + std::to_string(14 + i));
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, at), 14 + i);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, at + 4), types[i]);
+    EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 8), counts[i]);
+    EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 16), sizes[i] * counts[i]);
+  }
+  const auto data = [&](std::size_t i, std::size_t k) {
+    return s.section_at[n - 6 + i] + kSectionHeader + sizes[i] * k;
+  };
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, data(0, 0)), std::uint32_t(b.bounces));
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, data(0, 1)), b.patches);
+  for (std::size_t k = 0; k < points; ++k) EXPECT_EQ(get<std::uint32_t>(s.bytes, data(1, k)), b.patch[k]) << k;
+  for (std::size_t k = 0; k <= points; ++k) EXPECT_EQ(get<std::uint32_t>(s.bytes, data(2, k)), b.offsets[k]) << k;
+  for (std::size_t k = 0; k < entries; ++k) {
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, data(3, k)), b.source[k]) << k;
+    EXPECT_EQ(get<std::uint16_t>(s.bytes, data(4, k)), glm::packHalf1x16(b.weight[k])) << k;
+  }
+  for (std::size_t k = 0; k < b.patches; ++k) EXPECT_EQ(get<std::uint32_t>(s.bytes, data(5, k)), b.parent[k]) << k;
+  EXPECT_EQ(s.bytes.size(), data(5, b.patches) + (8 - 4 * b.patches % 8) % 8 + kTrailer);  // the last section
+}
+
+TEST(LightBounceFile, RoundTripIsBitIdenticalAsVersionEight) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  // Rows of every vertex, analytic (stored nothing else) and interpolated
+  // ones (kind 13 before 14) included; 7 vertices (odd sizes: padding); one
+  // bounce and the most; an operator without entries (every row empty).
+  prt::LightBounce no_entries = sample_light_bounce(40);
+  no_entries.offsets.assign(41, 0);
+  no_entries.source.clear();
+  no_entries.weight.clear();
+  Transfer empty_rows = full_transfer();
+  empty_rows.light_bounce = no_entries;
+  const std::vector<std::pair<std::string, Transfer>> cases = {
+      {"every vertex stored", with_light_bounce(full_transfer())},
+      {"analytic vertices", with_light_bounce(mixed_transfer())},
+      {"interpolated vertices", with_light_bounce(adaptive_transfer())},
+      {"7 vertices, 1 bounce", with_light_bounce(full_transfer(7), 1)},
+      {"the most bounces", with_light_bounce(full_transfer(), prt::kMaxLightBounces)},
+      {"no entries", empty_rows},
+  };
+  for (const auto& [what, t] : cases) {
+    SCOPED_TRACE(what);
+    ASSERT_EQ(prt::transfer_problem(t), "");
+    EXPECT_EQ(prt::transfer_format_version(t), 8u);
+    const Sample s = sample_file(dir, t);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 8u);
+    EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
+    expect_light_bounce_sections(s, t.light_bounce);
+    const Transfer back = prt::read_transfer(dir.file("sample.prtt"));
+    expect_identical(t, back);
+    EXPECT_EQ(file_version(dir.file("sample.prtt")), 8u);
+    prt::write_transfer(path, back);
+    EXPECT_EQ(read_file(path), s.bytes);
+    // Without the operator: the file of before, byte for byte (its own
+    // version, no kinds 14-19); the operator adds only its six sections.
+    Transfer plain = t;
+    plain.light_bounce = {};
+    const std::uint32_t before = prt::transfer_format_version(plain);
+    EXPECT_LT(before, 8u);
+    EXPECT_EQ(prt::transfer_sections(t).size(), prt::transfer_sections(plain).size() + 6);
+    EXPECT_EQ(without_sections(s, [](std::uint32_t kind) { return kind >= 14; }, before),
+              sample_file(dir, plain).bytes);
+    // Not per vertex: the bytes per vertex are the transfer's.
+    EXPECT_EQ(prt::transfer_bytes_per_vertex(t), prt::transfer_bytes_per_vertex(plain));
+  }
+}
+
+// Files an earlier prt wrote (the fuzz corpus's seeds, made by prt
+// precompute and prt compress: every version from 2 to 7), read and written
+// again: the same version and bytes. A transfer without an operator is
+// written as it was before version 8.
+TEST(TransferFile, FilesOfEarlierVersionsAreWrittenAgainByteForByte) {
+  TempDir dir;
+  const fs::path corpus = fs::path(PRT_SOURCE_DIR) / "tests" / "fuzz" / "corpus" / "transfer";
+  std::vector<std::uint32_t> versions;
+  for (const char* name : {"seed-unshadowed-b2.prt", "seed-shadowed-b3.prt", "seed-interreflected-colour.prt",
+                           "seed-compressed-b3-w16.prt", "seed-compressed-chosen.prt", "seed-compressed-glossy.prt",
+                           "seed-adaptive-b1.prt", "seed-lightmap-b1.prt", "seed-lightmap-adaptive-b1.prt"}) {
+    SCOPED_TRACE(name);
+    const std::string in = (corpus / name).string();
+    ASSERT_TRUE(fs::exists(in)) << in;
+    std::uint32_t version = 0;
+    const prt::AnyTransfer any = prt::read_transfer_file(in, &version);
+    versions.push_back(version);
+    const std::string out = dir.file("again.prtt");
+    prt::write_transfer_file(out, any);
+    EXPECT_EQ(read_file(out), read_file(in));
+    EXPECT_EQ(file_version(out), version);
+  }
+  std::sort(versions.begin(), versions.end());
+  EXPECT_EQ(versions.front(), 2u);
+  EXPECT_EQ(versions.back(), 7u);
+}
+
+// A lightmap's operator: a row per covered texel, its sections after the
+// layout and texels (and the interpolated-texel mask).
+TEST(LightmapFile, LightBounceRoundTripsAsVersionEight) {
+  TempDir dir;
+  for (bool analytic : {false, true})
+    for (bool interpolated : {false, true}) {
+      SCOPED_TRACE(std::string(analytic ? "analytic texels" : "every texel stored") +
+                   (interpolated ? ", interpolated texels" : ""));
+      prt::LightmapTransfer plain = interreflected_lightmap(analytic);
+      if (interpolated) plain.transfer = with_interpolated(plain.transfer, [](std::size_t v) { return v % 4 != 0; });
+      prt::LightmapTransfer l = plain;
+      l.transfer.light_bounce = sample_light_bounce(40);
+      EXPECT_EQ(prt::transfer_format_version(l), 8u);
+      const Sample s = lightmap_sample(dir, l);
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 8u);
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 8u, 8u);  // flag bit 3: a lightmap
+      EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(l));
+      const std::size_t n = s.section_at.size(), mask = interpolated ? 1 : 0;
+      ASSERT_GE(n, 8 + mask);
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[n - 8 - mask]), 10u);
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[n - 7 - mask]), 11u);
+      if (interpolated) {
+        EXPECT_EQ(get<std::uint32_t>(s.bytes, s.section_at[n - 7]), 13u);
+      }
+      expect_light_bounce_sections(s, l.transfer.light_bounce);
+      const std::string path = dir.file("lightmap.prtt");
+      const prt::LightmapTransfer back = prt::read_lightmap_transfer(path);
+      expect_identical(l.transfer, back.transfer);
+      EXPECT_EQ(back.layout.texels, l.layout.texels);
+      std::uint32_t version = 0;
+      EXPECT_EQ(prt::kind_of(prt::read_transfer_file(path, &version)), prt::TransferKind::Lightmap);
+      EXPECT_EQ(version, 8u);
+      prt::write_lightmap_transfer(dir.file("again.prtt"), back);
+      EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+      const std::string d = prt::describe_transfer(back);
+      EXPECT_TRUE(contains(d, "format version 8")) << d;
+      EXPECT_TRUE(contains(d, "per receiver (texel)")) << d;
+      // Without it: the version 5 (7 with the mask) file of before, byte for byte.
+      const std::uint32_t before = interpolated ? 7u : 5u;
+      EXPECT_EQ(prt::transfer_format_version(plain), before);
+      EXPECT_EQ(without_sections(s, [](std::uint32_t kind) { return kind >= 14; }, before),
+                lightmap_sample(dir, plain).bytes);
+    }
+}
+
+TEST(LightBounceRead, DamagedOperatorsAreRefusedByName) {
+  TempDir dir;
+  const Transfer t = with_light_bounce(full_transfer());  // 11 sections: 1-5, 14-19
+  ASSERT_EQ(t.light_bounce.entries(), 53u);
+  const Sample s = sample_file(dir, t);
+  const auto data = [&](std::uint32_t kind, std::size_t k) { return section_of(s, kind) + kSectionHeader + 4 * k; };
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& expected, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, expected, what);
+  };
+  // The sections in a file older than version 8.
+  edit(kVersionAt, std::uint32_t(7),
+       {"bad section table: section 6 of 11 has unknown kind 14 in a version 7 file",
+        "'light bounce header' sections are version 8 and later"},
+       "kind 14 in version 7");
+  edit(kVersionAt, std::uint32_t(2), {"11 sections; at most 6 kinds exist in version 2"}, "kind 14 in version 2");
+  // Section heads: element types and counts.
+  edit(section_of(s, 18) + 4, std::uint32_t(1), {"section 'light bounce weights' has element type 1; expected 8 (f16)"},
+       "f32 weights");
+  edit(section_of(s, 17) + 4, std::uint32_t(1), {"section 'light bounce sources' has element type 1; expected 4 (u32)"},
+       "f32 sources");
+  edit(section_of(s, 14) + 8, std::uint64_t(3),
+       {"section 'light bounce header' has 3 values; expected 2 (bounces, patches)"}, "header count");
+  edit(section_of(s, 15) + 8, std::uint64_t(39),
+       {"section 'light bounce patches' has 39 values; expected one per vertex (40)"}, "patch count");
+  edit(section_of(s, 16) + 8, std::uint64_t(40),
+       {"section 'light bounce offsets' has 40 values; expected vertices + 1 = 41"}, "offset count");
+  edit(section_of(s, 18) + 8, std::uint64_t(63),
+       {"section 'light bounce weights' has 63 values; 'light bounce sources' has 53 (one weight per entry)"},
+       "weight count");
+  // The header's values.
+  edit(data(14, 0), std::uint32_t(0), {"bad section 'light bounce header': 0 bounces; an operator applies 1 to 64"},
+       "0 bounces");
+  edit(data(14, 0), std::uint32_t(65), {"65 bounces; an operator applies 1 to 64"}, "65 bounces");
+  edit(data(14, 0), std::uint32_t(0x80000000u), {"2147483648 bounces"}, "bounces past int");
+  edit(data(14, 1), std::uint32_t(0xffffffffu), {"light bounce: 4294967295 source patches for 40 points"},
+       "2^32 - 1 patches");
+  edit(data(14, 1), std::uint32_t(5), {"light bounce: 4 parents for 5 patches"}, "a patch without a parent");
+  // The arrays: what light_bounce_problem refuses.
+  edit(data(15, 0), std::uint32_t(7), {"light bounce: point 0 is in patch 7 of 4"}, "a point's patch out of range");
+  edit(data(19, 0), std::uint64_t(0xffffffffffffffffull), {"light bounce: patch 3 holds no point"},
+       "a coarse patch without children");
+  edit(data(19, 0), std::uint32_t(0), {"light bounce: patch 0's parent is 0 (a later patch of 4, or none)"},
+       "a patch its own parent");
+  edit(data(19, 2), std::uint32_t(4), {"light bounce: patch 2's parent is 4"}, "a parent out of range");
+  edit(data(17, 0), std::uint32_t(4), {"light bounce: row 0 names patch 4 of 4"}, "a source out of range");
+  edit(data(17, 1), std::uint32_t(1), {"light bounce: row 0's patches do not increase"}, "a source repeated");
+  edit(data(16, 40), std::uint32_t(52), {"light bounce: row offsets run from 0 to 52 over 53 entries"},
+       "offsets not ending at the entries");
+  edit(data(16, 0), std::uint32_t(1), {"light bounce: row offsets run from 1 to 53 over 53 entries"},
+       "offsets not starting at 0");
+  // A row running past the entries, the next one back: refused before any
+  // row is read (past the sources' end otherwise).
+  edit(data(16, 1), std::uint32_t(1000), {"light bounce: row 1's offsets decrease"}, "an offset past the entries");
+  // The weights are binary16: 0x7e00 a NaN, 0x7c00 infinity, 0xb800 -0.5.
+  const auto weight_at = [&](std::size_t e) { return section_of(s, 18) + kSectionHeader + 2 * e; };
+  edit(weight_at(5), std::uint16_t(0x7e00), {"light bounce: row 3 has the weight nan"}, "a NaN weight");
+  edit(weight_at(5), std::uint16_t(0x7c00), {"light bounce: row 3 has the weight inf"}, "an infinite weight");
+  edit(weight_at(0), std::uint16_t(0xb800), {"light bounce: row 0 has the weight -0.5"}, "a negative weight");
+  // Some of the six sections without the others.
+  const auto missing = [&](auto drop, const std::vector<std::string>& expected, const std::string& what) {
+    expect_bytes_error(dir, without_sections(s, drop, 8), expected, what);
+  };
+  missing([](std::uint32_t k) { return k == 18; },
+          {"bad section table: the light-bounce operator's sections (kinds 14 to 19) come together, but the file has "
+           "'light bounce header', 'light bounce patches', 'light bounce offsets', 'light bounce sources', 'light "
+           "bounce parents' without 'light bounce weights'"},
+          "no weights");
+  missing([](std::uint32_t k) { return k == 14; }, {"without 'light bounce header'"}, "no header");
+  missing([](std::uint32_t k) { return k == 15 || k == 17; },
+          {"has 'light bounce header', 'light bounce offsets', 'light bounce weights', 'light bounce parents' without "
+           "'light bounce patches', 'light bounce sources'"},
+          "no patches or sources");
+  // A version 8 file need not hold one.
+  write_file(dir.file("none.prtt"), without_sections(s, [](std::uint32_t k) { return k >= 14; }, 8));
+  EXPECT_TRUE(prt::read_transfer(dir.file("none.prtt")).light_bounce.empty());
+
+  // Only an interreflected transfer keeps one.
+  const Sample g = sample_file(dir, with_light_bounce(make_transfer(TransferMode::Interreflected, 1, 2, 40, {})));
+  std::string b = g.bytes;
+  put(b, kModeAt, std::uint32_t(1));
+  reseal(b);
+  expect_bytes_error(dir, b,
+                     {"has a 'light bounce header' section, but the header says the transfer is shadowed (a "
+                      "light-bounce operator is kept by interreflected transfers only)"},
+                     "shadowed");
+  // Never a compressed file: its own sections followed by the operator's.
+  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
+  b = c.bytes.substr(0, c.bytes.size() - kTrailer);
+  for (std::size_t i = s.section_at.size() - 6; i < s.section_at.size(); ++i) b += section_bytes(s, i);
+  b += c.bytes.substr(c.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kVersionAt, 8);
+  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + 6));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
+                  {"has a 'light bounce header' section, but the header's flags say the file is compressed"},
+                  "compressed");
+  // A lightmap's operator is read by the same reader.
+  prt::LightmapTransfer l = interreflected_lightmap();
+  l.transfer.light_bounce = sample_light_bounce(40);
+  const Sample ls = lightmap_sample(dir, l);
+  b = ls.bytes;
+  put(b, section_of(ls, 17) + kSectionHeader, std::uint32_t(5));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_lightmap_transfer, dir.file("bad.prtt"), {"light bounce: row 0 names patch 5 of 4"},
+                  "a lightmap's source out of range");
+}
+
+TEST(LightBounceWrite, RefusesWhatCouldNotBeReadBack) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  const auto expect_refused = [&](auto write, const std::string& words) {
+    try {
+      write();
+      ADD_FAILURE() << "wrote it (" << words << ")";
+    } catch (const prt::Error& e) {
+      EXPECT_TRUE(contains(e.what(), path + ": cannot write this ")) << e.what();
+      EXPECT_TRUE(contains(e.what(), words)) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(path));
+  };
+  Transfer t = with_light_bounce(full_transfer());
+  t.light_bounce.source[0] = 4;
+  expect_refused([&] { prt::write_transfer(path, t); }, "transfer: light bounce: row 0 names patch 4 of 4");
+  t = with_light_bounce(full_transfer());
+  t.light_bounce.weight[0] = 0.1f;  // no binary16 value: the file's 16 bits could not hold it
+  expect_refused([&] { prt::write_transfer(path, t); },
+                 "light bounce: row 0 has the weight 0.1, not a half-precision value");
+  t = with_light_bounce(full_transfer());
+  t.light_bounce.offsets[1] = 1000;
+  expect_refused([&] { prt::write_transfer(path, t); }, "light bounce: row 1's offsets decrease");
+  t = with_light_bounce(make_transfer(TransferMode::Shadowed, 1, 2, 40, {}));
+  expect_refused([&] { prt::write_transfer(path, t); },
+                 "a light-bounce operator in a transfer that is not interreflected");
+  prt::LightmapTransfer l = interreflected_lightmap();
+  l.transfer.light_bounce = sample_light_bounce(39);  // a row short
+  expect_refused([&] { prt::write_lightmap_transfer(path, l); },
+                 "lightmap: light bounce: 39 patch indices for 40 points");
+  // Compression keeps the operator in memory (compress_transfer copies the
+  // transfer's other parts) but not in a file: the writer refuses it rather
+  // than drop it.
+  prt::CompressedTransfer c = compressed(with_light_bounce(full_transfer()), 2, 3, 16);
+  ASSERT_FALSE(c.transfer.light_bounce.empty());
+  expect_refused([&] { prt::write_compressed_transfer(path, c); },
+                 "compressed transfer: its light-bounce operator (prt precompute --light-bounce) is not kept by "
+                 "compression yet");
+  EXPECT_TRUE(dir.listing().empty());
+  c.transfer.light_bounce = {};
+  prt::write_compressed_transfer(path, c);
+  EXPECT_EQ(file_version(path), 4u);
+}
+
 // ---- writing -----------------------------------------------------------------------------
 
 TEST(TransferWrite, RefusesWhatCouldNotBeReadBack) {
@@ -1879,6 +2270,98 @@ TEST(PrtInfo, ReportsInterpolatedTexels) {
   EXPECT_EQ(j.at("traced_vertices"), 40);
   EXPECT_EQ(j.at("traced_fraction").get<double>(), 1.0);
   EXPECT_EQ(j.at("lightmap").at("interpolated_texels"), 0);
+}
+
+// The light-bounce operator's size (issue 48: "prt info gives its size per
+// receiver and per source patch"): the text line and the JSON object, for a
+// transfer and a lightmap; neither without an operator.
+TEST(PrtInfo, ReportsTheLightBounceOperator) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt"), lightmap = dir.file("l.prtt"), plain = dir.file("p.prtt");
+  const Transfer t = with_light_bounce(full_transfer());  // 3 channels, 4 bands: SH rows of 3 x 16 x 4 = 192 bytes
+  prt::write_transfer(path, t);
+  // Its arrays as the file stores them: a patch and an offset per point
+  // (and one more offset), a u32 source and an f16 weight per entry, a
+  // parent per patch.
+  const std::size_t points = 40, patches = 4, entries = t.light_bounce.source.size();
+  const std::size_t bytes = 4 * points + 4 * (points + 1) + 6 * entries + 4 * patches;
+  char want[256];
+  std::snprintf(want, sizeof want,
+                "2 bounces (applied at run time), 4 source patches, %zu entries: %.2f per receiver (vertex), %.2f per "
+                "source patch; %zu bytes, %.1f per receiver against 192 of an SH row (3 x 16 x 4 bytes)\n",
+                entries, double(entries) / points, double(entries) / patches, bytes, double(bytes) / points);
+  Result r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "prt transfer (format version 8)")) << r.out;
+  EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(^  light bounce +2 bounces)", std::regex::multiline))) << r.out;
+  EXPECT_TRUE(contains(r.out, want)) << "expected: " << want << "in:\n" << r.out;
+  EXPECT_TRUE(contains(r.out, "light bounce weights")) << r.out;  // the sections
+  EXPECT_FALSE(contains(r.out, "prt now writes")) << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 8);
+  const nlohmann::json& b = j.at("light_bounce");
+  EXPECT_EQ(b.at("bounces"), 2);
+  EXPECT_EQ(b.at("patches"), patches);
+  EXPECT_EQ(b.at("entries"), entries);
+  EXPECT_DOUBLE_EQ(b.at("entries_per_vertex").get<double>(), double(entries) / points);
+  EXPECT_DOUBLE_EQ(b.at("entries_per_patch").get<double>(), double(entries) / patches);
+  EXPECT_EQ(b.at("bytes"), bytes);
+  EXPECT_DOUBLE_EQ(b.at("bytes_per_vertex").get<double>(), double(bytes) / points);
+  EXPECT_EQ(b.at("sh_row_bytes"), 192);
+  EXPECT_EQ(j.at("sections").back().at("kind"), 19);
+  EXPECT_EQ(j.at("sections").back().at("name"), "light bounce parents");
+  std::uint64_t stored = 0;  // the bytes of kinds 15 to 19 in the file's own section table
+  for (const auto& sec : j.at("sections"))
+    if (sec.at("kind") >= 15 && sec.at("kind") <= 19) stored += sec.at("bytes").get<std::uint64_t>();
+  EXPECT_EQ(stored, bytes);
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
+
+  // A lightmap's receivers are its covered texels (2 bands, one channel: 16-byte rows).
+  prt::LightmapTransfer l = interreflected_lightmap(true);
+  l.transfer.light_bounce = sample_light_bounce(40);
+  prt::write_lightmap_transfer(lightmap, l);
+  r = run_prt(dir, {"info", lightmap});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  std::snprintf(want, sizeof want, "%zu bytes, %.1f per receiver against 16 of an SH row (1 x 4 x 4 bytes)", bytes,
+                double(bytes) / points);
+  EXPECT_TRUE(contains(r.out, "entries: 1.32 per receiver (texel)")) << r.out;  // 53 / 40
+  EXPECT_TRUE(contains(r.out, want)) << "expected: " << want << "\nin:\n" << r.out;
+  r = run_prt(dir, {"info", lightmap, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("light_bounce").at("entries"), entries);
+  EXPECT_EQ(j.at("light_bounce").at("sh_row_bytes"), 16);
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(lightmap));
+
+  // Without one: no line, no key.
+  prt::write_transfer(plain, full_transfer());
+  r = run_prt(dir, {"info", plain});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_FALSE(contains(r.out, "light bounce")) << r.out;
+  r = run_prt(dir, {"info", plain, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_FALSE(nlohmann::json::parse(r.out).contains("light_bounce")) << r.out;
+}
+
+// prt compress refuses a transfer with an operator, naming it, before any
+// work: the compressed file would lose it.
+TEST(PrtCompress, RefusesATransferWithALightBounceOperator) {
+  TempDir dir;
+  const std::string in = dir.file("t.prtt"), out = dir.file("c.prtt");
+  prt::write_transfer(in, with_light_bounce(full_transfer()));
+  Result r = run_prt(dir, {"compress", in, "-o", out, "--clusters", "2", "--pca", "2", "-q"});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_TRUE(contains(r.err, in + ": holds a light-bounce operator (prt precompute --light-bounce), which is not "
+                                   "kept by compression yet"))
+      << describe_run(r);
+  EXPECT_EQ(dir.listing(), std::vector<std::string>{"t.prtt"});
+  // The same transfer without it compresses.
+  prt::write_transfer(in, full_transfer());
+  r = run_prt(dir, {"compress", in, "-o", out, "--clusters", "2", "--pca", "2", "-q"});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(fs::exists(out));
 }
 
 TEST(PrtInfo, BadFilesExitNonZeroNamingTheFile) {

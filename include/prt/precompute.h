@@ -43,6 +43,10 @@ inline constexpr int kMaxTransferBands = 16;
 inline constexpr int kMaxSamples = 1 << 24;  // rays per vertex (prt reference: paths per vertex)
 inline constexpr int kMaxBounces = 64;       // albedo 0.9: the 65th bounce would add 0.9^64 = 0.1% of the direct light
 inline constexpr int kMaxThreads = 1024;     // worker threads (0: every core)
+// The lights' bounce operator's source patches, in spacings of the points
+// (TransferOptions::light_bounce_patch; docs/LIGHTS.md "Bounce" measures it).
+inline constexpr double kLightBouncePatchSpacings = 1.0;
+inline constexpr double kLightBounceRatio = 1.0;
 
 struct TransferOptions {
   TransferMode mode = TransferMode::Shadowed;
@@ -78,6 +82,16 @@ struct TransferOptions {
   // range of the vertices; rank 0 returns the whole transfer, the others an
   // empty one. nullptr: this process alone.
   const Communicator* comm = nullptr;
+  // Interreflected with bounces: also keep the gather as the lights' bounce
+  // operator (Transfer::light_bounce, prt/light_bounce.h; docs/LIGHTS.md
+  // "Bounce"), its finest source patches cells of `light_bounce_patch` world
+  // units a side (0: kLightBouncePatchSpacings times the points' mean
+  // spacing: a lightmap's texel size, a mesh's mean edge length), a hit at
+  // distance d merged into the coarsest patch of cell at most
+  // light_bounce_ratio x d. One process.
+  bool light_bounce = false;
+  double light_bounce_patch = 0;
+  double light_bounce_ratio = kLightBounceRatio;
   // When set, compute_transfer fills it with its plan and what its records
   // took (TransferMemory below).
   struct TransferMemory* memory_report = nullptr;

@@ -8,6 +8,7 @@
 // surfaces (see docs/PRECOMPUTE.md).
 #pragma once
 
+#include <prt/light_bounce.h>
 #include <prt/mesh.h>
 
 #include <glm/vec3.hpp>
@@ -112,6 +113,11 @@ struct Transfer : TransferHeader, RowSlots {
   // 'interpolated vertices' bit mask (docs/FORMAT.md).
   std::vector<std::uint8_t> interpolated;
   std::size_t interpolated_vertices() const;  // counted over `interpolated`
+
+  // Interreflected transfers computed with --light-bounce (prt/light_bounce.h,
+  // docs/LIGHTS.md "Bounce"): the gather kept as the operator that bounces
+  // the lights' direct light, a row per vertex (texel). Empty otherwise.
+  LightBounce light_bounce;
 
   std::size_t stride() const { return std::size_t(channels) * bands * bands; }
   std::size_t stored_vertices() const { return vertices - analytic_vertices(); }

@@ -28,17 +28,21 @@ namespace prt {
 // The newest version of SH transfer files (docs/FORMAT.md); this prt reads
 // it and every earlier one (version 1: every vertex stored). Each file is
 // written in the oldest version that holds it: transfers (compressed or
-// not, lightmaps too) with interpolated vertices or texels 7, compressed
-// transfers with a choice record 6, other lightmaps 5, other compressed
-// transfers 4, glossy ones 3, the others 2. Wavelet transfers are written as
-// version kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 7;
+// not, lightmaps too) with a light-bounce operator 8, with interpolated
+// vertices or texels 7, compressed transfers with a choice record 6, other
+// lightmaps 5, other compressed transfers 4, glossy ones 3, the others 2.
+// Wavelet transfers are written as version kWaveletFormatVersion.
+inline constexpr std::uint32_t kTransferFormatVersion = 8;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
 // Kind 13: the 'interpolated vertices' mask (Transfer::interpolated, adaptive
 // sample points), written only when some vertex is interpolated.
 inline constexpr std::uint32_t kInterpolatedFormatVersion = 7;
+// Kinds 14-19: the light-bounce operator (Transfer::light_bounce,
+// prt/light_bounce.h), written only when a transfer (or lightmap) has one;
+// compressed files never hold it.
+inline constexpr std::uint32_t kLightBounceFormatVersion = 8;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
 inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
@@ -48,9 +52,10 @@ inline constexpr std::uint32_t kProbeFormatVersion = 1;
 // vertices: 3 with glossy matrices, 2 otherwise (so that a prt reading
 // version 2 reads every file it could).
 inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }
-// The version write_transfer writes for `t`: kInterpolatedFormatVersion (7)
-// when some vertex is interpolated (Transfer::interpolated_vertices() > 0),
-// else transfer_format_version(t.glossy).
+// The version write_transfer writes for `t`: kLightBounceFormatVersion (8)
+// with a light-bounce operator (!Transfer::light_bounce.empty()), else
+// kInterpolatedFormatVersion (7) when some vertex is interpolated
+// (Transfer::interpolated_vertices() > 0), else transfer_format_version(t.glossy).
 std::uint32_t transfer_format_version(const Transfer& t);
 
 // Writes `t` to `path` through write_atomically: a failure (or the process
@@ -73,13 +78,13 @@ std::string describe_transfer(const Transfer& t);
 
 // ---- what a file holds (prt info, tests) ------------------------------------
 struct TransferSection {
-  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 6 analytic vertices ... 13 interpolated vertices
+  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 13 interpolated vertices, 14-19 light bounce
   const char* name = "";            // "coefficients", "direct", "ambient occlusion", ...
-  std::uint32_t element_bytes = 0;  // 4 (f32) or 8 (f64)
+  std::uint32_t element_bytes = 0;  // 1 (u8) to 8 (f64, u64); 2 for the f16 light-bounce weights
   std::uint64_t count = 0;          // elements (scalars)
   std::uint64_t bytes = 0;          // count * element_bytes, without padding
   bool per_vertex = false;          // true: bytes / vertices bytes per vertex
-  const char* type = "f32";         // element type: "f32", "f64", "u64", "u32" or "i16"
+  const char* type = "f32";         // element type: "f32", "f64", "u64", "u32", "i16", "u8", "u16" or "f16"
 };
 
 // The sections write_transfer stores for `t`, in file order (empty arrays
@@ -97,7 +102,9 @@ std::uint64_t transfer_file_size(const Transfer& t);
 // ---- compressed transfers (version 4, flag bit 2; docs/FORMAT.md "Compressed transfer") ----
 // Writes `c` (prt/compressed_transfer.h) through write_atomically; throws
 // prt::Error "PATH: cannot write this compressed transfer: PROBLEM" before
-// writing anything if compressed_transfer_problem(c) finds it inconsistent.
+// writing anything if compressed_transfer_problem(c) finds it inconsistent,
+// or if c.transfer has a light-bounce operator (compression does not keep
+// one yet: the file would silently lose it).
 // 16-bit weights are stored as their codes (weight_code), and read back as
 // the same floats: the round trip is bit-exact.
 void write_compressed_transfer(const std::string& path, const CompressedTransfer& c);
@@ -196,13 +203,16 @@ void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& wha
 // sections: the layout (width, height, UV set, scene hash) and the covered
 // texels' indices; and, when some texel was interpolated from traced ones
 // (Transfer::interpolated: prt precompute --lightmap --adaptive), the
-// 'interpolated vertices' mask over the texels (version 7). Written through
-// write_atomically; throws prt::Error "PATH: cannot write this lightmap:
+// 'interpolated vertices' mask over the texels (version 7); and, computed
+// with --light-bounce, the light-bounce operator over the texels (version
+// 8). Written through write_atomically; throws prt::Error "PATH: cannot write this lightmap:
 // PROBLEM" (lightmap_problem; also for glossy matrices, which a lightmap file
 // does not hold) before writing anything.
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
-// The version write_lightmap_transfer writes for `t`: kInterpolatedFormatVersion
-// (7) when some texel is interpolated, else kLightmapFormatVersion (5).
+// The version write_lightmap_transfer writes for `t`: kLightBounceFormatVersion
+// (8) with a light-bounce operator (one row per covered texel), else
+// kInterpolatedFormatVersion (7) when some texel is interpolated, else
+// kLightmapFormatVersion (5).
 std::uint32_t transfer_format_version(const LightmapTransfer& t);
 // Reads one with read_transfer's checks plus the layout's (lightmap_problem);
 // throws prt::Error "PATH: problem", also for a per-vertex file (and

@@ -147,7 +147,8 @@ void bind_lightmap_transfer(py::module_& m) {
                 // texels moved out of geometry as it moves them (prt relight's
                 // add_texel_lights), so that the bits are the command's.
                 prt::move_texels_out_of_geometry(scene.mesh, tx);
-                add_direct_light(rgb, ls, scene.mesh, tx.positions, tx.normals, tx.albedo);
+                add_direct_light(rgb, ls, scene.mesh, tx.positions, tx.normals, tx.albedo, std::nullopt,
+                                 l.transfer.light_bounce);  // their bounce with an operator (--light-bounce)
               }
               img = prt::lightmap_image(l.layout, rgb);
             }

@@ -59,11 +59,15 @@ std::optional<prt::Light> take_sun(prt::EnvMap& map, const glm::dmat3& rotation)
 
 void add_direct_light(std::vector<glm::vec3>& rgb, const std::vector<prt::Light>& lights, const prt::Mesh& occluders,
                       std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                      std::span<const glm::vec3> albedo, const std::optional<prt::GlossyLobe>& lobe) {
+                      std::span<const glm::vec3> albedo, const std::optional<prt::GlossyLobe>& lobe,
+                      const prt::LightBounce& bounce) {
   if (lights.empty()) return;
   const prt::DirectLight direct(occluders);
   const std::vector<glm::vec3> d = direct.radiance(lights, positions, normals, albedo, lobe);
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += d[i];
+  if (bounce.empty()) return;
+  const std::vector<glm::vec3> b = prt::light_bounce(bounce, d, albedo);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += b[i];
 }
 
 namespace {

@@ -242,7 +242,9 @@ void bind_transfer_relight(py::module_& m) {
             rgb = p.compressed ? prt::relight(*p.compressed, mesh, light)
                   : direct     ? prt::relight_direct(p.t, mesh, light)
                                : prt::relight(p.t, mesh, light);
-            if (!ls.empty()) add_direct_light(rgb, ls, mesh, mesh.positions, mesh.normals, albedo(std::nullopt));
+            if (!ls.empty())  // with an operator (--light-bounce) their bounce too, unless direct=True
+              add_direct_light(rgb, ls, mesh, mesh.positions, mesh.normals, albedo(std::nullopt), std::nullopt,
+                               p.compressed || direct ? prt::LightBounce{} : p.t.light_bounce);
           }
           return vec3s(rgb);
         }

@@ -293,11 +293,13 @@ std::optional<prt::Light> take_sun(prt::EnvMap& map, const glm::dmat3& rotation)
 
 // Adds the lights' direct light (prt::DirectLight: albedo/pi x irradiance,
 // each light's shadow ray traced against `occluders`) at the points to
-// `rgb`, as prt relight's add_lights. Nothing without lights. Call without
-// the GIL.
+// `rgb`, as prt relight's add_lights, and with a transfer's light-bounce
+// operator (prt/light_bounce.h; empty: none) their bounce. Nothing without
+// lights. Call without the GIL.
 void add_direct_light(std::vector<glm::vec3>& rgb, const std::vector<prt::Light>& lights, const prt::Mesh& occluders,
                       std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                      std::span<const glm::vec3> albedo, const std::optional<prt::GlossyLobe>& lobe = std::nullopt);
+                      std::span<const glm::vec3> albedo, const std::optional<prt::GlossyLobe>& lobe = std::nullopt,
+                      const prt::LightBounce& bounce = {});
 
 // ---- transfers -----------------------------------------------------------------
 

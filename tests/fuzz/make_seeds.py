@@ -245,6 +245,9 @@ def transfer_seeds(out, tmp, prt):
         "shadowed-b3": ["--mode", "shadowed", "--bands", "3", "--samples", "64"],
         "interreflected-colour": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
                                   "--vertex-colors"],
+        # Version 8: the light-bounce operator (kinds 14-19).
+        "light-bounce-b2": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
+                            "--light-bounce"],
         "glossy-shadowed-b2": ["--material", "glossy", "--bands", "2", "--samples", "64"],
         "glossy-interreflected-colour": ["--material", "glossy", "--mode", "interreflected", "--bands", "2",
                                          "--samples", "64", "--vertex-colors"],
@@ -310,7 +313,9 @@ def transfer_seeds(out, tmp, prt):
     write(out, "transfer", "adaptive-b1.prt", f.read_bytes())
     # Lightmaps (version 5: kinds 10 and 11) of the bump as an OBJ with planar
     # texture coordinates, and with adaptive sample points among the texels
-    # (version 7: the 'interpolated vertices' mask, kind 13, after kind 11).
+    # (version 7: the 'interpolated vertices' mask, kind 13, after kind 11),
+    # and with the light-bounce operator over the texels (version 8, kinds
+    # 14-19, after kind 11).
     bump_obj = tmp / "bump.obj"
     s = "".join("v %g %g %g\nvt %g %g\n" % (x, 0.3 * math.exp(-3 * (x * x + z * z)), z, (x + 1) / 2, (1 - z) / 2)
                 for x, z in grid)
@@ -318,7 +323,8 @@ def transfer_seeds(out, tmp, prt):
                                                                b + 1, b + 1, c + 1, c + 1, d + 1, d + 1)
                  for a, b, c, d in quads)
     bump_obj.write_text(s)
-    for name, args in (("lightmap-b1", []), ("lightmap-adaptive-b1", ["--adaptive"])):
+    for name, args in (("lightmap-b1", []), ("lightmap-adaptive-b1", ["--adaptive"]),
+                       ("lightmap-light-bounce-b1", ["--mode", "interreflected", "--bounces", "1", "--light-bounce"])):
         f = tmp / (name + ".prt")
         subprocess.run([prt, "precompute", str(bump_obj), "--lightmap", "16x16", "-o", str(f), "--threads", "1", "-q",
                         "--bands", "1", "--samples", "64", *args], check=True)

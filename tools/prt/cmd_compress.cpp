@@ -133,6 +133,12 @@ int run_compress(CompressArgs& a) {
   if (!a.measure.empty()) return run_measure(a);
   for_path("--output", [&] { check_writable(a.output); });
   const Transfer t = read_input(a.input);
+  // The compressed file would silently lose it (write_compressed_transfer
+  // refuses it too): before any work.
+  if (!t.light_bounce.empty())
+    throw Error(a.input + ": holds a light-bounce operator (prt precompute --light-bounce), which is not kept by "
+                "compression yet: use the transfer uncompressed, or precompute it again without --light-bounce to "
+                "compress it");
   if (!t.glossy)  // an option that does not fit the file: the file's mismatch
     for (const CLI::Option* o : {a.glossy_clusters_opt, a.glossy_pca_opt})
       if (o->count() > 0)

@@ -174,8 +174,10 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
     // to the texels (the lights traced from the sample points prt precompute
     // used: moved out of geometry first), times the same 2^stops.
     std::vector<glm::vec3> more(opts.baked.size(), glm::vec3(0.0f));
-    add_sun_bounce(more, sun_map, lt.transfer, texel_points(texels), sh::Window::None, 0, a.rotate.empty() ? nullptr : euler.data());
-    add_texel_lights(more, lit, scene.mesh, texels);
+    const LightBounce* bounce = bounce_of(lt.transfer, false);  // then the sun bounces as the lights do
+    if (!bounce)
+      add_sun_bounce(more, sun_map, lt.transfer, texel_points(texels), sh::Window::None, 0, a.rotate.empty() ? nullptr : euler.data());
+    add_texel_lights(more, lit, scene.mesh, texels, bounce);
     const float scale = float(std::exp2(fixed));
     for (std::size_t i = 0; i < more.size(); ++i) opts.baked[i] += more[i] * scale;
     opts.bake.lights = bake_lights_note(lit, lit.size() > opts.lights.size());
@@ -292,11 +294,12 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
     std::vector<glm::dvec3> light = project(env, t.bands);
     if (!a.rotate.empty()) rotate_lighting(light, t.bands, euler.data());
     std::vector<glm::vec3> rgb = relight(t, mesh, light);
-    add_sun_bounce(rgb, sun_map, t, mesh, sh::Window::None, 0, a.rotate.empty() ? nullptr : euler.data());
+    const LightBounce* bounce = compressed ? nullptr : bounce_of(t, false);  // then the sun bounces as the lights do
+    if (!bounce) add_sun_bounce(rgb, sun_map, t, mesh, sh::Window::None, 0, a.rotate.empty() ? nullptr : euler.data());
     std::vector<glm::vec3> albedo(rgb.size());
     // The albedo relight's lights use (a glossy file's: its diffuse one).
     for (std::size_t v = 0; v < albedo.size(); ++v) albedo[v] = vertex_albedo(t, mesh, v);
-    add_direct_light(rgb, lit, mesh, mesh.positions, mesh.normals, albedo);
+    add_direct_light(rgb, lit, mesh, mesh.positions, mesh.normals, albedo, std::nullopt, bounce);
     opts.bake.lights = bake_lights_note(lit, lit.size() > opts.lights.size());
     const std::optional<double> given = exposure_stops(a.exposure.empty() ? "0" : a.exposure);
     // auto: prt render's rule over the relit vertices, each counted once (frame_exposure).

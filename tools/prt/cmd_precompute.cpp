@@ -75,6 +75,7 @@ struct PrecomputeArgs {
   // samples and bounces given on the command line are the most it may choose.
   double target_error = 0;
   std::string env, cache;
+  const CLI::Option *light_bounce_opt = nullptr, *bounce_patch_opt = nullptr, *bounce_ratio_opt = nullptr;
   const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr, *mode_opt = nullptr,
                     *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr,
                     *material_opt = nullptr;
@@ -160,6 +161,34 @@ Progress job_progress(const Progress& p) {
 std::size_t memory_limit(const PrecomputeArgs& a) {
   return a.memory_limit.empty() ? default_memory_limit(mpi::launched() ? mpi::local_size() : 1)
                                 : parse_memory_size(a.memory_limit);
+}
+
+// --light-bounce and --bounce-patch (docs/LIGHTS.md "Bounce"): the
+// interreflected pass's gather of every point, kept in one process.
+void check_light_bounce(const PrecomputeArgs& a) {
+  for (const CLI::Option* o : {a.bounce_patch_opt, a.bounce_ratio_opt})
+    if (o->count() > 0 && !a.opt.light_bounce)
+      throw UsageError(o->get_name() + " shapes the --light-bounce operator's patches; give --light-bounce too");
+  if (!a.opt.light_bounce) return;
+  if (a.mode != "interreflected" || a.opt.bounces < 1)
+    throw UsageError("--light-bounce keeps the interreflected pass's gather: give --mode interreflected (and --bounces "
+                     "1 or more)");
+  if (a.material == "glossy")
+    throw UsageError("--light-bounce: the lights bounce off diffuse surfaces; a glossy transfer keeps no operator");
+  if (a.basis == "zh")
+    throw UsageError("--light-bounce does not go with --basis zh: a deforming mesh's gather changes with its pose");
+  const std::pair<const CLI::Option*, const char*> refused[] = {
+      {a.probes_opt, "--probes (a probe volume gathers from the mesh's vertices, not from its own points: not yet)"},
+      {a.adaptive_opt, "--adaptive (interpolated points have no gather row to keep)"},
+      {a.target_opt, "--target-error (it chooses the bounces by the sky's error; give --bounces)"},
+  };
+  for (const auto& [o, why] : refused)
+    if (o->count() > 0) throw UsageError(std::string("--light-bounce does not go with ") + why);
+  if (!a.compress.empty())
+    throw UsageError("--light-bounce does not go with --compress: a compressed transfer keeps no operator (yet)");
+  if (job().size() > 1)
+    throw UsageError("--light-bounce runs in one process: its operator is made of every point's gather row at once "
+                     "(run it without mpirun)");
 }
 
 // The rules across options (each value alone is checked while parsing):
@@ -866,6 +895,7 @@ int run_precompute(PrecomputeArgs& a) {
                                   : " (its size is set by --cube-res and --threshold)"));
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
+  check_light_bounce(a);  // every kind of run
   if (a.probes_opt->count() > 0) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     return run_probes(a);
@@ -951,6 +981,23 @@ void add_transfer_options(CLI::App* s, PrecomputeArgs& a) {
           ->check(number_range(0.0, 1.0, false, true))
           ->capture_default_str();
   a.sh_only.push_back(a.tolerance_opt);
+  a.light_bounce_opt =
+      s->add_flag("--light-bounce", a.opt.light_bounce,
+                  "Interreflected: also keep the bounces' gather as the operator that bounces the lights' direct light "
+                  "at run time (prt relight/render --lights; docs/LIGHTS.md \"Bounce\")");
+  a.bounce_patch_opt =
+      s->add_option("--bounce-patch", a.opt.light_bounce_patch,
+                    "With --light-bounce: the finest source patches' size in world units (0: a lightmap's mean texel, "
+                    "a mesh's mean edge)")
+          ->check(number_range(0.0, 1e30, true, true))
+          ->capture_default_str();
+  a.bounce_ratio_opt =
+      s->add_option("--bounce-ratio", a.opt.light_bounce_ratio,
+                    "With --light-bounce: a hit at distance d joins the coarsest source patch of size at most this times "
+                    "d (smaller: more accurate, larger files; docs/LIGHTS.md \"Bounce\" tables both)")
+          ->check(number_range(0.0, 1e6, true, false))
+          ->capture_default_str();
+  a.sh_only.insert(a.sh_only.end(), {a.light_bounce_opt, a.bounce_patch_opt, a.bounce_ratio_opt});
   a.wavelet_only.push_back(
       s->add_option("--cube-res", a.wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
           ->check(cube_resolution())

@@ -332,14 +332,17 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
   const Mesh points = texel_points(texels);
   std::vector<glm::vec3> rgb = a.direct ? relight_direct(lt.transfer, points, light) : relight(lt.transfer, points, light);
-  if (!a.direct) add_sun_bounce(rgb, sun_map, lt.transfer, points, window, a.window_width, a.rotate.empty() ? nullptr : euler.data());
+  // With a light-bounce operator the sun bounces as the lights do (add_texel_lights).
+  const LightBounce* bounce = bounce_of(lt.transfer, a.direct);
+  if (!a.direct && !bounce)
+    add_sun_bounce(rgb, sun_map, lt.transfer, points, window, a.window_width, a.rotate.empty() ? nullptr : euler.data());
   const double frame_ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
     for (double x : vertex_transfer(lt.transfer, points, v, a.direct)) m = std::max(m, std::abs(x));
     return m;
   });
-  const double lights_ms = add_texel_lights(rgb, lights, scene.mesh, texels);
+  const double lights_ms = add_texel_lights(rgb, lights, scene.mesh, texels, bounce);
   Outputs out("relight");
   out.write([&] { write_lightmap_exr(a.output, lt.layout, rgb); });
   if (const int rc = out.commit(); rc != 0) return rc;
@@ -529,7 +532,10 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
                                      : glossy   ? relight_glossy(t, mesh, light, shading)
                                      : a.direct ? relight_direct(t, mesh, light)
                                                 : relight(t, mesh, light);
-  if (!a.direct) add_sun_bounce(rgb, sun_map, t, mesh, window, a.window_width, a.rotate.empty() ? nullptr : euler.data());
+  // With a light-bounce operator the sun bounces as the lights do (add_direct_light).
+  const LightBounce* bounce = c ? nullptr : bounce_of(t, a.direct);
+  if (!a.direct && !bounce)
+    add_sun_bounce(rgb, sun_map, t, mesh, window, a.window_width, a.rotate.empty() ? nullptr : euler.data());
   const double frame_ms = ms_since(t1);
   check_relit(rgb, a, env, [&](std::size_t v) {
     double m = 0;
@@ -547,7 +553,7 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
   const double lights_ms = add_direct_light(rgb, lights, mesh, mesh.positions, mesh.normals, albedo_of(rgb.size(), [&](std::size_t v) {
     // The diffuse albedo the transfer's relighting used (--diffuse replaces it for a glossy file).
     return glossy && shading.diffuse.x >= 0 ? glm::vec3(shading.diffuse) : vertex_albedo(t, mesh, v);
-  }), lobe);
+  }), lobe, bounce);
   const std::size_t written = rgb.size();
   if (const int rc = write_output(a, ext, mesh, std::move(rgb)); rc != 0) return rc;
   if (!a.quiet)

@@ -105,22 +105,28 @@ void add_map_sun(const LightArgs& args, std::vector<Light>& lights, EnvMap& env,
 
 double add_direct_light(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
                         std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                        std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe) {
+                        std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe,
+                        const LightBounce* bounce) {
   if (lights.empty()) return 0;
   const auto t0 = std::chrono::steady_clock::now();
   const DirectLight direct(occluders);
   const std::vector<glm::vec3> d = direct.radiance(lights, positions, normals, albedo, lobe);
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += d[i];
+  if (bounce) {  // a glossy transfer keeps no operator: d is the diffuse light the points send on
+    const std::vector<glm::vec3> b = light_bounce(*bounce, d, albedo);
+    for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += b[i];
+  }
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 double add_texel_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
-                        LightmapTexels texels) {
+                        LightmapTexels texels, const LightBounce* bounce) {
   if (lights.empty()) return 0;
   const auto t0 = std::chrono::steady_clock::now();
   move_texels_out_of_geometry(occluders, texels);
   const double move_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  return move_ms + add_direct_light(rgb, lights, occluders, texels.positions, texels.normals, texels.albedo);
+  return move_ms + add_direct_light(rgb, lights, occluders, texels.positions, texels.normals, texels.albedo,
+                                    std::nullopt, bounce);
 }
 
 std::string describe_lights(const std::vector<Light>& lights) {
@@ -186,8 +192,12 @@ std::vector<Light> RenderLights::at(double t, const glm::dmat3& rotation) const 
   return out;
 }
 
-std::optional<LightmapTexels> renderer_light_points(const Scene& scene) {
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene, bool quiet) {
   const LightmapTransfer* l = scene.get<LightmapTransfer>();
+  const Transfer* t = l ? &l->transfer : scene.get<Transfer>();
+  if (t && !t->light_bounce.empty() && !quiet)
+    fmt::print(stderr, "lights: the transfer's light-bounce operator is applied by prt relight and prt export --bake; "
+                       "the GPU draws the lights' direct light only (docs/LIGHTS.md \"Bounce\")\n");
   if (!l) return std::nullopt;
   LightmapTexels texels = lightmap_texels(*scene.world, l->layout.width, l->layout.height, l->layout.uv_set,
                                           l->transfer.vertex_colors ? nullptr : &l->transfer.albedo);

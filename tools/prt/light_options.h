@@ -57,15 +57,23 @@ void add_map_sun(const LightArgs& args, std::vector<Light>& lights, EnvMap& env,
                  bool quiet, std::optional<EnvMap>* sun_map);
 
 // Adds the lights' direct light (prt/direct_light.h: albedo/pi x irradiance,
-// each light's shadow ray traced against `occluders`) at the points to `rgb`.
-// Returns the milliseconds it took (0 without lights).
+// each light's shadow ray traced against `occluders`) at the points to `rgb`,
+// and with a transfer's light-bounce operator (prt/light_bounce.h; the points
+// its rows: the transfer's vertices or texels) their bounce. Returns the
+// milliseconds it took (0 without lights).
 double add_direct_light(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
                         std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                        std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe = std::nullopt);
+                        std::span<const glm::vec3> albedo, const std::optional<GlossyLobe>& lobe = std::nullopt,
+                        const LightBounce* bounce = nullptr);
 // The same at a lightmap's texels, at the sample points prt precompute traced
 // from (moved out of geometry as it moves them: prt/precompute.h).
 double add_texel_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& lights, const Mesh& occluders,
-                        LightmapTexels texels);
+                        LightmapTexels texels, const LightBounce* bounce = nullptr);
+// The operator a transfer's lights bounce through in prt relight and prt
+// export --bake: null without one, or for --direct (the direct part alone).
+inline const LightBounce* bounce_of(const Transfer& t, bool direct_only) {
+  return t.light_bounce.empty() || direct_only ? nullptr : &t.light_bounce;
+}
 
 // The sun's bounce when --sun auto took it out of the map: an interreflected
 // transfer T keeps its direct part T_d, so the sun's light projected alone
@@ -112,7 +120,8 @@ struct RenderLights {
 // What a renderer needs beside the lights for `scene`: for a lightmap, its texels' sample points
 // moved out of geometry as prt precompute moved them (the points prt
 // relight lights; Renderer::set_light_points), nullopt otherwise.
-std::optional<LightmapTexels> renderer_light_points(const Scene& scene);
+// Unless quiet, says so when the transfer's light-bounce operator is not drawn.
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene, bool quiet);
 
 // Reads the lights (command_lights, take_sun on `env` in place) and checks
 // the paths against them; `scene_lights` as command_lights.

@@ -1,0 +1,74 @@
+// The bounce of lights inside a scene (docs/LIGHTS.md "Bounce"): the gather
+// of prt's interreflected pass kept as an operator from the light that
+// leaves the scene's surfaces to the light it sends on, applied every frame
+// to the lights' direct light.
+//
+// The interreflected pass traces, from every point (a lightmap's texel, a
+// mesh's vertex), rays whose front hits make a row of the gather matrix G:
+// sum_j G_ij L_j is the irradiance at point i from the radiance L_j leaving
+// the points around the hits (bilinear in the lightmap, barycentric on a
+// mesh), each bounce of the sky's transfer being (rho_i / pi) G applied to
+// the one before (precompute/transfer.cpp). The operator keeps G with its
+// columns merged into source patches, as hierarchical radiosity links a
+// receiver to patches as coarse as their distance allows: the patches are
+// the cells of nested grids (cell size s, 2s, 4s, ...; each cell's points of
+// one dominant normal direction), and an entry of G whose emitting point
+// lies at distance d from the receiver goes to the coarsest patch whose cell
+// is at most ratio x d (TransferOptions::light_bounce_ratio). A patch's
+// radiance is the mean of its points'. A row then holds one weight per patch
+// its rays reached, and the bounces are applied at run time:
+//   L_0 = the lights' direct radiance at the points,
+//   L_k(i) = (rho_i / pi) sum_p W_ip mean_{j in p} L_{k-1}(j),  k = 1..B,
+//   indirect = L_1 + ... + L_B.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace prt {
+
+// The most bounces an operator applies: prt::kMaxBounces (prt/precompute.h,
+// which pins the two equal).
+inline constexpr int kMaxLightBounces = 64;
+// The most levels of source patches (cells doubling from the finest: 2^31
+// times its size spans any scene prt takes).
+inline constexpr int kMaxPatchLevels = 32;
+
+struct LightBounce {
+  int bounces = 0;                      // B, applied at run time; 0: no operator
+  static constexpr std::uint32_t kNoParent = 0xffffffffu;
+  std::uint32_t patches = 0;            // source patches, of every level
+  std::vector<std::uint32_t> patch;     // per point: its patch of the finest level (< patches)
+  std::vector<std::uint32_t> parent;    // per patch: the patch of the next level holding it (> itself), or kNoParent
+  std::vector<std::uint32_t> offsets;   // points + 1: point i's entries are [offsets[i], offsets[i + 1])
+  std::vector<std::uint32_t> source;    // per entry: a source patch, increasing within a row
+  std::vector<float> weight;            // per entry: W_ip, sum over i's rays landing in p of (pi / sum cos) w cos b,
+                                        // a half-precision value (files store 16 bits)
+
+  bool empty() const { return bounces == 0; }
+  std::size_t points() const { return patch.size(); }
+  std::size_t entries() const { return source.size(); }
+  // Bytes of the operator's arrays (as stored in a transfer file).
+  std::size_t bytes() const;
+};
+
+// What is wrong with `b` for `points` points, or "" when nothing is: 1 to
+// kMaxLightBounces bounces, one patch per point below `patches`, one parent
+// per patch above it (or none), every patch holding a point, offsets from 0
+// increasing to entries(), sources increasing within a row and below
+// `patches`, weights finite, >= 0 and half-precision values. An empty
+// operator (0 bounces, no arrays) is fine.
+std::string light_bounce_problem(const LightBounce& b, std::size_t points);
+
+// The indirect radiance at every point, bounces 1..B of `direct` (the
+// radiance leaving each point: the lights' direct light), with each point's
+// diffuse albedo (one per point). Accumulated in double. Throws prt::Error
+// for sizes other than b.points().
+std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::vec3> direct,
+                                    std::span<const glm::vec3> albedo);
+
+}  // namespace prt
