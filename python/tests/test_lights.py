@@ -234,6 +234,28 @@ def test_vertex_relight_with_lights_is_prt_relight(files, tmp_path):
     assert np.all(np.abs(got - want) <= 4 * EPS32 * size)
 
 
+def test_light_bounce_operator_bounces_the_lights_as_prt_relight(files, tmp_path):
+    """A transfer precomputed with --light-bounce: lights= adds their bounce,
+    bit for bit prt relight --lights (the same operator applied to the same
+    direct light), and direct=True leaves it out as --direct does."""
+    t_path = files / "bounce.prt"
+    run_prt("precompute", MESH, "--bands", 3, "--samples", 32, "--mode", "interreflected", "--bounces", 2,
+            "--light-bounce", "--seed", 7, "-q", "-o", t_path)
+    mesh, t = prt.load_mesh(MESH), prt.read_transfer(t_path)
+    lights = prt.read_lights(files / "lights.json")
+    want, _ = cli_csv(tmp_path / "b.csv", "relight", MESH, t_path, ENV, "--lights", files / "lights.json")
+    got = prt.relight(t, mesh, prt.project(ENV, t.bands), lights=lights)
+    np.testing.assert_array_equal(got, want)
+    direct = prt.relight(t, mesh, prt.project(ENV, t.bands), lights=lights, direct=True)
+    want, _ = cli_csv(tmp_path / "d.csv", "relight", MESH, t_path, ENV, "--lights", files / "lights.json", "--direct")
+    np.testing.assert_array_equal(direct, want)
+    # The bounce is there: the lights' light reflected adds to most vertices.
+    sky = prt.relight(t, mesh, prt.project(ENV, t.bands))
+    sky_direct = prt.relight(t, mesh, prt.project(ENV, t.bands), direct=True)
+    bounce = (got - sky) - (direct - sky_direct)
+    assert (bounce.max(axis=1) > 1e-4).mean() > 0.5
+
+
 def test_glossy_zh_and_wavelet_relight_with_lights_are_prt_relight(files, tmp_path):
     """The other vertex transfers, each against prt relight with the same
     lights: a glossy one seen from an eye (the lights' lobe too), a zonal-
