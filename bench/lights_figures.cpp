@@ -1,5 +1,5 @@
 // bench/lights_figures.cpp - the figures of docs/LIGHTS.md "On the GPU":
-//   prt_lights_figures SCENE LIGHTMAP.prt [--frames N]
+//   prt_lights_figures SCENE LIGHTMAP.prt [--frames N] [--shadow-map-size N] [--frames-only] [--one-light]
 // 1. Shadow maps against traced rays: the GPU's direct light from lights at
 //    the lightmap's texel sample points (Renderer::lightmap_radiance under a
 //    black map) against prt::DirectLight's at the same points, relative RMS
@@ -9,7 +9,9 @@
 //    4096.
 // 2. Frame: 1280 x 720, the scene's lightmap relit each frame with 4 point
 //    lights moving (each round a circle, so every cube is redrawn every
-//    frame) and a sun turning, against the static lightmapped frame (the
+//    frame) and a sun turning (--one-light: one point light moving, no sun:
+//    docs/LIGHTS.md "Bounce"'s frame, the light's bounce applied every frame
+//    when LIGHTMAP.prt has an operator), against the static lightmapped frame (the
 //    lightmap drawn, not relit: an engine's baked frame), N frames each, in
 //    this process.
 #include <prt/direct_light.h>
@@ -60,11 +62,12 @@ int main(int argc, char** argv) {
     return 2;
   }
   int frames = 20, shadow_size = prt::kDefaultShadowMapSize;
-  bool table = true;
+  bool table = true, one_light = false;
   for (int i = 3; i < argc; ++i) {
     if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) frames = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--shadow-map-size") == 0 && i + 1 < argc) shadow_size = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--frames-only") == 0) table = false;
+    else if (std::strcmp(argv[i], "--one-light") == 0) one_light = true;
   }
   try {
     const prt::Scene scene = prt::load_scene(argv[1]);
@@ -121,14 +124,14 @@ int main(int argc, char** argv) {
       r.set_lightmap_relight(lit);
       const auto lights_at = [&](int f) {
         std::vector<prt::Light> ls;
-        for (int k = 0; k < 4; ++k) {
+        for (int k = 0; k < (one_light ? 1 : 4); ++k) {
           const double a = 2.0 * M_PI * (f / 40.0 + k / 4.0);
           ls.push_back(point(c + glm::dvec3(0.3 * e.x * std::cos(a), 0.2 * e.y, 0.3 * e.z * std::sin(a)), 2.0));
         }
         prt::Light s = sun;
         const double b = 0.05 * f;
         s.direction = glm::normalize(glm::dvec3(-0.6 * std::cos(b), -0.5, 0.6 + 0.2 * std::sin(b)));
-        ls.push_back(s);
+        if (!one_light) ls.push_back(s);
         return ls;
       };
       if (lit) r.set_lights(lights_at(0));
@@ -147,9 +150,9 @@ int main(int argc, char** argv) {
     const auto [lit_ms, lit_maps] = timed(true);
     std::printf("\nframe 1280x720 (%s), %d frames each:\n", r.device().c_str(), frames);
     std::printf("  static lightmapped frame: %.2f ms\n", base_ms);
-    std::printf("  relit, 4 moving point lights and a turning sun: %.2f ms (%.2fx), %.1f shadow maps redrawn per frame "
-                "at %d texels\n",
-                lit_ms, lit_ms / base_ms, lit_maps, shadow_size);
+    std::printf("  relit, %s: %.2f ms (%.2fx), %.1f shadow maps redrawn per frame at %d texels%s\n",
+                one_light ? "1 moving point light" : "4 moving point lights and a turning sun", lit_ms, lit_ms / base_ms,
+                lit_maps, shadow_size, t.transfer.light_bounce.empty() ? "" : ", the lights' bounce every frame");
     (void)base_maps;
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "prt_lights_figures: %s\n", ex.what());

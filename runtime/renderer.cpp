@@ -161,6 +161,7 @@ void Renderer::Impl::resize(int w, int h) {
 
 void Renderer::Impl::delete_mesh_objects() {
   lightmap.reset();
+  bounce.reset();
   glDeleteBuffers(3, light_points.data());
   light_points = {};
   light_point_count = 0;
@@ -412,6 +413,8 @@ void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
   clear_mesh();
   m.limits = gl::limits();
   m.lightmap = std::make_unique<detail::LightmapPass>(scene, texels, t, m.limits);
+  if (!t.transfer.light_bounce.empty())  // the lights' bounce at the texels (bounce_pass.h)
+    m.bounce = std::make_unique<detail::BouncePass>(t.transfer.light_bounce, m.limits.storage_block, m.limits.work_groups);
   m.set_bounds(scene.mesh);
   m.lightmap_relit = false;
   m.bands = m.band_limit = t.transfer.bands;
@@ -559,7 +562,18 @@ void Renderer::Impl::apply_lights(GLuint radiance, const glm::dvec3& eye, int ra
   glGetIntegerv(GL_VIEWPORT, viewport);
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
   pts.radiance_stride = radiance_stride;
-  lights->apply(occluders, object ? *object : pts, radiance, std::max<std::uint64_t>(limits.work_groups, 1));
+  const std::uint64_t groups = std::max<std::uint64_t>(limits.work_groups, 1);
+  if (bounce && !object && shading != Shading::Direct && bounce->points() == pts.count) {
+    // The direct light into the bounce pass's own buffer, then its bounces,
+    // then both into `radiance` (prt relight: direct + light_bounce).
+    detail::LightsPass::Points direct = pts;
+    direct.radiance_stride = 4;
+    bounce->clear_direct();
+    lights->apply(occluders, direct, bounce->direct(), groups);
+    bounce->apply(radiance, radiance_stride, pts.albedo_buffer, pts.albedo);
+  } else {
+    lights->apply(occluders, object ? *object : pts, radiance, groups);
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, GLuint(framebuffer));
   glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
 }

@@ -16,6 +16,7 @@
 #include "egl_context.h"
 #include "gl_util.h"
 #include "lightmap_pass.h"
+#include "bounce_pass.h"
 #include "lights_pass.h"
 #include "probe_pass.h"
 
@@ -187,6 +188,7 @@ struct Renderer::Impl {
   int shadow_size = kDefaultShadowMapSize;
   std::array<GLuint, 3> light_points{};
   std::size_t light_point_count = 0;
+  std::unique_ptr<detail::BouncePass> bounce;  // a transfer's light-bounce operator (set_mesh, set_scene)
   glm::dvec3 bounds_centre{0.0};
   double bounds_radius = 1.0;
   // The occluders' bounds, which the directional lights' maps are fitted to:

@@ -19,4 +19,5 @@ extern const char* const zh_comp_glsl;
 extern const char* const shadow_vert_glsl;
 extern const char* const shadow_frag_glsl;
 extern const char* const lights_comp_glsl;
+extern const char* const bounce_comp_glsl;
 }  // namespace prt::shaders

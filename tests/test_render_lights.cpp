@@ -7,6 +7,7 @@
 
 #include <prt/deform.h>
 #include <prt/direct_light.h>
+#include <prt/light_bounce.h>
 #include <prt/lightmap.h>
 #include <prt/precompute.h>
 #include <prt/probes.h>
@@ -158,6 +159,76 @@ TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) 
   // Without the points, a lightmap's lights are refused, naming what is missing.
   r->set_light_points({}, {}, {});
   EXPECT_THROW(r->render(cam, 32, 32), Error);
+}
+
+TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
+  // A lightmap and a vertex transfer precomputed with --light-bounce: the
+  // GPU adds the lights' bounce to their direct light as prt relight does.
+  // Its bounce (the frame less the direct shading's, which leaves the bounce
+  // out as --direct does) is prt::light_bounce of its own direct light, to
+  // float rounding; the whole is DirectLight's direct light plus that
+  // bounce, within the shadow maps' tolerance.
+  REQUIRE_RENDERER(r);
+  const Scene s = test::floor_and_box(false);
+  LightmapTexels texels = lightmap_texels(s, 48, 48, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 64;
+  o.mode = TransferMode::Interreflected;
+  o.bounces = 2;
+  o.light_bounce = true;
+  const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
+  ASSERT_FALSE(t.transfer.light_bounce.empty());
+  r->set_scene(s, t);
+  r->set_lighting(std::vector<glm::dvec3>(9, glm::dvec3(0.0)));  // the lights alone
+  r->set_light_points(texels.positions, texels.normals, texels.albedo);
+  r->set_shadow_map_size(kTestShadowMapSize);
+  const std::vector<Light> lights{three_lights()[0]};
+  r->set_lights(lights);
+  Camera cam;
+  cam.eye = {0, 3, 2};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 1, 0};
+  // GPU float sums of a few hundred weights against the CPU's double:
+  // 1e-4 of the brightest bounce.
+  constexpr double kBounceTol = 1e-4;
+  const auto expect_bounce = [&](const std::vector<glm::vec3>& whole, const std::vector<glm::vec3>& direct,
+                                 const LightBounce& op, const std::vector<glm::vec3>& albedo, const char* what) {
+    const std::vector<glm::vec3> want = light_bounce(op, direct, albedo);
+    double scale = 0;
+    for (const glm::vec3& w : want) scale = std::max(scale, double(glm::length(w)));
+    ASSERT_GT(scale, 0.0) << what;
+    for (std::size_t i = 0; i < want.size(); ++i)
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(whole[i][c] - direct[i][c], want[i][c], kBounceTol * scale) << what << " " << i;
+  };
+  r->render(cam, 32, 32);
+  const std::vector<glm::vec3> lit = r->lightmap_radiance();
+  r->set_shading(Shading::Direct);
+  r->render(cam, 32, 32);
+  const std::vector<glm::vec3> direct = r->lightmap_radiance();
+  expect_bounce(lit, direct, t.transfer.light_bounce, texels.albedo, "lightmap");
+  const std::vector<glm::vec3> traced = DirectLight(s.mesh).radiance(lights, texels.positions, texels.normals, texels.albedo);
+  const std::vector<glm::vec3> bounce = light_bounce(t.transfer.light_bounce, traced, texels.albedo);
+  std::vector<glm::vec3> cpu(traced.size());
+  for (std::size_t i = 0; i < cpu.size(); ++i) cpu[i] = traced[i] + bounce[i];
+  const Agreement a = agreement(lit, cpu);
+  EXPECT_LT(a.rel_rms, kShadowMapRms);
+  EXPECT_GT(agreement(traced, cpu).rel_rms, 2 * kShadowMapRms);  // the bounce is a real part of it (8.8%)
+  std::printf("lightmap: against the traced direct light and its bounce %.4f (the bounce is %.3f of it)\n", a.rel_rms,
+              agreement(traced, cpu).rel_rms);
+
+  // At a mesh's vertices.
+  const Mesh mesh = test::floor_and_ball(32);
+  TransferOptions v = o;
+  v.albedo = glm::vec3(0.7f, 0.6f, 0.5f);
+  const Transfer tv = compute_transfer(mesh, v);
+  r->set_mesh(mesh, tv);
+  r->set_lighting(std::vector<glm::dvec3>(9, glm::dvec3(0.0)));
+  const std::vector<glm::vec3> vlit = r->vertex_radiance({0, 3, 3});
+  r->set_shading(Shading::Direct);
+  const std::vector<glm::vec3> vdirect = r->vertex_radiance({0, 3, 3});
+  expect_bounce(vlit, vdirect, tv.light_bounce, std::vector<glm::vec3>(mesh.vertex_count(), v.albedo), "vertices");
 }
 
 TEST(RenderLights, TheProbeLitObjectIsLitAndShadowedByTheScene) {

@@ -98,7 +98,7 @@ void prepare_lights(const RenderArgs& a, RenderJob& j) {
     j.background.reset();
     return;
   }
-  j.light_points = renderer_light_points(j.scene, a.quiet);
+  j.light_points = renderer_light_points(j.scene);
 }
 
 // The options that need no file: --probes with --object, --rotate (returned,

@@ -539,7 +539,7 @@ ViewLights view_lights(const ViewArgs& a, const Scene& scene) {
   ViewLights v;
   if (a.light.sun_auto()) v.sky = scene.env;
   v.lights = render_lights(a.light, {}, v.sky, a.mesh, scene.world ? &scene.world->lights : nullptr, a.quiet);
-  if (!v.lights.empty()) v.points = renderer_light_points(scene, a.quiet);
+  if (!v.lights.empty()) v.points = renderer_light_points(scene);
   return v;
 }
 

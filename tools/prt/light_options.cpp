@@ -192,12 +192,9 @@ std::vector<Light> RenderLights::at(double t, const glm::dmat3& rotation) const 
   return out;
 }
 
-std::optional<LightmapTexels> renderer_light_points(const Scene& scene, bool quiet) {
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene) {
   const LightmapTransfer* l = scene.get<LightmapTransfer>();
-  const Transfer* t = l ? &l->transfer : scene.get<Transfer>();
-  if (t && !t->light_bounce.empty() && !quiet)
-    fmt::print(stderr, "lights: the transfer's light-bounce operator is applied by prt relight and prt export --bake; "
-                       "the GPU draws the lights' direct light only (docs/LIGHTS.md \"Bounce\")\n");
+
   if (!l) return std::nullopt;
   LightmapTexels texels = lightmap_texels(*scene.world, l->layout.width, l->layout.height, l->layout.uv_set,
                                           l->transfer.vertex_colors ? nullptr : &l->transfer.albedo);

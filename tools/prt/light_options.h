@@ -120,8 +120,7 @@ struct RenderLights {
 // What a renderer needs beside the lights for `scene`: for a lightmap, its texels' sample points
 // moved out of geometry as prt precompute moved them (the points prt
 // relight lights; Renderer::set_light_points), nullopt otherwise.
-// Unless quiet, says so when the transfer's light-bounce operator is not drawn.
-std::optional<LightmapTexels> renderer_light_points(const Scene& scene, bool quiet);
+std::optional<LightmapTexels> renderer_light_points(const Scene& scene);
 
 // Reads the lights (command_lights, take_sun on `env` in place) and checks
 // the paths against them; `scene_lights` as command_lights.
