@@ -45,6 +45,21 @@ std::vector<Light> three_lights() {
   return {point_light({0.3, 2.2, -0.2}, 3.0), spot, sun};
 }
 
+// A lightmap's texels at the points prt precompute traces from (moved out of
+// geometry), size x size, and the camera above the floor the tests draw with.
+LightmapTexels traced_texels(const Scene& s, int size) {
+  LightmapTexels texels = lightmap_texels(s, size, size, 0);
+  move_texels_out_of_geometry(s.mesh, texels);
+  return texels;
+}
+Camera above() {
+  Camera cam;
+  cam.eye = {0, 3, 2};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 1, 0};
+  return cam;
+}
+
 // Relative RMS over points and channels, and the fraction of points whose
 // visibility differs (one side black, the other not).
 struct Agreement {
@@ -124,8 +139,7 @@ TEST(RenderLights, VertexLightsAreTheTracedDirectLight) {
 TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) {
   REQUIRE_RENDERER(r);
   const Scene s = test::floor_and_box(false);
-  LightmapTexels texels = lightmap_texels(s, 96, 96, 0);
-  move_texels_out_of_geometry(s.mesh, texels);
+  const LightmapTexels texels = traced_texels(s, 96);
   TransferOptions o;
   o.bands = 3;
   o.samples = 32;
@@ -136,10 +150,7 @@ TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) 
   r->set_lights(lights);
   r->set_shadow_map_size(kTestShadowMapSize);
   r->set_light_points(texels.positions, texels.normals, texels.albedo);
-  Camera cam;
-  cam.eye = {0, 3, 2};
-  cam.target = {0, 0, 0};
-  cam.up = {0, 1, 0};
+  const Camera cam = above();
   r->render(cam, 32, 32);
   EXPECT_EQ(r->shadow_maps_drawn(), 3);
   const std::vector<glm::vec3> cpu = DirectLight(s.mesh).radiance(lights, texels.positions, texels.normals, texels.albedo);
@@ -170,8 +181,7 @@ TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
   // bounce, within the shadow maps' tolerance.
   REQUIRE_RENDERER(r);
   const Scene s = test::floor_and_box(false);
-  LightmapTexels texels = lightmap_texels(s, 48, 48, 0);
-  move_texels_out_of_geometry(s.mesh, texels);
+  const LightmapTexels texels = traced_texels(s, 48);
   TransferOptions o;
   o.bands = 3;
   o.samples = 64;
@@ -186,10 +196,7 @@ TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
   r->set_shadow_map_size(kTestShadowMapSize);
   const std::vector<Light> lights{three_lights()[0]};
   r->set_lights(lights);
-  Camera cam;
-  cam.eye = {0, 3, 2};
-  cam.target = {0, 0, 0};
-  cam.up = {0, 1, 0};
+  const Camera cam = above();
   // GPU float sums of a few hundred weights against the CPU's double:
   // 1e-4 of the brightest bounce.
   constexpr double kBounceTol = 1e-4;
@@ -238,8 +245,7 @@ TEST(RenderLights, TheProbeLitObjectIsLitAndShadowedByTheScene) {
   // shadow. The ball itself casts no shadow (it is not in the maps).
   REQUIRE_RENDERER(r);
   const Scene s = test::floor_and_box(false);
-  LightmapTexels texels = lightmap_texels(s, 48, 48, 0);
-  move_texels_out_of_geometry(s.mesh, texels);
+  const LightmapTexels texels = traced_texels(s, 48);
   TransferOptions o;
   o.bands = 3;
   o.samples = 16;
@@ -255,10 +261,7 @@ TEST(RenderLights, TheProbeLitObjectIsLitAndShadowedByTheScene) {
   const glm::mat4 model = glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0.75f, 0.25f, 0.0f)), glm::vec3(0.25f));
   r->set_probe_object_model(model);
   const std::vector<Light> lights{point_light({-1.2, 1.6, 0.05}, 2.0)};
-  Camera cam;
-  cam.eye = {0, 3, 2};
-  cam.target = {0, 0, 0};
-  cam.up = {0, 1, 0};
+  const Camera cam = above();
   r->set_lights(lights);
   r->render(cam, 32, 32);
   const std::vector<glm::vec3> lit = r->probe_object_radiance();
