@@ -85,6 +85,9 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
       throw Error(fmt::format("--bounce-patch must be a finite size >= 0, got {}", o.light_bounce_patch));
     if (!(o.light_bounce_ratio > 0) || !std::isfinite(o.light_bounce_ratio))
       throw Error(fmt::format("--bounce-ratio must be a finite number > 0, got {}", o.light_bounce_ratio));
+    if (o.light_bounce_clusters < -1 || o.light_bounce_clusters >= kMaxPatchLevels)
+      throw Error(fmt::format("--bounce-clusters must be -1 (none) to {}, got {}", kMaxPatchLevels - 1,
+                              o.light_bounce_clusters));
   }
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
@@ -815,6 +818,8 @@ LightBounce keep_light_bounce(const Run& run, const FirstPass& fp, int bounces) 
       b.offsets[run.r0 + i + 1] = std::uint32_t(b.source.size());
     }
   }
+  // Far hits gathered once per cluster of receivers (prt::link_clusters).
+  if (run.o.light_bounce_clusters >= 0) b = link_clusters(b, run.o.light_bounce_clusters);
   return b;
 }
 

@@ -14,97 +14,255 @@ namespace prt::detail {
 
 namespace {
 
-// Every patch's points, every level (a point is in one patch of each level):
-// a CSR from patch to points, so each patch's mean is one invocation's sum.
-void patch_members(const LightBounce& b, std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& members) {
-  std::vector<std::uint32_t> count(b.patches, 0);
-  for (std::uint32_t p : b.patch)
-    for (std::uint32_t q = p; q != LightBounce::kNoParent; q = b.parent[q]) ++count[q];
-  offsets.assign(std::size_t(b.patches) + 1, 0);
-  for (std::uint32_t p = 0; p < b.patches; ++p) offsets[p + 1] = offsets[p] + count[p];
-  members.resize(offsets.back());
-  std::vector<std::uint32_t> at(offsets.begin(), offsets.end() - 1);
-  for (std::uint32_t i = 0; i < b.patch.size(); ++i)
-    for (std::uint32_t q = b.patch[i]; q != LightBounce::kNoParent; q = b.parent[q]) members[at[q]++] = i;
+// The shader's steps (shaders/bounce.comp.glsl).
+enum Step : GLuint { kFinestMeans = 0, kPointRows = 1, kAdd = 2, kLevelMeans = 3, kClusterRows = 4, kPush = 5 };
+
+// The patches by level (finest first; a parent is one level above its
+// children), and what each patch's mean is taken over: a finest patch's
+// points, or a coarser patch's children (weighted by their points).
+struct Hierarchy {
+  std::vector<std::uint32_t> level_offsets{0};  // levels + 1, into `order`
+  std::vector<std::uint32_t> order;             // patches, level by level
+  std::vector<std::uint32_t> input_offsets;     // patches + 1
+  std::vector<std::uint32_t> inputs;            // points (finest) or child patches
+  std::vector<float> points;                    // per patch, the points it holds
+};
+
+Hierarchy hierarchy(const LightBounce& b) {
+  Hierarchy h;
+  std::vector<std::uint32_t> level(b.patches, 0), count(b.patches, 0);
+  std::vector<std::uint32_t> pts(b.patches, 0);
+  for (std::uint32_t p : b.patch) ++count[p], ++pts[p];
+  std::uint32_t levels = 1;
+  for (std::uint32_t p = 0; p < b.patches; ++p)
+    if (b.parent[p] != LightBounce::kNoParent) {  // parents follow their children (light_bounce_problem)
+      level[b.parent[p]] = std::max(level[b.parent[p]], level[p] + 1);
+      ++count[b.parent[p]];
+      pts[b.parent[p]] += pts[p];
+      levels = std::max(levels, level[b.parent[p]] + 1);
+    }
+  h.level_offsets.assign(levels + 1, 0);
+  for (std::uint32_t p = 0; p < b.patches; ++p) ++h.level_offsets[level[p] + 1];
+  for (std::uint32_t l = 0; l < levels; ++l) h.level_offsets[l + 1] += h.level_offsets[l];
+  h.order.resize(b.patches);
+  std::vector<std::uint32_t> at(h.level_offsets.begin(), h.level_offsets.end() - 1);
+  for (std::uint32_t p = 0; p < b.patches; ++p) h.order[at[level[p]]++] = p;
+  h.input_offsets.assign(std::size_t(b.patches) + 1, 0);
+  for (std::uint32_t p = 0; p < b.patches; ++p) h.input_offsets[p + 1] = h.input_offsets[p] + count[p];
+  h.inputs.resize(h.input_offsets.back());
+  std::vector<std::uint32_t> fill(h.input_offsets.begin(), h.input_offsets.end() - 1);
+  for (std::uint32_t i = 0; i < b.patch.size(); ++i) h.inputs[fill[b.patch[i]]++] = i;
+  for (std::uint32_t p = 0; p < b.patches; ++p)
+    if (b.parent[p] != LightBounce::kNoParent) h.inputs[fill[b.parent[p]]++] = p;
+  h.points.assign(pts.begin(), pts.end());
+  return h;
 }
 
 }  // namespace
 
 BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::uint64_t work_groups)
-    : points_(b.points()), patches_(b.patches), bounces_(b.bounces), work_groups_(std::max<std::uint64_t>(work_groups, 1)) {
+    : points_(b.points()),
+      patches_(b.patches),
+      entries_(b.entries()),
+      bounces_(b.bounces),
+      clusters_(!b.cluster_offsets.empty()),
+      work_groups_(std::max<std::uint64_t>(work_groups, 1)),
+      offsets_(b.offsets),
+      cluster_entries_(b.cluster_source.size()) {
   if (const std::string p = light_bounce_problem(b, b.points()); !p.empty()) throw Error(p);
-  std::vector<std::uint32_t> offsets, members;
-  patch_members(b, offsets, members);
+  const Hierarchy h = hierarchy(b);
+  level_offsets_ = h.level_offsets;
   const std::pair<const char*, std::size_t> arrays[] = {
-      {"the patches' points", members.size() * 4}, {"the rows' sources", b.source.size() * 4},
-      {"the rows' weights", b.weight.size() * 4},  {"the points' radiance", points_ * 16}};
+      {"the patches' inputs", h.inputs.size() * 4}, {"the rows' sources", b.source.size() * 4},
+      {"the rows' weights", b.weight.size() * 4},   {"the clusters' sources", b.cluster_source.size() * 4},
+      {"the points' direct light and bounces", points_ * 16 * std::size_t(bounces_ + 1)}};
   for (const auto& [what, bytes] : arrays)
     if (bytes > storage_block)
       throw Error(fmt::format("the light-bounce operator's {} take {} bytes in one storage buffer; this OpenGL's "
                               "GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: prt relight applies it on the CPU",
                               what, bytes, storage_block));
   program_ = gl::link_compute(shaders::bounce_comp_glsl, "light bounce", "");
-  members_offsets_ = gl::make_buffer(offsets.data(), offsets.size() * 4);
-  members_ = gl::make_buffer(members.data(), std::max<std::size_t>(members.size(), 1) * 4);
-  row_offsets_ = gl::make_buffer(b.offsets.data(), b.offsets.size() * 4);
-  sources_ = gl::make_buffer(b.source.data(), std::max<std::size_t>(b.source.size(), 1) * 4);
-  weights_ = gl::make_buffer(b.weight.data(), std::max<std::size_t>(b.weight.size(), 1) * 4);
-  for (GLuint* v : {&direct_, &emitted_, &total_}) *v = gl::make_buffer(nullptr, points_ * 16, GL_DYNAMIC_STORAGE_BIT);
+  const auto upload = [](const auto& v) {
+    return gl::make_buffer(v.data(), std::max<std::size_t>(v.size(), 1) * sizeof(v[0]));
+  };
+  order_ = upload(h.order);
+  input_offsets_ = upload(h.input_offsets);
+  inputs_ = upload(h.inputs);
+  patch_points_ = upload(h.points);
+  parents_ = upload(b.parent);
+  // The lowest level whose patches have cluster rows: the push stops there,
+  // and each point reads its patch of that level.
+  std::vector<std::uint32_t> level(b.patches, 0);
+  for (std::uint32_t p = 0; p < b.patches; ++p)
+    if (b.parent[p] != LightBounce::kNoParent) level[b.parent[p]] = std::max(level[b.parent[p]], level[p] + 1);
+  lowest_ = level_offsets_.size() - 1;
+  for (std::uint32_t p = 0; clusters_ && p < b.patches; ++p)
+    if (b.cluster_offsets[p + 1] > b.cluster_offsets[p]) lowest_ = std::min<std::size_t>(lowest_, level[p]);
+  std::vector<std::uint32_t> ancestor(b.patch);
+  for (std::uint32_t& q : ancestor)
+    while (level[q] < lowest_ && b.parent[q] != LightBounce::kNoParent) q = b.parent[q];
+  point_patch_ = upload(ancestor);
+  // The clusters' rows in level order (the patches from the lowest level
+  // with rows on): their cost, for the sweeps' slices.
+  if (clusters_) {
+    cluster_cost_.assign(std::size_t(b.patches) + 1, 0);
+    for (std::size_t k = 0; k < b.patches; ++k) {
+      const std::uint32_t p = h.order[k];
+      cluster_cost_[k + 1] = cluster_cost_[k] + (b.cluster_offsets[p + 1] - b.cluster_offsets[p]);
+    }
+  }
+  row_offsets_ = upload(b.offsets);
+  sources_ = upload(b.source);
+  weights_ = upload(b.weight);
+  cluster_row_offsets_ = upload(clusters_ ? b.cluster_offsets : std::vector<std::uint32_t>(patches_ + 1, 0));
+  cluster_sources_ = upload(b.cluster_source);
+  cluster_weights_ = upload(b.cluster_weight);
+  const float zero = 0.0f;
+  // The direct light and every bounce, one after the other (the add step
+  // sums them in one pass).
+  radiance_ = gl::make_buffer(nullptr, points_ * 16 * std::size_t(bounces_ + 1), GL_DYNAMIC_STORAGE_BIT);
+  glClearNamedBufferData(radiance_, GL_R32F, GL_RED, GL_FLOAT, &zero);
   means_ = gl::make_buffer(nullptr, patches_ * 16, GL_DYNAMIC_STORAGE_BIT);
+  pushed_ = gl::make_buffer(nullptr, patches_ * 16, GL_DYNAMIC_STORAGE_BIT);
+  glClearNamedBufferData(pushed_, GL_R32F, GL_RED, GL_FLOAT, &zero);
   gl::check_gl(fmt::format("uploading a light-bounce operator ({} points, {} patches, {} entries)", points_, patches_,
                            b.entries()));
 }
 
 BouncePass::~BouncePass() {
-  const GLuint buffers[] = {members_offsets_, members_, row_offsets_, sources_, weights_,
-                            direct_,          emitted_, means_,       total_};
+  const GLuint buffers[] = {order_,   input_offsets_,       inputs_,           patch_points_,    parents_,
+                            point_patch_, row_offsets_,     sources_,          weights_,         cluster_row_offsets_,
+                            cluster_sources_, cluster_weights_, radiance_,     means_,           pushed_};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   glDeleteProgram(program_);
 }
 
-void BouncePass::clear_direct() {
-  const float zero = 0.0f;
-  glClearNamedBufferData(direct_, GL_R32F, GL_RED, GL_FLOAT, &zero);
+std::uint64_t BouncePass::work() const {
+  const std::uint64_t sweep = points_ + patches_ + offsets_.back() + points_ +
+                              (clusters_ ? cluster_entries_ + 2 * (patches_ - level_offsets_[lowest_]) : 0);
+  return std::uint64_t(bounces_) * sweep;
 }
 
-void BouncePass::dispatch(std::size_t count) {
-  glUniform1ui(0, GLuint(count));
-  const std::size_t groups = (count + 63) / 64;
+void BouncePass::clear_direct() {
+  const float zero = 0.0f;
+  glClearNamedBufferSubData(radiance_, GL_R32F, 0, GLsizeiptr(points_ * 16), GL_RED, GL_FLOAT, &zero);
+}
+
+void BouncePass::direct_changed() {
+  clean_ = 0;
+  sweep_clean_ = false;  // a sweep under way finishes on what it began with
+}
+
+void BouncePass::dispatch(GLuint step, std::size_t first, std::size_t end) {
+  glUniform1ui(2, step);
+  glUniform1ui(5, GLuint(points_));
+  glUniform1ui(0, GLuint(end));
+  const std::size_t groups = (end - first + 63) / 64;
   for (std::size_t g = 0; g < groups; g += work_groups_) {
-    glUniform1ui(1, GLuint(g * 64));
+    glUniform1ui(1, GLuint(first + g * 64));
     glDispatchCompute(GLuint(std::min<std::uint64_t>(work_groups_, groups - g)), 1, 1);
   }
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-void BouncePass::apply(GLuint radiance, int radiance_stride, GLuint albedo_buffer, const glm::vec3& albedo) {
+void BouncePass::means(int input) {
+  // Up the levels: the finest patches over their points, each coarser one
+  // over its children.
+  const GLuint bind[][2] = {{0, input_offsets_}, {1, inputs_}, {2, radiance_}, {3, means_}, {4, patch_points_}, {6, order_}};
+  for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+  glUniform1ui(6, GLuint(input));  // which of the points' radiances: 0 the direct light, k bounce k
+  for (std::size_t l = 0; l + 1 < level_offsets_.size(); ++l)
+    dispatch(l == 0 ? kFinestMeans : kLevelMeans, level_offsets_[l], level_offsets_[l + 1]);
+}
+
+void BouncePass::push() {
+  // Down the levels: each patch's gathered light plus its parent's (already
+  // holding every level above), so a finest patch holds its whole chain's.
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, parents_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, pushed_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, order_);
+  for (std::size_t l = level_offsets_.size() - 1; l-- > lowest_;) dispatch(kPush, level_offsets_[l], level_offsets_[l + 1]);
+}
+
+std::size_t BouncePass::slice(const std::vector<std::uint32_t>& offsets, std::uint64_t room) const {
+  // The last row whose cost from row_ (entries, and one a row) fits, by
+  // bisection; one row at least.
+  const std::size_t rows = offsets.size() - 1;
+  if (room == ~std::uint64_t(0)) return rows;
+  const auto cost = [&](std::size_t e) { return std::uint64_t(offsets[e] - offsets[row_]) + (e - row_); };
+  std::size_t end = row_ + 1, hi = rows;
+  while (end < hi) {
+    const std::size_t mid = (end + hi + 1) / 2;
+    if (cost(mid) <= room) end = mid;
+    else hi = mid - 1;
+  }
+  return end;
+}
+
+bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, const glm::vec3& albedo) {
+  if (done() || points_ == 0) return true;
   glUseProgram(program_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  glCopyNamedBufferSubData(direct_, emitted_, 0, 0, GLsizeiptr(points_ * 16));
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   glUniform4f(3, albedo.x, albedo.y, albedo.z, albedo_buffer ? 1.0f : 0.0f);
-  glUniform1ui(4, GLuint(radiance_stride));
-  for (int k = 0; k < bounces_; ++k) {
-    glUniform1ui(2, 0u);  // the patches' means of what the points send
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, members_offsets_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, members_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, emitted_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, means_);
-    dispatch(patches_);
-    glUniform1ui(2, 1u);  // the gather: the next bounce, added to the total
-    glUniform1ui(5, k == 0 ? 1u : 0u);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, row_offsets_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, sources_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, weights_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, albedo_buffer ? albedo_buffer : weights_);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, total_);
-    dispatch(points_);
+  std::uint64_t spent = 0;
+  const auto left = [&] { return budget == 0 ? ~std::uint64_t(0) : budget - std::min(budget, spent); };
+  while (!done() && left() > 0) {
+    switch (phase_) {
+      case Phase::Means:  // the sweep begins: its input's patch means, as they stand now
+        sweep_clean_ = level_ <= clean_;
+        means(level_);
+        spent += points_ + patches_;
+        phase_ = clusters_ ? Phase::Clusters : Phase::Points;
+        row_ = clusters_ ? level_offsets_[lowest_] : 0;
+        break;
+      case Phase::Clusters: {  // the clusters' rows, within the budget
+        const std::size_t end = slice(cluster_cost_, left());
+        const GLuint bind[][2] = {{0, cluster_row_offsets_}, {1, cluster_sources_}, {3, means_}, {4, cluster_weights_},
+                                  {5, pushed_},          {6, order_}};
+        for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+        dispatch(kClusterRows, row_, end);
+        spent += std::uint64_t(cluster_cost_[end] - cluster_cost_[row_]) + (end - row_);
+        row_ = end;
+        if (row_ == patches_) {
+          push();
+          spent += patches_ - level_offsets_[lowest_];
+          row_ = 0;
+          phase_ = Phase::Points;
+        }
+        break;
+      }
+      case Phase::Points: {  // bounce level_ + 1 at the points' rows, within the budget
+        const std::size_t end = slice(offsets_, left());
+        const GLuint bind[][2] = {{0, row_offsets_}, {1, sources_}, {2, radiance_},   {3, means_},
+                                  {4, weights_},     {5, pushed_},  {6, point_patch_},
+                                  {7, albedo_buffer ? albedo_buffer : weights_}};
+        for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+        glUniform1ui(6, GLuint(level_ + 1));
+        dispatch(kPointRows, row_, end);
+        spent += std::uint64_t(offsets_[end] - offsets_[row_]) + (end - row_);
+        row_ = end;
+        if (row_ == points_) {  // the sweep is done
+          if (sweep_clean_ && clean_ == level_) clean_ = level_ + 1;
+          level_ = (level_ + 1) % bounces_;
+          row_ = 0;
+          phase_ = Phase::Means;
+        }
+        break;
+      }
+    }
   }
-  glUniform1ui(2, 2u);  // direct + bounces into the radiance drawn
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, direct_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, total_);
+  gl::check_gl("the light-bounce pass");
+  return done();
+}
+
+void BouncePass::add(GLuint radiance, int radiance_stride) {
+  glUseProgram(program_);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  glUniform1ui(4, GLuint(radiance_stride));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, radiance);
-  dispatch(points_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);  // direct + every bounce, into the radiance drawn
+  glUniform1ui(6, GLuint(bounces_));
+  dispatch(kAdd, 0, points_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);
   gl::check_gl("the light-bounce pass");
 }

@@ -1,8 +1,10 @@
 // Private to prt::runtime: the lights' bounce on the GPU (docs/LIGHTS.md
 // "Bounce"): a transfer's light-bounce operator (prt/light_bounce.h) applied
-// each frame to the lights' direct light at the points the lights pass
-// lights (a lightmap's texels, a mesh's vertices), B bounces iterated as
-// prt::light_bounce does (shaders/bounce.comp.glsl).
+// to the lights' direct light at the points the lights pass lights (a
+// lightmap's texels, a mesh's vertices), B bounces iterated as
+// prt::light_bounce does (shaders/bounce.comp.glsl), within a budget of work
+// a frame when asked: the bounces then catch up with a moving light over a
+// few frames.
 #pragma once
 
 #include <prt/light_bounce.h>
@@ -12,6 +14,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <vector>
 
 namespace prt::detail {
 
@@ -25,23 +28,56 @@ class BouncePass {
   BouncePass& operator=(const BouncePass&) = delete;
 
   std::size_t points() const { return points_; }
+  // The work of all B bounces once, the unit of step()'s budget: each
+  // bounce's rows' entries and rows (points' and clusters'), and its patch
+  // means and push down the levels.
+  std::uint64_t work() const;
   // The buffer the lights pass writes the direct light into (a vec4 per
   // point), zeroed by clear_direct().
-  GLuint direct() const { return direct_; }
+  GLuint direct() const { return radiance_; }
   void clear_direct();
-  // The B bounces of direct(), then direct + bounces added to `radiance`
-  // (radiance_stride floats a point). The albedo: per point in
-  // `albedo_buffer` (float triples) or `albedo` for all.
-  void apply(GLuint radiance, int radiance_stride, GLuint albedo_buffer, const glm::vec3& albedo);
+  // direct() was rewritten (a light moved): the bounces catch up as step()
+  // sweeps again.
+  void direct_changed();
+  // Advances the bounces by about `budget` units of work() (0: until done),
+  // in sweeps: bounce k's rows in order, from the patch means of bounce
+  // k - 1 (the direct light for k = 1) as they stood when the sweep began,
+  // then bounce k + 1's, cycling 1..B (Enlighten's convergence over frames).
+  // The albedo: per point in `albedo_buffer` (float triples) or `albedo`
+  // for all. True when done: bounces 1..B of the current direct light, each
+  // swept whole after the one before it, as prt::light_bounce applies them.
+  bool step(std::uint64_t budget, GLuint albedo_buffer, const glm::vec3& albedo);
+  bool done() const { return clean_ == bounces_; }
+  // radiance += direct + every bounce as it stands (radiance_stride floats a point).
+  void add(GLuint radiance, int radiance_stride);
 
  private:
-  void dispatch(std::size_t count);
-  std::size_t points_ = 0, patches_ = 0;
+  enum class Phase { Means, Clusters, Points };
+  void dispatch(GLuint step, std::size_t first, std::size_t end);
+  void means(int input);
+  void push();
+  std::size_t slice(const std::vector<std::uint32_t>& offsets, std::uint64_t room) const;
+  std::size_t points_ = 0, patches_ = 0, entries_ = 0;
   int bounces_ = 0;
+  bool clusters_ = false;
   std::uint64_t work_groups_ = 1;
   GLuint program_ = 0;
-  GLuint members_offsets_ = 0, members_ = 0, row_offsets_ = 0, sources_ = 0, weights_ = 0;
-  GLuint direct_ = 0, emitted_ = 0, means_ = 0, total_ = 0;
+  GLuint order_ = 0, input_offsets_ = 0, inputs_ = 0, patch_points_ = 0, parents_ = 0, point_patch_ = 0;
+  GLuint row_offsets_ = 0, sources_ = 0, weights_ = 0, cluster_row_offsets_ = 0, cluster_sources_ = 0,
+         cluster_weights_ = 0;
+  GLuint radiance_ = 0, means_ = 0, pushed_ = 0;  // radiance_: the direct light, then bounces 1..B (vec4s a point)
+  std::size_t lowest_ = 0;                         // the lowest level with cluster rows
+  std::vector<std::uint32_t> offsets_;           // the points' rows' offsets (the sweeps' slices)
+  std::vector<std::uint32_t> cluster_cost_;      // the clusters' rows' entries before each, in level order
+  std::uint64_t cluster_entries_ = 0;
+  std::vector<std::uint32_t> level_offsets_;     // the patches of each level, in the order uploaded
+  // The sweep: bounce level_ + 1, its phase, the next row; whether its input
+  // was up to date when it began; clean_: bounces 1..clean_ are up to date
+  // with the direct light.
+  int level_ = 0, clean_ = 0;
+  Phase phase_ = Phase::Means;
+  std::size_t row_ = 0;
+  bool sweep_clean_ = false;
 };
 
 }  // namespace prt::detail

@@ -71,6 +71,7 @@ LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, con
     bytes_ += d.size() * sizeof(float);
   }
   radiance_ = gl::make_buffer(nullptr, std::max<std::size_t>(texels_, 1) * 16);
+  sky_ = gl::make_buffer(nullptr, std::max<std::size_t>(texels_, 1) * 16);
   const std::vector<std::uint32_t> writes = image_writes(t.layout, 4);
   writes_ = writes.size() / 2;
   writes_buffer_ = gl::make_buffer(writes.data(), writes.size() * sizeof(std::uint32_t));
@@ -119,7 +120,7 @@ LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, con
 }
 
 LightmapPass::~LightmapPass() {
-  const GLuint buffers[] = {rows_, direct_, radiance_, writes_buffer_, positions_, uv_base_, uv_lightmap_, indices_};
+  const GLuint buffers[] = {rows_, direct_, radiance_, sky_, writes_buffer_, positions_, uv_base_, uv_lightmap_, indices_};
   for (GLuint b : buffers)
     if (b) glDeleteBuffers(1, &b);
   if (lightmap_) glDeleteTextures(1, &lightmap_);
@@ -138,7 +139,7 @@ GLuint LightmapPass::program(int pass, int coeffs) {
   return programs_[key] = gl::link_compute(shaders::lightmap_comp_glsl, "lightmap relight", defines);
 }
 
-void LightmapPass::relight(int band_limit, bool direct, const std::function<void(GLuint radiance)>& add) {
+void LightmapPass::relight(int band_limit, bool direct, bool sky, const std::function<void(GLuint radiance)>& add) {
   const auto dispatch = [&](std::size_t count) {
     glUniform1ui(0, GLuint(count));
     glUniform1ui(1, GLuint(width_));
@@ -148,11 +149,24 @@ void LightmapPass::relight(int band_limit, bool direct, const std::function<void
       glDispatchCompute(GLuint(std::min<std::size_t>(work_groups_, groups - g)), 1, 1);
     }
   };
-  glUseProgram(program(0, band_limit * band_limit));
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, direct && direct_ ? direct_ : rows_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
-  dispatch(texels_);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  if (!sky_kept_) sky = true;
+  if (sky) {
+    glUseProgram(program(0, band_limit * band_limit));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, direct && direct_ ? direct_ : rows_);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
+    dispatch(texels_);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    sky_kept_ = false;
+  }
+  // The sky's radiance kept for frames where only the lights change.
+  const auto bytes = GLsizeiptr(texels_ * 16);
+  if (!sky) {
+    glCopyNamedBufferSubData(sky_, radiance_, 0, 0, bytes);
+  } else if (add) {
+    glCopyNamedBufferSubData(radiance_, sky_, 0, 0, bytes);
+    sky_kept_ = true;
+  }
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
   if (add) add(radiance_);
   glUseProgram(program(1, 0));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);

@@ -38,10 +38,12 @@ class LightmapPass {
 
   // Relights the covered texels (the direct part with `direct`) with the
   // lighting block at uniform binding 1 (its first band_limit^2 vec4s),
-  // and writes the lightmap image.
-  // `add` (when set) adds to the covered texels' radiance (a vec4 buffer)
-  // before the image is written: the lights' direct light.
-  void relight(int band_limit, bool direct, const std::function<void(GLuint radiance)>& add = {});
+  // and writes the lightmap image. `add` (when set) adds to the covered
+  // texels' radiance (a vec4 buffer) before the image is written: the
+  // lights' direct light and bounce. `sky` false: only the lights changed,
+  // and the sky's radiance of the last relight with `add` is kept (relit
+  // anyway when there is none).
+  void relight(int band_limit, bool direct, bool sky, const std::function<void(GLuint radiance)>& add = {});
   // Draws every triangle with the bound program, positions at attribute 0
   // (the lights' shadow maps).
   void draw_geometry() const;
@@ -57,7 +59,8 @@ class LightmapPass {
   int bands_ = 0, channels_ = 0, width_ = 0, height_ = 0;
   std::size_t texels_ = 0, writes_ = 0, bytes_ = 0;
   std::uint64_t work_groups_ = 65535;
-  GLuint rows_ = 0, direct_ = 0, radiance_ = 0, writes_buffer_ = 0;
+  GLuint rows_ = 0, direct_ = 0, radiance_ = 0, sky_ = 0, writes_buffer_ = 0;
+  bool sky_kept_ = false;  // sky_ holds the last relight's sky radiance
   GLuint lightmap_ = 0, texel_albedo_ = 0;
   GLuint vao_ = 0, positions_ = 0, uv_base_ = 0, uv_lightmap_ = 0, indices_ = 0;
   GLuint draw_program_ = 0;

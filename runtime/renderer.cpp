@@ -459,7 +459,19 @@ void Renderer::clear_probe_object() {
 }
 void Renderer::set_lightmap_relight(bool on) { impl_->lightmap_relight = on; }
 
+void Renderer::set_light_bounce_budget(std::uint64_t work) { impl_->bounce_budget = work; }
+
+bool Renderer::light_bounce_done() const {
+  return !impl_->bounce_pending();
+}
+
+bool Renderer::Impl::bounce_pending() const {
+  return bounce && lights && !lights->empty() && shading != Shading::Direct &&
+         (bounce_version != lights_version || !bounce->done());
+}
+
 void Renderer::Impl::set_bounds(const Mesh& mesh) {
+  ++lights_version;
   bounds_centre = 0.5 * (glm::dvec3(mesh.bounds_min()) + glm::dvec3(mesh.bounds_max()));
   bounds_radius = mesh.positions.empty() ? 1.0 : std::max(0.5 * mesh.diagonal(), 1e-30);
   if (lights) {
@@ -471,6 +483,7 @@ void Renderer::Impl::set_bounds(const Mesh& mesh) {
 void Renderer::set_lights(std::span<const Light> lights) {
   Impl& m = *impl_;
   m.make_current();
+  if (!std::equal(lights.begin(), lights.end(), m.light_list.begin(), m.light_list.end())) ++m.lights_version;
   m.light_list.assign(lights.begin(), lights.end());
   if (m.light_list.empty()) {
     m.lights.reset();
@@ -495,6 +508,7 @@ void Renderer::set_light_points(std::span<const glm::vec3> positions, std::span<
   m.light_points[1] = make_buffer(normals.data(), normals.size() * sizeof(glm::vec3));
   m.light_points[2] = make_buffer(albedo.data(), albedo.size() * sizeof(glm::vec3));
   m.light_point_count = positions.size();
+  ++m.lights_version;
 }
 
 void Renderer::set_shadow_map_size(int size) {
@@ -503,6 +517,7 @@ void Renderer::set_shadow_map_size(int size) {
   if (m.lights) m.lights->set_size(size);
   else if (size < 16 || size > kMaxShadowMapSize)
     throw Error(fmt::format("shadow map size must be 16 to {}, got {}", kMaxShadowMapSize, size));
+  if (size != m.shadow_size) ++m.lights_version;
   m.shadow_size = size;
 }
 
@@ -564,13 +579,19 @@ void Renderer::Impl::apply_lights(GLuint radiance, const glm::dvec3& eye, int ra
   pts.radiance_stride = radiance_stride;
   const std::uint64_t groups = std::max<std::uint64_t>(limits.work_groups, 1);
   if (bounce && !object && shading != Shading::Direct && bounce->points() == pts.count) {
-    // The direct light into the bounce pass's own buffer, then its bounces,
-    // then both into `radiance` (prt relight: direct + light_bounce).
-    detail::LightsPass::Points direct = pts;
-    direct.radiance_stride = 4;
-    bounce->clear_direct();
-    lights->apply(occluders, direct, bounce->direct(), groups);
-    bounce->apply(radiance, radiance_stride, pts.albedo_buffer, pts.albedo);
+    // The direct light into the bounce pass's own buffer when the lights
+    // changed, its bounces brought up to date (within the budget), then both
+    // into `radiance` (prt relight: direct + light_bounce).
+    if (bounce_version != lights_version) {
+      detail::LightsPass::Points at_points = pts;
+      at_points.radiance_stride = 4;
+      bounce->clear_direct();
+      lights->apply(occluders, at_points, bounce->direct(), groups);
+      bounce->direct_changed();
+      bounce_version = lights_version;
+    }
+    bounce->step(bounce_budget, pts.albedo_buffer, pts.albedo);
+    bounce->add(radiance, radiance_stride);
   } else {
     lights->apply(occluders, object ? *object : pts, radiance, groups);
   }
@@ -668,6 +689,7 @@ void Renderer::set_shading(Shading s) {
     throw Error("shading '" + std::string(shading_name(s)) + "' is unavailable: " + why);
   }
   impl_->shading = s;
+  impl_->sky_stale = true;
 }
 
 Shading Renderer::shading() const { return impl_->shading; }
@@ -832,9 +854,18 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     glBindBufferBase(GL_UNIFORM_BUFFER, 1, m.light_buffer);
-    if (m.lightmap_relight || !m.lightmap_relit)
-      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, [&](GLuint radiance) { m.apply_lights(radiance, cam.eye); });
+    // The sky relit when asked to every frame, or when it changed; the
+    // lights added again when they changed or their bounce is catching up.
+    const bool sky = m.lightmap_relight || !m.lightmap_relit || m.sky_stale;
+    if (sky || m.lights_drawn != m.lights_version || m.bounce_pending()) {
+      const bool with_lights = m.lights && !m.lights->empty();
+      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, sky,
+                          with_lights ? std::function<void(GLuint)>([&](GLuint radiance) { m.apply_lights(radiance, cam.eye); })
+                              : std::function<void(GLuint)>());
+      m.lights_drawn = m.lights_version;
+    }
     m.lightmap_relit = true;
+    m.sky_stale = false;
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     m.lightmap->draw(glm::mat4(proj * view), m.lightmap_detail);
   } else if (m.index_count > 0) {

@@ -189,6 +189,15 @@ struct Renderer::Impl {
   std::array<GLuint, 3> light_points{};
   std::size_t light_point_count = 0;
   std::unique_ptr<detail::BouncePass> bounce;  // a transfer's light-bounce operator (set_mesh, set_scene)
+  // What the lights' direct light depends on (the lights, their points, the
+  // occluders, the maps' size) changes this; bounce->direct() holds the
+  // direct light of bounce_version, the lightmap image the lights of
+  // lights_drawn (0: none yet).
+  std::uint64_t lights_version = 1, bounce_version = 0, lights_drawn = 0;
+  std::uint64_t bounce_budget = 0;  // set_light_bounce_budget
+  // The bounce is applied (a lighting with lights, an operator, shading
+  // other than Direct) and not yet done for the lights as they are.
+  bool bounce_pending() const;
   glm::dvec3 bounds_centre{0.0};
   double bounds_radius = 1.0;
   // The occluders' bounds, which the directional lights' maps are fitted to:
@@ -202,6 +211,7 @@ struct Renderer::Impl {
   // color_buffer, or with lights a copy of it plus their direct light.
   GLuint lit_colors(const glm::dvec3& eye);
   bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;
+  bool sky_stale = true;  // set_lighting, set_band_limit, set_shading since the lightmap's last relight
   // An object lit by a probe volume (set_probe_object), drawn after the scene.
   std::unique_ptr<detail::ProbePass> probe_object;
   bool probe_lit = false;

@@ -108,6 +108,7 @@ void Renderer::Impl::finish_transfer(const Transfer& t, const Mesh& mesh, const 
 // The first band_limit^2 lighting coefficients, zeros up to the next
 // multiple of 4 (the shader reads whole vec4s of transfer).
 void Renderer::Impl::upload_lighting() {
+  sky_stale = true;
   if (light.empty()) return;
   const std::size_t keep = std::size_t(band_limit) * band_limit, padded = (keep + 3) / 4 * 4;
   std::vector<float> v(padded * 4, 0.0f);

@@ -67,12 +67,20 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   j["file_bytes"] = transfer_file_size(t);
   // The light-bounce operator (prt precompute --light-bounce; docs/LIGHTS.md
   // "Bounce"): its size per receiver (a row per vertex, or per covered texel
-  // of a lightmap) and per source patch, and an SH row's bytes to compare.
+  // of a lightmap) and per source patch, the entries of its cluster rows
+  // (prt::link_clusters; counted in the entries) and the patches whose
+  // cluster row has any (0 and 0 without cluster rows), and an SH row's bytes
+  // to compare.
   if (const LightBounce& b = t.light_bounce; !b.empty()) {
     const double receivers = double(std::max<std::size_t>(b.points(), 1)), entries = double(b.entries());
+    std::size_t clusters = 0;
+    for (std::size_t q = 0; q + 1 < b.cluster_offsets.size(); ++q)
+      clusters += b.cluster_offsets[q + 1] > b.cluster_offsets[q];
     j["light_bounce"] = {{"bounces", b.bounces},
                          {"patches", b.patches},
                          {"entries", b.entries()},
+                         {"cluster_entries", b.cluster_source.size()},
+                         {"clusters", clusters},
                          {"entries_per_vertex", entries / receivers},
                          {"entries_per_patch", b.patches ? entries / double(b.patches) : 0.0},
                          {"bytes", b.bytes()},

@@ -7,6 +7,7 @@
 #include <glm/gtc/packing.hpp>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -14,14 +15,47 @@ namespace prt {
 
 std::size_t LightBounce::bytes() const {
   // The weights as a file stores them: 16-bit halves (docs/FORMAT.md "Light-bounce operator").
-  return (patch.size() + parent.size() + offsets.size() + source.size()) * sizeof(std::uint32_t) +
-         weight.size() * sizeof(std::uint16_t);
+  return (patch.size() + parent.size() + offsets.size() + source.size() + cluster_offsets.size() +
+          cluster_source.size()) *
+             sizeof(std::uint32_t) +
+         (weight.size() + cluster_weight.size()) * sizeof(std::uint16_t);
 }
+
+namespace {
+
+// What is wrong with rows of (patch, weight) entries, or "".
+std::string rows_problem(const char* what, std::span<const std::uint32_t> offsets, std::span<const std::uint32_t> source,
+                         std::span<const float> weight, std::uint32_t patches) {
+  if (weight.size() != source.size())
+    return fmt::format("light bounce: {} sources and {} weights ({}s)", source.size(), weight.size(), what);
+  if (offsets.front() != 0 || offsets.back() != source.size())
+    return fmt::format("light bounce: {} offsets run from {} to {} over {} entries", what, offsets.front(),
+                       offsets.back(), source.size());
+  // Every offset before any row is read: non-decreasing up to the entries,
+  // no row then reaches past them.
+  const std::size_t rows = offsets.size() - 1;
+  for (std::size_t i = 0; i < rows; ++i)
+    if (offsets[i + 1] < offsets[i]) return fmt::format("light bounce: {} {}'s offsets decrease", what, i);
+  for (std::size_t i = 0; i < rows; ++i) {
+    for (std::uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) {
+      if (source[e] >= patches) return fmt::format("light bounce: {} {} names patch {} of {}", what, i, source[e], patches);
+      if (e > offsets[i] && source[e] <= source[e - 1])
+        return fmt::format("light bounce: {} {}'s patches do not increase", what, i);
+      if (!(weight[e] >= 0.0f) || !std::isfinite(weight[e]))
+        return fmt::format("light bounce: {} {} has the weight {}", what, i, weight[e]);
+      if (glm::unpackHalf1x16(glm::packHalf1x16(weight[e])) != weight[e])
+        return fmt::format("light bounce: {} {} has the weight {}, not a half-precision value", what, i, weight[e]);
+    }
+  }
+  return "";
+}
+
+}  // namespace
 
 std::string light_bounce_problem(const LightBounce& b, std::size_t points) {
   if (b.bounces == 0) {
     if (b.patches != 0 || !b.patch.empty() || !b.parent.empty() || !b.offsets.empty() || !b.source.empty() ||
-        !b.weight.empty())
+        !b.weight.empty() || !b.cluster_offsets.empty() || !b.cluster_source.empty() || !b.cluster_weight.empty())
       return "a light-bounce operator of 0 bounces holds arrays";
     return "";
   }
@@ -30,8 +64,6 @@ std::string light_bounce_problem(const LightBounce& b, std::size_t points) {
   if (b.patch.size() != points) return fmt::format("light bounce: {} patch indices for {} points", b.patch.size(), points);
   if (b.offsets.size() != points + 1)
     return fmt::format("light bounce: {} row offsets for {} points (expected {})", b.offsets.size(), points, points + 1);
-  if (b.weight.size() != b.source.size())
-    return fmt::format("light bounce: {} sources and {} weights", b.source.size(), b.weight.size());
   if (b.patches == 0 && points > 0) return "light bounce: no source patches";
   // Before the array of that size (a damaged file's count could be 2^32 - 1):
   // each level's patches hold at least one point each.
@@ -54,26 +86,69 @@ std::string light_bounce_problem(const LightBounce& b, std::size_t points) {
     if (!used[p]) return fmt::format("light bounce: patch {} holds no point", p);
     if (b.parent[p] != LightBounce::kNoParent) used[b.parent[p]] = 1;  // parents follow their children
   }
-  if (b.offsets.front() != 0 || b.offsets.back() != b.source.size())
-    return fmt::format("light bounce: row offsets run from {} to {} over {} entries", b.offsets.front(), b.offsets.back(),
-                       b.source.size());
-  // Every offset before any row is read: non-decreasing up to entries(), no
-  // row then reaches past the entries.
-  for (std::size_t i = 0; i < points; ++i)
-    if (b.offsets[i + 1] < b.offsets[i]) return fmt::format("light bounce: row {}'s offsets decrease", i);
-  for (std::size_t i = 0; i < points; ++i) {
-    for (std::uint32_t e = b.offsets[i]; e < b.offsets[i + 1]; ++e) {
-      if (b.source[e] >= b.patches)
-        return fmt::format("light bounce: row {} names patch {} of {}", i, b.source[e], b.patches);
-      if (e > b.offsets[i] && b.source[e] <= b.source[e - 1])
-        return fmt::format("light bounce: row {}'s patches do not increase", i);
-      if (!(b.weight[e] >= 0.0f) || !std::isfinite(b.weight[e]))
-        return fmt::format("light bounce: row {} has the weight {}", i, b.weight[e]);
-      if (glm::unpackHalf1x16(glm::packHalf1x16(b.weight[e])) != b.weight[e])
-        return fmt::format("light bounce: row {} has the weight {}, not a half-precision value", i, b.weight[e]);
-    }
+  if (std::string p = rows_problem("row", b.offsets, b.source, b.weight, b.patches); !p.empty()) return p;
+  if (b.cluster_offsets.empty()) {
+    if (!b.cluster_source.empty() || !b.cluster_weight.empty())
+      return "light bounce: cluster entries without the clusters' row offsets";
+    return "";
   }
-  return "";
+  if (b.cluster_offsets.size() != std::size_t(b.patches) + 1)
+    return fmt::format("light bounce: {} cluster row offsets for {} patches (expected {})", b.cluster_offsets.size(),
+                       b.patches, std::size_t(b.patches) + 1);
+  return rows_problem("cluster row", b.cluster_offsets, b.cluster_source, b.cluster_weight, b.patches);
+}
+
+LightBounce link_clusters(const LightBounce& b, int offset) {
+  if (offset < 0) throw Error(fmt::format("light bounce: cluster offset {} (0 or more)", offset));
+  if (!b.cluster_offsets.empty()) throw Error("light bounce: the operator's links already reach clusters");
+  LightBounce out = b;
+  if (b.empty()) return out;
+  out.offsets.assign(1, 0);
+  out.source.clear();
+  out.weight.clear();
+  // Each patch's level above the finest (children come before parents) and points.
+  std::vector<int> level(b.patches, 0);
+  std::vector<std::uint32_t> members(b.patches, 0);
+  for (std::uint32_t p : b.patch) ++members[p];
+  for (std::uint32_t p = 0; p < b.patches; ++p)
+    if (b.parent[p] != LightBounce::kNoParent) {
+      level[b.parent[p]] = level[p] + 1;
+      members[b.parent[p]] += members[p];
+    }
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> rows(b.patches);
+  std::vector<std::uint32_t> chain;
+  for (std::size_t i = 0; i < b.points(); ++i) {
+    chain.clear();
+    for (std::uint32_t q = b.patch[i]; q != LightBounce::kNoParent; q = b.parent[q]) chain.push_back(q);
+    for (std::uint32_t e = b.offsets[i]; e < b.offsets[i + 1]; ++e) {
+      const int r = level[b.source[e]] - offset;
+      if (r <= 0) {
+        out.source.push_back(b.source[e]);
+        out.weight.push_back(b.weight[e]);
+      } else {
+        const std::uint32_t q = chain[std::min<std::size_t>(std::size_t(r), chain.size() - 1)];
+        rows[q].emplace_back(b.source[e], double(b.weight[e]) / members[q]);
+      }
+    }
+    out.offsets.push_back(std::uint32_t(out.source.size()));
+  }
+  out.cluster_offsets.assign(1, 0);
+  for (auto& row : rows) {
+    std::sort(row.begin(), row.end());
+    for (std::size_t k = 0; k < row.size();) {
+      double w = 0;
+      const std::uint32_t src = row[k].first;
+      for (; k < row.size() && row[k].first == src; ++k) w += row[k].second;
+      const float h = glm::unpackHalf1x16(glm::packHalf1x16(float(w)));
+      if (h > 0.0f) {
+        out.cluster_source.push_back(src);
+        out.cluster_weight.push_back(h);
+      }
+    }
+    out.cluster_offsets.push_back(std::uint32_t(out.cluster_source.size()));
+  }
+  if (out.cluster_source.empty()) out.cluster_offsets.clear();  // nothing moved: no cluster rows (a version-8 file)
+  return out;
 }
 
 std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::vec3> direct,
@@ -82,11 +157,18 @@ std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::v
   if (direct.size() != P || albedo.size() != P)
     throw Error(fmt::format("light bounce: {} points, {} direct radiances and {} albedos (expected as many of each)", P,
                             direct.size(), albedo.size()));
-  std::vector<glm::dvec3> emitted(direct.begin(), direct.end()), patch_mean(b.patches), next(P), total(P, glm::dvec3(0.0));
+  std::vector<glm::dvec3> emitted(direct.begin(), direct.end()), patch_mean(b.patches), pushed(b.patches), next(P),
+      total(P, glm::dvec3(0.0));
   std::vector<std::uint32_t> members(b.patches, 0);
   for (std::uint32_t p : b.patch) ++members[p];
   for (std::uint32_t p = 0; p < b.patches; ++p)
     if (b.parent[p] != LightBounce::kNoParent) members[b.parent[p]] += members[p];
+  const auto row = [&](std::span<const std::uint32_t> offsets, std::span<const std::uint32_t> source,
+                       std::span<const float> weight, std::size_t i) {
+    glm::dvec3 e(0.0);
+    for (std::uint32_t q = offsets[i]; q < offsets[i + 1]; ++q) e += double(weight[q]) * patch_mean[source[q]];
+    return e;
+  };
   for (int k = 0; k < b.bounces; ++k) {
     // Each patch's radiance: the mean of its points' (children come before
     // their parents: the sums go up the levels in one pass).
@@ -95,9 +177,17 @@ std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::v
     for (std::uint32_t p = 0; p < b.patches; ++p)
       if (b.parent[p] != LightBounce::kNoParent) patch_mean[b.parent[p]] += patch_mean[p];
     for (std::uint32_t p = 0; p < b.patches; ++p) patch_mean[p] /= double(members[p]);
+    // The clusters' rows, pushed down the levels (parents first) to the finest.
+    std::fill(pushed.begin(), pushed.end(), glm::dvec3(0.0));
+    if (!b.cluster_offsets.empty()) {
+      tbb::parallel_for(std::uint32_t(0), b.patches, [&](std::uint32_t q) {
+        pushed[q] = row(b.cluster_offsets, b.cluster_source, b.cluster_weight, q);
+      });
+      for (std::uint32_t q = b.patches; q-- > 0;)
+        if (b.parent[q] != LightBounce::kNoParent) pushed[q] += pushed[b.parent[q]];
+    }
     tbb::parallel_for(std::size_t(0), P, [&](std::size_t i) {
-      glm::dvec3 e(0.0);
-      for (std::uint32_t q = b.offsets[i]; q < b.offsets[i + 1]; ++q) e += double(b.weight[q]) * patch_mean[b.source[q]];
+      const glm::dvec3 e = row(b.offsets, b.source, b.weight, i) + pushed[b.patch[i]];
       next[i] = glm::dvec3(albedo[i]) / std::numbers::pi * e;
     });
     for (std::size_t i = 0; i < P; ++i) total[i] += next[i];

@@ -26,6 +26,7 @@
 #include <iterator>
 #include <limits>
 #include <optional>
+#include <span>
 
 namespace prt {
 
@@ -36,14 +37,26 @@ namespace detail::tio {
 
 using detail::HeaderValues;
 
-// What is wrong with light-bounce section `kind` (14 to 19) holding `count`
+// What the section rules know of the light-bounce operator so far (its
+// sections come by increasing kind): the count of 'light bounce sources'
+// (kind 17) and of 'light bounce cluster sources' (kind 21) once their heads
+// are read, and the header's patch count once 'light bounce header' (kind
+// 14) is read.
+struct LightBounceSeen {
+  std::optional<std::uint64_t> sources, cluster_sources;
+  std::optional<std::uint32_t> patches;
+};
+
+// What is wrong with light-bounce section `kind` (14 to 22) holding `count`
 // elements, or "": the operator is an interreflected transfer's and never a
 // compressed file's; its header is two words, its patches one per vertex,
-// its offsets one more, its weights as many as its sources (`sources`: that
-// section's count, once read). Its values, and its parents' count (one per
-// patch), are light_bounce_problem's, once the whole operator is read.
+// its offsets one more, its weights as many as its sources; its cluster
+// offsets one more than the header's patches, its cluster weights as many
+// as its cluster sources (what `seen` knows). Its values, and its parents'
+// count (one per patch), are light_bounce_problem's, once the whole operator
+// is read.
 std::string light_bounce_section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v,
-                                         bool compressed, std::optional<std::uint64_t> sources) {
+                                         bool compressed, const LightBounceSeen& seen) {
   const char* name = kind_info(kind)->name;
   if (compressed)
     return fmt::format("has a '{}' section, but the header's flags say the file is compressed (compression keeps no "
@@ -60,34 +73,60 @@ std::string light_bounce_section_problem(std::uint32_t kind, std::uint64_t count
     return fmt::format("section '{}' has {} values; expected one per vertex ({})", name, count, v.vertices);
   if (kind == kLightBounceOffsets && count != v.vertices + 1)
     return fmt::format("section '{}' has {} values; expected vertices + 1 = {}", name, count, v.vertices + 1);
-  if (kind == kLightBounceWeights && sources && count != *sources)
+  if (kind == kLightBounceWeights && seen.sources && count != *seen.sources)
     return fmt::format("section '{}' has {} values; 'light bounce sources' has {} (one weight per entry)", name,
-                       count, *sources);
+                       count, *seen.sources);
+  // (Without the header the sections' rule below names what is missing.)
+  if (kind == kLightBounceClusterOffsets && seen.patches && count != std::uint64_t(*seen.patches) + 1)
+    return fmt::format("section '{}' has {} values; expected patches + 1 = {} (one row per source patch)", name,
+                       count, std::uint64_t(*seen.patches) + 1);
+  if (kind == kLightBounceClusterWeights && seen.cluster_sources && count != *seen.cluster_sources)
+    return fmt::format("section '{}' has {} values; 'light bounce cluster sources' has {} (one weight per cluster "
+                       "entry)",
+                       name, count, *seen.cluster_sources);
   return {};
 }
 
-// The operator's six sections come together: what is wrong when only some
-// of them were read (bit k of `seen`: kind k), or "".
-std::string light_bounce_sections_problem(std::uint32_t seen) {
+// The names of `kinds` that `seen` has (bit k: kind k) and of those it
+// lacks, each as "'a', 'b'".
+std::pair<std::string, std::string> kinds_seen(std::span<const std::uint32_t> kinds, std::uint32_t seen) {
   std::string have, missing;
-  for (std::uint32_t kind : kLightBounceKinds) {
+  for (std::uint32_t kind : kinds) {
     std::string& list = (seen >> kind) & 1u ? have : missing;
     list += fmt::format("{}'{}'", list.empty() ? "" : ", ", kind_info(kind)->name);
   }
-  if (have.empty() || missing.empty()) return {};
-  return fmt::format("the light-bounce operator's sections (kinds 14 to 19) come together, but the file has {} "
-                     "without {}",
-                     have, missing);
+  return {have, missing};
+}
+
+// The operator's six sections come together, its cluster rows' three too,
+// and those only with the six: what is wrong when only some of them were
+// read (bit k of `seen`: kind k), or "".
+std::string light_bounce_sections_problem(std::uint32_t seen) {
+  const auto [have, missing] = kinds_seen(kLightBounceKinds, seen);
+  if (!have.empty() && !missing.empty())
+    return fmt::format("the light-bounce operator's sections (kinds 14 to 19) come together, but the file has {} "
+                       "without {}",
+                       have, missing);
+  const auto [have_clusters, missing_clusters] = kinds_seen(kLightBounceClusterKinds, seen);
+  if (!have_clusters.empty() && !missing_clusters.empty())
+    return fmt::format("the light-bounce operator's cluster sections (kinds 20 to 22) come together, but the file "
+                       "has {} without {}",
+                       have_clusters, missing_clusters);
+  if (!have_clusters.empty() && have.empty())
+    return fmt::format("the file has {} (kinds 20 to 22, an operator's cluster rows) but no light-bounce operator "
+                       "(kinds 14 to 19)",
+                       have_clusters);
+  return {};
 }
 
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13,
-// the light-bounce operator's for 14 to 19 (`sources`: the count of kind 17,
-// once read).
+// the light-bounce operator's for 14 to 22 (`bounce`: what its sections
+// read so far say).
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v, bool compressed,
-                            bool lightmap = false, std::optional<std::uint64_t> sources = std::nullopt) {
-  if (is_light_bounce_kind(kind)) return light_bounce_section_problem(kind, count, v, compressed, sources);
+                            bool lightmap = false, const LightBounceSeen& bounce = {}) {
+  if (is_light_bounce_kind(kind)) return light_bounce_section_problem(kind, count, v, compressed, bounce);
   if (kind == kInterpolatedMask) {
     // A lightmap's rows are its covered texels: the mask marks interpolated
     // texels there (prt precompute --lightmap --adaptive), one bit per row.
@@ -183,6 +222,12 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
     // Built by the writer (light_bounce_weights: 16 bits each).
     case kLightBounceWeights: return {nullptr, t.light_bounce.weight.size()};
     case kLightBounceParents: return {t.light_bounce.parent.data(), t.light_bounce.parent.size()};
+    case kLightBounceClusterOffsets:
+      return {t.light_bounce.cluster_offsets.data(), t.light_bounce.cluster_offsets.size()};
+    case kLightBounceClusterSources:
+      return {t.light_bounce.cluster_source.data(), t.light_bounce.cluster_source.size()};
+    // Built by the writer (light_bounce_weights(t, true): 16 bits each).
+    case kLightBounceClusterWeights: return {nullptr, t.light_bounce.cluster_weight.size()};
   }
   return {nullptr, 0};
 }
@@ -191,16 +236,21 @@ std::array<std::uint32_t, kLightBounceHeaderWords> light_bounce_header(const Tra
   return {std::uint32_t(t.light_bounce.bounces), t.light_bounce.patches};
 }
 
-std::vector<std::uint16_t> light_bounce_weights(const Transfer& t) {
-  std::vector<std::uint16_t> halves(t.light_bounce.weight.size());
-  for (std::size_t e = 0; e < halves.size(); ++e) halves[e] = glm::packHalf1x16(t.light_bounce.weight[e]);
+std::vector<std::uint16_t> light_bounce_weights(const Transfer& t, bool clusters) {
+  const std::vector<float>& w = clusters ? t.light_bounce.cluster_weight : t.light_bounce.weight;
+  std::vector<std::uint16_t> halves(w.size());
+  for (std::size_t e = 0; e < halves.size(); ++e) halves[e] = glm::packHalf1x16(w[e]);
   return halves;
 }
 
 // Whether `t` stores section `kind`: the coefficients always, the light-bounce
 // operator's six with an operator (its sources and weights even when no
-// row has an entry), the others when non-empty.
+// row has an entry), its cluster rows' three when it has cluster rows (even
+// when none has an entry: the offsets say there are rows), the others when
+// non-empty.
 bool has_section(const Transfer& t, std::uint32_t kind) {
+  if (is_light_bounce_cluster_kind(kind))
+    return light_bounce_format_version(t.light_bounce) == kLightBounceClustersFormatVersion;
   if (is_light_bounce_kind(kind)) return !t.light_bounce.empty();
   return kind == kCoeffs || (kind == kGlossy && t.glossy) || section_array(t, kind).second > 0;
 }
@@ -394,7 +444,7 @@ void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::u
 }  // namespace detail::tio
 
 std::uint32_t transfer_format_version(const Transfer& t) {
-  if (!t.light_bounce.empty()) return kLightBounceFormatVersion;
+  if (const std::uint32_t v = light_bounce_format_version(t.light_bounce); v != 0) return v;
   return t.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : transfer_format_version(t.glossy);
 }
 
@@ -402,21 +452,24 @@ void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  // The oldest version that holds `t` (8 only with a light-bounce operator, 7
-  // only with interpolated vertices, 3 only with glossy matrices): an earlier
-  // prt reads every file it could.
+  // The oldest version that holds `t` (9 only with a light-bounce operator's
+  // cluster rows, 8 only with an operator, 7 only with interpolated
+  // vertices, 3 only with glossy matrices): an earlier prt reads every file
+  // it could.
   fill_header(header, t, transfer_format_version(t), 0u, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t), interpolated = interpolated_mask(t);
   const auto bounce = light_bounce_header(t);
-  const std::vector<std::uint16_t> weights = light_bounce_weights(t);
+  const std::vector<std::uint16_t> weights = light_bounce_weights(t),
+                                   cluster_weights = light_bounce_weights(t, true);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
-                   s.kind == kAnalyticMask         ? static_cast<const void*>(mask.data())
-                   : s.kind == kInterpolatedMask   ? interpolated.data()
-                   : s.kind == kLightBounceHeader  ? bounce.data()
-                   : s.kind == kLightBounceWeights ? static_cast<const void*>(weights.data())
-                                                   : section_array(t, s.kind).first});
+                   s.kind == kAnalyticMask                ? static_cast<const void*>(mask.data())
+                   : s.kind == kInterpolatedMask          ? interpolated.data()
+                   : s.kind == kLightBounceHeader         ? bounce.data()
+                   : s.kind == kLightBounceWeights        ? static_cast<const void*>(weights.data())
+                   : s.kind == kLightBounceClusterWeights ? static_cast<const void*>(cluster_weights.data())
+                                                          : section_array(t, s.kind).first});
   write_file(path, header, raw);
 }
 
@@ -671,7 +724,7 @@ struct ShFile {
   Transfer t;
   std::vector<std::uint32_t> mask, interpolated;
   std::uint32_t seen = 0;  // bit k: a section of kind k was read
-  std::optional<std::uint64_t> light_bounce_sources;  // the count of kind 17, once its head is read
+  LightBounceSeen light_bounce;  // what the operator's sections read so far say
   bool has(std::uint32_t kind) const { return (seen >> kind) & 1u; }
 };
 
@@ -702,7 +755,8 @@ void Reader::read_sh_header(ShFile& f) {
                   : version_ == 5 ? kKindsV5
                   : version_ == 6 ? kKindsV6
                   : version_ == 7 ? kKindsV7
-                                  : kKindsV8;
+                  : version_ == 8 ? kKindsV8
+                                  : kKindsV9;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -784,10 +838,18 @@ void Reader::read_sh_sections(ShFile& f) {
     previous = s.kind;
     f.seen |= 1u << s.kind;
     expect_type(k->name, s.type, k->type);
-    if (auto p = section_problem(s.kind, s.count, v, f.compressed, f.lightmap, f.light_bounce_sources); !p.empty())
+    if (auto p = section_problem(s.kind, s.count, v, f.compressed, f.lightmap, f.light_bounce); !p.empty())
       throw fail("bad section table: " + p);
-    if (s.kind == kLightBounceSources) f.light_bounce_sources = s.count;
+    if (s.kind == kLightBounceSources) f.light_bounce.sources = s.count;
+    if (s.kind == kLightBounceClusterSources) f.light_bounce.cluster_sources = s.count;
     return k->name;
+  };
+  // A light-bounce weights section (kinds 18, 22): 16-bit halves, widened.
+  const auto read_halves = [&](const SectionHead& s, std::vector<float>& out) {
+    std::vector<std::uint16_t> halves;
+    read_section(s.data, halves, s.count);
+    out.resize(halves.size());
+    for (std::size_t e = 0; e < halves.size(); ++e) out[e] = glm::unpackHalf1x16(halves[e]);
   };
   const auto load_data = [&](const SectionHead& s) {
     switch (s.kind) {
@@ -809,19 +871,17 @@ void Reader::read_sh_sections(ShFile& f) {
                                  kMaxLightBounces));
         t.light_bounce.bounces = int(words[0]);
         t.light_bounce.patches = words[1];
+        f.light_bounce.patches = words[1];  // the cluster offsets' count (kind 20, later)
         break;
       }
       case kLightBouncePatches: read_section(s.data, t.light_bounce.patch, s.count); break;
       case kLightBounceOffsets: read_section(s.data, t.light_bounce.offsets, s.count); break;
       case kLightBounceSources: read_section(s.data, t.light_bounce.source, s.count); break;
-      case kLightBounceWeights: {
-        std::vector<std::uint16_t> halves;
-        read_section(s.data, halves, s.count);
-        t.light_bounce.weight.resize(halves.size());
-        for (std::size_t e = 0; e < halves.size(); ++e) t.light_bounce.weight[e] = glm::unpackHalf1x16(halves[e]);
-        break;
-      }
+      case kLightBounceWeights: read_halves(s, t.light_bounce.weight); break;
       case kLightBounceParents: read_section(s.data, t.light_bounce.parent, s.count); break;
+      case kLightBounceClusterOffsets: read_section(s.data, t.light_bounce.cluster_offsets, s.count); break;
+      case kLightBounceClusterSources: read_section(s.data, t.light_bounce.cluster_source, s.count); break;
+      case kLightBounceClusterWeights: read_halves(s, t.light_bounce.cluster_weight); break;
       case kLightmapLayout: {
         std::vector<std::uint64_t> words;
         read_section(s.data, words, s.count);
@@ -994,17 +1054,27 @@ std::string describe_line(const char* label, const std::string& value) {
 
 // The light-bounce operator's line (docs/LIGHTS.md "Bounce"), or "" without
 // one: its size per receiver (a row per point: `points`, plural, names them)
-// and per source patch, and its bytes per receiver against the SH row's.
+// and per source patch, with its cluster rows (when it has them) the entries
+// in those and the patches whose row has any, and its bytes per receiver
+// against the SH row's.
 std::string describe_light_bounce(const Transfer& t, const char* points) {
   const LightBounce& b = t.light_bounce;
   if (b.empty()) return {};
   const char* point = std::strcmp(points, "texels") == 0 ? "texel" : "vertex";
   const double n = double(std::max<std::size_t>(b.points(), 1)), entries = double(b.entries());
+  std::string clusters;
+  if (!b.cluster_offsets.empty()) {
+    std::size_t with_rows = 0;
+    for (std::size_t q = 0; q + 1 < b.cluster_offsets.size(); ++q)
+      with_rows += b.cluster_offsets[q + 1] > b.cluster_offsets[q];
+    clusters = fmt::format(", of which {} in cluster rows ({} cluster{} with rows)", b.cluster_source.size(),
+                           with_rows, with_rows == 1 ? "" : "s");
+  }
   return describe_line(
       "light bounce",
-      fmt::format("{} bounce{} (applied at run time), {} source patches, {} entries: {:.2f} per receiver ({}), {:.2f} "
-                  "per source patch; {} bytes, {:.1f} per receiver against {} of an SH row ({} x {} x 4 bytes)",
-                  b.bounces, b.bounces == 1 ? "" : "s", b.patches, b.entries(), entries / n, point,
+      fmt::format("{} bounce{} (applied at run time), {} source patches, {} entries{}: {:.2f} per receiver ({}), "
+                  "{:.2f} per source patch; {} bytes, {:.1f} per receiver against {} of an SH row ({} x {} x 4 bytes)",
+                  b.bounces, b.bounces == 1 ? "" : "s", b.patches, b.entries(), clusters, entries / n, point,
                   b.patches ? entries / double(b.patches) : 0.0, b.bytes(), double(b.bytes()) / n,
                   4 * t.stride(), t.channels, t.bands * t.bands));
 }

@@ -4,7 +4,7 @@
 //   scene/transfer_io.cpp           framing (header, section table, checksum,
 //                                   atomic write, the reader's common checks),
 //                                   the SH sections (kinds 1-7, 12, 13), the
-//                                   light-bounce operator (14-19) and the
+//                                   light-bounce operator (14-22) and the
 //                                   compressed signals (8, 9)
 //   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
 //   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
@@ -127,6 +127,11 @@ enum Kind : std::uint32_t {
   kLightBounceSources = 17,                         // u32 per entry: a source patch
   kLightBounceWeights = 18,                         // f16 per entry: its weight
   kLightBounceParents = 19,                         // u32 per patch: the coarser patch holding it, or 0xffffffff
+  // Version 9: the operator's cluster rows (LightBounce::cluster_*), all
+  // three or none, and only with the six above.
+  kLightBounceClusterOffsets = 20,                  // u32, patches + 1: each patch's row's first entry
+  kLightBounceClusterSources = 21,                  // u32 per cluster entry: a source patch
+  kLightBounceClusterWeights = 22,                  // f16 per cluster entry: its weight
 };
 
 struct KindInfo {
@@ -136,7 +141,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 19> kKinds = {{
+constexpr std::array<KindInfo, 22> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -158,6 +163,9 @@ constexpr std::array<KindInfo, 19> kKinds = {{
     {kLightBounceSources, "light bounce sources", kTypeU32, false},
     {kLightBounceWeights, "light bounce weights", kTypeF16, false},
     {kLightBounceParents, "light bounce parents", kTypeU32, false},
+    {kLightBounceClusterOffsets, "light bounce cluster offsets", kTypeU32, false},
+    {kLightBounceClusterSources, "light bounce cluster sources", kTypeU32, false},
+    {kLightBounceClusterWeights, "light bounce cluster weights", kTypeF16, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
@@ -168,19 +176,37 @@ constexpr std::size_t kKindsV5 = 11;
 constexpr std::size_t kKindsV6 = 12;
 constexpr std::size_t kKindsV7 = 13;
 constexpr std::size_t kKindsV8 = 19;
-// The first version whose files may hold section `kind` (1 to 19).
+constexpr std::size_t kKindsV9 = 22;
+// The first version whose files may hold section `kind` (1 to 22).
 constexpr std::uint32_t kind_version(std::uint32_t kind) {
   return kind <= kKindsV1 ? 1 : kind <= kKindsV2 ? 2 : kind <= kKindsV3 ? 3 : kind <= kKindsV4 ? 4
-         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : kind <= kKindsV7 ? 7 : 8;
+         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : kind <= kKindsV7 ? 7 : kind <= kKindsV8 ? 8 : 9;
 }
-static_assert(kKindsV8 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
-              kind_version(kLightBounceParents) == kLightBounceFormatVersion);
-// The operator's sections, in file order.
+// (The newest version's kinds are the last: a version after 9 adds its
+// kinds, a kKindsV and a step to kind_version and to the reader's table.)
+static_assert(kKindsV9 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
+              kind_version(kLightBounceParents) == kLightBounceFormatVersion &&
+              kind_version(kLightBounceClusterOffsets) == kLightBounceClustersFormatVersion &&
+              kind_version(kLightBounceClusterWeights) == kLightBounceClustersFormatVersion &&
+              kLightBounceClustersFormatVersion == kTransferFormatVersion);
+// The operator's sections, in file order: the six every operator has, then
+// the three of its cluster rows (when it has them).
 constexpr std::array<std::uint32_t, 6> kLightBounceKinds = {kLightBounceHeader,  kLightBouncePatches,
                                                            kLightBounceOffsets, kLightBounceSources,
                                                            kLightBounceWeights, kLightBounceParents};
+constexpr std::array<std::uint32_t, 3> kLightBounceClusterKinds = {
+    kLightBounceClusterOffsets, kLightBounceClusterSources, kLightBounceClusterWeights};
+// Any of the operator's sections, its cluster rows' included (14 to 22).
 constexpr bool is_light_bounce_kind(std::uint32_t kind) {
-  return kind >= kLightBounceHeader && kind <= kLightBounceParents;
+  return kind >= kLightBounceHeader && kind <= kLightBounceClusterWeights;
+}
+constexpr bool is_light_bounce_cluster_kind(std::uint32_t kind) {
+  return kind >= kLightBounceClusterOffsets && kind <= kLightBounceClusterWeights;
+}
+// The version the light-bounce operator `b` needs: 9 with cluster rows, 8
+// without, 0 for no operator.
+inline std::uint32_t light_bounce_format_version(const LightBounce& b) {
+  return b.empty() ? 0u : b.cluster_offsets.empty() ? kLightBounceFormatVersion : kLightBounceClustersFormatVersion;
 }
 constexpr std::uint64_t kLightBounceHeaderWords = 2;  // bounces, patches
 // The longest compression choice record a reader takes (its JSON is under a
@@ -313,9 +339,10 @@ std::vector<std::uint32_t> interpolated_mask(const Transfer& t);
 std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind);
 // The 'light bounce header' section of `t`: bounces, patches.
 std::array<std::uint32_t, kLightBounceHeaderWords> light_bounce_header(const Transfer& t);
-// The 'light bounce weights' section of `t`: each weight's binary16 bits
+// The 'light bounce weights' section of `t` (kind 18), or with `clusters`
+// its 'light bounce cluster weights' (kind 22): each weight's binary16 bits
 // (exact: light_bounce_problem requires half-precision values).
-std::vector<std::uint16_t> light_bounce_weights(const Transfer& t);
+std::vector<std::uint16_t> light_bounce_weights(const Transfer& t, bool clusters = false);
 // "truncated: expected ... bytes, file has ..."
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size);
 std::string unknown_basis(std::uint32_t basis);

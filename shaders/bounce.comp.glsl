@@ -1,50 +1,75 @@
 #version 450 core
 // The lights' bounce on the GPU (runtime/bounce_pass.cpp; prt/light_bounce.h,
-// docs/LIGHTS.md "Bounce"): prt::light_bounce's steps, one invocation per
-// patch or point:
-//   u_step 0: each patch's mean radiance, over the points it holds (a CSR of
-//             the points of every patch, every level);
-//   u_step 1: next_i = (rho_i / pi) sum_e w_e mean[source_e], total_i += next_i;
-//   u_step 2: radiance_i += direct_i + total_i (u_radiance_stride floats a point).
+// docs/LIGHTS.md "Bounce"): prt::light_bounce's steps, one invocation each,
+// i from u_first to u_count - 1 (a patch p = order[i] where a level's
+// patches are taken):
+//   u_step 0: a finest patch's mean radiance over its points (of one bounce,
+//             or the direct light);
+//   u_step 3: a coarser patch's mean over its children, by their points;
+//   u_step 4: a cluster's gathered light, sum_e w_e mean[source_e];
+//   u_step 5: pushed down a level: pushed[p] += pushed[parent[p]];
+//   u_step 1: the next bounce at point i,
+//             L_i = (rho_i / pi) (sum_e w_e mean[source_e] + pushed[patch_i]),
+//             patch_i its patch of the lowest level the push reaches;
+//   u_step 2: radiance_i += the direct light + every bounce, with
+//             u_radiance_stride floats a point.
+// The points' radiances are one array: u_points vec4s of direct light, then
+// as many of each bounce.
 // No block is declared readonly: each binding holds different arrays in
 // different steps, and with readonly blocks Mesa's llvmpipe read a step's
 // offsets from the buffer the same step writes (measured: the patch counts
 // came out of the means just written).
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) buffer A0 { uint offsets0[]; };  // step 0: patch -> its points; step 1: rows
-layout(std430, binding = 1) buffer A1 { uint index1[]; };    // step 0: the points; step 1: the sources
-layout(std430, binding = 2) buffer A2 { vec4 emitted[]; };            // steps 0, 1: the radiance leaving each point (1: written, next)
-layout(std430, binding = 3) buffer A3 { vec4 means[]; };              // steps 0, 1: each patch's mean
-layout(std430, binding = 4) buffer A4 { float weights[]; };  // step 1
-layout(std430, binding = 5) buffer A5 { float albedo[]; };   // step 1: rgb per point (u_albedo.w = 1)
-layout(std430, binding = 6) buffer A6 { vec4 total[]; };              // steps 1, 2
-layout(std430, binding = 7) buffer A7 { float rad[]; };               // step 2: the radiance drawn; step 1: the previous emitted
-layout(location = 0) uniform uint u_count;  // patches (step 0) or points
+layout(std430, binding = 0) buffer A0 { uint offsets0[]; };  // steps 0, 3: inputs; 1, 4: rows
+layout(std430, binding = 1) buffer A1 { uint index1[]; };    // steps 0, 3: inputs; 1, 4: sources; 5: parents
+layout(std430, binding = 2) buffer A2 { vec4 emitted[]; };   // the direct light, then each bounce, u_points a piece
+layout(std430, binding = 3) buffer A3 { vec4 means[]; };     // each patch's mean: written (0, 3), read (1, 4)
+layout(std430, binding = 4) buffer A4 { float weights[]; };  // steps 1, 4: the rows' weights; 0, 3: each patch's points
+layout(std430, binding = 5) buffer A5 { vec4 pushed[]; };    // each patch's gathered light: written (4, 5), read (1)
+layout(std430, binding = 6) buffer A6 { uint order[]; };     // steps 0, 3, 4, 5: patches by level; 1: each point's patch
+layout(std430, binding = 7) buffer A7 { float rad[]; };      // step 2: the radiance drawn; 1: rgb albedo per point
+layout(location = 0) uniform uint u_count;
 layout(location = 1) uniform uint u_first;
 layout(location = 2) uniform uint u_step;
 layout(location = 3) uniform vec4 u_albedo;          // rgb: one albedo for all; w = 1: per point
 layout(location = 4) uniform uint u_radiance_stride;
-layout(location = 5) uniform uint u_first_bounce;    // step 1: 1 on the first bounce (total starts at 0)
+layout(location = 5) uniform uint u_points;
+layout(location = 6) uniform uint u_piece;  // steps 0: the piece read; 1: written; 2: the last added
 
 const float PI = 3.14159265358979;
+const uint NO_PARENT = 0xffffffffu;
+
+vec3 row(uint r) {
+  vec3 g = vec3(0.0);
+  for (uint e = offsets0[r]; e < offsets0[r + 1u]; ++e) g += weights[e] * means[index1[e]].rgb;
+  return g;
+}
 
 void main() {
   const uint i = u_first + gl_GlobalInvocationID.x;
   if (i >= u_count) return;
-  if (u_step == 0u) {
+  if (u_step == 0u || u_step == 3u) {
+    const uint p = order[i];
     vec3 s = vec3(0.0);
-    for (uint e = offsets0[i]; e < offsets0[i + 1u]; ++e) s += emitted[index1[e]].rgb;
-    means[i] = vec4(s / float(offsets0[i + 1u] - offsets0[i]), 0.0);
+    for (uint e = offsets0[p]; e < offsets0[p + 1u]; ++e) {
+      const uint c = index1[e];
+      s += u_step == 0u ? emitted[u_piece * u_points + c].rgb : weights[c] * means[c].rgb;
+    }
+    means[p] = vec4(s / (u_step == 0u ? float(offsets0[p + 1u] - offsets0[p]) : weights[p]), 0.0);
+  } else if (u_step == 4u) {
+    const uint p = order[i];
+    pushed[p] = vec4(row(p), 0.0);
+  } else if (u_step == 5u) {
+    const uint p = order[i];
+    if (index1[p] != NO_PARENT) pushed[p] += pushed[index1[p]];
   } else if (u_step == 1u) {
-    vec3 g = vec3(0.0);
-    for (uint e = offsets0[i]; e < offsets0[i + 1u]; ++e) g += weights[e] * means[index1[e]].rgb;
-    const vec3 rho = u_albedo.w > 0.5 ? vec3(albedo[3u * i], albedo[3u * i + 1u], albedo[3u * i + 2u]) : u_albedo.rgb;
-    const vec3 next = rho / PI * g;
-    total[i] = vec4((u_first_bounce == 1u ? vec3(0.0) : total[i].rgb) + next, 0.0);
-    emitted[i] = vec4(next, 0.0);
+    const vec3 g = row(i) + pushed[order[i]].rgb;
+    const vec3 rho = u_albedo.w > 0.5 ? vec3(rad[3u * i], rad[3u * i + 1u], rad[3u * i + 2u]) : u_albedo.rgb;
+    emitted[u_piece * u_points + i] = vec4(rho / PI * g, 0.0);
   } else {
-    const vec3 add = emitted[i].rgb + total[i].rgb;
+    vec3 add = vec3(0.0);
+    for (uint k = 0u; k <= u_piece; ++k) add += emitted[k * u_points + i].rgb;
     const uint r = u_radiance_stride * i;
     rad[r] += add.r;
     rad[r + 1u] += add.g;

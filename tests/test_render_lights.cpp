@@ -4,6 +4,7 @@
 #include "test_meshes.h"
 #include "test_renderer.h"
 #include "test_scenes.h"
+#include "test_util.h"
 
 #include <prt/deform.h>
 #include <prt/direct_light.h>
@@ -172,6 +173,25 @@ TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) 
   EXPECT_THROW(r->render(cam, 32, 32), Error);
 }
 
+// A lightmap transfer with the lights' bounce operator (its defaults), and
+// a renderer drawing it under `sky` with the lights at its texels.
+TransferOptions bounce_options() {
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 64;
+  o.mode = TransferMode::Interreflected;
+  o.bounces = 2;
+  o.light_bounce = true;
+  return o;
+}
+void show_bounce_lightmap(Renderer& r, const Scene& s, const LightmapTransfer& t, const LightmapTexels& texels,
+                          const std::vector<glm::dvec3>& sky) {
+  r.set_scene(s, t);
+  r.set_lighting(sky);
+  r.set_light_points(texels.positions, texels.normals, texels.albedo);
+  r.set_shadow_map_size(kTestShadowMapSize);
+}
+
 TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
   // A lightmap and a vertex transfer precomputed with --light-bounce: the
   // GPU adds the lights' bounce to their direct light as prt relight does.
@@ -182,18 +202,10 @@ TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
   REQUIRE_RENDERER(r);
   const Scene s = test::floor_and_box(false);
   const LightmapTexels texels = traced_texels(s, 48);
-  TransferOptions o;
-  o.bands = 3;
-  o.samples = 64;
-  o.mode = TransferMode::Interreflected;
-  o.bounces = 2;
-  o.light_bounce = true;
+  const TransferOptions o = bounce_options();
   const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
   ASSERT_FALSE(t.transfer.light_bounce.empty());
-  r->set_scene(s, t);
-  r->set_lighting(std::vector<glm::dvec3>(9, glm::dvec3(0.0)));  // the lights alone
-  r->set_light_points(texels.positions, texels.normals, texels.albedo);
-  r->set_shadow_map_size(kTestShadowMapSize);
+  show_bounce_lightmap(*r, s, t, texels, std::vector<glm::dvec3>(9, glm::dvec3(0.0)));  // the lights alone
   const std::vector<Light> lights{three_lights()[0]};
   r->set_lights(lights);
   const Camera cam = above();
@@ -236,6 +248,59 @@ TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
   r->set_shading(Shading::Direct);
   const std::vector<glm::vec3> vdirect = r->vertex_radiance({0, 3, 3});
   expect_bounce(vlit, vdirect, tv.light_bounce, std::vector<glm::vec3>(mesh.vertex_count(), v.albedo), "vertices");
+}
+
+TEST(RenderLights, WithABudgetTheBounceCatchesUpWithAMovedLightOverFrames) {
+  // set_light_bounce_budget: a frame brings the bounces up to date by at
+  // most that much work, bounce 1 swept whole before bounce 2. After a light
+  // moves, the frames' bounce converges to the whole bounce of the light
+  // where it now is (the same sums, sliced: to float rounding), the sky
+  // kept (set_lightmap_relight(false): only the lights' part is redone), and
+  // light_bounce_done() says when.
+  REQUIRE_RENDERER(r);
+  const Scene s = test::floor_and_box(false);
+  const LightmapTexels texels = traced_texels(s, 48);
+  const LightmapTransfer t = compute_lightmap_transfer(s, texels, bounce_options());
+  ASSERT_FALSE(t.transfer.light_bounce.cluster_offsets.empty());  // the default operator has cluster rows
+  show_bounce_lightmap(*r, s, t, texels, test::random_coefficients(3, 5));  // a sky as well: kept while the light moves
+  r->set_lightmap_relight(false);
+  std::vector<Light> lights{three_lights()[0]};
+  const Camera cam = above();
+  r->set_lights(lights);
+  r->render(cam, 16, 16);
+  EXPECT_TRUE(r->light_bounce_done());
+  lights[0].position += glm::dvec3(0.3, -0.1, 0.2);
+  r->set_lights(lights);
+  EXPECT_FALSE(r->light_bounce_done());
+  r->render(cam, 16, 16);
+  const std::vector<glm::vec3> whole = r->lightmap_radiance();  // budget 0: the whole bounce in the frame
+  EXPECT_TRUE(r->light_bounce_done());
+
+  // Back, then forth again within a budget of a few rows a frame.
+  lights[0].position -= glm::dvec3(0.3, -0.1, 0.2);
+  r->set_lights(lights);
+  r->render(cam, 16, 16);
+  const std::vector<glm::vec3> before = r->lightmap_radiance();
+  r->set_light_bounce_budget(400);
+  lights[0].position += glm::dvec3(0.3, -0.1, 0.2);
+  r->set_lights(lights);
+  int frames = 0;
+  double first = 0;
+  do {
+    r->render(cam, 16, 16);
+    if (++frames == 1) first = agreement(r->lightmap_radiance(), whole).rel_rms;
+  } while (!r->light_bounce_done() && frames < 10000);
+  ASSERT_TRUE(r->light_bounce_done());
+  EXPECT_GT(frames, 4);  // the budget split the work
+  const std::vector<glm::vec3> caught_up = r->lightmap_radiance();
+  // GPU float sums, the same in both, sliced differently: 1e-5 of a texel.
+  constexpr double kSlicedTol = 1e-5;
+  const Agreement a = agreement(caught_up, whole);
+  EXPECT_LT(a.rel_rms, kSlicedTol);
+  EXPECT_GT(first, 100 * kSlicedTol);                           // the first frame was behind...
+  EXPECT_GT(agreement(before, whole).rel_rms, first * 0.5);       // ...but with the direct light already moved
+  std::printf("budget 400: %d frames to catch up; the first %.4f off, then %.2g (the old light's %.4f)\n", frames, first,
+              a.rel_rms, agreement(before, whole).rel_rms);
 }
 
 TEST(RenderLights, TheProbeLitObjectIsLitAndShadowedByTheScene) {

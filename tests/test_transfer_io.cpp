@@ -145,6 +145,9 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_EQ(a.light_bounce.offsets, b.light_bounce.offsets);
   EXPECT_EQ(a.light_bounce.source, b.light_bounce.source);
   EXPECT_TRUE(same_bits(a.light_bounce.weight, b.light_bounce.weight));
+  EXPECT_EQ(a.light_bounce.cluster_offsets, b.light_bounce.cluster_offsets);
+  EXPECT_EQ(a.light_bounce.cluster_source, b.light_bounce.cluster_source);
+  EXPECT_TRUE(same_bits(a.light_bounce.cluster_weight, b.light_bounce.cluster_weight));
 }
 
 // `t` with random glossy matrices for its stored rows (the layout of its mode).
@@ -488,7 +491,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 8"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 9"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -1419,7 +1422,7 @@ TEST(LightmapRead, BadInterpolatedTexelMask) {
   EXPECT_FALSE(fs::exists(dir.file("w.prtt")));
 }
 
-// ---- the light-bounce operator (version 8, kinds 14-18; prt/light_bounce.h) ----------------
+// ---- the light-bounce operator (version 8, kinds 14-19; 9 with cluster rows, 20-22; prt/light_bounce.h) ----
 
 // A valid operator over `points` points (a transfer's vertices, a lightmap's
 // covered texels): point i in patch i % 3 of the finest level, patches 0 and
@@ -1452,6 +1455,31 @@ prt::LightBounce sample_light_bounce(std::size_t points, int bounces = 2) {
 // `t` (interreflected) with sample_light_bounce over its vertices.
 Transfer with_light_bounce(Transfer t, int bounces = 2) {
   t.light_bounce = sample_light_bounce(t.vertices, bounces);
+  return t;
+}
+
+// `b` (sample_light_bounce's 4 patches) with cluster rows, as
+// prt::link_clusters makes them: patch 0's row reaches patches 2 and 3,
+// patch 1's none, patch 2's patch 0, the coarse patch 3's patch 2 (4 cluster
+// entries, 3 clusters with rows). Random half-precision weights, none round.
+prt::LightBounce with_cluster_rows(prt::LightBounce b) {
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<float> weight(0.0f, 2.0f);
+  const std::vector<std::uint32_t> reach[4] = {{2, 3}, {}, {0}, {2}};
+  b.cluster_offsets.assign(1, 0);
+  for (const auto& row : reach) {
+    for (std::uint32_t p : row) {
+      b.cluster_source.push_back(p);
+      b.cluster_weight.push_back(glm::unpackHalf1x16(glm::packHalf1x16(weight(rng))));
+    }
+    b.cluster_offsets.push_back(std::uint32_t(b.cluster_source.size()));
+  }
+  return b;
+}
+
+// `t` (interreflected) with sample_light_bounce and its cluster rows.
+Transfer with_clustered_light_bounce(Transfer t, int bounces = 2) {
+  t.light_bounce = with_cluster_rows(sample_light_bounce(t.vertices, bounces));
   return t;
 }
 
@@ -1495,17 +1523,23 @@ std::string without_sections(const Sample& s, Pick drop, std::uint32_t version) 
   return out;
 }
 
-// Checks that the last six sections of `s` are those docs/FORMAT.md
-// specifies for `b`: kinds 14 to 19, u32 bounces and patches, u32 per point,
-// u32 per point and one more, u32 and f16 (IEEE 754 binary16) per entry,
-// u32 per patch, the arrays in order.
+// Checks that the last sections of `s` are those docs/FORMAT.md specifies
+// for `b`: kinds 14 to 19, u32 bounces and patches, u32 per point, u32 per
+// point and one more, u32 and f16 (IEEE 754 binary16) per entry, u32 per
+// patch; then, when `b` has cluster rows, kinds 20 to 22, u32 per patch and
+// one more, u32 and f16 per cluster entry; the arrays in order.
 void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
-  const std::size_t n = s.section_at.size(), points = b.patch.size(), entries = b.source.size();
-  ASSERT_GE(n, 6u);
-  const std::uint32_t types[6] = {4, 4, 4, 4, 8, 4}, sizes[6] = {4, 4, 4, 4, 2, 4};  // u32 x 4, f16, u32
-  const std::size_t counts[6] = {2, points, points + 1, entries, entries, b.patches};
-  for (std::size_t i = 0; i < 6; ++i) {
-    const std::size_t at = s.section_at[n - 6 + i];
+  const bool clusters = !b.cluster_offsets.empty();
+  const std::size_t kinds = clusters ? 9 : 6;
+  const std::size_t n = s.section_at.size(), points = b.patch.size(), entries = b.source.size(),
+                    cluster_entries = b.cluster_source.size();
+  ASSERT_GE(n, kinds);
+  // u32 x 4, f16, u32; u32 x 2, f16.
+  const std::uint32_t types[9] = {4, 4, 4, 4, 8, 4, 4, 4, 8}, sizes[9] = {4, 4, 4, 4, 2, 4, 4, 4, 2};
+  const std::size_t counts[9] = {2, points, points + 1, entries, entries, b.patches, b.patches + std::size_t(1),
+                                 cluster_entries, cluster_entries};
+  for (std::size_t i = 0; i < kinds; ++i) {
+    const std::size_t at = s.section_at[n - kinds + i];
     SCOPED_TRACE("section of kind " + std::to_string(14 + i));
     EXPECT_EQ(get<std::uint32_t>(s.bytes, at), 14 + i);
     EXPECT_EQ(get<std::uint32_t>(s.bytes, at + 4), types[i]);
@@ -1513,7 +1547,7 @@ void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
     EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 16), sizes[i] * counts[i]);
   }
   const auto data = [&](std::size_t i, std::size_t k) {
-    return s.section_at[n - 6 + i] + kSectionHeader + sizes[i] * k;
+    return s.section_at[n - kinds + i] + kSectionHeader + sizes[i] * k;
   };
   EXPECT_EQ(get<std::uint32_t>(s.bytes, data(0, 0)), std::uint32_t(b.bounces));
   EXPECT_EQ(get<std::uint32_t>(s.bytes, data(0, 1)), b.patches);
@@ -1524,7 +1558,17 @@ void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
     EXPECT_EQ(get<std::uint16_t>(s.bytes, data(4, k)), glm::packHalf1x16(b.weight[k])) << k;
   }
   for (std::size_t k = 0; k < b.patches; ++k) EXPECT_EQ(get<std::uint32_t>(s.bytes, data(5, k)), b.parent[k]) << k;
-  EXPECT_EQ(s.bytes.size(), data(5, b.patches) + (8 - 4 * b.patches % 8) % 8 + kTrailer);  // the last section
+  if (!clusters) {
+    EXPECT_EQ(s.bytes.size(), data(5, b.patches) + (8 - 4 * b.patches % 8) % 8 + kTrailer);  // the last section
+    return;
+  }
+  for (std::size_t k = 0; k <= b.patches; ++k)
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, data(6, k)), b.cluster_offsets[k]) << k;
+  for (std::size_t k = 0; k < cluster_entries; ++k) {
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, data(7, k)), b.cluster_source[k]) << k;
+    EXPECT_EQ(get<std::uint16_t>(s.bytes, data(8, k)), glm::packHalf1x16(b.cluster_weight[k])) << k;
+  }
+  EXPECT_EQ(s.bytes.size(), data(8, cluster_entries) + (8 - 2 * cluster_entries % 8) % 8 + kTrailer);
 }
 
 TEST(LightBounceFile, RoundTripIsBitIdenticalAsVersionEight) {
@@ -1572,6 +1616,69 @@ TEST(LightBounceFile, RoundTripIsBitIdenticalAsVersionEight) {
     // Not per vertex: the bytes per vertex are the transfer's.
     EXPECT_EQ(prt::transfer_bytes_per_vertex(t), prt::transfer_bytes_per_vertex(plain));
   }
+}
+
+// An operator's cluster rows (prt::link_clusters): kinds 20 to 22 after the
+// six, version 9; the same operator without them stays the version 8 file.
+TEST(LightBounceFile, ClusterRowsRoundTripBitIdenticalAsVersionNine) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  // Hand-made rows over every vertex stored, analytic and interpolated
+  // vertices, 7 vertices (odd sizes: padding); link_clusters' own rows; and
+  // cluster rows of which none has an entry (the offsets say there are rows:
+  // still version 9, sources and weights empty).
+  Transfer no_cluster_entries = with_light_bounce(full_transfer());
+  no_cluster_entries.light_bounce.cluster_offsets.assign(5, 0);
+  Transfer linked = with_light_bounce(full_transfer());
+  linked.light_bounce = prt::link_clusters(linked.light_bounce, 0);
+  ASSERT_FALSE(linked.light_bounce.cluster_source.empty());  // patch 2's rows reach the coarse patch 3
+  const std::vector<std::pair<std::string, Transfer>> cases = {
+      {"every vertex stored", with_clustered_light_bounce(full_transfer())},
+      {"analytic vertices", with_clustered_light_bounce(mixed_transfer())},
+      {"interpolated vertices", with_clustered_light_bounce(adaptive_transfer())},
+      {"7 vertices, 1 bounce", with_clustered_light_bounce(full_transfer(7), 1)},
+      {"link_clusters", linked},
+      {"no cluster entries", no_cluster_entries},
+  };
+  for (const auto& [what, t] : cases) {
+    SCOPED_TRACE(what);
+    ASSERT_EQ(prt::transfer_problem(t), "");
+    EXPECT_EQ(prt::transfer_format_version(t), 9u);
+    const Sample s = sample_file(dir, t);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 9u);
+    EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
+    expect_light_bounce_sections(s, t.light_bounce);
+    const Transfer back = prt::read_transfer(dir.file("sample.prtt"));
+    expect_identical(t, back);
+    EXPECT_EQ(file_version(dir.file("sample.prtt")), 9u);
+    prt::write_transfer(path, back);
+    EXPECT_EQ(read_file(path), s.bytes);
+    // Without the cluster rows: the version 8 file, byte for byte; the rows
+    // add only their three sections.
+    Transfer flat = t;
+    flat.light_bounce.cluster_offsets.clear();
+    flat.light_bounce.cluster_source.clear();
+    flat.light_bounce.cluster_weight.clear();
+    EXPECT_EQ(prt::transfer_format_version(flat), 8u);
+    EXPECT_EQ(prt::transfer_sections(t).size(), prt::transfer_sections(flat).size() + 3);
+    EXPECT_EQ(without_sections(s, [](std::uint32_t kind) { return kind >= 20; }, 8), sample_file(dir, flat).bytes);
+    EXPECT_EQ(prt::transfer_bytes_per_vertex(t), prt::transfer_bytes_per_vertex(flat));
+  }
+  // A lightmap's: after the layout, texels and the six.
+  prt::LightmapTransfer l = interreflected_lightmap(true);
+  l.transfer.light_bounce = with_cluster_rows(sample_light_bounce(40));
+  EXPECT_EQ(prt::transfer_format_version(l), 9u);
+  const Sample ls = lightmap_sample(dir, l);
+  EXPECT_EQ(get<std::uint32_t>(ls.bytes, kVersionAt), 9u);
+  EXPECT_EQ(ls.bytes.size(), prt::transfer_file_size(l));
+  expect_light_bounce_sections(ls, l.transfer.light_bounce);
+  const prt::LightmapTransfer lback = prt::read_lightmap_transfer(dir.file("lightmap.prtt"));
+  expect_identical(l.transfer, lback.transfer);
+  prt::write_lightmap_transfer(dir.file("again.prtt"), lback);
+  EXPECT_EQ(read_file(dir.file("again.prtt")), ls.bytes);
+  EXPECT_TRUE(contains(prt::describe_transfer(lback), "format version 9"));
+  l.transfer.light_bounce = sample_light_bounce(40);
+  EXPECT_EQ(prt::transfer_format_version(l), 8u);
 }
 
 // Files an earlier prt wrote (the fuzz corpus's seeds, made by prt
@@ -1756,6 +1863,86 @@ TEST(LightBounceRead, DamagedOperatorsAreRefusedByName) {
   write_file(dir.file("bad.prtt"), b);
   expect_error_of(prt::read_lightmap_transfer, dir.file("bad.prtt"), {"light bounce: row 0 names patch 5 of 4"},
                   "a lightmap's source out of range");
+}
+
+TEST(LightBounceRead, DamagedClusterRowsAreRefusedByName) {
+  TempDir dir;
+  const Transfer t = with_clustered_light_bounce(full_transfer());  // 14 sections: 1-5, 14-19, 20-22
+  ASSERT_EQ(t.light_bounce.cluster_source.size(), 4u);
+  const Sample s = sample_file(dir, t);
+  ASSERT_EQ(s.section_at.size(), 14u);
+  const auto data = [&](std::uint32_t kind, std::size_t k) { return section_of(s, kind) + kSectionHeader + 4 * k; };
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& expected, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, expected, what);
+  };
+  // The sections in a version 8 file: kind 20 is version 9's.
+  edit(kVersionAt, std::uint32_t(8),
+       {"bad section table: section 12 of 14 has unknown kind 20 in a version 8 file",
+        "'light bounce cluster offsets' sections are version 9 and later"},
+       "kind 20 in version 8");
+  // Section heads: element types and counts (the offsets one per patch and
+  // one more: the header's 4 patches; the weights as many as the sources).
+  edit(section_of(s, 22) + 4, std::uint32_t(1),
+       {"section 'light bounce cluster weights' has element type 1; expected 8 (f16)"}, "f32 cluster weights");
+  edit(section_of(s, 20) + 8, std::uint64_t(4),
+       {"bad section table: section 'light bounce cluster offsets' has 4 values; expected patches + 1 = 5 (one row "
+        "per source patch)"},
+       "cluster offset count");
+  edit(section_of(s, 22) + 8, std::uint64_t(5),
+       {"bad section table: section 'light bounce cluster weights' has 5 values; 'light bounce cluster sources' has 4 "
+        "(one weight per cluster entry)"},
+       "cluster weight count");
+  // The count follows the header's patches: 5 patches want 6 offsets (the
+  // operator is refused for its parents then, not for its cluster offsets).
+  edit(data(14, 1), std::uint32_t(5),
+       {"bad section table: section 'light bounce cluster offsets' has 5 values; expected patches + 1 = 6"},
+       "patches changed under the cluster offsets");
+  // The values: what light_bounce_problem refuses in the cluster rows.
+  edit(data(21, 0), std::uint32_t(4), {"light bounce: cluster row 0 names patch 4 of 4"},
+       "a cluster source out of range");
+  edit(data(21, 1), std::uint32_t(2), {"light bounce: cluster row 0's patches do not increase"},
+       "a cluster source repeated");
+  edit(data(20, 4), std::uint32_t(3), {"light bounce: cluster row offsets run from 0 to 3 over 4 entries"},
+       "cluster offsets not ending at the entries");
+  edit(section_of(s, 22) + kSectionHeader, std::uint16_t(0xb800), {"light bounce: cluster row 0 has the weight -0.5"},
+       "a negative cluster weight");
+  // Some of the three without the others, or without the operator's six.
+  const auto missing = [&](auto drop, const std::vector<std::string>& expected, const std::string& what) {
+    expect_bytes_error(dir, without_sections(s, drop, 9), expected, what);
+  };
+  missing([](std::uint32_t k) { return k == 21; },
+          {"bad section table: the light-bounce operator's cluster sections (kinds 20 to 22) come together, but the "
+           "file has 'light bounce cluster offsets', 'light bounce cluster weights' without 'light bounce cluster "
+           "sources'"},
+          "no cluster sources");
+  missing([](std::uint32_t k) { return k == 20; }, {"without 'light bounce cluster offsets'"}, "no cluster offsets");
+  missing([](std::uint32_t k) { return k == 22; }, {"without 'light bounce cluster weights'"}, "no cluster weights");
+  missing([](std::uint32_t k) { return k >= 14 && k <= 19; },
+          {"bad section table: the file has 'light bounce cluster offsets', 'light bounce cluster sources', 'light "
+           "bounce cluster weights' (kinds 20 to 22, an operator's cluster rows) but no light-bounce operator (kinds "
+           "14 to 19)"},
+          "cluster rows without the operator");
+  // (Without the six and the three: a version 9 file need hold neither.)
+  write_file(dir.file("none.prtt"), without_sections(s, [](std::uint32_t k) { return k >= 14; }, 9));
+  EXPECT_TRUE(prt::read_transfer(dir.file("none.prtt")).light_bounce.empty());
+  write_file(dir.file("flat.prtt"), without_sections(s, [](std::uint32_t k) { return k >= 20; }, 9));
+  EXPECT_TRUE(prt::read_transfer(dir.file("flat.prtt")).light_bounce.cluster_offsets.empty());
+
+  // Never a compressed file: its own sections followed by the three.
+  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
+  std::string b = c.bytes.substr(0, c.bytes.size() - kTrailer);
+  for (std::size_t i = s.section_at.size() - 3; i < s.section_at.size(); ++i) b += section_bytes(s, i);
+  b += c.bytes.substr(c.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kVersionAt, 9);
+  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + 3));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
+                  {"has a 'light bounce cluster offsets' section, but the header's flags say the file is compressed"},
+                  "compressed");
 }
 
 TEST(LightBounceWrite, RefusesWhatCouldNotBeReadBack) {
@@ -2285,7 +2472,7 @@ TEST(PrtInfo, ReportsTheLightBounceOperator) {
   // parent per patch.
   const std::size_t points = 40, patches = 4, entries = t.light_bounce.source.size();
   const std::size_t bytes = 4 * points + 4 * (points + 1) + 6 * entries + 4 * patches;
-  char want[256];
+  char want[512];  // the longest line, with cluster rows, is about 240 characters
   std::snprintf(want, sizeof want,
                 "2 bounces (applied at run time), 4 source patches, %zu entries: %.2f per receiver (vertex), %.2f per "
                 "source patch; %zu bytes, %.1f per receiver against 192 of an SH row (3 x 16 x 4 bytes)\n",
@@ -2310,6 +2497,8 @@ TEST(PrtInfo, ReportsTheLightBounceOperator) {
   EXPECT_EQ(b.at("bytes"), bytes);
   EXPECT_DOUBLE_EQ(b.at("bytes_per_vertex").get<double>(), double(bytes) / points);
   EXPECT_EQ(b.at("sh_row_bytes"), 192);
+  EXPECT_EQ(b.at("cluster_entries"), 0);  // no cluster rows
+  EXPECT_EQ(b.at("clusters"), 0);
   EXPECT_EQ(j.at("sections").back().at("kind"), 19);
   EXPECT_EQ(j.at("sections").back().at("name"), "light bounce parents");
   std::uint64_t stored = 0;  // the bytes of kinds 15 to 19 in the file's own section table
@@ -2334,6 +2523,35 @@ TEST(PrtInfo, ReportsTheLightBounceOperator) {
   EXPECT_EQ(j.at("light_bounce").at("entries"), entries);
   EXPECT_EQ(j.at("light_bounce").at("sh_row_bytes"), 16);
   EXPECT_EQ(j.at("file_bytes"), fs::file_size(lightmap));
+
+  // With cluster rows (4 entries in the rows of 3 of the 4 patches, counted
+  // in the entries): the line says how many, --json has them, the file is
+  // version 9, its last sections kinds 20 to 22.
+  const Transfer ct = with_clustered_light_bounce(full_transfer());
+  prt::write_transfer(path, ct);
+  const std::size_t all = entries + 4;
+  const std::size_t cbytes = bytes + 4 * (patches + 1) + 6 * 4;
+  std::snprintf(want, sizeof want,
+                "2 bounces (applied at run time), 4 source patches, %zu entries, of which 4 in cluster rows (3 "
+                "clusters with rows): %.2f per receiver (vertex), %.2f per source patch; %zu bytes, %.1f per receiver "
+                "against 192 of an SH row (3 x 16 x 4 bytes)\n",
+                all, double(all) / points, double(all) / patches, cbytes, double(cbytes) / points);
+  r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "prt transfer (format version 9)")) << r.out;
+  EXPECT_TRUE(contains(r.out, want)) << "expected: " << want << "in:\n" << r.out;
+  EXPECT_TRUE(contains(r.out, "light bounce cluster weights")) << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 9);
+  EXPECT_EQ(j.at("light_bounce").at("entries"), all);
+  EXPECT_EQ(j.at("light_bounce").at("cluster_entries"), 4);
+  EXPECT_EQ(j.at("light_bounce").at("clusters"), 3);
+  EXPECT_EQ(j.at("light_bounce").at("bytes"), cbytes);
+  EXPECT_EQ(j.at("sections").back().at("kind"), 22);
+  EXPECT_EQ(j.at("sections").back().at("name"), "light bounce cluster weights");
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
 
   // Without one: no line, no key.
   prt::write_transfer(plain, full_transfer());

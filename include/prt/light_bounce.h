@@ -48,10 +48,17 @@ struct LightBounce {
   std::vector<std::uint32_t> source;    // per entry: a source patch, increasing within a row
   std::vector<float> weight;            // per entry: W_ip, sum over i's rays landing in p of (pi / sum cos) w cos b,
                                         // a half-precision value (files store 16 bits)
+  // Links whose receiving end is a patch (link_clusters): per patch q a row
+  // of (source, weight) like a point's, gathered once for all q's points;
+  // a point's bounce is its own row's plus the rows of every patch holding
+  // it. Empty (no offsets): none.
+  std::vector<std::uint32_t> cluster_offsets;  // patches + 1, or empty
+  std::vector<std::uint32_t> cluster_source;   // per cluster entry, increasing within a row
+  std::vector<float> cluster_weight;           // per cluster entry, a half-precision value
 
   bool empty() const { return bounces == 0; }
   std::size_t points() const { return patch.size(); }
-  std::size_t entries() const { return source.size(); }
+  std::size_t entries() const { return source.size() + cluster_source.size(); }
   // Bytes of the operator's arrays (as stored in a transfer file).
   std::size_t bytes() const;
 };
@@ -63,6 +70,18 @@ struct LightBounce {
 // `patches`, weights finite, >= 0 and half-precision values. An empty
 // operator (0 bounces, no arrays) is fine.
 std::string light_bounce_problem(const LightBounce& b, std::size_t points);
+
+// Hierarchical radiosity's links at both ends (Hanrahan, Salzman & Aupperle
+// 1991): every entry of a point's row whose source patch lies `offset` + 1
+// or more levels above the finest moves to the row of the point's patch
+// `offset` levels below that source's (the receiver's cluster then no finer
+// than the source, less `offset` levels), its weight divided by the
+// cluster's points, so that the cluster's points share the row's mean. Far
+// light, which neighbours receive alike, is then gathered once per cluster:
+// fewer entries to store and to apply, at the cost of the differences
+// between neighbours' views of far patches. The result's weights are
+// rounded to half precision; when no entry moves, it has no cluster rows.
+LightBounce link_clusters(const LightBounce& b, int offset);
 
 // The indirect radiance at every point, bounces 1..B of `direct` (the
 // radiance leaving each point: the lights' direct light), with each point's

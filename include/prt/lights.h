@@ -40,6 +40,8 @@ struct Light {
   glm::dvec3 direction{0.0, 0.0, -1.0};  // spot and directional: the way the light travels, unit length
   double inner_cone = 0.0;            // spot: radians, 0 <= inner < outer <= pi/2
   double outer_cone = 0.78539816339744830962;  // spot: radians (KHR's default, pi/4)
+
+  bool operator==(const Light&) const = default;
 };
 
 // The KHR_lights_punctual README's window: clamp(1 - (d / range)^4, 0, 1);

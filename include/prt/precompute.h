@@ -47,6 +47,9 @@ inline constexpr int kMaxThreads = 1024;     // worker threads (0: every core)
 // (TransferOptions::light_bounce_patch; docs/LIGHTS.md "Bounce" measures it).
 inline constexpr double kLightBouncePatchSpacings = 1.0;
 inline constexpr double kLightBounceRatio = 1.0;
+// Far hits gathered by clusters of receivers this many levels finer than
+// their source patch (TransferOptions::light_bounce_clusters).
+inline constexpr int kLightBounceClusters = 2;
 
 struct TransferOptions {
   TransferMode mode = TransferMode::Shadowed;
@@ -88,10 +91,13 @@ struct TransferOptions {
   // units a side (0: kLightBouncePatchSpacings times the points' mean
   // spacing: a lightmap's texel size, a mesh's mean edge length), a hit at
   // distance d merged into the coarsest patch of cell at most
-  // light_bounce_ratio x d. One process.
+  // light_bounce_ratio x d, and received by the point's patch
+  // light_bounce_clusters levels finer than that (prt::link_clusters; -1:
+  // every point gathers all its own hits). One process.
   bool light_bounce = false;
   double light_bounce_patch = 0;
   double light_bounce_ratio = kLightBounceRatio;
+  int light_bounce_clusters = kLightBounceClusters;
   // When set, compute_transfer fills it with its plan and what its records
   // took (TransferMemory below).
   struct TransferMemory* memory_report = nullptr;

@@ -57,6 +57,7 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <span>
@@ -333,10 +334,24 @@ class Renderer {
   // storage block size.
   void set_scene(const Scene& scene, const LightmapTransfer& lightmap);
   void set_lightmap_detail(bool on);
-  // false: frames keep the lightmap image of the last relit frame and only
-  // draw (a static lightmap, what an engine without PRT draws: the baseline
-  // of the lightmapped frame's cost, bench/lightmap_figures.cpp).
+  // true (the default): every frame relights the lightmap. false: a frame
+  // relights it only when something changed: the lighting, band limit or
+  // shading (the sky's part), the lights (their direct light and bounce
+  // added again to the sky's radiance as it was), or a bounce still
+  // catching up (set_light_bounce_budget); a frame where nothing changed
+  // only draws (a static lightmap, what an engine without PRT draws: the
+  // baseline of the lightmapped frame's cost, bench/lightmap_figures.cpp).
   void set_lightmap_relight(bool on);
+  // The lights' bounce (a transfer with a light-bounce operator,
+  // docs/LIGHTS.md "Bounce"): its direct light is evaluated when the lights
+  // change and its B bounces brought up to date by at most `work` units a
+  // frame (an entry of the operator's rows or a patch's member; 0, the
+  // default: all of them in the frame). With a budget the bounce catches up
+  // with a moving light over a few frames, bounce 1 swept whole before bounce
+  // 2, ..., as Enlighten converges over frames; light_bounce_done() says when
+  // the frame drawn has the B bounces of the lights as they are.
+  void set_light_bounce_budget(std::uint64_t work);
+  bool light_bounce_done() const;
   // The covered texels' radiance of the last frame drawn (set_scene only),
   // in texel order: relight_lightmap's up to float rounding.
   std::vector<glm::vec3> lightmap_radiance() const;

@@ -245,9 +245,14 @@ def transfer_seeds(out, tmp, prt):
         "shadowed-b3": ["--mode", "shadowed", "--bands", "3", "--samples", "64"],
         "interreflected-colour": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
                                   "--vertex-colors"],
-        # Version 8: the light-bounce operator (kinds 14-19).
+        # Version 8: the light-bounce operator (kinds 14-19), without cluster
+        # rows; version 9 with them (kinds 20-22; the default --bounce-clusters
+        # 2 gives rows here, though none of this tiny mesh's has an entry:
+        # the lightmap below has some).
         "light-bounce-b2": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
-                            "--light-bounce"],
+                            "--light-bounce", "--bounce-clusters", "-1"],
+        "light-bounce-clusters-b2": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
+                                     "--light-bounce"],
         "glossy-shadowed-b2": ["--material", "glossy", "--bands", "2", "--samples", "64"],
         "glossy-interreflected-colour": ["--material", "glossy", "--mode", "interreflected", "--bands", "2",
                                          "--samples", "64", "--vertex-colors"],
@@ -315,7 +320,8 @@ def transfer_seeds(out, tmp, prt):
     # texture coordinates, and with adaptive sample points among the texels
     # (version 7: the 'interpolated vertices' mask, kind 13, after kind 11),
     # and with the light-bounce operator over the texels (version 8, kinds
-    # 14-19, after kind 11).
+    # 14-19, after kind 11), and with its cluster rows (version 9, kinds
+    # 20-22; --bounce-clusters 0: a few hundred cluster entries).
     bump_obj = tmp / "bump.obj"
     s = "".join("v %g %g %g\nvt %g %g\n" % (x, 0.3 * math.exp(-3 * (x * x + z * z)), z, (x + 1) / 2, (1 - z) / 2)
                 for x, z in grid)
@@ -323,8 +329,10 @@ def transfer_seeds(out, tmp, prt):
                                                                b + 1, b + 1, c + 1, c + 1, d + 1, d + 1)
                  for a, b, c, d in quads)
     bump_obj.write_text(s)
+    bounce = ["--mode", "interreflected", "--bounces", "1", "--light-bounce", "--bounce-clusters"]
     for name, args in (("lightmap-b1", []), ("lightmap-adaptive-b1", ["--adaptive"]),
-                       ("lightmap-light-bounce-b1", ["--mode", "interreflected", "--bounces", "1", "--light-bounce"])):
+                       ("lightmap-light-bounce-b1", bounce + ["-1"]),
+                       ("lightmap-light-bounce-clusters-b1", bounce + ["0"])):
         f = tmp / (name + ".prt")
         subprocess.run([prt, "precompute", str(bump_obj), "--lightmap", "16x16", "-o", str(f), "--threads", "1", "-q",
                         "--bands", "1", "--samples", "64", *args], check=True)

@@ -75,7 +75,8 @@ struct PrecomputeArgs {
   // samples and bounces given on the command line are the most it may choose.
   double target_error = 0;
   std::string env, cache;
-  const CLI::Option *light_bounce_opt = nullptr, *bounce_patch_opt = nullptr, *bounce_ratio_opt = nullptr;
+  const CLI::Option *light_bounce_opt = nullptr, *bounce_patch_opt = nullptr, *bounce_ratio_opt = nullptr,
+                    *bounce_clusters_opt = nullptr;
   const CLI::Option *bands_opt = nullptr, *samples_opt = nullptr, *bounces_opt = nullptr, *mode_opt = nullptr,
                     *target_opt = nullptr, *env_opt = nullptr, *cache_opt = nullptr, *tolerance_opt = nullptr,
                     *material_opt = nullptr;
@@ -166,7 +167,7 @@ std::size_t memory_limit(const PrecomputeArgs& a) {
 // --light-bounce and --bounce-patch (docs/LIGHTS.md "Bounce"): the
 // interreflected pass's gather of every point, kept in one process.
 void check_light_bounce(const PrecomputeArgs& a) {
-  for (const CLI::Option* o : {a.bounce_patch_opt, a.bounce_ratio_opt})
+  for (const CLI::Option* o : {a.bounce_patch_opt, a.bounce_ratio_opt, a.bounce_clusters_opt})
     if (o->count() > 0 && !a.opt.light_bounce)
       throw UsageError(o->get_name() + " shapes the --light-bounce operator's patches; give --light-bounce too");
   if (!a.opt.light_bounce) return;
@@ -997,7 +998,14 @@ void add_transfer_options(CLI::App* s, PrecomputeArgs& a) {
                     "d (smaller: more accurate, larger files; docs/LIGHTS.md \"Bounce\" tables both)")
           ->check(number_range(0.0, 1e6, true, false))
           ->capture_default_str();
-  a.sh_only.insert(a.sh_only.end(), {a.light_bounce_opt, a.bounce_patch_opt, a.bounce_ratio_opt});
+  a.bounce_clusters_opt =
+      s->add_option("--bounce-clusters", a.opt.light_bounce_clusters,
+                    "With --light-bounce: a far hit's light is received once for the texels of a patch this many "
+                    "levels finer than its source patch (smaller: smaller, faster, coarser; -1: each texel gathers all "
+                    "its hits; docs/LIGHTS.md \"Bounce\")")
+          ->check(CLI::Range(-1, prt::kMaxPatchLevels - 1))
+          ->capture_default_str();
+  a.sh_only.insert(a.sh_only.end(), {a.light_bounce_opt, a.bounce_patch_opt, a.bounce_ratio_opt, a.bounce_clusters_opt});
   a.wavelet_only.push_back(
       s->add_option("--cube-res", a.wopt.cube_res, "Wavelet basis: cube face size r (16, 32, 64; 6 r^2 coefficients)")
           ->check(cube_resolution())

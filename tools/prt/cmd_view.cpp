@@ -83,6 +83,11 @@ struct ViewArgs {
   const CLI::Option* fov_opt = nullptr;  // given: the default camera takes it (else 40, or 70 inside a room)
   LightArgs light;  // --lights, --sun (docs/LIGHTS.md), edited live
   int shadow_size = kDefaultShadowMapSize;
+  // --bounce-budget: the lights' bounce brought up to date by at most this
+  // much work a frame (Renderer::set_light_bounce_budget); about 10 ms a
+  // frame on llvmpipe, a fraction of a millisecond on a GPU
+  // (docs/LIGHTS.md "Bounce").
+  std::uint64_t bounce_budget = std::uint64_t(1) << 20;
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
@@ -304,6 +309,7 @@ class Viewer {
     upload(renderer, scene, a.transfer);  // the SH rows, or the wavelet transfer's mesh alone
     renderer.set_environment(scene.env);
     renderer.set_shadow_map_size(a.shadow_size);
+    renderer.set_light_bounce_budget(a.bounce_budget);
     if (light_points) renderer.set_light_points(light_points->positions, light_points->normals, light_points->albedo);
     if (kinds.wavelet) playback_.emplace(*scene.wavelet(), scene.env);
     st.wavelet = kinds.wavelet_first;
@@ -811,6 +817,10 @@ Run add_view(CLI::App& app) {
   add_glossy_options(s, a->lobe);
   add_light_options(s, a->light);
   add_shared(s, SharedOption::ShadowMapSize, a->shadow_size, "Lights' shadow maps");
+  s->add_option("--bounce-budget", a->bounce_budget,
+                "A transfer with a light-bounce operator: the lights' bounce follows a moving light with at most this "
+                "much work a frame (entries of its rows; 0: all of it every frame; docs/LIGHTS.md \"Bounce\")")
+      ->capture_default_str();
   s->add_flag("--no-panel", a->no_panel,
               "No on-screen panel (Dear ImGui: map, exposure, tone map, light rotation, shading, bands, gloss, frame "
               "time; F1 hides and shows it)");
