@@ -75,15 +75,15 @@ int main(int argc, char** argv) {
     return 2;
   }
   int width = 64, height = 64, samples = 1024, bounces = 2, ref_samples = 4096;
-  std::vector<double> patches{1}, ratios{0.25, 0.5, 1.0};
+  std::vector<double> patches{1}, ratios{0.25, 0.5, 1.0}, clusters{-1};
   for (int i = 3; i + 1 < argc; i += 2) {
     const std::string o = argv[i], v = argv[i + 1];
     if (o == "--lightmap") std::sscanf(v.c_str(), "%dx%d", &width, &height);
     else if (o == "--samples") samples = std::stoi(v);
     else if (o == "--bounces") bounces = std::stoi(v);
     else if (o == "--reference-samples") ref_samples = std::stoi(v);
-    else if (o == "--patches" || o == "--ratios") {
-      std::vector<double>& list = o == "--patches" ? patches : ratios;
+    else if (o == "--patches" || o == "--ratios" || o == "--clusters") {
+      std::vector<double>& list = o == "--patches" ? patches : o == "--ratios" ? ratios : clusters;
       list.clear();
       std::stringstream s(v);
       for (std::string k; std::getline(s, k, ',');) list.push_back(std::stod(k));
@@ -155,8 +155,10 @@ int main(int argc, char** argv) {
       t0 = std::chrono::steady_clock::now();
       const prt::LightmapTransfer lt = prt::compute_lightmap_transfer(scene, texels, o);
       const double s = seconds_since(t0);
-      const prt::LightBounce& b = lt.transfer.light_bounce;
-      std::printf("| %g | %g | %u | %.1f | %.1f | %.0f | %.2f | %.2f |", k, ratio, b.patches, double(b.entries()) / double(T),
+      for (double cluster : clusters) {
+      const prt::LightBounce b = cluster < 0 ? lt.transfer.light_bounce : prt::link_clusters(lt.transfer.light_bounce, int(cluster));
+      const std::string linked = cluster < 0 ? "" : ", clusters " + std::to_string(int(cluster));
+      std::printf("| %g | %g%s | %u | %.1f | %.1f | %.0f | %.2f | %.2f |", k, ratio, linked.c_str(), b.patches, double(b.entries()) / double(T),
                   double(b.entries()) / double(b.patches), double(b.bytes()) / double(T),
                   double(b.bytes()) / double(T) / sh_bytes, s / plain_s);
       double apply_ms = 0;
@@ -172,6 +174,7 @@ int main(int argc, char** argv) {
       }
       std::printf(" %.2f |\n", apply_ms / double(lights.size()));
       std::fflush(stdout);
+      }
     }
   } catch (const std::exception& x) {
     std::fprintf(stderr, "prt_light_bounce_figures: %s\n", x.what());

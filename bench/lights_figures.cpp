@@ -1,5 +1,6 @@
 // bench/lights_figures.cpp - the figures of docs/LIGHTS.md "On the GPU":
 //   prt_lights_figures SCENE LIGHTMAP.prt [--frames N] [--shadow-map-size N] [--frames-only] [--one-light]
+//                      [--bounce-budget W]...
 // 1. Shadow maps against traced rays: the GPU's direct light from lights at
 //    the lightmap's texel sample points (Renderer::lightmap_radiance under a
 //    black map) against prt::DirectLight's at the same points, relative RMS
@@ -10,11 +11,16 @@
 // 2. Frame: 1280 x 720, the scene's lightmap relit each frame with 4 point
 //    lights moving (each round a circle, so every cube is redrawn every
 //    frame) and a sun turning (--one-light: one point light moving, no sun:
-//    docs/LIGHTS.md "Bounce"'s frame, the light's bounce applied every frame
-//    when LIGHTMAP.prt has an operator), against the static lightmapped frame (the
-//    lightmap drawn, not relit: an engine's baked frame), N frames each, in
-//    this process.
+//    docs/LIGHTS.md "Bounce"'s frame: the sky kept, the light's direct light
+//    and bounce added again each frame when LIGHTMAP.prt has an operator,
+//    whole and within each --bounce-budget), against the static lightmapped
+//    frame (the lightmap drawn, not relit: an engine's baked frame), N frames
+//    each, in this process.
+// 3. With --one-light and an operator, for each --bounce-budget: how the
+//    bounce converges over frames after the light jumps, and how far each
+//    frame is from the converged one while it moves.
 #include <prt/direct_light.h>
+#include <prt/light_bounce.h>
 #include <prt/lightmap.h>
 #include <prt/precompute.h>
 #include <prt/render.h>
@@ -23,10 +29,12 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -54,6 +62,56 @@ prt::Light point(glm::dvec3 at, double intensity) {
   return l;
 }
 
+// 3. The bounce's convergence over frames: the light jumps (from the
+// circle's start to a quarter turn on), or moves along the circle (1/40 of a
+// turn a frame); each frame's lit texels against the converged frame of the
+// same light (a second renderer, whole bounce).
+void convergence(const prt::Scene& scene, const prt::LightmapTransfer& t, const prt::LightmapTexels& texels,
+                 prt::Renderer& r, const prt::Camera& cam, int shadow_size,
+                 const std::function<std::vector<prt::Light>(double)>& lights_at,
+                 const std::vector<std::uint64_t>& budgets) {
+  const std::size_t nc = std::size_t(t.transfer.bands) * t.transfer.bands;
+  prt::Renderer whole;
+  whole.set_scene(scene, t);
+  whole.set_lighting(std::vector<glm::dvec3>(nc, glm::dvec3(0.0)));
+  whole.set_light_points(texels.positions, texels.normals, texels.albedo);
+  whole.set_shadow_map_size(shadow_size);
+  const auto converged = [&](double f) {
+    whole.set_lights(lights_at(f));
+    whole.render(cam, 64, 36);
+    return whole.lightmap_radiance();
+  };
+  for (std::uint64_t budget : budgets) {
+    r.set_light_bounce_budget(0);
+    r.set_lights(lights_at(0));
+    r.render(cam, 64, 36);
+    r.set_light_bounce_budget(budget);
+    r.set_lights(lights_at(10));
+    const std::vector<glm::vec3> goal = converged(10);
+    std::printf("  budget %llu, the light jumped a quarter turn: lit texels' relative RMS to the converged frame",
+                static_cast<unsigned long long>(budget));
+    int n = 0;
+    do {
+      r.render(cam, 64, 36);
+      ++n;
+      if (n <= 4 || r.light_bounce_done()) std::printf(" %d: %.2f%%", n, 100 * agreement(r.lightmap_radiance(), goal).rel_rms);
+    } while (!r.light_bounce_done() && n < 1000);
+    std::printf(" (done after %d frames)\n", n);
+    double worst = 0, sum = 0;
+    const int moving = 20;
+    for (int f = 1; f <= moving; ++f) {
+      r.set_lights(lights_at(10 + f));
+      r.render(cam, 64, 36);
+      const double err = agreement(r.lightmap_radiance(), converged(10 + f)).rel_rms;
+      worst = std::max(worst, err);
+      sum += err;
+    }
+    std::printf("  budget %llu, the light moving 1/40 turn a frame: mean %.2f%%, worst %.2f%% over %d frames\n",
+                static_cast<unsigned long long>(budget), 100 * sum / moving, 100 * worst, moving);
+    std::fflush(stdout);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -63,15 +121,23 @@ int main(int argc, char** argv) {
   }
   int frames = 20, shadow_size = prt::kDefaultShadowMapSize;
   bool table = true, one_light = false;
+  std::vector<std::uint64_t> budgets;  // --bounce-budget, each measured
+  int link = -1;                       // --link-clusters K: prt::link_clusters(operator, K) first
   for (int i = 3; i < argc; ++i) {
     if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) frames = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--shadow-map-size") == 0 && i + 1 < argc) shadow_size = std::atoi(argv[++i]);
     else if (std::strcmp(argv[i], "--frames-only") == 0) table = false;
     else if (std::strcmp(argv[i], "--one-light") == 0) one_light = true;
+    else if (std::strcmp(argv[i], "--link-clusters") == 0 && i + 1 < argc) link = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--bounce-budget") == 0 && i + 1 < argc) budgets.push_back(std::strtoull(argv[++i], nullptr, 10));
   }
   try {
     const prt::Scene scene = prt::load_scene(argv[1]);
-    const prt::LightmapTransfer t = prt::read_transfer_as<prt::LightmapTransfer>(argv[2]);
+    prt::LightmapTransfer t = prt::read_transfer_as<prt::LightmapTransfer>(argv[2]);
+    if (link >= 0) t.transfer.light_bounce = prt::link_clusters(t.transfer.light_bounce, link);
+    if (!t.transfer.light_bounce.empty())
+      std::printf("light-bounce operator: %.1f entries a texel\n",
+                  double(t.transfer.light_bounce.entries()) / double(t.transfer.light_bounce.points()));
     prt::LightmapTexels texels = prt::lightmap_texels(scene, t.layout.width, t.layout.height, t.layout.uv_set,
                                                       t.transfer.vertex_colors ? nullptr : &t.transfer.albedo);
     prt::move_texels_out_of_geometry(scene.mesh, texels);
@@ -119,41 +185,58 @@ int main(int argc, char** argv) {
 
     // 2. Frames: 4 moving point lights and a turning sun against the static lightmap.
     r.set_shadow_map_size(shadow_size);
-    const auto timed = [&](bool lit) {
+    const auto lights_at = [&](double f) {
+      std::vector<prt::Light> ls;
+      for (int k = 0; k < (one_light ? 1 : 4); ++k) {
+        const double a = 2.0 * M_PI * (f / 40.0 + k / 4.0);
+        ls.push_back(point(c + glm::dvec3(0.3 * e.x * std::cos(a), 0.2 * e.y, 0.3 * e.z * std::sin(a)), 2.0));
+      }
+      prt::Light s = sun;
+      const double b = 0.05 * f;
+      s.direction = glm::normalize(glm::dvec3(-0.6 * std::cos(b), -0.5, 0.6 + 0.2 * std::sin(b)));
+      if (!one_light) ls.push_back(s);
+      return ls;
+    };
+    // The sky is relit every frame with the lights (4 lights and a sun: the
+    // sun turns with it) or kept (one light moving: only the lights' part is
+    // added again to the sky's radiance, as an engine's static lightmap).
+    const auto timed = [&](bool lit, std::uint64_t budget) {
       r.set_lights({});
-      r.set_lightmap_relight(lit);
-      const auto lights_at = [&](int f) {
-        std::vector<prt::Light> ls;
-        for (int k = 0; k < (one_light ? 1 : 4); ++k) {
-          const double a = 2.0 * M_PI * (f / 40.0 + k / 4.0);
-          ls.push_back(point(c + glm::dvec3(0.3 * e.x * std::cos(a), 0.2 * e.y, 0.3 * e.z * std::sin(a)), 2.0));
-        }
-        prt::Light s = sun;
-        const double b = 0.05 * f;
-        s.direction = glm::normalize(glm::dvec3(-0.6 * std::cos(b), -0.5, 0.6 + 0.2 * std::sin(b)));
-        if (!one_light) ls.push_back(s);
-        return ls;
-      };
+      r.set_lightmap_relight(lit && !one_light);
+      r.set_light_bounce_budget(budget);
       if (lit) r.set_lights(lights_at(0));
       r.render(cam, 1280, 720);  // warm-up (and the static lightmap's one relight)
       int maps = 0;
-      const auto t0 = std::chrono::steady_clock::now();
+      std::vector<double> ms;  // each frame's: the median is given (this machine's other work makes outliers)
       for (int f = 1; f <= frames; ++f) {
+        const auto t0 = std::chrono::steady_clock::now();
         if (lit) r.set_lights(lights_at(f));
         r.render(cam, 1280, 720);
+        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
         maps += r.shadow_maps_drawn();
       }
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / frames;
-      return std::make_pair(ms, double(maps) / frames);
+      std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
+      return std::make_pair(ms[ms.size() / 2], double(maps) / frames);
     };
-    const auto [base_ms, base_maps] = timed(false);
-    const auto [lit_ms, lit_maps] = timed(true);
-    std::printf("\nframe 1280x720 (%s), %d frames each:\n", r.device().c_str(), frames);
+    const bool bounce = !t.transfer.light_bounce.empty();
+    const auto [base_ms, base_maps] = timed(false, 0);
+    std::printf("\nframe 1280x720 (%s), the median of %d frames each:\n", r.device().c_str(), frames);
     std::printf("  static lightmapped frame: %.2f ms\n", base_ms);
-    std::printf("  relit, %s: %.2f ms (%.2fx), %.1f shadow maps redrawn per frame at %d texels%s\n",
-                one_light ? "1 moving point light" : "4 moving point lights and a turning sun", lit_ms, lit_ms / base_ms,
-                lit_maps, shadow_size, t.transfer.light_bounce.empty() ? "" : ", the lights' bounce every frame");
     (void)base_maps;
+    std::vector<std::uint64_t> runs{0};
+    if (bounce) runs.insert(runs.end(), budgets.begin(), budgets.end());
+    for (std::uint64_t budget : runs) {
+      const auto [lit_ms, lit_maps] = timed(true, budget);
+      std::printf("  relit, %s: %.2f ms (%.2fx; the lights' update %.2f ms, %.2fx the static frame), %.1f shadow "
+                  "maps redrawn per frame at %d texels%s\n",
+                  one_light ? "1 moving point light" : "4 moving point lights and a turning sun", lit_ms,
+                  lit_ms / base_ms, lit_ms - base_ms, (lit_ms - base_ms) / base_ms, lit_maps, shadow_size,
+                  !bounce          ? ""
+                  : budget == 0    ? ", its bounce whole every frame"
+                                   : (", its bounce within " + std::to_string(budget) + " units a frame").c_str());
+      std::fflush(stdout);
+    }
+    if (bounce && one_light) convergence(scene, t, texels, r, cam, shadow_size, lights_at, budgets);
   } catch (const std::exception& ex) {
     std::fprintf(stderr, "prt_lights_figures: %s\n", ex.what());
     return 1;
