@@ -216,13 +216,15 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, const glm::vec
         row_ = clusters_ ? level_offsets_[lowest_] : 0;
         break;
       case Phase::Clusters: {  // the clusters' rows, within the budget
-        const std::size_t end = slice(cluster_cost_, left());
-        const GLuint bind[][2] = {{0, cluster_row_offsets_}, {1, cluster_sources_}, {3, means_}, {4, cluster_weights_},
-                                  {5, pushed_},          {6, order_}};
-        for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
-        dispatch(kClusterRows, row_, end);
-        spent += std::uint64_t(cluster_cost_[end] - cluster_cost_[row_]) + (end - row_);
-        row_ = end;
+        if (row_ < patches_) {  // (a file's cluster rows may all be empty: none to gather)
+          const std::size_t end = slice(cluster_cost_, left());
+          const GLuint bind[][2] = {{0, cluster_row_offsets_}, {1, cluster_sources_}, {3, means_},
+                                    {4, cluster_weights_},     {5, pushed_},          {6, order_}};
+          for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+          dispatch(kClusterRows, row_, end);
+          spent += std::uint64_t(cluster_cost_[end] - cluster_cost_[row_]) + (end - row_);
+          row_ = end;
+        }
         if (row_ == patches_) {
           push();
           spent += patches_ - level_offsets_[lowest_];

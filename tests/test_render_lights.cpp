@@ -237,6 +237,19 @@ TEST(RenderLights, TheLightsBounceOnTheGpuAsTheOperatorDoes) {
   std::printf("lightmap: against the traced direct light and its bounce %.4f (the bounce is %.3f of it)\n", a.rel_rms,
               agreement(traced, cpu).rel_rms);
 
+  // Cluster rows none of which has an entry (a file may hold them): the
+  // points' own rows alone.
+  LightmapTransfer bare = t;
+  bare.transfer.light_bounce.cluster_offsets.assign(std::size_t(t.transfer.light_bounce.patches) + 1, 0);
+  bare.transfer.light_bounce.cluster_source.clear();
+  bare.transfer.light_bounce.cluster_weight.clear();
+  show_bounce_lightmap(*r, s, bare, texels, std::vector<glm::dvec3>(9, glm::dvec3(0.0)));
+  r->render(cam, 32, 32);
+  const std::vector<glm::vec3> bare_lit = r->lightmap_radiance();
+  r->set_shading(Shading::Direct);
+  r->render(cam, 32, 32);
+  expect_bounce(bare_lit, r->lightmap_radiance(), bare.transfer.light_bounce, texels.albedo, "empty cluster rows");
+
   // At a mesh's vertices.
   const Mesh mesh = test::floor_and_ball(32);
   TransferOptions v = o;
