@@ -465,6 +465,8 @@ bool Renderer::light_bounce_done() const {
   return !impl_->bounce_pending();
 }
 
+bool Renderer::has_light_bounce() const { return impl_->bounce != nullptr; }
+
 bool Renderer::Impl::bounce_pending() const {
   return bounce && lights && !lights->empty() && shading != Shading::Direct &&
          (bounce_version != lights_version || !bounce->done());

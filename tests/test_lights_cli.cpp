@@ -276,6 +276,8 @@ TEST(LightsCli, ALightBounceOperatorBouncesTheLightsAsTheReferenceDoes) {
       {{"--light-bounce", "--mode", "interreflected", "--adaptive"}, "interpolated points have no gather row"},
       {{"--light-bounce", "--mode", "interreflected", "--probes", "2x2x2"}, "a probe volume gathers"},
       {{"--light-bounce", "--mode", "interreflected", "--bounce-ratio", "0"}, "--bounce-ratio"},
+      {{"--bounce-clusters", "1"}, "give --light-bounce too"},
+      {{"--light-bounce", "--mode", "interreflected", "--bounce-clusters", "-2"}, "--bounce-clusters"},
   };
   for (const auto& [more, why] : refused) {
     std::vector<std::string> args{"precompute", room, "-q", "-o", dir.file("x.prt")};

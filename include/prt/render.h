@@ -352,6 +352,7 @@ class Renderer {
   // the frame drawn has the B bounces of the lights as they are.
   void set_light_bounce_budget(std::uint64_t work);
   bool light_bounce_done() const;
+  bool has_light_bounce() const;  // the drawn transfer has a light-bounce operator
   // The covered texels' radiance of the last frame drawn (set_scene only),
   // in texel order: relight_lightmap's up to float rounding.
   std::vector<glm::vec3> lightmap_radiance() const;

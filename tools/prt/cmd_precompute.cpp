@@ -1003,7 +1003,7 @@ void add_transfer_options(CLI::App* s, PrecomputeArgs& a) {
                     "With --light-bounce: a far hit's light is received once for the texels of a patch this many "
                     "levels finer than its source patch (smaller: smaller, faster, coarser; -1: each texel gathers all "
                     "its hits; docs/LIGHTS.md \"Bounce\")")
-          ->check(CLI::Range(-1, prt::kMaxPatchLevels - 1))
+          ->check(int_range(-1, prt::kMaxPatchLevels - 1, "-1: none"))
           ->capture_default_str();
   a.sh_only.insert(a.sh_only.end(), {a.light_bounce_opt, a.bounce_patch_opt, a.bounce_ratio_opt, a.bounce_clusters_opt});
   a.wavelet_only.push_back(

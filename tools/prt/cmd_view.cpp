@@ -43,6 +43,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <limits>
 #include <vector>
 
 namespace prt::cli {
@@ -731,6 +732,9 @@ int run_view(const ViewArgs& a) {
         info.wavelet = st.wavelet;
         info.frame_ms = frame_ms;
         info.device = renderer.device();
+        if (renderer.has_light_bounce() && !st.lights.empty())
+          info.bounce = renderer.light_bounce_done() ? "their bounce: whole"
+                                                     : "their bounce: catching up (--bounce-budget)";
         panel->draw(st, info);
       }
       ++frame;
@@ -820,6 +824,7 @@ Run add_view(CLI::App& app) {
   s->add_option("--bounce-budget", a->bounce_budget,
                 "A transfer with a light-bounce operator: the lights' bounce follows a moving light with at most this "
                 "much work a frame (entries of its rows; 0: all of it every frame; docs/LIGHTS.md \"Bounce\")")
+      ->check(count_range(0, std::numeric_limits<std::uint64_t>::max()))
       ->capture_default_str();
   s->add_flag("--no-panel", a->no_panel,
               "No on-screen panel (Dear ImGui: map, exposure, tone map, light rotation, shading, bands, gloss, frame "

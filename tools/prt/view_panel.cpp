@@ -38,9 +38,10 @@ namespace {
 
 // The lights (docs/LIGHTS.md): select, place, recolour, dim, remove, add;
 // the same state the keys edit.
-void draw_lights(ViewState& st) {
+void draw_lights(ViewState& st, const std::string& bounce) {
   ImGui::Separator();
   if (!ImGui::CollapsingHeader(fmt::format("lights ({})###lights", st.lights.size()).c_str())) return;
+  if (!bounce.empty()) ImGui::TextDisabled("%s", bounce.c_str());
   int remove = -1;
   for (int i = 0; i < int(st.lights.size()); ++i) {
     Light& l = st.lights[std::size_t(i)];
@@ -133,7 +134,7 @@ void ViewPanel::draw(ViewState& st, const PanelInfo& info) {
     if (ImGui::SliderFloat("specular", &specular, 0.0f, 1.0f, "%.2f")) st.specular = specular;
   }
   if (info.wavelet) ImGui::SliderInt("terms K", &st.terms, 1, 1 << 14, "%d", ImGuiSliderFlags_Logarithmic);
-  draw_lights(st);
+  draw_lights(st, info.bounce);
   ImGui::Separator();
   if (ImGui::Button("screenshot")) st.screenshot_requested = true;
   ImGui::SameLine();

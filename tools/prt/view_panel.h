@@ -22,6 +22,9 @@ struct PanelInfo {
   bool glossy = false, wavelet = false;
   double frame_ms = 0;            // smoothed frame time
   std::string device;
+  // With lights and a light-bounce operator: whether the frame has their
+  // whole bounce or it is still catching up (Renderer::light_bounce_done).
+  std::string bounce;
 };
 
 class ViewPanel {
