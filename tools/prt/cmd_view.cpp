@@ -537,6 +537,21 @@ void check_view_options(const ViewArgs& a) {
 // Lights (docs/LIGHTS.md): the scene's and --lights files', and with --sun
 // auto the map's sun, whose direction stays in the map's frame (the frame
 // loop turns it with the sky), the sky left, and a lightmap's points for them.
+// What the panel shows of the viewer and the renderer this frame (the
+// transfer's bands and glossiness are the caller's).
+PanelInfo panel_info(const Viewer& viewer, const ViewState& st, const Renderer& renderer, double frame_ms) {
+  PanelInfo info;
+  info.map = viewer.map_name();
+  info.shading = viewer.shown_label(st);
+  info.status = viewer.title(st);
+  info.wavelet = st.wavelet;
+  info.frame_ms = frame_ms;
+  info.device = renderer.device();
+  if (renderer.has_light_bounce() && !st.lights.empty())
+    info.bounce = renderer.light_bounce_done() ? "their bounce: whole" : "their bounce: catching up (--bounce-budget)";
+  return info;
+}
+
 struct ViewLights {
   RenderLights lights;
   EnvMap sky;
@@ -723,18 +738,9 @@ int run_view(const ViewArgs& a) {
       }
       renderer.present(cam, fw, fh, fw, fh, Display{st.exposure, kToneMaps[st.tone]});
       if (panel) {
-        PanelInfo info;
-        info.map = viewer.map_name();
-        info.shading = viewer.shown_label(st);
-        info.status = viewer.title(st);
+        PanelInfo info = panel_info(viewer, st, renderer, frame_ms);
         info.file_bands = kinds.sh ? scene.header.bands : 0;
-        info.glossy = kinds.sh && scene.header.glossy;
-        info.wavelet = st.wavelet;
-        info.frame_ms = frame_ms;
-        info.device = renderer.device();
-        if (renderer.has_light_bounce() && !st.lights.empty())
-          info.bounce = renderer.light_bounce_done() ? "their bounce: whole"
-                                                     : "their bounce: catching up (--bounce-budget)";
+        info.glossy = glossy;
         panel->draw(st, info);
       }
       ++frame;
