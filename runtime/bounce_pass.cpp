@@ -26,6 +26,7 @@ struct Hierarchy {
   std::vector<std::uint32_t> input_offsets;     // patches + 1
   std::vector<std::uint32_t> inputs;            // points (finest) or child patches
   std::vector<float> points;                    // per patch, the points it holds
+  std::vector<std::uint32_t> level;             // per patch, levels above the finest
 };
 
 Hierarchy hierarchy(const LightBounce& b) {
@@ -55,6 +56,7 @@ Hierarchy hierarchy(const LightBounce& b) {
   for (std::uint32_t p = 0; p < b.patches; ++p)
     if (b.parent[p] != LightBounce::kNoParent) h.inputs[fill[b.parent[p]]++] = p;
   h.points.assign(pts.begin(), pts.end());
+  h.level = std::move(level);
   return h;
 }
 
@@ -92,9 +94,7 @@ BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::u
   parents_ = upload(b.parent);
   // The lowest level whose patches have cluster rows: the push stops there,
   // and each point reads its patch of that level.
-  std::vector<std::uint32_t> level(b.patches, 0);
-  for (std::uint32_t p = 0; p < b.patches; ++p)
-    if (b.parent[p] != LightBounce::kNoParent) level[b.parent[p]] = std::max(level[b.parent[p]], level[p] + 1);
+  const std::vector<std::uint32_t>& level = h.level;
   lowest_ = level_offsets_.size() - 1;
   for (std::uint32_t p = 0; clusters_ && p < b.patches; ++p)
     if (b.cluster_offsets[p + 1] > b.cluster_offsets[p]) lowest_ = std::min<std::size_t>(lowest_, level[p]);

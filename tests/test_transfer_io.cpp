@@ -1571,6 +1571,23 @@ void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
   EXPECT_EQ(s.bytes.size(), data(8, cluster_entries) + (8 - 2 * cluster_entries % 8) % 8 + kTrailer);
 }
 
+// Writes `t` (an operator's transfer), expects the file of `version` of the
+// size it says, holding the operator's sections, read back identical and
+// written again (to `path`) byte for byte; returns its bytes.
+Sample expect_round_trip(const TempDir& dir, const std::string& path, const Transfer& t, std::uint32_t version) {
+  EXPECT_EQ(prt::transfer_format_version(t), version);
+  const Sample s = sample_file(dir, t);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), version);
+  EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
+  expect_light_bounce_sections(s, t.light_bounce);
+  const Transfer back = prt::read_transfer(dir.file("sample.prtt"));
+  expect_identical(t, back);
+  EXPECT_EQ(file_version(dir.file("sample.prtt")), version);
+  prt::write_transfer(path, back);
+  EXPECT_EQ(read_file(path), s.bytes);
+  return s;
+}
+
 TEST(LightBounceFile, RoundTripIsBitIdenticalAsVersionEight) {
   TempDir dir;
   const std::string path = dir.file("t.prtt");
@@ -1594,16 +1611,7 @@ TEST(LightBounceFile, RoundTripIsBitIdenticalAsVersionEight) {
   for (const auto& [what, t] : cases) {
     SCOPED_TRACE(what);
     ASSERT_EQ(prt::transfer_problem(t), "");
-    EXPECT_EQ(prt::transfer_format_version(t), 8u);
-    const Sample s = sample_file(dir, t);
-    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 8u);
-    EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
-    expect_light_bounce_sections(s, t.light_bounce);
-    const Transfer back = prt::read_transfer(dir.file("sample.prtt"));
-    expect_identical(t, back);
-    EXPECT_EQ(file_version(dir.file("sample.prtt")), 8u);
-    prt::write_transfer(path, back);
-    EXPECT_EQ(read_file(path), s.bytes);
+    const Sample s = expect_round_trip(dir, path, t, 8u);
     // Without the operator: the file of before, byte for byte (its own
     // version, no kinds 14-19); the operator adds only its six sections.
     Transfer plain = t;
@@ -1643,16 +1651,7 @@ TEST(LightBounceFile, ClusterRowsRoundTripBitIdenticalAsVersionNine) {
   for (const auto& [what, t] : cases) {
     SCOPED_TRACE(what);
     ASSERT_EQ(prt::transfer_problem(t), "");
-    EXPECT_EQ(prt::transfer_format_version(t), 9u);
-    const Sample s = sample_file(dir, t);
-    EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 9u);
-    EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
-    expect_light_bounce_sections(s, t.light_bounce);
-    const Transfer back = prt::read_transfer(dir.file("sample.prtt"));
-    expect_identical(t, back);
-    EXPECT_EQ(file_version(dir.file("sample.prtt")), 9u);
-    prt::write_transfer(path, back);
-    EXPECT_EQ(read_file(path), s.bytes);
+    const Sample s = expect_round_trip(dir, path, t, 9u);
     // Without the cluster rows: the version 8 file, byte for byte; the rows
     // add only their three sections.
     Transfer flat = t;
