@@ -35,6 +35,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -165,6 +166,18 @@ int main(int argc, char** argv) {
         {"point, low", point(c + glm::dvec3(-0.2 * e.x, -0.3 * e.y, 0.25 * e.z), 3.0)},
         {"spot", spot},
         {"sun", sun}};
+    // The direct light alone: with an operator in the file, a renderer of
+    // the transfer without it (the bounce is section 3's).
+    std::optional<prt::Renderer> plain;
+    if (table && !t.transfer.light_bounce.empty()) {
+      prt::LightmapTransfer direct_only = t;
+      direct_only.transfer.light_bounce = {};
+      plain.emplace();
+      plain->set_scene(scene, direct_only);
+      plain->set_lighting(std::vector<glm::dvec3>(nc, glm::dvec3(0.0)));
+      plain->set_light_points(texels.positions, texels.normals, texels.albedo);
+    }
+    prt::Renderer& shadows = plain ? *plain : r;
     if (table) std::printf("| light | 256 | 512 | 1024 | 2048 | 4096 |\n|---|---|---|---|---|---|\n");
     for (const auto& [name, light] : cases) {
       if (!table) break;
@@ -172,10 +185,10 @@ int main(int argc, char** argv) {
       const std::vector<glm::vec3> cpu = traced.radiance(one, texels.positions, texels.normals, texels.albedo);
       std::printf("| %s |", name);
       for (int size : {256, 512, 1024, 2048, 4096}) {
-        r.set_shadow_map_size(size);
-        r.set_lights(one);
-        r.render(cam, 64, 36);
-        const std::vector<glm::vec3> gpu = r.lightmap_radiance();
+        shadows.set_shadow_map_size(size);
+        shadows.set_lights(one);
+        shadows.render(cam, 64, 36);
+        const std::vector<glm::vec3> gpu = shadows.lightmap_radiance();
         const Agreement a = agreement(gpu, cpu);
         std::printf(" %.2f%% (%.2f%%) |", 100 * a.rel_rms, 100 * a.flipped);
       }
@@ -200,37 +213,64 @@ int main(int argc, char** argv) {
     // The sky is relit every frame with the lights (4 lights and a sun: the
     // sun turns with it) or kept (one light moving: only the lights' part is
     // added again to the sky's radiance, as an engine's static lightmap).
-    const auto timed = [&](bool lit, std::uint64_t budget) {
+    // The static frame is drawn by a second renderer of the same scene, in
+    // runs between the lit ones, so that both see the same load on this
+    // shared machine (whose speed drifts by tens of percent in minutes).
+    prt::Renderer still;
+    still.set_scene(scene, t);
+    still.set_lighting(std::vector<glm::dvec3>(nc, glm::dvec3(0.0)));
+    still.set_lightmap_relight(false);
+    still.render(cam, 1280, 720);  // its one relight
+    const auto median = [](std::vector<double> ms) {
+      std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
+      return ms[ms.size() / 2];
+    };
+    struct Timing {
+      double lit_ms = 0, static_ms = 0, maps = 0;
+    };
+    const auto timed = [&](std::uint64_t budget) {
       r.set_lights({});
-      r.set_lightmap_relight(lit && !one_light);
+      r.set_lightmap_relight(!one_light);
       r.set_light_bounce_budget(budget);
-      if (lit) r.set_lights(lights_at(0));
-      r.render(cam, 1280, 720);  // warm-up (and the static lightmap's one relight)
+      r.set_lights(lights_at(0));
+      r.render(cam, 1280, 720);  // warm-up
       int maps = 0;
-      std::vector<double> ms;  // each frame's: the median is given (this machine's other work makes outliers)
-      for (int f = 1; f <= frames; ++f) {
+      std::vector<double> lit, base;  // each frame's: the medians are given (this machine's other work makes outliers)
+      const auto clock = [](const std::function<void()>& f) {
         const auto t0 = std::chrono::steady_clock::now();
-        if (lit) r.set_lights(lights_at(f));
-        r.render(cam, 1280, 720);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+        f();
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      };
+      // In runs of kRun frames each, so that neither pays for the other's
+      // caches more than once a run.
+      constexpr int kRun = 5;
+      for (int f = 1, moved = 0; moved < frames; ++f) {
+        if ((f / kRun) % 2 == 0) {
+          base.push_back(clock([&] { still.render(cam, 1280, 720); }));
+          continue;
+        }
+        ++moved;
+        lit.push_back(clock([&] {
+          r.set_lights(lights_at(moved));
+          r.render(cam, 1280, 720);
+        }));
         maps += r.shadow_maps_drawn();
       }
-      std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
-      return std::make_pair(ms[ms.size() / 2], double(maps) / frames);
+      return Timing{median(lit), median(base), double(maps) / frames};
     };
     const bool bounce = !t.transfer.light_bounce.empty();
-    const auto [base_ms, base_maps] = timed(false, 0);
-    std::printf("\nframe 1280x720 (%s), the median of %d frames each:\n", r.device().c_str(), frames);
-    std::printf("  static lightmapped frame: %.2f ms\n", base_ms);
-    (void)base_maps;
+    std::printf("\nframe 1280x720 (%s), the median of %d frames each, the static lightmapped frame drawn in runs "
+                "between the lit ones:\n",
+                r.device().c_str(), frames);
     std::vector<std::uint64_t> runs{0};
     if (bounce) runs.insert(runs.end(), budgets.begin(), budgets.end());
     for (std::uint64_t budget : runs) {
-      const auto [lit_ms, lit_maps] = timed(true, budget);
-      std::printf("  relit, %s: %.2f ms (%.2fx; the lights' update %.2f ms, %.2fx the static frame), %.1f shadow "
-                  "maps redrawn per frame at %d texels%s\n",
-                  one_light ? "1 moving point light" : "4 moving point lights and a turning sun", lit_ms,
-                  lit_ms / base_ms, lit_ms - base_ms, (lit_ms - base_ms) / base_ms, lit_maps, shadow_size,
+      const Timing m = timed(budget);
+      std::printf("  relit, %s: %.2f ms against the static frame's %.2f ms (%.2fx; the lights' update %.2f ms, %.2fx the "
+                  "static frame), %.1f shadow maps redrawn per frame at %d texels%s\n",
+                  one_light ? "1 moving point light" : "4 moving point lights and a turning sun", m.lit_ms, m.static_ms,
+                  m.lit_ms / m.static_ms, m.lit_ms - m.static_ms, (m.lit_ms - m.static_ms) / m.static_ms, m.maps,
+                  shadow_size,
                   !bounce          ? ""
                   : budget == 0    ? ", its bounce whole every frame"
                                    : (", its bounce within " + std::to_string(budget) + " units a frame").c_str());

@@ -35,6 +35,8 @@ class BouncePass {
   // The buffer the lights pass writes the direct light into (a vec4 per
   // point), zeroed by clear_direct().
   GLuint direct() const { return radiance_; }
+  // radiance_'s layers: the direct light, then bounces 1..B, points() vec4s each.
+  int layers() const { return bounces_ + 1; }
   void clear_direct();
   // direct() was rewritten (a light moved): the bounces catch up as step()
   // sweeps again.

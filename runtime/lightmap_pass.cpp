@@ -139,7 +139,7 @@ GLuint LightmapPass::program(int pass, int coeffs) {
   return programs_[key] = gl::link_compute(shaders::lightmap_comp_glsl, "lightmap relight", defines);
 }
 
-void LightmapPass::relight(int band_limit, bool direct, bool sky, const std::function<void(GLuint radiance)>& add) {
+void LightmapPass::relight(int band_limit, bool direct, bool sky, const Lights& lights) {
   const auto dispatch = [&](std::size_t count) {
     glUniform1ui(0, GLuint(count));
     glUniform1ui(1, GLuint(width_));
@@ -149,29 +149,43 @@ void LightmapPass::relight(int band_limit, bool direct, bool sky, const std::fun
       glDispatchCompute(GLuint(std::min<std::size_t>(work_groups_, groups - g)), 1, 1);
     }
   };
-  if (!sky_kept_) sky = true;
+  if (!radiance_sky_ && !sky_kept_) sky = true;
   if (sky) {
     glUseProgram(program(0, band_limit * band_limit));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, direct && direct_ ? direct_ : rows_);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
     dispatch(texels_);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    radiance_sky_ = true;
     sky_kept_ = false;
   }
-  // The sky's radiance kept for frames where only the lights change.
+  // Light added into radiance_: the sky's kept aside in sky_ first, and
+  // copied back into radiance_ on the relights that keep it.
   const auto bytes = GLsizeiptr(texels_ * 16);
-  if (!sky) {
+  if (lights.add) {
+    if (radiance_sky_) {
+      glCopyNamedBufferSubData(radiance_, sky_, 0, 0, bytes);
+      sky_kept_ = true;
+    } else {
+      glCopyNamedBufferSubData(sky_, radiance_, 0, 0, bytes);
+    }
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    lights.add(radiance_);
+    radiance_sky_ = false;
+  } else if (!radiance_sky_) {
     glCopyNamedBufferSubData(sky_, radiance_, 0, 0, bytes);
-  } else if (add) {
-    glCopyNamedBufferSubData(radiance_, sky_, 0, 0, bytes);
-    sky_kept_ = true;
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    radiance_sky_ = true;
   }
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  if (add) add(radiance_);
+  last_ = {{}, lights.layers, lights.layers ? lights.layer_count : 0};
   glUseProgram(program(1, 0));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, writes_buffer_);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, last_.layers ? last_.layers : radiance_);
+  glUniform1ui(3, GLuint(last_.layer_count));
+  glUniform1ui(4, GLuint(texels_));
   glBindImageTexture(0, lightmap_, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   dispatch(writes_);
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   gl::check_gl("the lightmap pass");
@@ -206,9 +220,16 @@ void LightmapPass::draw_geometry() const {
 
 std::vector<glm::vec3> LightmapPass::radiance() const {
   std::vector<glm::vec4> r(texels_);
-  if (texels_) glGetNamedBufferSubData(radiance_, 0, GLsizeiptr(texels_ * 16), r.data());
   std::vector<glm::vec3> out(texels_);
+  if (!texels_) return out;
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(radiance_, 0, GLsizeiptr(texels_ * 16), r.data());
   for (std::size_t i = 0; i < texels_; ++i) out[i] = glm::vec3(r[i]);
+  // The layers the image's writes summed, in the same order.
+  for (int k = 0; k < last_.layer_count; ++k) {
+    glGetNamedBufferSubData(last_.layers, GLintptr(std::size_t(k) * texels_ * 16), GLsizeiptr(texels_ * 16), r.data());
+    for (std::size_t i = 0; i < texels_; ++i) out[i] += glm::vec3(r[i]);
+  }
   return out;
 }
 

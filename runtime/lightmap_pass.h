@@ -36,14 +36,22 @@ class LightmapPass {
   std::size_t texels() const { return texels_; }
   std::size_t bytes() const { return bytes_; }
 
+  // The lights' share of a relight: `add` adds their light to the covered
+  // texels' radiance (a vec4 buffer), or the image's writes sum
+  // `layer_count` arrays of texels() vec4s from `layers` on top of the sky's
+  // radiance (the lights' direct light and bounces, bounce_pass.h: no pass
+  // of its own, and the sky's radiance never copied).
+  struct Lights {
+    std::function<void(GLuint radiance)> add;
+    GLuint layers = 0;
+    int layer_count = 0;
+  };
   // Relights the covered texels (the direct part with `direct`) with the
   // lighting block at uniform binding 1 (its first band_limit^2 vec4s),
-  // and writes the lightmap image. `add` (when set) adds to the covered
-  // texels' radiance (a vec4 buffer) before the image is written: the
-  // lights' direct light and bounce. `sky` false: only the lights changed,
-  // and the sky's radiance of the last relight with `add` is kept (relit
-  // anyway when there is none).
-  void relight(int band_limit, bool direct, bool sky, const std::function<void(GLuint radiance)>& add = {});
+  // adds `lights`, and writes the lightmap image. `sky` false: only the
+  // lights changed, and the sky's radiance of the last relight is kept
+  // (relit anyway when there is none).
+  void relight(int band_limit, bool direct, bool sky, const Lights& lights);
   // Draws every triangle with the bound program, positions at attribute 0
   // (the lights' shadow maps).
   void draw_geometry() const;
@@ -60,7 +68,9 @@ class LightmapPass {
   std::size_t texels_ = 0, writes_ = 0, bytes_ = 0;
   std::uint64_t work_groups_ = 65535;
   GLuint rows_ = 0, direct_ = 0, radiance_ = 0, sky_ = 0, writes_buffer_ = 0;
-  bool sky_kept_ = false;  // sky_ holds the last relight's sky radiance
+  bool sky_kept_ = false;     // sky_ holds the last relight's sky radiance
+  bool radiance_sky_ = false; // radiance_ holds it (nothing added since)
+  Lights last_;               // the last relight's layers, for radiance()
   GLuint lightmap_ = 0, texel_albedo_ = 0;
   GLuint vao_ = 0, positions_ = 0, uv_base_ = 0, uv_lightmap_ = 0, indices_ = 0;
   GLuint draw_program_ = 0;

@@ -216,7 +216,7 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   glNamedBufferSubData(light_buffer_, 0, GLsizeiptr(bytes), g.data());
 
   glUseProgram(apply_program_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, light_buffer_);
+  glBindBufferRange(GL_UNIFORM_BUFFER, 3, light_buffer_, 0, GLsizeiptr(bytes));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, points.positions);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, points.normals);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, points.albedo_buffer ? points.albedo_buffer : points.positions);

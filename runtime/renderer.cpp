@@ -468,8 +468,7 @@ bool Renderer::light_bounce_done() const {
 bool Renderer::has_light_bounce() const { return impl_->bounce != nullptr; }
 
 bool Renderer::Impl::bounce_pending() const {
-  return bounce && lights && !lights->empty() && shading != Shading::Direct &&
-         (bounce_version != lights_version || !bounce->done());
+  return lights_bounce() && (bounce_version != lights_version || !bounce->done());
 }
 
 void Renderer::Impl::set_bounds(const Mesh& mesh) {
@@ -536,69 +535,103 @@ GLuint Renderer::Impl::lit_colors(const glm::dvec3& eye) {
   return lit_color_buffer;
 }
 
+Renderer::Impl::LightTargets Renderer::Impl::light_targets(const glm::dvec3& eye) {
+  LightTargets t;
+  if (lightmap) {
+    t.points = {light_points[0], light_points[1], light_points[2], glm::vec3(1.0f), light_point_count};
+    t.occluders = [this] { lightmap->draw_geometry(); };
+    return t;
+  }
+  t.points = {position_buffer, normal_buffer, albedo_buffer, albedo, vertex_count};
+  if (shading == Shading::Glossy && has_glossy) {  // prt relight --eye: --diffuse or the transfer's, and the lobe
+    if (!(lobe.diffuse.x < 0 && lobe.diffuse.y < 0 && lobe.diffuse.z < 0)) {
+      t.points.albedo_buffer = 0;
+      t.points.albedo = glm::vec3(lobe.diffuse);
+    }
+    t.points.eye = glm::vec3(eye);
+    t.points.gloss = float(lobe.gloss);
+    t.points.specular = float(lobe.specular);
+  }
+  if (zh) {
+    // A deforming mesh: its pose (zh_relight's) moved the occluders, maybe
+    // beyond the rest pose's bounds, which fit the directional lights'
+    // maps: every map is redrawn, around the pose's own bounds (read back:
+    // 12 bytes a vertex).
+    Mesh posed;
+    posed.positions.resize(vertex_count);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetNamedBufferSubData(position_buffer, 0, GLsizeiptr(vertex_count * sizeof(glm::vec3)), posed.positions.data());
+    set_bounds(posed);
+  }
+  t.occluders = [this] {
+    glBindVertexArray(vao);
+    glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
+  };
+  return t;
+}
+
+bool Renderer::Impl::lights_bounce() const {
+  return lights && !lights->empty() && bounce && shading != Shading::Direct &&
+         bounce->points() == (lightmap ? light_point_count : vertex_count);
+}
+
+namespace {
+// The lights pass draws its shadow maps into framebuffers of its own: the
+// caller's framebuffer and viewport come back when this goes.
+class KeepFramebuffer {
+ public:
+  KeepFramebuffer() {
+    glGetIntegerv(GL_VIEWPORT, viewport_);
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer_);
+  }
+  ~KeepFramebuffer() {
+    glBindFramebuffer(GL_FRAMEBUFFER, GLuint(framebuffer_));
+    glViewport(viewport_[0], viewport_[1], viewport_[2], viewport_[3]);
+  }
+  KeepFramebuffer(const KeepFramebuffer&) = delete;
+  KeepFramebuffer& operator=(const KeepFramebuffer&) = delete;
+
+ private:
+  GLint viewport_[4]{};
+  GLint framebuffer_ = 0;
+};
+
+std::string lights_points_problem(std::size_t texels, std::size_t given) {
+  return fmt::format("lights on a lightmap need its {} texels' points (set_light_points; {} given)", texels, given);
+}
+}  // namespace
+
+void Renderer::Impl::update_lights_bounce(const glm::dvec3& eye) {
+  PRT_CHECK(lights_bounce());
+  const LightTargets t = light_targets(eye);
+  // The direct light into the bounce pass's own buffer when the lights
+  // changed, then its bounces brought up to date (within the budget).
+  if (bounce_version != lights_version) {
+    const KeepFramebuffer keep;
+    detail::LightsPass::Points at_points = t.points;
+    at_points.radiance_stride = 4;
+    bounce->clear_direct();
+    lights->apply(t.occluders, at_points, bounce->direct(), std::max<std::uint64_t>(limits.work_groups, 1));
+    bounce->direct_changed();
+    bounce_version = lights_version;
+  }
+  bounce->step(bounce_budget, t.points.albedo_buffer, t.points.albedo);
+}
+
 void Renderer::Impl::apply_lights(GLuint radiance, const glm::dvec3& eye, int radiance_stride,
                                   const detail::LightsPass::Points* object) {
   if (!lights || lights->empty()) return;
-  detail::LightsPass::Points pts;
-  std::function<void()> occluders;
-  if (lightmap) {
-    if (!object && light_point_count != lightmap->texels())
-      throw Error(fmt::format("lights on a lightmap need its {} texels' points (set_light_points; {} given)",
-                              lightmap->texels(), light_point_count));
-    pts = {light_points[0], light_points[1], light_points[2], glm::vec3(1.0f), light_point_count};
-    occluders = [this] { lightmap->draw_geometry(); };
-  } else {
-    pts = {position_buffer, normal_buffer, albedo_buffer, albedo, vertex_count};
-    if (shading == Shading::Glossy && has_glossy) {  // prt relight --eye: --diffuse or the transfer's, and the lobe
-      if (!(lobe.diffuse.x < 0 && lobe.diffuse.y < 0 && lobe.diffuse.z < 0)) {
-        pts.albedo_buffer = 0;
-        pts.albedo = glm::vec3(lobe.diffuse);
-      }
-      pts.eye = glm::vec3(eye);
-      pts.gloss = float(lobe.gloss);
-      pts.specular = float(lobe.specular);
-    }
-    if (zh) {
-      // A deforming mesh: its pose (zh_relight's) moved the occluders, maybe
-      // beyond the rest pose's bounds, which fit the directional lights'
-      // maps: every map is redrawn, around the pose's own bounds (read back:
-      // 12 bytes a vertex).
-      Mesh posed;
-      posed.positions.resize(vertex_count);
-      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-      glGetNamedBufferSubData(position_buffer, 0, GLsizeiptr(vertex_count * sizeof(glm::vec3)), posed.positions.data());
-      set_bounds(posed);
-    }
-    occluders = [this] {
-      glBindVertexArray(vao);
-      glDrawElements(GL_TRIANGLES, index_count, GL_UNSIGNED_INT, nullptr);
-    };
-  }
-  GLint viewport[4];
-  GLint framebuffer = 0;
-  glGetIntegerv(GL_VIEWPORT, viewport);
-  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &framebuffer);
-  pts.radiance_stride = radiance_stride;
-  const std::uint64_t groups = std::max<std::uint64_t>(limits.work_groups, 1);
-  if (bounce && !object && shading != Shading::Direct && bounce->points() == pts.count) {
-    // The direct light into the bounce pass's own buffer when the lights
-    // changed, its bounces brought up to date (within the budget), then both
-    // into `radiance` (prt relight: direct + light_bounce).
-    if (bounce_version != lights_version) {
-      detail::LightsPass::Points at_points = pts;
-      at_points.radiance_stride = 4;
-      bounce->clear_direct();
-      lights->apply(occluders, at_points, bounce->direct(), groups);
-      bounce->direct_changed();
-      bounce_version = lights_version;
-    }
-    bounce->step(bounce_budget, pts.albedo_buffer, pts.albedo);
+  if (lightmap && !object && light_point_count != lightmap->texels())
+    throw Error(lights_points_problem(lightmap->texels(), light_point_count));
+  if (!object && lights_bounce()) {  // prt relight: direct + light_bounce
+    update_lights_bounce(eye);
     bounce->add(radiance, radiance_stride);
-  } else {
-    lights->apply(occluders, object ? *object : pts, radiance, groups);
+    return;
   }
-  glBindFramebuffer(GL_FRAMEBUFFER, GLuint(framebuffer));
-  glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+  LightTargets t = light_targets(eye);
+  t.points.radiance_stride = radiance_stride;
+  const KeepFramebuffer keep;
+  lights->apply(t.occluders, object ? *object : t.points, radiance, std::max<std::uint64_t>(limits.work_groups, 1));
 }
 
 std::vector<glm::vec3> Renderer::lightmap_radiance() const {
@@ -860,10 +893,17 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     // lights added again when they changed or their bounce is catching up.
     const bool sky = m.lightmap_relight || !m.lightmap_relit || m.sky_stale;
     if (sky || m.lights_drawn != m.lights_version || m.bounce_pending()) {
-      const bool with_lights = m.lights && !m.lights->empty();
-      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, sky,
-                          with_lights ? std::function<void(GLuint)>([&](GLuint radiance) { m.apply_lights(radiance, cam.eye); })
-                              : std::function<void(GLuint)>());
+      // The lights' direct light and bounce as layers the image's writes
+      // sum (bounce_pass.h), or their direct light alone added in.
+      detail::LightmapPass::Lights on;
+      if (m.lights_bounce()) {
+        m.update_lights_bounce(cam.eye);
+        on.layers = m.bounce->direct();
+        on.layer_count = m.bounce->layers();
+      } else if (m.lights && !m.lights->empty()) {
+        on.add = [&](GLuint radiance) { m.apply_lights(radiance, cam.eye); };
+      }
+      m.lightmap->relight(m.band_limit, m.shading == Shading::Direct, sky, on);
       m.lights_drawn = m.lights_version;
     }
     m.lightmap_relit = true;

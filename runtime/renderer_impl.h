@@ -208,6 +208,19 @@ struct Renderer::Impl {
   // points; radiance_stride floats per point (4: radiance_buffer; 3: colours).
   void apply_lights(GLuint radiance, const glm::dvec3& eye, int radiance_stride = 4,
                     const detail::LightsPass::Points* object = nullptr);
+  // The points the lights shade (a lightmap's texels, or the mesh's vertices
+  // with a glossy shading's lobe toward `eye`) and what casts their shadows.
+  struct LightTargets {
+    detail::LightsPass::Points points;
+    std::function<void()> occluders;
+  };
+  LightTargets light_targets(const glm::dvec3& eye);
+  // The lights bounce through the transfer's operator (lights, an operator
+  // over the shaded points, shading other than Direct).
+  bool lights_bounce() const;
+  // Their direct light into the bounce pass when they changed, and their
+  // bounce brought up to date within the budget (lights_bounce() holds).
+  void update_lights_bounce(const glm::dvec3& eye);
   // color_buffer, or with lights a copy of it plus their direct light.
   GLuint lit_colors(const glm::dvec3& eye);
   bool lightmap_detail = true, lightmap_relight = true, lightmap_relit = false;

@@ -5,8 +5,9 @@
 // lightmap image: the covered texels and the gutter texels, each copying the
 // radiance of its source texel (itself, or the covered texel its gutter ring
 // came from), A = 1 for covered texels and 0 for gutters (prt::lightmap_image's
-// layout). Rows are dense: [texel][channel][NC] floats, analytic texels
-// evaluated on the CPU when the scene is set. The renderer compiles one
+// layout), plus the lights' layers when there are any. Rows are dense:
+// [texel][channel][NC] floats, analytic texels evaluated on the CPU when the
+// scene is set. The renderer compiles one
 // program per (COEFFS, NC, CHANNELS, PASS): COEFFS = the live band limit's
 // bands^2 <= NC = the transfer's.
 layout(local_size_x = 64) in;
@@ -37,13 +38,20 @@ void main() {
 layout(std430, binding = 2) readonly buffer Radiance { vec4 radiance[]; };
 // (texel y * width + x, source covered texel | 0x80000000 for a gutter)
 layout(std430, binding = 3) readonly buffer Writes { uvec2 writes[]; };
+// The lights' layers summed on top (u_layers arrays of u_texels, the
+// direct light and each bounce: bounce_pass.h), in the order prt relight adds.
+layout(std430, binding = 4) readonly buffer Layers { vec4 layers[]; };
+layout(location = 3) uniform uint u_layers;
+layout(location = 4) uniform uint u_texels;
 layout(rgba32f, binding = 0) uniform writeonly image2D u_lightmap;
 void main() {
   const uint i = u_first + gl_GlobalInvocationID.x;
   if (i >= u_count) return;
   const uvec2 w = writes[i];
   const bool gutter = (w.y & 0x80000000u) != 0u;
-  const vec3 b = radiance[w.y & 0x7fffffffu].rgb;
+  const uint t = w.y & 0x7fffffffu;
+  vec3 b = radiance[t].rgb;
+  for (uint k = 0u; k < u_layers; ++k) b += layers[k * u_texels + t].rgb;
   imageStore(u_lightmap, ivec2(int(w.x % u_width), int(w.x / u_width)), vec4(b, gutter ? 0.0 : 1.0));
 }
 #endif

@@ -19,7 +19,7 @@ struct GpuLight {
   vec4 p3;  // x, y: the spot's scale and offset; z: a shadow texel's world size (at distance 1 for cubes)
   mat4 view_proj;  // directional: world -> the shadow map's clip space
 };
-layout(std430, binding = 0) readonly buffer Lights { GpuLight lights[]; };
+layout(std140, binding = 3) uniform Lights { GpuLight lights[256]; };
 layout(std430, binding = 1) readonly buffer Positions { float pos[]; };
 layout(std430, binding = 2) readonly buffer Normals { float nrm[]; };
 layout(std430, binding = 3) readonly buffer Albedo { float alb[]; };
