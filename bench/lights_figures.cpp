@@ -113,6 +113,47 @@ void convergence(const prt::Scene& scene, const prt::LightmapTransfer& t, const 
   }
 }
 
+struct Timing {
+  double lit_ms = 0, static_ms = 0, maps = 0;
+};
+// Section 2's frames: `frames` of `r` with the lights moving (the sky relit
+// with them unless `one_light`) and as many static frames of `still`, in runs
+// of kRun each, so that neither pays for the other's caches more than once
+// a run; the medians (this machine's other work makes outliers).
+Timing time_frames(prt::Renderer& r, prt::Renderer& still, const prt::Camera& cam, bool one_light,
+                   std::uint64_t budget, int frames, const std::function<std::vector<prt::Light>(double)>& lights_at) {
+  const auto median = [](std::vector<double> ms) {
+    std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
+    return ms[ms.size() / 2];
+  };
+  const auto clock = [](const std::function<void()>& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  };
+  r.set_lights({});
+  r.set_lightmap_relight(!one_light);
+  r.set_light_bounce_budget(budget);
+  r.set_lights(lights_at(0));
+  r.render(cam, 1280, 720);  // warm-up
+  int maps = 0;
+  std::vector<double> lit, base;
+  constexpr int kRun = 5;
+  for (int f = 1, moved = 0; moved < frames; ++f) {
+    if ((f / kRun) % 2 == 0) {
+      base.push_back(clock([&] { still.render(cam, 1280, 720); }));
+      continue;
+    }
+    ++moved;
+    lit.push_back(clock([&] {
+      r.set_lights(lights_at(moved));
+      r.render(cam, 1280, 720);
+    }));
+    maps += r.shadow_maps_drawn();
+  }
+  return Timing{median(lit), median(base), double(maps) / frames};
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -221,43 +262,6 @@ int main(int argc, char** argv) {
     still.set_lighting(std::vector<glm::dvec3>(nc, glm::dvec3(0.0)));
     still.set_lightmap_relight(false);
     still.render(cam, 1280, 720);  // its one relight
-    const auto median = [](std::vector<double> ms) {
-      std::nth_element(ms.begin(), ms.begin() + std::ptrdiff_t(ms.size() / 2), ms.end());
-      return ms[ms.size() / 2];
-    };
-    struct Timing {
-      double lit_ms = 0, static_ms = 0, maps = 0;
-    };
-    const auto timed = [&](std::uint64_t budget) {
-      r.set_lights({});
-      r.set_lightmap_relight(!one_light);
-      r.set_light_bounce_budget(budget);
-      r.set_lights(lights_at(0));
-      r.render(cam, 1280, 720);  // warm-up
-      int maps = 0;
-      std::vector<double> lit, base;  // each frame's: the medians are given (this machine's other work makes outliers)
-      const auto clock = [](const std::function<void()>& f) {
-        const auto t0 = std::chrono::steady_clock::now();
-        f();
-        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      };
-      // In runs of kRun frames each, so that neither pays for the other's
-      // caches more than once a run.
-      constexpr int kRun = 5;
-      for (int f = 1, moved = 0; moved < frames; ++f) {
-        if ((f / kRun) % 2 == 0) {
-          base.push_back(clock([&] { still.render(cam, 1280, 720); }));
-          continue;
-        }
-        ++moved;
-        lit.push_back(clock([&] {
-          r.set_lights(lights_at(moved));
-          r.render(cam, 1280, 720);
-        }));
-        maps += r.shadow_maps_drawn();
-      }
-      return Timing{median(lit), median(base), double(maps) / frames};
-    };
     const bool bounce = !t.transfer.light_bounce.empty();
     std::printf("\nframe 1280x720 (%s), the median of %d frames each, the static lightmapped frame drawn in runs "
                 "between the lit ones:\n",
@@ -265,7 +269,7 @@ int main(int argc, char** argv) {
     std::vector<std::uint64_t> runs{0};
     if (bounce) runs.insert(runs.end(), budgets.begin(), budgets.end());
     for (std::uint64_t budget : runs) {
-      const Timing m = timed(budget);
+      const Timing m = time_frames(r, still, cam, one_light, budget, frames, lights_at);
       std::printf("  relit, %s: %.2f ms against the static frame's %.2f ms (%.2fx; the lights' update %.2f ms, %.2fx the "
                   "static frame), %.1f shadow maps redrawn per frame at %d texels%s\n",
                   one_light ? "1 moving point light" : "4 moving point lights and a turning sun", m.lit_ms, m.static_ms,
