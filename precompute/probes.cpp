@@ -8,6 +8,7 @@
 #include "progress_ticker.h"
 #include "random.h"
 #include "ray_scene.h"
+#include "transfer_impl.h"
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -126,26 +127,8 @@ struct ProbeScratch {
   detail::Hit hits[8];
 };
 
-// Grid point x moved off the surfaces near it, to the side it is on (the
-// front side when it lies on it), until no surface is within `lift` (a
-// corner: one move per surface).
 glm::vec3 lift_off_surfaces(const ProbeTracing& tr, glm::vec3 x) {
-  const Mesh& mesh = tr.scene.mesh;
-  const double lift = tr.lift;
-  for (int move = 0; move < 4; ++move) {
-    glm::dvec3 at;
-    const std::uint32_t f = tr.rays.closest_point(x, float(lift), at);
-    if (f == ~0u) break;
-    const glm::uvec3& tri = mesh.triangles[f];
-    const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
-    glm::dvec3 n = glm::cross(b - a, c - a);
-    if (!(glm::length(n) > 0)) break;
-    n = glm::normalize(n);
-    const double side = glm::dot(glm::dvec3(x) - at, n);
-    const double sign = side < -1e-3 * lift ? -1.0 : 1.0;
-    x = glm::vec3(glm::dvec3(x) + n * (sign * 2.0 * lift - side));
-  }
-  return x;
+  return detail::lift_off_surfaces(tr.rays, tr.scene.mesh, tr.lift, x);
 }
 
 void set_bit(const ProbeTracing& tr, ProbeScratch& sc, int face, int u, int v) {
@@ -393,6 +376,7 @@ ProbeTransfer compute_probe_transfer(const Scene& scene, const ProbeGrid& grid, 
   const float offset = float(o.offset > 0 ? o.offset : detail::default_ray_offset(mesh));
   double smallest = 0.0;
   ProbeTransfer t = probe_header(scene, grid, o, smallest);
+  (void)smallest;  // the lift below is a twentieth of it (detail::probe_lift)
 
   const int r = o.cube_res, base = std::max(1, r / 4);
   const ProbeTracing tr{scene,
@@ -408,7 +392,7 @@ ProbeTransfer compute_probe_transfer(const Scene& scene, const ProbeGrid& grid, 
                         base,
                         r / base,
                         (std::size_t(6) * r * r + 31) / 32,
-                        0.05 * smallest};
+                        detail::probe_lift(grid)};
   const std::size_t P = grid.count();
   std::vector<ProbeRecord> records(P);
   detail::ProgressTicker ticker(progress, P, "probes");
@@ -457,5 +441,36 @@ double ProbeOcclusion::operator()(const glm::dvec3& probe, const glm::dvec3& p) 
   }
   return open / 5.0;
 }
+
+namespace detail {
+
+double probe_lift(const ProbeGrid& grid) {
+  const glm::dvec3 sp = grid.spacing();
+  const double largest = std::max({sp.x, sp.y, sp.z});
+  double smallest = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+    if (sp[a] > 0) smallest = std::min(smallest, sp[a]);
+  if (!std::isfinite(smallest)) smallest = largest > 0 ? largest : 1.0;
+  return 0.05 * smallest;
+}
+
+glm::vec3 lift_off_surfaces(const RayScene& rays, const Mesh& mesh, double lift, glm::vec3 x) {
+  for (int move = 0; move < 4; ++move) {
+    glm::dvec3 at;
+    const std::uint32_t f = rays.closest_point(x, float(lift), at);
+    if (f == ~0u) break;
+    const glm::uvec3& tri = mesh.triangles[f];
+    const glm::dvec3 a(mesh.positions[tri[0]]), b(mesh.positions[tri[1]]), c(mesh.positions[tri[2]]);
+    glm::dvec3 n = glm::cross(b - a, c - a);
+    if (!(glm::length(n) > 0)) break;
+    n = glm::normalize(n);
+    const double side = glm::dot(glm::dvec3(x) - at, n);
+    const double sign = side < -1e-3 * lift ? -1.0 : 1.0;
+    x = glm::vec3(glm::dvec3(x) + n * (sign * 2.0 * lift - side));
+  }
+  return x;
+}
+
+}  // namespace detail
 
 }  // namespace prt

@@ -20,6 +20,7 @@
 #include <prt/error.h>
 #include <prt/filter.h>
 #include <prt/glossy.h>
+#include <prt/probes.h>
 #include <prt/sh.h>
 
 #include "progress_ticker.h"
@@ -772,6 +773,90 @@ void gather_bounces(const Run& run, Transfer& t, const FirstPass& fp) {
 // significant bits: 0.05% of a weight, against the operator's percent).
 float to_half_precision(double w) { return glm::unpackHalf1x16(glm::packHalf1x16(float(w))); }
 
+// The operator's probe rows (LightBounce::ProbeRows): from each probe of
+// probe_grid(mesh, dims), placed as compute_probe_transfer places it, the
+// transfer's M directions over the sphere (4 pi / M each); a front hit's
+// share of each point around it (bilinear texels, the triangle's corners)
+// goes to that point's patch at level_at(the hit's distance), times
+// Y_k(w), summed in double per (patch, k), stored as halves.
+LightBounce::ProbeRows probe_rows(const Run& run, const detail::SourcePatches& sp,
+                                  const std::function<int(double)>& level_at) {
+  const ProbeGrid grid = probe_grid(run.mesh, run.o.light_bounce_probes);
+  LightBounce::ProbeRows r;
+  r.dims = grid.dims;
+  r.min = grid.min;
+  r.max = grid.max;
+  r.bands = 3;  // L2: what probe volumes light objects with (ProbePass)
+  const int nc = r.bands * r.bands;
+  const std::size_t Q = grid.count(), P = run.V;
+  const double lift = detail::probe_lift(grid);
+  // The first pass's ray scene is gone by now (its memory went to the
+  // bounces): one of the probe volume's kind (robust, as its rays start in
+  // open space) for the probes' rays.
+  const detail::RayScene rays(run.mesh, /*robust=*/true);
+  std::vector<std::vector<std::uint32_t>> sources(Q);
+  std::vector<std::vector<float>> weights(Q);
+  detail::ProgressTicker ticker(run.progress, Q, "probe rows");
+  tbb::parallel_for(std::size_t(0), Q, [&](std::size_t q) {
+    detail::enable_ftz_daz();
+    const int i = int(q % std::size_t(grid.dims[0]));
+    const int j = int((q / std::size_t(grid.dims[0])) % std::size_t(grid.dims[1]));
+    const int k = int(q / (std::size_t(grid.dims[0]) * std::size_t(grid.dims[1])));
+    const glm::vec3 x = detail::lift_off_surfaces(rays, run.mesh, lift, glm::vec3(grid.position(i, j, k)));
+    std::vector<std::pair<std::uint32_t, std::array<double, 9>>> row;
+    std::array<double, 9> y{};
+    detail::Hit hits[8];
+    for (int j0 = 0; j0 < run.M; j0 += 8) {
+      const int count = std::min(8, run.M - j0);
+      rays.intersect8(x, run.dirs.data() + j0, count, run.offset, hits);
+      for (int h = 0; h < count; ++h) {
+        const detail::Hit& hit = hits[h];
+        if (!hit.hit() || !hit.front) continue;
+        const glm::vec3& d = run.dirs[std::size_t(j0 + h)];
+        sh::eval<double>(r.bands, d.x, d.y, d.z, y.data());
+        const int level = level_at(double(hit.t));
+        std::uint32_t idx[4];
+        float wt[4];
+        int np = 0;
+        if (run.src.hit_points) {
+          np = run.src.hit_points->points(hit.triangle, hit.u, hit.v, idx, wt);
+        } else {
+          const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
+          const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
+          for (int c = 0; c < 3; ++c) {
+            idx[np] = tri[c];
+            wt[np++] = bc[c];
+          }
+        }
+        for (int e = 0; e < np; ++e) {
+          if (idx[e] >= P || !(wt[e] > 0.0f)) continue;
+          std::array<double, 9> w{};
+          for (int c = 0; c < nc; ++c) w[std::size_t(c)] = run.w * double(wt[e]) * y[std::size_t(c)];
+          row.emplace_back(sp.of_point[std::size_t(level) * P + idx[e]], w);
+        }
+      }
+    }
+    std::sort(row.begin(), row.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (std::size_t e = 0; e < row.size();) {
+      const std::uint32_t patch = row[e].first;
+      std::array<double, 9> w{};
+      for (; e < row.size() && row[e].first == patch; ++e)
+        for (int c = 0; c < nc; ++c) w[std::size_t(c)] += row[e].second[std::size_t(c)];
+      sources[q].push_back(patch);
+      for (int c = 0; c < nc; ++c) weights[q].push_back(to_half_precision(w[std::size_t(c)]));
+    }
+    ticker.tick(1);
+  });
+  ticker.finish();
+  r.offsets.assign(1, 0);
+  for (std::size_t q = 0; q < Q; ++q) {
+    r.source.insert(r.source.end(), sources[q].begin(), sources[q].end());
+    r.weight.insert(r.weight.end(), weights[q].begin(), weights[q].end());
+    r.offsets.push_back(std::uint32_t(r.source.size()));
+  }
+  return r;
+}
+
 LightBounce keep_light_bounce(const Run& run, const FirstPass& fp, int bounces) {
   static_assert(kMaxLightBounces == kMaxBounces);
   LightBounce b;
@@ -818,6 +903,7 @@ LightBounce keep_light_bounce(const Run& run, const FirstPass& fp, int bounces) 
       b.offsets[run.r0 + i + 1] = std::uint32_t(b.source.size());
     }
   }
+  if (run.o.light_bounce_probes[0] > 0) b.probes = probe_rows(run, sp, level_at);
   // Far hits gathered once per cluster of receivers (prt::link_clusters).
   if (run.o.light_bounce_clusters >= 0) b = link_clusters(b, run.o.light_bounce_clusters);
   return b;

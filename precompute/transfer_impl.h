@@ -226,6 +226,14 @@ struct SourcePatches {
 };
 SourcePatches source_patches(const glm::vec3* positions, const glm::vec3* normals, std::size_t count, double cell);
 
+// A probe grid point nearer a surface than probe_lift(grid) (a twentieth of
+// its smallest spacing) is moved twice that off it, to the side it is on
+// (the front when it lies on it), once per surface (a corner):
+// compute_probe_transfer's probes and the light-bounce operator's probe rows
+// stand at the same places.
+double probe_lift(const ProbeGrid& grid);
+glm::vec3 lift_off_surfaces(const RayScene& rays, const Mesh& mesh, double lift, glm::vec3 x);
+
 // Throws prt::Error for options.light_bounce: adaptive sample points
 // interpolate some points' transfer, which then have no gather row.
 void refuse_adaptive_light_bounce(const TransferOptions& options);

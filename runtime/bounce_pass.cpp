@@ -6,6 +6,8 @@
 #include "shaders.h"
 
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 
 #include <algorithm>
 #include <vector>
@@ -15,7 +17,15 @@ namespace prt::detail {
 namespace {
 
 // The shader's steps (shaders/bounce.comp.glsl).
-enum Step : GLuint { kFinestMeans = 0, kPointRows = 1, kAdd = 2, kLevelMeans = 3, kClusterRows = 4, kPush = 5 };
+enum Step : GLuint {
+  kFinestMeans = 0,
+  kPointRows = 1,
+  kAdd = 2,
+  kLevelMeans = 3,
+  kClusterRows = 4,
+  kPush = 5,
+  kProbeRows = 6
+};
 
 // The patches by level (finest first; a parent is one level above its
 // children), and what each patch's mean is taken over: a finest patch's
@@ -77,7 +87,9 @@ BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::u
   const std::pair<const char*, std::size_t> arrays[] = {
       {"the patches' inputs", h.inputs.size() * 4}, {"the rows' sources", b.source.size() * 4},
       {"the rows' weights", b.weight.size() * 4},   {"the clusters' sources", b.cluster_source.size() * 4},
-      {"the points' direct light and bounces", points_ * 16 * std::size_t(bounces_ + 1)}};
+      {"the points' direct light and bounces", points_ * 16 * std::size_t(bounces_ + 1)},
+      {"the probes' rows' weights", b.probes.weight.size() * 4},
+      {"the probes' SH", probes_ * 9 * 16}};
   for (const auto& [what, bytes] : arrays)
     if (bytes > storage_block)
       throw Error(fmt::format("the light-bounce operator's {} take {} bytes in one storage buffer; this OpenGL's "
@@ -117,6 +129,20 @@ BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::u
   cluster_row_offsets_ = upload(clusters_ ? b.cluster_offsets : std::vector<std::uint32_t>(patches_ + 1, 0));
   cluster_sources_ = upload(b.cluster_source);
   cluster_weights_ = upload(b.cluster_weight);
+  probes_ = b.probes.probes();
+  probe_grid_ = b.probes.dims;
+  probe_min_ = b.probes.min;
+  probe_max_ = b.probes.max;
+  if (probes_ > 0) {
+    if (b.probes.bands != 3)
+      throw Error(fmt::format("the light-bounce operator's probe rows have {} bands; the probe-lit object takes 3",
+                              b.probes.bands));
+    probe_row_offsets_ = upload(b.probes.offsets);
+    probe_sources_ = upload(b.probes.source);
+    probe_weights_ = upload(b.probes.weight);
+    probe_means_ = gl::make_buffer(nullptr, patches_ * 16, GL_DYNAMIC_STORAGE_BIT);
+    probe_sh_ = gl::make_buffer(nullptr, probes_ * 9 * 16, GL_DYNAMIC_STORAGE_BIT);
+  }
   const float zero = 0.0f;
   // The direct light and every bounce, one after the other (the add step
   // sums them in one pass).
@@ -132,7 +158,8 @@ BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::u
 BouncePass::~BouncePass() {
   const GLuint buffers[] = {order_,   input_offsets_,       inputs_,           patch_points_,    parents_,
                             point_patch_, row_offsets_,     sources_,          weights_,         cluster_row_offsets_,
-                            cluster_sources_, cluster_weights_, radiance_,     means_,           pushed_};
+                            cluster_sources_, cluster_weights_, radiance_,     means_,           pushed_,
+                            probe_row_offsets_, probe_sources_, probe_weights_, probe_means_, probe_sh_};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   glDeleteProgram(program_);
 }
@@ -165,14 +192,45 @@ void BouncePass::dispatch(GLuint step, std::size_t first, std::size_t end) {
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
-void BouncePass::means(int input) {
+void BouncePass::means(int input, int pieces, GLuint out) {
   // Up the levels: the finest patches over their points, each coarser one
   // over its children.
-  const GLuint bind[][2] = {{0, input_offsets_}, {1, inputs_}, {2, radiance_}, {3, means_}, {4, patch_points_}, {6, order_}};
+  const GLuint bind[][2] = {{0, input_offsets_}, {1, inputs_}, {2, radiance_}, {3, out}, {4, patch_points_}, {6, order_}};
   for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
   glUniform1ui(6, GLuint(input));  // which of the points' radiances: 0 the direct light, k bounce k
+  glUniform1ui(7, GLuint(pieces));
   for (std::size_t l = 0; l + 1 < level_offsets_.size(); ++l)
     dispatch(l == 0 ? kFinestMeans : kLevelMeans, level_offsets_[l], level_offsets_[l + 1]);
+}
+
+void BouncePass::probe_light() {
+  if (probes_ == 0) return;
+  glUseProgram(program_);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  // The patches' means of the direct light and every bounce as they stand,
+  // then each probe's row.
+  means(0, bounces_ + 1, probe_means_);
+  const GLuint bind[][2] = {{0, probe_row_offsets_}, {1, probe_sources_}, {3, probe_means_}, {4, probe_weights_},
+                            {5, probe_sh_}};
+  for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+  dispatch(kProbeRows, 0, probes_);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  gl::check_gl("the light-bounce pass's probes");
+}
+
+bool BouncePass::probe_box_matches(const glm::dvec3& min, const glm::dvec3& max) const {
+  const double tol = 1e-6 * std::max(glm::length(probe_max_ - probe_min_), 1e-30);
+  return glm::length(min - probe_min_) <= tol && glm::length(max - probe_max_) <= tol;
+}
+
+std::vector<glm::vec3> BouncePass::probe_sh() const {
+  std::vector<glm::vec4> v(probes_ * 9);
+  std::vector<glm::vec3> out(v.size());
+  if (v.empty()) return out;
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glGetNamedBufferSubData(probe_sh_, 0, GLsizeiptr(v.size() * 16), v.data());
+  for (std::size_t i = 0; i < v.size(); ++i) out[i] = glm::vec3(v[i]);
+  return out;
 }
 
 void BouncePass::push() {
@@ -210,7 +268,7 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, const glm::vec
     switch (phase_) {
       case Phase::Means:  // the sweep begins: its input's patch means, as they stand now
         sweep_clean_ = level_ <= clean_;
-        means(level_);
+        means(level_, 1, means_);
         spent += points_ + patches_;
         phase_ = clusters_ ? Phase::Clusters : Phase::Points;
         row_ = clusters_ ? level_offsets_[lowest_] : 0;

@@ -13,6 +13,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -52,11 +53,25 @@ class BouncePass {
   bool done() const { return clean_ == bounces_; }
   // radiance += direct + every bounce as it stands (radiance_stride floats a point).
   void add(GLuint radiance, int radiance_stride);
+  // The operator's probe rows (LightBounce::ProbeRows): how many probes, of
+  // which grid (0 0 0: none).
+  std::size_t probes() const { return probes_; }
+  const std::array<int, 3>& probe_grid() const { return probe_grid_; }
+  // The rows' grid box is this one (to a millionth of its size: the same
+  // scene's bounds through a file's doubles).
+  bool probe_box_matches(const glm::dvec3& min, const glm::dvec3& max) const;
+  // Each probe's SH of the lights' light from the direct light and the
+  // bounces as they stand, into probe_sh_buffer(): 9 vec4s a probe.
+  void probe_light();
+  GLuint probe_sh_buffer() const { return probe_sh_; }
+  std::vector<glm::vec3> probe_sh() const;  // read back, 9 a probe
 
  private:
   enum class Phase { Means, Clusters, Points };
   void dispatch(GLuint step, std::size_t first, std::size_t end);
-  void means(int input);
+  // The patches' means of `pieces` of the points' radiances from `input`
+  // on, summed, into `out`.
+  void means(int input, int pieces, GLuint out);
   void push();
   std::size_t slice(const std::vector<std::uint32_t>& offsets, std::uint64_t room) const;
   std::size_t points_ = 0, patches_ = 0, entries_ = 0;
@@ -68,6 +83,10 @@ class BouncePass {
   GLuint row_offsets_ = 0, sources_ = 0, weights_ = 0, cluster_row_offsets_ = 0, cluster_sources_ = 0,
          cluster_weights_ = 0;
   GLuint radiance_ = 0, means_ = 0, pushed_ = 0;  // radiance_: the direct light, then bounces 1..B (vec4s a point)
+  std::size_t probes_ = 0;
+  std::array<int, 3> probe_grid_{0, 0, 0};
+  glm::dvec3 probe_min_{0.0}, probe_max_{0.0};
+  GLuint probe_row_offsets_ = 0, probe_sources_ = 0, probe_weights_ = 0, probe_means_ = 0, probe_sh_ = 0;
   std::size_t lowest_ = 0;                         // the lowest level with cluster rows
   std::vector<std::uint32_t> offsets_;           // the points' rows' offsets (the sweeps' slices)
   std::vector<std::uint32_t> cluster_cost_;      // the clusters' rows' entries before each, in level order

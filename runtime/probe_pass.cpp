@@ -48,6 +48,8 @@ ProbePass::ProbePass(const Mesh& object, const ProbeTransfer& t, const glm::vec3
   world_ = gl::make_buffer(nullptr, std::max<std::size_t>(vertices_, 1) * sizeof(glm::vec4));
   const glm::dvec3 sp = t.grid.spacing();
   min_ = glm::vec3(t.grid.min);
+  box_min_ = t.grid.min;
+  box_max_ = t.grid.max;
   spacing_ = glm::vec3(sp);
   dims_ = {t.grid.dims[0], t.grid.dims[1], t.grid.dims[2]};
   depth_res_ = t.depth_res;
@@ -98,8 +100,10 @@ void ProbePass::draw(const glm::mat4& view_proj, GLuint draw_program, const AddL
   glUniform1f(8, cap_);
   glUniform1f(9, bias_);
   glUniform3fv(10, 1, &albedo_[0]);
-  const GLuint buffers[8] = {positions_, normals_, sh_, info_, probe_pos_, depth_, radiance_, world_};
-  for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, buffers[b]);
+  glUniform1i(11, lights_sh_ ? 1 : 0);
+  const GLuint buffers[9] = {positions_, normals_, sh_, info_, probe_pos_, depth_, radiance_, world_,
+                             lights_sh_ ? lights_sh_ : sh_};
+  for (GLuint b = 0; b < 9; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, buffers[b]);
   const std::size_t groups = (vertices_ + 63) / 64;
   for (std::size_t g = 0; g < groups; g += work_groups_) {
     glUniform1ui(1, GLuint(g * 64));

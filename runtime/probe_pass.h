@@ -33,6 +33,14 @@ class ProbePass {
   // The relit probes' SH, 9 per probe (ProbeRelighter::relight).
   void set_lighting(std::span<const glm::vec3> sh);
   void set_model(const glm::mat4& model) { model_ = model; }
+  // A buffer of the lights' light at the probes, 9 vec4s a probe in the
+  // volume's order, added to the relit SH (the light-bounce operator's probe
+  // rows: BouncePass::probe_sh_buffer); 0: none.
+  void set_lights_sh(GLuint buffer) { lights_sh_ = buffer; }
+  std::size_t probes() const { return probes_; }
+  const glm::ivec3& dims() const { return dims_; }
+  const glm::dvec3& box_min() const { return box_min_; }
+  const glm::dvec3& box_max() const { return box_max_; }
   // Computes the vertices' radiance and draws the object (depth test on)
   // with `draw_program` (the renderer's vertex-colour program).
   // `add` (when set) adds to the vertices' radiance (a vec4 buffer) before
@@ -55,6 +63,8 @@ class ProbePass {
   float cap_ = 1, bias_ = 0;
   GLuint positions_ = 0, normals_ = 0, indices_ = 0, sh_ = 0, info_ = 0, probe_pos_ = 0, depth_ = 0;
   GLuint radiance_ = 0, world_ = 0, vao_ = 0, program_ = 0;
+  GLuint lights_sh_ = 0;  // not owned
+  glm::dvec3 box_min_{0.0}, box_max_{0.0};  // the volume's grid
 };
 
 }  // namespace prt::detail

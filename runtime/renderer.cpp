@@ -431,6 +431,7 @@ void Renderer::set_probe_object(const Mesh& object, const ProbeTransfer& probes,
   m.probe_lit = false;
   m.limits = gl::limits();
   m.probe_object = std::make_unique<detail::ProbePass>(object, probes, albedo, m.limits);
+  m.probe_lights_stale = true;
 }
 
 void Renderer::set_probe_lighting(std::span<const glm::vec3> probe_sh) {
@@ -450,6 +451,21 @@ std::vector<glm::vec3> Renderer::probe_object_radiance() const {
   if (!impl_->probe_object) return {};
   impl_->make_current();
   return impl_->probe_object->radiance();
+}
+
+bool Renderer::Impl::probe_lights() const {
+  if (!probe_object || !lights_bounce() || bounce->probes() == 0) return false;
+  const std::array<int, 3>& d = bounce->probe_grid();
+  return glm::ivec3(d[0], d[1], d[2]) == probe_object->dims() && bounce->probes() == probe_object->probes() &&
+         bounce->probe_box_matches(probe_object->box_min(), probe_object->box_max());
+}
+
+bool Renderer::probe_object_lights_bounce() const { return impl_->probe_lights(); }
+
+std::vector<glm::vec3> Renderer::probe_lights_sh() const {
+  if (!impl_->probe_lights()) return {};
+  impl_->make_current();
+  return impl_->bounce->probe_sh();
 }
 
 void Renderer::clear_probe_object() {
@@ -616,6 +632,7 @@ void Renderer::Impl::update_lights_bounce(const glm::dvec3& eye) {
     bounce_version = lights_version;
   }
   bounce->step(bounce_budget, t.points.albedo_buffer, t.points.albedo);
+  probe_lights_stale = true;  // the probes' share follows what the frame draws
 }
 
 void Renderer::Impl::apply_lights(GLuint radiance, const glm::dvec3& eye, int radiance_stride,
@@ -923,6 +940,14 @@ void Renderer::Impl::draw(const Camera& cam, int width, int height) {
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
     const glm::dmat4 proj = glm::perspective(glm::radians(cam.fov_deg), aspect, dist * 1e-3, dist * 1e3);
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
+    // The lights' light leaving the scene's surfaces, at the probes (the
+    // operator's probe rows), when it changed.
+    const bool probe_lights = m.probe_lights();
+    if (probe_lights && m.probe_lights_stale) {
+      m.bounce->probe_light();
+      m.probe_lights_stale = false;
+    }
+    m.probe_object->set_lights_sh(probe_lights ? m.bounce->probe_sh_buffer() : 0);
     // The lights' direct light on it, shadowed by the scene (the scene's
     // shadow maps; the object casts no shadow).
     m.probe_object->draw(glm::mat4(proj * view), m.attribute_program(attribute_mode(Shading::VertexColors)),

@@ -228,6 +228,11 @@ struct Renderer::Impl {
   // An object lit by a probe volume (set_probe_object), drawn after the scene.
   std::unique_ptr<detail::ProbePass> probe_object;
   bool probe_lit = false;
+  // The object's probes get the lights' light (an operator with probe rows
+  // of its volume's grid, lights, shading other than Direct); its SH is
+  // recomputed when the bounce moved or the object came.
+  bool probe_lights() const;
+  bool probe_lights_stale = true;
   // This OpenGL's limits (set_mesh), and the vertices of one compute
   // dispatch: relight() shades the mesh in runs of `chunk` vertices, each
   // binding its range of the per-vertex storage buffers, so that no binding

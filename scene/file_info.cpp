@@ -70,7 +70,8 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   // of a lightmap) and per source patch, the entries of its cluster rows
   // (prt::link_clusters; counted in the entries) and the patches whose
   // cluster row has any (0 and 0 without cluster rows), and an SH row's bytes
-  // to compare.
+  // to compare (bytes: the whole operator's; per vertex: its points' rows,
+  // without the probe rows).
   if (const LightBounce& b = t.light_bounce; !b.empty()) {
     const double receivers = double(std::max<std::size_t>(b.points(), 1)), entries = double(b.entries());
     std::size_t clusters = 0;
@@ -84,8 +85,18 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
                          {"entries_per_vertex", entries / receivers},
                          {"entries_per_patch", b.patches ? entries / double(b.patches) : 0.0},
                          {"bytes", b.bytes()},
-                         {"bytes_per_vertex", double(b.bytes()) / receivers},
+                         {"bytes_per_vertex", double(b.bytes() - b.probes.bytes()) / receivers},
                          {"sh_row_bytes", 4 * t.stride()}};
+    // Its probe rows (prt precompute --light-bounce --probes; absent
+    // without): the grid, the bands, the entries and their arrays' bytes as
+    // the file stores them (u32 offsets and sources, f16 weights; counted
+    // in the operator's bytes too).
+    if (const LightBounce::ProbeRows& r = b.probes; !r.empty())
+      j["light_bounce"]["probe_rows"] = {
+          {"dims", r.dims},
+          {"bands", r.bands},
+          {"entries", r.entries()},
+          {"bytes", r.bytes()}};
   }
   if (!t.ao.empty()) {
     const auto [lo, hi] = std::minmax_element(t.ao.begin(), t.ao.end());

@@ -2,6 +2,7 @@
 #include <prt/light_bounce.h>
 
 #include <prt/error.h>
+#include <prt/probes.h>
 
 #include <fmt/format.h>
 #include <glm/gtc/packing.hpp>
@@ -18,16 +19,19 @@ std::size_t LightBounce::bytes() const {
   return (patch.size() + parent.size() + offsets.size() + source.size() + cluster_offsets.size() +
           cluster_source.size()) *
              sizeof(std::uint32_t) +
-         (weight.size() + cluster_weight.size()) * sizeof(std::uint16_t);
+         (weight.size() + cluster_weight.size()) * sizeof(std::uint16_t) + probes.bytes();
 }
 
 namespace {
 
-// What is wrong with rows of (patch, weight) entries, or "".
+// What is wrong with rows of (patch, `per_entry` weights) entries, or "";
+// `signed_weights`: the weights may be negative (SH coefficients).
 std::string rows_problem(const char* what, std::span<const std::uint32_t> offsets, std::span<const std::uint32_t> source,
-                         std::span<const float> weight, std::uint32_t patches) {
-  if (weight.size() != source.size())
-    return fmt::format("light bounce: {} sources and {} weights ({}s)", source.size(), weight.size(), what);
+                         std::span<const float> weight, std::uint32_t patches, std::size_t per_entry = 1,
+                         bool signed_weights = false) {
+  if (weight.size() != source.size() * per_entry)
+    return fmt::format("light bounce: {} sources and {} weights ({}s, {} weights an entry)", source.size(),
+                       weight.size(), what, per_entry);
   if (offsets.front() != 0 || offsets.back() != source.size())
     return fmt::format("light bounce: {} offsets run from {} to {} over {} entries", what, offsets.front(),
                        offsets.back(), source.size());
@@ -41,13 +45,35 @@ std::string rows_problem(const char* what, std::span<const std::uint32_t> offset
       if (source[e] >= patches) return fmt::format("light bounce: {} {} names patch {} of {}", what, i, source[e], patches);
       if (e > offsets[i] && source[e] <= source[e - 1])
         return fmt::format("light bounce: {} {}'s patches do not increase", what, i);
-      if (!(weight[e] >= 0.0f) || !std::isfinite(weight[e]))
-        return fmt::format("light bounce: {} {} has the weight {}", what, i, weight[e]);
-      if (glm::unpackHalf1x16(glm::packHalf1x16(weight[e])) != weight[e])
-        return fmt::format("light bounce: {} {} has the weight {}, not a half-precision value", what, i, weight[e]);
+      for (std::size_t k = 0; k < per_entry; ++k) {
+        const float w = weight[e * per_entry + k];
+        if (!(signed_weights || w >= 0.0f) || !std::isfinite(w))
+          return fmt::format("light bounce: {} {} has the weight {}", what, i, w);
+        if (glm::unpackHalf1x16(glm::packHalf1x16(w)) != w)
+          return fmt::format("light bounce: {} {} has the weight {}, not a half-precision value", what, i, w);
+      }
     }
   }
   return "";
+}
+
+// What is wrong with an operator's probe rows, or "" (none is fine).
+std::string probe_rows_problem(const LightBounce::ProbeRows& r, std::uint32_t patches) {
+  if (r.empty()) {
+    if (r.dims != std::array<int, 3>{0, 0, 0} || r.bands != 0 || !r.source.empty() || !r.weight.empty())
+      return "light bounce: probe entries without the probes' row offsets";
+    return "";
+  }
+  if (const std::string p = probe_dims_problem(r.dims); !p.empty()) return "light bounce: probe rows' grid: " + p;
+  for (int a = 0; a < 3; ++a)
+    if (!std::isfinite(r.min[a]) || !std::isfinite(r.max[a]) || r.max[a] < r.min[a])
+      return fmt::format("light bounce: the probe rows' box runs from {} to {} along axis {}", r.min[a], r.max[a], a);
+  if (r.bands < 1 || r.bands > 8) return fmt::format("light bounce: probe rows of {} bands (1 to 8)", r.bands);
+  const std::size_t probes = std::size_t(r.dims[0]) * std::size_t(r.dims[1]) * std::size_t(r.dims[2]);
+  if (r.offsets.size() != probes + 1)
+    return fmt::format("light bounce: {} probe row offsets for {} probes (expected {})", r.offsets.size(), probes,
+                       probes + 1);
+  return rows_problem("probe row", r.offsets, r.source, r.weight, patches, std::size_t(r.bands) * r.bands, true);
 }
 
 }  // namespace
@@ -55,7 +81,8 @@ std::string rows_problem(const char* what, std::span<const std::uint32_t> offset
 std::string light_bounce_problem(const LightBounce& b, std::size_t points) {
   if (b.bounces == 0) {
     if (b.patches != 0 || !b.patch.empty() || !b.parent.empty() || !b.offsets.empty() || !b.source.empty() ||
-        !b.weight.empty() || !b.cluster_offsets.empty() || !b.cluster_source.empty() || !b.cluster_weight.empty())
+        !b.weight.empty() || !b.cluster_offsets.empty() || !b.cluster_source.empty() || !b.cluster_weight.empty() ||
+        !b.probes.empty() || !b.probes.source.empty() || !b.probes.weight.empty())
       return "a light-bounce operator of 0 bounces holds arrays";
     return "";
   }
@@ -87,6 +114,7 @@ std::string light_bounce_problem(const LightBounce& b, std::size_t points) {
     if (b.parent[p] != LightBounce::kNoParent) used[b.parent[p]] = 1;  // parents follow their children
   }
   if (std::string p = rows_problem("row", b.offsets, b.source, b.weight, b.patches); !p.empty()) return p;
+  if (std::string p = probe_rows_problem(b.probes, b.patches); !p.empty()) return p;
   if (b.cluster_offsets.empty()) {
     if (!b.cluster_source.empty() || !b.cluster_weight.empty())
       return "light bounce: cluster entries without the clusters' row offsets";
@@ -151,6 +179,46 @@ LightBounce link_clusters(const LightBounce& b, int offset) {
   return out;
 }
 
+namespace {
+// Each patch's points (children come before their parents).
+std::vector<std::uint32_t> patch_members(const LightBounce& b) {
+  std::vector<std::uint32_t> members(b.patches, 0);
+  for (std::uint32_t p : b.patch) ++members[p];
+  for (std::uint32_t p = 0; p < b.patches; ++p)
+    if (b.parent[p] != LightBounce::kNoParent) members[b.parent[p]] += members[p];
+  return members;
+}
+
+// Each patch's radiance, the mean of its points' (the sums go up the levels
+// in one pass).
+template <class Radiance>
+void patch_means(const LightBounce& b, const std::vector<std::uint32_t>& members, const Radiance& radiance,
+                 std::vector<glm::dvec3>& mean) {
+  mean.assign(b.patches, glm::dvec3(0.0));
+  for (std::size_t i = 0; i < b.points(); ++i) mean[b.patch[i]] += glm::dvec3(radiance[i]);
+  for (std::uint32_t p = 0; p < b.patches; ++p)
+    if (b.parent[p] != LightBounce::kNoParent) mean[b.parent[p]] += mean[p];
+  for (std::uint32_t p = 0; p < b.patches; ++p) mean[p] /= double(members[p]);
+}
+}  // namespace
+
+std::vector<glm::vec3> light_bounce_at_probes(const LightBounce& b, std::span<const glm::vec3> leaving) {
+  if (b.probes.empty()) throw Error("light bounce: the operator has no probe rows (prt precompute --probes)");
+  if (leaving.size() != b.points())
+    throw Error(fmt::format("light bounce: {} radiances for {} points", leaving.size(), b.points()));
+  std::vector<glm::dvec3> mean;
+  patch_means(b, patch_members(b), leaving, mean);
+  const std::size_t nc = std::size_t(b.probes.bands) * std::size_t(b.probes.bands);
+  std::vector<glm::vec3> out(b.probes.probes() * nc);
+  tbb::parallel_for(std::size_t(0), b.probes.probes(), [&](std::size_t q) {
+    std::vector<glm::dvec3> c(nc, glm::dvec3(0.0));
+    for (std::uint32_t e = b.probes.offsets[q]; e < b.probes.offsets[q + 1]; ++e)
+      for (std::size_t k = 0; k < nc; ++k) c[k] += double(b.probes.weight[e * nc + k]) * mean[b.probes.source[e]];
+    for (std::size_t k = 0; k < nc; ++k) out[q * nc + k] = glm::vec3(c[k]);
+  });
+  return out;
+}
+
 std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::vec3> direct,
                                     std::span<const glm::vec3> albedo) {
   const std::size_t P = b.points();
@@ -159,10 +227,7 @@ std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::v
                             direct.size(), albedo.size()));
   std::vector<glm::dvec3> emitted(direct.begin(), direct.end()), patch_mean(b.patches), pushed(b.patches), next(P),
       total(P, glm::dvec3(0.0));
-  std::vector<std::uint32_t> members(b.patches, 0);
-  for (std::uint32_t p : b.patch) ++members[p];
-  for (std::uint32_t p = 0; p < b.patches; ++p)
-    if (b.parent[p] != LightBounce::kNoParent) members[b.parent[p]] += members[p];
+  const std::vector<std::uint32_t> members = patch_members(b);
   const auto row = [&](std::span<const std::uint32_t> offsets, std::span<const std::uint32_t> source,
                        std::span<const float> weight, std::size_t i) {
     glm::dvec3 e(0.0);
@@ -170,13 +235,7 @@ std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::v
     return e;
   };
   for (int k = 0; k < b.bounces; ++k) {
-    // Each patch's radiance: the mean of its points' (children come before
-    // their parents: the sums go up the levels in one pass).
-    std::fill(patch_mean.begin(), patch_mean.end(), glm::dvec3(0.0));
-    for (std::size_t i = 0; i < P; ++i) patch_mean[b.patch[i]] += emitted[i];
-    for (std::uint32_t p = 0; p < b.patches; ++p)
-      if (b.parent[p] != LightBounce::kNoParent) patch_mean[b.parent[p]] += patch_mean[p];
-    for (std::uint32_t p = 0; p < b.patches; ++p) patch_mean[p] /= double(members[p]);
+    patch_means(b, members, emitted, patch_mean);
     // The clusters' rows, pushed down the levels (parents first) to the finest.
     std::fill(pushed.begin(), pushed.end(), glm::dvec3(0.0));
     if (!b.cluster_offsets.empty()) {

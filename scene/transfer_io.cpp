@@ -39,22 +39,49 @@ using detail::HeaderValues;
 
 // What the section rules know of the light-bounce operator so far (its
 // sections come by increasing kind): the count of 'light bounce sources'
-// (kind 17) and of 'light bounce cluster sources' (kind 21) once their heads
-// are read, and the header's patch count once 'light bounce header' (kind
-// 14) is read.
+// (kind 17), of 'light bounce cluster sources' (kind 21) and of 'light
+// bounce probe sources' (kind 26) once their heads are read, the header's
+// patch count once 'light bounce header' (kind 14) is read, and the probes
+// and bands once 'light bounce probe grid' (kind 23) is.
 struct LightBounceSeen {
-  std::optional<std::uint64_t> sources, cluster_sources;
-  std::optional<std::uint32_t> patches;
+  std::optional<std::uint64_t> sources, cluster_sources, probe_sources, probes;
+  std::optional<std::uint32_t> patches, probe_bands;
 };
 
-// What is wrong with light-bounce section `kind` (14 to 22) holding `count`
+// What is wrong with probe-row section `kind` (23 to 27; any other: "")
+// holding `count` elements, or "" (light_bounce_section_problem's rules).
+std::string probe_section_problem(std::uint32_t kind, std::uint64_t count, const LightBounceSeen& seen) {
+  const char* name = kind_info(kind)->name;
+  if (kind == kLightBounceProbeGrid && count != kLightBounceProbeGridWords)
+    return fmt::format("section '{}' has {} values; expected {} (NX, NY, NZ, bands)", name, count,
+                       kLightBounceProbeGridWords);
+  if (kind == kLightBounceProbeBox && count != kLightBounceProbeBoxValues)
+    return fmt::format("section '{}' has {} values; expected {} (min x, y, z, max x, y, z)", name, count,
+                       kLightBounceProbeBoxValues);
+  if (kind == kLightBounceProbeOffsets && seen.probes && count != *seen.probes + 1)
+    return fmt::format("section '{}' has {} values; expected probes + 1 = {} (one row per probe)", name, count,
+                       *seen.probes + 1);
+  // bands^2 weights per entry; bands 0 is light_bounce_problem's to name.
+  if (kind == kLightBounceProbeWeights && seen.probe_sources && seen.probe_bands && *seen.probe_bands > 0) {
+    const std::uint64_t per_entry = std::uint64_t(*seen.probe_bands) * *seen.probe_bands;
+    if (count % per_entry != 0 || count / per_entry != *seen.probe_sources)  // (the product may overflow)
+      return fmt::format("section '{}' has {} values; 'light bounce probe sources' has {} (bands^2 = {} weights per "
+                         "probe entry)",
+                         name, count, *seen.probe_sources, per_entry);
+  }
+  return {};
+}
+
+// What is wrong with light-bounce section `kind` (14 to 27) holding `count`
 // elements, or "": the operator is an interreflected transfer's and never a
 // compressed file's; its header is two words, its patches one per vertex,
 // its offsets one more, its weights as many as its sources; its cluster
 // offsets one more than the header's patches, its cluster weights as many
-// as its cluster sources (what `seen` knows). Its values, and its parents'
-// count (one per patch), are light_bounce_problem's, once the whole operator
-// is read.
+// as its cluster sources; its probe grid four words, its probe box six
+// values, its probe offsets one more than the grid's probes, its probe
+// weights bands^2 per probe source (what `seen` knows). Its values, and its
+// parents' count (one per patch), are light_bounce_problem's, once the
+// whole operator is read.
 std::string light_bounce_section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v,
                                          bool compressed, const LightBounceSeen& seen) {
   const char* name = kind_info(kind)->name;
@@ -84,7 +111,7 @@ std::string light_bounce_section_problem(std::uint32_t kind, std::uint64_t count
     return fmt::format("section '{}' has {} values; 'light bounce cluster sources' has {} (one weight per cluster "
                        "entry)",
                        name, count, *seen.cluster_sources);
-  return {};
+  return probe_section_problem(kind, count, seen);
 }
 
 // The names of `kinds` that `seen` has (bit k: kind k) and of those it
@@ -98,9 +125,9 @@ std::pair<std::string, std::string> kinds_seen(std::span<const std::uint32_t> ki
   return {have, missing};
 }
 
-// The operator's six sections come together, its cluster rows' three too,
-// and those only with the six: what is wrong when only some of them were
-// read (bit k of `seen`: kind k), or "".
+// The operator's six sections come together, its cluster rows' three too
+// and its probe rows' five, and those only with the six: what is wrong when
+// only some of them were read (bit k of `seen`: kind k), or "".
 std::string light_bounce_sections_problem(std::uint32_t seen) {
   const auto [have, missing] = kinds_seen(kLightBounceKinds, seen);
   if (!have.empty() && !missing.empty())
@@ -116,13 +143,43 @@ std::string light_bounce_sections_problem(std::uint32_t seen) {
     return fmt::format("the file has {} (kinds 20 to 22, an operator's cluster rows) but no light-bounce operator "
                        "(kinds 14 to 19)",
                        have_clusters);
+  const auto [have_probes, missing_probes] = kinds_seen(kLightBounceProbeKinds, seen);
+  if (!have_probes.empty() && !missing_probes.empty())
+    return fmt::format("the light-bounce operator's probe sections (kinds 23 to 27) come together, but the file has "
+                       "{} without {}",
+                       have_probes, missing_probes);
+  if (!have_probes.empty() && have.empty())
+    return fmt::format("the file has {} (kinds 23 to 27, an operator's probe rows) but no light-bounce operator "
+                       "(kinds 14 to 19)",
+                       have_probes);
+  return {};
+}
+
+// The probe rows' grid and bands from the words of 'light bounce probe
+// grid' (kind 23: NX, NY, NZ, bands) into `r`, and the probes and bands
+// into `seen` (the probe offsets' and weights' counts, kinds 25 and 27), or
+// what is wrong with them: a value above 2^31 - 1 (it would read as
+// negative), or dims that break probe_dims_problem's rule (the offsets'
+// count is taken from them). The bands, box and rows are
+// light_bounce_problem's, once the operator is read.
+std::string read_probe_grid(std::span<const std::uint32_t, kLightBounceProbeGridWords> words,
+                            LightBounce::ProbeRows& r, LightBounceSeen& seen) {
+  const char* names[kLightBounceProbeGridWords] = {"NX", "NY", "NZ", "bands"};
+  for (std::size_t w = 0; w < words.size(); ++w)
+    if (words[w] > std::uint32_t(std::numeric_limits<int>::max()))
+      return fmt::format("{} {} is out of range", names[w], words[w]);
+  r.dims = {int(words[0]), int(words[1]), int(words[2])};
+  r.bands = int(words[3]);
+  if (std::string p = probe_dims_problem(r.dims); !p.empty()) return p;
+  seen.probes = std::uint64_t(r.dims[0]) * std::uint64_t(r.dims[1]) * std::uint64_t(r.dims[2]);
+  seen.probe_bands = words[3];
   return {};
 }
 
 // What is wrong with a section of `kind` holding `count` elements in a
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13,
-// the light-bounce operator's for 14 to 22 (`bounce`: what its sections
+// the light-bounce operator's for 14 to 27 (`bounce`: what its sections
 // read so far say).
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v, bool compressed,
                             bool lightmap = false, const LightBounceSeen& bounce = {}) {
@@ -214,44 +271,73 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
     case kGlossy: return {t.glossy_matrices.data(), t.glossy_matrices.size()};
     // Built by the writer from Transfer::interpolated (interpolated_mask).
     case kInterpolatedMask: return {nullptr, t.interpolated_vertices() > 0 ? mask_words(t.vertices) : 0};
-    // Built by the writer (light_bounce_header).
+    // Built by the writer (LightBounceSections).
     case kLightBounceHeader: return {nullptr, t.light_bounce.empty() ? 0 : kLightBounceHeaderWords};
     case kLightBouncePatches: return {t.light_bounce.patch.data(), t.light_bounce.patch.size()};
     case kLightBounceOffsets: return {t.light_bounce.offsets.data(), t.light_bounce.offsets.size()};
     case kLightBounceSources: return {t.light_bounce.source.data(), t.light_bounce.source.size()};
-    // Built by the writer (light_bounce_weights: 16 bits each).
+    // Built by the writer (LightBounceSections: 16 bits each).
     case kLightBounceWeights: return {nullptr, t.light_bounce.weight.size()};
     case kLightBounceParents: return {t.light_bounce.parent.data(), t.light_bounce.parent.size()};
     case kLightBounceClusterOffsets:
       return {t.light_bounce.cluster_offsets.data(), t.light_bounce.cluster_offsets.size()};
     case kLightBounceClusterSources:
       return {t.light_bounce.cluster_source.data(), t.light_bounce.cluster_source.size()};
-    // Built by the writer (light_bounce_weights(t, true): 16 bits each).
+    // Built by the writer (LightBounceSections): the cluster weights, the
+    // probe rows' grid, box and weights.
     case kLightBounceClusterWeights: return {nullptr, t.light_bounce.cluster_weight.size()};
+    case kLightBounceProbeGrid: return {nullptr, t.light_bounce.probes.empty() ? 0 : kLightBounceProbeGridWords};
+    case kLightBounceProbeBox: return {nullptr, t.light_bounce.probes.empty() ? 0 : kLightBounceProbeBoxValues};
+    case kLightBounceProbeOffsets:
+      return {t.light_bounce.probes.offsets.data(), t.light_bounce.probes.offsets.size()};
+    case kLightBounceProbeSources: return {t.light_bounce.probes.source.data(), t.light_bounce.probes.source.size()};
+    case kLightBounceProbeWeights: return {nullptr, t.light_bounce.probes.weight.size()};
   }
   return {nullptr, 0};
 }
 
-std::array<std::uint32_t, kLightBounceHeaderWords> light_bounce_header(const Transfer& t) {
-  return {std::uint32_t(t.light_bounce.bounces), t.light_bounce.patches};
-}
-
-std::vector<std::uint16_t> light_bounce_weights(const Transfer& t, bool clusters) {
-  const std::vector<float>& w = clusters ? t.light_bounce.cluster_weight : t.light_bounce.weight;
+namespace {
+// Each weight's binary16 bits.
+std::vector<std::uint16_t> halves_of(const std::vector<float>& w) {
   std::vector<std::uint16_t> halves(w.size());
   for (std::size_t e = 0; e < halves.size(); ++e) halves[e] = glm::packHalf1x16(w[e]);
   return halves;
+}
+}  // namespace
+
+LightBounceSections::LightBounceSections(const Transfer& t)
+    : t_(t),
+      header_{std::uint32_t(t.light_bounce.bounces), t.light_bounce.patches},
+      probe_grid_{std::uint32_t(t.light_bounce.probes.dims[0]), std::uint32_t(t.light_bounce.probes.dims[1]),
+                  std::uint32_t(t.light_bounce.probes.dims[2]), std::uint32_t(t.light_bounce.probes.bands)},
+      probe_box_{t.light_bounce.probes.min.x, t.light_bounce.probes.min.y, t.light_bounce.probes.min.z,
+                 t.light_bounce.probes.max.x, t.light_bounce.probes.max.y, t.light_bounce.probes.max.z},
+      weights_(halves_of(t.light_bounce.weight)),
+      cluster_weights_(halves_of(t.light_bounce.cluster_weight)),
+      probe_weights_(halves_of(t.light_bounce.probes.weight)) {}
+
+const void* LightBounceSections::data(std::uint32_t kind) const {
+  switch (kind) {
+    case kLightBounceHeader: return header_.data();
+    case kLightBounceWeights: return weights_.data();
+    case kLightBounceClusterWeights: return cluster_weights_.data();
+    case kLightBounceProbeGrid: return probe_grid_.data();
+    case kLightBounceProbeBox: return probe_box_.data();
+    case kLightBounceProbeWeights: return probe_weights_.data();
+  }
+  return section_array(t_, kind).first;
 }
 
 // Whether `t` stores section `kind`: the coefficients always, the light-bounce
 // operator's six with an operator (its sources and weights even when no
 // row has an entry), its cluster rows' three when it has cluster rows (even
-// when none has an entry: the offsets say there are rows), the others when
-// non-empty.
+// when none has an entry: the offsets say there are rows), its probe rows'
+// five when it has probe rows, the others when non-empty.
 bool has_section(const Transfer& t, std::uint32_t kind) {
-  if (is_light_bounce_cluster_kind(kind))
-    return light_bounce_format_version(t.light_bounce) == kLightBounceClustersFormatVersion;
-  if (is_light_bounce_kind(kind)) return !t.light_bounce.empty();
+  const LightBounce& b = t.light_bounce;
+  if (is_light_bounce_cluster_kind(kind)) return !b.empty() && !b.cluster_offsets.empty();
+  if (is_light_bounce_probe_kind(kind)) return !b.empty() && !b.probes.empty();
+  if (is_light_bounce_kind(kind)) return !b.empty();
   return kind == kCoeffs || (kind == kGlossy && t.glossy) || section_array(t, kind).second > 0;
 }
 
@@ -452,24 +538,20 @@ void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  // The oldest version that holds `t` (9 only with a light-bounce operator's
-  // cluster rows, 8 only with an operator, 7 only with interpolated
-  // vertices, 3 only with glossy matrices): an earlier prt reads every file
-  // it could.
+  // The oldest version that holds `t` (10 only with a light-bounce
+  // operator's probe rows, 9 only with its cluster rows, 8 only with an
+  // operator, 7 only with interpolated vertices, 3 only with glossy
+  // matrices): an earlier prt reads every file it could.
   fill_header(header, t, transfer_format_version(t), 0u, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t), interpolated = interpolated_mask(t);
-  const auto bounce = light_bounce_header(t);
-  const std::vector<std::uint16_t> weights = light_bounce_weights(t),
-                                   cluster_weights = light_bounce_weights(t, true);
+  const LightBounceSections bounce(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
-                   s.kind == kAnalyticMask                ? static_cast<const void*>(mask.data())
-                   : s.kind == kInterpolatedMask          ? interpolated.data()
-                   : s.kind == kLightBounceHeader         ? bounce.data()
-                   : s.kind == kLightBounceWeights        ? static_cast<const void*>(weights.data())
-                   : s.kind == kLightBounceClusterWeights ? static_cast<const void*>(cluster_weights.data())
-                                                          : section_array(t, s.kind).first});
+                   s.kind == kAnalyticMask        ? static_cast<const void*>(mask.data())
+                   : s.kind == kInterpolatedMask  ? interpolated.data()
+                   : is_light_bounce_kind(s.kind) ? bounce.data(s.kind)
+                                                  : section_array(t, s.kind).first});
   write_file(path, header, raw);
 }
 
@@ -756,7 +838,8 @@ void Reader::read_sh_header(ShFile& f) {
                   : version_ == 6 ? kKindsV6
                   : version_ == 7 ? kKindsV7
                   : version_ == 8 ? kKindsV8
-                                  : kKindsV9;
+                  : version_ == 9 ? kKindsV9
+                                  : kKindsV10;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -842,9 +925,10 @@ void Reader::read_sh_sections(ShFile& f) {
       throw fail("bad section table: " + p);
     if (s.kind == kLightBounceSources) f.light_bounce.sources = s.count;
     if (s.kind == kLightBounceClusterSources) f.light_bounce.cluster_sources = s.count;
+    if (s.kind == kLightBounceProbeSources) f.light_bounce.probe_sources = s.count;
     return k->name;
   };
-  // A light-bounce weights section (kinds 18, 22): 16-bit halves, widened.
+  // A light-bounce weights section (kinds 18, 22, 27): 16-bit halves, widened.
   const auto read_halves = [&](const SectionHead& s, std::vector<float>& out) {
     std::vector<std::uint16_t> halves;
     read_section(s.data, halves, s.count);
@@ -882,6 +966,23 @@ void Reader::read_sh_sections(ShFile& f) {
       case kLightBounceClusterOffsets: read_section(s.data, t.light_bounce.cluster_offsets, s.count); break;
       case kLightBounceClusterSources: read_section(s.data, t.light_bounce.cluster_source, s.count); break;
       case kLightBounceClusterWeights: read_halves(s, t.light_bounce.cluster_weight); break;
+      case kLightBounceProbeGrid: {
+        std::array<std::uint32_t, kLightBounceProbeGridWords> words;
+        read_at(s.data, words.data(), sizeof words);
+        if (auto p = read_probe_grid(words, t.light_bounce.probes, f.light_bounce); !p.empty())
+          throw fail(fmt::format("bad section '{}': {}", s.name, p));
+        break;
+      }
+      case kLightBounceProbeBox: {
+        std::array<double, kLightBounceProbeBoxValues> box;
+        read_at(s.data, box.data(), sizeof box);
+        t.light_bounce.probes.min = {box[0], box[1], box[2]};
+        t.light_bounce.probes.max = {box[3], box[4], box[5]};
+        break;
+      }
+      case kLightBounceProbeOffsets: read_section(s.data, t.light_bounce.probes.offsets, s.count); break;
+      case kLightBounceProbeSources: read_section(s.data, t.light_bounce.probes.source, s.count); break;
+      case kLightBounceProbeWeights: read_halves(s, t.light_bounce.probes.weight); break;
       case kLightmapLayout: {
         std::vector<std::uint64_t> words;
         read_section(s.data, words, s.count);
@@ -1052,11 +1153,27 @@ std::string describe_line(const char* label, const std::string& value) {
   return fmt::format("  {:<17} {}\n", label, value);
 }
 
+// The light-bounce operator's probe rows' line, or "" without them: the
+// grid, bands, entries in all and per probe, and their arrays' bytes (as
+// the file stores them: a u32 offset per probe and one more, a u32 source
+// and bands^2 f16 weights per entry; the light-bounce line leaves them out).
+std::string describe_probe_rows(const LightBounce::ProbeRows& r) {
+  if (r.empty()) return {};
+  const std::size_t probes = r.probes(), bytes = r.bytes();
+  return describe_line("bounce probes",
+                       fmt::format("{}x{}x{} probe grid ({} probes), {} band{} ({} weight{} per entry), {} entries: "
+                                   "{:.2f} per probe; {} bytes, {:.1f} per probe",
+                                   r.dims[0], r.dims[1], r.dims[2], probes, r.bands, r.bands == 1 ? "" : "s",
+                                   r.bands * r.bands, r.bands == 1 ? "" : "s", r.entries(),
+                                   double(r.entries()) / double(probes), bytes, double(bytes) / double(probes)));
+}
+
 // The light-bounce operator's line (docs/LIGHTS.md "Bounce"), or "" without
 // one: its size per receiver (a row per point: `points`, plural, names them)
 // and per source patch, with its cluster rows (when it has them) the entries
-// in those and the patches whose row has any, and its bytes per receiver
-// against the SH row's.
+// in those and the patches whose row has any, and its bytes (without the
+// probe rows) per receiver against the SH row's; then its probe rows' line
+// (when it has them).
 std::string describe_light_bounce(const Transfer& t, const char* points) {
   const LightBounce& b = t.light_bounce;
   if (b.empty()) return {};
@@ -1075,8 +1192,10 @@ std::string describe_light_bounce(const Transfer& t, const char* points) {
       fmt::format("{} bounce{} (applied at run time), {} source patches, {} entries{}: {:.2f} per receiver ({}), "
                   "{:.2f} per source patch; {} bytes, {:.1f} per receiver against {} of an SH row ({} x {} x 4 bytes)",
                   b.bounces, b.bounces == 1 ? "" : "s", b.patches, b.entries(), clusters, entries / n, point,
-                  b.patches ? entries / double(b.patches) : 0.0, b.bytes(), double(b.bytes()) / n,
-                  4 * t.stride(), t.channels, t.bands * t.bands));
+                  b.patches ? entries / double(b.patches) : 0.0, b.bytes() - b.probes.bytes(),
+                  double(b.bytes() - b.probes.bytes()) / n,
+                  4 * t.stride(), t.channels, t.bands * t.bands)) +
+         describe_probe_rows(b.probes);
 }
 
 std::string describe(const Transfer& t, std::uint32_t version, const std::vector<TransferSection>& sections,

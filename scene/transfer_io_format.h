@@ -4,7 +4,7 @@
 //   scene/transfer_io.cpp           framing (header, section table, checksum,
 //                                   atomic write, the reader's common checks),
 //                                   the SH sections (kinds 1-7, 12, 13), the
-//                                   light-bounce operator (14-22) and the
+//                                   light-bounce operator (14-27) and the
 //                                   compressed signals (8, 9)
 //   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
 //   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
@@ -132,6 +132,13 @@ enum Kind : std::uint32_t {
   kLightBounceClusterOffsets = 20,                  // u32, patches + 1: each patch's row's first entry
   kLightBounceClusterSources = 21,                  // u32 per cluster entry: a source patch
   kLightBounceClusterWeights = 22,                  // f16 per cluster entry: its weight
+  // Version 10: the operator's probe rows (LightBounce::probes), all five or
+  // none, and only with the six above.
+  kLightBounceProbeGrid = 23,                       // u32 NX, NY, NZ, bands
+  kLightBounceProbeBox = 24,                        // f64 min x, y, z, max x, y, z
+  kLightBounceProbeOffsets = 25,                    // u32, probes + 1: each probe's row's first entry
+  kLightBounceProbeSources = 26,                    // u32 per probe entry: a source patch
+  kLightBounceProbeWeights = 27,                    // f16, bands^2 per probe entry: its SH weights
 };
 
 struct KindInfo {
@@ -141,7 +148,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 22> kKinds = {{
+constexpr std::array<KindInfo, 27> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -166,6 +173,11 @@ constexpr std::array<KindInfo, 22> kKinds = {{
     {kLightBounceClusterOffsets, "light bounce cluster offsets", kTypeU32, false},
     {kLightBounceClusterSources, "light bounce cluster sources", kTypeU32, false},
     {kLightBounceClusterWeights, "light bounce cluster weights", kTypeF16, false},
+    {kLightBounceProbeGrid, "light bounce probe grid", kTypeU32, false},
+    {kLightBounceProbeBox, "light bounce probe box", kTypeF64, false},
+    {kLightBounceProbeOffsets, "light bounce probe offsets", kTypeU32, false},
+    {kLightBounceProbeSources, "light bounce probe sources", kTypeU32, false},
+    {kLightBounceProbeWeights, "light bounce probe weights", kTypeF16, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
@@ -177,38 +189,55 @@ constexpr std::size_t kKindsV6 = 12;
 constexpr std::size_t kKindsV7 = 13;
 constexpr std::size_t kKindsV8 = 19;
 constexpr std::size_t kKindsV9 = 22;
-// The first version whose files may hold section `kind` (1 to 22).
+constexpr std::size_t kKindsV10 = 27;
+// The first version whose files may hold section `kind` (1 to 27).
 constexpr std::uint32_t kind_version(std::uint32_t kind) {
   return kind <= kKindsV1 ? 1 : kind <= kKindsV2 ? 2 : kind <= kKindsV3 ? 3 : kind <= kKindsV4 ? 4
-         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : kind <= kKindsV7 ? 7 : kind <= kKindsV8 ? 8 : 9;
+         : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : kind <= kKindsV7 ? 7 : kind <= kKindsV8 ? 8
+         : kind <= kKindsV9 ? 9 : 10;
 }
-// (The newest version's kinds are the last: a version after 9 adds its
+// (The newest version's kinds are the last: a version after 10 adds its
 // kinds, a kKindsV and a step to kind_version and to the reader's table.)
-static_assert(kKindsV9 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
+static_assert(kKindsV10 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
               kind_version(kLightBounceParents) == kLightBounceFormatVersion &&
               kind_version(kLightBounceClusterOffsets) == kLightBounceClustersFormatVersion &&
               kind_version(kLightBounceClusterWeights) == kLightBounceClustersFormatVersion &&
-              kLightBounceClustersFormatVersion == kTransferFormatVersion);
+              kind_version(kLightBounceProbeGrid) == kLightBounceProbesFormatVersion &&
+              kind_version(kLightBounceProbeWeights) == kLightBounceProbesFormatVersion &&
+              kLightBounceProbesFormatVersion == kTransferFormatVersion);
 // The operator's sections, in file order: the six every operator has, then
-// the three of its cluster rows (when it has them).
+// the three of its cluster rows and the five of its probe rows (when it has
+// them).
 constexpr std::array<std::uint32_t, 6> kLightBounceKinds = {kLightBounceHeader,  kLightBouncePatches,
                                                            kLightBounceOffsets, kLightBounceSources,
                                                            kLightBounceWeights, kLightBounceParents};
 constexpr std::array<std::uint32_t, 3> kLightBounceClusterKinds = {
     kLightBounceClusterOffsets, kLightBounceClusterSources, kLightBounceClusterWeights};
-// Any of the operator's sections, its cluster rows' included (14 to 22).
+constexpr std::array<std::uint32_t, 5> kLightBounceProbeKinds = {kLightBounceProbeGrid, kLightBounceProbeBox,
+                                                                kLightBounceProbeOffsets, kLightBounceProbeSources,
+                                                                kLightBounceProbeWeights};
+// Any of the operator's sections, its cluster and probe rows' included (14 to 27).
 constexpr bool is_light_bounce_kind(std::uint32_t kind) {
-  return kind >= kLightBounceHeader && kind <= kLightBounceClusterWeights;
+  return kind >= kLightBounceHeader && kind <= kLightBounceProbeWeights;
 }
 constexpr bool is_light_bounce_cluster_kind(std::uint32_t kind) {
   return kind >= kLightBounceClusterOffsets && kind <= kLightBounceClusterWeights;
 }
-// The version the light-bounce operator `b` needs: 9 with cluster rows, 8
-// without, 0 for no operator.
-inline std::uint32_t light_bounce_format_version(const LightBounce& b) {
-  return b.empty() ? 0u : b.cluster_offsets.empty() ? kLightBounceFormatVersion : kLightBounceClustersFormatVersion;
+constexpr bool is_light_bounce_probe_kind(std::uint32_t kind) {
+  return kind >= kLightBounceProbeGrid && kind <= kLightBounceProbeWeights;
 }
-constexpr std::uint64_t kLightBounceHeaderWords = 2;  // bounces, patches
+// The version the light-bounce operator `b` needs: 10 with probe rows, else
+// 9 with cluster rows, else 8; 0 for no operator. (An operator without
+// probe rows is written as before version 10, byte for byte.)
+inline std::uint32_t light_bounce_format_version(const LightBounce& b) {
+  return b.empty()                    ? 0u
+         : !b.probes.empty()          ? kLightBounceProbesFormatVersion
+         : !b.cluster_offsets.empty() ? kLightBounceClustersFormatVersion
+                                      : kLightBounceFormatVersion;
+}
+constexpr std::uint64_t kLightBounceHeaderWords = 2;      // bounces, patches
+constexpr std::uint64_t kLightBounceProbeGridWords = 4;   // NX, NY, NZ, bands
+constexpr std::uint64_t kLightBounceProbeBoxValues = 6;   // min x, y, z, max x, y, z
 // The longest compression choice record a reader takes (its JSON is under a
 // kilobyte for a handful of maps; this leaves room for thousands).
 constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
@@ -335,14 +364,27 @@ std::vector<std::uint32_t> analytic_mask(const Transfer& t);
 // interpolated: the file then has no section 13).
 std::vector<std::uint32_t> interpolated_mask(const Transfer& t);
 // Pointer to the array of SH section `kind` of `t` and its element count
-// (the writer builds the masks and the light-bounce header: null for those).
+// (the writer builds the masks and some light-bounce sections, below: null
+// for those).
 std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind);
-// The 'light bounce header' section of `t`: bounces, patches.
-std::array<std::uint32_t, kLightBounceHeaderWords> light_bounce_header(const Transfer& t);
-// The 'light bounce weights' section of `t` (kind 18), or with `clusters`
-// its 'light bounce cluster weights' (kind 22): each weight's binary16 bits
-// (exact: light_bounce_problem requires half-precision values).
-std::vector<std::uint16_t> light_bounce_weights(const Transfer& t, bool clusters = false);
+// The light-bounce sections of `t` (kinds 14 to 27) as a writer stores them:
+// those it builds (the header's bounces and patches, the probe rows' grid
+// and box, and each weights section's binary16 bits, exact since
+// light_bounce_problem requires half-precision values) kept here while the
+// file is written, the others `t`'s own arrays. Refers to `t`.
+class LightBounceSections {
+ public:
+  explicit LightBounceSections(const Transfer& t);
+  // The data of light-bounce section `kind` (section_array's count of it).
+  const void* data(std::uint32_t kind) const;
+
+ private:
+  const Transfer& t_;
+  std::array<std::uint32_t, kLightBounceHeaderWords> header_;
+  std::array<std::uint32_t, kLightBounceProbeGridWords> probe_grid_;
+  std::array<double, kLightBounceProbeBoxValues> probe_box_;
+  std::vector<std::uint16_t> weights_, cluster_weights_, probe_weights_;
+};
 // "truncated: expected ... bytes, file has ..."
 std::string truncated(std::uint64_t expected, bool exact, std::uint64_t size);
 std::string unknown_basis(std::uint32_t basis);

@@ -12,7 +12,11 @@
 //             L_i = (rho_i / pi) (sum_e w_e mean[source_e] + pushed[patch_i]),
 //             patch_i its patch of the lowest level the push reaches;
 //   u_step 2: radiance_i += the direct light + every bounce, with
-//             u_radiance_stride floats a point.
+//             u_radiance_stride floats a point;
+//   u_step 6: probe i's SH of the lights' light (LightBounce::ProbeRows),
+//             c_k = sum_e w_ek mean[source_e] (9 coefficients), from the
+//             means of the direct light and every bounce summed.
+// Step 0 takes the mean of u_pieces pieces from u_piece on, summed.
 // The points' radiances are one array: u_points vec4s of direct light, then
 // as many of each bounce.
 // No block is declared readonly: each binding holds different arrays in
@@ -26,7 +30,7 @@ layout(std430, binding = 1) buffer A1 { uint index1[]; };    // steps 0, 3: inpu
 layout(std430, binding = 2) buffer A2 { vec4 emitted[]; };   // the direct light, then each bounce, u_points a piece
 layout(std430, binding = 3) buffer A3 { vec4 means[]; };     // each patch's mean: written (0, 3), read (1, 4)
 layout(std430, binding = 4) buffer A4 { float weights[]; };  // steps 1, 4: the rows' weights; 0, 3: each patch's points
-layout(std430, binding = 5) buffer A5 { vec4 pushed[]; };    // each patch's gathered light: written (4, 5), read (1)
+layout(std430, binding = 5) buffer A5 { vec4 pushed[]; };    // each patch's gathered light: written (4, 5), read (1); 6: the probes' SH
 layout(std430, binding = 6) buffer A6 { uint order[]; };     // steps 0, 3, 4, 5: patches by level; 1: each point's patch
 layout(std430, binding = 7) buffer A7 { float rad[]; };      // step 2: the radiance drawn; 1: rgb albedo per point
 layout(location = 0) uniform uint u_count;
@@ -35,7 +39,8 @@ layout(location = 2) uniform uint u_step;
 layout(location = 3) uniform vec4 u_albedo;          // rgb: one albedo for all; w = 1: per point
 layout(location = 4) uniform uint u_radiance_stride;
 layout(location = 5) uniform uint u_points;
-layout(location = 6) uniform uint u_piece;  // steps 0: the piece read; 1: written; 2: the last added
+layout(location = 6) uniform uint u_piece;  // steps 0: the first piece read; 1: written; 2: the last added
+layout(location = 7) uniform uint u_pieces; // step 0: pieces summed
 
 const float PI = 3.14159265358979;
 const uint NO_PARENT = 0xffffffffu;
@@ -54,9 +59,21 @@ void main() {
     vec3 s = vec3(0.0);
     for (uint e = offsets0[p]; e < offsets0[p + 1u]; ++e) {
       const uint c = index1[e];
-      s += u_step == 0u ? emitted[u_piece * u_points + c].rgb : weights[c] * means[c].rgb;
+      if (u_step == 3u) {
+        s += weights[c] * means[c].rgb;
+      } else {
+        for (uint k = u_piece; k < u_piece + u_pieces; ++k) s += emitted[k * u_points + c].rgb;
+      }
     }
     means[p] = vec4(s / (u_step == 0u ? float(offsets0[p + 1u] - offsets0[p]) : weights[p]), 0.0);
+  } else if (u_step == 6u) {
+    vec3 c[9];
+    for (int k = 0; k < 9; ++k) c[k] = vec3(0.0);
+    for (uint e = offsets0[i]; e < offsets0[i + 1u]; ++e) {
+      const vec3 m = means[index1[e]].rgb;
+      for (int k = 0; k < 9; ++k) c[k] += weights[9u * e + uint(k)] * m;
+    }
+    for (int k = 0; k < 9; ++k) pushed[9u * i + uint(k)] = vec4(c[k], 0.0);
   } else if (u_step == 4u) {
     const uint p = order[i];
     pushed[p] = vec4(row(p), 0.0);

@@ -18,6 +18,10 @@ layout(std430, binding = 4) readonly buffer ProbePos { vec4 probe_pos[]; };
 layout(std430, binding = 5) readonly buffer Depth { vec2 depth[]; };          // per slot: N^2 (mean, mean^2) / cap, cap^2
 layout(std430, binding = 6) writeonly buffer Out { vec4 out_radiance[]; };
 layout(std430, binding = 7) writeonly buffer World { vec4 out_position[]; };
+// The lights' light at the probes (the light-bounce operator's probe rows:
+// 9 per probe), added to the relit SH when u_lights_sh is 1.
+layout(std430, binding = 8) readonly buffer LightsSH { vec4 lights_sh[]; };
+layout(location = 11) uniform int u_lights_sh;
 
 layout(location = 0) uniform uint u_count;
 layout(location = 1) uniform uint u_first;
@@ -106,7 +110,10 @@ void main() {
   const float norm = 1.0 / max(sum, 0.05);
   for (int c = 0; c < 8; ++c)
     if (weights[c] > 0.0)
-      for (int k = 0; k < 9; ++k) sh[k] += weights[c] * norm * probe_sh[probes[c] * 9u + uint(k)].rgb;
+      for (int k = 0; k < 9; ++k) {
+        const uint at = probes[c] * 9u + uint(k);
+        sh[k] += weights[c] * norm * (probe_sh[at].rgb + (u_lights_sh == 1 ? lights_sh[at].rgb : vec3(0.0)));
+      }
   // E/pi = sum_k A_l/pi L_k Y_k(n): A_0/pi = 1, A_1/pi = 2/3, A_2/pi = 1/4.
   const float x = n.x, y = n.y, z = n.z;
   // prt's real SH (Condon-Shortley phase, z polar, k = l(l+1)+m).

@@ -269,12 +269,23 @@ TEST(LightsCli, ALightBounceOperatorBouncesTheLightsAsTheReferenceDoes) {
   EXPECT_LT(with, kBouncedRms);
   EXPECT_GT(without, 3 * with);
 
+  // With --probes the operator has rows for that grid's probes too
+  // (docs/LIGHTS.md "Bounce"), which prt info counts.
+  r = run_prt(dir, {"precompute", room, "--lightmap", "16x16", "--mode", "interreflected", "--samples", "32",
+                    "--light-bounce", "--probes", "3x2x3", "-q", "-o", dir.file("rows.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"info", dir.file("rows.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.out.find("bounce probes     3x2x3 probe grid (18 probes), 3 bands"), std::string::npos) << r.out;
+
   // What the operator cannot come from is refused before any ray, naming why.
   const std::pair<std::vector<std::string>, const char*> refused[] = {
       {{"--bounce-ratio", "0.5"}, "give --light-bounce too"},
       {{"--light-bounce", "--mode", "shadowed"}, "give --mode interreflected"},
       {{"--light-bounce", "--mode", "interreflected", "--adaptive"}, "interpolated points have no gather row"},
-      {{"--light-bounce", "--mode", "interreflected", "--probes", "2x2x2"}, "a probe volume gathers"},
+      {{"--light-bounce", "--mode", "interreflected", "--probes", "2x2x2", "--probe-cube", "8"},
+       "applies to a probe volume's run"},
+      {{"--light-bounce", "--mode", "interreflected", "--probes", "1x2x2"}, "--probes"},
       {{"--light-bounce", "--mode", "interreflected", "--bounce-ratio", "0"}, "--bounce-ratio"},
       {{"--bounce-clusters", "1"}, "give --light-bounce too"},
       {{"--light-bounce", "--mode", "interreflected", "--bounce-clusters", "-2"}, "--bounce-clusters"},

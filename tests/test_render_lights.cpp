@@ -367,6 +367,69 @@ TEST(RenderLights, TheProbeLitObjectIsLitAndShadowedByTheScene) {
               cpu.size(), shadowed, a.rel_rms, a.flipped);
 }
 
+TEST(RenderLights, TheProbeLitObjectGetsTheLightsLightThroughTheOperatorsProbeRows) {
+  // A lightmap precomputed with --light-bounce --probes 4x3x4 and a probe
+  // volume of the same grid: the GPU's SH of the lights' light at the
+  // probes is prt::light_bounce_at_probes of the radiance the lightmap
+  // draws (its direct light and bounce), to float rounding, and the object
+  // lit by those probes is brighter than without them. A volume of another
+  // grid takes none.
+  REQUIRE_RENDERER(r);
+  const Scene s = test::floor_and_box(false);
+  const LightmapTexels texels = traced_texels(s, 48);
+  TransferOptions o = bounce_options();
+  o.light_bounce_probes = {4, 3, 4};
+  const LightmapTransfer t = compute_lightmap_transfer(s, texels, o);
+  ASSERT_EQ(t.transfer.light_bounce.probes.probes(), 48u);
+  show_bounce_lightmap(*r, s, t, texels, std::vector<glm::dvec3>(9, glm::dvec3(0.0)));
+  const ProbeTransfer probes = compute_probe_transfer(s, probe_grid(s.mesh, {4, 3, 4}), ProbeOptions{});
+  const Mesh ball = test::sphere(24, 48, 1.0f);
+  r->set_probe_object(ball, probes, glm::vec3(0.7f));
+  r->set_probe_lighting(std::vector<glm::vec3>(probes.probes() * 9, glm::vec3(0.0f)));
+  r->set_probe_object_model(glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0.6f, 0.5f, -0.4f)), glm::vec3(0.2f)));
+  r->set_lights(std::vector<Light>{three_lights()[0]});
+  const Camera cam = above();
+  r->render(cam, 32, 32);
+  ASSERT_TRUE(r->probe_object_lights_bounce());
+  const std::vector<glm::vec3> gpu = r->probe_lights_sh();
+  const std::vector<glm::vec3> want = light_bounce_at_probes(t.transfer.light_bounce, r->lightmap_radiance());
+  ASSERT_EQ(gpu.size(), want.size());
+  double scale = 0;
+  for (const glm::vec3& w : want) scale = std::max(scale, double(glm::length(w)));
+  ASSERT_GT(scale, 0.0);
+  // GPU float sums of a few hundred weights against the CPU's double.
+  constexpr double kShTol = 1e-4;
+  for (std::size_t i = 0; i < want.size(); ++i)
+    for (int c = 0; c < 3; ++c) ASSERT_NEAR(gpu[i][c], want[i][c], kShTol * scale) << i;
+  const std::vector<glm::vec3> with = r->probe_object_radiance();
+
+  // The same frame from a transfer without probe rows: the object has the
+  // lights' direct light alone.
+  LightmapTransfer no_rows = t;
+  no_rows.transfer.light_bounce.probes = {};
+  show_bounce_lightmap(*r, s, no_rows, texels, std::vector<glm::dvec3>(9, glm::dvec3(0.0)));
+  r->render(cam, 32, 32);
+  EXPECT_FALSE(r->probe_object_lights_bounce());
+  EXPECT_TRUE(r->probe_lights_sh().empty());
+  const std::vector<glm::vec3> without = r->probe_object_radiance();
+  double added = 0, base = 0;
+  for (std::size_t v = 0; v < with.size(); ++v) {
+    added += double(with[v].x - without[v].x);
+    base += double(without[v].x);
+  }
+  EXPECT_GT(added, 0.05 * base);  // the walls' light is a real part of what the object gets
+  std::printf("probe rows: %zu entries over 48 probes; the object's light from them %.1f%% of its direct light\n",
+              t.transfer.light_bounce.probes.entries(), 100.0 * added / base);
+
+  // A volume of another grid: its probes are not the rows' probes.
+  show_bounce_lightmap(*r, s, t, texels, std::vector<glm::dvec3>(9, glm::dvec3(0.0)));
+  const ProbeTransfer other = compute_probe_transfer(s, probe_grid(s.mesh, {3, 3, 3}), ProbeOptions{});
+  r->set_probe_object(ball, other, glm::vec3(0.7f));
+  r->set_probe_lighting(std::vector<glm::vec3>(other.probes() * 9, glm::vec3(0.0f)));
+  r->render(cam, 32, 32);
+  EXPECT_FALSE(r->probe_object_lights_bounce());
+}
+
 TEST(RenderLights, GlossyVerticesGetEachLightsLobeTowardTheEye) {
   // prt relight --eye's glossy light: --diffuse's albedo and each light's
   // Phong lobe toward the eye, on the GPU as DirectLight with a GlossyLobe.

@@ -148,6 +148,14 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_EQ(a.light_bounce.cluster_offsets, b.light_bounce.cluster_offsets);
   EXPECT_EQ(a.light_bounce.cluster_source, b.light_bounce.cluster_source);
   EXPECT_TRUE(same_bits(a.light_bounce.cluster_weight, b.light_bounce.cluster_weight));
+  const prt::LightBounce::ProbeRows &pa = a.light_bounce.probes, &pb = b.light_bounce.probes;
+  EXPECT_EQ(pa.dims, pb.dims);
+  EXPECT_EQ(std::memcmp(&pa.min, &pb.min, sizeof pa.min), 0);
+  EXPECT_EQ(std::memcmp(&pa.max, &pb.max, sizeof pa.max), 0);
+  EXPECT_EQ(pa.bands, pb.bands);
+  EXPECT_EQ(pa.offsets, pb.offsets);
+  EXPECT_EQ(pa.source, pb.source);
+  EXPECT_TRUE(same_bits(pa.weight, pb.weight));
 }
 
 // `t` with random glossy matrices for its stored rows (the layout of its mode).
@@ -491,7 +499,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 9"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 10"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -1483,6 +1491,38 @@ Transfer with_clustered_light_bounce(Transfer t, int bounces = 2) {
   return t;
 }
 
+// `b` (sample_light_bounce's 4 patches) with probe rows on a 2 x 2 x 2 grid
+// of 3 bands (9 weights an entry), as prt precompute --light-bounce --probes
+// makes them: probe q's row reaches patch p < 3 when bit p of q is set, and
+// probe 7's the coarse patch 3 too (probe 0's none): 13 entries, 117
+// weights (odd: padding). Random half-precision weights of either sign (SH
+// coefficients), none round; a box with no round bound.
+prt::LightBounce with_probe_rows(prt::LightBounce b) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<float> weight(-2.0f, 2.0f);
+  prt::LightBounce::ProbeRows& r = b.probes;
+  r.dims = {2, 2, 2};
+  r.min = {-1.25, -0.5, -2.0 / 3.0};
+  r.max = {1.0 / 3.0, 0.75, 2.5};
+  r.bands = 3;
+  r.offsets.assign(1, 0);
+  for (std::uint32_t q = 0; q < 8; ++q) {
+    for (std::uint32_t p = 0; p < 4; ++p) {
+      if (p < 3 ? ((q >> p) & 1u) == 0 : q != 7) continue;
+      r.source.push_back(p);
+      for (int k = 0; k < 9; ++k) r.weight.push_back(glm::unpackHalf1x16(glm::packHalf1x16(weight(rng))));
+    }
+    r.offsets.push_back(std::uint32_t(r.source.size()));
+  }
+  return b;
+}
+
+// `t` (interreflected) with sample_light_bounce and its probe rows.
+Transfer with_probed_light_bounce(Transfer t, int bounces = 2) {
+  t.light_bounce = with_probe_rows(sample_light_bounce(t.vertices, bounces));
+  return t;
+}
+
 // sample_lightmap made interreflected (2 bounces): a lightmap that may keep an operator.
 prt::LightmapTransfer interreflected_lightmap(bool analytic = false) {
   prt::LightmapTransfer l = sample_lightmap(analytic);
@@ -1527,27 +1567,45 @@ std::string without_sections(const Sample& s, Pick drop, std::uint32_t version) 
 // for `b`: kinds 14 to 19, u32 bounces and patches, u32 per point, u32 per
 // point and one more, u32 and f16 (IEEE 754 binary16) per entry, u32 per
 // patch; then, when `b` has cluster rows, kinds 20 to 22, u32 per patch and
-// one more, u32 and f16 per cluster entry; the arrays in order.
+// one more, u32 and f16 per cluster entry; then, when it has probe rows,
+// kinds 23 to 27, u32 NX, NY, NZ and bands, f64 min and max, u32 per probe
+// and one more, u32 per probe entry and bands^2 f16 per probe entry; the
+// arrays in order.
 void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
-  const bool clusters = !b.cluster_offsets.empty();
-  const std::size_t kinds = clusters ? 9 : 6;
+  const bool clusters = !b.cluster_offsets.empty(), probes = !b.probes.empty();
   const std::size_t n = s.section_at.size(), points = b.patch.size(), entries = b.source.size(),
-                    cluster_entries = b.cluster_source.size();
-  ASSERT_GE(n, kinds);
-  // u32 x 4, f16, u32; u32 x 2, f16.
-  const std::uint32_t types[9] = {4, 4, 4, 4, 8, 4, 4, 4, 8}, sizes[9] = {4, 4, 4, 4, 2, 4, 4, 4, 2};
-  const std::size_t counts[9] = {2, points, points + 1, entries, entries, b.patches, b.patches + std::size_t(1),
-                                 cluster_entries, cluster_entries};
-  for (std::size_t i = 0; i < kinds; ++i) {
-    const std::size_t at = s.section_at[n - kinds + i];
-    SCOPED_TRACE("section of kind " + std::to_string(14 + i));
-    EXPECT_EQ(get<std::uint32_t>(s.bytes, at), 14 + i);
-    EXPECT_EQ(get<std::uint32_t>(s.bytes, at + 4), types[i]);
-    EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 8), counts[i]);
-    EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 16), sizes[i] * counts[i]);
+                    cluster_entries = b.cluster_source.size(), probe_entries = b.probes.source.size();
+  // Kind, element type (4 u32, 8 f16, 2 f64), element bytes, count.
+  struct Head {
+    std::uint32_t kind, type, size;
+    std::size_t count;
+  };
+  std::vector<Head> heads = {{14, 4, 4, 2},        {15, 4, 4, points},  {16, 4, 4, points + 1},
+                             {17, 4, 4, entries},  {18, 8, 2, entries}, {19, 4, 4, b.patches}};
+  if (clusters)
+    heads.insert(heads.end(), {{20, 4, 4, b.patches + std::size_t(1)},
+                               {21, 4, 4, cluster_entries},
+                               {22, 8, 2, cluster_entries}});
+  const std::size_t probe_count = probes ? b.probes.offsets.size() - 1 : 0,
+                    per_entry = std::size_t(b.probes.bands * b.probes.bands);
+  if (probes)
+    heads.insert(heads.end(), {{23, 4, 4, 4},
+                               {24, 2, 8, 6},
+                               {25, 4, 4, probe_count + 1},
+                               {26, 4, 4, probe_entries},
+                               {27, 8, 2, probe_entries * per_entry}});
+  ASSERT_GE(n, heads.size());
+  const std::size_t first = n - heads.size();
+  for (std::size_t i = 0; i < heads.size(); ++i) {
+    const std::size_t at = s.section_at[first + i];
+    SCOPED_TRACE("section of kind " + std::to_string(heads[i].kind));
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, at), heads[i].kind);
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, at + 4), heads[i].type);
+    EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 8), heads[i].count);
+    EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 16), heads[i].size * heads[i].count);
   }
   const auto data = [&](std::size_t i, std::size_t k) {
-    return s.section_at[n - kinds + i] + kSectionHeader + sizes[i] * k;
+    return s.section_at[first + i] + kSectionHeader + heads[i].size * k;
   };
   EXPECT_EQ(get<std::uint32_t>(s.bytes, data(0, 0)), std::uint32_t(b.bounces));
   EXPECT_EQ(get<std::uint32_t>(s.bytes, data(0, 1)), b.patches);
@@ -1558,17 +1616,33 @@ void expect_light_bounce_sections(const Sample& s, const prt::LightBounce& b) {
     EXPECT_EQ(get<std::uint16_t>(s.bytes, data(4, k)), glm::packHalf1x16(b.weight[k])) << k;
   }
   for (std::size_t k = 0; k < b.patches; ++k) EXPECT_EQ(get<std::uint32_t>(s.bytes, data(5, k)), b.parent[k]) << k;
-  if (!clusters) {
-    EXPECT_EQ(s.bytes.size(), data(5, b.patches) + (8 - 4 * b.patches % 8) % 8 + kTrailer);  // the last section
-    return;
+  if (clusters) {
+    for (std::size_t k = 0; k <= b.patches; ++k)
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, data(6, k)), b.cluster_offsets[k]) << k;
+    for (std::size_t k = 0; k < cluster_entries; ++k) {
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, data(7, k)), b.cluster_source[k]) << k;
+      EXPECT_EQ(get<std::uint16_t>(s.bytes, data(8, k)), glm::packHalf1x16(b.cluster_weight[k])) << k;
+    }
   }
-  for (std::size_t k = 0; k <= b.patches; ++k)
-    EXPECT_EQ(get<std::uint32_t>(s.bytes, data(6, k)), b.cluster_offsets[k]) << k;
-  for (std::size_t k = 0; k < cluster_entries; ++k) {
-    EXPECT_EQ(get<std::uint32_t>(s.bytes, data(7, k)), b.cluster_source[k]) << k;
-    EXPECT_EQ(get<std::uint16_t>(s.bytes, data(8, k)), glm::packHalf1x16(b.cluster_weight[k])) << k;
+  if (probes) {
+    const std::size_t p = clusters ? 9 : 6;  // the grid's section
+    const prt::LightBounce::ProbeRows& r = b.probes;
+    for (std::size_t a = 0; a < 3; ++a) EXPECT_EQ(get<std::uint32_t>(s.bytes, data(p, a)), std::uint32_t(r.dims[a]));
+    EXPECT_EQ(get<std::uint32_t>(s.bytes, data(p, 3)), std::uint32_t(r.bands));
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(get<double>(s.bytes, data(p + 1, std::size_t(a))), r.min[a]) << a;
+      EXPECT_EQ(get<double>(s.bytes, data(p + 1, std::size_t(a) + 3)), r.max[a]) << a;
+    }
+    for (std::size_t k = 0; k <= probe_count; ++k)
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, data(p + 2, k)), r.offsets[k]) << k;
+    for (std::size_t k = 0; k < probe_entries; ++k)
+      EXPECT_EQ(get<std::uint32_t>(s.bytes, data(p + 3, k)), r.source[k]) << k;
+    for (std::size_t k = 0; k < r.weight.size(); ++k)
+      EXPECT_EQ(get<std::uint16_t>(s.bytes, data(p + 4, k)), glm::packHalf1x16(r.weight[k])) << k;
   }
-  EXPECT_EQ(s.bytes.size(), data(8, cluster_entries) + (8 - 2 * cluster_entries % 8) % 8 + kTrailer);
+  // The last section ends the data: its padding, then the trailer.
+  const Head& last = heads.back();
+  EXPECT_EQ(s.bytes.size(), data(heads.size() - 1, last.count) + (8 - last.size * last.count % 8) % 8 + kTrailer);
 }
 
 // Writes `t` (an operator's transfer), expects the file of `version` of the
@@ -1678,6 +1752,64 @@ TEST(LightBounceFile, ClusterRowsRoundTripBitIdenticalAsVersionNine) {
   EXPECT_TRUE(contains(prt::describe_transfer(lback), "format version 9"));
   l.transfer.light_bounce = sample_light_bounce(40);
   EXPECT_EQ(prt::transfer_format_version(l), 8u);
+}
+
+// An operator's probe rows (prt precompute --light-bounce --probes): kinds
+// 23 to 27 after the six (and the cluster rows' three), version 10; the
+// same operator without them stays the version 9 (or 8) file, byte for
+// byte.
+TEST(LightBounceFile, ProbeRowsRoundTripBitIdenticalAsVersionTen) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt");
+  // Over every vertex stored, analytic and interpolated vertices, 7
+  // vertices and one bounce; with cluster rows too; and probe rows of which
+  // none has an entry (the offsets say there are rows: still version 10).
+  Transfer no_probe_entries = with_probed_light_bounce(full_transfer());
+  prt::LightBounce::ProbeRows& empty = no_probe_entries.light_bounce.probes;
+  empty.offsets.assign(9, 0);
+  empty.source.clear();
+  empty.weight.clear();
+  Transfer clustered = with_clustered_light_bounce(full_transfer());
+  clustered.light_bounce = with_probe_rows(clustered.light_bounce);
+  const std::vector<std::pair<std::string, Transfer>> cases = {
+      {"every vertex stored", with_probed_light_bounce(full_transfer())},
+      {"analytic vertices", with_probed_light_bounce(mixed_transfer())},
+      {"interpolated vertices", with_probed_light_bounce(adaptive_transfer())},
+      {"7 vertices, 1 bounce", with_probed_light_bounce(full_transfer(7), 1)},
+      {"cluster rows too", clustered},
+      {"no probe entries", no_probe_entries},
+  };
+  for (const auto& [what, t] : cases) {
+    SCOPED_TRACE(what);
+    ASSERT_EQ(prt::transfer_problem(t), "");
+    const Sample s = expect_round_trip(dir, path, t, 10u);
+    // Without the probe rows: the file of before, byte for byte (version 9
+    // with cluster rows, else 8); the rows add only their five sections.
+    Transfer flat = t;
+    flat.light_bounce.probes = {};
+    const std::uint32_t before = t.light_bounce.cluster_offsets.empty() ? 8u : 9u;
+    EXPECT_EQ(prt::transfer_format_version(flat), before);
+    EXPECT_EQ(prt::transfer_sections(t).size(), prt::transfer_sections(flat).size() + 5);
+    EXPECT_EQ(without_sections(s, [](std::uint32_t kind) { return kind >= 23; }, before),
+              sample_file(dir, flat).bytes);
+    EXPECT_EQ(prt::transfer_bytes_per_vertex(t), prt::transfer_bytes_per_vertex(flat));
+  }
+  // A lightmap's: after the layout, texels and the six.
+  prt::LightmapTransfer l = interreflected_lightmap(true);
+  l.transfer.light_bounce = with_probe_rows(sample_light_bounce(40));
+  EXPECT_EQ(prt::transfer_format_version(l), 10u);
+  const Sample ls = lightmap_sample(dir, l);
+  EXPECT_EQ(get<std::uint32_t>(ls.bytes, kVersionAt), 10u);
+  EXPECT_EQ(ls.bytes.size(), prt::transfer_file_size(l));
+  expect_light_bounce_sections(ls, l.transfer.light_bounce);
+  const prt::LightmapTransfer lback = prt::read_lightmap_transfer(dir.file("lightmap.prtt"));
+  expect_identical(l.transfer, lback.transfer);
+  prt::write_lightmap_transfer(dir.file("again.prtt"), lback);
+  EXPECT_EQ(read_file(dir.file("again.prtt")), ls.bytes);
+  EXPECT_TRUE(contains(prt::describe_transfer(lback), "format version 10"));
+  l.transfer.light_bounce.probes = {};
+  EXPECT_EQ(prt::transfer_format_version(l), 8u);
+  EXPECT_EQ(without_sections(ls, [](std::uint32_t kind) { return kind >= 23; }, 8), lightmap_sample(dir, l).bytes);
 }
 
 // Files an earlier prt wrote (the fuzz corpus's seeds, made by prt
@@ -1944,6 +2076,105 @@ TEST(LightBounceRead, DamagedClusterRowsAreRefusedByName) {
                   "compressed");
 }
 
+TEST(LightBounceRead, DamagedProbeRowsAreRefusedByName) {
+  TempDir dir;
+  const Transfer t = with_probed_light_bounce(full_transfer());  // 16 sections: 1-5, 14-19, 23-27
+  ASSERT_EQ(t.light_bounce.probes.source.size(), 13u);
+  const Sample s = sample_file(dir, t);
+  ASSERT_EQ(s.section_at.size(), 16u);
+  const auto data = [&](std::uint32_t kind, std::size_t k) { return section_of(s, kind) + kSectionHeader + 4 * k; };
+  const auto edit = [&](std::size_t at, auto value, const std::vector<std::string>& expected, const std::string& what) {
+    std::string b = s.bytes;
+    put(b, at, value);
+    reseal(b);
+    expect_bytes_error(dir, b, expected, what);
+  };
+  // The sections in a version 9 (or older) file: kind 23 is version 10's.
+  edit(kVersionAt, std::uint32_t(9),
+       {"bad section table: section 12 of 16 has unknown kind 23 in a version 9 file",
+        "'light bounce probe grid' sections are version 10 and later"},
+       "kind 23 in version 9");
+  edit(kVersionAt, std::uint32_t(8), {"section 12 of 16 has unknown kind 23 in a version 8 file"},
+       "kind 23 in version 8");
+  // Section heads: element types and counts (the offsets one per probe of
+  // the grid and one more, the weights bands^2 per source).
+  edit(section_of(s, 24) + 4, std::uint32_t(1),
+       {"section 'light bounce probe box' has element type 1; expected 2 (f64)"}, "f32 box");
+  edit(section_of(s, 27) + 4, std::uint32_t(1),
+       {"section 'light bounce probe weights' has element type 1; expected 8 (f16)"}, "f32 probe weights");
+  edit(section_of(s, 23) + 8, std::uint64_t(3),
+       {"bad section table: section 'light bounce probe grid' has 3 values; expected 4 (NX, NY, NZ, bands)"},
+       "grid count");
+  edit(section_of(s, 24) + 8, std::uint64_t(5),
+       {"section 'light bounce probe box' has 5 values; expected 6 (min x, y, z, max x, y, z)"}, "box count");
+  edit(section_of(s, 25) + 8, std::uint64_t(8),
+       {"bad section table: section 'light bounce probe offsets' has 8 values; expected probes + 1 = 9 (one row per "
+        "probe)"},
+       "probe offset count");
+  edit(section_of(s, 27) + 8, std::uint64_t(118),
+       {"bad section table: section 'light bounce probe weights' has 118 values; 'light bounce probe sources' has 13 "
+        "(bands^2 = 9 weights per probe entry)"},
+       "probe weight count");
+  // The grid's values: the dims before the offsets' count is taken from them.
+  edit(data(23, 0), std::uint32_t(0x80000000u),
+       {"bad section 'light bounce probe grid': NX 2147483648 is out of range"}, "NX past int");
+  edit(data(23, 1), std::uint32_t(1),
+       {"bad section 'light bounce probe grid': NY is 1; each of NX, NY, NZ must be 2 to 1024"}, "NY of 1");
+  edit(data(23, 2), std::uint32_t(3), {"section 'light bounce probe offsets' has 9 values; expected probes + 1 = 13"},
+       "NZ changed under the probe offsets");
+  // The values: what light_bounce_problem refuses in the probe rows.
+  edit(data(23, 3), std::uint32_t(0), {"light bounce: probe rows of 0 bands (1 to 8)"}, "0 bands");
+  edit(section_of(s, 24) + kSectionHeader, std::numeric_limits<double>::quiet_NaN(),
+       {"light bounce: the probe rows' box runs from nan to 0.333"}, "a NaN box");
+  edit(section_of(s, 24) + kSectionHeader + 8 * 4, -1.0,
+       {"light bounce: the probe rows' box runs from -0.5 to -1 along axis 1"}, "max below min");
+  // Probe 1's row is entry 0 (patch 0), probe 3's entries 2 and 3 (patches 0, 1).
+  edit(data(26, 0), std::uint32_t(4), {"light bounce: probe row 1 names patch 4 of 4"}, "a probe source out of range");
+  edit(data(26, 3), std::uint32_t(0), {"light bounce: probe row 3's patches do not increase"},
+       "a probe source repeated");
+  edit(data(25, 8), std::uint32_t(12), {"light bounce: probe row offsets run from 0 to 12 over 13 entries"},
+       "probe offsets not ending at the entries");
+  edit(section_of(s, 27) + kSectionHeader, std::uint16_t(0x7e00), {"light bounce: probe row 1 has the weight nan"},
+       "a NaN probe weight");
+  // A negative weight (0xb800, -0.5) is an SH coefficient's: read as it is.
+  std::string negative = s.bytes;
+  put(negative, section_of(s, 27) + kSectionHeader, std::uint16_t(0xb800));
+  reseal(negative);
+  write_file(dir.file("negative.prtt"), negative);
+  EXPECT_EQ(prt::read_transfer(dir.file("negative.prtt")).light_bounce.probes.weight[0], -0.5f);
+  // Some of the five without the others, or without the operator's six.
+  const auto missing = [&](auto drop, const std::vector<std::string>& expected, const std::string& what) {
+    expect_bytes_error(dir, without_sections(s, drop, 10), expected, what);
+  };
+  missing([](std::uint32_t k) { return k == 25; },
+          {"bad section table: the light-bounce operator's probe sections (kinds 23 to 27) come together, but the "
+           "file has 'light bounce probe grid', 'light bounce probe box', 'light bounce probe sources', 'light bounce "
+           "probe weights' without 'light bounce probe offsets'"},
+          "no probe offsets");
+  missing([](std::uint32_t k) { return k == 24; }, {"without 'light bounce probe box'"}, "no box");
+  missing([](std::uint32_t k) { return k >= 14 && k <= 19; },
+          {"bad section table: the file has 'light bounce probe grid', 'light bounce probe box', 'light bounce probe "
+           "offsets', 'light bounce probe sources', 'light bounce probe weights' (kinds 23 to 27, an operator's probe "
+           "rows) but no light-bounce operator (kinds 14 to 19)"},
+          "probe rows without the operator");
+  // (A version 10 file need hold neither.)
+  write_file(dir.file("flat.prtt"), without_sections(s, [](std::uint32_t k) { return k >= 23; }, 10));
+  EXPECT_TRUE(prt::read_transfer(dir.file("flat.prtt")).light_bounce.probes.empty());
+
+  // Never a compressed file: its own sections followed by the five.
+  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
+  std::string b = c.bytes.substr(0, c.bytes.size() - kTrailer);
+  for (std::size_t i = s.section_at.size() - 5; i < s.section_at.size(); ++i) b += section_bytes(s, i);
+  b += c.bytes.substr(c.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kVersionAt, 10);
+  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + 5));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
+                  {"has a 'light bounce probe grid' section, but the header's flags say the file is compressed"},
+                  "compressed");
+}
+
 TEST(LightBounceWrite, RefusesWhatCouldNotBeReadBack) {
   TempDir dir;
   const std::string path = dir.file("t.prtt");
@@ -1967,6 +2198,10 @@ TEST(LightBounceWrite, RefusesWhatCouldNotBeReadBack) {
   t = with_light_bounce(full_transfer());
   t.light_bounce.offsets[1] = 1000;
   expect_refused([&] { prt::write_transfer(path, t); }, "light bounce: row 1's offsets decrease");
+  t = with_probed_light_bounce(full_transfer());
+  t.light_bounce.probes.weight[0] = -0.1f;  // its sign is an SH weight's; its bits no binary16's
+  expect_refused([&] { prt::write_transfer(path, t); },
+                 "light bounce: probe row 1 has the weight -0.1, not a half-precision value");
   t = with_light_bounce(make_transfer(TransferMode::Shadowed, 1, 2, 40, {}));
   expect_refused([&] { prt::write_transfer(path, t); },
                  "a light-bounce operator in a transfer that is not interreflected");
@@ -2550,6 +2785,48 @@ TEST(PrtInfo, ReportsTheLightBounceOperator) {
   EXPECT_EQ(j.at("light_bounce").at("bytes"), cbytes);
   EXPECT_EQ(j.at("sections").back().at("kind"), 22);
   EXPECT_EQ(j.at("sections").back().at("name"), "light bounce cluster weights");
+  EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
+
+  // Without probe rows: no probe line, no probe_rows key.
+  EXPECT_FALSE(contains(prt::describe_transfer(ct), "bounce probes"));
+  EXPECT_FALSE(j.at("light_bounce").contains("probe_rows")) << r.out;
+
+  // With probe rows (a 2 x 2 x 2 grid of 3 bands, 13 entries): their own
+  // line and object; their arrays (u32 offsets and sources, 9 f16 weights
+  // an entry) counted in the operator's bytes in the JSON, left out of the
+  // light-bounce line and its bytes per receiver (the points' rows); the
+  // file is version 10, its last sections kinds 23 to 27.
+  const Transfer pt = with_probed_light_bounce(full_transfer());
+  prt::write_transfer(path, pt);
+  const std::size_t probe_bytes = 4 * 9 + 4 * 13 + 2 * 9 * 13, pbytes = bytes + probe_bytes;
+  std::snprintf(want, sizeof want,
+                "2 bounces (applied at run time), 4 source patches, %zu entries: %.2f per receiver (vertex), %.2f per "
+                "source patch; %zu bytes, %.1f per receiver against 192 of an SH row (3 x 16 x 4 bytes)\n",
+                entries, double(entries) / points, double(entries) / patches, bytes, double(bytes) / points);
+  r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "prt transfer (format version 10)")) << r.out;
+  EXPECT_TRUE(contains(r.out, want)) << "expected: " << want << "in:\n" << r.out;
+  std::snprintf(want, sizeof want,
+                "  bounce probes     2x2x2 probe grid (8 probes), 3 bands (9 weights per entry), 13 entries: %.2f per "
+                "probe; %zu bytes, %.1f per probe\n",
+                13.0 / 8, probe_bytes, double(probe_bytes) / 8);
+  EXPECT_TRUE(contains(r.out, want)) << "expected: " << want << "in:\n" << r.out;
+  EXPECT_TRUE(contains(r.out, "light bounce probe weights")) << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 10);
+  EXPECT_EQ(j.at("light_bounce").at("entries"), entries);  // the points' rows'
+  EXPECT_EQ(j.at("light_bounce").at("bytes"), pbytes);
+  EXPECT_DOUBLE_EQ(j.at("light_bounce").at("bytes_per_vertex").get<double>(), double(bytes) / points);
+  const nlohmann::json& probe_rows = j.at("light_bounce").at("probe_rows");
+  EXPECT_EQ(probe_rows.at("dims"), nlohmann::json::array({2, 2, 2}));
+  EXPECT_EQ(probe_rows.at("bands"), 3);
+  EXPECT_EQ(probe_rows.at("entries"), 13);
+  EXPECT_EQ(probe_rows.at("bytes"), probe_bytes);
+  EXPECT_EQ(j.at("sections").back().at("kind"), 27);
+  EXPECT_EQ(j.at("sections").back().at("name"), "light bounce probe weights");
   EXPECT_EQ(j.at("file_bytes"), fs::file_size(path));
 
   // Without one: no line, no key.

@@ -24,6 +24,8 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
+
 #include <cstdint>
 #include <span>
 #include <string>
@@ -56,10 +58,40 @@ struct LightBounce {
   std::vector<std::uint32_t> cluster_source;   // per cluster entry, increasing within a row
   std::vector<float> cluster_weight;           // per cluster entry, a half-precision value
 
+  // Receivers at a probe volume's probes (prt precompute --lightmap WxH
+  // --light-bounce --probes NXxNYxNZ): per probe a row of (source patch,
+  // bands^2 SH weights) giving the SH of the lights' light arriving at the
+  // probe from the scene's surfaces,
+  //   c_k = sum_e W_ek mean_{j in p_e} L(j),
+  // L the lights' radiance leaving the points (their direct light and its
+  // B bounces: the surfaces as drawn), W_ek the sum over the probe's rays
+  // whose front hit lands in patch p_e (a hit's share of each point around
+  // it, the patch as coarse as the hit's distance allows, as for the points'
+  // rows) of (4 pi / rays) Y_k(w). The grid is prt::probe_grid(scene mesh,
+  // dims) (probe (i, j, k) is row i + NX (j + NY k)), its points moved off
+  // surfaces as prt::compute_probe_transfer moves them: a probe volume of
+  // the same grid takes these rows (prt render --probes --object).
+  struct ProbeRows {
+    std::array<int, 3> dims{0, 0, 0};  // 0 0 0: no probe rows
+    glm::dvec3 min{0.0}, max{0.0};     // the grid's box (prt::ProbeGrid)
+    int bands = 0;                     // of each probe's SH (3: 9 coefficients)
+    std::vector<std::uint32_t> offsets;  // probes + 1: probe q's entries are [offsets[q], offsets[q + 1])
+    std::vector<std::uint32_t> source;   // per entry: a source patch, increasing within a row
+    std::vector<float> weight;           // per entry bands^2 values (W_e0 .. W_e(n^2-1)), half-precision values
+    bool empty() const { return offsets.empty(); }
+    std::size_t probes() const { return empty() ? 0 : offsets.size() - 1; }
+    std::size_t entries() const { return source.size(); }
+    // Bytes of its arrays as a file stores them (u32 offsets and sources,
+    // f16 weights).
+    std::size_t bytes() const { return 4 * offsets.size() + 4 * source.size() + 2 * weight.size(); }
+  };
+  ProbeRows probes;
+
   bool empty() const { return bounces == 0; }
   std::size_t points() const { return patch.size(); }
   std::size_t entries() const { return source.size() + cluster_source.size(); }
-  // Bytes of the operator's arrays (as stored in a transfer file).
+  // Bytes of the operator's arrays (as stored in a transfer file), its probe
+  // rows' included.
   std::size_t bytes() const;
 };
 
@@ -67,7 +99,10 @@ struct LightBounce {
 // kMaxLightBounces bounces, one patch per point below `patches`, one parent
 // per patch above it (or none), every patch holding a point, offsets from 0
 // increasing to entries(), sources increasing within a row and below
-// `patches`, weights finite, >= 0 and half-precision values. An empty
+// `patches`, weights finite, >= 0 and half-precision values; probe rows (when
+// there are any) for a grid of 2 to kMaxProbeDim a side (prt/probes.h's
+// rule) with a finite box, 1 to 8 bands, one row per probe of the same
+// kind, their weights finite half-precision values of either sign. An empty
 // operator (0 bounces, no arrays) is fine.
 std::string light_bounce_problem(const LightBounce& b, std::size_t points);
 
@@ -89,5 +124,12 @@ LightBounce link_clusters(const LightBounce& b, int offset);
 // for sizes other than b.points().
 std::vector<glm::vec3> light_bounce(const LightBounce& b, std::span<const glm::vec3> direct,
                                     std::span<const glm::vec3> albedo);
+
+// The probes' SH of the lights' light (see ProbeRows): per probe bands^2 RGB
+// coefficients, out[q * n^2 + k], from `leaving`, the lights' radiance
+// leaving every point (their direct light plus light_bounce's). Accumulated
+// in double. Throws prt::Error for sizes other than b.points() or an
+// operator without probe rows.
+std::vector<glm::vec3> light_bounce_at_probes(const LightBounce& b, std::span<const glm::vec3> leaving);
 
 }  // namespace prt

@@ -19,6 +19,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -98,6 +99,11 @@ struct TransferOptions {
   double light_bounce_patch = 0;
   double light_bounce_ratio = kLightBounceRatio;
   int light_bounce_clusters = kLightBounceClusters;
+  // With light_bounce: the operator's receivers include the probes of
+  // prt::probe_grid(mesh, light_bounce_probes) (LightBounce::ProbeRows;
+  // prt precompute --lightmap WxH --light-bounce --probes NXxNYxNZ); 0 0 0:
+  // none.
+  std::array<int, 3> light_bounce_probes{0, 0, 0};
   // When set, compute_transfer fills it with its plan and what its records
   // took (TransferMemory below).
   struct TransferMemory* memory_report = nullptr;

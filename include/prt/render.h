@@ -394,6 +394,15 @@ class Renderer {
   void set_probe_object_model(const glm::mat4& model);
   // The object's vertices' radiance of the last frame drawn.
   std::vector<glm::vec3> probe_object_radiance() const;
+  // With lights and a transfer whose light-bounce operator has probe rows
+  // for the probe volume's grid (prt precompute --lightmap WxH --light-bounce
+  // --probes NXxNYxNZ; LightBounce::ProbeRows), the object's probes add the
+  // lights' light leaving the scene's surfaces (their direct light and its
+  // bounces as the frame has them) to the relit SH: true when they do.
+  bool probe_object_lights_bounce() const;
+  // Those probes' SH of the lights' light, 9 a probe (read back; empty when
+  // probe_object_lights_bounce() is false).
+  std::vector<glm::vec3> probe_lights_sh() const;
   void clear_probe_object();
   void clear_mesh();
   int bands() const;  // of the uploaded SH transfer; 0 without one

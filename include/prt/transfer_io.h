@@ -28,12 +28,12 @@ namespace prt {
 // The newest version of SH transfer files (docs/FORMAT.md); this prt reads
 // it and every earlier one (version 1: every vertex stored). Each file is
 // written in the oldest version that holds it: transfers (lightmaps too)
-// with a light-bounce operator 9 when it has cluster rows, else 8;
-// transfers (compressed or not) with interpolated vertices or texels 7,
-// compressed transfers with a choice record 6, other lightmaps 5, other
-// compressed transfers 4, glossy ones 3, the others 2.
+// with a light-bounce operator 10 when it has probe rows, else 9 when it
+// has cluster rows, else 8; transfers (compressed or not) with interpolated
+// vertices or texels 7, compressed transfers with a choice record 6, other
+// lightmaps 5, other compressed transfers 4, glossy ones 3, the others 2.
 // Wavelet transfers are written as version kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 9;
+inline constexpr std::uint32_t kTransferFormatVersion = 10;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
@@ -48,6 +48,10 @@ inline constexpr std::uint32_t kLightBounceFormatVersion = 8;
 // cluster_source, cluster_weight; prt::link_clusters), written only with an
 // operator that has them (cluster_offsets not empty), all three or none.
 inline constexpr std::uint32_t kLightBounceClustersFormatVersion = 9;
+// Kinds 23-27: the operator's probe rows (LightBounce::probes: the grid and
+// bands, the box, offsets, sources, weights), written only with an operator
+// that has them (probes.offsets not empty), all five or none.
+inline constexpr std::uint32_t kLightBounceProbesFormatVersion = 10;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
 inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
@@ -57,8 +61,10 @@ inline constexpr std::uint32_t kProbeFormatVersion = 1;
 // vertices: 3 with glossy matrices, 2 otherwise (so that a prt reading
 // version 2 reads every file it could).
 inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }
-// The version write_transfer writes for `t`: kLightBounceClustersFormatVersion
-// (9) with a light-bounce operator that has cluster rows
+// The version write_transfer writes for `t`: kLightBounceProbesFormatVersion
+// (10) with a light-bounce operator that has probe rows
+// (!Transfer::light_bounce.probes.empty()), else
+// kLightBounceClustersFormatVersion (9) with one that has cluster rows
 // (!Transfer::light_bounce.cluster_offsets.empty()), else
 // kLightBounceFormatVersion (8) with any other operator
 // (!Transfer::light_bounce.empty()), else
@@ -86,7 +92,7 @@ std::string describe_transfer(const Transfer& t);
 
 // ---- what a file holds (prt info, tests) ------------------------------------
 struct TransferSection {
-  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 13 interpolated vertices, 14-22 light bounce
+  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 13 interpolated vertices, 14-27 light bounce
   const char* name = "";            // "coefficients", "direct", "ambient occlusion", ...
   std::uint32_t element_bytes = 0;  // 1 (u8) to 8 (f64, u64); 2 for the f16 light-bounce weights
   std::uint64_t count = 0;          // elements (scalars)
@@ -213,16 +219,17 @@ void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& wha
 // (Transfer::interpolated: prt precompute --lightmap --adaptive), the
 // 'interpolated vertices' mask over the texels (version 7); and, computed
 // with --light-bounce, the light-bounce operator over the texels (version
-// 8; 9 when it has cluster rows). Written through write_atomically;
-// throws prt::Error "PATH: cannot write this lightmap: PROBLEM"
-// (lightmap_problem; also for glossy matrices, which a lightmap file does
-// not hold) before writing anything.
+// 8; 9 when it has cluster rows, 10 when it has probe rows). Written
+// through write_atomically; throws prt::Error "PATH: cannot write this
+// lightmap: PROBLEM" (lightmap_problem; also for glossy matrices, which a
+// lightmap file does not hold) before writing anything.
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
 // The version write_lightmap_transfer writes for `t`:
-// kLightBounceClustersFormatVersion (9) with a light-bounce operator that
-// has cluster rows, kLightBounceFormatVersion (8) with any other (one row
-// per covered texel), else kInterpolatedFormatVersion (7) when some texel
-// is interpolated, else kLightmapFormatVersion (5).
+// kLightBounceProbesFormatVersion (10) with a light-bounce operator that has
+// probe rows, kLightBounceClustersFormatVersion (9) with one that has
+// cluster rows, kLightBounceFormatVersion (8) with any other (one row per
+// covered texel), else kInterpolatedFormatVersion (7) when some texel is
+// interpolated, else kLightmapFormatVersion (5).
 std::uint32_t transfer_format_version(const LightmapTransfer& t);
 // Reads one with read_transfer's checks plus the layout's (lightmap_problem);
 // throws prt::Error "PATH: problem", also for a per-vertex file (and

@@ -188,3 +188,30 @@ def test_probe_lit_object_is_prt_renders_exr(files, tmp_path):
         prt.render(prt.read_transfer(room), prt.load_mesh(ROOM), ENV, probes=prt.read_probes(vol))
     with pytest.raises(prt.Error, match="object_at"):
         prt.render(prt.read_transfer(room), prt.load_mesh(ROOM), ENV, object_at=(0, 0, 0))
+
+
+def test_probe_lit_object_gets_the_lights_light_off_the_walls(tmp_path):
+    """A lightmap precomputed with --light-bounce --probes of the volume's
+    grid: with lights, the object's probes add the lights' light off the
+    room's surfaces, prt render's own frame bit for bit, and the object is
+    brighter than with the same lightmap without the probe rows."""
+    rows, plain, vol = tmp_path / "rows.prt", tmp_path / "plain.prt", tmp_path / "vol.prt"
+    common = ["--lightmap", "32x32", "--mode", "interreflected", "--bounces", "2", "--samples", "32", "--bands", "3",
+              "--light-bounce", "--seed", "7", "-q"]
+    run_prt("precompute", ROOM, *common, "--probes", "4x3x4", "-o", rows)
+    run_prt("precompute", ROOM, *common, "-o", plain)
+    run_prt("precompute", ROOM, "--probes", "4x3x4", "-q", "-o", vol)
+    lights = tmp_path / "lights.json"
+    lights.write_text('[{"type": "point", "position": [-0.8, 1.6, 0.4], "intensity": 6}]')
+    cam = ["--camera", "1.8,1.8,1.8,0,0.8,0,0,1,0", "--exposure", "0"]
+    at = ["--object-at", "0.5,1,0", "--object-size", "0.8"]
+    want = cli_frame(tmp_path, ROOM, rows, ENV, *cam, *at, "--probes", vol, "--object", MESH, "--lights", lights)
+    kw = dict(width=W, height=H, linear=True, camera=((1.8, 1.8, 1.8), (0, 0.8, 0)), exposure=0,
+              probes=prt.read_probes(vol), object=prt.load_mesh(MESH), object_at=(0.5, 1, 0), object_size=0.8,
+              lights=prt.read_lights(lights))
+    got = prt.render(prt.read_lightmap(rows), prt.load_scene(ROOM), ENV, **kw)
+    np.testing.assert_array_equal(got, want)
+    darker = prt.render(prt.read_lightmap(plain), prt.load_scene(ROOM), ENV, **kw)
+    changed = np.abs(got - darker).max(axis=2) > 1e-6
+    assert changed.mean() > 0.005  # the object's pixels
+    assert (got - darker)[changed].sum() > 0  # lit more

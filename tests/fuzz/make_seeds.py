@@ -253,6 +253,10 @@ def transfer_seeds(out, tmp, prt):
                             "--light-bounce", "--bounce-clusters", "-1"],
         "light-bounce-clusters-b2": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
                                      "--light-bounce"],
+        # Version 10: the operator's probe rows (kinds 23-27), on a 2 x 2 x 2
+        # grid over the mesh (the lightmap below has cluster rows too).
+        "light-bounce-probes-b2": ["--mode", "interreflected", "--bands", "2", "--samples", "64", "--bounces", "2",
+                                   "--light-bounce", "--bounce-clusters", "-1", "--probes", "2x2x2"],
         "glossy-shadowed-b2": ["--material", "glossy", "--bands", "2", "--samples", "64"],
         "glossy-interreflected-colour": ["--material", "glossy", "--mode", "interreflected", "--bands", "2",
                                          "--samples", "64", "--vertex-colors"],
@@ -321,7 +325,9 @@ def transfer_seeds(out, tmp, prt):
     # (version 7: the 'interpolated vertices' mask, kind 13, after kind 11),
     # and with the light-bounce operator over the texels (version 8, kinds
     # 14-19, after kind 11), and with its cluster rows (version 9, kinds
-    # 20-22; --bounce-clusters 0: a few hundred cluster entries).
+    # 20-22; --bounce-clusters 0: a few hundred cluster entries), and with
+    # those and probe rows (version 10, kinds 20-27: every kind of the
+    # operator).
     bump_obj = tmp / "bump.obj"
     s = "".join("v %g %g %g\nvt %g %g\n" % (x, 0.3 * math.exp(-3 * (x * x + z * z)), z, (x + 1) / 2, (1 - z) / 2)
                 for x, z in grid)
@@ -332,7 +338,8 @@ def transfer_seeds(out, tmp, prt):
     bounce = ["--mode", "interreflected", "--bounces", "1", "--light-bounce", "--bounce-clusters"]
     for name, args in (("lightmap-b1", []), ("lightmap-adaptive-b1", ["--adaptive"]),
                        ("lightmap-light-bounce-b1", bounce + ["-1"]),
-                       ("lightmap-light-bounce-clusters-b1", bounce + ["0"])):
+                       ("lightmap-light-bounce-clusters-b1", bounce + ["0"]),
+                       ("lightmap-light-bounce-probes-b1", bounce + ["0", "--probes", "2x2x2"])):
         f = tmp / (name + ".prt")
         subprocess.run([prt, "precompute", str(bump_obj), "--lightmap", "16x16", "-o", str(f), "--threads", "1", "-q",
                         "--bands", "1", "--samples", "64", *args], check=True)

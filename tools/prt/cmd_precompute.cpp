@@ -179,7 +179,6 @@ void check_light_bounce(const PrecomputeArgs& a) {
   if (a.basis == "zh")
     throw UsageError("--light-bounce does not go with --basis zh: a deforming mesh's gather changes with its pose");
   const std::pair<const CLI::Option*, const char*> refused[] = {
-      {a.probes_opt, "--probes (a probe volume gathers from the mesh's vertices, not from its own points: not yet)"},
       {a.adaptive_opt, "--adaptive (interpolated points have no gather row to keep)"},
       {a.target_opt, "--target-error (it chooses the bounces by the sky's error; give --bounces)"},
   };
@@ -885,24 +884,31 @@ int run_precompute(PrecomputeArgs& a) {
                           {"--cache", a.cache}});
   // --memory-limit plans an SH transfer's memory (docs/PRECOMPUTE.md, "Memory"); a probe volume or a wavelet
   // transfer would ignore it.
-  if (a.memory_limit_opt->count() > 0 && (a.probes_opt->count() > 0 || a.basis == "wavelet"))
+  // --probes with --light-bounce: the operator's receivers at a probe grid's
+  // probes (docs/LIGHTS.md "Bounce"), in the transfer's own run; without it,
+  // a probe volume's run.
+  const bool probe_volume = a.probes_opt->count() > 0 && !a.opt.light_bounce;
+  if (a.memory_limit_opt->count() > 0 && (probe_volume || a.basis == "wavelet"))
     throw UsageError(fmt::format(
         "--memory-limit does not apply to {}: it plans the memory of an SH transfer at vertices or texels (its per-point "
         "arrays first, then the bounces' gather records, which go to a temporary file past the limit; "
         "docs/PRECOMPUTE.md, \"Memory\"), and {} has no such plan{}; leave --memory-limit out",
-        a.probes_opt->count() > 0 ? "--probes" : "--basis wavelet",
-        a.probes_opt->count() > 0 ? "a probe volume" : "a wavelet transfer",
-        a.probes_opt->count() > 0 ? " (a 64x32x64 volume takes about 80 MB; docs/PROBES.md)"
+        probe_volume ? "--probes" : "--basis wavelet",
+        probe_volume ? "a probe volume" : "a wavelet transfer",
+        probe_volume ? " (a 64x32x64 volume takes about 80 MB; docs/PROBES.md)"
                                   : " (its size is set by --cube-res and --threshold)"));
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
   check_light_bounce(a);  // every kind of run
-  if (a.probes_opt->count() > 0) {
+  if (probe_volume) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     return run_probes(a);
   }
   for (const CLI::Option* o : {a.probe_cube_opt, a.bounce_bands_opt})
-    if (o->count() > 0) throw UsageError(o->get_name() + " applies to --probes");
+    if (o->count() > 0)
+      throw UsageError(o->get_name() + " applies to a probe volume's run (--probes without --light-bounce)");
+  if (a.probes_opt->count() > 0)
+    a.opt.light_bounce_probes = for_option("--probes", [&] { return parse_probe_dims(a.probes); });
   if (a.lightmap_opt->count() > 0) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     for (const auto& [option, path] : {std::pair{"--ao-map", &a.ao_map}, std::pair{"--bent-normal-map", &a.bent_map},
@@ -1037,7 +1043,9 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
   a.probes_opt = s->add_option("--probes", a.probes,
                                "NXxNYxNZ: a relightable probe volume instead of vertices: probes on a grid spanning "
                                "SCENE's bounding box, corners included (docs/PROBES.md); --bands (default 3), --mode "
-                               "shadowed|interreflected, --samples (rays per probe)");
+                               "shadowed|interreflected, --samples (rays per probe). With --light-bounce: the "
+                               "operator's receivers include that grid's probes, for the probe-lit object of "
+                               "prt render --probes (docs/LIGHTS.md \"Bounce\")");
   a.probe_cube_opt = s->add_option("--probe-cube", a.popt.cube_res,
                                    "With --probes: the visibility cube's finest face size r (4 to 64; traced at r/4, refined where an edge crosses)")
                          ->check(int_one_of({4, 8, 16, 32, 64}))
@@ -1153,6 +1161,8 @@ Run add_precompute(CLI::App& app) {
       "         prt precompute models/tube.obj -o tube-zh.prt --basis zh --lobes 4 --bands 6\n"
       "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected -o room.prt\n"
       "         prt precompute models/room.gltf --probes 16x8x16 -o room-probes.prt\n"
+      "         prt precompute models/room.gltf --lightmap 256x256 --mode interreflected --light-bounce --probes "
+      "16x8x16 -o room-lights.prt\n"
       "         prt precompute coarse.obj -o fine.prt --subdivide 0.02 --subdivided-mesh fine.ply");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB (with --lightmap: a scene, glTF/GLB or OBJ)")
       ->check(path_value())

@@ -296,6 +296,14 @@ int render_frames(const RenderArgs& a, RenderJob& j, const std::array<double, 3>
     if (!j.lights.empty())
       fmt::print(stderr, "lights: {} shadow map(s) of {} texels a side redrawn over {} frame(s) (only what moved)\n",
                  maps_drawn, a.shadow_size, a.frames);
+    if (!j.lights.empty() && j.probe_object)
+      fmt::print(stderr, "{}\n",
+                 j.renderer->probe_object_lights_bounce()
+                     ? "the probe-lit object: the lights' direct light, and their light off the scene's surfaces at "
+                       "its probes (the transfer's light-bounce probe rows)"
+                     : "the probe-lit object: the lights' direct light alone (its probes take the lights' light off "
+                       "the surfaces from a transfer precomputed with --light-bounce --probes of the volume's grid; "
+                       "docs/LIGHTS.md \"Bounce\")");
     if (wavelet && look.shading == Shading::Transfer)
       fmt::print(stderr, "wavelet relighting on the CPU: {:.2f} ms per frame (K = {}, {} selection, cube {}^2 x 6)\n",
                  cpu_ms / a.frames, look.terms, wavelet::selection_name(look.selection), j.scene.wavelet()->cube_res);

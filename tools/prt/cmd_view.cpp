@@ -548,7 +548,9 @@ PanelInfo panel_info(const Viewer& viewer, const ViewState& st, const Renderer& 
   info.frame_ms = frame_ms;
   info.device = renderer.device();
   if (renderer.has_light_bounce() && !st.lights.empty())
-    info.bounce = renderer.light_bounce_done() ? "their bounce: whole" : "their bounce: catching up (--bounce-budget)";
+    info.bounce = std::string(renderer.light_bounce_done() ? "their bounce: whole"
+                                                           : "their bounce: catching up (--bounce-budget)") +
+                  (renderer.probe_object_lights_bounce() ? "; at the object's probes too" : "");
   return info;
 }
 
