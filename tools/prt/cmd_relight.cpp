@@ -376,6 +376,10 @@ int run_probes(const RelightArgs& a, const std::string& ext, const std::array<do
   EnvMap env = load_envmap(a.env);
   require_finite(env);
   const std::vector<Light> lights = relight_lights(a, env, euler.data(), &scene.lights);
+  if (!a.quiet && !lights.empty())
+    fmt::print(stderr, "the lights' direct light at the points; their light off the surfaces at the probes comes from "
+                       "the scene's light-bounce operator (prt precompute --light-bounce --probes), which prt render "
+                       "--probes --object applies (docs/LIGHTS.md \"Bounce\")\n");
   ProbeRelighter relighter(t, env);
   relighter.set_rotation(sh::rotation_from_euler(euler[0], euler[1], euler[2]));
   const double t_light = ms_since(t0);
