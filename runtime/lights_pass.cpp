@@ -73,9 +73,11 @@ glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double 
 
 LightsPass::LightsPass() {
   shadow_program_ = gl::link_program(shaders::shadow_vert_glsl, shaders::shadow_frag_glsl, "shadow map");
-  apply_program_ = gl::link_compute(shaders::lights_comp_glsl, "lights",
-                                    fmt::format("#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n#define KNORMAL_OFFSET {:.6f}\n",
-                                                kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels));
+  apply_program_ = gl::link_compute(
+      shaders::lights_comp_glsl, "lights",
+      fmt::format("#define KMAX_LIGHTS {}\n#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n"
+                  "#define KNORMAL_OFFSET {:.6f}\n",
+                  kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels));
   glCreateFramebuffers(1, &fbo_);
   set_size(kDefaultShadowMapSize);
 }

@@ -499,6 +499,10 @@ void Renderer::Impl::set_bounds(const Mesh& mesh) {
 
 void Renderer::set_lights(std::span<const Light> lights) {
   Impl& m = *impl_;
+  if (lights.size() > std::size_t(kMaxGpuLights))
+    throw Error(fmt::format("{} lights: the GPU's lights pass takes at most {} at once (prt relight evaluates any "
+                            "number on the CPU)",
+                            lights.size(), kMaxGpuLights));
   m.make_current();
   if (!std::equal(lights.begin(), lights.end(), m.light_list.begin(), m.light_list.end())) ++m.lights_version;
   m.light_list.assign(lights.begin(), lights.end());

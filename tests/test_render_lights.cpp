@@ -135,6 +135,20 @@ TEST(RenderLights, VertexLightsAreTheTracedDirectLight) {
   EXPECT_LT(b.rel_rms, kShadowMapRms);
   EXPECT_LT(b.flipped, kFlippedFraction);
   EXPECT_EQ(r->shadow_maps_drawn(), 3);
+
+  // More lights than the pass's uniform block holds: refused with the
+  // limit, the lights as they were.
+  try {
+    r->set_lights(std::vector<Light>(std::size_t(kMaxGpuLights) + 1, lights[0]));
+    ADD_FAILURE() << "set_lights took more than kMaxGpuLights lights";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 128"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(agreement(r->vertex_radiance({0, 3, 3}),
+                      DirectLight(moved).radiance(lights, moved.positions, moved.normals,
+                                                  std::vector<glm::vec3>(moved.vertex_count(), o.albedo)))
+                .rel_rms,
+            b.rel_rms);
 }
 
 TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) {

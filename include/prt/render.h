@@ -76,6 +76,11 @@ inline constexpr int kMaxRenderBands = 16;
 // with 4 moving lights and a turning sun 1.7x the static lightmapped frame
 // on llvmpipe (1024: 4.7x); 8192: a 1.5 GiB cube of 32-bit distances.
 inline constexpr int kDefaultShadowMapSize = 512, kMaxShadowMapSize = 8192;
+// The most lights the GPU's lights pass takes at once (Renderer::set_lights):
+// their records (128 bytes each) fill a uniform block of 16 KiB, the least
+// any OpenGL 4.5 gives (GL_MAX_UNIFORM_BLOCK_SIZE). prt relight evaluates
+// any number on the CPU.
+inline constexpr int kMaxGpuLights = 128;
 // The most bands of a glossy transfer the renderer takes: prt::kMaxGlossyBands
 // (prt/precompute.h, which the runtime does not include; tests/test_render_glossy.cpp
 // pins the two equal). The glossy pass keeps bands^2 basis values per invocation.
@@ -367,7 +372,7 @@ class Renderer {
   // cube per point or spot light, a square fitted to the mesh's bounding
   // sphere per directional light, each redrawn only when its light moves.
   // An empty span removes them. Throws prt::Error for a light check_light
-  // refuses.
+  // refuses or more than kMaxGpuLights.
   void set_lights(std::span<const Light> lights);
   // A lightmap's points for the lights, in texel order: the texels' sample
   // points moved out of geometry as prt precompute moved them
