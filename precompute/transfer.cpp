@@ -90,6 +90,11 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
       throw Error(fmt::format("--bounce-clusters must be -1 (none) to {}, got {}", kMaxPatchLevels - 1,
                               o.light_bounce_clusters));
   }
+  // Before any ray: the probe rows' grid (LightBounce::ProbeRows).
+  if (o.light_bounce_probes != std::array<int, 3>{0, 0, 0}) {
+    if (!o.light_bounce) throw Error("--probes with a transfer: the light-bounce operator's probe rows need --light-bounce");
+    if (const std::string p = probe_dims_problem(o.light_bounce_probes); !p.empty()) throw Error("--probes: " + p);
+  }
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 

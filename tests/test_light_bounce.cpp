@@ -210,6 +210,16 @@ TEST(LightBounce, AProbeInsideAClosedSphereSeesTheWallsLightInSH) {
   constexpr double kMeanTol = 0.045, kWorstTol = 0.065;
   EXPECT_LT(sum / inside, kMeanTol);
   EXPECT_LT(worst, kWorstTol);
+
+  // Probe rows without the operator, or of a grid the probe rule refuses:
+  // refused before any ray.
+  TransferOptions bad;
+  bad.mode = TransferMode::Interreflected;
+  bad.light_bounce_probes = {3, 3, 3};
+  EXPECT_THROW(compute_transfer(sphere.ball, bad), Error);
+  bad.light_bounce = true;
+  bad.light_bounce_probes = {1, 3, 3};
+  EXPECT_THROW(compute_transfer(sphere.ball, bad), Error);
 }
 
 TEST(LightBounce, ClustersShareTheirPointsRowsAndKeepTheirSum) {

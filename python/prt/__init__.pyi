@@ -389,7 +389,7 @@ def load_scene(path: Any) -> Scene:
     Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.
     """
 
-def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ...) -> Lightmap:
+def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ...) -> Lightmap:
     """
     The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.
 
@@ -399,6 +399,7 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
       uv_set: the scene's UV set the atlas is laid out in, 0 to 7 (TEXCOORD_N), or -1: TEXCOORD_1 where every object has it, else TEXCOORD_0 [--uv].
       bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
       adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.
+      light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.
 
     Returns a Lightmap.
     """
@@ -464,7 +465,7 @@ def make_mesh(positions: Any, triangles: Any, normals: Any = ..., colors: Any = 
     Returns a Mesh.
     """
 
-def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., progress: Any = ...) -> Any:
+def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., progress: Any = ...) -> Any:
     """
     Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.
 
@@ -487,6 +488,9 @@ def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = 
       adaptive: adaptive sample points (basis='sh'; docs/PRECOMPUTE.md): None traces every vertex; a tolerance TOL in (0, 1) traces a subset and interpolates the rest along the surface where probes show interpolation adds at most TOL (relative RMS, band-weighted); 0: the default TOL, 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples [--adaptive [TOL]: 0 is the option without a value]. The Transfer's .interpolated marks the interpolated vertices.
       verify_adaptive: with adaptive: trace this fraction, [0, 1], of the interpolated vertices again (they keep the traced transfer) (0) [--verify-adaptive].
       adaptive_any: with adaptive: take a TOL above 1.5x the default, which is refused otherwise [--adaptive-any].
+      light_bounce: with mode='interreflected', keep the bounces' gather as the lights' bounce operator (Transfer.light_bounce; relight(lights=...) and render apply it; docs/LIGHTS.md "Bounce") [--light-bounce].
+      bounce_patch, bounce_ratio, bounce_clusters: its finest patches' size in mesh units (0: a few vertices' spacing), how coarse a far patch may be against its distance (1), the levels a far link's receiving cluster stays below its source (2; -1: none) [--bounce-patch, --bounce-ratio, --bounce-clusters].
+      bounce_probes: (NX, NY, NZ): the operator's rows for that probe grid's probes too, which the probe-lit object of render(probes=, object=) takes (None: none) [--probes with --light-bounce].
       progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).
 
     Returns a Transfer (a WaveletTransfer for basis='wavelet').

@@ -184,13 +184,16 @@ void bind_lightmap_compute(py::module_& m) {
   m.def(
       "precompute_lightmap",
       [](const prt::Scene& scene, int width, int height, int uv_set, const std::string& mode, int bands, int samples,
-         int bounces, std::uint64_t seed, const py::object& adaptive, double verify_adaptive, bool adaptive_any) {
+         int bounces, std::uint64_t seed, const py::object& adaptive, double verify_adaptive, bool adaptive_any,
+         bool light_bounce, double bounce_patch, double bounce_ratio, int bounce_clusters,
+         const py::object& bounce_probes) {
         prt::TransferOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bands = bands;
         o.samples = samples;
         o.bounces = bounces;
         o.seed = seed;
+        light_bounce_args(o, light_bounce, bounce_patch, bounce_ratio, bounce_clusters, bounce_probes);
         const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
         uv_set_arg(uv_set, "uv_set");
         py::gil_scoped_release release;
@@ -208,7 +211,9 @@ void bind_lightmap_compute(py::module_& m) {
       py::arg("scene"), py::arg("width"), py::arg("height"), py::kw_only(), py::arg("uv_set") = -1,
       py::arg("mode") = "shadowed", py::arg("bands") = 5, py::arg("samples") = 1024, py::arg("bounces") = 1,
       py::arg("seed") = 1, py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0,
-      py::arg("adaptive_any") = false,
+      py::arg("adaptive_any") = false, py::arg("light_bounce") = false, py::arg("bounce_patch") = 0.0,
+      py::arg("bounce_ratio") = prt::kLightBounceRatio, py::arg("bounce_clusters") = prt::kLightBounceClusters,
+      py::arg("bounce_probes") = py::none(),
       "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
@@ -217,6 +222,7 @@ void bind_lightmap_compute(py::module_& m) {
       "  uv_set: the scene's UV set the atlas is laid out in, 0 to 7 (TEXCOORD_N), or -1: TEXCOORD_1 where every object has it, else TEXCOORD_0 [--uv].\n"
       "  bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
       "  adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.\n"
+      "  light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.\n"
       "\n"
       "Returns a Lightmap.");
 

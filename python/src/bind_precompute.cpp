@@ -15,12 +15,14 @@ void bind_precompute(py::module_& m) {
       [](const prt::Mesh& mesh, const py::object& bands_arg, int samples, const std::string& mode, int bounces,
          const py::object& albedo, bool vertex_colors, std::uint64_t seed, int threads, double offset,
          double bounce_tolerance, const std::string& material, const std::string& basis, int cube_res,
-         double threshold, const py::object& adaptive, double verify_adaptive, bool adaptive_any,
+         double threshold, const py::object& adaptive, double verify_adaptive, bool adaptive_any, bool light_bounce,
+         double bounce_patch, double bounce_ratio, int bounce_clusters, const py::object& bounce_probes,
          py::object progress) -> py::object {
         if (basis != "sh" && basis != "wavelet")
           throw Error("basis: expected 'sh' or 'wavelet' (for 'zh', fit_zh the SH transfer), got '" + basis + "'");
         const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
         if (basis == "wavelet") {
+          if (light_bounce) throw Error("light_bounce: applies to basis='sh' (an interreflected SH transfer)");
           if (adapt)
             throw Error("adaptive: applies to basis='sh' (SH transfer); a wavelet transfer traces every vertex");
           // The CLI's rules: shadowed, diffuse; its size set by cube_res and threshold.
@@ -56,6 +58,7 @@ void bind_precompute(py::module_& m) {
         if (material != "diffuse" && material != "glossy")
           throw Error("material: expected 'diffuse' or 'glossy', got '" + material + "'");
         o.glossy = material == "glossy";
+        light_bounce_args(o, light_bounce, bounce_patch, bounce_ratio, bounce_clusters, bounce_probes);
         PyTransfer p;
         p.t = run_released(std::move(progress), [&](const prt::Progress& pr) {
           return adapt ? prt::compute_adaptive_transfer(mesh, o, *adapt, pr) : prt::compute_transfer(mesh, o, pr);
@@ -67,6 +70,8 @@ void bind_precompute(py::module_& m) {
       py::arg("seed") = 1, py::arg("threads") = 0, py::arg("offset") = 0.0, py::arg("bounce_tolerance") = 0.0,
       py::arg("material") = "diffuse", py::arg("basis") = "sh", py::arg("cube_res") = 32, py::arg("threshold") = 1e-2,
       py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0, py::arg("adaptive_any") = false,
+      py::arg("light_bounce") = false, py::arg("bounce_patch") = 0.0, py::arg("bounce_ratio") = prt::kLightBounceRatio,
+      py::arg("bounce_clusters") = prt::kLightBounceClusters, py::arg("bounce_probes") = py::none(),
       py::arg("progress") = py::none(),
       "Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.\n"
       "\n"
@@ -89,6 +94,9 @@ void bind_precompute(py::module_& m) {
       "  adaptive: adaptive sample points (basis='sh'; docs/PRECOMPUTE.md): None traces every vertex; a tolerance TOL in (0, 1) traces a subset and interpolates the rest along the surface where probes show interpolation adds at most TOL (relative RMS, band-weighted); 0: the default TOL, 0.01, and 0.01 x sqrt(1024 / samples) past 1024 samples [--adaptive [TOL]: 0 is the option without a value]. The Transfer's .interpolated marks the interpolated vertices.\n"
       "  verify_adaptive: with adaptive: trace this fraction, [0, 1], of the interpolated vertices again (they keep the traced transfer) (0) [--verify-adaptive].\n"
       "  adaptive_any: with adaptive: take a TOL above 1.5x the default, which is refused otherwise [--adaptive-any].\n"
+      "  light_bounce: with mode='interreflected', keep the bounces' gather as the lights' bounce operator (Transfer.light_bounce; relight(lights=...) and render apply it; docs/LIGHTS.md \"Bounce\") [--light-bounce].\n"
+      "  bounce_patch, bounce_ratio, bounce_clusters: its finest patches' size in mesh units (0: a few vertices' spacing), how coarse a far patch may be against its distance (1), the levels a far link's receiving cluster stays below its source (2; -1: none) [--bounce-patch, --bounce-ratio, --bounce-clusters].\n"
+      "  bounce_probes: (NX, NY, NZ): the operator's rows for that probe grid's probes too, which the probe-lit object of render(probes=, object=) takes (None: none) [--probes with --light-bounce].\n"
       "  progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).\n"
       "\n"
       "Returns a Transfer (a WaveletTransfer for basis='wavelet').");

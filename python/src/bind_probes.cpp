@@ -15,30 +15,6 @@
 namespace prt::python {
 namespace {
 
-// dims= of precompute_probes: (NX, NY, NZ), three whole numbers by the rule
-// of prt::probe_dims_problem (prt precompute --probes NXxNYxNZ's).
-std::array<int, 3> probe_dims_arg(const py::object& dims) {
-  const std::string rule = "dims: expected (NX, NY, NZ), three whole numbers, each 2 to " +
-                           std::to_string(prt::kMaxProbeDim) + ", at most " + std::to_string(prt::kMaxProbes) +
-                           " probes in all";
-  std::string shown = py::repr(dims);
-  if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
-  const std::string got = ", got " + std::string(py::str(py::type::of(dims).attr("__name__"))) + " " + shown;
-  if (dims.is_none() || py::isinstance<py::str>(dims) || py::isinstance<py::bytes>(dims) ||
-      !PySequence_Check(dims.ptr()))
-    throw Error(rule + got);
-  const Py_ssize_t n = PySequence_Size(dims.ptr());
-  if (n < 0) {  // a 0-d array: a sequence without a length
-    PyErr_Clear();
-    throw Error(rule + got);
-  }
-  if (n != 3) throw Error(rule + got + " (" + std::to_string(n) + " values)");
-  const py::sequence seq = py::reinterpret_borrow<py::sequence>(dims);
-  std::array<int, 3> d{};
-  for (std::size_t k = 0; k < 3; ++k) d[k] = int_arg(seq[k], "dims[" + std::to_string(k) + "]");
-  if (const std::string p = prt::probe_dims_problem(d); !p.empty()) throw Error("dims: " + shown + ": " + p);
-  return d;
-}
 
 // ProbeVolume, read_probes.
 void bind_probes_volume(py::module_& m) {

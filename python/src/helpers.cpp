@@ -4,6 +4,7 @@
 #include "module.h"
 
 #include <prt/io.h>
+#include <prt/probes.h>
 #include <prt/render.h>
 #include <prt/rotation.h>
 #include <prt/wavelet.h>
@@ -368,6 +369,43 @@ prt::EnvMap map_from_array(const py::handle& obj) {
   }
   throw Error("map: expected an array of shape (H, W, 3) (lat-long) or (6, N, N, 3) (cube faces), got " +
               shape_text(a));
+}
+
+std::array<int, 3> probe_dims_arg(const py::object& dims, const std::string& what) {
+  const std::string rule = what + ": expected (NX, NY, NZ), three whole numbers, each 2 to " +
+                           std::to_string(prt::kMaxProbeDim) + ", at most " + std::to_string(prt::kMaxProbes) +
+                           " probes in all";
+  std::string shown = py::repr(dims);
+  if (shown.size() > 60) shown = shown.substr(0, 57) + "...";
+  const std::string got = ", got " + std::string(py::str(py::type::of(dims).attr("__name__"))) + " " + shown;
+  if (dims.is_none() || py::isinstance<py::str>(dims) || py::isinstance<py::bytes>(dims) ||
+      !PySequence_Check(dims.ptr()))
+    throw Error(rule + got);
+  const Py_ssize_t n = PySequence_Size(dims.ptr());
+  if (n < 0) {  // a 0-d array: a sequence without a length
+    PyErr_Clear();
+    throw Error(rule + got);
+  }
+  if (n != 3) throw Error(rule + got + " (" + std::to_string(n) + " values)");
+  const py::sequence seq = py::reinterpret_borrow<py::sequence>(dims);
+  std::array<int, 3> d{};
+  for (std::size_t k = 0; k < 3; ++k) d[k] = int_arg(seq[k], what + "[" + std::to_string(k) + "]");
+  if (const std::string p = prt::probe_dims_problem(d); !p.empty()) throw Error(what + ": " + shown + ": " + p);
+  return d;
+}
+
+void light_bounce_args(prt::TransferOptions& o, bool light_bounce, double patch, double ratio, int clusters,
+                       const py::object& probes) {
+  o.light_bounce = light_bounce;
+  o.light_bounce_patch = patch;
+  o.light_bounce_ratio = ratio;
+  o.light_bounce_clusters = clusters;
+  if (!probes.is_none()) o.light_bounce_probes = probe_dims_arg(probes, "bounce_probes");
+  const bool shaped = patch != 0.0 || ratio != prt::kLightBounceRatio || clusters != prt::kLightBounceClusters ||
+                      !probes.is_none();
+  if (shaped && !light_bounce)
+    throw Error("bounce_patch, bounce_ratio, bounce_clusters and bounce_probes shape the light_bounce operator: give "
+                "light_bounce=True too");
 }
 
 }  // namespace prt::python

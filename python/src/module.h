@@ -234,6 +234,13 @@ auto run_released(py::object progress, F&& f) {
 // above max_adaptive_tolerance(samples) unless adaptive_any. Returns the
 // options, or nothing for adaptive=None.
 std::optional<prt::AdaptiveOptions> adaptive_arg(const py::object& adaptive, double verify, bool any, int samples);
+// (NX, NY, NZ) by prt::probe_dims_problem's rule, errors naming `what`.
+std::array<int, 3> probe_dims_arg(const py::object& dims, const std::string& what = "dims");
+// light_bounce= and its shaping arguments (prt precompute --light-bounce,
+// --bounce-patch, --bounce-ratio, --bounce-clusters, --probes) into `o`;
+// throws prt::Error for a shaping argument without light_bounce.
+void light_bounce_args(prt::TransferOptions& o, bool light_bounce, double patch, double ratio, int clusters,
+                       const py::object& probes);
 
 // threads=: prt's --threads, 0 (every core) to prt::kMaxThreads.
 int threads_arg(int threads);

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import prt
-from conftest import ENV, SOURCE, run_prt
+from conftest import ENV, MESH, SOURCE, run_prt
 
 SCENE = SOURCE / "models" / "wall-on-floor.gltf"
 
@@ -31,6 +31,36 @@ def test_precompute_lightmap_is_the_cli_file(tmp_path):
     assert (back.width, back.height, back.uv_set, back.bands) == (24, 24, 1, 3)
     np.testing.assert_array_equal(back.texels, lm.texels)
     assert back.analytic.any() and not back.analytic.all()
+
+
+def test_precompute_lightmap_keeps_the_light_bounce_operator_as_the_cli(tmp_path):
+    """light_bounce=True and its shaping arguments (bounce_probes: its rows at
+    a probe grid's probes) are prt precompute --light-bounce's, bit for bit;
+    a shaping argument without light_bounce, or a bad grid, is refused."""
+    cli = tmp_path / "cli.prt"
+    run_prt("precompute", SCENE, "--lightmap", "24x24", "--samples", "64", "--bands", "3", "--seed", "7",
+            "--mode", "interreflected", "--bounces", "2", "--light-bounce", "--bounce-clusters", "1", "--probes",
+            "3x2x3", "-q", "-o", cli)
+    s = prt.load_scene(SCENE)
+    lm = prt.precompute_lightmap(s, 24, 24, bands=3, samples=64, seed=7, mode="interreflected", bounces=2,
+                                 light_bounce=True, bounce_clusters=1, bounce_probes=(3, 2, 3))
+    out = tmp_path / "py.prt"
+    lm.write(out)
+    assert out.read_bytes() == cli.read_bytes()
+    with pytest.raises(prt.Error, match="light_bounce=True"):
+        prt.precompute_lightmap(s, 8, 8, bands=3, samples=16, mode="interreflected", bounce_probes=(3, 2, 3))
+    with pytest.raises(prt.Error, match="bounce_probes"):
+        prt.precompute_lightmap(s, 8, 8, bands=3, samples=16, mode="interreflected", light_bounce=True,
+                                bounce_probes=(1, 2, 3))
+    mesh = prt.load_mesh(MESH)
+    t = prt.precompute(mesh, bands=3, samples=32, mode="interreflected", bounces=2, light_bounce=True,
+                       bounce_probes=(2, 2, 2))
+    t_cli = tmp_path / "v.prt"
+    run_prt("precompute", MESH, "--bands", "3", "--samples", "32", "--mode", "interreflected", "--bounces", "2",
+            "--light-bounce", "--probes", "2x2x2", "-q", "-o", t_cli)
+    t_py = tmp_path / "v_py.prt"
+    t.write(t_py)
+    assert t_py.read_bytes() == t_cli.read_bytes()
 
 
 def test_rows_round_trip_and_relight(tmp_path):
