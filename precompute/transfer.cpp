@@ -880,7 +880,6 @@ LightBounce keep_light_bounce(const Run& run, const FirstPass& fp, int bounces) 
     return x < 2.0 ? 0 : std::min(sp.levels - 1, int(std::floor(std::log2(x))));
   };
   std::vector<std::uint8_t> buffer;
-  std::vector<std::pair<std::uint32_t, double>> row;
   const std::vector<std::uint64_t>& grow = fp.grow;
   for (std::size_t blk = 0; blk * run.plan.block < run.own; ++blk) {
     const std::size_t b0 = blk * run.plan.block, b1 = std::min(run.own, b0 + run.plan.block);
@@ -888,24 +887,42 @@ LightBounce keep_light_bounce(const Run& run, const FirstPass& fp, int bounces) 
     const std::size_t nnz = std::size_t(grow[b1] - grow[b0]);
     const auto* col = reinterpret_cast<const std::uint32_t*>(bytes);
     const auto* val = reinterpret_cast<const float*>(bytes + nnz * sizeof(std::uint32_t));
-    for (std::size_t i = b0; i < b1; ++i) {
-      row.clear();
-      const glm::dvec3 at(run.src.positions[run.r0 + i]);
-      for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
-        const int l = level_at(glm::length(glm::dvec3(run.src.positions[col[e]]) - at));
-        row.emplace_back(sp.of_point[std::size_t(l) * P + col[e]], val[e]);
+    // Each point's row on its own (in parallel: the same bits in any
+    // order), then appended in point order.
+    const std::size_t grains = (b1 - b0 + kWorkerGrain - 1) / kWorkerGrain;
+    std::vector<std::vector<std::uint32_t>> sources(grains), lengths(grains);
+    std::vector<std::vector<float>> weights(grains);
+    tbb::parallel_for(std::size_t(0), grains, [&](std::size_t g) {
+      std::vector<std::pair<std::uint32_t, double>> row;
+      const std::size_t i0 = b0 + g * kWorkerGrain, i1 = std::min(b1, i0 + kWorkerGrain);
+      for (std::size_t i = i0; i < i1; ++i) {
+        row.clear();
+        const glm::dvec3 at(run.src.positions[run.r0 + i]);
+        for (std::size_t e = grow[i] - grow[b0]; e < grow[i + 1] - grow[b0]; ++e) {
+          const int l = level_at(glm::length(glm::dvec3(run.src.positions[col[e]]) - at));
+          row.emplace_back(sp.of_point[std::size_t(l) * P + col[e]], val[e]);
+        }
+        std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+        std::size_t out = 0;
+        for (std::size_t q = 0; q < row.size(); ++q) {
+          if (out > 0 && row[out - 1].first == row[q].first) row[out - 1].second += row[q].second;
+          else row[out++] = row[q];
+        }
+        for (std::size_t q = 0; q < out; ++q) {
+          sources[g].push_back(row[q].first);
+          weights[g].push_back(to_half_precision(row[q].second));
+        }
+        lengths[g].push_back(std::uint32_t(out));
       }
-      std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-      std::size_t out = 0;
-      for (std::size_t q = 0; q < row.size(); ++q) {
-        if (out > 0 && row[out - 1].first == row[q].first) row[out - 1].second += row[q].second;
-        else row[out++] = row[q];
+    });
+    std::size_t i = b0;
+    for (std::size_t g = 0; g < grains; ++g) {
+      b.source.insert(b.source.end(), sources[g].begin(), sources[g].end());
+      b.weight.insert(b.weight.end(), weights[g].begin(), weights[g].end());
+      for (std::uint32_t n : lengths[g]) {
+        b.offsets[run.r0 + i + 1] = b.offsets[run.r0 + i] + n;
+        ++i;
       }
-      for (std::size_t q = 0; q < out; ++q) {
-        b.source.push_back(row[q].first);
-        b.weight.push_back(to_half_precision(row[q].second));
-      }
-      b.offsets[run.r0 + i + 1] = std::uint32_t(b.source.size());
     }
   }
   if (run.o.light_bounce_probes[0] > 0) b.probes = probe_rows(run, sp, level_at);
