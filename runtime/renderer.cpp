@@ -615,10 +615,6 @@ class KeepFramebuffer {
   GLint viewport_[4]{};
   GLint framebuffer_ = 0;
 };
-
-std::string lights_points_problem(std::size_t texels, std::size_t given) {
-  return fmt::format("lights on a lightmap need its {} texels' points (set_light_points; {} given)", texels, given);
-}
 }  // namespace
 
 void Renderer::Impl::update_lights_bounce(const glm::dvec3& eye) {
@@ -643,7 +639,8 @@ void Renderer::Impl::apply_lights(GLuint radiance, const glm::dvec3& eye, int ra
                                   const detail::LightsPass::Points* object) {
   if (!lights || lights->empty()) return;
   if (lightmap && !object && light_point_count != lightmap->texels())
-    throw Error(lights_points_problem(lightmap->texels(), light_point_count));
+    throw Error(fmt::format("lights on a lightmap need its {} texels' points (set_light_points; {} given)",
+                            lightmap->texels(), light_point_count));
   if (!object && lights_bounce()) {  // prt relight: direct + light_bounce
     update_lights_bounce(eye);
     bounce->add(radiance, radiance_stride);
