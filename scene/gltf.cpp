@@ -1,7 +1,7 @@
 // glTF 2.0 export (prt/gltf.h), written with tinygltf (Debian's
-// libtinygltf-dev, header only). Its implementation is compiled into this
-// file, renamed (namespace prt_tinygltf) and with hidden visibility, so
-// prt::scene exports none of its symbols and clashes with no copy of
+// libtinygltf-dev, header only). Its implementation is compiled in
+// tinygltf.cpp, renamed (namespace prt_tinygltf) and with hidden visibility,
+// so prt::scene exports none of its symbols and clashes with no copy of
 // tinygltf a consumer links, shared or static (tests/gltf_reader.cpp is one).
 
 #include <prt/gltf.h>
@@ -14,9 +14,6 @@
 #include <glm/vec4.hpp>
 #include <nlohmann/json.hpp>
 
-// tinygltf's implementation, compiled here once (gltf_model.h includes its
-// declarations the same way for the other units).
-#define TINYGLTF_IMPLEMENTATION
 #include "gltf_model.h"
 
 #include <cmath>

@@ -1,15 +1,12 @@
-// tinygltf's implementation for the tests' glTF reader (tests/test_gltf.h).
+// The tests' glTF reader (tests/test_gltf.h), on tinygltf (its
+// implementation in tinygltf_reader.cpp).
 #include "test_gltf.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 
-#define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#include <tiny_gltf.h>
+#include "tinygltf_reader.h"
 
 namespace prt::test {
 
