@@ -170,11 +170,6 @@ std::uint64_t BouncePass::work() const {
   return std::uint64_t(bounces_) * sweep;
 }
 
-void BouncePass::clear_direct() {
-  const float zero = 0.0f;
-  glClearNamedBufferSubData(radiance_, GL_R32F, 0, GLsizeiptr(points_ * 16), GL_RED, GL_FLOAT, &zero);
-}
-
 void BouncePass::direct_changed() {
   clean_ = 0;
   sweep_clean_ = false;  // a sweep under way finishes on what it began with
@@ -257,11 +252,12 @@ std::size_t BouncePass::slice(const std::vector<std::uint32_t>& offsets, std::ui
   return end;
 }
 
-bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, const glm::vec3& albedo) {
+bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_stride, const glm::vec3& albedo) {
   if (done() || points_ == 0) return true;
   glUseProgram(program_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   glUniform4f(3, albedo.x, albedo.y, albedo.z, albedo_buffer ? 1.0f : 0.0f);
+  glUniform1ui(8, GLuint(albedo_stride));
   std::uint64_t spent = 0;
   const auto left = [&] { return budget == 0 ? ~std::uint64_t(0) : budget - std::min(budget, spent); };
   while (!done() && left() > 0) {

@@ -34,11 +34,10 @@ class BouncePass {
   // means and push down the levels.
   std::uint64_t work() const;
   // The buffer the lights pass writes the direct light into (a vec4 per
-  // point), zeroed by clear_direct().
+  // point, written whole: LightsPass::Points::accumulate false).
   GLuint direct() const { return radiance_; }
   // radiance_'s layers: the direct light, then bounces 1..B, points() vec4s each.
   int layers() const { return bounces_ + 1; }
-  void clear_direct();
   // direct() was rewritten (a light moved): the bounces catch up as step()
   // sweeps again.
   void direct_changed();
@@ -46,10 +45,11 @@ class BouncePass {
   // in sweeps: bounce k's rows in order, from the patch means of bounce
   // k - 1 (the direct light for k = 1) as they stood when the sweep began,
   // then bounce k + 1's, cycling 1..B (Enlighten's convergence over frames).
-  // The albedo: per point in `albedo_buffer` (float triples) or `albedo`
-  // for all. True when done: bounces 1..B of the current direct light, each
-  // swept whole after the one before it, as prt::light_bounce applies them.
-  bool step(std::uint64_t budget, GLuint albedo_buffer, const glm::vec3& albedo);
+  // The albedo: per point in `albedo_buffer` (rgb first, `albedo_stride`
+  // floats a point) or `albedo` for all. True when done: bounces 1..B of the
+  // current direct light, each swept whole after the one before it, as
+  // prt::light_bounce applies them.
+  bool step(std::uint64_t budget, GLuint albedo_buffer, int albedo_stride, const glm::vec3& albedo);
   bool done() const { return clean_ == bounces_; }
   // radiance += direct + every bounce as it stands (radiance_stride floats a point).
   void add(GLuint radiance, int radiance_stride);

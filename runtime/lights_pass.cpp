@@ -73,11 +73,15 @@ glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double 
 
 LightsPass::LightsPass() {
   shadow_program_ = gl::link_program(shaders::shadow_vert_glsl, shaders::shadow_frag_glsl, "shadow map");
-  apply_program_ = gl::link_compute(
-      shaders::lights_comp_glsl, "lights",
-      fmt::format("#define KMAX_LIGHTS {}\n#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n"
-                  "#define KNORMAL_OFFSET {:.6f}\n",
-                  kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels));
+  const auto apply = [](int vec4) {
+    return gl::link_compute(
+        shaders::lights_comp_glsl, "lights",
+        fmt::format("#define KMAX_LIGHTS {}\n#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n"
+                    "#define KNORMAL_OFFSET {:.6f}\n#define KVEC4 {}\n",
+                    kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels, vec4));
+  };
+  apply_program_ = apply(0);
+  apply_vec4_program_ = apply(1);
   glCreateFramebuffers(1, &fbo_);
   set_size(kDefaultShadowMapSize);
 }
@@ -90,6 +94,7 @@ LightsPass::~LightsPass() {
   glDeleteBuffers(1, &light_buffer_);
   glDeleteProgram(shadow_program_);
   glDeleteProgram(apply_program_);
+  glDeleteProgram(apply_vec4_program_);
 }
 
 void LightsPass::set_size(int size) {
@@ -217,7 +222,8 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   }
   glNamedBufferSubData(light_buffer_, 0, GLsizeiptr(bytes), g.data());
 
-  glUseProgram(apply_program_);
+  PRT_CHECK(!points.vec4 || (points.position_stride == 4 && points.radiance_stride == 4));
+  glUseProgram(points.vec4 ? apply_vec4_program_ : apply_program_);
   glBindBufferRange(GL_UNIFORM_BUFFER, 3, light_buffer_, 0, GLsizeiptr(bytes));
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, points.positions);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, points.normals);
@@ -233,6 +239,7 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   glUniform4f(8, points.eye.x, points.eye.y, points.eye.z, points.gloss);
   glUniform1f(9, points.specular);
   glUniform1ui(10, GLuint(points.radiance_stride));
+  glUniform1ui(11, points.accumulate ? 1u : 0u);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   const std::size_t groups = (points.count + 63) / 64;
   for (std::size_t first = 0; first < groups; first += work_groups) {

@@ -41,8 +41,8 @@ class LightsPass {
   // The occluders changed (a new pose): every map is redrawn.
   void geometry_moved() { all_dirty_ = true; }
 
-  // The points lit (float triples; albedo_buffer 0: `albedo` for all), owned
-  // by the caller, `count` of them.
+  // The points lit (float triples, or vec4s: `vec4`; albedo_buffer 0:
+  // `albedo` for all), owned by the caller, `count` of them.
   struct Points {
     GLuint positions = 0, normals = 0, albedo_buffer = 0;
     glm::vec3 albedo{1.0f};
@@ -54,11 +54,19 @@ class LightsPass {
     // prt::DirectLight adds it with a GlossyLobe.
     glm::vec3 eye{0.0f};
     float gloss = 0.0f, specular = 0.0f;
+    // true: positions, normals, albedo and radiance are vec4s a point (xyz,
+    // rgb; a lightmap's texel points), read and written a vec4 at a time;
+    // position_stride and radiance_stride are then 4.
+    bool vec4 = false;
+    // true: the lights' light is added to what `radiance` holds; false: it
+    // is written over it (nothing read, no clear needed first).
+    bool accumulate = true;
   };
   // Redraws the shadow maps that need it (draw_occluders draws every occluder
   // triangle with positions at attribute 0, the program bound), then adds the
-  // lights' direct light to `radiance` (radiance_stride floats per point, rgb first). Leaves the
-  // framebuffer binding and viewport to the caller.
+  // lights' direct light to `radiance` (radiance_stride floats per point, rgb
+  // first), or writes it there (Points::accumulate). Leaves the framebuffer
+  // binding and viewport to the caller.
   void apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
              std::uint64_t work_groups);
   // How many shadow maps were redrawn since begin_frame() (cube maps count
@@ -77,7 +85,7 @@ class LightsPass {
   int size_ = 0, drawn_ = 0;
   int cubes_ = 0, suns_ = 0;            // layers allocated
   GLuint cube_texture_ = 0, sun_texture_ = 0, depth_rb_ = 0, fbo_ = 0;
-  GLuint shadow_program_ = 0, apply_program_ = 0, light_buffer_ = 0;
+  GLuint shadow_program_ = 0, apply_program_ = 0, apply_vec4_program_ = 0, light_buffer_ = 0;
   std::size_t light_buffer_bytes_ = 0;
 };
 

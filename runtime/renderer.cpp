@@ -525,9 +525,16 @@ void Renderer::set_light_points(std::span<const glm::vec3> positions, std::span<
                             positions.size(), normals.size(), albedo.size()));
   m.make_current();
   glDeleteBuffers(3, m.light_points.data());
-  m.light_points[0] = make_buffer(positions.data(), positions.size() * sizeof(glm::vec3));
-  m.light_points[1] = make_buffer(normals.data(), normals.size() * sizeof(glm::vec3));
-  m.light_points[2] = make_buffer(albedo.data(), albedo.size() * sizeof(glm::vec3));
+  // A vec4 a point each (the lights pass reads a vec4 where it read three
+  // floats: LightsPass::Points::vec4).
+  const auto upload = [](std::span<const glm::vec3> v) {
+    std::vector<glm::vec4> four(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) four[i] = glm::vec4(v[i], 0.0f);
+    return make_buffer(four.data(), four.size() * sizeof(glm::vec4));
+  };
+  m.light_points[0] = upload(positions);
+  m.light_points[1] = upload(normals);
+  m.light_points[2] = upload(albedo);
   m.light_point_count = positions.size();
   ++m.lights_version;
 }
@@ -558,7 +565,8 @@ GLuint Renderer::Impl::lit_colors(const glm::dvec3& eye) {
 Renderer::Impl::LightTargets Renderer::Impl::light_targets(const glm::dvec3& eye) {
   LightTargets t;
   if (lightmap) {
-    t.points = {light_points[0], light_points[1], light_points[2], glm::vec3(1.0f), light_point_count};
+    t.points = {light_points[0], light_points[1], light_points[2], glm::vec3(1.0f), light_point_count, 4};
+    t.points.vec4 = true;
     t.occluders = [this] { lightmap->draw_geometry(); };
     return t;
   }
@@ -626,12 +634,12 @@ void Renderer::Impl::update_lights_bounce(const glm::dvec3& eye) {
     const KeepFramebuffer keep;
     detail::LightsPass::Points at_points = t.points;
     at_points.radiance_stride = 4;
-    bounce->clear_direct();
+    at_points.accumulate = false;  // written over the last lights' direct light
     lights->apply(t.occluders, at_points, bounce->direct(), std::max<std::uint64_t>(limits.work_groups, 1));
     bounce->direct_changed();
     bounce_version = lights_version;
   }
-  bounce->step(bounce_budget, t.points.albedo_buffer, t.points.albedo);
+  bounce->step(bounce_budget, t.points.albedo_buffer, t.points.vec4 ? 4 : 3, t.points.albedo);
   probe_lights_stale = true;  // the probes' share follows what the frame draws
 }
 

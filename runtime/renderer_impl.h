@@ -181,7 +181,7 @@ struct Renderer::Impl {
   // A scene and its lightmap (set_scene): drawn by the lightmap pass instead of the mesh.
   std::unique_ptr<detail::LightmapPass> lightmap;
   // Lights inside the scene (set_lights), their points for a lightmap
-  // (set_light_points: positions, normals, albedo as float triples), and the
+  // (set_light_points: positions, normals, albedo, a vec4 each), and the
   // shaded geometry's bounding sphere (fits the directional lights' maps).
   std::unique_ptr<detail::LightsPass> lights;
   std::vector<Light> light_list;

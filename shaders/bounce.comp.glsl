@@ -32,7 +32,7 @@ layout(std430, binding = 3) buffer A3 { vec4 means[]; };     // each patch's mea
 layout(std430, binding = 4) buffer A4 { float weights[]; };  // steps 1, 4: the rows' weights; 0, 3: each patch's points
 layout(std430, binding = 5) buffer A5 { vec4 pushed[]; };    // each patch's gathered light: written (4, 5), read (1); 6: the probes' SH
 layout(std430, binding = 6) buffer A6 { uint order[]; };     // steps 0, 3, 4, 5: patches by level; 1: each point's patch
-layout(std430, binding = 7) buffer A7 { float rad[]; };      // step 2: the radiance drawn; 1: rgb albedo per point
+layout(std430, binding = 7) buffer A7 { float rad[]; };      // step 2: the radiance drawn; 1: albedo per point (rgb first)
 layout(location = 0) uniform uint u_count;
 layout(location = 1) uniform uint u_first;
 layout(location = 2) uniform uint u_step;
@@ -41,6 +41,7 @@ layout(location = 4) uniform uint u_radiance_stride;
 layout(location = 5) uniform uint u_points;
 layout(location = 6) uniform uint u_piece;  // steps 0: the first piece read; 1: written; 2: the last added
 layout(location = 7) uniform uint u_pieces; // step 0: pieces summed
+layout(location = 8) uniform uint u_albedo_stride;  // step 1: floats a point's albedo takes (rgb first)
 
 const float PI = 3.14159265358979;
 const uint NO_PARENT = 0xffffffffu;
@@ -82,7 +83,8 @@ void main() {
     if (index1[p] != NO_PARENT) pushed[p] += pushed[index1[p]];
   } else if (u_step == 1u) {
     const vec3 g = row(i) + pushed[order[i]].rgb;
-    const vec3 rho = u_albedo.w > 0.5 ? vec3(rad[3u * i], rad[3u * i + 1u], rad[3u * i + 2u]) : u_albedo.rgb;
+    const uint a = u_albedo_stride * i;
+    const vec3 rho = u_albedo.w > 0.5 ? vec3(rad[a], rad[a + 1u], rad[a + 2u]) : u_albedo.rgb;
     emitted[u_piece * u_points + i] = vec4(rho / PI * g, 0.0);
   } else {
     vec3 add = vec3(0.0);
