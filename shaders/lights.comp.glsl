@@ -1,15 +1,16 @@
 #version 450 core
 // Lights inside the scene (runtime/lights_pass.cpp, docs/LIGHTS.md "On the
 // GPU"): one invocation per shaded point (a vertex, a lightmap texel's sample
-// point) adds (or, with u_accumulate 0, writes) albedo / pi x sum over lights of E_l max(n . l, 0) V, where E_l
-// follows prt::sample_light (inverse square, KHR's range window and spot
-// attenuation) and V is the light's shadow map read at the point moved
-// KLIGHT_OFFSET shadow-map texels toward the light and KNORMAL_OFFSET x
-// sin(incidence) along its normal (no acne on its own surface, in corners or
-// at grazing light; runtime/lights_pass.cpp), within a depth bias of
-// KDEPTH_BIAS texels. A glossy point (u_specular > 0) adds each lit light's
-// Phong lobe rho_s E_l (e + 1) / (2 pi) max(r . l, 0)^e, r the mirror of the
-// direction to the eye, as prt::DirectLight does with a GlossyLobe.
+// point) adds (or, with u_accumulate 0, writes) albedo / pi x sum over lights
+// of E_l max(n . l, 0) V, where E_l follows prt::sample_light (inverse
+// square, KHR's range window and spot attenuation) and V is the light's
+// shadow map read at the point moved KLIGHT_OFFSET shadow-map texels toward
+// the light and KNORMAL_OFFSET x sin(incidence) along its normal (no acne on
+// its own surface, in corners or at grazing light; runtime/lights_pass.cpp),
+// within a depth bias of KDEPTH_BIAS texels. A glossy point (u_specular > 0)
+// adds each lit light's Phong lobe rho_s E_l (e + 1) / (2 pi)
+// max(r . l, 0)^e, r the mirror of the direction to the eye, as
+// prt::DirectLight does with a GlossyLobe.
 layout(local_size_x = 64) in;
 
 struct GpuLight {
