@@ -129,29 +129,27 @@ std::pair<std::string, std::string> kinds_seen(std::span<const std::uint32_t> ki
 // and its probe rows' five, and those only with the six: what is wrong when
 // only some of them were read (bit k of `seen`: kind k), or "".
 std::string light_bounce_sections_problem(std::uint32_t seen) {
-  const auto [have, missing] = kinds_seen(kLightBounceKinds, seen);
-  if (!have.empty() && !missing.empty())
-    return fmt::format("the light-bounce operator's sections (kinds 14 to 19) come together, but the file has {} "
-                       "without {}",
-                       have, missing);
-  const auto [have_clusters, missing_clusters] = kinds_seen(kLightBounceClusterKinds, seen);
-  if (!have_clusters.empty() && !missing_clusters.empty())
-    return fmt::format("the light-bounce operator's cluster sections (kinds 20 to 22) come together, but the file "
-                       "has {} without {}",
-                       have_clusters, missing_clusters);
-  if (!have_clusters.empty() && have.empty())
-    return fmt::format("the file has {} (kinds 20 to 22, an operator's cluster rows) but no light-bounce operator "
-                       "(kinds 14 to 19)",
-                       have_clusters);
-  const auto [have_probes, missing_probes] = kinds_seen(kLightBounceProbeKinds, seen);
-  if (!have_probes.empty() && !missing_probes.empty())
-    return fmt::format("the light-bounce operator's probe sections (kinds 23 to 27) come together, but the file has "
-                       "{} without {}",
-                       have_probes, missing_probes);
-  if (!have_probes.empty() && have.empty())
-    return fmt::format("the file has {} (kinds 23 to 27, an operator's probe rows) but no light-bounce operator "
-                       "(kinds 14 to 19)",
-                       have_probes);
+  // Each group of sections, and what its rows are (the operator itself: "").
+  struct Group {
+    std::span<const std::uint32_t> kinds;
+    const char* name;  // "cluster " or "probe ", before "sections"
+    const char* rows;  // "cluster rows" or "probe rows"; "" for the operator
+  };
+  const Group groups[] = {{kLightBounceKinds, "", ""},
+                          {kLightBounceClusterKinds, "cluster ", "cluster rows"},
+                          {kLightBounceProbeKinds, "probe ", "probe rows"}};
+  const auto range = [](std::span<const std::uint32_t> k) { return fmt::format("{} to {}", k.front(), k.back()); };
+  const bool operator_read = !kinds_seen(kLightBounceKinds, seen).first.empty();
+  for (const Group& g : groups) {
+    const auto [have, missing] = kinds_seen(g.kinds, seen);
+    if (!have.empty() && !missing.empty())
+      return fmt::format("the light-bounce operator's {}sections (kinds {}) come together, but the file has {} "
+                         "without {}",
+                         g.name, range(g.kinds), have, missing);
+    if (!have.empty() && *g.rows && !operator_read)
+      return fmt::format("the file has {} (kinds {}, an operator's {}) but no light-bounce operator (kinds {})", have,
+                         range(g.kinds), g.rows, range(kLightBounceKinds));
+  }
   return {};
 }
 

@@ -1884,6 +1884,24 @@ TEST(LightmapFile, LightBounceRoundTripsAsVersionEight) {
     }
 }
 
+// A compressed file (file version `version`) followed by the last
+// `sections` sections of `s` is refused by read_compressed_transfer, naming
+// the first of them (`first`): an operator's rows are never a compressed
+// file's.
+void expect_compressed_refuses(const TempDir& dir, const Sample& s, std::size_t sections, std::uint32_t version,
+                               const std::string& first) {
+  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
+  std::string b = c.bytes.substr(0, c.bytes.size() - kTrailer);
+  for (std::size_t i = s.section_at.size() - sections; i < s.section_at.size(); ++i) b += section_bytes(s, i);
+  b += c.bytes.substr(c.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kVersionAt, version);
+  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + sections));
+  reseal(b);
+  write_file(dir.file("bad.prtt"), b);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
+                  {"has a '" + first + "' section, but the header's flags say the file is compressed"}, "compressed");
+}
+
 TEST(LightBounceRead, DamagedOperatorsAreRefusedByName) {
   TempDir dir;
   const Transfer t = with_light_bounce(full_transfer());  // 11 sections: 1-5, 14-19
@@ -1973,17 +1991,7 @@ TEST(LightBounceRead, DamagedOperatorsAreRefusedByName) {
                       "light-bounce operator is kept by interreflected transfers only)"},
                      "shadowed");
   // Never a compressed file: its own sections followed by the operator's.
-  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
-  b = c.bytes.substr(0, c.bytes.size() - kTrailer);
-  for (std::size_t i = s.section_at.size() - 6; i < s.section_at.size(); ++i) b += section_bytes(s, i);
-  b += c.bytes.substr(c.bytes.size() - kTrailer);
-  put<std::uint32_t>(b, kVersionAt, 8);
-  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + 6));
-  reseal(b);
-  write_file(dir.file("bad.prtt"), b);
-  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
-                  {"has a 'light bounce header' section, but the header's flags say the file is compressed"},
-                  "compressed");
+  expect_compressed_refuses(dir, s, 6, 8, "light bounce header");
   // A lightmap's operator is read by the same reader.
   prt::LightmapTransfer l = interreflected_lightmap();
   l.transfer.light_bounce = sample_light_bounce(40);
@@ -2063,17 +2071,7 @@ TEST(LightBounceRead, DamagedClusterRowsAreRefusedByName) {
   EXPECT_TRUE(prt::read_transfer(dir.file("flat.prtt")).light_bounce.cluster_offsets.empty());
 
   // Never a compressed file: its own sections followed by the three.
-  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
-  std::string b = c.bytes.substr(0, c.bytes.size() - kTrailer);
-  for (std::size_t i = s.section_at.size() - 3; i < s.section_at.size(); ++i) b += section_bytes(s, i);
-  b += c.bytes.substr(c.bytes.size() - kTrailer);
-  put<std::uint32_t>(b, kVersionAt, 9);
-  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + 3));
-  reseal(b);
-  write_file(dir.file("bad.prtt"), b);
-  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
-                  {"has a 'light bounce cluster offsets' section, but the header's flags say the file is compressed"},
-                  "compressed");
+  expect_compressed_refuses(dir, s, 3, 9, "light bounce cluster offsets");
 }
 
 TEST(LightBounceRead, DamagedProbeRowsAreRefusedByName) {
@@ -2162,17 +2160,7 @@ TEST(LightBounceRead, DamagedProbeRowsAreRefusedByName) {
   EXPECT_TRUE(prt::read_transfer(dir.file("flat.prtt")).light_bounce.probes.empty());
 
   // Never a compressed file: its own sections followed by the five.
-  const Sample c = compressed_sample(dir, compressed(full_transfer(), 2, 3, 16));
-  std::string b = c.bytes.substr(0, c.bytes.size() - kTrailer);
-  for (std::size_t i = s.section_at.size() - 5; i < s.section_at.size(); ++i) b += section_bytes(s, i);
-  b += c.bytes.substr(c.bytes.size() - kTrailer);
-  put<std::uint32_t>(b, kVersionAt, 10);
-  put<std::uint32_t>(b, kSectionCountAt, std::uint32_t(c.section_at.size() + 5));
-  reseal(b);
-  write_file(dir.file("bad.prtt"), b);
-  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"),
-                  {"has a 'light bounce probe grid' section, but the header's flags say the file is compressed"},
-                  "compressed");
+  expect_compressed_refuses(dir, s, 5, 10, "light bounce probe grid");
 }
 
 TEST(LightBounceWrite, RefusesWhatCouldNotBeReadBack) {
