@@ -73,15 +73,18 @@ glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double 
 
 LightsPass::LightsPass() {
   shadow_program_ = gl::link_program(shaders::shadow_vert_glsl, shaders::shadow_frag_glsl, "shadow map");
+  // Two programs: any points (floats, a normal matrix, a glossy lobe), and
+  // a lightmap's texel points (vec4s in world space, diffuse).
   const auto apply = [](int vec4) {
     return gl::link_compute(
         shaders::lights_comp_glsl, "lights",
         fmt::format("#define KMAX_LIGHTS {}\n#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n"
-                    "#define KNORMAL_OFFSET {:.6f}\n#define KVEC4 {}\n",
-                    kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels, vec4));
+                    "#define KNORMAL_OFFSET {:.6f}\n#define KVEC4 {}\n#define KGLOSSY {}\n",
+                    kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels, vec4, 1 - vec4));
   };
   apply_program_ = apply(0);
   apply_vec4_program_ = apply(1);
+  glCreateTextures(GL_TEXTURE_BUFFER, GLsizei(point_views_.size()), point_views_.data());
   glCreateFramebuffers(1, &fbo_);
   set_size(kDefaultShadowMapSize);
 }
@@ -89,6 +92,7 @@ LightsPass::LightsPass() {
 LightsPass::~LightsPass() {
   glDeleteTextures(1, &cube_texture_);
   glDeleteTextures(1, &sun_texture_);
+  glDeleteTextures(GLsizei(point_views_.size()), point_views_.data());
   glDeleteRenderbuffers(1, &depth_rb_);
   glDeleteFramebuffers(1, &fbo_);
   glDeleteBuffers(1, &light_buffer_);
@@ -114,6 +118,11 @@ void LightsPass::set_lights(std::span<const Light> lights, const glm::dvec3& cen
   std::vector<Light> checked(lights.begin(), lights.end());
   for (std::size_t i = 0; i < checked.size(); ++i) check_light(checked[i], fmt::format("light {}", i));
   if (checked.size() != lights_.size() || centre != centre_ || radius != radius_) all_dirty_ = true;
+  // A light's map layer is its place among the lights of its kind (cubes,
+  // suns): where a kind changes at some index, the layers after it move.
+  const auto sun = [](const Light& l) { return l.type == LightType::Directional; };
+  for (std::size_t i = 0; !all_dirty_ && i < checked.size(); ++i)
+    all_dirty_ = sun(checked[i]) != sun(lights_[i]);
   dirty_.assign(checked.size(), true);
   if (!all_dirty_)
     for (std::size_t i = 0; i < checked.size(); ++i) dirty_[i] = !same_light(checked[i], lights_[i]);
@@ -190,12 +199,16 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
                        std::uint64_t work_groups) {
   if (lights_.empty() || points.count == 0) return;
   draw_maps(draw_occluders);
-  // The lights' records (lights.comp.glsl's GpuLight).
+  // The lights' records (lights.comp.glsl's GpuLight), the point and spot
+  // lights first: the shader loops over them, then over the suns.
   std::vector<GpuLight> g(lights_.size());
   int cube = 0, sun = 0;
+  const auto cubes = std::size_t(std::count_if(lights_.begin(), lights_.end(), [](const Light& l) {
+    return l.type != LightType::Directional;
+  }));
   for (std::size_t i = 0; i < lights_.size(); ++i) {
     const Light& l = lights_[i];
-    GpuLight& r = g[i];
+    GpuLight& r = g[l.type == LightType::Directional ? cubes + std::size_t(sun) : std::size_t(cube)];
     const glm::dvec3 radiant = l.color * l.intensity;
     const int type = l.type == LightType::Point ? 0 : l.type == LightType::Spot ? 1 : 2;
     r.p1 = glm::vec4(glm::vec3(l.direction), l.range ? float(*l.range) : 0.0f);
@@ -222,17 +235,30 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   }
   glNamedBufferSubData(light_buffer_, 0, GLsizeiptr(bytes), g.data());
 
-  PRT_CHECK(!points.vec4 || (points.position_stride == 4 && points.radiance_stride == 4));
+  // vec4 points: world-space normals, no lobe (the vec4 program has none).
+  PRT_CHECK(!points.vec4 || (points.position_stride == 4 && points.radiance_stride == 4 &&
+                             points.normal_matrix == glm::mat3(1.0f) && points.specular == 0.0f));
   glUseProgram(points.vec4 ? apply_vec4_program_ : apply_program_);
   glBindBufferRange(GL_UNIFORM_BUFFER, 3, light_buffer_, 0, GLsizeiptr(bytes));
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, points.positions);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, points.normals);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, points.albedo_buffer ? points.albedo_buffer : points.positions);
+  const GLuint albedo = points.albedo_buffer ? points.albedo_buffer : points.positions;
+  if (points.vec4) {
+    // Attached each time: a buffer's name may have been deleted and reused.
+    const GLuint sources[] = {points.positions, points.normals, albedo};
+    for (std::size_t k = 0; k < point_views_.size(); ++k) {
+      glTextureBuffer(point_views_[k], GL_RGBA32F, sources[k]);
+      glBindTextureUnit(GLuint(2 + k), point_views_[k]);
+    }
+  } else {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, points.positions);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, points.normals);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, albedo);
+  }
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, radiance);
   glBindTextureUnit(0, cube_texture_);
   glBindTextureUnit(1, sun_texture_);
   glUniform1ui(0, GLuint(points.count));
   glUniform1ui(2, GLuint(lights_.size()));
+  glUniform1ui(12, GLuint(cubes));
   glUniform4f(3, points.albedo.x, points.albedo.y, points.albedo.z, points.albedo_buffer ? 1.0f : 0.0f);
   glUniform1ui(4, GLuint(points.position_stride));
   glUniformMatrix3fv(5, 1, GL_FALSE, &points.normal_matrix[0][0]);

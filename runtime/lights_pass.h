@@ -14,6 +14,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <span>
@@ -87,6 +88,8 @@ class LightsPass {
   GLuint cube_texture_ = 0, sun_texture_ = 0, depth_rb_ = 0, fbo_ = 0;
   GLuint shadow_program_ = 0, apply_program_ = 0, apply_vec4_program_ = 0, light_buffer_ = 0;
   std::size_t light_buffer_bytes_ = 0;
+  // Buffer textures over a vec4 point set's positions, normals and albedo.
+  std::array<GLuint, 3> point_views_{};
 };
 
 }  // namespace prt::detail

@@ -182,6 +182,15 @@ TEST(RenderLights, LightmapLightsAreTheTracedDirectLightAndOnlyMovedMapsRedraw) 
   r->render(cam, 32, 32);
   EXPECT_EQ(r->shadow_maps_drawn(), 1);
 
+  // The same lights in another order, the sun first: the pass takes the
+  // point and spot lights, then the suns, in whatever order they come. The
+  // texels agree to float rounding (three terms summed in another order).
+  const std::vector<glm::vec3> in_order = r->lightmap_radiance();
+  r->set_lights(std::vector<Light>{lights[2], lights[1], lights[0]});
+  r->render(cam, 32, 32);
+  constexpr double kSumOrderRms = 1e-6;
+  EXPECT_LT(agreement(r->lightmap_radiance(), in_order).rel_rms, kSumOrderRms);
+
   // Without the points, a lightmap's lights are refused, naming what is missing.
   r->set_light_points({}, {}, {});
   EXPECT_THROW(r->render(cam, 32, 32), Error);
