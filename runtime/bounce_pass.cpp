@@ -95,7 +95,8 @@ BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::u
       throw Error(fmt::format("the light-bounce operator's {} take {} bytes in one storage buffer; this OpenGL's "
                               "GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: prt relight applies it on the CPU",
                               what, bytes, storage_block));
-  program_ = gl::link_compute(shaders::bounce_comp_glsl, "light bounce", "");
+  for (GLuint k = 0; k < programs_.size(); ++k)
+    programs_[k] = gl::link_compute(shaders::bounce_comp_glsl, "light bounce", fmt::format("#define STEP {}u\n", k));
   const auto upload = [](const auto& v) {
     return gl::make_buffer(v.data(), std::max<std::size_t>(v.size(), 1) * sizeof(v[0]));
   };
@@ -161,7 +162,7 @@ BouncePass::~BouncePass() {
                             cluster_sources_, cluster_weights_, radiance_,     means_,           pushed_,
                             probe_row_offsets_, probe_sources_, probe_weights_, probe_means_, probe_sh_};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
-  glDeleteProgram(program_);
+  for (const GLuint p : programs_) glDeleteProgram(p);
 }
 
 std::uint64_t BouncePass::work() const {
@@ -176,8 +177,13 @@ void BouncePass::direct_changed() {
 }
 
 void BouncePass::dispatch(GLuint step, std::size_t first, std::size_t end) {
-  glUniform1ui(2, step);
+  glUseProgram(programs_[step]);
+  glUniform4fv(3, 1, &uniforms_.albedo[0]);
+  glUniform1ui(4, uniforms_.radiance_stride);
   glUniform1ui(5, GLuint(points_));
+  glUniform1ui(6, uniforms_.piece);
+  glUniform1ui(7, uniforms_.pieces);
+  glUniform1ui(8, uniforms_.albedo_stride);
   glUniform1ui(0, GLuint(end));
   const std::size_t groups = (end - first + 63) / 64;
   for (std::size_t g = 0; g < groups; g += work_groups_) {
@@ -192,15 +198,14 @@ void BouncePass::means(int input, int pieces, GLuint out) {
   // over its children.
   const GLuint bind[][2] = {{0, input_offsets_}, {1, inputs_}, {2, radiance_}, {3, out}, {4, patch_points_}, {6, order_}};
   for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
-  glUniform1ui(6, GLuint(input));  // which of the points' radiances: 0 the direct light, k bounce k
-  glUniform1ui(7, GLuint(pieces));
+  uniforms_.piece = GLuint(input);  // which of the points' radiances: 0 the direct light, k bounce k
+  uniforms_.pieces = GLuint(pieces);
   for (std::size_t l = 0; l + 1 < level_offsets_.size(); ++l)
     dispatch(l == 0 ? kFinestMeans : kLevelMeans, level_offsets_[l], level_offsets_[l + 1]);
 }
 
 void BouncePass::probe_light() {
   if (probes_ == 0) return;
-  glUseProgram(program_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   // The patches' means of the direct light and every bounce as they stand,
   // then each probe's row.
@@ -254,10 +259,9 @@ std::size_t BouncePass::slice(const std::vector<std::uint32_t>& offsets, std::ui
 
 bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_stride, const glm::vec3& albedo) {
   if (done() || points_ == 0) return true;
-  glUseProgram(program_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  glUniform4f(3, albedo.x, albedo.y, albedo.z, albedo_buffer ? 1.0f : 0.0f);
-  glUniform1ui(8, GLuint(albedo_stride));
+  uniforms_.albedo = glm::vec4(albedo, albedo_buffer ? 1.0f : 0.0f);
+  uniforms_.albedo_stride = GLuint(albedo_stride);
   std::uint64_t spent = 0;
   const auto left = [&] { return budget == 0 ? ~std::uint64_t(0) : budget - std::min(budget, spent); };
   while (!done() && left() > 0) {
@@ -293,7 +297,7 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_str
                                   {4, weights_},     {5, pushed_},  {6, point_patch_},
                                   {7, albedo_buffer ? albedo_buffer : weights_}};
         for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
-        glUniform1ui(6, GLuint(level_ + 1));
+        uniforms_.piece = GLuint(level_ + 1);
         dispatch(kPointRows, row_, end);
         spent += std::uint64_t(offsets_[end] - offsets_[row_]) + (end - row_);
         row_ = end;
@@ -312,12 +316,11 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_str
 }
 
 void BouncePass::add(GLuint radiance, int radiance_stride) {
-  glUseProgram(program_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-  glUniform1ui(4, GLuint(radiance_stride));
+  uniforms_.radiance_stride = GLuint(radiance_stride);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, radiance);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);  // direct + every bounce, into the radiance drawn
-  glUniform1ui(6, GLuint(bounces_));
+  uniforms_.piece = GLuint(bounces_);
   dispatch(kAdd, 0, points_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);
   gl::check_gl("the light-bounce pass");

@@ -12,6 +12,7 @@
 #include "gl_util.h"
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include <array>
 #include <cstdint>
@@ -78,7 +79,13 @@ class BouncePass {
   int bounces_ = 0;
   bool clusters_ = false;
   std::uint64_t work_groups_ = 1;
-  GLuint program_ = 0;
+  // One program a step (bounce.comp.glsl compiled with STEP defined), and
+  // the uniforms the steps share, set by dispatch() on the step's program.
+  std::array<GLuint, 7> programs_{};
+  struct Uniforms {
+    glm::vec4 albedo{1.0f, 1.0f, 1.0f, 0.0f};
+    GLuint albedo_stride = 3, radiance_stride = 4, piece = 0, pieces = 1;
+  } uniforms_;
   GLuint order_ = 0, input_offsets_ = 0, inputs_ = 0, patch_points_ = 0, parents_ = 0, point_patch_ = 0;
   GLuint row_offsets_ = 0, sources_ = 0, weights_ = 0, cluster_row_offsets_ = 0, cluster_sources_ = 0,
          cluster_weights_ = 0;

@@ -1,21 +1,23 @@
 #version 450 core
 // The lights' bounce on the GPU (runtime/bounce_pass.cpp; prt/light_bounce.h,
-// docs/LIGHTS.md "Bounce"): prt::light_bounce's steps, one invocation each,
-// i from u_first to u_count - 1 (a patch p = order[i] where a level's
-// patches are taken):
-//   u_step 0: a finest patch's mean radiance over its points (of one bounce,
-//             or the direct light);
-//   u_step 3: a coarser patch's mean over its children, by their points;
-//   u_step 4: a cluster's gathered light, sum_e w_e mean[source_e];
-//   u_step 5: pushed down a level: pushed[p] += pushed[parent[p]];
-//   u_step 1: the next bounce at point i,
-//             L_i = (rho_i / pi) (sum_e w_e mean[source_e] + pushed[patch_i]),
-//             patch_i its patch of the lowest level the push reaches;
-//   u_step 2: radiance_i += the direct light + every bounce, with
-//             u_radiance_stride floats a point;
-//   u_step 6: probe i's SH of the lights' light (LightBounce::ProbeRows),
-//             c_k = sum_e w_ek mean[source_e] (9 coefficients), from the
-//             means of the direct light and every bounce summed.
+// docs/LIGHTS.md "Bounce"): prt::light_bounce's steps, one program each (the
+// step STEP defined when it is compiled: on llvmpipe, one program choosing
+// its step by a uniform took about twice as long over a frame's sweep), one
+// invocation each, i from u_first to u_count - 1 (a patch p = order[i] where
+// a level's patches are taken):
+//   STEP 0: a finest patch's mean radiance over its points (of one bounce,
+//          or the direct light);
+//   STEP 3: a coarser patch's mean over its children, by their points;
+//   STEP 4: a cluster's gathered light, sum_e w_e mean[source_e];
+//   STEP 5: pushed down a level: pushed[p] += pushed[parent[p]];
+//   STEP 1: the next bounce at point i,
+//          L_i = (rho_i / pi) (sum_e w_e mean[source_e] + pushed[patch_i]),
+//          patch_i its patch of the lowest level the push reaches;
+//   STEP 2: radiance_i += the direct light + every bounce, with
+//          u_radiance_stride floats a point;
+//   STEP 6: probe i's SH of the lights' light (LightBounce::ProbeRows),
+//          c_k = sum_e w_ek mean[source_e] (9 coefficients), from the
+//          means of the direct light and every bounce summed.
 // Step 0 takes the mean of u_pieces pieces from u_piece on, summed.
 // The points' radiances are one array: u_points vec4s of direct light, then
 // as many of each bounce.
@@ -35,7 +37,6 @@ layout(std430, binding = 6) buffer A6 { uint order[]; };     // steps 0, 3, 4, 5
 layout(std430, binding = 7) buffer A7 { float rad[]; };      // step 2: the radiance drawn; 1: albedo per point (rgb first)
 layout(location = 0) uniform uint u_count;
 layout(location = 1) uniform uint u_first;
-layout(location = 2) uniform uint u_step;
 layout(location = 3) uniform vec4 u_albedo;          // rgb: one albedo for all; w = 1: per point
 layout(location = 4) uniform uint u_radiance_stride;
 layout(location = 5) uniform uint u_points;
@@ -55,19 +56,19 @@ vec3 row(uint r) {
 void main() {
   const uint i = u_first + gl_GlobalInvocationID.x;
   if (i >= u_count) return;
-  if (u_step == 0u || u_step == 3u) {
+  if (STEP == 0u || STEP == 3u) {
     const uint p = order[i];
     vec3 s = vec3(0.0);
     for (uint e = offsets0[p]; e < offsets0[p + 1u]; ++e) {
       const uint c = index1[e];
-      if (u_step == 3u) {
+      if (STEP == 3u) {
         s += weights[c] * means[c].rgb;
       } else {
         for (uint k = u_piece; k < u_piece + u_pieces; ++k) s += emitted[k * u_points + c].rgb;
       }
     }
-    means[p] = vec4(s / (u_step == 0u ? float(offsets0[p + 1u] - offsets0[p]) : weights[p]), 0.0);
-  } else if (u_step == 6u) {
+    means[p] = vec4(s / (STEP == 0u ? float(offsets0[p + 1u] - offsets0[p]) : weights[p]), 0.0);
+  } else if (STEP == 6u) {
     vec3 c[9];
     for (int k = 0; k < 9; ++k) c[k] = vec3(0.0);
     for (uint e = offsets0[i]; e < offsets0[i + 1u]; ++e) {
@@ -75,13 +76,13 @@ void main() {
       for (int k = 0; k < 9; ++k) c[k] += weights[9u * e + uint(k)] * m;
     }
     for (int k = 0; k < 9; ++k) pushed[9u * i + uint(k)] = vec4(c[k], 0.0);
-  } else if (u_step == 4u) {
+  } else if (STEP == 4u) {
     const uint p = order[i];
     pushed[p] = vec4(row(p), 0.0);
-  } else if (u_step == 5u) {
+  } else if (STEP == 5u) {
     const uint p = order[i];
     if (index1[p] != NO_PARENT) pushed[p] += pushed[index1[p]];
-  } else if (u_step == 1u) {
+  } else if (STEP == 1u) {
     const vec3 g = row(i) + pushed[order[i]].rgb;
     const uint a = u_albedo_stride * i;
     const vec3 rho = u_albedo.w > 0.5 ? vec3(rad[a], rad[a + 1u], rad[a + 2u]) : u_albedo.rgb;
