@@ -75,6 +75,14 @@ LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, con
   const std::vector<std::uint32_t> writes = image_writes(t.layout, 4);
   writes_ = writes.size() / 2;
   writes_buffer_ = gl::make_buffer(writes.data(), writes.size() * sizeof(std::uint32_t));
+  texture_buffer_texels_ = limits.texture_buffer_texels;
+  if (std::max(writes_, texels_) > texture_buffer_texels_)
+    throw Error(fmt::format("the lightmap's {} texels and {} image writes exceed this OpenGL's buffer textures "
+                            "({} texels, GL_MAX_TEXTURE_BUFFER_SIZE): use a smaller atlas",
+                            texels_, writes_, texture_buffer_texels_));
+  glCreateTextures(GL_TEXTURE_BUFFER, GLsizei(write_views_.size()), write_views_.data());
+  glTextureBuffer(write_views_[0], GL_RGBA32F, radiance_);
+  glTextureBuffer(write_views_[1], GL_RG32UI, writes_buffer_);
   lightmap_ = make_texture(width_, height_, nullptr, false);
   const float zero[4] = {0, 0, 0, 0};
   glClearTexImage(lightmap_, 0, GL_RGBA, GL_FLOAT, zero);
@@ -124,6 +132,7 @@ LightmapPass::~LightmapPass() {
   for (GLuint b : buffers)
     if (b) glDeleteBuffers(1, &b);
   if (lightmap_) glDeleteTextures(1, &lightmap_);
+  glDeleteTextures(GLsizei(write_views_.size()), write_views_.data());
   if (texel_albedo_) glDeleteTextures(1, &texel_albedo_);
   if (!textures_.empty()) glDeleteTextures(GLsizei(textures_.size()), textures_.data());
   if (vao_) glDeleteVertexArrays(1, &vao_);
@@ -178,14 +187,18 @@ void LightmapPass::relight(int band_limit, bool direct, bool sky, const Lights& 
     radiance_sky_ = true;
   }
   last_ = {{}, lights.layers, lights.layers ? lights.layer_count : 0};
+  if (texels_ * std::size_t(last_.layer_count) > texture_buffer_texels_)
+    throw Error(fmt::format("the lights' {} layers of {} texels exceed this OpenGL's buffer textures ({} texels, "
+                            "GL_MAX_TEXTURE_BUFFER_SIZE): use a smaller atlas or fewer bounces",
+                            last_.layer_count, texels_, texture_buffer_texels_));
   glUseProgram(program(1, 0));
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, writes_buffer_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, last_.layers ? last_.layers : radiance_);
+  // Attached each time: the layers' buffer is the caller's.
+  glTextureBuffer(write_views_[2], GL_RGBA32F, last_.layers ? last_.layers : radiance_);
+  for (std::size_t k = 0; k < write_views_.size(); ++k) glBindTextureUnit(GLuint(5 + k), write_views_[k]);
   glUniform1ui(3, GLuint(last_.layer_count));
   glUniform1ui(4, GLuint(texels_));
   glBindImageTexture(0, lightmap_, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   dispatch(writes_);
   glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   gl::check_gl("the lightmap pass");

@@ -13,7 +13,9 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <vector>
@@ -68,6 +70,11 @@ class LightmapPass {
   std::size_t texels_ = 0, writes_ = 0, bytes_ = 0;
   std::uint64_t work_groups_ = 65535;
   GLuint rows_ = 0, direct_ = 0, radiance_ = 0, sky_ = 0, writes_buffer_ = 0;
+  // The image's writes read radiance_, writes_buffer_ and the lights' layers
+  // as buffer textures (llvmpipe fetches texels eight invocations at a
+  // time, where it loads storage buffers one by one).
+  std::array<GLuint, 3> write_views_{};
+  std::uint64_t texture_buffer_texels_ = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE
   bool sky_kept_ = false;     // sky_ holds the last relight's sky radiance
   bool radiance_sky_ = false; // radiance_ holds it (nothing added since)
   Lights last_;               // the last relight's layers, for radiance()

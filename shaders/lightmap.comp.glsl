@@ -35,23 +35,27 @@ void main() {
   radiance[i] = vec4(b, 1.0);
 }
 #else
-layout(std430, binding = 2) readonly buffer Radiance { vec4 radiance[]; };
+// Buffer textures (llvmpipe fetches a texel for eight invocations at once,
+// where it loads a storage buffer invocation by invocation: the writes of
+// the room's 512 x 512 lightmap with the lights' three layers took two
+// fifths less time).
+layout(binding = 5) uniform samplerBuffer u_radiance;
 // (texel y * width + x, source covered texel | 0x80000000 for a gutter)
-layout(std430, binding = 3) readonly buffer Writes { uvec2 writes[]; };
+layout(binding = 6) uniform usamplerBuffer u_writes;
 // The lights' layers summed on top (u_layers arrays of u_texels, the
 // direct light and each bounce: bounce_pass.h), in the order prt relight adds.
-layout(std430, binding = 4) readonly buffer Layers { vec4 layers[]; };
+layout(binding = 7) uniform samplerBuffer u_layer_texels;
 layout(location = 3) uniform uint u_layers;
 layout(location = 4) uniform uint u_texels;
 layout(rgba32f, binding = 0) uniform writeonly image2D u_lightmap;
 void main() {
   const uint i = u_first + gl_GlobalInvocationID.x;
   if (i >= u_count) return;
-  const uvec2 w = writes[i];
+  const uvec2 w = texelFetch(u_writes, int(i)).xy;
   const bool gutter = (w.y & 0x80000000u) != 0u;
   const uint t = w.y & 0x7fffffffu;
-  vec3 b = radiance[t].rgb;
-  for (uint k = 0u; k < u_layers; ++k) b += layers[k * u_texels + t].rgb;
+  vec3 b = texelFetch(u_radiance, int(t)).rgb;
+  for (uint k = 0u; k < u_layers; ++k) b += texelFetch(u_layer_texels, int(k * u_texels + t)).rgb;
   imageStore(u_lightmap, ivec2(int(w.x % u_width), int(w.x / u_width)), vec4(b, gutter ? 0.0 : 1.0));
 }
 #endif
