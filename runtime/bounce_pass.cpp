@@ -10,6 +10,7 @@
 #include <glm/vec4.hpp>
 
 #include <algorithm>
+#include <tuple>
 #include <vector>
 
 namespace prt::detail {
@@ -72,29 +73,38 @@ Hierarchy hierarchy(const LightBounce& b) {
 
 }  // namespace
 
-BouncePass::BouncePass(const LightBounce& b, std::uint64_t storage_block, std::uint64_t work_groups)
+BouncePass::BouncePass(const LightBounce& b, const gl::Limits& limits)
     : points_(b.points()),
       patches_(b.patches),
       entries_(b.entries()),
       bounces_(b.bounces),
       clusters_(!b.cluster_offsets.empty()),
-      work_groups_(std::max<std::uint64_t>(work_groups, 1)),
+      work_groups_(std::max<std::uint64_t>(limits.work_groups, 1)),
       offsets_(b.offsets),
       cluster_entries_(b.cluster_source.size()) {
   if (const std::string p = light_bounce_problem(b, b.points()); !p.empty()) throw Error(p);
   const Hierarchy h = hierarchy(b);
   level_offsets_ = h.level_offsets;
-  const std::pair<const char*, std::size_t> arrays[] = {
-      {"the patches' inputs", h.inputs.size() * 4}, {"the rows' sources", b.source.size() * 4},
-      {"the rows' weights", b.weight.size() * 4},   {"the clusters' sources", b.cluster_source.size() * 4},
-      {"the points' direct light and bounces", points_ * 16 * std::size_t(bounces_ + 1)},
-      {"the probes' rows' weights", b.probes.weight.size() * 4},
-      {"the probes' SH", probes_ * 9 * 16}};
-  for (const auto& [what, bytes] : arrays)
-    if (bytes > storage_block)
+  // The largest arrays: (what, elements, bytes an element).
+  const std::tuple<const char*, std::size_t, std::size_t> arrays[] = {
+      {"the patches' inputs", h.inputs.size(), 4},
+      {"the rows' sources", b.source.size(), 4},
+      {"the rows' weights", b.weight.size(), 4},
+      {"the clusters' sources", b.cluster_source.size(), 4},
+      {"the points' direct light and bounces", points_ * std::size_t(bounces_ + 1), 16},
+      {"the probes' rows' weights", b.probes.weight.size(), 4},
+      {"the probes' SH", probes_ * 9, 16}};
+  for (const auto& [what, elements, size] : arrays) {
+    if (elements * size > limits.storage_block)
       throw Error(fmt::format("the light-bounce operator's {} take {} bytes in one storage buffer; this OpenGL's "
                               "GL_MAX_SHADER_STORAGE_BLOCK_SIZE is {} bytes: prt relight applies it on the CPU",
-                              what, bytes, storage_block));
+                              what, elements * size, limits.storage_block));
+    if (elements > limits.texture_buffer_texels)
+      throw Error(fmt::format("the light-bounce operator's {} take {} texels in one buffer texture; this OpenGL's "
+                              "GL_MAX_TEXTURE_BUFFER_SIZE is {} texels: prt relight applies it on the CPU",
+                              what, elements, limits.texture_buffer_texels));
+  }
+  glCreateTextures(GL_TEXTURE_BUFFER, GLsizei(views_.size()), views_.data());
   for (GLuint k = 0; k < programs_.size(); ++k)
     programs_[k] = gl::link_compute(shaders::bounce_comp_glsl, "light bounce", fmt::format("#define STEP {}u\n", k));
   const auto upload = [](const auto& v) {
@@ -163,6 +173,7 @@ BouncePass::~BouncePass() {
                             probe_row_offsets_, probe_sources_, probe_weights_, probe_means_, probe_sh_};
   glDeleteBuffers(GLsizei(std::size(buffers)), buffers);
   for (const GLuint p : programs_) glDeleteProgram(p);
+  glDeleteTextures(GLsizei(views_.size()), views_.data());
 }
 
 std::uint64_t BouncePass::work() const {
@@ -190,14 +201,22 @@ void BouncePass::dispatch(GLuint step, std::size_t first, std::size_t end) {
     glUniform1ui(1, GLuint(first + g * 64));
     glDispatchCompute(GLuint(std::min<std::uint64_t>(work_groups_, groups - g)), 1, 1);
   }
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+}
+
+void BouncePass::bind(GLuint slot, GLuint buffer) {
+  // The texel format of each slot's array (bounce.comp.glsl's t_ samplers).
+  constexpr GLenum kFormat[] = {GL_R32UI, GL_R32UI, GL_RGBA32F, GL_RGBA32F, GL_R32F, GL_RGBA32F, GL_R32UI, GL_R32F};
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+  glTextureBuffer(views_[slot], kFormat[slot], buffer);  // each time: the albedo's buffer is the caller's
+  glBindTextureUnit(slot, views_[slot]);
 }
 
 void BouncePass::means(int input, int pieces, GLuint out) {
   // Up the levels: the finest patches over their points, each coarser one
   // over its children.
   const GLuint bind[][2] = {{0, input_offsets_}, {1, inputs_}, {2, radiance_}, {3, out}, {4, patch_points_}, {6, order_}};
-  for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+  for (const auto& [slot, buffer] : bind) this->bind(slot, buffer);
   uniforms_.piece = GLuint(input);  // which of the points' radiances: 0 the direct light, k bounce k
   uniforms_.pieces = GLuint(pieces);
   for (std::size_t l = 0; l + 1 < level_offsets_.size(); ++l)
@@ -206,13 +225,13 @@ void BouncePass::means(int input, int pieces, GLuint out) {
 
 void BouncePass::probe_light() {
   if (probes_ == 0) return;
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   // The patches' means of the direct light and every bounce as they stand,
   // then each probe's row.
   means(0, bounces_ + 1, probe_means_);
   const GLuint bind[][2] = {{0, probe_row_offsets_}, {1, probe_sources_}, {3, probe_means_}, {4, probe_weights_},
                             {5, probe_sh_}};
-  for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+  for (const auto& [slot, buffer] : bind) this->bind(slot, buffer);
   dispatch(kProbeRows, 0, probes_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
   gl::check_gl("the light-bounce pass's probes");
@@ -236,9 +255,9 @@ std::vector<glm::vec3> BouncePass::probe_sh() const {
 void BouncePass::push() {
   // Down the levels: each patch's gathered light plus its parent's (already
   // holding every level above), so a finest patch holds its whole chain's.
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, parents_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, pushed_);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, order_);
+  bind(1, parents_);
+  bind(5, pushed_);
+  bind(6, order_);
   for (std::size_t l = level_offsets_.size() - 1; l-- > lowest_;) dispatch(kPush, level_offsets_[l], level_offsets_[l + 1]);
 }
 
@@ -259,7 +278,7 @@ std::size_t BouncePass::slice(const std::vector<std::uint32_t>& offsets, std::ui
 
 bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_stride, const glm::vec3& albedo) {
   if (done() || points_ == 0) return true;
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   uniforms_.albedo = glm::vec4(albedo, albedo_buffer ? 1.0f : 0.0f);
   uniforms_.albedo_stride = GLuint(albedo_stride);
   std::uint64_t spent = 0;
@@ -278,7 +297,7 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_str
           const std::size_t end = slice(cluster_cost_, left());
           const GLuint bind[][2] = {{0, cluster_row_offsets_}, {1, cluster_sources_}, {3, means_},
                                     {4, cluster_weights_},     {5, pushed_},          {6, order_}};
-          for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+          for (const auto& [slot, buffer] : bind) this->bind(slot, buffer);
           dispatch(kClusterRows, row_, end);
           spent += std::uint64_t(cluster_cost_[end] - cluster_cost_[row_]) + (end - row_);
           row_ = end;
@@ -296,7 +315,7 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_str
         const GLuint bind[][2] = {{0, row_offsets_}, {1, sources_}, {2, radiance_},   {3, means_},
                                   {4, weights_},     {5, pushed_},  {6, point_patch_},
                                   {7, albedo_buffer ? albedo_buffer : weights_}};
-        for (const auto& [slot, buffer] : bind) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffer);
+        for (const auto& [slot, buffer] : bind) this->bind(slot, buffer);
         uniforms_.piece = GLuint(level_ + 1);
         dispatch(kPointRows, row_, end);
         spent += std::uint64_t(offsets_[end] - offsets_[row_]) + (end - row_);
@@ -316,10 +335,10 @@ bool BouncePass::step(std::uint64_t budget, GLuint albedo_buffer, int albedo_str
 }
 
 void BouncePass::add(GLuint radiance, int radiance_stride) {
-  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
   uniforms_.radiance_stride = GLuint(radiance_stride);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, radiance);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, radiance_);  // direct + every bounce, into the radiance drawn
+  bind(7, radiance);
+  bind(2, radiance_);  // direct + every bounce, into the radiance drawn
   uniforms_.piece = GLuint(bounces_);
   dispatch(kAdd, 0, points_);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT);

@@ -23,8 +23,8 @@ namespace prt::detail {
 class BouncePass {
  public:
   // Uploads `b` (checked by light_bounce_problem). Throws prt::Error when an
-  // array exceeds this OpenGL's storage block size.
-  BouncePass(const LightBounce& b, std::uint64_t storage_block, std::uint64_t work_groups);
+  // array exceeds this OpenGL's storage block or buffer texture size.
+  BouncePass(const LightBounce& b, const gl::Limits& limits);
   ~BouncePass();
   BouncePass(const BouncePass&) = delete;
   BouncePass& operator=(const BouncePass&) = delete;
@@ -70,6 +70,9 @@ class BouncePass {
  private:
   enum class Phase { Means, Clusters, Points };
   void dispatch(GLuint step, std::size_t first, std::size_t end);
+  // `buffer` at a slot of bounce.comp.glsl: its storage block (written) and
+  // its buffer texture (read).
+  void bind(GLuint slot, GLuint buffer);
   // The patches' means of `pieces` of the points' radiances from `input`
   // on, summed, into `out`.
   void means(int input, int pieces, GLuint out);
@@ -82,6 +85,7 @@ class BouncePass {
   // One program a step (bounce.comp.glsl compiled with STEP defined), and
   // the uniforms the steps share, set by dispatch() on the step's program.
   std::array<GLuint, 7> programs_{};
+  std::array<GLuint, 8> views_{};  // a buffer texture a slot
   struct Uniforms {
     glm::vec4 albedo{1.0f, 1.0f, 1.0f, 0.0f};
     GLuint albedo_stride = 3, radiance_stride = 4, piece = 0, pieces = 1;

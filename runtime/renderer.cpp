@@ -414,7 +414,7 @@ void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
   m.limits = gl::limits();
   m.lightmap = std::make_unique<detail::LightmapPass>(scene, texels, t, m.limits);
   if (!t.transfer.light_bounce.empty())  // the lights' bounce at the texels (bounce_pass.h)
-    m.bounce = std::make_unique<detail::BouncePass>(t.transfer.light_bounce, m.limits.storage_block, m.limits.work_groups);
+    m.bounce = std::make_unique<detail::BouncePass>(t.transfer.light_bounce, m.limits);
   m.set_bounds(scene.mesh);
   m.lightmap_relit = false;
   m.bands = m.band_limit = t.transfer.bands;

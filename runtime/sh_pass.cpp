@@ -46,7 +46,7 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
   set_mesh(mesh, t.albedo, t.vertex_colors);
   Impl& m = *impl_;
   if (!t.light_bounce.empty())  // the lights' bounce at the vertices (bounce_pass.h)
-    m.bounce = std::make_unique<detail::BouncePass>(t.light_bounce, m.limits.storage_block, m.limits.work_groups);
+    m.bounce = std::make_unique<detail::BouncePass>(t.light_bounce, m.limits);
   const int stride = t.bands * t.bands;
   // With no stored vertex, an interreflected transfer's direct part is its
   // transfer: both are the clamped cosine everywhere.

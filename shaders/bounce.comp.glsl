@@ -35,6 +35,26 @@ layout(std430, binding = 4) buffer A4 { float weights[]; };  // steps 1, 4: the 
 layout(std430, binding = 5) buffer A5 { vec4 pushed[]; };    // each patch's gathered light: written (4, 5), read (1); 6: the probes' SH
 layout(std430, binding = 6) buffer A6 { uint order[]; };     // steps 0, 3, 4, 5: patches by level; 1: each point's patch
 layout(std430, binding = 7) buffer A7 { float rad[]; };      // step 2: the radiance drawn; 1: albedo per point (rgb first)
+// Each slot's array is also a buffer texture at the unit of the same number,
+// read through it (llvmpipe fetches a texel for eight invocations at once,
+// where it loads a storage buffer invocation by invocation): the storage
+// blocks are written, and read where a step writes the same array.
+layout(binding = 0) uniform usamplerBuffer t_offsets;
+layout(binding = 1) uniform usamplerBuffer t_index;
+layout(binding = 2) uniform samplerBuffer t_emitted;
+layout(binding = 3) uniform samplerBuffer t_means;
+layout(binding = 4) uniform samplerBuffer t_weights;
+layout(binding = 5) uniform samplerBuffer t_pushed;
+layout(binding = 6) uniform usamplerBuffer t_order;
+layout(binding = 7) uniform samplerBuffer t_albedo;
+#define OFFSET(i) texelFetch(t_offsets, int(i)).x
+#define INDEX(i) texelFetch(t_index, int(i)).x
+#define EMITTED(i) texelFetch(t_emitted, int(i)).rgb
+#define MEAN(i) texelFetch(t_means, int(i)).rgb
+#define WEIGHT(i) texelFetch(t_weights, int(i)).x
+#define PUSHED(i) texelFetch(t_pushed, int(i)).rgb
+#define ORDER(i) texelFetch(t_order, int(i)).x
+#define ALBEDO(i) texelFetch(t_albedo, int(i)).x
 layout(location = 0) uniform uint u_count;
 layout(location = 1) uniform uint u_first;
 layout(location = 3) uniform vec4 u_albedo;          // rgb: one albedo for all; w = 1: per point
@@ -49,7 +69,8 @@ const uint NO_PARENT = 0xffffffffu;
 
 vec3 row(uint r) {
   vec3 g = vec3(0.0);
-  for (uint e = offsets0[r]; e < offsets0[r + 1u]; ++e) g += weights[e] * means[index1[e]].rgb;
+  const uint end = OFFSET(r + 1u);
+  for (uint e = OFFSET(r); e < end; ++e) g += WEIGHT(e) * MEAN(INDEX(e));
   return g;
 }
 
@@ -57,39 +78,40 @@ void main() {
   const uint i = u_first + gl_GlobalInvocationID.x;
   if (i >= u_count) return;
   if (STEP == 0u || STEP == 3u) {
-    const uint p = order[i];
+    const uint p = ORDER(i), first = OFFSET(p), end = OFFSET(p + 1u);
     vec3 s = vec3(0.0);
-    for (uint e = offsets0[p]; e < offsets0[p + 1u]; ++e) {
-      const uint c = index1[e];
+    for (uint e = first; e < end; ++e) {
+      const uint c = INDEX(e);
       if (STEP == 3u) {
-        s += weights[c] * means[c].rgb;
+        s += WEIGHT(c) * MEAN(c);
       } else {
-        for (uint k = u_piece; k < u_piece + u_pieces; ++k) s += emitted[k * u_points + c].rgb;
+        for (uint k = u_piece; k < u_piece + u_pieces; ++k) s += EMITTED(k * u_points + c);
       }
     }
-    means[p] = vec4(s / (STEP == 0u ? float(offsets0[p + 1u] - offsets0[p]) : weights[p]), 0.0);
+    means[p] = vec4(s / (STEP == 0u ? float(end - first) : WEIGHT(p)), 0.0);
   } else if (STEP == 6u) {
     vec3 c[9];
     for (int k = 0; k < 9; ++k) c[k] = vec3(0.0);
-    for (uint e = offsets0[i]; e < offsets0[i + 1u]; ++e) {
-      const vec3 m = means[index1[e]].rgb;
-      for (int k = 0; k < 9; ++k) c[k] += weights[9u * e + uint(k)] * m;
+    const uint end = OFFSET(i + 1u);
+    for (uint e = OFFSET(i); e < end; ++e) {
+      const vec3 m = MEAN(INDEX(e));
+      for (int k = 0; k < 9; ++k) c[k] += WEIGHT(9u * e + uint(k)) * m;
     }
     for (int k = 0; k < 9; ++k) pushed[9u * i + uint(k)] = vec4(c[k], 0.0);
   } else if (STEP == 4u) {
-    const uint p = order[i];
+    const uint p = ORDER(i);
     pushed[p] = vec4(row(p), 0.0);
-  } else if (STEP == 5u) {
-    const uint p = order[i];
-    if (index1[p] != NO_PARENT) pushed[p] += pushed[index1[p]];
+  } else if (STEP == 5u) {  // reads and writes pushed: through its storage block
+    const uint p = ORDER(i), parent = INDEX(p);
+    if (parent != NO_PARENT) pushed[p] += pushed[parent];
   } else if (STEP == 1u) {
-    const vec3 g = row(i) + pushed[order[i]].rgb;
+    const vec3 g = row(i) + PUSHED(ORDER(i));
     const uint a = u_albedo_stride * i;
-    const vec3 rho = u_albedo.w > 0.5 ? vec3(rad[a], rad[a + 1u], rad[a + 2u]) : u_albedo.rgb;
+    const vec3 rho = u_albedo.w > 0.5 ? vec3(ALBEDO(a), ALBEDO(a + 1u), ALBEDO(a + 2u)) : u_albedo.rgb;
     emitted[u_piece * u_points + i] = vec4(rho / PI * g, 0.0);
-  } else {
+  } else {  // adds into rad: through its storage block
     vec3 add = vec3(0.0);
-    for (uint k = 0u; k <= u_piece; ++k) add += emitted[k * u_points + i].rgb;
+    for (uint k = 0u; k <= u_piece; ++k) add += EMITTED(k * u_points + i);
     const uint r = u_radiance_stride * i;
     rad[r] += add.r;
     rad[r + 1u] += add.g;
