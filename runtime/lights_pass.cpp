@@ -37,7 +37,9 @@ namespace {
 // alone, 1.5 texels: up to 7.0%, 2.8% and 9.2%); a box on a floor under three
 // lights 0.3%, with 0.02% of its texels changing visibility.
 constexpr float kLightOffsetTexels = 1.5f, kNormalOffsetTexels = 0.5f, kDepthBiasTexels = 1.0f;
-constexpr float kNoOccluder = 1e30f;  // cleared depth: nothing in that direction
+// A cube's near plane, a fraction of the scene's radius: occluders nearer
+// the light than this do not shadow.
+constexpr double kCubeNear = 1e-4;
 
 // GL's cube-map faces (+X, -X, +Y, -Y, +Z, -Z): the axis and the up vector
 // that make a 90-degree view render each face as the sampler reads it.
@@ -61,6 +63,18 @@ struct GpuLight {
 
 // The directional map's frame: the bounding sphere seen along `dir` by an
 // orthographic camera whose near plane touches it.
+// A cube face's projection, 90 degrees, with reversed depth (glClipControl's
+// GL_ZERO_TO_ONE): a point at distance z along the face's axis gets depth
+// near / z, 1 at the near plane and toward 0 far off, with no far plane;
+// float depth keeps the same relative precision, 2^-24, at every distance.
+glm::mat4 reversed_cube_projection(float near) {
+  glm::mat4 p(0.0f);
+  p[0][0] = p[1][1] = 1.0f;
+  p[2][3] = -1.0f;  // w = -z_view, the distance along the axis
+  p[3][2] = near;   // z = near
+  return p;
+}
+
 glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double radius, glm::dvec3& origin) {
   origin = centre - dir * radius;
   const glm::dvec3 up = std::abs(dir.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
@@ -86,6 +100,8 @@ LightsPass::LightsPass() {
   apply_vec4_program_ = apply(1);
   glCreateTextures(GL_TEXTURE_BUFFER, GLsizei(point_views_.size()), point_views_.data());
   glCreateFramebuffers(1, &fbo_);
+  glNamedFramebufferDrawBuffer(fbo_, GL_NONE);  // depth alone
+  glNamedFramebufferReadBuffer(fbo_, GL_NONE);
   set_size(kDefaultShadowMapSize);
 }
 
@@ -93,7 +109,6 @@ LightsPass::~LightsPass() {
   glDeleteTextures(1, &cube_texture_);
   glDeleteTextures(1, &sun_texture_);
   glDeleteTextures(GLsizei(point_views_.size()), point_views_.data());
-  glDeleteRenderbuffers(1, &depth_rb_);
   glDeleteFramebuffers(1, &fbo_);
   glDeleteBuffers(1, &light_buffer_);
   glDeleteProgram(shadow_program_);
@@ -106,10 +121,6 @@ void LightsPass::set_size(int size) {
     throw Error(fmt::format("shadow map size must be 16 to {}, got {}", kMaxShadowMapSize, size));
   if (size == size_) return;
   size_ = size;
-  glDeleteRenderbuffers(1, &depth_rb_);
-  glCreateRenderbuffers(1, &depth_rb_);
-  glNamedRenderbufferStorage(depth_rb_, GL_DEPTH_COMPONENT32F, 2 * size, 2 * size);  // a cube face or a sun's map
-  glNamedFramebufferRenderbuffer(fbo_, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb_);
   cubes_ = suns_ = -1;  // reallocated at the next apply
   all_dirty_ = true;
 }
@@ -139,7 +150,7 @@ void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
     glCreateTextures(target, 1, &tex);
     const bool cube = target == GL_TEXTURE_CUBE_MAP_ARRAY;
     const int side = cube ? size_ : 2 * size_;
-    glTextureStorage3D(tex, 1, GL_R32F, side, side, std::max(layers, 1) * (cube ? 6 : 1));
+    glTextureStorage3D(tex, 1, GL_DEPTH_COMPONENT32F, side, side, std::max(layers, 1) * (cube ? 6 : 1));
     glTextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glTextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -149,13 +160,15 @@ void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
   if (std::max(cubes, 1) != cubes_) make(GL_TEXTURE_CUBE_MAP_ARRAY, cube_texture_, cubes_ = std::max(cubes, 1));
   if (std::max(suns, 1) != suns_) make(GL_TEXTURE_2D_ARRAY, sun_texture_, suns_ = std::max(suns, 1));
 
+  // Depth alone, each map's layer the framebuffer's depth attachment: the
+  // rasteriser keeps the nearest occluder (on llvmpipe half the time a
+  // distance written to a colour target took).
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
   glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);  // back faces occlude, as in prt's ray tracing
   glDisable(GL_BLEND);
   glUseProgram(shadow_program_);
-  const float far_depth = 1.0f, none[4] = {kNoOccluder, 0, 0, 0};
+  const float far_depth = 1.0f, reversed_far_depth = 0.0f;
   int cube = 0, sun = 0;
   for (std::size_t i = 0; i < lights_.size(); ++i) {
     const Light& l = lights_[i];
@@ -163,33 +176,34 @@ void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
     const int layer = directional ? sun++ : cube++;
     if (!all_dirty_ && !dirty_[i]) continue;
     ++drawn_;
-    if (directional) {
+    if (directional) {  // depth along the light from the map's plane over 2 r, 1 where nothing is
       glm::dvec3 origin;
       const glm::mat4 vp = sun_view_proj(l.direction, centre_, radius_, origin);
-      glNamedFramebufferTextureLayer(fbo_, GL_COLOR_ATTACHMENT0, sun_texture_, 0, layer);
+      glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+      glDepthFunc(GL_LESS);
+      glNamedFramebufferTextureLayer(fbo_, GL_DEPTH_ATTACHMENT, sun_texture_, 0, layer);
       glViewport(0, 0, 2 * size_, 2 * size_);
-      glClearNamedFramebufferfv(fbo_, GL_COLOR, 0, none);
       glClearNamedFramebufferfv(fbo_, GL_DEPTH, 0, &far_depth);
       glUniformMatrix4fv(0, 1, GL_FALSE, &vp[0][0]);
-      glUniform4f(1, float(origin.x), float(origin.y), float(origin.z), 1.0f);
-      glUniform3f(2, float(l.direction.x), float(l.direction.y), float(l.direction.z));
       draw_occluders();
       continue;
     }
+    // A cube's faces: reversed depth, 0 where nothing is.
     const glm::vec3 at(l.position);
-    const double far = glm::length(l.position - centre_) + 1.01 * radius_;
-    const glm::mat4 proj = glm::perspective(glm::radians(90.0f), 1.0f, float(1e-4 * radius_), float(far));
-    glUniform4f(1, at.x, at.y, at.z, 0.0f);
+    const glm::mat4 proj = reversed_cube_projection(float(kCubeNear * radius_));
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    glDepthFunc(GL_GREATER);
     glViewport(0, 0, size_, size_);
     for (int f = 0; f < 6; ++f) {
-      glNamedFramebufferTextureLayer(fbo_, GL_COLOR_ATTACHMENT0, cube_texture_, 0, 6 * layer + f);
-      glClearNamedFramebufferfv(fbo_, GL_COLOR, 0, none);
-      glClearNamedFramebufferfv(fbo_, GL_DEPTH, 0, &far_depth);
+      glNamedFramebufferTextureLayer(fbo_, GL_DEPTH_ATTACHMENT, cube_texture_, 0, 6 * layer + f);
+      glClearNamedFramebufferfv(fbo_, GL_DEPTH, 0, &reversed_far_depth);
       const glm::mat4 vp = proj * glm::lookAt(at, at + kFaceAxis[std::size_t(f)], kFaceUp[std::size_t(f)]);
       glUniformMatrix4fv(0, 1, GL_FALSE, &vp[0][0]);
       draw_occluders();
     }
   }
+  glClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);  // GL's defaults, as the other passes draw with
+  glDepthFunc(GL_LESS);
   all_dirty_ = false;
   std::fill(dirty_.begin(), dirty_.end(), false);
   gl::check_gl("drawing the shadow maps");
@@ -217,13 +231,14 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
       r.view_proj = sun_view_proj(l.direction, centre_, radius_, origin);
       r.p0 = glm::vec4(glm::vec3(origin), 2.0f);
       r.p2 = glm::vec4(glm::vec3(radiant), float(sun++));
-      r.p3 = glm::vec4(0.0f, 0.0f, float(radius_ / size_), 0.0f);  // 2 r over 2 size texels
+      r.p3 = glm::vec4(0.0f, 0.0f, float(radius_ / size_), float(2.0 * radius_));  // 2 r over 2 size texels; the depth's span
     } else {
       r.p0 = glm::vec4(glm::vec3(l.position), float(type));
       r.p2 = glm::vec4(glm::vec3(radiant), float(cube++));
       // KHR's spot attenuation as scale and offset (prt::spot_attenuation).
       const double scale = 1.0 / std::max(0.001, std::cos(l.inner_cone) - std::cos(l.outer_cone));
-      r.p3 = glm::vec4(float(scale), float(-std::cos(l.outer_cone) * scale), 2.0f / float(size_), 0.0f);
+      r.p3 = glm::vec4(float(scale), float(-std::cos(l.outer_cone) * scale), 2.0f / float(size_),
+                       float(kCubeNear * radius_));
       r.view_proj = glm::mat4(1.0f);
     }
   }

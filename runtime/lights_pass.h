@@ -1,7 +1,8 @@
 // Private to prt::runtime: lights inside the scene on the GPU (docs/LIGHTS.md
-// "On the GPU"). Each light's shadow map (a cube for point and spot lights,
-// distances from the light; a square fitted to the scene's bounding sphere for
-// directional lights, depths along the light), redrawn only when the light or
+// "On the GPU"). Each light's shadow map, depth alone (a cube for point and
+// spot lights, reversed depth along each face's axis; a square fitted to the
+// scene's bounding sphere for directional lights, depths along the light),
+// redrawn only when the light or
 // the occluders change; then one compute pass adds every light's direct light
 // at the shaded points (the mesh's vertices, a lightmap's texel sample points)
 // to the radiance the PRT pass wrote (shaders/lights.comp.glsl).
@@ -85,7 +86,7 @@ class LightsPass {
   double radius_ = 1.0;
   int size_ = 0, drawn_ = 0;
   int cubes_ = 0, suns_ = 0;            // layers allocated
-  GLuint cube_texture_ = 0, sun_texture_ = 0, depth_rb_ = 0, fbo_ = 0;
+  GLuint cube_texture_ = 0, sun_texture_ = 0, fbo_ = 0;
   GLuint shadow_program_ = 0, apply_program_ = 0, apply_vec4_program_ = 0, light_buffer_ = 0;
   std::size_t light_buffer_bytes_ = 0;
   // Buffer textures over a vec4 point set's positions, normals and albedo.

@@ -24,7 +24,8 @@ struct GpuLight {
   vec4 p0;  // xyz: position (point, spot) or the shadow plane's origin (directional); w: type (0 point, 1 spot, 2 directional)
   vec4 p1;  // xyz: direction the light travels (spot, directional); w: range (0: none)
   vec4 p2;  // rgb: color x intensity; w: the shadow map's layer
-  vec4 p3;  // x, y: the spot's scale and offset; z: a shadow texel's world size (at distance 1 for cubes)
+  vec4 p3;  // x, y: the spot's scale and offset; z: a shadow texel's world size (at distance 1 for cubes);
+            // w: a cube's near plane, or a directional map's depth span
   mat4 view_proj;  // directional: world -> the shadow map's clip space
 };
 // A uniform block (kMaxGpuLights records, the cube lights first): the pass
@@ -141,8 +142,14 @@ void main() {
     const float c = dot(g_n, to_light);
     const float texel = lights[k].p3.z * d;
     const vec3 w = g_p + lookup_offset(to_light, g_n, c) * texel - lights[k].p0.xyz;
-    const float nearest = texture(u_cubes, vec4(w, lights[k].p2.w)).r;
-    add_light(lights[k].p2.rgb * g, to_light, c, length(w) <= nearest + KDEPTH_BIAS * texel);
+    // The face keeps near / z of its nearest occluder, z along its axis (the
+    // largest of |w|'s components, m): that occluder lies |w| z / m from the
+    // light. Lit where |w| <= that + the bias, written without a division
+    // (a depth of 0, nothing there, is lit).
+    const float depth = texture(u_cubes, vec4(w, lights[k].p2.w)).r;
+    const vec3 aw = abs(w);
+    const float lw = length(w), m = max(aw.x, max(aw.y, aw.z));
+    add_light(lights[k].p2.rgb * g, to_light, c, depth * m * (lw - KDEPTH_BIAS * texel) <= lights[k].p3.w * lw);
   }
   for (uint k = u_cube_lights; k < u_lights; ++k) {  // directional lights: a square map each
     const vec3 to_light = -lights[k].p1.xyz;
@@ -152,7 +159,7 @@ void main() {
     const vec4 h = lights[k].view_proj * vec4(q, 1.0);
     const vec2 uv = h.xy / h.w * 0.5 + 0.5;
     const float depth = dot(q - lights[k].p0.xyz, lights[k].p1.xyz);
-    const float nearest = texture(u_suns, vec3(uv, lights[k].p2.w)).r;
+    const float nearest = texture(u_suns, vec3(uv, lights[k].p2.w)).r * lights[k].p3.w;
     const bool outside = any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)));
     add_light(lights[k].p2.rgb, to_light, c, outside || depth <= nearest + KDEPTH_BIAS * texel);
   }

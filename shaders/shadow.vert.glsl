@@ -2,8 +2,6 @@
 // Shadow maps (runtime/lights_pass.cpp): the occluders seen from a light.
 layout(location = 0) in vec3 a_position;
 layout(location = 0) uniform mat4 u_view_proj;
-out vec3 v_world;
 void main() {
-  v_world = a_position;
   gl_Position = u_view_proj * vec4(a_position, 1.0);
 }
