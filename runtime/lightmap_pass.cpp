@@ -141,10 +141,10 @@ LightmapPass::~LightmapPass() {
 }
 
 GLuint LightmapPass::program(int pass, int coeffs) {
-  const auto key = std::make_pair(pass, pass == 0 ? coeffs : 0);
+  const auto key = std::make_pair(pass, coeffs);
   if (auto it = programs_.find(key); it != programs_.end()) return it->second;
-  const std::string defines = fmt::format("#define PASS {}\n#define COEFFS {}\n#define NC {}\n#define CHANNELS {}\n", pass,
-                                          key.second, bands_ * bands_, channels_);
+  const std::string defines = fmt::format("#define PASS {}\n#define COEFFS {}\n#define NC {}\n#define CHANNELS {}\n#define LAYERS {}\n", pass,
+                                          pass == 0 ? coeffs : 0, bands_ * bands_, channels_, pass == 1 ? coeffs : 0);
   return programs_[key] = gl::link_compute(shaders::lightmap_comp_glsl, "lightmap relight", defines);
 }
 
@@ -191,11 +191,10 @@ void LightmapPass::relight(int band_limit, bool direct, bool sky, const Lights& 
     throw Error(fmt::format("the lights' {} layers of {} texels exceed this OpenGL's buffer textures ({} texels, "
                             "GL_MAX_TEXTURE_BUFFER_SIZE): use a smaller atlas or fewer bounces",
                             last_.layer_count, texels_, texture_buffer_texels_));
-  glUseProgram(program(1, 0));
+  glUseProgram(program(1, last_.layer_count));
   // Attached each time: the layers' buffer is the caller's.
   glTextureBuffer(write_views_[2], GL_RGBA32F, last_.layers ? last_.layers : radiance_);
   for (std::size_t k = 0; k < write_views_.size(); ++k) glBindTextureUnit(GLuint(5 + k), write_views_[k]);
-  glUniform1ui(3, GLuint(last_.layer_count));
   glUniform1ui(4, GLuint(texels_));
   glBindImageTexture(0, lightmap_, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
   glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);

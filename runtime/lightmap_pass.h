@@ -81,7 +81,7 @@ class LightmapPass {
   GLuint lightmap_ = 0, texel_albedo_ = 0;
   GLuint vao_ = 0, positions_ = 0, uv_base_ = 0, uv_lightmap_ = 0, indices_ = 0;
   GLuint draw_program_ = 0;
-  std::map<std::pair<int, int>, GLuint> programs_;  // (pass, coeffs)
+  std::map<std::pair<int, int>, GLuint> programs_;  // (pass, coeffs; 1, the lights' layers)
   std::vector<GLuint> textures_;                     // the scene's, in its order
   struct Batch {
     GLsizei first = 0, count = 0;  // indices
