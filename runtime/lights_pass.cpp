@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <tuple>
 
 namespace prt::detail {
 
@@ -87,17 +88,6 @@ glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double 
 
 LightsPass::LightsPass() {
   shadow_program_ = gl::link_program(shaders::shadow_vert_glsl, shaders::shadow_frag_glsl, "shadow map");
-  // Two programs: any points (floats, a normal matrix, a glossy lobe), and
-  // a lightmap's texel points (vec4s in world space, diffuse).
-  const auto apply = [](int vec4) {
-    return gl::link_compute(
-        shaders::lights_comp_glsl, "lights",
-        fmt::format("#define KMAX_LIGHTS {}\n#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n"
-                    "#define KNORMAL_OFFSET {:.6f}\n#define KVEC4 {}\n#define KGLOSSY {}\n",
-                    kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels, vec4, 1 - vec4));
-  };
-  apply_program_ = apply(0);
-  apply_vec4_program_ = apply(1);
   glCreateTextures(GL_TEXTURE_BUFFER, GLsizei(point_views_.size()), point_views_.data());
   glCreateFramebuffers(1, &fbo_);
   glNamedFramebufferDrawBuffer(fbo_, GL_NONE);  // depth alone
@@ -112,8 +102,7 @@ LightsPass::~LightsPass() {
   glDeleteFramebuffers(1, &fbo_);
   glDeleteBuffers(1, &light_buffer_);
   glDeleteProgram(shadow_program_);
-  glDeleteProgram(apply_program_);
-  glDeleteProgram(apply_vec4_program_);
+  for (const auto& [key, program] : apply_programs_) glDeleteProgram(program);
 }
 
 void LightsPass::set_size(int size) {
@@ -209,6 +198,24 @@ void LightsPass::draw_maps(const std::function<void()>& draw_occluders) {
   gl::check_gl("drawing the shadow maps");
 }
 
+GLuint LightsPass::apply_program(bool vec4, int cubes, int suns) {
+  // Counts up to kUnrolledLights each are compiled in (lights.comp.glsl's
+  // KCUBES, KSUNS); more are read from uniforms.
+  constexpr int kUnrolledLights = 4;
+  if (cubes > kUnrolledLights || suns > kUnrolledLights) cubes = suns = -1;
+  const std::tuple<bool, int, int> key{vec4, cubes, suns};
+  if (const auto it = apply_programs_.find(key); it != apply_programs_.end()) return it->second;
+  // vec4: a lightmap's texel points (vec4s in world space, diffuse); else
+  // any points (floats, a normal matrix, a glossy lobe).
+  return apply_programs_[key] = gl::link_compute(
+             shaders::lights_comp_glsl, "lights",
+             fmt::format("#define KMAX_LIGHTS {}\n#define KLIGHT_OFFSET {:.6f}\n#define KDEPTH_BIAS {:.6f}\n"
+                         "#define KNORMAL_OFFSET {:.6f}\n#define KVEC4 {}\n#define KGLOSSY {}\n#define KCUBES {}\n"
+                         "#define KSUNS {}\n",
+                         kMaxGpuLights, kLightOffsetTexels, kDepthBiasTexels, kNormalOffsetTexels, int(vec4),
+                         int(!vec4), cubes, suns));
+}
+
 void LightsPass::apply(const std::function<void()>& draw_occluders, const Points& points, GLuint radiance,
                        std::uint64_t work_groups) {
   if (lights_.empty() || points.count == 0) return;
@@ -253,7 +260,7 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   // vec4 points: world-space normals, no lobe (the vec4 program has none).
   PRT_CHECK(!points.vec4 || (points.position_stride == 4 && points.radiance_stride == 4 &&
                              points.normal_matrix == glm::mat3(1.0f) && points.specular == 0.0f));
-  glUseProgram(points.vec4 ? apply_vec4_program_ : apply_program_);
+  glUseProgram(apply_program(points.vec4, int(cubes), int(lights_.size() - cubes)));
   glBindBufferRange(GL_UNIFORM_BUFFER, 3, light_buffer_, 0, GLsizeiptr(bytes));
   const GLuint albedo = points.albedo_buffer ? points.albedo_buffer : points.positions;
   if (points.vec4) {

@@ -18,7 +18,9 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <map>
 #include <span>
+#include <tuple>
 #include <vector>
 
 namespace prt::detail {
@@ -87,7 +89,10 @@ class LightsPass {
   int size_ = 0, drawn_ = 0;
   int cubes_ = 0, suns_ = 0;            // layers allocated
   GLuint cube_texture_ = 0, sun_texture_ = 0, fbo_ = 0;
-  GLuint shadow_program_ = 0, apply_program_ = 0, apply_vec4_program_ = 0, light_buffer_ = 0;
+  // The lights pass's programs, by (vec4 points, cube lights, suns): see apply_program.
+  GLuint apply_program(bool vec4, int cubes, int suns);
+  std::map<std::tuple<bool, int, int>, GLuint> apply_programs_;
+  GLuint shadow_program_ = 0, light_buffer_ = 0;
   std::size_t light_buffer_bytes_ = 0;
   // Buffer textures over a vec4 point set's positions, normals and albedo.
   std::array<GLuint, 3> point_views_{};
