@@ -85,10 +85,11 @@ struct ViewArgs {
   LightArgs light;  // --lights, --sun (docs/LIGHTS.md), edited live
   int shadow_size = kDefaultShadowMapSize;
   // --bounce-budget: the lights' bounce brought up to date by at most this
-  // much work a frame (Renderer::set_light_bounce_budget); about 10 ms a
-  // frame on llvmpipe, a fraction of a millisecond on a GPU
-  // (docs/LIGHTS.md "Bounce").
-  std::uint64_t bounce_budget = std::uint64_t(1) << 20;
+  // much work a frame (Renderer::set_light_bounce_budget); about 5 ms a
+  // frame on llvmpipe, where the room's 512 x 512 lightmap then follows a
+  // moving light within a static frame's time and has its whole bounce 6
+  // frames after the light stops (docs/LIGHTS.md "Bounce").
+  std::uint64_t bounce_budget = std::uint64_t(1) << 19;
 };
 
 // The maps N and P cycle through: the HDR maps beside ENV and the bundled
