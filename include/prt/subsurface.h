@@ -1,0 +1,89 @@
+// prt/subsurface.h - translucent materials: multiple scattering by the
+// dipole diffusion approximation of Jensen, Marschner, Levoy & Hanrahan 2001
+// (docs/SUBSURFACE.md states the model with its formulas and units).
+//
+// Units: the coefficients are in 1/mm and distances in mm; R_d(r) is then in
+// 1/mm^2 and its integral over the plane, R_d,total, has no unit. A mesh's
+// distances become millimetres through a length scale (mm per mesh unit, as
+// D3DX's fLengthScale).
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace prt {
+
+// A homogeneous translucent material, per RGB channel: sigma_a the
+// absorption coefficient and sigma_s the reduced scattering coefficient
+// sigma_s' = sigma_s (1 - g), both in 1/mm; eta the relative index of
+// refraction (the material's over the medium around it, > 1 for a
+// material in air).
+struct SubsurfaceMaterial {
+  std::string name;  // the preset's name, "" for coefficients given directly
+  glm::dvec3 sigma_a{0.0};
+  glm::dvec3 sigma_s{0.0};
+  double eta = 1.3;
+
+  bool operator==(const SubsurfaceMaterial&) const = default;
+};
+
+// The measured materials of Jensen et al. 2001's table (its Figure 5), by
+// the names D3DX's samples used: apple, chicken1, chicken2, cream, ketchup,
+// marble, potato, skimmilk, skin1, skin2, wholemilk; `measured_rd` the
+// table's total diffuse reflectance (docs/SUBSURFACE.md compares it with
+// subsurface_total_reflectance).
+struct SubsurfacePreset {
+  std::string_view name;
+  glm::dvec3 sigma_s;  // reduced, 1/mm
+  glm::dvec3 sigma_a;  // 1/mm
+  double eta;
+  glm::dvec3 measured_rd;
+};
+std::span<const SubsurfacePreset> subsurface_presets();
+// The preset named `name` (letter case ignored) as a material; nullopt if
+// there is none.
+std::optional<SubsurfaceMaterial> subsurface_preset(std::string_view name);
+// "apple, chicken1, ...": the presets' names, for messages and --help.
+std::string subsurface_preset_names();
+
+// Throws prt::Error naming `what` and the problem unless every coefficient is
+// finite and >= 0, each channel's sigma_a + sigma_s is > 0 (light goes
+// somewhere) and eta is in [1, 3] (a material denser than what surrounds it,
+// and within the range of F_dr's fit: 0.002 off the exact integral from 1 to
+// 2, 0.016 at 3).
+void check_subsurface_material(const SubsurfaceMaterial& m, std::string_view what);
+
+// F_dr(eta), the diffuse Fresnel reflectance of the boundary seen from
+// inside: Jensen 2001's polynomial fit -1.440 / eta^2 + 0.710 / eta + 0.668 +
+// 0.0636 eta.
+double diffuse_fresnel_reflectance(double eta);
+// 1 - the exact Fresnel reflectance of an unpolarised ray entering a
+// dielectric of relative index eta at incidence cos_theta (clamped to
+// [0, 1]); 0 past the critical angle where eta < 1.
+double fresnel_transmittance(double eta, double cos_theta);
+
+// One channel's dipole: the real source at depth z_r = 1 / sigma_t' under the
+// surface and the virtual one at z_v = z_r (1 + 4 A / 3) above it,
+// A = (1 + F_dr) / (1 - F_dr).
+struct Dipole {
+  Dipole(double sigma_a, double sigma_s, double eta);
+  double alpha_prime = 0.0;  // sigma_s' / sigma_t'
+  double sigma_tr = 0.0;     // sqrt(3 sigma_a sigma_t'), 1/mm
+  double z_r = 0.0, z_v = 0.0;  // mm
+  // R_d(r) = alpha' / (4 pi) [z_r (1 + sigma_tr d_r) e^(-sigma_tr d_r) / d_r^3
+  //                         + z_v (1 + sigma_tr d_v) e^(-sigma_tr d_v) / d_v^3],
+  // d = sqrt(r^2 + z^2): the diffuse reflectance at distance r (mm) from
+  // where light entered, 1/mm^2.
+  double rd(double r) const;
+  // Its integral over the plane, the closed form
+  // (alpha' / 2) (1 + e^(-(4/3) A sqrt(3 (1 - alpha')))) e^(-sqrt(3 (1 - alpha'))).
+  double total() const;
+};
+glm::dvec3 subsurface_rd(const SubsurfaceMaterial& m, double r_mm);
+glm::dvec3 subsurface_total_reflectance(const SubsurfaceMaterial& m);
+
+}  // namespace prt
