@@ -257,7 +257,9 @@ void LightsPass::apply(const std::function<void()>& draw_occluders, const Points
   }
   glNamedBufferSubData(light_buffer_, 0, GLsizeiptr(bytes), g.data());
 
-  // vec4 points: world-space normals, no lobe (the vec4 program has none).
+  // vec4 points: world-space normals, no lobe (the vec4 program has none);
+  // a lightmap's texels, as many as LightmapPass checked against
+  // GL_MAX_TEXTURE_BUFFER_SIZE, so the buffer textures read them all.
   PRT_CHECK(!points.vec4 || (points.position_stride == 4 && points.radiance_stride == 4 &&
                              points.normal_matrix == glm::mat3(1.0f) && points.specular == 0.0f));
   glUseProgram(apply_program(points.vec4, int(cubes), int(lights_.size() - cubes)));
