@@ -3,6 +3,7 @@
 // materials against the table's reflectance, and the Fresnel terms against
 // their exact values (docs/SUBSURFACE.md).
 #include <prt/error.h>
+#include <prt/filter.h>
 #include <prt/subsurface.h>
 
 #include <gtest/gtest.h>
@@ -132,6 +133,31 @@ TEST(Subsurface, DiffuseFresnelFitIsTheExactReflectanceFromInside) {
       exact += (1 - fresnel_transmittance(1 / eta, mu)) * 2 * mu / kPoints;
     }
     EXPECT_NEAR(diffuse_fresnel_reflectance(eta), exact, kFit) << eta;
+  }
+}
+
+TEST(Subsurface, FresnelCosineFactorsAreTheTransmittedCosinesZonalOnes) {
+  // eta = 1 (no boundary): the clamped cosine's A_l, to rounding.
+  constexpr double kRounding = 1e-13;
+  const std::vector<double> a = sh::clamped_cosine_factors(16), k1 = fresnel_cosine_factors(1.0, 16);
+  ASSERT_EQ(k1.size(), 16u);
+  for (int l = 0; l < 16; ++l) EXPECT_NEAR(k1[std::size_t(l)], a[std::size_t(l)], kRounding) << l;
+  // K_0 = pi (1 - the exact reflectance of diffuse light from outside),
+  // that reflectance by the midpoint rule (1e-9: the rule's error on the
+  // smooth integrand at 100,000 points); every K_l against the same rule.
+  constexpr double kMidpoint = 1e-9;
+  constexpr int kPoints = 100000;
+  for (double eta : {1.3, 1.5, 2.4}) {
+    const std::vector<double> k = fresnel_cosine_factors(eta, 6);
+    for (int l = 0; l < 6; ++l) {
+      double sum = 0.0;
+      for (int i = 0; i < kPoints; ++i) {
+        const double mu = (i + 0.5) / kPoints;
+        sum += 2 * kPi * fresnel_transmittance(eta, mu) * mu * std::legendre(unsigned(l), mu) / kPoints;
+      }
+      EXPECT_NEAR(k[std::size_t(l)], sum, kMidpoint) << eta << " " << l;
+    }
+    EXPECT_LT(k[0], kPi);  // some light is reflected
   }
 }
 

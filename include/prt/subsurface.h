@@ -14,6 +14,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace prt {
 
@@ -65,6 +66,14 @@ double diffuse_fresnel_reflectance(double eta);
 // dielectric of relative index eta at incidence cos_theta (clamped to
 // [0, 1]); 0 past the critical angle where eta < 1.
 double fresnel_transmittance(double eta, double cos_theta);
+
+// The zonal factors K_l = 2 pi int_0^1 T(eta, mu) mu P_l(mu) dmu of the
+// transmitted cosine T(eta, cos) max(cos, 0), l < bands: the irradiance
+// transmitted into a surface of normal n under lighting L (unshadowed) is
+// sum_lm K_l L_lm Y_lm(n), as the clamped cosine's A_l give the irradiance
+// (sh::clamped_cosine_factors, prt/filter.h); eta = 1 gives the A_l. Gauss-Legendre in mu (T is smooth
+// on [0, 1] for eta >= 1).
+std::vector<double> fresnel_cosine_factors(double eta, int bands);
 
 // One channel's dipole: the real source at depth z_r = 1 / sigma_t' under the
 // surface and the virtual one at z_v = z_r (1 + 4 A / 3) above it,
