@@ -83,6 +83,8 @@ int main(int argc, char** argv) {
         "BM_ProjectCube1T/16");
   ratio(rep, "prt::sh::eval double vs naive std::sph_legendre at 9 bands", "BM_EvalNaive/9", "BM_EvalDouble/9");
   ratio(rep, "prt::sh::eval float vs naive std::sph_legendre at 9 bands", "BM_EvalNaive/9", "BM_EvalFloat/9");
+  ratio(rep, "subsurface scatter, 100k vertices, 1000 receivers: clusters vs every pair", "BM_SubsurfaceEveryPair",
+        "BM_SubsurfaceClusters");
   ratio(rep, "rotation per frame (set + apply RGB) vs re-projection, 9 bands", "BM_RotateByReprojectRGB/9",
         "BM_RotationFrameRGB/9");
   ratio(rep, "rotation per frame (set + apply RGB) vs re-projection, 16 bands", "BM_RotateByReprojectRGB/16",
