@@ -62,8 +62,6 @@ struct GpuLight {
   glm::mat4 view_proj;
 };
 
-// The directional map's frame: the bounding sphere seen along `dir` by an
-// orthographic camera whose near plane touches it.
 // A cube face's projection, 90 degrees, with reversed depth (glClipControl's
 // GL_ZERO_TO_ONE): a point at distance z along the face's axis gets depth
 // near / z, 1 at the near plane and toward 0 far off, with no far plane;
@@ -76,6 +74,8 @@ glm::mat4 reversed_cube_projection(float near) {
   return p;
 }
 
+// The directional map's frame: the bounding sphere seen along `dir` by an
+// orthographic camera whose near plane touches it.
 glm::mat4 sun_view_proj(const glm::dvec3& dir, const glm::dvec3& centre, double radius, glm::dvec3& origin) {
   origin = centre - dir * radius;
   const glm::dvec3 up = std::abs(dir.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
