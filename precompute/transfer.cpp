@@ -22,6 +22,7 @@
 #include <prt/glossy.h>
 #include <prt/probes.h>
 #include <prt/sh.h>
+#include <prt/subsurface.h>
 
 #include "progress_ticker.h"
 #include "ray_scene.h"
@@ -94,6 +95,13 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.light_bounce_probes != std::array<int, 3>{0, 0, 0}) {
     if (!o.light_bounce) throw Error("--probes with a transfer: the light-bounce operator's probe rows need --light-bounce");
     if (const std::string p = probe_dims_problem(o.light_bounce_probes); !p.empty()) throw Error("--probes: " + p);
+  }
+  if (o.transmission_eta != 0) {
+    if (!(o.transmission_eta >= 1 && o.transmission_eta <= 3))
+      throw Error(fmt::format("the relative index of refraction must be 1 to 3, got {}", o.transmission_eta));
+    if (o.mode != TransferMode::Shadowed || o.glossy || o.light_bounce)
+      throw Error("a transmitted-irradiance transfer (subsurface) is shadowed only, not glossy, with no light-bounce "
+                  "operator");
   }
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
@@ -357,7 +365,13 @@ struct Run {
   std::size_t stride = 0, gstride = 0;  // floats per point of t.coeffs and of t.glossy_matrices
   Plan plan;
   Albedo vertex_albedo;
-  std::vector<double> A;  // the clamped cosine's factors per band
+  std::vector<double> A;  // the kernel's zonal factors per band: the clamped cosine's, or fresnel_cosine_factors'
+  // The kernel a direction at cosine c above the horizon weighs: c, or
+  // T(eta, c) c (TransferOptions::transmission_eta).
+  double kernel(double c) const { return o.transmission_eta > 0 ? fresnel_transmittance(o.transmission_eta, c) * c : c; }
+  // The kernel's integral over the hemisphere, and of the direction times it
+  // (the bent normal's unoccluded sum, along the normal).
+  double k0 = M_PI, k1 = 2.0 * M_PI / 3.0;
   // The direction set (M directions of weight w), its basis in float and,
   // glossy, in double (the products of the matrices sum many rays).
   int M = 0;
@@ -473,7 +487,7 @@ void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, i
     ++sc.occluded_rays;
     const detail::Hit& hit = sc.hits[k];
     const int j = sc.batch_j[k];
-    const double wc = run.w * glm::dot(nrm, run.dirs[j]);
+    const double wc = run.w * run.kernel(glm::dot(nrm, run.dirs[j]));
     const float* y = run.Ytab.data() + std::size_t(j) * nc;
     for (int q = 0; q < nc; ++q) sc.occ[q] += wc * y[q];
     sc.occ_cos += wc;
@@ -579,7 +593,7 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
   for (int j = 0; j < run.M; ++j) {
     const float c = glm::dot(nrm, run.dirs[j]);
     if (c <= 0.0f) continue;  // below the horizon: no ray
-    all_cos += run.w * c;
+    all_cos += run.w * run.kernel(c);
     sc.batch[count] = run.dirs[j];
     sc.batch_j[count++] = j;
     if (count == 8) {
@@ -588,11 +602,12 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
     }
   }
   if (count) trace_batch(run, sc, nrm, origin, count, fronts);
-  fp.analytic[v] = sc.occluded_rays == 0;
+  fp.analytic[v] = sc.occluded_rays == 0 && !(run.o.transmission_eta > 0);  // readers rebuild analytic rows with A_l
   if (run.glossy && sc.occluded_rays > 0) write_glossy_matrix(run, t, sc, v, nrm);
-  // Scale the occluded sums so the set integrates cos+ to exactly pi: a
-  // fully occluded vertex then gets AO 0 and T_00 0 exactly.
-  const double scale = all_cos > 0.0 ? M_PI / all_cos : 1.0;
+  // Scale the occluded sums so the set integrates the kernel to exactly its
+  // K_0 (cos+: pi): a fully occluded vertex then gets AO 0 and T_00 0 exactly.
+  const double k0 = run.k0;
+  const double scale = all_cos > 0.0 ? k0 / all_cos : 1.0;
   for (int l = 0; l < n; ++l)
     for (int m = -l; m <= l; ++m) {
       const int k = sh::index(l, m);
@@ -605,8 +620,8 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
       for (int k = 0; k < nc; ++k)
         fp.bounce_light[v * stride + std::size_t(c) * nc + k] = float(a * sc.eacc[std::size_t(c) * nc + k]);
     }
-  t.ao[v] = float(std::clamp(1.0 - scale * sc.occ_cos / M_PI, 0.0, 1.0));
-  const glm::dvec3 bent = (2.0 * M_PI / 3.0) * glm::dvec3(nrm) - scale * sc.occ_dir;
+  t.ao[v] = float(std::clamp(1.0 - scale * sc.occ_cos / k0, 0.0, 1.0));
+  const glm::dvec3 bent = run.k1 * glm::dvec3(nrm) - scale * sc.occ_dir;
   const double len = glm::length(bent);
   t.bent_normals[v] = len > 0 ? glm::vec3(bent / len) : nrm;
   if (run.gather) {  // same scale as above
@@ -953,6 +968,12 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   // The direct transfer: albedo times S, the geometry-only transfer (one
   // channel), S_k = (1/pi) integral V cos+ Y_k, written per vertex.
   run.A = sh::clamped_cosine_factors(run.n);
+  if (o.transmission_eta > 0) {  // the transmitted cosine's factors (docs/SUBSURFACE.md)
+    run.A = fresnel_cosine_factors(o.transmission_eta, std::max(run.n, 2));
+    run.k0 = run.A[0];
+    run.k1 = run.A[1];
+    run.A.resize(std::size_t(run.n));
+  }
   t.coeffs.assign(V * run.stride, 0.0f);
   t.ao.assign(V, 1.0f);
   t.bent_normals.assign(src.normals, src.normals + V);

@@ -104,6 +104,15 @@ struct TransferOptions {
   // prt precompute --lightmap WxH --light-bounce --probes NXxNYxNZ); 0 0 0:
   // none.
   std::array<int, 3> light_bounce_probes{0, 0, 0};
+  // > 0: each direction weighted by the Fresnel transmittance into a
+  // dielectric of this relative index (prt/subsurface.h's
+  // fresnel_transmittance; 1 to 3), S_k = (1/pi) int V T(eta, cos) cos+ Y_k:
+  // the irradiance transmitted into a translucent surface, over pi
+  // (docs/SUBSURFACE.md). Shadowed only, neither glossy nor a light-bounce
+  // operator; every vertex's row is stored (none is analytic), and its AO
+  // is the transmitted irradiance's (1 - the occluded part of K_0). 0: the
+  // cosine alone.
+  double transmission_eta = 0;
   // When set, compute_transfer fills it with its plan and what its records
   // took (TransferMemory below).
   struct TransferMemory* memory_report = nullptr;
