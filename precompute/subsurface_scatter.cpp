@@ -198,4 +198,28 @@ std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial
   return out;
 }
 
+Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
+                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter) {
+  check_subsurface_material(material, "subsurface material");
+  if (!scatter.receivers.empty())
+    throw Error("compute_subsurface_transfer: every vertex receives (SubsurfaceScatterOptions::receivers must be empty)");
+  TransferOptions o = options;
+  o.mode = TransferMode::Shadowed;
+  o.bounces = 0;
+  o.albedo = glm::vec3(1.0f);
+  o.vertex_colors = false;
+  o.transmission_eta = material.eta;
+  Transfer t = compute_transfer(mesh, o);
+  PRT_CHECK(t.channels == 1 && t.analytic_vertices() == 0);
+  const int nc = t.bands * t.bands;
+  std::vector<float> in(t.vertices * std::size_t(nc));
+  for (std::size_t v = 0; v < t.vertices; ++v)
+    for (int k = 0; k < nc; ++k)  // pi S: the transmitted irradiance's rows
+      in[v * std::size_t(nc) + std::size_t(k)] = float(std::numbers::pi * t.coeffs[t.row(v) * std::size_t(nc) + std::size_t(k)]);
+  t.coeffs = subsurface_scatter(mesh, material, in, nc, scatter);
+  t.channels = 3;
+  t.slots.clear();
+  return t;
+}
+
 }  // namespace prt

@@ -5,7 +5,9 @@
 #pragma once
 
 #include <prt/mesh.h>
+#include <prt/precompute.h>
 #include <prt/subsurface.h>
+#include <prt/transfer.h>
 
 #include <cstdint>
 #include <span>
@@ -39,5 +41,15 @@ struct SubsurfaceScatterOptions {
 // a bad material, length scale or row count.
 std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial& material,
                                       std::span<const float> in, int nc, const SubsurfaceScatterOptions& options = {});
+
+// A translucent mesh's transfer (docs/SUBSURFACE.md): the transmitted
+// irradiance's (compute_transfer with transmission_eta the material's eta,
+// shadowed; `options`' mode, albedo and vertex colours are not used: the
+// material's reflectance is its profile), times pi, summed over the surface
+// by subsurface_scatter into RGB rows, so that a row dotted with lighting L
+// is the exit radiance L_o. Every vertex is stored; AO and bent normals are
+// the transmitted irradiance's.
+Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
+                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter = {});
 
 }  // namespace prt
