@@ -121,6 +121,29 @@ double Dipole::rd(double r) const {
   return alpha_prime / (4.0 * std::numbers::pi) * (pole(z_r) + pole(z_v));
 }
 
+double Dipole::disc(double rho) const {
+  const auto pole = [&](double z) {
+    const double D = std::sqrt(rho * rho + z * z);
+    return std::exp(-sigma_tr * z) - z * std::exp(-sigma_tr * D) / D;
+  };
+  return 0.5 * alpha_prime * (pole(z_r) + pole(z_v));
+}
+
+double Dipole::laplacian(double r) const {
+  // Each pole is h(d) = z (1 + s d) e^(-s d) / d^3 of d = sqrt(r^2 + z^2):
+  // h' = h g, g = -s^2 d / (1 + s d) - 3 / d, h'' = h (g^2 + g'), and in r
+  // the Laplacian is h'' r^2 / d^2 + h' (2 / d - r^2 / d^3).
+  const double s = sigma_tr;
+  const auto pole = [&](double z) {
+    const double d = std::sqrt(r * r + z * z), sd = 1.0 + s * d;
+    const double h = z * sd * std::exp(-s * d) / (d * d * d);
+    const double g = -s * s * d / sd - 3.0 / d, dg = -s * s / (sd * sd) + 3.0 / (d * d);
+    const double h1 = h * g, h2 = h * (g * g + dg);
+    return h2 * r * r / (d * d) + h1 * (2.0 / d - r * r / (d * d * d));
+  };
+  return alpha_prime / (4.0 * std::numbers::pi) * (pole(z_r) + pole(z_v));
+}
+
 double Dipole::total() const {
   // The poles' integrals over the plane are 2 pi e^(-sigma_tr z) each, and
   // sigma_tr z_r = sqrt(3 (1 - alpha')), sigma_tr z_v the same times

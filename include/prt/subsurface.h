@@ -88,10 +88,30 @@ struct Dipole {
   // d = sqrt(r^2 + z^2): the diffuse reflectance at distance r (mm) from
   // where light entered, 1/mm^2.
   double rd(double r) const;
+  // Its integral over the disc of radius rho (mm) about where light entered,
+  // int_0^rho R_d(r) 2 pi r dr, closed form (each pole's integrand is the
+  // derivative of -z e^(-sigma_tr d) / d in d):
+  // (alpha' / 2) sum over the poles of (e^(-sigma_tr z) - z e^(-sigma_tr D) / D),
+  // D = sqrt(rho^2 + z^2). total() as rho grows; 0 at rho = 0.
+  double disc(double rho) const;
+  // The profile's 2-D Laplacian d^2 R_d / dr^2 + (1 / r) dR_d / dr at r (mm),
+  // 1/mm^4: the second-order term of R_d's mean over a small disc,
+  // R_d + rho^2 / 8 Laplacian (prt/subsurface_scatter.h's far sources).
+  double laplacian(double r) const;
   // Its integral over the plane, the closed form
   // (alpha' / 2) (1 + e^(-(4/3) A sqrt(3 (1 - alpha')))) e^(-sqrt(3 (1 - alpha'))).
   double total() const;
 };
+// What a translucent transfer was computed from, as its file records it
+// (docs/FORMAT.md, "Subsurface material"; prt info prints it): the material
+// and the length scale, millimetres per mesh unit.
+struct SubsurfaceRecord {
+  SubsurfaceMaterial material;
+  double length_scale = 1.0;
+
+  bool operator==(const SubsurfaceRecord&) const = default;
+};
+
 glm::dvec3 subsurface_rd(const SubsurfaceMaterial& m, double r_mm);
 glm::dvec3 subsurface_total_reflectance(const SubsurfaceMaterial& m);
 
