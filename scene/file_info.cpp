@@ -43,11 +43,14 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   j["albedo"] = {t.albedo.x, t.albedo.y, t.albedo.z};
   j["vertex_colors"] = t.vertex_colors;
   // Glossy matrices (docs/FORMAT.md, "Glossy matrices"): their layout.
-  j["material"] = t.glossy ? "glossy" : "diffuse";
+  // A translucent transfer's material (docs/FORMAT.md, "Subsurface
+  // material"): the record's keys, as the file stores them.
+  j["material"] = t.glossy ? "glossy" : t.subsurface ? "subsurface" : "diffuse";
   if (t.glossy)
     j["glossy"] = {{"symmetric", t.glossy_symmetric()},
                    {"channels", t.glossy_channels()},
                    {"floats_per_stored_vertex", t.glossy_stride()}};
+  if (t.subsurface) j["subsurface"] = nlohmann::ordered_json::parse(subsurface_record_json(*t.subsurface));
   j["seed"] = t.seed;
   j["vertices"] = t.vertices;
   j["mesh_hash"] = fmt::format("{:#018x}", t.mesh_hash);

@@ -120,6 +120,17 @@ std::string array_problem(TransferArray a, std::uint64_t count, const HeaderValu
   return {};
 }
 
+std::string subsurface_record_problem(const SubsurfaceRecord& r) {
+  try {
+    check_subsurface_material(r.material, "the material");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  if (!(std::isfinite(r.length_scale) && r.length_scale > 0))
+    return fmt::format("the length scale must be finite and > 0 (mm per mesh unit), got {}", r.length_scale);
+  return {};
+}
+
 }  // namespace detail
 
 namespace {
@@ -223,6 +234,15 @@ std::string problem(const Transfer& t, bool rows_elsewhere) {
   if (auto p = light_bounce_problem(t.light_bounce, t.vertices); !p.empty()) return p;
   if (!t.light_bounce.empty() && t.mode != TransferMode::Interreflected)
     return "a light-bounce operator in a transfer that is not interreflected";
+  // A translucent transfer (prt/subsurface_scatter.h) is RGB and diffuse.
+  if (t.subsurface) {
+    if (t.channels != 3)
+      return fmt::format("a subsurface material in a transfer of {} channel{} (a translucent transfer is RGB: 3 "
+                         "channels)",
+                         t.channels, t.channels == 1 ? "" : "s");
+    if (t.glossy) return "a subsurface material in a glossy transfer (a translucent transfer is diffuse)";
+    if (auto p = detail::subsurface_record_problem(*t.subsurface); !p.empty()) return "subsurface material: " + p;
+  }
   return finite_problem(t);
 }
 

@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 #include <glm/gtc/packing.hpp>
+#include <nlohmann/json.hpp>
 
 #include <unistd.h>
 
@@ -178,7 +179,8 @@ std::string read_probe_grid(std::span<const std::uint32_t, kLightBounceProbeGrid
 // transfer of valid header values `v`, or "": the array rules for kinds 1 to
 // 5, the analytic-vertex mask's for 6, the interpolated-vertex mask's for 13,
 // the light-bounce operator's for 14 to 27 (`bounce`: what its sections
-// read so far say).
+// read so far say), the subsurface material's for 28 (3 channels, not
+// glossy, 2 to kMaxSubsurfaceBytes bytes).
 std::string section_problem(std::uint32_t kind, std::uint64_t count, const HeaderValues& v, bool compressed,
                             bool lightmap = false, const LightBounceSeen& bounce = {}) {
   if (is_light_bounce_kind(kind)) return light_bounce_section_problem(kind, count, v, compressed, bounce);
@@ -200,6 +202,21 @@ std::string section_problem(std::uint32_t kind, std::uint64_t count, const Heade
     if (kind == kLightmapTexels && count != v.vertices)
       return fmt::format("section '{}' has {} texels; the header says {}", name, count, v.vertices);
     return {};
+  }
+  if (kind == kSubsurfaceMaterial) {
+    // A translucent transfer (prt/subsurface_scatter.h) is RGB and diffuse.
+    const char* name = kind_info(kind)->name;
+    if (v.channels != 3)
+      return fmt::format("has a '{}' section, but the header says {} channel{} (a translucent transfer is RGB: 3 "
+                         "channels)",
+                         name, v.channels, v.channels == 1 ? "" : "s");
+    if (v.glossy)
+      return fmt::format("has a '{}' section, but the header's flags say it has glossy matrices (a translucent "
+                         "transfer is diffuse)",
+                         name);
+    if (count < 2 || count > kMaxSubsurfaceBytes)
+      return fmt::format("section '{}' has {} bytes; a record has 2 to {}", name, count, kMaxSubsurfaceBytes);
+    return {};  // the JSON is checked as it is read
   }
   if (kind == kCompressionChoice) {
     const char* name = kind_info(kind)->name;
@@ -256,6 +273,32 @@ std::vector<std::uint32_t> interpolated_mask(const Transfer& t) {
   return mask;
 }
 
+// ---- the subsurface material (kind 28; docs/FORMAT.md "Subsurface material") ----------
+
+std::string subsurface_section(const Transfer& t) {
+  return t.subsurface ? subsurface_record_json(*t.subsurface) : std::string();
+}
+
+namespace {
+// Member `key` of the object `j`; throws naming it when it is missing.
+const nlohmann::json& json_member(const nlohmann::json& j, const char* key) {
+  const auto it = j.find(key);
+  if (it == j.end()) throw Error(fmt::format("the key '{}' is missing", key));
+  return *it;
+}
+double json_number(const nlohmann::json& j, const char* key) {
+  const nlohmann::json& x = json_member(j, key);
+  if (!x.is_number()) throw Error(fmt::format("'{}' is not a number (got {})", key, x.dump()));
+  return x.get<double>();
+}
+glm::dvec3 json_triple(const nlohmann::json& j, const char* key) {
+  const nlohmann::json& x = json_member(j, key);
+  if (!x.is_array() || x.size() != 3 || !x[0].is_number() || !x[1].is_number() || !x[2].is_number())
+    throw Error(fmt::format("'{}' is not an array of 3 numbers (got {})", key, x.dump()));
+  return {x[0].get<double>(), x[1].get<double>(), x[2].get<double>()};
+}
+}  // namespace
+
 // Pointer to the array of section `kind` and its element count.
 std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint32_t kind) {
   switch (kind) {
@@ -290,6 +333,8 @@ std::pair<const void*, std::uint64_t> section_array(const Transfer& t, std::uint
       return {t.light_bounce.probes.offsets.data(), t.light_bounce.probes.offsets.size()};
     case kLightBounceProbeSources: return {t.light_bounce.probes.source.data(), t.light_bounce.probes.source.size()};
     case kLightBounceProbeWeights: return {nullptr, t.light_bounce.probes.weight.size()};
+    // Built by the writer (subsurface_record_json): its bytes.
+    case kSubsurfaceMaterial: return {nullptr, t.subsurface ? subsurface_record_json(*t.subsurface).size() : 0};
   }
   return {nullptr, 0};
 }
@@ -528,6 +573,7 @@ void fill_header(unsigned char (&header)[kHeaderSize], const Transfer& t, std::u
 }  // namespace detail::tio
 
 std::uint32_t transfer_format_version(const Transfer& t) {
+  if (t.subsurface) return kSubsurfaceFormatVersion;
   if (const std::uint32_t v = light_bounce_format_version(t.light_bounce); v != 0) return v;
   return t.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : transfer_format_version(t.glossy);
 }
@@ -536,29 +582,34 @@ void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
-  // The oldest version that holds `t` (10 only with a light-bounce
-  // operator's probe rows, 9 only with its cluster rows, 8 only with an
-  // operator, 7 only with interpolated vertices, 3 only with glossy
-  // matrices): an earlier prt reads every file it could.
+  // The oldest version that holds `t` (11 only with a subsurface material,
+  // 10 only with a light-bounce operator's probe rows, 9 only with its
+  // cluster rows, 8 only with an operator, 7 only with interpolated
+  // vertices, 3 only with glossy matrices): an earlier prt reads every file
+  // it could.
   fill_header(header, t, transfer_format_version(t), 0u, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t), interpolated = interpolated_mask(t);
   const LightBounceSections bounce(t);
+  const std::string subsurface = subsurface_section(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections)
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes,
-                   s.kind == kAnalyticMask        ? static_cast<const void*>(mask.data())
-                   : s.kind == kInterpolatedMask  ? interpolated.data()
-                   : is_light_bounce_kind(s.kind) ? bounce.data(s.kind)
-                                                  : section_array(t, s.kind).first});
+                   s.kind == kAnalyticMask         ? static_cast<const void*>(mask.data())
+                   : s.kind == kInterpolatedMask   ? interpolated.data()
+                   : is_light_bounce_kind(s.kind)  ? bounce.data(s.kind)
+                   : s.kind == kSubsurfaceMaterial ? static_cast<const void*>(subsurface.data())
+                                                   : section_array(t, s.kind).first});
   write_file(path, header, raw);
 }
 
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
   std::vector<TransferSection> s;
-  std::vector<TransferSection> after;  // the interpolated-vertex mask: kind 13, after the records
+  // The interpolated-vertex mask (kind 13) and the subsurface material (28):
+  // after the records.
+  std::vector<TransferSection> after;
   // (No light-bounce operator: write_compressed_transfer refuses one.)
   for (const auto& sec : transfer_sections(c.transfer))
-    if (sec.kind == kInterpolatedMask) after.push_back(sec);
+    if (sec.kind == kInterpolatedMask || sec.kind == kSubsurfaceMaterial) after.push_back(sec);
     else if (sec.kind != kCoeffs && sec.kind != kGlossy && !is_light_bounce_kind(sec.kind)) s.push_back(sec);
   const auto add = [&](std::uint32_t kind, const ClusteredSignal& g) {
     const std::uint64_t bytes = signal_record_bytes(g);
@@ -575,6 +626,7 @@ std::vector<TransferSection> transfer_sections(const CompressedTransfer& c) {
 }
 
 std::uint32_t transfer_format_version(const CompressedTransfer& c) {
+  if (c.transfer.subsurface) return kSubsurfaceFormatVersion;
   if (c.transfer.interpolated_vertices() > 0) return kInterpolatedFormatVersion;
   return c.choice ? kChosenCompressionFormatVersion : kCompressedFormatVersion;
 }
@@ -596,17 +648,63 @@ void write_compressed_transfer(const std::string& path, const CompressedTransfer
   const std::vector<unsigned char> coeffs = encode_signal(c.coeffs);
   const std::vector<unsigned char> glossy = t.glossy ? encode_signal(c.glossy) : std::vector<unsigned char>{};
   const std::string choice = c.choice ? compression_choice_json(*c.choice) : std::string();
+  const std::string subsurface = subsurface_section(t);
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
-    const void* data = s.kind == kAnalyticMask       ? mask.data()
-                       : s.kind == kInterpolatedMask ? interpolated.data()
-                       : s.kind == kCompressedCoeffs ? coeffs.data()
-                       : s.kind == kCompressedGlossy ? glossy.data()
-                       : s.kind == kCompressionChoice ? static_cast<const void*>(choice.data())
-                                                     : section_array(t, s.kind).first;
+    const void* data = s.kind == kAnalyticMask         ? mask.data()
+                       : s.kind == kInterpolatedMask   ? interpolated.data()
+                       : s.kind == kCompressedCoeffs   ? coeffs.data()
+                       : s.kind == kCompressedGlossy   ? glossy.data()
+                       : s.kind == kCompressionChoice  ? static_cast<const void*>(choice.data())
+                       : s.kind == kSubsurfaceMaterial ? static_cast<const void*>(subsurface.data())
+                                                       : section_array(t, s.kind).first;
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
   }
   write_file(path, header, raw);
+}
+
+std::string subsurface_record_json(const SubsurfaceRecord& r) {
+  const SubsurfaceMaterial& m = r.material;
+  nlohmann::ordered_json j;
+  j["name"] = m.name;
+  j["sigma_a"] = {m.sigma_a.x, m.sigma_a.y, m.sigma_a.z};
+  j["sigma_s"] = {m.sigma_s.x, m.sigma_s.y, m.sigma_s.z};
+  j["eta"] = m.eta;
+  j["length_scale"] = r.length_scale;
+  try {
+    return j.dump();  // doubles as the shortest text that reads back the same
+  } catch (const nlohmann::json::exception&) {
+    throw Error("subsurface material: its name is not valid UTF-8");
+  }
+}
+
+SubsurfaceRecord parse_subsurface_record(std::string_view text) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(text.begin(), text.end());
+  } catch (const nlohmann::json::exception& e) {
+    // Not JSON (invalid UTF-8 included), or a number out of range ("number
+    // overflow": a non-finite value cannot be written as JSON).
+    throw Error(std::string("not a JSON object: ") + e.what());
+  }
+  if (!j.is_object()) throw Error("not a JSON object");
+  SubsurfaceRecord r;
+  const nlohmann::json& name = json_member(j, "name");
+  if (!name.is_string()) throw Error(fmt::format("'name' is not a string (got {})", name.dump()));
+  r.material.name = name.get<std::string>();
+  r.material.sigma_a = json_triple(j, "sigma_a");
+  r.material.sigma_s = json_triple(j, "sigma_s");
+  r.material.eta = json_number(j, "eta");
+  r.length_scale = json_number(j, "length_scale");
+  if (auto p = detail::subsurface_record_problem(r); !p.empty()) throw Error(p);
+  return r;
+}
+
+std::string describe_subsurface_record(const SubsurfaceRecord& r) {
+  const SubsurfaceMaterial& m = r.material;
+  return fmt::format("subsurface{}: sigma_a {:g}, {:g}, {:g} /mm; sigma_s' {:g}, {:g}, {:g} /mm; eta {:g}; {:g} mm a unit",
+                     m.name.empty() ? "" : ", " + m.name, m.sigma_a.x, m.sigma_a.y, m.sigma_a.z, m.sigma_s.x,
+                     m.sigma_s.y, m.sigma_s.z, m.eta, r.length_scale);
 }
 
 // ---- reading ------------------------------------------------------------------------
@@ -828,16 +926,17 @@ void Reader::read_sh_header(ShFile& f) {
   // Version 1 stores every vertex.
   v = header_values(h, version_ >= 2 ? load<std::uint64_t>(h + kOffStored) : load<std::uint64_t>(h + kOffVertices));
   const bool v1 = version_ == 1;
-  f.known_kinds = v1              ? kKindsV1
-                  : version_ == 2 ? kKindsV2
-                  : version_ == 3 ? kKindsV3
-                  : version_ == 4 ? kKindsV4
-                  : version_ == 5 ? kKindsV5
-                  : version_ == 6 ? kKindsV6
-                  : version_ == 7 ? kKindsV7
-                  : version_ == 8 ? kKindsV8
-                  : version_ == 9 ? kKindsV9
-                                  : kKindsV10;
+  f.known_kinds = v1               ? kKindsV1
+                  : version_ == 2  ? kKindsV2
+                  : version_ == 3  ? kKindsV3
+                  : version_ == 4  ? kKindsV4
+                  : version_ == 5  ? kKindsV5
+                  : version_ == 6  ? kKindsV6
+                  : version_ == 7  ? kKindsV7
+                  : version_ == 8  ? kKindsV8
+                  : version_ == 9  ? kKindsV9
+                  : version_ == 10 ? kKindsV10
+                                   : kKindsV11;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -999,6 +1098,16 @@ void Reader::read_sh_sections(ShFile& f) {
       case kCompressedCoeffs:
         f.compressed_out->coeffs = read_signal(s.data, s.bytes, s.name, v.stored, f.stride);
         break;
+      case kSubsurfaceMaterial: {
+        std::string json(s.count, '\0');
+        read_at(s.data, reinterpret_cast<unsigned char*>(json.data()), s.count);
+        try {
+          t.subsurface = parse_subsurface_record(json);
+        } catch (const Error& e) {
+          throw fail(fmt::format("bad section '{}': {}", s.name, e.what()));
+        }
+        break;
+      }
       case kCompressionChoice: {
         std::string json(s.count, '\0');
         read_at(s.data, reinterpret_cast<unsigned char*>(json.data()), s.count);
@@ -1212,6 +1321,7 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
                                                            : fmt::format(", {} channel{} (interreflected)",
                                                                          t.glossy_channels(),
                                                                          t.glossy_channels() == 1 ? "" : "s")));
+  if (t.subsurface) s += line("material", describe_subsurface_record(*t.subsurface));
   s += line("bounces", fmt::format("{}", t.bounces));
   s += line("samples", fmt::format("{}", t.samples));
   s += line("albedo", fmt::format("{:.7g} {:.7g} {:.7g}{}", double(t.albedo.x), double(t.albedo.y), double(t.albedo.z),

@@ -4,7 +4,8 @@
 //   scene/transfer_io.cpp           framing (header, section table, checksum,
 //                                   atomic write, the reader's common checks),
 //                                   the SH sections (kinds 1-7, 12, 13), the
-//                                   light-bounce operator (14-27) and the
+//                                   light-bounce operator (14-27), the
+//                                   subsurface material (28) and the
 //                                   compressed signals (8, 9)
 //   scene/transfer_io_lightmap.cpp  lightmap sections (10, 11)
 //   scene/transfer_io_wavelet.cpp   wavelet transfers (basis 1, kinds 16-22)
@@ -139,6 +140,8 @@ enum Kind : std::uint32_t {
   kLightBounceProbeOffsets = 25,                    // u32, probes + 1: each probe's row's first entry
   kLightBounceProbeSources = 26,                    // u32 per probe entry: a source patch
   kLightBounceProbeWeights = 27,                    // f16, bands^2 per probe entry: its SH weights
+  // Version 11: a translucent transfer's material (TransferHeader::subsurface).
+  kSubsurfaceMaterial = 28,                         // what it was computed from (UTF-8 JSON)
 };
 
 struct KindInfo {
@@ -148,7 +151,7 @@ struct KindInfo {
   bool per_vertex;
 };
 // In file order: sections are stored by increasing kind.
-constexpr std::array<KindInfo, 27> kKinds = {{
+constexpr std::array<KindInfo, 28> kKinds = {{
     {kCoeffs, detail::array_name(TransferArray::Coeffs), kTypeF32, true},
     {kDirect, detail::array_name(TransferArray::Direct), kTypeF32, true},
     {kAO, detail::array_name(TransferArray::AO), kTypeF32, true},
@@ -178,6 +181,7 @@ constexpr std::array<KindInfo, 27> kKinds = {{
     {kLightBounceProbeOffsets, "light bounce probe offsets", kTypeU32, false},
     {kLightBounceProbeSources, "light bounce probe sources", kTypeU32, false},
     {kLightBounceProbeWeights, "light bounce probe weights", kTypeF16, false},
+    {kSubsurfaceMaterial, "subsurface material", kTypeU8, false},
 }};
 // Section kinds a file of each version may hold (kinds 1..N).
 constexpr std::size_t kKindsV1 = 5;
@@ -190,21 +194,23 @@ constexpr std::size_t kKindsV7 = 13;
 constexpr std::size_t kKindsV8 = 19;
 constexpr std::size_t kKindsV9 = 22;
 constexpr std::size_t kKindsV10 = 27;
-// The first version whose files may hold section `kind` (1 to 27).
+constexpr std::size_t kKindsV11 = 28;
+// The first version whose files may hold section `kind` (1 to 28).
 constexpr std::uint32_t kind_version(std::uint32_t kind) {
   return kind <= kKindsV1 ? 1 : kind <= kKindsV2 ? 2 : kind <= kKindsV3 ? 3 : kind <= kKindsV4 ? 4
          : kind <= kKindsV5 ? 5 : kind <= kKindsV6 ? 6 : kind <= kKindsV7 ? 7 : kind <= kKindsV8 ? 8
-         : kind <= kKindsV9 ? 9 : 10;
+         : kind <= kKindsV9 ? 9 : kind <= kKindsV10 ? 10 : 11;
 }
-// (The newest version's kinds are the last: a version after 10 adds its
+// (The newest version's kinds are the last: a version after 11 adds its
 // kinds, a kKindsV and a step to kind_version and to the reader's table.)
-static_assert(kKindsV10 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
+static_assert(kKindsV11 == kKinds.size() && kind_version(kLightBounceHeader) == kLightBounceFormatVersion &&
               kind_version(kLightBounceParents) == kLightBounceFormatVersion &&
               kind_version(kLightBounceClusterOffsets) == kLightBounceClustersFormatVersion &&
               kind_version(kLightBounceClusterWeights) == kLightBounceClustersFormatVersion &&
               kind_version(kLightBounceProbeGrid) == kLightBounceProbesFormatVersion &&
               kind_version(kLightBounceProbeWeights) == kLightBounceProbesFormatVersion &&
-              kLightBounceProbesFormatVersion == kTransferFormatVersion);
+              kind_version(kSubsurfaceMaterial) == kSubsurfaceFormatVersion &&
+              kSubsurfaceFormatVersion == kTransferFormatVersion);
 // The operator's sections, in file order: the six every operator has, then
 // the three of its cluster rows and the five of its probe rows (when it has
 // them).
@@ -241,6 +247,9 @@ constexpr std::uint64_t kLightBounceProbeBoxValues = 6;   // min x, y, z, max x,
 // The longest compression choice record a reader takes (its JSON is under a
 // kilobyte for a handful of maps; this leaves room for thousands).
 constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
+// The longest subsurface material record a reader takes (its JSON is a
+// couple of hundred bytes; the rest is room for a long name).
+constexpr std::uint64_t kMaxSubsurfaceBytes = 1u << 16;
 constexpr std::uint64_t kLightmapLayoutWords = 4;
 
 // Words of the analytic- and interpolated-vertex bit masks: bit v % 32 of
@@ -363,6 +372,9 @@ std::vector<std::uint32_t> analytic_mask(const Transfer& t);
 // The interpolated-vertex bit mask of `t` (empty when no vertex is
 // interpolated: the file then has no section 13).
 std::vector<std::uint32_t> interpolated_mask(const Transfer& t);
+// The subsurface material section's bytes for `t` (subsurface_record_json;
+// empty without a record).
+std::string subsurface_section(const Transfer& t);
 // Pointer to the array of SH section `kind` of `t` and its element count
 // (the writer builds the masks and some light-bounce sections, below: null
 // for those).

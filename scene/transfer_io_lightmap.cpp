@@ -1,8 +1,9 @@
 // Lightmap sections of transfer files (kinds 10 and 11, flag bit 3, version
 // 5; version 7 with the interpolated-texel mask, kind 13; version 8 with the
 // light-bounce operator over the texels, kinds 14-19, 9 with its cluster
-// rows, kinds 20-22, 10 with its probe rows, kinds 23-27; docs/FORMAT.md
-// "Lightmap transfer"). The framing: transfer_io_format.h.
+// rows, kinds 20-22, 10 with its probe rows, kinds 23-27; 11 with a
+// subsurface material, kind 28; docs/FORMAT.md "Lightmap transfer"). The
+// framing: transfer_io_format.h.
 #include <prt/transfer_io.h>
 
 #include <prt/error.h>
@@ -25,8 +26,8 @@ using namespace detail::tio;
 std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
   std::vector<TransferSection> s;
   // The interpolated-texel mask (kind 13, adaptive sample points among the
-  // texels) and the light-bounce operator (14-27): after the layout and
-  // texels, as sections go by increasing kind.
+  // texels), the light-bounce operator (14-27) and the subsurface material
+  // (28): after the layout and texels, as sections go by increasing kind.
   std::vector<TransferSection> after;
   for (const auto& sec : transfer_sections(t.transfer))
     if (sec.kind > kLightmapTexels) after.push_back(sec);
@@ -43,9 +44,11 @@ std::vector<TransferSection> transfer_sections(const LightmapTransfer& t) {
 std::uint64_t transfer_file_size(const LightmapTransfer& t) { return file_size_of(transfer_sections(t)); }
 
 std::uint32_t transfer_format_version(const LightmapTransfer& t) {
-  // 10 only with an operator's probe rows, 9 only with its cluster rows, 8
-  // only with an operator, 7 only with the mask: a lightmap with none stays
-  // the version 5 file of before, byte for byte.
+  // 11 only with a subsurface material, 10 only with an operator's probe
+  // rows, 9 only with its cluster rows, 8 only with an operator, 7 only with
+  // the mask: a lightmap with none stays the version 5 file of before, byte
+  // for byte.
+  if (t.transfer.subsurface) return kSubsurfaceFormatVersion;
   if (const std::uint32_t v = light_bounce_format_version(t.transfer.light_bounce); v != 0) return v;
   return t.transfer.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : kLightmapFormatVersion;
 }
@@ -58,16 +61,18 @@ void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t)
   fill_header(header, t.transfer, transfer_format_version(t), kFlagLightmap, sections.size());
   const std::vector<std::uint32_t> mask = analytic_mask(t.transfer), interpolated = interpolated_mask(t.transfer);
   const LightBounceSections bounce(t.transfer);
+  const std::string subsurface = subsurface_section(t.transfer);
   const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
                                                       std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
-    const void* data = s.kind == kAnalyticMask        ? static_cast<const void*>(mask.data())
-                       : s.kind == kInterpolatedMask  ? interpolated.data()
-                       : is_light_bounce_kind(s.kind) ? bounce.data(s.kind)
-                       : s.kind == kLightmapLayout    ? static_cast<const void*>(layout)
-                       : s.kind == kLightmapTexels    ? static_cast<const void*>(t.layout.texels.data())
-                                                      : section_array(t.transfer, s.kind).first;
+    const void* data = s.kind == kAnalyticMask         ? static_cast<const void*>(mask.data())
+                       : s.kind == kInterpolatedMask   ? interpolated.data()
+                       : is_light_bounce_kind(s.kind)  ? bounce.data(s.kind)
+                       : s.kind == kLightmapLayout     ? static_cast<const void*>(layout)
+                       : s.kind == kLightmapTexels     ? static_cast<const void*>(t.layout.texels.data())
+                       : s.kind == kSubsurfaceMaterial ? static_cast<const void*>(subsurface.data())
+                                                       : section_array(t.transfer, s.kind).first;
     raw.push_back({s.kind, kind_info(s.kind)->type, s.count, s.bytes, data});
   }
   write_file(path, header, raw);

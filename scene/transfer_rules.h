@@ -46,6 +46,12 @@ constexpr const char* array_name(TransferArray a) { return enum_name(kTransferAr
 // are there exactly when h.glossy.
 std::string array_problem(TransferArray a, std::uint64_t count, const HeaderValues& h);
 
+// What is wrong with a subsurface record (TransferHeader::subsurface), or
+// "": a material check_subsurface_material refuses ("the material: ..."), a
+// length scale that is not finite and > 0. transfer_problem adds that a
+// translucent transfer has 3 channels and no glossy matrices.
+std::string subsurface_record_problem(const SubsurfaceRecord& r);
+
 // transfer_problem(t) for the part of a compressed transfer that is not
 // compressed (CompressedTransfer::transfer): everything but the stored rows,
 // which must be empty (coefficients, direct part, glossy matrices).

@@ -33,6 +33,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <random>
@@ -156,6 +157,10 @@ void expect_identical(const Transfer& a, const Transfer& b) {
   EXPECT_EQ(pa.offsets, pb.offsets);
   EXPECT_EQ(pa.source, pb.source);
   EXPECT_TRUE(same_bits(pa.weight, pb.weight));
+  EXPECT_EQ(a.subsurface.has_value(), b.subsurface.has_value());
+  if (a.subsurface && b.subsurface) {
+    EXPECT_TRUE(*a.subsurface == *b.subsurface);
+  }
 }
 
 // `t` with random glossy matrices for its stored rows (the layout of its mode).
@@ -499,7 +504,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 10"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 11"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.
@@ -2933,6 +2938,426 @@ TEST(PrtInfo, PeakMemoryIsOneCopyOfTheArrays) {
   EXPECT_GE(growth, kResidentFraction * held) << what;
   RecordProperty("reader_growth_bytes", std::to_string(growth));
   RecordProperty("arrays_growth_bytes", std::to_string(held));
+}
+
+// ---- the subsurface material (version 11, kind 28) ---------------------------------------
+
+// Jensen 2001's marble at D3DX's 25 mm a mesh unit.
+prt::SubsurfaceRecord sample_record(std::string name = "marble") {
+  prt::SubsurfaceRecord r;
+  r.material.name = std::move(name);
+  r.material.sigma_a = {0.0021, 0.0041, 0.0071};
+  r.material.sigma_s = {2.19, 2.62, 3.0};
+  r.material.eta = 1.5;
+  r.length_scale = 25.0;
+  return r;
+}
+
+// A translucent transfer (prt/subsurface_scatter.h): RGB, every vertex
+// stored, with ambient occlusion and sample_record().
+Transfer translucent_transfer() {
+  Transfer t = make_transfer(TransferMode::Shadowed, 3, 3, 40, {false, true, false, false});
+  t.vertex_colors = false;
+  t.subsurface = sample_record();
+  return t;
+}
+
+// `t` without its subsurface record.
+Transfer without_record(Transfer t) {
+  t.subsurface.reset();
+  return t;
+}
+
+// The kinds of the sections of `s`, in file order.
+std::vector<std::uint32_t> kinds_of(const Sample& s) {
+  std::vector<std::uint32_t> kinds;
+  for (std::size_t at : s.section_at) kinds.push_back(get<std::uint32_t>(s.bytes, at));
+  return kinds;
+}
+
+// The bytes `with` (a file whose last section is the record) without that
+// section: version `version`, one section fewer, resealed.
+std::string strip_last_section(const Sample& with, std::uint32_t version) {
+  std::string b = with.bytes.substr(0, with.section_at.back()) + with.bytes.substr(with.bytes.size() - kTrailer);
+  put<std::uint32_t>(b, kVersionAt, version);
+  put<std::uint32_t>(b, kSectionCountAt, get<std::uint32_t>(with.bytes, kSectionCountAt) - 1);
+  reseal(b);
+  return b;
+}
+
+// `bytes` (a valid file) with one more section after its last: `kind`,
+// element type `type`, `count` elements in `data`; version `version`, the
+// section count one more, resealed (as a buggy or foreign writer would).
+std::string with_section(const std::string& bytes, std::uint32_t kind, std::uint32_t type, std::uint64_t count,
+                         const std::string& data, std::uint32_t version) {
+  std::string head(kSectionHeader, '\0');
+  put(head, 0, kind);
+  put(head, 4, type);
+  put(head, 8, count);
+  put<std::uint64_t>(head, 16, data.size());
+  std::string b = bytes.substr(0, bytes.size() - kTrailer) + head + data +
+                  std::string((8 - data.size() % 8) % 8, '\0') + bytes.substr(bytes.size() - kTrailer);
+  put(b, kVersionAt, version);
+  put(b, kSectionCountAt, get<std::uint32_t>(bytes, kSectionCountAt) + 1);
+  reseal(b);
+  return b;
+}
+
+TEST(SubsurfaceFile, RoundTripsBitExactAsVersionEleven) {
+  TempDir dir;
+  Transfer t = translucent_transfer();
+  t.subsurface->material.sigma_a.x = 0.1 + 0.2;  // 0.30000000000000004: 17 significant digits
+  const Sample plain = sample_file(dir, without_record(t));
+  EXPECT_EQ(get<std::uint32_t>(plain.bytes, kVersionAt), 2u);
+  for (std::uint32_t kind : kinds_of(plain)) EXPECT_NE(kind, 28u);
+  EXPECT_EQ(prt::transfer_format_version(t), 11u);
+  const Sample s = sample_file(dir, t);
+  const std::string path = dir.file("sample.prtt");
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 11u);
+  EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(t));
+  // The last section: kind 28, u8, one JSON object of the record's five keys.
+  const std::size_t at = s.section_at.back();
+  const std::string json = prt::subsurface_record_json(*t.subsurface);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at), 28u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, at + 4), 6u);
+  EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 8), json.size());
+  EXPECT_EQ(get<std::uint64_t>(s.bytes, at + 16), json.size());
+  EXPECT_EQ(s.bytes.substr(at + kSectionHeader, json.size()), json);
+  const nlohmann::json j = nlohmann::json::parse(json);
+  ASSERT_TRUE(j.is_object()) << json;
+  EXPECT_EQ(j.size(), 5u) << json;
+  EXPECT_EQ(j.at("name"), "marble");
+  EXPECT_EQ(j.at("sigma_a").get<std::vector<double>>(), (std::vector<double>{0.1 + 0.2, 0.0041, 0.0071}));
+  EXPECT_EQ(j.at("sigma_s").get<std::vector<double>>(), (std::vector<double>{2.19, 2.62, 3.0}));
+  EXPECT_EQ(j.at("eta").get<double>(), 1.5);
+  EXPECT_EQ(j.at("length_scale").get<double>(), 25.0);
+  const auto sections = prt::transfer_sections(t);
+  ASSERT_EQ(sections.size(), s.section_at.size());
+  EXPECT_EQ(sections.back().kind, 28u);
+  EXPECT_STREQ(sections.back().name, "subsurface material");
+  EXPECT_FALSE(sections.back().per_vertex);
+  EXPECT_EQ(prt::transfer_bytes_per_vertex(t), prt::transfer_bytes_per_vertex(without_record(t)));
+  // Everything before it is the file without the record, byte for byte.
+  EXPECT_EQ(strip_last_section(s, 2), plain.bytes);
+  // Read back bit for bit, and written again the same.
+  const Transfer back = prt::read_transfer(path);
+  expect_identical(t, back);
+  ASSERT_TRUE(back.subsurface.has_value());
+  EXPECT_EQ(back.subsurface->material.sigma_a.x, 0.1 + 0.2);
+  EXPECT_EQ(back.subsurface->material.name, "marble");
+  EXPECT_EQ(back.subsurface->length_scale, 25.0);
+  EXPECT_EQ(file_version(path), 11u);
+  prt::write_transfer(dir.file("again.prtt"), back);
+  EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+  const std::string d = prt::describe_transfer(back);
+  EXPECT_TRUE(contains(d, "format version 11")) << d;
+  EXPECT_TRUE(contains(d, "subsurface material")) << d;  // the section
+  // A file without the record reads back without one.
+  prt::write_transfer(dir.file("plain.prtt"), without_record(t));
+  EXPECT_FALSE(prt::read_transfer(dir.file("plain.prtt")).subsurface.has_value());
+  EXPECT_FALSE(contains(prt::describe_transfer(without_record(t)), "subsurface")) << prt::describe_transfer(without_record(t));
+
+  // A record without a name (coefficients given directly).
+  t.subsurface->material.name.clear();
+  sample_file(dir, t);
+  const Transfer unnamed = prt::read_transfer(path);
+  ASSERT_TRUE(unnamed.subsurface.has_value());
+  EXPECT_TRUE(*unnamed.subsurface == *t.subsurface);
+  EXPECT_TRUE(contains(prt::describe_transfer(unnamed), "subsurface: sigma_a 0.3, 0.0041")) << prt::describe_transfer(unnamed);
+}
+
+TEST(SubsurfaceDescribe, NamesTheMaterialOnItsLine) {
+  const std::string d = prt::describe_transfer(translucent_transfer());
+  EXPECT_TRUE(std::regex_search(d, std::regex(R"(^  material +subsurface, marble: sigma_a 0\.0021, 0\.0041, 0\.0071 /mm; )"
+                                              R"(sigma_s' 2\.19, 2\.62, 3 /mm; eta 1\.5; 25 mm a unit$)",
+                                              std::regex::multiline)))
+      << d;
+  EXPECT_EQ(prt::describe_subsurface_record(sample_record("")),
+            "subsurface: sigma_a 0.0021, 0.0041, 0.0071 /mm; sigma_s' 2.19, 2.62, 3 /mm; eta 1.5; 25 mm a unit");
+}
+
+// After every other section: an adaptive transfer's mask (13) and a
+// light-bounce operator (14 to 27) come before it.
+TEST(SubsurfaceFile, ComesAfterEveryOtherSection) {
+  TempDir dir;
+  Transfer t = with_interpolated(full_transfer(), [](std::size_t v) { return v % 4 != 0; });
+  t.light_bounce = with_probe_rows(with_cluster_rows(sample_light_bounce(t.vertices)));
+  t.subsurface = sample_record();
+  const Sample s = sample_file(dir, t);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 11u);
+  const std::vector<std::uint32_t> kinds = kinds_of(s);
+  ASSERT_GE(kinds.size(), 16u);
+  EXPECT_TRUE(std::adjacent_find(kinds.begin(), kinds.end(), std::greater_equal<>()) == kinds.end());
+  EXPECT_EQ(kinds[kinds.size() - 2], 27u);
+  EXPECT_EQ(kinds.back(), 28u);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), 13u), 1);
+  expect_identical(t, prt::read_transfer(dir.file("sample.prtt")));
+  EXPECT_EQ(strip_last_section(s, 10), sample_file(dir, without_record(t)).bytes);
+}
+
+TEST(SubsurfaceFile, CompressedFileKeepsTheRecord) {
+  TempDir dir;
+  const Transfer t = with_interpolated(translucent_transfer(), [](std::size_t v) { return v % 4 != 0; });
+  prt::CompressedTransfer c = compressed(t, 2, 3, 16);
+  ASSERT_TRUE(c.transfer.subsurface.has_value());  // compress_transfer keeps the header whole
+  c.choice = sample_choice();
+  EXPECT_EQ(prt::transfer_format_version(c), 11u);
+  const Sample s = compressed_sample(dir, c);
+  const std::string path = dir.file("sample.prtt");
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 11u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 4u, 4u);  // flag bit 2: compressed
+  EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(c));
+  // By increasing kind: the records (8), the choice (12), the mask (13), the material (28).
+  const std::vector<std::uint32_t> kinds = kinds_of(s);
+  ASSERT_GE(kinds.size(), 4u);
+  EXPECT_EQ(std::vector<std::uint32_t>(kinds.end() - 4, kinds.end()), (std::vector<std::uint32_t>{8, 12, 13, 28}));
+  const auto sections = prt::transfer_sections(c);
+  ASSERT_EQ(sections.size(), kinds.size());
+  EXPECT_EQ(sections.back().kind, 28u);
+  const prt::CompressedTransfer back = prt::read_compressed_transfer(path);
+  ASSERT_TRUE(back.transfer.subsurface.has_value());
+  EXPECT_TRUE(*back.transfer.subsurface == sample_record());
+  EXPECT_TRUE(prt::decompress(back).subsurface == c.transfer.subsurface);
+  prt::write_compressed_transfer(dir.file("again.prtt"), back);
+  EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+  std::uint32_t version = 0;
+  EXPECT_EQ(prt::kind_of(prt::read_transfer_file(path, &version)), prt::TransferKind::Compressed);
+  EXPECT_EQ(version, 11u);
+  const std::string d = prt::describe_transfer(back);
+  EXPECT_TRUE(contains(d, "format version 11")) << d;
+  EXPECT_TRUE(contains(d, "  material          subsurface, marble: sigma_a 0.0021")) << d;
+  // Without the record: the version 7 (with the mask) or 6 file of before.
+  c.transfer.subsurface.reset();
+  EXPECT_EQ(strip_last_section(s, 7), compressed_sample(dir, c).bytes);
+  c.transfer.interpolated.clear();
+  EXPECT_EQ(get<std::uint32_t>(compressed_sample(dir, c).bytes, kVersionAt), 6u);
+}
+
+TEST(SubsurfaceFile, LightmapKeepsTheRecord) {
+  TempDir dir;
+  prt::LightmapTransfer l = sample_lightmap();
+  l.transfer = translucent_transfer();
+  EXPECT_EQ(prt::transfer_format_version(l), 11u);
+  const Sample s = lightmap_sample(dir, l);
+  const std::string path = dir.file("lightmap.prtt");
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kVersionAt), 11u);
+  EXPECT_EQ(get<std::uint32_t>(s.bytes, kFlagsAt) & 8u, 8u);  // flag bit 3: a lightmap
+  EXPECT_EQ(s.bytes.size(), prt::transfer_file_size(l));
+  const std::vector<std::uint32_t> kinds = kinds_of(s);
+  ASSERT_GE(kinds.size(), 3u);
+  EXPECT_EQ(std::vector<std::uint32_t>(kinds.end() - 3, kinds.end()), (std::vector<std::uint32_t>{10, 11, 28}));
+  EXPECT_EQ(prt::transfer_sections(l).back().kind, 28u);
+  const prt::LightmapTransfer back = prt::read_lightmap_transfer(path);
+  expect_identical(l.transfer, back.transfer);
+  EXPECT_EQ(back.layout.texels, l.layout.texels);
+  prt::write_lightmap_transfer(dir.file("again.prtt"), back);
+  EXPECT_EQ(read_file(dir.file("again.prtt")), s.bytes);
+  const std::string d = prt::describe_transfer(back);
+  EXPECT_TRUE(contains(d, "format version 11")) << d;
+  EXPECT_TRUE(contains(d, "subsurface, marble: sigma_a")) << d;
+  // Without the record: the version 5 lightmap of before.
+  l.transfer.subsurface.reset();
+  EXPECT_EQ(prt::transfer_format_version(l), 5u);
+  EXPECT_EQ(strip_last_section(s, 5), lightmap_sample(dir, l).bytes);
+}
+
+TEST(SubsurfaceRead, BadRecordsAreRefusedByName) {
+  TempDir dir;
+  const Sample s = sample_file(dir, translucent_transfer());
+  const std::size_t data = s.section_at.back() + kSectionHeader;
+  const std::string json = prt::subsurface_record_json(sample_record());
+  // `text` padded with spaces to the record's length (the layout stays valid).
+  const auto pad = [&](std::string text) {
+    EXPECT_LE(text.size(), json.size()) << text;
+    text.resize(json.size(), ' ');
+    return text;
+  };
+  // The record with `from` (found in it) replaced by `to`.
+  const auto edited = [&](const std::string& from, const std::string& to) {
+    std::string text = json;
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from << " in " << json;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+    return pad(text);
+  };
+  const auto with_json = [&](const std::string& text, const std::string& problem, const std::string& what) {
+    ASSERT_EQ(text.size(), json.size()) << what;
+    std::string b = s.bytes;
+    b.replace(data, json.size(), text);
+    reseal(b);
+    expect_bytes_error(dir, b, {"bad section 'subsurface material': " + problem}, what);
+  };
+  ASSERT_EQ(json.substr(0, 17), R"({"name":"marble",)");  // what the edits below find
+  with_json(pad(R"({"name": "marble")"), "not a JSON object", "truncated JSON");
+  with_json(pad("[1, 2]"), "not a JSON object", "an array");
+  with_json(pad("\xff\"x\""), "not a JSON object", "not UTF-8 JSON");
+  with_json(edited(R"("eta")", R"("etx")"), "the key 'eta' is missing", "eta missing");
+  with_json(edited(R"("sigma_s")", R"("sigma_z")"), "the key 'sigma_s' is missing", "sigma_s missing");
+  with_json(edited(R"("length_scale")", R"("length_scald")"), "the key 'length_scale' is missing", "no length scale");
+  with_json(edited(R"("marble")", "12345678"), "'name' is not a string (got 12345678)", "a number for a name");
+  with_json(edited(",0.0071]", "]"), "'sigma_a' is not an array of 3 numbers (got [0.0021,0.0041])", "2 numbers");
+  with_json(edited("[0.0021,", R"(["0.01",)"), "'sigma_a' is not an array of 3 numbers", "a string in sigma_a");
+  with_json(edited(R"("eta":1.5)", R"("eta":"1")"), R"('eta' is not a number (got "1"))", "eta a string");
+  with_json(edited(R"("length_scale":25.0)", R"("length_scale":true)"), "'length_scale' is not a number",
+            "length scale a boolean");
+  // Well-formed, but a material check_subsurface_material refuses.
+  with_json(edited(R"("eta":1.5)", R"("eta":4.5)"),
+            "the material: the relative index of refraction must be 1 to 3, got 4.5", "eta 4.5");
+  with_json(edited("[0.0021", "[-0.002"), "the material: sigma_a (red) must be finite and >= 0 (1/mm), got -0.002",
+            "a negative sigma_a");
+  // (JSON has no infinity: a number too large for a double is refused as it is read.)
+  const std::string overflow = "not a JSON object: [json.exception.out_of_range.406] number overflow parsing '1e999'";
+  with_json(edited("[2.19,2.62", "[1e999,2.6"), overflow, "an infinite sigma_s");
+  // A length scale that is not finite and > 0.
+  const std::string scale = "the length scale must be finite and > 0 (mm per mesh unit), got ";
+  with_json(edited(R"("length_scale":25.0)", R"("length_scale":-1)"), scale + "-1", "length scale -1");
+  with_json(edited(R"("length_scale":25.0)", R"("length_scale":0)"), scale + "0", "length scale 0");
+  with_json(edited(R"("eta":1.5,"length_scale":25.0)", R"("eta":2,"length_scale":1e999)"), overflow,
+            "an infinite length scale");
+  // Other keys are ignored.
+  std::string b = s.bytes;
+  b.replace(data, json.size(), edited(R"("name":"marble")", R"("name":"","x":0)"));
+  reseal(b);
+  write_file(dir.file("extra.prtt"), b);
+  const Transfer extra = prt::read_transfer(dir.file("extra.prtt"));
+  ASSERT_TRUE(extra.subsurface.has_value());
+  EXPECT_TRUE(*extra.subsurface == sample_record(""));
+}
+
+TEST(SubsurfaceRead, MisplacedRecordsAreRefusedByName) {
+  TempDir dir;
+  const std::string json = prt::subsurface_record_json(sample_record());
+  // In a file older than version 11.
+  Sample s = sample_file(dir, translucent_transfer());
+  put<std::uint32_t>(s.bytes, kVersionAt, 10);
+  reseal(s.bytes);
+  expect_bytes_error(dir, s.bytes,
+                     {"bad section table: section 3 of 3 has unknown kind 28 in a version 10 file ('subsurface "
+                      "material' sections are version 11 and later)"},
+                     "kind 28 in version 10");
+  // In a grey transfer, and in a glossy one: a translucent transfer is RGB and diffuse.
+  const Sample grey = sample_file(dir, make_transfer(TransferMode::Shadowed, 1, 3, 40, {false, true, false, false}));
+  expect_bytes_error(dir, with_section(grey.bytes, 28, 6, json.size(), json, 11),
+                     {"bad section table: has a 'subsurface material' section, but the header says 1 channel (a "
+                      "translucent transfer is RGB: 3 channels)"},
+                     "grey");
+  const Sample glossy = sample_file(dir, with_glossy(without_record(translucent_transfer())));
+  expect_bytes_error(dir, with_section(glossy.bytes, 28, 6, json.size(), json, 11),
+                     {"bad section table: has a 'subsurface material' section, but the header's flags say it has "
+                      "glossy matrices (a translucent transfer is diffuse)"},
+                     "glossy");
+  // Of another element type, or too short to be a record.
+  const Sample rgb = sample_file(dir, without_record(translucent_transfer()));
+  expect_bytes_error(dir, with_section(rgb.bytes, 28, 1, 1, std::string(4, '\0'), 11),
+                     {"section 'subsurface material' has element type 1; expected 6 (u8)"}, "f32");
+  expect_bytes_error(dir, with_section(rgb.bytes, 28, 6, 1, "{", 11),
+                     {"section 'subsurface material' has 1 bytes; a record has 2 to 65536"}, "one byte");
+  // The same section appended by hand reads as the writer's.
+  write_file(dir.file("hand.prtt"), with_section(rgb.bytes, 28, 6, json.size(), json, 11));
+  EXPECT_EQ(read_file(dir.file("hand.prtt")), sample_file(dir, translucent_transfer()).bytes);
+  // A compressed file and a lightmap are read by the same rules.
+  const Sample c = compressed_sample(dir, compressed(translucent_transfer(), 2, 3, 16));
+  std::string old = c.bytes;
+  put<std::uint32_t>(old, kVersionAt, 10);
+  reseal(old);
+  write_file(dir.file("bad.prtt"), old);
+  expect_error_of(prt::read_compressed_transfer, dir.file("bad.prtt"), {"unknown kind 28 in a version 10 file"},
+                  "compressed, version 10");
+  const Sample lightmap = lightmap_sample(dir, sample_lightmap());  // grey
+  write_file(dir.file("bad.prtt"), with_section(lightmap.bytes, 28, 6, json.size(), json, 11));
+  expect_error_of(prt::read_lightmap_transfer, dir.file("bad.prtt"),
+                  {"has a 'subsurface material' section, but the header says 1 channel"}, "grey lightmap");
+}
+
+TEST(SubsurfaceWrite, RefusesWhatCouldNotBeReadBack) {
+  TempDir dir;
+  const std::string path = dir.file("out.prtt");
+  const auto refused = [&](const Transfer& t, const std::string& problem, const std::string& what) {
+    EXPECT_EQ(prt::transfer_problem(t).substr(0, problem.size()), problem) << what;
+    try {
+      prt::write_transfer(path, t);
+      ADD_FAILURE() << what << ": written";
+    } catch (const prt::Error& e) {
+      EXPECT_TRUE(contains(e.what(), path + ": cannot write this transfer: " + problem)) << what << ": " << e.what();
+    }
+    EXPECT_FALSE(fs::exists(path)) << what;
+  };
+  Transfer grey = make_transfer(TransferMode::Shadowed, 1, 3, 40, {});
+  grey.subsurface = sample_record();
+  refused(grey, "a subsurface material in a transfer of 1 channel (a translucent transfer is RGB: 3 channels)", "grey");
+  refused(with_glossy(translucent_transfer()),
+          "a subsurface material in a glossy transfer (a translucent transfer is diffuse)", "glossy");
+  Transfer t = translucent_transfer();
+  t.subsurface->material.eta = 0.5;
+  refused(t, "subsurface material: the material: the relative index of refraction must be 1 to 3, got 0.5", "eta");
+  t = translucent_transfer();
+  t.subsurface->material.sigma_s.z = std::numeric_limits<double>::quiet_NaN();
+  refused(t, "subsurface material: the material: sigma_s' (blue) must be finite and >= 0 (1/mm), got nan", "NaN");
+  for (double scale : {0.0, -25.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+    t = translucent_transfer();
+    t.subsurface->length_scale = scale;
+    refused(t, "subsurface material: the length scale must be finite and > 0 (mm per mesh unit)",
+            "length scale " + std::to_string(scale));
+  }
+  EXPECT_EQ(prt::transfer_problem(translucent_transfer()), "");
+  // A name that is not UTF-8 cannot be stored as JSON.
+  t = translucent_transfer();
+  t.subsurface->material.name = "marble\xff";
+  EXPECT_THROW(prt::write_transfer(path, t), prt::Error);
+  EXPECT_FALSE(fs::exists(path));
+  // The compressed and lightmap writers alike.
+  prt::CompressedTransfer c = compressed(translucent_transfer(), 2, 3, 16);
+  c.transfer.subsurface->length_scale = 0;
+  EXPECT_THROW(prt::write_compressed_transfer(path, c), prt::Error);
+  EXPECT_FALSE(fs::exists(path));
+  prt::LightmapTransfer l = sample_lightmap();  // grey
+  l.transfer.subsurface = sample_record();
+  EXPECT_THROW(prt::write_lightmap_transfer(path, l), prt::Error);
+  EXPECT_FALSE(fs::exists(path));
+}
+
+TEST(PrtInfo, NamesTheSubsurfaceMaterial) {
+  TempDir dir;
+  const std::string path = dir.file("t.prtt"), packed = dir.file("c.prtt"), plain = dir.file("p.prtt");
+  prt::write_transfer(path, translucent_transfer());
+  Result r = run_prt(dir, {"info", path});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_TRUE(contains(r.out, "format version 11")) << r.out;
+  EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(^  material +subsurface, marble: sigma_a 0\.0021, 0\.0041, )"
+                                                  R"(0\.0071 /mm; sigma_s' 2\.19, 2\.62, 3 /mm; eta 1\.5; 25 mm a )"
+                                                  R"(unit$)",
+                                                  std::regex::multiline)))
+      << r.out;
+  EXPECT_FALSE(contains(r.out, "prt now writes version")) << r.out;
+  r = run_prt(dir, {"info", path, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 11);
+  EXPECT_EQ(j.at("material"), "subsurface");
+  const nlohmann::json& m = j.at("subsurface");
+  EXPECT_EQ(m.size(), 5u) << m;
+  EXPECT_EQ(m.at("name"), "marble");
+  EXPECT_EQ(m.at("sigma_a").get<std::vector<double>>(), (std::vector<double>{0.0021, 0.0041, 0.0071}));
+  EXPECT_EQ(m.at("sigma_s").get<std::vector<double>>(), (std::vector<double>{2.19, 2.62, 3.0}));
+  EXPECT_EQ(m.at("eta").get<double>(), 1.5);
+  EXPECT_EQ(m.at("length_scale").get<double>(), 25.0);
+  // A compressed file's too.
+  prt::write_compressed_transfer(packed, compressed(translucent_transfer(), 2, 3, 16));
+  r = run_prt(dir, {"info", packed, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("format_version"), 11);
+  EXPECT_EQ(j.at("subsurface").at("name"), "marble");
+  // Without a record: no line, no key.
+  prt::write_transfer(plain, without_record(translucent_transfer()));
+  r = run_prt(dir, {"info", plain});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_FALSE(contains(r.out, "material")) << r.out;
+  r = run_prt(dir, {"info", plain, "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("material"), "diffuse");
+  EXPECT_FALSE(j.contains("subsurface"));
 }
 
 }  // namespace

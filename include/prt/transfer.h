@@ -10,11 +10,13 @@
 
 #include <prt/light_bounce.h>
 #include <prt/mesh.h>
+#include <prt/subsurface.h>
 
 #include <glm/vec3.hpp>
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -40,6 +42,9 @@ struct TransferHeader {
   std::uint64_t seed = 0;
   std::size_t vertices = 0;
   std::uint64_t mesh_hash = 0;
+  // A translucent material's transfer (prt/subsurface_scatter.h): what it
+  // was computed from. Empty for every other transfer.
+  std::optional<SubsurfaceRecord> subsurface;
 
   TransferHeader& header() { return *this; }
   const TransferHeader& header() const { return *this; }

@@ -33,7 +33,9 @@ namespace prt {
 // vertices or texels 7, compressed transfers with a choice record 6, other
 // lightmaps 5, other compressed transfers 4, glossy ones 3, the others 2.
 // Wavelet transfers are written as version kWaveletFormatVersion.
-inline constexpr std::uint32_t kTransferFormatVersion = 10;
+// Transfers (compressed or not, and lightmaps) that record a subsurface
+// material are written as version 11, whatever else they hold.
+inline constexpr std::uint32_t kTransferFormatVersion = 11;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
@@ -52,6 +54,10 @@ inline constexpr std::uint32_t kLightBounceClustersFormatVersion = 9;
 // bands, the box, offsets, sources, weights), written only with an operator
 // that has them (probes.offsets not empty), all five or none.
 inline constexpr std::uint32_t kLightBounceProbesFormatVersion = 10;
+// Kind 28: the subsurface material (TransferHeader::subsurface, a translucent
+// transfer's SubsurfaceRecord, prt/subsurface.h) as one UTF-8 JSON object,
+// written only when a transfer (compressed or not, or a lightmap) has one.
+inline constexpr std::uint32_t kSubsurfaceFormatVersion = 11;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
 inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
@@ -61,8 +67,9 @@ inline constexpr std::uint32_t kProbeFormatVersion = 1;
 // vertices: 3 with glossy matrices, 2 otherwise (so that a prt reading
 // version 2 reads every file it could).
 inline std::uint32_t transfer_format_version(bool glossy) { return glossy ? 3u : 2u; }
-// The version write_transfer writes for `t`: kLightBounceProbesFormatVersion
-// (10) with a light-bounce operator that has probe rows
+// The version write_transfer writes for `t`: kSubsurfaceFormatVersion (11)
+// with a subsurface record (t.subsurface), else
+// kLightBounceProbesFormatVersion (10) with a light-bounce operator that has probe rows
 // (!Transfer::light_bounce.probes.empty()), else
 // kLightBounceClustersFormatVersion (9) with one that has cluster rows
 // (!Transfer::light_bounce.cluster_offsets.empty()), else
@@ -79,6 +86,22 @@ std::uint32_t transfer_format_version(const Transfer& t);
 // file could not be read back), and naming the file if the write fails.
 void write_transfer(const std::string& path, const Transfer& t);
 
+// The subsurface record (kind 28, docs/FORMAT.md "Subsurface material") as
+// the file stores it: one JSON object with the keys name, sigma_a, sigma_s
+// (arrays of 3 numbers, 1/mm; sigma_s the reduced coefficient), eta and
+// length_scale (mm per mesh unit), every double written so that it reads
+// back bit for bit. Throws prt::Error when the name is not valid UTF-8. And
+// back: parse_subsurface_record throws prt::Error naming the problem (not a
+// JSON object, a key missing or of the wrong type, a material
+// check_subsurface_material refuses, a length scale that is not finite and
+// > 0); other keys are ignored.
+std::string subsurface_record_json(const SubsurfaceRecord& r);
+SubsurfaceRecord parse_subsurface_record(std::string_view json);
+// "subsurface, marble: sigma_a 0.0021, 0.0041, 0.0071 /mm; sigma_s' 2.19,
+// 2.62, 3 /mm; eta 1.5; 25 mm a unit" (no name: "subsurface: sigma_a ..."):
+// prt info's material line.
+std::string describe_subsurface_record(const SubsurfaceRecord& r);
+
 // Reads a transfer file. Validates everything before returning: signature,
 // version, size (truncation), checksum, header values, section table, and
 // the data (transfer_problem). Throws prt::Error "PATH: problem" otherwise,
@@ -92,7 +115,8 @@ std::string describe_transfer(const Transfer& t);
 
 // ---- what a file holds (prt info, tests) ------------------------------------
 struct TransferSection {
-  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 13 interpolated vertices, 14-27 light bounce
+  std::uint32_t kind = 0;           // docs/FORMAT.md: 1 coefficients ... 13 interpolated vertices, 14-27 light bounce,
+                                    // 28 subsurface material
   const char* name = "";            // "coefficients", "direct", "ambient occlusion", ...
   std::uint32_t element_bytes = 0;  // 1 (u8) to 8 (f64, u64); 2 for the f16 light-bounce weights
   std::uint64_t count = 0;          // elements (scalars)
@@ -128,9 +152,10 @@ CompressedTransfer read_compressed_transfer(const std::string& path);
 // The sections write_compressed_transfer stores, in file order, and the
 // file's exact size.
 std::vector<TransferSection> transfer_sections(const CompressedTransfer& c);
-// The version write_compressed_transfer writes for `c`: 7 when some vertex
-// is interpolated (c.transfer.interpolated: compression keeps the mask),
-// else 6 with a choice record, 4 without.
+// The version write_compressed_transfer writes for `c`: 11 with a
+// subsurface record (c.transfer.subsurface: compression keeps it), else 7
+// when some vertex is interpolated (c.transfer.interpolated: compression
+// keeps the mask), else 6 with a choice record, 4 without.
 std::uint32_t transfer_format_version(const CompressedTransfer& c);
 std::uint64_t transfer_file_size(const CompressedTransfer& c);
 // check_matches of its uncompressed part.
@@ -225,7 +250,8 @@ void check_matches(const ZhTransfer& t, const Mesh& mesh, const std::string& wha
 // lightmap file does not hold) before writing anything.
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t);
 // The version write_lightmap_transfer writes for `t`:
-// kLightBounceProbesFormatVersion (10) with a light-bounce operator that has
+// kSubsurfaceFormatVersion (11) with a subsurface record
+// (t.transfer.subsurface), else kLightBounceProbesFormatVersion (10) with a light-bounce operator that has
 // probe rows, kLightBounceClustersFormatVersion (9) with one that has
 // cluster rows, kLightBounceFormatVersion (8) with any other (one row per
 // covered texel), else kInterpolatedFormatVersion (7) when some texel is

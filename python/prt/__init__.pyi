@@ -362,6 +362,11 @@ class Transfer:
     def stored_vertices(self) -> Any:
         ...
     @property
+    def subsurface(self) -> Any:
+        """
+        A translucent transfer's material (prt precompute --material subsurface; the file's 'subsurface material', docs/FORMAT.md): a new dict of name, sigma_a and sigma_s ((r, g, b) in 1/mm; sigma_s the reduced scattering coefficient), eta and length_scale (mm per mesh unit); None for any other transfer
+        """
+    @property
     def vertex_colors(self) -> Any:
         ...
     @property

@@ -104,6 +104,23 @@ void bind_transfer(py::module_& m) {
       .def_property_readonly("mesh_hash", [](const PyTransfer& p) { return p.t.mesh_hash; })
       .def_property_readonly("glossy", [](const PyTransfer& p) { return p.t.glossy; },
                              "Whether it holds glossy matrices (relight() uses the diffuse part)")
+      .def_property_readonly(
+          "subsurface",
+          [](const PyTransfer& p) -> py::object {
+            if (!p.t.subsurface) return py::none();
+            const prt::SubsurfaceRecord& r = *p.t.subsurface;
+            const auto rgb = [](const glm::dvec3& v) { return py::make_tuple(v.x, v.y, v.z); };
+            py::dict d;
+            d["name"] = r.material.name;
+            d["sigma_a"] = rgb(r.material.sigma_a);
+            d["sigma_s"] = rgb(r.material.sigma_s);
+            d["eta"] = r.material.eta;
+            d["length_scale"] = r.length_scale;
+            return d;
+          },
+          "A translucent transfer's material (prt precompute --material subsurface; the file's 'subsurface "
+          "material', docs/FORMAT.md): a new dict of name, sigma_a and sigma_s ((r, g, b) in 1/mm; sigma_s the "
+          "reduced scattering coefficient), eta and length_scale (mm per mesh unit); None for any other transfer")
       .def_property_readonly("compressed", [](const PyTransfer& p) { return p.compressed.has_value(); },
                              "Read from a compressed file (prt compress): rows are reconstructed")
       .def_property_readonly("source", [](const PyTransfer& p) { return p.source; })
