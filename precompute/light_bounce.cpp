@@ -47,6 +47,9 @@ void refuse_adaptive_light_bounce(const TransferOptions& options) {
   if (options.light_bounce)
     throw Error("--light-bounce and --adaptive: adaptive sample points interpolate most points' transfer, and those have "
                 "no gather row to keep; precompute every point (leave out --adaptive)");
+  if (options.between_bounces)
+    throw Error("a translucent material and --adaptive: the surface integral sums every vertex's traced light; "
+                "precompute every vertex (leave out --adaptive)");
 }
 
 double mean_edge_length(const Mesh& mesh) {

@@ -402,6 +402,9 @@ Subdivided subdivide_for_transfer(const Mesh& mesh, const TransferOptions& optio
   const auto t0 = std::chrono::steady_clock::now();
   detail::check_transfer_options(options, mesh);
   const auto bad = [](const std::string& what) { return Error("subdividing for transfer: " + what); };
+  if (options.between_bounces)
+    throw bad("a translucent material's transfer is not subdivided (its surface integral runs once, over the whole "
+              "mesh); precompute it on a finer mesh");
   if (!(s.tolerance > 0 && s.tolerance < 1)) throw bad(fmt::format("tolerance {} is outside (0, 1)", s.tolerance));
   if (s.max_vertices != 0 && s.max_vertices < mesh.vertex_count())
     throw bad(fmt::format("at most {} vertices is below the mesh's {} (0: 4x the mesh's)", s.max_vertices,

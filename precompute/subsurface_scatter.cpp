@@ -5,9 +5,12 @@
 #include <prt/error.h>
 #include <prt/subsurface_scatter.h>
 
+#include "progress_ticker.h"
+
 #include <fmt/format.h>
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <tbb/blocked_range.h>
@@ -43,13 +46,15 @@ namespace {
 struct Node {
   glm::dvec3 centre{0.0};
   double area = 0.0;
+  double m2 = 0.0;  // the area-weighted mean squared distance of its sources' spread from the centre
+  double radius = 0.0;  // of a sphere about the centre holding its points
   std::uint32_t first = 0, count = 0;
   std::uint32_t child = 0, children = 0;
 };
 
 // Leaves hold at most this many points: below it a cluster's aggregate
 // costs about what its points do.
-constexpr std::uint32_t kLeafPoints = 8;
+constexpr std::uint32_t kLeafPoints = 4;
 constexpr int kMaxDepth = 32;  // coincident points stop the splitting here
 
 struct Octree {
@@ -96,7 +101,8 @@ bool split(Octree& t, std::uint32_t n, const std::vector<glm::dvec3>& pos) {
   return true;
 }
 
-Octree build_octree(const std::vector<glm::dvec3>& pos, const std::vector<double>& area, std::span<const float> in,
+Octree build_octree(const std::vector<glm::dvec3>& pos, std::span<const double> area, std::span<const double> m2,
+                    std::span<const float> in,
                     int nc) {
   Octree t;
   for (std::uint32_t i = 0; i < pos.size(); ++i)
@@ -114,111 +120,468 @@ Octree build_octree(const std::vector<glm::dvec3>& pos, const std::vector<double
     Node& node = t.nodes[n];
     double* s = t.sums.data() + n * std::size_t(nc);
     glm::dvec3 weighted(0.0);
+    double squares = 0.0;  // sum of A (m2 + |x|^2)
     if (node.children == 0) {
       for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
         const std::uint32_t p = t.order[i];
         node.area += area[p];
         weighted += area[p] * pos[p];
+        squares += area[p] * (m2[p] + glm::dot(pos[p], pos[p]));
         for (int k = 0; k < nc; ++k) s[k] += area[p] * double(in[std::size_t(p) * std::size_t(nc) + std::size_t(k)]);
       }
     } else {
       for (std::uint32_t c = node.child; c < node.child + node.children; ++c) {
         node.area += t.nodes[c].area;
         weighted += t.nodes[c].area * t.nodes[c].centre;
+        squares += t.nodes[c].area * (t.nodes[c].m2 + glm::dot(t.nodes[c].centre, t.nodes[c].centre));
         for (int k = 0; k < nc; ++k) s[k] += t.sums[std::size_t(c) * std::size_t(nc) + std::size_t(k)];
       }
     }
     node.centre = node.area > 0 ? weighted / node.area : glm::dvec3(0.0);
+    node.m2 = node.area > 0 ? std::max(squares / node.area - glm::dot(node.centre, node.centre), 0.0) : 0.0;
+    if (node.children == 0)
+      for (std::uint32_t i = node.first; i < node.first + node.count; ++i)
+        node.radius = std::max(node.radius, glm::length(pos[t.order[i]] - node.centre));
+    else
+      for (std::uint32_t c = node.child; c < node.child + node.children; ++c)
+        node.radius = std::max(node.radius, t.nodes[c].radius + glm::length(t.nodes[c].centre - node.centre));
   }
   return t;
 }
 
 }  // namespace
 
-std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial& material,
-                                      std::span<const float> in, int nc, const SubsurfaceScatterOptions& o) {
+namespace {
+
+// Gauss-Legendre on [0, 1], 4 nodes: the radial rule of the disc average
+// (in the squared radius, so each node stands for an equal share of area).
+constexpr std::array<double, 4> kDiscNodes = {0.0694318442029737, 0.3300094782075719, 0.6699905217924281,
+                                              0.9305681557970263};
+constexpr std::array<double, 4> kDiscWeights = {0.1739274225687269, 0.3260725774312731, 0.3260725774312731,
+                                                0.1739274225687269};
+constexpr int kDiscAngles = 8;
+// A source closer than this many of its disc radii is averaged over its disc
+// (docs/SUBSURFACE.md "Near sources"); farther, its point value with the
+// disc's second-order term.
+constexpr double kNearDiscs = 3.0;
+
+// The three channels' profiles tabulated at r = reach t^2 for t in [0, 1]
+// (dense where the profile peaks, at r = 0) and interpolated linearly in t:
+// a lookup instead of each channel's two exponentials. Per entry, per
+// channel: R_d, its 2-D Laplacian, and the radial moments
+// F1(r) = int_0^r R_d s ds (disc / 2 pi, closed form) and
+// F2(r) = int_0^r R_d s^2 ds (Simpson's rule between entries) that integrate
+// R_d times a linear function over a wedge. 16,384 entries keep the
+// interpolation within 2e-5 of the profile (tests/test_subsurface_scatter.cpp).
+class ProfileTable {
+ public:
+  static constexpr std::size_t kColumns = 12;  // R_d, Laplacian, F1, F2; three channels each
+  ProfileTable(const std::array<Dipole, 3>& d, double reach_mm)
+      : reach_(std::max(reach_mm, 1e-30)), scale_((kEntries - 1) / std::sqrt(reach_)) {
+    values_.resize(std::size_t(kEntries) * kColumns);
+    double prev_r = 0.0;
+    for (int i = 0; i < kEntries; ++i) {
+      const double t = double(i) / (kEntries - 1), r = reach_ * t * t;
+      double* e = values_.data() + std::size_t(i) * kColumns;
+      for (std::size_t c = 0; c < 3; ++c) {
+        e[c] = d[c].rd(r);
+        e[3 + c] = d[c].laplacian(r);
+        e[6 + c] = d[c].disc(r) / (2 * std::numbers::pi);
+        if (i == 0) continue;
+        const double m = 0.5 * (prev_r + r);
+        const auto g = [&](double x) { return d[c].rd(x) * x * x; };
+        e[9 + c] = e[9 + c - kColumns] + (r - prev_r) / 6 * (g(prev_r) + 4 * g(m) + g(r));
+      }
+      prev_r = r;
+    }
+  }
+  // R_d per channel at r mm.
+  glm::dvec3 value(double r) const {
+    double f[kColumns];
+    lookup(r, f, 3);
+    return {f[0], f[1], f[2]};
+  }
+  // The mean of R_d over a source spread about a point r away with mean
+  // squared radius m2, to second order (isotropic): R_d + m2 / 4
+  // Laplacian(R_d) (a uniform disc of radius rho: m2 = rho^2 / 2).
+  glm::dvec3 point_mean(double r, double m2) const {
+    double f[kColumns];
+    lookup(r, f, 6);
+    return {f[0] + m2 / 4 * f[3], f[1] + m2 / 4 * f[4], f[2] + m2 / 4 * f[5]};
+  }
+  // The same mean by a product rule over the disc (4 radii, equal shares of
+  // area by Gauss-Legendre, times 8 angles), for a disc near the receiver.
+  glm::dvec3 disc_mean(double r, double rho) const {
+    glm::dvec3 sum(0.0);
+    for (std::size_t i = 0; i < kDiscNodes.size(); ++i) {
+      const double q = rho * std::sqrt(kDiscNodes[i]);
+      for (int a = 0; a < kDiscAngles; ++a) {
+        const double phi = 2 * std::numbers::pi * (a + 0.5) / kDiscAngles;
+        const double x = r + q * std::cos(phi), y = q * std::sin(phi);
+        sum += kDiscWeights[i] / kDiscAngles * value(std::sqrt(x * x + y * y));
+      }
+    }
+    return sum;
+  }
+  // F1 and F2 per channel at r mm.
+  void moments(double r, glm::dvec3& f1, glm::dvec3& f2) const {
+    double f[kColumns];
+    lookup(r, f, kColumns);
+    f1 = {f[6], f[7], f[8]};
+    f2 = {f[9], f[10], f[11]};
+  }
+
+ private:
+  static constexpr int kEntries = 16384;
+  void lookup(double r, double* f, std::size_t n) const {
+    const double t = std::min(std::sqrt(std::max(r, 0.0)) * scale_, double(kEntries - 1));
+    const int i = std::min(int(t), kEntries - 2);
+    const double u = t - i;
+    const double* a = values_.data() + std::size_t(i) * kColumns;
+    for (std::size_t k = 0; k < n; ++k) f[k] = a[k] + u * (a[k + kColumns] - a[k]);
+  }
+  double reach_, scale_;
+  std::vector<double> values_;
+};
+
+// The angular rule of a wedge: Gauss-Legendre, 4 nodes on each side of
+// the edge's nearest point.
+constexpr const std::array<double, 4>& kWedgeNodes = kDiscNodes;
+constexpr const std::array<double, 4>& kWedgeWeights = kDiscWeights;
+
+// W[j] = int over triangle p (mm) of R_d(|x - o|) b_j(x) dA, b_j its corners'
+// barycentric functions (so sum_j W[j] E_j is the profile's integral over
+// the triangle of irradiance linear across it), per channel: o projected
+// onto the triangle's plane, the triangle the signed sum of the three wedges
+// (o, p_k, p_k+1), and each wedge in polar coordinates about o, where
+// b_j = b_j(o) + r grad b_j . e(phi) makes the radial integral
+// b_j(o) F1(r(phi)) + grad b_j . e(phi) F2(r(phi)); the angle by
+// Gauss-Legendre, split where r(phi) is least. Exact but for the angular
+// rule and the projection (o's height over the plane left out: the
+// triangles this takes are the receiver's own and its neighbours').
+void triangle_weights(const ProfileTable& table, const glm::dvec3& o, const std::array<glm::dvec3, 3>& p,
+                      std::array<glm::dvec3, 3>& W) {
+  W.fill(glm::dvec3(0.0));
+  const glm::dvec3 cr = glm::cross(p[1] - p[0], p[2] - p[0]);
+  const double area2 = glm::length(cr);
+  if (!(area2 > 0)) return;
+  const glm::dvec3 n = cr / area2;
+  const glm::dvec3 q = o - glm::dot(o - p[0], n) * n;
+  std::array<glm::dvec3, 3> grad;
+  std::array<double, 3> at;
+  for (int j = 0; j < 3; ++j) {
+    grad[std::size_t(j)] = glm::cross(n, p[std::size_t((j + 2) % 3)] - p[std::size_t((j + 1) % 3)]) / area2;
+    at[std::size_t(j)] = glm::dot(grad[std::size_t(j)], q - p[std::size_t((j + 1) % 3)]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const glm::dvec3 u = p[std::size_t(k)] - q, w = p[std::size_t((k + 1) % 3)] - q;
+    const double lu = glm::length(u);
+    if (!(lu > 0) || !(glm::length(glm::cross(u, w)) > 1e-12 * lu * glm::length(w))) continue;  // no area
+    const glm::dvec3 e1 = u / lu, e2 = glm::cross(n, e1);
+    const glm::dvec2 a(lu, 0.0), b(glm::dot(w, e1), glm::dot(w, e2)), d = b - a;
+    const double theta = std::atan2(b.y, b.x);  // signed: the wedge's orientation about n
+    const double ad = a.x * d.y - a.y * d.x;    // r(phi) = (a x d) / (e(phi) x d)
+    const glm::dvec2 foot = a - glm::dot(a, d) / glm::dot(d, d) * d;
+    const double phi_n = std::atan2(foot.y, foot.x);
+    const bool split = theta > 0 ? phi_n > 0 && phi_n < theta : phi_n < 0 && phi_n > theta;
+    const double cuts[3] = {0.0, split ? phi_n : 0.5 * theta, theta};
+    for (int s = 0; s < 2; ++s) {
+      const double lo = cuts[s], span = cuts[s + 1] - cuts[s];
+      for (std::size_t g = 0; g < kWedgeNodes.size(); ++g) {
+        const double phi = lo + span * kWedgeNodes[g], c = std::cos(phi), sn = std::sin(phi);
+        const double r = ad / (c * d.y - sn * d.x);
+        glm::dvec3 f1, f2;
+        table.moments(r, f1, f2);
+        const glm::dvec3 e = c * e1 + sn * e2;
+        for (std::size_t j = 0; j < 3; ++j) W[j] += span * kWedgeWeights[g] * (at[j] * f1 + glm::dot(grad[j], e) * f2);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// Past this distance (mm) the profile adds at most kReachShare of the
+// total reflectance R_d,total whatever the surface there: the smallest D
+// (each channel's, the largest of three) with R_d(D) times the whole area
+// `area_mm2` at most kReachShare R_d,total. A cluster wholly beyond it is
+// skipped.
+constexpr double kReachShare = 1e-6;
+double profile_reach(const std::array<Dipole, 3>& dipole, double area_mm2) {
+  double reach = 0.0;
+  for (const Dipole& d : dipole) {
+    const double bound = kReachShare * d.total();
+    double lo = 0.0, hi = d.z_v;
+    while (d.rd(hi) * area_mm2 > bound && hi < 1e12) hi *= 2;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (d.rd(mid) * area_mm2 > bound ? lo : hi) = mid;
+    }
+    reach = std::max(reach, hi);
+  }
+  return reach;
+}
+
+// Each vertex's triangles: triangles[offsets[v], offsets[v + 1]).
+struct Incidence {
+  std::vector<std::uint32_t> offsets, triangles;
+};
+
+Incidence incidence(const Mesh& mesh) {
+  Incidence in;
+  in.offsets.assign(mesh.positions.size() + 1, 0);
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) ++in.offsets[t[c] + 1];
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) in.offsets[v + 1] += in.offsets[v];
+  in.triangles.resize(in.offsets.back());
+  std::vector<std::uint32_t> at(in.offsets.begin(), in.offsets.end() - 1);
+  for (std::uint32_t i = 0; i < mesh.triangles.size(); ++i)
+    for (int c = 0; c < 3; ++c) in.triangles[at[mesh.triangles[i][c]]++] = i;
+  return in;
+}
+
+// Each source's far-field stand-in: its weight's centre and mean squared
+// radius about it (mesh units). A vertex of a mesh weighs each of its
+// triangles by its barycentric hat b_j (the integral of irradiance linear
+// across triangles): over a triangle with edges e1, e2 from the vertex,
+// int b_j = A / 3, int b_j (x - x_j) = A (e1 + e2) / 12 and
+// int b_j |x - x_j|^2 = A (e1^2 + e2^2 + e1 . e2) / 30.
+struct Sources {
+  std::vector<glm::dvec3> centre;
+  std::vector<double> m2;
+};
+
+Sources hat_sources(const Mesh& mesh, std::span<const double> areas) {
+  const std::size_t V = mesh.positions.size();
+  Sources s;
+  s.centre.assign(V, glm::dvec3(0.0));
+  s.m2.assign(V, 0.0);
+  for (const glm::uvec3& t : mesh.triangles) {
+    const glm::dvec3 p[3] = {glm::dvec3(mesh.positions[t.x]), glm::dvec3(mesh.positions[t.y]),
+                             glm::dvec3(mesh.positions[t.z])};
+    const double A = 0.5 * glm::length(glm::cross(p[1] - p[0], p[2] - p[0]));
+    for (int c = 0; c < 3; ++c) {
+      const glm::dvec3 e1 = p[(c + 1) % 3] - p[c], e2 = p[(c + 2) % 3] - p[c];
+      s.centre[t[c]] += A / 12 * (e1 + e2);
+      s.m2[t[c]] += A / 30 * (glm::dot(e1, e1) + glm::dot(e2, e2) + glm::dot(e1, e2));
+    }
+  }
+  for (std::size_t v = 0; v < V; ++v) {
+    const glm::dvec3 offset = areas[v] > 0 ? s.centre[v] / areas[v] : glm::dvec3(0.0);
+    s.m2[v] = areas[v] > 0 ? std::max(s.m2[v] / areas[v] - glm::dot(offset, offset), 0.0) : 0.0;
+    s.centre[v] = glm::dvec3(mesh.positions[v]) + offset;
+  }
+  return s;
+}
+
+// Points without triangles: each a uniform disc of its area about itself.
+Sources disc_sources(const std::vector<glm::dvec3>& pos, std::span<const double> areas) {
+  Sources s;
+  s.centre = pos;
+  s.m2.resize(pos.size());
+  for (std::size_t i = 0; i < pos.size(); ++i) s.m2[i] = areas[i] / (2 * std::numbers::pi);
+  return s;
+}
+
+// The sum over points; `mesh` (whose vertices the points are) gives the
+// near field by its triangles, else by discs.
+std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<const double> areas, const Mesh* mesh,
+                                const SubsurfaceMaterial& material, std::span<const float> in, int nc,
+                                const SubsurfaceScatterOptions& o, const Progress& progress = {},
+                                const char* phase = "subsurface") {
   check_subsurface_material(material, "subsurface material");
   if (!(std::isfinite(o.length_scale) && o.length_scale > 0))
     throw Error(fmt::format("the length scale must be > 0 (mm per mesh unit), got {}", o.length_scale));
   if (!(std::isfinite(o.max_solid_angle) && o.max_solid_angle >= 0))
     throw Error(fmt::format("the largest solid angle of a cluster taken whole must be >= 0, got {}", o.max_solid_angle));
-  const std::size_t V = mesh.positions.size();
-  if (nc < 1 || in.size() != V * std::size_t(nc))
-    throw Error(fmt::format("subsurface scatter: {} floats of irradiance for {} vertices x {} coefficients", in.size(),
-                            V, nc));
+  const std::size_t V = positions.size();
+  if (areas.size() != V) throw Error(fmt::format("subsurface scatter: {} areas for {} points", areas.size(), V));
+  const int in_channels = nc >= 1 && in.size() == V * 3 * std::size_t(nc) ? 3 : 1;
+  if (nc < 1 || in.size() != V * std::size_t(in_channels) * std::size_t(nc))
+    throw Error(fmt::format("subsurface scatter: {} floats of irradiance for {} points x {} coefficients (1 or 3 "
+                            "channels)",
+                            in.size(), V, nc));
+  for (const std::uint32_t r : o.receivers)
+    if (r >= V) throw Error(fmt::format("subsurface scatter: receiver {} of {} points", r, V));
   std::vector<glm::dvec3> pos(V);
-  for (std::size_t i = 0; i < V; ++i) pos[i] = glm::dvec3(mesh.positions[i]);
-  const std::vector<double> area = vertex_areas(mesh);
-  const Octree tree = build_octree(pos, area, in, nc);
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (std::size_t i = 0; i < V; ++i) {
+    pos[i] = glm::dvec3(positions[i]);
+    lo = glm::min(lo, pos[i]);
+    hi = glm::max(hi, pos[i]);
+  }
+  const Sources src = mesh ? hat_sources(*mesh, areas) : disc_sources(pos, areas);
+  const std::size_t in_stride = std::size_t(in_channels) * std::size_t(nc);
+  const Octree tree = build_octree(src.centre, areas, src.m2, in, int(in_stride));
   const std::array<Dipole, 3> dipole = {Dipole(material.sigma_a.x, material.sigma_s.x, material.eta),
                                         Dipole(material.sigma_a.y, material.sigma_s.y, material.eta),
                                         Dipole(material.sigma_a.z, material.sigma_s.z, material.eta)};
   const double S = o.length_scale, S2 = S * S, eps = o.max_solid_angle;
-  for (const std::uint32_t r : o.receivers)
-    if (r >= V) throw Error(fmt::format("subsurface scatter: receiver {} of a mesh of {} vertices", r, V));
+  const ProfileTable table(dipole, V ? 1.001 * S * glm::length(hi - lo) : 1.0);
   const std::size_t stride = 3 * std::size_t(nc), R = o.receivers.empty() ? V : o.receivers.size();
   std::vector<float> out(R * stride, 0.0f);
+  const double reach = profile_reach(dipole, tree.nodes.empty() ? 0.0 : S2 * tree.nodes[0].area) / S;  // mesh units
+  const Incidence inc = mesh ? incidence(*mesh) : Incidence{};
+  // The sources in the tree's order (a leaf's points and rows side by side),
+  // their weights' constant parts in mm.
+  struct Leaf {
+    glm::dvec3 centre;
+    double area, m2, rho, near2;  // S^2 A, S^2 m2, the disc radius (mm), (3 rho / S)^2 in mesh units
+  };
+  std::vector<Leaf> leaf(tree.order.size());
+  std::vector<float> rows(tree.order.size() * in_stride);
+  for (std::size_t i = 0; i < tree.order.size(); ++i) {
+    const std::uint32_t p = tree.order[i];
+    const double area = S2 * areas[p], rho = std::sqrt(area / std::numbers::pi);
+    leaf[i] = {src.centre[p], area, S2 * src.m2[p], rho, (kNearDiscs * rho / S) * (kNearDiscs * rho / S)};
+    std::copy_n(in.data() + std::size_t(p) * in_stride, in_stride, rows.data() + i * in_stride);
+  }
+  // Receivers in the tree's order too (neighbours walk the same nodes),
+  // then the points without area.
+  std::vector<std::uint32_t> receivers = o.receivers;
+  if (receivers.empty()) {
+    receivers = tree.order;
+    for (std::uint32_t i = 0; i < V; ++i)
+      if (!(areas[i] > 0)) receivers.push_back(i);
+  }
+  std::vector<std::size_t> out_row(receivers.size());
+  for (std::size_t r = 0; r < receivers.size(); ++r) out_row[r] = o.receivers.empty() ? receivers[r] : r;
+  detail::ProgressTicker ticker(progress, R, phase);
+  ticker.start();
   std::unique_ptr<tbb::global_control> limit;
   if (o.threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o.threads);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, R, 64), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<double> acc(stride);
-    std::vector<std::uint32_t> stack;
-    for (std::size_t row = range.begin(); row < range.end(); ++row) {
-      const std::size_t v = o.receivers.empty() ? row : o.receivers[row];
+    std::vector<std::uint32_t> stack, near;
+    std::vector<glm::dvec3> hats;
+    for (std::size_t r = range.begin(); r < range.end(); ++r) {
+      const std::size_t v = receivers[r], row = out_row[r];
       std::fill(acc.begin(), acc.end(), 0.0);
-      // Adds weight x R_d(S d) per channel times `rows` (nc values).
-      const auto add = [&](double d, double weight, const auto* rows) {
+      // Adds w[c] (mm^2 times R_d, per channel) times `rows` (in_stride values).
+      const auto add = [&](const glm::dvec3& w, const auto* rows) {
         for (int c = 0; c < 3; ++c) {
-          const double r = weight * dipole[std::size_t(c)].rd(S * d);
-          for (int k = 0; k < nc; ++k) acc[std::size_t(c) * std::size_t(nc) + std::size_t(k)] += r * double(rows[k]);
+          const auto* r = rows + (in_channels == 3 ? std::size_t(c) * std::size_t(nc) : 0);
+          double* a = acc.data() + std::size_t(c) * std::size_t(nc);
+          for (int k = 0; k < nc; ++k) a[k] += w[c] * double(r[k]);
+        }
+      };
+      // The weight S^2 A_i R_d of the source at tree.order[i]
+      // (docs/SUBSURFACE.md "Near sources").
+      const auto point_weight = [&](std::uint32_t i) {
+        const Leaf& l = leaf[i];
+        const double d2 = glm::dot(pos[v] - l.centre, pos[v] - l.centre), d = S * std::sqrt(d2);
+        if (mesh) {  // the near ones' triangles are integrated below
+          if (d2 < l.near2) near.push_back(tree.order[i]);
+          return l.area * table.point_mean(d, l.m2);
+        }
+        if (d <= 1e-6 * l.rho)  // on it: the disc's closed form
+          return glm::dvec3(dipole[0].disc(l.rho), dipole[1].disc(l.rho), dipole[2].disc(l.rho));
+        if (d2 < l.near2) return l.area * table.disc_mean(d, l.rho);
+        return l.area * table.point_mean(d, l.m2);
+      };
+      // Each near vertex's weight integrated over its triangles
+      // (triangle_weights: its hat b_j), in place of its point value. Whole
+      // hats only: a vertex whose triangles were integrated in part would
+      // lose the symmetry that makes its point value second-order.
+      const auto near_field = [&](std::size_t v, std::vector<std::uint32_t>& verts) {
+        std::sort(verts.begin(), verts.end());
+        std::vector<std::uint32_t>& tris = stack;
+        tris.clear();
+        for (const std::uint32_t p : verts)
+          tris.insert(tris.end(), inc.triangles.begin() + inc.offsets[p], inc.triangles.begin() + inc.offsets[p + 1]);
+        std::sort(tris.begin(), tris.end());
+        tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
+        hats.assign(verts.size(), glm::dvec3(0.0));
+        std::array<glm::dvec3, 3> W;
+        for (const std::uint32_t t : tris) {
+          const glm::uvec3 tri = mesh->triangles[t];
+          triangle_weights(table, S * pos[v], {S * pos[tri.x], S * pos[tri.y], S * pos[tri.z]}, W);
+          for (int c = 0; c < 3; ++c) {
+            const auto at = std::lower_bound(verts.begin(), verts.end(), tri[c]);
+            if (at != verts.end() && *at == tri[c]) hats[std::size_t(at - verts.begin())] += W[std::size_t(c)];
+          }
+        }
+        for (std::size_t i = 0; i < verts.size(); ++i) {
+          const std::uint32_t j = verts[i];
+          const double d = glm::length(pos[v] - src.centre[j]) * S;
+          add(hats[i] - S2 * areas[j] * table.point_mean(d, S2 * src.m2[j]), in.data() + std::size_t(j) * in_stride);
         }
       };
       stack.assign(1, 0);
+      near.clear();
       while (!tree.order.empty() && !stack.empty()) {
         const Node& node = tree.nodes[stack.back()];
         const std::size_t n = stack.back();
         stack.pop_back();
         if (node.children == 0) {
-          for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
-            const std::uint32_t p = tree.order[i];
-            add(glm::length(pos[v] - pos[p]), S2 * area[p], in.data() + std::size_t(p) * std::size_t(nc));
-          }
+          for (std::uint32_t i = node.first; i < node.first + node.count; ++i)
+            add(point_weight(i), rows.data() + std::size_t(i) * in_stride);
           continue;
         }
         const double d2 = glm::dot(pos[v] - node.centre, pos[v] - node.centre);
+        if (node.radius + reach < std::sqrt(d2)) continue;  // beyond the profile's reach
         if (node.area < eps * d2) {  // small seen from here: the cluster whole
-          add(std::sqrt(d2), S2, tree.sums.data() + n * std::size_t(nc));
+          add(S2 * table.point_mean(S * std::sqrt(d2), S2 * node.m2), tree.sums.data() + n * in_stride);
           continue;
         }
         for (std::uint32_t c = node.child; c < node.child + node.children; ++c) stack.push_back(c);
       }
+      if (mesh) near_field(v, near);
       for (std::size_t q = 0; q < stride; ++q) out[row * stride + q] = float(acc[q] / std::numbers::pi);
     }
+    ticker.tick(range.size());
   });
+  ticker.finish();
   return out;
 }
 
+}  // namespace
+
+std::vector<float> subsurface_scatter(std::span<const glm::vec3> positions, std::span<const double> areas,
+                                      const SubsurfaceMaterial& material, std::span<const float> in, int nc,
+                                      const SubsurfaceScatterOptions& o) {
+  return scatter_impl(positions, areas, nullptr, material, in, nc, o);
+}
+
+std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial& material, std::span<const float> in,
+                                      int nc, const SubsurfaceScatterOptions& o) {
+  const std::vector<double> area = vertex_areas(mesh);
+  return scatter_impl(mesh.positions, area, &mesh, material, in, nc, o);
+}
+
 Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
-                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter) {
+                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter,
+                                     const Progress& progress) {
   check_subsurface_material(material, "subsurface material");
   if (!scatter.receivers.empty())
     throw Error("compute_subsurface_transfer: every vertex receives (SubsurfaceScatterOptions::receivers must be empty)");
+  if (options.mode == TransferMode::Unshadowed)
+    throw Error("a translucent material's transfer is shadowed or interreflected: the light entering a vertex is "
+                "traced (unshadowed light would pass through the object's other side)");
+  if (options.glossy) throw Error("a translucent material's exit radiance is view-independent: no glossy matrices");
+  if (options.light_bounce) throw Error("--light-bounce: the lights' bounce is diffuse; a translucent transfer keeps no operator");
+  // Checked before any ray (subsurface_scatter checks them again).
+  if (!(std::isfinite(scatter.length_scale) && scatter.length_scale > 0))
+    throw Error(fmt::format("the length scale must be > 0 (mm per mesh unit), got {}", scatter.length_scale));
   TransferOptions o = options;
-  o.mode = TransferMode::Shadowed;
-  o.bounces = 0;
+  if (o.mode == TransferMode::Shadowed) o.bounces = 0;
   o.albedo = glm::vec3(1.0f);
   o.vertex_colors = false;
   o.transmission_eta = material.eta;
-  Transfer t = compute_transfer(mesh, o);
-  PRT_CHECK(t.channels == 1 && t.analytic_vertices() == 0);
-  const int nc = t.bands * t.bands;
-  std::vector<float> in(t.vertices * std::size_t(nc));
-  for (std::size_t v = 0; v < t.vertices; ++v)
-    for (int k = 0; k < nc; ++k)  // pi S: the transmitted irradiance's rows
-      in[v * std::size_t(nc) + std::size_t(k)] = float(std::numbers::pi * t.coeffs[t.row(v) * std::size_t(nc) + std::size_t(k)]);
-  t.coeffs = subsurface_scatter(mesh, material, in, nc, scatter);
-  t.channels = 3;
-  t.slots.clear();
+  const std::vector<double> area = vertex_areas(mesh);
+  const int nc = o.bands * o.bands;
+  int pass = 0;
+  o.between_bounces = [&](std::vector<float>& rows) {  // E_t / pi -> L_o, the surface integral
+    for (float& x : rows) x = float(std::numbers::pi * x);
+    const std::string phase = pass++ == 0 ? "subsurface" : fmt::format("subsurface, bounce {}", pass - 1);
+    rows = scatter_impl(mesh.positions, area, &mesh, material, rows, nc, scatter, progress, phase.c_str());
+  };
+  Transfer t = compute_transfer(mesh, o, progress);
+  if (t.vertices == 0) return t;  // another rank's
+  PRT_CHECK(t.channels == 3 && t.analytic_vertices() == 0);
+  t.subsurface = SubsurfaceRecord{material, scatter.length_scale};
   return t;
 }
 

@@ -99,10 +99,15 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.transmission_eta != 0) {
     if (!(o.transmission_eta >= 1 && o.transmission_eta <= 3))
       throw Error(fmt::format("the relative index of refraction must be 1 to 3, got {}", o.transmission_eta));
-    if (o.mode != TransferMode::Shadowed || o.glossy || o.light_bounce)
-      throw Error("a transmitted-irradiance transfer (subsurface) is shadowed only, not glossy, with no light-bounce "
-                  "operator");
+    if (o.mode == TransferMode::Unshadowed || o.glossy || o.light_bounce)
+      throw Error("a transmitted-irradiance transfer (subsurface) is shadowed or interreflected, not glossy, with no "
+                  "light-bounce operator");
+    if (o.mode == TransferMode::Interreflected && !o.between_bounces)
+      throw Error("an interreflected transmitted-irradiance transfer bounces exit radiance: it needs between_bounces "
+                  "(compute_subsurface_transfer)");
   }
+  if (o.between_bounces && !(o.transmission_eta > 0))
+    throw Error("between_bounces is a translucent material's surface integral: it needs transmission_eta");
   detail::check_common_options(o.albedo, o.vertex_colors, o.threads, o.offset, mesh);
 }
 
@@ -311,7 +316,7 @@ TransferMemory transfer_memory(const Mesh& mesh, const TransferOptions& o) {
   const std::size_t V = mesh.vertex_count();
   TransferOptions unlimited = o;
   unlimited.memory_limit = 0;
-  const bool grey = !o.vertex_colors && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z;
+  const bool grey = !o.vertex_colors && o.albedo.x == o.albedo.y && o.albedo.y == o.albedo.z && !o.between_bounces;
   return plan_memory(mesh, V, unlimited,
                      range_begin(V, comm.rank() + 1, comm.size()) - range_begin(V, comm.rank(), comm.size()), false, grey)
       .memory;
@@ -343,7 +348,8 @@ struct Run {
       : mesh(m), src(s), o(opts), progress(p), comm(opts.comm ? *opts.comm : single_process()), emitters(emitting),
         emitter_channels(emitting_channels), n(opts.bands), nc(sh::num_coeffs(opts.bands)), V(s.count),
         r0(range_begin(V, comm.rank(), comm.size())), own(range_begin(V, comm.rank() + 1, comm.size()) - r0),
-        grey(!s.albedo && !opts.vertex_colors && opts.albedo.x == opts.albedo.y && opts.albedo.y == opts.albedo.z),
+        grey(!s.albedo && !opts.vertex_colors && opts.albedo.x == opts.albedo.y && opts.albedo.y == opts.albedo.z &&
+             !opts.between_bounces),
         trace(opts.mode != TransferMode::Unshadowed),
         gather(opts.mode == TransferMode::Interreflected && opts.bounces > 0 && !emitting), glossy(opts.glossy),
         glossy_ir(opts.glossy && opts.mode == TransferMode::Interreflected),
@@ -769,6 +775,7 @@ void gather_bounces(const Run& run, Transfer& t, const FirstPass& fp) {
     }
     bounce.finish();
     all_gather(next, V, run.comm);
+    if (o.between_bounces) o.between_bounces(next);
     double energy = 0.0;
     for (std::size_t i = 0; i < next.size(); ++i) {
       t.coeffs[i] += next[i];
@@ -1009,6 +1016,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   if (src.analytic_out) *src.analytic_out = fp.analytic;
   if (emitters) gather_to_root(fp.bounce_light, V, comm);
 
+  if (o.between_bounces && (run.gather || comm.rank() == 0)) o.between_bounces(t.coeffs);
   if (emitters) {  // points: the direct part, plus the vertices' light gathered above
     t.direct = t.coeffs;
     for (std::size_t i = 0; i < t.coeffs.size(); ++i) t.coeffs[i] += fp.bounce_light[i];
@@ -1047,6 +1055,8 @@ Transfer compute_point_transfer(const Mesh& mesh, const SamplePoints& points, co
                                 const Progress& progress) {
   check_options(o, mesh);
   if (o.glossy) throw Error("glossy transfer is computed at the mesh's vertices only (compute_transfer)");
+  if (o.between_bounces)
+    throw Error("a translucent material's surface integral runs over the mesh's vertices only (compute_transfer)");
   const std::size_t P = points.positions.size();
   if (points.normals.size() != P || (!points.albedo.empty() && points.albedo.size() != P))
     throw Error(fmt::format("sample points: {} positions, {} normals and {} albedos (expected as many normals, and as "

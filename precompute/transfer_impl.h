@@ -236,7 +236,7 @@ glm::vec3 lift_off_surfaces(const RayScene& rays, const Mesh& mesh, double lift,
 
 // Throws prt::Error for options.light_bounce: adaptive sample points
 // interpolate some points' transfer, which then have no gather row.
-void refuse_adaptive_light_bounce(const TransferOptions& options);
+void refuse_adaptive_light_bounce(const TransferOptions& options);  // and a translucent surface integral
 // The mean length of a mesh's edges (each triangle's three; 0 for none): the
 // spacing of its vertices, a vertex transfer's default patch size.
 double mean_edge_length(const Mesh& mesh);

@@ -20,6 +20,7 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <functional>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -108,11 +109,20 @@ struct TransferOptions {
   // dielectric of this relative index (prt/subsurface.h's
   // fresnel_transmittance; 1 to 3), S_k = (1/pi) int V T(eta, cos) cos+ Y_k:
   // the irradiance transmitted into a translucent surface, over pi
-  // (docs/SUBSURFACE.md). Shadowed only, neither glossy nor a light-bounce
-  // operator; every vertex's row is stored (none is analytic), and its AO
-  // is the transmitted irradiance's (1 - the occluded part of K_0). 0: the
-  // cosine alone.
+  // (docs/SUBSURFACE.md). Shadowed, or interreflected with between_bounces;
+  // neither glossy nor a light-bounce operator; every vertex's row is
+  // stored (none is analytic), and its AO is the transmitted irradiance's
+  // (1 - the occluded part of K_0). 0: the cosine alone.
   double transmission_eta = 0;
+  // With transmission_eta, at the mesh's vertices (compute_transfer): the
+  // surface integral of a translucent material (compute_subsurface_transfer),
+  // applied in place to the direct rows and, interreflected, to each
+  // bounce's rows before they are summed and gathered again. The rows are
+  // every vertex's, three channels (the transfer is RGB when this is set),
+  // each E_t / pi of its light; it leaves each the exit radiance's row.
+  // Under mpirun every rank calls it on the same rows (rank 0 alone when
+  // shadowed).
+  std::function<void(std::vector<float>& rows)> between_bounces;
   // When set, compute_transfer fills it with its plan and what its records
   // took (TransferMemory below).
   struct TransferMemory* memory_report = nullptr;

@@ -25,31 +25,49 @@ struct SubsurfaceScatterOptions {
   // taken whole, at its area-weighted centre, where its area over its
   // squared distance to the receiver is below this (a solid angle, in
   // steradians); 0 sums every pair (the brute-force reference, O(N^2)).
-  double max_solid_angle = 0.05;
+  double max_solid_angle = 0.1;
   int threads = 0;  // 0: every core
   // The receivers: empty, every vertex; else these vertices, the output's
   // rows in their order.
   std::vector<std::uint32_t> receivers;
 };
 
-// For every receiving vertex o, per channel c of the material and
+// For every receiving point o, per channel c of the material and
 // coefficient k < nc:
-//   out[o][c][k] = (1 / pi) sum_i R_d,c(S |x_o - x_i|) S^2 A_i in[i][k],
-// S the length scale, A_i vertex_areas' (so a row of transmitted irradiance
-// in `in`, nc floats a vertex, becomes a row of exit radiance). Sums in
-// double; rows of 3 x nc floats, [vertex][channel][k]. Throws prt::Error for
-// a bad material, length scale or row count.
+//   out[o][c][k] = (1 / pi) sum_i S^2 A_i Rbar_c(o, i) in[i][c][k],
+// S the length scale, A_i the point's area (mesh units squared) and Rbar the
+// mean of the profile R_d over a disc of that area about point i
+// (docs/SUBSURFACE.md "Near sources": its closed form on the point itself,
+// a product rule within three radii, R_d + rho^2 / 8 Laplacian farther), so
+// that a row of transmitted irradiance becomes a row of exit radiance. `in`
+// holds nc floats a point (one row for the three channels) or 3 nc
+// ([point][channel][k], each channel its own). Sums in double; rows of
+// 3 x nc floats, [point][channel][k]. Throws prt::Error for a bad material,
+// length scale, area or row count.
+std::vector<float> subsurface_scatter(std::span<const glm::vec3> positions, std::span<const double> areas,
+                                      const SubsurfaceMaterial& material, std::span<const float> in, int nc,
+                                      const SubsurfaceScatterOptions& options = {});
+// The mesh's vertices, with vertex_areas.
 std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial& material,
                                       std::span<const float> in, int nc, const SubsurfaceScatterOptions& options = {});
 
 // A translucent mesh's transfer (docs/SUBSURFACE.md): the transmitted
-// irradiance's (compute_transfer with transmission_eta the material's eta,
-// shadowed; `options`' mode, albedo and vertex colours are not used: the
-// material's reflectance is its profile), times pi, summed over the surface
-// by subsurface_scatter into RGB rows, so that a row dotted with lighting L
-// is the exit radiance L_o. Every vertex is stored; AO and bent normals are
-// the transmitted irradiance's.
+// irradiance's transfer (compute_transfer with transmission_eta the
+// material's eta: each ray weighed by T(eta, cos) cos), its rows times pi
+// summed over the surface by subsurface_scatter, so that a row dotted with
+// lighting L is the exit radiance L_o. `options`' mode is shadowed or
+// interreflected: then the exit radiance of the mesh's other surfaces lights
+// each vertex too, bounce by bounce (each bounce's gathered irradiance
+// summed over the surface again; `options.bounces`, bounce_tolerance).
+// Its albedo and vertex colours are not used (the material's reflectance
+// is its profile); neither glossy nor light_bounce. The result: RGB rows,
+// every vertex stored, `subsurface` recording the material and length
+// scale; AO and bent normals are the transmitted irradiance's. Under
+// mpirun, rank 0's result (others return an empty transfer). Throws
+// prt::Error for a bad material, length scale or option; Error("cancelled")
+// when `progress` says stop.
 Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
-                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter = {});
+                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter = {},
+                                     const Progress& progress = {});
 
 }  // namespace prt
