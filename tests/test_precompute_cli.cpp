@@ -13,6 +13,8 @@
 #include <prt/envmap.h>
 #include <prt/mesh.h>
 #include <prt/projection.h>
+#include <prt/subsurface_reference.h>
+#include <prt/subsurface_scatter.h>
 #include <prt/transfer.h>
 #include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
@@ -341,6 +343,128 @@ TEST(PrecomputeCli, GlossyOptionsAreChecked) {
                                    "0,2,1", "--samples", "16", "-q"});
   ASSERT_EQ(ref.code, 0) << describe_run(ref);
   EXPECT_EQ(read_vertex_csv(dir.file("ref.csv")).size(), load_mesh(mesh).vertex_count());
+}
+
+// prt reference --material subsurface: the library's numbers in the
+// reference's CSV (docs/SUBSURFACE.md "The reference"), and what does not
+// apply to a translucent material refused before any work.
+TEST(PrecomputeCli, SubsurfaceReferenceThroughTheCommandLine) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(4));
+  const std::string mesh = dir.file("fb.off"), env = write_constant_map(dir, 1.0f), out = dir.file("s.csv");
+  const Result r = run_prt(dir, {"reference", mesh, env, "-o", out, "--material", "subsurface", "--sss", "marble",
+                                 "--length-scale", "10", "--samples", "4", "--mode", "interreflected", "--bounces",
+                                 "1", "-t", "2"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("marble: sigma_a 0.0021"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("4 iterations/vertex"), std::string::npos) << r.err;
+  std::vector<glm::vec3> se;
+  const std::vector<glm::vec3> got = read_vertex_csv(out, &se);
+  ReferenceOptions o;
+  o.samples = 4;
+  o.mode = TransferMode::Interreflected;
+  o.bounces = 1;
+  const ReferenceResult want =
+      render_subsurface_reference(load_mesh(mesh), load_envmap(env), o, SubsurfaceRecord{*subsurface_preset("marble"), 10.0});
+  ASSERT_EQ(got.size(), want.radiance.size());
+  ASSERT_EQ(se.size(), want.std_error.size());
+  for (std::size_t v = 0; v < got.size(); ++v)
+    for (int c = 0; c < 3; ++c) {
+      // The CSV's text holds a float to 1e-6 relative (or better).
+      EXPECT_NEAR(got[v][c], want.radiance[v][c], 1e-6 * std::abs(want.radiance[v][c]) + 1e-12) << v;
+      EXPECT_NEAR(se[v][c], want.std_error[v][c], 1e-6 * std::abs(want.std_error[v][c]) + 1e-12) << v;
+    }
+  const std::string x = dir.file("x.csv");
+  const std::vector<std::string> sss = {"--material", "subsurface", "--sss", "skin1"};
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {"reference", mesh, env, "-o", x};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  auto plus = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = sss;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return with(args);
+  };
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {plus({"--mode", "unshadowed"}), "--mode unshadowed does not apply to --material subsurface"},
+      {plus({"--albedo", "0.5,0.5,0.5"}), "--albedo does not apply to --material subsurface"},
+      {plus({"--vertex-colors"}), "--vertex-colors does not apply"},
+      {plus({"--lightmap", "16x16"}), "--lightmap does not apply"},
+      {plus({"--sun", "auto"}), "--lights and --sun do not apply"},
+      {plus({"--eye", "0,1,0"}), "--material glossy only"},
+      {with({"--sss", "marble"}), "--sss needs --material subsurface"},
+      {with({"--material", "subsurface"}), "needs --sss NAME"},
+      {with({"--material", "subsurface", "--sss", "jade"}), "--sss: expected one of apple, chicken1"},
+  };
+  for (const auto& [args, words] : cases) {
+    const Result q = run_prt(dir, args);
+    EXPECT_EQ(q.code, 2) << describe_run(q);
+    EXPECT_NE(q.err.find(words), std::string::npos) << describe_run(q);
+    EXPECT_FALSE(std::filesystem::exists(x));
+  }
+}
+
+// prt precompute --material subsurface: the library's transfer in the file,
+// with the material on prt info's line, relit by prt relight as any RGB
+// transfer; what does not apply refused by name before any work.
+TEST(PrecomputeCli, SubsurfaceTransferThroughTheCommandLine) {
+  TempDir dir;
+  test::write_off(dir.file("fb.off"), test::floor_and_ball(6));
+  const std::string mesh = dir.file("fb.off"), env = write_constant_map(dir, 1.0f), out = dir.file("s.prt");
+  const Result r = run_prt(dir, {"precompute", mesh, "-o", out, "--material", "subsurface", "--sss", "skin1",
+                                 "--eta", "1.4", "--length-scale", "10", "--samples", "64", "--bands", "3", "--mode",
+                                 "interreflected", "-t", "2"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("material: subsurface, skin1 (modified): sigma_a 0.032"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("wrote " + out + ": subsurface (interreflected), 3 bands, 3 channels"), std::string::npos)
+      << r.err;
+  const Transfer t = read_transfer(out);
+  SubsurfaceMaterial m = *subsurface_preset("skin1");
+  m.name = "skin1 (modified)";
+  m.eta = 1.4;
+  ASSERT_TRUE(t.subsurface.has_value());
+  EXPECT_EQ(*t.subsurface, (SubsurfaceRecord{m, 10.0}));
+  TransferOptions o;
+  o.samples = 64;
+  o.bands = 3;
+  o.mode = TransferMode::Interreflected;
+  SubsurfaceScatterOptions so;
+  so.length_scale = 10.0;
+  const Transfer want = compute_subsurface_transfer(load_mesh(mesh), o, m, so);
+  EXPECT_EQ(t.coeffs, want.coeffs);  // the same bits: one computation
+  const Result info = run_prt(dir, {"info", out});
+  EXPECT_NE(info.out.find("subsurface, skin1 (modified): sigma_a 0.032, 0.17, 0.48 /mm"), std::string::npos)
+      << info.out;
+  const Result lit = run_prt(dir, {"relight", mesh, out, env, "-o", dir.file("s.csv"), "-q"});
+  ASSERT_EQ(lit.code, 0) << describe_run(lit);
+  EXPECT_EQ(read_vertex_csv(dir.file("s.csv")).size(), load_mesh(mesh).vertex_count());
+  const std::string x = dir.file("x.prt");
+  auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = {"precompute", mesh, "-o", x, "--material", "subsurface", "--sss", "marble"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {with({"--mode", "unshadowed"}), "--material subsurface is shadowed or interreflected"},
+      {with({"--basis", "wavelet"}), "--basis wavelet does not apply to --material subsurface"},
+      {with({"--albedo", "0.5,0.5,0.5"}), "--albedo does not apply to --material subsurface"},
+      {with({"--vertex-colors"}), "--vertex-colors does not apply"},
+      {with({"--lightmap", "16x16"}), "--lightmap does not apply"},
+      {with({"--probes", "2x2x2"}), "--probes does not apply"},
+      {with({"--adaptive"}), "--adaptive does not apply"},
+      {with({"--target-error", "0.1", "--env", env}), "--target-error does not apply"},
+      {{"precompute", mesh, "-o", x, "--sigma-a", "1,1,1"}, "--sigma-a needs --material subsurface"},
+      {{"precompute", mesh, "-o", x, "--material", "subsurface", "--sigma-a", "1,1,1"}, "both --sigma-a and --sigma-s"},
+      {{"precompute", mesh, "-o", x, "--material", "subsurface", "--sigma-a", "0,0,0", "--sigma-s", "0,1,1"},
+       "sigma_a + sigma_s' (red) must be > 0"},
+  };
+  for (const auto& [args, words] : cases) {
+    const Result q = run_prt(dir, args);
+    EXPECT_EQ(q.code, 2) << describe_run(q);
+    EXPECT_NE(q.err.find(words), std::string::npos) << describe_run(q);
+    EXPECT_FALSE(std::filesystem::exists(x));
+  }
 }
 
 // The band limit says why it is 16 (docs/CONVENTIONS.md, "Band counts"),

@@ -1,12 +1,14 @@
 // prt precompute: mesh -> per-vertex SH or wavelet transfer file.
 #include "commands.h"
 #include "progress_bar.h"
+#include "subsurface_options.h"
 
 #include <prt/lightmap.h>
 #include <prt/envmap.h>
 #include <prt/ply.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
+#include <prt/subsurface_scatter.h>
 #include <prt/mpi.h>
 #include <prt/io.h>
 #include <prt/mesh.h>
@@ -91,6 +93,7 @@ struct PrecomputeArgs {
   std::string subdivide;  // --subdivide [TOL]: "" not given or no value (TOL = --target-error / 2)
   std::string subdivided_mesh;
   const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
+  SubsurfaceArgs sss;  // --material subsurface's material and length scale
 };
 
 // --compress KxN into o; "" or what is wrong with `text`.
@@ -872,9 +875,111 @@ int run_sh_vertices(PrecomputeArgs& a) {
   return 0;
 }
 
+// --material subsurface (docs/SUBSURFACE.md): what does not apply, refused
+// by name with the reason.
+void check_subsurface(const PrecomputeArgs& a) {
+  const auto no = [](const std::string& what, const std::string& why) {
+    throw UsageError(what + " does not apply to --material subsurface: " + why);
+  };
+  if (a.basis != "sh")
+    no("--basis " + a.basis, "its exit radiance is view-independent and smooth (the dipole spreads light over "
+                             "millimetres), so SH transfer vectors hold it; leave --basis out");
+  if (a.mode == "unshadowed")
+    throw UsageError("--material subsurface is shadowed or interreflected: the light entering each vertex is traced "
+                     "(unshadowed light would pass through the object's other side)");
+  if (a.lightmap_opt->count() > 0)
+    no("--lightmap", "the surface integral runs over a mesh's vertices, whose triangles integrate the light entering "
+                     "near each one; precompute per vertex");
+  if (a.probes_opt->count() > 0) no("--probes", "a probe volume records the light arriving at points in space");
+  for (const CLI::Option* o : {a.albedo_opt, a.vertex_colors_opt})
+    if (o->count() > 0)
+      no(o->get_name(), "the material's reflectance is its profile (--sss, or --sigma-a and --sigma-s), not an albedo");
+  if (a.light_bounce_opt->count() > 0) no("--light-bounce", "the lights' bounce operator is a diffuse surface's");
+  if (a.target_opt->count() > 0)
+    no("--target-error", "it chooses a diffuse transfer's settings against the diffuse reference; give --bands and "
+                         "--samples");
+  if (a.adaptive_opt->count() > 0) no("--adaptive", "the surface integral sums every vertex's traced light");
+  if (a.subdivide_opt->count() > 0)
+    no("--subdivide", "the surface integral runs once over the whole mesh; precompute a finer mesh instead");
+  check_not_input("--output", a.output, {{"MESH", a.mesh}});
+}
+
+// The scale of a translucent precompute, for its summary: the mesh's size in
+// millimetres and how far each channel's light goes (1 / sigma_tr).
+std::string subsurface_scale(const Mesh& mesh, const SubsurfaceRecord& r) {
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (const glm::vec3& p : mesh.positions) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+  const SubsurfaceMaterial& m = r.material;
+  std::string reach;
+  for (int c = 0; c < 3; ++c) {
+    const Dipole d(m.sigma_a[c], m.sigma_s[c], m.eta);
+    reach += fmt::format("{}{:.3g}", c ? ", " : "", d.sigma_tr > 0 ? 1.0 / d.sigma_tr : INFINITY);
+  }
+  return fmt::format("the mesh is {:.3g} mm across at {:g} mm a unit; its light goes {} mm (1 / sigma_tr: r, g, b)",
+                     mesh.positions.empty() ? 0.0 : glm::length(hi - lo) * r.length_scale, r.length_scale, reach);
+}
+
+// A translucent material's transfer at the mesh's vertices
+// (compute_subsurface_transfer), written as an RGB SH transfer.
+int run_subsurface(PrecomputeArgs& a, const SubsurfaceRecord& r) {
+  check_subsurface(a);
+  a.opt.mode = for_option("--mode", [&] { return parse_transfer_mode(a.mode); });
+  a.opt.comm = &job();
+  a.opt.memory_limit = memory_limit(a);
+  if (is_root()) for_path("--output", [&] { check_writable(a.output); });
+  CompressOptions copt;  // checked before the long work
+  copt.weight_bits = a.compress_weights;
+  if (!a.compress.empty()) parse_compress(a.compress, copt);
+  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
+    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  const bool quiet = a.quiet || !is_root();
+  if (!quiet)
+    fmt::print(stderr, "{}\nmaterial: subsurface, {}\n{}\n", describe(mesh), describe_subsurface(r),
+               subsurface_scale(mesh, r));
+  Outputs out("precompute");
+  SubsurfaceScatterOptions so;
+  so.length_scale = r.length_scale;
+  so.threads = a.opt.threads;
+  const std::optional<Transfer> t = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+    return compute_subsurface_transfer(mesh, a.opt, r.material, so, job_progress(progress));
+  }, a.opt.memory_limit);
+  if (!t) return 130;
+  if (!is_root()) return 0;
+  if (!a.compress.empty()) {
+    const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "precompute", [&](const Progress& p) {
+      copt.progress = p;
+      return compress_transfer(*t, copt);
+    });
+    if (!c) return 130;
+    out.write([&] { write_compressed_transfer(a.output, *c); });
+    if (const int rc = out.commit(); rc != 0) return rc;
+    if (!a.quiet) fmt::print(stderr, "wrote {} (compressed):\n{}", a.output, describe_transfer(*c));
+    return 0;
+  }
+  out.write([&] { write_transfer(a.output, *t); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!a.quiet) {
+    fmt::print(stderr, "wrote {}: subsurface ({}), {} bands, 3 channels, {} vertices, {} bytes/vertex transfer, {:.2f} s\n",
+               a.output, transfer_mode_name(t->mode), t->bands, t->vertices, 4 * t->stride(), secs);
+    if (t->mode == TransferMode::Interreflected && !t->bounce_energy.empty()) {
+      std::string energies;
+      for (double e : t->bounce_energy) energies += fmt::format(" {:.3g}", t->direct_energy > 0 ? e / t->direct_energy : 0.0);
+      fmt::print(stderr, "bounces: {}; energy of each relative to the direct part:{}\n", t->bounces, energies);
+    }
+  }
+  return 0;
+}
+
 int run_precompute(PrecomputeArgs& a) {
   check_subdivide(a);
   parse_adaptive(a);
+  if (const std::optional<SubsurfaceRecord> r = subsurface_record(a.sss, a.material)) return run_subsurface(a, *r);
   // No output over another (each is kept off the inputs by check_not_input below).
   check_distinct_outputs({{"--output", a.output},
                           {"--ao-map", a.ao_map},
@@ -963,8 +1068,10 @@ void add_basis_options(CLI::App* s, PrecomputeArgs& a) {
 void add_transfer_options(CLI::App* s, PrecomputeArgs& a) {
   a.material_opt =
       add_shared(s, SharedOption::Material, a.material,
-                 "diffuse (transfer vectors), or glossy: also the transfer matrices of glossy, view-dependent PRT "
-                 "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12)");
+                 "diffuse (transfer vectors), glossy: also the transfer matrices of glossy, view-dependent PRT "
+                 "(docs/GLOSSY.md; shadowed or interreflected, bands at most 12), or subsurface: a translucent "
+                 "material's RGB transfer (--sss or --sigma-a/--sigma-s, --eta, --length-scale; docs/SUBSURFACE.md)");
+  add_subsurface_options(s, a.sss);
   a.mode_opt = add_shared(s, SharedOption::Mode, a.mode, "Transfer: unshadowed (no rays), shadowed, or interreflected");
   a.bands_opt = add_shared(s, SharedOption::BandsComputed, a.opt.bands,
                            "SH bands n: prt render and prt view draw at most 16, and transfer accuracy is measured up "
@@ -1156,6 +1263,7 @@ Run add_precompute(CLI::App& app) {
       "(docs/PRECOMPUTE.md, \"Memory\" and \"Many processes\").\n"
       "Example: prt precompute models/scene.obj -o scene.prt --mode interreflected --bounces 2\n"
       "         prt precompute bunny.off -o bunny-glossy.prt --material glossy --bands 5\n"
+      "         prt precompute bunny.off -o bunny-marble.prt --material subsurface --sss marble --length-scale 400\n"
       "         prt precompute bunny.off -o bunny.prt --target-error 0.02 --env envmaps/forest.exr\n"
       "         prt precompute bunny.off -o bunny.wlt --basis wavelet --cube-res 32\n"
       "         prt precompute models/tube.obj -o tube-zh.prt --basis zh --lobes 4 --bands 6\n"

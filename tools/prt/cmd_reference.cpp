@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "light_options.h"
 #include "progress_bar.h"
+#include "subsurface_options.h"
 
 #include <prt/vertex_csv.h>
 #include <prt/compare.h>
@@ -15,6 +16,7 @@
 #include <prt/scene.h>
 #include <prt/mesh.h>
 #include <prt/reference.h>
+#include <prt/subsurface_reference.h>
 #include <prt/rotation.h>
 
 #include <fmt/core.h>
@@ -43,6 +45,8 @@ struct ReferenceArgs {
   const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr;
   std::string at;  // --at POINTS.csv: E(p, n)/pi at query points (what a probe volume gives there)
   LightArgs light;  // --lights, --sun (docs/LIGHTS.md)
+  SubsurfaceArgs sss;  // --material subsurface: --sss, --sigma-a, --sigma-s, --eta, --length-scale
+  const CLI::Option* samples_opt = nullptr;
 };
 
 // ENV (or `none`: black, the lights alone), a lat-long map; with --sun auto
@@ -159,6 +163,65 @@ int run_lightmap(ReferenceArgs& a) {
   return 0;
 }
 
+// --material subsurface: L_o of a translucent mesh by probe-sampling the
+// dipole (prt/subsurface_reference.h, docs/SUBSURFACE.md "The reference"),
+// per vertex, written as the diffuse reference's CSV.
+int run_subsurface(ReferenceArgs& a, const SubsurfaceRecord& record) {
+  const char* why = "does not apply to --material subsurface";
+  if (a.lightmap_opt->count() > 0) throw UsageError(fmt::format("--lightmap {} (the reference is per vertex)", why));
+  if (!a.at.empty()) throw UsageError(fmt::format("--at {} (the reference is at the mesh's vertices)", why));
+  if (a.uv_opt->count() > 0) throw UsageError(fmt::format("--uv {}", why));
+  if (a.opt.vertex_colors) throw UsageError(fmt::format("--vertex-colors {} (the material's profile is its colour)", why));
+  if (a.albedo_opt->count() > 0)
+    throw UsageError(fmt::format("--albedo {} (the material's coefficients give its reflectance)", why));
+  for (const CLI::Option* o : a.glossy_opts)
+    if (o->count() > 0) throw UsageError(o->get_name() + " applies to --material glossy only");
+  if (a.light.given())
+    throw UsageError("--lights and --sun do not apply to --material subsurface: the reference is lit by the map alone");
+  if (a.opt.mode == TransferMode::Unshadowed)
+    throw UsageError("--mode unshadowed does not apply to --material subsurface (a translucent transfer is shadowed "
+                     "or interreflected)");
+  if (a.opt.offset < 0 || !std::isfinite(a.opt.offset))
+    throw UsageError("--offset: must be a finite number >= 0 (0: 1e-4 x the bounding-box diagonal)");
+  if (a.samples_opt->count() == 0) a.opt.samples = kSubsurfaceReferenceSamples;
+  for_path("--output", [&] { check_writable(a.output); });
+
+  std::unique_ptr<tbb::global_control> limit;
+  if (a.threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
+  const auto t0 = std::chrono::steady_clock::now();
+  const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
+  if (!a.quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  EnvMap map = a.env == "none" ? make_latlong(2, 1, std::vector<float>(6, 0.0f), "none (no environment)")
+                               : load_envmap(a.env);
+  require_finite(map);
+  if (map.is_cube()) throw Error(a.env + ": prt reference needs a lat-long (2:1) map, not " + map.source_layout);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(map), describe_subsurface(record));
+
+  Outputs out("reference");
+  const std::optional<ReferenceResult> computed =
+      run_with_progress(a.quiet, "reference", [&](const Progress& progress) {
+        return render_subsurface_reference(mesh, map, a.opt, record, progress);
+      });
+  if (!computed) return 130;
+  const ReferenceResult& r = *computed;
+  out.write([&] { write_vertex_csv(a.output, r.radiance, &r.std_error); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet) {
+    double se2 = 0, b2 = 0;
+    for (std::size_t v = 0; v < r.radiance.size(); ++v) {
+      se2 += double(glm::dot(r.std_error[v], r.std_error[v]));
+      b2 += double(glm::dot(r.radiance[v], r.radiance[v]));
+    }
+    fmt::print(stderr, "wrote {}: {} vertices, subsurface, {}{}, {} iterations/vertex, {:.2f} s\n", a.output,
+               r.radiance.size(), transfer_mode_name(a.opt.mode),
+               a.opt.mode == TransferMode::Interreflected ? fmt::format(" ({} bounces)", a.opt.bounces) : "",
+               a.opt.samples, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    fmt::print(stderr, "standard error: {:.3g} relative RMS\n", b2 > 0 ? std::sqrt(se2 / b2) : 0.0);
+  }
+  return 0;
+}
+
 int run_reference(ReferenceArgs& a) {
   // Every option and the output path before any loading (each value alone
   // was checked while parsing).
@@ -172,6 +235,7 @@ int run_reference(ReferenceArgs& a) {
     parse_triple(a.rotate, "--rotate", e);
     a.opt.rotation = sh::rotation_from_euler(e[0], e[1], e[2]);
   }
+  if (const std::optional<SubsurfaceRecord> sss = subsurface_record(a.sss, a.material)) return run_subsurface(a, *sss);
   if (a.lightmap_opt->count() > 0) {
     if (!a.at.empty()) throw UsageError("--at and --lightmap are two runs (query points, a lightmap's texels)");
     a.opt.glossy = a.material == "glossy";
@@ -259,7 +323,16 @@ Run add_reference(CLI::App& app) {
       "Example: prt reference cow.off forest.exr --samples 1024 -o cow_ref.csv\n"
       "         prt reference models/room.gltf forest.exr --lightmap 128x128 --mode interreflected -o ref.exr\n"
       "         prt reference models/room.gltf forest.exr --at points.csv -o ref.csv\n"
-      "         prt reference models/room.gltf none --lights lights.json --lightmap 64x64 -o lights.exr");
+      "         prt reference models/room.gltf none --lights lights.json --lightmap 64x64 -o lights.exr\n"
+      "--material subsurface (--sss NAME, or --sigma-a r,g,b --sigma-s r,g,b [--eta E]; --length-scale mm a unit):\n"
+      "the exit radiance L_o of a translucent mesh (the dipole, docs/SUBSURFACE.md), the ground truth of\n"
+      "prt precompute --material subsurface: each probe samples the profile by a ray through the mesh\n"
+      "along the normal or a tangent and sums the dipole over every surface point it crosses, each with its\n"
+      "transmitted irradiance (map and cosine sampling, Fresnel transmittance); --samples iterations of 4\n"
+      "probes a channel (default 4096).\n"
+      "Shadowed, or interreflected (surfaces hit glow with their own L_o, --bounces hops). The map's light\n"
+      "alone: no --lights/--sun, --albedo, --vertex-colors, --lightmap, --at.\n"
+      "         prt reference cow.off forest.exr --material subsurface --sss marble --length-scale 100 -o sss.csv");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->check(path_value())->required();
   s->add_option("ENV,--env", a->env,
                 "Lat-long environment map (EXR, HDR, ...); none: no light from afar (the lights alone: --lights)")
@@ -278,21 +351,24 @@ Run add_reference(CLI::App& app) {
                 "what a white Lambertian surface there reflects (probe volumes, docs/PROBES.md); writes point,r,g,b,...")
       ->check(path_value());
   s->add_flag("--vertex-colors", a->opt.vertex_colors, "Use the mesh's vertex colours as albedo");
-  s->add_option("-s,--samples", a->opt.samples,
-                "Iterations per vertex, each one map-sampled and one cosine-sampled direction")
+  a->samples_opt = s->add_option("-s,--samples", a->opt.samples,
+                "Iterations per vertex, each one map-sampled and one cosine-sampled direction (--material "
+                "subsurface: iterations of 4 probes a channel, default 4096)")
       ->check(int_range(2, 1 << 24))
       ->capture_default_str();
   add_shared(s, SharedOption::Seed, a->opt.seed, "Random seed (any thread count)");
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   add_shared(s, SharedOption::Offset, a->opt.offset, "Ray origin offset along the normal");
   add_shared(s, SharedOption::Material, a->material,
-             "diffuse, or glossy: also the view-dependent Phong lobe (--eye, --gloss, --specular)");
+             "diffuse; glossy: also the view-dependent Phong lobe (--eye, --gloss, --specular); subsurface: a "
+             "translucent material (--sss or --sigma-a/--sigma-s, --eta, --length-scale)");
   a->glossy_opts.push_back(add_shared(s, SharedOption::Eye, a->eye, "Glossy: the eye point"));
   a->glossy_opts.push_back(add_shared(s, SharedOption::Gloss, a->opt.gloss, "Glossy: the lobe's exponent"));
   a->glossy_opts.push_back(add_shared(s, SharedOption::Specular, a->opt.specular, "Glossy: the lobe's strength"));
   s->add_flag("--weld", a->mesh_opt.weld, "Merge vertices that share a position (as prt precompute --weld)");
   add_shared(s, SharedOption::Threads, a->threads, "Worker threads");
   add_light_options(s, a->light);
+  add_subsurface_options(s, a->sss);
   s->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
   return [a] { return run_reference(*a); };
 }

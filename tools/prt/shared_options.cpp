@@ -1,5 +1,7 @@
 #include "shared_options.h"
 
+#include <prt/subsurface.h>
+
 #include <prt/lightmap.h>
 
 #include "look.h"
@@ -65,7 +67,17 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::Albedo, Spec{"--albedo", triple_value("r,g,b", kMinAlbedo, kMaxAlbedo, "energy conservation"),
                               "r,g,b, each 0 to 1"});
     t.emplace(S::Mode, Spec{"-m,--mode", parsed_by(parse_transfer_mode), "unshadowed, shadowed or interreflected"});
-    t.emplace(S::Material, Spec{"--material", one_of({"diffuse", "glossy"}), "diffuse or glossy"});
+    t.emplace(S::Material, Spec{"--material", one_of({"diffuse", "glossy", "subsurface"}), "diffuse, glossy or subsurface"});
+    t.emplace(S::Sss, Spec{"--sss", parsed_by([](const std::string& name) {
+                             if (!subsurface_preset(name))
+                               throw Error(fmt::format("expected one of {}, got {}", subsurface_preset_names(),
+                                                       show_text(name)));
+                           }),
+                           subsurface_preset_names()});
+    t.emplace(S::SigmaA, Spec{"--sigma-a", triple_value("r,g,b", 0.0), "r,g,b in 1/mm, each >= 0"});
+    t.emplace(S::SigmaS, Spec{"--sigma-s", triple_value("r,g,b", 0.0), "r,g,b in 1/mm, each >= 0"});
+    t.emplace(S::Eta, Spec{"--eta", number_range(1.0, 3.0), "1 to 3"});
+    t.emplace(S::LengthScale, Spec{"--length-scale", positive_number(), "mm per mesh unit, > 0"});
     t.emplace(S::Bounces, Spec{"--bounces", int_range(0, kMaxBounces), fmt::format("0 to {}", kMaxBounces)});
     t.emplace(S::Seed, Spec{"--seed", seed_value(), "0 to 2^64 - 1; same seed, same bits"});
     t.emplace(S::Threads, Spec{"-t,--threads", int_range(0, kMaxThreads), fmt::format("0 (all cores) to {}", kMaxThreads)});

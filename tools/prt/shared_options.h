@@ -72,6 +72,11 @@ enum class SharedOption {
   Animation,     // --animation N: which of a glTF's animations, 0 to 2^20
   Sun,           // --sun auto|none: the map's sun as a directional light (docs/LIGHTS.md)
   ShadowMapSize, // --shadow-map-size N: lights' shadow maps, 16 to 8192 texels a side
+  Sss,           // --sss NAME: a measured translucent material (prt/subsurface.h's presets)
+  SigmaA,        // --sigma-a r,g,b: absorption coefficients, 1/mm, each >= 0
+  SigmaS,        // --sigma-s r,g,b: reduced scattering coefficients, 1/mm, each >= 0
+  Eta,           // --eta: a relative index of refraction, 1 to 3
+  LengthScale,   // --length-scale: millimetres per mesh unit, > 0
 };
 
 // Adds option `which` to `command`, bound to `value`, with `help` (what the
