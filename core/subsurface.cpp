@@ -144,6 +144,16 @@ double Dipole::laplacian(double r) const {
   return alpha_prime / (4.0 * std::numbers::pi) * (pole(z_r) + pole(z_v));
 }
 
+double Dipole::slope(double r) const {
+  const double s = sigma_tr;  // h' r / d, the poles as in laplacian()
+  const auto pole = [&](double z) {
+    const double d = std::sqrt(r * r + z * z), sd = 1.0 + s * d;
+    const double h = z * sd * std::exp(-s * d) / (d * d * d);
+    return h * (-s * s * d / sd - 3.0 / d) * r / d;
+  };
+  return alpha_prime / (4.0 * std::numbers::pi) * (pole(z_r) + pole(z_v));
+}
+
 double Dipole::total() const {
   // The poles' integrals over the plane are 2 pi e^(-sigma_tr z) each, and
   // sigma_tr z_r = sqrt(3 (1 - alpha')), sigma_tr z_v the same times

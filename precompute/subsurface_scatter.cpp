@@ -47,6 +47,7 @@ struct Node {
   glm::dvec3 centre{0.0};
   double area = 0.0;
   double m2 = 0.0;  // the area-weighted mean squared distance of its sources' spread from the centre
+  glm::dvec3 normal{0.0};  // the area-weighted mean of its sources' normals (shorter where they disagree)
   double radius = 0.0;  // of a sphere about the centre holding its points
   std::uint32_t first = 0, count = 0;
   std::uint32_t child = 0, children = 0;
@@ -102,7 +103,7 @@ bool split(Octree& t, std::uint32_t n, const std::vector<glm::dvec3>& pos) {
 }
 
 Octree build_octree(const std::vector<glm::dvec3>& pos, std::span<const double> area, std::span<const double> m2,
-                    std::span<const float> in,
+                    const std::vector<glm::dvec3>& normal, std::span<const float> in,
                     int nc) {
   Octree t;
   for (std::uint32_t i = 0; i < pos.size(); ++i)
@@ -127,6 +128,7 @@ Octree build_octree(const std::vector<glm::dvec3>& pos, std::span<const double> 
         node.area += area[p];
         weighted += area[p] * pos[p];
         squares += area[p] * (m2[p] + glm::dot(pos[p], pos[p]));
+        node.normal += area[p] * normal[p];
         for (int k = 0; k < nc; ++k) s[k] += area[p] * double(in[std::size_t(p) * std::size_t(nc) + std::size_t(k)]);
       }
     } else {
@@ -134,11 +136,13 @@ Octree build_octree(const std::vector<glm::dvec3>& pos, std::span<const double> 
         node.area += t.nodes[c].area;
         weighted += t.nodes[c].area * t.nodes[c].centre;
         squares += t.nodes[c].area * (t.nodes[c].m2 + glm::dot(t.nodes[c].centre, t.nodes[c].centre));
+        node.normal += t.nodes[c].area * t.nodes[c].normal;
         for (int k = 0; k < nc; ++k) s[k] += t.sums[std::size_t(c) * std::size_t(nc) + std::size_t(k)];
       }
     }
     node.centre = node.area > 0 ? weighted / node.area : glm::dvec3(0.0);
     node.m2 = node.area > 0 ? std::max(squares / node.area - glm::dot(node.centre, node.centre), 0.0) : 0.0;
+    if (node.area > 0) node.normal /= node.area;
     if (node.children == 0)
       for (std::uint32_t i = node.first; i < node.first + node.count; ++i)
         node.radius = std::max(node.radius, glm::length(pos[t.order[i]] - node.centre));
@@ -168,18 +172,16 @@ constexpr double kNearDiscs = 3.0;
 // The three channels' profiles tabulated at r = reach t^2 for t in [0, 1]
 // (dense where the profile peaks, at r = 0) and interpolated linearly in t:
 // a lookup instead of each channel's two exponentials. Per entry, per
-// channel: R_d, its 2-D Laplacian, and the radial moments
-// F1(r) = int_0^r R_d s ds (disc / 2 pi, closed form) and
-// F2(r) = int_0^r R_d s^2 ds (Simpson's rule between entries) that integrate
-// R_d times a linear function over a wedge. 16,384 entries keep the
+// channel: R_d, its 2-D Laplacian, and F1(r) = int_0^r R_d s ds (the
+// disc's closed form over 2 pi) that integrates R_d over a wedge, and
+// dR_d / dr. 16,384 entries keep the
 // interpolation within 2e-5 of the profile (tests/test_subsurface_scatter.cpp).
 class ProfileTable {
  public:
-  static constexpr std::size_t kColumns = 12;  // R_d, Laplacian, F1, F2; three channels each
+  static constexpr std::size_t kColumns = 12;  // R_d, Laplacian, F1, slope; three channels each
   ProfileTable(const std::array<Dipole, 3>& d, double reach_mm)
       : reach_(std::max(reach_mm, 1e-30)), scale_((kEntries - 1) / std::sqrt(reach_)) {
     values_.resize(std::size_t(kEntries) * kColumns);
-    double prev_r = 0.0;
     for (int i = 0; i < kEntries; ++i) {
       const double t = double(i) / (kEntries - 1), r = reach_ * t * t;
       double* e = values_.data() + std::size_t(i) * kColumns;
@@ -187,12 +189,8 @@ class ProfileTable {
         e[c] = d[c].rd(r);
         e[3 + c] = d[c].laplacian(r);
         e[6 + c] = d[c].disc(r) / (2 * std::numbers::pi);
-        if (i == 0) continue;
-        const double m = 0.5 * (prev_r + r);
-        const auto g = [&](double x) { return d[c].rd(x) * x * x; };
-        e[9 + c] = e[9 + c - kColumns] + (r - prev_r) / 6 * (g(prev_r) + 4 * g(m) + g(r));
+        e[9 + c] = d[c].slope(r);
       }
-      prev_r = r;
     }
   }
   // R_d per channel at r mm.
@@ -201,13 +199,17 @@ class ProfileTable {
     lookup(r, f, 3);
     return {f[0], f[1], f[2]};
   }
-  // The mean of R_d over a source spread about a point r away with mean
-  // squared radius m2, to second order (isotropic): R_d + m2 / 4
-  // Laplacian(R_d) (a uniform disc of radius rho: m2 = rho^2 / 2).
-  glm::dvec3 point_mean(double r, double m2) const {
+  // The mean of R_d over a source spread in a plane about a point r away,
+  // with mean squared radius m2, to second order (isotropic): R_d + m2 / 4
+  // times R_d(|y - o|)'s 2-D Laplacian in y over that plane, which is
+  // Laplacian(R_d) inplane + (2 / r) dR_d/dr (1 - inplane), `inplane` the
+  // share of r^2 along the plane (1: the receiver in it; 0: straight above
+  // the source). A uniform disc of radius rho: m2 = rho^2 / 2.
+  glm::dvec3 point_mean(double r, double m2, double inplane = 1.0) const {
     double f[kColumns];
-    lookup(r, f, 6);
-    return {f[0] + m2 / 4 * f[3], f[1] + m2 / 4 * f[4], f[2] + m2 / 4 * f[5]};
+    lookup(r, f, kColumns);
+    const double a = m2 / 4 * inplane, b = r > 0 ? m2 / 2 / r * (1 - inplane) : 0.0;
+    return {f[0] + a * f[3] + b * f[9], f[1] + a * f[4] + b * f[10], f[2] + a * f[5] + b * f[11]};
   }
   // The same mean by a product rule over the disc (4 radii, equal shares of
   // area by Gauss-Legendre, times 8 angles), for a disc near the receiver.
@@ -223,18 +225,17 @@ class ProfileTable {
     }
     return sum;
   }
-  // F1 and F2 per channel at r mm.
-  void moments(double r, glm::dvec3& f1, glm::dvec3& f2) const {
+  // F1 per channel at r mm.
+  glm::dvec3 f1(double r) const {
     double f[kColumns];
     lookup(r, f, kColumns);
-    f1 = {f[6], f[7], f[8]};
-    f2 = {f[9], f[10], f[11]};
+    return {f[6], f[7], f[8]};
   }
 
  private:
   static constexpr int kEntries = 16384;
   void lookup(double r, double* f, std::size_t n) const {
-    const double t = std::min(std::sqrt(std::max(r, 0.0)) * scale_, double(kEntries - 1));
+    const double t = r > 0 ? std::min(std::sqrt(r) * scale_, double(kEntries - 1)) : 0.0;  // NaN: 0
     const int i = std::min(int(t), kEntries - 2);
     const double u = t - i;
     const double* a = values_.data() + std::size_t(i) * kColumns;
@@ -251,36 +252,72 @@ constexpr const std::array<double, 4>& kWedgeWeights = kDiscWeights;
 
 // W[j] = int over triangle p (mm) of R_d(|x - o|) b_j(x) dA, b_j its corners'
 // barycentric functions (so sum_j W[j] E_j is the profile's integral over
-// the triangle of irradiance linear across it), per channel: o projected
-// onto the triangle's plane, the triangle the signed sum of the three wedges
-// (o, p_k, p_k+1), and each wedge in polar coordinates about o, where
-// b_j = b_j(o) + r grad b_j . e(phi) makes the radial integral
-// b_j(o) F1(r(phi)) + grad b_j . e(phi) F2(r(phi)); the angle by
-// Gauss-Legendre, split where r(phi) is least. Exact but for the angular
-// rule and the projection (o's height over the plane left out: the
-// triangles this takes are the receiver's own and its neighbours').
-void triangle_weights(const ProfileTable& table, const glm::dvec3& o, const std::array<glm::dvec3, 3>& p,
-                      std::array<glm::dvec3, 3>& W) {
+// the triangle of irradiance linear across it), per channel. With q the
+// receiver o projected onto the triangle's plane and h its height over it,
+// |x - o|^2 = |x - q|^2 + h^2, and b_j(x) = b_j(q) + grad b_j . (x - q):
+//   W[j] = b_j(q) I0 + grad b_j . I1,
+//   I0 = int R_d dA, I1 = int R_d (x - q) dA = the boundary integral of
+//   F1_h(|x - q|) times the edges' outward normals (R_d (x - q) is the
+//   gradient of F1_h(|x - q|), F1_h(s) = int_0^s R_d(sqrt(t^2 + h^2)) t dt
+//   = F1(sqrt(s^2 + h^2)) - F1(|h|), the table's disc),
+// I0 as the signed sum of the three wedges (q, p_k, p_k+1), each in polar
+// coordinates about q: int dphi F1_h(r(phi)), Gauss-Legendre in the angle
+// split where r(phi) is least; I1 by Gauss-Legendre along each edge in
+// t = t* + a sinh(v) about the edge's point nearest q (nodes dense where
+// F1_h changes, over the profile's width there). Exact but for the rules.
+constexpr std::array<double, 8> kEdgeNodes = {0.0198550717512319, 0.1016667612931866, 0.2372337950418355,
+                                              0.4082826787521751, 0.5917173212478249, 0.7627662049581645,
+                                              0.8983332387068134, 0.9801449282487681};
+constexpr std::array<double, 8> kEdgeWeights = {0.0506142681451881, 0.1111905172266872, 0.1568533229389436,
+                                                0.1813418916891810, 0.1813418916891810, 0.1568533229389436,
+                                                0.1111905172266872, 0.0506142681451881};
+
+constexpr int kEdgePieces = 2;  // the rule on each of two halves of the mapped edge
+
+void triangle_weights(const ProfileTable& table, double width, const glm::dvec3& o,
+                      const std::array<glm::dvec3, 3>& p, std::array<glm::dvec3, 3>& W) {
   W.fill(glm::dvec3(0.0));
   const glm::dvec3 cr = glm::cross(p[1] - p[0], p[2] - p[0]);
   const double area2 = glm::length(cr);
   if (!(area2 > 0)) return;
   const glm::dvec3 n = cr / area2;
-  const glm::dvec3 q = o - glm::dot(o - p[0], n) * n;
-  std::array<glm::dvec3, 3> grad;
-  std::array<double, 3> at;
-  for (int j = 0; j < 3; ++j) {
-    grad[std::size_t(j)] = glm::cross(n, p[std::size_t((j + 2) % 3)] - p[std::size_t((j + 1) % 3)]) / area2;
-    at[std::size_t(j)] = glm::dot(grad[std::size_t(j)], q - p[std::size_t((j + 1) % 3)]);
-  }
+  const double h = glm::dot(o - p[0], n);
+  const glm::dvec3 q = o - h * n;
+  const glm::dvec3 base = table.f1(std::abs(h));
+  const auto f1h = [&](double r) { return table.f1(std::sqrt(r * r + h * h)) - base; };
+  glm::dvec3 I0(0.0);
+  std::array<glm::dvec3, 3> I1{};  // per channel: the vector integral
   for (int k = 0; k < 3; ++k) {
-    const glm::dvec3 u = p[std::size_t(k)] - q, w = p[std::size_t((k + 1) % 3)] - q;
+    const glm::dvec3 a3 = p[std::size_t(k)], b3 = p[std::size_t((k + 1) % 3)];
+    const glm::dvec3 edge = b3 - a3;
+    const double L = glm::length(edge);
+    if (!(L > 0)) continue;
+    // I1: the edge, outward normal cross(edge, n) / L.
+    const glm::dvec3 out = glm::cross(edge, n) / L;
+    const double ts = std::clamp(glm::dot(q - a3, edge) / (L * L), 0.0, 1.0);
+    const double gap = glm::length(q - (a3 + ts * edge));
+    const double scale = std::max(std::sqrt(gap * gap + h * h), width) / L;
+    glm::dvec3 along(0.0);
+    for (int side = 0; side < 2; ++side) {  // towards a (t < t*), towards b
+      const double part = side == 0 ? ts : 1.0 - ts, sign = side == 0 ? -1.0 : 1.0;
+      if (!(part > 0)) continue;
+      const double vmax = std::asinh(part / scale);
+      for (int half = 0; half < kEdgePieces; ++half)
+        for (std::size_t g = 0; g < kEdgeNodes.size(); ++g) {
+          const double v = vmax * (half + kEdgeNodes[g]) / kEdgePieces, t = ts + sign * scale * std::sinh(v);
+          along += vmax / kEdgePieces * kEdgeWeights[g] * scale * std::cosh(v) * L * f1h(glm::length(a3 + t * edge - q));
+        }
+    }
+    for (std::size_t c = 0; c < 3; ++c) I1[c] += along[int(c)] * out;
+    // I0: the wedge (q, a, b).
+    const glm::dvec3 u = a3 - q, w = b3 - q;
     const double lu = glm::length(u);
-    if (!(lu > 0) || !(glm::length(glm::cross(u, w)) > 1e-12 * lu * glm::length(w))) continue;  // no area
+    if (!(lu > 0)) continue;
     const glm::dvec3 e1 = u / lu, e2 = glm::cross(n, e1);
     const glm::dvec2 a(lu, 0.0), b(glm::dot(w, e1), glm::dot(w, e2)), d = b - a;
+    const double ad = a.x * d.y - a.y * d.x;  // r(phi) = (a x d) / (e(phi) x d)
+    if (!(std::abs(ad) > 1e-12 * lu * glm::length(d))) continue;  // q on the edge's line: no area
     const double theta = std::atan2(b.y, b.x);  // signed: the wedge's orientation about n
-    const double ad = a.x * d.y - a.y * d.x;    // r(phi) = (a x d) / (e(phi) x d)
     const glm::dvec2 foot = a - glm::dot(a, d) / glm::dot(d, d) * d;
     const double phi_n = std::atan2(foot.y, foot.x);
     const bool split = theta > 0 ? phi_n > 0 && phi_n < theta : phi_n < 0 && phi_n > theta;
@@ -288,14 +325,17 @@ void triangle_weights(const ProfileTable& table, const glm::dvec3& o, const std:
     for (int s = 0; s < 2; ++s) {
       const double lo = cuts[s], span = cuts[s + 1] - cuts[s];
       for (std::size_t g = 0; g < kWedgeNodes.size(); ++g) {
-        const double phi = lo + span * kWedgeNodes[g], c = std::cos(phi), sn = std::sin(phi);
-        const double r = ad / (c * d.y - sn * d.x);
-        glm::dvec3 f1, f2;
-        table.moments(r, f1, f2);
-        const glm::dvec3 e = c * e1 + sn * e2;
-        for (std::size_t j = 0; j < 3; ++j) W[j] += span * kWedgeWeights[g] * (at[j] * f1 + glm::dot(grad[j], e) * f2);
+        const double phi = lo + span * kWedgeNodes[g];
+        const double r = ad / (std::cos(phi) * d.y - std::sin(phi) * d.x);
+        if (!(r > 0 && r < INFINITY)) continue;  // rounding at a wedge's edge: no area there
+        I0 += span * kWedgeWeights[g] * f1h(r);
       }
     }
+  }
+  for (std::size_t j = 0; j < 3; ++j) {
+    const glm::dvec3 grad = glm::cross(n, p[(j + 2) % 3] - p[(j + 1) % 3]) / area2;
+    const double at = glm::dot(grad, q - p[(j + 1) % 3]);
+    for (std::size_t c = 0; c < 3; ++c) W[j][int(c)] = at * I0[int(c)] + glm::dot(grad, I1[c]);
   }
 }
 
@@ -351,6 +391,7 @@ Incidence incidence(const Mesh& mesh) {
 struct Sources {
   std::vector<glm::dvec3> centre;
   std::vector<double> m2;
+  std::vector<glm::dvec3> normal;  // the plane of the spread (unit; 0: taken as the receiver's)
 };
 
 Sources hat_sources(const Mesh& mesh, std::span<const double> areas) {
@@ -358,6 +399,7 @@ Sources hat_sources(const Mesh& mesh, std::span<const double> areas) {
   Sources s;
   s.centre.assign(V, glm::dvec3(0.0));
   s.m2.assign(V, 0.0);
+  s.normal.assign(V, glm::dvec3(0.0));
   for (const glm::uvec3& t : mesh.triangles) {
     const glm::dvec3 p[3] = {glm::dvec3(mesh.positions[t.x]), glm::dvec3(mesh.positions[t.y]),
                              glm::dvec3(mesh.positions[t.z])};
@@ -366,12 +408,15 @@ Sources hat_sources(const Mesh& mesh, std::span<const double> areas) {
       const glm::dvec3 e1 = p[(c + 1) % 3] - p[c], e2 = p[(c + 2) % 3] - p[c];
       s.centre[t[c]] += A / 12 * (e1 + e2);
       s.m2[t[c]] += A / 30 * (glm::dot(e1, e1) + glm::dot(e2, e2) + glm::dot(e1, e2));
+      s.normal[t[c]] += glm::cross(p[1] - p[0], p[2] - p[0]);  // twice the area times the face's normal
     }
   }
   for (std::size_t v = 0; v < V; ++v) {
     const glm::dvec3 offset = areas[v] > 0 ? s.centre[v] / areas[v] : glm::dvec3(0.0);
     s.m2[v] = areas[v] > 0 ? std::max(s.m2[v] / areas[v] - glm::dot(offset, offset), 0.0) : 0.0;
     s.centre[v] = glm::dvec3(mesh.positions[v]) + offset;
+    const double len = glm::length(s.normal[v]);
+    s.normal[v] = len > 0 ? s.normal[v] / len : glm::dvec3(0.0);
   }
   return s;
 }
@@ -380,9 +425,29 @@ Sources hat_sources(const Mesh& mesh, std::span<const double> areas) {
 Sources disc_sources(const std::vector<glm::dvec3>& pos, std::span<const double> areas) {
   Sources s;
   s.centre = pos;
+  s.normal.assign(pos.size(), glm::dvec3(0.0));
   s.m2.resize(pos.size());
   for (std::size_t i = 0; i < pos.size(); ++i) s.m2[i] = areas[i] / (2 * std::numbers::pi);
   return s;
+}
+
+// What subsurface_scatter refuses; the channels `in` holds (1 or 3).
+int check_scatter(std::size_t V, std::size_t areas, const SubsurfaceMaterial& material, std::size_t in, int nc,
+                  const SubsurfaceScatterOptions& o) {
+  check_subsurface_material(material, "subsurface material");
+  if (!(std::isfinite(o.length_scale) && o.length_scale > 0))
+    throw Error(fmt::format("the length scale must be > 0 (mm per mesh unit), got {}", o.length_scale));
+  if (!(std::isfinite(o.max_solid_angle) && o.max_solid_angle >= 0))
+    throw Error(fmt::format("the largest solid angle of a cluster taken whole must be >= 0, got {}", o.max_solid_angle));
+  if (areas != V) throw Error(fmt::format("subsurface scatter: {} areas for {} points", areas, V));
+  const int in_channels = nc >= 1 && in == V * 3 * std::size_t(nc) ? 3 : 1;
+  if (nc < 1 || in != V * std::size_t(in_channels) * std::size_t(nc))
+    throw Error(fmt::format("subsurface scatter: {} floats of irradiance for {} points x {} coefficients (1 or 3 "
+                            "channels)",
+                            in, V, nc));
+  for (const std::uint32_t r : o.receivers)
+    if (r >= V) throw Error(fmt::format("subsurface scatter: receiver {} of {} points", r, V));
+  return in_channels;
 }
 
 // The sum over points; `mesh` (whose vertices the points are) gives the
@@ -391,20 +456,8 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
                                 const SubsurfaceMaterial& material, std::span<const float> in, int nc,
                                 const SubsurfaceScatterOptions& o, const Progress& progress = {},
                                 const char* phase = "subsurface") {
-  check_subsurface_material(material, "subsurface material");
-  if (!(std::isfinite(o.length_scale) && o.length_scale > 0))
-    throw Error(fmt::format("the length scale must be > 0 (mm per mesh unit), got {}", o.length_scale));
-  if (!(std::isfinite(o.max_solid_angle) && o.max_solid_angle >= 0))
-    throw Error(fmt::format("the largest solid angle of a cluster taken whole must be >= 0, got {}", o.max_solid_angle));
   const std::size_t V = positions.size();
-  if (areas.size() != V) throw Error(fmt::format("subsurface scatter: {} areas for {} points", areas.size(), V));
-  const int in_channels = nc >= 1 && in.size() == V * 3 * std::size_t(nc) ? 3 : 1;
-  if (nc < 1 || in.size() != V * std::size_t(in_channels) * std::size_t(nc))
-    throw Error(fmt::format("subsurface scatter: {} floats of irradiance for {} points x {} coefficients (1 or 3 "
-                            "channels)",
-                            in.size(), V, nc));
-  for (const std::uint32_t r : o.receivers)
-    if (r >= V) throw Error(fmt::format("subsurface scatter: receiver {} of {} points", r, V));
+  const int in_channels = check_scatter(V, areas.size(), material, in.size(), nc, o);
   std::vector<glm::dvec3> pos(V);
   glm::dvec3 lo(INFINITY), hi(-INFINITY);
   for (std::size_t i = 0; i < V; ++i) {
@@ -414,12 +467,13 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
   }
   const Sources src = mesh ? hat_sources(*mesh, areas) : disc_sources(pos, areas);
   const std::size_t in_stride = std::size_t(in_channels) * std::size_t(nc);
-  const Octree tree = build_octree(src.centre, areas, src.m2, in, int(in_stride));
+  const Octree tree = build_octree(src.centre, areas, src.m2, src.normal, in, int(in_stride));
   const std::array<Dipole, 3> dipole = {Dipole(material.sigma_a.x, material.sigma_s.x, material.eta),
                                         Dipole(material.sigma_a.y, material.sigma_s.y, material.eta),
                                         Dipole(material.sigma_a.z, material.sigma_s.z, material.eta)};
   const double S = o.length_scale, S2 = S * S, eps = o.max_solid_angle;
   const ProfileTable table(dipole, V ? 1.001 * S * glm::length(hi - lo) : 1.0);
+  const double width = std::min({dipole[0].z_r, dipole[1].z_r, dipole[2].z_r});  // the profile's narrowest, mm
   const std::size_t stride = 3 * std::size_t(nc), R = o.receivers.empty() ? V : o.receivers.size();
   std::vector<float> out(R * stride, 0.0f);
   const double reach = profile_reach(dipole, tree.nodes.empty() ? 0.0 : S2 * tree.nodes[0].area) / S;  // mesh units
@@ -427,7 +481,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
   // The sources in the tree's order (a leaf's points and rows side by side),
   // their weights' constant parts in mm.
   struct Leaf {
-    glm::dvec3 centre;
+    glm::dvec3 centre, normal;
     double area, m2, rho, near2;  // S^2 A, S^2 m2, the disc radius (mm), (3 rho / S)^2 in mesh units
   };
   std::vector<Leaf> leaf(tree.order.size());
@@ -435,7 +489,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
   for (std::size_t i = 0; i < tree.order.size(); ++i) {
     const std::uint32_t p = tree.order[i];
     const double area = S2 * areas[p], rho = std::sqrt(area / std::numbers::pi);
-    leaf[i] = {src.centre[p], area, S2 * src.m2[p], rho, (kNearDiscs * rho / S) * (kNearDiscs * rho / S)};
+    leaf[i] = {src.centre[p], src.normal[p], area, S2 * src.m2[p], rho, (kNearDiscs * rho / S) * (kNearDiscs * rho / S)};
     std::copy_n(in.data() + std::size_t(p) * in_stride, in_stride, rows.data() + i * in_stride);
   }
   // Receivers in the tree's order too (neighbours walk the same nodes),
@@ -471,10 +525,12 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
       // (docs/SUBSURFACE.md "Near sources").
       const auto point_weight = [&](std::uint32_t i) {
         const Leaf& l = leaf[i];
-        const double d2 = glm::dot(pos[v] - l.centre, pos[v] - l.centre), d = S * std::sqrt(d2);
+        const glm::dvec3 to = pos[v] - l.centre;
+        const double d2 = glm::dot(to, to), d = S * std::sqrt(d2), g = glm::dot(to, l.normal);
+        const double inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
         if (mesh) {  // the near ones' triangles are integrated below
           if (d2 < l.near2) near.push_back(tree.order[i]);
-          return l.area * table.point_mean(d, l.m2);
+          return l.area * table.point_mean(d, l.m2, inplane);
         }
         if (d <= 1e-6 * l.rho)  // on it: the disc's closed form
           return glm::dvec3(dipole[0].disc(l.rho), dipole[1].disc(l.rho), dipole[2].disc(l.rho));
@@ -497,7 +553,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
         std::array<glm::dvec3, 3> W;
         for (const std::uint32_t t : tris) {
           const glm::uvec3 tri = mesh->triangles[t];
-          triangle_weights(table, S * pos[v], {S * pos[tri.x], S * pos[tri.y], S * pos[tri.z]}, W);
+          triangle_weights(table, width, S * pos[v], {S * pos[tri.x], S * pos[tri.y], S * pos[tri.z]}, W);
           for (int c = 0; c < 3; ++c) {
             const auto at = std::lower_bound(verts.begin(), verts.end(), tri[c]);
             if (at != verts.end() && *at == tri[c]) hats[std::size_t(at - verts.begin())] += W[std::size_t(c)];
@@ -505,8 +561,11 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
         }
         for (std::size_t i = 0; i < verts.size(); ++i) {
           const std::uint32_t j = verts[i];
-          const double d = glm::length(pos[v] - src.centre[j]) * S;
-          add(hats[i] - S2 * areas[j] * table.point_mean(d, S2 * src.m2[j]), in.data() + std::size_t(j) * in_stride);
+          const glm::dvec3 to = pos[v] - src.centre[j];
+          const double d2 = glm::dot(to, to), g = glm::dot(to, src.normal[j]);
+          const double point = S2 * areas[j], inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
+          add(hats[i] - point * table.point_mean(S * std::sqrt(d2), S2 * src.m2[j], inplane),
+              in.data() + std::size_t(j) * in_stride);
         }
       };
       stack.assign(1, 0);
@@ -523,7 +582,8 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
         const double d2 = glm::dot(pos[v] - node.centre, pos[v] - node.centre);
         if (node.radius + reach < std::sqrt(d2)) continue;  // beyond the profile's reach
         if (node.area < eps * d2) {  // small seen from here: the cluster whole
-          add(S2 * table.point_mean(S * std::sqrt(d2), S2 * node.m2), tree.sums.data() + n * in_stride);
+          const double g = glm::dot(pos[v] - node.centre, node.normal), inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
+          add(S2 * table.point_mean(S * std::sqrt(d2), S2 * node.m2, inplane), tree.sums.data() + n * in_stride);
           continue;
         }
         for (std::uint32_t c = node.child; c < node.child + node.children; ++c) stack.push_back(c);

@@ -23,6 +23,9 @@ ZhTransfer fit_zh_transfer(const Transfer& t, const Mesh& mesh, const ZhFitOptio
   check_matches(t, mesh, "the transfer to fit");
   if (t.glossy)
     throw Error("zonal-harmonic fit: a glossy transfer's matrices have no zonal form here (fit the diffuse transfer)");
+  if (t.subsurface)
+    throw Error("zonal-harmonic fit: a translucent material's transfer is a sum over the whole surface, which does not "
+                "follow the mesh when it bends (local deformable PRT is for diffuse transfer)");
   if (t.bands > zh::kMaxBands)
     throw Error(fmt::format("zonal-harmonic fit: {} bands; lobes carry at most {}", t.bands, zh::kMaxBands));
   if (o.lobes < 1 || o.lobes > zh::kMaxLobes)

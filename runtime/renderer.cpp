@@ -8,11 +8,13 @@
 #include <prt/glossy.h>
 #include <prt/names.h>
 #include <prt/render.h>
+#include <prt/subsurface.h>
 #include <prt/sh.h>
 #include <prt/transfer_io.h>
 
 #include "egl_context.h"
 #include "renderer_impl.h"
+
 #include "gl_util.h"
 #include "lightmap_pass.h"
 #include "shaders.h"
@@ -188,6 +190,7 @@ void Renderer::Impl::delete_mesh_objects() {
   glossy_block_chunks.clear();
   light_coeffs.clear();
   has_direct = false;
+  translucent = false;
   source = Source::Stored;
   slot_buffer = 0;
   position_buffer = index_buffer = 0;
@@ -503,6 +506,7 @@ void Renderer::set_lights(std::span<const Light> lights) {
     throw Error(fmt::format("{} lights: the GPU's lights pass takes at most {} at once (prt relight evaluates any "
                             "number on the CPU)",
                             lights.size(), kMaxGpuLights));
+  if (m.translucent && !lights.empty()) throw Error(std::string("lights: ") + kTranslucentLightsWhy);
   m.make_current();
   if (!std::equal(lights.begin(), lights.end(), m.light_list.begin(), m.light_list.end())) ++m.lights_version;
   m.light_list.assign(lights.begin(), lights.end());
@@ -715,8 +719,8 @@ bool Renderer::has_shading(Shading s) const {
   if (m.index_count == 0) return false;
   if (m.zh) return s == Shading::Transfer || s == Shading::Lambert;
   switch (s) {
-    case Shading::Transfer:
-    case Shading::Unshadowed: return m.bands > 0;
+    case Shading::Transfer: return m.bands > 0;
+    case Shading::Unshadowed: return m.bands > 0 && !m.translucent;
     case Shading::Direct: return m.has_direct;
     case Shading::Glossy: return m.has_glossy;
     case Shading::Clusters: return m.cluster_color_buffer != 0;
@@ -746,6 +750,9 @@ void Renderer::set_shading(Shading s) {
                       : s == Shading::Direct   ? "the transfer is not interreflected"
                       : s == Shading::Glossy ? "the transfer has no glossy matrices (prt precompute --material glossy)"
                       : s == Shading::Clusters ? "the transfer is not compressed"
+                      : s == Shading::Unshadowed && m.translucent
+                          ? "a translucent transfer (prt precompute --material subsurface) has no unshadowed form: "
+                            "its light leaves each vertex from the surface around it, which only its rows hold"
                                              : "the transfer file has no such data";
     throw Error("shading '" + std::string(shading_name(s)) + "' is unavailable: " + why);
   }

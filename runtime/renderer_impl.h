@@ -103,6 +103,10 @@ struct Renderer::Impl {
   // Shading::Unshadowed) are shaded from the normal and albedo buffers.
   TransferArray transfer, direct;
   bool has_direct = false;        // an interreflected transfer's direct part (maybe all analytic)
+  // A translucent transfer's (TransferHeader::subsurface): no unshadowed form
+  // (its light comes from the surface around each vertex, which only its rows
+  // hold) and no lights (kTranslucentLightsWhy).
+  bool translucent = false;
   Source source = Source::Stored;  // of transfer and direct
   GLuint slot_buffer = 0;          // Source::Mixed: per vertex its row, or Transfer::kAnalytic
   // Compressed glossy transfers: the glossy pass's work by cluster

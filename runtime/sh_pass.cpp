@@ -86,6 +86,7 @@ void Renderer::set_mesh(const Mesh& mesh, const Transfer& t) {
 // normals, the glossy rows of `glossy_vertices` (hemisphere matrices for
 // the analytic ones) and what the glossy pass needs of the header.
 void Renderer::Impl::finish_transfer(const Transfer& t, const Mesh& mesh, const std::vector<std::size_t>& glossy_vertices) {
+  translucent = t.subsurface.has_value();
   if (!t.ao.empty()) ao_buffer = make_buffer(t.ao.data(), t.ao.size() * sizeof(float));
   if (!t.bent_normals.empty())
     bent_buffer = make_buffer(t.bent_normals.data(), t.bent_normals.size() * sizeof(glm::vec3));

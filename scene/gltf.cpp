@@ -8,6 +8,7 @@
 
 #include <prt/error.h>
 #include <prt/io.h>
+#include <prt/transfer_io.h>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -51,12 +52,18 @@ json extras_object(const Mesh& mesh, const Transfer& t, const GltfOptions& opts)
       {"shading",
        "radiance[c] = dot(row[c], L[c]) with L[c] the SH coefficients of channel c of the environment's radiance "
        "in prt's convention (prt project --convention prt, the default); a 1-channel row serves R, G and B"},
-      {"albedo", t.vertex_colors ? json("vertex colours") : json::array({t.albedo.x, t.albedo.y, t.albedo.z})},
+      // A translucent transfer's rows hold its material's profile, no albedo.
+      {"albedo", t.subsurface      ? json("subsurface")
+                 : t.vertex_colors ? json("vertex colours")
+                                   : json::array({t.albedo.x, t.albedo.y, t.albedo.z})},
       {"vertices", t.vertices},
       {"normals", has_all_normals(mesh) ? "NORMAL" : "omitted: some vertices have none (their transfer is 0)"},
-      {"material", t.glossy ? "diffuse part of a glossy transfer" : "diffuse"},
+      {"material", t.glossy ? "diffuse part of a glossy transfer" : t.subsurface ? "subsurface" : "diffuse"},
       {"dense", "every vertex has its row (analytic vertices evaluated: prt::dense_transfer)"},
   };
+  // The translucent material (docs/FORMAT.md "Subsurface material"): the
+  // file's record, its five keys.
+  if (t.subsurface) prt["subsurface"] = json::parse(subsurface_record_json(*t.subsurface));
   if (t.mode == TransferMode::Interreflected) prt["bounces"] = t.bounces;
   if (t.samples > 0) prt["samples"] = t.samples;
   if (!opts.transfer_source.empty()) prt["transfer"] = opts.transfer_source;

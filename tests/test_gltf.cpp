@@ -242,6 +242,47 @@ TEST_F(ExportCli, BakeWritesTheClampedRelitColour) {
   EXPECT_EQ(bake.at("rotate"), nlohmann::json::array({40.0, 10.0, -20.0}));
 }
 
+// A translucent transfer (prt precompute --material subsurface) exports as
+// any RGB transfer, its extras naming the material (not "diffuse", no
+// albedo: the rows hold the profile) with the file's record; prt export
+// --bake and prt relight refuse lights inside the scene, whose direct light
+// would be a diffuse surface's.
+TEST_F(ExportCli, TranslucentTransferRecordsItsMaterialAndRefusesLights) {
+  const std::string tube = std::string(PRT_SOURCE_DIR) + "/models/tube.obj", tfile = dir.file("marble.prt");
+  auto r = run_prt(dir, {"precompute", tube, "-o", tfile, "-q", "--samples", std::to_string(kSamples), "--bands", "2",
+                         "--material", "subsurface", "--sss", "marble"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string out = dir.file("marble.gltf");
+  r = run_prt(dir, {"export", tube, tfile, "-o", out, "--bake", kStudio, "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const prt::Transfer t = prt::read_transfer(tfile);
+  ASSERT_TRUE(t.subsurface);
+  const GltfFile g = read_gltf(out);
+  expect_file_holds(g, prt::load_mesh(tube), t);
+  const nlohmann::json& x = g.extras.at("prt");
+  EXPECT_EQ(x.at("material"), "subsurface");
+  EXPECT_EQ(x.at("albedo"), "subsurface");
+  EXPECT_EQ(x.at("subsurface"), nlohmann::json::parse(prt::subsurface_record_json(*t.subsurface)));
+  EXPECT_EQ(x.at("subsurface").at("name"), "marble");
+  EXPECT_EQ(x.at("subsurface").at("length_scale"), 25.0);
+
+  const std::string lights = dir.file("lights.json");
+  prt::test::write_file(lights, R"([{"type": "point", "position": [0, 2, 0], "intensity": 5}])");
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"export", tube, tfile, "-o", dir.file("lit.glb"), "--bake", kStudio},
+        std::vector<std::string>{"relight", tube, tfile, kStudio, "-o", dir.file("lit.csv")}}) {
+    std::vector<std::string> lit = args;
+    lit.insert(lit.end(), {"--lights", lights, "-q"});
+    r = run_prt(dir, lit);
+    EXPECT_EQ(r.code, 1) << args[0];
+    EXPECT_NE(r.err.find("--lights, --sun auto or the scene's own lights: a translucent transfer (prt precompute "
+                         "--material subsurface) takes no lights inside the scene"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(args[0] == "export" ? dir.file("lit.glb") : dir.file("lit.csv")));
+  }
+}
+
 // Lights of every kind and direction: a spot turned up (+Z, the half-turn
 // the node's rotation handles apart), one turned down (-Z: no rotation),
 // spots either side of the horizontal, a directional light.

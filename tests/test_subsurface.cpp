@@ -92,7 +92,7 @@ TEST(Subsurface, DiscIntegralIsTheProfilesPartialIntegral) {
   }
 }
 
-TEST(Subsurface, LaplacianIsTheProfilesSecondDerivativesInThePlane) {
+TEST(Subsurface, LaplacianAndSlopeAreTheProfilesDerivatives) {
   // Against central differences of R_d in r (step 1e-4 of r + z_r: their
   // error is of the order of the step squared times the fourth derivative,
   // about 1e-8 of the value, and rounding as much), from r = 0 (where the Laplacian is 2 R_d'')
@@ -107,6 +107,8 @@ TEST(Subsurface, LaplacianIsTheProfilesSecondDerivativesInThePlane) {
         const double second = (fp - 2 * f0 + fm) / (e * e);
         const double want = r > 0 ? second + (fp - fm) / (2 * e) / r : 2 * second;
         EXPECT_NEAR(d.laplacian(r), want, kDifference * std::abs(want) + 1e-12) << m.name << " " << c << " " << f;
+        const double first = (fp - fm) / (2 * e);
+        if (r > 0) EXPECT_NEAR(d.slope(r), first, kDifference * std::abs(first) + 1e-12) << m.name << " " << c << " " << f;
       }
     }
   }

@@ -331,7 +331,9 @@ void main() {
     return {
       vertices: model.vertices,
       describe: () => `${model.vertices} vertices, ${indices.length / 3} triangles, ${bands} bands, ` +
-                      `${channels === 1 ? 'mono' : 'RGB'} ${glb.info.mode || ''} transfer`,
+                      `${channels === 1 ? 'mono' : 'RGB'} ${glb.info.mode || ''} transfer` +
+                      // A translucent material (prt precompute --material subsurface): its record's name.
+                      (glb.info.subsurface ? `, translucent (${glb.info.subsurface.name || 'subsurface'})` : ''),
       draw(M, L, gain, tone) {
         light.data.fill(0);
         for (let k = 0; k < n; ++k) light.data.set(L[k], 4 * k);

@@ -98,6 +98,8 @@ struct Dipole {
   // 1/mm^4: the second-order term of R_d's mean over a small disc,
   // R_d + rho^2 / 8 Laplacian (prt/subsurface_scatter.h's far sources).
   double laplacian(double r) const;
+  // dR_d / dr at r (mm), 1/mm^3.
+  double slope(double r) const;
   // Its integral over the plane, the closed form
   // (alpha' / 2) (1 + e^(-(4/3) A sqrt(3 (1 - alpha')))) e^(-sqrt(3 (1 - alpha'))).
   double total() const;
@@ -111,6 +113,16 @@ struct SubsurfaceRecord {
 
   bool operator==(const SubsurfaceRecord&) const = default;
 };
+
+// Why lights inside the scene do not light a translucent transfer
+// (TransferHeader::subsurface, prt precompute --material subsurface): the
+// sentence prt relight, render, view, export --bake and Python refuse them
+// with, each after the name of its option.
+inline constexpr const char* kTranslucentLightsWhy =
+    "a translucent transfer (prt precompute --material subsurface) takes no lights inside the scene: their direct "
+    "light here is a diffuse surface's (albedo / pi x the irradiance at the point), while a translucent material's "
+    "light enters the surface around each point and scatters under it, which its rows hold for the environment's "
+    "light only; light it with the map alone (a sun left in the map)";
 
 glm::dvec3 subsurface_rd(const SubsurfaceMaterial& m, double r_mm);
 glm::dvec3 subsurface_total_reflectance(const SubsurfaceMaterial& m);

@@ -164,9 +164,10 @@ inline bool albedo_in_range(const glm::vec3& a) {
 // coefficients one row (stride() floats) per stored vertex; direct absent or
 // the same size, and only in an interreflected transfer; ambient occlusion
 // and bent normals absent or one per vertex; interpolated absent or one flag
-// of 0 or 1 per vertex; bounce energy absent or 1 to bounces values; every
-// value finite. Whether `t` fits a mesh is
-// check_matches' (prt/transfer_io.h).
+// of 0 or 1 per vertex; bounce energy absent or 1 to bounces values; a
+// subsurface record only on a three-channel transfer that is not glossy,
+// its material and length scale valid; every value finite. Whether `t`
+// fits a mesh is check_matches' (prt/transfer_io.h).
 std::string transfer_problem(const Transfer& t);
 
 // The unshadowed (clamped-cosine) transfer of a vertex with normal n and

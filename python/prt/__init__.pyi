@@ -470,7 +470,7 @@ def make_mesh(positions: Any, triangles: Any, normals: Any = ..., colors: Any = 
     Returns a Mesh.
     """
 
-def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., progress: Any = ...) -> Any:
+def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = ..., bounces: int = ..., albedo: Any = ..., vertex_colors: bool = ..., seed: int = ..., threads: int = ..., offset: float = ..., bounce_tolerance: float = ..., material: str = ..., basis: str = ..., cube_res: int = ..., threshold: float = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., sss: Any = ..., sigma_a: Any = ..., sigma_s: Any = ..., eta: Any = ..., length_scale: float = ..., progress: Any = ...) -> Any:
     """
     Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.
 
@@ -486,7 +486,11 @@ def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = 
       threads: worker threads, 0 (every core) to 1024 [--threads]; the result does not depend on it.
       offset: ray origin offset along the normal in mesh units (0: 1e-4 x the bounding-box diagonal) [--offset].
       bounce_tolerance: stop adding bounces once one adds less than this fraction of the direct energy, [0, 1) (0: never) [--bounce-tolerance].
-      material: 'diffuse', or 'glossy': also the transfer matrices of glossy PRT (at most 12 bands; docs/GLOSSY.md) [--material].
+      material: 'diffuse'; 'glossy': also the transfer matrices of glossy PRT (at most 12 bands; docs/GLOSSY.md); or 'subsurface': a translucent material's RGB transfer (the dipole's light under the surface; shadowed or interreflected, SH, no albedo, adaptive or light_bounce; docs/SUBSURFACE.md) [--material].
+      sss: material='subsurface': a measured material of Jensen et al. 2001 by D3DX's name ('marble', 'skin1', ...); sigma_a, sigma_s, eta override its values [--sss].
+      sigma_a, sigma_s: material='subsurface': the absorption and reduced scattering coefficients (r, g, b) in 1/mm, both without sss [--sigma-a, --sigma-s].
+      eta: material='subsurface': the relative index of refraction, 1 to 3 (None: the preset's; 1.3 with sigma_a and sigma_s) [--eta].
+      length_scale: material='subsurface': millimetres per mesh unit (25, D3DX's samples' fLengthScale) [--length-scale].
       basis: 'sh'; or 'wavelet': a WaveletTransfer (shadowed, diffuse; samples, seed and bounces do not apply: one ray per cube texel) [--basis].
       cube_res: wavelet basis: the cube's face size r, a power of two 2 to 256 (32) [--cube-res].
       threshold: wavelet basis: the relative L2 error each vertex's kept coefficients may leave, [0, 1) (0.01) [--threshold].
@@ -498,7 +502,7 @@ def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = 
       bounce_probes: (NX, NY, NZ): the operator's rows for that probe grid's probes too, which the probe-lit object of render(probes=, object=) takes (None: none) [--probes with --light-bounce].
       progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).
 
-    Returns a Transfer (a WaveletTransfer for basis='wavelet').
+    Returns a Transfer (a WaveletTransfer for basis='wavelet'; for material='subsurface' an RGB one whose .subsurface records the material).
     """
 
 def project(map: Any, bands: int = ..., *, mapping: str = ..., quadrature: str = ..., irradiance: bool = ..., window: str = ..., window_width: float = ..., rotate: Any = ...) -> numpy.ndarray:

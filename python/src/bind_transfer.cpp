@@ -7,6 +7,7 @@
 #include <prt/hash.h>
 #include <prt/mesh.h>
 #include <prt/render.h>
+#include <prt/subsurface.h>
 #include <prt/transfer.h>
 #include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
@@ -237,6 +238,8 @@ void bind_transfer_relight(py::module_& m) {
         if (direct && p.compressed)
           throw Error(p.source + ": direct=True: a compressed transfer keeps no direct part");
         const std::vector<prt::Light> ls = lights_arg(lights);
+        if (!ls.empty() && p.t.subsurface)
+          throw Error(p.source + ": lights=: " + prt::kTranslucentLightsWhy);
         // The albedo the lights' direct light takes: the one the transfer's
         // relighting used (prt relight's add_lights; diffuse= replaces it for
         // a glossy transfer seen from an eye).

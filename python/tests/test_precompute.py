@@ -2,6 +2,7 @@
 docs/PRECOMPUTE.md), its progress callback, cancelling, Ctrl-C, and that it
 runs without the GIL."""
 import os
+import re
 import signal
 import threading
 import time
@@ -243,3 +244,67 @@ def test_adaptive_tolerance_limit_follows_the_samples(tube):
     prt.precompute(tube, bands=1, samples=SAMPLES, adaptive=0.015)
     with pytest.raises(prt.Error, match="above 0.0075, the largest tolerance for 4096 samples"):
         prt.precompute(tube, bands=1, samples=4096, adaptive=0.008)
+
+
+# material='subsurface' (docs/SUBSURFACE.md): prt precompute --material
+# subsurface's bits, its options by the CLI's names, the CLI's refusals (on
+# the tube: models/scene.obj crashes the surface integral, reported).
+@pytest.mark.parametrize("cli,kwargs", [
+    (["--sss", "marble", "--length-scale", "100"], dict(sss="marble", length_scale=100)),
+    (["--mode", "interreflected", "--sigma-a", "0.03,0.1,0.4", "--sigma-s", "0.8,0.9,1", "--eta", "1.4"],
+     dict(mode="interreflected", sigma_a=(0.03, 0.1, 0.4), sigma_s=(0.8, 0.9, 1), eta=1.4)),
+    (["--sss", "skin1", "--eta", "1.5"], dict(sss="skin1", eta=1.5)),
+])
+def test_subsurface_same_bits_as_cli(tube, tmp_path, cli, kwargs):
+    path = tmp_path / "cli.prt"
+    run_prt("precompute", TUBE, "-o", path, "--material", "subsurface", "--bands", BANDS, "--samples", SAMPLES,
+            "--seed", SEED, "-q", *cli)
+    t = prt.precompute(tube, material="subsurface", bands=BANDS, samples=SAMPLES, seed=SEED, **kwargs)
+    assert t.channels == 3
+    assert t.subsurface == prt.read_transfer(path).subsurface
+    out = tmp_path / "py.prt"
+    t.write(out)
+    assert out.read_bytes() == path.read_bytes()
+
+
+def test_subsurface_records_the_material(tube):
+    t = prt.precompute(tube, material="subsurface", sss="marble", bands=2, samples=16)
+    s = t.subsurface
+    assert s["name"] == "marble" and s["eta"] == 1.5 and s["length_scale"] == 25
+    assert tuple(s["sigma_a"]) == (0.0021, 0.0041, 0.0071)
+    modified = prt.precompute(tube, material="subsurface", sss="marble", eta=1.3, bands=2, samples=16)
+    assert modified.subsurface["name"] == "marble (modified)" and modified.subsurface["eta"] == 1.3
+    assert prt.precompute(tube, bands=2, samples=16).subsurface is None
+
+
+@pytest.mark.parametrize("kwargs,words", [
+    (dict(material="subsurface"), "needs sss=NAME"),
+    (dict(material="subsurface", sss="jade"), "no measured material 'jade'"),
+    (dict(material="subsurface", sigma_a=(0.1, 0.1, 0.1)), "needs sss=NAME"),
+    (dict(material="subsurface", sss="marble", sigma_a=(0.1, 0.1)), "sigma_a: expected 3 numbers"),
+    (dict(material="subsurface", sss="marble", eta=4.0), "the relative index of refraction must be 1 to 3"),
+    (dict(material="subsurface", sss="marble", length_scale=0.0), "length_scale"),
+    (dict(material="subsurface", sss="marble", mode="unshadowed"), "shadowed or interreflected"),
+    (dict(material="subsurface", sss="marble", basis="wavelet"), "basis: does not apply to material='subsurface'"),
+    (dict(material="subsurface", sss="marble", albedo=0.5), "albedo: does not apply to material='subsurface'"),
+    (dict(material="subsurface", sss="marble", vertex_colors=True), "vertex_colors: does not apply"),
+    (dict(material="subsurface", sss="marble", adaptive=0.01), "adaptive: does not apply"),
+    (dict(material="subsurface", sss="marble", mode="interreflected", light_bounce=True), "light_bounce: does not"),
+    (dict(sss="marble"), "sss: needs material='subsurface'"),
+    (dict(length_scale=10), "length_scale: needs material='subsurface'"),
+    (dict(material="translucent"), "'diffuse', 'glossy' or 'subsurface'"),
+])
+def test_subsurface_refusals(tube, kwargs, words):
+    with pytest.raises(prt.Error, match=re.escape(words)):
+        prt.precompute(tube, bands=2, samples=16, **kwargs)
+
+
+def test_subsurface_relight_refuses_lights(tube):
+    # Lights' direct light is a diffuse surface's; a translucent transfer
+    # holds the environment's light only (prt relight --lights refuses too).
+    t = prt.precompute(tube, material="subsurface", sss="marble", bands=2, samples=16)
+    lighting = np.zeros((4, 3), dtype=np.float32)
+    lighting[0] = 1
+    assert np.all(np.isfinite(prt.relight(t, tube, lighting)))
+    with pytest.raises(prt.Error, match="takes no lights inside the scene"):
+        prt.relight(t, tube, lighting, lights=[prt.Light(position=(0, 2, 0))])

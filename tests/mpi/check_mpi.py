@@ -4,7 +4,8 @@
 Usage: check_mpi.py PRT_EXE MPIRUN [--ranks 1,2,3]
 
 Every mode (unshadowed, shadowed, interreflected with bounces, RGB albedo,
-glossy shadowed and interreflected, wavelet) run with 1, 2 and 3 ranks
+glossy shadowed and interreflected, translucent (--material subsurface)
+shadowed and interreflected, wavelet) run with 1, 2 and 3 ranks
 (mpirun --oversubscribe: more ranks than the machine's cores) writes a file
 byte-identical to one process without mpirun. A rank that fails
 (PRT_TEST_FAIL_RANK) or a job interrupted by Ctrl-C ends every rank with its
@@ -100,6 +101,10 @@ def main():
             "glossy": ["--material", "glossy", "--bands", "3"],
             "glossy-interreflected": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",
                                       "--albedo", "0.9,0.6,0.3"],
+            # translucent: every rank traces its share, the surface integral then runs over all of them
+            "subsurface": ["--material", "subsurface", "--sss", "marble", "--length-scale", "25", "--bands", "4"],
+            "subsurface-interreflected": ["--material", "subsurface", "--sss", "skin1", "--length-scale", "25",
+                                          "--mode", "interreflected", "--bands", "4"],
             # adaptive sample points: every rank makes the same choices, each batch split over the ranks
             "adaptive": ["--bands", "4", "--adaptive"],
             "adaptive-glossy-interreflected": ["--material", "glossy", "--mode", "interreflected", "--bands", "3",

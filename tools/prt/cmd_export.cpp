@@ -288,6 +288,7 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
     // bounce is left out there (its direct light is traced).
     std::optional<EnvMap> sun_map;
     const std::vector<Light> lit = bake_lights(a, opts.lights, env, euler, compressed ? nullptr : &sun_map);
+    check_translucent_lights(t, !lit.empty(), a.transfer);
     if (compressed && a.light.sun_auto() && t.mode == TransferMode::Interreflected && !a.quiet)
       fmt::print(stderr, "--sun auto: {} is compressed and keeps no direct part: the sun's bounce is left out (its "
                          "direct light is traced)\n", a.transfer);

@@ -522,6 +522,7 @@ int run_sh(const RelightArgs& a, const std::string& ext, const std::array<double
   if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(mesh), describe(env));
   std::optional<EnvMap> sun_map;
   const std::vector<Light> lights = relight_lights(a, env, euler.data(), nullptr, c ? nullptr : &sun_map);
+  check_translucent_lights(t, !lights.empty(), a.transfer);
   if (c && a.light.sun_auto() && t.mode == TransferMode::Interreflected && !a.quiet)
     fmt::print(stderr, "--sun auto: {} is compressed and keeps no direct part: the sun's bounce is left out (its "
                        "direct light is traced)\n", a.transfer);

@@ -94,6 +94,7 @@ void prepare_lights(const RenderArgs& a, RenderJob& j) {
   if (a.light.sun_auto()) j.background = j.scene.env;
   const std::vector<Light>* own = j.scene.world ? &j.scene.world->lights : nullptr;
   j.lights = render_lights(a.light, a.light_paths, j.scene.env, a.mesh, own, a.quiet);
+  check_translucent_lights(j.scene.header, !j.lights.empty(), a.transfer);
   if (j.lights.empty()) {
     j.background.reset();
     return;

@@ -564,6 +564,7 @@ ViewLights view_lights(const ViewArgs& a, const Scene& scene) {
   ViewLights v;
   if (a.light.sun_auto()) v.sky = scene.env;
   v.lights = render_lights(a.light, {}, v.sky, a.mesh, scene.world ? &scene.world->lights : nullptr, a.quiet);
+  check_translucent_lights(scene.header, !v.lights.empty(), a.transfer);
   if (!v.lights.empty()) v.points = renderer_light_points(scene);
   return v;
 }

@@ -129,6 +129,11 @@ double add_texel_lights(std::vector<glm::vec3>& rgb, const std::vector<Light>& l
                                     std::nullopt, bounce);
 }
 
+void check_translucent_lights(const TransferHeader& t, bool lit, const std::string& transfer_path) {
+  if (t.subsurface && lit)
+    throw Error(transfer_path + ": --lights, --sun auto or the scene's own lights: " + kTranslucentLightsWhy);
+}
+
 std::string describe_lights(const std::vector<Light>& lights) {
   if (lights.empty()) return {};
   int n[3] = {0, 0, 0};

@@ -91,6 +91,12 @@ void add_sun_bounce(std::vector<glm::vec3>& rgb, const std::optional<EnvMap>& su
   for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] += all[i] - direct[i];
 }
 
+// Lights on a translucent transfer (TransferHeader::subsurface, prt
+// precompute --material subsurface): refused with prt::kTranslucentLightsWhy
+// when `lit` (the command found lights: the scene's own, --lights files',
+// --sun auto's), naming the file. Nothing for other transfers.
+void check_translucent_lights(const TransferHeader& t, bool lit, const std::string& transfer_path);
+
 // "2 lights (1 point, 1 spot)" for a command's summary, "" without lights.
 std::string describe_lights(const std::vector<Light>& lights);
 
