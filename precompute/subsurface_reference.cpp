@@ -8,6 +8,7 @@
 #include <prt/error.h>
 #include <prt/precompute.h>
 
+#include "env_light.h"
 #include "progress_ticker.h"
 #include "random.h"
 #include "ray_scene.h"
@@ -31,7 +32,7 @@
 namespace prt {
 
 // Named, not anonymous: the unity build joins this file with reference.cpp,
-// whose anonymous namespace has its own EnvLight.
+// whose anonymous namespace has names of its own (kPi, its helpers).
 namespace subsurface_reference_impl {
 
 using detail::Rng;
@@ -51,82 +52,9 @@ constexpr int kAxisStrata = 4;
 // ---- the environment: prt/reference.h's lookup and importance sampling ----------
 // (A copy of reference.cpp's EnvLight, whose class is private to that file.)
 
-class EnvLight {
- public:
-  EnvLight(const EnvMap& map, const glm::dmat3& R) : W_(map.width), H_(map.height), rgb_(map.rgb.data()), R_(R) {
-    RT_ = glm::transpose(R);
-    cos_edge_.resize(H_ + 1);
-    for (int y = 0; y <= H_; ++y) cos_edge_[y] = std::cos(kPi * y / H_);
-    cos_edge_[0] = 1.0;
-    cos_edge_[H_] = -1.0;
-    col_cdf_.resize(std::size_t(H_) * (W_ + 1));
-    row_cdf_.resize(H_ + 1);
-    last_col_.assign(H_, 0);
-    row_cdf_[0] = 0;
-    for (int y = 0; y < H_; ++y) {
-      double* cdf = &col_cdf_[std::size_t(y) * (W_ + 1)];
-      cdf[0] = 0;
-      for (int x = 0; x < W_; ++x) {
-        const double m = weight(std::size_t(y) * W_ + x);
-        cdf[x + 1] = cdf[x] + m;
-        if (m > 0) last_col_[y] = x;
-      }
-      const double row = cdf[W_] * latlong_pixel_solid_angle(y, W_, H_);
-      row_cdf_[y + 1] = row_cdf_[y] + row;
-      if (row > 0) last_row_ = y;
-    }
-    total_ = row_cdf_[H_];
-  }
+using detail::EnvLight;
+using detail::mis_over_pdf;
 
-  bool can_sample() const { return total_ > 0; }
-
-  std::size_t pixel_of(const glm::dvec3& w) const {
-    double px = 0, py = 0;
-    latlong_pixel(RT_ * w, W_, H_, px, py);
-    const int x = std::clamp(int(px), 0, W_ - 1), y = std::clamp(int(py), 0, H_ - 1);
-    return std::size_t(y) * W_ + x;
-  }
-
-  glm::dvec3 radiance(std::size_t pixel) const {
-    const float* p = rgb_ + 3 * pixel;
-    return {p[0], p[1], p[2]};
-  }
-
-  double pdf(std::size_t pixel) const { return total_ > 0 ? weight(pixel) / total_ : 0.0; }
-
-  glm::dvec3 sample(Rng& rng, std::size_t& pixel) const {
-    const double u0 = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
-    int y = int(std::upper_bound(row_cdf_.begin(), row_cdf_.end(), u0 * total_) - row_cdf_.begin()) - 1;
-    y = std::clamp(y, 0, last_row_);
-    const double* cdf = &col_cdf_[std::size_t(y) * (W_ + 1)];
-    int x = int(std::upper_bound(cdf, cdf + W_ + 1, u1 * cdf[W_]) - cdf) - 1;
-    x = std::clamp(x, 0, last_col_[y]);
-    pixel = std::size_t(y) * W_ + x;
-    const double phi = 2.0 * kPi * (x + u2) / W_;
-    const double ct = cos_edge_[y] + u3 * (cos_edge_[y + 1] - cos_edge_[y]);
-    const double st = std::sqrt(std::max(0.0, 1.0 - ct * ct));
-    return R_ * glm::dvec3(-st * std::sin(phi), ct, st * std::cos(phi));
-  }
-
- private:
-  double weight(std::size_t pixel) const {
-    const float* p = rgb_ + 3 * pixel;
-    return std::max({std::abs(double(p[0])), std::abs(double(p[1])), std::abs(double(p[2]))});
-  }
-
-  int W_, H_;
-  const float* rgb_;
-  glm::dmat3 R_, RT_;
-  std::vector<double> cos_edge_;
-  std::vector<double> row_cdf_;
-  std::vector<double> col_cdf_;
-  std::vector<int> last_col_;
-  int last_row_ = 0;
-  double total_ = 0;
-};
-
-// Power heuristic weight over the density (as reference.cpp's).
-double mis_over_pdf(double pa, double pb) { return pa / (pa * pa + pb * pb); }
 
 // ---- one channel's profile as a distribution of the radius -----------------------
 
