@@ -173,30 +173,37 @@ constexpr double kNearDiscs = 3.0;
 // (dense where the profile peaks, at r = 0) and interpolated linearly in t:
 // a lookup instead of each channel's two exponentials. Per entry, per
 // channel: R_d, its 2-D Laplacian, and F1(r) = int_0^r R_d s ds (the
-// disc's closed form over 2 pi) that integrates R_d over a wedge, and
-// dR_d / dr. 16,384 entries keep the
+// disc's closed form over 2 pi) that integrates R_d over a wedge,
+// dR_d / dr, and F2(r) = int_0^r R_d s^2 ds (Simpson's rule between
+// entries) that integrates R_d times the distance over a wedge in the
+// plane. 16,384 entries keep the
 // interpolation within 2e-5 of the profile (tests/test_subsurface_scatter.cpp).
 class ProfileTable {
  public:
-  static constexpr std::size_t kColumns = 12;  // R_d, Laplacian, F1, slope; three channels each
+  static constexpr std::size_t kColumns = 15;  // R_d, Laplacian, slope, F1, F2; three channels each
   ProfileTable(const std::array<Dipole, 3>& d, double reach_mm)
       : reach_(std::max(reach_mm, 1e-30)), scale_((kEntries - 1) / std::sqrt(reach_)) {
     values_.resize(std::size_t(kEntries) * kColumns);
+    double prev_r = 0.0;
     for (int i = 0; i < kEntries; ++i) {
       const double t = double(i) / (kEntries - 1), r = reach_ * t * t;
       double* e = values_.data() + std::size_t(i) * kColumns;
       for (std::size_t c = 0; c < 3; ++c) {
         e[c] = d[c].rd(r);
         e[3 + c] = d[c].laplacian(r);
-        e[6 + c] = d[c].disc(r) / (2 * std::numbers::pi);
-        e[9 + c] = d[c].slope(r);
+        e[6 + c] = d[c].slope(r);
+        e[9 + c] = d[c].disc(r) / (2 * std::numbers::pi);
+        if (i == 0) continue;  // F2(0) = 0; then Simpson's rule between entries
+        const auto g = [&](double x) { return d[c].rd(x) * x * x; };
+        e[12 + c] = e[12 + c - kColumns] + (r - prev_r) / 6 * (g(prev_r) + 4 * g(0.5 * (prev_r + r)) + g(r));
       }
+      prev_r = r;
     }
   }
   // R_d per channel at r mm.
   glm::dvec3 value(double r) const {
     double f[kColumns];
-    lookup(r, f, 3);
+    lookup(r, f, 0, 3);
     return {f[0], f[1], f[2]};
   }
   // The mean of R_d over a source spread in a plane about a point r away,
@@ -207,9 +214,9 @@ class ProfileTable {
   // the source). A uniform disc of radius rho: m2 = rho^2 / 2.
   glm::dvec3 point_mean(double r, double m2, double inplane = 1.0) const {
     double f[kColumns];
-    lookup(r, f, kColumns);
+    lookup(r, f, 0, 9);
     const double a = m2 / 4 * inplane, b = r > 0 ? m2 / 2 / r * (1 - inplane) : 0.0;
-    return {f[0] + a * f[3] + b * f[9], f[1] + a * f[4] + b * f[10], f[2] + a * f[5] + b * f[11]};
+    return {f[0] + a * f[3] + b * f[6], f[1] + a * f[4] + b * f[7], f[2] + a * f[5] + b * f[8]};
   }
   // The same mean by a product rule over the disc (4 radii, equal shares of
   // area by Gauss-Legendre, times 8 angles), for a disc near the receiver.
@@ -228,18 +235,26 @@ class ProfileTable {
   // F1 per channel at r mm.
   glm::dvec3 f1(double r) const {
     double f[kColumns];
-    lookup(r, f, kColumns);
-    return {f[6], f[7], f[8]};
+    lookup(r, f, 9, 12);
+    return {f[9], f[10], f[11]};
+  }
+  // F1 and F2 per channel at r mm.
+  void moments(double r, glm::dvec3& f1, glm::dvec3& f2) const {
+    double f[kColumns];
+    lookup(r, f, 9, 15);
+    f1 = {f[9], f[10], f[11]};
+    f2 = {f[12], f[13], f[14]};
   }
 
  private:
   static constexpr int kEntries = 16384;
-  void lookup(double r, double* f, std::size_t n) const {
+  // Columns [from, to) at r into f[from, to).
+  void lookup(double r, double* f, std::size_t from, std::size_t to) const {
     const double t = r > 0 ? std::min(std::sqrt(r) * scale_, double(kEntries - 1)) : 0.0;  // NaN: 0
     const int i = std::min(int(t), kEntries - 2);
     const double u = t - i;
     const double* a = values_.data() + std::size_t(i) * kColumns;
-    for (std::size_t k = 0; k < n; ++k) f[k] = a[k] + u * (a[k + kColumns] - a[k]);
+    for (std::size_t k = from; k < to; ++k) f[k] = a[k] + u * (a[k + kColumns] - a[k]);
   }
   double reach_, scale_;
   std::vector<double> values_;
@@ -273,6 +288,43 @@ constexpr std::array<double, 8> kEdgeWeights = {0.0506142681451881, 0.1111905172
                                                 0.1111905172266872, 0.0506142681451881};
 
 constexpr int kEdgePieces = 2;  // the rule on each of two halves of the mapped edge
+// A triangle whose plane passes this close to the receiver, in the
+// profile's narrowest width, is taken as through it for I1 (F2's planar
+// moment; the error is of order (h / z_r)^2 of that term).
+constexpr double kFlat = 0.05;
+// An edge at least this far from the receiver, relative to its length,
+// sees F1_h change smoothly along it: one piece.
+constexpr double kEdgeSmooth = 0.25;
+
+// I1's part along one edge a + t edge (t in [0, 1], length L): the
+// integral of F1_h(|x - q|) times the edge's outward normal
+// cross(edge, n) / L, Gauss-Legendre in t = t* + a sinh(v) about the edge's
+// point t* nearest q (a: the profile's width there over L).
+template <typename F1h>
+void edge_integral(double width, double h, const glm::dvec3& a3, const glm::dvec3& edge, double L,
+                   const glm::dvec3& n, const glm::dvec3& q, const F1h& f1h, std::array<glm::dvec3, 3>& I1) {
+  const glm::dvec3 out = glm::cross(edge, n) / L;
+  const double ts = std::clamp(glm::dot(q - a3, edge) / (L * L), 0.0, 1.0);
+  const double gap = glm::length(q - (a3 + ts * edge));
+  const double scale = std::max(std::sqrt(gap * gap + h * h), width) / L;
+  glm::dvec3 along(0.0);
+  for (int side = 0; side < 2; ++side) {  // towards a (t < t*), towards b
+    const double part = side == 0 ? ts : 1.0 - ts, sign = side == 0 ? -1.0 : 1.0;
+    if (!(part > 0)) continue;
+    const double vmax = std::asinh(part / scale);
+    // Where F1_h changes within the edge (the receiver near its line),
+    // the mapped edge in two pieces; else one.
+    const int pieces = scale < kEdgeSmooth ? kEdgePieces : 1;
+    for (int piece = 0; piece < pieces; ++piece)
+      for (std::size_t g = 0; g < kEdgeNodes.size(); ++g) {
+        const double v = vmax * (piece + kEdgeNodes[g]) / pieces, ev = std::exp(v);
+        const double t = ts + sign * scale * 0.5 * (ev - 1 / ev);  // sinh
+        along += vmax / pieces * kEdgeWeights[g] * scale * 0.5 * (ev + 1 / ev) * L *
+                 f1h(glm::length(a3 + t * edge - q));
+      }
+  }
+  for (std::size_t c = 0; c < 3; ++c) I1[c] += along[int(c)] * out;
+}
 
 void triangle_weights(const ProfileTable& table, double width, const glm::dvec3& o,
                       const std::array<glm::dvec3, 3>& p, std::array<glm::dvec3, 3>& W) {
@@ -285,6 +337,9 @@ void triangle_weights(const ProfileTable& table, double width, const glm::dvec3&
   const glm::dvec3 q = o - h * n;
   const glm::dvec3 base = table.f1(std::abs(h));
   const auto f1h = [&](double r) { return table.f1(std::sqrt(r * r + h * h)) - base; };
+  // In the plane (the receiver's own triangles, and where the surface is
+  // flat enough): I1 from the wedges too, int dphi e(phi) F2(r(phi)).
+  const bool flat = std::abs(h) < kFlat * width;
   glm::dvec3 I0(0.0);
   std::array<glm::dvec3, 3> I1{};  // per channel: the vector integral
   for (int k = 0; k < 3; ++k) {
@@ -292,23 +347,7 @@ void triangle_weights(const ProfileTable& table, double width, const glm::dvec3&
     const glm::dvec3 edge = b3 - a3;
     const double L = glm::length(edge);
     if (!(L > 0)) continue;
-    // I1: the edge, outward normal cross(edge, n) / L.
-    const glm::dvec3 out = glm::cross(edge, n) / L;
-    const double ts = std::clamp(glm::dot(q - a3, edge) / (L * L), 0.0, 1.0);
-    const double gap = glm::length(q - (a3 + ts * edge));
-    const double scale = std::max(std::sqrt(gap * gap + h * h), width) / L;
-    glm::dvec3 along(0.0);
-    for (int side = 0; side < 2; ++side) {  // towards a (t < t*), towards b
-      const double part = side == 0 ? ts : 1.0 - ts, sign = side == 0 ? -1.0 : 1.0;
-      if (!(part > 0)) continue;
-      const double vmax = std::asinh(part / scale);
-      for (int half = 0; half < kEdgePieces; ++half)
-        for (std::size_t g = 0; g < kEdgeNodes.size(); ++g) {
-          const double v = vmax * (half + kEdgeNodes[g]) / kEdgePieces, t = ts + sign * scale * std::sinh(v);
-          along += vmax / kEdgePieces * kEdgeWeights[g] * scale * std::cosh(v) * L * f1h(glm::length(a3 + t * edge - q));
-        }
-    }
-    for (std::size_t c = 0; c < 3; ++c) I1[c] += along[int(c)] * out;
+    if (!flat) edge_integral(width, h, a3, edge, L, n, q, f1h, I1);
     // I0: the wedge (q, a, b).
     const glm::dvec3 u = a3 - q, w = b3 - q;
     const double lu = glm::length(u);
@@ -326,9 +365,18 @@ void triangle_weights(const ProfileTable& table, double width, const glm::dvec3&
       const double lo = cuts[s], span = cuts[s + 1] - cuts[s];
       for (std::size_t g = 0; g < kWedgeNodes.size(); ++g) {
         const double phi = lo + span * kWedgeNodes[g];
-        const double r = ad / (std::cos(phi) * d.y - std::sin(phi) * d.x);
+        const double c = std::cos(phi), sn = std::sin(phi), r = ad / (c * d.y - sn * d.x);
         if (!(r > 0 && r < INFINITY)) continue;  // rounding at a wedge's edge: no area there
-        I0 += span * kWedgeWeights[g] * f1h(r);
+        const double w = span * kWedgeWeights[g];
+        if (!flat) {
+          I0 += w * f1h(r);
+          continue;
+        }
+        glm::dvec3 f1, f2;
+        table.moments(std::sqrt(r * r + h * h), f1, f2);
+        I0 += w * (f1 - base);
+        const glm::dvec3 e = c * e1 + sn * e2;
+        for (std::size_t ch = 0; ch < 3; ++ch) I1[ch] += w * f2[int(ch)] * e;
       }
     }
   }
