@@ -367,16 +367,16 @@ void triangle_weights(const ProfileTable& table, double width, const glm::dvec3&
         const double phi = lo + span * kWedgeNodes[g];
         const double c = std::cos(phi), sn = std::sin(phi), r = ad / (c * d.y - sn * d.x);
         if (!(r > 0 && r < INFINITY)) continue;  // rounding at a wedge's edge: no area there
-        const double w = span * kWedgeWeights[g];
+        const double wt = span * kWedgeWeights[g];
         if (!flat) {
-          I0 += w * f1h(r);
+          I0 += wt * f1h(r);
           continue;
         }
         glm::dvec3 f1, f2;
         table.moments(std::sqrt(r * r + h * h), f1, f2);
-        I0 += w * (f1 - base);
+        I0 += wt * (f1 - base);
         const glm::dvec3 e = c * e1 + sn * e2;
-        for (std::size_t ch = 0; ch < 3; ++ch) I1[ch] += w * f2[int(ch)] * e;
+        for (std::size_t ch = 0; ch < 3; ++ch) I1[ch] += wt * f2[int(ch)] * e;
       }
     }
   }
@@ -562,11 +562,11 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
       const std::size_t v = receivers[r], row = out_row[r];
       std::fill(acc.begin(), acc.end(), 0.0);
       // Adds w[c] (mm^2 times R_d, per channel) times `rows` (in_stride values).
-      const auto add = [&](const glm::dvec3& w, const auto* rows) {
+      const auto add = [&](const glm::dvec3& w, const auto* source) {
         for (int c = 0; c < 3; ++c) {
-          const auto* r = rows + (in_channels == 3 ? std::size_t(c) * std::size_t(nc) : 0);
+          const auto* x = source + (in_channels == 3 ? std::size_t(c) * std::size_t(nc) : 0);
           double* a = acc.data() + std::size_t(c) * std::size_t(nc);
-          for (int k = 0; k < nc; ++k) a[k] += w[c] * double(r[k]);
+          for (int k = 0; k < nc; ++k) a[k] += w[c] * double(x[k]);
         }
       };
       // The weight S^2 A_i R_d of the source at tree.order[i]
@@ -589,7 +589,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
       // (triangle_weights: its hat b_j), in place of its point value. Whole
       // hats only: a vertex whose triangles were integrated in part would
       // lose the symmetry that makes its point value second-order.
-      const auto near_field = [&](std::size_t v, std::vector<std::uint32_t>& verts) {
+      const auto near_field = [&](std::vector<std::uint32_t>& verts) {
         std::sort(verts.begin(), verts.end());
         std::vector<std::uint32_t>& tris = stack;
         tris.clear();
@@ -636,7 +636,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
         }
         for (std::uint32_t c = node.child; c < node.child + node.children; ++c) stack.push_back(c);
       }
-      if (mesh) near_field(v, near);
+      if (mesh) near_field(near);
       for (std::size_t q = 0; q < stride; ++q) out[row * stride + q] = float(acc[q] / std::numbers::pi);
     }
     ticker.tick(range.size());
