@@ -743,6 +743,17 @@ struct ShReports {
   std::optional<Mesh> refined;  // --subdivide: the mesh the transfer is for
 };
 
+// --compress KxN and --compress-weights, checked: what a vertex transfer is
+// compressed with when --compress is given.
+CompressOptions compress_options(const PrecomputeArgs& a) {
+  CompressOptions copt;
+  copt.weight_bits = a.compress_weights;
+  if (!a.compress.empty()) parse_compress(a.compress, copt);
+  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
+    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
+  return copt;
+}
+
 // The summary of an SH vertex transfer written (`secs` after loading began;
 // `cap`: the refined mesh's most vertices).
 void print_sh_summary(const PrecomputeArgs& a, const Transfer& t, const ShReports& rep, std::size_t cap, double secs) {
@@ -801,11 +812,7 @@ int run_sh_vertices(PrecomputeArgs& a) {
   const bool subdivide = a.subdivide_opt->count() > 0;
   if (subdivide && is_root()) for_path("--subdivided-mesh", [&] { check_writable(a.subdivided_mesh); });
 
-  CompressOptions copt;  // checked before the long work
-  copt.weight_bits = a.compress_weights;
-  if (!a.compress.empty()) parse_compress(a.compress, copt);
-  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
-    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
+  CompressOptions copt = compress_options(a);  // checked before the long work
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   if (subdivide && a.sopt.max_vertices != 0 && a.sopt.max_vertices < mesh.vertex_count())
@@ -930,11 +937,7 @@ int run_subsurface(PrecomputeArgs& a, const SubsurfaceRecord& r) {
   a.opt.comm = &job();
   a.opt.memory_limit = memory_limit(a);
   if (is_root()) for_path("--output", [&] { check_writable(a.output); });
-  CompressOptions copt;  // checked before the long work
-  copt.weight_bits = a.compress_weights;
-  if (!a.compress.empty()) parse_compress(a.compress, copt);
-  if (a.compress.empty() && a.compress_weights_opt->count() > 0)
-    throw UsageError("--compress-weights is for --compress KxN; give both, or leave it out");
+  CompressOptions copt = compress_options(a);  // checked before the long work
   const auto t0 = std::chrono::steady_clock::now();
   const Mesh mesh = load_mesh(a.mesh, a.mesh_opt);
   const bool quiet = a.quiet || !is_root();
