@@ -277,9 +277,12 @@ constexpr const std::array<double, 4>& kWedgeWeights = kDiscWeights;
 //   = F1(sqrt(s^2 + h^2)) - F1(|h|), the table's disc),
 // I0 as the signed sum of the three wedges (q, p_k, p_k+1), each in polar
 // coordinates about q: int dphi F1_h(r(phi)), Gauss-Legendre in the angle
-// split where r(phi) is least; I1 by Gauss-Legendre along each edge in
-// t = t* + a sinh(v) about the edge's point nearest q (nodes dense where
-// F1_h changes, over the profile's width there). Exact but for the rules.
+// split where r(phi) is least. I1, for a triangle whose plane passes within
+// kFlat of the profile's width of o (the receiver's own triangles), from
+// the same wedges: int dphi e(phi) F2(r(phi)), F2 = int_0^r R_d s^2 ds; for
+// the others, by Gauss-Legendre along each edge in t = t* + a sinh(v) about
+// the edge's point nearest q (nodes dense where F1_h changes, over the
+// profile's width there). Exact but for the rules (and, in the plane, h).
 constexpr std::array<double, 8> kEdgeNodes = {0.0198550717512319, 0.1016667612931866, 0.2372337950418355,
                                               0.4082826787521751, 0.5917173212478249, 0.7627662049581645,
                                               0.8983332387068134, 0.9801449282487681};
