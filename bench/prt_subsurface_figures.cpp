@@ -2,7 +2,7 @@
 // materials (docs/SUBSURFACE.md):
 //   prt_subsurface_figures MESH ENV [--bands 5] [--samples 1024] [--receivers 200] [--ref-samples 4096]
 //                          [--levels 2] [--seed 1] [--quick] [--no-diagnostics] [--no-interreflected]
-//                          [--dump MATERIAL]
+//                          [--dump MATERIAL] [--only MATERIAL]
 // For marble, skin1, ketchup and "custom 0.1 mm" (sigma_a 0.5, sigma_s' 9.5
 // /mm in every channel, eta 1.3: 1 / sigma_t' = 0.1 mm), each at two length
 // scales S (mm per mesh unit) from the mesh's bounding-box diagonal D and
@@ -10,8 +10,9 @@
 //   "few percent": S = L / (0.03 D) (the object is ~33 diffusion lengths across),
 //   "thin":        S = L / (0.5 D)  (2 across: light crosses thin parts),
 // one row of:
-//   e_prt  our translucent transfer (`--samples` rays, the mesh's vertices,
-//          compute_subsurface_transfer's model) relit at `--bands` bands
+//   e_prt  our translucent transfer (compute_subsurface_transfer at
+//          `--samples` rays, its irradiance samples as the product takes
+//          them; the count added is printed) relit at `--bands` bands
 //          under the map's projection, against render_subsurface_reference
 //          (`--ref-samples` iterations, the same material and scale, shadowed)
 //          at the receivers;
@@ -35,12 +36,14 @@
 // scale, interreflected (2 bounces) against the reference's interreflected
 // mode.
 //
-// Shadowed rows share the transmitted irradiance's trace (compute_transfer
-// with transmission_eta, rows times pi) between the materials of one eta and
-// evaluate the surface integral (subsurface_scatter) at the receivers only:
-// the same arithmetic as compute_subsurface_transfer, checked against it at
-// the receivers on the first row (printed). Diagnostics (a second table, for
-// every shadowed row): e_prt with 4x the rays, and with every source pair
+// The band-limited answer and the diagnostics share the transmitted
+// irradiance's trace (compute_transfer with transmission_eta, rows times pi)
+// between the materials of one eta and evaluate the surface integral
+// (subsurface_scatter) at the receivers only: the arithmetic of
+// compute_subsurface_transfer with the vertices alone as irradiance samples
+// (split_levels 0), checked against it at the receivers on the first row
+// (printed). Diagnostics (a second table, for every shadowed row): e_prt
+// with the vertices alone, that with 4x the rays, with every source pair
 // (SubsurfaceScatterOptions::max_solid_angle = 0; the band-limited one too),
 // on the mesh split once at `--samples` rays (the surface's sampling alone),
 // the mean edge length in mm against the material's smallest and largest
@@ -87,6 +90,7 @@ struct Args {
   std::uint64_t seed = 1;
   bool diagnostics = true, interreflected = true;
   std::string dump;  // --dump MATERIAL: each receiver's values of that material's rows, on stderr
+  std::string only;  // --only MATERIAL: that material's rows alone (the interreflected one with skin1)
 };
 
 // Every triangle split into n^2 (n = 2^levels segments an edge: the grid of
@@ -288,7 +292,8 @@ struct Row {
   Errors prt, bl;
   double noise = 0, t_prt = 0, t_bl = 0, t_ref = 0;
   // diagnostics
-  Errors more_rays, every_pair, bl_every_pair, split_once;
+  Errors more_rays, every_pair, bl_every_pair, split_once, vertices_alone;
+  std::size_t added = 0;  // irradiance samples between the vertices
   double zr_min = 0, zr_max = 0;
 };
 
@@ -334,31 +339,38 @@ Row shadowed_row(Setup& s, const Material& mat, const char* scale_name, double f
   const Trace& coarse = s.trace(s.coarse, s.mesh, eta, s.a.samples);
   const Trace& fine = s.trace(s.fine_rows, s.fine, eta, s.a.samples << (2 * s.a.levels));
   double t = 0;
-  const auto ours = scatter_relit(s.mesh, mat.m, coarse.rows, s.a.bands, row.scale, kDefault, s.receivers, s.light, t);
-  row.t_prt = coarse.seconds + t;
+  TransferOptions o;
+  o.bands = s.a.bands;
+  o.samples = s.a.samples;
+  o.seed = s.a.seed;
+  SubsurfaceScatterOptions so;
+  so.length_scale = row.scale;
+  so.added_samples = &row.added;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Transfer whole = compute_subsurface_transfer(s.mesh, o, mat.m, so);
+  const std::vector<glm::vec3> all = relight(whole, s.mesh, s.light);
+  row.t_prt = seconds_since(t0);
+  std::vector<glm::vec3> ours(s.receivers.size());
+  for (std::size_t i = 0; i < ours.size(); ++i) ours[i] = all[s.receivers[i]];
+  const auto alone = scatter_relit(s.mesh, mat.m, coarse.rows, s.a.bands, row.scale, kDefault, s.receivers, s.light, t);
   const auto bl = scatter_relit(s.fine, mat.m, fine.rows, s.a.bands, row.scale, kDefault, s.receivers, s.light, t);
   row.t_bl = fine.seconds + t;
   const ReferenceResult ref = reference(s, mat.m, row.scale, TransferMode::Shadowed, row.t_ref);
   row.prt = rel_rms(ours, ref);
+  row.vertices_alone = rel_rms(alone, ref);
   row.bl = rel_rms(bl, ref);
   row.noise = noise_of(ref);
   if (s.a.dump == mat.name) dump_receivers(s, mat.m, coarse, ours, bl, ref);
-  if (check) {  // the decomposition against compute_subsurface_transfer itself
-    TransferOptions o;
-    o.bands = s.a.bands;
-    o.samples = s.a.samples;
-    o.seed = s.a.seed;
-    SubsurfaceScatterOptions so;
-    so.length_scale = row.scale;
-    const Transfer whole = compute_subsurface_transfer(s.mesh, o, mat.m, so);
-    const std::vector<glm::vec3> all = relight(whole, s.mesh, s.light);
+  if (check) {  // the decomposition against compute_subsurface_transfer itself, without irradiance samples
+    so.split_levels = 0;
+    const std::vector<glm::vec3> plain = relight(compute_subsurface_transfer(s.mesh, o, mat.m, so), s.mesh, s.light);
     double dmax = 0, vmax = 0;
     for (std::size_t i = 0; i < s.receivers.size(); ++i) {
-      dmax = std::max(dmax, double(glm::length(all[s.receivers[i]] - ours[i])));
-      vmax = std::max(vmax, double(glm::length(all[s.receivers[i]])));
+      dmax = std::max(dmax, double(glm::length(plain[s.receivers[i]] - alone[i])));
+      vmax = std::max(vmax, double(glm::length(plain[s.receivers[i]])));
     }
-    fmt::print("check: compute_subsurface_transfer against the shared trace + subsurface_scatter at the receivers "
-               "({}, {}): largest difference {:.3g} of the largest value {:.3g}\n\n",
+    fmt::print("check: compute_subsurface_transfer without irradiance samples against the shared trace + "
+               "subsurface_scatter at the receivers ({}, {}): largest difference {:.3g} of the largest value {:.3g}\n\n",
                mat.name, scale_name, dmax, vmax);
   }
   if (s.a.diagnostics) {
@@ -403,7 +415,10 @@ Row interreflected_row(Setup& s, const Material& mat, double fraction) {
     for (std::size_t i = 0; i < r.size(); ++i) r[i] = all[s.receivers[i]];
     return r;
   };
+  so.added_samples = &row.added;
   const auto ours = at_receivers(s.mesh, s.a.samples, row.t_prt);
+  so.added_samples = nullptr;
+  so.split_levels = 0;  // the band-limited answer's samples: the mesh split --levels times, everywhere
   const auto bl = at_receivers(s.fine, s.a.samples << (2 * s.a.levels), row.t_bl);
   const ReferenceResult ref = reference(s, mat.m, row.scale, TransferMode::Interreflected, row.t_ref);
   row.prt = rel_rms(ours, ref);
@@ -414,10 +429,10 @@ Row interreflected_row(Setup& s, const Material& mat, double fraction) {
 
 void print_row(const Row& r) {
   const double bound = 1.1 * r.bl.raw + 0.01;
-  fmt::print("| {} | {} | {:.4g} | {:.4g} | {:.2f}% | {:.2f}% | {:.2f}% | {} | {:.2f}% | {:.2f}% | {:.2f}% | {:.1f} | {:.1f} | {:.1f} |\n",
+  fmt::print("| {} | {} | {:.4g} | {:.4g} | {:.2f}% | {:.2f}% | {:.2f}% | {} | {:.2f}% | {:.2f}% | {:.2f}% | {} | {:.1f} | {:.1f} | {:.1f} |\n",
              r.material, r.scale_name, r.scale, r.size_mm, 100 * r.prt.raw, 100 * r.bl.raw, 100 * bound,
              r.prt.raw <= bound ? "yes" : fmt::format("**no** (+{:.2f} pts)", 100 * (r.prt.raw - bound)),
-             100 * r.noise, 100 * r.prt.corrected, 100 * r.bl.corrected, r.t_prt, r.t_bl, r.t_ref);
+             100 * r.noise, 100 * r.prt.corrected, 100 * r.bl.corrected, r.added, r.t_prt, r.t_bl, r.t_ref);
   std::fflush(stdout);
 }
 
@@ -442,6 +457,7 @@ Args parse(int argc, char** argv) {
     else if (o == "--no-diagnostics") a.diagnostics = false;
     else if (o == "--no-interreflected") a.interreflected = false;
     else if (o == "--dump") a.dump = next();
+    else if (o == "--only") a.only = next();
     else throw Error("unknown option " + o);
   }
   if (quick) a.samples = 128, a.receivers = 48, a.ref_samples = 256, a.levels = 1;
@@ -449,15 +465,16 @@ Args parse(int argc, char** argv) {
 }
 
 void print_diagnostics(const Setup& s, const std::vector<Row>& rows) {
-  fmt::print("\nDiagnostics (shadowed rows): e_prt at {} rays; e_prt and e_bl with every source pair "
-             "(max_solid_angle 0); e_prt on the mesh split once at {} rays; mean edge {:.4g} mesh units, in mm against z_r = 1/sigma_t' (smallest, largest)\n\n",
+  fmt::print("\nDiagnostics (shadowed rows): e_prt with the vertices alone as irradiance samples (split_levels 0), "
+             "and that at {} rays, with every source pair (max_solid_angle 0; e_bl too) and on the mesh split once at "
+             "{} rays; mean edge {:.4g} mesh units, in mm against z_r = 1/sigma_t' (smallest, largest)\n\n",
              4 * s.a.samples, s.a.samples, s.edge);
-  fmt::print("| material | scale | e_prt | e_prt {} rays | e_prt every pair | e_prt split once | e_bl | e_bl every pair | edge mm | "
-             "z_r mm |\n|---|---|---|---|---|---|---|---|---|---|\n",
+  fmt::print("| material | scale | e_prt | e_prt vertices alone | e_prt {} rays | e_prt every pair | e_prt split once | e_bl | e_bl every pair | edge mm | "
+             "z_r mm |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
              4 * s.a.samples);
   for (const Row& r : rows)
-    fmt::print("| {} | {} | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.3g} | {:.3g}-{:.3g} |\n", r.material,
-               r.scale_name, 100 * r.prt.raw, 100 * r.more_rays.raw, 100 * r.every_pair.raw, 100 * r.split_once.raw, 100 * r.bl.raw,
+    fmt::print("| {} | {} | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.2f}% | {:.3g} | {:.3g}-{:.3g} |\n", r.material,
+               r.scale_name, 100 * r.prt.raw, 100 * r.vertices_alone.raw, 100 * r.more_rays.raw, 100 * r.every_pair.raw, 100 * r.split_once.raw, 100 * r.bl.raw,
                100 * r.bl_every_pair.raw, s.edge * r.scale, r.zr_min, r.zr_max);
 }
 
@@ -481,16 +498,18 @@ int run(Setup& s) {
   const std::vector<Material> mats = materials();
   std::string table =
       "| material | scale | S (mm/unit) | object mm | e_prt | e_bl | 1.1 e_bl + 1% | met | ref noise | e_prt* | e_bl* "
-      "| ours s | band-limited s | reference s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "| samples added | ours s | band-limited s | reference s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   bool header = false;
-  for (const Material& m : mats)
+  for (const Material& m : mats) {
+    if (!s.a.only.empty() && s.a.only != m.name) continue;
     for (const auto& [name, fraction] : {std::pair{"few percent", 0.03}, std::pair{"thin", 0.5}}) {
       std::fprintf(stderr, "%s, %s...\n", m.name.c_str(), name);
       rows.push_back(shadowed_row(s, m, name, fraction, rows.empty()));
       if (!header) fmt::print("{}", table), header = true;
       print_row(rows.back());
     }
-  if (s.a.interreflected) print_row(interreflected_row(s, mats[1], 0.5));
+  }
+  if (s.a.interreflected && (s.a.only.empty() || s.a.only == mats[1].name)) print_row(interreflected_row(s, mats[1], 0.5));
   fmt::print("\nTraces (shared by the rows of one eta): ");
   for (const auto& [eta, t] : s.coarse) fmt::print("ours eta {} {:.1f} s; ", eta, t.seconds);
   for (const auto& [eta, t] : s.fine_rows) fmt::print("band-limited eta {} {:.1f} s; ", eta, t.seconds);
@@ -506,7 +525,8 @@ int main(int argc, char** argv) {
   if (argc < 3) {
     std::fprintf(stderr,
                  "usage: prt_subsurface_figures MESH ENV [--bands 5] [--samples 1024] [--receivers 200] "
-                 "[--ref-samples 4096] [--levels 2] [--seed 1] [--quick] [--no-diagnostics] [--no-interreflected]\n");
+                 "[--ref-samples 4096] [--levels 2] [--seed 1] [--quick] [--no-diagnostics] [--no-interreflected] [--dump MATERIAL] "
+                 "[--only MATERIAL]\n");
     return 2;
   }
   try {

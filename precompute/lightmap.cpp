@@ -174,10 +174,10 @@ void check_lightmap_memory(const Scene& scene, int width, int height, int uv_set
   // What the plan in compute_at (after lightmap_texels, move_texels_out_of_geometry
   // and TexelSetup) counts at least: the process then holds what it holds now
   // and the texels (LightmapTexels: texel index, position, normal, albedo,
-  // triangle, barycentrics, texel size) and TexelSetup's map of the atlas;
+  // triangle, barycentrics, texel size, area) and TexelSetup's map of the atlas;
   // its arrays are those of P points or more, in one channel at least.
   constexpr std::size_t kTexelBytes = sizeof(std::uint32_t) + 3 * sizeof(glm::vec3) + sizeof(std::uint32_t) +
-                                      sizeof(glm::vec2) + sizeof(float);
+                                      sizeof(glm::vec2) + 2 * sizeof(float);
   const std::size_t atlas = std::size_t(width) * std::size_t(height);
   TransferOptions o = options;
   o.vertex_colors = false;

@@ -6,6 +6,7 @@
 #include <prt/subsurface_scatter.h>
 
 #include "progress_ticker.h"
+#include "subsurface_samples.h"
 
 #include <fmt/format.h>
 
@@ -23,6 +24,7 @@
 #include <cstdint>
 #include <memory>
 #include <numbers>
+#include <numeric>
 
 namespace prt {
 
@@ -183,19 +185,21 @@ class ProfileTable {
   static constexpr std::size_t kColumns = 15;  // R_d, Laplacian, slope, F1, F2; three channels each
   ProfileTable(const std::array<Dipole, 3>& d, double reach_mm)
       : reach_(std::max(reach_mm, 1e-30)), scale_((kEntries - 1) / std::sqrt(reach_)) {
-    values_.resize(std::size_t(kEntries) * kColumns);
+    far_.resize(std::size_t(kEntries) * kFar);
+    near_.resize(std::size_t(kEntries) * kNear);
     double prev_r = 0.0;
     for (int i = 0; i < kEntries; ++i) {
       const double t = double(i) / (kEntries - 1), r = reach_ * t * t;
-      double* e = values_.data() + std::size_t(i) * kColumns;
+      float* e = far_.data() + std::size_t(i) * kFar;
+      double* m = near_.data() + std::size_t(i) * kNear;
       for (std::size_t c = 0; c < 3; ++c) {
-        e[c] = d[c].rd(r);
-        e[3 + c] = d[c].laplacian(r);
-        e[6 + c] = d[c].slope(r);
-        e[9 + c] = d[c].disc(r) / (2 * std::numbers::pi);
+        e[c] = float(d[c].rd(r));
+        e[3 + c] = float(d[c].laplacian(r));
+        e[6 + c] = float(d[c].slope(r));
+        m[c] = d[c].disc(r) / (2 * std::numbers::pi);
         if (i == 0) continue;  // F2(0) = 0; then Simpson's rule between entries
         const auto g = [&](double x) { return d[c].rd(x) * x * x; };
-        e[12 + c] = e[12 + c - kColumns] + (r - prev_r) / 6 * (g(prev_r) + 4 * g(0.5 * (prev_r + r)) + g(r));
+        m[3 + c] = m[3 + c - kNear] + (r - prev_r) / 6 * (g(prev_r) + 4 * g(0.5 * (prev_r + r)) + g(r));
       }
       prev_r = r;
     }
@@ -248,16 +252,25 @@ class ProfileTable {
 
  private:
   static constexpr int kEntries = 16384;
-  // Columns [from, to) at r into f[from, to).
+  // The columns every source reads (R_d, Laplacian, slope) in floats, 0.6
+  // MB that stay in cache (float's 6e-8 is far below the interpolation's
+  // 2e-5); the near field's F1 and F2, whose differences cancel, in doubles.
+  static constexpr std::size_t kFar = 9, kNear = 6;
+  // Columns [from, to) at r into f[from, to): [0, 9) from the far table,
+  // [9, 15) from the near one.
   void lookup(double r, double* f, std::size_t from, std::size_t to) const {
     const double t = r > 0 ? std::min(std::sqrt(r) * scale_, double(kEntries - 1)) : 0.0;  // NaN: 0
     const int i = std::min(int(t), kEntries - 2);
     const double u = t - i;
-    const double* a = values_.data() + std::size_t(i) * kColumns;
-    for (std::size_t k = from; k < to; ++k) f[k] = a[k] + u * (a[k + kColumns] - a[k]);
+    const float* a = far_.data() + std::size_t(i) * kFar;
+    for (std::size_t k = from; k < std::min(to, kFar); ++k) f[k] = double(a[k]) + u * (double(a[k + kFar]) - double(a[k]));
+    const double* b = near_.data() + std::size_t(i) * kNear;
+    for (std::size_t k = std::max(from, kFar); k < to; ++k)
+      f[k] = b[k - kFar] + u * (b[k - kFar + kNear] - b[k - kFar]);
   }
   double reach_, scale_;
-  std::vector<double> values_;
+  std::vector<float> far_;
+  std::vector<double> near_;
 };
 
 // The angular rule of a wedge: Gauss-Legendre, 4 nodes on each side of
@@ -501,12 +514,61 @@ int check_scatter(std::size_t V, std::size_t areas, const SubsurfaceMaterial& ma
   return in_channels;
 }
 
+// Rows of three channels, [point][channel][k], as one when the three are
+// equal everywhere (the direct light's: the rays are weighed alike in every
+// channel), so that the sum over points carries a third of the numbers.
+std::vector<float> grey_rows(std::vector<float> rows, int nc) {
+  const std::size_t n = std::size_t(nc), P = rows.size() / (3 * n);
+  if (rows.size() != 3 * n * P) return rows;
+  for (std::size_t p = 0; p < P; ++p)
+    for (std::size_t k = 0; k < n; ++k)
+      if (rows[(3 * p + 1) * n + k] != rows[3 * p * n + k] || rows[(3 * p + 2) * n + k] != rows[3 * p * n + k]) return rows;
+  std::vector<float> grey(P * n);
+  for (std::size_t p = 0; p < P; ++p) std::copy_n(rows.begin() + std::ptrdiff_t(3 * p * n), n, grey.begin() + std::ptrdiff_t(p * n));
+  return grey;
+}
+
+// The spread term (m2 / 4 times the Laplacian) is the second order of the
+// profile's change across a cluster; the fourth, about (sigma_tr rho)^4 /
+// 64 of the cluster's weight for a cluster of radius rho, is what the solid
+// angle alone does not bound: a cluster several decay lengths wide a few
+// away (docs/SUBSURFACE.md "Clusters"). One decay length bounds it by 1.6%
+// of a cluster's weight; half and two measured alike on the tube, where
+// none was 15.2% off against 7.2% with every pair.
+constexpr double kClusterSpan = 1.0;
+
+// The receivers' positions (`points`, else the sources `index` names, else
+// every source) into `at`, and the order they are visited in: out_row[r]
+// the r-th one's row. Sources in the tree's order (neighbours walk the
+// same nodes), then those without area; `points` in their order.
+std::vector<std::size_t> receiver_order(const std::vector<glm::dvec3>& pos, const Octree& tree,
+                                        std::vector<std::uint32_t> index, std::span<const glm::dvec3> points,
+                                        std::vector<glm::dvec3>& at) {
+  const std::size_t V = pos.size();
+  if (points.empty() && index.empty()) {
+    index.resize(V);
+    std::iota(index.begin(), index.end(), 0u);
+  }
+  const std::size_t R = points.empty() ? index.size() : points.size();
+  std::vector<std::size_t> out_row(R);
+  std::iota(out_row.begin(), out_row.end(), std::size_t(0));
+  at.assign(points.begin(), points.end());
+  if (!points.empty()) return out_row;
+  std::vector<std::uint32_t> place(V, std::uint32_t(tree.order.size()));
+  for (std::size_t i = 0; i < tree.order.size(); ++i) place[tree.order[i]] = std::uint32_t(i);
+  std::stable_sort(out_row.begin(), out_row.end(),
+                   [&](std::size_t a, std::size_t b) { return place[index[a]] < place[index[b]]; });
+  at.resize(R);
+  for (std::size_t r = 0; r < R; ++r) at[r] = pos[index[r]];
+  return out_row;
+}
+
 // The sum over points; `mesh` (whose vertices the points are) gives the
 // near field by its triangles, else by discs.
 std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<const double> areas, const Mesh* mesh,
                                 const SubsurfaceMaterial& material, std::span<const float> in, int nc,
                                 const SubsurfaceScatterOptions& o, const Progress& progress = {},
-                                const char* phase = "subsurface") {
+                                const char* phase = "subsurface", std::span<const glm::dvec3> points = {}) {
   const std::size_t V = positions.size();
   const int in_channels = check_scatter(V, areas.size(), material, in.size(), nc, o);
   std::vector<glm::dvec3> pos(V);
@@ -525,8 +587,11 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
   const double S = o.length_scale, S2 = S * S, eps = o.max_solid_angle;
   const ProfileTable table(dipole, V ? 1.001 * S * glm::length(hi - lo) : 1.0);
   const double width = std::min({dipole[0].z_r, dipole[1].z_r, dipole[2].z_r});  // the profile's narrowest, mm
-  const std::size_t stride = 3 * std::size_t(nc), R = o.receivers.empty() ? V : o.receivers.size();
+  const std::size_t stride = 3 * std::size_t(nc), R = !points.empty() ? points.size() : o.receivers.empty() ? V : o.receivers.size();
   std::vector<float> out(R * stride, 0.0f);
+  // A cluster is taken whole only within kClusterSpan decay lengths of the
+  // fastest-decaying channel (mesh units).
+  const double cluster_span = kClusterSpan / (S * std::max({dipole[0].sigma_tr, dipole[1].sigma_tr, dipole[2].sigma_tr}));
   const double reach = profile_reach(dipole, tree.nodes.empty() ? 0.0 : S2 * tree.nodes[0].area) / S;  // mesh units
   const Incidence inc = mesh ? incidence(*mesh) : Incidence{};
   // The sources in the tree's order (a leaf's points and rows side by side),
@@ -543,16 +608,8 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
     leaf[i] = {src.centre[p], src.normal[p], area, S2 * src.m2[p], rho, (kNearDiscs * rho / S) * (kNearDiscs * rho / S)};
     std::copy_n(in.data() + std::size_t(p) * in_stride, in_stride, rows.data() + i * in_stride);
   }
-  // Receivers in the tree's order too (neighbours walk the same nodes),
-  // then the points without area.
-  std::vector<std::uint32_t> receivers = o.receivers;
-  if (receivers.empty()) {
-    receivers = tree.order;
-    for (std::uint32_t i = 0; i < V; ++i)
-      if (!(areas[i] > 0)) receivers.push_back(i);
-  }
-  std::vector<std::size_t> out_row(receivers.size());
-  for (std::size_t r = 0; r < receivers.size(); ++r) out_row[r] = o.receivers.empty() ? receivers[r] : r;
+  std::vector<glm::dvec3> receiver;
+  const std::vector<std::size_t> out_row = receiver_order(pos, tree, o.receivers, points, receiver);
   detail::ProgressTicker ticker(progress, R, phase);
   ticker.start();
   std::unique_ptr<tbb::global_control> limit;
@@ -562,10 +619,23 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
     std::vector<std::uint32_t> stack, near;
     std::vector<glm::dvec3> hats;
     for (std::size_t r = range.begin(); r < range.end(); ++r) {
-      const std::size_t v = receivers[r], row = out_row[r];
+      const std::size_t row = out_row[r];
+      const glm::dvec3 o_pos = receiver[row];
       std::fill(acc.begin(), acc.end(), 0.0);
       // Adds w[c] (mm^2 times R_d, per channel) times `rows` (in_stride values).
-      const auto add = [&](const glm::dvec3& w, const auto* source) {
+      const auto add = [&](const glm::dvec3& w, const auto* __restrict source) {
+        if (in_channels == 1) {  // one row for the three channels: one pass over it
+          double* __restrict a0 = acc.data();
+          double* __restrict a1 = a0 + nc;
+          double* __restrict a2 = a1 + nc;
+          for (int k = 0; k < nc; ++k) {
+            const double x = double(source[k]);
+            a0[k] += w.x * x;
+            a1[k] += w.y * x;
+            a2[k] += w.z * x;
+          }
+          return;
+        }
         for (int c = 0; c < 3; ++c) {
           const auto* x = source + (in_channels == 3 ? std::size_t(c) * std::size_t(nc) : 0);
           double* a = acc.data() + std::size_t(c) * std::size_t(nc);
@@ -576,7 +646,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
       // (docs/SUBSURFACE.md "Near sources").
       const auto point_weight = [&](std::uint32_t i) {
         const Leaf& l = leaf[i];
-        const glm::dvec3 to = pos[v] - l.centre;
+        const glm::dvec3 to = o_pos - l.centre;
         const double d2 = glm::dot(to, to), d = S * std::sqrt(d2), g = glm::dot(to, l.normal);
         const double inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
         if (mesh) {  // the near ones' triangles are integrated below
@@ -604,7 +674,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
         std::array<glm::dvec3, 3> W;
         for (const std::uint32_t t : tris) {
           const glm::uvec3 tri = mesh->triangles[t];
-          triangle_weights(table, width, S * pos[v], {S * pos[tri.x], S * pos[tri.y], S * pos[tri.z]}, W);
+          triangle_weights(table, width, S * o_pos, {S * pos[tri.x], S * pos[tri.y], S * pos[tri.z]}, W);
           for (int c = 0; c < 3; ++c) {
             const auto at = std::lower_bound(verts.begin(), verts.end(), tri[c]);
             if (at != verts.end() && *at == tri[c]) hats[std::size_t(at - verts.begin())] += W[std::size_t(c)];
@@ -612,7 +682,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
         }
         for (std::size_t i = 0; i < verts.size(); ++i) {
           const std::uint32_t j = verts[i];
-          const glm::dvec3 to = pos[v] - src.centre[j];
+          const glm::dvec3 to = o_pos - src.centre[j];
           const double d2 = glm::dot(to, to), g = glm::dot(to, src.normal[j]);
           const double point = S2 * areas[j], inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
           add(hats[i] - point * table.point_mean(S * std::sqrt(d2), S2 * src.m2[j], inplane),
@@ -630,10 +700,10 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
             add(point_weight(i), rows.data() + std::size_t(i) * in_stride);
           continue;
         }
-        const double d2 = glm::dot(pos[v] - node.centre, pos[v] - node.centre);
+        const double d2 = glm::dot(o_pos - node.centre, o_pos - node.centre);
         if (node.radius + reach < std::sqrt(d2)) continue;  // beyond the profile's reach
-        if (node.area < eps * d2) {  // small seen from here: the cluster whole
-          const double g = glm::dot(pos[v] - node.centre, node.normal), inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
+        if (node.area < eps * d2 && node.radius < cluster_span) {  // small seen from here, narrow for the profile: whole
+          const double g = glm::dot(o_pos - node.centre, node.normal), inplane = d2 > 0 ? 1.0 - g * g / d2 : 1.0;
           add(S2 * table.point_mean(S * std::sqrt(d2), S2 * node.m2, inplane), tree.sums.data() + n * in_stride);
           continue;
         }
@@ -662,9 +732,14 @@ std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial
   return scatter_impl(mesh.positions, area, &mesh, material, in, nc, o);
 }
 
-Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
-                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter,
-                                     const Progress& progress) {
+// Each split quadruples a triangle's sources: four levels are 256 points
+// where there was one.
+constexpr int kMaxSplitLevels = 4;
+
+namespace {
+
+void check_subsurface_options(const TransferOptions& options, const SubsurfaceMaterial& material,
+                              const SubsurfaceScatterOptions& scatter) {
   check_subsurface_material(material, "subsurface material");
   if (!scatter.receivers.empty())
     throw Error("compute_subsurface_transfer: every vertex receives (SubsurfaceScatterOptions::receivers must be empty)");
@@ -676,6 +751,18 @@ Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& op
   // Checked before any ray (subsurface_scatter checks them again).
   if (!(std::isfinite(scatter.length_scale) && scatter.length_scale > 0))
     throw Error(fmt::format("the length scale must be > 0 (mm per mesh unit), got {}", scatter.length_scale));
+  if (!(scatter.split_difference >= 0) || scatter.split_levels < 0 || scatter.split_levels > kMaxSplitLevels)
+    throw Error(fmt::format("irradiance samples: a triangle is split where its corners differ by more than a share >= 0 "
+                            "(got {}), up to 0 to {} times (got {})",
+                            scatter.split_difference, kMaxSplitLevels, scatter.split_levels));
+}
+
+}  // namespace
+
+Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
+                                     const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter,
+                                     const Progress& progress) {
+  check_subsurface_options(options, material, scatter);
   TransferOptions o = options;
   if (o.mode == TransferMode::Shadowed) o.bounces = 0;
   o.albedo = glm::vec3(1.0f);
@@ -685,15 +772,70 @@ Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& op
   const int nc = o.bands * o.bands;
   int pass = 0;
   o.between_bounces = [&](std::vector<float>& rows) {  // E_t / pi -> L_o, the surface integral
+    if (pass++ == 0) {  // the direct light, with irradiance samples between the vertices
+      detail::IrradianceSamples s =
+          detail::irradiance_samples(mesh, std::move(rows), o, scatter.split_difference, scatter.split_levels, progress);
+      if (scatter.added_samples) *scatter.added_samples = s.added;
+      s.rows = grey_rows(std::move(s.rows), nc);
+      for (float& x : s.rows) x = float(std::numbers::pi * x);
+      SubsurfaceScatterOptions so = scatter;
+      so.receivers.resize(mesh.vertex_count());
+      std::iota(so.receivers.begin(), so.receivers.end(), 0u);
+      rows = scatter_impl(s.sources.positions, vertex_areas(s.sources), &s.sources, material, s.rows, nc, so, progress,
+                          "subsurface");
+      return;
+    }
     for (float& x : rows) x = float(std::numbers::pi * x);
-    const std::string phase = pass++ == 0 ? "subsurface" : fmt::format("subsurface, bounce {}", pass - 1);
-    rows = scatter_impl(mesh.positions, area, &mesh, material, rows, nc, scatter, progress, phase.c_str());
+    const std::string phase = fmt::format("subsurface, bounce {}", pass - 1);
+    rows = scatter_impl(mesh.positions, area, &mesh, material, grey_rows(std::move(rows), nc), nc, scatter, progress,
+                        phase.c_str());
   };
   Transfer t = compute_transfer(mesh, o, progress);
   if (t.vertices == 0) return t;  // another rank's
   PRT_CHECK(t.channels == 3 && t.analytic_vertices() == 0);
   t.subsurface = SubsurfaceRecord{material, scatter.length_scale};
   return t;
+}
+
+LightmapTransfer compute_subsurface_lightmap(const Scene& scene, const LightmapTexels& texels,
+                                             const TransferOptions& options, const SubsurfaceMaterial& material,
+                                             const SubsurfaceScatterOptions& scatter, const Progress& progress) {
+  check_subsurface_options(options, material, scatter);
+  const Mesh& mesh = scene.mesh;
+  const std::size_t P = texels.layout.texels.size();
+  if (texels.triangle.size() != P || texels.barycentric.size() != P || texels.area.size() != P)
+    throw Error("lightmap texels: triangle, barycentric and area must have one entry per covered texel (lightmap_texels "
+                "fills them)");
+  // Each texel is a source of the area it covers and a receiver, at its
+  // point on its triangle (not where move_texels_out_of_geometry put its
+  // rays' origin).
+  std::vector<glm::vec3> at(P);
+  std::vector<double> area(P);
+  for (std::size_t i = 0; i < P; ++i) {
+    if (texels.triangle[i] >= mesh.triangles.size())
+      throw Error(fmt::format("lightmap texel {}: triangle {} of {}", i, texels.triangle[i], mesh.triangles.size()));
+    const glm::uvec3 tri = mesh.triangles[texels.triangle[i]];
+    const float u = texels.barycentric[i].x, v = texels.barycentric[i].y;
+    at[i] = (1 - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];
+    area[i] = double(texels.area[i]);
+  }
+  LightmapTexels lit = texels;  // the material's reflectance is its profile: no albedo
+  std::fill(lit.albedo.begin(), lit.albedo.end(), glm::vec3(1.0f));
+  TransferOptions o = options;
+  if (o.mode == TransferMode::Shadowed) o.bounces = 0;
+  o.transmission_eta = material.eta;
+  const int nc = o.bands * o.bands;
+  int pass = 0;
+  o.between_bounces = [&](std::vector<float>& rows) {  // E_t / pi -> L_o, the surface integral over the texels
+    for (float& x : rows) x = float(std::numbers::pi * x);
+    const std::string phase = pass++ == 0 ? "subsurface" : fmt::format("subsurface, bounce {}", pass - 1);
+    rows = scatter_impl(at, area, nullptr, material, grey_rows(std::move(rows), nc), nc, scatter, progress, phase.c_str());
+  };
+  LightmapTransfer out = compute_lightmap_transfer(scene, lit, o, progress);
+  if (out.transfer.vertices == 0) return out;  // another rank's
+  PRT_CHECK(out.transfer.channels == 3 && out.transfer.analytic_vertices() == 0);
+  out.transfer.subsurface = SubsurfaceRecord{material, scatter.length_scale};
+  return out;
 }
 
 }  // namespace prt

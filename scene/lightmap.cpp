@@ -177,7 +177,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   UnionFind charts = uv_charts(mesh);
 
   // Per texel: coverage, the best triangle so far and where it samples.
-  std::vector<float> coverage(N, 0.0f), best_score(N, -1.0f);
+  std::vector<float> coverage(N, 0.0f), best_score(N, -1.0f), surface(N, 0.0f);
   std::vector<std::uint32_t> best(N, std::numeric_limits<std::uint32_t>::max()), chart(N, 0);
   std::vector<glm::vec2> sample(N);
   std::vector<std::uint8_t> shared(N, 0);
@@ -228,6 +228,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
         const std::size_t i = std::size_t(y) * W + x;
         if (coverage[i] > 0 && covered > kTouchArea && chart[i] != ch) shared[i] = 1;
         coverage[i] += float(covered);
+        surface[i] += float(covered * area3 / (0.5 * std::abs(area2)));  // the covered part's area in space
         if (coverage[i] > 1.0 + kOverlapTolerance) {
           ++overlapped;
           note_overlap(std::uint32_t(t));
@@ -281,6 +282,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   out.triangle.reserve(count);
   out.barycentric.reserve(count);
   out.texel_size.reserve(count);
+  out.area.reserve(count);
   for (std::size_t i = 0; i < N; ++i) {
     const std::uint32_t t = best[i];
     if (t == std::numeric_limits<std::uint32_t>::max()) continue;
@@ -298,6 +300,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
     out.albedo.push_back(glm::clamp(a, 0.0f, 1.0f));
     out.triangle.push_back(t);
     out.barycentric.push_back(bc);
+    out.area.push_back(surface[i]);
     const glm::vec2 u0 = uv[tri.x], u1 = uv[tri.y], u2 = uv[tri.z];
     const double uv_area = 0.5 * std::abs(double(u1.x - u0.x) * (u2.y - u0.y) - double(u2.x - u0.x) * (u1.y - u0.y)) * W * H;
     out.texel_size.push_back(float(std::sqrt(0.5 * glm::length(glm::dvec3(face)) / uv_area)));

@@ -52,6 +52,7 @@ TEST(LightmapTexels, QuadCoversExactlyItsTexels) {
     EXPECT_NEAR(t.positions[i].z, ((y + 0.5) / 8 - 0.25) / 0.5, 1e-5);
     EXPECT_NEAR(t.normals[i].y, 1.0f, 1e-6f);
     EXPECT_NEAR(t.texel_size[i], 0.25f, 1e-5f);  // 1 m over 4 texels
+    EXPECT_NEAR(t.area[i], 0.0625f, 1e-6f);       // and the surface it covers, 0.25 m squared
   }
 }
 
@@ -68,10 +69,13 @@ TEST(LightmapTexels, ThinTriangleGetsATexelWhereverItPasses) {
   const LightmapTexels t = lightmap_texels(s, 8, 8, 0);
   ASSERT_EQ(t.layout.texels.size(), 6u);
   EXPECT_EQ(t.partial, 6u);
+  double area = 0;
   for (std::size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(t.layout.texels[i], 2u * 8 + 1 + i);
     EXPECT_NEAR(t.positions[i].z, 0.025f, 0.03f);  // on the sliver
+    area += t.area[i];
   }
+  EXPECT_NEAR(area, 0.15, 1e-6);  // the texels share the sliver's area, 6 x 0.05 / 2
 }
 
 TEST(LightmapTexels, OverlappingChartsAreRefusedNamingTheObjects) {

@@ -450,7 +450,7 @@ TEST(PrecomputeCli, SubsurfaceTransferThroughTheCommandLine) {
       {with({"--basis", "wavelet"}), "--basis wavelet does not apply to --material subsurface"},
       {with({"--albedo", "0.5,0.5,0.5"}), "--albedo does not apply to --material subsurface"},
       {with({"--vertex-colors"}), "--vertex-colors does not apply"},
-      {with({"--lightmap", "16x16"}), "--lightmap does not apply"},
+      {with({"--lightmap", "16x16", "--ao-map", dir.file("ao.exr")}), "--ao-map does not apply to --material subsurface"},
       {with({"--probes", "2x2x2"}), "--probes does not apply"},
       {with({"--adaptive"}), "--adaptive does not apply"},
       {with({"--target-error", "0.1", "--env", env}), "--target-error does not apply"},
@@ -465,6 +465,36 @@ TEST(PrecomputeCli, SubsurfaceTransferThroughTheCommandLine) {
     EXPECT_NE(q.err.find(words), std::string::npos) << describe_run(q);
     EXPECT_FALSE(std::filesystem::exists(x));
   }
+}
+
+// prt precompute SCENE --lightmap WxH --material subsurface: the library's
+// translucent lightmap (compute_subsurface_lightmap) in the file, named by
+// prt info, relit by prt relight into the atlas.
+TEST(PrecomputeCli, SubsurfaceLightmapThroughTheCommandLine) {
+  TempDir dir;
+  const std::string scene = std::string(PRT_SOURCE_DIR) + "/models/room.gltf", out = dir.file("l.prt");
+  const Result r = run_prt(dir, {"precompute", scene, "--lightmap", "24x24", "-o", out, "--material", "subsurface",
+                                 "--sss", "ketchup", "--length-scale", "40", "--samples", "32", "--bands", "3", "-t", "2"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("material: subsurface, ketchup: sigma_a 0.061"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("wrote " + out + ": lightmap 24x24, shadowed 3 bands, 3 channels"), std::string::npos) << r.err;
+  const LightmapTransfer got = read_lightmap_transfer(out);
+  const Scene s = load_scene(scene);
+  LightmapTexels texels = lightmap_texels(s, 24, 24, s.lightmap_uv_set());
+  move_texels_out_of_geometry(s.mesh, texels);
+  TransferOptions o;
+  o.samples = 32;
+  o.bands = 3;
+  SubsurfaceScatterOptions so;
+  so.length_scale = 40.0;
+  const LightmapTransfer want = compute_subsurface_lightmap(s, texels, o, *subsurface_preset("ketchup"), so);
+  EXPECT_EQ(got.transfer.coeffs, want.transfer.coeffs);  // the same bits: one computation
+  EXPECT_EQ(got.layout.texels, want.layout.texels);
+  const Result info = run_prt(dir, {"info", out});
+  EXPECT_NE(info.out.find("material          subsurface, ketchup"), std::string::npos) << info.out;
+  const Result lit = run_prt(dir, {"relight", scene, out, write_constant_map(dir, 1.0f), "-o", dir.file("l.exr"), "-q"});
+  ASSERT_EQ(lit.code, 0) << describe_run(lit);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("l.exr")));
 }
 
 // The band limit says why it is 16 (docs/CONVENTIONS.md, "Band counts"),

@@ -62,6 +62,7 @@ struct LightmapTexels {
   std::vector<std::uint32_t> triangle;     // the triangle the sample lies on
   std::vector<glm::vec2> barycentric;      // (u, v) on it: the point is (1-u-v) p0 + u p1 + v p2
   std::vector<float> texel_size;           // world-space length of a texel's edge on that triangle
+  std::vector<float> area;                 // world-space area of the surface it covers (over every triangle covering part of it)
   std::size_t partial = 0;                 // texels whose centre no triangle covers (sampled on the covered part)
   std::size_t shared = 0;                  // texels two UV charts touch (too little padding: they bleed)
   std::size_t uv_degenerate = 0;           // triangles with area in space but none in the UV set (no texels)

@@ -4,8 +4,10 @@
 // profile R_d of prt/subsurface.h.
 #pragma once
 
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/precompute.h>
+#include <prt/scene.h>
 #include <prt/subsurface.h>
 #include <prt/transfer.h>
 
@@ -32,6 +34,19 @@ struct SubsurfaceScatterOptions {
   // The receivers: empty, every vertex; else these vertices, the output's
   // rows in their order.
   std::vector<std::uint32_t> receivers;
+  // compute_subsurface_transfer's irradiance samples apart from the vertices
+  // (docs/SUBSURFACE.md "Irradiance samples"): a triangle is split into four
+  // at its edges' midpoints, up to split_levels times, where the
+  // transmitted irradiance under uniform light (the rows' DC terms) at the
+  // ends of one of its edges differs by more than split_difference of the
+  // larger (a shadow's edge, a groove), or their normals by more than 30
+  // degrees (a bend); the new points are traced and summed as sources, the
+  // vertices alone receive. split_levels 0: the vertices alone, as
+  // subsurface_scatter.
+  double split_difference = 0.15;
+  int split_levels = 2;
+  // When set, compute_subsurface_transfer stores how many points it added.
+  std::size_t* added_samples = nullptr;
 };
 
 // For every receiving point o, per channel c of the material and
@@ -71,5 +86,21 @@ std::vector<float> subsurface_scatter(const Mesh& mesh, const SubsurfaceMaterial
 Transfer compute_subsurface_transfer(const Mesh& mesh, const TransferOptions& options,
                                      const SubsurfaceMaterial& material, const SubsurfaceScatterOptions& scatter = {},
                                      const Progress& progress = {});
+
+// The same exit radiance at a lightmap's covered texels (prt precompute
+// --lightmap WxH --material subsurface): each texel traced as
+// compute_lightmap_transfer traces it (transmission_eta the material's) and
+// summed over the texels as sources (a disc of the area it covers,
+// texels.area, at its point on its triangle) and receivers, as
+// subsurface_scatter sums points without triangles; interreflected, bounce
+// by bounce, the texels gathering from each other. RGB rows, one per
+// texel, none analytic; AO and bent normals the transmitted irradiance's.
+// Under mpirun, rank 0's result (others: empty). Throws as
+// compute_subsurface_transfer, and for texels without their triangles or
+// areas.
+LightmapTransfer compute_subsurface_lightmap(const Scene& scene, const LightmapTexels& texels,
+                                             const TransferOptions& options, const SubsurfaceMaterial& material,
+                                             const SubsurfaceScatterOptions& scatter = {},
+                                             const Progress& progress = {});
 
 }  // namespace prt

@@ -512,8 +512,34 @@ int run_zh(PrecomputeArgs& a) {
   return 0;
 }
 
-// --lightmap WxH: the SH transfer of every covered texel of SCENE's atlas.
-int run_lightmap(PrecomputeArgs& a) {
+// The summary's line on the surface integral's sources.
+void print_irradiance_samples(const Mesh& mesh, std::size_t added) {
+  fmt::print(stderr, "irradiance samples: the {} vertices and {} points between them (triangles split where the light "
+                     "entering them changes)\n",
+             mesh.vertex_count(), added);
+}
+
+// The scale of a translucent precompute, for its summary: the mesh's size in
+// millimetres and how far each channel's light goes (1 / sigma_tr).
+std::string subsurface_scale(const Mesh& mesh, const SubsurfaceRecord& r) {
+  glm::dvec3 lo(INFINITY), hi(-INFINITY);
+  for (const glm::vec3& p : mesh.positions) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+  const SubsurfaceMaterial& m = r.material;
+  std::string reach;
+  for (int c = 0; c < 3; ++c) {
+    const Dipole d(m.sigma_a[c], m.sigma_s[c], m.eta);
+    reach += fmt::format("{}{:.3g}", c ? ", " : "", d.sigma_tr > 0 ? 1.0 / d.sigma_tr : INFINITY);
+  }
+  return fmt::format("the mesh is {:.3g} mm across at {:g} mm a unit; its light goes {} mm (1 / sigma_tr: r, g, b)",
+                     mesh.positions.empty() ? 0.0 : glm::length(hi - lo) * r.length_scale, r.length_scale, reach);
+}
+
+// --lightmap WxH: the SH transfer of every covered texel of SCENE's atlas;
+// with `sss`, a translucent material's (compute_subsurface_lightmap).
+int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   const bool wavelet = a.basis == "wavelet";
   if (wavelet && a.mode != "shadowed")
     throw UsageError("--mode " + a.mode + " is not available with --basis wavelet: wavelet transfers are shadowed only");
@@ -525,7 +551,7 @@ int run_lightmap(PrecomputeArgs& a) {
     for (const CLI::Option* o : a.wavelet_only)
       if (o->count() > 0) throw UsageError(o->get_name() + " applies to --basis wavelet only");
   for (const CLI::Option* o : {a.material_opt, a.target_opt, a.vertex_colors_opt, a.weld_opt})
-    if (o->count() > 0 && !(o == a.material_opt && a.material == "diffuse"))
+    if (o->count() > 0 && !(o == a.material_opt && (a.material == "diffuse" || sss)))
       throw UsageError(o->get_name() + " does not apply to --lightmap (a lightmap is diffuse; its albedo is the "
                        "scene's materials, or --albedo)");
   if (!a.compress.empty()) throw UsageError("--compress does not apply to --lightmap");
@@ -556,6 +582,8 @@ int run_lightmap(PrecomputeArgs& a) {
   test_fail_rank();
   const bool quiet = a.quiet || !is_root();
   if (!quiet) fmt::print(stderr, "{}\n", describe(scene));
+  if (!quiet && sss)
+    fmt::print(stderr, "material: subsurface, {}\n{}\n", describe_subsurface(*sss), subsurface_scale(scene.mesh, *sss));
   const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
   if (!wavelet) {  // a limit the transfer's plan would refuse, refused before the atlas is rasterised
     release_free_memory();
@@ -608,7 +636,13 @@ int run_lightmap(PrecomputeArgs& a) {
   }
   const bool adapt = a.adaptive_opt->count() > 0;
   AdaptiveReport adaptive;
+  SubsurfaceScatterOptions so;
+  if (sss) {
+    so.length_scale = sss->length_scale;
+    so.threads = a.opt.threads;
+  }
   const std::optional<LightmapTransfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
+    if (sss) return compute_subsurface_lightmap(scene, texels, a.opt, sss->material, so, job_progress(progress));
     return adapt ? compute_adaptive_lightmap_transfer(scene, texels, a.opt, a.aopt, job_progress(progress), &adaptive)
                  : compute_lightmap_transfer(scene, texels, a.opt, job_progress(progress));
   }, a.opt.memory_limit);
@@ -894,9 +928,11 @@ void check_subsurface(const PrecomputeArgs& a) {
   if (a.mode == "unshadowed")
     throw UsageError("--material subsurface is shadowed or interreflected: the light entering each vertex is traced "
                      "(unshadowed light would pass through the object's other side)");
-  if (a.lightmap_opt->count() > 0)
-    no("--lightmap", "the surface integral runs over a mesh's vertices, whose triangles integrate the light entering "
-                     "near each one; precompute per vertex");
+  for (const auto& [option, path] : {std::pair{"--ao-map", &a.ao_map}, std::pair{"--bent-normal-map", &a.bent_map},
+                                     std::pair{"--obscurance-map", &a.obscurance_map}})
+    if (!path->empty())
+      no(option, "a translucent lightmap's texels are not traced (each sums the light entering the surface around "
+                 "it); precompute a diffuse lightmap for the extra maps");
   if (a.probes_opt->count() > 0) no("--probes", "a probe volume records the light arriving at points in space");
   for (const CLI::Option* o : {a.albedo_opt, a.vertex_colors_opt})
     if (o->count() > 0)
@@ -909,24 +945,6 @@ void check_subsurface(const PrecomputeArgs& a) {
   if (a.subdivide_opt->count() > 0)
     no("--subdivide", "the surface integral runs once over the whole mesh; precompute a finer mesh instead");
   check_not_input("--output", a.output, {{"MESH", a.mesh}});
-}
-
-// The scale of a translucent precompute, for its summary: the mesh's size in
-// millimetres and how far each channel's light goes (1 / sigma_tr).
-std::string subsurface_scale(const Mesh& mesh, const SubsurfaceRecord& r) {
-  glm::dvec3 lo(INFINITY), hi(-INFINITY);
-  for (const glm::vec3& p : mesh.positions) {
-    lo = glm::min(lo, glm::dvec3(p));
-    hi = glm::max(hi, glm::dvec3(p));
-  }
-  const SubsurfaceMaterial& m = r.material;
-  std::string reach;
-  for (int c = 0; c < 3; ++c) {
-    const Dipole d(m.sigma_a[c], m.sigma_s[c], m.eta);
-    reach += fmt::format("{}{:.3g}", c ? ", " : "", d.sigma_tr > 0 ? 1.0 / d.sigma_tr : INFINITY);
-  }
-  return fmt::format("the mesh is {:.3g} mm across at {:g} mm a unit; its light goes {} mm (1 / sigma_tr: r, g, b)",
-                     mesh.positions.empty() ? 0.0 : glm::length(hi - lo) * r.length_scale, r.length_scale, reach);
 }
 
 // A translucent material's transfer at the mesh's vertices
@@ -948,11 +966,14 @@ int run_subsurface(PrecomputeArgs& a, const SubsurfaceRecord& r) {
   SubsurfaceScatterOptions so;
   so.length_scale = r.length_scale;
   so.threads = a.opt.threads;
+  std::size_t added = 0;
+  so.added_samples = &added;
   const std::optional<Transfer> t = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
     return compute_subsurface_transfer(mesh, a.opt, r.material, so, job_progress(progress));
   }, a.opt.memory_limit);
   if (!t) return 130;
   if (!is_root()) return 0;
+  if (!a.quiet) print_irradiance_samples(mesh, added);
   if (!a.compress.empty()) {
     const std::optional<CompressedTransfer> c = run_with_progress(a.quiet, "precompute", [&](const Progress& p) {
       copt.progress = p;
@@ -982,7 +1003,12 @@ int run_subsurface(PrecomputeArgs& a, const SubsurfaceRecord& r) {
 int run_precompute(PrecomputeArgs& a) {
   check_subdivide(a);
   parse_adaptive(a);
-  if (const std::optional<SubsurfaceRecord> r = subsurface_record(a.sss, a.material)) return run_subsurface(a, *r);
+  if (const std::optional<SubsurfaceRecord> r = subsurface_record(a.sss, a.material)) {
+    if (a.lightmap_opt->count() == 0) return run_subsurface(a, *r);
+    check_subsurface(a);
+    check_not_input("--output", a.output, {{"SCENE", a.mesh}});
+    return run_lightmap(a, &*r);
+  }
   // No output over another (each is kept off the inputs by check_not_input below).
   check_distinct_outputs({{"--output", a.output},
                           {"--ao-map", a.ao_map},
