@@ -363,6 +363,7 @@ Row shadowed_row(Setup& s, const Material& mat, const char* scale_name, double f
   if (s.a.dump == mat.name) dump_receivers(s, mat.m, coarse, ours, bl, ref);
   if (check) {  // the decomposition against compute_subsurface_transfer itself, without irradiance samples
     so.split_levels = 0;
+    so.added_samples = nullptr;
     const std::vector<glm::vec3> plain = relight(compute_subsurface_transfer(s.mesh, o, mat.m, so), s.mesh, s.light);
     double dmax = 0, vmax = 0;
     for (std::size_t i = 0; i < s.receivers.size(); ++i) {

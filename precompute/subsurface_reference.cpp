@@ -330,16 +330,25 @@ void validate(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& o, co
                             rec.length_scale));
 }
 
+// The receivers: vertices (all, or those listed) or points on the surface.
+struct Receivers {
+  const std::vector<std::uint32_t>* vertices = nullptr;
+  const std::vector<glm::vec3>* positions = nullptr;  // points: these, with normals
+  const std::vector<glm::vec3>* normals = nullptr;
+};
+
 ReferenceResult render(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
-                       const SubsurfaceRecord& rec, const std::vector<std::uint32_t>* vertices,
-                       const Progress& progress) {
+                       const SubsurfaceRecord& rec, const Receivers& at, const Progress& progress) {
   validate(mesh, map, options, rec);
+  const std::vector<std::uint32_t>* vertices = at.vertices;
   if (vertices)
     for (std::uint32_t v : *vertices)
       if (v >= mesh.vertex_count())
         throw Error(fmt::format("subsurface reference: vertex {} is out of range (the mesh has {})", v,
                                 mesh.vertex_count()));
-  const std::size_t n = vertices ? vertices->size() : mesh.vertex_count();
+  if (at.positions && at.normals->size() != at.positions->size())
+    throw Error(fmt::format("subsurface reference: {} points and {} normals", at.positions->size(), at.normals->size()));
+  const std::size_t n = at.positions ? at.positions->size() : vertices ? vertices->size() : mesh.vertex_count();
   ReferenceResult result;
   result.radiance.assign(n, glm::vec3(0.0f));
   result.std_error.assign(n, glm::vec3(0.0f));
@@ -378,10 +387,10 @@ ReferenceResult render(const Mesh& mesh, const EnvMap& map, const ReferenceOptio
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       if (ticker.cancelled()) return;
       const std::size_t v = vertices ? (*vertices)[i] : i;
-      glm::dvec3 nv(mesh.normals[v]);
+      glm::dvec3 nv(at.positions ? (*at.normals)[i] : mesh.normals[v]);
       if (!(glm::dot(nv, nv) > 0)) continue;
       nv = glm::normalize(nv);
-      const glm::dvec3 p(mesh.positions[v]);
+      const glm::dvec3 p(at.positions ? (*at.positions)[i] : mesh.positions[v]);
       Rng rng(options.seed, v);
       const Frame f = frame_of(nv);
       glm::dvec3 mean(0.0), m2(0.0);
@@ -404,13 +413,25 @@ ReferenceResult render(const Mesh& mesh, const EnvMap& map, const ReferenceOptio
 
 ReferenceResult render_subsurface_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
                                             const SubsurfaceRecord& record, const Progress& progress) {
-  return subsurface_reference_impl::render(mesh, map, options, record, nullptr, progress);
+  return subsurface_reference_impl::render(mesh, map, options, record, {}, progress);
 }
 
 ReferenceResult render_subsurface_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
                                             const SubsurfaceRecord& record,
                                             const std::vector<std::uint32_t>& vertices, const Progress& progress) {
-  return subsurface_reference_impl::render(mesh, map, options, record, &vertices, progress);
+  subsurface_reference_impl::Receivers at;
+  at.vertices = &vertices;
+  return subsurface_reference_impl::render(mesh, map, options, record, at, progress);
+}
+
+ReferenceResult render_subsurface_reference_at_points(const Mesh& mesh, const EnvMap& map,
+                                                      const ReferenceOptions& options, const SubsurfaceRecord& record,
+                                                      const std::vector<glm::vec3>& positions,
+                                                      const std::vector<glm::vec3>& normals, const Progress& progress) {
+  subsurface_reference_impl::Receivers at;
+  at.positions = &positions;
+  at.normals = &normals;
+  return subsurface_reference_impl::render(mesh, map, options, record, at, progress);
 }
 
 }  // namespace prt

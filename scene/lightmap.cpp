@@ -339,6 +339,21 @@ std::size_t lightmap_texels_at_least(const Scene& scene, int W, int H, int uv_se
   return texels > 0 ? std::size_t(std::min(texels, double(W) * double(H))) : 0;
 }
 
+std::vector<glm::vec3> texel_surface_points(const Mesh& mesh, const LightmapTexels& texels) {
+  if (texels.triangle.size() != texels.barycentric.size())
+    throw Error(fmt::format("lightmap texels: {} triangles and {} barycentrics", texels.triangle.size(),
+                            texels.barycentric.size()));
+  std::vector<glm::vec3> at(texels.triangle.size());
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    if (texels.triangle[i] >= mesh.triangles.size())
+      throw Error(fmt::format("lightmap texel {}: triangle {} of {}", i, texels.triangle[i], mesh.triangles.size()));
+    const glm::uvec3 tri = mesh.triangles[texels.triangle[i]];
+    const float u = texels.barycentric[i].x, v = texels.barycentric[i].y;
+    at[i] = (1 - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];
+  }
+  return at;
+}
+
 Mesh texel_points(const LightmapTexels& texels) {
   Mesh m;
   m.positions = texels.positions;

@@ -390,7 +390,7 @@ TEST(PrecomputeCli, SubsurfaceReferenceThroughTheCommandLine) {
       {plus({"--mode", "unshadowed"}), "--mode unshadowed does not apply to --material subsurface"},
       {plus({"--albedo", "0.5,0.5,0.5"}), "--albedo does not apply to --material subsurface"},
       {plus({"--vertex-colors"}), "--vertex-colors does not apply"},
-      {plus({"--lightmap", "16x16"}), "--lightmap does not apply"},
+      {plus({"--uv", "1"}), "--uv picks the lightmap's UV set: give --lightmap WxH too"},
       {plus({"--sun", "auto"}), "--lights and --sun do not apply"},
       {plus({"--eye", "0,1,0"}), "--material glossy only"},
       {with({"--sss", "marble"}), "--sss needs --material subsurface"},
@@ -492,9 +492,27 @@ TEST(PrecomputeCli, SubsurfaceLightmapThroughTheCommandLine) {
   EXPECT_EQ(got.layout.texels, want.layout.texels);
   const Result info = run_prt(dir, {"info", out});
   EXPECT_NE(info.out.find("material          subsurface, ketchup"), std::string::npos) << info.out;
-  const Result lit = run_prt(dir, {"relight", scene, out, write_constant_map(dir, 1.0f), "-o", dir.file("l.exr"), "-q"});
+  const std::string env = write_constant_map(dir, 1.0f);
+  const Result lit = run_prt(dir, {"relight", scene, out, env, "-o", dir.file("l.exr"), "-q"});
   ASSERT_EQ(lit.code, 0) << describe_run(lit);
   EXPECT_TRUE(std::filesystem::exists(dir.file("l.exr")));
+  // The reference at the same texels (each at its point on its triangle),
+  // as the library computes it, and prt compare between the two.
+  const Result ref = run_prt(dir, {"reference", scene, env, "--lightmap", "24x24", "--material", "subsurface", "--sss",
+                                   "ketchup", "--length-scale", "40", "--samples", "4", "-o", dir.file("r.exr"), "-q"});
+  ASSERT_EQ(ref.code, 0) << describe_run(ref);
+  const RgbaImage image = read_exr_rgba(dir.file("r.exr"));
+  ReferenceOptions ro;
+  ro.samples = 4;
+  const ReferenceResult direct = render_subsurface_reference_at_points(
+      s.mesh, load_envmap(env), ro, SubsurfaceRecord{*subsurface_preset("ketchup"), 40.0},
+      texel_surface_points(s.mesh, texels), texels.normals);
+  ASSERT_EQ(direct.radiance.size(), texels.layout.texels.size());
+  for (std::size_t i = 0; i < direct.radiance.size(); i += 37)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(image.rgba[4 * std::size_t(texels.layout.texels[i]) + std::size_t(c)], direct.radiance[i][c]) << i;
+  const Result cmp = run_prt(dir, {"compare", dir.file("l.exr"), dir.file("r.exr")});
+  EXPECT_EQ(cmp.code, 0) << describe_run(cmp);
 }
 
 // The band limit says why it is 16 (docs/CONVENTIONS.md, "Band counts"),

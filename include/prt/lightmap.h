@@ -92,6 +92,12 @@ std::size_t lightmap_texels_at_least(const Scene& scene, int width, int height, 
 // triangles): what relight() and shading_hash() read for a lightmap's rows.
 Mesh texel_points(const LightmapTexels& texels);
 
+// Each texel's sample point on its triangle (texels.triangle, barycentric:
+// where lightmap_texels put it, before move_texels_out_of_geometry moved the
+// rays' origin): where a translucent lightmap's surface integral receives
+// its light. Throws prt::Error for a triangle out of `mesh`'s range.
+std::vector<glm::vec3> texel_surface_points(const Mesh& mesh, const LightmapTexels& texels);
+
 // Throws prt::Error (naming `path`) unless `t` was computed for `scene`'s
 // texels: same scene hash, atlas and covered texels, and shading hash.
 void check_matches(const LightmapTransfer& t, const LightmapTexels& texels, const std::string& path);

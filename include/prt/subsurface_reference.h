@@ -60,6 +60,8 @@
 #include <prt/reference.h>
 #include <prt/subsurface.h>
 
+#include <glm/vec3.hpp>
+
 #include <cstdint>
 #include <vector>
 
@@ -84,5 +86,15 @@ ReferenceResult render_subsurface_reference(const Mesh& mesh, const EnvMap& map,
 ReferenceResult render_subsurface_reference(const Mesh& mesh, const EnvMap& map, const ReferenceOptions& options,
                                             const SubsurfaceRecord& record,
                                             const std::vector<std::uint32_t>& vertices, const Progress& progress = {});
+
+// The same at points on the mesh's surface (a lightmap's texels: prt
+// reference --lightmap WxH --material subsurface), each with its shading
+// normal (zero: 0 there); entry i draws from the generator seeded by
+// (seed, i).
+ReferenceResult render_subsurface_reference_at_points(const Mesh& mesh, const EnvMap& map,
+                                                      const ReferenceOptions& options, const SubsurfaceRecord& record,
+                                                      const std::vector<glm::vec3>& positions,
+                                                      const std::vector<glm::vec3>& normals,
+                                                      const Progress& progress = {});
 
 }  // namespace prt

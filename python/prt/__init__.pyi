@@ -394,7 +394,7 @@ def load_scene(path: Any) -> Scene:
     Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.
     """
 
-def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ...) -> Lightmap:
+def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., material: str = ..., sss: Any = ..., sigma_a: Any = ..., sigma_s: Any = ..., eta: Any = ..., length_scale: float = ...) -> Lightmap:
     """
     The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.
 
@@ -405,6 +405,8 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
       bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
       adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.
       light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.
+      material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].
+      sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].
 
     Returns a Lightmap.
     """

@@ -6,6 +6,7 @@
 #include <prt/lightmap.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
+#include <prt/subsurface_scatter.h>
 #include <prt/transfer_io.h>
 
 namespace prt::python {
@@ -134,6 +135,8 @@ void bind_lightmap_transfer(py::module_& m) {
             if (light.size() < std::size_t(l.transfer.bands) * l.transfer.bands)
               throw Error("lighting: fewer coefficients than the lightmap's bands^2");
             const std::vector<prt::Light> ls = lights_arg(lights);
+            if (!ls.empty() && l.transfer.subsurface)  // as prt relight's --lights on a translucent lightmap
+              throw Error(std::string("lights=: ") + prt::kTranslucentLightsWhy);
             std::vector<glm::vec4> img;
             {
               py::gil_scoped_release release;
@@ -186,7 +189,18 @@ void bind_lightmap_compute(py::module_& m) {
       [](const prt::Scene& scene, int width, int height, int uv_set, const std::string& mode, int bands, int samples,
          int bounces, std::uint64_t seed, const py::object& adaptive, double verify_adaptive, bool adaptive_any,
          bool light_bounce, double bounce_patch, double bounce_ratio, int bounce_clusters,
-         const py::object& bounce_probes) {
+         const py::object& bounce_probes, const std::string& material, const py::object& sss,
+         const py::object& sigma_a, const py::object& sigma_s, const py::object& eta, double length_scale) {
+        // As prt precompute --lightmap: diffuse (the scene's albedo), or a
+        // translucent material's (--material subsurface); not glossy.
+        const bool translucent = material == "subsurface";
+        if (material != "diffuse" && !translucent)
+          throw Error("material: a lightmap is 'diffuse' or 'subsurface', got '" + material + "'");
+        check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
+        if (translucent)  // a lightmap takes no basis or albedo: those of the diffuse SH default
+          check_subsurface_args("sh", mode, py::float_(0.8), false, !adaptive.is_none(), light_bounce);
+        const std::optional<prt::SubsurfaceRecord> sss_record =
+            translucent ? std::optional(subsurface_arg(sss, sigma_a, sigma_s, eta, length_scale)) : std::nullopt;
         prt::TransferOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bands = bands;
@@ -205,6 +219,11 @@ void bind_lightmap_compute(py::module_& m) {
         prt::check_lightmap_memory(scene, width, height, set, planned, adapt.has_value());
         prt::LightmapTexels tx = prt::lightmap_texels(scene, width, height, set);
         prt::move_texels_out_of_geometry(scene.mesh, tx);
+        if (sss_record) {  // the texels' transmitted light summed by the profile (compute_subsurface_lightmap)
+          prt::SubsurfaceScatterOptions so;
+          so.length_scale = sss_record->length_scale;
+          return prt::compute_subsurface_lightmap(scene, tx, o, sss_record->material, so);
+        }
         return adapt ? prt::compute_adaptive_lightmap_transfer(scene, tx, o, *adapt)
                      : prt::compute_lightmap_transfer(scene, tx, o);
       },
@@ -213,7 +232,9 @@ void bind_lightmap_compute(py::module_& m) {
       py::arg("seed") = 1, py::arg("adaptive") = py::none(), py::arg("verify_adaptive") = 0.0,
       py::arg("adaptive_any") = false, py::arg("light_bounce") = false, py::arg("bounce_patch") = 0.0,
       py::arg("bounce_ratio") = prt::kLightBounceRatio, py::arg("bounce_clusters") = prt::kLightBounceClusters,
-      py::arg("bounce_probes") = py::none(),
+      py::arg("bounce_probes") = py::none(), py::arg("material") = "diffuse", py::arg("sss") = py::none(),
+      py::arg("sigma_a") = py::none(), py::arg("sigma_s") = py::none(), py::arg("eta") = py::none(),
+      py::arg("length_scale") = kDefaultLengthScale,
       "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
@@ -223,6 +244,8 @@ void bind_lightmap_compute(py::module_& m) {
       "  bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.\n"
       "  adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.\n"
       "  light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.\n"
+      "  material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].\n"
+      "  sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].\n"
       "\n"
       "Returns a Lightmap.");
 

@@ -14,10 +14,6 @@ namespace prt::python {
 
 namespace {
 
-// prt precompute --length-scale's default (tools/prt/subsurface_options.h):
-// D3DX's samples' fLengthScale, 25 mm a mesh unit.
-constexpr double kDefaultLengthScale = 25.0;
-
 // sigma_a=, sigma_s=: three numbers r, g, b (1/mm).
 glm::dvec3 coefficients_arg(const py::object& o, const char* what) {
   std::vector<double> v;
@@ -30,10 +26,18 @@ glm::dvec3 coefficients_arg(const py::object& o, const char* what) {
   return {v[0], v[1], v[2]};
 }
 
-// The translucent material of material='subsurface', as prt precompute's
-// --sss, --sigma-a, --sigma-s, --eta and --length-scale give it
-// (tools/prt/subsurface_options.cpp): the preset, its values overridden (its
-// name then marked "(modified)"), or both coefficients (eta 1.3 unless given).
+}  // namespace
+
+// material='subsurface''s arguments (module.h), precompute_lightmap's too.
+void check_subsurface_given(const std::string& material, const py::object& sss, const py::object& sigma_a,
+                            const py::object& sigma_s, const py::object& eta, double length_scale) {
+  if (material == "subsurface") return;
+  for (const auto& [given, name] : {std::pair{!sss.is_none(), "sss"}, std::pair{!sigma_a.is_none(), "sigma_a"},
+                                    std::pair{!sigma_s.is_none(), "sigma_s"}, std::pair{!eta.is_none(), "eta"},
+                                    std::pair{length_scale != kDefaultLengthScale, "length_scale"}})
+    if (given) throw Error(std::string(name) + ": needs material='subsurface'");
+}
+
 prt::SubsurfaceRecord subsurface_arg(const py::object& sss, const py::object& sigma_a, const py::object& sigma_s,
                                      const py::object& eta, double length_scale) {
   prt::SubsurfaceRecord r;
@@ -57,8 +61,6 @@ prt::SubsurfaceRecord subsurface_arg(const py::object& sss, const py::object& si
   return r;
 }
 
-// What prt precompute --material subsurface refuses, by the argument's name
-// with the CLI's reason (tools/prt/cmd_precompute.cpp, check_subsurface).
 void check_subsurface_args(const std::string& basis, const std::string& mode, const py::object& albedo,
                            bool vertex_colors, bool adaptive, bool light_bounce) {
   const auto no = [](const std::string& what, const std::string& why) {
@@ -77,8 +79,6 @@ void check_subsurface_args(const std::string& basis, const std::string& mode, co
   if (light_bounce) no("light_bounce", "the lights' bounce operator is a diffuse surface's");
 }
 
-}  // namespace
-
 // precompute.
 void bind_precompute(py::module_& m) {
   m.def(
@@ -91,11 +91,7 @@ void bind_precompute(py::module_& m) {
          const py::object& sss, const py::object& sigma_a, const py::object& sigma_s, const py::object& eta,
          double length_scale, py::object progress) -> py::object {
         const bool translucent = material == "subsurface";
-        if (!translucent)
-          for (const auto& [given, name] : {std::pair{!sss.is_none(), "sss"}, std::pair{!sigma_a.is_none(), "sigma_a"},
-                                            std::pair{!sigma_s.is_none(), "sigma_s"}, std::pair{!eta.is_none(), "eta"},
-                                            std::pair{length_scale != kDefaultLengthScale, "length_scale"}})
-            if (given) throw Error(std::string(name) + ": needs material='subsurface'");
+        check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
         if (translucent) check_subsurface_args(basis, mode, albedo, vertex_colors, !adaptive.is_none(), light_bounce);
         if (basis != "sh" && basis != "wavelet")
           throw Error("basis: expected 'sh' or 'wavelet' (for 'zh', fit_zh the SH transfer), got '" + basis + "'");

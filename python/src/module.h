@@ -18,6 +18,7 @@
 #include <prt/lights.h>
 #include <prt/precompute.h>
 #include <prt/progress.h>
+#include <prt/subsurface.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
@@ -241,6 +242,29 @@ std::array<int, 3> probe_dims_arg(const py::object& dims, const std::string& wha
 // throws prt::Error for a shaping argument without light_bounce.
 void light_bounce_args(prt::TransferOptions& o, bool light_bounce, double patch, double ratio, int clusters,
                        const py::object& probes);
+
+// material='subsurface' of precompute and precompute_lightmap (defined in
+// bind_precompute.cpp; docs/SUBSURFACE.md): prt precompute --material
+// subsurface's options by the CLI's names, and its refusals.
+//
+// length_scale='s default, prt precompute --length-scale's
+// (tools/prt/subsurface_options.h): D3DX's samples' fLengthScale, 25 mm a
+// mesh unit.
+constexpr double kDefaultLengthScale = 25.0;
+// sss=, sigma_a=, sigma_s=, eta= or length_scale= given with another
+// material than 'subsurface': refused by the argument's name.
+void check_subsurface_given(const std::string& material, const py::object& sss, const py::object& sigma_a,
+                            const py::object& sigma_s, const py::object& eta, double length_scale);
+// The translucent material of material='subsurface', as prt precompute's
+// --sss, --sigma-a, --sigma-s, --eta and --length-scale give it
+// (tools/prt/subsurface_options.cpp): the preset, its values overridden (its
+// name then marked "(modified)"), or both coefficients (eta 1.3 unless given).
+prt::SubsurfaceRecord subsurface_arg(const py::object& sss, const py::object& sigma_a, const py::object& sigma_s,
+                                     const py::object& eta, double length_scale);
+// What prt precompute --material subsurface refuses, by the argument's name
+// with the CLI's reason (tools/prt/cmd_precompute.cpp, check_subsurface).
+void check_subsurface_args(const std::string& basis, const std::string& mode, const py::object& albedo,
+                           bool vertex_colors, bool adaptive, bool light_bounce);
 
 // threads=: prt's --threads, 0 (every core) to prt::kMaxThreads.
 int threads_arg(int threads);

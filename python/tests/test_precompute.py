@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import prt
-from conftest import BANDS, MESH, SAMPLES, SEED, run_prt
+from conftest import BANDS, MESH, SAMPLES, SEED, SOURCE, run_prt
 
 # A Python thread counts while precompute runs; with the GIL held it could
 # not run at all. The margins leave out the instants around the call (the
@@ -308,3 +308,44 @@ def test_subsurface_relight_refuses_lights(tube):
     assert np.all(np.isfinite(prt.relight(t, tube, lighting)))
     with pytest.raises(prt.Error, match="takes no lights inside the scene"):
         prt.relight(t, tube, lighting, lights=[prt.Light(position=(0, 2, 0))])
+
+
+# A translucent lightmap: precompute_lightmap(material='subsurface') is prt
+# precompute SCENE --lightmap WxH --material subsurface's file, its options
+# by the same names as precompute's and its refusals the CLI's.
+ROOM = SOURCE / "models" / "room.gltf"
+
+
+@pytest.mark.parametrize("cli,kwargs", [
+    (["--sss", "ketchup", "--length-scale", "40"], dict(sss="ketchup", length_scale=40)),
+    (["--mode", "interreflected", "--sss", "skin1", "--eta", "1.5"], dict(mode="interreflected", sss="skin1", eta=1.5)),
+])
+def test_subsurface_lightmap_is_the_cli_file(tmp_path, cli, kwargs):
+    path = tmp_path / "cli.prt"
+    run_prt("precompute", ROOM, "--lightmap", "24x24", "--material", "subsurface", "--bands", BANDS, "--samples",
+            SAMPLES, "--seed", SEED, "-q", "-o", path, *cli)
+    scene = prt.load_scene(ROOM)
+    lm = prt.precompute_lightmap(scene, 24, 24, material="subsurface", bands=BANDS, samples=SAMPLES, seed=SEED,
+                                 **kwargs)
+    assert lm.channels == 3 and not lm.analytic.any()
+    out = tmp_path / "py.prt"
+    lm.write(out)
+    assert out.read_bytes() == path.read_bytes()
+    lighting = np.zeros((BANDS * BANDS, 3), dtype=np.float32)
+    lighting[0] = 1
+    assert np.all(np.isfinite(lm.relight(scene, lighting)))
+    with pytest.raises(prt.Error, match="takes no lights inside the scene"):
+        lm.relight(scene, lighting, lights=[prt.Light(position=(0, 2, 0))])
+
+
+@pytest.mark.parametrize("kwargs,words", [
+    (dict(material="subsurface"), "needs sss=NAME"),
+    (dict(material="subsurface", sss="marble", mode="unshadowed"), "shadowed or interreflected"),
+    (dict(material="subsurface", sss="marble", adaptive=0.01), "adaptive: does not apply"),
+    (dict(material="subsurface", sss="marble", mode="interreflected", light_bounce=True), "light_bounce: does not"),
+    (dict(sss="marble"), "sss: needs material='subsurface'"),
+    (dict(material="glossy"), "a lightmap is 'diffuse' or 'subsurface', got 'glossy'"),
+])
+def test_subsurface_lightmap_refusals(kwargs, words):
+    with pytest.raises(prt.Error, match=re.escape(words)):
+        prt.precompute_lightmap(prt.load_scene(ROOM), 8, 8, bands=2, samples=16, **kwargs)

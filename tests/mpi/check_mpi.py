@@ -5,13 +5,13 @@ Usage: check_mpi.py PRT_EXE MPIRUN [--ranks 1,2,3]
 
 Every mode (unshadowed, shadowed, interreflected with bounces, RGB albedo,
 glossy shadowed and interreflected, translucent (--material subsurface)
-shadowed and interreflected, wavelet) run with 1, 2 and 3 ranks
-(mpirun --oversubscribe: more ranks than the machine's cores) writes a file
-byte-identical to one process without mpirun. A rank that fails
-(PRT_TEST_FAIL_RANK) or a job interrupted by Ctrl-C ends every rank with its
-message and a non-zero status, leaves no output and no temporary, and no rank
-hangs (each run is bounded in time). Exit 0 when all hold, 1 otherwise (the
-lines say which), 77 when mpirun is missing (ctest: skipped).
+shadowed and interreflected, per vertex and in a lightmap, wavelet) run with
+1, 2 and 3 ranks (mpirun --oversubscribe: more ranks than the machine's
+cores) writes a file byte-identical to one process without mpirun. A rank
+that fails (PRT_TEST_FAIL_RANK) or a job interrupted by Ctrl-C ends every rank
+with its message and a non-zero status, leaves no output and no temporary, and
+no rank hangs (each run is bounded in time). Exit 0 when all hold, 1
+otherwise (the lines say which), 77 when mpirun is missing (ctest: skipped).
 """
 import argparse
 import math
@@ -116,10 +116,17 @@ def main():
             # a lightmap's texels chosen adaptively (the scene below): the same choices on every rank
             "lightmap-adaptive-interreflected": ["--lightmap", "48x48", "--mode", "interreflected", "--bands", "3",
                                                  "--adaptive", "--verify-adaptive", "0.2"],
+            # a translucent lightmap (the room below): the surface integral runs over every rank's texels
+            "lightmap-subsurface": ["--lightmap", "24x24", "--material", "subsurface", "--sss", "ketchup",
+                                    "--length-scale", "40", "--bands", "3"],
+            "lightmap-subsurface-interreflected": ["--lightmap", "24x24", "--material", "subsurface", "--sss", "skin1",
+                                                   "--length-scale", "40", "--mode", "interreflected", "--bands", "3"],
         }
         # Runs on another input than the mesh above.
-        inputs = {"lightmap-adaptive-interreflected": os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
-                                                                   "..", "models", "wall-on-floor.gltf")}
+        models = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "models")
+        inputs = {"lightmap-adaptive-interreflected": os.path.join(models, "wall-on-floor.gltf"),
+                  "lightmap-subsurface": os.path.join(models, "room.gltf"),
+                  "lightmap-subsurface-interreflected": os.path.join(models, "room.gltf")}
         for name, opts in list(modes.items()) + [("wavelet", ["--basis", "wavelet", "--cube-res", "8"])]:
             o = (common if name != "wavelet" else ["-q"]) + opts
             one = os.path.join(work, name + ".single.prt")

@@ -108,10 +108,30 @@ int run_at(ReferenceArgs& a) {
   return 0;
 }
 
+// What --material subsurface refuses, at vertices and texels alike.
+void check_subsurface_reference(ReferenceArgs& a) {
+  const char* why = "does not apply to --material subsurface";
+  if (!a.at.empty()) throw UsageError(fmt::format("--at {} (the reference is at the mesh's vertices)", why));
+  if (a.opt.vertex_colors) throw UsageError(fmt::format("--vertex-colors {} (the material's profile is its colour)", why));
+  if (a.albedo_opt->count() > 0)
+    throw UsageError(fmt::format("--albedo {} (the material's coefficients give its reflectance)", why));
+  for (const CLI::Option* o : a.glossy_opts)
+    if (o->count() > 0) throw UsageError(o->get_name() + " applies to --material glossy only");
+  if (a.light.given())
+    throw UsageError("--lights and --sun do not apply to --material subsurface: the reference is lit by the map alone");
+  if (a.opt.mode == TransferMode::Unshadowed)
+    throw UsageError("--mode unshadowed does not apply to --material subsurface (a translucent transfer is shadowed "
+                     "or interreflected)");
+  if (a.opt.offset < 0 || !std::isfinite(a.opt.offset))
+    throw UsageError("--offset: must be a finite number >= 0 (0: 1e-4 x the bounding-box diagonal)");
+  if (a.samples_opt->count() == 0) a.opt.samples = kSubsurfaceReferenceSamples;
+}
+
 // --lightmap WxH: the reference at the texel sample points prt precompute
 // --lightmap traces (the same rasterisation, the same samples moved out of
 // geometry), written in the relit lightmap's layout.
-int run_lightmap(ReferenceArgs& a) {
+int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
+  if (sss) check_subsurface_reference(a);
   if (a.opt.glossy) throw UsageError("--lightmap: a lightmap is diffuse (no --material glossy)");
   if (a.opt.vertex_colors) throw UsageError("--vertex-colors does not apply to --lightmap (the scene's materials are the albedo)");
   int width = 0, height = 0;
@@ -126,7 +146,7 @@ int run_lightmap(ReferenceArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const prt::Scene scene = load_scene(a.mesh, a.mesh_opt);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(scene));
-  const EnvMap map = reference_map(a, &scene.lights);
+  const EnvMap map = reference_map(a, sss ? nullptr : &scene.lights);  // a translucent transfer is the map's alone
   const bool override_albedo = a.albedo_opt->count() > 0;
   const glm::vec3 albedo = a.opt.albedo;
   const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
@@ -136,7 +156,11 @@ int run_lightmap(ReferenceArgs& a) {
     return override_albedo ? albedo : scene.albedo(tri, u, v);
   };
   Outputs out("reference");
+  if (!a.quiet && sss) fmt::print(stderr, "{}\n", describe_subsurface(*sss));
   const std::optional<ReferenceResult> computed = run_with_progress(a.quiet, "reference", [&](const Progress& progress) {
+    if (sss)  // each texel at its point on its triangle, where prt precompute's surface integral receives it
+      return render_subsurface_reference_at_points(scene.mesh, map, a.opt, *sss, texel_surface_points(scene.mesh, texels),
+                                                   texels.normals, progress);
     return render_reference_at_points(scene.mesh, map, a.opt, texels.positions, texels.normals, texels.albedo,
                                       hit_albedo, progress);
   });
@@ -167,23 +191,8 @@ int run_lightmap(ReferenceArgs& a) {
 // dipole (prt/subsurface_reference.h, docs/SUBSURFACE.md "The reference"),
 // per vertex, written as the diffuse reference's CSV.
 int run_subsurface(ReferenceArgs& a, const SubsurfaceRecord& record) {
-  const char* why = "does not apply to --material subsurface";
-  if (a.lightmap_opt->count() > 0) throw UsageError(fmt::format("--lightmap {} (the reference is per vertex)", why));
-  if (!a.at.empty()) throw UsageError(fmt::format("--at {} (the reference is at the mesh's vertices)", why));
-  if (a.uv_opt->count() > 0) throw UsageError(fmt::format("--uv {}", why));
-  if (a.opt.vertex_colors) throw UsageError(fmt::format("--vertex-colors {} (the material's profile is its colour)", why));
-  if (a.albedo_opt->count() > 0)
-    throw UsageError(fmt::format("--albedo {} (the material's coefficients give its reflectance)", why));
-  for (const CLI::Option* o : a.glossy_opts)
-    if (o->count() > 0) throw UsageError(o->get_name() + " applies to --material glossy only");
-  if (a.light.given())
-    throw UsageError("--lights and --sun do not apply to --material subsurface: the reference is lit by the map alone");
-  if (a.opt.mode == TransferMode::Unshadowed)
-    throw UsageError("--mode unshadowed does not apply to --material subsurface (a translucent transfer is shadowed "
-                     "or interreflected)");
-  if (a.opt.offset < 0 || !std::isfinite(a.opt.offset))
-    throw UsageError("--offset: must be a finite number >= 0 (0: 1e-4 x the bounding-box diagonal)");
-  if (a.samples_opt->count() == 0) a.opt.samples = kSubsurfaceReferenceSamples;
+  check_subsurface_reference(a);
+  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   for_path("--output", [&] { check_writable(a.output); });
 
   std::unique_ptr<tbb::global_control> limit;
@@ -235,7 +244,8 @@ int run_reference(ReferenceArgs& a) {
     parse_triple(a.rotate, "--rotate", e);
     a.opt.rotation = sh::rotation_from_euler(e[0], e[1], e[2]);
   }
-  if (const std::optional<SubsurfaceRecord> sss = subsurface_record(a.sss, a.material)) return run_subsurface(a, *sss);
+  if (const std::optional<SubsurfaceRecord> sss = subsurface_record(a.sss, a.material))
+    return a.lightmap_opt->count() > 0 ? run_lightmap(a, &*sss) : run_subsurface(a, *sss);
   if (a.lightmap_opt->count() > 0) {
     if (!a.at.empty()) throw UsageError("--at and --lightmap are two runs (query points, a lightmap's texels)");
     a.opt.glossy = a.material == "glossy";
@@ -331,7 +341,8 @@ Run add_reference(CLI::App& app) {
       "transmitted irradiance (map and cosine sampling, Fresnel transmittance); --samples iterations of 4\n"
       "probes a channel (default 4096).\n"
       "Shadowed, or interreflected (surfaces hit glow with their own L_o, --bounces hops). The map's light\n"
-      "alone: no --lights/--sun, --albedo, --vertex-colors, --lightmap, --at.\n"
+      "alone: no --lights/--sun, --albedo, --vertex-colors, --at. With --lightmap WxH, at the texels of prt\n"
+      "precompute SCENE --lightmap WxH --material subsurface (each at its point on its triangle).\n"
       "         prt reference cow.off forest.exr --material subsurface --sss marble --length-scale 100 -o sss.csv");
   s->add_option("MESH", a->mesh, "Mesh file: OBJ, PLY, OFF, STL, glTF/GLB")->check(path_value())->required();
   s->add_option("ENV,--env", a->env,
