@@ -71,7 +71,7 @@ double default_ray_offset(const Mesh& mesh) {
   return std::max({1e-4 * mesh.diagonal(), 64.0 * FLT_EPSILON * magnitude, 1e-30});
 }
 
-RayScene::RayScene(const Mesh& mesh, bool robust) : mesh_(mesh) {
+RayScene::RayScene(const Mesh& mesh, bool robust, bool all_hits) : mesh_(mesh), all_hits_(all_hits) {
   // make_mesh refuses larger coordinates; a Mesh built by hand is checked here.
   const glm::vec3 lo = mesh.bounds_min(), hi = mesh.bounds_max();
   const double extent = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y),
@@ -93,7 +93,8 @@ RayScene::RayScene(const Mesh& mesh, bool robust) : mesh_(mesh) {
   RTCScene scene = rtcNewScene(device);
   scene_ = scene;
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-  if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneFlags(scene, RTCSceneFlags((robust ? RTC_SCENE_FLAG_ROBUST : 0) |
+                                        (all_hits ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0)));
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
   // Embree's own buffers (rtcSetNewGeometryBuffer) are padded as it needs.
   auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -220,6 +221,52 @@ void RayScene::intersect8(const glm::vec3& o, const glm::vec3* dirs, int count, 
     h.t = rh.ray.tfar[i];
     h.front = is_front(mesh_, h.triangle, dirs[i]);
   }
+}
+
+namespace {
+// intersect_all's context: Embree passes the RTCIntersectContext to the
+// filter, which finds the rest of the struct behind it.
+struct AllHits {
+  RTCIntersectContext ctx;
+  const Mesh* mesh;
+  glm::vec3 dir;
+  std::vector<Hit>* hits;
+};
+
+// Records the hit and rejects it, so that the traversal goes on to the next.
+void collect_hit(const RTCFilterFunctionNArguments* args) {
+  const auto* all = reinterpret_cast<const AllHits*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] == 0) continue;
+    Hit h;
+    h.triangle = RTCHitN_primID(args->hit, args->N, i);
+    h.u = RTCHitN_u(args->hit, args->N, i);
+    h.v = RTCHitN_v(args->hit, args->N, i);
+    h.t = RTCRayN_tfar(args->ray, args->N, i);
+    h.front = is_front(*all->mesh, h.triangle, all->dir);
+    all->hits->push_back(h);
+    args->valid[i] = 0;
+  }
+}
+}  // namespace
+
+void RayScene::intersect_all(const glm::vec3& o, const glm::vec3& d, float tnear, float tfar,
+                             std::vector<Hit>& hits) const {
+  if (!all_hits_) throw Error("RayScene::intersect_all: the scene was not built with all_hits");
+  hits.clear();
+  RTCRayHit rh;
+  rh.ray = single_ray(o, d, tnear);
+  rh.ray.tfar = tfar;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  AllHits all{{}, &mesh_, d, &hits};
+  rtcInitIntersectContext(&all.ctx);
+  all.ctx.filter = collect_hit;
+  rtcIntersect1(scene_of(scene_), &all.ctx, &rh);
+  // Embree may report a triangle more than once (its filter's contract): keep each once.
+  std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) { return a.triangle < b.triangle; });
+  hits.erase(std::unique(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) { return a.triangle == b.triangle; }),
+             hits.end());
 }
 
 Hit RayScene::intersect1(const glm::vec3& o, const glm::vec3& d, float tnear) const {

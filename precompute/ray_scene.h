@@ -41,7 +41,8 @@ class RayScene {
   // robust: Embree's watertight mode (no ray slips between two triangles
   // that share an edge; slower): what probe volumes trace with, where one
   // stray ray lights a closed box.
-  explicit RayScene(const Mesh& mesh, bool robust = false);
+  // all_hits: intersect_all may be called (Embree's context filter).
+  explicit RayScene(const Mesh& mesh, bool robust = false, bool all_hits = false);
   ~RayScene();
   RayScene(const RayScene&) = delete;
   RayScene& operator=(const RayScene&) = delete;
@@ -53,6 +54,12 @@ class RayScene {
   void intersect8(const glm::vec3& origin, const glm::vec3* dirs, int count, float tnear, Hit* hits) const;
   // One ray.
   Hit intersect1(const glm::vec3& origin, const glm::vec3& dir, float tnear) const;
+  // Every triangle the segment [tnear, tfar] crosses, once each, in no
+  // particular order, into `hits` (cleared first). Two triangles at the same
+  // place (a box standing on a floor) both count, where stepping from hit
+  // to hit with intersect1 finds one of them. Needs all_hits.
+  void intersect_all(const glm::vec3& origin, const glm::vec3& dir, float tnear, float tfar,
+                     std::vector<Hit>& hits) const;
   // Something hits in [tnear, tfar] (default: the whole ray).
   bool occluded1(const glm::vec3& origin, const glm::vec3& dir, float tnear,
                  float tfar = std::numeric_limits<float>::infinity()) const;
@@ -66,6 +73,7 @@ class RayScene {
   void release();
 
   const Mesh& mesh_;
+  bool all_hits_ = false;
   void* device_ = nullptr;  // RTCDevice
   void* scene_ = nullptr;   // RTCScene
 };

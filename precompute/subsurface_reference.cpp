@@ -24,7 +24,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cfloat>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -138,7 +137,6 @@ struct Integrator {
   double S = 1.0;       // mm per mesh unit
   double R = 1.0;       // mesh units: the probes' ball
   double offset = 0.0;  // ray offset
-  double step = 0.0;    // re-trace past a probe's hit by this (mesh units)
   bool interreflect = false;
   int bounces = 0;
 
@@ -192,12 +190,9 @@ struct Integrator {
     const glm::dvec3& w = f.axis[(a + 2) % 3];
     const double h = std::sqrt(std::max(0.0, R * R - rho * rho));
     const glm::dvec3 start = xo + rho * (std::cos(phi) * u + std::sin(phi) * w) + h * axis;
-    const glm::vec3 origin(start), dir(-axis);
-    float tnear = 0.0f;
-    for (int guard = 0; guard < 1 << 16; ++guard) {
-      const detail::Hit hit = scene.intersect1(origin, dir, tnear);
-      if (!hit.hit() || double(hit.t) > 2.0 * h) break;
-      tnear = float(double(hit.t) + step);
+    thread_local std::vector<detail::Hit> crossed;
+    scene.intersect_all(glm::vec3(start), glm::vec3(-axis), 0.0f, float(2.0 * h), crossed);
+    for (const detail::Hit& hit : crossed) {
       ProbeHit p;
       glm::dvec3 ng;
       if (!surface(hit, p.x, p.ns, ng)) continue;
@@ -354,7 +349,9 @@ ReferenceResult render(const Mesh& mesh, const EnvMap& map, const ReferenceOptio
   result.std_error.assign(n, glm::vec3(0.0f));
 
   const EnvLight env(map, options.rotation);
-  const detail::RayScene scene(mesh, true);  // watertight: a probe slipping between triangles would lose a hit
+  // Watertight: a probe slipping between triangles would lose a hit; every
+  // hit of a probe's segment, two triangles at the same place included.
+  const detail::RayScene scene(mesh, true, true);
   const double diag = mesh.diagonal();
   const SubsurfaceMaterial& m = rec.material;
   Integrator integ{mesh, env, scene};
@@ -362,10 +359,6 @@ ReferenceResult render(const Mesh& mesh, const EnvMap& map, const ReferenceOptio
   integ.S = rec.length_scale;
   integ.R = 1.001 * diag;
   integ.offset = options.offset > 0 ? options.offset : detail::default_ray_offset(mesh);
-  double coord = 0.0;
-  for (int c = 0; c < 3; ++c)
-    coord = std::max({coord, std::abs(double(mesh.bounds_min()[c])), std::abs(double(mesh.bounds_max()[c]))});
-  integ.step = 1e-5 * diag + 8.0 * FLT_EPSILON * (coord + 2.0 * diag);
   integ.interreflect = options.mode == TransferMode::Interreflected;
   integ.bounces = options.bounces;
   for (int c = 0; c < 3; ++c) {

@@ -167,7 +167,6 @@ constexpr std::array<double, 4> kDiscNodes = {0.0694318442029737, 0.330009478207
                                               0.9305681557970263};
 constexpr std::array<double, 4> kDiscWeights = {0.1739274225687269, 0.3260725774312731, 0.3260725774312731,
                                                 0.1739274225687269};
-constexpr int kDiscAngles = 8;
 // A source closer than this many of its disc radii is averaged over its disc
 // (docs/SUBSURFACE.md "Near sources"); farther, its point value with the
 // disc's second-order term.
@@ -223,20 +222,6 @@ class ProfileTable {
     lookup(r, f, 0, 9);
     const double a = m2 / 4 * inplane, b = r > 0 ? m2 / 2 / r * (1 - inplane) : 0.0;
     return {f[0] + a * f[3] + b * f[6], f[1] + a * f[4] + b * f[7], f[2] + a * f[5] + b * f[8]};
-  }
-  // The same mean by a product rule over the disc (4 radii, equal shares of
-  // area by Gauss-Legendre, times 8 angles), for a disc near the receiver.
-  glm::dvec3 disc_mean(double r, double rho) const {
-    glm::dvec3 sum(0.0);
-    for (std::size_t i = 0; i < kDiscNodes.size(); ++i) {
-      const double q = rho * std::sqrt(kDiscNodes[i]);
-      for (int a = 0; a < kDiscAngles; ++a) {
-        const double phi = 2 * std::numbers::pi * (a + 0.5) / kDiscAngles;
-        const double x = r + q * std::cos(phi), y = q * std::sin(phi);
-        sum += kDiscWeights[i] / kDiscAngles * value(std::sqrt(x * x + y * y));
-      }
-    }
-    return sum;
   }
   // F1 per channel at r mm.
   glm::dvec3 f1(double r) const {
@@ -306,6 +291,40 @@ constexpr std::array<double, 8> kEdgeWeights = {0.0506142681451881, 0.1111905172
                                                 0.1111905172266872, 0.0506142681451881};
 
 constexpr int kEdgePieces = 2;  // the rule on each of two halves of the mapped edge
+
+// int over a uniform disc of radius rho (mm) of R_d(|x - o|) dA, per
+// channel, o at distance d (mm) from the disc's centre along its plane and
+// h over it: in polar coordinates about o's projection q,
+//   int dphi [F1(sqrt(s^2 + h^2)) - F1(|h|)]
+// between the boundary's distances s from q in each direction (the
+// profile's peak at q is inside F1, not sampled). q inside the disc:
+// Gauss-Legendre on [0, pi/2] and [pi/2, pi] (s has a kink at pi/2 when q
+// is on the rim); outside: in theta, sin phi = (rho / d) sin theta, which
+// takes the square root at the tangent directions away. The points path's
+// near field: a texel of a translucent lightmap over another's receiver
+// (a box's bottom on the floor under it) or beside it.
+glm::dvec3 disc_integral(const ProfileTable& table, double d, double h, double rho) {
+  const glm::dvec3 base = table.f1(std::abs(h));
+  const auto F = [&](double s) { return table.f1(std::sqrt(s * s + h * h)) - base; };
+  glm::dvec3 sum(0.0);
+  const double half_pi = 0.5 * std::numbers::pi;
+  if (d <= rho) {
+    for (int part = 0; part < 2; ++part)
+      for (std::size_t k = 0; k < kEdgeNodes.size(); ++k) {
+        const double phi = (part + kEdgeNodes[k]) * half_pi, sn = std::sin(phi);
+        const double s = -d * std::cos(phi) + std::sqrt(std::max(0.0, rho * rho - d * d * sn * sn));
+        sum += (kEdgeWeights[k] * half_pi) * F(s);
+      }
+  } else {
+    for (std::size_t k = 0; k < kEdgeNodes.size(); ++k) {
+      const double theta = kEdgeNodes[k] * half_pi, sn = rho / d * std::sin(theta);
+      const double cphi = std::sqrt(std::max(0.0, 1.0 - sn * sn)), root = rho * std::cos(theta);
+      const double jacobian = rho / d * std::cos(theta) / cphi;  // dphi / dtheta
+      sum += (kEdgeWeights[k] * half_pi * jacobian) * (F(d * cphi + root) - F(d * cphi - root));
+    }
+  }
+  return 2.0 * sum;  // the other half of the angles, by symmetry
+}
 // A triangle whose plane passes this close to the receiver, in the
 // profile's narrowest width, is taken as through it for I1 (F2's planar
 // moment; the error is of order (h / z_r)^2 of that term).
@@ -344,6 +363,57 @@ void edge_integral(double width, double h, const glm::dvec3& a3, const glm::dvec
   for (std::size_t c = 0; c < 3; ++c) I1[c] += along[int(c)] * out;
 }
 
+// The nodes of the angular rule over the wedge (q, a3, b3) in the plane
+// of unit normal n (q in it): fn(wt, r, e) for each, e the unit direction
+// in the plane at its angle, r the distance from q to the edge a3 b3 along
+// e, wt its weight, signed by the wedge's orientation about n
+// (Gauss-Legendre split where r is least). Nothing when q is on the
+// edge's line (no area).
+template <class Fn>
+void wedge_nodes(const glm::dvec3& q, const glm::dvec3& n, const glm::dvec3& a3, const glm::dvec3& b3, Fn&& fn) {
+  const glm::dvec3 u = a3 - q, w = b3 - q;
+  const double lu = glm::length(u);
+  if (!(lu > 0)) return;
+  const glm::dvec3 e1 = u / lu, e2 = glm::cross(n, e1);
+  const glm::dvec2 a(lu, 0.0), b(glm::dot(w, e1), glm::dot(w, e2)), d = b - a;
+  const double ad = a.x * d.y - a.y * d.x;  // r(phi) = (a x d) / (e(phi) x d)
+  if (!(std::abs(ad) > 1e-12 * lu * glm::length(d))) return;
+  const double theta = std::atan2(b.y, b.x);  // signed: the wedge's orientation about n
+  const glm::dvec2 foot = a - glm::dot(a, d) / glm::dot(d, d) * d;
+  const double phi_n = std::atan2(foot.y, foot.x);
+  const bool split = theta > 0 ? phi_n > 0 && phi_n < theta : phi_n < 0 && phi_n > theta;
+  const double cuts[3] = {0.0, split ? phi_n : 0.5 * theta, theta};
+  for (int s = 0; s < 2; ++s) {
+    const double lo = cuts[s], span = cuts[s + 1] - cuts[s];
+    for (std::size_t g = 0; g < kWedgeNodes.size(); ++g) {
+      const double phi = lo + span * kWedgeNodes[g];
+      const double c = std::cos(phi), sn = std::sin(phi), r = ad / (c * d.y - sn * d.x);
+      if (!(r > 0 && r < INFINITY)) continue;  // rounding at a wedge's edge: no area there
+      fn(span * kWedgeWeights[g], r, c * e1 + sn * e2);
+    }
+  }
+}
+
+// int over a convex planar polygon p[0..count) (mm) of R_d(|x - o|) dA per
+// channel: the signed sum of its edges' wedges about o's projection onto
+// its plane (as triangle_weights' I0). A translucent lightmap's texel
+// footprint (prt/lightmap.h texel_footprints).
+glm::dvec3 polygon_integral(const ProfileTable& table, const glm::dvec3& o, const glm::dvec3* p, std::size_t count) {
+  glm::dvec3 normal(0.0);  // Newell's: the polygon's orientation
+  for (std::size_t i = 0; i < count; ++i) normal += glm::cross(p[i], p[(i + 1) % count]);
+  const double len = glm::length(normal);
+  if (!(len > 0)) return glm::dvec3(0.0);
+  const glm::dvec3 n = normal / len;
+  const double h = glm::dot(o - p[0], n);
+  const glm::dvec3 q = o - h * n, base = table.f1(std::abs(h));
+  glm::dvec3 I0(0.0);
+  for (std::size_t i = 0; i < count; ++i)
+    wedge_nodes(q, n, p[i], p[(i + 1) % count], [&](double wt, double r, const glm::dvec3&) {
+      I0 += wt * (table.f1(std::sqrt(r * r + h * h)) - base);
+    });
+  return I0;
+}
+
 void triangle_weights(const ProfileTable& table, double width, const glm::dvec3& o,
                       const std::array<glm::dvec3, 3>& p, std::array<glm::dvec3, 3>& W) {
   W.fill(glm::dvec3(0.0));
@@ -367,36 +437,16 @@ void triangle_weights(const ProfileTable& table, double width, const glm::dvec3&
     if (!(L > 0)) continue;
     if (!flat) edge_integral(width, h, a3, edge, L, n, q, f1h, I1);
     // I0: the wedge (q, a, b).
-    const glm::dvec3 u = a3 - q, w = b3 - q;
-    const double lu = glm::length(u);
-    if (!(lu > 0)) continue;
-    const glm::dvec3 e1 = u / lu, e2 = glm::cross(n, e1);
-    const glm::dvec2 a(lu, 0.0), b(glm::dot(w, e1), glm::dot(w, e2)), d = b - a;
-    const double ad = a.x * d.y - a.y * d.x;  // r(phi) = (a x d) / (e(phi) x d)
-    if (!(std::abs(ad) > 1e-12 * lu * glm::length(d))) continue;  // q on the edge's line: no area
-    const double theta = std::atan2(b.y, b.x);  // signed: the wedge's orientation about n
-    const glm::dvec2 foot = a - glm::dot(a, d) / glm::dot(d, d) * d;
-    const double phi_n = std::atan2(foot.y, foot.x);
-    const bool split = theta > 0 ? phi_n > 0 && phi_n < theta : phi_n < 0 && phi_n > theta;
-    const double cuts[3] = {0.0, split ? phi_n : 0.5 * theta, theta};
-    for (int s = 0; s < 2; ++s) {
-      const double lo = cuts[s], span = cuts[s + 1] - cuts[s];
-      for (std::size_t g = 0; g < kWedgeNodes.size(); ++g) {
-        const double phi = lo + span * kWedgeNodes[g];
-        const double c = std::cos(phi), sn = std::sin(phi), r = ad / (c * d.y - sn * d.x);
-        if (!(r > 0 && r < INFINITY)) continue;  // rounding at a wedge's edge: no area there
-        const double wt = span * kWedgeWeights[g];
-        if (!flat) {
-          I0 += wt * f1h(r);
-          continue;
-        }
-        glm::dvec3 f1, f2;
-        table.moments(std::sqrt(r * r + h * h), f1, f2);
-        I0 += wt * (f1 - base);
-        const glm::dvec3 e = c * e1 + sn * e2;
-        for (std::size_t ch = 0; ch < 3; ++ch) I1[ch] += wt * f2[int(ch)] * e;
+    wedge_nodes(q, n, a3, b3, [&](double wt, double r, const glm::dvec3& e) {
+      if (!flat) {
+        I0 += wt * f1h(r);
+        return;
       }
-    }
+      glm::dvec3 f1, f2;
+      table.moments(std::sqrt(r * r + h * h), f1, f2);
+      I0 += wt * (f1 - base);
+      for (std::size_t ch = 0; ch < 3; ++ch) I1[ch] += wt * f2[int(ch)] * e;
+    });
   }
   for (std::size_t j = 0; j < 3; ++j) {
     const glm::dvec3 grad = glm::cross(n, p[(j + 2) % 3] - p[(j + 1) % 3]) / area2;
@@ -505,6 +555,34 @@ Sources disc_sources(const std::vector<glm::dvec3>& pos, std::span<const double>
   return s;
 }
 
+// Texels with their footprints (prt/lightmap.h): each reaches its farthest
+// corner; an octree node holds that reach and a receiver within three of
+// it integrates the footprint. Throws prt::Error for footprints of another
+// texel count.
+void widen_to_footprints(const TexelFootprints& f, const std::vector<glm::dvec3>& pos, Sources& src) {
+  if (f.texel_polygons.size() != pos.size() + 1 || f.texel_polygons.back() + 1 != f.polygon_corners.size() ||
+      f.polygon_corners.back() != f.corners.size())
+    throw Error(fmt::format("subsurface scatter: texel footprints for {} texels, given {} points",
+                            f.texel_polygons.empty() ? 0 : f.texel_polygons.size() - 1, pos.size()));
+  for (std::size_t i = 0; i < pos.size(); ++i)
+    for (std::uint32_t j = f.polygon_corners[f.texel_polygons[i]]; j < f.polygon_corners[f.texel_polygons[i + 1]]; ++j)
+      src.extent[i] = std::max(src.extent[i], glm::length(glm::dvec3(f.corners[j]) - pos[i]));
+}
+
+// int over texel p's footprint of R_d(|x - o|) dA per channel (o in mesh
+// units, S mm a unit; `corners` scratch).
+glm::dvec3 footprint_integral(const ProfileTable& table, const TexelFootprints& f, std::uint32_t p, double S,
+                              const glm::dvec3& o, std::vector<glm::dvec3>& corners) {
+  glm::dvec3 sum(0.0);
+  for (std::uint32_t k = f.texel_polygons[p]; k < f.texel_polygons[p + 1]; ++k) {
+    corners.clear();
+    for (std::uint32_t j = f.polygon_corners[k]; j < f.polygon_corners[k + 1]; ++j)
+      corners.push_back(S * glm::dvec3(f.corners[j]));
+    sum += polygon_integral(table, S * o, corners.data(), corners.size());
+  }
+  return sum;
+}
+
 // What subsurface_scatter refuses; the channels `in` holds (1 or 3).
 int check_scatter(std::size_t V, std::size_t areas, const SubsurfaceMaterial& material, std::size_t in, int nc,
                   const SubsurfaceScatterOptions& o) {
@@ -594,7 +672,8 @@ struct Leaf {
 std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<const double> areas, const Mesh* mesh,
                                 const SubsurfaceMaterial& material, std::span<const float> in, int nc,
                                 const SubsurfaceScatterOptions& o, const Progress& progress = {},
-                                const char* phase = "subsurface", std::span<const glm::dvec3> points = {}) {
+                                const char* phase = "subsurface", std::span<const glm::dvec3> points = {},
+                                const TexelFootprints* footprints = nullptr) {
   const std::size_t V = positions.size();
   const int in_channels = check_scatter(V, areas.size(), material, in.size(), nc, o);
   std::vector<glm::dvec3> pos(V);
@@ -604,7 +683,8 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
     lo = glm::min(lo, pos[i]);
     hi = glm::max(hi, pos[i]);
   }
-  const Sources src = mesh ? hat_sources(*mesh, areas) : disc_sources(pos, areas);
+  Sources src = mesh ? hat_sources(*mesh, areas) : disc_sources(pos, areas);
+  if (footprints) widen_to_footprints(*footprints, pos, src);
   const std::size_t in_stride = std::size_t(in_channels) * std::size_t(nc);
   const Octree tree = build_octree(src.centre, areas, src.m2, src.normal, src.extent, in, int(in_stride));
   const std::array<Dipole, 3> dipole = {Dipole(material.sigma_a.x, material.sigma_s.x, material.eta),
@@ -626,7 +706,8 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
   for (std::size_t i = 0; i < tree.order.size(); ++i) {
     const std::uint32_t p = tree.order[i];
     const double area = S2 * areas[p], rho = std::sqrt(area / std::numbers::pi);
-    leaf[i] = {src.centre[p], src.normal[p], area, S2 * src.m2[p], rho, (kNearDiscs * rho / S) * (kNearDiscs * rho / S),
+    const double near = kNearDiscs * (footprints ? src.extent[p] : rho / S);  // mesh units
+    leaf[i] = {src.centre[p], src.normal[p], area, S2 * src.m2[p], rho, near * near,
                src.extent[p] > kWideSource * cluster_span};
     std::copy_n(in.data() + std::size_t(p) * in_stride, in_stride, rows.data() + i * in_stride);
   }
@@ -639,7 +720,7 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, R, 64), [&](const tbb::blocked_range<std::size_t>& range) {
     std::vector<double> acc(stride);
     std::vector<std::uint32_t> stack, near;
-    std::vector<glm::dvec3> hats;
+    std::vector<glm::dvec3> hats, corners;
     for (std::size_t r = range.begin(); r < range.end(); ++r) {
       const std::size_t row = out_row[r];
       const glm::dvec3 o_pos = receiver[row];
@@ -675,10 +756,9 @@ std::vector<float> scatter_impl(std::span<const glm::vec3> positions, std::span<
           if (d2 < l.near2 || l.wide) near.push_back(tree.order[i]);
           return l.area * table.point_mean(d, l.m2, inplane);
         }
-        if (d <= 1e-6 * l.rho)  // on it: the disc's closed form
-          return glm::dvec3(dipole[0].disc(l.rho), dipole[1].disc(l.rho), dipole[2].disc(l.rho));
-        if (d2 < l.near2 || l.wide) return l.area * table.disc_mean(d, l.rho);
-        return l.area * table.point_mean(d, l.m2);
+        if (!(d2 < l.near2 || l.wide)) return l.area * table.point_mean(d, l.m2);
+        if (!footprints) return disc_integral(table, S * std::sqrt(std::max(0.0, d2 - g * g)), S * g, l.rho);
+        return footprint_integral(table, *footprints, tree.order[i], S, o_pos, corners);
       };
       // Each near vertex's weight integrated over its triangles
       // (triangle_weights: its hat b_j), in place of its point value. Whole
@@ -835,6 +915,9 @@ LightmapTransfer compute_subsurface_lightmap(const Scene& scene, const LightmapT
   // reference beside such a box, 2.2% traced where it lies).
   const std::vector<glm::vec3> at = texel_surface_points(scene.mesh, texels);
   const std::vector<double> area(texels.area.begin(), texels.area.end());
+  // Near a receiver, each texel's own surface is integrated (a uniform disc
+  // of its area was 22% off beside a box's bright bottom edge).
+  const TexelFootprints footprints = texel_footprints(scene, texels);
   LightmapTexels lit = texels;
   lit.positions = at;
   std::fill(lit.albedo.begin(), lit.albedo.end(), glm::vec3(1.0f));  // the material's reflectance is its profile
@@ -846,7 +929,8 @@ LightmapTransfer compute_subsurface_lightmap(const Scene& scene, const LightmapT
   o.between_bounces = [&](std::vector<float>& rows) {  // E_t / pi -> L_o, the surface integral over the texels
     for (float& x : rows) x = float(std::numbers::pi * x);
     const std::string phase = pass++ == 0 ? "subsurface" : fmt::format("subsurface, bounce {}", pass - 1);
-    rows = scatter_impl(at, area, nullptr, material, grey_rows(std::move(rows), nc), nc, scatter, progress, phase.c_str());
+    rows = scatter_impl(at, area, nullptr, material, grey_rows(std::move(rows), nc), nc, scatter, progress, phase.c_str(),
+                        {}, &footprints);
   };
   LightmapTransfer out = compute_lightmap_transfer(scene, lit, o, progress);
   if (out.transfer.vertices == 0) return out;  // another rank's

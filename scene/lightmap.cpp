@@ -166,6 +166,82 @@ std::string object_names(const Scene& scene, const std::vector<std::uint32_t>& o
   return names;
 }
 
+// A triangle of a UV set in atlas pixels (texel (x, y) is [x, x+1] x [y, y+1]),
+// and its parts inside texels.
+struct AtlasTriangle {
+  glm::dvec2 a, b, c;
+  double area2;        // twice the signed area, texels
+  int x0, x1, y0, y1;  // the texels its bounding box touches
+
+  AtlasTriangle(const std::vector<glm::vec2>& uv, const glm::uvec3& tri, int W, int H)
+      : a(double(uv[tri.x].x) * W, double(uv[tri.x].y) * H),
+        b(double(uv[tri.y].x) * W, double(uv[tri.y].y) * H),
+        c(double(uv[tri.z].x) * W, double(uv[tri.z].y) * H),
+        area2((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)),
+        x0(std::clamp(int(std::floor(std::min({a.x, b.x, c.x}))), 0, W - 1)),
+        x1(std::clamp(int(std::ceil(std::max({a.x, b.x, c.x}))) - 1, 0, W - 1)),
+        y0(std::clamp(int(std::floor(std::min({a.y, b.y, c.y}))), 0, H - 1)),
+        y1(std::clamp(int(std::ceil(std::max({a.y, b.y, c.y}))) - 1, 0, H - 1)) {}
+
+  bool degenerate() const { return !(std::abs(area2) > 1e-12); }
+
+  // The barycentrics (weights of corners 1 and 2) of point s, unclamped.
+  glm::dvec2 weights(const glm::dvec2& s) const {
+    const double inv = 1.0 / area2;
+    return {((c.x - s.x) * (a.y - s.y) - (a.x - s.x) * (c.y - s.y)) * inv,
+            ((a.x - s.x) * (b.y - s.y) - (b.x - s.x) * (a.y - s.y)) * inv};
+  }
+  // The same, clamped onto the triangle.
+  glm::vec2 barycentric(const glm::dvec2& s) const {
+    const glm::dvec2 w = weights(s);
+    const double u = std::clamp(w.x, 0.0, 1.0);
+    return glm::vec2(float(u), float(std::clamp(w.y, 0.0, 1.0 - u)));
+  }
+
+  // fn(x, y, covered, centroid, part) for every texel it covers a part of:
+  // the part's area (texel area 1), centroid and polygon (scratch p0, p1).
+  template <class Fn>
+  void for_each_part(Poly& p0, Poly& p1, Fn&& fn) const {
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        p0 = {a, b, c};
+        clip(p0, p1, 0, x, false);
+        clip(p1, p0, 0, x + 1, true);
+        clip(p0, p1, 1, y, false);
+        clip(p1, p0, 1, y + 1, true);
+        if (p0.size() < 3) continue;
+        glm::dvec2 centroid(x + 0.5, y + 0.5);
+        const double covered = area_centroid(p0, centroid);
+        if (covered > 0) fn(x, y, covered, centroid, p0);
+      }
+  }
+};
+
+// Texels the surface covers only in part (a chart's edge crosses them) are
+// sampled at the centroid of their largest covered part, not at the centre:
+// a centre on the chart's edge lies on the seam with the next surface (a
+// wall's top texel on the ceiling's edge), where rays start on both planes
+// at once and leak past the seam (half the sky, inside a closed room). A
+// second pass over the triangles, touching only those texels.
+void sample_partial_texels(const Mesh& mesh, const std::vector<glm::vec2>& uv, int W, int H,
+                           const std::vector<float>& coverage, UnionFind& charts, std::vector<std::uint32_t>& best,
+                           std::vector<std::uint32_t>& chart, std::vector<glm::vec2>& sample) {
+  std::vector<float> largest(coverage.size(), 0.0f);
+  Poly p0, p1;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const AtlasTriangle tri(uv, mesh.triangles[t], W, H);
+    if (tri.degenerate()) continue;
+    tri.for_each_part(p0, p1, [&](int x, int y, double covered, const glm::dvec2& centroid, const Poly&) {
+      const std::size_t i = std::size_t(y) * std::size_t(W) + std::size_t(x);
+      if (!(coverage[i] < 1.0 - kOverlapTolerance) || !(covered > largest[i])) return;
+      largest[i] = float(covered);
+      best[i] = std::uint32_t(t);
+      chart[i] = charts.find(std::uint32_t(t));
+      sample[i] = tri.barycentric(centroid);
+    });
+  }
+}
+
 }  // namespace
 
 LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
@@ -190,17 +266,15 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   };
   Poly p0, p1;
   for (std::size_t t = 0; t < T; ++t) {
+    const AtlasTriangle at(uv, mesh.triangles[t], W, H);
     const glm::uvec3 tri = mesh.triangles[t];
-    const glm::dvec2 a(double(uv[tri.x].x) * W, double(uv[tri.x].y) * H), b(double(uv[tri.y].x) * W, double(uv[tri.y].y) * H),
-        c(double(uv[tri.z].x) * W, double(uv[tri.z].y) * H);
-    const double area2 = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
     const glm::vec3 e1 = mesh.positions[tri.y] - mesh.positions[tri.x], e2 = mesh.positions[tri.z] - mesh.positions[tri.x];
     const double area3 = 0.5 * glm::length(glm::cross(glm::dvec3(e1), glm::dvec3(e2)));
-    if (!(std::abs(area2) > 1e-12)) {
+    if (at.degenerate()) {
       if (area3 > 0) ++degenerate;
       continue;
     }
-    for (const glm::dvec2 q : {a, b, c})
+    for (const glm::dvec2 q : {at.a, at.b, at.c})
       if (q.x < -kUvSlack * W || q.x > (1 + kUvSlack) * W || q.y < -kUvSlack * H || q.y > (1 + kUvSlack) * H) {
         const std::uint32_t o = scene.triangle_object.empty() ? 0 : scene.triangle_object[t];
         throw Error(fmt::format("{}: UV set {} of {} leaves [0, 1] (triangle {} at UV ({:g}, {:g})): a lightmap set keeps "
@@ -208,51 +282,30 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
                                 mesh.source, uv_set, scene.objects.empty() ? "the mesh" : scene.objects[o].name, t,
                                 q.x / W, q.y / H));
       }
-    const int x0 = std::clamp(int(std::floor(std::min({a.x, b.x, c.x}))), 0, W - 1);
-    const int x1 = std::clamp(int(std::ceil(std::max({a.x, b.x, c.x}))) - 1, 0, W - 1);
-    const int y0 = std::clamp(int(std::floor(std::min({a.y, b.y, c.y}))), 0, H - 1);
-    const int y1 = std::clamp(int(std::ceil(std::max({a.y, b.y, c.y}))) - 1, 0, H - 1);
     const std::uint32_t ch = charts.find(std::uint32_t(t));
-    const double inv = 1.0 / area2;
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        p0 = {a, b, c};
-        clip(p0, p1, 0, x, false);
-        clip(p1, p0, 0, x + 1, true);
-        clip(p0, p1, 1, y, false);
-        clip(p1, p0, 1, y + 1, true);
-        if (p0.size() < 3) continue;
-        glm::dvec2 centroid(x + 0.5, y + 0.5);
-        const double covered = area_centroid(p0, centroid);
-        if (!(covered > 0)) continue;
-        const std::size_t i = std::size_t(y) * W + x;
-        if (coverage[i] > 0 && covered > kTouchArea && chart[i] != ch) shared[i] = 1;
-        coverage[i] += float(covered);
-        surface[i] += float(covered * area3 / (0.5 * std::abs(area2)));  // the covered part's area in space
-        if (coverage[i] > 1.0 + kOverlapTolerance) {
-          ++overlapped;
-          note_overlap(std::uint32_t(t));
-          if (best[i] != std::numeric_limits<std::uint32_t>::max()) note_overlap(best[i]);
-        }
-        // The centre, when this triangle covers it (score 2), else the centroid (score: the covered area).
-        const glm::dvec2 centre(x + 0.5, y + 0.5);
-        const double l1 = ((b.x - centre.x) * (c.y - centre.y) - (c.x - centre.x) * (b.y - centre.y)) * inv;
-        const double l2 = ((c.x - centre.x) * (a.y - centre.y) - (a.x - centre.x) * (c.y - centre.y)) * inv;
-        const double l3 = 1.0 - l1 - l2;
-        const bool inside = l1 >= 0 && l2 >= 0 && l3 >= 0;
-        const double score = inside ? 2.0 : covered;
-        if (score > best_score[i]) {
-          best_score[i] = float(score);
-          best[i] = std::uint32_t(t);
-          chart[i] = ch;
-          const glm::dvec2 s = inside ? centre : centroid;
-          // Barycentrics of s: weights of corners 1 and 2.
-          const double u = ((c.x - s.x) * (a.y - s.y) - (a.x - s.x) * (c.y - s.y)) * inv;
-          const double v = ((a.x - s.x) * (b.y - s.y) - (b.x - s.x) * (a.y - s.y)) * inv;
-          sample[i] = glm::vec2(float(std::clamp(u, 0.0, 1.0)), float(std::clamp(v, 0.0, 1.0 - std::clamp(u, 0.0, 1.0))));
-        }
+    at.for_each_part(p0, p1, [&](int x, int y, double covered, const glm::dvec2& centroid, const Poly&) {
+      const std::size_t i = std::size_t(y) * W + x;
+      if (coverage[i] > 0 && covered > kTouchArea && chart[i] != ch) shared[i] = 1;
+      coverage[i] += float(covered);
+      surface[i] += float(covered * area3 / (0.5 * std::abs(at.area2)));  // the covered part's area in space
+      if (coverage[i] > 1.0 + kOverlapTolerance) {
+        ++overlapped;
+        note_overlap(std::uint32_t(t));
+        if (best[i] != std::numeric_limits<std::uint32_t>::max()) note_overlap(best[i]);
       }
+      // The centre, when this triangle covers it (score 2), else the centroid (score: the covered area).
+      const glm::dvec2 centre(x + 0.5, y + 0.5), w = at.weights(centre);
+      const bool inside = w.x >= 0 && w.y >= 0 && 1.0 - w.x - w.y >= 0;
+      const double score = inside ? 2.0 : covered;
+      if (score > best_score[i]) {
+        best_score[i] = float(score);
+        best[i] = std::uint32_t(t);
+        chart[i] = ch;
+        sample[i] = at.barycentric(inside ? centre : centroid);
+      }
+    });
   }
+  sample_partial_texels(mesh, uv, W, H, coverage, charts, best, chart, sample);
   if (overlapped > 0) {
     const std::string names = object_names(scene, overlap_objects);
     throw Error(fmt::format("{}: the lightmap charts of UV set {} overlap: {} texels of the {}x{} atlas are covered more "
@@ -304,7 +357,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
     const glm::vec2 u0 = uv[tri.x], u1 = uv[tri.y], u2 = uv[tri.z];
     const double uv_area = 0.5 * std::abs(double(u1.x - u0.x) * (u2.y - u0.y) - double(u2.x - u0.x) * (u1.y - u0.y)) * W * H;
     out.texel_size.push_back(float(std::sqrt(0.5 * glm::length(glm::dvec3(face)) / uv_area)));
-    if (best_score[i] < 1.5f) ++out.partial;
+    if (coverage[i] < 1.0 - kOverlapTolerance) ++out.partial;
     if (shared[i]) ++out.shared;
   }
   return out;
@@ -352,6 +405,62 @@ std::vector<glm::vec3> texel_surface_points(const Mesh& mesh, const LightmapTexe
     at[i] = (1 - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];
   }
   return at;
+}
+
+TexelFootprints texel_footprints(const Scene& scene, const LightmapTexels& texels) {
+  const Mesh& mesh = scene.mesh;
+  const LightmapLayout& l = texels.layout;
+  check_atlas(scene, l.width, l.height, l.uv_set);
+  const auto& uv = scene.uv_sets[std::size_t(l.uv_set)];
+  if (l.scene_hash != scene.hash())
+    throw Error(fmt::format("{}: the lightmap texels are another scene's", mesh.source));
+  const std::size_t n = l.texels.size(), W = std::size_t(l.width);
+  std::vector<std::uint32_t> index(W * std::size_t(l.height), kNoTexel);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (l.texels[i] >= index.size())
+      throw Error(fmt::format("lightmap texel {} is outside the {}x{} atlas", l.texels[i], l.width, l.height));
+    index[l.texels[i]] = std::uint32_t(i);
+  }
+  // The polygons in the triangles' order, then grouped by texel.
+  std::vector<std::uint32_t> owner, start;
+  std::vector<glm::vec3> corners;
+  Poly p0, p1;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const glm::uvec3 tri = mesh.triangles[t];
+    const AtlasTriangle at(uv, tri, l.width, l.height);
+    if (at.degenerate()) continue;
+    const glm::dvec3 P0(mesh.positions[tri.x]), P1(mesh.positions[tri.y]), P2(mesh.positions[tri.z]);
+    at.for_each_part(p0, p1, [&](int x, int y, double, const glm::dvec2&, const Poly& part) {
+      const std::uint32_t i = index[std::size_t(y) * W + std::size_t(x)];
+      if (i == kNoTexel) return;
+      owner.push_back(i);
+      start.push_back(std::uint32_t(corners.size()));
+      for (const glm::dvec2& q : part) {
+        const glm::dvec2 w = at.weights(q);
+        corners.emplace_back((1.0 - w.x - w.y) * P0 + w.x * P1 + w.y * P2);
+      }
+    });
+  }
+  start.push_back(std::uint32_t(corners.size()));
+  TexelFootprints f;
+  f.texel_polygons.assign(n + 1, 0);
+  for (const std::uint32_t i : owner) ++f.texel_polygons[i + 1];
+  for (std::size_t i = 0; i < n; ++i)
+    if (f.texel_polygons[i + 1] == 0)
+      throw Error(fmt::format("{}: lightmap texel {} of the {}x{} atlas covers no surface: the texels are not "
+                              "lightmap_texels' of this scene at this size and UV set",
+                              mesh.source, l.texels[i], l.width, l.height));
+  for (std::size_t i = 0; i < n; ++i) f.texel_polygons[i + 1] += f.texel_polygons[i];
+  std::vector<std::uint32_t> slot(f.texel_polygons.begin(), f.texel_polygons.end() - 1), order(owner.size());
+  for (std::size_t k = 0; k < owner.size(); ++k) order[slot[owner[k]]++] = std::uint32_t(k);
+  f.polygon_corners.reserve(owner.size() + 1);
+  f.corners.reserve(corners.size());
+  for (const std::uint32_t k : order) {
+    f.polygon_corners.push_back(std::uint32_t(f.corners.size()));
+    f.corners.insert(f.corners.end(), corners.begin() + start[k], corners.begin() + start[k + 1]);
+  }
+  f.polygon_corners.push_back(std::uint32_t(f.corners.size()));
+  return f;
 }
 
 Mesh texel_points(const LightmapTexels& texels) {

@@ -179,6 +179,98 @@ TEST(LightmapTexels, MissingUvSetAndUvsOutsideTheAtlasAreRefused) {
   EXPECT_EQ(h, 256);
 }
 
+TEST(LightmapTexels, ATexelTheChartsEdgeHalvesIsSampledOnItsCoveredHalf) {
+  // A 1 x 1 quad whose chart ends at v = 5.5 / 8: the texels of row 5 are
+  // half covered, their centres on the chart's edge (the quad's far edge,
+  // where a room's wall meets its ceiling). Sampled at the centre, their
+  // rays would start on the seam; they are sampled at the centroid of the
+  // covered half, a quarter texel inside.
+  test::SceneBuilder b;
+  b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.25f, 0.25f, 0.75f, 5.5f / 8});
+  const Scene s = b.build();
+  const LightmapTexels t = lightmap_texels(s, 8, 8, 0);
+  ASSERT_EQ(t.layout.texels.size(), 16u);
+  EXPECT_EQ(t.partial, 4u);
+  const double per_texel = 1.0 / (8 * (5.5 / 8 - 0.25));  // world z per texel along v
+  for (std::size_t i = 0; i < t.layout.texels.size(); ++i) {
+    const int x = int(t.layout.texels[i] % 8), y = int(t.layout.texels[i] / 8);
+    EXPECT_NEAR(t.area[i], (y == 5 ? 0.5 : 1.0) * 0.25 * per_texel, 1e-6);  // 0.25 wide: 1 over 4 texels
+    if (y < 5) {  // whole: the centre
+      EXPECT_NEAR(t.positions[i].x, ((x + 0.5) / 8 - 0.25) / 0.5, 1e-5);
+      EXPECT_NEAR(t.positions[i].z, (y + 0.5 - 2.0) * per_texel, 1e-5);
+      continue;
+    }
+    // Half covered: on the covered half (the centroid of the larger of the
+    // quad's two triangles' parts there), at least a tenth of a texel off
+    // the edge; at the edge before.
+    EXPECT_GE(t.positions[i].x, (x / 8.0 - 0.25) / 0.5 - 1e-6) << x;
+    EXPECT_LE(t.positions[i].x, ((x + 1) / 8.0 - 0.25) / 0.5 + 1e-6) << x;
+    EXPECT_GT(t.positions[i].z, (5.0 - 2.0) * per_texel) << x;
+    EXPECT_LT(t.positions[i].z, (5.4 - 2.0) * per_texel) << x;
+  }
+}
+
+TEST(LightmapTexels, FootprintsAreTheSurfaceEachTexelCovers) {
+  // texel_footprints: each texel's polygons lie on its triangles and their
+  // areas sum to texels.area (the whole texel inside a chart, a part at its
+  // edges and across the quads' diagonals), wall-on-floor at an atlas where
+  // chart edges cross texels.
+  const Scene s = wall_on_floor();
+  const LightmapTexels t = lightmap_texels(s, 40, 40, 0);
+  const TexelFootprints f = texel_footprints(s, t);
+  ASSERT_EQ(f.texel_polygons.size(), t.layout.texels.size() + 1);
+  ASSERT_EQ(f.polygon_corners.size(), std::size_t(f.texel_polygons.back()) + 1);
+  ASSERT_EQ(f.corners.size(), std::size_t(f.polygon_corners.back()));
+  const double whole = *std::max_element(t.area.begin(), t.area.end());  // a whole texel's area
+  double worst = 0.0, total = 0.0;
+  for (std::size_t i = 0; i + 1 < f.texel_polygons.size(); ++i) {
+    double area = 0.0;
+    for (std::uint32_t k = f.texel_polygons[i]; k < f.texel_polygons[i + 1]; ++k) {
+      const std::uint32_t first = f.polygon_corners[k], end = f.polygon_corners[k + 1];
+      ASSERT_GE(end - first, 3u);
+      for (std::uint32_t j = first + 1; j + 1 < end; ++j)
+        area += 0.5 * glm::length(glm::cross(glm::dvec3(f.corners[j] - f.corners[first]),
+                                              glm::dvec3(f.corners[j + 1] - f.corners[first])));
+    }
+    worst = std::max(worst, std::abs(area - t.area[i]) / whole);
+    total += area;
+  }
+  // Float corners and areas: a few float epsilons of a whole texel's area
+  // (a sliver's own area is all rounding).
+  constexpr double kAreaAgreement = 1e-5;
+  EXPECT_LT(worst, kAreaAgreement);
+  EXPECT_NEAR(total, 16.0 + 2 * (3.0 * 1.55 + 0.2 * 1.55) + 2 * 3.0 * 0.2, 1e-3);  // the floor and the box's six faces
+  LightmapTexels other = t;  // the texels of another atlas
+  other.layout.width = 41;
+  EXPECT_THROW(texel_footprints(s, other), Error);
+  other = t;
+  other.layout.scene_hash ^= 1;
+  EXPECT_THROW(texel_footprints(s, other), Error);
+}
+
+TEST(Lightmap, TheRoomsWindowWallSeesNoSkyPastItsSeams) {
+  // models/room.gltf at 64 x 64, half its atlas: chart edges fall on texel
+  // centres. The window wall (z = -2, facing +z) sees the sky only through
+  // its own plane, that is not at all; texels sampled on its seams with the
+  // ceiling and the side walls saw half the sky (AO 0.5, measured 0.059 on
+  // average over the wall before they were sampled on their covered part).
+  const Scene room = load_scene(PRT_SOURCE_DIR "/models/room.gltf");
+  const LightmapTexels t = lightmap_texels(room, 64, 64, 1);
+  EXPECT_GT(t.partial, 0u);
+  TransferOptions o;
+  o.bands = 2;
+  o.samples = 64;
+  const LightmapTransfer lt = compute_lightmap_transfer(room, t, o);
+  ASSERT_EQ(lt.transfer.ao.size(), t.positions.size());
+  std::size_t wall = 0;
+  for (std::size_t i = 0; i < t.positions.size(); ++i) {
+    if (!(t.normals[i].z > 0.99f && std::abs(t.positions[i].z + 2.0f) < 1e-4f)) continue;
+    ++wall;
+    EXPECT_EQ(lt.transfer.ao[i], 0.0f) << "texel at " << t.positions[i].x << ", " << t.positions[i].y;
+  }
+  EXPECT_GT(wall, 300u);
+}
+
 TEST(LightmapTexels, AlbedoIsTheMaterialTimesTheSrgbDecodedTexture) {
   test::SceneBuilder b;
   b.quad({0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 0, 0}, {0.0f, 0.0f, 1.0f, 1.0f});

@@ -179,6 +179,35 @@ TEST(SubsurfaceReference, AgreesWithTheSumOverUniformSurfaceSamples) {
   }
 }
 
+TEST(SubsurfaceReference, TwoSurfacesAtOnePlaceBothCount) {
+  // A quad and its reverse at the same place (a box's bottom on the floor
+  // it stands on): under constant light each takes in the same irradiance,
+  // so the quad's centre leaves twice what the quad alone leaves. A probe
+  // that stepped from hit to hit found one of the two at each crossing
+  // (the ratio was 1).
+  const Mesh one = test::quad(4);
+  std::vector<glm::vec3> p = one.positions;
+  std::vector<glm::uvec3> t = one.triangles;
+  for (const glm::uvec3& tri : one.triangles) {
+    const unsigned n = unsigned(one.positions.size());
+    t.emplace_back(tri.x + n, tri.z + n, tri.y + n);  // facing -y
+  }
+  p.insert(p.end(), one.positions.begin(), one.positions.end());
+  const Mesh two = make_mesh(std::move(p), std::move(t), {}, {}, {}, "two quads at one place");
+  const SubsurfaceRecord rec{*subsurface_preset("skin1"), 5.0};
+  ReferenceOptions o;
+  o.samples = 512;
+  const std::vector<std::uint32_t> centre{12};
+  const ReferenceResult a = render_subsurface_reference(one, constant_map(1.0f), o, rec, centre);
+  const ReferenceResult b = render_subsurface_reference(two, constant_map(1.0f), o, rec, centre);
+  for (int c = 0; c < 3; ++c) {
+    const double se = std::hypot(2.0 * a.std_error[0][c], double(b.std_error[0][c]));
+    std::printf("channel %d: one %.5f, two %.5f: ratio %.4f (se of the difference %.4f)\n", c, a.radiance[0][c],
+                b.radiance[0][c], b.radiance[0][c] / a.radiance[0][c], se / a.radiance[0][c]);
+    EXPECT_NEAR(b.radiance[0][c], 2.0 * a.radiance[0][c], kSigmas * se) << "channel " << c;
+  }
+}
+
 TEST(SubsurfaceReference, TwoSeedsAgreeWithinTheirStandardErrors) {
   // A ball over a floor (shadows, curvature, two bodies), marble at 10 mm
   // a unit, under a sun: the difference of two seeds' results against their

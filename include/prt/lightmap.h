@@ -63,7 +63,7 @@ struct LightmapTexels {
   std::vector<glm::vec2> barycentric;      // (u, v) on it: the point is (1-u-v) p0 + u p1 + v p2
   std::vector<float> texel_size;           // world-space length of a texel's edge on that triangle
   std::vector<float> area;                 // world-space area of the surface it covers (over every triangle covering part of it)
-  std::size_t partial = 0;                 // texels whose centre no triangle covers (sampled on the covered part)
+  std::size_t partial = 0;                 // texels the surface covers only in part (sampled at the centroid of the largest covered part)
   std::size_t shared = 0;                  // texels two UV charts touch (too little padding: they bleed)
   std::size_t uv_degenerate = 0;           // triangles with area in space but none in the UV set (no texels)
   std::size_t charts = 0;                  // UV charts (triangles joined by shared edges)
@@ -71,8 +71,11 @@ struct LightmapTexels {
 
 // Rasterises every triangle of `scene` into a width x height atlas of UV set
 // `uv_set`, conservatively: a texel belongs to the triangle that covers its
-// centre, else to the one covering most of it, and is sampled at its centre
-// or at the centroid of the covered part. `albedo` (non-null) replaces the
+// centre, else to the one covering most of it, and is sampled at its centre;
+// a texel covered only in part (a chart's edge crosses it) belongs to the
+// triangle covering most of it and is sampled at the centroid of that part,
+// off the chart's edge (a centre on the edge is on the seam with the next
+// surface, where rays leak). `albedo` (non-null) replaces the
 // materials' albedo. Throws prt::Error naming the scene when charts overlap
 // (a texel covered more than once: a lightmap set gives each triangle its own
 // part of the atlas), when UVs leave [0, 1], or the size is out of range.
@@ -97,6 +100,22 @@ Mesh texel_points(const LightmapTexels& texels);
 // rays' origin): where a translucent lightmap's surface integral receives
 // its light. Throws prt::Error for a triangle out of `mesh`'s range.
 std::vector<glm::vec3> texel_surface_points(const Mesh& mesh, const LightmapTexels& texels);
+
+// The surface each covered texel covers, as polygons in space: the parts of
+// the scene's triangles inside the texel, clipped as lightmap_texels clips
+// them (convex, counter-clockwise about their triangle's normal). Texel i's
+// polygons are texel_polygons[i] .. texel_polygons[i + 1] - 1; polygon k's
+// corners are corners[polygon_corners[k]] .. corners[polygon_corners[k + 1]
+// - 1]. Their areas sum to texels.area. What a translucent lightmap's
+// surface integral takes near each receiver (prt/subsurface_scatter.h).
+// About 100 bytes a texel. Throws prt::Error as lightmap_texels for a
+// scene `texels` was not made from (size, UV set).
+struct TexelFootprints {
+  std::vector<std::uint32_t> texel_polygons;   // texels + 1 offsets into polygon_corners
+  std::vector<std::uint32_t> polygon_corners;  // polygons + 1 offsets into corners
+  std::vector<glm::vec3> corners;
+};
+TexelFootprints texel_footprints(const Scene& scene, const LightmapTexels& texels);
 
 // Throws prt::Error (naming `path`) unless `t` was computed for `scene`'s
 // texels: same scene hash, atlas and covered texels, and shading hash.

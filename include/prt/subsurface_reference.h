@@ -28,8 +28,10 @@
 //     Dipole::disc (a table of quantiles refined by safeguarded Newton), and
 //     phi uniform: a point on the disc about x_o perpendicular to a;
 //   * the segment through it along a, within the ball of radius r_max / S
-//     about x_o, and every intersection x_i of it with the mesh (re-traced
-//     from just past each hit; watertight tracing);
+//     about x_o, and every intersection x_i of it with the mesh (one
+//     traversal that collects them all, each triangle once: two triangles
+//     at the same place, as a box standing on a floor, both count;
+//     watertight tracing);
 //   * each x_i is a sample of the area measure (mm^2) of density
 //       q(x_i) = sum_a' P(a') |n_g . a'| (1/C) sum_c' R_d,c'(r_a') / disc_c'(r_max)
 //     (the mixture over axes and channels: one-sample MIS, balance
@@ -48,8 +50,7 @@
 //   estimated by one probe from it (axis and channel at random, one of its
 //   hits picked uniformly, weighted by the count), recursively.
 //
-// Unbiased up to float ray tracing (and hits closer than 1e-5 of the
-// diagonal along one probe, which count once). Deterministic: each vertex
+// Unbiased up to float ray tracing. Deterministic: each vertex
 // draws from its own generator seeded by (seed, vertex index), so results
 // are bit-identical for any thread count.
 #pragma once

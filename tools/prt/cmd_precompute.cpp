@@ -594,8 +594,8 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   if (!quiet) {
     const std::size_t n = texels.layout.texels.size();
     fmt::print(stderr,
-               "lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} sampled on a "
-               "partly covering triangle, {} moved out of geometry\n",
+               "lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} covered in part "
+               "(sampled on the covered part), {} moved out of geometry\n",
                width, height, set, set, n, 100.0 * double(n) / (double(width) * height), texels.charts, texels.partial,
                moved);
     if (texels.shared)
