@@ -70,16 +70,6 @@ void check_subsurface_material(const SubsurfaceMaterial& m, std::string_view wha
 
 double diffuse_fresnel_reflectance(double eta) { return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta; }
 
-double fresnel_transmittance(double eta, double cos_theta) {
-  if (eta == 1.0) return 1.0;  // no boundary (the formulas' 0 / 0 at grazing incidence)
-  const double ci = std::clamp(cos_theta, 0.0, 1.0);
-  const double sin_t2 = (1.0 - ci * ci) / (eta * eta);
-  if (sin_t2 >= 1.0) return 0.0;  // total internal reflection
-  const double ct = std::sqrt(1.0 - sin_t2);
-  const double rs = (ci - eta * ct) / (ci + eta * ct), rp = (eta * ci - ct) / (eta * ci + ct);
-  return 1.0 - 0.5 * (rs * rs + rp * rp);
-}
-
 std::vector<double> fresnel_cosine_factors(double eta, int bands) {
   // 64 nodes: the integrand is a polynomial of degree <= bands (16 at most)
   // times the smooth T; the factors agree with 128 nodes' to 4e-15 (eta 1 to

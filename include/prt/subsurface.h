@@ -10,6 +10,8 @@
 
 #include <glm/vec3.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <optional>
 #include <span>
 #include <string>
@@ -64,8 +66,19 @@ void check_subsurface_material(const SubsurfaceMaterial& m, std::string_view wha
 double diffuse_fresnel_reflectance(double eta);
 // 1 - the exact Fresnel reflectance of an unpolarised ray entering a
 // dielectric of relative index eta at incidence cos_theta (clamped to
-// [0, 1]); 0 past the critical angle where eta < 1.
-double fresnel_transmittance(double eta, double cos_theta);
+// [0, 1]); 0 past the critical angle where eta < 1. Inline: the
+// transmitted irradiance's transfer weighs every ray by it (122 million
+// calls on a 120k-vertex mesh at 1024 rays, 4% of its time as a call into
+// prt::core).
+inline double fresnel_transmittance(double eta, double cos_theta) {
+  if (eta == 1.0) return 1.0;  // no boundary (the formulas' 0 / 0 at grazing incidence)
+  const double ci = std::clamp(cos_theta, 0.0, 1.0);
+  const double sin_t2 = (1.0 - ci * ci) / (eta * eta);
+  if (sin_t2 >= 1.0) return 0.0;  // total internal reflection
+  const double ct = std::sqrt(1.0 - sin_t2);
+  const double rs = (ci - eta * ct) / (ci + eta * ct), rp = (eta * ci - ct) / (eta * ci + ct);
+  return 1.0 - 0.5 * (rs * rs + rp * rp);
+}
 
 // The zonal factors K_l = 2 pi int_0^1 T(eta, mu) mu P_l(mu) dmu of the
 // transmitted cosine T(eta, cos) max(cos, 0), l < bands: the irradiance
