@@ -227,6 +227,9 @@ nlohmann::ordered_json info(const std::string& path) {
     return nlohmann::ordered_json{{"width", l.width},
                                   {"height", l.height},
                                   {"uv_set", l.uv_set},
+                                  {"uv", l.unwrap_padding >= 0 ? "made by prt (--lightmap-uv auto)" : "the scene's own"},
+                                  {"uv_padding", l.unwrap_padding >= 0 ? nlohmann::ordered_json(l.unwrap_padding)
+                                                                       : nlohmann::ordered_json(nullptr)},
                                   {"covered_texels", l.texels.size()}};
   };
   return dispatch(

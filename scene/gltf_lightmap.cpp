@@ -11,67 +11,11 @@
 #include "gltf_model.h"
 
 #include <fmt/format.h>
-#include <glm/common.hpp>
-#include <glm/geometric.hpp>
-#include <stb_image_write.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace prt {
-
-namespace {
-
-using json = nlohmann::json;
-namespace tg = prt_tinygltf;
-
-// PNG bytes of an 8-bit image (stb_image_write, into memory).
-std::vector<unsigned char> encode_png(int width, int height, int comp, const unsigned char* pixels) {
-  std::vector<unsigned char> png;
-  const auto sink = [](void* ctx, void* data, int size) {
-    auto* v = static_cast<std::vector<unsigned char>*>(ctx);
-    v->insert(v->end(), static_cast<unsigned char*>(data), static_cast<unsigned char*>(data) + size);
-  };
-  if (!stbi_write_png_to_func(sink, &png, width, height, comp, pixels, width * comp))
-    throw Error("cannot encode a PNG image");
-  return png;
-}
-
-// An image stored in buffer 0 (its own view) and a texture sampling it
-// (bilinear, clamp for lightmaps, repeat for materials); returns the texture.
-int add_image(tg::Model& model, const std::vector<unsigned char>& png, const std::string& name, bool repeat) {
-  std::vector<unsigned char>& data = model.buffers[0].data;
-  while (data.size() % 4 != 0) data.push_back(0);
-  tg::BufferView view;
-  view.buffer = 0;
-  view.byteOffset = data.size();
-  view.byteLength = png.size();
-  data.insert(data.end(), png.begin(), png.end());
-  model.bufferViews.push_back(view);
-  tg::Image image;
-  image.name = name;
-  image.mimeType = "image/png";
-  image.bufferView = int(model.bufferViews.size()) - 1;
-  model.images.push_back(image);
-  tg::Sampler sampler;
-  sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
-  sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
-  sampler.wrapS = sampler.wrapT = repeat ? TINYGLTF_TEXTURE_WRAP_REPEAT : TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
-  model.samplers.push_back(sampler);
-  tg::Texture texture;
-  texture.source = int(model.images.size()) - 1;
-  texture.sampler = int(model.samplers.size()) - 1;
-  model.textures.push_back(texture);
-  return int(model.textures.size()) - 1;
-}
-
-std::uint8_t srgb_byte(float linear) {
-  const float c = std::clamp(linear, 0.0f, 1.0f);
-  const float e = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
-  return std::uint8_t(std::lround(e * 255.0f));
-}
-
-}  // namespace
 
 LightmapQuantization quantize_lightmap(const std::vector<float>& rows, std::size_t stride, int bits) {
   if (bits != 8 && bits != 16) throw Error(fmt::format("lightmap quantisation: {} bits (8 or 16)", bits));
@@ -101,6 +45,12 @@ LightmapQuantization quantize_lightmap(const std::vector<float>& rows, std::size
 
 namespace {
 
+using json = nlohmann::json;
+namespace tg = prt_tinygltf;
+using detail::add_image;
+using detail::encode_png;
+using detail::srgb_byte;
+
 // What the phases of write_gltf_lightmap share: the model being built and the
 // indices of its textures and materials.
 struct LightmapExport {
@@ -117,23 +67,11 @@ struct LightmapExport {
   // Materials: the scene's; with a bake, unlit (KHR_materials_unlit) showing
   // the baked lightmap at TEXCOORD_1 so any viewer shows the lit scene.
   int add_material(const Material* m) {
-    tg::Material gm;
-    gm.name = m ? m->name : "white";
-    gm.pbrMetallicRoughness.metallicFactor = 0.0;
-    if (baked_texture >= 0) {
-      gm.pbrMetallicRoughness.baseColorFactor = {1, 1, 1, 1};
-      gm.pbrMetallicRoughness.baseColorTexture.index = baked_texture;
-      gm.pbrMetallicRoughness.baseColorTexture.texCoord = 1;
-      gm.extensions["KHR_materials_unlit"] = tg::Value(tg::Value::Object{});
-    } else if (m) {
-      gm.pbrMetallicRoughness.baseColorFactor = {m->base_color.x, m->base_color.y, m->base_color.z, m->base_color.w};
-      if (m->base_color_texture >= 0) {
-        gm.pbrMetallicRoughness.baseColorTexture.index = material_textures[std::size_t(m->base_color_texture)];
-        gm.pbrMetallicRoughness.baseColorTexture.texCoord = m->texture_uv_set == l.uv_set ? 1 : 0;
-      }
-    }
-    model.materials.push_back(gm);
-    return int(model.materials.size()) - 1;
+    const std::string name = m ? m->name : "white";
+    if (baked_texture >= 0) return detail::add_material(model, name, glm::vec4(1.0f), baked_texture, 1, true);
+    if (!m) return detail::add_material(model, name, glm::vec4(1.0f), -1, 0, false);
+    const int texture = m->base_color_texture >= 0 ? material_textures[std::size_t(m->base_color_texture)] : -1;
+    return detail::add_material(model, name, m->base_color, texture, m->texture_uv_set == l.uv_set ? 1 : 0, false);
   }
 };
 
@@ -164,73 +102,7 @@ void add_lightmap_textures(LightmapExport& e, const LightmapQuantization& q, std
         for (int c = 0; c < 3; ++c) px[p * 3 + std::size_t(c)] = srgb_byte(e.opts.baked[source[p]][c]);
     e.baked_texture = add_image(model, encode_png(l.width, l.height, 3, px.data()), "prt_lightmap_baked", false);
   }
-  const Scene& scene = e.scene;
-  e.material_textures.assign(scene.textures.size(), -1);
-  for (std::size_t i = 0; i < scene.textures.size(); ++i) {
-    const Texture& tex = scene.textures[i];
-    std::vector<unsigned char> px(tex.texels.size() * 4);
-    for (std::size_t p = 0; p < tex.texels.size(); ++p) {
-      for (int c = 0; c < 3; ++c) px[p * 4 + std::size_t(c)] = srgb_byte(tex.texels[p][c]);
-      px[p * 4 + 3] = std::uint8_t(std::lround(std::clamp(tex.texels[p].w, 0.0f, 1.0f) * 255.0f));
-    }
-    e.material_textures[i] = add_image(model, encode_png(tex.width, tex.height, 4, px.data()), tex.name, true);
-  }
-}
-
-// The node of object `o`: its mesh with world-space vertices, the lightmap
-// UVs `lm_uv` as TEXCOORD_1.
-void add_object_node(LightmapExport& e, const SceneObject& o, const std::vector<glm::vec2>& lm_uv, tg::Scene& gscene) {
-  const Scene& scene = e.scene;
-  const LightmapLayout& l = e.l;
-  tg::Model& model = e.model;
-  const Mesh& mesh = scene.mesh;
-  std::uint32_t lo = std::numeric_limits<std::uint32_t>::max(), hi = 0;
-  for (std::size_t f = o.first_triangle; f < o.first_triangle + o.triangle_count; ++f)
-    for (int k = 0; k < 3; ++k) lo = std::min(lo, mesh.triangles[f][k]), hi = std::max(hi, mesh.triangles[f][k]);
-  const std::size_t nv = std::size_t(hi - lo) + 1;
-  std::vector<glm::vec3> pos(mesh.positions.begin() + lo, mesh.positions.begin() + lo + std::ptrdiff_t(nv));
-  std::vector<glm::vec3> nrm(mesh.normals.begin() + lo, mesh.normals.begin() + lo + std::ptrdiff_t(nv));
-  for (glm::vec3& n : nrm)
-    if (!(glm::dot(n, n) > 0.5f)) n = glm::vec3(0, 1, 0);  // glTF: NORMAL unit length (such vertices have no area)
-  std::vector<glm::vec2> uv0(nv, glm::vec2(0.0f)), uv1(lm_uv.begin() + lo, lm_uv.begin() + lo + std::ptrdiff_t(nv));
-  if (!scene.uv_sets.empty() && l.uv_set != 0) uv0.assign(scene.uv_sets[0].begin() + lo, scene.uv_sets[0].begin() + lo + std::ptrdiff_t(nv));
-  else uv0 = uv1;
-  std::vector<std::uint32_t> idx;
-  idx.reserve(o.triangle_count * 3);
-  for (std::size_t f = o.first_triangle; f < o.first_triangle + o.triangle_count; ++f)
-    for (int k = 0; k < 3; ++k) idx.push_back(mesh.triangles[f][k] - lo);
-  tg::Primitive prim;
-  prim.mode = TINYGLTF_MODE_TRIANGLES;
-  prim.indices = detail::add_accessor(model, idx.data(), idx.size() * 4, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER,
-                                      TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, idx.size());
-  const int pa = detail::add_accessor(model, pos.data(), nv * 12, TINYGLTF_TARGET_ARRAY_BUFFER,
-                                      TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
-  glm::vec3 mn(std::numeric_limits<float>::max()), mx(-std::numeric_limits<float>::max());
-  for (const glm::vec3& p : pos) mn = glm::min(mn, p), mx = glm::max(mx, p);
-  model.accessors[std::size_t(pa)].minValues = {mn.x, mn.y, mn.z};
-  model.accessors[std::size_t(pa)].maxValues = {mx.x, mx.y, mx.z};
-  prim.attributes["POSITION"] = pa;
-  prim.attributes["NORMAL"] = detail::add_accessor(model, nrm.data(), nv * 12, TINYGLTF_TARGET_ARRAY_BUFFER,
-                                                   TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
-  prim.attributes["TEXCOORD_0"] = detail::add_accessor(model, uv0.data(), nv * 8, TINYGLTF_TARGET_ARRAY_BUFFER,
-                                                       TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nv);
-  prim.attributes["TEXCOORD_1"] = detail::add_accessor(model, uv1.data(), nv * 8, TINYGLTF_TARGET_ARRAY_BUFFER,
-                                                       TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nv);
-  if (o.material >= 0) {
-    prim.material = e.material_index[std::size_t(o.material)];
-  } else {
-    if (e.white < 0) e.white = e.add_material(nullptr);
-    prim.material = e.white;
-  }
-  tg::Mesh gm;
-  gm.name = o.name;
-  gm.primitives.push_back(std::move(prim));
-  model.meshes.push_back(std::move(gm));
-  tg::Node node;
-  node.name = o.name;
-  node.mesh = int(model.meshes.size()) - 1;
-  model.nodes.push_back(node);
-  gscene.nodes.push_back(int(model.nodes.size()) - 1);
+  e.material_textures = detail::add_scene_textures(model, e.scene);
 }
 
 // asset.extras.prt: what a reader needs to decode the coefficient textures.
@@ -311,9 +183,13 @@ void write_gltf_lightmap(const std::string& path, const Scene& scene, const Ligh
 
   // One node per object, world-space vertices (the scene's are flattened).
   const auto& lm_uv = scene.uv_sets.at(std::size_t(l.uv_set));
+  // TEXCOORD_0 the scene's first set (the lightmap's when it is set 0), TEXCOORD_1 the lightmap's.
+  const std::vector<const std::vector<glm::vec2>*> uvs = {&scene.uv_sets[0], &lm_uv};
   for (const SceneObject& o : scene.objects) {
     if (o.triangle_count == 0) continue;
-    add_object_node(e, o, lm_uv, gscene);
+    if (o.material < 0 && e.white < 0) e.white = e.add_material(nullptr);
+    const int material = o.material >= 0 ? e.material_index[std::size_t(o.material)] : e.white;
+    detail::add_object_node(model, scene.mesh, o, uvs, material, gscene);
   }
   detail::add_lights(model, gscene, opts.lights, path);
   model.scenes.push_back(gscene);

@@ -4,6 +4,8 @@
 
 #include <prt/lightmap.h>
 
+#include "atlas_raster.h"
+
 #include <prt/error.h>
 
 #include <fmt/format.h>
@@ -28,56 +30,28 @@ namespace {
 constexpr double kOverlapTolerance = 1e-3;
 // A triangle "touches" a texel for chart sharing when it covers more than this.
 constexpr double kTouchArea = 1e-3;
+// Two charts whose UVs overlap by at most this share of the smaller one's
+// UV area only touch: a packing that is nearly right (too little margin, a
+// chart's edge pushed over its neighbour's), whose texels each go to one
+// owner. More is one region of the atlas used by two surfaces (a game
+// compiler's shared rectangles, mirrored UVs: half or all of a chart), whose
+// texels cannot serve both. A quarter sits between the two by a wide margin
+// either way: the touches seen are a few percent, the shared regions all of
+// the smaller chart.
+constexpr double kTouchOverlapShare = 0.25;
+// At most this share of the charts' UV area may overlap in touches; more is
+// refused as a layout that is not a lightmap's (and the count
+// lightmap_texels_at_least promises holds).
+constexpr double kMaxTouchOverlap = 0.1;
 // UVs may leave [0, 1] by this much (exporters' rounding) before refusal.
 constexpr double kUvSlack = 1e-4;
 
-using Poly = std::vector<glm::dvec2>;
-
-// Sutherland-Hodgman: the part of polygon `in` with coordinate `axis` on
-// the `keep_below` side of `bound`.
-void clip(const Poly& in, Poly& out, int axis, double bound, bool keep_below) {
-  out.clear();
-  const std::size_t n = in.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    const glm::dvec2 a = in[i], b = in[(i + 1) % n];
-    const bool ain = keep_below ? a[axis] <= bound : a[axis] >= bound;
-    const bool bin = keep_below ? b[axis] <= bound : b[axis] >= bound;
-    if (ain) out.push_back(a);
-    if (ain != bin) {
-      const double t = (bound - a[axis]) / (b[axis] - a[axis]);
-      out.push_back(a + t * (b - a));
-    }
-  }
-}
-
-// Area and centroid of a simple polygon (shoelace).
-double area_centroid(const Poly& p, glm::dvec2& centroid) {
-  double a = 0;
-  glm::dvec2 c(0.0);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const glm::dvec2 u = p[i], v = p[(i + 1) % p.size()];
-    const double cr = u.x * v.y - v.x * u.y;
-    a += cr;
-    c += (u + v) * cr;
-  }
-  if (std::abs(a) > 0) centroid = c / (3.0 * a);
-  return std::abs(a) * 0.5;
-}
-
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) {
-    for (std::size_t i = 0; i < n; ++i) parent[i] = std::uint32_t(i);
-  }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void join(std::uint32_t a, std::uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
+using atlas_raster::AtlasTriangle;
+using atlas_raster::Poly;
+using atlas_raster::UnionFind;
+using atlas_raster::area_centroid;
+using atlas_raster::check_atlas;
+using atlas_raster::clip;
 
 }  // namespace
 
@@ -131,30 +105,6 @@ void parse_lightmap_size(const std::string& text, int& width, int& height) {
 
 namespace {
 
-// What lightmap_texels and lightmap_texels_at_least take: an atlas size in
-// range, and a UV set the scene has.
-void check_atlas(const Scene& scene, int W, int H, int uv_set) {
-  if (W < 1 || H < 1 || W > kMaxLightmapSize || H > kMaxLightmapSize)
-    throw Error(fmt::format("lightmap size {}x{} is outside 1..{}", W, H, kMaxLightmapSize));
-  if (uv_set < 0 || std::size_t(uv_set) >= scene.uv_sets.size())
-    throw Error(fmt::format("{}: has no UV set {}", scene.mesh.source, uv_set));
-}
-
-// Charts: triangles joined by an edge (two shared vertex indices).
-UnionFind uv_charts(const Mesh& mesh) {
-  const std::size_t T = mesh.triangles.size();
-  UnionFind charts(T);
-  std::unordered_map<std::uint64_t, std::uint32_t> edge;
-  edge.reserve(T * 3);
-  for (std::size_t t = 0; t < T; ++t)
-    for (int k = 0; k < 3; ++k) {
-      std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-      if (a > b) std::swap(a, b);
-      const auto [it, fresh] = edge.emplace((std::uint64_t(a) << 32) | b, std::uint32_t(t));
-      if (!fresh) charts.join(it->second, std::uint32_t(t));
-    }
-  return charts;
-}
 
 // The names of `objects` (indices into scene.objects), the first 8 and how
 // many more, for a message; "the mesh" when the scene has no objects.
@@ -166,54 +116,65 @@ std::string object_names(const Scene& scene, const std::vector<std::uint32_t>& o
   return names;
 }
 
-// A triangle of a UV set in atlas pixels (texel (x, y) is [x, x+1] x [y, y+1]),
-// and its parts inside texels.
-struct AtlasTriangle {
-  glm::dvec2 a, b, c;
-  double area2;        // twice the signed area, texels
-  int x0, x1, y0, y1;  // the texels its bounding box touches
+// Where charts' UVs overlap (texels covered more than once), per pair of
+// charts (union-find roots; a chart with itself when it folds or mirrors
+// onto itself): the overlapping UV area, texels, and a triangle of each for
+// the message. check() tells touching charts (a nearly right packing: each
+// texel one owner) from one region used by two surfaces (refused).
+struct ChartOverlaps {
+  struct Pair {
+    double area = 0;
+    std::uint32_t tri_a = 0, tri_b = 0;
+  };
+  std::vector<double> chart_area;  // per chart root: its triangles' UV area, texels
+  std::unordered_map<std::uint64_t, Pair> pairs;
 
-  AtlasTriangle(const std::vector<glm::vec2>& uv, const glm::uvec3& tri, int W, int H)
-      : a(double(uv[tri.x].x) * W, double(uv[tri.x].y) * H),
-        b(double(uv[tri.y].x) * W, double(uv[tri.y].y) * H),
-        c(double(uv[tri.z].x) * W, double(uv[tri.z].y) * H),
-        area2((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)),
-        x0(std::clamp(int(std::floor(std::min({a.x, b.x, c.x}))), 0, W - 1)),
-        x1(std::clamp(int(std::ceil(std::max({a.x, b.x, c.x}))) - 1, 0, W - 1)),
-        y0(std::clamp(int(std::floor(std::min({a.y, b.y, c.y}))), 0, H - 1)),
-        y1(std::clamp(int(std::ceil(std::max({a.y, b.y, c.y}))) - 1, 0, H - 1)) {}
+  explicit ChartOverlaps(std::size_t triangles) : chart_area(triangles, 0.0) {}
 
-  bool degenerate() const { return !(std::abs(area2) > 1e-12); }
-
-  // The barycentrics (weights of corners 1 and 2) of point s, unclamped.
-  glm::dvec2 weights(const glm::dvec2& s) const {
-    const double inv = 1.0 / area2;
-    return {((c.x - s.x) * (a.y - s.y) - (a.x - s.x) * (c.y - s.y)) * inv,
-            ((a.x - s.x) * (b.y - s.y) - (b.x - s.x) * (a.y - s.y)) * inv};
-  }
-  // The same, clamped onto the triangle.
-  glm::vec2 barycentric(const glm::dvec2& s) const {
-    const glm::dvec2 w = weights(s);
-    const double u = std::clamp(w.x, 0.0, 1.0);
-    return glm::vec2(float(u), float(std::clamp(w.y, 0.0, 1.0 - u)));
+  void add(std::uint32_t chart_a, std::uint32_t tri_a, std::uint32_t chart_b, std::uint32_t tri_b, double area) {
+    if (chart_a > chart_b) std::swap(chart_a, chart_b), std::swap(tri_a, tri_b);
+    Pair& p = pairs[(std::uint64_t(chart_a) << 32) | chart_b];
+    if (p.area == 0) p.tri_a = tri_a, p.tri_b = tri_b;
+    p.area += std::max(area, 0.0);
   }
 
-  // fn(x, y, covered, centroid, part) for every texel it covers a part of:
-  // the part's area (texel area 1), centroid and polygon (scratch p0, p1).
-  template <class Fn>
-  void for_each_part(Poly& p0, Poly& p1, Fn&& fn) const {
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        p0 = {a, b, c};
-        clip(p0, p1, 0, x, false);
-        clip(p1, p0, 0, x + 1, true);
-        clip(p0, p1, 1, y, false);
-        clip(p1, p0, 1, y + 1, true);
-        if (p0.size() < 3) continue;
-        glm::dvec2 centroid(x + 0.5, y + 0.5);
-        const double covered = area_centroid(p0, centroid);
-        if (covered > 0) fn(x, y, covered, centroid, p0);
+  // Throws prt::Error naming the objects when a pair overlaps by more than
+  // kTouchOverlapShare of its smaller chart, or touches overlap by more
+  // than kMaxTouchOverlap of all charts' area.
+  void check(const Scene& scene, int uv_set, int W, int H, std::size_t texels) const {
+    if (pairs.empty()) return;
+    std::vector<std::pair<std::uint64_t, Pair>> sorted(pairs.begin(), pairs.end());
+    std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    double total = 0, touching = 0, shared_area = 0;
+    for (const double a : chart_area) total += a;
+    std::vector<std::uint32_t> objects;
+    const auto note = [&](std::uint32_t tri) {
+      const std::uint32_t o = scene.triangle_object.empty() ? 0 : scene.triangle_object[tri];
+      if (std::find(objects.begin(), objects.end(), o) == objects.end()) objects.push_back(o);
+    };
+    for (const auto& [key, p] : sorted) {
+      const double smaller = std::min(chart_area[key >> 32], chart_area[key & 0xffffffffu]);
+      if (p.area > kTouchOverlapShare * smaller) {
+        shared_area += p.area;
+        note(p.tri_a), note(p.tri_b);
+      } else {
+        touching += p.area;
       }
+    }
+    const std::string& source = scene.mesh.source;
+    const char* way_out = "Let prt make lightmap UVs (prt precompute --lightmap-uv auto, or prt unwrap SCENE -o OUT.glb), "
+                          "make them with Blender's UV > Lightmap Pack into a second UV map, or pick another set with --uv N";
+    if (shared_area > 0)
+      throw Error(fmt::format("{}: the lightmap charts of UV set {} share texels: {:.2f}% of the charts' area lies on "
+                              "another surface's part of the {}x{} atlas ({} texels covered more than once), in {}. A "
+                              "lightmap UV set gives every surface its own texels (shared rectangles, mirrored or tiled "
+                              "texture UVs cannot be one). {}",
+                              source, uv_set, 100.0 * shared_area / total, W, H, texels, object_names(scene, objects),
+                              way_out));
+    if (touching > kMaxTouchOverlap * total)
+      throw Error(fmt::format("{}: the lightmap charts of UV set {} overlap their neighbours by {:.1f}% of their area in "
+                              "the {}x{} atlas (at most {:.0f}% is baked, one owner per texel). {}",
+                              source, uv_set, 100.0 * touching / total, W, H, 100.0 * kMaxTouchOverlap, way_out));
   }
 };
 
@@ -250,20 +211,15 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   const std::size_t T = mesh.triangles.size(), N = std::size_t(W) * H;
 
-  UnionFind charts = uv_charts(mesh);
+  UnionFind charts = atlas_raster::uv_charts(mesh, uv);
 
   // Per texel: coverage, the best triangle so far and where it samples.
   std::vector<float> coverage(N, 0.0f), best_score(N, -1.0f), surface(N, 0.0f);
   std::vector<std::uint32_t> best(N, std::numeric_limits<std::uint32_t>::max()), chart(N, 0);
   std::vector<glm::vec2> sample(N);
-  std::vector<std::uint8_t> shared(N, 0);
-  std::size_t overlapped = 0, degenerate = 0;
-  std::vector<std::uint32_t> overlap_objects;  // in the order found, each once
-  std::vector<std::uint8_t> object_noted(std::max<std::size_t>(scene.objects.size(), 1), 0);
-  const auto note_overlap = [&](std::uint32_t tri) {
-    const std::uint32_t o = scene.triangle_object.empty() ? 0 : scene.triangle_object[tri];
-    if (!object_noted[o]) object_noted[o] = 1, overlap_objects.push_back(o);  // (a search of the list: quadratic)
-  };
+  std::vector<std::uint8_t> shared(N, 0), overlapped(N, 0);
+  std::size_t degenerate = 0;
+  ChartOverlaps overlaps(T);
   Poly p0, p1;
   for (std::size_t t = 0; t < T; ++t) {
     const AtlasTriangle at(uv, mesh.triangles[t], W, H);
@@ -283,15 +239,16 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
                                 q.x / W, q.y / H));
       }
     const std::uint32_t ch = charts.find(std::uint32_t(t));
+    overlaps.chart_area[ch] += 0.5 * std::abs(at.area2);
     at.for_each_part(p0, p1, [&](int x, int y, double covered, const glm::dvec2& centroid, const Poly&) {
       const std::size_t i = std::size_t(y) * W + x;
       if (coverage[i] > 0 && covered > kTouchArea && chart[i] != ch) shared[i] = 1;
+      const double before = coverage[i];
       coverage[i] += float(covered);
       surface[i] += float(covered * area3 / (0.5 * std::abs(at.area2)));  // the covered part's area in space
-      if (coverage[i] > 1.0 + kOverlapTolerance) {
-        ++overlapped;
-        note_overlap(std::uint32_t(t));
-        if (best[i] != std::numeric_limits<std::uint32_t>::max()) note_overlap(best[i]);
+      if (coverage[i] > 1.0 + kOverlapTolerance && best[i] != std::numeric_limits<std::uint32_t>::max()) {
+        overlapped[i] = 1;
+        overlaps.add(chart[i], best[i], ch, std::uint32_t(t), double(coverage[i]) - std::max(before, 1.0));
       }
       // The centre, when this triangle covers it (score 2), else the centroid (score: the covered area).
       const glm::dvec2 centre(x + 0.5, y + 0.5), w = at.weights(centre);
@@ -306,14 +263,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
     });
   }
   sample_partial_texels(mesh, uv, W, H, coverage, charts, best, chart, sample);
-  if (overlapped > 0) {
-    const std::string names = object_names(scene, overlap_objects);
-    throw Error(fmt::format("{}: the lightmap charts of UV set {} overlap: {} texels of the {}x{} atlas are covered more "
-                            "than once, in {}. A lightmap UV set gives every triangle its own part of [0,1]^2 "
-                            "(mirrored or tiled texture UVs cannot be one): make lightmap UVs with Blender's UV > "
-                            "Lightmap Pack (or xatlas) into a second UV map, or pick another set with --uv N",
-                            mesh.source, uv_set, overlapped, W, H, names));
-  }
+  overlaps.check(scene, uv_set, W, H, std::size_t(std::count(overlapped.begin(), overlapped.end(), 1)));
 
   LightmapTexels out;
   out.layout.width = W;
@@ -359,6 +309,7 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
     out.texel_size.push_back(float(std::sqrt(0.5 * glm::length(glm::dvec3(face)) / uv_area)));
     if (coverage[i] < 1.0 - kOverlapTolerance) ++out.partial;
     if (shared[i]) ++out.shared;
+    if (overlapped[i]) ++out.overlapped;
   }
   return out;
 }
@@ -385,10 +336,11 @@ std::size_t lightmap_texels_at_least(const Scene& scene, int W, int H, int uv_se
     clip(p1, p0, 1, double(H), true);
     if (p0.size() >= 3) area += area_centroid(p0, centroid);
   }
-  // A covered texel's coverage is at most 1 + kOverlapTolerance (more is
-  // refused as an overlap); the float sums of coverage round by far less
+  // A covered texel's coverage is at most 1 + kOverlapTolerance except
+  // where charts touch, whose overlaps are at most kMaxTouchOverlap of the
+  // area (more is refused); the float sums of coverage round by far less
   // than the 1e-3 kept aside.
-  const double texels = area / (1.0 + kOverlapTolerance) * (1.0 - 1e-3);
+  const double texels = area * (1.0 - kMaxTouchOverlap) / (1.0 + kOverlapTolerance) * (1.0 - 1e-3);
   return texels > 0 ? std::size_t(std::min(texels, double(W) * double(H))) : 0;
 }
 
@@ -476,7 +428,10 @@ std::string lightmap_problem(const LightmapTransfer& t) {
   const LightmapLayout& l = t.layout;
   if (l.width < 1 || l.height < 1 || l.width > kMaxLightmapSize || l.height > kMaxLightmapSize)
     return fmt::format("atlas {}x{} is outside 1..{}", l.width, l.height, kMaxLightmapSize);
-  if (l.uv_set < 0 || l.uv_set > 255) return fmt::format("UV set {} is outside 0..255", l.uv_set);
+  if (l.uv_set < 0 || l.uv_set > kMaxLightmapUvSet)
+    return fmt::format("UV set {} is outside 0..{}", l.uv_set, kMaxLightmapUvSet);
+  if (l.unwrap_padding < -1 || l.unwrap_padding > kMaxUnwrapPadding)
+    return fmt::format("the padding of its UVs made by prt, {}, is outside 0..{}", l.unwrap_padding, kMaxUnwrapPadding);
   const std::uint64_t n = std::uint64_t(l.width) * std::uint64_t(l.height);
   for (std::size_t i = 0; i < l.texels.size(); ++i) {
     if (l.texels[i] >= n) return fmt::format("covered texel {} ({}) is outside the {}x{} atlas", i, l.texels[i], l.width, l.height);

@@ -85,9 +85,10 @@ int Scene::lightmap_uv_set(int requested) const {
     for (std::size_t i = 0; i < names.size() && i < 8; ++i) list += (i ? ", " : "") + names[i];
     if (names.size() > 8) list += fmt::format(" and {} more", names.size() - 8);
     throw Error(fmt::format(
-        "{}: {} of {} objects have no UV set {} (TEXCOORD_{}) for the lightmap: {}. Give every object lightmap UVs, "
-        "each triangle its own part of [0,1]^2 (Blender: UV > Lightmap Pack into a second UV map, then export glTF; "
-        "or xatlas), or pick an existing set with --uv N",
+        "{}: {} of {} objects have no UV set {} (TEXCOORD_{}) for the lightmap: {}. Let prt make lightmap UVs "
+        "(prt precompute --lightmap-uv auto, or prt unwrap SCENE -o OUT.glb), give every object its own (each "
+        "triangle its own part of [0,1]^2: Blender's UV > Lightmap Pack into a second UV map), or pick an existing "
+        "set with --uv N",
         mesh.source, names.size(), objects.size(), set, set, list));
   };
   if (requested < -1 || requested > kMaxLightmapUvSet)
@@ -584,7 +585,8 @@ Scene load_scene(const std::string& path, const MeshOptions& options) {
     case detail::MeshFormat::Glb: return load_gltf(path, true, options);
     case detail::MeshFormat::Obj: return load_obj(path, options);
     default:
-      throw Error(path + ": a scene is glTF 2.0 (.gltf, .glb) or OBJ with vt: this format has no UVs or materials");
+      throw Error(path + ": a scene is glTF 2.0 (.gltf, .glb) or OBJ with vt: this format has no UVs or materials "
+                         "(--lightmap-uv auto makes lightmap UVs for any mesh file)");
   }
 }
 

@@ -1090,7 +1090,7 @@ void Reader::read_sh_sections(ShFile& f) {
         };
         f.lightmap_out->width = narrow(words[0], "width");
         f.lightmap_out->height = narrow(words[1], "height");
-        f.lightmap_out->uv_set = narrow(words[2], "UV set");
+        set_uv_set_word(*f.lightmap_out, std::uint64_t(narrow(words[2], "UV set")));
         f.lightmap_out->scene_hash = words[3];
         break;
       }

@@ -251,6 +251,15 @@ constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
 // couple of hundred bytes; the rest is room for a long name).
 constexpr std::uint64_t kMaxSubsurfaceBytes = 1u << 16;
 constexpr std::uint64_t kLightmapLayoutWords = 4;
+// The layout's third word: the UV set, plus 256 x (padding + 1) when prt made
+// it (LightmapLayout::unwrap_padding; docs/FORMAT.md "Lightmap transfer").
+inline std::uint64_t uv_set_word(const LightmapLayout& l) {
+  return std::uint64_t(l.uv_set) + (l.unwrap_padding >= 0 ? 256u * std::uint64_t(l.unwrap_padding + 1) : 0u);
+}
+inline void set_uv_set_word(LightmapLayout& l, std::uint64_t word) {
+  l.uv_set = int(word % 256);
+  l.unwrap_padding = int(word / 256) - 1;
+}
 
 // Words of the analytic- and interpolated-vertex bit masks: bit v % 32 of
 // word v / 32 is vertex v.

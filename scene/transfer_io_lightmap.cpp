@@ -63,7 +63,7 @@ void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t)
   const LightBounceSections bounce(t.transfer);
   const std::string subsurface = subsurface_section(t.transfer);
   const std::uint64_t layout[kLightmapLayoutWords] = {std::uint64_t(t.layout.width), std::uint64_t(t.layout.height),
-                                                      std::uint64_t(t.layout.uv_set), t.layout.scene_hash};
+                                                      uv_set_word(t.layout), t.layout.scene_hash};
   std::vector<RawSection> raw;
   for (const auto& s : sections) {
     const void* data = s.kind == kAnalyticMask         ? static_cast<const void*>(mask.data())
@@ -92,9 +92,12 @@ std::string describe_transfer(const LightmapTransfer& t) {
   const std::uint64_t size = transfer_file_size(t);
   // The rows as this file stores them: its version, its sections (the layout,
   // texels and mask included) and size; the adaptive line counts texels.
-  return fmt::format("lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}% of the atlas), {} analytic "
+  const std::string uv = l.unwrap_padding >= 0
+                             ? fmt::format("made by prt (--lightmap-uv auto, padding {})", l.unwrap_padding)
+                             : fmt::format("UV set {} (TEXCOORD_{})", l.uv_set, l.uv_set);
+  return fmt::format("lightmap {}x{} in {}: {} covered texels ({:.1f}% of the atlas), {} analytic "
                      "(no row stored), {:.1f} bytes per covered texel, scene hash {:016x}\n",
-                     l.width, l.height, l.uv_set, l.uv_set, n, 100.0 * double(n) / (double(l.width) * l.height),
+                     l.width, l.height, uv, n, 100.0 * double(n) / (double(l.width) * l.height),
                      t.transfer.analytic_vertices(), n ? double(size) / double(n) : 0.0, l.scene_hash) +
          detail::tio::describe(t.transfer, transfer_format_version(t), transfer_sections(t), size, "", "texels");
 }

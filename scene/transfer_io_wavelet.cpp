@@ -98,8 +98,9 @@ std::vector<TransferSection> transfer_sections(const WaveletLightmap& t) {
 std::uint64_t transfer_file_size(const WaveletLightmap& t) { return file_size_of(transfer_sections(t)); }
 
 std::string describe_transfer(const WaveletLightmap& t) {
-  return fmt::format("wavelet lightmap {}x{} in UV set {}, {} covered texels; {}", t.layout.width, t.layout.height,
-                     t.layout.uv_set, t.layout.texels.size(), describe_transfer(t.transfer));
+  return fmt::format("wavelet lightmap {}x{} in UV set {}{}, {} covered texels; {}", t.layout.width, t.layout.height,
+                     t.layout.uv_set, t.layout.unwrap_padding >= 0 ? " (made by prt, --lightmap-uv auto)" : "",
+                     t.layout.texels.size(), describe_transfer(t.transfer));
 }
 
 namespace detail::tio {
@@ -110,7 +111,7 @@ void write_wavelet_file(const std::string& path, const WaveletTransfer& t, const
   if (lightmap) {
     words[0] = std::uint64_t(lightmap->width);
     words[1] = std::uint64_t(lightmap->height);
-    words[2] = std::uint64_t(lightmap->uv_set);
+    words[2] = uv_set_word(*lightmap);
     words[3] = lightmap->scene_hash;
   }
   const std::vector<WaveletSection> sections = wavelet_sections(t, lightmap, words);
@@ -252,7 +253,7 @@ WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
             throw fail(fmt::format("bad section 'lightmap layout': value {} is out of range", w[std::size_t(k)]));
         lightmap_out->width = int(w[0]);
         lightmap_out->height = int(w[1]);
-        lightmap_out->uv_set = int(w[2]);
+        set_uv_set_word(*lightmap_out, w[2]);
         lightmap_out->scene_hash = w[3];
         break;
       }

@@ -551,4 +551,253 @@ TEST_F(ExportCli, PrecomputeOfTheExportGivesTheSameTransfer) {
               a.vertex_count());
 }
 
+// ---- whole scenes (write_gltf_scene) ---------------------------------------------
+
+// Each object write_gltf_scene keeps (those with triangles, in order) and the
+// vertices it writes of it: its triangles' lowest to highest index.
+struct KeptObject {
+  std::size_t object;
+  std::uint32_t lo, count;
+};
+std::vector<KeptObject> kept_objects(const prt::Scene& s) {
+  std::vector<KeptObject> kept;
+  for (std::size_t i = 0; i < s.objects.size(); ++i) {
+    const prt::SceneObject& o = s.objects[i];
+    if (o.triangle_count == 0) continue;
+    std::uint32_t lo = UINT32_MAX, hi = 0;
+    for (std::size_t f = o.first_triangle; f < o.first_triangle + o.triangle_count; ++f)
+      for (int k = 0; k < 3; ++k) lo = std::min(lo, s.mesh.triangles[f][k]), hi = std::max(hi, s.mesh.triangles[f][k]);
+    kept.push_back({i, lo, hi - lo + 1});
+  }
+  return kept;
+}
+
+// At most `ulps` float steps apart.
+bool within_ulps(float a, float b, int ulps) {
+  float x = std::min(a, b);
+  for (int i = 0; i < ulps; ++i) x = std::nextafter(x, 2.0f);
+  return std::max(a, b) <= x;
+}
+
+// `got` (load_scene of what write_gltf_scene wrote of `want`) holds the same
+// scene: positions, UVs, triangles (renumbered per object), base colours
+// and texels to the bit; normals within 1 ulp (load_scene normalises a
+// file's normals in double, which moves a few float unit normals by 1 ulp;
+// a zero normal is written (0, 1, 0): it comes back so on a vertex a
+// triangle uses, and zero again on one none uses); light directions within
+// 1e-14 (the node's rotation is a quaternion, as
+// LightsRoundTripAsKhrLightsPunctual).
+void expect_scene_round_trips(const prt::Scene& want, const prt::Scene& got) {
+  const std::vector<KeptObject> kept = kept_objects(want);
+  ASSERT_EQ(got.objects.size(), kept.size());
+  std::vector<bool> referenced(want.mesh.vertex_count(), false);
+  for (const glm::uvec3& t : want.mesh.triangles)
+    for (int k = 0; k < 3; ++k) referenced[t[k]] = true;
+  std::size_t base = 0, first_triangle = 0, sets = 0;
+  bool white = false;  // an object without a material: a white one is appended
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    const prt::SceneObject &wo = want.objects[kept[i].object], &go = got.objects[i];
+    SCOPED_TRACE(wo.name);
+    EXPECT_EQ(go.name, wo.name);
+    EXPECT_EQ(go.first_triangle, first_triangle);
+    EXPECT_EQ(go.triangle_count, wo.triangle_count);
+    EXPECT_EQ(go.first_vertex, base);
+    EXPECT_EQ(go.vertex_count, kept[i].count);
+    const int want_sets = std::min(wo.uv_sets, int(want.uv_sets.size()));
+    EXPECT_EQ(go.uv_sets, want_sets);
+    sets = std::max(sets, std::size_t(want_sets));
+    EXPECT_EQ(go.material, wo.material >= 0 ? wo.material : int(want.materials.size()));
+    white = white || wo.material < 0;
+    ASSERT_LE(base + kept[i].count, got.mesh.vertex_count());
+    for (std::uint32_t v = 0; v < kept[i].count; ++v) {
+      const std::size_t w = kept[i].lo + v, g = base + v;
+      EXPECT_EQ(0, std::memcmp(&got.mesh.positions[g], &want.mesh.positions[w], sizeof(glm::vec3))) << "vertex " << w;
+      // A zero normal is written (0, 1, 0); a vertex no triangle uses gets none again on reading (make_mesh).
+      glm::vec3 n = want.mesh.normals[w];
+      if (!(glm::dot(n, n) > 0.5f) && referenced[w]) n = glm::vec3(0, 1, 0);
+      for (int k = 0; k < 3; ++k)
+        EXPECT_TRUE(within_ulps(got.mesh.normals[g][k], n[k], 1)) << "vertex " << w << ": " << got.mesh.normals[g][k]
+                                                                  << " vs " << n[k];
+      for (int s = 0; s < want_sets; ++s)
+        EXPECT_EQ(0, std::memcmp(&got.uv_sets[std::size_t(s)][g], &want.uv_sets[std::size_t(s)][w], sizeof(glm::vec2)))
+            << "vertex " << w << " TEXCOORD_" << s;
+    }
+    for (std::size_t f = 0; f < wo.triangle_count; ++f)
+      EXPECT_EQ(got.mesh.triangles[first_triangle + f],
+                want.mesh.triangles[wo.first_triangle + f] - glm::uvec3(kept[i].lo) + glm::uvec3(std::uint32_t(base)))
+          << "triangle " << f;
+    base += kept[i].count;
+    first_triangle += wo.triangle_count;
+  }
+  EXPECT_EQ(got.mesh.vertex_count(), base);
+  EXPECT_EQ(got.mesh.triangles.size(), first_triangle);
+  EXPECT_EQ(got.uv_sets.size(), sets);
+
+  ASSERT_EQ(got.materials.size(), want.materials.size() + (white ? 1 : 0));
+  for (std::size_t i = 0; i < want.materials.size(); ++i) {
+    const prt::Material &w = want.materials[i], &g = got.materials[i];
+    SCOPED_TRACE(w.name);
+    EXPECT_EQ(g.name, w.name);
+    EXPECT_EQ(g.base_color, w.base_color);  // float -> JSON's 17 digits -> float
+    EXPECT_EQ(g.base_color_texture, w.base_color_texture);
+    if (w.base_color_texture >= 0) {
+      EXPECT_EQ(g.texture_uv_set, w.texture_uv_set);
+    }
+  }
+  if (white) {
+    EXPECT_EQ(got.materials.back().base_color, glm::vec4(1.0f));
+    EXPECT_EQ(got.materials.back().base_color_texture, -1);
+  }
+  ASSERT_EQ(got.textures.size(), want.textures.size());
+  for (std::size_t i = 0; i < want.textures.size(); ++i) {
+    const prt::Texture &w = want.textures[i], &g = got.textures[i];
+    EXPECT_EQ(g.name, w.name);
+    EXPECT_EQ(g.width, w.width);
+    EXPECT_EQ(g.height, w.height);
+    // 8-bit sRGB texels (what a reader decodes) are written as the same bytes.
+    EXPECT_EQ(g.texels, w.texels) << w.name;
+  }
+  ASSERT_EQ(got.lights.size(), want.lights.size());
+  for (std::size_t i = 0; i < want.lights.size(); ++i) {
+    const prt::Light &w = want.lights[i], &g = got.lights[i];
+    SCOPED_TRACE(w.name);
+    EXPECT_EQ(g.type, w.type);
+    EXPECT_EQ(g.name, w.name);
+    EXPECT_EQ(g.color, w.color);
+    EXPECT_EQ(g.intensity, w.intensity);
+    EXPECT_EQ(g.range, w.range);
+    if (w.type != prt::LightType::Directional) {
+      EXPECT_EQ(g.position, w.position);
+    }
+    if (w.type != prt::LightType::Point) {
+      EXPECT_LT(glm::length(g.direction - w.direction), 1e-14);
+    }
+    EXPECT_EQ(g.inner_cone, w.inner_cone);
+    EXPECT_EQ(g.outer_cone, w.outer_cone);
+  }
+}
+
+// Two UV sets, a texture sampled at TEXCOORD_1, a vertex no triangle uses
+// inside an object's range (no normal: written (0, 1, 0)), an object without triangles (skipped), one
+// without a material (a white one) and with one UV set, and two lights.
+prt::Scene made_gltf_scene() {
+  std::vector<glm::vec3> p = {{0, 0, 0}, {1, 0, 0}, {0.5f, 0.3f, 0.1f}, {1, 0, 1}, {0, 0, 1},   // a quad, vertex 2 unused
+                              {2, 0, 0}, {2, 1, 0}, {2, 1.0f / 3.0f, 1}, {2, 0, 1}};             // a quad at x = 2
+  std::vector<glm::uvec3> tris = {{0, 4, 3}, {0, 3, 1}, {5, 6, 7}, {5, 7, 8}};
+  std::vector<std::vector<glm::vec2>> uv(2);
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    uv[0].emplace_back(float(v) / 7.0f, 1.0f - float(v) / 11.0f);
+    uv[1].emplace_back(0.1f + float(v) / 13.0f, float(v * v) / 97.0f);
+  }
+  prt::Texture tex;
+  tex.width = 3;
+  tex.height = 2;
+  tex.name = "checker";
+  for (int i = 0; i < 6; ++i)  // linear values a PNG decodes to: 8-bit sRGB colour, linear alpha
+    tex.texels.emplace_back(prt::srgb_to_linear(float(40 * i + 3) / 255.0f), prt::srgb_to_linear(float(250 - 37 * i) / 255.0f),
+                            prt::srgb_to_linear(float(i * i) / 255.0f), float(255 - 20 * i) / 255.0f);
+  prt::Material red{"red", {0.8f, 0.2f, 0.1f, 1.0f}, 0, 1}, blue{"blue", {0.1f, 0.3f, 0.9f, 0.5f}, -1, 0};
+  prt::Scene s = prt::make_scene(std::move(p), std::move(tris), std::move(uv), {2, 0, 2}, {red, blue}, {tex});
+  s.objects[0].name = "floor";
+  s.objects[1].name = "nothing";
+  s.objects[2].name = "wall";
+  s.objects[2].material = -1;
+  s.objects[2].uv_sets = 1;
+  prt::Light spot;
+  spot.type = prt::LightType::Spot;
+  spot.name = "spot";
+  spot.color = {1.0, 0.9, 0.8};
+  spot.intensity = 5;
+  spot.range = 10;
+  spot.position = {1, 2, 3};
+  spot.direction = glm::normalize(glm::dvec3(0.1, -1, 0.2));
+  spot.inner_cone = 0.2;
+  spot.outer_cone = 0.6;
+  prt::Light sun;
+  sun.type = prt::LightType::Directional;
+  sun.name = "sun";
+  sun.intensity = 0.7;
+  sun.direction = glm::normalize(glm::dvec3(-0.3, -1, -0.2));
+  s.lights = {spot, sun};
+  return s;
+}
+
+class GltfSceneExport : public ::testing::Test {
+ protected:
+  TempDir dir;
+};
+
+// models/room.gltf (7 objects, 2 UV sets, a texture): every vertex is used,
+// so the file read back is the scene itself.
+TEST_F(GltfSceneExport, RoomRoundTripsThroughLoadScene) {
+  const prt::Scene room = prt::load_scene(std::string(PRT_SOURCE_DIR) + "/models/room.gltf");
+  ASSERT_EQ(room.uv_sets.size(), 2u);
+  ASSERT_FALSE(room.textures.empty());
+  for (const char* name : {"room.glb", "room.GLTF"}) {
+    SCOPED_TRACE(name);
+    const std::string out = dir.file(name);
+    prt::write_gltf_scene(out, room, "prt test");
+    const prt::Scene back = prt::load_scene(out);
+    expect_scene_round_trips(room, back);
+    EXPECT_EQ(back.mesh.positions, room.mesh.positions);
+    EXPECT_EQ(back.mesh.triangles, room.mesh.triangles);
+    EXPECT_EQ(back.uv_sets, room.uv_sets);
+    EXPECT_EQ(back.hash(), room.hash());
+  }
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"room.GLTF", "room.glb"}));  // no temporaries left
+  const nlohmann::json j = nlohmann::json::parse(prt::test::read_file(dir.file("room.GLTF")));
+  EXPECT_EQ(j.at("asset").at("generator"), "prt test");
+  for (const auto& m : j.at("materials")) EXPECT_EQ(m.at("pbrMetallicRoughness").at("metallicFactor"), 0) << m.dump();
+}
+
+TEST_F(GltfSceneExport, MadeSceneRoundTripsWithEveryUvSetTextureAndLight) {
+  const prt::Scene s = made_gltf_scene();
+  ASSERT_EQ(s.mesh.normals[2], glm::vec3(0.0f));  // the unused vertex has no normal
+  for (const char* name : {"made.glb", "made.gltf"}) {
+    SCOPED_TRACE(name);
+    const std::string out = dir.file(name);
+    prt::write_gltf_scene(out, s);
+    const prt::Scene back = prt::load_scene(out);
+    expect_scene_round_trips(s, back);
+    // Disjoint vertex ranges: the same arrays, where the writer keeps them.
+    EXPECT_EQ(back.mesh.positions, s.mesh.positions);
+    EXPECT_EQ(back.mesh.triangles, s.mesh.triangles);
+    EXPECT_EQ(back.mesh.normals[2], glm::vec3(0.0f));  // written (0, 1, 0), unused: none on reading
+    // The wall has only TEXCOORD_0; the reader pads its TEXCOORD_1 with zeros.
+    for (std::size_t v = 5; v < 9; ++v) EXPECT_EQ(back.uv_sets[1][v], glm::vec2(0.0f));
+    EXPECT_EQ(back.materials[0].texture_uv_set, 1);
+    EXPECT_EQ(back.albedo(0, 0.25f, 0.25f), s.albedo(0, 0.25f, 0.25f));
+  }
+  const nlohmann::json j = nlohmann::json::parse(prt::test::read_file(dir.file("made.gltf")));
+  EXPECT_EQ(j.at("meshes").size(), 2u);
+  EXPECT_EQ(j.at("meshes")[1].at("primitives")[0].at("attributes").size(), 3u) << j.at("meshes")[1].dump();
+  EXPECT_EQ(j.at("extensionsUsed"), nlohmann::json::array({"KHR_lights_punctual"}));
+  EXPECT_EQ(j.at("materials")[2].at("name"), "white");
+  EXPECT_EQ(j.at("materials")[2].at("pbrMetallicRoughness").at("metallicFactor"), 0);
+}
+
+TEST_F(GltfSceneExport, RefusesAnotherExtensionAndAFailedWrite) {
+  const prt::Scene s = made_gltf_scene();
+  const std::string txt = dir.file("scene.txt");
+  try {
+    prt::write_gltf_scene(txt, s);
+    ADD_FAILURE() << "a .txt file was written";
+  } catch (const prt::Error& e) {
+    EXPECT_NE(std::string(e.what()).find(txt + ": expected a .glb or .gltf file"), std::string::npos) << e.what();
+  }
+  const std::string missing = dir.file("no/such/dir/scene.glb");
+  try {
+    prt::write_gltf_scene(missing, s);
+    ADD_FAILURE() << "written into a missing directory";
+  } catch (const prt::Error& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(missing));
+  EXPECT_TRUE(dir.listing().empty());  // nothing, not even a temporary
+  prt::Scene bad = s;  // a light check_light refuses
+  bad.lights[0].intensity = -1;
+  EXPECT_THROW(prt::write_gltf_scene(dir.file("bad.glb"), bad), prt::Error);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.glb")));
+}
+
 }  // namespace

@@ -7,6 +7,7 @@
 #include <prt/gltf.h>
 #include <prt/mesh.h>
 #include <prt/precompute.h>
+#include <prt/scene.h>
 #include <prt/transfer.h>
 
 #include <gtest/gtest.h>
@@ -152,6 +153,42 @@ TEST_F(GltfValidator, LightmapExportsHaveNoErrors) {
   EXPECT_EQ(v.code, 0) << v.err;
   ASSERT_EQ(v.reports.size(), files.size()) << v.err;
   for (std::size_t i = 0; i < files.size(); ++i) EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
+}
+
+// write_gltf_scene (prt unwrap's output): the room (two UV sets, a texture,
+// a transformed box flattened) and a made scene with a texture at
+// TEXCOORD_1, a vertex no triangle uses (its normal written (0, 1, 0)), an
+// object with one UV set and no material (a white one), and a spot light.
+TEST_F(GltfValidator, SceneExportsHaveNoErrors) {
+  const prt::Scene room = prt::load_scene(kSource + "/models/room.gltf");
+  std::vector<std::vector<glm::vec2>> uv = {{{0, 0}, {1, 0}, {0.5f, 0.5f}, {1, 1}, {0, 1}, {0, 0}, {1, 0}, {1, 1}},
+                                            {{0, 0}, {0.5f, 0}, {0.2f, 0.2f}, {0.5f, 0.5f}, {0, 0.5f}, {0.6f, 0},
+                                             {0.9f, 0}, {0.9f, 0.3f}}};
+  prt::Texture tex{2, 2, {{1, 0, 0, 1}, {0, 1, 0, 1}, {0, 0, 1, 0.5f}, {1, 1, 1, 1}}, "tex"};
+  prt::Scene made = prt::make_scene({{0, 0, 0}, {1, 0, 0}, {0.5f, 1, 0.5f}, {1, 0, 1}, {0, 0, 1}, {2, 0, 0}, {3, 0, 0}, {3, 1, 0}},
+                                    {{0, 4, 3}, {0, 3, 1}, {5, 6, 7}}, std::move(uv), {2, 1},
+                                    {prt::Material{"textured", glm::vec4(0.9f), 0, 1}}, {tex});
+  made.objects[1].material = -1;
+  made.objects[1].uv_sets = 1;
+  made.lights.emplace_back();
+  made.lights[0].type = prt::LightType::Spot;
+  made.lights[0].name = "spot";
+  made.lights[0].position = {0.5, 2, 0.5};
+  made.lights[0].direction = {0, -1, 0};
+  std::vector<std::string> files;
+  for (const char* ext : {".glb", ".gltf"}) {
+    files.push_back(dir.file(std::string("room") + ext));
+    prt::write_gltf_scene(files.back(), room);
+    files.push_back(dir.file(std::string("made") + ext));
+    prt::write_gltf_scene(files.back(), made);
+  }
+  VALIDATE_OR_SKIP(v, dir, files);
+  EXPECT_EQ(v.code, 0) << v.err;
+  ASSERT_EQ(v.reports.size(), files.size()) << v.err;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
+    EXPECT_EQ(v.reports[i].at("warnings"), 0) << v.reports[i].dump();
+  }
 }
 
 TEST(LightmapQuantization, DecodesWithinHalfAStep) {

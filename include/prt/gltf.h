@@ -120,4 +120,25 @@ void bake_lightmap(GltfLightmapOptions& opts, const LightmapTransfer& t, const L
 void write_gltf_lightmap(const std::string& path, const Scene& scene, const LightmapTransfer& t,
                          const LightmapTexels& texels, const GltfLightmapOptions& opts = {});
 
+// ---- whole scenes -------------------------------------------------------------
+// Writes `scene` as glTF 2.0, binary for .glb and JSON for .gltf (any case;
+// one file, buffer and images embedded), through write_atomically: every
+// object with triangles a mesh and a root node, in world space (the scene is
+// already flattened: no transforms), holding the vertices its triangles use
+// (lowest to highest index), with POSITION, NORMAL (a zero-length normal
+// written as (0, 1, 0)), each UV set the object has (SceneObject::uv_sets) as
+// TEXCOORD_n, and its material: the base colour factor and texture (an sRGB
+// PNG, repeat) at the texCoord it was read with, metallic 0 (glTF's default,
+// fully metallic, renders black without an environment), roughness 1;
+// objects without one get a white material of their own. The scene's lights
+// as KHR_lights_punctual (as GltfOptions::lights). prt::load_scene reads back
+// the same scene where each object's triangles use every vertex of its range
+// and every texture is used: positions, UVs, triangles, objects, materials
+// and 8-bit sRGB texels to the bit, normals within 1 ulp (renormalised on
+// reading), light directions within 1e-14 (a node rotation). What
+// `prt unwrap` writes. Throws
+// prt::Error naming `path` for another extension, a material or texture
+// index out of range, a light check_light refuses, and a failed write.
+void write_gltf_scene(const std::string& path, const Scene& scene, const std::string& generator = "prt");
+
 }  // namespace prt

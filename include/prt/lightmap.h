@@ -28,10 +28,18 @@
 namespace prt {
 
 inline constexpr int kMaxLightmapSize = 16384;  // texels per side
+// The most padding a layout records for UVs prt made (LightmapLayout::
+// unwrap_padding): files store the UV set and it in one word, set + 256 x
+// (padding + 1), below kMaxLightmapSize.
+inline constexpr int kMaxUnwrapPadding = 62;
 
 struct LightmapLayout {
   int width = 0, height = 0;          // atlas size in texels, 1..kMaxLightmapSize each
   int uv_set = 0;                     // the scene's UV set the atlas is laid out in (0 = TEXCOORD_0)
+  // -1: the UV set is the scene's own. P >= 0: prt made it (`prt precompute
+  // --lightmap-uv auto`): the last set of unwrap_scene(scene) at this atlas
+  // and padding P (lightmap_scene, prt/unwrap.h, makes it again).
+  int unwrap_padding = -1;
   std::vector<std::uint32_t> texels;  // covered texels, index y * width + x (y from the top), strictly increasing
   std::uint64_t scene_hash = 0;       // Scene::hash() of the scene it was computed for
 };
@@ -65,6 +73,7 @@ struct LightmapTexels {
   std::vector<float> area;                 // world-space area of the surface it covers (over every triangle covering part of it)
   std::size_t partial = 0;                 // texels the surface covers only in part (sampled at the centroid of the largest covered part)
   std::size_t shared = 0;                  // texels two UV charts touch (too little padding: they bleed)
+  std::size_t overlapped = 0;              // texels covered twice where charts touch (a nearly right packing), each owned by one triangle
   std::size_t uv_degenerate = 0;           // triangles with area in space but none in the UV set (no texels)
   std::size_t charts = 0;                  // UV charts (triangles joined by shared edges)
 };
@@ -76,16 +85,22 @@ struct LightmapTexels {
 // triangle covering most of it and is sampled at the centroid of that part,
 // off the chart's edge (a centre on the edge is on the seam with the next
 // surface, where rays leak). `albedo` (non-null) replaces the
-// materials' albedo. Throws prt::Error naming the scene when charts overlap
-// (a texel covered more than once: a lightmap set gives each triangle its own
-// part of the atlas), when UVs leave [0, 1], or the size is out of range.
+// materials' albedo. Charts whose UVs overlap a little (by at most a
+// quarter of the smaller one's area, a tenth of all charts' area in all:
+// a packing with too little margin) are baked, each texel owned by the
+// triangle covering its centre (else most of it) and counted in
+// `overlapped`. Throws prt::Error naming the scene and objects, and the
+// way out (--lightmap-uv auto), when two charts share more (one region of
+// the atlas used by two surfaces: shared rectangles, mirrored UVs), when UVs
+// leave [0, 1], or the size is out of range.
 LightmapTexels lightmap_texels(const Scene& scene, int width, int height, int uv_set,
                                const glm::vec3* albedo = nullptr);
 
 // The fewest covered texels lightmap_texels(scene, width, height, uv_set)
 // can find, from one pass over the triangles, without rasterising: every
 // covered texel holds at most 1 + its overlap tolerance of the triangles'
-// UV area (clipped to the atlas), so the area bounds the count from below.
+// UV area (clipped to the atlas), except where charts touch, which overlap
+// by at most a tenth of it, so the area bounds the count from below.
 // What a large atlas's memory is planned from before its texels exist
 // (check_lightmap_memory, prt/precompute.h). Throws prt::Error as
 // lightmap_texels does for a size out of range or a missing UV set.
