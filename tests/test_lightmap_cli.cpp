@@ -104,6 +104,76 @@ TEST(LightmapCli, WaveletLightmapAgreesWithTheReference) {
   EXPECT_NE(r.err.find("wavelet lightmap"), std::string::npos) << r.err;
 }
 
+// Lightmap UVs made by prt (docs/LIGHTMAPS.md "Lightmap UVs made by prt"):
+// a mesh file without UVs is baked with --lightmap-uv auto, and relight,
+// export and render make the same UVs again from the same file; the
+// reference at the same texels agrees under constant light; prt unwrap's
+// file bakes the same texels as the auto run; the options' refusals.
+TEST(LightmapCli, UvsMadeByPrtBakeAMeshWithoutUvsThroughEveryConsumer) {
+  TempDir dir;
+  const std::string mesh = dir.file("ball.off"), env = write_constant_map(dir, 1.0f);
+  test::write_off(mesh, test::floor_and_ball(6));
+  const std::vector<std::string> auto_uv = {"--lightmap", "48x48", "--lightmap-uv", "auto"};
+  std::vector<std::string> pre = {"precompute", mesh, "--samples", "256", "-o", dir.file("a.prt")};
+  pre.insert(pre.end(), auto_uv.begin(), auto_uv.end());
+  Result r = run_prt(dir, pre);
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("lightmap UVs made by prt"), std::string::npos) << r.err;
+  r = run_prt(dir, {"info", dir.file("a.prt"), "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_EQ(info["lightmap"]["uv_padding"].get<int>(), 2) << r.out;
+  r = run_prt(dir, {"relight", mesh, dir.file("a.prt"), env, "-q", "-o", dir.file("a.exr")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  std::vector<std::string> ref = {"reference", mesh, env, "--samples", "512", "-q", "-o", dir.file("ref.exr")};
+  ref.insert(ref.end(), auto_uv.begin(), auto_uv.end());
+  r = run_prt(dir, ref);
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"compare", dir.file("a.exr"), dir.file("ref.exr"), "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  // Constant light: SH is exact, the difference is the 256-ray quadrature
+  // (~1%) and the floor's texels at the ball's contact; 4% as for the
+  // scene's own UVs (LightmapCli.PrecomputeRelightReferenceCompare).
+  EXPECT_LT(noise_corrected(r.out), 0.04) << r.out;
+  r = run_prt(dir, {"export", mesh, dir.file("a.prt"), "-q", "-o", dir.file("a.glb")});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"render", mesh, dir.file("a.prt"), env, "-q", "--width", "64", "--height", "64", "-o",
+                    dir.file("a.png")});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+
+  // prt unwrap's file is the auto run's scene: the same texels, the same light.
+  r = run_prt(dir, {"unwrap", mesh, "--lightmap", "48x48", "-o", dir.file("u.glb")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"unwrap", dir.file("u.glb"), "--measure", "0", "--lightmap", "48x48", "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json stats = nlohmann::json::parse(r.out);
+  EXPECT_EQ(stats["shared_texels"].get<int>(), 0) << r.out;
+  EXPECT_GE(stats["min_gap"].get<int>(), 2) << r.out;
+  r = run_prt(dir, {"precompute", dir.file("u.glb"), "--lightmap", "48x48", "--uv", "0", "--samples", "256", "-q",
+                    "-o", dir.file("u.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"relight", dir.file("u.glb"), dir.file("u.prt"), env, "-q", "-o", dir.file("u.exr")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_EQ(read_file(dir.file("u.exr")), read_file(dir.file("a.exr")));
+
+  // Refusals: --uv names a set of the scene's, which auto does not use;
+  // --uv-padding without auto; the auto lightmap with another mesh.
+  std::vector<std::string> bad = pre;
+  bad.insert(bad.end(), {"--uv", "0"});
+  r = run_prt(dir, bad);
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("--lightmap-uv auto makes its own"), std::string::npos) << r.err;
+  r = run_prt(dir, {"precompute", kModels + "/room.gltf", "--lightmap", "16x16", "--uv-padding", "3", "-o",
+                    dir.file("o.prt")});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("--uv-padding applies to --lightmap-uv auto only"), std::string::npos) << r.err;
+  test::write_off(dir.file("other.off"), test::floor_and_ball(5));
+  r = run_prt(dir, {"relight", dir.file("other.off"), dir.file("a.prt"), env, "-q", "-o", dir.file("o.exr")});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("another scene"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o.exr")));
+}
+
 // --adaptive among a lightmap's texels: some interpolated and marked in the
 // file (prt info says how many were traced), relit near the full run's
 // lightmap under a real map.

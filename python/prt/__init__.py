@@ -37,7 +37,9 @@ from ._prt import (  # noqa: F401
     fit_zh,
     info,
     load_envmap,
+    atlas_stats,
     lightmap_from_rows,
+    lightmap_scene,
     load_mesh,
     load_scene,
     make_mesh,
@@ -61,7 +63,9 @@ from ._prt import (  # noqa: F401
     rotation_from_euler,
     sh_eval,
     split_sun,
+    unwrap_scene,
     verify,
+    write_scene,
     write_vertex_csv,
 )
 
@@ -73,6 +77,7 @@ __all__ = [
     "WaveletTransfer", "read_wavelet", "compress", "compression_error",
     "info", "verify", "render", "export_gltf", "export_web", "export_probes", "read_exr",
     "Light", "read_lights", "split_sun", "direct_light",
+    "unwrap_scene", "atlas_stats", "lightmap_scene", "write_scene",
 ]
 
 

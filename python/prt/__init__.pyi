@@ -1049,3 +1049,24 @@ def direct_light(mesh: Any, lights: Any, positions: Any = ..., normals: Any = ..
 
     Returns float32 (N, 3) linear RGB radiance.
     """
+
+def unwrap_scene(scene: Scene, *, width: int = ..., height: int = ..., texel_size: float = ..., padding: int = ..., max_stretch: float = ...) -> tuple:
+    """
+    Lightmap UVs made by prt (prt unwrap; docs/LIGHTMAPS.md "Lightmap UVs made by prt"): returns (Scene, stats), the scene with one UV set more (its last; vertices split where charts meet) and the atlas's figures (a dict: charts, covered_texels, use, max_stretch, min_gap, ...).
+      width, height: the atlas to fill at the largest density that fits [--lightmap]; texel_size > 0: a texel's edge in scene units instead [--texel-size]; padding: empty texels between charts, 0 to 62 [--padding]; max_stretch: a triangle's largest anisotropy, 1 to 100 [--max-stretch].
+    """
+
+def atlas_stats(scene: Scene, uv_set: int, width: int, height: int) -> dict:
+    """
+    The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure): a dict of charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles.
+    """
+
+def lightmap_scene(scene: Scene, lightmap: Lightmap) -> Scene:
+    """
+    The scene `lightmap` is laid out in: `scene` itself, or, where prt made its UVs (prt precompute --lightmap-uv auto), `scene` unwrapped again as it was then. Pass it to Lightmap.rows and Lightmap.relight.
+    """
+
+def write_scene(scene: Scene, path: Any) -> None:
+    """
+    Writes the scene as glTF 2.0 (.glb or .gltf; one node per object, world space, every UV set as TEXCOORD_n, materials and lights), as prt unwrap does.
+    """

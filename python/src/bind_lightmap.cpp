@@ -1,13 +1,19 @@
 // python/src/bind_lightmap.cpp - prt's Python module: scenes and SH lightmaps
 // (Scene, load_scene, Lightmap, read_lightmap, precompute_lightmap,
-// lightmap_from_rows; docs/LIGHTMAPS.md).
+// lightmap_from_rows, unwrap_scene, atlas_stats, lightmap_scene, write_scene;
+// docs/LIGHTMAPS.md).
 #include "module.h"
 
+#include <prt/gltf.h>
 #include <prt/lightmap.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
 #include <prt/subsurface_scatter.h>
 #include <prt/transfer_io.h>
+#include <prt/unwrap.h>
+
+#include <cmath>
+#include <string>
 
 namespace prt::python {
 namespace {
@@ -20,6 +26,75 @@ int uv_set_arg(int uv_set, const char* what) {
                 ": expected -1 (choose: TEXCOORD_1 where every object has it, else TEXCOORD_0) or 0 to " +
                 std::to_string(prt::kMaxLightmapUvSet) + " (TEXCOORD_N)");
   return uv_set;
+}
+
+// unwrap_scene, atlas_stats, lightmap_scene, write_scene (prt/unwrap.h).
+void bind_unwrap(py::module_& m) {
+  const auto stats_dict = [](const prt::AtlasStats& s) {
+    return py::dict(py::arg("width") = s.width, py::arg("height") = s.height, py::arg("texel_size") = s.texel_size,
+                    py::arg("charts") = s.charts, py::arg("covered_texels") = s.covered, py::arg("use") = s.use,
+                    py::arg("max_stretch") = s.max_stretch, py::arg("max_area_ratio") = s.max_area_ratio,
+                    py::arg("min_gap") = s.min_gap, py::arg("shared_texels") = s.shared_texels,
+                    py::arg("degenerate_triangles") = s.degenerate, py::arg("seconds") = s.seconds);
+  };
+  m.def(
+      "unwrap_scene",
+      [stats_dict](const prt::Scene& scene, int width, int height, double texel_size, int padding, double max_stretch) {
+        if (width < 1 || height < 1 || width > prt::kMaxLightmapSize || height > prt::kMaxLightmapSize)
+          throw Error("unwrap_scene: width and height must be 1 to " + std::to_string(prt::kMaxLightmapSize));
+        if (padding < 0 || padding > prt::kMaxUnwrapPadding)
+          throw Error("unwrap_scene: padding must be 0 to " + std::to_string(prt::kMaxUnwrapPadding));
+        if (!(texel_size >= 0) || !std::isfinite(texel_size)) throw Error("unwrap_scene: texel_size must be >= 0 and finite");
+        if (!(max_stretch >= 1) || !(max_stretch <= 100)) throw Error("unwrap_scene: max_stretch must be 1 to 100");
+        prt::UnwrapOptions o;
+        o.width = width;
+        o.height = height;
+        o.texel_size = texel_size;
+        o.padding = padding;
+        o.max_stretch = max_stretch;
+        prt::AtlasStats s;
+        prt::Scene out;
+        {
+          py::gil_scoped_release release;
+          out = prt::unwrap_scene(scene, o, &s);
+        }
+        return py::make_tuple(std::move(out), stats_dict(s));
+      },
+      py::arg("scene"), py::kw_only(), py::arg("width") = 1024, py::arg("height") = 1024, py::arg("texel_size") = 0.0,
+      py::arg("padding") = 2, py::arg("max_stretch") = 1.5,
+      "Lightmap UVs made by prt (prt unwrap; docs/LIGHTMAPS.md \"Lightmap UVs made by prt\"): returns (Scene, stats), "
+      "the scene with one UV set more (its last; vertices split where charts meet) and the atlas's figures (a dict: "
+      "charts, covered_texels, use, max_stretch, min_gap, ...).\n"
+      "  width, height: the atlas to fill at the largest density that fits [--lightmap]; texel_size > 0: a texel's "
+      "edge in scene units instead [--texel-size]; padding: empty texels between charts, 0 to 62 [--padding]; "
+      "max_stretch: a triangle's largest anisotropy, 1 to 100 [--max-stretch].");
+  m.def(
+      "atlas_stats",
+      [stats_dict](const prt::Scene& scene, int uv_set, int width, int height) {
+        return stats_dict(prt::atlas_stats(scene, scene.lightmap_uv_set(uv_set_arg(uv_set, "uv_set")), width, height));
+      },
+      py::arg("scene"), py::arg("uv_set"), py::arg("width"), py::arg("height"),
+      "The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure): a dict of "
+      "charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles.");
+  m.def(
+      "lightmap_scene",
+      [](const prt::Scene& scene, const prt::LightmapTransfer& lightmap) {
+        py::gil_scoped_release release;
+        return prt::lightmap_scene(scene, lightmap.layout);
+      },
+      py::arg("scene"), py::arg("lightmap"),
+      "The scene `lightmap` is laid out in: `scene` itself, or, where prt made its UVs (prt precompute --lightmap-uv "
+      "auto), `scene` unwrapped again as it was then. Pass it to Lightmap.rows and Lightmap.relight.");
+  m.def(
+      "write_scene",
+      [](const prt::Scene& scene, const py::object& path) {
+        const std::string p = path_of(path, "path");
+        py::gil_scoped_release release;
+        prt::write_gltf_scene(p, scene, "prt (Python)");
+      },
+      py::arg("scene"), py::arg("path"),
+      "Writes the scene as glTF 2.0 (.glb or .gltf; one node per object, world space, every UV set as TEXCOORD_n, "
+      "materials and lights), as prt unwrap does.");
 }
 
 // Scene, load_scene.
@@ -180,6 +255,7 @@ void bind_lightmap_transfer(py::module_& m) {
 
   m.def("read_lightmap", [](const py::object& path) { return prt::read_lightmap_transfer(path_of(path, "path")); },
         py::arg("path"), "Reads the lightmap file at `path` (prt precompute SCENE --lightmap WxH). Returns a Lightmap.");
+  bind_unwrap(m);  // after Lightmap: its signatures name the class
 }
 
 // precompute_lightmap, lightmap_from_rows.

@@ -201,3 +201,27 @@ def test_an_atlas_the_memory_cannot_hold_is_refused_before_rasterising():
     s = prt.load_scene(SOURCE / "models" / "room.gltf")
     with pytest.raises(prt.Error, match="refused before the texels are rasterised"):
         prt.precompute_lightmap(s, 16384, 16384, samples=16)
+
+
+def test_unwrap_scene_is_prt_unwrap_and_lightmap_scene_makes_it_again(tmp_path):
+    # prt unwrap's file and Python's write_scene of unwrap_scene hold the same scene;
+    # a --lightmap-uv auto lightmap's scene is made again by lightmap_scene.
+    run_prt("unwrap", SCENE, "--lightmap", "32x32", "--padding", "3", "-q", "-o", tmp_path / "cli.glb")
+    s = prt.load_scene(SCENE)
+    u, stats = prt.unwrap_scene(s, width=32, height=32, padding=3)
+    assert len(u.uv_sets) == len(s.uv_sets) + 1
+    assert u.hash == prt.load_scene(tmp_path / "cli.glb").hash
+    assert stats["shared_texels"] == 0 and stats["min_gap"] >= 3 and stats["max_stretch"] <= 1.5
+    assert prt.atlas_stats(u, len(s.uv_sets), 32, 32)["covered_texels"] == stats["covered_texels"]
+    prt.write_scene(u, tmp_path / "py.glb")
+    assert prt.load_scene(tmp_path / "py.glb").hash == u.hash
+    run_prt("precompute", SCENE, "--lightmap", "32x32", "--lightmap-uv", "auto", "--uv-padding", "3", "--samples",
+            "16", "-q", "-o", tmp_path / "auto.prt")
+    lm = prt.read_lightmap(tmp_path / "auto.prt")
+    assert prt.lightmap_scene(s, lm).hash == u.hash == lm.scene_hash
+    rows = lm.rows(prt.lightmap_scene(s, lm))
+    assert rows.shape[0] == stats["covered_texels"]
+    with pytest.raises(prt.Error, match="padding"):
+        prt.unwrap_scene(s, padding=63)
+    with pytest.raises(prt.Error, match="max_stretch"):
+        prt.unwrap_scene(s, max_stretch=0.5)

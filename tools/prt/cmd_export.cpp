@@ -5,6 +5,7 @@
 #include "look.h"
 #include "progress_bar.h"
 #include "inputs.h"
+#include "lightmap_inputs.h"
 #include "light_options.h"
 
 #include <prt/compressed_transfer.h>
@@ -151,7 +152,7 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   if (!a.bake.empty() && a.output.empty())
     throw UsageError("--bake: a lightmap's baked texture goes into the glTF of --output (the page relights the "
                      "coefficient textures): give --output FILE.glb too");
-  const prt::Scene scene = prt::load_scene(a.mesh);
+  const prt::Scene scene = load_lightmap_scene(a.mesh, lt.layout);
   const LightmapTexels texels = lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
                                                 lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
   check_matches(lt, texels, a.transfer);

@@ -1,6 +1,7 @@
 // prt precompute: mesh -> per-vertex SH or wavelet transfer file.
 #include "commands.h"
 #include "progress_bar.h"
+#include "lightmap_inputs.h"
 #include "subsurface_options.h"
 
 #include <prt/lightmap.h>
@@ -15,6 +16,7 @@
 #include <prt/transfer.h>
 #include <prt/transfer_io.h>
 #include <prt/tuning.h>
+#include <prt/unwrap.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh.h>
 #include <prt/zh_transfer.h>
@@ -53,6 +55,10 @@ struct PrecomputeArgs {
   // --lightmap WxH: SCENE's texels (docs/LIGHTMAPS.md); --uv N: its UV set (-1: TEXCOORD_1 when present, else 0).
   std::string lightmap;
   int uv = -1;
+  // --lightmap-uv auto: lightmap UVs made by prt (prt/unwrap.h) at --uv-padding; "scene": the scene's own.
+  std::string lightmap_uv = "scene";
+  int uv_padding = 2;
+  const CLI::Option *lightmap_uv_opt = nullptr, *uv_padding_opt = nullptr;
   // --probes NXxNYxNZ: a probe volume over SCENE (docs/PROBES.md).
   std::string probes;
   ProbeOptions popt;
@@ -537,6 +543,32 @@ std::string subsurface_scale(const Mesh& mesh, const SubsurfaceRecord& r) {
                      mesh.positions.empty() ? 0.0 : glm::length(hi - lo) * r.length_scale, r.length_scale, reach);
 }
 
+// What prt precompute --lightmap says of the atlas's texels.
+void print_texels(const LightmapTexels& texels, int set, std::size_t moved) {
+  const int width = texels.layout.width, height = texels.layout.height;
+  const std::size_t n = texels.layout.texels.size();
+  fmt::print(stderr,
+             "lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} covered in part "
+             "(sampled on the covered part), {} moved out of geometry\n",
+             width, height, set, set, n, 100.0 * double(n) / (double(width) * height), texels.charts, texels.partial,
+             moved);
+  if (texels.shared)
+    fmt::print(stderr,
+               "warning: {} texels are touched by two UV charts (less than a texel of padding between them): "
+               "each holds one chart's light, and bilinear filtering bleeds it into the other; pack the lightmap "
+               "UVs with more margin or use a larger atlas\n",
+               texels.shared);
+  if (texels.overlapped)
+    fmt::print(stderr,
+               "warning: {} texels lie where two UV charts overlap a little (a packing with too little margin): each "
+               "holds the light of the triangle covering its centre, and the other chart shows it too; --lightmap-uv "
+               "auto makes UVs without overlaps\n",
+               texels.overlapped);
+  if (texels.uv_degenerate)
+    fmt::print(stderr, "warning: {} triangles have no area in UV set {}: they get no texels (black in the lightmap)\n",
+               texels.uv_degenerate, set);
+}
+
 // --lightmap WxH: the SH transfer of every covered texel of SCENE's atlas;
 // with `sss`, a translucent material's (compute_subsurface_lightmap).
 int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
@@ -578,36 +610,23 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   a.opt.memory_limit = memory_limit(a);
   if (is_root()) for_path("--output", [&] { check_writable(a.output); });
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(a.mesh, a.mesh_opt);
-  test_fail_rank();
+  const bool auto_uv = a.lightmap_uv == "auto";
   const bool quiet = a.quiet || !is_root();
+  const Scene scene = load_scene_to_bake(a.mesh, a.mesh_opt, {a.lightmap_uv, a.uv_padding, a.uv_opt, a.uv_padding_opt},
+                                         width, height, quiet);
+  test_fail_rank();
   if (!quiet) fmt::print(stderr, "{}\n", describe(scene));
   if (!quiet && sss)
     fmt::print(stderr, "material: subsurface, {}\n{}\n", describe_subsurface(*sss), subsurface_scale(scene.mesh, *sss));
-  const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
+  const int set = auto_uv ? int(scene.uv_sets.size()) - 1 : scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
   if (!wavelet) {  // a limit the transfer's plan would refuse, refused before the atlas is rasterised
     release_free_memory();
     check_lightmap_memory(scene, width, height, set, a.opt, a.adaptive_opt->count() > 0, albedo ? &*albedo : nullptr);
   }
   LightmapTexels texels = lightmap_texels(scene, width, height, set, albedo ? &*albedo : nullptr);
+  if (auto_uv) texels.layout.unwrap_padding = a.uv_padding;
   const std::size_t moved = move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
-  if (!quiet) {
-    const std::size_t n = texels.layout.texels.size();
-    fmt::print(stderr,
-               "lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} covered in part "
-               "(sampled on the covered part), {} moved out of geometry\n",
-               width, height, set, set, n, 100.0 * double(n) / (double(width) * height), texels.charts, texels.partial,
-               moved);
-    if (texels.shared)
-      fmt::print(stderr,
-                 "warning: {} texels are touched by two UV charts (less than a texel of padding between them): "
-                 "each holds one chart's light, and bilinear filtering bleeds it into the other; pack the lightmap "
-                 "UVs with more margin or use a larger atlas\n",
-                 texels.shared);
-    if (texels.uv_degenerate)
-      fmt::print(stderr, "warning: {} triangles have no area in UV set {}: they get no texels (black in the lightmap)\n",
-                 texels.uv_degenerate, set);
-  }
+  if (!quiet) print_texels(texels, set, moved);
   Outputs out("precompute");
   if (wavelet) {  // the all-frequency variant: a wavelet transfer at the texels (docs/LIGHTMAPS.md)
     a.wopt.threads = a.opt.threads;
@@ -693,7 +712,7 @@ int run_probes(PrecomputeArgs& a) {
   if (a.lightmap_opt->count() > 0) throw UsageError("--probes and --lightmap are two runs (a probe volume, a lightmap)");
   if (a.basis != "sh") throw UsageError("--basis does not apply to --probes (a probe stores a visibility cube; docs/PROBES.md)");
   for (const CLI::Option* o : {a.material_opt, a.target_opt, a.vertex_colors_opt, a.weld_opt, a.uv_opt, a.tolerance_opt,
-                               a.compress_weights_opt})
+                               a.compress_weights_opt, a.lightmap_uv_opt, a.uv_padding_opt})
     if (o->count() > 0 && !(o == a.material_opt && a.material == "diffuse"))
       throw UsageError(o->get_name() + " does not apply to --probes");
   for (const CLI::Option* o : a.wavelet_only)
@@ -1051,6 +1070,8 @@ int run_precompute(PrecomputeArgs& a) {
     return run_lightmap(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
     throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
                      "too (a vertex transfer keeps its ambient occlusion and bent normals in the file)");
@@ -1176,6 +1197,12 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
   a.uv_opt = add_shared(s, SharedOption::UvSet, a.uv,
                            "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
                            "object has it, else TEXCOORD_0)");
+  a.lightmap_uv_opt = add_shared(s, SharedOption::LightmapUv, a.lightmap_uv,
+                                 "With --lightmap: 'scene' (its own UV set, --uv) or 'auto': lightmap UVs made by "
+                                 "prt for the WxH atlas (prt unwrap's; SCENE may then be any mesh file). Relight, "
+                                 "render, view and export make them again from the same SCENE");
+  a.uv_padding_opt = add_shared(s, SharedOption::UvPadding, a.uv_padding,
+                                "With --lightmap-uv auto: empty texels between any two charts");
   a.probes_opt = s->add_option("--probes", a.probes,
                                "NXxNYxNZ: a relightable probe volume instead of vertices: probes on a grid spanning "
                                "SCENE's bounding box, corners included (docs/PROBES.md); --bands (default 3), --mode "

@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "light_options.h"
 #include "progress_bar.h"
+#include "lightmap_inputs.h"
 #include "subsurface_options.h"
 
 #include <prt/vertex_csv.h>
@@ -43,6 +44,9 @@ struct ReferenceArgs {
   std::string lightmap;  // --lightmap WxH: the texels of prt precompute --lightmap, as an RGBA EXR
   int uv = -1;
   const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr;
+  std::string lightmap_uv = "scene";  // --lightmap-uv, --uv-padding: as prt precompute's
+  int uv_padding = 2;
+  const CLI::Option *lightmap_uv_opt = nullptr, *uv_padding_opt = nullptr;
   std::string at;  // --at POINTS.csv: E(p, n)/pi at query points (what a probe volume gives there)
   LightArgs light;  // --lights, --sun (docs/LIGHTS.md)
   SubsurfaceArgs sss;  // --material subsurface: --sss, --sigma-a, --sigma-s, --eta, --length-scale
@@ -144,12 +148,15 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
   if (a.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
   const auto t0 = std::chrono::steady_clock::now();
-  const prt::Scene scene = load_scene(a.mesh, a.mesh_opt);
+  const bool auto_uv = a.lightmap_uv == "auto";
+  const prt::Scene scene =
+      load_scene_to_bake(a.mesh, a.mesh_opt, {a.lightmap_uv, a.uv_padding, a.uv_opt, a.uv_padding_opt}, width, height,
+                         a.quiet);
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(scene));
   const EnvMap map = reference_map(a, sss ? nullptr : &scene.lights);  // a translucent transfer is the map's alone
   const bool override_albedo = a.albedo_opt->count() > 0;
   const glm::vec3 albedo = a.opt.albedo;
-  const int set = scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
+  const int set = auto_uv ? int(scene.uv_sets.size()) - 1 : scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
   LightmapTexels texels = lightmap_texels(scene, width, height, set, override_albedo ? &albedo : nullptr);
   move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
   const std::function<glm::vec3(std::uint32_t, float, float)> hit_albedo = [&](std::uint32_t tri, float u, float v) {
@@ -192,7 +199,8 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
 // per vertex, written as the diffuse reference's CSV.
 int run_subsurface(ReferenceArgs& a, const SubsurfaceRecord& record) {
   check_subsurface_reference(a);
-  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  for (const CLI::Option* o : {a.uv_opt, a.lightmap_uv_opt, a.uv_padding_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " picks or makes the lightmap's UVs: give --lightmap WxH too");
   for_path("--output", [&] { check_writable(a.output); });
 
   std::unique_ptr<tbb::global_control> limit;
@@ -255,7 +263,8 @@ int run_reference(ReferenceArgs& a) {
     a.opt.glossy = a.material == "glossy";
     return run_at(a);
   }
-  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  for (const CLI::Option* o : {a.uv_opt, a.lightmap_uv_opt, a.uv_padding_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " picks or makes the lightmap's UVs: give --lightmap WxH too");
   a.opt.glossy = a.material == "glossy";
   for (const CLI::Option* o : a.glossy_opts)
     if (o->count() > 0 && !a.opt.glossy) throw UsageError(o->get_name() + " applies to --material glossy only");
@@ -357,6 +366,10 @@ Run add_reference(CLI::App& app) {
                                   "WxH: the reference at the texels of prt precompute --lightmap WxH (SCENE: glTF or "
                                   "OBJ with vt), written as an RGBA float EXR in the relit lightmap's layout");
   a->uv_opt = add_shared(s, SharedOption::UvSet, a->uv, "With --lightmap: the UV set (as prt precompute --uv)");
+  a->lightmap_uv_opt = add_shared(s, SharedOption::LightmapUv, a->lightmap_uv,
+                                  "With --lightmap: the scene's own UVs, or prt's (as prt precompute --lightmap-uv)");
+  a->uv_padding_opt = add_shared(s, SharedOption::UvPadding, a->uv_padding,
+                                 "With --lightmap-uv auto: texels between charts (as prt precompute --uv-padding)");
   s->add_option("--at", a->at,
                 "POINTS.csv (header x,y,z,nx,ny,nz): the reference at these points instead of vertices: E(p, n)/pi, "
                 "what a white Lambertian surface there reflects (probe volumes, docs/PROBES.md); writes point,r,g,b,...")

@@ -3,6 +3,7 @@
 #include "look.h"
 #include "progress_bar.h"
 #include "inputs.h"
+#include "lightmap_inputs.h"
 #include "light_options.h"
 
 #include <prt/vertex_csv.h>
@@ -278,7 +279,7 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std
       throw UsageError(o->get_name() + " applies to SH transfers; " + a.transfer + " is a wavelet lightmap (--terms, "
                        "--selection)");
   const wavelet::Selection selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
-  const prt::Scene scene = prt::load_scene(a.mesh);
+  const prt::Scene scene = load_lightmap_scene(a.mesh, wl.layout);
   const LightmapTexels texels = lightmap_texels(scene, wl.layout.width, wl.layout.height, wl.layout.uv_set);
   if (texels.layout.scene_hash != wl.layout.scene_hash || texels.layout.texels != wl.layout.texels)
     throw Error(a.transfer + ": was computed for another scene or atlas (scene hash, covered texels differ)");
@@ -315,7 +316,7 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   for (const CLI::Option* o : a.wavelet_only)
     if (o->count() > 0) throw UsageError(o->get_name() + " applies to wavelet transfers; " + a.transfer + " is an SH lightmap");
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
-  const prt::Scene scene = prt::load_scene(a.mesh);
+  const prt::Scene scene = load_lightmap_scene(a.mesh, lt.layout);
   const LightmapTexels texels =
       lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
                       lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);

@@ -26,5 +26,6 @@ Run add_view(CLI::App& app);       // cmd_view.cpp
 Run add_report(CLI::App& app);     // cmd_report.cpp
 Run add_compress(CLI::App& app);   // cmd_compress.cpp
 Run add_export(CLI::App& app);     // cmd_export.cpp
+Run add_unwrap(CLI::App& app);     // cmd_unwrap.cpp
 
 }  // namespace prt::cli

@@ -1,4 +1,5 @@
 #include "inputs.h"
+#include "lightmap_inputs.h"
 
 #include <prt/error.h>
 #include <prt/rotation.h>
@@ -109,7 +110,8 @@ Scene load_scene(const std::string& mesh, AnyTransfer loaded, const std::string&
   require_support(s.kind(), consumer, transfer);
   // The kind says whether MESH is a mesh or a scene (a lightmap's, docs/LIGHTMAPS.md).
   if (is_lightmap(s.kind())) {
-    s.world = prt::load_scene(mesh);
+    const LightmapTransfer* lt = s.get<LightmapTransfer>();
+    s.world = load_lightmap_scene(mesh, lt ? lt->layout : s.get<WaveletLightmap>()->layout);
     s.mesh = s.world->mesh;
   } else {
     s.mesh = load_mesh(mesh);

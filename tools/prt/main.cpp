@@ -57,6 +57,7 @@ int run_command(int argc, char** argv) {
   add(prt::cli::add_compress);
   add(prt::cli::add_relight);
   add(prt::cli::add_export);
+  add(prt::cli::add_unwrap);
   add(prt::cli::add_render);
   add(prt::cli::add_reference);
   add(prt::cli::add_compare);

@@ -108,6 +108,9 @@ const std::map<SharedOption, Spec>& specs() {
                                 }),
                                 fmt::format("WxH, 1 to {} texels a side", kMaxLightmapSize)});
     t.emplace(S::UvSet, Spec{"--uv", int_range(0, kMaxLightmapUvSet), fmt::format("0 to {}: TEXCOORD_N", kMaxLightmapUvSet)});
+    t.emplace(S::LightmapUv, Spec{"--lightmap-uv", one_of({"scene", "auto"}), "scene or auto"});
+    t.emplace(S::UvPadding, Spec{"--uv-padding", int_range(0, kMaxUnwrapPadding),
+                                 fmt::format("0 to {} texels", kMaxUnwrapPadding)});
     t.emplace(S::ObjectAt, Spec{"--object-at", triple_value("x,y,z"), "x,y,z"});
     t.emplace(S::ObjectSize, Spec{"--object-size", positive_number(), "a positive length (scene units)"});
     t.emplace(S::Deform, Spec{"--deform", deform_value(), "bend:ANGLE or twist:ANGLE, degrees, at most 720"});

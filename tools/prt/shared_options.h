@@ -65,6 +65,8 @@ enum class SharedOption {
   BandsShown,    // -b,--bands a renderer shades with: 0 (all of the file's) to 16
   Lightmap,      // --lightmap WxH: an atlas of 1 to 16384 texels a side (prt precompute and reference)
   UvSet,         // --uv N: the lightmap's UV set, 0 to 7 (TEXCOORD_N)
+  LightmapUv,    // --lightmap-uv scene|auto: the scene's own lightmap UVs, or prt's (prt/unwrap.h)
+  UvPadding,     // --uv-padding P: with --lightmap-uv auto, texels between charts, 0 to 62
   ObjectAt,      // --object-at x,y,z: three finite numbers (render and view's probe-lit object)
   ObjectSize,    // --object-size d: a positive number (its bounding box's diagonal)
   Deform,        // --deform bend:ANGLE|twist:ANGLE: a procedural pose (prt/deform.h), |ANGLE| <= 720 degrees
