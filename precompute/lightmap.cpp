@@ -5,6 +5,7 @@
 #include <prt/precompute.h>
 
 #include <prt/error.h>
+#include <prt/hash.h>
 
 #include "ray_scene.h"
 #include "transfer_impl.h"
@@ -16,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 
 namespace prt {
 
@@ -106,15 +108,27 @@ struct TexelSetup {
     map.point_of_texel = point_of_texel.data();
   }
 
-  // The rows computed for the texels, as the lightmap's transfer (rank 0).
-  LightmapTransfer finish(Transfer t, const LightmapTexels& texels) const {
+  // The lightmap's transfer before its rows: rank 0's copy of the layout,
+  // made before the transfer's memory plan (which measures it as held).
+  LightmapTransfer start(const LightmapTexels& texels) const {
     LightmapTransfer out;
+    if (!o.comm || o.comm->rank() == 0) out.layout = texels.layout;
+    return out;
+  }
+
+  // The rows computed for the texels, as the lightmap's transfer (rank 0):
+  // `out` from start().
+  LightmapTransfer finish(LightmapTransfer out, Transfer t, const LightmapTexels& texels) const {
     out.transfer = std::move(t);
     if (o.comm && o.comm->rank() != 0) return out;
     out.transfer.vertex_colors = per_point;  // relight takes an analytic texel's albedo from texel_points' colours
     out.transfer.mesh_hash = texels.layout.scene_hash;
-    out.transfer.shading_hash = shading_hash(texel_points(texels), per_point);
-    out.layout = texels.layout;
+    // shading_hash(texel_points(texels), per_point), without texel_points'
+    // copy of every texel's position, normal and albedo (36 bytes a texel).
+    Hasher h;
+    h.add_span(std::span<const glm::vec3>(texels.normals));
+    if (per_point) h.add_span(std::span<const glm::vec3>(texels.albedo));
+    out.transfer.shading_hash = h.digest();
     return out;
   }
 };
@@ -164,7 +178,8 @@ LightmapTransfer compute_lightmap_transfer(const Scene& scene, const LightmapTex
   src.vertices = false;
   src.hit_points = &setup.map;
   src.compact = true;
-  return setup.finish(detail::compute_at(scene.mesh, src, setup.o, progress), texels);
+  LightmapTransfer out = setup.start(texels);
+  return setup.finish(std::move(out), detail::compute_at(scene.mesh, src, setup.o, progress), texels);
 }
 
 void check_lightmap_memory(const Scene& scene, int width, int height, int uv_set, const TransferOptions& options,
@@ -174,9 +189,10 @@ void check_lightmap_memory(const Scene& scene, int width, int height, int uv_set
   // What the plan in compute_at (after lightmap_texels, move_texels_out_of_geometry
   // and TexelSetup) counts at least: the process then holds what it holds now
   // and the texels (LightmapTexels: texel index, position, normal, albedo,
-  // triangle, barycentrics, texel size, area) and TexelSetup's map of the atlas;
-  // its arrays are those of P points or more, in one channel at least.
-  constexpr std::size_t kTexelBytes = sizeof(std::uint32_t) + 3 * sizeof(glm::vec3) + sizeof(std::uint32_t) +
+  // triangle, barycentrics, texel size, area), the output's copy of the
+  // texel index (TexelSetup::start) and TexelSetup's map of the atlas; its
+  // arrays are those of P points or more, in one channel at least.
+  constexpr std::size_t kTexelBytes = 2 * sizeof(std::uint32_t) + 3 * sizeof(glm::vec3) + sizeof(std::uint32_t) +
                                       sizeof(glm::vec2) + 2 * sizeof(float);
   const std::size_t atlas = std::size_t(width) * std::size_t(height);
   TransferOptions o = options;
@@ -229,7 +245,8 @@ LightmapTransfer compute_adaptive_lightmap_transfer(const Scene& scene, const Li
   if (setup.per_point) points.albedo = texels.albedo;
   points.hit_points = &setup.map;
   texel_neighbours(texels, setup.point_of_texel, points);
-  return setup.finish(detail::adaptive_at(scene.mesh, points, setup.o, adaptive, progress, r), texels);
+  LightmapTransfer out = setup.start(texels);
+  return setup.finish(std::move(out), detail::adaptive_at(scene.mesh, points, setup.o, adaptive, progress, r), texels);
 }
 
 std::vector<float> point_obscurance(const Mesh& mesh, std::span<const glm::vec3> positions,

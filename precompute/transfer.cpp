@@ -192,6 +192,7 @@ Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std:
   if (gather) fixed += row * (o.bounces > 1 ? 2 : 1);             // the bounce buffers
   if (emitters) fixed += row + mesh.vertex_count() * stride * sizeof(float);  // the points' bounce light, the vertices' transfer
   fixed += V * (sizeof(float) + sizeof(glm::vec3) + 1);           // ao, bent normals, analytic
+  fixed += V * sizeof(std::uint32_t);                             // the slots of the analytic rows' compaction
   fixed += V * gstride * sizeof(float);                           // glossy matrices
   fixed += (own + 1) * sizeof(std::uint64_t) * ((gather ? 1 : 0) + (glossy_ir ? 1 : 0));  // record offsets
   fixed += M * nc * (sizeof(float) + (o.glossy ? sizeof(double) : 0));  // the directions' SH tables

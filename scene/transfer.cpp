@@ -334,14 +334,12 @@ void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic) {
     }
     t.slots[v] = std::uint32_t(rows++);
   }
+  // The arrays keep their capacity: shrinking one would copy it into a new
+  // allocation while the old is held (the rows twice at once, past what a
+  // --memory-limit plan counts: a 2M-texel lightmap peaked 52% over).
   t.coeffs.resize(rows * stride);
-  t.coeffs.shrink_to_fit();
-  if (!t.direct.empty()) {
-    t.direct.resize(rows * stride);
-    t.direct.shrink_to_fit();
-  }
+  if (!t.direct.empty()) t.direct.resize(rows * stride);
   t.glossy_matrices.resize(rows * gstride);
-  t.glossy_matrices.shrink_to_fit();
 }
 
 namespace {

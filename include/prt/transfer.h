@@ -197,7 +197,8 @@ std::uint64_t shading_hash(const Mesh& mesh, bool vertex_colors);
 std::vector<float> dense_transfer(const Transfer& t, const Mesh& mesh, bool direct = false);
 
 // Marks vertices analytic (slots; see Transfer) and drops their rows from
-// coeffs and direct. `analytic` has one entry per vertex (non-zero:
+// coeffs and direct (in place: the arrays keep their capacity, so that the
+// rows are never held twice). `analytic` has one entry per vertex (non-zero:
 // analytic). compute_transfer does this itself; for tests and tools.
 void compact_transfer(Transfer& t, const std::vector<std::uint8_t>& analytic);
 
