@@ -12,13 +12,8 @@ cd "$(dirname "$0")/.."
 prt="${1:-build}/prt"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-# A constant map of radiance 1 as a Radiance HDR: 32 x 16 flat RGBE pixels
-# (mantissa 128, exponent 129: 0.5 x 2^1).
-/usr/bin/python3 -c '
-import sys
-w, h = 32, 16
-sys.stdout.buffer.write(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (h, w) + bytes([128, 128, 128, 129]) * (w * h))
-' > "$work/constant.hdr"
+# A constant map of radiance 1 (SH is exact under it).
+/usr/bin/python3 scripts/constant_map.py "$work/constant.hdr"
 err() { "$prt" compare "$1" "$2" --json | /usr/bin/python3 -c 'import json,sys; print("%.1f%%" % (100 * json.load(sys.stdin)["rel_rms_noise_corrected"]))'; }
 lightmap=(--lightmap 64x64)
 echo "| scene | scale | constant map | sunset.exr | the diffuse lightmap's (sunset.exr) |"
