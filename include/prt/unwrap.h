@@ -31,8 +31,12 @@ struct UnwrapOptions {
   int padding = 2;
   // The largest anisotropy a triangle may take, sigma_max / sigma_min of its
   // map from the surface to the atlas (1: conformal); charts that exceed it
-  // (or fold, or overlap themselves) are split until none does.
-  double max_stretch = 1.5;
+  // (or fold, or overlap themselves) are split until none does. 1.05:
+  // measured on the shared meshes at 1024 x 1024 against 1.5, it gives 3 to
+  // 90% more charts (cow 903 against 557), the same atlas use or more (-2 to
+  // +9 points) and the largest area distortion 1.07-1.53 against 1.23-1.98;
+  // three.js's unwrapUVs allows 1.5 (lightmap mode) or 2 (normal mode).
+  double max_stretch = 1.05;
   // Faces join a chart while their normal is within this angle (degrees) of
   // the chart's seed face's normal (and they share an edge with it).
   double max_chart_angle = 60.0;

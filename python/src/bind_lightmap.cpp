@@ -61,7 +61,7 @@ void bind_unwrap(py::module_& m) {
         return py::make_tuple(std::move(out), stats_dict(s));
       },
       py::arg("scene"), py::kw_only(), py::arg("width") = 1024, py::arg("height") = 1024, py::arg("texel_size") = 0.0,
-      py::arg("padding") = 2, py::arg("max_stretch") = 1.5,
+      py::arg("padding") = 2, py::arg("max_stretch") = 1.05,
       "Lightmap UVs made by prt (prt unwrap; docs/LIGHTMAPS.md \"Lightmap UVs made by prt\"): returns (Scene, stats), "
       "the scene with one UV set more (its last; vertices split where charts meet) and the atlas's figures (a dict: "
       "charts, covered_texels, use, max_stretch, min_gap, ...).\n"
