@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # prt unwrap beside three.js r187's unwrapUVs (tests/js/unwrap_three.mjs) on
-# the same meshes, measured by one tool (prt unwrap --measure, prt/unwrap.h
+# the same meshes, measured by one tool (prt unwrap --measure-uv, prt/unwrap.h
 # atlas_stats): charts, atlas use, texel density, largest stretch and area
 # distortion, the smallest gap between charts, texels two charts share, and
 # each unwrap's own time (three.js: the unwrapUVs call; prt: unwrap_scene,
@@ -29,7 +29,7 @@ for m in bunny00 cow fandisk homer lion knot1 holes mannequin-devil; do
 done
 meshes+=(models/scene.obj models/tube.obj models/room.gltf models/wall-on-floor.gltf)
 
-stats() {  # JSON of prt unwrap --json or --measure --json -> one row
+stats() {  # JSON of prt unwrap --json or --measure-uv --json -> one row
   python3 -c '
 import json, sys
 j = json.load(sys.stdin)
@@ -55,7 +55,7 @@ for mesh in "${meshes[@]}"; do
     if node tests/js/unwrap_three.mjs "$mesh" "$tmp/three.obj" --resolution "$res" --padding 1 --mode "$mode" \
       > "$tmp/three.json"; then
       secs=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["seconds"])' "$tmp/three.json")
-      "$prt" unwrap "$tmp/three.obj" --measure 0 --lightmap "${res}x${res}" --json | stats "three.js $mode" "$secs"
+      "$prt" unwrap "$tmp/three.obj" --measure-uv 0 --lightmap "${res}x${res}" --json | stats "three.js $mode" "$secs"
     else
       echo "| three.js $mode | (unwrapUVs returned null) |"
     fi
@@ -65,7 +65,7 @@ for mesh in "${meshes[@]}"; do
   # At three.js's density (its normal mode's, the denser of its two on curved
   # meshes): the atlas prt needs.
   node tests/js/unwrap_three.mjs "$mesh" "$tmp/three.obj" --resolution "$res" --padding 1 --mode normal > "$tmp/three.json"
-  size=$("$prt" unwrap "$tmp/three.obj" --measure 0 --lightmap "${res}x${res}" --json |
+  size=$("$prt" unwrap "$tmp/three.obj" --measure-uv 0 --lightmap "${res}x${res}" --json |
     python3 -c 'import json,sys; print(json.load(sys.stdin)["texel_size"])')
   "$prt" unwrap "$mesh" -o "$tmp/prt.glb" --texel-size "$size" --padding 2 --json | stats "prt at three's" ""
 done

@@ -45,6 +45,7 @@ const std::map<std::string, std::vector<std::string>>& commands() {
       {"verify", {"verify"}},
       {"view", {"view", "mesh.obj", "in.prt", "env.exr"}},
       {"report", {"report", "mesh.obj", "env.exr"}},
+      {"unwrap", {"unwrap", "mesh.obj", "-o", "out.glb"}},
   };
   return c;
 }
@@ -169,6 +170,8 @@ const std::vector<Shared>& shared_table() {
         {"64", "must be WxH with W and H from 1 to 16384 (e.g. 1024x1024), got '64'"}},
        {"64x32"}},
       {"--uv", {{"8", "must be a whole number from 0 to 7, got '8'"}}, {"0", "1"}},
+      {"--lightmap-uv", {{"own", "expected scene or auto, got 'own'"}}, {"scene", "auto"}},
+      {"--uv-padding", {{"63", "must be a whole number from 0 to 62, got '63'"}}, {"0", "2"}},
       {"--object-at", {{"1,2", "expected three numbers x,y,z, got '1,2'"}}, {"0,1,0"}},
       {"--object-size", {{"0", "must be a positive number, got 0"}}, {"0.5"}},
       {"--deform",
@@ -232,6 +235,7 @@ const std::map<std::string, std::set<std::string>>& path_options() {
       {"info", {"FILE"}},
       {"view", {"MESH", "TRANSFER", "ENV", "--probes", "--object", "--screenshot", "--screenshot-dir", "--second"}},
       {"report", {"MESH", "ENV", "--out", "--cache"}},
+      {"unwrap", {"SCENE", "--output"}},
   };
   return t;
 }
@@ -349,7 +353,7 @@ TEST(CliPathOptions, EmptyValuesAreRefusedWhileParsing) {
       EXPECT_TRUE(p.rfind("--", 0) != 0 || options.count(p)) << "prt " << c << " lists no " << p << " in --help";
   }
   EXPECT_GT(checked, 150u) << "--help lists were not read";
-  EXPECT_EQ(paths, 34u);  // the --options of path_options()
+  EXPECT_EQ(paths, 35u);  // the --options of path_options()
   // Positional paths: '' in place of each.
   const std::vector<std::vector<std::string>> positional = {
       {"precompute", "", "-o", "out.prt"},
@@ -364,6 +368,7 @@ TEST(CliPathOptions, EmptyValuesAreRefusedWhileParsing) {
       {"render", "mesh.obj", "in.prt", "", "-o", "out.png"},
       {"view", "mesh.obj", "", "env.exr"},
       {"report", "mesh.obj", ""},
+      {"unwrap", "", "-o", "out.glb"},
   };
   for (const auto& args : positional) {
     const Result r = run_prt(dir, args);

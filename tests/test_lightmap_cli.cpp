@@ -144,7 +144,7 @@ TEST(LightmapCli, UvsMadeByPrtBakeAMeshWithoutUvsThroughEveryConsumer) {
   // prt unwrap's file is the auto run's scene: the same texels, the same light.
   r = run_prt(dir, {"unwrap", mesh, "--lightmap", "48x48", "-o", dir.file("u.glb")});
   ASSERT_EQ(r.code, 0) << describe_run(r);
-  r = run_prt(dir, {"unwrap", dir.file("u.glb"), "--measure", "0", "--lightmap", "48x48", "--json"});
+  r = run_prt(dir, {"unwrap", dir.file("u.glb"), "--measure-uv", "0", "--lightmap", "48x48", "--json"});
   ASSERT_EQ(r.code, 0) << describe_run(r);
   const nlohmann::json stats = nlohmann::json::parse(r.out);
   EXPECT_EQ(stats["shared_texels"].get<int>(), 0) << r.out;

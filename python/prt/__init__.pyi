@@ -1058,7 +1058,7 @@ def unwrap_scene(scene: Scene, *, width: int = ..., height: int = ..., texel_siz
 
 def atlas_stats(scene: Scene, uv_set: int, width: int, height: int) -> dict:
     """
-    The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure): a dict of charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles.
+    The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure-uv): a dict of charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles.
     """
 
 def lightmap_scene(scene: Scene, lightmap: Lightmap) -> Scene:

@@ -74,7 +74,7 @@ void bind_unwrap(py::module_& m) {
         return stats_dict(prt::atlas_stats(scene, scene.lightmap_uv_set(uv_set_arg(uv_set, "uv_set")), width, height));
       },
       py::arg("scene"), py::arg("uv_set"), py::arg("width"), py::arg("height"),
-      "The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure): a dict of "
+      "The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure-uv): a dict of "
       "charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles.");
   m.def(
       "lightmap_scene",

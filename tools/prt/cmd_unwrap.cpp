@@ -1,6 +1,6 @@
 // prt unwrap: lightmap UVs made by prt (prt/unwrap.h), written as the
 // scene's next UV set into a glTF file; or the figures of a UV set the
-// scene has (--measure).
+// scene has (--measure-uv).
 #include "commands.h"
 #include "options.h"
 #include "progress_bar.h"
@@ -65,8 +65,8 @@ int run_unwrap(UnwrapArgs& a) {
   if (a.lightmap_opt->count() > 0)
     for_option("--lightmap", [&] { parse_lightmap_size(a.lightmap, a.opt.width, a.opt.height); });
   if (a.measure_opt->count() > 0) {
-    if (a.output_opt->count() > 0) throw UsageError("--measure reports a UV set the scene has: it writes no --output");
-    if (a.texel_opt->count() > 0) throw UsageError("--measure takes the atlas as --lightmap WxH, not --texel-size");
+    if (a.output_opt->count() > 0) throw UsageError("--measure-uv reports a UV set the scene has: it writes no --output");
+    if (a.texel_opt->count() > 0) throw UsageError("--measure-uv takes the atlas as --lightmap WxH, not --texel-size");
     const prt::Scene scene = load_scene_or_mesh(a.scene);
     const AtlasStats s = atlas_stats(scene, scene.lightmap_uv_set(a.measure), a.opt.width, a.opt.height);
     if (a.json) fmt::print("{}\n", stats_json(s).dump(2));
@@ -74,7 +74,7 @@ int run_unwrap(UnwrapArgs& a) {
                     s.height, stats_text(s));
     return 0;
   }
-  if (a.output_opt->count() == 0) throw UsageError("--output is required (or --measure N to report a UV set)");
+  if (a.output_opt->count() == 0) throw UsageError("--output is required (or --measure-uv N to report a UV set)");
   if (a.texel_opt->count() > 0 && a.lightmap_opt->count() > 0)
     throw UsageError("--texel-size and --lightmap are exclusive: a density, or an atlas to fill");
   a.opt.texel_size = a.texel_size;
@@ -117,9 +117,9 @@ Run add_unwrap(CLI::App& app) {
                                 "glTF file to write (.glb or .gltf): the scene, flattened to world space, one node per "
                                 "object, with the new UV set")
                       ->check(path_value());
-  a->lightmap_opt = s->add_option("--lightmap", a->lightmap,
-                                  "WxH: the atlas to fill, at the largest texel density whose charts fit (default "
-                                  "1024x1024)");
+  a->lightmap_opt = add_shared(s, SharedOption::Lightmap, a->lightmap,
+                                "The atlas to fill, at the largest texel density whose charts fit (default "
+                                "1024x1024)");
   a->texel_opt = s->add_option("--texel-size", a->texel_size,
                                "A texel's edge in scene units instead: the atlas is the smallest that holds the charts")
                      ->check(number_range(0.0, 1e30, true, true));
@@ -131,7 +131,7 @@ Run add_unwrap(CLI::App& app) {
                 "Largest anisotropy of a triangle's map to the atlas (sigma_max / sigma_min); charts past it are split")
       ->check(number_range(1.0, 100.0))
       ->capture_default_str();
-  a->measure_opt = s->add_option("--measure", a->measure,
+  a->measure_opt = s->add_option("--measure-uv", a->measure,
                                  "Report the figures of SCENE's UV set N as a --lightmap atlas (charts, texels, "
                                  "stretch, gaps, shared texels) instead of unwrapping")
                        ->check(int_range(0, kMaxLightmapUvSet));
