@@ -1068,5 +1068,5 @@ def lightmap_scene(scene: Scene, lightmap: Lightmap) -> Scene:
 
 def write_scene(scene: Scene, path: Any) -> None:
     """
-    Writes the scene as glTF 2.0 (.glb or .gltf; one node per object, world space, every UV set as TEXCOORD_n, materials and lights), as prt unwrap does.
+    Writes the scene to `path` as glTF 2.0 (.glb or .gltf; one node per object, world space, every UV set as TEXCOORD_n, materials and lights), as prt unwrap does: a temporary file, then renamed.
     """

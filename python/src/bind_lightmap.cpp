@@ -93,8 +93,8 @@ void bind_unwrap(py::module_& m) {
         prt::write_gltf_scene(p, scene, "prt (Python)");
       },
       py::arg("scene"), py::arg("path"),
-      "Writes the scene as glTF 2.0 (.glb or .gltf; one node per object, world space, every UV set as TEXCOORD_n, "
-      "materials and lights), as prt unwrap does.");
+      "Writes the scene to `path` as glTF 2.0 (.glb or .gltf; one node per object, world space, every UV set as "
+      "TEXCOORD_n, materials and lights), as prt unwrap does: a temporary file, then renamed.");
 }
 
 // Scene, load_scene.
