@@ -199,8 +199,9 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
 // per vertex, written as the diffuse reference's CSV.
 int run_subsurface(ReferenceArgs& a, const SubsurfaceRecord& record) {
   check_subsurface_reference(a);
-  for (const CLI::Option* o : {a.uv_opt, a.lightmap_uv_opt, a.uv_padding_opt})
-    if (o->count() > 0) throw UsageError(o->get_name() + " picks or makes the lightmap's UVs: give --lightmap WxH too");
+  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
   for_path("--output", [&] { check_writable(a.output); });
 
   std::unique_ptr<tbb::global_control> limit;
@@ -263,8 +264,9 @@ int run_reference(ReferenceArgs& a) {
     a.opt.glossy = a.material == "glossy";
     return run_at(a);
   }
-  for (const CLI::Option* o : {a.uv_opt, a.lightmap_uv_opt, a.uv_padding_opt})
-    if (o->count() > 0) throw UsageError(o->get_name() + " picks or makes the lightmap's UVs: give --lightmap WxH too");
+  if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt})
+    if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
   a.opt.glossy = a.material == "glossy";
   for (const CLI::Option* o : a.glossy_opts)
     if (o->count() > 0 && !a.opt.glossy) throw UsageError(o->get_name() + " applies to --material glossy only");
