@@ -6,13 +6,17 @@
 
 namespace prt {
 
+UnwrapOptions lightmap_unwrap_options(int width, int height, int padding) {
+  UnwrapOptions o;
+  o.width = width;
+  o.height = height;
+  o.padding = padding;
+  return o;
+}
+
 Scene lightmap_scene(Scene scene, const LightmapLayout& layout) {
   if (layout.unwrap_padding < 0) return scene;
-  UnwrapOptions o;
-  o.width = layout.width;
-  o.height = layout.height;
-  o.padding = layout.unwrap_padding;
-  return unwrap_scene(scene, o);
+  return unwrap_scene(scene, lightmap_unwrap_options(layout.width, layout.height, layout.unwrap_padding));
 }
 
 }  // namespace prt

@@ -75,6 +75,12 @@ struct AtlasStats {
 // angle outside (0, 180], a size outside 1..kMaxLightmapSize).
 Scene unwrap_scene(const Scene& scene, const UnwrapOptions& options = {}, AtlasStats* stats = nullptr);
 
+// The options a lightmap's UVs are made with when prt makes them (prt
+// precompute --lightmap-uv auto): a width x height atlas at `padding`, the
+// rest the defaults. The one place the baking and the reading side take
+// them from: they must agree, bit for bit.
+UnwrapOptions lightmap_unwrap_options(int width, int height, int padding);
+
 // The scene a lightmap's layout was laid out in: `scene` itself where the
 // layout's UV set is the scene's own, else (UVs prt made: unwrap_padding
 // >= 0) unwrap_scene(scene) at the layout's atlas and padding, the UVs

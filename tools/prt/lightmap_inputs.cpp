@@ -14,12 +14,9 @@ prt::Scene load_scene_to_bake(const std::string& path, const MeshOptions& option
     return prt::load_scene(path, options);
   }
   if (uv.uv_opt->count() > 0) throw UsageError("--uv picks a UV set of SCENE; --lightmap-uv auto makes its own");
-  UnwrapOptions o;
-  o.width = width;
-  o.height = height;
-  o.padding = uv.padding;
   AtlasStats s;
-  prt::Scene scene = unwrap_scene(load_scene_or_mesh(path, options), o, &s);
+  prt::Scene scene =
+      unwrap_scene(load_scene_or_mesh(path, options), lightmap_unwrap_options(width, height, uv.padding), &s);
   if (!quiet)
     fmt::print(stderr, "lightmap UVs made by prt (--lightmap-uv auto): {} charts, texel {:.4g} scene units, {:.1f}% of "
                        "the atlas covered, largest stretch {:.3f}, {:.2f} s\n",
