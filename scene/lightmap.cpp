@@ -67,7 +67,7 @@ RgbaImage lightmap_rgba(const LightmapLayout& layout, std::span<const glm::vec3>
 }
 
 std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& l, int gutter) {
-  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height);
+  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height), PH = std::size_t(std::max(l.page_height(), 1));
   std::vector<std::uint32_t> source(W * H, kNoTexel);
   for (std::size_t i = 0; i < l.texels.size(); ++i) source[l.texels[i]] = std::uint32_t(i);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> ring;
@@ -80,7 +80,7 @@ std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& l, int gutter)
         for (int dy = -1; dy <= 1 && from == kNoTexel; ++dy)
           for (int dx = -1; dx <= 1 && from == kNoTexel; ++dx) {
             const long long xx = (long long)x + dx, yy = (long long)y + dy;
-            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H) continue;
+            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H || std::size_t(yy) / PH != y / PH) continue;
             from = source[std::size_t(yy) * W + std::size_t(xx)];
           }
         if (from != kNoTexel) ring.emplace_back(std::uint32_t(y * W + x), from);
@@ -89,6 +89,11 @@ std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& l, int gutter)
     for (const auto& [texel, from] : ring) source[texel] = from;
   }
   return source;
+}
+
+std::string lightmap_size_text(const LightmapLayout& l) {
+  if (l.pages == 1) return fmt::format("{}x{}", l.width, l.height);
+  return fmt::format("{} pages of {}x{}", l.pages, l.width, l.page_height());
 }
 
 void parse_lightmap_size(const std::string& text, int& width, int& height) {
@@ -205,9 +210,30 @@ void sample_partial_texels(const Mesh& mesh, const std::vector<glm::vec2>& uv, i
 
 }  // namespace
 
-LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
+namespace {
+
+// What is wrong with a layout's size, pages and UV set, or "".
+std::string atlas_problem(const LightmapLayout& l) {
+  if (l.pages < 1 || l.pages > kMaxLightmapPages)
+    return fmt::format("{} pages is outside 1..{}", l.pages, kMaxLightmapPages);
+  if (l.width < 1 || l.height < 1 || l.height % l.pages != 0 || l.width > kMaxLightmapSize ||
+      l.page_height() > kMaxLightmapSize)
+    return fmt::format("atlas {}x{} of {} pages is not pages of 1..{} texels a side", l.width, l.height, l.pages,
+                       kMaxLightmapSize);
+  if (l.uv_set < 0 || l.uv_set > kMaxLightmapUvSet)
+    return fmt::format("UV set {} is outside 0..{}", l.uv_set, kMaxLightmapUvSet);
+  if (l.unwrap_padding < -1 || l.unwrap_padding > kMaxUnwrapPadding)
+    return fmt::format("the padding of its UVs made by prt, {}, is outside 0..{}", l.unwrap_padding, kMaxUnwrapPadding);
+  return "";
+}
+
+}  // namespace
+
+namespace {
+
+// lightmap_texels of a W x H atlas whose size and UV set are checked.
+LightmapTexels texels_of(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
   const Mesh& mesh = scene.mesh;
-  check_atlas(scene, W, H, uv_set);
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   const std::size_t T = mesh.triangles.size(), N = std::size_t(W) * H;
 
@@ -234,7 +260,8 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
       if (q.x < -kUvSlack * W || q.x > (1 + kUvSlack) * W || q.y < -kUvSlack * H || q.y > (1 + kUvSlack) * H) {
         const std::uint32_t o = scene.triangle_object.empty() ? 0 : scene.triangle_object[t];
         throw Error(fmt::format("{}: UV set {} of {} leaves [0, 1] (triangle {} at UV ({:g}, {:g})): a lightmap set keeps "
-                                "every triangle inside the atlas (Blender: UV > Lightmap Pack; or --uv N)",
+                                "every triangle inside the atlas (Blender: UV > Lightmap Pack; or --uv N; a set of "
+                                "many UV tiles is a lightmap of many pages: --pages auto)",
                                 mesh.source, uv_set, scene.objects.empty() ? "the mesh" : scene.objects[o].name, t,
                                 q.x / W, q.y / H));
       }
@@ -314,9 +341,28 @@ LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, con
   return out;
 }
 
+}  // namespace
+
+LightmapTexels lightmap_texels(const Scene& scene, int W, int H, int uv_set, const glm::vec3* albedo_override) {
+  check_atlas(scene, W, H, uv_set);
+  return texels_of(scene, W, H, uv_set, albedo_override);
+}
+
+LightmapTexels lightmap_texels(const Scene& scene, const LightmapLayout& atlas, const glm::vec3* albedo_override) {
+  check_atlas(scene, atlas.width, atlas.page_height(), atlas.uv_set);
+  if (const std::string p = atlas_problem(atlas); !p.empty()) throw Error(fmt::format("{}: lightmap {}", scene.mesh.source, p));
+  LightmapTexels out = texels_of(scene, atlas.width, atlas.height, atlas.uv_set, albedo_override);
+  out.layout.pages = atlas.pages;
+  out.layout.unwrap_padding = atlas.unwrap_padding;
+  return out;
+}
+
 std::size_t lightmap_texels_at_least(const Scene& scene, int W, int H, int uv_set) {
   const Mesh& mesh = scene.mesh;
-  check_atlas(scene, W, H, uv_set);
+  // H may be the rows of many pages stacked (stack_lightmap_pages).
+  if (H > kMaxLightmapSize * kMaxLightmapPages)
+    throw Error(fmt::format("lightmap height {} is past {} pages of {}", H, kMaxLightmapPages, kMaxLightmapSize));
+  check_atlas(scene, W, std::min(H, kMaxLightmapSize), uv_set);
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   // The triangles' UV area in texels, each clipped to the atlas as
   // lightmap_texels clips it (a texel's coverage sums these parts).
@@ -426,12 +472,7 @@ Mesh texel_points(const LightmapTexels& texels) {
 
 std::string lightmap_problem(const LightmapTransfer& t) {
   const LightmapLayout& l = t.layout;
-  if (l.width < 1 || l.height < 1 || l.width > kMaxLightmapSize || l.height > kMaxLightmapSize)
-    return fmt::format("atlas {}x{} is outside 1..{}", l.width, l.height, kMaxLightmapSize);
-  if (l.uv_set < 0 || l.uv_set > kMaxLightmapUvSet)
-    return fmt::format("UV set {} is outside 0..{}", l.uv_set, kMaxLightmapUvSet);
-  if (l.unwrap_padding < -1 || l.unwrap_padding > kMaxUnwrapPadding)
-    return fmt::format("the padding of its UVs made by prt, {}, is outside 0..{}", l.unwrap_padding, kMaxUnwrapPadding);
+  if (std::string p = atlas_problem(l); !p.empty()) return p;
   const std::uint64_t n = std::uint64_t(l.width) * std::uint64_t(l.height);
   for (std::size_t i = 0; i < l.texels.size(); ++i) {
     if (l.texels[i] >= n) return fmt::format("covered texel {} ({}) is outside the {}x{} atlas", i, l.texels[i], l.width, l.height);
@@ -449,9 +490,9 @@ void check_matches(const LightmapTransfer& t, const LightmapTexels& texels, cons
     throw Error(fmt::format("{}: was computed for another scene (scene hash {:016x}, this one {:016x}): positions, "
                             "triangles or UVs differ",
                             path, a.scene_hash, b.scene_hash));
-  if (a.width != b.width || a.height != b.height || a.uv_set != b.uv_set || a.texels != b.texels)
-    throw Error(fmt::format("{}: its {}x{} atlas of UV set {} ({} texels) is not this scene's {}x{} of set {} ({} texels)",
-                            path, a.width, a.height, a.uv_set, a.texels.size(), b.width, b.height, b.uv_set,
+  if (a.width != b.width || a.height != b.height || a.pages != b.pages || a.uv_set != b.uv_set || a.texels != b.texels)
+    throw Error(fmt::format("{}: its {} atlas of UV set {} ({} texels) is not this scene's {} of set {} ({} texels)",
+                            path, lightmap_size_text(a), a.uv_set, a.texels.size(), lightmap_size_text(b), b.uv_set,
                             b.texels.size()));
   if (t.transfer.shading_hash != 0 && t.transfer.shading_hash != shading_hash(texel_points(texels), t.transfer.vertex_colors))
     throw Error(path + ": the scene's normals or albedo at the texels differ from those it was computed with "
@@ -464,7 +505,7 @@ std::vector<glm::vec3> relight_lightmap(const LightmapTransfer& t, const Lightma
 }
 
 std::vector<glm::vec4> lightmap_image(const LightmapLayout& l, std::span<const glm::vec3> values, int gutter) {
-  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height);
+  const std::size_t W = std::size_t(l.width), H = std::size_t(l.height), PH = std::size_t(std::max(l.page_height(), 1));
   if (values.size() != l.texels.size())
     throw Error(fmt::format("lightmap image: {} values for {} covered texels", values.size(), l.texels.size()));
   std::vector<glm::vec4> img(W * H, glm::vec4(0.0f));
@@ -487,7 +528,7 @@ std::vector<glm::vec4> lightmap_image(const LightmapLayout& l, std::span<const g
         for (int dy = -1; dy <= 1; ++dy)
           for (int dx = -1; dx <= 1; ++dx) {
             const long long xx = (long long)x + dx, yy = (long long)y + dy;
-            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H) continue;
+            if (xx < 0 || yy < 0 || xx >= (long long)W || yy >= (long long)H || std::size_t(yy) / PH != y / PH) continue;
             const std::size_t j = std::size_t(yy) * W + std::size_t(xx);
             if (filled[j]) sum += glm::vec3(img[j]), ++n;
           }

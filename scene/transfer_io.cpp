@@ -1083,14 +1083,13 @@ void Reader::read_sh_sections(ShFile& f) {
       case kLightmapLayout: {
         std::vector<std::uint64_t> words;
         read_section(s.data, words, s.count);
-        const auto narrow = [&](std::uint64_t x, const char* what) {
-          if (x > std::uint64_t(kMaxLightmapSize))
-            throw fail(fmt::format("bad section 'lightmap layout': {} {} is out of range", what, x));
+        const auto narrow = [&](std::uint64_t x, std::uint64_t limit, const char* what) {
+          if (x > limit) throw fail(fmt::format("bad section 'lightmap layout': {} {} is out of range", what, x));
           return int(x);
         };
-        f.lightmap_out->width = narrow(words[0], "width");
-        f.lightmap_out->height = narrow(words[1], "height");
-        set_uv_set_word(*f.lightmap_out, std::uint64_t(narrow(words[2], "UV set")));
+        f.lightmap_out->width = narrow(words[0], kMaxLightmapSize, "width");
+        f.lightmap_out->height = narrow(words[1], std::uint64_t(kMaxLightmapSize) * kMaxLightmapPages, "height");
+        set_uv_set_word(*f.lightmap_out, std::uint64_t(narrow(words[2], 65536u * kMaxLightmapPages, "UV set")));
         f.lightmap_out->scene_hash = words[3];
         break;
       }

@@ -252,13 +252,16 @@ constexpr std::uint64_t kMaxChoiceBytes = 1u << 20;
 constexpr std::uint64_t kMaxSubsurfaceBytes = 1u << 16;
 constexpr std::uint64_t kLightmapLayoutWords = 4;
 // The layout's third word: the UV set, plus 256 x (padding + 1) when prt made
-// it (LightmapLayout::unwrap_padding; docs/FORMAT.md "Lightmap transfer").
+// it (LightmapLayout::unwrap_padding), plus 65536 x (pages - 1)
+// (docs/FORMAT.md "Lightmap transfer"). Files of one page read as before.
 inline std::uint64_t uv_set_word(const LightmapLayout& l) {
-  return std::uint64_t(l.uv_set) + (l.unwrap_padding >= 0 ? 256u * std::uint64_t(l.unwrap_padding + 1) : 0u);
+  return std::uint64_t(l.uv_set) + (l.unwrap_padding >= 0 ? 256u * std::uint64_t(l.unwrap_padding + 1) : 0u) +
+         65536u * std::uint64_t(std::max(l.pages, 1) - 1);
 }
 inline void set_uv_set_word(LightmapLayout& l, std::uint64_t word) {
   l.uv_set = int(word % 256);
-  l.unwrap_padding = int(word / 256) - 1;
+  l.unwrap_padding = int(word / 256 % 256) - 1;
+  l.pages = int(std::min<std::uint64_t>(word / 65536, 1u << 20)) + 1;  // lightmap_problem refuses past kMaxLightmapPages
 }
 
 // Words of the analytic- and interpolated-vertex bit masks: bit v % 32 of

@@ -95,9 +95,9 @@ std::string describe_transfer(const LightmapTransfer& t) {
   const std::string uv = l.unwrap_padding >= 0
                              ? fmt::format("made by prt (--lightmap-uv auto, padding {})", l.unwrap_padding)
                              : fmt::format("UV set {} (TEXCOORD_{})", l.uv_set, l.uv_set);
-  return fmt::format("lightmap {}x{} in {}: {} covered texels ({:.1f}% of the atlas), {} analytic "
+  return fmt::format("lightmap {} in {}: {} covered texels ({:.1f}% of the atlas), {} analytic "
                      "(no row stored), {:.1f} bytes per covered texel, scene hash {:016x}\n",
-                     l.width, l.height, uv, n, 100.0 * double(n) / (double(l.width) * l.height),
+                     lightmap_size_text(l), uv, n, 100.0 * double(n) / (double(l.width) * l.height),
                      t.transfer.analytic_vertices(), n ? double(size) / double(n) : 0.0, l.scene_hash) +
          detail::tio::describe(t.transfer, transfer_format_version(t), transfer_sections(t), size, "", "texels");
 }

@@ -98,7 +98,7 @@ std::vector<TransferSection> transfer_sections(const WaveletLightmap& t) {
 std::uint64_t transfer_file_size(const WaveletLightmap& t) { return file_size_of(transfer_sections(t)); }
 
 std::string describe_transfer(const WaveletLightmap& t) {
-  return fmt::format("wavelet lightmap {}x{} in UV set {}{}, {} covered texels; {}", t.layout.width, t.layout.height,
+  return fmt::format("wavelet lightmap {} in UV set {}{}, {} covered texels; {}", lightmap_size_text(t.layout),
                      t.layout.uv_set, t.layout.unwrap_padding >= 0 ? " (made by prt, --lightmap-uv auto)" : "",
                      t.layout.texels.size(), describe_transfer(t.transfer));
 }
@@ -248,8 +248,10 @@ WaveletTransfer Reader::read_wavelet(LightmapLayout* lightmap_out) {
       case kWaveletLightmapLayout: {
         std::vector<std::uint64_t> w;
         read_section(s.data, w, s.count);
+        const std::uint64_t limit[3] = {std::uint64_t(kMaxLightmapSize), std::uint64_t(kMaxLightmapSize) * kMaxLightmapPages,
+                                        65536u * kMaxLightmapPages};
         for (int k = 0; k < 3; ++k)
-          if (w[std::size_t(k)] > std::uint64_t(kMaxLightmapSize))
+          if (w[std::size_t(k)] > limit[k])
             throw fail(fmt::format("bad section 'lightmap layout': value {} is out of range", w[std::size_t(k)]));
         lightmap_out->width = int(w[0]);
         lightmap_out->height = int(w[1]);

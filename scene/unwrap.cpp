@@ -705,7 +705,7 @@ struct Footprint {
 // Where a chart lies in the atlas: texel (x, y) of its footprint's corner,
 // turned `turn` quarters (chart_texel).
 struct Placement {
-  int x = 0, y = 0, turn = 0;
+  int x = 0, y = 0, turn = 0, page = 0;
 };
 
 // A chart's point in texels at density d before its placement: its extent
@@ -926,45 +926,67 @@ class Memo {
   std::unordered_map<std::uint64_t, std::vector<std::pair<const Footprint*, std::pair<int, int>>>> by_hash;
 };
 
-// Places every chart, largest first, each where it first fits (scan
-// order; any of four turns, the earliest); false when one does not.
-bool place_all(const Footprints& f, const std::vector<std::uint32_t>& order, int W, int H, int pad,
-               std::vector<Placement>& at) {
+// Where chart c first fits in `atlas` (scan order; any of four turns, the
+// earliest): turn -1 when it does not.
+Placement place_on(Atlas& atlas, Memo& memo, const Footprints& f, std::uint32_t c, int border) {
+  Placement best{0, atlas.H, -1};
+  // The turns with fewer rows first: they reach less deep, and bound the others' search.
+  const int first = f.h0[c] <= f.w0[c] ? 0 : 1;
+  for (const int turn : {first, first + 2, 1 - first, 3 - first}) {
+    if (f.twin[c][std::size_t(turn)]) continue;
+    const Footprint& fp = f.fp[c][std::size_t(turn)];
+    std::pair<int, int>& from = memo.at(fp);
+    int x = 0, y = 0;
+    if (find_place(atlas, fp, border, best.y, from.first, from.second, x, y)) {
+      from = {y, x};
+      if (y < best.y || (y == best.y && (x < best.x || (x == best.x && turn < best.turn)))) best = Placement{x, y, turn};
+    } else {
+      from = {std::max(from.first, std::min(best.y, atlas.H - border - fp.h) + 1), 0};
+    }
+  }
+  return best;
+}
+
+// Places every chart, largest first, each on the first page where it fits
+// (place_on), a new page opened when it fits none, up to `max_pages`; false
+// when one does not fit. `pages` (non-null) receives the pages used.
+bool place_all(const Footprints& f, const std::vector<std::uint32_t>& order, int W, int H, int pad, int max_pages,
+               std::vector<Placement>& at, int* pages = nullptr) {
   const int border = (pad + 1) / 2;
-  Atlas atlas(W, H);
-  Memo memo;
+  std::vector<Atlas> atlas;
+  std::vector<Memo> memo;  // references into a Memo are kept: no reallocation
+  atlas.reserve(std::size_t(max_pages));
+  memo.reserve(std::size_t(max_pages));
   at.assign(f.fp.size(), {});
   for (const std::uint32_t c : order) {
     Placement best{0, H, -1};
-    // The turns with fewer rows first: they reach less deep, and bound the others' search.
-    const int first = f.h0[c] <= f.w0[c] ? 0 : 1;
-    for (const int turn : {first, first + 2, 1 - first, 3 - first}) {
-      if (f.twin[c][std::size_t(turn)]) continue;
-      const Footprint& fp = f.fp[c][std::size_t(turn)];
-      std::pair<int, int>& from = memo.at(fp);
-      int x = 0, y = 0;
-      if (find_place(atlas, fp, border, best.y, from.first, from.second, x, y)) {
-        from = {y, x};
-        if (y < best.y || (y == best.y && (x < best.x || (x == best.x && turn < best.turn)))) best = Placement{x, y, turn};
-      } else {
-        from = {std::max(from.first, std::min(best.y, H - border - fp.h) + 1), 0};
-      }
+    for (int page = 0; best.turn < 0; ++page) {
+      const bool fresh = page == int(atlas.size());
+      if (fresh && page == max_pages) return false;
+      if (fresh) atlas.emplace_back(W, H), memo.emplace_back();
+      best = place_on(atlas[std::size_t(page)], memo[std::size_t(page)], f, c, border);
+      best.page = page;
+      if (best.turn < 0 && fresh) return false;  // it fits no page, even an empty one
     }
-    if (best.turn < 0) return false;
     at[c] = best;
-    occupy(atlas, f.fp[c][std::size_t(best.turn)], best.x, best.y, pad);
+    occupy(atlas[std::size_t(best.page)], f.fp[c][std::size_t(best.turn)], best.x, best.y, pad);
   }
+  if (pages) *pages = std::max(1, int(atlas.size()));
   return true;
 }
 
 // Texels a UV rounded to float may move, at most: half a float's spacing
 // below 1, in texels of the larger side; twice that kept.
-double rounding_reach(int size) { return double(size) * std::ldexp(1.0, -22); }
+// On pages past the first, u = page + u' rounds 16 times coarser (below
+// kMaxLightmapPages = 10 < 16).
+double rounding_reach(int size, int pages = 1) {
+  return double(size) * std::ldexp(1.0, pages > 1 ? -18 : -22);
+}
 
 struct Layout {
   Footprints f;
   std::vector<Placement> at;
-  int width = 0, height = 0;
+  int width = 0, height = 0, pages = 1;  // a page's size, and the pages
 };
 
 std::vector<std::uint32_t> packing_order(const std::vector<Chart>& charts) {
@@ -988,7 +1010,7 @@ bool pack_at(const std::vector<Chart>& charts, const std::vector<std::uint32_t>&
              const UnwrapOptions& o, Layout& out) {
   const int border = (o.padding + 1) / 2;
   return make_footprints(charts, d, eps, std::max(o.width, o.height) - 2 * border, out.f) &&
-         place_all(out.f, order, o.width, o.height, o.padding, out.at);
+         place_all(out.f, order, o.width, o.height, o.padding, o.pages, out.at);
 }
 
 // width x height: the largest density at which the charts fit. From the
@@ -999,18 +1021,20 @@ bool pack_at(const std::vector<Chart>& charts, const std::vector<std::uint32_t>&
 Layout fit_atlas(const std::vector<Chart>& charts, const UnwrapOptions& o, const std::string& source) {
   const int W = o.width, H = o.height, pad = o.padding, border = (pad + 1) / 2;
   Layout best;
-  best.width = W, best.height = H;
+  best.width = W, best.height = H, best.pages = o.pages;
   if (charts.empty()) return best;
-  const double eps = rounding_reach(std::max(W, H));
+  const double eps = rounding_reach(std::max(W, H), o.pages);
   const std::vector<std::uint32_t> order = packing_order(charts);
   double area = 0;
   for (const Chart& c : charts) area += c.area3;
-  const double usable = double(W - 2 * border) * double(H - 2 * border);
+  const double usable = double(W - 2 * border) * double(H - 2 * border) * o.pages;
   const double hi = std::sqrt(std::max(usable, 0.0) / area), d_min = 0.9 / largest_extent(charts);
   const auto refuse = [&] {
-    return Error(fmt::format("{}: its {} lightmap charts do not fit a {}x{} atlas with padding {} at any texel density "
-                             "(each chart at least one texel, {} texels apart): give a larger atlas or a smaller padding",
-                             source, charts.size(), W, H, pad, pad));
+    return Error(fmt::format("{}: its {} lightmap charts do not fit {} {}x{} with padding {} at any texel density "
+                             "(each chart at least one texel, {} texels apart): give a larger atlas{} or a smaller "
+                             "padding",
+                             source, charts.size(), o.pages > 1 ? fmt::format("{} pages of", o.pages) : "a", W, H, pad,
+                             pad, o.pages < kMaxLightmapPages ? ", more pages" : ""));
   };
   if (!(usable > 0)) throw refuse();
   // Trials at a < b: which fit; `best` the densest that did.
@@ -1069,7 +1093,7 @@ Layout size_atlas(const std::vector<Chart>& charts, const UnwrapOptions& o, cons
   side = std::min(kMaxLightmapSize, std::max(side, int(std::ceil(std::sqrt(double(cells))))) + 2 * border);
   int failed = 0;
   std::vector<Placement> at;
-  while (!place_all(best.f, order, side, side, pad, at)) {
+  while (!place_all(best.f, order, side, side, pad, 1, at)) {
     if (side >= kMaxLightmapSize) throw refuse(fmt::format("more than {} x {} texels", side, side));
     failed = side;
     side = std::min(kMaxLightmapSize, std::max(side + 1, int(std::ceil(side * 1.06))));
@@ -1077,7 +1101,7 @@ Layout size_atlas(const std::vector<Chart>& charts, const UnwrapOptions& o, cons
   best.at = at;
   for (int good = side; good - failed > 1;) {
     const int mid = failed + (good - failed) / 2;
-    if (place_all(best.f, order, mid, mid, pad, at))
+    if (place_all(best.f, order, mid, mid, pad, 1, at))
       good = side = mid, best.at = at;
     else
       failed = mid;
@@ -1089,6 +1113,25 @@ Layout size_atlas(const std::vector<Chart>& charts, const UnwrapOptions& o, cons
   }
   best.width = std::min(side, used_w + border);
   best.height = std::min(side, used_h + border);
+  return best;
+}
+
+// texel_size with pages: width x height pages at that density, as many as
+// the charts take (up to kMaxLightmapPages).
+Layout page_atlas(const std::vector<Chart>& charts, const UnwrapOptions& o, const std::string& source) {
+  const int W = o.width, H = o.height, pad = o.padding, border = (pad + 1) / 2;
+  const double d = 1.0 / o.texel_size;
+  Layout best;
+  best.width = W, best.height = H;
+  if (charts.empty()) return best;
+  if (!make_footprints(charts, d, rounding_reach(std::max(W, H), kMaxLightmapPages), std::max(W, H) - 2 * border, best.f))
+    throw Error(fmt::format("{}: texels of {:g} make a chart {:.3g} texels long, longer than a {}x{} page: give a "
+                            "larger texel size or larger pages",
+                            source, o.texel_size, largest_extent(charts) * d, W, H));
+  if (!place_all(best.f, packing_order(charts), W, H, pad, kMaxLightmapPages, best.at, &best.pages))
+    throw Error(fmt::format("{}: texels of {:g} need more than {} pages of {}x{} (or a chart fits no page): give a "
+                            "larger texel size or larger pages",
+                            source, o.texel_size, kMaxLightmapPages, W, H));
   return best;
 }
 
@@ -1132,7 +1175,7 @@ CornerUvs corner_uvs(const Faces& f, const std::vector<Chart>& charts, const Lay
     chart_uv[c].resize(charts[c].welds.size());
     for (std::size_t i = 0; i < charts[c].welds.size(); ++i) {
       const glm::dvec2 q = chart_texel(charts[c], i, L.f.density, L.f.margin, p.turn, L.f.w0[c], L.f.h0[c]) + glm::dvec2(p.x, p.y);
-      chart_uv[c][i] = glm::vec2(float(q.x / L.width), float(q.y / L.height));
+      chart_uv[c][i] = glm::vec2(float(q.x / L.width + p.page), float(q.y / L.height));
     }
   }
   const auto uv_of = [&](std::uint32_t c, std::uint32_t local) { return chart_uv[c][local]; };
@@ -1227,12 +1270,12 @@ Scene assemble(const Scene& scene, const CornerUvs& corners) {
 }
 
 // The checks make_scene makes, on what unwrap_scene built (a failure is prt's bug).
-void check_result(const Scene& s) {
+void check_result(const Scene& s, int pages) {
   const std::size_t V = s.mesh.positions.size();
   bool ok = V > 0 && (s.mesh.normals.empty() || s.mesh.normals.size() == V) && (s.mesh.colors.empty() || s.mesh.colors.size() == V);
   for (const auto& set : s.uv_sets) ok = ok && set.size() == V;
   for (const glm::uvec3& t : s.mesh.triangles) ok = ok && t.x < V && t.y < V && t.z < V;
-  for (const glm::vec2& q : s.uv_sets.back()) ok = ok && q.x >= 0.0f && q.x <= 1.0f && q.y >= 0.0f && q.y <= 1.0f;
+  for (const glm::vec2& q : s.uv_sets.back()) ok = ok && q.x >= 0.0f && q.x <= float(pages) && q.y >= 0.0f && q.y <= 1.0f;
   if (!ok) throw Error(s.mesh.source + ": unwrap made an inconsistent scene (a bug in prt)");
 }
 
@@ -1336,8 +1379,13 @@ void check_input(const Scene& scene, const UnwrapOptions& o) {
     throw Error(fmt::format("{}: unwrap chart angle {} must be in (0, 180] degrees", source, o.max_chart_angle));
   if (!(o.texel_size >= 0 && std::isfinite(o.texel_size)))
     throw Error(fmt::format("{}: unwrap texel size {} must be a finite number >= 0", source, o.texel_size));
-  if (o.texel_size == 0 && (o.width < 1 || o.height < 1 || o.width > kMaxLightmapSize || o.height > kMaxLightmapSize))
+  if ((o.texel_size == 0 || o.pages != 1) &&
+      (o.width < 1 || o.height < 1 || o.width > kMaxLightmapSize || o.height > kMaxLightmapSize))
     throw Error(fmt::format("{}: lightmap size {}x{} is outside 1..{}", source, o.width, o.height, kMaxLightmapSize));
+  if (!(o.pages >= (o.texel_size > 0 ? 0 : 1) && o.pages <= kMaxLightmapPages && (o.texel_size == 0 || o.pages <= 1)))
+    throw Error(fmt::format("{}: unwrap pages {} must be 1 to {} for an atlas of a given size, 0 (as many as the texel "
+                            "size needs) or 1 with a texel size",
+                            source, o.pages, kMaxLightmapPages));
   if (scene.uv_sets.size() > std::size_t(kMaxLightmapUvSet))
     throw Error(fmt::format("{}: has {} UV sets already; the lightmap UVs would be TEXCOORD_{}, past TEXCOORD_{} (the "
                             "highest a lightmap is laid out in)",
@@ -1406,12 +1454,15 @@ Scene unwrap_scene(const Scene& scene, const UnwrapOptions& o, AtlasStats* stats
   check_input(scene, o);
   const Faces faces = build_faces(scene);
   const std::vector<Chart> charts = make_charts(faces, o);
-  const Layout layout = o.texel_size > 0 ? size_atlas(charts, o, source) : fit_atlas(charts, o, source);
+  const Layout layout = o.texel_size > 0 ? (o.pages == 0 ? page_atlas(charts, o, source) : size_atlas(charts, o, source))
+                                         : fit_atlas(charts, o, source);
   // The float UVs keep max_stretch (a conformal request, 1, keeps rounding's 1e-4).
   Scene out = assemble(scene, corner_uvs(faces, charts, layout, std::max(o.max_stretch, 1 + 1e-4)));
-  check_result(out);
+  check_result(out, layout.pages);
   if (stats) {
-    *stats = atlas_stats(out, int(out.uv_sets.size()) - 1, layout.width, layout.height);
+    const int set = int(out.uv_sets.size()) - 1;
+    *stats = atlas_stats(stack_lightmap_pages(out, set, layout.pages), set, layout.width, layout.height * layout.pages);
+    stats->pages = layout.pages;
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   return out;

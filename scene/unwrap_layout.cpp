@@ -6,8 +6,9 @@
 
 namespace prt {
 
-UnwrapOptions lightmap_unwrap_options(int width, int height, int padding) {
+UnwrapOptions lightmap_unwrap_options(int width, int height, int padding, int pages) {
   UnwrapOptions o;
+  o.pages = pages;
   o.width = width;
   o.height = height;
   o.padding = padding;
@@ -15,8 +16,10 @@ UnwrapOptions lightmap_unwrap_options(int width, int height, int padding) {
 }
 
 Scene lightmap_scene(Scene scene, const LightmapLayout& layout) {
-  if (layout.unwrap_padding < 0) return scene;
-  return unwrap_scene(scene, lightmap_unwrap_options(layout.width, layout.height, layout.unwrap_padding));
+  if (layout.unwrap_padding >= 0)
+    scene = unwrap_scene(scene, lightmap_unwrap_options(layout.width, layout.page_height(), layout.unwrap_padding,
+                                                        layout.pages));
+  return stack_lightmap_pages(std::move(scene), layout.uv_set, layout.pages);
 }
 
 }  // namespace prt

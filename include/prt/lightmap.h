@@ -2,7 +2,11 @@
 //
 // A lightmap is a W x H atlas laid out in one of a scene's UV sets. Texel
 // (x, y), counted from the top-left, covers UV [x/W, (x+1)/W] x [y/H, (y+1)/H]
-// (glTF's UV origin is the image's top-left, v down). Every texel a triangle
+// (glTF's UV origin is the image's top-left, v down). A lightmap of many
+// pages lays page p (0-based) in UV tile u in [p, p + 1] (UDIM tile 1001 + p,
+// the first row of UDIM tiles: Blender's and Mari's convention); its
+// texels are indexed as one atlas of the pages stacked top to bottom
+// (stack_lightmap_pages). Every texel a triangle
 // covers, even partly (conservative rasterisation), is a sample point with
 // its own transfer vector, computed and relit exactly as a vertex's
 // (prt/transfer.h): outgoing radiance B = sum_k T_k L_k, T including the
@@ -32,9 +36,14 @@ inline constexpr int kMaxLightmapSize = 16384;  // texels per side
 // unwrap_padding): files store the UV set and it in one word, set + 256 x
 // (padding + 1), below kMaxLightmapSize.
 inline constexpr int kMaxUnwrapPadding = 62;
+// The most pages a lightmap has: UDIM's first row of tiles, 1001 to 1010.
+inline constexpr int kMaxLightmapPages = 10;
 
 struct LightmapLayout {
-  int width = 0, height = 0;          // atlas size in texels, 1..kMaxLightmapSize each
+  // The atlas in texels: a page's width, and the rows of every page stacked
+  // (pages x a page's height; each side of a page 1..kMaxLightmapSize).
+  int width = 0, height = 0;
+  int pages = 1;                      // 1..kMaxLightmapPages; page p is rows p*H/pages .. (p+1)*H/pages - 1
   int uv_set = 0;                     // the scene's UV set the atlas is laid out in (0 = TEXCOORD_0)
   // -1: the UV set is the scene's own. P >= 0: prt made it (`prt precompute
   // --lightmap-uv auto`): the last set of unwrap_scene(scene) at this atlas
@@ -42,6 +51,7 @@ struct LightmapLayout {
   int unwrap_padding = -1;
   std::vector<std::uint32_t> texels;  // covered texels, index y * width + x (y from the top), strictly increasing
   std::uint64_t scene_hash = 0;       // Scene::hash() of the scene it was computed for
+  int page_height() const { return pages > 0 ? height / pages : height; }
 };
 
 struct LightmapTransfer {
@@ -95,6 +105,27 @@ struct LightmapTexels {
 // leave [0, 1], or the size is out of range.
 LightmapTexels lightmap_texels(const Scene& scene, int width, int height, int uv_set,
                                const glm::vec3* albedo = nullptr);
+// The same for `atlas`'s size, pages, UV set and unwrap padding (its texels
+// and hash unused): the texels of a lightmap of many pages, whose scene has
+// its UVs stacked (stack_lightmap_pages, lightmap_scene in prt/unwrap.h).
+LightmapTexels lightmap_texels(const Scene& scene, const LightmapLayout& atlas, const glm::vec3* albedo = nullptr);
+
+// The pages UV set `uv_set` uses: 1 + the largest UV tile (floor u) of a
+// triangle's centroid, 1 where every UV lies in [0, 1]. Throws prt::Error
+// naming the scene, object and triangle for a triangle outside tiles 0 to
+// kMaxLightmapPages - 1 (u < 0, u > kMaxLightmapPages, or v outside [0, 1])
+// or across two tiles (a chart crossing a page's edge).
+int lightmap_pages_used(const Scene& scene, int uv_set);
+
+// `scene` with UV set `uv_set`'s tiles 0 .. pages - 1 stacked into one atlas:
+// a vertex of a triangle on tile p (by its centroid) at (u, v) moves to
+// (u - p, (v + p) / pages), so texel (x, y) of page p of a W x H page is
+// texel (x, y + p H) of the W x (pages H) atlas, and every consumer of one
+// atlas (lightmap_texels, the GPU pass, the export) takes many pages as it.
+// The scene itself for pages == 1 (its UVs in [0, 1] as one page's are).
+// Throws prt::Error as lightmap_pages_used does, and for a triangle on a
+// tile past pages - 1, or a vertex shared by triangles of two tiles.
+Scene stack_lightmap_pages(Scene scene, int uv_set, int pages);
 
 // The fewest covered texels lightmap_texels(scene, width, height, uv_set)
 // can find, from one pass over the triangles, without rasterising: every
@@ -146,7 +177,9 @@ std::vector<glm::vec3> relight_lightmap(const LightmapTransfer& t, const Lightma
 // The W x H RGBA image of per-texel values: RGB the value, A 1 at covered
 // texels; uncovered texels within `gutter` texels of covered ones take the
 // mean of their covered (or already filled) 8-neighbours, ring by ring, so
-// bilinear filtering never reads black; A stays 0 there. Rows from the top.
+// bilinear filtering never reads black; A stays 0 there. Rows from the top;
+// a layout of many pages gives the pages stacked, and never fills a gutter
+// from another page.
 std::vector<glm::vec4> lightmap_image(const LightmapLayout& layout, std::span<const glm::vec3> values, int gutter = 4);
 
 // lightmap_image as the RGBA float image prt writes as EXR (prt relight,
@@ -161,6 +194,10 @@ RgbaImage lightmap_rgba(const LightmapLayout& layout, std::span<const glm::vec3>
 // pass and the glTF export fill gutters with.
 inline constexpr std::uint32_t kNoTexel = 0xffffffffu;
 std::vector<std::uint32_t> lightmap_sources(const LightmapLayout& layout, int gutter = 4);
+
+// "W x H" for one page, "P pages of W x H" for many (as "1024x1024" and
+// "3 pages of 1024x1024"): how messages and describe name an atlas.
+std::string lightmap_size_text(const LightmapLayout& layout);
 
 // Parses "WxH" (e.g. "1024x1024"); throws prt::Error for anything else or a
 // side outside 1..kMaxLightmapSize.

@@ -24,6 +24,12 @@ struct UnwrapOptions {
   // atlas and the largest density whose charts fit it.
   double texel_size = 0;
   int width = 1024, height = 1024;
+  // Pages of width x height (a lightmap of many pages, prt/lightmap.h: page
+  // p in UV tile u in [p, p + 1]). Without texel_size: the charts fill this
+  // many pages, 1 to kMaxLightmapPages, at the largest density that fits.
+  // With it: 1 for the one smallest atlas above, or 0 for width x height
+  // pages at that density, as many as the charts take.
+  int pages = 1;
   // Empty texels between any two charts (and between a chart and the
   // atlas's edge: half of it, rounded up): texels of one chart are never
   // within `padding` texels (Chebyshev distance) of another's, so bilinear
@@ -44,7 +50,8 @@ struct UnwrapOptions {
 
 // What an unwrap made, and what atlas_stats measures of any UV set.
 struct AtlasStats {
-  int width = 0, height = 0;     // the atlas, texels
+  int width = 0, height = 0;     // the atlas, texels (pages stacked: height is pages x a page's)
+  int pages = 1;                 // pages (unwrap_scene; 1 from atlas_stats)
   double texel_size = 0;         // world-space edge of a texel (the mean over the surface)
   std::size_t charts = 0;        // charts: triangles with area in UV joined by an edge whose two ends share position and UV
   std::size_t covered = 0;       // texels any triangle covers (conservatively, as lightmap_texels rasterises)
@@ -76,10 +83,11 @@ struct AtlasStats {
 Scene unwrap_scene(const Scene& scene, const UnwrapOptions& options = {}, AtlasStats* stats = nullptr);
 
 // The options a lightmap's UVs are made with when prt makes them (prt
-// precompute --lightmap-uv auto): a width x height atlas at `padding`, the
-// rest the defaults. The one place the baking and the reading side take
+// precompute --lightmap-uv auto): `pages` width x height pages at
+// `padding`, filled at the largest density that fits, the rest the
+// defaults. The one place the baking and the reading side take
 // them from: they must agree, bit for bit.
-UnwrapOptions lightmap_unwrap_options(int width, int height, int padding);
+UnwrapOptions lightmap_unwrap_options(int width, int height, int padding, int pages = 1);
 
 // The scene a lightmap's layout was laid out in: `scene` itself where the
 // layout's UV set is the scene's own, else (UVs prt made: unwrap_padding
@@ -87,7 +95,8 @@ UnwrapOptions lightmap_unwrap_options(int width, int height, int padding);
 // prt precompute --lightmap-uv auto baked. What every consumer of a
 // lightmap (relight, render, view, export, Python) loads its scene through;
 // the scene hash the layout records then tells whether the unwrap gave the
-// same atlas.
+// same atlas. A layout of many pages has the set's pages stacked
+// (stack_lightmap_pages, prt/lightmap.h).
 Scene lightmap_scene(Scene scene, const LightmapLayout& layout);
 
 // The figures of UV set `uv_set` as a width x height atlas (any UV set: a

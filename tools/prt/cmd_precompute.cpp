@@ -59,6 +59,10 @@ struct PrecomputeArgs {
   std::string lightmap_uv = "scene";
   int uv_padding = 2;
   const CLI::Option *lightmap_uv_opt = nullptr, *uv_padding_opt = nullptr;
+  // --pages N|auto: a lightmap of many pages (UV tiles); --texel-size: the density --pages auto fills them at.
+  std::string pages = "1";
+  double texel_size = 0;
+  const CLI::Option *pages_opt = nullptr, *texel_opt = nullptr;
   // --probes NXxNYxNZ: a probe volume over SCENE (docs/PROBES.md).
   std::string probes;
   ProbeOptions popt;
@@ -548,9 +552,9 @@ void print_texels(const LightmapTexels& texels, int set, std::size_t moved) {
   const int width = texels.layout.width, height = texels.layout.height;
   const std::size_t n = texels.layout.texels.size();
   fmt::print(stderr,
-             "lightmap {}x{} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} covered in part "
+             "lightmap {} in UV set {} (TEXCOORD_{}): {} covered texels ({:.1f}%), {} charts; {} covered in part "
              "(sampled on the covered part), {} moved out of geometry\n",
-             width, height, set, set, n, 100.0 * double(n) / (double(width) * height), texels.charts, texels.partial,
+             lightmap_size_text(texels.layout), set, set, n, 100.0 * double(n) / (double(width) * height), texels.charts, texels.partial,
              moved);
   if (texels.shared)
     fmt::print(stderr,
@@ -610,21 +614,23 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   a.opt.memory_limit = memory_limit(a);
   if (is_root()) for_path("--output", [&] { check_writable(a.output); });
   const auto t0 = std::chrono::steady_clock::now();
-  const bool auto_uv = a.lightmap_uv == "auto";
   const bool quiet = a.quiet || !is_root();
-  const Scene scene = load_scene_to_bake(a.mesh, a.mesh_opt, {a.lightmap_uv, a.uv_padding, a.uv_opt, a.uv_padding_opt},
-                                         width, height, quiet);
+  const SceneToBake bake = load_scene_to_bake(
+      a.mesh, a.mesh_opt,
+      {a.lightmap_uv, a.uv, a.uv_padding, a.pages, a.texel_size, a.uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt},
+      width, height, quiet);
+  const Scene& scene = bake.scene;
   test_fail_rank();
   if (!quiet) fmt::print(stderr, "{}\n", describe(scene));
   if (!quiet && sss)
     fmt::print(stderr, "material: subsurface, {}\n{}\n", describe_subsurface(*sss), subsurface_scale(scene.mesh, *sss));
-  const int set = auto_uv ? int(scene.uv_sets.size()) - 1 : scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
+  const int set = bake.atlas.uv_set;
   if (!wavelet) {  // a limit the transfer's plan would refuse, refused before the atlas is rasterised
     release_free_memory();
-    check_lightmap_memory(scene, width, height, set, a.opt, a.adaptive_opt->count() > 0, albedo ? &*albedo : nullptr);
+    check_lightmap_memory(scene, width, bake.atlas.height, set, a.opt, a.adaptive_opt->count() > 0,
+                          albedo ? &*albedo : nullptr);
   }
-  LightmapTexels texels = lightmap_texels(scene, width, height, set, albedo ? &*albedo : nullptr);
-  if (auto_uv) texels.layout.unwrap_padding = a.uv_padding;
+  LightmapTexels texels = lightmap_texels(scene, bake.atlas, albedo ? &*albedo : nullptr);
   const std::size_t moved = move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
   if (!quiet) print_texels(texels, set, moved);
   Outputs out("precompute");
@@ -645,9 +651,9 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
     out.write([&] { write_wavelet_lightmap(a.output, wl); });
     if (const int rc = out.commit(); rc != 0) return rc;
     if (!a.quiet)
-      fmt::print(stderr, "wrote {}: wavelet lightmap {}x{}, cube {}, {} covered texels, {:.1f} coefficients and {:.1f} "
+      fmt::print(stderr, "wrote {}: wavelet lightmap {}, cube {}, {} covered texels, {:.1f} coefficients and {:.1f} "
                          "bytes per texel, {:.2f} s\n",
-                 a.output, width, height, wl.transfer.cube_res, wl.transfer.vertices,
+                 a.output, lightmap_size_text(texels.layout), wl.transfer.cube_res, wl.transfer.vertices,
                  double(wl.transfer.kept()) / double(std::max<std::size_t>(wl.transfer.vertices, 1)),
                  double(wl.transfer.bytes()) / double(std::max<std::size_t>(wl.transfer.vertices, 1)),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
@@ -678,7 +684,7 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   }
   // An extra map: per-texel values in the lightmap's layout, A = coverage.
   const auto write_map = [&](const std::string& path, const std::vector<glm::vec3>& values) {
-    out.write([&, image = lightmap_rgba(texels.layout, values)] { write_exr_rgba(path, image); });
+    write_lightmap_pages(out, path, texels.layout, lightmap_rgba(texels.layout, values));
   };
   const Transfer& ct = computed->transfer;
   if (!a.ao_map.empty()) {
@@ -698,9 +704,9 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   if (!a.quiet) {
     const Transfer& t = computed->transfer;
     fmt::print(stderr,
-               "wrote {}: lightmap {}x{}, {} {} bands, {} channel{}, {} covered texels ({} analytic, no row stored), "
+               "wrote {}: lightmap {}, {} {} bands, {} channel{}, {} covered texels ({} analytic, no row stored), "
                "{} bytes, {:.2f} s\n",
-               a.output, width, height, transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s",
+               a.output, lightmap_size_text(texels.layout), transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s",
                t.vertices, t.analytic_vertices(), transfer_file_size(*computed), secs);
     if (adapt) print_adaptive(adaptive, t, "texels");
   }
@@ -712,7 +718,8 @@ int run_probes(PrecomputeArgs& a) {
   if (a.lightmap_opt->count() > 0) throw UsageError("--probes and --lightmap are two runs (a probe volume, a lightmap)");
   if (a.basis != "sh") throw UsageError("--basis does not apply to --probes (a probe stores a visibility cube; docs/PROBES.md)");
   for (const CLI::Option* o : {a.material_opt, a.target_opt, a.vertex_colors_opt, a.weld_opt, a.uv_opt, a.tolerance_opt,
-                               a.compress_weights_opt, a.lightmap_uv_opt, a.uv_padding_opt})
+                               a.compress_weights_opt, a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt,
+                               a.texel_opt})
     if (o->count() > 0 && !(o == a.material_opt && a.material == "diffuse"))
       throw UsageError(o->get_name() + " does not apply to --probes");
   for (const CLI::Option* o : a.wavelet_only)
@@ -1070,7 +1077,7 @@ int run_precompute(PrecomputeArgs& a) {
     return run_lightmap(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
-  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt})
+  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
     if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
     throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
@@ -1203,6 +1210,14 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
                                  "render, view and export make them again from the same SCENE");
   a.uv_padding_opt = add_shared(s, SharedOption::UvPadding, a.uv_padding,
                                 "With --lightmap-uv auto: empty texels between any two charts");
+  a.pages_opt = add_shared(s, SharedOption::Pages, a.pages,
+                           "With --lightmap: pages of WxH, page p in UV tile u in [p, p+1] (UDIM 1001+p); 'auto': the "
+                           "tiles SCENE's UVs use, or with --lightmap-uv auto the pages --texel-size takes (images: "
+                           "one EXR per page, NAME.1001.exr ...)")
+                    ->capture_default_str();
+  a.texel_opt = add_shared(s, SharedOption::TexelSize, a.texel_size,
+                           "With --lightmap-uv auto --pages auto: a texel's edge in scene units, which decides the "
+                           "pages (the charts then fill them)");
   a.probes_opt = s->add_option("--probes", a.probes,
                                "NXxNYxNZ: a relightable probe volume instead of vertices: probes on a grid spanning "
                                "SCENE's bounding box, corners included (docs/PROBES.md); --bands (default 3), --mode "

@@ -47,6 +47,9 @@ struct ReferenceArgs {
   std::string lightmap_uv = "scene";  // --lightmap-uv, --uv-padding: as prt precompute's
   int uv_padding = 2;
   const CLI::Option *lightmap_uv_opt = nullptr, *uv_padding_opt = nullptr;
+  std::string pages = "1";  // --pages, --texel-size: as prt precompute's
+  double texel_size = 0;
+  const CLI::Option *pages_opt = nullptr, *texel_opt = nullptr;
   std::string at;  // --at POINTS.csv: E(p, n)/pi at query points (what a probe volume gives there)
   LightArgs light;  // --lights, --sun (docs/LIGHTS.md)
   SubsurfaceArgs sss;  // --material subsurface: --sss, --sigma-a, --sigma-s, --eta, --length-scale
@@ -148,16 +151,16 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
   if (a.threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, a.threads);
   const auto t0 = std::chrono::steady_clock::now();
-  const bool auto_uv = a.lightmap_uv == "auto";
-  const prt::Scene scene =
-      load_scene_to_bake(a.mesh, a.mesh_opt, {a.lightmap_uv, a.uv_padding, a.uv_opt, a.uv_padding_opt}, width, height,
-                         a.quiet);
+  const SceneToBake bake = load_scene_to_bake(
+      a.mesh, a.mesh_opt,
+      {a.lightmap_uv, a.uv, a.uv_padding, a.pages, a.texel_size, a.uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt},
+      width, height, a.quiet);
+  const prt::Scene& scene = bake.scene;
   if (!a.quiet) fmt::print(stderr, "{}\n", describe(scene));
   const EnvMap map = reference_map(a, sss ? nullptr : &scene.lights);  // a translucent transfer is the map's alone
   const bool override_albedo = a.albedo_opt->count() > 0;
   const glm::vec3 albedo = a.opt.albedo;
-  const int set = auto_uv ? int(scene.uv_sets.size()) - 1 : scene.lightmap_uv_set(a.uv_opt->count() > 0 ? a.uv : -1);
-  LightmapTexels texels = lightmap_texels(scene, width, height, set, override_albedo ? &albedo : nullptr);
+  LightmapTexels texels = lightmap_texels(scene, bake.atlas, override_albedo ? &albedo : nullptr);
   move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
   const std::function<glm::vec3(std::uint32_t, float, float)> hit_albedo = [&](std::uint32_t tri, float u, float v) {
     return override_albedo ? albedo : scene.albedo(tri, u, v);
@@ -175,10 +178,10 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
   const ReferenceResult& r = *computed;
   RgbaImage image = lightmap_rgba(texels.layout, r.radiance);
   // The standard errors beside (covered texels only), for prt compare's noise correction.
-  image.std_error.assign(std::size_t(width) * std::size_t(height) * 3, 0.0f);
+  image.std_error.assign(std::size_t(image.width) * std::size_t(image.height) * 3, 0.0f);
   for (std::size_t i = 0; i < r.std_error.size(); ++i)
     for (int c = 0; c < 3; ++c) image.std_error[3 * std::size_t(texels.layout.texels[i]) + std::size_t(c)] = r.std_error[i][c];
-  out.write([&] { write_exr_rgba(a.output, image); });
+  write_lightmap_pages(out, a.output, texels.layout, std::move(image));
   if (const int rc = out.commit(); rc != 0) return rc;
   if (!a.quiet) {
     double se2 = 0, b2 = 0;
@@ -186,8 +189,8 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
       se2 += double(glm::dot(r.std_error[v], r.std_error[v]));
       b2 += double(glm::dot(r.radiance[v], r.radiance[v]));
     }
-    fmt::print(stderr, "wrote {}: lightmap {}x{}, {} covered texels, {}, {} samples/texel, {:.2f} s\n", a.output, width,
-               height, r.radiance.size(), transfer_mode_name(a.opt.mode), a.opt.samples,
+    fmt::print(stderr, "wrote {}: lightmap {}, {} covered texels, {}, {} samples/texel, {:.2f} s\n", a.output,
+               lightmap_size_text(texels.layout), r.radiance.size(), transfer_mode_name(a.opt.mode), a.opt.samples,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     fmt::print(stderr, "standard error: {:.3g} relative RMS\n", b2 > 0 ? std::sqrt(se2 / b2) : 0.0);
   }
@@ -200,7 +203,7 @@ int run_lightmap(ReferenceArgs& a, const SubsurfaceRecord* sss = nullptr) {
 int run_subsurface(ReferenceArgs& a, const SubsurfaceRecord& record) {
   check_subsurface_reference(a);
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
-  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt})
+  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
     if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
   for_path("--output", [&] { check_writable(a.output); });
 
@@ -265,7 +268,7 @@ int run_reference(ReferenceArgs& a) {
     return run_at(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
-  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt})
+  for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
     if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
   a.opt.glossy = a.material == "glossy";
   for (const CLI::Option* o : a.glossy_opts)
@@ -372,6 +375,12 @@ Run add_reference(CLI::App& app) {
                                   "With --lightmap: the scene's own UVs, or prt's (as prt precompute --lightmap-uv)");
   a->uv_padding_opt = add_shared(s, SharedOption::UvPadding, a->uv_padding,
                                  "With --lightmap-uv auto: texels between charts (as prt precompute --uv-padding)");
+  a->pages_opt = add_shared(s, SharedOption::Pages, a->pages,
+                            "With --lightmap: its pages (as prt precompute --pages): one EXR per page, "
+                            "NAME.1001.exr ...")
+                     ->capture_default_str();
+  a->texel_opt = add_shared(s, SharedOption::TexelSize, a->texel_size,
+                            "With --lightmap-uv auto --pages auto: a texel's edge (as prt precompute --texel-size)");
   s->add_option("--at", a->at,
                 "POINTS.csv (header x,y,z,nx,ny,nz): the reference at these points instead of vertices: E(p, n)/pi, "
                 "what a white Lambertian surface there reflects (probe volumes, docs/PROBES.md); writes point,r,g,b,...")

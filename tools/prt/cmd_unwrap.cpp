@@ -22,18 +22,20 @@ namespace prt::cli {
 namespace {
 
 struct UnwrapArgs {
-  std::string scene, output, lightmap;
+  std::string scene, output, lightmap, pages = "1";
   double texel_size = 0;
   UnwrapOptions opt;
   int measure = -1;
   bool json = false, quiet = false;
-  CLI::Option *lightmap_opt = nullptr, *texel_opt = nullptr, *measure_opt = nullptr, *output_opt = nullptr;
+  CLI::Option *lightmap_opt = nullptr, *texel_opt = nullptr, *measure_opt = nullptr, *output_opt = nullptr,
+              *pages_opt = nullptr;
 };
 
 nlohmann::ordered_json stats_json(const AtlasStats& s) {
   nlohmann::ordered_json j;
   j["width"] = s.width;
   j["height"] = s.height;
+  j["pages"] = s.pages;
   j["texel_size"] = s.texel_size;
   j["charts"] = s.charts;
   j["covered_texels"] = s.covered;
@@ -49,7 +51,7 @@ nlohmann::ordered_json stats_json(const AtlasStats& s) {
 
 std::string stats_text(const AtlasStats& s) {
   return fmt::format(
-      "  atlas            {}x{}, texel {:.6g} scene units\n"
+      "  atlas            {}, texel {:.6g} scene units\n"
       "  charts           {}\n"
       "  covered texels   {} ({:.1f}% of the atlas)\n"
       "  largest stretch  {:.3f} (sigma_max / sigma_min of a triangle's map; 1: conformal)\n"
@@ -57,7 +59,10 @@ std::string stats_text(const AtlasStats& s) {
       "  smallest gap     {} texels between charts\n"
       "  shared texels    {} (covered by two charts)\n"
       "  degenerate       {} triangles with no UV area\n",
-      s.width, s.height, s.texel_size, s.charts, s.covered, 100.0 * s.use, s.max_stretch, s.max_area_ratio, s.min_gap,
+      s.pages > 1 ? fmt::format("{} pages of {}x{} (stacked: {}x{})", s.pages, s.width, s.height / s.pages, s.width,
+                                s.height)
+                  : fmt::format("{}x{}", s.width, s.height),
+      s.texel_size, s.charts, s.covered, 100.0 * s.use, s.max_stretch, s.max_area_ratio, s.min_gap,
       s.shared_texels, s.degenerate);
 }
 
@@ -67,16 +72,26 @@ int run_unwrap(UnwrapArgs& a) {
   if (a.measure_opt->count() > 0) {
     if (a.output_opt->count() > 0) throw UsageError("--measure-uv reports a UV set the scene has: it writes no --output");
     if (a.texel_opt->count() > 0) throw UsageError("--measure-uv takes the atlas as --lightmap WxH, not --texel-size");
+    if (a.pages_opt->count() > 0) throw UsageError("--measure-uv counts the pages the UV set uses: it takes no --pages");
     const prt::Scene scene = load_scene_or_mesh(a.scene);
-    const AtlasStats s = atlas_stats(scene, scene.lightmap_uv_set(a.measure), a.opt.width, a.opt.height);
+    const int set = scene.lightmap_uv_set(a.measure), pages = lightmap_pages_used(scene, set);
+    AtlasStats s = atlas_stats(stack_lightmap_pages(scene, set, pages), set, a.opt.width, a.opt.height * pages);
+    s.pages = pages;
     if (a.json) fmt::print("{}\n", stats_json(s).dump(2));
-    else fmt::print("{}: UV set {} (TEXCOORD_{}) as a {}x{} atlas\n{}", a.scene, a.measure, a.measure, s.width,
-                    s.height, stats_text(s));
+    else fmt::print("{}: UV set {} (TEXCOORD_{}) as {} {}x{}\n{}", a.scene, a.measure, a.measure,
+                    pages > 1 ? fmt::format("{} pages of", pages) : "a", a.opt.width, a.opt.height, stats_text(s));
     return 0;
   }
   if (a.output_opt->count() == 0) throw UsageError("--output is required (or --measure-uv N to report a UV set)");
-  if (a.texel_opt->count() > 0 && a.lightmap_opt->count() > 0)
-    throw UsageError("--texel-size and --lightmap are exclusive: a density, or an atlas to fill");
+  a.opt.pages = a.pages == "auto" ? 0 : std::stoi(a.pages);
+  if (a.opt.pages == 0 && a.texel_opt->count() == 0)
+    throw UsageError("--pages auto takes --texel-size S: the density that decides how many pages the charts take");
+  if (a.opt.pages > 1 && a.texel_opt->count() > 0)
+    throw UsageError("--pages N fills N pages at the largest density that fits: it takes no --texel-size (--pages auto "
+                     "does)");
+  if (a.opt.pages == 1 && a.texel_opt->count() > 0 && a.lightmap_opt->count() > 0)
+    throw UsageError("--texel-size and --lightmap are exclusive: a density, or an atlas to fill (--pages auto takes "
+                     "both: pages of WxH at that density)");
   a.opt.texel_size = a.texel_size;
   check_not_input("--output", a.output, {{"SCENE", a.scene}});
   for_path("--output", [&] { check_writable(a.output); });
@@ -120,9 +135,13 @@ Run add_unwrap(CLI::App& app) {
   a->lightmap_opt = add_shared(s, SharedOption::Lightmap, a->lightmap,
                                 "The atlas to fill, at the largest texel density whose charts fit (default "
                                 "1024x1024)");
-  a->texel_opt = s->add_option("--texel-size", a->texel_size,
-                               "A texel's edge in scene units instead: the atlas is the smallest that holds the charts")
-                     ->check(number_range(0.0, 1e30, true, true));
+  a->texel_opt = add_shared(s, SharedOption::TexelSize, a->texel_size,
+                            "A texel's edge in scene units instead: the atlas is the smallest that holds the charts "
+                            "(with --pages auto: as many --lightmap pages as the charts take)");
+  a->pages_opt = add_shared(s, SharedOption::Pages, a->pages,
+                            "Pages of --lightmap WxH: N pages filled at the largest density that fits, or 'auto' "
+                            "with --texel-size; page p's charts in UV tile u in [p, p+1] (UDIM 1001+p)")
+                     ->capture_default_str();
   s->add_option("--padding", a->opt.padding,
                 "Empty texels between any two charts (bilinear filtering and gutters never mix them)")
       ->check(int_range(0, kMaxUnwrapPadding))

@@ -1,27 +1,94 @@
 // The scene of a lightmap (lightmap_inputs.h).
 #include "lightmap_inputs.h"
 
+#include "progress_bar.h"
+
+#include <prt/envmap.h>
 #include <prt/unwrap.h>
 
 #include <fmt/core.h>
 
+#include <cstddef>
+#include <filesystem>
+
 namespace prt::cli {
 
-prt::Scene load_scene_to_bake(const std::string& path, const MeshOptions& options, const LightmapUvArgs& uv, int width,
-                              int height, bool quiet) {
-  if (uv.lightmap_uv != "auto") {
+namespace {
+
+// --pages: "auto" (0) or 1 to kMaxLightmapPages (the option's check took it).
+int pages_value(const std::string& text) { return text == "auto" ? 0 : std::stoi(text); }
+
+}  // namespace
+
+SceneToBake load_scene_to_bake(const std::string& path, const MeshOptions& options, const LightmapUvArgs& uv, int width,
+                               int height, bool quiet) {
+  const bool auto_uv = uv.lightmap_uv == "auto";
+  int pages = pages_value(uv.pages);
+  if (uv.texel_opt->count() > 0 && !(auto_uv && pages == 0))
+    throw UsageError("--texel-size is the density of --lightmap-uv auto --pages auto: how many pages the charts take");
+  SceneToBake out;
+  out.atlas.width = width;
+  if (!auto_uv) {
     if (uv.padding_opt->count() > 0) throw UsageError("--uv-padding applies to --lightmap-uv auto only");
-    return prt::load_scene(path, options);
+    out.scene = prt::load_scene(path, options);
+    out.atlas.uv_set = out.scene.lightmap_uv_set(uv.uv_opt->count() > 0 ? uv.uv : -1);
+    if (pages == 0) pages = lightmap_pages_used(out.scene, out.atlas.uv_set);
+  } else {
+    if (uv.uv_opt->count() > 0) throw UsageError("--uv picks a UV set of SCENE; --lightmap-uv auto makes its own");
+    prt::Scene scene = load_scene_or_mesh(path, options);
+    if (pages == 0) {  // the pages the density takes; then the charts fill them (what consumers make again)
+      if (uv.texel_opt->count() == 0)
+        throw UsageError("--pages auto with --lightmap-uv auto takes --texel-size S: the density that decides how many "
+                         "pages the charts take");
+      UnwrapOptions o = lightmap_unwrap_options(width, height, uv.padding, 0);
+      o.texel_size = uv.texel_size;
+      AtlasStats first;
+      unwrap_scene(scene, o, &first);
+      pages = first.pages;
+    }
+    AtlasStats s;
+    out.scene = unwrap_scene(scene, lightmap_unwrap_options(width, height, uv.padding, pages), &s);
+    out.atlas.uv_set = int(out.scene.uv_sets.size()) - 1;
+    out.atlas.unwrap_padding = uv.padding;
+    if (!quiet)
+      fmt::print(stderr, "lightmap UVs made by prt (--lightmap-uv auto): {} charts{}, texel {:.4g} scene units, {:.1f}% "
+                         "of the atlas covered, largest stretch {:.3f}, {:.2f} s\n",
+                 s.charts, pages > 1 ? fmt::format(" on {} pages", pages) : "", s.texel_size, 100.0 * s.use,
+                 s.max_stretch, s.seconds);
   }
-  if (uv.uv_opt->count() > 0) throw UsageError("--uv picks a UV set of SCENE; --lightmap-uv auto makes its own");
-  AtlasStats s;
-  prt::Scene scene =
-      unwrap_scene(load_scene_or_mesh(path, options), lightmap_unwrap_options(width, height, uv.padding), &s);
-  if (!quiet)
-    fmt::print(stderr, "lightmap UVs made by prt (--lightmap-uv auto): {} charts, texel {:.4g} scene units, {:.1f}% of "
-                       "the atlas covered, largest stretch {:.3f}, {:.2f} s\n",
-               s.charts, s.texel_size, 100.0 * s.use, s.max_stretch, s.seconds);
-  return scene;
+  out.atlas.pages = pages;
+  out.atlas.height = height * pages;
+  out.scene = stack_lightmap_pages(std::move(out.scene), out.atlas.uv_set, pages);
+  return out;
+}
+
+std::string page_path(const std::string& path, int page, int pages) {
+  if (pages == 1) return path;
+  const std::string tile = std::to_string(1001 + page);
+  if (const std::size_t at = path.find("<UDIM>"); at != std::string::npos)
+    return path.substr(0, at) + tile + path.substr(at + 6);
+  const std::filesystem::path p(path);
+  return (p.parent_path() / (p.stem().string() + "." + tile + p.extension().string())).string();
+}
+
+void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout, RgbaImage image) {
+  const int pages = layout.pages, rows = layout.page_height();
+  if (pages == 1) {
+    out.write([&] { write_exr_rgba(path, image); });
+    return;
+  }
+  const std::size_t W = std::size_t(image.width), per_page = W * std::size_t(rows);
+  for (int p = 0; p < pages; ++p) {
+    RgbaImage page;
+    page.width = image.width;
+    page.height = rows;
+    const std::size_t first = std::size_t(p) * per_page;
+    page.rgba.assign(image.rgba.begin() + std::ptrdiff_t(4 * first), image.rgba.begin() + std::ptrdiff_t(4 * (first + per_page)));
+    if (!image.std_error.empty())
+      page.std_error.assign(image.std_error.begin() + std::ptrdiff_t(3 * first),
+                            image.std_error.begin() + std::ptrdiff_t(3 * (first + per_page)));
+    out.write([&] { write_exr_rgba(page_path(path, p, pages), page); });
+  }
 }
 
 prt::Scene load_lightmap_scene(const std::string& path, const LightmapLayout& layout) {

@@ -4,6 +4,9 @@
 #pragma once
 
 #include "options.h"
+#include "progress_bar.h"
+
+#include <prt/envmap.h>
 
 #include <prt/lightmap.h>
 #include <prt/mesh.h>
@@ -16,18 +19,36 @@
 namespace prt::cli {
 
 // How a lightmap run (prt precompute, prt reference --lightmap) takes its
-// UVs: --lightmap-uv, --uv-padding, and the options that go with them.
+// UVs: --uv, --lightmap-uv, --uv-padding, --pages, --texel-size.
 struct LightmapUvArgs {
   const std::string& lightmap_uv;  // "scene" or "auto"
-  int padding;
-  const CLI::Option *uv_opt, *padding_opt;  // --uv, --uv-padding
+  int uv, padding;
+  const std::string& pages;  // "1" to "10", or "auto"
+  double texel_size;
+  const CLI::Option *uv_opt, *padding_opt, *pages_opt, *texel_opt;  // --uv, --uv-padding, --pages, --texel-size
 };
-// SCENE as a lightmap run bakes it: as prt::load_scene reads it, or with
-// --lightmap-uv auto any mesh file unwrapped into the width x height atlas
-// (its UVs the last set; the unwrap's figures printed unless `quiet`).
-// Throws UsageError for --uv with auto, --uv-padding without it.
-prt::Scene load_scene_to_bake(const std::string& path, const MeshOptions& options, const LightmapUvArgs& uv, int width,
-                              int height, bool quiet);
+// SCENE as a lightmap run bakes it, and its atlas (width, pages, height =
+// pages x a page's, UV set, unwrap padding; no texels yet): as
+// prt::load_scene reads it, or with --lightmap-uv auto any mesh file
+// unwrapped into width x height pages (its UVs the last set; the unwrap's
+// figures printed unless `quiet`); a UV set of many pages stacked
+// (prt::stack_lightmap_pages). --pages auto counts the scene's UV tiles, or
+// with --lightmap-uv auto the pages --texel-size takes. Throws UsageError
+// for options that do not go together.
+struct SceneToBake {
+  prt::Scene scene;
+  LightmapLayout atlas;
+};
+SceneToBake load_scene_to_bake(const std::string& path, const MeshOptions& options, const LightmapUvArgs& uv, int width,
+                               int height, bool quiet);
+
+// The file a page of a lightmap image is written to: `path` itself for a
+// lightmap of one page; else with UDIM's tile number, 1001 + page, for
+// "<UDIM>" in it or before its extension (lm.exr: lm.1001.exr, lm.1002.exr).
+std::string page_path(const std::string& path, int page, int pages);
+// Writes `image` (the layout's pages stacked, lightmap_rgba's) as one RGBA
+// float EXR per page (page_path), each rename-on-success through `out`.
+void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout, RgbaImage image);
 
 // A lightmap's scene: MESH as prt::load_scene reads it, or, where prt made
 // the lightmap's UVs (prt precompute --lightmap-uv auto), any mesh file

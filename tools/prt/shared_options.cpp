@@ -111,6 +111,16 @@ const std::map<SharedOption, Spec>& specs() {
     t.emplace(S::LightmapUv, Spec{"--lightmap-uv", one_of({"scene", "auto"}), "scene or auto"});
     t.emplace(S::UvPadding, Spec{"--uv-padding", int_range(0, kMaxUnwrapPadding),
                                  fmt::format("0 to {} texels", kMaxUnwrapPadding)});
+    t.emplace(S::Pages, Spec{"--pages", parsed_by([](const std::string& text) {
+                               if (text == "auto") return 0;
+                               if (text.empty() || text.size() > 2 || text.find_first_not_of("0123456789") != std::string::npos ||
+                                   std::stoi(text) < 1 || std::stoi(text) > kMaxLightmapPages)
+                                 throw Error(fmt::format("must be 1 to {} or auto, got '{}'", kMaxLightmapPages, text));
+                               return std::stoi(text);
+                             }),
+                             fmt::format("1 to {} (UDIM tiles 1001 to {}), or auto", kMaxLightmapPages,
+                                         1000 + kMaxLightmapPages)});
+    t.emplace(S::TexelSize, Spec{"--texel-size", positive_number(), "a positive length (scene units)"});
     t.emplace(S::ObjectAt, Spec{"--object-at", triple_value("x,y,z"), "x,y,z"});
     t.emplace(S::ObjectSize, Spec{"--object-size", positive_number(), "a positive length (scene units)"});
     t.emplace(S::Deform, Spec{"--deform", deform_value(), "bend:ANGLE or twist:ANGLE, degrees, at most 720"});

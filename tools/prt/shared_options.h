@@ -67,6 +67,8 @@ enum class SharedOption {
   UvSet,         // --uv N: the lightmap's UV set, 0 to 7 (TEXCOORD_N)
   LightmapUv,    // --lightmap-uv scene|auto: the scene's own lightmap UVs, or prt's (prt/unwrap.h)
   UvPadding,     // --uv-padding P: with --lightmap-uv auto, texels between charts, 0 to 62
+  Pages,         // --pages N|auto: a lightmap's pages, 1 to 10 (UDIM tiles 1001 to 1010), or as many as it takes
+  TexelSize,     // --texel-size S: a lightmap texel's edge, a positive length (scene units)
   ObjectAt,      // --object-at x,y,z: three finite numbers (render and view's probe-lit object)
   ObjectSize,    // --object-size d: a positive number (its bounding box's diagonal)
   Deform,        // --deform bend:ANGLE|twist:ANGLE: a procedural pose (prt/deform.h), |ANGLE| <= 720 degrees
