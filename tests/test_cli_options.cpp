@@ -172,6 +172,8 @@ const std::vector<Shared>& shared_table() {
       {"--uv", {{"8", "must be a whole number from 0 to 7, got '8'"}}, {"0", "1"}},
       {"--lightmap-uv", {{"own", "expected scene or auto, got 'own'"}}, {"scene", "auto"}},
       {"--uv-padding", {{"63", "must be a whole number from 0 to 62, got '63'"}}, {"0", "2"}},
+      {"--pages", {{"11", "must be 1 to 10 or auto, got '11'"}, {"0", "must be 1 to 10 or auto, got '0'"}}, {"1", "auto"}},
+      {"--texel-size", {{"0", "must be a positive number, got 0"}}, {"0.05"}},
       {"--object-at", {{"1,2", "expected three numbers x,y,z, got '1,2'"}}, {"0,1,0"}},
       {"--object-size", {{"0", "must be a positive number, got 0"}}, {"0.5"}},
       {"--deform",
