@@ -226,6 +226,8 @@ nlohmann::ordered_json info(const std::string& path) {
   const auto lightmap_json = [](const LightmapLayout& l) {
     return nlohmann::ordered_json{{"width", l.width},
                                   {"height", l.height},
+                                  {"pages", l.pages},
+                                  {"page_height", l.page_height()},
                                   {"uv_set", l.uv_set},
                                   {"uv", l.unwrap_padding >= 0 ? "made by prt (--lightmap-uv auto)" : "the scene's own"},
                                   {"uv_padding", l.unwrap_padding >= 0 ? nlohmann::ordered_json(l.unwrap_padding)
