@@ -408,7 +408,7 @@ std::vector<glm::vec3> texel_surface_points(const Mesh& mesh, const LightmapTexe
 TexelFootprints texel_footprints(const Scene& scene, const LightmapTexels& texels) {
   const Mesh& mesh = scene.mesh;
   const LightmapLayout& l = texels.layout;
-  check_atlas(scene, l.width, l.height, l.uv_set);
+  check_atlas(scene, l.width, l.page_height(), l.uv_set);  // the pages' rows stacked: l.height
   const auto& uv = scene.uv_sets[std::size_t(l.uv_set)];
   if (l.scene_hash != scene.hash())
     throw Error(fmt::format("{}: the lightmap texels are another scene's", mesh.source));
