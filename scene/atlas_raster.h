@@ -83,6 +83,14 @@ inline void check_atlas(const Scene& scene, int W, int H, int uv_set) {
     throw Error(fmt::format("{}: has no UV set {}", scene.mesh.source, uv_set));
 }
 
+// check_atlas for an atlas of many pages stacked (prt::stack_lightmap_pages):
+// H may be up to kMaxLightmapPages pages of kMaxLightmapSize rows.
+inline void check_stacked_atlas(const Scene& scene, int W, int H, int uv_set) {
+  if (H > kMaxLightmapSize * kMaxLightmapPages)
+    throw Error(fmt::format("lightmap height {} is past {} pages of {} rows", H, kMaxLightmapPages, kMaxLightmapSize));
+  check_atlas(scene, W, std::min(H, kMaxLightmapSize), uv_set);
+}
+
 // A float's bits with -0 taken as +0: vertices weld where these are equal.
 inline std::uint32_t canonical_bits(float f) {
   if (f == 0.0f) f = 0.0f;

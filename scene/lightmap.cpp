@@ -359,10 +359,7 @@ LightmapTexels lightmap_texels(const Scene& scene, const LightmapLayout& atlas, 
 
 std::size_t lightmap_texels_at_least(const Scene& scene, int W, int H, int uv_set) {
   const Mesh& mesh = scene.mesh;
-  // H may be the rows of many pages stacked (stack_lightmap_pages).
-  if (H > kMaxLightmapSize * kMaxLightmapPages)
-    throw Error(fmt::format("lightmap height {} is past {} pages of {}", H, kMaxLightmapPages, kMaxLightmapSize));
-  check_atlas(scene, W, std::min(H, kMaxLightmapSize), uv_set);
+  atlas_raster::check_stacked_atlas(scene, W, H, uv_set);  // H may be the rows of many pages stacked
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   // The triangles' UV area in texels, each clipped to the atlas as
   // lightmap_texels clips it (a texel's coverage sums these parts).

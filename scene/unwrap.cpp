@@ -1406,7 +1406,7 @@ void check_input(const Scene& scene, const UnwrapOptions& o) {
 
 AtlasStats atlas_stats(const Scene& scene, int uv_set, int W, int H) {
   using namespace unwrap_detail;
-  atlas_raster::check_atlas(scene, W, H, uv_set);
+  atlas_raster::check_stacked_atlas(scene, W, H, uv_set);  // H may be the rows of many pages stacked
   const Mesh& mesh = scene.mesh;
   const auto& uv = scene.uv_sets[std::size_t(uv_set)];
   if (uv.size() != mesh.positions.size())

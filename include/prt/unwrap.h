@@ -102,8 +102,9 @@ Scene lightmap_scene(Scene scene, const LightmapLayout& layout);
 // The figures of UV set `uv_set` as a width x height atlas (any UV set: a
 // scene's own, prt's, three.js's unwrapUVs written out): charts, texels
 // covered, stretch, the smallest gap between charts, texels two charts
-// share. Throws prt::Error as lightmap_texels does for a size out of range
-// or a missing UV set.
+// share. H may be many pages' rows stacked (stack_lightmap_pages). Throws
+// prt::Error as lightmap_texels does for a size out of range or a missing
+// UV set.
 AtlasStats atlas_stats(const Scene& scene, int uv_set, int width, int height);
 
 }  // namespace prt

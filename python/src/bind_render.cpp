@@ -248,7 +248,12 @@ void RenderCall::check_target() {
   source = is_zh ? z->source : is_wavelet ? wt->source : is_lightmap ? lightmap_source : p->source;
   if (is_lightmap) {
     if (lm->layout.scene_hash != world->hash())
-      throw Error("transfer: the lightmap was computed for another scene than `mesh` (scene hashes differ)");
+      throw Error("transfer: the lightmap was computed for another scene than `mesh` (scene hashes differ)" +
+                  (lm->layout.pages > 1 || lm->layout.unwrap_padding >= 0
+                       ? "; its atlas (" + prt::lightmap_size_text(lm->layout) + ") is laid out " +
+                             (lm->layout.unwrap_padding >= 0 ? "in UVs prt made" : "in UV tiles stacked into one atlas") +
+                             ": draw it on lightmap_scene(scene, lightmap), the scene it was laid out in"
+                       : std::string()));
   } else if (is_zh)
     prt::check_matches(z->z, mesh, source);
   else if (is_wavelet)
@@ -443,8 +448,7 @@ prt::Image RenderCall::draw(const prt::EnvMap* e, std::vector<float>& coverage) 
   // renderer_light_points in tools/prt/light_options.cpp).
   std::optional<prt::LightmapTexels> light_points;
   if (is_lightmap && !frame_lights.empty()) {
-    light_points = prt::lightmap_texels(*world, lm->layout.width, lm->layout.height, lm->layout.uv_set,
-                                        lm->transfer.vertex_colors ? nullptr : &lm->transfer.albedo);
+    light_points = prt::lightmap_texels(*world, lm->layout, lm->transfer.vertex_colors ? nullptr : &lm->transfer.albedo);
     prt::move_texels_out_of_geometry(world->mesh, *light_points);
   }
   std::vector<glm::dvec3> light, rotated;
@@ -569,7 +573,8 @@ void bind_render(py::module_& m) {
       "else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform "
       "('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a "
       "wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its "
-      "Scene (mesh=the Scene; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object "
+      "Scene (mesh=the Scene, lightmap_scene(scene, lightmap) for UVs prt made or many pages; shading 'transfer' or "
+      "'direct'). probes (a ProbeVolume of the scene drawn) and object "
       "(a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal "
       "(0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: "
       "(height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render "

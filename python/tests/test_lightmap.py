@@ -225,3 +225,154 @@ def test_unwrap_scene_is_prt_unwrap_and_lightmap_scene_makes_it_again(tmp_path):
         prt.unwrap_scene(s, padding=63)
     with pytest.raises(prt.Error, match="max_stretch"):
         prt.unwrap_scene(s, max_stretch=0.5)
+
+
+# ---- lightmaps of many pages (docs/LIGHTMAPS.md): page p in UV tile u in [p, p + 1], UDIM 1001 + p ----
+
+OBJ = SOURCE / "models" / "scene.obj"  # no UVs of its own: unwrap_scene makes them
+
+
+@pytest.fixture(scope="module")
+def paged(tmp_path_factory):
+    """scene.obj unwrapped into 3 pages of 64x64 by prt unwrap --pages 3 and by
+    unwrap_scene: (folder, the glb as read back, unwrap_scene's Scene, its stats)."""
+    d = tmp_path_factory.mktemp("pages")
+    run_prt("unwrap", OBJ, "--lightmap", "64x64", "--pages", "3", "-q", "-o", d / "u.glb")
+    u, stats = prt.unwrap_scene(prt.load_scene(OBJ), width=64, height=64, pages=3)
+    return d, prt.load_scene(d / "u.glb"), u, stats
+
+
+def uv_tiles(scene, uv_set):
+    """Each triangle's UV tile (floor of its centroid's u), checked: its three
+    corners on that tile, v in [0, 1]."""
+    q = scene.uv_sets[uv_set][scene.triangles].astype(np.float64)  # (T, 3, 2)
+    tile = np.floor(q[..., 0].mean(axis=1))
+    slack = 1e-4
+    assert (q[..., 0] >= tile[:, None] - slack).all() and (q[..., 0] <= tile[:, None] + 1 + slack).all()
+    assert (q[..., 1] >= -slack).all() and (q[..., 1] <= 1 + slack).all()
+    return tile
+
+
+def test_unwrap_scene_into_pages_is_prt_unwrap(paged):
+    d, glb, u, stats = paged
+    assert u.hash == glb.hash
+    assert (stats["pages"], stats["width"], stats["height"]) == (3, 64, 192)  # height: the pages stacked
+    set_ = len(u.uv_sets) - 1
+    assert sorted(set(uv_tiles(u, set_))) == [0, 1, 2]
+    # atlas_stats (--measure-uv) counts the tiles and measures them stacked, as the unwrap did.
+    measured = prt.atlas_stats(u, set_, 64, 64)
+    assert (measured["pages"], measured["height"]) == (3, 192)
+    assert measured["covered_texels"] == stats["covered_texels"] and measured["shared_texels"] == 0
+    # One page (the default): one atlas, UVs in [0, 1], as before.
+    one, one_stats = prt.unwrap_scene(prt.load_scene(OBJ), width=64, height=64)
+    assert (one_stats["pages"], one_stats["height"]) == (1, 64)
+    assert set(uv_tiles(one, len(one.uv_sets) - 1)) == {0}
+    assert prt.unwrap_scene(prt.load_scene(OBJ), width=64, height=64, pages=1)[0].hash == one.hash
+    assert prt.atlas_stats(one, len(one.uv_sets) - 1, 64, 64)["pages"] == 1
+
+
+def test_unwrap_scene_pages_auto_takes_a_texel_size_as_prt_unwrap(paged):
+    d = paged[0]
+    texel = 0.09  # scene.obj's charts take 3 pages of 64x64 at this density
+    run_prt("unwrap", OBJ, "--lightmap", "64x64", "--pages", "auto", "--texel-size", texel, "-q", "-o", d / "a.glb")
+    u, stats = prt.unwrap_scene(prt.load_scene(OBJ), width=64, height=64, texel_size=texel, pages="auto")
+    assert u.hash == prt.load_scene(d / "a.glb").hash
+    assert stats["pages"] == 3 and stats["height"] == 3 * 64
+    assert stats["texel_size"] == pytest.approx(texel, rel=0.05)
+
+
+def test_precompute_lightmap_of_pages_is_the_cli_file_and_relights_as_prt_relight(paged, tmp_path):
+    d, glb, _, stats = paged
+    cli = tmp_path / "cli.prt"
+    run_prt("precompute", d / "u.glb", "--lightmap", "64x64", "--pages", "3", "--samples", "16", "--bands", "3",
+            "--seed", "7", "-q", "-o", cli)
+    for pages in (3, "auto"):  # auto: the tiles the UV set uses
+        lm = prt.precompute_lightmap(glb, 64, 64, pages=pages, bands=3, samples=16, seed=7)
+        lm.write(tmp_path / "py.prt")
+        assert (tmp_path / "py.prt").read_bytes() == cli.read_bytes(), pages
+    back = prt.read_lightmap(cli)
+    for x in (lm, back):
+        assert (x.width, x.height, x.pages, x.page_height) == (64, 192, 3, 64)
+        assert repr(x).startswith("<prt.Lightmap 3 pages of 64x64, ")
+    assert len(lm.texels) == stats["covered_texels"]
+    assert sorted(set(lm.texels // (64 * 64))) == [0, 1, 2]  # every page covered
+    # Relit on the scene it was laid out in (its tiles stacked): the pages prt relight writes, bit for bit.
+    stacked = prt.lightmap_scene(glb, lm)
+    assert stacked.hash == lm.scene_hash != glb.hash
+    assert set(uv_tiles(stacked, 0)) == {0}
+    light = prt.project(prt.load_envmap(ENV), 3)
+    img = lm.relight(stacked, light)
+    assert img.shape == (192, 64, 4)
+    run_prt("relight", d / "u.glb", cli, ENV, "-q", "-o", tmp_path / "out.exr")
+    pages = lm.split_pages(img)
+    assert len(pages) == 3
+    for p, page in enumerate(pages):
+        assert page.shape == (64, 64, 4)
+        np.testing.assert_array_equal(page, prt.read_exr(tmp_path / f"out.{1001 + p}.exr"))
+    # The scene as loaded (its UDIM UVs) is not the lightmap's: named, with the call that mends it.
+    for call in (lambda: lm.relight(glb, light), lambda: lm.rows(glb)):
+        refused(call, "scene: the lightmap was computed for another scene", "3 pages of 64x64",
+                "lightmap_scene(scene, lightmap)")
+    # Rows round trip through lightmap_from_rows over the same pages.
+    rows = lm.rows(stacked)
+    again = prt.lightmap_from_rows(glb, 64, 64, rows, pages=3)
+    assert (again.pages, again.height) == (3, 192) and again.scene_hash == lm.scene_hash
+    np.testing.assert_array_equal(again.rows(stacked), rows)
+
+
+def test_render_draws_a_lightmap_of_pages_as_prt_render(paged, tmp_path):
+    d, glb, _, _ = paged
+    lm = prt.precompute_lightmap(glb, 16, 16, pages="auto", bands=2, samples=4)
+    # The scene as loaded: refused before any OpenGL context is needed.
+    refused(lambda: prt.render(lm, glb, ENV), "scene hashes differ", "3 pages of 16x16",
+            "lightmap_scene(scene, lightmap)")
+    lm.write(tmp_path / "lm.prt")
+    try:
+        got = prt.render(lm, prt.lightmap_scene(glb, lm), ENV, width=96, height=48, linear=True, exposure=0)
+    except prt.Error as e:
+        if "no OpenGL 4.5 context" in str(e):
+            pytest.skip(str(e))
+        raise
+    run_prt("render", d / "u.glb", tmp_path / "lm.prt", ENV, "--width", 96, "--height", 48, "--exposure", 0, "-q",
+            "-o", tmp_path / "frame.exr")
+    np.testing.assert_array_equal(got, prt.read_exr(tmp_path / "frame.exr")[..., :3])
+
+
+def test_one_page_is_as_before(tmp_path):
+    # A UV set in [0, 1]: pages 'auto' is one page, the file of no pages= at all.
+    s = prt.load_scene(SCENE)
+    plain = prt.precompute_lightmap(s, 24, 24, bands=3, samples=16, seed=7)
+    plain.write(tmp_path / "plain.prt")
+    for pages in (1, "auto"):
+        lm = prt.precompute_lightmap(s, 24, 24, bands=3, samples=16, seed=7, pages=pages)
+        lm.write(tmp_path / "p.prt")
+        assert (tmp_path / "p.prt").read_bytes() == (tmp_path / "plain.prt").read_bytes(), pages
+    assert (plain.pages, plain.page_height, plain.height) == (1, 24, 24)
+    assert repr(plain).startswith("<prt.Lightmap 24x24, ")
+    assert prt.lightmap_scene(s, plain).hash == s.hash
+    img = plain.relight(s, prt.project(prt.load_envmap(ENV), 3))
+    (only,) = plain.split_pages(img)
+    np.testing.assert_array_equal(only, img)
+    assert prt.atlas_stats(s, 1, 24, 24)["pages"] == 1
+
+
+def test_pages_refusals(paged):
+    _, glb, _, _ = paged
+    s = prt.load_scene(OBJ)
+    rule = "pages: must be 1 to 10 (UDIM tiles 1001 to 1010) or 'auto', got "
+    for bad, words in [(0, rule + "0"), (11, rule + "11"), (-1, rule + "-1"), ("two", rule + "'two'"),
+                       (True, "pages: a bool"), (2.0, "pages: expected a whole number")]:
+        refused(lambda: prt.precompute_lightmap(glb, 8, 8, samples=4, pages=bad), words)
+        refused(lambda: prt.lightmap_from_rows(glb, 8, 8, np.zeros((1, 1, 9), np.float32), pages=bad), words)
+        refused(lambda: prt.unwrap_scene(s, pages=bad), words)
+    # A triangle on a page past the lightmap's pages; UDIM UVs as one page.
+    refused(lambda: prt.precompute_lightmap(glb, 8, 8, samples=4, pages=2), "lies on page 2 (UDIM tile 1003)",
+            "past the lightmap's 2 pages")
+    refused(lambda: prt.precompute_lightmap(glb, 8, 8, samples=4), "leaves [0, 1]", "many pages")
+    refused(lambda: prt.precompute_lightmap(glb, 8, 2 ** 30, samples=4, pages=3), "lightmap size 8x1073741824 is "
+                                                                                   "outside 1..16384")
+    # unwrap_scene: 'auto' is counted at a texel size; N pages are filled, at no texel size.
+    refused(lambda: prt.unwrap_scene(s, pages="auto"), "pages: 'auto' takes texel_size > 0")
+    refused(lambda: prt.unwrap_scene(s, pages=2, texel_size=0.1), "pages: 2 pages are filled at the largest density")
+    lm = prt.precompute_lightmap(glb, 8, 8, pages=3, bands=2, samples=4)
+    refused(lambda: lm.split_pages(np.zeros((8, 8, 4))), "image: expected an array of the lightmap's 24 rows first")
