@@ -327,10 +327,12 @@ TEST(AtlasStats, ChartsJoinAcrossSplitVerticesOfOnePositionAndUv) {
   std::vector<glm::vec2> cut = uv;
   cut[3] = {0.15f, 0.9f};
   EXPECT_EQ(atlas_stats(make_scene(p, {{0, 1, 2}, {3, 4, 5}}, {cut}), 0, 8, 8).charts, 2u);
-  // Refusals as lightmap_texels': no such set, a size out of range.
+  // Refusals as lightmap_texels': no such set, a size out of range (the
+  // height may be many pages' rows stacked: up to kMaxLightmapPages pages).
   EXPECT_THROW(atlas_stats(s, 1, 8, 8), Error);
   EXPECT_THROW(atlas_stats(s, 0, 0, 8), Error);
-  EXPECT_THROW(atlas_stats(s, 0, 8, kMaxLightmapSize + 1), Error);
+  EXPECT_THROW(atlas_stats(s, 0, kMaxLightmapSize + 1, 8), Error);
+  EXPECT_THROW(atlas_stats(s, 0, 8, kMaxLightmapSize * kMaxLightmapPages + 1), Error);
 }
 
 TEST(Unwrap, SharedMeshesKeepTheirBounds) {
