@@ -241,13 +241,15 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
           {"auto_exposure", page.auto_exposure},
           {"tonemap", std::string(tone_map_name(page.display.tone_map))}}}};
     if (!page.lightmap_albedo.empty()) {
-      PRT_CHECK(page.lightmap_albedo.size() == std::size_t(page.lightmap_width) * page.lightmap_height);
+      PRT_CHECK(page.lightmap_pages >= 1 &&
+                page.lightmap_albedo.size() == std::size_t(page.lightmap_width) * page.lightmap_height * page.lightmap_pages);
       std::vector<std::uint16_t> half(page.lightmap_albedo.size() * 3);
       for (std::size_t i = 0; i < page.lightmap_albedo.size(); ++i)
         for (int ch = 0; ch < 3; ++ch) half[i * 3 + std::size_t(ch)] = glm::packHalf1x16(page.lightmap_albedo[i][ch]);
       const std::string file = "lightmap_albedo.rgb16f";
       write_bytes(tmp / file, half.data(), half.size() * sizeof(std::uint16_t));
       lighting["lightmap_albedo"] = {{"file", file}, {"width", page.lightmap_width}, {"height", page.lightmap_height}};
+      if (page.lightmap_pages > 1) lighting["lightmap_albedo"]["pages"] = page.lightmap_pages;  // (one: as before pages)
     }
     const std::string text = lighting.dump(1) + "\n";
     write_bytes(tmp / "lighting.json", text.data(), text.size());

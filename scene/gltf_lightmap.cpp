@@ -2,7 +2,8 @@
 // write_gltf_lightmap; docs/FORMAT.md "Lightmap export"): every object a
 // node, the lightmap UVs as TEXCOORD_1, and the transfer as coefficient
 // textures, 8-bit PNGs of 4 coefficients each with a scale and bias per
-// coefficient.
+// coefficient; a lightmap of many pages as images of its own per page and
+// a primitive per page.
 #include <prt/gltf.h>
 
 #include <prt/error.h>
@@ -11,9 +12,12 @@
 #include "gltf_model.h"
 
 #include <fmt/format.h>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace prt {
 
@@ -47,6 +51,7 @@ namespace {
 
 using json = nlohmann::json;
 namespace tg = prt_tinygltf;
+using detail::add_accessor;
 using detail::add_image;
 using detail::encode_png;
 using detail::srgb_byte;
@@ -58,33 +63,55 @@ struct LightmapExport {
   const LightmapLayout& l;
   const GltfLightmapOptions& opts;
   tg::Model model;
-  json coefficient_textures = json::array();
-  int baked_texture = -1;
-  std::vector<int> material_textures;  // per scene texture
-  std::vector<int> material_index;     // per scene material
-  int white = -1;                      // the material of objects without one, added when first needed
+  std::vector<std::vector<int>> coefficient_textures;  // per page, per group of 4 coefficients
+  std::vector<int> baked_textures;                     // per page; empty without a bake
+  std::vector<int> material_textures;                  // per scene texture
+  // Per page (one set for all pages without a bake: the scene's materials
+  // show no page), per scene material; and the material of objects without
+  // one, added when first needed.
+  std::vector<std::vector<int>> material_index;
+  std::vector<int> white;
 
   // Materials: the scene's; with a bake, unlit (KHR_materials_unlit) showing
-  // the baked lightmap at TEXCOORD_1 so any viewer shows the lit scene.
-  int add_material(const Material* m) {
-    const std::string name = m ? m->name : "white";
-    if (baked_texture >= 0) return detail::add_material(model, name, glm::vec4(1.0f), baked_texture, 1, true);
+  // page `page`'s baked lightmap at TEXCOORD_1 so any viewer shows the lit scene.
+  int add_material(const Material* m, int page) {
+    std::string name = m ? m->name : "white";
+    if (!baked_textures.empty()) {
+      if (l.pages > 1) name += fmt::format(" (lightmap page {})", page);
+      return detail::add_material(model, name, glm::vec4(1.0f), baked_textures[std::size_t(page)], 1, true);
+    }
     if (!m) return detail::add_material(model, name, glm::vec4(1.0f), -1, 0, false);
     const int texture = m->base_color_texture >= 0 ? material_textures[std::size_t(m->base_color_texture)] : -1;
     return detail::add_material(model, name, m->base_color, texture, m->texture_uv_set == l.uv_set ? 1 : 0, false);
   }
+  // The material of object `o`'s triangles on page `page`.
+  int object_material(const SceneObject& o, int page) {
+    const std::size_t set = material_index.size() > 1 ? std::size_t(page) : 0;
+    if (o.material >= 0) return material_index[set][std::size_t(o.material)];
+    if (white[set] < 0) white[set] = add_material(nullptr, int(set));
+    return white[set];
+  }
 };
 
-// The coefficient textures: texture g holds coefficients 4g .. 4g + 3 of a
-// row ([channel][k]) in R, G, B, A; gutters copy their source texel. Then the
-// baked lightmap (if any) and the scene's textures, in that order.
+// The coefficient textures: texture g of a page holds coefficients 4g ..
+// 4g + 3 of a row ([channel][k]) in R, G, B, A; gutters copy their source
+// texel (within the page). Texture 0 of every page, texture 1 of every
+// page, ..., then the baked lightmap of every page (if any), then the
+// scene's textures, in that order. Page p is the stacked atlas's rows p H ..
+// (p + 1) H - 1 (H a page's height).
 void add_lightmap_textures(LightmapExport& e, const LightmapQuantization& q, std::size_t stride,
                            const std::vector<std::uint32_t>& source) {
   const LightmapLayout& l = e.l;
   tg::Model& model = e.model;
-  const int groups = int((stride + 3) / 4);
+  const int groups = int((stride + 3) / 4), H = l.page_height();
+  const std::size_t page_texels = std::size_t(l.width) * std::size_t(H);
+  // One page keeps the names it had before there were pages.
+  const auto page_name = [&](const std::string& base, int p) {
+    return l.pages > 1 ? fmt::format("{}_page_{}", base, p) : base;
+  };
+  e.coefficient_textures.assign(std::size_t(l.pages), {});
   for (int g = 0; g < groups; ++g) {
-    std::vector<unsigned char> px(std::size_t(l.width) * l.height * 4, 0);
+    std::vector<unsigned char> px(source.size() * 4, 0);
     for (std::size_t p = 0; p < source.size(); ++p) {
       if (source[p] == kNoTexel) continue;
       for (int c = 0; c < 4; ++c) {
@@ -92,17 +119,91 @@ void add_lightmap_textures(LightmapExport& e, const LightmapQuantization& q, std
         if (j < stride) px[p * 4 + std::size_t(c)] = std::uint8_t(q.codes[std::size_t(source[p]) * stride + j]);
       }
     }
-    e.coefficient_textures.push_back(add_image(model, encode_png(l.width, l.height, 4, px.data()),
-                                               fmt::format("prt_lightmap_coefficients_{}", g), false));
+    for (int p = 0; p < l.pages; ++p)
+      e.coefficient_textures[std::size_t(p)].push_back(
+          add_image(model, encode_png(l.width, H, 4, px.data() + std::size_t(p) * page_texels * 4),
+                    page_name(fmt::format("prt_lightmap_coefficients_{}", g), p), false));
   }
   if (!e.opts.baked.empty()) {
-    std::vector<unsigned char> px(std::size_t(l.width) * l.height * 3, 0);
+    std::vector<unsigned char> px(source.size() * 3, 0);
     for (std::size_t p = 0; p < source.size(); ++p)
       if (source[p] != kNoTexel)
         for (int c = 0; c < 3; ++c) px[p * 3 + std::size_t(c)] = srgb_byte(e.opts.baked[source[p]][c]);
-    e.baked_texture = add_image(model, encode_png(l.width, l.height, 3, px.data()), "prt_lightmap_baked", false);
+    for (int p = 0; p < l.pages; ++p)
+      e.baked_textures.push_back(add_image(model, encode_png(l.width, H, 3, px.data() + std::size_t(p) * page_texels * 3),
+                                           page_name("prt_lightmap_baked", p), false));
   }
   e.material_textures = detail::add_scene_textures(model, e.scene);
+}
+
+// Object `o` of a lightmap of many pages as a mesh of one primitive per page
+// its triangles lie on (the page of a triangle: floor(pages x v) of its
+// centroid's stacked v), pages in order, and a root node of `gscene`. Each
+// primitive holds the vertices its triangles use (lowest to highest index):
+// POSITION (with min and max), NORMAL (zero-length ones as (0, 1, 0), as
+// add_object_node), TEXCOORD_0 the scene's first UV set, TEXCOORD_1 the
+// lightmap's local to the page, (u, pages x v - p), in [0, 1] as a page's UVs
+// are (TEXCOORD_0 too where the lightmap's set is the first); the material
+// of the object on that page, and extras {"prt_lightmap_page": p}.
+void add_paged_object_node(LightmapExport& e, const SceneObject& o, tg::Scene& gscene) {
+  const Mesh& mesh = e.scene.mesh;
+  const int pages = e.l.pages;
+  const std::vector<glm::vec2>& lm = e.scene.uv_sets.at(std::size_t(e.l.uv_set));
+  const auto page_of = [&](const glm::uvec3& t) {
+    const double v = (double(lm[t.x].y) + double(lm[t.y].y) + double(lm[t.z].y)) / 3.0;
+    return int(std::clamp(std::floor(v * pages), 0.0, double(pages - 1)));
+  };
+  const auto local = [&](glm::vec2 uv, int p) { return glm::vec2(uv.x, float(double(uv.y) * pages - p)); };
+  tg::Mesh gm;
+  gm.name = o.name;
+  for (int p = 0; p < pages; ++p) {
+    std::vector<std::uint32_t> used;
+    for (std::size_t f = o.first_triangle; f < o.first_triangle + o.triangle_count; ++f)
+      if (const glm::uvec3 t = mesh.triangles[f]; page_of(t) == p) used.insert(used.end(), {t.x, t.y, t.z});
+    if (used.empty()) continue;
+    std::vector<std::uint32_t> corners = used;  // the triangles' corners, in order
+    std::sort(used.begin(), used.end());
+    used.erase(std::unique(used.begin(), used.end()), used.end());
+    std::vector<std::uint32_t> idx(corners.size());
+    for (std::size_t i = 0; i < corners.size(); ++i)
+      idx[i] = std::uint32_t(std::lower_bound(used.begin(), used.end(), corners[i]) - used.begin());
+    const std::size_t nv = used.size();
+    std::vector<glm::vec3> pos(nv), nrm(nv);
+    std::vector<glm::vec2> uv0(nv), uv1(nv);
+    glm::vec3 mn(std::numeric_limits<float>::max()), mx(-std::numeric_limits<float>::max());
+    for (std::size_t i = 0; i < nv; ++i) {
+      const std::uint32_t v = used[i];
+      pos[i] = mesh.positions[v];
+      mn = glm::min(mn, pos[i]), mx = glm::max(mx, pos[i]);
+      nrm[i] = glm::dot(mesh.normals[v], mesh.normals[v]) > 0.5f ? mesh.normals[v] : glm::vec3(0, 1, 0);
+      uv1[i] = local(lm[v], p);
+      uv0[i] = e.l.uv_set == 0 ? uv1[i] : e.scene.uv_sets[0][v];
+    }
+    tg::Primitive prim;
+    prim.mode = TINYGLTF_MODE_TRIANGLES;
+    prim.indices = add_accessor(e.model, idx.data(), idx.size() * 4, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER,
+                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, idx.size());
+    const int pa = add_accessor(e.model, pos.data(), nv * 12, TINYGLTF_TARGET_ARRAY_BUFFER,
+                                TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+    e.model.accessors[std::size_t(pa)].minValues = {mn.x, mn.y, mn.z};
+    e.model.accessors[std::size_t(pa)].maxValues = {mx.x, mx.y, mx.z};
+    prim.attributes["POSITION"] = pa;
+    prim.attributes["NORMAL"] = add_accessor(e.model, nrm.data(), nv * 12, TINYGLTF_TARGET_ARRAY_BUFFER,
+                                             TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+    prim.attributes["TEXCOORD_0"] = add_accessor(e.model, uv0.data(), nv * 8, TINYGLTF_TARGET_ARRAY_BUFFER,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nv);
+    prim.attributes["TEXCOORD_1"] = add_accessor(e.model, uv1.data(), nv * 8, TINYGLTF_TARGET_ARRAY_BUFFER,
+                                                 TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nv);
+    prim.material = e.object_material(o, p);
+    prim.extras = tg::Value(tg::Value::Object{{"prt_lightmap_page", tg::Value(p)}});
+    gm.primitives.push_back(std::move(prim));
+  }
+  e.model.meshes.push_back(std::move(gm));
+  tg::Node node;
+  node.name = o.name;
+  node.mesh = int(e.model.meshes.size()) - 1;
+  e.model.nodes.push_back(node);
+  gscene.nodes.push_back(int(e.model.nodes.size()) - 1);
 }
 
 // asset.extras.prt: what a reader needs to decode the coefficient textures.
@@ -117,8 +218,8 @@ json lightmap_extras(const LightmapExport& e, const LightmapTransfer& t, const L
       {"channels", t.transfer.channels},
       {"coefficients", stride},
       {"mode", std::string(transfer_mode_name(t.transfer.mode))},
-      {"lightmap", {{"width", l.width}, {"height", l.height}, {"texcoord", 1}, {"covered_texels", N}}},
-      {"textures", e.coefficient_textures},
+      {"lightmap", {{"width", l.width}, {"height", l.page_height()}, {"texcoord", 1}, {"covered_texels", N}}},
+      {"textures", l.pages > 1 ? json(e.coefficient_textures) : json(e.coefficient_textures[0])},
       {"bits", 8},
       {"scale", q.scale},
       {"bias", q.bias},
@@ -129,16 +230,22 @@ json lightmap_extras(const LightmapExport& e, const LightmapTransfer& t, const L
                   "TEXCOORD_1 (gutters are filled)"},
       {"sh_convention", "prt (docs/CONVENTIONS.md)"},
   };
+  if (l.pages > 1) {  // (one page: as before there were pages)
+    prt["lightmap"]["pages"] = l.pages;
+    prt["pages"] = "page p (UDIM tile 1001 + p) has its own images: textures[p][g] (and bake.texture[p]); the "
+                   "primitives on it have extras.prt_lightmap_page = p and their TEXCOORD_1 in its [0, 1]; covered_texels "
+                   "counts every page's";
+  }
   if (!t.transfer.vertex_colors)  // one albedo for all (--albedo): the materials' is not in the rows
     prt["albedo"] = {t.transfer.albedo.x, t.transfer.albedo.y, t.transfer.albedo.z};
   if (!opts.transfer_source.empty()) prt["transfer"] = opts.transfer_source;
-  if (e.baked_texture >= 0)
+  if (!e.baked_textures.empty())
     prt["bake"] = {{"map", opts.bake.map},
                    {"rotate", json::array({opts.bake.rotate[0], opts.bake.rotate[1], opts.bake.rotate[2]})},
                    {"exposure", opts.bake.exposure},
-                   {"texture", e.baked_texture},
+                   {"texture", l.pages > 1 ? json(e.baked_textures) : json(e.baked_textures[0])},
                    {"color", "sRGB-encoded radiance x 2^exposure clamped to [0, 1], at TEXCOORD_1 (KHR_materials_unlit)"}};
-  if (e.baked_texture >= 0 && !opts.bake.lights.empty()) prt["bake"]["lights"] = opts.bake.lights;
+  if (!e.baked_textures.empty() && !opts.bake.lights.empty()) prt["bake"]["lights"] = opts.bake.lights;
   return prt;
 }
 
@@ -177,9 +284,14 @@ void write_gltf_lightmap(const std::string& path, const Scene& scene, const Ligh
   tg::Scene gscene;
 
   add_lightmap_textures(e, q, stride, source);
-  if (e.baked_texture >= 0) model.extensionsUsed.push_back("KHR_materials_unlit");
-  e.material_index.resize(scene.materials.size());
-  for (std::size_t i = 0; i < scene.materials.size(); ++i) e.material_index[i] = e.add_material(&scene.materials[i]);
+  if (!e.baked_textures.empty()) model.extensionsUsed.push_back("KHR_materials_unlit");
+  // A material set per page where the materials show the page's bake, else one.
+  const int sets = e.baked_textures.empty() ? 1 : l.pages;
+  e.material_index.assign(std::size_t(sets), std::vector<int>(scene.materials.size()));
+  e.white.assign(std::size_t(sets), -1);
+  for (int p = 0; p < sets; ++p)
+    for (std::size_t i = 0; i < scene.materials.size(); ++i)
+      e.material_index[std::size_t(p)][i] = e.add_material(&scene.materials[i], p);
 
   // One node per object, world-space vertices (the scene's are flattened).
   const auto& lm_uv = scene.uv_sets.at(std::size_t(l.uv_set));
@@ -187,9 +299,10 @@ void write_gltf_lightmap(const std::string& path, const Scene& scene, const Ligh
   const std::vector<const std::vector<glm::vec2>*> uvs = {&scene.uv_sets[0], &lm_uv};
   for (const SceneObject& o : scene.objects) {
     if (o.triangle_count == 0) continue;
-    if (o.material < 0 && e.white < 0) e.white = e.add_material(nullptr);
-    const int material = o.material >= 0 ? e.material_index[std::size_t(o.material)] : e.white;
-    detail::add_object_node(model, scene.mesh, o, uvs, material, gscene);
+    if (l.pages > 1)
+      add_paged_object_node(e, o, gscene);
+    else
+      detail::add_object_node(model, scene.mesh, o, uvs, e.object_material(o, 0), gscene);
   }
   detail::add_lights(model, gscene, opts.lights, path);
   model.scenes.push_back(gscene);

@@ -4,16 +4,25 @@
 // when PRT_REQUIRE_TOOLS=1 (scripts/test.sh sets it).
 #include "test_files.h"
 
+#include <prt/envmap.h>
 #include <prt/gltf.h>
+#include <prt/lightmap.h>
 #include <prt/mesh.h>
 #include <prt/precompute.h>
+#include <prt/projection.h>
 #include <prt/scene.h>
 #include <prt/transfer.h>
+#include <prt/transfer_io.h>
+#include <prt/unwrap.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -140,11 +149,17 @@ TEST_F(GltfValidator, LightmapExportsHaveNoErrors) {
   const std::string lights = dir.file("lights.json");  // kept as KHR_lights_punctual (the last file)
   prt::test::write_file(lights,
                         R"([{"type": "spot", "position": [1, 2.2, 1], "direction": [0, -1, 0], "intensity": 3}])");
-  std::vector<std::string> files = {dir.file("room.glb"), dir.file("room.gltf"), dir.file("room-baked.glb"),
-                                    dir.file("room-lit.glb")};
+  // A lightmap of 3 pages (UVs prt makes): images and primitives per page.
+  const std::string paged = dir.file("paged.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", scene, "--lightmap", "32x32", "--lightmap-uv", "auto", "--pages", "3",
+                          "--samples", "16", "-q", "-o", paged})
+                .code,
+            0);
+  std::vector<std::string> files = {dir.file("room.glb"),   dir.file("room.gltf"),  dir.file("room-baked.glb"),
+                                    dir.file("room-lit.glb"), dir.file("paged.glb"), dir.file("paged-baked.gltf")};
   for (std::size_t i = 0; i < files.size(); ++i) {
-    std::vector<std::string> args = {"export", scene, lm, "-o", files[i], "-q"};
-    if (i == 2) args.insert(args.end(), {"--bake", kStudio, "--exposure", "1"});
+    std::vector<std::string> args = {"export", scene, i < 4 ? lm : paged, "-o", files[i], "-q"};
+    if (i == 2 || i == 5) args.insert(args.end(), {"--bake", kStudio, "--exposure", "1"});
     if (i == 3) args.insert(args.end(), {"--bake", kStudio, "--lights", lights});
     const auto r = run_prt(dir, args);
     ASSERT_EQ(r.code, 0) << r.err;
@@ -189,6 +204,174 @@ TEST_F(GltfValidator, SceneExportsHaveNoErrors) {
     EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
     EXPECT_EQ(v.reports[i].at("warnings"), 0) << v.reports[i].dump();
   }
+}
+
+// The JSON chunk of a .glb, its BIN chunk, and the file with its JSON replaced.
+struct Glb {
+  nlohmann::json json;
+  std::string bin;
+};
+Glb read_glb(const std::string& bytes) {
+  Glb g;
+  std::uint32_t json_bytes = 0, bin_bytes = 0;
+  EXPECT_GT(bytes.size(), 28u);
+  if (bytes.size() <= 28) return g;
+  std::memcpy(&json_bytes, bytes.data() + 12, 4);
+  g.json = nlohmann::json::parse(bytes.substr(20, json_bytes));
+  const std::size_t bin_at = 20 + std::size_t(json_bytes);
+  std::memcpy(&bin_bytes, bytes.data() + bin_at, 4);
+  g.bin = bytes.substr(bin_at + 8, bin_bytes);
+  return g;
+}
+std::string write_glb(const Glb& g) {
+  std::string json = g.json.dump();
+  while (json.size() % 4) json += ' ';
+  const auto u32 = [](std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  return "glTF" + u32(2) + u32(std::uint32_t(12 + 8 + json.size() + 8 + g.bin.size())) + u32(std::uint32_t(json.size())) +
+         "JSON" + json + u32(std::uint32_t(g.bin.size())) + std::string("BIN\0", 4) + g.bin;
+}
+// Accessor `index` of float VEC2s (tightly packed, as prt writes them).
+std::vector<glm::vec2> vec2s(const Glb& g, int index) {
+  const nlohmann::json& a = g.json["accessors"][std::size_t(index)];
+  const nlohmann::json& v = g.json["bufferViews"][a["bufferView"].get<std::size_t>()];
+  std::vector<glm::vec2> out(a["count"].get<std::size_t>());
+  std::memcpy(out.data(), g.bin.data() + v.value("byteOffset", 0) + a.value("byteOffset", 0), out.size() * 8);
+  return out;
+}
+std::vector<std::uint32_t> u32s(const Glb& g, int index) {
+  const nlohmann::json& a = g.json["accessors"][std::size_t(index)];
+  const nlohmann::json& v = g.json["bufferViews"][a["bufferView"].get<std::size_t>()];
+  std::vector<std::uint32_t> out(a["count"].get<std::size_t>());
+  std::memcpy(out.data(), g.bin.data() + v.value("byteOffset", 0) + a.value("byteOffset", 0), out.size() * 4);
+  return out;
+}
+
+// The byte the writer stores for linear `v` (sRGB-encoded, as
+// detail::srgb_byte: in float, to the bit).
+int srgb_code(float v) {
+  const float c = std::clamp(v, 0.0f, 1.0f);
+  const float e = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+  return int(std::lround(e * 255.0f));
+}
+
+// A lightmap of many pages (docs/FORMAT.md "Lightmap export", "Many
+// pages"): extras record the pages; every image is once per page, W x H;
+// each primitive lies on one page, its TEXCOORD_1 in [0, 1] and its
+// triangles over covered texels of that page; the materials show their
+// page's bake; and page p's texels are the stacked atlas's rows p H ..
+// (p + 1) H - 1 (the quantised rows and the bake, gutters filled), read
+// back by prt::load_scene (stb_image) with a material made to show each.
+TEST(LightmapPagesExport, EachPageIsItsOwnImagesAndPrimitives) {
+  TempDir dir;
+  const std::string room = kSource + "/models/room.gltf", lm = dir.file("paged.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", room, "--lightmap", "24x16", "--lightmap-uv", "auto", "--pages", "3",
+                          "--bands", "2", "--samples", "16", "-q", "-o", lm})
+                .code,
+            0);
+  const prt::LightmapTransfer t = prt::read_lightmap_transfer(lm);
+  const prt::LightmapLayout& l = t.layout;
+  ASSERT_EQ(l.pages, 3);
+  const int W = 24, H = 16, P = 3;
+  ASSERT_EQ(l.width, W);
+  ASSERT_EQ(l.page_height(), H);
+  const prt::Scene scene = prt::lightmap_scene(prt::load_scene(room), l);
+  const prt::LightmapTexels texels =
+      prt::lightmap_texels(scene, l, t.transfer.vertex_colors ? nullptr : &t.transfer.albedo);
+  prt::GltfLightmapOptions opts;
+  const double euler[3] = {0, 0, 0};
+  prt::bake_lightmap(opts, t, texels, prt::project(prt::load_envmap(kStudio), t.transfer.bands), "studio.exr", euler, 1);
+  const std::string path = dir.file("paged.glb");
+  prt::write_gltf_lightmap(path, scene, t, texels, opts);
+
+  Glb g = read_glb(prt::test::read_file(path));
+  const nlohmann::json info = g.json["asset"]["extras"]["prt"];
+  EXPECT_EQ(info["lightmap"]["pages"], P) << info.dump();
+  EXPECT_EQ(info["lightmap"]["width"], W);
+  EXPECT_EQ(info["lightmap"]["height"], H);
+  const std::size_t stride = t.transfer.stride(), groups = (stride + 3) / 4;
+  ASSERT_EQ(info["textures"].size(), std::size_t(P));
+  ASSERT_EQ(info["bake"]["texture"].size(), std::size_t(P));
+  // Primitives: each on one page, showing its bake, its triangles over that page's covered texels.
+  std::vector<std::size_t> triangles_on(P, 0);
+  for (const nlohmann::json& mesh : g.json["meshes"])
+    for (const nlohmann::json& prim : mesh["primitives"]) {
+      const int p = prim["extras"]["prt_lightmap_page"];
+      ASSERT_TRUE(p >= 0 && p < P) << prim.dump();
+      const nlohmann::json& m = g.json["materials"][prim["material"].get<std::size_t>()];
+      EXPECT_EQ(m["pbrMetallicRoughness"]["baseColorTexture"]["index"], info["bake"]["texture"][std::size_t(p)]);
+      const std::vector<glm::vec2> uv = vec2s(g, prim["attributes"]["TEXCOORD_1"]);
+      for (const glm::vec2& c : uv) ASSERT_TRUE(c.x >= 0 && c.x <= 1 && c.y >= 0 && c.y <= 1) << c.x << ", " << c.y;
+      const std::vector<std::uint32_t> idx = u32s(g, prim["indices"]);
+      for (std::size_t i = 0; i + 2 < idx.size(); i += 3) {
+        const glm::vec2 c = (uv[idx[i]] + uv[idx[i + 1]] + uv[idx[i + 2]]) / 3.0f;
+        const std::uint32_t texel = std::uint32_t(std::floor(c.y * H) + p * H) * W + std::uint32_t(std::floor(c.x * W));
+        EXPECT_TRUE(std::binary_search(l.texels.begin(), l.texels.end(), texel)) << "page " << p << " texel " << texel;
+        ++triangles_on[std::size_t(p)];
+      }
+    }
+  for (int p = 0; p < P; ++p) EXPECT_GT(triangles_on[std::size_t(p)], 0u) << "page " << p;
+
+  // What the stacked atlas holds: the quantised rows (8 bits) and the bake (sRGB bytes), gutters filled.
+  const prt::LightmapQuantization q =
+      prt::quantize_lightmap(prt::dense_transfer(t.transfer, prt::texel_points(texels)), stride, 8);
+  const std::vector<std::uint32_t> source = prt::lightmap_sources(l);
+  ASSERT_EQ(source.size(), std::size_t(W) * H * P);
+  // A material for every coefficient image, so that load_scene decodes it (RGB as sRGB, alpha linear).
+  const std::size_t first_made = g.json["materials"].size();
+  for (int p = 0; p < P; ++p)
+    for (std::size_t k = 0; k < groups; ++k)
+      g.json["materials"].push_back({{"name", "show"}, {"pbrMetallicRoughness",
+                                     {{"baseColorTexture", {{"index", info["textures"][std::size_t(p)][k]}}}}}});
+  ASSERT_GT(first_made, 0u);
+  const std::string shown = dir.file("shown.glb");
+  prt::test::write_file(shown, write_glb(g));
+  const prt::Scene back = prt::load_scene(shown);
+  const auto texture_of = [&](int gltf_texture) -> const prt::Texture* {
+    const std::string name = g.json["images"][g.json["textures"][std::size_t(gltf_texture)]["source"].get<std::size_t>()]["name"];
+    for (const prt::Texture& x : back.textures)
+      if (x.name == name) return &x;
+    return nullptr;
+  };
+  const auto srgb = [](int code) { return prt::srgb_to_linear(float(code) / 255.0f); };
+  for (int p = 0; p < P; ++p) {
+    const prt::Texture* baked = texture_of(info["bake"]["texture"][std::size_t(p)]);
+    ASSERT_NE(baked, nullptr);
+    ASSERT_EQ(baked->width, W);
+    ASSERT_EQ(baked->height, H);
+    std::vector<const prt::Texture*> coefficient(groups);
+    for (std::size_t k = 0; k < groups; ++k) {
+      coefficient[k] = texture_of(info["textures"][std::size_t(p)][k]);
+      ASSERT_NE(coefficient[k], nullptr);
+      ASSERT_EQ(coefficient[k]->width, W);
+      ASSERT_EQ(coefficient[k]->height, H);
+    }
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < std::size_t(W) * H; ++i) {
+      const std::uint32_t s = source[std::size_t(p) * W * H + i];
+      covered += s != prt::kNoTexel;
+      for (int c = 0; c < 3; ++c) {
+        const float want = s == prt::kNoTexel ? 0.0f : srgb(srgb_code(opts.baked[s][c]));
+        ASSERT_EQ(baked->texels[i][c], want) << "page " << p << " texel " << i;
+      }
+      for (std::size_t j = 0; j < groups * 4; ++j) {
+        const int code = s == prt::kNoTexel || j >= stride ? 0 : int(q.codes[std::size_t(s) * stride + j]);
+        const float got = coefficient[j / 4]->texels[i][int(j % 4)];
+        ASSERT_EQ(got, j % 4 == 3 ? float(code) / 255.0f : srgb(code)) << "page " << p << " texel " << i << " j " << j;
+      }
+    }
+    EXPECT_GT(covered, std::size_t(W) * H / 8) << "page " << p;
+  }
+
+  // The page (prt export --web): its model is this export, and the texel
+  // albedo every page's W x H, one after another (lighting.json says so).
+  const auto r = run_prt(dir, {"export", room, lm, "--web", dir.file("web"), "--env", "studio", "-q"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json lighting = nlohmann::json::parse(prt::test::read_file(dir.file("web/lighting.json")));
+  EXPECT_EQ(lighting["lightmap_albedo"], nlohmann::json({{"file", "lightmap_albedo.rgb16f"}, {"width", W}, {"height", H},
+                                                         {"pages", P}}));
+  EXPECT_EQ(prt::test::read_file(dir.file("web/lightmap_albedo.rgb16f")).size(), std::size_t(W) * H * P * 3 * 2);
+  EXPECT_EQ(read_glb(prt::test::read_file(dir.file("web/model.glb"))).json["asset"]["extras"]["prt"]["textures"],
+            info["textures"]);
 }
 
 TEST(LightmapQuantization, DecodesWithinHalfAStep) {

@@ -13,9 +13,10 @@
 //
 // A lightmap (prt precompute SCENE --lightmap, exported by write_gltf_lightmap):
 // the scene's objects drawn with their lightmap UVs (TEXCOORD_1); each
-// fragment samples the 8-bit coefficient textures (one TEXTURE_2D_ARRAY
-// layer per 4 coefficients) bilinearly, decodes value = bias + scale x
-// byte / 255 and dots it with the rotated lighting, as the lightmap pass of
+// fragment samples the 8-bit coefficient textures of its primitive's page
+// (a lightmap of many pages has images of its own per page; per page one
+// TEXTURE_2D_ARRAY layer per 4 coefficients) bilinearly, decodes value =
+// bias + scale x byte / 255 and dots it with the rotated lighting, as the lightmap pass of
 // prt render relights texels and samples the result (the two are equal: both
 // are linear in the texel values); with detail (the default, as prt render)
 // the material's albedo at the fragment replaces the texel's
@@ -399,23 +400,61 @@ void main() {
     return t;
   }
 
+  // Per page of a lightmap (docs/FORMAT.md "Lightmap export"): its
+  // coefficient textures in one texture array (layer g holds coefficients
+  // 4g .. 4g + 3) and its texel albedo (lighting.json's lightmap_albedo:
+  // every page's W x H, one after another).
+  async function lightmapPages(gl, glb, lighting, pages, W, H, groups) {
+    const { info } = glb;
+    const pageTextures = pages > 1 ? info.textures : [info.textures];
+    if (!Array.isArray(pageTextures) || pageTextures.length !== pages ||
+        !pageTextures.every((t) => Array.isArray(t) && t.length === groups))
+      fail('model.glb: asset.extras.prt: textures is not ' + groups + ' coefficient textures per page for ' + pages + ' pages');
+    const a = lighting.lightmap_albedo;
+    if (!a || a.width !== W || a.height !== H || (a.pages || 1) !== pages)
+      fail('lighting.json: no lightmap_albedo of the lightmap\'s size and pages');
+    const half = new Uint16Array(await fetchOk(a.file));
+    if (half.length !== pages * W * H * 3) fail(a.file + ': ' + half.length + ' values, expected ' + pages * W * H * 3);
+    const clampWrap = [gl.CLAMP_TO_EDGE, gl.CLAMP_TO_EDGE], out = [];
+    for (let p = 0; p < pages; ++p) {
+      const coefficients = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D_ARRAY, coefficients);
+      gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA8, W, H, groups);
+      for (let g = 0; g < groups; ++g) {
+        const what = 'coefficient texture ' + g + (pages > 1 ? ' of page ' + p : '');
+        const img = await textureImage(glb, pageTextures[p][g], what);
+        if (img.width !== W || img.height !== H) fail(`model.glb: ${what} is ${img.width}x${img.height}, the lightmap ${W}x${H}`);
+        gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, g, W, H, 1, gl.RGBA, gl.UNSIGNED_BYTE, img.rgba);
+      }
+      for (const q of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, q, gl.LINEAR);
+      for (const q of [gl.TEXTURE_WRAP_S, gl.TEXTURE_WRAP_T]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, q, gl.CLAMP_TO_EDGE);
+      const albedo = texture2d(gl, W, H, gl.RGB, gl.HALF_FLOAT, gl.RGB16F, half.subarray(p * W * H * 3, (p + 1) * W * H * 3),
+                               clampWrap);
+      out.push({ coefficients, albedo });
+    }
+    return out;
+  }
+
   // A lightmap (docs/FORMAT.md "Lightmap export"): every node's primitives
   // in one vertex array (world-space vertices: prt writes no node
-  // transforms), drawn per material; the coefficient textures in one
-  // texture array; the texel albedo of lighting.json's lightmap_albedo.
+  // transforms), drawn per material and page (a primitive's
+  // extras.prt_lightmap_page, its TEXCOORD_1 local to that page) with that
+  // page's textures (lightmapPages).
   async function lightmapModel(gl, glb, lighting) {
     const { json, info, accessor } = glb;
     const bands = info.bands, channels = info.channels, n = bands * bands, stride = info.coefficients;
-    const W = info.lightmap.width, H = info.lightmap.height, uvSet = 'TEXCOORD_' + info.lightmap.texcoord;
-    const groups = info.textures.length;
-    if (stride !== channels * n || groups !== Math.ceil(stride / 4) || info.scale.length !== stride ||
-        info.bias.length !== stride || info.bits !== 8)
+    const W = info.lightmap.width, H = info.lightmap.height, pages = info.lightmap.pages || 1;
+    const uvSet = 'TEXCOORD_' + info.lightmap.texcoord, groups = Math.ceil(stride / 4);
+    if (stride !== channels * n || info.scale.length !== stride || info.bias.length !== stride || info.bits !== 8 ||
+        !(Number.isInteger(pages) && pages >= 1))
       fail('model.glb: asset.extras.prt: an inconsistent lightmap description (docs/FORMAT.md "Lightmap export")');
     if (groups > gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS))
       fail(`model.glb: ${groups} coefficient textures exceed this WebGL's ${gl.getParameter(gl.MAX_ARRAY_TEXTURE_LAYERS)} texture layers`);
+    const maxSize = gl.getParameter(gl.MAX_TEXTURE_SIZE);
+    if (W > maxSize || H > maxSize) fail(`model.glb: a ${W}x${H} lightmap page exceeds this WebGL's ${maxSize} texels a side`);
 
-    // Geometry, gathered per material.
-    const positions = [], uv0 = [], uv1 = [], perMaterial = new Map();
+    // Geometry, gathered per material and page.
+    const positions = [], uv0 = [], uv1 = [], batchOf = new Map();
     let vertices = 0, triangles = 0, objects = 0;
     for (const nodeIndex of json.scenes[json.scene || 0].nodes) {
       const node = json.nodes[nodeIndex];
@@ -426,6 +465,9 @@ void main() {
       for (const prim of json.meshes[node.mesh].primitives) {
         if (prim.mode !== undefined && prim.mode !== 4) fail('model.glb: a primitive that is not triangles');
         if (prim.attributes[uvSet] === undefined) fail('model.glb: node ' + nodeIndex + ' has no ' + uvSet);
+        const page = (prim.extras && prim.extras.prt_lightmap_page) || 0;
+        if (!(Number.isInteger(page) && page >= 0 && page < pages))
+          fail(`model.glb: node ${nodeIndex}: a primitive on lightmap page ${page} of ${pages}`);
         const p = accessor(prim.attributes.POSITION), count = p.length / 3;
         const t1 = accessor(prim.attributes[uvSet]);
         const t0 = prim.attributes.TEXCOORD_0 !== undefined ? accessor(prim.attributes.TEXCOORD_0) : new Float32Array(2 * count);
@@ -433,9 +475,9 @@ void main() {
         positions.push(p);
         uv0.push(t0);
         uv1.push(t1);
-        const key = prim.material === undefined ? -1 : prim.material;
-        if (!perMaterial.has(key)) perMaterial.set(key, []);
-        const list = perMaterial.get(key);
+        const material = prim.material === undefined ? -1 : prim.material, key = material + '/' + page;
+        if (!batchOf.has(key)) batchOf.set(key, { material, page, list: [] });
+        const list = batchOf.get(key).list;
         for (let i = 0; i < idx.length; ++i) list.push(idx[i] + vertices);
         vertices += count;
         triangles += idx.length / 3;
@@ -448,16 +490,17 @@ void main() {
       return out;
     };
     const batches = [], all = [];
-    for (const [material, list] of perMaterial) {
-      batches.push({ material, first: all.length, count: list.length });
+    for (const { material, page, list } of batchOf.values()) {
+      batches.push({ material, page, first: all.length, count: list.length });
       for (const i of list) all.push(i);
     }
     const vao = geometry(gl, [concat(positions), concat(uv0), concat(uv1)], new Uint32Array(all));
 
     // Materials: base colour factor x texture (sRGB; linear after sampling).
-    const clampWrap = [gl.CLAMP_TO_EDGE, gl.CLAMP_TO_EDGE], repeat = [gl.REPEAT, gl.REPEAT];
+    const repeat = [gl.REPEAT, gl.REPEAT];
     const materials = new Map();
-    for (const key of perMaterial.keys()) {
+    for (const { material: key } of batches) {
+      if (materials.has(key)) continue;
       const m = key >= 0 ? json.materials[key] : {};
       const pbr = m.pbrMetallicRoughness || {};
       const entry = { color: pbr.baseColorFactor || [1, 1, 1, 1], texture: null, uv: 0 };
@@ -470,32 +513,15 @@ void main() {
       }
       materials.set(key, entry);
     }
-
-    // The coefficient textures: layer g holds coefficients 4g .. 4g + 3.
-    const coefficients = gl.createTexture();
-    gl.bindTexture(gl.TEXTURE_2D_ARRAY, coefficients);
-    gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA8, W, H, groups);
-    for (let g = 0; g < groups; ++g) {
-      const img = await textureImage(glb, info.textures[g], 'coefficient texture ' + g);
-      if (img.width !== W || img.height !== H) fail(`model.glb: coefficient texture ${g} is ${img.width}x${img.height}, the lightmap ${W}x${H}`);
-      gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, g, W, H, 1, gl.RGBA, gl.UNSIGNED_BYTE, img.rgba);
-    }
-    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, p, gl.LINEAR);
-    for (const p of [gl.TEXTURE_WRAP_S, gl.TEXTURE_WRAP_T]) gl.texParameteri(gl.TEXTURE_2D_ARRAY, p, gl.CLAMP_TO_EDGE);
-
-    const a = lighting.lightmap_albedo;
-    if (!a || a.width !== W || a.height !== H) fail('lighting.json: no lightmap_albedo of the lightmap\'s size');
-    const half = new Uint16Array(await fetchOk(a.file));
-    if (half.length !== W * H * 3) fail(a.file + ': ' + half.length + ' values, expected ' + W * H * 3);
-    const texelAlbedo = texture2d(gl, W, H, gl.RGB, gl.HALF_FLOAT, gl.RGB16F, half, clampWrap);
+    const pageTextures = await lightmapPages(gl, glb, lighting, pages, W, H, groups);
 
     const prog = program(gl, lightmapVert, lightmapFrag(groups), 'lightmap');
     const light = uniformBlock(gl, prog, 4 + 12 * groups);
     return {
       vertices,
-      lightmap: { width: W, height: H, objects, triangles },
-      describe: () => `${objects} objects, ${triangles} triangles, ${W}x${H} lightmap, ${bands} bands, ` +
-                      `${channels === 1 ? 'mono' : 'RGB'} ${info.mode || ''} transfer`,
+      lightmap: { width: W, height: H, pages, objects, triangles },
+      describe: () => `${objects} objects, ${triangles} triangles, ${pages > 1 ? pages + ' pages of ' : ''}${W}x${H} ` +
+                      `lightmap, ${bands} bands, ${channels === 1 ? 'mono' : 'RGB'} ${info.mode || ''} transfer`,
       draw(M, L, gain, tone, state) {
         // value_j = bias_j + scale_j t_j (t = byte / 255, what the sampler
         // returns); radiance_c = sum_j value_j L[k_j][c] over the j of
@@ -516,19 +542,19 @@ void main() {
         gl.uniform1f(prog.u.u_gain, gain);
         gl.uniform1i(prog.u.u_tone, tone);
         gl.uniform1i(prog.u.u_detail, state.detail ? 1 : 0);
-        gl.activeTexture(gl.TEXTURE1);
-        gl.bindTexture(gl.TEXTURE_2D_ARRAY, coefficients);
         gl.uniform1i(prog.u.u_coefficients, 1);
-        gl.activeTexture(gl.TEXTURE2);
-        gl.bindTexture(gl.TEXTURE_2D, texelAlbedo);
         gl.uniform1i(prog.u.u_texel_albedo, 2);
         gl.uniform1i(prog.u.u_base, 3);
         gl.bindVertexArray(vao);
         for (const b of batches) {
-          const m = materials.get(b.material);
+          const m = materials.get(b.material), t = pageTextures[b.page];
           gl.uniform4fv(prog.u.u_base_color, m.color);
           gl.uniform1i(prog.u.u_has_texture, m.texture ? 1 : 0);
           gl.uniform1i(prog.u.u_base_uv, m.uv);
+          gl.activeTexture(gl.TEXTURE1);
+          gl.bindTexture(gl.TEXTURE_2D_ARRAY, t.coefficients);
+          gl.activeTexture(gl.TEXTURE2);
+          gl.bindTexture(gl.TEXTURE_2D, t.albedo);
           gl.activeTexture(gl.TEXTURE3);
           gl.bindTexture(gl.TEXTURE_2D, m.texture);
           gl.drawElements(gl.TRIANGLES, b.count, gl.UNSIGNED_INT, 4 * b.first);

@@ -95,7 +95,8 @@ LightmapQuantization quantize_lightmap(const std::vector<float>& rows, std::size
 
 struct GltfLightmapOptions {
   // The relit lightmap (linear radiance per covered texel, exposure applied):
-  // written as an sRGB PNG the materials show unlit at TEXCOORD_1; empty: none.
+  // written as an sRGB PNG (one per page) the materials show unlit at
+  // TEXCOORD_1; empty: none.
   std::vector<glm::vec3> baked;
   GltfBake bake;                  // what extras records of it
   std::vector<Light> lights;      // KHR_lights_punctual, as GltfOptions::lights
@@ -115,6 +116,15 @@ void bake_lightmap(GltfLightmapOptions& opts, const LightmapTransfer& t, const L
 // and its lightmap `t` as coefficient textures: 8-bit RGBA PNGs, 4
 // coefficients each, gutters filled (lightmap_sources), with the scale and
 // bias of every coefficient and the decoding rule in asset.extras.prt.
+// A lightmap of many pages (t.layout.pages > 1; `scene` with its pages
+// stacked, as lightmap_scene gives it and `texels` were taken in) is
+// written as pages, not as the stacked atlas: every image (coefficient
+// textures, the bake) once per page at a page's size, each object's mesh a
+// primitive per page it lies on (a triangle's page: its centroid's), its
+// TEXCOORD_1 local to that page, (u, pages x v - p), extras
+// {"prt_lightmap_page": p}, and with a bake a material per page showing that
+// page's baked image; extras record the pages (docs/FORMAT.md). One page
+// writes what it wrote before pages existed.
 // .glb or .gltf (one file, images and buffer embedded), through
 // write_atomically. Throws prt::Error naming `path`.
 void write_gltf_lightmap(const std::string& path, const Scene& scene, const LightmapTransfer& t,

@@ -31,12 +31,13 @@ struct WebPage {
   bool auto_exposure = false;
   bool turn = false;              // start with the environment turning
   // A lightmap's page (model.glb from write_gltf_lightmap): the texels'
-  // own albedo as a W x H image (lightmap_image: gutters filled), which the
+  // own albedo as an image (lightmap_image: gutters filled), which the
   // page divides out where a fragment takes its material's albedo, as
   // prt render does (Renderer::set_lightmap_detail). Empty for per-vertex
-  // transfer.
+  // transfer. `lightmap_pages` pages of lightmap_width x lightmap_height
+  // (a page's size), stacked top to bottom as lightmap_image gives them.
   std::vector<glm::vec4> lightmap_albedo;
-  int lightmap_width = 0, lightmap_height = 0;
+  int lightmap_width = 0, lightmap_height = 0, lightmap_pages = 1;
 };
 
 // The HDR map files (.exr, .hdr, .pfm, any case) directly in `dir`,
@@ -80,7 +81,8 @@ class StagedPage {
 // initial state), maps/NAME.rgb16f (each map as a lat-long background: RGB half
 // floats, row 0 at the top) and maps/NAME.png (the picker's 128 x 64
 // thumbnail) and, for a lightmap, lightmap_albedo.rgb16f (the texel albedo,
-// RGB half floats, row 0 at the top). Checks the directory first (check_web_dir). Throws
+// RGB half floats, row 0 at the top; many pages one after another, lighting.json's
+// "pages" beside a page's width and height). Checks the directory first (check_web_dir). Throws
 // prt::Error("cancelled") when cancelled() turns true between maps (Ctrl-C),
 // prt::Error naming the file on a bad map or a failed write; nothing is
 // left then. Progress lines go to stderr unless quiet.

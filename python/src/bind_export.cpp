@@ -123,9 +123,7 @@ LightmapExport lightmap_export(const prt::LightmapTransfer& l, const prt::Scene&
   if (bake.is_none() && (!rotate.is_none() || !exposure.is_none()))
     throw Error(std::string(rotate.is_none() ? "exposure" : "rotate") +
                 ": applies to the baked lightmap: give bake= (a map file) too");
-  LightmapExport x{prt::lightmap_texels(scene, l.layout.width, l.layout.height, l.layout.uv_set,
-                                        l.transfer.vertex_colors ? nullptr : &l.transfer.albedo),
-                   {}};
+  LightmapExport x{prt::lightmap_texels(scene, l.layout, l.transfer.vertex_colors ? nullptr : &l.transfer.albedo), {}};
   prt::check_matches(l, x.texels, "the lightmap");
   x.opts.generator = "prt " PRT_VERSION " (prt export)";
   if (!bake.is_none()) {
@@ -244,7 +242,8 @@ void bind_export(py::module_& m) {
       "textures as glTF 2.0 (docs/FORMAT.md \"Lightmap export\"), as prt export SCENE LIGHTMAP -o FILE does "
       "(extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance "
       "becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', "
-      "default 0), as --bake.");
+      "default 0), as --bake. A lightmap of many pages (its Scene from lightmap_scene: the pages stacked) is "
+      "written as pages: images of a page's size and a primitive per page, as prt export writes it.");
 
   m.def(
       "export_web",
@@ -289,7 +288,8 @@ void bind_export(py::module_& m) {
                                   tone_map, turn, force, bake);
         w.lightmap_albedo = prt::lightmap_image(l.layout, x.texels.albedo);
         w.lightmap_width = l.layout.width;
-        w.lightmap_height = l.layout.height;
+        w.lightmap_height = l.layout.page_height();
+        w.lightmap_pages = l.layout.pages;
         py::gil_scoped_release release;
         std::unique_ptr<prt::StagedPage> page = prt::stage_web_page(
             w, l.transfer.bands,

@@ -81,3 +81,25 @@ def test_kinds_python_does_not_export_say_why(tmp_path):
         with pytest.raises(prt.Error, match="is a wavelet transfer: prt.export_gltf and prt.export_web take SH"):
             export(w, prt.load_mesh(mesh), tmp_path / "out", fov=35)  # any arguments: the kind is refused
     assert sorted(p.name for p in tmp_path.iterdir()) == ["w.prt"]
+
+
+def test_many_pages_are_the_clis(tmp_path):
+    """A lightmap of 3 pages (UVs prt makes): export_gltf and export_web on its
+    Scene from lightmap_scene (the pages stacked) write the command's files,
+    a page's images and a primitive per page (docs/FORMAT.md "Lightmap export")."""
+    path = tmp_path / "pages.prt"
+    run_prt("precompute", SCENE, "--lightmap", "16x16", "--lightmap-uv", "auto", "--pages", "3", "--samples", "16",
+            "--bands", "2", "-q", "-o", path)
+    lm = prt.read_lightmap(path)
+    scene = prt.lightmap_scene(prt.load_scene(SCENE), lm)
+    want, got = tmp_path / "cli.glb", tmp_path / "py.glb"
+    run_prt("export", SCENE, path, "-o", want, "--bake", ENV, "-q")
+    prt.export_gltf(lm, scene, got, bake=ENV)
+    a, b = glb(want.read_bytes()), glb(got.read_bytes())
+    assert a == b
+    assert a[0]["asset"]["extras"]["prt"]["lightmap"]["pages"] == 3
+    run_prt("export", SCENE, path, "--web", tmp_path / "cli", "--env", ENV, "-q")
+    prt.export_web(lm, scene, tmp_path / "py", env=ENV)
+    for name in ("lighting.json", "lightmap_albedo.rgb16f"):
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "py" / name).read_bytes(), name
+    assert json.loads((tmp_path / "py" / "lighting.json").read_text())["lightmap_albedo"]["pages"] == 3

@@ -141,7 +141,8 @@ function serve(dir) {
 // page's initial camera turned and raised), exposure, negatives (also the
 // negative controls), controls (also the controls' checks), textured (a
 // lightmap with a textured material: the detail toggle must change the
-// frame), tolerances (this case's; default: the per-vertex ones).
+// frame), tolerances (this case's; default: the per-vertex ones), pages (a
+// lightmap of that many pages: the page must draw them all).
 async function runCase(browser, tmp, name, c) {
   const mesh = path.join(args.source, c.scene);
   const transfer = path.join(tmp, name + '.prt');
@@ -191,11 +192,14 @@ async function runCase(browser, tmp, name, c) {
       throw new Error(`sizes: page ${web.width}x${web.height}, prt render ${prt.width}x${prt.height}, expected ${W}x${H}`);
     const m = compare(web, prt, bg);
     const passes = (x) => passesWithin(x, tol);
-    console.log(`${name}: page (${info.lightmap ? `lightmap ${info.lightmap.width}x${info.lightmap.height}, ` : ''}` +
+    const pages = info.lightmap && info.lightmap.pages > 1 ? `${info.lightmap.pages} pages of ` : '';
+    console.log(`${name}: page (${info.lightmap ? `lightmap ${pages}${info.lightmap.width}x${info.lightmap.height}, ` : ''}` +
                 `${info.vertices} vertices, ${info.bands} bands, ${info.channels} channel(s); ` +
                 `"${status}") vs prt render: ${show(m)}`);
     if (!passes(m)) fail(name + ': the page differs from prt render beyond the tolerances');
     if (m.modelPixels < 0.1 * W * H) fail(name + ': the model covers only ' + m.modelPixels + ' pixels');
+    if (c.pages && !(info.lightmap && info.lightmap.pages === c.pages))
+      fail(`${name}: the page read ${info.lightmap && info.lightmap.pages} lightmap pages, expected ${c.pages}`);
     if (c.negatives) {
       await tab.evaluate(() => prtViewer.set({ model: true, spin: 90 }));
       const mt = compare(await shot(), prt, bg);
@@ -283,6 +287,15 @@ async function main() {
       scene: 'models/room.gltf', exposure: 1.5, camera: [1.7, 1.7, 1.8, -0.6, 0.6, -0.9, 0, 1, 0],
       precompute: ['--lightmap', '64x64', '--bands', '3', '--samples', '64', '--mode', 'interreflected'],
       tolerances: lightmapTolerances, negatives: true, textured: true });
+    // A lightmap of many pages (UVs prt makes, packed into 3 pages): the
+    // glTF's images and primitives per page (docs/FORMAT.md "Lightmap
+    // export"), each page's textures bound to its primitives; prt render
+    // draws the same file from its pages stacked into one atlas.
+    await runCase(browser, tmp, 'lightmap_pages', {
+      scene: 'models/room.gltf', exposure: 1.5, camera: [1.7, 1.7, 1.8, -0.6, 0.6, -0.9, 0, 1, 0], pages: 3,
+      precompute: ['--lightmap', '48x48', '--lightmap-uv', 'auto', '--pages', '3', '--bands', '3', '--samples', '64',
+                   '--mode', 'interreflected'],
+      tolerances: lightmapTolerances, textured: true });
     await runCase(browser, tmp, 'lightmap_wall', {
       scene: 'models/wall-on-floor.gltf', exposure: 0,
       precompute: ['--lightmap', '64x64', '--bands', '4', '--samples', '64', '--albedo', '0.7,0.7,0.7'],

@@ -153,8 +153,8 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
     throw UsageError("--bake: a lightmap's baked texture goes into the glTF of --output (the page relights the "
                      "coefficient textures): give --output FILE.glb too");
   const prt::Scene scene = load_lightmap_scene(a.mesh, lt.layout);
-  const LightmapTexels texels = lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
-                                                lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
+  const LightmapTexels texels =
+      lightmap_texels(scene, lt.layout, lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
   check_matches(lt, texels, a.transfer);
   if (!a.quiet) fmt::print(stderr, "{}\n{}", describe(scene), describe_transfer(lt));
   GltfLightmapOptions opts;
@@ -196,7 +196,8 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
     WebPage w = web_page(a, scene.mesh, euler, tone);
     w.lightmap_albedo = lightmap_image(lt.layout, texels.albedo);
     w.lightmap_width = lt.layout.width;
-    w.lightmap_height = lt.layout.height;
+    w.lightmap_height = lt.layout.page_height();
+    w.lightmap_pages = lt.layout.pages;
     GltfLightmapOptions page_opts = opts;
     page_opts.baked.clear();
     page_opts.lights.clear();  // (none: export_lights refuses them with --web)
@@ -208,9 +209,10 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   if (!a.quiet) {
     const std::size_t stride = lt.transfer.stride();
     if (!a.output.empty())
-      fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures ({}x{} RGBA8, {} bytes per texel){}{}\n",
-                 a.output, scene.objects.size(), (stride + 3) / 4, lt.layout.width, lt.layout.height,
-                 4 * ((stride + 3) / 4), opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)",
+      fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures{} ({} RGBA8, {} bytes per texel){}{}\n",
+                 a.output, scene.objects.size(), (stride + 3) / 4, lt.layout.pages > 1 ? " per page" : "",
+                 lightmap_size_text(lt.layout), 4 * ((stride + 3) / 4),
+                 opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)",
                  opts.lights.empty() ? "" : "; " + describe_lights(opts.lights) + " as KHR_lights_punctual");
     if (page) print_page_written(a);
   }
@@ -447,6 +449,8 @@ Run add_export(CLI::App& app) {
       "A lightmap (prt precompute SCENE --lightmap) is exported as the scene, one node per object, its lightmap\n"
       "UVs as TEXCOORD_1 and its transfer as 8-bit coefficient textures with a scale and bias per coefficient\n"
       "(docs/FORMAT.md, \"Lightmap export\"); --bake adds the baked lightmap; --web relights it per pixel.\n"
+      "A lightmap of many pages (--pages) is written as pages: each page's images at a page's size, and each\n"
+      "object a primitive per page, its TEXCOORD_1 in that page's [0, 1].\n"
       "A probe volume (prt precompute SCENE --probes), given as TRANSFER or --probes FILE, is exported relit\n"
       "under --bake ENV as JSON: each probe's\n"
       "three.js LightProbe and Unity SphericalHarmonicsL2 arrays; --matrices adds its SH matrices (docs/PROBES.md).\n"
