@@ -69,7 +69,9 @@ class Lightmap:
         ...
     @property
     def height(self) -> Any:
-        ...
+        """
+        The atlas's rows: every page's stacked, pages x page_height (page_height for one page)
+        """
     @property
     def interpolated(self) -> numpy.ndarray:
         """
@@ -83,33 +85,49 @@ class Lightmap:
     @property
     def mode(self) -> Any:
         ...
+    @property
+    def page_height(self) -> Any:
+        """
+        A page's height in texels (prt precompute --lightmap WxH's H)
+        """
+    @property
+    def pages(self) -> Any:
+        """
+        Pages, 1 to 10: page p is UV tile u in [p, p + 1] (UDIM tile 1001 + p), rows p * page_height to (p + 1) * page_height - 1 of the stacked atlas
+        """
     def relight(self, scene: Scene, lighting: Any, *, lights: Any = ...) -> numpy.ndarray:
         """
-        The lightmap relit on `scene` (the Scene it was computed for), as prt relight SCENE LIGHTMAP ENV [--lights ...] -o x.exr: float32 (H, W, 4), its EXR (RGB linear radiance, A = 1 at covered texels, gutters filled).
+        The lightmap relit on `scene` (the Scene it was computed for), as prt relight SCENE LIGHTMAP ENV [--lights ...] -o x.exr: float32 (height, width, 4), its EXR (RGB linear radiance, A = 1 at covered texels, gutters filled). A lightmap of many pages gives them stacked, (pages * page_height, width, 4), page p's rows from p * page_height (gutters never filled from another page): split_pages(image) gives the images prt relight writes as OUT.1001.exr, OUT.1002.exr, ...
 
         Arguments:
-          scene: the Scene.
+          scene: the Scene (lightmap_scene(scene, lightmap) for UVs prt made or many pages).
           lighting: coefficients (n*n, 3) (project()), at least the lightmap's bands^2.
           lights: a list of Light (None: none): their direct light, traced against the scene at the texels' sample points, is added [--lights]. Only these: the scene's own (scene.lights) are added by passing them too. The sun split (--sun auto) takes the map, which SH lighting no longer is: split_sun(map) first, project the sky, and pass the sun in lights= (docs/LIGHTS.md).
         """
     def rows(self, scene: Scene) -> numpy.ndarray:
         """
-        float32 (N, channels, bands^2): every covered texel's transfer, analytic ones evaluated from `scene`
+        float32 (N, channels, bands^2): every covered texel's transfer, analytic ones evaluated from `scene` (the Scene it was laid out in: lightmap_scene(scene, lightmap) for UVs prt made or many pages)
         """
     @property
     def scene_hash(self) -> Any:
         ...
+    def split_pages(self, image: Any) -> list:
+        """
+        The pages of `image`, an array whose first axis is the stacked atlas's rows (height = pages x page_height; relight's image): a list of `pages` views of it, page p (UDIM tile 1001 + p) its rows p * page_height to (p + 1) * page_height - 1, as prt relight writes OUT.1001.exr, OUT.1002.exr, ... ([image] for one page).
+        """
     @property
     def texels(self) -> numpy.ndarray:
         """
-        uint32 (N,): covered texels, y * width + x (rows from the top)
+        uint32 (N,): covered texels, y * width + x (rows from the top, of the pages stacked: page y // page_height)
         """
     @property
     def uv_set(self) -> Any:
         ...
     @property
     def width(self) -> Any:
-        ...
+        """
+        The atlas's width in texels (a page's)
+        """
     def write(self, path: Any) -> None:
         """
         Writes the lightmap file to `path` (docs/FORMAT.md), atomically (a temporary file, then renamed).
@@ -377,12 +395,12 @@ class Transfer:
         Writes the file to `path` (atomically) as prt precompute does (docs/FORMAT.md); a compressed transfer as prt compress does.
         """
 
-def lightmap_from_rows(scene: Scene, width: int, height: int, rows: Any, *, uv_set: int = ..., mode: str = ...) -> Lightmap:
+def lightmap_from_rows(scene: Scene, width: int, height: int, rows: Any, *, uv_set: int = ..., mode: str = ..., pages: Any = ...) -> Lightmap:
     """
     A lightmap from arrays, for a Scene: every texel of the atlas stored (none analytic); .write() makes a file prt relight reads.
 
     Arguments:
-      scene: the Scene; width, height: the atlas in texels, 1 to 16384 each; uv_set: its UV set, 0 to 7 (-1: as precompute_lightmap).
+      scene: the Scene; width, height: the atlas (a page) in texels, 1 to 16384 each; uv_set: its UV set, 0 to 7 (-1: as precompute_lightmap); pages: 1 to 10 or 'auto', as precompute_lightmap's (the texels in the order of the pages stacked).
       rows: float32 (N, channels, bands^2), one per covered texel, in texel order.
       mode: the transfer mode recorded ('shadowed', 'interreflected', ...).
 
@@ -394,14 +412,15 @@ def load_scene(path: Any) -> Scene:
     Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.
     """
 
-def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., material: str = ..., sss: Any = ..., sigma_a: Any = ..., sigma_s: Any = ..., eta: Any = ..., length_scale: float = ...) -> Lightmap:
+def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., material: str = ..., sss: Any = ..., sigma_a: Any = ..., sigma_s: Any = ..., eta: Any = ..., length_scale: float = ..., pages: Any = ...) -> Lightmap:
     """
     The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.
 
     Arguments (prt precompute's option in brackets):
       scene: a Scene (load_scene).
-      width, height: the atlas in texels, 1 to 16384 each [--lightmap WxH].
+      width, height: the atlas (a page) in texels, 1 to 16384 each [--lightmap WxH].
       uv_set: the scene's UV set the atlas is laid out in, 0 to 7 (TEXCOORD_N), or -1: TEXCOORD_1 where every object has it, else TEXCOORD_0 [--uv].
+      pages: a lightmap of many pages [--pages]: 1 to 10 width x height pages, page p in UV tile u in [p, p + 1] (UDIM tile 1001 + p; unwrap_scene(pages=...) makes such UVs), or 'auto': the tiles the UV set uses. The Lightmap holds them stacked (height = pages x height; relight it on lightmap_scene(scene, lightmap)). 1 (the default): one atlas, UVs in [0, 1].
       bands (1 to 16) [--bands], samples (rays per texel) [--samples], mode [--mode], bounces [--bounces], seed [--seed]: as precompute's.
       adaptive [--adaptive [TOL]], verify_adaptive [--verify-adaptive], adaptive_any [--adaptive-any]: as precompute's, among the texels: None traces every texel; 0 (the default TOL) or a TOL in (0, 1) traces a subset and interpolates the rest from neighbouring texels of the same chart. The Lightmap's .interpolated marks the interpolated texels.
       light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.
@@ -879,7 +898,7 @@ def verify(*, bands_max: int = ..., float_bands: int = ..., progress: Any = ...)
 
 def render(transfer: Any, mesh: Any, map: Any, *, width: int = ..., height: int = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., linear: bool = ..., shading: Any = ..., bands: Any = ..., gloss: float = ..., specular: float = ..., diffuse: Any = ..., deform: Any = ..., amount: float = ..., terms: int = ..., selection: str = ..., alpha: bool = ..., probes: Any = ..., object: Any = ..., object_at: Any = ..., object_size: float = ..., lights: Any = ..., sun: str = ..., shadow_map_size: int = ...) -> numpy.ndarray:
     """
-    A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 matrix or yaw, pitch, roll degrees). camera: None (prt render's default camera: a three-quarter view from above that frames every vertex, or from inside a room that encloses its centre), (eye, target[, up]) or a dict; fov: vertical degrees (None: 40, or 70 inside a room). exposure: stops or 'auto' (prt render's rule: the 99th percentile of the model's pixels in this frame, their largest channel, at 1). Values: the tone map's display values in [0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', 'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform ('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its Scene (mesh=the Scene; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object (a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal (0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: (height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render --alpha). lights: a list of Light (None: none), each one's direct light drawn beside the map's PRT with shadow maps, as prt render --lights (docs/LIGHTS.md); only these: a glTF's own lights (Scene.lights) are added by passing them too. sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun), the rest lighting the transfer and the sun drawn as a directional light turned by rotate, the map as given the background (prt render --sun auto). shadow_map_size: the lights' shadow maps, 16 to 8192 texels a side of a cube face (a sun's map has twice as many) [--shadow-map-size]. Raises prt.Error where no OpenGL 4.5 context can be had.
+    A frame as prt render draws it, headless (OpenGL 4.5 through EGL; one context per process, made on the first call on a thread of its own and reused): float32 (height, width, 3), row 0 at the top. The map is the background and the lighting (an EnvMap, a file name or an (H, W, 3) array), turned by rotate (a 3x3 matrix or yaw, pitch, roll degrees). camera: None (prt render's default camera: a three-quarter view from above that frames every vertex, or from inside a room that encloses its centre), (eye, target[, up]) or a dict; fov: vertical degrees (None: 40, or 70 inside a room). exposure: stops or 'auto' (prt render's rule: the 99th percentile of the model's pixels in this frame, their largest channel, at 1). Values: the tone map's display values in [0, 1] (tone_map 'clamp', 'reinhard' or 'aces'; sRGB-encode them to show), or with linear=True the linear radiance times 2^exposure (what prt render writes to EXR). shading: the renderer's ('transfer', 'direct', 'unshadowed', 'lambert', 'ao', 'bent', 'glossy', 'clusters'; default 'glossy' for a glossy transfer, else 'transfer'); bands: a band limit; gloss, specular, diffuse: a glossy transfer's lobe; deform ('bend:ANGLE' or 'twist:ANGLE') and amount: a zonal-harmonic transfer's pose; terms and selection: a wavelet transfer's (relit on the CPU each frame, as prt render --terms --selection). A Lightmap draws its Scene (mesh=the Scene, lightmap_scene(scene, lightmap) for UVs prt made or many pages; shading 'transfer' or 'direct'). probes (a ProbeVolume of the scene drawn) and object (a Mesh): an object lit by the volume, as prt render --probes --object: object_size its bounding-box diagonal (0: twice the probe spacing), object_at its centre (None: the start of prt render's path). alpha=True: (height, width, 4), A = 1 where the model covers the pixel, 0 where the background shows (prt render --alpha). lights: a list of Light (None: none), each one's direct light drawn beside the map's PRT with shadow maps, as prt render --lights (docs/LIGHTS.md); only these: a glTF's own lights (Scene.lights) are added by passing them too. sun: 'none' (the map as it is) or 'auto': the map's sun split off (split_sun), the rest lighting the transfer and the sun drawn as a directional light turned by rotate, the map as given the background (prt render --sun auto). shadow_map_size: the lights' shadow maps, 16 to 8192 texels a side of a cube face (a sun's map has twice as many) [--shadow-map-size]. Raises prt.Error where no OpenGL 4.5 context can be had.
     """
 
 @overload
@@ -890,7 +909,7 @@ def export_gltf(transfer: Transfer, mesh: Mesh, path: Any, *, bake: Any = ..., r
 @overload
 def export_gltf(transfer: Lightmap, mesh: Scene, path: Any, *, bake: Any = ..., rotate: Any = ..., exposure: Any = ...) -> None:
     """
-    For a Lightmap and its Scene: writes the scene (one node per object) with the lightmap's coefficient textures as glTF 2.0 (docs/FORMAT.md "Lightmap export"), as prt export SCENE LIGHTMAP -o FILE does (extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', default 0), as --bake.
+    For a Lightmap and its Scene: writes the scene (one node per object) with the lightmap's coefficient textures as glTF 2.0 (docs/FORMAT.md "Lightmap export"), as prt export SCENE LIGHTMAP -o FILE does (extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', default 0), as --bake. A lightmap of many pages (its Scene from lightmap_scene: the pages stacked) is written as pages: images of a page's size and a primitive per page, as prt export writes it.
     """
 @overload
 def export_gltf(transfer: WaveletTransfer, *args, **kwargs) -> None:
@@ -1050,20 +1069,21 @@ def direct_light(mesh: Any, lights: Any, positions: Any = ..., normals: Any = ..
     Returns float32 (N, 3) linear RGB radiance.
     """
 
-def unwrap_scene(scene: Scene, *, width: int = ..., height: int = ..., texel_size: float = ..., padding: int = ..., max_stretch: float = ...) -> tuple:
+def unwrap_scene(scene: Scene, *, width: int = ..., height: int = ..., texel_size: float = ..., padding: int = ..., max_stretch: float = ..., pages: Any = ...) -> tuple:
     """
-    Lightmap UVs made by prt (prt unwrap; docs/LIGHTMAPS.md "Lightmap UVs made by prt"): returns (Scene, stats), the scene with one UV set more (its last; vertices split where charts meet) and the atlas's figures (a dict: charts, covered_texels, use, max_stretch, min_gap, ...).
-      width, height: the atlas to fill at the largest density that fits [--lightmap]; texel_size > 0: a texel's edge in scene units instead [--texel-size]; padding: empty texels between charts, 0 to 62 [--padding]; max_stretch: a triangle's largest anisotropy, 1 to 100 [--max-stretch].
+    Lightmap UVs made by prt (prt unwrap; docs/LIGHTMAPS.md "Lightmap UVs made by prt"): returns (Scene, stats), the scene with one UV set more (its last; vertices split where charts meet) and the atlas's figures (a dict: width, height (pages stacked: pages x a page's height), pages, charts, covered_texels, use, max_stretch, min_gap, ...).
+      width, height: the atlas (a page) to fill at the largest density that fits [--lightmap]; texel_size > 0: a texel's edge in scene units instead [--texel-size]; padding: empty texels between charts, 0 to 62 [--padding]; max_stretch: a triangle's largest anisotropy, 1 to 100 [--max-stretch].
+      pages: a lightmap of many pages [--pages], page p in UV tile u in [p, p + 1] (UDIM tile 1001 + p): 1 to 10 width x height pages filled at the largest density that fits (texel_size 0), or 'auto' with texel_size > 0: as many width x height pages as the charts take at that density. 1 (the default): one atlas, UVs in [0, 1].
     """
 
 def atlas_stats(scene: Scene, uv_set: int, width: int, height: int) -> dict:
     """
-    The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure-uv): a dict of charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles.
+    The figures of the scene's UV set `uv_set` (0 to 7) as a width x height atlas (prt unwrap --measure-uv): a dict of width, height, pages, charts, covered_texels, use, max_stretch, max_area_ratio, min_gap, shared_texels, degenerate_triangles. A set whose UVs lie on many UV tiles (u in [p, p + 1]: page p, UDIM 1001 + p) is measured as that many width x height pages, stacked (height: pages x height).
     """
 
 def lightmap_scene(scene: Scene, lightmap: Lightmap) -> Scene:
     """
-    The scene `lightmap` is laid out in: `scene` itself, or, where prt made its UVs (prt precompute --lightmap-uv auto), `scene` unwrapped again as it was then. Pass it to Lightmap.rows and Lightmap.relight.
+    The scene `lightmap` is laid out in: `scene` itself, or, where prt made its UVs (prt precompute --lightmap-uv auto), `scene` unwrapped again as it was then; for a lightmap of many pages, with the UV set's tiles (page p: u in [p, p + 1]) stacked into one atlas (page p's rows p * page_height onwards). Pass it to Lightmap.rows, Lightmap.relight and render.
     """
 
 def write_scene(scene: Scene, path: Any) -> None:
