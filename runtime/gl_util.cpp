@@ -60,11 +60,12 @@ void apply_test_limits(Limits& l) {
     std::uint64_t* field = name == "GL_MAX_SHADER_STORAGE_BLOCK_SIZE" ? &l.storage_block
                            : name == "GL_MAX_TEXTURE_BUFFER_SIZE"     ? &l.texture_buffer_texels
                            : name == "GL_MAX_COMPUTE_WORK_GROUP_COUNT" ? &l.work_groups
+                           : name == "GL_MAX_TEXTURE_SIZE"             ? &l.texture_size
                                                                         : nullptr;
     if (!field || eq == std::string::npos || ec != std::errc() || ptr != item.data() + item.size() || value == 0)
       throw Error(fmt::format("PRT_TEST_GL_LIMITS: '{}' is not NAME=VALUE with NAME one of "
                               "GL_MAX_SHADER_STORAGE_BLOCK_SIZE, GL_MAX_TEXTURE_BUFFER_SIZE, "
-                              "GL_MAX_COMPUTE_WORK_GROUP_COUNT and VALUE a positive integer",
+                              "GL_MAX_COMPUTE_WORK_GROUP_COUNT, GL_MAX_TEXTURE_SIZE and VALUE a positive integer",
                               item));
     *field = std::min(*field, value);
   }
@@ -73,9 +74,10 @@ void apply_test_limits(Limits& l) {
 }  // namespace
 
 Limits limits() {
-  GLint64 block = 0, texels = 0, align = 0;
+  GLint64 block = 0, texels = 0, align = 0, side = 0;
   GLint groups = 0;
   glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &block);
+  glGetInteger64v(GL_MAX_TEXTURE_SIZE, &side);
   glGetInteger64v(GL_MAX_TEXTURE_BUFFER_SIZE, &texels);
   glGetInteger64v(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
   glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &groups);
@@ -84,6 +86,7 @@ Limits limits() {
   l.texture_buffer_texels = std::uint64_t(std::max<GLint64>(texels, 0));
   l.work_groups = std::uint64_t(std::max<GLint>(groups, 0));
   l.storage_align = std::uint64_t(std::max<GLint64>(align, 1));
+  l.texture_size = std::uint64_t(std::max<GLint64>(side, 0));
   apply_test_limits(l);
   return l;
 }

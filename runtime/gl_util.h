@@ -30,13 +30,14 @@ void check_gl(const std::string& what);
 
 // The implementation limits the renderer sizes its buffers and dispatches by.
 // PRT_TEST_GL_LIMITS="GL_MAX_SHADER_STORAGE_BLOCK_SIZE=4096,..." lowers any
-// of the first three (a test hook: tests meet the limits with small meshes);
-// prt::Error for a malformed value.
+// of them but the alignment (a test hook: tests meet the limits with small
+// meshes); prt::Error for a malformed value.
 struct Limits {
   std::uint64_t storage_block = 0;          // GL_MAX_SHADER_STORAGE_BLOCK_SIZE, bytes
   std::uint64_t texture_buffer_texels = 0;  // GL_MAX_TEXTURE_BUFFER_SIZE, texels
   std::uint64_t work_groups = 0;            // GL_MAX_COMPUTE_WORK_GROUP_COUNT in x
   std::uint64_t storage_align = 1;          // GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, bytes
+  std::uint64_t texture_size = 0;           // GL_MAX_TEXTURE_SIZE, texels a side of a 2D texture
 };
 Limits limits();
 

@@ -44,10 +44,27 @@ std::vector<std::uint32_t> image_writes(const LightmapLayout& l, int rings) {
   return out;
 }
 
+// Throws prt::Error when the lightmap's texture (a page's width by every
+// page's rows, stacked as the layout indexes them) is past GL_MAX_TEXTURE_SIZE.
+void check_texture_size(const LightmapLayout& l, std::uint64_t side) {
+  if (std::uint64_t(l.width) <= side && std::uint64_t(l.height) <= side) return;
+  if (l.pages == 1)
+    throw Error(fmt::format("the lightmap's {}x{} atlas is past this OpenGL's largest texture ({} texels a side, "
+                            "GL_MAX_TEXTURE_SIZE): bake a smaller one (prt precompute --lightmap WxH, each side at "
+                            "most {})",
+                            l.width, l.height, side, side));
+  throw Error(fmt::format("the lightmap's {} is drawn from one {}x{} texture, the pages stacked, which is past this "
+                          "OpenGL's largest texture ({} texels a side, GL_MAX_TEXTURE_SIZE): bake it on fewer, "
+                          "larger pages (prt precompute --lightmap WxH --pages N, with W and N x H at most {}; wider "
+                          "pages of fewer rows hold as many texels)",
+                          lightmap_size_text(l), l.width, l.height, side, side));
+}
+
 }  // namespace
 
 LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, const LightmapTransfer& t,
                            const gl::Limits& limits) {
+  check_texture_size(t.layout, limits.texture_size);
   const Transfer& tr = t.transfer;
   bands_ = tr.bands;
   channels_ = tr.channels;

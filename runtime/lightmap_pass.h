@@ -25,8 +25,10 @@ namespace prt::detail {
 class LightmapPass {
  public:
   // Uploads the scene and the lightmap (the caller has run check_matches
-  // with `texels`). Throws prt::Error when the rows exceed this OpenGL's
-  // storage block size (limits.storage_block).
+  // with `texels`): its image is one width x height texture, a lightmap of
+  // many pages drawn with the scene's UVs stacked (prt::stack_lightmap_pages).
+  // Throws prt::Error when the rows exceed this OpenGL's storage block size
+  // (limits.storage_block) or the texture its largest (limits.texture_size).
   LightmapPass(const Scene& scene, const LightmapTexels& texels, const LightmapTransfer& t, const gl::Limits& limits);
   ~LightmapPass();
   LightmapPass(const LightmapPass&) = delete;

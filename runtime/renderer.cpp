@@ -408,7 +408,7 @@ void Renderer::set_mesh(const Mesh& mesh, const glm::vec3& albedo, bool vertex_c
 void Renderer::set_scene(const Scene& scene, const LightmapTransfer& t) {
   if (const std::string p = lightmap_problem(t); !p.empty()) throw Error("inconsistent lightmap: " + p);
   check_bands(t.transfer);
-  const LightmapTexels texels = lightmap_texels(scene, t.layout.width, t.layout.height, t.layout.uv_set,
+  const LightmapTexels texels = lightmap_texels(scene, t.layout,
                                                 t.transfer.vertex_colors ? nullptr : &t.transfer.albedo);
   check_matches(t, texels, "lightmap");
   Impl& m = *impl_;

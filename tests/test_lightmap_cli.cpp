@@ -7,6 +7,7 @@
 
 #include <prt/envmap.h>
 #include <prt/error.h>
+#include <prt/gltf.h>
 #include <prt/lightmap.h>
 #include <prt/lights.h>
 #include <prt/scene.h>
@@ -15,6 +16,7 @@
 #include <prt/wavelet_transfer.h>
 
 #include <fmt/format.h>
+#include <glm/common.hpp>
 #include <glm/gtc/packing.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -204,6 +206,138 @@ TEST(LightmapCli, AdaptiveTracesSomeTexelsAndRelightsNearTheFullRun) {
   // (tests/test_adaptive.cpp) for the relit error of every texel.
   constexpr double kSlack = 2.0, kTol = 0.01;
   EXPECT_LT(nlohmann::json::parse(c.out)["rel_rms"].get<double>(), kSlack * kTol) << c.out;
+}
+
+// The texels (x, y) a lightmap EXR covers (A = 1), as y * width + x.
+std::vector<std::uint32_t> covered_texels(const RgbaImage& img) {
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < std::size_t(img.width) * std::size_t(img.height); ++i)
+    if (img.rgba[4 * i + 3] == 1.0f) out.push_back(std::uint32_t(i));
+  return out;
+}
+
+// A lightmap of two pages (docs/LIGHTMAPS.md): models/room.gltf with its
+// floor's lightmap UVs moved to tile 1 (u + 1, UDIM 1002) is baked with
+// --pages 2, and every reading consumer takes it as the one-page room: prt
+// relight writes a page per EXR whose covered texels are the one-page
+// bake's at the same (x, y), the floor's on page 2 and the rest on page 1;
+// prt compare takes the pages with <UDIM>; prt render draws the same image;
+// prt info says the pages. --pages 1 on the copy is refused naming --pages
+// auto, and a stacked texture past GL_MAX_TEXTURE_SIZE naming the way out.
+TEST(LightmapCli, PagesRelightAndRenderAsOnePage) {
+  TempDir dir;
+  const std::string env = PRT_SOURCE_DIR "/envmaps/sunset.exr";
+  prt::Scene scene = load_scene(kModels + "/room.gltf");
+  const int set = scene.lightmap_uv_set(-1);
+  std::vector<glm::vec2>& uv = scene.uv_sets[std::size_t(set)];
+  // UVs on a 1/4096 grid, so that u + 1 and the stacked (v + 1) / 2 are
+  // exact in float: both files' texels lie at the same points to the bit.
+  for (glm::vec2& t : uv) t = glm::round(t * 4096.0f) / 4096.0f;
+  write_gltf_scene(dir.file("one.glb"), scene);
+  const auto floor = std::find_if(scene.objects.begin(), scene.objects.end(),
+                                  [](const SceneObject& o) { return o.name == "floor"; });
+  ASSERT_NE(floor, scene.objects.end());
+  for (std::size_t v = floor->first_vertex; v < floor->first_vertex + floor->vertex_count; ++v) uv[v].x += 1.0f;
+  write_gltf_scene(dir.file("two.glb"), scene);
+
+  const std::vector<std::string> bake = {"--lightmap", "48x48", "--samples", "64", "--seed", "7", "-q"};
+  const auto precompute = [&](const std::string& glb, const std::string& prt, std::vector<std::string> more) {
+    std::vector<std::string> args = {"precompute", dir.file(glb), "-o", dir.file(prt)};
+    args.insert(args.end(), bake.begin(), bake.end());
+    args.insert(args.end(), more.begin(), more.end());
+    return run_prt(dir, args);
+  };
+  Result r = precompute("one.glb", "one.prt", {});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = precompute("two.glb", "two.prt", {"--pages", "2"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = precompute("two.glb", "bad.prt", {"--pages", "1"});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("--pages auto"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.prt")));
+
+  r = run_prt(dir, {"info", dir.file("two.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.out.find("lightmap 2 pages of 48x48"), std::string::npos) << r.out;
+  r = run_prt(dir, {"info", dir.file("two.prt"), "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const nlohmann::json info = nlohmann::json::parse(r.out)["lightmap"];
+  EXPECT_EQ(info["pages"].get<int>(), 2) << r.out;
+  EXPECT_EQ(info["height"].get<int>(), 96) << r.out;  // the pages' rows, stacked
+
+  // (a) relight: one EXR per page, named so; the covered texels are the one-page bake's.
+  r = run_prt(dir, {"relight", dir.file("one.glb"), dir.file("one.prt"), env, "-q", "-o", dir.file("one.exr")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"relight", dir.file("two.glb"), dir.file("two.prt"), env, "-o", dir.file("two.exr")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find(fmt::format("wrote {} ... {} (2 pages of 48x48 RGBA", dir.file("two.1001.exr"),
+                                   dir.file("two.1002.exr"))),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("two.exr")));
+  const RgbaImage one = read_exr_rgba(dir.file("one.exr"));
+  const RgbaImage pages[2] = {read_exr_rgba(dir.file("two.1001.exr")), read_exr_rgba(dir.file("two.1002.exr"))};
+  std::vector<std::uint32_t> both;
+  for (const RgbaImage& page : pages) {
+    ASSERT_EQ(page.width, 48);
+    ASSERT_EQ(page.height, 48);
+    const std::vector<std::uint32_t> c = covered_texels(page);
+    EXPECT_GT(c.size(), 100u);
+    both.insert(both.end(), c.begin(), c.end());
+    // The same points, the same rays (the seed's one direction set), the
+    // same relighting: the same floats.
+    for (std::uint32_t t : c)
+      for (std::size_t ch = 0; ch < 3; ++ch)
+        ASSERT_EQ(page.rgba[4 * t + ch], one.rgba[4 * t + ch]) << "texel " << t << " of page " << (&page - pages);
+  }
+  // The floor's texels and the rest's together are the one page's, none on both pages.
+  std::sort(both.begin(), both.end());
+  EXPECT_EQ(both, covered_texels(one));
+  r = run_prt(dir, {"compare", dir.file("two.<UDIM>.exr"), dir.file("one.exr"), "--json"});
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  EXPECT_NE(r.err.find("<UDIM> in both paths"), std::string::npos) << r.err;
+  std::filesystem::copy_file(dir.file("two.1001.exr"), dir.file("same.1001.exr"));
+  std::filesystem::copy_file(dir.file("two.1002.exr"), dir.file("same.1002.exr"));
+  r = run_prt(dir, {"compare", dir.file("two.<UDIM>.exr"), dir.file("same.<UDIM>.exr"), "--json"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_EQ(nlohmann::json::parse(r.out)["vertices"].get<std::size_t>(), both.size()) << r.out;
+
+  // (b) render: the same camera (the framing one: the same geometry) sees the same light.
+  for (const std::string name : {"one", "two"}) {
+    r = run_prt(dir, {"render", dir.file(name + ".glb"), dir.file(name + ".prt"), env, "-q", "--width", "64",
+                      "--height", "64", "--exposure", "0", "-o", dir.file(name + "-r.exr")});
+    ASSERT_EQ(r.code, 0) << describe_run(r);
+  }
+  const RgbaImage r1 = read_exr_rgba(dir.file("one-r.exr")), r2 = read_exr_rgba(dir.file("two-r.exr"));
+  ASSERT_EQ(r1.rgba.size(), r2.rgba.size());
+  double most = 0, worst = 0;
+  for (std::size_t i = 0; i < r1.rgba.size(); ++i) {
+    most = std::max(most, double(r1.rgba[i]));
+    worst = std::max(worst, std::abs(double(r1.rgba[i]) - double(r2.rgba[i])));
+  }
+  ASSERT_GT(most, 0.0);
+  // The same texels' radiance to the bit, drawn from one texture or from
+  // its second page: the lightmap UVs' (v + 1) / 2 and the filter's weights
+  // in float differ by an ulp or so (measured 1.2e-7 of the brightest);
+  // 1e-5 of it. A page drawn from the other page's rows is off by the
+  // radiance itself.
+  constexpr double kSameImage = 1e-5;
+  EXPECT_LE(worst, kSameImage * most) << "worst " << worst << " of " << most;
+
+  // The stacked 48x96 texture past a GL_MAX_TEXTURE_SIZE of 64 is refused
+  // with the way out; the one page's 48x48 is not.
+  const std::vector<std::pair<std::string, std::string>> small = {{"PRT_TEST_GL_LIMITS", "GL_MAX_TEXTURE_SIZE=64"}};
+  r = run_prt(dir, {"render", dir.file("one.glb"), dir.file("one.prt"), env, "-q", "--width", "16", "--height", "16",
+                    "-o", dir.file("small.png")}, small);
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"render", dir.file("two.glb"), dir.file("two.prt"), env, "-q", "--width", "16", "--height", "16",
+                    "-o", dir.file("big.png")}, small);
+  EXPECT_EQ(r.code, 1) << describe_run(r);
+  for (const std::string& part : {dir.file("two.prt") + ": the lightmap's 2 pages of 48x48", std::string("48x96"),
+                                  std::string("(64 texels a side, GL_MAX_TEXTURE_SIZE)"),
+                                  std::string("fewer, larger pages")})
+    EXPECT_NE(r.err.find(part), std::string::npos) << part << "\n" << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("big.png")));
 }
 
 TEST(LightmapCli, FilesRoundTripAndReadersTellThemApart) {

@@ -13,7 +13,10 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/common.hpp>
+
 #include <cmath>
+#include <cstdlib>
 
 namespace prt {
 namespace {
@@ -205,6 +208,95 @@ TEST(RenderLightmap, OneColouredAlbedoForAllKeepsItUnderDetail) {
   ASSERT_GT(most, 0.0);
   // albedo x (1 / albedo) in float: a few ulps.
   EXPECT_LE(diff, 1e-6 * most);
+}
+
+}  // namespace
+}  // namespace prt
+
+namespace prt {
+namespace {
+
+// Sets an environment variable while it lives (PRT_TEST_GL_LIMITS: the
+// renderer reads it in set_scene).
+struct ScopedEnv {
+  ScopedEnv(const char* name, const char* value) : name_(name) { ::setenv(name, value, 1); }
+  ~ScopedEnv() { ::unsetenv(name_); }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+  const char* name_;
+};
+
+TEST(RenderLightmap, PagesDrawAsOnePage) {
+  // floor_and_box with the box's UVs moved to tile 1 (u + 1) and stacked
+  // into a 32 x 64 atlas of two pages (prt::stack_lightmap_pages): its
+  // texels relit on the GPU are relight_lightmap's, and the frame is the one
+  // page's. A texture past GL_MAX_TEXTURE_SIZE is refused naming the pages.
+  REQUIRE_RENDERER(r);
+  Scene one = floor_and_box(false);
+  // UVs on a 1/4096 grid: u + 1 and (v + 1) / 2 exact in float, so both
+  // scenes' texels lie at the same points to the bit.
+  for (glm::vec2& t : one.uv_sets[0]) t = glm::round(t * 4096.0f) / 4096.0f;
+  Scene moved = one;
+  const SceneObject& box = moved.objects[1];
+  for (std::size_t v = box.first_vertex; v < box.first_vertex + box.vertex_count; ++v) moved.uv_sets[0][v].x += 1.0f;
+  ASSERT_EQ(lightmap_pages_used(moved, 0), 2);
+  const Scene two = stack_lightmap_pages(moved, 0, 2);
+  LightmapLayout atlas;
+  atlas.width = 32;
+  atlas.height = 64;
+  atlas.pages = 2;
+  TransferOptions o;
+  o.bands = 3;
+  o.samples = 64;
+  LightmapTexels texels[2] = {lightmap_texels(one, 32, 32, 0), lightmap_texels(two, atlas)};
+  const Scene* scenes[2] = {&one, &two};
+  std::vector<Image> frames;
+  const std::vector<glm::dvec3> light = project(smooth_map(), 3);
+  Camera cam;
+  cam.eye = {0.5, 2.0, 1.5};
+  cam.target = {0, 0, 0};
+  cam.up = {0, 1, 0};
+  std::vector<LightmapTransfer> t;
+  for (int p = 0; p < 2; ++p) {
+    move_texels_out_of_geometry(scenes[p]->mesh, texels[p]);
+    t.push_back(compute_lightmap_transfer(*scenes[p], texels[p], o));
+    r->set_scene(*scenes[p], t.back());
+    r->set_lighting(light);
+    r->set_lightmap_detail(false);
+    frames.push_back(r->render(cam, 48, 48));
+    test::expect_radiance_near(r->lightmap_radiance(), relight_lightmap(t.back(), texels[p], light), kTexelTolerance,
+                               p == 0 ? "one page" : "two pages");
+  }
+  ASSERT_EQ(t[1].layout.pages, 2);
+  ASSERT_EQ(t[0].layout.texels.size(), t[1].layout.texels.size());
+  double most = 0, worst = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x)
+      for (int c = 0; c < 3; ++c) {
+        most = std::max(most, double(frames[0].at(x, y)[c]));
+        worst = std::max(worst, std::abs(double(frames[0].at(x, y)[c]) - double(frames[1].at(x, y)[c])));
+      }
+  ASSERT_GT(most, 0.0);
+  // The same transfer at the same points, relit on the GPU in float and
+  // sampled at (v + 1) / 2 of a texture twice as tall: the filter's 8-bit
+  // weights at coordinates rounded otherwise (measured 2e-6 of the
+  // brightest); kTexelTolerance bounds it. The box drawn from the floor's
+  // page, or from a page it is not on, is off by the radiance itself.
+  EXPECT_LE(worst, kTexelTolerance * most) << "worst " << worst << " of " << most;
+  ::testing::Test::RecordProperty("worst_relative", std::to_string(worst / most));
+
+  // GL_MAX_TEXTURE_SIZE 48: the one page (32 x 32) uploads, the stacked 32 x 64 does not.
+  const ScopedEnv limit("PRT_TEST_GL_LIMITS", "GL_MAX_TEXTURE_SIZE=48");
+  EXPECT_NO_THROW(r->set_scene(one, t[0]));
+  try {
+    r->set_scene(two, t[1]);
+    FAIL() << "a 32x64 lightmap texture past GL_MAX_TEXTURE_SIZE 48 was uploaded";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    for (const char* part : {"2 pages of 32x32", "one 32x64 texture", "(48 texels a side, GL_MAX_TEXTURE_SIZE)",
+                             "fewer, larger pages"})
+      EXPECT_NE(m.find(part), std::string::npos) << part << "\n" << m;
+  }
 }
 
 }  // namespace

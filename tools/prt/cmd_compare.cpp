@@ -1,10 +1,12 @@
 // prt compare: error of one vertex CSV against a reference one.
 #include "commands.h"
+#include "lightmap_inputs.h"
 
 #include <prt/vertex_csv.h>
 #include <prt/accuracy.h>
 #include <prt/compare.h>
 #include <prt/envmap.h>
+#include <prt/lightmap.h>
 
 #include <glm/geometric.hpp>
 
@@ -34,10 +36,11 @@ bool is_exr(const std::string& path) {
   return ext == ".exr";
 }
 
-// Two lightmaps (RGBA EXR, A = 1 at covered texels: prt relight and prt
-// reference --lightmap): the covered texels' RGB, in texel order.
-void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<glm::vec3>& a, std::vector<glm::vec3>& b,
-                    std::vector<glm::vec3>& se) {
+// One page of two lightmaps (RGBA EXR, A = 1 at covered texels: prt
+// relight and prt reference --lightmap): the covered texels' RGB appended to
+// `a` and `b` (B's standard errors to `se`), in texel order.
+void read_lightmap_page(const std::string& pa, const std::string& pb, std::vector<glm::vec3>& a,
+                        std::vector<glm::vec3>& b, std::vector<glm::vec3>& se) {
   const RgbaImage ia = read_exr_rgba(pa), ib = read_exr_rgba(pb);
   if (ia.width != ib.width || ia.height != ib.height)
     throw Error(fmt::format("{} is {}x{} but {} is {}x{}: not lightmaps of the same atlas", pa, ia.width, ia.height, pb,
@@ -54,6 +57,38 @@ void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<gl
   if (differ)
     throw Error(fmt::format("{} and {} cover different texels ({} differ in A): not lightmaps of the same scene and atlas",
                             pa, pb, differ));
+}
+
+// The files of a lightmap: `path`, or for "<UDIM>" in it every page from
+// 1001 up that exists (what prt relight and prt reference write for a
+// lightmap of many pages: page_path, lightmap_inputs.h).
+std::vector<std::string> lightmap_pages(const std::string& path) {
+  const auto page = [&](int p) { return page_path(path, p, kMaxLightmapPages); };
+  if (path.find("<UDIM>") == std::string::npos) {
+    if (!std::filesystem::exists(path) && std::filesystem::exists(page(0)))
+      throw Error(fmt::format("{} does not exist but {} does: a lightmap of many pages; compare them all with <UDIM> "
+                              "in both paths (NAME.<UDIM>.exr)",
+                              path, page(0)));
+    return {path};
+  }
+  std::vector<std::string> out;
+  for (int p = 0; p < kMaxLightmapPages && std::filesystem::exists(page(p)); ++p) out.push_back(page(p));
+  if (out.empty()) throw Error(fmt::format("{}: no page of it exists (the first would be {})", path, page(0)));
+  return out;
+}
+
+// Two lightmaps, each one EXR or its pages (lightmap_pages): the covered
+// texels' RGB, page after page, in texel order.
+void read_lightmaps(const std::string& pa, const std::string& pb, std::vector<glm::vec3>& a, std::vector<glm::vec3>& b,
+                    std::vector<glm::vec3>& se) {
+  const std::vector<std::string> fa = lightmap_pages(pa), fb = lightmap_pages(pb);
+  const bool udim_a = pa.find("<UDIM>") != std::string::npos, udim_b = pb.find("<UDIM>") != std::string::npos;
+  if (udim_a != udim_b)
+    throw Error(fmt::format("{} and {}: give <UDIM> in both paths (the pages of two lightmaps) or in neither", pa, pb));
+  if (fa.size() != fb.size())
+    throw Error(fmt::format("{} has {} pages but {} has {}: not lightmaps of the same atlas", pa, fa.size(), pb,
+                            fb.size()));
+  for (std::size_t p = 0; p < fa.size(); ++p) read_lightmap_page(fa[p], fb[p], a, b, se);
   if (a.empty()) throw Error(fmt::format("{}: no covered texel (A = 1): not a prt lightmap", pa));
 }
 
@@ -121,7 +156,8 @@ Run add_compare(CLI::App& app) {
   s->footer(
       "Files: vertex,r,g,b[,se_r,se_g,se_b] as written by prt relight and prt reference; or two lightmaps (RGBA\n"
       "EXR of prt relight and prt reference --lightmap), compared over their covered texels (A = 1; the texels\n"
-      "are the 'vertices' below).\n"
+      "are the 'vertices' below); a lightmap of many pages with <UDIM> in both paths (lm.<UDIM>.exr: its pages\n"
+      "from lm.1001.exr up, compared as one).\n"
       "Norms are Euclidean over RGB. eps keeps near-black vertices from dominating the relative errors.\n"
       "Example: prt compare cow_prt.csv cow_ref.csv --json");
   s->add_option("A", a->a, "CSV (or lightmap EXR) to judge")->check(path_value())->required();

@@ -255,32 +255,51 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   return 0;
 }
 
-// A lightmap's relit atlas is an EXR, checked before any work.
-void check_lightmap_output(const RelightArgs& a, const std::string& ext) {
+// A lightmap's relit atlas is an EXR (one per page, page_path), checked before any work.
+void check_lightmap_output(const RelightArgs& a, const std::string& ext, const LightmapLayout& layout) {
   if (ext != ".exr")
     throw UsageError("--output: " + a.output + ": " + a.transfer + " is a lightmap: its relit atlas is an RGBA float "
                      "EXR (.exr)");
   if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
-  check_not_input("--output", a.output, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
-  for_path("--output", [&] { check_writable(a.output); });
+  for (int p = 0; p < layout.pages; ++p) {
+    const std::string path = page_path(a.output, p, layout.pages);
+    check_not_input("--output", path, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+    for_path("--output", [&] { check_writable(path); });
+  }
 }
 
-// An RGBA float EXR of per-texel radiance in the lightmap's layout.
-void write_lightmap_exr(const std::string& path, const LightmapLayout& layout, const std::vector<glm::vec3>& rgb) {
-  write_exr_rgba(path, lightmap_rgba(layout, rgb));
+// The files write_lightmap_pages writes for `path`: itself, or the first
+// page's and the last's ("lm.1001.exr ... lm.1003.exr").
+std::string written_pages(const std::string& path, const LightmapLayout& layout) {
+  if (layout.pages == 1) return path;
+  return page_path(path, 0, layout.pages) + " ... " + page_path(path, layout.pages - 1, layout.pages);
+}
+
+// Writes the relit texels as RGBA float EXRs in the lightmap's layout, one
+// per page (write_lightmap_pages), and unless quiet prints `timing` and the
+// files written. Returns the exit status.
+int write_relit_lightmap(const RelightArgs& a, const LightmapLayout& layout, const std::vector<glm::vec3>& rgb,
+                         const std::string& timing) {
+  Outputs out("relight");
+  write_lightmap_pages(out, a.output, layout, lightmap_rgba(layout, rgb));
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (!a.quiet)
+    fmt::print(stderr, "relight: {}\nwrote {} ({} RGBA, {} covered texels)\n", timing, written_pages(a.output, layout),
+               lightmap_size_text(layout), layout.texels.size());
+  return 0;
 }
 
 // A wavelet lightmap: the texels' wavelet relighting with K terms (as per vertex).
 int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
                          const WaveletLightmap& wl) {
-  check_lightmap_output(a, ext);
+  check_lightmap_output(a, ext, wl.layout);
   for (const CLI::Option* o : a.sh_only)
     if (o->count() > 0)
       throw UsageError(o->get_name() + " applies to SH transfers; " + a.transfer + " is a wavelet lightmap (--terms, "
                        "--selection)");
   const wavelet::Selection selection = for_option("--selection", [&] { return wavelet::parse_selection(a.selection); });
   const prt::Scene scene = load_lightmap_scene(a.mesh, wl.layout);
-  const LightmapTexels texels = lightmap_texels(scene, wl.layout.width, wl.layout.height, wl.layout.uv_set);
+  const LightmapTexels texels = lightmap_texels(scene, wl.layout);
   if (texels.layout.scene_hash != wl.layout.scene_hash || texels.layout.texels != wl.layout.texels)
     throw Error(a.transfer + ": was computed for another scene or atlas (scene hash, covered texels differ)");
   EnvMap env = load_envmap(a.env);
@@ -295,21 +314,16 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std
   const double ms = ms_since(t0);
   check_relit(rgb, a, env, [&](std::size_t v) { return double(wl.transfer.vertex_scale[v]) * 32767.0; });
   add_texel_lights(rgb, lights, scene.mesh, texels);
-  Outputs out("relight");
-  out.write([&] { write_lightmap_exr(a.output, wl.layout, rgb); });
-  if (const int rc = out.commit(); rc != 0) return rc;
-  if (!a.quiet)
-    fmt::print(stderr, "relight: {:.3f} ms ({} of {} terms)\nwrote {} ({}x{} RGBA, {} covered texels)\n", ms,
-               lighting.terms().size(), wl.transfer.coeff_count(), a.output, wl.layout.width, wl.layout.height,
-               wl.layout.texels.size());
-  return 0;
+  return write_relit_lightmap(a, wl.layout, rgb,
+                              fmt::format("{:.3f} ms ({} of {} terms)", ms, lighting.terms().size(),
+                                          wl.transfer.coeff_count()));
 }
 
 // A lightmap transfer (prt precompute --lightmap): an RGBA float EXR of the
 // atlas, A = 1 at covered texels, gutters dilated (docs/LIGHTMAPS.md).
 int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
                  const LightmapTransfer& lt) {
-  check_lightmap_output(a, ext);
+  check_lightmap_output(a, ext, lt.layout);
   for (const CLI::Option* o : a.sh_only)
     if (o->count() > 0 && o->get_name() != "--window" && o->get_name() != "--window-width" && o->get_name() != "--direct")
       throw UsageError(o->get_name() + " does not apply to a lightmap (diffuse: no eye, no lobe)");
@@ -318,8 +332,7 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
   const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
   const prt::Scene scene = load_lightmap_scene(a.mesh, lt.layout);
   const LightmapTexels texels =
-      lightmap_texels(scene, lt.layout.width, lt.layout.height, lt.layout.uv_set,
-                      lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
+      lightmap_texels(scene, lt.layout, lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
   check_matches(lt, texels, a.transfer);
   if (a.direct) check_direct(lt.transfer, a.transfer, "--direct");
   EnvMap env = load_envmap(a.env);
@@ -344,15 +357,10 @@ int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<
     return m;
   });
   const double lights_ms = add_texel_lights(rgb, lights, scene.mesh, texels, bounce);
-  Outputs out("relight");
-  out.write([&] { write_lightmap_exr(a.output, lt.layout, rgb); });
-  if (const int rc = out.commit(); rc != 0) return rc;
-  if (!a.quiet)
-    fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels){}\nwrote {} ({}x{} RGBA, {} covered texels)\n",
-               frame_ms, rgb.size(),
-               lights.empty() ? std::string() : fmt::format("; lights' direct light {:.1f} ms", lights_ms), a.output,
-               lt.layout.width, lt.layout.height, lt.layout.texels.size());
-  return 0;
+  return write_relit_lightmap(
+      a, lt.layout, rgb,
+      fmt::format("{:.3f} ms (projection, rotation, {} texels){}", frame_ms, rgb.size(),
+                  lights.empty() ? std::string() : fmt::format("; lights' direct light {:.1f} ms", lights_ms)));
 }
 
 // A probe volume (prt precompute SCENE --probes): E(p, n)/pi at each query
@@ -593,6 +601,7 @@ Run add_relight(CLI::App& app) {
       "         prt relight tube-bent.obj tube-zh.prt envmaps/forest.exr -o bent.ply   (a pose of a --basis zh mesh)\n"
       "         prt relight models/tube-skinned.gltf tube-zh.prt envmaps/forest.exr --time 1 -o bent.ply   (its skin)\n"
       "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr\n"
+      "         prt relight pages.glb pages.prt envmaps/forest.exr -o lm.exr   (3 pages: lm.1001.exr ... lm.1003.exr)\n"
       "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
   s->add_option("MESH", a->mesh,
                 "The mesh (or, for a lightmap, the scene) the transfer was computed for; for a --basis zh transfer, any "
@@ -602,7 +611,9 @@ Run add_relight(CLI::App& app) {
   s->add_option("ENV", a->env, "Environment map")->check(path_value())->required();
   s->add_option("-o,--output", a->output,
                 "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b); a lightmap: .exr (RGBA float "
-                "atlas, A = 1 where a triangle covers the texel)")->check(path_value())
+                "atlas, A = 1 where a triangle covers the texel; a lightmap of many pages (prt precompute --pages): "
+                "one EXR per page, UDIM tile 1001 + page before the extension or in place of <UDIM>, as "
+                "lm.1001.exr, lm.1002.exr ...)")->check(path_value())
       ->required();
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));

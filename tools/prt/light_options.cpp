@@ -201,7 +201,7 @@ std::optional<LightmapTexels> renderer_light_points(const Scene& scene) {
   const LightmapTransfer* l = scene.get<LightmapTransfer>();
 
   if (!l) return std::nullopt;
-  LightmapTexels texels = lightmap_texels(*scene.world, l->layout.width, l->layout.height, l->layout.uv_set,
+  LightmapTexels texels = lightmap_texels(*scene.world, l->layout,
                                           l->transfer.vertex_colors ? nullptr : &l->transfer.albedo);
   move_texels_out_of_geometry(scene.world->mesh, texels);
   return texels;
