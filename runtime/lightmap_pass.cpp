@@ -70,6 +70,7 @@ LightmapPass::LightmapPass(const Scene& scene, const LightmapTexels& texels, con
   channels_ = tr.channels;
   width_ = t.layout.width;
   height_ = t.layout.height;
+  pages_ = t.layout.pages;
   texels_ = t.layout.texels.size();
   work_groups_ = std::max<std::uint64_t>(limits.work_groups, 1);
   const Mesh points = texel_points(texels);
@@ -227,6 +228,7 @@ void LightmapPass::draw(const glm::mat4& view_proj, bool detail) {
   glUseProgram(draw_program_);
   glUniformMatrix4fv(0, 1, GL_FALSE, &view_proj[0][0]);
   glUniform1i(6, detail ? 1 : 0);
+  glUniform1i(7, pages_);
   glBindTextureUnit(0, lightmap_);
   glBindTextureUnit(1, texel_albedo_);
   glBindVertexArray(vao_);

@@ -68,7 +68,7 @@ class LightmapPass {
  private:
   GLuint program(int pass, int coeffs);
 
-  int bands_ = 0, channels_ = 0, width_ = 0, height_ = 0;
+  int bands_ = 0, channels_ = 0, width_ = 0, height_ = 0, pages_ = 1;
   std::size_t texels_ = 0, writes_ = 0, bytes_ = 0;
   std::uint64_t work_groups_ = 65535;
   GLuint rows_ = 0, direct_ = 0, radiance_ = 0, sky_ = 0, writes_buffer_ = 0;

@@ -5,6 +5,10 @@
 // albedo at this fragment (base colour factor x texture at the texture UV)
 // replaces it: radiance x albedo(fragment) / albedo(texel), the texel albedo
 // sampled from its own map the same way (where it is not ~0). Linear RGB.
+// A lightmap of u_pages pages stacked in one texture (docs/LIGHTMAPS.md
+// "Many pages") is filtered as each page alone: v clamped to the fragment's
+// page, half a texel inside its edge (GL_CLAMP_TO_EDGE's rule), so a chart
+// at a page's edge never reads the next page's row.
 in vec2 v_uv_base;
 in vec2 v_uv_lightmap;
 layout(binding = 0) uniform sampler2D u_lightmap;
@@ -13,13 +17,20 @@ layout(binding = 2) uniform sampler2D u_base;
 layout(location = 4) uniform vec4 u_base_color;
 layout(location = 5) uniform int u_has_texture;
 layout(location = 6) uniform int u_detail;
+layout(location = 7) uniform int u_pages;
 layout(location = 0) out vec4 o_color;
 void main() {
-  vec3 b = texture(u_lightmap, v_uv_lightmap).rgb;
+  vec2 uv = v_uv_lightmap;
+  if (u_pages > 1) {
+    const float rows = float(textureSize(u_lightmap, 0).y), page_rows = rows / float(u_pages);
+    const float page = clamp(floor(uv.y * float(u_pages)), 0.0, float(u_pages - 1));
+    uv.y = clamp(uv.y, (page * page_rows + 0.5) / rows, ((page + 1.0) * page_rows - 0.5) / rows);
+  }
+  vec3 b = texture(u_lightmap, uv).rgb;
   if (u_detail != 0) {
     vec3 albedo = u_base_color.rgb;
     if (u_has_texture != 0) albedo *= texture(u_base, v_uv_base).rgb;
-    const vec3 texel = texture(u_texel_albedo, v_uv_lightmap).rgb;
+    const vec3 texel = texture(u_texel_albedo, uv).rgb;
     for (int c = 0; c < 3; ++c)
       if (texel[c] > 1e-3) b[c] *= clamp(albedo[c], 0.0, 1.0) / texel[c];
   }

@@ -299,5 +299,55 @@ TEST(RenderLightmap, PagesDrawAsOnePage) {
   }
 }
 
+TEST(RenderLightmap, PagesFilterApartAtTheirEdges) {
+  // Two quads side by side, each chart a whole tile edge to edge: the left
+  // (albedo 1) on page 1, the right (albedo 0.1) on page 2. Stacked in one
+  // texture, page 2's top row lies under page 1's bottom row: filtered as
+  // one texture, the right quad's pixels along that edge would take up to
+  // half the left one's light (x5 its own). Filtered as each page alone
+  // (the shader clamps v to the fragment's page), every pixel is its quad's.
+  REQUIRE_RENDERER(r);
+  test::SceneBuilder b;
+  b.quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1, 1});
+  b.end_object();
+  b.quad({1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 0, 2, 1});
+  b.end_object();
+  Material white, dark;
+  dark.base_color = glm::vec4(0.1f, 0.1f, 0.1f, 1.0f);
+  const Scene s = stack_lightmap_pages(b.build({white, dark}), 0, 2);
+  LightmapLayout atlas;
+  atlas.width = 8, atlas.height = 16, atlas.pages = 2;
+  const LightmapTexels tx = lightmap_texels(s, atlas);
+  TransferOptions o;
+  o.bands = 3;
+  o.mode = TransferMode::Unshadowed;  // one normal a quad: one value a quad
+  const LightmapTransfer t = compute_lightmap_transfer(s, tx, o);
+  const std::vector<glm::dvec3> light = project(smooth_map(), 3);
+  const std::vector<glm::vec3> texel = relight_lightmap(t, tx, light);
+  const float left = texel.front().x, right = texel.back().x;
+  ASSERT_GT(left, 5.0f * right);
+  r->set_scene(s, t);
+  r->set_lighting(light);
+  r->set_lightmap_detail(false);
+  Camera cam;
+  cam.eye = {1.0, 0.5, 1.6};
+  cam.target = {1.0, 0.5, 0.0};
+  cam.up = {0, 1, 0};
+  constexpr int kSide = 64;
+  const Image img = r->render(cam, kSide, kSide);
+  const std::vector<float> cover = r->coverage();
+  int seen = 0;
+  for (int y = 0; y < kSide; ++y)
+    for (int x = 0; x < kSide; ++x) {
+      // Whole pixels off the seam at x = 1 (the frame's middle columns).
+      if (cover[std::size_t(y * kSide + x)] < 1.0f || std::abs(x - kSide / 2) < 2) continue;
+      const float want = x < kSide / 2 ? left : right;
+      // The bilinear filter of one value, in float: kTexelTolerance of it.
+      EXPECT_NEAR(img.at(x, y)[0], want, kTexelTolerance * want) << x << "," << y;
+      ++seen;
+    }
+  EXPECT_GT(seen, kSide * kSide / 4);
+}
+
 }  // namespace
 }  // namespace prt
