@@ -601,10 +601,13 @@ std::vector<Chart> flatten(std::vector<std::uint32_t> faces, const Faces& f, dou
   return out;
 }
 
+// The stretch bound charts are flattened to: a ten-thousandth inside the
+// option's, for the UVs' rounding to float.
+double chart_stretch(const UnwrapOptions& o) { return std::max(1 + 1e-9, o.max_stretch * (1 - 1e-4)); }
+
 std::vector<Chart> make_charts(const Faces& f, const UnwrapOptions& o) {
   const double cos_limit = std::cos(o.max_chart_angle * M_PI / 180.0);
-  // Charts keep a ten-thousandth of the stretch bound for the UVs' rounding to float.
-  const double max_stretch = std::max(1 + 1e-9, o.max_stretch * (1 - 1e-4));
+  const double max_stretch = chart_stretch(o);
   std::vector<std::vector<std::uint32_t>> grown = grow_charts(f, cos_limit);
   std::vector<std::vector<Chart>> flat(grown.size());
   tbb::parallel_for(std::size_t(0), grown.size(), [&](std::size_t i) {
@@ -614,6 +617,42 @@ std::vector<Chart> make_charts(const Faces& f, const UnwrapOptions& o) {
   for (auto& v : flat)
     for (Chart& c : v) charts.push_back(std::move(c));
   return charts;
+}
+
+// Pages (UnwrapOptions::pages != 1): a chart longer than a page at density
+// d (a terrain at a fine texel) is cut across its long side at its area's
+// median (split_long) and the parts flattened again, until every chart is
+// shorter than `limit` texels. A cut whose parts are no shorter (a quad of
+// two long triangles) is not made: the chart stays, and the packer refuses
+// it as longer than a page. The charts keep their order, each cut chart's
+// parts in its place.
+void cut_to_page(std::vector<Chart>& charts, const Faces& f, double d, double limit, double max_stretch) {
+  const auto longest = [](const Chart& c) { return std::max(c.extent.x, c.extent.y); };
+  std::vector<Chart> out;
+  out.reserve(charts.size());
+  for (Chart& c : charts) {
+    std::vector<Chart> stack;
+    stack.push_back(std::move(c));
+    while (!stack.empty()) {
+      Chart x = std::move(stack.back());
+      stack.pop_back();
+      if (longest(x) * d < limit || x.faces.size() == 1) {
+        out.push_back(std::move(x));
+        continue;
+      }
+      std::vector<Chart> cut;
+      for (std::vector<std::uint32_t>& part : split_long(x, f))
+        for (Chart& p : flatten(std::move(part), f, max_stretch)) cut.push_back(std::move(p));
+      double most = 0;
+      for (const Chart& p : cut) most = std::max(most, longest(p));
+      if (!(most < 0.9 * longest(x))) {
+        out.push_back(std::move(x));
+        continue;
+      }
+      for (auto it = cut.rbegin(); it != cut.rend(); ++it) stack.push_back(std::move(*it));
+    }
+  }
+  charts = std::move(out);
 }
 
 
@@ -1453,7 +1492,17 @@ Scene unwrap_scene(const Scene& scene, const UnwrapOptions& o, AtlasStats* stats
   const std::string& source = scene.mesh.source;
   check_input(scene, o);
   const Faces faces = build_faces(scene);
-  const std::vector<Chart> charts = make_charts(faces, o);
+  std::vector<Chart> charts = make_charts(faces, o);
+  if (o.pages != 1) {  // pages: no chart longer than a page, at the texel size or the densest the pages could hold
+    const int border = (o.padding + 1) / 2, inner = std::min(o.width, o.height) - 2 * border;
+    double area = 0;
+    for (const Chart& c : charts) area += c.area3;
+    const double d = o.texel_size > 0 ? 1.0 / o.texel_size
+                                      : std::sqrt(double(o.width - 2 * border) * double(o.height - 2 * border) *
+                                                  o.pages / std::max(area, 1e-300));
+    // Two texels inside the page's inner side: a footprint's margins and rounding (make_footprints).
+    if (inner > 2) cut_to_page(charts, faces, d, double(inner - 2), chart_stretch(o));
+  }
   const Layout layout = o.texel_size > 0 ? (o.pages == 0 ? page_atlas(charts, o, source) : size_atlas(charts, o, source))
                                          : fit_atlas(charts, o, source);
   // The float UVs keep max_stretch (a conformal request, 1, keeps rounding's 1e-4).

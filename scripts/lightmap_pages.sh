@@ -1,24 +1,27 @@
 #!/usr/bin/env bash
 # A game level's lightmap on many pages: scripts/make_scene.py boxes --count
-# 3400 (3401 objects, 40,802 triangles), lightmap UVs made by prt, shadowed,
-# 5 bands, 256 rays a texel, at the texel size of a one-page 1792 x 1792
-# atlas (about 2.36M covered texels):
-#   1. one page:   prt precompute LEVEL --lightmap 1792x1792 --lightmap-uv auto
-#   2. pages:      prt precompute LEVEL --lightmap 1024x1024 --lightmap-uv auto --pages auto
-#                  --texel-size T (T: run 1's texel), which makes as many pages as T takes
-#                  and fills them (what every consumer makes again)
+# 3400 (3401 objects, 40,802 triangles; its ground is 150 x 150), lightmap UVs
+# made by prt at a texel of 0.1 (about 4.9M covered texels), shadowed, 5
+# bands, 256 rays a texel:
+#   1. one atlas:  the smallest square that holds the charts at that texel
+#                  (prt unwrap --texel-size 0.1: S x S), baked with
+#                  prt precompute LEVEL --lightmap SxS --lightmap-uv auto
+#   2. pages:      prt precompute LEVEL --lightmap 2048x2048 --lightmap-uv auto --pages auto
+#                  --texel-size 0.1: as many 2048 x 2048 pages as that texel takes, then
+#                  filled (what every consumer makes again)
 #   3. run 2 under mpirun -np 2: its file must be run 2's, byte for byte
 #   4. prt relight of run 2: one EXR per page, LEVEL.1001.exr ...
-# For each: pages, covered texels, the unwrap's seconds (as the precompute
+# For each: pages, covered texels, the unwrap's line (as the precompute
 # reports it), wall seconds and peak resident memory (GNU time; MB = 1e6 bytes).
 # Usage: bash scripts/lightmap_pages.sh [BUILD_DIR]
-#   (~5 min on 2 shared cores; LEVEL_COUNT=N, LEVEL_RAYS=R, LEVEL_PAGE=N change the case)
+#   (~6 min on 2 shared cores; LEVEL_COUNT=N, LEVEL_RAYS=R, LEVEL_PAGE=N, LEVEL_TEXEL=S change the case)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 prt="${1:-build}/prt"
 rays=${LEVEL_RAYS:-256}
 count=${LEVEL_COUNT:-3400}
-page=${LEVEL_PAGE:-1024}
+page=${LEVEL_PAGE:-2048}
+texel=${LEVEL_TEXEL:-0.1}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 py=/usr/bin/python3
@@ -38,8 +41,8 @@ run() {  # label, tag, prt precompute arguments...
   rows+=("| $label | $(field "$work/$tag.prt" pages) | $(field "$work/$tag.prt" covered_texels) | $(unwrap_line "$work/l$tag.txt") | $(wall "$work/t$tag.txt") | $(peak "$work/t$tag.txt") |")
 }
 
-run "one page, --lightmap 1792x1792" one --lightmap 1792x1792
-texel=$(grep -o 'texel [0-9.e-]* scene units' "$work/lone.txt" | awk '{print $2}')
+side=$("$prt" unwrap "$level" --texel-size "$texel" -o "$work/u.glb" 2>&1 | grep -o 'atlas *[0-9]*x' | grep -o '[0-9]*')
+run "one atlas, --lightmap ${side}x${side} (the smallest at texel $texel)" one --lightmap "${side}x${side}"
 run "--lightmap ${page}x${page} --pages auto --texel-size $texel" pages --lightmap "${page}x${page}" --pages auto --texel-size "$texel"
 
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_vader_single_copy_mechanism=none

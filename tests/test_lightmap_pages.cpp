@@ -183,5 +183,31 @@ TEST(LightmapPages, UnwrapFillsAsManyPagesAsTheTexelSizeTakes) {
   expect_refusal([&] { unwrap_scene(scene, o); }, "unwrap pages 3");
 }
 
+TEST(LightmapPages, ChartsLongerThanAPageAreCutToFit) {
+  // A flat strip of 40 x 1 unit quads (one planar chart 40 long): at a
+  // texel of 0.5 it is 80 texels long, past a 32 x 32 page. Cut across its
+  // long side until every part fits: 160 texels of surface on a few pages,
+  // each part within the page. The same strip as two long triangles cannot
+  // be cut shorter, and is refused as longer than a page.
+  std::vector<glm::vec3> p;
+  std::vector<glm::uvec3> t;
+  for (int k = 0; k <= 40; ++k) p.emplace_back(float(k), 0.0f, 0.0f), p.emplace_back(float(k), 0.0f, -1.0f);
+  for (std::uint32_t k = 0; k < 40; ++k) t.emplace_back(2 * k, 2 * k + 2, 2 * k + 3), t.emplace_back(2 * k, 2 * k + 3, 2 * k + 1);
+  UnwrapOptions o;
+  o.width = o.height = 32;
+  o.texel_size = 0.5;
+  o.pages = 0;
+  AtlasStats st;
+  const Scene out = unwrap_scene(make_scene(p, t, {}), o, &st);
+  EXPECT_GT(st.charts, 2u);
+  EXPECT_GE(st.pages, 1);
+  EXPECT_EQ(st.shared_texels, 0u);
+  EXPECT_GE(st.min_gap, o.padding);
+  EXPECT_NEAR(st.texel_size / o.texel_size, 1.0, 0.05);
+  EXPECT_LE(st.max_stretch, o.max_stretch * 1.0001);
+  const Scene two = make_scene({{0, 0, 0}, {40, 0, 0}, {40, 0, -1}, {0, 0, -1}}, {{0, 1, 2}, {0, 2, 3}}, {});
+  expect_refusal([&] { unwrap_scene(two, o); }, "longer than a 32x32 page");
+}
+
 }  // namespace
 }  // namespace prt
