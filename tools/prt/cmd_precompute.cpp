@@ -1078,7 +1078,7 @@ int run_precompute(PrecomputeArgs& a) {
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
-    if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
+    if (o->count() > 0) throw UsageError(o->get_name() + " shapes a lightmap's atlas: give --lightmap WxH too");
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
     throw UsageError("--ao-map, --bent-normal-map and --obscurance(-map) write maps of a lightmap: give --lightmap WxH "
                      "too (a vertex transfer keeps its ambient occlusion and bent normals in the file)");

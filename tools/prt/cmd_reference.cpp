@@ -204,7 +204,7 @@ int run_subsurface(ReferenceArgs& a, const SubsurfaceRecord& record) {
   check_subsurface_reference(a);
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
-    if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
+    if (o->count() > 0) throw UsageError(o->get_name() + " shapes a lightmap's atlas: give --lightmap WxH too");
   for_path("--output", [&] { check_writable(a.output); });
 
   std::unique_ptr<tbb::global_control> limit;
@@ -269,7 +269,7 @@ int run_reference(ReferenceArgs& a) {
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
   for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
-    if (o->count() > 0) throw UsageError(o->get_name() + " makes a lightmap's UVs: give --lightmap WxH too");
+    if (o->count() > 0) throw UsageError(o->get_name() + " shapes a lightmap's atlas: give --lightmap WxH too");
   a.opt.glossy = a.material == "glossy";
   for (const CLI::Option* o : a.glossy_opts)
     if (o->count() > 0 && !a.opt.glossy) throw UsageError(o->get_name() + " applies to --material glossy only");
