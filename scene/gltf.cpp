@@ -275,6 +275,15 @@ void write_gltf(const std::string& path, const Mesh& mesh, const Transfer& t, co
                      TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, nv);
   }
 
+  // A bake shows as it is in any viewer: unlit, base colour 1, so the colour
+  // drawn is COLOR_0 (glTF: unlit = baseColor x COLOR_0). Without a
+  // material glTF's default one is fully metallic and draws the bake black
+  // where there is no environment. Without a bake: no material, as before.
+  if (!opts.colors.empty()) {
+    prim.material = detail::add_material(model, "prt_bake", glm::vec4(1.0f), -1, 0, /*unlit=*/true);
+    model.extensionsUsed.push_back("KHR_materials_unlit");
+  }
+
   tinygltf::Mesh gmesh;
   gmesh.name = std::filesystem::path(mesh.source).stem().string();
   gmesh.primitives.push_back(std::move(prim));

@@ -138,6 +138,24 @@ TEST_F(GltfValidator, EveryVariantPrtWritesHasNoErrors) {
     // Not required by the issue, but the files are meant to be clean.
     EXPECT_EQ(v.reports[i].at("warnings"), 0) << v.reports[i].dump();
   }
+  // A bake has its material, unlit with base colour 1 (viewers draw COLOR_0:
+  // tests/js/three_client_test.js), the extension used, not required; an
+  // export without a bake has no material (glTF's default).
+  const nlohmann::json baked = nlohmann::json::parse(prt::test::read_file(dir.file("rgb-baked.gltf")));
+  const nlohmann::json& prim = baked.at("meshes")[0].at("primitives")[0];
+  ASSERT_TRUE(prim.contains("material")) << prim.dump().substr(0, 200);
+  const nlohmann::json& m = baked.at("materials").at(prim.at("material").get<std::size_t>());
+  EXPECT_TRUE(m.at("extensions").contains("KHR_materials_unlit")) << m.dump();
+  // (tinygltf leaves out a factor at glTF's default: base colour 1.)
+  const nlohmann::json one = nlohmann::json::array({1.0, 1.0, 1.0, 1.0});
+  EXPECT_EQ(m.at("pbrMetallicRoughness").value("baseColorFactor", one), one) << m.dump();
+  EXPECT_EQ(m.at("pbrMetallicRoughness").at("metallicFactor"), 0) << m.dump();  // a viewer without the extension
+  EXPECT_EQ(baked.at("extensionsUsed"), nlohmann::json::array({"KHR_materials_unlit"}));
+  EXPECT_FALSE(baked.contains("extensionsRequired"));
+  const nlohmann::json plain = nlohmann::json::parse(prt::test::read_file(dir.file("mono.gltf")));
+  EXPECT_FALSE(plain.contains("materials"));
+  EXPECT_FALSE(plain.at("meshes")[0].at("primitives")[0].contains("material"));
+  EXPECT_FALSE(plain.contains("extensionsUsed"));
 }
 
 // A scene with its SH lightmap (docs/FORMAT.md "Lightmap export"): the

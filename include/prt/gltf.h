@@ -6,7 +6,10 @@
 // the mesh's unit normals; left out when a vertex has none, see below), the
 // dense transfer as custom attributes _PRT_T0 .. _PRT_T{n-1} (VEC4 FLOAT:
 // every vertex, analytic ones evaluated, prt::dense_transfer) and, when
-// baked, COLOR_0 (VEC3 FLOAT, linear, in [0, 1]); the scene's lights, if
+// baked, COLOR_0 (VEC3 FLOAT, linear, in [0, 1]) and a material for it
+// ("prt_bake": KHR_materials_unlit, listed in extensionsUsed, baseColorFactor
+// 1, so viewers draw COLOR_0 itself; without a bake the primitive has no
+// material); the scene's lights, if
 // any, as KHR_lights_punctual, a node each beside the mesh's. Coefficient j
 // of a vertex's row ([channel][k], k = l(l+1)+m) is component j % 4 of
 // attribute j / 4; the last attribute is zero-padded. asset.extras.prt
