@@ -9,6 +9,7 @@
 #include <prt/error.h>
 #include <prt/gltf.h>
 #include <prt/lightmap.h>
+#include <prt/lightmap_encoding.h>
 #include <prt/lights.h>
 #include <prt/scene.h>
 #include <prt/transfer_file.h>
@@ -26,6 +27,8 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <tuple>
+#include <vector>
 
 namespace prt {
 namespace {
@@ -632,6 +635,58 @@ TEST(LightmapCli, ExportRefusesLightsWhereTheyCannotGo) {
   r = run_prt(dir, {"export", scene, dir.file("lm.prt"), "--web", dir.file("page"), "--lights", "none", "-q"});
   EXPECT_EQ(r.code, 0) << describe_run(r);
   EXPECT_TRUE(std::filesystem::exists(dir.file("page/model.glb")));
+}
+
+// --encoding (docs/LIGHTMAPS.md "Encodings for engines"): each file decodes
+// to the float EXR's texels within its encoding's bound (the half's 2^-11
+// relative; RGBM's and RGBD's half a step of their multiplier, here in the
+// error they report), and combinations no file holds are refused, writing nothing.
+TEST(LightmapCli, RelightEncodings) {
+  TempDir dir;
+  const std::string scene = kModels + "/wall-on-floor.gltf", env = PRT_SOURCE_DIR "/envmaps/sunset.exr";
+  Result r = run_prt(dir, {"precompute", scene, "--lightmap", "24x24", "--samples", "16", "-q", "-o", dir.file("s.prt")});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const auto relight = [&](const std::string& out, std::vector<std::string> more) {
+    std::vector<std::string> args = {"relight", scene, dir.file("s.prt"), env, "-o", dir.file(out)};
+    args.insert(args.end(), more.begin(), more.end());
+    return run_prt(dir, args);
+  };
+  ASSERT_EQ((r = relight("f.exr", {"-q"})).code, 0) << describe_run(r);
+  const RgbaImage ref = read_exr_rgba(dir.file("f.exr"));
+  constexpr double kHalfRelative = 1.0 / 2048;
+  ASSERT_EQ((r = relight("h.exr", {"--encoding", "half"})).code, 0) << describe_run(r);
+  EXPECT_NE(r.err.find("encoding half: relative RMS error"), std::string::npos) << r.err;
+  EXPECT_LE(encoding_error(ref, read_exr_rgba(dir.file("h.exr"))).relative_rms, kHalfRelative);
+  ASSERT_EQ((r = relight("k.ktx2", {"-q"})).code, 0) << describe_run(r);
+  const Ktx2Image k = read_ktx2_half(dir.file("k.ktx2"));
+  EXPECT_EQ(k.width, 24u);
+  EXPECT_EQ(decode_half(24, 24, k.halves).rgba, read_exr_rgba(dir.file("h.exr")).rgba);  // the same halves
+  for (const char* e : {"rgbm", "rgbd"}) {
+    const std::string png = std::string(e) + ".png";
+    ASSERT_EQ((r = relight(png, {"--encoding", e, "-q"})).code, 0) << describe_run(r);
+    const Rgba8Image bytes = read_png_rgba8(dir.file(png));
+    const RgbaImage back = std::string(e) == "rgbm" ? decode_rgbm(bytes) : decode_rgbd(bytes);
+    for (std::size_t t = 0; t < 24u * 24u; ++t) {
+      if (ref.rgba[4 * t + 3] == 0) continue;  // gutters: dilated, not compared
+      const int a8 = bytes.rgba[4 * t + 3];
+      const double step = std::string(e) == "rgbm" ? a8 / 255.0 * kRgbmRange / 510 : 0.5 / a8;
+      for (int c = 0; c < 3; ++c)
+        ASSERT_LE(std::abs(back.rgba[4 * t + c] - ref.rgba[4 * t + c]), step + 1e-6 * ref.rgba[4 * t + c]) << e << t;
+    }
+  }
+  // Refusals, before any work, nothing written.
+  for (const auto& [out, more, says] :
+       std::vector<std::tuple<std::string, std::vector<std::string>, std::string>>{
+           {"x.png", {}, "needs --encoding rgbm or rgbd"},
+           {"x.exr", {"--encoding", "rgbm"}, "--encoding rgbm: "},
+           {"x.ktx2", {"--encoding", "float"}, "half as EXR or KTX2"},
+           {"x.png", {"--encoding", "half"}, "rgbm and rgbd are written as 8-bit PNG"},
+           {"x.png", {"--encoding", "rgbm", "--tonemap", "aces"}, "--tonemap"}}) {
+    r = relight(out, more);
+    EXPECT_EQ(r.code, 2) << describe_run(r);  // usage errors
+    EXPECT_NE(r.err.find(says), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file(out)));
+  }
 }
 
 }  // namespace

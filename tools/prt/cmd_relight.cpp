@@ -57,6 +57,9 @@ struct RelightArgs {
   bool srgb = false;
   const CLI::Option *exposure_opt = nullptr, *srgb_opt = nullptr;
   int terms = 100;
+  // A lightmap's file encoding (prt/lightmap_encoding.h); empty: by extension.
+  std::string encoding;
+  const CLI::Option* encoding_opt = nullptr;
   bool direct = false, quiet = false;
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
   std::string at;  // --at POINTS.csv: query points of a probe volume
@@ -255,12 +258,12 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
   return 0;
 }
 
-// A lightmap's relit atlas is an EXR (one per page, page_path), checked before any work.
-void check_lightmap_output(const RelightArgs& a, const std::string& ext, const LightmapLayout& layout) {
-  if (ext != ".exr")
-    throw UsageError("--output: " + a.output + ": " + a.transfer + " is a lightmap: its relit atlas is an RGBA float "
-                     "EXR (.exr)");
-  if (!a.tonemap.empty()) throw UsageError("--tonemap: a lightmap is written as linear radiance (float EXR)");
+// A lightmap's relit atlas is an EXR, KTX2 or PNG in an encoding
+// (lightmap_output_encoding; one file per page, page_path), checked before any work.
+void check_lightmap_output(const RelightArgs& a, const std::string&, const LightmapLayout& layout) {
+  lightmap_output_encoding(a.output, a.encoding);
+  if (!a.tonemap.empty())
+    throw UsageError("--tonemap: a lightmap is written as linear radiance (float or half EXR, KTX2, RGBM or RGBD PNG)");
   for (int p = 0; p < layout.pages; ++p) {
     const std::string path = page_path(a.output, p, layout.pages);
     check_not_input("--output", path, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
@@ -281,11 +284,17 @@ std::string written_pages(const std::string& path, const LightmapLayout& layout)
 int write_relit_lightmap(const RelightArgs& a, const LightmapLayout& layout, const std::vector<glm::vec3>& rgb,
                          const std::string& timing) {
   Outputs out("relight");
-  write_lightmap_pages(out, a.output, layout, lightmap_rgba(layout, rgb));
+  const LightmapEncoding encoding = lightmap_output_encoding(a.output, a.encoding);
+  const EncodedPages done = write_encoded_lightmap_pages(out, a.output, layout, lightmap_rgba(layout, rgb), encoding);
   if (const int rc = out.commit(); rc != 0) return rc;
-  if (!a.quiet)
-    fmt::print(stderr, "relight: {}\nwrote {} ({} RGBA, {} covered texels)\n", timing, written_pages(a.output, layout),
-               lightmap_size_text(layout), layout.texels.size());
+  if (a.quiet) return 0;
+  fmt::print(stderr, "relight: {}\nwrote {} ({} RGBA {}, {} covered texels)\n", timing, written_pages(a.output, layout),
+             lightmap_size_text(layout), encoding_name(encoding), layout.texels.size());
+  if (encoding != LightmapEncoding::Float)
+    fmt::print(stderr, "encoding {}: relative RMS error {:.3g}, max error {:.3g} ({:.3g} of the peak {:.4g}) over the "
+               "covered texels; {} texels clamped (largest value {:.4g})\n", encoding_name(encoding),
+               done.error.relative_rms, done.error.max_abs, done.error.peak > 0 ? done.error.max_abs / done.error.peak : 0.0,
+               done.error.peak, done.report.clamped_texels, done.report.largest);
   return 0;
 }
 
@@ -446,8 +455,8 @@ int run_relight(const RelightArgs& a) {
     if (o->count() > 0 && a.tonemap.empty())
       throw UsageError(o->get_name() + " is for display colours: give --tonemap clamp, reinhard or aces too (without "
                        "it the output is linear radiance)");
-  if (ext != ".ply" && ext != ".csv" && ext != ".exr")
-    throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr)");
+  if (ext != ".ply" && ext != ".csv" && ext != ".exr" && ext != ".png" && ext != ".ktx2")
+    throw UsageError("--output: " + a.output + ": expected a .ply or .csv file (a lightmap: .exr, .ktx2, .png)");
   // The file says which kind it holds; each kind's relighting takes the
   // options that apply to it.
   AnyTransfer any = read_transfer_file(a.transfer);
@@ -462,6 +471,9 @@ int run_relight(const RelightArgs& a) {
   if (a.time_opt->count() > 0 && !zh)
     throw UsageError("--time: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a skin's "
                      "animation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
+  const bool lightmap = kind_of(any) == TransferKind::Lightmap || kind_of(any) == TransferKind::WaveletLightmap;
+  if (a.encoding_opt->count() > 0 && !lightmap)
+    throw UsageError("--encoding applies to a lightmap's relit atlas: " + a.transfer + " is not a lightmap");
   if (!a.at.empty() && kind_of(any) != TransferKind::Probes)
     throw UsageError("--at gives query points of a probe volume: " + a.transfer + " is not one");
   return dispatch(
@@ -602,6 +614,7 @@ Run add_relight(CLI::App& app) {
       "         prt relight models/tube-skinned.gltf tube-zh.prt envmaps/forest.exr --time 1 -o bent.ply   (its skin)\n"
       "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr\n"
       "         prt relight pages.glb pages.prt envmaps/forest.exr -o lm.exr   (3 pages: lm.1001.exr ... lm.1003.exr)\n"
+      "         prt relight models/room.gltf room.prt envmaps/forest.exr -o lm.png --encoding rgbm   (or lm.ktx2: half)\n"
       "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
   s->add_option("MESH", a->mesh,
                 "The mesh (or, for a lightmap, the scene) the transfer was computed for; for a --basis zh transfer, any "
@@ -613,8 +626,15 @@ Run add_relight(CLI::App& app) {
                 "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b); a lightmap: .exr (RGBA float "
                 "atlas, A = 1 where a triangle covers the texel; a lightmap of many pages (prt precompute --pages): "
                 "one EXR per page, UDIM tile 1001 + page before the extension or in place of <UDIM>, as "
-                "lm.1001.exr, lm.1002.exr ...)")->check(path_value())
+                "lm.1001.exr, lm.1002.exr ...; .ktx2: half floats; .png: 8-bit RGBM or RGBD, see --encoding)")
+      ->check(path_value())
       ->required();
+  a->encoding_opt =
+      s->add_option("--encoding", a->encoding,
+                    "A lightmap's file encoding: float (.exr, the default), half (.exr or .ktx2, the default for "
+                    ".ktx2), rgbm or rgbd (8-bit .png, linear, the multiplier in A: RGBM c = C x A x 6, RGBD c = C / "
+                    "A, with C and A in [0, 1]); prints the error it adds (docs/LIGHTMAPS.md \"Encodings for engines\")")
+          ->check(CLI::IsMember({"float", "half", "rgbm", "rgbd"}));
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));
   a->sh_only.push_back(add_shared(s, SharedOption::WindowWidth, a->window_width, "SH: window width in bands"));

@@ -8,6 +8,9 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <cctype>
+
 #include <cstddef>
 #include <filesystem>
 
@@ -89,6 +92,69 @@ void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapL
                             image.std_error.begin() + std::ptrdiff_t(3 * (first + per_page)));
     out.write([&] { write_exr_rgba(page_path(path, p, pages), page); });
   }
+}
+
+LightmapEncoding lightmap_output_encoding(const std::string& path, const std::string& name) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".exr" && ext != ".png" && ext != ".ktx2")
+    throw UsageError("--output: " + path + ": a relit lightmap is written as .exr (float or half), .ktx2 (half) or "
+                     ".png (--encoding rgbm or rgbd)");
+  if (name.empty()) {
+    if (ext == ".png")
+      throw UsageError("--output: " + path + ": a PNG lightmap needs --encoding rgbm or rgbd (8-bit HDR encodings; "
+                       "docs/LIGHTMAPS.md \"Encodings for engines\")");
+    return ext == ".exr" ? LightmapEncoding::Float : LightmapEncoding::Half;
+  }
+  const LightmapEncoding e = for_option("--encoding", [&] { return parse_lightmap_encoding(name); });
+  const bool fits = ext == ".png" ? e == LightmapEncoding::Rgbm || e == LightmapEncoding::Rgbd
+                                  : ext == ".exr" ? e == LightmapEncoding::Float || e == LightmapEncoding::Half
+                                                  : e == LightmapEncoding::Half;
+  if (!fits)
+    throw UsageError(fmt::format("--encoding {}: {} cannot hold it: rgbm and rgbd are written as 8-bit PNG (.png), "
+                                 "float as EXR (.exr), half as EXR or KTX2 (.exr, .ktx2)", name, path));
+  return e;
+}
+
+namespace {
+
+// Texels [first, first + count) of a stacked image of 4 values per texel.
+template <class T>
+std::vector<T> page_values(const std::vector<T>& all, std::size_t first, std::size_t count) {
+  return std::vector<T>(all.begin() + std::ptrdiff_t(4 * first), all.begin() + std::ptrdiff_t(4 * (first + count)));
+}
+
+}  // namespace
+
+EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
+                                          RgbaImage image, LightmapEncoding encoding) {
+  EncodedPages done;
+  if (encoding == LightmapEncoding::Float) {
+    write_lightmap_pages(out, path, layout, std::move(image));
+    return done;
+  }
+  const int W = image.width, rows = layout.page_height(), pages = layout.pages;
+  const std::size_t per_page = std::size_t(W) * std::size_t(rows);
+  const std::string ext = std::filesystem::path(path).extension().string();
+  const bool ktx2 = ext.size() == 5 && std::tolower(static_cast<unsigned char>(ext[1])) == 'k';
+  if (encoding == LightmapEncoding::Half) {
+    const std::vector<std::uint16_t> halves = encode_half(image, &done.report);
+    done.error = encoding_error(image, decode_half(image.width, image.height, halves));
+    for (int p = 0; p < pages; ++p) {
+      const std::vector<std::uint16_t> page = page_values(halves, std::size_t(p) * per_page, per_page);
+      const std::string file = page_path(path, p, pages);
+      out.write([&] { ktx2 ? write_ktx2_half(file, W, rows, page) : write_exr_half(file, W, rows, page); });
+    }
+    return done;
+  }
+  const bool rgbm = encoding == LightmapEncoding::Rgbm;
+  const Rgba8Image bytes = rgbm ? encode_rgbm(image, &done.report) : encode_rgbd(image, &done.report);
+  done.error = encoding_error(image, rgbm ? decode_rgbm(bytes) : decode_rgbd(bytes));
+  for (int p = 0; p < pages; ++p) {
+    Rgba8Image page{W, rows, page_values(bytes.rgba, std::size_t(p) * per_page, per_page)};
+    out.write([&] { write_png_rgba8(page_path(path, p, pages), page); });
+  }
+  return done;
 }
 
 prt::Scene load_lightmap_scene(const std::string& path, const LightmapLayout& layout) {

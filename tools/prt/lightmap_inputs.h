@@ -9,6 +9,7 @@
 #include <prt/envmap.h>
 
 #include <prt/lightmap.h>
+#include <prt/lightmap_encoding.h>
 #include <prt/mesh.h>
 #include <prt/scene.h>
 
@@ -49,6 +50,24 @@ std::string page_path(const std::string& path, int page, int pages);
 // Writes `image` (the layout's pages stacked, lightmap_rgba's) as one RGBA
 // float EXR per page (page_path), each rename-on-success through `out`.
 void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout, RgbaImage image);
+
+// The encoding of a relit lightmap written to `path` (prt/lightmap_encoding.h):
+// `name` (--encoding: float, half, rgbm, rgbd), or when empty the one its
+// extension implies: .exr float, .ktx2 half. Throws UsageError for a
+// combination no file holds (.png needs rgbm or rgbd; .exr float or half;
+// .ktx2 half) or another extension.
+LightmapEncoding lightmap_output_encoding(const std::string& path, const std::string& name);
+// What write_encoded_lightmap_pages did: the error the encoding adds over
+// the covered texels (decoded from the very values stored; zero for float)
+// and what it clamped.
+struct EncodedPages {
+  EncodingError error;
+  EncodeReport report;
+};
+// write_lightmap_pages in `encoding`: float or half EXR, half KTX2 or RGBM /
+// RGBD 8-bit PNG by `path`'s extension, one file per page (page_path).
+EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
+                                          RgbaImage image, LightmapEncoding encoding);
 
 // A lightmap's scene: MESH as prt::load_scene reads it, or, where prt made
 // the lightmap's UVs (prt precompute --lightmap-uv auto), any mesh file
