@@ -15,7 +15,7 @@
 //   --images DIR: also write DIR/three_NAME_{three,render}.png
 // Exit 0 pass, 1 fail, 77 skip (tools.js).
 'use strict';
-const { missing } = require('./tools');
+const { missing, chromiumOrSkip, testArgs } = require('./tools');
 const fs = require('fs');
 const os = require('os');
 const path = require('path');
@@ -23,23 +23,11 @@ const http = require('http');
 const { execFile } = require('child_process');
 const { readPng, writePng } = require('./png');
 
-let chromium;
-try {
-  ({ chromium } = require('playwright-core'));
-} catch (e) {
-  missing('the npm package playwright-core');
-}
+const { chromium, executable: CHROMIUM } = chromiumOrSkip();
 const THREE_DIR = path.join(__dirname, 'node_modules', 'three');
 if (!fs.existsSync(path.join(THREE_DIR, 'examples', 'jsm', 'loaders', 'GLTFLoader.js'))) missing('the npm package three');
-const CHROMIUM = process.env.PRT_CHROMIUM || '/usr/bin/chromium';
-if (!fs.existsSync(CHROMIUM)) missing('Chromium (' + CHROMIUM + ')');
 
-const args = {};
-for (let i = 2; i < process.argv.length; i += 2) args[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
-if (!args.prt || !args.source) {
-  console.error('usage: node three_client_test.js --prt BUILD/prt --source SRC [--images DIR]');
-  process.exit(2);
-}
+const args = testArgs('three_client_test.js');
 
 // --- tolerances (sRGB-encoded 8-bit levels, per channel) -----------------
 // Coverage: the IoU of three.js's model pixels (the same in frames over a

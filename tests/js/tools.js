@@ -9,4 +9,29 @@ function missing(what) {
   console.error(`SKIP: ${what} is missing (npm ci --prefix tests/js; scripts/install-deps.sh)`);
   process.exit(77);
 }
-module.exports = { missing };
+// playwright-core's chromium and the Chromium it drives (PRT_CHROMIUM, else
+// Debian's /usr/bin/chromium), or missing() for either.
+function chromiumOrSkip() {
+  let chromium;
+  try {
+    ({ chromium } = require('playwright-core'));
+  } catch (e) {
+    missing('the npm package playwright-core');
+  }
+  const executable = process.env.PRT_CHROMIUM || '/usr/bin/chromium';
+  if (!require('fs').existsSync(executable)) missing('Chromium (' + executable + ')');
+  return { chromium, executable };
+}
+
+// The test's --name value pairs; usage and exit 2 without --prt and --source.
+function testArgs(script) {
+  const args = {};
+  for (let i = 2; i < process.argv.length; i += 2) args[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
+  if (!args.prt || !args.source) {
+    console.error(`usage: node ${script} --prt BUILD/prt --source SRC [--images DIR]`);
+    process.exit(2);
+  }
+  return args;
+}
+
+module.exports = { missing, chromiumOrSkip, testArgs };

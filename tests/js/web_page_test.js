@@ -10,7 +10,7 @@
 //   --images DIR: also write DIR/web_{mono,rgb}_{page,render}.png (the docs' pictures)
 // Exit 0 pass, 1 fail, 77 skip (tools.js).
 'use strict';
-const { missing } = require('./tools');
+const { missing, chromiumOrSkip, testArgs } = require('./tools');
 const fs = require('fs');
 const os = require('os');
 const path = require('path');
@@ -18,21 +18,9 @@ const http = require('http');
 const { execFileSync } = require('child_process');
 const { readPng, writePng } = require('./png');
 
-let chromium;
-try {
-  ({ chromium } = require('playwright-core'));
-} catch (e) {
-  missing('the npm package playwright-core');
-}
-const CHROMIUM = process.env.PRT_CHROMIUM || '/usr/bin/chromium';
-if (!fs.existsSync(CHROMIUM)) missing('Chromium (' + CHROMIUM + ')');
+const { chromium, executable: CHROMIUM } = chromiumOrSkip();
 
-const args = {};
-for (let i = 2; i < process.argv.length; i += 2) args[process.argv[i].replace(/^--/, '')] = process.argv[i + 1];
-if (!args.prt || !args.source) {
-  console.error('usage: node web_page_test.js --prt BUILD/prt --source SRC [--images DIR]');
-  process.exit(2);
-}
+const args = testArgs('web_page_test.js');
 
 // --- tolerances (sRGB-encoded 8-bit levels, per channel) -----------------
 // A model pixel: one whose colour differs from the page's own frame without
