@@ -1119,7 +1119,8 @@ Layout size_atlas(const std::vector<Chart>& charts, const UnwrapOptions& o, cons
   for (const Chart& c : charts) area += c.area3;
   const auto refuse = [&](const std::string& why) {
     return Error(fmt::format("{}: texels of {:g} need {}, past the largest lightmap ({} x {} texels): give a larger "
-                             "texel size",
+                             "texel size, or lay them on pages (UnwrapOptions::pages 0; prt unwrap --pages auto "
+                             "--lightmap WxH)",
                              source, o.texel_size, why, kMaxLightmapSize, kMaxLightmapSize));
   };
   if (!(area * d * d <= double(limit) * limit)) throw refuse(fmt::format("{:.3g} texels of surface", area * d * d));
