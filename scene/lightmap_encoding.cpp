@@ -3,6 +3,8 @@
 // error each adds.
 #include <prt/lightmap_encoding.h>
 
+#include "gltf_model.h"
+
 #include <prt/error.h>
 #include <prt/io.h>
 
@@ -10,7 +12,6 @@
 #include <OpenEXR/ImfRgbaFile.h>
 #include <fmt/format.h>
 #include <stb_image.h>
-#include <stb_image_write.h>
 
 #include <algorithm>
 #include <array>
@@ -235,12 +236,11 @@ EncodingError encoding_error(const RgbaImage& reference, const RgbaImage& decode
 void write_png_rgba8(const std::string& path, const Rgba8Image& image) {
   PRT_CHECK_OP(image.rgba.size(), ==, texel_count(image.width, image.height) * 4);
   std::vector<std::uint8_t> png;
-  const auto sink = [](void* ctx, void* data, int size) {
-    auto* v = static_cast<std::vector<std::uint8_t>*>(ctx);
-    v->insert(v->end(), static_cast<std::uint8_t*>(data), static_cast<std::uint8_t*>(data) + size);
-  };
-  if (!stbi_write_png_to_func(sink, &png, image.width, image.height, 4, image.rgba.data(), image.width * 4))
-    throw Error(path + ": cannot encode a PNG image");
+  try {
+    png = detail::encode_png(image.width, image.height, 4, image.rgba.data());
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
+  }
   write_bytes(path, png);
 }
 

@@ -21,6 +21,20 @@ namespace {
 // --pages: "auto" (0) or 1 to kMaxLightmapPages (the option's check took it).
 int pages_value(const std::string& text) { return text == "auto" ? 0 : std::stoi(text); }
 
+// Texels [first, first + count) of a stacked image of `per_texel` values a texel.
+template <class T>
+std::vector<T> page_values(const std::vector<T>& all, std::size_t first, std::size_t count, std::size_t per_texel) {
+  return std::vector<T>(all.begin() + std::ptrdiff_t(per_texel * first),
+                        all.begin() + std::ptrdiff_t(per_texel * (first + count)));
+}
+
+// `path`'s extension in lower case (".exr").
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
 }  // namespace
 
 SceneToBake load_scene_to_bake(const std::string& path, const MeshOptions& options, const LightmapUvArgs& uv, int width,
@@ -80,23 +94,20 @@ void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapL
     out.write([&] { write_exr_rgba(path, image); });
     return;
   }
-  const std::size_t W = std::size_t(image.width), per_page = W * std::size_t(rows);
+  const std::size_t per_page = std::size_t(image.width) * std::size_t(rows);
   for (int p = 0; p < pages; ++p) {
     RgbaImage page;
     page.width = image.width;
     page.height = rows;
     const std::size_t first = std::size_t(p) * per_page;
-    page.rgba.assign(image.rgba.begin() + std::ptrdiff_t(4 * first), image.rgba.begin() + std::ptrdiff_t(4 * (first + per_page)));
-    if (!image.std_error.empty())
-      page.std_error.assign(image.std_error.begin() + std::ptrdiff_t(3 * first),
-                            image.std_error.begin() + std::ptrdiff_t(3 * (first + per_page)));
+    page.rgba = page_values(image.rgba, first, per_page, 4);
+    if (!image.std_error.empty()) page.std_error = page_values(image.std_error, first, per_page, 3);
     out.write([&] { write_exr_rgba(page_path(path, p, pages), page); });
   }
 }
 
 LightmapEncoding lightmap_output_encoding(const std::string& path, const std::string& name) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(path);
   if (ext != ".exr" && ext != ".png" && ext != ".ktx2")
     throw UsageError("--output: " + path + ": a relit lightmap is written as .exr (float or half), .ktx2 (half) or "
                      ".png (--encoding rgbm or rgbd)");
@@ -116,16 +127,6 @@ LightmapEncoding lightmap_output_encoding(const std::string& path, const std::st
   return e;
 }
 
-namespace {
-
-// Texels [first, first + count) of a stacked image of 4 values per texel.
-template <class T>
-std::vector<T> page_values(const std::vector<T>& all, std::size_t first, std::size_t count) {
-  return std::vector<T>(all.begin() + std::ptrdiff_t(4 * first), all.begin() + std::ptrdiff_t(4 * (first + count)));
-}
-
-}  // namespace
-
 EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
                                           RgbaImage image, LightmapEncoding encoding) {
   EncodedPages done;
@@ -135,13 +136,12 @@ EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path,
   }
   const int W = image.width, rows = layout.page_height(), pages = layout.pages;
   const std::size_t per_page = std::size_t(W) * std::size_t(rows);
-  const std::string ext = std::filesystem::path(path).extension().string();
-  const bool ktx2 = ext.size() == 5 && std::tolower(static_cast<unsigned char>(ext[1])) == 'k';
+  const bool ktx2 = lower_extension(path) == ".ktx2";
   if (encoding == LightmapEncoding::Half) {
     const std::vector<std::uint16_t> halves = encode_half(image, &done.report);
     done.error = encoding_error(image, decode_half(image.width, image.height, halves));
     for (int p = 0; p < pages; ++p) {
-      const std::vector<std::uint16_t> page = page_values(halves, std::size_t(p) * per_page, per_page);
+      const std::vector<std::uint16_t> page = page_values(halves, std::size_t(p) * per_page, per_page, 4);
       const std::string file = page_path(path, p, pages);
       out.write([&] { ktx2 ? write_ktx2_half(file, W, rows, page) : write_exr_half(file, W, rows, page); });
     }
@@ -151,7 +151,7 @@ EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path,
   const Rgba8Image bytes = rgbm ? encode_rgbm(image, &done.report) : encode_rgbd(image, &done.report);
   done.error = encoding_error(image, rgbm ? decode_rgbm(bytes) : decode_rgbd(bytes));
   for (int p = 0; p < pages; ++p) {
-    Rgba8Image page{W, rows, page_values(bytes.rgba, std::size_t(p) * per_page, per_page)};
+    Rgba8Image page{W, rows, page_values(bytes.rgba, std::size_t(p) * per_page, per_page, 4)};
     out.write([&] { write_png_rgba8(page_path(path, p, pages), page); });
   }
   return done;
