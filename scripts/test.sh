@@ -73,7 +73,7 @@ phase "Release tests" release_tests
 # relocations of the sanitizers' globals), 0.25 s linked so.
 TARGETS=prt_unit_tests phase "ASan+UBSan build" \
   scripts/build.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" \
-  -DPRT_SANITIZE=ON -DPRT_BUILD_BENCH=OFF -DPRT_SHARED_LIBS=OFF -DCMAKE_EXE_LINKER_FLAGS=-no-pie
+  -DPRT_SANITIZE=ON -DPRT_GTEST_SHARDS=ON -DPRT_BUILD_BENCH=OFF -DPRT_SHARED_LIBS=OFF -DCMAKE_EXE_LINKER_FLAGS=-no-pie
 # intercept_tls_get_addr=0: LeakSanitizer (GCC 12's, with Debian 12's glibc)
 # otherwise tracks each thread's dynamic TLS through __tls_get_addr and, once
 # the OpenImageIO plugin's libraries (about 30 with thread-local storage) have
