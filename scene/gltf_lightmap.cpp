@@ -71,18 +71,36 @@ struct LightmapExport {
   // one, added when first needed.
   std::vector<std::vector<int>> material_index;
   std::vector<int> white;
+  double intensity = 1;  // with opts.moz_lightmap: MOZ_lightmap's intensity (the irradiance's largest value)
 
   // Materials: the scene's; with a bake, unlit (KHR_materials_unlit) showing
-  // page `page`'s baked lightmap at TEXCOORD_1 so any viewer shows the lit scene.
+  // page `page`'s baked lightmap at TEXCOORD_1 so any viewer shows the lit
+  // scene, or (opts.moz_lightmap) the scene's with page `page`'s irradiance
+  // as MOZ_lightmap at TEXCOORD_1.
   int add_material(const Material* m, int page) {
     std::string name = m ? m->name : "white";
-    if (!baked_textures.empty()) {
-      if (l.pages > 1) name += fmt::format(" (lightmap page {})", page);
+    const bool baked = !baked_textures.empty();
+    if (baked && l.pages > 1) name += fmt::format(" (lightmap page {})", page);
+    if (baked && !opts.moz_lightmap)
       return detail::add_material(model, name, glm::vec4(1.0f), baked_textures[std::size_t(page)], 1, true);
+    int index;
+    if (!m) {
+      index = detail::add_material(model, name, glm::vec4(1.0f), -1, 0, false);
+    } else {
+      const int texture = m->base_color_texture >= 0 ? material_textures[std::size_t(m->base_color_texture)] : -1;
+      index = detail::add_material(model, name, m->base_color, texture, m->texture_uv_set == l.uv_set ? 1 : 0, false);
     }
-    if (!m) return detail::add_material(model, name, glm::vec4(1.0f), -1, 0, false);
-    const int texture = m->base_color_texture >= 0 ? material_textures[std::size_t(m->base_color_texture)] : -1;
-    return detail::add_material(model, name, m->base_color, texture, m->texture_uv_set == l.uv_set ? 1 : 0, false);
+    if (baked) {
+      auto& extensions = model.materials[std::size_t(index)].extensions;
+      extensions["MOZ_lightmap"] = tg::Value(tg::Value::Object{{"index", tg::Value(baked_textures[std::size_t(page)])},
+                                                               {"texCoord", tg::Value(1)},
+                                                               {"intensity", tg::Value(intensity)}});
+      // prt baked a Lambertian surface: without this, a PBR engine keeps the
+      // dielectric's specular share (F0 0.04) off the diffuse light: about 2%
+      // at roughness 1 in three.js (1 - singleScattering - multiScattering).
+      extensions["KHR_materials_specular"] = tg::Value(tg::Value::Object{{"specularFactor", tg::Value(0.0)}});
+    }
+    return index;
   }
   // The material of object `o`'s triangles on page `page`.
   int object_material(const SceneObject& o, int page) {
@@ -93,6 +111,49 @@ struct LightmapExport {
   }
 };
 
+// The baked image's bytes (covered texels, by `source`; 0 elsewhere), RGB:
+// the radiance sRGB-encoded (clamped to [0, 1]) or, with opts.moz_lightmap,
+// the irradiance E_c = pi B_c / albedo_c (albedo the texel's; where a
+// channel's is at most 1e-3, prt render's threshold, the mean of the other
+// channels' E, or 0 without one) over its largest value, which becomes
+// e.intensity, sRGB-encoded too: linear bytes lose the dark texels of a
+// room whose sunlit patch sets the largest value (below largest / 510 they
+// become 0; measured in three_client_test.js's lightmap case).
+std::vector<unsigned char> baked_pixels(LightmapExport& e, const LightmapTexels& texels,
+                                        const std::vector<std::uint32_t>& source) {
+  const std::vector<glm::vec3>& baked = e.opts.baked;
+  std::vector<unsigned char> px(source.size() * 3, 0);
+  if (!e.opts.moz_lightmap) {
+    for (std::size_t p = 0; p < source.size(); ++p)
+      if (source[p] != kNoTexel)
+        for (int c = 0; c < 3; ++c) px[p * 3 + std::size_t(c)] = srgb_byte(baked[source[p]][c]);
+    return px;
+  }
+  constexpr float kMinAlbedo = 1e-3f;  // lightmap.frag.glsl's: below it prt render leaves B as it is
+  std::vector<glm::vec3> irradiance(baked.size());
+  double top = 0;
+  for (std::size_t i = 0; i < baked.size(); ++i) {
+    const glm::vec3 a = texels.albedo[i];
+    float sum = 0;
+    int known = 0;
+    for (int c = 0; c < 3; ++c) {
+      if (a[c] <= kMinAlbedo) continue;
+      irradiance[i][c] = std::max(0.0f, float(M_PI) * baked[i][c] / a[c]);
+      sum += irradiance[i][c];
+      ++known;
+    }
+    for (int c = 0; c < 3; ++c)
+      if (a[c] <= kMinAlbedo) irradiance[i][c] = known ? sum / float(known) : 0.0f;
+    for (int c = 0; c < 3; ++c) top = std::max(top, double(irradiance[i][c]));
+  }
+  e.intensity = top > 0 ? top : 1.0;
+  for (std::size_t p = 0; p < source.size(); ++p)
+    if (source[p] != kNoTexel)
+      for (int c = 0; c < 3; ++c)
+        px[p * 3 + std::size_t(c)] = srgb_byte(float(irradiance[source[p]][c] / e.intensity));
+  return px;
+}
+
 // The coefficient textures: texture g of a page holds coefficients 4g ..
 // 4g + 3 of a row ([channel][k]) in R, G, B, A; gutters copy their source
 // texel (within the page). Texture 0 of every page, texture 1 of every
@@ -100,7 +161,7 @@ struct LightmapExport {
 // scene's textures, in that order. Page p is the stacked atlas's rows p H ..
 // (p + 1) H - 1 (H a page's height).
 void add_lightmap_textures(LightmapExport& e, const LightmapQuantization& q, std::size_t stride,
-                           const std::vector<std::uint32_t>& source) {
+                           const LightmapTexels& texels, const std::vector<std::uint32_t>& source) {
   const LightmapLayout& l = e.l;
   tg::Model& model = e.model;
   const int groups = int((stride + 3) / 4), H = l.page_height();
@@ -125,13 +186,11 @@ void add_lightmap_textures(LightmapExport& e, const LightmapQuantization& q, std
                     page_name(fmt::format("prt_lightmap_coefficients_{}", g), p), false));
   }
   if (!e.opts.baked.empty()) {
-    std::vector<unsigned char> px(source.size() * 3, 0);
-    for (std::size_t p = 0; p < source.size(); ++p)
-      if (source[p] != kNoTexel)
-        for (int c = 0; c < 3; ++c) px[p * 3 + std::size_t(c)] = srgb_byte(e.opts.baked[source[p]][c]);
+    const std::vector<unsigned char> px = baked_pixels(e, texels, source);
+    const std::string base = e.opts.moz_lightmap ? "prt_lightmap_irradiance" : "prt_lightmap_baked";
     for (int p = 0; p < l.pages; ++p)
       e.baked_textures.push_back(add_image(model, encode_png(l.width, H, 3, px.data() + std::size_t(p) * page_texels * 3),
-                                           page_name("prt_lightmap_baked", p), false));
+                                           page_name(base, p), false));
   }
   e.material_textures = detail::add_scene_textures(model, e.scene);
 }
@@ -245,6 +304,11 @@ json lightmap_extras(const LightmapExport& e, const LightmapTransfer& t, const L
                    {"exposure", opts.bake.exposure},
                    {"texture", l.pages > 1 ? json(e.baked_textures) : json(e.baked_textures[0])},
                    {"color", "sRGB-encoded radiance x 2^exposure clamped to [0, 1], at TEXCOORD_1 (KHR_materials_unlit)"}};
+  if (!e.baked_textures.empty() && opts.moz_lightmap) {
+    prt["bake"]["color"] = "sRGB-encoded irradiance E = pi x radiance x 2^exposure / albedo(texel) over intensity, at TEXCOORD_1 "
+                           "(MOZ_lightmap on the scene's materials: radiance = E x albedo / pi, three.js r155+'s lightMap)";
+    prt["bake"]["intensity"] = e.intensity;
+  }
   if (!e.baked_textures.empty() && !opts.bake.lights.empty()) prt["bake"]["lights"] = opts.bake.lights;
   return prt;
 }
@@ -283,8 +347,11 @@ void write_gltf_lightmap(const std::string& path, const Scene& scene, const Ligh
   model.buffers.emplace_back();
   tg::Scene gscene;
 
-  add_lightmap_textures(e, q, stride, source);
-  if (!e.baked_textures.empty()) model.extensionsUsed.push_back("KHR_materials_unlit");
+  add_lightmap_textures(e, q, stride, texels, source);
+  if (!e.baked_textures.empty() && opts.moz_lightmap)
+    model.extensionsUsed.insert(model.extensionsUsed.end(), {"KHR_materials_specular", "MOZ_lightmap"});
+  else if (!e.baked_textures.empty())
+    model.extensionsUsed.push_back("KHR_materials_unlit");
   // A material set per page where the materials show the page's bake, else one.
   const int sets = e.baked_textures.empty() ? 1 : l.pages;
   e.material_index.assign(std::size_t(sets), std::vector<int>(scene.materials.size()));

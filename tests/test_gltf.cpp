@@ -467,6 +467,18 @@ TEST_F(ExportCli, BadInputsNameTheFile) {
   r = run_prt(dir, {"export", kScene, tfile, "-o", dir.file("x.glb"), "--exposure", "1"});
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("--exposure applies to the baked colours"), std::string::npos) << r.err;
+  // --bake-material is a lightmap bake's: refused without --bake, on a vertex
+  // transfer (its bake is COLOR_0), and for a value other than unlit or lit.
+  r = run_prt(dir, {"export", kScene, tfile, "-o", dir.file("x.glb"), "--bake-material", "lit"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--bake-material applies to a lightmap's baked texture: give --bake ENV too"), std::string::npos)
+      << r.err;
+  r = run_prt(dir, {"export", kScene, tfile, "-o", dir.file("x.glb"), "--bake", kStudio, "--bake-material", "lit"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(tfile + " is a vertex transfer (its bake is COLOR_0, unlit)"), std::string::npos) << r.err;
+  r = run_prt(dir, {"export", kScene, tfile, "-o", dir.file("x.glb"), "--bake", kStudio, "--bake-material", "shiny"});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--bake-material"), std::string::npos) << r.err;
   // A wavelet transfer is refused.
   const std::string wlt = precompute("s.wlt", {"--basis", "wavelet", "--cube-res", "4"}, false);
   r = run_prt(dir, {"export", kScene, wlt, "-o", dir.file("x.glb")});

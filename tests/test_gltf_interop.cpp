@@ -174,11 +174,14 @@ TEST_F(GltfValidator, LightmapExportsHaveNoErrors) {
                 .code,
             0);
   std::vector<std::string> files = {dir.file("room.glb"),   dir.file("room.gltf"),  dir.file("room-baked.glb"),
-                                    dir.file("room-lit.glb"), dir.file("paged.glb"), dir.file("paged-baked.gltf")};
+                                    dir.file("room-lit.glb"), dir.file("paged.glb"), dir.file("paged-baked.gltf"),
+                                    dir.file("room-moz.glb"), dir.file("paged-moz.glb")};
   for (std::size_t i = 0; i < files.size(); ++i) {
-    std::vector<std::string> args = {"export", scene, i < 4 ? lm : paged, "-o", files[i], "-q"};
+    std::vector<std::string> args = {"export", scene, i < 4 || i == 6 ? lm : paged, "-o", files[i], "-q"};
     if (i == 2 || i == 5) args.insert(args.end(), {"--bake", kStudio, "--exposure", "1"});
     if (i == 3) args.insert(args.end(), {"--bake", kStudio, "--lights", lights});
+    // The bake as MOZ_lightmap (a vendor extension the validator does not know: an info, not an error).
+    if (i >= 6) args.insert(args.end(), {"--bake", kStudio, "--bake-material", "lit"});
     const auto r = run_prt(dir, args);
     ASSERT_EQ(r.code, 0) << r.err;
   }
@@ -390,6 +393,77 @@ TEST(LightmapPagesExport, EachPageIsItsOwnImagesAndPrimitives) {
   EXPECT_EQ(prt::test::read_file(dir.file("web/lightmap_albedo.rgb16f")).size(), std::size_t(W) * H * P * 3 * 2);
   EXPECT_EQ(read_glb(prt::test::read_file(dir.file("web/model.glb"))).json["asset"]["extras"]["prt"]["textures"],
             info["textures"]);
+}
+
+// The bake as MOZ_lightmap (prt export --bake --bake-material lit): every
+// material of the scene carries it (texCoord 1, intensity k) and
+// KHR_materials_specular 0, and the image decodes, as an engine reads it
+// (sRGB bytes x k), to the irradiance E whose E x albedo(texel) / pi is the
+// bake B within half an sRGB step. three.js's drawing of it:
+// tests/js/three_client_test.js, case lightmap_moz.
+TEST(MozLightmapExport, TheIrradianceTimesTheTexelAlbedoOverPiIsTheBake) {
+  TempDir dir;
+  const std::string room = kSource + "/models/room.gltf", lm = dir.file("room.prt");
+  ASSERT_EQ(run_prt(dir, {"precompute", room, "--lightmap", "32x32", "--bands", "2", "--samples", "16", "-q", "-o", lm})
+                .code,
+            0);
+  const prt::LightmapTransfer t = prt::read_lightmap_transfer(lm);
+  const prt::Scene scene = prt::load_scene(room);
+  const prt::LightmapTexels texels =
+      prt::lightmap_texels(scene, t.layout, t.transfer.vertex_colors ? nullptr : &t.transfer.albedo);
+  prt::GltfLightmapOptions opts;
+  opts.moz_lightmap = true;
+  const double euler[3] = {0, 0, 0};
+  prt::bake_lightmap(opts, t, texels, prt::project(prt::load_envmap(kStudio), t.transfer.bands), "studio.exr", euler, 1);
+  const std::string path = dir.file("moz.glb");
+  prt::write_gltf_lightmap(path, scene, t, texels, opts);
+
+  Glb g = read_glb(prt::test::read_file(path));
+  EXPECT_EQ(g.json["extensionsUsed"], nlohmann::json::array({"KHR_materials_specular", "MOZ_lightmap"}));
+  EXPECT_FALSE(g.json.contains("extensionsRequired"));
+  const double k = g.json["asset"]["extras"]["prt"]["bake"]["intensity"];
+  ASSERT_GT(k, 0.0);
+  int image = -1;
+  for (const nlohmann::json& m : g.json["materials"]) {
+    const nlohmann::json& moz = m["extensions"]["MOZ_lightmap"];
+    EXPECT_EQ(moz["texCoord"], 1) << m.dump();
+    EXPECT_EQ(moz["intensity"].get<double>(), k);
+    EXPECT_EQ(m["extensions"]["KHR_materials_specular"]["specularFactor"], 0.0);
+    image = moz["index"];
+  }
+  ASSERT_GE(image, 0);
+  // Decoded by load_scene through a material showing it (RGB as sRGB).
+  g.json["materials"].push_back({{"name", "show"}, {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", image}}}}}});
+  const std::string shown = dir.file("shown.glb");
+  prt::test::write_file(shown, write_glb(g));
+  const prt::Scene back = prt::load_scene(shown);
+  const std::string name = g.json["images"][g.json["textures"][std::size_t(image)]["source"].get<std::size_t>()]["name"];
+  const prt::Texture* irradiance = nullptr;
+  for (const prt::Texture& x : back.textures)
+    if (x.name == name) irradiance = &x;
+  ASSERT_NE(irradiance, nullptr);
+  const std::vector<std::uint32_t> source = prt::lightmap_sources(t.layout);
+  ASSERT_EQ(source.size(), irradiance->texels.size());
+  float brightest = 0;
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    if (source[i] == prt::kNoTexel) continue;
+    for (int c = 0; c < 3; ++c) {
+      const float a = texels.albedo[source[i]][c], v = irradiance->texels[i][c];
+      brightest = std::max(brightest, v);
+      if (a <= 1e-3f) continue;
+      // Half an 8-bit sRGB step at v (the encoding's rounding), in B's units.
+      const int code = srgb_code(v);
+      const float step = prt::srgb_to_linear(std::min(255, code + 1) / 255.0f) -
+                         prt::srgb_to_linear(std::max(0, code - 1) / 255.0f);
+      const double b = std::max(0.0f, opts.baked[source[i]][c]);
+      ASSERT_NEAR(double(v) * k * a / M_PI, b, 0.5 * step * k * a / M_PI + 1e-7 * k)
+          << "texel " << i << " channel " << c;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, std::size_t(32 * 32));
+  EXPECT_EQ(brightest, 1.0f);  // k is the largest irradiance: its texel is 255
 }
 
 TEST(LightmapQuantization, DecodesWithinHalfAStep) {

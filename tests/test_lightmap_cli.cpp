@@ -631,6 +631,12 @@ TEST(LightmapCli, ExportRefusesLightsWhereTheyCannotGo) {
                     "--lights", spots});
   EXPECT_EQ(r.code, 2) << describe_run(r);
   EXPECT_NE(r.err.find("lights inside the scene are not in it"), std::string::npos) << r.err;
+  r = run_prt(dir, {"export", scene, "--probes", dir.file("p.prt"), "--bake", "studio", "-o", dir.file("p.json"),
+                    "--bake-material", "lit"});
+  EXPECT_EQ(r.code, 2) << describe_run(r);
+  EXPECT_NE(r.err.find("--bake-material applies to a lightmap's baked texture; a probe volume exports"),
+            std::string::npos)
+      << r.err;
   EXPECT_EQ(dir.listing(), (std::vector<std::string>{"lit-room.gltf", "lm.prt", "spot.json"}));
   r = run_prt(dir, {"export", scene, dir.file("lm.prt"), "--web", dir.file("page"), "--lights", "none", "-q"});
   EXPECT_EQ(r.code, 0) << describe_run(r);

@@ -102,6 +102,15 @@ struct GltfLightmapOptions {
   // TEXCOORD_1; empty: none.
   std::vector<glm::vec3> baked;
   GltfBake bake;                  // what extras records of it
+  // How the materials show `baked` (docs/FORMAT.md "Lightmap export"):
+  // unlit, an sRGB PNG of the radiance itself (KHR_materials_unlit, the
+  // default); or lit, the scene's PBR materials (base colour and texture at
+  // full resolution) with a MOZ_lightmap (Mozilla Hubs' extension, three.js's
+  // lightMap): an sRGB PNG of the irradiance E = pi B / albedo(texel) per
+  // channel divided by its largest value k, written as the intensity, so
+  // that three.js (r155+: diffuse = lightMap x lightMapIntensity x
+  // albedo / pi) draws B x albedo(fragment) / albedo(texel), nothing clipped.
+  bool moz_lightmap = false;
   std::vector<Light> lights;      // KHR_lights_punctual, as GltfOptions::lights
   std::string transfer_source;    // recorded in extras
   std::string generator = "prt";

@@ -907,9 +907,9 @@ def export_gltf(transfer: Transfer, mesh: Mesh, path: Any, *, bake: Any = ..., r
     Writes the mesh and its SH transfer as glTF 2.0 (.glb binary, .gltf JSON; docs/FORMAT.md "glTF export") to `path`, as prt export MESH T -o FILE does, the same bytes: the transfer rows as vertex attributes _PRT_T0, ... (a compressed transfer's reconstructed rows; a glossy one's diffuse part), described in asset.extras.prt. bake: a map file whose relit radiance becomes COLOR_0 (turned by rotate, yaw, pitch, roll degrees; times 2^exposure, stops or 'auto', default 0; clamped to [0, 1]), as --bake.
     """
 @overload
-def export_gltf(transfer: Lightmap, mesh: Scene, path: Any, *, bake: Any = ..., rotate: Any = ..., exposure: Any = ...) -> None:
+def export_gltf(transfer: Lightmap, mesh: Scene, path: Any, *, bake: Any = ..., rotate: Any = ..., exposure: Any = ..., bake_material: Any = ...) -> None:
     """
-    For a Lightmap and its Scene: writes the scene (one node per object) with the lightmap's coefficient textures as glTF 2.0 (docs/FORMAT.md "Lightmap export"), as prt export SCENE LIGHTMAP -o FILE does (extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', default 0), as --bake. A lightmap of many pages (its Scene from lightmap_scene: the pages stacked) is written as pages: images of a page's size and a primitive per page, as prt export writes it.
+    For a Lightmap and its Scene: writes the scene (one node per object) with the lightmap's coefficient textures as glTF 2.0 (docs/FORMAT.md "Lightmap export"), as prt export SCENE LIGHTMAP -o FILE does (extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', default 0), as --bake; bake_material: 'unlit' (default) or 'lit' (the scene's materials with the irradiance as MOZ_lightmap, three.js's lightMap), as --bake-material. A lightmap of many pages (its Scene from lightmap_scene: the pages stacked) is written as pages: images of a page's size and a primitive per page, as prt export writes it.
     """
 @overload
 def export_gltf(transfer: WaveletTransfer, *args, **kwargs) -> None:

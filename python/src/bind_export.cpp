@@ -228,21 +228,30 @@ void bind_export(py::module_& m) {
   m.def(
       "export_gltf",
       [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& path, const py::object& bake,
-         const py::object& rotate, const py::object& exposure) {
+         const py::object& rotate, const py::object& exposure, const py::object& bake_material) {
         const std::string out = path_of(path, "path");
         check_not_input("path", out, {{"scene", scene.mesh.source},
                                       {"bake", is_path(bake) ? path_of(bake, "bake") : std::string()}});
-        const LightmapExport x = lightmap_export(l, scene, bake, rotate, exposure);
+        std::string material = "unlit";
+        if (!bake_material.is_none()) {
+          if (bake.is_none()) throw Error("bake_material: applies to the baked lightmap: give bake= (a map file) too");
+          material = py::cast<std::string>(bake_material);
+          if (material != "unlit" && material != "lit")
+            throw Error("bake_material: '" + material + "': expected 'unlit' or 'lit'");
+        }
+        LightmapExport x = lightmap_export(l, scene, bake, rotate, exposure);
+        x.opts.moz_lightmap = material == "lit";
         py::gil_scoped_release release;
         prt::write_gltf_lightmap(out, scene, l, x.texels, x.opts);
       },
       py::arg("transfer"), py::arg("mesh"), py::arg("path"), py::kw_only(), py::arg("bake") = py::none(),
-      py::arg("rotate") = py::none(), py::arg("exposure") = py::none(),
+      py::arg("rotate") = py::none(), py::arg("exposure") = py::none(), py::arg("bake_material") = py::none(),
       "For a Lightmap and its Scene: writes the scene (one node per object) with the lightmap's coefficient "
       "textures as glTF 2.0 (docs/FORMAT.md \"Lightmap export\"), as prt export SCENE LIGHTMAP -o FILE does "
       "(extras name no transfer file: a Lightmap does not know its file); bake: a map file whose relit radiance "
       "becomes the baked lightmap (unlit, TEXCOORD_1; turned by rotate; times 2^exposure, stops or 'auto', "
-      "default 0), as --bake. A lightmap of many pages (its Scene from lightmap_scene: the pages stacked) is "
+      "default 0), as --bake; bake_material: 'unlit' (default) or 'lit' (the scene's materials with the "
+      "irradiance as MOZ_lightmap, three.js's lightMap), as --bake-material. A lightmap of many pages (its Scene from lightmap_scene: the pages stacked) is "
       "written as pages: images of a page's size and a primitive per page, as prt export writes it.");
 
   m.def(

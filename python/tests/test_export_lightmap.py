@@ -34,6 +34,7 @@ def glb(data: bytes):
 @pytest.mark.parametrize("cli,kw", [
     ([], {}),
     (["--bake", ENV, "--rotate", "30,-10,5", "--exposure", "1.5"], dict(bake=ENV, rotate=(30, -10, 5), exposure=1.5)),
+    (["--bake", ENV, "--bake-material", "lit"], dict(bake=ENV, bake_material="lit")),
 ])
 def test_gltf_is_the_clis(lightmap_file, tmp_path, cli, kw):
     want, got = tmp_path / "cli.glb", tmp_path / "py.glb"
@@ -63,6 +64,10 @@ def test_refusals(lightmap_file, tmp_path):
     lm, scene = prt.read_lightmap(lightmap_file), prt.load_scene(SCENE)
     with pytest.raises(prt.Error, match="bake="):
         prt.export_gltf(lm, scene, tmp_path / "x.glb", exposure=1.0)
+    with pytest.raises(prt.Error, match="bake_material: applies to the baked lightmap"):
+        prt.export_gltf(lm, scene, tmp_path / "x.glb", bake_material="lit")
+    with pytest.raises(prt.Error, match="expected 'unlit' or 'lit'"):
+        prt.export_gltf(lm, scene, tmp_path / "x.glb", bake=ENV, bake_material="shiny")
     with pytest.raises(prt.Error, match="the page relights"):
         prt.export_web(lm, scene, tmp_path / "page", bake=ENV)
     with pytest.raises(prt.Error, match="mistyped arguments"):  # a Lightmap takes its Scene

@@ -8,11 +8,15 @@
 // another map must fail the same comparison.
 //
 // Cases (CASES below): a vertex bake (prt export --bake: COLOR_0 under an
-// unlit material, docs/FORMAT.md "Loading a vertex bake in three.js"). A
-// case names the files to make and load; lightmaps or probes go beside it.
+// unlit material, docs/FORMAT.md "Loading a vertex bake in three.js"), and
+// a lightmap bake as MOZ_lightmap on lit materials (prt export --bake
+// --bake-material lit: docs/FORMAT.md "Lightmap export"), which three's
+// GLTFLoader reads through the small plugin of docs/WEB.md (registered for
+// every case: files without the extension are untouched). A case names the
+// files to make and load; probes go beside them.
 //
 // node three_client_test.js --prt BUILD/prt --source SRC [--images DIR]
-//   --images DIR: also write DIR/three_NAME_{three,render}.png
+//   --images DIR: also write DIR/three_NAME_{three,render,diff}.png (diff: x 8 where both cover)
 // Exit 0 pass, 1 fail, 77 skip (tools.js).
 'use strict';
 const { missing, chromiumOrSkip, testArgs } = require('./tools');
@@ -73,6 +77,18 @@ const PAGE = `<!doctype html><html><head><link rel="icon" href="data:,"></head><
 <script type="module">
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+// MOZ_lightmap (Mozilla Hubs' extension) as three's lightMap: docs/WEB.md.
+class MozLightmap {
+  constructor(parser) { this.parser = parser; this.name = 'MOZ_lightmap'; }
+  extendMaterialParams(materialIndex, params) {
+    const ext = (this.parser.json.materials[materialIndex].extensions || {})[this.name];
+    if (!ext) return Promise.resolve();
+    params.lightMapIntensity = ext.intensity ?? 1;
+    // prt's lightmap PNG is sRGB-encoded; at TEXCOORD_n as channel n.
+    return this.parser.assignTexture(params, 'lightMap', { index: ext.index, texCoord: ext.texCoord ?? 1 },
+                                     THREE.SRGBColorSpace);
+  }
+}
 const renderer = new THREE.WebGLRenderer({ canvas: document.getElementById('c'), antialias: false,
                                            preserveDrawingBuffer: true });
 renderer.toneMapping = THREE.NoToneMapping;
@@ -91,7 +107,7 @@ function pixels(W, H) {
 // view: {eye, target, up, fov (vertical, degrees), width, height}. Returns
 // the frame over a black and over a white background, and what the loader made.
 self.draw = async (url, v) => {
-  const gltf = await new GLTFLoader().loadAsync(url);
+  const gltf = await new GLTFLoader().register((parser) => new MozLightmap(parser)).loadAsync(url);
   const scene = new THREE.Scene();
   scene.add(gltf.scene);
   const dist = Math.hypot(v.eye[0] - v.target[0], v.eye[1] - v.target[1], v.eye[2] - v.target[2]);
@@ -108,7 +124,9 @@ self.draw = async (url, v) => {
     frames.push(pixels(v.width, v.height));
   }
   const materials = [];
-  gltf.scene.traverse((o) => { if (o.isMesh) materials.push({ type: o.material.type, vertexColors: o.material.vertexColors }); });
+  gltf.scene.traverse((o) => {
+    if (o.isMesh) materials.push({ type: o.material.type, vertexColors: o.material.vertexColors, lightMap: !!o.material.lightMap });
+  });
   return { frames, materials };
 };
 self.ready = true;
@@ -153,6 +171,7 @@ function compare(frames, ref, refMask) {
   const [black, white] = frames.map((f) => Buffer.from(f, 'base64'));
   let inter = 0, uni = 0, sum = 0;
   const maxes = [];
+  const diff = Buffer.alloc(black.length);  // |three - prt render| x 8 where both cover, for --images
   for (let i = 0; i < refMask.length; ++i) {
     const mt = black[3 * i] === white[3 * i] && black[3 * i + 1] === white[3 * i + 1] && black[3 * i + 2] === white[3 * i + 2];
     const mp = refMask[i] === 1;
@@ -164,6 +183,7 @@ function compare(frames, ref, refMask) {
       const e = Math.abs(black[3 * i + c] - ref.rgb[3 * i + c]);
       d += e;
       dmax = Math.max(dmax, e);
+      diff[3 * i + c] = Math.min(255, 8 * e);
     }
     sum += d / 3;
     maxes.push(dmax);
@@ -171,7 +191,7 @@ function compare(frames, ref, refMask) {
   maxes.sort((x, y) => x - y);
   return { pixels: inter, iou: uni ? inter / uni : 0, mean: inter ? sum / inter : Infinity,
            p99: maxes.length ? maxes[Math.min(maxes.length - 1, Math.floor(0.99 * maxes.length))] : Infinity,
-           max: maxes.length ? maxes[maxes.length - 1] : Infinity, black };
+           max: maxes.length ? maxes[maxes.length - 1] : Infinity, black, diff };
 }
 const show = (m) => `covered pixels ${m.pixels}, IoU ${m.iou.toFixed(4)}, mean ${m.mean.toFixed(3)}, p99 ${m.p99}, max ${m.max}`;
 
@@ -189,8 +209,8 @@ async function runCase(tab, base, tmp, name, c) {
   const got = await tab.evaluate(([u, view]) => self.draw(u, view), [`${base}/${path.basename(files.glb)}`, v]);
   const m = compare(got.frames, ref, mask);
   console.log(`${name}: three.js GLTFLoader (${JSON.stringify(got.materials)}) vs prt render: ${show(m)}`);
-  if (!got.materials.length || got.materials.some((x) => x.type !== c.material))
-    fail(`${name}: the loader made ${JSON.stringify(got.materials)}, expected ${c.material}`);
+  if (!got.materials.length || got.materials.some((x) => x.type !== c.material || x.lightMap !== !!c.lightMap))
+    fail(`${name}: the loader made ${JSON.stringify(got.materials)}, expected ${c.material}${c.lightMap ? ' with a lightMap' : ''}`);
   if (!(m.iou >= kMinIoU && m.mean <= kMaxMean && m.p99 <= kMaxP99)) fail(`${name}: three.js's frame differs from prt render beyond the tolerances`);
   if (m.pixels < 0.1 * v.width * v.height) fail(`${name}: the model covers only ${m.pixels} pixels`);
   const neg = await tab.evaluate(([u, view]) => self.draw(u, view), [`${base}/${path.basename(files.negative)}`, v]);
@@ -201,6 +221,7 @@ async function runCase(tab, base, tmp, name, c) {
     fs.mkdirSync(args.images, { recursive: true });
     fs.writeFileSync(path.join(args.images, `three_${name}_three.png`), writePng(v.width, v.height, m.black));
     fs.copyFileSync(png, path.join(args.images, `three_${name}_render.png`));
+    fs.writeFileSync(path.join(args.images, `three_${name}_diff.png`), writePng(v.width, v.height, m.diff));
   }
 }
 
@@ -230,10 +251,39 @@ function vertexBake(stops) {
     },
   };
 }
+// prt export --bake --bake-material lit of a lightmap: the room's own PBR
+// materials (the floor's checker texture at full resolution) with the
+// irradiance as MOZ_lightmap; prt render of the lightmap: its detail mode
+// (radiance x albedo(fragment) / albedo(texel)), the same exposure, clamped.
+// The camera: inside the room (4 x 2.5 x 4, the floor at y = 0), from a
+// corner near the ceiling toward the box and the opposite corner.
+const roomView = { eye: [1.7, 2.0, 1.7], target: [-0.8, 0.5, -1.0], up: [0, 1, 0], fov: 70, width: 320, height: 240 };
+function lightmapBake(stops) {
+  return {
+    view: roomView, material: 'MeshPhysicalMaterial', lightMap: true,
+    make: async (tmp) => {
+      const src = (p) => path.join(args.source, p);
+      const scene = src('models/room.gltf'), transfer = path.join(tmp, 'room.prt');
+      if (!fs.existsSync(transfer))
+        await run(args.prt, ['precompute', scene, '--lightmap', '128x128', '--bands', '3', '--samples', '64', '-o', transfer, '-q']);
+      const bake = (map, out) => run(args.prt, ['export', scene, transfer, '-o', path.join(tmp, out), '--bake',
+                                                src('envmaps/' + map), '--bake-material', 'lit',
+                                                '--exposure', String(stops), '-q']);
+      const [glb, negative] = [`room_sunset_${stops}.glb`, `room_city_${stops}.glb`];
+      await Promise.all([bake('sunset.exr', glb), bake('city.exr', negative)]);
+      return { glb, negative, negativeWhat: 'baked under city.exr instead of sunset.exr',
+               render: ['render', scene, transfer, src('envmaps/sunset.exr'), '--exposure', String(stops),
+                        '--tonemap', 'clamp'] };
+    },
+  };
+}
 const CASES = {
   vertex_bake: vertexBake(0),  // nothing clamps (the brightest vertex 0.93)
   // Some vertices clamp: per vertex in the bake, per pixel in prt render.
   vertex_bake_bright: vertexBake(1.5),
+  // The room's light through its window: +4 stops shows it (prt render's
+  // auto exposure: +4.5).
+  lightmap_moz: lightmapBake(4),
 };
 
 async function main() {

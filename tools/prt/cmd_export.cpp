@@ -45,6 +45,9 @@ struct ExportArgs {
   std::string probes;    // --probes FILE: the probe volume to export (or as TRANSFER)
   std::string exposure;  // stops or auto; unset: 0 for --bake, auto for --web
   bool quiet = false;
+  // --bake-material: how a lightmap's bake is shown ("unlit" or "lit": MOZ_lightmap on the scene's materials).
+  std::string bake_material = "unlit";
+  const CLI::Option* bake_material_opt = nullptr;
   const CLI::Option *rotate_opt = nullptr, *exposure_opt = nullptr;
   // --web DIR: the relighting page (web_export.h, docs/WEB.md).
   std::string web, env, camera, tone_map = "clamp";
@@ -158,6 +161,7 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   check_matches(lt, texels, a.transfer);
   if (!a.quiet) fmt::print(stderr, "{}\n{}", describe(scene), describe_transfer(lt));
   GltfLightmapOptions opts;
+  opts.moz_lightmap = a.bake_material == "lit";
   opts.transfer_source = std::filesystem::path(a.transfer).filename().string();
   opts.generator = "prt " PRT_VERSION " (prt export)";
   opts.lights = export_lights(a, &scene.lights);
@@ -212,7 +216,9 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
       fmt::print(stderr, "wrote {}: {} objects, {} coefficient textures{} ({} RGBA8, {} bytes per texel){}{}\n",
                  a.output, scene.objects.size(), (stride + 3) / 4, lt.layout.pages > 1 ? " per page" : "",
                  lightmap_size_text(lt.layout), 4 * ((stride + 3) / 4),
-                 opts.baked.empty() ? "" : ", and the baked lightmap (unlit, TEXCOORD_1)",
+                 opts.baked.empty() ? ""
+                 : opts.moz_lightmap ? ", and the baked lightmap (MOZ_lightmap on the scene's materials, TEXCOORD_1)"
+                                     : ", and the baked lightmap (unlit, TEXCOORD_1)",
                  opts.lights.empty() ? "" : "; " + describe_lights(opts.lights) + " as KHR_lights_punctual");
     if (page) print_page_written(a);
   }
@@ -229,6 +235,8 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler, P
     throw UsageError("--lights and --sun: a probe volume's JSON holds each probe's SH of the map; lights inside the "
                      "scene are not in it (docs/LIGHTS.md \"Export\")");
   if (!a.web.empty()) throw UsageError("--web shows a mesh's or a lightmap's transfer; a probe volume exports as JSON (-o FILE.json)");
+  if (a.bake_material_opt->count() > 0)
+    throw UsageError("--bake-material applies to a lightmap's baked texture; a probe volume exports its probes' SH as JSON");
   if (a.bake.empty()) throw UsageError(a.transfer + " is a probe volume: give --bake ENV (the map its probes are relit under) and -o FILE.json");
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
@@ -348,6 +356,14 @@ UsageError not_gltf(const std::string& output) {
   return UsageError("--output: " + output + ": expected a .glb (binary glTF) or .gltf (JSON glTF) file");
 }
 
+// --bake-material lit needs texels (a lightmap): a vertex bake is COLOR_0.
+void check_no_bake_material(const ExportArgs& a) {
+  if (a.bake_material != "unlit")
+    throw UsageError("--bake-material " + a.bake_material + ": " + a.transfer +
+                     " is a vertex transfer (its bake is COLOR_0, unlit); lit applies to a lightmap (prt precompute "
+                     "SCENE --lightmap)");
+}
+
 // The options of a glTF export (-o FILE.glb|.gltf, --bake, --web), checked
 // before anything is read: usage errors (exit 2) and outputs that cannot be
 // written.
@@ -360,6 +376,8 @@ void check_gltf_options(const ExportArgs& a, bool gltf) {
       throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
   for (const CLI::Option* o : a.web_opts)
     if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
+  if (a.bake_material_opt->count() > 0 && a.bake.empty())
+    throw UsageError("--bake-material applies to a lightmap's baked texture: give --bake ENV too");
   if (a.light.sun_opt->count() > 0 && a.bake.empty())
     throw UsageError("--sun applies to the baked colours (the map's sun traced as a light): give --bake ENV too");
   if (!a.output.empty()) {
@@ -416,11 +434,13 @@ int run_export(const ExportArgs& args) {
   return dispatch(
       any,
       [&](const Transfer& t) {
+        check_no_bake_material(a);
         const Mesh mesh = load_mesh(a.mesh);
         check_matches(t, mesh, a.transfer);
         return export_mesh(a, mesh, t, false, euler, tone);
       },
       [&](const CompressedTransfer& c) {  // exported as the rows it reconstructs
+        check_no_bake_material(a);
         const Mesh mesh = load_mesh(a.mesh);
         check_matches(c, mesh, a.transfer);
         return export_mesh(a, mesh, decompress(c), true, euler, tone);
@@ -478,6 +498,12 @@ Run add_export(CLI::App& app) {
       ->check(path_value());
   s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it")
       ->check(path_value());
+  a->bake_material_opt =
+      s->add_option("--bake-material", a->bake_material,
+                    "With --bake of a lightmap: unlit (default; an sRGB PNG of the radiance under KHR_materials_unlit) or "
+                    "lit (the scene's PBR materials with the irradiance as MOZ_lightmap, three.js's lightMap; "
+                    "docs/FORMAT.md \"Lightmap export\")")
+          ->check(CLI::IsMember({"unlit", "lit"}));
   a->rotate_opt = add_shared(s, SharedOption::Rotate, a->rotate, "With --bake or --web: rotate the lighting");
   a->exposure_opt = add_shared(s, SharedOption::Exposure, a->exposure,
                                "With --bake: scale the radiance by 2^stops before clamping (default 0); with --web: "
