@@ -95,6 +95,12 @@ Sh9 to_unity(std::span<const glm::dvec3> radiance) {
   return u;
 }
 
+Sh9 to_godot(std::span<const glm::dvec3> radiance) {
+  Sh9 g = padded(radiance);
+  for (int k = 0; k < 9; ++k) g[k] *= kSign[k] / kPi;
+  return g;
+}
+
 UnityPacked unity_pack(const Sh9& s) {
   UnityPacked p;
   for (int c = 0; c < 3; ++c) {
@@ -152,6 +158,16 @@ glm::dvec3 three_get_irradiance_at(const Sh9& s, const glm::dvec3& n) {
   return s[0] * 0.886227 + s[1] * (2 * 0.511664 * y) + s[2] * (2 * 0.511664 * z) + s[3] * (2 * 0.511664 * x) +
          s[4] * (2 * 0.429043 * x * y) + s[5] * (2 * 0.429043 * y * z) + s[6] * (0.743125 * z * z - 0.247708) +
          s[7] * (2 * 0.429043 * x * z) + s[8] * (0.429043 * (x * x - y * y));
+}
+
+glm::dvec3 godot_lightmap_capture(const Sh9& sh, const glm::dvec3& n) {
+  // scene_forward_clustered.glsl's lightmap capture, written as Godot writes
+  // it (c1 .. c5), on `wnormal` = n.
+  const double c1 = 0.429043, c2 = 0.511664, c3 = 0.743125, c4 = 0.886227, c5 = 0.247708;
+  const double x = n.x, y = n.y, z = n.z;
+  return c1 * sh[8] * (x * x - y * y) + c3 * sh[6] * z * z + c4 * sh[0] - c5 * sh[6] + 2.0 * c1 * sh[4] * x * y +
+         2.0 * c1 * sh[7] * x * z + 2.0 * c1 * sh[5] * y * z + 2.0 * c2 * sh[3] * x + 2.0 * c2 * sh[1] * y +
+         2.0 * c2 * sh[2] * z;
 }
 
 glm::dvec3 filament_irradiance(const Sh9& s, const glm::dvec3& n) {

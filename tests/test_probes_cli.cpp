@@ -129,19 +129,38 @@ TEST(ProbesCli, ExportGivesEnginesTheProbesLight) {
   const glm::dvec3 n = glm::normalize(glm::dvec3(0.3, 0.9, -0.3));
   for (std::size_t i = 0; i < which.size(); ++i) {
     const nlohmann::json& probe = j["probes"][which[i]];
-    sh::Sh9 three{}, unity{};
+    sh::Sh9 three{}, unity{}, godot{};
     for (int k = 0; k < 9; ++k)
       for (int c = 0; c < 3; ++c) {
         three[std::size_t(k)][c] = probe["three"][k][c].get<double>();
         unity[std::size_t(k)][c] = probe["unity"][k][c].get<double>();
+        godot[std::size_t(k)][c] = probe["godot"][k][c].get<double>();
       }
     const glm::dvec3 e3 = sh::three_get_irradiance_at(three, n) / M_PI;
     const glm::dvec3 eu = sh::unity_shade_sh9(sh::unity_pack(unity), sh::to_engine_axes(sh::Convention::Unity, n));
+    const glm::dvec3 eg = sh::godot_lightmap_capture(godot, n);
     for (int c = 0; c < 3; ++c) {
       EXPECT_NEAR(e3[c], want[i][c], 1e-5 * (1 + std::abs(want[i][c]))) << "probe " << which[i];
       EXPECT_NEAR(eu[c], want[i][c], 1e-5 * (1 + std::abs(want[i][c]))) << "probe " << which[i];
+      EXPECT_NEAR(eg[c], want[i][c], 1e-5 * (1 + std::abs(want[i][c]))) << "probe " << which[i];
     }
   }
+  // three_grid: three.js's LightProbeGridWebGL puts probe (i, j, k) at the
+  // centre of cell (i, j, k) of its box (position +- size / 2, resolution
+  // cells): there it must be on prt's grid point (1e-6 relative: JSON doubles).
+  const nlohmann::json& g = j["three_grid"];
+  ASSERT_EQ(g["resolution"], nlohmann::json(t.grid.dims));
+  for (int k = 0; k < t.grid.dims[2]; ++k)
+    for (int jj = 0; jj < t.grid.dims[1]; ++jj)
+      for (int i = 0; i < t.grid.dims[0]; ++i) {
+        const int cell[3] = {i, jj, k};
+        const glm::dvec3 want_at = t.grid.position(i, jj, k);
+        for (int a = 0; a < 3; ++a) {
+          const double size = g["size"][a], res = g["resolution"][a];
+          const double three_at = g["position"][a].get<double>() - size / 2 + (cell[a] + 0.5) * size / res;
+          EXPECT_NEAR(three_at, want_at[a], 1e-6 * (1 + std::abs(want_at[a]))) << i << "," << jj << "," << k;
+        }
+      }
   // The matrices: header, then positions and states, then the matrices.
   const std::string bin = read_file(dir.file("m.bin"));
   ASSERT_GE(bin.size(), 80u);

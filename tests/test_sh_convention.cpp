@@ -239,6 +239,22 @@ TEST(UnityConvention, ShadeSH9AtTheMirroredNormalIsIrradianceOverPi) {
   }
 }
 
+// Godot 4's probe SH (LightmapGIData probe_data "sh"): its lightmap capture
+// at n is E/pi (prt's irradiance, here from prt's own formula, over pi),
+// and a white sky of radiance 1 shows 1 (Godot applies no 1/pi after it).
+TEST(GodotConvention, LightmapCaptureOfTheProbeArrayIsIrradianceOverPi) {
+  const auto c = lighting(9);
+  const sh::Sh9 g = sh::to_godot(c);
+  EXPECT_LT(worst_relative(
+                random_directions(500, 11), [&](auto d) { return sh::godot_lightmap_capture(g, d); },
+                [&](auto d) { return prt_irradiance(c, d) / kPi; }),
+            kThreeConstantsTol);  // Godot's shader prints three's 6-digit constants
+  std::vector<glm::dvec3> white(9, glm::dvec3(0.0));
+  white[0] = glm::dvec3(2.0 * std::sqrt(kPi));  // radiance 1 in every direction: c0 = 1 / Y_00
+  for (const auto& d : random_directions(50, 12))
+    EXPECT_LT(max_abs(sh::godot_lightmap_capture(sh::to_godot(white), d) - glm::dvec3(1.0)), 1e-5);
+}
+
 // ---- world axes: a light from a known direction -------------------------------------
 
 // A small bright light from s (prt's axes): its SH is the basis at s. The

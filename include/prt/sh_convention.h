@@ -17,6 +17,11 @@
 //   filament  Filament IndirectLight::irradiance(3, sh) as cmgen --sh-shader
 //             writes it: E/pi, pre-multiplied by the basis constants, to be
 //             summed against 1, y, z, x, yx, yz, 3z^2-1, zx, x^2-y^2. Same axes.
+//   godot     Godot 4 LightmapGIData's probe SH ("sh" of probe_data, 9
+//             Colors a probe), as its lightmapper bakes them: radiance / pi,
+//             no Condon-Shortley phase (three's array / pi); its scene
+//             shader's lightmap capture convolves them and applies no 1/pi:
+//             E/pi. Same axes. (Probe arrays only: not a Convention.)
 //   unity     Unity SphericalHarmonicsL2 (E/pi pre-multiplied by its
 //             normalisation constants) and its packing into unity_SHAr..SHC
 //             for ShadeSH9. Unity's world is left-handed: a prt direction
@@ -53,6 +58,7 @@ using Sh9 = std::array<glm::dvec3, 9>;
 Sh9 to_three(std::span<const glm::dvec3> radiance);     // SphericalHarmonics3.coefficients
 Sh9 to_filament(std::span<const glm::dvec3> radiance);  // IndirectLight irradiance SH
 Sh9 to_unity(std::span<const glm::dvec3> radiance);     // SphericalHarmonicsL2: [i] = (sh[0,i], sh[1,i], sh[2,i])
+Sh9 to_godot(std::span<const glm::dvec3> radiance);     // LightmapGIData probe_data "sh": [probe * 9 + i]
 
 // Unity's packing of a SphericalHarmonicsL2 into the seven shader constants
 // unity_SHAr, SHAg, SHAb, SHBr, SHBg, SHBb, SHC (in that order), and back.
@@ -72,6 +78,7 @@ glm::dvec3 three_get_irradiance_at(const Sh9& three, const glm::dvec3& n);  // g
 glm::dvec3 filament_irradiance(const Sh9& filament,
                                const glm::dvec3& n);  // Irradiance_SphericalHarmonics: max(E/pi, 0)
 glm::dvec3 unity_shade_sh9(const UnityPacked& packed, const glm::dvec3& n);  // ShadeSH9, linear colour space: E/pi
+glm::dvec3 godot_lightmap_capture(const Sh9& godot, const glm::dvec3& n);  // the lightmap capture: E/pi
 
 // Shader code for `prt project --format glsl|hlsl`: the constants and
 // functions evaluating them, compilable as GLSL 4.50 or HLSL (shader model 5).

@@ -55,6 +55,13 @@ const kMaxP99 = 10;
 // mean by a margin: measured 56.1 at exposure 0, 8.4 at +1.5 stops (much
 // of both bakes saturates there); p99 121 and 73.
 const kMinMeanNegative = 2.5 * kMaxMean;
+// three's probe grid against its shading computed from prt's JSON
+// (threeGridModel): the same arithmetic but for the GPU's float filtering
+// weights (8 bits of fraction in SwiftShader as in most GPUs) and the
+// triangulated sphere's interpolated normals (24 x 48: within 0.5 degrees):
+// about a level; the mean within half a level.
+const kMaxMeanModel = 0.5;
+const kMaxP99Model = 2;
 
 const fail = (msg) => { console.error('FAIL: ' + msg); process.exitCode = 1; };
 
@@ -104,12 +111,36 @@ function pixels(W, H) {
   for (let i = 0; i < rgb.length; i += 8192) s += String.fromCharCode(...rgb.subarray(i, i + 8192));
   return btoa(s);
 }
-// view: {eye, target, up, fov (vertical, degrees), width, height}. Returns
-// the frame over a black and over a white background, and what the loader made.
-self.draw = async (url, v) => {
+// An OBJ lit by the probe grid as prt render --object draws it: albedo 0.8
+// (linear), its bounding box's diagonal o.size, centred at o.at.
+async function probeLitObject(o) {
+  const { OBJLoader } = await import('three/addons/loaders/OBJLoader.js');
+  const object = await new OBJLoader().loadAsync(o.url);
+  const box = new THREE.Box3().setFromObject(object);
+  const scale = o.size / box.getSize(new THREE.Vector3()).length();
+  const centre = box.getCenter(new THREE.Vector3());
+  object.scale.setScalar(scale);
+  object.position.set(o.at[0] - scale * centre.x, o.at[1] - scale * centre.y, o.at[2] - scale * centre.z);
+  const material = new THREE.MeshLambertMaterial({ color: new THREE.Color().setRGB(0.8, 0.8, 0.8, THREE.LinearSRGBColorSpace) });
+  object.traverse((m) => { if (m.isMesh) m.material = material; });
+  return object;
+}
+// view: {eye, target, up, fov (vertical, degrees), width, height}; extra:
+// {probes: URL of prt's probe JSON, object: {url, at, size}} or nothing.
+// Returns the frame over a black and over a white background (and, with an
+// object, the object alone over both), and what the loader made.
+self.draw = async (url, v, extra = {}) => {
   const gltf = await new GLTFLoader().register((parser) => new MozLightmap(parser)).loadAsync(url);
   const scene = new THREE.Scene();
   scene.add(gltf.scene);
+  if (extra.probes) {
+    const { LightProbeGridWebGL } = await import('three/addons/lighting/LightProbeGridWebGL.js');
+    const { probeGridFromPrt } = await import('/prt-three.js');
+    const doc = await (await fetch(extra.probes)).json();
+    scene.add(probeGridFromPrt(THREE, LightProbeGridWebGL, doc, { intensity: extra.intensity ?? 1 }));
+  }
+  const object = extra.object ? await probeLitObject(extra.object) : null;
+  if (object) scene.add(object);
   const dist = Math.hypot(v.eye[0] - v.target[0], v.eye[1] - v.target[1], v.eye[2] - v.target[2]);
   // prt render's projection: glm::perspective(fov, W / H, dist 1e-3, dist 1e3), glm::lookAt.
   const camera = new THREE.PerspectiveCamera(v.fov, v.width / v.height, dist * 1e-3, dist * 1e3);
@@ -117,17 +148,25 @@ self.draw = async (url, v) => {
   camera.up.set(...v.up);
   camera.lookAt(...v.target);
   renderer.setSize(v.width, v.height, false);
-  const frames = [];
+  const frames = [], objectFrames = [];
   for (const bg of [0x000000, 0xffffff]) {
     scene.background = new THREE.Color(bg);
     renderer.render(scene, camera);
     frames.push(pixels(v.width, v.height));
   }
+  if (object) {
+    gltf.scene.visible = false;
+    for (const bg of [0x000000, 0xffffff]) {
+      scene.background = new THREE.Color(bg);
+      renderer.render(scene, camera);
+      objectFrames.push(pixels(v.width, v.height));
+    }
+  }
   const materials = [];
   gltf.scene.traverse((o) => {
     if (o.isMesh) materials.push({ type: o.material.type, vertexColors: o.material.vertexColors, lightMap: !!o.material.lightMap });
   });
-  return { frames, materials };
+  return { frames, objectFrames, materials };
 };
 self.ready = true;
 </script></body></html>`;
@@ -195,8 +234,75 @@ function compare(frames, ref, refMask) {
 }
 const show = (m) => `covered pixels ${m.pixels}, IoU ${m.iou.toFixed(4)}, mean ${m.mean.toFixed(3)}, p99 ${m.p99}, max ${m.max}`;
 
+// The pixels three's object covers (equal over black and white), or null.
+function objectMask(frames) {
+  if (!frames.length) return null;
+  const [black, white] = frames.map((f) => Buffer.from(f, 'base64'));
+  const mask = new Uint8Array(black.length / 3);
+  for (let i = 0; i < mask.length; ++i)
+    mask[i] = black[3 * i] === white[3 * i] && black[3 * i + 1] === white[3 * i + 1] && black[3 * i + 2] === white[3 * i + 2] ? 1 : 0;
+  return mask;
+}
+
+// three.js r187's own shading of the probe-lit sphere, computed here from
+// prt's probe JSON (doc) as its grid shader does it
+// (lightprobes_pars_fragment: the point plus half a cell along the normal,
+// clamped to the outer probe centres, trilinear; shGetIrradianceAt's
+// constants; x albedo 0.8 / pi; sRGB bytes), at the pixels inside the
+// sphere's mask (one pixel in from its edge) whose camera ray meets the
+// sphere (centre o.at, radius: o.size over the unit sphere's box diagonal
+// 2 sqrt 3). A wrong packing of the grid's texture, a wrong sign or order of
+// the SH, or a misplaced grid makes three's pixels differ from these.
+function threeGridModel(doc, intensity, v, o, om) {
+  const g = doc.three_grid, res = g.resolution;
+  const min = g.position.map((x, a) => x - g.size[a] / 2), spacing = g.size.map((x, a) => x / res[a]);
+  const coefficient = (i, j, k) => doc.probes[i + res[0] * (j + res[1] * k)].three;
+  const r = o.size / (2 * Math.sqrt(3));
+  const sub = (a, b) => a.map((x, i) => x - b[i]), dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const norm = (a) => { const l = Math.sqrt(dot(a, a)); return a.map((x) => x / l); };
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const f = norm(sub(v.target, v.eye)), right = norm(cross(f, v.up)), up = cross(right, f);
+  const tan = Math.tan((v.fov * Math.PI) / 360), aspect = v.width / v.height;
+  const srgb = (x) => (x <= 0.0031308 ? 12.92 * x : 1.055 * Math.pow(x, 1 / 2.4) - 0.055);
+  const rgb = Buffer.alloc(v.width * v.height * 3), mask = new Uint8Array(v.width * v.height);
+  for (let y = 1; y < v.height - 1; ++y)
+    for (let x = 1; x < v.width - 1; ++x) {
+      const idx = y * v.width + x;
+      if (!(om[idx] && om[idx - 1] && om[idx + 1] && om[idx - v.width] && om[idx + v.width])) continue;
+      const sx = ((2 * (x + 0.5)) / v.width - 1) * tan * aspect, sy = (1 - (2 * (y + 0.5)) / v.height) * tan;
+      const d = norm([0, 1, 2].map((a) => f[a] + sx * right[a] + sy * up[a]));
+      const oc = sub(v.eye, o.at), b = dot(oc, d), disc = b * b - (dot(oc, oc) - r * r);
+      if (disc <= 0) continue;
+      const p = v.eye.map((e, a) => e + (-b - Math.sqrt(disc)) * d[a]), n = norm(sub(p, o.at));
+      if (-dot(n, d) < 0.2) continue;  // grazing: the triangulated silhouette differs
+      const w = [0, 1, 2].map((a) => {
+        const u = Math.min(Math.max((p[a] + 0.5 * spacing[a] * n[a] - min[a]) / g.size[a], 0.5 / res[a]), 1 - 0.5 / res[a]);
+        const t = u * res[a] - 0.5, i0 = Math.min(Math.floor(t), res[a] - 2);
+        return [i0, t - i0];
+      });
+      const c = Array.from({ length: 9 }, () => [0, 0, 0]);
+      for (let corner = 0; corner < 8; ++corner) {
+        const bit = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+        const weight = bit.reduce((acc, on, a) => acc * (on ? w[a][1] : 1 - w[a][1]), 1);
+        const probe = coefficient(...bit.map((on, a) => w[a][0] + on));
+        for (let k = 0; k < 9; ++k) for (let ch = 0; ch < 3; ++ch) c[k][ch] += weight * probe[k][ch] * intensity;
+      }
+      const [nx, ny, nz] = n;
+      for (let ch = 0; ch < 3; ++ch) {
+        const e = 0.886227 * c[0][ch] + 2 * 0.511664 * (c[1][ch] * ny + c[2][ch] * nz + c[3][ch] * nx) +
+                  2 * 0.429043 * (c[4][ch] * nx * ny + c[5][ch] * ny * nz + c[7][ch] * nx * nz) +
+                  c[6][ch] * (0.743125 * nz * nz - 0.247708) + 0.429043 * c[8][ch] * (nx * nx - ny * ny);
+        rgb[3 * idx + ch] = Math.round(255 * srgb(Math.min(1, (Math.max(e, 0) * 0.8) / Math.PI)));
+      }
+      mask[idx] = 1;
+    }
+  return { rgb, mask };
+}
+
 // One case: c.make(tmp) makes the files ({glb, negative, render: prt render's
-// arguments before -o}) and c.view is the camera both draw from.
+// arguments before -o; with probes: extra and negativeExtra, self.draw's
+// third argument, URLs relative to the page}) and c.view is the camera both
+// draw from. With an object, its pixels are compared on their own too.
 async function runCase(tab, base, tmp, name, c) {
   const files = await c.make(tmp);
   const v = c.view, png = path.join(tmp, name + '.png'), exr = path.join(tmp, name + '.exr');
@@ -206,16 +312,39 @@ async function runCase(tab, base, tmp, name, c) {
                      run(args.prt, [...files.render, ...size, '-o', exr, '--alpha'])]);
   const ref = readPng(fs.readFileSync(png)), mask = await coverage(exr, v.width, v.height);
   if (ref.width !== v.width || ref.height !== v.height) throw new Error(`${png}: ${ref.width}x${ref.height}`);
-  const got = await tab.evaluate(([u, view]) => self.draw(u, view), [`${base}/${path.basename(files.glb)}`, v]);
+  const draw = (glb, extra) => tab.evaluate(([u, view, x]) => self.draw(u, view, x),
+                                            [`${base}/${path.basename(glb)}`, v, extra || {}]);
+  const got = await draw(files.glb, files.extra);
   const m = compare(got.frames, ref, mask);
   console.log(`${name}: three.js GLTFLoader (${JSON.stringify(got.materials)}) vs prt render: ${show(m)}`);
   if (!got.materials.length || got.materials.some((x) => x.type !== c.material || x.lightMap !== !!c.lightMap))
     fail(`${name}: the loader made ${JSON.stringify(got.materials)}, expected ${c.material}${c.lightMap ? ' with a lightMap' : ''}`);
-  if (!(m.iou >= kMinIoU && m.mean <= kMaxMean && m.p99 <= kMaxP99)) fail(`${name}: three.js's frame differs from prt render beyond the tolerances`);
+  if (c.frame !== false && !(m.iou >= kMinIoU && m.mean <= kMaxMean && m.p99 <= kMaxP99))
+    fail(`${name}: three.js's frame differs from prt render beyond the tolerances`);
   if (m.pixels < 0.1 * v.width * v.height) fail(`${name}: the model covers only ${m.pixels} pixels`);
-  const neg = await tab.evaluate(([u, view]) => self.draw(u, view), [`${base}/${path.basename(files.negative)}`, v]);
-  const n = compare(neg.frames, ref, mask);
-  console.log(`${name}: negative control, ${files.negativeWhat}: ${show(n)}`);
+  // The probe-lit object: its pixels against prt render, and (check
+  // 'model') against three's shading computed from the probe JSON.
+  const om = objectMask(got.objectFrames);
+  let objectRef = ref, objectMaskRef = om && mask.map((x, i) => x & om[i]);
+  if (om) {
+    const o = compare(got.frames, ref, objectMaskRef);
+    console.log(`${name}: the probe-lit object alone, against prt render: ${show(o)}`);
+    if (o.pixels < 0.02 * v.width * v.height) fail(`${name}: the object covers only ${o.pixels} pixels`);
+    const modelled = threeGridModel(JSON.parse(fs.readFileSync(files.probesJson, 'utf8')), files.intensity, v, c.object, om);
+    const t = compare(got.frames, { rgb: modelled.rgb }, modelled.mask);
+    console.log(`${name}: the object against three's grid shading computed from the JSON: ${show(t)}`);
+    if (t.pixels < 0.5 * o.pixels) fail(`${name}: the model covers only ${t.pixels} of the object's ${o.pixels} pixels`);
+    if (!(t.mean <= kMaxMeanModel && t.p99 <= kMaxP99Model)) fail(`${name}: three's grid does not shade as the JSON says`);
+    if (c.object.check === 'model') {
+      objectRef = { rgb: modelled.rgb };
+      objectMaskRef = modelled.mask;
+    } else if (!(o.mean <= kMaxMean && o.p99 <= kMaxP99)) {
+      fail(`${name}: three.js's object differs from prt render's beyond the tolerances`);
+    }
+  }
+  const neg = await draw(files.negative, files.negativeExtra);
+  const n = compare(neg.frames, objectRef, om ? objectMaskRef : mask);
+  console.log(`${name}: negative control, ${files.negativeWhat}${om ? ', on the object' : ''}: ${show(n)}`);
   if (!(n.mean >= kMinMeanNegative)) fail(`${name}: the negative control (${files.negativeWhat}) passes too close`);
   if (args.images) {
     fs.mkdirSync(args.images, { recursive: true });
@@ -258,25 +387,105 @@ function vertexBake(stops) {
 // The camera: inside the room (4 x 2.5 x 4, the floor at y = 0), from a
 // corner near the ceiling toward the box and the opposite corner.
 const roomView = { eye: [1.7, 2.0, 1.7], target: [-0.8, 0.5, -1.0], up: [0, 1, 0], fov: 70, width: 320, height: 240 };
+const src = (p) => path.join(args.source, p);
+// A scene's lightmap (W x H, once per run) and its bake under `map` at
+// `stops` (once per map, stops and material): lit (MOZ_lightmap on the
+// scene's materials) or unlit.
+async function sceneBake(tmp, model, size, map, stops, material = 'lit') {
+  const name = path.basename(model, path.extname(model));
+  const scene = src(model), transfer = path.join(tmp, `${name}_${size}.prt`);
+  if (!fs.existsSync(transfer))
+    await run(args.prt, ['precompute', scene, '--lightmap', size, '--bands', '3', '--samples', '64', '-o', transfer, '-q']);
+  const glb = `${name}_${size}_${path.basename(map, '.exr')}_${stops}_${material}.glb`;
+  if (!fs.existsSync(path.join(tmp, glb)))
+    await run(args.prt, ['export', scene, transfer, '-o', path.join(tmp, glb), '--bake', src('envmaps/' + map),
+                         '--bake-material', material, '--exposure', String(stops), '-q']);
+  return { scene, transfer, glb };
+}
+const roomBake = (tmp, map, stops, material) => sceneBake(tmp, 'models/room.gltf', '128x128', map, stops, material);
 function lightmapBake(stops) {
   return {
     view: roomView, material: 'MeshPhysicalMaterial', lightMap: true,
     make: async (tmp) => {
-      const src = (p) => path.join(args.source, p);
-      const scene = src('models/room.gltf'), transfer = path.join(tmp, 'room.prt');
-      if (!fs.existsSync(transfer))
-        await run(args.prt, ['precompute', scene, '--lightmap', '128x128', '--bands', '3', '--samples', '64', '-o', transfer, '-q']);
-      const bake = (map, out) => run(args.prt, ['export', scene, transfer, '-o', path.join(tmp, out), '--bake',
-                                                src('envmaps/' + map), '--bake-material', 'lit',
-                                                '--exposure', String(stops), '-q']);
-      const [glb, negative] = [`room_sunset_${stops}.glb`, `room_city_${stops}.glb`];
-      await Promise.all([bake('sunset.exr', glb), bake('city.exr', negative)]);
+      const [{ scene, transfer, glb }, { glb: negative }] = await Promise.all([roomBake(tmp, 'sunset.exr', stops),
+                                                                               roomBake(tmp, 'city.exr', stops)]);
       return { glb, negative, negativeWhat: 'baked under city.exr instead of sunset.exr',
                render: ['render', scene, transfer, src('envmaps/sunset.exr'), '--exposure', String(stops),
                         '--tonemap', 'clamp'] };
     },
   };
 }
+// A UV sphere with its normals as OBJ text (rings x segments).
+function sphereObj(rings, segments) {
+  const v = [], f = [];
+  for (let i = 0; i <= rings; ++i)
+    for (let j = 0; j <= segments; ++j) {
+      const t = Math.PI * i / rings, p = 2 * Math.PI * j / segments;
+      v.push([Math.sin(t) * Math.cos(p), Math.cos(t), Math.sin(t) * Math.sin(p)]);
+    }
+  for (let i = 0; i < rings; ++i)
+    for (let j = 0; j < segments; ++j) {
+      const a = i * (segments + 1) + j + 1, b = a + segments + 1;
+      if (i > 0) f.push([a, a + 1, b]);
+      if (i < rings - 1) f.push([a + 1, b + 1, b]);
+    }
+  return v.map((x) => `v ${x.join(' ')}`).concat(v.map((x) => `vn ${x.join(' ')}`),
+                                                 f.map((t) => `f ${t.map((k) => `${k}//${k}`).join(' ')}`)).join('\n') + '\n';
+}
+// A scene's unlit bake with a sphere lit by the scene's probe volume
+// (shadowed) in three.js's LightProbeGridWebGL (web/prt-three.js). The
+// scene is unlit: three's grid lights every lit material in its box, a
+// lightmapped one too. The sphere is compared on its own pixels:
+//   check 'render': with prt render --probes --object (the same probes on
+//     the GPU: trilinear weights x each probe's depth-moment visibility x
+//     validity at the vertices; three: trilinear at the point plus half a
+//     cell along the normal, per pixel), within the tolerances;
+//   check 'model': with three's own shading of the probes computed here
+//     from the JSON (threeGridModel), within the tolerances, which checks
+//     the texture's packing and the SH convention; against prt render it is
+//     only printed (where the light changes within a cell, the two
+//     interpolations differ).
+// The negative control: the probes relit under city.exr.
+function probeLit({ model, lightmap, dims, view, at, size, stops, check }) {
+  return {
+    view, material: 'MeshBasicMaterial', lightMap: false, object: { at, size, check },
+    // The room's unlit bake holds each texel's albedo, where prt render
+    // shows the floor's texture at full resolution: its checker edges differ
+    // (p99 23); the frame is the object's backdrop here, and the lightmap
+    // case compares it.
+    frame: check !== 'model',
+    make: async (tmp) => {
+      const { scene, transfer, glb } = await sceneBake(tmp, model, lightmap, 'sunset.exr', stops, 'unlit');
+      const name = path.basename(model, path.extname(model));
+      const probes = path.join(tmp, `${name}-probes.prt`), object = path.join(tmp, 'sphere.obj');
+      fs.writeFileSync(object, sphereObj(24, 48));
+      await run(args.prt, ['precompute', scene, '--probes', dims, '-o', probes, '-q']);
+      const json = (map) => `${name}_probes_${map}.json`;
+      const exportProbes = (map) => run(args.prt, ['export', scene, '--probes', probes, '--bake', src('envmaps/' + map),
+                                                   '-o', path.join(tmp, json(map)), '-q']);
+      await Promise.all([exportProbes('sunset.exr'), exportProbes('city.exr')]);
+      const extra = (file) => ({ probes: file, intensity: 2 ** stops, object: { url: 'sphere.obj', at, size } });
+      fs.copyFileSync(src('web/prt-three.js'), path.join(tmp, 'prt-three.js'));
+      // check 'model': the negative is the loader's likeliest mistake, prt's
+      // own SH (the Condon-Shortley phase: k = 1, 3, 5, 7 negated) handed to
+      // three as they are.
+      const doc = JSON.parse(fs.readFileSync(path.join(tmp, json('sunset.exr')), 'utf8'));
+      for (const p of doc.probes) for (const k of [1, 3, 5, 7]) p.three[k] = p.three[k].map((x) => -x);
+      fs.writeFileSync(path.join(tmp, `${name}_probes_cs.json`), JSON.stringify(doc));
+      const negative = check === 'model' ? `${name}_probes_cs.json` : json('city.exr');
+      return { glb, negative: glb, extra: extra(json('sunset.exr')), negativeExtra: extra(negative),
+               probesJson: path.join(tmp, json('sunset.exr')), intensity: 2 ** stops,
+               negativeWhat: check === 'model' ? "its probes' SH with prt's Condon-Shortley signs"
+                                               : 'its probes relit under city.exr instead of sunset.exr',
+               render: ['render', scene, transfer, src('envmaps/sunset.exr'), '--exposure', String(stops),
+                        '--tonemap', 'clamp', '--probes', probes, '--object', object, '--object-at', at.join(','),
+                        '--object-size', String(size)] };
+    },
+  };
+}
+// wall-on-floor.gltf: a floor 4 x 4 at y = 0 and a wall 3 x 1.5 x 0.2 on it
+// (z in -0.1 .. 0.1), seen from the front right.
+const wallView = { eye: [2.2, 1.6, 3.2], target: [0, 0.6, 0], up: [0, 1, 0], fov: 45, width: 320, height: 240 };
 const CASES = {
   vertex_bake: vertexBake(0),  // nothing clamps (the brightest vertex 0.93)
   // Some vertices clamp: per vertex in the bake, per pixel in prt render.
@@ -284,6 +493,12 @@ const CASES = {
   // The room's light through its window: +4 stops shows it (prt render's
   // auto exposure: +4.5).
   lightmap_moz: lightmapBake(4),
+  // Outdoors, the sphere in front of the wall: the light changes slowly.
+  probe_lit_object: probeLit({ model: 'models/wall-on-floor.gltf', lightmap: '64x64', dims: '24x8x24', view: wallView,
+                               at: [0.4, 0.7, 0.9], size: 1.2, stops: 0, check: 'render' }),
+  // In the room, where the window's light changes within a cell.
+  probe_grid_room: probeLit({ model: 'models/room.gltf', lightmap: '128x128', dims: '8x5x8', view: roomView,
+                              at: [0.3, 1.1, 0.0], size: 1.2, stops: 4, check: 'model' }),
 };
 
 async function main() {
