@@ -49,7 +49,7 @@ phase "Release build" scripts/build.sh build
 # else here: every test with a label other than unit (slow, the longest unit
 # tests among them, which start first; report, hard_cases, interop, package:
 # install the build, move the prefix, build and run consumers against it;
-# mpi: prt precompute under mpirun with 1 to 3 ranks; verify64).
+# mpi: prt precompute under mpirun with 2 and 3 ranks, some with 1; verify64).
 release_tests() {
   logs+=(build/ctest.log)
   local labels
