@@ -102,6 +102,7 @@ set(_prt_dep_table
   "PkgConfig::XXHASH|PKG:XXHASH:libxxhash|libxxhash"
   "PkgConfig::OPENBLAS|PKG:OPENBLAS:openblas|openblas"
   "PkgConfig::STB|PKG:STB:stb|stb"
+  "astcenc::astcenc|astcenc CONFIG|-lastcenc"
   "fmt::fmt|fmt|fmt"
   "fmt::fmt-header-only|fmt|fmt"
   "spdlog::spdlog|spdlog|spdlog"

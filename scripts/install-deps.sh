@@ -16,6 +16,10 @@ PACKAGES=(
   libeigen3-dev
   # images and meshes
   libopenexr-dev libopenimageio-dev openimageio-tools libassimp-dev
+  # ASTC HDR lightmaps (prt relight --encoding astc-hdr): Arm's astcenc as a
+  # library (prt::scene links it) and its command, which
+  # scripts/lightmap_encodings.sh decodes prt's blocks with
+  libastcenc-dev astcenc
   # glTF export (header only: scene/gltf.cpp compiles it in)
   libtinygltf-dev
   # scene textures (PNG, JPEG): stb_image; the view panel: Dear ImGui

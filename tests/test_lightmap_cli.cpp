@@ -680,6 +680,38 @@ TEST(LightmapCli, RelightEncodings) {
         ASSERT_LE(std::abs(back.rgba[4 * t + c] - ref.rgba[4 * t + c]), step + 1e-6 * ref.rgba[4 * t + c]) << e << t;
     }
   }
+  // ASTC HDR: a KTX2 of VK_FORMAT_ASTC_4x4_SFLOAT_BLOCK whose blocks (the
+  // level the level index points at) decode to the error prt relight
+  // printed, which stays under kAstcWallRelativeRms: measured 0.0182 here
+  // (astcenc 4.2, thorough; no texel clamped), with 35% for another
+  // machine's bake and encoder. A lightmap of two pages of 22 rows (no
+  // multiple of the 4-texel block) is one KTX2 of 6 x 6 blocks per page.
+  constexpr double kAstcWallRelativeRms = 0.025;
+  ASSERT_EQ((r = relight("a.ktx2", {"--encoding", "astc-hdr"})).code, 0) << describe_run(r);
+  const std::string said = "encoding astc-hdr: relative RMS error ";
+  ASSERT_NE(r.err.find(said), std::string::npos) << r.err;
+  const double printed = std::stod(r.err.substr(r.err.find(said) + said.size()));
+  const std::string astc = read_file(dir.file("a.ktx2"));
+  const auto le = [&](std::size_t at, int bytes) {
+    std::uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v |= std::uint64_t(std::uint8_t(astc.at(at + std::size_t(i)))) << (8 * i);
+    return v;
+  };
+  EXPECT_EQ(le(12, 4), kVkFormatAstc4x4Sfloat);
+  EXPECT_EQ(le(20, 4), 24u);
+  AstcImage blocks{24, 24, {}};
+  const std::string level = astc.substr(le(80, 8), le(88, 8));
+  blocks.blocks.assign(level.begin(), level.end());
+  const double decoded = encoding_error(ref, decode_astc_hdr(blocks)).relative_rms;
+  EXPECT_NEAR(decoded, printed, 0.005 * printed);  // printed to 3 significant digits: half a unit of the third
+  EXPECT_LE(decoded, kAstcWallRelativeRms);
+  ASSERT_EQ((r = run_prt(dir, {"precompute", scene, "--lightmap", "22x22", "--lightmap-uv", "auto", "--pages", "2",
+                               "--samples", "16", "-q", "-o", dir.file("p.prt")})).code, 0) << describe_run(r);
+  ASSERT_EQ((r = run_prt(dir, {"relight", scene, dir.file("p.prt"), env, "-q", "--encoding", "astc-hdr", "-o",
+                               dir.file("p.ktx2")})).code, 0) << describe_run(r);
+  for (const char* page : {"p.1001.ktx2", "p.1002.ktx2"})
+    EXPECT_EQ(std::filesystem::file_size(dir.file(page)), 160u + 6 * 6 * 16) << page;  // header, DFD, 36 blocks
+  EXPECT_FALSE(std::filesystem::exists(dir.file("p.ktx2")));
   // Refusals, before any work, nothing written.
   for (const auto& [out, more, says] :
        std::vector<std::tuple<std::string, std::vector<std::string>, std::string>>{
@@ -687,6 +719,8 @@ TEST(LightmapCli, RelightEncodings) {
            {"x.exr", {"--encoding", "rgbm"}, "--encoding rgbm: "},
            {"x.ktx2", {"--encoding", "float"}, "half as EXR or KTX2"},
            {"x.png", {"--encoding", "half"}, "rgbm and rgbd are written as 8-bit PNG"},
+           {"x.exr", {"--encoding", "astc-hdr"}, "ASTC HDR blocks are written as KTX2 only"},
+           {"x.png", {"--encoding", "astc-hdr"}, "ASTC HDR blocks are written as KTX2 only"},
            {"x.png", {"--encoding", "rgbm", "--tonemap", "aces"}, "--tonemap"}}) {
     r = relight(out, more);
     EXPECT_EQ(r.code, 2) << describe_run(r);  // usage errors

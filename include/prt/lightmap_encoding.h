@@ -1,17 +1,18 @@
 // prt/lightmap_encoding.h - encodings of a relit lightmap for engines: half
-// floats (EXR, KTX2) and 8-bit RGBM and RGBD (PNG), each with an exact
-// decoder of the stored values, so the error an encoding adds is measurable
-// (encoding_error). docs/LIGHTMAPS.md "Encodings for engines".
+// floats (EXR, KTX2), ASTC HDR blocks (KTX2) and 8-bit RGBM and RGBD (PNG),
+// each with a decoder of the stored values, so the error an encoding adds is
+// measurable (encoding_error). docs/LIGHTMAPS.md "Encodings for engines".
 //
 // Input: an RgbaImage (prt/envmap.h) of linear HDR radiance, rows from the
 // top, A = 1 at covered texels (lightmap_rgba). All encodings here are
 // LINEAR: no sRGB transfer function is applied to any channel, and the PNGs
 // carry no sRGB or gAMA chunk (engines must sample them as linear data:
 // three.js RGBMLoader / Babylon's RGBD decode are linear on the decoded bytes).
-// RGBM and RGBD keep the multiplier in A, so they lose the coverage mask
-// (gutters are dilated, so nothing needs it at run time); half keeps A.
+// RGBM and RGBD keep the multiplier in A, and ASTC HDR stores no A, so they
+// lose the coverage mask (gutters are dilated, so nothing needs it at run
+// time); half keeps A.
 //
-// Not here (next step): ASTC HDR (astcenc) and BC6H inside KTX2.
+// Not here: BC6H inside KTX2.
 #pragma once
 
 #include <prt/envmap.h>
@@ -23,8 +24,9 @@
 
 namespace prt {
 
-enum class LightmapEncoding { Float, Half, Rgbm, Rgbd };
-// "float", "half", "rgbm", "rgbd"; parse throws prt::Error for another name.
+enum class LightmapEncoding { Float, Half, Rgbm, Rgbd, AstcHdr };
+// "float", "half", "rgbm", "rgbd", "astc-hdr"; parse throws prt::Error for
+// another name.
 const char* encoding_name(LightmapEncoding e);
 LightmapEncoding parse_lightmap_encoding(const std::string& name);
 
@@ -124,5 +126,45 @@ struct Ktx2Image {
 // `what` for another identifier, format, level count or a truncated file.
 Ktx2Image parse_ktx2_half(const std::vector<std::uint8_t>& bytes, const std::string& what);
 Ktx2Image read_ktx2_half(const std::string& path);
+
+// ASTC HDR (Khronos Data Format Specification 1.3, "ASTC"; Arm's astcenc,
+// libastcenc, profile ASTCENC_PRF_HDR): 4x4 texel blocks of 16 bytes, so 1
+// byte a texel, rows of blocks from the top, ceil(width/4) x ceil(height/4)
+// blocks (astcenc repeats the edge texels into a partial block). RGB only:
+// A is encoded as the constant 1 (astcenc's swizzle RGB1; storing coverage
+// in A made the relit room's error 1.6 times larger, docs/LIGHTMAPS.md), so
+// the coverage mask is lost as with RGBM. Channels < 0 (SH ringing: ASTC
+// HDR stores no negative values) or > kHalfMax are clamped and reported;
+// NaN or infinite texels are refused (prt::Error). Lossy: no per-texel
+// bound; docs/LIGHTMAPS.md gives the measured error. Quality preset
+// kAstcQuality (astcenc's "thorough"), chosen there by measured time vs
+// error. Compresses on oneTBB's threads; the blocks do not depend on how
+// many.
+inline constexpr int kAstcBlock = 4;                 // block width and height, texels
+inline constexpr std::size_t kAstcBlockBytes = 16;   // every ASTC block is 128 bits
+inline constexpr float kAstcQuality = 98.0f;         // ASTCENC_PRE_THOROUGH
+struct AstcImage {
+  int width = 0, height = 0;         // texels
+  std::vector<std::uint8_t> blocks;  // ceil(width/4) * ceil(height/4) * 16 bytes
+};
+AstcImage encode_astc_hdr(const RgbaImage& image, EncodeReport* report = nullptr);
+// astcenc's decompressor (ASTCENC_PRF_HDR) on the blocks: RGB, A = 1.
+// Throws prt::Error for blocks of the wrong size.
+RgbaImage decode_astc_hdr(const AstcImage& image);
+
+// KTX 2.0 of one 2D image of VK_FORMAT_ASTC_4x4_SFLOAT_BLOCK (1000066000,
+// VK_EXT_texture_compression_astc_hdr), one level, typeSize 1, no
+// supercompression, no key/value data; the DFD as the KHR Data Format
+// Specification gives for that format (Khronos' KTX-Software writes the
+// same): one basic block, colour model ASTC (162), primaries BT.709,
+// transfer LINEAR, texel block 4x4, 16 bytes a plane, one 128-bit sample of
+// channel ASTC_DATA with qualifiers SIGNED | FLOAT, lower -1.0f, upper
+// 1.0f. Layout: identifier (12), header (36), index (32), level index (24),
+// DFD (44) at 104, level at 160 (aligned to lcm(16, 4) bytes, KTX2's
+// mipPadding). Written through write_atomically; throws prt::Error naming
+// `path`.
+inline constexpr std::uint32_t kVkFormatAstc4x4Sfloat = 1000066000;
+std::vector<std::uint8_t> ktx2_astc_bytes(const AstcImage& image);
+void write_ktx2_astc(const std::string& path, const AstcImage& image);
 
 }  // namespace prt

@@ -263,7 +263,8 @@ int run_zh(const RelightArgs& a, const std::string& ext, const std::array<double
 void check_lightmap_output(const RelightArgs& a, const std::string&, const LightmapLayout& layout) {
   lightmap_output_encoding(a.output, a.encoding);
   if (!a.tonemap.empty())
-    throw UsageError("--tonemap: a lightmap is written as linear radiance (float or half EXR, KTX2, RGBM or RGBD PNG)");
+    throw UsageError("--tonemap: a lightmap is written as linear radiance (float or half EXR, half or ASTC HDR KTX2, "
+                     "RGBM or RGBD PNG)");
   for (int p = 0; p < layout.pages; ++p) {
     const std::string path = page_path(a.output, p, layout.pages);
     check_not_input("--output", path, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
@@ -285,11 +286,14 @@ int write_relit_lightmap(const RelightArgs& a, const LightmapLayout& layout, con
                          const std::string& timing) {
   Outputs out("relight");
   const LightmapEncoding encoding = lightmap_output_encoding(a.output, a.encoding);
+  const auto t0 = std::chrono::steady_clock::now();
   const EncodedPages done = write_encoded_lightmap_pages(out, a.output, layout, lightmap_rgba(layout, rgb), encoding);
+  const double encode_ms = ms_since(t0);  // encoding, decoding for the error, writing the temporaries
   if (const int rc = out.commit(); rc != 0) return rc;
   if (a.quiet) return 0;
-  fmt::print(stderr, "relight: {}\nwrote {} ({} RGBA {}, {} covered texels)\n", timing, written_pages(a.output, layout),
-             lightmap_size_text(layout), encoding_name(encoding), layout.texels.size());
+  fmt::print(stderr, "relight: {}\nwrote {} ({} RGBA {}, {} covered texels; encoded and written in {:.1f} ms)\n",
+             timing, written_pages(a.output, layout), lightmap_size_text(layout), encoding_name(encoding),
+             layout.texels.size(), encode_ms);
   if (encoding != LightmapEncoding::Float)
     fmt::print(stderr, "encoding {}: relative RMS error {:.3g}, max error {:.3g} ({:.3g} of the peak {:.4g}) over the "
                "covered texels; {} texels clamped (largest value {:.4g})\n", encoding_name(encoding),
@@ -615,6 +619,7 @@ Run add_relight(CLI::App& app) {
       "         prt relight models/room.gltf room.prt envmaps/forest.exr --rotate 90,0,0 -o lightmap.exr\n"
       "         prt relight pages.glb pages.prt envmaps/forest.exr -o lm.exr   (3 pages: lm.1001.exr ... lm.1003.exr)\n"
       "         prt relight models/room.gltf room.prt envmaps/forest.exr -o lm.png --encoding rgbm   (or lm.ktx2: half)\n"
+      "         prt relight models/room.gltf room.prt envmaps/forest.exr -o lm.ktx2 --encoding astc-hdr\n"
       "         prt relight models/room.gltf room-probes.prt envmaps/forest.exr --at points.csv -o light.csv");
   s->add_option("MESH", a->mesh,
                 "The mesh (or, for a lightmap, the scene) the transfer was computed for; for a --basis zh transfer, any "
@@ -626,15 +631,17 @@ Run add_relight(CLI::App& app) {
                 "Output: .ply (mesh with float vertex colours) or .csv (vertex,r,g,b); a lightmap: .exr (RGBA float "
                 "atlas, A = 1 where a triangle covers the texel; a lightmap of many pages (prt precompute --pages): "
                 "one EXR per page, UDIM tile 1001 + page before the extension or in place of <UDIM>, as "
-                "lm.1001.exr, lm.1002.exr ...; .ktx2: half floats; .png: 8-bit RGBM or RGBD, see --encoding)")
+                "lm.1001.exr, lm.1002.exr ...; .ktx2: half floats or ASTC HDR blocks; .png: 8-bit RGBM or RGBD, see "
+                "--encoding)")
       ->check(path_value())
       ->required();
   a->encoding_opt =
       s->add_option("--encoding", a->encoding,
                     "A lightmap's file encoding: float (.exr, the default), half (.exr or .ktx2, the default for "
                     ".ktx2), rgbm or rgbd (8-bit .png, linear, the multiplier in A: RGBM c = C x A x 6, RGBD c = C / "
-                    "A, with C and A in [0, 1]); prints the error it adds (docs/LIGHTMAPS.md \"Encodings for engines\")")
-          ->check(CLI::IsMember({"float", "half", "rgbm", "rgbd"}));
+                    "A, with C and A in [0, 1]), astc-hdr (.ktx2: ASTC HDR 4x4 blocks, 1 byte a texel, for GPUs with "
+                    "ASTC HDR); prints the error it adds (docs/LIGHTMAPS.md \"Encodings for engines\")")
+          ->check(CLI::IsMember({"float", "half", "rgbm", "rgbd", "astc-hdr"}));
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));
   a->sh_only.push_back(add_shared(s, SharedOption::WindowWidth, a->window_width, "SH: window width in bands"));

@@ -109,8 +109,8 @@ void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapL
 LightmapEncoding lightmap_output_encoding(const std::string& path, const std::string& name) {
   const std::string ext = lower_extension(path);
   if (ext != ".exr" && ext != ".png" && ext != ".ktx2")
-    throw UsageError("--output: " + path + ": a relit lightmap is written as .exr (float or half), .ktx2 (half) or "
-                     ".png (--encoding rgbm or rgbd)");
+    throw UsageError("--output: " + path + ": a relit lightmap is written as .exr (float or half), .ktx2 (half or "
+                     "astc-hdr) or .png (--encoding rgbm or rgbd)");
   if (name.empty()) {
     if (ext == ".png")
       throw UsageError("--output: " + path + ": a PNG lightmap needs --encoding rgbm or rgbd (8-bit HDR encodings; "
@@ -118,14 +118,50 @@ LightmapEncoding lightmap_output_encoding(const std::string& path, const std::st
     return ext == ".exr" ? LightmapEncoding::Float : LightmapEncoding::Half;
   }
   const LightmapEncoding e = for_option("--encoding", [&] { return parse_lightmap_encoding(name); });
-  const bool fits = ext == ".png" ? e == LightmapEncoding::Rgbm || e == LightmapEncoding::Rgbd
-                                  : ext == ".exr" ? e == LightmapEncoding::Float || e == LightmapEncoding::Half
-                                                  : e == LightmapEncoding::Half;
+  const bool fits = ext == ".png"   ? e == LightmapEncoding::Rgbm || e == LightmapEncoding::Rgbd
+                    : ext == ".exr" ? e == LightmapEncoding::Float || e == LightmapEncoding::Half
+                                    : e == LightmapEncoding::Half || e == LightmapEncoding::AstcHdr;
+  if (!fits && e == LightmapEncoding::AstcHdr)
+    throw UsageError(fmt::format("--encoding astc-hdr: {} cannot hold it: ASTC HDR blocks are written as KTX2 only "
+                                 "(-o lm.ktx2; VK_FORMAT_ASTC_4x4_SFLOAT_BLOCK)", path));
   if (!fits)
     throw UsageError(fmt::format("--encoding {}: {} cannot hold it: rgbm and rgbd are written as 8-bit PNG (.png), "
-                                 "float as EXR (.exr), half as EXR or KTX2 (.exr, .ktx2)", name, path));
+                                 "float as EXR (.exr), half as EXR or KTX2 (.exr, .ktx2), astc-hdr as KTX2 (.ktx2)",
+                                 name, path));
   return e;
 }
+
+namespace {
+
+// write_encoded_lightmap_pages for ASTC HDR: one KTX2 per page (a page is
+// compressed alone, so no block straddles two pages), each decoded back
+// with astcenc for the error.
+EncodedPages write_astc_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
+                              const RgbaImage& image) {
+  const int pages = layout.pages;
+  const std::size_t per_page = std::size_t(image.width) * std::size_t(layout.page_height());
+  EncodedPages done;
+  RgbaImage decoded = image;
+  std::vector<AstcImage> encoded;
+  for (int p = 0; p < pages; ++p) {
+    RgbaImage page;
+    page.width = image.width;
+    page.height = layout.page_height();
+    page.rgba = page_values(image.rgba, std::size_t(p) * per_page, per_page, 4);
+    EncodeReport report;
+    encoded.push_back(encode_astc_hdr(page, &report));
+    done.report.clamped_texels += report.clamped_texels;
+    done.report.largest = p == 0 ? report.largest : std::max(done.report.largest, report.largest);
+    const RgbaImage back = decode_astc_hdr(encoded.back());
+    std::copy(back.rgba.begin(), back.rgba.end(), decoded.rgba.begin() + std::ptrdiff_t(4 * per_page * std::size_t(p)));
+  }
+  done.error = encoding_error(image, decoded);
+  for (int p = 0; p < pages; ++p)
+    out.write([&] { write_ktx2_astc(page_path(path, p, pages), encoded[std::size_t(p)]); });
+  return done;
+}
+
+}  // namespace
 
 EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
                                           RgbaImage image, LightmapEncoding encoding) {
@@ -134,6 +170,7 @@ EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path,
     write_lightmap_pages(out, path, layout, std::move(image));
     return done;
   }
+  if (encoding == LightmapEncoding::AstcHdr) return write_astc_pages(out, path, layout, image);
   const int W = image.width, rows = layout.page_height(), pages = layout.pages;
   const std::size_t per_page = std::size_t(W) * std::size_t(rows);
   const bool ktx2 = lower_extension(path) == ".ktx2";

@@ -52,10 +52,10 @@ std::string page_path(const std::string& path, int page, int pages);
 void write_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout, RgbaImage image);
 
 // The encoding of a relit lightmap written to `path` (prt/lightmap_encoding.h):
-// `name` (--encoding: float, half, rgbm, rgbd), or when empty the one its
-// extension implies: .exr float, .ktx2 half. Throws UsageError for a
+// `name` (--encoding: float, half, rgbm, rgbd, astc-hdr), or when empty the
+// one its extension implies: .exr float, .ktx2 half. Throws UsageError for a
 // combination no file holds (.png needs rgbm or rgbd; .exr float or half;
-// .ktx2 half) or another extension.
+// .ktx2 half or astc-hdr) or another extension.
 LightmapEncoding lightmap_output_encoding(const std::string& path, const std::string& name);
 // What write_encoded_lightmap_pages did: the error the encoding adds over
 // the covered texels (decoded from the very values stored; zero for float)
@@ -64,8 +64,9 @@ struct EncodedPages {
   EncodingError error;
   EncodeReport report;
 };
-// write_lightmap_pages in `encoding`: float or half EXR, half KTX2 or RGBM /
-// RGBD 8-bit PNG by `path`'s extension, one file per page (page_path).
+// write_lightmap_pages in `encoding`: float or half EXR, half or ASTC HDR
+// KTX2, or RGBM / RGBD 8-bit PNG by `path`'s extension, one file per page
+// (page_path).
 EncodedPages write_encoded_lightmap_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
                                           RgbaImage image, LightmapEncoding encoding);
 
