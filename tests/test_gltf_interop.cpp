@@ -188,7 +188,10 @@ TEST_F(GltfValidator, LightmapExportsHaveNoErrors) {
   VALIDATE_OR_SKIP(v, dir, files);
   EXPECT_EQ(v.code, 0) << v.err;
   ASSERT_EQ(v.reports.size(), files.size()) << v.err;
-  for (std::size_t i = 0; i < files.size(); ++i) EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    EXPECT_EQ(v.reports[i].at("errors"), 0) << v.reports[i].dump();
+    EXPECT_EQ(v.reports[i].at("warnings"), 0) << v.reports[i].dump();
+  }
 }
 
 // write_gltf_scene (prt unwrap's output): the room (two UV sets, a texture,
