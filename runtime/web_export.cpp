@@ -27,8 +27,12 @@ extern const char* const web_index_html;
 extern const char* const web_prt_sh_js;
 extern const char* const web_prt_png_js;
 extern const char* const web_prt_viewer_js;
+extern const char* const web_three_html;
+extern const char* const web_prt_three_page_js;
+extern const char* const web_prt_three_js;
 }  // namespace detail
 using detail::web_index_html, detail::web_prt_sh_js, detail::web_prt_png_js, detail::web_prt_viewer_js;
+using detail::web_three_html, detail::web_prt_three_page_js, detail::web_prt_three_js;
 
 namespace fs = std::filesystem;
 
@@ -89,6 +93,24 @@ void write_thumbnail(const fs::path& path, const std::vector<float>& rgb, int wi
   const float gain = lum > 0 ? float(0.18 / lum) : 1.0f;
   for (float& v : out) v *= gain;
   write_image(path.string(), tw, th, out);
+}
+
+// The page's embedded sources: the relighting page's (index.html,
+// prt-viewer.js) or the three.js page's (three.html as index.html,
+// prt-three-page.js, prt-three.js), with prt-sh.js and prt-png.js either way.
+void write_sources(const fs::path& tmp, bool three) {
+  const auto put = [&](const char* name, const char* text) {
+    write_bytes(tmp / name, text, std::char_traits<char>::length(text));
+  };
+  put("index.html", three ? web_three_html : web_index_html);
+  put("prt-sh.js", web_prt_sh_js);
+  put("prt-png.js", web_prt_png_js);
+  if (three) {
+    put("prt-three-page.js", web_prt_three_page_js);
+    put("prt-three.js", web_prt_three_js);
+  } else {
+    put("prt-viewer.js", web_prt_viewer_js);
+  }
 }
 
 }  // namespace
@@ -190,10 +212,7 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
     if (cancelled && cancelled()) throw Error("cancelled");
   };
   try {
-    write_bytes(tmp / "index.html", web_index_html, std::char_traits<char>::length(web_index_html));
-    write_bytes(tmp / "prt-sh.js", web_prt_sh_js, std::char_traits<char>::length(web_prt_sh_js));
-    write_bytes(tmp / "prt-png.js", web_prt_png_js, std::char_traits<char>::length(web_prt_png_js));
-    write_bytes(tmp / "prt-viewer.js", web_prt_viewer_js, std::char_traits<char>::length(web_prt_viewer_js));
+    write_sources(tmp, page.three);
     write_model((tmp / "model.glb").string());
 
     nlohmann::json maps = nlohmann::json::array();
@@ -224,7 +243,7 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
     const Camera& c = page.camera;
     nlohmann::json lighting = {
         {"format", 1},
-        {"generator", "prt export --web"},
+        {"generator", page.three ? "prt export --three" : "prt export --web"},
         {"model", "model.glb"},
         {"bands", bands},
         {"convention", "prt: real orthonormal SH, Condon-Shortley phase, z polar axis, +Y up, k = l(l+1)+m "
@@ -250,6 +269,10 @@ std::unique_ptr<StagedPage> stage_web_page(const WebPage& page, int bands,
       write_bytes(tmp / file, half.data(), half.size() * sizeof(std::uint16_t));
       lighting["lightmap_albedo"] = {{"file", file}, {"width", page.lightmap_width}, {"height", page.lightmap_height}};
       if (page.lightmap_pages > 1) lighting["lightmap_albedo"]["pages"] = page.lightmap_pages;  // (one: as before pages)
+    }
+    if (page.write_probes) {
+      page.write_probes(tmp.string());
+      lighting["probes"] = {{"json", "probes.json"}, {"matrices", "probes.bin"}};
     }
     const std::string text = lighting.dump(1) + "\n";
     write_bytes(tmp / "lighting.json", text.data(), text.size());

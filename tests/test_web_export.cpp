@@ -189,7 +189,7 @@ TEST(WebExport, OptionErrors) {
     std::string message;
   };
   const std::vector<Case> cases = {
-      {{"export", kMesh, t}, 2, "give --output FILE.glb|.gltf, --web DIR, or both"},
+      {{"export", kMesh, t}, 2, "give --output FILE.glb|.gltf, --web DIR, --three DIR, or more than one"},
       {{"export", kMesh, t, "-o", dir.file("a.glb"), "--env", "studio"}, 2, "--env applies to the web page"},
       {{"export", kMesh, t, "-o", dir.file("a.glb"), "--force"}, 2, "--force applies to the web page"},
       {{"export", kMesh, t, "--web", dir.file("p"), "--tonemap", "gamma"}, 2, "--tonemap"},
@@ -203,6 +203,124 @@ TEST(WebExport, OptionErrors) {
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
   }
   EXPECT_EQ(dir.listing(), (std::vector<std::string>{"scene.prt"}));
+}
+
+// ---- prt export --three: the three.js page of a lightmap (docs/WEB.md "The three.js page") ----
+
+const std::string kRoom = std::string(PRT_SOURCE_DIR) + "/models/room.gltf";
+
+std::string precompute_room(const TempDir& dir) {
+  const std::string t = dir.file("room.prt");
+  const Result r = run_prt(dir, {"precompute", kRoom, "--lightmap", "16x16", "--bands", "3", "--samples", "16", "-o", t, "-q"});
+  EXPECT_EQ(r.code, 0) << describe_run(r);
+  return t;
+}
+
+std::string source(const std::string& name) { return read_file(fs::path(PRT_SOURCE_DIR) / "web" / name); }
+
+// The three.js page: its own index.html and modules (web/ byte for byte), and
+// the files --web writes for a lightmap, the same bytes but lighting.json's
+// generator; --web and --three in one run write both.
+TEST(ThreePage, WritesTheThreeJsPageBesideTheRelightingPage) {
+  TempDir dir;
+  const std::string t = precompute_room(dir);
+  const Result r = run_prt(dir, {"export", kRoom, t, "--three", dir.file("three"), "--web", dir.file("web"), "--env",
+                                 "studio", "--rotate", "10,20,30", "--exposure", "2", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const fs::path three = dir.file("three"), web = dir.file("web");
+  EXPECT_EQ(read_file(three / "index.html"), source("three.html"));
+  for (const char* f : {"prt-three-page.js", "prt-three.js", "prt-sh.js", "prt-png.js"})
+    EXPECT_EQ(read_file(three / f), source(f)) << f;
+  EXPECT_FALSE(fs::exists(three / "prt-viewer.js"));
+  EXPECT_EQ(read_file(web / "index.html"), source("index.html"));
+  EXPECT_FALSE(fs::exists(web / "prt-three-page.js"));
+  EXPECT_EQ(read_file(three / "model.glb"), read_file(web / "model.glb"));
+  EXPECT_EQ(read_file(three / "lightmap_albedo.rgb16f"), read_file(web / "lightmap_albedo.rgb16f"));
+  nlohmann::json j3 = nlohmann::json::parse(read_file(three / "lighting.json"));
+  nlohmann::json jw = nlohmann::json::parse(read_file(web / "lighting.json"));
+  EXPECT_EQ(j3.at("generator"), "prt export --three");
+  EXPECT_EQ(j3.at("bands"), 3);
+  EXPECT_EQ(j3.at("lightmap_albedo").at("width"), 16);
+  EXPECT_EQ(j3.at("initial").at("exposure"), 2.0);
+  j3.erase("generator");
+  jw.erase("generator");
+  EXPECT_EQ(j3, jw);
+  for (const auto& m : j3.at("maps")) EXPECT_TRUE(fs::exists(three / m.at("file").get<std::string>())) << m;
+  EXPECT_FALSE(fs::exists(three / "probes.json"));
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"room.prt", "three", "web"}));
+}
+
+// --three --probes P: probes.json (the grid under the first map) and
+// probes.bin (the matrices the page relights each frame), named by lighting.json.
+TEST(ThreePage, WritesTheProbesTheGridNeeds) {
+  TempDir dir;
+  const std::string t = precompute_room(dir), probes = dir.file("probes.prt");
+  Result r = run_prt(dir, {"precompute", kRoom, "--probes", "3x2x3", "--samples", "16", "-o", probes, "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  r = run_prt(dir, {"export", kRoom, t, "--three", dir.file("three"), "--probes", probes, "--env", "sunset", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const fs::path three = dir.file("three");
+  const nlohmann::json j = nlohmann::json::parse(read_file(three / "lighting.json"));
+  EXPECT_EQ(j.at("probes").at("json"), "probes.json");
+  EXPECT_EQ(j.at("probes").at("matrices"), "probes.bin");
+  const nlohmann::json p = nlohmann::json::parse(read_file(three / "probes.json"));
+  EXPECT_EQ(p.at("probes").size(), 18u);
+  EXPECT_EQ(p.at("map"), "sunset.exr");
+  const std::string bin = read_file(three / "probes.bin");
+  ASSERT_GE(bin.size(), 88u);
+  EXPECT_EQ(bin.substr(0, 8), "PRTPMAT1");
+  std::uint32_t channels = 0;
+  std::memcpy(&channels, bin.data() + 80, 4);
+  EXPECT_EQ(bin.size(), 88u + 16u * 18u + 4u * 18u * channels * 81u);
+  EXPECT_EQ(dir.listing(), (std::vector<std::string>{"probes.prt", "room.prt", "three"}));
+}
+
+// What the three.js page refuses, each before anything is written.
+TEST(ThreePage, Refusals) {
+  TempDir dir;
+  const std::string lm = precompute_room(dir), vt = precompute(dir);
+  const std::string probes = dir.file("probes.prt");
+  Result r = run_prt(dir, {"precompute", kRoom, "--probes", "2x2x2", "--samples", "16", "-o", probes, "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::string lm2 = dir.file("room2.prt");
+  r = run_prt(dir, {"precompute", kRoom, "--lightmap", "16x16", "--bands", "2", "--samples", "16", "-o", lm2, "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  const std::string other = dir.file("other.prt");
+  r = run_prt(dir, {"precompute", std::string(PRT_SOURCE_DIR) + "/models/wall-on-floor.gltf", "--probes", "2x2x2",
+                    "--samples", "16", "-o", other, "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  fs::create_directories(dir.file("full"));
+  write_file(fs::path(dir.file("full")) / "keep.txt", "mine");
+  struct Case {
+    std::vector<std::string> args;
+    int code;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{"export", kMesh, vt, "--three", dir.file("p")}, 1,
+       "--three: " + vt + " is a vertex transfer; the three.js page relights a lightmap"},
+      {{"export", kMesh, vt, "--three", dir.file("p")}, 1, "give --web DIR for a vertex transfer's page"},
+      {{"export", kRoom, lm, "--three", dir.file("p"), "--web", dir.file("p")}, 2, "--three"},
+      {{"export", kRoom, lm, "--three", dir.file("full")}, 1, ": directory exists and is not empty (--force"},
+      {{"export", kRoom, probes, "--three", dir.file("p")}, 1, probes + ": is a probe volume: the web page relights"},
+      {{"export", kRoom, lm, "--three", dir.file("p"), "--probes", other}, 1, other + ": computed for another scene than"},
+      {{"export", kRoom, lm2, "--three", dir.file("p"), "--probes", probes}, 1, "--probes: " + lm2 + " has 2 bands"},
+      {{"export", kRoom, lm, "--three", lm}, 2, "--three"},
+      {{"export", kRoom, lm, "-o", dir.file("a.glb"), "--turn"}, 2, "give --web DIR (or --three DIR) too"},
+  };
+  for (const Case& c : cases) {
+    r = run_prt(dir, c.args);
+    EXPECT_EQ(r.code, c.code) << describe_run(r);
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_EQ(dir.listing(), (std::vector<std::string>{"full", "other.prt", "probes.prt", "room.prt", "room2.prt", "scene.prt"}))
+        << describe_run(r);
+  }
+  EXPECT_EQ(read_file(fs::path(dir.file("full")) / "keep.txt"), "mine");
+  // --force replaces it.
+  r = run_prt(dir, {"export", kRoom, lm, "--three", dir.file("full"), "--force", "-q"});
+  ASSERT_EQ(r.code, 0) << describe_run(r);
+  EXPECT_FALSE(fs::exists(fs::path(dir.file("full")) / "keep.txt"));
+  EXPECT_TRUE(fs::exists(fs::path(dir.file("full")) / "prt-three-page.js"));
 }
 
 }  // namespace

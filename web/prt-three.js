@@ -27,6 +27,10 @@
 // the first and last slice of each sub-volume repeat its k = 0 and k = nz - 1
 // probes (so that linear filtering in z does not blend sub-volumes).
 //
+// fillProbeGrid(doc, intensity, data): the texture's floats alone, into a
+// grid's texture.image.data to update it in place (the three.js page of
+// prt export --three relights its probes each frame; docs/WEB.md).
+//
 // What three does not do that prt does (docs/PROBES.md): it ignores prt's
 // probe positions moved off surfaces and each probe's visibility of the
 // point; it shades at the point plus half a cell along the normal. An
@@ -37,6 +41,25 @@ export function probeGridFromPrt(THREE, LightProbeGridWebGL, doc, { intensity = 
   const g = doc.three_grid;
   if (!g || !Array.isArray(doc.probes)) throw new Error('not a prt probe volume JSON with three_grid (prt export --probes)');
   const [nx, ny, nz] = g.resolution;
+  const texture = new THREE.Data3DTexture(fillProbeGrid(doc, intensity), nx, ny, 7 * (nz + 2));
+  texture.format = THREE.RGBAFormat;
+  texture.type = THREE.FloatType;
+  texture.minFilter = THREE.LinearFilter;
+  texture.magFilter = THREE.LinearFilter;
+  texture.generateMipmaps = false;
+  texture.needsUpdate = true;
+  const grid = new LightProbeGridWebGL(g.size[0], g.size[1], g.size[2], nx, ny, nz);
+  grid.position.fromArray(g.position);
+  grid.updateBoundingBox();  // it reads position: three calls it only when constructed and baked
+  grid.texture = texture;
+  return grid;
+}
+
+// The grid texture's floats for doc's probes (doc.probes[p].three, x
+// intensity), into `data` when given (a grid's texture.image.data: then set
+// texture.needsUpdate, as the three.js page does each frame), else a new array.
+export function fillProbeGrid(doc, intensity = 1, data = null) {
+  const [nx, ny, nz] = doc.three_grid.resolution;
   if (doc.probes.length !== nx * ny * nz) throw new Error(`${doc.probes.length} probes for a ${nx}x${ny}x${nz} grid`);
   const valid = doc.probes.map((p) => p.state !== 'invalid');
   const coefficients = doc.probes.map((p) => p.three.flat().map((x) => x * intensity));
@@ -55,7 +78,7 @@ export function probeGridFromPrt(THREE, LightProbeGridWebGL, doc, { intensity = 
     return n ? sum.map((v) => v / n) : c;
   });
   const depth = 7 * (nz + 2);
-  const data = new Float32Array(nx * ny * depth * 4);
+  if (!data) data = new Float32Array(nx * ny * depth * 4);
   filled.forEach((c, p) => {
     const i = p % nx, j = Math.floor(p / nx) % ny, k = Math.floor(p / (nx * ny));
     const f = [...c, 0];
@@ -66,16 +89,5 @@ export function probeGridFromPrt(THREE, LightProbeGridWebGL, doc, { intensity = 
       for (const z of slices) data.set(f.slice(4 * t, 4 * t + 4), 4 * (i + nx * (j + ny * z)));
     }
   });
-  const texture = new THREE.Data3DTexture(data, nx, ny, depth);
-  texture.format = THREE.RGBAFormat;
-  texture.type = THREE.FloatType;
-  texture.minFilter = THREE.LinearFilter;
-  texture.magFilter = THREE.LinearFilter;
-  texture.generateMipmaps = false;
-  texture.needsUpdate = true;
-  const grid = new LightProbeGridWebGL(g.size[0], g.size[1], g.size[2], nx, ny, nz);
-  grid.position.fromArray(g.position);
-  grid.updateBoundingBox();  // it reads position: three calls it only when constructed and baked
-  grid.texture = texture;
-  return grid;
+  return data;
 }

@@ -38,6 +38,14 @@ struct WebPage {
   // (a page's size), stacked top to bottom as lightmap_image gives them.
   std::vector<glm::vec4> lightmap_albedo;
   int lightmap_width = 0, lightmap_height = 0, lightmap_pages = 1;
+  // prt export --three: the three.js page (docs/WEB.md "The three.js page"):
+  // the same model.glb, lighting.json, lightmap_albedo.rgb16f and maps/,
+  // with three.html as index.html, prt-three-page.js and prt-three.js in
+  // place of prt-viewer.js. A lightmap's page only (lightmap_albedo set).
+  bool three = false;
+  // --three --probes: files beside the page's (probes.json, probes.bin),
+  // written into the staged directory; lighting.json's "probes" names them.
+  std::function<void(const std::string& dir)> write_probes;
 };
 
 // The HDR map files (.exr, .hdr, .pfm, any case) directly in `dir`,
@@ -76,7 +84,7 @@ class StagedPage {
 };
 
 // Writes the page, staged: index.html, prt-sh.js, prt-png.js, prt-viewer.js (embedded
-// in prt), model.glb (write_model(path): the glTF writer), lighting.json
+// in prt; page.three: the three.js page's index.html, prt-three-page.js and prt-three.js instead), model.glb (write_model(path): the glTF writer), lighting.json
 // (every map's SH coefficients at `bands`, the transfer's band count, the
 // initial state), maps/NAME.rgb16f (each map as a lat-long background: RGB half
 // floats, row 0 at the top) and maps/NAME.png (the picker's 128 x 64

@@ -51,9 +51,10 @@ struct ExportArgs {
   const CLI::Option *rotate_opt = nullptr, *exposure_opt = nullptr;
   // --web DIR: the relighting page (web_export.h, docs/WEB.md).
   std::string web, env, camera, tone_map = "clamp";
+  std::string three;  // --three DIR: the three.js page of a lightmap (docs/WEB.md "The three.js page")
   double fov = 40;
   bool force = false, turn = false;
-  std::vector<const CLI::Option*> web_opts;  // --env, --camera, --fov, --tonemap, --turn, --force
+  std::vector<const CLI::Option*> web_opts;  // --env, --camera, --fov, --tonemap, --turn, --force (--web or --three)
   const CLI::Option* fov_opt = nullptr;       // given: the default camera takes it (else 40, or 70 inside a room)
   // A probe volume (prt precompute --probes): --matrices FILE.bin, their input bands.
   std::string matrices;
@@ -70,14 +71,14 @@ struct ExportArgs {
 // the sky's PRT alone, so --web refuses them.
 std::vector<Light> export_lights(const ExportArgs& a, const std::vector<Light>* scene_lights) {
   std::vector<Light> lights = command_lights(a.light, a.mesh, scene_lights);
-  if (a.web.empty() || lights.empty()) return lights;
+  if ((a.web.empty() && a.three.empty()) || lights.empty()) return lights;
   const bool from_files =
       std::any_of(a.light.files.begin(), a.light.files.end(), [](const std::string& f) { return f != "none"; });
   const std::string why = fmt::format(
-      "--web: {} {} lit by {}: the page relights the sky's PRT only (lights in the page are not implemented yet); give "
+      "{}: {} {} lit by {}: the page relights the sky's PRT only (lights in the page are not implemented yet); give "
       "--lights none to write the page without them, or export the glTF alone (-o FILE.glb keeps them; docs/LIGHTS.md "
       "\"Export\")",
-      a.mesh, from_files ? "with --lights is" : "is", describe_lights(lights));
+      a.web.empty() ? "--three" : "--web", a.mesh, from_files ? "with --lights is" : "is", describe_lights(lights));
   if (from_files) throw UsageError(why);
   throw Error(why);
 }
@@ -105,9 +106,11 @@ std::string bake_lights_note(const std::vector<Light>& lights, bool sun) {
 // prt render's, scene_camera of `mesh`, for a square canvas, which a wider
 // one still fits), --fov, --rotate, --exposure (default: auto, for the first
 // map), --tonemap.
-WebPage web_page(const ExportArgs& a, const Mesh& mesh, const std::array<double, 3>& euler, ToneMap tone) {
+WebPage web_page(const ExportArgs& a, const std::string& dir, const Mesh& mesh, const std::array<double, 3>& euler,
+                 ToneMap tone) {
   WebPage w;
-  w.dir = a.web;
+  w.dir = dir;
+  w.three = dir == a.three;
   w.force = a.force;
   w.turn = a.turn;
   w.maps = web_maps(a.env, w.initial);
@@ -137,14 +140,49 @@ std::unique_ptr<StagedPage> stage_page(const ExportArgs& a, const WebPage& w, in
   } catch (const Error&) {
     if (!Outputs::interrupted()) throw;
   }
-  if (!a.quiet && page) fmt::print(stderr, "{}: {} maps\n", a.web, w.maps.size());
+  if (!a.quiet && page) fmt::print(stderr, "{}: {} maps\n", w.dir, w.maps.size());
   return page;
 }
 
-void print_page_written(const ExportArgs& a) {
-  fmt::print(stderr, "wrote {}/ (index.html, model.glb, lighting.json, maps/): serve it with "
-                     "python3 -m http.server -d {} and open http://localhost:8000/\n",
-             a.web, a.web);
+void print_page_written(const std::string& dir, bool three) {
+  fmt::print(stderr, "wrote {}/ ({}index.html, model.glb, lighting.json, maps/): serve it with "
+                     "python3 -m http.server -d {} and open http://localhost:8000/{}\n",
+             dir, three ? "the three.js page: " : "", dir,
+             three ? " (three.js comes from unpkg.com unless ?three=URL names a copy)" : "");
+}
+
+// --three --probes P: the probe volume whose grid lights the page's moving
+// object (checked: a volume of the same scene, 3 bands, and a lightmap of 3
+// bands or more: the page relights the probes from the map's SH at the
+// lightmap's bands); none without.
+std::optional<ProbeTransfer> page_probes(const ExportArgs& a, int lightmap_bands) {
+  if (a.probes.empty()) return std::nullopt;
+  if (lightmap_bands < 3)
+    throw Error(fmt::format("--probes: {} has {} bands; the page relights the probes from the map's first 3 bands, which "
+                            "it keeps at the lightmap's: precompute the lightmap with --bands 3 or more", a.transfer,
+                            lightmap_bands));
+  ProbeTransfer t = read_transfer_as<ProbeTransfer>(a.probes);
+  if (load_scene_or_mesh(a.mesh).hash() != t.scene_hash)
+    throw Error(a.probes + ": computed for another scene than " + a.mesh + ": rerun prt precompute " + a.mesh + " --probes ...");
+  if (t.bands != 3) throw Error(fmt::format("{}: {} bands; three.js's probe grid holds 3 (L2): precompute with --bands 3", a.probes, t.bands));
+  return t;
+}
+
+// The three.js page's probes (docs/WEB.md "The three.js page"): probes.json
+// (probe_engine_json under the first map: the grid's place, each probe's
+// state) and probes.bin (each probe's SH transfer matrices from the map's 3
+// bands, docs/FORMAT.md "Probe matrices"), which the page relights each frame.
+void write_page_probes(const ExportArgs& a, const ProbeTransfer& t, const WebPage& w, const std::array<double, 3>& euler,
+                       const std::string& dir) {
+  ProbeExportNames names;
+  names.scene = std::filesystem::path(a.mesh).filename().string();
+  names.probes_file = std::filesystem::path(a.probes).filename().string();
+  names.map = std::filesystem::path(w.initial).filename().string();
+  names.generator = "prt " PRT_VERSION " (prt export --three)";
+  write_text_file(dir + "/probes.json", probe_engine_json(t, load_envmap(w.initial), euler, names));
+  int channels = 1;
+  const std::vector<float> m = probe_sh_matrices(t, 3, channels);
+  write_probe_matrices(dir + "/probes.bin", t, m, 3, channels);
 }
 
 // A lightmap (prt precompute SCENE --lightmap): the scene with its
@@ -194,22 +232,27 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
   }
   Outputs out("export");
   if (!a.output.empty()) out.write([&] { write_gltf_lightmap(a.output, scene, lt, texels, opts); });
-  std::unique_ptr<StagedPage> page;
-  if (!a.web.empty()) {
-    // The page's model: the scene's own materials (no bake: the page relights).
-    WebPage w = web_page(a, scene.mesh, euler, tone);
+  // The pages (--web, --three): the scene's own materials (no bake: the page relights).
+  std::vector<std::unique_ptr<StagedPage>> pages;
+  const std::optional<ProbeTransfer> probes = page_probes(a, lt.transfer.bands);
+  GltfLightmapOptions page_opts = opts;
+  page_opts.baked.clear();
+  page_opts.lights.clear();  // (none: export_lights refuses them with --web and --three)
+  for (const std::string* dir : {&a.web, &a.three}) {
+    if (dir->empty()) continue;
+    WebPage w = web_page(a, *dir, scene.mesh, euler, tone);
     w.lightmap_albedo = lightmap_image(lt.layout, texels.albedo);
     w.lightmap_width = lt.layout.width;
     w.lightmap_height = lt.layout.page_height();
     w.lightmap_pages = lt.layout.pages;
-    GltfLightmapOptions page_opts = opts;
-    page_opts.baked.clear();
-    page_opts.lights.clear();  // (none: export_lights refuses them with --web)
-    page = stage_page(a, w, lt.transfer.bands,
-                      [&](const std::string& path) { write_gltf_lightmap(path, scene, lt, texels, page_opts); });
+    if (dir == &a.three && probes) w.write_probes = [&](const std::string& d) { write_page_probes(a, *probes, w, euler, d); };
+    pages.push_back(stage_page(a, w, lt.transfer.bands,
+                               [&](const std::string& path) { write_gltf_lightmap(path, scene, lt, texels, page_opts); }));
+    if (!pages.back()) pages.clear();  // Ctrl-C: the Outputs' commit says so
+    if (pages.empty()) break;
   }
   if (const int rc = out.commit(); rc != 0) return rc;
-  if (page) page->commit();
+  for (auto& p : pages) p->commit();
   if (!a.quiet) {
     const std::size_t stride = lt.transfer.stride();
     if (!a.output.empty())
@@ -220,7 +263,8 @@ int run_export_lightmap(const ExportArgs& a, const LightmapTransfer& lt, const s
                  : opts.moz_lightmap ? ", and the baked lightmap (MOZ_lightmap on the scene's materials, TEXCOORD_1)"
                                      : ", and the baked lightmap (unlit, TEXCOORD_1)",
                  opts.lights.empty() ? "" : "; " + describe_lights(opts.lights) + " as KHR_lights_punctual");
-    if (page) print_page_written(a);
+    for (const std::string* dir : {&a.web, &a.three})
+      if (!pages.empty() && !dir->empty()) print_page_written(*dir, dir == &a.three);
   }
   return 0;
 }
@@ -235,6 +279,7 @@ int run_export_probes(const ExportArgs& a, const std::array<double, 3>& euler, P
     throw UsageError("--lights and --sun: a probe volume's JSON holds each probe's SH of the map; lights inside the "
                      "scene are not in it (docs/LIGHTS.md \"Export\")");
   if (!a.web.empty()) throw UsageError("--web shows a mesh's or a lightmap's transfer; a probe volume exports as JSON (-o FILE.json)");
+  if (!a.three.empty()) throw UsageError("--three shows a lightmap (prt precompute SCENE --lightmap); a probe volume exports as JSON (-o FILE.json)");
   if (a.bake_material_opt->count() > 0)
     throw UsageError("--bake-material applies to a lightmap's baked texture; a probe volume exports its probes' SH as JSON");
   if (a.bake.empty()) throw UsageError(a.transfer + " is a probe volume: give --bake ENV (the map its probes are relit under) and -o FILE.json");
@@ -337,7 +382,7 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
   if (!a.output.empty()) out.write([&] { write_gltf(a.output, mesh, t, opts); });
   std::unique_ptr<StagedPage> page;
   if (!a.web.empty())
-    page = stage_page(a, web_page(a, mesh, euler, tone), t.bands,
+    page = stage_page(a, web_page(a, a.web, mesh, euler, tone), t.bands,
                       [&](const std::string& path) { write_gltf(path, mesh, t, opts); });
   if (const int rc = out.commit(); rc != 0) return rc;
   if (page) page->commit();
@@ -347,7 +392,7 @@ int export_mesh(const ExportArgs& a, const Mesh& mesh, const Transfer& t, bool c
                  mesh.vertex_count(), mesh.triangles.size(), gltf_transfer_attribute_count(t.bands, t.channels),
                  opts.colors.empty() ? "" : ", COLOR_0",
                  opts.lights.empty() ? "" : "; " + describe_lights(opts.lights) + " as KHR_lights_punctual");
-    if (page) print_page_written(a);
+    if (page) print_page_written(a.web, false);
   }
   return 0;
 }
@@ -372,10 +417,11 @@ void check_gltf_options(const ExportArgs& a, bool gltf) {
     throw UsageError("--matrices and --matrix-bands apply to a probe volume (prt precompute --probes)");
   if (!a.output.empty() && !gltf) throw not_gltf(a.output);
   for (const CLI::Option* o : {a.rotate_opt, a.exposure_opt})
-    if (o->count() > 0 && a.bake.empty() && a.web.empty())
+    if (o->count() > 0 && a.bake.empty() && a.web.empty() && a.three.empty())
       throw UsageError(o->get_name() + " applies to the baked colours and the web page: give --bake ENV or --web DIR too");
   for (const CLI::Option* o : a.web_opts)
-    if (o->count() > 0 && a.web.empty()) throw UsageError(o->get_name() + " applies to the web page: give --web DIR too");
+    if (o->count() > 0 && a.web.empty() && a.three.empty())
+      throw UsageError(o->get_name() + " applies to the web page: give --web DIR (or --three DIR) too");
   if (a.bake_material_opt->count() > 0 && a.bake.empty())
     throw UsageError("--bake-material applies to a lightmap's baked texture: give --bake ENV too");
   if (a.light.sun_opt->count() > 0 && a.bake.empty())
@@ -388,12 +434,16 @@ void check_gltf_options(const ExportArgs& a, bool gltf) {
     check_not_input("--web", a.web, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
     check_web_dir(a.web, a.force);
   }
+  if (!a.three.empty()) {
+    check_not_input("--three", a.three, {{"MESH", a.mesh}, {"TRANSFER", a.transfer}, {"--bake", a.bake}, {"--env", a.env}});
+    check_web_dir(a.three, a.force);
+  }
 }
 
 int run_export(const ExportArgs& args) {
   ExportArgs a = args;  // --probes FILE becomes the transfer
-  check_distinct_outputs({{"--output", a.output}, {"--web", a.web}, {"--matrices", a.matrices}});
-  if (!a.probes.empty()) {
+  check_distinct_outputs({{"--output", a.output}, {"--web", a.web}, {"--three", a.three}, {"--matrices", a.matrices}});
+  if (!a.probes.empty() && a.three.empty()) {
     if (!a.transfer.empty() && a.transfer != a.probes)
       throw UsageError("--probes " + a.probes + " exports a probe volume as JSON; " + a.transfer +
                        " is exported in its own run (prt export SCENE " + a.transfer + " -o FILE.glb)");
@@ -403,13 +453,14 @@ int run_export(const ExportArgs& args) {
     return run_export_probes(a, rotate_degrees(a.rotate), nullptr);
   }
   if (a.transfer.empty()) throw UsageError("give TRANSFER (a file from prt precompute or prt compress) or --probes FILE");
-  if (a.output.empty() && a.web.empty()) throw UsageError("give --output FILE.glb|.gltf, --web DIR, or both");
+  if (a.output.empty() && a.web.empty() && a.three.empty())
+    throw UsageError("give --output FILE.glb|.gltf, --web DIR, --three DIR, or more than one");
   std::string ext = std::filesystem::path(a.output).extension().string();
   for (auto& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   const bool gltf = ext == ".glb" || ext == ".gltf";
   // -o FILE.json without --web: a probe volume given as TRANSFER, its
   // probes' SH as JSON (as with --probes FILE); any other kind is refused.
-  const bool probe_json = ext == ".json" && a.web.empty();
+  const bool probe_json = ext == ".json" && a.web.empty() && a.three.empty();
   if (probe_json) {
     AnyTransfer any = read_transfer_file(a.transfer);
     ProbeTransfer* p = std::get_if<ProbeTransfer>(&any);
@@ -421,12 +472,16 @@ int run_export(const ExportArgs& args) {
   AnyTransfer any = read_transfer_file(a.transfer);
   // The page, the glTF and its baked colours each take the kinds the table
   // says (prt/transfer_file.h); the others are refused with its sentence.
-  if (!a.web.empty()) require_support(kind_of(any), Consumer::ExportWeb, a.transfer);
+  if (!a.web.empty() || !a.three.empty()) require_support(kind_of(any), Consumer::ExportWeb, a.transfer);
   if (gltf) require_support(kind_of(any), Consumer::ExportGlb, a.transfer);
   if (!a.bake.empty()) require_support(kind_of(any), Consumer::ExportBake, a.transfer);
   const std::array<double, 3> euler = rotate_degrees(a.rotate);
   const ToneMap tone = parse_tone_map(a.tone_map);  // checked while parsing
 
+  // The three.js page relights a lightmap only (three's lightMap).
+  if (!a.three.empty() && !std::holds_alternative<LightmapTransfer>(any))
+    throw Error("--three: " + a.transfer + " is a vertex transfer; the three.js page relights a lightmap (prt precompute "
+                "SCENE --lightmap) into three's lightMap: give --web DIR for a vertex transfer's page");
   const auto refused = [](const auto&) -> int {
     PRT_CHECK(false && "refused above by the kind table (Consumer::ExportGlb, ExportBake, ExportWeb)");
     return 1;
@@ -484,16 +539,21 @@ Run add_export(CLI::App& app) {
       "WebGL2 as prt render draws it; --env, --camera, --fov, --rotate, --exposure, --tonemap set its first frame\n"
       "(without --camera, prt render's default camera: inside a scene that encloses its centre, a room, the eye\n"
       "inside; docs/RUNTIME.md, \"The default camera\").\n"
+      "--three DIR (a lightmap) writes the same files with a three.js page: GLTFLoader, MeshPhysicalMaterial, the\n"
+      "lightmap relit each frame into their lightMap; it loads three.js from unpkg.com (?three=URL: a copy);\n"
+      "--probes P.prt adds a sphere moving through the probe grid, the probes relit each frame (probes.bin).\n"
       "Example: prt export bunny.off bunny.prt -o bunny.glb\n"
       "         prt export bunny.off bunny.prt --web bunny-web --env forest && python3 -m http.server -d bunny-web\n"
       "         prt export bunny.off bunny.prt -o bunny.gltf --bake envmaps/forest.exr --rotate 90,0,0 --exposure -1\n"
       "         prt export room.gltf room.prt -o room.glb --web room-web --camera 1.7,1.7,1.8,-0.6,0.6,-0.9,0,1,0\n"
+      "         prt export room.gltf room.prt --three room-three\n"
       "         prt export room.gltf --probes room-probes.prt --bake forest.exr -o probes.json --matrices probes.bin");
   s->add_option("MESH", a->mesh, "The mesh the transfer was computed for")->check(path_value())->required();
   s->add_option("TRANSFER", a->transfer, "SH transfer file from prt precompute (or prt compress); a probe volume may "
                                          "come here or as --probes")->check(path_value());
   s->add_option("--probes", a->probes, "A probe volume (prt precompute SCENE --probes) to export relit under --bake ENV "
-                                       "as JSON (-o FILE.json)")->check(path_value());
+                                       "as JSON (-o FILE.json); with --three, the grid that lights the page's moving object")
+      ->check(path_value());
   s->add_option("-o,--output", a->output, "Output: .glb (binary glTF) or .gltf (JSON glTF, buffer embedded)")
       ->check(path_value());
   s->add_option("--bake", a->bake, "Environment map: also write COLOR_0, the relit colour under it")
@@ -511,6 +571,11 @@ Run add_export(CLI::App& app) {
                                "model's largest channel at 1) over the baked vertices or texels, and on the page from "
                                "its first frame");
   s->add_option("--web", a->web, "Also (or instead) write the relighting web page into this directory (docs/WEB.md)")
+      ->check(path_value());
+  s->add_option("--three", a->three,
+                "A lightmap: also (or instead) write the three.js page into this directory: three's GLTFLoader and "
+                "standard materials, the lightmap relit each frame into their lightMap (docs/WEB.md \"The three.js "
+                "page\"); takes --web's options")
       ->check(path_value());
   a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)")
                             ->check(path_value()));
