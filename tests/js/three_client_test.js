@@ -19,12 +19,11 @@
 //   --images DIR: also write DIR/three_NAME_{three,render,diff}.png (diff: x 8 where both cover)
 // Exit 0 pass, 1 fail, 77 skip (tools.js).
 'use strict';
-const { missing, chromiumOrSkip, testArgs } = require('./tools');
+const { missing, chromiumOrSkip, testArgs, run, exrCoverage } = require('./tools');
 const fs = require('fs');
 const os = require('os');
 const path = require('path');
 const http = require('http');
-const { execFile } = require('child_process');
 const { readPng, writePng } = require('./png');
 const { threeGridModel } = require('./three_grid_model');
 
@@ -66,16 +65,6 @@ const kMaxP99Model = 2;
 
 const fail = (msg) => { console.error('FAIL: ' + msg); process.exitCode = 1; };
 
-function run(cmd, argv) {
-  return new Promise((resolve, reject) => {
-    execFile(cmd, argv, { maxBuffer: 1 << 26 }, (e, stdout, stderr) => {
-      if (!e) return resolve(stdout);
-      // prt render without an OpenGL 4.5 context: the GL tests' rule (tests/README.md).
-      if (/no OpenGL 4\.5/.test(stderr) && process.env.PRT_REQUIRE_GL !== '1') missing('an OpenGL 4.5 context for prt render');
-      reject(new Error(`${path.basename(cmd)} ${argv.join(' ')}: exit ${e.code}\n${stderr}`));
-    });
-  });
-}
 
 // The page: three.js from tests/js/node_modules (import map), drawing a
 // file with a view and returning the frame's pixels (rows from the top).
@@ -191,19 +180,6 @@ function serve(dir) {
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 
-// prt render's coverage from its EXR alpha (three's EXRLoader writes rows
-// from the bottom).
-async function coverage(exr, W, H) {
-  const { EXRLoader } = await import(path.join(THREE_DIR, 'examples', 'jsm', 'loaders', 'EXRLoader.js'));
-  const THREE = await import(path.join(THREE_DIR, 'build', 'three.module.js'));
-  const buf = fs.readFileSync(exr);
-  const e = new EXRLoader().setDataType(THREE.FloatType).parse(buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.length));
-  if (e.width !== W || e.height !== H) throw new Error(`${exr}: ${e.width}x${e.height}, expected ${W}x${H}`);
-  const mask = new Uint8Array(W * H);
-  for (let y = 0; y < H; ++y)
-    for (let x = 0; x < W; ++x) mask[y * W + x] = e.data[4 * ((H - 1 - y) * W + x) + 3] > 0.5 ? 1 : 0;
-  return mask;
-}
 
 // three's frames (black and white backgrounds) against prt render's
 // picture and coverage: three's model pixels are those equal in both frames.
@@ -256,7 +232,7 @@ async function runCase(tab, base, tmp, name, c) {
                 '--camera', [...v.eye, ...v.target, ...v.up].join(','), '--fov', String(v.fov), '-q'];
   await Promise.all([run(args.prt, [...files.render, ...size, '-o', png]),
                      run(args.prt, [...files.render, ...size, '-o', exr, '--alpha'])]);
-  const ref = readPng(fs.readFileSync(png)), mask = await coverage(exr, v.width, v.height);
+  const ref = readPng(fs.readFileSync(png)), mask = await exrCoverage(THREE_DIR, exr, v.width, v.height);
   if (ref.width !== v.width || ref.height !== v.height) throw new Error(`${png}: ${ref.width}x${ref.height}`);
   const draw = (glb, extra) => tab.evaluate(([u, view, x]) => self.draw(u, view, x),
                                             [`${base}/${path.basename(glb)}`, v, extra || {}]);

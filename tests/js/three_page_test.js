@@ -22,12 +22,11 @@
 // node three_page_test.js --prt BUILD/prt --source SRC [--images DIR]
 // Exit 0 pass, 1 fail, 77 skip (tools.js).
 'use strict';
-const { missing, chromiumOrSkip, testArgs } = require('./tools');
+const { missing, chromiumOrSkip, testArgs, run, exrCoverage } = require('./tools');
 const fs = require('fs');
 const os = require('os');
 const path = require('path');
 const http = require('http');
-const { execFile } = require('child_process');
 const { readPng, writePng } = require('./png');
 const { threeGridModel } = require('./three_grid_model');
 
@@ -60,15 +59,6 @@ const object = { at: [0.3, 1.1, 0.0], size: 1.2 };
 const fail = (msg) => { console.error('FAIL: ' + msg); process.exitCode = 1; };
 const src = (p) => path.join(args.source, p);
 
-function run(cmd, argv) {
-  return new Promise((resolve, reject) => {
-    execFile(cmd, argv, { maxBuffer: 1 << 26 }, (e, stdout, stderr) => {
-      if (!e) return resolve(stdout);
-      if (/no OpenGL 4\.5/.test(stderr) && process.env.PRT_REQUIRE_GL !== '1') missing('an OpenGL 4.5 context for prt render');
-      reject(new Error(`${path.basename(cmd)} ${argv.join(' ')}: exit ${e.code}\n${stderr}`));
-    });
-  });
-}
 
 // Serves `dir` at / (the pages in page/ and web/) and three's package at /three/.
 function serve(dir) {
@@ -88,17 +78,6 @@ function serve(dir) {
   return new Promise((resolve) => server.listen(0, '127.0.0.1', () => resolve(server)));
 }
 
-// prt render's coverage from its EXR alpha (three's EXRLoader: rows from the bottom).
-async function coverage(exr, W, H) {
-  const { EXRLoader } = await import(path.join(THREE_DIR, 'examples', 'jsm', 'loaders', 'EXRLoader.js'));
-  const THREE = await import(path.join(THREE_DIR, 'build', 'three.module.js'));
-  const buf = fs.readFileSync(exr);
-  const e = new EXRLoader().setDataType(THREE.FloatType).parse(buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.length));
-  const mask = new Uint8Array(W * H);
-  for (let y = 0; y < H; ++y)
-    for (let x = 0; x < W; ++x) mask[y * W + x] = e.data[4 * ((H - 1 - y) * W + x) + 3] > 0.5 ? 1 : 0;
-  return mask;
-}
 
 function compare(rgb, ref, mask) {
   let n = 0, sum = 0;
@@ -197,7 +176,7 @@ async function main() {
       const png = path.join(tmp, `render${i}.png`), exr = path.join(tmp, `render${i}.exr`);
       const base = ['render', scene, transfer, src('envmaps/sunset.exr'), '--rotate', r.join(','), ...size];
       await Promise.all([run(args.prt, [...base, '-o', png]), run(args.prt, [...base, '-o', exr, '--alpha'])]);
-      return { png, rgb: readPng(fs.readFileSync(png)).rgb, mask: await coverage(exr, W, H) };
+      return { png, rgb: readPng(fs.readFileSync(png)).rgb, mask: await exrCoverage(THREE_DIR, exr, W, H) };
     }));
     server = await serve(tmp);
     browser = await chromium.launch({
