@@ -60,7 +60,21 @@
     return px;
   }
 
-  const api = { chunks, unfilter };
+  // The unfiltered pixels `px` (`channels` a pixel) as RGBA8: grey to R, G
+  // and B, A 255 where the image has none.
+  function rgba(px, width, height, channels) {
+    const out = new Uint8Array(width * height * 4);
+    for (let i = 0; i < width * height; ++i) {
+      const s = px.subarray(i * channels, (i + 1) * channels), grey = channels < 3;
+      out[4 * i] = s[0];
+      out[4 * i + 1] = grey ? s[0] : s[1];
+      out[4 * i + 2] = grey ? s[0] : s[2];
+      out[4 * i + 3] = channels === 2 ? s[1] : channels === 4 ? s[3] : 255;
+    }
+    return out;
+  }
+
+  const api = { chunks, unfilter, rgba };
   if (typeof module !== 'undefined' && module.exports) module.exports = api;
   else root.PrtPNG = api;
 })(typeof self !== 'undefined' ? self : this);

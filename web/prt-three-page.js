@@ -68,15 +68,7 @@ async function decodePng(bytes, what) {
   const stream = new Blob(png.idat).stream().pipeThrough(new DecompressionStream('deflate'));
   const px = PNG.unfilter(new Uint8Array(await new Response(stream).arrayBuffer()), png.width, png.height, png.channels, what);
   const { width, height, channels } = png;
-  const rgba = new Uint8Array(width * height * 4);
-  for (let i = 0; i < width * height; ++i) {
-    const s = px.subarray(i * channels, (i + 1) * channels), grey = channels < 3;
-    rgba[4 * i] = s[0];
-    rgba[4 * i + 1] = grey ? s[0] : s[1];
-    rgba[4 * i + 2] = grey ? s[0] : s[2];
-    rgba[4 * i + 3] = channels === 2 ? s[1] : channels === 4 ? s[3] : 255;
-  }
-  return { width, height, rgba };
+  return { width, height, rgba: PNG.rgba(px, width, height, channels) };
 }
 
 // RGB half floats -> RGBA half floats (alpha 1), three's HalfFloatType data.

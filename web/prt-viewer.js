@@ -109,15 +109,7 @@
       fail(e.message);
     }
     const { width, height, channels } = png;
-    const rgba = new Uint8Array(width * height * 4);
-    for (let i = 0; i < width * height; ++i) {
-      const s = px.subarray(i * channels, (i + 1) * channels), grey = channels < 3;
-      rgba[4 * i] = s[0];
-      rgba[4 * i + 1] = grey ? s[0] : s[1];
-      rgba[4 * i + 2] = grey ? s[0] : s[2];
-      rgba[4 * i + 3] = channels === 2 ? s[1] : channels === 4 ? s[3] : 255;
-    }
-    return { width, height, rgba };
+    return { width, height, rgba: PNG.rgba(px, width, height, channels) };
   }
 
   // The image of glTF texture `index`, decoded.
