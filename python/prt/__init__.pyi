@@ -928,7 +928,7 @@ def export_gltf(transfer: ProbeVolume, *args, **kwargs) -> None:
     """
 
 @overload
-def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ...) -> None:
+def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ..., three: bool = ...) -> None:
     """
     Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does (the same files): index.html and its scripts, model.glb, lighting.json (every map's SH), maps/. Written whole or not at all.
 
@@ -941,9 +941,9 @@ def export_web(transfer: Transfer, mesh: Mesh, dir: Any, *, env: Any = ..., came
       force: replace an existing non-empty dir [--force]; bake: a map file: COLOR_0 in the model, as export_gltf [--bake].
     """
 @overload
-def export_web(transfer: Lightmap, mesh: Scene, dir: Any, *, env: Any = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ...) -> None:
+def export_web(transfer: Lightmap, mesh: Scene, dir: Any, *, env: Any = ..., camera: Any = ..., fov: Any = ..., rotate: Any = ..., exposure: Any = ..., tone_map: str = ..., turn: bool = ..., force: bool = ..., bake: Any = ..., three: bool = ...) -> None:
     """
-    For a Lightmap and its Scene: the page that relights the lightmap per pixel (docs/WEB.md "Lightmaps"), as prt export SCENE LIGHTMAP --web DIR does; the other arguments as for a Transfer (bake= is refused: the page relights).
+    For a Lightmap and its Scene: the page that relights the lightmap per pixel (docs/WEB.md "Lightmaps"), as prt export SCENE LIGHTMAP --web DIR does; the other arguments as for a Transfer (bake= is refused: the page relights). three=True: the three.js page instead, as prt export SCENE LIGHTMAP --three DIR (docs/WEB.md "The three.js page"; its probes, --three --probes, are the command's only).
     """
 @overload
 def export_web(transfer: WaveletTransfer, *args, **kwargs) -> None:

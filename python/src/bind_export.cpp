@@ -258,7 +258,10 @@ void bind_export(py::module_& m) {
       "export_web",
       [](const PyTransfer& p, const prt::Mesh& mesh, const py::object& dir, const py::object& env,
          const py::object& camera, const py::object& fov, const py::object& rotate, const py::object& exposure,
-         const std::string& tone_map, bool turn, bool force, const py::object& bake) {
+         const std::string& tone_map, bool turn, bool force, const py::object& bake, bool three) {
+        if (three)
+          throw Error("three=True: the transfer is a vertex transfer; the three.js page relights a lightmap "
+                      "(precompute_lightmap) into three's lightMap: leave three=False for a vertex transfer's page");
         // The model: the glTF prt export writes (its bake recorded with the page's rotate and exposure, as the
         // command's --bake, --rotate and --exposure serve both).
         const Export x = gltf_export(p, mesh, bake, bake.is_none() ? py::none() : rotate,
@@ -273,7 +276,7 @@ void bind_export(py::module_& m) {
       py::arg("transfer"), py::arg("mesh"), py::arg("dir"), py::kw_only(), py::arg("env") = py::none(),
       py::arg("camera") = py::none(), py::arg("fov") = py::none(), py::arg("rotate") = py::none(),
       py::arg("exposure") = py::none(), py::arg("tone_map") = "clamp", py::arg("turn") = false, py::arg("force") = false,
-      py::arg("bake") = py::none(),
+      py::arg("bake") = py::none(), py::arg("three") = false,
       "Writes the relighting web page (docs/WEB.md) into `dir`, as prt export MESH T --web DIR does (the same files): index.html and its scripts, model.glb, lighting.json (every map's SH), maps/. Written whole or not at all.\n"
       "\n"
       "Arguments (prt export's option in brackets):\n"
@@ -287,7 +290,7 @@ void bind_export(py::module_& m) {
       "export_web",
       [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& dir, const py::object& env,
          const py::object& camera, const py::object& fov, const py::object& rotate, const py::object& exposure,
-         const std::string& tone_map, bool turn, bool force, const py::object& bake) {
+         const std::string& tone_map, bool turn, bool force, const py::object& bake, bool three) {
         if (!bake.is_none())
           throw Error("bake: a lightmap's baked texture goes into the glTF of export_gltf(bake=); the page relights "
                       "the coefficient textures (as prt export --web)");
@@ -299,6 +302,7 @@ void bind_export(py::module_& m) {
         w.lightmap_width = l.layout.width;
         w.lightmap_height = l.layout.page_height();
         w.lightmap_pages = l.layout.pages;
+        w.three = three;
         py::gil_scoped_release release;
         std::unique_ptr<prt::StagedPage> page = prt::stage_web_page(
             w, l.transfer.bands,
@@ -308,10 +312,11 @@ void bind_export(py::module_& m) {
       py::arg("transfer"), py::arg("mesh"), py::arg("dir"), py::kw_only(), py::arg("env") = py::none(),
       py::arg("camera") = py::none(), py::arg("fov") = py::none(), py::arg("rotate") = py::none(),
       py::arg("exposure") = py::none(), py::arg("tone_map") = "clamp", py::arg("turn") = false, py::arg("force") = false,
-      py::arg("bake") = py::none(),
+      py::arg("bake") = py::none(), py::arg("three") = false,
       "For a Lightmap and its Scene: the page that relights the lightmap per pixel (docs/WEB.md \"Lightmaps\"), "
       "as prt export SCENE LIGHTMAP --web DIR does; the other arguments as for a Transfer (bake= is refused: "
-      "the page relights).");
+      "the page relights). three=True: the three.js page instead, as prt export SCENE LIGHTMAP --three DIR "
+      "(docs/WEB.md \"The three.js page\"; its probes, --three --probes, are the command's only).");
   // The other kinds: refused with the table's sentence.
   refuse_export<PyWavelet>(m, prt::TransferKind::Wavelet);
   refuse_export<PyZhTransfer>(m, prt::TransferKind::ZH);

@@ -60,6 +60,26 @@ def test_page_is_the_clis(lightmap_file, tmp_path):
         assert a == b, name
 
 
+def test_three_page_is_the_clis(lightmap_file, tmp_path):
+    """export_web(three=True) writes the files of prt export --three, byte for byte (the glTF's extras aside)."""
+    want, got = tmp_path / "cli", tmp_path / "py"
+    run_prt("export", SCENE, lightmap_file, "--three", want, "--env", ENV, "--exposure", "0.5", "-q")
+    prt.export_web(prt.read_lightmap(lightmap_file), prt.load_scene(SCENE), got, env=ENV, exposure=0.5, three=True)
+    files = sorted(p.relative_to(want).as_posix() for p in want.rglob("*") if p.is_file())
+    assert "prt-three-page.js" in files and "prt-viewer.js" not in files
+    assert files == sorted(p.relative_to(got).as_posix() for p in got.rglob("*") if p.is_file())
+    for name in files:
+        a, b = (want / name).read_bytes(), (got / name).read_bytes()
+        if name.endswith(".glb"):
+            a, b = glb(a), glb(b)
+        assert a == b, name
+    with pytest.raises(prt.Error, match="three=True: the transfer is a vertex transfer"):
+        mesh = SOURCE / "models" / "scene.obj"
+        t = prt.precompute(prt.load_mesh(mesh), bands=2, samples=16)
+        prt.export_web(t, prt.load_mesh(mesh), tmp_path / "vertex", three=True)
+    assert not (tmp_path / "vertex").exists()
+
+
 def test_refusals(lightmap_file, tmp_path):
     lm, scene = prt.read_lightmap(lightmap_file), prt.load_scene(SCENE)
     with pytest.raises(prt.Error, match="bake="):
