@@ -577,15 +577,18 @@ Run add_export(CLI::App& app) {
                 "standard materials, the lightmap relit each frame into their lightMap (docs/WEB.md \"The three.js "
                 "page\"); takes --web's options")
       ->check(path_value());
-  a->web_opts.push_back(s->add_option("--env", a->env, "With --web: the map shown first (a file, or a bundled map's name)")
-                            ->check(path_value()));
-  a->web_opts.push_back(add_shared(s, SharedOption::Camera, a->camera, "With --web: initial camera (as prt render)"));
+  a->web_opts.push_back(
+      s->add_option("--env", a->env, "With --web or --three: the map shown first (a file, or a bundled map's name)")
+          ->check(path_value()));
+  a->web_opts.push_back(
+      add_shared(s, SharedOption::Camera, a->camera, "With --web or --three: initial camera (as prt render)"));
   a->fov_opt = add_shared(s, SharedOption::Fov, a->fov,
-                          "With --web: vertical field of view (default 40, or 70 for the camera inside a room)");
+                          "With --web or --three: vertical field of view (default 40, or 70 for the camera inside a room)");
   a->web_opts.push_back(a->fov_opt);
-  a->web_opts.push_back(add_shared(s, SharedOption::Tonemap, a->tone_map, "With --web: initial tone map"));
-  a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web: start with the environment turning"));
-  a->web_opts.push_back(s->add_flag("--force", a->force, "With --web: replace an existing non-empty directory"));
+  a->web_opts.push_back(
+      add_shared(s, SharedOption::Tonemap, a->tone_map, "With --web: initial tone map (the three.js page draws clamp)"));
+  a->web_opts.push_back(s->add_flag("--turn", a->turn, "With --web or --three: start with the environment turning"));
+  a->web_opts.push_back(s->add_flag("--force", a->force, "With --web or --three: replace an existing non-empty directory"));
   s->add_option("--matrices", a->matrices,
                 "A probe volume: also write every probe's SH transfer matrix (its light from the map's first "
                 "--matrix-bands bands) as a binary file (docs/FORMAT.md \"Probe matrices\")")->check(path_value());
