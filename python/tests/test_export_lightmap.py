@@ -31,6 +31,18 @@ def glb(data: bytes):
     return doc, data[20 + n:]
 
 
+def assert_same_files(want, got):
+    """The same files under both directories, byte for byte (a .glb's extras.prt.transfer aside); their names."""
+    files = sorted(p.relative_to(want).as_posix() for p in want.rglob("*") if p.is_file())
+    assert files == sorted(p.relative_to(got).as_posix() for p in got.rglob("*") if p.is_file())
+    for name in files:
+        a, b = (want / name).read_bytes(), (got / name).read_bytes()
+        if name.endswith(".glb"):
+            a, b = glb(a), glb(b)
+        assert a == b, name
+    return files
+
+
 @pytest.mark.parametrize("cli,kw", [
     ([], {}),
     (["--bake", ENV, "--rotate", "30,-10,5", "--exposure", "1.5"], dict(bake=ENV, rotate=(30, -10, 5), exposure=1.5)),
@@ -51,13 +63,7 @@ def test_page_is_the_clis(lightmap_file, tmp_path):
     want, got = tmp_path / "cli", tmp_path / "py"
     run_prt("export", SCENE, lightmap_file, "--web", want, "--env", ENV, "--exposure", "0.5", "-q")
     prt.export_web(prt.read_lightmap(lightmap_file), prt.load_scene(SCENE), got, env=ENV, exposure=0.5)
-    files = sorted(p.relative_to(want).as_posix() for p in want.rglob("*") if p.is_file())
-    assert files == sorted(p.relative_to(got).as_posix() for p in got.rglob("*") if p.is_file())
-    for name in files:
-        a, b = (want / name).read_bytes(), (got / name).read_bytes()
-        if name.endswith(".glb"):
-            a, b = glb(a), glb(b)
-        assert a == b, name
+    assert_same_files(want, got)
 
 
 def test_three_page_is_the_clis(lightmap_file, tmp_path):
@@ -65,14 +71,8 @@ def test_three_page_is_the_clis(lightmap_file, tmp_path):
     want, got = tmp_path / "cli", tmp_path / "py"
     run_prt("export", SCENE, lightmap_file, "--three", want, "--env", ENV, "--exposure", "0.5", "-q")
     prt.export_web(prt.read_lightmap(lightmap_file), prt.load_scene(SCENE), got, env=ENV, exposure=0.5, three=True)
-    files = sorted(p.relative_to(want).as_posix() for p in want.rglob("*") if p.is_file())
+    files = assert_same_files(want, got)
     assert "prt-three-page.js" in files and "prt-viewer.js" not in files
-    assert files == sorted(p.relative_to(got).as_posix() for p in got.rglob("*") if p.is_file())
-    for name in files:
-        a, b = (want / name).read_bytes(), (got / name).read_bytes()
-        if name.endswith(".glb"):
-            a, b = glb(a), glb(b)
-        assert a == b, name
     with pytest.raises(prt.Error, match="three=True: the transfer is a vertex transfer"):
         mesh = SOURCE / "models" / "scene.obj"
         t = prt.precompute(prt.load_mesh(mesh), bands=2, samples=16)
