@@ -50,6 +50,9 @@ void refuse_adaptive_light_bounce(const TransferOptions& options) {
   if (options.between_bounces)
     throw Error("a translucent material and --adaptive: the surface integral sums every vertex's traced light; "
                 "precompute every vertex (leave out --adaptive)");
+  if (options.directional)
+    throw Error("--directional and --adaptive: adaptive sample points interpolate square glossy matrices, not a "
+                "directional lightmap's rows; precompute every texel (leave out --adaptive)");
 }
 
 double mean_edge_length(const Mesh& mesh) {

@@ -75,6 +75,17 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.glossy && o.bands > kMaxGlossyBands)
     throw Error(fmt::format("--bands must be at most {} for glossy transfer (each matrix has bands^4 entries), got {}",
                             kMaxGlossyBands, o.bands));
+  if (o.directional) {
+    if (o.glossy) throw Error("--directional keeps a lightmap's L1 rows; --material glossy a vertex's whole matrices: one of them");
+    if (o.mode == TransferMode::Unshadowed)
+      throw Error("--directional needs --mode shadowed or interreflected (an unshadowed texel's rows are its "
+                  "hemisphere's, computed at run time)");
+    if (o.bands < 2) throw Error("--directional needs --bands 2 or more (the L1 of the light reaches band 1)");
+    if (o.light_bounce)
+      throw Error("--directional and --light-bounce: the directional rows carry the environment's light only, not "
+                  "the lights' bounce; precompute them apart");
+    if (o.transmission_eta != 0) throw Error("--directional: a translucent lightmap has no directional rows");
+  }
   if (o.light_bounce) {
     if (o.mode != TransferMode::Interreflected || o.bounces < 1)
       throw Error("--light-bounce keeps the interreflected pass's gather: it needs --mode interreflected and --bounces 1 "
@@ -179,12 +190,13 @@ Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std:
   Plan p;
   const bool trace = o.mode != TransferMode::Unshadowed;
   const bool gather = o.mode == TransferMode::Interreflected && o.bounces > 0 && !emitters;
-  const bool glossy_ir = o.glossy && o.mode == TransferMode::Interreflected;
+  const bool glossy_ir = (o.glossy || o.directional) && o.mode == TransferMode::Interreflected;
   const std::size_t V = P, nc = std::size_t(o.bands) * o.bands;
   const std::size_t stride = (grey ? 1 : 3) * nc;
   const std::size_t row = V * stride * sizeof(float);
   std::size_t gstride = 0;
-  if (o.glossy) gstride = glossy_ir ? std::size_t(grey ? 1 : 3) * nc * nc : nc * (nc + 1) / 2;
+  if (o.directional) gstride = std::size_t(glossy_ir && !grey ? 3 : 1) * kDirectionalRows * nc;
+  else if (o.glossy) gstride = glossy_ir ? std::size_t(grey ? 1 : 3) * nc * nc : nc * (nc + 1) / 2;
   const std::size_t M = trace ? 2 * std::size_t(o.samples) : 0;
   const std::size_t threads = std::size_t(o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency());
   std::size_t fixed = row;                                        // coeffs
@@ -195,7 +207,7 @@ Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std:
   fixed += V * sizeof(std::uint32_t);                             // the slots of the analytic rows' compaction
   fixed += V * gstride * sizeof(float);                           // glossy matrices
   fixed += (own + 1) * sizeof(std::uint64_t) * ((gather ? 1 : 0) + (glossy_ir ? 1 : 0));  // record offsets
-  fixed += M * nc * (sizeof(float) + (o.glossy ? sizeof(double) : 0));  // the directions' SH tables
+  fixed += M * nc * (sizeof(float) + (o.glossy || o.directional ? sizeof(double) : 0));  // the directions' SH tables
   fixed += trace ? mesh.triangles.size() * kRaySceneBytesPerTriangle : 0;
   fixed += threads * (M * std::size_t(pairs) * sizeof(std::pair<std::uint32_t, float>) + M * nc * sizeof(double));  // per-thread scratch
   const std::size_t per_vertex = max_records_per_vertex(o, gather, glossy_ir, pairs);
@@ -254,13 +266,16 @@ void gather_to_root(std::vector<T>& data, std::size_t V, const Communicator& com
 
 // Interreflected glossy: M_p[c] += w sum_front hits Y(s) T_q[c]^T, T_q the
 // final diffuse transfer (`vertex_rows`, t.coeffs' rows for every mesh vertex) at the hit point by
-// its barycentric coordinates; per vertex one BLAS product
-// (nc x H) (H x channels nc). Vertices [v0, v0 + offsets.size() - 1), their
+// its barycentric coordinates (`hit_points`, texels: the texels around the
+// hit's lightmap UV, whose rows `vertex_rows` then are); per vertex one BLAS product
+// (rows x H) (H x channels nc), rows = the matrices' (t.glossy_row_count()).
+// Vertices [v0, v0 + offsets.size() - 1), their
 // hits in `store`'s blocks (block b of `blocks` vertices).
-void add_glossy_bounce_light(Transfer& t, const float* vertex_rows, const Mesh& mesh, const detail::SpillStore& store,
+void add_glossy_bounce_light(Transfer& t, const float* vertex_rows, const Mesh& mesh,
+                             const detail::HitToPoint* hit_points, const detail::SpillStore& store,
                              const std::vector<std::uint64_t>& offsets, std::size_t v0, std::size_t block,
                              const std::vector<double>& Y, double w, const Progress& progress) {
-  const std::size_t nc = std::size_t(t.bands) * t.bands, stride = t.stride();
+  const std::size_t nc = std::size_t(t.bands) * t.bands, stride = t.stride(), rows = t.glossy_row_count();
   const std::size_t gstride = t.glossy_stride(), own = offsets.size() - 1;
   detail::ProgressTicker ticker(progress, own, "glossy bounce light");
   constexpr std::size_t kGrain = 64;
@@ -270,7 +285,7 @@ void add_glossy_bounce_light(Transfer& t, const float* vertex_rows, const Mesh& 
     const auto* hits_of_block = reinterpret_cast<const FrontHit*>(store.get(2 * b + 1, buffer));
     tbb::parallel_for(std::size_t(0), (b1 - b0 + kGrain - 1) / kGrain, [&](std::size_t grain) {
       if (ticker.cancelled()) return;
-      std::vector<double> Yh, Th, B(nc * stride);
+      std::vector<double> Yh, Th, B(rows * stride);
       const std::size_t g0 = b0 + grain * kGrain, g1 = std::min(b1, g0 + kGrain);
       for (std::size_t i = g0; i < g1; ++i) {
         const std::size_t H = std::size_t(offsets[i + 1] - offsets[i]);
@@ -280,22 +295,32 @@ void add_glossy_bounce_light(Transfer& t, const float* vertex_rows, const Mesh& 
         Th.assign(H * stride, 0.0);
         for (std::size_t h = 0; h < H; ++h) {
           std::copy_n(Y.begin() + std::ptrdiff_t(hits[h].dir * nc), nc, Yh.begin() + std::ptrdiff_t(h * nc));
-          const glm::uvec3 tri = mesh.triangles[hits[h].triangle];
-          const double bc[3] = {1.0 - hits[h].u - hits[h].v, hits[h].u, hits[h].v};
           double* th = Th.data() + h * stride;
-          for (int c = 0; c < 3; ++c) {
-            const float* src = vertex_rows + std::size_t(tri[c]) * stride;
-            for (std::size_t k = 0; k < stride; ++k) th[k] += bc[c] * src[k];
+          std::uint32_t idx[4];
+          float wt[4];
+          int np = 0;
+          if (hit_points) {
+            np = hit_points->points(hits[h].triangle, hits[h].u, hits[h].v, idx, wt);
+          } else {
+            const glm::uvec3 tri = mesh.triangles[hits[h].triangle];
+            np = 3;
+            std::copy_n(&tri.x, 3, idx);
+            wt[0] = 1.0f - hits[h].u - hits[h].v, wt[1] = hits[h].u, wt[2] = hits[h].v;
+          }
+          for (int c = 0; c < np; ++c) {
+            const float* src = vertex_rows + std::size_t(idx[c]) * stride;
+            for (std::size_t k = 0; k < stride; ++k) th[k] += double(wt[c]) * src[k];
           }
         }
-        cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, int(nc), int(stride), int(H), w, Yh.data(), int(nc),
+        // Y^T's first `rows` rows: Yh is H x nc, its first `rows` columns.
+        cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, int(rows), int(stride), int(H), w, Yh.data(), int(nc),
                     Th.data(), int(stride), 0.0, B.data(), int(stride));
         float* g = t.glossy_matrices.data() + (v0 + i) * gstride;
         for (int c = 0; c < t.channels; ++c)
-          for (std::size_t p = 0; p < nc; ++p)
+          for (std::size_t p = 0; p < rows; ++p)
             for (std::size_t q = 0; q < nc; ++q)
-              g[std::size_t(c) * nc * nc + p * nc + q] =
-                  float(double(g[std::size_t(c) * nc * nc + p * nc + q]) + B[p * stride + std::size_t(c) * nc + q]);
+              g[std::size_t(c) * rows * nc + p * nc + q] =
+                  float(double(g[std::size_t(c) * rows * nc + p * nc + q]) + B[p * stride + std::size_t(c) * nc + q]);
       }
       ticker.tick(g1 - g0);
     });
@@ -338,6 +363,9 @@ namespace {
 
 // Points per worker task in compute_impl's passes.
 constexpr std::size_t kWorkerGrain = 64;
+// Directional rows: rays with cos below this are "near the horizon", where
+// the direction set's hemisphere quadrature has its error.
+constexpr float kHorizonBand = 0.25f;
 
 using Entry = std::pair<std::uint32_t, float>;  // a gather row's (emitting point, weight)
 
@@ -352,8 +380,9 @@ struct Run {
         grey(!s.albedo && !opts.vertex_colors && opts.albedo.x == opts.albedo.y && opts.albedo.y == opts.albedo.z &&
              !opts.between_bounces),
         trace(opts.mode != TransferMode::Unshadowed),
-        gather(opts.mode == TransferMode::Interreflected && opts.bounces > 0 && !emitting), glossy(opts.glossy),
-        glossy_ir(opts.glossy && opts.mode == TransferMode::Interreflected),
+        gather(opts.mode == TransferMode::Interreflected && opts.bounces > 0 && !emitting),
+        glossy(opts.glossy || opts.directional),
+        glossy_ir(glossy && opts.mode == TransferMode::Interreflected), grows(opts.directional ? kDirectionalRows : nc),
         want_hits(gather || glossy_ir || emitting), channels(grey ? 1 : 3), vertex_albedo{opts, m} {}
 
   const Mesh& mesh;
@@ -367,7 +396,9 @@ struct Run {
   int emitter_channels;
   int n, nc;  // bands, coefficients per channel
   std::size_t V, r0, own;  // the points; this rank's are [r0, r0 + own)
-  bool grey, trace, gather, glossy, glossy_ir, want_hits;
+  bool grey, trace, gather, glossy, glossy_ir;
+  int grows;  // glossy: the matrices' rows (nc; kDirectionalRows for a directional lightmap)
+  bool want_hits;
   int channels;  // the transfer's: 1 for a grey albedo, else 3
   std::size_t stride = 0, gstride = 0;  // floats per point of t.coeffs and of t.glossy_matrices
   Plan plan;
@@ -424,6 +455,8 @@ struct Scratch {
 
   std::vector<double> Yn, occ;
   std::vector<double> Yocc, C;  // glossy: the occluded rays' Y, and w Yocc^T Yocc
+  std::vector<double> Yvis, Cv;  // directional: the visible rays' Y, and w Yvis^T Yvis (first rows)
+  std::size_t horizon_rays = 0, horizon_visible = 0;  // directional: rays near the horizon, and those visible
   std::vector<Entry> r;
   std::vector<float> s;  // S of the vertex
   std::vector<double> eacc;  // points: sum of w cos barycentric T_vertex over front hits
@@ -490,6 +523,16 @@ void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, i
     occluded = run.scene->occluded8(origin, sc.batch, count, run.offset);
   }
   for (int k = 0; k < count; ++k) {
+    if (run.o.directional) {
+      const int j = sc.batch_j[k];
+      const bool near_horizon = glm::dot(nrm, run.dirs[j]) < kHorizonBand;
+      sc.horizon_rays += near_horizon;
+      if (!(occluded & (1u << k))) {
+        sc.horizon_visible += near_horizon;
+        sc.Yvis.insert(sc.Yvis.end(), run.Ydbl.begin() + std::ptrdiff_t(j) * nc,
+                       run.Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
+      }
+    }
     if (!(occluded & (1u << k))) continue;
     ++sc.occluded_rays;
     const detail::Hit& hit = sc.hits[k];
@@ -530,23 +573,57 @@ void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, i
   }
 }
 
+// A directional lightmap's texel: sc.C's first `rows` rows (each whole)
+// set so that H - C is M_p = (the visible rays' sum) + f (H - the set's own
+// hemisphere sum). The direction set's error over the hemisphere lies at
+// the horizon, so it is mended in the share f of the horizon the texel sees
+// (0 for a texel under a roof, whose rows are then its window's rays alone;
+// 1 in the open). H - occluded (f = 1 always, as vertices' glossy
+// matrices) was 1.4x this error in the bundled room at 256 samples, its
+// texels' sky seen through windows (docs/LIGHTMAPS.md "Directional
+// lightmaps").
+void directional_occluded(const Run& run, Scratch& sc, const std::vector<double>& H) {
+  const int nc = run.nc, rows = run.grows;
+  const std::size_t visible = sc.Yvis.size() / std::size_t(nc), entries = std::size_t(rows) * nc;
+  cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, rows, nc, int(sc.occluded_rays), run.w, sc.Yocc.data(), nc,
+              sc.Yocc.data(), nc, 0.0, sc.C.data(), nc);
+  sc.Cv.assign(entries, 0.0);
+  if (visible > 0)
+    cblas_dgemm(CblasRowMajor, CblasTrans, CblasNoTrans, rows, nc, int(visible), run.w, sc.Yvis.data(), nc,
+                sc.Yvis.data(), nc, 0.0, sc.Cv.data(), nc);
+  const double f = sc.horizon_rays ? double(sc.horizon_visible) / double(sc.horizon_rays) : 0.0;
+  for (std::size_t e = 0; e < entries; ++e) {
+    const double set_hemisphere = sc.C[e] + sc.Cv[e];
+    sc.C[e] = H[e] - sc.Cv[e] - f * (H[e] - set_hemisphere);
+  }
+}
+
 // Glossy: vertex v's matrix M_p = H(n) - w sum_occluded Y Y^T (upper
 // triangle from the BLAS); interreflected keeps it full, per channel, for
-// the bounce light added later.
+// the bounce light added later. A directional lightmap's texel keeps its
+// first rows (directional_occluded).
 void write_glossy_matrix(const Run& run, Transfer& t, Scratch& sc, std::size_t v, glm::vec3 nrm) {
-  const int nc = run.nc;
-  rank_k_update(nc, int(sc.occluded_rays), run.w, sc.Yocc.data(), 0.0, sc.C.data());
+  const int nc = run.nc, rows = run.grows;
+  const bool symmetric = t.glossy_symmetric();
   const std::vector<double> H = glossy::hemisphere_product_matrix(glm::normalize(glm::dvec3(nrm)), run.n);
+  if (rows == nc)  // the upper triangle
+    rank_k_update(nc, int(sc.occluded_rays), run.w, sc.Yocc.data(), 0.0, sc.C.data());
+  else
+    directional_occluded(run, sc, H);
+  const auto occluded = [&](int p, int q) {
+    return rows == nc ? sc.C[std::size_t(std::min(p, q)) * nc + std::size_t(std::max(p, q))]
+                      : sc.C[std::size_t(p) * nc + q];
+  };
   float* g = t.glossy_matrices.data() + v * run.gstride;
+  const std::size_t per_channel = std::size_t(rows) * nc;
   std::size_t k = 0;
-  for (int p = 0; p < nc; ++p)
-    for (int q = run.glossy_ir ? 0 : p; q < nc; ++q) {
-      const int a = std::min(p, q), bq = std::max(p, q);
-      const double value = H[std::size_t(p) * nc + q] - sc.C[std::size_t(a) * nc + bq];
-      if (run.glossy_ir)
-        for (int c = 0; c < t.channels; ++c) g[std::size_t(c) * nc * nc + std::size_t(p) * nc + q] = float(value);
-      else
+  for (int p = 0; p < rows; ++p)
+    for (int q = symmetric ? p : 0; q < nc; ++q) {
+      const double value = H[std::size_t(p) * nc + q] - occluded(p, q);
+      if (symmetric)
         g[k++] = float(value);
+      else
+        for (int c = 0; c < t.glossy_channels(); ++c) g[std::size_t(c) * per_channel + std::size_t(p) * nc + q] = float(value);
     }
 }
 
@@ -589,6 +666,8 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
   }
   std::fill(sc.occ.begin(), sc.occ.end(), 0.0);
   sc.Yocc.clear();
+  sc.Yvis.clear();
+  sc.horizon_rays = sc.horizon_visible = 0;
   sc.r.clear();
   sc.occluded_rays = 0;
   sc.occ_cos = 0.0;
@@ -707,7 +786,8 @@ Transfer finish_transfer(const Run& run, Transfer& t, FirstPass& fp, bool keep_e
   if (run.glossy_ir) {
     std::vector<float> dense;
     if (run.src.expand) (*run.src.expand)(t.coeffs, dense, true);
-    add_glossy_bounce_light(t, run.src.expand ? dense.data() : t.coeffs.data(), run.mesh, fp.store, fp.frow, run.r0,
+    add_glossy_bounce_light(t, run.src.expand ? dense.data() : t.coeffs.data(), run.mesh, run.src.hit_points, fp.store,
+                            fp.frow, run.r0,
                             run.plan.block, run.Ydbl, run.w, run.progress);
   }
   if (run.glossy) gather_to_root(t.glossy_matrices, run.V, run.comm);
@@ -966,6 +1046,9 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   Run run(mesh, src, o, progress, emitters, emitter_channels);
   const Communicator& comm = run.comm;
   const std::size_t V = run.V;
+  if (o.directional && !src.hit_points)
+    throw Error("--directional rows are a lightmap's (prt precompute --lightmap WxH --directional), not a mesh's "
+                "vertices'");
   Transfer t = transfer_header(run);
   run.stride = t.stride();
   // Checked before any ray: throws for a limit below the minimum.
@@ -987,6 +1070,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   t.bent_normals.assign(src.normals, src.normals + V);
   if (run.glossy) detail::blas_single_threaded();
   t.glossy = run.glossy;
+  t.glossy_rows = o.directional ? kDirectionalRows : 0;
   run.gstride = run.glossy ? t.glossy_stride() : 0;
   if (run.glossy) t.glossy_matrices.assign(V * run.gstride, 0.0f);
   make_tables(run);

@@ -45,8 +45,15 @@ nlohmann::ordered_json to_json(const std::string& path, const Transfer& t, std::
   // Glossy matrices (docs/FORMAT.md, "Glossy matrices"): their layout.
   // A translucent transfer's material (docs/FORMAT.md, "Subsurface
   // material"): the record's keys, as the file stores them.
-  j["material"] = t.glossy ? "glossy" : t.subsurface ? "subsurface" : "diffuse";
-  if (t.glossy)
+  // A directional lightmap's rows (docs/FORMAT.md "Directional rows") are
+  // no glossy material: "directional" says their layout.
+  const bool directional = t.glossy && t.glossy_rows != 0;
+  j["material"] = t.glossy && !directional ? "glossy" : t.subsurface ? "subsurface" : "diffuse";
+  if (directional)
+    j["directional"] = {{"rows", t.glossy_rows},
+                        {"channels", t.glossy_channels()},
+                        {"floats_per_stored_texel", t.glossy_stride()}};
+  else if (t.glossy)
     j["glossy"] = {{"symmetric", t.glossy_symmetric()},
                    {"channels", t.glossy_channels()},
                    {"floats_per_stored_vertex", t.glossy_stride()}};

@@ -53,7 +53,7 @@ namespace detail {
 
 HeaderValues header_of(const Transfer& t) {
   const std::uint64_t stored = t.slots.size() == t.vertices ? t.stored_vertices() : t.vertices;
-  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored, t.glossy};
+  return {t.bands, t.channels, std::int64_t(t.mode), t.bounces, t.samples, t.albedo, t.vertices, stored, t.glossy, t.glossy_rows};
 }
 
 std::string header_problem(const HeaderValues& h) {
@@ -97,6 +97,16 @@ std::string array_problem(TransferArray a, std::uint64_t count, const HeaderValu
                            "the hemisphere's)", name);
       const bool ir = h.mode == std::int64_t(TransferMode::Interreflected);
       const std::uint64_t nc = std::uint64_t(h.bands) * std::uint64_t(h.bands);
+      if (h.glossy_rows != 0) {  // a directional lightmap's L1 rows
+        if (h.glossy_rows != kDirectionalRows || h.bands < 2)
+          return fmt::format("directional rows: {} rows of {} bands; must be {} rows of 2 bands or more", h.glossy_rows,
+                             h.bands, kDirectionalRows);
+        const std::uint64_t per = std::uint64_t(ir ? h.channels : 1) * kDirectionalRows * nc;
+        if (count != h.stored * per)
+          return fmt::format("section '{}' has {} values; expected stored texels x {} x {} rows x bands^2 = {} x {} = "
+                             "{}", name, count, ir ? "channels" : "1", kDirectionalRows, h.stored, per, h.stored * per);
+        return {};
+      }
       const std::uint64_t per = ir ? std::uint64_t(h.channels) * nc * nc : nc * (nc + 1) / 2;
       if (count != h.stored * per)
         return ir ? fmt::format("section '{}' has {} values; expected stored vertices x channels x (bands^2)^2 = {} x "
@@ -231,6 +241,7 @@ std::string problem(const Transfer& t, bool rows_elsewhere) {
   } else if (!t.glossy_matrices.empty()) {
     return "glossy matrices without the glossy flag";
   }
+  if (t.glossy_rows != 0 && !t.glossy) return "directional rows (glossy_rows) without the glossy flag";
   if (auto p = light_bounce_problem(t.light_bounce, t.vertices); !p.empty()) return p;
   if (!t.light_bounce.empty() && t.mode != TransferMode::Interreflected)
     return "a light-bounce operator in a transfer that is not interreflected";

@@ -580,6 +580,8 @@ std::uint32_t transfer_format_version(const Transfer& t) {
 
 void write_transfer(const std::string& path, const Transfer& t) {
   if (auto p = transfer_problem(t); !p.empty()) throw Error(path + ": cannot write this transfer: " + p);
+  if (t.glossy_rows != 0)
+    throw Error(path + ": cannot write this transfer: directional rows are a lightmap's (write_lightmap_transfer)");
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
   // The oldest version that holds `t` (11 only with a subsurface material,
@@ -936,7 +938,8 @@ void Reader::read_sh_header(ShFile& f) {
                   : version_ == 8  ? kKindsV8
                   : version_ == 9  ? kKindsV9
                   : version_ == 10 ? kKindsV10
-                                   : kKindsV11;
+                  : version_ == 11 ? kKindsV11
+                                   : kKindsV12;
   const std::uint32_t flags = load<std::uint32_t>(h + kOffFlags);
   const std::uint32_t known_flags = version_ >= 5   ? kKnownFlags
                                     : version_ == 4 ? kKnownFlagsV4
@@ -953,8 +956,11 @@ void Reader::read_sh_header(ShFile& f) {
   if (!lightmap && f.lightmap_out)
     throw fail("holds a per-vertex transfer, not a lightmap (prt::read_transfer reads it; prt precompute SCENE "
                "--lightmap WxH makes a lightmap)");
-  if (lightmap && (compressed || v.glossy))
-    throw fail("bad header: a lightmap is neither compressed nor glossy");
+  if (lightmap && compressed) throw fail("bad header: a lightmap is not compressed");
+  if (lightmap && v.glossy && version_ < kDirectionalFormatVersion)
+    throw fail(fmt::format("bad header: a lightmap of version {} has no directional rows (the glossy flag); they "
+                           "came with version {}", version_, kDirectionalFormatVersion));
+  if (lightmap && v.glossy) v.glossy_rows = kDirectionalRows;  // its 'glossy matrices' are the texels' L1 rows
   if (compressed && !f.compressed_out)
     throw fail("holds a transfer compressed by clustered PCA (prt compress): prt relight, render, view and info take "
                "it; the library reads it with prt::read_compressed_transfer");
@@ -989,6 +995,7 @@ void Reader::read_sh_header(ShFile& f) {
   t.albedo = v.albedo;
   t.vertex_colors = (flags & kFlagVertexColors) != 0;
   t.glossy = v.glossy;
+  t.glossy_rows = int(v.glossy_rows);
   t.seed = load<std::uint64_t>(h + kOffSeed);
   t.vertices = std::size_t(v.vertices);
   t.mesh_hash = load<std::uint64_t>(h + kOffMeshHash);
@@ -1313,7 +1320,11 @@ std::string describe(const Transfer& t, std::uint32_t version, const std::vector
   s += line("channels",
             fmt::format("{}{}", t.channels, t.channels == 1 ? " (grey: one channel serves R, G and B)" : " (RGB)"));
   s += line("mode", std::string(transfer_mode_name(t.mode)));
-  if (t.glossy)
+  if (t.glossy && t.glossy_rows != 0)
+    s += line("directional", fmt::format("the L1 of the incident radiance: {} rows of {} per stored texel, {} channel{} "
+                                         "(prt relight --directional)", t.glossy_rows, t.bands * t.bands,
+                                         t.glossy_channels(), t.glossy_channels() == 1 ? "" : "s"));
+  else if (t.glossy)
     s += line("material", fmt::format("glossy: transfer matrices of {}x{}{} per stored vertex", t.bands * t.bands,
                                       t.bands * t.bands,
                                       t.glossy_symmetric() ? " (symmetric: upper triangle stored)"

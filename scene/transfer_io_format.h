@@ -195,6 +195,7 @@ constexpr std::size_t kKindsV8 = 19;
 constexpr std::size_t kKindsV9 = 22;
 constexpr std::size_t kKindsV10 = 27;
 constexpr std::size_t kKindsV11 = 28;
+constexpr std::size_t kKindsV12 = 28;  // version 12 added no kind (a lightmap may be glossy: directional rows)
 // The first version whose files may hold section `kind` (1 to 28).
 constexpr std::uint32_t kind_version(std::uint32_t kind) {
   return kind <= kKindsV1 ? 1 : kind <= kKindsV2 ? 2 : kind <= kKindsV3 ? 3 : kind <= kKindsV4 ? 4
@@ -210,7 +211,8 @@ static_assert(kKindsV11 == kKinds.size() && kind_version(kLightBounceHeader) == 
               kind_version(kLightBounceProbeGrid) == kLightBounceProbesFormatVersion &&
               kind_version(kLightBounceProbeWeights) == kLightBounceProbesFormatVersion &&
               kind_version(kSubsurfaceMaterial) == kSubsurfaceFormatVersion &&
-              kSubsurfaceFormatVersion == kTransferFormatVersion);
+              kSubsurfaceFormatVersion + 1 == kDirectionalFormatVersion &&
+              kDirectionalFormatVersion == kTransferFormatVersion && kKindsV12 == kKindsV11);
 // The operator's sections, in file order: the six every operator has, then
 // the three of its cluster rows and the five of its probe rows (when it has
 // them).

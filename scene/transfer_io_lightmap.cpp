@@ -48,6 +48,7 @@ std::uint32_t transfer_format_version(const LightmapTransfer& t) {
   // rows, 9 only with its cluster rows, 8 only with an operator, 7 only with
   // the mask: a lightmap with none stays the version 5 file of before, byte
   // for byte.
+  if (t.transfer.glossy) return kDirectionalFormatVersion;  // 12 with directional rows
   if (t.transfer.subsurface) return kSubsurfaceFormatVersion;
   if (const std::uint32_t v = light_bounce_format_version(t.transfer.light_bounce); v != 0) return v;
   return t.transfer.interpolated_vertices() > 0 ? kInterpolatedFormatVersion : kLightmapFormatVersion;
@@ -55,7 +56,9 @@ std::uint32_t transfer_format_version(const LightmapTransfer& t) {
 
 void write_lightmap_transfer(const std::string& path, const LightmapTransfer& t) {
   if (auto p = lightmap_problem(t); !p.empty()) throw Error(path + ": cannot write this lightmap: " + p);
-  if (t.transfer.glossy) throw Error(path + ": cannot write this lightmap: a lightmap has no glossy matrices");
+  if (t.transfer.glossy && t.transfer.glossy_rows != kDirectionalRows)
+    throw Error(path + ": cannot write this lightmap: a lightmap's matrices are directional rows (glossy_rows " +
+                std::to_string(kDirectionalRows) + "), never whole glossy matrices");
   const std::vector<TransferSection> sections = transfer_sections(t);
   unsigned char header[kHeaderSize];
   fill_header(header, t.transfer, transfer_format_version(t), kFlagLightmap, sections.size());

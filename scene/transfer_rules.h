@@ -23,6 +23,7 @@ struct HeaderValues {
   std::uint64_t vertices;
   std::uint64_t stored;  // vertices with a row in the coefficients; the rest are analytic
   bool glossy = false;   // holds glossy transfer matrices
+  std::int64_t glossy_rows = 0;  // their rows: 0 all (bands^2), kDirectionalRows for a directional lightmap's
 };
 // Those of `t`; its stored vertices are counted over its slots when they are
 // one per vertex, and are all of its vertices otherwise.

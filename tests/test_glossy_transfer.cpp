@@ -15,6 +15,7 @@
 
 #include "test_meshes.h"
 #include "test_threads.h"
+#include "test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -73,18 +74,6 @@ std::vector<double> opening_matrix(double h, int bands) {
   return m;
 }
 
-double max_abs(const std::vector<double>& a) {
-  double x = 0;
-  for (double v : a) x = std::max(x, std::abs(v));
-  return x;
-}
-
-double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
-  double x = 0;
-  for (std::size_t k = 0; k < a.size(); ++k) x = std::max(x, std::abs(a[k] - b[k]));
-  return x;
-}
-
 TEST(GlossyTransfer, OpenBoxFloorCentreSeesTheOpening) {
   const double h = 0.6;
   const Mesh m = test::open_box(float(h));
@@ -96,7 +85,7 @@ TEST(GlossyTransfer, OpenBoxFloorCentreSeesTheOpening) {
   for (int i = 0; i < nc; ++i)
     for (int j = 0; j < nc; ++j) ASSERT_EQ(got[std::size_t(i) * nc + j], got[std::size_t(j) * nc + i]);
   // The exact matrix: its (0, 0) entry is the opening's solid angle / (4 pi).
-  const double worst = max_diff(got, want), largest = max_abs(want);
+  const double worst = test::largest_abs_difference(got, want), largest = test::largest_abs(want);
   std::printf("open box floor centre: max |M - exact| %.3g (largest entry %.3g)\n", worst, largest);
   EXPECT_LT(worst, kOpeningTolerance * largest);
 }
@@ -156,7 +145,7 @@ TEST(GlossyTransfer, InterreflectedAddsTheWallsDiffuseLight) {
   std::vector<double> got(got_ir.size());
   for (std::size_t k = 0; k < got.size(); ++k) got[k] = got_ir[k] - got_sh[k];
   const std::vector<double> want = wall_light_matrix(m, ir, 4);
-  const double worst = max_diff(got, want), largest = max_abs(want);
+  const double worst = test::largest_abs_difference(got, want), largest = test::largest_abs(want);
   std::printf("open box walls' light: max |M_ir - M_sh - exact| %.3g (largest entry %.3g)\n", worst, largest);
   ASSERT_GT(largest, 1e-3);  // the walls do send light
   EXPECT_LT(worst, kOpeningTolerance * largest);

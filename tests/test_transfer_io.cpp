@@ -504,7 +504,7 @@ TEST(TransferRead, NewerAndUnknownVersions) {
   TempDir dir;
   Sample s = sample_file(dir, full_transfer());
   put<std::uint32_t>(s.bytes, kVersionAt, 99);
-  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 11"},
+  expect_bytes_error(dir, s.bytes, {"written by a newer prt (version 99); this prt reads versions 1 to 12"},
                      "version 99");
   // A newer version may change everything after the version: it is named
   // even when the rest is short or different.

@@ -9,11 +9,24 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
 
 namespace prt::test {
+
+// The largest |a_i|, and the largest |a_i - b_i| (a and b of one size).
+inline double largest_abs(const std::vector<double>& a) {
+  double m = 0;
+  for (double x : a) m = std::max(m, std::abs(x));
+  return m;
+}
+inline double largest_abs_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
+  return m;
+}
 
 inline std::vector<glm::dvec3> random_directions(int count, unsigned seed) {
   std::mt19937_64 rng(seed);

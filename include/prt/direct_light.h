@@ -18,6 +18,7 @@
 // that surface).
 #pragma once
 
+#include <prt/lightmap_directional.h>
 #include <prt/lights.h>
 #include <prt/mesh.h>
 
@@ -57,6 +58,14 @@ class DirectLight {
                                   std::span<const glm::vec3> normals, std::span<const glm::vec3> albedo,
                                   const std::optional<GlossyLobe>& lobe = std::nullopt) const;
 
+  // The lights' direct light at the points as incident radiance to band 1,
+  // for directional lightmaps (prt/lightmap_directional.h): a light of
+  // irradiance E_l from direction l, visible (V = 1), is a delta of radiance
+  // whose coefficients are c_k = E_l Y_k(l), k = 0..3. A light at or below a
+  // point's horizon (n . l <= 0) adds nothing: the surface blocks it, as the
+  // directional rows' hemisphere does. The same shadow rays as radiance().
+  std::vector<L1Radiance> incident_l1(std::span<const Light> lights, std::span<const glm::vec3> positions,
+                                      std::span<const glm::vec3> normals) const;
   double offset() const { return offset_; }
 
  private:

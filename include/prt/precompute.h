@@ -71,6 +71,12 @@ struct TransferOptions {
   // Also the glossy transfer matrices (prt/transfer.h, Transfer::glossy), from
   // the same rays; shadowed or interreflected, bands at most kMaxGlossyBands.
   bool glossy = false;
+  // Lightmaps only (compute_lightmap_transfer): also each texel's directional
+  // rows, rows k = 0..3 of its glossy matrix M_p (the L1 of its incident
+  // radiance: Transfer::glossy_rows = kDirectionalRows), from the same rays;
+  // shadowed or interreflected, 2 bands or more
+  // (prt/lightmap_directional.h; docs/LIGHTMAPS.md "Directional lightmaps").
+  bool directional = false;
   // The most memory the process may hold while computing, in bytes (0: no
   // limit; docs/PRECOMPUTE.md, "Memory"). What the result needs whatever the
   // limit (the ray scene, the per-vertex arrays) comes first; the gather

@@ -76,6 +76,9 @@ struct RowSlots {
 // clamped cosine about the mesh's normal, with the albedo compute_transfer
 // used (vertex_albedo). In an unshadowed transfer every vertex with a normal
 // is analytic, so nothing is stored but for vertices without one (transfer 0).
+// The rows a directional lightmap keeps of each texel's matrix (L1: k = 0..3).
+inline constexpr int kDirectionalRows = 4;
+
 struct Transfer : TransferHeader, RowSlots {
   // shading_hash(mesh, vertex_colors) of the mesh the transfer was computed
   // for: analytic vertices take their normal and albedo from the mesh, which
@@ -102,11 +105,17 @@ struct Transfer : TransferHeader, RowSlots {
   // Unshadowed transfers have none (every M_p is the hemisphere's).
   bool glossy = false;
   std::vector<float> glossy_matrices;
+  // The matrices' rows: 0 for all nc (a vertex's glossy transfer); 4
+  // (kDirectionalRows) for a directional lightmap, whose texels keep only
+  // rows k = 0..3 of M_p, the L1 of their incident radiance
+  // (prt/lightmap_directional.h), every row nc long (not symmetric).
+  int glossy_rows = 0;
   int glossy_channels() const { return mode == TransferMode::Interreflected ? channels : 1; }
-  bool glossy_symmetric() const { return mode != TransferMode::Interreflected; }
+  bool glossy_symmetric() const { return mode != TransferMode::Interreflected && glossy_rows == 0; }
+  std::size_t glossy_row_count() const { return glossy_rows ? std::size_t(glossy_rows) : std::size_t(bands) * bands; }
   std::size_t glossy_stride() const {
     const std::size_t nc = std::size_t(bands) * bands;
-    return std::size_t(glossy_channels()) * (glossy_symmetric() ? nc * (nc + 1) / 2 : nc * nc);
+    return std::size_t(glossy_channels()) * (glossy_symmetric() ? nc * (nc + 1) / 2 : glossy_row_count() * nc);
   }
   double direct_energy = 0;             // interreflected: mean |T| of the direct part (not stored in files)
 

@@ -34,8 +34,9 @@ namespace prt {
 // lightmaps 5, other compressed transfers 4, glossy ones 3, the others 2.
 // Wavelet transfers are written as version kWaveletFormatVersion.
 // Transfers (compressed or not, and lightmaps) that record a subsurface
-// material are written as version 11, whatever else they hold.
-inline constexpr std::uint32_t kTransferFormatVersion = 11;
+// material are written as version 11, whatever else they hold, and
+// directional lightmaps as version 12.
+inline constexpr std::uint32_t kTransferFormatVersion = 12;
 inline constexpr std::uint32_t kCompressedFormatVersion = 4;
 inline constexpr std::uint32_t kLightmapFormatVersion = 5;
 inline constexpr std::uint32_t kChosenCompressionFormatVersion = 6;  // kind 12: what its size was chosen for
@@ -58,6 +59,11 @@ inline constexpr std::uint32_t kLightBounceProbesFormatVersion = 10;
 // transfer's SubsurfaceRecord, prt/subsurface.h) as one UTF-8 JSON object,
 // written only when a transfer (compressed or not, or a lightmap) has one.
 inline constexpr std::uint32_t kSubsurfaceFormatVersion = 11;
+// No new kind: a lightmap whose header has the glossy flag, its 'glossy
+// matrices' section (kind 7) holding each stored texel's directional rows
+// (Transfer::glossy_rows = kDirectionalRows, prt/lightmap_directional.h).
+// Before 12 a lightmap was never glossy.
+inline constexpr std::uint32_t kDirectionalFormatVersion = 12;
 inline constexpr std::uint32_t kWaveletFormatVersion = 1;
 // Zonal-harmonic (local deformable) transfers have their own version line.
 inline constexpr std::uint32_t kZhFormatVersion = 2;  // 2: the tangent rules (sections 28, 29)
