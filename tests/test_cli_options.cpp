@@ -216,7 +216,8 @@ const std::map<std::string, std::vector<Refusal>>& bands_table() {
 const std::set<std::string> kNoSharedValue = {"--help",   "--quiet",  "--output", "--env",   "--mesh",
                                               "--cache",  "--json",   "--weld",   "--vertex-colors",     "--samples",
                                               "--bands",  "--at",     "--probes", "--object", "--dynamic-ao",
-                                              "--lights"};  // --lights: FILE.json or none  // --bands: bands_table()
+                                              "--lights", "--directional"};  // --lights: FILE.json or none  // --bands: bands_table()
+// (--directional: precompute's flag, relight's packing.)
 
 // Every option and argument of every command that names a file or a
 // directory: each takes options.h's path_value(), so '' is refused while

@@ -5,7 +5,8 @@ Usage: check_mpi.py PRT_EXE MPIRUN [--ranks 1,2,3]
 
 Every mode (unshadowed, shadowed, interreflected with bounces, RGB albedo,
 glossy shadowed and interreflected, translucent (--material subsurface)
-shadowed and interreflected, per vertex and in a lightmap, wavelet) run with
+shadowed and interreflected, per vertex and in a lightmap, a directional
+lightmap, wavelet) run with
 2 and 3 ranks (mpirun --oversubscribe: more ranks than the machine's cores),
 and four of them with 1 rank too, writes a file byte-identical to one
 process without mpirun. A rank
@@ -126,12 +127,16 @@ def main():
                                     "--length-scale", "40", "--bands", "3"],
             "lightmap-subsurface-interreflected": ["--lightmap", "24x24", "--material", "subsurface", "--sss", "skin1",
                                                    "--length-scale", "40", "--mode", "interreflected", "--bands", "3"],
+            # a directional lightmap's rows, its texels' glossy bounce records spilled past 20 kB
+            "lightmap-directional-spilled": ["--lightmap", "24x24", "--directional", "--mode", "interreflected",
+                                             "--bands", "3"],
         }
         # Runs on another input than the mesh above.
         models = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "models")
         inputs = {"lightmap-adaptive-interreflected": os.path.join(models, "wall-on-floor.gltf"),
                   "lightmap-subsurface": os.path.join(models, "room.gltf"),
-                  "lightmap-subsurface-interreflected": os.path.join(models, "room.gltf")}
+                  "lightmap-subsurface-interreflected": os.path.join(models, "room.gltf"),
+                  "lightmap-directional-spilled": os.path.join(models, "room.gltf")}
         for name, opts in list(modes.items()) + [("wavelet", ["--basis", "wavelet", "--cube-res", "8"])]:
             o = (common if name != "wavelet" else ["-q"]) + opts
             one = os.path.join(work, name + ".single.prt")

@@ -71,7 +71,7 @@ struct PrecomputeArgs {
   std::string ao_map, bent_map, obscurance_map;
   double obscurance = 0;
   const CLI::Option *lightmap_opt = nullptr, *uv_opt = nullptr, *albedo_opt = nullptr, *vertex_colors_opt = nullptr,
-                    *weld_opt = nullptr;
+                    *weld_opt = nullptr, *directional_opt = nullptr;
   // --compress KxN: write the transfer compressed by clustered PCA (prt compress).
   std::string compress;
   int compress_weights = 16;
@@ -591,6 +591,9 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
       throw UsageError(o->get_name() + " does not apply to --lightmap (a lightmap is diffuse; its albedo is the "
                        "scene's materials, or --albedo)");
   if (!a.compress.empty()) throw UsageError("--compress does not apply to --lightmap");
+  if (a.opt.directional && (wavelet || sss))
+    throw UsageError(wavelet ? "--directional is an SH lightmap's (the L1 of its incident light), not --basis wavelet's"
+                             : "--directional: a translucent lightmap's light is diffuse, with no directional rows");
   if (a.obscurance_map.empty() != !(a.obscurance > 0))
     throw UsageError("--obscurance D and --obscurance-map FILE go together (the distance and where to write the map)");
   for (const auto& [option, m] : {std::pair{"--ao-map", &a.ao_map}, std::pair{"--bent-normal-map", &a.bent_map},
@@ -708,6 +711,9 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
                "{} bytes, {:.2f} s\n",
                a.output, lightmap_size_text(texels.layout), transfer_mode_name(t.mode), t.bands, t.channels, t.channels == 1 ? "" : "s",
                t.vertices, t.analytic_vertices(), transfer_file_size(*computed), secs);
+    if (t.glossy_rows != 0)
+      fmt::print(stderr, "directional rows: {} x {} ({} channel{}), {} bytes per stored texel\n", t.glossy_rows,
+                 t.bands * t.bands, t.glossy_channels(), t.glossy_channels() == 1 ? "" : "s", 4 * t.glossy_stride());
     if (adapt) print_adaptive(adaptive, t, "texels");
   }
   return 0;
@@ -1077,6 +1083,9 @@ int run_precompute(PrecomputeArgs& a) {
     return run_lightmap(a);
   }
   if (a.uv_opt->count() > 0) throw UsageError("--uv picks the lightmap's UV set: give --lightmap WxH too");
+  if (a.directional_opt->count() > 0)
+    throw UsageError("--directional keeps a lightmap's L1 rows: give --lightmap WxH too (at vertices, --material "
+                     "glossy keeps whole matrices)");
   for (const CLI::Option* o : {a.lightmap_uv_opt, a.uv_padding_opt, a.pages_opt, a.texel_opt})
     if (o->count() > 0) throw UsageError(o->get_name() + " shapes a lightmap's atlas: give --lightmap WxH too");
   if (!a.ao_map.empty() || !a.bent_map.empty() || !a.obscurance_map.empty() || a.obscurance > 0)
@@ -1201,6 +1210,11 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
                                  "WxH: an SH lightmap instead of vertices: the transfer of every texel of a W x H "
                                  "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
                                  "lightmap UV set (docs/LIGHTMAPS.md)");
+  a.directional_opt =
+      s->add_flag("--directional", a.opt.directional,
+                  "With --lightmap: also each texel's directional rows, the L1 of its incident light, for normal-mapped "
+                  "surfaces (prt relight --directional godot|monosh|dominant|sh; docs/LIGHTMAPS.md \"Directional "
+                  "lightmaps\")");
   a.uv_opt = add_shared(s, SharedOption::UvSet, a.uv,
                            "With --lightmap: the UV set the atlas is laid out in (default TEXCOORD_1 when every "
                            "object has it, else TEXCOORD_0)");

@@ -14,6 +14,7 @@
 #include <prt/filter.h>
 #include <prt/io.h>
 #include <prt/lightmap.h>
+#include <prt/lightmap_directional.h>
 #include <prt/precompute.h>
 #include <prt/probes.h>
 #include <prt/scene.h>
@@ -60,6 +61,9 @@ struct RelightArgs {
   // A lightmap's file encoding (prt/lightmap_encoding.h); empty: by extension.
   std::string encoding;
   const CLI::Option* encoding_opt = nullptr;
+  // --directional PACKING: a directional lightmap's L1 packed for an engine (prt/lightmap_directional.h).
+  std::string directional;
+  const CLI::Option* directional_opt = nullptr;
   bool direct = false, quiet = false;
   std::vector<const CLI::Option*> sh_only, wavelet_only;  // to refuse those the file's basis does not take
   std::string at;  // --at POINTS.csv: query points of a probe volume
@@ -332,6 +336,103 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std
                                           wl.transfer.coeff_count()));
 }
 
+// --directional PACKING, checked before any work: a lightmap with
+// directional rows, one page, an .exr (and its companion PNG) to write.
+DirectionalPacking check_directional(const RelightArgs& a, const std::string& ext, const LightmapTransfer& lt) {
+  const DirectionalPacking packing =
+      for_option("--directional", [&] { return parse_directional_packing(a.directional); });
+  if (!lt.transfer.glossy || lt.transfer.glossy_rows != kDirectionalRows)
+    throw UsageError("--directional: " + a.transfer + " has no directional rows: precompute it with --directional "
+                     "(prt precompute SCENE --lightmap WxH --directional)");
+  if (a.encoding_opt->count() > 0)
+    throw UsageError(std::string("--encoding: --directional ") + directional_packing_name(packing) +
+                     " sets the files' encoding (docs/LIGHTMAPS.md \"Directional lightmaps\")");
+  if (a.direct)
+    throw UsageError("--direct: the directional rows hold the whole light of the file's mode, not its direct part");
+  if (lt.layout.pages > 1)
+    throw UsageError("--directional writes one page; " + a.transfer + " has " + lightmap_size_text(lt.layout) +
+                     " (not done: relight it without --directional, or precompute one page)");
+  if (ext != ".exr") throw UsageError("--output: " + a.output + ": --directional writes an .exr (the float layers)");
+  if (!a.tonemap.empty()) throw UsageError("--tonemap: a directional lightmap is written as linear values");
+  std::vector<std::string> paths{a.output};
+  if (packing == DirectionalPacking::MonoSh || packing == DirectionalPacking::Dominant)
+    paths.push_back(directional_companion_path(a.output));
+  for (const std::string& path : paths) {
+    check_not_input("--output", path, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
+    for_path("--output", [&] { check_writable(path); });
+  }
+  return packing;
+}
+
+// How far prt's L1 at the texels' normals is from the diffuse lightmap's
+// E/pi (its exit radiance over the albedo), over the covered texels with an
+// albedo: what the L1's cosine leaves out (bands 2 and 4, ...).
+double l1_against_diffuse(const LightmapTransfer& lt, const LightmapTexels& texels, const std::vector<glm::dvec3>& light,
+                          const std::vector<L1Radiance>& l1) {
+  const std::vector<glm::vec3> exit = relight(lt.transfer, texel_points(texels), light);
+  double e2 = 0, r2 = 0;
+  for (std::size_t i = 0; i < l1.size(); ++i) {
+    const glm::vec3 l = l1_irradiance_over_pi(l1[i], glm::normalize(texels.normals[i]));
+    for (int c = 0; c < 3; ++c) {
+      if (!(texels.albedo[i][c] > 0)) continue;
+      const double want = double(exit[i][c]) / double(texels.albedo[i][c]);
+      e2 += (double(l[c]) - want) * (double(l[c]) - want);
+      r2 += want * want;
+    }
+  }
+  return r2 > 0 ? std::sqrt(e2 / r2) : 0.0;
+}
+
+// --directional: the texels' L1 incident radiance under ENV (rotated,
+// windowed) and the lights' direct light, packed for an engine instead of
+// the diffuse atlas (docs/LIGHTMAPS.md "Directional lightmaps").
+int run_directional_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
+                             const LightmapTransfer& lt) {
+  const DirectionalPacking packing = check_directional(a, ext, lt);
+  const sh::Window window = for_option("--window", [&] { return sh::parse_window(a.window); });
+  const prt::Scene scene = load_lightmap_scene(a.mesh, lt.layout);
+  LightmapTexels texels = lightmap_texels(scene, lt.layout, lt.transfer.vertex_colors ? nullptr : &lt.transfer.albedo);
+  check_matches(lt, texels, a.transfer);
+  EnvMap env = load_envmap(a.env);
+  require_finite(env);
+  if (!a.quiet) fmt::print(stderr, "{}\n{}\n", describe(scene), describe(env));
+  const std::vector<Light> lights = relight_lights(a, env, euler.data(), &scene.lights);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<glm::dvec3> light = project(env, lt.transfer.bands);
+  sh::apply_window(std::span<glm::dvec3>(light), window, a.window_width > 0 ? a.window_width : lt.transfer.bands);
+  if (!a.rotate.empty()) rotate_lighting(light, lt.transfer.bands, euler.data());
+  std::vector<L1Radiance> l1 = relight_directional(lt, texels, light);
+  const double frame_ms = ms_since(t0);
+  const double truncation = a.quiet ? 0.0 : l1_against_diffuse(lt, texels, light, l1);
+  if (!lights.empty()) {  // at the points precompute traced from, as add_texel_lights
+    LightmapTexels moved = texels;
+    move_texels_out_of_geometry(scene.mesh, moved);
+    const std::vector<L1Radiance> direct = DirectLight(scene.mesh).incident_l1(lights, moved.positions, moved.normals);
+    for (std::size_t i = 0; i < l1.size(); ++i)
+      for (std::size_t k = 0; k < 4; ++k) l1[i][k] += direct[i][k];
+  }
+  EncodeReport report;
+  const DirectionalImages images = pack_directional(lt.layout, l1, texels.normals, packing, &report);
+  Outputs out("relight");
+  std::vector<std::string> written;
+  out.write([&] { written = write_directional(a.output, images); });
+  if (const int rc = out.commit(); rc != 0) return rc;
+  if (a.quiet) return 0;
+  const DirectionalImages stored = read_directional(a.output, packing, lt.layout.height);
+  const EncodingError at_normal = directional_decode_error(stored, lt.layout, l1, texels.normals, 0.0);
+  const EncodingError tilted = directional_decode_error(stored, lt.layout, l1, texels.normals, kDirectionalTilt);
+  const std::string files = written.size() == 1 ? written[0] : written[0] + " and " + written[1];
+  fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels' L1)\nwrote {} ({} {}, {} covered texels; {} "
+             "texels past the packing's range)\n", frame_ms, l1.size(), files, lightmap_size_text(lt.layout),
+             directional_packing_name(packing), lt.layout.texels.size(), report.clamped_texels);
+  fmt::print(stderr, "decoded as the engine does, against prt's L1 (E/pi, peak {:.4g}): relative RMS {:.3g} at the "
+             "texels' normals, {:.3g} at normals tilted {:g} degrees\n", at_normal.peak, at_normal.relative_rms,
+             tilted.relative_rms, kDirectionalTilt);
+  fmt::print(stderr, "prt's L1 at the texels' normals against the diffuse lightmap (E/pi, ENV's light): relative RMS "
+             "{:.3g} (the cosine's bands past 1)\n", truncation);
+  return 0;
+}
+
 // A lightmap transfer (prt precompute --lightmap): an RGBA float EXR of the
 // atlas, A = 1 at covered texels, gutters dilated (docs/LIGHTMAPS.md).
 int run_lightmap(const RelightArgs& a, const std::string& ext, const std::array<double, 3>& euler,
@@ -476,6 +577,9 @@ int run_relight(const RelightArgs& a) {
     throw UsageError("--time: " + a.transfer + " holds a transfer baked for one pose, which cannot follow a skin's "
                      "animation: compute one that can with prt precompute --basis zh (docs/LDPRT.md)");
   const bool lightmap = kind_of(any) == TransferKind::Lightmap || kind_of(any) == TransferKind::WaveletLightmap;
+  if (!a.directional.empty() && kind_of(any) != TransferKind::Lightmap)
+    throw UsageError("--directional packs a directional SH lightmap's L1 (prt precompute --lightmap WxH "
+                     "--directional): " + a.transfer + " is not an SH lightmap");
   if (a.encoding_opt->count() > 0 && !lightmap)
     throw UsageError("--encoding applies to a lightmap's relit atlas: " + a.transfer + " is not a lightmap");
   if (!a.at.empty() && kind_of(any) != TransferKind::Probes)
@@ -492,7 +596,9 @@ int run_relight(const RelightArgs& a) {
         check_vertex_output(a, ext);
         return run_zh(a, ext, euler, z);
       },
-      [&](const LightmapTransfer& l) { return run_lightmap(a, ext, euler, l); },
+      [&](const LightmapTransfer& l) {
+        return a.directional.empty() ? run_lightmap(a, ext, euler, l) : run_directional_lightmap(a, ext, euler, l);
+      },
       [&](const WaveletLightmap& w) { return run_wavelet_lightmap(a, ext, euler, w); },
       [&](const ProbeTransfer& p) { return run_probes(a, ext, euler, p); });
 }
@@ -642,6 +748,14 @@ Run add_relight(CLI::App& app) {
                     "A, with C and A in [0, 1]), astc-hdr (.ktx2: ASTC HDR 4x4 blocks, 1 byte a texel, for GPUs with "
                     "ASTC HDR); prints the error it adds (docs/LIGHTMAPS.md \"Encodings for engines\")")
           ->check(CLI::IsMember({"float", "half", "rgbm", "rgbd", "astc-hdr"}));
+  a->directional_opt = s->add_option(
+      "--directional", a->directional,
+      "A directional lightmap (prt precompute --lightmap WxH --directional): write the texels' L1 incident light for "
+      "normal maps instead of the diffuse atlas, packed as godot (Godot 4's SH lightmap: four half layers stacked in "
+      "one EXR), monosh (Bakery's MonoSH: L0 in the EXR, the direction in OUT-dir.png), dominant (Unity's "
+      "directional mode: the colour in the EXR, direction and rebalancing in OUT-dir.png) or sh (prt's four float "
+      "coefficients, stacked); prints the decode's error (docs/LIGHTMAPS.md \"Directional lightmaps\")")
+                           ->check(CLI::IsMember({"godot", "monosh", "dominant", "sh"}));
   add_shared(s, SharedOption::Rotate, a->rotate, "Rotate the lighting");
   a->sh_only.push_back(add_shared(s, SharedOption::Window, a->window, "SH: window against ringing"));
   a->sh_only.push_back(add_shared(s, SharedOption::WindowWidth, a->window_width, "SH: window width in bands"));

@@ -25,7 +25,7 @@ Transfer header_only(const Transfer& t) {
   Transfer h;
   h.header() = t.header();
   h.shading_hash = t.shading_hash;
-  h.glossy = t.glossy;
+  h.glossy = t.glossy && t.glossy_rows == 0;  // a directional lightmap's rows are no glossy material
   h.direct_energy = t.direct_energy;
   return h;
 }
