@@ -68,6 +68,11 @@ class Lightmap:
     def channels(self) -> Any:
         ...
     @property
+    def directional(self) -> Any:
+        """
+        True when the lightmap has directional rows (precompute_lightmap(directional=True), prt precompute --lightmap WxH --directional): relight_directional relights them
+        """
+    @property
     def height(self) -> Any:
         """
         The atlas's rows: every page's stacked, pages x page_height (page_height for one page)
@@ -104,6 +109,15 @@ class Lightmap:
           lighting: coefficients (n*n, 3) (project()), at least the lightmap's bands^2.
           lights: a list of Light (None: none): their direct light, traced against the scene at the texels' sample points, is added [--lights]. Only these: the scene's own (scene.lights) are added by passing them too. The sun split (--sun auto) takes the map, which SH lighting no longer is: split_sun(map) first, project the sky, and pass the sun in lights= (docs/LIGHTS.md).
         """
+    def relight_directional(self, scene: Scene, lighting: Any, *, lights: Any = ...) -> numpy.ndarray:
+        """
+        Each covered texel's L1 incident radiance under `lighting`, as prt relight SCENE LIGHTMAP ENV --directional PACKING [--lights ...] computes it before packing it: float32 (N, 4, 3), N the covered texels in texel order (.texels), coefficient k = 0..3 in prt's basis (c0 = L_00, c1 = L_1-1 (y), c2 = L_10 (z), c3 = L_11 (x)), RGB. Incident light: the texel's albedo is not in it. Raises prt.Error for a lightmap without directional rows (.directional False). Releases the GIL.
+
+        Arguments:
+          scene: the Scene it was computed for (lightmap_scene(scene, lightmap) for UVs prt made).
+          lighting: coefficients (n*n, 3) (project()), at least the lightmap's bands^2, as relight's.
+          lights: a list of Light (None: none): their direct light as L1, traced against the scene from the texels moved out of geometry, is added [--lights]; a light at or below a texel's horizon adds nothing. Only these: pass scene.lights too for the scene's own.
+        """
     def rows(self, scene: Scene) -> numpy.ndarray:
         """
         float32 (N, channels, bands^2): every covered texel's transfer, analytic ones evaluated from `scene` (the Scene it was laid out in: lightmap_scene(scene, lightmap) for UVs prt made or many pages)
@@ -131,6 +145,16 @@ class Lightmap:
     def write(self, path: Any) -> None:
         """
         Writes the lightmap file to `path` (docs/FORMAT.md), atomically (a temporary file, then renamed).
+        """
+    def write_directional(self, path: Any, scene: Scene, l1: Any, packing: str) -> list:
+        """
+        Packs `l1` for an engine and writes its files, as prt relight SCENE LIGHTMAP ENV -o PATH --directional PACKING writes them (the same bytes for the same L1): PATH holds the float layers stacked vertically (layer i in rows i * height onwards); 'monosh' and 'dominant' also write their 8-bit direction layer beside it (PATH with -dir.png for .exr), first. Each file written atomically. Returns the paths written, in that order (list of str). A lightmap of one page only.
+
+        Arguments:
+          path: the .exr to write [-o].
+          scene: the Scene the lightmap was computed for: its texels' normals (Unity's dominant direction is rebalanced at them).
+          l1: float32 (N, 4, 3), each covered texel's L1 incident radiance, as relight_directional returns it.
+          packing [--directional]: 'godot' (Godot 4's SH lightmap: four half layers L0, L1 y, z, x), 'monosh' (Bakery's MonoSH: L0 in the EXR, one direction in the PNG), 'dominant' (Unity's directional mode: the colour at the texel's normal in the EXR, the dominant direction and its rebalancing in the PNG) or 'sh' (prt's own four float coefficient layers). docs/LIGHTMAPS.md "Directional lightmaps".
         """
 
 class Mesh:
@@ -412,7 +436,7 @@ def load_scene(path: Any) -> Scene:
     Reads the glTF 2.0 (.gltf, .glb) or OBJ scene at `path` as prt precompute --lightmap does: its objects, materials and UV sets, flattened into world space. Returns a Scene.
     """
 
-def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., material: str = ..., sss: Any = ..., sigma_a: Any = ..., sigma_s: Any = ..., eta: Any = ..., length_scale: float = ..., pages: Any = ...) -> Lightmap:
+def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = ..., mode: str = ..., bands: int = ..., samples: int = ..., bounces: int = ..., seed: int = ..., adaptive: Any = ..., verify_adaptive: float = ..., adaptive_any: bool = ..., light_bounce: bool = ..., bounce_patch: float = ..., bounce_ratio: float = ..., bounce_clusters: int = ..., bounce_probes: Any = ..., material: str = ..., sss: Any = ..., sigma_a: Any = ..., sigma_s: Any = ..., eta: Any = ..., length_scale: float = ..., pages: Any = ..., directional: bool = ...) -> Lightmap:
     """
     The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.
 
@@ -426,6 +450,7 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
       light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.
       material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].
       sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].
+      directional: also each texel's directional rows, the L1 of its incident light, for normal-mapped surfaces (Lightmap.relight_directional, write_directional; docs/LIGHTMAPS.md "Directional lightmaps"): a shadowed or interreflected lightmap of 2 bands or more, without adaptive, light_bounce or material='subsurface' [--directional].
 
     Returns a Lightmap.
     """

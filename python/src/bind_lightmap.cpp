@@ -1,11 +1,13 @@
 // python/src/bind_lightmap.cpp - prt's Python module: scenes and SH lightmaps
 // (Scene, load_scene, Lightmap, read_lightmap, precompute_lightmap,
 // lightmap_from_rows, unwrap_scene, atlas_stats, lightmap_scene, write_scene;
+// directional lightmaps: Lightmap.relight_directional, .write_directional;
 // docs/LIGHTMAPS.md).
 #include "module.h"
 
 #include <prt/gltf.h>
 #include <prt/lightmap.h>
+#include <prt/lightmap_directional.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
 #include <prt/subsurface_scatter.h>
@@ -13,8 +15,10 @@
 #include <prt/unwrap.h>
 
 #include <cmath>
+#include <cstring>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace prt::python {
 namespace {
@@ -376,6 +380,104 @@ void bind_lightmap_transfer(py::module_& m) {
   bind_unwrap(m);  // after Lightmap: its signatures name the class
 }
 
+// ---- directional lightmaps (prt/lightmap_directional.h) ----
+
+static_assert(sizeof(prt::L1Radiance) == 12 * sizeof(float), "L1Radiance: four packed RGB float triples");
+
+// The lights' direct light as L1, added to `l1` as prt relight --directional
+// adds it: at the texels moved out of geometry (a copy: the packing takes
+// the texels' own normals), DirectLight::incident_l1.
+void add_lights_l1(std::vector<prt::L1Radiance>& l1, const std::vector<prt::Light>& lights, const prt::Mesh& mesh,
+                   prt::LightmapTexels moved) {
+  prt::move_texels_out_of_geometry(mesh, moved);
+  const std::vector<prt::L1Radiance> direct = prt::DirectLight(mesh).incident_l1(lights, moved.positions, moved.normals);
+  for (std::size_t i = 0; i < l1.size(); ++i)
+    for (std::size_t k = 0; k < 4; ++k) l1[i][k] += direct[i][k];
+}
+
+// l1= of write_directional: float32 (N, 4, 3), N the covered texels.
+std::vector<prt::L1Radiance> l1_arg(const py::object& l1, std::size_t texels) {
+  const FArray a = real_array<float>(l1, "l1");
+  if (a.ndim() != 3 || std::size_t(a.shape(0)) != texels || a.shape(1) != 4 || a.shape(2) != 3)
+    throw Error("l1: expected float32 (" + std::to_string(texels) + ", 4, 3), the L1 radiance of the lightmap's " +
+                std::to_string(texels) + " covered texels (relight_directional's), got shape " + shape_text(a));
+  std::vector<prt::L1Radiance> out(texels);
+  if (texels) std::memcpy(out.data(), a.data(), texels * sizeof(prt::L1Radiance));
+  return out;
+}
+
+// Lightmap.directional, .relight_directional, .write_directional.
+void bind_lightmap_directional(py::module_& m) {
+  auto lightmap = py::reinterpret_borrow<py::class_<prt::LightmapTransfer>>(m.attr("Lightmap"));
+  lightmap.def_property_readonly(
+      "directional",
+      [](const prt::LightmapTransfer& l) {
+        return l.transfer.glossy && l.transfer.glossy_rows == prt::kDirectionalRows;
+      },
+      "True when the lightmap has directional rows (precompute_lightmap(directional=True), prt precompute --lightmap "
+      "WxH --directional): relight_directional relights them");
+  lightmap.def(
+      "relight_directional",
+      [](const prt::LightmapTransfer& l, const prt::Scene& scene, const py::object& lighting, const py::object& lights) {
+        const std::vector<glm::dvec3> light = to_coeffs(lighting, "lighting");
+        const std::vector<prt::Light> ls = lights_arg(lights);
+        std::vector<prt::L1Radiance> l1;
+        {
+          py::gil_scoped_release release;
+          const prt::LightmapTexels tx = texels_on(l, scene);
+          l1 = prt::relight_directional(l, tx, light);
+          if (!ls.empty()) add_lights_l1(l1, ls, scene.mesh, tx);
+        }
+        return copy(reinterpret_cast<const float*>(l1.data()), {py::ssize_t(l1.size()), 4, 3});
+      },
+      py::arg("scene"), py::arg("lighting"), py::kw_only(), py::arg("lights") = py::none(),
+      "Each covered texel's L1 incident radiance under `lighting`, as prt relight SCENE LIGHTMAP ENV --directional "
+      "PACKING [--lights ...] computes it before packing it: float32 (N, 4, 3), N the covered texels in texel order "
+      "(.texels), coefficient k = 0..3 in prt's basis (c0 = L_00, c1 = L_1-1 (y), c2 = L_10 (z), c3 = L_11 (x)), RGB. "
+      "Incident light: the texel's albedo is not in it. Raises prt.Error for a lightmap without directional rows "
+      "(.directional False). Releases the GIL.\n"
+      "\n"
+      "Arguments:\n"
+      "  scene: the Scene it was computed for (lightmap_scene(scene, lightmap) for UVs prt made).\n"
+      "  lighting: coefficients (n*n, 3) (project()), at least the lightmap's bands^2, as relight's.\n"
+      "  lights: a list of Light (None: none): their direct light as L1, traced against the scene from the texels "
+      "moved out of geometry, is added [--lights]; a light at or below a texel's horizon adds nothing. Only these: "
+      "pass scene.lights too for the scene's own.");
+  lightmap.def(
+      "write_directional",
+      [](const prt::LightmapTransfer& l, const py::object& path, const prt::Scene& scene, const py::object& l1,
+         const std::string& packing) {
+        const prt::DirectionalPacking p = prt::parse_directional_packing(packing);
+        const std::string out = path_of(path, "path");
+        if (l.layout.pages > 1)  // as prt relight --directional
+          throw Error("write_directional writes one page; the lightmap has " + prt::lightmap_size_text(l.layout));
+        const std::vector<prt::L1Radiance> c = l1_arg(l1, l.layout.texels.size());
+        std::vector<std::string> written;
+        {
+          py::gil_scoped_release release;
+          const prt::LightmapTexels tx = texels_on(l, scene);
+          written = prt::write_directional(out, prt::pack_directional(l.layout, c, tx.normals, p));
+        }
+        return py::list(py::cast(written));  // a list (the stub's `list`)
+      },
+      py::arg("path"), py::arg("scene"), py::arg("l1"), py::arg("packing"),
+      "Packs `l1` for an engine and writes its files, as prt relight SCENE LIGHTMAP ENV -o PATH --directional PACKING "
+      "writes them (the same bytes for the same L1): PATH holds the float layers stacked vertically (layer i in rows "
+      "i * height onwards); 'monosh' and 'dominant' also write their 8-bit direction layer beside it (PATH with "
+      "-dir.png for .exr), first. Each file written atomically. Returns the paths written, in that order (list of "
+      "str). A lightmap of one page only.\n"
+      "\n"
+      "Arguments:\n"
+      "  path: the .exr to write [-o].\n"
+      "  scene: the Scene the lightmap was computed for: its texels' normals (Unity's dominant direction is "
+      "rebalanced at them).\n"
+      "  l1: float32 (N, 4, 3), each covered texel's L1 incident radiance, as relight_directional returns it.\n"
+      "  packing [--directional]: 'godot' (Godot 4's SH lightmap: four half layers L0, L1 y, z, x), 'monosh' "
+      "(Bakery's MonoSH: L0 in the EXR, one direction in the PNG), 'dominant' (Unity's directional mode: the colour "
+      "at the texel's normal in the EXR, the dominant direction and its rebalancing in the PNG) or 'sh' (prt's own "
+      "four float coefficient layers). docs/LIGHTMAPS.md \"Directional lightmaps\".");
+}
+
 // precompute_lightmap, lightmap_from_rows.
 void bind_lightmap_compute(py::module_& m) {
   m.def(
@@ -385,13 +487,15 @@ void bind_lightmap_compute(py::module_& m) {
          bool light_bounce, double bounce_patch, double bounce_ratio, int bounce_clusters,
          const py::object& bounce_probes, const std::string& material, const py::object& sss,
          const py::object& sigma_a, const py::object& sigma_s, const py::object& eta, double length_scale,
-         const py::object& pages) {
+         const py::object& pages, bool directional) {
         // As prt precompute --lightmap: diffuse (the scene's albedo), or a
         // translucent material's (--material subsurface); not glossy.
         const bool translucent = material == "subsurface";
         if (material != "diffuse" && !translucent)
           throw Error("material: a lightmap is 'diffuse' or 'subsurface', got '" + material + "'");
         check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
+        if (directional && translucent)  // as prt precompute's; the library refuses the rest (adaptive, ...)
+          throw Error("directional: a translucent lightmap's light is diffuse, with no directional rows");
         if (translucent)  // a lightmap takes no basis or albedo: those of the diffuse SH default
           check_subsurface_args("sh", mode, py::float_(0.8), false, !adaptive.is_none(), light_bounce);
         const std::optional<prt::SubsurfaceRecord> sss_record =
@@ -402,6 +506,7 @@ void bind_lightmap_compute(py::module_& m) {
         o.samples = samples;
         o.bounces = bounces;
         o.seed = seed;
+        o.directional = directional;
         light_bounce_args(o, light_bounce, bounce_patch, bounce_ratio, bounce_clusters, bounce_probes);
         const std::optional<prt::AdaptiveOptions> adapt = adaptive_arg(adaptive, verify_adaptive, adaptive_any, samples);
         uv_set_arg(uv_set, "uv_set");
@@ -432,7 +537,7 @@ void bind_lightmap_compute(py::module_& m) {
       py::arg("bounce_ratio") = prt::kLightBounceRatio, py::arg("bounce_clusters") = prt::kLightBounceClusters,
       py::arg("bounce_probes") = py::none(), py::arg("material") = "diffuse", py::arg("sss") = py::none(),
       py::arg("sigma_a") = py::none(), py::arg("sigma_s") = py::none(), py::arg("eta") = py::none(),
-      py::arg("length_scale") = kDefaultLengthScale, py::arg("pages") = 1,
+      py::arg("length_scale") = kDefaultLengthScale, py::arg("pages") = 1, py::arg("directional") = false,
       "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
@@ -445,6 +550,7 @@ void bind_lightmap_compute(py::module_& m) {
       "  light_bounce [--light-bounce], bounce_patch [--bounce-patch] (0: a few texels), bounce_ratio [--bounce-ratio], bounce_clusters [--bounce-clusters], bounce_probes [--probes with --light-bounce]: the lights' bounce operator among the texels (and at a probe grid's probes), as precompute's.\n"
       "  material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].\n"
       "  sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].\n"
+      "  directional: also each texel's directional rows, the L1 of its incident light, for normal-mapped surfaces (Lightmap.relight_directional, write_directional; docs/LIGHTMAPS.md \"Directional lightmaps\"): a shadowed or interreflected lightmap of 2 bands or more, without adaptive, light_bounce or material='subsurface' [--directional].\n"
       "\n"
       "Returns a Lightmap.");
 
@@ -493,6 +599,7 @@ void bind_lightmap_compute(py::module_& m) {
 void bind_lightmap(py::module_& m) {
   bind_lightmap_scene(m);
   bind_lightmap_transfer(m);
+  bind_lightmap_directional(m);
   bind_lightmap_compute(m);
 }
 
