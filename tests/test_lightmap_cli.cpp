@@ -748,6 +748,16 @@ TEST(LightmapCli, DirectionalIsRefusedWhereItCannotGo) {
           "wavelet");
   for (const char* f : {"x.exr", "x-dir.png", "x.png", "v.prt", "a.prt", "u.prt", "w.prt"})
     EXPECT_FALSE(std::filesystem::exists(dir.file(f))) << f;
+  // Many pages: one set of files per page (lm.1001.exr and lm.1001-dir.png, ...).
+  ASSERT_EQ(run_prt(dir, {"precompute", scene, "--lightmap", "16x16", "--lightmap-uv", "auto", "--pages", "2",
+                          "--samples", "16", "--directional", "-q", "-o", dir.file("pages.prt")}).code, 0);
+  Result p = run_prt(dir, {"relight", scene, dir.file("pages.prt"), env, "-o", dir.file("lm.exr"), "--directional",
+                           "monosh"});
+  ASSERT_EQ(p.code, 0) << describe_run(p);
+  for (const char* f : {"lm.1001.exr", "lm.1001-dir.png", "lm.1002.exr", "lm.1002-dir.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("lm.exr")));
+  EXPECT_NE(p.err.find("decoded as the engine does"), std::string::npos) << p.err;
   // The other consumers take a directional lightmap as the lightmap it also is.
   Result r = run_prt(dir, {"relight", scene, dir.file("d.prt"), env, "-q", "-o", dir.file("diffuse.exr")});
   EXPECT_EQ(r.code, 0) << describe_run(r);

@@ -337,7 +337,7 @@ int run_wavelet_lightmap(const RelightArgs& a, const std::string& ext, const std
 }
 
 // --directional PACKING, checked before any work: a lightmap with
-// directional rows, one page, an .exr (and its companion PNG) to write.
+// directional rows, an .exr (and its companion PNG) to write per page.
 DirectionalPacking check_directional(const RelightArgs& a, const std::string& ext, const LightmapTransfer& lt) {
   const DirectionalPacking packing =
       for_option("--directional", [&] { return parse_directional_packing(a.directional); });
@@ -349,19 +349,72 @@ DirectionalPacking check_directional(const RelightArgs& a, const std::string& ex
                      " sets the files' encoding (docs/LIGHTMAPS.md \"Directional lightmaps\")");
   if (a.direct)
     throw UsageError("--direct: the directional rows hold the whole light of the file's mode, not its direct part");
-  if (lt.layout.pages > 1)
-    throw UsageError("--directional writes one page; " + a.transfer + " has " + lightmap_size_text(lt.layout) +
-                     " (not done: relight it without --directional, or precompute one page)");
   if (ext != ".exr") throw UsageError("--output: " + a.output + ": --directional writes an .exr (the float layers)");
   if (!a.tonemap.empty()) throw UsageError("--tonemap: a directional lightmap is written as linear values");
-  std::vector<std::string> paths{a.output};
-  if (packing == DirectionalPacking::MonoSh || packing == DirectionalPacking::Dominant)
-    paths.push_back(directional_companion_path(a.output));
+  std::vector<std::string> paths;
+  for (int page = 0; page < lt.layout.pages; ++page) {
+    paths.push_back(page_path(a.output, page, lt.layout.pages));
+    if (packing == DirectionalPacking::MonoSh || packing == DirectionalPacking::Dominant)
+      paths.push_back(directional_companion_path(paths.back()));
+  }
   for (const std::string& path : paths) {
     check_not_input("--output", path, {{"SCENE", a.mesh}, {"TRANSFER", a.transfer}, {"ENV", a.env}});
     for_path("--output", [&] { check_writable(path); });
   }
   return packing;
+}
+
+// Rows [first, first + rows) of every layer: one page of a lightmap's
+// stacked layers.
+DirectionalImages directional_rows(const DirectionalImages& images, int first, int rows) {
+  DirectionalImages out{images.packing, {}};
+  for (const RgbaImage& layer : images.layers) {
+    RgbaImage page;
+    page.width = layer.width;
+    page.height = rows;
+    page.has_alpha = layer.has_alpha;
+    const std::size_t row = 4 * std::size_t(layer.width);
+    page.rgba.assign(layer.rgba.begin() + std::ptrdiff_t(std::size_t(first) * row),
+                     layer.rgba.begin() + std::ptrdiff_t(std::size_t(first + rows) * row));
+    out.layers.push_back(std::move(page));
+  }
+  return out;
+}
+
+// Writes `images` (the layout's pages stacked) as one set of files per page
+// (page_path: lm.1001.exr and lm.1001-dir.png, ...) through `out`; returns
+// the paths written.
+std::vector<std::string> write_directional_pages(Outputs& out, const std::string& path, const LightmapLayout& layout,
+                                                 const DirectionalImages& images) {
+  std::vector<std::string> written;
+  for (int page = 0; page < layout.pages; ++page) {
+    const DirectionalImages one = layout.pages == 1 ? images
+                                                    : directional_rows(images, page * layout.page_height(),
+                                                                       layout.page_height());
+    out.write([&] {
+      for (std::string& f : write_directional(page_path(path, page, layout.pages), one)) written.push_back(std::move(f));
+    });
+  }
+  return written;
+}
+
+// The files write_directional_pages wrote, read back and their pages stacked
+// again, as a GPU samples them.
+DirectionalImages read_directional_pages(const std::string& path, const LightmapLayout& layout,
+                                         DirectionalPacking packing) {
+  DirectionalImages all{packing, {}};
+  for (int page = 0; page < layout.pages; ++page) {
+    DirectionalImages one = read_directional(page_path(path, page, layout.pages), packing, layout.page_height());
+    if (all.layers.empty()) {
+      all.layers = std::move(one.layers);
+      continue;
+    }
+    for (std::size_t i = 0; i < all.layers.size(); ++i) {
+      all.layers[i].height += one.layers[i].height;
+      all.layers[i].rgba.insert(all.layers[i].rgba.end(), one.layers[i].rgba.begin(), one.layers[i].rgba.end());
+    }
+  }
+  return all;
 }
 
 // How far prt's L1 at the texels' normals is from the diffuse lightmap's
@@ -414,14 +467,16 @@ int run_directional_lightmap(const RelightArgs& a, const std::string& ext, const
   EncodeReport report;
   const DirectionalImages images = pack_directional(lt.layout, l1, texels.normals, packing, &report);
   Outputs out("relight");
-  std::vector<std::string> written;
-  out.write([&] { written = write_directional(a.output, images); });
+  const std::vector<std::string> written = write_directional_pages(out, a.output, lt.layout, images);
   if (const int rc = out.commit(); rc != 0) return rc;
   if (a.quiet) return 0;
-  const DirectionalImages stored = read_directional(a.output, packing, lt.layout.height);
+  const DirectionalImages stored = read_directional_pages(a.output, lt.layout, packing);
   const EncodingError at_normal = directional_decode_error(stored, lt.layout, l1, texels.normals, 0.0);
   const EncodingError tilted = directional_decode_error(stored, lt.layout, l1, texels.normals, kDirectionalTilt);
-  const std::string files = written.size() == 1 ? written[0] : written[0] + " and " + written[1];
+  const std::string files = written.size() == 1   ? written[0]
+                            : written.size() == 2 ? written[0] + " and " + written[1]
+                                                  : fmt::format("{} ... {} ({} files)", written.front(), written.back(),
+                                                                written.size());
   fmt::print(stderr, "relight: {:.3f} ms (projection, rotation, {} texels' L1)\nwrote {} ({} {}, {} covered texels; {} "
              "texels past the packing's range)\n", frame_ms, l1.size(), files, lightmap_size_text(lt.layout),
              directional_packing_name(packing), lt.layout.texels.size(), report.clamped_texels);
