@@ -75,6 +75,10 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.glossy && o.bands > kMaxGlossyBands)
     throw Error(fmt::format("--bands must be at most {} for glossy transfer (each matrix has bands^4 entries), got {}",
                             kMaxGlossyBands, o.bands));
+  if (o.tracer && (o.mode != TransferMode::Shadowed || o.glossy || o.directional || o.transmission_eta != 0 ||
+                   (o.comm && o.comm->size() > 1)))
+    throw Error("--device gpu traces the shadowed transfer in one process (not done yet: interreflected, glossy, "
+                "directional, translucent, mpirun); precompute those with --device cpu");
   if (o.directional) {
     if (o.glossy) throw Error("--directional keeps a lightmap's L1 rows; --material glossy a vertex's whole matrices: one of them");
     if (o.mode == TransferMode::Unshadowed)
@@ -642,19 +646,19 @@ void merge_gather_row(std::vector<Entry>& r, double scale, std::vector<Entry>& r
   rows.insert(rows.end(), r.begin(), r.begin() + std::ptrdiff_t(out));
 }
 
-// Point r0 + i of this rank: its rays traced, its direct transfer, AO, bent
-// normal (and glossy matrix, bounce light) written, its records appended to
-// its grain's `rows` and `fronts` (null when not kept).
-void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, std::vector<Entry>* rows,
+// Point r0 + i before its rays: false when it needs none (no normal: no
+// transfer; unshadowed: the analytic row), written; else its normal's basis
+// in sc.Yn.
+bool start_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, std::vector<Entry>* rows,
                  std::vector<FrontHit>* fronts) {
-  const int n = run.n, nc = run.nc;
-  const std::size_t v = run.r0 + i, stride = run.stride;
+  const int n = run.n;
+  const std::size_t v = run.r0 + i;
   const glm::vec3 nrm = run.src.normals[v];
   if (glm::dot(nrm, nrm) == 0.0f) {  // unreferenced or no normal: no transfer
     t.ao[v] = 0.0f;
     if (run.gather) fp.grow[i + 1] = rows->size();
     if (run.glossy_ir) fp.frow[i + 1] = fronts->size();
-    return;
+    return false;
   }
   sh::eval<double>(n, nrm.x, nrm.y, nrm.z, sc.Yn.data());
   if (!run.trace) {
@@ -662,8 +666,22 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
     for (int l = 0; l < n; ++l)
       for (int m = -l; m <= l; ++m) sc.s[sh::index(l, m)] = float(run.A[l] * sc.Yn[sh::index(l, m)] / M_PI);
     write_direct(run, t, v, sc.s);
-    return;
+    return false;
   }
+  return true;
+}
+
+void finish_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, double all_cos,
+                  std::vector<Entry>* rows, std::vector<FrontHit>* fronts);
+
+// Point r0 + i of this rank: its rays traced, its direct transfer, AO, bent
+// normal (and glossy matrix, bounce light) written, its records appended to
+// its grain's `rows` and `fronts` (null when not kept).
+void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, std::vector<Entry>* rows,
+                 std::vector<FrontHit>* fronts) {
+  if (!start_point(run, t, fp, sc, i, rows, fronts)) return;
+  const std::size_t v = run.r0 + i;
+  const glm::vec3 nrm = run.src.normals[v];
   std::fill(sc.occ.begin(), sc.occ.end(), 0.0);
   sc.Yocc.clear();
   sc.Yvis.clear();
@@ -688,6 +706,18 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
     }
   }
   if (count) trace_batch(run, sc, nrm, origin, count, fronts);
+  finish_point(run, t, fp, sc, i, all_cos, rows, fronts);
+}
+
+// Point r0 + i once its rays' sums are in `sc` (and `all_cos`, the
+// direction set's own integral of the kernel above its horizon): its
+// direct transfer, AO, bent normal (and glossy matrix, bounce light) written,
+// its gather row merged into `rows`.
+void finish_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, double all_cos,
+                  std::vector<Entry>* rows, std::vector<FrontHit>* fronts) {
+  const int n = run.n, nc = run.nc;
+  const std::size_t v = run.r0 + i, stride = run.stride;
+  const glm::vec3 nrm = run.src.normals[v];
   fp.analytic[v] = sc.occluded_rays == 0 && !(run.o.transmission_eta > 0);  // readers rebuild analytic rows with A_l
   if (run.glossy && sc.occluded_rays > 0) write_glossy_matrix(run, t, sc, v, nrm);
   // Scale the occluded sums so the set integrates the kernel to exactly its
@@ -754,9 +784,45 @@ void store_block(const Run& run, FirstPass& fp, std::size_t b0, std::size_t b1,
   fp.store.append(run.glossy_ir ? pack(grain_hits) : std::vector<std::uint8_t>{});
 }
 
+// The first pass with TransferOptions::tracer (shadowed, no records): the
+// tracer sums every point's occluded rays (prt/point_tracer.h), then each
+// point is finished as the CPU's rays finish it.
+void trace_points_with(const PointTracer& tracer, const Run& run, Transfer& t, FirstPass& fp) {
+  OcclusionJob job;
+  job.positions = std::span<const glm::vec3>(run.src.positions + run.r0, run.own);
+  job.normals = std::span<const glm::vec3>(run.src.normals + run.r0, run.own);
+  job.directions = run.dirs;
+  job.basis = run.Ytab;
+  job.nc = run.nc;
+  job.weight = run.w;
+  job.offset = run.offset;
+  OcclusionSums sums;
+  detail::ProgressTicker rays(run.progress, run.own, "rays (GPU)");
+  std::size_t told = 0;
+  tracer.trace(job, sums, [&](std::size_t done, std::size_t) {
+    rays.tick(done - told);
+    told = done;
+    return !rays.cancelled();
+  });
+  rays.finish();
+  const std::size_t nc = std::size_t(run.nc);
+  tbb::parallel_for(std::size_t(0), (run.own + kWorkerGrain - 1) / kWorkerGrain, [&](std::size_t grain) {
+    Scratch sc(run);
+    for (std::size_t i = grain * kWorkerGrain; i < std::min(run.own, (grain + 1) * kWorkerGrain); ++i) {
+      if (!start_point(run, t, fp, sc, i, nullptr, nullptr)) continue;
+      std::copy_n(sums.occluded_basis.begin() + std::ptrdiff_t(i * nc), nc, sc.occ.begin());
+      sc.occluded_rays = sums.occluded_rays[i];
+      sc.occ_cos = sums.occluded_cos[i];
+      sc.occ_dir = sums.occluded_dir[i];
+      finish_point(run, t, fp, sc, i, sums.all_cos[i], nullptr, nullptr);
+    }
+  });
+}
+
 // The first pass over this rank's points, a block of plan.block at a time:
 // rays, direct transfer and records.
 void trace_points(const Run& run, Transfer& t, FirstPass& fp) {
+  if (run.o.tracer) return trace_points_with(*run.o.tracer, run, t, fp);
   detail::ProgressTicker first(run.progress, run.own, run.trace ? "rays" : "transfer");
   for (std::size_t b0 = 0; b0 < run.own; b0 += run.plan.block) {
     const std::size_t b1 = std::min(run.own, b0 + run.plan.block);

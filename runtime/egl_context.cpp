@@ -24,7 +24,7 @@ std::string egl_error() { return hex(unsigned(eglGetError())); }
 
 }  // namespace
 
-void EglContext::create() {
+void EglContext::create(bool hardware_first) {
   EGLDisplay display = EGL_NO_DISPLAY;
   const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   auto get_platform_display =
@@ -44,8 +44,21 @@ void EglContext::create() {
     display_ = d;
     return true;
   };
+  // 0. With hardware_first: the first EGL device that is no software renderer.
+  if (hardware_first && get_platform_display && has_extension(client_ext, "EGL_EXT_platform_device")) {
+    auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto query_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+    EGLDeviceEXT devices[8];
+    EGLint n = 0;
+    if (query_devices && query_devices(8, devices, &n))
+      for (EGLint i = 0; i < n && display == EGL_NO_DISPLAY; ++i) {
+        const char* dext = query_string ? query_string(devices[i], EGL_EXTENSIONS) : nullptr;
+        if (!has_extension(dext, "EGL_MESA_device_software"))
+          try_init(get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr), "hardware device");
+      }
+  }
   // 1. Mesa's surfaceless platform: no X, no Wayland, no DRM device needed.
-  if (get_platform_display && has_extension(client_ext, "EGL_MESA_platform_surfaceless"))
+  if (display == EGL_NO_DISPLAY && get_platform_display && has_extension(client_ext, "EGL_MESA_platform_surfaceless"))
     try_init(get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr), "surfaceless");
   // 2. The first EGL device (NVIDIA's headless path).
   if (display == EGL_NO_DISPLAY && get_platform_display && has_extension(client_ext, "EGL_EXT_platform_device")) {

@@ -29,7 +29,11 @@ class EglContext {
   // it is OpenGL 4.5 or later. Throws prt::NoGlContext("no OpenGL 4.5 context: ...
   // (EGL error 0x...)") naming the displays tried or the step that failed.
   // On failure the display (and context) made so far stay for destroy().
-  void create();
+  // `hardware_first` (the GPU tracer): EGL devices that are not software
+  // (no EGL_MESA_device_software) are tried before Mesa's surfaceless
+  // platform, so a machine with a GPU and Mesa computes on the GPU; else
+  // surfaceless first (the renderer: what tests and CI compare against).
+  void create(bool hardware_first = false);
 
   bool has_display() const { return display_ != nullptr; }
 

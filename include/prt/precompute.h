@@ -7,6 +7,7 @@
 
 #include <prt/communicator.h>
 #include <prt/mesh.h>
+#include <prt/point_tracer.h>
 #include <prt/probes.h>
 #include <prt/progress.h>
 #include <prt/compressed_transfer.h>
@@ -77,6 +78,12 @@ struct TransferOptions {
   // shadowed or interreflected, 2 bands or more
   // (prt/lightmap_directional.h; docs/LIGHTMAPS.md "Directional lightmaps").
   bool directional = false;
+  // The shadowed transfer's occlusion traced by this tracer instead of
+  // Embree on the CPU's threads (prt precompute --device gpu; prt/point_tracer.h,
+  // prt/gpu_tracer.h): the same rays, each point finished as on the CPU.
+  // Shadowed, one process, no glossy or directional rows, not translucent
+  // (refused with prt::Error otherwise). nullptr: the CPU.
+  const PointTracer* tracer = nullptr;
   // The most memory the process may hold while computing, in bytes (0: no
   // limit; docs/PRECOMPUTE.md, "Memory"). What the result needs whatever the
   // limit (the ray scene, the per-vertex arrays) comes first; the gather
@@ -320,6 +327,13 @@ struct ZhFitOptions {
 // glossy transfer, bands over zh::kMaxBands or lobes out of range.
 ZhTransfer fit_zh_transfer(const Transfer& t, const Mesh& mesh, const ZhFitOptions& options,
                            const Progress& progress = {});
+
+// The flat BVH of `mesh`'s triangles a GPU traverses (prt/point_tracer.h),
+// built by Embree's rtcBuildBVH (SAH, leaves of at most `max_leaf`
+// triangles, 1 to kFlatBvhMaxLeaf). Degenerate triangles (no area) are left
+// out, as Embree leaves them out of the CPU's scene. Throws prt::Error for a
+// tree deeper than kFlatBvhMaxDepth or a bad max_leaf.
+FlatBvh build_flat_bvh(const Mesh& mesh, int max_leaf = 4);
 
 // Reference: the shadowed glossy transfer matrices M_p (nc x nc row-major,
 // double, nc = bands^2) of the listed vertices only, traced as

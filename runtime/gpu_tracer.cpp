@@ -1,0 +1,286 @@
+// Occlusion jobs traced in OpenGL compute shaders over a flat BVH. See
+// prt/gpu_tracer.h; the shader is shaders/occlusion.comp.glsl.
+#include <prt/gpu_tracer.h>
+
+#include <prt/error.h>
+#include <prt/render.h>
+
+#include "egl_context.h"
+#include "gl_util.h"
+
+#include <EGL/egl.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace prt::shaders {
+extern const char* const occlusion_comp_glsl;  // embedded by runtime/embed_shaders.cmake
+}
+
+namespace prt {
+
+namespace {
+
+// Rays a dispatch traces, counting half the set above each point's horizon
+// (2 kChunkRays / M points): on llvmpipe with 2 busy cores about 0.4 s for
+// tests/test_gpu_tracer.cpp's mesh (1.9e6 rays/s), far less on a GPU.
+constexpr std::size_t kChunkRays = std::size_t(1) << 20;
+// The shader's local_size_x: 64, and 1 on llvmpipe, whose SIMD execution of
+// this shader gave some invocations of a work group wrong answers (Mesa
+// 22.3.6: 40 of 64 points of the bundled scene traced as less occluded than
+// one point alone, whatever the shader's loops looked like; one invocation a
+// group matches the CPU bit for bit: GpuPrecompute.*). Other drivers are
+// trusted with 64 and checked by the same tests where a GPU runs them.
+constexpr std::size_t kGroup = 64;
+std::size_t group_size(const std::string& renderer) {
+  return renderer.find("llvmpipe") != std::string::npos ? 1 : kGroup;
+}
+constexpr int kLocalSumsMax = 36;      // coefficients summed in a local array (6 bands) or fewer
+constexpr int kPrewarmNc = 25;         // the program built with the tracer (5 bands, the default)
+constexpr std::size_t kStatDoubles = 5;  // all_cos, occluded_cos, occluded_dir xyz
+
+// Throws prt::Error unless `bytes` of `what` fit one shader storage block.
+void check_block(const std::string& what, std::uint64_t bytes, std::uint64_t limit) {
+  if (bytes > limit)
+    throw Error(fmt::format("GPU tracer: {} take {} bytes, over this OpenGL's GL_MAX_SHADER_STORAGE_BLOCK_SIZE of {}",
+                            what, bytes, limit));
+}
+
+// The EGL context current on this thread when made, made current again when
+// destroyed (or none, releasing `ours`).
+class RestoreCurrent {
+ public:
+  explicit RestoreCurrent(const gl::EglContext& ours)
+      : ours_(ours),
+        display_(eglGetCurrentDisplay()),
+        context_(eglGetCurrentContext()),
+        draw_(eglGetCurrentSurface(EGL_DRAW)),
+        read_(eglGetCurrentSurface(EGL_READ)) {}
+  ~RestoreCurrent() {
+    if (context_ != EGL_NO_CONTEXT)
+      eglMakeCurrent(display_, draw_, read_, context_);
+    else
+      ours_.release_current();
+  }
+  RestoreCurrent(const RestoreCurrent&) = delete;
+  RestoreCurrent& operator=(const RestoreCurrent&) = delete;
+
+ private:
+  const gl::EglContext& ours_;
+  EGLDisplay display_;
+  EGLContext context_;
+  EGLSurface draw_, read_;
+};
+
+// The buffers of one trace() call, deleted with it (its context current).
+struct TraceBuffers {
+  GLuint directions = 0, basis = 0, points = 0, rays = 0, stats = 0, sums = 0;
+  TraceBuffers() = default;
+  TraceBuffers(const TraceBuffers&) = delete;
+  TraceBuffers& operator=(const TraceBuffers&) = delete;
+  ~TraceBuffers() {
+    const GLuint all[] = {directions, basis, points, rays, stats, sums};
+    glDeleteBuffers(GLsizei(std::size(all)), all);
+  }
+};
+
+class GlPointTracer final : public PointTracer {
+ public:
+  explicit GlPointTracer(const FlatBvh& bvh);
+  ~GlPointTracer() override;
+  GlPointTracer(const GlPointTracer&) = delete;
+  GlPointTracer& operator=(const GlPointTracer&) = delete;
+
+  void trace(const OcclusionJob& job, OcclusionSums& out,
+             const std::function<bool(std::size_t, std::size_t)>& progress) const override;
+  std::string name() const override { return name_; }
+
+ private:
+  void upload_bvh(const FlatBvh& bvh);
+  GLuint program(int nc) const;
+  std::size_t chunk_points(const OcclusionJob& job) const;
+  void upload_job(const OcclusionJob& job, std::size_t chunk, TraceBuffers& b) const;
+  void run_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
+                 OcclusionSums& out) const;
+
+  gl::EglContext egl_;
+  std::string name_;
+  gl::Limits limits_;
+  std::size_t group_ = kGroup;  // the work group's size (group_size)
+  GLuint nodes_ = 0, corners_ = 0;
+  bool has_tree_ = false;
+  mutable std::mutex mutex_;                // one trace() at a time
+  mutable std::map<int, GLuint> programs_;  // by nc
+};
+
+GlPointTracer::GlPointTracer(const FlatBvh& bvh) {
+  RestoreCurrent restore(egl_);
+  try {
+    egl_.create(true);  // a hardware EGL device first; NoGlContext when there is no context at all
+    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    name_ = std::string("OpenGL compute on ") + (renderer ? renderer : "?");
+    group_ = group_size(name_);
+    limits_ = gl::limits();
+    upload_bvh(bvh);
+    program(kPrewarmNc);
+  } catch (...) {
+    if (egl_.try_make_current()) {
+      for (const auto& [nc, p] : programs_) glDeleteProgram(p);
+      const GLuint buffers[] = {nodes_, corners_};
+      glDeleteBuffers(2, buffers);
+      egl_.release_current();
+    }
+    egl_.destroy();
+    throw;
+  }
+}
+
+GlPointTracer::~GlPointTracer() {
+  if (!egl_.has_display()) return;
+  {
+    RestoreCurrent restore(egl_);
+    if (egl_.try_make_current()) {
+      for (const auto& [nc, p] : programs_) glDeleteProgram(p);
+      const GLuint buffers[] = {nodes_, corners_};
+      glDeleteBuffers(2, buffers);
+    }
+  }
+  egl_.destroy();  // never the display: egl_context.h
+}
+
+void GlPointTracer::upload_bvh(const FlatBvh& bvh) {
+  const std::uint64_t node_bytes = bvh.nodes.size() * sizeof(FlatBvhNode);
+  const std::uint64_t corner_bytes = bvh.corners.size() * sizeof(glm::vec4);
+  check_block(fmt::format("the flat BVH's {} nodes", bvh.nodes.size()), node_bytes, limits_.storage_block);
+  check_block(fmt::format("the flat BVH's {} triangles' corners", bvh.corners.size() / 3), corner_bytes,
+              limits_.storage_block);
+  has_tree_ = !bvh.nodes.empty();
+  nodes_ = gl::make_buffer(bvh.nodes.data(), node_bytes);
+  corners_ = gl::make_buffer(bvh.corners.data(), corner_bytes);
+  gl::check_gl("uploading the flat BVH");
+}
+
+GLuint GlPointTracer::program(int nc) const {
+  GLuint& p = programs_[nc];
+  if (!p)
+    p = gl::link_compute(shaders::occlusion_comp_glsl, "occlusion",
+                         fmt::format("#define NC {}\n#define LOCAL_SUMS {}\n#define LEAF {}u\n#define MAX_DEPTH {}\n"
+                                     "#define GROUP {}\n",
+                                     nc, nc > 0 && nc <= kLocalSumsMax ? 1 : 0, kFlatBvhLeaf, kFlatBvhMaxDepth, group_));
+  return p;
+}
+
+// Points per dispatch: about kChunkRays rays (half the set each), a multiple
+// of the work group, within the storage block and work group count limits.
+std::size_t GlPointTracer::chunk_points(const OcclusionJob& job) const {
+  const std::size_t m = std::max<std::size_t>(job.directions.size(), 1);
+  const std::size_t kGroup = group_;
+  std::size_t chunk = std::max(kGroup, (2 * kChunkRays / m) / kGroup * kGroup);
+  const std::size_t row_bytes =
+      std::max({std::size_t(job.nc) * sizeof(double), kStatDoubles * sizeof(double), 2 * sizeof(glm::vec4)});
+  const std::size_t fit = std::size_t(limits_.storage_block / row_bytes);
+  if (fit < chunk) chunk = fit >= kGroup ? fit / kGroup * kGroup : std::max<std::size_t>(fit, 1);
+  chunk = std::min<std::size_t>(chunk, std::max<std::uint64_t>(limits_.work_groups, 1) * kGroup);
+  return std::min(chunk, job.positions.size());
+}
+
+void GlPointTracer::upload_job(const OcclusionJob& job, std::size_t chunk, TraceBuffers& b) const {
+  const std::size_t m = job.directions.size(), nc = std::size_t(job.nc);
+  check_block(fmt::format("the {} directions", m), m * sizeof(glm::vec4), limits_.storage_block);
+  check_block(fmt::format("the directions' basis ({} x {} floats)", m, nc), m * nc * sizeof(float),
+              limits_.storage_block);
+  check_block(fmt::format("the sums of {} points ({} coefficients)", chunk, nc), chunk * nc * sizeof(double),
+              limits_.storage_block);
+  std::vector<glm::vec4> dirs(m);
+  for (std::size_t j = 0; j < m; ++j) dirs[j] = glm::vec4(job.directions[j], 0.0f);
+  b.directions = gl::make_buffer(dirs.data(), dirs.size() * sizeof(glm::vec4));
+  b.basis = gl::make_buffer(job.basis.data(), job.basis.size() * sizeof(float));
+  b.points = gl::make_buffer(nullptr, chunk * 2 * sizeof(glm::vec4), GL_DYNAMIC_STORAGE_BIT);
+  b.rays = gl::make_buffer(nullptr, chunk * sizeof(std::uint32_t));
+  b.stats = gl::make_buffer(nullptr, chunk * kStatDoubles * sizeof(double));
+  b.sums = gl::make_buffer(nullptr, chunk * nc * sizeof(double));
+  gl::check_gl("uploading the occlusion job");
+}
+
+// Points [first, first + count): uploaded, traced, their sums read into `out`.
+void GlPointTracer::run_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
+                              OcclusionSums& out) const {
+  const std::size_t nc = std::size_t(job.nc);
+  std::vector<glm::vec4> points(2 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    points[2 * i] = glm::vec4(job.positions[first + i], 1.0f);
+    points[2 * i + 1] = glm::vec4(job.normals[first + i], 0.0f);
+  }
+  glNamedBufferSubData(b.points, 0, GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data());
+  const GLuint p = program(job.nc);
+  glUseProgram(p);
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(count));
+  const GLuint buffers[] = {nodes_, corners_, b.points, b.directions, b.basis, b.rays, b.stats, b.sums};
+  for (GLuint slot = 0; slot < std::size(buffers); ++slot)
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffers[slot]);
+  glDispatchCompute(GLuint((count + group_ - 1) / group_), 1, 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glFinish();
+  glGetNamedBufferSubData(b.rays, 0, GLsizeiptr(count * sizeof(std::uint32_t)), out.occluded_rays.data() + first);
+  if (nc > 0)
+    glGetNamedBufferSubData(b.sums, 0, GLsizeiptr(count * nc * sizeof(double)), out.occluded_basis.data() + first * nc);
+  std::vector<double> stats(count * kStatDoubles);
+  glGetNamedBufferSubData(b.stats, 0, GLsizeiptr(stats.size() * sizeof(double)), stats.data());
+  gl::check_gl("tracing a chunk of points");
+  for (std::size_t i = 0; i < count; ++i) {
+    const double* s = stats.data() + i * kStatDoubles;
+    out.all_cos[first + i] = s[0];
+    out.occluded_cos[first + i] = s[1];
+    out.occluded_dir[first + i] = glm::dvec3(s[2], s[3], s[4]);
+  }
+}
+
+void check_job(const OcclusionJob& job) {
+  if (job.normals.size() != job.positions.size())
+    throw Error(fmt::format("GPU tracer: {} normals for {} points", job.normals.size(), job.positions.size()));
+  if (job.nc < 0 || job.basis.size() != job.directions.size() * std::size_t(job.nc))
+    throw Error(fmt::format("GPU tracer: a basis of {} floats for {} directions of {} coefficients", job.basis.size(),
+                            job.directions.size(), job.nc));
+  if (job.directions.size() > 0xffffffffu || job.positions.size() > 0xffffffffu)
+    throw Error("GPU tracer: more than 2^32 points or directions");
+}
+
+void GlPointTracer::trace(const OcclusionJob& job, OcclusionSums& out,
+                          const std::function<bool(std::size_t, std::size_t)>& progress) const {
+  check_job(job);
+  const std::size_t n = job.positions.size(), nc = std::size_t(job.nc);
+  out.occluded_basis.assign(n * nc, 0.0);
+  out.occluded_rays.assign(n, 0);
+  out.all_cos.assign(n, 0.0);
+  out.occluded_cos.assign(n, 0.0);
+  out.occluded_dir.assign(n, glm::dvec3(0.0));
+  if (n == 0) return;
+  const std::lock_guard<std::mutex> lock(mutex_);
+  RestoreCurrent restore(egl_);
+  egl_.make_current();
+  const std::size_t chunk = chunk_points(job);
+  TraceBuffers b;
+  upload_job(job, chunk, b);
+  const GLuint p = program(job.nc);
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_dirs"), GLuint(job.directions.size()));
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_has_tree"), has_tree_ ? 1u : 0u);
+  glProgramUniform1f(p, glGetUniformLocation(p, "u_offset"), job.offset);
+  glProgramUniform1d(p, glGetUniformLocation(p, "u_weight"), job.weight);
+  for (std::size_t first = 0; first < n; first += chunk) {
+    const std::size_t count = std::min(chunk, n - first);
+    run_chunk(job, first, count, b, out);
+    if (progress && !progress(first + count, n)) throw Error("cancelled");
+  }
+  glUseProgram(0);
+}
+
+}  // namespace
+
+std::unique_ptr<PointTracer> make_gl_point_tracer(const FlatBvh& bvh) { return std::make_unique<GlPointTracer>(bvh); }
+
+}  // namespace prt

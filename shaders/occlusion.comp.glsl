@@ -1,0 +1,167 @@
+#version 450 core
+// The shadowed transfer's occlusion sums of a chunk of points
+// (runtime/gpu_tracer.cpp; prt/point_tracer.h, prt/gpu_tracer.h): one
+// invocation per point i < u_count. For its point, with n its normal (a zero
+// normal: every sum 0), rays from o = p + offset n along each direction d_j
+// of the set above the horizon (c = dot(n, d_j) > 0 in float), in direction
+// order; each weighs wc = weight * c, summed in double:
+//   all_cos += wc for every ray; for an occluded ray (any triangle of the
+//   flat BVH hit at t > offset): rays++, occluded_cos += wc,
+//   occluded_dir += wc d_j, occluded_basis[k] += wc Y_k(d_j).
+// The traversal mirrors flat_bvh_occluded (core/point_tracer.cpp) operation
+// for operation in float: every float result is `precise` (no fused
+// multiply-add, no reassociation), dot and cross written out in glm's order.
+// NC (defined when compiled): coefficients per direction. LOCAL_SUMS 1: the
+// basis sums kept in a local array (small NC), else summed in the output
+// buffer (each invocation owns its row: no atomics); the same additions in
+// the same order either way. LEAF and MAX_DEPTH (defined when compiled):
+// kFlatBvhLeaf and kFlatBvhMaxDepth (the stack holds MAX_DEPTH + 1 nodes).
+// GROUP: the work group's size (1 on llvmpipe: runtime/gpu_tracer.cpp).
+layout(local_size_x = GROUP) in;  // runtime/gpu_tracer.cpp's group_size
+
+struct Node {
+  vec3 lo;
+  uint a;  // inner: left child; leaf: first triangle
+  vec3 hi;
+  uint b;  // inner: right child; leaf: LEAF | triangle count
+};
+
+layout(std430, binding = 0) readonly buffer Nodes { Node nodes[]; };
+layout(std430, binding = 1) readonly buffer Corners { vec4 corners[]; };    // 3 per triangle
+layout(std430, binding = 2) readonly buffer Points { vec4 points[]; };      // position, normal per point
+layout(std430, binding = 3) readonly buffer Directions { vec4 dirs[]; };
+layout(std430, binding = 4) readonly buffer Basis { float basis[]; };       // M x NC
+layout(std430, binding = 5) writeonly buffer Rays { uint rays_out[]; };
+layout(std430, binding = 6) buffer Stats { double stats[]; };  // all_cos, occluded_cos, occluded_dir xyz per point
+layout(std430, binding = 7) buffer Sums { double sums[]; };    // NC per point
+
+uniform uint u_count;     // points in this chunk
+uniform uint u_dirs;      // M
+uniform uint u_has_tree;  // 0: no triangle (nodes[0] a placeholder)
+uniform float u_offset;
+uniform double u_weight;
+
+float pdot(vec3 a, vec3 b) {
+  precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
+  return r;
+}
+
+vec3 pcross(vec3 a, vec3 b) {
+  precise vec3 r = vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
+  return r;
+}
+
+// ---- the traversal: flat_bvh_occluded's (core/point_tracer.cpp), step for step
+
+// C's fmin and fmax: a NaN operand (0 * inf: a ray in the plane of a box's
+// face) is ignored, where GLSL's min and max leave the result undefined.
+float fmin_(float a, float b) {
+  precise float r = isnan(a) ? b : (isnan(b) ? a : min(a, b));
+  return r;
+}
+
+float fmax_(float a, float b) {
+  precise float r = isnan(a) ? b : (isnan(b) ? a : max(a, b));
+  return r;
+}
+
+// Does the ray meet the node's box at some t > tnear? inv = 1 / d.
+bool slab(Node nd, vec3 o, vec3 inv, float tnear) {
+  precise vec3 t0 = (nd.lo - o) * inv;
+  precise vec3 t1 = (nd.hi - o) * inv;
+  const float tmin = fmax_(fmax_(fmin_(t0.x, t1.x), fmin_(t0.y, t1.y)), fmin_(t0.z, t1.z));
+  const float tmax = fmin_(fmin_(fmax_(t0.x, t1.x), fmax_(t0.y, t1.y)), fmax_(t0.z, t1.z));
+  return tmin <= tmax && tmax > tnear;
+}
+
+// Moller-Trumbore, both faces: does the ray hit triangle `tri` at t > tnear?
+bool hits_triangle(uint tri, vec3 o, vec3 d, float tnear) {
+  const vec3 v0 = corners[3u * tri].xyz, v1 = corners[3u * tri + 1u].xyz, v2 = corners[3u * tri + 2u].xyz;
+  precise vec3 e1 = v1 - v0;
+  precise vec3 e2 = v2 - v0;
+  const vec3 p = pcross(d, e2);
+  const float det = pdot(e1, p);
+  if (det == 0.0) return false;
+  precise float inv_det = 1.0 / det;
+  precise vec3 s = o - v0;
+  precise float u = pdot(s, p) * inv_det;
+  if (!(u >= 0.0 && u <= 1.0)) return false;
+  const vec3 q = pcross(s, e1);
+  precise float v = pdot(d, q) * inv_det;
+  if (!(v >= 0.0 && u + v <= 1.0)) return false;
+  precise float t = pdot(e2, q) * inv_det;
+  return t > tnear;
+}
+
+bool occluded(vec3 o, vec3 d, float tnear) {
+  if (u_has_tree == 0u) return false;
+  precise vec3 inv = 1.0 / d;
+  uint stack[MAX_DEPTH + 1];
+  int sp = 0;
+  stack[sp++] = 0u;
+  // No return from inside the loops: llvmpipe (Mesa 22.3) gave lanes of one
+  // work group wrong answers with it (GpuPrecompute.*BundledScene*).
+  bool hit = false;
+  while (sp > 0 && !hit) {
+    const Node nd = nodes[stack[--sp]];
+    if (!slab(nd, o, inv, tnear)) continue;
+    if ((nd.b & LEAF) != 0u) {
+      const uint last = nd.a + (nd.b & ~LEAF);
+      for (uint tri = nd.a; tri < last && !hit; ++tri) hit = hits_triangle(tri, o, d, tnear);
+    } else {
+      stack[sp++] = nd.b;
+      stack[sp++] = nd.a;
+    }
+  }
+  return hit;
+}
+// ---- the sums
+
+void main() {
+  const uint i = gl_GlobalInvocationID.x;
+  if (i >= u_count) return;
+  const vec3 p = points[2u * i].xyz, n = points[2u * i + 1u].xyz;
+  const uint row = i * uint(NC);
+#if LOCAL_SUMS
+  precise double acc[NC];
+  for (int k = 0; k < NC; ++k) acc[k] = 0.0LF;
+#else
+  for (int k = 0; k < NC; ++k) sums[row + uint(k)] = 0.0LF;
+#endif
+  uint rays = 0u;
+  precise double all_cos = 0.0LF, occ_cos = 0.0LF;
+  precise dvec3 occ_dir = dvec3(0.0LF);
+  if (pdot(n, n) != 0.0) {
+    precise vec3 origin = p + u_offset * n;
+    for (uint j = 0u; j < u_dirs; ++j) {
+      const vec3 d = dirs[j].xyz;
+      const float c = pdot(n, d);
+      if (c <= 0.0) continue;
+      precise double wc = u_weight * double(c);
+      all_cos += wc;
+      if (!occluded(origin, d, u_offset)) continue;
+      ++rays;
+      occ_cos += wc;
+      precise dvec3 wd = wc * dvec3(d);
+      occ_dir += wd;
+      const uint brow = j * uint(NC);
+      for (int k = 0; k < NC; ++k) {
+        precise double y = wc * double(basis[brow + uint(k)]);
+#if LOCAL_SUMS
+        acc[k] += y;
+#else
+        sums[row + uint(k)] += y;
+#endif
+      }
+    }
+  }
+#if LOCAL_SUMS
+  for (int k = 0; k < NC; ++k) sums[row + uint(k)] = acc[k];
+#endif
+  rays_out[i] = rays;
+  stats[5u * i] = all_cos;
+  stats[5u * i + 1u] = occ_cos;
+  stats[5u * i + 2u] = occ_dir.x;
+  stats[5u * i + 3u] = occ_dir.y;
+  stats[5u * i + 4u] = occ_dir.z;
+}

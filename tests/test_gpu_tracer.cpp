@@ -1,0 +1,382 @@
+// The OpenGL compute tracer of occlusion jobs (prt/gpu_tracer.h): its sums
+// equal the CPU's, computed here from prt::flat_bvh_occluded over the same
+// flat BVH (prt::build_flat_bvh) in the same order; cancelling throws; a
+// job of no points, and a BVH of no triangles, work; a BVH over the storage
+// block limit is refused naming it. Skips (with the reason) where no EGL/GL
+// 4.5 context can be made (tests/test_gl.h).
+#include <prt/error.h>
+#include <prt/gpu_tracer.h>
+#include <prt/point_tracer.h>
+#include <prt/precompute.h>
+#include <prt/render.h>
+#include <prt/sh.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "test_gl.h"
+#include "test_meshes.h"
+
+namespace prt {
+namespace {
+
+// The sums' tolerance, relative to the largest |value| of each point's sum
+// (or 1e-300): the shader repeats the CPU's float operations (`precise`)
+// and its double additions in the same order, so on llvmpipe the sums are
+// expected bit for bit (measured: 0, every sum). 1e-12 leaves room for a GL
+// whose float division rounds differently (a ray's verdict would then
+// differ, which occluded_rays catches).
+constexpr double kSumTolerance = 1e-12;
+
+constexpr int kBands = 4;          // nc = 16: summed in the shader's local array
+constexpr int kManyBands = 8;      // nc = 64: summed in the output buffer
+constexpr int kSamples = 256;      // 2 x 256 directions
+
+// A ball over a floor: 800 + 2254 triangles (prt::test::ball_over_floor).
+Mesh gput_mesh() { return test::ball_over_floor(20, 24, 49, 0.5f, {0.1f, 0.7f, -0.05f}); }
+
+// 2 * samples random unit directions (fixed seed).
+std::vector<glm::vec3> gput_directions(int samples) {
+  std::mt19937_64 rng(12345);
+  std::normal_distribution<double> g;
+  std::vector<glm::vec3> d;
+  while (d.size() < std::size_t(2 * samples)) {
+    const glm::dvec3 v(g(rng), g(rng), g(rng));
+    const double len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    if (len > 1e-6) d.emplace_back(glm::vec3(v / len));
+  }
+  return d;
+}
+
+std::vector<float> gput_basis(const std::vector<glm::vec3>& dirs, int bands) {
+  const std::size_t nc = std::size_t(bands) * bands;
+  std::vector<float> y(dirs.size() * nc);
+  for (std::size_t j = 0; j < dirs.size(); ++j) sh::eval<float>(bands, dirs[j].x, dirs[j].y, dirs[j].z, &y[j * nc]);
+  return y;
+}
+
+// The job's arrays: every `stride`-th vertex of `mesh` with its normal, and
+// every 17th of those again with a zero normal.
+struct GputJobData {
+  std::vector<glm::vec3> positions, normals, directions;
+  std::vector<float> basis;
+  int nc = 0;
+  OcclusionJob job() const {
+    OcclusionJob j;
+    j.positions = positions;
+    j.normals = normals;
+    j.directions = directions;
+    j.basis = basis;
+    j.nc = nc;
+    j.weight = 4.0 * M_PI / double(directions.size());
+    return j;
+  }
+};
+
+float gput_diagonal(const Mesh& mesh) {
+  glm::vec3 lo(1e30f), hi(-1e30f);
+  for (const glm::vec3& p : mesh.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const glm::vec3 e = hi - lo;
+  return std::sqrt(e.x * e.x + e.y * e.y + e.z * e.z);
+}
+
+GputJobData gput_job_data(const Mesh& mesh, std::size_t stride, int samples, int bands) {
+  GputJobData d;
+  for (std::size_t v = 0; v < mesh.positions.size(); v += stride) {
+    d.positions.push_back(mesh.positions[v]);
+    d.normals.push_back(mesh.normals[v]);
+    if (d.positions.size() % 17 == 0) {
+      d.positions.push_back(mesh.positions[v]);
+      d.normals.emplace_back(0.0f);
+    }
+  }
+  d.directions = gput_directions(samples);
+  d.basis = gput_basis(d.directions, bands);
+  d.nc = bands * bands;
+  return d;
+}
+
+// The sums on the CPU, as prt/point_tracer.h defines them.
+OcclusionSums gput_cpu_sums(const FlatBvh& bvh, const OcclusionJob& job) {
+  const std::size_t n = job.positions.size(), nc = std::size_t(job.nc);
+  OcclusionSums s;
+  s.occluded_basis.assign(n * nc, 0.0);
+  s.occluded_rays.assign(n, 0);
+  s.all_cos.assign(n, 0.0);
+  s.occluded_cos.assign(n, 0.0);
+  s.occluded_dir.assign(n, glm::dvec3(0.0));
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::vec3 nrm = job.normals[i];
+    if (glm::dot(nrm, nrm) == 0.0f) continue;
+    const glm::vec3 origin = job.positions[i] + job.offset * nrm;
+    for (std::size_t j = 0; j < job.directions.size(); ++j) {
+      const glm::vec3 d = job.directions[j];
+      const float c = glm::dot(nrm, d);
+      if (c <= 0.0f) continue;
+      const double wc = job.weight * double(c);
+      s.all_cos[i] += wc;
+      if (!flat_bvh_occluded(bvh, origin, d, job.offset)) continue;
+      ++s.occluded_rays[i];
+      s.occluded_cos[i] += wc;
+      s.occluded_dir[i] += wc * glm::dvec3(d);
+      for (std::size_t k = 0; k < nc; ++k) s.occluded_basis[i * nc + k] += wc * double(job.basis[j * nc + k]);
+    }
+  }
+  return s;
+}
+
+// The worst |a - b| / max(|b|, 1e-300) over a point's sums, and how many differ at all.
+struct GputDiff {
+  double worst = 0;
+  std::size_t differing = 0;
+  void add(double a, double b) {
+    if (a == b) return;
+    ++differing;
+    worst = std::max(worst, std::abs(a - b) / std::max(std::abs(b), 1e-300));
+  }
+};
+
+GputDiff gput_compare(const OcclusionSums& gpu, const OcclusionSums& cpu, std::size_t nc) {
+  GputDiff diff;
+  EXPECT_EQ(gpu.occluded_rays.size(), cpu.occluded_rays.size());
+  EXPECT_EQ(gpu.occluded_basis.size(), cpu.occluded_basis.size());
+  if (gpu.occluded_rays.size() != cpu.occluded_rays.size() || gpu.occluded_basis.size() != cpu.occluded_basis.size())
+    return diff;
+  int bad = 0;
+  for (std::size_t i = 0; i < cpu.occluded_rays.size(); ++i) {
+    if (gpu.occluded_rays[i] != cpu.occluded_rays[i] && ++bad <= 5)
+      ADD_FAILURE() << "point " << i << ": " << gpu.occluded_rays[i] << " occluded rays on the GPU, "
+                    << cpu.occluded_rays[i] << " on the CPU";
+    diff.add(gpu.all_cos[i], cpu.all_cos[i]);
+    diff.add(gpu.occluded_cos[i], cpu.occluded_cos[i]);
+    for (int c = 0; c < 3; ++c) diff.add(gpu.occluded_dir[i][c], cpu.occluded_dir[i][c]);
+    for (std::size_t k = 0; k < nc; ++k) diff.add(gpu.occluded_basis[i * nc + k], cpu.occluded_basis[i * nc + k]);
+  }
+  return diff;
+}
+
+// A tracer of `bvh`, or the reason no context can be had (only a missing
+// context: any other error fails the test).
+std::unique_ptr<PointTracer> gput_try_tracer(const FlatBvh& bvh, std::string& why) {
+  try {
+    return make_gl_point_tracer(bvh);
+  } catch (const NoGlContext& e) {
+    why = e.what();
+    return nullptr;
+  }
+}
+
+#define GPUT_REQUIRE_TRACER(t, bvh)                                          \
+  std::string why_##t;                                                       \
+  std::unique_ptr<PointTracer> t = gput_try_tracer((bvh), why_##t);          \
+  if (!t) PRT_SKIP_WITHOUT_GL(why_##t);
+
+void gput_expect_equal_sums(int bands) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  GputJobData data = gput_job_data(mesh, 5, kSamples, bands);
+  OcclusionJob job = data.job();
+  job.offset = 1e-4f * gput_diagonal(mesh);
+  ASSERT_GT(job.positions.size(), 300u);
+  OcclusionSums gpu;
+  std::size_t calls = 0, last = 0;
+  tracer->trace(job, gpu, [&](std::size_t done, std::size_t total) {
+    EXPECT_EQ(total, job.positions.size());
+    EXPECT_GT(done, last);
+    last = done;
+    ++calls;
+    return true;
+  });
+  EXPECT_EQ(last, job.positions.size());
+  EXPECT_GE(calls, 1u);
+  const OcclusionSums cpu = gput_cpu_sums(bvh, job);
+  std::size_t occluded = 0, points_occluded = 0;
+  for (std::uint32_t r : cpu.occluded_rays) {
+    occluded += r;
+    points_occluded += r > 0;
+  }
+  EXPECT_GT(points_occluded, job.positions.size() / 4) << "too few points shadowed to tell";
+  const GputDiff diff = gput_compare(gpu, cpu, std::size_t(job.nc));
+  EXPECT_LE(diff.worst, kSumTolerance);
+  ::testing::Test::RecordProperty("sums_differing", std::to_string(diff.differing));
+  ::testing::Test::RecordProperty("worst_relative_difference", std::to_string(diff.worst));
+  std::printf("GPU tracer (%s), %d bands: %zu points, %zu occluded rays; %zu sums differ from the CPU's, worst %.3g\n",
+              tracer->name().c_str(), bands, job.positions.size(), occluded, diff.differing, diff.worst);
+}
+
+TEST(GpuTracer, SumsEqualCpuTraversal) { gput_expect_equal_sums(kBands); }
+
+TEST(GpuTracer, SumsEqualCpuTraversalManyCoefficients) { gput_expect_equal_sums(kManyBands); }
+
+TEST(GpuTracer, AxisAlignedRaysOnBoxFaces) {
+  // Rays with zero components from points on the boxes' faces (an open box's
+  // vertices and edge midpoints: 0 * inf = NaN in the slab test, which C's
+  // fmin and fmax ignore and the shader must too), offsets 0 and 1e-4: the
+  // same verdicts as flat_bvh_occluded, ray by ray (one direction a job).
+  const Mesh mesh = test::open_box(1.0f);
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  std::vector<glm::vec3> points = mesh.positions;
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int e = 0; e < 3; ++e) points.push_back(0.5f * (mesh.positions[t[e]] + mesh.positions[t[(e + 1) % 3]]));
+  const std::vector<glm::vec3> dirs = {{1, 0, 0},       {-1, 0, 0},      {0, 1, 0},     {0, -1, 0},
+                                       {0, 0, 1},       {0, 0, -1},      {0.6f, 0.8f, 0}, {0, -0.6f, 0.8f},
+                                       {-0.8f, 0, 0.6f}, {0.6f, 0, -0.8f}};
+  std::vector<glm::vec3> positions, normals;
+  for (const glm::vec3& p : points)
+    for (const glm::vec3& n : {glm::vec3(0, 1, 0), glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(-1, 0, 0)}) {
+      positions.push_back(p);
+      normals.push_back(n);
+    }
+  std::size_t differ = 0, occluded = 0;
+  for (const float offset : {0.0f, 1e-4f})
+    for (const glm::vec3& d : dirs) {
+      OcclusionJob job;
+      job.positions = positions;
+      job.normals = normals;
+      job.directions = std::span<const glm::vec3>(&d, 1);
+      job.nc = 0;
+      job.weight = 1.0;
+      job.offset = offset;
+      OcclusionSums gpu;
+      tracer->trace(job, gpu, {});
+      const OcclusionSums cpu = gput_cpu_sums(bvh, job);
+      for (std::size_t i = 0; i < positions.size(); ++i) {
+        occluded += cpu.occluded_rays[i];
+        if (gpu.occluded_rays[i] != cpu.occluded_rays[i] && ++differ <= 5)
+          ADD_FAILURE() << "point " << i << " (" << positions[i].x << ", " << positions[i].y << ", " << positions[i].z
+                        << "), direction (" << d.x << ", " << d.y << ", " << d.z << "), offset " << offset << ": GPU "
+                        << gpu.occluded_rays[i] << ", CPU " << cpu.occluded_rays[i];
+      }
+    }
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(occluded, 0u);
+}
+
+TEST(GpuTracer, NameMentionsRenderer) {
+  const FlatBvh bvh = build_flat_bvh(test::quad(2));
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  const std::string name = tracer->name();
+  const std::string prefix = "OpenGL compute on ";
+  ASSERT_EQ(name.rfind(prefix, 0), 0u) << name;
+  const Renderer r;  // its device(): GL_RENDERER ", " GL_VERSION
+  EXPECT_EQ(r.device().rfind(name.substr(prefix.size()) + ", ", 0), 0u) << name << " vs " << r.device();
+}
+
+TEST(GpuTracer, CancelThrows) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  const GputJobData data = gput_job_data(mesh, 1, 1024, 2);  // several chunks
+  OcclusionJob job = data.job();
+  job.offset = 1e-4f * gput_diagonal(mesh);
+  OcclusionSums out;
+  std::size_t calls = 0;
+  try {
+    tracer->trace(job, out, [&](std::size_t, std::size_t) { return ++calls < 2; });
+    ADD_FAILURE() << "a cancelled trace returned";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "cancelled");
+  }
+  EXPECT_EQ(calls, 2u);
+  // The tracer still works after a cancelled call (on a few of the points).
+  OcclusionJob few = job;
+  few.positions = job.positions.first(64);
+  few.normals = job.normals.first(64);
+  tracer->trace(few, out, {});
+  EXPECT_EQ(out.occluded_rays.size(), 64u);
+}
+
+TEST(GpuTracer, TracesOnAnyThread) {
+  // Made on this thread, traced on two others in turn and on this one again
+  // (trace() makes its context current on the calling thread and leaves it
+  // current nowhere): the same sums each time.
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  const GputJobData data = gput_job_data(mesh, 20, 64, 3);
+  OcclusionJob job = data.job();
+  job.offset = 1e-4f * gput_diagonal(mesh);
+  OcclusionSums here, there[2];
+  for (OcclusionSums& s : there) std::thread([&] { tracer->trace(job, s, {}); }).join();
+  tracer->trace(job, here, {});
+  for (const OcclusionSums& s : there) {
+    EXPECT_EQ(s.occluded_rays, here.occluded_rays);
+    EXPECT_EQ(s.occluded_basis, here.occluded_basis);
+  }
+}
+
+TEST(GpuTracer, EmptyJobAndEmptyTree) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  GputJobData data = gput_job_data(mesh, 40, 64, 3);
+  OcclusionJob job = data.job();
+  job.offset = 1e-3f;
+  job.positions = {};
+  job.normals = {};
+  OcclusionSums out;
+  out.all_cos.assign(5, 1.0);
+  tracer->trace(job, out, [](std::size_t, std::size_t) { return true; });
+  EXPECT_TRUE(out.all_cos.empty() && out.occluded_rays.empty() && out.occluded_basis.empty() &&
+              out.occluded_cos.empty() && out.occluded_dir.empty());
+  // No triangle: no ray occluded, every other sum as on the CPU.
+  const FlatBvh none;
+  std::unique_ptr<PointTracer> open = make_gl_point_tracer(none);
+  const OcclusionJob all = data.job();
+  open->trace(all, out, {});
+  const OcclusionSums cpu = gput_cpu_sums(none, all);
+  for (std::size_t i = 0; i < all.positions.size(); ++i) EXPECT_EQ(out.occluded_rays[i], 0u);
+  EXPECT_EQ(gput_compare(out, cpu, std::size_t(all.nc)).differing, 0u);
+  EXPECT_GT(*std::max_element(out.all_cos.begin(), out.all_cos.end()), 2.0);  // about pi
+}
+
+// Sets PRT_TEST_GL_LIMITS while it lives.
+struct GputLimits {
+  explicit GputLimits(const char* value) {
+    if (const char* old = std::getenv("PRT_TEST_GL_LIMITS")) old_ = old;
+    ::setenv("PRT_TEST_GL_LIMITS", value, 1);
+  }
+  ~GputLimits() {
+    if (old_) ::setenv("PRT_TEST_GL_LIMITS", old_->c_str(), 1);
+    else ::unsetenv("PRT_TEST_GL_LIMITS");
+  }
+  GputLimits(const GputLimits&) = delete;
+  GputLimits& operator=(const GputLimits&) = delete;
+  std::optional<std::string> old_;
+};
+
+TEST(GpuTracer, RefusesBvhOverStorageLimit) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  {
+    std::string why;
+    if (!gput_try_tracer(FlatBvh{}, why)) PRT_SKIP_WITHOUT_GL(why);
+  }
+  const GputLimits limit("GL_MAX_SHADER_STORAGE_BLOCK_SIZE=4096");
+  try {
+    make_gl_point_tracer(bvh);
+    ADD_FAILURE() << "a BVH of " << bvh.corners.size() * 16 << " bytes of corners was accepted";
+  } catch (const NoGlContext&) {
+    throw;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE of 4096"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace prt
