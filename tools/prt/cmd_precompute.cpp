@@ -7,6 +7,7 @@
 #include <prt/lightmap.h>
 #include <prt/envmap.h>
 #include <prt/ply.h>
+#include <prt/gpu_tracer.h>
 #include <prt/precompute.h>
 #include <prt/scene.h>
 #include <prt/subsurface_scatter.h>
@@ -104,7 +105,52 @@ struct PrecomputeArgs {
   std::string subdivided_mesh;
   const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
   SubsurfaceArgs sss;  // --material subsurface's material and length scale
+  // --device cpu|gpu: Embree on the CPU's threads, or the shadowed rays in OpenGL compute shaders
+  // (docs/PRECOMPUTE.md "On the GPU").
+  std::string device = "cpu";
+  const CLI::Option* device_opt = nullptr;
 };
+
+// --device gpu: the mesh's flat BVH and the GL tracer, made before the work
+// and set as the options' tracer; nothing for --device cpu.
+std::unique_ptr<PointTracer> make_device(PrecomputeArgs& a, const Mesh& mesh, bool quiet) {
+  if (a.device != "gpu") return nullptr;
+  const auto t0 = std::chrono::steady_clock::now();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::unique_ptr<PointTracer> tracer = make_gl_point_tracer(bvh);
+  if (!quiet)
+    fmt::print(stderr, "device: {}; BVH of {} triangles: {} nodes, depth {}, built in {:.2f} s\n", tracer->name(),
+               bvh.triangle_ids.size(), bvh.nodes.size(), bvh.depth, build_s);
+  a.opt.tracer = tracer.get();
+  return tracer;
+}
+
+// --device gpu, checked before any work: what the GPU does not trace yet is
+// refused by name (docs/PRECOMPUTE.md "On the GPU").
+void check_device(const PrecomputeArgs& a) {
+  if (a.device != "gpu") return;
+  const auto no = [](const std::string& what) {
+    throw UsageError("--device gpu: " + what + " (not done yet: precompute it with --device cpu, the default)");
+  };
+  if (a.probes_opt->count() > 0) no("a probe volume's rays are traced on the CPU");
+  if (a.basis != "sh") no("--basis " + a.basis + " is traced on the CPU");
+  if (a.mode != "shadowed") no("--mode " + a.mode + ": the GPU traces the shadowed transfer only");
+  if (a.material != "diffuse") no("--material " + a.material + ": the GPU traces the diffuse transfer only");
+  if (a.opt.directional) no("--directional rows are summed on the CPU");
+  if (a.adaptive_opt->count() > 0 || a.subdivide_opt->count() > 0 || a.target_opt->count() > 0)
+    no("--adaptive, --subdivide and --target-error trace their batches on the CPU");
+  if (mpi::launched() && mpi::world().size() > 1) no("under mpirun (one process drives the GPU)");
+}
+
+// The rays' rate of a --device run: about `points` x samples rays (half the
+// 2 x samples directions lie above a point's horizon).
+void print_rays(const PrecomputeArgs& a, std::size_t points, double seconds) {
+  if (a.quiet || a.device_opt->count() == 0 || a.opt.mode == TransferMode::Unshadowed) return;
+  const double rays = double(points) * double(a.opt.samples);
+  fmt::print(stderr, "rays ({}): about {:.3g} in {:.2f} s, {:.3g} rays/s (the whole precompute's time)\n", a.device,
+             rays, seconds, rays / std::max(seconds, 1e-9));
+}
 
 // --compress KxN into o; "" or what is wrong with `text`.
 std::string compress_problem(const std::string& text, CompressOptions& o) {
@@ -663,6 +709,7 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
     return 0;
   }
   const bool adapt = a.adaptive_opt->count() > 0;
+  const std::unique_ptr<PointTracer> device = make_device(a, scene.mesh, quiet);
   AdaptiveReport adaptive;
   SubsurfaceScatterOptions so;
   if (sss) {
@@ -716,6 +763,7 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
                  t.bands * t.bands, t.glossy_channels(), t.glossy_channels() == 1 ? "" : "s", 4 * t.glossy_stride());
     if (adapt) print_adaptive(adaptive, t, "texels");
   }
+  print_rays(a, texels.positions.size(), secs);
   return 0;
 }
 
@@ -888,6 +936,7 @@ int run_sh_vertices(PrecomputeArgs& a) {
   release_free_memory();
   const bool quiet = a.quiet || !is_root();
   if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  const std::unique_ptr<PointTracer> device = make_device(a, mesh, quiet);
   Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   const bool adapt = a.adaptive_opt->count() > 0;
   // --target-error: the settings chosen on the input mesh; with --subdivide
@@ -945,6 +994,7 @@ int run_sh_vertices(PrecomputeArgs& a) {
   if (const int rc = out.commit(); rc != 0) return rc;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!a.quiet) print_sh_summary(a, t, rep, cap, secs);
+  print_rays(a, mesh.vertex_count(), secs);
   return 0;
 }
 
@@ -1066,6 +1116,7 @@ int run_precompute(PrecomputeArgs& a) {
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
   check_light_bounce(a);  // every kind of run
+  check_device(a);
   if (probe_volume) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     return run_probes(a);
@@ -1210,6 +1261,13 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
                                  "WxH: an SH lightmap instead of vertices: the transfer of every texel of a W x H "
                                  "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
                                  "lightmap UV set (docs/LIGHTMAPS.md)");
+  a.device_opt = s->add_option("--device", a.device,
+                               "cpu (Embree on every core) or gpu: the shadowed transfer's rays traced in OpenGL "
+                               "compute shaders over a BVH built here, per vertex or texel, headless through EGL "
+                               "(the GPU's EGL device when there is one; Mesa's llvmpipe otherwise); prints rays "
+                               "per second (docs/PRECOMPUTE.md \"On the GPU\")")
+                     ->check(CLI::IsMember({"cpu", "gpu"}))
+                     ->capture_default_str();
   a.directional_opt =
       s->add_flag("--directional", a.opt.directional,
                   "With --lightmap: also each texel's directional rows, the L1 of its incident light, for normal-mapped "
