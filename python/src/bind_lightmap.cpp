@@ -487,10 +487,11 @@ void bind_lightmap_compute(py::module_& m) {
          bool light_bounce, double bounce_patch, double bounce_ratio, int bounce_clusters,
          const py::object& bounce_probes, const std::string& material, const py::object& sss,
          const py::object& sigma_a, const py::object& sigma_s, const py::object& eta, double length_scale,
-         const py::object& pages, bool directional) {
+         const py::object& pages, bool directional, const std::string& device) {
         // As prt precompute --lightmap: diffuse (the scene's albedo), or a
         // translucent material's (--material subsurface); not glossy.
         const bool translucent = material == "subsurface";
+        check_device_arg(device, mode, material, "sh", !adaptive.is_none());
         if (material != "diffuse" && !translucent)
           throw Error("material: a lightmap is 'diffuse' or 'subsurface', got '" + material + "'");
         check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
@@ -527,6 +528,8 @@ void bind_lightmap_compute(py::module_& m) {
           so.length_scale = sss_record->length_scale;
           return prt::compute_subsurface_lightmap(baked, tx, o, sss_record->material, so);
         }
+        const std::unique_ptr<prt::PointTracer> gpu = device_tracer(device, baked.mesh);  // kept while it traces
+        o.tracer = gpu.get();
         return adapt ? prt::compute_adaptive_lightmap_transfer(baked, tx, o, *adapt)
                      : prt::compute_lightmap_transfer(baked, tx, o);
       },
@@ -538,6 +541,7 @@ void bind_lightmap_compute(py::module_& m) {
       py::arg("bounce_probes") = py::none(), py::arg("material") = "diffuse", py::arg("sss") = py::none(),
       py::arg("sigma_a") = py::none(), py::arg("sigma_s") = py::none(), py::arg("eta") = py::none(),
       py::arg("length_scale") = kDefaultLengthScale, py::arg("pages") = 1, py::arg("directional") = false,
+      py::arg("device") = "cpu",
       "The SH lightmap prt precompute SCENE --lightmap WxH computes (the same bits). Releases the GIL.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
@@ -551,6 +555,7 @@ void bind_lightmap_compute(py::module_& m) {
       "  material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].\n"
       "  sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].\n"
       "  directional: also each texel's directional rows, the L1 of its incident light, for normal-mapped surfaces (Lightmap.relight_directional, write_directional; docs/LIGHTMAPS.md \"Directional lightmaps\"): a shadowed or interreflected lightmap of 2 bands or more, without adaptive, light_bounce or material='subsurface' [--directional].\n"
+      "  device: 'cpu' or 'gpu', as precompute's (a shadowed, diffuse lightmap) [--device].\n"
       "\n"
       "Returns a Lightmap.");
 

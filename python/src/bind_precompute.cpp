@@ -89,8 +89,9 @@ void bind_precompute(py::module_& m) {
          double threshold, const py::object& adaptive, double verify_adaptive, bool adaptive_any, bool light_bounce,
          double bounce_patch, double bounce_ratio, int bounce_clusters, const py::object& bounce_probes,
          const py::object& sss, const py::object& sigma_a, const py::object& sigma_s, const py::object& eta,
-         double length_scale, py::object progress) -> py::object {
+         double length_scale, const std::string& device, py::object progress) -> py::object {
         const bool translucent = material == "subsurface";
+        check_device_arg(device, mode, material, basis, !adaptive.is_none());
         check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
         if (translucent) check_subsurface_args(basis, mode, albedo, vertex_colors, !adaptive.is_none(), light_bounce);
         if (basis != "sh" && basis != "wavelet")
@@ -148,6 +149,8 @@ void bind_precompute(py::module_& m) {
         }
         light_bounce_args(o, light_bounce, bounce_patch, bounce_ratio, bounce_clusters, bounce_probes);
         p.t = run_released(std::move(progress), [&](const prt::Progress& pr) {
+          const std::unique_ptr<prt::PointTracer> gpu = device_tracer(device, mesh);  // kept while it traces
+          o.tracer = gpu.get();
           return adapt ? prt::compute_adaptive_transfer(mesh, o, *adapt, pr) : prt::compute_transfer(mesh, o, pr);
         });
         return py::cast(std::move(p));
@@ -160,7 +163,8 @@ void bind_precompute(py::module_& m) {
       py::arg("light_bounce") = false, py::arg("bounce_patch") = 0.0, py::arg("bounce_ratio") = prt::kLightBounceRatio,
       py::arg("bounce_clusters") = prt::kLightBounceClusters, py::arg("bounce_probes") = py::none(),
       py::arg("sss") = py::none(), py::arg("sigma_a") = py::none(), py::arg("sigma_s") = py::none(),
-      py::arg("eta") = py::none(), py::arg("length_scale") = kDefaultLengthScale, py::arg("progress") = py::none(),
+      py::arg("eta") = py::none(), py::arg("length_scale") = kDefaultLengthScale, py::arg("device") = "cpu",
+      py::arg("progress") = py::none(),
       "Traces the transfer of every vertex (or, with adaptive=, of a subset, interpolating the rest), as prt precompute MESH does: the same defaults, and with the same seed and inputs the same bits. Releases the GIL while it traces.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
@@ -189,6 +193,7 @@ void bind_precompute(py::module_& m) {
       "  light_bounce: with mode='interreflected', keep the bounces' gather as the lights' bounce operator (Transfer.light_bounce; relight(lights=...) and render apply it; docs/LIGHTS.md \"Bounce\") [--light-bounce].\n"
       "  bounce_patch, bounce_ratio, bounce_clusters: its finest patches' size in mesh units (0: a few vertices' spacing), how coarse a far patch may be against its distance (1), the levels a far link's receiving cluster stays below its source (2; -1: none) [--bounce-patch, --bounce-ratio, --bounce-clusters].\n"
       "  bounce_probes: (NX, NY, NZ): the operator's rows for that probe grid's probes too, which the probe-lit object of render(probes=, object=) takes (None: none) [--probes with --light-bounce].\n"
+      "  device: 'cpu' (Embree on every core) or 'gpu': the shadowed transfer's rays in OpenGL compute over a BVH built here (mode='shadowed', diffuse, basis='sh', no adaptive; prt.Error where no OpenGL 4.5 context can be made; docs/PRECOMPUTE.md \"On the GPU\") [--device].\n"
       "  progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).\n"
       "\n"
       "Returns a Transfer (a WaveletTransfer for basis='wavelet'; for material='subsurface' an RGB one whose .subsurface records the material).");

@@ -3,7 +3,9 @@
 // file arguments.
 #include "module.h"
 
+#include <prt/gpu_tracer.h>
 #include <prt/io.h>
+#include <prt/precompute.h>
 #include <prt/probes.h>
 #include <prt/render.h>
 #include <prt/rotation.h>
@@ -406,6 +408,24 @@ void light_bounce_args(prt::TransferOptions& o, bool light_bounce, double patch,
   if (shaped && !light_bounce)
     throw Error("bounce_patch, bounce_ratio, bounce_clusters and bounce_probes shape the light_bounce operator: give "
                 "light_bounce=True too");
+}
+
+void check_device_arg(const std::string& device, const std::string& mode, const std::string& material,
+                      const std::string& basis, bool adaptive) {
+  if (device != "cpu" && device != "gpu") throw Error("device: expected 'cpu' or 'gpu', got '" + device + "'");
+  if (device == "cpu") return;
+  const auto no = [](const std::string& what) {
+    throw Error("device='gpu': " + what + " (not done yet: leave device='cpu')");
+  };
+  if (mode != "shadowed") no("mode='" + mode + "': the GPU traces the shadowed transfer only");
+  if (material != "diffuse") no("material='" + material + "': the GPU traces the diffuse transfer only");
+  if (basis != "sh") no("basis='" + basis + "' is traced on the CPU");
+  if (adaptive) no("adaptive sample points trace their batches on the CPU");
+}
+
+std::unique_ptr<prt::PointTracer> device_tracer(const std::string& device, const prt::Mesh& mesh) {
+  if (device != "gpu") return nullptr;
+  return prt::make_gl_point_tracer(prt::build_flat_bvh(mesh));
 }
 
 }  // namespace prt::python

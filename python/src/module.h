@@ -16,6 +16,7 @@
 #include <prt/envmap.h>
 #include <prt/error.h>
 #include <prt/lights.h>
+#include <prt/point_tracer.h>
 #include <prt/precompute.h>
 #include <prt/progress.h>
 #include <prt/subsurface.h>
@@ -235,6 +236,13 @@ auto run_released(py::object progress, F&& f) {
 // above max_adaptive_tolerance(samples) unless adaptive_any. Returns the
 // options, or nothing for adaptive=None.
 std::optional<prt::AdaptiveOptions> adaptive_arg(const py::object& adaptive, double verify, bool any, int samples);
+// device= (precompute, precompute_lightmap): 'cpu' or 'gpu', refused with
+// prt --device gpu's sentences where the GPU does not trace (mode, material,
+// basis, adaptive); device_tracer: the GL tracer of `mesh` for 'gpu' (the
+// flat BVH built, a context made: prt.Error where there is none), else null.
+void check_device_arg(const std::string& device, const std::string& mode, const std::string& material,
+                      const std::string& basis, bool adaptive);
+std::unique_ptr<prt::PointTracer> device_tracer(const std::string& device, const prt::Mesh& mesh);
 // (NX, NY, NZ) by prt::probe_dims_problem's rule, errors naming `what`.
 std::array<int, 3> probe_dims_arg(const py::object& dims, const std::string& what = "dims");
 // light_bounce= and its shaping arguments (prt precompute --light-bounce,
