@@ -198,9 +198,12 @@ Plan plan_memory(const Mesh& mesh, std::size_t P, const TransferOptions& o, std:
   const std::size_t V = P, nc = std::size_t(o.bands) * o.bands;
   const std::size_t stride = (grey ? 1 : 3) * nc;
   const std::size_t row = V * stride * sizeof(float);
-  std::size_t gstride = 0;
-  if (o.directional) gstride = std::size_t(glossy_ir && !grey ? 3 : 1) * kDirectionalRows * nc;
-  else if (o.glossy) gstride = glossy_ir ? std::size_t(grey ? 1 : 3) * nc * nc : nc * (nc + 1) / 2;
+  Transfer shape;  // the matrices' layout, as compute_impl will make them (glossy_stride)
+  shape.bands = o.bands;
+  shape.channels = grey ? 1 : 3;
+  shape.mode = o.mode;
+  shape.glossy_rows = o.directional ? kDirectionalRows : 0;
+  const std::size_t gstride = o.glossy || o.directional ? shape.glossy_stride() : 0;
   const std::size_t M = trace ? 2 * std::size_t(o.samples) : 0;
   const std::size_t threads = std::size_t(o.threads > 0 ? o.threads : tbb::this_task_arena::max_concurrency());
   std::size_t fixed = row;                                        // coeffs
