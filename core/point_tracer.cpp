@@ -41,7 +41,9 @@ bool flat_box_hit(const FlatBvhNode& n, glm::vec3 o, glm::vec3 inv, float tnear)
 }
 
 // Moller-Trumbore, both faces: does the ray hit triangle abc at t > tnear?
-bool flat_triangle_hit(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 o, glm::vec3 d, float tnear) {
+// On a hit, its t and barycentrics in `hit` (when not null).
+bool flat_triangle_hit(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 o, glm::vec3 d, float tnear,
+                       RayHit* hit = nullptr) {
   const glm::vec3 e1 = b - a;
   const glm::vec3 e2 = c - a;
   const glm::vec3 p = glm::cross(d, e2);
@@ -55,7 +57,19 @@ bool flat_triangle_hit(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 o, glm::
   const float v = glm::dot(d, q) * inv_det;
   if (!(v >= 0.0f && u + v <= 1.0f)) return false;
   const float t = glm::dot(e2, q) * inv_det;
-  return t > tnear;
+  if (!(t > tnear)) return false;
+  if (hit) *hit = RayHit{0, u, v, t};
+  return true;
+}
+
+// The slab test's entry distance: where the ray enters the node's box, or
+// +inf where it misses it (at every t > tnear). inv = 1 / d.
+float flat_box_entry(const FlatBvhNode& n, glm::vec3 o, glm::vec3 inv, float tnear) {
+  const glm::vec3 t0 = (glm::vec3(n.lo[0], n.lo[1], n.lo[2]) - o) * inv;
+  const glm::vec3 t1 = (glm::vec3(n.hi[0], n.hi[1], n.hi[2]) - o) * inv;
+  const float tmin = std::fmax(std::fmax(std::fmin(t0.x, t1.x), std::fmin(t0.y, t1.y)), std::fmin(t0.z, t1.z));
+  const float tmax = std::fmin(std::fmin(std::fmax(t0.x, t1.x), std::fmax(t0.y, t1.y)), std::fmax(t0.z, t1.z));
+  return tmin <= tmax && tmax > tnear ? tmin : INFINITY;
 }
 
 }  // namespace
@@ -88,6 +102,65 @@ bool flat_bvh_occluded(const FlatBvh& bvh, glm::vec3 o, glm::vec3 d, float tnear
     }
   }
   return false;
+}
+
+// The closest hit: a stack of (node, its box's entry distance); the root
+// tested first; an inner node tests both children's boxes and pushes those
+// the ray enters before the best hit so far, the farther first (b first on
+// a tie: a is popped first, as flat_bvh_occluded visits it); a popped node
+// whose entry is no longer before the best hit is skipped. A leaf's
+// triangles in storage order, one replacing the best where its t is smaller.
+RayHit flat_bvh_closest(const FlatBvh& bvh, glm::vec3 o, glm::vec3 d, float tnear) {
+  RayHit best;
+  if (bvh.nodes.empty()) return best;
+  const glm::vec3 inv = 1.0f / d;
+  float best_t = INFINITY;
+  constexpr int kStackSize = kFlatBvhMaxDepth + 1;
+  std::uint32_t stack[kStackSize];
+  float entry[kStackSize];
+  int top = 0;
+  const float root = flat_box_entry(bvh.nodes[0], o, inv, tnear);
+  if (root < best_t) {
+    stack[top] = 0;
+    entry[top++] = root;
+  }
+  std::uint32_t best_leaf_triangle = 0;
+  while (top > 0) {
+    --top;
+    if (!(entry[top] < best_t)) continue;
+    const FlatBvhNode& n = bvh.nodes[stack[top]];
+    if ((n.b & kFlatBvhLeaf) == 0u) {
+      const float ta = flat_box_entry(bvh.nodes[n.a], o, inv, tnear);
+      const float tb = flat_box_entry(bvh.nodes[n.b], o, inv, tnear);
+      PRT_CHECK_OP(top + 2, <=, kStackSize);
+      const bool a_first = ta <= tb;  // popped first: pushed last
+      const std::uint32_t near_node = a_first ? n.a : n.b, far_node = a_first ? n.b : n.a;
+      const float t_near = a_first ? ta : tb, t_far = a_first ? tb : ta;
+      if (t_far < best_t) {
+        stack[top] = far_node;
+        entry[top++] = t_far;
+      }
+      if (t_near < best_t) {
+        stack[top] = near_node;
+        entry[top++] = t_near;
+      }
+      continue;
+    }
+    const std::uint32_t first = n.a;
+    const std::uint32_t count = n.b & ~kFlatBvhLeaf;
+    for (std::uint32_t i = first; i < first + count; ++i) {
+      RayHit h;
+      if (!flat_triangle_hit(glm::vec3(bvh.corners[3 * i]), glm::vec3(bvh.corners[3 * i + 1]),
+                             glm::vec3(bvh.corners[3 * i + 2]), o, d, tnear, &h) ||
+          !(h.t < best_t))
+        continue;
+      best = h;
+      best_t = h.t;
+      best_leaf_triangle = i;
+    }
+  }
+  if (best_t < INFINITY) best.triangle = bvh.triangle_ids[best_leaf_triangle];
+  return best;
 }
 
 }  // namespace prt

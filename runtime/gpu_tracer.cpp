@@ -1,5 +1,6 @@
 // Occlusion jobs traced in OpenGL compute shaders over a flat BVH. See
-// prt/gpu_tracer.h; the shader is shaders/occlusion.comp.glsl.
+// prt/gpu_tracer.h; the shaders are shaders/occlusion.comp.glsl (trace())
+// and shaders/hits.comp.glsl (trace_hits()).
 #include <prt/gpu_tracer.h>
 
 #include <prt/error.h>
@@ -12,23 +13,31 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <initializer_list>
 #include <map>
 #include <mutex>
+#include <span>
 #include <string>
 #include <vector>
 
 namespace prt::shaders {
 extern const char* const occlusion_comp_glsl;  // embedded by runtime/embed_shaders.cmake
+extern const char* const hits_comp_glsl;
 }
 
 namespace prt {
 
 namespace {
 
-// Rays a dispatch traces, counting half the set above each point's horizon
-// (2 kChunkRays / M points): on llvmpipe with 2 busy cores about 0.4 s for
-// tests/test_gpu_tracer.cpp's mesh (1.9e6 rays/s), far less on a GPU.
+// Rays a dispatch traces. trace(): counting half the set above each point's
+// horizon (2 kChunkRays / M points): on llvmpipe with 2 busy cores about
+// 0.4 s for tests/test_gpu_tracer.cpp's mesh (1.9e6 rays/s), far less on a
+// GPU. trace_hits(): counting all M slots of a point, above its horizon or
+// not (kChunkRays / M points, one invocation a slot; about half of them
+// trace a ray), so that its hits buffer is 16 MiB.
 constexpr std::size_t kChunkRays = std::size_t(1) << 20;
 // The shader's local_size_x: 64, and 1 on llvmpipe, whose SIMD execution of
 // this shader gave some invocations of a work group wrong answers (Mesa
@@ -43,6 +52,10 @@ std::size_t group_size(const std::string& renderer) {
 constexpr int kLocalSumsMax = 36;      // coefficients summed in a local array (6 bands) or fewer
 constexpr int kPrewarmNc = 25;         // the program built with the tracer (5 bands, the default)
 constexpr std::size_t kStatDoubles = 5;  // all_cos, occluded_cos, occluded_dir xyz
+constexpr int kHitsProgram = -1;         // programs_'s key of hits.comp (the others: nc)
+// GL_MAX_COMPUTE_WORK_GROUP_COUNT in y: GL 4.5's least (trace_hits's
+// dispatch puts in y what x cannot take).
+constexpr std::uint64_t kMinGroupsY = 65535;
 
 // Throws prt::Error unless `bytes` of `what` fit one shader storage block.
 void check_block(const std::string& what, std::uint64_t bytes, std::uint64_t limit) {
@@ -79,12 +92,12 @@ class RestoreCurrent {
 
 // The buffers of one trace() call, deleted with it (its context current).
 struct TraceBuffers {
-  GLuint directions = 0, basis = 0, points = 0, rays = 0, stats = 0, sums = 0;
+  GLuint directions = 0, basis = 0, points = 0, rays = 0, stats = 0, sums = 0, hits = 0;
   TraceBuffers() = default;
   TraceBuffers(const TraceBuffers&) = delete;
   TraceBuffers& operator=(const TraceBuffers&) = delete;
   ~TraceBuffers() {
-    const GLuint all[] = {directions, basis, points, rays, stats, sums};
+    const GLuint all[] = {directions, basis, points, rays, stats, sums, hits};
     glDeleteBuffers(GLsizei(std::size(all)), all);
   }
 };
@@ -98,24 +111,42 @@ class GlPointTracer final : public PointTracer {
 
   void trace(const OcclusionJob& job, OcclusionSums& out,
              const std::function<bool(std::size_t, std::size_t)>& progress) const override;
+  void trace_hits(const OcclusionJob& job, const std::function<bool(const HitChunk&)>& consume) const override;
   std::string name() const override { return name_; }
 
  private:
   void upload_bvh(const FlatBvh& bvh);
   GLuint program(int nc) const;
-  std::size_t chunk_points(const OcclusionJob& job) const;
+  std::size_t chunk_points(std::size_t n, std::size_t want, std::size_t granule, std::size_t row_bytes,
+                           std::uint64_t cap) const;
+  GLuint upload_directions(const OcclusionJob& job) const;
   void upload_job(const OcclusionJob& job, std::size_t chunk, TraceBuffers& b) const;
+  void upload_hit_job(const OcclusionJob& job, std::size_t chunk, TraceBuffers& b) const;
+  void set_job_uniforms(GLuint p, const OcclusionJob& job) const;
+  void dispatch(std::uint64_t invocations) const;
   void run_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
                  OcclusionSums& out) const;
+  void run_hit_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
+                     std::vector<RayHit>& hits) const;
+  // Runs `body` with the tracer's context current on this thread, one call
+  // at a time, restoring the thread's own context after (throwing or not).
+  template <class Body>
+  void in_context(Body&& body) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    RestoreCurrent restore(egl_);
+    egl_.make_current();
+    body();
+  }
 
   gl::EglContext egl_;
   std::string name_;
   gl::Limits limits_;
   std::size_t group_ = kGroup;  // the work group's size (group_size)
   GLuint nodes_ = 0, corners_ = 0;
+  std::vector<std::uint32_t> triangle_ids_;  // the BVH's: trace_hits maps leaf order to the mesh's
   bool has_tree_ = false;
-  mutable std::mutex mutex_;                // one trace() at a time
-  mutable std::map<int, GLuint> programs_;  // by nc
+  mutable std::mutex mutex_;                // one trace() or trace_hits() at a time
+  mutable std::map<int, GLuint> programs_;  // by nc; kHitsProgram: hits.comp
 };
 
 GlPointTracer::GlPointTracer(const FlatBvh& bvh) {
@@ -160,6 +191,7 @@ void GlPointTracer::upload_bvh(const FlatBvh& bvh) {
   check_block(fmt::format("the flat BVH's {} triangles' corners", bvh.corners.size() / 3), corner_bytes,
               limits_.storage_block);
   has_tree_ = !bvh.nodes.empty();
+  triangle_ids_ = bvh.triangle_ids;
   nodes_ = gl::make_buffer(bvh.nodes.data(), node_bytes);
   corners_ = gl::make_buffer(bvh.corners.data(), corner_bytes);
   gl::check_gl("uploading the flat BVH");
@@ -167,6 +199,10 @@ void GlPointTracer::upload_bvh(const FlatBvh& bvh) {
 
 GLuint GlPointTracer::program(int nc) const {
   GLuint& p = programs_[nc];
+  if (!p && nc == kHitsProgram)
+    p = gl::link_compute(shaders::hits_comp_glsl, "hits",
+                         fmt::format("#define LEAF {}u\n#define MAX_DEPTH {}\n#define GROUP {}\n", kFlatBvhLeaf,
+                                     kFlatBvhMaxDepth, group_));
   if (!p)
     p = gl::link_compute(shaders::occlusion_comp_glsl, "occlusion",
                          fmt::format("#define NC {}\n#define LOCAL_SUMS {}\n#define LEAF {}u\n#define MAX_DEPTH {}\n"
@@ -175,30 +211,51 @@ GLuint GlPointTracer::program(int nc) const {
   return p;
 }
 
-// Points per dispatch: about kChunkRays rays (half the set each), a multiple
-// of the work group, within the storage block and work group count limits.
-std::size_t GlPointTracer::chunk_points(const OcclusionJob& job) const {
-  const std::size_t m = std::max<std::size_t>(job.directions.size(), 1);
-  const std::size_t kGroup = group_;
-  std::size_t chunk = std::max(kGroup, (2 * kChunkRays / m) / kGroup * kGroup);
-  const std::size_t row_bytes =
-      std::max({std::size_t(job.nc) * sizeof(double), kStatDoubles * sizeof(double), 2 * sizeof(glm::vec4)});
-  const std::size_t fit = std::size_t(limits_.storage_block / row_bytes);
-  if (fit < chunk) chunk = fit >= kGroup ? fit / kGroup * kGroup : std::max<std::size_t>(fit, 1);
-  chunk = std::min<std::size_t>(chunk, std::max<std::uint64_t>(limits_.work_groups, 1) * kGroup);
-  return std::min(chunk, job.positions.size());
+// Points per dispatch: `want`, a multiple of `granule` (trace(): the work
+// group, one invocation a point), fewer where `row_bytes` a point would
+// overflow a storage block, never more than `cap` (the work group count
+// limit's) nor n.
+std::size_t GlPointTracer::chunk_points(std::size_t n, std::size_t want, std::size_t granule, std::size_t row_bytes,
+                                        std::uint64_t cap) const {
+  std::size_t chunk = std::max(granule, want / granule * granule);
+  const std::size_t fit = std::size_t(limits_.storage_block / std::max<std::size_t>(row_bytes, 1));
+  if (fit < chunk) chunk = fit >= granule ? fit / granule * granule : std::max<std::size_t>(fit, 1);
+  chunk = std::size_t(std::min<std::uint64_t>(chunk, std::max<std::uint64_t>(cap, 1)));
+  return std::min(chunk, n);
+}
+
+// The job's directions as vec4s (checked against the storage block limit).
+GLuint GlPointTracer::upload_directions(const OcclusionJob& job) const {
+  const std::size_t m = job.directions.size();
+  check_block(fmt::format("the {} directions", m), m * sizeof(glm::vec4), limits_.storage_block);
+  std::vector<glm::vec4> dirs(m);
+  for (std::size_t j = 0; j < m; ++j) dirs[j] = glm::vec4(job.directions[j], 0.0f);
+  return gl::make_buffer(dirs.data(), dirs.size() * sizeof(glm::vec4));
+}
+
+// Points [first, first + count)'s positions and normals into `buffer`.
+void upload_points(const OcclusionJob& job, std::size_t first, std::size_t count, GLuint buffer) {
+  std::vector<glm::vec4> points(2 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    points[2 * i] = glm::vec4(job.positions[first + i], 1.0f);
+    points[2 * i + 1] = glm::vec4(job.normals[first + i], 0.0f);
+  }
+  glNamedBufferSubData(buffer, 0, GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data());
+}
+
+// Binds buffers[k] to shader storage binding k.
+void bind_buffers(std::initializer_list<GLuint> buffers) {
+  GLuint slot = 0;
+  for (const GLuint b : buffers) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot++, b);
 }
 
 void GlPointTracer::upload_job(const OcclusionJob& job, std::size_t chunk, TraceBuffers& b) const {
   const std::size_t m = job.directions.size(), nc = std::size_t(job.nc);
-  check_block(fmt::format("the {} directions", m), m * sizeof(glm::vec4), limits_.storage_block);
   check_block(fmt::format("the directions' basis ({} x {} floats)", m, nc), m * nc * sizeof(float),
               limits_.storage_block);
   check_block(fmt::format("the sums of {} points ({} coefficients)", chunk, nc), chunk * nc * sizeof(double),
               limits_.storage_block);
-  std::vector<glm::vec4> dirs(m);
-  for (std::size_t j = 0; j < m; ++j) dirs[j] = glm::vec4(job.directions[j], 0.0f);
-  b.directions = gl::make_buffer(dirs.data(), dirs.size() * sizeof(glm::vec4));
+  b.directions = upload_directions(job);
   b.basis = gl::make_buffer(job.basis.data(), job.basis.size() * sizeof(float));
   b.points = gl::make_buffer(nullptr, chunk * 2 * sizeof(glm::vec4), GL_DYNAMIC_STORAGE_BIT);
   b.rays = gl::make_buffer(nullptr, chunk * sizeof(std::uint32_t));
@@ -207,25 +264,45 @@ void GlPointTracer::upload_job(const OcclusionJob& job, std::size_t chunk, Trace
   gl::check_gl("uploading the occlusion job");
 }
 
+void GlPointTracer::upload_hit_job(const OcclusionJob& job, std::size_t chunk, TraceBuffers& b) const {
+  const std::size_t m = job.directions.size();
+  check_block(fmt::format("the hits of {} points ({} directions)", chunk, m), chunk * m * sizeof(RayHit),
+              limits_.storage_block);
+  b.directions = upload_directions(job);
+  b.points = gl::make_buffer(nullptr, chunk * 2 * sizeof(glm::vec4), GL_DYNAMIC_STORAGE_BIT);
+  b.hits = gl::make_buffer(nullptr, chunk * m * sizeof(RayHit));
+  gl::check_gl("uploading the occlusion job");
+}
+
+// The uniforms both shaders share (u_count is set per chunk).
+void GlPointTracer::set_job_uniforms(GLuint p, const OcclusionJob& job) const {
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_dirs"), GLuint(job.directions.size()));
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_has_tree"), has_tree_ ? 1u : 0u);
+  glProgramUniform1f(p, glGetUniformLocation(p, "u_offset"), job.offset);
+}
+
+// Work groups for `invocations` (the bound program's, numbered x fastest),
+// as many in x as the work group count limit allows and the rest in y; then
+// glFinish, so that no dispatch queues behind another.
+void GlPointTracer::dispatch(std::uint64_t invocations) const {
+  const std::uint64_t groups = (invocations + group_ - 1) / group_;
+  if (groups == 0) return;
+  const std::uint64_t x = std::min<std::uint64_t>(groups, std::max<std::uint64_t>(limits_.work_groups, 1));
+  glDispatchCompute(GLuint(x), GLuint((groups + x - 1) / x), 1);
+  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  glFinish();
+}
+
 // Points [first, first + count): uploaded, traced, their sums read into `out`.
 void GlPointTracer::run_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
                               OcclusionSums& out) const {
   const std::size_t nc = std::size_t(job.nc);
-  std::vector<glm::vec4> points(2 * count);
-  for (std::size_t i = 0; i < count; ++i) {
-    points[2 * i] = glm::vec4(job.positions[first + i], 1.0f);
-    points[2 * i + 1] = glm::vec4(job.normals[first + i], 0.0f);
-  }
-  glNamedBufferSubData(b.points, 0, GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data());
+  upload_points(job, first, count, b.points);
   const GLuint p = program(job.nc);
   glUseProgram(p);
   glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(count));
-  const GLuint buffers[] = {nodes_, corners_, b.points, b.directions, b.basis, b.rays, b.stats, b.sums};
-  for (GLuint slot = 0; slot < std::size(buffers); ++slot)
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, buffers[slot]);
-  glDispatchCompute(GLuint((count + group_ - 1) / group_), 1, 1);
-  glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-  glFinish();
+  bind_buffers({nodes_, corners_, b.points, b.directions, b.basis, b.rays, b.stats, b.sums});
+  dispatch(count);  // count <= the work group count limit x the group: y = 1
   glGetNamedBufferSubData(b.rays, 0, GLsizeiptr(count * sizeof(std::uint32_t)), out.occluded_rays.data() + first);
   if (nc > 0)
     glGetNamedBufferSubData(b.sums, 0, GLsizeiptr(count * nc * sizeof(double)), out.occluded_basis.data() + first * nc);
@@ -240,10 +317,42 @@ void GlPointTracer::run_chunk(const OcclusionJob& job, std::size_t first, std::s
   }
 }
 
-void check_job(const OcclusionJob& job) {
+// Points [first, first + count): uploaded, their closest hits traced and
+// read into hits[0, count M), leaf-order triangles mapped to the mesh's.
+void GlPointTracer::run_hit_chunk(const OcclusionJob& job, std::size_t first, std::size_t count,
+                                  const TraceBuffers& b, std::vector<RayHit>& hits) const {
+  const std::size_t slots = count * job.directions.size();
+  upload_points(job, first, count, b.points);
+  const GLuint p = program(kHitsProgram);
+  glUseProgram(p);
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(count));
+  bind_buffers({nodes_, corners_, b.points, b.directions, b.hits});
+  dispatch(slots);
+  static_assert(sizeof(RayHit) == 4 * sizeof(std::uint32_t) && offsetof(RayHit, t) == 12, "the shader's uvec4");
+  glGetNamedBufferSubData(b.hits, 0, GLsizeiptr(slots * sizeof(RayHit)), hits.data());
+  gl::check_gl("tracing a chunk of points' closest hits");
+  for (std::size_t r = 0; r < slots; ++r) {
+    RayHit& h = hits[r];
+    if (h.triangle == kNoRayHit) continue;
+    if (h.triangle >= triangle_ids_.size())
+      throw Error(fmt::format("GPU tracer: triangle {} of {} hit (the hits shader is wrong)", h.triangle,
+                              triangle_ids_.size()));
+    h.triangle = triangle_ids_[h.triangle];
+  }
+}
+
+// Points [0, n) in chunks of `chunk`, in order; run(first, count) returning
+// false cancels (prt::Error("cancelled")).
+void for_each_chunk(std::size_t n, std::size_t chunk, const std::function<bool(std::size_t, std::size_t)>& run) {
+  for (std::size_t first = 0; first < n; first += chunk)
+    if (!run(first, std::min(chunk, n - first))) throw Error("cancelled");
+}
+
+// basis: check the basis against nc too (trace(); trace_hits uses neither).
+void check_job(const OcclusionJob& job, bool basis) {
   if (job.normals.size() != job.positions.size())
     throw Error(fmt::format("GPU tracer: {} normals for {} points", job.normals.size(), job.positions.size()));
-  if (job.nc < 0 || job.basis.size() != job.directions.size() * std::size_t(job.nc))
+  if (basis && (job.nc < 0 || job.basis.size() != job.directions.size() * std::size_t(job.nc)))
     throw Error(fmt::format("GPU tracer: a basis of {} floats for {} directions of {} coefficients", job.basis.size(),
                             job.directions.size(), job.nc));
   if (job.directions.size() > 0xffffffffu || job.positions.size() > 0xffffffffu)
@@ -252,7 +361,7 @@ void check_job(const OcclusionJob& job) {
 
 void GlPointTracer::trace(const OcclusionJob& job, OcclusionSums& out,
                           const std::function<bool(std::size_t, std::size_t)>& progress) const {
-  check_job(job);
+  check_job(job, true);
   const std::size_t n = job.positions.size(), nc = std::size_t(job.nc);
   out.occluded_basis.assign(n * nc, 0.0);
   out.occluded_rays.assign(n, 0);
@@ -260,23 +369,43 @@ void GlPointTracer::trace(const OcclusionJob& job, OcclusionSums& out,
   out.occluded_cos.assign(n, 0.0);
   out.occluded_dir.assign(n, glm::dvec3(0.0));
   if (n == 0) return;
-  const std::lock_guard<std::mutex> lock(mutex_);
-  RestoreCurrent restore(egl_);
-  egl_.make_current();
-  const std::size_t chunk = chunk_points(job);
-  TraceBuffers b;
-  upload_job(job, chunk, b);
-  const GLuint p = program(job.nc);
-  glProgramUniform1ui(p, glGetUniformLocation(p, "u_dirs"), GLuint(job.directions.size()));
-  glProgramUniform1ui(p, glGetUniformLocation(p, "u_has_tree"), has_tree_ ? 1u : 0u);
-  glProgramUniform1f(p, glGetUniformLocation(p, "u_offset"), job.offset);
-  glProgramUniform1d(p, glGetUniformLocation(p, "u_weight"), job.weight);
-  for (std::size_t first = 0; first < n; first += chunk) {
-    const std::size_t count = std::min(chunk, n - first);
-    run_chunk(job, first, count, b, out);
-    if (progress && !progress(first + count, n)) throw Error("cancelled");
-  }
-  glUseProgram(0);
+  in_context([&] {
+    const std::size_t m = std::max<std::size_t>(job.directions.size(), 1);
+    const std::size_t row_bytes = std::max({nc * sizeof(double), kStatDoubles * sizeof(double), 2 * sizeof(glm::vec4)});
+    const std::uint64_t cap = std::max<std::uint64_t>(limits_.work_groups, 1) * group_;
+    const std::size_t chunk = chunk_points(n, 2 * kChunkRays / m, group_, row_bytes, cap);
+    TraceBuffers b;
+    upload_job(job, chunk, b);
+    const GLuint p = program(job.nc);
+    set_job_uniforms(p, job);
+    glProgramUniform1d(p, glGetUniformLocation(p, "u_weight"), job.weight);
+    for_each_chunk(n, chunk, [&](std::size_t first, std::size_t count) {
+      run_chunk(job, first, count, b, out);
+      return !progress || progress(first + count, n);
+    });
+    glUseProgram(0);
+  });
+}
+
+void GlPointTracer::trace_hits(const OcclusionJob& job, const std::function<bool(const HitChunk&)>& consume) const {
+  check_job(job, false);
+  const std::size_t n = job.positions.size(), m = job.directions.size();
+  if (n == 0) return;  // consume is not called
+  in_context([&] {
+    const std::uint64_t slots_cap = std::max<std::uint64_t>(limits_.work_groups, 1) * kMinGroupsY * group_;
+    const std::size_t chunk = chunk_points(n, kChunkRays / std::max<std::size_t>(m, 1), 1,
+                                           std::max(m * sizeof(RayHit), 2 * sizeof(glm::vec4)),
+                                           slots_cap / std::max<std::size_t>(m, 1));
+    TraceBuffers b;
+    upload_hit_job(job, chunk, b);
+    set_job_uniforms(program(kHitsProgram), job);
+    std::vector<RayHit> hits(chunk * m);
+    for_each_chunk(n, chunk, [&](std::size_t first, std::size_t count) {
+      run_hit_chunk(job, first, count, b, hits);
+      return consume(HitChunk{first, count, std::span<const RayHit>(hits.data(), count * m)});
+    });
+    glUseProgram(0);
+  });
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The flat BVH a GPU traverses (prt/point_tracer.h): build_flat_bvh's
-// structure, its determinism, its refusals, and flat_bvh_occluded (the CPU
-// reference of the shader's traversal) against Embree's occlusion.
+// structure, its determinism, its refusals, flat_bvh_occluded (the CPU
+// reference of the occlusion shader's traversal) against Embree's occlusion
+// and flat_bvh_closest (the hits shader's) against Embree's closest hits.
 #include "test_meshes.h"
 
 // RayScene (Embree's occlusion) is private to prt::precompute, which this
@@ -23,9 +24,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace prt {
@@ -326,18 +329,22 @@ constexpr int kFbvhRays = 10000;
 // Rays from points on the surface (lifted off by `offset` along the face
 // normal, either side, tnear = offset, as the transfer traces) and from
 // points in and around the bounding box (tnear 0); a tenth of the
-// directions have a zero component. The share of rays on which `bvh` and
-// Embree disagree; `hits`: how many Embree found occluded.
-double fbvh_mismatch_rate(const FlatBvh& bvh, const Mesh& m, std::uint64_t seed, int& hits) {
-  const detail::RayScene scene(m);
-  const float offset = float(detail::default_ray_offset(m));
-  const glm::vec3 lo = m.bounds_min(), hi = m.bounds_max(), pad = 0.2f * (hi - lo);
-  FbvhRng rng{seed};
-  int mismatches = 0;
-  hits = 0;
-  for (int r = 0; r < kFbvhRays; ++r) {
-    glm::vec3 o;
-    float tnear = 0.0f;
+// directions have a zero component. The same rays for a mesh and a seed.
+struct FbvhRays {
+  const Mesh& m;
+  float offset;
+  glm::vec3 lo, hi, pad;
+  FbvhRng rng;
+  FbvhRays(const Mesh& mesh, std::uint64_t seed)
+      : m(mesh),
+        offset(float(detail::default_ray_offset(mesh))),
+        lo(mesh.bounds_min()),
+        hi(mesh.bounds_max()),
+        pad(0.2f * (hi - lo)),
+        rng(seed) {}
+  // Ray r (called with r = 0, 1, 2, ... in turn).
+  void next(int r, glm::vec3& o, glm::vec3& d, float& tnear) {
+    tnear = 0.0f;
     if (r % 2 == 0) {
       const glm::uvec3 t = m.triangles[rng.next() % m.triangles.size()];
       const glm::vec3 a = m.positions[t.x], b = m.positions[t.y], c = m.positions[t.z];
@@ -349,11 +356,25 @@ double fbvh_mismatch_rate(const FlatBvh& bvh, const Mesh& m, std::uint64_t seed,
     } else {
       for (int k = 0; k < 3; ++k) o[k] = lo[k] - pad[k] + float(rng.uniform()) * (hi[k] - lo[k] + 2 * pad[k]);
     }
-    glm::vec3 d = rng.unit();
+    d = rng.unit();
     if (r % 10 == 5) {
       d[rng.next() % 3] = 0.0f;
       d = glm::normalize(d);
     }
+  }
+};
+
+// The share of FbvhRays on which `bvh` and Embree disagree; `hits`: how
+// many Embree found occluded.
+double fbvh_mismatch_rate(const FlatBvh& bvh, const Mesh& m, std::uint64_t seed, int& hits) {
+  const detail::RayScene scene(m);
+  FbvhRays rays(m, seed);
+  int mismatches = 0;
+  hits = 0;
+  for (int r = 0; r < kFbvhRays; ++r) {
+    glm::vec3 o, d;
+    float tnear;
+    rays.next(r, o, d, tnear);
     const bool embree = scene.occluded1(o, d, tnear);
     hits += embree;
     mismatches += flat_bvh_occluded(bvh, o, d, tnear) != embree;
@@ -391,6 +412,153 @@ TEST(FlatBvh, ComparisonCatchesALostSubtree) {
   const double rate = fbvh_mismatch_rate(bvh, m, 2, hits);
   std::printf("lost subtree: mismatch rate %.1e\n", rate);
   EXPECT_GT(rate, 10 * kFbvhMaxMismatchRate);
+}
+
+// ---- the closest hit -----------------------------------------------------------------
+
+// Known answers: two parallel quads (z = 1 and z = 2, the farther listed
+// first, so that storage order is not the answer), a leaf a triangle.
+// Catches a traversal that keeps the first hit found instead of the nearest,
+// ignores tnear, reports a leaf-order index instead of the mesh's, or
+// mislabels u and v.
+TEST(FlatBvh, ClosestHitOfTwoQuads) {
+  const auto quad_at = [](float z, std::uint32_t base) {
+    std::vector<glm::vec3> p = {{-1, -1, z}, {1, -1, z}, {1, 1, z}, {-1, 1, z}};
+    std::vector<glm::uvec3> t = {{base, base + 1, base + 2}, {base, base + 2, base + 3}};
+    return std::make_pair(p, t);
+  };
+  auto [far_p, far_t] = quad_at(2.0f, 0);
+  auto [near_p, near_t] = quad_at(1.0f, 4);
+  far_p.insert(far_p.end(), near_p.begin(), near_p.end());
+  far_t.insert(far_t.end(), near_t.begin(), near_t.end());
+  const Mesh m = make_mesh(std::move(far_p), std::move(far_t), {}, {}, {}, "two quads");
+  const FlatBvh bvh = build_flat_bvh(m, 1);
+  ASSERT_EQ(bvh.triangle_ids.size(), 4u);
+  // (0.5, -0.5) lies in each quad's first triangle (a, b, c) at u = 0.5, v = 0.25.
+  const glm::vec3 o(0.5f, -0.5f, 0.0f), up(0, 0, 1);
+  const RayHit near = flat_bvh_closest(bvh, o, up, 0.0f);
+  EXPECT_EQ(near.triangle, 2u);
+  EXPECT_EQ(near.t, 1.0f);
+  EXPECT_NEAR(near.u, 0.5f, 1e-6f);
+  EXPECT_NEAR(near.v, 0.25f, 1e-6f);
+  const RayHit past = flat_bvh_closest(bvh, o, up, 1.5f);  // starts past the nearer quad
+  EXPECT_EQ(past.triangle, 0u);
+  EXPECT_EQ(past.t, 2.0f);
+  // From between the quads down, at (-0.5, 0.5): their second triangles.
+  const RayHit from_between = flat_bvh_closest(bvh, glm::vec3(-0.5f, 0.5f, 1.5f), -up, 0.0f);
+  EXPECT_EQ(from_between.triangle, 3u);
+  EXPECT_EQ(from_between.t, 0.5f);
+  const RayHit miss = flat_bvh_closest(bvh, o, -up, 0.0f);
+  EXPECT_EQ(miss.triangle, kNoRayHit);
+  EXPECT_FALSE(miss.hit());
+  EXPECT_EQ(miss.t, 0.0f);
+  EXPECT_EQ(flat_bvh_closest(bvh, glm::vec3(5, 0, 0), up, 0.0f).triangle, kNoRayHit);  // beside both
+  EXPECT_EQ(flat_bvh_closest(FlatBvh{}, o, up, 0.0f).triangle, kNoRayHit);
+}
+
+// Closest hits against Embree's (RayScene::intersect1) on FbvhRays.
+// Ties: both hit, different triangles, t within kFbvhTieT relative (a ray
+// through a shared edge or vertex, coincident triangles: which one is
+// reported depends on the order and on each test's rounding). Slips: any
+// other disagreement on what is hit (a ray grazing an edge that one test
+// counts and the other does not, as in the occlusion comparison). Both
+// bounded by kFbvhMaxMismatchRate. Where the triangle agrees, t and u, v
+// must agree within kFbvhHitT (relative to the scene's diagonal) and
+// kFbvhHitUv: Embree computes them with other float formulas (t from the
+// plane's normal, u, v scaled by the determinant), so they differ by a few
+// ulp of the coordinates, amplified at grazing angles and on small
+// triangles; not bit for bit.
+constexpr double kFbvhTieT = 1e-5;
+constexpr double kFbvhHitT = 1e-5;
+constexpr double kFbvhHitUv = 1e-3;
+
+struct FbvhClosestStats {
+  int hits = 0, ties = 0, slips = 0, t_bad = 0, uv_bad = 0;
+  double worst_t = 0, worst_uv = 0;  // over rays whose triangle agrees
+};
+
+FbvhClosestStats fbvh_closest_stats(const FlatBvh& bvh, const Mesh& m, std::uint64_t seed,
+                                    const std::function<void(RayHit&)>& perturb = {}) {
+  const detail::RayScene scene(m);
+  FbvhRays rays(m, seed);
+  const double diag = glm::length(glm::dvec3(m.bounds_max() - m.bounds_min()));
+  FbvhClosestStats s;
+  for (int r = 0; r < kFbvhRays; ++r) {
+    glm::vec3 o, d;
+    float tnear;
+    rays.next(r, o, d, tnear);
+    const detail::Hit e = scene.intersect1(o, d, tnear);
+    RayHit f = flat_bvh_closest(bvh, o, d, tnear);
+    if (perturb) perturb(f);
+    s.hits += e.hit();
+    if (!e.hit() && !f.hit()) continue;
+    if (e.triangle != f.triangle) {
+      const bool tie = e.hit() && f.hit() && std::abs(double(e.t) - f.t) <= kFbvhTieT * std::max(double(e.t), 1e-30);
+      ++(tie ? s.ties : s.slips);
+      continue;
+    }
+    const double dt = std::abs(double(e.t) - f.t) / diag;
+    const double duv = std::max(std::abs(double(e.u) - f.u), std::abs(double(e.v) - f.v));
+    s.worst_t = std::max(s.worst_t, dt);
+    s.worst_uv = std::max(s.worst_uv, duv);
+    s.t_bad += !(dt <= kFbvhHitT);
+    s.uv_bad += !(duv <= kFbvhHitUv);
+  }
+  return s;
+}
+
+bool fbvh_closest_agrees(const FbvhClosestStats& s) {
+  return s.ties + s.slips <= kFbvhMaxMismatchRate * kFbvhRays && s.t_bad == 0 && s.uv_bad == 0;
+}
+
+void fbvh_compare_closest_with_embree(const Mesh& m, std::uint64_t seed) {
+  const FbvhClosestStats s = fbvh_closest_stats(build_flat_bvh(m, 4), m, seed);
+  std::printf("%s closest hits: %d of %d rays hit; %d ties, %d slips; worst |dt|/diagonal %.2g, |du|,|dv| %.2g\n",
+              m.source.c_str(), s.hits, kFbvhRays, s.ties, s.slips, s.worst_t, s.worst_uv);
+  EXPECT_GT(s.hits, kFbvhRays / 20) << m.source;
+  EXPECT_LE(s.ties + s.slips, kFbvhMaxMismatchRate * kFbvhRays) << m.source;
+  EXPECT_EQ(s.t_bad, 0) << m.source << ": worst |dt| / diagonal " << s.worst_t;
+  EXPECT_EQ(s.uv_bad, 0) << m.source << ": worst |du|, |dv| " << s.worst_uv;
+}
+
+// Catches a closest-hit traversal that skips a nearer subtree (a wrong
+// entry distance, push order or pruning: a farther triangle reported, a slip),
+// or wrong t, u, v (a swapped u and v, t of another triangle).
+TEST(FlatBvh, ClosestAgreesWithEmbreeOnASphere) { fbvh_compare_closest_with_embree(fbvh_sphere(), 1); }
+TEST(FlatBvh, ClosestAgreesWithEmbreeOnABallOverAFloor) {
+  fbvh_compare_closest_with_embree(test::floor_and_ball(16), 2);
+}
+TEST(FlatBvh, ClosestAgreesWithEmbreeInAnOpenBox) { fbvh_compare_closest_with_embree(test::open_box(1.0f), 3); }
+TEST(FlatBvh, ClosestAgreesWithEmbreeOnATriangleSoup) {
+  fbvh_compare_closest_with_embree(fbvh_soup(3000, 0.1f, 5), 4);
+}
+TEST(FlatBvh, ClosestAgreesWithEmbreeOnTheBundledScene) {
+  fbvh_compare_closest_with_embree(load_mesh(PRT_SOURCE_DIR "/models/scene.obj"), 5);
+}
+
+// The comparison can fail: on the ball over the floor, each of these wrong
+// answers is caught (a hit moved 1e-4 of the diagonal along the ray, u and
+// v swapped, every 50th hit reported as a neighbouring triangle, the root's
+// second subtree lost).
+TEST(FlatBvh, ClosestComparisonCatchesWrongAnswers) {
+  const Mesh m = test::floor_and_ball(16);
+  const FlatBvh bvh = build_flat_bvh(m, 4);
+  const float diag = glm::length(m.bounds_max() - m.bounds_min());
+  ASSERT_TRUE(fbvh_closest_agrees(fbvh_closest_stats(bvh, m, 2)));
+  EXPECT_FALSE(fbvh_closest_agrees(fbvh_closest_stats(bvh, m, 2, [&](RayHit& h) { h.t += 1e-4f * diag; })));
+  EXPECT_FALSE(fbvh_closest_agrees(fbvh_closest_stats(bvh, m, 2, [](RayHit& h) { std::swap(h.u, h.v); })));
+  int k = 0;
+  const auto neighbour = [&](RayHit& h) {
+    if (h.hit() && ++k % 50 == 0) h.triangle = (h.triangle + 1) % std::uint32_t(m.triangles.size());
+  };
+  const FbvhClosestStats off = fbvh_closest_stats(bvh, m, 2, neighbour);
+  EXPECT_FALSE(fbvh_closest_agrees(off)) << off.ties << " ties, " << off.slips << " slips";
+  FlatBvh lost = bvh;
+  ASSERT_FALSE(lost.nodes[0].b & kFlatBvhLeaf);
+  lost.nodes[0].b = lost.nodes[0].a;
+  const FbvhClosestStats s = fbvh_closest_stats(lost, m, 2);
+  std::printf("closest, lost subtree: %d ties, %d slips\n", s.ties, s.slips);
+  EXPECT_FALSE(fbvh_closest_agrees(s));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The OpenGL compute tracer of occlusion jobs (prt/gpu_tracer.h): its sums
 // equal the CPU's, computed here from prt::flat_bvh_occluded over the same
-// flat BVH (prt::build_flat_bvh) in the same order; cancelling throws; a
+// flat BVH (prt::build_flat_bvh) in the same order, and its closest hits
+// (trace_hits) flat_bvh_closest's bit for bit; cancelling throws; a
 // job of no points, and a BVH of no triangles, work; a BVH over the storage
 // block limit is refused naming it. Skips (with the reason) where no EGL/GL
 // 4.5 context can be made (tests/test_gl.h).
@@ -17,11 +18,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "test_gl.h"
@@ -375,6 +378,298 @@ TEST(GpuTracer, RefusesBvhOverStorageLimit) {
     throw;
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE of 4096"), std::string::npos) << e.what();
+  }
+}
+
+// ---- trace_hits ----------------------------------------------------------------------
+
+// Every slot's closest hit on the CPU, as prt/point_tracer.h's HitChunk
+// defines it: a miss below the horizon or for a zero normal, else
+// flat_bvh_closest from p + offset n (n * M entries).
+std::vector<RayHit> gphit_cpu_hits(const FlatBvh& bvh, const OcclusionJob& job) {
+  const std::size_t m = job.directions.size();
+  std::vector<RayHit> hits(job.positions.size() * m);
+  for (std::size_t i = 0; i < job.positions.size(); ++i) {
+    const glm::vec3 nrm = job.normals[i];
+    if (glm::dot(nrm, nrm) == 0.0f) continue;
+    const glm::vec3 origin = job.positions[i] + job.offset * nrm;
+    for (std::size_t j = 0; j < m; ++j)
+      if (glm::dot(nrm, job.directions[j]) > 0.0f)
+        hits[i * m + j] = flat_bvh_closest(bvh, origin, job.directions[j], job.offset);
+  }
+  return hits;
+}
+
+bool gphit_same_bits(const RayHit& a, const RayHit& b) { return std::memcmp(&a, &b, sizeof(RayHit)) == 0; }
+
+// trace_hits's chunks gathered: expects them in point order, covering the
+// job once, each of count x M hits.
+struct GphitGathered {
+  std::vector<RayHit> hits;
+  std::vector<std::size_t> counts;  // per chunk
+};
+
+GphitGathered gphit_trace(const PointTracer& tracer, const OcclusionJob& job) {
+  GphitGathered g;
+  const std::size_t m = job.directions.size();
+  tracer.trace_hits(job, [&](const HitChunk& c) {
+    EXPECT_EQ(c.first * m, g.hits.size()) << "chunk " << g.counts.size() << " out of order";
+    EXPECT_GT(c.count, 0u);
+    EXPECT_EQ(c.hits.size(), c.count * m);
+    g.hits.insert(g.hits.end(), c.hits.begin(), c.hits.end());
+    g.counts.push_back(c.count);
+    return true;
+  });
+  EXPECT_EQ(g.hits.size(), job.positions.size() * m) << "the chunks do not cover the job";
+  return g;
+}
+
+// How many of `gpu` differ from `cpu` in any bit (the first five reported).
+std::size_t gphit_differing(const std::vector<RayHit>& gpu, const std::vector<RayHit>& cpu, std::size_t m) {
+  std::size_t differ = 0;
+  for (std::size_t r = 0; r < std::min(gpu.size(), cpu.size()); ++r)
+    if (!gphit_same_bits(gpu[r], cpu[r]) && ++differ <= 5)
+      ADD_FAILURE() << "point " << r / m << ", direction " << r % m << ": GPU (" << gpu[r].triangle << ", "
+                    << gpu[r].u << ", " << gpu[r].v << ", " << gpu[r].t << "), CPU (" << cpu[r].triangle << ", "
+                    << cpu[r].u << ", " << cpu[r].v << ", " << cpu[r].t << ")";
+  return differ;
+}
+
+// Storage blocks of 256 KiB (the test mesh's BVH fits; 32 points of 512
+// directions' hits a chunk) and 1000 work groups in x (a chunk's 16384 ray
+// slots dispatch as 1000 x 17 groups on llvmpipe): several chunks and a 2-D
+// dispatch from a small job.
+constexpr const char* kGphitSmallLimits =
+    "GL_MAX_SHADER_STORAGE_BLOCK_SIZE=262144,GL_MAX_COMPUTE_WORK_GROUP_COUNT=1000";
+
+// The sums test's job: every hit equal bit for bit to flat_bvh_closest's
+// (mapped to the mesh's triangles), in several chunks (kGphitSmallLimits)
+// and in one. Catches float arithmetic that differs from the CPU's (an
+// operation reordered or fused where the GL honours that: measured, t as
+// dot / det instead of dot * inv_det makes 4673 of the 18238 hits differ),
+// a wrong slot numbering across chunks or the 2-D dispatch, an unmapped
+// triangle index (18238 of 18238 differ), a horizon or zero normal not
+// honoured (checked on their own here too). Tie rules: HitsOnBoxFacesAndTies
+// (this job has no exact ties).
+TEST(GpuTracer, HitsEqualCpuTraversal) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  std::unique_ptr<PointTracer> small;
+  {
+    const GputLimits limits(kGphitSmallLimits);
+    GPUT_REQUIRE_TRACER(tracer, bvh);
+    small = std::move(tracer);
+  }
+  const GputJobData data = gput_job_data(mesh, 5, kSamples, 1);
+  OcclusionJob job = data.job();
+  job.offset = 1e-4f * gput_diagonal(mesh);
+  const std::size_t m = job.directions.size();
+  const GphitGathered chunked = gphit_trace(*small, job);
+  EXPECT_GE(chunked.counts.size(), 5u) << "the limits did not split the job";
+  const std::vector<RayHit> cpu = gphit_cpu_hits(bvh, job);
+  std::size_t hits = 0, misses_above = 0, below_or_zero = 0;
+  for (std::size_t r = 0; r < cpu.size(); ++r) {
+    const glm::vec3 n = job.normals[r / m];
+    const bool traced = glm::dot(n, n) != 0.0f && glm::dot(n, job.directions[r % m]) > 0.0f;
+    hits += cpu[r].hit();
+    misses_above += traced && !cpu[r].hit();
+    if (!traced) {
+      ++below_or_zero;
+      EXPECT_TRUE(r >= chunked.hits.size() || gphit_same_bits(chunked.hits[r], RayHit{})) << "slot " << r;
+    }
+  }
+  EXPECT_GT(hits, cpu.size() / 20) << "too few hits to tell";
+  EXPECT_GT(misses_above, cpu.size() / 20) << "too few misses to tell";
+  const std::size_t differ = gphit_differing(chunked.hits, cpu, m);
+  EXPECT_EQ(differ, 0u);
+  const std::unique_ptr<PointTracer> whole = make_gl_point_tracer(bvh);
+  const GphitGathered one = gphit_trace(*whole, job);
+  EXPECT_EQ(one.counts.size(), 1u);
+  EXPECT_EQ(gphit_differing(one.hits, cpu, m), 0u);
+  ::testing::Test::RecordProperty("hits_differing", std::to_string(differ));
+  std::printf("GPU closest hits (%s): %zu points x %zu directions in %zu chunks: %zu hits, %zu misses traced, %zu "
+              "not traced; %zu differ from flat_bvh_closest\n",
+              small->name().c_str(), job.positions.size(), m, chunked.counts.size(), hits, misses_above,
+              below_or_zero, differ);
+}
+
+// Rays with zero components from points on an open box's faces (its
+// vertices and edge midpoints; 0 * inf = NaN in the slab test, which
+// fmin_/fmax_ must ignore as C's fmin and fmax do), offsets 0 and 1e-4, and
+// equal entry distances and equal t (two copies of the box, the copy's
+// triangles after the original's, a triangle a leaf: a tie between boxes
+// must visit a first, a tie between triangles keep the first found). Every hit bit for bit as
+// flat_bvh_closest's. Catches `ta < tb` for `ta <= tb` (measured: 96 of
+// 96 hits differ at max_leaf 1), `<=` for `<` in the triangle's test
+// against the best (96 of 96 at max_leaf 8), and GLSL's min/max for
+// fmin_/fmax_ on a GL whose min/max return a NaN operand (llvmpipe's ignore
+// it, as fmin does: not caught there).
+TEST(GpuTracer, HitsOnBoxFacesAndTies) {
+  Mesh mesh = test::open_box(1.0f);
+  const std::size_t nt = mesh.triangles.size();
+  for (std::size_t t = 0; t < nt; ++t) mesh.triangles.push_back(mesh.triangles[t]);
+  {
+    std::string why;
+    if (!gput_try_tracer(FlatBvh{}, why)) PRT_SKIP_WITHOUT_GL(why);
+  }
+  std::vector<glm::vec3> points(mesh.positions.begin(), mesh.positions.end());
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int e = 0; e < 3; ++e)
+      points.push_back(0.5f * (mesh.positions[mesh.triangles[t][e]] + mesh.positions[mesh.triangles[t][(e + 1) % 3]]));
+  points.push_back({0.3f, 0.4f, 0.2f});  // inside, off every plane
+  std::vector<glm::vec3> positions, normals;
+  for (const glm::vec3& p : points)
+    for (const glm::vec3& n : {glm::vec3(0, 1, 0), glm::vec3(1, 0, 0), glm::vec3(0, 0, -1), glm::vec3(-1, 0, 0)}) {
+      positions.push_back(p);
+      normals.push_back(n);
+    }
+  const std::vector<glm::vec3> dirs = {{1, 0, 0},        {-1, 0, 0},      {0, 1, 0},       {0, -1, 0},
+                                       {0, 0, 1},        {0, 0, -1},      {0.6f, 0.8f, 0}, {0, -0.6f, 0.8f},
+                                       {-0.8f, 0, 0.6f}, {0.6f, 0, -0.8f}, glm::normalize(glm::vec3(0.3f, -1, 0.2f))};
+  // A triangle a leaf: the twins' boxes tie; 8 a leaf: the twins share leaves.
+  for (const int max_leaf : {1, kFlatBvhMaxLeaf}) {
+    const FlatBvh bvh = build_flat_bvh(mesh, max_leaf);
+    const std::unique_ptr<PointTracer> tracer = make_gl_point_tracer(bvh);
+    std::size_t differ = 0, hits = 0, copies = 0;
+    for (const float offset : {0.0f, 1e-4f}) {
+      OcclusionJob job;
+      job.positions = positions;
+      job.normals = normals;
+      job.directions = dirs;
+      job.offset = offset;
+      const std::vector<RayHit> cpu = gphit_cpu_hits(bvh, job);
+      differ += gphit_differing(gphit_trace(*tracer, job).hits, cpu, dirs.size());
+      for (const RayHit& h : cpu) {
+        hits += h.hit();
+        copies += h.hit() && h.triangle >= nt;
+      }
+    }
+    std::printf("box faces and ties, max_leaf %d: %zu hits (%zu on the copy), %zu differ\n", max_leaf, hits, copies,
+                differ);
+    EXPECT_EQ(differ, 0u) << "max_leaf " << max_leaf;
+    EXPECT_GT(hits, 50u);
+    // Each hit is a tie of a triangle and its copy (equal boxes, equal t):
+    // build_flat_bvh puts the original first (in a, and first in a leaf),
+    // so the CPU's rules report the original every time (measured); `ta <
+    // tb` or `<=` would report the copy, and differ.
+    EXPECT_EQ(copies, 0u) << "max_leaf " << max_leaf;
+  }
+}
+
+// Throughput on llvmpipe (or a GPU), printed: trace_hits against trace on
+// one job of the test mesh (every vertex, 512 directions), in rays traced
+// (above the horizon) a second; the hits also checked against the CPU on a
+// sample of points. Catches a trace_hits far slower than trace (a hang-like
+// regression: more than 20 times slower).
+TEST(GpuTracer, HitsThroughput) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  const GputJobData data = gput_job_data(mesh, 1, kSamples, 1);
+  OcclusionJob job = data.job();
+  job.offset = 1e-4f * gput_diagonal(mesh);
+  const std::size_t m = job.directions.size();
+  std::size_t rays = 0;
+  for (std::size_t i = 0; i < job.positions.size(); ++i)
+    for (const glm::vec3& d : job.directions) rays += glm::dot(job.normals[i], d) > 0.0f;
+  using Clock = std::chrono::steady_clock;
+  OcclusionSums sums;
+  tracer->trace(job, sums, {});  // warm: the program built
+  auto start = Clock::now();
+  tracer->trace(job, sums, {});
+  const double trace_s = std::chrono::duration<double>(Clock::now() - start).count();
+  start = Clock::now();
+  const GphitGathered g = gphit_trace(*tracer, job);
+  const double hits_s = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf("%zu points x %zu directions, %zu rays: trace %.3f s (%.3g rays/s), trace_hits %.3f s (%.3g rays/s), "
+              "%zu chunks\n",
+              job.positions.size(), m, rays, trace_s, rays / trace_s, hits_s, rays / hits_s, g.counts.size());
+  EXPECT_LT(hits_s, 20 * trace_s + 1.0);
+  OcclusionJob sample = job;
+  sample.positions = job.positions.first(std::min<std::size_t>(job.positions.size(), 100));
+  sample.normals = job.normals.first(sample.positions.size());
+  EXPECT_EQ(gphit_differing(g.hits, gphit_cpu_hits(bvh, sample), m), 0u);
+}
+
+// Cancelling (consume returning false after the second of several chunks)
+// throws "cancelled" with no third call, and the tracer works after it.
+// Catches a cancel that is ignored or a chunk delivered after it.
+TEST(GpuTracer, HitsCancelThrows) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  const GputLimits limits(kGphitSmallLimits);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  const GputJobData data = gput_job_data(mesh, 5, kSamples, 1);
+  OcclusionJob job = data.job();
+  job.offset = 1e-4f * gput_diagonal(mesh);
+  std::size_t calls = 0;
+  try {
+    tracer->trace_hits(job, [&](const HitChunk&) { return ++calls < 2; });
+    ADD_FAILURE() << "a cancelled trace_hits returned";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "cancelled");
+  }
+  EXPECT_EQ(calls, 2u);
+  OcclusionJob few = job;
+  few.positions = job.positions.first(20);
+  few.normals = job.normals.first(20);
+  EXPECT_EQ(gphit_differing(gphit_trace(*tracer, few).hits, gphit_cpu_hits(bvh, few), few.directions.size()), 0u);
+}
+
+// A job of no points: consume is never called (as trace() calls no
+// progress). No directions: chunks of empty hits covering the points. No
+// triangle: every slot a miss (RayHit{}, bit for bit). basis and nc are not
+// looked at (a basis that does not match nc is no error). Catches a call
+// with a bogus chunk, a GL error on empty buffers, or a hit without a tree.
+TEST(GpuTracer, HitsEmptyJobNoDirectionsAndEmptyTree) {
+  const Mesh mesh = gput_mesh();
+  const FlatBvh bvh = build_flat_bvh(mesh);
+  GPUT_REQUIRE_TRACER(tracer, bvh);
+  const GputJobData data = gput_job_data(mesh, 40, 64, 3);
+  OcclusionJob job = data.job();
+  job.offset = 1e-3f;
+  job.nc = 5;  // not 9: trace() would refuse it
+  OcclusionJob empty = job;
+  empty.positions = {};
+  empty.normals = {};
+  std::size_t calls = 0;
+  tracer->trace_hits(empty, [&](const HitChunk&) { return ++calls, true; });
+  EXPECT_EQ(calls, 0u);
+  OcclusionJob no_dirs = job;
+  no_dirs.directions = {};
+  const GphitGathered none = gphit_trace(*tracer, no_dirs);
+  EXPECT_TRUE(none.hits.empty());
+  EXPECT_GE(none.counts.size(), 1u);
+  const std::unique_ptr<PointTracer> open = make_gl_point_tracer(FlatBvh{});
+  const GphitGathered g = gphit_trace(*open, job);
+  std::size_t not_miss = 0;
+  for (const RayHit& h : g.hits) not_miss += !gphit_same_bits(h, RayHit{});
+  EXPECT_EQ(not_miss, 0u);
+  EXPECT_FALSE(g.hits.empty());
+}
+
+// The hits buffer over the storage block limit is refused, naming it.
+// Catches a missing check (a GL error or a truncated buffer instead).
+TEST(GpuTracer, HitsRefuseBufferOverStorageLimit) {
+  {
+    std::string why;
+    if (!gput_try_tracer(FlatBvh{}, why)) PRT_SKIP_WITHOUT_GL(why);
+  }
+  const GputLimits limit("GL_MAX_SHADER_STORAGE_BLOCK_SIZE=4096");
+  const std::unique_ptr<PointTracer> tracer = make_gl_point_tracer(FlatBvh{});
+  const Mesh mesh = gput_mesh();
+  const GputJobData data = gput_job_data(mesh, 40, 128, 1);  // 256 directions: 4096 bytes a point fit
+  OcclusionJob job = data.job();
+  EXPECT_NO_THROW(tracer->trace_hits(job, [](const HitChunk&) { return true; }));
+  const GputJobData more = gput_job_data(mesh, 40, 129, 1);  // 258 directions: 4128 bytes do not
+  try {
+    tracer->trace_hits(more.job(), [](const HitChunk&) { return true; });
+    ADD_FAILURE() << "hits of 4128 bytes a point were accepted";
+  } catch (const NoGlContext&) {
+    throw;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the hits of 1 points (258 directions) take 4128 bytes"), std::string::npos)
+        << e.what();
   }
 }
 

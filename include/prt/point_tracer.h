@@ -1,5 +1,5 @@
-// prt/point_tracer.h - the transfer's occlusion sums from another tracer
-// than Embree on the CPU (prt precompute --device gpu; docs/PRECOMPUTE.md
+// prt/point_tracer.h - the transfer's rays traced by another tracer than
+// Embree on the CPU (prt precompute --device gpu; docs/PRECOMPUTE.md
 // "On the GPU"): a flat BVH a GPU traverses, the job a transfer's first pass
 // hands over, and what comes back. Plain data: prt::precompute builds the
 // BVH (with Embree's builder) and sums what comes back into the transfer;
@@ -55,6 +55,23 @@ struct FlatBvh {
 // t > tnear and the barycentrics are in [0, 1]).
 bool flat_bvh_occluded(const FlatBvh& bvh, glm::vec3 o, glm::vec3 d, float tnear);
 
+// The closest hit of one ray (flat_bvh_closest; PointTracer::trace_hits).
+inline constexpr std::uint32_t kNoRayHit = 0xffffffffu;
+struct RayHit {
+  std::uint32_t triangle = kNoRayHit;  // the mesh's triangle index (FlatBvh::triangle_ids), kNoRayHit: none
+  float u = 0, v = 0;  // barycentrics of the triangle's corners 1 and 2 (Embree's u, v): p = (1-u-v) a + u b + v c
+  float t = 0;         // the hit's distance along the (unit) direction
+  bool hit() const { return triangle != kNoRayHit; }
+};
+static_assert(sizeof(RayHit) == 16, "RayHit: one uvec4 of the shader's output");
+
+// The closest triangle of `bvh` (either face) the ray o + t d meets at
+// t > tnear: the CPU reference of the GPU's closest-hit traversal, operation
+// for operation (the same Moller-Trumbore test as flat_bvh_occluded; a
+// triangle replaces the best so far where its t is strictly smaller, so the
+// first found of equal t stays; the traversal's order is the shader's).
+RayHit flat_bvh_closest(const FlatBvh& bvh, glm::vec3 o, glm::vec3 d, float tnear);
+
 // ---- the occlusion job -------------------------------------------------------------
 
 // The shadowed transfer's rays of some points, as compute_transfer traces
@@ -82,6 +99,19 @@ struct OcclusionSums {
   std::vector<glm::dvec3> occluded_dir;  // sum over occluded rays of wc d
 };
 
+// What PointTracer::trace_hits hands back, a chunk of points at a time:
+// points [first, first + count) of the job, and the closest hit of each of
+// their rays, point first + i's ray along direction j at hits[i M + j]
+// (M = the job's directions). A direction at or below the point's horizon
+// (dot(n, d) <= 0 in float), and every direction of a point with a zero
+// normal, has no ray: its entry is a miss (RayHit{}: kNoRayHit, u = v =
+// t = 0). The rays are the occlusion job's: from p + offset n, t in
+// (offset, infinity), t measured from that lifted origin.
+struct HitChunk {
+  std::size_t first = 0, count = 0;
+  std::span<const RayHit> hits;  // count x M
+};
+
 // A tracer of occlusion jobs (prt::runtime's GL compute tracer,
 // make_gl_point_tracer in prt/gpu_tracer.h). trace() fills `out` for every
 // point of `job` (resizing it), or throws prt::Error; `progress` (may be
@@ -92,6 +122,15 @@ class PointTracer {
   virtual ~PointTracer() = default;
   virtual void trace(const OcclusionJob& job, OcclusionSums& out,
                      const std::function<bool(std::size_t, std::size_t)>& progress) const = 0;
+  // The closest hit of every ray of `job` (its basis and nc are not used),
+  // handed to `consume` a chunk at a time in point order, each chunk's
+  // `hits` valid during the call only; `consume` returning false cancels
+  // (prt::Error("cancelled")); `consume` must not call the tracer (a GL
+  // tracer holds its lock and context during the call). What
+  // interreflection, glossy matrices, directional rows and wavelets need of
+  // each ray (prt::compute_transfer and compute_wavelet_transfer take them
+  // on the CPU, as they take Embree's hits).
+  virtual void trace_hits(const OcclusionJob& job, const std::function<bool(const HitChunk&)>& consume) const = 0;
   // What traces: "OpenGL compute on <renderer string>".
   virtual std::string name() const = 0;
 };
