@@ -189,13 +189,11 @@ std::uint32_t RayScene::occluded8(const glm::vec3& o, const glm::vec3* dirs, int
   return bits;
 }
 
-namespace {
-bool is_front(const Mesh& m, unsigned tri, const glm::vec3& dir) {
+bool front_facing(const Mesh& m, std::uint32_t tri, const glm::vec3& dir) {
   const glm::uvec3 t = m.triangles[tri];
   const glm::vec3 n = glm::cross(m.positions[t.y] - m.positions[t.x], m.positions[t.z] - m.positions[t.x]);
   return glm::dot(n, dir) < 0.0f;
 }
-}  // namespace
 
 void RayScene::intersect8(const glm::vec3& o, const glm::vec3* dirs, int count, float tnear, Hit* hits) const {
   PRT_CHECK(count >= 0 && count <= 8);
@@ -219,7 +217,7 @@ void RayScene::intersect8(const glm::vec3& o, const glm::vec3* dirs, int count, 
     h.u = rh.hit.u[i];
     h.v = rh.hit.v[i];
     h.t = rh.ray.tfar[i];
-    h.front = is_front(mesh_, h.triangle, dirs[i]);
+    h.front = front_facing(mesh_, h.triangle, dirs[i]);
   }
 }
 
@@ -243,7 +241,7 @@ void collect_hit(const RTCFilterFunctionNArguments* args) {
     h.u = RTCHitN_u(args->hit, args->N, i);
     h.v = RTCHitN_v(args->hit, args->N, i);
     h.t = RTCRayN_tfar(args->ray, args->N, i);
-    h.front = is_front(*all->mesh, h.triangle, all->dir);
+    h.front = front_facing(*all->mesh, h.triangle, all->dir);
     all->hits->push_back(h);
     args->valid[i] = 0;
   }
@@ -283,7 +281,7 @@ Hit RayScene::intersect1(const glm::vec3& o, const glm::vec3& d, float tnear) co
   h.u = rh.hit.u;
   h.v = rh.hit.v;
   h.t = rh.ray.tfar;
-  h.front = is_front(mesh_, h.triangle, d);
+  h.front = front_facing(mesh_, h.triangle, d);
   return h;
 }
 

@@ -25,6 +25,11 @@ struct Hit {
   bool hit() const { return triangle != ~0u; }
 };
 
+// Does a ray along `dir` strike the side of triangle `tri` its normal
+// (counter-clockwise corners) faces? What Hit::front says, for every
+// tracer's hits (Embree's and prt/point_tracer.h's).
+bool front_facing(const Mesh& mesh, std::uint32_t tri, const glm::vec3& dir);
+
 // The smallest bounding-box diagonal rays are traced on (a mesh of one
 // point, diagonal 0, has nothing to hit and is let through). Embree's float
 // ray-triangle test multiplies lengths, and with flush-to-zero products

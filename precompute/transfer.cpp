@@ -75,10 +75,9 @@ void check_options(const TransferOptions& o, const Mesh& mesh) {
   if (o.glossy && o.bands > kMaxGlossyBands)
     throw Error(fmt::format("--bands must be at most {} for glossy transfer (each matrix has bands^4 entries), got {}",
                             kMaxGlossyBands, o.bands));
-  if (o.tracer && (o.mode != TransferMode::Shadowed || o.glossy || o.directional || o.transmission_eta != 0 ||
-                   (o.comm && o.comm->size() > 1)))
-    throw Error("--device gpu traces the shadowed transfer in one process (not done yet: interreflected, glossy, "
-                "directional, translucent, mpirun); precompute those with --device cpu");
+  if (o.tracer && o.comm && o.comm->size() > 1)
+    throw Error("--device gpu runs in one process (one process drives the GPU): run it without mpirun, or use "
+                "--device cpu under mpirun");
   if (o.directional) {
     if (o.glossy) throw Error("--directional keeps a lightmap's L1 rows; --material glossy a vertex's whole matrices: one of them");
     if (o.mode == TransferMode::Unshadowed)
@@ -516,12 +515,64 @@ void write_direct(const Run& run, Transfer& t, std::size_t v, const std::vector<
   }
 }
 
-// One batch of `count` rays from `origin` (scratch.batch): the occluded
-// directions' cosine-weighted basis subtracted, their front hits recorded
-// for the bounce gather (and the glossy bounce light in `fronts`).
+// Ray `j` of a point (its normal `nrm`), occluded or not, and where it hit
+// (used where run.want_hits): the occluded directions' cosine-weighted basis
+// subtracted, the visible ones kept for directional rows, front hits
+// recorded for the bounce gather (and the glossy bounce light in `fronts`).
+// Every tracer's rays go through here, in direction order.
+void take_ray(const Run& run, Scratch& sc, glm::vec3 nrm, int j, bool occluded, const detail::Hit& hit,
+              std::vector<FrontHit>* fronts) {
+  const int nc = run.nc;
+  if (run.o.directional) {
+    const bool near_horizon = glm::dot(nrm, run.dirs[j]) < kHorizonBand;
+    sc.horizon_rays += near_horizon;
+    if (!occluded) {
+      sc.horizon_visible += near_horizon;
+      sc.Yvis.insert(sc.Yvis.end(), run.Ydbl.begin() + std::ptrdiff_t(j) * nc,
+                     run.Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
+    }
+  }
+  if (!occluded) return;
+  ++sc.occluded_rays;
+  const double wc = run.w * run.kernel(glm::dot(nrm, run.dirs[j]));
+  const float* y = run.Ytab.data() + std::size_t(j) * nc;
+  for (int q = 0; q < nc; ++q) sc.occ[q] += wc * y[q];
+  sc.occ_cos += wc;
+  sc.occ_dir += wc * glm::dvec3(run.dirs[j]);
+  if (run.glossy)
+    sc.Yocc.insert(sc.Yocc.end(), run.Ydbl.begin() + std::ptrdiff_t(j) * nc, run.Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
+  if (run.glossy_ir && hit.front) fronts->push_back({std::uint32_t(j), hit.triangle, hit.u, hit.v});
+  if (run.emitters && hit.front) {
+    const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
+    const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
+    const std::size_t estride = std::size_t(run.emitter_channels) * nc;
+    for (int c = 0; c < 3; ++c) {
+      const double wb = double(float(wc) * bc[c]);
+      const float* e = run.emitters->data() + std::size_t(tri[c]) * estride;
+      for (int ch = 0; ch < run.channels; ++ch) {
+        const float* ec = e + (run.emitter_channels == 1 ? 0 : std::size_t(ch) * nc);
+        for (int q = 0; q < nc; ++q) sc.eacc[std::size_t(ch) * nc + q] += wb * ec[q];
+      }
+    }
+  }
+  if (run.gather && hit.front) {
+    if (run.src.hit_points) {  // points (texels): those around the hit's lightmap UV
+      std::uint32_t idx[4];
+      float wt[4];
+      const int np = run.src.hit_points->points(hit.triangle, hit.u, hit.v, idx, wt);
+      for (int q = 0; q < np; ++q) sc.r.emplace_back(idx[q], float(wc) * wt[q]);
+    } else {
+      const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
+      const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
+      for (int c = 0; c < 3; ++c) sc.r.emplace_back(tri[c], float(wc) * bc[c]);
+    }
+  }
+}
+
+// One batch of `count` rays from `origin` (scratch.batch) traced by Embree,
+// each taken (take_ray).
 void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, int count,
                  std::vector<FrontHit>* fronts) {
-  const int nc = run.nc;
   std::uint32_t occluded = 0;
   if (run.want_hits) {
     run.scene->intersect8(origin, sc.batch, count, run.offset, sc.hits);
@@ -529,55 +580,8 @@ void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, i
   } else {
     occluded = run.scene->occluded8(origin, sc.batch, count, run.offset);
   }
-  for (int k = 0; k < count; ++k) {
-    if (run.o.directional) {
-      const int j = sc.batch_j[k];
-      const bool near_horizon = glm::dot(nrm, run.dirs[j]) < kHorizonBand;
-      sc.horizon_rays += near_horizon;
-      if (!(occluded & (1u << k))) {
-        sc.horizon_visible += near_horizon;
-        sc.Yvis.insert(sc.Yvis.end(), run.Ydbl.begin() + std::ptrdiff_t(j) * nc,
-                       run.Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
-      }
-    }
-    if (!(occluded & (1u << k))) continue;
-    ++sc.occluded_rays;
-    const detail::Hit& hit = sc.hits[k];
-    const int j = sc.batch_j[k];
-    const double wc = run.w * run.kernel(glm::dot(nrm, run.dirs[j]));
-    const float* y = run.Ytab.data() + std::size_t(j) * nc;
-    for (int q = 0; q < nc; ++q) sc.occ[q] += wc * y[q];
-    sc.occ_cos += wc;
-    sc.occ_dir += wc * glm::dvec3(run.dirs[j]);
-    if (run.glossy)
-      sc.Yocc.insert(sc.Yocc.end(), run.Ydbl.begin() + std::ptrdiff_t(j) * nc, run.Ydbl.begin() + std::ptrdiff_t(j + 1) * nc);
-    if (run.glossy_ir && hit.front) fronts->push_back({std::uint32_t(j), hit.triangle, hit.u, hit.v});
-    if (run.emitters && hit.front) {
-      const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
-      const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
-      const std::size_t estride = std::size_t(run.emitter_channels) * nc;
-      for (int c = 0; c < 3; ++c) {
-        const double wb = double(float(wc) * bc[c]);
-        const float* e = run.emitters->data() + std::size_t(tri[c]) * estride;
-        for (int ch = 0; ch < run.channels; ++ch) {
-          const float* ec = e + (run.emitter_channels == 1 ? 0 : std::size_t(ch) * nc);
-          for (int q = 0; q < nc; ++q) sc.eacc[std::size_t(ch) * nc + q] += wb * ec[q];
-        }
-      }
-    }
-    if (run.gather && hit.front) {
-      if (run.src.hit_points) {  // points (texels): those around the hit's lightmap UV
-        std::uint32_t idx[4];
-        float wt[4];
-        const int np = run.src.hit_points->points(hit.triangle, hit.u, hit.v, idx, wt);
-        for (int q = 0; q < np; ++q) sc.r.emplace_back(idx[q], float(wc) * wt[q]);
-      } else {
-        const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
-        const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
-        for (int c = 0; c < 3; ++c) sc.r.emplace_back(tri[c], float(wc) * bc[c]);
-      }
-    }
-  }
+  for (int k = 0; k < count; ++k)
+    take_ray(run, sc, nrm, sc.batch_j[k], (occluded & (1u << k)) != 0, sc.hits[k], fronts);
 }
 
 // A directional lightmap's texel: sc.C's first `rows` rows (each whole)
@@ -677,14 +681,8 @@ bool start_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
 void finish_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, double all_cos,
                   std::vector<Entry>* rows, std::vector<FrontHit>* fronts);
 
-// Point r0 + i of this rank: its rays traced, its direct transfer, AO, bent
-// normal (and glossy matrix, bounce light) written, its records appended to
-// its grain's `rows` and `fronts` (null when not kept).
-void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, std::vector<Entry>* rows,
-                 std::vector<FrontHit>* fronts) {
-  if (!start_point(run, t, fp, sc, i, rows, fronts)) return;
-  const std::size_t v = run.r0 + i;
-  const glm::vec3 nrm = run.src.normals[v];
+// A point's sums zeroed before its rays.
+void reset_sums(const Run& run, Scratch& sc) {
   std::fill(sc.occ.begin(), sc.occ.end(), 0.0);
   sc.Yocc.clear();
   sc.Yvis.clear();
@@ -693,8 +691,19 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
   sc.occluded_rays = 0;
   sc.occ_cos = 0.0;
   sc.occ_dir = glm::dvec3(0.0);
-  const glm::vec3 origin = run.src.positions[v] + run.offset * nrm;
   if (run.emitters) std::fill(sc.eacc.begin(), sc.eacc.end(), 0.0);
+}
+
+// Point r0 + i of this rank: its rays traced, its direct transfer, AO, bent
+// normal (and glossy matrix, bounce light) written, its records appended to
+// its grain's `rows` and `fronts` (null when not kept).
+void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, std::vector<Entry>* rows,
+                 std::vector<FrontHit>* fronts) {
+  if (!start_point(run, t, fp, sc, i, rows, fronts)) return;
+  const std::size_t v = run.r0 + i;
+  const glm::vec3 nrm = run.src.normals[v];
+  reset_sums(run, sc);
+  const glm::vec3 origin = run.src.positions[v] + run.offset * nrm;
   int count = 0;
   double all_cos = 0.0;  // the direction set's own integral of cos+ (pi up to its quadrature error)
   for (int j = 0; j < run.M; ++j) {
@@ -787,22 +796,33 @@ void store_block(const Run& run, FirstPass& fp, std::size_t b0, std::size_t b1,
   fp.store.append(run.glossy_ir ? pack(grain_hits) : std::vector<std::uint8_t>{});
 }
 
-// The first pass with TransferOptions::tracer (shadowed, no records): the
-// tracer sums every point's occluded rays (prt/point_tracer.h), then each
-// point is finished as the CPU's rays finish it.
-void trace_points_with(const PointTracer& tracer, const Run& run, Transfer& t, FirstPass& fp) {
+// The occlusion job of this rank's points [b0, b1).
+OcclusionJob occlusion_job(const Run& run, std::size_t b0, std::size_t b1) {
   OcclusionJob job;
-  job.positions = std::span<const glm::vec3>(run.src.positions + run.r0, run.own);
-  job.normals = std::span<const glm::vec3>(run.src.normals + run.r0, run.own);
+  job.positions = std::span<const glm::vec3>(run.src.positions + run.r0 + b0, b1 - b0);
+  job.normals = std::span<const glm::vec3>(run.src.normals + run.r0 + b0, b1 - b0);
   job.directions = run.dirs;
   job.basis = run.Ytab;
   job.nc = run.nc;
   job.weight = run.w;
   job.offset = run.offset;
+  return job;
+}
+
+// Does the tracer's sums path give every point what the first pass needs?
+// Only where each point needs its occluded rays' sums alone: no records
+// (gather, glossy bounce, emitters), no per-ray rows (glossy, directional),
+// the plain cosine kernel (the shader weighs rays by c).
+bool sums_suffice(const Run& run) { return !run.want_hits && !run.glossy && !(run.o.transmission_eta > 0); }
+
+// The first pass with TransferOptions::tracer, sums path: the tracer sums
+// every point's occluded rays (prt/point_tracer.h), then each point is
+// finished as the CPU's rays finish it.
+void trace_points_summed(const PointTracer& tracer, const Run& run, Transfer& t, FirstPass& fp) {
   OcclusionSums sums;
   detail::ProgressTicker rays(run.progress, run.own, "rays (GPU)");
   std::size_t told = 0;
-  tracer.trace(job, sums, [&](std::size_t done, std::size_t) {
+  tracer.trace(occlusion_job(run, 0, run.own), sums, [&](std::size_t done, std::size_t) {
     rays.tick(done - told);
     told = done;
     return !rays.cancelled();
@@ -822,10 +842,73 @@ void trace_points_with(const PointTracer& tracer, const Run& run, Transfer& t, F
   });
 }
 
+// Point r0 + i from the tracer's closest hits of its rays (`hits`, M, one
+// per direction): each ray above the horizon taken in direction order, as
+// trace_point takes Embree's, then finished.
+void take_point_hits(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::size_t i, const RayHit* hits,
+                     std::vector<Entry>* rows, std::vector<FrontHit>* fronts) {
+  if (!start_point(run, t, fp, sc, i, rows, fronts)) return;
+  const glm::vec3 nrm = run.src.normals[run.r0 + i];
+  reset_sums(run, sc);
+  double all_cos = 0.0;
+  for (int j = 0; j < run.M; ++j) {
+    const float c = glm::dot(nrm, run.dirs[j]);
+    if (c <= 0.0f) continue;
+    all_cos += run.w * run.kernel(c);
+    const RayHit& h = hits[j];
+    detail::Hit hit;
+    if (h.hit()) {
+      hit.triangle = h.triangle;
+      hit.u = h.u;
+      hit.v = h.v;
+      hit.t = h.t;
+      hit.front = detail::front_facing(run.mesh, h.triangle, run.dirs[j]);
+    }
+    take_ray(run, sc, nrm, j, h.hit(), hit, fronts);
+  }
+  finish_point(run, t, fp, sc, i, all_cos, rows, fronts);
+}
+
+// The first pass with TransferOptions::tracer, hits path: a block of
+// plan.block points at a time, the tracer's chunks of closest hits taken
+// per point (take_point_hits) on the worker threads, each worker grain's
+// records in point order (a grain a chunk splits continues in the next),
+// stored per block as trace_points stores Embree's.
+void trace_points_hits(const PointTracer& tracer, const Run& run, Transfer& t, FirstPass& fp) {
+  detail::ProgressTicker rays(run.progress, run.own, "rays (GPU)");
+  const std::size_t M = std::size_t(run.M);
+  for (std::size_t b0 = 0; b0 < run.own && !rays.cancelled(); b0 += run.plan.block) {
+    const std::size_t b1 = std::min(run.own, b0 + run.plan.block);
+    const std::size_t grains = (b1 - b0 + kWorkerGrain - 1) / kWorkerGrain;
+    std::vector<std::vector<Entry>> grain_rows(run.gather ? grains : 0);
+    std::vector<std::vector<FrontHit>> grain_hits(run.glossy_ir ? grains : 0);
+    tracer.trace_hits(occlusion_job(run, b0, b1), [&](const HitChunk& ch) {
+      if (ch.count == 0) return !rays.cancelled();
+      const std::size_t g0 = ch.first / kWorkerGrain, g1 = (ch.first + ch.count - 1) / kWorkerGrain + 1;
+      tbb::parallel_for(g0, g1, [&](std::size_t g) {
+        detail::enable_ftz_daz();
+        Scratch sc(run);
+        std::vector<Entry>* rows = run.gather ? &grain_rows[g] : nullptr;
+        std::vector<FrontHit>* fronts = run.glossy_ir ? &grain_hits[g] : nullptr;
+        const std::size_t i0 = std::max(ch.first, g * kWorkerGrain);
+        const std::size_t i1 = std::min(ch.first + ch.count, (g + 1) * kWorkerGrain);
+        for (std::size_t i = i0; i < i1; ++i)
+          take_point_hits(run, t, fp, sc, b0 + i, ch.hits.data() + (i - ch.first) * M, rows, fronts);
+      });
+      rays.tick(ch.count);
+      return !rays.cancelled();
+    });
+    store_block(run, fp, b0, b1, grain_rows, grain_hits);
+  }
+  rays.finish();
+}
+
 // The first pass over this rank's points, a block of plan.block at a time:
 // rays, direct transfer and records.
 void trace_points(const Run& run, Transfer& t, FirstPass& fp) {
-  if (run.o.tracer) return trace_points_with(*run.o.tracer, run, t, fp);
+  if (run.o.tracer)
+    return sums_suffice(run) ? trace_points_summed(*run.o.tracer, run, t, fp)
+                             : trace_points_hits(*run.o.tracer, run, t, fp);
   detail::ProgressTicker first(run.progress, run.own, run.trace ? "rays" : "transfer");
   for (std::size_t b0 = 0; b0 < run.own; b0 += run.plan.block) {
     const std::size_t b1 = std::min(run.own, b0 + run.plan.block);
@@ -1144,7 +1227,7 @@ Transfer compute_impl(const Mesh& mesh, const Source& src, const TransferOptions
   if (run.glossy) t.glossy_matrices.assign(V * run.gstride, 0.0f);
   make_tables(run);
   std::unique_ptr<detail::RayScene> own_scene;
-  if (run.trace && !src.scene) own_scene = std::make_unique<detail::RayScene>(mesh);
+  if (run.trace && !src.scene && !o.tracer) own_scene = std::make_unique<detail::RayScene>(mesh);
   run.scene = src.scene ? src.scene : own_scene.get();
   fp.analytic.assign(V, 0);
 

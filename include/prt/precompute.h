@@ -78,11 +78,15 @@ struct TransferOptions {
   // shadowed or interreflected, 2 bands or more
   // (prt/lightmap_directional.h; docs/LIGHTMAPS.md "Directional lightmaps").
   bool directional = false;
-  // The shadowed transfer's occlusion traced by this tracer instead of
-  // Embree on the CPU's threads (prt precompute --device gpu; prt/point_tracer.h,
-  // prt/gpu_tracer.h): the same rays, each point finished as on the CPU.
-  // Shadowed, one process, no glossy or directional rows, not translucent
-  // (refused with prt::Error otherwise). nullptr: the CPU.
+  // The first pass's rays traced by this tracer instead of Embree on the
+  // CPU's threads (prt precompute --device gpu; prt/point_tracer.h,
+  // prt/gpu_tracer.h): the same rays, each taken and each point finished
+  // as on the CPU. A shadowed diffuse transfer takes the tracer's sums
+  // (PointTracer::trace); everything else its closest hits (trace_hits):
+  // interreflection's gather, glossy matrices, directional rows, the
+  // transmitted kernel. One process (prt::Error under a communicator of
+  // more). The lights' bounce operator's probe rows stay on Embree.
+  // nullptr: the CPU.
   const PointTracer* tracer = nullptr;
   // The most memory the process may hold while computing, in bytes (0: no
   // limit; docs/PRECOMPUTE.md, "Memory"). What the result needs whatever the
@@ -416,15 +420,25 @@ struct WaveletOptions {
   // The processes sharing the job (as TransferOptions::comm): each traces
   // its range, rank 0 returns the whole transfer, the others an empty one.
   const Communicator* comm = nullptr;
+  // The visibility traced by this tracer instead of Embree on the CPU's
+  // threads (as TransferOptions::tracer; prt/point_tracer.h,
+  // prt/gpu_tracer.h): the same rays (PointTracer::trace_hits along the
+  // cube's texel directions), a texel visible where its ray hits nothing,
+  // each vertex then compressed as on the CPU. The tracer's BVH is the
+  // occluders' (build_flat_bvh). One process (refused with prt::Error under
+  // a comm of more than one). nullptr: the CPU.
+  const PointTracer* tracer = nullptr;
 };
 
 // Traces one occlusion ray per texel above the horizon of every vertex (from
 // p + offset n, tnear = offset), builds t, transforms, thresholds, quantises
 // and transposes. Vertices with a zero normal get no coefficients. TBB over
 // blocks of vertices; deterministic (same bits for any thread count).
-// Progress: phase "rays", cancellable (throws prt::Error("cancelled")).
+// Progress: phase "rays" ("rays (GPU)" with a tracer), cancellable (throws
+// prt::Error("cancelled")).
 // Throws prt::Error on bad options (cube_res, threshold, albedo, offset,
-// threads, vertex_colors without colours, more than 2^32 - 1 vertices).
+// threads, vertex_colors without colours, more than 2^32 - 1 vertices, a
+// tracer under more than one process).
 WaveletTransfer compute_wavelet_transfer(const Mesh& mesh, const WaveletOptions& options,
                                          const Progress& progress = {});
 
@@ -437,7 +451,8 @@ WaveletTransfer compute_wavelet_at_points(const Mesh& occluders, const Mesh& poi
 
 // Reference: the dense texel-domain transfer t_i (no albedo, double) of the
 // listed vertices, [k][6 r^2], traced exactly as compute_wavelet_transfer
-// does. B_v = rho_v sum_i t_i l_i is the direct per-texel relighting.
+// does (by options.tracer when set). B_v = rho_v sum_i t_i l_i is the direct
+// per-texel relighting.
 std::vector<double> wavelet_texel_transfer(const Mesh& mesh, const WaveletOptions& options,
                                            std::span<const std::uint32_t> vertices);
 
