@@ -468,6 +468,7 @@ struct Scratch {
   std::vector<double> eacc;  // points: sum of w cos barycentric T_vertex over front hits
   glm::vec3 batch[8];
   int batch_j[8];
+  float batch_c[8];
   detail::Hit hits[8];
   std::size_t occluded_rays = 0;
   double occ_cos = 0.0;
@@ -515,16 +516,17 @@ void write_direct(const Run& run, Transfer& t, std::size_t v, const std::vector<
   }
 }
 
-// Ray `j` of a point (its normal `nrm`), occluded or not, and where it hit
+// Ray `j` of a point (its normal `nrm`, c = dot(nrm, d_j) in float > 0),
+// occluded or not, and where it hit
 // (used where run.want_hits): the occluded directions' cosine-weighted basis
 // subtracted, the visible ones kept for directional rows, front hits
 // recorded for the bounce gather (and the glossy bounce light in `fronts`).
 // Every tracer's rays go through here, in direction order.
-void take_ray(const Run& run, Scratch& sc, glm::vec3 nrm, int j, bool occluded, const detail::Hit& hit,
+void take_ray(const Run& run, Scratch& sc, float c, int j, bool occluded, const detail::Hit& hit,
               std::vector<FrontHit>* fronts) {
   const int nc = run.nc;
   if (run.o.directional) {
-    const bool near_horizon = glm::dot(nrm, run.dirs[j]) < kHorizonBand;
+    const bool near_horizon = c < kHorizonBand;
     sc.horizon_rays += near_horizon;
     if (!occluded) {
       sc.horizon_visible += near_horizon;
@@ -534,7 +536,7 @@ void take_ray(const Run& run, Scratch& sc, glm::vec3 nrm, int j, bool occluded, 
   }
   if (!occluded) return;
   ++sc.occluded_rays;
-  const double wc = run.w * run.kernel(glm::dot(nrm, run.dirs[j]));
+  const double wc = run.w * run.kernel(c);
   const float* y = run.Ytab.data() + std::size_t(j) * nc;
   for (int q = 0; q < nc; ++q) sc.occ[q] += wc * y[q];
   sc.occ_cos += wc;
@@ -571,8 +573,7 @@ void take_ray(const Run& run, Scratch& sc, glm::vec3 nrm, int j, bool occluded, 
 
 // One batch of `count` rays from `origin` (scratch.batch) traced by Embree,
 // each taken (take_ray).
-void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, int count,
-                 std::vector<FrontHit>* fronts) {
+void trace_batch(const Run& run, Scratch& sc, glm::vec3 origin, int count, std::vector<FrontHit>* fronts) {
   std::uint32_t occluded = 0;
   if (run.want_hits) {
     run.scene->intersect8(origin, sc.batch, count, run.offset, sc.hits);
@@ -581,7 +582,7 @@ void trace_batch(const Run& run, Scratch& sc, glm::vec3 nrm, glm::vec3 origin, i
     occluded = run.scene->occluded8(origin, sc.batch, count, run.offset);
   }
   for (int k = 0; k < count; ++k)
-    take_ray(run, sc, nrm, sc.batch_j[k], (occluded & (1u << k)) != 0, sc.hits[k], fronts);
+    take_ray(run, sc, sc.batch_c[k], sc.batch_j[k], (occluded & (1u << k)) != 0, sc.hits[k], fronts);
 }
 
 // A directional lightmap's texel: sc.C's first `rows` rows (each whole)
@@ -711,13 +712,14 @@ void trace_point(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, std::s
     if (c <= 0.0f) continue;  // below the horizon: no ray
     all_cos += run.w * run.kernel(c);
     sc.batch[count] = run.dirs[j];
+    sc.batch_c[count] = c;
     sc.batch_j[count++] = j;
     if (count == 8) {
-      trace_batch(run, sc, nrm, origin, count, fronts);
+      trace_batch(run, sc, origin, count, fronts);
       count = 0;
     }
   }
-  if (count) trace_batch(run, sc, nrm, origin, count, fronts);
+  if (count) trace_batch(run, sc, origin, count, fronts);
   finish_point(run, t, fp, sc, i, all_cos, rows, fronts);
 }
 
@@ -864,7 +866,7 @@ void take_point_hits(const Run& run, Transfer& t, FirstPass& fp, Scratch& sc, st
       hit.t = h.t;
       hit.front = detail::front_facing(run.mesh, h.triangle, run.dirs[j]);
     }
-    take_ray(run, sc, nrm, j, h.hit(), hit, fronts);
+    take_ray(run, sc, c, j, h.hit(), hit, fronts);
   }
   finish_point(run, t, fp, sc, i, all_cos, rows, fronts);
 }
