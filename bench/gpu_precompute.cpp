@@ -1,11 +1,12 @@
-// prt_gpu_bench: the shadowed transfer of one mesh (or one lightmap's
-// texels) on the CPU (Embree, every core) and on the GPU (OpenGL compute
+// prt_gpu_bench: the transfer of one mesh (or one lightmap's texels),
+// shadowed (the tracer's sums) or interreflected (its closest hits), on the CPU (Embree, every core) and on the GPU (OpenGL compute
 // over the flat BVH, prt/gpu_tracer.h), in one run: the same rays, their
 // time, rays per second, the ratio, and how far the two files are apart
 // (docs/PRECOMPUTE.md "On the GPU"; scripts/gpu_precompute.sh runs it on a
 // lent GPU machine).
 //
 // Usage: prt_gpu_bench [--vertices N] [--texels N] [--samples S] [--bands B] [--mesh FILE] [--gpu-only]
+//                      [--mode shadowed|interreflected]
 //   --vertices N: a floor under a ball, N vertices in all (default 100000)
 //   --texels N:   instead, a lightmap of a floor with boxes, about N covered texels
 //   --mesh FILE:  instead, a mesh file (its vertices)
@@ -37,6 +38,7 @@ struct BenchArgs {
   std::size_t vertices = 100000, texels = 0;
   int samples = 1024, bands = 3;
   std::string mesh;
+  std::string mode = "shadowed";
   bool gpu_only = false;
 };
 
@@ -54,8 +56,9 @@ BenchArgs parse(int argc, char** argv) {
     else if (s == "--bands") a.bands = std::stoi(next());
     else if (s == "--mesh") a.mesh = next();
     else if (s == "--gpu-only") a.gpu_only = true;
+    else if (s == "--mode") a.mode = next();
     else throw prt::Error("unknown argument " + s + " (--vertices N, --texels N, --samples S, --bands B, --mesh FILE, "
-                          "--gpu-only)");
+                          "--gpu-only, --mode shadowed|interreflected)");
   }
   return a;
 }
@@ -102,7 +105,7 @@ struct Run {
 
 int run(const BenchArgs& a) {
   prt::TransferOptions o;
-  o.mode = prt::TransferMode::Shadowed;
+  o.mode = prt::parse_transfer_mode(a.mode);
   o.bands = a.bands;
   o.samples = a.samples;
   const bool texels = a.texels > 0;
@@ -133,9 +136,9 @@ int run(const BenchArgs& a) {
   const double bvh_s = seconds_since(t0);
   const std::unique_ptr<prt::PointTracer> gpu = prt::make_gl_point_tracer(bvh);
   const double rays = double(count) * double(a.samples);  // half of 2 x samples directions above each horizon
-  fmt::print("{} {}: {} triangles, BVH {} nodes (depth {}) in {:.2f} s; {} bands, {} samples, about {:.3g} rays\n",
-             texels ? "texels" : "vertices", count, occluders.triangles.size(), bvh.nodes.size(), bvh.depth, bvh_s,
-             a.bands, a.samples, rays);
+  fmt::print("{} {}: {} triangles, BVH {} nodes (depth {}) in {:.2f} s; {}, {} bands, {} samples, about {:.3g} "
+             "rays\n", texels ? "texels" : "vertices", count, occluders.triangles.size(), bvh.nodes.size(), bvh.depth,
+             bvh_s, a.mode, a.bands, a.samples, rays);
   const Run g = once(gpu.get());
   fmt::print("gpu ({}): {:.2f} s, {:.3g} rays/s\n", gpu->name(), g.seconds, rays / g.seconds);
   Run c;
@@ -144,10 +147,10 @@ int run(const BenchArgs& a) {
     fmt::print("cpu (Embree): {:.2f} s, {:.3g} rays/s; gpu / cpu speed {:.2f}x; relative RMS gpu vs cpu {:.3g}\n",
                c.seconds, rays / c.seconds, c.seconds / g.seconds, relative_rms(g.rows, c.rows));
   }
-  fmt::print("{{\"points\": {}, \"texels\": {}, \"triangles\": {}, \"bands\": {}, \"samples\": {}, \"rays\": {:.6g}, "
+  fmt::print("{{\"points\": {}, \"texels\": {}, \"mode\": \"{}\", \"triangles\": {}, \"bands\": {}, \"samples\": {}, \"rays\": {:.6g}, "
              "\"bvh_nodes\": {}, \"bvh_seconds\": {:.4g}, \"gpu\": \"{}\", \"gpu_seconds\": {:.4g}, "
              "\"cpu_seconds\": {:.4g}, \"relative_rms\": {:.4g}}}\n",
-             count, texels, occluders.triangles.size(), a.bands, a.samples, rays, bvh.nodes.size(), bvh_s,
+             count, texels, a.mode, occluders.triangles.size(), a.bands, a.samples, rays, bvh.nodes.size(), bvh_s,
              gpu->name(), g.seconds, a.gpu_only ? 0.0 : c.seconds, a.gpu_only ? 0.0 : relative_rms(g.rows, c.rows));
   return 0;
 }

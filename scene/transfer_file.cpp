@@ -45,7 +45,8 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{true, "prt.render"},
        S{true, "prt.export_gltf, prt.export_web"},
        S{true, "mpirun -np N prt precompute MESH ..."},
-       S{true, "prt precompute MESH --memory-limit SIZE"}}}},
+       S{true, "prt precompute MESH --memory-limit SIZE"},
+       S{true, "prt precompute MESH --device gpu (shadowed, interreflected, glossy)"}}}},
     {TransferKind::Compressed,
      {"compressed", "a compressed SH transfer", "prt compress"},
      {{S{true, "prt info FILE"},
@@ -63,7 +64,8 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{true, "prt.render"},
        S{true, "prt.export_gltf, prt.export_web (rows rebuilt)"},
        S{true, "mpirun -np N prt precompute MESH --compress KxN"},
-       S{true, "prt precompute MESH --compress KxN --memory-limit SIZE"}}}},
+       S{true, "prt precompute MESH --compress KxN --memory-limit SIZE"},
+       S{true, "prt precompute MESH --compress KxN --device gpu (the rays on the GPU, clustered PCA on the CPU)"}}}},
     {TransferKind::Wavelet,
      {"wavelet", "a wavelet transfer", "prt precompute MESH --basis wavelet"},
      {{S{true, "prt info FILE"},
@@ -85,7 +87,8 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{false, "is a wavelet transfer: prt.export_gltf and prt.export_web take SH transfers (prt.precompute)"},
        S{true, "mpirun -np N prt precompute MESH --basis wavelet"},
        S{false, "--memory-limit plans an SH transfer's memory; a wavelet transfer's size is set by --cube-res and "
-                "--threshold: leave --memory-limit out"}}}},
+                "--threshold: leave --memory-limit out"},
+       S{true, "prt precompute MESH --basis wavelet --device gpu (each cube texel's ray)"}}}},
     {TransferKind::ZH,
      {"zh", "a zonal-harmonic (local deformable) transfer", "prt precompute MESH --basis zh"},
      {{S{true, "prt info FILE"},
@@ -105,7 +108,8 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{true, "prt.render"},
        S{false, "is a zonal-harmonic transfer: prt.export_gltf and prt.export_web take SH transfers (prt.precompute)"},
        S{true, "mpirun -np N prt precompute MESH --basis zh"},
-       S{true, "prt precompute MESH --basis zh --memory-limit SIZE"}}}},
+       S{true, "prt precompute MESH --basis zh --memory-limit SIZE"},
+       S{true, "prt precompute MESH --basis zh --device gpu (the SH transfer on the GPU, the lobes fitted on the CPU)"}}}},
     {TransferKind::Lightmap,
      {"lightmap", "an SH lightmap", "prt precompute SCENE --lightmap WxH"},
      {{S{true, "prt info FILE"},
@@ -123,7 +127,8 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{true, "prt.render"},
        S{true, "prt.export_gltf(lightmap, scene, PATH), prt.export_web(lightmap, scene, DIR)"},
        S{true, "mpirun -np N prt precompute SCENE --lightmap WxH"},
-       S{true, "prt precompute SCENE --lightmap WxH --memory-limit SIZE"}}}},
+       S{true, "prt precompute SCENE --lightmap WxH --memory-limit SIZE"},
+       S{true, "prt precompute SCENE --lightmap WxH --device gpu (--directional too)"}}}},
     {TransferKind::WaveletLightmap,
      {"wavelet-lightmap", "a wavelet lightmap", "prt precompute SCENE --lightmap WxH --basis wavelet"},
      {{S{true, "prt info FILE"},
@@ -150,7 +155,8 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
                 "precompute SCENE --lightmap WxH, then prt export)"},
        S{true, "mpirun -np N prt precompute SCENE --lightmap WxH --basis wavelet"},
        S{false, "--memory-limit plans an SH transfer's memory; a wavelet lightmap's size is set by WxH, --cube-res "
-                "and --threshold: leave --memory-limit out"}}}},
+                "and --threshold: leave --memory-limit out"},
+       S{true, "prt precompute SCENE --lightmap WxH --basis wavelet --device gpu"}}}},
     {TransferKind::Probes,
      {"probes", "a probe volume", "prt precompute SCENE --probes NXxNYxNZ"},
      {{S{true, "prt info FILE"},
@@ -174,7 +180,10 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
        S{false, "a probe volume is traced in one process (not under mpirun) for now: run prt precompute SCENE "
                 "--probes without mpirun"},
        S{false, "--memory-limit plans an SH transfer's memory; a probe volume has no such plan (a 64x32x64 volume "
-                "takes about 80 MB; docs/PROBES.md): leave --memory-limit out"}}}},
+                "takes about 80 MB; docs/PROBES.md): leave --memory-limit out"},
+       S{false, "--device gpu traces transfers at vertices and texels; a probe volume's rays are traced on the CPU "
+                "(each probe refines its cube map where an edge crosses it and draws its bounce paths as it goes): "
+                "leave --device out"}}}},
 }};
 
 constexpr bool rows_complete() {
@@ -191,6 +200,7 @@ constexpr std::array<std::string_view, kConsumers> kConsumerNames = {
     "prt info",          "prt relight", "prt render",     "prt view",       "prt export (.glb)",
     "prt export --bake", "prt export --web", "prt compress", "prt reference", "prt.read_transfer",
     "Python relight",    "prt.render",  "Python export",  "mpirun",         "--memory-limit",
+    "--device gpu",
 };
 
 }  // namespace

@@ -147,8 +147,9 @@ enum class Consumer : std::uint8_t {
   PythonExport,  // prt.export_gltf, prt.export_web
   Mpi,           // mpirun -np N prt precompute
   MemoryLimit,   // prt precompute --memory-limit
+  GpuPrecompute, // prt precompute --device gpu (the kind made on the GPU)
 };
-inline constexpr std::size_t kConsumers = 15;
+inline constexpr std::size_t kConsumers = 16;
 
 // Whether `consumer` takes `kind`; when it does not, `why` is the sentence
 // the refusal says (why, and what to do instead), and when it does, how (the

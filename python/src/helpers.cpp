@@ -410,16 +410,16 @@ void light_bounce_args(prt::TransferOptions& o, bool light_bounce, double patch,
                 "light_bounce=True too");
 }
 
-void check_device_arg(const std::string& device, const std::string& mode, const std::string& material,
-                      const std::string& basis, bool adaptive) {
+void check_device_arg(const std::string& device, prt::TransferKind kind, const std::string& material, bool adaptive) {
   if (device != "cpu" && device != "gpu") throw Error("device: expected 'cpu' or 'gpu', got '" + device + "'");
   if (device == "cpu") return;
+  // The kinds the GPU makes: the kind table's (prt/transfer_file.h, Consumer::GpuPrecompute).
+  if (const prt::Support& s = prt::support(kind, prt::Consumer::GpuPrecompute); !s.works)
+    throw Error("device='gpu': " + std::string(s.why));
   const auto no = [](const std::string& what) {
-    throw Error("device='gpu': " + what + " (not done yet: leave device='cpu')");
+    throw Error("device='gpu': " + what + " (leave device='cpu')");
   };
-  if (mode != "shadowed") no("mode='" + mode + "': the GPU traces the shadowed transfer only");
-  if (material != "diffuse") no("material='" + material + "': the GPU traces the diffuse transfer only");
-  if (basis != "sh") no("basis='" + basis + "' is traced on the CPU");
+  if (material == "subsurface") no("material='subsurface' gathers the light entering the surface from points the CPU traces");
   if (adaptive) no("adaptive sample points trace their batches on the CPU");
 }
 

@@ -20,6 +20,7 @@
 #include <prt/precompute.h>
 #include <prt/progress.h>
 #include <prt/subsurface.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer.h>
 #include <prt/wavelet_transfer.h>
 #include <prt/zh_transfer.h>
@@ -236,12 +237,13 @@ auto run_released(py::object progress, F&& f) {
 // above max_adaptive_tolerance(samples) unless adaptive_any. Returns the
 // options, or nothing for adaptive=None.
 std::optional<prt::AdaptiveOptions> adaptive_arg(const py::object& adaptive, double verify, bool any, int samples);
-// device= (precompute, precompute_lightmap): 'cpu' or 'gpu', refused with
-// prt --device gpu's sentences where the GPU does not trace (mode, material,
-// basis, adaptive); device_tracer: the GL tracer of `mesh` for 'gpu' (the
-// flat BVH built, a context made: prt.Error where there is none), else null.
-void check_device_arg(const std::string& device, const std::string& mode, const std::string& material,
-                      const std::string& basis, bool adaptive);
+// device= (precompute, precompute_lightmap): 'cpu' or 'gpu', refused where
+// the GPU does not trace: a kind the kind table says it does not make
+// (prt/transfer_file.h, Consumer::GpuPrecompute: its sentence), a
+// subsurface material, adaptive points; device_tracer: the GL tracer of
+// `mesh` for 'gpu' (the flat BVH built, a context made: prt.Error where
+// there is none), else null.
+void check_device_arg(const std::string& device, prt::TransferKind kind, const std::string& material, bool adaptive);
 std::unique_ptr<prt::PointTracer> device_tracer(const std::string& device, const prt::Mesh& mesh);
 // (NX, NY, NZ) by prt::probe_dims_problem's rule, errors naming `what`.
 std::array<int, 3> probe_dims_arg(const py::object& dims, const std::string& what = "dims");

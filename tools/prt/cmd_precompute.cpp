@@ -15,6 +15,7 @@
 #include <prt/io.h>
 #include <prt/mesh.h>
 #include <prt/transfer.h>
+#include <prt/transfer_file.h>
 #include <prt/transfer_io.h>
 #include <prt/tuning.h>
 #include <prt/unwrap.h>
@@ -105,14 +106,14 @@ struct PrecomputeArgs {
   std::string subdivided_mesh;
   const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
   SubsurfaceArgs sss;  // --material subsurface's material and length scale
-  // --device cpu|gpu: Embree on the CPU's threads, or the shadowed rays in OpenGL compute shaders
+  // --device cpu|gpu: Embree on the CPU's threads, or an SH transfer's rays in OpenGL compute shaders
   // (docs/PRECOMPUTE.md "On the GPU").
   std::string device = "cpu";
   const CLI::Option* device_opt = nullptr;
 };
 
 // --device gpu: the mesh's flat BVH and the GL tracer, made before the work
-// and set as the options' tracer; nothing for --device cpu.
+// and set as the options' tracer (SH and wavelet); nothing for --device cpu.
 std::unique_ptr<PointTracer> make_device(PrecomputeArgs& a, const Mesh& mesh, bool quiet) {
   if (a.device != "gpu") return nullptr;
   const auto t0 = std::chrono::steady_clock::now();
@@ -123,31 +124,46 @@ std::unique_ptr<PointTracer> make_device(PrecomputeArgs& a, const Mesh& mesh, bo
     fmt::print(stderr, "device: {}; BVH of {} triangles: {} nodes, depth {}, built in {:.2f} s\n", tracer->name(),
                bvh.triangle_ids.size(), bvh.nodes.size(), bvh.depth, build_s);
   a.opt.tracer = tracer.get();
+  a.wopt.tracer = tracer.get();
   return tracer;
 }
 
-// --device gpu, checked before any work: what the GPU does not trace yet is
-// refused by name (docs/PRECOMPUTE.md "On the GPU").
+// The kind of transfer a run makes (the kind table's --device gpu column).
+TransferKind made_kind(const PrecomputeArgs& a) {
+  const bool wavelet = a.basis == "wavelet";
+  if (a.probes_opt->count() > 0 && !a.opt.light_bounce) return TransferKind::Probes;
+  if (a.lightmap_opt->count() > 0) return wavelet ? TransferKind::WaveletLightmap : TransferKind::Lightmap;
+  if (wavelet) return TransferKind::Wavelet;
+  if (a.basis == "zh") return TransferKind::ZH;
+  return a.compress.empty() ? TransferKind::SH : TransferKind::Compressed;
+}
+
+// --device gpu, checked before any work: the kinds the GPU does not make
+// are refused with the kind table's sentence (prt/transfer_file.h,
+// Consumer::GpuPrecompute), what else it does not trace by name
+// (docs/PRECOMPUTE.md "On the GPU").
 void check_device(const PrecomputeArgs& a) {
   if (a.device != "gpu") return;
   const auto no = [](const std::string& what) {
-    throw UsageError("--device gpu: " + what + " (not done yet: precompute it with --device cpu, the default)");
+    throw UsageError("--device gpu: " + what + " (precompute it with --device cpu, the default)");
   };
-  if (a.probes_opt->count() > 0) no("a probe volume's rays are traced on the CPU");
-  if (a.basis != "sh") no("--basis " + a.basis + " is traced on the CPU");
-  if (a.mode != "shadowed") no("--mode " + a.mode + ": the GPU traces the shadowed transfer only");
-  if (a.material != "diffuse") no("--material " + a.material + ": the GPU traces the diffuse transfer only");
-  if (a.opt.directional) no("--directional rows are summed on the CPU");
+  if (const Support& s = support(made_kind(a), Consumer::GpuPrecompute); !s.works)
+    throw UsageError(std::string(s.why));
+  if (a.material == "subsurface")
+    no("--material subsurface: the light entering the surface is gathered from sample points the CPU traces");
   if (a.adaptive_opt->count() > 0 || a.subdivide_opt->count() > 0 || a.target_opt->count() > 0)
     no("--adaptive, --subdivide and --target-error trace their batches on the CPU");
   if (mpi::launched() && mpi::world().size() > 1) no("under mpirun (one process drives the GPU)");
 }
 
 // The rays' rate of a --device run: about `points` x samples rays (half the
-// 2 x samples directions lie above a point's horizon).
+// 2 x samples directions lie above a point's horizon; a wavelet transfer's
+// half of the cube's 6 r^2 texels).
 void print_rays(const PrecomputeArgs& a, std::size_t points, double seconds) {
-  if (a.quiet || a.device_opt->count() == 0 || a.opt.mode == TransferMode::Unshadowed) return;
-  const double rays = double(points) * double(a.opt.samples);
+  const bool wavelet = a.basis == "wavelet";
+  if (a.quiet || a.device_opt->count() == 0 || (!wavelet && a.opt.mode == TransferMode::Unshadowed)) return;
+  const double per_point = wavelet ? 3.0 * a.wopt.cube_res * a.wopt.cube_res : double(a.opt.samples);
+  const double rays = double(points) * per_point;
   fmt::print(stderr, "rays ({}): about {:.3g} in {:.2f} s, {:.3g} rays/s (the whole precompute's time)\n", a.device,
              rays, seconds, rays / std::max(seconds, 1e-9));
 }
@@ -478,6 +494,7 @@ int run_wavelet(PrecomputeArgs& a) {
   test_fail_rank();
   const bool quiet = a.quiet || !is_root();
   if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  const std::unique_ptr<PointTracer> device = make_device(a, mesh, quiet);
   Outputs out("precompute");  // from here Ctrl-C stops cleanly, the write step included
   const std::optional<WaveletTransfer> computed =
       a.target_opt->count() > 0 ? run_wavelet_target(a, mesh)
@@ -490,6 +507,7 @@ int run_wavelet(PrecomputeArgs& a) {
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.write([&] { write_wavelet_transfer(a.output, t); });
   if (const int rc = out.commit(); rc != 0) return rc;
+  print_rays(a, t.vertices, secs);
   if (!a.quiet)
     fmt::print(stderr,
                "wrote {}: wavelet, cube {} ({} coefficients), threshold {}, {} vertices, kept {:.3f}% of the "
@@ -528,6 +546,7 @@ int run_zh(PrecomputeArgs& a) {
   release_free_memory();
   const bool quiet = a.quiet || !is_root();
   if (!quiet) fmt::print(stderr, "{}\n", describe(mesh));
+  const std::unique_ptr<PointTracer> device = make_device(a, mesh, quiet);
   Outputs out("precompute");
   const std::optional<Transfer> computed = run_with_progress(quiet, "precompute", [&](const Progress& progress) {
     return a.adaptive_opt->count() > 0 ? compute_adaptive_transfer(mesh, a.opt, a.aopt, job_progress(progress))
@@ -682,6 +701,7 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
   LightmapTexels texels = lightmap_texels(scene, bake.atlas, albedo ? &*albedo : nullptr);
   const std::size_t moved = move_texels_out_of_geometry(scene.mesh, texels, a.opt.offset);
   if (!quiet) print_texels(texels, set, moved);
+  const std::unique_ptr<PointTracer> device = make_device(a, scene.mesh, quiet);
   Outputs out("precompute");
   if (wavelet) {  // the all-frequency variant: a wavelet transfer at the texels (docs/LIGHTMAPS.md)
     a.wopt.threads = a.opt.threads;
@@ -706,10 +726,10 @@ int run_lightmap(PrecomputeArgs& a, const SubsurfaceRecord* sss = nullptr) {
                  double(wl.transfer.kept()) / double(std::max<std::size_t>(wl.transfer.vertices, 1)),
                  double(wl.transfer.bytes()) / double(std::max<std::size_t>(wl.transfer.vertices, 1)),
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    print_rays(a, wl.transfer.vertices, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     return 0;
   }
   const bool adapt = a.adaptive_opt->count() > 0;
-  const std::unique_ptr<PointTracer> device = make_device(a, scene.mesh, quiet);
   AdaptiveReport adaptive;
   SubsurfaceScatterOptions so;
   if (sss) {
@@ -1085,6 +1105,7 @@ int run_subsurface(PrecomputeArgs& a, const SubsurfaceRecord& r) {
 int run_precompute(PrecomputeArgs& a) {
   check_subdivide(a);
   parse_adaptive(a);
+  check_device(a);  // before any kind of run
   if (const std::optional<SubsurfaceRecord> r = subsurface_record(a.sss, a.material)) {
     if (a.lightmap_opt->count() == 0) return run_subsurface(a, *r);
     check_subsurface(a);
@@ -1116,7 +1137,6 @@ int run_precompute(PrecomputeArgs& a) {
   if (a.basis == "zh" && (a.probes_opt->count() > 0 || a.lightmap_opt->count() > 0))
     throw UsageError("--basis zh is per vertex (a deforming mesh's lobes): not for --probes or --lightmap");
   check_light_bounce(a);  // every kind of run
-  check_device(a);
   if (probe_volume) {
     check_not_input("--output", a.output, {{"SCENE", a.mesh}});
     return run_probes(a);
@@ -1262,8 +1282,9 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
                                  "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
                                  "lightmap UV set (docs/LIGHTMAPS.md)");
   a.device_opt = s->add_option("--device", a.device,
-                               "cpu (Embree on every core) or gpu: the shadowed transfer's rays traced in OpenGL "
-                               "compute shaders over a BVH built here, per vertex or texel, headless through EGL "
+                               "cpu (Embree on every core) or gpu: the rays of an SH transfer (shadowed, "
+                               "interreflected, glossy, directional; per vertex or texel) traced in OpenGL compute "
+                               "shaders over a BVH built here, headless through EGL "
                                "(the GPU's EGL device when there is one; Mesa's llvmpipe otherwise); prints rays "
                                "per second (docs/PRECOMPUTE.md \"On the GPU\")")
                      ->check(CLI::IsMember({"cpu", "gpu"}))
