@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# The shadowed transfer on the GPU against the CPU (docs/PRECOMPUTE.md "On the
+# The transfer on the GPU against the CPU (docs/PRECOMPUTE.md "On the
 # GPU"), for a machine with a GPU (the device tool lends an NVIDIA H100 or
 # H200 at times: /work/.library/device/README.md): prt_gpu_bench on a floor
-# and ball of 1M vertices x 1024 samples, and a lightmap of about 2M covered
-# texels, each traced by OpenGL compute (through EGL, the GPU's own device)
+# and ball of 1M vertices x 1024 samples (shadowed, and interreflected: the
+# closest hits), and a lightmap of about 2M covered texels, each traced by OpenGL compute (through EGL, the GPU's own device)
 # and by Embree on every core, in one run each; then the GPU's rays per
 # second against its own limits, from nvidia-smi where there is one: the
 # memory bandwidth a traversal reads its nodes and triangles through, and
@@ -30,6 +30,9 @@ echo
 echo
 "$bench" --texels "$texels" --samples "$samples" | tee /tmp/gpu_precompute_texels.txt
 echo
+# Interreflected: every ray's closest hit comes back (16 bytes) for the CPU's gather.
+"$bench" --vertices "$vertices" --samples "$samples" --mode interreflected | tee /tmp/gpu_precompute_interreflected.txt
+echo
 # The GPU's limits (datasheets): memory bandwidth and dense FP32. A ray of the
 # any-hit traversal reads about 20 nodes (32 bytes) and 8 triangles (48 bytes)
 # on these scenes (prt_gpu_bench's "bytes_per_ray" when printed; else this
@@ -47,7 +50,7 @@ try:
 except Exception:
     name = ""
 limit = next((v for k, v in limits.items() if k in name), None)
-for case in ("vertices", "texels"):
+for case in ("vertices", "texels", "interreflected"):
     text = open(f"/tmp/gpu_precompute_{case}.txt").read()
     j = json.loads([l for l in text.splitlines() if l.startswith("{")][-1])
     rate = j["rays"] / j["gpu_seconds"]

@@ -48,6 +48,15 @@ def test_interreflected_glossy_transfer_is_the_commands(tmp_path):
     assert (tmp_path / "py.prt").read_bytes() == (tmp_path / "cli.prt").read_bytes()
 
 
+def test_wavelet_transfer_is_the_commands(tmp_path):
+    mesh = prt.load_mesh(SCENE)
+    t = gpu_or_skip(lambda: prt.precompute(mesh, basis="wavelet", cube_res=8, device="gpu"))
+    t.write(tmp_path / "py.prt")
+    run_prt("precompute", SCENE, "--device", "gpu", "--basis", "wavelet", "--cube-res", 8, "-q", "-o",
+            tmp_path / "cli.prt")
+    assert (tmp_path / "py.prt").read_bytes() == (tmp_path / "cli.prt").read_bytes()
+
+
 def test_lightmap_is_the_commands(tmp_path):
     scene = prt.load_scene(ROOM)
     lm = gpu_or_skip(lambda: prt.precompute_lightmap(scene, 16, 16, bands=BANDS, samples=SAMPLES,
