@@ -115,7 +115,7 @@ TEST(PrecomputeCli, DeviceGpuTracesTheTransferAsTheCpu) {
   const std::vector<std::pair<std::vector<std::string>, std::string>> refused = {
       {{"--basis", "wavelet"}, wavelet_why},
       {{"--probes", "4x4x4"}, probes_why},
-      {{"--adaptive"}, "--device gpu: --adaptive"},
+      {{"--subdivide", "0.02"}, "--device gpu: --subdivide"},
       {{"--material", "subsurface", "--sss", "skin1"}, "--device gpu: --material subsurface"},
   };
   for (const auto& [extra, why] : refused) {

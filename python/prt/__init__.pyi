@@ -451,7 +451,7 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
       material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].
       sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].
       directional: also each texel's directional rows, the L1 of its incident light, for normal-mapped surfaces (Lightmap.relight_directional, write_directional; docs/LIGHTMAPS.md "Directional lightmaps"): a shadowed or interreflected lightmap of 2 bands or more, without adaptive, light_bounce or material='subsurface' [--directional].
-      device: 'cpu' or 'gpu', as precompute's (shadowed or interreflected, directional too; not material='subsurface' or adaptive) [--device].
+      device: 'cpu' or 'gpu', as precompute's (shadowed or interreflected, directional and adaptive too; not material='subsurface') [--device].
 
     Returns a Lightmap.
     """
@@ -547,7 +547,7 @@ def precompute(mesh: Mesh, *, bands: Any = ..., samples: int = ..., mode: str = 
       light_bounce: with mode='interreflected', keep the bounces' gather as the lights' bounce operator (Transfer.light_bounce; relight(lights=...) and render apply it; docs/LIGHTS.md "Bounce") [--light-bounce].
       bounce_patch, bounce_ratio, bounce_clusters: its finest patches' size in mesh units (0: a few vertices' spacing), how coarse a far patch may be against its distance (1), the levels a far link's receiving cluster stays below its source (2; -1: none) [--bounce-patch, --bounce-ratio, --bounce-clusters].
       bounce_probes: (NX, NY, NZ): the operator's rows for that probe grid's probes too, which the probe-lit object of render(probes=, object=) takes (None: none) [--probes with --light-bounce].
-      device: 'cpu' (Embree on every core) or 'gpu': the rays of an SH transfer (shadowed, interreflected, glossy) or a wavelet transfer in OpenGL compute over a BVH built here (not material='subsurface' or adaptive; prt.Error where no OpenGL 4.5 context can be made; docs/PRECOMPUTE.md "On the GPU") [--device].
+      device: 'cpu' (Embree on every core) or 'gpu': the rays of an SH transfer (shadowed, interreflected, glossy) or a wavelet transfer in OpenGL compute over a BVH built here (adaptive too; not material='subsurface'; prt.Error where no OpenGL 4.5 context can be made; docs/PRECOMPUTE.md "On the GPU") [--device].
       progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).
 
     Returns a Transfer (a WaveletTransfer for basis='wavelet'; for material='subsurface' an RGB one whose .subsurface records the material).

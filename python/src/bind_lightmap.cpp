@@ -491,7 +491,7 @@ void bind_lightmap_compute(py::module_& m) {
         // As prt precompute --lightmap: diffuse (the scene's albedo), or a
         // translucent material's (--material subsurface); not glossy.
         const bool translucent = material == "subsurface";
-        check_device_arg(device, prt::TransferKind::Lightmap, material, !adaptive.is_none());
+        check_device_arg(device, prt::TransferKind::Lightmap, material);
         if (material != "diffuse" && !translucent)
           throw Error("material: a lightmap is 'diffuse' or 'subsurface', got '" + material + "'");
         check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
@@ -555,7 +555,7 @@ void bind_lightmap_compute(py::module_& m) {
       "  material: 'diffuse' (the scene's materials' albedo); or 'subsurface': a translucent material's RGB lightmap, the light entering the surface around each texel scattered under it (shadowed or interreflected; no adaptive or light_bounce; docs/SUBSURFACE.md) [--material].\n"
       "  sss, sigma_a, sigma_s, eta, length_scale: material='subsurface': the material and millimetres per scene unit, as precompute's [--sss, --sigma-a, --sigma-s, --eta, --length-scale].\n"
       "  directional: also each texel's directional rows, the L1 of its incident light, for normal-mapped surfaces (Lightmap.relight_directional, write_directional; docs/LIGHTMAPS.md \"Directional lightmaps\"): a shadowed or interreflected lightmap of 2 bands or more, without adaptive, light_bounce or material='subsurface' [--directional].\n"
-      "  device: 'cpu' or 'gpu', as precompute's (shadowed or interreflected, directional too; not material='subsurface' or adaptive) [--device].\n"
+      "  device: 'cpu' or 'gpu', as precompute's (shadowed or interreflected, directional and adaptive too; not material='subsurface') [--device].\n"
       "\n"
       "Returns a Lightmap.");
 

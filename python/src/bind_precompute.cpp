@@ -91,8 +91,7 @@ void bind_precompute(py::module_& m) {
          const py::object& sss, const py::object& sigma_a, const py::object& sigma_s, const py::object& eta,
          double length_scale, const std::string& device, py::object progress) -> py::object {
         const bool translucent = material == "subsurface";
-        check_device_arg(device, basis == "wavelet" ? prt::TransferKind::Wavelet : prt::TransferKind::SH, material,
-                         !adaptive.is_none());
+        check_device_arg(device, basis == "wavelet" ? prt::TransferKind::Wavelet : prt::TransferKind::SH, material);
         check_subsurface_given(material, sss, sigma_a, sigma_s, eta, length_scale);
         if (translucent) check_subsurface_args(basis, mode, albedo, vertex_colors, !adaptive.is_none(), light_bounce);
         if (basis != "sh" && basis != "wavelet")
@@ -196,7 +195,7 @@ void bind_precompute(py::module_& m) {
       "  light_bounce: with mode='interreflected', keep the bounces' gather as the lights' bounce operator (Transfer.light_bounce; relight(lights=...) and render apply it; docs/LIGHTS.md \"Bounce\") [--light-bounce].\n"
       "  bounce_patch, bounce_ratio, bounce_clusters: its finest patches' size in mesh units (0: a few vertices' spacing), how coarse a far patch may be against its distance (1), the levels a far link's receiving cluster stays below its source (2; -1: none) [--bounce-patch, --bounce-ratio, --bounce-clusters].\n"
       "  bounce_probes: (NX, NY, NZ): the operator's rows for that probe grid's probes too, which the probe-lit object of render(probes=, object=) takes (None: none) [--probes with --light-bounce].\n"
-      "  device: 'cpu' (Embree on every core) or 'gpu': the rays of an SH transfer (shadowed, interreflected, glossy) or a wavelet transfer in OpenGL compute over a BVH built here (not material='subsurface' or adaptive; prt.Error where no OpenGL 4.5 context can be made; docs/PRECOMPUTE.md \"On the GPU\") [--device].\n"
+      "  device: 'cpu' (Embree on every core) or 'gpu': the rays of an SH transfer (shadowed, interreflected, glossy) or a wavelet transfer in OpenGL compute over a BVH built here (adaptive too; not material='subsurface'; prt.Error where no OpenGL 4.5 context can be made; docs/PRECOMPUTE.md \"On the GPU\") [--device].\n"
       "  progress: None, True (a line on stderr) or a callable (done, total, phase) returning False to stop; Ctrl-C stops it (KeyboardInterrupt).\n"
       "\n"
       "Returns a Transfer (a WaveletTransfer for basis='wavelet'; for material='subsurface' an RGB one whose .subsurface records the material).");

@@ -410,7 +410,7 @@ void light_bounce_args(prt::TransferOptions& o, bool light_bounce, double patch,
                 "light_bounce=True too");
 }
 
-void check_device_arg(const std::string& device, prt::TransferKind kind, const std::string& material, bool adaptive) {
+void check_device_arg(const std::string& device, prt::TransferKind kind, const std::string& material) {
   if (device != "cpu" && device != "gpu") throw Error("device: expected 'cpu' or 'gpu', got '" + device + "'");
   if (device == "cpu") return;
   // The kinds the GPU makes: the kind table's (prt/transfer_file.h, Consumer::GpuPrecompute).
@@ -420,7 +420,6 @@ void check_device_arg(const std::string& device, prt::TransferKind kind, const s
     throw Error("device='gpu': " + what + " (leave device='cpu')");
   };
   if (material == "subsurface") no("material='subsurface' gathers the light entering the surface from points the CPU traces");
-  if (adaptive) no("adaptive sample points trace their batches on the CPU");
 }
 
 std::unique_ptr<prt::PointTracer> device_tracer(const std::string& device, const prt::Mesh& mesh) {

@@ -240,10 +240,10 @@ std::optional<prt::AdaptiveOptions> adaptive_arg(const py::object& adaptive, dou
 // device= (precompute, precompute_lightmap): 'cpu' or 'gpu', refused where
 // the GPU does not trace: a kind the kind table says it does not make
 // (prt/transfer_file.h, Consumer::GpuPrecompute: its sentence), a
-// subsurface material, adaptive points; device_tracer: the GL tracer of
-// `mesh` for 'gpu' (the flat BVH built, a context made: prt.Error where
-// there is none), else null.
-void check_device_arg(const std::string& device, prt::TransferKind kind, const std::string& material, bool adaptive);
+// subsurface material; device_tracer: the GL tracer of `mesh` for 'gpu'
+// (the flat BVH built, a context made: prt.Error where there is none), else
+// null.
+void check_device_arg(const std::string& device, prt::TransferKind kind, const std::string& material);
 std::unique_ptr<prt::PointTracer> device_tracer(const std::string& device, const prt::Mesh& mesh);
 // (NX, NY, NZ) by prt::probe_dims_problem's rule, errors naming `what`.
 std::array<int, 3> probe_dims_arg(const py::object& dims, const std::string& what = "dims");

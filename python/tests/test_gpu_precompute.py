@@ -69,7 +69,6 @@ def test_lightmap_is_the_commands(tmp_path):
 
 @pytest.mark.parametrize("kwargs, says", [
     ({"material": "subsurface", "sss": "skin1"}, "material='subsurface'"),
-    ({"adaptive": 0}, "adaptive"),
     ({"device": "tpu"}, "expected 'cpu' or 'gpu'"),
 ])
 def test_what_the_gpu_does_not_trace_is_refused(kwargs, says):

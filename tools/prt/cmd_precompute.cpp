@@ -151,8 +151,8 @@ void check_device(const PrecomputeArgs& a) {
     throw UsageError(std::string(s.why));
   if (a.material == "subsurface")
     no("--material subsurface: the light entering the surface is gathered from sample points the CPU traces");
-  if (a.adaptive_opt->count() > 0 || a.subdivide_opt->count() > 0 || a.target_opt->count() > 0)
-    no("--adaptive, --subdivide and --target-error trace their batches on the CPU");
+  if (a.subdivide_opt->count() > 0)
+    no("--subdivide traces each round's refined mesh, whose triangles are not the GPU's BVH (the input's)");
   if (mpi::launched() && mpi::world().size() > 1) no("under mpirun (one process drives the GPU)");
 }
 
