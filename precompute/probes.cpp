@@ -18,8 +18,10 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <memory>
+#include <vector>
 
 namespace prt {
 
@@ -92,10 +94,11 @@ ProbeTransfer probe_header(const Scene& scene, const ProbeGrid& grid, const Prob
   return t;
 }
 
-// What tracing a probe needs: the scene and its rays, the volume's header,
-// the cube sizes. Traced at base = r / 4 with kk^2 rays per texel; a base
-// texel that is neither all visible nor all blocked is traced again at r,
-// one ray per finest texel.
+// What tracing the probes needs: the scene and its rays, the volume's
+// header, the cube sizes. Traced at base = r / 4 with kk^2 rays per texel;
+// a base texel that is neither all visible nor all blocked (or borders one
+// of another class) is traced again at r: 2 x 2 rays per finest texel, and
+// 4 x 4 more where those disagree.
 struct ProbeTracing {
   const Scene& scene;
   const detail::RayScene& rays;
@@ -109,7 +112,46 @@ struct ProbeTracing {
   double lift;  // a probe nearer a surface than this is moved 2 x this off it
 };
 
-// One worker's scratch, reset for each probe, and the probe's ray counts.
+// ---- the random numbers ------------------------------------------------------------
+// Every draw is keyed by what it is for, never by the order the rays are
+// traced in: the probes are traced in wavefronts (a block of probes' rays
+// at once, by Embree on the CPU's threads or by ProbeOptions::tracer), and
+// the file is the same whichever traces them (but for the rays that the
+// two see differently) and whatever the thread count. One generator per
+// (probe, base texel) jitters its kk^2 rays, one per (probe, base ray)
+// draws its bounce path's directions, one per (probe, finest texel)
+// jitters its 4 + 16 refinement rays: stream = probe << 24 | kind << 20 |
+// index, index < 2^20 (base rays: at most 6 16^2 64 = 98,304; finest
+// texels 6 64^2 = 24,576), probe < kMaxProbes = 2^24: no two coincide
+// (Rng mixes the stream by an odd multiplier, a bijection).
+enum class Draw : std::uint64_t { BaseTexel = 0, BouncePath = 1, FinestTexel = 2 };
+static_assert(kMaxProbes <= (std::size_t(1) << 24), "probe_rng's streams");
+static_assert(std::size_t(6) * 16 * 16 * 64 < (std::size_t(1) << 20), "probe_rng's streams");
+
+detail::Rng probe_rng(const ProbeTracing& tr, std::size_t p, Draw kind, std::size_t index) {
+  return detail::Rng(tr.o.seed, (std::uint64_t(p) << 24) | (std::uint64_t(kind) << 20) | std::uint64_t(index));
+}
+
+// A diffuse path from a front hit of a probe's base ray, between bounces.
+struct BouncePath {
+  detail::Rng rng;     // the path's stream (Draw::BouncePath)
+  glm::dvec3 origin;   // the last hit
+  glm::dvec3 weight;   // the base ray's solid angle x the albedos so far
+  glm::dvec3 w{0.0};   // the next ray's direction
+  glm::vec3 dir0;      // the probe's ray the path started from
+  glm::vec3 from{0.0f};  // the next ray's origin
+  detail::Hit hit;     // the last hit
+  bool alive = true;
+};
+
+// A finest texel refined (Draw::FinestTexel), and whether its 2 x 2 rays disagreed.
+struct RefineTask {
+  detail::Rng rng;
+  int face, fu, fv;
+  bool mixed = false;
+};
+
+// One probe's sums, reset for each block.
 struct ProbeScratch {
   explicit ProbeScratch(const ProbeTracing& tr)
       : bits(tr.words), cls(std::size_t(6) * tr.base * tr.base), m1(std::size_t(tr.N) * tr.N),
@@ -117,71 +159,138 @@ struct ProbeScratch {
         bounce(std::size_t(tr.t.channels) * tr.nc * tr.nb), yk(static_cast<std::size_t>(tr.nc)),
         yj(static_cast<std::size_t>(std::max(tr.nb, 1))) {}
 
+  glm::vec3 x{0.0f};  // the probe's position
   std::vector<std::uint32_t> bits;  // the finest texels that see the map
   std::vector<std::uint8_t> cls;  // per base texel: 0 all blocked, 1 all visible, 2 mixed
   std::vector<double> m1, m2, count;  // depth moments per octahedral texel
   std::vector<double> bounce;
   std::vector<double> yk, yj;
   std::size_t back = 0, hit_count = 0, total = 0;
-  glm::vec3 dirs[8];
-  detail::Hit hits[8];
+  std::vector<BouncePath> paths;    // started by its base rays, in ray order
+  std::vector<RefineTask> refines;  // its edge texels' finest texels, in texel order
 };
 
-glm::vec3 lift_off_surfaces(const ProbeTracing& tr, glm::vec3 x) {
-  return detail::lift_off_surfaces(tr.rays, tr.scene.mesh, tr.lift, x);
+// ---- wavefronts ----------------------------------------------------------------------
+
+// Base rays a block of probes traces at most (kProbeBlock probes at most;
+// the defaults, r = 64 and 16 rays a base texel: 24,576 rays a probe, 10
+// probes a block): the block's bounce paths (152 bytes each, one per front
+// hit) stay within 38 MiB, kept with the probes' scratch from block to block.
+constexpr std::size_t kBlockRays = std::size_t(1) << 18;
+constexpr std::size_t kProbeBlock = 256;
+// Rays one wavefront hands to the tracer at most (a block's base rays are
+// one wavefront; refinement's may be more): their origins, directions and
+// hits (and the tracer's RayHits) take at most 60 MiB; the GL tracer
+// dispatches them in chunks of its own.
+constexpr std::size_t kWaveRays = std::size_t(1) << 20;
+
+// One wavefront's rays, all from tnear = the offset, and their closest hits.
+struct Wave {
+  bool occlusion = false;  // only whether each ray hits matters (Embree: occluded8, hits[i].triangle 0 when it does)
+  std::vector<glm::vec3> origins, dirs;
+  std::vector<detail::Hit> hits;
+  std::vector<RayHit> traced;  // ProbeOptions::tracer's
+};
+
+// fn(i) for i in [0, n), in parallel (flush-to-zero on each worker, as Embree wants).
+template <class Fn>
+void for_each_parallel(std::size_t n, std::size_t grain, Fn&& fn) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain), [&](const tbb::blocked_range<std::size_t>& range) {
+    detail::enable_ftz_daz();
+    for (std::size_t i = range.begin(); i < range.end(); ++i) fn(i);
+  });
 }
+
+// Embree on the CPU's threads (robust): rays in fixed groups of 8, each run
+// of one origin inside a group through intersect8 (a lone ray through
+// intersect1; occlusion waves through occluded8), so that a ray takes the
+// same call whatever the thread count.
+void trace_wave_embree(const ProbeTracing& tr, Wave& w) {
+  const std::size_t n = w.origins.size();
+  for_each_parallel((n + 7) / 8, 64, [&](std::size_t g) {
+    const std::size_t end = std::min(n, 8 * g + 8);
+    for (std::size_t a = 8 * g; a < end;) {
+      std::size_t b = a + 1;
+      while (b < end && w.origins[b] == w.origins[a]) ++b;
+      if (w.occlusion) {
+        const std::uint32_t blocked = tr.rays.occluded8(w.origins[a], w.dirs.data() + a, int(b - a), tr.offset);
+        for (std::size_t i = a; i < b; ++i) w.hits[i].triangle = (blocked >> (i - a)) & 1u ? 0u : ~0u;
+      } else if (b - a == 1) {
+        w.hits[a] = tr.rays.intersect1(w.origins[a], w.dirs[a], tr.offset);
+      } else {
+        tr.rays.intersect8(w.origins[a], w.dirs.data() + a, int(b - a), tr.offset, w.hits.data() + a);
+      }
+      a = b;
+    }
+  });
+}
+
+// The wavefront's closest hits: Embree's, or ProbeOptions::tracer's (which
+// side was struck from the mesh, as Embree's hits say it).
+void trace_wave(const ProbeTracing& tr, Wave& w) {
+  const std::size_t n = w.origins.size();
+  w.hits.assign(n, detail::Hit{});
+  if (!tr.o.tracer) return trace_wave_embree(tr, w);
+  w.traced.assign(n, RayHit{});
+  tr.o.tracer->trace_rays(w.origins, w.dirs, tr.offset, w.traced);
+  const Mesh& mesh = tr.scene.mesh;
+  for_each_parallel(n, 4096, [&](std::size_t i) {
+    const RayHit& h = w.traced[i];
+    if (!h.hit()) return;
+    if (h.triangle >= mesh.triangles.size())
+      throw Error(fmt::format("probe tracer: triangle {} of {} hit", h.triangle, mesh.triangles.size()));
+    detail::Hit& out = w.hits[i];
+    out.triangle = h.triangle;
+    out.u = h.u;
+    out.v = h.v;
+    out.t = h.t;
+    out.front = detail::front_facing(mesh, h.triangle, w.dirs[i]);
+  });
+}
+
+// The tasks of probes [0, n) of a block, count(q) of probe q's, k rays
+// each, traced in wavefronts of at most kWaveRays rays (in probe order, a
+// probe's tasks in order): make(q, j, origins, dirs) sets task j of probe
+// q's k rays (in parallel: each task draws from its own streams);
+// take(q, j, dirs, hits) reads them, a probe's tasks in order on one
+// thread, probes in parallel.
+template <class Count, class Make, class Take>
+void trace_tasks(const ProbeTracing& tr, Wave& w, std::size_t n, int k, Count&& count, Make&& make, Take&& take) {
+  const std::size_t kz = std::size_t(k), per = std::max<std::size_t>(kWaveRays / kz, 1);
+  std::vector<std::size_t> start(n + 1, 0);  // probe q's tasks: [start[q], start[q + 1])
+  for (std::size_t q = 0; q < n; ++q) start[q + 1] = start[q] + count(q);
+  for (std::size_t first = 0; first < start[n]; first += per) {
+    const std::size_t size = std::min(per, start[n] - first);
+    const std::size_t q0 = std::size_t(std::upper_bound(start.begin(), start.end(), first) - start.begin()) - 1;
+    const std::size_t q1 = std::size_t(std::lower_bound(start.begin(), start.end(), first + size) - start.begin());
+    w.origins.resize(size * kz);
+    w.dirs.resize(size * kz);
+    // Probe q's tasks in this wavefront: [max(start[q], first), min(start[q + 1], first + size)).
+    const auto each = [&](std::size_t q, auto&& fn) {
+      for (std::size_t g = std::max(start[q], first); g < std::min(start[q + 1], first + size); ++g)
+        fn(g - start[q], (g - first) * kz);
+    };
+    for_each_parallel(q1 - q0, 1, [&](std::size_t i) {
+      each(q0 + i, [&](std::size_t j, std::size_t at) { make(q0 + i, j, &w.origins[at], &w.dirs[at]); });
+    });
+    trace_wave(tr, w);
+    for_each_parallel(q1 - q0, 1, [&](std::size_t i) {
+      each(q0 + i, [&](std::size_t j, std::size_t at) { take(q0 + i, j, &w.dirs[at], &w.hits[at]); });
+    });
+  }
+}
+
+// ---- the base cube -------------------------------------------------------------------
 
 void set_bit(const ProbeTracing& tr, ProbeScratch& sc, int face, int u, int v) {
   const std::size_t i2 = (std::size_t(face) * tr.r + std::size_t(v)) * tr.r + std::size_t(u);
   sc.bits[i2 >> 5] |= 1u << (i2 & 31);
 }
 
-// A diffuse path from the front hit of the probe's ray in direction d: its
-// escape lights the probe through the band-limited map (albedo x Y_k(d)
-// omega x Y_j(w)).
-void trace_bounce_path(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, glm::vec3 x, const glm::dvec3& d,
-                       const detail::Hit& hit, double omega) {
-  const ProbeOptions& o = tr.o;
-  const Mesh& mesh = tr.scene.mesh;
-  const int nc = tr.nc, nb = tr.nb, channels = tr.t.channels;
-  sh::eval(o.bands, d.x, d.y, d.z, sc.yk.data());
-  glm::dvec3 weight(omega);
-  glm::dvec3 origin = glm::dvec3(x) + d * double(hit.t);
-  detail::Hit h = hit;
-  for (int bounce_i = 0; bounce_i < o.bounces; ++bounce_i) {
-    const glm::uvec3& tri = mesh.triangles[h.triangle];
-    const float w0 = 1.0f - h.u - h.v;
-    glm::dvec3 ns = glm::dvec3(mesh.normals[tri[0]] * w0 + mesh.normals[tri[1]] * h.u + mesh.normals[tri[2]] * h.v);
-    if (!(glm::length(ns) > 0)) {
-      const glm::vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
-      ns = glm::dvec3(glm::cross(b - a, c - a));
-    }
-    if (!(glm::length(ns) > 0)) break;
-    ns = glm::normalize(ns);
-    const glm::vec3 albedo = o.override_albedo ? o.albedo : glm::clamp(tr.scene.albedo(h.triangle, h.u, h.v), 0.0f, 1.0f);
-    weight *= glm::dvec3(albedo);
-    const glm::dvec3 w = detail::sample_cosine(rng, ns);
-    const glm::vec3 from = glm::vec3(origin + ns * double(tr.offset));
-    h = tr.rays.intersect1(from, glm::vec3(w), tr.offset);
-    if (!h.hit()) {
-      sh::eval(o.bounce_bands, w.x, w.y, w.z, sc.yj.data());
-      for (int c = 0; c < channels; ++c) {
-        const double wc = channels == 1 ? weight.x : weight[c];
-        double* B = sc.bounce.data() + std::size_t(c) * nc * nb;
-        for (int kq = 0; kq < nc; ++kq)
-          for (int jq = 0; jq < nb; ++jq)
-            B[std::size_t(kq) * nb + std::size_t(jq)] += wc * sc.yk[std::size_t(kq)] * sc.yj[std::size_t(jq)];
-      }
-      break;
-    }
-    if (!h.front) break;  // back faces are black
-    origin = glm::dvec3(from) + w * double(h.t);
-  }
-}
-
-// One ray of the base cube: depth moments, back faces, the bounce paths.
-void take_ray(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, glm::vec3 x, const glm::dvec3& d,
-              const detail::Hit& hit, double omega) {
+// One ray of the base cube: depth moments, back faces; a front hit starts
+// a bounce path (interreflected).
+void take_ray(const ProbeTracing& tr, ProbeScratch& sc, std::size_t p, std::size_t ray,
+              glm::vec3 d, const detail::Hit& hit, double omega) {
   const int N = tr.N;
   ++sc.total;
   double depth = tr.t.depth_cap;
@@ -190,87 +299,133 @@ void take_ray(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, glm::v
     depth = std::min(double(hit.t), double(tr.t.depth_cap));
     if (!hit.front) ++sc.back;
   }
-  const glm::dvec2 uv = octahedral_encode(d);
+  const glm::dvec2 uv = octahedral_encode(glm::dvec3(d));
   const std::size_t o2 =
       std::size_t(std::clamp(int(uv.y * N), 0, N - 1)) * N + std::size_t(std::clamp(int(uv.x * N), 0, N - 1));
   sc.m1[o2] += depth;
   sc.m2[o2] += depth * depth;
   sc.count[o2] += 1;
   if (tr.nb == 0 || !hit.hit() || !hit.front) return;
-  trace_bounce_path(tr, sc, rng, x, d, hit, omega);
+  const glm::dvec3 dd(d);
+  sc.paths.push_back(BouncePath{probe_rng(tr, p, Draw::BouncePath, ray), glm::dvec3(sc.x) + dd * double(hit.t),
+                                glm::dvec3(omega), glm::dvec3(0.0), d, glm::vec3(0.0f), hit, true});
 }
 
-// The base cube: kk^2 jittered rays per texel, each texel classed (0 all
-// blocked, 1 all visible, 2 mixed).
-void trace_base_cube(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, glm::vec3 x) {
-  const int kk = tr.kk, base = tr.base;
-  for (int face = 0; face < 6; ++face)
-    for (int v = 0; v < base; ++v)
-      for (int u = 0; u < base; ++u) {
-        const double omega = cube_texel_solid_angle(u, v, base) / (kk * kk);
-        int escapes = 0;
-        for (int s0 = 0; s0 < kk * kk; s0 += 8) {
-          const int n = std::min(8, kk * kk - s0);
-          for (int q = 0; q < n; ++q) {
-            const int a = (s0 + q) % kk, b = (s0 + q) / kk;
-            const double s1 = 2.0 * (u + (a + rng.uniform()) / kk) / base - 1.0;
-            const double t1 = 2.0 * (v + (b + rng.uniform()) / kk) / base - 1.0;
-            sc.dirs[q] = glm::vec3(glm::normalize(cube_direction(face, s1, t1)));
-          }
-          tr.rays.intersect8(x, sc.dirs, n, tr.offset, sc.hits);
-          for (int q = 0; q < n; ++q) {
-            escapes += !sc.hits[q].hit();
-            take_ray(tr, sc, rng, x, glm::dvec3(sc.dirs[q]), sc.hits[q], omega);
-          }
-        }
-        sc.cls[(std::size_t(face) * base + std::size_t(v)) * base + std::size_t(u)] =
-            std::uint8_t(escapes == kk * kk ? 1 : escapes == 0 ? 0 : 2);
-      }
-}
-
-// Finest texel (fu, fv) of `face`: 2 x 2 jittered rays, visible when all
-// escape; when some do, 4 x 4 more, one per sub-texel (partial_mask).
-void refine_texel(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, glm::vec3 x, int face, int fu, int fv,
-                  ProbeRecord& rec) {
-  const int r = tr.r;
-  glm::vec3* dirs = sc.dirs;
-  for (int q = 0; q < 4; ++q) {
-    const double s1 = 2.0 * (fu + ((q & 1) + rng.uniform()) * 0.5) / r - 1.0;
-    const double t1 = 2.0 * (fv + ((q >> 1) + rng.uniform()) * 0.5) / r - 1.0;
-    dirs[q] = glm::vec3(glm::normalize(cube_direction(face, s1, t1)));
-  }
-  const std::uint32_t blocked = tr.rays.occluded8(x, dirs, 4, tr.offset);
-  const int open = 4 - std::popcount(blocked);
-  if (open == 4) {
-    set_bit(tr, sc, face, fu, fv);
-  } else if (open > 0) {
-    // An edge crosses it: which of its 4 x 4 sub-texels see the map.
-    std::uint16_t mask = 0;
-    for (int h = 0; h < 2; ++h) {
-      for (int q = 0; q < 8; ++q) {
-        const int cq = h * 8 + q;
-        const double s1 = 2.0 * (fu + ((cq & 3) + rng.uniform()) * 0.25) / r - 1.0;
-        const double t1 = 2.0 * (fv + ((cq >> 2) + rng.uniform()) * 0.25) / r - 1.0;
-        dirs[q] = glm::vec3(glm::normalize(cube_direction(face, s1, t1)));
-      }
-      const std::uint32_t occ = tr.rays.occluded8(x, dirs, 8, tr.offset);
-      for (int q = 0; q < 8; ++q)
-        if (!((occ >> q) & 1u)) mask = std::uint16_t(mask | (1u << (h * 8 + q)));
+// The base cubes of probes [p0, p0 + n) (scratch[q]: probe p0 + q's):
+// kk^2 jittered rays per texel, each texel classed (0 all blocked, 1 all
+// visible, 2 mixed); the bounce paths they start (each probe's in ray order).
+void trace_base_cubes(const ProbeTracing& tr, std::size_t p0, std::size_t n, std::vector<ProbeScratch>& scratch,
+                      Wave& w) {
+  const int kk = tr.kk, base = tr.base, k = kk * kk;
+  const std::size_t texels = std::size_t(6) * base * base;
+  const auto make = [&](std::size_t q, std::size_t texel, glm::vec3* org, glm::vec3* dirs) {
+    const int face = int(texel / (std::size_t(base) * base)), v = int(texel / base % base), u = int(texel % base);
+    detail::Rng rng = probe_rng(tr, p0 + q, Draw::BaseTexel, texel);
+    for (int s = 0; s < k; ++s) {
+      const int a = s % kk, b = s / kk;
+      const double s1 = 2.0 * (u + (a + rng.uniform()) / kk) / base - 1.0;
+      const double t1 = 2.0 * (v + (b + rng.uniform()) / kk) / base - 1.0;
+      dirs[s] = glm::vec3(glm::normalize(cube_direction(face, s1, t1)));
+      org[s] = scratch[q].x;
     }
-    if (mask == 0xffff) {
-      set_bit(tr, sc, face, fu, fv);
-    } else if (mask != 0) {
-      rec.partial_nodes.push_back(probe_node_id(r, face, 0, fu, fv));
-      rec.partial_mask.push_back(mask);
+  };
+  const auto take = [&](std::size_t q, std::size_t texel, const glm::vec3* dirs, const detail::Hit* hits) {
+    const int v = int(texel / base % base), u = int(texel % base);
+    const double omega = cube_texel_solid_angle(u, v, base) / k;
+    int escapes = 0;
+    for (int s = 0; s < k; ++s) {
+      escapes += !hits[s].hit();
+      take_ray(tr, scratch[q], p0 + q, texel * k + s, dirs[s], hits[s], omega);
     }
+    scratch[q].cls[texel] = std::uint8_t(escapes == k ? 1 : escapes == 0 ? 0 : 2);
+  };
+  trace_tasks(tr, w, n, k, [&](std::size_t) { return texels; }, make, take);
+}
+
+// ---- bounce paths --------------------------------------------------------------------
+
+// The next ray of path `pa` (cosine-weighted about the shading normal at
+// its last hit, the albedo there taken into its weight); false where the
+// hit's normal is degenerate (the path ends).
+bool next_bounce(const ProbeTracing& tr, BouncePath& pa) {
+  const Mesh& mesh = tr.scene.mesh;
+  const detail::Hit& h = pa.hit;
+  const glm::uvec3& tri = mesh.triangles[h.triangle];
+  const float w0 = 1.0f - h.u - h.v;
+  glm::dvec3 ns = glm::dvec3(mesh.normals[tri[0]] * w0 + mesh.normals[tri[1]] * h.u + mesh.normals[tri[2]] * h.v);
+  if (!(glm::length(ns) > 0)) {
+    const glm::vec3 a = mesh.positions[tri[0]], b = mesh.positions[tri[1]], c = mesh.positions[tri[2]];
+    ns = glm::dvec3(glm::cross(b - a, c - a));
+  }
+  if (!(glm::length(ns) > 0)) return false;
+  ns = glm::normalize(ns);
+  const glm::vec3 albedo =
+      tr.o.override_albedo ? tr.o.albedo : glm::clamp(tr.scene.albedo(h.triangle, h.u, h.v), 0.0f, 1.0f);
+  pa.weight *= glm::dvec3(albedo);
+  pa.w = detail::sample_cosine(pa.rng, ns);
+  pa.from = glm::vec3(pa.origin + ns * double(tr.offset));
+  return true;
+}
+
+// Path `pa`'s ray met `h`: an escape lights the probe through the
+// band-limited map (albedo x Y_k(d0) omega x Y_j(w)) and ends the path, as
+// a back face does (black); a front hit continues it.
+void end_bounce(const ProbeTracing& tr, ProbeScratch& sc, BouncePath& pa, const detail::Hit& h) {
+  if (h.hit()) {
+    pa.alive = h.front;  // back faces are black
+    pa.origin = glm::dvec3(pa.from) + pa.w * double(h.t);
+    pa.hit = h;
+    return;
+  }
+  pa.alive = false;
+  const int nc = tr.nc, nb = tr.nb, channels = tr.t.channels;
+  const glm::dvec3 d(pa.dir0);
+  sh::eval(tr.o.bands, d.x, d.y, d.z, sc.yk.data());
+  sh::eval(tr.o.bounce_bands, pa.w.x, pa.w.y, pa.w.z, sc.yj.data());
+  for (int c = 0; c < channels; ++c) {
+    const double wc = channels == 1 ? pa.weight.x : pa.weight[c];
+    double* B = sc.bounce.data() + std::size_t(c) * nc * nb;
+    for (int kq = 0; kq < nc; ++kq)
+      for (int jq = 0; jq < nb; ++jq)
+        B[std::size_t(kq) * nb + std::size_t(jq)] += wc * sc.yk[std::size_t(kq)] * sc.yj[std::size_t(jq)];
   }
 }
 
-// Refined at the finest texels, one jittered ray each: mixed base texels
-// and those beside a texel of another class (an edge that slipped between
-// the base rays: a sliver of sky at a grazing angle).
-void refine_edges(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, glm::vec3 x, ProbeRecord& rec) {
+// The block's bounce paths (scratch[q].paths, q < n), a wavefront per
+// bounce: every live path's next ray at once.
+void trace_bounces(const ProbeTracing& tr, std::vector<ProbeScratch>& scratch, std::size_t n, Wave& w) {
+  const auto dead = [](const BouncePath& pa) { return !pa.alive; };
+  const auto prune = [&](std::size_t q) {
+    std::vector<BouncePath>& paths = scratch[q].paths;
+    paths.erase(std::remove_if(paths.begin(), paths.end(), dead), paths.end());
+  };
+  for (int bounce = 0; bounce < tr.o.bounces; ++bounce) {
+    for_each_parallel(n, 1, [&](std::size_t q) {
+      for (BouncePath& pa : scratch[q].paths) pa.alive = next_bounce(tr, pa);
+      prune(q);
+    });
+    trace_tasks(
+        tr, w, n, 1, [&](std::size_t q) { return scratch[q].paths.size(); },
+        [&](std::size_t q, std::size_t j, glm::vec3* org, glm::vec3* dirs) {
+          org[0] = scratch[q].paths[j].from;
+          dirs[0] = glm::vec3(scratch[q].paths[j].w);
+        },
+        [&](std::size_t q, std::size_t j, const glm::vec3*, const detail::Hit* hits) {
+          end_bounce(tr, scratch[q], scratch[q].paths[j], hits[0]);
+        });
+    for_each_parallel(n, 1, prune);
+  }
+}
+
+// ---- refinement ----------------------------------------------------------------------
+
+// A probe's finest texels to refine, in (face, v, u, y, x) order: those of
+// mixed base texels and of those beside a texel of another class (an edge
+// that slipped between the base rays: a sliver of sky at a grazing
+// angle); the finest texels of the other all-visible base texels set.
+void plan_refinement(const ProbeTracing& tr, ProbeScratch& sc, std::size_t p) {
   const int kk = tr.kk, base = tr.base, refine = tr.refine;
+  sc.refines.clear();
   for (int face = 0; face < 6; ++face)
     for (int v = 0; v < base; ++v)
       for (int u = 0; u < base; ++u) {
@@ -282,16 +437,68 @@ void refine_edges(const ProbeTracing& tr, ProbeScratch& sc, detail::Rng& rng, gl
             if (nu < 0 || nv < 0 || nu >= base || nv >= base) continue;
             edge = sc.cls[(std::size_t(face) * base + std::size_t(nv)) * base + std::size_t(nu)] != c0;
           }
-        if (!edge) {
-          if (c0 == 1)
-            for (int y = 0; y < refine; ++y)
-              for (int x2 = 0; x2 < refine; ++x2) set_bit(tr, sc, face, u * refine + x2, v * refine + y);
-          continue;
-        }
         for (int y = 0; y < refine; ++y)
-          for (int x2 = 0; x2 < refine; ++x2) refine_texel(tr, sc, rng, x, face, u * refine + x2, v * refine + y, rec);
+          for (int x2 = 0; x2 < refine; ++x2) {
+            const int fu = u * refine + x2, fv = v * refine + y;
+            if (!edge && c0 == 1) set_bit(tr, sc, face, fu, fv);
+            if (!edge) continue;
+            const std::size_t texel = (std::size_t(face) * tr.r + std::size_t(fv)) * tr.r + std::size_t(fu);
+            sc.refines.push_back(RefineTask{probe_rng(tr, p, Draw::FinestTexel, texel), face, fu, fv});
+          }
       }
 }
+
+// `count` jittered directions of a finest texel, `side` x `side` sub-texels.
+void refine_dirs(const ProbeTracing& tr, RefineTask& task, int side, int count, glm::vec3* dirs) {
+  for (int c = 0; c < count; ++c) {
+    const double s1 = 2.0 * (task.fu + ((c % side) + task.rng.uniform()) / side) / tr.r - 1.0;
+    const double t1 = 2.0 * (task.fv + ((c / side) + task.rng.uniform()) / side) / tr.r - 1.0;
+    dirs[c] = glm::vec3(glm::normalize(cube_direction(task.face, s1, t1)));
+  }
+}
+
+// The finest texels of the block's probes (scratch[q].refines, q < n):
+// 2 x 2 jittered rays each, visible when all escape; where some do
+// (mixed), 4 x 4 more, one per sub-texel (partial_mask, bit 4 sy + sx).
+void refine_texels(const ProbeTracing& tr, std::size_t p0, std::size_t n, std::vector<ProbeScratch>& scratch,
+                   std::vector<ProbeRecord>& records, Wave& w) {
+  const auto count = [&](std::size_t q) { return scratch[q].refines.size(); };
+  w.occlusion = true;  // a ProbeOptions::tracer traces closest hits all the same
+  const auto make = [&](int side, std::size_t q, std::size_t j, glm::vec3* org, glm::vec3* dirs) {
+    std::fill(org, org + side * side, scratch[q].x);
+    refine_dirs(tr, scratch[q].refines[j], side, side * side, dirs);
+  };
+  trace_tasks(
+      tr, w, n, 4, count, [&](std::size_t q, std::size_t j, glm::vec3* org, glm::vec3* dirs) { make(2, q, j, org, dirs); },
+      [&](std::size_t q, std::size_t j, const glm::vec3*, const detail::Hit* hits) {
+        RefineTask& task = scratch[q].refines[j];
+        int open = 0;
+        for (int c = 0; c < 4; ++c) open += !hits[c].hit();
+        if (open == 4) set_bit(tr, scratch[q], task.face, task.fu, task.fv);
+        task.mixed = open > 0 && open < 4;
+      });
+  for_each_parallel(n, 1, [&](std::size_t q) {
+    std::vector<RefineTask>& v = scratch[q].refines;
+    v.erase(std::remove_if(v.begin(), v.end(), [](const RefineTask& t) { return !t.mixed; }), v.end());
+  });
+  trace_tasks(
+      tr, w, n, 16, count, [&](std::size_t q, std::size_t j, glm::vec3* org, glm::vec3* dirs) { make(4, q, j, org, dirs); },
+      [&](std::size_t q, std::size_t j, const glm::vec3*, const detail::Hit* hits) {
+        const RefineTask& task = scratch[q].refines[j];
+        std::uint16_t mask = 0;
+        for (int c = 0; c < 16; ++c)
+          if (!hits[c].hit()) mask = std::uint16_t(mask | (1u << c));
+        if (mask == 0xffff) {
+          set_bit(tr, scratch[q], task.face, task.fu, task.fv);
+        } else if (mask != 0) {
+          records[p0 + q].partial_nodes.push_back(probe_node_id(tr.r, task.face, 0, task.fu, task.fv));
+          records[p0 + q].partial_mask.push_back(mask);
+        }
+      });
+  w.occlusion = false;
+}
+
+// ---- a block of probes ---------------------------------------------------------------
 
 // The probe's state and, stored, its visibility nodes, depth moments and
 // bounce matrices.
@@ -318,24 +525,40 @@ void finish_record(const ProbeTracing& tr, const ProbeScratch& sc, ProbeRecord& 
   }
 }
 
-// Probe p of the grid, traced into rec.
-void trace_probe(const ProbeTracing& tr, ProbeScratch& sc, std::size_t p, ProbeRecord& rec) {
+// Probe p of the grid placed (moved off surfaces) and its sums cleared.
+void start_probe(const ProbeTracing& tr, ProbeScratch& sc, std::size_t p, ProbeRecord& rec) {
   const ProbeGrid& grid = tr.t.grid;
   const int i = int(p % std::size_t(grid.dims[0]));
   const int j = int((p / std::size_t(grid.dims[0])) % std::size_t(grid.dims[1]));
   const int k = int(p / (std::size_t(grid.dims[0]) * std::size_t(grid.dims[1])));
-  const glm::vec3 x = lift_off_surfaces(tr, glm::vec3(grid.position(i, j, k)));
-  rec.position = x;
-  detail::Rng rng(tr.o.seed, p);
+  sc.x = detail::lift_off_surfaces(tr.rays, tr.scene.mesh, tr.lift, glm::vec3(grid.position(i, j, k)));
+  rec.position = sc.x;
   std::fill(sc.bits.begin(), sc.bits.end(), 0u);
   std::fill(sc.m1.begin(), sc.m1.end(), 0.0);
   std::fill(sc.m2.begin(), sc.m2.end(), 0.0);
   std::fill(sc.count.begin(), sc.count.end(), 0.0);
   std::fill(sc.bounce.begin(), sc.bounce.end(), 0.0);
   sc.back = sc.hit_count = sc.total = 0;
-  trace_base_cube(tr, sc, rng, x);
-  refine_edges(tr, sc, rng, x, rec);
-  finish_record(tr, sc, rec);
+  sc.paths.clear();
+  sc.refines.clear();
+}
+
+// Probes [p0, p0 + n) traced into records, a wavefront at a time: their
+// base rays, each bounce of their paths, each stage of their refinement.
+void trace_block(const ProbeTracing& tr, std::size_t p0, std::size_t n, std::vector<ProbeScratch>& scratch,
+                 std::vector<ProbeRecord>& records, Wave& w) {
+  for_each_parallel(n, 1, [&](std::size_t q) { start_probe(tr, scratch[q], p0 + q, records[p0 + q]); });
+  trace_base_cubes(tr, p0, n, scratch, w);
+  trace_bounces(tr, scratch, n, w);
+  for_each_parallel(n, 1, [&](std::size_t q) { plan_refinement(tr, scratch[q], p0 + q); });
+  refine_texels(tr, p0, n, scratch, records, w);
+  for_each_parallel(n, 1, [&](std::size_t q) { finish_record(tr, scratch[q], records[p0 + q]); });
+}
+
+// Probes a block traces together: kBlockRays base rays at most, 1 to kProbeBlock.
+std::size_t probe_block(const ProbeTracing& tr) {
+  const std::size_t rays = std::size_t(6) * tr.base * tr.base * tr.kk * tr.kk;
+  return std::clamp<std::size_t>(kBlockRays / rays, 1, kProbeBlock);
 }
 
 // The probes' records packed into t, in grid order.
@@ -395,24 +618,22 @@ ProbeTransfer compute_probe_transfer(const Scene& scene, const ProbeGrid& grid, 
                         detail::probe_lift(grid)};
   const std::size_t P = grid.count();
   std::vector<ProbeRecord> records(P);
+  const std::size_t block = std::min(probe_block(tr), P);
+  std::vector<ProbeScratch> scratch(block, ProbeScratch(tr));
+  Wave wave;
   detail::ProgressTicker ticker(progress, P, "probes");
   ticker.start();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, P, 16), [&](const tbb::blocked_range<std::size_t>& range) {
-    detail::enable_ftz_daz();
-    ProbeScratch sc(tr);
-    for (std::size_t p = range.begin(); p < range.end(); ++p) {
-      if (ticker.cancelled()) return;
-      trace_probe(tr, sc, p, records[p]);
-      ticker.tick(1);
-    }
-  });
+  for (std::size_t p0 = 0; p0 < P && !ticker.cancelled(); p0 += block) {
+    const std::size_t n = std::min(block, P - p0);
+    trace_block(tr, p0, n, scratch, records, wave);
+    ticker.tick(n);
+  }
   ticker.finish();
   pack_records(t, records);
   if (const std::string problem = probe_transfer_problem(t); !problem.empty())
     throw Error("computed probe volume is inconsistent (a bug): " + problem);
   return t;
 }
-
 ProbeOcclusion::ProbeOcclusion(const Mesh& mesh, const ProbeGrid& grid)
     : rays_(std::make_unique<detail::RayScene>(mesh, /*robust=*/true)), offset_(detail::default_ray_offset(mesh)) {
   const glm::dvec3 sp = grid.spacing();

@@ -1,6 +1,6 @@
 // Occlusion jobs traced in OpenGL compute shaders over a flat BVH. See
 // prt/gpu_tracer.h; the shaders are shaders/occlusion.comp.glsl (trace())
-// and shaders/hits.comp.glsl (trace_hits()).
+// and shaders/hits.comp.glsl (trace_hits(); with RAYS defined, trace_rays()).
 #include <prt/gpu_tracer.h>
 
 #include <prt/error.h>
@@ -39,20 +39,39 @@ namespace {
 // not (kChunkRays / M points, one invocation a slot; about half of them
 // trace a ray), so that its hits buffer is 16 MiB.
 constexpr std::size_t kChunkRays = std::size_t(1) << 20;
-// The shader's local_size_x: 64, and 1 on llvmpipe, whose SIMD execution of
-// this shader gave some invocations of a work group wrong answers (Mesa
-// 22.3.6: 40 of 64 points of the bundled scene traced as less occluded than
-// one point alone, whatever the shader's loops looked like; one invocation a
-// group matches the CPU bit for bit: GpuPrecompute.*). Other drivers are
-// trusted with 64 and checked by the same tests where a GPU runs them.
+// The shader's local_size_x: 64, and 1 on llvmpipe. llvmpipe runs a group's
+// invocations 8 to a SIMD vector whose loops run while any lane needs them,
+// and its loop limit (below) counts the vector's iterations: with 64, lanes
+// of a group were cut short where the same point alone was not (Mesa 22.3.6:
+// 40 of 64 points of the bundled scene less occluded). With the shaders'
+// own count of their steps (per lane, under the vector's) 64 still lost rays
+// at 2048 directions (the tube: 7e-4); with 1 they match the CPU bit for bit.
 constexpr std::size_t kGroup = 64;
-std::size_t group_size(const std::string& renderer) {
-  return renderer.find("llvmpipe") != std::string::npos ? 1 : kGroup;
-}
+bool is_llvmpipe(const std::string& renderer) { return renderer.find("llvmpipe") != std::string::npos; }
+std::size_t group_size(const std::string& renderer) { return is_llvmpipe(renderer) ? 1 : kGroup; }
+// llvmpipe ends an invocation's loops, silently, once they have run 65535
+// iterations in all (Mesa's gallivm: LP_MAX_TGSI_LOOP_ITERATIONS, one
+// counter shared by every loop of the shader). The sums shader, which walks
+// the BVH for each of a point's rays in one invocation (2048 directions: some
+// 60,000 steps on the tube), lost its later rays to it (GpuPrecompute.*
+// IssuesSampleCount: 0.17 relative RMS). So there it counts its own
+// iterations: past kLoopBudget it pauses before its next ray and the host
+// dispatches again (the same sums, in the same order); a walk that would
+// reach kLoopLimit is an error. The hits shaders (one ray an invocation)
+// check the walk alone. Elsewhere neither applies (0xffffffff). The shaders
+// count a step per node and per triangle tested; llvmpipe counts more (it
+// cut the walk of GpuTracer.AWalkPastTheLoopLimit* at 40,000 to 50,000 of
+// the shaders' steps), so the limit is half its 65535, and the budget a
+// quarter (a ray's walk has the other quarter; one takes some 100 steps).
+constexpr std::uint32_t kLoopLimit = 32767;
+constexpr std::uint32_t kLoopBudget = 16384;
+constexpr std::uint32_t kNoLoopLimit = 0xffffffffu;
+constexpr std::uint32_t kOverrunHit = 0xfffffffeu;  // hits.comp's kOverrun
 constexpr int kLocalSumsMax = 36;      // coefficients summed in a local array (6 bands) or fewer
 constexpr int kPrewarmNc = 25;         // the program built with the tracer (5 bands, the default)
 constexpr std::size_t kStatDoubles = 5;  // all_cos, occluded_cos, occluded_dir xyz
 constexpr int kHitsProgram = -1;         // programs_'s key of hits.comp (the others: nc)
+constexpr int kRaysProgram = -2;         // hits.comp with RAYS: trace_rays's batches
 // GL_MAX_COMPUTE_WORK_GROUP_COUNT in y: GL 4.5's least (trace_hits's
 // dispatch puts in y what x cannot take).
 constexpr std::uint64_t kMinGroupsY = 65535;
@@ -93,11 +112,12 @@ class RestoreCurrent {
 // The buffers of one trace() call, deleted with it (its context current).
 struct TraceBuffers {
   GLuint directions = 0, basis = 0, points = 0, rays = 0, stats = 0, sums = 0, hits = 0;
+  GLuint resume = 0, passes = 0;  // the sums shader's: each point's next direction; paused and overrun counts
   TraceBuffers() = default;
   TraceBuffers(const TraceBuffers&) = delete;
   TraceBuffers& operator=(const TraceBuffers&) = delete;
   ~TraceBuffers() {
-    const GLuint all[] = {directions, basis, points, rays, stats, sums, hits};
+    const GLuint all[] = {directions, basis, points, rays, stats, sums, hits, resume, passes};
     glDeleteBuffers(GLsizei(std::size(all)), all);
   }
 };
@@ -112,6 +132,8 @@ class GlPointTracer final : public PointTracer {
   void trace(const OcclusionJob& job, OcclusionSums& out,
              const std::function<bool(std::size_t, std::size_t)>& progress) const override;
   void trace_hits(const OcclusionJob& job, const std::function<bool(const HitChunk&)>& consume) const override;
+  void trace_rays(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions, float tnear,
+                  std::span<RayHit> hits) const override;
   std::string name() const override { return name_; }
 
  private:
@@ -126,8 +148,12 @@ class GlPointTracer final : public PointTracer {
   void dispatch(std::uint64_t invocations) const;
   void run_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
                  OcclusionSums& out) const;
+  void run_passes(std::size_t count, std::size_t m, const TraceBuffers& b) const;
   void run_hit_chunk(const OcclusionJob& job, std::size_t first, std::size_t count, const TraceBuffers& b,
                      std::vector<RayHit>& hits) const;
+  void map_triangles(std::span<RayHit> hits) const;
+  void run_ray_chunk(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions,
+                     const TraceBuffers& b, std::span<RayHit> hits) const;
   // Runs `body` with the tracer's context current on this thread, one call
   // at a time, restoring the thread's own context after (throwing or not).
   template <class Body>
@@ -142,6 +168,7 @@ class GlPointTracer final : public PointTracer {
   std::string name_;
   gl::Limits limits_;
   std::size_t group_ = kGroup;  // the work group's size (group_size)
+  bool loop_limited_ = false;   // llvmpipe: the shaders keep within kLoopLimit
   GLuint nodes_ = 0, corners_ = 0;
   std::vector<std::uint32_t> triangle_ids_;  // the BVH's: trace_hits maps leaf order to the mesh's
   bool has_tree_ = false;
@@ -156,6 +183,7 @@ GlPointTracer::GlPointTracer(const FlatBvh& bvh) {
     const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
     name_ = std::string("OpenGL compute on ") + (renderer ? renderer : "?");
     group_ = group_size(name_);
+    loop_limited_ = is_llvmpipe(name_);
     limits_ = gl::limits();
     upload_bvh(bvh);
     program(kPrewarmNc);
@@ -199,10 +227,10 @@ void GlPointTracer::upload_bvh(const FlatBvh& bvh) {
 
 GLuint GlPointTracer::program(int nc) const {
   GLuint& p = programs_[nc];
-  if (!p && nc == kHitsProgram)
-    p = gl::link_compute(shaders::hits_comp_glsl, "hits",
-                         fmt::format("#define LEAF {}u\n#define MAX_DEPTH {}\n#define GROUP {}\n", kFlatBvhLeaf,
-                                     kFlatBvhMaxDepth, group_));
+  if (!p && (nc == kHitsProgram || nc == kRaysProgram))
+    p = gl::link_compute(shaders::hits_comp_glsl, nc == kRaysProgram ? "hits (rays)" : "hits",
+                         fmt::format("#define LEAF {}u\n#define MAX_DEPTH {}\n#define GROUP {}\n{}", kFlatBvhLeaf,
+                                     kFlatBvhMaxDepth, group_, nc == kRaysProgram ? "#define RAYS 1\n" : ""));
   if (!p)
     p = gl::link_compute(shaders::occlusion_comp_glsl, "occlusion",
                          fmt::format("#define NC {}\n#define LOCAL_SUMS {}\n#define LEAF {}u\n#define MAX_DEPTH {}\n"
@@ -261,6 +289,8 @@ void GlPointTracer::upload_job(const OcclusionJob& job, std::size_t chunk, Trace
   b.rays = gl::make_buffer(nullptr, chunk * sizeof(std::uint32_t));
   b.stats = gl::make_buffer(nullptr, chunk * kStatDoubles * sizeof(double));
   b.sums = gl::make_buffer(nullptr, chunk * nc * sizeof(double));
+  b.resume = gl::make_buffer(nullptr, chunk * sizeof(std::uint32_t));
+  b.passes = gl::make_buffer(nullptr, 2 * sizeof(std::uint32_t));
   gl::check_gl("uploading the occlusion job");
 }
 
@@ -279,6 +309,8 @@ void GlPointTracer::set_job_uniforms(GLuint p, const OcclusionJob& job) const {
   glProgramUniform1ui(p, glGetUniformLocation(p, "u_dirs"), GLuint(job.directions.size()));
   glProgramUniform1ui(p, glGetUniformLocation(p, "u_has_tree"), has_tree_ ? 1u : 0u);
   glProgramUniform1f(p, glGetUniformLocation(p, "u_offset"), job.offset);
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_budget"), loop_limited_ ? kLoopBudget : kNoLoopLimit);
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_limit"), loop_limited_ ? kLoopLimit : kNoLoopLimit);
 }
 
 // Work groups for `invocations` (the bound program's, numbered x fastest),
@@ -301,8 +333,8 @@ void GlPointTracer::run_chunk(const OcclusionJob& job, std::size_t first, std::s
   const GLuint p = program(job.nc);
   glUseProgram(p);
   glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(count));
-  bind_buffers({nodes_, corners_, b.points, b.directions, b.basis, b.rays, b.stats, b.sums});
-  dispatch(count);  // count <= the work group count limit x the group: y = 1
+  bind_buffers({nodes_, corners_, b.points, b.directions, b.basis, b.rays, b.stats, b.sums, b.resume, b.passes});
+  run_passes(count, job.directions.size(), b);
   glGetNamedBufferSubData(b.rays, 0, GLsizeiptr(count * sizeof(std::uint32_t)), out.occluded_rays.data() + first);
   if (nc > 0)
     glGetNamedBufferSubData(b.sums, 0, GLsizeiptr(count * nc * sizeof(double)), out.occluded_basis.data() + first * nc);
@@ -314,6 +346,25 @@ void GlPointTracer::run_chunk(const OcclusionJob& job, std::size_t first, std::s
     out.all_cos[first + i] = s[0];
     out.occluded_cos[first + i] = s[1];
     out.occluded_dir[first + i] = glm::dvec3(s[2], s[3], s[4]);
+  }
+}
+
+// The sums shader over a chunk of `count` points (bound), dispatched until
+// no point has paused (occlusion.comp.glsl, "Passes"); each pass takes every
+// paused point at least one direction further, so M + 1 passes end it.
+void GlPointTracer::run_passes(std::size_t count, std::size_t m, const TraceBuffers& b) const {
+  const std::uint32_t zero = 0;
+  glClearNamedBufferData(b.resume, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  for (std::size_t pass = 0;; ++pass) {
+    if (pass > m) throw Error("GPU tracer: the sums shader made no progress (a bug)");
+    glClearNamedBufferData(b.passes, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    dispatch(count);  // count <= the work group count limit x the group: y = 1
+    std::uint32_t counts[2] = {0, 0};  // paused, overrun
+    glGetNamedBufferSubData(b.passes, 0, GLsizeiptr(sizeof(counts)), counts);
+    if (counts[1] > 0)
+      throw Error(fmt::format("GPU tracer: {} rays' BVH walks took more than {} steps, this OpenGL's loop limit "
+                              "(a degenerate mesh? trace it with --device cpu)", counts[1], kLoopLimit));
+    if (counts[0] == 0) return;
   }
 }
 
@@ -331,14 +382,42 @@ void GlPointTracer::run_hit_chunk(const OcclusionJob& job, std::size_t first, st
   static_assert(sizeof(RayHit) == 4 * sizeof(std::uint32_t) && offsetof(RayHit, t) == 12, "the shader's uvec4");
   glGetNamedBufferSubData(b.hits, 0, GLsizeiptr(slots * sizeof(RayHit)), hits.data());
   gl::check_gl("tracing a chunk of points' closest hits");
-  for (std::size_t r = 0; r < slots; ++r) {
-    RayHit& h = hits[r];
+  map_triangles(std::span<RayHit>(hits.data(), slots));
+}
+
+// The shader's leaf-order triangles mapped to the mesh's.
+void GlPointTracer::map_triangles(std::span<RayHit> hits) const {
+  for (RayHit& h : hits) {
     if (h.triangle == kNoRayHit) continue;
+    if (h.triangle == kOverrunHit)
+      throw Error(fmt::format("GPU tracer: a ray's BVH walk took more than {} steps, this OpenGL's loop limit "
+                              "(a degenerate mesh? trace it with --device cpu)", kLoopLimit));
     if (h.triangle >= triangle_ids_.size())
       throw Error(fmt::format("GPU tracer: triangle {} of {} hit (the hits shader is wrong)", h.triangle,
                               triangle_ids_.size()));
     h.triangle = triangle_ids_[h.triangle];
   }
+}
+
+// One chunk of trace_rays's batch: uploaded (origin, direction per ray),
+// traced, its hits read into `hits` and mapped to the mesh's triangles.
+void GlPointTracer::run_ray_chunk(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions,
+                                  const TraceBuffers& b, std::span<RayHit> hits) const {
+  const std::size_t count = origins.size();
+  std::vector<glm::vec4> rays(2 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    rays[2 * i] = glm::vec4(origins[i], 1.0f);
+    rays[2 * i + 1] = glm::vec4(directions[i], 0.0f);
+  }
+  glNamedBufferSubData(b.points, 0, GLsizeiptr(rays.size() * sizeof(glm::vec4)), rays.data());
+  const GLuint p = program(kRaysProgram);
+  glUseProgram(p);
+  glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(count));
+  bind_buffers({nodes_, corners_, b.points, 0, b.hits});
+  dispatch(count);
+  glGetNamedBufferSubData(b.hits, 0, GLsizeiptr(count * sizeof(RayHit)), hits.data());
+  gl::check_gl("tracing a chunk of rays' closest hits");
+  map_triangles(hits);
 }
 
 // Points [0, n) in chunks of `chunk`, in order; run(first, count) returning
@@ -403,6 +482,31 @@ void GlPointTracer::trace_hits(const OcclusionJob& job, const std::function<bool
     for_each_chunk(n, chunk, [&](std::size_t first, std::size_t count) {
       run_hit_chunk(job, first, count, b, hits);
       return consume(HitChunk{first, count, std::span<const RayHit>(hits.data(), count * m)});
+    });
+    glUseProgram(0);
+  });
+}
+
+void GlPointTracer::trace_rays(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions, float tnear,
+                               std::span<RayHit> hits) const {
+  const std::size_t n = origins.size();
+  if (directions.size() != n || hits.size() != n)
+    throw Error(fmt::format("GPU tracer: {} origins, {} directions and {} hits", n, directions.size(), hits.size()));
+  if (n == 0) return;
+  in_context([&] {
+    const std::uint64_t cap = std::max<std::uint64_t>(limits_.work_groups, 1) * kMinGroupsY * group_;
+    const std::size_t chunk = chunk_points(n, kChunkRays, 1, 2 * sizeof(glm::vec4), cap);
+    TraceBuffers b;
+    b.points = gl::make_buffer(nullptr, chunk * 2 * sizeof(glm::vec4), GL_DYNAMIC_STORAGE_BIT);
+    b.hits = gl::make_buffer(nullptr, chunk * sizeof(RayHit));
+    gl::check_gl("allocating a batch of rays");
+    const GLuint p = program(kRaysProgram);
+    glProgramUniform1ui(p, glGetUniformLocation(p, "u_has_tree"), has_tree_ ? 1u : 0u);
+    glProgramUniform1f(p, glGetUniformLocation(p, "u_offset"), tnear);
+    glProgramUniform1ui(p, glGetUniformLocation(p, "u_limit"), loop_limited_ ? kLoopLimit : kNoLoopLimit);
+    for_each_chunk(n, chunk, [&](std::size_t first, std::size_t count) {
+      run_ray_chunk(origins.subspan(first, count), directions.subspan(first, count), b, hits.subspan(first, count));
+      return true;
     });
     glUseProgram(0);
   });

@@ -30,17 +30,26 @@ struct Node {
 
 layout(std430, binding = 0) readonly buffer Nodes { Node nodes[]; };
 layout(std430, binding = 1) readonly buffer Corners { vec4 corners[]; };  // 3 per triangle
+// RAYS: trace_rays's batch (points: origin, direction per ray), else
+// trace_hits's job (points: position, normal per point; dirs).
 layout(std430, binding = 2) readonly buffer Points { vec4 points[]; };    // position, normal per point
+#ifndef RAYS
 layout(std430, binding = 3) readonly buffer Directions { vec4 dirs[]; };
+#endif
 layout(std430, binding = 4) writeonly buffer Hits { uvec4 hits[]; };      // u_count x u_dirs
 
 uniform uint u_count;     // points in this chunk
 uniform uint u_dirs;      // M
 uniform uint u_has_tree;  // 0: no triangle (nodes[0] a placeholder)
 uniform float u_offset;
+// The most loop iterations one ray's walk may take (llvmpipe's loop limit,
+// less a margin: runtime/gpu_tracer.cpp's kLoopLimit; 0xffffffff elsewhere).
+// A walk that reaches it reports kOverrun instead of a hit (the host throws).
+uniform uint u_limit;
 
 const float kInf = uintBitsToFloat(0x7f800000u);
 const uint kMiss = 0xffffffffu;
+const uint kOverrun = 0xfffffffeu;
 
 float pdot(vec3 a, vec3 b) {
   precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
@@ -115,7 +124,12 @@ uvec4 closest(vec3 o, vec3 d, float tnear) {
     entry[sp++] = root;
   }
   // No return from inside the loops (occlusion.comp: llvmpipe, Mesa 22.3).
+  uint steps = 0u;
   while (sp > 0) {
+    if (++steps >= u_limit) {
+      best = uvec4(kOverrun, 0u, 0u, 0u);
+      break;
+    }
     --sp;
     if (!(entry[sp] < best_t)) continue;
     const Node nd = nodes[stack[sp]];
@@ -136,6 +150,7 @@ uvec4 closest(vec3 o, vec3 d, float tnear) {
       continue;
     }
     const uint last = nd.a + (nd.b & ~LEAF);
+    steps += nd.b & ~LEAF;
     for (uint tri = nd.a; tri < last; ++tri) {
       vec3 h;
       if (!triangle_hit(tri, o, d, tnear, h) || !(h.z < best_t)) continue;
@@ -146,6 +161,15 @@ uvec4 closest(vec3 o, vec3 d, float tnear) {
   return best;
 }
 
+#ifdef RAYS
+// trace_rays: ray r < u_count from points[2r] along points[2r + 1], t in
+// (u_offset, inf) (u_offset: the batch's tnear), into hits[r].
+void main() {
+  const uint r = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * uint(GROUP));
+  if (r >= u_count) return;
+  hits[r] = closest(points[2u * r].xyz, points[2u * r + 1u].xyz, u_offset);
+}
+#else
 void main() {
   const uint r = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * uint(GROUP));
   if (u_dirs == 0u || r / u_dirs >= u_count) return;
@@ -162,3 +186,4 @@ void main() {
   }
   hits[r] = h;
 }
+#endif

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,13 @@ class ReferenceTracer final : public PointTracer {
       }
       if (!consume(HitChunk{first, count, hits})) throw Error("cancelled");
     }
+  }
+  // flat_bvh_closest of each ray, in order (prt::Error on spans of different sizes).
+  void trace_rays(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions, float tnear,
+                  std::span<RayHit> hits) const override {
+    if (directions.size() != origins.size() || hits.size() != origins.size())
+      throw Error("ReferenceTracer::trace_rays: spans of different sizes");
+    for (std::size_t i = 0; i < origins.size(); ++i) hits[i] = flat_bvh_closest(bvh_, origins[i], directions[i], tnear);
   }
   std::string name() const override { return "flat_bvh_closest on the CPU"; }
 

@@ -51,6 +51,15 @@
 // triangles read back are mapped to the mesh's on the CPU and `consume` is
 // called after each chunk, in point order. A job of no points calls
 // `consume` zero times.
+//
+// llvmpipe's loop limit: llvmpipe ends a shader invocation's loops, without
+// a word, once they have run 65535 iterations in all. trace() there counts
+// its steps and, past a budget, pauses a point before its next ray and
+// dispatches the chunk again until every point is done (the same sums in
+// the same order); every shader stops a single ray's walk well before the
+// limit and throws prt::Error("... loop limit ...") rather than answer from
+// a cut walk (a degenerate mesh: tens of thousands of triangles' boxes on
+// one ray). Other drivers have no such limit.
 #pragma once
 
 #include <prt/point_tracer.h>

@@ -131,6 +131,17 @@ class PointTracer {
   // each ray (prt::compute_transfer and compute_wavelet_transfer take them
   // on the CPU, as they take Embree's hits).
   virtual void trace_hits(const OcclusionJob& job, const std::function<bool(const HitChunk&)>& consume) const = 0;
+  // A batch of independent rays: ray i from origins[i] along the unit
+  // directions[i], t in (tnear, infinity), its closest hit (either face) into
+  // hits[i] (triangle: the mesh's index; a miss: RayHit{}); t measured from
+  // origins[i]. The three spans are of one size (else prt::Error); any size:
+  // the tracer splits the batch into dispatches itself (the GL tracer 2^20
+  // rays at a time, 48 MiB of buffers). Each hit is flat_bvh_closest's (bit
+  // for bit on llvmpipe). What probe volumes trace their wavefronts
+  // with (ProbeOptions::tracer: the base rays, each bounce of the diffuse
+  // paths, the refinement rays; precompute/probes.cpp).
+  virtual void trace_rays(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions, float tnear,
+                          std::span<RayHit> hits) const = 0;
   // What traces: "OpenGL compute on <renderer string>".
   virtual std::string name() const = 0;
 };

@@ -471,6 +471,15 @@ struct ProbeOptions {
   std::uint64_t seed = 1;     // jitters the rays inside the texels and the bounce directions
   int threads = 0;            // 0: all cores; at most kMaxThreads
   double offset = 0;          // ray offset off surfaces; 0: 1e-4 x the scene's diagonal
+  // The probes' rays traced by this tracer (PointTracer::trace_rays; prt/gpu_tracer.h's
+  // GL compute tracer) instead of Embree on the CPU's threads; nullptr: Embree.
+  // Either way the same code draws, takes and sums the same rays, a wavefront
+  // of a block of probes at a time (its base rays, each bounce of its paths,
+  // each stage of its refinement), so the volume differs from the CPU's only
+  // where a ray is seen differently (grazing a triangle's edge; the probes'
+  // placement off surfaces stays Embree's point query). The tracer's BVH is
+  // the scene mesh's (build_flat_bvh(scene.mesh)); it must outlive the call.
+  const PointTracer* tracer = nullptr;
 };
 
 // Traces every probe of `grid` (probe_grid(scene.mesh, dims)) against the
@@ -483,7 +492,9 @@ struct ProbeOptions {
 // every ray escapes is Sky. Interreflected: each front-face hit continues as
 // a diffuse path (cosine-weighted, one direction per hit, `bounces` deep)
 // whose escape adds albedo x Y_k(w1) omega x Y_j(w2) to the bounce matrix.
-// Deterministic for any thread count (each probe its own generator).
+// Deterministic for any thread count: every random draw comes from a
+// generator of its own purpose (per probe and base texel, bounce path,
+// finest texel), whatever order the wavefronts trace the rays in.
 // Progress: phase "probes"; cancellable (prt::Error("cancelled")).
 ProbeTransfer compute_probe_transfer(const Scene& scene, const ProbeGrid& grid, const ProbeOptions& options,
                                      const Progress& progress = {});

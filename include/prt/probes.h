@@ -1,5 +1,9 @@
 // prt/probes.h - relightable probe volumes (docs/PROBES.md): points on a
 // regular grid over a scene whose incident light follows the environment.
+// Traced by prt::compute_probe_transfer (prt/precompute.h), by Embree on the
+// CPU or, with ProbeOptions::tracer (a prt/point_tracer.h PointTracer: the
+// GL compute tracer of prt/gpu_tracer.h), on the GPU: the same rays, drawn
+// and summed by the same code, a wavefront of a block of probes at a time.
 //
 // A probe at x stores what it takes to give, for any environment L, the
 // n-band SH projection of its incident radiance
