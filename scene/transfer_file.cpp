@@ -181,9 +181,7 @@ constexpr std::array<KindRow, kTransferKinds> kRows = {{
                 "--probes without mpirun"},
        S{false, "--memory-limit plans an SH transfer's memory; a probe volume has no such plan (a 64x32x64 volume "
                 "takes about 80 MB; docs/PROBES.md): leave --memory-limit out"},
-       S{false, "--device gpu traces transfers at vertices and texels; a probe volume's rays are traced on the CPU "
-                "(each probe refines its cube map where an edge crosses it and draws its bounce paths as it goes): "
-                "leave --device out"}}}},
+       S{true, "prt precompute SCENE --probes NXxNYxNZ --device gpu (each wavefront of rays)"}}}},
 }};
 
 constexpr bool rows_complete() {

@@ -456,7 +456,7 @@ def precompute_lightmap(scene: Scene, width: int, height: int, *, uv_set: int = 
     Returns a Lightmap.
     """
 
-def precompute_probes(scene: Scene, dims: Any, *, mode: str = ..., bands: int = ..., bounce_bands: int = ..., bounces: int = ..., seed: int = ...) -> ProbeVolume:
+def precompute_probes(scene: Scene, dims: Any, *, mode: str = ..., bands: int = ..., bounce_bands: int = ..., bounces: int = ..., seed: int = ..., device: str = ...) -> ProbeVolume:
     """
     The relightable probe volume prt precompute SCENE --probes NXxNYxNZ computes (the same bits). Releases the GIL.
 
@@ -465,6 +465,7 @@ def precompute_probes(scene: Scene, dims: Any, *, mode: str = ..., bands: int = 
       dims: (NX, NY, NZ) probes, three whole numbers, each 2 to 1024 and at most 16777216 in all, spanning the scene's bounding box, corners included [--probes].
       mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH, 1 to 8 (3) [--bands].
       bounce_bands: the environment bands the bounce light takes, 1 to 16 (6) [--bounce-bands]; bounces: 1 to 8, interreflected [--bounces]; seed [--seed].
+      device: 'cpu' (Embree) or 'gpu': the probes' rays in OpenGL compute, as precompute's [--device].
 
     Returns a ProbeVolume.
     """

@@ -11,6 +11,7 @@
 #include <array>
 #include <cctype>
 #include <filesystem>
+#include <memory>
 
 namespace prt::python {
 namespace {
@@ -237,8 +238,9 @@ void bind_probes_precompute(py::module_& m) {
   m.def(
       "precompute_probes",
       [](const prt::Scene& scene, const py::object& dims, const std::string& mode, int bands, int bounce_bands,
-         int bounces, std::uint64_t seed) {
+         int bounces, std::uint64_t seed, const std::string& device) {
         const std::array<int, 3> dd = probe_dims_arg(dims);
+        check_device_arg(device, prt::TransferKind::Probes, "diffuse");
         prt::ProbeOptions o;
         o.mode = prt::parse_transfer_mode(mode);
         o.bands = bands;
@@ -250,10 +252,12 @@ void bind_probes_precompute(py::module_& m) {
           o.albedo = glm::vec3(0.8f);
         }
         py::gil_scoped_release release;
+        const std::unique_ptr<prt::PointTracer> gpu = device_tracer(device, scene.mesh);  // kept while it traces
+        o.tracer = gpu.get();
         return prt::compute_probe_transfer(scene, prt::probe_grid(scene.mesh, dd), o);
       },
       py::arg("scene"), py::arg("dims"), py::kw_only(), py::arg("mode") = "shadowed", py::arg("bands") = 3,
-      py::arg("bounce_bands") = 6, py::arg("bounces") = 1, py::arg("seed") = 1,
+      py::arg("bounce_bands") = 6, py::arg("bounces") = 1, py::arg("seed") = 1, py::arg("device") = "cpu",
       "The relightable probe volume prt precompute SCENE --probes NXxNYxNZ computes (the same bits). Releases the GIL.\n"
       "\n"
       "Arguments (prt precompute's option in brackets):\n"
@@ -261,6 +265,7 @@ void bind_probes_precompute(py::module_& m) {
       "  dims: (NX, NY, NZ) probes, three whole numbers, each 2 to 1024 and at most 16777216 in all, spanning the scene's bounding box, corners included [--probes].\n"
       "  mode: 'shadowed' or 'interreflected' [--mode]; bands: of each probe's SH, 1 to 8 (3) [--bands].\n"
       "  bounce_bands: the environment bands the bounce light takes, 1 to 16 (6) [--bounce-bands]; bounces: 1 to 8, interreflected [--bounces]; seed [--seed].\n"
+      "  device: 'cpu' (Embree) or 'gpu': the probes' rays in OpenGL compute, as precompute's [--device].\n"
       "\n"
       "Returns a ProbeVolume.");
 }

@@ -57,6 +57,14 @@ def test_wavelet_transfer_is_the_commands(tmp_path):
     assert (tmp_path / "py.prt").read_bytes() == (tmp_path / "cli.prt").read_bytes()
 
 
+def test_probe_volume_is_the_commands(tmp_path):
+    scene = prt.load_scene(ROOM)
+    v = gpu_or_skip(lambda: prt.precompute_probes(scene, (3, 2, 3), device="gpu"))
+    v.write(tmp_path / "py.prt")
+    run_prt("precompute", ROOM, "--probes", "3x2x3", "--device", "gpu", "-q", "-o", tmp_path / "cli.prt")
+    assert (tmp_path / "py.prt").read_bytes() == (tmp_path / "cli.prt").read_bytes()
+
+
 def test_lightmap_is_the_commands(tmp_path):
     scene = prt.load_scene(ROOM)
     lm = gpu_or_skip(lambda: prt.precompute_lightmap(scene, 16, 16, bands=BANDS, samples=SAMPLES,

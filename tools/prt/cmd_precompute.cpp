@@ -158,11 +158,13 @@ void check_device(const PrecomputeArgs& a) {
 
 // The rays' rate of a --device run: about `points` x samples rays (half the
 // 2 x samples directions lie above a point's horizon; a wavelet transfer's
-// half of the cube's 6 r^2 texels).
-void print_rays(const PrecomputeArgs& a, std::size_t points, double seconds) {
+// half of the cube's 6 r^2 texels), or `points` x `per_point` where given
+// (a probe's base rays).
+void print_rays(const PrecomputeArgs& a, std::size_t points, double seconds, double per_point = 0) {
   const bool wavelet = a.basis == "wavelet";
-  if (a.quiet || a.device_opt->count() == 0 || (!wavelet && a.opt.mode == TransferMode::Unshadowed)) return;
-  const double per_point = wavelet ? 3.0 * a.wopt.cube_res * a.wopt.cube_res : double(a.opt.samples);
+  if (a.quiet || a.device_opt->count() == 0) return;
+  if (per_point == 0 && !wavelet && a.opt.mode == TransferMode::Unshadowed) return;
+  if (per_point == 0) per_point = wavelet ? 3.0 * a.wopt.cube_res * a.wopt.cube_res : double(a.opt.samples);
   const double rays = double(points) * per_point;
   fmt::print(stderr, "rays ({}): about {:.3g} in {:.2f} s, {:.3g} rays/s (the whole precompute's time)\n", a.device,
              rays, seconds, rays / std::max(seconds, 1e-9));
@@ -840,6 +842,8 @@ int run_probes(PrecomputeArgs& a) {
     o.albedo = glm::vec3(float(rgb[0]), float(rgb[1]), float(rgb[2]));
   }
   const ProbeGrid grid = probe_grid(scene.mesh, dims);
+  const std::unique_ptr<PointTracer> device = make_device(a, scene.mesh, a.quiet);
+  o.tracer = device.get();
   if (!a.quiet) {
     const glm::dvec3 sp = grid.spacing();
     fmt::print(stderr, "{}\nprobes {}x{}x{} ({} in all) over [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}] x [{:.4g}, {:.4g}], spacing "
@@ -865,6 +869,8 @@ int run_probes(PrecomputeArgs& a) {
                a.output, t.probes(), counts[1], counts[0], counts[2], t.bytes(),
                counts[1] ? double(t.bytes()) / double(counts[1]) : 0.0,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    print_rays(a, t.probes(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+               6.0 * base * base * o.rays_per_texel);
   }
   return 0;
 }
