@@ -24,8 +24,11 @@
 #include <vector>
 
 namespace prt::shaders {
-extern const char* const occlusion_comp_glsl;  // embedded by runtime/embed_shaders.cmake
+// Embedded by runtime/embed_shaders.cmake; bvh_glsl: what both walks share,
+// inserted after their defines.
+extern const char* const occlusion_comp_glsl;
 extern const char* const hits_comp_glsl;
+extern const char* const bvh_glsl;
 }
 
 namespace prt {
@@ -229,13 +232,15 @@ GLuint GlPointTracer::program(int nc) const {
   GLuint& p = programs_[nc];
   if (!p && (nc == kHitsProgram || nc == kRaysProgram))
     p = gl::link_compute(shaders::hits_comp_glsl, nc == kRaysProgram ? "hits (rays)" : "hits",
-                         fmt::format("#define LEAF {}u\n#define MAX_DEPTH {}\n#define GROUP {}\n{}", kFlatBvhLeaf,
-                                     kFlatBvhMaxDepth, group_, nc == kRaysProgram ? "#define RAYS 1\n" : ""));
+                         fmt::format("#define LEAF {}u\n#define MAX_DEPTH {}\n#define GROUP {}\n{}{}", kFlatBvhLeaf,
+                                     kFlatBvhMaxDepth, group_, nc == kRaysProgram ? "#define RAYS 1\n" : "",
+                                     shaders::bvh_glsl));
   if (!p)
     p = gl::link_compute(shaders::occlusion_comp_glsl, "occlusion",
                          fmt::format("#define NC {}\n#define LOCAL_SUMS {}\n#define LEAF {}u\n#define MAX_DEPTH {}\n"
-                                     "#define GROUP {}\n",
-                                     nc, nc > 0 && nc <= kLocalSumsMax ? 1 : 0, kFlatBvhLeaf, kFlatBvhMaxDepth, group_));
+                                     "#define GROUP {}\n{}",
+                                     nc, nc > 0 && nc <= kLocalSumsMax ? 1 : 0, kFlatBvhLeaf, kFlatBvhMaxDepth, group_,
+                                     shaders::bvh_glsl));
   return p;
 }
 

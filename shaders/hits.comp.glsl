@@ -21,15 +21,6 @@
 // group's size (1 on llvmpipe: runtime/gpu_tracer.cpp).
 layout(local_size_x = GROUP) in;  // runtime/gpu_tracer.cpp's group_size
 
-struct Node {
-  vec3 lo;
-  uint a;  // inner: left child; leaf: first triangle
-  vec3 hi;
-  uint b;  // inner: right child; leaf: LEAF | triangle count
-};
-
-layout(std430, binding = 0) readonly buffer Nodes { Node nodes[]; };
-layout(std430, binding = 1) readonly buffer Corners { vec4 corners[]; };  // 3 per triangle
 // RAYS: trace_rays's batch (points: origin, direction per ray), else
 // trace_hits's job (points: position, normal per point; dirs).
 layout(std430, binding = 2) readonly buffer Points { vec4 points[]; };    // position, normal per point
@@ -47,67 +38,10 @@ uniform float u_offset;
 // A walk that reaches it reports kOverrun instead of a hit (the host throws).
 uniform uint u_limit;
 
-const float kInf = uintBitsToFloat(0x7f800000u);
 const uint kMiss = 0xffffffffu;
 const uint kOverrun = 0xfffffffeu;
 
-float pdot(vec3 a, vec3 b) {
-  precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
-  return r;
-}
-
-vec3 pcross(vec3 a, vec3 b) {
-  precise vec3 r = vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-  return r;
-}
-
-// C's fmin and fmax: a NaN operand (0 * inf: a ray in the plane of a box's
-// face) is ignored, where GLSL's min and max leave the result undefined.
-float fmin_(float a, float b) {
-  precise float r = isnan(a) ? b : (isnan(b) ? a : min(a, b));
-  return r;
-}
-
-float fmax_(float a, float b) {
-  precise float r = isnan(a) ? b : (isnan(b) ? a : max(a, b));
-  return r;
-}
-
-// ---- the traversal: flat_bvh_closest's (core/point_tracer.cpp), step for step
-
-// flat_box_entry: where the ray enters node k's box, or +inf where it
-// misses it (at every t > tnear). inv = 1 / d.
-float box_entry(uint k, vec3 o, vec3 inv, float tnear) {
-  const Node nd = nodes[k];
-  precise vec3 t0 = (nd.lo - o) * inv;
-  precise vec3 t1 = (nd.hi - o) * inv;
-  const float tmin = fmax_(fmax_(fmin_(t0.x, t1.x), fmin_(t0.y, t1.y)), fmin_(t0.z, t1.z));
-  const float tmax = fmin_(fmin_(fmax_(t0.x, t1.x), fmax_(t0.y, t1.y)), fmax_(t0.z, t1.z));
-  return tmin <= tmax && tmax > tnear ? tmin : kInf;
-}
-
-// flat_triangle_hit: Moller-Trumbore, both faces: does the ray hit
-// triangle `tri` at t > tnear? On a hit, uvt = (u, v, t).
-bool triangle_hit(uint tri, vec3 o, vec3 d, float tnear, out vec3 uvt) {
-  uvt = vec3(0.0);
-  const vec3 v0 = corners[3u * tri].xyz, v1 = corners[3u * tri + 1u].xyz, v2 = corners[3u * tri + 2u].xyz;
-  precise vec3 e1 = v1 - v0;
-  precise vec3 e2 = v2 - v0;
-  const vec3 p = pcross(d, e2);
-  const float det = pdot(e1, p);
-  if (det == 0.0) return false;
-  precise float inv_det = 1.0 / det;
-  precise vec3 s = o - v0;
-  precise float u = pdot(s, p) * inv_det;
-  if (!(u >= 0.0 && u <= 1.0)) return false;
-  const vec3 q = pcross(s, e1);
-  precise float v = pdot(d, q) * inv_det;
-  if (!(v >= 0.0 && u + v <= 1.0)) return false;
-  precise float t = pdot(e2, q) * inv_det;
-  if (!(t > tnear)) return false;
-  uvt = vec3(u, v, t);
-  return true;
-}
+// ---- the traversal: flat_bvh_closest's (core/point_tracer.cpp), step for step (bvh.glsl's functions)
 
 // The closest hit: uvec4(leaf-order triangle or kMiss, u, v, t bits).
 uvec4 closest(vec3 o, vec3 d, float tnear) {

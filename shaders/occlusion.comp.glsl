@@ -27,15 +27,6 @@
 // walk would reach u_limit is counted in `overrun` (the host throws).
 layout(local_size_x = GROUP) in;  // runtime/gpu_tracer.cpp's group_size
 
-struct Node {
-  vec3 lo;
-  uint a;  // inner: left child; leaf: first triangle
-  vec3 hi;
-  uint b;  // inner: right child; leaf: LEAF | triangle count
-};
-
-layout(std430, binding = 0) readonly buffer Nodes { Node nodes[]; };
-layout(std430, binding = 1) readonly buffer Corners { vec4 corners[]; };    // 3 per triangle
 layout(std430, binding = 2) readonly buffer Points { vec4 points[]; };      // position, normal per point
 layout(std430, binding = 3) readonly buffer Directions { vec4 dirs[]; };
 layout(std430, binding = 4) readonly buffer Basis { float basis[]; };       // M x NC
@@ -63,57 +54,7 @@ uniform uint u_limit;
 // llvmpipe's limiter counts them).
 uint g_steps = 0u;
 
-float pdot(vec3 a, vec3 b) {
-  precise float r = a.x * b.x + a.y * b.y + a.z * b.z;
-  return r;
-}
-
-vec3 pcross(vec3 a, vec3 b) {
-  precise vec3 r = vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-  return r;
-}
-
-// ---- the traversal: flat_bvh_occluded's (core/point_tracer.cpp), step for step
-
-// C's fmin and fmax: a NaN operand (0 * inf: a ray in the plane of a box's
-// face) is ignored, where GLSL's min and max leave the result undefined.
-float fmin_(float a, float b) {
-  precise float r = isnan(a) ? b : (isnan(b) ? a : min(a, b));
-  return r;
-}
-
-float fmax_(float a, float b) {
-  precise float r = isnan(a) ? b : (isnan(b) ? a : max(a, b));
-  return r;
-}
-
-// Does the ray meet the node's box at some t > tnear? inv = 1 / d.
-bool slab(Node nd, vec3 o, vec3 inv, float tnear) {
-  precise vec3 t0 = (nd.lo - o) * inv;
-  precise vec3 t1 = (nd.hi - o) * inv;
-  const float tmin = fmax_(fmax_(fmin_(t0.x, t1.x), fmin_(t0.y, t1.y)), fmin_(t0.z, t1.z));
-  const float tmax = fmin_(fmin_(fmax_(t0.x, t1.x), fmax_(t0.y, t1.y)), fmax_(t0.z, t1.z));
-  return tmin <= tmax && tmax > tnear;
-}
-
-// Moller-Trumbore, both faces: does the ray hit triangle `tri` at t > tnear?
-bool hits_triangle(uint tri, vec3 o, vec3 d, float tnear) {
-  const vec3 v0 = corners[3u * tri].xyz, v1 = corners[3u * tri + 1u].xyz, v2 = corners[3u * tri + 2u].xyz;
-  precise vec3 e1 = v1 - v0;
-  precise vec3 e2 = v2 - v0;
-  const vec3 p = pcross(d, e2);
-  const float det = pdot(e1, p);
-  if (det == 0.0) return false;
-  precise float inv_det = 1.0 / det;
-  precise vec3 s = o - v0;
-  precise float u = pdot(s, p) * inv_det;
-  if (!(u >= 0.0 && u <= 1.0)) return false;
-  const vec3 q = pcross(s, e1);
-  precise float v = pdot(d, q) * inv_det;
-  if (!(v >= 0.0 && u + v <= 1.0)) return false;
-  precise float t = pdot(e2, q) * inv_det;
-  return t > tnear;
-}
+// ---- the traversal: flat_bvh_occluded's (core/point_tracer.cpp), step for step (bvh.glsl's functions)
 
 bool occluded(vec3 o, vec3 d, float tnear) {
   if (u_has_tree == 0u) return false;
@@ -136,7 +77,8 @@ bool occluded(vec3 o, vec3 d, float tnear) {
     if ((nd.b & LEAF) != 0u) {
       const uint last = nd.a + (nd.b & ~LEAF);
       g_steps += nd.b & ~LEAF;
-      for (uint tri = nd.a; tri < last && !hit; ++tri) hit = hits_triangle(tri, o, d, tnear);
+      vec3 uvt;
+      for (uint tri = nd.a; tri < last && !hit; ++tri) hit = triangle_hit(tri, o, d, tnear, uvt);
     } else {
       stack[sp++] = nd.b;
       stack[sp++] = nd.a;
