@@ -106,7 +106,7 @@ struct PrecomputeArgs {
   std::string subdivided_mesh;
   const CLI::Option *subdivide_opt = nullptr, *subdivide_max_opt = nullptr, *subdivided_mesh_opt = nullptr;
   SubsurfaceArgs sss;  // --material subsurface's material and length scale
-  // --device cpu|gpu: Embree on the CPU's threads, or an SH transfer's rays in OpenGL compute shaders
+  // --device cpu|gpu: Embree on the CPU's threads, or the rays in OpenGL compute shaders
   // (docs/PRECOMPUTE.md "On the GPU").
   std::string device = "cpu";
   const CLI::Option* device_opt = nullptr;
@@ -1288,9 +1288,9 @@ void add_lightmap_options(CLI::App* s, PrecomputeArgs& a) {
                                  "atlas a triangle of SCENE (glTF with materials, or OBJ with vt) covers, in its "
                                  "lightmap UV set (docs/LIGHTMAPS.md)");
   a.device_opt = s->add_option("--device", a.device,
-                               "cpu (Embree on every core) or gpu: the rays of an SH transfer (shadowed, "
-                               "interreflected, glossy, directional; per vertex or texel) traced in OpenGL compute "
-                               "shaders over a BVH built here, headless through EGL "
+                               "cpu (Embree on every core) or gpu: the rays (shadowed, interreflected, glossy, "
+                               "directional, wavelet; per vertex, texel or probe) traced in OpenGL compute shaders "
+                               "over a BVH built here, headless through EGL "
                                "(the GPU's EGL device when there is one; Mesa's llvmpipe otherwise); prints rays "
                                "per second (docs/PRECOMPUTE.md \"On the GPU\")")
                      ->check(CLI::IsMember({"cpu", "gpu"}))
