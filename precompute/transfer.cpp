@@ -548,9 +548,9 @@ void take_ray(const Run& run, Scratch& sc, float c, int j, bool occluded, const 
     const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
     const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
     const std::size_t estride = std::size_t(run.emitter_channels) * nc;
-    for (int c = 0; c < 3; ++c) {
-      const double wb = double(float(wc) * bc[c]);
-      const float* e = run.emitters->data() + std::size_t(tri[c]) * estride;
+    for (int corner = 0; corner < 3; ++corner) {
+      const double wb = double(float(wc) * bc[corner]);
+      const float* e = run.emitters->data() + std::size_t(tri[corner]) * estride;
       for (int ch = 0; ch < run.channels; ++ch) {
         const float* ec = e + (run.emitter_channels == 1 ? 0 : std::size_t(ch) * nc);
         for (int q = 0; q < nc; ++q) sc.eacc[std::size_t(ch) * nc + q] += wb * ec[q];
@@ -566,7 +566,7 @@ void take_ray(const Run& run, Scratch& sc, float c, int j, bool occluded, const 
     } else {
       const glm::uvec3 tri = run.mesh.triangles[hit.triangle];
       const float bc[3] = {1.0f - hit.u - hit.v, hit.u, hit.v};
-      for (int c = 0; c < 3; ++c) sc.r.emplace_back(tri[c], float(wc) * bc[c]);
+      for (int corner = 0; corner < 3; ++corner) sc.r.emplace_back(tri[corner], float(wc) * bc[corner]);
     }
   }
 }
